@@ -1,0 +1,3 @@
+"""omnibot: drive omnidirectional (omni-wheel and mecanum) mobile robots, real or simulated."""
+
+__version__ = "0.1.0"

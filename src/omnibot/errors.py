@@ -1,0 +1,58 @@
+"""The one exception hierarchy of omnibot.
+
+::
+
+    OmnibotError                  every error omnibot raises on purpose
+     +-- ConfigError              a robot description, world or config file is wrong (names the key)
+     +-- KinematicsError          a wheel layout cannot do what was asked (e.g. not holonomic)
+     +-- SimulationError          the simulator was given something it cannot simulate
+     +-- ProtocolError            bytes or a message that do not follow the protocol
+     +-- LinkError                a byte link failed (port gone, refused, closed)
+     |    +-- LinkTimeout         nothing arrived in time
+     +-- ControllerError          the motor controller answered ERROR,<code>,<text>
+
+The CLI turns any OmnibotError into a one-line message and a non-zero exit status.
+"""
+
+from __future__ import annotations
+
+
+class OmnibotError(Exception):
+    """Base class of every error omnibot raises on purpose."""
+
+
+class ConfigError(OmnibotError, ValueError):
+    """A description, world or configuration file is malformed; the message names the bad key."""
+
+    def __init__(self, message: str, key: str | None = None) -> None:
+        super().__init__(f"{key}: {message}" if key else message)
+        self.key = key
+
+
+class KinematicsError(OmnibotError, ValueError):
+    """A wheel layout cannot do what was asked of it."""
+
+
+class SimulationError(OmnibotError):
+    """The simulator was asked for something it cannot simulate."""
+
+
+class ProtocolError(OmnibotError, ValueError):
+    """Bytes or a message that do not follow the protocol."""
+
+
+class LinkError(OmnibotError, OSError):
+    """A byte link failed: the port went away, the peer refused or closed."""
+
+
+class LinkTimeout(LinkError, TimeoutError):
+    """Nothing arrived on a link within the timeout."""
+
+
+class ControllerError(OmnibotError):
+    """The motor controller rejected a command with ``ERROR,<code>,<text>``."""
+
+    def __init__(self, code: int, text: str) -> None:
+        super().__init__(f"controller error {code}: {text}")
+        self.code = code
+        self.text = text

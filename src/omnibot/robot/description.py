@@ -1,0 +1,492 @@
+"""The robot description: one validated model that drives kinematics, firmware, simulator and URDF.
+
+A description is a YAML mapping. Lengths are in metres, masses in kilograms, times in seconds and
+angles in degrees where the key ends in ``_deg`` (converted to radians by the properties here).
+Every mapping rejects keys it does not know, and the error names the key and suggests the nearest
+valid one::
+
+    omnibot: wheels[1].radus: unknown key; did you mean 'radius'?
+
+Wheel geometry is accepted in two forms (see docs/robot.md):
+
+* Cartesian: ``x``, ``y`` (wheel contact centre in the body frame), ``drive_angle_deg`` (direction the
+  contact point travels, relative to the body, for a positive wheel speed) and ``gamma_deg`` (roller
+  angle: the rollers' constrained direction is the drive direction turned by gamma);
+* seed 003's polar form: ``alpha_deg``, ``beta_deg``, ``gamma_deg`` and ``L`` (Siegwart's Swedish wheel),
+  converted with x = L cos(alpha), y = L sin(alpha), drive angle = alpha + beta - 90 degrees.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+from collections.abc import Mapping
+from functools import cached_property
+from pathlib import Path
+from typing import Any, Literal
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from omnibot.errors import ConfigError
+
+PRESET_DIR = Path(__file__).with_name("presets")
+
+
+class _Spec(BaseModel):
+    """Strict, immutable base: unknown keys are errors."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class Footprint(_Spec):
+    """Plan-view outline of the body, centred on the body frame origin."""
+
+    shape: Literal["circle", "box", "polygon"]
+    radius: float | None = Field(default=None, gt=0)
+    length: float | None = Field(default=None, gt=0)
+    width: float | None = Field(default=None, gt=0)
+    points: tuple[tuple[float, float], ...] | None = None
+    height: float = Field(default=0.1, gt=0)
+
+    @model_validator(mode="after")
+    def _check_shape(self) -> Footprint:
+        need = {"circle": ("radius",), "box": ("length", "width"), "polygon": ("points",)}[self.shape]
+        for key in need:
+            if getattr(self, key) is None:
+                raise ValueError(f"a {self.shape} footprint needs '{key}'")
+        if self.shape == "polygon" and self.points is not None and len(self.points) < 3:
+            raise ValueError("a polygon footprint needs at least 3 points")
+        return self
+
+    def outline(self, segments: int = 24) -> list[tuple[float, float]]:
+        """Polygon approximating the footprint, counter-clockwise, in the body frame (m)."""
+        if self.shape == "circle":
+            assert self.radius is not None
+            return [
+                (self.radius * math.cos(2 * math.pi * k / segments), self.radius * math.sin(2 * math.pi * k / segments))
+                for k in range(segments)
+            ]
+        if self.shape == "box":
+            assert self.length is not None and self.width is not None
+            hx, hy = self.length / 2, self.width / 2
+            return [(hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy)]
+        assert self.points is not None
+        return list(self.points)
+
+    @property
+    def bounding_radius(self) -> float:
+        """Radius of the smallest origin-centred circle holding the footprint (m)."""
+        return max(math.hypot(x, y) for x, y in self.outline())
+
+
+class MotorSpec(_Spec):
+    """A brushed DC gear motor and its driver channel; torques and speeds at the motor shaft."""
+
+    resistance: float = Field(gt=0, description="terminal resistance, ohm")
+    torque_constant: float = Field(gt=0, description="N m/A, equal to the back-EMF constant in V s/rad")
+    gear_ratio: float = Field(gt=0, description="motor turns per wheel turn")
+    gear_efficiency: float = Field(default=0.9, gt=0, le=1)
+    rotor_inertia: float = Field(default=1e-6, ge=0, description="kg m^2 at the motor shaft")
+    friction_static: float = Field(default=0.0, ge=0, description="Coulomb friction torque at the wheel, N m")
+    friction_viscous: float = Field(default=0.0, ge=0, description="viscous friction at the wheel, N m s/rad")
+    current_limit: float = Field(default=math.inf, gt=0, description="driver current limit, A")
+    driver_drop: float = Field(default=0.0, ge=0, description="voltage lost in the driver (L298: about 2 V)")
+    deadband: int = Field(default=0, ge=0, description="PWM counts below which the driver gives no output")
+    pwm_bits: int = Field(default=8, ge=1, le=16)
+
+    @property
+    def pwm_max(self) -> int:
+        """Largest PWM command (255 for 8 bits)."""
+        return (1 << self.pwm_bits) - 1
+
+
+class RollerSpec(_Spec):
+    """The free rollers of an omni or mecanum wheel."""
+
+    count: int = Field(default=8, ge=1, description="rollers around the rim")
+    rolling_resistance: float = Field(
+        default=0.02, ge=0, description="resistance to rolling along the free direction, fraction of load"
+    )
+    friction_variation: float = Field(
+        default=0.0, ge=0, description="peak relative rise of that resistance with wheel angle (1.0 = 2x)"
+    )
+
+
+class WheelSpec(_Spec):
+    """One driven wheel: geometry (either form), rollers and its motor."""
+
+    name: str
+    radius: float = Field(gt=0)
+    gamma_deg: float = 0.0
+    x: float | None = None
+    y: float | None = None
+    drive_angle_deg: float | None = None
+    alpha_deg: float | None = None
+    beta_deg: float | None = None
+    L: float | None = Field(default=None, gt=0)
+    width: float = Field(default=0.02, gt=0)
+    inertia: float = Field(default=1e-5, ge=0, description="wheel inertia about its axle, kg m^2")
+    rollers: RollerSpec = RollerSpec()
+    motor: MotorSpec
+
+    @model_validator(mode="after")
+    def _check_form(self) -> WheelSpec:
+        cartesian = [k for k in ("x", "y", "drive_angle_deg") if getattr(self, k) is not None]
+        polar = [k for k in ("alpha_deg", "beta_deg", "L") if getattr(self, k) is not None]
+        if cartesian and polar:
+            raise ValueError("give either x/y/drive_angle_deg or alpha_deg/beta_deg/L, not both")
+        if not polar and len(cartesian) != 3:
+            missing = sorted({"x", "y", "drive_angle_deg"} - set(cartesian))
+            raise ValueError(f"wheel geometry needs {', '.join(missing)} (or alpha_deg/beta_deg/L)")
+        if polar and len(polar) != 3:
+            missing = sorted({"alpha_deg", "beta_deg", "L"} - set(polar))
+            raise ValueError(f"seed 003 wheel geometry needs {', '.join(missing)}")
+        if abs(math.cos(math.radians(self.gamma_deg))) < 1e-6:
+            raise ValueError("gamma_deg of +-90 makes the rollers take the whole drive: the wheel cannot push")
+        return self
+
+    @property
+    def position(self) -> tuple[float, float]:
+        """Contact centre (x, y) in the body frame, m."""
+        if self.L is not None:
+            assert self.alpha_deg is not None
+            a = math.radians(self.alpha_deg)
+            return (self.L * math.cos(a), self.L * math.sin(a))
+        assert self.x is not None and self.y is not None
+        return (self.x, self.y)
+
+    @property
+    def drive_angle(self) -> float:
+        """Direction of travel of the contact point for a positive wheel speed, rad, body frame."""
+        if self.L is not None:
+            assert self.alpha_deg is not None and self.beta_deg is not None
+            return math.radians(self.alpha_deg + self.beta_deg - 90.0)
+        assert self.drive_angle_deg is not None
+        return math.radians(self.drive_angle_deg)
+
+    @property
+    def gamma(self) -> float:
+        """Roller angle, rad."""
+        return math.radians(self.gamma_deg)
+
+    @property
+    def traction_angle(self) -> float:
+        """Direction in which the wheel can push the floor (drive direction turned by gamma), rad."""
+        return self.drive_angle + self.gamma
+
+
+class BatterySpec(_Spec):
+    voltage: float = Field(gt=0, description="nominal voltage, V")
+    internal_resistance: float = Field(default=0.05, ge=0, description="ohm")
+    capacity_ah: float = Field(default=2.0, gt=0)
+
+
+class MotorEncoderSpec(_Spec):
+    """Quadrature encoder on a driven wheel's motor."""
+
+    wheel: str
+    counts_per_rev: int = Field(gt=0, description="quadrature counts per wheel revolution")
+
+
+class TrackingWheelSpec(_Spec):
+    """A passive, unpowered measuring wheel with an encoder (seed 002's vertical/horizontal encoders)."""
+
+    name: str
+    x: float
+    y: float
+    direction_deg: float = Field(description="direction it measures, degrees in the body frame")
+    radius: float = Field(gt=0)
+    counts_per_rev: int = Field(gt=0)
+
+    @property
+    def direction(self) -> float:
+        return math.radians(self.direction_deg)
+
+
+class EncoderSpec(_Spec):
+    motors: tuple[MotorEncoderSpec, ...] = ()
+    tracking: tuple[TrackingWheelSpec, ...] = ()
+
+
+class GyroSpec(_Spec):
+    """A yaw-rate gyro (MEMS); noise figures per its datasheet."""
+
+    model: str = "generic"
+    rate_hz: float = Field(default=1000.0, gt=0)
+    noise_density: float = Field(default=8.7e-5, ge=0, description="rad/s/sqrt(Hz)")
+    bias_std: float = Field(default=0.01, ge=0, description="turn-on bias spread, rad/s")
+    bias_walk: float = Field(default=2e-4, ge=0, description="bias random walk, rad/s/sqrt(s)")
+    scale_error_std: float = Field(default=0.01, ge=0, description="scale factor error spread, fraction")
+    range: float = Field(default=4.363, gt=0, description="saturation, rad/s (MPU6050 +-250 deg/s)")
+    resolution: float = Field(default=1.332e-4, ge=0, description="rad/s per LSB (MPU6050: 1/131 deg/s)")
+
+
+class SonarSpec(_Spec):
+    """An ultrasonic range finder (HC-SR04 figures by default)."""
+
+    name: str
+    x: float
+    y: float
+    angle_deg: float
+    cone_deg: float = Field(default=15.0, gt=0, lt=180)
+    min_range: float = Field(default=0.02, ge=0)
+    max_range: float = Field(default=4.0, gt=0)
+    period_min: float = Field(default=0.060, gt=0, description="shortest measuring cycle, s")
+    noise_std: float = Field(default=0.003, ge=0, description="range noise, m")
+    miss_probability: float = Field(default=0.02, ge=0, le=1)
+
+    @property
+    def angle(self) -> float:
+        return math.radians(self.angle_deg)
+
+    @property
+    def cone(self) -> float:
+        return math.radians(self.cone_deg)
+
+
+class LimitsSpec(_Spec):
+    """What the robot may be asked to do; the controller's parameter checks come from here."""
+
+    speed_min: float = Field(default=0.0, ge=0, description="m/s, below it the robot does not start")
+    speed_max: float = Field(gt=0, description="m/s")
+    angular_speed_max: float = Field(gt=0, description="rad/s")
+    curvature_max: float = Field(gt=0, description="1/m")
+    acceleration_max: float = Field(gt=0, description="m/s^2")
+    angular_acceleration_max: float = Field(gt=0, description="rad/s^2")
+    distance_max: float = Field(default=5.0, gt=0, description="longest finite MOVE, m")
+
+
+class PiecewiseLinear(_Spec):
+    """y(x) by linear interpolation between knots, held constant outside them."""
+
+    x: tuple[float, ...]
+    y: tuple[float, ...]
+
+    @model_validator(mode="after")
+    def _check(self) -> PiecewiseLinear:
+        if len(self.x) != len(self.y) or not self.x:
+            raise ValueError("x and y need the same, non-zero number of knots")
+        if any(b <= a for a, b in zip(self.x, self.x[1:], strict=False)):
+            raise ValueError("x must increase strictly")
+        return self
+
+    def __call__(self, value: float) -> float:
+        xs, ys = self.x, self.y
+        if value <= xs[0]:
+            return ys[0]
+        for i in range(1, len(xs)):
+            if value <= xs[i]:
+                t = (value - xs[i - 1]) / (xs[i] - xs[i - 1])
+                return ys[i - 1] + t * (ys[i] - ys[i - 1])
+        return ys[-1]
+
+
+class CourseTable(_Spec):
+    """K_l(power, course): one power curve per course in 0..45 degrees (seed 000, Fig. 7)."""
+
+    courses_deg: tuple[float, ...]
+    curves: tuple[PiecewiseLinear, ...]
+
+    @model_validator(mode="after")
+    def _check(self) -> CourseTable:
+        if len(self.courses_deg) != len(self.curves) or not self.curves:
+            raise ValueError("courses_deg and curves need the same, non-zero length")
+        if any(b <= a for a, b in zip(self.courses_deg, self.courses_deg[1:], strict=False)):
+            raise ValueError("courses_deg must increase strictly")
+        return self
+
+
+class CalibrationSpec(_Spec):
+    """Seed 000's power calibration: P = K * K_l * V ... with factors as piecewise-linear tables.
+
+    ``k`` is PWM counts per m/s of wheel rim speed; the tables are dimensionless factors of power.
+    """
+
+    k: float = Field(gt=0, description="PWM counts per m/s of rim speed")
+    k_l: CourseTable | None = None
+    k_t: PiecewiseLinear | None = None
+    k_r: PiecewiseLinear | None = None
+
+
+class ControllerSpec(_Spec):
+    """Motor-controller settings baked into the firmware for this robot."""
+
+    loop_hz: float = Field(default=500.0, gt=0)
+    queue_capacity: int = Field(default=16, ge=1)
+    baud: int = Field(default=115200, gt=0)
+    line_max: int = Field(default=64, ge=16)
+    wheel_speed_control: bool = False
+    speed_kp: float = Field(default=0.0, ge=0, description="PWM counts per rad/s of wheel speed error")
+    speed_ki: float = Field(default=0.0, ge=0)
+
+
+class RobotDescription(_Spec):
+    """Everything omnibot knows about one robot."""
+
+    name: str
+    summary: str = ""
+    mass: float = Field(gt=0, description="kg")
+    yaw_inertia: float = Field(gt=0, description="kg m^2 about the vertical axis through the centre")
+    footprint: Footprint
+    wheels: tuple[WheelSpec, ...] = Field(min_length=3)
+    battery: BatterySpec
+    encoders: EncoderSpec = EncoderSpec()
+    gyro: GyroSpec | None = None
+    sonars: tuple[SonarSpec, ...] = ()
+    limits: LimitsSpec
+    controller: ControllerSpec = ControllerSpec()
+    calibration: CalibrationSpec | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _merge_motor_defaults(cls, data: Any) -> Any:
+        """A top-level ``motor`` gives every wheel's motor; a wheel's own ``motor`` overrides keys of it."""
+        if not isinstance(data, Mapping) or "motor" not in data:
+            return data
+        data = dict(data)
+        default = data.pop("motor")
+        if not isinstance(default, Mapping):
+            raise ValueError("'motor' must be a mapping")
+        wheels = data.get("wheels")
+        if isinstance(wheels, list | tuple):
+            merged = []
+            for wheel in wheels:
+                if isinstance(wheel, Mapping):
+                    own = wheel.get("motor", {})
+                    own = own if isinstance(own, Mapping) else {}
+                    wheel = {**wheel, "motor": {**default, **own}}
+                merged.append(wheel)
+            data["wheels"] = merged
+        return data
+
+    @model_validator(mode="after")
+    def _check_references(self) -> RobotDescription:
+        names = [w.name for w in self.wheels]
+        if len(set(names)) != len(names):
+            raise ValueError(f"wheel names must be unique, got {names}")
+        for enc in self.encoders.motors:
+            if enc.wheel not in names:
+                raise ValueError(_unknown(f"encoders.motors wheel '{enc.wheel}'", enc.wheel, names))
+        return self
+
+    @property
+    def n_wheels(self) -> int:
+        return len(self.wheels)
+
+    @cached_property
+    def wheel_matrix(self) -> Any:
+        """The inverse-kinematics matrix, see :func:`omnibot.robot.kinematics.wheel_matrix`."""
+        from omnibot.robot.kinematics import wheel_matrix
+
+        return wheel_matrix(self)
+
+    def wheel(self, name: str) -> WheelSpec:
+        for w in self.wheels:
+            if w.name == name:
+                return w
+        raise ConfigError(_unknown("no such wheel", name, [w.name for w in self.wheels]))
+
+
+# --------------------------------------------------------------------------- loading
+
+
+def _unknown(what: str, given: str, choices: list[str]) -> str:
+    close = difflib.get_close_matches(given, choices, n=1, cutoff=0.5)
+    hint = f"; did you mean '{close[0]}'?" if close else f"; expected one of: {', '.join(sorted(choices))}"
+    return what + hint
+
+
+def _model_at(loc: tuple[int | str, ...]) -> type[BaseModel] | None:
+    """The model class that owns the mapping at a validation-error location."""
+    model: Any = RobotDescription
+    for part in loc:
+        if isinstance(part, int):
+            continue
+        field = model.model_fields.get(part) if isinstance(model, type) else None
+        if field is None:
+            return None
+        model = _inner_model(field.annotation)
+    return model if isinstance(model, type) and issubclass(model, BaseModel) else None
+
+
+def _inner_model(annotation: Any) -> Any:
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    for arg in getattr(annotation, "__args__", ()):
+        found = _inner_model(arg)
+        if found is not None:
+            return found
+    return None
+
+
+def _format_loc(loc: tuple[int | str, ...]) -> str:
+    out = ""
+    for part in loc:
+        if isinstance(part, int):
+            out += f"[{part}]"
+        elif not (part.startswith("function-") or part in {"tuple[float, float]"}):
+            out += f".{part}" if out else part
+    return out
+
+
+def _explain(error: ValidationError, source: str) -> ConfigError:
+    lines = []
+    for item in error.errors():
+        loc = tuple(item["loc"])
+        key = _format_loc(loc) or "(top level)"
+        if item["type"] == "extra_forbidden":
+            owner = _model_at(loc[:-1])
+            valid = list(owner.model_fields) if owner else []
+            if owner is RobotDescription:
+                valid.append("motor")
+            lines.append(f"{key}: " + _unknown("unknown key", str(loc[-1]), valid))
+        elif item["type"] == "missing":
+            lines.append(f"{key}: required key is missing")
+        else:
+            msg = item["msg"].removeprefix("Value error, ")
+            given = item.get("input")
+            shown = "" if isinstance(given, Mapping | list) else f" (got {given!r})"
+            lines.append(f"{key}: {msg}{shown}")
+    head = f"invalid robot description {source}" if source else "invalid robot description"
+    return ConfigError(head + ":\n  " + "\n  ".join(lines))
+
+
+def parse_description(data: Any, source: str = "") -> RobotDescription:
+    """Validate a mapping (e.g. parsed YAML) into a :class:`RobotDescription`."""
+    if not isinstance(data, Mapping):
+        raise ConfigError(f"a robot description must be a mapping, got {type(data).__name__} {source}".strip())
+    try:
+        return RobotDescription.model_validate(data)
+    except ValidationError as exc:
+        raise _explain(exc, source) from None
+
+
+def load_description(path: str | Path) -> RobotDescription:
+    """Read and validate a YAML robot description file."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ConfigError(f"cannot read robot description {path}: {exc.strerror}") from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"{path} is not valid YAML: {exc}") from None
+    return parse_description(data, str(path))
+
+
+def preset_names() -> list[str]:
+    """Names of the bundled presets."""
+    return sorted(p.stem for p in PRESET_DIR.glob("*.yaml"))
+
+
+def load_robot(name_or_path: str | Path) -> RobotDescription:
+    """A preset by name (``omni4``, ``omni3``, ``mecanum4``) or a description file by path."""
+    text = str(name_or_path)
+    if text in preset_names():
+        return load_description(PRESET_DIR / f"{text}.yaml")
+    path = Path(text)
+    if path.suffix in {".yaml", ".yml"} or path.exists():
+        return load_description(path)
+    raise ConfigError(_unknown(f"unknown robot '{text}'", text, preset_names()))
