@@ -9,8 +9,8 @@ valid one::
 
 Wheel geometry is accepted in two forms (see docs/robot.md):
 
-* Cartesian: ``x``, ``y`` (wheel contact centre in the body frame), ``drive_angle_deg`` (direction the
-  contact point travels, relative to the body, for a positive wheel speed) and ``gamma_deg`` (roller
+* Cartesian: ``x``, ``y`` (wheel contact centre in the body frame), ``drive_angle_deg`` (direction in
+  which a positive wheel speed carries the robot at that wheel, body frame) and ``gamma_deg`` (roller
   angle: the rollers' constrained direction is the drive direction turned by gamma);
 * seed 003's polar form: ``alpha_deg``, ``beta_deg``, ``gamma_deg`` and ``L`` (Siegwart's Swedish wheel),
   converted with x = L cos(alpha), y = L sin(alpha), drive angle = alpha + beta - 90 degrees.
@@ -64,7 +64,10 @@ class Footprint(_Spec):
         if self.shape == "circle":
             assert self.radius is not None
             return [
-                (self.radius * math.cos(2 * math.pi * k / segments), self.radius * math.sin(2 * math.pi * k / segments))
+                (
+                    self.radius * math.cos(2 * math.pi * k / segments),
+                    self.radius * math.sin(2 * math.pi * k / segments),
+                )
                 for k in range(segments)
             ]
         if self.shape == "box":
@@ -143,7 +146,9 @@ class WheelSpec(_Spec):
             missing = sorted({"alpha_deg", "beta_deg", "L"} - set(polar))
             raise ValueError(f"seed 003 wheel geometry needs {', '.join(missing)}")
         if abs(math.cos(math.radians(self.gamma_deg))) < 1e-6:
-            raise ValueError("gamma_deg of +-90 makes the rollers take the whole drive: the wheel cannot push")
+            raise ValueError(
+                "gamma_deg of +-90 makes the rollers take the whole drive: the wheel cannot push"
+            )
         return self
 
     @property
@@ -158,7 +163,7 @@ class WheelSpec(_Spec):
 
     @property
     def drive_angle(self) -> float:
-        """Direction of travel of the contact point for a positive wheel speed, rad, body frame."""
+        """Direction in which a positive wheel speed carries the robot at this wheel, rad, body frame."""
         if self.L is not None:
             assert self.alpha_deg is not None and self.beta_deg is not None
             return math.radians(self.alpha_deg + self.beta_deg - 90.0)
@@ -355,8 +360,9 @@ class RobotDescription(_Spec):
                 if isinstance(wheel, Mapping):
                     own = wheel.get("motor", {})
                     own = own if isinstance(own, Mapping) else {}
-                    wheel = {**wheel, "motor": {**default, **own}}
-                merged.append(wheel)
+                    merged.append({**wheel, "motor": {**default, **own}})
+                else:
+                    merged.append(wheel)
             data["wheels"] = merged
         return data
 
@@ -403,7 +409,8 @@ def _model_at(loc: tuple[int | str, ...]) -> type[BaseModel] | None:
     for part in loc:
         if isinstance(part, int):
             continue
-        field = model.model_fields.get(part) if isinstance(model, type) else None
+        fields = model.model_fields if isinstance(model, type) and issubclass(model, BaseModel) else {}
+        field = fields.get(part)
         if field is None:
             return None
         model = _inner_model(field.annotation)
@@ -455,7 +462,9 @@ def _explain(error: ValidationError, source: str) -> ConfigError:
 def parse_description(data: Any, source: str = "") -> RobotDescription:
     """Validate a mapping (e.g. parsed YAML) into a :class:`RobotDescription`."""
     if not isinstance(data, Mapping):
-        raise ConfigError(f"a robot description must be a mapping, got {type(data).__name__} {source}".strip())
+        raise ConfigError(
+            f"a robot description must be a mapping, got {type(data).__name__} {source}".strip()
+        )
     try:
         return RobotDescription.model_validate(data)
     except ValidationError as exc:

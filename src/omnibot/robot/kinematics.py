@@ -48,9 +48,7 @@ def wheel_rows(
     denom = np.asarray(radii, dtype=float) * np.cos(np.asarray(gammas, dtype=float))
     if np.any(np.abs(denom) < 1e-12):
         raise KinematicsError("a wheel with gamma of +-90 degrees or zero radius cannot drive")
-    rows = np.column_stack(
-        (np.cos(phi), np.sin(phi), p[:, 0] * np.sin(phi) - p[:, 1] * np.cos(phi))
-    )
+    rows = np.column_stack((np.cos(phi), np.sin(phi), p[:, 0] * np.sin(phi) - p[:, 1] * np.cos(phi)))
     return np.asarray(rows / denom[:, None], dtype=float)
 
 

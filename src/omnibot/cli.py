@@ -1,0 +1,170 @@
+"""The ``omnibot`` command line: ``main(argv=None)`` returns the exit status, so tests call it directly.
+
+Every subcommand lives in its own function pair: ``_add_<name>(subparsers)`` declares its arguments,
+the handler does the work (importing heavy modules lazily so ``omnibot --help`` stays fast). Any
+:class:`~omnibot.errors.OmnibotError` becomes a one-line ``omnibot: error: ...`` on stderr and exit
+status 2, never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+from omnibot import __version__
+from omnibot.errors import ConfigError, OmnibotError
+
+Handler = Callable[[argparse.Namespace], int]
+
+
+def parse_floats(text: str, count: int, what: str) -> list[float]:
+    """``"a,b,c"`` -> floats, with an error that says what was expected."""
+    parts = [p.strip() for p in text.split(",")]
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        values = []
+    if len(values) != count or not all(math.isfinite(v) for v in values):
+        raise ConfigError(f"expected {count} comma-separated numbers, got {text!r}", key=what)
+    return values
+
+
+# --------------------------------------------------------------------------- robot
+
+
+def _robot_list(args: argparse.Namespace) -> int:
+    from omnibot.robot.description import load_robot, preset_names
+
+    for name in preset_names():
+        print(f"{name:10s} {load_robot(name).summary}")
+    return 0
+
+
+def _robot_show(args: argparse.Namespace) -> int:
+    from omnibot.robot.description import load_robot
+    from omnibot.robot.summary import describe
+
+    print(describe(load_robot(args.robot)))
+    return 0
+
+
+def _robot_urdf(args: argparse.Namespace) -> int:
+    from omnibot.robot.description import load_robot
+    from omnibot.robot.urdf import to_urdf
+
+    text = to_urdf(load_robot(args.robot))
+    if args.out:
+        try:
+            Path(args.out).write_text(text, encoding="utf-8")
+        except OSError as exc:
+            raise ConfigError(f"cannot write {args.out}: {exc.strerror}", key="--out") from None
+        print(f"wrote {args.out}", file=sys.stderr)
+    else:
+        sys.stdout.write(text)
+    return 0
+
+
+def _add_robot(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    p = sub.add_parser("robot", help="inspect robot descriptions and presets")
+    rsub = p.add_subparsers(dest="robot_command", required=True, metavar="{list,show,urdf}")
+    rsub.add_parser("list", help="list the bundled presets").set_defaults(handler=_robot_list)
+    show = rsub.add_parser("show", help="print a readable summary of a robot")
+    show.add_argument("robot", help="preset name (omni4, omni3, mecanum4) or description YAML file")
+    show.set_defaults(handler=_robot_show)
+    urdf = rsub.add_parser("urdf", help="write a URDF of the robot")
+    urdf.add_argument("robot", help="preset name or description YAML file")
+    urdf.add_argument("-o", "--out", help="output file (default: standard output)")
+    urdf.set_defaults(handler=_robot_urdf)
+
+
+# --------------------------------------------------------------------------- kinematics
+
+
+def _kinematics(args: argparse.Namespace) -> int:
+    from omnibot.robot import kinematics as kin
+    from omnibot.robot.description import load_robot
+
+    robot = load_robot(args.robot)
+    J = robot.wheel_matrix
+    names = [w.name for w in robot.wheels]
+    out: dict[str, object] = {"robot": robot.name, "wheel_names": names}
+    if args.wheels is not None:
+        speeds = parse_floats(args.wheels, robot.n_wheels, "--wheels")
+        result = kin.forward(J, speeds)
+        twist = [float(v) for v in result.twist]
+        residual = [float(v) for v in result.residual]
+        out |= {"wheel_speeds": speeds, "twist": twist, "residual": residual}
+    else:
+        twist = parse_floats(args.twist, 3, "--twist")
+        speeds = [float(v) for v in kin.inverse(J, twist)]
+        rims = [v * w.radius for v, w in zip(speeds, robot.wheels, strict=True)]
+        out |= {"twist": twist, "wheel_speeds": speeds, "rim_speeds": rims}
+    if args.json:
+        print(json.dumps(out))
+        return 0
+    print(f"{robot.name}: twist vx={twist[0]:.4g} m/s  vy={twist[1]:.4g} m/s  w={twist[2]:.4g} rad/s")
+    for name, speed, wheel in zip(names, speeds, robot.wheels, strict=True):
+        print(f"  {name:12s} {speed:10.4f} rad/s   rim {speed * wheel.radius:8.4f} m/s")
+    if args.wheels is not None:
+        print(
+            "  residual (rad/s, non-zero = wheels disagree, slip): " + ", ".join(f"{v:.4f}" for v in residual)
+        )
+    return 0
+
+
+def _add_kinematics(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    p = sub.add_parser(
+        "kinematics",
+        help="wheel speeds for a body twist (or the twist for wheel speeds)",
+        description="Inverse kinematics by default; --wheels gives forward kinematics instead. "
+        "Write negative first values with '=': --twist=-0.2,0,0",
+    )
+    p.add_argument("--robot", default="omni4", help="preset name or description file (default omni4)")
+    group = p.add_mutually_exclusive_group()
+    group.add_argument("--twist", default="0,0,0", help="VX,VY,W in m/s, m/s, rad/s (body frame)")
+    group.add_argument("--wheels", help="wheel speeds in rad/s, comma-separated, preset wheel order")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(handler=_kinematics)
+
+
+# --------------------------------------------------------------------------- parser
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="omnibot", description="Drive omnidirectional mobile robots, real or simulated."
+    )
+    parser.add_argument("--version", action="version", version=f"omnibot {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for add in ADDERS:
+        add(sub)
+    return parser
+
+
+ADDERS: list[Callable[[argparse._SubParsersAction[argparse.ArgumentParser]], None]] = [
+    _add_robot,
+    _add_kinematics,
+]
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ``omnibot`` command line; returns the exit status."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    handler: Handler = args.handler
+    try:
+        return handler(args)
+    except OmnibotError as exc:
+        print(f"omnibot: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("omnibot: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,153 @@
+"""Robot descriptions: presets load, bad files give errors that name the key and suggest the fix."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import pytest
+import yaml
+
+from omnibot.errors import ConfigError
+from omnibot.robot.description import (
+    PRESET_DIR,
+    PiecewiseLinear,
+    load_description,
+    load_robot,
+    parse_description,
+    preset_names,
+)
+
+
+def preset_data(name: str) -> dict[str, Any]:
+    data = yaml.safe_load((PRESET_DIR / f"{name}.yaml").read_text())
+    assert isinstance(data, dict)
+    return data
+
+
+def test_presets_are_the_three_seed_robots() -> None:
+    assert preset_names() == ["mecanum4", "omni3", "omni4"]
+
+
+def test_omni4_keeps_seed000_numbers() -> None:
+    r = load_robot("omni4")
+    assert r.n_wheels == 4 and r.mass <= 2.0
+    assert [w.name for w in r.wheels] == ["m1", "m2", "m3", "m4"]
+    for w in r.wheels:
+        assert math.hypot(*w.position) == pytest.approx(0.096)
+        assert w.radius == pytest.approx(0.025)
+        assert w.motor.pwm_max == 255
+    assert r.battery.voltage == pytest.approx(7.4)
+    assert (r.limits.speed_min, r.limits.speed_max) == (0.30, 1.00)
+    assert len(r.sonars) == 1
+
+
+def test_omni3_keeps_seed002_numbers() -> None:
+    r = load_robot("omni3")
+    assert r.n_wheels == 3 and r.mass == pytest.approx(30)
+    assert all(w.radius == pytest.approx(0.0762) for w in r.wheels)  # 6 inch diameter
+    assert r.battery.voltage == pytest.approx(22.5)
+    assert r.limits.speed_max == pytest.approx(5.0)
+    assert {t.name for t in r.encoders.tracking} == {"vertical", "horizontal"}
+    assert r.gyro is not None and r.gyro.model == "MPU6050"
+
+
+def test_mecanum4_keeps_seed003_alpha_beta_gamma() -> None:
+    r = load_robot("mecanum4")
+    assert [w.alpha_deg for w in r.wheels] == [35.77, 144.23, 215.77, 324.23]
+    assert [w.gamma_deg for w in r.wheels] == [45, -45, 45, -45]
+    assert all(pytest.approx(0.0937) == w.L and w.radius == pytest.approx(0.0325) for w in r.wheels)
+
+
+def test_polar_form_converts_to_cartesian() -> None:
+    w = load_robot("mecanum4").wheels[0]
+    assert w.position[0] == pytest.approx(0.0937 * math.cos(math.radians(35.77)))
+    assert w.position[1] == pytest.approx(0.0937 * math.sin(math.radians(35.77)))
+    assert math.degrees(w.drive_angle) == pytest.approx(35.77 + 144.23 - 90)
+
+
+def test_wheel_motor_overrides_merge_with_the_default() -> None:
+    data = preset_data("omni4")
+    data["wheels"][1]["motor"] = {"resistance": 4.2}
+    r = parse_description(data)
+    assert r.wheels[1].motor.resistance == 4.2
+    assert r.wheels[1].motor.gear_ratio == r.wheels[0].motor.gear_ratio
+    assert r.wheels[0].motor.resistance == 3.5
+
+
+def error_for(data: dict[str, Any]) -> str:
+    with pytest.raises(ConfigError) as info:
+        parse_description(data, "test.yaml")
+    return str(info.value)
+
+
+def test_misspelt_key_is_named_with_a_suggestion() -> None:
+    data = preset_data("omni4")
+    data["wheels"][1]["radus"] = data["wheels"][1].pop("radius")
+    msg = error_for(data)
+    assert "wheels[1].radus: unknown key; did you mean 'radius'?" in msg
+    assert "wheels[1].radius: required key is missing" in msg
+
+
+def test_misspelt_top_level_and_nested_keys() -> None:
+    data = preset_data("omni3")
+    data["mas"] = data.pop("mass")
+    data["limits"]["speed_mx"] = data["limits"].pop("speed_max")
+    msg = error_for(data)
+    assert "mas: unknown key; did you mean 'mass'?" in msg
+    assert "limits.speed_mx: unknown key; did you mean 'speed_max'?" in msg
+
+
+def test_bad_values_are_named() -> None:
+    data = preset_data("omni4")
+    data["mass"] = -1
+    data["wheels"][0]["radius"] = "big"
+    msg = error_for(data)
+    assert "mass: Input should be greater than 0 (got -1)" in msg
+    assert "wheels[0].radius:" in msg and "'big'" in msg
+
+
+def test_mixed_wheel_forms_and_degenerate_rollers_are_rejected() -> None:
+    data = preset_data("omni4")
+    data["wheels"][0]["alpha_deg"] = 10
+    assert "either x/y/drive_angle_deg or alpha_deg/beta_deg/L" in error_for(data)
+    data = preset_data("omni4")
+    data["wheels"][2]["gamma_deg"] = 90
+    assert "wheels[2]: gamma_deg of +-90" in error_for(data)
+
+
+def test_encoder_on_unknown_wheel_suggests_a_name() -> None:
+    data = preset_data("omni4")
+    data["encoders"]["motors"][0]["wheel"] = "m5"
+    assert "did you mean 'm1'?" in error_for(data) or "did you mean" in error_for(data)
+
+
+def test_not_a_mapping(tmp_path: Path) -> None:
+    f = tmp_path / "r.yaml"
+    f.write_text("- just\n- a list\n")
+    with pytest.raises(ConfigError, match="must be a mapping"):
+        load_description(f)
+    f.write_text("name: [unclosed\n")
+    with pytest.raises(ConfigError, match="not valid YAML"):
+        load_description(f)
+    with pytest.raises(ConfigError, match="cannot read"):
+        load_description(tmp_path / "missing.yaml")
+
+
+def test_unknown_preset_suggests() -> None:
+    with pytest.raises(ConfigError, match="did you mean 'mecanum4'"):
+        load_robot("mecanum")
+
+
+def test_description_file_round_trip(tmp_path: Path) -> None:
+    f = tmp_path / "mine.yaml"
+    f.write_text(yaml.safe_dump(preset_data("omni3")))
+    assert load_robot(str(f)) == load_robot("omni3")
+
+
+def test_piecewise_linear() -> None:
+    f = PiecewiseLinear(x=(0, 100, 255), y=(2.0, 1.0, 0.5))
+    assert f(-5) == 2.0 and f(50) == pytest.approx(1.5) and f(177.5) == pytest.approx(0.75) and f(999) == 0.5
+    with pytest.raises(ValueError, match="increase strictly"):
+        PiecewiseLinear(x=(0, 0), y=(1, 1))
