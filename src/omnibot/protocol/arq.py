@@ -1,0 +1,173 @@
+"""Sequence numbers, acknowledgement and retry for binary frames (MicroPython-safe, no timers).
+
+Both directions use the same rules (docs/protocol.md, "Sequence numbers, acknowledgement, retry"):
+
+* A sequenced frame carries seq 1..255 (wrapping to 1). The sender (:class:`Sender`) sends a frame
+  only if its seq is less than ``window`` after the oldest unacknowledged one, retransmits a frame
+  ``timeout_ms`` after it was last sent, ``retries`` times at most, then gives up on it and on
+  every later frame still pending, and marks its next frame SYNC.
+* Commands are acknowledged by their reply (same seq), events by an ACK frame (same seq).
+* The receiver (:class:`Receiver`) takes frames strictly in order: the expected seq is NEW
+  (execute/deliver, then reply/ACK); one of the last ``window`` seqs is a DUPLICATE (re-send the
+  cached reply / re-ACK, never execute twice); anything else is OUT_OF_ORDER and dropped without an
+  answer, so the sender's retransmissions restore the order.
+* A SYNC frame that is not a duplicate is NEW whatever seq the receiver expected: the sender
+  abandoned every earlier frame. STOP and HELLO are always sent SYNC; HELLO also resets the
+  receiver (:meth:`Receiver.reset`) before it is classified, which starts a session.
+
+Time is a number of milliseconds passed in by the caller (``now``); nothing here reads a clock.
+"""
+
+from omnibot.protocol import codes
+
+NEW = 0
+DUPLICATE = 1
+OUT_OF_ORDER = 2
+
+
+def seq_next(seq: int) -> int:
+    """The sequence number after ``seq`` (1..255, 255 wraps to 1)."""
+    return seq % codes.SEQ_MAX + 1
+
+
+def seq_back(expected: int, seq: int) -> int:
+    """How many frames before ``expected`` the frame ``seq`` is (0 = it is the expected one)."""
+    return (expected - seq) % codes.SEQ_MAX
+
+
+class _Out:
+    """A frame awaiting acknowledgement."""
+
+    def __init__(self, seq: int, frame: bytes, deadline: int) -> None:
+        self.seq = seq
+        self.frame = frame
+        self.deadline = deadline
+        self.resent = 0
+
+
+class Sender:
+    """Outgoing sequenced frames awaiting acknowledgement.
+
+    Use: ``seq, sync = tx.allocate()``; encode the frame with them; ``tx.track(seq, frame, now)``;
+    write it. On a reply/ACK call ``tx.ack(seq)``. Call ``tx.poll(now)`` often and write the frames
+    it returns. ``tx.take_failed()`` lists seqs that will never be acknowledged.
+    """
+
+    def __init__(
+        self,
+        window: int = codes.WINDOW,
+        timeout_ms: int = codes.RETRY_TIMEOUT_MS,
+        retries: int = codes.RETRIES,
+        first_seq: int = 1,
+    ) -> None:
+        self.window = window
+        self.timeout_ms = timeout_ms
+        self.retries = retries
+        self._next = first_seq
+        self._sync = True
+        self._pending: list[_Out] = []
+        self._failed: list[int] = []
+
+    def ready(self) -> bool:
+        """True if another frame may be sent now: its seq is less than ``window`` after the oldest
+        unacknowledged one (so a receiver always tells a retransmission from a new frame)."""
+        return not self._pending or seq_back(self._next, self._pending[0].seq) < self.window
+
+    def pending(self) -> "list[int]":
+        """Seqs sent and not yet acknowledged, oldest first."""
+        return [p.seq for p in self._pending]
+
+    def allocate(self, sync: bool = False) -> "tuple[int, bool]":
+        """Seq and SYNC flag for the next frame.
+
+        ``sync=True`` (STOP, HELLO) abandons every pending frame first. A SYNC flag is also given
+        to the first frame and to the first frame after a give-up. Raises ValueError if the
+        window is full.
+        """
+        if sync:
+            self._abandon(0)
+        elif not self.ready():
+            raise ValueError("send window full")
+        seq = self._next
+        self._next = seq_next(seq)
+        flag = sync or self._sync
+        self._sync = False
+        return seq, flag
+
+    def track(self, seq: int, frame: bytes, now: int) -> None:
+        """Remember a frame just written, for retransmission until it is acknowledged."""
+        self._pending.append(_Out(seq, frame, now + self.timeout_ms))
+
+    def ack(self, seq: int) -> bool:
+        """The peer acknowledged ``seq``; False if it was not pending (late or duplicate ack)."""
+        for i in range(len(self._pending)):
+            if self._pending[i].seq == seq:
+                self._pending.pop(i)
+                return True
+        return False
+
+    def poll(self, now: int) -> "list[bytes]":
+        """Frames to retransmit at time ``now``, oldest first; gives up after ``retries``."""
+        out: list[bytes] = []
+        for i in range(len(self._pending)):
+            entry = self._pending[i]
+            if now < entry.deadline:
+                continue
+            if entry.resent >= self.retries:
+                self._abandon(i)
+                break
+            entry.deadline = now + self.timeout_ms
+            entry.resent += 1
+            out.append(entry.frame)
+        return out
+
+    def take_failed(self) -> "list[int]":
+        """Seqs given up on or abandoned since the last call (they get no reply), oldest first."""
+        failed = self._failed
+        self._failed = []
+        return failed
+
+    def _abandon(self, start: int) -> None:
+        if start < len(self._pending):
+            for entry in self._pending[start:]:
+                self._failed.append(entry.seq)
+            self._pending = self._pending[:start]
+            self._sync = True
+
+
+class Receiver:
+    """Incoming sequenced frames: in-order acceptance, duplicate detection, cached replies."""
+
+    def __init__(self, window: int = codes.WINDOW) -> None:
+        self.window = window
+        self.expected = 0  # 0: nothing received yet, the first frame is accepted whatever its seq
+        self._replies: dict[int, bytes] = {}
+
+    def reset(self) -> None:
+        """Start a new session (on HELLO): accept the next frame whatever its seq."""
+        self.expected = 0
+        self._replies = {}
+
+    def classify(self, seq: int, sync: bool = False) -> int:
+        """NEW, DUPLICATE or OUT_OF_ORDER for an incoming frame; NEW advances the expected seq."""
+        if seq == 0:
+            return NEW
+        if self.expected:
+            back = seq_back(self.expected, seq)
+            if 0 < back <= self.window:
+                return DUPLICATE
+            if back and not sync:
+                return OUT_OF_ORDER
+        self.expected = seq_next(seq)
+        for old in list(self._replies):
+            if not 0 < seq_back(self.expected, old) <= self.window:
+                del self._replies[old]
+        return NEW
+
+    def remember(self, seq: int, reply: bytes) -> None:
+        """Keep the reply frame sent for ``seq``, to answer a duplicate of it."""
+        self._replies[seq] = reply
+
+    def reply_for(self, seq: int) -> "bytes | None":
+        """The reply sent for a duplicate ``seq``, if it is still kept."""
+        return self._replies.get(seq)

@@ -1,0 +1,201 @@
+"""Protocol constants shared by the host and the motor-controller firmware (docs/protocol.md).
+
+MicroPython-safe on purpose: plain integer constants and dicts, no imports. The firmware imports this
+module on the board, the host codecs import it under CPython; one table, so both always agree.
+"""
+
+# --- versions and limits ---------------------------------------------------------------------------
+PROTOCOL_VERSION = 1  # first field of the HELLO reply; one number covers text and binary framing
+VERSIONS = (1,)  # protocol versions this implementation speaks
+INF = 30000  # "infinite" distance, angle or repeat
+INT_MIN = -32768  # command parameters are 16-bit signed
+INT_MAX = 32767
+PARAMS_MAX = 5  # parameters of one command (events and telemetry may carry more fields)
+LINE_MAX = 64  # longest command, host -> controller, terminator excluded
+EVENT_LINE_MAX = 256  # longest reply/event line, controller -> host, CR LF excluded
+POWER_MAX = 255  # raw motor power -255..255
+MOTORS_MAX = PARAMS_MAX - 1  # POWER,T,P1..Pn carries at most 4 motors
+
+# --- text framing ----------------------------------------------------------------------------------
+COMMAND_TERMINATORS = b";\r\n"  # any run of these ends a command (host -> controller)
+LINE_TERMINATORS = b"\r\n"  # reply/event lines (';' is part of a STATUS reply line)
+COMMAND_END = b"\n"  # what the host codec writes after a command
+LINE_END = b"\r\n"  # what the controller writes after a reply or event
+
+# --- keywords ----------------------------------------------------------------------------------------
+# Command ids double as binary message types (see BINARY below).
+MOVE = 1
+ROTATE = 2
+DELTA = 3
+POWER = 4
+STOP = 5
+VEL = 6
+MODE = 7
+SONAR = 8
+TELEM = 9
+STATUS = 10
+HELLO = 11
+CAL = 12
+ACK = 31  # binary only: the host acknowledges an event frame
+
+COMMANDS = {
+    "MOVE": MOVE,
+    "ROTATE": ROTATE,
+    "DELTA": DELTA,
+    "POWER": POWER,
+    "STOP": STOP,
+    "VEL": VEL,
+    "MODE": MODE,
+    "SONAR": SONAR,
+    "TELEM": TELEM,
+    "STATUS": STATUS,
+    "HELLO": HELLO,
+    "CAL": CAL,
+}
+# (fewest, most) parameters of each command; POWER is T plus one power per motor.
+PARAM_COUNTS = {
+    MOVE: (4, 4),
+    ROTATE: (2, 2),
+    DELTA: (5, 5),
+    POWER: (2, 5),
+    STOP: (0, 0),
+    VEL: (4, 4),
+    MODE: (1, 1),
+    SONAR: (5, 5),
+    TELEM: (2, 2),
+    STATUS: (0, 0),
+    HELLO: (0, 5),
+    CAL: (4, 4),
+}
+QUEUED = (MOVE, ROTATE, DELTA, POWER)  # commands that go through the queue
+
+# --- replies and events (binary message types; text keywords in KEYWORDS) ------------------------
+OK = 32
+ERROR = 33  # ERROR reply to a command
+HELLO_REPLY = 34
+STATUS_REPLY = 35
+RANGE = 64
+WARN = 65
+ERROR_EVENT = 66  # ERROR raised by the motion or sensor logic, not a reply
+IDLE = 67
+TEL = 68
+
+KEYWORDS = {
+    MOVE: "MOVE",
+    ROTATE: "ROTATE",
+    DELTA: "DELTA",
+    POWER: "POWER",
+    STOP: "STOP",
+    VEL: "VEL",
+    MODE: "MODE",
+    SONAR: "SONAR",
+    TELEM: "TELEM",
+    STATUS: "STATUS",
+    HELLO: "HELLO",
+    CAL: "CAL",
+    ACK: "ACK",
+    OK: "OK",
+    ERROR: "ERROR",
+    HELLO_REPLY: "HELLO",
+    STATUS_REPLY: "STATUS",
+    RANGE: "RANGE",
+    WARN: "WARN",
+    ERROR_EVENT: "ERROR",
+    IDLE: "IDLE",
+    TEL: "TEL",
+}
+REPLIES = (OK, ERROR, HELLO_REPLY, STATUS_REPLY)  # frame seq = the answered command's seq
+EVENTS = (RANGE, WARN, ERROR_EVENT, IDLE)  # own seq, acknowledged by the host with ACK
+# Binary payload: these types carry this many integers, then the rest of the frame is ASCII text.
+TEXT_AFTER = {ERROR: 1, ERROR_EVENT: 1, WARN: 1, HELLO_REPLY: 2}
+
+# --- WARN and ERROR codes ----------------------------------------------------------------------------
+W_SPEED_REDUCED = 11
+W_POWER_TOO_LOW = 12
+W_SONAR_STOP = 13
+E_QUEUE_FULL = 21
+E_TOO_LONG = 22
+E_UNKNOWN = 23
+E_PARAM_COUNT = 24
+E_NOT_INTEGER = 25
+E_TIME = 27
+E_SPEED = 28
+E_ANGLE = 29
+E_CURVATURE = 30
+E_COURSE = 31
+E_DISTANCE = 32
+E_SONAR_PERIOD = 33
+E_RANGE16 = 34
+E_REPEAT = 35
+E_INTERNAL = 36
+E_SONAR = 37
+E_CALIBRATION = 38  # project: CAL table, index or knot order
+E_UNSUPPORTED = 39  # project: MODE bit, TELEM mask bit or protocol version not supported
+E_ESTOP = 40
+
+TEXTS = {
+    W_SPEED_REDUCED: "speed reduced to what the motors can give",
+    W_POWER_TOO_LOW: "power below what moves the robot, set to 0",
+    W_SONAR_STOP: "emergency stop by sonar",
+    E_QUEUE_FULL: "queue full",
+    E_TOO_LONG: "command too long",
+    E_UNKNOWN: "unknown command",
+    E_PARAM_COUNT: "wrong number of parameters",
+    E_NOT_INTEGER: "parameter is not an integer",
+    E_TIME: "time out of range",
+    E_SPEED: "speed or power out of range",
+    E_ANGLE: "angle out of range",
+    E_CURVATURE: "curvature out of range",
+    E_COURSE: "course out of range",
+    E_DISTANCE: "distance out of range",
+    E_SONAR_PERIOD: "sonar period out of range",
+    E_RANGE16: "value outside 16-bit range",
+    E_REPEAT: "repeat out of range",
+    E_INTERNAL: "internal fault",
+    E_SONAR: "sonar distance out of range or no such sonar",
+    E_CALIBRATION: "calibration table, index or knot order wrong",
+    E_UNSUPPORTED: "mode, mask bit or version not supported",
+    E_ESTOP: "motion blocked: emergency stop latched",
+}
+
+# --- STATUS states -----------------------------------------------------------------------------------
+STATE_MOVING = 0
+STATE_IDLE = 1
+STATE_ESTOP = 3
+
+# --- MODE bits -----------------------------------------------------------------------------------------
+MODE_SIMULATION = 1  # bit 0: run every algorithm, apply no power
+MODE_CLOSED_LOOP = 2  # bit 1: closed-loop wheel-speed control (needs motor encoders)
+MODE_BINARY = 4  # bit 2: binary framing in both directions (after the OK of this MODE)
+MODE_MASK = 7  # every defined bit; others get ERROR 39
+
+# --- TEL mask bits; groups follow t_ms and mask in bit order -------------------------------------
+TEL_POWER = 1  # n, p1..pn: applied motor powers
+TEL_ENCODERS = 2  # n, c1..cn: motor encoder counts (cumulative, signed 32-bit)
+TEL_TRACKING = 4  # m, k1..km: passive tracking-wheel counts (cumulative, signed 32-bit)
+TEL_GYRO = 8  # yaw rate, 0.01 deg/s
+TEL_HEADING = 16  # integrated yaw, 0.01 deg, not wrapped
+TEL_BATTERY = 32  # battery voltage, mV
+TEL_QUEUE = 64  # state, queued commands
+TEL_SONAR = 128  # k, r1..rk: last range of each sonar, cm (-1: none)
+TEL_MASK = 255
+TEL_PERIOD_MIN = 10  # ms; TELEM,P with 0 < P < 10 gets ERROR 27
+
+# --- CAL tables (CAL,T,I,X,Y) --------------------------------------------------------------------------
+CAL_K = 0  # Y = K in 0.001 PWM counts per cm/s of rim speed (I = X = 0)
+CAL_KT = 1  # K_t(power): knot I = (X power, Y factor x 1000)
+CAL_KR = 2  # K_r(power)
+CAL_KL = 10  # 10 + k: K_l curve k; I = -1 sets its course (X degrees), I >= 0 a knot
+CAL_KL_CURVES = 8
+CAL_KNOTS_MAX = 16
+CAL_SCALE = 1000
+
+# --- binary framing (frame.py, arq.py) ------------------------------------------------------------
+FRAME_DELIMITER = 0  # COBS-encoded frames are separated by 0x00
+FRAME_SYNC = 0x80  # flag in the type byte: the sender abandoned every earlier frame
+FRAME_TYPE_MASK = 0x7F
+FRAME_MAX = 254  # decoded bytes (type .. CRC) in one frame
+SEQ_MAX = 255  # sequence numbers run 1..255 and wrap to 1; 0 = unsequenced (TEL)
+WINDOW = 4  # frames a sender may have unacknowledged
+RETRY_TIMEOUT_MS = 50
+RETRIES = 3  # retransmissions before giving up

@@ -1,0 +1,219 @@
+"""Acknowledgement and retry: Sender and Receiver alone, then both over a lossy link."""
+
+from __future__ import annotations
+
+import itertools
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from omnibot.protocol import arq, binary, codes
+from omnibot.protocol import messages as m
+
+
+def test_first_frame_is_sync_and_seqs_wrap() -> None:
+    tx = arq.Sender(window=300, first_seq=254)
+    got = [tx.allocate() for _ in range(4)]
+    assert got == [(254, True), (255, False), (1, False), (2, False)]
+    assert arq.seq_next(255) == 1 and arq.seq_back(1, 255) == 1 and arq.seq_back(7, 7) == 0
+
+
+def test_window_limits_unacknowledged_frames() -> None:
+    tx = arq.Sender(window=2)
+    for now in (0, 1):
+        seq, _ = tx.allocate()
+        tx.track(seq, b"f%d" % seq, now)
+    assert not tx.ready()
+    with pytest.raises(ValueError):
+        tx.allocate()
+    assert tx.ack(1) and not tx.ack(1) and not tx.ack(99)
+    assert tx.ready() and tx.pending() == [2]
+
+
+def test_window_spans_from_the_oldest_unacknowledged_frame() -> None:
+    tx = arq.Sender(window=3)
+    for now in range(3):
+        seq, _ = tx.allocate()
+        tx.track(seq, b"x", now)
+    tx.ack(2)
+    tx.ack(3)
+    assert tx.pending() == [1] and not tx.ready()  # seq 4 would be 3 after the pending seq 1
+    tx.ack(1)
+    assert tx.ready()
+
+
+def test_timeout_retransmits_then_gives_up() -> None:
+    tx = arq.Sender(window=4, timeout_ms=50, retries=2)
+    for now in (0, 10):
+        seq, _ = tx.allocate()
+        tx.track(seq, b"f%d" % seq, now)
+    assert tx.poll(49) == []
+    assert tx.poll(50) == [b"f1"]
+    assert tx.poll(60) == [b"f2"]
+    assert tx.poll(100) == [b"f1"]
+    assert tx.poll(110) == [b"f2"]
+    assert tx.take_failed() == []
+    assert tx.poll(150) == []  # f1 out of retries: it and every later frame are given up
+    assert tx.take_failed() == [1, 2] and tx.take_failed() == []
+    assert tx.pending() == [] and tx.allocate() == (3, True)  # the next frame resynchronises
+
+
+def test_ack_stops_retransmission() -> None:
+    tx = arq.Sender(timeout_ms=50, retries=3)
+    seq, _ = tx.allocate()
+    tx.track(seq, b"f", 0)
+    assert tx.poll(50) == [b"f"]
+    tx.ack(seq)
+    assert tx.poll(1000) == [] and tx.take_failed() == []
+
+
+def test_sync_abandons_pending_frames() -> None:
+    tx = arq.Sender()
+    for now in range(3):
+        seq, _ = tx.allocate()
+        tx.track(seq, b"x", now)
+    assert tx.allocate(sync=True) == (4, True)
+    assert tx.take_failed() == [1, 2, 3] and tx.pending() == []
+
+
+def test_receiver_in_order_duplicate_and_out_of_order() -> None:
+    rx = arq.Receiver(window=2)
+    assert rx.classify(10) == arq.NEW  # first frame: any seq
+    assert rx.classify(11) == arq.NEW
+    assert rx.classify(11) == arq.DUPLICATE
+    assert rx.classify(10) == arq.DUPLICATE
+    assert rx.classify(9) == arq.OUT_OF_ORDER  # older than the window
+    assert rx.classify(13) == arq.OUT_OF_ORDER  # 12 is missing
+    assert rx.classify(12) == arq.NEW
+    assert rx.classify(13) == arq.NEW
+    assert rx.classify(0) == arq.NEW and rx.expected == 14  # unsequenced: no state
+    assert rx.classify(40, sync=True) == arq.NEW and rx.expected == 41
+    assert rx.classify(40, sync=True) == arq.DUPLICATE  # a retransmitted SYNC frame
+    rx.reset()
+    assert rx.classify(40) == arq.NEW
+
+
+def test_receiver_wraps_at_255() -> None:
+    rx = arq.Receiver()
+    assert [rx.classify(s) for s in (254, 255, 1, 255)] == [arq.NEW, arq.NEW, arq.NEW, arq.DUPLICATE]
+
+
+def test_cached_replies_cover_the_window() -> None:
+    rx = arq.Receiver(window=2)
+    for seq in (1, 2, 3):
+        assert rx.classify(seq) == arq.NEW
+        rx.remember(seq, b"r%d" % seq)
+    assert rx.classify(3) == arq.DUPLICATE and rx.reply_for(3) == b"r3"
+    assert rx.reply_for(2) == b"r2"
+    assert rx.classify(4) == arq.NEW
+    assert rx.reply_for(2) is None and rx.reply_for(3) == b"r3"
+
+
+class Controller:
+    """A minimal controller: executes each command once and replies OK (the reply is the ack)."""
+
+    def __init__(self) -> None:
+        self.rx = arq.Receiver()
+        self.executed: list[m.Message] = []
+
+    def receive(self, wire: bytes) -> bytes | None:
+        _, packet = binary.decode(wire)
+        assert isinstance(packet, binary.Packet)
+        if isinstance(packet.message, m.Hello):
+            self.rx.reset()
+        verdict = self.rx.classify(packet.seq, packet.sync)
+        if verdict == arq.DUPLICATE:
+            return self.rx.reply_for(packet.seq)  # re-ack, do not re-execute
+        if verdict == arq.OUT_OF_ORDER:
+            return None
+        self.executed.append(packet.message)
+        reply = binary.encode(m.Ok(), packet.seq)
+        self.rx.remember(packet.seq, reply)
+        return reply
+
+
+def test_duplicate_command_is_re_acknowledged_not_re_executed() -> None:
+    ctl = Controller()
+    tx = arq.Sender(timeout_ms=50)
+    seq, sync = tx.allocate()
+    wire = binary.encode(m.Move(2, 40, 0, 0), seq, sync=sync)
+    tx.track(seq, wire, 0)
+    first = ctl.receive(wire)  # the reply is lost on the way back
+    assert first is not None
+    [again] = tx.poll(50)
+    reply = ctl.receive(again)
+    assert reply == first and ctl.executed == [m.Move(2, 40, 0, 0)]
+    tx.ack(binary.decode(reply)[1].seq)  # type: ignore[union-attr]
+    assert tx.pending() == []
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(st.booleans(), min_size=1, max_size=400),  # True: the frame is lost
+    st.integers(5, 40),
+    st.integers(0, 3),
+)
+def test_lossy_link_executes_each_command_at_most_once_and_in_order(
+    losses: list[bool], count: int, retries: int
+) -> None:
+    """Commands go out through a link that drops frames (both ways) as ``losses`` says.
+
+    Every command is either acknowledged or reported failed; acknowledged ones ran exactly once;
+    whatever ran, ran once and in the order sent.
+    """
+    loss = itertools.cycle(losses)
+    ctl = Controller()
+    tx = arq.Sender(window=codes.WINDOW, timeout_ms=50, retries=retries)
+    commands = [m.Move(i, 40, 0, 0) for i in range(count)]
+    sent: dict[int, m.Move] = {}
+    acked: list[m.Move] = []
+    failed: list[m.Move] = []
+    wire_out: list[bytes] = []
+    now = 0
+    queue = list(commands)
+    while queue or tx.pending():
+        while queue and tx.ready():
+            cmd = queue.pop(0)
+            seq, sync = tx.allocate()
+            frame = binary.encode(cmd, seq, sync=sync)
+            sent[seq] = cmd
+            tx.track(seq, frame, now)
+            wire_out.append(frame)
+        wire_out.extend(tx.poll(now))
+        for frame in wire_out:
+            if next(loss):
+                continue
+            reply = ctl.receive(frame)
+            if reply is not None and not next(loss):
+                seq = binary.decode(reply)[1].seq  # type: ignore[union-attr]
+                if tx.ack(seq):
+                    acked.append(sent[seq])
+        wire_out = []
+        failed.extend(sent[s] for s in tx.take_failed())
+        now += 10
+        assert now < 100_000
+    assert sorted(acked + failed, key=lambda c: c.distance) == commands
+    assert set(acked) <= set(ctl.executed)
+    ran = [c.distance for c in ctl.executed if isinstance(c, m.Move)]
+    assert len(ran) == len(ctl.executed)
+    assert ran == sorted(set(ran))
+
+
+def test_duplicate_event_is_re_acked_and_delivered_once() -> None:
+    ctl_tx = arq.Sender(timeout_ms=50)
+    host_rx = arq.Receiver()
+    delivered: list[m.Message] = []
+    seq, sync = ctl_tx.allocate()
+    event = binary.encode(m.Range(1, 35), seq, sync=sync)
+    ctl_tx.track(seq, event, 0)
+    acks: list[bytes] = []
+    for wire in (event, *ctl_tx.poll(50)):  # the first ACK is lost, the event comes again
+        packet = binary.decode(wire)[1]
+        assert isinstance(packet, binary.Packet)
+        if host_rx.classify(packet.seq, packet.sync) == arq.NEW:
+            delivered.append(packet.message)
+        acks.append(binary.encode(m.Ack(), packet.seq))
+    assert delivered == [m.Range(1, 35)] and acks[0] == acks[1]
+    ack = binary.decode(acks[1])[1]
+    assert isinstance(ack, binary.Packet) and ctl_tx.ack(ack.seq) and ctl_tx.pending() == []

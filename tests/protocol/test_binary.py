@@ -1,0 +1,210 @@
+"""Binary codec: round trips, any split, resynchronisation after garbage, worked examples, sizes."""
+
+from __future__ import annotations
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from omnibot.errors import ProtocolError
+from omnibot.protocol import binary, codes, frame, text
+from omnibot.protocol import messages as m
+from tests.protocol import strategies as s
+
+Item = binary.Packet | m.Malformed
+
+
+def decode_all(data: bytes) -> list[Item]:
+    out: list[Item] = []
+    while True:
+        used, item = binary.decode(data)
+        if used == 0:
+            return out
+        data = data[used:]
+        if item is not None:
+            out.append(item)
+
+
+def chunked(data: bytes, size: int) -> list[Item]:
+    dec = binary.BinaryDecoder()
+    out: list[Item] = []
+    for i in range(0, len(data), size):
+        out.extend(dec.feed(data[i : i + size]))
+    return out
+
+
+packets = st.builds(
+    binary.Packet,
+    s.messages,
+    seq=st.integers(0, 255),
+    sync=st.booleans(),
+    event=st.booleans(),
+).map(lambda p: p if isinstance(p.message, m.ErrorReply) else binary.Packet(p.message, p.seq, p.sync))
+
+
+@given(packets)
+def test_round_trip(packet: binary.Packet) -> None:
+    wire = binary.encode_packet(packet)
+    assert binary.decode(wire) == (len(wire), packet)
+
+
+@given(s.commands)
+def test_binary_is_never_longer_than_text_for_commands(cmd: m.Command) -> None:
+    assert len(binary.encode(cmd, 1)) <= len(text.encode(cmd)) + 4
+
+
+@given(st.lists(packets, max_size=8))
+def test_any_split(items: list[binary.Packet]) -> None:
+    data = b"".join(map(binary.encode_packet, items))
+    half = len(data) // 2
+    dec = binary.BinaryDecoder()
+    halves = [*dec.feed(data[:half]), *dec.feed(data[half:])]
+    for got in (decode_all(data), chunked(data, max(1, len(data))), halves, chunked(data, 1)):
+        assert got == items
+
+
+@given(st.lists(st.tuples(st.binary(max_size=80), packets), min_size=1, max_size=6), st.integers(1, 40))
+def test_garbage_between_frames_never_costs_a_frame(
+    parts: list[tuple[bytes, binary.Packet]], size: int
+) -> None:
+    data = b"".join(g + binary.encode_packet(p) for g, p in parts)
+    for got in (decode_all(data), chunked(data, size)):
+        assert [x for x in got if isinstance(x, binary.Packet)] == [p for _, p in parts]
+        assert all(isinstance(x, m.Malformed) for x in got if not isinstance(x, binary.Packet))
+
+
+def test_every_single_byte_corruption_is_caught() -> None:
+    ok = binary.encode(m.Ok(), 1)
+    for wire in (binary.encode(m.Move(2, 40, 0, 0), 1), binary.encode(m.Vel(35, -20, 45, 100), 200)):
+        for pos in range(1, len(wire) - 1):
+            for value in range(256):
+                if value == wire[pos]:
+                    continue
+                bad = wire[:pos] + bytes([value]) + wire[pos + 1 :]
+                got = decode_all(bad + ok)
+                assert [x for x in got if isinstance(x, binary.Packet)] == [binary.Packet(m.Ok(), 1)]
+
+
+def test_worked_examples() -> None:
+    # the hex in docs/protocol.md
+    move = binary.encode(m.Move(2, 40, 0, 0), 1)
+    assert move.hex(" ") == "00 05 01 01 04 50 01 03 75 de 00"
+    assert frame.cobs_decode(move[1:-1]).hex(" ") == "01 01 04 50 00 00 75 de"
+    assert binary.encode(m.Ok(), 1).hex(" ") == "00 05 20 01 0b c8 00"
+    assert binary.encode(m.Stop(), 2, sync=True).hex(" ") == "00 05 85 02 d9 20 00"
+    assert binary.encode(m.Ack(), 7).hex(" ") == "00 05 1f 07 7e a5 00"
+    assert binary.encode(m.Hello((1,)), 1, sync=True).hex(" ") == "00 06 8b 01 02 14 44 00"
+    assert (
+        binary.encode(m.HelloReply(1, "omni4", 4), 1).hex(" ") == "00 0c 22 01 02 08 6f 6d 6e 69 34 08 e5 00"
+    )
+    err = binary.encode(m.ErrorReply(23, "unknown command"), 3)
+    assert err.hex(" ") == "00 15 21 03 2e 75 6e 6b 6e 6f 77 6e 20 63 6f 6d 6d 61 6e 64 3b 2d 00"
+
+
+def test_header_fields() -> None:
+    event = binary.encode(m.ErrorReply(36, "x"), 9, event=True)
+    assert binary.decode(event)[1] == binary.Packet(m.ErrorReply(36, "x"), 9, event=True)
+    assert binary.type_id(m.ErrorReply(1), event=True) == codes.ERROR_EVENT
+    assert binary.type_id(m.ErrorReply(1)) == codes.ERROR
+    assert binary.type_id(m.Warn(1), event=True) == codes.WARN
+    reply = binary.decode(binary.encode(m.HelloReply(1, "omni4", 4), 1))[1]
+    assert reply == binary.Packet(m.HelloReply(1, "omni4", 4), 1)
+
+
+@pytest.mark.parametrize(
+    ("type_id", "ints", "code"),
+    [
+        (100, [], codes.E_UNKNOWN),
+        (codes.MOVE, [1, 2, 3], codes.E_PARAM_COUNT),
+        (codes.POWER, [1, 2, 3, 4, 5, 6], codes.E_PARAM_COUNT),
+        (codes.MOVE, [1, 2, 3, 40000], codes.E_RANGE16),
+        (codes.RANGE, [1], codes.E_PARAM_COUNT),
+    ],
+)
+def test_bad_messages_are_malformed(type_id: int, ints: list[int], code: int) -> None:
+    _, got = binary.decode(frame.encode_message(type_id, 1, ints))
+    assert isinstance(got, m.Malformed) and got.code == code
+
+
+def test_bad_payloads_are_malformed() -> None:
+    for wire in (
+        frame.encode_frame(codes.MOVE, 1, b"\x80"),  # truncated varint
+        frame.encode_frame(codes.ERROR, 1, b"\x2e\xff"),  # text not ASCII
+    ):
+        got = binary.decode(wire)[1]
+        assert isinstance(got, m.Malformed) and got.reason == "bad payload"
+        assert got.code == codes.E_NOT_INTEGER
+
+
+def test_encode_rejects_what_binary_cannot_carry() -> None:
+    for bad in (
+        m.Move(32768, 0, 0, 0),
+        m.Power(1, (1, 2, 3, 4, 5)),
+        m.Warn(1, "caf\u00e9"),
+        m.Telemetry(2**35),
+        m.Telemetry(1, encoders=(2**31,) * 60),
+    ):
+        with pytest.raises(ProtocolError):
+            binary.encode(bad)
+
+
+def test_rest_hands_text_back_after_a_switch() -> None:
+    dec = binary.BinaryDecoder()
+    it = dec.feed(binary.encode(m.Ok(), 4) + b"HELLO,1,omni4,4\r\n")
+    assert next(it) == binary.Packet(m.Ok(), 4)
+    assert dec.rest() == b"HELLO,1,omni4,4\r\n"
+
+
+# Figures of docs/protocol.md, "Bandwidth": 115200 baud 8N1 carries 11520 bytes/s each way.
+LINE = 11520
+VEL = m.Vel(35, -20, 45, 100)
+TEL_TYPICAL = m.Telemetry(
+    3_600_000,
+    powers=(120, -120, 118, -119),
+    encoders=(123456, -123456, 654321, -654321),
+    gyro_rate=-4512,
+    heading=90123,
+    battery_mv=7400,
+    queue=(0, 2),
+)
+TEL_WORST = m.Telemetry(
+    2**31 - 1,
+    powers=(-255,) * 4,
+    encoders=(-(2**31),) * 4,
+    gyro_rate=-(2**31),
+    heading=-(2**31),
+    battery_mv=65535,
+    queue=(3, 64),
+)
+
+
+def test_bandwidth_figures() -> None:
+    sizes = {
+        "move": len(binary.encode(m.Move(2, 40, 0, 0), 1)),
+        "move_worst": len(binary.encode(m.Move(-30000, -100, -359, -99), 1)),
+        "vel": len(binary.encode(VEL, 1)),
+        "vel_worst": len(binary.encode(m.Vel(-32768, -32768, -32768, 1000), 1)),
+        "ok": len(binary.encode(m.Ok(), 1)),
+        "tel": len(binary.encode(TEL_TYPICAL)),
+        "tel_worst": len(binary.encode(TEL_WORST)),
+        "text_vel": len(text.encode(VEL)),
+        "text_tel": len(text.encode(TEL_TYPICAL)),
+    }
+    assert sizes == {
+        "move": 11,
+        "move_worst": 16,
+        "vel": 12,
+        "vel_worst": 18,
+        "ok": 7,
+        "tel": 44,
+        "tel_worst": 60,
+        "text_vel": 18,
+        "text_tel": 90,
+    }
+    assert TEL_TYPICAL.mask == 123
+    # host -> controller: VEL at 100 Hz
+    assert 100 * sizes["vel_worst"] <= 0.5 * LINE
+    # controller -> host: an OK per VEL plus TEL, both at 100 Hz
+    assert 100 * (sizes["ok"] + sizes["tel"]) == 5100 <= 0.5 * LINE
+    assert 50 * sizes["tel_worst"] + 100 * sizes["ok"] <= 0.5 * LINE
+    assert 100 * (4 + sizes["text_tel"]) > 0.5 * LINE  # the text protocol does not fit
