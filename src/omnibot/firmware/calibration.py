@@ -1,0 +1,124 @@
+"""Seed 000's calibration factors as plain-list piecewise-linear tables (MicroPython-safe).
+
+A table is ``[xs, ys]``: power knots (PWM counts, strictly increasing) and factors; the value is
+interpolated linearly between knots and held constant outside them. ``K_l`` has one table per course
+(degrees, 0..45 for seed 000) and is interpolated between the two nearest courses.
+"""
+
+from omnibot.protocol import codes
+
+TABLE_K = codes.CAL_K
+TABLE_KT = codes.CAL_KT
+TABLE_KR = codes.CAL_KR
+TABLE_KL = codes.CAL_KL  # 10 + k: the k-th course of K_l
+KNOTS_MAX = codes.CAL_KNOTS_MAX
+
+TYPE_CHECKING = False
+if TYPE_CHECKING:
+    from typing import Any
+
+
+def interp(xs: list[float], ys: list[float], x: float) -> float:
+    """Piecewise-linear y(x), held constant outside the knots."""
+    n = len(xs)
+    if x <= xs[0]:
+        return ys[0]
+    for i in range(1, n):
+        if x <= xs[i]:
+            x0 = xs[i - 1]
+            return ys[i - 1] + (x - x0) * (ys[i] - ys[i - 1]) / (xs[i] - x0)
+    return ys[n - 1]
+
+
+def fold_course(course_deg: float, axes: list[float]) -> float:
+    """Angle (0..90 degrees) between a course and the nearest "idle axis" (seed 000: motor spindles).
+
+    An idle axis is a direction of travel along which some wheel does not turn; for seed 000's four
+    wheels the axes are 0 and 90 degrees, so every course folds into 0..45.
+    """
+    best = 90.0
+    for a in axes:
+        d = (course_deg - a) % 180.0
+        if d > 90.0:
+            d = 180.0 - d
+        best = min(best, d)
+    return best
+
+
+class Calibration:
+    """K (PWM counts per m/s of rim speed) and the K_l, K_t, K_r factor tables."""
+
+    def __init__(self, cfg: "dict[str, Any]") -> None:
+        self.k = float(cfg["k"])
+        self.kl_courses = [float(c) for c in cfg["kl_courses"]]
+        self.kl = [_table(t) for t in cfg["kl_tables"]]
+        self.kt = _table(cfg["kt"])
+        self.kr = _table(cfg["kr"])
+
+    def k_l(self, power: float, folded_course: float) -> float:
+        """K_l(power, course), the course already folded (see :func:`fold_course`)."""
+        cs = self.kl_courses
+        n = len(cs)
+        if n == 1 or folded_course <= cs[0]:
+            return interp(self.kl[0][0], self.kl[0][1], power)
+        for i in range(1, n):
+            if folded_course <= cs[i]:
+                a = interp(self.kl[i - 1][0], self.kl[i - 1][1], power)
+                b = interp(self.kl[i][0], self.kl[i][1], power)
+                return a + (folded_course - cs[i - 1]) * (b - a) / (cs[i] - cs[i - 1])
+        last = self.kl[n - 1]
+        return interp(last[0], last[1], power)
+
+    def k_t(self, power: float) -> float:
+        return interp(self.kt[0], self.kt[1], power)
+
+    def k_r(self, power: float) -> float:
+        return interp(self.kr[0], self.kr[1], power)
+
+    def set_knot(self, table: int, index: int, power: int, value: float) -> bool:
+        """Write one knot (the CAL command); False if the table, index or power order is invalid.
+
+        Writing knot ``index`` drops the knots after it, so a table is uploaded from knot 0 upwards.
+        For ``TABLE_KL + k`` with ``index`` -1, ``power`` is the course (degrees) of the k-th curve and
+        k may be one past the last curve to add a curve (given a flat factor 1.0 until knots arrive).
+        """
+        if table == TABLE_K:
+            if value <= 0:
+                return False
+            self.k = value
+            return True
+        if table == TABLE_KT:
+            return _write(self.kt, index, power, value)
+        if table == TABLE_KR:
+            return _write(self.kr, index, power, value)
+        k = table - TABLE_KL
+        if k < 0 or k > len(self.kl) or (k == len(self.kl) and index != -1):
+            return False
+        if index == -1:
+            courses = self.kl_courses
+            if (k > 0 and power <= courses[k - 1]) or (k + 1 < len(courses) and power >= courses[k + 1]):
+                return False
+            if k == len(courses):
+                courses.append(float(power))
+                self.kl.append([[0.0], [1.0]])
+            else:
+                courses[k] = float(power)
+            return True
+        return _write(self.kl[k], index, power, value)
+
+
+def _table(t: "list[Any]") -> "list[list[float]]":
+    return [[float(x) for x in t[0]], [float(y) for y in t[1]]]
+
+
+def _write(t: "list[list[float]]", index: int, power: int, value: float) -> bool:
+    xs, ys = t
+    if index < 0 or index > len(xs) or index >= KNOTS_MAX:
+        return False
+    if index > 0 and power <= xs[index - 1]:
+        return False
+    del xs[index:]
+    del ys[index:]
+    xs.append(float(power))
+    ys.append(value)
+    return True

@@ -1,0 +1,233 @@
+"""Host side (CPython): the firmware's plain config dict from a robot description, and board files.
+
+The firmware reads only plain literals (MicroPython has no pydantic or numpy), so everything derived
+from the description is computed here: the rim-speed matrix (inverse kinematics times wheel radius),
+the idle axes for folding the course, calibration tables as lists, limits in protocol units.
+
+::
+
+    python -m omnibot.firmware.config omni4 board/          # stage files for mpremote
+    python -m omnibot.firmware.config omni4 --print         # print robot_config.py
+
+Keys of the config dict (all plain ints, floats, strings, lists, dicts):
+
+==========================  =======================================================================
+name, motors                robot name (HELLO) and motor count
+pwm_max, power_min          PWM full scale; dead band (largest ``motor.deadband`` unless given)
+radius                      wheel radii, m
+J                           inverse kinematics, rad/s of each wheel per (vx, vy, w) in m/s, rad/s
+rim                         J times the wheel radius: rim speed (m/s) per unit twist
+idle_axes                   directions (deg, 0..180) of travel along which some wheel stands still
+k                           calibration K, PWM counts per m/s of rim speed
+kl_courses, kl_tables       K_l: courses (deg) and one [powers, factors] table per course
+kt, kr                      K_t and K_r as [powers, factors]
+distance_max_cm             exclusive bound of abs(L) (MOVE)
+speed_min_cms/speed_max_cms inclusive bounds of abs(V)
+curvature_max               exclusive bound of abs(C), 1/(1000 cm)
+rate_max_dps                exclusive bound of abs(F) and abs(W), deg/s
+queue_capacity, line_max    command queue slots, longest command
+baud, loop_hz               UART speed; nominal main-loop rate (informative)
+mode                        MODE bits at reset (bit 1 when controller.wheel_speed_control)
+encoder_cpr                 counts per wheel revolution of each motor's encoder, 0 = none
+speed_kp, speed_ki          wheel-speed PI gains, PWM counts per rad/s (and per rad)
+control_period_ms           wheel-speed control period
+tracking, gyro              number of tracking wheels; True when there is a gyro
+sonar_period_min_ms         one entry per sonar: its shortest period (>= 60 ms)
+pins                        board pin map for MachineHAL (see hal.py)
+==========================  =======================================================================
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import shutil
+from pathlib import Path
+from typing import Any
+
+from omnibot.robot.description import PiecewiseLinear, RobotDescription, load_robot
+
+PACKAGE_DIR = Path(__file__).resolve().parent
+SRC_DIR = PACKAGE_DIR.parent.parent
+BOARD_MODULES = (
+    "binlink",
+    "calibration",
+    "controller",
+    "hal",
+    "limits",
+    "motion",
+    "parser",
+    "power",
+    "queue",
+    "sonar",
+    "speedctl",
+    "telemetry",
+    "watchdog",
+)
+PROTOCOL_MODULES = ("codes", "crc", "frame", "arq")
+
+
+def default_pins(robot: RobotDescription) -> dict[str, Any]:
+    """An example pin map for a Raspberry Pi Pico (RP2040); edit it for your wiring."""
+    n = robot.n_wheels
+    return {
+        "uart": [0, 0, 1],
+        "pwm_freq": 1000,
+        "motors": [[2 + 3 * i, 3 + 3 * i, 4 + 3 * i] for i in range(n)],
+        "encoders": [[14 + 2 * i, 15 + 2 * i] for i in range(n)] if robot.encoders.motors else [],
+        "tracking": [],
+        "sonars": [[22, 26]][: len(robot.sonars)],
+        "battery": [28, round(3300.0 * 3 / 65535, 6)],
+        "gyro": None,
+    }
+
+
+def _table(t: PiecewiseLinear | None) -> list[list[float]]:
+    if t is None:
+        return [[0.0], [1.0]]
+    return [[float(x) for x in t.x], [float(y) for y in t.y]]
+
+
+def _idle_axes(robot: RobotDescription) -> list[float]:
+    axes: list[float] = []
+    for w in robot.wheels:
+        a = round((math.degrees(w.traction_angle) + 90.0) % 180.0, 6) % 180.0
+        if all(min(abs(a - b), 180.0 - abs(a - b)) > 1e-6 for b in axes):
+            axes.append(a)
+    return sorted(axes)
+
+
+def _default_k(robot: RobotDescription) -> float:
+    """PWM counts per m/s of rim speed from the motor model, when the description gives no K."""
+    w = robot.wheels[0]
+    m = w.motor
+    volts = max(robot.battery.voltage - m.driver_drop, 0.1)
+    v_free = volts / (m.torque_constant * m.gear_ratio) * w.radius
+    return m.pwm_max / v_free
+
+
+def build_config(
+    robot: RobotDescription,
+    *,
+    power_min: int | None = None,
+    pins: dict[str, Any] | None = None,
+    control_period_ms: int = 10,
+) -> dict[str, Any]:
+    """The firmware's config dict for a robot (keys in the module docstring)."""
+    J = robot.wheel_matrix
+    radius = [float(w.radius) for w in robot.wheels]
+    cal = robot.calibration
+    k = float(cal.k) if cal else _default_k(robot)
+    if cal and cal.k_l:
+        courses = [float(c) for c in cal.k_l.courses_deg]
+        kl_tables = [_table(c) for c in cal.k_l.curves]
+    else:
+        courses, kl_tables = [0.0], [_table(None)]
+    cpr = {e.wheel: e.counts_per_rev for e in robot.encoders.motors}
+    encoder_cpr = [int(cpr.get(w.name, 0)) for w in robot.wheels]
+    ctl = robot.controller
+    kp, ki = ctl.speed_kp, ctl.speed_ki
+    if kp == 0.0 and ki == 0.0:
+        kr = k * sum(radius) / len(radius)  # the feedforward's PWM counts per rad/s of wheel speed
+        kp, ki = 0.5 * kr, 10.0 * kr
+    lim = robot.limits
+    has_encoders = all(encoder_cpr)
+    return {
+        "name": robot.name,
+        "motors": robot.n_wheels,
+        "pwm_max": max(w.motor.pwm_max for w in robot.wheels),
+        "power_min": int(power_min if power_min is not None else max(w.motor.deadband for w in robot.wheels)),
+        "radius": radius,
+        "J": [[float(v) for v in row] for row in J],
+        "rim": [[float(v) * r for v in row] for row, r in zip(J, radius, strict=True)],
+        "idle_axes": _idle_axes(robot),
+        "k": k,
+        "kl_courses": courses,
+        "kl_tables": kl_tables,
+        "kt": _table(cal.k_t if cal else None),
+        "kr": _table(cal.k_r if cal else None),
+        "distance_max_cm": round(lim.distance_max * 100.0, 6),
+        "speed_min_cms": round(lim.speed_min * 100.0, 6),
+        "speed_max_cms": round(lim.speed_max * 100.0, 6),
+        "curvature_max": round(lim.curvature_max * 10.0, 6),
+        "rate_max_dps": round(math.degrees(lim.angular_speed_max), 6),
+        "queue_capacity": ctl.queue_capacity,
+        "line_max": ctl.line_max,
+        "baud": ctl.baud,
+        "loop_hz": ctl.loop_hz,
+        "mode": 2 if ctl.wheel_speed_control and has_encoders else 0,
+        "encoder_cpr": encoder_cpr,
+        "speed_kp": round(kp, 6),
+        "speed_ki": round(ki, 6),
+        "control_period_ms": control_period_ms,
+        "tracking": len(robot.encoders.tracking),
+        "gyro": robot.gyro is not None,
+        "sonar_period_min_ms": [max(60, math.ceil(s.period_min * 1000 - 1e-9)) for s in robot.sonars],
+        "pins": pins if pins is not None else default_pins(robot),
+    }
+
+
+def config_module_source(config: dict[str, Any]) -> str:
+    """The text of ``robot_config.py``: ``CONFIG = {...}`` with plain literals, one key a line."""
+    lines = [f'"""Firmware config of robot {config["name"]!r}, written by omnibot.firmware.config."""', ""]
+    lines.append("CONFIG = {")
+    for key, value in config.items():
+        lines.append(f"    {key!r}: {value!r},")
+    lines.append("}")
+    return "\n".join(lines) + "\n"
+
+
+def write_config_module(config: dict[str, Any], path: str | Path) -> Path:
+    """Write ``robot_config.py``; returns its path."""
+    path = Path(path)
+    path.write_text(config_module_source(config), encoding="utf-8")
+    return path
+
+
+def board_files() -> list[tuple[Path, str]]:
+    """(source file, path on the board) of every module the board needs, main.py at the root."""
+    files = [
+        (SRC_DIR / "omnibot" / "__init__.py", "omnibot/__init__.py"),
+        (SRC_DIR / "omnibot" / "protocol" / "__init__.py", "omnibot/protocol/__init__.py"),
+        (PACKAGE_DIR / "__init__.py", "omnibot/firmware/__init__.py"),
+    ]
+    files += [
+        (SRC_DIR / "omnibot" / "protocol" / f"{m}.py", f"omnibot/protocol/{m}.py") for m in PROTOCOL_MODULES
+    ]
+    files += [(PACKAGE_DIR / f"{m}.py", f"omnibot/firmware/{m}.py") for m in BOARD_MODULES]
+    files.append((PACKAGE_DIR / "main.py", "main.py"))
+    return files
+
+
+def stage_board(dest: str | Path, config: dict[str, Any]) -> list[Path]:
+    """Copy the board's files and ``robot_config.py`` under ``dest``, laid out as on the board."""
+    dest = Path(dest)
+    out = []
+    for src, rel in board_files():
+        target = dest / rel
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(src, target)
+        out.append(target)
+    out.append(write_config_module(config, dest / "robot_config.py"))
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m omnibot.firmware.config", description=__doc__.split("\n")[0])
+    ap.add_argument("robot", help="preset name or robot description file")
+    ap.add_argument("dest", nargs="?", help="directory to stage the board files in")
+    ap.add_argument("--print", action="store_true", help="print robot_config.py")
+    ap.add_argument("--power-min", type=int, default=None, help="dead band, PWM counts")
+    args = ap.parse_args(argv)
+    config = build_config(load_robot(args.robot), power_min=args.power_min)
+    if args.print or not args.dest:
+        print(config_module_source(config), end="")
+    if args.dest:
+        for path in stage_board(args.dest, config):
+            print(path)
+        print(f"copy to the board with: mpremote connect PORT cp -r {args.dest}/. :")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,324 @@
+"""The motor controller: one :meth:`Controller.poll` per main-loop pass, never blocking.
+
+Each poll: advance the clock from ``hal.ticks_us()``; advance the motion timeline; read the UART
+and handle every complete command (immediate ones at once, motion commands into the queue, one
+reply each, in order); run the sonars (RANGE events, emergency stop); integrate the gyro; send a
+TEL line when due. Text replies and events are lines ending in CR LF; after ``MODE`` with bit 2 the
+same messages travel as binary frames (docs/protocol.md), until a binary MODE clears the bit.
+"""
+
+from omnibot.firmware import parser
+from omnibot.firmware.binlink import BinaryLink
+from omnibot.firmware.calibration import Calibration
+from omnibot.firmware.limits import Limits
+from omnibot.firmware.motion import Executor
+from omnibot.firmware.power import PowerModel
+from omnibot.firmware.queue import CommandQueue
+from omnibot.firmware.sonar import Sonars
+from omnibot.firmware.telemetry import Telemetry
+from omnibot.protocol import arq, codes
+
+TYPE_CHECKING = False
+if TYPE_CHECKING:
+    from typing import Any
+
+    from omnibot.firmware.hal import HAL
+    from omnibot.protocol.frame import Frame
+
+MOTION = (codes.MOVE, codes.ROTATE, codes.DELTA, codes.POWER, codes.VEL)
+QUEUED = (codes.MOVE, codes.ROTATE, codes.DELTA, codes.POWER)
+
+
+class Controller:
+    """Seed 000's motor controller over a HAL, configured by a plain dict (see config.py)."""
+
+    def __init__(self, hal: "HAL", config: "dict[str, Any]") -> None:
+        self.hal = hal
+        self.config = config
+        self.name = str(config["name"])
+        self.motors = int(config["motors"])
+        self.tracking = int(config["tracking"])
+        self.has_gyro = bool(config["gyro"])
+        self.calibration = Calibration(config)
+        self.model = PowerModel(config, self.calibration)
+        self.limits = Limits(config)
+        self.queue = CommandQueue(int(config["queue_capacity"]))
+        self.executor = Executor(config, hal, self.queue, self.model, self._warn, self._idle)
+        self.sonars = Sonars(len(config["sonar_period_min_ms"]))
+        self.telemetry = Telemetry()
+        self.link = BinaryLink(hal.uart_write)
+        self.binary = False
+        self.latched = False
+        self.now_ms = 0
+        self._us = 0
+        self._seq = 0
+        self._last = hal.ticks_us()
+        self._split = parser.LineSplitter(int(config["line_max"]))
+        self._lines: list[bytes | None] = []
+        self._ends: list[int] = []
+        self._frames: list[Frame] = []
+        self._params: list[int] = []
+        mode = int(config.get("mode", 0))
+        if mode & codes.MODE_CLOSED_LOOP and not self.limits.has_encoders:
+            mode &= ~codes.MODE_CLOSED_LOOP
+        self.executor.set_mode(mode & ~codes.MODE_BINARY)
+        self.emit(self._hello_text())
+
+    # ------------------------------------------------------------------ output
+
+    def emit(self, line: str) -> None:
+        """Send one text line (CR LF added)."""
+        self.hal.uart_write((line + "\r\n").encode())
+
+    def _ok(self) -> None:
+        if self.binary:
+            self.link.reply(codes.OK, self._seq, [])
+        else:
+            self.emit("OK")
+
+    def _error(self, code: int) -> None:
+        if self.binary:
+            self.link.reply(codes.ERROR, self._seq, [code])
+        else:
+            self.emit(f"ERROR,{code},{codes.TEXTS[code]}")
+
+    def _warn(self, code: int) -> None:
+        if self.binary:
+            self.link.event(codes.WARN, [code], self.now_ms)
+        else:
+            self.emit(f"WARN,{code},{codes.TEXTS[code]}")
+
+    def _idle(self) -> None:
+        if self.binary:
+            self.link.event(codes.IDLE, [], self.now_ms)
+        else:
+            self.emit("IDLE")
+
+    def _range(self, sonar: int, cm: int) -> None:
+        if self.binary:
+            self.link.event(codes.RANGE, [sonar, cm], self.now_ms)
+        else:
+            self.emit(f"RANGE,{sonar},{cm}")
+
+    def _hello_text(self) -> str:
+        return f"HELLO,{codes.PROTOCOL_VERSION},{self.name},{self.motors}"
+
+    def _status(self) -> None:
+        ex = self.executor
+        m = ex.remembered
+        state = self.state
+        queued = len(self.queue)
+        cap = self.queue.capacity
+        mode = self.mode
+        if self.binary:
+            ints = [state, queued, cap, mode]
+            ints.extend(ex.powers)
+            ints.extend(m)
+            self.link.reply(codes.STATUS_REPLY, self._seq, ints)
+            return
+        powers = ",".join([str(v) for v in ex.powers])
+        self.emit(f"STATUS,{state},{queued},{cap},{mode};POWER,{powers};MOVE,{m[0]},{m[1]},{m[2]},{m[3]}")
+
+    # ------------------------------------------------------------------ loop
+
+    @property
+    def state(self) -> int:
+        if self.latched:
+            return codes.STATE_ESTOP
+        return codes.STATE_MOVING if self.executor.moving else codes.STATE_IDLE
+
+    @property
+    def mode(self) -> int:
+        """The MODE bits in force."""
+        return self.executor.mode | (codes.MODE_BINARY if self.binary else 0)
+
+    def poll(self) -> None:
+        """One pass of the main loop."""
+        hal = self.hal
+        t = hal.ticks_us()
+        dt = max(hal.ticks_diff(t, self._last), 0)
+        self._last = t
+        us = self._us + dt
+        if us >= 1000:
+            self.now_ms += us // 1000
+            us %= 1000
+        self._us = us
+        self.executor.step(dt)
+        data = hal.uart_read()
+        if data:
+            if self.binary:
+                self._binary_input(data)
+            else:
+                self._text_input(data)
+        if self.sonars.count and self.sonars.poll(hal, self.now_ms, self.executor.moving, self._range) >= 0:
+            self.emergency_stop()
+        if self.has_gyro:
+            rate = hal.gyro_rate_mdps()
+            if rate is not None:
+                self.telemetry.integrate(rate, dt)
+        if self.telemetry.due(self.now_ms):
+            fields = self.telemetry.fields(self)
+            if self.binary:
+                self.link.telemetry(fields)
+            else:
+                self.emit("TEL," + ",".join([str(v) for v in fields]))
+        if self.binary:
+            self.link.poll(self.now_ms)
+
+    def emergency_stop(self) -> None:
+        """Sonar emergency stop: motors off, queue cleared, WARN 13, latched until STOP."""
+        self.executor.stop()
+        self.latched = True
+        self._warn(codes.W_SONAR_STOP)
+        self._idle()
+
+    # ------------------------------------------------------------------ input
+
+    def _text_input(self, data: bytes) -> None:
+        lines = self._lines
+        ends = self._ends
+        self._split.feed(data, lines, ends)
+        for k in range(len(lines)):
+            self.handle(lines[k])
+            if self.binary:  # MODE switched to binary: the rest of the bytes are frames
+                rest = data[ends[k] :]
+                del lines[:]
+                del ends[:]
+                self._split.reset()
+                if rest:
+                    self._binary_input(rest)
+                return
+        del lines[:]
+        del ends[:]
+
+    def _binary_input(self, data: bytes) -> None:
+        frames = self._frames
+        i = 0
+        n = len(data)
+        while i < n:
+            end = data.find(b"\x00", i)
+            stop = n if end < 0 else end + 1
+            self.link.decoder.feed(data[i:stop], frames)
+            i = stop
+            for fr in frames:
+                self._frame(fr)
+            del frames[:]
+            if not self.binary:  # a binary MODE cleared bit 2: the rest is text
+                if i < n:
+                    self._text_input(data[i:])
+                return
+
+    def _frame(self, fr: "Frame") -> None:
+        t = fr.type_id
+        if t < 0:
+            return  # bad CRC, COBS or length: dropped, the host retries
+        link = self.link
+        if t == codes.ACK:
+            link.tx.ack(fr.seq)
+            return
+        if t == codes.HELLO and fr.sync:
+            link.rx.reset()
+        kind = link.rx.classify(fr.seq, fr.sync)
+        if kind == arq.DUPLICATE:
+            reply = link.rx.reply_for(fr.seq)
+            if reply is not None:
+                self.hal.uart_write(reply)
+            return
+        if kind == arq.OUT_OF_ORDER:
+            return
+        self._seq = fr.seq
+        if t not in codes.PARAM_COUNTS:
+            self._error(codes.E_UNKNOWN)
+            return
+        try:
+            ints, _ = fr.fields()
+        except ValueError:
+            self._error(codes.E_NOT_INTEGER)
+            return
+        if len(ints) > codes.PARAMS_MAX:
+            self._error(codes.E_PARAM_COUNT)
+            return
+        for v in ints:
+            if v < codes.INT_MIN or v > codes.INT_MAX:
+                self._error(codes.E_RANGE16)
+                return
+        self.execute(t, ints)
+
+    def handle(self, cmd: "bytes | None") -> None:
+        """Handle one text command (None: it was too long); exactly one reply."""
+        if cmd is None:
+            self._error(codes.E_TOO_LONG)
+            return
+        p = self._params
+        kw = parser.parse(cmd, p)
+        if kw == 0:
+            return
+        if kw < 0:
+            self._error(-kw)
+            return
+        self.execute(kw, p)
+
+    # ------------------------------------------------------------------ commands
+
+    def execute(self, kw: int, p: "list[int]") -> None:
+        """Check and run one parsed command; exactly one reply."""
+        code = self.limits.check(kw, p)
+        if code == 0 and self.latched and kw in MOTION:
+            code = codes.E_ESTOP
+        if code:
+            self._error(code)
+            return
+        ex = self.executor
+        if kw in QUEUED:
+            if not self.queue.push(kw, p):
+                self._error(codes.E_QUEUE_FULL)
+                return
+            self._ok()
+            ex.step(0)
+        elif kw == codes.VEL:
+            self._ok()
+            ex.vel(p[0], p[1], p[2], p[3])
+        elif kw == codes.STOP:
+            was = ex.stop()
+            ex.reset_move()
+            self.latched = False
+            self._ok()
+            if was:
+                self._idle()
+        elif kw == codes.STATUS:
+            self._status()
+        elif kw == codes.HELLO:
+            if self.binary:
+                self.link.reply(
+                    codes.HELLO_REPLY, self._seq, [codes.PROTOCOL_VERSION, self.motors], self.name.encode()
+                )
+            else:
+                self.emit(self._hello_text())
+        elif kw == codes.MODE:
+            self._ok()
+            ex.set_mode(p[0] & ~codes.MODE_BINARY)
+            binary = bool(p[0] & codes.MODE_BINARY)
+            if binary != self.binary:
+                self.binary = binary
+                self.link.reset()
+                self._split.reset()
+        elif kw == codes.SONAR:
+            self.sonars.configure(p[0] - 1, p[1], p[2], p[3], p[4], self.now_ms)
+            self._ok()
+        elif kw == codes.TELEM:
+            self.telemetry.configure(p[0], p[1], self.now_ms)
+            self._ok()
+        elif kw == codes.CAL:
+            if self._cal(p[0], p[1], p[2], p[3]):
+                self._ok()
+            else:
+                self._error(codes.E_CALIBRATION)
+        else:
+            self._error(codes.E_INTERNAL)
+
+    def _cal(self, table: int, index: int, x: int, y: int) -> bool:
+        if table == codes.CAL_K:
+            return index == 0 and x == 0 and self.calibration.set_knot(table, 0, 0, y * 0.1)
+        if table >= codes.CAL_KL + codes.CAL_KL_CURVES or x < 0 or y < 0:
+            return False
+        return self.calibration.set_knot(table, index, x, y / codes.CAL_SCALE)

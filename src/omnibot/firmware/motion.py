@@ -1,0 +1,319 @@
+"""The motion executor: runs queued MOVE/ROTATE/DELTA/POWER commands and VEL on a timeline.
+
+Each motion has a duration (seed 000: T = L/V, T = A/F, POWER's T). Time is kept as the remaining
+microseconds of the current motion; a motion that ends mid-poll hands its overshoot to the next one,
+so a run of queued motions keeps its timeline (37 moves of 50 ms take 1850 ms, whatever the poll
+rate). Infinite motions (L or A = +-INF) and VEL end as soon as a command is queued behind them.
+DELTA repeats ``max(R, 1)`` times; with R = INF it repeats until a command is queued and then
+finishes the current repetition. The remembered MOVE is set when a MOVE or DELTA repetition starts.
+"""
+
+import math
+
+from omnibot.firmware.power import DEADBAND, SATURATED, PowerModel
+from omnibot.firmware.speedctl import SpeedControl
+from omnibot.firmware.watchdog import Watchdog
+from omnibot.protocol import codes
+
+TYPE_CHECKING = False
+if TYPE_CHECKING:
+    from collections.abc import Callable
+    from typing import Any
+
+    from omnibot.firmware.hal import HAL
+    from omnibot.firmware.queue import CommandQueue
+
+INF = codes.INF
+MODE_SIMULATION = codes.MODE_SIMULATION
+MODE_CLOSED_LOOP = codes.MODE_CLOSED_LOOP
+NONE = 0  # no motion (kinds are the command ids of protocol/codes.py otherwise)
+LOOP_GUARD = 16  # motions started in one step at most (zero-length moves), keeps a poll short
+
+
+class Executor:
+    """Owns the current motion, its powers, the remembered MOVE and the mode bits."""
+
+    def __init__(
+        self,
+        cfg: "dict[str, Any]",
+        hal: "HAL",
+        queue: "CommandQueue",
+        model: PowerModel,
+        warn: "Callable[[int], None]",
+        on_idle: "Callable[[], None]",
+    ) -> None:
+        self.hal = hal
+        self.queue = queue
+        self.model = model
+        self.n = model.n
+        self._warn = warn
+        self._on_idle = on_idle
+        self.l_max = float(cfg["distance_max_cm"])
+        self.v_min = float(cfg["speed_min_cms"])
+        self.v_max = float(cfg["speed_max_cms"])
+        self.c_max = float(cfg["curvature_max"])
+        self.kind = NONE
+        self.infinite = False
+        self.remaining = 0
+        self.powers = [0] * self.n
+        self.mode = 0
+        self.remembered = [0, 0, 0, 0]
+        self.watchdog = Watchdog()
+        self._applied = [0] * self.n
+        self._delta = [0, 0, 0, 0]
+        self._reps = 0
+        self._reps_inf = False
+        self._warned = 0
+        self._twist = [0.0, 0.0, 0.0]
+        self._rot = False
+        self._ff = [0.0] * self.n
+        self._target = [0.0] * self.n
+        self._counts = [0] * self.n
+        self._feedback = False
+        period_us = int(cfg["control_period_ms"]) * 1000
+        self.speedctl = SpeedControl(
+            [int(c) for c in cfg["encoder_cpr"]],
+            float(cfg["speed_kp"]),
+            float(cfg["speed_ki"]),
+            period_us,
+            model.pwm_max,
+        )
+        for i in range(self.n):
+            hal.set_power(i, 0)
+
+    # ------------------------------------------------------------------ state
+
+    @property
+    def moving(self) -> bool:
+        return self.kind != NONE
+
+    def set_mode(self, mode: int) -> None:
+        """Change the mode bits; switching the closed loop re-plans the current motion's powers."""
+        old = self.mode
+        self.mode = mode
+        if (old ^ mode) & MODE_CLOSED_LOOP:
+            if mode & MODE_CLOSED_LOOP:
+                self._start_feedback()
+            else:
+                self._feedback = False
+                if self.kind not in (NONE, codes.POWER):
+                    t = self._twist
+                    self.model.compute(t[0], t[1], t[2], self._rot, self.powers)
+        self.apply()
+
+    def apply(self) -> None:
+        """Send the powers to the motors (zeros in simulation mode), only where they changed."""
+        sim = self.mode & MODE_SIMULATION
+        for i in range(self.n):
+            p = 0 if sim else self.powers[i]
+            if p != self._applied[i]:
+                self._applied[i] = p
+                self.hal.set_power(i, p)
+
+    # ------------------------------------------------------------------ commands
+
+    def stop(self) -> bool:
+        """Motors off, queue cleared, motion cancelled; True if something was moving."""
+        was = self.kind != NONE
+        self.queue.clear()
+        self.kind = NONE
+        self.watchdog.disarm()
+        self._feedback = False
+        for i in range(self.n):
+            self.powers[i] = 0
+        self.apply()
+        return was
+
+    def reset_move(self) -> None:
+        for i in range(4):
+            self.remembered[i] = 0
+
+    def vel(self, vx: int, vy: int, w: int, t_ms: int) -> None:
+        """Hold a body velocity (cm/s, cm/s, deg/s) for t_ms unless refreshed; clears the queue."""
+        self.queue.clear()
+        if self.kind != codes.VEL:
+            self._warned = 0
+        self.kind = codes.VEL
+        self.infinite = False
+        self.watchdog.arm(t_ms)
+        self._drive(vx * 0.01, vy * 0.01, math.radians(w), vx == 0 and vy == 0)
+
+    # ------------------------------------------------------------------ timeline
+
+    def step(self, dt_us: int) -> None:
+        """Advance the timeline by dt_us and start whatever is due."""
+        if self.kind != NONE and not self.infinite:
+            self.remaining -= dt_us
+        guard = LOOP_GUARD
+        while guard > 0:
+            guard -= 1
+            kind = self.kind
+            if kind == NONE:
+                if len(self.queue) == 0:
+                    break
+                self._start_next(0)
+            elif kind == codes.VEL:
+                if len(self.queue):
+                    self.watchdog.disarm()
+                    self._start_next(0)
+                elif self.watchdog.expired(dt_us):
+                    self._finish()
+                break
+            elif self.infinite:
+                if len(self.queue) == 0:
+                    break
+                self._start_next(0)
+            elif self.remaining > 0:
+                break
+            elif kind == codes.DELTA and (len(self.queue) == 0 if self._reps_inf else self._reps > 0):
+                self._repeat(self.remaining)
+            elif len(self.queue):
+                self._start_next(self.remaining)
+            else:
+                self._finish()
+        if self._feedback and self.kind != NONE:
+            self._feedback_step(dt_us)
+
+    def _finish(self) -> None:
+        self.stop()
+        self._on_idle()
+
+    def _start_next(self, carry: int) -> None:
+        slot = self.queue.pop()
+        kind = slot[0]
+        self.kind = kind
+        self._warned = 0
+        if kind == codes.MOVE:
+            for i in range(4):
+                self.remembered[i] = slot[i + 1]
+            self._move(carry)
+        elif kind == codes.DELTA:
+            for i in range(4):
+                self._delta[i] = slot[i + 1]
+            r = slot[5]
+            self._reps_inf = r == INF
+            self._reps = 1 if r < 1 else r
+            self._repeat(carry)
+        elif kind == codes.ROTATE:
+            self._rotate(slot[1], slot[2], carry)
+        else:  # POWER
+            self.infinite = False
+            self.remaining = slot[1] * 1000 + carry
+            self._feedback = False
+            for i in range(self.n):
+                self.powers[i] = slot[i + 2]
+            self.apply()
+
+    def _repeat(self, carry: int) -> None:
+        """One DELTA repetition: remembered MOVE += increments (clamped, course wrapped)."""
+        if not self._reps_inf:
+            self._reps -= 1
+        m = self.remembered
+        d = self._delta
+        lim = self.l_max
+        if abs(m[0]) != INF:
+            m[0] = _clamp(m[0] + d[0], lim)
+        v = m[1] + d[1]
+        if v != 0 and abs(v) < self.v_min:
+            v = math.ceil(self.v_min) * (1 if v > 0 else -1)
+        elif abs(v) > self.v_max:
+            v = int(self.v_max) * (1 if v > 0 else -1)
+            self._warn_once(SATURATED)
+        m[1] = v
+        c = m[2] + d[2]
+        m[2] = c % 360 if c >= 0 else -((-c) % 360)
+        m[3] = _clamp(m[3] + d[3], self.c_max)
+        if self._reps_inf and (m[0] == 0 or m[1] == 0):  # zero-length: would spin without moving
+            self._reps_inf = False
+            self._reps = 0
+        self._move(carry)
+
+    def _move(self, carry: int) -> None:
+        L, V, D, C = self.remembered
+        self.infinite = abs(L) == INF
+        if L == 0 or V == 0:
+            self.remaining = carry
+            self._drive(0.0, 0.0, 0.0, False)
+            return
+        s = abs(V) if (L > 0) == (V > 0) else -abs(V)
+        a = math.radians(D)
+        self._drive(s * 0.01 * math.cos(a), s * 0.01 * math.sin(a), s * C * 0.001, False)
+        if not self.infinite:
+            self.remaining = _duration(abs(L), abs(V), self.model.scale) + carry
+
+    def _rotate(self, A: int, F: int, carry: int) -> None:
+        self.infinite = abs(A) == INF
+        if A == 0:
+            self.remaining = carry
+            self._drive(0.0, 0.0, 0.0, True)
+            return
+        w = math.radians(abs(F))
+        self._drive(0.0, 0.0, w if (A > 0) == (F > 0) else -w, True)
+        if not self.infinite:
+            self.remaining = _duration(abs(A), abs(F), self.model.scale) + carry
+
+    def _drive(self, vx: float, vy: float, w: float, rotate: bool) -> None:
+        """Compute and apply the powers for a twist (m/s, m/s, rad/s)."""
+        model = self.model
+        flags = model.compute(vx, vy, w, rotate, self.powers)
+        self._warn_once(flags)
+        t = self._twist
+        t[0] = vx
+        t[1] = vy
+        t[2] = w
+        self._rot = rotate
+        if flags & DEADBAND:
+            for i in range(self.n):
+                self._ff[i] = 0.0
+                self._target[i] = 0.0
+        else:
+            for i in range(self.n):
+                self._ff[i] = model.raw[i]
+            model.wheel_speeds(vx, vy, w, self._target)
+        if self.mode & MODE_CLOSED_LOOP and not self._feedback:
+            self._start_feedback()
+        self.apply()
+
+    def _warn_once(self, flags: int) -> None:
+        new = flags & ~self._warned
+        self._warned |= flags
+        if new & SATURATED:
+            self._warn(codes.W_SPEED_REDUCED)
+        if new & DEADBAND:
+            self._warn(codes.W_POWER_TOO_LOW)
+
+    # ------------------------------------------------------------------ closed loop
+
+    def _start_feedback(self) -> None:
+        for i in range(self.n):
+            self._counts[i] = self.hal.encoder_count(i)
+        self.speedctl.reset(self._counts)
+        self._feedback = (
+            bool(self.mode & MODE_CLOSED_LOOP)
+            and self.speedctl.available
+            and self.kind not in (NONE, codes.POWER)
+        )
+
+    def _feedback_step(self, dt_us: int) -> None:
+        for i in range(self.n):
+            self._counts[i] = self.hal.encoder_count(i)
+        if self.speedctl.update(dt_us, self._counts, self._target, self._ff, self.powers):
+            self.apply()
+
+
+def _clamp(v: int, lim: float) -> int:
+    """v limited to |v| < lim (lim is an exclusive bound)."""
+    m = math.ceil(lim) - 1
+    if v > m:
+        return m
+    if v < -m:
+        return -m
+    return v
+
+
+def _duration(amount: int, rate: int, scale: float) -> int:
+    """Microseconds for amount / rate, stretched by 1/scale when the powers were saturated."""
+    t = amount * 1000000 // rate
+    if scale < 1.0:
+        t = int(t / scale)
+    return t

@@ -1,0 +1,59 @@
+"""Closed-loop wheel-speed control (MODE bit 1): feedforward power plus PI on each wheel's speed.
+
+Wheel speeds come from the motor encoders (counts per wheel revolution from the robot description),
+measured every ``period_us``. The integral is frozen while the output saturates (anti-windup).
+"""
+
+import math
+
+
+class SpeedControl:
+    """PI correction of the feedforward powers from encoder-measured wheel speeds."""
+
+    def __init__(self, cpr: list[int], kp: float, ki: float, period_us: int, pwm_max: int) -> None:
+        self.n = len(cpr)
+        self.rad_per_count = [2.0 * math.pi / c if c > 0 else 0.0 for c in cpr]
+        self.kp = kp
+        self.ki = ki
+        self.period_us = period_us
+        self.pwm_max = pwm_max
+        self.speed = [0.0] * self.n
+        self._integ = [0.0] * self.n
+        self._last = [0] * self.n
+        self._acc_us = 0
+
+    @property
+    def available(self) -> bool:
+        """True when every motor has an encoder."""
+        return all(r != 0.0 for r in self.rad_per_count)
+
+    def reset(self, counts: list[int]) -> None:
+        for i in range(self.n):
+            self._integ[i] = 0.0
+            self._last[i] = counts[i]
+        self._acc_us = 0
+
+    def update(
+        self, dt_us: int, counts: list[int], target: list[float], ff: list[float], out: list[int]
+    ) -> bool:
+        """Accumulate time; every period write ff + PI into ``out``; True when it did."""
+        self._acc_us += dt_us
+        if self._acc_us < self.period_us:
+            return False
+        dt = self._acc_us * 1e-6
+        self._acc_us = 0
+        lim = self.pwm_max
+        for i in range(self.n):
+            c = counts[i]
+            self.speed[i] = (c - self._last[i]) * self.rad_per_count[i] / dt
+            self._last[i] = c
+            err = target[i] - self.speed[i]
+            p = ff[i] + self.kp * err + self.ki * self._integ[i]
+            if -lim < p < lim:
+                self._integ[i] += err * dt
+            elif p >= lim:
+                p = lim
+            else:
+                p = -lim
+            out[i] = round(p)
+        return True

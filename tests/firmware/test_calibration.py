@@ -1,0 +1,99 @@
+"""Calibration tables, course folding and the power model."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from omnibot.firmware.calibration import Calibration, fold_course, interp
+from omnibot.firmware.config import build_config
+from omnibot.firmware.power import DEADBAND, SATURATED, PowerModel
+from omnibot.robot.description import load_robot
+
+
+def test_interp_holds_outside_and_interpolates_inside() -> None:
+    xs, ys = [50.0, 100.0, 200.0], [2.0, 1.0, 0.5]
+    assert interp(xs, ys, 0) == 2.0
+    assert interp(xs, ys, 75) == 1.5
+    assert interp(xs, ys, 150) == 0.75
+    assert interp(xs, ys, 999) == 0.5
+
+
+@pytest.mark.parametrize(
+    ("course", "folded"),
+    [(0, 0), (30, 30), (45, 45), (60, 30), (90, 0), (135, 45), (-10, 10), (350, 10), (200, 20)],
+)
+def test_fold_course_omni4(course: float, folded: float) -> None:
+    axes = build_config(load_robot("omni4"))["idle_axes"]
+    assert axes == [0.0, 90.0]
+    assert fold_course(course, axes) == pytest.approx(folded)
+
+
+def test_idle_axes_of_three_wheels_and_mecanum() -> None:
+    assert build_config(load_robot("omni3"))["idle_axes"] == [0.0, 60.0, 120.0]
+    assert build_config(load_robot("mecanum4"))["idle_axes"] == [45.0, 135.0]
+    axes = [0.0, 60.0, 120.0]
+    assert max(fold_course(c, axes) for c in range(360)) == 30.0
+
+
+def _cal() -> Calibration:
+    return Calibration(
+        {
+            "k": 200.0,
+            "kl_courses": [0, 45],
+            "kl_tables": [[[0, 100], [2.0, 1.0]], [[0], [1.0]]],
+            "kt": [[0], [1.0]],
+            "kr": [[0, 100], [1.0, 3.0]],
+        }
+    )
+
+
+def test_k_l_interpolates_power_and_course() -> None:
+    cal = _cal()
+    assert cal.k_l(0, 0) == 2.0
+    assert cal.k_l(50, 0) == 1.5
+    assert cal.k_l(50, 45) == 1.0
+    assert cal.k_l(50, 22.5) == pytest.approx(1.25)
+    assert cal.k_r(50) == 2.0
+
+
+def test_set_knot_rules() -> None:
+    cal = _cal()
+    assert cal.set_knot(2, 0, 10, 1.5)  # rewriting knot 0 drops the rest
+    assert cal.kr == [[10.0], [1.5]]
+    assert not cal.set_knot(2, 2, 20, 1.0)  # no gaps
+    assert not cal.set_knot(2, 1, 10, 1.0)  # increasing powers
+    assert cal.set_knot(2, 1, 20, 1.0)
+    assert not cal.set_knot(12, 0, 0, 1.0)  # curve 2 does not exist yet
+    assert cal.set_knot(12, -1, 80, 0)  # add course 80
+    assert cal.kl_courses == [0, 45, 80]
+    assert not cal.set_knot(11, -1, 90, 0)  # courses must increase
+    assert not cal.set_knot(0, 0, 0, 0.0)
+    assert cal.set_knot(0, 0, 0, 300.0) and cal.k == 300.0
+
+
+def test_power_model_saturation_and_dead_band() -> None:
+    cfg = build_config(load_robot("omni4"), power_min=60)
+    model = PowerModel(cfg, Calibration(cfg))
+    out = [0] * 4
+    assert model.compute(1.0, 0.0, 0.0, False, out) == 0
+    assert out == [0, 220, 0, -220]
+    flags = model.compute(2.0, 0.0, 0.0, False, out)
+    assert flags == SATURATED and out == [0, 255, 0, -255]
+    assert model.scale == pytest.approx(255 / 440)
+    assert model.compute(0.2, 0.0, 0.0, False, out) == DEADBAND
+    assert out == [0, 0, 0, 0]
+    # rotation: K * R_c * w on every wheel
+    model.compute(0.0, 0.0, math.pi, True, out)
+    assert out == [round(220 * 0.096 * math.pi)] * 4
+
+
+def test_wheel_speeds_match_kinematics() -> None:
+    robot = load_robot("mecanum4")
+    cfg = build_config(robot)
+    model = PowerModel(cfg, Calibration(cfg))
+    out = [0.0] * 4
+    model.wheel_speeds(0.3, -0.2, 1.0, out)
+    want = robot.wheel_matrix @ [0.3, -0.2, 1.0]
+    assert out == pytest.approx(list(want))

@@ -1,0 +1,157 @@
+"""The same firmware under MicroPython (unix port) and CPython: identical output for one script."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from omnibot.firmware.config import build_config, stage_board
+from omnibot.protocol import codes, frame
+from omnibot.robot.description import load_robot
+
+ROOT = Path(__file__).resolve().parents[2]
+DRIVER = Path(__file__).with_name("mp_driver.py")
+MICROPYTHON = Path(sys.executable).with_name("micropython")
+
+SCRIPT = """
+> HELLO;hello,1;STATUS
+> MOVE,2,40,0,0;DELTA,0,0,10,0,36;STATUS
+@ 100
+> STATUS;FOO;MOVE,1;MOVE,x,1,1,1;MOVE,99999,1,1,1;MOVE,500,40,0,0
+@ 1800
+> SONAR,1,60,0,100,20
+> TELEM,100,255
+gyro -1500
+> MOVE,30000,60,45,10
+range 0 150
+@ 200
+range 0 15
+@ 200
+> STATUS
+> STOP;ROTATE,180,-200
+range 0 200
+@ 1000
+>> POWER,100,10,20,
+>> -30,255;MODE,1;VEL,20,30,40,100
+@ 300
+> MODE,0;MOVE,100,100,0,99;DELTA,0,0,10,5,30000
+@ 2000
+> MOVE,10,40,0,0
+@ 2000
+> CAL,0,0,0,4400;CAL,10,0,0,500;CAL,11,-1,45,0;CAL,11,0,0,1000;CAL,2,3,0,0
+> MOVE,20,40,30,0
+@ 100
+> MOVE,xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx;STATUS
+@ 1000
+"""
+
+
+def _hex(type_id: int, seq: int, *ints: int, sync: bool = False) -> str:
+    return "hex " + frame.encode_message(type_id, seq, list(ints), b"", sync).hex()
+
+
+BINARY_SCRIPT = "\n".join(
+    [
+        "> MODE,4",
+        _hex(codes.HELLO, 1, 1, sync=True),
+        _hex(codes.MOVE, 2, 2, 40, 0, 0) + "00ff00" + _hex(codes.DELTA, 3, 0, 0, 10, 0, 3)[4:],
+        _hex(codes.DELTA, 3, 0, 0, 10, 0, 3),
+        _hex(codes.STATUS, 4),
+        _hex(codes.TELEM, 5, 50, 255),
+        "@ 260",
+        _hex(codes.ACK, 1),
+        "@ 200",
+        _hex(codes.MOVE, 6, 1, 40000, 0, 0),
+        _hex(codes.MODE, 7, 0) + "0a".join(["", "5354415455530a"]),
+        "> HELLO",
+    ]
+)
+
+
+def micropython() -> str:
+    found = MICROPYTHON if MICROPYTHON.exists() else shutil.which("micropython")
+    if not found:
+        pytest.skip("micropython (unix port) not installed")
+    return str(found)
+
+
+def run(interpreter: list[str], stage: Path, script: Path) -> str:
+    env = dict(os.environ)
+    path = os.pathsep.join([str(stage), str(ROOT)])
+    env["MICROPYPATH"] = path
+    env["PYTHONPATH"] = path
+    proc = subprocess.run(
+        [*interpreter, str(DRIVER), str(script)],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert proc.returncode == 0, proc.stderr
+    return proc.stdout
+
+
+@pytest.mark.parametrize("robot", ["omni4", "mecanum4"])
+def test_micropython_matches_cpython(tmp_path: Path, robot: str) -> None:
+    mp = micropython()
+    stage = tmp_path / "board"
+    stage_board(stage, build_config(load_robot(robot)))
+    script = tmp_path / "script.txt"
+    script.write_text(SCRIPT)
+    out_mp = run([mp], stage, script)
+    out_cp = run([sys.executable, "-S"], stage, script)
+    assert out_mp == out_cp
+    lines = out_cp.splitlines()
+    assert lines[0] == f"0 HELLO,1,{robot},4"
+    assert any(line.endswith(" IDLE") for line in lines)
+    assert any(" TEL," in line for line in lines)
+    assert any("ERROR,22," in line for line in lines)
+
+
+def test_binary_mode_matches_cpython(tmp_path: Path) -> None:
+    mp = micropython()
+    stage = tmp_path / "board"
+    stage_board(stage, build_config(load_robot("omni4")))
+    script = tmp_path / "script.txt"
+    script.write_text(BINARY_SCRIPT)
+    out_mp = run([mp], stage, script)
+    out_cp = run([sys.executable, "-S"], stage, script)
+    assert out_mp == out_cp
+    lines = out_cp.splitlines()
+    assert lines[1] == "0 OK"
+    assert sum(" hex " in line for line in lines) >= 5
+    assert lines[-3].endswith(b"\x00STATUS,1,0,16,0;POWER,0,0,0,0;MOVE,2,40,30,0\r\n".hex())
+    assert lines[-2] == "460 HELLO,1,omni4,4"
+
+
+def test_board_files_import_under_micropython(tmp_path: Path) -> None:
+    """Every module copied to a board compiles and imports under MicroPython (main.py excepted)."""
+    mp = micropython()
+    stage = tmp_path / "board"
+    stage_board(stage, build_config(load_robot("omni3")))
+    mods = [
+        "omnibot.firmware." + p.stem
+        for p in (stage / "omnibot" / "firmware").glob("*.py")
+        if p.stem != "__init__"
+    ]
+    code = (
+        "import robot_config\n"
+        + "".join(f"import {m}\n" for m in mods)
+        + "print('ok', len(robot_config.CONFIG))"
+    )
+    proc = subprocess.run(
+        [mp, "-c", code],
+        check=False,
+        env={**os.environ, "MICROPYPATH": str(stage)},
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.startswith("ok")
