@@ -1,0 +1,49 @@
+"""Byte links chosen by URL: serial ports, TCP, the in-process lockstep simulator, and wrappers.
+
+``open_link(url)`` (grammar in :mod:`omnibot.transport.url`) returns a :class:`Link`: ``write``,
+``read(max_bytes, timeout)`` (``b""`` on timeout), ``close``, ``url``, ``closed`` and ``clock`` (wall or
+simulated time). Links move bytes only; they know nothing of the protocol or of the simulator.
+
+Modules: ``base`` (Link, Clock), ``url`` (grammar, open_link, register_scheme), ``serial_link``,
+``tcp``, ``lockstep`` (LockstepDevice, LockstepLink), ``spy`` (trace), ``faults`` (fault injection),
+``pacing`` (baud-rate token bucket), ``pty_bridge`` (serve a device on a pty; POSIX only, import it
+directly).
+"""
+
+from omnibot.transport.base import Clock, Link, WallClock
+from omnibot.transport.faults import FaultLink, FaultStats
+from omnibot.transport.lockstep import LockstepClock, LockstepDevice, LockstepLink
+from omnibot.transport.pacing import Pacer
+from omnibot.transport.serial_link import SerialLink
+from omnibot.transport.spy import SpyEvent, SpyLink
+from omnibot.transport.tcp import TcpLink
+from omnibot.transport.url import (
+    LinkUrl,
+    open_link,
+    parse_link_url,
+    register_scheme,
+    registered_schemes,
+    unregister_scheme,
+)
+
+__all__ = [
+    "Clock",
+    "FaultLink",
+    "FaultStats",
+    "Link",
+    "LinkUrl",
+    "LockstepClock",
+    "LockstepDevice",
+    "LockstepLink",
+    "Pacer",
+    "SerialLink",
+    "SpyEvent",
+    "SpyLink",
+    "TcpLink",
+    "WallClock",
+    "open_link",
+    "parse_link_url",
+    "register_scheme",
+    "registered_schemes",
+    "unregister_scheme",
+]

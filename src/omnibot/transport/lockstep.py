@@ -1,0 +1,218 @@
+"""In-process lockstep link: the host drives a simulated device, and time is the device's time.
+
+There is no thread and no wall-clock wait. ``read(timeout=t)`` steps the device tick by tick until
+bytes have reached the host or ``t`` seconds of *simulated* time have passed; ``clock.sleep(t)`` steps
+it for ``t`` simulated seconds. So a test or benchmark runs as fast as the device can be stepped, and
+the same inputs give the same bytes at the same simulated times.
+
+The UART is modelled as two paced FIFOs in simulated time::
+
+    host.write() --> [ tx FIFO: 10 bits/baud per byte ] --> device.receive()   (before each step)
+    host.read()  <-- [ rx FIFO: 10 bits/baud per byte ] <-- device.transmit()  (after each step)
+
+A byte leaves its FIFO when its last bit is on the other side; a byte written while the line is busy
+queues behind the others, so throughput is capped at ``baud / 10`` bytes per simulated second in each
+direction (``baud=0``: unpaced, bytes arrive at the next tick boundary). Simulated time moves in whole
+device ticks, so waits round up to whole ticks and a positive wait always moves at least one tick.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from collections import deque
+from typing import Protocol, runtime_checkable
+
+from omnibot.errors import LinkError
+from omnibot.transport.base import Link, bit_time
+
+__all__ = ["DEFAULT_BAUD", "LockstepClock", "LockstepDevice", "LockstepLink", "PacedFifo"]
+
+DEFAULT_BAUD = 115200
+_EPS = 1e-9  # relative slack when turning a duration into whole ticks
+
+
+@runtime_checkable
+class LockstepDevice(Protocol):
+    """A device that can be stepped by the host (the simulated controller implements this).
+
+    ``time`` is the device's simulated time in seconds and ``tick`` the seconds one :meth:`step`
+    advances it by (both may be plain attributes or read-only properties). Optionally a device may
+    have ``close()``; :class:`LockstepLink` calls it when the link is closed.
+    """
+
+    @property
+    def time(self) -> float:
+        """Simulated seconds; advanced by ``tick`` on every :meth:`step`."""
+        ...
+
+    @property
+    def tick(self) -> float:
+        """Seconds of simulated time per :meth:`step` (e.g. 0.001)."""
+        ...
+
+    def receive(self, data: bytes) -> None:
+        """Bytes from the host, delivered to the device's UART."""
+        ...
+
+    def step(self) -> None:
+        """Advance one device tick."""
+        ...
+
+    def transmit(self) -> bytes:
+        """Bytes the device has sent since the last call (``b""`` if none)."""
+        ...
+
+
+class PacedFifo:
+    """A byte FIFO whose bytes come out no faster than one per ``byte_time`` seconds.
+
+    ``push(now, data)`` puts bytes on the line at time ``now`` (after anything still on it);
+    ``pop_due(now)`` returns the bytes whose last bit has arrived by ``now``.
+    """
+
+    def __init__(self, byte_time: float) -> None:
+        self.byte_time = byte_time
+        self._chunks: deque[tuple[float, bytes]] = deque()  # (start time of first byte, bytes)
+        self._line_free = -math.inf
+        self._pending = 0
+
+    def __len__(self) -> int:
+        return self._pending
+
+    def push(self, now: float, data: bytes) -> None:
+        if not data:
+            return
+        start = max(now, self._line_free)
+        self._chunks.append((start, data))
+        self._line_free = start + len(data) * self.byte_time
+        self._pending += len(data)
+
+    def pop_due(self, now: float) -> bytes:
+        out = bytearray()
+        while self._chunks:
+            start, data = self._chunks[0]
+            if self.byte_time == 0.0:
+                n = len(data) if start <= now else 0
+            else:
+                n = min(len(data), math.floor((now - start) / self.byte_time + _EPS))
+            if n <= 0:
+                break
+            out += data[:n]
+            if n == len(data):
+                self._chunks.popleft()
+            else:
+                self._chunks[0] = (start + n * self.byte_time, data[n:])
+                break
+        self._pending -= len(out)
+        return bytes(out)
+
+    def clear(self) -> None:
+        self._chunks.clear()
+        self._pending = 0
+
+
+class LockstepClock:
+    """The simulated clock of a :class:`LockstepLink`: ``now()`` is the device's time."""
+
+    def __init__(self, link: LockstepLink) -> None:
+        self._link = link
+
+    def now(self) -> float:
+        return self._link.device.time
+
+    def sleep(self, seconds: float) -> None:
+        """Step the device for ``seconds`` of simulated time (rounded up to whole ticks)."""
+        self._link.advance(seconds)
+
+    def __repr__(self) -> str:
+        return f"LockstepClock(now={self.now():.6f})"
+
+
+class LockstepLink(Link):
+    """A :class:`Link` to a :class:`LockstepDevice` stepped in the caller's thread.
+
+    Meant to be driven from one thread: every blocking call advances simulated time, so a
+    background reader thread would make simulated time run as fast as it loops. Calls are
+    serialised by a lock, so using it from several threads is safe, just not deterministic.
+    """
+
+    def __init__(self, device: LockstepDevice, *, baud: int = DEFAULT_BAUD, url: str | None = None) -> None:
+        if device.tick <= 0:
+            raise ValueError(f"device tick must be > 0 s, got {device.tick}")
+        super().__init__(url or f"lockstep://{type(device).__name__}?baud={baud}")
+        self._clock = LockstepClock(self)
+        self.device = device
+        self.baud = baud
+        byte_time = bit_time(baud)
+        self._to_device = PacedFifo(byte_time)
+        self._to_host = PacedFifo(byte_time)
+        self._inbox = bytearray()  # arrived at the host, not yet read
+        self._lock = threading.RLock()
+        self.steps = 0
+        """Device steps taken through this link."""
+
+    @property
+    def in_waiting(self) -> int:
+        """Bytes that have arrived at the host and not been read yet."""
+        with self._lock:
+            self._collect()
+            return len(self._inbox)
+
+    def advance(self, seconds: float) -> None:
+        """Step the device for ``seconds`` of simulated time (whole ticks, at least one if > 0)."""
+        self._check_open()
+        with self._lock:
+            for _ in range(self._ticks_for(seconds)):
+                self._step()
+
+    def _ticks_for(self, seconds: float) -> int:
+        if seconds <= 0:
+            return 0
+        return max(1, math.ceil(seconds / self.device.tick - _EPS))
+
+    def _step(self) -> None:
+        device = self.device
+        due = self._to_device.pop_due(device.time)
+        if due:
+            device.receive(due)
+        device.step()
+        self.steps += 1
+        out = device.transmit()
+        if out:
+            self._to_host.push(device.time, out)
+        self._collect()
+
+    def _collect(self) -> None:
+        arrived = self._to_host.pop_due(self.device.time)
+        if arrived:
+            self._inbox += arrived
+
+    def _write(self, data: bytes) -> None:
+        with self._lock:
+            self._to_device.push(self.device.time, data)
+
+    def _read(self, max_bytes: int, timeout: float | None) -> bytes:
+        with self._lock:
+            self._collect()
+            if not self._inbox and timeout != 0:
+                ticks = math.inf if timeout is None else self._ticks_for(timeout)
+                taken = 0
+                while not self._inbox and taken < ticks and not self.closed:
+                    self._step()
+                    taken += 1
+            chunk = bytes(self._inbox[:max_bytes])
+            del self._inbox[:max_bytes]
+            return chunk
+
+    def _close(self) -> None:
+        with self._lock:
+            self._to_device.clear()
+            self._to_host.clear()
+            self._inbox.clear()
+            close = getattr(self.device, "close", None)
+            if callable(close):
+                try:
+                    close()
+                except Exception as exc:
+                    raise LinkError(f"closing the device of {self.url} failed: {exc}") from exc

@@ -1,0 +1,228 @@
+"""Serve a stepped device on a pseudo-terminal in real time (the plumbing of ``omnibot sim --pty``).
+
+::
+
+    host program --(slave: /dev/pts/N)--> kernel pty --(master fd)--> PtyBridge --> device.receive()
+                 <--                                  <-- paced  <--           <-- device.transmit()
+
+The bridge owns the master side. The device (any :class:`~omnibot.transport.lockstep.LockstepDevice`)
+is stepped once per ``device.tick`` of wall-clock time; a late loop catches up with several steps, and
+beyond ``max_catch_up`` seconds behind it skips ticks (counted in ``skipped_ticks``) instead of
+racing. Bytes are paced to ``baud`` in both directions (a pty itself does not pace), with a
+:class:`~omnibot.transport.pacing.Pacer` per direction.
+
+The host may open, close and reopen the slave at will: while no one has it open the master reports a
+hang-up (reads give EIO); the bridge keeps the device running, discards what the device sends (a UART
+with nothing attached), flushes stale bytes, and carries on when the slave is opened again
+(calling ``on_connect``, if given, each time a host opens it).
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+import select
+import termios
+import threading
+import time
+import tty
+from collections.abc import Callable
+from types import TracebackType
+from typing import Self
+
+from omnibot.errors import LinkError
+from omnibot.transport.lockstep import DEFAULT_BAUD, LockstepDevice
+from omnibot.transport.pacing import Pacer
+
+__all__ = ["PtyBridge"]
+
+_READ_CHUNK = 4096
+
+
+class PtyBridge:
+    """A pty pair whose master end is served by ``device`` in real time.
+
+    Use as a context manager (``with PtyBridge(dev) as bridge: open(bridge.path)``), or call
+    :meth:`start`/:meth:`stop`, or run the loop in the calling thread with :meth:`run` until an Event
+    is set and then :meth:`close`. The bridge does not close the device.
+    """
+
+    def __init__(
+        self,
+        device: LockstepDevice,
+        *,
+        baud: int = DEFAULT_BAUD,
+        burst: int = 16,
+        max_catch_up: float = 0.1,
+        on_connect: Callable[[], None] | None = None,
+    ) -> None:
+        if device.tick <= 0:
+            raise ValueError(f"device tick must be > 0 s, got {device.tick}")
+        self.device = device
+        self.baud = baud
+        self.burst = burst
+        self.max_catch_up = max_catch_up
+        self.on_connect = on_connect
+        """Called in the bridge's thread each time a host opens the slave (e.g. to reset the device
+        the way opening an Arduino's port pulses DTR)."""
+        master, slave = os.openpty()
+        try:
+            tty.setraw(slave)
+            self.path: str = os.ttyname(slave)
+            """The slave device path for the host to open (e.g. ``/dev/pts/7``)."""
+        except BaseException:
+            os.close(master)
+            raise
+        finally:
+            os.close(slave)  # the host opens it by path; while nobody has it open we see hang-ups
+        os.set_blocking(master, False)
+        self._master: int | None = master
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self.error: BaseException | None = None
+        """What ended the loop abnormally, if anything (also raised as LinkError by stop())."""
+        self.connected = False
+        """Whether a host had the slave open at the last look."""
+        self.steps = 0
+        self.skipped_ticks = 0
+        self.bytes_to_device = 0
+        self.bytes_to_host = 0
+        self.bytes_discarded = 0
+
+    # -- lifecycle -----------------------------------------------------------------------------
+
+    def start(self) -> Self:
+        """Run the loop in a background thread."""
+        if self._master is None:
+            raise LinkError("pty bridge is closed")
+        if self._thread is not None:
+            raise RuntimeError("pty bridge already started")
+        self._thread = threading.Thread(
+            target=self._thread_main, name=f"omnibot-pty {self.path}", daemon=True
+        )
+        self._thread.start()
+        return self
+
+    def stop(self, timeout: float = 5.0) -> None:
+        """Stop the loop, join its thread, close the pty; raise LinkError if the loop had failed."""
+        self._stop.set()
+        thread, self._thread = self._thread, None
+        if thread is not None:
+            thread.join(timeout)
+            if thread.is_alive():
+                raise LinkError(f"pty bridge thread did not stop within {timeout} s")
+        self._close_fd()
+        if self.error is not None:
+            error, self.error = self.error, None
+            raise LinkError(f"pty bridge on {self.path} failed: {error}") from error
+
+    close = stop
+
+    def __enter__(self) -> Self:
+        return self.start()
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.stop()
+
+    def _thread_main(self) -> None:
+        try:
+            self.run()
+        except BaseException as exc:
+            self.error = exc
+
+    def _close_fd(self) -> None:
+        master, self._master = self._master, None
+        if master is not None:
+            os.close(master)
+
+    # -- the loop ------------------------------------------------------------------------------
+
+    def run(self, stop: threading.Event | None = None) -> None:
+        """Serve the device until ``stop`` (or :meth:`stop`) is set. Call :meth:`close` afterwards."""
+        master = self._master
+        if master is None:
+            raise LinkError("pty bridge is closed")
+        device, tick = self.device, self.device.tick
+        to_device, to_host = bytearray(), bytearray()
+        pace_in = Pacer(self.baud, burst=self.burst)
+        pace_out = Pacer(self.baud, burst=self.burst)
+        poller = select.poll()
+        poller.register(master, select.POLLIN)
+        next_tick = time.monotonic() + tick
+
+        while not self._stop.is_set() and not (stop is not None and stop.is_set()):
+            self._poll(master, poller, to_device, to_host)
+            now = time.monotonic()
+            if now - next_tick > self.max_catch_up:
+                skipped = int((now - next_tick) / tick)
+                self.skipped_ticks += skipped
+                next_tick += skipped * tick
+            while next_tick <= now:
+                n = pace_in.take(len(to_device))
+                if n:
+                    device.receive(bytes(to_device[:n]))
+                    del to_device[:n]
+                    self.bytes_to_device += n
+                device.step()
+                self.steps += 1
+                out = device.transmit()
+                if out:
+                    if self.connected:
+                        to_host += out
+                    else:
+                        self.bytes_discarded += len(out)
+                next_tick += tick
+            if to_host and self.connected:
+                self._send(master, to_host, pace_out)
+            wait = next_tick - time.monotonic()
+            if wait > 0:
+                time.sleep(wait)
+
+    def _poll(self, master: int, poller: select.poll, to_device: bytearray, to_host: bytearray) -> None:
+        events = 0
+        for _, ev in poller.poll(0):
+            events |= ev
+        hung_up = bool(events & select.POLLHUP) and not events & select.POLLIN
+        if hung_up:
+            if self.connected:  # the host closed the slave: drop what is in flight
+                self.connected = False
+                self.bytes_discarded += len(to_host)
+                to_host.clear()
+                termios.tcflush(master, termios.TCIOFLUSH)
+            return
+        if not self.connected:
+            self.connected = True
+            if self.on_connect is not None:
+                self.on_connect()
+        if events & select.POLLIN and len(to_device) < _READ_CHUNK:
+            try:
+                data = os.read(master, _READ_CHUNK)
+            except BlockingIOError:
+                return
+            except OSError as exc:
+                if exc.errno == errno.EIO:  # slave closed between poll and read
+                    self.connected = False
+                    return
+                raise
+            to_device += data
+
+    def _send(self, master: int, to_host: bytearray, pacer: Pacer) -> None:
+        n = pacer.take(len(to_host))
+        if not n:
+            return
+        try:
+            written = os.write(master, to_host[:n])
+        except BlockingIOError:
+            written = 0
+        except OSError as exc:
+            if exc.errno == errno.EIO:
+                self.connected = False
+                return
+            raise
+        del to_host[:written]
+        self.bytes_to_host += written

@@ -1,0 +1,75 @@
+"""Shared test fixtures. Every test runs under a leak check.
+
+``no_leaks`` (autouse) fails a test that leaves behind threads, child processes or open file
+descriptors (ptys, sockets, files). It snapshots them before the test and compares after, giving
+threads and children a short grace period to finish (a stopped helper may still be unwinding).
+A test that leaks on purpose (e.g. a process-wide cache opened on first use) can opt out with
+``@pytest.mark.allow_leaks("why")``.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+from collections.abc import Iterator
+
+import pytest
+
+GRACE = 2.0  # seconds to wait for stragglers before calling it a leak
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line("markers", "allow_leaks(reason): skip the thread/process/fd leak check")
+
+
+def _open_fds() -> dict[int, str]:
+    fds: dict[int, str] = {}
+    for name in os.listdir("/proc/self/fd"):
+        try:
+            fds[int(name)] = os.readlink(f"/proc/self/fd/{name}")
+        except OSError:  # the directory's own fd, already closed again
+            continue
+    return fds
+
+
+def _children() -> set[int]:
+    """Pids whose parent is this process (zombies included: not reaped is a leak too)."""
+    me, found = os.getpid(), set()
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat", encoding="ascii", errors="replace") as f:
+                stat = f.read()
+        except OSError:
+            continue
+        fields = stat[stat.rfind(")") + 2 :].split()  # after "pid (comm) "; fields[1] is the ppid
+        if len(fields) > 1 and int(fields[1]) == me:
+            found.add(int(entry))
+    return found
+
+
+def _leaks(threads: set[threading.Thread], fds: dict[int, str], children: set[int]) -> list[str]:
+    found = [f"thread {t.name!r}" for t in threading.enumerate() if t not in threads and t.is_alive()]
+    found += [f"fd {fd} -> {target}" for fd, target in _open_fds().items() if fds.get(fd) != target]
+    found += [f"child process {pid}" for pid in sorted(_children() - children)]
+    return found
+
+
+@pytest.fixture(autouse=True)
+def no_leaks(request: pytest.FixtureRequest) -> Iterator[None]:
+    if request.node.get_closest_marker("allow_leaks") or not os.path.isdir("/proc/self/fd"):
+        yield
+        return
+    threads = set(threading.enumerate())
+    fds = _open_fds()
+    children = _children()
+    yield
+    deadline = time.monotonic() + GRACE
+    leaks = _leaks(threads, fds, children)
+    while leaks and time.monotonic() < deadline:
+        time.sleep(0.01)
+        leaks = _leaks(threads, fds, children)
+    if leaks:
+        pytest.fail("test leaked: " + "; ".join(leaks), pytrace=False)

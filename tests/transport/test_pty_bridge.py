@@ -1,0 +1,93 @@
+"""The pty bridge: a device served on a real pseudo-terminal, in real time, paced to the baud."""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+
+import pytest
+import serial
+
+from omnibot.errors import LinkError
+from omnibot.transport.pty_bridge import PtyBridge
+
+from .fakes import EchoDevice
+
+
+def read_line(port: serial.Serial, timeout: float = 2.0) -> bytes:
+    port.timeout = timeout
+    line = bytes(port.read_until(b"\n"))
+    assert line.endswith(b"\n"), f"no line within {timeout} s: {line!r}"
+    return line
+
+
+def wait_until(condition: Callable[[], bool], timeout: float = 2.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not condition():
+        assert time.monotonic() < deadline, "condition not met in time"
+        time.sleep(0.005)
+
+
+def test_echo_through_pyserial() -> None:
+    with PtyBridge(EchoDevice()) as bridge, serial.Serial(bridge.path, 115200) as port:
+        port.write(b"MOVE,2,40,0,0\n")
+        assert read_line(port) == b"MOVE,2,40,0,0\n"
+    assert bridge.steps > 0
+    assert bridge.error is None
+
+
+def test_pacing_holds_the_baud_rate() -> None:
+    n = 2304  # 0.2 s at 115200 baud in each direction (pipelined)
+    with PtyBridge(EchoDevice(per_byte=True), baud=115200) as bridge, serial.Serial(bridge.path) as port:
+        port.timeout = 5
+        t0 = time.monotonic()
+        port.write(b"x" * n)
+        data = port.read(n)
+        elapsed = time.monotonic() - t0
+    assert data == b"x" * n
+    assert 0.15 <= elapsed < 3.0, elapsed
+
+
+def test_host_closes_and_reopens_the_slave() -> None:
+    device = EchoDevice()
+    connects: list[float] = []
+    with PtyBridge(device, on_connect=lambda: connects.append(device.time)) as bridge:
+        with serial.Serial(bridge.path) as port:
+            port.write(b"one\n")
+            assert read_line(port) == b"one\n"
+            port.write(b"unread\n")  # echoed after the host has gone
+        wait_until(lambda: not bridge.connected and bridge.bytes_discarded >= len(b"unread\n"))
+        with serial.Serial(bridge.path) as port:
+            port.write(b"two\n")
+            assert read_line(port) == b"two\n"  # no stale "unread" first
+        assert device.received == b"one\nunread\ntwo\n"
+        assert len(connects) == 2
+
+
+def test_run_in_foreground_until_event() -> None:
+    stop = threading.Event()
+    bridge = PtyBridge(EchoDevice())
+    timer = threading.Timer(0.1, stop.set)
+    timer.start()
+    t0 = time.monotonic()
+    bridge.run(stop)
+    bridge.close()
+    timer.join()
+    assert 0.09 <= time.monotonic() - t0 < 2.0
+    assert bridge.steps >= 20  # about one per ms of wall time (fewer if the machine is busy)
+    with pytest.raises(LinkError, match="closed"):
+        bridge.start()
+
+
+class BrokenDevice(EchoDevice):
+    def step(self) -> None:
+        raise RuntimeError("boom")
+
+
+def test_device_failure_surfaces_on_stop() -> None:
+    bridge = PtyBridge(BrokenDevice()).start()
+    wait_until(lambda: bridge.error is not None)
+    with pytest.raises(LinkError, match="boom"):
+        bridge.stop()
+    bridge.stop()  # idempotent
