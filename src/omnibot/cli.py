@@ -131,6 +131,47 @@ def _add_kinematics(sub: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     p.set_defaults(handler=_kinematics)
 
 
+# --------------------------------------------------------------------------- sim
+
+
+def _sim(args: argparse.Namespace) -> int:
+    from omnibot.robot.description import load_robot
+    from omnibot.sim.emulator import run_pty_emulator
+    from omnibot.sim.surfaces import SURFACES
+    from omnibot.sim.world import load_world
+
+    robot = load_robot(args.robot)
+    if args.surface is not None and args.surface not in SURFACES:
+        raise ConfigError(
+            f"unknown surface {args.surface!r}; expected one of: {', '.join(SURFACES)}", key="--surface"
+        )
+    if args.world is not None:
+        load_world(args.world)  # a bad world is reported before the pty appears
+    if not args.pty:
+        raise ConfigError("only the pty emulator exists so far: add --pty", key="omnibot sim")
+    truth = Path(args.truth) if args.truth else None
+    return run_pty_emulator(
+        robot, seed=args.seed, surface=args.surface, world=args.world, truth=truth, baud=args.baud
+    )
+
+
+def _add_sim(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    p = sub.add_parser(
+        "sim",
+        help="run the simulated robot (firmware + physics) on a pseudo-terminal",
+        description="Runs the firmware and the simulator as one process on a pty, in real time, "
+        "pacing bytes to the baud rate. The first stdout line is the device path. Ends on SIGINT/SIGTERM.",
+    )
+    p.add_argument("--pty", action="store_true", help="serve on a pseudo-terminal (required)")
+    p.add_argument("--robot", default="omni4", help="preset name or description file (default omni4)")
+    p.add_argument("--seed", type=int, default=0, help="random seed of the sensor noise (default 0)")
+    p.add_argument("--surface", help="floor surface: wood, carpet, concrete, linoleum (default: the world's)")
+    p.add_argument("--world", help="world name (empty, room, corridor) or world YAML file (default empty)")
+    p.add_argument("--truth", metavar="FILE.csv", help="write the ground-truth trajectory t,x,y,theta")
+    p.add_argument("--baud", type=int, default=115200, help="pace bytes to this baud rate (default 115200)")
+    p.set_defaults(handler=_sim)
+
+
 # --------------------------------------------------------------------------- parser
 
 
@@ -148,6 +189,7 @@ def build_parser() -> argparse.ArgumentParser:
 ADDERS: list[Callable[[argparse._SubParsersAction[argparse.ArgumentParser]], None]] = [
     _add_robot,
     _add_kinematics,
+    _add_sim,
 ]
 
 

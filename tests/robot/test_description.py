@@ -69,11 +69,12 @@ def test_polar_form_converts_to_cartesian() -> None:
 
 def test_wheel_motor_overrides_merge_with_the_default() -> None:
     data = preset_data("omni4")
-    data["wheels"][1]["motor"] = {"resistance": 4.2}
+    default = data["motor"]["resistance"]
+    data["wheels"][1]["motor"] = {"resistance": default * 1.1}
     r = parse_description(data)
-    assert r.wheels[1].motor.resistance == 4.2
+    assert r.wheels[1].motor.resistance == default * 1.1
     assert r.wheels[1].motor.gear_ratio == r.wheels[0].motor.gear_ratio
-    assert r.wheels[0].motor.resistance == 3.5
+    assert r.wheels[0].motor.resistance == default
 
 
 def error_for(data: dict[str, Any]) -> str:

@@ -114,6 +114,9 @@ class RollerSpec(_Spec):
     friction_variation: float = Field(
         default=0.0, ge=0, description="peak relative rise of that resistance with wheel angle (1.0 = 2x)"
     )
+    grip: float = Field(
+        default=1.0, gt=0, description="roller material's floor friction relative to soft rubber (scales mu)"
+    )
 
 
 class WheelSpec(_Spec):

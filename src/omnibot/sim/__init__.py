@@ -1,0 +1,1 @@
+"""The simulator: rigid-body physics with motors, wheels, rollers and floor surfaces, sensors and a world."""

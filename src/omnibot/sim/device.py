@@ -1,0 +1,189 @@
+"""The simulated motor controller: the real firmware running on the simulator through a simulator HAL.
+
+This is the one module that joins firmware, simulator and transport (DESIGN.md's import rules)::
+
+    host bytes --receive()--> SimHAL UART --> firmware Controller.poll() --set_power--> Simulator
+    host bytes <-transmit()-- SimHAL UART <--         (events, replies, TEL)   <--sensors--/
+
+:class:`SimDevice` implements :class:`~omnibot.transport.lockstep.LockstepDevice`, so the same object
+serves the in-process lockstep link (``sim://PRESET``), the real-time pty emulator (``omnibot sim
+--pty``) and tests. The firmware is polled at the robot's ``controller.loop_hz`` (an Arduino-class
+loop), the physics steps at 1 kHz.
+
+Importing this module registers the ``sim`` URL scheme::
+
+    sim://PRESET_OR_FILE?seed=0&surface=wood&world=empty&baud=115200
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+from omnibot.errors import ConfigError
+from omnibot.firmware.config import build_config
+from omnibot.firmware.controller import Controller
+from omnibot.firmware.hal import HAL
+from omnibot.robot.description import RobotDescription, load_robot
+from omnibot.sim.simulator import Simulator, TruthRecorder
+from omnibot.sim.world import World
+from omnibot.transport.lockstep import DEFAULT_BAUD, LockstepLink
+from omnibot.transport.url import LinkUrl, register_scheme
+
+SPEED_OF_SOUND = 343.0
+"""m/s at 20 degrees C; an HC-SR04 echo takes 2 d / c."""
+ECHO_TIMEOUT = 0.030
+"""s the HC-SR04 waits for an echo that never comes."""
+
+
+class SimHAL(HAL):
+    """The firmware's HAL over a :class:`Simulator`: its clock, motors and sensors."""
+
+    def __init__(self, sim: Simulator) -> None:
+        self.sim = sim
+        robot = sim.robot
+        self.rx = bytearray()
+        self.tx = bytearray()
+        self.pwm = [0] * robot.n_wheels
+        self._pwm_dirty = False
+        encoder_index = {e.wheel: k for k, e in enumerate(robot.encoders.motors)}
+        self._encoder_of_wheel = [encoder_index.get(w.name) for w in robot.wheels]
+        self._sonar_ready: list[float] = [math.inf] * len(robot.sonars)
+        self._sonar_cm: list[int] = [-1] * len(robot.sonars)
+
+    def ticks_us(self) -> int:
+        return self.sim.clock.ticks_us()
+
+    def uart_read(self) -> bytes:
+        if not self.rx:
+            return b""
+        data = bytes(self.rx)
+        self.rx.clear()
+        return data
+
+    def uart_write(self, data: bytes) -> None:
+        self.tx += data
+
+    def set_power(self, i: int, pwm: int) -> None:
+        if self.pwm[i] != pwm:
+            self.pwm[i] = pwm
+            self._pwm_dirty = True
+
+    def apply_power(self) -> None:
+        """Hand changed PWM values to the simulator (once per step, not once per motor)."""
+        if self._pwm_dirty:
+            self.sim.set_pwm(self.pwm)
+            self._pwm_dirty = False
+
+    def encoder_count(self, i: int) -> int:
+        k = self._encoder_of_wheel[i]
+        return 0 if k is None else self.sim.encoder_counts()[k]
+
+    def tracking_count(self, j: int) -> int:
+        return self.sim.tracking_counts()[j]
+
+    def gyro_rate_mdps(self) -> int | None:
+        if self.sim.robot.gyro is None:
+            return None
+        return round(math.degrees(self.sim.gyro_rate()) * 1000.0)
+
+    def sonar_start(self, s: int) -> None:
+        reading = self.sim.sonar_ping(s)
+        if reading is None:
+            self._sonar_cm[s] = -1
+            self._sonar_ready[s] = self.sim.time + ECHO_TIMEOUT
+        else:
+            self._sonar_cm[s] = round(reading * 100.0)
+            self._sonar_ready[s] = self.sim.time + 2.0 * reading / SPEED_OF_SOUND
+
+    def sonar_read(self, s: int) -> int | None:
+        if self.sim.time < self._sonar_ready[s]:
+            return None
+        return self._sonar_cm[s]
+
+    def battery_mv(self) -> int:
+        return round(self.sim.battery_voltage * 1000.0)
+
+
+class SimDevice:
+    """Firmware + simulator as one steppable device (a LockstepDevice)."""
+
+    def __init__(
+        self,
+        robot: RobotDescription | str,
+        *,
+        surface: str | None = None,
+        world: World | str | Path | None = None,
+        seed: int = 0,
+        dt: float = 0.001,
+        start_pose: tuple[float, float, float] | None = None,
+        truth_recorder: TruthRecorder | None = None,
+        true_robot: RobotDescription | None = None,
+        firmware_overrides: dict[str, Any] | None = None,
+    ) -> None:
+        """``robot`` is what the firmware is built for; ``true_robot`` (default: the same) is what the
+        simulator simulates, so a robot whose real parameters differ from its description can be tested.
+        """
+        self.robot = load_robot(robot) if isinstance(robot, str) else robot
+        self.sim = Simulator(
+            true_robot or self.robot,
+            surface=surface,
+            world=world,
+            seed=seed,
+            dt=dt,
+            start_pose=start_pose,
+            truth_recorder=truth_recorder,
+        )
+        self.hal = SimHAL(self.sim)
+        config = build_config(self.robot)
+        config.update(firmware_overrides or {})
+        self.controller = Controller(self.hal, config)
+        self._poll_every = max(1, round(1.0 / (self.robot.controller.loop_hz * dt)))
+        self._steps = 0
+        self._tick = dt
+
+    @property
+    def time(self) -> float:
+        return self.sim.time
+
+    @property
+    def tick(self) -> float:
+        return self._tick
+
+    def receive(self, data: bytes) -> None:
+        self.hal.rx += data
+
+    def step(self) -> None:
+        if self._steps % self._poll_every == 0:
+            self.controller.poll()
+            self.hal.apply_power()
+        self._steps += 1
+        self.sim.step()
+
+    def transmit(self) -> bytes:
+        if not self.hal.tx:
+            return b""
+        data = bytes(self.hal.tx)
+        self.hal.tx.clear()
+        return data
+
+
+def _open_sim(u: LinkUrl) -> LockstepLink:
+    if not u.target:
+        raise ConfigError("sim:// needs a robot: sim://omni4, sim://omni3, sim://mecanum4 or sim://FILE.yaml")
+    device = SimDevice(
+        u.target,
+        surface=u.get_str("surface", "") or None,
+        world=u.get_str("world", "") or None,
+        seed=u.get_int("seed", 0, minimum=0),
+    )
+    return LockstepLink(device, baud=u.get_int("baud", DEFAULT_BAUD, minimum=0), url=u.url)
+
+
+register_scheme(
+    "sim",
+    _open_sim,
+    options=("seed", "surface", "world", "baud"),
+    help="sim://PRESET?seed=N&surface=NAME&world=NAME&baud=115200: in-process lockstep simulator",
+)

@@ -1,0 +1,216 @@
+"""Simulated sensors: motor encoders, passive tracking wheels, a yaw gyro and ultrasonic sonars.
+
+Each sensor takes its spec from the robot description and a ``numpy.random.Generator``; the same
+seed gives the same readings. The sensors know nothing of the physics: the simulator feeds them the
+true wheel angles, body twist and pose, and they return what the hardware would report.
+
+Counters are quantised with ``floor`` like a real counter (a count happens when an edge is
+crossed), with a 1e-9 count allowance so that exactly one revolution gives exactly
+``counts_per_rev`` despite rounding in 2 pi.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from omnibot.robot.description import GyroSpec, SonarSpec, TrackingWheelSpec
+from omnibot.sim.world import Pose, World
+
+IntArray = NDArray[np.int64]
+FloatArray = NDArray[np.float64]
+_EDGE_EPS = 1e-9
+
+
+def _count(revolutions: FloatArray, cpr: FloatArray) -> IntArray:
+    return np.floor(revolutions * cpr + _EDGE_EPS).astype(np.int64)
+
+
+class MotorEncoders:
+    """Quadrature encoders on the driven wheels: counts per wheel revolution, floor-quantised.
+
+    ``miss_probability`` is the chance that any one edge is not counted (a noisy line or a slow
+    interrupt); missed counts are lost for good, so counts stay monotone while the wheel turns one
+    way. Counts start at 0 for the angles given at construction (power-on).
+    """
+
+    def __init__(
+        self,
+        counts_per_rev: Sequence[int],
+        rng: np.random.Generator,
+        *,
+        miss_probability: float = 0.0,
+        initial_angles: ArrayLike | None = None,
+    ) -> None:
+        if not 0.0 <= miss_probability <= 1.0:
+            raise ValueError(f"miss_probability must be in [0, 1], got {miss_probability}")
+        self._cpr = np.asarray(counts_per_rev, dtype=float)
+        self._rng = rng
+        self.miss_probability = miss_probability
+        angles = np.zeros(len(self._cpr)) if initial_angles is None else np.asarray(initial_angles, float)
+        self._edges = _count(angles / (2 * math.pi), self._cpr)
+        self._origin = self._edges.copy()
+        self._lost = np.zeros(len(self._cpr), dtype=np.int64)
+
+    def update(self, wheel_angles: ArrayLike) -> IntArray:
+        """Feed the true wheel angles (rad); return the counts."""
+        edges = _count(np.asarray(wheel_angles, dtype=float) / (2 * math.pi), self._cpr)
+        if self.miss_probability > 0:
+            delta = edges - self._edges
+            missed = self._rng.binomial(np.abs(delta), self.miss_probability)
+            self._lost += np.sign(delta) * missed
+        self._edges = edges
+        return self.counts
+
+    @property
+    def counts(self) -> IntArray:
+        return np.asarray(self._edges - self._origin - self._lost, dtype=np.int64)
+
+
+class TrackingWheels:
+    """Passive measuring wheels: each rolls with the body velocity at its mount, along its direction.
+
+    The rolled distance per step is ``u . (v + w x p) * dt * (1 + slip)`` with ``slip`` drawn from
+    N(0, ``slip_std``) every step (a wheel that skids a little on the floor).
+    """
+
+    def __init__(
+        self, specs: Sequence[TrackingWheelSpec], rng: np.random.Generator, *, slip_std: float = 0.01
+    ) -> None:
+        self.specs = tuple(specs)
+        self._rng = rng
+        self.slip_std = slip_std
+        self._pos = np.array([(s.x, s.y) for s in specs], dtype=float).reshape(-1, 2)
+        self._dir = np.array([(math.cos(s.direction), math.sin(s.direction)) for s in specs]).reshape(-1, 2)
+        self._circ = np.array([2 * math.pi * s.radius for s in specs], dtype=float)
+        self._cpr = np.array([s.counts_per_rev for s in specs], dtype=float)
+        self.distance = np.zeros(len(self.specs))
+        """Distance each wheel has rolled (m), slip included."""
+
+    def velocities(self, twist: ArrayLike) -> FloatArray:
+        """Rim speed of each wheel (m/s) for a body twist (vx, vy, w): u . (v + w x p)."""
+        vx, vy, w = (float(c) for c in np.asarray(twist, dtype=float))
+        vel = np.column_stack((vx - w * self._pos[:, 1], vy + w * self._pos[:, 0]))
+        return np.asarray(np.einsum("ij,ij->i", vel, self._dir))
+
+    def update(self, twist: ArrayLike, dt: float) -> IntArray:
+        """Roll the wheels for ``dt`` seconds at the body twist; return the counts."""
+        if not len(self.specs):
+            return self.counts
+        step = self.velocities(twist) * dt
+        if self.slip_std > 0:
+            step = step * (1.0 + self._rng.normal(0.0, self.slip_std, len(step)))
+        self.distance = self.distance + step
+        return self.counts
+
+    @property
+    def counts(self) -> IntArray:
+        return _count(self.distance / self._circ, self._cpr)
+
+
+class Gyro:
+    """A MEMS yaw-rate gyro sampled at ``spec.rate_hz``.
+
+    Each sample is the true rate averaged over the sample period, then::
+
+        rate = (1 + scale_error) * true + bias + N(0, noise_density * sqrt(rate_hz))
+
+    saturated at +-``range`` and quantised to ``resolution``. The turn-on bias is drawn from
+    N(0, bias_std) and the scale error from N(0, scale_error_std) at construction; the bias walks by
+    N(0, bias_walk * sqrt(period)) per sample. With this convention the mean of one second of
+    samples at rest has a standard deviation of ``noise_density`` (the angle random walk).
+    """
+
+    def __init__(self, spec: GyroSpec, rng: np.random.Generator) -> None:
+        self.spec = spec
+        self._rng = rng
+        self.period = 1.0 / spec.rate_hz
+        self.bias = float(rng.normal(0.0, spec.bias_std)) if spec.bias_std > 0 else 0.0
+        self.scale_error = float(rng.normal(0.0, spec.scale_error_std)) if spec.scale_error_std > 0 else 0.0
+        self._sigma = spec.noise_density * math.sqrt(spec.rate_hz)
+        self._walk = spec.bias_walk * math.sqrt(self.period)
+        self._acc_time = 0.0
+        self._acc_angle = 0.0
+        self.rate = 0.0
+        """Latest sample, rad/s (0 before the first)."""
+        self.angle = 0.0
+        """Sum of samples times the period: the heading a firmware integrating this gyro would have."""
+        self.samples = 0
+
+    def update(self, dt: float, true_rate: float) -> bool:
+        """Advance ``dt`` seconds at ``true_rate``; True if at least one new sample was taken."""
+        self._acc_time += dt
+        self._acc_angle += true_rate * dt
+        new = False
+        while self._acc_time >= self.period - 1e-12:
+            mean = self._acc_angle / self._acc_time
+            self._acc_time -= self.period
+            self._acc_angle = mean * self._acc_time
+            self.measure(mean)
+            new = True
+        return new
+
+    def measure(self, true_rate: float) -> float:
+        """Take one sample of a (period-averaged) true rate; returns it and stores it in :attr:`rate`."""
+        spec = self.spec
+        if self._walk > 0:
+            self.bias += float(self._rng.normal(0.0, self._walk))
+        noise = float(self._rng.normal(0.0, self._sigma)) if self._sigma > 0 else 0.0
+        value = (1.0 + self.scale_error) * true_rate + self.bias + noise
+        value = min(max(value, -spec.range), spec.range)
+        if spec.resolution > 0:
+            value = round(value / spec.resolution) * spec.resolution
+            value = min(max(value, -spec.range), spec.range)
+        self.rate = value
+        self.angle += value * self.period
+        self.samples += 1
+        return value
+
+
+class Sonar:
+    """An ultrasonic range finder (HC-SR04 by default) looking into a world.
+
+    A measurement is the distance to the nearest wall or obstacle point inside the cone (see
+    :meth:`World.cone_range`), plus N(0, noise_std), clamped below at ``min_range``. It is None (no
+    echo) when nothing is within ``max_range`` or, with ``miss_probability``, at random. The echo's
+    flight time is not simulated: a ping answers at once.
+
+    :meth:`ping` respects the sensor's cycle: a ping less than ``period_min`` after the previous
+    measurement does not measure again and returns the previous result (None if it had no echo).
+    """
+
+    def __init__(self, spec: SonarSpec, rng: np.random.Generator) -> None:
+        self.spec = spec
+        self._rng = rng
+        self.last: float | None = None
+        self.last_time: float | None = None
+
+    def pose_in_world(self, pose: Sequence[float]) -> Pose:
+        """The sensor's own pose for a robot pose (x, y, theta)."""
+        x, y, th = (float(c) for c in pose[:3])
+        c, s = math.cos(th), math.sin(th)
+        return Pose(
+            x + c * self.spec.x - s * self.spec.y, y + s * self.spec.x + c * self.spec.y, th + self.spec.angle
+        )
+
+    def measure(self, pose: Sequence[float], world: World) -> float | None:
+        """One measurement now, ignoring the cycle time."""
+        spec = self.spec
+        miss, noise = self._rng.random(), self._rng.normal(0.0, 1.0)  # drawn every time: stable streams
+        sp = self.pose_in_world(pose)
+        true = world.cone_range(sp.x, sp.y, sp.theta, spec.cone, spec.max_range)
+        if math.isinf(true) or miss < spec.miss_probability:
+            return None
+        value = max(true + spec.noise_std * float(noise), spec.min_range)
+        return value if value <= spec.max_range else None
+
+    def ping(self, now: float, pose: Sequence[float], world: World) -> float | None:
+        """Measure at time ``now`` (s) unless the last measurement is younger than ``period_min``."""
+        if self.last_time is not None and now - self.last_time < self.spec.period_min - 1e-9:
+            return self.last
+        self.last = self.measure(pose, world)
+        self.last_time = now
+        return self.last

@@ -1,0 +1,628 @@
+"""The simulated room: a small YAML format, its validation, and the geometry the simulator needs.
+
+A world file (see docs/world_format.md) names a default ``floor`` surface, ``walls`` (thin lines the
+robot may be on either side of), solid ``obstacles``, floor ``patches`` of other surfaces and an
+optional ``start`` pose. Lengths in metres, angles in degrees where the key ends in ``_deg``::
+
+    name: room
+    floor: wood
+    start: {x: 1.0, y: 1.0, theta_deg: 0}
+    walls:
+      - {shape: rectangle, min: [0, 0], max: [5, 4]}
+    obstacles:
+      - {shape: circle, center: [1.2, 3.0], radius: 0.25}
+    patches:
+      - {surface: carpet, shape: rectangle, min: [2.5, 2.2], max: [4.5, 3.6]}
+
+Errors name the bad key and suggest the right one, as robot descriptions do::
+
+    omnibot: invalid world room.yaml:
+      obstacles[0].radus: unknown key; did you mean 'radius'?
+
+Geometry (all numpy, vectorised over segments):
+
+* :meth:`World.raycast` - distance along rays to the first wall or obstacle edge;
+* :meth:`World.cone_range` - distance to the nearest point of any edge inside a sensor's cone
+  (exact, not sampled by rays; the nearest point in a cone is never hidden behind another edge);
+* :meth:`World.surface_ids` - surface under points (point in polygon; later patches win);
+* :meth:`World.contacts` - a convex robot outline against walls and obstacles: the direction that
+  pushes the robot out (unit normal), the penetration depth and a contact point.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Annotated, Any, Literal, NamedTuple
+
+import numpy as np
+import yaml
+from numpy.typing import ArrayLike, NDArray
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from omnibot.errors import ConfigError
+from omnibot.sim.surfaces import SURFACES
+
+WORLD_DIR = Path(__file__).with_name("worlds")
+CIRCLE_SEGMENTS = 64
+"""Edges of the polygon standing in for a circle (radial error 0.12 % of the radius)."""
+
+FloatArray = NDArray[np.float64]
+Point = tuple[float, float]
+
+_SHAPE_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    # shape: (required keys, optional keys)
+    "polyline": (("points",), ("closed",)),
+    "polygon": (("points",), ()),
+    "rectangle": (("min", "max"), ()),
+    "box": (("center", "size"), ("angle_deg",)),
+    "circle": (("center", "radius"), ()),
+}
+_GEOMETRY_KEYS = ("points", "closed", "min", "max", "center", "size", "angle_deg", "radius")
+
+
+# --------------------------------------------------------------------------- file format
+
+
+class _Spec(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class ShapeSpec(_Spec):
+    """One outline: ``polyline`` (walls only), ``polygon``, ``rectangle``, ``box`` or ``circle``."""
+
+    shape: Literal["polyline", "polygon", "rectangle", "box", "circle"]
+    points: tuple[Point, ...] | None = None
+    closed: bool | None = None
+    min: Point | None = None
+    max: Point | None = None
+    center: Point | None = None
+    size: Point | None = None
+    angle_deg: float | None = None
+    radius: float | None = Field(default=None, gt=0)
+
+    @model_validator(mode="after")
+    def _check_shape(self) -> ShapeSpec:
+        need, optional = _SHAPE_KEYS[self.shape]
+        takes = need + optional
+        for key in need:
+            if getattr(self, key) is None:
+                raise ValueError(f"a {self.shape} needs '{key}'")
+        for key in _GEOMETRY_KEYS:
+            if key not in takes and getattr(self, key) is not None:
+                raise ValueError(f"'{key}' does not apply to a {self.shape} (it takes {', '.join(takes)})")
+        if self.points is not None:
+            least = 2 if self.shape == "polyline" else 3
+            if len(self.points) < least:
+                raise ValueError(f"a {self.shape} needs at least {least} points, got {len(self.points)}")
+        if (
+            self.min is not None
+            and self.max is not None
+            and not (self.min[0] < self.max[0] and self.min[1] < self.max[1])
+        ):
+            raise ValueError(f"a rectangle needs min < max in x and y, got min {self.min}, max {self.max}")
+        if self.size is not None and not (self.size[0] > 0 and self.size[1] > 0):
+            raise ValueError(f"a box needs a positive size, got {self.size}")
+        return self
+
+    @property
+    def is_closed(self) -> bool:
+        return self.shape != "polyline" or bool(self.closed)
+
+    def vertices(self) -> FloatArray:
+        """(V, 2) vertices in the world frame; closed shapes counter-clockwise (circles as 64-gons)."""
+        if self.shape in ("polyline", "polygon"):
+            assert self.points is not None
+            pts = np.array(self.points, dtype=float)
+            return _ccw(pts) if self.shape == "polygon" else pts
+        if self.shape == "rectangle":
+            assert self.min is not None and self.max is not None
+            (x0, y0), (x1, y1) = self.min, self.max
+            return np.array([(x0, y0), (x1, y0), (x1, y1), (x0, y1)], dtype=float)
+        assert self.center is not None
+        if self.shape == "box":
+            assert self.size is not None
+            hx, hy = self.size[0] / 2, self.size[1] / 2
+            local = np.array([(-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy)])
+            a = math.radians(self.angle_deg or 0.0)
+            rot = np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
+            return np.asarray(local @ rot.T + np.array(self.center), dtype=float)
+        assert self.radius is not None
+        k = np.arange(CIRCLE_SEGMENTS) * (2 * math.pi / CIRCLE_SEGMENTS)
+        return np.asarray(np.column_stack((np.cos(k), np.sin(k))) * self.radius + np.array(self.center))
+
+    def segments(self) -> FloatArray:
+        """(K, 4) edges ``x0, y0, x1, y1`` (zero-length edges of repeated points left out)."""
+        v = self.vertices()
+        end = np.roll(v, -1, axis=0) if self.is_closed else v[1:]
+        seg = np.hstack((v[: len(end)], end))
+        return seg[np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]) > 1e-12]
+
+
+class WallSpec(ShapeSpec):
+    """A wall: a thin line (or closed loop) the robot collides with from either side."""
+
+
+class ObstacleSpec(ShapeSpec):
+    """A solid obstacle: any closed shape."""
+
+    @model_validator(mode="after")
+    def _check_closed(self) -> ObstacleSpec:
+        if self.shape == "polyline":
+            raise ValueError("an obstacle must be a closed shape (polygon, rectangle, box or circle)")
+        return self
+
+
+def _known_surface(name: str) -> str:
+    if name not in SURFACES:
+        raise ValueError(_unknown(f"unknown surface '{name}'", name, list(SURFACES)))
+    return name
+
+
+SurfaceName = Annotated[str, AfterValidator(_known_surface)]
+
+
+class PatchSpec(ShapeSpec):
+    """A floor area of another surface; a later patch covers an earlier one."""
+
+    surface: SurfaceName
+
+    @model_validator(mode="after")
+    def _check_closed(self) -> PatchSpec:
+        if self.shape == "polyline":
+            raise ValueError("a patch must be a closed shape (polygon, rectangle, box or circle)")
+        return self
+
+
+class StartSpec(_Spec):
+    x: float
+    y: float
+    theta_deg: float = 0.0
+
+
+class WorldSpec(_Spec):
+    """A whole world file."""
+
+    name: str
+    summary: str = ""
+    floor: SurfaceName = "wood"
+    start: StartSpec | None = None
+    walls: tuple[WallSpec, ...] = ()
+    obstacles: tuple[ObstacleSpec, ...] = ()
+    patches: tuple[PatchSpec, ...] = ()
+
+
+# --------------------------------------------------------------------------- loading
+
+
+def _unknown(what: str, given: str, choices: list[str]) -> str:
+    close = difflib.get_close_matches(given, choices, n=1, cutoff=0.5)
+    hint = f"; did you mean '{close[0]}'?" if close else f"; expected one of: {', '.join(sorted(choices))}"
+    return what + hint
+
+
+def _model_at(loc: tuple[int | str, ...]) -> type[BaseModel] | None:
+    model: Any = WorldSpec
+    for part in loc:
+        if isinstance(part, int):
+            continue
+        field = model.model_fields.get(part) if _is_model(model) else None
+        if field is None:
+            return None
+        model = next((a for a in _flatten(field.annotation) if _is_model(a)), None)
+    return model if _is_model(model) else None
+
+
+def _is_model(obj: Any) -> bool:
+    return isinstance(obj, type) and issubclass(obj, BaseModel)
+
+
+def _flatten(annotation: Any) -> list[Any]:
+    out = [annotation]
+    for arg in getattr(annotation, "__args__", ()):
+        out += _flatten(arg)
+    return out
+
+
+def _format_loc(loc: tuple[int | str, ...]) -> str:
+    out = ""
+    for part in loc:
+        if isinstance(part, int):
+            out += f"[{part}]"
+        elif not (part.startswith("function-") or part.startswith("tuple[")):
+            out += f".{part}" if out else part
+    return out
+
+
+def _explain(error: ValidationError, source: str) -> ConfigError:
+    lines = []
+    for item in error.errors():
+        loc = tuple(item["loc"])
+        key = _format_loc(loc) or "(top level)"
+        given = item.get("input")
+        if item["type"] == "extra_forbidden":
+            owner = _model_at(loc[:-1])
+            valid = list(owner.model_fields) if owner else []
+            lines.append(f"{key}: " + _unknown("unknown key", str(loc[-1]), valid))
+        elif item["type"] == "missing":
+            lines.append(f"{key}: required key is missing")
+        elif item["type"] == "literal_error" and isinstance(given, str):
+            choices = re.findall(r"'([^']*)'", str(item.get("ctx", {}).get("expected", "")))
+            lines.append(f"{key}: " + _unknown(f"unknown value {given!r}", given, choices))
+        else:
+            msg = item["msg"].removeprefix("Value error, ")
+            shown = "" if isinstance(given, Mapping | list) else f" (got {given!r})"
+            lines.append(f"{key}: {msg}{shown}")
+    head = f"invalid world {source}" if source else "invalid world"
+    return ConfigError(head + ":\n  " + "\n  ".join(lines))
+
+
+def parse_world(data: Any, source: str = "") -> World:
+    """Validate a mapping (e.g. parsed YAML) into a :class:`World`."""
+    if not isinstance(data, Mapping):
+        raise ConfigError(f"a world must be a mapping, got {type(data).__name__} {source}".strip())
+    try:
+        spec = WorldSpec.model_validate(data)
+    except ValidationError as exc:
+        raise _explain(exc, source) from None
+    return World(spec)
+
+
+def world_names() -> list[str]:
+    """Names of the bundled worlds."""
+    return sorted(p.stem for p in WORLD_DIR.glob("*.yaml"))
+
+
+def load_world(name_or_path: str | Path) -> World:
+    """A bundled world by name (``empty``, ``room``, ``corridor``) or a world file by path."""
+    text = str(name_or_path)
+    if text in world_names():
+        path = WORLD_DIR / f"{text}.yaml"
+    else:
+        path = Path(text)
+        if path.suffix not in {".yaml", ".yml"} and not path.exists():
+            raise ConfigError(_unknown(f"unknown world '{text}'", text, world_names()))
+    try:
+        raw = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ConfigError(f"cannot read world {path}: {exc.strerror}") from None
+    try:
+        data = yaml.safe_load(raw)
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"{path} is not valid YAML: {exc}") from None
+    return parse_world(data, str(path))
+
+
+# --------------------------------------------------------------------------- geometry
+
+
+class Pose(NamedTuple):
+    """A planar pose: x, y in m, theta in rad."""
+
+    x: float
+    y: float
+    theta: float
+
+
+@dataclass(frozen=True)
+class Contact:
+    """The robot outline overlapping a wall or obstacle.
+
+    ``normal`` is the unit vector (world frame) along which the robot must move to get free,
+    ``depth`` how far (m), ``point`` where the two touch (world frame), ``owner`` which item of the
+    world file it is (``walls[0]``, ``obstacles[2]``).
+    """
+
+    point: Point
+    normal: Point
+    depth: float
+    owner: str
+
+
+@dataclass(frozen=True)
+class _Solid:
+    owner: str
+    vertices: FloatArray  # convex, counter-clockwise
+    center: FloatArray
+    radius: float
+
+
+class World:
+    """A validated world, with its geometry as numpy arrays."""
+
+    def __init__(self, spec: WorldSpec) -> None:
+        self.spec = spec
+        self.name = spec.name
+        self.floor = spec.floor
+        names = [spec.floor]
+        for patch in spec.patches:
+            if patch.surface not in names:
+                names.append(patch.surface)
+        self.surface_names: tuple[str, ...] = tuple(names)
+        """Surface id -> name; id 0 is the floor."""
+        self.start: Pose | None = (
+            Pose(spec.start.x, spec.start.y, math.radians(spec.start.theta_deg)) if spec.start else None
+        )
+
+        segs: list[FloatArray] = []
+        owners: list[str] = []
+        thin: list[FloatArray] = []  # walls and non-convex obstacles, checked edge by edge
+        thin_owner: list[str] = []
+        self._solids: list[_Solid] = []
+        for i, wall in enumerate(spec.walls):
+            s = wall.segments()
+            segs.append(s)
+            owners += [f"walls[{i}]"] * len(s)
+            thin.append(s)
+            thin_owner += [f"walls[{i}]"] * len(s)
+        for i, obstacle in enumerate(spec.obstacles):
+            s = obstacle.segments()
+            segs.append(s)
+            owners += [f"obstacles[{i}]"] * len(s)
+            v = obstacle.vertices()
+            if is_convex(v):
+                c = v.mean(axis=0)
+                r = float(np.max(np.hypot(*(v - c).T)))
+                self._solids.append(_Solid(f"obstacles[{i}]", v, c, r))
+            else:
+                thin.append(s)
+                thin_owner += [f"obstacles[{i}]"] * len(s)
+        self.segments: FloatArray = np.vstack(segs) if segs else np.zeros((0, 4))
+        """(K, 4) every wall and obstacle edge, ``x0, y0, x1, y1``."""
+        self.segment_owner: tuple[str, ...] = tuple(owners)
+        self._thin = np.vstack(thin) if thin else np.zeros((0, 4))
+        self._thin_owner = tuple(thin_owner)
+        self._patches = [(self.surface_names.index(p.surface), _Area(p.vertices())) for p in spec.patches]
+        self._thin_a = self._thin[:, :2]
+        self._thin_e = self._thin[:, 2:] - self._thin_a
+        self._thin_ee = np.einsum("ij,ij->i", self._thin_e, self._thin_e)
+
+    def __repr__(self) -> str:
+        return f"World({self.name!r}, {len(self.segments)} edges, surfaces {list(self.surface_names)})"
+
+    def with_floor(self, surface: str) -> World:
+        """The same world with another default floor surface."""
+        return parse_world({**self.spec.model_dump(exclude_none=True), "floor": surface}, "(floor override)")
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float] | None:
+        """``(x_min, y_min, x_max, y_max)`` of walls, obstacles and patches, or None for an empty world."""
+        pts = [self.segments[:, :2], self.segments[:, 2:]] + [a.vertices for _, a in self._patches]
+        allp = np.vstack(pts)
+        if len(allp) == 0:
+            return None
+        lo, hi = allp.min(axis=0), allp.max(axis=0)
+        return (float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]))
+
+    # ------------------------------------------------------------------ rays and cones
+
+    def raycast(self, origins: ArrayLike, angles: ArrayLike, max_range: float = math.inf) -> FloatArray:
+        """Distance from each origin along its angle to the first edge (inf if none within max_range).
+
+        ``origins`` is (2,) or (R, 2), ``angles`` a scalar or (R,) (either is broadcast to the
+        other); the result has shape (R,).
+        """
+        ang = np.atleast_1d(np.asarray(angles, dtype=float))
+        o = np.asarray(origins, dtype=float).reshape(-1, 2)
+        count = max(len(ang), len(o))
+        ang, o = np.broadcast_to(ang, (count,)), np.broadcast_to(o, (count, 2))
+        if len(self.segments) == 0:
+            return np.full(len(ang), math.inf)
+        d = np.column_stack((np.cos(ang), np.sin(ang)))
+        a = self.segments[:, :2]
+        e = self.segments[:, 2:] - a
+        denom = d[:, None, 0] * e[None, :, 1] - d[:, None, 1] * e[None, :, 0]
+        ao = a[None, :, :] - o[:, None, :]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (ao[..., 0] * e[None, :, 1] - ao[..., 1] * e[None, :, 0]) / denom
+            s = (ao[..., 0] * d[:, None, 1] - ao[..., 1] * d[:, None, 0]) / denom
+        hit = (np.abs(denom) > 1e-12) & (t >= 0) & (s >= 0) & (s <= 1)
+        dist = np.where(hit, t, math.inf).min(axis=1)
+        return np.where(dist <= max_range, dist, math.inf)
+
+    def cone_range(
+        self, x: float, y: float, heading: float, cone: float, max_range: float = math.inf
+    ) -> float:
+        """Distance from (x, y) to the nearest edge point within ``heading +- cone/2`` (inf if none).
+
+        ``cone`` (rad) must be below pi. Exact: each edge is clipped to the cone, then its point
+        nearest the apex is taken.
+        """
+        if not 0 < cone < math.pi:
+            raise ValueError(f"cone must be in (0, pi), got {cone}")
+        if len(self.segments) == 0:
+            return math.inf
+        A = self.segments[:, :2] - np.array([x, y])
+        E = self.segments[:, 2:] - self.segments[:, :2]
+        r = np.array([math.cos(heading - cone / 2), math.sin(heading - cone / 2)])
+        left = np.array([math.cos(heading + cone / 2), math.sin(heading + cone / 2)])
+        lo = np.zeros(len(A))
+        hi = np.ones(len(A))
+        # inside the cone: cross(r, p) >= 0 and cross(p, left) >= 0, each linear in t along the edge
+        for f0, f1 in (
+            (r[0] * A[:, 1] - r[1] * A[:, 0], r[0] * E[:, 1] - r[1] * E[:, 0]),
+            (A[:, 0] * left[1] - A[:, 1] * left[0], E[:, 0] * left[1] - E[:, 1] * left[0]),
+        ):
+            with np.errstate(divide="ignore", invalid="ignore"):
+                tc = -f0 / f1
+            lo = np.where(f1 > 1e-15, np.maximum(lo, tc), lo)
+            hi = np.where(f1 < -1e-15, np.minimum(hi, tc), hi)
+            hi = np.where((np.abs(f1) <= 1e-15) & (f0 < 0), -1.0, hi)
+        ok = lo <= hi
+        if not ok.any():
+            return math.inf
+        ee = np.einsum("ij,ij->i", E, E)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t_near = np.where(ee > 0, -np.einsum("ij,ij->i", A, E) / ee, 0.0)
+        t = np.clip(t_near, lo, np.maximum(lo, hi))
+        dist = np.hypot(A[:, 0] + t * E[:, 0], A[:, 1] + t * E[:, 1])
+        best = float(np.where(ok, dist, math.inf).min())
+        return best if best <= max_range else math.inf
+
+    # ------------------------------------------------------------------ surfaces
+
+    def surface_ids(self, points: ArrayLike) -> NDArray[np.int64]:
+        """Surface id (index into :attr:`surface_names`) under each point; shape ``points.shape[:-1]``."""
+        p = np.asarray(points, dtype=float)
+        flat = p.reshape(-1, 2)
+        ids = np.zeros(len(flat), dtype=np.int64)
+        for sid, area in self._patches:
+            ids[area.contains(flat)] = sid
+        return ids.reshape(p.shape[:-1])
+
+    def surface_at(self, x: float, y: float) -> str:
+        """Name of the surface at one point."""
+        return self.surface_names[int(self.surface_ids([x, y]))]
+
+    # ------------------------------------------------------------------ collisions
+
+    def contacts(self, outline: ArrayLike) -> list[Contact]:
+        """Where a convex outline (world frame, (V, 2)) overlaps walls or obstacles.
+
+        Solid convex obstacles are tested whole (separating axes), walls and non-convex obstacles
+        edge by edge; contacts of one owner whose normals are within 30 degrees are merged (the
+        deepest is kept) so that a flat face pressed on a 64-gon circle pushes once, not thrice.
+        """
+        v = np.asarray(outline, dtype=float)
+        centre = v.mean(axis=0)
+        reach = float(np.max(np.hypot(*(v - centre).T)))
+        found: list[Contact] = []
+        for solid in self._solids:
+            if np.hypot(*(solid.center - centre)) < reach + solid.radius:
+                c = _sat(v, solid.vertices, solid.owner)
+                if c is not None:
+                    found.append(c)
+        if len(self._thin):
+            t = np.clip(np.einsum("ij,ij->i", centre - self._thin_a, self._thin_e) / self._thin_ee, 0.0, 1.0)
+            gap = self._thin_a + t[:, None] * self._thin_e - centre
+            near = np.flatnonzero(np.einsum("ij,ij->i", gap, gap) < reach * reach)
+            edge: list[Contact] = []
+            for k in near:
+                c = _sat(v, self._thin[k].reshape(2, 2), self._thin_owner[k])
+                if c is not None:
+                    edge.append(c)
+            found += _merge(edge)
+        return found
+
+
+# --------------------------------------------------------------------------- pure geometry helpers
+
+
+def _ccw(v: FloatArray) -> FloatArray:
+    """The polygon in counter-clockwise order."""
+    x, y = v[:, 0], v[:, 1]
+    area2 = float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+    return v if area2 >= 0 else v[::-1].copy()
+
+
+def is_convex(v: FloatArray) -> bool:
+    """True if the closed polygon (V, 2) is convex."""
+    e = np.roll(v, -1, axis=0) - v
+    cross = e[:, 0] * np.roll(e, -1, axis=0)[:, 1] - e[:, 1] * np.roll(e, -1, axis=0)[:, 0]
+    return bool(np.all(cross >= -1e-12) or np.all(cross <= 1e-12))
+
+
+def convex_hull(points: ArrayLike) -> FloatArray:
+    """Counter-clockwise convex hull (Andrew's monotone chain) of (P, 2) points."""
+    pts = sorted({(float(x), float(y)) for x, y in np.asarray(points, dtype=float).reshape(-1, 2)})
+    if len(pts) < 3:
+        return np.array(pts, dtype=float)
+
+    def half(seq: list[Point]) -> list[Point]:
+        out: list[Point] = []
+        for p in seq:
+            while len(out) >= 2 and (
+                (out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
+                - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])
+                <= 0
+            ):
+                out.pop()
+            out.append(p)
+        return out
+
+    lower, upper = half(pts), half(pts[::-1])
+    return np.array(lower[:-1] + upper[:-1], dtype=float)
+
+
+def points_in_polygon(points: ArrayLike, polygon: ArrayLike) -> NDArray[np.bool_]:
+    """Crossing-number test of (P, 2) points against a closed (V, 2) polygon."""
+    return _Area(np.asarray(polygon, dtype=float)).contains(np.asarray(points, dtype=float).reshape(-1, 2))
+
+
+class _Area:
+    """A closed polygon prepared for fast point-in-polygon tests (edges and bounding box cached)."""
+
+    def __init__(self, vertices: FloatArray) -> None:
+        self.vertices = vertices
+        self.lo, self.hi = vertices.min(axis=0), vertices.max(axis=0)
+        x0, y0 = vertices[:, 0], vertices[:, 1]
+        x1, y1 = np.roll(x0, -1), np.roll(y0, -1)
+        self._x0, self._y0 = x0, y0
+        self._y1 = y1
+        dy = y1 - y0
+        self._slope = np.divide(x1 - x0, dy, out=np.zeros_like(dy), where=dy != 0)
+
+    def contains(self, points: FloatArray) -> NDArray[np.bool_]:
+        inside = np.zeros(len(points), dtype=bool)
+        box = np.all((points >= self.lo) & (points <= self.hi), axis=1)
+        if not box.any():
+            return inside
+        x, y = points[box, :1], points[box, 1:]
+        straddle = (self._y0 > y) != (self._y1 > y)
+        x_cross = self._x0 + (y - self._y0) * self._slope
+        inside[box] = np.count_nonzero(straddle & (x < x_cross), axis=1) % 2 == 1
+        return inside
+
+
+def _edge_normals(v: FloatArray) -> FloatArray:
+    """Unit normals of a polygon's edges (a 2-vertex 'polygon' is one segment with one normal)."""
+    e = (v[1:2] - v[0:1]) if len(v) == 2 else (np.roll(v, -1, axis=0) - v)
+    n = np.column_stack((e[:, 1], -e[:, 0]))
+    length = np.hypot(n[:, 0], n[:, 1])
+    return np.asarray(n[length > 1e-12] / length[length > 1e-12, None])
+
+
+def _sat(robot: FloatArray, other: FloatArray, owner: str) -> Contact | None:
+    """Separating-axis test of two convex shapes; the push is toward the robot's side of each axis."""
+    axes = np.vstack((_edge_normals(robot), _edge_normals(other)))
+    pr = robot @ axes.T
+    po = other @ axes.T
+    rmin, rmax, omin, omax = pr.min(0), pr.max(0), po.min(0), po.max(0)
+    plus = omax - rmin  # move the robot along +axis by this much to clear
+    minus = rmax - omin  # or along -axis by this much
+    if np.any(plus <= 0) or np.any(minus <= 0):
+        return None
+    side = (robot.mean(0) - other.mean(0)) @ axes.T
+    depth = np.where(side > 1e-12, plus, np.where(side < -1e-12, minus, np.minimum(plus, minus)))
+    sign = np.where(side > 1e-12, 1.0, np.where(side < -1e-12, -1.0, np.where(plus <= minus, 1.0, -1.0)))
+    # the shallowest axis; on a tie prefer the obstacle's own face (listed last)
+    best = float(depth.min())
+    k = int(np.flatnonzero(depth <= best + 1e-9 + 1e-6 * best)[-1])
+    n = axes[k] * sign[k]
+    t = np.array([-n[1], n[0]])
+    # contact point: middle of the overlap, along the face, of the two deepest features
+    tol = 1e-6 + 1e-3 * best
+    pr, po = robot @ n, other @ n
+    feat_r = robot[pr <= pr.min() + tol] @ t
+    feat_o = other[po >= po.max() - tol] @ t
+    lo, hi = max(feat_r.min(), feat_o.min()), min(feat_r.max(), feat_o.max())
+    along = 0.5 * (lo + hi) if lo <= hi else 0.5 * (feat_r.mean() + feat_o.mean())
+    across = 0.5 * (pr.min() + po.max())
+    point = along * t + across * n
+    return Contact((float(point[0]), float(point[1])), (float(n[0]), float(n[1])), best, owner)
+
+
+def _merge(contacts: list[Contact], max_angle_deg: float = 30.0) -> list[Contact]:
+    cos_max = math.cos(math.radians(max_angle_deg))
+    kept: list[Contact] = []
+    for c in sorted(contacts, key=lambda c: -c.depth):
+        if all(
+            k.owner != c.owner or k.normal[0] * c.normal[0] + k.normal[1] * c.normal[1] < cos_max
+            for k in kept
+        ):
+            kept.append(c)
+    return kept

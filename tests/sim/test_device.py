@@ -1,0 +1,73 @@
+"""The simulated controller: real firmware on the simulator, reached through sim:// in lockstep."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import pytest
+
+from omnibot.errors import ConfigError
+from omnibot.sim.device import SimDevice
+from omnibot.transport.base import Link
+from omnibot.transport.lockstep import LockstepLink
+from omnibot.transport.url import open_link
+
+
+def read_until(link: Link, marker: bytes, timeout: float = 5.0) -> bytes:
+    out = b""
+    deadline = link.clock.now() + timeout
+    while marker not in out and link.clock.now() < deadline:
+        out += link.read(timeout=0.05)
+    return out
+
+
+def test_hello_at_power_up_and_a_move_moves_the_simulated_robot() -> None:
+    device = SimDevice("omni4", seed=1)
+    with LockstepLink(device) as link:
+        assert read_until(link, b"\r\n").startswith(b"HELLO,1,omni4,4\r\n")
+        t0 = time.perf_counter()
+        link.write(b"MOVE,30,60,90,0;")
+        out = read_until(link, b"IDLE\r\n")
+        assert out == b"OK\r\nIDLE\r\n"
+        assert time.perf_counter() - t0 < 2.0  # lockstep runs faster than real time
+        pose = device.sim.pose
+        assert 0.15 < pose.y < 0.45  # course 90: to the left; open loop, so only roughly 30 cm
+        assert abs(pose.x) < 0.05 and abs(pose.theta) < 0.2
+
+
+def test_rotate_turns_counter_clockwise() -> None:
+    device = SimDevice("omni4", seed=2)
+    with LockstepLink(device) as link:
+        link.write(b"ROTATE,90,180;")
+        read_until(link, b"IDLE\r\n")
+        assert 0.5 < device.sim.pose.theta < 2.5
+
+
+def test_simulation_mode_reaches_no_motor() -> None:
+    device = SimDevice("omni4", seed=3)
+    with LockstepLink(device) as link:
+        link.write(b"MODE,1;MOVE,30,60,0,0;")
+        read_until(link, b"IDLE\r\n")
+        assert math.hypot(device.sim.pose.x, device.sim.pose.y) < 1e-4
+
+
+def test_sim_url_options_and_errors() -> None:
+    with open_link("sim://omni3?seed=4&surface=carpet&world=room&baud=0") as link:
+        assert b"HELLO,1,omni3,3" in read_until(link, b"\r\n")
+    with pytest.raises(ConfigError, match="did you mean"):
+        open_link("sim://omni4?sead=1")
+    with pytest.raises(ConfigError):
+        open_link("sim://omni9")
+
+
+def test_sonar_emergency_stop_in_the_corridor() -> None:
+    device = SimDevice("omni4", seed=5, world="corridor")
+    with LockstepLink(device) as link:
+        read_until(link, b"\r\n")
+        link.write(b"SONAR,1,60,0,0,40;MOVE,30000,60,0,0;")
+        out = read_until(link, b"WARN,13", timeout=30.0)
+        assert b"WARN,13" in out
+        link.write(b"MOVE,10,40,0,0;")
+        assert b"ERROR,40" in read_until(link, b"ERROR", timeout=1.0)
+        assert device.sim.collisions == []
