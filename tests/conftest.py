@@ -23,13 +23,19 @@ def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line("markers", "allow_leaks(reason): skip the thread/process/fd leak check")
 
 
+PROCESS_CACHES = ("/matplotlib/mpl-data/fonts/",)
+"""Files libraries keep open for the life of the process by design (matplotlib's font cache)."""
+
+
 def _open_fds() -> dict[int, str]:
     fds: dict[int, str] = {}
     for name in os.listdir("/proc/self/fd"):
         try:
-            fds[int(name)] = os.readlink(f"/proc/self/fd/{name}")
+            target = os.readlink(f"/proc/self/fd/{name}")
         except OSError:  # the directory's own fd, already closed again
             continue
+        if not any(cache in target for cache in PROCESS_CACHES):
+            fds[int(name)] = target
     return fds
 
 

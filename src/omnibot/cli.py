@@ -172,6 +172,44 @@ def _add_sim(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.set_defaults(handler=_sim)
 
 
+# --------------------------------------------------------------------------- tour
+
+
+def _tour(args: argparse.Namespace) -> int:
+    from omnibot.demos.directions import format_table, plot_tour, run_tour
+    from omnibot.robot.description import load_robot, preset_names
+    from omnibot.sim.surfaces import get_surface
+
+    get_surface(args.surface)
+    if not 0 < args.power <= 255:
+        raise ConfigError(f"expected 1..255 PWM counts, got {args.power}", key="--power")
+    names = preset_names() if args.robot == "all" else [args.robot]
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    for name in names:
+        robot = load_robot(name)
+        runs = run_tour(robot, power=args.power, duration=args.duration, surface=args.surface, seed=args.seed)
+        print(format_table(robot, runs))
+        png = out / f"directions_{robot.name}.png"
+        plot_tour(robot, runs, png)
+        print(f"  plot: {png}\n")
+    return 0
+
+
+def _add_tour(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    p = sub.add_parser(
+        "tour",
+        help="drive each robot through seed 003's main directions in the simulator, open loop, with plots",
+    )
+    p.add_argument("--robot", default="all", help="preset name, description file, or 'all' (default)")
+    p.add_argument("--surface", default="wood", help="floor surface (default wood)")
+    p.add_argument("--power", type=int, default=180, help="PWM counts of the busiest motor (default 180)")
+    p.add_argument("--duration", type=float, default=1.0, help="seconds per motion (default 1)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--out", default="out", help="directory for the plots (default ./out)")
+    p.set_defaults(handler=_tour)
+
+
 # --------------------------------------------------------------------------- parser
 
 
@@ -190,6 +228,7 @@ ADDERS: list[Callable[[argparse._SubParsersAction[argparse.ArgumentParser]], Non
     _add_robot,
     _add_kinematics,
     _add_sim,
+    _add_tour,
 ]
 
 

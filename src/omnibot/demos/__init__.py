@@ -1,0 +1,1 @@
+"""Runnable demonstrations built on the public API (``omnibot tour``, ``omnibot demo``)."""

@@ -1,0 +1,1 @@
+"""Plotting helpers (matplotlib, Agg backend); models never import this package."""
