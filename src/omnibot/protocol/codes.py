@@ -196,6 +196,6 @@ FRAME_SYNC = 0x80  # flag in the type byte: the sender abandoned every earlier f
 FRAME_TYPE_MASK = 0x7F
 FRAME_MAX = 254  # decoded bytes (type .. CRC) in one frame
 SEQ_MAX = 255  # sequence numbers run 1..255 and wrap to 1; 0 = unsequenced (TEL)
-WINDOW = 4  # frames a sender may have unacknowledged
+WINDOW = 8  # frames a sender may have unacknowledged (8 keeps a 115200 line full with a 2 ms loop)
 RETRY_TIMEOUT_MS = 50
 RETRIES = 3  # retransmissions before giving up

@@ -1,0 +1,217 @@
+"""Protocol throughput on a 115200-baud line, text against binary, through the real firmware.
+
+Run: ``python -m benchmarks.link_throughput [--pty]``. By default the line is the in-process lockstep
+link (a UART paced at 115200 baud in both directions, simulated time, deterministic). With ``--pty``
+the same runs go through ``omnibot sim --pty`` in real time: a separate process, a pseudo-terminal
+paced to the baud rate, the firmware running in CPython.
+
+1. Commands per second sustained: the host streams ``N`` commands as fast as the line and the
+   protocol allow (text: no window, replies in order; binary: the ARQ window of docs/protocol.md)
+   and we time until the last reply is in. The command is ``VEL,40,0,0,100`` (immediate, so the
+   controller's 16-deep motion queue cannot overflow; a stream of ``MOVE,2,40,0,0`` at line rate
+   queues 800 moves of 50 ms per second and must end in ERROR 21). The line limit is 11,520 bytes/s
+   divided by the command's length on the wire.
+2. Closed-loop load: VEL at 100 Hz with telemetry (powers, encoders, gyro, heading, battery, queue)
+   at 100 Hz back, for 10 s: bytes per second in each direction against the line's 11,520.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import signal
+import subprocess
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+from omnibot.protocol import binary, codes, text
+from omnibot.protocol.messages import Mode, Ok, Telem, Telemetry, Vel
+from omnibot.sim.device import SimDevice
+from omnibot.transport.base import Link
+from omnibot.transport.lockstep import LockstepLink
+from omnibot.transport.url import open_link
+
+LINE_BYTES_PER_S = 115200 / 10
+VEL = Vel(40, 0, 0, 100)
+TEL_MASK = (
+    codes.TEL_POWER
+    | codes.TEL_ENCODERS
+    | codes.TEL_GYRO
+    | codes.TEL_HEADING
+    | codes.TEL_BATTERY
+    | codes.TEL_QUEUE
+)
+
+
+@contextmanager
+def open_line(pty: bool, seed: int = 1) -> Iterator[Link]:
+    """A link to a fresh simulated omni4 controller, lockstep or through the pty emulator."""
+    if not pty:
+        with LockstepLink(SimDevice("omni4", seed=seed)) as link:
+            drain(link, 0.05)
+            yield link
+        return
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "omnibot", "sim", "--pty", "--robot", "omni4", "--seed", str(seed)],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert proc.stdout is not None
+        path = proc.stdout.readline().strip()
+        with open_link(f"serial://{path}") as link:
+            drain(link, 0.2)
+            yield link
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(timeout=10)
+
+
+def drain(link: Link, seconds: float) -> bytes:
+    """Read whatever arrives for ``seconds`` of the link's clock."""
+    end = link.clock.now() + seconds
+    out = b""
+    while (left := end - link.clock.now()) > 0:
+        out += link.read(timeout=left)
+    return out
+
+
+def stream_text(link: Link, n: int) -> float:
+    """Send n VEL lines back to back; seconds until the n-th OK."""
+    line = text.encode(VEL, terminator=b";")
+    t0 = link.clock.now()
+    link.write(line * n)
+    got, buf = 0, b""
+    while got < n:
+        chunk = link.read(timeout=2.0)
+        if not chunk:
+            raise RuntimeError(f"text stream stalled after {got} of {n} replies")
+        buf += chunk
+        got += buf.count(b"OK\r\n")
+        buf = buf[buf.rfind(b"\n") + 1 :]
+    return link.clock.now() - t0
+
+
+def switch_to_binary(link: Link) -> None:
+    link.write(text.encode(Mode(codes.MODE_BINARY)))
+    reply = b""
+    while b"OK\r\n" not in reply:
+        chunk = link.read(timeout=1.0)
+        if not chunk:
+            raise RuntimeError("no OK to MODE,4")
+        reply += chunk
+
+
+def stream_binary(link: Link, n: int) -> float:
+    """Send n VEL frames with at most WINDOW unacknowledged; seconds until the n-th OK."""
+    frames = [binary.encode(VEL, seq=k % codes.SEQ_MAX + 1) for k in range(n)]
+    decoder = binary.BinaryDecoder()
+    sent = acked = 0
+    t0 = link.clock.now()
+    while acked < n:
+        while sent < n and sent - acked < codes.WINDOW:
+            link.write(frames[sent])
+            sent += 1
+        chunk = link.read(timeout=2.0)
+        if not chunk:
+            raise RuntimeError(f"binary stream stalled after {acked} of {n} replies")
+        acked += sum(
+            1 for p in decoder.feed(chunk) if isinstance(p, binary.Packet) and isinstance(p.message, Ok)
+        )
+    return link.clock.now() - t0
+
+
+def closed_loop_load(link: Link, binary_mode: bool, seconds: float = 10.0) -> tuple[float, float, int]:
+    """VEL every 10 ms and TEL every 10 ms back: (host->controller B/s, controller->host B/s, TEL count)."""
+    if binary_mode:
+        switch_to_binary(link)
+        link.write(binary.encode(Telem(10, TEL_MASK), seq=1))
+    else:
+        link.write(text.encode(Telem(10, TEL_MASK)))
+    drain(link, 0.05)
+    decoder: binary.BinaryDecoder | text.TextDecoder = (
+        binary.BinaryDecoder() if binary_mode else text.TextDecoder()
+    )
+    sent = received = tels = 0
+    t0 = link.clock.now()
+    k = 0
+    while link.clock.now() - t0 < seconds:
+        frame = binary.encode(VEL, seq=(k + 1) % codes.SEQ_MAX + 1) if binary_mode else text.encode(VEL)
+        link.write(frame)
+        sent += len(frame)
+        k += 1
+        next_at = t0 + 0.010 * k
+        while (left := next_at - link.clock.now()) > 0:
+            chunk = link.read(timeout=left)
+            received += len(chunk)
+            for item in decoder.feed(chunk):
+                message = item.message if isinstance(item, binary.Packet) else item
+                tels += isinstance(message, Telemetry)
+    elapsed = link.clock.now() - t0
+    return sent / elapsed, received / elapsed, tels
+
+
+def run(pty: bool, n: int = 2000) -> dict[str, object]:
+    text_len = len(text.encode(VEL, terminator=b";"))
+    bin_len = len(binary.encode(VEL, seq=1))
+    with open_line(pty) as link:
+        t_text = stream_text(link, n)
+    with open_line(pty) as link:
+        switch_to_binary(link)
+        t_bin = stream_binary(link, n)
+    with open_line(pty) as link:
+        up_t, down_t, tel_t = closed_loop_load(link, binary_mode=False)
+    with open_line(pty) as link:
+        up_b, down_b, tel_b = closed_loop_load(link, binary_mode=True)
+    return {
+        "line": "pty emulator, real time" if pty else "lockstep, simulated time",
+        "text_command_bytes": text_len,
+        "text_commands_per_s": n / t_text,
+        "text_line_limit_per_s": LINE_BYTES_PER_S / text_len,
+        "binary_command_bytes": bin_len,
+        "binary_commands_per_s": n / t_bin,
+        "binary_line_limit_per_s": LINE_BYTES_PER_S / bin_len,
+        "closed_loop_text_up_Bps": up_t,
+        "closed_loop_text_down_Bps": down_t,
+        "closed_loop_text_tel_per_s": tel_t / 10,
+        "closed_loop_binary_up_Bps": up_b,
+        "closed_loop_binary_down_Bps": down_b,
+        "closed_loop_binary_tel_per_s": tel_b / 10,
+    }
+
+
+def report(r: dict[str, object]) -> str:
+    def pct(x: object, of: object) -> str:
+        return f"{100 * float(x) / float(of):5.1f}%"  # type: ignore[arg-type]
+
+    line = LINE_BYTES_PER_S
+    return "\n".join(
+        [
+            f"line: {r['line']}, 115200 baud 8N1 = {line:,.0f} bytes/s each way",
+            f"VEL stream, text   ({r['text_command_bytes']} B): {r['text_commands_per_s']:7.1f} commands/s of "
+            f"{r['text_line_limit_per_s']:7.1f} line limit = {pct(r['text_commands_per_s'], r['text_line_limit_per_s'])}",
+            f"VEL stream, binary ({r['binary_command_bytes']} B): {r['binary_commands_per_s']:7.1f} commands/s of "
+            f"{r['binary_line_limit_per_s']:7.1f} line limit = {pct(r['binary_commands_per_s'], r['binary_line_limit_per_s'])}",
+            f"closed loop VEL 100 Hz + TEL 100 Hz, text:   up {r['closed_loop_text_up_Bps']:7.0f} B/s "
+            f"({pct(r['closed_loop_text_up_Bps'], line)}), down {r['closed_loop_text_down_Bps']:7.0f} B/s "
+            f"({pct(r['closed_loop_text_down_Bps'], line)}), {r['closed_loop_text_tel_per_s']:.0f} TEL/s",
+            f"closed loop VEL 100 Hz + TEL 100 Hz, binary: up {r['closed_loop_binary_up_Bps']:7.0f} B/s "
+            f"({pct(r['closed_loop_binary_up_Bps'], line)}), down {r['closed_loop_binary_down_Bps']:7.0f} B/s "
+            f"({pct(r['closed_loop_binary_down_Bps'], line)}), {r['closed_loop_binary_tel_per_s']:.0f} TEL/s",
+        ]
+    )
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description="protocol throughput on a 115200-baud line")
+    parser.add_argument("--pty", action="store_true", help="through the pty emulator in real time")
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args(argv)
+    result = run(args.pty)
+    print(json.dumps(result) if args.json else report(result))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
