@@ -1,4 +1,9 @@
-"""Fixtures: the omni4 firmware on a FakeHAL with scripted time."""
+"""Fixtures: the omni4 firmware on a FakeHAL with scripted time.
+
+The rig's calibration is pinned to seed 000's plain form, K = 220 PWM counts per m/s and flat
+factors (``FORMULA_CALIBRATION``), so these tests check the formulas with numbers they can state, whatever
+the presets' fitted tables are.
+"""
 
 from __future__ import annotations
 
@@ -8,7 +13,7 @@ import pytest
 
 from omnibot.firmware.config import build_config
 from omnibot.firmware.controller import Controller
-from omnibot.robot.description import load_robot
+from omnibot.robot.description import CalibrationSpec, load_robot
 from tests.firmware.fakehal import FakeHAL, advance
 
 
@@ -41,8 +46,12 @@ class Rig:
         return line
 
 
+FORMULA_CALIBRATION = CalibrationSpec(k=220.0)
+
+
 def make_rig(robot: str = "omni4", **overrides: Any) -> Rig:
-    config = build_config(load_robot(robot))
+    description = load_robot(robot).model_copy(update={"calibration": FORMULA_CALIBRATION})
+    config = build_config(description)
     config.update(overrides)
     return Rig(config)
 

@@ -10,6 +10,7 @@ from omnibot.firmware.calibration import Calibration, fold_course, interp
 from omnibot.firmware.config import build_config
 from omnibot.firmware.power import DEADBAND, SATURATED, PowerModel
 from omnibot.robot.description import load_robot
+from tests.firmware.conftest import FORMULA_CALIBRATION
 
 
 def test_interp_holds_outside_and_interpolates_inside() -> None:
@@ -74,7 +75,9 @@ def test_set_knot_rules() -> None:
 
 
 def test_power_model_saturation_and_dead_band() -> None:
-    cfg = build_config(load_robot("omni4"), power_min=60)
+    cfg = build_config(
+        load_robot("omni4").model_copy(update={"calibration": FORMULA_CALIBRATION}), power_min=60
+    )
     model = PowerModel(cfg, Calibration(cfg))
     out = [0] * 4
     assert model.compute(1.0, 0.0, 0.0, False, out) == 0

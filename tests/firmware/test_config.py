@@ -22,12 +22,15 @@ def test_config_is_plain_literals_and_round_trips(name: str) -> None:
 
 
 def test_omni4_limits_in_protocol_units() -> None:
-    cfg = fwconfig.build_config(load_robot("omni4"))
+    robot = load_robot("omni4")
+    cfg = fwconfig.build_config(robot)
     assert cfg["distance_max_cm"] == 500.0
     assert (cfg["speed_min_cms"], cfg["speed_max_cms"]) == (30.0, 100.0)
     assert cfg["curvature_max"] == 100.0
     assert 899 < cfg["rate_max_dps"] < 900
-    assert cfg["k"] == 220.0
+    assert robot.calibration is not None and robot.calibration.k_r is not None
+    assert cfg["k"] == robot.calibration.k
+    assert cfg["kr"] == [list(robot.calibration.k_r.x), list(robot.calibration.k_r.y)]
     assert cfg["sonar_period_min_ms"] == [60]
     assert cfg["encoder_cpr"] == [440] * 4
     assert cfg["pwm_max"] == 255 and cfg["power_min"] == 0

@@ -1,0 +1,1 @@
+"""State estimation from the robot's own sensors (encoders, gyro); depends on robot and plain data only."""

@@ -1,0 +1,86 @@
+"""Dead reckoning from motor-shaft encoders through the forward kinematics, with optional gyro heading.
+
+Each update takes cumulative encoder counts (and, when there is one, the gyro's integrated heading)
+at a time stamp. Count differences become wheel angle increments, the least-squares forward
+kinematics turns them into a body displacement (dx, dy, dtheta), and the displacement is composed
+onto the pose along a constant-curvature arc (exact for a constant twist over the interval, so the
+estimate does not assume a constant heading as seed 002's equations (11)-(12) do). With a gyro
+heading the rotation comes from the gyro and only the translation from the wheels. The per-wheel
+residual of the fit (what no rigid motion explains) is kept as a slip signal.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from omnibot.errors import ConfigError
+from omnibot.robot import kinematics as kin
+from omnibot.robot.description import RobotDescription
+
+
+@dataclass(frozen=True)
+class Pose2D:
+    x: float
+    y: float
+    theta: float
+
+
+def compose_arc(pose: Pose2D, dx: float, dy: float, dtheta: float) -> Pose2D:
+    """Move ``pose`` by a body-frame displacement travelled with constant twist (an arc)."""
+    if abs(dtheta) < 1e-9:
+        a, b = 1.0 - dtheta * dtheta / 6.0, dtheta / 2.0
+    else:
+        a, b = math.sin(dtheta) / dtheta, (1.0 - math.cos(dtheta)) / dtheta
+    # the chord of the arc, in the body frame at the start of the interval
+    cx, cy = a * dx - b * dy, b * dx + a * dy
+    c, s = math.cos(pose.theta), math.sin(pose.theta)
+    return Pose2D(pose.x + c * cx - s * cy, pose.y + s * cx + c * cy, pose.theta + dtheta)
+
+
+class WheelOdometry:
+    """Pose from cumulative motor-encoder counts (every driven wheel needs an encoder)."""
+
+    def __init__(self, robot: RobotDescription, start: Pose2D | None = None) -> None:
+        cpr = {e.wheel: e.counts_per_rev for e in robot.encoders.motors}
+        missing = [w.name for w in robot.wheels if w.name not in cpr]
+        if missing:
+            raise ConfigError(f"wheel odometry needs an encoder on every wheel; none on {', '.join(missing)}")
+        self._rad_per_count = np.array([2.0 * math.pi / cpr[w.name] for w in robot.wheels])
+        self._pinv = np.linalg.pinv(robot.wheel_matrix)
+        self._J = robot.wheel_matrix
+        self.pose = start or Pose2D(0.0, 0.0, 0.0)
+        self.distance = 0.0
+        """Path length travelled by the body centre, m."""
+        self.residual = np.zeros(robot.n_wheels)
+        """Last interval's per-wheel residual, rad (non-zero: the wheels disagree, slip)."""
+        self._counts: np.ndarray | None = None
+        self._heading: float | None = None
+
+    def update(self, counts: Sequence[int], heading: float | None = None) -> Pose2D:
+        """Fold in new cumulative counts (and the gyro's integrated heading, rad); the new pose."""
+        c = np.asarray(counts, dtype=float)
+        if c.shape != self._rad_per_count.shape:
+            raise ValueError(f"expected {self._rad_per_count.size} encoder counts, got {c.size}")
+        if self._counts is None:
+            self._counts, self._heading = c, heading
+            return self.pose
+        angles = (c - self._counts) * self._rad_per_count
+        self._counts = c
+        disp = self._pinv @ angles  # body displacement: twist times the interval
+        self.residual = angles - self._J @ disp
+        dx, dy, dtheta = (float(v) for v in disp)
+        if heading is not None and self._heading is not None:
+            dtheta = heading - self._heading
+        self._heading = heading
+        self.pose = compose_arc(self.pose, dx, dy, dtheta)
+        self.distance += math.hypot(dx, dy)
+        return self.pose
+
+
+def forward_twist(robot: RobotDescription, wheel_speeds: Sequence[float]) -> kin.ForwardResult:
+    """Body twist for wheel speeds (rad/s), a convenience over :func:`omnibot.robot.kinematics.forward`."""
+    return kin.forward(robot.wheel_matrix, wheel_speeds)
