@@ -459,3 +459,16 @@ def test_a_batch_equals_single_runs(vary: str) -> None:
             if k % 100 == 99:
                 np.testing.assert_allclose(single.pose[0], b_pose[k][i], rtol=1e-9, atol=1e-12)
     assert not np.allclose(batch.pose[0], batch.pose[2])  # the robots really differ
+
+
+def test_the_step_kernel_compiles_once_whatever_the_inputs() -> None:
+    """Every input is copied into a typed buffer, so the kernel never recompiles (lists, ints, broadcasts)."""
+    from omnibot.sim import kernels
+
+    robot = load_robot("omni4")
+    for n in (1, 3):
+        ph = Physics(robot, n=n, surfaces=("wood", "carpet"))
+        ph.step([10, 20, 30, 40])
+        ph.step(np.full((n, 4), 100, dtype=np.int64), surface_ids=[1, 0, 1, 0], external_force=(1, 0, 0))
+        ph.step(np.float32(50.0), surface_ids=np.ones((n, 4)), external_force=np.zeros((n, 3)))
+    assert len(kernels.physics_step.signatures) == 1

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from omnibot.robot.description import GyroSpec, SonarSpec, TrackingWheelSpec, load_robot
-from omnibot.sim.sensors import Gyro, MotorEncoders, Sonar, TrackingWheels
+from omnibot.sim.sensors import Gyro, MotorEncoders, NormalBlock, Sonar, TrackingWheels
 from omnibot.sim.world import load_world, parse_world
 
 TWO_PI = 2 * math.pi
@@ -207,3 +207,20 @@ def test_sonar_pose_in_world() -> None:
     s = Sonar(SonarSpec(name="side", x=0.1, y=0.05, angle_deg=90), rng())
     p = s.pose_in_world((1.0, 2.0, math.pi / 2))
     assert p.x == pytest.approx(0.95) and p.y == pytest.approx(2.1) and p.theta == pytest.approx(math.pi)
+
+
+# --------------------------------------------------------------------------- cost-saving helpers
+
+
+def test_normal_block_draws_the_same_numbers_as_one_at_a_time() -> None:
+    block = NormalBlock(rng(9), block=7)
+    one_by_one = rng(9)
+    assert [block() for _ in range(30)] == [one_by_one.standard_normal() for _ in range(30)]
+
+
+def test_encoders_with_a_source_count_when_read() -> None:
+    angles = np.array([0.3, -0.2])
+    enc = MotorEncoders([440, 440], rng(), initial_angles=angles, source=lambda: angles)
+    assert enc.counts.tolist() == [0, 0]
+    angles += [TWO_PI, -TWO_PI / 2]  # the wheels turn; nothing is fed
+    assert enc.counts.tolist() == [440, -220]

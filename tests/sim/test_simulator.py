@@ -14,6 +14,7 @@ from omnibot.errors import ConfigError, SimulationError
 from omnibot.robot import kinematics as kin
 from omnibot.robot.description import RobotDescription, load_robot
 from omnibot.sim.simulator import CollisionEvent, PwmRangeError, Simulator, Snapshot, TruthRecorder
+from omnibot.sim.world import convex_hull
 from tests.sim.fakes import FakePhysics, ScriptedPhysics
 
 
@@ -317,3 +318,37 @@ def test_truth_recorder_writes_csv(omni4, tmp_path: Path) -> None:
     sim.advance(0.35)
     rec2.close()
     assert len(stream.getvalue().splitlines()) == 1 + 4  # header, t = 0.5, 0.6, 0.7, 0.8
+
+
+# --------------------------------------------------------------------------- broad phases
+
+
+def test_cached_surfaces_and_contacts_equal_a_full_test_every_step(omni4) -> None:
+    """The surface and contact broad phases skip work but never change what the physics gets."""
+    sim = Simulator(omni4, world="room", start_pose=(2.0, 2.5, 0.3))
+    world, ph = sim.world, sim.physics
+    outline = convex_hull(omni4.footprint.outline())
+    names = [s.name for s in ph.surfaces]
+    original = ph.step
+    surfaces_seen: set[tuple[str, ...]] = set()
+    steps_touching = []
+
+    def spy(pwm, surface_ids=None, external_force=None):
+        x, y, th = ph.pose[0]
+        expect = world.surface_ids(ph.contact_points_world()[0])
+        got = [names[i] for i in np.asarray(surface_ids).reshape(-1)]
+        assert got == [world.surface_names[i] for i in expect]
+        c, s = math.cos(th), math.sin(th)
+        contacts = world.contacts(outline @ np.array([[c, s], [-s, c]]) + (x, y))
+        assert [k.owner for k in sim.contacts] == [k.owner for k in contacts]
+        assert [k.depth for k in sim.contacts] == pytest.approx([k.depth for k in contacts], abs=1e-12)
+        surfaces_seen.add(tuple(got))
+        steps_touching.append(bool(contacts))
+        original(pwm, surface_ids, external_force)
+
+    ph.step = spy  # type: ignore[method-assign]
+    for twist in [(0.6, 0.3, 0.5), (0.2, -0.8, -1.0), (-0.7, 0.2, 2.0)]:
+        sim.set_pwm(pwm_for(omni4, twist, peak=220))
+        sim.advance(2.0)
+    assert len(surfaces_seen) > 2  # wood, carpet and wheels on both
+    assert sum(steps_touching) > 100 and sim.collisions

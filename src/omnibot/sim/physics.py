@@ -50,9 +50,15 @@ K holds the secant slopes of the friction laws (x: contact speed over its regula
 not the tangents: every friction term becomes implicit in the form f_new = -k x_new, which on its
 own can stop a contact within a step but never reverse it, and all together only remove energy;
 the stiff regularisation stays stable at 1 kHz however hard a wheel slips. The back-EMF damping
-(D_motor, dropped while the current is limited) is implicit too. The body-frame (Coriolis) term is then applied as the exact
-rotation of (vx, vy) by -w dt and the pose advanced with the new twist at the mid-step heading.
-No randomness, no wall clock: a run is deterministic, and a batch of n equals n single runs.
+(D_motor, dropped while the current is limited) is implicit too. The body-frame (Coriolis) term
+is then applied as the exact rotation of (vx, vy) by -w dt and the pose advanced with the new twist
+at the mid-step heading. No randomness, no wall clock: a run is deterministic, and a batch of n
+equals n single runs.
+
+Implementation: this class holds parameters and state in numpy arrays; one compiled kernel,
+:func:`omnibot.sim.kernels.physics_step`, advances them in place (the matrix above has an arrow
+structure, a dense body block and a diagonal wheel block, so the kernel eliminates the wheels and
+solves a 3x3 system: O(m) per robot, about a microsecond per step for one robot).
 """
 
 from __future__ import annotations
@@ -65,16 +71,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from omnibot.errors import SimulationError
 from omnibot.robot.description import RobotDescription
+from omnibot.sim import kernels
+from omnibot.sim.kernels import ROLL_SPEED_EPS, WHEEL_SPEED_EPS
 from omnibot.sim.surfaces import Surface, get_surface
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
 GRAVITY = 9.81
-WHEEL_SPEED_EPS = 0.01
-"""rad/s: regularisation speed of the Coulomb friction at the wheel axle."""
-ROLL_SPEED_EPS = 0.005
-"""m/s: regularisation speed of the roller rolling resistance."""
 
 
 def static_loads(x: FloatArray, y: FloatArray, mass: FloatArray, lifted: BoolArray) -> FloatArray:
@@ -104,7 +108,8 @@ class Physics:
     indices into it, and index 0 is the floor everywhere when it is given none.
 
     ``lifted`` is a read-only (n,m) mask: assign a new mask to lift wheels off the floor (their load
-    goes to the others). Other state arrays may be written in place (e.g. ``twist[0, 0] = 0.5``).
+    goes to the others). Other state arrays may be written in place (e.g. ``twist[0, 0] = 0.5``);
+    assigning to a state attribute also writes in place, so references stay valid.
     """
 
     def __init__(
@@ -136,18 +141,19 @@ class Physics:
 
         self._pose = np.zeros((n, 3))
         self._q = np.zeros((n, 3 + m))
-        self.wheel_angle = np.zeros((n, m))
-        self.motor_current = np.zeros((n, m))
-        """(n,m) motor current at the last step, A."""
-        self.traction_force = np.zeros((n, m))
-        """(n,m) floor force on the robot along each wheel's traction direction at the last step, N."""
+        self._wheel_angle = np.zeros((n, m))
+        self._current = np.zeros((n, m))
+        self._traction = np.zeros((n, m))
+        self._battery = np.zeros((n, 2))  # bus voltage, battery current of the last step
         self._init_parameters()
-        self.battery_open_voltage = self._v_nominal.copy()
-        """(n,) open-circuit battery voltage, V (lower it to simulate a discharged battery)."""
-        self._v_bus = self.battery_open_voltage.copy()
-        self._i_batt = np.zeros(n)
+        self._v_open = np.array([r.battery.voltage for r in self.robots], dtype=float)
+        self._battery[:, 0] = self._v_open
+        # input buffers: the kernel always gets C-contiguous float64 / int64 arrays (one compilation)
+        self._pwm = np.zeros((n, m))
+        self._ids = np.zeros((n, m), dtype=np.int64)
+        self._floor = np.zeros((n, m), dtype=np.int64)
+        self._ext = np.zeros((n, 3))
         self._steps = 0
-        self._custom_surface = False
         self._lifted = np.zeros((n, m), dtype=bool)
         self._set_loads()
 
@@ -160,99 +166,67 @@ class Physics:
         return np.array([float(fn(r)) for r in self.robots])
 
     def _init_parameters(self) -> None:
-        n, m = self.n, self.m
-        wp, rp = self._wheel_param, self._robot_param
+        wp, rp, dt = self._wheel_param, self._robot_param, self.dt
         self._x = wp(lambda w: w.position[0])
         self._y = wp(lambda w: w.position[1])
-        drive = wp(lambda w: w.drive_angle)
         gamma = wp(lambda w: w.gamma)
         r = wp(lambda w: w.radius)
-        phi = drive + gamma
-        # Rows of H: traction (slip) speeds, roller speeds, axle speeds; columns vx, vy, w, omega_1..m.
-        H = np.zeros((n, 3, m, 3 + m))
-        H[:, 0, :, 0], H[:, 0, :, 1] = np.cos(phi), np.sin(phi)
-        H[:, 0, :, 2] = self._x * np.sin(phi) - self._y * np.cos(phi)
-        H[:, 1, :, 0], H[:, 1, :, 1] = -np.sin(phi), np.cos(phi)
-        H[:, 1, :, 2] = self._x * np.cos(phi) + self._y * np.sin(phi)
-        wheel = np.arange(m)
-        H[:, 0, wheel, 3 + wheel] = -r * np.cos(gamma)
-        H[:, 1, wheel, 3 + wheel] = r * np.sin(gamma)
-        H[:, 2, wheel, 3 + wheel] = 1.0
-        self._H = H.reshape(n, 3 * m, 3 + m).copy()
-        self._HT = np.ascontiguousarray(self._H.transpose(0, 2, 1))
-        # Robots with one geometry share H: then the products below are single BLAS calls.
-        self._shared = bool(np.all(self._H[:1] == self._H))
-        H0 = self._H[0]
-        self._H0, self._H0T = H0.copy(), np.ascontiguousarray(H0.T)
-        self._H0_outer = (H0[:, :, None] * H0[:, None, :]).reshape(3 * m, (3 + m) ** 2)
-
-        self._mass = rp(lambda rb: rb.mass)
-        inertia = wp(lambda w: w.inertia + w.motor.gear_ratio**2 * w.motor.rotor_inertia)
-        diag = np.concatenate(
-            [self._mass[:, None], self._mass[:, None], rp(lambda rb: rb.yaw_inertia)[:, None], inertia],
-            axis=1,
-        )
-        self._M_dt = np.zeros((n, 3 + m, 3 + m))
-        self._M_dt[:, np.arange(3 + m), np.arange(3 + m)] = diag / self.dt
-
+        phi = wp(lambda w: w.drive_angle) + gamma
+        cos_phi, sin_phi = np.cos(phi), np.sin(phi)
+        W = np.zeros((self.n, self.m, kernels.W_COLUMNS))
+        # Rows of H per wheel: traction (slip) speed and roller speed over vx, vy, w and the wheel's omega.
+        W[..., kernels.W_TX], W[..., kernels.W_TY] = cos_phi, sin_phi
+        W[..., kernels.W_TW] = self._x * sin_phi - self._y * cos_phi
+        W[..., kernels.W_TA] = -r * np.cos(gamma)
+        W[..., kernels.W_NX], W[..., kernels.W_NY] = -sin_phi, cos_phi
+        W[..., kernels.W_NW] = self._x * cos_phi + self._y * sin_phi
+        W[..., kernels.W_NA] = r * np.sin(gamma)
+        W[..., kernels.W_J_DT] = wp(lambda w: w.inertia + w.motor.gear_ratio**2 * w.motor.rotor_inertia) / dt
         k = wp(lambda w: w.motor.torque_constant)
         gear = wp(lambda w: w.motor.gear_ratio)
         eta = wp(lambda w: w.motor.gear_efficiency)
-        self._inv_res = 1.0 / wp(lambda w: w.motor.resistance)
-        self._ke = k * gear  # back-EMF, V per wheel rad/s
-        self._kt = eta * k * gear  # wheel torque, N m per A
-        self._emf_damping = self._kt * self._ke * self._inv_res
-        self._ke_res = self._ke * self._inv_res
-        self._i_max = wp(lambda w: w.motor.current_limit)
-        self._neg_i_max = -self._i_max
-        self._drop = wp(lambda w: w.motor.driver_drop)
-        self._on_threshold = np.maximum(wp(lambda w: w.motor.deadband), 1e-9)
-        self._inv_pwm_max = 1.0 / wp(lambda w: w.motor.pwm_max)
-        self._visc = wp(lambda w: w.motor.friction_viscous)
-        self._v_nominal = rp(lambda rb: rb.battery.voltage)
-        self._r_batt = rp(lambda rb: rb.battery.internal_resistance)
-        # relaxing V_bus by 1/(1 + R_batt sum(1/R)) per step keeps the lagged coupling stable for any battery
-        self._batt_relax = 1.0 / (1.0 + self._r_batt * self._inv_res.sum(axis=1))
-
+        inv_res = 1.0 / wp(lambda w: w.motor.resistance)
+        ke = k * gear  # back-EMF, V per wheel rad/s
+        kt = eta * k * gear  # wheel torque, N m per A
+        W[..., kernels.W_INV_PWM_MAX] = 1.0 / wp(lambda w: w.motor.pwm_max)
+        W[..., kernels.W_ON_THRESHOLD] = np.maximum(wp(lambda w: w.motor.deadband), 1e-9)
+        W[..., kernels.W_DROP] = wp(lambda w: w.motor.driver_drop)
+        W[..., kernels.W_INV_RES] = inv_res
+        W[..., kernels.W_KE_RES] = ke * inv_res
+        W[..., kernels.W_I_MAX] = wp(lambda w: w.motor.current_limit)
+        W[..., kernels.W_KT] = kt
+        W[..., kernels.W_EMF_DAMPING] = kt * ke * inv_res
+        W[..., kernels.W_VISC] = wp(lambda w: w.motor.friction_viscous)
+        W[..., kernels.W_STATIC] = wp(lambda w: w.motor.friction_static)
         self._grip = wp(lambda w: w.rollers.grip)
         rr0 = wp(lambda w: w.rollers.rolling_resistance)
-        self._rr_var = 0.5 * rr0 * wp(lambda w: w.rollers.friction_variation)
-        self._rr_top = rr0 + self._rr_var
-        self._roller_count = wp(lambda w: w.rollers.count)
+        rr_var = 0.5 * rr0 * wp(lambda w: w.rollers.friction_variation)
+        W[..., kernels.W_RR_VAR] = rr_var
+        W[..., kernels.W_RR_TOP] = rr0 + rr_var
+        W[..., kernels.W_ROLLER_COUNT] = wp(lambda w: w.rollers.count)
+        self._wp = W
 
-        self._mu_tab = np.array([s.mu for s in self.surfaces])
-        self._inv_veps_tab = np.array([1.0 / s.slip_velocity for s in self.surfaces])
-        self._roll_tab = np.array([s.rolling_multiplier for s in self.surfaces])
-        # Friction laws per contact row: saturation force (or torque) and 1/regularisation speed.
-        self._fmax = np.empty((n, 3 * m))
-        self._fmax[:, 2 * m :] = wp(lambda w: w.motor.friction_static)
-        self._inv_eps = np.empty((n, 3 * m))
-        self._inv_eps[:, :m] = self._inv_veps_tab[0]
-        self._inv_eps[:, m : 2 * m] = 1.0 / ROLL_SPEED_EPS
-        self._inv_eps[:, 2 * m :] = 1.0 / WHEEL_SPEED_EPS
+        self._mass = rp(lambda rb: rb.mass)
+        r_batt = rp(lambda rb: rb.battery.internal_resistance)
+        R = np.zeros((self.n, kernels.R_COLUMNS))
+        R[:, kernels.R_M_DT] = self._mass / dt
+        R[:, kernels.R_I_DT] = rp(lambda rb: rb.yaw_inertia) / dt
+        R[:, kernels.R_BATT_RES] = r_batt
+        # relaxing V_bus by 1/(1 + R_batt sum(1/R)) per step keeps the lagged coupling stable for any battery
+        R[:, kernels.R_BATT_RELAX] = 1.0 / (1.0 + r_batt * inv_res.sum(axis=1))
+        self._rp = R
+
+        S = np.zeros((len(self.surfaces), kernels.S_COLUMNS))
+        S[:, kernels.S_MU] = [s.mu for s in self.surfaces]
+        S[:, kernels.S_INV_VEPS] = [1.0 / s.slip_velocity for s in self.surfaces]
+        S[:, kernels.S_ROLL] = [s.rolling_multiplier for s in self.surfaces]
+        self._surf = S
 
     def _set_loads(self) -> None:
         self._load = static_loads(self._x, self._y, self._mass, self._lifted)
         self._load.flags.writeable = False
-        self._grip_load = self._grip * self._load
-        self._default_surface()
-
-    def _default_surface(self) -> None:
-        m = self.m
-        self._fmax[:, :m] = self._mu_tab[0] * self._grip_load
-        self._inv_eps[:, :m] = self._inv_veps_tab[0]
-        self._roll_load = self._roll_tab[0] * self._load
-        self._custom_surface = False
-
-    def _apply_surface(self, surface_ids: ArrayLike) -> None:
-        m = self.m
-        ids = np.broadcast_to(np.asarray(surface_ids, dtype=np.intp), (self.n, m))
-        if ids.min() < 0 or ids.max() >= len(self.surfaces):
-            raise SimulationError(f"surface_ids must index the {len(self.surfaces)} surfaces of this Physics")
-        self._fmax[:, :m] = self._mu_tab[ids] * self._grip_load
-        self._inv_eps[:, :m] = self._inv_veps_tab[ids]
-        self._roll_load = self._roll_tab[ids] * self._load
-        self._custom_surface = True
+        self._wp[..., kernels.W_LOAD] = self._load
+        self._wp[..., kernels.W_GRIP_LOAD] = self._grip * self._load
 
     # ------------------------------------------------------------------ state access
 
@@ -284,6 +258,42 @@ class Physics:
         self._q[:, 3:] = value
 
     @property
+    def wheel_angle(self) -> FloatArray:
+        """(n,m) wheel angles, rad (continuous); writable in place."""
+        return self._wheel_angle
+
+    @wheel_angle.setter
+    def wheel_angle(self, value: ArrayLike) -> None:
+        self._wheel_angle[:] = value
+
+    @property
+    def motor_current(self) -> FloatArray:
+        """(n,m) motor current at the last step, A."""
+        return self._current
+
+    @motor_current.setter
+    def motor_current(self, value: ArrayLike) -> None:
+        self._current[:] = value
+
+    @property
+    def traction_force(self) -> FloatArray:
+        """(n,m) floor force on the robot along each wheel's traction direction at the last step, N."""
+        return self._traction
+
+    @traction_force.setter
+    def traction_force(self, value: ArrayLike) -> None:
+        self._traction[:] = value
+
+    @property
+    def battery_open_voltage(self) -> FloatArray:
+        """(n,) open-circuit battery voltage, V (lower it to simulate a discharged battery)."""
+        return self._v_open
+
+    @battery_open_voltage.setter
+    def battery_open_voltage(self, value: ArrayLike) -> None:
+        self._v_open[:] = value
+
+    @property
     def time(self) -> float:
         """Simulated time since the last reset, s (step count times dt: no drift)."""
         return self._steps * self.dt
@@ -308,17 +318,22 @@ class Physics:
     @property
     def battery_voltage(self) -> FloatArray:
         """(n,) battery terminal voltage at the last step, V."""
-        return self._v_bus.copy()
+        return self._battery[:, 0].copy()
+
+    def _contact_speeds(self) -> FloatArray:
+        out = np.empty((self.n, self.m, 2))
+        kernels.contact_speeds(self._q, self._wp, out)
+        return out
 
     @property
     def slip(self) -> FloatArray:
         """(n,m) slip speed along each wheel's traction direction, m/s (contact velocity minus rim)."""
-        return np.asarray((self._H[:, : self.m] @ self._q[:, :, None])[:, :, 0], dtype=float)
+        return self._contact_speeds()[:, :, 0].copy()
 
     @property
     def roller_speed(self) -> FloatArray:
         """(n,m) speed of the floor under each wheel along its free roller direction, m/s."""
-        return np.asarray((self._H[:, self.m : 2 * self.m] @ self._q[:, :, None])[:, :, 0], dtype=float)
+        return self._contact_speeds()[:, :, 1].copy()
 
     def velocity_world(self) -> FloatArray:
         """(n,3) world-frame velocity: vx, vy (m/s), w (rad/s)."""
@@ -341,14 +356,14 @@ class Physics:
         starts: angle 0 is the low-friction position seed 000 set its wheels to before measuring.
         """
         self._pose[:] = 0.0 if pose is None else np.broadcast_to(np.asarray(pose, dtype=float), (self.n, 3))
-        self.wheel_angle[:] = (
+        self._wheel_angle[:] = (
             0.0 if wheel_angle is None else np.broadcast_to(np.asarray(wheel_angle, float), (self.n, self.m))
         )
         self._q[:] = 0.0
-        self.motor_current[:] = 0.0
-        self.traction_force[:] = 0.0
-        self._i_batt[:] = 0.0
-        self._v_bus[:] = self.battery_open_voltage
+        self._current[:] = 0.0
+        self._traction[:] = 0.0
+        self._battery[:, 0] = self._v_open
+        self._battery[:, 1] = 0.0
         self._steps = 0
 
     # ------------------------------------------------------------------ dynamics
@@ -365,72 +380,33 @@ class Physics:
         ``surfaces`` for the floor under each wheel (default 0); ``external_force``: (n,3) world
         Fx, Fy (N) and torque about the body origin (N m), e.g. from collisions or a push by hand.
         """
-        m, dt, q = self.m, self.dt, self._q
-        omega = q[:, 3:]
-
-        # --- driver and motor: current, torque and its slope (back-EMF damping while not limited)
-        pwm_a = np.asarray(pwm, dtype=float)
-        duty = np.minimum(np.maximum(pwm_a * self._inv_pwm_max, -1.0), 1.0)
-        on = np.abs(pwm_a) >= self._on_threshold
-        v_bus = self._v_bus + self._batt_relax * (
-            self.battery_open_voltage - self._r_batt * self._i_batt - self._v_bus
-        )
-        np.maximum(v_bus, 0.0, out=v_bus)
-        i_stall = np.maximum(v_bus[:, None] - self._drop, 0.0) * self._inv_res
-        i_free = duty * i_stall - self._ke_res * omega
-        current = np.minimum(np.maximum(i_free, self._neg_i_max), self._i_max) * on
-        linear = on & (np.abs(i_free) < self._i_max)
-
-        # --- friction laws on every contact row (traction slip, roller rolling, axle)
-        if surface_ids is not None:
-            self._apply_surface(surface_ids)
-        elif self._custom_surface:
-            self._default_surface()
-        fmax, inv_eps = self._fmax, self._inv_eps
-        np.multiply(
-            self._rr_top - self._rr_var * np.cos(self._roller_count * self.wheel_angle),
-            self._roll_load,
-            out=fmax[:, m : 2 * m],
-        )
-        x = q @ self._H0T if self._shared else (self._H @ q[:, :, None])[:, :, 0]
-        x *= inv_eps
-        th = np.tanh(x)
-        force = fmax * th
-        at_rest = x == 0.0  # there tanh(x)/x is 1: add 1 above and below
-        kd = fmax * inv_eps * ((th + at_rest) / (x + at_rest))
-        # axle rows also carry the motor: drive torque minus viscous friction, and their slopes
-        force[:, 2 * m :] -= self._kt * current - self._visc * omega
-        kd[:, 2 * m :] += self._emf_damping * linear + self._visc
-
-        # --- linearised backward Euler on q = (twist, wheel speeds); force holds -f (sign folded)
-        if self._shared:
-            Q = force @ self._H0
-            A = (kd @ self._H0_outer).reshape(self._M_dt.shape)
+        self._pwm[...] = pwm
+        if surface_ids is None:
+            ids = self._floor
         else:
-            Q = (self._HT @ force[:, :, None])[:, :, 0]
-            A = self._HT @ (kd[:, :, None] * self._H)
-        np.negative(Q, out=Q)
+            ids = self._ids
+            ids[...] = surface_ids
         if external_force is not None:
-            f = np.broadcast_to(np.asarray(external_force, dtype=float), (self.n, 3))
-            c, s = np.cos(self._pose[:, 2]), np.sin(self._pose[:, 2])
-            Q[:, 0] += c * f[:, 0] + s * f[:, 1]
-            Q[:, 1] += c * f[:, 1] - s * f[:, 0]
-            Q[:, 2] += f[:, 2]
-        A += self._M_dt
-        q += np.linalg.solve(A, Q[:, :, None])[:, :, 0]
-
-        # --- body-frame rotation of the velocity, pose and wheel angles ((x, y) pairs as complex views)
-        w = q[:, 2]
-        v = q[:, 0:2].view(np.complex128)[:, 0]
-        v *= np.exp(w * (-1j * dt))
-        heading = self._pose[:, 2] + (0.5 * dt) * w
-        self._pose[:, 0:2].view(np.complex128)[:, 0] += np.exp(1j * heading) * v * dt
-        self._pose[:, 2] += dt * w
-        self.wheel_angle += dt * omega
-        self.motor_current[:] = current
-        np.negative(force[:, :m], out=self.traction_force)
-        self._v_bus[:] = v_bus
-        self._i_batt[:] = (duty * current).sum(axis=1)
+            self._ext[...] = external_force
+        failed = kernels.physics_step(
+            self._pose,
+            self._q,
+            self._wheel_angle,
+            self._current,
+            self._traction,
+            self._battery,
+            self._v_open,
+            self._pwm,
+            ids,
+            self._ext,
+            external_force is not None,
+            self._wp,
+            self._rp,
+            self._surf,
+            self.dt,
+        )
+        if failed:
+            raise SimulationError(f"surface_ids must index the {len(self.surfaces)} surfaces of this Physics")
         self._steps += 1
 
 

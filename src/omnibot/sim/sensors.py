@@ -7,12 +7,16 @@ true wheel angles, body twist and pose, and they return what the hardware would 
 Counters are quantised with ``floor`` like a real counter (a count happens when an edge is
 crossed), with a 1e-9 count allowance so that exactly one revolution gives exactly
 ``counts_per_rev`` despite rounding in 2 pi.
+
+Cost per simulator step: the gyro and tracking wheels work on Python floats and take their normal
+draws from blocks generated ahead (:class:`NormalBlock`, the same numbers as drawing one at a time),
+and motor encoders given a ``source`` count only when read.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -29,12 +33,41 @@ def _count(revolutions: FloatArray, cpr: FloatArray) -> IntArray:
     return np.floor(revolutions * cpr + _EDGE_EPS).astype(np.int64)
 
 
+class NormalBlock:
+    """Standard normal draws from a Generator, generated a block at a time.
+
+    Calling it gives the same sequence as calling ``rng.standard_normal()`` each time (the
+    Generator's draws do not depend on how many are asked for at once), but costs a list lookup.
+    The first block is drawn at the first call, so draws made from ``rng`` before then come first;
+    the Generator must not be used for anything else afterwards.
+    """
+
+    def __init__(self, rng: np.random.Generator, block: int = 1024) -> None:
+        self._rng = rng
+        self._block = block
+        self._values: list[float] = []
+        self._next = 0
+
+    def __call__(self) -> float:
+        k = self._next
+        if k >= len(self._values):
+            self._values = self._rng.standard_normal(self._block).tolist()
+            k = 0
+        self._next = k + 1
+        return self._values[k]
+
+
 class MotorEncoders:
     """Quadrature encoders on the driven wheels: counts per wheel revolution, floor-quantised.
 
     ``miss_probability`` is the chance that any one edge is not counted (a noisy line or a slow
     interrupt); missed counts are lost for good, so counts stay monotone while the wheel turns one
     way. Counts start at 0 for the angles given at construction (power-on).
+
+    With a ``source`` (a callable returning the true wheel angles) the encoders count when
+    :attr:`counts` is read instead of at every :meth:`update`: the counts are the same, and the
+    missed edges are drawn for all the edges since the last read at once (the same distribution
+    while a wheel turns one way).
     """
 
     def __init__(
@@ -44,6 +77,7 @@ class MotorEncoders:
         *,
         miss_probability: float = 0.0,
         initial_angles: ArrayLike | None = None,
+        source: Callable[[], ArrayLike] | None = None,
     ) -> None:
         if not 0.0 <= miss_probability <= 1.0:
             raise ValueError(f"miss_probability must be in [0, 1], got {miss_probability}")
@@ -54,19 +88,25 @@ class MotorEncoders:
         self._edges = _count(angles / (2 * math.pi), self._cpr)
         self._origin = self._edges.copy()
         self._lost = np.zeros(len(self._cpr), dtype=np.int64)
+        self._source = source
 
-    def update(self, wheel_angles: ArrayLike) -> IntArray:
-        """Feed the true wheel angles (rad); return the counts."""
+    def _feed(self, wheel_angles: ArrayLike) -> None:
         edges = _count(np.asarray(wheel_angles, dtype=float) / (2 * math.pi), self._cpr)
         if self.miss_probability > 0:
             delta = edges - self._edges
             missed = self._rng.binomial(np.abs(delta), self.miss_probability)
             self._lost += np.sign(delta) * missed
         self._edges = edges
-        return self.counts
+
+    def update(self, wheel_angles: ArrayLike) -> IntArray:
+        """Feed the true wheel angles (rad); return the counts."""
+        self._feed(wheel_angles)
+        return np.asarray(self._edges - self._origin - self._lost, dtype=np.int64)
 
     @property
     def counts(self) -> IntArray:
+        if self._source is not None:
+            self._feed(self._source())
         return np.asarray(self._edges - self._origin - self._lost, dtype=np.int64)
 
 
@@ -81,29 +121,40 @@ class TrackingWheels:
         self, specs: Sequence[TrackingWheelSpec], rng: np.random.Generator, *, slip_std: float = 0.01
     ) -> None:
         self.specs = tuple(specs)
-        self._rng = rng
+        self._normal = NormalBlock(rng)
         self.slip_std = slip_std
         self._pos = np.array([(s.x, s.y) for s in specs], dtype=float).reshape(-1, 2)
         self._dir = np.array([(math.cos(s.direction), math.sin(s.direction)) for s in specs]).reshape(-1, 2)
         self._circ = np.array([2 * math.pi * s.radius for s in specs], dtype=float)
         self._cpr = np.array([s.counts_per_rev for s in specs], dtype=float)
-        self.distance = np.zeros(len(self.specs))
+        # per wheel (ux, uy, px, py) as floats for the per-step update
+        self._geometry = [
+            (float(u[0]), float(u[1]), float(p[0]), float(p[1]))
+            for u, p in zip(self._dir, self._pos, strict=True)
+        ]
+        self._distance = [0.0] * len(self.specs)
+
+    @property
+    def distance(self) -> FloatArray:
         """Distance each wheel has rolled (m), slip included."""
+        return np.array(self._distance, dtype=float)
 
     def velocities(self, twist: ArrayLike) -> FloatArray:
         """Rim speed of each wheel (m/s) for a body twist (vx, vy, w): u . (v + w x p)."""
         vx, vy, w = (float(c) for c in np.asarray(twist, dtype=float))
-        vel = np.column_stack((vx - w * self._pos[:, 1], vy + w * self._pos[:, 0]))
-        return np.asarray(np.einsum("ij,ij->i", vel, self._dir))
+        return np.array([(vx - w * py) * ux + (vy + w * px) * uy for ux, uy, px, py in self._geometry])
 
-    def update(self, twist: ArrayLike, dt: float) -> IntArray:
-        """Roll the wheels for ``dt`` seconds at the body twist; return the counts."""
-        if not len(self.specs):
+    def update(self, twist: Sequence[float], dt: float) -> IntArray:
+        """Roll the wheels for ``dt`` seconds at the body twist (vx, vy, w); return the counts."""
+        if not self._geometry:
             return self.counts
-        step = self.velocities(twist) * dt
-        if self.slip_std > 0:
-            step = step * (1.0 + self._rng.normal(0.0, self.slip_std, len(step)))
-        self.distance = self.distance + step
+        vx, vy, w = twist
+        slip_std, normal, distance = self.slip_std, self._normal, self._distance
+        for k, (ux, uy, px, py) in enumerate(self._geometry):
+            step = ((vx - w * py) * ux + (vy + w * px) * uy) * dt
+            if slip_std > 0:
+                step = step * (1.0 + slip_std * normal())
+            distance[k] = distance[k] + step
         return self.counts
 
     @property
@@ -126,12 +177,14 @@ class Gyro:
 
     def __init__(self, spec: GyroSpec, rng: np.random.Generator) -> None:
         self.spec = spec
-        self._rng = rng
         self.period = 1.0 / spec.rate_hz
         self.bias = float(rng.normal(0.0, spec.bias_std)) if spec.bias_std > 0 else 0.0
         self.scale_error = float(rng.normal(0.0, spec.scale_error_std)) if spec.scale_error_std > 0 else 0.0
+        self._normal = NormalBlock(rng)  # after the turn-on draws: the same stream as before
         self._sigma = spec.noise_density * math.sqrt(spec.rate_hz)
         self._walk = spec.bias_walk * math.sqrt(self.period)
+        self._due = self.period - 1e-12
+        self._range, self._resolution = float(spec.range), float(spec.resolution)
         self._acc_time = 0.0
         self._acc_angle = 0.0
         self.rate = 0.0
@@ -144,26 +197,26 @@ class Gyro:
         """Advance ``dt`` seconds at ``true_rate``; True if at least one new sample was taken."""
         self._acc_time += dt
         self._acc_angle += true_rate * dt
-        new = False
-        while self._acc_time >= self.period - 1e-12:
+        if self._acc_time < self._due:
+            return False
+        while self._acc_time >= self._due:
             mean = self._acc_angle / self._acc_time
             self._acc_time -= self.period
             self._acc_angle = mean * self._acc_time
             self.measure(mean)
-            new = True
-        return new
+        return True
 
     def measure(self, true_rate: float) -> float:
         """Take one sample of a (period-averaged) true rate; returns it and stores it in :attr:`rate`."""
-        spec = self.spec
         if self._walk > 0:
-            self.bias += float(self._rng.normal(0.0, self._walk))
-        noise = float(self._rng.normal(0.0, self._sigma)) if self._sigma > 0 else 0.0
+            self.bias += self._walk * self._normal()
+        noise = self._sigma * self._normal() if self._sigma > 0 else 0.0
+        limit, resolution = self._range, self._resolution
         value = (1.0 + self.scale_error) * true_rate + self.bias + noise
-        value = min(max(value, -spec.range), spec.range)
-        if spec.resolution > 0:
-            value = round(value / spec.resolution) * spec.resolution
-            value = min(max(value, -spec.range), spec.range)
+        value = min(max(value, -limit), limit)
+        if resolution > 0:
+            value = round(value / resolution) * resolution
+            value = min(max(value, -limit), limit)
         self.rate = value
         self.angle += value * self.period
         self.samples += 1

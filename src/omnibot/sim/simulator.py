@@ -3,13 +3,24 @@
 ::
 
     set_pwm(...) -> step()/advance() ----------------------------------------------> clock += dt
-                      |  surface ids under each wheel   <- World.surface_ids (every step)
-                      |  wall/obstacle push-back force  <- World.contacts    (every step)
+                      |  surface ids under each wheel   <- World.surface_probe (when a wheel may
+                      |                                    have crossed a patch edge)
+                      |  wall/obstacle push-back force  <- World.contacts_at   (when the robot may
+                      |                                    touch something)
                       |  hand pushes (push())
                       v
                    Physics.step(pwm, surface_ids, external_force)
                       v
-      encoders, tracking wheels, gyro (every step) ; sonars (on ping) ; listeners ; collision events
+      tracking wheels, gyro (every step) ; encoders (when read) ; sonars (on ping) ; listeners ;
+      collision events
+
+A step costs a few microseconds: the physics is one compiled kernel call, the sensors work on
+Python floats, and two exact broad phases skip the world geometry. Each probe of the world returns
+a clearance: the contact test tells how far the robot's origin may move (any rotation) before its
+outline could touch a wall or obstacle, the surface lookup how far the wheel contact points may
+move before one could cross a patch edge (a contact point moves at most |dx, dy| + |d theta| r).
+Until the robot has moved that far the previous answer (no contact; the same surfaces) stands, so
+the result is the same as testing every step. Near a wall or a patch edge the test runs every step.
 
 Collisions use a penalty force: each contact pushes along its normal with a spring-damper whose
 stiffness is set from the simulation step (natural frequency 0.25/dt for the effective mass at the
@@ -226,7 +237,8 @@ class Simulator:
 
     ``surface`` overrides the world's default floor (None keeps it; the default world is ``empty``,
     a wood floor). ``start_pose`` (x, y, theta) overrides the world's start (else the origin).
-    ``physics_factory`` replaces :class:`~omnibot.sim.physics.Physics` (tests use a stand-in).
+    ``physics_factory`` replaces :class:`~omnibot.sim.physics.Physics` (tests use a stand-in); the
+    simulator keeps views of its ``pose`` and ``twist`` arrays, so it must update them in place.
     """
 
     def __init__(
@@ -266,34 +278,57 @@ class Simulator:
         if len(start) != 3:
             raise SimulationError(f"start_pose is (x, y, theta), got {tuple(start)}")
         self._physics.reset(pose=np.array([start], dtype=float))
+        # views of robot 0's state: the physics updates its arrays in place
+        self._pose_row = self._physics.pose[0]
+        self._twist_row = self._physics.twist[0]
 
-        self._pwm = np.zeros(robot.n_wheels, dtype=np.int64)
-        self._pwm_max = np.array([wh.motor.pwm_max for wh in robot.wheels], dtype=np.int64)
-        self._outline = convex_hull(robot.footprint.outline())
+        n_wheels = robot.n_wheels
+        self._pwm = np.zeros((1, n_wheels))
+        self._pwm_max = [wh.motor.pwm_max for wh in robot.wheels]
+        self._wheel_names = [wh.name for wh in robot.wheels]
+        self._outline = np.ascontiguousarray(convex_hull(robot.footprint.outline()), dtype=float)
         self._pushes: list[tuple[int, float, float, float]] = []
+        self._force = np.zeros((1, 3))
         self._touching: dict[str, int] = {}
-        self.contacts: list[Contact] = []
-        """Contacts found at the start of the last step."""
         self.collisions: list[CollisionEvent] = []
         self._collision_listeners: list[CollisionListener] = []
         self._listeners: list[_ListenerSlot] = []
+        self._next_notify_us = 0
 
-        names = [wh.name for wh in robot.wheels]
-        self._enc_index = np.array([names.index(e.wheel) for e in robot.encoders.motors], dtype=np.int64)
+        # contact broad phase: no contact while the origin stays within _clear of (_clear_x, _clear_y)
+        self._walls = len(self.world.segments) > 0
+        self._contact_out = self.world.contact_buffer()
+        self._contact_rows: list[list[float]] = []
+        self._contacts: list[Contact] | None = []
+        self._clear_x = self._clear_y = 0.0
+        self._clear = -1.0
+        # surface cache: the same ids while the wheels move less than _surf_clear from the anchor pose
+        self._patchy = len(self.world.surface_names) > 1
+        self._ids = self._floor_ids.copy()
+        self._surf_anchor = (0.0, 0.0, 0.0)
+        self._surf_clear = -1.0
+        self._wheel_reach = max(math.hypot(*wh.position) for wh in robot.wheels)
+
+        names = self._wheel_names
+        enc_index = np.array([names.index(e.wheel) for e in robot.encoders.motors], dtype=np.int64)
+        angles = self._physics.wheel_angle
         self.encoders = MotorEncoders(
             [e.counts_per_rev for e in robot.encoders.motors],
             _rng(seed, _RNG_ENCODERS),
-            initial_angles=self._physics.wheel_angle[0, self._enc_index],
+            initial_angles=angles[0, enc_index],
+            source=lambda: self._physics.wheel_angle[0, enc_index],
         )
         self.tracking = TrackingWheels(robot.encoders.tracking, _rng(seed, _RNG_TRACKING))
+        self._tracking_on = len(robot.encoders.tracking) > 0
         self.gyro = Gyro(robot.gyro, _rng(seed, _RNG_GYRO)) if robot.gyro is not None else None
         self.sonars = [Sonar(s, _rng(seed, _RNG_SONAR + i)) for i, s in enumerate(robot.sonars)]
 
-        touching = self._find_contacts()
-        if touching:
+        x, y, th = self._pose_row.tolist()
+        touching = self._find_contacts(x, y, th)
+        if touching >= 0:
             raise SimulationError(
-                f"start pose {tuple(float(c) for c in start)} overlaps {touching[0].owner} of world "
-                f"'{self.world.name}'"
+                f"start pose {tuple(float(c) for c in start)} overlaps {self.world.contact_owners[touching]} "
+                f"of world '{self.world.name}'"
             )
         if truth_recorder is not None:
             self.add_listener(truth_recorder, period=truth_recorder.period)
@@ -312,13 +347,13 @@ class Simulator:
     @property
     def pose(self) -> Pose:
         """True world pose (x, y in m, theta in rad, continuous: not wrapped)."""
-        x, y, th = (float(c) for c in self._physics.pose[0])
+        x, y, th = self._pose_row.tolist()
         return Pose(x, y, th)
 
     @property
     def twist(self) -> Twist:
         """True body-frame velocity (vx, vy in m/s, w in rad/s)."""
-        vx, vy, w = (float(c) for c in self._physics.twist[0])
+        vx, vy, w = self._twist_row.tolist()
         return Twist(vx, vy, w)
 
     @property
@@ -328,7 +363,14 @@ class Simulator:
 
     @property
     def pwm(self) -> list[int]:
-        return [int(v) for v in self._pwm]
+        return [int(v) for v in self._pwm[0]]
+
+    @property
+    def contacts(self) -> list[Contact]:
+        """Contacts found at the start of the last step."""
+        if self._contacts is None:
+            self._contacts = self.world.contact_list(self._contact_rows)
+        return self._contacts
 
     @property
     def battery_voltage(self) -> float:
@@ -336,25 +378,25 @@ class Simulator:
         own = getattr(self._physics, "battery_voltage", None)
         if own is not None:
             return float(np.asarray(own, dtype=float).reshape(-1)[0])
-        duty = np.abs(self._pwm) / self._pwm_max
+        duty = np.abs(self._pwm[0]) / np.array(self._pwm_max, dtype=float)
         current = float(np.sum(np.abs(self._physics.motor_current[0]) * duty))
         bat = self.robot.battery
         return max(0.0, bat.voltage - bat.internal_resistance * current)
 
     def snapshot(self) -> Snapshot:
-        x, y, th = (float(c) for c in self._physics.pose[0])
-        vx, vy, w = (float(c) for c in self._physics.twist[0])
-        return Snapshot(self.time, x, y, th, vx, vy, w)
+        x, y, th = self._pose_row.tolist()
+        vx, vy, w = self._twist_row.tolist()
+        return Snapshot(self.clock.now(), x, y, th, vx, vy, w)
 
     # ------------------------------------------------------------------ commands
 
     def set_pwm(self, values: Sequence[int]) -> None:
         """Signed PWM counts, one per wheel (robot.wheels order). Out of range raises, never clamps."""
         vals = list(values)
-        names = [w.name for w in self.robot.wheels]
+        names = self._wheel_names
         if len(vals) != len(names):
             raise PwmRangeError(f"set_pwm needs {len(names)} values ({', '.join(names)}), got {len(vals)}")
-        out = np.zeros(len(vals), dtype=np.int64)
+        out = []
         for i, v in enumerate(vals):
             if isinstance(v, bool) or not isinstance(v, int | np.integer | float) or int(v) != v:
                 raise PwmRangeError(f"PWM for wheel '{names[i]}' must be a whole number of counts, got {v!r}")
@@ -363,12 +405,12 @@ class Simulator:
                     f"PWM {int(v)} for wheel '{names[i]}' is outside +-{self._pwm_max[i]} "
                     "(the firmware must clamp)"
                 )
-            out[i] = int(v)
-        self._pwm = out
+            out.append(int(v))
+        self._pwm[0] = out
 
     def lift_wheel(self, name: str, lifted: bool = True) -> None:
         """Fault injection: lift a wheel off the floor (it spins freely and drives nothing)."""
-        index = [w.name for w in self.robot.wheels].index(self.robot.wheel(name).name)
+        index = self._wheel_names.index(self.robot.wheel(name).name)
         mask = np.array(self._physics.lifted, dtype=bool)
         mask[0, index] = lifted
         self._physics.lifted = mask
@@ -390,7 +432,7 @@ class Simulator:
         if duration < 0:
             raise ValueError(f"duration must be >= 0, got {duration}")
         if motors_off:
-            self._pwm = np.zeros_like(self._pwm)
+            self._pwm[:] = 0.0
         end = self.clock.ticks_us() + round(duration * 1e6)
         self._pushes.append((end, float(force_xy[0]), float(force_xy[1]), float(torque)))
 
@@ -434,10 +476,12 @@ class Simulator:
         period_us = 0 if period is None else max(1, round(period * 1e6))
         now = self.clock.ticks_us()
         self._listeners.append(_ListenerSlot(fn, period_us, now + period_us))
+        self._next_notify_us = min(slot.next_us for slot in self._listeners)
         fn(self.snapshot())
 
     def remove_listener(self, fn: Listener) -> None:
         self._listeners = [s for s in self._listeners if s.fn != fn]
+        self._next_notify_us = min((slot.next_us for slot in self._listeners), default=0)
 
     def on_collision(self, fn: CollisionListener) -> None:
         """Call ``fn(event)`` for every new collision (also appended to :attr:`collisions`)."""
@@ -457,30 +501,45 @@ class Simulator:
             self._step_once()
 
     def _step_once(self) -> None:
-        ph = self._physics
-        twist0 = np.array(ph.twist[0], dtype=float)
         now_us = self.clock.ticks_us()
-        ids = self._surface_ids()
-        force = self._contact_force(now_us, twist0)
-        self._pushes = [p for p in self._pushes if p[0] > now_us]
-        for _, fx, fy, tz in self._pushes:
-            force += (fx, fy, tz)
-        ph.step(self._pwm[None, :], ids, force[None, :] if np.any(force) else None)
+        x, y, th = self._pose_row.tolist()
+        vx0, vy0, w0 = self._twist_row.tolist()
+        ids = self._surface_ids(x, y, th) if self._patchy else self._floor_ids
+        fx = fy = tz = 0.0
+        if self._walls:
+            dx, dy = x - self._clear_x, y - self._clear_y
+            if self._clear <= 0.0 or dx * dx + dy * dy >= self._clear * self._clear:
+                fx, fy, tz = self._contact_force(now_us, x, y, th, vx0, vy0, w0)
+        if self._pushes:
+            self._pushes = [p for p in self._pushes if p[0] > now_us]
+            for _, px, py, pz in self._pushes:
+                fx, fy, tz = fx + px, fy + py, tz + pz
+        if fx or fy or tz:
+            force = self._force
+            force[0, 0], force[0, 1], force[0, 2] = fx, fy, tz
+            self._physics.step(self._pwm, ids, force)
+        else:
+            self._physics.step(self._pwm, ids, None)
         self.clock.advance_us(self._dt_us)
 
-        mean_twist = 0.5 * (twist0 + np.asarray(ph.twist[0], dtype=float))
-        self.encoders.update(ph.wheel_angle[0, self._enc_index])
-        self.tracking.update(mean_twist, self.dt)
-        if self.gyro is not None:
-            self.gyro.update(self.dt, float(mean_twist[2]))
-        if self._listeners:
+        if self._tracking_on or self.gyro is not None:
+            vx1, vy1, w1 = self._twist_row.tolist()
+            if self._tracking_on:
+                self.tracking.update((0.5 * (vx0 + vx1), 0.5 * (vy0 + vy1), 0.5 * (w0 + w1)), self.dt)
+            if self.gyro is not None:
+                self.gyro.update(self.dt, 0.5 * (w0 + w1))
+        if self._listeners and now_us + self._dt_us >= self._next_notify_us:
             self._notify()
 
-    def _surface_ids(self) -> NDArray[np.int64]:
-        if len(self.world.surface_names) == 1:
-            return self._floor_ids
-        local = self.world.surface_ids(self._physics.contact_points_world()[0])
-        return self._surface_map[local][None, :]
+    def _surface_ids(self, x: float, y: float, th: float) -> NDArray[np.int64]:
+        """Surface ids under the wheels, looked up again only when a wheel may have changed patch."""
+        x0, y0, th0 = self._surf_anchor
+        moved = math.hypot(x - x0, y - y0) + abs(th - th0) * self._wheel_reach
+        if moved >= self._surf_clear - 1e-9:
+            local, clearance = self.world.surface_probe(self._physics.contact_points_world()[0])
+            self._ids[0] = self._surface_map[local]
+            self._surf_anchor, self._surf_clear = (x, y, th), clearance
+        return self._ids
 
     def _notify(self) -> None:
         now = self.clock.ticks_us()
@@ -491,46 +550,52 @@ class Simulator:
                 if slot.period_us:
                     slot.next_us = (now // slot.period_us + 1) * slot.period_us
                 slot.fn(snap)
+        self._next_notify_us = min((slot.next_us for slot in self._listeners), default=0)
 
-    def _find_contacts(self) -> list[Contact]:
-        if len(self.world.segments) == 0:
-            return []
-        x, y, th = (float(c) for c in self._physics.pose[0])
-        c, s = math.cos(th), math.sin(th)
-        outline = self._outline @ np.array([[c, s], [-s, c]]) + (x, y)
-        return self.world.contacts(outline)
+    def _find_contacts(self, x: float, y: float, th: float) -> int:
+        """Test the outline at (x, y, th) against the world; returns the owner id of the first contact or -1.
 
-    def _contact_force(self, now_us: int, twist: FloatArray) -> FloatArray:
+        Fills the contact rows and the broad-phase clearance.
+        """
+        count, clearance = self.world.contacts_at(self._outline, x, y, th, self._contact_out)
+        self._clear_x, self._clear_y, self._clear = x, y, clearance
+        self._contact_rows = self._contact_out[:count].tolist() if count else []
+        self._contacts = None if count else []
+        return int(self._contact_out[0, 5]) if count else -1
+
+    def _contact_force(
+        self, now_us: int, x: float, y: float, th: float, vx: float, vy: float, w: float
+    ) -> tuple[float, float, float]:
         """Penalty force (world Fx, Fy, torque) of every contact; records collision events."""
-        self.contacts = self._find_contacts()
-        force = np.zeros(3)
-        if not self.contacts:
-            return force
-        x, y, th = (float(c) for c in self._physics.pose[0])
+        self._find_contacts(x, y, th)
+        fx_sum = fy_sum = tz_sum = 0.0
+        if not self._contact_rows:
+            return fx_sum, fy_sum, tz_sum
         c, s = math.cos(th), math.sin(th)
-        vx, vy, w = (float(v) for v in twist)
         vwx, vwy = c * vx - s * vy, s * vx + c * vy
         m, inertia = self.robot.mass, self.robot.yaw_inertia
         omega = CONTACT_OMEGA_DT / self.dt
-        for contact in self.contacts:
-            rx, ry = contact.point[0] - x, contact.point[1] - y
-            nx, ny = contact.normal
-            px, py = vwx - w * ry, vwy + w * rx
-            vn, vt = px * nx + py * ny, -px * ny + py * nx
+        for row in self._contact_rows:
+            px, py, nx, ny, depth, _ = row
+            rx, ry = px - x, py - y
+            pvx, pvy = vwx - w * ry, vwy + w * rx
+            vn, vt = pvx * nx + pvy * ny, -pvx * ny + pvy * nx
             rn = rx * ny - ry * nx
             m_eff = 1.0 / (1.0 / m + rn * rn / inertia)
-            fn = max(0.0, m_eff * omega * omega * contact.depth - 2 * CONTACT_DAMPING * m_eff * omega * vn)
+            fn = max(0.0, m_eff * omega * omega * depth - 2 * CONTACT_DAMPING * m_eff * omega * vn)
             ft = -WALL_FRICTION * fn * math.tanh(vt / 0.05)
             fx, fy = fn * nx - ft * ny, fn * ny + ft * nx
-            force += (fx, fy, rx * fy - ry * fx)
-            self._touch(now_us, contact, -vn)
-        return force
+            fx_sum, fy_sum, tz_sum = fx_sum + fx, fy_sum + fy, tz_sum + (rx * fy - ry * fx)
+            self._touch(now_us, row, -vn)
+        return fx_sum, fy_sum, tz_sum
 
-    def _touch(self, now_us: int, contact: Contact, speed: float) -> None:
-        last = self._touching.get(contact.owner)
-        self._touching[contact.owner] = now_us
+    def _touch(self, now_us: int, row: list[float], speed: float) -> None:
+        owner = self.world.contact_owners[int(row[5])]
+        last = self._touching.get(owner)
+        self._touching[owner] = now_us
         if last is not None and now_us - last <= CONTACT_RELEASE * 1e6:
             return
+        (contact,) = self.world.contact_list([row])
         event = CollisionEvent(
             self.time,
             contact.point[0],

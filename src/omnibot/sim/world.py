@@ -19,14 +19,19 @@ Errors name the bad key and suggest the right one, as robot descriptions do::
     omnibot: invalid world room.yaml:
       obstacles[0].radus: unknown key; did you mean 'radius'?
 
-Geometry (all numpy, vectorised over segments):
+Geometry (numpy, vectorised over segments, or compiled kernels from :mod:`omnibot.sim.kernels`
+where the simulator calls it every step):
 
 * :meth:`World.raycast` - distance along rays to the first wall or obstacle edge;
 * :meth:`World.cone_range` - distance to the nearest point of any edge inside a sensor's cone
   (exact, not sampled by rays; the nearest point in a cone is never hidden behind another edge);
 * :meth:`World.surface_ids` - surface under points (point in polygon; later patches win);
+  :meth:`World.surface_probe` also returns how far the points may move without changing surface;
 * :meth:`World.contacts` - a convex robot outline against walls and obstacles: the direction that
-  pushes the robot out (unit normal), the penetration depth and a contact point.
+  pushes the robot out (unit normal), the penetration depth and a contact point;
+  :meth:`World.contacts_at` does the same for a body-frame outline at a pose, into a preallocated
+  buffer, and also returns how far the robot may move before it could touch anything (the
+  simulator's broad phase: it skips the test while the robot stays within that distance).
 """
 
 from __future__ import annotations
@@ -45,6 +50,7 @@ from numpy.typing import ArrayLike, NDArray
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from omnibot.errors import ConfigError
+from omnibot.sim import kernels
 from omnibot.sim.surfaces import SURFACES
 
 WORLD_DIR = Path(__file__).with_name("worlds")
@@ -52,6 +58,7 @@ CIRCLE_SEGMENTS = 64
 """Edges of the polygon standing in for a circle (radial error 0.12 % of the radius)."""
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
 Point = tuple[float, float]
 
 _SHAPE_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
@@ -323,12 +330,12 @@ class Contact:
     owner: str
 
 
-@dataclass(frozen=True)
-class _Solid:
-    owner: str
-    vertices: FloatArray  # convex, counter-clockwise
-    center: FloatArray
-    radius: float
+def _polygons(polygons: list[FloatArray]) -> tuple[FloatArray, IntArray]:
+    """Polygons packed for the kernels: all vertices (V, 2) and offsets (K+1,) of each polygon's first."""
+    sizes = [len(p) for p in polygons]
+    verts = np.vstack(polygons) if polygons else np.zeros((0, 2))
+    offsets = np.concatenate(([0], np.cumsum(sizes))).astype(np.int64)
+    return np.ascontiguousarray(verts, dtype=float), offsets
 
 
 class World:
@@ -351,35 +358,48 @@ class World:
         segs: list[FloatArray] = []
         owners: list[str] = []
         thin: list[FloatArray] = []  # walls and non-convex obstacles, checked edge by edge
-        thin_owner: list[str] = []
-        self._solids: list[_Solid] = []
+        thin_owner: list[int] = []
+        solids: list[FloatArray] = []  # convex obstacles (counter-clockwise), tested whole
+        solid_owner: list[int] = []
+        self.contact_owners: tuple[str, ...] = tuple(
+            [f"walls[{i}]" for i in range(len(spec.walls))]
+            + [f"obstacles[{i}]" for i in range(len(spec.obstacles))]
+        )
+        """Owner id (column 5 of a :meth:`contacts_at` row) -> world item name."""
         for i, wall in enumerate(spec.walls):
             s = wall.segments()
             segs.append(s)
             owners += [f"walls[{i}]"] * len(s)
             thin.append(s)
-            thin_owner += [f"walls[{i}]"] * len(s)
+            thin_owner += [i] * len(s)
         for i, obstacle in enumerate(spec.obstacles):
             s = obstacle.segments()
             segs.append(s)
             owners += [f"obstacles[{i}]"] * len(s)
             v = obstacle.vertices()
+            owner = len(spec.walls) + i
             if is_convex(v):
-                c = v.mean(axis=0)
-                r = float(np.max(np.hypot(*(v - c).T)))
-                self._solids.append(_Solid(f"obstacles[{i}]", v, c, r))
+                solids.append(v)
+                solid_owner.append(owner)
             else:
                 thin.append(s)
-                thin_owner += [f"obstacles[{i}]"] * len(s)
+                thin_owner += [owner] * len(s)
         self.segments: FloatArray = np.vstack(segs) if segs else np.zeros((0, 4))
         """(K, 4) every wall and obstacle edge, ``x0, y0, x1, y1``."""
         self.segment_owner: tuple[str, ...] = tuple(owners)
-        self._thin = np.vstack(thin) if thin else np.zeros((0, 4))
-        self._thin_owner = tuple(thin_owner)
-        self._patches = [(self.surface_names.index(p.surface), _Area(p.vertices())) for p in spec.patches]
-        self._thin_a = self._thin[:, :2]
-        self._thin_e = self._thin[:, 2:] - self._thin_a
-        self._thin_ee = np.einsum("ij,ij->i", self._thin_e, self._thin_e)
+        thin_edges = np.vstack(thin) if thin else np.zeros((0, 4))
+        self._thin_v = np.ascontiguousarray(thin_edges.reshape(-1, 2), dtype=float)  # edge k: rows 2k, 2k+1
+        self._thin_owner = np.array(thin_owner, dtype=np.int64)
+        self._solid_v, self._solid_off = _polygons(solids)
+        self._solid_owner = np.array(solid_owner, dtype=np.int64)
+        centers = [v.mean(axis=0) for v in solids]
+        self._solid_c = np.array(centers, dtype=float).reshape(-1, 2)
+        self._solid_r = np.array([np.max(np.hypot(*(v - c).T)) for v, c in zip(solids, centers, strict=True)])
+        self._patch_vertices = [p.vertices() for p in spec.patches]
+        self._patch_v, self._patch_off = _polygons(self._patch_vertices)
+        self._patch_sid = np.array(
+            [self.surface_names.index(p.surface) for p in spec.patches], dtype=np.int64
+        )
 
     def __repr__(self) -> str:
         return f"World({self.name!r}, {len(self.segments)} edges, surfaces {list(self.surface_names)})"
@@ -391,7 +411,7 @@ class World:
     @property
     def bounds(self) -> tuple[float, float, float, float] | None:
         """``(x_min, y_min, x_max, y_max)`` of walls, obstacles and patches, or None for an empty world."""
-        pts = [self.segments[:, :2], self.segments[:, 2:]] + [a.vertices for _, a in self._patches]
+        pts = [self.segments[:, :2], self.segments[:, 2:], *self._patch_vertices]
         allp = np.vstack(pts)
         if len(allp) == 0:
             return None
@@ -467,12 +487,21 @@ class World:
 
     def surface_ids(self, points: ArrayLike) -> NDArray[np.int64]:
         """Surface id (index into :attr:`surface_names`) under each point; shape ``points.shape[:-1]``."""
+        return self.surface_probe(points)[0]
+
+    def surface_probe(self, points: ArrayLike) -> tuple[NDArray[np.int64], float]:
+        """Surface ids under the points (as :meth:`surface_ids`) and their clearance, m.
+
+        The clearance is the distance from the nearest point to the nearest patch edge (inf without
+        patches): as long as every point moves less than that, none of them changes surface.
+        """
         p = np.asarray(points, dtype=float)
-        flat = p.reshape(-1, 2)
+        flat = np.ascontiguousarray(p.reshape(-1, 2))
         ids = np.zeros(len(flat), dtype=np.int64)
-        for sid, area in self._patches:
-            ids[area.contains(flat)] = sid
-        return ids.reshape(p.shape[:-1])
+        if not len(self._patch_sid):
+            return ids.reshape(p.shape[:-1]), math.inf
+        clearance = kernels.surface_probe(flat, self._patch_v, self._patch_off, self._patch_sid, ids)
+        return ids.reshape(p.shape[:-1]), float(clearance)
 
     def surface_at(self, x: float, y: float) -> str:
         """Name of the surface at one point."""
@@ -487,26 +516,48 @@ class World:
         edge by edge; contacts of one owner whose normals are within 30 degrees are merged (the
         deepest is kept) so that a flat face pressed on a 64-gon circle pushes once, not thrice.
         """
-        v = np.asarray(outline, dtype=float)
-        centre = v.mean(axis=0)
-        reach = float(np.max(np.hypot(*(v - centre).T)))
-        found: list[Contact] = []
-        for solid in self._solids:
-            if np.hypot(*(solid.center - centre)) < reach + solid.radius:
-                c = _sat(v, solid.vertices, solid.owner)
-                if c is not None:
-                    found.append(c)
-        if len(self._thin):
-            t = np.clip(np.einsum("ij,ij->i", centre - self._thin_a, self._thin_e) / self._thin_ee, 0.0, 1.0)
-            gap = self._thin_a + t[:, None] * self._thin_e - centre
-            near = np.flatnonzero(np.einsum("ij,ij->i", gap, gap) < reach * reach)
-            edge: list[Contact] = []
-            for k in near:
-                c = _sat(v, self._thin[k].reshape(2, 2), self._thin_owner[k])
-                if c is not None:
-                    edge.append(c)
-            found += _merge(edge)
-        return found
+        out = self.contact_buffer()
+        count, _ = self.contacts_at(outline, 0.0, 0.0, 0.0, out)
+        return self.contact_list(out[:count])
+
+    def contact_buffer(self) -> FloatArray:
+        """A buffer big enough for every contact :meth:`contacts_at` can report."""
+        return np.zeros((len(self._solid_owner) + len(self._thin_owner) + 1, 6))
+
+    def contacts_at(
+        self, outline: ArrayLike, x: float, y: float, theta: float, out: FloatArray
+    ) -> tuple[int, float]:
+        """Contacts of a convex outline given in its own frame, placed at pose (x, y, theta).
+
+        Writes one row per contact into ``out`` (from :meth:`contact_buffer`): point x, y, normal
+        x, y, depth, owner id (index into :attr:`contact_owners`), and returns ``(count,
+        clearance)``: while the outline's origin stays closer than ``clearance`` (m) to (x, y),
+        whatever its rotation, it touches nothing (0 when it touches, or sits inside a solid).
+        """
+        body = np.ascontiguousarray(outline, dtype=float)
+        count, clearance = kernels.outline_contacts(
+            body,
+            float(x),
+            float(y),
+            float(theta),
+            self._solid_v,
+            self._solid_off,
+            self._solid_c,
+            self._solid_r,
+            self._solid_owner,
+            self._thin_v,
+            self._thin_owner,
+            out,
+        )
+        return int(count), float(clearance)
+
+    def contact_list(self, rows: FloatArray | list[list[float]]) -> list[Contact]:
+        """:class:`Contact` objects from :meth:`contacts_at` rows."""
+        owners = self.contact_owners
+        return [
+            Contact((float(r[0]), float(r[1])), (float(r[2]), float(r[3])), float(r[4]), owners[int(r[5])])
+            for r in rows
+        ]
 
 
 # --------------------------------------------------------------------------- pure geometry helpers
@@ -550,79 +601,8 @@ def convex_hull(points: ArrayLike) -> FloatArray:
 
 def points_in_polygon(points: ArrayLike, polygon: ArrayLike) -> NDArray[np.bool_]:
     """Crossing-number test of (P, 2) points against a closed (V, 2) polygon."""
-    return _Area(np.asarray(polygon, dtype=float)).contains(np.asarray(points, dtype=float).reshape(-1, 2))
-
-
-class _Area:
-    """A closed polygon prepared for fast point-in-polygon tests (edges and bounding box cached)."""
-
-    def __init__(self, vertices: FloatArray) -> None:
-        self.vertices = vertices
-        self.lo, self.hi = vertices.min(axis=0), vertices.max(axis=0)
-        x0, y0 = vertices[:, 0], vertices[:, 1]
-        x1, y1 = np.roll(x0, -1), np.roll(y0, -1)
-        self._x0, self._y0 = x0, y0
-        self._y1 = y1
-        dy = y1 - y0
-        self._slope = np.divide(x1 - x0, dy, out=np.zeros_like(dy), where=dy != 0)
-
-    def contains(self, points: FloatArray) -> NDArray[np.bool_]:
-        inside = np.zeros(len(points), dtype=bool)
-        box = np.all((points >= self.lo) & (points <= self.hi), axis=1)
-        if not box.any():
-            return inside
-        x, y = points[box, :1], points[box, 1:]
-        straddle = (self._y0 > y) != (self._y1 > y)
-        x_cross = self._x0 + (y - self._y0) * self._slope
-        inside[box] = np.count_nonzero(straddle & (x < x_cross), axis=1) % 2 == 1
-        return inside
-
-
-def _edge_normals(v: FloatArray) -> FloatArray:
-    """Unit normals of a polygon's edges (a 2-vertex 'polygon' is one segment with one normal)."""
-    e = (v[1:2] - v[0:1]) if len(v) == 2 else (np.roll(v, -1, axis=0) - v)
-    n = np.column_stack((e[:, 1], -e[:, 0]))
-    length = np.hypot(n[:, 0], n[:, 1])
-    return np.asarray(n[length > 1e-12] / length[length > 1e-12, None])
-
-
-def _sat(robot: FloatArray, other: FloatArray, owner: str) -> Contact | None:
-    """Separating-axis test of two convex shapes; the push is toward the robot's side of each axis."""
-    axes = np.vstack((_edge_normals(robot), _edge_normals(other)))
-    pr = robot @ axes.T
-    po = other @ axes.T
-    rmin, rmax, omin, omax = pr.min(0), pr.max(0), po.min(0), po.max(0)
-    plus = omax - rmin  # move the robot along +axis by this much to clear
-    minus = rmax - omin  # or along -axis by this much
-    if np.any(plus <= 0) or np.any(minus <= 0):
-        return None
-    side = (robot.mean(0) - other.mean(0)) @ axes.T
-    depth = np.where(side > 1e-12, plus, np.where(side < -1e-12, minus, np.minimum(plus, minus)))
-    sign = np.where(side > 1e-12, 1.0, np.where(side < -1e-12, -1.0, np.where(plus <= minus, 1.0, -1.0)))
-    # the shallowest axis; on a tie prefer the obstacle's own face (listed last)
-    best = float(depth.min())
-    k = int(np.flatnonzero(depth <= best + 1e-9 + 1e-6 * best)[-1])
-    n = axes[k] * sign[k]
-    t = np.array([-n[1], n[0]])
-    # contact point: middle of the overlap, along the face, of the two deepest features
-    tol = 1e-6 + 1e-3 * best
-    pr, po = robot @ n, other @ n
-    feat_r = robot[pr <= pr.min() + tol] @ t
-    feat_o = other[po >= po.max() - tol] @ t
-    lo, hi = max(feat_r.min(), feat_o.min()), min(feat_r.max(), feat_o.max())
-    along = 0.5 * (lo + hi) if lo <= hi else 0.5 * (feat_r.mean() + feat_o.mean())
-    across = 0.5 * (pr.min() + po.max())
-    point = along * t + across * n
-    return Contact((float(point[0]), float(point[1])), (float(n[0]), float(n[1])), best, owner)
-
-
-def _merge(contacts: list[Contact], max_angle_deg: float = 30.0) -> list[Contact]:
-    cos_max = math.cos(math.radians(max_angle_deg))
-    kept: list[Contact] = []
-    for c in sorted(contacts, key=lambda c: -c.depth):
-        if all(
-            k.owner != c.owner or k.normal[0] * c.normal[0] + k.normal[1] * c.normal[1] < cos_max
-            for k in kept
-        ):
-            kept.append(c)
-    return kept
+    flat = np.ascontiguousarray(np.asarray(points, dtype=float).reshape(-1, 2))
+    verts, offsets = _polygons([np.asarray(polygon, dtype=float)])
+    ids = np.zeros(len(flat), dtype=np.int64)
+    kernels.surface_probe(flat, verts, offsets, np.ones(1, dtype=np.int64), ids)
+    return np.asarray(ids == 1, dtype=bool)

@@ -1,0 +1,21 @@
+"""Run every benchmark in turn (``make bench``); results are copied into BENCHMARKS.md by hand."""
+
+from __future__ import annotations
+
+from benchmarks import firmware_command_time, link_throughput, sim_speed
+
+
+def main() -> int:
+    for title, run in (
+        ("simulator speed", lambda: sim_speed.main([])),
+        ("firmware time per command", lambda: firmware_command_time.main([])),
+        ("line throughput, lockstep", lambda: link_throughput.main([])),
+        ("line throughput, pty emulator", lambda: link_throughput.main(["--pty"])),
+    ):
+        print(f"\n== {title}")
+        run()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,127 @@
+"""Simulator speed: one robot with full wheel dynamics and sensors against IR-SIM, and a batch of 1000.
+
+Run: ``python -m benchmarks.sim_speed`` (``make bench`` runs every benchmark). Both simulators are
+measured in the same run on the same machine, so the ratio is meaningful even when the absolute
+numbers are not. Results go in BENCHMARKS.md.
+
+* omnibot single: :class:`~omnibot.sim.simulator.Simulator` of the ``omni4`` preset in the ``room``
+  world at 1 kHz: motor electrics, wheel dynamics, roller and floor friction, surface patches,
+  collisions, encoders, gyro and a sonar pinged every 60 ms. The robot drives into the cabinet
+  after about 3 s and keeps pushing against it, so most steps run the full contact test.
+* IR-SIM: one kinematic omni robot, headless, no obstacles (:mod:`benchmarks.irsim_baseline`).
+* omnibot batch: :class:`~omnibot.sim.physics.Physics` with N = 1000 robots (robot-steps/s).
+* kernel start-up (skip with ``--no-startup``): seconds from a fresh interpreter's first import of
+  the simulator to the end of its first step, with an empty numba cache (every kernel compiled) and
+  with the cache this run filled (kernels loaded from disk); numba's import is included.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+from benchmarks.irsim_baseline import irsim_steps_per_second
+from omnibot.robot.description import load_robot
+from omnibot.sim.physics import Physics
+from omnibot.sim.simulator import Simulator
+
+
+def omnibot_single_steps_per_second(steps: int = 20000, repeats: int = 3) -> float:
+    sim = Simulator(load_robot("omni4"), world="room", seed=1, start_pose=(1.0, 1.0, 0.0))
+    sim.set_pwm([40, 150, -40, -150])
+    sim.step()  # load (or compile) the kernels outside the timing
+    best = 0.0
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        for k in range(steps):
+            sim.step()
+            if k % 60 == 0:
+                sim.sonar_ping(0)
+            if k % 10 == 0:
+                sim.encoder_counts()
+                sim.gyro_rate()
+        best = max(best, steps / (time.perf_counter() - t0))
+    return best
+
+
+def omnibot_batch_robot_steps_per_second(n: int = 1000, steps: int = 500, repeats: int = 3) -> float:
+    robot = load_robot("omni4")
+    physics = Physics(robot, n=n)
+    rng = np.random.default_rng(0)
+    pwm = rng.integers(-255, 256, size=(n, robot.n_wheels))
+    physics.step(pwm)
+    best = 0.0
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            physics.step(pwm)
+        best = max(best, n * steps / (time.perf_counter() - t0))
+    return best
+
+
+_STARTUP = """
+import time
+t0 = time.perf_counter()
+from omnibot.robot.description import load_robot
+from omnibot.sim.simulator import Simulator
+Simulator(load_robot("omni4"), world="room").step()
+print(time.perf_counter() - t0)
+"""
+
+
+def kernel_startup_seconds(cold: bool) -> float:
+    """Import + first simulator step in a new interpreter; ``cold`` uses an empty numba cache."""
+    env = dict(os.environ)
+    with tempfile.TemporaryDirectory() as tmp:
+        if cold:
+            env["NUMBA_CACHE_DIR"] = tmp
+        out = subprocess.run(
+            [sys.executable, "-c", _STARTUP], env=env, capture_output=True, text=True, check=True
+        )
+    return float(out.stdout.split()[-1])
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--json", action="store_true", help="print the results as JSON")
+    parser.add_argument("--no-startup", action="store_true", help="skip the kernel start-up timing")
+    args = parser.parse_args(argv)
+    ours = omnibot_single_steps_per_second()
+    theirs = irsim_steps_per_second()
+    batch = omnibot_batch_robot_steps_per_second()
+    result: dict[str, float | None] = {
+        "omnibot_single_steps_per_s": round(ours),
+        "irsim_steps_per_s": round(theirs) if theirs else None,
+        "ratio": round(ours / theirs, 2) if theirs else None,
+        "omnibot_batch_1000_robot_steps_per_s": round(batch),
+    }
+    if not args.no_startup:
+        result["startup_cold_s"] = round(kernel_startup_seconds(cold=True), 2)
+        result["startup_warm_s"] = round(kernel_startup_seconds(cold=False), 2)
+    if args.json:
+        print(json.dumps(result))
+    else:
+        print(f"omnibot, one robot, full dynamics + sensors: {ours:12,.0f} steps/s")
+        if theirs:
+            print(f"IR-SIM 2.12, one kinematic omni robot:       {theirs:12,.0f} steps/s")
+            print(f"ratio omnibot / IR-SIM:                      {ours / theirs:12.2f}  (goal >= 3)")
+        else:
+            print("IR-SIM is not installed (make setup installs it); no ratio")
+        print(f"omnibot, batch of 1000 robots:               {batch:12,.0f} robot-steps/s")
+        if not args.no_startup:
+            print(
+                f"start-up to the first step (import + kernels): {result['startup_cold_s']:.2f} s with an "
+                f"empty numba cache, {result['startup_warm_s']:.2f} s cached"
+            )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

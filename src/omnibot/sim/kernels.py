@@ -1,0 +1,491 @@
+"""Compiled (numba) kernels of the simulator: the physics step and the world's contact geometry.
+
+The equations live here once; :mod:`omnibot.sim.physics` and :mod:`omnibot.sim.world` hold the
+parameters and state as numpy arrays and call these kernels with them. Every kernel loops over
+plain scalars and writes into arrays its caller preallocated, so one call costs about a
+microsecond for one robot and scales linearly with the number of robots.
+
+Kernels compile lazily on their first call and are cached on disk (``cache=True``, next to this
+file or in ``NUMBA_CACHE_DIR``), so a new process loads them instead of compiling. Callers always
+pass the same argument types (C-contiguous float64 arrays, int64 id arrays, Python floats and
+bools), so each kernel compiles exactly once.
+
+Parameter layouts (column indices below are compile-time constants):
+
+* ``wp`` (n, m, W_COLUMNS): per wheel: the traction row ``W_TX..W_TA`` and roller row
+  ``W_NX..W_NA`` of the contact matrix H (body vx, vy, w and wheel-speed coefficients), motor,
+  driver and roller constants, the static load;
+* ``rp`` (n, R_COLUMNS): per robot: mass / dt, yaw inertia / dt, battery resistance and relaxation;
+* ``surf`` (S, S_COLUMNS): per floor surface: mu, 1 / slip velocity, rolling multiplier.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+# wheel parameter columns
+W_TX, W_TY, W_TW, W_TA = 0, 1, 2, 3
+W_NX, W_NY, W_NW, W_NA = 4, 5, 6, 7
+W_J_DT = 8
+W_INV_PWM_MAX = 9
+W_ON_THRESHOLD = 10
+W_DROP = 11
+W_INV_RES = 12
+W_KE_RES = 13
+W_I_MAX = 14
+W_KT = 15
+W_EMF_DAMPING = 16
+W_VISC = 17
+W_STATIC = 18
+W_LOAD = 19
+W_GRIP_LOAD = 20
+W_RR_TOP = 21
+W_RR_VAR = 22
+W_ROLLER_COUNT = 23
+W_COLUMNS = 24
+
+# robot parameter columns
+R_M_DT, R_I_DT, R_BATT_RES, R_BATT_RELAX = 0, 1, 2, 3
+R_COLUMNS = 4
+
+# surface table columns
+S_MU, S_INV_VEPS, S_ROLL = 0, 1, 2
+S_COLUMNS = 3
+
+WHEEL_SPEED_EPS = 0.01
+"""rad/s: regularisation speed of the Coulomb friction at the wheel axle."""
+ROLL_SPEED_EPS = 0.005
+"""m/s: regularisation speed of the roller rolling resistance."""
+_INV_WHEEL_EPS = 1.0 / WHEEL_SPEED_EPS
+_INV_ROLL_EPS = 1.0 / ROLL_SPEED_EPS
+
+MERGE_COS = math.cos(math.radians(30.0))
+"""Edge contacts of one owner whose normals are closer than 30 degrees are merged."""
+
+
+# --------------------------------------------------------------------------- physics
+
+
+@njit(cache=True)
+def _contact_speeds(
+    wp: FloatArray, i: int, j: int, vx: float, vy: float, w: float, omega: float
+) -> tuple[float, float]:
+    """Slip speed along the traction direction and roller rolling speed of wheel j of robot i."""
+    p = wp[i, j]
+    slip = p[W_TX] * vx + p[W_TY] * vy + p[W_TW] * w + p[W_TA] * omega
+    roll = p[W_NX] * vx + p[W_NY] * vy + p[W_NW] * w + p[W_NA] * omega
+    return slip, roll
+
+
+@njit(cache=True)
+def _secant(fmax: float, inv_eps: float, x: float) -> tuple[float, float]:
+    """Regularised friction fmax tanh(x) and its secant slope d/d(speed) (fmax inv_eps at x = 0)."""
+    th = math.tanh(x)
+    ratio = th / x if x != 0.0 else 1.0
+    return fmax * th, fmax * inv_eps * ratio
+
+
+@njit(cache=True)
+def physics_step(
+    pose: FloatArray,
+    q: FloatArray,
+    wheel_angle: FloatArray,
+    current: FloatArray,
+    traction: FloatArray,
+    battery: FloatArray,
+    v_open: FloatArray,
+    pwm: FloatArray,
+    ids: IntArray,
+    ext: FloatArray,
+    has_ext: bool,
+    wp: FloatArray,
+    rp: FloatArray,
+    surf: FloatArray,
+    dt: float,
+) -> int:
+    """Advance every robot by dt in place (see :mod:`omnibot.sim.physics` for the equations).
+
+    ``battery`` (n, 2) holds the bus voltage and battery current of the last step. The linearised
+    backward-Euler system has an arrow structure (a dense 3x3 body block, a diagonal wheel block):
+    the wheels are eliminated one by one (Schur complement), the 3x3 body system is solved by
+    Cholesky, then the wheel speeds are substituted back; exact, in O(m) per robot.
+    Returns 0, or 1 (state untouched) if a surface id is out of range.
+    """
+    n, m = wheel_angle.shape
+    n_surf = surf.shape[0]
+    for i in range(n):
+        for j in range(m):
+            if ids[i, j] < 0 or ids[i, j] >= n_surf:
+                return 1
+    scratch = np.empty((m, 5))  # per wheel: coupling c / d (3), 1 / d, right-hand side
+    for i in range(n):
+        vx, vy, w = q[i, 0], q[i, 1], q[i, 2]
+        r = rp[i]
+        v_bus = battery[i, 0]
+        v_bus = v_bus + r[R_BATT_RELAX] * (v_open[i] - r[R_BATT_RES] * battery[i, 1] - v_bus)
+        v_bus = max(v_bus, 0.0)
+        s00, s11, s22 = r[R_M_DT], r[R_M_DT], r[R_I_DT]
+        s01 = s02 = s12 = 0.0
+        r0 = r1 = r2 = 0.0
+        i_batt = 0.0
+        for j in range(m):
+            p = wp[i, j]
+            omega = q[i, 3 + j]
+            # driver and motor: current, and whether it follows the back-EMF (not limited)
+            command = pwm[i, j]
+            duty = min(max(command * p[W_INV_PWM_MAX], -1.0), 1.0)
+            i_free = duty * (max(v_bus - p[W_DROP], 0.0) * p[W_INV_RES]) - p[W_KE_RES] * omega
+            i_max = p[W_I_MAX]
+            if abs(command) >= p[W_ON_THRESHOLD]:
+                amps = min(max(i_free, -i_max), i_max)
+                emf = p[W_EMF_DAMPING] if abs(i_free) < i_max else 0.0
+            else:
+                amps, emf = 0.0, 0.0
+            # friction on the three contact rows: traction slip, roller rolling, axle
+            sid = ids[i, j]
+            inv_veps = surf[sid, S_INV_VEPS]
+            roll_max = (p[W_RR_TOP] - p[W_RR_VAR] * math.cos(p[W_ROLLER_COUNT] * wheel_angle[i, j])) * (
+                surf[sid, S_ROLL] * p[W_LOAD]
+            )
+            slip, roll = _contact_speeds(wp, i, j, vx, vy, w, omega)
+            ft, kt = _secant(surf[sid, S_MU] * p[W_GRIP_LOAD], inv_veps, slip * inv_veps)
+            fn, kn = _secant(roll_max, _INV_ROLL_EPS, roll * _INV_ROLL_EPS)
+            fa, ka = _secant(p[W_STATIC], _INV_WHEEL_EPS, omega * _INV_WHEEL_EPS)
+            fa -= p[W_KT] * amps - p[W_VISC] * omega  # the motor drives the axle row
+            ka += emf + p[W_VISC]
+            traction[i, j] = -ft
+            current[i, j] = amps
+            i_batt += duty * amps
+            # (M/dt + H^T K H) dq = -H^T f: accumulate, then eliminate this wheel's speed
+            tx, ty, tw, ta = p[W_TX], p[W_TY], p[W_TW], p[W_TA]
+            nx, ny, nw, na = p[W_NX], p[W_NY], p[W_NW], p[W_NA]
+            r0 -= ft * tx + fn * nx
+            r1 -= ft * ty + fn * ny
+            r2 -= ft * tw + fn * nw
+            rw = -(ft * ta + fn * na + fa)
+            s00 += kt * tx * tx + kn * nx * nx
+            s11 += kt * ty * ty + kn * ny * ny
+            s22 += kt * tw * tw + kn * nw * nw
+            s01 += kt * tx * ty + kn * nx * ny
+            s02 += kt * tx * tw + kn * nx * nw
+            s12 += kt * ty * tw + kn * ny * nw
+            c0 = kt * ta * tx + kn * na * nx
+            c1 = kt * ta * ty + kn * na * ny
+            c2 = kt * ta * tw + kn * na * nw
+            inv_d = 1.0 / (p[W_J_DT] + kt * ta * ta + kn * na * na + ka)
+            e0, e1, e2 = c0 * inv_d, c1 * inv_d, c2 * inv_d
+            s00 -= c0 * e0
+            s11 -= c1 * e1
+            s22 -= c2 * e2
+            s01 -= c0 * e1
+            s02 -= c0 * e2
+            s12 -= c1 * e2
+            r0 -= e0 * rw
+            r1 -= e1 * rw
+            r2 -= e2 * rw
+            scratch[j, 0], scratch[j, 1], scratch[j, 2], scratch[j, 3], scratch[j, 4] = e0, e1, e2, inv_d, rw
+        if has_ext:  # world force and torque, into the body frame
+            c, s = math.cos(pose[i, 2]), math.sin(pose[i, 2])
+            r0 += c * ext[i, 0] + s * ext[i, 1]
+            r1 += c * ext[i, 1] - s * ext[i, 0]
+            r2 += ext[i, 2]
+        # 3x3 body system by Cholesky (the Schur complement of an SPD matrix is SPD)
+        l00 = math.sqrt(s00)
+        l10, l20 = s01 / l00, s02 / l00
+        l11 = math.sqrt(s11 - l10 * l10)
+        l21 = (s12 - l20 * l10) / l11
+        l22 = math.sqrt(s22 - l20 * l20 - l21 * l21)
+        y0 = r0 / l00
+        y1 = (r1 - l10 * y0) / l11
+        y2 = (r2 - l20 * y0 - l21 * y1) / l22
+        dw = y2 / l22
+        dvy = (y1 - l21 * dw) / l11
+        dvx = (y0 - l10 * dvy - l20 * dw) / l00
+        for j in range(m):
+            sc = scratch[j]
+            q[i, 3 + j] += sc[4] * sc[3] - sc[0] * dvx - sc[1] * dvy - sc[2] * dw
+        vx, vy, w = vx + dvx, vy + dvy, w + dw
+        # body-frame rotation of the velocity by -w dt, pose at the mid-step heading, wheel angles
+        c, s = math.cos(w * dt), math.sin(w * dt)
+        vx, vy = vx * c + vy * s, vy * c - vx * s
+        q[i, 0], q[i, 1], q[i, 2] = vx, vy, w
+        heading = pose[i, 2] + 0.5 * dt * w
+        c, s = math.cos(heading), math.sin(heading)
+        pose[i, 0] += (c * vx - s * vy) * dt
+        pose[i, 1] += (s * vx + c * vy) * dt
+        pose[i, 2] += dt * w
+        for j in range(m):
+            wheel_angle[i, j] += dt * q[i, 3 + j]
+        battery[i, 0] = v_bus
+        battery[i, 1] = i_batt
+    return 0
+
+
+@njit(cache=True)
+def contact_speeds(q: FloatArray, wp: FloatArray, out: FloatArray) -> None:
+    """Fill out (n, m, 2) with each wheel's slip speed and roller rolling speed (m/s)."""
+    n, m = out.shape[0], out.shape[1]
+    for i in range(n):
+        for j in range(m):
+            out[i, j, 0], out[i, j, 1] = _contact_speeds(wp, i, j, q[i, 0], q[i, 1], q[i, 2], q[i, 3 + j])
+
+
+# --------------------------------------------------------------------------- world geometry
+
+
+@njit(cache=True)
+def _inside(px: float, py: float, verts: FloatArray, lo: int, hi: int) -> bool:
+    """Crossing-number test of one point against the closed polygon verts[lo:hi] (bounding box first)."""
+    xmin, ymin, xmax, ymax = np.inf, np.inf, -np.inf, -np.inf
+    for k in range(lo, hi):
+        xmin, xmax = min(xmin, verts[k, 0]), max(xmax, verts[k, 0])
+        ymin, ymax = min(ymin, verts[k, 1]), max(ymax, verts[k, 1])
+    if not (xmin <= px <= xmax and ymin <= py <= ymax):
+        return False
+    inside = False
+    for k in range(lo, hi):
+        k1 = k + 1 if k + 1 < hi else lo
+        x0, y0, x1, y1 = verts[k, 0], verts[k, 1], verts[k1, 0], verts[k1, 1]
+        if (y0 > py) != (y1 > py):
+            dy = y1 - y0
+            slope = (x1 - x0) / dy if dy != 0.0 else 0.0
+            if px < x0 + (py - y0) * slope:
+                inside = not inside
+    return inside
+
+
+@njit(cache=True)
+def _segment_distance(px: float, py: float, x0: float, y0: float, x1: float, y1: float) -> float:
+    ex, ey = x1 - x0, y1 - y0
+    ee = ex * ex + ey * ey
+    t = ((px - x0) * ex + (py - y0) * ey) / ee if ee > 0.0 else 0.0
+    t = min(max(t, 0.0), 1.0)
+    return math.hypot(x0 + t * ex - px, y0 + t * ey - py)
+
+
+@njit(cache=True)
+def surface_probe(
+    points: FloatArray, verts: FloatArray, offsets: IntArray, surface: IntArray, out: IntArray
+) -> float:
+    """Surface id under each point (later polygons win, 0 outside all) into out; returns the clearance.
+
+    Polygon k is verts[offsets[k]:offsets[k+1]] with surface id surface[k]. The clearance is the
+    smallest distance from any point to any polygon edge: the points may each move less than that
+    without changing their surface.
+    """
+    clearance = np.inf
+    for a in range(points.shape[0]):
+        px, py = points[a, 0], points[a, 1]
+        sid = 0
+        for k in range(surface.shape[0]):
+            lo, hi = offsets[k], offsets[k + 1]
+            if _inside(px, py, verts, lo, hi):
+                sid = surface[k]
+            for e in range(lo, hi):
+                e1 = e + 1 if e + 1 < hi else lo
+                d = _segment_distance(px, py, verts[e, 0], verts[e, 1], verts[e1, 0], verts[e1, 1])
+                clearance = min(clearance, d)
+        out[a] = sid
+    return clearance
+
+
+@njit(cache=True)
+def _add_normals(v: FloatArray, lo: int, hi: int, closed: bool, axes: FloatArray, count: int) -> int:
+    """Append the unit edge normals of polygon v[lo:hi] (one for a 2-vertex segment) to axes."""
+    n_edges = hi - lo if closed else hi - lo - 1
+    for k in range(lo, lo + n_edges):
+        k1 = k + 1 if k + 1 < hi else lo
+        ex, ey = v[k1, 0] - v[k, 0], v[k1, 1] - v[k, 1]
+        length = math.hypot(ey, -ex)
+        if length > 1e-12:
+            axes[count, 0], axes[count, 1] = ey / length, -ex / length
+            count += 1
+    return count
+
+
+@njit(cache=True)
+def _sat(
+    robot: FloatArray, other: FloatArray, lo: int, hi: int, closed: bool, axes: FloatArray, depth: FloatArray
+) -> tuple[bool, float, float, float, float, float]:
+    """Separating-axis test of the convex robot outline against the convex other[lo:hi].
+
+    ``closed`` False means other is one segment (two vertices, one axis). Returns (hit, point x,
+    point y, normal x, normal y, depth): the normal pushes the robot out along the shallowest axis
+    (toward its side of each axis; on a tie the other shape's own face, listed last).
+    """
+    nr = robot.shape[0]
+    count = _add_normals(robot, 0, nr, True, axes, 0)
+    count = _add_normals(other, lo, hi, closed, axes, count)
+    crx = cry = cox = coy = 0.0
+    for k in range(nr):
+        crx += robot[k, 0]
+        cry += robot[k, 1]
+    for k in range(lo, hi):
+        cox += other[k, 0]
+        coy += other[k, 1]
+    crx, cry, cox, coy = crx / nr, cry / nr, cox / (hi - lo), coy / (hi - lo)
+    best = np.inf
+    for a in range(count):
+        ax, ay = axes[a, 0], axes[a, 1]
+        rmin, rmax, omin, omax = np.inf, -np.inf, np.inf, -np.inf
+        for k in range(nr):
+            pr = robot[k, 0] * ax + robot[k, 1] * ay
+            rmin, rmax = min(rmin, pr), max(rmax, pr)
+        for k in range(lo, hi):
+            po = other[k, 0] * ax + other[k, 1] * ay
+            omin, omax = min(omin, po), max(omax, po)
+        plus, minus = omax - rmin, rmax - omin  # move the robot along +axis / -axis by this to clear
+        if plus <= 0.0 or minus <= 0.0:
+            return False, 0.0, 0.0, 0.0, 0.0, 0.0
+        side = (crx - cox) * ax + (cry - coy) * ay
+        if side > 1e-12:
+            dep, sign = plus, 1.0
+        elif side < -1e-12:
+            dep, sign = minus, -1.0
+        else:
+            dep, sign = min(plus, minus), (1.0 if plus <= minus else -1.0)
+        depth[a, 0], depth[a, 1] = dep, sign
+        best = min(best, dep)
+    k = 0
+    for a in range(count):
+        if depth[a, 0] <= best + 1e-9 + 1e-6 * best:
+            k = a
+    nx, ny = axes[k, 0] * depth[k, 1], axes[k, 1] * depth[k, 1]
+    tx, ty = -ny, nx
+    # contact point: middle of the overlap, along the face, of the two deepest features
+    tol = 1e-6 + 1e-3 * best
+    pr_min, po_max = np.inf, -np.inf
+    for j in range(nr):
+        pr_min = min(pr_min, robot[j, 0] * nx + robot[j, 1] * ny)
+    for j in range(lo, hi):
+        po_max = max(po_max, other[j, 0] * nx + other[j, 1] * ny)
+    r_lo, r_hi, r_sum, r_n = np.inf, -np.inf, 0.0, 0
+    for j in range(nr):
+        if robot[j, 0] * nx + robot[j, 1] * ny <= pr_min + tol:
+            f = robot[j, 0] * tx + robot[j, 1] * ty
+            r_lo, r_hi, r_sum, r_n = min(r_lo, f), max(r_hi, f), r_sum + f, r_n + 1
+    o_lo, o_hi, o_sum, o_n = np.inf, -np.inf, 0.0, 0
+    for j in range(lo, hi):
+        if other[j, 0] * nx + other[j, 1] * ny >= po_max - tol:
+            f = other[j, 0] * tx + other[j, 1] * ty
+            o_lo, o_hi, o_sum, o_n = min(o_lo, f), max(o_hi, f), o_sum + f, o_n + 1
+    lo_f, hi_f = max(r_lo, o_lo), min(r_hi, o_hi)
+    along = 0.5 * (lo_f + hi_f) if lo_f <= hi_f else 0.5 * (r_sum / r_n + o_sum / o_n)
+    across = 0.5 * (pr_min + po_max)
+    return True, along * tx + across * nx, along * ty + across * ny, nx, ny, best
+
+
+@njit(cache=True)
+def outline_contacts(
+    body: FloatArray,
+    x: float,
+    y: float,
+    theta: float,
+    solid_v: FloatArray,
+    solid_off: IntArray,
+    solid_c: FloatArray,
+    solid_r: FloatArray,
+    solid_owner: IntArray,
+    thin_v: FloatArray,
+    thin_owner: IntArray,
+    out: FloatArray,
+) -> tuple[int, float]:
+    """Contacts of a convex outline (body frame, placed at pose x, y, theta) with the world.
+
+    Solid convex obstacles (solid_v[solid_off[k]:solid_off[k+1]], bounding circle solid_c, solid_r)
+    are tested whole; thin edges (walls, non-convex obstacles; edge k is thin_v[2k:2k+2]) one by one,
+    and contacts of one owner whose normals are within 30 degrees are merged (the deepest kept).
+    Writes rows (point x, point y, normal x, normal y, depth, owner id) to out and returns
+    (count, clearance): the outline's origin may move less than ``clearance`` (any rotation)
+    without touching anything (0 when touching, or inside a solid).
+    """
+    nv = body.shape[0]
+    c, s = math.cos(theta), math.sin(theta)
+    v = np.empty((nv, 2))
+    reach0 = 0.0
+    for k in range(nv):
+        bx, by = body[k, 0], body[k, 1]
+        v[k, 0], v[k, 1] = bx * c - by * s + x, bx * s + by * c + y
+        reach0 = max(reach0, math.hypot(bx, by))
+    cx = cy = 0.0
+    for k in range(nv):
+        cx += v[k, 0]
+        cy += v[k, 1]
+    cx, cy = cx / nv, cy / nv
+    reach = 0.0
+    for k in range(nv):
+        reach = max(reach, math.hypot(v[k, 0] - cx, v[k, 1] - cy))
+    longest = 2
+    for k in range(solid_owner.shape[0]):
+        longest = max(longest, solid_off[k + 1] - solid_off[k])
+    axes = np.empty((nv + longest, 2))
+    depth = np.empty((nv + longest, 2))
+    count = first_edge = 0
+    nearest = np.inf
+    inside_solid = False
+    n_solid = solid_owner.shape[0]
+    for k in range(n_solid + thin_owner.shape[0]):
+        if k < n_solid:  # a solid: its edges, whether the origin is inside, its bounding circle
+            verts, lo, hi, closed, owner = solid_v, solid_off[k], solid_off[k + 1], True, solid_owner[k]
+            for e in range(lo, hi):
+                e1 = e + 1 if e + 1 < hi else lo
+                d = _segment_distance(x, y, verts[e, 0], verts[e, 1], verts[e1, 0], verts[e1, 1])
+                nearest = min(nearest, d)
+            inside_solid = inside_solid or _inside(x, y, verts, lo, hi)
+            near = math.hypot(solid_c[k, 0] - cx, solid_c[k, 1] - cy) < reach + solid_r[k]
+        else:  # a thin edge: near if its closest point to the centre is within reach
+            e = k - n_solid
+            verts, lo, hi, closed, owner = thin_v, 2 * e, 2 * e + 2, False, thin_owner[e]
+            x0, y0, x1, y1 = verts[lo, 0], verts[lo, 1], verts[lo + 1, 0], verts[lo + 1, 1]
+            nearest = min(nearest, _segment_distance(x, y, x0, y0, x1, y1))
+            ex, ey = x1 - x0, y1 - y0
+            t = min(max(((cx - x0) * ex + (cy - y0) * ey) / (ex * ex + ey * ey), 0.0), 1.0)
+            gx, gy = x0 + t * ex - cx, y0 + t * ey - cy
+            near = gx * gx + gy * gy < reach * reach
+        if not near:
+            continue
+        hit, px, py, nx, ny, dep = _sat(v, verts, lo, hi, closed, axes, depth)
+        if not hit:
+            continue
+        a = count
+        if not closed:  # edge contacts stay sorted by depth, deepest first (stable for equal depths)
+            while a > first_edge and out[a - 1, 4] < dep:
+                for col in range(6):
+                    out[a, col] = out[a - 1, col]
+                a -= 1
+        out[a, 0], out[a, 1], out[a, 2], out[a, 3], out[a, 4], out[a, 5] = px, py, nx, ny, dep, owner
+        count += 1
+        if closed:
+            first_edge = count
+    kept = first_edge
+    for a in range(first_edge, count):
+        keep = True
+        for b in range(first_edge, kept):
+            if out[b, 5] == out[a, 5] and out[b, 2] * out[a, 2] + out[b, 3] * out[a, 3] >= MERGE_COS:
+                keep = False
+                break
+        if keep:
+            for col in range(6):
+                out[kept, col] = out[a, col]
+            kept += 1
+    clearance = nearest - reach0 - 1e-9
+    if kept > 0 or inside_solid or not clearance > 0.0:
+        clearance = 0.0
+    return kept, clearance
+
+
+__all__ = [
+    "ROLL_SPEED_EPS",
+    "WHEEL_SPEED_EPS",
+    "contact_speeds",
+    "outline_contacts",
+    "physics_step",
+    "surface_probe",
+]
