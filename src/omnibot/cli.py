@@ -210,6 +210,76 @@ def _add_tour(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.set_defaults(handler=_tour)
 
 
+# --------------------------------------------------------------------------- send, console
+
+
+def _send(args: argparse.Namespace) -> int:
+    from omnibot.console import run_send
+
+    return run_send(args)
+
+
+def _add_send(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    p = sub.add_parser(
+        "send",
+        help="send protocol commands, print the replies and events",
+        description="Sends each command (text protocol, several per argument with ';') and prints the "
+        "replies and events. Exit status 0 if every reply is OK, 1 if any is an ERROR, 2 for bad "
+        "input or link errors.",
+    )
+    p.add_argument(
+        "commands", nargs="+", metavar="COMMANDS", help="protocol text, e.g. 'MOVE,2,40,0,0;STATUS'"
+    )
+    p.add_argument("--port", default="sim://omni4", help="link URL (default sim://omni4)")
+    p.add_argument("--timeout", type=float, default=2.0, help="seconds to wait for each reply (default 2)")
+    p.add_argument("--wait-idle", action="store_true", help="after the replies, wait for IDLE")
+    p.add_argument("--idle-timeout", type=float, default=60.0, help="seconds --wait-idle waits (default 60)")
+    p.add_argument("--binary", action="store_true", help="speak the binary protocol (MODE bit 2)")
+    p.set_defaults(handler=_send)
+
+
+def _console(args: argparse.Namespace) -> int:
+    from omnibot.console import run_console
+
+    return run_console(args)
+
+
+def _add_console(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    p = sub.add_parser(
+        "console",
+        help="interactive terminal for the controller protocol",
+        description="Type protocol commands; replies and decoded events are printed as they come. "
+        ":help lists the console's own commands.",
+    )
+    p.add_argument("--port", default="sim://omni4", help="link URL (default sim://omni4)")
+    p.add_argument("--timeout", type=float, default=2.0, help="seconds to wait for each reply (default 2)")
+    p.set_defaults(handler=_console)
+
+
+# --------------------------------------------------------------------------- demo
+
+
+def _demo(args: argparse.Namespace) -> int:
+    from omnibot.demos.seed000 import run_demo
+
+    print(run_demo(args.port, args.robot, Path(args.out), seed=args.seed))
+    return 0
+
+
+def _add_demo(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    p = sub.add_parser(
+        "demo",
+        help="the main job: seed 000's motion examples through the whole stack, commanded vs achieved",
+        description="Starts the simulated robot on a pty (omnibot sim --pty) and drives seed 000's examples "
+        "through client -> text protocol -> pty -> firmware -> simulator; --port drives a real board instead.",
+    )
+    p.add_argument("--port", help="link URL of a real controller (default: the simulated robot on a pty)")
+    p.add_argument("--robot", default="omni4", help="preset name or description file (default omni4)")
+    p.add_argument("--seed", type=int, default=1, help="simulator seed (default 1)")
+    p.add_argument("--out", default="out", help="directory for the plot and truth CSV (default ./out)")
+    p.set_defaults(handler=_demo)
+
+
 # --------------------------------------------------------------------------- parser
 
 
@@ -229,6 +299,9 @@ ADDERS: list[Callable[[argparse._SubParsersAction[argparse.ArgumentParser]], Non
     _add_kinematics,
     _add_sim,
     _add_tour,
+    _add_send,
+    _add_console,
+    _add_demo,
 ]
 
 

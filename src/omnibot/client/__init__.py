@@ -1,0 +1,74 @@
+"""The host client: typed calls in SI, request/reply matching, events and telemetry (docs/client.md).
+
+::
+
+    from omnibot.client import RobotClient
+
+    with RobotClient.open("sim://omni4") as robot:      # or "/dev/ttyUSB0", "tcp://host:port", ...
+        robot.move(0.5, 0.4)                            # 0.5 m at 0.4 m/s, returns the MOVE sent
+        robot.wait_idle(timeout=5)
+        print(robot.status())
+
+Modules: ``client`` (RobotClient, Pending: sending, matching, pumping), ``calls`` (the typed calls),
+``commands`` (SI -> checked commands), ``limits``,
+``events`` (Event types, listeners, EventRecorder), ``views`` (Hello, Status), ``wire`` (text and
+binary wire formats), ``errors`` (ControllerError subclasses per code).
+"""
+
+from omnibot.client.client import DEFAULT_TIMEOUT, Pending, RobotClient
+from omnibot.client.errors import (
+    CalibrationRejected,
+    CommandRejected,
+    ControllerReset,
+    EmergencyStopLatched,
+    InternalFault,
+    NotSupported,
+    OutOfRange,
+    QueueFull,
+    controller_error,
+)
+from omnibot.client.events import (
+    ErrorEvent,
+    Event,
+    EventRecorder,
+    IdleEvent,
+    RangeEvent,
+    ResetEvent,
+    Telemetry,
+    Unexpected,
+    WarnEvent,
+)
+from omnibot.client.limits import Limits
+from omnibot.client.views import Hello, MoveState, Status
+from omnibot.errors import ControllerError, LinkError, LinkTimeout
+
+__all__ = [
+    "DEFAULT_TIMEOUT",
+    "CalibrationRejected",
+    "CommandRejected",
+    "ControllerError",
+    "ControllerReset",
+    "EmergencyStopLatched",
+    "ErrorEvent",
+    "Event",
+    "EventRecorder",
+    "Hello",
+    "IdleEvent",
+    "InternalFault",
+    "Limits",
+    "LinkError",
+    "LinkTimeout",
+    "MoveState",
+    "NotSupported",
+    "OutOfRange",
+    "Pending",
+    "QueueFull",
+    "RangeEvent",
+    "ResetEvent",
+    "RobotClient",
+    "Status",
+    "Telemetry",
+    "Unexpected",
+    "WarnEvent",
+    "controller_error",
+]

@@ -1,0 +1,133 @@
+"""Typed calls in SI: each builds one checked command and hands it to ``execute`` (DESIGN habit 7).
+
+:class:`TypedCalls` is mixed into :class:`~omnibot.client.client.RobotClient`, which provides
+``execute``, ``submit``, ``limits`` and the known MODE bits; conversions and checks are in
+:mod:`omnibot.client.commands`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, TypeVar
+
+from omnibot.client import commands
+from omnibot.client.limits import Limits
+from omnibot.client.views import Hello, Status
+from omnibot.protocol import codes
+from omnibot.protocol.messages import (
+    Cal,
+    Command,
+    Delta,
+    HelloReply,
+    Mode,
+    Move,
+    Power,
+    Reply,
+    Rotate,
+    Sonar,
+    StatusReply,
+    Stop,
+    Telem,
+    Vel,
+)
+from omnibot.protocol.messages import Hello as HelloCommand
+from omnibot.protocol.messages import Status as StatusCommand
+from omnibot.robot.description import CalibrationSpec
+
+C = TypeVar("C", bound=Command)
+
+
+class TypedCalls:
+    """move, rotate, delta, power, vel, stop, mode, sonar, telemetry, cal, status, hello."""
+
+    limits: Limits
+    _mode: int | None
+
+    def execute(self, command: Command, timeout: float | None = None) -> Reply:
+        raise NotImplementedError
+
+    def submit(self, command: Command, timeout: float | None = None) -> Any:
+        raise NotImplementedError
+
+    def move(self, distance: float, speed: float, course: float = 0.0, curvature: float = 0.0) -> Move:
+        """MOVE ``distance`` m (math.inf: until the next command) at ``speed`` m/s on ``course``
+        rad from the head, bending with ``curvature`` 1/m. Returns the command sent."""
+        return self._run(commands.move(self.limits, distance, speed, course, curvature))
+
+    def rotate(self, angle: float, rate: float) -> Rotate:
+        """ROTATE by ``angle`` rad (math.inf: until the next command) at ``rate`` rad/s."""
+        return self._run(commands.rotate(self.limits, angle, rate))
+
+    def delta(
+        self,
+        distance: float = 0.0,
+        speed: float = 0.0,
+        course: float = 0.0,
+        curvature: float = 0.0,
+        repeat: float = 0,
+    ) -> Delta:
+        """DELTA: runs the remembered MOVE plus these increments max(repeat, 1) times (``repeat``
+        an int, or math.inf: until the next command)."""
+        return self._run(commands.delta(self.limits, distance, speed, course, curvature, repeat))
+
+    def power(self, time: float, powers: Sequence[int]) -> Power:
+        """POWER: raw PWM counts, one per motor, for ``time`` s (no calibration)."""
+        return self._run(commands.power(self.limits, time, powers))
+
+    def vel(self, vx: float, vy: float, w: float, timeout: float) -> Vel:
+        """VEL: hold (vx, vy) m/s and w rad/s for at most ``timeout`` s unless refreshed."""
+        return self._run(commands.vel(self.limits, vx, vy, w, timeout))
+
+    def stop(self) -> Stop:
+        """STOP: motors off, queue cleared, remembered MOVE reset, emergency-stop latch released."""
+        return self._run(Stop())
+
+    def mode(
+        self, mask: int | None = None, *, simulation: bool | None = None, closed_loop: bool | None = None
+    ) -> Mode:
+        """MODE: a whole mask, or change single bits of the current one (read by STATUS if not known)."""
+        if mask is None:
+            mask = self._mode if self._mode is not None else self.status().mode
+            for bit, on in ((codes.MODE_SIMULATION, simulation), (codes.MODE_CLOSED_LOOP, closed_loop)):
+                if on is not None:
+                    mask = mask | bit if on else mask & ~bit
+            mask &= ~codes.MODE_BINARY
+        return self._run(commands.mode(self.limits, mask))
+
+    def sonar(
+        self, number: int, period: float, low: float = 0.0, high: float = 0.0, stop: float = 0.0
+    ) -> Sonar:
+        """SONAR ``number`` (1..k) every ``period`` s (0: off); RANGE band [low, high] m; e-stop
+        below ``stop`` m while moving (0: off)."""
+        return self._run(commands.sonar(self.limits, number, period, low, high, stop))
+
+    def telemetry(self, period: float, mask: int = codes.TEL_MASK) -> Telem:
+        """TELEM: a TEL sample every ``period`` s (0: off) with the groups of ``mask``."""
+        return self._run(commands.telem(self.limits, period, mask))
+
+    def cal(self, table: int, index: int, x: int, y: int) -> Cal:
+        """CAL with protocol integers (one knot; docs/protocol.md)."""
+        return self._run(commands.cal(self.limits, table, index, x, y))
+
+    def upload_calibration(self, spec: CalibrationSpec) -> list[Cal]:
+        """Upload a calibration section (K, K_t, K_r, K_l) with CAL commands; the commands sent."""
+        sent = commands.calibration(spec)
+        for pending in [self.submit(c) for c in sent]:
+            pending.result()
+        return sent
+
+    def status(self) -> Status:
+        """STATUS as a :class:`Status` (SI)."""
+        reply = self.execute(StatusCommand())
+        assert isinstance(reply, StatusReply)
+        return Status.from_reply(reply)
+
+    def hello(self, versions: Sequence[int] = ()) -> Hello:
+        """HELLO (optionally listing the protocol versions we speak) as a :class:`Hello`."""
+        reply = self.execute(HelloCommand(tuple(versions)))
+        assert isinstance(reply, HelloReply)
+        return Hello.from_reply(reply)
+
+    def _run(self, command: C) -> C:
+        self.execute(command)
+        return command

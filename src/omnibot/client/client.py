@@ -1,0 +1,607 @@
+"""RobotClient: typed calls in SI, request/reply matching, events, text or binary protocol.
+
+The client is synchronous and pumps the link itself, in the caller's thread: no background
+thread, so it runs unchanged on a lockstep ``sim://`` link (where a blocking read advances
+simulated time) and on a real port. Every wait (a reply, IDLE, :meth:`RobotClient.sleep`) reads
+the link and dispatches the events that arrive meanwhile to the listeners::
+
+    move(0.5, 0.4) -> commands.move(): SI -> Move(50, 40, 0, 0), checked -> execute() -> submit()
+        submit(): wire.frame() -> link.write() -> Pending (kept in send order)
+        Pending.result(): pump until answered: link.read() -> wire.feed() -> replies / events
+            replies: text -> the oldest Pending that accepts it (FIFO); binary -> by seq
+            events:  RANGE WARN ERROR IDLE TEL HELLO(reset) -> Event -> listeners
+
+Timeouts count on ``link.clock`` (simulated time on sim://) and raise LinkTimeout. A LinkError from
+the link fails the call (and every command awaiting a reply); the client then tries
+``link.reopen(retry=reconnect)`` so that the next call can work.
+
+Text replies carry no sequence number: ``OK``/``ERROR`` answer the oldest command waiting, a
+``STATUS`` or ``HELLO`` reply the oldest STATUS or HELLO (commands before it whose reply never came
+fail with ProtocolError). An ``ERROR`` line while no command waits (the firmware never sends
+one) becomes an :class:`~omnibot.client.events.ErrorEvent`; a ``HELLO`` line nobody asked for is
+a controller reset (:class:`~omnibot.client.events.ResetEvent`; waiting commands fail with
+ControllerReset). A command that timed out keeps its place in the line until its reply comes,
+so later replies still match; over a noisy line use the binary protocol, whose replies carry the
+command's seq.
+
+Not thread-safe: use a client from one thread (listeners run in that thread, during the waits).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from types import TracebackType
+from typing import Self, TypeVar
+
+from omnibot.client.calls import TypedCalls
+from omnibot.client.errors import ControllerReset, controller_error
+from omnibot.client.events import (
+    ErrorEvent,
+    Event,
+    IdleEvent,
+    Listeners,
+    RangeEvent,
+    ResetEvent,
+    Telemetry,
+    WarnEvent,
+    event_from_message,
+)
+from omnibot.client.limits import Limits
+from omnibot.client.views import Hello
+from omnibot.client.wire import BinaryWire, TextWire, Wire
+from omnibot.errors import LinkError, LinkTimeout, ProtocolError
+from omnibot.protocol import arq, codes, text
+from omnibot.protocol.binary import Packet
+from omnibot.protocol.messages import (
+    Command,
+    Delta,
+    ErrorReply,
+    HelloReply,
+    Malformed,
+    Mode,
+    Move,
+    Ok,
+    Power,
+    Reply,
+    Rotate,
+    StatusReply,
+    Stop,
+    Vel,
+    check_command,
+)
+from omnibot.protocol.messages import Hello as HelloCommand
+from omnibot.protocol.messages import Status as StatusCommand
+from omnibot.robot.description import RobotDescription
+from omnibot.transport.base import Clock, Link
+
+E = TypeVar("E", bound=Event)
+
+MOTION = (Move, Rotate, Delta, Power, Vel)
+DEFAULT_TIMEOUT = 1.0
+"""Seconds (link clock) to wait for a reply."""
+_RETRY_POLL = codes.RETRY_TIMEOUT_MS / 2000.0  # binary: look at retransmissions this often (s)
+_FOREVER_STEP = 1.0
+
+
+class Pending:
+    """A command sent and (maybe) not answered yet; :meth:`result` waits for its reply."""
+
+    def __init__(
+        self,
+        client: RobotClient,
+        command: Command | None,
+        line: str,
+        seq: int,
+        deadline: float,
+        malformed: bool = False,
+    ) -> None:
+        self.command = command
+        """The command; None for raw bytes whose form the client did not check."""
+        self.malformed = malformed
+        """Raw text that does not parse as a command: the controller answers it with ERROR."""
+        self.line = line
+        """The command as text, for messages."""
+        self.seq = seq
+        """Binary sequence number (0 in text)."""
+        self.deadline = deadline
+        """Link-clock time after which :meth:`result` raises LinkTimeout."""
+        self.reply: Reply | None = None
+        self.error: BaseException | None = None
+        self.timed_out = False
+        self.abandoned = False  # binary: pending when a SYNC frame was sent
+        self._client = client
+
+    @property
+    def done(self) -> bool:
+        """True once a reply (or a failure) is in."""
+        return self.reply is not None or self.error is not None
+
+    def accepts(self, reply: Reply) -> bool:
+        """Whether ``reply`` can answer this command (text matching). Raw text that did not parse
+        can only get an ERROR; other raw text anything but a HELLO reply (send HELLO typed)."""
+        if isinstance(reply, ErrorReply):
+            return True
+        if self.command is None:
+            return not self.malformed and not isinstance(reply, HelloReply)
+        if isinstance(self.command, StatusCommand):
+            return isinstance(reply, StatusReply)
+        if isinstance(self.command, HelloCommand):
+            return isinstance(reply, HelloReply)
+        return isinstance(reply, Ok)
+
+    def result(self, timeout: float | None = None) -> Reply:
+        """Wait for the reply (pumping the client) and return it; raise the ControllerError of an
+        ERROR reply, LinkTimeout after ``timeout`` s (default: until the deadline), LinkError."""
+        if not self.done:
+            client = self._client
+            deadline = self.deadline if timeout is None else client.clock.now() + timeout
+            try:
+                client._wait(lambda: self.done, deadline, f"no reply to {self.line}")
+            except LinkTimeout:
+                self.timed_out = True
+                raise
+        if self.error is not None:
+            raise self.error
+        assert self.reply is not None
+        return self.reply
+
+    def _fail(self, error: BaseException) -> None:
+        if not self.done:
+            self.error = error
+
+    def __repr__(self) -> str:
+        state = "error" if self.error else "replied" if self.reply else "waiting"
+        return f"<Pending {self.line!r} seq={self.seq} {state}>"
+
+
+class RobotClient(TypedCalls):
+    """A motor controller behind a :class:`~omnibot.transport.base.Link`, in SI units.
+
+    ``robot`` (a description, preset name or file) adds the robot's limits to the checks made
+    before sending; without it only the protocol's ranges are checked. ``timeout`` is the reply
+    timeout in seconds of ``link.clock``; ``reconnect`` the seconds ``link.reopen`` may retry after
+    a LinkError (None: do not reopen).
+    """
+
+    def __init__(
+        self,
+        link: Link,
+        robot: RobotDescription | str | None = None,
+        *,
+        limits: Limits | None = None,
+        timeout: float = DEFAULT_TIMEOUT,
+        reconnect: float | None = 0.0,
+    ) -> None:
+        self.link = link
+        if limits is None:
+            limits = Limits.from_robot(robot) if robot is not None else Limits()
+        self.limits = limits
+        self.timeout = timeout
+        self.reconnect = reconnect
+        self.last_hello: Hello | None = None
+        """The last HELLO seen (a reply or a reset greeting)."""
+        self._wire: Wire = TextWire()
+        self._outstanding: list[Pending] = []
+        self._listeners = Listeners()
+        self._moving = False
+        self._mode: int | None = None
+        self._broken = False
+        self._hello_answered = False  # text: the last reply matched was a HELLO reply
+        self._synced = False  # text: a reply has been matched since the client started
+
+    @classmethod
+    def open(cls, url: str, robot: RobotDescription | str | None = None, **options: object) -> RobotClient:
+        """Open ``url`` (see :func:`omnibot.transport.url.open_link`) and wrap it; for ``sim://PRESET``
+        the robot defaults to that preset. ``options`` go to the constructor."""
+        from omnibot.transport.url import open_link, parse_link_url
+
+        if robot is None:
+            base = parse_link_url(url)[-1]
+            if base.scheme == "sim":
+                robot = base.target
+        link = open_link(url)
+        try:
+            return cls(link, robot, **options)  # type: ignore[arg-type]
+        except BaseException:
+            link.close()
+            raise
+
+    # ------------------------------------------------------------------ state
+
+    @property
+    def clock(self) -> Clock:
+        """The link's clock: wall time, or simulated time on sim://."""
+        return self.link.clock
+
+    @property
+    def binary(self) -> bool:
+        """True while the client speaks the binary protocol."""
+        return self._wire.binary
+
+    @property
+    def moving(self) -> bool:
+        """True from the OK of a motion command until IDLE (or STOP, or a STATUS saying idle)."""
+        return self._moving
+
+    @property
+    def mode_bits(self) -> int | None:
+        """The MODE bits last set or reported by STATUS; None if not known yet."""
+        return self._mode
+
+    @property
+    def outstanding(self) -> list[Pending]:
+        """Commands sent whose reply has not come yet, oldest first."""
+        return list(self._outstanding)
+
+    # ------------------------------------------------------------------ listeners
+
+    def add_listener(self, callback: Callable[[E], object], *types: type[E]) -> None:
+        """Call ``callback(event)`` for each event of ``types`` (all events if none are given)."""
+        self._listeners.add(callback, *types)
+
+    def remove_listener(self, callback: Callable[[E], object]) -> None:
+        self._listeners.remove(callback)
+
+    def on_telemetry(self, callback: Callable[[Telemetry], object]) -> None:
+        self._listeners.add(callback, Telemetry)
+
+    def on_range(self, callback: Callable[[RangeEvent], object]) -> None:
+        self._listeners.add(callback, RangeEvent)
+
+    def on_warn(self, callback: Callable[[WarnEvent], object]) -> None:
+        self._listeners.add(callback, WarnEvent)
+
+    def on_error(self, callback: Callable[[ErrorEvent], object]) -> None:
+        self._listeners.add(callback, ErrorEvent)
+
+    def on_idle(self, callback: Callable[[IdleEvent], object]) -> None:
+        self._listeners.add(callback, IdleEvent)
+
+    def on_reset(self, callback: Callable[[ResetEvent], object]) -> None:
+        self._listeners.add(callback, ResetEvent)
+
+    # ------------------------------------------------------------------ sending
+
+    def execute(self, command: Command, timeout: float | None = None) -> Reply:
+        """Send one command and wait for its reply (OK, STATUS or HELLO reply); ERROR raises."""
+        return self.submit(command, timeout).result()
+
+    def submit(self, command: Command, timeout: float | None = None) -> Pending:
+        """Send one command without waiting: several may be outstanding (pipelining)."""
+        check_command(command)
+        return self._send(command, None, timeout)
+
+    def submit_text(self, line: str, timeout: float | None = None) -> list[Pending]:
+        """Send protocol text as typed (``"MOVE,2,40,0,0;DELTA,0,0,10,0,36"``), one Pending per
+        non-empty command. In text mode each command goes out as written (bad ones too: the
+        controller answers them); in binary mode they must parse, else ProtocolError."""
+        try:
+            data = line.encode("ascii") + b"\n"
+        except UnicodeEncodeError:
+            raise ProtocolError(f"commands are ASCII only: {line!r}") from None
+        chunks: list[tuple[Command | None, bytes]] = []
+        pos = 0
+        while pos < len(data):
+            used, parsed = text.decode_command(data[pos:])
+            if used == 0:
+                break
+            chunk = data[pos : pos + used].rstrip(b";\r\n")
+            pos += used
+            if parsed is not None:
+                chunks.append((None if isinstance(parsed, Malformed) else parsed, chunk))
+        if self.binary:
+            bad = [c.decode("latin-1") for cmd, c in chunks if cmd is None]
+            if bad:
+                raise ProtocolError(f"cannot send malformed commands in binary mode: {bad}")
+            return [self.submit(cmd, timeout) for cmd, _ in chunks if cmd is not None]
+        return [self._send(cmd, chunk + b"\n", timeout, malformed=cmd is None) for cmd, chunk in chunks]
+
+    def submit_raw(self, data: bytes, replies: int = 1, timeout: float | None = None) -> list[Pending]:
+        """Write ``data`` unchanged (text mode only) and expect ``replies`` replies to it (OK,
+        ERROR or STATUS; a HELLO line is never taken as the answer to raw bytes)."""
+        if self.binary:
+            raise ProtocolError("raw text cannot be sent in binary mode")
+        self._ensure_open()
+        self._wait_for_switch()
+        line = data.decode("latin-1").strip()
+        deadline = self.clock.now() + (self.timeout if timeout is None else timeout)
+        out = [Pending(self, None, line, 0, deadline) for _ in range(replies)]
+        self._outstanding.extend(out)
+        self._write(data)
+        return out
+
+    def _send(
+        self, command: Command | None, raw: bytes | None, timeout: float | None, malformed: bool = False
+    ) -> Pending:
+        self._ensure_open()
+        self._wait_for_switch()
+        wait = self.timeout if timeout is None else timeout
+        wire = self._wire
+        sync = isinstance(command, Stop | HelloCommand)
+        if isinstance(wire, BinaryWire) and not sync and not wire.ready():
+            self._wait(wire.ready, self.clock.now() + wait, "binary send window full")
+        if isinstance(wire, BinaryWire) and sync:
+            self._give_up(wire.take_failed())
+        now = self.clock.now()
+        if raw is not None and not wire.binary:
+            seq, data = 0, raw
+        else:
+            assert command is not None
+            seq, data = wire.frame(command, round(now * 1000))
+        if isinstance(wire, BinaryWire) and sync:
+            abandoned = set(wire.take_failed())
+            for p in self._outstanding:
+                p.abandoned = p.abandoned or p.seq in abandoned
+        if raw is not None:
+            line = raw.decode("latin-1").strip()
+        else:
+            assert command is not None
+            line = text.encode(command).decode("ascii").strip()
+        pending = Pending(self, command, line, seq, now + wait, malformed)
+        self._outstanding.append(pending)
+        self._write(data)
+        return pending
+
+    def _wait_for_switch(self) -> None:
+        """Wait for a MODE that switches protocols: nothing may be sent until its OK is in."""
+        for p in list(self._outstanding):
+            cmd = p.command
+            if isinstance(cmd, Mode) and bool(cmd.mask & codes.MODE_BINARY) != self.binary and not p.done:
+                p.result()
+
+    # ------------------------------------------------------------------ waiting
+
+    def pump(self, timeout: float = 0.0) -> int:
+        """Read what arrives within ``timeout`` s (0: only what is there), dispatch it; the number
+        of messages handled."""
+        return self._pump_once(timeout)
+
+    def sleep(self, seconds: float) -> None:
+        """Let ``seconds`` pass on the link's clock, dispatching events meanwhile."""
+        deadline = self.clock.now() + seconds
+        while (remaining := deadline - self.clock.now()) > 0:
+            self._pump_once(remaining)
+
+    def drain(self, timeout: float | None = None) -> None:
+        """Wait until every command sent has its reply (those that timed out excepted)."""
+        waiting = [p for p in self._outstanding if not p.timed_out]
+        if not waiting:
+            return
+        deadline = max(p.deadline for p in waiting) if timeout is None else self.clock.now() + timeout
+        self._wait(lambda: all(p.done for p in waiting), deadline, "replies outstanding")
+
+    def wait_idle(self, timeout: float | None = None) -> None:
+        """Wait until the robot is idle: the replies of the commands sent are in and IDLE came
+        (returns at once if it already did). ``timeout`` s on the link clock, None: no limit."""
+        deadline = math.inf if timeout is None else self.clock.now() + timeout
+        waiting = [p for p in self._outstanding if not p.timed_out]
+        self._wait(lambda: all(p.done for p in waiting), deadline, "replies outstanding")
+        self._wait(lambda: not self._moving, deadline, "robot still moving (no IDLE)")
+
+    def _wait(self, done: Callable[[], bool], deadline: float, what: str) -> None:
+        while not done():
+            remaining = deadline - self.clock.now()
+            if remaining <= 0:
+                raise LinkTimeout(f"{what} (timeout on {self.link.url})")
+            self._pump_once(min(remaining, _FOREVER_STEP))
+
+    def _pump_once(self, timeout: float) -> int:
+        self._service()
+        if self.binary and self._outstanding:
+            timeout = min(timeout, _RETRY_POLL)
+        data = self._read(timeout)
+        return self._process(data) if data else 0
+
+    # ------------------------------------------------------------------ protocols
+
+    def use_binary(self) -> Hello:
+        """Switch to the binary protocol (MODE with bit 2, keeping the other bits), start the
+        session with HELLO and return its reply (the protocol version in use)."""
+        if not self.binary:
+            self.drain()
+            mask = self.status().mode
+            self.execute(Mode(mask | codes.MODE_BINARY))
+        return self.hello(codes.VERSIONS)
+
+    def use_text(self) -> None:
+        """Switch back to the text protocol (MODE with bit 2 clear, other bits kept)."""
+        if self.binary:
+            mask = self._mode if self._mode is not None else self.status().mode
+            self.execute(Mode(mask & ~codes.MODE_BINARY))
+
+    # ------------------------------------------------------------------ input
+
+    def _process(self, data: bytes) -> int:
+        handled = 0
+        while data:
+            wire = self._wire
+            items = wire.feed(data)
+            data = b""
+            for item in items:
+                handled += 1
+                self._handle(item)
+                if self._wire is not wire:  # switched protocols (MODE) or the controller reset
+                    data = wire.rest()
+                    break
+        return handled
+
+    def _handle(self, item: Packet | Malformed) -> None:
+        now = self.clock.now()
+        if isinstance(item, Malformed):
+            self._listeners.dispatch(event_from_message(item, now))
+            return
+        message = item.message
+        if isinstance(message, HelloReply) and item.event:
+            self._reset(event_from_message(message, now))
+        elif isinstance(message, Ok | StatusReply | HelloReply) or (
+            isinstance(message, ErrorReply) and not item.event
+        ):
+            if isinstance(self._wire, BinaryWire):
+                self._reply_by_seq(item.seq, message)
+            else:
+                self._reply_in_order(message, now)
+        else:
+            wire = self._wire
+            if isinstance(wire, BinaryWire) and item.seq:
+                kind = wire.receiver.classify(item.seq, item.sync)
+                if kind != arq.OUT_OF_ORDER:
+                    self._write(wire.ack(item.seq))
+                if kind != arq.NEW:
+                    return
+            self._event(event_from_message(message, now))
+
+    def _reply_in_order(self, reply: Reply, now: float) -> None:
+        for i, p in enumerate(self._outstanding):
+            if p.accepts(reply):
+                for lost in self._outstanding[:i]:
+                    lost._fail(ProtocolError(f"no reply to {lost.line}: a later reply came first"))
+                del self._outstanding[: i + 1]
+                self._complete(p, reply)
+                self._hello_answered = isinstance(reply, HelloReply)
+                self._synced = True
+                return
+        event = event_from_message(reply, now)
+        if isinstance(event, ResetEvent) and (self._hello_answered or not self._synced):
+            # The greeting of a controller that started as we connected (no reply matched yet), or
+            # the HELLO line taken as the answer to our HELLO was the greeting and this is the
+            # answer: report the reset, but the commands waiting may still be answered.
+            self._hello_answered = False
+            self.last_hello = event.hello
+            self._listeners.dispatch(event)
+            return
+        self._event(event)
+
+    def _reply_by_seq(self, seq: int, reply: Reply) -> None:
+        wire = self._wire
+        assert isinstance(wire, BinaryWire)
+        wire.sender.ack(seq)
+        for i, p in enumerate(self._outstanding):
+            if p.seq == seq:
+                for lost in self._outstanding[:i]:
+                    if lost.abandoned:
+                        lost._fail(LinkTimeout(f"no reply to {lost.line}: abandoned by a SYNC frame"))
+                self._outstanding = [q for q in self._outstanding[:i] if not q.done] + self._outstanding[
+                    i + 1 :
+                ]
+                self._complete(p, reply)
+                return
+        # a duplicate reply to a retransmitted command, or a late one: nothing waits for it
+
+    def _complete(self, pending: Pending, reply: Reply) -> None:
+        pending.reply = reply
+        if isinstance(reply, ErrorReply):
+            pending.error = controller_error(reply.code, reply.description, pending.line)
+            return
+        command = pending.command
+        if isinstance(reply, StatusReply):
+            self._mode = reply.mode
+            self._moving = reply.state == codes.STATE_MOVING
+        elif isinstance(reply, HelloReply):
+            self.last_hello = Hello.from_reply(reply)
+        elif isinstance(command, MOTION):
+            self._moving = True
+        elif isinstance(command, Stop):
+            self._moving = False
+        elif isinstance(command, Mode):
+            self._mode = command.mask
+            binary = bool(command.mask & codes.MODE_BINARY)
+            if binary != self.binary:
+                self._wire = BinaryWire() if binary else TextWire()
+
+    def _event(self, event: Event) -> None:
+        if isinstance(event, IdleEvent):
+            self._moving = False
+        elif isinstance(event, ResetEvent):
+            self._reset(event)
+            return
+        self._listeners.dispatch(event)
+
+    def _reset(self, event: Event) -> None:
+        assert isinstance(event, ResetEvent)
+        self.last_hello = event.hello
+        for p in self._outstanding:
+            p._fail(ControllerReset(f"the controller restarted before answering {p.line}"))
+        self._outstanding.clear()
+        self._moving = False
+        self._mode = None
+        if self.binary:
+            self._wire = TextWire()
+        self._listeners.dispatch(event)
+
+    # ------------------------------------------------------------------ link
+
+    def _service(self) -> None:
+        wire = self._wire
+        if isinstance(wire, BinaryWire):
+            for frame in wire.service(round(self.clock.now() * 1000)):
+                self._write(frame)
+            self._give_up(wire.take_failed())
+
+    def _give_up(self, seqs: list[int]) -> None:
+        if not seqs:
+            return
+        for p in self._outstanding:
+            if p.seq in seqs:
+                p._fail(
+                    LinkTimeout(
+                        f"no reply to {p.line} after {codes.RETRIES} retries; it may or may not have run"
+                    )
+                )
+        self._outstanding = [p for p in self._outstanding if not p.done]
+
+    def _write(self, data: bytes) -> None:
+        try:
+            self.link.write(data)
+        except LinkError as exc:
+            self._link_failed(exc)
+            raise
+
+    def _read(self, timeout: float) -> bytes:
+        try:
+            return self.link.read(4096, timeout)
+        except LinkError as exc:
+            self._link_failed(exc)
+            raise
+
+    def _link_failed(self, exc: LinkError) -> None:
+        for p in self._outstanding:
+            p._fail(exc)
+        self._outstanding.clear()
+        self._wire = BinaryWire() if self.binary else TextWire()
+        self._moving = False
+        self._broken = True
+        self._synced = False
+        if self.reconnect is not None and not self.link.closed:
+            try:
+                self.link.reopen(retry=self.reconnect)
+                self._broken = False
+            except LinkError:
+                pass
+
+    def _ensure_open(self) -> None:
+        if self.link.closed:
+            raise LinkError(f"link {self.link.url} is closed")
+        if self._broken:
+            if self.reconnect is None:
+                raise LinkError(f"link {self.link.url} failed and reconnecting is off")
+            self.link.reopen(retry=self.reconnect)
+            self._broken = False
+
+    # ------------------------------------------------------------------ lifetime
+
+    def close(self) -> None:
+        """Close the link (idempotent). The controller stays in its mode (see use_text)."""
+        self.link.close()
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        proto = "binary" if self.binary else "text"
+        return f"<RobotClient {self.link.url!r} {proto} outstanding={len(self._outstanding)}>"

@@ -1,0 +1,97 @@
+"""SI views of the controller's query replies: :class:`Hello` and :class:`Status`."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from omnibot.protocol import codes, units
+from omnibot.protocol.messages import HelloReply, StatusReply
+
+
+@dataclass(frozen=True)
+class Hello:
+    """``HELLO,<version>,<robot name>,<motors>``: what the controller is."""
+
+    version: int
+    name: str
+    motors: int
+
+    @classmethod
+    def from_reply(cls, reply: HelloReply) -> Hello:
+        return cls(reply.version, reply.name, reply.motors)
+
+
+def _distance(cm: int) -> float:
+    return math.copysign(math.inf, cm) if abs(cm) == codes.INF else units.from_cm(cm)
+
+
+@dataclass(frozen=True)
+class MoveState:
+    """The remembered MOVE (the base of DELTA) in SI: m (+-inf: endless), m/s, rad, 1/m."""
+
+    distance: float
+    speed: float
+    course: float
+    curvature: float
+
+    @classmethod
+    def from_protocol(cls, move: tuple[int, int, int, int]) -> MoveState:
+        L, V, D, C = move
+        return cls(_distance(L), units.from_cm(V), units.from_deg(D), units.from_curvature(C))
+
+
+STATE_NAMES = {codes.STATE_MOVING: "moving", codes.STATE_IDLE: "idle", codes.STATE_ESTOP: "estop"}
+
+
+@dataclass(frozen=True)
+class Status:
+    """The STATUS reply: state, queue, MODE bits, motor powers (raw counts), remembered MOVE."""
+
+    state: int
+    queued: int
+    capacity: int
+    mode: int
+    powers: tuple[int, ...]
+    move: MoveState
+
+    @classmethod
+    def from_reply(cls, reply: StatusReply) -> Status:
+        return cls(
+            reply.state,
+            reply.queued,
+            reply.capacity,
+            reply.mode,
+            tuple(reply.powers),
+            MoveState.from_protocol(reply.move),
+        )
+
+    @property
+    def state_name(self) -> str:
+        """``moving``, ``idle`` or ``estop`` (or the number of an unknown state)."""
+        return STATE_NAMES.get(self.state, str(self.state))
+
+    @property
+    def moving(self) -> bool:
+        return self.state == codes.STATE_MOVING
+
+    @property
+    def idle(self) -> bool:
+        return self.state == codes.STATE_IDLE
+
+    @property
+    def estop(self) -> bool:
+        """True while the sonar emergency stop is latched (motion gets ERROR 40 until STOP)."""
+        return self.state == codes.STATE_ESTOP
+
+    @property
+    def simulation(self) -> bool:
+        return bool(self.mode & codes.MODE_SIMULATION)
+
+    @property
+    def closed_loop(self) -> bool:
+        return bool(self.mode & codes.MODE_CLOSED_LOOP)
+
+    @property
+    def binary(self) -> bool:
+        return bool(self.mode & codes.MODE_BINARY)

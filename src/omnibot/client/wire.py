@@ -1,0 +1,112 @@
+"""The two wire formats the client speaks: text lines and binary frames with ARQ (no I/O).
+
+Both turn a command into bytes (``frame``) and received bytes into packets (``feed``), lazily, so
+the client can stop at the reply that switches protocols and hand the rest over (``rest``)::
+
+    TextWire:    command -> "MOVE,2,40,0,0\\n"        bytes -> Packet(message, seq=0) | Malformed
+    BinaryWire:  command -> frame (seq, SYNC, retry)  bytes -> Packet(message, seq, event) | Malformed
+                 + ack(seq) for events, service(now_ms) for retransmissions (arq.Sender)
+
+A binary controller that resets speaks text again and greets with ``HELLO,...\\r\\n``;
+:class:`BinaryWire` spots that line between frames and reports it as a HELLO packet with
+``event=True`` (the client then treats it as a reset and goes back to text).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterator
+from typing import Final
+
+from omnibot.protocol import arq, binary, text
+from omnibot.protocol.binary import Packet
+from omnibot.protocol.messages import Ack, Command, HelloReply, Malformed, Stop
+from omnibot.protocol.messages import Hello as HelloCommand
+
+_RESET_RE: Final = re.compile(rb"HELLO,(\d+),([^,\r\n\x00]+),(\d+)\r\n")
+_TAIL_MAX = 300
+
+
+class TextWire:
+    """The line protocol: commands end with LF; replies are matched in order by the client."""
+
+    binary = False
+
+    def __init__(self) -> None:
+        self._decoder = text.TextDecoder()
+
+    def ready(self) -> bool:
+        return True
+
+    def frame(self, command: Command, now_ms: int) -> tuple[int, bytes]:
+        """(seq, bytes) of a command; seq is 0 in text."""
+        return 0, text.encode(command)
+
+    def feed(self, data: bytes) -> Iterator[Packet | Malformed]:
+        for message in self._decoder.feed(data):
+            yield message if isinstance(message, Malformed) else Packet(message)
+
+    def rest(self) -> bytes:
+        return self._decoder.rest()
+
+    def service(self, now_ms: int) -> list[bytes]:
+        return []
+
+    def take_failed(self) -> list[int]:
+        return []
+
+
+class BinaryWire:
+    """Binary frames: sequence numbers, retries and SYNC for commands, in-order events with ACKs."""
+
+    binary = True
+
+    def __init__(self) -> None:
+        self._decoder = binary.BinaryDecoder()
+        self.sender = arq.Sender()
+        self.receiver = arq.Receiver()
+        self._tail = b""  # bytes since the last 0x00, to spot a reset HELLO line
+        self._after_reset: bytes | None = None
+
+    def ready(self) -> bool:
+        """True if the send window has room for another command."""
+        return self.sender.ready()
+
+    def frame(self, command: Command, now_ms: int) -> tuple[int, bytes]:
+        """Allocate a seq (STOP and HELLO with SYNC, abandoning what is pending), encode, track."""
+        binary.encode(command, 1)  # raises ProtocolError before a seq is used up
+        seq, sync = self.sender.allocate(sync=isinstance(command, Stop | HelloCommand))
+        data = binary.encode(command, seq, sync=sync)
+        self.sender.track(seq, data, now_ms)
+        return seq, data
+
+    def ack(self, seq: int) -> bytes:
+        return binary.encode(Ack(), seq)
+
+    def feed(self, data: bytes) -> Iterator[Packet | Malformed]:
+        yield from self._decoder.feed(data)
+        cut = data.rfind(b"\x00")
+        self._tail = (data[cut + 1 :] if cut >= 0 else self._tail + data)[-_TAIL_MAX:]
+        found = _RESET_RE.search(self._tail)
+        if found:
+            self._after_reset = self._tail[found.end() :]
+            self._tail = b""
+            hello = HelloReply(int(found[1]), found[2].decode("ascii", "replace"), int(found[3]))
+            yield Packet(hello, 0, event=True)
+
+    def rest(self) -> bytes:
+        pending = self._decoder.rest()
+        if self._after_reset is not None:
+            pending, self._after_reset = self._after_reset, None
+        return pending
+
+    def service(self, now_ms: int) -> list[bytes]:
+        """Frames to retransmit now."""
+        return self.sender.poll(now_ms)
+
+    def take_failed(self) -> list[int]:
+        """Seqs given up on (after the retries) or abandoned by a SYNC frame."""
+        return self.sender.take_failed()
+
+
+Wire = TextWire | BinaryWire

@@ -1,0 +1,367 @@
+"""``omnibot send`` and ``omnibot console``: the protocol by hand, over any link URL.
+
+``send`` is one-shot: it sends the commands given on the command line, prints every reply and the
+events seen until the replies are in (with ``--wait-idle`` until IDLE), and exits 0 if every
+reply was OK, 1 if any was an ERROR, 2 for bad input or a link error.
+
+``console`` is an interactive terminal: lines typed are sent as they are; replies and decoded
+events are printed as they come (``<- RANGE sonar 1: 42 cm``), also while the prompt waits.
+Lines starting with ``:`` are console commands (``:help``). With a terminal, input is read with
+readline (history in ``~/.omnibot_history``) in a helper thread while the main thread keeps the
+link pumped; on ``sim://`` the main thread also advances simulated time with the wall clock, so
+the simulated robot lives in real time while you type. With piped input there is no helper
+thread: lines are handled one after the other, and simulated time advances only while waiting
+for replies and with ``:wait``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import math
+import os
+import queue
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterable
+from pathlib import Path
+from typing import TextIO
+
+from omnibot.client import (
+    ErrorEvent,
+    Event,
+    IdleEvent,
+    RangeEvent,
+    ResetEvent,
+    RobotClient,
+    Telemetry,
+    Unexpected,
+    WarnEvent,
+)
+from omnibot.errors import ControllerError, LinkError, LinkTimeout, ProtocolError
+from omnibot.protocol import codes, text
+from omnibot.protocol.messages import Malformed, Reply
+
+DEFAULT_PORT = "sim://omni4"
+HISTORY = Path("~/.omnibot_history")
+PROMPT = "> "
+QUIT = (":quit", ":q", ":exit")
+
+HELP = """\
+Type protocol commands (several per line with ';'), e.g. MOVE,20,40,0,0  STATUS  STOP
+Console commands:
+  :help              this text
+  :quit              leave (also :q, :exit, Ctrl-D)
+  :tel on|off        show or hide TEL lines (shown by default)
+  :wait SECONDS      let time pass, showing events
+  :idle [SECONDS]    wait for IDLE (default 30 s)
+  :status            STATUS in SI units
+  :binary / :text    switch the protocol (replies and events look the same)"""
+
+
+# ------------------------------------------------------------------ formatting
+
+
+def format_reply(reply: Reply) -> str:
+    """A reply as its text line: ``<- OK``, ``<- ERROR,23,unknown command``."""
+    return "<- " + text.encode(reply).decode("ascii").rstrip()
+
+
+def _list(values: Iterable[object]) -> str:
+    return ",".join(str(v) for v in values)
+
+
+def format_telemetry(tel: Telemetry) -> str:
+    """A TEL sample on one line, in readable units."""
+    parts = [f"<- TEL {tel.controller_time:.3f} s"]
+    if tel.powers is not None:
+        parts.append(f"pwr {_list(tel.powers)}")
+    if tel.encoders is not None:
+        parts.append(f"enc {_list(tel.encoders)}")
+    if tel.tracking:
+        parts.append(f"trk {_list(tel.tracking)}")
+    if tel.gyro_rate is not None:
+        parts.append(f"gyro {math.degrees(tel.gyro_rate):.1f} deg/s")
+    if tel.heading is not None:
+        parts.append(f"hdg {math.degrees(tel.heading):.1f} deg")
+    if tel.battery is not None:
+        parts.append(f"bat {tel.battery:.2f} V")
+    if tel.state is not None:
+        state = {codes.STATE_MOVING: "moving", codes.STATE_IDLE: "idle", codes.STATE_ESTOP: "estop"}
+        parts.append(f"{state.get(tel.state, tel.state)} q{tel.queued}")
+    if tel.ranges is not None:
+        ranges = ["-" if r is None else f"{round(r * 100)}cm" for r in tel.ranges]
+        parts.append(f"sonar {_list(ranges)}")
+    return " ".join(parts)
+
+
+def format_event(event: Event) -> str:
+    """An event on one line: ``<- RANGE sonar 1: 42 cm``, ``<- WARN 13 emergency stop by sonar``."""
+    if isinstance(event, RangeEvent):
+        where = "no echo" if event.distance is None else f"{round(event.distance * 100)} cm"
+        return f"<- RANGE sonar {event.sonar}: {where}"
+    if isinstance(event, WarnEvent):
+        return f"<- WARN {event.code} {event.text}"
+    if isinstance(event, ErrorEvent):
+        return f"<- ERROR {event.code} {event.text} (no command waiting)"
+    if isinstance(event, IdleEvent):
+        return "<- IDLE"
+    if isinstance(event, Telemetry):
+        return format_telemetry(event)
+    if isinstance(event, ResetEvent):
+        h = event.hello
+        return f"<- HELLO,{h.version},{h.name},{h.motors} (controller reset)"
+    if isinstance(event, Unexpected):
+        msg = event.message
+        raw = msg.raw if isinstance(msg, Malformed) else msg
+        return f"<- ?? {event.reason}: {raw!r}"
+    return f"<- {event}"
+
+
+# ------------------------------------------------------------------ send
+
+
+def run_send(args: argparse.Namespace, out: TextIO | None = None) -> int:
+    """``omnibot send``: exit status 0 all OK, 1 an ERROR reply, 2 bad input or link trouble."""
+    out = out or sys.stdout
+    for line in args.commands:
+        if not line.isascii():
+            print(f"omnibot: error: commands are ASCII only: {line!r}", file=sys.stderr)
+            return 2
+    status = 0
+    with RobotClient.open(args.port, timeout=args.timeout, reconnect=None) as client:
+
+        def show(event: Event) -> None:
+            print(format_event(event), file=out, flush=True)
+
+        client.add_listener(show)
+        if args.binary:
+            client.use_binary()
+        for line in args.commands:
+            pendings = client.submit_text(line)
+            for p in pendings:
+                print(f"-> {p.line}", file=out, flush=True)
+            for p in pendings:
+                try:
+                    p.result()
+                except ControllerError:
+                    status = 1
+                if p.reply is not None:
+                    print(format_reply(p.reply), file=out, flush=True)
+        if args.wait_idle:
+            client.wait_idle(args.idle_timeout)
+        client.pump(0)
+        client.use_text()
+    return status
+
+
+# ------------------------------------------------------------------ console
+
+
+class Console:
+    """The interactive console's state: the client, where to print, whether TEL is shown."""
+
+    def __init__(self, client: RobotClient, out: TextIO, echo: bool) -> None:
+        self.client = client
+        self.out = out
+        self.echo = echo
+        self.show_tel = True
+        self.prompting = False
+        """True while the input thread shows the prompt: events are printed above it."""
+        client.add_listener(self._event)
+
+    def say(self, line: str) -> None:
+        print(line, file=self.out, flush=True)
+
+    def _event(self, event: Event) -> None:
+        if not self.show_tel and isinstance(event, Telemetry):
+            return
+        if self.prompting and self.out.isatty():  # above the prompt, then show it again as typed
+            self.out.write(f"\r\x1b[K{format_event(event)}\n{PROMPT}{_typed()}")
+            self.out.flush()
+        else:
+            self.say(format_event(event))
+
+    def handle(self, line: str) -> bool:
+        """Handle one input line; False to quit."""
+        line = line.strip()
+        if not line:
+            self.client.pump(0)
+            return True
+        if self.echo:
+            self.say(f"-> {line}")
+        try:
+            if line.startswith(":"):
+                return self._meta(line)
+            self._send(line)
+        except LinkTimeout as exc:
+            self.say(f"!! {exc}")
+        except LinkError as exc:
+            self.say(f"!! link error: {exc}")
+        except (ProtocolError, ValueError) as exc:
+            self.say(f"!! {exc}")
+        return True
+
+    def _send(self, line: str) -> None:
+        for p in self.client.submit_text(line):
+            with contextlib.suppress(ControllerError):
+                p.result()
+            if p.reply is not None:
+                self.say(format_reply(p.reply))
+
+    def _meta(self, line: str) -> bool:
+        word, *rest = line.split()
+        word = word.lower()
+        client = self.client
+        if word in QUIT:
+            return False
+        if word == ":help":
+            self.say(HELP)
+        elif word == ":tel" and rest and rest[0].lower() in ("on", "off"):
+            self.show_tel = rest[0].lower() == "on"
+        elif word == ":wait" and len(rest) == 1:
+            client.sleep(_seconds(rest[0]))
+        elif word == ":idle" and len(rest) <= 1:
+            client.wait_idle(_seconds(rest[0]) if rest else 30.0)
+            self.say("idle")
+        elif word == ":status" and not rest:
+            s = client.status()
+            m = s.move
+            self.say(
+                f"{s.state_name}, {s.queued}/{s.capacity} queued, mode {s.mode}, powers {_list(s.powers)}; "
+                f"move {m.distance:g} m at {m.speed:g} m/s, course {math.degrees(m.course):g} deg, "
+                f"curvature {m.curvature:g} 1/m"
+            )
+        elif word == ":binary" and not rest:
+            h = client.use_binary()
+            self.say(f"binary protocol, version {h.version}")
+        elif word == ":text" and not rest:
+            client.use_text()
+            self.say("text protocol")
+        else:
+            self.say(f"?? unknown console command {line!r}; :help lists them")
+        return True
+
+
+def _seconds(word: str) -> float:
+    try:
+        value = float(word)
+    except ValueError:
+        raise ValueError(f"expected seconds, got {word!r}") from None
+    if not 0 <= value < math.inf:
+        raise ValueError(f"expected seconds >= 0, got {word!r}")
+    return value
+
+
+def run_console(
+    args: argparse.Namespace,
+    stdin: TextIO | None = None,
+    out: TextIO | None = None,
+    interactive: bool | None = None,
+    input_fn: Callable[[str], str] = input,
+) -> int:
+    """``omnibot console``; ``interactive`` defaults to whether ``stdin`` is a terminal."""
+    stdin = stdin or sys.stdin
+    out = out or sys.stdout
+    if interactive is None:
+        interactive = stdin.isatty()
+    with RobotClient.open(args.port, timeout=args.timeout) as client:
+        console = Console(client, out, echo=not interactive)
+        if interactive:
+            console.say(f"omnibot console on {client.link.url}; :help for help, :quit to leave")
+            _interactive(console, input_fn)
+        else:
+            for line in stdin:
+                if not console.handle(line):
+                    break
+                client.pump(0)
+        try:
+            client.drain()
+            client.pump(0)
+            client.use_text()
+        except LinkError as exc:
+            console.say(f"!! {exc}")
+    return 0
+
+
+def _interactive(console: Console, input_fn: Callable[[str], str]) -> None:
+    """Read lines in a helper thread (readline, history); pump the link in this one."""
+    history = _load_history()
+    lines: queue.Queue[str | None] = queue.Queue()
+    ready = threading.Event()
+    ready.set()
+
+    def reader() -> None:
+        try:
+            while True:
+                ready.wait()
+                ready.clear()
+                console.prompting = True
+                line = input_fn(PROMPT)
+                console.prompting = False
+                lines.put(line)
+                if line.strip().lower() in QUIT:
+                    return
+        except (EOFError, KeyboardInterrupt):
+            pass
+        finally:
+            lines.put(None)
+
+    thread = threading.Thread(target=reader, name="omnibot-console-input", daemon=True)
+    thread.start()
+    client = console.client
+    clock = client.clock
+    wall0, clock0 = time.monotonic(), clock.now()
+    try:
+        while True:
+            try:
+                line = lines.get(timeout=0.05)
+            except queue.Empty:
+                line = ""
+            else:
+                if line is None:
+                    break
+                if not console.handle(line):
+                    break
+                ready.set()
+                wall0, clock0 = time.monotonic(), clock.now()
+            ahead = clock0 + (time.monotonic() - wall0) - clock.now()
+            if ahead > 0.001:  # simulated time: keep up with the wall clock while waiting for input
+                client.sleep(ahead)
+            else:
+                client.pump(0)
+    finally:
+        ready.set()
+        thread.join(timeout=0.5)
+        _save_history(history)
+
+
+def _typed() -> str:
+    """What the user has typed at the prompt so far (readline's buffer)."""
+    try:
+        import readline
+    except ImportError:  # pragma: no cover
+        return ""
+    return readline.get_line_buffer()
+
+
+def _load_history() -> Path | None:
+    try:
+        import readline
+    except ImportError:  # pragma: no cover - no readline on this platform
+        return None
+    path = Path(os.path.expanduser(str(HISTORY)))
+    with contextlib.suppress(OSError):
+        readline.read_history_file(path)
+    readline.set_history_length(1000)
+    return path
+
+
+def _save_history(path: Path | None) -> None:
+    if path is None:
+        return
+    import readline
+
+    with contextlib.suppress(OSError):
+        readline.write_history_file(path)

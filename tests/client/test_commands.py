@@ -1,0 +1,169 @@
+"""SI -> protocol commands: conversion, rounding to the protocol's resolution, checks before sending."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from omnibot.client import Limits
+from omnibot.client import commands as c
+from omnibot.protocol import codes
+from omnibot.protocol.messages import Cal, Delta, Mode, Move, Power, Rotate, Sonar, Telem, Vel
+from omnibot.robot.description import CalibrationSpec, CourseTable, PiecewiseLinear
+
+OMNI4 = Limits.from_robot("omni4")
+ANY = Limits()
+
+
+def test_limits_from_robot_match_the_firmware_config() -> None:
+    assert OMNI4.robot == "omni4"
+    assert (OMNI4.distance_max_cm, OMNI4.speed_min_cms, OMNI4.speed_max_cms) == (500.0, 30.0, 100.0)
+    assert (OMNI4.curvature_max, OMNI4.motors, OMNI4.pwm_max) == (100.0, 4, 255)
+    assert OMNI4.sonar_period_min_ms == (60,) and OMNI4.has_encoders
+    assert math.isclose(OMNI4.rate_max_dps, math.degrees(15.7))
+    assert ANY.robot is None and ANY.motors is None
+
+
+def test_move_converts_and_rounds() -> None:
+    assert c.move(OMNI4, 0.5, 0.4) == Move(50, 40, 0, 0)
+    assert c.move(OMNI4, 0.123, 0.456, math.radians(10.4), 2.04) == Move(12, 46, 10, 20)
+    assert c.move(OMNI4, -0.2, 0.3, -math.pi / 2) == Move(-20, 30, -90, 0)
+    assert c.move(OMNI4, math.inf, 0.4) == Move(codes.INF, 40, 0, 0)
+    assert c.move(OMNI4, -math.inf, 0.4) == Move(-codes.INF, 40, 0, 0)
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        ((5.0, 0.4), "distance 5 is 500 cm, outside abs(L) < 500 cm"),
+        ((0.5, 0.2), "speed 0.2 is 20 cm/s, outside 30 <= abs(V) <= 100 cm/s"),
+        ((0.5, 1.2), "speed"),
+        ((0.5, 0.0), "speed"),
+        ((0.5, 0.4, 2 * math.pi), "course"),
+        ((0.5, 0.4, 0.0, 10.0), "curvature 10 is 100 1/(1000 cm)"),
+        ((math.nan, 0.4), "finite"),
+        ((0.5, math.inf), "finite"),
+        ((400.0, 0.4), "16-bit"),
+    ],
+)
+def test_move_rejects_out_of_range(args: tuple[float, ...], words: str) -> None:
+    with pytest.raises(ValueError, match="MOVE") as info:
+        c.move(OMNI4, *args)
+    assert words in str(info.value)
+
+
+def test_protocol_only_limits_allow_what_the_protocol_allows() -> None:
+    assert c.move(ANY, 20.0, 2.0) == Move(2000, 200, 0, 0)
+    with pytest.raises(ValueError, match=r"use math\.inf"):
+        c.move(ANY, 300.0, 1.0)  # 30000 cm would mean INF
+    with pytest.raises(ValueError, match="speed"):
+        c.move(ANY, 1.0, 0.001)  # rounds to 0 cm/s
+
+
+def test_move_type_errors() -> None:
+    with pytest.raises(TypeError):
+        c.move(OMNI4, "1", 0.4)  # type: ignore[arg-type]
+    with pytest.raises(TypeError):
+        c.move(OMNI4, True, 0.4)
+
+
+def test_delta() -> None:
+    assert c.delta(OMNI4, course=math.radians(10), repeat=36) == Delta(0, 0, 10, 0, 36)
+    assert c.delta(OMNI4, 0.01, -0.05, repeat=math.inf) == Delta(1, -5, 0, 0, codes.INF)
+    assert c.delta(OMNI4, 9.99, 2.0, math.radians(719), 19.9) == Delta(999, 200, 719, 199, 0)
+    for kwargs in ({"distance": 10.0}, {"speed": 2.01}, {"course": math.radians(720)}, {"curvature": 20.0}):
+        with pytest.raises(ValueError, match="DELTA"):
+            c.delta(OMNI4, **kwargs)
+    for repeat in (-1, 30001, 1.5, -math.inf, True):
+        with pytest.raises(ValueError, match="repeat"):
+            c.delta(OMNI4, repeat=repeat)
+
+
+def test_rotate() -> None:
+    assert c.rotate(OMNI4, math.pi, math.pi / 2) == Rotate(180, 90)
+    assert c.rotate(OMNI4, -math.inf, 1.0) == Rotate(-codes.INF, 57)
+    assert c.rotate(OMNI4, 10 * math.pi, -2.0) == Rotate(1800, -115)
+    with pytest.raises(ValueError, match="rate"):
+        c.rotate(OMNI4, 1.0, 0.001)
+    with pytest.raises(ValueError, match="rate"):
+        c.rotate(OMNI4, 1.0, 15.7)  # 900 deg/s, not below the limit
+    with pytest.raises(ValueError, match="angle"):
+        c.rotate(OMNI4, math.radians(30000), 1.0)
+
+
+def test_power() -> None:
+    assert c.power(OMNI4, 0.25, [10, -20, 255, -255]) == Power(250, (10, -20, 255, -255))
+    with pytest.raises(ValueError, match="4 powers"):
+        c.power(OMNI4, 0.25, [10, 20])
+    with pytest.raises(ValueError, match=r"1\.\.4"):
+        c.power(ANY, 0.25, [1, 2, 3, 4, 5])
+    with pytest.raises(ValueError, match="power 3 = 256"):
+        c.power(OMNI4, 0.25, [0, 0, 256, 0])
+    with pytest.raises(TypeError, match="integer"):
+        c.power(OMNI4, 0.25, [0, 0, 1.5, 0])  # type: ignore[list-item]
+    for t in (0.0, 0.0004, 30.001):
+        with pytest.raises(ValueError, match="time"):
+            c.power(OMNI4, t, [0, 0, 0, 0])
+
+
+def test_vel() -> None:
+    assert c.vel(OMNI4, 0.35, -0.2, math.radians(45), 0.1) == Vel(35, -20, 45, 100)
+    with pytest.raises(ValueError, match="exceeds"):
+        c.vel(OMNI4, 0.8, 0.8, 0.0, 0.1)
+    with pytest.raises(ValueError, match="w"):
+        c.vel(OMNI4, 0.0, 0.0, 16.0, 0.1)
+    for t in (0.0, 1.001, 2.0):
+        with pytest.raises(ValueError, match="timeout"):
+            c.vel(OMNI4, 0.1, 0.0, 0.0, t)
+
+
+def test_mode() -> None:
+    assert c.mode(OMNI4, 3) == Mode(3)
+    with pytest.raises(ValueError, match="use_binary"):
+        c.mode(OMNI4, codes.MODE_BINARY)
+    with pytest.raises(ValueError, match="bits"):
+        c.mode(OMNI4, 8)
+    with pytest.raises(ValueError, match="encoders"):
+        c.mode(Limits(has_encoders=False, robot="bare"), codes.MODE_CLOSED_LOOP)
+
+
+def test_sonar_and_telem() -> None:
+    assert c.sonar(OMNI4, 1, 0.1, 0.2, 3.0, 0.25) == Sonar(1, 100, 20, 300, 25)
+    assert c.sonar(OMNI4, 1, 0) == Sonar(1, 0, 0, 0, 0)
+    with pytest.raises(ValueError, match=r"numbered 1\.\.1"):
+        c.sonar(OMNI4, 2, 0.1)
+    with pytest.raises(ValueError, match="period"):
+        c.sonar(OMNI4, 1, 0.05)
+    with pytest.raises(ValueError, match="high"):
+        c.sonar(OMNI4, 1, 0.1, 0.0, 5.01)
+    assert c.sonar(ANY, 3, 0.06) == Sonar(3, 60, 0, 0, 0)
+    assert c.telem(OMNI4, 0.05) == Telem(50, 255)
+    assert c.telem(OMNI4, 0, 0) == Telem(0, 0)
+    with pytest.raises(ValueError, match="period"):
+        c.telem(OMNI4, 0.005)
+    with pytest.raises(ValueError, match="mask"):
+        c.telem(OMNI4, 0.1, 256)
+
+
+def test_cal_and_calibration_upload() -> None:
+    assert c.cal(OMNI4, 1, 0, 40, 1300) == Cal(1, 0, 40, 1300)
+    with pytest.raises(ValueError, match="16-bit"):
+        c.cal(OMNI4, 1, 0, 40, 70000)
+    full = CalibrationSpec(
+        k=220.0,
+        k_t=PiecewiseLinear(x=(40.0, 255.0), y=(1.3, 0.95)),
+        k_l=CourseTable(
+            courses_deg=(0.0, 45.0),
+            curves=(PiecewiseLinear(x=(40.0,), y=(1.4,)), PiecewiseLinear(x=(40.0,), y=(1.1,))),
+        ),
+    )
+    assert c.calibration(full) == [
+        Cal(0, 0, 0, 2200),
+        Cal(1, 0, 40, 1300),
+        Cal(1, 1, 255, 950),
+        Cal(10, -1, 0, 0),
+        Cal(10, 0, 40, 1400),
+        Cal(11, -1, 45, 0),
+        Cal(11, 0, 40, 1100),
+    ]

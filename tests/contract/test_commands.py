@@ -1,0 +1,188 @@
+"""Every command's accepted path and the reply formats, on every backend."""
+
+from __future__ import annotations
+
+import itertools
+import math
+import re
+
+import pytest
+
+from omnibot.client import EventRecorder, IdleEvent, NotSupported, OutOfRange, RobotClient, Telemetry
+from omnibot.protocol import codes, units
+from omnibot.protocol.messages import Cal, Hello, Mode, Move, Status
+
+from .conftest import ROBOT, Backend, RawLink
+
+
+def test_hello_format(raw: RawLink) -> None:
+    raw.write(b"HELLO\n")
+    assert raw.line() == f"HELLO,1,{ROBOT},4\r\n".encode()
+    raw.write(b"hello,2,1\n")  # versions the host speaks: the highest shared one answers
+    assert raw.line() == f"HELLO,1,{ROBOT},4\r\n".encode()
+
+
+def test_hello_versions(client: RobotClient) -> None:
+    hello = client.hello([1])
+    assert (hello.version, hello.name, hello.motors) == (1, ROBOT, 4)
+    with pytest.raises(NotSupported) as info:
+        client.execute(Hello((2, 3)))
+    assert info.value.code == codes.E_UNSUPPORTED
+
+
+def test_status_format(raw: RawLink) -> None:
+    raw.write(b"STATUS\n")
+    assert raw.line() == b"STATUS,1,0,16,0;POWER,0,0,0,0;MOVE,0,0,0,0\r\n"
+    raw.write(b"MOVE,30000,40,90,0\nSTATUS\n")
+    ok, status = raw.replies(2)
+    assert ok == b"OK\r\n"
+    m = re.fullmatch(rb"STATUS,0,0,16,0;POWER,(-?\d+),(-?\d+),(-?\d+),(-?\d+);MOVE,30000,40,90,0\r\n", status)
+    assert m, status
+    assert any(int(p) != 0 for p in m.groups())
+    raw.write(b"STOP\nSTATUS\n")
+    assert raw.replies(2) == [b"OK\r\n", b"STATUS,1,0,16,0;POWER,0,0,0,0;MOVE,0,0,0,0\r\n"]
+
+
+def test_move_runs_then_idle(client: RobotClient) -> None:
+    rec = EventRecorder()
+    client.add_listener(rec, IdleEvent)
+    start = client.clock.now()
+    sent = client.move(0.1, 0.4)  # 10 cm at 40 cm/s: 0.25 s
+    assert sent == Move(10, 40, 0, 0)
+    assert client.status().moving
+    client.wait_idle(timeout=3)
+    took = rec.events[0].time - start
+    assert 0.2 <= took <= 0.6, took
+    status = client.status()
+    assert status.idle and status.powers == (0, 0, 0, 0)
+    assert status.move.distance == 0.1 and status.move.speed == 0.4
+
+
+def test_rotate(client: RobotClient) -> None:
+    start = client.clock.now()
+    assert client.rotate(math.radians(45), math.radians(180)).params() == (45, 180)
+    assert client.status().moving
+    client.wait_idle(timeout=3)
+    assert 0.2 <= client.clock.now() - start <= 0.7
+    assert client.status().move.speed == 0.0  # ROTATE leaves the remembered MOVE alone
+
+
+def test_delta_circle_and_remembered_move(client: RobotClient) -> None:
+    start = client.clock.now()
+    pendings = client.submit_text("MOVE,2,40,0,0;DELTA,0,0,10,0,3")
+    for p in pendings:
+        p.result()
+    client.wait_idle(timeout=3)
+    assert 0.15 <= client.clock.now() - start <= 0.6  # 4 moves of 50 ms
+    status = client.status()
+    assert status.idle
+    assert (status.move.distance, status.move.speed, round(math.degrees(status.move.course))) == (
+        0.02,
+        0.4,
+        30,
+    )
+
+
+def test_infinite_move_ends_at_next_command(client: RobotClient) -> None:
+    client.move(math.inf, 0.4)
+    client.sleep(0.1)
+    assert client.status().moving
+    client.move(0.1, 0.4)  # the endless MOVE stops at once, this one runs 0.25 s
+    start = client.clock.now()
+    client.wait_idle(timeout=3)
+    assert client.clock.now() - start <= 0.6
+    assert client.status().move.distance == 0.1
+
+
+def test_power(client: RobotClient) -> None:
+    client.power(0.2, [60, -60, 60, -60])
+    assert client.status().powers == (60, -60, 60, -60)
+    client.wait_idle(timeout=3)
+    assert client.status().powers == (0, 0, 0, 0)
+
+
+def test_mode_bits(client: RobotClient) -> None:
+    client.mode(simulation=True)
+    assert client.status().mode == codes.MODE_SIMULATION
+    client.mode(closed_loop=True)  # omni4 has motor encoders
+    status = client.status()
+    assert status.simulation and status.closed_loop
+    client.mode(0)
+    assert client.status().mode == 0
+
+
+def test_telemetry_stream(client: RobotClient) -> None:
+    rec = EventRecorder()
+    client.on_telemetry(rec)
+    client.telemetry(0.05, codes.TEL_MASK)
+    client.sleep(0.32)
+    client.telemetry(0)
+    samples = rec.of(Telemetry)
+    assert len(samples) >= 4
+    gaps = [b.controller_time - a.controller_time for a, b in itertools.pairwise(samples)]
+    assert all(0.045 <= g <= 0.055 for g in gaps), gaps
+    tel = samples[-1]
+    assert tel.powers == (0, 0, 0, 0)
+    assert tel.encoders is not None and len(tel.encoders) == 4
+    assert tel.tracking == ()
+    assert tel.gyro_rate is not None and tel.heading is not None
+    assert tel.battery is not None and 5.0 < tel.battery < 9.0
+    assert (tel.state, tel.queued) == (codes.STATE_IDLE, 0)
+    assert tel.ranges is not None and len(tel.ranges) == 1
+    rec.clear()
+    client.sleep(0.15)
+    assert rec.events == []
+
+
+def test_sonar_and_telem_settings(client: RobotClient) -> None:
+    assert client.sonar(1, 0.1, 0.2, 3.0, 0.0).params() == (1, 100, 20, 300, 0)
+    client.sonar(1, 0)
+    assert client.telemetry(0.1, codes.TEL_POWER | codes.TEL_QUEUE).params() == (100, 65)
+    client.telemetry(0)
+
+
+def test_cal_upload(client: RobotClient) -> None:
+    from omnibot.robot.description import load_robot
+
+    spec = load_robot(ROBOT).calibration
+    assert spec is not None
+    sent = client.upload_calibration(spec)  # the robot's own values: changes nothing
+    assert sent[0].params() == (codes.CAL_K, 0, 0, units.to_cal_k(spec.k))
+    assert all(isinstance(c, Cal) for c in sent)
+
+
+def test_stop_when_idle_sends_no_idle(client: RobotClient) -> None:
+    rec = EventRecorder()
+    client.add_listener(rec)
+    client.stop()
+    client.sleep(0.1)
+    assert rec.of(IdleEvent) == []
+
+
+def test_pipelined_replies_match_in_order(client: RobotClient) -> None:
+    pendings = [client.submit(c) for c in (Status(), Mode(0), Hello(), Status(), Move(0, 20, 0, 0))]
+    replies = [type(p.result()).__name__ for p in pendings[:4]]
+    assert replies == ["StatusReply", "Ok", "HelloReply", "StatusReply"]
+    with pytest.raises(OutOfRange) as info:
+        pendings[4].result()
+    assert info.value.code == codes.E_SPEED
+
+
+def test_binary_round_trip(client: RobotClient, backend: Backend) -> None:
+    rec = EventRecorder()
+    client.add_listener(rec)
+    hello = client.use_binary()
+    assert client.binary and (hello.version, hello.name) == (1, ROBOT)
+    assert client.status().binary
+    client.move(0.05, 0.4)
+    client.wait_idle(timeout=3)  # IDLE arrives as an event frame, acknowledged
+    assert rec.of(IdleEvent)
+    with pytest.raises(OutOfRange):
+        client.execute(Move(0, 20, 0, 0))
+    client.telemetry(0.05, codes.TEL_POWER | codes.TEL_QUEUE)
+    client.sleep(0.2)
+    client.telemetry(0)
+    assert len(rec.of(Telemetry)) >= 2
+    client.use_text()
+    assert not client.binary
+    assert client.status().mode == 0
