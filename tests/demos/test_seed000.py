@@ -1,0 +1,52 @@
+"""The main job: seed 000's examples through the whole stack, judged against ground truth."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+from omnibot.cli import main
+from omnibot.demos.seed000 import run_demo
+
+
+def achieved(report: str, example: int) -> str:
+    block = report.split(f"\n{example}. ", 1)[1]
+    return re.search(r"achieved:\s+(.*)", block).group(1)  # type: ignore[union-attr]
+
+
+def number(text: str, pattern: str) -> float:
+    return float(re.search(pattern, text).group(1))  # type: ignore[union-attr]
+
+
+def test_demo_in_lockstep_meets_the_seed_examples(tmp_path: Path) -> None:
+    report = run_demo("sim://omni4?world=room&seed=1", "omni4", tmp_path)
+    circle = achieved(report, 1)
+    assert number(circle, r"ends ([\d.]+) cm") < 5.0
+    assert abs(number(circle, r"heading ([+-][\d.]+) deg")) < 3.0
+    seed_spin = achieved(report, 2)
+    assert 30 < number(seed_spin, r"path bend \+?([+-]?[\d.]+) deg") < 120  # seed's C=-40 bends left
+    straight = achieved(report, 3)
+    assert abs(number(straight, r"path bend ([+-][\d.]+) deg")) < 15
+    assert -340 < number(straight, r"body turned ([+-][\d.]+) deg") < -260  # -200 deg/s for 1.5 s
+    rotate = achieved(report, 4)
+    assert abs(abs(number(rotate, r"heading ([+-]?[\d.]+) deg")) - 180) < 8
+    approach = achieved(report, 5)
+    assert approach.startswith("stopped")
+    assert 15 < number(approach, r"centre ([\d.]+) cm from the wall") < 40  # front 10 cm ahead of the centre
+    assert (tmp_path / "demo_trajectory.png").stat().st_size > 20_000
+    assert (tmp_path / "demo_truth.csv").read_text().startswith("t,x,y,theta\n")
+
+
+def test_demo_command_through_the_pty_emulator(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["demo", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "via client -> text protocol -> pty (115200 baud) -> firmware -> simulator" in out
+    assert achieved(out, 5).startswith("stopped")
+    assert abs(number(achieved(out, 3), r"path bend ([+-][\d.]+) deg")) < 15
+
+
+def test_demo_bad_port_is_a_clear_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["demo", "--port", "bogus://x", "--out", str(tmp_path)]) == 2
+    assert "omnibot: error:" in capsys.readouterr().err
