@@ -279,12 +279,11 @@ class Ok(_NoParams):
 
 
 @dataclass(frozen=True)
-class ErrorReply(_Message):
-    """``ERROR,<code>,<text>``: a rejected command, or (as an event) a fault of the motion logic."""
+class _Coded(_Message):
+    """A code with a text: ERROR and WARN."""
 
     code: int
     text: str = ""
-    TYPE: ClassVar[int] = codes.ERROR
 
     @property
     def description(self) -> str:
@@ -301,6 +300,13 @@ class ErrorReply(_Message):
     def from_params(cls, params: Sequence[int], label: str = "") -> Self:
         _count(cls, params, 1)
         return cls(params[0], label)
+
+
+@dataclass(frozen=True)
+class ErrorReply(_Coded):
+    """``ERROR,<code>,<text>``: a rejected command, or (as an event) a fault of the motion logic."""
+
+    TYPE: ClassVar[int] = codes.ERROR
 
 
 @dataclass(frozen=True)
@@ -372,28 +378,10 @@ class Range(_Message):
 
 
 @dataclass(frozen=True)
-class Warn(_Message):
+class Warn(_Coded):
     """``WARN,<code>,<text>``: a warning of the motion or sensor logic."""
 
-    code: int
-    text: str = ""
     TYPE: ClassVar[int] = codes.WARN
-
-    @property
-    def description(self) -> str:
-        """The text, or the standard text of the code when the controller sent none."""
-        return self.text or codes.TEXTS.get(self.code, "")
-
-    def params(self) -> tuple[int, ...]:
-        return (self.code,)
-
-    def label(self) -> str:
-        return self.text
-
-    @classmethod
-    def from_params(cls, params: Sequence[int], label: str = "") -> Self:
-        _count(cls, params, 1)
-        return cls(params[0], label)
 
 
 @dataclass(frozen=True)

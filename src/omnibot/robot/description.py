@@ -18,7 +18,6 @@ Wheel geometry is accepted in two forms (see docs/robot.md):
 
 from __future__ import annotations
 
-import difflib
 import math
 from collections.abc import Mapping
 from functools import cached_property
@@ -28,6 +27,7 @@ from typing import Any, Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from omnibot.config_errors import explain, suggest
 from omnibot.errors import ConfigError
 
 PRESET_DIR = Path(__file__).with_name("presets")
@@ -376,7 +376,7 @@ class RobotDescription(_Spec):
             raise ValueError(f"wheel names must be unique, got {names}")
         for enc in self.encoders.motors:
             if enc.wheel not in names:
-                raise ValueError(_unknown(f"encoders.motors wheel '{enc.wheel}'", enc.wheel, names))
+                raise ValueError(suggest(f"encoders.motors wheel '{enc.wheel}'", enc.wheel, names))
         return self
 
     @property
@@ -394,72 +394,10 @@ class RobotDescription(_Spec):
         for w in self.wheels:
             if w.name == name:
                 return w
-        raise ConfigError(_unknown("no such wheel", name, [w.name for w in self.wheels]))
+        raise ConfigError(suggest("no such wheel", name, [w.name for w in self.wheels]))
 
 
 # --------------------------------------------------------------------------- loading
-
-
-def _unknown(what: str, given: str, choices: list[str]) -> str:
-    close = difflib.get_close_matches(given, choices, n=1, cutoff=0.5)
-    hint = f"; did you mean '{close[0]}'?" if close else f"; expected one of: {', '.join(sorted(choices))}"
-    return what + hint
-
-
-def _model_at(loc: tuple[int | str, ...]) -> type[BaseModel] | None:
-    """The model class that owns the mapping at a validation-error location."""
-    model: Any = RobotDescription
-    for part in loc:
-        if isinstance(part, int):
-            continue
-        fields = model.model_fields if isinstance(model, type) and issubclass(model, BaseModel) else {}
-        field = fields.get(part)
-        if field is None:
-            return None
-        model = _inner_model(field.annotation)
-    return model if isinstance(model, type) and issubclass(model, BaseModel) else None
-
-
-def _inner_model(annotation: Any) -> Any:
-    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
-        return annotation
-    for arg in getattr(annotation, "__args__", ()):
-        found = _inner_model(arg)
-        if found is not None:
-            return found
-    return None
-
-
-def _format_loc(loc: tuple[int | str, ...]) -> str:
-    out = ""
-    for part in loc:
-        if isinstance(part, int):
-            out += f"[{part}]"
-        elif not (part.startswith("function-") or part in {"tuple[float, float]"}):
-            out += f".{part}" if out else part
-    return out
-
-
-def _explain(error: ValidationError, source: str) -> ConfigError:
-    lines = []
-    for item in error.errors():
-        loc = tuple(item["loc"])
-        key = _format_loc(loc) or "(top level)"
-        if item["type"] == "extra_forbidden":
-            owner = _model_at(loc[:-1])
-            valid = list(owner.model_fields) if owner else []
-            if owner is RobotDescription:
-                valid.append("motor")
-            lines.append(f"{key}: " + _unknown("unknown key", str(loc[-1]), valid))
-        elif item["type"] == "missing":
-            lines.append(f"{key}: required key is missing")
-        else:
-            msg = item["msg"].removeprefix("Value error, ")
-            given = item.get("input")
-            shown = "" if isinstance(given, Mapping | list) else f" (got {given!r})"
-            lines.append(f"{key}: {msg}{shown}")
-    head = f"invalid robot description {source}" if source else "invalid robot description"
-    return ConfigError(head + ":\n  " + "\n  ".join(lines))
 
 
 def parse_description(data: Any, source: str = "") -> RobotDescription:
@@ -471,7 +409,9 @@ def parse_description(data: Any, source: str = "") -> RobotDescription:
     try:
         return RobotDescription.model_validate(data)
     except ValidationError as exc:
-        raise _explain(exc, source) from None
+        raise explain(
+            exc, RobotDescription, "robot description", source, {RobotDescription: ["motor"]}
+        ) from None
 
 
 def load_description(path: str | Path) -> RobotDescription:
@@ -501,4 +441,4 @@ def load_robot(name_or_path: str | Path) -> RobotDescription:
     path = Path(text)
     if path.suffix in {".yaml", ".yml"} or path.exists():
         return load_description(path)
-    raise ConfigError(_unknown(f"unknown robot '{text}'", text, preset_names()))
+    raise ConfigError(suggest(f"unknown robot '{text}'", text, preset_names()))

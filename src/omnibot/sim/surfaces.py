@@ -16,9 +16,9 @@ across the path) rather than from a lookup.
 
 from __future__ import annotations
 
-import difflib
 from dataclasses import dataclass
 
+from omnibot.config_errors import suggest
 from omnibot.errors import ConfigError
 
 
@@ -86,8 +86,4 @@ def get_surface(surface: str | Surface) -> Surface:
     try:
         return SURFACES[surface]
     except KeyError:
-        close = difflib.get_close_matches(surface, list(SURFACES), n=1, cutoff=0.5)
-        hint = (
-            f"; did you mean '{close[0]}'?" if close else f"; expected one of: {', '.join(sorted(SURFACES))}"
-        )
-        raise ConfigError(f"unknown surface '{surface}'" + hint) from None
+        raise ConfigError(suggest(f"unknown surface '{surface}'", surface, SURFACES)) from None

@@ -36,9 +36,7 @@ where the simulator calls it every step):
 
 from __future__ import annotations
 
-import difflib
 import math
-import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -49,6 +47,7 @@ import yaml
 from numpy.typing import ArrayLike, NDArray
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from omnibot.config_errors import explain, suggest
 from omnibot.errors import ConfigError
 from omnibot.sim import kernels
 from omnibot.sim.surfaces import SURFACES
@@ -166,7 +165,7 @@ class ObstacleSpec(ShapeSpec):
 
 def _known_surface(name: str) -> str:
     if name not in SURFACES:
-        raise ValueError(_unknown(f"unknown surface '{name}'", name, list(SURFACES)))
+        raise ValueError(suggest(f"unknown surface '{name}'", name, list(SURFACES)))
     return name
 
 
@@ -206,68 +205,6 @@ class WorldSpec(_Spec):
 # --------------------------------------------------------------------------- loading
 
 
-def _unknown(what: str, given: str, choices: list[str]) -> str:
-    close = difflib.get_close_matches(given, choices, n=1, cutoff=0.5)
-    hint = f"; did you mean '{close[0]}'?" if close else f"; expected one of: {', '.join(sorted(choices))}"
-    return what + hint
-
-
-def _model_at(loc: tuple[int | str, ...]) -> type[BaseModel] | None:
-    model: Any = WorldSpec
-    for part in loc:
-        if isinstance(part, int):
-            continue
-        field = model.model_fields.get(part) if _is_model(model) else None
-        if field is None:
-            return None
-        model = next((a for a in _flatten(field.annotation) if _is_model(a)), None)
-    return model if _is_model(model) else None
-
-
-def _is_model(obj: Any) -> bool:
-    return isinstance(obj, type) and issubclass(obj, BaseModel)
-
-
-def _flatten(annotation: Any) -> list[Any]:
-    out = [annotation]
-    for arg in getattr(annotation, "__args__", ()):
-        out += _flatten(arg)
-    return out
-
-
-def _format_loc(loc: tuple[int | str, ...]) -> str:
-    out = ""
-    for part in loc:
-        if isinstance(part, int):
-            out += f"[{part}]"
-        elif not (part.startswith("function-") or part.startswith("tuple[")):
-            out += f".{part}" if out else part
-    return out
-
-
-def _explain(error: ValidationError, source: str) -> ConfigError:
-    lines = []
-    for item in error.errors():
-        loc = tuple(item["loc"])
-        key = _format_loc(loc) or "(top level)"
-        given = item.get("input")
-        if item["type"] == "extra_forbidden":
-            owner = _model_at(loc[:-1])
-            valid = list(owner.model_fields) if owner else []
-            lines.append(f"{key}: " + _unknown("unknown key", str(loc[-1]), valid))
-        elif item["type"] == "missing":
-            lines.append(f"{key}: required key is missing")
-        elif item["type"] == "literal_error" and isinstance(given, str):
-            choices = re.findall(r"'([^']*)'", str(item.get("ctx", {}).get("expected", "")))
-            lines.append(f"{key}: " + _unknown(f"unknown value {given!r}", given, choices))
-        else:
-            msg = item["msg"].removeprefix("Value error, ")
-            shown = "" if isinstance(given, Mapping | list) else f" (got {given!r})"
-            lines.append(f"{key}: {msg}{shown}")
-    head = f"invalid world {source}" if source else "invalid world"
-    return ConfigError(head + ":\n  " + "\n  ".join(lines))
-
-
 def parse_world(data: Any, source: str = "") -> World:
     """Validate a mapping (e.g. parsed YAML) into a :class:`World`."""
     if not isinstance(data, Mapping):
@@ -275,7 +212,7 @@ def parse_world(data: Any, source: str = "") -> World:
     try:
         spec = WorldSpec.model_validate(data)
     except ValidationError as exc:
-        raise _explain(exc, source) from None
+        raise explain(exc, WorldSpec, "world", source) from None
     return World(spec)
 
 
@@ -292,7 +229,7 @@ def load_world(name_or_path: str | Path) -> World:
     else:
         path = Path(text)
         if path.suffix not in {".yaml", ".yml"} and not path.exists():
-            raise ConfigError(_unknown(f"unknown world '{text}'", text, world_names()))
+            raise ConfigError(suggest(f"unknown world '{text}'", text, world_names()))
     try:
         raw = path.read_text(encoding="utf-8")
     except OSError as exc:
