@@ -366,3 +366,14 @@ def test_closed_client() -> None:
     with pytest.raises(LinkError, match="closed"):
         client.status()
     assert "RobotClient" in repr(client)
+
+
+def test_open_lets_the_power_up_greeting_settle() -> None:
+    """sim:// greets at time 0; a HELLO sent right after opening gets its own reply, not the greeting."""
+    resets: list[object] = []
+    with RobotClient.open("sim://omni4") as client:
+        client.on_reset(resets.append)
+        hello = client.hello()
+        client.sleep(0.1)
+    assert hello.name == "omni4"
+    assert resets == []  # the greeting was consumed while settling, and nothing else looked like one

@@ -191,9 +191,15 @@ class RobotClient(TypedCalls):
         self._synced = False  # text: a reply has been matched since the client started
 
     @classmethod
-    def open(cls, url: str, robot: RobotDescription | str | None = None, **options: object) -> RobotClient:
+    def open(
+        cls, url: str, robot: RobotDescription | str | None = None, *, settle: float = 0.05, **options: object
+    ) -> RobotClient:
         """Open ``url`` (see :func:`omnibot.transport.url.open_link`) and wrap it; for ``sim://PRESET``
-        the robot defaults to that preset. ``options`` go to the constructor."""
+        the robot defaults to that preset. ``options`` go to the constructor.
+
+        The new link is read for ``settle`` seconds before the first command, so a controller's
+        power-up ``HELLO`` (sim:// sends one at time 0) arrives as the greeting it is (a ResetEvent)
+        and is not taken for the reply to a ``HELLO`` the caller sends next."""
         from omnibot.transport.url import open_link, parse_link_url
 
         if robot is None:
@@ -202,7 +208,10 @@ class RobotClient(TypedCalls):
                 robot = base.target
         link = open_link(url)
         try:
-            return cls(link, robot, **options)  # type: ignore[arg-type]
+            client = cls(link, robot, **options)  # type: ignore[arg-type]
+            if settle > 0:
+                client.sleep(settle)
+            return client
         except BaseException:
             link.close()
             raise
