@@ -280,6 +280,47 @@ def _add_demo(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.set_defaults(handler=_demo)
 
 
+# --------------------------------------------------------------------------- teleop, dashboard
+
+
+def _teleop(args: argparse.Namespace) -> int:
+    from omnibot.teleop.command import run
+
+    return run(args)
+
+
+def _add_teleop(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    from omnibot.teleop.command import add_arguments
+
+    p = sub.add_parser(
+        "teleop",
+        help="drive the robot from a joystick (pygame) or the keyboard, with a deadman",
+        description="Sends VEL with its watchdog at autorepeat_rate; letting go of the enable button, "
+        "losing the pad or going quiet stops the robot. On sim:// simulated time follows the wall clock.",
+    )
+    add_arguments(p)
+    p.set_defaults(handler=_teleop)
+
+
+def _dashboard(args: argparse.Namespace) -> int:
+    from omnibot.web.command import run
+
+    return run(args)
+
+
+def _add_dashboard(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    from omnibot.web.command import add_arguments
+
+    p = sub.add_parser(
+        "dashboard",
+        help="a web page showing the robot live (map, trail, sonars, charts) and driving it",
+        description="Serves the dashboard over HTTP and a websocket; bound to 127.0.0.1 unless --host "
+        "says otherwise, and then an access token is required.",
+    )
+    add_arguments(p)
+    p.set_defaults(handler=_dashboard)
+
+
 # --------------------------------------------------------------------------- parser
 
 
@@ -302,6 +343,8 @@ ADDERS: list[Callable[[argparse._SubParsersAction[argparse.ArgumentParser]], Non
     _add_send,
     _add_console,
     _add_demo,
+    _add_teleop,
+    _add_dashboard,
 ]
 
 

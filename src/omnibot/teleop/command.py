@@ -1,0 +1,111 @@
+"""``omnibot teleop``: drive a robot from a joystick or the keyboard (docs/teleop.md).
+
+Imports here are light (no pygame): :func:`add_arguments` runs whenever ``omnibot`` builds its parser.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import math
+import sys
+from collections.abc import Callable
+from typing import Any
+
+from omnibot.errors import ConfigError
+
+DEFAULT_PORT = "sim://omni4?world=room"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--port", default=DEFAULT_PORT, help=f"link URL (default {DEFAULT_PORT}: the simulated robot)"
+    )
+    p.add_argument(
+        "--robot", help="preset or description file, for the limits (default: sim://'s preset, else omni4)"
+    )
+    group = p.add_mutually_exclusive_group()
+    group.add_argument(
+        "--joystick", action="store_true", help="read a pad through pygame (waits for one to be plugged)"
+    )
+    group.add_argument("--keyboard", action="store_true", help="read keys in this terminal")
+    p.add_argument(
+        "--config", metavar="FILE.yaml", help="teleop parameters for another pad (default: seed 003's)"
+    )
+    p.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (default: until Ctrl-C)")
+
+
+def robot_for(port: str, robot: str | None) -> str:
+    """The robot whose limits apply: ``--robot``, else the preset of a sim:// URL, else omni4."""
+    if robot:
+        return robot
+    from omnibot.transport.url import parse_link_url
+
+    base = parse_link_url(port)[-1]
+    return base.target if base.scheme == "sim" and base.target else "omni4"
+
+
+def _say(text: str) -> None:
+    print(f"teleop: {text}", flush=True)
+
+
+def open_source(args: argparse.Namespace, config: Any, say: Callable[[str], None]) -> Any:
+    """The input source the flags ask for; with neither flag a pad if one is attached, else the
+    keyboard if standard input is a terminal."""
+    from omnibot.teleop.keyboard import KeyboardSource
+
+    if args.keyboard:
+        return KeyboardSource(config)
+    try:
+        from omnibot.teleop.joystick import JoystickSource
+
+        pad = JoystickSource(config, on_message=say)
+    except ImportError as exc:  # pragma: no cover - pygame is a dependency
+        raise ConfigError(f"joystick input needs pygame: {exc}", key="--joystick") from None
+    if args.joystick or pad.attached:
+        if not pad.attached:
+            say("no joystick attached yet: plug one in (the robot stays still until then)")
+        return pad
+    pad.close()
+    if not sys.stdin.isatty():
+        raise ConfigError(
+            "no joystick attached and standard input is not a terminal: plug in a pad (--joystick)"
+        )
+    return KeyboardSource(config)
+
+
+def run(args: argparse.Namespace) -> int:
+    from omnibot.client.client import RobotClient
+    from omnibot.teleop.config import load_teleop_config
+    from omnibot.teleop.keyboard import HELP
+    from omnibot.teleop.loop import Teleop
+    from omnibot.teleop.simlink import sim_device
+
+    if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
+        raise ConfigError(f"expected a positive number of seconds, got {args.duration}", key="--duration")
+    config = load_teleop_config(args.config)
+    robot = robot_for(args.port, args.robot)
+    source = open_source(args, config, _say)
+    with contextlib.ExitStack() as stack:
+        stack.callback(source.close)
+        client = stack.enter_context(RobotClient.open(args.port, robot, timeout=max(0.2, config.vel_timeout)))
+        if hasattr(source, "__enter__"):
+            stack.enter_context(source)
+        device = sim_device(client.link)
+        where = "simulated, paced to the wall clock" if device is not None else "real time"
+        _say(
+            f"{client.link.url} ({where}), {source.name}; VEL every {config.period * 1000:.0f} ms, watchdog {config.vel_timeout:g} s"
+        )
+        if source.name == "keyboard":
+            _say(HELP)
+        teleop = Teleop(client, config, source, on_message=_say)
+        _say(f"limits: {teleop.limits.speed:.2f} m/s, {teleop.limits.rate:.2f} rad/s")
+        try:
+            teleop.run(args.duration)  # stops the robot on the way out, Ctrl-C included
+        except KeyboardInterrupt:
+            _say("interrupted")
+        if device is not None:
+            x, y, th = device.sim.pose
+            _say(f"robot at x={x:.2f} m y={y:.2f} m heading={round(math.degrees(th))} deg")
+        _say(f"sent {teleop.sent.vel} VEL, {teleop.sent.zero} zero VEL, {teleop.sent.errors} failed")
+    return 0

@@ -1,0 +1,78 @@
+"""``omnibot dashboard``: serve the live dashboard for a robot (docs/dashboard.md).
+
+Imports here are light (no FastAPI): :func:`add_arguments` runs whenever ``omnibot`` builds its parser.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import time
+
+from omnibot.errors import ConfigError
+
+DEFAULT_PORT = "sim://omni4?world=room"
+TOKEN_ENV = "OMNIBOT_DASHBOARD_TOKEN"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--port", default=DEFAULT_PORT, help=f"link URL of the robot (default {DEFAULT_PORT})")
+    p.add_argument("--robot", help="preset or description file (default: sim://'s preset, else omni4)")
+    p.add_argument(
+        "--host", default="127.0.0.1", help="address to serve on (default 127.0.0.1: this machine only)"
+    )
+    p.add_argument("--http-port", type=int, default=8080, help="HTTP port (default 8080; 0: any free port)")
+    p.add_argument(
+        "--token",
+        help=f"access token (default ${TOKEN_ENV}; required, and made up if not given, off loopback)",
+    )
+    p.add_argument(
+        "--world", help="room map to draw for a real robot: world name or YAML (sim:// shows its own)"
+    )
+    p.add_argument(
+        "--path", metavar="FILE.csv", help="a planned path to draw: x,y rows, or a path file (t,x,y,theta)"
+    )
+    p.add_argument(
+        "--config", metavar="FILE.yaml", help="teleop parameters for a browser gamepad (default seed 003's)"
+    )
+    p.add_argument("--duration", type=float, metavar="S", help="serve for S seconds (default: until Ctrl-C)")
+
+
+def run(args: argparse.Namespace) -> int:
+    from omnibot.teleop.config import load_teleop_config
+    from omnibot.web.dashboard import Dashboard
+    from omnibot.web.scene import load_path
+
+    if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
+        raise ConfigError(f"expected a positive number of seconds, got {args.duration}", key="--duration")
+    config = load_teleop_config(args.config)
+    path = load_path(args.path) if args.path else None
+    token = args.token or os.environ.get(TOKEN_ENV) or None
+    dash = Dashboard(
+        args.port,
+        args.robot,
+        host=args.host,
+        http_port=args.http_port,
+        token=token,
+        world=args.world,
+        path=path,
+        config=config,
+    )
+    dash.start()
+    try:
+        print(f"omnibot dashboard for {args.port}: {dash.url}", flush=True)
+        if dash.token and not args.token and not os.environ.get(TOKEN_ENV):
+            print(
+                "  (an access token was made up because the server is reachable from other machines)",
+                flush=True,
+            )
+        print("  Ctrl-C stops it (and the robot)", flush=True)
+        end = math.inf if args.duration is None else time.monotonic() + args.duration
+        while time.monotonic() < end and dash.link.alive:
+            time.sleep(min(0.2, max(0.0, end - time.monotonic())))
+    except KeyboardInterrupt:
+        print("omnibot dashboard: stopping", flush=True)
+    finally:
+        dash.stop()
+    return 0

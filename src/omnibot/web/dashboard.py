@@ -1,0 +1,181 @@
+"""The dashboard: the robot link thread and the web server thread, started and stopped together.
+
+::
+
+    with Dashboard("sim://omni4?world=room", http_port=0) as dash:   # 0: an ephemeral port
+        print(dash.url)                                              # http://127.0.0.1:PORT/
+        ...                                                          # dash.hub.latest: newest state
+
+Threads: ``omnibot-robot-link`` owns the client (:class:`~omnibot.web.link.RobotLink`);
+``omnibot-web`` runs uvicorn with its own event loop. Everything that can fail on bad input (the
+link URL, the robot, the world, the path, binding the port, a missing token) fails in the
+constructor, before any thread starts, with an :class:`~omnibot.errors.OmnibotError`.
+
+Binding: 127.0.0.1 by default. Bound to any other address the dashboard requires an access token:
+the one given, or a fresh random one (printed in :attr:`Dashboard.url`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ipaddress
+import secrets
+import socket
+import threading
+import time
+from pathlib import Path
+from types import TracebackType
+from typing import Self
+
+import uvicorn
+
+from omnibot.client.client import RobotClient
+from omnibot.errors import ConfigError, OmnibotError
+from omnibot.robot.description import RobotDescription, load_robot
+from omnibot.sim.world import World, load_world
+from omnibot.teleop.config import TeleopConfig
+from omnibot.teleop.simlink import sim_device
+from omnibot.web.link import RobotLink
+from omnibot.web.messages import MAX_FRAME
+from omnibot.web.scene import Point, build_scene
+from omnibot.web.server import Hub, create_app
+from omnibot.web.teach import TeachRepeat
+
+TOKEN_MIN = 8
+
+
+def is_loopback(host: str) -> bool:
+    """True for 127.0.0.0/8, ::1 and localhost."""
+    if host.lower() == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def access_token(host: str, token: str | None) -> str | None:
+    """The token the server requires: the one given (checked), else a fresh one off loopback, else None."""
+    if token is not None:
+        if len(token) < TOKEN_MIN:
+            raise ConfigError(f"an access token needs at least {TOKEN_MIN} characters", key="--token")
+        return token
+    return None if is_loopback(host) else secrets.token_urlsafe(18)
+
+
+def bind(host: str, port: int) -> socket.socket:
+    """A listening TCP socket on ``host:port`` (0: any free port), or a ConfigError saying why not."""
+    if not 0 <= port <= 65535:
+        raise ConfigError(f"expected a port 0..65535, got {port}", key="--http-port")
+    try:
+        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE)
+    except (socket.gaierror, UnicodeError) as exc:
+        raise ConfigError(f"cannot resolve {host!r}: {exc}", key="--host") from None
+    family, kind, proto, _, address = infos[0]
+    sock = socket.socket(family, kind, proto)
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        sock.bind(address)
+        sock.listen(64)
+    except OSError as exc:
+        sock.close()
+        raise ConfigError(f"cannot listen on {host}:{port}: {exc.strerror}", key="--http-port") from None
+    return sock
+
+
+class Dashboard:
+    """Serves the dashboard for the robot at ``port_url`` (see the module docstring)."""
+
+    def __init__(
+        self,
+        port_url: str,
+        robot: RobotDescription | str | None = None,
+        *,
+        host: str = "127.0.0.1",
+        http_port: int = 8080,
+        token: str | None = None,
+        world: World | str | Path | None = None,
+        path: list[Point] | None = None,
+        config: TeleopConfig | None = None,
+        teach: TeachRepeat | None = None,
+    ) -> None:
+        self.token = token = access_token(host, token)
+        self.host = host
+        description = self._robot(port_url, robot)
+        client = RobotClient.open(port_url, description, timeout=0.5)
+        try:
+            device = sim_device(client.link)
+            if world is not None:
+                the_world: World | None = world if isinstance(world, World) else load_world(world)
+            else:
+                the_world = device.sim.world if device is not None else None
+            self.scene = build_scene(description, the_world, path)
+            self.link = RobotLink(client, description, config, teach=teach)
+            self.scene["teach"] = teach is not None
+            self._sock = bind(host, http_port)
+        except BaseException:
+            client.close()
+            raise
+        self.port = int(self._sock.getsockname()[1])
+        self.hub = Hub(self.scene, self.link.outbox, self.link.submit)
+        self.app = create_app(self.hub, token)
+        self._server = uvicorn.Server(
+            uvicorn.Config(
+                self.app,
+                log_level="warning",
+                log_config=None,  # leave the application's logging alone
+                access_log=False,
+                lifespan="on",
+                ws_max_size=MAX_FRAME * 4,
+                timeout_graceful_shutdown=2,
+            )
+        )
+        self._thread: threading.Thread | None = None
+
+    @staticmethod
+    def _robot(port_url: str, robot: RobotDescription | str | None) -> RobotDescription:
+        if isinstance(robot, RobotDescription):
+            return robot
+        from omnibot.teleop.command import robot_for
+
+        return load_robot(robot_for(port_url, robot))
+
+    @property
+    def url(self) -> str:
+        """The page's address (with ``?token=`` when one is required)."""
+        host = f"[{self.host}]" if ":" in self.host else self.host
+        query = f"?token={self.token}" if self.token else ""
+        return f"http://{host}:{self.port}/{query}"
+
+    def start(self, timeout: float = 10.0) -> None:
+        """Start the link and the server; returns once the server accepts connections."""
+        self.link.start()
+        self._thread = threading.Thread(
+            target=self._server.run, kwargs={"sockets": [self._sock]}, name="omnibot-web", daemon=True
+        )
+        self._thread.start()
+        deadline = time.monotonic() + timeout
+        while not self._server.started:
+            if not self._thread.is_alive() or time.monotonic() > deadline:
+                self.stop()
+                raise OmnibotError("the dashboard's web server did not start")
+            time.sleep(0.01)
+
+    def stop(self) -> None:
+        """Stop the server, then the link (the robot gets STOP); idempotent."""
+        self._server.should_exit = True
+        if self._thread is not None:
+            self._thread.join(10.0)
+            self._thread = None
+        with contextlib.suppress(OSError):
+            self._sock.close()
+        self.link.stop()
+
+    def __enter__(self) -> Self:
+        self.start()
+        return self
+
+    def __exit__(
+        self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        self.stop()

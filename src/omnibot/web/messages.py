@@ -1,0 +1,111 @@
+"""Messages from the browser, validated before anything acts on them (pydantic, extra keys forbidden).
+
+Every websocket text frame is one JSON object with a ``type``::
+
+    {"type": "drive", "vx": 0.5, "vy": 0, "w": 0, "enable": true}   fractions (-1..1) of the limits;
+                                                                     enable false: let go (deadman)
+    {"type": "joy", "axes": [...], "buttons": [...]}                 a gamepad (Gamepad API, standard
+                                                                     layout), mapped like a pad
+    {"type": "estop"}                                                STOP now; drive ignored until
+    {"type": "resume"}                                               resume
+    {"type": "teach", "action": "record" | "stop" | "follow"}        teach and repeat (a hook)
+    {"type": "ping", "t": 123.4}                                     answered with a pong (latency)
+
+:func:`parse_message` returns the message or a one-line reason it was rejected (which the page
+shows); a rejected message is never acted on. Frames larger than :data:`MAX_FRAME` are rejected
+unread.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError
+
+MAX_FRAME = 4096
+"""Characters: the largest message the page sends is a gamepad's state, well under this."""
+
+Fraction = Annotated[float, Field(ge=-1.0, le=1.0, allow_inf_nan=False)]
+
+
+class _Message(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class Drive(_Message):
+    """On-screen joystick or keys: fractions of the robot's speed and turn-rate limits."""
+
+    type: Literal["drive"]
+    vx: Fraction = 0.0
+    vy: Fraction = 0.0
+    w: Fraction = 0.0
+    enable: bool = True
+    source: Literal["keyboard", "joystick"] = "keyboard"
+
+
+class Joy(_Message):
+    """A browser gamepad: axes as the Gamepad API gives them (up and left negative), buttons 0..1."""
+
+    type: Literal["joy"]
+    axes: Annotated[list[Fraction], Field(max_length=16)]
+    buttons: Annotated[
+        list[Annotated[float, Field(ge=0.0, le=1.0, allow_inf_nan=False)]], Field(max_length=32)
+    ]
+
+
+class EStop(_Message):
+    type: Literal["estop"]
+
+
+class Resume(_Message):
+    type: Literal["resume"]
+
+
+class Teach(_Message):
+    type: Literal["teach"]
+    action: Literal["record", "stop", "follow"]
+
+
+class Ping(_Message):
+    type: Literal["ping"]
+    t: float = Field(allow_inf_nan=False)
+
+
+Message = Annotated[Drive | Joy | EStop | Resume | Teach | Ping, Field(discriminator="type")]
+_ADAPTER: TypeAdapter[Message] = TypeAdapter(Message)
+
+
+def _reason(error: ValidationError) -> str:
+    parts = []
+    for item in error.errors()[:3]:
+        loc = ".".join(str(p) for p in item["loc"])
+        msg = item["msg"]
+        given = item.get("input")
+        if item["type"] == "union_tag_invalid":
+            tag = item.get("ctx", {}).get("tag", "")
+            msg = f"unknown message type {tag!r}; expected one of: drive, joy, estop, resume, teach, ping"
+        elif item["type"] == "union_tag_not_found":
+            msg = "a message needs a 'type'"
+        elif item["type"] == "extra_forbidden":
+            msg = "unknown key"
+        elif isinstance(given, int | float | str) and not isinstance(given, bool):
+            msg += f" (got {given!r})"
+        parts.append(f"{loc}: {msg}" if loc else msg)
+    return "; ".join(parts)
+
+
+def parse_message(text: str) -> Message | str:
+    """The validated message, or why it was rejected."""
+    if len(text) > MAX_FRAME:
+        return f"message too long ({len(text)} characters, at most {MAX_FRAME})"
+    try:
+        data = json.loads(text)
+    except ValueError as exc:
+        return f"not JSON: {exc}"
+    if not isinstance(data, dict):
+        return f"a message is a JSON object, got {type(data).__name__}"
+    try:
+        return _ADAPTER.validate_python(data)
+    except ValidationError as exc:
+        return _reason(exc)

@@ -1,0 +1,104 @@
+"""``omnibot teleop``: argument errors exit 2 with one line, and a real terminal drives the robot."""
+
+from __future__ import annotations
+
+import os
+import re
+import select
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from omnibot.cli import main
+
+
+def test_joystick_waits_for_a_pad_and_keeps_the_robot_still(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["teleop", "--joystick", "--duration", "0.3"]) == 0
+    out = capsys.readouterr().out
+    assert "no joystick attached yet" in out
+    assert "sent 0 VEL, 0 zero VEL" in out
+    assert "robot at x=1.00 m y=1.00 m" in out  # the room's start pose: it never moved
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--duration", "0"], "--duration: expected a positive number of seconds"),
+        (["--robot", "omni5"], "unknown robot 'omni5'; did you mean 'omni4'?"),
+        (["--port", "sim://omni9"], "omni9"),
+        (["--port", "bogus://x"], "bogus"),
+    ],
+)
+def test_bad_arguments_exit_2(argv: list[str], message: str, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["teleop", "--joystick", "--duration", "0.1", *argv]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("omnibot: error: ") and message in err
+    assert "Traceback" not in err
+
+
+def test_bad_config_file_exits_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    config = tmp_path / "pad.yaml"
+    config.write_text("enable_buton: 4\n")
+    assert main(["teleop", "--joystick", "--config", str(config)]) == 2
+    assert "enable_buton: unknown key; did you mean 'enable_button'?" in capsys.readouterr().err
+
+
+def test_keyboard_needs_a_terminal(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.setattr("omnibot.teleop.keyboard.os.isatty", lambda fd: False)
+    assert main(["teleop", "--keyboard"]) == 2
+    assert "--keyboard: keyboard teleop needs a terminal" in capsys.readouterr().err
+
+
+def test_no_pad_and_no_terminal(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+    monkeypatch.setattr(sys.stdin, "isatty", lambda: False)
+    assert main(["teleop"]) == 2
+    assert "no joystick attached and standard input is not a terminal" in capsys.readouterr().err
+
+
+def test_keyboard_in_a_real_terminal_drives_the_simulated_robot_in_real_time() -> None:
+    """``omnibot teleop --keyboard`` on a pseudo-terminal: hold w for a second (auto-repeat), let go."""
+    master, slave = os.openpty()
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "omnibot", "teleop", "--keyboard", "--duration", "3"],
+        stdin=slave,
+        stdout=slave,
+        stderr=slave,
+        env=env,
+        start_new_session=True,
+    )
+    os.close(slave)
+    out = b""
+    try:
+
+        def read_until(pattern: bytes, timeout: float) -> None:
+            nonlocal out
+            end = time.monotonic() + timeout
+            while pattern not in out:
+                assert time.monotonic() < end, f"no {pattern!r} in {out!r}"
+                if select.select([master], [], [], 0.05)[0]:
+                    try:
+                        out += os.read(master, 4096)
+                    except OSError:  # the child closed the terminal
+                        return
+
+        read_until(b"keys: ", 20)
+        for _ in range(30):  # a held key: the terminal repeats it every 33 ms
+            os.write(master, b"w")
+            time.sleep(0.033)
+        assert proc.wait(timeout=20) == 0
+        read_until(b"failed", 5)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+        os.close(master)
+    text = out.decode(errors="replace")
+    assert "stopping: released" in text
+    x = float(re.search(r"robot at x=([-\d.]+) m", text).group(1))  # type: ignore[union-attr]
+    assert 1.3 < x < 2.5  # about 1.5 s forward at the robot's 0.99 m/s, from x = 1.0

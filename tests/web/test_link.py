@@ -1,0 +1,138 @@
+"""The robot link, period by period with no thread: driving, the deadman, e-stop, teach hook."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+
+from omnibot.client import RobotClient
+from omnibot.robot.description import load_robot
+from omnibot.teleop.pacing import Pacer
+from omnibot.web.link import PageGone, RobotLink
+from omnibot.web.messages import Drive, EStop, Joy, Resume, Teach
+from tests.teleop.fakes import FakeWall, truth
+
+
+class Stepper:
+    """Runs a RobotLink's periods by hand on a fake wall clock (simulated time follows it)."""
+
+    def __init__(self, link: RobotLink) -> None:
+        self.link = link
+        self.wall = FakeWall()
+        link.setup()
+        self.pacer = Pacer(link.client, link.config.period, wall=self.wall, sleep=self.wall.sleep)
+        self.frames: list[dict[str, Any]] = []
+
+    def run(self, seconds: float, request: Any = None) -> dict[str, Any]:
+        """Run ``seconds``, submitting ``request`` every period (as a page repeats its input)."""
+        end = self.wall() + seconds
+        while self.wall() < end - 1e-9:
+            if request is not None:
+                self.link.submit(request)
+            self.link.tick(self.wall())
+            self.pacer.wait()
+        while not self.link.outbox.empty():
+            self.frames.append(self.link.outbox.get_nowait())
+        states = [f for f in self.frames if f["type"] == "state"]
+        return states[-1]
+
+    def logs(self) -> list[str]:
+        return [f["text"] for f in self.frames if f["type"] == "log"]
+
+
+@pytest.fixture
+def stepper() -> Iterator[Stepper]:
+    client = RobotClient.open("sim://omni4?world=room&seed=1", timeout=0.5)
+    link = RobotLink(client, load_robot("omni4"))
+    yield Stepper(link)
+    link.stop()  # no thread: closes the client
+    assert client.link.closed
+
+
+def speed(stepper: Stepper) -> float:
+    twist = truth(stepper.link.client).twist
+    return float(abs(twist.vx) + abs(twist.vy) + abs(twist.w) * 0.1)
+
+
+def test_drive_then_let_go(stepper: Stepper) -> None:
+    x0 = truth(stepper.link.client).pose.x
+    state = stepper.run(1.0, Drive(type="drive", vx=0.5))
+    assert state["drive"]["state"] == "driving" and state["drive"]["twist"] == [0.495, 0.0, 0.0]
+    assert truth(stepper.link.client).pose.x - x0 > 0.3
+    state = stepper.run(0.6, Drive(type="drive", enable=False))
+    assert state["drive"]["ended"] == "released"
+    assert speed(stepper) < 0.01
+    assert state["pose_source"] == "truth" and state["link"]["tel_hz"] > 15
+
+
+@pytest.mark.parametrize(("gone", "why"), [(PageGone(), "lost"), (None, "quiet")])
+def test_a_page_that_goes_away_or_quiet_stops_the_robot(stepper: Stepper, gone: Any, why: str) -> None:
+    stepper.run(0.5, Drive(type="drive", vx=0.5))
+    if gone is not None:
+        stepper.link.submit(gone)
+    state = stepper.run(1.0)  # nothing more from the page
+    assert state["drive"]["ended"] == why
+    assert speed(stepper) < 0.01
+
+
+def test_estop_ignores_driving_until_resume(stepper: Stepper) -> None:
+    stepper.run(0.5, Drive(type="drive", vx=0.5))
+    stepper.link.submit(EStop(type="estop"))
+    state = stepper.run(0.5, Drive(type="drive", vx=0.5))
+    assert state["drive"]["state"] == "estop" and speed(stepper) < 0.01
+    stepper.link.submit(Resume(type="resume"))
+    state = stepper.run(0.3, Drive(type="drive", vx=0.5))
+    assert state["drive"]["state"] == "driving"
+    assert any("emergency stop" in text for text in stepper.logs())
+
+
+def test_gamepad_goes_through_the_teleop_mapping(stepper: Stepper) -> None:
+    # browser axes: up negative; seed 003: axis 3 (joy convention) times -3.5, limited to 0.99 m/s
+    state = stepper.run(0.3, Joy(type="joy", axes=[0, 0, 0, 1.0], buttons=[0] * 7 + [1]))
+    assert state["drive"]["source"] == "gamepad"
+    assert state["drive"]["twist"] == [0.99, 0.0, 0.0]
+    state = stepper.run(0.5, Joy(type="joy", axes=[0, 0, 0, 1.0], buttons=[0] * 8))  # enable let go
+    assert state["drive"]["ended"] == "released"
+
+
+def test_teach_is_a_hook_that_reports_it_is_not_there_yet(stepper: Stepper) -> None:
+    stepper.link.submit(Teach(type="teach", action="record"))
+    state = stepper.run(0.1)
+    assert state["drive"]["teach"] is False
+    assert any("navigation issue" in text for text in stepper.logs())
+
+
+class RecordingTeacher:
+    """A stand-in for the navigation issue's teach and repeat."""
+
+    def __init__(self) -> None:
+        self.calls: list[str] = []
+        self.poses: list[Any] = []
+
+    def command(self, action: str, client: RobotClient, pose: Any) -> str:
+        self.calls.append(action)
+        return f"{action} ok"
+
+    def tick(self, client: RobotClient, pose: Any) -> bool:
+        self.poses.append(pose)
+        return self.calls[-1:] == ["follow"]
+
+
+def test_teach_hook_is_called_in_the_link_thread() -> None:
+    client = RobotClient.open("sim://omni4?world=room", timeout=0.5)
+    teacher = RecordingTeacher()
+    link = RobotLink(client, load_robot("omni4"), teach=teacher)
+    try:
+        stepper = Stepper(link)
+        link.submit(Teach(type="teach", action="follow"))
+        state = stepper.run(0.2, Drive(type="drive", vx=0.5))
+        assert state["drive"]["state"] == "following"  # page input is ignored while following
+        assert teacher.poses[-1][:2] == pytest.approx((1.0, 1.0), abs=0.01)
+        link.submit(EStop(type="estop"))
+        stepper.run(0.1)
+        assert teacher.calls == ["follow", "stop"]
+        assert "follow ok" in stepper.logs()
+    finally:
+        link.stop()

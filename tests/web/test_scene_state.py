@@ -1,0 +1,76 @@
+"""The scene (map, robot, path) and the state frames built from telemetry."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+
+from omnibot.client.events import Telemetry
+from omnibot.errors import ConfigError
+from omnibot.robot.description import load_robot
+from omnibot.sim.world import load_world
+from omnibot.web.scene import build_scene, load_path
+from omnibot.web.state import StateTracker
+
+
+def test_scene_has_the_room_robot_and_path() -> None:
+    robot = load_robot("omni4")
+    scene = build_scene(robot, load_world("room"), [(1.0, 1.0), (2.0, 1.5)])
+    assert scene["type"] == "scene"
+    assert len(scene["robot"]["wheels"]) == 4 and scene["robot"]["sonars"][0]["name"] == "front"
+    assert len(scene["robot"]["footprint"]) >= 4
+    world = scene["world"]
+    assert world["bounds"] == (0.0, 0.0, 5.0, 4.0)
+    assert world["patches"][0]["surface"] == "carpet"
+    assert len(world["obstacles"]) == 2 and len(world["segments"]) > 4
+    assert scene["path"] == [[1.0, 1.0], [2.0, 1.5]]
+    assert build_scene(robot)["world"] is None
+
+
+def test_load_path(tmp_path: Path) -> None:
+    good = tmp_path / "path.csv"
+    good.write_text("1,1\n2,1.5\n\n# a comment\n3,2,ignored\n")
+    assert load_path(good) == [(1.0, 1.0), (2.0, 1.5), (3.0, 2.0)]
+    taught = tmp_path / "taught.csv"  # the navigation path files: t,x,y,theta[,v]
+    taught.write_text("t,x,y,theta,v\n0,1,1,0,0.3\n1,1.3,1,0,0.3\n")
+    assert load_path(taught) == [(1.0, 1.0), (1.3, 1.0)]
+    bad = tmp_path / "bad.csv"
+    bad.write_text("1,1\n2,oops\n")
+    with pytest.raises(ConfigError, match=r"--path: .*bad.csv line 2: expected x,y in metres"):
+        load_path(bad)
+    bad.write_text("1,1\n")
+    with pytest.raises(ConfigError, match="at least 2 points"):
+        load_path(bad)
+    with pytest.raises(ConfigError, match="cannot read path"):
+        load_path(tmp_path / "missing.csv")
+
+
+def tel(t: float, counts: tuple[int, ...], heading: float = 0.0) -> Telemetry:
+    return Telemetry(
+        time=t,
+        controller_time=t,
+        powers=(10, -10, 10, -10),
+        encoders=counts,
+        heading=heading,
+        battery=7.2,
+        state=1,
+        queued=0,
+        ranges=(0.42,),
+    )
+
+
+def test_state_frames_from_telemetry() -> None:
+    robot = load_robot("omni4")
+    tracker = StateTracker(robot, "sim://omni4")
+    tracker(tel(0.0, (0, 0, 0, 0)))
+    tracker(tel(0.05, (44, 0, -44, 0)))  # a tenth of a turn (440 counts) in 50 ms: 4 pi rad/s
+    frame = tracker.frame(0.05, None, {"state": "idle"})
+    assert frame["wheel_speeds"] == pytest.approx([4 * math.pi, 0, -4 * math.pi, 0], abs=0.01)
+    assert frame["pose_source"] == "odometry" and frame["pose"] is not None
+    assert frame["powers"] == [10, -10, 10, -10]
+    assert (frame["battery"], frame["ranges"], frame["robot_state"]) == (7.2, [0.42], "idle")
+    assert frame["link"]["tel_hz"] == 2.0 and frame["link"]["ok"]
+    truth = tracker.frame(0.05, (1.0, 2.0, 0.5), {})
+    assert truth["pose"] == [1.0, 2.0, 0.5] and truth["pose_source"] == "truth"
