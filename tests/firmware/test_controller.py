@@ -412,6 +412,23 @@ def test_closed_loop_reaches_wheel_speed() -> None:
     assert hal.enc[0] - start[0] == pytest.approx(0.7 * target, rel=0.03)
 
 
+def test_closed_loop_holds_its_correction_through_vel_refreshes() -> None:
+    """A host refreshing VEL every 10 ms (the speed loop's own period) must not wipe the correction."""
+    rig = make_rig()
+    hal = rig.hal
+    hal.enc_gain = 0.7 * (440 / (2 * 3.14159265)) / (220 * 0.025)  # 30 % weaker than K promises
+    assert rig.cmd("MODE,2") == ["OK"]
+    for _ in range(150):
+        assert rig.cmd("VEL,0,50,0,100") == ["OK"]
+        rig.run(10)
+    start = list(hal.enc)
+    for _ in range(50):
+        rig.cmd("VEL,0,50,0,100")
+        rig.run(10)
+    target = 0.5 / 0.025 * 440 / (2 * 3.14159265) * 0.5  # counts in 0.5 s for 0.5 m/s rim speed
+    assert hal.enc[0] - start[0] == pytest.approx(target, rel=0.05)
+
+
 def test_closed_loop_needs_encoders() -> None:
     rig = make_rig(encoder_cpr=[0, 0, 0, 0])
     assert rig.cmd("MODE,2") == [err(codes.E_UNSUPPORTED)]

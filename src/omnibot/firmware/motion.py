@@ -272,6 +272,8 @@ class Executor:
             model.wheel_speeds(vx, vy, w, self._target)
         if self.mode & MODE_CLOSED_LOOP and not self._feedback:
             self._start_feedback()
+        elif self._feedback:
+            self.speedctl.hold(self._ff, self.powers)  # a new command keeps the speed loop's correction
         self.apply()
 
     def _warn_once(self, flags: int) -> None:

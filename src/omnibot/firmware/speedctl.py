@@ -18,6 +18,7 @@ class SpeedControl:
         self.period_us = period_us
         self.pwm_max = pwm_max
         self.speed = [0.0] * self.n
+        self.correction = [0.0] * self.n
         self._integ = [0.0] * self.n
         self._last = [0] * self.n
         self._acc_us = 0
@@ -30,6 +31,7 @@ class SpeedControl:
     def reset(self, counts: list[int]) -> None:
         for i in range(self.n):
             self._integ[i] = 0.0
+            self.correction[i] = 0.0
             self._last[i] = counts[i]
         self._acc_us = 0
 
@@ -48,12 +50,23 @@ class SpeedControl:
             self.speed[i] = (c - self._last[i]) * self.rad_per_count[i] / dt
             self._last[i] = c
             err = target[i] - self.speed[i]
-            p = ff[i] + self.kp * err + self.ki * self._integ[i]
+            self.correction[i] = self.kp * err + self.ki * self._integ[i]
+            p = ff[i] + self.correction[i]
             if -lim < p < lim:
                 self._integ[i] += err * dt
-            elif p >= lim:
-                p = lim
-            else:
-                p = -lim
-            out[i] = round(p)
+            out[i] = self._limit(p)
         return True
+
+    def hold(self, ff: list[float], out: list[int]) -> None:
+        """New feedforward between periods: write it plus the last correction (not the bare
+        feedforward, which would drop the loop's work until the next period)."""
+        for i in range(self.n):
+            out[i] = self._limit(ff[i] + self.correction[i])
+
+    def _limit(self, p: float) -> int:
+        lim = self.pwm_max
+        if p >= lim:
+            return lim
+        if p <= -lim:
+            return -lim
+        return round(p)
