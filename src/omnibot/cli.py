@@ -321,6 +321,48 @@ def _add_dashboard(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> 
     p.set_defaults(handler=_dashboard)
 
 
+# --------------------------------------------------------------------------- record, follow
+
+
+def _record(args: argparse.Namespace) -> int:
+    from omnibot.navigation.commands import run_record
+
+    return run_record(args)
+
+
+def _add_record(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    from omnibot.navigation.commands import add_record_arguments
+
+    p = sub.add_parser(
+        "record",
+        help="teach a path: record the robot's odometry while it is pushed by hand or driven",
+        description="Samples the robot's own pose estimate (encoders, tracking wheels, gyro) by distance or "
+        "time into a path file t,x,y,theta[,v]. In the simulator a hand pushes the robot along a shape with "
+        "the motors off (seed 002's teaching), or VEL commands drive it; with --port it listens.",
+    )
+    add_record_arguments(p)
+    p.set_defaults(handler=_record)
+
+
+def _follow(args: argparse.Namespace) -> int:
+    from omnibot.navigation.commands import run_follow
+
+    return run_follow(args)
+
+
+def _add_follow(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    from omnibot.navigation.commands import add_follow_arguments
+
+    p = sub.add_parser(
+        "follow",
+        help="repeat a path: a path follower drives it, with a report and a plot",
+        description="Runs a path follower at 100 Hz on the host (VEL out, TEL in); by default on the simulated "
+        "robot in lockstep, measured against its ground truth. Exit status 1 if the path was not completed.",
+    )
+    add_follow_arguments(p)
+    p.set_defaults(handler=_follow)
+
+
 # --------------------------------------------------------------------------- parser
 
 
@@ -343,6 +385,8 @@ ADDERS: list[Callable[[argparse._SubParsersAction[argparse.ArgumentParser]], Non
     _add_send,
     _add_console,
     _add_demo,
+    _add_record,
+    _add_follow,
     _add_teleop,
     _add_dashboard,
 ]

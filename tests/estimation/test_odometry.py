@@ -77,3 +77,15 @@ def test_needs_encoders_and_the_right_count() -> None:
         WheelOdometry(parse_description(data))
     with pytest.raises(ValueError, match="expected 4 encoder counts"):
         WheelOdometry(load_robot("omni4")).update([1, 2, 3])
+
+
+def test_slipping_flag_and_counter_wrap() -> None:
+    robot = load_robot("omni4")
+    odo = WheelOdometry(robot)
+    top = 2**31 - 1
+    odo.update([top, 0, -top, 0])
+    pose = odo.update([-(2**31) + 9, 0, 2**31 - 9, 0])  # 10 counts each way through the wrap
+    assert pose.y == pytest.approx(10 * 2 * math.pi / 440 * 0.025)
+    assert not odo.slipping
+    odo.update([-(2**31) + 9, 50, 2**31 - 9, 0])  # one wheel turns alone: no rigid motion does that
+    assert odo.slipping

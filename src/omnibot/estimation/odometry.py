@@ -6,7 +6,11 @@ kinematics turns them into a body displacement (dx, dy, dtheta), and the displac
 onto the pose along a constant-curvature arc (exact for a constant twist over the interval, so the
 estimate does not assume a constant heading as seed 002's equations (11)-(12) do). With a gyro
 heading the rotation comes from the gyro and only the translation from the wheels. The per-wheel
-residual of the fit (what no rigid motion explains) is kept as a slip signal.
+residual of the fit (what no rigid motion explains) is kept as a slip signal; :attr:`WheelOdometry.slipping`
+says when it is larger than encoder quantisation explains (only robots with more wheels than the three
+planar motions have a residual at all).
+
+Counts are signed 32-bit and wrap (docs/protocol.md, TEL); differences are taken modulo 2**32.
 """
 
 from __future__ import annotations
@@ -21,12 +25,20 @@ from omnibot.errors import ConfigError
 from omnibot.robot import kinematics as kin
 from omnibot.robot.description import RobotDescription
 
+COUNT_MODULUS = 1 << 32
+
 
 @dataclass(frozen=True)
 class Pose2D:
     x: float
     y: float
     theta: float
+
+
+def count_delta(new: np.ndarray, old: np.ndarray) -> np.ndarray:
+    """``new - old`` for signed 32-bit wrapping counters (any step smaller than 2**31)."""
+    out: np.ndarray = (new - old + COUNT_MODULUS // 2) % COUNT_MODULUS - COUNT_MODULUS // 2
+    return out
 
 
 def compose_arc(pose: Pose2D, dx: float, dy: float, dtheta: float) -> Pose2D:
@@ -57,6 +69,8 @@ class WheelOdometry:
         """Path length travelled by the body centre, m."""
         self.residual = np.zeros(robot.n_wheels)
         """Last interval's per-wheel residual, rad (non-zero: the wheels disagree, slip)."""
+        self.slip_threshold = 3.0 * float(self._rad_per_count.max())
+        """Residual (rad, largest wheel) above which :attr:`slipping` is set: a few counts."""
         self._counts: np.ndarray | None = None
         self._heading: float | None = None
 
@@ -68,7 +82,7 @@ class WheelOdometry:
         if self._counts is None:
             self._counts, self._heading = c, heading
             return self.pose
-        angles = (c - self._counts) * self._rad_per_count
+        angles = count_delta(c, self._counts) * self._rad_per_count
         self._counts = c
         disp = self._pinv @ angles  # body displacement: twist times the interval
         self.residual = angles - self._J @ disp
@@ -79,6 +93,11 @@ class WheelOdometry:
         self.pose = compose_arc(self.pose, dx, dy, dtheta)
         self.distance += math.hypot(dx, dy)
         return self.pose
+
+    @property
+    def slipping(self) -> bool:
+        """True when the last interval's residual is more than quantisation explains (wheel slip)."""
+        return float(np.abs(self.residual).max(initial=0.0)) > self.slip_threshold
 
 
 def forward_twist(robot: RobotDescription, wheel_speeds: Sequence[float]) -> kin.ForwardResult:

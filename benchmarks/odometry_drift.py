@@ -1,0 +1,184 @@
+"""Odometry drift on a 100 m mixed drive, in % of the distance driven.
+
+Run: ``python -m benchmarks.odometry_drift`` (``--help`` for options). The simulated robot drives a
+pseudo-random 100 m path of straights and arcs (the body turning with the path plus a +-45 degree
+swing, so translation and rotation mix) in four legs with a stop between them, speed up to 0.5 m/s
+(omni4) or 2 m/s (omni3), after a gyro calibration spin in place (one turn each way, where the
+wheels do not slip: the estimator learns the gyro's scale error; ``--no-calibration`` skips it).
+The ``tracker`` follower drives on the ``fused`` estimate; every
+estimator runs on the same telemetry, and each one's position error against the simulator's ground
+truth is taken at the end of every leg (at standstill).
+
+Goals: <= 0.5 % with tracking wheels + gyro (omni3), <= 2 % with driven-wheel encoders + gyro on
+carpet.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import math
+import time
+from concurrent.futures import ProcessPoolExecutor
+from typing import Any
+
+import numpy as np
+
+ROBOTS = {"omni4": (0.5, 1.0), "omni3": (2.0, 2.0)}
+"""preset: (speed cap m/s, path scale m)."""
+LEGS = 4
+
+
+def drive(job: tuple[str, str, float, int, bool]) -> dict[str, Any]:
+    from omnibot.control.followers.base import make_follower
+    from omnibot.control.paths.path import Path
+    from omnibot.control.paths.standard import random_path
+    from omnibot.estimation.estimator import estimator_names
+    from omnibot.estimation.odometry import Pose2D
+    from omnibot.navigation.runner import Navigator
+    from omnibot.navigation.session import follower_limits, simulated_client
+    from omnibot.robot.description import load_robot
+
+    preset, surface, length, seed, calibrate = job
+    speed, size = ROBOTS[preset]
+    robot = load_robot(preset)
+    whole = random_path(length, seed=seed, size=size, heading="mixed")
+    cuts = [int(np.searchsorted(whole.s, k * whole.length / LEGS)) for k in range(LEGS)] + [len(whole) - 1]
+    legs = [
+        Path(whole.x[a : b + 1], whole.y[a : b + 1], whole.theta[a : b + 1])
+        for a, b in itertools.pairwise(cuts)
+    ]
+    names = estimator_names(robot)
+    started = time.perf_counter()
+    errors: dict[str, list[float]] = {n: [] for n in names}
+    travelled = 0.0
+    with simulated_client(robot, surface=surface, seed=seed, start=Pose2D(*whole.start)) as client:
+        nav = Navigator(
+            client,
+            robot,
+            estimator="fused",
+            observers=[n for n in names if n != "fused"],
+            start=Pose2D(*whole.start),
+        )
+        nav.prepare()
+        if calibrate:
+            nav.calibrate_gyro()
+        last = nav.truth()
+        completed = True
+        for leg in legs:
+            follower = make_follower("tracker", follower_limits(robot, speed))
+            run = nav.follow(leg, follower)
+            completed &= run.completed
+            truth = np.array(run.truth)
+            if last is not None and len(truth):
+                pts = np.vstack(([last[:2]], truth[:, :2], [nav.truth()[:2]]))  # type: ignore[index]
+                travelled += float(np.sum(np.hypot(*np.diff(pts, axis=0).T)))
+            last = nav.truth()
+            assert last is not None
+            for name in names:
+                est = nav.estimator if name == "fused" else nav.observers[name]
+                e = est.estimate
+                errors[name].append(math.hypot(e.x - last[0], e.y - last[1]))
+        nav.close()
+    return {
+        "robot": preset,
+        "surface": surface,
+        "distance_m": travelled,
+        "errors": errors,
+        "completed": completed,
+        "wall_s": time.perf_counter() - started,
+    }
+
+
+def describe(name: str) -> str:
+    return {
+        "fused": "fused (best available: tracking wheels if any, gyro + encoders)",
+        "tracking+gyro": "tracking wheels + gyro (fused)",
+        "tracking+raw-gyro": "tracking wheels + raw gyro sum",
+        "encoders+gyro": "driven-wheel encoders + gyro (fused)",
+        "encoders+raw-gyro": "driven-wheel encoders + raw gyro sum",
+        "encoders": "driven-wheel encoders only",
+        "seed002": "seed 002's (8)-(12) + raw gyro (1)",
+    }.get(name, name)
+
+
+def format_table(results: list[dict[str, Any]]) -> str:
+    cols = [(r["robot"], r["surface"]) for r in results]
+    names: list[str] = []
+    for r in results:
+        names += [n for n in r["errors"] if n not in names]
+    out = [
+        "| estimator | " + " | ".join(f"{rb} {sf}" for rb, sf in cols) + " |",
+        "|---|" + "---|" * len(cols),
+    ]
+    for n in names:
+        cells = []
+        for r in results:
+            e = r["errors"].get(n)
+            if not e:
+                cells.append("-")
+                continue
+            final = 100 * e[-1] / r["distance_m"]
+            worst = 100 * max(e) / r["distance_m"]
+            cells.append(f"{final:.2f} % (max {worst:.2f} %)")
+        out.append(f"| {describe(n)} | " + " | ".join(cells) + " |")
+    out.append(
+        "| distance driven (truth) | " + " | ".join(f"{r['distance_m']:.1f} m" for r in results) + " |"
+    )
+    out.append(
+        "| all legs completed | " + " | ".join("yes" if r["completed"] else "NO" for r in results) + " |"
+    )
+    return "\n".join(out)
+
+
+def goals(results: list[dict[str, Any]]) -> str:
+    lines = ["| goal | result |", "|---|---|"]
+    for r in results:
+        d = r["distance_m"]
+        if "tracking+gyro" in r["errors"]:
+            v = 100 * r["errors"]["tracking+gyro"][-1] / d
+            lines.append(
+                f"| tracking wheels + gyro <= 0.5 % ({r['robot']} {r['surface']}) | {v:.2f} % {'met' if v <= 0.5 else 'NOT met'} |"
+            )
+        if r["surface"] == "carpet" and "encoders+gyro" in r["errors"]:
+            v = 100 * r["errors"]["encoders+gyro"][-1] / d
+            lines.append(
+                f"| encoders + gyro on carpet <= 2 % ({r['robot']}) | {v:.2f} % {'met' if v <= 2 else 'NOT met'} |"
+            )
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--robots", default=",".join(ROBOTS))
+    p.add_argument("--surfaces", default="wood,carpet")
+    p.add_argument("--length", type=float, default=100.0, help="m (default 100)")
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--jobs", type=int, default=2)
+    p.add_argument(
+        "--no-calibration", action="store_true", help="skip the gyro calibration spin before the drive"
+    )
+    args = p.parse_args(argv)
+    work = [
+        (r, s, args.length, args.seed, not args.no_calibration)
+        for r in args.robots.split(",")
+        for s in args.surfaces.split(",")
+    ]
+    started = time.perf_counter()
+    if args.jobs <= 1:
+        results = [drive(j) for j in work]
+    else:
+        with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+            results = list(pool.map(drive, work))
+    print(
+        f"## Odometry drift: {args.length:.0f} m mixed drive in {LEGS} legs, final error (max at a stop), % of distance\n"
+    )
+    print(format_table(results))
+    print()
+    print(goals(results))
+    print(f"\n({time.perf_counter() - started:.0f} s wall)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

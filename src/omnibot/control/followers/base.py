@@ -1,0 +1,166 @@
+"""Path followers: the interface, shared helpers and the registry (strategies by name).
+
+A follower is started on a path at a time, then asked once per control period for a body-frame
+velocity command given the robot's estimated state (in the path's frame, already extrapolated to
+the time the command is sent)::
+
+    follower = make_follower("tracker", limits, rate=100.0)
+    follower.start(path, t)
+    while not follower.done:
+        command = follower.update(State(t, x, y, theta, vx, vy, w))   # -> VEL vx, vy, w
+
+Followers see only the state they are given (the robot's own estimate), never ground truth.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, ClassVar, TypeVar
+
+from omnibot.control.paths.path import Path
+from omnibot.control.paths.profile import MotionLimits, SpeedProfile, time_optimal_profile
+from omnibot.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class State:
+    """The robot's estimated state: world pose and world-frame velocity at time ``t`` (s)."""
+
+    t: float
+    x: float
+    y: float
+    theta: float
+    vx: float = 0.0
+    vy: float = 0.0
+    w: float = 0.0
+    slipping: bool = False
+    """The estimator saw the wheels slip (its velocity is then less trustworthy)."""
+
+
+@dataclass(frozen=True)
+class Command:
+    """A body-frame velocity command: vx, vy m/s (x forward, y left), w rad/s (counter-clockwise)."""
+
+    vx: float
+    vy: float
+    w: float
+
+    @property
+    def speed(self) -> float:
+        return math.hypot(self.vx, self.vy)
+
+
+STOP = Command(0.0, 0.0, 0.0)
+PLAN_MARGIN = 0.7
+"""Fraction of the acceleration limits every follower plans its speeds with (the same speed schedule
+for all of them; the rest of the grip is left for feedback)."""
+
+
+def wrap(angle: float) -> float:
+    """Angle in [-pi, pi)."""
+    return (angle + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def to_body(vx: float, vy: float, w: float, theta: float, dt: float = 0.0) -> Command:
+    """World-frame velocity to a body-frame command, turned by the heading at the middle of the next
+    ``dt`` s (the body keeps turning while the command acts)."""
+    th = theta + 0.5 * w * dt
+    c, s = math.cos(th), math.sin(th)
+    return Command(c * vx + s * vy, -s * vx + c * vy, w)
+
+
+def clamp_speed(vx: float, vy: float, v_max: float) -> tuple[float, float]:
+    speed = math.hypot(vx, vy)
+    if speed > v_max > 0:
+        return vx * v_max / speed, vy * v_max / speed
+    return vx, vy
+
+
+class Follower(ABC):
+    """Base class: keeps the path, the limits and the control rate; subclasses implement the law."""
+
+    name: ClassVar[str] = ""
+    end_tolerance: ClassVar[float] = 0.02
+    """Position error (m) at the end within which the path counts as done."""
+
+    def __init__(self, limits: MotionLimits, *, rate: float = 100.0, **options: Any) -> None:
+        if options:
+            raise ConfigError(f"follower {self.name!r} has no option(s) {', '.join(sorted(options))}")
+        if not rate > 0:
+            raise ConfigError(f"control rate must be positive, got {rate}")
+        self.limits = limits
+        self.rate = rate
+        self.dt = 1.0 / rate
+        self.path: Path | None = None
+        self.done = False
+        self.progress = 0.0
+        """Arc length (m) of the path reached so far."""
+        self.t0 = 0.0
+
+    def start(self, path: Path, t: float) -> None:
+        """Begin following ``path`` at time ``t`` (the robot stands at its start)."""
+        if len(path) < 2 or path.length <= 0:
+            raise ConfigError("a path to follow needs at least two distinct points")
+        self.path = path
+        self.t0 = t
+        self.done = False
+        self.progress = 0.0
+
+    @abstractmethod
+    def update(self, state: State) -> Command:
+        """The command for the next control period."""
+
+    def plan(self, path: Path, margin: float = PLAN_MARGIN) -> SpeedProfile:
+        """The time-optimal profile within ``margin`` of the limits (honouring the path's v)."""
+        return time_optimal_profile(path, self.limits.scaled(margin))
+
+    def at_end(self, state: State, tolerance: float | None = None) -> bool:
+        """Within ``tolerance`` of the path's end, nearly stopped."""
+        assert self.path is not None
+        x, y, _ = self.path.end
+        tol = self.end_tolerance if tolerance is None else tolerance
+        return math.hypot(state.x - x, state.y - y) <= tol and math.hypot(state.vx, state.vy) < 0.05
+
+
+F = TypeVar("F", bound=type[Follower])
+
+FOLLOWERS: dict[str, Callable[..., Follower]] = {}
+"""Followers by name: ``FOLLOWERS[name](limits, rate=..., **options)``."""
+
+
+def register(name: str, **defaults: Any) -> Callable[[F], F]:
+    """Class decorator: register a follower class under ``name`` (with default options)."""
+
+    def deco(cls: F) -> F:
+        def factory(limits: MotionLimits, **options: Any) -> Follower:
+            follower = cls(limits, **{**defaults, **options})
+            follower.name = name  # type: ignore[misc]
+            return follower
+
+        if name in FOLLOWERS:
+            raise ValueError(f"follower {name!r} registered twice")
+        FOLLOWERS[name] = factory
+        return cls
+
+    return deco
+
+
+def follower_names() -> list[str]:
+    from omnibot.control import followers  # noqa: F401  (registers the built-in followers)
+
+    return list(FOLLOWERS)
+
+
+def make_follower(name: str, limits: MotionLimits, **options: Any) -> Follower:
+    """The follower registered as ``name``; ConfigError naming the choices if there is none."""
+    names = follower_names()
+    if name not in FOLLOWERS:
+        import difflib
+
+        close = difflib.get_close_matches(name, names, n=1, cutoff=0.5)
+        hint = f"; did you mean '{close[0]}'?" if close else ""
+        raise ConfigError(f"unknown follower '{name}'{hint}; expected one of: {', '.join(names)}")
+    return FOLLOWERS[name](limits, **options)

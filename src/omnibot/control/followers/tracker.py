@@ -1,0 +1,175 @@
+"""Our tracker: the time-optimal profile as feedforward, with along-track, cross-track and heading feedback.
+
+The path is planned once with :func:`~omnibot.control.paths.profile.time_optimal_profile` within a
+margin of the limits (``margin``: the rest is left for feedback), which gives a reference pose,
+velocity and turn rate at every instant. Each control period (100 Hz or more):
+
+1. **reference time** advances with the clock, slowed by a governor when the robot lags more than
+   ``lag_start`` behind along the path (so a stuck start or a slipping patch does not leave the
+   reference running away and the robot cutting across to catch up);
+2. **prediction**: the estimated pose is carried ``lead`` seconds ahead with the estimated velocity
+   (telemetry age, link and wheel-loop delay), and the reference is taken at the same instant;
+3. **feedback** on the error in the path frame at the reference point: cross-track with a PI
+   (gain ``cross``, integral ``cross_i``, clamped), along-track with a PI (``along``, ``along_i``),
+   and heading with a PI (``heading``, ``heading_i``);
+4. **command**: v = v_ref + k_t e_t t + k_n e_n n and w = w_ref + k_theta e_theta, turned into the
+   body frame with the heading at the middle of the next period, speed clamped to the limit.
+
+The path is done when the reference has reached the end and the robot is within ``end_tolerance``
+of the last point and nearly still (or ``settle`` seconds after the reference ended).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, ClassVar
+
+import numpy as np
+
+from omnibot.control.followers.base import (
+    PLAN_MARGIN,
+    STOP,
+    Command,
+    Follower,
+    State,
+    clamp_speed,
+    register,
+    to_body,
+    wrap,
+)
+from omnibot.control.followers.response import VelocityResponse
+from omnibot.control.paths.path import Path
+from omnibot.control.paths.profile import MotionLimits, SpeedProfile
+
+STEADY_ACCEL = 0.5
+"""m/s^2: the response model learns only while the reference accelerates less than this (and the
+estimator sees no slip): it is a steady-state gain."""
+
+
+@register("tracker")
+class ProfileTracker(Follower):
+    """Time-optimal feedforward plus path-frame PI feedback (see the module docstring)."""
+
+    end_tolerance: ClassVar[float] = 0.01
+
+    def __init__(
+        self,
+        limits: MotionLimits,
+        *,
+        rate: float = 100.0,
+        margin: float = PLAN_MARGIN,
+        lead: float = 0.04,
+        cross: float = 30.0,
+        cross_i: float = 100.0,
+        along: float = 10.0,
+        along_i: float = 20.0,
+        heading: float = 8.0,
+        heading_i: float = 10.0,
+        lag_start: float = 0.03,
+        lag_span: float = 0.10,
+        settle: float = 1.5,
+        adapt: bool = True,
+        **options: Any,
+    ) -> None:
+        super().__init__(limits, rate=rate, **options)
+        self.margin = margin
+        self.lead = lead
+        self.k_cross, self.i_cross = cross, cross_i
+        self.k_along, self.i_along = along, along_i
+        self.k_heading, self.i_heading = heading, heading_i
+        self.lag_start, self.lag_span = lag_start, lag_span
+        self.settle = settle
+        self.response = VelocityResponse() if adapt else None
+        self.profile: SpeedProfile | None = None
+        self.tau = 0.0
+        """Reference time, s (the profile's clock, slowed by the governor)."""
+        self._last_t: float | None = None
+        self._integral = np.zeros(3)  # along, cross, heading
+        self._ended_at: float | None = None
+        self.errors = (0.0, 0.0, 0.0)
+        """Last along-track, cross-track (m) and heading (rad) errors of the estimate."""
+
+    def start(self, path: Path, t: float) -> None:
+        super().start(path, t)
+        self.profile = self.plan(path, self.margin)
+        self.tau = 0.0
+        self._last_t = t
+        self._ended_at = None
+        self._integral[:] = 0.0
+        if self.response is not None:
+            self.response.reset()
+
+    def update(self, state: State) -> Command:
+        prof, path = self.profile, self.path
+        assert prof is not None and path is not None
+        if self.done:
+            return STOP
+        dt = self.dt if self._last_t is None else max(0.0, state.t - self._last_t)
+        self._last_t = state.t
+
+        # 1. reference time with the lag governor
+        now = prof.at(self.tau)
+        tx, ty = _direction(now.vx, now.vy, prof, self.tau)
+        lag = (now.x - state.x) * tx + (now.y - state.y) * ty
+        pace = 1.0 if lag <= self.lag_start else max(0.2, 1.0 - (lag - self.lag_start) / self.lag_span)
+        self.tau += dt * pace
+        end = prof.min_time
+        if self.tau >= end:
+            self.tau = end
+            if self._ended_at is None:
+                self._ended_at = state.t
+            if self.at_end(state) or state.t - self._ended_at >= self.settle:
+                self.done = True
+                return STOP
+
+        # 2. prediction: robot and reference at the instant the command takes effect
+        lead = self.lead
+        px, py = state.x + state.vx * lead, state.y + state.vy * lead
+        pth = state.theta + state.w * lead
+        ref = prof.at(self.tau + lead * pace)
+        self.progress = ref.s
+        tx, ty = _direction(ref.vx, ref.vy, prof, self.tau + lead)
+        nx, ny = -ty, tx
+
+        # 3. feedback in the path frame
+        ex, ey = ref.x - px, ref.y - py
+        e_t, e_n = ex * tx + ey * ty, ex * nx + ey * ny
+        e_th = wrap(ref.theta - pth)
+        self.errors = (e_t, e_n, e_th)
+        limits = self.limits
+        integral = self._integral
+        integral += np.array([e_t, e_n, e_th]) * dt
+        caps = (
+            0.1
+            * np.array([limits.v_max, limits.v_max, limits.w_max])
+            / np.maximum([self.i_along, self.i_cross, self.i_heading], 1e-9)
+        )
+        np.clip(integral, -caps, caps, out=integral)
+        u_t = self.k_along * e_t + self.i_along * integral[0]
+        u_n = self.k_cross * e_n + self.i_cross * integral[1]
+        vx = ref.vx + u_t * tx + u_n * nx
+        vy = ref.vy + u_t * ty + u_n * ny
+        vx, vy = clamp_speed(vx, vy, limits.v_max)
+        w = ref.w + self.k_heading * e_th + self.i_heading * integral[2]
+        w = max(-limits.w_max, min(limits.w_max, w))
+        command = to_body(vx, vy, w, state.theta, self.dt)
+        model = self.response
+        if model is None:
+            return command
+        c, s = math.cos(state.theta), math.sin(state.theta)
+        if not state.slipping and math.hypot(ref.ax, ref.ay) < STEADY_ACCEL:
+            model.observe(state.t, c * state.vx + s * state.vy, -s * state.vx + c * state.vy, state.w, dt)
+        ux, uy = clamp_speed(*model.compensate(command.vx, command.vy, command.w)[:2], 1.3 * limits.v_max)
+        uw = max(-limits.w_max, min(limits.w_max, command.w / model.g_w))
+        model.sent(state.t, ux, uy, uw)
+        return Command(ux, uy, uw)
+
+
+def _direction(vx: float, vy: float, prof: SpeedProfile, tau: float) -> tuple[float, float]:
+    """Unit direction of the reference: its velocity, or the path's direction where it is still."""
+    speed = math.hypot(vx, vy)
+    if speed > 1e-6:
+        return vx / speed, vy / speed
+    j = int(np.searchsorted(prof.t, min(max(tau, 0.0), prof.min_time), side="right")) - 1
+    j = min(max(j, 0), len(prof.t) - 1)
+    return float(prof.tx[j]), float(prof.ty[j])

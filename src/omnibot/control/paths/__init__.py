@@ -1,0 +1,30 @@
+"""Paths: the :class:`Path` type, CSV files, teaching, geometry, standard paths and speed profiles."""
+
+from omnibot.control.paths.files import PathFileError, format_path, parse_path, read_path, write_path
+from omnibot.control.paths.geometry import curvature, douglas_peucker, heading_rate, resample
+from omnibot.control.paths.path import Path, Projection
+from omnibot.control.paths.profile import MotionLimits, Reference, SpeedProfile, time_optimal_profile
+from omnibot.control.paths.standard import random_path, standard_names, standard_path
+from omnibot.control.paths.teach import PathRecorder
+
+__all__ = [
+    "MotionLimits",
+    "Path",
+    "PathFileError",
+    "PathRecorder",
+    "Projection",
+    "Reference",
+    "SpeedProfile",
+    "curvature",
+    "douglas_peucker",
+    "format_path",
+    "heading_rate",
+    "parse_path",
+    "random_path",
+    "read_path",
+    "resample",
+    "standard_names",
+    "standard_path",
+    "time_optimal_profile",
+    "write_path",
+]

@@ -1,0 +1,303 @@
+"""Time-optimal speed along a path under speed, acceleration and traction limits (forward-backward).
+
+The path is walked in a generalised arc length sigma, d sigma = sqrt(ds^2 + (rho d theta)^2), so a
+turn in place (ds = 0) is a stretch of path like any other. With u = d sigma / dt the robot's speed
+is v = u ds/d sigma and its turn rate w = u d theta/d sigma. At each point of a fine grid:
+
+* speed caps: v <= v_max, |w| <= w_max, v^2 |kappa| <= a_lat (the wheels' grip sideways),
+  v^2 |d^2 theta/ds^2| <= alpha_max / 2, and v <= the path file's v when it has one;
+* acceleration: the tangential acceleration may use what the lateral one leaves of the friction
+  ellipse, a_t <= a_max sqrt(1 - (v^2 kappa / a_lat)^2), and the angular one alpha_max / 2.
+
+A forward pass from rest accelerates as hard as allowed, a backward pass from rest at the end
+brakes as late as allowed, and the smaller of the two (and the caps) is the time-optimal profile of
+this point-mass-plus-rotation model (the classical result for one path parameter). Its duration is
+the minimum traversal time: no follower can be faster within those limits, which is what makes it
+the yardstick of the benchmarks. Followers may plan with a margin (limits scaled below 1) to keep
+authority for feedback.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from omnibot.control.paths.geometry import curvature, heading_rate
+from omnibot.control.paths.path import FloatArray, Path
+from omnibot.robot.description import RobotDescription
+
+RHO = 0.1
+"""m: the length a radian of turning in place counts for in sigma (only the grid depends on it)."""
+
+
+@dataclass(frozen=True)
+class MotionLimits:
+    """Speed and acceleration limits for planning (SI)."""
+
+    v_max: float
+    a_max: float
+    w_max: float
+    alpha_max: float
+    a_lat: float | None = None
+    """Sideways (centripetal) acceleration limit; None: a_max (a friction circle)."""
+
+    def __post_init__(self) -> None:
+        for name in ("v_max", "a_max", "w_max", "alpha_max"):
+            value = getattr(self, name)
+            if not (value > 0 and math.isfinite(value)):
+                raise ValueError(f"motion limit {name} must be a positive number, got {value}")
+        if self.a_lat is not None and not self.a_lat > 0:
+            raise ValueError(f"motion limit a_lat must be positive, got {self.a_lat}")
+
+    @property
+    def lateral(self) -> float:
+        return self.a_max if self.a_lat is None else self.a_lat
+
+    @classmethod
+    def from_robot(cls, robot: RobotDescription, speed: float | None = None) -> MotionLimits:
+        """The robot's own limits, the speed capped at ``speed`` m/s when given."""
+        lim = robot.limits
+        v = lim.speed_max if speed is None else min(speed, lim.speed_max)
+        return cls(v, lim.acceleration_max, lim.angular_speed_max, lim.angular_acceleration_max)
+
+    def scaled(self, factor: float, speed_factor: float = 1.0) -> MotionLimits:
+        """Accelerations times ``factor``, speeds times ``speed_factor`` (a planning margin)."""
+        return replace(
+            self,
+            v_max=self.v_max * speed_factor,
+            w_max=self.w_max * speed_factor,
+            a_max=self.a_max * factor,
+            alpha_max=self.alpha_max * factor,
+            a_lat=None if self.a_lat is None else self.a_lat * factor,
+        )
+
+    def with_turn_rate(self, w_max: float) -> MotionLimits:
+        return replace(self, w_max=min(self.w_max, w_max))
+
+
+@dataclass(frozen=True)
+class Reference:
+    """Where the profile is at one time: pose, world velocity and acceleration, arc length."""
+
+    t: float
+    s: float
+    x: float
+    y: float
+    theta: float
+    vx: float
+    vy: float
+    w: float
+    ax: float
+    ay: float
+    speed: float
+
+
+@dataclass(frozen=True, eq=False)
+class SpeedProfile:
+    """A time-optimal profile on a fine grid (arrays of equal length, one entry per grid point)."""
+
+    t: FloatArray
+    s: FloatArray
+    sigma: FloatArray
+    x: FloatArray
+    y: FloatArray
+    theta: FloatArray
+    u: FloatArray
+    """d sigma / dt at each point."""
+    rs: FloatArray
+    """ds / d sigma of the segment starting at each point (last: copy of the one before)."""
+    rt: FloatArray
+    """d theta / d sigma of the segment starting at each point."""
+    tx: FloatArray
+    ty: FloatArray
+    """Direction of travel of the segment starting at each point."""
+    kappa: FloatArray
+
+    @property
+    def min_time(self) -> float:
+        """Duration of the profile, s (the minimum traversal time when planned at the robot's limits)."""
+        return float(self.t[-1])
+
+    @property
+    def speed(self) -> FloatArray:
+        """Translational speed at each grid point, m/s."""
+        prev = np.concatenate(([self.rs[0]], self.rs[:-1]))
+        return self.u * np.maximum(self.rs, prev)
+
+    def speed_at(self, s: float) -> float:
+        """Translational speed at arc length ``s`` (the larger where a turn in place sits)."""
+        return float(np.interp(s, self.s, self.speed))
+
+    def at(self, t: float) -> Reference:
+        """The reference at time ``t`` (clamped to the profile), constant acceleration per segment."""
+        n = len(self.t)
+        tc = min(max(t, 0.0), float(self.t[-1]))
+        j = int(np.searchsorted(self.t, tc, side="right")) - 1
+        j = min(max(j, 0), n - 2)
+        dt = float(self.t[j + 1] - self.t[j])
+        dsig = float(self.sigma[j + 1] - self.sigma[j])
+        u0, u1 = float(self.u[j]), float(self.u[j + 1])
+        tau = tc - float(self.t[j])
+        acc = (u1 - u0) / dt if dt > 0 else 0.0
+        progress = u0 * tau + 0.5 * acc * tau * tau
+        f = min(max(progress / dsig, 0.0), 1.0) if dsig > 0 else 0.0
+        u = u0 + acc * tau
+        rs, rt = float(self.rs[j]), float(self.rt[j])
+        tx, ty = float(self.tx[j]), float(self.ty[j])
+        v = u * rs
+        a_t = acc * rs
+        k = float(self.kappa[j] + f * (self.kappa[j + 1] - self.kappa[j]))
+        a_n = v * v * k
+        return Reference(
+            t=tc,
+            s=float(self.s[j] + f * (self.s[j + 1] - self.s[j])),
+            x=float(self.x[j] + f * (self.x[j + 1] - self.x[j])),
+            y=float(self.y[j] + f * (self.y[j + 1] - self.y[j])),
+            theta=float(self.theta[j] + f * (self.theta[j + 1] - self.theta[j])),
+            vx=v * tx,
+            vy=v * ty,
+            w=u * rt,
+            ax=a_t * tx - a_n * ty,
+            ay=a_t * ty + a_n * tx,
+            speed=v,
+        )
+
+
+def time_optimal_profile(
+    path: Path, limits: MotionLimits, *, resolution: float = 0.01, use_path_speed: bool = True
+) -> SpeedProfile:
+    """The time-optimal profile of ``path`` under ``limits`` (see the module docstring).
+
+    ``resolution`` is the grid step in sigma (m); ``use_path_speed`` caps the speed by the path's
+    v column when it has one.
+    """
+    if len(path) < 2:
+        raise ValueError("a speed profile needs a path of at least two points")
+    # per original point: curvature of travel, heading curvature, file speed
+    kappa0 = curvature(path)  # signed, left positive
+    hr = heading_rate(path)
+    hr_f = np.where(np.isfinite(hr), hr, 0.0)
+    ds0 = np.diff(path.s)
+    dth0 = np.diff(path.theta)
+    hcurv0 = np.zeros(len(path))
+    if len(path) > 2:
+        span = path.s[2:] - path.s[:-2]
+        ok = span > 1e-9
+        hcurv0[1:-1] = np.where(ok, np.abs(hr_f[2:] - hr_f[:-2]) / np.where(ok, span, 1.0), 0.0)
+    vfile0 = path.v if (use_path_speed and path.v is not None) else None
+
+    # refine every segment into steps of at most `resolution` in sigma
+    xs, ys, ths, ss, sig, kap, hcv, vf = [], [], [], [], [], [], [], []
+    rs_seg, rt_seg, tx_seg, ty_seg = [], [], [], []
+    sigma = 0.0
+    last_dir = (math.cos(path.theta[0]), math.sin(path.theta[0]))
+    for i in range(len(path) - 1):
+        ds, dth = float(ds0[i]), float(dth0[i])
+        seg_sigma = math.hypot(ds, RHO * dth)
+        if seg_sigma <= 1e-12:
+            continue
+        k = max(1, math.ceil(seg_sigma / resolution - 1e-9))
+        direction = (
+            ((path.x[i + 1] - path.x[i]) / ds, (path.y[i + 1] - path.y[i]) / ds) if ds > 0 else last_dir
+        )
+        last_dir = direction
+        for j in range(k):
+            f = j / k
+            xs.append(path.x[i] + f * (path.x[i + 1] - path.x[i]))
+            ys.append(path.y[i] + f * (path.y[i + 1] - path.y[i]))
+            ths.append(path.theta[i] + f * dth)
+            ss.append(path.s[i] + f * ds)
+            sig.append(sigma + f * seg_sigma)
+            kap.append(kappa0[i] + f * (kappa0[i + 1] - kappa0[i]))
+            hcv.append(hcurv0[i] + f * (hcurv0[i + 1] - hcurv0[i]))
+            vf.append(math.inf if vfile0 is None else vfile0[i] + f * (vfile0[i + 1] - vfile0[i]))
+            rs_seg.append(ds / seg_sigma)
+            rt_seg.append(dth / seg_sigma)
+            tx_seg.append(direction[0])
+            ty_seg.append(direction[1])
+        sigma += seg_sigma
+    if not xs:
+        raise ValueError("the path does not move: every point is at the same pose")
+    xs.append(path.x[-1])
+    ys.append(path.y[-1])
+    ths.append(path.theta[-1])
+    ss.append(path.s[-1])
+    sig.append(sigma)
+    kap.append(kappa0[-1])
+    hcv.append(hcurv0[-1])
+    vf.append(math.inf if vfile0 is None else vfile0[-1])
+    rs_seg.append(rs_seg[-1])
+    rt_seg.append(rt_seg[-1])
+    tx_seg.append(tx_seg[-1])
+    ty_seg.append(ty_seg[-1])
+
+    n = len(xs)
+    S = np.array(sig)
+    rs = np.array(rs_seg)
+    rt = np.abs(np.array(rt_seg))
+    rs_pt = np.maximum(rs, np.concatenate(([rs[0]], rs[:-1])))
+    rt_pt = np.maximum(rt, np.concatenate(([rt[0]], rt[:-1])))
+    K = np.abs(np.array(kap))
+    HC = np.array(hcv)
+    VF = np.array(vf)
+
+    inf = math.inf
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cap = np.full(n, inf)
+        cap = np.minimum(cap, np.where(rs_pt > 0, limits.v_max / rs_pt, inf))
+        cap = np.minimum(cap, np.where(rt_pt > 0, limits.w_max / rt_pt, inf))
+        lat = np.where(K > 0, np.sqrt(limits.lateral / K), inf)
+        cap = np.minimum(cap, np.where(rs_pt > 0, lat / rs_pt, inf))
+        head = np.where(HC > 0, np.sqrt(0.5 * limits.alpha_max / HC), inf)
+        cap = np.minimum(cap, np.where(rs_pt > 0, head / rs_pt, inf))
+        cap = np.minimum(cap, np.where(rs_pt > 0, VF / rs_pt, inf))
+    cap[0] = cap[-1] = 0.0
+
+    def accel(j: int, u: float) -> float:
+        a = inf
+        if rs_pt[j] > 0:
+            v = u * rs_pt[j]
+            use = v * v * K[j] / limits.lateral
+            a = min(a, limits.a_max * math.sqrt(max(0.0, 1.0 - use * use)) / rs_pt[j])
+        if rt_pt[j] > 0:
+            a = min(a, 0.5 * limits.alpha_max / rt_pt[j])
+        return a if math.isfinite(a) else limits.a_max
+
+    u = cap.copy()
+    dsig = np.diff(S)
+    u[0] = 0.0
+    for j in range(n - 1):
+        reach = math.sqrt(u[j] * u[j] + 2.0 * accel(j, u[j]) * dsig[j])
+        u[j + 1] = min(u[j + 1], reach)
+    u[-1] = 0.0
+    for j in range(n - 2, -1, -1):
+        reach = math.sqrt(u[j + 1] * u[j + 1] + 2.0 * accel(j + 1, u[j + 1]) * dsig[j])
+        u[j] = min(u[j], reach)
+
+    t = np.zeros(n)
+    for j in range(n - 1):
+        total = u[j] + u[j + 1]
+        # constant acceleration over the step; from rest to rest in one step: accelerate, then brake
+        step = 2.0 * dsig[j] / total if total > 1e-12 else 2.0 * math.sqrt(dsig[j] / max(accel(j, 0.0), 1e-9))
+        t[j + 1] = t[j] + step
+    return SpeedProfile(
+        t=t,
+        s=np.array(ss),
+        sigma=S,
+        x=np.array(xs),
+        y=np.array(ys),
+        theta=np.array(ths),
+        u=u,
+        rs=rs,
+        rt=np.array(rt_seg),
+        tx=np.array(tx_seg),
+        ty=np.array(ty_seg),
+        kappa=np.array(kap),
+    )
+
+
+def min_traversal_time(path: Path, limits: MotionLimits) -> float:
+    """Minimum time to drive ``path`` from rest to rest within ``limits`` (ignores the path's v)."""
+    return time_optimal_profile(path, limits, use_path_speed=False).min_time

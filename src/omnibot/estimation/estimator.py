@@ -1,0 +1,390 @@
+"""The robot's pose from its telemetry: encoders, tracking wheels and gyro fused, on the host.
+
+One :class:`PoseEstimator` update per telemetry sample (TEL at 50-100 Hz, docs/navigation.md says
+why on the host)::
+
+    sample (controller time, motor counts, tracking counts, gyro heading)
+      motor counts -> least-squares forward kinematics -> (dx, dy, d_theta)_wheels + residual
+      gyro heading -> HeadingFilter (bias, scale; encoders as reference, slip check) -> d_theta
+      translation: tracking wheels with the w x p term removed (TrackingOdometry), else the wheels'
+      pose <- arc (compose_arc); velocity <- displacement / dt, low-passed
+
+Estimators are small strategies registered by name (:data:`ESTIMATORS`, :func:`make_estimator`), so
+a benchmark can run several on the same telemetry. Inputs are plain: anything with the attributes
+of :class:`SensorSample` (the client's ``Telemetry`` event has them).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from omnibot.errors import ConfigError
+from omnibot.estimation.heading import HeadingFilter, HeadingFilterConfig
+from omnibot.estimation.odometry import COUNT_MODULUS, Pose2D, compose_arc, count_delta
+from omnibot.estimation.tracking import Seed002Odometry, TrackingGeometry
+from omnibot.robot.description import RobotDescription
+
+STILL_TIME = 0.2
+"""Seconds without a single encoder count after which the robot is taken to stand still."""
+VELOCITY_TAU = 0.03
+"""Time constant of the velocity low-pass, s."""
+ACCEL_SPAN = 0.1
+"""s between the three poses of the second difference that measures how hard the wheels work (for
+HeadingFilter: the harder, the less their rotation is worth); long enough that encoder counts do
+not turn into noise. Angular acceleration counts at a 0.2 m lever."""
+TRACK_SLIP_WINDOW = 0.1
+"""Time constant of the leaky sum of tracking-wheel vs driven-wheel translation differences, s."""
+TRACK_SLIP_GAP, TRACK_SLIP_FRACTION = 0.003, 0.05
+"""That sum above this many metres plus this fraction of the distance travelled in the window: slip."""
+
+
+class SensorSample(Protocol):
+    """One telemetry sample: what an estimator reads (None: the group was not sent)."""
+
+    @property
+    def controller_time(self) -> float: ...
+    @property
+    def encoders(self) -> tuple[int, ...] | None: ...
+    @property
+    def tracking(self) -> tuple[int, ...] | None: ...
+    @property
+    def heading(self) -> float | None: ...
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """Pose (world frame), world-frame velocity and flags at controller time ``t``."""
+
+    t: float
+    x: float
+    y: float
+    theta: float
+    vx: float = 0.0
+    vy: float = 0.0
+    w: float = 0.0
+    slipping: bool = False
+    standstill: bool = True
+
+    @property
+    def pose(self) -> Pose2D:
+        return Pose2D(self.x, self.y, self.theta)
+
+    def predict(self, t: float) -> Estimate:
+        """Extrapolated to time ``t`` at constant velocity (latency compensation)."""
+        dt = t - self.t
+        return Estimate(
+            t,
+            self.x + self.vx * dt,
+            self.y + self.vy * dt,
+            self.theta + self.w * dt,
+            self.vx,
+            self.vy,
+            self.w,
+            self.slipping,
+            self.standstill,
+        )
+
+
+class Estimator(Protocol):
+    """What the navigation loop needs of an estimator."""
+
+    name: str
+    estimate: Estimate
+
+    @property
+    def distance(self) -> float:
+        """Path length driven so far, m."""
+
+    def update(self, sample: SensorSample) -> Estimate: ...
+
+
+class PoseEstimator:
+    """Dead reckoning with a choice of translation and heading sources.
+
+    ``translation``: ``"tracking"`` (passive tracking wheels), ``"encoders"`` (driven-wheel encoders)
+    or ``"auto"`` (tracking wheels when the robot has them). ``heading``: ``"fused"`` (gyro with bias
+    and scale learned against the encoders), ``"gyro"`` (the raw gyro sum, seed 002's (1)) or
+    ``"encoders"`` (the wheels' rotation only).
+    """
+
+    def __init__(
+        self,
+        robot: RobotDescription,
+        *,
+        translation: str = "auto",
+        heading: str = "fused",
+        start: Pose2D | None = None,
+        name: str = "",
+        filter_config: HeadingFilterConfig | None = None,
+    ) -> None:
+        if translation == "auto":
+            translation = "tracking" if len(robot.encoders.tracking) >= 2 else "encoders"
+        if translation not in ("tracking", "encoders"):
+            raise ConfigError(f"unknown translation source {translation!r}; expected tracking or encoders")
+        if heading not in ("fused", "gyro", "encoders"):
+            raise ConfigError(f"unknown heading source {heading!r}; expected fused, gyro or encoders")
+        cpr = {e.wheel: e.counts_per_rev for e in robot.encoders.motors}
+        self.has_encoders = all(w.name in cpr for w in robot.wheels)
+        if heading in ("fused", "gyro") and robot.gyro is None:
+            raise ConfigError(f"robot {robot.name} has no gyro for heading '{heading}'")
+        if (translation == "encoders" or heading == "encoders") and not self.has_encoders:
+            raise ConfigError(f"robot {robot.name} lacks an encoder on every driven wheel")
+        self.name = name or f"{translation}+{heading}"
+        self.translation = translation
+        self.heading_source = heading
+        self.tracking = (
+            TrackingGeometry(robot.encoders.tracking, robot.name) if translation == "tracking" else None
+        )
+        if self.has_encoders:
+            self._rad_per_count = np.array([2.0 * math.pi / cpr[w.name] for w in robot.wheels])
+            self._J = robot.wheel_matrix
+            self._pinv = np.linalg.pinv(self._J)
+            per_count = np.abs(self._pinv[2]) * self._rad_per_count
+            self.rotation_resolution = float(per_count.max())
+            self.residual_threshold = 3.0 * float(self._rad_per_count.max())
+            self.redundant = robot.n_wheels > 3
+        else:
+            self.rotation_resolution = 0.0
+        config = filter_config
+        if config is None and robot.gyro is not None:
+            config = HeadingFilterConfig.from_gyro(robot.gyro)
+        self.filter = HeadingFilter(config, theta=start.theta if start else 0.0)
+        start = start or Pose2D(0.0, 0.0, 0.0)
+        self.estimate = Estimate(0.0, start.x, start.y, start.theta)
+        self.distance = 0.0
+        self.residual = np.zeros(robot.n_wheels)
+        self._pose = start
+        self._last: SensorSample | None = None
+        self._t = 0.0
+        self._still_for = 0.0
+        self._vel = (0.0, 0.0, 0.0)
+        self._accel = 0.0
+        self._history: deque[tuple[float, float, float, float]] = deque()
+        self._track_mismatch = 0.0
+
+    def reset(self, pose: Pose2D) -> None:
+        """Put the estimate at ``pose`` (keeps the gyro's learned bias and scale)."""
+        self._pose = pose
+        self.filter.reset_heading(pose.theta)
+        e = self.estimate
+        self.estimate = Estimate(e.t, pose.x, pose.y, pose.theta, 0.0, 0.0, 0.0, e.slipping, e.standstill)
+
+    def update(self, sample: SensorSample) -> Estimate:
+        """Fold in one telemetry sample; returns the new estimate."""
+        last = self._last
+        self._last = sample
+        if last is None:
+            self._t = sample.controller_time
+            self.estimate = Estimate(self._t, *self.estimate_pose_tuple())
+            return self.estimate
+        dt_ms = (round(sample.controller_time * 1000) - round(last.controller_time * 1000)) % COUNT_MODULUS
+        dt = dt_ms / 1000.0
+        self._t += dt
+        if dt <= 0:
+            return self.estimate
+
+        moved = False
+        wheel = None  # (dx, dy, dtheta) from the driven wheels
+        slip = False
+        if self.has_encoders and sample.encoders is not None and last.encoders is not None:
+            counts = count_delta(np.asarray(sample.encoders, float), np.asarray(last.encoders, float))
+            moved |= bool(np.any(counts != 0))
+            angles = counts * self._rad_per_count
+            disp = self._pinv @ angles
+            self.residual = angles - self._J @ disp
+            if self.redundant:
+                slip |= float(np.abs(self.residual).max()) > self.residual_threshold
+            wheel = (float(disp[0]), float(disp[1]), float(disp[2]))
+        rolled = None
+        if self.tracking is not None and sample.tracking is not None and last.tracking is not None:
+            delta = count_delta(np.asarray(sample.tracking, float), np.asarray(last.tracking, float))
+            moved |= bool(np.any(delta != 0))
+            rolled = delta * self.tracking.m_per_count
+        self._still_for = 0.0 if moved else self._still_for + dt
+        standstill = self._still_for >= STILL_TIME
+
+        # tracking wheels against driven wheels: a translation slip the gyro cannot see
+        if rolled is not None and wheel is not None and self.tracking is not None:
+            tx, ty = self.tracking.displacement(rolled, wheel[2])
+            gap = math.hypot(tx - wheel[0], ty - wheel[1])
+            window = TRACK_SLIP_WINDOW
+            self._track_mismatch = self._track_mismatch * math.exp(-dt / window) + gap
+            travelled = math.hypot(tx, ty) / dt * window
+            slip |= self._track_mismatch > TRACK_SLIP_GAP + TRACK_SLIP_FRACTION * travelled
+
+        d_theta = self._rotation(dt, sample, last, wheel, standstill, slip, self._accel)
+        if self.translation == "tracking":
+            if rolled is None or self.tracking is None:
+                dx = dy = 0.0
+            else:
+                dx, dy = self.tracking.displacement(rolled, d_theta)
+        elif wheel is not None:
+            dx, dy = wheel[0], wheel[1]
+        else:
+            dx = dy = 0.0
+        if standstill:
+            dx = dy = 0.0
+        before = self._pose
+        self._pose = compose_arc(before, dx, dy, d_theta)
+        self.distance += math.hypot(dx, dy)
+        a = 1.0 - math.exp(-dt / VELOCITY_TAU)
+        vx0, vy0, w0 = self._vel
+        self._vel = (
+            vx0 + a * ((self._pose.x - before.x) / dt - vx0),
+            vy0 + a * ((self._pose.y - before.y) / dt - vy0),
+            w0 + a * (d_theta / dt - w0),
+        )
+        self._accel = self._acceleration()
+        slipping = slip or self.filter.slipping
+        self.estimate = Estimate(self._t, *self.estimate_pose_tuple(), *self._vel, slipping, standstill)
+        return self.estimate
+
+    def _acceleration(self) -> float:
+        """Second difference of the pose over ACCEL_SPAN: |a| + 0.2 m x |alpha|."""
+        h = self._history
+        p = self._pose
+        h.append((self._t, p.x, p.y, p.theta))
+        while len(h) > 2 and h[1][0] <= self._t - 2.0 * ACCEL_SPAN:
+            h.popleft()
+        t0 = h[0][0]
+        if self._t - t0 < 2.0 * ACCEL_SPAN - 1e-6:
+            return self._accel
+        mid = min(h, key=lambda r: abs(r[0] - (t0 + self._t) / 2.0))
+        t1, t2 = mid[0] - t0, self._t - mid[0]
+        if t1 <= 0 or t2 <= 0:
+            return self._accel
+        span = 0.5 * (t1 + t2)
+
+        def second(i: int, now: float) -> float:
+            return ((now - mid[i]) / t2 - (mid[i] - h[0][i]) / t1) / span
+
+        acc = math.hypot(second(1, p.x), second(2, p.y))
+        return acc + 0.2 * abs(second(3, p.theta))
+
+    def estimate_pose_tuple(self) -> tuple[float, float, float]:
+        p = self._pose
+        return (p.x, p.y, p.theta)
+
+    def _rotation(
+        self,
+        dt: float,
+        sample: SensorSample,
+        last: SensorSample,
+        wheel: tuple[float, float, float] | None,
+        standstill: bool,
+        slip: bool,
+        accel: float,
+    ) -> float:
+        d_ref = wheel[2] if wheel is not None else None
+        if self.heading_source == "encoders":
+            return d_ref or 0.0
+        if sample.heading is None or last.heading is None:
+            return d_ref or 0.0
+        d_psi = sample.heading - last.heading
+        if self.heading_source == "gyro":
+            return d_psi
+        return self.filter.update(
+            dt,
+            d_psi,
+            d_ref,
+            standstill=standstill,
+            slip=slip,
+            accel=accel,
+            ref_resolution=self.rotation_resolution,
+        )
+
+
+class Seed002Estimator:
+    """Seed 002's dead reckoning as written: tracking wheels by (8)-(12), raw gyro heading by (1)."""
+
+    def __init__(self, robot: RobotDescription, start: Pose2D | None = None, name: str = "seed002") -> None:
+        if robot.gyro is None:
+            raise ConfigError(f"robot {robot.name} has no gyro for seed 002's heading")
+        self.name = name
+        self.odometry = Seed002Odometry(robot, start)
+        start = start or Pose2D(0.0, 0.0, 0.0)
+        self.estimate = Estimate(0.0, start.x, start.y, start.theta)
+        self._last: SensorSample | None = None
+        self._vel = (0.0, 0.0, 0.0)
+
+    @property
+    def distance(self) -> float:
+        return self.odometry.distance
+
+    def update(self, sample: SensorSample) -> Estimate:
+        last = self._last
+        self._last = sample
+        d_theta = 0.0
+        if last is not None and sample.heading is not None and last.heading is not None:
+            d_theta = sample.heading - last.heading
+        if sample.tracking is None:
+            return self.estimate
+        before = self.odometry.pose
+        pose = self.odometry.update(sample.tracking, d_theta)
+        t = sample.controller_time
+        dt = t - self.estimate.t if last is not None else 0.0
+        if dt > 0:
+            a = 1.0 - math.exp(-dt / VELOCITY_TAU)
+            vx0, vy0, w0 = self._vel
+            self._vel = (
+                vx0 + a * ((pose.x - before.x) / dt - vx0),
+                vy0 + a * ((pose.y - before.y) / dt - vy0),
+                w0 + a * (d_theta / dt - w0),
+            )
+        self.estimate = Estimate(t, pose.x, pose.y, pose.theta, *self._vel, False, False)
+        return self.estimate
+
+
+EstimatorFactory = Callable[[RobotDescription, Pose2D | None], Estimator]
+
+ESTIMATORS: dict[str, EstimatorFactory] = {
+    "fused": lambda r, s: PoseEstimator(r, start=s, name="fused"),
+    "tracking+gyro": lambda r, s: PoseEstimator(r, translation="tracking", start=s, name="tracking+gyro"),
+    "tracking+raw-gyro": lambda r, s: PoseEstimator(
+        r, translation="tracking", heading="gyro", start=s, name="tracking+raw-gyro"
+    ),
+    "encoders+gyro": lambda r, s: PoseEstimator(r, translation="encoders", start=s, name="encoders+gyro"),
+    "encoders+raw-gyro": lambda r, s: PoseEstimator(
+        r, translation="encoders", heading="gyro", start=s, name="encoders+raw-gyro"
+    ),
+    "encoders": lambda r, s: PoseEstimator(
+        r, translation="encoders", heading="encoders", start=s, name="encoders"
+    ),
+    "seed002": Seed002Estimator,
+}
+"""Estimators by name: ``fused`` is the best the robot's sensors allow (tracking wheels if any, gyro
+fused with the encoders); the others isolate one source each, for comparison."""
+
+
+def make_estimator(name: str, robot: RobotDescription, start: Pose2D | None = None) -> Estimator:
+    """The estimator registered as ``name`` for ``robot``, starting at ``start``."""
+    try:
+        factory = ESTIMATORS[name]
+    except KeyError:
+        raise ConfigError(f"unknown estimator {name!r}; expected one of: {', '.join(ESTIMATORS)}") from None
+    return factory(robot, start)
+
+
+def estimator_names(robot: RobotDescription | None = None) -> list[str]:
+    """Registered names (those ``robot``'s sensors support, when given)."""
+    if robot is None:
+        return list(ESTIMATORS)
+    out = []
+    for name, factory in ESTIMATORS.items():
+        try:
+            factory(robot, None)
+        except ConfigError:
+            continue
+        out.append(name)
+    return out
+
+
+def replay(estimator: Estimator, samples: Sequence[SensorSample]) -> list[Estimate]:
+    """Run an estimator over recorded samples; the estimate after each."""
+    return [estimator.update(s) for s in samples]

@@ -1,0 +1,196 @@
+"""Heading from the gyro, with its bias and scale error estimated against the wheel encoders.
+
+Seed 002 integrates the gyro, theta = theta + d_theta (its equation (1)). A MEMS gyro (MPU6050) has a
+turn-on bias of about 0.01 rad/s (0.6 degree/s: 36 degrees a minute), a bias that wanders, and a
+scale error of about 1 %, so the sum drifts. The wheels measure rotation too: right in the long run
+while they roll without slipping, noisy in the short run (counts, roller wobble), and wrong for good
+after a slip. :class:`HeadingFilter` is a small extended Kalman filter over
+
+    x = (theta, bias, scale, offset)
+
+    predict   theta += (d_psi - bias dt) / (1 + scale)        d_psi: the gyro's heading increment
+              offset  random walk, faster the harder the wheels work (acceleration a; slip grows
+                      faster than the force as it nears the grip limit):
+                      q = (ref_drift^2 + (slip_per_accel2 a^2)^2) dt
+    correct   z = theta_ref (the encoders' heading) = theta + offset + noise
+
+The offset is the encoders' accumulated slip error. It barely moves while the robot drives quietly
+(straight at a steady speed, turning steadily, standing), so there the difference between gyro and
+wheels is bias plus scale times the rate: the bias is learned at standstill and while driving
+straight, the scale once the robot turns (a spin in place is the cleanest, see the navigator's
+gyro calibration). Under hard acceleration or cornering the offset may move, so the wheels' rotation
+counts for little then, and nothing at all while a slip is seen: a slip check compares the encoders'
+rotation with the gyro's over a short window (plus any slip flag from elsewhere: the wheel-fit
+residual, the tracking wheels), and while it fires the reference follows the filter (no
+information), so a slip never enters the heading. At standstill the rotation is known to be zero:
+the gyro's rate is its bias. A saturated gyro sample is replaced by the encoders' rotation.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from omnibot.robot.description import GyroSpec
+
+
+@dataclass(frozen=True)
+class HeadingFilterConfig:
+    """Noise model and slip check of :class:`HeadingFilter` (defaults: an MPU6050 and the presets)."""
+
+    angle_random_walk: float = 8.7e-5
+    """Gyro noise density, rad/s/sqrt(Hz) (= rad/sqrt(s) of heading random walk)."""
+    bias_walk: float = 2e-4
+    """Bias random walk, rad/s/sqrt(s)."""
+    bias_std: float = 0.01
+    """Turn-on bias spread, rad/s (initial uncertainty)."""
+    scale_std: float = 0.01
+    """Scale-factor error spread (initial uncertainty)."""
+    scale_walk: float = 1e-5
+    """Scale-factor random walk, 1/sqrt(s) (temperature)."""
+    ref_std: float = 0.004
+    """Encoder heading noise, rad: bounded (roller wobble), correlated over ``ref_time``."""
+    ref_time: float = 0.5
+    """Correlation time of that noise, s."""
+    ref_drift: float = 5e-4
+    """Random walk of the encoders' slip offset while driving quietly, rad/sqrt(s)."""
+    slip_per_accel2: float = 0.002
+    """Extra offset random walk per (m/s^2)^2 of acceleration, rad/sqrt(s) (wheels under load slip)."""
+    still_std: float = 2e-4
+    """Heading quantisation at standstill, rad (the TEL heading's 0.01 degree steps)."""
+    slip_window: float = 0.1
+    """Time constant of the leaky sum of gyro-encoder rotation differences, s."""
+    slip_threshold: float = 3e-3
+    """Leaky sum (rad) above which the wheels are taken to slip (plus the encoders' own resolution)."""
+    slip_hold: float = 0.3
+    """Seconds the encoder reference stays distrusted after the last slip."""
+    gyro_range: float = math.inf
+    """Gyro saturation, rad/s; samples near it use the encoders' rotation instead."""
+
+    @classmethod
+    def from_gyro(cls, spec: GyroSpec, **overrides: float) -> HeadingFilterConfig:
+        """The noise model from a robot description's gyro section."""
+        values: dict[str, float] = {
+            "angle_random_walk": spec.noise_density,
+            "bias_walk": max(spec.bias_walk, 1e-6),
+            "bias_std": max(spec.bias_std, 1e-4),
+            "scale_std": max(spec.scale_error_std, 1e-4),
+            "gyro_range": spec.range,
+        }
+        values.update(overrides)
+        return cls(**values)
+
+
+class HeadingFilter:
+    """Kalman filter over (heading, gyro bias, gyro scale error, encoder offset); see the module docstring."""
+
+    def __init__(self, config: HeadingFilterConfig | None = None, theta: float = 0.0) -> None:
+        self.config = c = config or HeadingFilterConfig()
+        self.x = np.array([theta, 0.0, 0.0, 0.0])
+        """State: heading (rad), bias (rad/s), scale error (fraction), encoder offset (rad)."""
+        self.P = np.diag([1e-8, c.bias_std**2, c.scale_std**2, 1e-8])
+        self._ref = theta
+        self._mismatch = 0.0
+        self._distrust = 0.0
+        self.slipping = False
+        """The last update did not trust the encoders (slip seen, or held after one)."""
+
+    @property
+    def theta(self) -> float:
+        return float(self.x[0])
+
+    @property
+    def bias(self) -> float:
+        return float(self.x[1])
+
+    @property
+    def scale(self) -> float:
+        return float(self.x[2])
+
+    def reset_heading(self, theta: float) -> None:
+        """Set the heading (keeping what was learned about the gyro)."""
+        self.x[0] = theta
+        self.x[3] = 0.0
+        self._ref = theta
+        for i in (0, 3):
+            self.P[i, :] = 0.0
+            self.P[:, i] = 0.0
+            self.P[i, i] = 1e-8
+
+    def update(
+        self,
+        dt: float,
+        d_psi: float,
+        d_ref: float | None,
+        *,
+        standstill: bool = False,
+        slip: bool = False,
+        accel: float = 0.0,
+        ref_resolution: float = 0.0,
+    ) -> float:
+        """Fold in one interval; returns the heading increment (rad).
+
+        ``d_psi`` is the gyro's heading increment, ``d_ref`` the encoders' rotation (None: no
+        encoders), ``standstill`` that no wheel turned for a while, ``slip`` an outside slip flag,
+        ``accel`` how hard the wheels work (m/s^2, rotation included), ``ref_resolution`` the
+        encoders' rotation per count (widens the slip check).
+        """
+        c = self.config
+        before = float(self.x[0])
+        if dt <= 0:
+            return 0.0
+        theta, bias, scale, _ = (float(v) for v in self.x)
+        saturated = abs(d_psi) > 0.97 * c.gyro_range * dt
+        if saturated and d_ref is not None:
+            d_psi = d_ref * (1.0 + scale) + bias * dt  # what the gyro would have said
+        k = 1.0 + scale
+        inc = 0.0 if standstill else (d_psi - bias * dt) / k  # standing: the body does not turn
+        F = np.eye(4)
+        if not standstill:
+            F[0, 1], F[0, 2] = -dt / k, -inc / k
+        self.x[0] = theta + inc
+        drift = c.ref_drift**2 + (c.slip_per_accel2 * accel * accel) ** 2
+        Q = np.diag([c.angle_random_walk**2 * dt, c.bias_walk**2 * dt, c.scale_walk**2 * dt, drift * dt])
+        self.P = F @ self.P @ F.T + Q
+
+        trusted = False
+        if d_ref is not None:
+            decay = math.exp(-dt / c.slip_window)
+            self._mismatch = self._mismatch * decay + (d_ref - inc)
+            limit = c.slip_threshold + 3.0 * ref_resolution
+            if slip or saturated or abs(self._mismatch) > limit:
+                self._distrust = c.slip_hold
+                self._mismatch = 0.0
+            else:
+                self._distrust = max(0.0, self._distrust - dt)
+            trusted = self._distrust <= 0.0
+        self.slipping = d_ref is not None and not trusted
+
+        if standstill:
+            # the body does not turn, so the gyro's rate is its bias: learned fastest here (the
+            # heading's quantisation steps count as white noise, which overstates them)
+            self._bias_update(d_psi / dt, c.angle_random_walk**2 / dt + (c.still_std / dt) ** 2 / 6.0)
+        elif trusted:
+            assert d_ref is not None
+            self._ref += d_ref
+            r = c.ref_std**2 * max(1.0, c.ref_time / dt)
+            self._z_update(self._ref, r)
+        else:
+            self._ref += float(self.x[0]) - theta  # follow the filter: no information
+        return float(self.x[0]) - before
+
+    def _z_update(self, z: float, r: float) -> None:
+        P = self.P
+        H = np.array([1.0, 0.0, 0.0, 1.0])
+        PH = P @ H
+        K = PH / (H @ PH + r)
+        self.x = self.x + K * (z - self.x[0] - self.x[3])
+        self.P = P - np.outer(K, PH)
+
+    def _bias_update(self, rate: float, r: float) -> None:
+        P = self.P
+        K = P[:, 1] / (P[1, 1] + r)
+        self.x = self.x + K * (rate - self.x[1])
+        self.P = P - np.outer(K, P[1, :])

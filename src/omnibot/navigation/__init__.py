@@ -1,0 +1,5 @@
+"""Teach and repeat on a robot: the follower loop over a client, metrics, plots, the CLI commands.
+
+The glue between :mod:`omnibot.client` (VEL out, TEL in), :mod:`omnibot.estimation` and
+:mod:`omnibot.control`; see docs/navigation.md.
+"""

@@ -1,0 +1,320 @@
+"""The navigation loop: telemetry -> estimator -> follower -> VEL, on the link's clock.
+
+::
+
+    TEL every 10 ms (binary) --on_telemetry--> estimator(s) --estimate--+
+                                                                         v
+    every 1/rate s on link.clock: predict the estimate to now -> follower.update(State) -> VEL
+                                  (body frame, cm/s and deg/s, watchdog 150 ms; not awaited)
+
+Everything waits through :meth:`RobotClient.sleep`, so the same loop runs on a real port (wall
+clock) and in lockstep on ``sim://`` (simulated time, faster than real time and deterministic for
+a seed). Replies to VEL are collected without blocking; an ERROR reply stops the run. With a
+simulated robot the ground truth is sampled at every tick (followers never see it), mapped into
+the path's frame (the estimator starts at the path's first pose, the robot is taken to stand there).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from omnibot.client.client import Pending, RobotClient
+from omnibot.client.commands import vel as vel_command
+from omnibot.client.errors import NotSupported
+from omnibot.client.events import Telemetry
+from omnibot.control.followers.base import STOP, Command, Follower, State
+from omnibot.control.paths.path import Path
+from omnibot.errors import OmnibotError
+from omnibot.estimation.estimator import Estimator, make_estimator
+from omnibot.estimation.odometry import Pose2D
+from omnibot.protocol import codes
+from omnibot.robot.description import RobotDescription
+
+WATCHDOG = 0.15
+"""VEL watchdog, s: the motors stop this long after the last command if the host goes quiet."""
+SETTLE = 0.5
+"""Seconds to wait after the final STOP before reading the final pose."""
+STANDSTILL = 1.0
+"""Seconds of standstill before a run (the gyro bias is learned while the wheels do not turn)."""
+
+
+class NavigationError(OmnibotError):
+    """The robot could not follow: the controller refused a command, an emergency stop latched..."""
+
+
+@dataclass
+class FollowRun:
+    """What happened in one follow run (times on the link clock, poses in the path's frame)."""
+
+    path: Path
+    follower: str
+    estimator: str
+    t: list[float] = field(default_factory=list)
+    estimate: list[tuple[float, float, float]] = field(default_factory=list)
+    command: list[tuple[float, float, float]] = field(default_factory=list)
+    truth: list[tuple[float, float, float]] = field(default_factory=list)
+    start_time: float = 0.0
+    end_time: float = 0.0
+    completed: bool = False
+    final_estimate: Pose2D | None = None
+    final_truth: Pose2D | None = None
+    distance: float = 0.0
+
+    @property
+    def duration(self) -> float:
+        return self.end_time - self.start_time
+
+    @property
+    def has_truth(self) -> bool:
+        return bool(self.truth)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The trace as arrays: t (n,), estimate (n, 3), command (n, 3), truth (n, 3) or empty."""
+        return {
+            "t": np.array(self.t),
+            "estimate": np.array(self.estimate).reshape(-1, 3),
+            "command": np.array(self.command).reshape(-1, 3),
+            "truth": np.array(self.truth).reshape(-1, 3),
+        }
+
+
+class FrameMap:
+    """Maps simulator world poses into the path's frame: path_start o sim_start^-1."""
+
+    def __init__(self, sim_start: Pose2D, path_start: Pose2D) -> None:
+        self.dth = path_start.theta - sim_start.theta
+        self.c, self.s = math.cos(self.dth), math.sin(self.dth)
+        self.sim_start = sim_start
+        self.path_start = path_start
+
+    def __call__(self, x: float, y: float, theta: float) -> tuple[float, float, float]:
+        dx, dy = x - self.sim_start.x, y - self.sim_start.y
+        return (
+            self.path_start.x + self.c * dx - self.s * dy,
+            self.path_start.y + self.s * dx + self.c * dy,
+            theta + self.dth,
+        )
+
+
+def simulator_of(client: RobotClient) -> Any | None:
+    """The in-process simulator behind a ``sim://`` link (None for any other link)."""
+    link: Any = client.link
+    for _ in range(4):
+        device = getattr(link, "device", None)
+        if device is not None:
+            return getattr(device, "sim", None)
+        link = getattr(link, "inner", None) or getattr(link, "link", None)
+        if link is None:
+            return None
+    return None
+
+
+class Navigator:
+    """Runs followers on a robot through a client: telemetry, estimation, the control loop, truth.
+
+    ``estimator`` names the estimator the followers see (:data:`omnibot.estimation.ESTIMATORS`);
+    ``observers`` are more estimators fed the same telemetry (for comparisons). ``wheel_loop``
+    turns on the controller's wheel-speed loop (MODE bit 1) when every wheel has an encoder.
+    """
+
+    def __init__(
+        self,
+        client: RobotClient,
+        robot: RobotDescription,
+        *,
+        estimator: str = "fused",
+        observers: Sequence[str] = (),
+        wheel_loop: bool = True,
+        binary: bool = True,
+        start: Pose2D | None = None,
+    ) -> None:
+        self.client = client
+        self.robot = robot
+        self.start_pose = start or Pose2D(0.0, 0.0, 0.0)
+        self.estimator: Estimator = make_estimator(estimator, robot, self.start_pose)
+        self.observers: dict[str, Estimator] = {
+            name: make_estimator(name, robot, self.start_pose) for name in observers
+        }
+        self.wheel_loop = wheel_loop and all(
+            any(e.wheel == w.name for e in robot.encoders.motors) for w in robot.wheels
+        )
+        self.binary = binary
+        self.sim = simulator_of(client)
+        self.frame: FrameMap | None = None
+        self._offset = math.inf
+        self._offset_time = 0.0
+        self._pending: list[Pending] = []
+        self._state = 1
+        self._started = False
+
+    # ------------------------------------------------------------------ setup
+
+    def prepare(self, standstill: float = STANDSTILL) -> None:
+        """Stop, pick the protocol, start telemetry, and stand still while the gyro bias is learned."""
+        c = self.client
+        c.stop()
+        period = 0.02
+        if self.binary:
+            try:
+                c.use_binary()
+                period = 0.01
+            except NotSupported:
+                pass
+        if self.wheel_loop:
+            c.mode(closed_loop=True)
+        mask = codes.TEL_ENCODERS | codes.TEL_HEADING | codes.TEL_QUEUE
+        if self.robot.encoders.tracking:
+            mask |= codes.TEL_TRACKING
+        c.on_telemetry(self._on_telemetry)
+        self._started = True
+        if self.sim is not None:
+            p = self.sim.pose
+            self.frame = FrameMap(Pose2D(p.x, p.y, p.theta), self.start_pose)
+        c.telemetry(period, mask)
+        c.sleep(standstill)
+
+    def calibrate_gyro(self, turns: float = 1.0, rate: float = 1.0) -> tuple[float, float]:
+        """Spin in place ``turns`` times each way at ``rate`` rad/s, then stand still.
+
+        Turning steadily in place, the wheels hardly slip, so their rotation is a good reference for
+        the gyro's scale error (and the standstills for its bias); the estimator learns both. The
+        robot ends where it started (within its own odometry). Returns the learned (bias, scale).
+        """
+        c = self.client
+        ramp = 0.5
+        for sign in (1.0, -1.0):
+            duration = 2.0 * math.pi * turns / rate + ramp
+            t0 = c.clock.now()
+            while (t := c.clock.now() - t0) < duration + ramp:
+                k = min(1.0, t / ramp, max(0.0, (duration + ramp - t) / ramp))
+                self.send(Command(0.0, 0.0, sign * rate * k))
+                c.sleep(0.01)
+            c.stop()
+            c.sleep(STANDSTILL)
+        flt = getattr(self.estimator, "filter", None)
+        return (flt.bias, flt.scale) if flt is not None else (math.nan, math.nan)
+
+    def close(self) -> None:
+        """Stop the robot and the telemetry, detach the listener (idempotent)."""
+        if not self._started:
+            return
+        self._started = False
+        try:
+            if not self.client.link.closed:
+                self.client.stop()
+                self.client.telemetry(0.0)
+        finally:
+            self.client.remove_listener(self._on_telemetry)
+
+    def _on_telemetry(self, event: Telemetry) -> None:
+        lag = event.time - event.controller_time
+        # the least-delayed sample gives the clock offset (allowed to creep up 20 us/s for drift)
+        self._offset = min(self._offset + 2e-5 * max(0.0, event.time - self._offset_time), lag)
+        self._offset_time = event.time
+        if event.state is not None:
+            self._state = event.state
+        self.estimator.update(event)
+        for obs in self.observers.values():
+            obs.update(event)
+
+    # ------------------------------------------------------------------ state
+
+    def state(self) -> State:
+        """The estimate, extrapolated to now on the link clock."""
+        now = self.client.clock.now()
+        est = self.estimator.estimate
+        offset = self._offset if math.isfinite(self._offset) else 0.0
+        horizon = min(max(0.0, now - (est.t + offset)), 0.1)
+        e = est.predict(est.t + horizon)
+        return State(now, e.x, e.y, e.theta, e.vx, e.vy, e.w, e.slipping)
+
+    def truth(self) -> tuple[float, float, float] | None:
+        """Ground truth now, in the path's frame (None without a simulator)."""
+        if self.sim is None or self.frame is None:
+            return None
+        p = self.sim.pose
+        return self.frame(p.x, p.y, p.theta)
+
+    # ------------------------------------------------------------------ running
+
+    def send(self, command: Command) -> None:
+        """VEL for ``command`` (clamped to what the controller accepts), without waiting."""
+        c = self.client
+        lim = c.limits
+        vmax = max(0.0, (lim.speed_max_cms - 1.0) / 100.0)
+        vx, vy = command.vx, command.vy
+        speed = math.hypot(vx, vy)
+        if speed > vmax:
+            vx, vy = vx * vmax / speed, vy * vmax / speed
+        wmax = math.radians(max(0.0, lim.rate_max_dps - 1.0))
+        w = max(-wmax, min(wmax, command.w))
+        self._collect()
+        self._pending.append(c.submit(vel_command(lim, vx, vy, w, WATCHDOG)))
+
+    def _collect(self) -> None:
+        keep = []
+        for p in self._pending:
+            if p.error is not None:
+                raise NavigationError(f"the controller refused {p.line}: {p.error}")
+            if not p.done:
+                keep.append(p)
+        self._pending = keep
+        if self._state == codes.STATE_ESTOP:
+            raise NavigationError("emergency stop latched on the controller")
+
+    def follow(self, path: Path, follower: Follower, *, timeout: float | None = None) -> FollowRun:
+        """Drive ``path`` with ``follower`` until it is done (or ``timeout`` s, default from the path)."""
+        c = self.client
+        clock = c.clock
+        run = FollowRun(path, follower.name, self.estimator.name)
+        period = follower.dt
+        start = clock.now()
+        follower.start(path, self.state().t)
+        if timeout is None:
+            profile = getattr(follower, "profile", None)
+            nominal = (
+                profile.min_time if profile is not None else path.length / max(follower.limits.v_max, 1e-3)
+            )
+            timeout = 3.0 * nominal + 10.0
+        run.start_time = start
+        distance0 = self.estimator.distance
+        next_tick = start
+        try:
+            while True:
+                state = self.state()
+                command = follower.update(state)
+                if follower.done:
+                    break
+                self.send(command)
+                self._record(run, state, command)
+                if state.t - start > timeout:
+                    break
+                next_tick += period
+                c.sleep(max(0.0, next_tick - clock.now()))
+            run.completed = follower.done
+            run.end_time = clock.now()
+        finally:
+            self._pending.clear()
+            if not c.link.closed:
+                c.stop()
+        self._record(run, self.state(), STOP)
+        c.sleep(SETTLE)
+        est = self.estimator.estimate
+        run.final_estimate = est.pose
+        truth = self.truth()
+        run.final_truth = Pose2D(*truth) if truth is not None else None
+        run.distance = self.estimator.distance - distance0
+        return run
+
+    def _record(self, run: FollowRun, state: State, command: Command) -> None:
+        run.t.append(state.t)
+        run.estimate.append((state.x, state.y, state.theta))
+        run.command.append((command.vx, command.vy, command.w))
+        truth = self.truth()
+        if truth is not None:
+            run.truth.append(truth)

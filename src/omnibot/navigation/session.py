@@ -1,0 +1,130 @@
+"""One-call follow runs: open the simulated robot at the path's start, or drive any link.
+
+:func:`simulated_client` builds the lockstep ``sim://`` link with the robot standing at a given pose
+(so the path's frame and the simulator's coincide); :func:`follow_path` prepares a
+:class:`~omnibot.navigation.runner.Navigator`, runs one follower and returns the run and its report.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+from omnibot.client.client import RobotClient
+from omnibot.control.followers.base import make_follower
+from omnibot.control.paths.path import Path
+from omnibot.control.paths.profile import MotionLimits
+from omnibot.estimation.odometry import Pose2D
+from omnibot.navigation.metrics import tracking_report
+from omnibot.navigation.runner import FollowRun, Navigator
+from omnibot.robot.description import RobotDescription
+
+DEFAULT_RATE = 100.0
+"""Control rate of the follower loop, Hz."""
+
+
+def follower_limits(robot: RobotDescription, speed: float | None = None) -> MotionLimits:
+    """What followers may plan with: the robot's limits, the speed capped at ``speed``, and the turn
+    rate kept inside 90 % of the gyro's range (a saturated gyro loses heading)."""
+    limits = MotionLimits.from_robot(robot, speed)
+    if robot.gyro is not None:
+        limits = limits.with_turn_rate(0.9 * robot.gyro.range)
+    return limits
+
+
+def simulated_client(
+    robot: RobotDescription,
+    *,
+    surface: str | None = None,
+    seed: int = 0,
+    start: Pose2D | None = None,
+    world: str | None = None,
+) -> RobotClient:
+    """A client on the lockstep simulator (firmware + physics) with the robot standing at ``start``."""
+    from omnibot.sim.device import SimDevice
+    from omnibot.transport.lockstep import LockstepLink
+
+    pose = start or Pose2D(0.0, 0.0, 0.0)
+    device = SimDevice(
+        robot, surface=surface, world=world, seed=seed, start_pose=(pose.x, pose.y, pose.theta)
+    )
+    query = f"seed={seed}" + (f"&surface={surface}" if surface else "") + (f"&world={world}" if world else "")
+    link = LockstepLink(device, url=f"sim://{robot.name}?{query}")
+    return RobotClient(link, robot)
+
+
+@dataclass
+class FollowOptions:
+    """How to follow: follower name and options, speed cap, estimator, control rate, wheel loop."""
+
+    follower: str = "tracker"
+    speed: float | None = None
+    estimator: str = "fused"
+    rate: float = DEFAULT_RATE
+    wheel_loop: bool = True
+    follower_options: dict[str, Any] = field(default_factory=dict)
+    observers: tuple[str, ...] = ()
+    standstill: float = 1.0
+    calibrate_gyro: bool = False
+    """Spin in place one turn each way first (the gyro's scale error is learned; the robot ends where
+    it started, within its odometry)."""
+
+
+def follow_path(
+    client: RobotClient, robot: RobotDescription, path: Path, options: FollowOptions | None = None
+) -> tuple[FollowRun, dict[str, Any], Navigator]:
+    """Follow ``path`` through ``client`` (the robot standing at the path's start); the run, its
+    report (:func:`~omnibot.navigation.metrics.tracking_report`) and the navigator (for observers)."""
+    opts = options or FollowOptions()
+    limits = follower_limits(robot, opts.speed)
+    follower = make_follower(opts.follower, limits, rate=opts.rate, **opts.follower_options)
+    nav = Navigator(
+        client,
+        robot,
+        estimator=opts.estimator,
+        observers=opts.observers,
+        wheel_loop=opts.wheel_loop,
+        start=Pose2D(*path.start),
+    )
+    try:
+        nav.prepare(opts.standstill)
+        if opts.calibrate_gyro:
+            nav.calibrate_gyro()
+        run = nav.follow(path, follower)
+    finally:
+        nav.close()
+    report = tracking_report(run, MotionLimits.from_robot(robot, opts.speed))
+    report["robot"] = robot.name
+    report["rate_hz"] = opts.rate
+    if opts.speed is not None:
+        report["speed_cap_m_s"] = opts.speed
+    return run, report, nav
+
+
+def simulate_follow(
+    robot: RobotDescription,
+    path: Path,
+    options: FollowOptions | None = None,
+    *,
+    surface: str | None = None,
+    seed: int = 0,
+) -> tuple[FollowRun, dict[str, Any]]:
+    """Follow ``path`` on the simulated ``robot`` (standing at the path's start) in lockstep."""
+    start = Pose2D(*path.start)
+    with simulated_client(robot, surface=surface, seed=seed, start=start) as client:
+        run, report, _ = follow_path(client, robot, path, options)
+    report["surface"] = surface or "wood"
+    report["seed"] = seed
+    return run, report
+
+
+def summary(report: dict[str, Any]) -> str:
+    """One line: RMS, max, time against the minimum, final error."""
+    return (
+        f"RMS {100 * report['rms_cross_track_m']:.2f} cm, max {100 * report['max_cross_track_m']:.2f} cm, "
+        f"{report['duration_s']:.2f} s of minimum {report['min_time_s']:.2f} s "
+        f"({report['time_ratio']:.2f}x), final error {100 * report['final_error_m']:.2f} cm"
+        + ("" if report["completed"] else ", NOT COMPLETED")
+        + (f" [{report['source']}]" if not math.isnan(report["rms_cross_track_m"]) else "")
+    )

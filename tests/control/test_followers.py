@@ -1,0 +1,103 @@
+"""Followers on an idealised robot (first-order velocity lag, no slip): each one completes the path,
+and the registry picks them by name."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from omnibot.control.followers import Command, Follower, State, follower_names, make_follower
+from omnibot.control.followers.base import to_body, wrap
+from omnibot.control.followers.response import VelocityResponse
+from omnibot.control.followers.tracker import ProfileTracker
+from omnibot.control.paths import MotionLimits, Path, standard_path
+from omnibot.errors import ConfigError
+
+LIMITS = MotionLimits(v_max=0.5, a_max=2.0, w_max=6.0, alpha_max=20.0)
+
+
+def simulate(
+    name: str,
+    path: Path,
+    *,
+    gain: float = 1.0,
+    seconds: float = 30.0,
+    follower: Follower | None = None,
+    **options: object,
+) -> tuple[list[float], float, bool]:
+    """Run a follower at 100 Hz on a robot that reaches gain x the commanded body velocity with a
+    30 ms lag; returns the cross-track distances, the time taken and whether it finished."""
+    f = follower or make_follower(name, LIMITS, **options)
+    dt, tau = 0.01, 0.03
+    x, y, th = path.start
+    vx = vy = w = 0.0  # world velocity of the robot
+    f.start(path, 0.0)
+    t, dist = 0.0, list[float]()
+    while t < seconds:
+        cmd = f.update(State(t, x, y, th, vx, vy, w))
+        if f.done:
+            return dist, t, True
+        c, s = math.cos(th), math.sin(th)
+        want_x, want_y = gain * (c * cmd.vx - s * cmd.vy), gain * (s * cmd.vx + c * cmd.vy)
+        a = dt / tau
+        vx, vy, w = vx + a * (want_x - vx), vy + a * (want_y - vy), w + a * (gain * cmd.w - w)
+        x, y, th, t = x + vx * dt, y + vy * dt, th + w * dt, t + dt
+        dist.append(float(path.distances(np.array([[x, y]]))[0]))
+    return dist, t, False
+
+
+def test_registry() -> None:
+    assert {"seed002", "seed002-plain", "pure_pursuit", "tracker"} <= set(follower_names())
+    with pytest.raises(ConfigError, match="unknown follower 'traker'; did you mean 'tracker'"):
+        make_follower("traker", LIMITS)
+    with pytest.raises(ConfigError, match="no option"):
+        make_follower("tracker", LIMITS, wobble=1)
+    assert make_follower("seed002-plain", LIMITS).reduced_overshoot is False  # type: ignore[attr-defined]
+
+
+@pytest.mark.parametrize("name", ["tracker", "pure_pursuit", "seed002", "seed002-plain"])
+def test_every_follower_completes_an_s_curve(name: str) -> None:
+    path = standard_path("s_curve", size=1.0)
+    dist, t, done = simulate(name, path)
+    assert done, f"{name} did not finish in {t:.1f} s"
+    limit = {"tracker": 0.01, "pure_pursuit": 0.03, "seed002": 0.02, "seed002-plain": 0.10}[name]
+    assert max(dist) < limit
+
+
+def test_tracker_is_near_the_minimum_time_and_tight() -> None:
+    path = standard_path("lemniscate", size=1.0, heading="tangent")
+    f = make_follower("tracker", LIMITS)
+    f.start(path, 0.0)
+    minimum = f.profile.min_time  # type: ignore[attr-defined]
+    dist, t, done = simulate("tracker", path)
+    assert done and t < 1.15 * minimum + 0.3
+    assert math.sqrt(sum(d * d for d in dist) / len(dist)) < 0.003
+
+
+def test_tracker_learns_a_slow_robot() -> None:
+    tracker = make_follower("tracker", LIMITS)
+    dist, _, done = simulate("tracker", standard_path("circle", size=1.0), gain=0.7, follower=tracker)
+    assert done and max(dist) < 0.005
+    assert isinstance(tracker, ProfileTracker) and tracker.response is not None
+    np.testing.assert_allclose(tracker.response.G, 0.7 * np.eye(2), atol=0.05)
+
+
+def test_response_model_inverts_a_gain() -> None:
+    model = VelocityResponse(delay=0.0)
+    for k in range(300):
+        t = 0.01 * k
+        ux, uy = 0.3 * math.cos(t), 0.3 * math.sin(t)
+        model.sent(t, ux, uy, 0.5)
+        model.observe(t, 0.8 * ux, 0.8 * uy, 0.4, 0.01)
+    assert model.compensate(0.4, 0.0, 0.4) == pytest.approx((0.5, 0.0, 0.5), abs=0.02)
+
+
+def test_body_frame_and_wrap() -> None:
+    cmd = to_body(0.0, 1.0, 0.0, math.pi / 2)
+    assert (cmd.vx, cmd.vy) == pytest.approx((1.0, 0.0))
+    assert Command(0.3, 0.4, 0.0).speed == pytest.approx(0.5)
+    assert wrap(3 * math.pi) == pytest.approx(-math.pi)
+    with pytest.raises(ConfigError, match="two distinct points"):
+        make_follower("tracker", LIMITS).start(Path.from_points([(0.0, 0.0), (0.0, 0.0)], theta=0.0), 0.0)

@@ -1,0 +1,74 @@
+"""Time-optimal speed profile: closed-form cases, traction on curves, turns in place, caps."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from omnibot.control.paths import MotionLimits, Path, standard_path, time_optimal_profile
+from omnibot.control.paths.profile import min_traversal_time
+from omnibot.robot.description import load_robot
+
+LIM = MotionLimits(v_max=0.5, a_max=2.0, w_max=10.0, alpha_max=20.0)
+
+
+def test_straight_line_trapezoid_and_triangle() -> None:
+    line = Path.from_points([(0.0, 0.0), (1.0, 0.0)], theta=0.0)
+    assert time_optimal_profile(line, LIM).min_time == pytest.approx(1.0 / 0.5 + 0.5 / 2.0, rel=1e-3)
+    short = Path.from_points([(0.0, 0.0), (0.04, 0.0)], theta=0.0)  # never reaches v_max
+    assert time_optimal_profile(short, LIM).min_time == pytest.approx(2 * math.sqrt(0.04 / 2.0), rel=1e-3)
+
+
+def test_circle_speed_is_limited_by_grip() -> None:
+    ring = standard_path("circle", size=1.0)  # radius 0.5: v <= sqrt(a_lat r) = 1 m/s
+    fast = MotionLimits(v_max=3.0, a_max=2.0, w_max=10.0, alpha_max=20.0)
+    prof = time_optimal_profile(ring, fast)
+    assert prof.speed.max() == pytest.approx(1.0, rel=0.01)
+    half = len(prof.t) // 2
+    ref = prof.at(prof.t[half])
+    assert math.hypot(ref.ax, ref.ay) == pytest.approx(2.0, rel=0.03)  # all the grip goes sideways
+
+
+def test_turn_in_place_is_timed_by_the_angular_limits() -> None:
+    turn = Path(np.zeros(2), np.zeros(2), np.array([0.0, math.pi / 2]))
+    lim = MotionLimits(v_max=0.5, a_max=2.0, w_max=1.0, alpha_max=2.0)
+    prof = time_optimal_profile(turn, lim)
+    # bang-bang at alpha_max / 2 = 1 rad/s^2 capped at w_max = 1 rad/s: 1 s of ramps plus pi/2 - 1 at full rate
+    assert prof.min_time == pytest.approx(math.pi / 2 + 1.0, rel=1e-3)
+    mid = prof.at(prof.min_time / 2)
+    assert (mid.x, mid.y, mid.speed) == (0.0, 0.0, 0.0)
+    assert mid.w == pytest.approx(1.0) and mid.theta == pytest.approx(math.pi / 4, abs=1e-3)
+
+
+def test_path_speed_caps_and_is_ignored_for_the_minimum_time() -> None:
+    xs = np.linspace(0, 2, 201)
+    slow = Path.from_points(np.column_stack((xs, 0 * xs)), theta=0.0, v=np.full(201, 0.2))
+    prof = time_optimal_profile(slow, LIM)
+    assert prof.speed.max() == pytest.approx(0.2, rel=1e-3)
+    assert prof.min_time > 10.0
+    assert min_traversal_time(slow, LIM) == pytest.approx(2.0 / 0.5 + 0.25, rel=1e-3)
+
+
+def test_reference_is_continuous_and_ends_at_the_end() -> None:
+    path = standard_path("s_curve", size=1.0, heading="tangent")
+    prof = time_optimal_profile(path, MotionLimits.from_robot(load_robot("omni4"), 0.5))
+    ts = np.linspace(0, prof.min_time, 500)
+    refs = [prof.at(t) for t in ts]
+    xy = np.array([(r.x, r.y) for r in refs])
+    assert np.max(np.hypot(*np.diff(xy, axis=0).T)) < 0.5 * (ts[1] - ts[0]) * 1.05  # never faster than v_max
+    assert path.distances(xy).max() < 1e-6
+    end = prof.at(prof.min_time + 1.0)
+    assert (end.x, end.y, end.speed) == pytest.approx((path.end[0], path.end[1], 0.0))
+    assert max(abs(r.w) for r in refs) <= 10.0
+
+
+def test_limits_validation_and_scaling() -> None:
+    with pytest.raises(ValueError, match="v_max"):
+        MotionLimits(0.0, 1.0, 1.0, 1.0)
+    scaled = LIM.scaled(0.5)
+    assert (scaled.a_max, scaled.alpha_max, scaled.v_max) == (1.0, 10.0, 0.5)
+    assert LIM.with_turn_rate(3.0).w_max == 3.0
+    with pytest.raises(ValueError, match="two points"):
+        time_optimal_profile(Path(np.zeros(1), np.zeros(1), np.zeros(1)), LIM)

@@ -1,0 +1,72 @@
+"""Heading filter: bias at standstill and while driving straight, scale while turning, slips ignored."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from omnibot.estimation.heading import HeadingFilter, HeadingFilterConfig
+
+DT = 0.01
+
+
+def run(flt: HeadingFilter, seconds: float, rate: float, bias: float, scale: float, **kw: object) -> float:
+    """Feed a gyro with ``bias``/``scale`` and perfect encoders for a body turning at ``rate``."""
+    theta = 0.0
+    for _ in range(round(seconds / DT)):
+        true = rate * DT
+        flt.update(DT, (1 + scale) * true + bias * DT, true, **kw)  # type: ignore[arg-type]
+        theta += true
+    return theta
+
+
+def test_bias_is_learned_at_standstill_and_the_heading_holds() -> None:
+    flt = HeadingFilter()
+    run(flt, 2.0, 0.0, bias=0.012, scale=0.0, standstill=True)
+    assert flt.bias == pytest.approx(0.012, abs=2e-4)
+    assert flt.theta == 0.0  # standing still: no drift at all
+
+
+def test_bias_is_learned_while_driving_straight() -> None:
+    flt = HeadingFilter()
+    run(flt, 20.0, 0.0, bias=-0.008, scale=0.0)
+    assert flt.bias == pytest.approx(-0.008, abs=5e-4)
+    assert abs(flt.theta) < 0.01  # a raw gyro sum would be off by 0.16 rad
+
+
+def test_scale_is_learned_while_turning_steadily() -> None:
+    flt = HeadingFilter()
+    run(flt, 1.0, 0.0, bias=0.005, scale=0.015, standstill=True)
+    truth = run(flt, 2 * 2 * math.pi, 1.0, bias=0.005, scale=0.015)
+    assert flt.scale == pytest.approx(0.015, abs=2e-3)
+    assert flt.theta == pytest.approx(truth, abs=0.01)
+
+
+def test_a_slip_of_the_wheels_does_not_enter_the_heading() -> None:
+    flt = HeadingFilter()
+    run(flt, 1.0, 0.0, bias=0.0, scale=0.0, standstill=True)
+    for k in range(100):  # the wheels report a 0.3 rad spin the body (and gyro) never made
+        flt.update(DT, 0.0, 0.003 if k < 100 else 0.0)
+    assert flt.slipping
+    assert abs(flt.theta) < 0.01
+    run(flt, 2.0, 0.0, bias=0.0, scale=0.0)
+    assert abs(flt.theta) < 0.01 and not flt.slipping
+
+
+def test_outside_slip_flag_and_saturated_gyro() -> None:
+    flt = HeadingFilter(HeadingFilterConfig(gyro_range=4.0))
+    flt.update(DT, 0.01, 0.5, slip=True)  # flagged: the encoders' 0.5 rad is ignored
+    assert flt.theta == pytest.approx(0.01) and flt.slipping
+    sat = HeadingFilter(HeadingFilterConfig(gyro_range=4.0))
+    inc = sat.update(DT, 0.04, 0.06)  # the gyro is pinned at its range: the wheels say 6 rad/s
+    assert inc == pytest.approx(0.06)
+
+
+def test_reset_heading_keeps_the_learned_gyro() -> None:
+    flt = HeadingFilter()
+    run(flt, 2.0, 0.0, bias=0.01, scale=0.0, standstill=True)
+    flt.reset_heading(1.5)
+    assert flt.theta == 1.5 and flt.bias == pytest.approx(0.01, abs=2e-4)
+    assert np.all(np.isfinite(flt.P))

@@ -1,0 +1,76 @@
+"""The navigation loop on the lockstep simulator: a short follow run, truth in the path's frame."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from omnibot.client.client import RobotClient
+from omnibot.control.followers import make_follower
+from omnibot.control.paths import Path, standard_path
+from omnibot.estimation.odometry import Pose2D
+from omnibot.navigation.metrics import ODOMETRY, TRUTH, tracking_report
+from omnibot.navigation.runner import FrameMap, Navigator
+from omnibot.navigation.session import FollowOptions, follower_limits, simulate_follow
+from omnibot.robot.description import load_robot
+
+
+def test_tracker_follows_a_circle_against_ground_truth() -> None:
+    robot = load_robot("omni4")
+    path = standard_path("circle", size=0.6)
+    run, report = simulate_follow(robot, path, FollowOptions(follower="tracker", speed=0.4), seed=2)
+    assert report["source"] == TRUTH and report["completed"]
+    for key in ("rms_cross_track_m", "max_cross_track_m", "duration_s", "min_time_s", "final_error_m"):
+        assert math.isfinite(report[key])
+    assert report["rms_cross_track_m"] < 0.012 and report["max_cross_track_m"] < 0.03
+    assert 1.0 <= report["time_ratio"] < 1.3
+    assert report["final_error_m"] < 0.03
+    ticks = np.diff(run.t[:-1])
+    assert np.allclose(ticks, 0.01, atol=1e-3)  # the loop runs at 100 Hz on the link clock
+    assert len(run.truth) == len(run.estimate) == len(run.command)
+
+
+def test_truth_is_mapped_into_the_path_frame() -> None:
+    robot = load_robot("omni4")
+    path = standard_path("line", size=0.3)
+    shifted = Path(path.x + 2.0, path.y - 1.0, path.theta + 0.5)  # starts at (2, -1), heading 0.5
+    with RobotClient.open("sim://omni4?seed=1", robot) as client:  # the simulator starts at the origin
+        nav = Navigator(client, robot, start=Pose2D(*shifted.start))
+        nav.prepare(0.5)
+        follower = make_follower("pure_pursuit", follower_limits(robot, 0.4))
+        run = nav.follow(shifted, follower)
+        nav.close()
+    assert run.completed
+    assert run.truth[0] == pytest.approx((2.0, -1.0, 0.5), abs=1e-3)
+    report = tracking_report(run, follower_limits(robot, 0.4))
+    assert report["max_cross_track_m"] < 0.03 and report["final_error_m"] < 0.03
+    fm = FrameMap(Pose2D(1.0, 1.0, math.pi / 2), Pose2D(0.0, 0.0, 0.0))
+    assert fm(1.0, 2.0, math.pi / 2) == pytest.approx((1.0, 0.0, 0.0))
+
+
+def test_report_without_truth_says_so() -> None:
+    robot = load_robot("omni4")
+    run, _ = simulate_follow(
+        robot, standard_path("line", size=0.2), FollowOptions(follower="seed002", speed=0.3)
+    )
+    run.truth.clear()
+    run.final_truth = None
+    report = tracking_report(run, follower_limits(robot, 0.3))
+    assert report["source"] == ODOMETRY and "estimate_error_m" not in report
+    assert report["max_cross_track_m"] < 0.02
+
+
+def test_gyro_calibration_spin_learns_the_scale() -> None:
+    robot = load_robot("omni4")
+    with RobotClient.open("sim://omni4?seed=3", robot) as client:
+        nav = Navigator(client, robot)
+        nav.prepare(0.5)
+        bias, scale = nav.calibrate_gyro(turns=1.0, rate=3.0)
+        sim = nav.sim
+        nav.close()
+    assert sim is not None
+    assert bias == pytest.approx(sim.gyro.bias, abs=1e-3)
+    assert scale == pytest.approx(sim.gyro.scale_error, abs=3e-3)
+    assert abs(sim.pose.theta) < 0.2  # one turn each way: back where it started
