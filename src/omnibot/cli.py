@@ -363,6 +363,15 @@ def _add_follow(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
     p.set_defaults(handler=_follow)
 
 
+# --------------------------------------------------------------------------- calibrate
+
+
+def _add_calibrate(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    from omnibot.calibration.cli import add_parser
+
+    add_parser(sub)
+
+
 # --------------------------------------------------------------------------- parser
 
 
@@ -389,6 +398,7 @@ ADDERS: list[Callable[[argparse._SubParsersAction[argparse.ArgumentParser]], Non
     _add_follow,
     _add_teleop,
     _add_dashboard,
+    _add_calibrate,
 ]
 
 

@@ -1,0 +1,13 @@
+"""Seed 000's power calibration, automated, with gyro and odometry-geometry calibration (docs/calibration.md).
+
+Entry points (imported from their modules, so ``omnibot --help`` stays light)::
+
+    from omnibot.calibration.session import calibrate, calibrate_surface   # the whole procedure
+    from omnibot.calibration.experiments import Plan                         # how much to measure
+    from omnibot.calibration.accuracy import AccuracyPlan                    # the before/after check
+    from omnibot.calibration.calfile import load_calibration, write_calibration, merge_calibration
+    from omnibot.calibration.truth import TRUTHS, register_truth             # ground-truth strategies
+
+Data flow: RobotClient -> experiments (POWER/MOVE/ROTATE runs, each measured by a truth strategy)
+-> fits (rate curves -> K, K_l, K_r; curved MOVEs -> K_t) -> CAL upload -> accuracy -> calfile, report.
+"""

@@ -1,0 +1,167 @@
+"""Open-loop accuracy: MOVEs over courses and speeds and ROTATEs, commanded against achieved.
+
+Run before and after uploading a calibration, this is the before/after table of the report. Each
+MOVE on course ``c`` is followed by one back on ``c + 180`` (so the robot stays near its start);
+both are rows. Errors: distance (achieved / commanded - 1), course (direction of the displacement
+against the commanded course, degrees) and heading (how far the body turned, degrees; a straight
+MOVE should not turn it). For ROTATE the error is the angle's.
+"""
+
+from __future__ import annotations
+
+import math
+import statistics
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from functools import partial
+from typing import Any
+
+from omnibot.calibration.experiments import Runner, speed_range
+from omnibot.calibration.truth import ROTATE, STRAIGHT, RunInfo
+from omnibot.robot.description import RobotDescription
+
+
+@dataclass(frozen=True)
+class AccuracyPlan:
+    courses_deg: tuple[float, ...] = (0.0, 15.0, 30.0, 45.0, 60.0, 75.0, 90.0)
+    speeds: tuple[float, ...] | None = None
+    """m/s; default: four from the lowest speed to 90 % of the highest of :func:`speed_range`."""
+    length: float = 1.0
+    back: bool = True
+    rotations: tuple[tuple[float, float], ...] = ((90.0, 90.0), (180.0, 180.0))
+    """(angle, rate) in degrees and degrees/s, each both ways."""
+
+    def move_speeds(self, robot: RobotDescription) -> list[float]:
+        if self.speeds is not None:
+            return list(self.speeds)
+        lo, hi = speed_range(robot, self.length)
+        hi *= 0.9
+        return [round(lo + (hi - lo) * k / 3, 2) for k in range(4)]
+
+    @classmethod
+    def quick(cls) -> AccuracyPlan:
+        return cls(courses_deg=(0.0, 45.0, 90.0), speeds=None, rotations=((90.0, 90.0),))
+
+
+@dataclass(frozen=True)
+class AccuracyRow:
+    kind: str
+    """``move`` or ``rotate``."""
+    course_deg: float
+    speed: float
+    """m/s (move) or degrees/s (rotate)."""
+    commanded: float
+    """m (move) or degrees (rotate), signed for rotations."""
+    achieved: float | None
+    error: float | None
+    """achieved / commanded - 1."""
+    course_error_deg: float | None = None
+    heading_error_deg: float | None = None
+    source: str = ""
+
+    def as_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+def _wrap_deg(a: float) -> float:
+    return (a + 180.0) % 360.0 - 180.0
+
+
+def run_accuracy(runner: Runner, plan: AccuracyPlan) -> list[AccuracyRow]:
+    """Every MOVE and ROTATE of the plan, measured by the runner's truth."""
+    client, robot = runner.client, runner.robot
+    rows: list[AccuracyRow] = []
+    length = round(plan.length, 2)
+    for speed in plan.move_speeds(robot):
+        for course in plan.courses_deg:
+            for c in (course, course + 180.0) if plan.back else (course,):
+                info = RunInfo(
+                    STRAIGHT,
+                    f"check: move {100 * length:.0f} cm at {speed:g} m/s on course {c:g} deg",
+                    math.radians(c),
+                )
+                runner.note(f"check course {c:g} at {speed:g}")
+                r = runner.run(
+                    info,
+                    partial(client.move, length, speed, math.radians(c)),
+                    length / speed,
+                    "check",
+                    course_deg=c,
+                )
+                m = r.truth
+                d = None if m is None else m.distance
+                direction = None if m is None else m.direction
+                rows.append(
+                    AccuracyRow(
+                        kind="move",
+                        course_deg=c,
+                        speed=speed,
+                        commanded=length,
+                        achieved=d,
+                        error=None if d is None else d / length - 1.0,
+                        course_error_deg=None
+                        if direction is None
+                        else _wrap_deg(math.degrees(direction) - c),
+                        heading_error_deg=None if m is None or m.theta is None else math.degrees(m.theta),
+                        source="" if m is None else m.source,
+                    )
+                )
+    for angle, rate in plan.rotations:
+        for sign in (1, -1):
+            a = sign * angle
+            info = RunInfo(ROTATE, f"check: rotate {a:g} deg at {rate:g} deg/s")
+            runner.note(f"check rotate {a:g}")
+            r = runner.run(
+                info,
+                partial(client.rotate, math.radians(a), math.radians(rate)),
+                angle / rate,
+                "check",
+            )
+            m = r.truth
+            got = None if m is None or m.theta is None else math.degrees(m.theta)
+            rows.append(
+                AccuracyRow(
+                    kind="rotate",
+                    course_deg=0.0,
+                    speed=rate,
+                    commanded=a,
+                    achieved=got,
+                    error=None if got is None else got / a - 1.0,
+                    heading_error_deg=None if got is None else got - a,
+                    source="" if m is None else m.source,
+                )
+            )
+    return rows
+
+
+@dataclass(frozen=True)
+class Summary:
+    """Mean and largest absolute errors of a set of rows."""
+
+    moves: int
+    distance_mean: float | None
+    distance_max: float | None
+    heading_mean_deg: float | None
+    heading_max_deg: float | None
+    course_mean_deg: float | None
+    course_max_deg: float | None
+    rotate_mean: float | None
+    rotate_max: float | None
+
+    def as_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+def _stats(values: Sequence[float | None]) -> tuple[float | None, float | None]:
+    v = [abs(x) for x in values if x is not None]
+    return (statistics.fmean(v), max(v)) if v else (None, None)
+
+
+def summarize(rows: Sequence[AccuracyRow]) -> Summary:
+    moves = [r for r in rows if r.kind == "move"]
+    rot = [r for r in rows if r.kind == "rotate"]
+    dm, dx = _stats([r.error for r in moves])
+    hm, hx = _stats([r.heading_error_deg for r in moves])
+    cm, cx = _stats([r.course_error_deg for r in moves])
+    rm, rx = _stats([r.error for r in rot])
+    return Summary(len(moves), dm, dx, hm, hx, cm, cx, rm, rx)

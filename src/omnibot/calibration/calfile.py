@@ -1,0 +1,181 @@
+"""The calibration file: a description's ``calibration:`` section plus what the host needs.
+
+::
+
+    # omnibot calibrate: omni4 on wood, carpet (truth sim)
+    calibration:          # what the controller uses (the average over the surfaces); paste it into
+      k: 162.1            # the robot description, or merge it with `merge_calibration`
+      k_l: {courses_deg: [0.0, 15.0, 30.0, 45.0], curves: [{x: [...], y: [...]}, ...]}
+      k_t: {x: [...], y: [...]}
+      k_r: {x: [...], y: [...]}
+    surfaces:             # each surface's own calibration, dead bands and odometry factors
+      wood: {calibration: {...}, deadband: {course:0: 48, rotation: 40}, odometry: {...}}
+    gyro: {bias: -0.0032, scale: 1.008}                              # true = scale * (rate - bias)
+    odometry: {wheel_radius_scale: 1.038, wheel_base_scale: 0.989}  # for wheel odometry
+
+Only the ``calibration`` section goes to the controller (CAL commands); ``gyro`` and ``odometry``
+are host-side corrections (:func:`omnibot.calibration.umbmark.corrected_robot`).
+"""
+
+from __future__ import annotations
+
+import datetime
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+from pydantic import ValidationError
+
+from omnibot.calibration.session import CalibrationResult, describe_spec
+from omnibot.errors import ConfigError
+from omnibot.robot.description import CalibrationSpec, RobotDescription, load_robot, parse_description
+
+TOP_KEYS = ("robot", "calibration", "surfaces", "gyro", "odometry", "info")
+
+
+@dataclass(frozen=True)
+class CalibrationFile:
+    calibration: CalibrationSpec
+    surfaces: dict[str, CalibrationSpec] = field(default_factory=dict)
+    deadbands: dict[str, dict[str, int]] = field(default_factory=dict)
+    gyro: dict[str, float] | None = None
+    odometry: dict[str, float] | None = None
+    robot: str | None = None
+
+    def for_surface(self, surface: str | None) -> CalibrationSpec:
+        """A surface's own calibration (None: the file's ``calibration``)."""
+        if surface is None:
+            return self.calibration
+        if surface not in self.surfaces:
+            raise ConfigError(
+                f"no calibration for surface '{surface}'; the file has: {', '.join(self.surfaces) or 'none'}",
+                key="surface",
+            )
+        return self.surfaces[surface]
+
+
+def document(result: CalibrationResult, truth: str = "") -> dict[str, Any]:
+    """The YAML document of a calibration result (plain data)."""
+    doc: dict[str, Any] = {"robot": result.robot.name, "calibration": describe_spec(result.chosen)}
+    doc["surfaces"] = {
+        s.surface: {"calibration": describe_spec(s.spec), "deadband": dict(s.fit.deadbands)}
+        for s in result.sessions
+    }
+    if (gyro := result.gyro) is not None:
+        doc["gyro"] = {
+            "bias": round(gyro.bias, 6),
+            **({"scale": round(gyro.scale, 5)} if gyro.scale is not None else {}),
+        }
+    if (odo := result.odometry) is not None:
+        doc["odometry"] = _odometry(odo.as_dict())
+    doc["info"] = {
+        "surfaces": [s.surface for s in result.sessions],
+        "truth": truth or (result.sessions[0].truth if result.sessions else ""),
+        "written": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),
+    }
+    return doc
+
+
+def _odometry(values: dict[str, Any]) -> dict[str, Any]:
+    return {k: v for k, v in values.items() if not k.endswith("_runs")}
+
+
+def dumps(doc: dict[str, Any]) -> str:
+    """YAML with the knot lists on one line each (the presets' layout)."""
+    head = (
+        f"# omnibot calibrate: {doc.get('robot', '?')} on {', '.join(doc.get('info', {}).get('surfaces', []))}\n"
+        "# `calibration` goes to the controller (CAL) and into a robot description; `gyro` and `odometry`\n"
+        "# are host-side corrections. See docs/calibration.md.\n"
+    )
+    return head + yaml.safe_dump(doc, sort_keys=False, default_flow_style=None, width=200)
+
+
+def write_calibration(path: str | Path, result: CalibrationResult, truth: str = "") -> Path:
+    path = Path(path)
+    try:
+        if path.parent != Path():
+            path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(dumps(document(result, truth)), encoding="utf-8")
+    except OSError as exc:
+        raise ConfigError(f"cannot write {path}: {exc.strerror}", key="--out") from None
+    return path
+
+
+def _spec(data: Any, where: str) -> CalibrationSpec:
+    if not isinstance(data, dict):
+        raise ConfigError(f"{where}: expected a mapping with k, k_l, k_t, k_r")
+    try:
+        return CalibrationSpec.model_validate(data)
+    except ValidationError as exc:
+        problems = []
+        for item in exc.errors():
+            loc = ".".join(str(p) for p in item["loc"])
+            msg = (
+                "unknown key"
+                if item["type"] == "extra_forbidden"
+                else item["msg"].removeprefix("Value error, ")
+            )
+            problems.append(f"{where}.{loc}: {msg}")
+        raise ConfigError("invalid calibration:\n  " + "\n  ".join(problems)) from None
+
+
+def parse_calibration(data: Any, source: str = "") -> CalibrationFile:
+    """Validate a parsed calibration document (or a bare ``calibration`` section)."""
+    if not isinstance(data, dict):
+        raise ConfigError(f"a calibration file must be a mapping {source}".strip())
+    if "calibration" not in data and "k" in data:
+        data = {"calibration": data}
+    unknown = [k for k in data if k not in TOP_KEYS]
+    if unknown:
+        raise ConfigError(f"{source}: unknown key(s) {unknown}; expected {', '.join(TOP_KEYS)}".lstrip(": "))
+    if "calibration" not in data:
+        raise ConfigError(f"{source}: no 'calibration' section".lstrip(": "))
+    surfaces, deadbands = {}, {}
+    for name, entry in (data.get("surfaces") or {}).items():
+        if not isinstance(entry, dict) or "calibration" not in entry:
+            raise ConfigError(f"surfaces.{name}: expected a mapping with 'calibration'")
+        extra = [k for k in entry if k not in ("calibration", "deadband", "odometry")]
+        if extra:
+            raise ConfigError(
+                f"surfaces.{name}: unknown key(s) {extra}; expected calibration, deadband, odometry"
+            )
+        surfaces[str(name)] = _spec(entry["calibration"], f"surfaces.{name}.calibration")
+        deadbands[str(name)] = {str(k): int(v) for k, v in (entry.get("deadband") or {}).items()}
+    return CalibrationFile(
+        calibration=_spec(data["calibration"], "calibration"),
+        surfaces=surfaces,
+        deadbands=deadbands,
+        gyro=data.get("gyro"),
+        odometry=data.get("odometry"),
+        robot=data.get("robot"),
+    )
+
+
+def load_calibration(path: str | Path) -> CalibrationFile:
+    path = Path(path)
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise ConfigError(f"cannot read calibration file {path}: {exc.strerror}") from None
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"{path} is not valid YAML: {exc}") from None
+    return parse_calibration(data, str(path))
+
+
+def apply_calibration(robot: RobotDescription, spec: CalibrationSpec) -> RobotDescription:
+    """The description with its ``calibration`` section replaced."""
+    data = robot.model_dump(exclude_none=True)
+    data["calibration"] = spec.model_dump(exclude_none=True)
+    return parse_description(data, f"{robot.name} (calibrated)")
+
+
+def merge_calibration(robot: str | Path, calibration: str | Path, surface: str | None = None) -> str:
+    """A description file (or preset) with its ``calibration:`` section replaced by the file's, as
+    YAML text (comments of the description are not kept)."""
+    desc = load_robot(robot)
+    spec = load_calibration(calibration).for_surface(surface)
+    merged = apply_calibration(desc, spec)
+    data = merged.model_dump(exclude_none=True, mode="json")
+    data["calibration"] = describe_spec(spec)
+    return yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=200)

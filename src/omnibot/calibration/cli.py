@@ -1,0 +1,240 @@
+"""``omnibot calibrate``: argument parsing and the glue between links, the session and the outputs.
+
+Kept light at import time (``omnibot --help`` imports it): everything heavy is imported in
+:func:`run`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from collections.abc import Callable, Iterator
+from contextlib import AbstractContextManager, contextmanager
+from dataclasses import replace
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from omnibot.errors import ConfigError
+
+if TYPE_CHECKING:
+    from omnibot.calibration.experiments import Progress
+    from omnibot.client.client import RobotClient
+    from omnibot.robot.description import RobotDescription
+
+SIM_SURFACES = ("wood", "carpet")
+"""Seed 000 calibrated on wood and carpet and averaged them."""
+
+
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    p = sub.add_parser(
+        "calibrate",
+        help="seed 000's power calibration (K, K_l, K_t, K_r), gyro and odometry geometry, with a report",
+        description="Drives calibration runs over the protocol (POWER sweeps on courses 0..45 and in "
+        "rotation, curved MOVEs, a rotation test, UMBmark squares), measures each by the chosen ground "
+        "truth, fits the piecewise-linear factors per surface and averaged over the surfaces, uploads them "
+        "(CAL) and checks open-loop accuracy before and after. Default: the simulated robot in lockstep "
+        "(sim://ROBOT?surface=S), surfaces wood and carpet.",
+    )
+    p.add_argument("--port", help="link URL of the controller (default: the simulator in lockstep)")
+    p.add_argument("--robot", default="omni4", help="preset name or description file (default omni4)")
+    p.add_argument(
+        "--surface",
+        help="surface name(s), comma-separated (default: wood,carpet in the simulator, 'floor' on --port; "
+        "with several on a real robot you are asked to move it between them)",
+    )
+    p.add_argument("--out", required=True, metavar="CAL.yaml", help="calibration file to write")
+    p.add_argument("--report", required=True, metavar="DIR", help="directory for the figures and tables")
+    p.add_argument(
+        "--truth",
+        help="ground truth: sim | csv:FILE | encoders | sonar[:NAME] | tape (default: sim on the simulator, "
+        "else encoders when every wheel has one, else tape)",
+    )
+    p.add_argument("--seed", type=int, default=0, help="simulator seed (default 0)")
+    sim = p.add_mutually_exclusive_group()
+    sim.add_argument(
+        "--perturb",
+        metavar="SPEC",
+        help="simulate a robot that differs from its description, e.g. 'radius=1.05;torque_constant=1.1,0.9,0.9,1.1' "
+        "('acceptance' for that one)",
+    )
+    sim.add_argument(
+        "--true-robot", metavar="FILE", help="simulate this description while the firmware uses --robot"
+    )
+    p.add_argument(
+        "--quick", action="store_true", help="seed 000's scope: courses 0 and 45, fewer runs and checks"
+    )
+    p.add_argument(
+        "--courses", help="calibrated courses in degrees, comma-separated (default: 4 over the fold range)"
+    )
+    p.add_argument(
+        "--move-length", type=float, default=1.0, help="MOVE length the fit is exact for, m (default 1)"
+    )
+    p.add_argument("--no-check", action="store_true", help="skip the before/after accuracy moves")
+    p.add_argument(
+        "--no-upload", action="store_true", help="fit only: do not upload (no K_t runs, no after-check)"
+    )
+    p.set_defaults(handler=run)
+
+
+def _surfaces(text: str | None, simulated: bool) -> list[str]:
+    if text is None:
+        return list(SIM_SURFACES) if simulated else ["floor"]
+    names = [s.strip() for s in text.split(",") if s.strip()]
+    if not names or len(set(names)) != len(names):
+        raise ConfigError(f"expected distinct comma-separated surface names, got {text!r}", key="--surface")
+    if simulated:
+        from omnibot.sim.surfaces import get_surface
+
+        for name in names:
+            try:
+                get_surface(name)
+            except ConfigError as exc:
+                raise ConfigError(str(exc), key="--surface") from None
+    return names
+
+
+def _courses(text: str | None) -> tuple[float, ...] | None:
+    if text is None:
+        return None
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        raise ConfigError(f"expected comma-separated degrees, got {text!r}", key="--courses") from None
+    if not values or not all(math.isfinite(v) for v in values):
+        raise ConfigError(f"expected comma-separated degrees, got {text!r}", key="--courses")
+    return values
+
+
+@contextmanager
+def tqdm_progress(desc: str, total: int) -> Iterator[Progress | None]:
+    """A tqdm bar on stderr (hidden when stderr is not a terminal)."""
+    from tqdm import tqdm
+
+    class Bar(tqdm):  # type: ignore[type-arg]
+        monitor_interval = 0  # no monitor thread left behind
+
+    with Bar(total=total or None, desc=desc, unit="run", disable=None, file=sys.stderr, leave=True) as bar:
+        yield bar
+
+
+def sim_opener(
+    robot: RobotDescription, name: str, seed: int, true_robot: RobotDescription | None
+) -> Callable[[str], AbstractContextManager[RobotClient]]:
+    """surface -> a lockstep client on a fresh simulated robot standing on it."""
+
+    @contextmanager
+    def open_client(surface: str) -> Iterator[RobotClient]:
+        from omnibot.client.client import RobotClient
+
+        if true_robot is None:
+            with RobotClient.open(f"sim://{name}?surface={surface}&seed={seed}", robot) as client:
+                yield client
+            return
+        from omnibot.sim.device import SimDevice
+        from omnibot.transport.lockstep import LockstepLink
+
+        device = SimDevice(robot, true_robot=true_robot, surface=surface, seed=seed)
+        with RobotClient(
+            LockstepLink(device, url=f"sim://{name}?surface={surface}&seed={seed}"), robot
+        ) as client:
+            yield client
+
+    return open_client
+
+
+def port_opener(
+    client: RobotClient, ask: Callable[[str], str]
+) -> Callable[[str], AbstractContextManager[RobotClient]]:
+    """surface -> the one real controller, after asking the person to put the robot there."""
+    state = {"surface": ""}
+
+    @contextmanager
+    def open_client(surface: str) -> Iterator[RobotClient]:
+        if surface != state["surface"]:
+            ask(f"Put the robot on {surface} with about 2 m of free floor around it, then press Enter: ")
+            state["surface"] = surface
+        yield client
+
+    return open_client
+
+
+def run(args: argparse.Namespace, ask: Callable[[str], str] = input) -> int:
+    """The ``omnibot calibrate`` handler; returns the exit status."""
+    from omnibot.calibration.accuracy import AccuracyPlan
+    from omnibot.calibration.calfile import write_calibration
+    from omnibot.calibration.experiments import Plan
+    from omnibot.calibration.perturb import ACCEPTANCE, perturbed_robot
+    from omnibot.calibration.report import accuracy_entries, write_report
+    from omnibot.calibration.session import calibrate
+    from omnibot.calibration.tables import summary_table
+    from omnibot.calibration.truth import default_truth, parse_truth_spec
+    from omnibot.client.client import RobotClient
+    from omnibot.robot.description import load_robot
+
+    robot = load_robot(args.robot)
+    if robot.n_wheels > 4:
+        raise ConfigError(
+            f"{robot.name} has {robot.n_wheels} motors; POWER (the calibration runs) carries at most 4"
+        )
+    simulated = args.port is None
+    if not simulated and (args.perturb or args.true_robot):
+        raise ConfigError("--perturb and --true-robot need the simulator (leave out --port)")
+    surfaces = _surfaces(args.surface, simulated)
+    if args.truth is not None:
+        parse_truth_spec(args.truth)
+    if not args.move_length > 0:
+        raise ConfigError(f"expected a positive length in m, got {args.move_length}", key="--move-length")
+    base = Plan.quick() if args.quick else Plan()
+    courses = _courses(args.courses)
+    plan = replace(base, courses_deg=courses, move_length=args.move_length)
+    check = AccuracyPlan.quick() if args.quick else AccuracyPlan()
+    accuracy = None if args.no_check else replace(check, length=args.move_length)
+    true_robot = None
+    if args.perturb:
+        true_robot = perturbed_robot(robot, ACCEPTANCE if args.perturb == "acceptance" else args.perturb)
+    elif args.true_robot:
+        true_robot = load_robot(args.true_robot)
+    truth: str | Callable[[RobotClient], str] = args.truth or (lambda c: default_truth(c, robot))
+
+    if simulated:
+        name = str(args.robot)
+        result = calibrate(
+            robot,
+            surfaces,
+            sim_opener(robot, name, args.seed, true_robot),
+            truth=truth,
+            plan=plan,
+            accuracy=accuracy,
+            ask=ask,
+            progress=tqdm_progress,
+            upload=not args.no_upload,
+        )
+    else:
+        with RobotClient.open(args.port, robot) as client:
+            result = calibrate(
+                robot,
+                surfaces,
+                port_opener(client, ask),
+                truth=truth,
+                plan=plan,
+                accuracy=accuracy,
+                ask=ask,
+                progress=tqdm_progress,
+                upload=not args.no_upload,
+            )
+            if result.average is not None and not args.no_upload:
+                client.upload_calibration(result.average)
+    truth_name = result.sessions[0].truth if result.sessions else ""
+    cal = write_calibration(args.out, result, truth_name)
+    files = write_report(result, args.report)
+    print(f"omnibot calibrate: {robot.name} on {', '.join(surfaces)} (truth {truth_name})")
+    entries = accuracy_entries(result)
+    if entries:
+        print(summary_table(entries))
+    for s in result.sessions:
+        for note in s.notes:
+            print(f"note ({s.surface}): {note}")
+    print(f"calibration: {cal}")
+    print(f"report: {Path(args.report)} ({', '.join(f.name for f in files)})")
+    return 0

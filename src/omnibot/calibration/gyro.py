@@ -1,0 +1,71 @@
+"""Gyro bias and scale calibration.
+
+The controller reports the yaw rate (TEL gyro group) and its integral (TEL heading). The model is
+the usual one for a MEMS gyro::
+
+    measured = true / scale + bias        so    true = scale * (measured - bias)
+
+* bias: the mean rate over a standstill (``Plan.gyro_still`` s);
+* scale: over rotations whose true angle is known (the rotation test, measured by the truth
+  strategy), least squares of true angle against the bias-corrected integrated angle
+  ``gyro_heading_change - bias * duration``.
+"""
+
+from __future__ import annotations
+
+import math
+import statistics
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from typing import Any
+
+from omnibot.calibration.experiments import RunResult
+from omnibot.calibration.tap import TelemetryTap
+
+
+@dataclass(frozen=True)
+class GyroCalibration:
+    bias: float
+    """rad/s read at standstill."""
+    bias_std: float
+    """Standard deviation of the bias estimate (of the mean), rad/s."""
+    samples: int
+    scale: float | None
+    """true rate = scale * (measured - bias); None without a rotation of known angle."""
+    rotations: int = 0
+
+    def correct(self, measured: float) -> float:
+        """A measured rate (rad/s) corrected."""
+        return (self.scale or 1.0) * (measured - self.bias)
+
+    def as_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+def standstill_bias(tap: TelemetryTap, seconds: float) -> tuple[float, float, int] | None:
+    """(mean rate, its standard error, samples) over ``seconds`` of standstill; None without a gyro."""
+    rates = [t.gyro_rate for t in tap.collect(seconds) if t.gyro_rate is not None]
+    if not tap.gyro or len(rates) < 2:
+        return None
+    return statistics.fmean(rates), statistics.stdev(rates) / math.sqrt(len(rates)), len(rates)
+
+
+def fit_scale(runs: Sequence[RunResult], bias: float) -> tuple[float | None, int]:
+    """Scale from runs with a true angle and a gyro angle (the rotation test); (None, 0) if none."""
+    num = den = 0.0
+    used = 0
+    for r in runs:
+        if r.truth is None or r.truth.theta is None or r.gyro is None or r.gyro_time is None:
+            continue
+        g = r.gyro - bias * r.gyro_time
+        if abs(g) < math.radians(30.0):
+            continue
+        num += r.truth.theta * g
+        den += g * g
+        used += 1
+    return (num / den if den > 0 else None), used
+
+
+def calibrate_gyro(bias: tuple[float, float, int], runs: Sequence[RunResult]) -> GyroCalibration:
+    scale, used = fit_scale(runs, bias[0])
+    return GyroCalibration(bias=bias[0], bias_std=bias[1], samples=bias[2], scale=scale, rotations=used)

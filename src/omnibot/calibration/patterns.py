@@ -1,0 +1,105 @@
+"""Motor power patterns and course folding for calibration runs (pure functions, any wheel layout).
+
+Seed 000 drives its calibration runs with raw motor powers: course 0 is two opposite motors at +P
+and -P, course 45 all four at +-P, rotation all four at +P. Generalised through the kinematics:
+the pattern of a course is the rim speed each wheel needs for a unit translation along it (the
+firmware's ``rim`` matrix, inverse kinematics times wheel radius), scaled so that the busiest motor
+gets P. For omni4 this is exactly the seed's patterns.
+
+The firmware looks K_l up at the course *folded* onto 0..fold_max (the angle to the nearest idle
+axis, :func:`omnibot.firmware.calibration.fold_course`); every raw course ``axis + c`` folds to ``c``.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+from omnibot.firmware.calibration import fold_course
+from omnibot.firmware.config import build_config
+from omnibot.robot.description import RobotDescription
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """What the firmware derives from a description and calibration needs: rim matrix and idle axes."""
+
+    rim: tuple[tuple[float, float, float], ...]
+    """Rim speed (m/s) of each wheel per unit twist (vx, vy, w)."""
+    idle_axes: tuple[float, ...]
+    """Directions (degrees, 0..180) of travel along which some wheel stands still."""
+    pwm_max: int
+
+    @classmethod
+    def of(cls, robot: RobotDescription) -> Geometry:
+        cfg = build_config(robot)
+        rim = tuple((float(r[0]), float(r[1]), float(r[2])) for r in cfg["rim"])
+        return cls(rim=rim, idle_axes=tuple(float(a) for a in cfg["idle_axes"]), pwm_max=int(cfg["pwm_max"]))
+
+    @property
+    def motors(self) -> int:
+        return len(self.rim)
+
+    @property
+    def fold_max(self) -> float:
+        """Largest folded course (degrees): half the widest gap between neighbouring idle axes."""
+        axes = sorted(a % 180.0 for a in self.idle_axes)
+        if not axes:
+            return 90.0
+        gaps = [b - a for a, b in itertools.pairwise(axes)] + [axes[0] + 180.0 - axes[-1]]
+        return max(gaps) / 2.0
+
+    def fold(self, course_deg: float) -> float:
+        """The course (degrees) folded as the firmware folds it for K_l."""
+        return fold_course(course_deg, list(self.idle_axes))
+
+    def raw_courses(self, folded_deg: float, count: int) -> list[float]:
+        """``count`` raw courses (degrees, 0..360) that fold to ``folded_deg``, spread round the circle.
+
+        The candidates are ``axis + folded`` for every idle axis and its opposite, so they alternate
+        between wheel groups and directions (and runs on them roughly return the robot to its start).
+        """
+        bases = sorted({round((a + s) % 360.0, 6) for a in self.idle_axes for s in (0.0, 180.0)})
+        candidates = [round((b + folded_deg) % 360.0, 6) for b in bases]
+        if count >= len(candidates):
+            return candidates
+        step = len(candidates) / count
+        return [candidates[int(k * step)] for k in range(count)]
+
+    def translation_rim(self, course_deg: float) -> list[float]:
+        """Rim speed of each wheel for 1 m/s along ``course_deg``."""
+        c, s = math.cos(math.radians(course_deg)), math.sin(math.radians(course_deg))
+        return [r[0] * c + r[1] * s for r in self.rim]
+
+    def rotation_rim(self) -> list[float]:
+        """Rim speed of each wheel for 1 rad/s counter-clockwise."""
+        return [r[2] for r in self.rim]
+
+    def translation_factor(self, course_deg: float) -> float:
+        """Rim speed of the busiest wheel per m/s along the course: the firmware's K_l power argument
+        is K times this times the speed."""
+        return max(abs(v) for v in self.translation_rim(course_deg))
+
+    def rotation_factor(self) -> float:
+        """Rim speed of the busiest wheel per rad/s of rotation."""
+        return max(abs(v) for v in self.rotation_rim())
+
+
+def scaled_pattern(rims: list[float], power: int) -> list[int]:
+    """Integer powers proportional to ``rims`` with the busiest motor at ``power`` (sign kept)."""
+    peak = max(abs(v) for v in rims)
+    if peak <= 0.0:
+        raise ValueError("a pattern needs at least one wheel that turns")
+    return [round(power * v / peak) for v in rims]
+
+
+def course_pattern(geometry: Geometry, course_deg: float, power: int) -> list[int]:
+    """Seed 000's straight-run pattern generalised: busiest motor at ``power`` along the course."""
+    return scaled_pattern(geometry.translation_rim(course_deg), power)
+
+
+def rotation_pattern(geometry: Geometry, power: int, ccw: bool = True) -> list[int]:
+    """Rotation in place, busiest motor at ``power``; ``ccw`` False turns clockwise."""
+    rims = geometry.rotation_rim()
+    return scaled_pattern(rims if ccw else [-v for v in rims], power)

@@ -1,0 +1,239 @@
+"""The report directory of ``omnibot calibrate``: seed 000's figures 5-7, accuracy tables and raw data.
+
+=====================  ===========================================================================
+fig5_rates.png         rate (cm/s of the busiest wheel's rim) against power: each course, rotation
+fig6_kt_kr.png         K_t and K_r against power, per surface and averaged
+fig7_kl.png            K_l against power for each calibrated course
+accuracy.png           MOVE distance error against course, before and after
+accuracy.md            the before/after tables (markdown)
+accuracy.json          every accuracy row and the summaries
+runs.json              every run: command, truth, odometry, gyro
+=====================  ===========================================================================
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from omnibot.calibration.accuracy import AccuracyRow, summarize
+from omnibot.calibration.session import CalibrationResult, SurfaceSession, describe_spec
+from omnibot.calibration.tables import move_grid, rotate_lines, summary_table
+from omnibot.errors import ConfigError
+from omnibot.robot.description import CalibrationSpec, PiecewiseLinear
+
+STYLES = ("-", "--", ":", "-.")
+
+
+def accuracy_entries(result: CalibrationResult) -> list[tuple[str, list[AccuracyRow]]]:
+    """(label, rows) of every accuracy check, in the report's order."""
+    out: list[tuple[str, list[AccuracyRow]]] = []
+    for s in result.sessions:
+        if s.before is not None:
+            out.append((f"before, {s.surface}", s.before))
+        if s.after is not None:
+            out.append((f"after ({s.surface} calibration), {s.surface}", s.after))
+    for surface, rows in result.average_checks.items():
+        out.append((f"after (average calibration), {surface}", rows))
+    return out
+
+
+def accuracy_markdown(result: CalibrationResult) -> str:
+    entries = accuracy_entries(result)
+    lines = [
+        f"# Calibration accuracy: {result.robot.name}",
+        "",
+        "Open-loop MOVEs of the same length on each course and speed, each followed by one back on the",
+        "course + 180 degrees, and ROTATEs both ways; achieved distance against commanded (truth: "
+        f"{result.sessions[0].truth if result.sessions else '-'}).",
+        "",
+        "## Summary",
+        "",
+        summary_table(entries) if entries else "(no accuracy checks were run)",
+    ]
+    for label, rows in entries:
+        lines += ["", f"## {label}", "", move_grid(rows), "", move_grid(rows, "heading_error_deg"), ""]
+        lines += [move_grid(rows, "course_error_deg"), "", rotate_lines(rows)]
+    notes = [f"- {s.surface}: {n}" for s in result.sessions for n in s.notes]
+    if notes:
+        lines += ["", "## Notes", "", *notes]
+    return "\n".join(lines) + "\n"
+
+
+def accuracy_json(result: CalibrationResult) -> dict[str, Any]:
+    return {
+        label: {"summary": summarize(rows).as_dict(), "rows": [r.as_dict() for r in rows]}
+        for label, rows in accuracy_entries(result)
+    }
+
+
+def runs_json(result: CalibrationResult) -> dict[str, Any]:
+    def session(s: SurfaceSession) -> dict[str, Any]:
+        return {
+            "truth": s.truth,
+            "calibration": describe_spec(s.spec),
+            "deadband": s.fit.deadbands,
+            "k": s.fit.k,
+            "rate_points": {g: [p.__dict__ for p in pts] for g, pts in s.fit.points.items()},
+            "gyro": None if s.gyro is None else s.gyro.as_dict(),
+            "odometry": None if s.odometry is None else s.odometry.as_dict(),
+            "notes": s.notes,
+            "runs": [r.as_dict() for r in s.runs],
+        }
+
+    out: dict[str, Any] = {
+        "robot": result.robot.name,
+        "surfaces": {s.surface: session(s) for s in result.sessions},
+    }
+    if result.average is not None:
+        out["average"] = describe_spec(result.average)
+    return out
+
+
+# --------------------------------------------------------------------------- figures
+
+
+def _factor_lines(ax: Any, table: PiecewiseLinear | None, label: str, style: str, color: str) -> None:
+    if table is None:
+        return
+    ax.plot(table.x, table.y, style, color=color, marker=".", label=label)
+
+
+def plot_rates(result: CalibrationResult, path: Path) -> None:
+    """Seed 000's Fig. 5: rate against power for the straight courses and rotation."""
+    from omnibot.plots.figure import new_figure, save
+
+    fig, axes = new_figure(1, 1, size=(7.5, 5.0))
+    ax = axes[0][0]
+    for k, s in enumerate(result.sessions):
+        style = STYLES[k % len(STYLES)]
+        for j, (group, pts) in enumerate(sorted(s.fit.points.items())):
+            if not pts:
+                continue
+            curve = (
+                s.fit.rotation if group == "rotation" else s.fit.translation.get(float(group.split(":")[1]))
+            )
+            color = f"C{j}"
+            ax.plot([p.power for p in pts], [100 * p.rim for p in pts], "o", color=color, ms=4)
+            if curve is not None:
+                top = max(p.power for p in pts)
+                xs = [curve.powers[0] + (top - curve.powers[0]) * i / 60 for i in range(61)]
+                name = "rotation" if group == "rotation" else f"course {group.split(':')[1]} deg"
+                ax.plot(
+                    xs, [100 * curve.rim_at(x) for x in xs], style, color=color, label=f"{name}, {s.surface}"
+                )
+    ax.set_xlabel("power of the busiest motor [PWM counts]")
+    ax.set_ylabel("rate [cm/s of rim speed, effective]")
+    ax.set_title(f"{result.robot.name}: rate against power (seed 000 Fig. 5)", fontsize=10)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, ncol=2)
+    save(fig, str(path))
+
+
+def _specs(result: CalibrationResult) -> list[tuple[str, CalibrationSpec, str]]:
+    out = [(s.surface, s.spec, STYLES[(k + 1) % len(STYLES)]) for k, s in enumerate(result.sessions)]
+    if result.average is not None:
+        out.append(("average", result.average, STYLES[0]))
+    return out
+
+
+def plot_kt_kr(result: CalibrationResult, path: Path) -> None:
+    """Seed 000's Fig. 6: K_t and K_r against power."""
+    from omnibot.plots.figure import new_figure, save
+
+    fig, axes = new_figure(1, 1, size=(7.0, 4.6))
+    ax = axes[0][0]
+    for label, spec, style in _specs(result):
+        _factor_lines(ax, spec.k_t, f"K_t, {label}", style, "C0")
+        _factor_lines(ax, spec.k_r, f"K_r, {label}", style, "C3")
+    ax.set_xlabel("uncalibrated power p = K |rim speed| [PWM counts]")
+    ax.set_ylabel("factor")
+    ax.set_ylim(0, 4)
+    ax.set_title(f"{result.robot.name}: K_t and K_r (seed 000 Fig. 6)", fontsize=10)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7)
+    save(fig, str(path))
+
+
+def plot_kl(result: CalibrationResult, path: Path) -> None:
+    """Seed 000's Fig. 7: K_l against power for each course."""
+    from omnibot.plots.figure import new_figure, save
+
+    fig, axes = new_figure(1, 1, size=(7.0, 4.6))
+    ax = axes[0][0]
+    for label, spec, style in _specs(result):
+        if spec.k_l is None:
+            continue
+        for j, (course, curve) in enumerate(zip(spec.k_l.courses_deg, spec.k_l.curves, strict=True)):
+            _factor_lines(ax, curve, f"{course:g} deg, {label}", style, f"C{j}")
+    ax.set_xlabel("uncalibrated power p = K |rim speed| [PWM counts]")
+    ax.set_ylabel("K_l")
+    ax.set_ylim(0, 4)
+    ax.set_title(f"{result.robot.name}: K_l for each course (seed 000 Fig. 7)", fontsize=10)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, ncol=2)
+    save(fig, str(path))
+
+
+def plot_accuracy(entries: Sequence[tuple[str, Sequence[AccuracyRow]]], path: Path) -> None:
+    """MOVE distance error against course for every check (speeds as markers)."""
+    from omnibot.plots.figure import new_figure, save
+
+    fig, axes = new_figure(1, 1, size=(7.5, 4.8))
+    ax = axes[0][0]
+    for k, (label, rows) in enumerate(entries):
+        moves = [r for r in rows if r.kind == "move" and r.error is not None]
+        if not moves:
+            continue
+        xs = [r.course_deg % 180.0 for r in moves]
+        ax.plot(
+            xs, [100 * (r.error or 0.0) for r in moves], "o", ms=3.5, color=f"C{k}", label=label, alpha=0.75
+        )
+    ax.axhspan(-3, 3, color="0.85", zorder=0, label="+-3 %")
+    ax.set_xlabel("course [deg] (return runs folded onto their outbound course)")
+    ax.set_ylabel("distance error [%]")
+    ax.set_title("open-loop MOVE distance error, before and after calibration", fontsize=10)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7)
+    save(fig, str(path))
+
+
+def write_report(result: CalibrationResult, out: str | Path) -> list[Path]:
+    """Write the report files (see the module docstring); returns their paths."""
+    out = Path(out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        written = []
+        for name, fn in (
+            ("fig5_rates.png", plot_rates),
+            ("fig6_kt_kr.png", plot_kt_kr),
+            ("fig7_kl.png", plot_kl),
+        ):
+            fn(result, out / name)
+            written.append(out / name)
+        entries = accuracy_entries(result)
+        if entries:
+            plot_accuracy(entries, out / "accuracy.png")
+            written.append(out / "accuracy.png")
+        (out / "accuracy.md").write_text(accuracy_markdown(result), encoding="utf-8")
+        (out / "accuracy.json").write_text(
+            json.dumps(accuracy_json(result), indent=1, default=_json), encoding="utf-8"
+        )
+        (out / "runs.json").write_text(
+            json.dumps(runs_json(result), indent=1, default=_json), encoding="utf-8"
+        )
+        written += [out / "accuracy.md", out / "accuracy.json", out / "runs.json"]
+    except OSError as exc:
+        raise ConfigError(f"cannot write the report to {out}: {exc.strerror}", key="--report") from None
+    return written
+
+
+def _json(value: Any) -> Any:
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, tuple):
+        return list(value)
+    raise TypeError(f"not JSON: {type(value).__name__}")

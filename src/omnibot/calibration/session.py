@@ -1,0 +1,365 @@
+"""The whole calibration of one robot: per surface, then averaged over the surfaces.
+
+Per surface (:func:`calibrate_surface`), on one client::
+
+    telemetry on -> gyro bias at standstill -> accuracy before
+    -> dead bands -> straight sweeps (each calibrated course) -> rotation sweep -> fit K, K_l, K_r
+    -> upload -> curved MOVEs, fit K_t (rounds) -> upload
+    -> rotation test (gyro scale, wheel base) -> squares CCW and CW (UMBmark) -> accuracy after
+
+Over surfaces (:func:`calibrate`): each surface as above, then the averaged calibration (seed 000
+averaged wood and carpet), uploaded and checked on every surface again.
+"""
+
+from __future__ import annotations
+
+import math
+import statistics
+from collections.abc import Callable, Iterator
+from contextlib import AbstractContextManager, contextmanager
+from dataclasses import dataclass, field
+from functools import partial
+from typing import Any
+
+from omnibot.calibration.accuracy import AccuracyPlan, AccuracyRow, run_accuracy
+from omnibot.calibration.experiments import (
+    Plan,
+    Progress,
+    Runner,
+    RunResult,
+    find_deadband,
+    rotation_sweep,
+    speed_range,
+    straight_sweep,
+    turning_runs,
+)
+from omnibot.calibration.fits import SurfaceFit, average_kt, build_spec, fit_kt, fit_surface, robot_table
+from omnibot.calibration.gyro import GyroCalibration, calibrate_gyro, standstill_bias
+from omnibot.calibration.patterns import Geometry
+from omnibot.calibration.tap import TelemetryTap
+from omnibot.calibration.truth import ROTATE, SQUARE, Ask, RunInfo, TruthContext, make_truth
+from omnibot.calibration.umbmark import OdometryCalibration, SquareRun, calibrate_odometry, drive_square
+from omnibot.client.client import RobotClient
+from omnibot.protocol import codes
+from omnibot.robot.description import CalibrationSpec, RobotDescription
+
+ProgressFactory = Callable[[str, int], AbstractContextManager[Progress | None]]
+"""(description, expected runs) -> a context giving a progress bar (or None)."""
+
+
+@contextmanager
+def no_progress(desc: str, total: int) -> Iterator[Progress | None]:
+    yield None
+
+
+@dataclass
+class SurfaceSession:
+    """Everything measured and fitted on one surface."""
+
+    surface: str
+    truth: str
+    fit: SurfaceFit
+    spec: CalibrationSpec
+    runs: list[RunResult]
+    gyro: GyroCalibration | None = None
+    odometry: OdometryCalibration | None = None
+    before: list[AccuracyRow] | None = None
+    after: list[AccuracyRow] | None = None
+    notes: list[str] = field(default_factory=list)
+
+
+@dataclass
+class CalibrationResult:
+    robot: RobotDescription
+    sessions: list[SurfaceSession]
+    average: CalibrationSpec | None = None
+    average_checks: dict[str, list[AccuracyRow]] = field(default_factory=dict)
+
+    @property
+    def chosen(self) -> CalibrationSpec:
+        """The averaged calibration over several surfaces, else the one surface's."""
+        return self.average if self.average is not None else self.sessions[0].spec
+
+    @property
+    def gyro(self) -> GyroCalibration | None:
+        cals = [s.gyro for s in self.sessions if s.gyro is not None]
+        if not cals:
+            return None
+        scales = [c.scale for c in cals if c.scale is not None]
+        last = cals[-1]
+        return GyroCalibration(
+            bias=last.bias,
+            bias_std=last.bias_std,
+            samples=last.samples,
+            scale=statistics.fmean(scales) if scales else None,
+            rotations=sum(c.rotations for c in cals),
+        )
+
+    @property
+    def odometry(self) -> OdometryCalibration | None:
+        cals = [s.odometry for s in self.sessions if s.odometry is not None]
+        if len(cals) <= 1:
+            return cals[0] if cals else None
+        r = statistics.fmean(c.wheel_radius_scale for c in cals)
+        w = statistics.fmean(c.rotation_scale for c in cals)
+        return OdometryCalibration(
+            wheel_radius_scale=round(r, 4),
+            wheel_base_scale=round(r / w, 4),
+            rotation_scale=round(w, 4),
+            straight_runs=sum(c.straight_runs for c in cals),
+            rotation_runs=sum(c.rotation_runs for c in cals),
+        )
+
+
+def expected_runs(
+    plan: Plan, geometry: Geometry, accuracy: AccuracyPlan | None, robot: RobotDescription
+) -> int:
+    """A rough count of the runs of one surface (for the progress bar)."""
+    courses = len(plan.calibrated_courses(geometry))
+    n = (courses + 1) * 10
+    n += courses * plan.levels * plan.directions * 2 * 3 // 4
+    n += plan.levels * 2 * 2
+    n += plan.turn_rounds * len(plan.turn_curvatures) * len(plan.turn_courses_deg) * 2 + 4
+    if accuracy is not None:
+        moves = len(accuracy.courses_deg) * len(accuracy.move_speeds(robot)) * (2 if accuracy.back else 1)
+        n += 2 * (moves + 2 * len(accuracy.rotations))
+    return n
+
+
+def _open_loop(client: RobotClient) -> None:
+    """Clear the simulation and closed-loop MODE bits (calibration is of the open-loop powers)."""
+    mode = client.status().mode
+    unwanted = codes.MODE_SIMULATION | codes.MODE_CLOSED_LOOP
+    if mode & unwanted:
+        client.mode(mode & ~unwanted)
+
+
+def calibrate_surface(
+    client: RobotClient,
+    robot: RobotDescription,
+    surface: str,
+    *,
+    truth: str = "sim",
+    plan: Plan | None = None,
+    accuracy: AccuracyPlan | None = None,
+    ask: Ask = input,
+    progress: ProgressFactory = no_progress,
+    upload: bool = True,
+) -> SurfaceSession:
+    """Measure, fit and (``upload``) apply the calibration of ``robot`` on one surface."""
+    plan = plan or Plan()
+    geometry = Geometry.of(robot)
+    courses = plan.calibrated_courses(geometry)
+    client.stop()
+    _open_loop(client)
+    tap = TelemetryTap(client, robot)
+    tap.start()
+    source = make_truth(truth, TruthContext(client, robot, tap, ask))
+    notes: list[str] = []
+    with progress(
+        f"calibrate {robot.name} on {surface}", expected_runs(plan, geometry, accuracy, robot)
+    ) as bar:
+        runner = Runner(client, robot, source, tap, settle=plan.settle, progress=bar)
+        try:
+            bias = standstill_bias(tap, plan.gyro_still) if tap.gyro else None
+            before = run_accuracy(runner, accuracy) if accuracy is not None else None
+
+            deadbands = {f"course:{c:g}": find_deadband(runner, c, plan.deadband_step).power for c in courses}
+            deadbands["rotation"] = find_deadband(runner, None, plan.deadband_step).power
+            straight: list[RunResult] = []
+            for c in courses:
+                straight += straight_sweep(runner, plan, c, deadbands[f"course:{c:g}"])
+            rotation = rotation_sweep(runner, plan, deadbands["rotation"])
+            fit = fit_surface(
+                surface,
+                straight,
+                rotation,
+                deadbands,
+                geometry,
+                move_length=plan.move_length,
+                rotate_angle=plan.rotate_angle,
+            )
+            described = robot.calibration.k if robot.calibration is not None else None
+            if described is not None and not 1 / 3 < fit.k / described < 3:
+                notes.append(
+                    f"the fitted K ({fit.k:g}) is far from the description's ({described:g}): the runs may "
+                    "be too short for this robot (a heavy one coasts for long; try a longer --move-length) "
+                    "- check fig5_rates.png before using the tables"
+                )
+            kt = robot_table(robot, "k_t")
+            spec = build_spec([fit], robot, geometry, kt)
+            if upload:
+                client.upload_calibration(spec)
+                for _ in range(plan.turn_rounds):
+                    turns = turning_runs(runner, plan, spec.k)
+                    new_kt = fit_kt(turns, spec.k_t)
+                    if new_kt is None:
+                        notes.append("no curved MOVE turned measurably: K_t kept")
+                        break
+                    spec = build_spec([fit], robot, geometry, new_kt)
+                    client.upload_calibration(spec)
+            else:
+                notes.append("not uploaded: K_t (measured with curved MOVEs) kept from the description")
+            fit.kt = spec.k_t
+
+            if bias is not None:  # the bias wanders: measure it again right before the rotation test
+                bias = standstill_bias(tap, plan.gyro_still) or bias
+            rot_test = rotation_test(runner, plan)
+            gyro = calibrate_gyro(bias, rot_test) if bias is not None else None
+            squares: list[SquareRun] = []
+            if tap.odometry is not None and source.can(RunInfo(SQUARE, "")):
+                speed = plan.square_speed or round(0.5 * sum(speed_range(robot, plan.move_length)), 2)
+                rate = rotation_test_rate(robot)
+                squares = [drive_square(runner, plan.square_side, speed, rate, ccw) for ccw in (True, False)]
+            odometry = None
+            if tap.odometry is not None and source.exact:
+                odometry = calibrate_odometry(robot, straight, rot_test, squares)
+            elif tap.odometry is not None:
+                notes.append(
+                    f"odometry corrections need an independent truth (sim, csv, tape), not {source.name}"
+                )
+            after = run_accuracy(runner, accuracy) if accuracy is not None and upload else None
+        finally:
+            runner.close()
+            tap.stop()
+    return SurfaceSession(
+        surface=surface,
+        truth=source.describe(),
+        fit=fit,
+        spec=spec,
+        runs=runner.log,
+        gyro=gyro,
+        odometry=odometry,
+        before=before,
+        after=after,
+        notes=notes,
+    )
+
+
+def rotation_test_rate(robot: RobotDescription) -> float:
+    """rad/s: 90 degrees/s, or less where the gyro's range or the robot's limit is lower."""
+    rate = math.radians(90.0)
+    if robot.gyro is not None:
+        rate = min(rate, 0.5 * robot.gyro.range)
+    return min(rate, 0.5 * robot.limits.angular_speed_max)
+
+
+def rotation_test(runner: Runner, plan: Plan) -> list[RunResult]:
+    """ROTATE ``plan.rotation_turns`` full turns each way (gyro scale, rotation scale of odometry)."""
+    rate = round(math.degrees(rotation_test_rate(runner.robot)))
+    angle = 360.0 * plan.rotation_turns
+    out = []
+    for sign in (1, -1):
+        a = sign * angle
+        info = RunInfo(ROTATE, f"rotation test: {a:+.0f} deg at {rate} deg/s")
+        runner.note(f"rotation test {a:+.0f}")
+        out.append(
+            runner.run(
+                info,
+                partial(runner.client.rotate, math.radians(a), math.radians(rate)),
+                angle / rate,
+                "rotation-test",
+                sign=sign,
+                commanded=math.radians(angle),
+            )
+        )
+    return out
+
+
+ClientOpener = Callable[[str], AbstractContextManager[RobotClient]]
+"""surface -> a context giving a client whose robot stands on that surface."""
+
+
+def check_average(
+    client: RobotClient,
+    robot: RobotDescription,
+    spec: CalibrationSpec,
+    *,
+    truth: str,
+    accuracy: AccuracyPlan,
+    ask: Ask = input,
+    progress: Progress | None = None,
+) -> list[AccuracyRow]:
+    """Upload ``spec`` and run the accuracy check on the robot as it stands."""
+    client.stop()
+    _open_loop(client)
+    client.upload_calibration(spec)
+    tap = TelemetryTap(client, robot)
+    tap.start()
+    runner = Runner(
+        client, robot, make_truth(truth, TruthContext(client, robot, tap, ask)), tap, progress=progress
+    )
+    try:
+        return run_accuracy(runner, accuracy)
+    finally:
+        runner.close()
+        tap.stop()
+
+
+def calibrate(
+    robot: RobotDescription,
+    surfaces: list[str],
+    open_client: ClientOpener,
+    *,
+    truth: str | Callable[[RobotClient], str] = "sim",
+    plan: Plan | None = None,
+    accuracy: AccuracyPlan | None = None,
+    ask: Ask = input,
+    progress: ProgressFactory = no_progress,
+    upload: bool = True,
+) -> CalibrationResult:
+    """Calibrate on every surface, then average and check the average on every surface."""
+    plan = plan or Plan()
+    sessions = []
+
+    def truth_for(client: RobotClient) -> str:
+        return truth if isinstance(truth, str) else truth(client)
+
+    for surface in surfaces:
+        with open_client(surface) as client:
+            sessions.append(
+                calibrate_surface(
+                    client,
+                    robot,
+                    surface,
+                    truth=truth_for(client),
+                    plan=plan,
+                    accuracy=accuracy,
+                    ask=ask,
+                    progress=progress,
+                    upload=upload,
+                )
+            )
+    result = CalibrationResult(robot, sessions)
+    if len(sessions) > 1:
+        geometry = Geometry.of(robot)
+        fits = [s.fit for s in sessions]
+        result.average = build_spec(fits, robot, geometry, average_kt(fits))
+        if accuracy is not None and upload:
+            for surface in surfaces:
+                with open_client(surface) as client, progress(f"check the average on {surface}", 0) as bar:
+                    result.average_checks[surface] = check_average(
+                        client,
+                        robot,
+                        result.average,
+                        truth=truth_for(client),
+                        accuracy=accuracy,
+                        ask=ask,
+                        progress=bar,
+                    )
+    return result
+
+
+def describe_spec(spec: CalibrationSpec) -> dict[str, Any]:
+    """A calibration section as plain data (the YAML layout of a description's ``calibration:``)."""
+    out: dict[str, Any] = {"k": spec.k}
+    if spec.k_l is not None:
+        out["k_l"] = {
+            "courses_deg": list(spec.k_l.courses_deg),
+            "curves": [{"x": [int(x) for x in c.x], "y": list(c.y)} for c in spec.k_l.curves],
+        }
+    for name in ("k_t", "k_r"):
+        t = getattr(spec, name)
+        if t is not None:
+            out[name] = {"x": [int(x) for x in t.x], "y": list(t.y)}
+    return out

@@ -1,0 +1,127 @@
+"""The controller's telemetry during calibration: latest TEL sample, wheel odometry, gyro, sonar, logs.
+
+One :class:`TelemetryTap` per client switches TEL on (encoders, gyro rate, integrated heading,
+sonar ranges, queue state every ``period`` s) and listens: it keeps the latest sample, runs wheel
+odometry on the encoder counts when every wheel has an encoder, and can record the samples of a
+stretch of time (a square run, a standstill) for later replay.
+"""
+
+from __future__ import annotations
+
+from omnibot.client.client import RobotClient
+from omnibot.client.events import Telemetry
+from omnibot.estimation.odometry import Pose2D, WheelOdometry
+from omnibot.protocol import codes
+from omnibot.robot.description import RobotDescription
+
+TAP_MASK = (
+    codes.TEL_ENCODERS
+    | codes.TEL_TRACKING
+    | codes.TEL_GYRO
+    | codes.TEL_HEADING
+    | codes.TEL_SONAR
+    | codes.TEL_QUEUE
+)
+
+
+def has_wheel_encoders(robot: RobotDescription) -> bool:
+    """True when every driven wheel has a motor encoder (wheel odometry works)."""
+    names = {e.wheel for e in robot.encoders.motors}
+    return all(w.name in names for w in robot.wheels)
+
+
+class TelemetryTap:
+    """Telemetry listener of one client (see the module docstring)."""
+
+    def __init__(self, client: RobotClient, robot: RobotDescription, period: float = 0.02) -> None:
+        self.client = client
+        self.robot = robot
+        self.period = period
+        self.latest: Telemetry | None = None
+        self.odometry = WheelOdometry(robot) if has_wheel_encoders(robot) else None
+        self.gyro = robot.gyro is not None
+        self._log: list[Telemetry] | None = None
+        self._extra: list[WheelOdometry] = []
+        self._on = False
+
+    def start(self) -> None:
+        """Switch TEL on and start listening."""
+        if not self._on:
+            self.client.on_telemetry(self._sample)
+            self.client.telemetry(self.period, TAP_MASK)
+            self._on = True
+            self.client.sleep(3 * self.period)
+
+    def stop(self) -> None:
+        """Switch TEL off and stop listening."""
+        if self._on:
+            self._on = False
+            self.client.remove_listener(self._sample)
+            self.client.telemetry(0.0)
+
+    def _sample(self, tel: Telemetry) -> None:
+        self.latest = tel
+        if tel.encoders is not None:
+            if self.odometry is not None:
+                self.odometry.update(tel.encoders, None)
+            for odo in self._extra:
+                odo.update(tel.encoders, None)
+        if self._log is not None:
+            self._log.append(tel)
+
+    def add_odometry(self, robot: RobotDescription) -> WheelOdometry:
+        """Another wheel odometry on the same counts, with ``robot``'s geometry (corrected radii)."""
+        odo = WheelOdometry(robot)
+        if self.latest is not None and self.latest.encoders is not None:
+            odo.update(self.latest.encoders, None)
+        self._extra.append(odo)
+        return odo
+
+    # ------------------------------------------------------------------ views
+
+    @property
+    def odometry_pose(self) -> Pose2D | None:
+        return self.odometry.pose if self.odometry is not None else None
+
+    def counts(self) -> tuple[int, ...] | None:
+        """The latest encoder and tracking-wheel counts together, None when there are none."""
+        tel = self.latest
+        if tel is None:
+            return None
+        counts = (tel.encoders or ()) + (tel.tracking or ())
+        return counts or None
+
+    @property
+    def heading(self) -> float | None:
+        """The controller's integrated gyro heading (rad), None without a gyro or a sample."""
+        if not self.gyro or self.latest is None:
+            return None
+        return self.latest.heading
+
+    def record(self) -> None:
+        """Start keeping every sample (see :meth:`take_log`)."""
+        self._log = []
+
+    def take_log(self) -> list[Telemetry]:
+        """The samples since :meth:`record`, and stop keeping them."""
+        log, self._log = self._log or [], None
+        return log
+
+    def collect(self, seconds: float) -> list[Telemetry]:
+        """Let ``seconds`` pass and return the samples that came meanwhile."""
+        self.record()
+        self.client.sleep(seconds)
+        return self.take_log()
+
+
+def replay_odometry(
+    robot: RobotDescription, log: list[Telemetry], start: Pose2D | None = None
+) -> Pose2D | None:
+    """Wheel odometry over recorded samples with ``robot``'s geometry (e.g. corrected radii)."""
+    if not has_wheel_encoders(robot):
+        return None
+    odo = WheelOdometry(robot, start=start)
+    for tel in log:
+        if tel.encoders is not None:
+            odo.update(tel.encoders, None)
+    return odo.pose

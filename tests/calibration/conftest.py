@@ -1,0 +1,35 @@
+"""Fixtures of the calibration tests: lockstep clients on simulated robots (fixed seeds)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from contextlib import AbstractContextManager, contextmanager
+
+import pytest
+
+from omnibot.client.client import RobotClient
+from omnibot.robot.description import RobotDescription, load_robot
+from omnibot.sim.device import SimDevice
+from omnibot.transport.lockstep import LockstepLink
+
+Opener = Callable[..., AbstractContextManager[RobotClient]]
+
+
+@pytest.fixture(scope="session")
+def omni4() -> RobotDescription:
+    return load_robot("omni4")
+
+
+@contextmanager
+def sim_client(
+    robot: RobotDescription,
+    surface: str = "wood",
+    *,
+    true_robot: RobotDescription | None = None,
+    seed: int = 3,
+    **device: object,
+) -> Iterator[RobotClient]:
+    """A RobotClient in lockstep with a SimDevice (firmware for ``robot``, physics of ``true_robot``)."""
+    dev = SimDevice(robot, true_robot=true_robot, surface=surface, seed=seed, **device)  # type: ignore[arg-type]
+    with RobotClient(LockstepLink(dev), robot) as client:
+        yield client

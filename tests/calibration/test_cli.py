@@ -1,0 +1,114 @@
+"""``omnibot calibrate``: a quick end-to-end run and the errors that exit 2 without a traceback."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from omnibot.calibration.calfile import load_calibration, merge_calibration, parse_calibration
+from omnibot.calibration.perturb import ACCEPTANCE, parse_perturbation, perturbed_robot
+from omnibot.cli import main
+from omnibot.errors import ConfigError
+from omnibot.robot.description import RobotDescription, load_robot
+
+
+def test_quick_run_writes_the_file_and_the_report(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out, report = tmp_path / "cal.yaml", tmp_path / "report"
+    argv = ["calibrate", "--quick", "--surface", "wood", "--perturb", "radius=1.05", "--out", str(out)]
+    assert main([*argv, "--report", str(report)]) == 0
+    text = capsys.readouterr().out
+    assert "before, wood" in text and "after (wood calibration), wood" in text
+    cal = load_calibration(out)
+    assert cal.robot == "omni4" and list(cal.surfaces) == ["wood"]
+    assert cal.calibration.k_l is not None and cal.calibration.k_l.courses_deg == (0.0, 45.0)
+    assert cal.gyro is not None and cal.odometry is not None
+    assert cal.odometry["rotation_scale"] == pytest.approx(1.05, abs=0.01)
+    for name in ("fig5_rates.png", "fig6_kt_kr.png", "fig7_kl.png", "accuracy.png", "accuracy.md"):
+        assert (report / name).stat().st_size > 0
+    data = json.loads((report / "accuracy.json").read_text())
+    assert {"before, wood", "after (wood calibration), wood"} <= set(data)
+    runs = json.loads((report / "runs.json").read_text())
+    first_power = next(r for r in runs["surfaces"]["wood"]["runs"] if r["group"].startswith("deadband"))
+    assert first_power["command"] == "POWER,500,0,8,0,-8"  # the dead band search starts at 8 counts
+    # the file merges into the description it was made for
+    merged = merge_calibration("omni4", out)
+    assert "k_l:" in merged and f"k: {cal.calibration.k}" in merged
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--surface", "crapet"], "did you mean 'carpet'"),
+        (["--truth", "lazer"], "unknown truth strategy"),
+        (["--port", "sim://omni4", "--perturb", "radius=1.1"], "need the simulator"),
+        (["--perturb", "radius=1.1;torque=1.2"], "did you mean 'torque_constant'"),
+        (["--perturb", "radius=1,2"], "one per wheel"),
+        (["--courses", "0,60"], "within 0..45"),
+        (["--courses", "a,b"], "comma-separated degrees"),
+        (["--robot", "omni5"], "unknown robot"),
+        (["--move-length", "0"], "positive length"),
+    ],
+)
+def test_bad_input_exits_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], args: list[str], message: str
+) -> None:
+    code = main(["calibrate", "--out", str(tmp_path / "c.yaml"), "--report", str(tmp_path / "r"), *args])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert message in err and "Traceback" not in err
+
+
+def test_perturbation(omni4: RobotDescription) -> None:
+    robot = perturbed_robot(omni4, ACCEPTANCE)
+    assert [w.radius for w in robot.wheels] == pytest.approx([0.02625] * 4)
+    assert [w.motor.torque_constant for w in robot.wheels] == pytest.approx([0.0066, 0.0054, 0.0054, 0.0066])
+    assert robot.calibration == omni4.calibration
+    assert parse_perturbation(" deadband = 2 ", 4) == {"deadband": [2.0] * 4}
+    with pytest.raises(ConfigError, match="key=value"):
+        parse_perturbation("radius", 4)
+
+
+def test_calibration_file_errors(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match=r"calibration\.k: Input should be greater than 0"):
+        parse_calibration({"calibration": {"k": -1}})
+    with pytest.raises(ConfigError, match=r"calibration\.kk: unknown key"):
+        parse_calibration({"calibration": {"k": 100, "kk": 1}})
+    with pytest.raises(ConfigError, match="unknown key"):
+        parse_calibration({"calibraton": {"k": 100}})
+    bare = parse_calibration({"k": 150.0, "k_t": {"x": [0, 255], "y": [1.2, 1.2]}})
+    assert bare.calibration.k == 150.0
+    with pytest.raises(ConfigError, match="no calibration for surface 'wood'"):
+        bare.for_surface("wood")
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("calibration: [", encoding="utf-8")
+    with pytest.raises(ConfigError, match="not valid YAML"):
+        load_calibration(bad)
+    # a preset's own calibration section is a valid calibration file
+    preset = load_robot("omni4")
+    assert preset.calibration is not None
+    assert parse_calibration(
+        {"calibration": preset.calibration.model_dump(exclude_none=True)}
+    ).calibration == (preset.calibration)
+
+
+def test_a_port_with_two_floors_asks_between_them(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from omnibot.calibration.cli import run
+    from omnibot.cli import build_parser
+
+    prompts: list[str] = []
+    files = ["--out", str(tmp_path / "cal.yaml"), "--report", str(tmp_path / "r")]
+    port = ["--port", "sim://omni4?surface=wood", "--surface", "lab,hall", "--quick", "--no-check"]
+    args = build_parser().parse_args(["calibrate", *port, *files])
+
+    def ask(prompt: str) -> str:
+        prompts.append(prompt)
+        return ""
+
+    assert run(args, ask=ask) == 0
+    assert [p.split(" with")[0] for p in prompts] == ["Put the robot on lab", "Put the robot on hall"]
+    cal = load_calibration(tmp_path / "cal.yaml")
+    assert list(cal.surfaces) == ["lab", "hall"]  # the same floor twice here: nearly the same tables
+    assert cal.surfaces["lab"].k == pytest.approx(cal.surfaces["hall"].k, rel=0.05)
+    assert "truth sim" in capsys.readouterr().out

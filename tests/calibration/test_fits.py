@@ -1,0 +1,150 @@
+"""The fits on synthetic data with known answers (pure functions, no simulator)."""
+
+from __future__ import annotations
+
+import itertools
+
+import pytest
+
+from omnibot.calibration.experiments import RunResult
+from omnibot.calibration.fits import (
+    FACTOR_MAX,
+    RateCurve,
+    RatePoint,
+    average_tables,
+    factor_table,
+    fit_kt,
+    isotonic,
+    knot_powers,
+    rate_points,
+)
+from omnibot.calibration.truth import Motion
+from omnibot.client import commands
+from omnibot.protocol import codes
+from omnibot.robot.description import CalibrationSpec, CourseTable, PiecewiseLinear
+
+DEADBAND = 50.0
+SLOPE = 0.007  # m/s of rim speed per PWM count above the dead band
+
+
+def linear_rim(power: float) -> float:
+    return max(0.0, SLOPE * (power - DEADBAND))
+
+
+def run(power: int, duration: float, amount: float, course: float = 0.0) -> RunResult:
+    return RunResult(
+        kind="straight",
+        group="course:0",
+        command="POWER",
+        duration=duration,
+        truth=Motion(x=amount, y=0.0, theta=0.0, source="test"),
+        power=power,
+        course_deg=course,
+        folded_deg=0.0,
+    )
+
+
+def test_isotonic() -> None:
+    assert isotonic([1.0, 3.0, 2.0, 4.0]) == [1.0, 2.5, 2.5, 4.0]
+    assert isotonic([3.0, 2.0, 1.0]) == [2.0, 2.0, 2.0]
+    assert isotonic([0.0, 1.0, 2.0]) == [0.0, 1.0, 2.0]
+
+
+def test_rate_and_loss_from_two_durations() -> None:
+    # amount = rate * T + loss with rate 0.5 m/s, loss -0.05 m: a 1 m move lands when V = 0.5 / 1.05
+    runs = [run(100, t, 0.5 * t - 0.05) for t in (1.0, 2.5)]
+    (p,) = rate_points(runs, reference=1.0, factor=1.0)
+    assert p.rate == pytest.approx(0.5)
+    assert p.loss == pytest.approx(-0.05)
+    assert p.effective == pytest.approx(0.5 / 1.05)
+    # a move of the reference length at the effective speed covers it: rate * (L / V) + loss = L
+    assert p.rate * (1.0 / p.effective) + p.loss == pytest.approx(1.0)
+
+
+def test_rate_curve_is_monotone_and_inverts() -> None:
+    points = [
+        RatePoint(int(p), 0.0, 0.0, 0.0, linear_rim(p) * (1.08 if p == 120 else 1.0), 4)
+        for p in (60, 80, 100, 120, 140, 180, 220)
+    ]  # one noisy level above its neighbour
+    curve = RateCurve.fit(points, deadband=int(DEADBAND))
+    assert curve.powers[0] == DEADBAND and curve.rims[0] == 0.0
+    assert list(curve.rims) == sorted(curve.rims)
+    xs = [DEADBAND + k for k in range(0, 200, 3)]
+    ys = [curve.rim_at(x) for x in xs]
+    assert all(b >= a - 1e-12 for a, b in itertools.pairwise(ys))
+    for rim in (0.05, 0.3, 0.6, 1.2, 1.6):  # 1.6 m/s is beyond the last level: extrapolated
+        assert curve.rim_at(curve.power_for(rim)) == pytest.approx(rim, abs=1e-6)
+    assert curve.power_for(0.0) == DEADBAND
+
+
+def test_factor_table_reproduces_the_needed_power() -> None:
+    points = [RatePoint(int(p), 0.0, 0.0, 0.0, linear_rim(p), 4) for p in range(60, 256, 20)]
+    curve = RateCurve.fit(points, deadband=int(DEADBAND))
+    k = 1.0 / SLOPE
+    knots = knot_powers(20, 240, 255)
+    table = factor_table([curve], k, knots)
+    assert len(table.x) <= codes.CAL_KNOTS_MAX
+    assert all(0 < y <= FACTOR_MAX for y in table.y)
+    # between knots the firmware interpolates linearly: the power it applies stays within 1 %
+    for rim in (0.25, 0.4, 0.7, 1.0):
+        p = k * rim
+        needed = DEADBAND + rim / SLOPE
+        assert p * table(p) == pytest.approx(needed, rel=0.01)
+
+
+def test_knots_fit_the_protocol() -> None:
+    knots = knot_powers(3.2, 400.0, 255)
+    assert all(isinstance(k, int) for k in knots)
+    assert list(knots) == sorted(set(knots)) and knots[-1] == 255 and knots[0] >= 1
+    assert len(knots) <= codes.CAL_KNOTS_MAX
+
+
+def test_averaging_surfaces_averages_the_needed_power() -> None:
+    wood = RateCurve((50.0, 250.0), (0.0, 1.4))
+    carpet = RateCurve((70.0, 250.0), (0.0, 1.1))
+    k = 150.0
+    avg = factor_table([wood, carpet], k, (60, 120, 200))
+    for p, y in zip(avg.x, avg.y, strict=True):
+        expected = 0.5 * (wood.power_for(p / k) + carpet.power_for(p / k)) / p
+        assert y == pytest.approx(expected, abs=1e-3)
+
+
+def test_fit_kt_divides_by_the_turn_ratio() -> None:
+    def turn(p_arg: float, achieved: float, commanded: float) -> RunResult:
+        return RunResult(
+            kind="turn",
+            group="turn",
+            command="MOVE",
+            duration=1.0,
+            truth=Motion(theta=achieved),
+            commanded=commanded,
+            p_arg=p_arg,
+            sign=1,
+        )
+
+    current = PiecewiseLinear(x=(0.0, 255.0), y=(1.3, 1.3))
+    runs = [turn(20, 1.0, 2.0), turn(20, 1.2, 2.0), turn(60, 2.0, 2.0), turn(90, 0.01, 2.0)]
+    kt = fit_kt(runs, current)
+    assert kt is not None
+    assert kt.x == (20.0, 60.0)  # the run that did not turn is left out
+    assert kt.y == pytest.approx((1.3 / 0.55, 1.3), abs=1e-3)
+    assert fit_kt([turn(50, 0.0, 2.0)], current) is None
+
+
+def test_average_tables_on_the_union_of_knots() -> None:
+    a = PiecewiseLinear(x=(0.0, 100.0), y=(1.0, 2.0))
+    b = PiecewiseLinear(x=(50.0,), y=(3.0,))
+    avg = average_tables([a, b])
+    assert avg.x == (0.0, 50.0, 100.0)
+    assert avg.y == pytest.approx((2.0, 2.25, 2.5))
+
+
+def test_a_fitted_spec_uploads() -> None:
+    curve = RateCurve((50.0, 255.0), (0.0, 1.4))
+    table = factor_table([curve], 150.0, knot_powers(10, 250, 255))
+    spec = CalibrationSpec(
+        k=150.0, k_l=CourseTable(courses_deg=(0.0, 45.0), curves=(table, table)), k_t=table, k_r=table
+    )
+    cals = commands.calibration(spec)  # raises if anything is outside the protocol's ranges
+    assert cals[0].params() == (codes.CAL_K, 0, 0, 1500)
+    assert len(cals) == 1 + 2 * len(table.x) + 2 * (1 + len(table.x))  # K, K_t, K_r, two K_l curves

@@ -1,0 +1,56 @@
+"""Calibration power patterns and course folding against seed 000's section IV."""
+
+from __future__ import annotations
+
+import pytest
+
+from omnibot.calibration.patterns import Geometry, course_pattern, rotation_pattern, scaled_pattern
+from omnibot.robot.description import RobotDescription, load_robot
+
+
+@pytest.fixture(scope="module")
+def geo(omni4: RobotDescription) -> Geometry:
+    return Geometry.of(omni4)
+
+
+def test_seed000_patterns(geo: Geometry) -> None:
+    # course 0: two opposite motors at +P and -P, the other two unpowered (m2 +P, m4 -P on omni4)
+    assert course_pattern(geo, 0.0, 120) == [0, 120, 0, -120]
+    assert course_pattern(geo, 90.0, 120) == [120, 0, -120, 0]
+    assert course_pattern(geo, 180.0, 120) == [0, -120, 0, 120]
+    # course 45: the same power on all motors, even and odd motors in opposite directions
+    p45 = course_pattern(geo, 45.0, 120)
+    assert [abs(p) for p in p45] == [120] * 4
+    assert p45[0] * p45[2] < 0 and p45[1] * p45[3] < 0
+    # rotation: all motors the same direction (positive turns omni4 counter-clockwise)
+    assert rotation_pattern(geo, 90) == [90, 90, 90, 90]
+    assert rotation_pattern(geo, 90, ccw=False) == [-90, -90, -90, -90]
+
+
+def test_busiest_motor_gets_the_power(geo: Geometry) -> None:
+    for course in (0.0, 10.0, 30.0, 60.0, 135.0, 200.0):
+        assert max(abs(p) for p in course_pattern(geo, course, 200)) == 200
+    with pytest.raises(ValueError, match="turns"):
+        scaled_pattern([0.0, 0.0], 100)
+
+
+@pytest.mark.parametrize(("preset", "fold_max"), [("omni4", 45.0), ("omni3", 30.0), ("mecanum4", 45.0)])
+def test_fold_range_and_raw_courses(preset: str, fold_max: float) -> None:
+    geo = Geometry.of(load_robot(preset))
+    assert geo.fold_max == pytest.approx(fold_max)
+    for folded in (0.0, 0.5 * fold_max, fold_max):
+        raws = geo.raw_courses(folded, 4)
+        assert len(raws) == 4
+        assert all(geo.fold(c) == pytest.approx(folded, abs=1e-6) for c in raws)
+
+
+def test_raw_courses_alternate_directions(geo: Geometry) -> None:
+    assert geo.raw_courses(15.0, 4) == [15.0, 105.0, 195.0, 285.0]
+    assert geo.raw_courses(15.0, 2) == [15.0, 195.0]  # out and back
+
+
+def test_power_arguments(geo: Geometry) -> None:
+    # the firmware's K_l argument: K * |busiest rim speed|, V for course 0, V cos 45 for course 45
+    assert geo.translation_factor(0.0) == pytest.approx(1.0)
+    assert geo.translation_factor(45.0) == pytest.approx(0.5**0.5)
+    assert geo.rotation_factor() == pytest.approx(0.096)
