@@ -13,11 +13,27 @@ from __future__ import annotations
 import difflib
 import re
 from collections.abc import Iterable, Mapping
+from pathlib import Path
 from typing import Any
 
+import yaml
 from pydantic import BaseModel, ValidationError
 
 from omnibot.errors import ConfigError
+
+
+def read_yaml(path: str | Path, what: str) -> Any:
+    """The parsed content of a YAML file; ConfigError naming ``what`` and the file when it cannot be
+    read or is not YAML (validating the content is the caller's)."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ConfigError(f"cannot read {what} {path}: {exc.strerror}") from None
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"{path} is not valid YAML: {exc}") from None
 
 
 def suggest(what: str, given: str, choices: Iterable[str]) -> str:

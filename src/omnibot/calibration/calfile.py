@@ -28,6 +28,7 @@ import yaml
 from pydantic import ValidationError
 
 from omnibot.calibration.session import CalibrationResult, describe_spec
+from omnibot.config_errors import read_yaml
 from omnibot.errors import ConfigError
 from omnibot.robot.description import CalibrationSpec, RobotDescription, load_robot, parse_description
 
@@ -153,14 +154,7 @@ def parse_calibration(data: Any, source: str = "") -> CalibrationFile:
 
 
 def load_calibration(path: str | Path) -> CalibrationFile:
-    path = Path(path)
-    try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ConfigError(f"cannot read calibration file {path}: {exc.strerror}") from None
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{path} is not valid YAML: {exc}") from None
-    return parse_calibration(data, str(path))
+    return parse_calibration(read_yaml(path, "calibration file"), str(path))
 
 
 def apply_calibration(robot: RobotDescription, spec: CalibrationSpec) -> RobotDescription:

@@ -24,10 +24,9 @@ from functools import cached_property
 from pathlib import Path
 from typing import Any, Literal
 
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from omnibot.config_errors import explain, suggest
+from omnibot.config_errors import explain, read_yaml, suggest
 from omnibot.errors import ConfigError
 
 PRESET_DIR = Path(__file__).with_name("presets")
@@ -416,16 +415,7 @@ def parse_description(data: Any, source: str = "") -> RobotDescription:
 
 def load_description(path: str | Path) -> RobotDescription:
     """Read and validate a YAML robot description file."""
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ConfigError(f"cannot read robot description {path}: {exc.strerror}") from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{path} is not valid YAML: {exc}") from None
-    return parse_description(data, str(path))
+    return parse_description(read_yaml(path, "robot description"), str(path))
 
 
 def preset_names() -> list[str]:

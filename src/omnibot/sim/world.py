@@ -43,11 +43,10 @@ from pathlib import Path
 from typing import Annotated, Any, Literal, NamedTuple
 
 import numpy as np
-import yaml
 from numpy.typing import ArrayLike, NDArray
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from omnibot.config_errors import explain, suggest
+from omnibot.config_errors import explain, read_yaml, suggest
 from omnibot.errors import ConfigError
 from omnibot.sim import kernels
 from omnibot.sim.surfaces import SURFACES
@@ -230,15 +229,7 @@ def load_world(name_or_path: str | Path) -> World:
         path = Path(text)
         if path.suffix not in {".yaml", ".yml"} and not path.exists():
             raise ConfigError(suggest(f"unknown world '{text}'", text, world_names()))
-    try:
-        raw = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ConfigError(f"cannot read world {path}: {exc.strerror}") from None
-    try:
-        data = yaml.safe_load(raw)
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{path} is not valid YAML: {exc}") from None
-    return parse_world(data, str(path))
+    return parse_world(read_yaml(path, "world"), str(path))
 
 
 # --------------------------------------------------------------------------- geometry

@@ -36,10 +36,9 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from omnibot.config_errors import explain
+from omnibot.config_errors import explain, read_yaml
 from omnibot.errors import ConfigError
 
 VEL_TIMEOUT_MAX = 1.0
@@ -157,13 +156,4 @@ def load_teleop_config(path: str | Path | None) -> TeleopConfig:
     """Read a teleop YAML file; ``None`` gives seed 003's defaults."""
     if path is None:
         return TeleopConfig()
-    p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ConfigError(f"cannot read teleop config {p}: {exc.strerror}") from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{p} is not valid YAML: {exc}") from None
-    return parse_teleop_config(data, str(p))
+    return parse_teleop_config(read_yaml(path, "teleop config"), str(path))
