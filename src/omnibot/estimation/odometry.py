@@ -41,6 +41,23 @@ def count_delta(new: np.ndarray, old: np.ndarray) -> np.ndarray:
     return out
 
 
+class CountTracker:
+    """Increments of cumulative, wrapping counters, sample to sample (None for the first sample)."""
+
+    def __init__(self, n: int, what: str) -> None:
+        self.n = n
+        self.what = what
+        self._last: np.ndarray | None = None
+
+    def step(self, counts: Sequence[int]) -> np.ndarray | None:
+        """Counts since the previous sample; None for the first one. ValueError for a wrong count."""
+        c = np.asarray(counts, dtype=float)
+        if c.shape != (self.n,):
+            raise ValueError(f"expected {self.n} {self.what} counts, got {c.size}")
+        last, self._last = self._last, c
+        return None if last is None else count_delta(c, last)
+
+
 def compose_arc(pose: Pose2D, dx: float, dy: float, dtheta: float) -> Pose2D:
     """Move ``pose`` by a body-frame displacement travelled with constant twist (an arc)."""
     if abs(dtheta) < 1e-9:
@@ -71,19 +88,16 @@ class WheelOdometry:
         """Last interval's per-wheel residual, rad (non-zero: the wheels disagree, slip)."""
         self.slip_threshold = 3.0 * float(self._rad_per_count.max())
         """Residual (rad, largest wheel) above which :attr:`slipping` is set: a few counts."""
-        self._counts: np.ndarray | None = None
+        self._counts = CountTracker(robot.n_wheels, "encoder")
         self._heading: float | None = None
 
     def update(self, counts: Sequence[int], heading: float | None = None) -> Pose2D:
         """Fold in new cumulative counts (and the gyro's integrated heading, rad); the new pose."""
-        c = np.asarray(counts, dtype=float)
-        if c.shape != self._rad_per_count.shape:
-            raise ValueError(f"expected {self._rad_per_count.size} encoder counts, got {c.size}")
-        if self._counts is None:
-            self._counts, self._heading = c, heading
+        delta = self._counts.step(counts)
+        if delta is None:
+            self._heading = heading
             return self.pose
-        angles = count_delta(c, self._counts) * self._rad_per_count
-        self._counts = c
+        angles = delta * self._rad_per_count
         disp = self._pinv @ angles  # body displacement: twist times the interval
         self.residual = angles - self._J @ disp
         dx, dy, dtheta = (float(v) for v in disp)

@@ -22,7 +22,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from omnibot.errors import ConfigError
-from omnibot.estimation.odometry import Pose2D, compose_arc, count_delta
+from omnibot.estimation.odometry import CountTracker, Pose2D, compose_arc
 from omnibot.robot.description import RobotDescription, TrackingWheelSpec
 
 
@@ -63,18 +63,14 @@ class TrackingOdometry:
         self.geometry = TrackingGeometry(robot.encoders.tracking, robot.name)
         self.pose = start or Pose2D(0.0, 0.0, 0.0)
         self.distance = 0.0
-        self._counts: np.ndarray | None = None
+        self._counts = CountTracker(self.geometry.n, "tracking")
 
     def update(self, counts: Sequence[int], dtheta: float) -> Pose2D:
         """Fold in new cumulative counts and the rotation (rad) since the last call; the new pose."""
-        c = np.asarray(counts, dtype=float)
-        if c.shape != (self.geometry.n,):
-            raise ValueError(f"expected {self.geometry.n} tracking counts, got {c.size}")
-        if self._counts is None:
-            self._counts = c
+        delta = self._counts.step(counts)
+        if delta is None:
             return self.pose
-        rolled = count_delta(c, self._counts) * self.geometry.m_per_count
-        self._counts = c
+        rolled = delta * self.geometry.m_per_count
         dx, dy = self.geometry.displacement(rolled, dtheta)
         self.pose = compose_arc(self.pose, dx, dy, dtheta)
         self.distance += math.hypot(dx, dy)
@@ -94,17 +90,13 @@ class Seed002Odometry:
         self.pose = start or Pose2D(0.0, 0.0, 0.0)
         self._frame = self.pose.theta
         self.distance = 0.0
-        self._counts: np.ndarray | None = None
+        self._counts = CountTracker(self.geometry.n, "tracking")
 
     def update(self, counts: Sequence[int], dtheta: float) -> Pose2D:
-        c = np.asarray(counts, dtype=float)
-        if c.shape != (self.geometry.n,):
-            raise ValueError(f"expected {self.geometry.n} tracking counts, got {c.size}")
-        if self._counts is None:
-            self._counts = c
+        delta = self._counts.step(counts)
+        if delta is None:
             return self.pose
-        rolled = count_delta(c, self._counts) * self.geometry.m_per_count
-        self._counts = c
+        rolled = delta * self.geometry.m_per_count
         dv, dh = self.geometry.naive(rolled)
         cs, sn = math.cos(self._frame), math.sin(self._frame)
         p = self.pose
