@@ -14,20 +14,26 @@ Modules: ``config`` (TeleopConfig, YAML), ``mapping`` (JoyState, Twist, deadzone
 ``command`` (``omnibot teleop``).
 """
 
-from omnibot.teleop.config import TeleopConfig, load_teleop_config, parse_teleop_config
-from omnibot.teleop.deadman import Action, Deadman, Sample, Why
-from omnibot.teleop.mapping import (
-    ZERO,
-    JoyState,
-    TeleopCommand,
-    Twist,
-    TwistLimits,
-    deadzone,
-    fractions_to_twist,
-    joy_to_command,
-    limit_twist,
-)
-from omnibot.teleop.pacing import Pacer
+from importlib import import_module
+from typing import Any
+
+_EXPORTS = {
+    "config": ("TeleopConfig", "load_teleop_config", "parse_teleop_config"),
+    "deadman": ("Action", "Deadman", "Sample", "Why"),
+    "mapping": (
+        "ZERO",
+        "JoyState",
+        "TeleopCommand",
+        "Twist",
+        "TwistLimits",
+        "deadzone",
+        "fractions_to_twist",
+        "joy_to_command",
+        "limit_twist",
+    ),
+    "pacing": ("Pacer",),
+}
+_MODULE_OF = {name: module for module, names in _EXPORTS.items() for name in names}
 
 __all__ = [
     "ZERO",
@@ -48,3 +54,12 @@ __all__ = [
     "load_teleop_config",
     "parse_teleop_config",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """The package's names, imported on first use: ``omnibot teleop``'s argument parser (built for
+    every ``omnibot`` command) imports this package and must not pay for the client and models."""
+    module = _MODULE_OF.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(import_module(f"{__name__}.{module}"), name)
