@@ -19,15 +19,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import signal
-import subprocess
-import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 
 from omnibot.protocol import binary, codes, text
 from omnibot.protocol.messages import Mode, Ok, Telem, Telemetry, Vel
 from omnibot.sim.device import SimDevice
+from omnibot.sim.emulator import spawn_pty_emulator
 from omnibot.transport.base import Link
 from omnibot.transport.lockstep import LockstepLink
 from omnibot.transport.url import open_link
@@ -52,20 +50,9 @@ def open_line(pty: bool, seed: int = 1) -> Iterator[Link]:
             drain(link, 0.05)
             yield link
         return
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "omnibot", "sim", "--pty", "--robot", "omni4", "--seed", str(seed)],
-        stdout=subprocess.PIPE,
-        text=True,
-    )
-    try:
-        assert proc.stdout is not None
-        path = proc.stdout.readline().strip()
-        with open_link(f"serial://{path}") as link:
-            drain(link, 0.2)
-            yield link
-    finally:
-        proc.send_signal(signal.SIGTERM)
-        proc.wait(timeout=10)
+    with spawn_pty_emulator("omni4", seed=seed) as path, open_link(f"serial://{path}") as link:
+        drain(link, 0.2)
+        yield link
 
 
 def drain(link: Link, seconds: float) -> bytes:

@@ -24,9 +24,6 @@ from __future__ import annotations
 
 import csv
 import math
-import signal
-import subprocess
-import sys
 import tempfile
 import time
 from collections.abc import Callable, Iterator
@@ -37,10 +34,10 @@ from typing import Any
 
 from omnibot.client.client import RobotClient
 from omnibot.client.events import Event, RangeEvent, Telemetry, WarnEvent
-from omnibot.errors import LinkError
 from omnibot.estimation.odometry import Pose2D, WheelOdometry
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription
+from omnibot.sim.emulator import spawn_pty_emulator
 
 CIRCLE_STEP = 0.02
 SPIN_STEP = 0.03
@@ -368,49 +365,6 @@ def plot(truth: TruthSource | None, odo_trail: list[tuple[float, float]], world:
     save(fig, str(path))
 
 
-@contextmanager
-def pty_emulator(robot: str, world: str, seed: int, truth: Path) -> Iterator[str]:
-    """Start ``omnibot sim --pty`` and yield its device path; SIGTERM and wait on exit."""
-    proc = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "omnibot",
-            "sim",
-            "--pty",
-            "--robot",
-            robot,
-            "--world",
-            world,
-            "--seed",
-            str(seed),
-            "--truth",
-            str(truth),
-        ],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-    try:
-        assert proc.stdout is not None
-        path = proc.stdout.readline().strip()
-        if not path:
-            _, err = proc.communicate(timeout=10)
-            raise LinkError(f"the pty emulator did not start: {err.strip()}")
-        yield path
-    finally:
-        if proc.poll() is None:
-            proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
-        for stream in (proc.stdout, proc.stderr):
-            if stream is not None:
-                stream.close()
-
-
 def run_demo(port: str | None, robot_name: str, out: Path, seed: int = 1, world: str = "room") -> str:
     """Run the demo; returns the printed report.
 
@@ -425,7 +379,11 @@ def run_demo(port: str | None, robot_name: str, out: Path, seed: int = 1, world:
     with tempfile.TemporaryDirectory() as tmp:
         truth_file = TruthFile(Path(tmp) / "truth.csv") if port is None else None
         world_map = load_world(world) if port is None else None
-        context = pty_emulator(robot_name, world, seed, truth_file.path) if truth_file else _given(port or "")
+        context = (
+            spawn_pty_emulator(robot_name, world=world, seed=seed, truth=truth_file.path)
+            if truth_file
+            else _given(port or "")
+        )
         started = time.monotonic()
         with context as url, RobotClient.open(url, robot) as client:
             device = getattr(client.link, "device", None)

@@ -8,12 +8,16 @@ directions. SIGINT or SIGTERM end it cleanly: the pty is closed, the truth file 
 from __future__ import annotations
 
 import signal
+import subprocess
 import sys
 import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from types import FrameType
 from typing import Any, TextIO
 
+from omnibot.errors import LinkError
 from omnibot.robot.description import RobotDescription
 from omnibot.sim.device import SimDevice
 from omnibot.sim.simulator import TruthRecorder
@@ -57,3 +61,33 @@ def run_pty_emulator(
         if recorder is not None:
             recorder.close()
     return 0
+
+
+@contextmanager
+def spawn_pty_emulator(
+    robot: str, *, seed: int = 0, world: str | None = None, truth: Path | None = None
+) -> Iterator[str]:
+    """Run ``omnibot sim --pty`` as a child process and yield its device path; on exit SIGINT it,
+    wait for it (killing it if it hangs) and close its pipes. LinkError if it does not start."""
+    argv = [sys.executable, "-m", "omnibot", "sim", "--pty", "--robot", robot, "--seed", str(seed)]
+    argv += ["--world", world] if world else []
+    argv += ["--truth", str(truth)] if truth else []
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout is not None
+        path = proc.stdout.readline().strip()
+        if not path:
+            _, err = proc.communicate(timeout=10)
+            raise LinkError(f"the pty emulator did not start: {err.strip()}")
+        yield path
+    finally:
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+        for stream in (proc.stdout, proc.stderr):
+            if stream is not None:
+                stream.close()
