@@ -7,6 +7,7 @@ Kept light at import time (``omnibot --help`` imports it): everything heavy is i
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import sys
 from collections.abc import Callable, Iterator
@@ -197,12 +198,17 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] = input) -> int:
         true_robot = load_robot(args.true_robot)
     truth: str | Callable[[RobotClient], str] = args.truth or (lambda c: default_truth(c, robot))
 
-    if simulated:
-        name = str(args.robot)
+    with contextlib.ExitStack() as stack:
+        client: RobotClient | None = None
+        if simulated:
+            opener = sim_opener(robot, str(args.robot), args.seed, true_robot)
+        else:
+            client = stack.enter_context(RobotClient.open(args.port, robot))
+            opener = port_opener(client, ask)
         result = calibrate(
             robot,
             surfaces,
-            sim_opener(robot, name, args.seed, true_robot),
+            opener,
             truth=truth,
             plan=plan,
             accuracy=accuracy,
@@ -210,21 +216,8 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] = input) -> int:
             progress=tqdm_progress,
             upload=not args.no_upload,
         )
-    else:
-        with RobotClient.open(args.port, robot) as client:
-            result = calibrate(
-                robot,
-                surfaces,
-                port_opener(client, ask),
-                truth=truth,
-                plan=plan,
-                accuracy=accuracy,
-                ask=ask,
-                progress=tqdm_progress,
-                upload=not args.no_upload,
-            )
-            if result.average is not None and not args.no_upload:
-                client.upload_calibration(result.average)
+        if client is not None and result.average is not None and not args.no_upload:
+            client.upload_calibration(result.average)  # the averaged table stays on the real board
     truth_name = result.sessions[0].truth if result.sessions else ""
     cal = write_calibration(args.out, result, truth_name)
     files = write_report(result, args.report)
