@@ -5,6 +5,9 @@ descriptors (ptys, sockets, files). It snapshots them before the test and compar
 threads and children a short grace period to finish (a stopped helper may still be unwinding).
 A test that leaks on purpose (e.g. a process-wide cache opened on first use) can opt out with
 ``@pytest.mark.allow_leaks("why")``.
+
+Hypothesis runs derandomized (the same examples every run, no example database), so a property test
+passes or fails the same way on every machine; a test's own ``@settings`` adds to this profile.
 """
 
 from __future__ import annotations
@@ -15,6 +18,10 @@ import time
 from collections.abc import Iterator
 
 import pytest
+from hypothesis import settings
+
+settings.register_profile("omnibot", derandomize=True, database=None)
+settings.load_profile("omnibot")
 
 GRACE = 2.0  # seconds to wait for stragglers before calling it a leak
 

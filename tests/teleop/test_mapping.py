@@ -91,7 +91,9 @@ def test_limit_keeps_direction_and_ratio(vx: float, vy: float, w: float) -> None
     out = limit_twist(Twist(vx, vy, w), lim)
     assert math.hypot(out.vx, out.vy) <= lim.speed + 1e-9
     assert abs(out.w) <= lim.rate + 1e-9
-    k = out.vx / vx if vx else out.vy / vy if vy else out.w / w if w else 1.0
+    # the common factor, read off the largest component (a subnormal one underflows when scaled)
+    given, got = max((vx, out.vx), (vy, out.vy), (w, out.w), key=lambda pair: abs(pair[0]))
+    k = got / given if given else 1.0
     assert 0 < k <= 1.0
     assert (
         out.vx == pytest.approx(vx * k) and out.vy == pytest.approx(vy * k) and out.w == pytest.approx(w * k)
