@@ -10,7 +10,7 @@ from omnibot.client import Limits
 from omnibot.client import commands as c
 from omnibot.protocol import codes
 from omnibot.protocol.messages import Cal, Delta, Mode, Move, Power, Rotate, Sonar, Telem, Vel
-from omnibot.robot.description import CalibrationSpec, CourseTable, PiecewiseLinear
+from omnibot.robot.description import CalibrationSpec, CourseTable, MotorMapSpec, PiecewiseLinear
 
 OMNI4 = Limits.from_robot("omni4")
 ANY = Limits()
@@ -166,4 +166,16 @@ def test_cal_and_calibration_upload() -> None:
         Cal(10, 0, 40, 1400),
         Cal(11, -1, 45, 0),
         Cal(11, 0, 40, 1100),
+        Cal(12, codes.CAL_KL_DROP, 0, 0),  # curves the controller held beyond these are dropped
+    ]
+    motors = MotorMapSpec(
+        offset=(0.0, 38.25),
+        gain=(PiecewiseLinear(x=(0.0,), y=(1.0,)), PiecewiseLinear(x=(50.0, 200.0), y=(1.1, 0.9))),
+    )
+    assert c.calibration(CalibrationSpec(k=220.0, motors=motors))[1:] == [
+        Cal(codes.CAL_OFFSET, 0, 0, 0),
+        Cal(codes.CAL_GAIN, 0, 0, 1000),
+        Cal(codes.CAL_OFFSET, 1, 0, 382),
+        Cal(codes.CAL_GAIN + 1, 0, 50, 1100),
+        Cal(codes.CAL_GAIN + 1, 1, 200, 900),
     ]

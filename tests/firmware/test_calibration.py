@@ -6,10 +6,11 @@ import math
 
 import pytest
 
+from omnibot.errors import ConfigError
 from omnibot.firmware.calibration import Calibration, fold_course, interp
 from omnibot.firmware.config import build_config
 from omnibot.firmware.power import DEADBAND, SATURATED, PowerModel
-from omnibot.robot.description import load_robot
+from omnibot.robot.description import MotorMapSpec, PiecewiseLinear, load_robot
 from tests.firmware.conftest import FORMULA_CALIBRATION
 
 
@@ -38,16 +39,18 @@ def test_idle_axes_of_three_wheels_and_mecanum() -> None:
     assert max(fold_course(c, axes) for c in range(360)) == 30.0
 
 
+def _cal_cfg() -> dict[str, object]:
+    return {
+        "k": 200.0,
+        "kl_courses": [0, 45],
+        "kl_tables": [[[0, 100], [2.0, 1.0]], [[0], [1.0]]],
+        "kt": [[0], [1.0]],
+        "kr": [[0, 100], [1.0, 3.0]],
+    }
+
+
 def _cal() -> Calibration:
-    return Calibration(
-        {
-            "k": 200.0,
-            "kl_courses": [0, 45],
-            "kl_tables": [[[0, 100], [2.0, 1.0]], [[0], [1.0]]],
-            "kt": [[0], [1.0]],
-            "kr": [[0, 100], [1.0, 3.0]],
-        }
-    )
+    return Calibration(_cal_cfg())
 
 
 def test_k_l_interpolates_power_and_course() -> None:
@@ -100,3 +103,42 @@ def test_wheel_speeds_match_kinematics() -> None:
     model.wheel_speeds(0.3, -0.2, 1.0, out)
     want = robot.wheel_matrix @ [0.3, -0.2, 1.0]
     assert out == pytest.approx(list(want))
+
+
+def test_motor_map_offset_gain_and_ramp() -> None:
+    cal = Calibration({**_cal_cfg(), "motors": 2})
+    assert cal.offset == [0.0, 0.0] and cal.motor_power(1, -80.0) == -80.0  # identity by default
+    assert cal.set_knot(3, 1, 0, 40.0) and cal.set_knot(21, 0, 100, 0.8) and cal.set_knot(21, 1, 200, 1.2)
+    assert cal.motor_power(1, 50.0) == pytest.approx(40 + 0.8 * 50)
+    assert cal.motor_power(1, -150.0) == pytest.approx(-(40 + 1.0 * 150))
+    assert cal.motor_power(1, 0.25) == pytest.approx(0.25 * 40 + 0.8 * 0.25)  # the offset ramps in
+    assert cal.motor_power(1, 0.0) == 0.0 and cal.motor_power(0, 7.0) == 7.0
+    assert not cal.set_knot(3, 2, 0, 10.0)  # no motor 3
+    assert not cal.set_knot(3, 0, 5, 10.0)  # X must be 0
+    assert not cal.set_knot(22, 0, 0, 1.0)  # no gain table for motor 3
+    assert not cal.set_knot(21, 0, 0, 0.0)  # gains are positive
+
+
+def test_dropping_k_l_curves() -> None:
+    cal = _cal()
+    assert not cal.set_knot(10, -2, 0, 0)  # curve 0 always stays
+    assert not cal.set_knot(13, -2, 0, 0)  # beyond the curves
+    assert cal.set_knot(12, -2, 0, 0)  # nothing after curve 1: no change
+    assert cal.kl_courses == [0, 45]
+    assert cal.set_knot(11, -2, 0, 0)
+    assert cal.kl_courses == [0] and len(cal.kl) == 1
+    assert cal.k_l(50, 45) == 1.5
+
+
+def test_config_carries_the_motor_map() -> None:
+    robot = load_robot("omni4")
+    gain = PiecewiseLinear(x=(50.0,), y=(1.1,))
+    spec = FORMULA_CALIBRATION.model_copy(
+        update={"motors": MotorMapSpec(offset=(1, 2, 3, 4), gain=(gain,) * 4)}
+    )
+    cfg = build_config(robot.model_copy(update={"calibration": spec}))
+    assert cfg["motor_offset"] == [1.0, 2.0, 3.0, 4.0] and cfg["motor_gain"][3] == [[50.0], [1.1]]
+    assert build_config(robot)["motor_gain"] == [[[0.0], [1.0]]] * 4
+    three = spec.model_copy(update={"motors": MotorMapSpec(offset=(1, 2, 3), gain=(gain,) * 3)})
+    with pytest.raises(ConfigError, match="3 motors for a robot with 4"):
+        build_config(robot.model_copy(update={"calibration": three}))

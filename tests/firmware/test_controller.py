@@ -74,7 +74,11 @@ def test_status_format(rig: Rig) -> None:
         ("SONAR,0,100,0,0,0", codes.E_SONAR),
         ("SONAR,1,100,0,501,0", codes.E_SONAR),
         ("SONAR,1,100,-1,0,0", codes.E_SONAR),
-        ("CAL,3,0,0,1000", codes.E_CALIBRATION),
+        ("CAL,4,0,0,1000", codes.E_CALIBRATION),
+        ("CAL,3,4,0,400", codes.E_CALIBRATION),
+        ("CAL,24,0,0,1000", codes.E_CALIBRATION),
+        ("CAL,20,0,0,0", codes.E_CALIBRATION),
+        ("CAL,10,-2,0,0", codes.E_CALIBRATION),
         ("CAL,1,5,0,1000", codes.E_CALIBRATION),
         ("CAL,0,0,0,0", codes.E_CALIBRATION),
         ("MODE,8", codes.E_UNSUPPORTED),
@@ -388,6 +392,25 @@ def test_cal_uploads_tables(rig: Rig) -> None:
     assert rig.cmd("CAL,2,1,0,3000") == [err(codes.E_CALIBRATION)]  # knots must increase
     rig.cmd("ROTATE,90,90")
     assert rig.hal.powers[0] == round(440 * 0.096 * 1.5708 * 2.0)
+
+
+def test_cal_motor_map_and_dropped_curves(rig: Rig) -> None:
+    assert rig.cmd("CAL,0,0,0,4400") == ["OK"]
+    # motor 1 (index 0): offset 30 counts; motor 3: gain 1.2 up to power 100, 0.8 from 200
+    assert rig.send("CAL,3,0,0,300;CAL,22,0,100,1200;CAL,22,1,200,800\n") == ["OK", "OK", "OK"]
+    rig.cmd("MOVE,30000,50,90,0")  # nominal 220 on motors 1 and 3
+    assert rig.hal.powers == [250, 0, -176, 0]
+    rig.cmd("STOP;MOVE,30000,30,90,0")  # nominal 132: gain 1.2 - 0.4 * 32 / 100
+    assert rig.hal.powers == [162, 0, -round(132 * (1.2 - 0.4 * 0.32)), 0]
+    rig.cmd("STOP;MOVE,30000,30,0,0")  # motors 1 and 3 stand still: no offset
+    assert rig.hal.powers == [0, 132, 0, -132]
+    rig.cmd("STOP")
+    # a third K_l curve, then dropped again: course 90 folds to 0 and uses curve 0 (flat 1.0)
+    assert rig.send("CAL,11,-1,30,0;CAL,12,-1,45,0;CAL,12,0,0,2000;CAL,12,-2,0,0\n") == ["OK"] * 4
+    assert rig.cmd("CAL,12,0,0,1000") == [err(codes.E_CALIBRATION)]  # curve 2 is gone
+    rig.cmd("MOVE,30000,30,45,0")
+    v = round(440 * 0.3 * 0.7071)
+    assert rig.hal.powers == [v + 30, v, -round(v * 1.2), -v]
 
 
 def test_closed_loop_reaches_wheel_speed() -> None:

@@ -46,6 +46,8 @@ range 0 200
 > CAL,0,0,0,4400;CAL,10,0,0,500;CAL,11,-1,45,0;CAL,11,0,0,1000;CAL,2,3,0,0
 > MOVE,20,40,30,0
 @ 100
+> CAL,3,1,0,255;CAL,21,0,50,1100;CAL,21,1,150,900;CAL,11,-2,0,0;MOVE,20,40,30,0;STATUS
+@ 100
 > MOVE,xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx;STATUS
 @ 1000
 """

@@ -228,7 +228,8 @@ def _knots(table: int, curve: PiecewiseLinear) -> list[Cal]:
 
 
 def calibration(spec: CalibrationSpec) -> list[Cal]:
-    """The CAL commands that upload a calibration section: K, then K_t, K_r, K_l (knot 0 upwards)."""
+    """The CAL commands that upload a calibration section: K, then K_t, K_r, K_l (knot 0 upwards,
+    dropping curves the controller may hold beyond the section's), then the motor map if any."""
     out = [Cal(codes.CAL_K, 0, 0, units.to_cal_k(spec.k))]
     if spec.k_t is not None:
         out += _knots(codes.CAL_KT, spec.k_t)
@@ -240,6 +241,15 @@ def calibration(spec: CalibrationSpec) -> list[Cal]:
         for k, (course, curve) in enumerate(zip(spec.k_l.courses_deg, spec.k_l.curves, strict=True)):
             out.append(Cal(codes.CAL_KL + k, -1, round(course), 0))
             out += _knots(codes.CAL_KL + k, curve)
+        n = len(spec.k_l.curves)
+        if n < codes.CAL_KL_CURVES:
+            out.append(Cal(codes.CAL_KL + n, codes.CAL_KL_DROP, 0, 0))
+    if spec.motors is not None:
+        if len(spec.motors.gain) > codes.CAL_MOTORS:
+            raise ValueError(f"motor map: at most {codes.CAL_MOTORS} motors can be uploaded")
+        for i, (offset, gain) in enumerate(zip(spec.motors.offset, spec.motors.gain, strict=True)):
+            out.append(Cal(codes.CAL_OFFSET, i, 0, round(10 * offset)))
+            out += _knots(codes.CAL_GAIN + i, gain)
     for c in out:
         if not all(codes.INT_MIN <= p <= codes.INT_MAX for p in c.params()):
             raise ValueError(f"CAL {c.params()}: a value is outside the protocol's 16-bit range")

@@ -3,6 +3,11 @@
 A table is ``[xs, ys]``: power knots (PWM counts, strictly increasing) and factors; the value is
 interpolated linearly between knots and held constant outside them. ``K_l`` has one table per course
 (degrees, 0..45 for seed 000) and is interpolated between the two nearest courses.
+
+The motor map (a project addition) makes unequal motors act alike: motor i gets
+``sign(a) (offset_i + gain_i(|a|) |a|)`` for the nominal power ``a`` that the factors give
+(:meth:`Calibration.motor_power`): the offset lifts every turning wheel out of its own dead band, the
+gain table balances the motors over the power range. Identity by default.
 """
 
 from omnibot.protocol import codes
@@ -11,7 +16,10 @@ TABLE_K = codes.CAL_K
 TABLE_KT = codes.CAL_KT
 TABLE_KR = codes.CAL_KR
 TABLE_KL = codes.CAL_KL  # 10 + k: the k-th course of K_l
+TABLE_OFFSET = codes.CAL_OFFSET
+TABLE_GAIN = codes.CAL_GAIN  # 20 + i: motor i's gain table
 KNOTS_MAX = codes.CAL_KNOTS_MAX
+KL_DROP = codes.CAL_KL_DROP
 
 TYPE_CHECKING = False
 if TYPE_CHECKING:
@@ -46,7 +54,7 @@ def fold_course(course_deg: float, axes: list[float]) -> float:
 
 
 class Calibration:
-    """K (PWM counts per m/s of rim speed) and the K_l, K_t, K_r factor tables."""
+    """K (PWM counts per m/s of rim speed), the K_l, K_t, K_r factor tables and the motor map."""
 
     def __init__(self, cfg: "dict[str, Any]") -> None:
         self.k = float(cfg["k"])
@@ -54,6 +62,21 @@ class Calibration:
         self.kl = [_table(t) for t in cfg["kl_tables"]]
         self.kt = _table(cfg["kt"])
         self.kr = _table(cfg["kr"])
+        n = int(cfg.get("motors", 0))
+        self.offset = [float(v) for v in cfg.get("motor_offset", [0.0] * n)]
+        self.gain = [_table(t) for t in cfg.get("motor_gain", [[[0.0], [1.0]]] * n)]
+
+    def motor_power(self, i: int, a: float) -> float:
+        """Motor i's power for the nominal power ``a``: ``sign(a) (offset_i + gain_i(|a|) |a|)``.
+
+        Below one count the offset ramps in with ``|a|``, so a wheel meant to stand still stays still.
+        """
+        m = abs(a)
+        if m == 0.0 or i >= len(self.offset):
+            return a
+        t = self.gain[i]
+        p = self.offset[i] * min(m, 1.0) + interp(t[0], t[1], m) * m
+        return p if a > 0 else -p
 
     def k_l(self, power: float, folded_course: float) -> float:
         """K_l(power, course), the course already folded (see :func:`fold_course`)."""
@@ -80,7 +103,9 @@ class Calibration:
 
         Writing knot ``index`` drops the knots after it, so a table is uploaded from knot 0 upwards.
         For ``TABLE_KL + k`` with ``index`` -1, ``power`` is the course (degrees) of the k-th curve and
-        k may be one past the last curve to add a curve (given a flat factor 1.0 until knots arrive).
+        k may be one past the last curve to add a curve (given a flat factor 1.0 until knots arrive);
+        index -2 drops curves k and after (k >= 1: one curve stays). ``TABLE_OFFSET`` sets motor
+        ``index``'s offset to ``value`` counts; ``TABLE_GAIN + i`` writes a knot of motor i's gain table.
         """
         if table == TABLE_K:
             if value <= 0:
@@ -91,7 +116,23 @@ class Calibration:
             return _write(self.kt, index, power, value)
         if table == TABLE_KR:
             return _write(self.kr, index, power, value)
+        if table == TABLE_OFFSET:
+            if index < 0 or index >= len(self.offset) or power != 0:
+                return False
+            self.offset[index] = value
+            return True
+        if table >= TABLE_GAIN:
+            i = table - TABLE_GAIN
+            if i >= len(self.gain) or value <= 0:
+                return False
+            return _write(self.gain[i], index, power, value)
         k = table - TABLE_KL
+        if index == KL_DROP:
+            if k < 1 or k > len(self.kl) or power != 0:
+                return False
+            del self.kl[k:]
+            del self.kl_courses[k:]
+            return True
         if k < 0 or k > len(self.kl) or (k == len(self.kl) and index != -1):
             return False
         if index == -1:

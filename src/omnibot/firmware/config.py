@@ -21,6 +21,7 @@ idle_axes                   directions (deg, 0..180) of travel along which some 
 k                           calibration K, PWM counts per m/s of rim speed
 kl_courses, kl_tables       K_l: courses (deg) and one [powers, factors] table per course
 kt, kr                      K_t and K_r as [powers, factors]
+motor_offset, motor_gain    motor map: each motor's dead-band offset (counts) and [powers, gains]
 distance_max_cm             exclusive bound of abs(L) (MOVE)
 speed_min_cms/speed_max_cms inclusive bounds of abs(V)
 curvature_max               exclusive bound of abs(C), 1/(1000 cm)
@@ -45,6 +46,7 @@ import shutil
 from pathlib import Path
 from typing import Any
 
+from omnibot.errors import ConfigError
 from omnibot.robot.description import PiecewiseLinear, RobotDescription, load_robot
 
 PACKAGE_DIR = Path(__file__).resolve().parent
@@ -123,6 +125,12 @@ def build_config(
         kl_tables = [_table(c) for c in cal.k_l.curves]
     else:
         courses, kl_tables = [0.0], [_table(None)]
+    motors = cal.motors if cal else None
+    if motors is not None and len(motors.offset) != robot.n_wheels:
+        raise ConfigError(
+            f"{len(motors.offset)} motors for a robot with {robot.n_wheels}",
+            key="calibration.motors",
+        )
     cpr = {e.wheel: e.counts_per_rev for e in robot.encoders.motors}
     encoder_cpr = [int(cpr.get(w.name, 0)) for w in robot.wheels]
     ctl = robot.controller
@@ -146,6 +154,8 @@ def build_config(
         "kl_tables": kl_tables,
         "kt": _table(cal.k_t if cal else None),
         "kr": _table(cal.k_r if cal else None),
+        "motor_offset": [float(o) for o in motors.offset] if motors else [0.0] * robot.n_wheels,
+        "motor_gain": [_table(g) for g in motors.gain] if motors else [_table(None)] * robot.n_wheels,
         "distance_max_cm": round(lim.distance_max * 100.0, 6),
         "speed_min_cms": round(lim.speed_min * 100.0, 6),
         "speed_max_cms": round(lim.speed_max * 100.0, 6),

@@ -319,6 +319,13 @@ class Controller:
     def _cal(self, table: int, index: int, x: int, y: int) -> bool:
         if table == codes.CAL_K:
             return index == 0 and x == 0 and self.calibration.set_knot(table, 0, 0, y * 0.1)
-        if table >= codes.CAL_KL + codes.CAL_KL_CURVES or x < 0 or y < 0:
+        if x < 0 or y < 0:
+            return False
+        if table == codes.CAL_OFFSET:
+            return self.calibration.set_knot(table, index, x, y * 0.1)
+        if (
+            codes.CAL_KL + codes.CAL_KL_CURVES <= table < codes.CAL_GAIN
+            or table >= codes.CAL_GAIN + codes.CAL_MOTORS
+        ):
             return False
         return self.calibration.set_knot(table, index, x, y / codes.CAL_SCALE)

@@ -8,7 +8,9 @@ precomputed by config.py). The translation part and the rotation part get their 
     P_i = K * K_r(p_r) * rim_i2 w                                                    (ROTATE)
 
 where each factor's power argument is the largest uncalibrated power of its part (K |s|) and the
-course is folded onto the calibrated range (:func:`calibration.fold_course`). Then, keeping the
+course is folded onto the calibrated range (:func:`calibration.fold_course`). Each motor's power then
+goes through the motor map (:meth:`calibration.Calibration.motor_power`: its dead-band offset and
+gain, identity by default). Then, keeping the
 direction, all powers are scaled by one factor if any exceeds ``pwm_max`` (SATURATED) and, when every
 non-zero power is below ``power_min`` (the dead band: too little to move the robot), all are set to 0
 (DEADBAND).
@@ -75,7 +77,7 @@ class PowerModel:
         peak = 0.0
         for i in range(n):
             row = rim[i]
-            p = f_tr * (row[0] * vx + row[1] * vy) + f_rot * row[2] * w
+            p = cal.motor_power(i, f_tr * (row[0] * vx + row[1] * vy) + f_rot * row[2] * w)
             raw[i] = p
             peak = max(peak, abs(p))
         return self.finish(peak, out)

@@ -304,16 +304,33 @@ class CourseTable(_Spec):
         return self
 
 
+class MotorMapSpec(_Spec):
+    """Per-motor map of the nominal power a: ``sign(a) (offset_i + gain_i(|a|) |a|)`` (firmware)."""
+
+    offset: tuple[float, ...] = Field(description="dead-band offset of each motor, PWM counts")
+    gain: tuple[PiecewiseLinear, ...] = Field(description="gain of each motor over the nominal power")
+
+    @model_validator(mode="after")
+    def _check(self) -> MotorMapSpec:
+        if len(self.offset) != len(self.gain) or not self.offset:
+            raise ValueError("offset and gain need one entry per motor")
+        if any(o < 0 for o in self.offset) or any(y <= 0 for g in self.gain for y in g.y):
+            raise ValueError("offsets must be >= 0 and gains > 0")
+        return self
+
+
 class CalibrationSpec(_Spec):
     """Seed 000's power calibration: P = K * K_l * V ... with factors as piecewise-linear tables.
 
     ``k`` is PWM counts per m/s of wheel rim speed; the tables are dimensionless factors of power.
+    ``motors`` (optional) is the per-motor map applied after them.
     """
 
     k: float = Field(gt=0, description="PWM counts per m/s of rim speed")
     k_l: CourseTable | None = None
     k_t: PiecewiseLinear | None = None
     k_r: PiecewiseLinear | None = None
+    motors: MotorMapSpec | None = None
 
 
 class ControllerSpec(_Spec):
