@@ -10,7 +10,8 @@ estimator runs on the same telemetry, and each one's position error against the 
 truth is taken at the end of every leg (at standstill).
 
 Goals: <= 0.5 % with tracking wheels + gyro (omni3), <= 2 % with driven-wheel encoders + gyro on
-carpet.
+carpet. Before the drive, each floor's wheel slip is calibrated (``omnibot calibrate``'s slip runs,
+another seed); driven-wheel estimators are reported with and without it.
 """
 
 from __future__ import annotations
@@ -29,17 +30,22 @@ ROBOTS = {"omni4": (0.5, 1.0), "omni3": (2.0, 2.0)}
 LEGS = 4
 
 
-def drive(job: tuple[str, str, float, int, bool]) -> dict[str, Any]:
-    from omnibot.control.followers.base import make_follower
+SLIP_CORRECTED = ("encoders+gyro", "encoders")
+"""Driven-wheel estimators also run with the floor's slip calibration (rows marked "slip-calibrated")."""
+
+
+def drive(job: tuple[str, str, float, int, bool, bool]) -> dict[str, Any]:
+    from benchmarks.tracking import floor_slip
+    from omnibot.control.followers.base import make_follower, wrap
     from omnibot.control.paths.path import Path
     from omnibot.control.paths.standard import random_path
-    from omnibot.estimation.estimator import estimator_names
+    from omnibot.estimation.estimator import estimator_names, make_estimator
     from omnibot.estimation.odometry import Pose2D
     from omnibot.navigation.runner import Navigator
     from omnibot.navigation.session import follower_limits, simulated_client
     from omnibot.robot.description import load_robot
 
-    preset, surface, length, seed, calibrate = job
+    preset, surface, length, seed, calibrate, slip_calibrate = job
     speed, size = ROBOTS[preset]
     robot = load_robot(preset)
     whole = random_path(length, seed=seed, size=size, heading="mixed")
@@ -49,17 +55,21 @@ def drive(job: tuple[str, str, float, int, bool]) -> dict[str, Any]:
         for a, b in itertools.pairwise(cuts)
     ]
     names = estimator_names(robot)
+    slip = floor_slip(preset, surface) if slip_calibrate else None
+    corrected = [f"{n} slip" for n in SLIP_CORRECTED if slip is not None and n in names]
     started = time.perf_counter()
-    errors: dict[str, list[float]] = {n: [] for n in names}
+    errors: dict[str, list[float]] = {n: [] for n in [*names, *corrected]}
+    heading_errors: dict[str, list[float]] = {n: [] for n in errors}
     travelled = 0.0
     with simulated_client(robot, surface=surface, seed=seed, start=Pose2D(*whole.start)) as client:
-        nav = Navigator(
-            client,
-            robot,
-            estimator="fused",
-            observers=[n for n in names if n != "fused"],
-            start=Pose2D(*whole.start),
-        )
+        start = Pose2D(*whole.start)
+        observers = [make_estimator(n, robot, start) for n in names if n != "fused"]
+        for name in corrected:  # the same estimators again, with the floor's slip
+            est = make_estimator(name.split()[0], robot, start, slip)
+            est.name = name
+            observers.append(est)
+        # the follower drives on the best estimate: fused, with the floor's slip when calibrated
+        nav = Navigator(client, robot, estimator="fused", observers=observers, start=start, slip=slip)
         nav.prepare()
         if calibrate:
             nav.calibrate_gyro()
@@ -75,16 +85,18 @@ def drive(job: tuple[str, str, float, int, bool]) -> dict[str, Any]:
                 travelled += float(np.sum(np.hypot(*np.diff(pts, axis=0).T)))
             last = nav.truth()
             assert last is not None
-            for name in names:
+            for name, errs in errors.items():
                 est = nav.estimator if name == "fused" else nav.observers[name]
                 e = est.estimate
-                errors[name].append(math.hypot(e.x - last[0], e.y - last[1]))
+                errs.append(math.hypot(e.x - last[0], e.y - last[1]))
+                heading_errors[name].append(math.degrees(wrap(e.theta - last[2])))
         nav.close()
     return {
         "robot": preset,
         "surface": surface,
         "distance_m": travelled,
         "errors": errors,
+        "heading_errors": heading_errors,
         "completed": completed,
         "wall_s": time.perf_counter() - started,
     }
@@ -92,7 +104,10 @@ def drive(job: tuple[str, str, float, int, bool]) -> dict[str, Any]:
 
 def describe(name: str) -> str:
     return {
-        "fused": "fused (best available: tracking wheels if any, gyro + encoders)",
+        "fused": "fused (best available: tracking wheels if any, gyro + encoders; slip-calibrated "
+        "unless --no-slip-calibration)",
+        "encoders+gyro slip": "driven-wheel encoders + gyro (fused), slip-calibrated",
+        "encoders slip": "driven-wheel encoders only, slip-calibrated",
         "tracking+gyro": "tracking wheels + gyro (fused)",
         "tracking+raw-gyro": "tracking wheels + raw gyro sum",
         "encoders+gyro": "driven-wheel encoders + gyro (fused)",
@@ -123,6 +138,11 @@ def format_table(results: list[dict[str, Any]]) -> str:
             cells.append(f"{final:.2f} % (max {worst:.2f} %)")
         out.append(f"| {describe(n)} | " + " | ".join(cells) + " |")
     out.append(
+        "| heading error at the end (fused) | "
+        + " | ".join(f"{r['heading_errors']['fused'][-1]:+.2f} degree" for r in results)
+        + " |"
+    )
+    out.append(
         "| distance driven (truth) | " + " | ".join(f"{r['distance_m']:.1f} m" for r in results) + " |"
     )
     out.append(
@@ -140,11 +160,13 @@ def goals(results: list[dict[str, Any]]) -> str:
             lines.append(
                 f"| tracking wheels + gyro <= 0.5 % ({r['robot']} {r['surface']}) | {v:.2f} % {'met' if v <= 0.5 else 'NOT met'} |"
             )
-        if r["surface"] == "carpet" and "encoders+gyro" in r["errors"]:
-            v = 100 * r["errors"]["encoders+gyro"][-1] / d
-            lines.append(
-                f"| encoders + gyro on carpet <= 2 % ({r['robot']}) | {v:.2f} % {'met' if v <= 2 else 'NOT met'} |"
-            )
+        for name in ("encoders+gyro", "encoders+gyro slip"):
+            if r["surface"] == "carpet" and name in r["errors"]:
+                v = 100 * r["errors"][name][-1] / d
+                label = "encoders + gyro" + (", slip-calibrated," if name.endswith("slip") else "")
+                lines.append(
+                    f"| {label} on carpet <= 2 % ({r['robot']}) | {v:.2f} % {'met' if v <= 2 else 'NOT met'} |"
+                )
     return "\n".join(lines)
 
 
@@ -158,9 +180,15 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument(
         "--no-calibration", action="store_true", help="skip the gyro calibration spin before the drive"
     )
+    p.add_argument(
+        "--no-slip-calibration",
+        dest="slip",
+        action="store_false",
+        help="no floor slip calibration (the fused estimate then uses uncorrected encoders)",
+    )
     args = p.parse_args(argv)
     work = [
-        (r, s, args.length, args.seed, not args.no_calibration)
+        (r, s, args.length, args.seed, not args.no_calibration, args.slip)
         for r in args.robots.split(",")
         for s in args.surfaces.split(",")
     ]

@@ -19,6 +19,7 @@ overshoot (omni3, wood), plotted, with our tracker for comparison.
 from __future__ import annotations
 
 import argparse
+import functools
 import math
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -33,20 +34,35 @@ FOLLOWERS = ("seed002", "pure_pursuit", "tracker")
 SURFACES = ("wood", "carpet")
 
 
-def one_run(job: tuple[str, str, str, str, str, int, bool]) -> dict[str, Any]:
+CALIBRATION_SEED = 1000
+"""Simulator seed of the slip calibration drive (not the seed of the runs it is used in)."""
+
+
+@functools.cache
+def floor_slip(preset: str, surface: str) -> Any:
+    """The floor's slip coefficients from ``omnibot calibrate``'s slip runs (simulator truth)."""
+    from omnibot.navigation.slipcal import simulate_slip_calibration
+    from omnibot.robot.description import load_robot
+
+    speed = min(ROBOTS[preset][0], 0.8)
+    return simulate_slip_calibration(load_robot(preset), surface, seed=CALIBRATION_SEED, speed=speed).params
+
+
+def one_run(job: tuple[str, str, str, str, str, int, bool, bool]) -> dict[str, Any]:
     from omnibot.control.paths.standard import standard_path
     from omnibot.navigation.session import FollowOptions, simulate_follow
     from omnibot.robot.description import load_robot
 
-    preset, surface, shape, follower, heading, seed, calibrate = job
+    preset, surface, shape, follower, heading, seed, calibrate, slip = job
     speed, size = ROBOTS[preset]
     robot = load_robot(preset)
     path = standard_path(shape, size=size, heading=heading)
+    params = floor_slip(preset, surface) if slip else None
     started = time.perf_counter()
     _, report = simulate_follow(
         robot,
         path,
-        FollowOptions(follower=follower, speed=speed, calibrate_gyro=calibrate),
+        FollowOptions(follower=follower, speed=speed, calibrate_gyro=calibrate, slip=params),
         surface=surface,
         seed=seed,
     )
@@ -63,9 +79,10 @@ def run_matrix(
     seed: int,
     jobs: int,
     calibrate: bool = False,
+    slip: bool = True,
 ) -> list[dict[str, Any]]:
     work = [
-        (r, s, p, f, heading, seed, calibrate)
+        (r, s, p, f, heading, seed, calibrate, slip)
         for r in robots
         for s in surfaces
         for p in paths
@@ -164,7 +181,7 @@ def goals(results: list[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
-def seed002_experiment(target: FsPath, seed: int = 1) -> str:
+def seed002_experiment(target: FsPath, seed: int = 1, slip: bool = True) -> str:
     """Seed 002's S path on omni3 (wood) with and without reduced overshoot; the plot and a summary."""
     from omnibot.control.paths.standard import standard_path
     from omnibot.navigation.plot import plot_runs
@@ -182,7 +199,11 @@ def seed002_experiment(target: FsPath, seed: int = 1) -> str:
     )
     for name, label in zip(("seed002-plain", "seed002", "tracker"), labels, strict=True):
         run, report = simulate_follow(
-            robot, path, FollowOptions(follower=name, speed=speed), surface="wood", seed=seed
+            robot,
+            path,
+            FollowOptions(follower=name, speed=speed, slip=floor_slip("omni3", "wood") if slip else None),
+            surface="wood",
+            seed=seed,
         )
         runs.append(run)
         lines.append(f"  {label:42s} {summary(report)}")
@@ -201,6 +222,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
     p.add_argument("--calibrate-gyro", action="store_true", help="gyro calibration spin before each run")
     p.add_argument(
+        "--no-slip-calibration",
+        dest="slip",
+        action="store_false",
+        help="uncorrected driven-wheel encoders (default: the floor's slip calibration first)",
+    )
+    p.add_argument(
         "--seed002-plot", default="out/seed002_s_path.png", help="'' to skip the S-path experiment"
     )
     args = p.parse_args(argv)
@@ -215,15 +242,17 @@ def main(argv: list[str] | None = None) -> int:
         args.seed,
         args.jobs,
         args.calibrate_gyro,
+        args.slip,
     )
     spin = ", gyro calibration spin first" if args.calibrate_gyro else ""
+    spin += ", floor slip calibrated" if args.slip else ", no slip calibration"
     print(f"## Path tracking (heading {args.heading}{spin}, seed {args.seed}; {len(results)} runs)")
     print(format_tables(results, followers))
     if args.seed002_plot:
         target = FsPath(args.seed002_plot)
         target.parent.mkdir(parents=True, exist_ok=True)
         print("\n### Seed 002's experiment: the S path (omni3, wood)\n")
-        print(seed002_experiment(target, args.seed))
+        print(seed002_experiment(target, args.seed, args.slip))
         print(f"  plot: {target}")
     print(f"\n({time.perf_counter() - started:.0f} s wall)")
     return 0

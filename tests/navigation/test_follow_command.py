@@ -75,3 +75,47 @@ def test_bad_input_exits_2_without_a_traceback(
     err = capsys.readouterr().err
     assert err.startswith("omnibot: error: ") and message in err
     assert "Traceback" not in err
+
+
+CALIBRATION = """\
+robot: omni4
+calibration: {k: 160.0}
+surfaces:
+  wood: {calibration: {k: 150.0}, odometry: {slip: {roll: 0.002}}}
+  carpet: {calibration: {k: 190.0}, odometry: {slip: {roll: 0.016, compliance: 0.0}}}
+"""
+
+
+def test_follow_applies_the_floors_slip_from_a_calibration_file(tmp_path: FsPath) -> None:
+    path_file, cal, report = tmp_path / "c.csv", tmp_path / "cal.yaml", tmp_path / "r.json"
+    write_path(standard_path("circle", size=0.5), path_file)
+    cal.write_text(CALIBRATION)
+    argv = ["follow", str(path_file), "--speed", "0.4", "--surface", "carpet", "--calibration", str(cal)]
+    assert main([*argv, "--report", str(report)]) == 0
+    data = json.loads(report.read_text())
+    assert data["slip_calibration"] == {"file": str(cal), "roll": 0.016, "compliance": 0.0}
+    assert data["rms_cross_track_m"] < 0.01
+
+
+@pytest.mark.parametrize(
+    ("text", "extra", "message"),
+    [
+        (CALIBRATION, [], "has wheel slip for wood, carpet: say which floor"),
+        (CALIBRATION, ["--surface", "concrete"], "no wheel-slip calibration for surface 'concrete'"),
+        ("calibration: {k: 160.0}\n", ["--surface", "wood"], "the file has: none"),
+        (
+            "calibration: {k: 1}\nsurfaces: {wood: {calibration: {k: 1}, odometry: {slip: {roll: x}}}}\n",
+            ["--surface", "wood"],
+            "surfaces.wood.odometry.slip.roll: 'x' is not a number",
+        ),
+    ],
+)
+def test_follow_calibration_errors_are_one_line(
+    tmp_path: FsPath, capsys: pytest.CaptureFixture[str], text: str, extra: list[str], message: str
+) -> None:
+    path_file, cal = tmp_path / "c.csv", tmp_path / "cal.yaml"
+    write_path(standard_path("line", size=0.3), path_file)
+    cal.write_text(text)
+    assert main(["follow", str(path_file), "--calibration", str(cal), *extra]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err

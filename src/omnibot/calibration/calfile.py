@@ -8,8 +8,9 @@
       k_l: {courses_deg: [0.0, 15.0, 30.0, 45.0], curves: [{x: [...], y: [...]}, ...]}
       k_t: {x: [...], y: [...]}
       k_r: {x: [...], y: [...]}
-    surfaces:             # each surface's own calibration, dead bands and odometry factors
-      wood: {calibration: {...}, deadband: {course:0: 48, rotation: 40}, odometry: {...}}
+    surfaces:             # each surface's own calibration, dead bands and wheel slip
+      wood: {calibration: {...}, deadband: {course:0: 48, rotation: 40},
+             odometry: {slip: {roll: 0.0021, compliance: 0.0}}}
     gyro: {bias: -0.0032, scale: 1.008}                              # true = scale * (rate - bias)
     odometry: {wheel_radius_scale: 1.038, wheel_base_scale: 0.989}  # for wheel odometry
 
@@ -30,6 +31,7 @@ from pydantic import ValidationError
 from omnibot.calibration.session import CalibrationResult, describe_spec
 from omnibot.config_errors import read_yaml
 from omnibot.errors import ConfigError
+from omnibot.estimation.slip import SlipParameters
 from omnibot.robot.description import CalibrationSpec, RobotDescription, load_robot, parse_description
 
 TOP_KEYS = ("robot", "calibration", "surfaces", "gyro", "odometry", "info")
@@ -43,6 +45,8 @@ class CalibrationFile:
     gyro: dict[str, float] | None = None
     odometry: dict[str, float] | None = None
     robot: str | None = None
+    slip: dict[str, SlipParameters] = field(default_factory=dict)
+    """Each surface's wheel-slip coefficients for the driven-wheel encoders (host side)."""
 
     def for_surface(self, surface: str | None) -> CalibrationSpec:
         """A surface's own calibration (None: the file's ``calibration``)."""
@@ -54,6 +58,23 @@ class CalibrationFile:
                 key="surface",
             )
         return self.surfaces[surface]
+
+    def slip_for(self, surface: str | None) -> SlipParameters:
+        """A surface's wheel-slip coefficients; ``None`` picks the only surface that has them."""
+        if surface is None:
+            if len(self.slip) == 1:
+                return next(iter(self.slip.values()))
+            raise ConfigError(
+                "the calibration file has wheel slip for "
+                + (", ".join(self.slip) if self.slip else "no surface")
+                + ": say which floor the robot is on"
+            )
+        if surface not in self.slip:
+            raise ConfigError(
+                f"no wheel-slip calibration for surface '{surface}'; the file has: "
+                f"{', '.join(self.slip) or 'none'}"
+            )
+        return self.slip[surface]
 
 
 def document(result: CalibrationResult, truth: str = "") -> dict[str, Any]:
@@ -132,7 +153,7 @@ def parse_calibration(data: Any, source: str = "") -> CalibrationFile:
         raise ConfigError(f"{source}: unknown key(s) {unknown}; expected {', '.join(TOP_KEYS)}".lstrip(": "))
     if "calibration" not in data:
         raise ConfigError(f"{source}: no 'calibration' section".lstrip(": "))
-    surfaces, deadbands = {}, {}
+    surfaces, deadbands, slips = {}, {}, {}
     for name, entry in (data.get("surfaces") or {}).items():
         if not isinstance(entry, dict) or "calibration" not in entry:
             raise ConfigError(f"surfaces.{name}: expected a mapping with 'calibration'")
@@ -143,6 +164,11 @@ def parse_calibration(data: Any, source: str = "") -> CalibrationFile:
             )
         surfaces[str(name)] = _spec(entry["calibration"], f"surfaces.{name}.calibration")
         deadbands[str(name)] = {str(k): int(v) for k, v in (entry.get("deadband") or {}).items()}
+        odometry = entry.get("odometry") or {}
+        if not isinstance(odometry, dict) or sorted(set(odometry) - {"slip"}):
+            raise ConfigError(f"surfaces.{name}.odometry: expected a mapping with 'slip'")
+        if "slip" in odometry:
+            slips[str(name)] = SlipParameters.from_mapping(odometry["slip"], f"surfaces.{name}.odometry.slip")
     return CalibrationFile(
         calibration=_spec(data["calibration"], "calibration"),
         surfaces=surfaces,
@@ -150,6 +176,7 @@ def parse_calibration(data: Any, source: str = "") -> CalibrationFile:
         gyro=data.get("gyro"),
         odometry=data.get("odometry"),
         robot=data.get("robot"),
+        slip=slips,
     )
 
 

@@ -27,6 +27,7 @@ import numpy as np
 from omnibot.errors import ConfigError
 from omnibot.estimation.heading import HeadingFilter, HeadingFilterConfig
 from omnibot.estimation.odometry import COUNT_MODULUS, Pose2D, compose_arc, count_delta
+from omnibot.estimation.slip import SlipModel, SlipParameters
 from omnibot.estimation.tracking import Seed002Odometry, TrackingGeometry
 from omnibot.robot.description import RobotDescription
 
@@ -42,6 +43,8 @@ TRACK_SLIP_WINDOW = 0.1
 """Time constant of the leaky sum of tracking-wheel vs driven-wheel translation differences, s."""
 TRACK_SLIP_GAP, TRACK_SLIP_FRACTION = 0.003, 0.05
 """That sum above this many metres plus this fraction of the distance travelled in the window: slip."""
+ACCEL_TAU = 0.05
+"""Time constant of the low-passed body acceleration the slip model reads, s."""
 
 
 class SensorSample(Protocol):
@@ -110,7 +113,9 @@ class PoseEstimator:
     ``translation``: ``"tracking"`` (passive tracking wheels), ``"encoders"`` (driven-wheel encoders)
     or ``"auto"`` (tracking wheels when the robot has them). ``heading``: ``"fused"`` (gyro with bias
     and scale learned against the encoders), ``"gyro"`` (the raw gyro sum, seed 002's (1)) or
-    ``"encoders"`` (the wheels' rotation only).
+    ``"encoders"`` (the wheels' rotation only). ``slip``: the floor's creep coefficients
+    (:mod:`omnibot.estimation.slip`, from ``omnibot calibrate``), subtracted from the driven wheels'
+    increments before the forward kinematics.
     """
 
     def __init__(
@@ -122,6 +127,7 @@ class PoseEstimator:
         start: Pose2D | None = None,
         name: str = "",
         filter_config: HeadingFilterConfig | None = None,
+        slip: SlipParameters | None = None,
     ) -> None:
         if translation == "auto":
             translation = "tracking" if len(robot.encoders.tracking) >= 2 else "encoders"
@@ -149,7 +155,9 @@ class PoseEstimator:
             self.rotation_resolution = float(per_count.max())
             self.residual_threshold = 3.0 * float(self._rad_per_count.max())
             self.redundant = robot.n_wheels > 3
+            self.slip_model = SlipModel(robot, slip) if slip is not None else None
         else:
+            self.slip_model = None
             self.rotation_resolution = 0.0
         config = filter_config
         if config is None and robot.gyro is not None:
@@ -164,6 +172,10 @@ class PoseEstimator:
         self._t = 0.0
         self._still_for = 0.0
         self._vel = (0.0, 0.0, 0.0)
+        self.body_velocity = np.zeros(3)
+        """Low-passed body-frame twist (vx, vy m/s, w rad/s)."""
+        self.body_acceleration = np.zeros(3)
+        """Low-passed body-frame acceleration (m/s^2, rad/s^2): what drives the slip model."""
         self._accel = 0.0
         self._history: deque[tuple[float, float, float, float]] = deque()
         self._track_mismatch = 0.0
@@ -196,6 +208,9 @@ class PoseEstimator:
             counts = count_delta(np.asarray(sample.encoders, float), np.asarray(last.encoders, float))
             moved |= bool(np.any(counts != 0))
             angles = counts * self._rad_per_count
+            if self.slip_model is not None:
+                q, acc = self.body_velocity, self.body_acceleration
+                angles = angles - self.slip_model.wheel_correction(q, acc) * dt
             disp = self._pinv @ angles
             self.residual = angles - self._J @ disp
             if self.redundant:
@@ -240,10 +255,20 @@ class PoseEstimator:
             vy0 + a * ((self._pose.y - before.y) / dt - vy0),
             w0 + a * (d_theta / dt - w0),
         )
+        self._body_rates(dt)
         self._accel = self._acceleration()
         slipping = slip or self.filter.slipping
         self.estimate = Estimate(self._t, *self.estimate_pose_tuple(), *self._vel, slipping, standstill)
         return self.estimate
+
+    def _body_rates(self, dt: float) -> None:
+        """Body-frame twist and acceleration from the low-passed world velocity."""
+        c, s = math.cos(self._pose.theta), math.sin(self._pose.theta)
+        vx, vy, w = self._vel
+        body = np.array([c * vx + s * vy, -s * vx + c * vy, w])
+        a = 1.0 - math.exp(-dt / ACCEL_TAU)
+        self.body_acceleration += a * ((body - self.body_velocity) / dt - self.body_acceleration)
+        self.body_velocity = body
 
     def _acceleration(self) -> float:
         """Second difference of the pose over ACCEL_SPAN: |a| + 0.2 m x |alpha|."""
@@ -341,34 +366,42 @@ class Seed002Estimator:
         return self.estimate
 
 
-EstimatorFactory = Callable[[RobotDescription, Pose2D | None], Estimator]
+EstimatorFactory = Callable[[RobotDescription, Pose2D | None, SlipParameters | None], Estimator]
+
+
+def _pose_estimator(name: str, translation: str = "auto", heading: str = "fused") -> EstimatorFactory:
+    def make(robot: RobotDescription, start: Pose2D | None, slip: SlipParameters | None) -> Estimator:
+        return PoseEstimator(
+            robot, translation=translation, heading=heading, start=start, name=name, slip=slip
+        )
+
+    return make
+
 
 ESTIMATORS: dict[str, EstimatorFactory] = {
-    "fused": lambda r, s: PoseEstimator(r, start=s, name="fused"),
-    "tracking+gyro": lambda r, s: PoseEstimator(r, translation="tracking", start=s, name="tracking+gyro"),
-    "tracking+raw-gyro": lambda r, s: PoseEstimator(
-        r, translation="tracking", heading="gyro", start=s, name="tracking+raw-gyro"
-    ),
-    "encoders+gyro": lambda r, s: PoseEstimator(r, translation="encoders", start=s, name="encoders+gyro"),
-    "encoders+raw-gyro": lambda r, s: PoseEstimator(
-        r, translation="encoders", heading="gyro", start=s, name="encoders+raw-gyro"
-    ),
-    "encoders": lambda r, s: PoseEstimator(
-        r, translation="encoders", heading="encoders", start=s, name="encoders"
-    ),
-    "seed002": Seed002Estimator,
+    "fused": _pose_estimator("fused"),
+    "tracking+gyro": _pose_estimator("tracking+gyro", "tracking"),
+    "tracking+raw-gyro": _pose_estimator("tracking+raw-gyro", "tracking", "gyro"),
+    "encoders+gyro": _pose_estimator("encoders+gyro", "encoders"),
+    "encoders+raw-gyro": _pose_estimator("encoders+raw-gyro", "encoders", "gyro"),
+    "encoders": _pose_estimator("encoders", "encoders", "encoders"),
+    "seed002": lambda r, s, _slip: Seed002Estimator(r, s),
 }
 """Estimators by name: ``fused`` is the best the robot's sensors allow (tracking wheels if any, gyro
-fused with the encoders); the others isolate one source each, for comparison."""
+fused with the encoders); the others isolate one source each, for comparison. Every one but
+``seed002`` (as written) takes the floor's slip coefficients for its driven-wheel encoders."""
 
 
-def make_estimator(name: str, robot: RobotDescription, start: Pose2D | None = None) -> Estimator:
-    """The estimator registered as ``name`` for ``robot``, starting at ``start``."""
+def make_estimator(
+    name: str, robot: RobotDescription, start: Pose2D | None = None, slip: SlipParameters | None = None
+) -> Estimator:
+    """The estimator registered as ``name`` for ``robot``, starting at ``start``, with the floor's
+    creep coefficients ``slip`` (None: uncorrected encoders)."""
     try:
         factory = ESTIMATORS[name]
     except KeyError:
         raise ConfigError(f"unknown estimator {name!r}; expected one of: {', '.join(ESTIMATORS)}") from None
-    return factory(robot, start)
+    return factory(robot, start, slip)
 
 
 def estimator_names(robot: RobotDescription | None = None) -> list[str]:
@@ -378,7 +411,7 @@ def estimator_names(robot: RobotDescription | None = None) -> list[str]:
     out = []
     for name, factory in ESTIMATORS.items():
         try:
-            factory(robot, None)
+            factory(robot, None, None)
         except ConfigError:
             continue
         out.append(name)

@@ -42,7 +42,7 @@ class HeadingFilterConfig:
 
     angle_random_walk: float = 8.7e-5
     """Gyro noise density, rad/s/sqrt(Hz) (= rad/sqrt(s) of heading random walk)."""
-    bias_walk: float = 2e-4
+    bias_walk: float = 2e-5
     """Bias random walk, rad/s/sqrt(s)."""
     bias_std: float = 0.01
     """Turn-on bias spread, rad/s (initial uncertainty)."""
@@ -108,6 +108,14 @@ class HeadingFilter:
     @property
     def scale(self) -> float:
         return float(self.x[2])
+
+    def calibrated(self, bias: float, scale: float, bias_std: float, scale_std: float) -> None:
+        """Take a batch calibration of the gyro (bias rad/s, scale error) with its uncertainty."""
+        self.x[1], self.x[2] = bias, scale
+        for i in (1, 2):
+            self.P[i, :] = 0.0
+            self.P[:, i] = 0.0
+        self.P[1, 1], self.P[2, 2] = bias_std**2, scale_std**2
 
     def reset_heading(self, theta: float) -> None:
         """Set the heading (keeping what was learned about the gyro)."""

@@ -62,15 +62,20 @@ def run_follow(args: argparse.Namespace) -> int:
         estimator=args.estimator,
         rate=rate,
         wheel_loop=not args.no_wheel_loop,
+        calibrate_gyro=args.calibrate_gyro,
+        slip=_slip(args),
     )
+    surface = args.surface or "wood"
     if args.port:
         client = _open_port(args.port, robot)
     else:
-        client = simulated_client(robot, surface=args.surface, seed=args.seed, start=Pose2D(*path.start))
+        client = simulated_client(robot, surface=surface, seed=args.seed, start=Pose2D(*path.start))
     with client:
         run, report, _ = follow_path(client, robot, path, options)
     report["path_file"] = str(args.path)
-    report["link"] = args.port or f"sim://{robot.name} (lockstep, surface {args.surface}, seed {args.seed})"
+    report["link"] = args.port or f"sim://{robot.name} (lockstep, surface {surface}, seed {args.seed})"
+    if options.slip is not None:
+        report["slip_calibration"] = {"file": str(args.calibration), **options.slip.as_dict()}
     print(f"omnibot follow: {robot.name}, {args.follower}, {len(path)} points, {path.length:.2f} m")
     print(f"  {summary(report)}")
     if args.truth:
@@ -90,6 +95,19 @@ def run_follow(args: argparse.Namespace) -> int:
             raise ConfigError(f"cannot write {args.plot}: {exc.strerror or exc}", key="--plot") from None
         print(f"  plot: {args.plot}")
     return 0 if report["completed"] else 1
+
+
+def _slip(args: argparse.Namespace) -> Any:
+    """The floor's wheel-slip coefficients from ``--calibration`` (None without one)."""
+    if not args.calibration:
+        return None
+    from omnibot.calibration.calfile import load_calibration
+
+    cal = load_calibration(args.calibration)
+    try:
+        return cal.slip_for(args.surface)
+    except ConfigError as exc:
+        raise ConfigError(f"{args.calibration}: {exc}", key="--surface") from None
 
 
 def _write(target: FsPath, text: str, flag: str) -> None:
@@ -175,7 +193,14 @@ def add_follow_arguments(p: argparse.ArgumentParser) -> None:
         help="spin in place one turn each way first (learns the gyro scale)",
     )
     p.add_argument(
-        "--surface", default="wood", help="simulated floor: wood (default), carpet, concrete, linoleum"
+        "--calibration",
+        metavar="CAL.yaml",
+        help="calibration file from `omnibot calibrate`: its wheel slip for --surface corrects the encoders",
+    )
+    p.add_argument(
+        "--surface",
+        help="the floor: simulated floor (wood by default; carpet, concrete, linoleum) and the floor "
+        "whose slip --calibration applies",
     )
     p.add_argument("--seed", type=int, default=1, help="simulator seed (default 1)")
     p.add_argument("--truth", metavar="FILE.csv", help="write the ground truth t,x,y,theta (simulator only)")

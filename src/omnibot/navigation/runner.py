@@ -16,6 +16,7 @@ the path's frame (the estimator starts at the path's first pose, the robot is ta
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -30,8 +31,9 @@ from omnibot.client.events import Telemetry
 from omnibot.control.followers.base import STOP, Command, Follower, State
 from omnibot.control.paths.path import Path
 from omnibot.errors import OmnibotError
-from omnibot.estimation.estimator import Estimator, make_estimator
+from omnibot.estimation.estimator import Estimator, PoseEstimator, make_estimator
 from omnibot.estimation.odometry import Pose2D
+from omnibot.estimation.slip import SlipParameters
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription
 
@@ -114,12 +116,50 @@ def simulator_of(client: RobotClient) -> Any | None:
     return None
 
 
+class _GyroProbe:
+    """The gyro's heading and the encoders' rotation at every telemetry sample (gyro calibration)."""
+
+    def __init__(self, robot: RobotDescription) -> None:
+        self._encoders = PoseEstimator(robot, translation="encoders", heading="encoders", name="gyro-probe")
+        self.rows: list[tuple[float, float, float]] = []  # controller time, gyro heading, encoder heading
+
+    def update(self, event: Telemetry) -> None:
+        if event.heading is None:
+            return
+        est = self._encoders.update(event)
+        self.rows.append((event.controller_time, event.heading, est.theta))
+
+    def mark(self) -> int:
+        return len(self.rows) - 1
+
+    def fit(self, marks: list[int]) -> tuple[float, float, float] | None:
+        """(bias, scale, encoder rotation over the manoeuvre) from the spins between ``marks``
+        and the standstill just before the first; None without enough telemetry."""
+        if len(self.rows) < 10 or min(marks) < 0:
+            return None
+        rows = np.array(self.rows)
+        A, b = [], []
+        still = rows[: marks[0] + 1]
+        if len(still) > 1:  # standstill: d_psi = bias T
+            A.append([0.0, still[-1, 0] - still[0, 0]])
+            b.append(still[-1, 1] - still[0, 1])
+        for i, j in itertools.pairwise(marks):
+            d_enc = rows[j, 2] - rows[i, 2]
+            A.append([d_enc, rows[j, 0] - rows[i, 0]])
+            b.append(rows[j, 1] - rows[i, 1] - d_enc)
+        (scale, bias), *_ = np.linalg.lstsq(np.array(A), np.array(b), rcond=None)
+        turned = float(rows[marks[-1], 2] - rows[marks[0], 2])
+        return float(bias), float(scale), turned
+
+
 class Navigator:
     """Runs followers on a robot through a client: telemetry, estimation, the control loop, truth.
 
     ``estimator`` names the estimator the followers see (:data:`omnibot.estimation.ESTIMATORS`);
-    ``observers`` are more estimators fed the same telemetry (for comparisons). ``wheel_loop``
+    ``observers`` are more estimators fed the same telemetry (for comparisons): names, or
+    estimators made with :func:`~omnibot.estimation.estimator.make_estimator` (keyed by their name). ``wheel_loop``
     turns on the controller's wheel-speed loop (MODE bit 1) when every wheel has an encoder.
+    ``slip`` is the floor's creep calibration for the driven-wheel encoders (every estimator).
     """
 
     def __init__(
@@ -128,18 +168,20 @@ class Navigator:
         robot: RobotDescription,
         *,
         estimator: str = "fused",
-        observers: Sequence[str] = (),
+        observers: Sequence[str | Estimator] = (),
         wheel_loop: bool = True,
         binary: bool = True,
         start: Pose2D | None = None,
+        slip: SlipParameters | None = None,
     ) -> None:
         self.client = client
         self.robot = robot
         self.start_pose = start or Pose2D(0.0, 0.0, 0.0)
-        self.estimator: Estimator = make_estimator(estimator, robot, self.start_pose)
-        self.observers: dict[str, Estimator] = {
-            name: make_estimator(name, robot, self.start_pose) for name in observers
-        }
+        self.estimator: Estimator = make_estimator(estimator, robot, self.start_pose, slip)
+        self.observers: dict[str, Estimator] = {}
+        for obs in observers:
+            est = make_estimator(obs, robot, self.start_pose, slip) if isinstance(obs, str) else obs
+            self.observers[est.name] = est
         self.wheel_loop = wheel_loop and all(
             any(e.wheel == w.name for e in robot.encoders.motors) for w in robot.wheels
         )
@@ -179,25 +221,47 @@ class Navigator:
         c.sleep(standstill)
 
     def calibrate_gyro(self, turns: float = 1.0, rate: float = 1.0) -> tuple[float, float]:
-        """Spin in place ``turns`` times each way at ``rate`` rad/s, then stand still.
+        """Spin in place ``turns`` times each way at ``rate`` rad/s, standing still after each.
 
-        Turning steadily in place, the wheels hardly slip, so their rotation is a good reference for
-        the gyro's scale error (and the standstills for its bias); the estimator learns both. The
-        robot ends where it started (within its own odometry). Returns the learned (bias, scale).
+        Turning in place from rest to rest, the wheels do not slip (whatever creep the ramps cause
+        comes back when braking), so the encoders' rotation over each spin is a good reference: with
+        the gyro's heading change over the same stretch, ``d_psi = (1 + scale) d_enc + bias T`` for
+        each spin and ``d_psi = bias T`` for the standstill before, a least-squares fit gives the
+        gyro's bias and scale error. The estimator's heading filter takes them (with the fit's
+        uncertainty) and its heading is set from the encoders' rotation over the manoeuvre. The robot
+        ends where it started (within its own odometry). Returns the learned (bias, scale).
         """
         c = self.client
-        ramp = 0.5
-        for sign in (1.0, -1.0):
-            duration = 2.0 * math.pi * turns / rate + ramp
-            t0 = c.clock.now()
-            while (t := c.clock.now() - t0) < duration + ramp:
-                k = min(1.0, t / ramp, max(0.0, (duration + ramp - t) / ramp))
-                self.send(Command(0.0, 0.0, sign * rate * k))
-                c.sleep(0.01)
-            c.stop()
+        probe = _GyroProbe(self.robot)
+        c.on_telemetry(probe.update)
+        try:
             c.sleep(STANDSTILL)
-        flt = getattr(self.estimator, "filter", None)
-        return (flt.bias, flt.scale) if flt is not None else (math.nan, math.nan)
+            marks = [probe.mark()]
+            estimators = [self.estimator, *self.observers.values()]
+            start = [e.estimate.theta for e in estimators]
+            ramp = 0.5
+            for sign in (1.0, -1.0):
+                duration = 2.0 * math.pi * turns / rate + ramp
+                t0 = c.clock.now()
+                while (t := c.clock.now() - t0) < duration + ramp:
+                    k = min(1.0, t / ramp, max(0.0, (duration + ramp - t) / ramp))
+                    self.send(Command(0.0, 0.0, sign * rate * k))
+                    c.sleep(0.01)
+                c.stop()
+                c.sleep(STANDSTILL)
+                marks.append(probe.mark())
+        finally:
+            c.remove_listener(probe.update)
+        fit = probe.fit(marks)
+        if fit is None:
+            raise NavigationError("gyro calibration needs telemetry with encoders and gyro heading")
+        bias, scale, turned = fit
+        for est, theta in zip(estimators, start, strict=True):
+            if isinstance(est, PoseEstimator) and est.heading_source == "fused":
+                est.filter.calibrated(bias, scale, bias_std=2e-4, scale_std=5e-4)
+                p = est.estimate
+                est.reset(Pose2D(p.x, p.y, theta + turned))
+        return bias, scale
 
     def close(self) -> None:
         """Stop the robot and the telemetry, detach the listener (idempotent)."""

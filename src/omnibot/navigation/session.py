@@ -16,6 +16,7 @@ from omnibot.control.followers.base import make_follower
 from omnibot.control.paths.path import Path
 from omnibot.control.paths.profile import MotionLimits
 from omnibot.estimation.odometry import Pose2D
+from omnibot.estimation.slip import SlipParameters
 from omnibot.navigation.metrics import tracking_report
 from omnibot.navigation.runner import FollowRun, Navigator
 from omnibot.robot.description import RobotDescription
@@ -69,6 +70,8 @@ class FollowOptions:
     calibrate_gyro: bool = False
     """Spin in place one turn each way first (the gyro's scale error is learned; the robot ends where
     it started, within its odometry)."""
+    slip: SlipParameters | None = None
+    """The floor's creep coefficients for the driven-wheel encoders (``omnibot calibrate``)."""
 
 
 def follow_path(
@@ -86,6 +89,7 @@ def follow_path(
         observers=opts.observers,
         wheel_loop=opts.wheel_loop,
         start=Pose2D(*path.start),
+        slip=opts.slip,
     )
     try:
         nav.prepare(opts.standstill)

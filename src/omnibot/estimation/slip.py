@@ -1,0 +1,228 @@
+"""Steady wheel slip of omni and mecanum wheels: a per-floor model for wheel odometry.
+
+A driven wheel transmits force to the floor through a rubber (or carpet-pile) contact that creeps:
+the rim turns a little faster than the ground moves, in the direction the wheel pushes. On a hard
+floor that creep is small; on carpet the rollers of every wheel roll against a large rolling
+resistance, the driven wheels must push against it all the time, and the encoders over-read by
+several percent. The pattern is a rigid motion for most courses (each wheel's over-read matches
+its share of the motion), so the fit residual and the gyro cannot see it: it has to be calibrated
+once per floor and then subtracted.
+
+The model (linear in its two per-floor coefficients)::
+
+    rim speed of wheel k  =  T_k q  +  roll * p_k(q)  +  compliance * a_k(q_dot)
+
+* ``q`` the body twist, ``T_k`` the wheel's traction row (rim speed = r cos(gamma) omega);
+* ``p_k``: the traction force wheel k needs, in units of one wheel's roller drag, so that the drive
+  balances the rollers' rolling resistance ``-sum_j tanh(roll_j / eps) N_j`` (each roller row
+  ``N_j`` resists its own rolling speed; least-norm over the wheels, as equal wheels share it);
+* ``a_k``: the traction force wheel k needs, per unit mass, to accelerate the body (m/s^2);
+* ``roll`` (m/s) and ``compliance`` (s) are the floor's: the creep speed of a wheel carrying one
+  roller drag, and the creep per unit acceleration. :func:`fit_slip` fits them from straight runs
+  with a known true displacement (the simulator's truth, or a tape measure).
+
+:class:`SlipModel` gives the correction for a twist; :class:`~omnibot.estimation.estimator.PoseEstimator`
+(``slip=``) subtracts it from the encoder increments before the least-squares forward kinematics.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from omnibot.errors import ConfigError
+from omnibot.robot.description import RobotDescription
+
+FloatArray = NDArray[np.float64]
+
+ROLL_EPS = 0.01
+"""m/s: rolling speed over which a roller's resistance builds up (the model's sign regularisation)."""
+
+
+@dataclass(frozen=True)
+class SlipParameters:
+    """A floor's creep coefficients: ``roll`` (m/s per roller drag) and ``compliance`` (s)."""
+
+    roll: float = 0.0
+    compliance: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("roll", "compliance"):
+            value = getattr(self, name)
+            if not math.isfinite(value):
+                raise ConfigError(f"slip {name} must be a finite number, got {value}", key=name)
+
+    @classmethod
+    def from_mapping(cls, data: object, where: str = "slip") -> SlipParameters:
+        """From ``{roll: ..., compliance: ...}`` (a calibration file's ``odometry.slip``)."""
+        if not isinstance(data, dict):
+            raise ConfigError(f"{where}: expected a mapping with roll and compliance")
+        unknown = sorted(set(data) - {"roll", "compliance"})
+        if unknown:
+            raise ConfigError(f"{where}: unknown key(s) {unknown}; expected roll, compliance")
+        values = {}
+        for key in ("roll", "compliance"):
+            raw = data.get(key, 0.0)
+            try:
+                values[key] = float(raw)
+            except (TypeError, ValueError):
+                raise ConfigError(f"{where}.{key}: {raw!r} is not a number") from None
+        return cls(**values)
+
+    def as_dict(self) -> dict[str, float]:
+        return {"roll": round(self.roll, 6), "compliance": round(self.compliance, 6)}
+
+
+class SlipModel:
+    """The creep pattern of a robot's wheels (geometry from its description, coefficients per floor)."""
+
+    def __init__(self, robot: RobotDescription, params: SlipParameters | None = None) -> None:
+        x = np.array([w.position[0] for w in robot.wheels])
+        y = np.array([w.position[1] for w in robot.wheels])
+        gamma = np.array([w.gamma for w in robot.wheels])
+        radius = np.array([w.radius for w in robot.wheels])
+        phi = np.array([w.drive_angle for w in robot.wheels]) + gamma
+        c, s = np.cos(phi), np.sin(phi)
+        traction = np.column_stack((c, s, x * s - y * c))  # rim speed r cos(gamma) omega = T q
+        roller = np.column_stack((-s, c, x * c + y * s))
+        self.rim_per_rad = radius * np.cos(gamma)
+        """m of rim travel along the traction direction per rad of wheel turn."""
+        # a roller rolls with the body and, on mecanum wheels, with the wheel's own turn
+        self.roll_rows = roller + (radius * np.sin(gamma) / self.rim_per_rad)[:, None] * traction
+        self._share = np.linalg.pinv(traction.T)  # (m, 3): least-norm wheel forces for a body wrench
+        self._roller_wrench = roller  # wheel k's roller drag, per unit, as a body wrench row
+        self.inertia_ratio = robot.yaw_inertia / robot.mass
+        self.params = params or SlipParameters()
+
+    def patterns(self, twist: ArrayLike, accel: ArrayLike = (0.0, 0.0, 0.0)) -> tuple[FloatArray, FloatArray]:
+        """(p, a): the per-wheel force shares of the roller drag and of the acceleration (m/s^2)."""
+        q = np.asarray(twist, dtype=float)
+        drag = np.tanh((self.roll_rows @ q) / ROLL_EPS)
+        p = self._share @ (self._roller_wrench.T @ drag)
+        acc = np.asarray(accel, dtype=float)
+        a = self._share @ np.array([acc[0], acc[1], self.inertia_ratio * acc[2]])
+        return p, a
+
+    def creep(self, twist: ArrayLike, accel: ArrayLike = (0.0, 0.0, 0.0)) -> FloatArray:
+        """Per-wheel rim over-speed (m/s) at body twist ``twist`` and body acceleration ``accel``."""
+        p, a = self.patterns(twist, accel)
+        creep: FloatArray = self.params.roll * p + self.params.compliance * a
+        return creep
+
+    def wheel_correction(self, twist: ArrayLike, accel: ArrayLike = (0.0, 0.0, 0.0)) -> FloatArray:
+        """Per-wheel over-turn (rad/s) to subtract from measured wheel speeds."""
+        turn: FloatArray = self.creep(twist, accel) / self.rim_per_rad
+        return turn
+
+
+@dataclass(frozen=True)
+class SlipLeg:
+    """One calibration run: the body twists the encoders saw and the true displacement.
+
+    ``twists`` (n, 3) and ``accels`` (n, 3) are body-frame samples ``dt`` (n,) s long each, from the
+    encoders (uncorrected) and the gyro; ``encoder_disp`` and ``true_disp`` are the (x, y)
+    displacements over the run in the frame the run started in, by the encoders and by the truth.
+    """
+
+    twists: FloatArray
+    accels: FloatArray
+    dt: FloatArray
+    headings: FloatArray
+    encoder_disp: tuple[float, float]
+    true_disp: tuple[float, float]
+
+
+def _regressors(model: SlipModel, J_pinv: FloatArray, leg: SlipLeg) -> FloatArray:
+    """(2, 2): d(encoder - truth displacement in the start frame) / d(roll, compliance)."""
+    out = np.zeros((2, 2))
+    for q, acc, dt, th in zip(leg.twists, leg.accels, leg.dt, leg.headings, strict=True):
+        p, a = model.patterns(q, acc)
+        c, s = math.cos(th), math.sin(th)
+        for col, pattern in enumerate((p, a)):
+            body = J_pinv @ (pattern / model.rim_per_rad) * dt
+            out[0, col] += c * body[0] - s * body[1]
+            out[1, col] += s * body[0] + c * body[1]
+    return out
+
+
+def fit_slip(robot: RobotDescription, legs: Sequence[SlipLeg], compliance: bool = False) -> SlipParameters:
+    """Least-squares creep coefficients from runs with known true displacements.
+
+    Each leg contributes two equations (x and y of encoder minus true displacement). ``compliance``
+    also fits the acceleration term; over a run from rest to rest its creep integrates to almost
+    nothing (the wheels creep forward while speeding up and back while braking), so end-point truth
+    cannot pin it down and it is left at 0 unless asked for (runs that end moving can).
+    """
+    if not legs:
+        raise ConfigError("a slip fit needs at least one run")
+    model = SlipModel(robot)
+    J_pinv = np.linalg.pinv(robot.wheel_matrix)
+    rows, rhs = [], []
+    for leg in legs:
+        rows.append(_regressors(model, J_pinv, leg))
+        rhs.append(np.subtract(leg.encoder_disp, leg.true_disp))
+    A = np.vstack(rows)
+    b = np.concatenate(rhs)
+    if not compliance:
+        A = A[:, :1]
+    coef, *_ = np.linalg.lstsq(A, b, rcond=None)
+    return SlipParameters(float(coef[0]), float(coef[1]) if compliance else 0.0)
+
+
+def leg_error(
+    leg: SlipLeg, params: SlipParameters | None = None, robot: RobotDescription | None = None
+) -> float:
+    """|encoder - true displacement| / true distance of a run, uncorrected or with ``params``
+    (``robot`` is then needed for the geometry)."""
+    err = np.subtract(leg.encoder_disp, leg.true_disp)
+    if params is not None:
+        if robot is None:
+            raise ValueError("leg_error needs the robot to apply slip parameters")
+        reg = _regressors(SlipModel(robot), np.linalg.pinv(robot.wheel_matrix), leg)
+        err = err - reg @ np.array([params.roll, params.compliance])
+    return float(np.hypot(*err) / max(float(np.hypot(*leg.true_disp)), 1e-9))
+
+
+class SlipProbe:
+    """Records what the slip fit needs from telemetry: an uncorrected encoders+gyro estimator's body
+    twist, acceleration, heading and pose at every sample; :meth:`leg` cuts a run out of it."""
+
+    def __init__(self, robot: RobotDescription) -> None:
+        from omnibot.estimation.estimator import PoseEstimator
+
+        self.robot = robot
+        self.estimator = PoseEstimator(robot, translation="encoders", name="slip-probe")
+        self._rows: list[tuple[float, float, float, float, float, float, float, float, float, float]] = []
+        self._t: float | None = None
+
+    def update(self, sample: object) -> None:
+        """Fold in one telemetry sample (anything with the attributes of a ``SensorSample``)."""
+        est = self.estimator.update(sample)  # type: ignore[arg-type]
+        dt = 0.0 if self._t is None else est.t - self._t
+        self._t = est.t
+        q, a = self.estimator.body_velocity, self.estimator.body_acceleration
+        self._rows.append((dt, q[0], q[1], q[2], a[0], a[1], a[2], est.theta, est.x, est.y))
+
+    def mark(self) -> int:
+        """The index of the next sample: where a run starts."""
+        return len(self._rows)
+
+    def leg(self, start: int, true_disp: tuple[float, float]) -> SlipLeg:
+        """The run from sample ``start`` to now, with its true (x, y) displacement (estimator frame)."""
+        rows = np.array(self._rows[max(start - 1, 0) :])
+        if len(rows) < 2:
+            raise ConfigError("a slip calibration run needs telemetry: is TEL on?")
+        body = rows[1:]
+        disp = (float(rows[-1, 8] - rows[0, 8]), float(rows[-1, 9] - rows[0, 9]))
+        return SlipLeg(
+            twists=body[:, 1:4],
+            accels=body[:, 4:7],
+            dt=body[:, 0],
+            headings=body[:, 7],
+            encoder_disp=disp,
+            true_disp=true_disp,
+        )

@@ -1,0 +1,101 @@
+"""The wheel-slip model: its force-sharing patterns, the fit, and the creep it removes on carpet."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from omnibot.errors import ConfigError
+from omnibot.estimation.slip import SlipLeg, SlipModel, SlipParameters, fit_slip, leg_error
+from omnibot.robot.description import load_robot
+
+
+def _course(deg: float, speed: float = 0.4) -> tuple[float, float, float]:
+    a = math.radians(deg)
+    return (speed * math.cos(a), speed * math.sin(a), 0.0)
+
+
+def test_omni4_pattern_matches_which_wheels_push() -> None:
+    model = SlipModel(load_robot("omni4"))
+    # course 0: m1 and m3 only roll (their rollers drag), m2 and m4 push against that drag
+    p, _ = model.patterns(_course(0))
+    assert np.allclose(np.abs(p), [0.0, 1.0, 0.0, 1.0], atol=1e-6)
+    # course 30: every roller rolls, every wheel pushes one drag's worth
+    p, _ = model.patterns(_course(30))
+    assert np.allclose(np.abs(p), 1.0, atol=1e-3)
+    # standing still, or turning in place (omni4's rollers do not roll then): no creep
+    assert np.allclose(model.patterns((0.0, 0.0, 0.0))[0], 0.0)
+    assert np.allclose(model.patterns((0.0, 0.0, 2.0))[0], 0.0, atol=1e-9)
+
+
+def test_creep_reverses_with_the_motion_and_scales_with_its_coefficient() -> None:
+    robot = load_robot("omni3")
+    model = SlipModel(robot, SlipParameters(roll=0.01))
+    forward = model.creep(_course(40))
+    assert np.allclose(model.creep(_course(220)), -forward)
+    assert np.allclose(SlipModel(robot, SlipParameters(roll=0.02)).creep(_course(40)), 2 * forward)
+    # the acceleration share: pushing the mass, split over the wheels by least norm
+    accel_only = SlipModel(robot, SlipParameters(compliance=0.1)).creep((0, 0, 0), (1.0, 0.0, 0.0))
+    J = robot.wheel_matrix
+    rim = model.rim_per_rad
+    body = np.linalg.pinv(J) @ (accel_only / rim)
+    assert body[0] > 0 and abs(body[1]) < 1e-9 and abs(body[2]) < 1e-9
+
+
+def _synthetic_leg(robot_name: str, params: SlipParameters, course: float, speed: float) -> SlipLeg:
+    """A rest-to-rest run whose encoder displacement carries exactly the model's creep."""
+    robot = load_robot(robot_name)
+    model = SlipModel(robot, params)
+    pinv = np.linalg.pinv(robot.wheel_matrix)
+    dt, duration, ramp = 0.01, 2.0, 0.4
+    t = np.arange(0.0, duration, dt)
+    v = speed * np.clip(np.minimum(t / ramp, (duration - t) / ramp), 0.0, 1.0)
+    acc = np.gradient(v, dt)
+    c, s = math.cos(course), math.sin(course)
+    twists = np.column_stack((v * c, v * s, np.zeros_like(v)))
+    accels = np.column_stack((acc * c, acc * s, np.zeros_like(v)))
+    true = twists[:, :2].sum(axis=0) * dt
+    extra = sum(pinv @ (model.wheel_correction(q, a)) * dt for q, a in zip(twists, accels, strict=True))
+    enc = true + np.asarray(extra)[:2]
+    return SlipLeg(twists, accels, np.full(len(t), dt), np.zeros(len(t)), tuple(enc), tuple(true))
+
+
+@pytest.mark.parametrize("robot", ["omni4", "omni3", "mecanum4"])
+def test_fit_recovers_the_roll_coefficient_of_synthetic_runs(robot: str) -> None:
+    truth = SlipParameters(roll=0.0123)
+    legs = [_synthetic_leg(robot, truth, math.radians(deg), 0.3) for deg in (10, 75, 140, 200, 290)]
+    fitted = fit_slip(load_robot(robot), legs)
+    assert fitted.roll == pytest.approx(truth.roll, rel=1e-6)
+    assert fitted.compliance == 0.0
+    assert all(leg_error(leg) > 0.01 for leg in legs)
+    assert all(leg_error(leg, fitted, load_robot(robot)) < 1e-8 for leg in legs)
+
+
+def test_fit_needs_runs_and_leg_error_needs_the_robot() -> None:
+    with pytest.raises(ConfigError, match="at least one run"):
+        fit_slip(load_robot("omni4"), [])
+    leg = _synthetic_leg("omni4", SlipParameters(roll=0.01), 0.3, 0.3)
+    with pytest.raises(ValueError, match="needs the robot"):
+        leg_error(leg, SlipParameters(roll=0.01))
+
+
+@pytest.mark.parametrize(
+    ("data", "message"),
+    [
+        ([1, 2], "expected a mapping"),
+        ({"roll": 0.01, "rol": 0.0}, r"unknown key\(s\) \['rol'\]"),
+        ({"roll": "fast"}, "slip.roll: 'fast' is not a number"),
+        ({"compliance": float("nan")}, "must be a finite number"),
+    ],
+)
+def test_parameters_from_a_file_give_clear_errors(data: object, message: str) -> None:
+    with pytest.raises(ConfigError, match=message):
+        SlipParameters.from_mapping(data)
+
+
+def test_parameters_round_trip() -> None:
+    p = SlipParameters(roll=0.0161, compliance=0.002)
+    assert SlipParameters.from_mapping(p.as_dict()) == p
+    assert SlipParameters.from_mapping({"roll": 0.01}) == SlipParameters(0.01, 0.0)
