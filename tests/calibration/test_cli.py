@@ -31,7 +31,9 @@ def test_quick_run_writes_the_file_and_the_report(tmp_path: Path, capsys: pytest
     assert {"before, wood", "after (wood calibration), wood"} <= set(data)
     runs = json.loads((report / "runs.json").read_text())
     first_power = next(r for r in runs["surfaces"]["wood"]["runs"] if r["group"].startswith("deadband"))
-    assert first_power["command"] == "POWER,500,0,8,0,-8"  # the dead band search starts at 8 counts
+    assert first_power["command"] == "POWER,500,8,8,8,8"  # rotation's dead band first, from 8 counts
+    motors = cal.calibration.motors
+    assert motors is not None and len(motors.offset) == 4 and all(o > 20 for o in motors.offset)
     # the file merges into the description it was made for
     merged = merge_calibration("omni4", out)
     assert "k_l:" in merged and f"k: {cal.calibration.k}" in merged

@@ -147,4 +147,5 @@ def test_a_fitted_spec_uploads() -> None:
     )
     cals = commands.calibration(spec)  # raises if anything is outside the protocol's ranges
     assert cals[0].params() == (codes.CAL_K, 0, 0, 1500)
-    assert len(cals) == 1 + 2 * len(table.x) + 2 * (1 + len(table.x))  # K, K_t, K_r, two K_l curves
+    # K, K_t, K_r, two K_l curves, dropping any curves after them
+    assert len(cals) == 1 + 2 * len(table.x) + 2 * (1 + len(table.x)) + 1

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 from functools import partial
 from typing import Any, Protocol
 
-from omnibot.calibration.patterns import Geometry, course_pattern, rotation_pattern
+from omnibot.calibration.patterns import Geometry, course_pattern, rotation_pattern, top_power
 from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.truth import ROTATE, STRAIGHT, TURN, Motion, RunInfo, TruthSource, relative
 from omnibot.client.client import RobotClient
@@ -31,7 +31,7 @@ from omnibot.client.events import WarnEvent
 from omnibot.errors import ConfigError
 from omnibot.protocol import text
 from omnibot.protocol.messages import Command
-from omnibot.robot.description import RobotDescription
+from omnibot.robot.description import MotorMapSpec, RobotDescription
 
 MOVED_DISTANCE = 0.005
 """m: a run that goes less than this did not move the robot (dead band search)."""
@@ -102,6 +102,10 @@ class Plan:
     """Full turns each way of the rotation test (gyro scale, wheel base)."""
     square_side: float = 1.0
     square_speed: float | None = None
+    motor_map: bool = True
+    """Fit the motor map (each motor's dead-band offset and gain table) before the sweeps."""
+    balance_levels: tuple[float, ...] = (0.1, 0.25, 0.5, 0.85)
+    """Nominal powers of the balance runs, as fractions of the highest the offsets leave."""
 
     @classmethod
     def quick(cls) -> Plan:
@@ -181,6 +185,8 @@ class Runner:
     tap: TelemetryTap
     settle: float = 0.4
     progress: Progress | None = None
+    motors: MotorMapSpec | None = None
+    """The motor map the sweeps' patterns go through (the firmware's, mirrored; None: raw)."""
     log: list[RunResult] = field(default_factory=list)
     _warns: list[int] = field(default_factory=list)
 
@@ -287,11 +293,11 @@ def find_deadband(runner: Runner, course_deg: float | None, step: int = 8, durat
     def attempt(power: int) -> bool:
         flip[0] ^= 1
         if rotation:
-            pattern = rotation_pattern(geo, power, ccw=bool(flip[0]))
+            pattern = rotation_pattern(geo, power, ccw=bool(flip[0]), motors=runner.motors)
             info = RunInfo(ROTATE, f"dead band, rotation, power {power}")
         else:
             c = (course_deg or 0.0) + (0.0 if flip[0] else 180.0)
-            pattern = course_pattern(geo, c, power)
+            pattern = course_pattern(geo, c, power, runner.motors)
             info = RunInfo(STRAIGHT, f"dead band, course {c:g} deg, power {power}", math.radians(c))
         runner.note(f"dead band {group}: {power}")
         result = runner.power_run(pattern, duration, info, f"deadband:{group}", power=power)
@@ -392,7 +398,7 @@ def _sweep(
     geo = runner.geometry
     out: list[RunResult] = []
     rates: list[tuple[int, float]] = []
-    for power in power_levels(deadband, geo.pwm_max, plan.levels):
+    for power in power_levels(deadband, top_power(runner.motors, geo.pwm_max), plan.levels):
         runner.note(f"{group}: power {power}")
         t1 = round(_first_duration(rates, power, deadband, reference, plan.t_min, t_max, plan.probe), 3)
         first = [_target_run(runner, t, power, t1, group) for t in targets]
@@ -429,8 +435,8 @@ def _straight_info(raw: float, power: int, duration: float) -> RunInfo:
     )
 
 
-def _rotation_pattern(geo: Geometry, ccw: bool, power: int) -> list[int]:
-    return rotation_pattern(geo, power, ccw)
+def _rotation_pattern(geo: Geometry, ccw: bool, motors: MotorMapSpec | None, power: int) -> list[int]:
+    return rotation_pattern(geo, power, ccw, motors)
 
 
 def _rotation_info(ccw: bool, power: int, duration: float) -> RunInfo:
@@ -442,7 +448,7 @@ def straight_sweep(runner: Runner, plan: Plan, folded_deg: float, deadband: int)
     geo = runner.geometry
     targets = [
         Target(
-            pattern=partial(course_pattern, geo, raw),
+            pattern=partial(course_pattern, geo, raw, motors=runner.motors),
             info=partial(_straight_info, raw),
             meta={"course_deg": raw, "folded_deg": folded_deg},
         )
@@ -461,7 +467,7 @@ def rotation_sweep(runner: Runner, plan: Plan, deadband: int) -> list[RunResult]
     geo = runner.geometry
     targets = [
         Target(
-            pattern=partial(_rotation_pattern, geo, ccw),
+            pattern=partial(_rotation_pattern, geo, ccw, runner.motors),
             info=partial(_rotation_info, ccw),
             meta={"sign": 1 if ccw else -1},
         )

@@ -34,7 +34,13 @@ from typing import Any
 from omnibot.calibration.experiments import RunResult, speed_range
 from omnibot.calibration.patterns import Geometry
 from omnibot.errors import ConfigError
-from omnibot.robot.description import CalibrationSpec, CourseTable, PiecewiseLinear, RobotDescription
+from omnibot.robot.description import (
+    CalibrationSpec,
+    CourseTable,
+    MotorMapSpec,
+    PiecewiseLinear,
+    RobotDescription,
+)
 
 KNOTS = 14
 """Geometric knots over the working range (plus full power): the protocol allows 16."""
@@ -380,6 +386,10 @@ class SurfaceFit:
     deadbands: dict[str, int] = field(default_factory=dict)
     kt: PiecewiseLinear | None = None
     move_length: float = 1.0
+    motors: MotorMapSpec | None = None
+    """The motor map the sweeps ran through (their powers are nominal)."""
+    balance: Any = None
+    """The balance runs' outcome (:class:`omnibot.calibration.motors.Balance`), for the report."""
 
 
 def fit_surface(
@@ -445,7 +455,20 @@ def build_spec(
     k_l = CourseTable(courses_deg=tuple(float(c) for c in courses), curves=tuple(curves))
     rot = [f.rotation for f in fits if f.rotation is not None]
     k_r = factor_table(rot, k, rotation_knots(robot, geometry, k)) if rot else robot_table(robot, "k_r")
-    return CalibrationSpec(k=k, k_l=k_l, k_t=kt if kt is not None else robot_table(robot, "k_t"), k_r=k_r)
+    maps = [f.motors for f in fits if f.motors is not None]
+    motors = average_motors(maps) if len(maps) == len(fits) and maps else None
+    return CalibrationSpec(
+        k=k, k_l=k_l, k_t=kt if kt is not None else robot_table(robot, "k_t"), k_r=k_r, motors=motors
+    )
+
+
+def average_motors(maps: Sequence[MotorMapSpec]) -> MotorMapSpec:
+    """The mean of motor maps: offsets averaged, gain tables averaged on the union of their knots."""
+    n = len(maps[0].offset)
+    return MotorMapSpec(
+        offset=tuple(round(statistics.fmean(m.offset[i] for m in maps), 1) for i in range(n)),
+        gain=tuple(average_tables([m.gain[i] for m in maps]) for i in range(n)),
+    )
 
 
 def robot_table(robot: RobotDescription, name: str) -> PiecewiseLinear | None:

@@ -14,11 +14,12 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 from omnibot.firmware.calibration import fold_course
 from omnibot.firmware.config import build_config
-from omnibot.robot.description import RobotDescription
+from omnibot.robot.description import MotorMapSpec, RobotDescription
 
 
 @dataclass(frozen=True)
@@ -86,20 +87,53 @@ class Geometry:
         return max(abs(v) for v in self.rotation_rim())
 
 
-def scaled_pattern(rims: list[float], power: int) -> list[int]:
-    """Integer powers proportional to ``rims`` with the busiest motor at ``power`` (sign kept)."""
+def map_power(motors: MotorMapSpec | None, i: int, a: float) -> float:
+    """Motor i's power for the nominal power ``a``, as the firmware computes it."""
+    m = abs(a)
+    if motors is None or m == 0.0:
+        return a
+    p = motors.offset[i] * min(m, 1.0) + motors.gain[i](m) * m
+    return p if a > 0 else -p
+
+
+def apply_map(motors: MotorMapSpec | None, nominal: Sequence[float], pwm_max: int) -> list[int]:
+    """The integer powers the firmware would send for nominal powers (clipped, not rescaled)."""
+    return [max(-pwm_max, min(pwm_max, round(map_power(motors, i, a)))) for i, a in enumerate(nominal)]
+
+
+def top_power(motors: MotorMapSpec | None, pwm_max: int) -> int:
+    """The largest nominal power the map does not saturate for any motor."""
+    if motors is None:
+        return pwm_max
+    top = pwm_max
+    for o, g in zip(motors.offset, motors.gain, strict=True):
+        top = min(top, math.floor((pwm_max - o) / max(g.y)))
+    return max(top, 1)
+
+
+def scaled_pattern(
+    rims: list[float], power: int, motors: MotorMapSpec | None = None, pwm_max: int = 255
+) -> list[int]:
+    """Integer powers proportional to ``rims`` with the busiest motor at nominal ``power`` (sign kept),
+    through the motor map when there is one."""
     peak = max(abs(v) for v in rims)
     if peak <= 0.0:
         raise ValueError("a pattern needs at least one wheel that turns")
-    return [round(power * v / peak) for v in rims]
+    if motors is None:
+        return [round(power * v / peak) for v in rims]
+    return apply_map(motors, [power * v / peak for v in rims], pwm_max)
 
 
-def course_pattern(geometry: Geometry, course_deg: float, power: int) -> list[int]:
+def course_pattern(
+    geometry: Geometry, course_deg: float, power: int, motors: MotorMapSpec | None = None
+) -> list[int]:
     """Seed 000's straight-run pattern generalised: busiest motor at ``power`` along the course."""
-    return scaled_pattern(geometry.translation_rim(course_deg), power)
+    return scaled_pattern(geometry.translation_rim(course_deg), power, motors, geometry.pwm_max)
 
 
-def rotation_pattern(geometry: Geometry, power: int, ccw: bool = True) -> list[int]:
+def rotation_pattern(
+    geometry: Geometry, power: int, ccw: bool = True, motors: MotorMapSpec | None = None
+) -> list[int]:
     """Rotation in place, busiest motor at ``power``; ``ccw`` False turns clockwise."""
     rims = geometry.rotation_rim()
-    return scaled_pattern(rims if ccw else [-v for v in rims], power)
+    return scaled_pattern(rims if ccw else [-v for v in rims], power, motors, geometry.pwm_max)

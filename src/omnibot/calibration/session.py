@@ -35,13 +35,20 @@ from omnibot.calibration.experiments import (
 )
 from omnibot.calibration.fits import SurfaceFit, average_kt, build_spec, fit_kt, fit_surface, robot_table
 from omnibot.calibration.gyro import GyroCalibration, calibrate_gyro, standstill_bias
-from omnibot.calibration.patterns import Geometry
+from omnibot.calibration.motors import (
+    Balance,
+    balance_gains,
+    identity,
+    motor_deadbands,
+    offsets_from_deadbands,
+)
+from omnibot.calibration.patterns import Geometry, top_power
 from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.truth import ROTATE, SQUARE, Ask, RunInfo, TruthContext, make_truth
 from omnibot.calibration.umbmark import OdometryCalibration, SquareRun, calibrate_odometry, drive_square
 from omnibot.client.client import RobotClient
 from omnibot.protocol import codes
-from omnibot.robot.description import CalibrationSpec, RobotDescription
+from omnibot.robot.description import CalibrationSpec, MotorMapSpec, RobotDescription
 
 ProgressFactory = Callable[[str, int], AbstractContextManager[Progress | None]]
 """(description, expected runs) -> a context giving a progress bar (or None)."""
@@ -164,6 +171,10 @@ def calibrate_surface(
             bias = standstill_bias(tap, plan.gyro_still) if tap.gyro else None
             before = run_accuracy(runner, accuracy) if accuracy is not None else None
 
+            motors, balance = None, None
+            if plan.motor_map:
+                motors, balance = fit_motor_map(runner, plan, notes)
+                runner.motors = motors
             deadbands = {f"course:{c:g}": find_deadband(runner, c, plan.deadband_step).power for c in courses}
             deadbands["rotation"] = find_deadband(runner, None, plan.deadband_step).power
             straight: list[RunResult] = []
@@ -179,6 +190,7 @@ def calibrate_surface(
                 move_length=plan.move_length,
                 rotate_angle=plan.rotate_angle,
             )
+            fit.motors, fit.balance = motors, balance
             described = robot.calibration.k if robot.calibration is not None else None
             if described is not None and not 1 / 3 < fit.k / described < 3:
                 notes.append(
@@ -234,6 +246,21 @@ def calibrate_surface(
         after=after,
         notes=notes,
     )
+
+
+def fit_motor_map(runner: Runner, plan: Plan, notes: list[str]) -> tuple[MotorMapSpec, Balance]:
+    """Offsets from the motors' own dead bands, then gains from the balance runs (motors.py)."""
+    geo = runner.geometry
+    runner.motors = None
+    rotation = find_deadband(runner, None, plan.deadband_step).power
+    single = motor_deadbands(runner, plan.deadband_step)
+    offsets = offsets_from_deadbands(single, rotation, geo.pwm_max)
+    if not any(offsets):
+        notes.append(f"motor dead bands {single} (rotation {rotation}): no offsets")
+    top = top_power(MotorMapSpec(offset=offsets, gain=identity(geo.motors).gain), geo.pwm_max)
+    powers = sorted({max(1, round(f * top)) for f in plan.balance_levels})
+    balance = balance_gains(runner, offsets, powers)
+    return MotorMapSpec(offset=offsets, gain=balance.tables(geo.motors)), balance
 
 
 def rotation_test_rate(robot: RobotDescription) -> float:
@@ -362,4 +389,9 @@ def describe_spec(spec: CalibrationSpec) -> dict[str, Any]:
         t = getattr(spec, name)
         if t is not None:
             out[name] = {"x": [int(x) for x in t.x], "y": list(t.y)}
+    if spec.motors is not None:
+        out["motors"] = {
+            "offset": list(spec.motors.offset),
+            "gain": [{"x": [int(x) for x in g.x], "y": list(g.y)} for g in spec.motors.gain],
+        }
     return out

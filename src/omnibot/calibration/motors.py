@@ -1,0 +1,217 @@
+"""The motor map: each motor's dead-band offset and a gain table that balances unequal motors.
+
+The firmware gives motor i ``sign(a) (offset_i + gain_i(|a|) |a|)`` for the nominal power ``a``
+of the calibration factors (docs/firmware.md); :func:`map_power` is the same on the host, so the
+sweeps' raw POWER patterns drive the robot exactly as the firmware will.
+
+* **Offsets.** A motor's Coulomb friction needs a fixed power before its wheel turns at all; below
+  it a slowly turning wheel (the side pair of an omni4 on course 15) stands still and the robot
+  leaves its course. Each motor's dead band is found alone (:func:`motor_deadbands`: that motor's
+  POWER only; its wheel also pushes the robot, so the number is a little high) and scaled so that
+  their mean is the dead band of rotation in place, where no idle roller drags:
+  ``offset_i = deadband_i * rotation / mean(deadband)``.
+* **Gains.** Unequal motors turn the body on a straight run and pull it off its course. At a few
+  nominal powers the balance runs drive every idle axis and the course halfway between two of
+  them, both ways; the errors are each run's course error and its turn per metre. The log-gains
+  (their sum held at zero: a common factor is the K_l tables' business) are found by Gauss-Newton
+  with a finite-difference Jacobian at the first power, reused (chord method) at the others
+  (:func:`balance_gains`).
+"""
+
+from __future__ import annotations
+
+import math
+import statistics
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from omnibot.calibration.experiments import MOVED_ANGLE, MOVED_DISTANCE, Runner
+from omnibot.calibration.patterns import Geometry, apply_map
+from omnibot.calibration.truth import STRAIGHT, RunInfo
+from omnibot.robot.description import MotorMapSpec, PiecewiseLinear
+
+GAIN_STEP = 0.08
+"""Log-gain step of the finite-difference Jacobian."""
+GAIN_LIMIT = 0.4
+"""abs(log-gain) is kept below this (a factor 1.5)."""
+MIN_DISTANCE = 0.02
+"""m: a balance run shorter than this tells nothing."""
+
+
+def identity(n: int) -> MotorMapSpec:
+    return MotorMapSpec(offset=(0.0,) * n, gain=(PiecewiseLinear(x=(0.0,), y=(1.0,)),) * n)
+
+
+# --------------------------------------------------------------------------- offsets
+
+
+def motor_deadbands(runner: Runner, step: int = 8, duration: float = 0.5) -> list[int]:
+    """Each motor's dead band alone: the lowest POWER on that motor only that moves the robot."""
+    geo = runner.geometry
+    out = []
+    for i in range(geo.motors):
+        flip = [1]
+
+        def attempt(power: int, i: int = i, flip: list[int] = flip) -> bool:
+            flip[0] = -flip[0]
+            pattern = [0] * geo.motors
+            pattern[i] = flip[0] * power
+            info = RunInfo(STRAIGHT, f"dead band, motor {i + 1} alone, power {flip[0] * power}")
+            runner.note(f"dead band motor {i + 1}: {power}")
+            r = runner.power_run(pattern, duration, info, f"deadband:motor{i + 1}", power=power)
+            m = r.truth
+            if m is None:
+                return False
+            d, th = m.distance, m.theta
+            return (d is not None and d >= MOVED_DISTANCE) or (th is not None and abs(th) >= MOVED_ANGLE)
+
+        low, high, power = 0, None, step
+        while power <= geo.pwm_max:
+            if attempt(power):
+                high = power
+                break
+            low, power = power, power + step
+        if high is None:
+            out.append(geo.pwm_max + 1)
+            continue
+        while high - low > 2:
+            mid = (low + high) // 2
+            if attempt(mid):
+                high = mid
+            else:
+                low = mid
+        out.append(high)
+    return out
+
+
+def offsets_from_deadbands(single: Sequence[int], rotation: int, pwm_max: int) -> tuple[float, ...]:
+    """``offset_i = deadband_i * rotation / mean(deadband)`` (see the module docstring), 0.1 counts;
+    all zero when a motor never moved the robot alone."""
+    if not single or any(d > pwm_max for d in single) or rotation > pwm_max:
+        return (0.0,) * len(single)
+    mean = statistics.fmean(single)
+    return tuple(round(d * rotation / mean, 1) for d in single)
+
+
+# --------------------------------------------------------------------------- gains
+
+
+def balance_courses(geometry: Geometry, folded: Sequence[float] | None = None) -> list[float]:
+    """Raw courses (degrees) of the balance runs: each folded course (default: 0 and the largest)
+    from every idle axis, both ways."""
+    axes = sorted(a % 180.0 for a in geometry.idle_axes)
+    out: list[float] = []
+    for a in axes:
+        for f in folded if folded is not None else (0.0, geometry.fold_max):
+            c = a + f
+            out += [round(c % 360.0, 6), round((c + 180.0) % 360.0, 6)]
+    return sorted(set(out))
+
+
+@dataclass
+class Balance:
+    """The balance runs' outcome: the gain table of each motor and the errors before and after."""
+
+    powers: list[int] = field(default_factory=list)
+    log_gains: list[list[float]] = field(default_factory=list)
+    """Per power, each motor's log-gain."""
+    before: list[float] = field(default_factory=list)
+    """Per power, the rms error (rad) with equal gains."""
+    after: list[float] = field(default_factory=list)
+    """Per power, the rms error (rad) with the fitted gains."""
+
+    def tables(self, n: int) -> tuple[PiecewiseLinear, ...]:
+        if not self.powers:
+            return identity(n).gain
+        xs = tuple(float(p) for p in self.powers)
+        return tuple(
+            PiecewiseLinear(x=xs, y=tuple(round(math.exp(g[i]), 3) for g in self.log_gains)) for i in range(n)
+        )
+
+
+def _errors(
+    runner: Runner, courses: Sequence[float], power: int, motors: MotorMapSpec, duration: float
+) -> np.ndarray:
+    """Course error (rad) and turn (rad per metre of path) of a run on each course; NaN where the
+    robot hardly moved or the truth cannot tell."""
+    geo = runner.geometry
+    out: list[float] = []
+    for c in courses:
+        rims = geo.translation_rim(c)
+        peak = max(abs(v) for v in rims)
+        pattern = apply_map(motors, [power * v / peak for v in rims], geo.pwm_max)
+        info = RunInfo(STRAIGHT, f"balance, course {c:g} deg, nominal power {power}", math.radians(c))
+        r = runner.power_run(pattern, duration, info, "balance", power=power, course_deg=c)
+        m = r.truth
+        if m is None or m.x is None or m.y is None or m.theta is None or (m.distance or 0.0) < MIN_DISTANCE:
+            out += [math.nan, math.nan]
+            continue
+        course = math.atan2(m.y, m.x) - 0.5 * m.theta  # the body-frame course of an arc
+        err = (course - math.radians(c) + math.pi) % (2 * math.pi) - math.pi
+        out += [err, m.theta / max(m.path or m.distance or 0.0, MIN_DISTANCE)]
+    return np.asarray(out)
+
+
+def _with_gains(offsets: Sequence[float], x: np.ndarray) -> MotorMapSpec:
+    gains = tuple(PiecewiseLinear(x=(0.0,), y=(float(math.exp(v)),)) for v in x)
+    return MotorMapSpec(offset=tuple(offsets), gain=gains)
+
+
+def _rms(e: np.ndarray) -> float:
+    ok = e[np.isfinite(e)]
+    return float(np.sqrt(np.mean(ok * ok))) if ok.size else math.inf
+
+
+def balance_gains(
+    runner: Runner,
+    offsets: Sequence[float],
+    powers: Sequence[int],
+    duration: float = 1.0,
+    folded: Sequence[float] | None = None,
+) -> Balance:
+    """Log-gains at each nominal power that zero the balance runs' errors (module docstring).
+
+    Powers at which the robot hardly moves are left out; the Jacobian is measured at the first power
+    that moves it and reused at the others, each starting from the previous power's gains.
+    """
+    geo = runner.geometry
+    n = geo.motors
+    courses = balance_courses(geo, folded)
+    result = Balance()
+    jac: np.ndarray | None = None
+    x = np.zeros(n)
+    for power in powers:
+        runner.note(f"balance at {power}")
+        e0 = _errors(runner, courses, power, _with_gains(offsets, np.zeros(n)), duration)
+        if np.count_nonzero(np.isfinite(e0)) < e0.size // 2:
+            continue
+        e = e0
+        if x.any():
+            ex = _errors(runner, courses, power, _with_gains(offsets, x), duration)
+            if _rms(ex) < _rms(e0):
+                e = ex
+            else:
+                x = np.zeros(n)
+        if jac is None:
+            cols = []
+            for i in range(n):
+                xi = x.copy()
+                xi[i] += GAIN_STEP
+                ei = _errors(runner, courses, power, _with_gains(offsets, xi), duration)
+                cols.append((ei - e) / GAIN_STEP)
+            jac = np.column_stack(cols)
+        for _ in range(2):
+            rows = np.isfinite(e) & np.all(np.isfinite(jac), axis=1)
+            a = np.vstack([jac[rows], np.ones((1, n))])  # the last row holds the sum of log-gains at 0
+            step = np.linalg.lstsq(a, -np.concatenate([e[rows], [x.sum()]]), rcond=None)[0]
+            trial = np.clip(x + step, -GAIN_LIMIT, GAIN_LIMIT)
+            et = _errors(runner, courses, power, _with_gains(offsets, trial), duration)
+            if _rms(et) < _rms(e):
+                x, e = trial, et
+        result.powers.append(power)
+        result.log_gains.append([float(v) for v in x])
+        result.before.append(_rms(e0))
+        result.after.append(_rms(e))
+    return result
