@@ -104,8 +104,8 @@ class Plan:
     square_speed: float | None = None
     motor_map: bool = True
     """Fit the motor map (each motor's dead-band offset and gain table) before the sweeps."""
-    balance_levels: tuple[float, ...] = (0.1, 0.25, 0.5, 0.85)
-    """Nominal powers of the balance runs, as fractions of the highest the offsets leave."""
+    balance_levels: int = 4
+    """Nominal powers of the balance runs, spread over what the speed range needs."""
 
     @classmethod
     def quick(cls) -> Plan:

@@ -168,7 +168,7 @@ def balance_gains(
     runner: Runner,
     offsets: Sequence[float],
     powers: Sequence[int],
-    duration: float = 1.0,
+    durations: Sequence[float] | None = None,
     folded: Sequence[float] | None = None,
 ) -> Balance:
     """Log-gains at each nominal power that zero the balance runs' errors (module docstring).
@@ -182,7 +182,8 @@ def balance_gains(
     result = Balance()
     jac: np.ndarray | None = None
     x = np.zeros(n)
-    for power in powers:
+    for k, power in enumerate(powers):
+        duration = durations[k] if durations is not None else 1.0
         runner.note(f"balance at {power}")
         e0 = _errors(runner, courses, power, _with_gains(offsets, np.zeros(n)), duration)
         if np.count_nonzero(np.isfinite(e0)) < e0.size // 2:

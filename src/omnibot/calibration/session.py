@@ -47,6 +47,7 @@ from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.truth import ROTATE, SQUARE, Ask, RunInfo, TruthContext, make_truth
 from omnibot.calibration.umbmark import OdometryCalibration, SquareRun, calibrate_odometry, drive_square
 from omnibot.client.client import RobotClient
+from omnibot.firmware.config import build_config
 from omnibot.protocol import codes
 from omnibot.robot.description import CalibrationSpec, MotorMapSpec, RobotDescription
 
@@ -249,8 +250,9 @@ def calibrate_surface(
 
 
 def fit_motor_map(runner: Runner, plan: Plan, notes: list[str]) -> tuple[MotorMapSpec, Balance]:
-    """Offsets from the motors' own dead bands, then gains from the balance runs (motors.py)."""
-    geo = runner.geometry
+    """Offsets from the motors' own dead bands, then gains from the balance runs (motors.py) at
+    nominal powers spread over what the robot's speed range needs (by the described K)."""
+    geo, robot = runner.geometry, runner.robot
     runner.motors = None
     rotation = find_deadband(runner, None, plan.deadband_step).power
     single = motor_deadbands(runner, plan.deadband_step)
@@ -258,8 +260,15 @@ def fit_motor_map(runner: Runner, plan: Plan, notes: list[str]) -> tuple[MotorMa
     if not any(offsets):
         notes.append(f"motor dead bands {single} (rotation {rotation}): no offsets")
     top = top_power(MotorMapSpec(offset=offsets, gain=identity(geo.motors).gain), geo.pwm_max)
-    powers = sorted({max(1, round(f * top)) for f in plan.balance_levels})
-    balance = balance_gains(runner, offsets, powers)
+    k = float(build_config(robot)["k"])
+    slow, fast = speed_range(robot, plan.move_length)
+    factors = [geo.translation_factor(c) for c in plan.calibrated_courses(geo)]
+    lo, hi = k * slow * min(factors), min(2.0 * k * fast * max(factors), 0.9 * top)
+    n = max(1, plan.balance_levels)
+    powers = sorted({max(1, round(lo * (hi / lo) ** (i / max(n - 1, 1)))) for i in range(n)})
+    # long enough for about half the reference move at the speed each power is meant for
+    durations = [min(max(0.5 * plan.move_length * k * max(factors) / p, 1.0), 3.0) for p in powers]
+    balance = balance_gains(runner, offsets, powers, durations)
     return MotorMapSpec(offset=offsets, gain=balance.tables(geo.motors)), balance
 
 
