@@ -99,3 +99,10 @@ def test_parameters_round_trip() -> None:
     p = SlipParameters(roll=0.0161, compliance=0.002)
     assert SlipParameters.from_mapping(p.as_dict()) == p
     assert SlipParameters.from_mapping({"roll": 0.01}) == SlipParameters(0.01, 0.0)
+
+
+def test_fit_never_returns_a_negative_coefficient() -> None:
+    # encoders that under-read (a negative creep) are not creep: the fit says none rather than < 0
+    legs = [_synthetic_leg("omni4", SlipParameters(roll=-0.01), math.radians(d), 0.3) for d in (20, 200)]
+    fitted = fit_slip(load_robot("omni4"), legs, compliance=True)
+    assert fitted == SlipParameters(0.0, 0.0)

@@ -172,6 +172,7 @@ class PoseEstimator:
         self._t = 0.0
         self._still_for = 0.0
         self._vel = (0.0, 0.0, 0.0)
+        self._acc_world: tuple[float, ...] = (0.0, 0.0, 0.0)
         self.body_velocity = np.zeros(3)
         """Low-passed body-frame twist (vx, vy m/s, w rad/s)."""
         self.body_acceleration = np.zeros(3)
@@ -256,9 +257,25 @@ class PoseEstimator:
             w0 + a * (d_theta / dt - w0),
         )
         self._body_rates(dt)
+        b = 1.0 - math.exp(-dt / ACCEL_TAU)
+        self._acc_world = tuple(
+            acc + b * ((new - old) / dt - acc)
+            for acc, new, old in zip(self._acc_world, self._vel, (vx0, vy0, w0), strict=True)
+        )
         self._accel = self._acceleration()
         slipping = slip or self.filter.slipping
-        self.estimate = Estimate(self._t, *self.estimate_pose_tuple(), *self._vel, slipping, standstill)
+        # the low-pass lags a changing velocity by VELOCITY_TAU; its acceleration puts that back
+        (vx, vy, w), (ax, ay, aw) = self._vel, self._acc_world
+        tau = VELOCITY_TAU
+        self.estimate = Estimate(
+            self._t,
+            *self.estimate_pose_tuple(),
+            vx + tau * ax,
+            vy + tau * ay,
+            w + tau * aw,
+            slipping,
+            standstill,
+        )
         return self.estimate
 
     def _body_rates(self, dt: float) -> None:

@@ -152,7 +152,8 @@ def _regressors(model: SlipModel, J_pinv: FloatArray, leg: SlipLeg) -> FloatArra
 def fit_slip(robot: RobotDescription, legs: Sequence[SlipLeg], compliance: bool = False) -> SlipParameters:
     """Least-squares creep coefficients from runs with known true displacements.
 
-    Each leg contributes two equations (x and y of encoder minus true displacement). ``compliance``
+    Each leg contributes two equations (x and y of encoder minus true displacement); both
+    coefficients are kept non-negative. ``compliance``
     also fits the acceleration term; over a run from rest to rest its creep integrates to almost
     nothing (the wheels creep forward while speeding up and back while braking), so end-point truth
     cannot pin it down and it is left at 0 unless asked for (runs that end moving can).
@@ -167,10 +168,22 @@ def fit_slip(robot: RobotDescription, legs: Sequence[SlipLeg], compliance: bool 
         rhs.append(np.subtract(leg.encoder_disp, leg.true_disp))
     A = np.vstack(rows)
     b = np.concatenate(rhs)
-    if not compliance:
-        A = A[:, :1]
-    coef, *_ = np.linalg.lstsq(A, b, rcond=None)
-    return SlipParameters(float(coef[0]), float(coef[1]) if compliance else 0.0)
+    # creep is in the direction a wheel pushes: a negative coefficient is noise, so that term is
+    # dropped and the other refitted (non-negative least squares over two unknowns)
+    best = SlipParameters()
+    best_cost = float(b @ b)
+    for cols in ([0, 1], [0], [1]) if compliance else ([0],):
+        coef, *_ = np.linalg.lstsq(A[:, cols], b, rcond=None)
+        if np.any(coef < 0):
+            continue
+        values = dict(zip(("roll", "compliance"), [0.0, 0.0], strict=True))
+        for col, value in zip(cols, coef, strict=True):
+            values[("roll", "compliance")[col]] = float(value)
+        residual = b - A @ np.array([values["roll"], values["compliance"]])
+        cost = float(residual @ residual)
+        if cost < best_cost:
+            best, best_cost = SlipParameters(**values), cost
+    return best
 
 
 def leg_error(

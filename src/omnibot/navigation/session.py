@@ -18,7 +18,7 @@ from omnibot.control.paths.profile import MotionLimits
 from omnibot.estimation.odometry import Pose2D
 from omnibot.estimation.slip import SlipParameters
 from omnibot.navigation.metrics import tracking_report
-from omnibot.navigation.runner import FollowRun, Navigator
+from omnibot.navigation.runner import STANDSTILL, FollowRun, Navigator
 from omnibot.robot.description import RobotDescription
 
 DEFAULT_RATE = 100.0
@@ -66,7 +66,7 @@ class FollowOptions:
     wheel_loop: bool = True
     follower_options: dict[str, Any] = field(default_factory=dict)
     observers: tuple[str, ...] = ()
-    standstill: float = 1.0
+    standstill: float = STANDSTILL
     calibrate_gyro: bool = False
     """Spin in place one turn each way first (the gyro's scale error is learned; the robot ends where
     it started, within its odometry)."""

@@ -32,9 +32,11 @@ class SlipCalibration:
 
     params: SlipParameters
     legs: list[SlipLeg] = field(default_factory=list)
+    """The runs, from rest to rest."""
     courses_deg: list[float] = field(default_factory=list)
-
     robot: RobotDescription | None = None
+    speed_ups: list[SlipLeg] = field(default_factory=list)
+    """Each run's speed-up alone (only with a continuous truth): what pins down ``compliance``."""
 
     def errors(self, corrected: bool) -> list[float]:
         """Per run: |encoder - true displacement| / true distance, raw or with the fit applied."""
@@ -53,8 +55,16 @@ def course_order(count: int) -> list[float]:
     return out
 
 
-def drive_run(nav: Navigator, course: float, speed: float, distance: float, accel: float) -> None:
-    """One straight run along ``course`` (rad, body frame at the start) from rest to rest."""
+def drive_run(
+    nav: Navigator,
+    course: float,
+    speed: float,
+    distance: float,
+    accel: float,
+    at_cruise: Callable[[], object] | None = None,
+) -> None:
+    """One straight run along ``course`` (rad, body frame at the start) from rest to rest;
+    ``at_cruise`` is called once, 0.1 s into the cruise (the speed-up's creep then counted)."""
     c = nav.client
     heading0 = nav.estimator.estimate.theta
     period = 0.01
@@ -63,6 +73,9 @@ def drive_run(nav: Navigator, course: float, speed: float, distance: float, acce
     total = 2.0 * t_acc + cruise
     t0 = c.clock.now()
     while (t := c.clock.now() - t0) < total:
+        if at_cruise is not None and t >= t_acc + 0.1:
+            at_cruise()
+            at_cruise = None
         v = speed * min(1.0, t / t_acc, max(0.0, (total - t) / t_acc))
         err = heading0 - nav.estimator.estimate.theta
         nav.send(Command(v * math.cos(course), v * math.sin(course), HEADING_GAIN * err))
@@ -79,32 +92,45 @@ def calibrate_slip(
     distance: float = 0.5,
     accel: float = 1.0,
     settle: float = 0.4,
+    continuous: bool = False,
     progress: Callable[[int, int], object] | None = None,
 ) -> SlipCalibration:
     """Drive ``courses`` runs of ``distance`` m at ``speed`` m/s and fit the floor's slip.
 
     ``nav`` must be prepared (telemetry on). ``truth`` gives the true position before and after each
-    run. ``progress(done, total)`` is called after each run.
+    run; with ``continuous`` (a truth that can be read while moving, like the simulator's) also
+    once the speed-up is over, which pins down the acceleration term (``compliance``) as well.
+    ``progress(done, total)`` is called after each run.
     """
     probe = SlipProbe(nav.robot)
     nav.client.on_telemetry(probe.update)
     legs: list[SlipLeg] = []
+    speed_ups: list[SlipLeg] = []
     order = course_order(courses)
     try:
         for i, deg in enumerate(order):
             nav.client.sleep(settle)
             before, start = truth(), probe.mark()
-            drive_run(nav, math.radians(deg), speed, distance, accel)
+            if before is None:
+                raise ConfigError("slip calibration needs the true position before and after each run")
+
+            def speed_up_done(before: tuple[float, float] = before, start: int = start) -> None:
+                now = truth()
+                if now is not None:
+                    speed_ups.append(probe.leg(start, (now[0] - before[0], now[1] - before[1])))
+
+            drive_run(nav, math.radians(deg), speed, distance, accel, speed_up_done if continuous else None)
             nav.client.sleep(settle)
             after = truth()
-            if before is None or after is None:
+            if after is None:
                 raise ConfigError("slip calibration needs the true position before and after each run")
             legs.append(probe.leg(start, (after[0] - before[0], after[1] - before[1])))
             if progress is not None:
                 progress(i + 1, len(order))
     finally:
         nav.client.remove_listener(probe.update)
-    return SlipCalibration(fit_slip(nav.robot, legs), legs, order, nav.robot)
+    params = fit_slip(nav.robot, legs + speed_ups, compliance=bool(speed_ups))
+    return SlipCalibration(params, legs, order, nav.robot, speed_ups)
 
 
 def simulator_truth(nav: Navigator) -> TruthProbe:
@@ -129,7 +155,7 @@ def simulate_slip_calibration(
         nav = Navigator(client, robot)
         try:
             nav.prepare()
-            return calibrate_slip(nav, simulator_truth(nav), speed=speed)
+            return calibrate_slip(nav, simulator_truth(nav), speed=speed, continuous=True)
         finally:
             nav.close()
 

@@ -8,7 +8,8 @@ velocity and turn rate at every instant. Each control period (100 Hz or more):
    ``lag_start`` behind along the path (so a stuck start or a slipping patch does not leave the
    reference running away and the robot cutting across to catch up);
 2. **prediction**: the estimated pose is carried ``lead`` seconds ahead with the estimated velocity
-   (telemetry age, link and wheel-loop delay), and the reference is taken at the same instant;
+   and the reference's acceleration (telemetry age, link and wheel-loop delay), and the reference
+   is taken at the same instant;
 3. **feedback** on the error in the path frame at the reference point: cross-track with a PI
    (gain ``cross``, integral ``cross_i``, clamped), along-track with a PI (``along``, ``along_i``),
    and heading with a PI (``heading``, ``heading_i``);
@@ -59,7 +60,7 @@ class ProfileTracker(Follower):
         rate: float = 100.0,
         margin: float = PLAN_MARGIN,
         lead: float = 0.04,
-        cross: float = 30.0,
+        cross: float = 45.0,
         cross_i: float = 100.0,
         along: float = 10.0,
         along_i: float = 20.0,
@@ -124,9 +125,13 @@ class ProfileTracker(Follower):
 
         # 2. prediction: robot and reference at the instant the command takes effect
         lead = self.lead
-        px, py = state.x + state.vx * lead, state.y + state.vy * lead
-        pth = state.theta + state.w * lead
         ref = prof.at(self.tau + lead * pace)
+        # the robot carried ahead on the reference's acceleration (on a curve a straight-line
+        # prediction lands outside it, and the loop would hold the robot inside by v^2 lead^2 / 2R)
+        half = 0.5 * lead * lead
+        px = state.x + state.vx * lead + half * ref.ax
+        py = state.y + state.vy * lead + half * ref.ay
+        pth = state.theta + state.w * lead
         self.progress = ref.s
         tx, ty = _direction(ref.vx, ref.vy, prof, self.tau + lead)
         nx, ny = -ty, tx
