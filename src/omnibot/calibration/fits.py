@@ -32,6 +32,7 @@ from functools import cached_property
 from typing import Any
 
 from omnibot.calibration.experiments import RunResult, speed_range
+from omnibot.calibration.motors import Balance
 from omnibot.calibration.patterns import Geometry
 from omnibot.errors import ConfigError
 from omnibot.robot.description import (
@@ -388,8 +389,8 @@ class SurfaceFit:
     move_length: float = 1.0
     motors: MotorMapSpec | None = None
     """The motor map the sweeps ran through (their powers are nominal)."""
-    balance: Any = None
-    """The balance runs' outcome (:class:`omnibot.calibration.motors.Balance`), for the report."""
+    balance: Balance | None = None
+    """The balance runs' outcome, for the report."""
 
 
 def fit_surface(

@@ -24,6 +24,7 @@ import math
 import statistics
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -121,6 +122,14 @@ class Balance:
     """Per power, the rms error (rad) with equal gains."""
     after: list[float] = field(default_factory=list)
     """Per power, the rms error (rad) with the fitted gains."""
+
+    def as_dict(self) -> dict[str, list[Any]]:
+        return {
+            "powers": self.powers,
+            "log_gains": self.log_gains,
+            "before": self.before,
+            "after": self.after,
+        }
 
     def tables(self, n: int) -> tuple[PiecewiseLinear, ...]:
         if not self.powers:

@@ -76,6 +76,7 @@ def runs_json(result: CalibrationResult) -> dict[str, Any]:
             "truth": s.truth,
             "calibration": describe_spec(s.spec),
             "deadband": s.fit.deadbands,
+            "balance": None if s.fit.balance is None else s.fit.balance.as_dict(),
             "k": s.fit.k,
             "rate_points": {g: [p.__dict__ for p in pts] for g, pts in s.fit.points.items()},
             "gyro": None if s.gyro is None else s.gyro.as_dict(),
