@@ -83,6 +83,12 @@ def test_calibration_file_errors(tmp_path: Path) -> None:
     assert bare.calibration.k == 150.0
     with pytest.raises(ConfigError, match="no calibration for surface 'wood'"):
         bare.for_surface("wood")
+    with pytest.raises(ConfigError, match="one entry per motor"):
+        parse_calibration({"calibration": {"k": 100, "motors": {"offset": [30.0], "gain": []}}})
+    with pytest.raises(ConfigError, match="offsets must be >= 0"):
+        parse_calibration(
+            {"calibration": {"k": 100, "motors": {"offset": [-3], "gain": [{"x": [0], "y": [1]}]}}}
+        )
     bad = tmp_path / "bad.yaml"
     bad.write_text("calibration: [", encoding="utf-8")
     with pytest.raises(ConfigError, match="not valid YAML"):
@@ -101,7 +107,15 @@ def test_a_port_with_two_floors_asks_between_them(tmp_path: Path, capsys: pytest
 
     prompts: list[str] = []
     files = ["--out", str(tmp_path / "cal.yaml"), "--report", str(tmp_path / "r")]
-    port = ["--port", "sim://omni4?surface=wood", "--surface", "lab,hall", "--quick", "--no-check"]
+    port = [
+        "--port",
+        "sim://omni4?surface=wood",
+        "--surface",
+        "lab,hall",
+        "--quick",
+        "--no-check",
+        "--no-motor-map",
+    ]
     args = build_parser().parse_args(["calibrate", *port, *files])
 
     def ask(prompt: str) -> str:
@@ -112,5 +126,6 @@ def test_a_port_with_two_floors_asks_between_them(tmp_path: Path, capsys: pytest
     assert [p.split(" with")[0] for p in prompts] == ["Put the robot on lab", "Put the robot on hall"]
     cal = load_calibration(tmp_path / "cal.yaml")
     assert list(cal.surfaces) == ["lab", "hall"]  # the same floor twice here: nearly the same tables
+    assert cal.calibration.motors is None
     assert cal.surfaces["lab"].k == pytest.approx(cal.surfaces["hall"].k, rel=0.05)
     assert "truth sim" in capsys.readouterr().out

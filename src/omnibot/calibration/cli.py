@@ -71,6 +71,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument(
         "--move-length", type=float, default=1.0, help="MOVE length the fit is exact for, m (default 1)"
     )
+    p.add_argument(
+        "--no-motor-map", action="store_true", help="no per-motor offsets and gains (seed 000's factors only)"
+    )
     p.add_argument("--no-check", action="store_true", help="skip the before/after accuracy moves")
     p.add_argument(
         "--no-upload", action="store_true", help="fit only: do not upload (no K_t runs, no after-check)"
@@ -188,7 +191,7 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] = input) -> int:
         raise ConfigError(f"expected a positive length in m, got {args.move_length}", key="--move-length")
     base = Plan.quick() if args.quick else Plan()
     courses = _courses(args.courses)
-    plan = replace(base, courses_deg=courses, move_length=args.move_length)
+    plan = replace(base, courses_deg=courses, move_length=args.move_length, motor_map=not args.no_motor_map)
     check = AccuracyPlan.quick() if args.quick else AccuracyPlan()
     accuracy = None if args.no_check else replace(check, length=args.move_length)
     true_robot = None
