@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from benchmarks import firmware_command_time, link_throughput, sim_speed
+from benchmarks import firmware_command_time, link_throughput, odometry_drift, sim_speed, tracking
 
 
 def main() -> int:
@@ -11,6 +11,8 @@ def main() -> int:
         ("firmware time per command", lambda: firmware_command_time.main([])),
         ("line throughput, lockstep", lambda: link_throughput.main([])),
         ("line throughput, pty emulator", lambda: link_throughput.main(["--pty"])),
+        ("path tracking", lambda: tracking.main([])),
+        ("odometry drift", lambda: odometry_drift.main([])),
     ):
         print(f"\n== {title}")
         run()
