@@ -303,26 +303,32 @@ def find_deadband(runner: Runner, course_deg: float | None, step: int = 8, durat
         result = runner.power_run(pattern, duration, info, f"deadband:{group}", power=power)
         return _moved(result, rotation)
 
+    return Deadband(group, lowest_moving(attempt, step, geo.pwm_max))
+
+
+def lowest_moving(attempt: Callable[[int], bool], step: int, pwm_max: int) -> int:
+    """The lowest power for which ``attempt(power)`` (a run) moved the robot: upwards in ``step``
+    counts, then bisection to 2 counts; ``pwm_max + 1`` when not even full power moved it."""
     low, high = 0, None
     power = step
-    while power <= geo.pwm_max:
+    while power <= pwm_max:
         if attempt(power):
             high = power
             break
         low = power
         power += step
     if high is None:
-        if low < geo.pwm_max and attempt(geo.pwm_max):
-            high = geo.pwm_max
+        if low < pwm_max and attempt(pwm_max):
+            high = pwm_max
         else:
-            return Deadband(group, geo.pwm_max + 1)
+            return pwm_max + 1
     while high - low > 2:
         mid = (low + high) // 2
         if attempt(mid):
             high = mid
         else:
             low = mid
-    return Deadband(group, high)
+    return high
 
 
 def power_levels(deadband: int, pwm_max: int, levels: int) -> list[int]:
