@@ -34,6 +34,8 @@ def test_token_from_the_environment(
         (["--port", "bogus://x"], "bogus"),
         (["--world", "moon"], "moon"),
         (["--path", "missing.csv"], "--path: cannot read path missing.csv"),
+        (["--repeat-speed", "0"], "--repeat-speed: expected a positive speed in m/s, got 0"),
+        (["--robot", "omni5"], "unknown robot 'omni5'"),
     ],
 )
 def test_bad_arguments_exit_2(argv: list[str], message: str, capsys: pytest.CaptureFixture[str]) -> None:

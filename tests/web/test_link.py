@@ -97,15 +97,15 @@ def test_gamepad_goes_through_the_teleop_mapping(stepper: Stepper) -> None:
     assert state["drive"]["ended"] == "released"
 
 
-def test_teach_is_a_hook_that_reports_it_is_not_there_yet(stepper: Stepper) -> None:
+def test_teach_without_a_teacher_says_it_is_not_enabled(stepper: Stepper) -> None:
     stepper.link.submit(Teach(type="teach", action="record"))
     state = stepper.run(0.1)
     assert state["drive"]["teach"] is False
-    assert any("navigation issue" in text for text in stepper.logs())
+    assert any("not enabled on this dashboard" in text for text in stepper.logs())
 
 
 class RecordingTeacher:
-    """A stand-in for the navigation issue's teach and repeat."""
+    """A stand-in teacher that records how the link calls it."""
 
     def __init__(self) -> None:
         self.calls: list[str] = []

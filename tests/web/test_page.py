@@ -165,3 +165,38 @@ def test_screenshot(browser: Browser, tmp_path: Path) -> None:
             context.close()
     assert out.stat().st_size > 10_000
     assert not math.isnan(pose(dashboard)[0])
+
+
+def test_teach_and_repeat_from_the_page(browser: Browser) -> None:
+    from omnibot.navigation.webteach import PathTeacher
+    from omnibot.robot.description import load_robot
+
+    teacher = PathTeacher(load_robot("omni4"), period=0.05, speed=0.3)
+    with Dashboard(ROOM, http_port=0, teach=teacher) as dashboard:
+        context = browser.new_context(viewport={"width": 1400, "height": 950})
+        try:
+            page = context.new_page()
+            page.goto(dashboard.url)
+            page.wait_for_function("window.omnibot && window.omnibot.state() !== null")
+            teach = page.locator("[data-teach='record']")
+            expect(teach).to_be_enabled()
+            expect(page.locator("#teach-note")).to_contain_text("Repeat drives to its start")
+            time.sleep(0.5)  # standing: the gyro's bias
+            x0 = pose(dashboard)[0]
+            teach.click()
+            page.keyboard.down("w")
+            time.sleep(0.8)
+            page.keyboard.up("w")
+            wait_for(lambda: not moving(dashboard), what="the robot to stop")
+            page.locator("[data-teach='stop']").click()
+            expect(page.locator("#log")).to_contain_text("press Repeat to follow it")
+            x1, y1, _ = pose(dashboard)
+            page.locator("[data-teach='follow']").click()
+            wait_for(lambda: latest(dashboard)["drive"]["state"] == "following", what="following")
+            expect(page.locator("#log")).to_contain_text("to its start first")
+            wait_for(lambda: latest(dashboard)["drive"]["state"] != "following", 20.0, what="the repeat")
+            x2, y2, _ = pose(dashboard)
+            assert math.hypot(x2 - x1, y2 - y1) < 0.03  # back at the end of the taught path
+            assert x1 - x0 > 0.2
+        finally:
+            context.close()

@@ -36,28 +36,43 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--config", metavar="FILE.yaml", help="teleop parameters for a browser gamepad (default seed 003's)"
     )
+    p.add_argument(
+        "--repeat-speed",
+        type=float,
+        default=0.3,
+        metavar="V",
+        help="speed cap of Repeat (following the taught path), m/s (default 0.3)",
+    )
     p.add_argument("--duration", type=float, metavar="S", help="serve for S seconds (default: until Ctrl-C)")
 
 
 def run(args: argparse.Namespace) -> int:
+    from omnibot.navigation.webteach import PathTeacher
+    from omnibot.robot.description import load_robot
+    from omnibot.teleop.command import robot_for
     from omnibot.teleop.config import load_teleop_config
     from omnibot.web.dashboard import Dashboard
     from omnibot.web.scene import load_path
 
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
         raise ConfigError(f"expected a positive number of seconds, got {args.duration}", key="--duration")
+    if not (math.isfinite(args.repeat_speed) and args.repeat_speed > 0):
+        raise ConfigError(f"expected a positive speed in m/s, got {args.repeat_speed}", key="--repeat-speed")
     config = load_teleop_config(args.config)
+    robot = load_robot(robot_for(args.port, args.robot))
+    teacher = PathTeacher(robot, period=config.period, speed=args.repeat_speed)
     path = load_path(args.path) if args.path else None
     token = args.token or os.environ.get(TOKEN_ENV) or None
     dash = Dashboard(
         args.port,
-        args.robot,
+        robot,
         host=args.host,
         http_port=args.http_port,
         token=token,
         world=args.world,
         path=path,
         config=config,
+        teach=teacher,
     )
     dash.start()
     try:

@@ -1,9 +1,9 @@
 """The hook for teach and repeat from the page (record a path while driving, then follow it).
 
-Not built here: it arrives with the navigation issue (``omnibot.control``). A navigation module
-provides an object with this shape and hands it to :class:`~omnibot.web.dashboard.Dashboard`
-(``teach=``); the page then enables its Teach / Stop / Repeat buttons. Both methods run in the link
-thread, which owns the client::
+The dashboard only calls it; navigation implements it
+(:class:`omnibot.navigation.webteach.PathTeacher`, which ``omnibot dashboard`` hands to
+:class:`~omnibot.web.dashboard.Dashboard` as ``teach=``); the page then enables its Teach / Stop /
+Repeat buttons. Both methods run in the link thread, which owns the client::
 
     class PathTeacher:
         def command(self, action, client, pose):   # "record" | "stop" | "follow"
@@ -25,7 +25,7 @@ from omnibot.client.client import RobotClient
 
 Pose = tuple[float, float, float]
 
-NOT_AVAILABLE = "teach and repeat arrive with the navigation issue (no path follower yet)"
+NOT_AVAILABLE = "teach and repeat are not enabled on this dashboard (omnibot dashboard enables them)"
 
 
 class TeachRepeat(Protocol):

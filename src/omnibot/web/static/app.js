@@ -516,8 +516,8 @@ function setupTeach(available) {
     b.onclick = () => send({ type: "teach", action: b.dataset.teach });
   }
   $("teach-note").textContent = available
-    ? "Teach records the path you drive; Repeat follows it."
-    : "Arrives with the navigation issue.";
+    ? "Teach records the path you drive; Stop ends it; Repeat drives to its start and follows it."
+    : "Not enabled on this server (omnibot dashboard enables it).";
 }
 
 window.addEventListener("resize", requestDraw);

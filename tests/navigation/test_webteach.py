@@ -1,0 +1,97 @@
+"""Teach and repeat from the dashboard: the link, period by period, with the navigation teacher."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+
+import numpy as np
+import pytest
+
+from omnibot.client import RobotClient
+from omnibot.navigation.webteach import PathTeacher, gains_for
+from omnibot.robot.description import load_robot
+from omnibot.web.link import RobotLink
+from omnibot.web.messages import Drive, EStop, Teach
+from tests.teleop.fakes import truth
+from tests.web.test_link import Stepper
+
+
+@pytest.fixture
+def taught() -> Iterator[tuple[Stepper, PathTeacher]]:
+    """The simulated omni4 on wood, taught an L: 0.8 s forward, 0.8 s left, then stopped."""
+    client = RobotClient.open("sim://omni4?seed=2", timeout=0.5)
+    robot = load_robot("omni4")
+    teacher = PathTeacher(robot, period=0.05, speed=0.3)
+    link = RobotLink(client, robot, teach=teacher)
+    stepper = Stepper(link)
+    stepper.run(1.0)  # standing: the gyro's bias is learned
+    link.submit(Teach(type="teach", action="record"))
+    stepper.run(0.8, Drive(type="drive", vx=0.5))
+    stepper.run(0.8, Drive(type="drive", vy=0.5))
+    stepper.run(0.5, Drive(type="drive", enable=False))
+    link.submit(Teach(type="teach", action="stop"))
+    stepper.run(0.1)
+    yield stepper, teacher
+    link.stop()
+    assert client.link.closed
+
+
+def test_teach_records_the_driven_path_in_the_pages_frame(taught: tuple[Stepper, PathTeacher]) -> None:
+    stepper, teacher = taught
+    path = teacher.path
+    assert path is not None and 0.4 < path.length < 1.0
+    # the path starts where the page showed the robot and ends where it is
+    assert path.start[:2] == pytest.approx((0.0, 0.0), abs=0.01)
+    end = truth(stepper.link.client).pose
+    assert (path.x[-1], path.y[-1]) == pytest.approx((end.x, end.y), abs=0.02)
+    assert any(text.startswith("taught ") for text in stepper.logs())
+
+
+def test_repeat_drives_back_to_the_start_then_follows_the_path(taught: tuple[Stepper, PathTeacher]) -> None:
+    stepper, teacher = taught
+    path = teacher.path
+    assert path is not None
+    stepper.link.submit(Teach(type="teach", action="follow"))
+    state = stepper.run(0.5, Drive(type="drive", vx=-0.5))  # page input is ignored while following
+    assert state["drive"]["state"] == "following"
+    assert any("driving" in text and "to its start first" in text for text in stepper.logs())
+    trail = []
+    for _ in range(200):
+        state = stepper.run(0.1)
+        p = truth(stepper.link.client).pose
+        trail.append((p.x, p.y))
+        if state["drive"]["state"] != "following":
+            break
+    assert state["drive"]["state"] != "following", "the repeat did not finish"
+    end = truth(stepper.link.client).pose
+    assert math.hypot(end.x - path.x[-1], end.y - path.y[-1]) < 0.02
+    # once at the start (after the approach), the robot stays near the taught path
+    points = np.array(trail)
+    at_start = int(np.argmax(np.hypot(points[:, 0] - path.x[0], points[:, 1] - path.y[0]) < 0.03))
+    dist, _ = path.nearest(points[at_start:])
+    assert float(np.max(dist)) < 0.035
+
+
+def test_estop_ends_a_repeat_and_bad_order_is_explained(taught: tuple[Stepper, PathTeacher]) -> None:
+    stepper, teacher = taught
+    stepper.link.submit(Teach(type="teach", action="follow"))
+    stepper.run(0.3)
+    stepper.link.submit(EStop(type="estop"))
+    state = stepper.run(0.3)
+    assert state["drive"]["state"] == "estop" and teacher.follower is None
+    client = stepper.link.client
+    assert teacher.command("record", client, None).startswith("teaching")
+    assert teacher.command("follow", client, None) == "stop teaching first"
+    assert "too short" in teacher.command("stop", client, None)
+    assert teacher.command("stop", client, None) == "nothing to stop"
+    with pytest.raises(ValueError, match="unknown teach action"):
+        teacher.command("dance", client, None)
+
+
+def test_gains_scale_with_the_control_period() -> None:
+    assert gains_for(0.01)["cross"] == 45.0
+    slow = gains_for(0.05)
+    assert slow["cross"] * 0.05 < 0.5 and slow["lead"] == pytest.approx(0.09)
+    with pytest.raises(ValueError, match="must be positive"):
+        PathTeacher(load_robot("omni4"), period=0.0)
