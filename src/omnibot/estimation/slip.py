@@ -36,6 +36,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from omnibot.errors import ConfigError
 from omnibot.robot.description import RobotDescription
+from omnibot.robot.kinematics import contact_rows
 
 FloatArray = NDArray[np.float64]
 
@@ -81,14 +82,14 @@ class SlipModel:
     """The creep pattern of a robot's wheels (geometry from its description, coefficients per floor)."""
 
     def __init__(self, robot: RobotDescription, params: SlipParameters | None = None) -> None:
-        x = np.array([w.position[0] for w in robot.wheels])
-        y = np.array([w.position[1] for w in robot.wheels])
         gamma = np.array([w.gamma for w in robot.wheels])
         radius = np.array([w.radius for w in robot.wheels])
-        phi = np.array([w.drive_angle for w in robot.wheels]) + gamma
-        c, s = np.cos(phi), np.sin(phi)
-        traction = np.column_stack((c, s, x * s - y * c))  # rim speed r cos(gamma) omega = T q
-        roller = np.column_stack((-s, c, x * c + y * s))
+        traction, roller = contact_rows(
+            [w.position[0] for w in robot.wheels],
+            [w.position[1] for w in robot.wheels],
+            [w.drive_angle for w in robot.wheels],
+            gamma,
+        )  # the simulator's contact rows: rim speed r cos(gamma) omega = T q
         self.rim_per_rad = radius * np.cos(gamma)
         """m of rim travel along the traction direction per rad of wheel turn."""
         # a roller rolls with the body and, on mecanum wheels, with the wheel's own turn

@@ -39,17 +39,31 @@ class Twist(NamedTuple):
     w: float
 
 
+def contact_rows(
+    x: ArrayLike, y: ArrayLike, drive_angles: ArrayLike, gammas: ArrayLike
+) -> tuple[FloatArray, FloatArray]:
+    """Each wheel's floor contact as rows over the body twist (vx, vy, w), shape (..., 3) for
+    parameter arrays of any shape: the traction row (the speed of the body at the contact along
+    the rim's direction of travel, which a wheel turning at omega matches with ``r cos(gamma)
+    omega``) and the roller row (across it, along the roller's axis of rolling)."""
+    xa, ya = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    phi = np.asarray(drive_angles, dtype=float) + np.asarray(gammas, dtype=float)
+    c, s = np.cos(phi), np.sin(phi)
+    traction = np.stack((c, s, xa * s - ya * c), axis=-1)
+    roller = np.stack((-s, c, xa * c + ya * s), axis=-1)
+    return traction, roller
+
+
 def wheel_rows(
     positions: ArrayLike, drive_angles: ArrayLike, gammas: ArrayLike, radii: ArrayLike
 ) -> FloatArray:
     """The (n, 3) matrix J with omega = J @ (vx, vy, w) for the wheel parameters given as arrays."""
     p = np.asarray(positions, dtype=float).reshape(-1, 2)
-    phi = np.asarray(drive_angles, dtype=float) + np.asarray(gammas, dtype=float)
     denom = np.asarray(radii, dtype=float) * np.cos(np.asarray(gammas, dtype=float))
     if np.any(np.abs(denom) < 1e-12):
         raise KinematicsError("a wheel with gamma of +-90 degrees or zero radius cannot drive")
-    rows = np.column_stack((np.cos(phi), np.sin(phi), p[:, 0] * np.sin(phi) - p[:, 1] * np.cos(phi)))
-    return np.asarray(rows / denom[:, None], dtype=float)
+    traction, _ = contact_rows(p[:, 0], p[:, 1], drive_angles, gammas)
+    return np.asarray(traction / denom[:, None], dtype=float)
 
 
 def wheel_matrix(robot: RobotDescription) -> FloatArray:

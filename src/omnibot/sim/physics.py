@@ -71,6 +71,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from omnibot.errors import SimulationError
 from omnibot.robot.description import RobotDescription
+from omnibot.robot.kinematics import contact_rows
 from omnibot.sim import kernels
 from omnibot.sim.kernels import ROLL_SPEED_EPS, WHEEL_SPEED_EPS
 from omnibot.sim.surfaces import Surface, get_surface
@@ -171,15 +172,12 @@ class Physics:
         self._y = wp(lambda w: w.position[1])
         gamma = wp(lambda w: w.gamma)
         r = wp(lambda w: w.radius)
-        phi = wp(lambda w: w.drive_angle) + gamma
-        cos_phi, sin_phi = np.cos(phi), np.sin(phi)
+        traction, roller = contact_rows(self._x, self._y, wp(lambda w: w.drive_angle), gamma)
         W = np.zeros((self.n, self.m, kernels.W_COLUMNS))
         # Rows of H per wheel: traction (slip) speed and roller speed over vx, vy, w and the wheel's omega.
-        W[..., kernels.W_TX], W[..., kernels.W_TY] = cos_phi, sin_phi
-        W[..., kernels.W_TW] = self._x * sin_phi - self._y * cos_phi
+        W[..., kernels.W_TX : kernels.W_TW + 1] = traction
         W[..., kernels.W_TA] = -r * np.cos(gamma)
-        W[..., kernels.W_NX], W[..., kernels.W_NY] = -sin_phi, cos_phi
-        W[..., kernels.W_NW] = self._x * cos_phi + self._y * sin_phi
+        W[..., kernels.W_NX : kernels.W_NW + 1] = roller
         W[..., kernels.W_NA] = r * np.sin(gamma)
         W[..., kernels.W_J_DT] = wp(lambda w: w.inertia + w.motor.gear_ratio**2 * w.motor.rotor_inertia) / dt
         k = wp(lambda w: w.motor.torque_constant)
