@@ -152,3 +152,23 @@ def test_bad_twist_shape_is_an_error() -> None:
         kin.inverse(load_robot("omni4").wheel_matrix, (1.0, 2.0))
     with pytest.raises(KinematicsError, match="expected 4 wheel speeds"):
         kin.forward(load_robot("omni4").wheel_matrix, [1.0, 2.0])
+
+
+@pytest.mark.parametrize("preset", ["omni4", "omni3", "mecanum4"])
+def test_contact_rows_are_the_kinematics_rows_and_their_rollers(preset: str) -> None:
+    robot = load_robot(preset)
+    w = robot.wheels
+    traction, roller = kin.contact_rows(
+        [x.position[0] for x in w],
+        [x.position[1] for x in w],
+        [x.drive_angle for x in w],
+        [x.gamma for x in w],
+    )
+    rim = np.array([x.radius * np.cos(x.gamma) for x in w])
+    assert np.allclose(traction / rim[:, None], robot.wheel_matrix)
+    # the roller rolls across the rim's direction: unit, perpendicular translation parts
+    assert np.allclose(np.einsum("ij,ij->i", traction[:, :2], roller[:, :2]), 0.0)
+    assert np.allclose(np.hypot(roller[:, 0], roller[:, 1]), 1.0)
+    # turning at w moves a contact by w x p, whose roller component is w (p . rim direction)
+    p = np.array([x.position for x in w])
+    assert np.allclose(roller[:, 2], np.einsum("ij,ij->i", p, traction[:, :2]))
