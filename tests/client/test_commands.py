@@ -172,6 +172,16 @@ def test_cal_and_calibration_upload() -> None:
         offset=(0.0, 38.25),
         gain=(PiecewiseLinear(x=(0.0,), y=(1.0,)), PiecewiseLinear(x=(50.0, 200.0), y=(1.1, 0.9))),
     )
+    # without a motor map, the identity when the robot's motors are known
+    assert c.calibration(CalibrationSpec(k=220.0)) == [Cal(0, 0, 0, 2200)]
+    assert c.calibration(CalibrationSpec(k=220.0), motors=2)[1:] == [
+        Cal(codes.CAL_OFFSET, 0, 0, 0),
+        Cal(codes.CAL_GAIN, 0, 0, 1000),
+        Cal(codes.CAL_OFFSET, 1, 0, 0),
+        Cal(codes.CAL_GAIN + 1, 0, 0, 1000),
+    ]
+    with pytest.raises(ValueError, match="2 motors for a robot with 4"):
+        c.calibration(CalibrationSpec(k=220.0, motors=motors), motors=4)
     assert c.calibration(CalibrationSpec(k=220.0, motors=motors))[1:] == [
         Cal(codes.CAL_OFFSET, 0, 0, 0),
         Cal(codes.CAL_GAIN, 0, 0, 1000),

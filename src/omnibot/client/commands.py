@@ -29,7 +29,7 @@ from collections.abc import Callable, Sequence
 from omnibot.client.limits import Limits
 from omnibot.protocol import codes, units
 from omnibot.protocol.messages import Cal, Delta, Mode, Move, Power, Rotate, Sonar, Telem, Vel
-from omnibot.robot.description import CalibrationSpec, PiecewiseLinear
+from omnibot.robot.description import CalibrationSpec, MotorMapSpec, PiecewiseLinear
 
 INF = codes.INF
 TIME_MAX_MS = 30000  # POWER T, SONAR and TELEM periods
@@ -227,9 +227,11 @@ def _knots(table: int, curve: PiecewiseLinear) -> list[Cal]:
     ]
 
 
-def calibration(spec: CalibrationSpec) -> list[Cal]:
+def calibration(spec: CalibrationSpec, motors: int | None = None) -> list[Cal]:
     """The CAL commands that upload a calibration section: K, then K_t, K_r, K_l (knot 0 upwards,
-    dropping curves the controller may hold beyond the section's), then the motor map if any."""
+    dropping curves the controller may hold beyond the section's), then the motor map. A section
+    without one uploads the identity map when the robot's ``motors`` are known, so the controller
+    uses exactly the section."""
     out = [Cal(codes.CAL_K, 0, 0, units.to_cal_k(spec.k))]
     if spec.k_t is not None:
         out += _knots(codes.CAL_KT, spec.k_t)
@@ -244,10 +246,15 @@ def calibration(spec: CalibrationSpec) -> list[Cal]:
         n = len(spec.k_l.curves)
         if n < codes.CAL_KL_CURVES:
             out.append(Cal(codes.CAL_KL + n, codes.CAL_KL_DROP, 0, 0))
-    if spec.motors is not None:
-        if len(spec.motors.gain) > codes.CAL_MOTORS:
-            raise ValueError(f"motor map: at most {codes.CAL_MOTORS} motors can be uploaded")
-        for i, (offset, gain) in enumerate(zip(spec.motors.offset, spec.motors.gain, strict=True)):
+    motor_map = spec.motors
+    if motor_map is None and motors is not None:
+        flat = PiecewiseLinear(x=(0.0,), y=(1.0,))
+        motor_map = MotorMapSpec(offset=(0.0,) * motors, gain=(flat,) * motors)
+    if motor_map is not None:
+        n = len(motor_map.gain)
+        if n > codes.CAL_MOTORS or (motors is not None and n != motors):
+            raise ValueError(f"motor map: {n} motors for a robot with {motors} (at most {codes.CAL_MOTORS})")
+        for i, (offset, gain) in enumerate(zip(motor_map.offset, motor_map.gain, strict=True)):
             out.append(Cal(codes.CAL_OFFSET, i, 0, round(10 * offset)))
             out += _knots(codes.CAL_GAIN + i, gain)
     for c in out:
