@@ -25,6 +25,12 @@ def test_quick_run_writes_the_file_and_the_report(tmp_path: Path, capsys: pytest
     assert cal.calibration.k_l is not None and cal.calibration.k_l.courses_deg == (0.0, 45.0)
     assert cal.gyro is not None and cal.odometry is not None
     assert cal.odometry["rotation_scale"] == pytest.approx(1.05, abs=0.01)
+    # the floor's wheel slip for driven-wheel odometry (what omnibot follow --calibration applies)
+    assert "wheel slip (wood): roll 0.0" in text
+    slip = cal.slip_for("wood")
+    assert 0.0 < slip.roll < 0.01 and cal.slip_for(None) == slip
+    assert slip.scale == pytest.approx(1.05, abs=0.01)  # the true wheels are 5 % larger
+    assert "## Wheel slip (driven-wheel odometry)" in (report / "accuracy.md").read_text()
     for name in ("fig5_rates.png", "fig6_kt_kr.png", "fig7_kl.png", "accuracy.png", "accuracy.md"):
         assert (report / name).stat().st_size > 0
     data = json.loads((report / "accuracy.json").read_text())
@@ -127,5 +133,6 @@ def test_a_port_with_two_floors_asks_between_them(tmp_path: Path, capsys: pytest
     cal = load_calibration(tmp_path / "cal.yaml")
     assert list(cal.surfaces) == ["lab", "hall"]  # the same floor twice here: nearly the same tables
     assert cal.calibration.motors is None
+    assert set(cal.slip) == {"lab", "hall"}
     assert cal.surfaces["lab"].k == pytest.approx(cal.surfaces["hall"].k, rel=0.05)
     assert "truth sim" in capsys.readouterr().out

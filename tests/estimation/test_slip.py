@@ -45,7 +45,7 @@ def test_creep_reverses_with_the_motion_and_scales_with_its_coefficient() -> Non
 
 
 def _synthetic_leg(robot_name: str, params: SlipParameters, course: float, speed: float) -> SlipLeg:
-    """A rest-to-rest run whose encoder displacement carries exactly the model's creep."""
+    """A rest-to-rest run whose encoder displacement carries exactly the model's creep and scale."""
     robot = load_robot(robot_name)
     model = SlipModel(robot, params)
     pinv = np.linalg.pinv(robot.wheel_matrix)
@@ -58,7 +58,7 @@ def _synthetic_leg(robot_name: str, params: SlipParameters, course: float, speed
     accels = np.column_stack((acc * c, acc * s, np.zeros_like(v)))
     true = twists[:, :2].sum(axis=0) * dt
     extra = sum(pinv @ (model.wheel_correction(q, a)) * dt for q, a in zip(twists, accels, strict=True))
-    enc = true + np.asarray(extra)[:2]
+    enc = (true + np.asarray(extra)[:2]) / params.scale
     return SlipLeg(twists, accels, np.full(len(t), dt), np.zeros(len(t)), tuple(enc), tuple(true))
 
 
@@ -106,3 +106,21 @@ def test_fit_never_returns_a_negative_coefficient() -> None:
     legs = [_synthetic_leg("omni4", SlipParameters(roll=-0.01), math.radians(d), 0.3) for d in (20, 200)]
     fitted = fit_slip(load_robot("omni4"), legs, compliance=True)
     assert fitted == SlipParameters(0.0, 0.0)
+
+
+def test_fit_tells_a_radius_error_from_creep_with_two_speeds() -> None:
+    truth = SlipParameters(roll=0.01, scale=1.04)
+    legs = [
+        _synthetic_leg("omni4", truth, math.radians(deg), speed)
+        for deg in (15, 100, 190, 280)
+        for speed in (0.4, 0.2)
+    ]
+    fitted = fit_slip(load_robot("omni4"), legs, scale=True)
+    assert fitted.roll == pytest.approx(0.01, rel=0.05)
+    assert fitted.scale == pytest.approx(1.04, abs=0.002)
+    assert all(leg_error(leg, fitted, load_robot("omni4")) < 0.003 for leg in legs)
+
+
+def test_scale_out_of_range_is_refused() -> None:
+    with pytest.raises(ConfigError, match=r"scale must be between 0\.5 and 2"):
+        SlipParameters.from_mapping({"roll": 0.01, "scale": 3})

@@ -81,7 +81,11 @@ def document(result: CalibrationResult, truth: str = "") -> dict[str, Any]:
     """The YAML document of a calibration result (plain data)."""
     doc: dict[str, Any] = {"robot": result.robot.name, "calibration": describe_spec(result.chosen)}
     doc["surfaces"] = {
-        s.surface: {"calibration": describe_spec(s.spec), "deadband": dict(s.fit.deadbands)}
+        s.surface: {
+            "calibration": describe_spec(s.spec),
+            "deadband": dict(s.fit.deadbands),
+            **({"odometry": {"slip": s.slip.params.as_dict()}} if s.slip is not None else {}),
+        }
         for s in result.sessions
     }
     if (gyro := result.gyro) is not None:

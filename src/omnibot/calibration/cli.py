@@ -74,6 +74,11 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument(
         "--no-motor-map", action="store_true", help="no per-motor offsets and gains (seed 000's factors only)"
     )
+    p.add_argument(
+        "--no-slip",
+        action="store_true",
+        help="skip the wheel-slip runs (the driven-wheel odometry's creep on each floor)",
+    )
     p.add_argument("--no-check", action="store_true", help="skip the before/after accuracy moves")
     p.add_argument(
         "--no-upload", action="store_true", help="fit only: do not upload (no K_t runs, no after-check)"
@@ -169,7 +174,7 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] = input) -> int:
     from omnibot.calibration.calfile import write_calibration
     from omnibot.calibration.experiments import Plan
     from omnibot.calibration.perturb import ACCEPTANCE, perturbed_robot
-    from omnibot.calibration.report import accuracy_entries, write_report
+    from omnibot.calibration.report import accuracy_entries, slip_summary, write_report
     from omnibot.calibration.session import calibrate
     from omnibot.calibration.tables import summary_table
     from omnibot.calibration.truth import default_truth, parse_truth_spec
@@ -191,7 +196,13 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] = input) -> int:
         raise ConfigError(f"expected a positive length in m, got {args.move_length}", key="--move-length")
     base = Plan.quick() if args.quick else Plan()
     courses = _courses(args.courses)
-    plan = replace(base, courses_deg=courses, move_length=args.move_length, motor_map=not args.no_motor_map)
+    plan = replace(
+        base,
+        courses_deg=courses,
+        move_length=args.move_length,
+        motor_map=not args.no_motor_map,
+        slip=not args.no_slip,
+    )
     check = AccuracyPlan.quick() if args.quick else AccuracyPlan()
     accuracy = None if args.no_check else replace(check, length=args.move_length)
     true_robot = None
@@ -228,6 +239,9 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] = input) -> int:
     entries = accuracy_entries(result)
     if entries:
         print(summary_table(entries))
+    for s in result.sessions:
+        if s.slip is not None:
+            print(f"wheel slip ({s.surface}): {slip_summary(s.slip)}")
     for s in result.sessions:
         for note in s.notes:
             print(f"note ({s.surface}): {note}")

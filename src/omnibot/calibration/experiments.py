@@ -106,6 +106,8 @@ class Plan:
     """Fit the motor map (each motor's dead-band offset and gain table) before the sweeps."""
     balance_levels: int = 4
     """Nominal powers of the balance runs, spread over what the speed range needs."""
+    slip: bool = True
+    """Drive the wheel-slip runs (12 out-and-back, wheel-speed loop on) and fit the floor's creep."""
 
     @classmethod
     def quick(cls) -> Plan:

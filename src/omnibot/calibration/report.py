@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import math
+import statistics
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -23,6 +24,7 @@ from omnibot.calibration.accuracy import AccuracyRow, summarize
 from omnibot.calibration.session import CalibrationResult, SurfaceSession, describe_spec
 from omnibot.calibration.tables import move_grid, rotate_lines, summary_table
 from omnibot.errors import ConfigError
+from omnibot.navigation.slipcal import SlipCalibration
 from omnibot.robot.description import CalibrationSpec, PiecewiseLinear
 
 STYLES = ("-", "--", ":", "-.")
@@ -57,10 +59,41 @@ def accuracy_markdown(result: CalibrationResult) -> str:
     for label, rows in entries:
         lines += ["", f"## {label}", "", move_grid(rows), "", move_grid(rows, "heading_error_deg"), ""]
         lines += [move_grid(rows, "course_error_deg"), "", rotate_lines(rows)]
+    slips = [(s.surface, s.slip) for s in result.sessions if s.slip is not None]
+    if slips:
+        lines += [
+            "",
+            "## Wheel slip (driven-wheel odometry)",
+            "",
+            "Straight runs out and back on evenly spaced courses with the wheel-speed loop on; the encoders'",
+            "displacement against the truth's, raw and with the fitted creep taken out",
+            "(`surfaces.<floor>.odometry.slip`, for `omnibot follow --calibration`).",
+            "",
+            "| surface | roll (m/s) | compliance (s) | scale | runs | raw error, mean / max | corrected, mean / max |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for surface, slip in slips:
+            raw, fixed = slip.errors(corrected=False), slip.errors(corrected=True)
+            lines.append(
+                f"| {surface} | {slip.params.roll:.4f} | {slip.params.compliance:.4f} | {slip.params.scale:.4f} | "
+                f"{len(raw)} | "
+                f"{100 * statistics.fmean(raw):.1f} % / {100 * max(raw):.1f} % | "
+                f"{100 * statistics.fmean(fixed):.1f} % / {100 * max(fixed):.1f} % |"
+            )
     notes = [f"- {s.surface}: {n}" for s in result.sessions for n in s.notes]
     if notes:
         lines += ["", "## Notes", "", *notes]
     return "\n".join(lines) + "\n"
+
+
+def slip_summary(slip: SlipCalibration) -> str:
+    """One line: the coefficients and the runs' odometry error before and after taking them out."""
+    raw, fixed = slip.errors(corrected=False), slip.errors(corrected=True)
+    return (
+        f"roll {slip.params.roll:.4f} m/s, compliance {slip.params.compliance:.4f} s, "
+        f"scale {slip.params.scale:.4f}; {len(raw)} runs, "
+        f"encoder error {100 * statistics.fmean(raw):.1f} % -> {100 * statistics.fmean(fixed):.1f} % (mean)"
+    )
 
 
 def accuracy_json(result: CalibrationResult) -> dict[str, Any]:

@@ -43,11 +43,14 @@ from omnibot.calibration.motors import (
     offsets_from_deadbands,
 )
 from omnibot.calibration.patterns import Geometry, top_power
+from omnibot.calibration.slip import slip_step
 from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.truth import ROTATE, SQUARE, Ask, RunInfo, TruthContext, make_truth
 from omnibot.calibration.umbmark import OdometryCalibration, SquareRun, calibrate_odometry, drive_square
 from omnibot.client.client import RobotClient
+from omnibot.errors import ConfigError
 from omnibot.firmware.config import build_config
+from omnibot.navigation.slipcal import SlipCalibration
 from omnibot.protocol import codes
 from omnibot.robot.description import CalibrationSpec, MotorMapSpec, RobotDescription
 
@@ -74,6 +77,8 @@ class SurfaceSession:
     before: list[AccuracyRow] | None = None
     after: list[AccuracyRow] | None = None
     notes: list[str] = field(default_factory=list)
+    slip: SlipCalibration | None = None
+    """The floor's wheel creep (driven-wheel odometry), when the robot has wheel encoders."""
 
 
 @dataclass
@@ -235,6 +240,20 @@ def calibrate_surface(
         finally:
             runner.close()
             tap.stop()
+    slip = None
+    if plan.slip and tap.odometry is not None and source.exact:
+        with progress(f"wheel slip on {surface}", 12) as slip_bar:
+            try:
+                slip = slip_step(client, robot, source, slip_bar)
+            except ConfigError as exc:
+                notes.append(f"wheel slip not calibrated: {exc}")
+            finally:  # back to what the rest of the calibration expects
+                client.stop()
+                if client.binary:
+                    client.use_text()
+                _open_loop(client)
+    elif plan.slip and tap.odometry is not None:
+        notes.append(f"wheel slip needs an independent truth (sim, csv, tape), not {source.name}")
     return SurfaceSession(
         surface=surface,
         truth=source.describe(),
@@ -246,6 +265,7 @@ def calibrate_surface(
         before=before,
         after=after,
         notes=notes,
+        slip=slip,
     )
 
 

@@ -110,6 +110,8 @@ class TruthSource:
     kinds: frozenset[str] = frozenset({STRAIGHT, ROTATE, TURN, SQUARE})
     exact: bool = True
     """True when the source is independent of the robot's own sensors (sim, csv, tape)."""
+    live: bool = False
+    """True when it can also measure while the robot moves (the simulator)."""
 
     def can(self, run: RunInfo) -> bool:
         return run.kind in self.kinds
@@ -155,6 +157,7 @@ class SimTruth(TruthSource):
     """The simulator's ground-truth pose (in-process links only)."""
 
     name = "sim"
+    live = True
 
     def __init__(self, sim: Any) -> None:
         self.sim = sim

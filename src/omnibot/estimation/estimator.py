@@ -211,7 +211,8 @@ class PoseEstimator:
             angles = counts * self._rad_per_count
             if self.slip_model is not None:
                 q, acc = self.body_velocity, self.body_acceleration
-                angles = angles - self.slip_model.wheel_correction(q, acc) * dt
+                model = self.slip_model
+                angles = angles * model.params.scale - model.wheel_correction(q, acc) * dt
             disp = self._pinv @ angles
             self.residual = angles - self._J @ disp
             if self.redundant:

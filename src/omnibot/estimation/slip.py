@@ -44,38 +44,53 @@ ROLL_EPS = 0.01
 """m/s: rolling speed over which a roller's resistance builds up (the model's sign regularisation)."""
 
 
+KEYS = ("roll", "compliance", "scale")
+
+
 @dataclass(frozen=True)
 class SlipParameters:
-    """A floor's creep coefficients: ``roll`` (m/s per roller drag) and ``compliance`` (s)."""
+    """A floor's creep coefficients, ``roll`` (m/s per roller drag) and ``compliance`` (s), and the
+    encoders' distance ``scale`` (true distance per encoder distance once the creep is out: a tyre
+    whose rolling radius differs from the description's)."""
 
     roll: float = 0.0
     compliance: float = 0.0
+    scale: float = 1.0
 
     def __post_init__(self) -> None:
-        for name in ("roll", "compliance"):
+        for name in KEYS:
             value = getattr(self, name)
             if not math.isfinite(value):
                 raise ConfigError(f"slip {name} must be a finite number, got {value}", key=name)
+        if not 0.5 < self.scale < 2.0:
+            raise ConfigError(f"slip scale must be between 0.5 and 2, got {self.scale}", key="scale")
 
     @classmethod
     def from_mapping(cls, data: object, where: str = "slip") -> SlipParameters:
-        """From ``{roll: ..., compliance: ...}`` (a calibration file's ``odometry.slip``)."""
+        """From ``{roll: ..., compliance: ..., scale: ...}`` (a calibration file's ``odometry.slip``)."""
         if not isinstance(data, dict):
-            raise ConfigError(f"{where}: expected a mapping with roll and compliance")
-        unknown = sorted(set(data) - {"roll", "compliance"})
+            raise ConfigError(f"{where}: expected a mapping with roll, compliance and scale")
+        unknown = sorted(set(data) - set(KEYS))
         if unknown:
-            raise ConfigError(f"{where}: unknown key(s) {unknown}; expected roll, compliance")
+            raise ConfigError(f"{where}: unknown key(s) {unknown}; expected {', '.join(KEYS)}")
         values = {}
-        for key in ("roll", "compliance"):
-            raw = data.get(key, 0.0)
+        for key in KEYS:
+            raw = data.get(key, getattr(cls, key))
             try:
                 values[key] = float(raw)
             except (TypeError, ValueError):
                 raise ConfigError(f"{where}.{key}: {raw!r} is not a number") from None
-        return cls(**values)
+        try:
+            return cls(**values)
+        except ConfigError as exc:
+            raise ConfigError(f"{where}: {exc}") from None
 
     def as_dict(self) -> dict[str, float]:
-        return {"roll": round(self.roll, 6), "compliance": round(self.compliance, 6)}
+        return {
+            "roll": round(self.roll, 6),
+            "compliance": round(self.compliance, 6),
+            "scale": round(self.scale, 5),
+        }
 
 
 class SlipModel:
@@ -150,14 +165,18 @@ def _regressors(model: SlipModel, J_pinv: FloatArray, leg: SlipLeg) -> FloatArra
     return out
 
 
-def fit_slip(robot: RobotDescription, legs: Sequence[SlipLeg], compliance: bool = False) -> SlipParameters:
+def fit_slip(
+    robot: RobotDescription, legs: Sequence[SlipLeg], compliance: bool = False, scale: bool = False
+) -> SlipParameters:
     """Least-squares creep coefficients from runs with known true displacements.
 
-    Each leg contributes two equations (x and y of encoder minus true displacement); both
-    coefficients are kept non-negative. ``compliance``
-    also fits the acceleration term; over a run from rest to rest its creep integrates to almost
-    nothing (the wheels creep forward while speeding up and back while braking), so end-point truth
-    cannot pin it down and it is left at 0 unless asked for (runs that end moving can).
+    Each leg contributes two equations (x and y of encoder minus true displacement); the creep
+    coefficients are kept non-negative (creep is in the direction a wheel pushes: a negative one is
+    noise, so that term is dropped and the rest refitted). ``compliance`` also fits the acceleration
+    term: over a run from rest to rest its creep integrates to almost nothing (the wheels creep
+    forward while speeding up and back while braking), so it needs runs measured while moving.
+    ``scale`` also fits the encoders' distance scale: it needs runs at two speeds (a radius error
+    grows with the distance, creep with the time taken).
     """
     if not legs:
         raise ConfigError("a slip fit needs at least one run")
@@ -165,25 +184,24 @@ def fit_slip(robot: RobotDescription, legs: Sequence[SlipLeg], compliance: bool 
     J_pinv = np.linalg.pinv(robot.wheel_matrix)
     rows, rhs = [], []
     for leg in legs:
-        rows.append(_regressors(model, J_pinv, leg))
+        rows.append(np.column_stack((_regressors(model, J_pinv, leg), leg.encoder_disp)))
         rhs.append(np.subtract(leg.encoder_disp, leg.true_disp))
-    A = np.vstack(rows)
+    A = np.vstack(rows)  # columns: roll, compliance, 1 - scale
     b = np.concatenate(rhs)
-    # creep is in the direction a wheel pushes: a negative coefficient is noise, so that term is
-    # dropped and the other refitted (non-negative least squares over two unknowns)
+    free = [2] if scale else []
     best = SlipParameters()
-    best_cost = float(b @ b)
-    for cols in ([0, 1], [0], [1]) if compliance else ([0],):
-        coef, *_ = np.linalg.lstsq(A[:, cols], b, rcond=None)
-        if np.any(coef < 0):
+    best_cost = math.inf
+    for creep in ([0, 1], [0], [1], []) if compliance else ([0], []):
+        cols = creep + free
+        coef = np.linalg.lstsq(A[:, cols], b, rcond=None)[0] if cols else np.zeros(0)
+        if np.any(coef[: len(creep)] < 0):
             continue
-        values = dict(zip(("roll", "compliance"), [0.0, 0.0], strict=True))
-        for col, value in zip(cols, coef, strict=True):
-            values[("roll", "compliance")[col]] = float(value)
-        residual = b - A @ np.array([values["roll"], values["compliance"]])
+        x = np.zeros(3)
+        x[cols] = coef
+        residual = b - A @ x
         cost = float(residual @ residual)
         if cost < best_cost:
-            best, best_cost = SlipParameters(**values), cost
+            best, best_cost = SlipParameters(float(x[0]), float(x[1]), 1.0 - float(x[2])), cost
     return best
 
 
@@ -197,7 +215,11 @@ def leg_error(
         if robot is None:
             raise ValueError("leg_error needs the robot to apply slip parameters")
         reg = _regressors(SlipModel(robot), np.linalg.pinv(robot.wheel_matrix), leg)
-        err = err - reg @ np.array([params.roll, params.compliance])
+        err = (
+            err
+            - reg @ np.array([params.roll, params.compliance])
+            - (1.0 - params.scale) * np.asarray(leg.encoder_disp)
+        )
     return float(np.hypot(*err) / max(float(np.hypot(*leg.true_disp)), 1e-9))
 
 
@@ -224,6 +246,12 @@ class SlipProbe:
     def mark(self) -> int:
         """The index of the next sample: where a run starts."""
         return len(self._rows)
+
+    def heading(self, start: int) -> float:
+        """The estimated heading (rad) at a run's start (the sample before mark ``start``)."""
+        if not self._rows:
+            raise ConfigError("a slip calibration run needs telemetry: is TEL on?")
+        return float(self._rows[min(max(start - 1, 0), len(self._rows) - 1)][7])
 
     def leg(self, start: int, true_disp: tuple[float, float]) -> SlipLeg:
         """The run from sample ``start`` to now, with its true (x, y) displacement (estimator frame)."""

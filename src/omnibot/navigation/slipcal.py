@@ -2,9 +2,10 @@
 
 The robot drives out and back along evenly spaced courses (0, 180, 30, 210, ... degrees, so it ends
 near where it started) with its wheel-speed loop, heading held by the gyro, each run from rest to
-rest with the acceleration limit; for each run the encoders' displacement is compared with the
-truth's (the simulator, or a tape measure typed in), and the floor's creep coefficients
-(:class:`~omnibot.estimation.slip.SlipParameters`) come out of one least-squares fit.
+rest; for each run the encoders' displacement is compared with the truth's (a :class:`RunTruth`:
+the simulator, or any of ``omnibot calibrate``'s truth sources, e.g. a tape measure typed in), and
+the floor's creep coefficients (:class:`~omnibot.estimation.slip.SlipParameters`) come out of one
+least-squares fit. Runs the truth cannot measure are left out.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Protocol
 
 from omnibot.control.followers.base import Command
 from omnibot.errors import ConfigError
@@ -19,8 +21,21 @@ from omnibot.estimation.slip import SlipLeg, SlipParameters, SlipProbe, fit_slip
 from omnibot.navigation.runner import Navigator
 from omnibot.robot.description import RobotDescription
 
-TruthProbe = Callable[[], tuple[float, float] | None]
-"""The robot's true (x, y) now in the estimator's frame (None: unknown)."""
+
+class RunTruth(Protocol):
+    """Where a run really went: ``start()`` before it, ``displacement(mark, course)`` after it."""
+
+    live: bool
+    """It can also measure while the robot moves (then each speed-up is measured too, which pins
+    down the acceleration term)."""
+
+    def start(self) -> object:
+        """A mark taken with the robot standing at the start of a run."""
+
+    def displacement(self, mark: object, course: float) -> tuple[float, float] | None:
+        """The true (x, y) since ``mark`` in the body frame at the run's start (m), for a run
+        commanded along ``course`` (rad, same frame); None if this run cannot be measured."""
+
 
 HEADING_GAIN = 4.0
 """1/s: heading hold while driving a run."""
@@ -34,6 +49,7 @@ class SlipCalibration:
     legs: list[SlipLeg] = field(default_factory=list)
     """The runs, from rest to rest."""
     courses_deg: list[float] = field(default_factory=list)
+    """The course of each run in ``legs``, degrees."""
     robot: RobotDescription | None = None
     speed_ups: list[SlipLeg] = field(default_factory=list)
     """Each run's speed-up alone (only with a continuous truth): what pins down ``compliance``."""
@@ -85,64 +101,87 @@ def drive_run(
 
 def calibrate_slip(
     nav: Navigator,
-    truth: TruthProbe,
+    truth: RunTruth,
     *,
     courses: int = 12,
     speed: float = 0.3,
     distance: float = 0.5,
     accel: float = 1.0,
     settle: float = 0.4,
-    continuous: bool = False,
+    fit_scale: bool = True,
     progress: Callable[[int, int], object] | None = None,
 ) -> SlipCalibration:
-    """Drive ``courses`` runs of ``distance`` m at ``speed`` m/s and fit the floor's slip.
+    """Drive ``courses`` runs of ``distance`` m and fit the floor's slip.
 
-    ``nav`` must be prepared (telemetry on). ``truth`` gives the true position before and after each
-    run; with ``continuous`` (a truth that can be read while moving, like the simulator's) also
-    once the speed-up is over, which pins down the acceleration term (``compliance``) as well.
-    ``progress(done, total)`` is called after each run.
+    Each course is driven out at ``speed`` m/s and back at half of it: a wheel radius error grows
+    with the distance, creep with the time taken, so two speeds tell them apart (``fit_scale``
+    fits the encoders' distance scale too). ``nav`` must be prepared (telemetry on). ``truth``
+    measures each run; a ``live`` one also each speed-up, which pins down the acceleration term
+    (``compliance``) as well. ``progress(done, total)`` is called after each run. ConfigError when
+    fewer than two runs could be measured.
     """
     probe = SlipProbe(nav.robot)
     nav.client.on_telemetry(probe.update)
     legs: list[SlipLeg] = []
     speed_ups: list[SlipLeg] = []
+    measured: list[float] = []
     order = course_order(courses)
+
+    def world(disp: tuple[float, float], start: int) -> tuple[float, float]:
+        c, s = math.cos(probe.heading(start)), math.sin(probe.heading(start))
+        return (c * disp[0] - s * disp[1], s * disp[0] + c * disp[1])
+
     try:
         for i, deg in enumerate(order):
             nav.client.sleep(settle)
-            before, start = truth(), probe.mark()
-            if before is None:
-                raise ConfigError("slip calibration needs the true position before and after each run")
+            course = math.radians(deg)
+            mark, start = truth.start(), probe.mark()
 
-            def speed_up_done(before: tuple[float, float] = before, start: int = start) -> None:
-                now = truth()
-                if now is not None:
-                    speed_ups.append(probe.leg(start, (now[0] - before[0], now[1] - before[1])))
+            def speed_up_done(mark: object = mark, start: int = start, course: float = course) -> None:
+                disp = truth.displacement(mark, course)
+                if disp is not None:
+                    speed_ups.append(probe.leg(start, world(disp, start)))
 
-            drive_run(nav, math.radians(deg), speed, distance, accel, speed_up_done if continuous else None)
+            run_speed = speed if i % 2 == 0 else 0.5 * speed
+            drive_run(nav, course, run_speed, distance, accel, speed_up_done if truth.live else None)
             nav.client.sleep(settle)
-            after = truth()
-            if after is None:
-                raise ConfigError("slip calibration needs the true position before and after each run")
-            legs.append(probe.leg(start, (after[0] - before[0], after[1] - before[1])))
+            disp = truth.displacement(mark, course)
+            if disp is not None:
+                legs.append(probe.leg(start, world(disp, start)))
+                measured.append(deg)
             if progress is not None:
                 progress(i + 1, len(order))
     finally:
         nav.client.remove_listener(probe.update)
-    params = fit_slip(nav.robot, legs + speed_ups, compliance=bool(speed_ups))
-    return SlipCalibration(params, legs, order, nav.robot, speed_ups)
+    if len(legs) < 2:
+        raise ConfigError(
+            f"wheel slip needs at least two measured runs; the truth measured {len(legs)} of {len(order)}"
+        )
+    params = fit_slip(nav.robot, legs + speed_ups, compliance=bool(speed_ups), scale=fit_scale)
+    return SlipCalibration(params, legs, measured, nav.robot, speed_ups)
 
 
-def simulator_truth(nav: Navigator) -> TruthProbe:
-    """The simulator's ground truth as a :data:`TruthProbe` (ConfigError on a link without one)."""
-    if nav.sim is None:
-        raise ConfigError("this link has no simulator ground truth; measure the runs instead")
+class SimulatorTruth:
+    """The simulator's ground truth as a live :class:`RunTruth`."""
 
-    def probe() -> tuple[float, float] | None:
-        t = nav.truth()
-        return None if t is None else (t[0], t[1])
+    live = True
 
-    return probe
+    def __init__(self, nav: Navigator) -> None:
+        if nav.sim is None:
+            raise ConfigError("this link has no simulator ground truth; measure the runs instead")
+        self.nav = nav
+
+    def start(self) -> object:
+        return self.nav.truth()
+
+    def displacement(self, mark: object, course: float) -> tuple[float, float] | None:
+        now = self.nav.truth()
+        if now is None or not isinstance(mark, tuple):
+            return None
+        x0, y0, th0 = mark
+        dx, dy = now[0] - x0, now[1] - y0
+        c, s = math.cos(th0), math.sin(th0)
+        return (c * dx + s * dy, -s * dx + c * dy)
 
 
 def simulate_slip_calibration(
@@ -155,16 +194,17 @@ def simulate_slip_calibration(
         nav = Navigator(client, robot)
         try:
             nav.prepare()
-            return calibrate_slip(nav, simulator_truth(nav), speed=speed, continuous=True)
+            return calibrate_slip(nav, SimulatorTruth(nav), speed=speed)
         finally:
             nav.close()
 
 
 __all__: Sequence[str] = (
+    "RunTruth",
+    "SimulatorTruth",
     "SlipCalibration",
     "calibrate_slip",
     "course_order",
     "drive_run",
     "simulate_slip_calibration",
-    "simulator_truth",
 )
