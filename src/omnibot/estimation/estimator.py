@@ -44,7 +44,7 @@ TRACK_SLIP_WINDOW = 0.1
 TRACK_SLIP_GAP, TRACK_SLIP_FRACTION = 0.003, 0.05
 """That sum above this many metres plus this fraction of the distance travelled in the window: slip."""
 ACCEL_TAU = 0.05
-"""Time constant of the low-passed body acceleration the slip model reads, s."""
+"""Time constant of the low-passed acceleration (the slip model's input, the velocity's lag), s."""
 
 
 class SensorSample(Protocol):
@@ -113,9 +113,9 @@ class PoseEstimator:
     ``translation``: ``"tracking"`` (passive tracking wheels), ``"encoders"`` (driven-wheel encoders)
     or ``"auto"`` (tracking wheels when the robot has them). ``heading``: ``"fused"`` (gyro with bias
     and scale learned against the encoders), ``"gyro"`` (the raw gyro sum, seed 002's (1)) or
-    ``"encoders"`` (the wheels' rotation only). ``slip``: the floor's creep coefficients
-    (:mod:`omnibot.estimation.slip`, from ``omnibot calibrate``), subtracted from the driven wheels'
-    increments before the forward kinematics.
+    ``"encoders"`` (the wheels' rotation only). ``slip``: the floor's wheel slip
+    (:mod:`omnibot.estimation.slip`, from ``omnibot calibrate``): the driven wheels' increments are
+    scaled and their predicted creep taken out before the forward kinematics.
     """
 
     def __init__(
@@ -176,7 +176,7 @@ class PoseEstimator:
         self.body_velocity = np.zeros(3)
         """Low-passed body-frame twist (vx, vy m/s, w rad/s)."""
         self.body_acceleration = np.zeros(3)
-        """Low-passed body-frame acceleration (m/s^2, rad/s^2): what drives the slip model."""
+        """Low-passed acceleration in the body frame (m/s^2, rad/s^2): what drives the slip model."""
         self._accel = 0.0
         self._history: deque[tuple[float, float, float, float]] = deque()
         self._track_mismatch = 0.0
@@ -257,12 +257,12 @@ class PoseEstimator:
             vy0 + a * ((self._pose.y - before.y) / dt - vy0),
             w0 + a * (d_theta / dt - w0),
         )
-        self._body_rates(dt)
         b = 1.0 - math.exp(-dt / ACCEL_TAU)
         self._acc_world = tuple(
             acc + b * ((new - old) / dt - acc)
             for acc, new, old in zip(self._acc_world, self._vel, (vx0, vy0, w0), strict=True)
         )
+        self._body_rates()
         self._accel = self._acceleration()
         slipping = slip or self.filter.slipping
         # the low-pass lags a changing velocity by VELOCITY_TAU; its acceleration puts that back
@@ -279,14 +279,14 @@ class PoseEstimator:
         )
         return self.estimate
 
-    def _body_rates(self, dt: float) -> None:
-        """Body-frame twist and acceleration from the low-passed world velocity."""
+    def _body_rates(self) -> None:
+        """The low-passed world velocity and acceleration in the body frame (the acceleration is the
+        inertial one, what the wheels must push for, also while the body turns)."""
         c, s = math.cos(self._pose.theta), math.sin(self._pose.theta)
         vx, vy, w = self._vel
-        body = np.array([c * vx + s * vy, -s * vx + c * vy, w])
-        a = 1.0 - math.exp(-dt / ACCEL_TAU)
-        self.body_acceleration += a * ((body - self.body_velocity) / dt - self.body_acceleration)
-        self.body_velocity = body
+        ax, ay, aw = self._acc_world
+        self.body_velocity = np.array([c * vx + s * vy, -s * vx + c * vy, w])
+        self.body_acceleration = np.array([c * ax + s * ay, -s * ax + c * ay, aw])
 
     def _acceleration(self) -> float:
         """Second difference of the pose over ACCEL_SPAN: |a| + 0.2 m x |alpha|."""

@@ -159,8 +159,9 @@ class Navigator:
 
     ``estimator`` names the estimator the followers see (:data:`omnibot.estimation.ESTIMATORS`);
     ``observers`` are more estimators fed the same telemetry (for comparisons): names, or
-    estimators made with :func:`~omnibot.estimation.estimator.make_estimator` (keyed by their name). ``wheel_loop``
-    turns on the controller's wheel-speed loop (MODE bit 1) when every wheel has an encoder.
+    estimators made with :func:`~omnibot.estimation.estimator.make_estimator` (keyed by their
+    name). ``wheel_loop`` turns on the controller's wheel-speed loop (MODE bit 1) when every wheel
+    has an encoder.
     ``slip`` is the floor's creep calibration for the driven-wheel encoders (every estimator).
     """
 
@@ -229,9 +230,9 @@ class Navigator:
         comes back when braking), so the encoders' rotation over each spin is a good reference: with
         the gyro's heading change over the same stretch, ``d_psi = (1 + scale) d_enc + bias T`` for
         each spin and ``d_psi = bias T`` for the standstill before, a least-squares fit gives the
-        gyro's bias and scale error. The estimator's heading filter takes them (with the fit's
-        uncertainty) and its heading is set from the encoders' rotation over the manoeuvre. The robot
-        ends where it started (within its own odometry). Returns the learned (bias, scale).
+        gyro's bias and scale error. Every fused estimator's heading filter takes them (as known to
+        2e-4 rad/s and 0.05 %) and its heading is set from the encoders' rotation over the manoeuvre.
+        The robot ends where it started (within its own odometry). Returns the learned (bias, scale).
         """
         c = self.client
         probe = _GyroProbe(self.robot)
