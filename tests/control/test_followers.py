@@ -101,3 +101,14 @@ def test_body_frame_and_wrap() -> None:
     assert wrap(3 * math.pi) == pytest.approx(-math.pi)
     with pytest.raises(ConfigError, match="two distinct points"):
         make_follower("tracker", LIMITS).start(Path.from_points([(0.0, 0.0), (0.0, 0.0)], theta=0.0), 0.0)
+
+
+def test_tracker_does_not_hold_the_robot_inside_a_curve() -> None:
+    # carried ahead along a straight line, the robot's prediction lands outside a circle by
+    # v^2 lead^2 / 2R; compared with the reference there, the loop used to hold it inside by as much
+    path = standard_path("circle", size=0.5)  # radius 0.25 m at 0.5 m/s, an 80 ms lead: 3.2 mm
+    f = make_follower("tracker", LIMITS, lead=0.08)
+    dist, _, done = simulate("tracker", path, follower=f)
+    assert done
+    steady = np.array(dist[len(dist) // 4 : 3 * len(dist) // 4])
+    assert float(np.mean(steady)) < 0.0008

@@ -1,8 +1,8 @@
 """Wheel-slip calibration drive: straight runs in every direction, fitted by :func:`fit_slip`.
 
 The robot drives out and back along evenly spaced courses (0, 180, 30, 210, ... degrees, so it ends
-near where it started) with its wheel-speed loop, heading held by the gyro, each run from rest to
-rest; for each run the encoders' displacement is compared with the truth's (a :class:`RunTruth`:
+near where it started), out at full speed and back at half of it, with its wheel-speed loop,
+heading held by the gyro, each run from rest to rest; for each run the encoders' displacement is compared with the truth's (a :class:`RunTruth`:
 the simulator, or any of ``omnibot calibrate``'s truth sources, e.g. a tape measure typed in), and
 the floor's creep coefficients (:class:`~omnibot.estimation.slip.SlipParameters`) come out of one
 least-squares fit. Runs the truth cannot measure are left out.
@@ -52,7 +52,7 @@ class SlipCalibration:
     """The course of each run in ``legs``, degrees."""
     robot: RobotDescription | None = None
     speed_ups: list[SlipLeg] = field(default_factory=list)
-    """Each run's speed-up alone (only with a continuous truth): what pins down ``compliance``."""
+    """Each run's speed-up alone (only with a live truth): what pins down ``compliance``."""
 
     def errors(self, corrected: bool) -> list[float]:
         """Per run: |encoder - true displacement| / true distance, raw or with the fit applied."""
