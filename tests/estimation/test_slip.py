@@ -124,3 +124,15 @@ def test_fit_tells_a_radius_error_from_creep_with_two_speeds() -> None:
 def test_scale_out_of_range_is_refused() -> None:
     with pytest.raises(ConfigError, match=r"scale must be between 0\.5 and 2"):
         SlipParameters.from_mapping({"roll": 0.01, "scale": 3})
+
+
+def test_fit_keeps_scale_1_when_a_radius_error_explains_nothing() -> None:
+    rng = np.random.default_rng(5)
+    legs = []
+    for deg in (15, 100, 190, 280):
+        for speed in (0.4, 0.2):
+            leg = _synthetic_leg("omni4", SlipParameters(roll=0.01), math.radians(deg), speed)
+            noisy = tuple(np.asarray(leg.true_disp) + rng.normal(0.0, 3e-4, 2))
+            legs.append(SlipLeg(leg.twists, leg.accels, leg.dt, leg.headings, leg.encoder_disp, noisy))
+    fitted = fit_slip(load_robot("omni4"), legs, scale=True)
+    assert fitted.scale == 1.0 and fitted.roll == pytest.approx(0.01, rel=0.1)

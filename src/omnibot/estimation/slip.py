@@ -176,7 +176,10 @@ def fit_slip(
     term: over a run from rest to rest its creep integrates to almost nothing (the wheels creep
     forward while speeding up and back while braking), so it needs runs measured while moving.
     ``scale`` also fits the encoders' distance scale: it needs runs at two speeds (a radius error
-    grows with the distance, creep with the time taken).
+    grows with the distance, creep with the time taken), and it is kept only when it explains the
+    runs better by more than an extra parameter's worth (the Bayesian information criterion:
+    ``n ln(cost without / cost with) > ln n`` over the n equations); otherwise it stays 1, as it
+    would only trade against the creep.
     """
     if not legs:
         raise ConfigError("a slip fit needs at least one run")
@@ -188,9 +191,21 @@ def fit_slip(
         rhs.append(np.subtract(leg.encoder_disp, leg.true_disp))
     A = np.vstack(rows)  # columns: roll, compliance, 1 - scale
     b = np.concatenate(rhs)
-    free = [2] if scale else []
-    best = SlipParameters()
-    best_cost = math.inf
+    fixed, fixed_cost = _fit_creep(A, b, compliance, free=[])
+    if not scale:
+        return fixed
+    scaled, scaled_cost = _fit_creep(A, b, compliance, free=[2])
+    n = len(b)
+    if scaled_cost <= 0.0 or n * math.log(max(fixed_cost, 1e-30) / scaled_cost) > math.log(n):
+        return scaled
+    return fixed
+
+
+def _fit_creep(
+    A: FloatArray, b: FloatArray, compliance: bool, free: list[int]
+) -> tuple[SlipParameters, float]:
+    """The best fit with the creep columns non-negative and the ``free`` columns unconstrained."""
+    best, best_cost = SlipParameters(), math.inf
     for creep in ([0, 1], [0], [1], []) if compliance else ([0], []):
         cols = creep + free
         coef = np.linalg.lstsq(A[:, cols], b, rcond=None)[0] if cols else np.zeros(0)
@@ -202,7 +217,7 @@ def fit_slip(
         cost = float(residual @ residual)
         if cost < best_cost:
             best, best_cost = SlipParameters(float(x[0]), float(x[1]), 1.0 - float(x[2])), cost
-    return best
+    return best, best_cost
 
 
 def leg_error(
