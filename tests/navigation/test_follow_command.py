@@ -119,3 +119,19 @@ def test_follow_calibration_errors_are_one_line(
     assert main(["follow", str(path_file), "--calibration", str(cal), *extra]) == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err
+
+
+def test_calibrate_then_follow_on_carpet(tmp_path: FsPath) -> None:
+    """The workflow: calibrate on the floor (its wheel slip among the rest), then follow with it."""
+    cal, report = tmp_path / "cal.yaml", tmp_path / "report"
+    argv = ["calibrate", "--quick", "--surface", "carpet", "--no-check", "--no-motor-map", "--seed", "4"]
+    assert main([*argv, "--out", str(cal), "--report", str(report)]) == 0
+    path_file = tmp_path / "c.csv"
+    write_path(standard_path("circle", size=0.6), path_file)
+    rms = {}
+    for label, extra in (("raw", []), ("calibrated", ["--calibration", str(cal)])):
+        out = tmp_path / f"{label}.json"
+        follow = ["follow", str(path_file), "--speed", "0.4", "--surface", "carpet", "--report", str(out)]
+        assert main([*follow, *extra]) == 0
+        rms[label] = json.loads(out.read_text())["rms_cross_track_m"]
+    assert rms["raw"] > 0.015 and rms["calibrated"] < 0.3 * rms["raw"]
