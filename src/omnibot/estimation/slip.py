@@ -8,9 +8,9 @@ several percent. The pattern is a rigid motion for most courses (each wheel's ov
 its share of the motion), so the fit residual and the gyro cannot see it: it has to be calibrated
 once per floor and then subtracted.
 
-The model (linear in its two per-floor coefficients)::
+The model, with three per-floor numbers::
 
-    rim speed of wheel k  =  T_k q  +  roll * p_k(q)  +  compliance * a_k(q_dot)
+    scale * encoder rim speed of wheel k  =  T_k q  +  roll * p_k(q)  +  compliance * a_k(q_dot)
 
 * ``q`` the body twist, ``T_k`` the wheel's traction row (rim speed = r cos(gamma) omega);
 * ``p_k``: the traction force wheel k needs, in units of one wheel's roller drag, so that the drive
@@ -18,11 +18,13 @@ The model (linear in its two per-floor coefficients)::
   ``N_j`` resists its own rolling speed; least-norm over the wheels, as equal wheels share it);
 * ``a_k``: the traction force wheel k needs, per unit mass, to accelerate the body (m/s^2);
 * ``roll`` (m/s) and ``compliance`` (s) are the floor's: the creep speed of a wheel carrying one
-  roller drag, and the creep per unit acceleration. :func:`fit_slip` fits them from straight runs
-  with a known true displacement (the simulator's truth, or a tape measure).
+  roller drag, and the creep per unit acceleration; ``scale`` is the tyres' rolling radius against
+  the description's. :func:`fit_slip` fits them from straight runs with a known true displacement
+  (the simulator's truth, or a tape measure).
 
 :class:`SlipModel` gives the correction for a twist; :class:`~omnibot.estimation.estimator.PoseEstimator`
-(``slip=``) subtracts it from the encoder increments before the least-squares forward kinematics.
+(``slip=``) scales the encoder increments and subtracts it before the least-squares forward
+kinematics.
 """
 
 from __future__ import annotations
@@ -140,8 +142,9 @@ class SlipLeg:
     """One calibration run: the body twists the encoders saw and the true displacement.
 
     ``twists`` (n, 3) and ``accels`` (n, 3) are body-frame samples ``dt`` (n,) s long each, from the
-    encoders (uncorrected) and the gyro; ``encoder_disp`` and ``true_disp`` are the (x, y)
-    displacements over the run in the frame the run started in, by the encoders and by the truth.
+    encoders (uncorrected) and the gyro, ``headings`` (n,) the estimated heading at each; and
+    ``encoder_disp`` and ``true_disp`` are the (x, y) displacements over the run in the estimator's
+    (world) frame, by the encoders and by the truth.
     """
 
     twists: FloatArray
@@ -153,7 +156,7 @@ class SlipLeg:
 
 
 def _regressors(model: SlipModel, J_pinv: FloatArray, leg: SlipLeg) -> FloatArray:
-    """(2, 2): d(encoder - truth displacement in the start frame) / d(roll, compliance)."""
+    """(2, 2): d(encoder - true displacement, estimator frame) / d(roll, compliance)."""
     out = np.zeros((2, 2))
     for q, acc, dt, th in zip(leg.twists, leg.accels, leg.dt, leg.headings, strict=True):
         p, a = model.patterns(q, acc)
