@@ -129,7 +129,8 @@ class PathTeacher:
     # ------------------------------------------------------------------ helpers
 
     def state(self, client: RobotClient) -> State:
-        """The estimate carried to now on the link clock."""
+        """The latest estimate, stamped with the link clock's now (the tracker's ``lead`` covers the
+        telemetry's age, at most a period)."""
         assert self.estimator is not None
         est = self.estimator.estimate
         now = client.clock.now()
