@@ -59,7 +59,7 @@ def slip_step(
     source: TruthSource,
     bar: Any = None,
 ) -> SlipCalibration:
-    """Drive the slip runs on the floor the robot stands on and fit its creep coefficients."""
+    """Drive the slip runs on the floor the robot stands on and fit its wheel slip."""
     nav = Navigator(client, robot)
     update: Callable[[int, int], object] | None = None
     if bar is not None:

@@ -414,7 +414,7 @@ def make_estimator(
     name: str, robot: RobotDescription, start: Pose2D | None = None, slip: SlipParameters | None = None
 ) -> Estimator:
     """The estimator registered as ``name`` for ``robot``, starting at ``start``, with the floor's
-    creep coefficients ``slip`` (None: uncorrected encoders)."""
+    wheel slip ``slip`` (None: uncorrected encoders)."""
     try:
         factory = ESTIMATORS[name]
     except KeyError:

@@ -71,7 +71,8 @@ class FollowOptions:
     """Spin in place one turn each way first (the gyro's scale error is learned; the robot ends where
     it started, within its odometry)."""
     slip: SlipParameters | None = None
-    """The floor's creep coefficients for the driven-wheel encoders (``omnibot calibrate``)."""
+    """The floor's wheel slip (creep and distance scale) for the driven-wheel encoders, from
+    ``omnibot calibrate``."""
 
 
 def follow_path(
