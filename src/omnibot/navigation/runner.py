@@ -162,7 +162,8 @@ class Navigator:
     estimators made with :func:`~omnibot.estimation.estimator.make_estimator` (keyed by their
     name). ``wheel_loop`` turns on the controller's wheel-speed loop (MODE bit 1) when every wheel
     has an encoder.
-    ``slip`` is the floor's wheel-slip calibration (creep and distance scale) for the driven-wheel encoders (every estimator).
+    ``slip`` is the floor's wheel-slip calibration (creep and distance scale) for the driven-wheel
+    encoders (every estimator).
     """
 
     def __init__(
