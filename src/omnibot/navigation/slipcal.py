@@ -1,11 +1,12 @@
 """Wheel-slip calibration drive: straight runs in every direction, fitted by :func:`fit_slip`.
 
 The robot drives out and back along evenly spaced courses (0, 180, 30, 210, ... degrees, so it ends
-near where it started), out at full speed and back at half of it, with its wheel-speed loop,
-heading held by the gyro, each run from rest to rest; for each run the encoders' displacement is compared with the truth's (a :class:`RunTruth`:
-the simulator, or any of ``omnibot calibrate``'s truth sources, e.g. a tape measure typed in), and
-the floor's wheel slip (:class:`~omnibot.estimation.slip.SlipParameters`) comes out of one
-least-squares fit. Runs the truth cannot measure are left out.
+near where it started), out at full speed and back at half of it, with its wheel-speed loop and its
+heading held by the gyro, each run from rest to rest. For each run the encoders' displacement is
+compared with the truth's (a :class:`RunTruth`: the simulator, or any of ``omnibot calibrate``'s
+truth sources, e.g. a tape measure typed in), and the floor's wheel slip
+(:class:`~omnibot.estimation.slip.SlipParameters`) comes out of one least-squares fit. Runs the
+truth cannot measure are left out.
 """
 
 from __future__ import annotations
