@@ -247,8 +247,7 @@ def calibrate_surface(
                 slip = slip_step(client, robot, source, slip_bar)
             except ConfigError as exc:
                 notes.append(f"wheel slip not calibrated: {exc}")
-            finally:  # back to what the rest of the calibration expects
-                client.stop()
+            finally:  # back to what the rest of the calibration expects (the runs end stopped)
                 if client.binary:
                     client.use_text()
                 _open_loop(client)

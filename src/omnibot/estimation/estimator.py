@@ -30,6 +30,7 @@ from omnibot.estimation.odometry import COUNT_MODULUS, Pose2D, compose_arc, coun
 from omnibot.estimation.slip import SlipModel, SlipParameters
 from omnibot.estimation.tracking import Seed002Odometry, TrackingGeometry
 from omnibot.robot.description import RobotDescription
+from omnibot.robot.kinematics import world_to_body
 
 STILL_TIME = 0.2
 """Seconds without a single encoder count after which the robot is taken to stand still."""
@@ -282,11 +283,9 @@ class PoseEstimator:
     def _body_rates(self) -> None:
         """The low-passed world velocity and acceleration in the body frame (the acceleration is the
         inertial one, what the wheels must push for, also while the body turns)."""
-        c, s = math.cos(self._pose.theta), math.sin(self._pose.theta)
-        vx, vy, w = self._vel
-        ax, ay, aw = self._acc_world
-        self.body_velocity = np.array([c * vx + s * vy, -s * vx + c * vy, w])
-        self.body_acceleration = np.array([c * ax + s * ay, -s * ax + c * ay, aw])
+        theta = self._pose.theta
+        self.body_velocity = world_to_body(self._vel, theta)
+        self.body_acceleration = world_to_body(self._acc_world, theta)
 
     def _acceleration(self) -> float:
         """Second difference of the pose over ACCEL_SPAN: |a| + 0.2 m x |alpha|."""

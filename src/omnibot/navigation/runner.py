@@ -118,6 +118,25 @@ def simulator_of(client: RobotClient) -> Any | None:
     return None
 
 
+def ramp_fraction(t: float, total: float, ramp: float) -> float:
+    """The fraction of full speed at time ``t`` of a motion ``total`` s long that speeds up over the
+    first ``ramp`` s and slows down over the last (a trapezoid; 0 outside it)."""
+    return max(0.0, min(1.0, t / ramp, (total - t) / ramp))
+
+
+def submit_vel(client: RobotClient, command: Command, watchdog: float = WATCHDOG) -> Pending:
+    """VEL for ``command`` clamped to what the controller accepts, submitted without waiting."""
+    lim = client.limits
+    vmax = max(0.0, (lim.speed_max_cms - 1.0) / 100.0)
+    vx, vy = command.vx, command.vy
+    speed = math.hypot(vx, vy)
+    if speed > vmax:
+        vx, vy = vx * vmax / speed, vy * vmax / speed
+    wmax = math.radians(max(0.0, lim.rate_max_dps - 1.0))
+    w = max(-wmax, min(wmax, command.w))
+    return client.submit(vel_command(lim, vx, vy, w, watchdog))
+
+
 class _GyroProbe:
     """The gyro's heading and the encoders' rotation at every telemetry sample (gyro calibration)."""
 
@@ -248,7 +267,7 @@ class Navigator:
                 duration = 2.0 * math.pi * turns / rate + ramp
                 t0 = c.clock.now()
                 while (t := c.clock.now() - t0) < duration + ramp:
-                    k = min(1.0, t / ramp, max(0.0, (duration + ramp - t) / ramp))
+                    k = ramp_fraction(t, duration + ramp, ramp)
                     self.send(Command(0.0, 0.0, sign * rate * k))
                     c.sleep(0.01)
                 c.stop()
@@ -312,17 +331,8 @@ class Navigator:
 
     def send(self, command: Command) -> None:
         """VEL for ``command`` (clamped to what the controller accepts), without waiting."""
-        c = self.client
-        lim = c.limits
-        vmax = max(0.0, (lim.speed_max_cms - 1.0) / 100.0)
-        vx, vy = command.vx, command.vy
-        speed = math.hypot(vx, vy)
-        if speed > vmax:
-            vx, vy = vx * vmax / speed, vy * vmax / speed
-        wmax = math.radians(max(0.0, lim.rate_max_dps - 1.0))
-        w = max(-wmax, min(wmax, command.w))
         self._collect()
-        self._pending.append(c.submit(vel_command(lim, vx, vy, w, WATCHDOG)))
+        self._pending.append(submit_vel(self.client, command))
 
     def _collect(self) -> None:
         keep = []

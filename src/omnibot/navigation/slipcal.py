@@ -19,8 +19,9 @@ from typing import Protocol
 from omnibot.control.followers.base import Command
 from omnibot.errors import ConfigError
 from omnibot.estimation.slip import SlipLeg, SlipParameters, SlipProbe, fit_slip, leg_error
-from omnibot.navigation.runner import Navigator
+from omnibot.navigation.runner import Navigator, ramp_fraction
 from omnibot.robot.description import RobotDescription
+from omnibot.robot.kinematics import body_to_world, world_to_body
 
 
 class RunTruth(Protocol):
@@ -93,7 +94,7 @@ def drive_run(
         if at_cruise is not None and t >= t_acc + 0.1:
             at_cruise()
             at_cruise = None
-        v = speed * min(1.0, t / t_acc, max(0.0, (total - t) / t_acc))
+        v = speed * ramp_fraction(t, total, t_acc)
         err = heading0 - nav.estimator.estimate.theta
         nav.send(Command(v * math.cos(course), v * math.sin(course), HEADING_GAIN * err))
         c.sleep(period)
@@ -129,8 +130,8 @@ def calibrate_slip(
     order = course_order(courses)
 
     def world(disp: tuple[float, float], start: int) -> tuple[float, float]:
-        c, s = math.cos(probe.heading(start)), math.sin(probe.heading(start))
-        return (c * disp[0] - s * disp[1], s * disp[0] + c * disp[1])
+        x, y, _ = body_to_world((*disp, 0.0), probe.heading(start))
+        return (float(x), float(y))
 
     try:
         for i, deg in enumerate(order):
@@ -180,9 +181,8 @@ class SimulatorTruth:
         if now is None or not isinstance(mark, tuple):
             return None
         x0, y0, th0 = mark
-        dx, dy = now[0] - x0, now[1] - y0
-        c, s = math.cos(th0), math.sin(th0)
-        return (c * dx + s * dy, -s * dx + c * dy)
+        x, y, _ = world_to_body((now[0] - x0, now[1] - y0, 0.0), th0)
+        return (float(x), float(y))
 
 
 def simulate_slip_calibration(

@@ -22,7 +22,6 @@ import math
 from typing import Any
 
 from omnibot.client.client import RobotClient
-from omnibot.client.commands import vel as vel_command
 from omnibot.client.events import Telemetry
 from omnibot.control.followers.base import Follower, State, make_follower
 from omnibot.control.paths.path import Path
@@ -30,6 +29,7 @@ from omnibot.control.paths.teach import PathRecorder
 from omnibot.estimation.estimator import PoseEstimator
 from omnibot.estimation.odometry import Pose2D
 from omnibot.estimation.slip import SlipParameters
+from omnibot.navigation.runner import submit_vel
 from omnibot.navigation.session import follower_limits
 from omnibot.robot.description import RobotDescription
 
@@ -123,7 +123,7 @@ class PathTeacher:
         if follower.done:
             self._end_repeat(client)
             return False
-        client.submit(vel_command(client.limits, command.vx, command.vy, command.w, WATCHDOG))
+        submit_vel(client, command, WATCHDOG)
         return True
 
     # ------------------------------------------------------------------ helpers
