@@ -6,16 +6,16 @@ carpet. Open-loop MOVEs of 1 m on courses 0..90 (and back on course + 180) at 0.
 ROTATEs, are measured before and after calibration, and with the average of both surfaces.
 
 The calibration fits a motor map first (each motor's dead-band offset and a gain table that
-balances the motors), then seed 000's factor tables through it. What the simulator makes of the
-floor, stated once (docs/calibration.md has the numbers):
+balances the motors), then the idle wheels' roller drag, then seed 000's factor tables through them.
+What the simulator makes of the floor, stated once (docs/calibration.md has the numbers):
 
 * on courses 0 and 90 two wheels do not turn at all, and their rollers' resistance depends on where
-  each wheel happens to stand (seed 000: "can vary K_l as much as twice"); the phase is frozen for
-  the whole move and no open-loop power factor can know it, so single MOVEs there scatter around
-  the fitted average (a few % on wood, up to 30 % either way on carpet:
-  :func:`test_roller_phase_alone_moves_an_axis_course`);
-* on every other course every wheel rolls; there MOVEs land within 1.5 % on wood and, on average,
-  within 3 % on carpet.
+  each wheel stands (seed 000: "can vary K_l as much as twice"): up to 30 % of a MOVE either way on
+  carpet. The controller reads those wheels' positions from their encoders and makes up for the
+  drag (:func:`test_roller_drag_term_takes_out_the_wheel_position`);
+* on carpet this robot's weak motors cannot power 1 m MOVEs at 0.9 m/s on every course: the
+  calibration says how fast they can (its reach, about 0.8 m/s), and beyond it the controller warns
+  that it reduced the speed.
 """
 
 from __future__ import annotations
@@ -92,9 +92,11 @@ def test_the_robot_really_differs(outcome: tuple[CalibrationResult, Path, float]
 
 def test_after_within_3_percent(outcome: tuple[CalibrationResult, Path, float]) -> None:
     result, _, _ = outcome
-    # (surface, mean over all moves, mean and max over courses 15..75, max on the axes)
-    limits = (("wood", 0.015, 0.01, 0.025, 0.05), ("carpet", 0.04, 0.025, 0.12, 0.3))
-    for surface, mean_all, mean_rolling, max_rolling, max_axis in limits:
+    wood, carpet = result.sessions
+    assert wood.reach is not None and wood.reach >= max(CHECK.speeds or ())
+    assert carpet.reach is not None and 0.6 <= carpet.reach < 0.9
+    for session, mean_all in ((wood, 0.01), (carpet, 0.04)):
+        surface = session.surface
         after = rows(result, f"after ({surface} calibration), {surface}")
         before = summarize(rows(result, f"before, {surface}"))
         summary = summarize(after)
@@ -102,16 +104,16 @@ def test_after_within_3_percent(outcome: tuple[CalibrationResult, Path, float]) 
         assert summary.distance_mean is not None and before.distance_mean is not None
         assert summary.distance_mean < mean_all
         assert summary.distance_mean < before.distance_mean / 3
-        # where every wheel rolls (15..75 degrees): within 3 % on average on both floors, and every
-        # single move on wood; on carpet the top speed leaves a few % (one table per folded course
-        # serves four directions, and the motor map balances the motors only approximately)
-        rolling = [abs(r.error or 0.0) for r in moves(after, 15.0, 75.0)]
-        assert len(rolling) == 5 * 3 * 2
-        assert statistics.fmean(rolling) < mean_rolling
-        assert max(rolling) < max_rolling
-        # on the motor axes the frozen roller phase scatters single moves (the test below)
-        axis = [abs(r.error or 0.0) for r in after if r.kind == "move" and r.course_deg % 90.0 == 0.0]
-        assert max(axis) < max_axis
+        # every MOVE within the floor's reach lands within 3 %, on every course 0..90 and back
+        assert session.reach is not None
+        within = [r for r in moves(after) if r.speed <= session.reach]
+        assert len(within) >= 28
+        assert max(abs(r.error or 0.0) for r in within) < 0.03
+        # beyond it a motor runs out of power on most courses, and the controller says so (on the
+        # others the rollers' drag happens to be low there: the reach counts the worst position)
+        beyond = [r for r in moves(after) if r.speed > session.reach]
+        assert sum(r.saturated for r in beyond) >= len(beyond) / 2
+        assert not any(r.saturated for r in within)
 
 
 def test_motor_map_balances_unequal_motors(outcome: tuple[CalibrationResult, Path, float]) -> None:
@@ -131,30 +133,38 @@ def test_motor_map_balances_unequal_motors(outcome: tuple[CalibrationResult, Pat
         assert after.course_mean_deg < 0.7 * before.course_mean_deg
 
 
-def test_roller_phase_alone_moves_an_axis_course(
+def test_roller_drag_term_takes_out_the_wheel_position(
     outcome: tuple[CalibrationResult, Path, float], nominal: RobotDescription, true_robot: RobotDescription
 ) -> None:
-    """The same MOVE on course 90 (wheels m2 and m4 idle) with the idle wheels turned by half a
-    roller pitch: the carpet calibration cannot be right for both."""
+    """The same MOVE on course 90 (wheels m2 and m4 idle) with the idle wheels at their least and
+    most resistant positions (half a roller pitch apart): 30 % apart without the controller's drag
+    term, within 2.5 % with it."""
     result, _, _ = outcome
     carpet = result.sessions[1].spec
+    fit = result.sessions[1].fit.rollers
+    assert carpet.rollers is not None and fit is not None and fit.kept
+    assert fit.rms_after < 0.1 * fit.rms_before
     pitch = 2 * math.pi / true_robot.wheels[1].rollers.count
-    got = []
-    with sim_client(nominal, "carpet", true_robot=true_robot, seed=SEED + 2) as client:
-        sim = client.link.device.sim  # type: ignore[attr-defined]
-        client.upload_calibration(carpet)
-        for k, phase in enumerate((0.0, 0.5 * pitch, 0.0, 0.5 * pitch)):
-            angles = sim.physics.wheel_angle
-            for j in (1, 3):
-                angles[0, j] = round(angles[0, j] / pitch) * pitch + phase
-            x0, y0 = sim.pose.x, sim.pose.y
-            client.move(1.0, 0.3, math.radians(90 + 180 * (k % 2)))
-            client.wait_idle(timeout=10)
-            client.sleep(0.5)
-            got.append(math.hypot(sim.pose.x - x0, sim.pose.y - y0))
-    low, high = got[0::2], got[1::2]
-    assert low[0] == pytest.approx(low[1], abs=0.01) and high[0] == pytest.approx(high[1], abs=0.01)
-    assert low[0] - high[0] > 0.3  # more than 30 % of the distance from the wheels' position alone
+    spread = {}
+    for label, spec in (("with", carpet), ("without", carpet.model_copy(update={"rollers": None}))):
+        got = []
+        with sim_client(nominal, "carpet", true_robot=true_robot, seed=SEED + 2) as client:
+            sim = client.link.device.sim  # type: ignore[attr-defined]
+            client.upload_calibration(spec)
+            for k, phase in enumerate((0.0, 0.5 * pitch, 0.0, 0.5 * pitch)):
+                angles = sim.physics.wheel_angle
+                for j in (1, 3):
+                    angles[0, j] = round(angles[0, j] / pitch) * pitch + phase
+                x0, y0 = sim.pose.x, sim.pose.y
+                client.move(1.0, 0.3, math.radians(90 + 180 * (k % 2)))
+                client.wait_idle(timeout=10)
+                client.sleep(0.5)
+                got.append(math.hypot(sim.pose.x - x0, sim.pose.y - y0))
+        low, high = got[0::2], got[1::2]
+        assert low[0] == pytest.approx(low[1], abs=0.01) and high[0] == pytest.approx(high[1], abs=0.01)
+        spread[label] = low[0] - high[0]
+    assert spread["without"] > 0.3  # more than 30 % of the distance from the wheels' position alone
+    assert abs(spread["with"]) < 0.025
 
 
 def test_averaged_calibration_shows_the_surfaces_apart(

@@ -121,6 +121,7 @@ def test_a_port_with_two_floors_asks_between_them(tmp_path: Path, capsys: pytest
         "--quick",
         "--no-check",
         "--no-motor-map",
+        "--no-rollers",
     ]
     args = build_parser().parse_args(["calibrate", *port, *files])
 
@@ -132,7 +133,7 @@ def test_a_port_with_two_floors_asks_between_them(tmp_path: Path, capsys: pytest
     assert [p.split(" with")[0] for p in prompts] == ["Put the robot on lab", "Put the robot on hall"]
     cal = load_calibration(tmp_path / "cal.yaml")
     assert list(cal.surfaces) == ["lab", "hall"]  # the same floor twice here: nearly the same tables
-    assert cal.calibration.motors is None
+    assert cal.calibration.motors is None and cal.calibration.rollers is None
     assert set(cal.slip) == {"lab", "hall"}
     assert cal.surfaces["lab"].k == pytest.approx(cal.surfaces["hall"].k, rel=0.05)
     assert "truth sim" in capsys.readouterr().out

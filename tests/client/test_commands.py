@@ -10,7 +10,13 @@ from omnibot.client import Limits
 from omnibot.client import commands as c
 from omnibot.protocol import codes
 from omnibot.protocol.messages import Cal, Delta, Mode, Move, Power, Rotate, Sonar, Telem, Vel
-from omnibot.robot.description import CalibrationSpec, CourseTable, MotorMapSpec, PiecewiseLinear
+from omnibot.robot.description import (
+    CalibrationSpec,
+    CourseTable,
+    MotorMapSpec,
+    PiecewiseLinear,
+    RollerDragSpec,
+)
 
 OMNI4 = Limits.from_robot("omni4")
 ANY = Limits()
@@ -174,12 +180,36 @@ def test_cal_and_calibration_upload() -> None:
     )
     # without a motor map, the identity when the robot's motors are known
     assert c.calibration(CalibrationSpec(k=220.0)) == [Cal(0, 0, 0, 2200)]
+    no_drag = [
+        Cal(codes.CAL_ROLLER_COS, 0, 0, 0),
+        Cal(codes.CAL_ROLLER_SIN, 0, 0, 0),
+        Cal(codes.CAL_ROLLER_COS, 1, 0, 0),
+        Cal(codes.CAL_ROLLER_SIN, 1, 0, 0),
+        Cal(codes.CAL_ROLLER_COAST, 0, 0, 0),
+    ]
     assert c.calibration(CalibrationSpec(k=220.0), motors=2)[1:] == [
         Cal(codes.CAL_OFFSET, 0, 0, 0),
         Cal(codes.CAL_GAIN, 0, 0, 1000),
         Cal(codes.CAL_OFFSET, 1, 0, 0),
         Cal(codes.CAL_GAIN + 1, 0, 0, 1000),
+        *no_drag,
     ]
+    drag = RollerDragSpec(
+        cos=(-4.96, 0.0), sin=(0.35, 0.0), coast=PiecewiseLinear(x=(0.0, 0.64), y=(0.0, 0.34))
+    )
+    assert c.calibration(CalibrationSpec(k=220.0, rollers=drag))[1:] == [
+        Cal(codes.CAL_ROLLER_COS, 0, 0, -50),
+        Cal(codes.CAL_ROLLER_SIN, 0, 0, 4),
+        Cal(codes.CAL_ROLLER_COS, 1, 0, 0),
+        Cal(codes.CAL_ROLLER_SIN, 1, 0, 0),
+        Cal(codes.CAL_ROLLER_COAST, 0, 0, 0),
+        Cal(codes.CAL_ROLLER_COAST, 1, 64, 340),
+    ]
+    with pytest.raises(ValueError, match="roller drag: 2 wheels for a robot with 4"):
+        c.calibration(CalibrationSpec(k=220.0, rollers=drag), motors=4)
+    close = drag.model_copy(update={"coast": PiecewiseLinear(x=(0.5, 0.503), y=(0.1, 0.2))})
+    with pytest.raises(ValueError, match="1 cm/s apart"):
+        c.calibration(CalibrationSpec(k=220.0, rollers=close))
     with pytest.raises(ValueError, match="2 motors for a robot with 4"):
         c.calibration(CalibrationSpec(k=220.0, motors=motors), motors=4)
     assert c.calibration(CalibrationSpec(k=220.0, motors=motors))[1:] == [

@@ -74,7 +74,10 @@ def test_status_format(rig: Rig) -> None:
         ("SONAR,0,100,0,0,0", codes.E_SONAR),
         ("SONAR,1,100,0,501,0", codes.E_SONAR),
         ("SONAR,1,100,-1,0,0", codes.E_SONAR),
-        ("CAL,4,0,0,1000", codes.E_CALIBRATION),
+        ("CAL,7,0,0,1000", codes.E_CALIBRATION),
+        ("CAL,4,4,0,10", codes.E_CALIBRATION),
+        ("CAL,5,0,1,10", codes.E_CALIBRATION),
+        ("CAL,6,0,50,-5", codes.E_CALIBRATION),
         ("CAL,3,4,0,400", codes.E_CALIBRATION),
         ("CAL,24,0,0,1000", codes.E_CALIBRATION),
         ("CAL,20,0,0,0", codes.E_CALIBRATION),
@@ -486,3 +489,32 @@ def test_delta_from_infinite_move_stays_infinite(rig: Rig) -> None:
     assert rig.ctrl.executor.remembered == [30000, 50, 90, 0]
     assert rig.run(2000) == []
     assert rig.ctrl.executor.moving
+
+
+def test_cal_roller_drag_follows_the_idle_wheels_encoders(rig: Rig) -> None:
+    assert rig.cmd("CAL,0,0,0,4400") == ["OK"]
+    # wheels 1 and 3 stand still on course 0; their rollers drag -4 counts each at phase 0 (cos term)
+    assert rig.send("CAL,4,0,0,-40;CAL,4,2,0,-40\n") == ["OK", "OK"]
+    rig.cmd("MOVE,30000,50,0,0")  # infinite: no coast, gain 1
+    assert rig.hal.powers == [0, 220 - 8, 0, -(220 - 8)]
+    rig.hal.enc[0] = rig.hal.enc[2] = 55 * 7 + 28  # half a roller pitch (55 counts): cos = -1
+    rig.run(20)
+    assert rig.hal.powers == [0, 228, 0, -228]
+    rig.cmd("STOP")
+    rig.hal.enc[0] = rig.hal.enc[2] = -55  # a whole pitch back: phase 0 again
+    # the coast table: 1 s at 100 cm/s, so 0.5 s at 50 cm/s; a 1 m MOVE lasts 2 s: gain 1.25
+    assert rig.send("CAL,6,0,0,0;CAL,6,1,100,1000\n") == ["OK", "OK"]
+    rig.cmd("MOVE,100,50,0,0")
+    assert rig.hal.powers == [0, 210, 0, -210]
+    rig.cmd("STOP;ROTATE,90,90")  # rotation: no drag term
+    assert rig.hal.powers == [round(440 * 0.096 * 1.5708)] * 4
+    rig.cmd("STOP;MOVE,30000,50,90,0")  # wheels 2 and 4 stand still and have no drag
+    assert rig.hal.powers == [220, 0, -220, 0]
+
+
+def test_cal_roller_drag_off_in_closed_loop() -> None:
+    rig = make_rig()
+    rig.hal.enc_gain = 1.0
+    assert rig.send("CAL,0,0,0,4400;CAL,4,0,0,-40;CAL,4,2,0,-40;MODE,2\n") == ["OK"] * 4
+    rig.cmd("MOVE,30000,50,0,0")
+    assert rig.hal.powers == [0, 220, 0, -220]  # the feedforward, without the drag

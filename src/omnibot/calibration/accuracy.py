@@ -18,7 +18,14 @@ from typing import Any
 
 from omnibot.calibration.experiments import Runner, speed_range
 from omnibot.calibration.truth import ROTATE, STRAIGHT, RunInfo
-from omnibot.robot.description import RobotDescription
+from omnibot.firmware.calibration import Calibration
+from omnibot.firmware.config import build_config
+from omnibot.firmware.power import PowerModel
+from omnibot.protocol import codes
+from omnibot.robot.description import CalibrationSpec, RobotDescription
+
+REACH_COURSES = tuple(float(c) for c in range(0, 360, 15))
+"""Courses (degrees) :func:`reach_speed` checks."""
 
 
 @dataclass(frozen=True)
@@ -58,6 +65,8 @@ class AccuracyRow:
     course_error_deg: float | None = None
     heading_error_deg: float | None = None
     source: str = ""
+    saturated: bool = False
+    """The controller warned that the motors could not give the power asked (warning 11, speed reduced)."""
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -104,6 +113,7 @@ def run_accuracy(runner: Runner, plan: AccuracyPlan) -> list[AccuracyRow]:
                         else _wrap_deg(math.degrees(direction) - c),
                         heading_error_deg=None if m is None or m.theta is None else math.degrees(m.theta),
                         source="" if m is None else m.source,
+                        saturated=codes.W_SPEED_REDUCED in r.warnings,
                     )
                 )
     for angle, rate in plan.rotations:
@@ -129,9 +139,47 @@ def run_accuracy(runner: Runner, plan: AccuracyPlan) -> list[AccuracyRow]:
                     error=None if got is None else got / a - 1.0,
                     heading_error_deg=None if got is None else got - a,
                     source="" if m is None else m.source,
+                    saturated=codes.W_SPEED_REDUCED in r.warnings,
                 )
             )
     return rows
+
+
+def reach_speed(
+    robot: RobotDescription,
+    spec: CalibrationSpec,
+    length: float,
+    courses_deg: Sequence[float] = REACH_COURSES,
+) -> float | None:
+    """m/s: the fastest MOVE of ``length`` that the calibration can power on every course without a
+    motor saturating, the roller drag counted at its worst phase; None when not even the slowest can.
+
+    The powers are the firmware's own (:class:`~omnibot.firmware.power.PowerModel` on the calibrated
+    description), from the robot's slowest MOVE up to its fastest in 1 cm/s steps.
+    """
+    cfg = build_config(robot.model_copy(update={"calibration": spec}))
+    model = PowerModel(cfg, Calibration(cfg))
+    cal, n, pwm_max = model.cal, model.n, model.pwm_max
+    lo, hi = speed_range(robot, length)
+    out = [0] * n
+    best = None
+    for step in range(round(100 * lo), round(100 * hi) + 1):
+        v = step / 100.0
+        gain = 1.0 + cal.coast(100.0 * v) * v / length
+        for course in courses_deg:
+            ux, uy = math.cos(math.radians(course)), math.sin(math.radians(course))
+            model.compute(v * ux, v * uy, 0.0, False, out)
+            along = [r[0] * ux + r[1] * uy for r in model.rim]
+            busiest = max(abs(a) for a in along)
+            worst = gain * sum(
+                math.hypot(cal.roller_cos[i], cal.roller_sin[i]) * abs(d[0] * ux + d[1] * uy)
+                for i, d in enumerate(model.roller_dir)
+                if model.roller_pitch[i] > 0.0
+            )
+            if any(abs(model.base[i]) + worst * abs(along[i]) / busiest > pwm_max for i in range(n)):
+                return best
+        best = v
+    return best
 
 
 @dataclass(frozen=True)

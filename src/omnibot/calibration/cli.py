@@ -75,6 +75,11 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         "--no-motor-map", action="store_true", help="no per-motor offsets and gains (seed 000's factors only)"
     )
     p.add_argument(
+        "--no-rollers",
+        action="store_true",
+        help="no roller drag term for the wheels that stand still on the motor axes (seed 000's factors only)",
+    )
+    p.add_argument(
         "--no-slip",
         action="store_true",
         help="skip the wheel-slip runs (the driven-wheel odometry's creep on each floor)",
@@ -201,6 +206,7 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] = input) -> int:
         courses_deg=courses,
         move_length=args.move_length,
         motor_map=not args.no_motor_map,
+        roller_rounds=0 if args.no_rollers else base.roller_rounds,
         slip=not args.no_slip,
     )
     check = AccuracyPlan.quick() if args.quick else AccuracyPlan()

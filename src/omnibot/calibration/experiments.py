@@ -106,13 +106,17 @@ class Plan:
     """Fit the motor map (each motor's dead-band offset and gain table) before the sweeps."""
     balance_levels: int = 4
     """Nominal powers of the balance runs, spread over what the speed range needs."""
+    roller_rounds: int = 4
+    """Rounds of the idle axes at each power for the idle wheels' roller drag (rollers.py; 0: none)."""
     slip: bool = True
     """Drive the wheel-slip runs (12 out-and-back, wheel-speed loop on) and fit the floor's creep."""
 
     @classmethod
     def quick(cls) -> Plan:
         """Seed 000's own scope: courses 0 and 45 (fold range ends), two directions, fewer powers."""
-        return cls(course_count=2, directions=2, levels=6, turn_curvatures=(2.0, 5.0), turn_rounds=1)
+        return cls(
+            course_count=2, directions=2, levels=6, turn_curvatures=(2.0, 5.0), turn_rounds=1, roller_rounds=2
+        )
 
     def calibrated_courses(self, geometry: Geometry) -> list[float]:
         top = geometry.fold_max
@@ -154,15 +158,20 @@ class RunResult:
     p_arg: float | None = None
     """The firmware's power argument of the calibrated part (K times the busiest rim speed)."""
     warnings: tuple[int, ...] = ()
+    counts: tuple[int, ...] | None = None
+    """The controller's wheel encoder counts at the start (from telemetry), when it has encoders."""
+    correction: float = 0.0
+    """m added to a straight run's path by a later fit (the idle wheels' roller drag, rollers.py)."""
 
     @property
     def amount(self) -> float | None:
-        """Path length (m, straight: the arc when the body turned, see :attr:`Motion.path`) or angle
-        (rad, rotations and turns, signed by the command) achieved."""
+        """Path length (m, straight: the arc when the body turned, see :attr:`Motion.path`, plus
+        :attr:`correction`) or angle (rad, rotations and turns, signed by the command) achieved."""
         if self.truth is None:
             return None
         if self.kind == STRAIGHT:
-            return self.truth.path
+            path = self.truth.path
+            return None if path is None else path + self.correction
         return None if self.truth.theta is None else self.sign * self.truth.theta
 
     def as_dict(self) -> dict[str, Any]:
@@ -208,6 +217,8 @@ class Runner:
         """Mark, ``send()`` (the command, or a text naming what was sent), wait for IDLE and the
         coast-down, measure."""
         mark = self.truth.mark()
+        latest = self.tap.latest
+        counts = tuple(latest.encoders) if latest is not None and latest.encoders else None
         odo0 = self.tap.odometry_pose
         h0, t0 = self.tap.heading, self._ctime()
         self._warns.clear()
@@ -229,6 +240,7 @@ class Runner:
             gyro=None if h0 is None or h1 is None else h1 - h0,
             gyro_time=None if t0 is None or t1 is None else t1 - t0,
             warnings=tuple(self._warns),
+            counts=counts,
             **meta,
         )
         self.log.append(result)

@@ -34,6 +34,7 @@ from typing import Any
 from omnibot.calibration.experiments import RunResult, speed_range
 from omnibot.calibration.motors import Balance
 from omnibot.calibration.patterns import Geometry
+from omnibot.calibration.rollers import RollerFit
 from omnibot.errors import ConfigError
 from omnibot.robot.description import (
     CalibrationSpec,
@@ -41,6 +42,7 @@ from omnibot.robot.description import (
     MotorMapSpec,
     PiecewiseLinear,
     RobotDescription,
+    RollerDragSpec,
 )
 
 KNOTS = 14
@@ -391,6 +393,8 @@ class SurfaceFit:
     """The motor map the sweeps ran through (their powers are nominal)."""
     balance: Balance | None = None
     """The balance runs' outcome, for the report."""
+    rollers: RollerFit | None = None
+    """The idle wheels' roller drag (its runs were taken out of the axis-course sweeps)."""
 
 
 def fit_surface(
@@ -458,8 +462,28 @@ def build_spec(
     k_r = factor_table(rot, k, rotation_knots(robot, geometry, k)) if rot else robot_table(robot, "k_r")
     maps = [f.motors for f in fits if f.motors is not None]
     motors = average_motors(maps) if len(maps) == len(fits) and maps else None
+    drags = [f.rollers.spec for f in fits if f.rollers is not None]
+    rollers = average_rollers(drags) if drags else None
     return CalibrationSpec(
-        k=k, k_l=k_l, k_t=kt if kt is not None else robot_table(robot, "k_t"), k_r=k_r, motors=motors
+        k=k,
+        k_l=k_l,
+        k_t=kt if kt is not None else robot_table(robot, "k_t"),
+        k_r=k_r,
+        motors=motors,
+        rollers=rollers,
+    )
+
+
+def average_rollers(drags: Sequence[RollerDragSpec]) -> RollerDragSpec:
+    """The mean roller drag coefficients (the drag is linear in them) and coast tables (a missing
+    table counts as no coast)."""
+    n = len(drags[0].cos)
+    coasts = [d.coast for d in drags if d.coast is not None]
+    none = PiecewiseLinear(x=(0.0,), y=(0.0,))
+    return RollerDragSpec(
+        cos=tuple(round(statistics.fmean(d.cos[i] for d in drags), 2) for i in range(n)),
+        sin=tuple(round(statistics.fmean(d.sin[i] for d in drags), 2) for i in range(n)),
+        coast=average_tables([d.coast or none for d in drags]) if coasts else None,
     )
 
 

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 from omnibot.firmware.calibration import fold_course
 from omnibot.firmware.config import build_config
+from omnibot.firmware.power import roller_terms
 from omnibot.robot.description import MotorMapSpec, RobotDescription
 
 
@@ -31,12 +32,22 @@ class Geometry:
     idle_axes: tuple[float, ...]
     """Directions (degrees, 0..180) of travel along which some wheel stands still."""
     pwm_max: int
+    roller_dir: tuple[tuple[float, float], ...] = ()
+    """Each wheel's rollers' rolling direction (body frame)."""
+    roller_pitch: tuple[float, ...] = ()
+    """Encoder counts per roller pitch of each wheel (0: no encoder)."""
 
     @classmethod
     def of(cls, robot: RobotDescription) -> Geometry:
         cfg = build_config(robot)
         rim = tuple((float(r[0]), float(r[1]), float(r[2])) for r in cfg["rim"])
-        return cls(rim=rim, idle_axes=tuple(float(a) for a in cfg["idle_axes"]), pwm_max=int(cfg["pwm_max"]))
+        return cls(
+            rim=rim,
+            idle_axes=tuple(float(a) for a in cfg["idle_axes"]),
+            pwm_max=int(cfg["pwm_max"]),
+            roller_dir=tuple((float(d[0]), float(d[1])) for d in cfg["roller_dir"]),
+            roller_pitch=tuple(float(p) for p in cfg["roller_pitch"]),
+        )
 
     @property
     def motors(self) -> int:
@@ -72,6 +83,22 @@ class Geometry:
         """Rim speed of each wheel for 1 m/s along ``course_deg``."""
         c, s = math.cos(math.radians(course_deg)), math.sin(math.radians(course_deg))
         return [r[0] * c + r[1] * s for r in self.rim]
+
+    def idle_wheels(self, course_deg: float) -> list[int]:
+        """The wheels that do not turn on a straight run along the course."""
+        rims = self.translation_rim(course_deg)
+        peak = max(abs(v) for v in rims)
+        return [i for i, v in enumerate(rims) if abs(v) < 1e-6 * peak]
+
+    def roller_terms(self, course_deg: float, counts: Sequence[int]) -> tuple[list[float], list[float]]:
+        """Each wheel's roller drag terms (cos, sin) at encoder ``counts`` for travel along the course,
+        as the firmware computes them (:func:`omnibot.firmware.power.roller_terms`)."""
+        n = self.motors
+        fc, fs = [0.0] * n, [0.0] * n
+        c, s = math.cos(math.radians(course_deg)), math.sin(math.radians(course_deg))
+        dirs = [list(d) for d in self.roller_dir]
+        roller_terms(dirs, list(self.roller_pitch), list(counts), c, s, fc, fs)
+        return fc, fs
 
     def rotation_rim(self) -> list[float]:
         """Rim speed of each wheel for 1 rad/s counter-clockwise."""

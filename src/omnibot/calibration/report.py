@@ -20,7 +20,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from omnibot.calibration.accuracy import AccuracyRow, summarize
+from omnibot.calibration.accuracy import AccuracyRow, reach_speed, summarize
 from omnibot.calibration.session import CalibrationResult, SurfaceSession, describe_spec
 from omnibot.calibration.tables import move_grid, rotate_lines, summary_table
 from omnibot.errors import ConfigError
@@ -56,6 +56,41 @@ def accuracy_markdown(result: CalibrationResult) -> str:
         "",
         summary_table(entries) if entries else "(no accuracy checks were run)",
     ]
+    reach = [(f"{s.surface} calibration", s.reach) for s in result.sessions]
+    if result.average is not None and result.sessions:
+        length = result.sessions[0].fit.move_length
+        reach.append(("average calibration", reach_speed(result.robot, result.average, length)))
+    if result.sessions:
+        lines += [
+            "",
+            "## Reach",
+            "",
+            "The fastest MOVE of the reference length each calibration powers on every course without",
+            "a motor saturating (the roller drag at its worst phase); faster MOVEs fall short.",
+            "",
+            "| calibration | m/s |",
+            "|---|---|",
+            *(f"| {label} | {'-' if v is None else f'{v:g}'} |" for label, v in reach),
+        ]
+    drags = [(s.surface, s.fit.rollers) for s in result.sessions if s.fit.rollers is not None]
+    if drags:
+        lines += [
+            "",
+            "## Roller drag (wheels standing still on a motor axis)",
+            "",
+            "Each wheel's drag amplitude (PWM counts, over its roller phase), the coast times and the",
+            "drag runs' rms distance scatter without and with the term (kept: uploaded).",
+            "",
+            "| surface | amplitude per wheel | coast s at m/s | runs | rms before / after, mm | kept |",
+            "|---|---|---|---|---|---|",
+        ]
+        for surface, fit in drags:
+            amps = ", ".join(f"{math.hypot(c, s):.1f}" for c, s in zip(fit.cos, fit.sin, strict=True))
+            coast = ", ".join(f"{k:.2f} at {v:.2f}" for v, k in zip(fit.speeds, fit.coast, strict=True))
+            lines.append(
+                f"| {surface} | {amps} | {coast} | {fit.runs} | "
+                f"{1000 * fit.rms_before:.1f} / {1000 * fit.rms_after:.1f} | {'yes' if fit.kept else 'no'} |"
+            )
     for label, rows in entries:
         lines += ["", f"## {label}", "", move_grid(rows), "", move_grid(rows, "heading_error_deg"), ""]
         lines += [move_grid(rows, "course_error_deg"), "", rotate_lines(rows)]
@@ -110,6 +145,8 @@ def runs_json(result: CalibrationResult) -> dict[str, Any]:
             "calibration": describe_spec(s.spec),
             "deadband": s.fit.deadbands,
             "balance": None if s.fit.balance is None else s.fit.balance.as_dict(),
+            "rollers": None if s.fit.rollers is None else s.fit.rollers.as_dict(),
+            "reach": s.reach,
             "k": s.fit.k,
             "rate_points": {g: [p.__dict__ for p in pts] for g, pts in s.fit.points.items()},
             "gyro": None if s.gyro is None else s.gyro.as_dict(),

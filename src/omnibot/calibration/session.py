@@ -3,7 +3,8 @@
 Per surface (:func:`calibrate_surface`), on one client::
 
     telemetry on -> gyro bias at standstill -> accuracy before
-    -> dead bands -> straight sweeps (each calibrated course) -> rotation sweep -> fit K, K_l, K_r
+    -> motor map -> dead bands -> straight sweeps (each calibrated course) -> roller drag
+    -> rotation sweep -> fit K, K_l, K_r
     -> upload -> curved MOVEs, fit K_t (rounds) -> upload
     -> rotation test (gyro scale, wheel base) -> squares CCW and CW (UMBmark) -> accuracy after
 
@@ -21,7 +22,7 @@ from dataclasses import dataclass, field
 from functools import partial
 from typing import Any
 
-from omnibot.calibration.accuracy import AccuracyPlan, AccuracyRow, run_accuracy
+from omnibot.calibration.accuracy import AccuracyPlan, AccuracyRow, reach_speed, run_accuracy
 from omnibot.calibration.experiments import (
     Plan,
     Progress,
@@ -43,9 +44,10 @@ from omnibot.calibration.motors import (
     offsets_from_deadbands,
 )
 from omnibot.calibration.patterns import Geometry, top_power
+from omnibot.calibration.rollers import correct_runs, fit_rollers, roller_runs
 from omnibot.calibration.slip import slip_step
 from omnibot.calibration.tap import TelemetryTap
-from omnibot.calibration.truth import ROTATE, SQUARE, Ask, RunInfo, TruthContext, make_truth
+from omnibot.calibration.truth import ROTATE, SQUARE, STRAIGHT, Ask, RunInfo, TruthContext, make_truth
 from omnibot.calibration.umbmark import OdometryCalibration, SquareRun, calibrate_odometry, drive_square
 from omnibot.client.client import RobotClient
 from omnibot.errors import ConfigError
@@ -79,6 +81,9 @@ class SurfaceSession:
     notes: list[str] = field(default_factory=list)
     slip: SlipCalibration | None = None
     """The floor's wheel creep (driven-wheel odometry), when the robot has wheel encoders."""
+    reach: float | None = None
+    """m/s: the fastest MOVE of the reference length the floor's tables power on every course
+    (:func:`~omnibot.calibration.accuracy.reach_speed`)."""
 
 
 @dataclass
@@ -186,6 +191,20 @@ def calibrate_surface(
             straight: list[RunResult] = []
             for c in courses:
                 straight += straight_sweep(runner, plan, c, deadbands[f"course:{c:g}"])
+            rollers = None
+            if (
+                plan.roller_rounds > 0
+                and all(geometry.roller_pitch)
+                and source.can(RunInfo(STRAIGHT, "", 0.0))
+            ):
+                axis_deadband = deadbands.get("course:0")
+                if axis_deadband is None:
+                    axis_deadband = find_deadband(runner, 0.0, plan.deadband_step).power
+                rollers = fit_rollers(geometry, roller_runs(runner, plan, axis_deadband, plan.roller_rounds))
+                if rollers is None:
+                    notes.append("roller drag: the runs could not tell it (no drag term uploaded)")
+                else:
+                    straight = correct_runs(geometry, rollers, straight)
             rotation = rotation_sweep(runner, plan, deadbands["rotation"])
             fit = fit_surface(
                 surface,
@@ -196,7 +215,7 @@ def calibrate_surface(
                 move_length=plan.move_length,
                 rotate_angle=plan.rotate_angle,
             )
-            fit.motors, fit.balance = motors, balance
+            fit.motors, fit.balance, fit.rollers = motors, balance, rollers
             described = robot.calibration.k if robot.calibration is not None else None
             if described is not None and not 1 / 3 < fit.k / described < 3:
                 notes.append(
@@ -219,6 +238,15 @@ def calibrate_surface(
             else:
                 notes.append("not uploaded: K_t (measured with curved MOVEs) kept from the description")
             fit.kt = spec.k_t
+            reach = reach_speed(robot, spec, plan.move_length)
+            top = speed_range(robot, plan.move_length)[1]
+            if reach is None or reach < top:
+                notes.append(
+                    f"MOVEs of {plan.move_length:g} m reach "
+                    + ("no speed" if reach is None else f"{reach:g} m/s")
+                    + f" on every course with these tables (the robot's top: {top:g} m/s); faster ones "
+                    "saturate a motor (the controller warns 11, speed reduced) and fall short"
+                )
 
             if bias is not None:  # the bias wanders: measure it again right before the rotation test
                 bias = standstill_bias(tap, plan.gyro_still) or bias
@@ -265,6 +293,7 @@ def calibrate_surface(
         after=after,
         notes=notes,
         slip=slip,
+        reach=reach,
     )
 
 
@@ -422,4 +451,8 @@ def describe_spec(spec: CalibrationSpec) -> dict[str, Any]:
             "offset": list(spec.motors.offset),
             "gain": [{"x": [int(x) for x in g.x], "y": list(g.y)} for g in spec.motors.gain],
         }
+    if spec.rollers is not None:
+        out["rollers"] = {"cos": list(spec.rollers.cos), "sin": list(spec.rollers.sin)}
+        if spec.rollers.coast is not None:
+            out["rollers"]["coast"] = {"x": list(spec.rollers.coast.x), "y": list(spec.rollers.coast.y)}
     return out

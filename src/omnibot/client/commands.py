@@ -23,13 +23,14 @@ The builders return the command exactly as it is sent, so a caller can see what 
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable, Sequence
 
 from omnibot.client.limits import Limits
 from omnibot.protocol import codes, units
 from omnibot.protocol.messages import Cal, Delta, Mode, Move, Power, Rotate, Sonar, Telem, Vel
-from omnibot.robot.description import CalibrationSpec, MotorMapSpec, PiecewiseLinear
+from omnibot.robot.description import CalibrationSpec, MotorMapSpec, PiecewiseLinear, RollerDragSpec
 
 INF = codes.INF
 TIME_MAX_MS = 30000  # POWER T, SONAR and TELEM periods
@@ -229,9 +230,9 @@ def _knots(table: int, curve: PiecewiseLinear) -> list[Cal]:
 
 def calibration(spec: CalibrationSpec, motors: int | None = None) -> list[Cal]:
     """The CAL commands that upload a calibration section: K, then K_t, K_r, K_l (knot 0 upwards,
-    dropping curves the controller may hold beyond the section's), then the motor map. A section
-    without one uploads the identity map when the robot's ``motors`` are known, so the controller
-    uses exactly the section."""
+    dropping curves the controller may hold beyond the section's), then the motor map and the roller
+    drag. A section without them uploads the identity map and no drag when the robot's ``motors``
+    are known, so the controller uses exactly the section."""
     out = [Cal(codes.CAL_K, 0, 0, units.to_cal_k(spec.k))]
     if spec.k_t is not None:
         out += _knots(codes.CAL_KT, spec.k_t)
@@ -257,6 +258,22 @@ def calibration(spec: CalibrationSpec, motors: int | None = None) -> list[Cal]:
         for i, (offset, gain) in enumerate(zip(motor_map.offset, motor_map.gain, strict=True)):
             out.append(Cal(codes.CAL_OFFSET, i, 0, round(10 * offset)))
             out += _knots(codes.CAL_GAIN + i, gain)
+    rollers = spec.rollers
+    if rollers is None and motors is not None:
+        rollers = RollerDragSpec(cos=(0.0,) * motors, sin=(0.0,) * motors)
+    if rollers is not None:
+        n = len(rollers.cos)
+        if motors is not None and n != motors:
+            raise ValueError(f"roller drag: {n} wheels for a robot with {motors}")
+        for i, (a, b) in enumerate(zip(rollers.cos, rollers.sin, strict=True)):
+            out.append(Cal(codes.CAL_ROLLER_COS, i, 0, round(10 * a)))
+            out.append(Cal(codes.CAL_ROLLER_SIN, i, 0, round(10 * b)))
+        coast = rollers.coast or PiecewiseLinear(x=(0.0,), y=(0.0,))
+        xs = [round(100.0 * x) for x in coast.x]
+        if any(b <= a for a, b in itertools.pairwise(xs)):
+            raise ValueError(f"roller coast: speeds {list(coast.x)} m/s are not 1 cm/s apart")
+        for i, (x, y) in enumerate(zip(xs, coast.y, strict=True)):
+            out.append(Cal(codes.CAL_ROLLER_COAST, i, x, units.to_milli(y)))
     for c in out:
         if not all(codes.INT_MIN <= p <= codes.INT_MAX for p in c.params()):
             raise ValueError(f"CAL {c.params()}: a value is outside the protocol's 16-bit range")

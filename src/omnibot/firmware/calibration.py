@@ -8,6 +8,11 @@ The motor map (a project addition) makes unequal motors act alike: motor i gets
 ``sign(a) (offset_i + gain_i(|a|) |a|)`` for the nominal power ``a`` that the factors give
 (:meth:`Calibration.motor_power`): the offset lifts every turning wheel out of its own dead band, the
 gain table balances the motors over the power range. Identity by default.
+
+The roller drag (a project addition, :class:`~omnibot.firmware.power.PowerModel` applies it) holds two
+coefficients per wheel, ``roller_cos`` and ``roller_sin`` (PWM counts, zero by default), and the
+coast table ``roller_coast`` (``[speeds cm/s, seconds]``: how much longer than the motion the drag
+acts, as it also brakes the coast after a MOVE; zero by default).
 """
 
 from omnibot.protocol import codes
@@ -18,6 +23,9 @@ TABLE_KR = codes.CAL_KR
 TABLE_KL = codes.CAL_KL  # 10 + k: the k-th course of K_l
 TABLE_OFFSET = codes.CAL_OFFSET
 TABLE_GAIN = codes.CAL_GAIN  # 20 + i: motor i's gain table
+TABLE_ROLLER_COS = codes.CAL_ROLLER_COS
+TABLE_ROLLER_SIN = codes.CAL_ROLLER_SIN
+TABLE_ROLLER_COAST = codes.CAL_ROLLER_COAST
 KNOTS_MAX = codes.CAL_KNOTS_MAX
 KL_DROP = codes.CAL_KL_DROP
 
@@ -65,6 +73,9 @@ class Calibration:
         n = int(cfg.get("motors", 0))
         self.offset = [float(v) for v in cfg.get("motor_offset", [0.0] * n)]
         self.gain = [_table(t) for t in cfg.get("motor_gain", [[[0.0], [1.0]]] * n)]
+        self.roller_cos = [float(v) for v in cfg.get("roller_cos", [0.0] * n)]
+        self.roller_sin = [float(v) for v in cfg.get("roller_sin", [0.0] * n)]
+        self.roller_coast = _table(cfg.get("roller_coast", [[0.0], [0.0]]))
 
     def motor_power(self, i: int, a: float) -> float:
         """Motor i's power for the nominal power ``a``: ``sign(a) (offset_i + gain_i(|a|) |a|)``.
@@ -92,6 +103,10 @@ class Calibration:
         last = self.kl[n - 1]
         return interp(last[0], last[1], power)
 
+    def coast(self, speed: float) -> float:
+        """Seconds the roller drag acts beyond a motion ending at ``speed`` (cm/s)."""
+        return interp(self.roller_coast[0], self.roller_coast[1], speed)
+
     def k_t(self, power: float) -> float:
         return interp(self.kt[0], self.kt[1], power)
 
@@ -105,7 +120,9 @@ class Calibration:
         For ``TABLE_KL + k`` with ``index`` -1, ``power`` is the course (degrees) of the k-th curve and
         k may be one past the last curve to add a curve (given a flat factor 1.0 until knots arrive);
         index -2 drops curves k and after (k >= 1: one curve stays). ``TABLE_OFFSET`` sets motor
-        ``index``'s offset to ``value`` counts; ``TABLE_GAIN + i`` writes a knot of motor i's gain table.
+        ``index``'s offset to ``value`` counts; ``TABLE_GAIN + i`` writes a knot of motor i's gain table;
+        ``TABLE_ROLLER_COS`` and ``TABLE_ROLLER_SIN`` set wheel ``index``'s roller drag coefficient;
+        ``TABLE_ROLLER_COAST`` writes a knot (``power``: speed in cm/s, ``value`` in s, >= 0).
         """
         if table == TABLE_K:
             if value <= 0:
@@ -116,6 +133,16 @@ class Calibration:
             return _write(self.kt, index, power, value)
         if table == TABLE_KR:
             return _write(self.kr, index, power, value)
+        if table in (TABLE_ROLLER_COS, TABLE_ROLLER_SIN):
+            coeffs = self.roller_cos if table == TABLE_ROLLER_COS else self.roller_sin
+            if index < 0 or index >= len(coeffs) or power != 0:
+                return False
+            coeffs[index] = value
+            return True
+        if table == TABLE_ROLLER_COAST:
+            if value < 0:
+                return False
+            return _write(self.roller_coast, index, power, value)
         if table == TABLE_OFFSET:
             if index < 0 or index >= len(self.offset) or power != 0:
                 return False

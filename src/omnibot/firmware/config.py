@@ -22,6 +22,10 @@ k                           calibration K, PWM counts per m/s of rim speed
 kl_courses, kl_tables       K_l: courses (deg) and one [powers, factors] table per course
 kt, kr                      K_t and K_r as [powers, factors]
 motor_offset, motor_gain    motor map: each motor's dead-band offset (counts) and [powers, gains]
+roller_cos, roller_sin      roller drag coefficients of each wheel, PWM counts (0: none)
+roller_coast                [speeds cm/s, s]: how long the drag outlasts a MOVE (its coast)
+roller_dir                  each wheel's rollers' rolling direction in the body frame, [x, y]
+roller_pitch                encoder counts per roller pitch of each wheel (0: no encoder)
 distance_max_cm             exclusive bound of abs(L) (MOVE)
 speed_min_cms/speed_max_cms inclusive bounds of abs(V)
 curvature_max               exclusive bound of abs(C), 1/(1000 cm)
@@ -47,6 +51,7 @@ from pathlib import Path
 from typing import Any
 
 from omnibot.errors import ConfigError
+from omnibot.robot import kinematics
 from omnibot.robot.description import PiecewiseLinear, RobotDescription, load_robot
 
 PACKAGE_DIR = Path(__file__).resolve().parent
@@ -131,6 +136,18 @@ def build_config(
             f"{len(motors.offset)} motors for a robot with {robot.n_wheels}",
             key="calibration.motors",
         )
+    rollers = cal.rollers if cal else None
+    if rollers is not None and len(rollers.cos) != robot.n_wheels:
+        raise ConfigError(
+            f"roller drag for {len(rollers.cos)} wheels on a robot with {robot.n_wheels}",
+            key="calibration.rollers",
+        )
+    _, roller_rows = kinematics.contact_rows(
+        [w.position[0] for w in robot.wheels],
+        [w.position[1] for w in robot.wheels],
+        [w.drive_angle for w in robot.wheels],
+        [w.gamma for w in robot.wheels],
+    )
     cpr = {e.wheel: e.counts_per_rev for e in robot.encoders.motors}
     encoder_cpr = [int(cpr.get(w.name, 0)) for w in robot.wheels]
     ctl = robot.controller
@@ -156,6 +173,17 @@ def build_config(
         "kr": _table(cal.k_r if cal else None),
         "motor_offset": [float(o) for o in motors.offset] if motors else [0.0] * robot.n_wheels,
         "motor_gain": [_table(g) for g in motors.gain] if motors else [_table(None)] * robot.n_wheels,
+        "roller_cos": list(rollers.cos) if rollers else [0.0] * robot.n_wheels,
+        "roller_sin": list(rollers.sin) if rollers else [0.0] * robot.n_wheels,
+        "roller_coast": (
+            [[round(100.0 * x, 6) for x in rollers.coast.x], list(rollers.coast.y)]
+            if rollers and rollers.coast
+            else [[0.0], [0.0]]
+        ),
+        "roller_dir": [[round(float(v), 9) for v in row[:2]] for row in roller_rows],
+        "roller_pitch": [
+            round(c / w.rollers.count, 9) for c, w in zip(encoder_cpr, robot.wheels, strict=True)
+        ],
         "distance_max_cm": round(lim.distance_max * 100.0, 6),
         "speed_min_cms": round(lim.speed_min * 100.0, 6),
         "speed_max_cms": round(lim.speed_max * 100.0, 6),

@@ -70,6 +70,7 @@ class Executor:
         self._target = [0.0] * self.n
         self._counts = [0] * self.n
         self._feedback = False
+        self._drag = False
         period_us = int(cfg["control_period_ms"]) * 1000
         self.speedctl = SpeedControl(
             [int(c) for c in cfg["encoder_cpr"]],
@@ -98,7 +99,8 @@ class Executor:
                 self._feedback = False
                 if self.kind not in (NONE, codes.POWER):
                     t = self._twist
-                    self.model.compute(t[0], t[1], t[2], self._rot, self.powers)
+                    flags = self.model.compute(t[0], t[1], t[2], self._rot, self.powers)
+                    self._start_drag(flags)
         self.apply()
 
     def apply(self) -> None:
@@ -119,6 +121,7 @@ class Executor:
         self.kind = NONE
         self.watchdog.disarm()
         self._feedback = False
+        self._drag = False
         for i in range(self.n):
             self.powers[i] = 0
         self.apply()
@@ -173,6 +176,8 @@ class Executor:
                 self._finish()
         if self._feedback and self.kind != NONE:
             self._feedback_step(dt_us)
+        elif self._drag and self.kind != NONE:
+            self._drag_step()
 
     def _finish(self) -> None:
         self.stop()
@@ -200,6 +205,7 @@ class Executor:
             self.infinite = False
             self.remaining = slot[1] * 1000 + carry
             self._feedback = False
+            self._drag = False
             for i in range(self.n):
                 self.powers[i] = slot[i + 2]
             self.apply()
@@ -235,9 +241,12 @@ class Executor:
             self.remaining = carry
             self._drive(0.0, 0.0, 0.0, False)
             return
+        gain = 1.0
+        if not self.infinite:  # the rollers' drag also shortens the coast after a finite MOVE of L/V s
+            gain += self.model.cal.coast(abs(V)) * abs(V) / abs(L)
         s = abs(V) if (L > 0) == (V > 0) else -abs(V)
         a = math.radians(D)
-        self._drive(s * 0.01 * math.cos(a), s * 0.01 * math.sin(a), s * C * 0.001, False)
+        self._drive(s * 0.01 * math.cos(a), s * 0.01 * math.sin(a), s * C * 0.001, False, gain)
         if not self.infinite:
             self.remaining = _duration(abs(L), abs(V), self.model.scale) + carry
 
@@ -252,9 +261,11 @@ class Executor:
         if not self.infinite:
             self.remaining = _duration(abs(A), abs(F), self.model.scale) + carry
 
-    def _drive(self, vx: float, vy: float, w: float, rotate: bool) -> None:
-        """Compute and apply the powers for a twist (m/s, m/s, rad/s)."""
+    def _drive(self, vx: float, vy: float, w: float, rotate: bool, gain: float = 1.0) -> None:
+        """Compute and apply the powers for a twist (m/s, m/s, rad/s); ``gain`` is the roller drag's
+        (:meth:`PowerModel.drag`)."""
         model = self.model
+        model.drag_gain = gain
         flags = model.compute(vx, vy, w, rotate, self.powers)
         self._warn_once(flags)
         t = self._twist
@@ -274,6 +285,7 @@ class Executor:
             self._start_feedback()
         elif self._feedback:
             self.speedctl.hold(self._ff, self.powers)  # a new command keeps the speed loop's correction
+        self._start_drag(flags)
         self.apply()
 
     def _warn_once(self, flags: int) -> None:
@@ -283,6 +295,20 @@ class Executor:
             self._warn(codes.W_SPEED_REDUCED)
         if new & DEADBAND:
             self._warn(codes.W_POWER_TOO_LOW)
+
+    # ------------------------------------------------------------------ roller drag (open loop)
+
+    def _start_drag(self, flags: int) -> None:
+        """Add the rollers' drag to an open-loop translation, and keep it up to date each step."""
+        self._drag = not self._feedback and not flags & DEADBAND and self.model.drags()
+        if self._drag:
+            self._drag_step()
+
+    def _drag_step(self) -> None:
+        for i in range(self.n):
+            self._counts[i] = self.hal.encoder_count(i)
+        self._warn_once(self.model.drag(self._counts, self.powers) & SATURATED)
+        self.apply()
 
     # ------------------------------------------------------------------ closed loop
 

@@ -10,7 +10,8 @@ precomputed by config.py). The translation part and the rotation part get their 
 where each factor's power argument is the largest uncalibrated power of its part (K |s|) and the
 course is folded onto the calibrated range (:func:`calibration.fold_course`). Each motor's power then
 goes through the motor map (:meth:`calibration.Calibration.motor_power`: its dead-band offset and
-gain, identity by default). Then, keeping the
+gain, identity by default), and a translation gets the rollers' drag on top (:meth:`PowerModel.drag`,
+zero by default). Then, keeping the
 direction, all powers are scaled by one factor if any exceeds ``pwm_max`` (SATURATED) and, when every
 non-zero power is below ``power_min`` (the dead band: too little to move the robot), all are set to 0
 (DEADBAND).
@@ -28,6 +29,35 @@ if TYPE_CHECKING:
     from typing import Any
 
 
+def roller_terms(
+    dirs: "list[list[float]]",
+    pitches: "list[float]",
+    counts: "list[int]",
+    ux: float,
+    uy: float,
+    out_cos: "list[float]",
+    out_sin: "list[float]",
+) -> None:
+    """Each wheel's roller drag terms for travel along the unit vector (ux, uy).
+
+    Wheel i's rollers roll at ``a_i = |u . n_i|`` of the travel (n_i: their rolling direction,
+    ``dirs[i]``) and their drag changes with the roller phase phi_i (2 pi per ``pitches[i]`` encoder
+    counts from the encoders' origin; a wheel without an encoder has pitch 0 and no terms):
+    ``out_cos[i] = a_i cos(phi_i)``, ``out_sin[i] = a_i sin(phi_i)``.
+    """
+    for i in range(len(pitches)):
+        pitch = pitches[i]
+        d = dirs[i]
+        share = abs(d[0] * ux + d[1] * uy)
+        if pitch <= 0.0 or share == 0.0:
+            out_cos[i] = 0.0
+            out_sin[i] = 0.0
+            continue
+        phase = 6.283185307179586 * (counts[i] % pitch) / pitch
+        out_cos[i] = share * math.cos(phase)
+        out_sin[i] = share * math.sin(phase)
+
+
 class PowerModel:
     """Twist -> signed PWM counts, with the calibration, saturation and dead band."""
 
@@ -41,6 +71,15 @@ class PowerModel:
         self.cal = cal
         self.scale = 1.0
         self.raw = [0.0] * self.n
+        n = self.n
+        self.roller_dir = [[float(v) for v in row] for row in cfg.get("roller_dir", [[0.0, 0.0]] * n)]
+        self.roller_pitch = [float(p) for p in cfg.get("roller_pitch", [0.0] * n)]
+        self.base = [0.0] * n
+        self.drag_gain = 1.0
+        self._fc = [0.0] * n
+        self._fs = [0.0] * n
+        self._ux = 0.0
+        self._uy = 0.0
 
     def wheel_speeds(self, vx: float, vy: float, w: float, out: list[float]) -> None:
         """Wheel angular speeds (rad/s) for a twist."""
@@ -68,7 +107,12 @@ class PowerModel:
             tr_max = max(tr_max, a)
             rot_max = max(rot_max, b)
         f_tr = 0.0
+        self._ux = 0.0
+        self._uy = 0.0
         if tr_max > 0.0:
+            v = math.sqrt(vx * vx + vy * vy)
+            self._ux = vx / v
+            self._uy = vy / v
             course = math.degrees(math.atan2(vy, vx))
             f_tr = k * cal.k_l(k * tr_max, fold_course(course, self.axes))
         f_rot = 0.0
@@ -78,6 +122,51 @@ class PowerModel:
         for i in range(n):
             row = rim[i]
             p = cal.motor_power(i, f_tr * (row[0] * vx + row[1] * vy) + f_rot * row[2] * w)
+            raw[i] = p
+            self.base[i] = p
+            peak = max(peak, abs(p))
+        return self.finish(peak, out)
+
+    def drags(self) -> bool:
+        """True when the last twist translates and some wheel has a roller drag to make up for."""
+        if self._ux == 0.0 and self._uy == 0.0:
+            return False
+        cal = self.cal
+        for i in range(self.n):
+            if self.roller_pitch[i] > 0.0 and (cal.roller_cos[i] != 0.0 or cal.roller_sin[i] != 0.0):
+                return True
+        return False
+
+    def drag(self, counts: list[int], out: list[int]) -> int:
+        """Redo ``out`` for the last twist with the rollers' drag at the wheels' encoder ``counts``.
+
+        The drag is ``sum_i cos_i c_i + sin_i s_i`` PWM counts, with the wheels' terms c_i, s_i of
+        :func:`roller_terms` and the coefficients of the calibration, times ``drag_gain`` (a MOVE of
+        T s sets it to ``1 + coast / T``: the drag also shortens the coast after the motors stop, which
+        only more power during the motion can make up). It is made up by every wheel in
+        proportion to its share of the travel, ``(rim_i . u) / max|rim_j . u|`` (the busiest wheel
+        gets it all), on top of the powers :meth:`compute` gave; saturation and the dead band as there.
+        """
+        n = self.n
+        ux = self._ux
+        uy = self._uy
+        cal = self.cal
+        fc = self._fc
+        fs = self._fs
+        roller_terms(self.roller_dir, self.roller_pitch, counts, ux, uy, fc, fs)
+        total = 0.0
+        for i in range(n):
+            total += cal.roller_cos[i] * fc[i] + cal.roller_sin[i] * fs[i]
+        total *= self.drag_gain
+        rim = self.rim
+        busiest = 0.0
+        for i in range(n):
+            busiest = max(busiest, abs(rim[i][0] * ux + rim[i][1] * uy))
+        raw = self.raw
+        peak = 0.0
+        for i in range(n):
+            row = rim[i]
+            p = self.base[i] + total * (row[0] * ux + row[1] * uy) / busiest
             raw[i] = p
             peak = max(peak, abs(p))
         return self.finish(peak, out)

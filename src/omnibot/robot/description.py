@@ -322,11 +322,34 @@ class MotorMapSpec(_Spec):
         return self
 
 
+class RollerDragSpec(_Spec):
+    """How the idle wheels' rollers drag with the wheel's angle (firmware's roller term, one entry per
+    wheel): the drag ``cos_i cos(n phi_i) + sin_i sin(n phi_i)`` (PWM counts of the busiest motor) at
+    wheel angle phi_i from the controller's encoder origin, n its roller count. Zero mean: the mean drag
+    is in K_l."""
+
+    cos: tuple[float, ...] = Field(description="cosine coefficient of each wheel, PWM counts")
+    sin: tuple[float, ...] = Field(description="sine coefficient of each wheel, PWM counts")
+    coast: PiecewiseLinear | None = Field(
+        default=None,
+        description="s the drag acts beyond a MOVE (it brakes the coast too) against the speed in m/s",
+    )
+
+    @model_validator(mode="after")
+    def _check(self) -> RollerDragSpec:
+        if len(self.cos) != len(self.sin) or not self.cos:
+            raise ValueError("cos and sin need one entry per wheel")
+        if self.coast is not None and (min(self.coast.x) < 0 or min(self.coast.y) < 0):
+            raise ValueError("coast: speeds and times must be >= 0")
+        return self
+
+
 class CalibrationSpec(_Spec):
     """Seed 000's power calibration: P = K * K_l * V ... with factors as piecewise-linear tables.
 
     ``k`` is PWM counts per m/s of wheel rim speed; the tables are dimensionless factors of power.
-    ``motors`` (optional) is the per-motor map applied after them.
+    ``motors`` (optional) is the per-motor map applied after them, ``rollers`` (optional) the idle
+    wheels' roller drag added on top.
     """
 
     k: float = Field(gt=0, description="PWM counts per m/s of rim speed")
@@ -334,6 +357,7 @@ class CalibrationSpec(_Spec):
     k_t: PiecewiseLinear | None = None
     k_r: PiecewiseLinear | None = None
     motors: MotorMapSpec | None = None
+    rollers: RollerDragSpec | None = None
 
 
 class ControllerSpec(_Spec):

@@ -1,0 +1,248 @@
+"""The idle wheels' roller drag: measured, fitted, and taken out of the axis-course sweeps.
+
+Seed 000, section IV: on courses along a motor axis two wheels do not turn, and the friction of
+their rollers "depends very much on wheel angle position ... can vary K_l as much as twice"; its
+authors set those wheels by hand before such runs and advised courses near 45 degrees. The
+controller knows each wheel's angle from its encoder, so it can make up for that drag itself
+(:meth:`omnibot.firmware.power.PowerModel.drag`): per wheel, ``cos_i cos(phi_i) + sin_i sin(phi_i)``
+PWM counts of the busiest motor, phi_i the roller phase (one period per roller pitch of encoder
+counts from the encoders' origin, the controller's power-up) weighted by the wheel's rollers' share
+of the travel (:func:`omnibot.firmware.power.roller_terms`). The drag also brakes the coast after the
+motors stop, which a MOVE of T s makes up with ``1 + coast(V) / T`` times the drag while it drives.
+This module finds the coefficients and the coast table.
+
+Runs (:func:`roller_runs`): raw POWER along each idle axis in turn, round the circle (omni4: 0, 90,
+180, 270 degrees), at three powers over the working range and two durations each (the second twice
+the first). Each run turns the next axis's idle wheels by its whole distance, so their roller
+phases come out spread over the pitch; the encoder counts at each run's start give the phases of the
+wheels that stand still.
+
+Fit (:func:`fit_rollers`), least squares over the runs j::
+
+    distance_j = e_g + T_j r_g - s (T_j + k_P) D_j,   D_j = sum_i cos_i c_ij + sin_i s_ij
+
+with g the run's course and power (its own start/stop offset e_g and rate r_g), s the slope of the
+rate against power (m/s per PWM count), k_P the coast time at power P and c_ij, s_ij the terms of the
+wheels that stand still during run j. For given k_P it is linear; the k_P are found by coordinate
+search. The drag is kept when it halves the runs' rms scatter and explains them better than its
+parameters are worth (the Bayesian information criterion). :func:`correct_runs` then adds the drag
+at each axis-course sweep run's own phases back to its distance (``RunResult.correction``), so K_l
+on the axes is fitted for the mean drag, which is what the controller's K_l must give once it adds
+the rest.
+"""
+
+from __future__ import annotations
+
+import math
+import statistics
+from collections import defaultdict
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from omnibot.calibration.experiments import Plan, Runner, RunResult
+from omnibot.calibration.patterns import Geometry, course_pattern, top_power
+from omnibot.calibration.truth import STRAIGHT, RunInfo
+from omnibot.robot.description import PiecewiseLinear, RollerDragSpec
+
+GROUP = "rollers"
+PROBE = 0.6
+"""s of each power's first run, which sets the durations of the others."""
+SHARES = (0.3, 0.55, 0.8)
+"""The runs' powers, as fractions of the way from the axis's dead band to full power."""
+COAST_GRID = tuple(0.02 * k for k in range(151))
+"""s: the coast times tried (0..3 s)."""
+
+
+@dataclass(frozen=True)
+class RollerFit:
+    """The fitted drag coefficients, the coast table and how much of the runs' scatter they explain."""
+
+    cos: tuple[float, ...]
+    sin: tuple[float, ...]
+    slope: float
+    """m/s of travel per PWM count of the busiest motor, along the axes."""
+    speeds: tuple[float, ...]
+    """m/s: each power's mean steady speed."""
+    coast: tuple[float, ...]
+    """s: each power's coast time k_P."""
+    runs: int
+    rms_before: float
+    """m: rms residual of the runs' distances without the drag terms."""
+    rms_after: float
+    """m: the same with them."""
+    kept: bool
+    """False when the terms did not explain enough (the spec then holds no drag)."""
+
+    @property
+    def coast_table(self) -> PiecewiseLinear:
+        """Coast time against speed (m/s), from rest (0 s) through each power's point."""
+        pts = sorted(zip(self.speeds, self.coast, strict=True))
+        xs, ys = [0.0], [0.0]
+        for v, k in pts:
+            if round(v, 2) > round(xs[-1], 2):
+                xs.append(round(v, 2))
+                ys.append(round(k, 3))
+        return PiecewiseLinear(x=tuple(xs), y=tuple(ys))
+
+    @property
+    def spec(self) -> RollerDragSpec:
+        if not self.kept:
+            return RollerDragSpec(cos=(0.0,) * len(self.cos), sin=(0.0,) * len(self.sin))
+        return RollerDragSpec(cos=self.cos, sin=self.sin, coast=self.coast_table)
+
+    def drag(self, geometry: Geometry, course_deg: float, counts: Sequence[int]) -> float:
+        """PWM counts of drag (busiest motor) on a run along the course from these counts, counting
+        only the wheels that stand still on it (a turning wheel's drag averages out)."""
+        if not self.kept:
+            return 0.0
+        fc, fs = geometry.roller_terms(course_deg, counts)
+        return sum(self.cos[i] * fc[i] + self.sin[i] * fs[i] for i in geometry.idle_wheels(course_deg))
+
+    def as_dict(self) -> dict[str, object]:
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in self.__dict__.items()}
+
+
+def axis_courses(geometry: Geometry) -> list[float]:
+    """Every idle axis and its opposite (degrees, 0..360), round the circle."""
+    return sorted({round((a + s) % 360.0, 6) for a in geometry.idle_axes for s in (0.0, 180.0)})
+
+
+def roller_runs(runner: Runner, plan: Plan, deadband: int, rounds: int = 4) -> list[RunResult]:
+    """The drag runs (see the module docstring): per power a probe, then ``rounds`` times round the
+    axes, alternating the two durations."""
+    geo = runner.geometry
+    courses = axis_courses(geo)
+    top = top_power(runner.motors, geo.pwm_max)
+
+    def run(course: float, power: int, duration: float, group: str) -> RunResult:
+        info = RunInfo(
+            STRAIGHT,
+            f"roller drag, course {course:g} deg, power {power} for {duration:g} s",
+            math.radians(course),
+        )
+        runner.note(f"roller drag: course {course:g}, power {power}")
+        pattern = course_pattern(geo, course, power, runner.motors)
+        return runner.power_run(
+            pattern, duration, info, group, power=power, course_deg=course, folded_deg=0.0
+        )
+
+    out = []
+    for share in SHARES:
+        power = max(1, round(deadband + share * (top - deadband)))
+        probe = run(courses[0], power, PROBE, f"{GROUP}:probe")
+        speed = max((probe.amount or 0.0) / PROBE, 0.05)
+        # the first duration covers about 40 % of the reference move, the second twice that
+        first = round(min(max(0.4 * plan.move_length / speed, 0.3), 3.0), 2)
+        for k in range(rounds):
+            for course in courses:
+                out.append(run(course, power, first * (1 + k % 2), GROUP))
+    return out
+
+
+def fit_rollers(geometry: Geometry, runs: Sequence[RunResult]) -> RollerFit | None:
+    """Drag coefficients and coast times from :func:`roller_runs` (the module docstring); None when
+    the runs cannot tell them (no truth, fewer than two powers, phases that did not spread)."""
+    usable = [
+        r
+        for r in runs
+        if r.group == GROUP and r.amount is not None and r.counts is not None and r.power is not None
+    ]
+    powers = sorted({r.power for r in usable if r.power is not None})
+    if len(powers) < 2:
+        return None
+    n = geometry.motors
+    groups = sorted({(r.course_deg or 0.0, r.power or 0) for r in usable})
+    g_index = {g: i for i, g in enumerate(groups)}
+    p_index = {p: i for i, p in enumerate(powers)}
+    m, ng = len(usable), len(groups)
+    plain = np.zeros((m, 2 * ng))  # e_g and r_g columns
+    terms = np.zeros((m, 2 * n))  # -c_ij, -s_ij of the wheels standing still
+    durations = np.zeros(m)
+    level = np.zeros(m, dtype=int)
+    b = np.zeros(m)
+    for j, r in enumerate(usable):
+        assert r.counts is not None and r.power is not None and r.amount is not None
+        course = r.course_deg or 0.0
+        g = g_index[(course, r.power)]
+        plain[j, 2 * g] = 1.0
+        plain[j, 2 * g + 1] = r.duration
+        fc, fs = geometry.roller_terms(course, r.counts[:n])
+        for i in geometry.idle_wheels(course):
+            terms[j, i], terms[j, n + i] = -fc[i], -fs[i]
+        durations[j], level[j], b[j] = r.duration, p_index[r.power], r.amount
+    active = [c for c in range(2 * n) if np.any(terms[:, c] != 0.0)]
+    if not active:
+        return None
+    _, cost0 = _lstsq(plain, b)
+
+    def solve(coast: Sequence[float]) -> tuple[NDArray[np.float64], float]:
+        weight = durations + np.asarray(coast)[level]
+        return _lstsq(np.hstack((plain, terms[:, active] * weight[:, None])), b)
+
+    A = np.hstack((plain, terms[:, active]))
+    if m <= A.shape[1] + len(powers) or np.linalg.matrix_rank(A) < A.shape[1]:
+        return None
+    coast = [0.0] * len(powers)
+    for _ in range(3):  # coordinate search over each power's coast time
+        for q in range(len(powers)):
+            trials = [(solve([*coast[:q], k, *coast[q + 1 :]])[1], k) for k in COAST_GRID]
+            coast[q] = min(trials)[1]
+    coef, cost = solve(coast)
+    rates = coef[1 : 2 * ng : 2]
+    # s: the rate's slope against power, common to the courses (each course its own intercept)
+    courses = sorted({c for c, _ in groups})
+    X = np.zeros((ng, 1 + len(courses)))
+    for g, (c, p) in enumerate(groups):
+        X[g, 0], X[g, 1 + courses.index(c)] = p, 1.0
+    slope = float(np.linalg.lstsq(X, rates, rcond=None)[0][0])
+    if slope <= 0.0:
+        return None
+    drag = np.zeros(2 * n)
+    drag[active] = coef[2 * ng :] / slope
+    speeds = defaultdict(list)
+    for (_, p), rate in zip(groups, rates, strict=True):
+        speeds[p].append(float(rate))
+    # kept when it halves the runs' rms scatter and passes the Bayesian information criterion on
+    # the residuals the groups' own offsets and rates leave (a term that acts on every MOVE should
+    # explain something, not fit noise through the coast times' freedom)
+    k_params, dof = len(active) + len(powers), m - 2 * ng
+    kept = cost <= 0.25 * cost0 and (
+        cost <= 0.0 or dof * math.log(max(cost0, 1e-30) / cost) > k_params * math.log(max(dof, 2))
+    )
+    return RollerFit(
+        cos=tuple(round(float(v), 2) for v in drag[:n]),
+        sin=tuple(round(float(v), 2) for v in drag[n:]),
+        slope=slope,
+        speeds=tuple(statistics.fmean(speeds[p]) for p in powers),
+        coast=tuple(coast),
+        runs=m,
+        rms_before=math.sqrt(cost0 / m),
+        rms_after=math.sqrt(cost / m),
+        kept=bool(kept),
+    )
+
+
+def _lstsq(A: NDArray[np.float64], b: NDArray[np.float64]) -> tuple[NDArray[np.float64], float]:
+    coef = np.asarray(np.linalg.lstsq(A, b, rcond=None)[0], dtype=np.float64)
+    residual = b - A @ coef
+    return coef, float(residual @ residual)
+
+
+def correct_runs(geometry: Geometry, fit: RollerFit, runs: Sequence[RunResult]) -> list[RunResult]:
+    """The runs with the drag at their own phases added back to the straight ones along an idle
+    axis: ``s (T + coast) drag``, the distance they would have covered at the mean drag."""
+    out = []
+    axes = set(axis_courses(geometry))
+    table = fit.coast_table
+    for r in runs:
+        course = r.course_deg
+        if r.kind != STRAIGHT or r.counts is None or course is None or round(course % 360.0, 6) not in axes:
+            out.append(r)
+            continue
+        drag = fit.drag(geometry, course, r.counts[: geometry.motors])
+        speed = (r.amount or 0.0) / r.duration if r.duration > 0 else 0.0
+        out.append(replace(r, correction=fit.slope * (r.duration + table(speed)) * drag))
+    return out
