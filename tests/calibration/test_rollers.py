@@ -32,8 +32,11 @@ def drag(geo: Geometry, course: float, counts: tuple[int, ...]) -> float:
     return sum(COS[i] * fc[i] + SIN[i] * fs[i] for i in geo.idle_wheels(course))
 
 
-def synthetic_runs(geo: Geometry, with_drag: bool = True, noise: float = 0.002) -> list[RunResult]:
-    """Runs as roller_runs makes them: three powers, two durations, round the axes, random phases."""
+def synthetic_runs(
+    geo: Geometry, with_drag: bool = True, noise: float = 0.002, paired: bool = False
+) -> list[RunResult]:
+    """Runs as roller_runs makes them: three powers, two durations, round the axes, random phases
+    (``paired``: wheels 1 and 3 always at the same count, as a mecanum robot's diagonal pair)."""
     rng = np.random.default_rng(1)
     out = []
     for power in POWERS:
@@ -41,6 +44,8 @@ def synthetic_runs(geo: Geometry, with_drag: bool = True, noise: float = 0.002) 
             duration = 0.8 * (1 + k % 2)
             for course in axis_courses(geo):
                 counts = tuple(int(v) for v in rng.integers(-5000, 5000, size=4))
+                if paired:
+                    counts = (counts[0], counts[1], counts[0], counts[3])
                 rate = SLOPE * (power - 40) + 0.01 * (course // 90)
                 d = drag(geo, course, counts) if with_drag else 0.0
                 amount = -0.05 + duration * rate - SLOPE * (duration + COAST[power]) * d
@@ -84,6 +89,15 @@ def test_fit_recovers_the_drag_and_the_coast(geo: Geometry) -> None:
     assert table.x[0] == 0.0 and table.y[0] == 0.0 and list(table.x) == sorted(table.x)
     spec = fit.spec
     assert spec.cos == fit.cos and spec.coast == table
+
+
+def test_wheels_that_always_turn_together_share_their_drag(geo: Geometry) -> None:
+    fit = fit_rollers(geo, synthetic_runs(geo, paired=True))
+    assert fit is not None and fit.kept
+    half = (COS[0] + COS[2]) / 2, (SIN[0] + SIN[2]) / 2
+    assert (fit.cos[0], fit.sin[0]) == pytest.approx(half, abs=0.3)
+    assert (fit.cos[2], fit.sin[2]) == pytest.approx(half, abs=0.3)
+    assert fit.cos[1] == pytest.approx(COS[1], abs=0.3)
 
 
 def test_no_drag_is_not_kept(geo: Geometry) -> None:

@@ -114,9 +114,7 @@ class Plan:
     @classmethod
     def quick(cls) -> Plan:
         """Seed 000's own scope: courses 0 and 45 (fold range ends), two directions, fewer powers."""
-        return cls(
-            course_count=2, directions=2, levels=6, turn_curvatures=(2.0, 5.0), turn_rounds=1, roller_rounds=2
-        )
+        return cls(course_count=2, directions=2, levels=6, turn_curvatures=(2.0, 5.0), turn_rounds=1)
 
     def calibrated_courses(self, geometry: Geometry) -> list[float]:
         top = geometry.fold_max

@@ -182,8 +182,12 @@ def fit_rollers(geometry: Geometry, runs: Sequence[RunResult]) -> RollerFit | No
         weight = durations + np.asarray(coast)[level]
         return _lstsq(np.hstack((plain, terms[:, active] * weight[:, None])), b)
 
-    A = np.hstack((plain, terms[:, active]))
-    if m <= A.shape[1] + len(powers) or np.linalg.matrix_rank(A) < A.shape[1]:
+    # wheels whose phases always move together (a mecanum robot's diagonal pair) share their drag:
+    # their columns coincide and the minimum-norm solution splits it evenly
+    if np.linalg.matrix_rank(plain) < plain.shape[1]:
+        return None
+    rank = int(np.linalg.matrix_rank(np.hstack((plain, terms[:, active])))) - plain.shape[1]
+    if rank == 0 or m <= plain.shape[1] + rank + len(powers):
         return None
     coast = [0.0] * len(powers)
     for _ in range(3):  # coordinate search over each power's coast time
@@ -208,7 +212,7 @@ def fit_rollers(geometry: Geometry, runs: Sequence[RunResult]) -> RollerFit | No
     # kept when it halves the runs' rms scatter and passes the Bayesian information criterion on
     # the residuals the groups' own offsets and rates leave (a term that acts on every MOVE should
     # explain something, not fit noise through the coast times' freedom)
-    k_params, dof = len(active) + len(powers), m - 2 * ng
+    k_params, dof = rank + len(powers), m - 2 * ng
     kept = cost <= 0.25 * cost0 and (
         cost <= 0.0 or dof * math.log(max(cost0, 1e-30) / cost) > k_params * math.log(max(dof, 2))
     )
