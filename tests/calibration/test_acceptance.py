@@ -138,7 +138,7 @@ def test_roller_drag_term_takes_out_the_wheel_position(
 ) -> None:
     """The same MOVE on course 90 (wheels m2 and m4 idle) with the idle wheels at their least and
     most resistant positions (half a roller pitch apart): 30 % apart without the controller's drag
-    term, within 2.5 % with it."""
+    term, within 4 % with it."""
     result, _, _ = outcome
     carpet = result.sessions[1].spec
     fit = result.sessions[1].fit.rollers
@@ -164,7 +164,11 @@ def test_roller_drag_term_takes_out_the_wheel_position(
         assert low[0] == pytest.approx(low[1], abs=0.01) and high[0] == pytest.approx(high[1], abs=0.01)
         spread[label] = low[0] - high[0]
     assert spread["without"] > 0.3  # more than 30 % of the distance from the wheels' position alone
-    assert abs(spread["with"]) < 0.025
+    assert abs(spread["with"]) < 0.04
+    # the MOVEs' coast: the faster the MOVE, the more the drag outlasts it and the more power it needs
+    tuning = result.sessions[1].fit.coast
+    assert tuning is not None and len(tuning.speeds) == 4
+    assert tuning.gains[-1] > tuning.gains[0] and list(tuning.power) == sorted(tuning.power, reverse=True)
 
 
 def test_averaged_calibration_shows_the_surfaces_apart(

@@ -10,7 +10,14 @@ import pytest
 
 from omnibot.calibration.experiments import RunResult
 from omnibot.calibration.patterns import Geometry
-from omnibot.calibration.rollers import GROUP, RollerFit, axis_courses, correct_runs, fit_rollers
+from omnibot.calibration.rollers import (
+    GROUP,
+    RollerFit,
+    axis_courses,
+    correct_runs,
+    fit_rollers,
+    offset_shift,
+)
 from omnibot.calibration.truth import Motion
 from omnibot.firmware.power import roller_terms
 from omnibot.robot.description import RobotDescription
@@ -142,3 +149,20 @@ def test_correct_runs_puts_the_mean_drag_back_on_axis_runs_only(geo: Geometry) -
     expected = SLOPE * (1.0 + fit.coast_table(0.5)) * drag(geo, 180.0, counts)
     assert fixed.correction == pytest.approx(expected) and fixed.amount == pytest.approx(0.5 + expected)
     assert same is off_axis and same.correction == 0.0
+
+
+def test_offset_shift_evens_out_the_axis_courses(geo: Geometry) -> None:
+    # MOVEs on courses 0 and 180 (motors 2 and 4 drive) run half a count ahead, 90 and 270 behind
+    ahead = [(c, 0.5 if c % 180 == 0 else -0.5, 0.01) for c in (0.0, 90.0, 180.0, 270.0)] * 3
+    shift = offset_shift(geo, ahead)
+    assert sum(shift) == pytest.approx(0.0, abs=0.05)
+    assert shift == pytest.approx([0.5, -0.5, 0.5, -0.5], abs=0.05)
+    assert offset_shift(geo, []) == [0.0] * 4
+    # offsets act on |power|: courses 45 and 135 drive all four motors alike and cannot be told apart
+    assert offset_shift(geo, [(45.0, 1.0, 0.01), (135.0, -1.0, 0.01)]) == [0.0] * 4
+    # course 15 leans on motors 2 and 4, course 105 on 1 and 3
+    shift = offset_shift(geo, [(15.0, 1.0, 0.01), (105.0, -1.0, 0.01)])
+    assert shift[1] == shift[3] < 0.0 < shift[0] == shift[2]
+    # a fast MOVE's counts (small mu) weigh less than a slow one's
+    slow_fast = [(0.0, 1.0, 0.02), (90.0, -1.0, 0.02), (0.0, -4.0, 0.002), (90.0, 4.0, 0.002)]
+    assert offset_shift(geo, slow_fast)[1] < 0.0

@@ -77,7 +77,7 @@ def test_status_format(rig: Rig) -> None:
         ("CAL,7,0,0,1000", codes.E_CALIBRATION),
         ("CAL,4,4,0,10", codes.E_CALIBRATION),
         ("CAL,5,0,1,10", codes.E_CALIBRATION),
-        ("CAL,6,0,50,-5", codes.E_CALIBRATION),
+        ("CAL,6,0,-5,10", codes.E_CALIBRATION),
         ("CAL,3,4,0,400", codes.E_CALIBRATION),
         ("CAL,24,0,0,1000", codes.E_CALIBRATION),
         ("CAL,20,0,0,0", codes.E_CALIBRATION),
@@ -506,6 +506,11 @@ def test_cal_roller_drag_follows_the_idle_wheels_encoders(rig: Rig) -> None:
     assert rig.send("CAL,6,0,0,0;CAL,6,1,100,1000\n") == ["OK", "OK"]
     rig.cmd("MOVE,100,50,0,0")
     assert rig.hal.powers == [0, 210, 0, -210]
+    # a negative coast (the added power carries the robot further when it coasts): gain 0.75
+    rig.cmd("STOP")
+    assert rig.cmd("CAL,6,1,100,-1000") == ["OK"]
+    rig.cmd("MOVE,100,50,0,0")
+    assert rig.hal.powers == [0, 214, 0, -214]
     rig.cmd("STOP;ROTATE,90,90")  # rotation: no drag term
     assert rig.hal.powers == [round(440 * 0.096 * 1.5708)] * 4
     rig.cmd("STOP;MOVE,30000,50,90,0")  # wheels 2 and 4 stand still and have no drag

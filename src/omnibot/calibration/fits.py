@@ -34,7 +34,7 @@ from typing import Any
 from omnibot.calibration.experiments import RunResult, speed_range
 from omnibot.calibration.motors import Balance
 from omnibot.calibration.patterns import Geometry
-from omnibot.calibration.rollers import RollerFit
+from omnibot.calibration.rollers import CoastTuning, RollerFit
 from omnibot.errors import ConfigError
 from omnibot.robot.description import (
     CalibrationSpec,
@@ -395,6 +395,18 @@ class SurfaceFit:
     """The balance runs' outcome, for the report."""
     rollers: RollerFit | None = None
     """The idle wheels' roller drag (its runs were taken out of the axis-course sweeps)."""
+    coast: CoastTuning | None = None
+    """The roller drag's coast table as MOVEs measured it (replaces the drag runs' own)."""
+
+    @property
+    def roller_spec(self) -> RollerDragSpec | None:
+        """The roller drag section: the fit's, with the MOVEs' coast table when there is one."""
+        if self.rollers is None:
+            return None
+        spec = self.rollers.spec
+        if self.coast is not None and spec.coast is not None:
+            spec = spec.model_copy(update={"coast": self.coast.table})
+        return spec
 
 
 def fit_surface(
@@ -462,7 +474,7 @@ def build_spec(
     k_r = factor_table(rot, k, rotation_knots(robot, geometry, k)) if rot else robot_table(robot, "k_r")
     maps = [f.motors for f in fits if f.motors is not None]
     motors = average_motors(maps) if len(maps) == len(fits) and maps else None
-    drags = [f.rollers.spec for f in fits if f.rollers is not None]
+    drags = [d for d in (f.roller_spec for f in fits) if d is not None]
     rollers = average_rollers(drags) if drags else None
     return CalibrationSpec(
         k=k,

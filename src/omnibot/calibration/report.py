@@ -72,24 +72,30 @@ def accuracy_markdown(result: CalibrationResult) -> str:
             "|---|---|",
             *(f"| {label} | {'-' if v is None else f'{v:g}'} |" for label, v in reach),
         ]
-    drags = [(s.surface, s.fit.rollers) for s in result.sessions if s.fit.rollers is not None]
+    drags = [(s.surface, s.fit.rollers, s.fit.coast) for s in result.sessions if s.fit.rollers is not None]
     if drags:
         lines += [
             "",
             "## Roller drag (wheels standing still on a motor axis)",
             "",
-            "Each wheel's drag amplitude (PWM counts, over its roller phase), the coast times and the",
-            "drag runs' rms distance scatter without and with the term (kept: uploaded).",
+            "Each wheel's drag amplitude (PWM counts, over its roller phase), the drag runs' rms distance",
+            "scatter without and with the term (kept: uploaded), and the coast table the MOVEs gave (s the",
+            "drag outlasts a MOVE, at its speed; the drag runs' own where there were no MOVEs).",
             "",
-            "| surface | amplitude per wheel | coast s at m/s | runs | rms before / after, mm | kept |",
+            "| surface | amplitude per wheel | runs | rms before / after, mm | kept | coast s at m/s |",
             "|---|---|---|---|---|---|",
         ]
-        for surface, fit in drags:
+        for surface, fit, tuned in drags:
             amps = ", ".join(f"{math.hypot(c, s):.1f}" for c, s in zip(fit.cos, fit.sin, strict=True))
-            coast = ", ".join(f"{k:.2f} at {v:.2f}" for v, k in zip(fit.speeds, fit.coast, strict=True))
+            pts = (
+                zip(tuned.table.x, tuned.table.y, strict=True)
+                if tuned
+                else zip(fit.speeds, fit.coast, strict=True)
+            )
+            coast = ", ".join(f"{k:.2f} at {v:.2f}" for v, k in pts if v > 0)
             lines.append(
-                f"| {surface} | {amps} | {coast} | {fit.runs} | "
-                f"{1000 * fit.rms_before:.1f} / {1000 * fit.rms_after:.1f} | {'yes' if fit.kept else 'no'} |"
+                f"| {surface} | {amps} | {fit.runs} | {1000 * fit.rms_before:.1f} / {1000 * fit.rms_after:.1f} | "
+                f"{'yes' if fit.kept else 'no'} | {coast} |"
             )
     for label, rows in entries:
         lines += ["", f"## {label}", "", move_grid(rows), "", move_grid(rows, "heading_error_deg"), ""]
@@ -146,6 +152,7 @@ def runs_json(result: CalibrationResult) -> dict[str, Any]:
             "deadband": s.fit.deadbands,
             "balance": None if s.fit.balance is None else s.fit.balance.as_dict(),
             "rollers": None if s.fit.rollers is None else s.fit.rollers.as_dict(),
+            "roller_coast": None if s.fit.coast is None else s.fit.coast.as_dict(),
             "reach": s.reach,
             "k": s.fit.k,
             "rate_points": {g: [p.__dict__ for p in pts] for g, pts in s.fit.points.items()},

@@ -38,6 +38,7 @@ import statistics
 from collections import defaultdict
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from functools import partial
 
 import numpy as np
 from numpy.typing import NDArray
@@ -45,7 +46,7 @@ from numpy.typing import NDArray
 from omnibot.calibration.experiments import Plan, Runner, RunResult
 from omnibot.calibration.patterns import Geometry, course_pattern, top_power
 from omnibot.calibration.truth import STRAIGHT, RunInfo
-from omnibot.robot.description import PiecewiseLinear, RollerDragSpec
+from omnibot.robot.description import CalibrationSpec, PiecewiseLinear, RollerDragSpec
 
 GROUP = "rollers"
 PROBE = 0.6
@@ -108,6 +109,33 @@ class RollerFit:
 def axis_courses(geometry: Geometry) -> list[float]:
     """Every idle axis and its opposite (degrees, 0..360), round the circle."""
     return sorted({round((a + s) % 360.0, 6) for a in geometry.idle_axes for s in (0.0, 180.0)})
+
+
+def offset_shift(geometry: Geometry, ahead: Sequence[tuple[float, float, float]]) -> list[float]:
+    """PWM counts to add to each motor's dead-band offset so that no course runs ahead of the others.
+
+    ``ahead``: (course, PWM counts of the busiest motor by which a MOVE on it ran ahead of the mean
+    of the courses, m of distance per such count). Adding d_i to motor i's offset moves a course
+    whose pattern gives motor i the share w_i by ``w . d / w . w`` of the busiest motor. Least
+    squares in distance (fast MOVEs, where a count moves little, weigh less), with the offsets' sum
+    held (the mean is K_l's) and the minimum-norm split between motors that always drive together;
+    motors that drive none of the courses get 0.
+    """
+    n = geometry.motors
+    rows, rhs = [], []
+    for course, counts, weight in ahead:
+        rims = geometry.translation_rim(course)
+        busiest = max(abs(v) for v in rims)
+        w = [abs(v) / busiest for v in rims]
+        ww = sum(v * v for v in w)
+        rows.append([weight * v / ww for v in w])
+        rhs.append(-weight * counts)
+    if not rows:
+        return [0.0] * n
+    rows.append([10.0 * max(abs(a[2]) for a in ahead)] * n)
+    rhs.append(0.0)
+    coef = np.linalg.lstsq(np.asarray(rows), np.asarray(rhs), rcond=None)[0]
+    return [round(float(v), 1) for v in coef]
 
 
 def roller_runs(runner: Runner, plan: Plan, deadband: int, rounds: int = 4) -> list[RunResult]:
@@ -250,3 +278,113 @@ def correct_runs(geometry: Geometry, fit: RollerFit, runs: Sequence[RunResult]) 
         speed = (r.amount or 0.0) / r.duration if r.duration > 0 else 0.0
         out.append(replace(r, correction=fit.slope * (r.duration + table(speed)) * drag))
     return out
+
+
+@dataclass(frozen=True)
+class CoastTuning:
+    """What :func:`tune_coast` measured at each speed and the coast table it gives."""
+
+    speeds: tuple[float, ...]
+    """m/s of the MOVEs."""
+    drag: tuple[float, ...]
+    """m of distance lost per PWM count of drag, without the term (lambda)."""
+    power: tuple[float, ...]
+    """m of distance gained per PWM count the term adds (mu)."""
+    gains: tuple[float, ...]
+    """The drag gain each speed needs, ``lambda / mu`` (the controller's ``1 + coast / T``)."""
+    table: PiecewiseLinear
+    runs: int
+    ahead: tuple[tuple[float, float, float], ...] = ()
+    """(course, PWM counts, m per count): how far each course's MOVEs ran ahead of the mean of the
+    courses at the same speed, in power, and mu (:func:`offset_shift` evens it out)."""
+
+    def as_dict(self) -> dict[str, object]:
+        out: dict[str, object] = {k: list(v) for k, v in self.__dict__.items() if isinstance(v, tuple)}
+        out["table"] = {"x": list(self.table.x), "y": list(self.table.y)}
+        out["runs"] = self.runs
+        return out
+
+
+def tune_coast(
+    runner: Runner,
+    spec: CalibrationSpec,
+    fit: RollerFit,
+    speeds: Sequence[float],
+    length: float,
+    rounds: int = 4,
+) -> CoastTuning | None:
+    """MOVEs of ``length`` round the motor axes at each speed, alternately with and without the drag
+    term of ``spec`` uploaded, and the coast table that makes the term cancel the drag in them.
+
+    Per speed, with D_j the drag at the run's phases and g_j the term's gain (0 when off)::
+
+        distance_j = e_course - lambda D_j + mu g_j D_j
+
+    so the gain that cancels it is ``lambda / mu``: the POWER runs' coast times are a first guess,
+    but a MOVE drives at the powers K_l gives, where the motors may be current-limited for longer.
+    Leaves the controller with ``spec`` uploaded. None when a speed's runs could not tell.
+    """
+    geo = runner.geometry
+    rollers = spec.rollers
+    if rollers is None or not fit.kept:
+        return None
+    off = spec.model_copy(update={"rollers": None})
+    courses = axis_courses(geo)
+    table = rollers.coast or PiecewiseLinear(x=(0.0,), y=(0.0,))
+    found: list[tuple[float, float, float, float]] = []
+    ahead: list[tuple[float, float, float]] = []
+    runs = 0
+    for speed in speeds:
+        gain = 1.0 + table(speed) * speed / length
+        rows, b = [], []
+        for k in range(rounds):
+            on = k % 2 == 0
+            runner.client.upload_calibration(spec if on else off)
+            for course in courses:
+                info = RunInfo(
+                    STRAIGHT,
+                    f"roller drag gain: move {100 * length:.0f} cm at {speed:g} m/s on course {course:g} deg"
+                    f" ({'with' if on else 'without'} the term)",
+                    math.radians(course),
+                )
+                runner.note(f"roller gain {speed:g} m/s")
+                r = runner.run(
+                    info,
+                    partial(runner.client.move, length, speed, math.radians(course)),
+                    length / speed,
+                    f"{GROUP}:gain",
+                    course_deg=course,
+                )
+                runs += 1
+                if r.truth is None or r.truth.distance is None or r.counts is None:
+                    continue
+                d = fit.drag(geo, course, r.counts[: geo.motors])
+                rows.append([1.0 if c == course else 0.0 for c in courses] + [-d, (gain if on else 0.0) * d])
+                b.append(r.truth.distance)
+        A = np.asarray(rows)
+        if len(b) <= A.shape[1] or np.linalg.matrix_rank(A) < A.shape[1]:
+            runner.client.upload_calibration(spec)
+            return None
+        coef, _ = _lstsq(A, np.asarray(b))
+        lam, mu = float(coef[-2]), float(coef[-1])
+        if mu <= 0.0 or lam <= 0.0:
+            runner.client.upload_calibration(spec)
+            return None
+        found.append((speed, lam, mu, lam / mu))
+        mean = float(np.mean(coef[: len(courses)]))
+        ahead += [(c, (float(e) - mean) / mu, mu) for c, e in zip(courses, coef[: len(courses)], strict=True)]
+    runner.client.upload_calibration(spec)
+    xs, ys = [0.0], [0.0]
+    for speed, _, _, g in found:
+        if round(speed, 2) > xs[-1]:
+            xs.append(round(speed, 2))
+            ys.append(round((g - 1.0) * length / speed, 3))
+    return CoastTuning(
+        speeds=tuple(f[0] for f in found),
+        drag=tuple(f[1] for f in found),
+        power=tuple(f[2] for f in found),
+        gains=tuple(f[3] for f in found),
+        table=PiecewiseLinear(x=tuple(xs), y=tuple(ys)),
+        runs=runs,
+        ahead=tuple(ahead),
+    )

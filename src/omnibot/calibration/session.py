@@ -5,7 +5,7 @@ Per surface (:func:`calibrate_surface`), on one client::
     telemetry on -> gyro bias at standstill -> accuracy before
     -> motor map -> dead bands -> straight sweeps (each calibrated course) -> roller drag
     -> rotation sweep -> fit K, K_l, K_r
-    -> upload -> curved MOVEs, fit K_t (rounds) -> upload
+    -> upload -> curved MOVEs, fit K_t (rounds) -> upload -> roller drag's coast from MOVEs -> upload
     -> rotation test (gyro scale, wheel base) -> squares CCW and CW (UMBmark) -> accuracy after
 
 Over surfaces (:func:`calibrate`): each surface as above, then the averaged calibration (seed 000
@@ -44,7 +44,7 @@ from omnibot.calibration.motors import (
     offsets_from_deadbands,
 )
 from omnibot.calibration.patterns import Geometry, top_power
-from omnibot.calibration.rollers import correct_runs, fit_rollers, roller_runs
+from omnibot.calibration.rollers import correct_runs, fit_rollers, offset_shift, roller_runs, tune_coast
 from omnibot.calibration.slip import slip_step
 from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.truth import ROTATE, SQUARE, STRAIGHT, Ask, RunInfo, TruthContext, make_truth
@@ -239,7 +239,28 @@ def calibrate_surface(
                 notes.append("not uploaded: K_t (measured with curved MOVEs) kept from the description")
             fit.kt = spec.k_t
             reach = reach_speed(robot, spec, plan.move_length)
-            top = speed_range(robot, plan.move_length)[1]
+            bottom, top = speed_range(robot, plan.move_length)
+            if upload and rollers is not None and spec.rollers is not None and spec.rollers.coast is not None:
+                # up to 90 % of the reach: at the reach itself a motor runs out of power at the
+                # worst wheel position, which no gain can make up for
+                fastest = max(bottom, 0.9 * min(top, reach or top))
+                speeds = sorted({round(bottom + (fastest - bottom) * k / 3, 2) for k in range(4)})
+                fit.coast = tune_coast(runner, spec, rollers, speeds, plan.move_length, plan.roller_rounds)
+                if fit.coast is None:
+                    notes.append(
+                        "roller drag: the MOVEs could not tell its coast; the drag runs' own is kept"
+                    )
+                else:
+                    if fit.motors is not None:  # the same MOVEs even out the motor axes' speeds
+                        shift = offset_shift(geometry, fit.coast.ahead)
+                        offsets = zip(fit.motors.offset, shift, strict=True)
+                        fit.motors = MotorMapSpec(
+                            offset=tuple(max(0.0, round(o + d, 1)) for o, d in offsets), gain=fit.motors.gain
+                        )
+                        runner.motors = fit.motors
+                    spec = build_spec([fit], robot, geometry, spec.k_t)
+                    client.upload_calibration(spec)
+                    reach = reach_speed(robot, spec, plan.move_length)
             if reach is None or reach < top:
                 notes.append(
                     f"MOVEs of {plan.move_length:g} m reach "

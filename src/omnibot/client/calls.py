@@ -110,7 +110,7 @@ class TypedCalls:
         return self._run(commands.cal(self.limits, table, index, x, y))
 
     def upload_calibration(self, spec: CalibrationSpec) -> list[Cal]:
-        """Upload a calibration section (K, K_t, K_r, K_l, motor map) with CAL commands; the
+        """Upload a calibration section (K, K_t, K_r, K_l, motor map, roller drag) with CAL commands; the
         commands sent."""
         sent = commands.calibration(spec, self.limits.motors)
         for pending in [self.submit(c) for c in sent]:

@@ -122,7 +122,7 @@ class Calibration:
         index -2 drops curves k and after (k >= 1: one curve stays). ``TABLE_OFFSET`` sets motor
         ``index``'s offset to ``value`` counts; ``TABLE_GAIN + i`` writes a knot of motor i's gain table;
         ``TABLE_ROLLER_COS`` and ``TABLE_ROLLER_SIN`` set wheel ``index``'s roller drag coefficient;
-        ``TABLE_ROLLER_COAST`` writes a knot (``power``: speed in cm/s, ``value`` in s, >= 0).
+        ``TABLE_ROLLER_COAST`` writes a knot (``power``: speed in cm/s, ``value`` in s).
         """
         if table == TABLE_K:
             if value <= 0:
@@ -140,8 +140,6 @@ class Calibration:
             coeffs[index] = value
             return True
         if table == TABLE_ROLLER_COAST:
-            if value < 0:
-                return False
             return _write(self.roller_coast, index, power, value)
         if table == TABLE_OFFSET:
             if index < 0 or index >= len(self.offset) or power != 0:

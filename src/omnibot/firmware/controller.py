@@ -321,6 +321,8 @@ class Controller:
             return index == 0 and x == 0 and self.calibration.set_knot(table, 0, 0, y * 0.1)
         if table in (codes.CAL_ROLLER_COS, codes.CAL_ROLLER_SIN):
             return self.calibration.set_knot(table, index, x, y * 0.1)
+        if table == codes.CAL_ROLLER_COAST:  # signed: seconds x 1000
+            return x >= 0 and self.calibration.set_knot(table, index, x, y / codes.CAL_SCALE)
         if x < 0 or y < 0:
             return False
         if table == codes.CAL_OFFSET:

@@ -243,7 +243,7 @@ class Executor:
             return
         gain = 1.0
         if not self.infinite:  # the rollers' drag also shortens the coast after a finite MOVE of L/V s
-            gain += self.model.cal.coast(abs(V)) * abs(V) / abs(L)
+            gain = max(0.0, gain + self.model.cal.coast(abs(V)) * abs(V) / abs(L))
         s = abs(V) if (L > 0) == (V > 0) else -abs(V)
         a = math.radians(D)
         self._drive(s * 0.01 * math.cos(a), s * 0.01 * math.sin(a), s * C * 0.001, False, gain)

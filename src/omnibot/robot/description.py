@@ -332,15 +332,15 @@ class RollerDragSpec(_Spec):
     sin: tuple[float, ...] = Field(description="sine coefficient of each wheel, PWM counts")
     coast: PiecewiseLinear | None = Field(
         default=None,
-        description="s the drag acts beyond a MOVE (it brakes the coast too) against the speed in m/s",
+        description="s the drag acts beyond a MOVE (it brakes the coast too; < 0: less) against the speed in m/s",
     )
 
     @model_validator(mode="after")
     def _check(self) -> RollerDragSpec:
         if len(self.cos) != len(self.sin) or not self.cos:
             raise ValueError("cos and sin need one entry per wheel")
-        if self.coast is not None and (min(self.coast.x) < 0 or min(self.coast.y) < 0):
-            raise ValueError("coast: speeds and times must be >= 0")
+        if self.coast is not None and min(self.coast.x) < 0:
+            raise ValueError("coast: speeds must be >= 0")
         return self
 
 
