@@ -197,10 +197,8 @@ def calibrate_surface(
                 and all(geometry.roller_pitch)
                 and source.can(RunInfo(STRAIGHT, "", 0.0))
             ):
-                axis_deadband = deadbands.get("course:0")
-                if axis_deadband is None:
-                    axis_deadband = find_deadband(runner, 0.0, plan.deadband_step).power
-                rollers = fit_rollers(geometry, roller_runs(runner, plan, axis_deadband, plan.roller_rounds))
+                axis = deadbands.get("course:0") or find_deadband(runner, 0.0, plan.deadband_step).power
+                rollers = fit_rollers(geometry, roller_runs(runner, plan, axis, plan.roller_rounds))
                 if rollers is None:
                     notes.append("roller drag: the runs could not tell it (no drag term uploaded)")
                 else:
@@ -238,29 +236,10 @@ def calibrate_surface(
             else:
                 notes.append("not uploaded: K_t (measured with curved MOVEs) kept from the description")
             fit.kt = spec.k_t
-            reach = reach_speed(robot, spec, plan.move_length)
-            bottom, top = speed_range(robot, plan.move_length)
             if upload and rollers is not None and spec.rollers is not None and spec.rollers.coast is not None:
-                # up to 90 % of the reach: at the reach itself a motor runs out of power at the
-                # worst wheel position, which no gain can make up for
-                fastest = max(bottom, 0.9 * min(top, reach or top))
-                speeds = sorted({round(bottom + (fastest - bottom) * k / 3, 2) for k in range(4)})
-                fit.coast = tune_coast(runner, spec, rollers, speeds, plan.move_length, plan.roller_rounds)
-                if fit.coast is None:
-                    notes.append(
-                        "roller drag: the MOVEs could not tell its coast; the drag runs' own is kept"
-                    )
-                else:
-                    if fit.motors is not None:  # the same MOVEs even out the motor axes' speeds
-                        shift = offset_shift(geometry, fit.coast.ahead)
-                        offsets = zip(fit.motors.offset, shift, strict=True)
-                        fit.motors = MotorMapSpec(
-                            offset=tuple(max(0.0, round(o + d, 1)) for o, d in offsets), gain=fit.motors.gain
-                        )
-                        runner.motors = fit.motors
-                    spec = build_spec([fit], robot, geometry, spec.k_t)
-                    client.upload_calibration(spec)
-                    reach = reach_speed(robot, spec, plan.move_length)
+                spec = tune_rollers(runner, fit, spec, plan, notes)
+            reach = reach_speed(robot, spec, plan.move_length)
+            top = speed_range(robot, plan.move_length)[1]
             if reach is None or reach < top:
                 notes.append(
                     f"MOVEs of {plan.move_length:g} m reach "
@@ -316,6 +295,33 @@ def calibrate_surface(
         slip=slip,
         reach=reach,
     )
+
+
+def tune_rollers(
+    runner: Runner, fit: SurfaceFit, spec: CalibrationSpec, plan: Plan, notes: list[str]
+) -> CalibrationSpec:
+    """The roller drag's coast from MOVEs and the motor axes' offsets evened out by the same MOVEs
+    (rollers.py); the new section, uploaded. ``fit`` gets the coast and the shifted motor map."""
+    robot, geometry = runner.robot, runner.geometry
+    assert fit.rollers is not None
+    bottom, top = speed_range(robot, plan.move_length)
+    reach = reach_speed(robot, spec, plan.move_length)
+    # up to 90 % of the reach: at the reach itself a motor runs out of power at the worst wheel
+    # position, which no gain can make up for
+    fastest = max(bottom, 0.9 * min(top, reach or top))
+    speeds = sorted({round(bottom + (fastest - bottom) * k / 3, 2) for k in range(4)})
+    fit.coast = tune_coast(runner, spec, fit.rollers, speeds, plan.move_length, plan.roller_rounds)
+    if fit.coast is None:
+        notes.append("roller drag: the MOVEs could not tell its coast; the drag runs' own is kept")
+        return spec
+    if fit.motors is not None:
+        shift = offset_shift(geometry, fit.coast.ahead)
+        offsets = tuple(max(0.0, round(o + d, 1)) for o, d in zip(fit.motors.offset, shift, strict=True))
+        fit.motors = MotorMapSpec(offset=offsets, gain=fit.motors.gain)
+        runner.motors = fit.motors
+    spec = build_spec([fit], robot, geometry, spec.k_t)
+    runner.client.upload_calibration(spec)
+    return spec
 
 
 def fit_motor_map(runner: Runner, plan: Plan, notes: list[str]) -> tuple[MotorMapSpec, Balance]:
