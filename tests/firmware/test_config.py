@@ -7,8 +7,9 @@ from pathlib import Path
 
 import pytest
 
+from omnibot.errors import ConfigError
 from omnibot.firmware import config as fwconfig
-from omnibot.robot.description import load_robot, preset_names
+from omnibot.robot.description import PiecewiseLinear, RollerDragSpec, load_robot, preset_names
 
 
 @pytest.mark.parametrize("name", preset_names())
@@ -35,6 +36,26 @@ def test_omni4_limits_in_protocol_units() -> None:
     assert cfg["encoder_cpr"] == [440] * 4
     assert cfg["pwm_max"] == 255 and cfg["power_min"] == 0
     assert cfg["rim"][0] == pytest.approx([0.0, 1.0, 0.096])
+    # wheel 1 drives along y, so its rollers roll along x; 440 counts per turn over 8 rollers
+    assert cfg["roller_dir"][0] == pytest.approx([-1.0, 0.0]) and cfg["roller_pitch"] == [55.0] * 4
+    assert cfg["roller_cos"] == cfg["roller_sin"] == [0.0] * 4 and cfg["roller_coast"] == [[0.0], [0.0]]
+
+
+def test_roller_drag_section_in_the_config() -> None:
+    robot = load_robot("omni4")
+    assert robot.calibration is not None
+    coast = PiecewiseLinear(x=(0.0, 0.64), y=(0.0, 0.34))
+    drag = RollerDragSpec(cos=(-5.0, -4.0, -5.0, -4.0), sin=(0.5, 0.0, 0.0, 0.0), coast=coast)
+    cfg = fwconfig.build_config(
+        robot.model_copy(update={"calibration": robot.calibration.model_copy(update={"rollers": drag})})
+    )
+    assert cfg["roller_cos"] == [-5.0, -4.0, -5.0, -4.0] and cfg["roller_sin"][0] == 0.5
+    assert cfg["roller_coast"] == [[0.0, 64.0], [0.0, 0.34]]  # speeds in cm/s, as the controller's V
+    three = RollerDragSpec(cos=(0.0,) * 3, sin=(0.0,) * 3)
+    with pytest.raises(ConfigError, match="roller drag for 3 wheels on a robot with 4"):
+        fwconfig.build_config(
+            robot.model_copy(update={"calibration": robot.calibration.model_copy(update={"rollers": three})})
+        )
 
 
 def test_stage_board_and_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
