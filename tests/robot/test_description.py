@@ -109,6 +109,22 @@ def test_bad_values_are_named() -> None:
     assert "wheels[0].radius:" in msg and "'big'" in msg
 
 
+def test_roller_drag_section_is_checked() -> None:
+    data = preset_data("omni4")
+    data["calibration"]["rollers"] = {"cos": [-5.0, -4.0, -5.0, -4.0], "sin": [0.0, 0.0, 0.0, 0.0]}
+    robot = parse_description(data, "test")
+    assert robot.calibration is not None and robot.calibration.rollers is not None
+    assert robot.calibration.rollers.cos[1] == -4.0 and robot.calibration.rollers.coast is None
+    data["calibration"]["rollers"] = {"cos": [-5.0, -4.0], "sin": [0.0]}
+    assert "cos and sin need one entry per wheel" in error_for(data)
+    data["calibration"]["rollers"] = {
+        "cos": [1.0],
+        "sin": [0.0],
+        "coast": {"x": [-0.1, 0.5], "y": [0.0, -0.2]},
+    }
+    assert "coast: speeds must be >= 0" in error_for(data)
+
+
 def test_mixed_wheel_forms_and_degenerate_rollers_are_rejected() -> None:
     data = preset_data("omni4")
     data["wheels"][0]["alpha_deg"] = 10
