@@ -72,6 +72,8 @@ class Executor:
         self._feedback = False
         self._drag = False
         period_us = int(cfg["control_period_ms"]) * 1000
+        self._drag_period = period_us
+        self._drag_due = 0
         self.speedctl = SpeedControl(
             [int(c) for c in cfg["encoder_cpr"]],
             float(cfg["speed_kp"]),
@@ -177,7 +179,9 @@ class Executor:
         if self._feedback and self.kind != NONE:
             self._feedback_step(dt_us)
         elif self._drag and self.kind != NONE:
-            self._drag_step()
+            self._drag_due -= dt_us
+            if self._drag_due <= 0:
+                self._drag_step()
 
     def _finish(self) -> None:
         self.stop()
@@ -305,6 +309,8 @@ class Executor:
             self._drag_step()
 
     def _drag_step(self) -> None:
+        """Recompute the drag from the encoders now; the next time one control period on."""
+        self._drag_due = self._drag_period
         for i in range(self.n):
             self._counts[i] = self.hal.encoder_count(i)
         self._warn_once(self.model.drag(self._counts, self.powers) & SATURATED)
