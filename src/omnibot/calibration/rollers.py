@@ -36,7 +36,7 @@ from __future__ import annotations
 import math
 import statistics
 from collections import defaultdict
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 from functools import partial
 
@@ -80,13 +80,7 @@ class RollerFit:
     @property
     def coast_table(self) -> PiecewiseLinear:
         """Coast time against speed (m/s), from rest (0 s) through each power's point."""
-        pts = sorted(zip(self.speeds, self.coast, strict=True))
-        xs, ys = [0.0], [0.0]
-        for v, k in pts:
-            if round(v, 2) > round(xs[-1], 2):
-                xs.append(round(v, 2))
-                ys.append(round(k, 3))
-        return PiecewiseLinear(x=tuple(xs), y=tuple(ys))
+        return coast_table(zip(self.speeds, self.coast, strict=True))
 
     @property
     def spec(self) -> RollerDragSpec:
@@ -104,6 +98,17 @@ class RollerFit:
 
     def as_dict(self) -> dict[str, object]:
         return {k: list(v) if isinstance(v, tuple) else v for k, v in self.__dict__.items()}
+
+
+def coast_table(points: Iterable[tuple[float, float]]) -> PiecewiseLinear:
+    """A coast table from (speed m/s, seconds) points: from rest (0 s), speeds rounded to 1 cm/s
+    (the CAL resolution; a point no faster than the one before is dropped), times to 1 ms."""
+    xs, ys = [0.0], [0.0]
+    for v, k in sorted(points):
+        if round(v, 2) > xs[-1]:
+            xs.append(round(v, 2))
+            ys.append(round(k, 3))
+    return PiecewiseLinear(x=tuple(xs), y=tuple(ys))
 
 
 def axis_courses(geometry: Geometry) -> list[float]:
@@ -334,57 +339,55 @@ def tune_coast(
     found: list[tuple[float, float, float, float]] = []
     ahead: list[tuple[float, float, float]] = []
     runs = 0
-    for speed in speeds:
-        gain = 1.0 + table(speed) * speed / length
-        rows, b = [], []
-        for k in range(rounds):
-            on = k % 2 == 0
-            runner.client.upload_calibration(spec if on else off)
-            for course in courses:
-                info = RunInfo(
-                    STRAIGHT,
-                    f"roller drag gain: move {100 * length:.0f} cm at {speed:g} m/s on course {course:g} deg"
-                    f" ({'with' if on else 'without'} the term)",
-                    math.radians(course),
-                )
-                runner.note(f"roller gain {speed:g} m/s")
-                r = runner.run(
-                    info,
-                    partial(runner.client.move, length, speed, math.radians(course)),
-                    length / speed,
-                    f"{GROUP}:gain",
-                    course_deg=course,
-                )
-                runs += 1
-                if r.truth is None or r.truth.distance is None or r.counts is None:
-                    continue
-                d = fit.drag(geo, course, r.counts[: geo.motors])
-                rows.append([1.0 if c == course else 0.0 for c in courses] + [-d, (gain if on else 0.0) * d])
-                b.append(r.truth.distance)
-        A = np.asarray(rows)
-        if len(b) <= A.shape[1] or np.linalg.matrix_rank(A) < A.shape[1]:
-            runner.client.upload_calibration(spec)
-            return None
-        coef, _ = _lstsq(A, np.asarray(b))
-        lam, mu = float(coef[-2]), float(coef[-1])
-        if mu <= 0.0 or lam <= 0.0:
-            runner.client.upload_calibration(spec)
-            return None
-        found.append((speed, lam, mu, lam / mu))
-        mean = float(np.mean(coef[: len(courses)]))
-        ahead += [(c, (float(e) - mean) / mu, mu) for c, e in zip(courses, coef[: len(courses)], strict=True)]
-    runner.client.upload_calibration(spec)
-    xs, ys = [0.0], [0.0]
-    for speed, _, _, g in found:
-        if round(speed, 2) > xs[-1]:
-            xs.append(round(speed, 2))
-            ys.append(round((g - 1.0) * length / speed, 3))
+    try:
+        for speed in speeds:
+            gain = 1.0 + table(speed) * speed / length
+            rows, b = [], []
+            for k in range(rounds):
+                on = k % 2 == 0
+                runner.client.upload_calibration(spec if on else off)
+                for course in courses:
+                    info = RunInfo(
+                        STRAIGHT,
+                        f"roller drag gain: move {100 * length:.0f} cm at {speed:g} m/s on course {course:g} "
+                        f"deg ({'with' if on else 'without'} the term)",
+                        math.radians(course),
+                    )
+                    runner.note(f"roller gain {speed:g} m/s")
+                    r = runner.run(
+                        info,
+                        partial(runner.client.move, length, speed, math.radians(course)),
+                        length / speed,
+                        f"{GROUP}:gain",
+                        course_deg=course,
+                    )
+                    runs += 1
+                    if r.truth is None or r.truth.distance is None or r.counts is None:
+                        continue
+                    d = fit.drag(geo, course, r.counts[: geo.motors])
+                    rows.append(
+                        [1.0 if c == course else 0.0 for c in courses] + [-d, (gain if on else 0.0) * d]
+                    )
+                    b.append(r.truth.distance)
+            unknowns = len(courses) + 2
+            if len(b) <= unknowns or np.linalg.matrix_rank(np.asarray(rows)) < unknowns:
+                return None
+            coef, _ = _lstsq(np.asarray(rows), np.asarray(b))
+            lam, mu = float(coef[-2]), float(coef[-1])
+            if mu <= 0.0 or lam <= 0.0:
+                return None
+            found.append((speed, lam, mu, lam / mu))
+            offsets = coef[: len(courses)]
+            mean = float(np.mean(offsets))
+            ahead += [(c, (float(e) - mean) / mu, mu) for c, e in zip(courses, offsets, strict=True)]
+    finally:
+        runner.client.upload_calibration(spec)
     return CoastTuning(
         speeds=tuple(f[0] for f in found),
         drag=tuple(f[1] for f in found),
         power=tuple(f[2] for f in found),
         gains=tuple(f[3] for f in found),
-        table=PiecewiseLinear(x=tuple(xs), y=tuple(ys)),
+        table=coast_table((speed, (g - 1.0) * length / speed) for speed, _, _, g in found),
         runs=runs,
         ahead=tuple(ahead),
     )
