@@ -4,6 +4,7 @@ drives the real runs)."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -21,6 +22,7 @@ from omnibot.calibration.rollers import (
 from omnibot.calibration.truth import Motion
 from omnibot.firmware.power import roller_terms
 from omnibot.robot.description import RobotDescription
+from tests.calibration.test_fits import run as straight_run
 
 COS = (-5.0, -4.0, -6.0, -3.0)
 SIN = (0.5, 1.0, -0.5, 0.0)
@@ -57,19 +59,7 @@ def synthetic_runs(
                 d = drag(geo, course, counts) if with_drag else 0.0
                 amount = -0.05 + duration * rate - SLOPE * (duration + COAST[power]) * d
                 amount += float(rng.normal(0.0, noise))
-                out.append(
-                    RunResult(
-                        kind="straight",
-                        group=GROUP,
-                        command="POWER",
-                        duration=duration,
-                        truth=Motion(x=amount, y=0.0, theta=0.0, source="test"),
-                        power=power,
-                        course_deg=course,
-                        folded_deg=0.0,
-                        counts=counts,
-                    )
-                )
+                out.append(replace(straight_run(power, duration, amount, course), group=GROUP, counts=counts))
     return out
 
 
