@@ -12,17 +12,19 @@ link URL, the robot, the world, the path, binding the port, a missing token) fai
 constructor, before any thread starts, with an :class:`~omnibot.errors.OmnibotError`.
 
 Binding: 127.0.0.1 by default. Bound to any other address the dashboard requires an access token:
-the one given, or a fresh random one (printed in :attr:`Dashboard.url`).
+the one given, or a fresh random one (printed in :attr:`Dashboard.url`). Requests are answered only
+when their ``Host`` names this server (:class:`~omnibot.web.access.HostPolicy`: the loopback names,
+the bound address, the names in ``allow_hosts``), which defeats DNS rebinding.
 """
 
 from __future__ import annotations
 
 import contextlib
-import ipaddress
 import secrets
 import socket
 import threading
 import time
+from collections.abc import Sequence
 from pathlib import Path
 from types import TracebackType
 from typing import Self
@@ -35,6 +37,7 @@ from omnibot.robot.description import RobotDescription, load_robot
 from omnibot.sim.world import World, load_world
 from omnibot.teleop.config import TeleopConfig
 from omnibot.teleop.simlink import sim_device
+from omnibot.web.access import HostCheck, HostPolicy, is_loopback
 from omnibot.web.link import RobotLink
 from omnibot.web.messages import MAX_FRAME
 from omnibot.web.scene import Point, build_scene
@@ -42,16 +45,6 @@ from omnibot.web.server import Hub, create_app
 from omnibot.web.teach import TeachRepeat
 
 TOKEN_MIN = 8
-
-
-def is_loopback(host: str) -> bool:
-    """True for 127.0.0.0/8, ::1 and localhost."""
-    if host.lower() == "localhost":
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False
 
 
 def access_token(host: str, token: str | None) -> str | None:
@@ -98,9 +91,11 @@ class Dashboard:
         path: list[Point] | None = None,
         config: TeleopConfig | None = None,
         teach: TeachRepeat | None = None,
+        allow_hosts: Sequence[str] = (),
     ) -> None:
         self.token = token = access_token(host, token)
         self.host = host
+        HostPolicy.for_bind(host, 1, allow_hosts)  # a bad name fails here, before anything opens
         description = self._robot(port_url, robot)
         client = RobotClient.open(port_url, description, timeout=0.5)
         try:
@@ -119,9 +114,10 @@ class Dashboard:
         self.port = int(self._sock.getsockname()[1])
         self.hub = Hub(self.scene, self.link.outbox, self.link.submit)
         self.app = create_app(self.hub, token)
+        self.host_check = HostCheck(self.app, HostPolicy.for_bind(host, self.port, allow_hosts))
         self._server = uvicorn.Server(
             uvicorn.Config(
-                self.app,
+                self.host_check,
                 log_level="warning",
                 log_config=None,  # leave the application's logging alone
                 access_log=False,
