@@ -205,8 +205,31 @@ def build_config(
     }
 
 
+def _non_finite(value: Any, where: str) -> str | None:
+    """Where in ``value`` (nested lists and dicts) a float is not finite, or None."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return f"{where} = {value!r}"
+    if isinstance(value, list | tuple):
+        items: Any = enumerate(value)
+    elif isinstance(value, dict):
+        items = value.items()
+    else:
+        return None
+    for key, item in items:
+        found = _non_finite(item, f"{where}[{key!r}]")
+        if found:
+            return found
+    return None
+
+
 def config_module_source(config: dict[str, Any]) -> str:
-    """The text of ``robot_config.py``: ``CONFIG = {...}`` with plain literals, one key a line."""
+    """The text of ``robot_config.py``: ``CONFIG = {...}`` with plain literals, one key a line.
+    A number that is not finite is refused (ConfigError naming it): ``inf`` and ``nan`` are not
+    literals, and the board would stop at a NameError."""
+    for key, value in config.items():
+        found = _non_finite(value, str(key))
+        if found:
+            raise ConfigError(f"the firmware config cannot hold {found}: every number must be finite")
     lines = [f'"""Firmware config of robot {config["name"]!r}, written by omnibot.firmware.config."""', ""]
     lines.append("CONFIG = {")
     for key, value in config.items():
