@@ -136,3 +136,12 @@ def test_teach_hook_is_called_in_the_link_thread() -> None:
         assert "follow ok" in stepper.logs()
     finally:
         link.stop()
+
+
+def test_the_pose_is_labelled_by_what_it_is(stepper: Stepper) -> None:
+    state = stepper.run(0.2)
+    assert state["pose_source"] == "truth" and state["pose"][:2] == [1.0, 1.0]  # the room's start
+    stepper.link._device = None  # as on a real link: no simulator behind it
+    state = stepper.run(0.2)
+    assert state["pose_source"] == "odometry"
+    assert state["pose"] == state["odometry"]

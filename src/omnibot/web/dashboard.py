@@ -11,6 +11,10 @@ Threads: ``omnibot-robot-link`` owns the client (:class:`~omnibot.web.link.Robot
 link URL, the robot, the world, the path, binding the port, a missing token) fails in the
 constructor, before any thread starts, with an :class:`~omnibot.errors.OmnibotError`.
 
+A planned path read from a file (:class:`~omnibot.web.scene.PlannedPath`) is drawn from the robot's
+pose at the start, as ``omnibot follow`` would drive it from there; a list of points is drawn as
+given, in the frame of the pose the page shows.
+
 Binding: 127.0.0.1 by default. Bound to any other address the dashboard requires an access token:
 the one given, or a fresh random one (printed in :attr:`Dashboard.url`). Requests are answered only
 when their ``Host`` names this server (:class:`~omnibot.web.access.HostPolicy`: the loopback names,
@@ -40,7 +44,7 @@ from omnibot.teleop.simlink import sim_device
 from omnibot.web.access import HostCheck, HostPolicy, is_loopback
 from omnibot.web.link import RobotLink
 from omnibot.web.messages import MAX_FRAME
-from omnibot.web.scene import Point, build_scene
+from omnibot.web.scene import PlannedPath, Point, build_scene
 from omnibot.web.server import Hub, create_app
 from omnibot.web.teach import TeachRepeat
 
@@ -88,7 +92,7 @@ class Dashboard:
         http_port: int = 8080,
         token: str | None = None,
         world: World | str | Path | None = None,
-        path: list[Point] | None = None,
+        path: PlannedPath | Sequence[Point] | None = None,
         config: TeleopConfig | None = None,
         teach: TeachRepeat | None = None,
         allow_hosts: Sequence[str] = (),
@@ -104,8 +108,10 @@ class Dashboard:
                 the_world: World | None = world if isinstance(world, World) else load_world(world)
             else:
                 the_world = device.sim.world if device is not None else None
-            self.scene = build_scene(description, the_world, path)
             self.link = RobotLink(client, description, config, teach=teach)
+            # a path file is drawn where following it from here would drive it; points as given
+            points = path.placed(self.link.pose) if isinstance(path, PlannedPath) else path
+            self.scene = build_scene(description, the_world, points)
             self.scene["teach"] = teach is not None
             self._sock = bind(host, http_port)
         except BaseException:

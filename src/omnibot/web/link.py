@@ -147,6 +147,12 @@ class RobotLink:
             self.client.close()
 
     @property
+    def pose(self) -> tuple[float, float, float] | None:
+        """The pose the page shows: the simulator's truth, else odometry (before :meth:`start`, or
+        from the link thread)."""
+        return self._pose()
+
+    @property
     def alive(self) -> bool:
         return self._thread is not None and self._thread.is_alive()
 
@@ -221,7 +227,8 @@ class RobotLink:
             "ended": self.deadman.last_end.value if self.deadman.last_end else None,
             "teach": self.teach is not None,
         }
-        self._emit(self.tracker.frame(self.client.clock.now(), pose, drive))
+        # truth only when the link is a simulator that gives it; else the tracker shows odometry as such
+        self._emit(self.tracker.frame(self.client.clock.now(), self._truth(), drive))
 
     def _handle(self, request: Request, now: float) -> None:
         if isinstance(request, EStop):
