@@ -47,10 +47,11 @@ from __future__ import annotations
 import argparse
 import math
 import shutil
+import sys
 from pathlib import Path
 from typing import Any
 
-from omnibot.errors import ConfigError
+from omnibot.errors import ConfigError, OmnibotError
 from omnibot.robot import kinematics
 from omnibot.robot.description import PiecewiseLinear, RobotDescription, load_robot
 
@@ -280,7 +281,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--print", action="store_true", help="print robot_config.py")
     ap.add_argument("--power-min", type=int, default=None, help="dead band, PWM counts")
     args = ap.parse_args(argv)
-    config = build_config(load_robot(args.robot), power_min=args.power_min)
+    try:
+        config = build_config(load_robot(args.robot), power_min=args.power_min)
+        config_module_source(config)  # a number the board cannot read fails before a file is written
+    except OmnibotError as exc:
+        print(f"{ap.prog}: error: {exc}", file=sys.stderr)
+        return 2
     if args.print or not args.dest:
         print(config_module_source(config), end="")
     if args.dest:
