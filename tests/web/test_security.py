@@ -63,9 +63,9 @@ def assert_still(dash: Dashboard, before: list[float], settle: float = 0.4) -> N
     assert state is not None and state["drive"]["state"] == "idle" and state["drive"]["twist"] is None
 
 
-def http_get(port: int, host: str | None, path: str = "/") -> tuple[int, str]:
-    """GET from 127.0.0.1:port with this ``Host`` header (None: none at all)."""
-    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=5)
+def http_get(port: int, host: str | None, path: str = "/", address: str = "127.0.0.1") -> tuple[int, str]:
+    """GET from address:port with this ``Host`` header (None: none at all)."""
+    conn = http.client.HTTPConnection(address, port, timeout=5)
     try:
         conn.putrequest("GET", path, skip_host=True)
         if host is not None:
@@ -387,3 +387,11 @@ def test_a_full_inbox_drops_driving_but_never_the_emergency_stop() -> None:
         assert frames[-1]["drive"]["state"] == "estop"
     finally:
         link.stop()
+
+
+def test_a_name_given_to_host_is_served_with_the_address_it_resolved_to(no_server_errors: None) -> None:
+    with Dashboard(ROOM, host="localhost", http_port=0) as dash:
+        address = str(socket.getaddrinfo("localhost", dash.port, type=socket.SOCK_STREAM)[0][4][0])  # as bind()
+        for host in (f"localhost:{dash.port}", f"127.0.0.1:{dash.port}", f"[::1]:{dash.port}"):
+            assert http_get(dash.port, host, address=address)[0] == 200
+        assert http_get(dash.port, f"evil.example:{dash.port}", address=address)[0] == 403

@@ -120,7 +120,8 @@ class Dashboard:
         self.port = int(self._sock.getsockname()[1])
         self.hub = Hub(self.scene, self.link.outbox, self.link.submit)
         self.app = create_app(self.hub, token)
-        self.host_check = HostCheck(self.app, HostPolicy.for_bind(host, self.port, allow_hosts))
+        bound = str(self._sock.getsockname()[0])  # the address a name given to --host resolved to
+        self.host_check = HostCheck(self.app, HostPolicy.for_bind(host, self.port, [*allow_hosts, bound]))
         self._server = uvicorn.Server(
             uvicorn.Config(
                 self.host_check,
