@@ -391,7 +391,9 @@ def test_a_full_inbox_drops_driving_but_never_the_emergency_stop() -> None:
 
 def test_a_name_given_to_host_is_served_with_the_address_it_resolved_to(no_server_errors: None) -> None:
     with Dashboard(ROOM, host="localhost", http_port=0) as dash:
-        address = str(socket.getaddrinfo("localhost", dash.port, type=socket.SOCK_STREAM)[0][4][0])  # as bind()
+        address = str(
+            socket.getaddrinfo("localhost", dash.port, type=socket.SOCK_STREAM)[0][4][0]
+        )  # as bind()
         for host in (f"localhost:{dash.port}", f"127.0.0.1:{dash.port}", f"[::1]:{dash.port}"):
             assert http_get(dash.port, host, address=address)[0] == 200
         assert http_get(dash.port, f"evil.example:{dash.port}", address=address)[0] == 403
