@@ -227,7 +227,7 @@ def test_a_path_file_is_drawn_from_the_robot_not_the_room_corner(browser: Browse
             context.close()
 
 
-def test_on_a_real_link_the_pose_is_labelled_odometry(browser: Browser) -> None:
+def test_on_a_real_link_the_pose_is_labelled_odometry_from_the_maps_start(browser: Browser) -> None:
     from omnibot.sim.emulator import spawn_pty_emulator
     from omnibot.web.scene import PlannedPath
 
@@ -242,6 +242,8 @@ def test_on_a_real_link_the_pose_is_labelled_odometry(browser: Browser) -> None:
             expect(page.locator("#pose")).not_to_contain_text("truth")
             expect(page.locator("#legend-odo")).to_be_hidden()
             assert latest(dashboard)["pose_source"] == "odometry"
-            assert page.evaluate("window.omnibot.scene().path")[0] == [0.0, 0.0]  # odometry's origin
+            # odometry starts where the room puts the robot, and the path file is drawn from there
+            expect(page.locator("#pose")).to_contain_text("x 1.00 m, y 1.00 m")
+            assert page.evaluate("window.omnibot.scene().path") == [[1.0, 1.0], [1.5, 1.0]]
         finally:
             context.close()

@@ -37,6 +37,7 @@ import uvicorn
 
 from omnibot.client.client import RobotClient
 from omnibot.errors import ConfigError, OmnibotError
+from omnibot.estimation.odometry import Pose2D
 from omnibot.robot.description import RobotDescription, load_robot
 from omnibot.sim.world import World, load_world
 from omnibot.teleop.config import TeleopConfig
@@ -108,7 +109,11 @@ class Dashboard:
                 the_world: World | None = world if isinstance(world, World) else load_world(world)
             else:
                 the_world = device.sim.world if device is not None else None
-            self.link = RobotLink(client, description, config, teach=teach)
+            # on a link without truth, odometry starts at the map's start pose (where the robot is put)
+            start = the_world.start if device is None and the_world is not None else None
+            self.link = RobotLink(
+                client, description, config, teach=teach, start=Pose2D(*start) if start else None
+            )
             # a path file is drawn where following it from here would drive it; points as given
             points = path.placed(self.link.pose) if isinstance(path, PlannedPath) else path
             self.scene = build_scene(description, the_world, points)

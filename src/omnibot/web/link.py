@@ -75,7 +75,8 @@ Request = Drive | Joy | EStop | Resume | Teach | PageGone
 
 class RobotLink:
     """Owns ``client`` in a thread of its own; :meth:`submit` and :attr:`outbox` are the only ways in
-    and out. ``wall``/``sleep`` are the wall clock (tests may pass fakes)."""
+    and out. ``start`` is where odometry starts on a link without ground truth (None: the origin);
+    ``wall``/``sleep`` are the wall clock (tests may pass fakes)."""
 
     def __init__(
         self,
@@ -84,6 +85,7 @@ class RobotLink:
         config: TeleopConfig | None = None,
         *,
         teach: TeachRepeat | None = None,
+        start: Pose2D | None = None,
         wall: Callable[[], float] = time.monotonic,
         sleep: Callable[[float], None] = time.sleep,
     ) -> None:
@@ -102,8 +104,8 @@ class RobotLink:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._device = sim_device(client.link)
-        start = self._truth()
-        self.tracker = StateTracker(robot, client.link.url, Pose2D(*start) if start else None)
+        truth = self._truth()
+        self.tracker = StateTracker(robot, client.link.url, Pose2D(*truth) if truth else start)
         self.deadman = Deadman(self.config.input_timeout, self.config.stop_repeats)
         self.estop = False
         self.following = False
