@@ -106,6 +106,13 @@ class Recorder:
         self.ranges: list[float] = []
         self.estop = False
 
+    def start_at(self, pose: Pose2D) -> None:
+        """Odometry in the world frame from ``pose`` (the true start): its trail starts there, with no
+        leg from the origin where the odometry stood before it knew the start."""
+        if self.odometry is not None:
+            self.odometry.pose = pose
+            self.odo_trail = [(pose.x, pose.y)]
+
     def __call__(self, event: Event) -> None:
         if isinstance(event, Telemetry) and event.encoders is not None and self.odometry is not None:
             pose = self.odometry.update(event.encoders, event.heading)
@@ -170,8 +177,8 @@ class Demo:
         c.telemetry(0.02, codes.TEL_ENCODERS | codes.TEL_HEADING | codes.TEL_QUEUE)
         c.sleep(0.1)
         start = self.pose()
-        if start is not None and self.recorder.odometry is not None:
-            self.recorder.odometry.pose = start  # odometry in the world frame, from the true start
+        if start is not None:
+            self.recorder.start_at(start)
 
         with self.segment(
             "circle, heading held",

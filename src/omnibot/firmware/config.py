@@ -47,10 +47,11 @@ from __future__ import annotations
 import argparse
 import math
 import shutil
+import sys
 from pathlib import Path
 from typing import Any
 
-from omnibot.errors import ConfigError
+from omnibot.errors import ConfigError, OmnibotError
 from omnibot.robot import kinematics
 from omnibot.robot.description import PiecewiseLinear, RobotDescription, load_robot
 
@@ -205,8 +206,31 @@ def build_config(
     }
 
 
+def _non_finite(value: Any, where: str) -> str | None:
+    """Where in ``value`` (nested lists and dicts) a float is not finite, or None."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return f"{where} = {value!r}"
+    if isinstance(value, list | tuple):
+        items: Any = enumerate(value)
+    elif isinstance(value, dict):
+        items = value.items()
+    else:
+        return None
+    for key, item in items:
+        found = _non_finite(item, f"{where}[{key!r}]")
+        if found:
+            return found
+    return None
+
+
 def config_module_source(config: dict[str, Any]) -> str:
-    """The text of ``robot_config.py``: ``CONFIG = {...}`` with plain literals, one key a line."""
+    """The text of ``robot_config.py``: ``CONFIG = {...}`` with plain literals, one key a line.
+    A number that is not finite is refused (ConfigError naming it): ``inf`` and ``nan`` are not
+    literals, and the board would stop at a NameError."""
+    for key, value in config.items():
+        found = _non_finite(value, str(key))
+        if found:
+            raise ConfigError(f"the firmware config cannot hold {found}: every number must be finite")
     lines = [f'"""Firmware config of robot {config["name"]!r}, written by omnibot.firmware.config."""', ""]
     lines.append("CONFIG = {")
     for key, value in config.items():
@@ -257,7 +281,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--print", action="store_true", help="print robot_config.py")
     ap.add_argument("--power-min", type=int, default=None, help="dead band, PWM counts")
     args = ap.parse_args(argv)
-    config = build_config(load_robot(args.robot), power_min=args.power_min)
+    try:
+        config = build_config(load_robot(args.robot), power_min=args.power_min)
+        config_module_source(config)  # a number the board cannot read fails before a file is written
+    except OmnibotError as exc:
+        print(f"{ap.prog}: error: {exc}", file=sys.stderr)
+        return 2
     if args.print or not args.dest:
         print(config_module_source(config), end="")
     if args.dest:

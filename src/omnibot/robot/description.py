@@ -33,9 +33,11 @@ PRESET_DIR = Path(__file__).with_name("presets")
 
 
 class _Spec(BaseModel):
-    """Strict, immutable base: unknown keys are errors."""
+    """Strict, immutable base: unknown keys are errors, and so is every number that is not finite
+    (``.inf``, ``.nan``; the error names the key): no limit, gain or length of a robot is infinite,
+    and the firmware's config could not even spell one."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 class Footprint(_Spec):
@@ -92,10 +94,17 @@ class MotorSpec(_Spec):
     rotor_inertia: float = Field(default=1e-6, ge=0, description="kg m^2 at the motor shaft")
     friction_static: float = Field(default=0.0, ge=0, description="Coulomb friction torque at the wheel, N m")
     friction_viscous: float = Field(default=0.0, ge=0, description="viscous friction at the wheel, N m s/rad")
-    current_limit: float = Field(default=math.inf, gt=0, description="driver current limit, A")
+    current_limit: float | None = Field(
+        default=None, gt=0, description="driver current limit, A (none: no limit)"
+    )
     driver_drop: float = Field(default=0.0, ge=0, description="voltage lost in the driver (L298: about 2 V)")
     deadband: int = Field(default=0, ge=0, description="PWM counts below which the driver gives no output")
     pwm_bits: int = Field(default=8, ge=1, le=16)
+
+    @property
+    def current_max(self) -> float:
+        """The driver's current limit, A (infinite when it has none)."""
+        return math.inf if self.current_limit is None else self.current_limit
 
     @property
     def pwm_max(self) -> int:
