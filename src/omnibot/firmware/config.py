@@ -38,6 +38,9 @@ speed_kp, speed_ki          wheel-speed PI gains, PWM counts per rad/s (and per 
 control_period_ms           wheel-speed control period
 tracking, gyro              number of tracking wheels; True when there is a gyro
 sonar_period_min_ms         one entry per sonar: its shortest period (>= 60 ms)
+sonar_axes                  one entry per sonar: [x cm, y cm, axis deg, half cone deg] (body frame)
+stop_decel_cms2             deceleration the robot surely reaches when stopped, cm/s^2 (sonar stop)
+uncovered_speed_cms         fastest travel where no armed sonar looks, cm/s
 pins                        board pin map for MachineHAL (see hal.py)
 ==========================  =======================================================================
 """
@@ -66,6 +69,7 @@ BOARD_MODULES = (
     "parser",
     "power",
     "queue",
+    "safety",
     "sonar",
     "speedctl",
     "telemetry",
@@ -201,6 +205,12 @@ def build_config(
         "tracking": len(robot.encoders.tracking),
         "gyro": robot.gyro is not None,
         "sonar_period_min_ms": [max(60, math.ceil(s.period_min * 1000 - 1e-9)) for s in robot.sonars],
+        "sonar_axes": [
+            [round(s.x * 100.0, 6), round(s.y * 100.0, 6), round(s.angle_deg, 6), round(s.cone_deg / 2.0, 6)]
+            for s in robot.sonars
+        ],
+        "stop_decel_cms2": round(robot.stop_deceleration * 100.0, 6),
+        "uncovered_speed_cms": round(robot.uncovered_speed * 100.0, 6),
         "pins": pins if pins is not None else default_pins(robot),
     }
 
