@@ -72,6 +72,8 @@ class Executor:
         self.halt = 0
         self._k = 1.0
         self._time_scale = 1.0
+        self._speed = 0.0  # translation speed last commanded, cm/s
+        self._coast = 0  # us left of coasting down to a speed the guard lowered
         self._nominal = [0.0, 0.0, 0.0, 0.0]
         self._applied = [0] * self.n
         self._delta = [0, 0, 0, 0]
@@ -127,7 +129,7 @@ class Executor:
 
     def apply(self) -> None:
         """Send the powers to the motors (zeros in simulation mode), only where they changed."""
-        sim = self.mode & MODE_SIMULATION
+        sim = self.mode & MODE_SIMULATION or self._coast > 0
         for i in range(self.n):
             p = 0 if sim else self.powers[i]
             if p != self._applied[i]:
@@ -144,6 +146,8 @@ class Executor:
         self.watchdog.disarm()
         self._feedback = False
         self._drag = False
+        self._coast = 0
+        self._speed = 0.0
         for i in range(self.n):
             self.powers[i] = 0
         self.apply()
@@ -180,6 +184,10 @@ class Executor:
         """Advance the timeline by dt_us and start whatever is due."""
         if self.kind != NONE and not self.infinite:
             self.remaining -= dt_us
+        if self._coast > 0:
+            self._coast -= dt_us
+            if self._coast <= 0:
+                self.apply()
         guard = LOOP_GUARD
         while guard > 0:
             guard -= 1
@@ -316,6 +324,10 @@ class Executor:
             vx *= k
             vy *= k
             w *= k
+            self._slow_down(math.sqrt(vx * vx + vy * vy) * 100.0, k < 1.0, g.decel)
+        else:
+            self._speed = 0.0
+            self._coast = 0
         self._k = k
         model = self.model
         model.drag_gain = gain
@@ -341,6 +353,16 @@ class Executor:
             self.speedctl.hold(self._ff, self.powers)  # a new command keeps the speed loop's correction
         self._start_drag(flags)
         self.apply()
+
+    def _slow_down(self, speed: float, limited: bool, decel: float) -> None:
+        """When the guard lowers the speed, coast (powers off) until the robot must have slowed to it:
+        reduced power alone decelerates far less than the stop deceleration the guard counts on."""
+        bound = self._speed + decel * self._coast * 1e-6  # fastest the robot can be going now
+        self._speed = speed
+        if limited and bound > speed:
+            self._coast = int((bound - speed) / decel * 1e6)
+        else:
+            self._coast = 0
 
     def relimit(self) -> None:
         """Apply the guard's factor anew (a sonar reading came): re-drive the travel if it changed and
