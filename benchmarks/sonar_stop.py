@@ -127,13 +127,12 @@ def table(outcomes: list[Outcome]) -> str:
         "speed at the stop m/s | warnings |",
         "|---|---|---|---|---|---|---|---|",
     ]
-    keys = sorted({(o.run.course, o.run.refuse, o.run.speed, o.run.stop_cm) for o in outcomes})
-    for course, refuse, speed, stop in keys:
-        group = [
-            o
-            for o in outcomes
-            if (o.run.course, o.run.refuse, o.run.speed, o.run.stop_cm) == (course, refuse, speed, stop)
-        ]
+
+    def key(o: Outcome) -> tuple[int, bool, float, int]:  # sideways, no sonar sees: STOP is moot
+        return (o.run.course, o.run.refuse, o.run.speed, o.run.stop_cm if o.run.course == 0 else 0)
+
+    for course, refuse, speed, stop in sorted({key(o) for o in outcomes}):
+        group = [o for o in outcomes if key(o) == (course, refuse, speed, stop)]
         hits = sum(o.collided for o in group)
         fastest = max(o.impact for o in group)
         least = min(o.clearance for o in group)
@@ -143,7 +142,7 @@ def table(outcomes: list[Outcome]) -> str:
         if refuse:
             travel += ", refused"
         rows.append(
-            f"| {travel} | {speed:.2f} | {stop} | {len(group)} | {hits}"
+            f"| {travel} | {speed:.2f} | {stop or 'any'} | {len(group)} | {hits}"
             + (f" ({fastest:.2f})" if hits else "")
             + f" | {100 * least:.1f} | "
             + (f"{min(at_stop):.2f}-{max(at_stop):.2f}" if at_stop else "-")
