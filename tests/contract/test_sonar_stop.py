@@ -22,7 +22,11 @@ RUN_UP = 1.4
 
 def start_pose(angle_deg: float, course_deg: float) -> tuple[float, float, float]:
     travel = math.radians(90.0 + angle_deg)  # 90 degrees: head-on, towards -x
-    return WALL - RUN_UP * math.cos(travel), AIM - RUN_UP * math.sin(travel), travel - math.radians(course_deg)
+    return (
+        WALL - RUN_UP * math.cos(travel),
+        AIM - RUN_UP * math.sin(travel),
+        travel - math.radians(course_deg),
+    )
 
 
 @contextmanager
@@ -61,7 +65,10 @@ def test_stops_before_the_wall(speed: float, angle: int, stop: float) -> None:
         least = drive(client, device, 3.5)
         assert device.sim.collisions == []
         assert least > 0.01
-        assert [w.code for w in rec.events] in ([codes.W_SONAR_STOP], [codes.W_SONAR_LIMIT, codes.W_SONAR_STOP])
+        assert [w.code for w in rec.events] in (
+            [codes.W_SONAR_STOP],
+            [codes.W_SONAR_LIMIT, codes.W_SONAR_STOP],
+        )
         assert client.status().estop
         assert math.hypot(device.sim.twist.vx, device.sim.twist.vy) < 0.01
 
