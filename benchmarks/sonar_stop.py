@@ -22,6 +22,10 @@ import time
 from collections.abc import Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from omnibot.sim.simulator import Simulator
 
 ROBOT = "omni4"
 WALL_X = 0.0  # the room world's west wall
@@ -66,9 +70,9 @@ def start_pose(angle_deg: float, course_deg: float) -> tuple[float, float, float
     return x, y, travel - math.radians(course_deg)
 
 
-def wall_gap(sim: object, outline: Sequence[tuple[float, float]]) -> float:
+def wall_gap(sim: Simulator, outline: Sequence[tuple[float, float]]) -> float:
     """Distance (m) between the robot's outline and the west wall."""
-    pose = sim.pose  # type: ignore[attr-defined]
+    pose = sim.pose
     c, s = math.cos(pose.theta), math.sin(pose.theta)
     return min(pose.x + c * px - s * py for px, py in outline) - WALL_X
 

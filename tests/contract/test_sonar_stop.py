@@ -65,7 +65,7 @@ def test_stops_before_the_wall(speed: float, angle: int, stop: float) -> None:
         least = drive(client, device, 3.5)
         assert device.sim.collisions == []
         assert least > 0.01
-        assert [w.code for w in rec.events] in (
+        assert [w.code for w in rec.of(WarnEvent)] in (
             [codes.W_SONAR_STOP],
             [codes.W_SONAR_LIMIT, codes.W_SONAR_STOP],
         )
@@ -82,7 +82,7 @@ def test_uncovered_travel_is_limited() -> None:
         client.sleep(1.5)
         speed = math.hypot(device.sim.twist.vx, device.sim.twist.vy)
         assert 0.2 < speed < 0.36  # omni4's uncovered speed, 0.3 m/s
-        assert [w.code for w in rec.events] == [codes.W_UNCOVERED]
+        assert [w.code for w in rec.of(WarnEvent)] == [codes.W_UNCOVERED]
         client.stop()
 
 
