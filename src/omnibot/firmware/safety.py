@@ -39,7 +39,7 @@ LATENCY_MS = 2  # driver and bookkeeping on top of the echo and one loop pass
 SOUND_CMS = 34300.0
 HALF_CONE_DEG = 7.5  # an HC-SR04's 15 degrees, for a config without sonar geometry
 INCIDENCE_MAX = math.radians(60.0)  # walls met at 30 degrees or more to them are allowed for
-INCIDENCE_STEPS = 12
+INCIDENCE_STEPS = 12  # 5 degree steps
 
 
 class SonarGuard:
@@ -68,9 +68,6 @@ class SonarGuard:
 
     def armed(self, s: int) -> bool:
         return self.sonars.period[s] > 0 and self.sonars.stop[s] > 0
-
-    def any_armed(self) -> bool:
-        return any(self.armed(s) for s in range(self.sonars.count))
 
     def reading(self, s: int, cm: int) -> None:
         """A new reading of sonar s (cm, -1 for no echo)."""
