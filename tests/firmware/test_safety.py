@@ -267,3 +267,15 @@ def test_robot_without_sonars_keeps_working() -> None:
     assert rig.cmd("MOVE,100,100,90,0") == ["OK"]
     assert any(rig.hal.powers)
     assert rig.cmd("SONAR,1,60,0,0,25") == [err(codes.E_SONAR)]
+
+
+def test_arming_and_disarming_limit_a_running_travel(rig: Rig) -> None:
+    rig.cmd("MOVE,30000,100,90,0")
+    full = max(abs(p) for p in rig.hal.powers)
+    assert rig.cmd(f"SONAR,1,{PERIOD},0,0,{STOP}") == ["OK", warn(codes.W_UNCOVERED)]
+    assert max(abs(p) for p in rig.hal.powers) < full
+    assert rig.cmd("SONAR,1,0,0,0,0") == ["OK"]
+    assert max(abs(p) for p in rig.hal.powers) == full
+    rig.cmd(f"SONAR,1,{PERIOD},0,0,{STOP}")
+    assert rig.cmd("MODE,8") == ["OK", warn(codes.W_UNCOVERED_STOP), "IDLE"]
+    assert rig.hal.powers == [0, 0, 0, 0]

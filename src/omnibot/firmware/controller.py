@@ -189,10 +189,14 @@ class Controller:
         if not ex.moving:
             return
         if ex.travelling:
-            ex.relimit()
-            self._check_halt()
+            self._relimit()
         elif g.below_stop():  # ROTATE, POWER: the threshold alone
             self.emergency_stop()
+
+    def _relimit(self) -> None:
+        """The guard's inputs changed (a reading, SONAR, MODE): limit the running travel anew."""
+        self.executor.relimit()
+        self._check_halt()
 
     def _check_halt(self) -> None:
         """Report a motion the guard stopped (executor.halt): the emergency stop, or an uncovered one."""
@@ -345,6 +349,7 @@ class Controller:
             self._ok()
             self.guard.refuse = bool(p[0] & codes.MODE_REFUSE_UNCOVERED)
             ex.set_mode(p[0] & ~(codes.MODE_BINARY | codes.MODE_REFUSE_UNCOVERED))
+            self._relimit()
             binary = bool(p[0] & codes.MODE_BINARY)
             if binary != self.binary:
                 self.binary = binary
@@ -354,6 +359,7 @@ class Controller:
             self.sonars.configure(p[0] - 1, p[1], p[2], p[3], p[4], self.now_ms)
             self.guard.clear(p[0] - 1)
             self._ok()
+            self._relimit()
         elif kw == codes.TELEM:
             self.telemetry.configure(p[0], p[1], self.now_ms)
             self._ok()
