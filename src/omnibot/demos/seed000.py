@@ -17,7 +17,8 @@ The examples (seed 000, sections III and VI.C):
    leaves a bend of its own; both run, so the difference is measured, not argued.
 3. ``ROTATE`` to face the nearest wall.
 4. A sonar approach: ``SONAR,1,60,0,100,25`` then ``MOVE,INF,60,0,0``: RANGE events inside 1 m,
-   and the emergency stop below 25 cm (``WARN,13``), released by ``STOP``.
+   and the emergency stop (``WARN,13``) where the echo falls below 25 cm plus the distance the robot
+   needs to stop from its speed (docs/safety.md), released by ``STOP``.
 """
 
 from __future__ import annotations
@@ -238,7 +239,7 @@ class Demo:
         with self.segment(
             "sonar approach, emergency stop",
             "SONAR,1,60,0,100,25;MOVE,INF,60,0,0",
-            f"RANGE inside 1 m, WARN 13 below {100 * ESTOP_DISTANCE:.0f} cm",
+            f"RANGE inside 1 m, WARN 13 below {100 * ESTOP_DISTANCE:.0f} cm + the stop distance",
         ) as seg:
             c.sonar(1, 0.06, 0.0, 1.0, ESTOP_DISTANCE)
             c.move(math.inf, APPROACH_SPEED)

@@ -38,6 +38,9 @@ speed_kp, speed_ki          wheel-speed PI gains, PWM counts per rad/s (and per 
 control_period_ms           wheel-speed control period
 tracking, gyro              number of tracking wheels; True when there is a gyro
 sonar_period_min_ms         one entry per sonar: its shortest period (>= 60 ms)
+sonar_axes                  one entry per sonar: [axis deg, half cone deg, footprint lead cm, half width cm]
+stop_decel_cms2             deceleration the robot surely reaches when stopped, cm/s^2 (sonar stop)
+uncovered_speed_cms         fastest travel where no armed sonar looks, cm/s
 pins                        board pin map for MachineHAL (see hal.py)
 ==========================  =======================================================================
 """
@@ -53,7 +56,7 @@ from typing import Any
 
 from omnibot.errors import ConfigError, OmnibotError
 from omnibot.robot import kinematics
-from omnibot.robot.description import PiecewiseLinear, RobotDescription, load_robot
+from omnibot.robot.description import PiecewiseLinear, RobotDescription, SonarSpec, load_robot
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 SRC_DIR = PACKAGE_DIR.parent.parent
@@ -67,6 +70,7 @@ BOARD_MODULES = (
     "parser",
     "power",
     "queue",
+    "safety",
     "sonar",
     "speedctl",
     "telemetry",
@@ -112,6 +116,24 @@ def _default_k(robot: RobotDescription) -> float:
     volts = max(robot.battery.voltage - m.driver_drop, 0.1)
     v_free = volts / (m.torque_constant * m.gear_ratio) * w.radius
     return m.pwm_max / v_free
+
+
+def _sonar_axis(robot: RobotDescription, sonar: SonarSpec) -> list[float]:
+    """[axis deg, half cone deg, lead cm, half width cm] of a sonar: how far the footprint reaches
+    ahead of the sonar along its axis, and to either side of the axis (the sonar stop's geometry)."""
+    c, s = math.cos(sonar.angle), math.sin(sonar.angle)
+    along = []
+    across = []
+    for x, y in robot.footprint.outline():
+        dx, dy = x - sonar.x, y - sonar.y
+        along.append(c * dx + s * dy)
+        across.append(abs(-s * dx + c * dy))
+    return [
+        round(sonar.angle_deg, 6),
+        round(sonar.cone_deg / 2.0, 6),
+        round(max(0.0, *along) * 100.0, 6),
+        round(max(across) * 100.0, 6),
+    ]
 
 
 def build_config(
@@ -202,6 +224,9 @@ def build_config(
         "tracking": len(robot.encoders.tracking),
         "gyro": robot.gyro is not None,
         "sonar_period_min_ms": [max(60, math.ceil(s.period_min * 1000 - 1e-9)) for s in robot.sonars],
+        "sonar_axes": [_sonar_axis(robot, s) for s in robot.sonars],
+        "stop_decel_cms2": round(robot.stop_deceleration * 100.0, 6),
+        "uncovered_speed_cms": round(robot.uncovered_speed * 100.0, 6),
         "pins": pins if pins is not None else default_pins(robot),
     }
 
