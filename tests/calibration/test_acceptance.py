@@ -224,4 +224,3 @@ def test_the_file_uploads_and_applies(
         after = math.hypot(sim.pose.x - x0, sim.pose.y - y0)
     assert before < 0.85
     assert after == pytest.approx(1.0, abs=0.03)
-
