@@ -48,6 +48,13 @@ class CalibrationFile:
     slip: dict[str, SlipParameters] = field(default_factory=dict)
     """Each surface's wheel-slip coefficients for the driven-wheel encoders (host side)."""
 
+    def check_robot(self, robot: str, source: str = "the calibration file") -> None:
+        """Refuse a calibration made for another robot (a file that names none is taken as is)."""
+        if self.robot is not None and self.robot != robot:
+            raise ConfigError(
+                f"{source} is a calibration of '{self.robot}', not of '{robot}'", key="--calibration"
+            )
+
     def for_surface(self, surface: str | None) -> CalibrationSpec:
         """A surface's own calibration (None: the file's ``calibration``)."""
         if surface is None:
@@ -199,7 +206,9 @@ def merge_calibration(robot: str | Path, calibration: str | Path, surface: str |
     """A description file (or preset) with its ``calibration:`` section replaced by the file's, as
     YAML text (comments of the description are not kept)."""
     desc = load_robot(robot)
-    spec = load_calibration(calibration).for_surface(surface)
+    cal = load_calibration(calibration)
+    cal.check_robot(desc.name, str(calibration))
+    spec = cal.for_surface(surface)
     merged = apply_calibration(desc, spec)
     data = merged.model_dump(exclude_none=True, mode="json")
     data["calibration"] = describe_spec(spec)
