@@ -84,8 +84,9 @@ class CalibrationFile:
         return self.slip[surface]
 
 
-def document(result: CalibrationResult, truth: str = "") -> dict[str, Any]:
-    """The YAML document of a calibration result (plain data)."""
+def document(result: CalibrationResult, truth: str = "", warning: str = "") -> dict[str, Any]:
+    """The YAML document of a calibration result (plain data); ``warning`` marks one that its own
+    check found worse than none (``omnibot calibrate --force``)."""
     doc: dict[str, Any] = {"robot": result.robot.name, "calibration": describe_spec(result.chosen)}
     doc["surfaces"] = {
         s.surface: {
@@ -106,6 +107,7 @@ def document(result: CalibrationResult, truth: str = "") -> dict[str, Any]:
         "surfaces": [s.surface for s in result.sessions],
         "truth": truth or (result.sessions[0].truth if result.sessions else ""),
         "written": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),
+        **({"warning": warning} if warning else {}),
     }
     return doc
 
@@ -116,22 +118,26 @@ def _odometry(values: dict[str, Any]) -> dict[str, Any]:
 
 def dumps(doc: dict[str, Any]) -> str:
     """YAML with the knot lists on one line each (the presets' layout)."""
+    warning = doc.get("info", {}).get("warning")
     head = (
-        f"# omnibot calibrate: {doc.get('robot', '?')} on {', '.join(doc.get('info', {}).get('surfaces', []))}\n"
+        (f"# {warning}\n" if warning else "")
+        + f"# omnibot calibrate: {doc.get('robot', '?')} on {', '.join(doc.get('info', {}).get('surfaces', []))}\n"
         "# `calibration` goes to the controller (CAL) and into a robot description; `gyro` and `odometry`\n"
         "# are host-side corrections. See docs/calibration.md.\n"
     )
     return head + yaml.safe_dump(doc, sort_keys=False, default_flow_style=None, width=200)
 
 
-def write_calibration(path: str | Path, result: CalibrationResult, truth: str = "") -> Path:
+def write_calibration(
+    path: str | Path, result: CalibrationResult, truth: str = "", warning: str = ""
+) -> Path:
     path = Path(path)
     try:
         if path.parent != Path():
             path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(dumps(document(result, truth)), encoding="utf-8")
+        path.write_text(dumps(document(result, truth, warning)), encoding="utf-8")
     except OSError as exc:
-        raise ConfigError(f"cannot write {path}: {exc.strerror}", key="--out") from None
+        raise ConfigError(f"cannot write {path}: {exc.strerror}", key="--calibration") from None
     return path
 
 

@@ -151,19 +151,16 @@ class RobotSession:
     hello: Hello
 
 
-@contextlib.contextmanager
-def robot_session(
+def open_robot(
     url: str,
-    robot: str | None = None,
+    robot: str | RobotDescription | None = None,
     *,
-    stop: StopPolicy = "always",
-    restore: RestorePolicy = "mode",
     timeout: float | None = None,
     reconnect: float | None = 0.0,
-) -> Iterator[RobotSession]:
-    """Open ``url``, check that the robot on it is ``robot`` (None: take it from the link) and
-    :func:`guarded` the session. A link that cannot be opened, or no HELLO reply, is a ConfigError
-    (the command could not start: exit status 2), naming ``--port``."""
+) -> RobotSession:
+    """Open ``url`` and check that the robot on it is ``robot`` (None: take it from the link). A
+    link that cannot be opened, or no HELLO reply, is a ConfigError naming ``--port`` (the command
+    could not start: exit status 2). The caller closes the client (or :func:`guarded` does)."""
     try:
         client = RobotClient.open(
             url, None, timeout=DEFAULT_TIMEOUT if timeout is None else timeout, reconnect=reconnect
@@ -175,7 +172,15 @@ def robot_session(
             hello = client.hello()
         except LinkError as exc:
             raise ConfigError(f"no controller answers on {url}: {exc}", key="--port") from exc
-        description = robot_on_link(hello.name, robot, client.link.url or url)
+        if isinstance(robot, RobotDescription):
+            if robot.name != hello.name:
+                raise ConfigError(
+                    f"the robot is '{robot.name}' but the controller on {url} is '{hello.name}'",
+                    key="--robot",
+                )
+            description = robot
+        else:
+            description = robot_on_link(hello.name, robot, url)
         if hello.motors != description.n_wheels:
             raise ConfigError(
                 f"the controller on {url} drives {hello.motors} motors, {description.name} has "
@@ -186,5 +191,20 @@ def robot_session(
     except BaseException:
         client.close()
         raise
-    with guarded(client, stop=stop, restore=restore):
-        yield RobotSession(client, description, hello)
+    return RobotSession(client, description, hello)
+
+
+@contextlib.contextmanager
+def robot_session(
+    url: str,
+    robot: str | RobotDescription | None = None,
+    *,
+    stop: StopPolicy = "always",
+    restore: RestorePolicy = "mode",
+    timeout: float | None = None,
+    reconnect: float | None = 0.0,
+) -> Iterator[RobotSession]:
+    """:func:`open_robot`, then :func:`guarded`: the controller is left as it was found."""
+    session = open_robot(url, robot, timeout=timeout, reconnect=reconnect)
+    with guarded(session.client, stop=stop, restore=restore):
+        yield session

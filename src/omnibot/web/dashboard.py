@@ -23,15 +23,16 @@ import secrets
 import socket
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 from types import TracebackType
 from typing import Self
 
 import uvicorn
 
-from omnibot.client.client import RobotClient
+from omnibot.client.session import open_robot
 from omnibot.errors import ConfigError, OmnibotError
-from omnibot.robot.description import RobotDescription, load_robot
+from omnibot.robot.description import RobotDescription
 from omnibot.sim.world import World, load_world
 from omnibot.teleop.config import TeleopConfig
 from omnibot.teleop.simlink import sim_device
@@ -98,19 +99,25 @@ class Dashboard:
         path: list[Point] | None = None,
         config: TeleopConfig | None = None,
         teach: TeachRepeat | None = None,
+        make_teach: Callable[[RobotDescription], TeachRepeat] | None = None,
     ) -> None:
+        """``robot`` (a description, preset or file; None: the one the controller names) must be the
+        robot on the link; ``make_teach`` builds ``teach`` once the robot is known."""
         self.token = token = access_token(host, token)
         self.host = host
-        description = self._robot(port_url, robot)
-        client = RobotClient.open(port_url, description, timeout=0.5)
+        session = open_robot(port_url, robot, timeout=0.5)
+        client, description = session.client, session.robot
         try:
+            mode = client.status().mode
+            if make_teach is not None:
+                teach = make_teach(description)
             device = sim_device(client.link)
             if world is not None:
                 the_world: World | None = world if isinstance(world, World) else load_world(world)
             else:
                 the_world = device.sim.world if device is not None else None
             self.scene = build_scene(description, the_world, path)
-            self.link = RobotLink(client, description, config, teach=teach)
+            self.link = RobotLink(client, description, config, teach=teach, mode=mode)
             self.scene["teach"] = teach is not None
             self._sock = bind(host, http_port)
         except BaseException:
@@ -131,14 +138,6 @@ class Dashboard:
             )
         )
         self._thread: threading.Thread | None = None
-
-    @staticmethod
-    def _robot(port_url: str, robot: RobotDescription | str | None) -> RobotDescription:
-        if isinstance(robot, RobotDescription):
-            return robot
-        from omnibot.teleop.command import robot_for
-
-        return load_robot(robot_for(port_url, robot))
 
     @property
     def url(self) -> str:
