@@ -21,8 +21,10 @@ old spellings working with a warning. ``--debug`` (every command) shows the trac
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 from omnibot.errors import ConfigError
@@ -102,6 +104,21 @@ def check_sim_options(args: argparse.Namespace, allowed: Sequence[str] = ()) -> 
             "(sim://omni4?seed=1&world=room&surface=wood)",
             key=given[0],
         )
+
+
+def check_writable(path: str | Path | None, flag: str) -> None:
+    """Refuse, before any robot moves, an output file that could not be written: its directory must
+    exist (or be makeable) and be writable, and it must not be a directory."""
+    if path is None:
+        return
+    target = Path(path)
+    if target.is_dir():
+        raise ConfigError(f"{target} is a directory; give the file to write", key=flag)
+    parent = target.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir() or not os.access(parent, os.W_OK):
+        raise ConfigError(f"cannot write {target}: {parent} is not a writable directory", key=flag)
 
 
 def seed_of(args: argparse.Namespace) -> int:

@@ -179,6 +179,8 @@ class Console:
         self.show_tel = True
         self.prompting = False
         """True while the input thread shows the prompt: events are printed above it."""
+        self.lost = False
+        """The link failed and no command went through since (the console exits 1)."""
         client.add_listener(self._event)
 
     def say(self, line: str) -> None:
@@ -205,9 +207,11 @@ class Console:
             if line.startswith(":"):
                 return self._meta(line)
             self._send(line)
+            self.lost = False
         except LinkTimeout as exc:
             self.say(f"!! {exc}")
         except LinkError as exc:
+            self.lost = True
             self.say(f"!! link error: {exc}")
         except (ProtocolError, ValueError) as exc:
             self.say(f"!! {exc}")
@@ -295,7 +299,11 @@ def run_console(
             client.drain()
             client.pump(0)
         except LinkError as exc:
+            console.lost = console.lost or not isinstance(exc, LinkTimeout)
             console.say(f"!! {exc}")
+    if console.lost:
+        print("omnibot: error: the link to the controller failed", file=sys.stderr)
+        return 1
     return 0
 
 

@@ -20,6 +20,7 @@ from omnibot.cliargs import (
     DeprecatedAlias,
     add_robot_options,
     check_sim_options,
+    check_writable,
     seed_of,
     sim_robot,
     world_of,
@@ -325,10 +326,8 @@ def _outputs(args: argparse.Namespace) -> tuple[Path, Path]:
         out = report
     out_dir = Path(out or "out")
     cal_file = Path(cal) if cal else out_dir / "calibration.yaml"
-    if cal_file.is_dir():
-        raise ConfigError(
-            f"{cal_file} is a directory; give the calibration file to write", key="--calibration"
-        )
+    if cal:
+        check_writable(cal_file, "--calibration")
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
     except OSError as exc:

@@ -24,6 +24,7 @@ from omnibot.cliargs import (
     DeprecatedAlias,
     add_robot_options,
     check_sim_options,
+    check_writable,
     seed_of,
     sim_robot,
     world_of,
@@ -92,6 +93,8 @@ def run_follow(args: argparse.Namespace) -> int:
         cross_track=_positive(args.cross_track_tolerance, "--cross-track-tolerance"),
     )
     out = _out_dir(args)
+    for flag in ("truth", "report", "plot"):
+        check_writable(getattr(args, flag), f"--{flag}")
     targets = {
         "truth": _target(args.truth, out, "follow_truth.csv"),
         "report": _target(args.report, out, "follow_report.json"),
@@ -222,8 +225,7 @@ def run_record(args: argparse.Namespace) -> int:
         else None
     )
     out = FsPath(args.path)
-    if out.is_dir():
-        raise ConfigError(f"{out} is a directory; give the path file to write", key="--path")
+    check_writable(out, "--path")
     with _robot_client(args) as (client, robot):
         result = teach(client, robot, recorder, mode=mode, shape=shape, speed=speed, duration=duration)
     problem = check_recording(result)

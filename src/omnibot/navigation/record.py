@@ -17,12 +17,12 @@ estimator's poses (the robot's dead reckoning, as seed 002 records with its enco
 
 from __future__ import annotations
 
-import contextlib
 import math
 from dataclasses import dataclass
 from typing import Any
 
 from omnibot.client.client import RobotClient
+from omnibot.client.session import Terminated
 from omnibot.control.followers.base import to_body, wrap
 from omnibot.control.paths.path import Path
 from omnibot.control.paths.profile import time_optimal_profile
@@ -88,8 +88,11 @@ def teach(
         start = clock.now()
         d0 = nav.estimator.distance
         if mode == "listen":
-            with contextlib.suppress(KeyboardInterrupt):  # Ctrl-C ends the recording, keeps it
+            try:
                 client.sleep(duration)
+            except KeyboardInterrupt as exc:  # Ctrl-C ends the recording and keeps it; SIGTERM does not
+                if isinstance(exc, Terminated):
+                    raise
         else:
             assert shape is not None
             _move(client, robot, nav, shape, speed, mode)
