@@ -223,7 +223,10 @@ def _tour(args: argparse.Namespace) -> int:
         runs = run_tour(robot, power=args.power, duration=args.duration, surface=surface, seed=seed_of(args))
         print(format_table(robot, runs))
         png = out / f"directions_{robot.name}.png"
-        plot_tour(robot, runs, png)
+        try:
+            plot_tour(robot, runs, png)
+        except OSError as exc:
+            raise ConfigError(f"cannot write {png}: {exc.strerror or exc}", key="--out") from None
         print(f"  plot: {png}\n")
     return 0
 
@@ -232,6 +235,7 @@ def _add_tour(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "tour",
         help="drive each robot through seed 003's main directions in the simulator, open loop, with plots",
+        description="Runs the physics alone (no controller, no link): PWM straight to the motors.",
     )
     p.add_argument(
         "--robot", default="all", metavar="PRESET|FILE|all", help="the robot, or 'all' presets (default)"
