@@ -405,7 +405,8 @@ def _add_follow(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
         "follow",
         help="repeat a path: a path follower drives it, with a report and a plot",
         description="Runs a path follower at 100 Hz on the host (VEL out, TEL in); by default on the simulated "
-        "robot in lockstep, measured against its ground truth. Exit status 1 if the path was not completed.",
+        "robot in lockstep, measured against its ground truth. Exit status 1 if the run was not completed "
+        "(the follower did not finish, or the run was outside --final-tolerance/--cross-track-tolerance).",
     )
     add_follow_arguments(p)
     p.set_defaults(handler=_follow)
