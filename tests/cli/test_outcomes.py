@@ -161,3 +161,13 @@ def test_the_old_calibrate_spelling_still_works(
     err = capsys.readouterr().err
     assert "--out CAL.yaml is deprecated" in err and "--report is deprecated" in err
     assert cal.exists() and (report_dir / "accuracy.md").exists()
+
+
+def test_a_demo_whose_sonar_approach_found_no_wall_is_not_done(
+    tmp_path: Path, harness: Harness, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["demo", "--port", "sim://omni4", "--out", str(tmp_path)]) == 1  # the empty world
+    out = capsys.readouterr().out
+    assert "NO emergency stop, no echo: nothing ahead of the robot" in out
+    assert out.rstrip().endswith("NOT DONE: sonar approach, emergency stop")
+    harness.assert_left_as_found()

@@ -267,8 +267,16 @@ class Demo:
         seg.failed = not self.recorder.estop
         seg.achieved = (
             ("stopped" if self.recorder.estop else "NO emergency stop")
-            + (f", last echo {100 * last:.0f} cm" if last is not None else "")
-            + (f", robot centre {self._wall_gap():.0f} cm from the wall (truth)" if self.truth() else "")
+            + (
+                f", last echo {100 * last:.0f} cm"
+                if last is not None
+                else ", no echo: nothing ahead of the robot"
+            )
+            + (
+                f", robot centre {gap:.0f} cm from the wall (truth)"
+                if math.isfinite(gap := self._wall_gap())
+                else ""
+            )
         )
 
     def best_pose(self) -> Pose2D | None:
@@ -339,10 +347,11 @@ class TruthSource:
         return self.file.latest() if self.file is not None else None
 
 
-def world_bounds(world: Any) -> Bounds:
+def world_bounds(world: Any) -> Bounds | None:
+    """The walls' bounding box (None for a world without walls)."""
     xs = [v for seg in world.segments for v in (seg[0], seg[2])]
     ys = [v for seg in world.segments for v in (seg[1], seg[3])]
-    return ((min(xs), min(ys)), (max(xs), max(ys))) if xs else ((-1e9, -1e9), (1e9, 1e9))
+    return ((min(xs), min(ys)), (max(xs), max(ys))) if xs else None
 
 
 def format_table(segments: list[Segment]) -> str:
