@@ -90,6 +90,12 @@ def test_calibration_verdict() -> None:
     assert worse.worst == "wood: MOVE course 0 deg at 0.3 m/s: -3.0 % before, -32.0 % after"
     assert "wood 4.0 % -> 16.5 %" in worse.summary
     assert judge_calibration(result([-0.03, 0.05], [-0.01, 0.01])).better is True
+    averaged = result([-0.03, 0.05], [-0.01, 0.01])
+    averaged.average = averaged.sessions[0].spec
+    averaged.average_checks = {"wood": [row(0.0, -0.32), row(45.0, 0.01)]}
+    refused = judge_calibration(averaged)
+    assert refused.better is False and "-32.0 % after" in refused.worst
+    assert refused.hint.startswith("each floor's own tables: wood 4.0 % -> 1.0 %")
     unchecked = result([], [])
     unchecked.sessions[0].before = None
     assert judge_calibration(unchecked).better is None

@@ -26,6 +26,8 @@ class Verdict:
     """One line: each surface's mean error before and after."""
     worst: str = ""
     """The check's line that got worst (course, speed: before -> after)."""
+    hint: str = ""
+    """When the average over the floors is refused: how each floor's own tables did."""
 
 
 def mean_abs_error(rows: Sequence[AccuracyRow]) -> float | None:
@@ -81,5 +83,22 @@ def judge_calibration(result: CalibrationResult) -> Verdict:
         return Verdict(None, "no before/after accuracy check to judge the calibration by")
     summary = "mean abs error of the accuracy check: " + ", ".join(parts)
     if worse:
-        return Verdict(False, summary, max(worse)[1])
+        return Verdict(False, summary, max(worse)[1], _own_tables(result))
     return Verdict(True, summary)
+
+
+def _own_tables(result: CalibrationResult) -> str:
+    """Each floor's own tables against none, when the refused calibration is the average."""
+    if result.average is None:
+        return ""
+    own = []
+    for session in result.sessions:
+        b = mean_abs_error(session.before) if session.before else None
+        a = mean_abs_error(session.after) if session.after else None
+        if a is not None and b is not None:
+            own.append(f"{session.surface} {100 * b:.1f} % -> {100 * a:.1f} %")
+    if not own:
+        return ""
+    return (
+        "each floor's own tables: " + ", ".join(own) + " (calibrate one floor at a time with --surface NAME)"
+    )
