@@ -90,3 +90,22 @@ def test_the_link_dying_is_one_line_and_exit_1(pty_robot: PtyRobot) -> None:
     assert code == 1, err
     assert_one_line_error(err)
     assert err.startswith("omnibot: error:")
+
+
+@pytest.mark.parametrize(
+    ("argv", "ready", "signum", "status"),
+    [
+        (["teleop", "--joystick", "--robot", "omni3"], "limits:", signal.SIGINT, 130),
+        (["dashboard", "--http-port", "0", "--robot", "mecanum4"], "Ctrl-C stops it", signal.SIGTERM, 143),
+    ],
+)
+def test_commands_that_run_until_stopped_exit_with_the_signal(
+    argv: list[str], ready: str, signum: int, status: int
+) -> None:
+    command = Command(*argv)
+    command.wait_for(ready)
+    command.signal(signum)
+    code, out, err = command.finish()
+    assert code == status, out + err
+    assert_one_line_error(err)
+    assert f"omnibot: interrupted ({signal.Signals(signum).name})" in err
