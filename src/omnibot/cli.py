@@ -1,9 +1,21 @@
 """The ``omnibot`` command line: ``main(argv=None)`` returns the exit status, so tests call it directly.
 
 Every subcommand lives in its own function pair: ``_add_<name>(subparsers)`` declares its arguments,
-the handler does the work (importing heavy modules lazily so ``omnibot --help`` stays fast). Any
-:class:`~omnibot.errors.OmnibotError` becomes a one-line ``omnibot: error: ...`` on stderr and exit
-status 2, never a traceback.
+the handler does the work (importing heavy modules lazily so ``omnibot --help`` stays fast). The
+commands that talk to a robot share one grammar (:mod:`omnibot.cliargs`) and leave the controller as
+they found it (:mod:`omnibot.client.session`).
+
+Exit status, the same for every command (README's command table):
+
+* 0: the command did its job;
+* 1: it ran but did not do its job (a path not followed within tolerance, a recording too short, a
+  calibration worse than none, an ERROR reply, the link lost or silent);
+* 2: the command could not start: bad arguments, files or protocol text, the wrong robot, unwritable
+  output, a link that cannot be opened or whose controller does not answer HELLO;
+* 70: a bug (an exception omnibot did not expect: one line, the traceback with ``--debug``);
+* 130: interrupted by SIGINT (Ctrl-C), 143: by SIGTERM (the robot is stopped first).
+
+Errors are one line on stderr (``omnibot: error: ...``); ``--debug`` adds the traceback.
 """
 
 from __future__ import annotations
@@ -12,11 +24,16 @@ import argparse
 import json
 import math
 import sys
+import traceback
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from omnibot import __version__
-from omnibot.errors import ConfigError, OmnibotError
+from omnibot.cliargs import DEFAULT_SEED, add_debug_option, add_robot_options, seed_of
+from omnibot.errors import ConfigError, KinematicsError, OmnibotError, ProtocolError
+
+EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_BUG = 0, 1, 2, 70
+EXIT_SIGINT, EXIT_SIGTERM = 130, 143
 
 Handler = Callable[[argparse.Namespace], int]
 
@@ -31,6 +48,16 @@ def parse_floats(text: str, count: int, what: str) -> list[float]:
     if len(values) != count or not all(math.isfinite(v) for v in values):
         raise ConfigError(f"expected {count} comma-separated numbers, got {text!r}", key=what)
     return values
+
+
+def output_dir(text: str, flag: str = "--out") -> Path:
+    """``--out DIR`` made (with its parents); one line if it cannot be."""
+    out = Path(text)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(f"cannot make directory {out}: {exc.strerror or exc}", key=flag) from None
+    return out
 
 
 # --------------------------------------------------------------------------- robot
@@ -172,7 +199,12 @@ def _add_sim(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     )
     p.add_argument("--pty", action="store_true", help="serve on a pseudo-terminal (required)")
     p.add_argument("--robot", default="omni4", help="preset name or description file (default omni4)")
-    p.add_argument("--seed", type=int, default=0, help="random seed of the sensor noise (default 0)")
+    p.add_argument(
+        "--seed",
+        type=int,
+        default=DEFAULT_SEED,
+        help=f"random seed of the sensor noise (default {DEFAULT_SEED})",
+    )
     p.add_argument("--surface", help="floor surface: wood, carpet, concrete, linoleum (default: the world's)")
     p.add_argument("--world", help="world name (empty, room, corridor) or world YAML file (default empty)")
     p.add_argument("--truth", metavar="FILE.csv", help="write the ground-truth trajectory t,x,y,theta")
@@ -188,18 +220,21 @@ def _tour(args: argparse.Namespace) -> int:
     from omnibot.robot.description import load_robot, preset_names
     from omnibot.sim.surfaces import get_surface
 
-    get_surface(args.surface)
+    surface = args.surface or "wood"
+    get_surface(surface)
     if not 0 < args.power <= 255:
         raise ConfigError(f"expected 1..255 PWM counts, got {args.power}", key="--power")
     names = preset_names() if args.robot == "all" else [args.robot]
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    for name in names:
-        robot = load_robot(name)
-        runs = run_tour(robot, power=args.power, duration=args.duration, surface=args.surface, seed=args.seed)
+    robots = [load_robot(name) for name in names]
+    out = output_dir(args.out)
+    for robot in robots:
+        runs = run_tour(robot, power=args.power, duration=args.duration, surface=surface, seed=seed_of(args))
         print(format_table(robot, runs))
         png = out / f"directions_{robot.name}.png"
-        plot_tour(robot, runs, png)
+        try:
+            plot_tour(robot, runs, png)
+        except OSError as exc:
+            raise ConfigError(f"cannot write {png}: {exc.strerror or exc}", key="--out") from None
         print(f"  plot: {png}\n")
     return 0
 
@@ -208,13 +243,16 @@ def _add_tour(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "tour",
         help="drive each robot through seed 003's main directions in the simulator, open loop, with plots",
+        description="Runs the physics alone (no controller, no link): PWM straight to the motors.",
     )
-    p.add_argument("--robot", default="all", help="preset name, description file, or 'all' (default)")
-    p.add_argument("--surface", default="wood", help="floor surface (default wood)")
+    p.add_argument(
+        "--robot", default="all", metavar="PRESET|FILE|all", help="the robot, or 'all' presets (default)"
+    )
+    p.add_argument("--surface", metavar="NAME", help="simulated floor (default wood)")
+    p.add_argument("--seed", type=int, metavar="N", help=f"simulator seed (default {DEFAULT_SEED})")
     p.add_argument("--power", type=int, default=180, help="PWM counts of the busiest motor (default 180)")
     p.add_argument("--duration", type=float, default=1.0, help="seconds per motion (default 1)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--out", default="out", help="directory for the plots (default ./out)")
+    p.add_argument("--out", default="out", metavar="DIR", help="directory for the plots (default ./out)")
     p.set_defaults(handler=_tour)
 
 
@@ -232,13 +270,14 @@ def _add_send(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "send",
         help="send protocol commands, print the replies and events",
         description="Sends each command (text protocol, several per argument with ';') and prints the "
-        "replies and events. Exit status 0 if every reply is OK, 1 if any is an ERROR, 2 for bad "
-        "input or link errors.",
+        "replies and events. Exit status 0 if every reply is OK, 1 if any is an ERROR or the link "
+        "fails, 2 for bad input. Motion sent is left running when send ends normally (STOP on an "
+        "error or interrupt); the protocol goes back to text.",
     )
     p.add_argument(
         "commands", nargs="+", metavar="COMMANDS", help="protocol text, e.g. 'MOVE,2,40,0,0;STATUS'"
     )
-    p.add_argument("--port", default="sim://omni4", help="link URL (default sim://omni4)")
+    add_robot_options(p)
     p.add_argument("--timeout", type=float, default=2.0, help="seconds to wait for each reply (default 2)")
     p.add_argument("--wait-idle", action="store_true", help="after the replies, wait for IDLE")
     p.add_argument("--idle-timeout", type=float, default=60.0, help="seconds --wait-idle waits (default 60)")
@@ -257,9 +296,10 @@ def _add_console(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> No
         "console",
         help="interactive terminal for the controller protocol",
         description="Type protocol commands; replies and decoded events are printed as they come. "
-        ":help lists the console's own commands.",
+        ":help lists the console's own commands. Leaving (:quit, Ctrl-D, Ctrl-C) stops the robot and "
+        "puts the MODE found at the start back.",
     )
-    p.add_argument("--port", default="sim://omni4", help="link URL (default sim://omni4)")
+    add_robot_options(p)
     p.add_argument("--timeout", type=float, default=2.0, help="seconds to wait for each reply (default 2)")
     p.set_defaults(handler=_console)
 
@@ -268,10 +308,18 @@ def _add_console(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> No
 
 
 def _demo(args: argparse.Namespace) -> int:
+    from omnibot.cliargs import check_sim_options, check_world, world_of
     from omnibot.demos.seed000 import run_demo
 
-    print(run_demo(args.port, args.robot, Path(args.out), seed=args.seed))
-    return 0
+    check_sim_options(args)
+    if args.port is None:
+        check_world(args)
+    out = output_dir(args.out)
+    report, ok = run_demo(
+        args.port, args.robot, out, seed=seed_of(args), world=world_of(args), surface=args.surface
+    )
+    print(report)
+    return EXIT_OK if ok else EXIT_FAILED
 
 
 def _add_demo(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -281,10 +329,10 @@ def _add_demo(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         description="Starts the simulated robot on a pty (omnibot sim --pty) and drives seed 000's examples "
         "through client -> text protocol -> pty -> firmware -> simulator; --port drives a real board instead.",
     )
-    p.add_argument("--port", help="link URL of a real controller (default: the simulated robot on a pty)")
-    p.add_argument("--robot", default="omni4", help="preset name or description file (default omni4)")
-    p.add_argument("--seed", type=int, default=1, help="simulator seed (default 1)")
-    p.add_argument("--out", default="out", help="directory for the plot and truth CSV (default ./out)")
+    add_robot_options(p, world="room", port_help="the simulated --robot on a pty, omnibot sim --pty")
+    p.add_argument(
+        "--out", default="out", metavar="DIR", help="directory for the plot and truth CSV (default ./out)"
+    )
     p.set_defaults(handler=_demo)
 
 
@@ -365,7 +413,8 @@ def _add_follow(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
         "follow",
         help="repeat a path: a path follower drives it, with a report and a plot",
         description="Runs a path follower at 100 Hz on the host (VEL out, TEL in); by default on the simulated "
-        "robot in lockstep, measured against its ground truth. Exit status 1 if the path was not completed.",
+        "robot in lockstep, measured against its ground truth. Exit status 1 if the run was not completed "
+        "(the follower did not finish, or the run was outside --final-tolerance/--cross-track-tolerance).",
     )
     add_follow_arguments(p)
     p.set_defaults(handler=_follow)
@@ -388,10 +437,22 @@ def build_parser() -> argparse.ArgumentParser:
         prog="omnibot", description="Drive omnidirectional mobile robots, real or simulated."
     )
     parser.add_argument("--version", action="version", version=f"omnibot {__version__}")
+    parser.add_argument("--debug", action="store_true", help="show the traceback of an error")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for add in ADDERS:
         add(sub)
+    _add_debug(sub)
     return parser
+
+
+def _add_debug(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """``--debug`` on every (sub)command, so that it can go anywhere on the line."""
+    for p in sub.choices.values():
+        if "--debug" not in p._option_string_actions:
+            add_debug_option(p)
+        for action in p._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                _add_debug(action)
 
 
 ADDERS: list[Callable[[argparse._SubParsersAction[argparse.ArgumentParser]], None]] = [
@@ -410,19 +471,46 @@ ADDERS: list[Callable[[argparse._SubParsersAction[argparse.ArgumentParser]], Non
 ]
 
 
+def exit_status(exc: BaseException) -> int:
+    """The exit status of a command that ended with ``exc`` (see the module docstring)."""
+    from omnibot.client.session import Terminated
+
+    if isinstance(exc, Terminated):
+        return EXIT_SIGTERM
+    if isinstance(exc, KeyboardInterrupt):
+        return EXIT_SIGINT
+    if isinstance(exc, ConfigError | KinematicsError | ProtocolError):
+        return EXIT_USAGE
+    if isinstance(exc, OmnibotError):
+        return EXIT_FAILED
+    return EXIT_BUG
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``omnibot`` command line; returns the exit status."""
+    from omnibot.client.session import Terminated, terminate_cleanly
+
     parser = build_parser()
     args = parser.parse_args(argv)
     handler: Handler = args.handler
     try:
-        return handler(args)
-    except OmnibotError as exc:
-        print(f"omnibot: error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("omnibot: interrupted", file=sys.stderr)
-        return 130
+        with terminate_cleanly():
+            return handler(args)
+    except (Exception, KeyboardInterrupt) as exc:
+        status = exit_status(exc)
+        if args.debug:
+            traceback.print_exc()
+        if isinstance(exc, KeyboardInterrupt):
+            signal_name = "SIGTERM" if isinstance(exc, Terminated) else "SIGINT"
+            print(f"omnibot: interrupted ({signal_name})", file=sys.stderr)
+        elif status == EXIT_BUG:
+            print(
+                f"omnibot: internal error: {type(exc).__name__}: {exc} (run with --debug for the traceback)",
+                file=sys.stderr,
+            )
+        else:
+            print(f"omnibot: error: {exc}", file=sys.stderr)
+        return status
 
 
 if __name__ == "__main__":  # pragma: no cover

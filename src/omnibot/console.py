@@ -2,7 +2,9 @@
 
 ``send`` is one-shot: it sends the commands given on the command line, prints every reply and the
 events seen until the replies are in (with ``--wait-idle`` until IDLE), and exits 0 if every
-reply was OK, 1 if any was an ERROR, 2 for bad input or a link error.
+reply was OK, 1 if any was an ERROR (or the link failed), 2 for bad input. A motion it was asked to
+send keeps running when it ends normally; on an error or an interrupt the robot gets STOP. Either
+way the controller is left in the text protocol.
 
 ``console`` is an interactive terminal: lines typed are sent as they are; replies and decoded
 events are printed as they come (``<- RANGE sonar 1: 42 cm``), also while the prompt waits.
@@ -11,7 +13,9 @@ readline (history in ``~/.omnibot_history``) in a helper thread while the main t
 link pumped; on ``sim://`` the main thread also advances simulated time with the wall clock, so
 the simulated robot lives in real time while you type. With piped input there is no helper
 thread: lines are handled one after the other, and simulated time advances only while waiting
-for replies and with ``:wait``.
+for replies and with ``:wait``. However the console ends (``:quit``, end of input, Ctrl-C, the link
+dropping) the robot gets STOP and the controller its MODE from the start back
+(:func:`omnibot.client.session.guarded`).
 """
 
 from __future__ import annotations
@@ -123,14 +127,21 @@ def format_event(event: Event) -> str:
 
 
 def run_send(args: argparse.Namespace, out: TextIO | None = None) -> int:
-    """``omnibot send``: exit status 0 all OK, 1 an ERROR reply, 2 bad input or link trouble."""
+    """``omnibot send``: exit status 0 all OK, 1 an ERROR reply or link trouble, 2 bad input."""
+    from omnibot.cliargs import check_sim_options, sim_url
+    from omnibot.client.session import robot_session
+
     out = out or sys.stdout
     for line in args.commands:
         if not line.isascii():
             print(f"omnibot: error: commands are ASCII only: {line!r}", file=sys.stderr)
             return 2
+    check_sim_options(args)
     status = 0
-    with RobotClient.open(args.port, timeout=args.timeout, reconnect=None) as client:
+    with robot_session(
+        sim_url(args), args.robot, stop="on_error", restore="protocol", timeout=args.timeout, reconnect=None
+    ) as session:
+        client = session.client
 
         def show(event: Event) -> None:
             print(format_event(event), file=out, flush=True)
@@ -152,7 +163,6 @@ def run_send(args: argparse.Namespace, out: TextIO | None = None) -> int:
         if args.wait_idle:
             client.wait_idle(args.idle_timeout)
         client.pump(0)
-        client.use_text()
     return status
 
 
@@ -169,6 +179,8 @@ class Console:
         self.show_tel = True
         self.prompting = False
         """True while the input thread shows the prompt: events are printed above it."""
+        self.lost = False
+        """The link failed and no command went through since (the console exits 1)."""
         client.add_listener(self._event)
 
     def say(self, line: str) -> None:
@@ -195,9 +207,11 @@ class Console:
             if line.startswith(":"):
                 return self._meta(line)
             self._send(line)
+            self.lost = False
         except LinkTimeout as exc:
             self.say(f"!! {exc}")
         except LinkError as exc:
+            self.lost = True
             self.say(f"!! link error: {exc}")
         except (ProtocolError, ValueError) as exc:
             self.say(f"!! {exc}")
@@ -262,11 +276,16 @@ def run_console(
     input_fn: Callable[[str], str] = input,
 ) -> int:
     """``omnibot console``; ``interactive`` defaults to whether ``stdin`` is a terminal."""
+    from omnibot.cliargs import check_sim_options, sim_url
+    from omnibot.client.session import robot_session
+
     stdin = stdin or sys.stdin
     out = out or sys.stdout
     if interactive is None:
         interactive = stdin.isatty()
-    with RobotClient.open(args.port, timeout=args.timeout) as client:
+    check_sim_options(args)
+    with robot_session(sim_url(args), getattr(args, "robot", None), timeout=args.timeout) as session:
+        client = session.client
         console = Console(client, out, echo=not interactive)
         if interactive:
             console.say(f"omnibot console on {client.link.url}; :help for help, :quit to leave")
@@ -279,9 +298,12 @@ def run_console(
         try:
             client.drain()
             client.pump(0)
-            client.use_text()
         except LinkError as exc:
+            console.lost = console.lost or not isinstance(exc, LinkTimeout)
             console.say(f"!! {exc}")
+    if console.lost:
+        print("omnibot: error: the link to the controller failed", file=sys.stderr)
+        return 1
     return 0
 
 

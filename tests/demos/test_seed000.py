@@ -21,7 +21,8 @@ def number(text: str, pattern: str) -> float:
 
 
 def test_demo_in_lockstep_meets_the_seed_examples(tmp_path: Path) -> None:
-    report = run_demo("sim://omni4?world=room&seed=1", "omni4", tmp_path)
+    report, ok = run_demo("sim://omni4?world=room&seed=1", "omni4", tmp_path)
+    assert ok
     circle = achieved(report, 1)
     assert number(circle, r"ends ([\d.]+) cm") < 5.0
     assert abs(number(circle, r"heading ([+-][\d.]+) deg")) < 3.0

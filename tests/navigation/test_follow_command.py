@@ -50,12 +50,12 @@ def test_follow_writes_report_plot_and_truth(tmp_path: FsPath, capsys: pytest.Ca
         (["follow", "{good}", "--robot", "omni5"], "unknown robot 'omni5'"),
         (["follow", "{good}", "--port", "bogus://x"], "omnibot: error:"),
         (
-            ["record", "--out", "{out}", "--sample-distance", "0"],
+            ["record", "--path", "{out}", "--sample-distance", "0"],
             "--sample-distance: expected a positive number",
         ),
-        (["record", "--out", "{out}", "--shape", "circel"], "did you mean 'circle'"),
+        (["record", "--path", "{out}", "--shape", "circel"], "did you mean 'circle'"),
         (
-            ["record", "--out", "{out}", "--teach", "push", "--port", "sim://omni4", "--shape", "zigzag"],
+            ["record", "--path", "{out}", "--teach", "push", "--port", "sim://omni4", "--shape", "zigzag"],
             "unknown path 'zigzag'",
         ),
     ],

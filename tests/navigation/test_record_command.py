@@ -16,7 +16,7 @@ def test_record_by_pushing_then_follow_with_seed002(
     taught = tmp_path / "taught.csv"
     argv = [
         "record",
-        "--out",
+        "--path",
         str(taught),
         "--robot",
         "omni3",
@@ -39,7 +39,7 @@ def test_record_by_driving_and_by_time(tmp_path: FsPath) -> None:
     taught = tmp_path / "driven.csv"
     argv = [
         "record",
-        "--out",
+        "--path",
         str(taught),
         "--teach",
         "drive",

@@ -12,7 +12,7 @@ from omnibot.cli import main
 def test_serves_and_stops(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["dashboard", "--http-port", "0", "--duration", "0.3"]) == 0
     out = capsys.readouterr().out
-    assert "omnibot dashboard for sim://omni4?world=room: http://127.0.0.1:" in out
+    assert "omnibot dashboard for sim://omni4?seed=1&world=room: http://127.0.0.1:" in out
     assert "token" not in out
 
 

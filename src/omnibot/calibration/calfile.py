@@ -48,6 +48,13 @@ class CalibrationFile:
     slip: dict[str, SlipParameters] = field(default_factory=dict)
     """Each surface's wheel-slip coefficients for the driven-wheel encoders (host side)."""
 
+    def check_robot(self, robot: str, source: str = "the calibration file") -> None:
+        """Refuse a calibration made for another robot (a file that names none is taken as is)."""
+        if self.robot is not None and self.robot != robot:
+            raise ConfigError(
+                f"{source} is a calibration of '{self.robot}', not of '{robot}'", key="--calibration"
+            )
+
     def for_surface(self, surface: str | None) -> CalibrationSpec:
         """A surface's own calibration (None: the file's ``calibration``)."""
         if surface is None:
@@ -77,8 +84,9 @@ class CalibrationFile:
         return self.slip[surface]
 
 
-def document(result: CalibrationResult, truth: str = "") -> dict[str, Any]:
-    """The YAML document of a calibration result (plain data)."""
+def document(result: CalibrationResult, truth: str = "", warning: str = "") -> dict[str, Any]:
+    """The YAML document of a calibration result (plain data); ``warning`` marks one that its own
+    check found worse than none (``omnibot calibrate --force``)."""
     doc: dict[str, Any] = {"robot": result.robot.name, "calibration": describe_spec(result.chosen)}
     doc["surfaces"] = {
         s.surface: {
@@ -99,6 +107,7 @@ def document(result: CalibrationResult, truth: str = "") -> dict[str, Any]:
         "surfaces": [s.surface for s in result.sessions],
         "truth": truth or (result.sessions[0].truth if result.sessions else ""),
         "written": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),
+        **({"warning": warning} if warning else {}),
     }
     return doc
 
@@ -109,22 +118,26 @@ def _odometry(values: dict[str, Any]) -> dict[str, Any]:
 
 def dumps(doc: dict[str, Any]) -> str:
     """YAML with the knot lists on one line each (the presets' layout)."""
+    warning = doc.get("info", {}).get("warning")
     head = (
-        f"# omnibot calibrate: {doc.get('robot', '?')} on {', '.join(doc.get('info', {}).get('surfaces', []))}\n"
+        (f"# {warning}\n" if warning else "")
+        + f"# omnibot calibrate: {doc.get('robot', '?')} on {', '.join(doc.get('info', {}).get('surfaces', []))}\n"
         "# `calibration` goes to the controller (CAL) and into a robot description; `gyro` and `odometry`\n"
         "# are host-side corrections. See docs/calibration.md.\n"
     )
     return head + yaml.safe_dump(doc, sort_keys=False, default_flow_style=None, width=200)
 
 
-def write_calibration(path: str | Path, result: CalibrationResult, truth: str = "") -> Path:
+def write_calibration(
+    path: str | Path, result: CalibrationResult, truth: str = "", warning: str = ""
+) -> Path:
     path = Path(path)
     try:
         if path.parent != Path():
             path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(dumps(document(result, truth)), encoding="utf-8")
+        path.write_text(dumps(document(result, truth, warning)), encoding="utf-8")
     except OSError as exc:
-        raise ConfigError(f"cannot write {path}: {exc.strerror}", key="--out") from None
+        raise ConfigError(f"cannot write {path}: {exc.strerror}", key="--calibration") from None
     return path
 
 
@@ -199,7 +212,9 @@ def merge_calibration(robot: str | Path, calibration: str | Path, surface: str |
     """A description file (or preset) with its ``calibration:`` section replaced by the file's, as
     YAML text (comments of the description are not kept)."""
     desc = load_robot(robot)
-    spec = load_calibration(calibration).for_surface(surface)
+    cal = load_calibration(calibration)
+    cal.check_robot(desc.name, str(calibration))
+    spec = cal.for_surface(surface)
     merged = apply_calibration(desc, spec)
     data = merged.model_dump(exclude_none=True, mode="json")
     data["calibration"] = describe_spec(spec)

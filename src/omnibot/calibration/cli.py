@@ -16,6 +16,15 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from omnibot.cliargs import (
+    DeprecatedAlias,
+    add_robot_options,
+    check_sim_options,
+    check_writable,
+    seed_of,
+    sim_robot,
+    world_of,
+)
 from omnibot.errors import ConfigError
 
 if TYPE_CHECKING:
@@ -37,21 +46,32 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         "(CAL) and checks open-loop accuracy before and after. Default: the simulated robot in lockstep "
         "(sim://ROBOT?surface=S), surfaces wood and carpet.",
     )
-    p.add_argument("--port", help="link URL of the controller (default: the simulator in lockstep)")
-    p.add_argument("--robot", default="omni4", help="preset name or description file (default omni4)")
-    p.add_argument(
-        "--surface",
-        help="surface name(s), comma-separated (default: wood,carpet in the simulator, 'floor' on --port; "
-        "with several on a real robot you are asked to move it between them)",
+    add_robot_options(
+        p,
+        surface_help="surface name(s), comma-separated (default: wood,carpet in the simulator, 'floor' on "
+        "--port; with several on a real robot you are asked to move it between them)",
     )
-    p.add_argument("--out", required=True, metavar="CAL.yaml", help="calibration file to write")
-    p.add_argument("--report", required=True, metavar="DIR", help="directory for the figures and tables")
+    p.add_argument(
+        "--out",
+        metavar="DIR",
+        help="directory for the report (figures and tables) and, unless --calibration says otherwise, "
+        "calibration.yaml (default ./out)",
+    )
+    p.add_argument(
+        "--calibration", metavar="FILE.yaml", help="calibration file to write (default DIR/calibration.yaml)"
+    )
+    p.add_argument("--report", action=DeprecatedAlias, use="--out DIR", help=argparse.SUPPRESS)
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="write (and upload) the calibration even when its own check finds it worse than none; the "
+        "file says so, and the exit status is still 1",
+    )
     p.add_argument(
         "--truth",
         help="ground truth: sim | csv:FILE | encoders | sonar[:NAME] | tape (default: sim on the simulator, "
         "else encoders when every wheel has one, else tape)",
     )
-    p.add_argument("--seed", type=int, default=0, help="simulator seed (default 0)")
     sim = p.add_mutually_exclusive_group()
     sim.add_argument(
         "--perturb",
@@ -133,25 +153,29 @@ def tqdm_progress(desc: str, total: int) -> Iterator[Progress | None]:
 
 
 def sim_opener(
-    robot: RobotDescription, name: str, seed: int, true_robot: RobotDescription | None
+    robot: RobotDescription,
+    name: str,
+    seed: int,
+    true_robot: RobotDescription | None,
+    world: str | None = None,
 ) -> Callable[[str], AbstractContextManager[RobotClient]]:
-    """surface -> a lockstep client on a fresh simulated robot standing on it."""
+    """surface -> a lockstep client on a fresh simulated robot standing on it (in ``world``, default
+    empty), left stopped and in its MODE on the way out."""
 
     @contextmanager
     def open_client(surface: str) -> Iterator[RobotClient]:
         from omnibot.client.client import RobotClient
-
-        if true_robot is None:
-            with RobotClient.open(f"sim://{name}?surface={surface}&seed={seed}", robot) as client:
-                yield client
-            return
+        from omnibot.client.session import guarded
         from omnibot.sim.device import SimDevice
         from omnibot.transport.lockstep import LockstepLink
 
-        device = SimDevice(robot, true_robot=true_robot, surface=surface, seed=seed)
-        with RobotClient(
-            LockstepLink(device, url=f"sim://{name}?surface={surface}&seed={seed}"), robot
-        ) as client:
+        url = f"sim://{name}?surface={surface}&seed={seed}" + (f"&world={world}" if world else "")
+        if true_robot is None:
+            client = RobotClient.open(url, robot)
+        else:
+            device = SimDevice(robot, true_robot=true_robot, surface=surface, seed=seed, world=world)
+            client = RobotClient(LockstepLink(device, url=url), robot)
+        with guarded(client):
             yield client
 
     return open_client
@@ -183,14 +207,12 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] = input) -> int:
     from omnibot.calibration.session import calibrate
     from omnibot.calibration.tables import summary_table
     from omnibot.calibration.truth import default_truth, parse_truth_spec
-    from omnibot.client.client import RobotClient
+    from omnibot.calibration.verdict import judge_calibration
+    from omnibot.client.session import robot_session
     from omnibot.robot.description import load_robot
 
-    robot = load_robot(args.robot)
-    if robot.n_wheels > 4:
-        raise ConfigError(
-            f"{robot.name} has {robot.n_wheels} motors; POWER (the calibration runs) carries at most 4"
-        )
+    check_sim_options(args, allowed=("surface",))
+    cal_file, out_dir = _outputs(args)
     simulated = args.port is None
     if not simulated and (args.perturb or args.true_robot):
         raise ConfigError("--perturb and --true-robot need the simulator (leave out --port)")
@@ -211,19 +233,34 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] = input) -> int:
     )
     check = AccuracyPlan.quick() if args.quick else AccuracyPlan()
     accuracy = None if args.no_check else replace(check, length=args.move_length)
-    true_robot = None
-    if args.perturb:
-        true_robot = perturbed_robot(robot, ACCEPTANCE if args.perturb == "acceptance" else args.perturb)
-    elif args.true_robot:
-        true_robot = load_robot(args.true_robot)
-    truth: str | Callable[[RobotClient], str] = args.truth or (lambda c: default_truth(c, robot))
 
+    world = world_of(args)
     with contextlib.ExitStack() as stack:
         client: RobotClient | None = None
         if simulated:
-            opener = sim_opener(robot, str(args.robot), args.seed, true_robot)
+            robot = load_robot(sim_robot(args))
+            if world != "empty":
+                from omnibot.sim.world import load_world
+
+                load_world(world)
         else:
-            client = stack.enter_context(RobotClient.open(args.port, robot))
+            session = stack.enter_context(robot_session(args.port, args.robot))
+            client, robot = session.client, session.robot
+        if robot.n_wheels > 4:
+            raise ConfigError(
+                f"{robot.name} has {robot.n_wheels} motors; POWER (the calibration runs) carries at most 4"
+            )
+        true_robot = None
+        if args.perturb:
+            true_robot = perturbed_robot(robot, ACCEPTANCE if args.perturb == "acceptance" else args.perturb)
+        elif args.true_robot:
+            true_robot = load_robot(args.true_robot)
+        truth: str | Callable[[RobotClient], str] = args.truth or (lambda c: default_truth(c, robot))
+        if client is None:
+            opener = sim_opener(
+                robot, sim_robot(args), seed_of(args), true_robot, None if world == "empty" else world
+            )
+        else:
             opener = port_opener(client, ask)
         result = calibrate(
             robot,
@@ -236,11 +273,15 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] = input) -> int:
             progress=tqdm_progress,
             upload=not args.no_upload,
         )
-        if client is not None and result.average is not None and not args.no_upload:
-            client.upload_calibration(result.average)  # the averaged table stays on the real board
+        verdict = judge_calibration(result)
+        keep = verdict.better is not False or args.force
+        if client is not None and not args.no_upload:
+            if keep and result.average is not None:
+                client.upload_calibration(result.average)  # the averaged table stays on the real board
+            elif not keep and robot.calibration is not None:
+                client.upload_calibration(robot.calibration)  # back to the tables it was built with
     truth_name = result.sessions[0].truth if result.sessions else ""
-    cal = write_calibration(args.out, result, truth_name)
-    files = write_report(result, args.report)
+    files = write_report(result, out_dir)
     print(f"omnibot calibrate: {robot.name} on {', '.join(surfaces)} (truth {truth_name})")
     entries = accuracy_entries(result)
     if entries:
@@ -251,6 +292,44 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] = input) -> int:
     for s in result.sessions:
         for note in s.notes:
             print(f"note ({s.surface}): {note}")
+    print(f"report: {out_dir} ({', '.join(f.name for f in files)})")
+    print(f"check: {verdict.summary}")
+    if verdict.better is False:
+        warning = f"WORSE THAN NO CALIBRATION: {verdict.worst}"
+        if args.force:
+            cal = write_calibration(cal_file, result, truth_name, warning=warning)
+            print(f"calibration: {cal} (written anyway, --force: {warning})")
+        else:
+            print(
+                f"calibration: not written, not kept on the controller: {warning} (--force writes it anyway)"
+            )
+        return 1
+    cal = write_calibration(cal_file, result, truth_name)
     print(f"calibration: {cal}")
-    print(f"report: {Path(args.report)} ({', '.join(f.name for f in files)})")
     return 0
+
+
+def _outputs(args: argparse.Namespace) -> tuple[Path, Path]:
+    """(calibration file, report directory) from ``--calibration``/``--out``, and the old spellings
+    ``--out CAL.yaml --report DIR`` (deprecated)."""
+    out, cal, report = args.out, args.calibration, args.report
+    if out is not None and out.endswith((".yaml", ".yml")) and cal is None:
+        print(
+            "omnibot: warning: --out CAL.yaml is deprecated; use --calibration CAL.yaml (--out is now the "
+            "report's directory)",
+            file=sys.stderr,
+        )
+        cal, out = out, report
+    elif report is not None:
+        if out is not None:
+            raise ConfigError("give the report's directory once: --out DIR (--report is its old name)")
+        out = report
+    out_dir = Path(out or "out")
+    cal_file = Path(cal) if cal else out_dir / "calibration.yaml"
+    if cal:
+        check_writable(cal_file, "--calibration")
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(f"cannot make directory {out_dir}: {exc.strerror or exc}", key="--out") from None
+    return cal_file, out_dir

@@ -270,7 +270,9 @@ def _encoders(ctx: TruthContext, arg: str) -> TruthSource:
     from omnibot.calibration.calfile import load_calibration
     from omnibot.calibration.umbmark import corrected_robot
 
-    odo = load_calibration(arg).odometry or {}
+    cal = load_calibration(arg)
+    cal.check_robot(ctx.robot.name, arg)
+    odo = cal.odometry or {}
     try:
         radius, base = float(odo["wheel_radius_scale"]), float(odo["wheel_base_scale"])
     except (KeyError, TypeError, ValueError):

@@ -18,7 +18,8 @@ The examples (seed 000, sections III and VI.C):
 3. ``ROTATE`` to face the nearest wall.
 4. A sonar approach: ``SONAR,1,60,0,100,25`` then ``MOVE,INF,60,0,0``: RANGE events inside 1 m,
    and the emergency stop (``WARN,13``) where the echo falls below 25 cm plus the distance the robot
-   needs to stop from its speed (docs/safety.md), released by ``STOP``.
+   needs to stop from its speed (docs/safety.md), released by ``STOP``. A robot without a sonar
+   skips it (and the report says so); with one, no emergency stop means the demo did not do its job.
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ from typing import Any
 
 from omnibot.client.client import RobotClient
 from omnibot.client.events import Event, RangeEvent, Telemetry, WarnEvent
+from omnibot.errors import ConfigError
 from omnibot.estimation.odometry import Pose2D, WheelOdometry
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription
@@ -72,6 +74,8 @@ class Segment:
     rows: tuple[int, int] = (0, 0)
     """Ground-truth rows (indexes into the truth file) recorded during the segment."""
     events: list[str] = field(default_factory=list)
+    failed: bool = False
+    """The example did not do what it is for (no emergency stop in the sonar approach)."""
 
 
 class TruthFile:
@@ -236,6 +240,22 @@ class Demo:
             a, b, src = got
             seg.achieved = f"heading {math.degrees(wrap(b.theta)):.1f} deg ({src})"
 
+        if not self.robot.sonars:
+            self.segments.append(
+                Segment(
+                    "sonar approach, emergency stop",
+                    "SONAR,1,60,0,100,25;MOVE,INF,60,0,0",
+                    f"RANGE inside 1 m, WARN 13 below {100 * ESTOP_DISTANCE:.0f} cm",
+                    achieved=f"skipped: {self.robot.name} has no sonar",
+                )
+            )
+        else:
+            self._sonar_approach()
+        c.telemetry(0.0)
+        return self.segments
+
+    def _sonar_approach(self) -> None:
+        c = self.client
         with self.segment(
             "sonar approach, emergency stop",
             "SONAR,1,60,0,100,25;MOVE,INF,60,0,0",
@@ -252,13 +272,20 @@ class Demo:
             c.stop()
             c.sonar(1, 0.0)
         last = self.recorder.ranges[-1] if self.recorder.ranges else None
+        seg.failed = not self.recorder.estop
         seg.achieved = (
             ("stopped" if self.recorder.estop else "NO emergency stop")
-            + (f", last echo {100 * last:.0f} cm" if last is not None else "")
-            + (f", robot centre {self._wall_gap():.0f} cm from the wall (truth)" if self.truth() else "")
+            + (
+                f", last echo {100 * last:.0f} cm"
+                if last is not None
+                else ", no echo: nothing ahead of the robot"
+            )
+            + (
+                f", robot centre {gap:.0f} cm from the wall (truth)"
+                if math.isfinite(gap := self._wall_gap())
+                else ""
+            )
         )
-        c.telemetry(0.0)
-        return self.segments
 
     def best_pose(self) -> Pose2D | None:
         return self.truth() or self.odo()
@@ -328,10 +355,11 @@ class TruthSource:
         return self.file.latest() if self.file is not None else None
 
 
-def world_bounds(world: Any) -> Bounds:
+def world_bounds(world: Any) -> Bounds | None:
+    """The walls' bounding box (None for a world without walls)."""
     xs = [v for seg in world.segments for v in (seg[0], seg[2])]
     ys = [v for seg in world.segments for v in (seg[1], seg[3])]
-    return ((min(xs), min(ys)), (max(xs), max(ys))) if xs else ((-1e9, -1e9), (1e9, 1e9))
+    return ((min(xs), min(ys)), (max(xs), max(ys))) if xs else None
 
 
 def format_table(segments: list[Segment]) -> str:
@@ -373,27 +401,38 @@ def plot(truth: TruthSource | None, odo_trail: list[tuple[float, float]], world:
     save(fig, str(path))
 
 
-def run_demo(port: str | None, robot_name: str, out: Path, seed: int = 1, world: str = "room") -> str:
-    """Run the demo; returns the printed report.
+def run_demo(
+    port: str | None,
+    robot_name: str | None,
+    out: Path,
+    seed: int = 1,
+    world: str = "room",
+    surface: str | None = None,
+) -> tuple[str, bool]:
+    """Run the demo; returns the printed report and whether every example did what it should.
 
-    ``port`` None: ``omnibot sim --pty`` of ``robot_name`` in ``world``, truth from its CSV. A ``sim://``
-    port: the in-process simulator, truth from it. Anything else (a real board): odometry only.
+    ``port`` None: ``omnibot sim --pty`` of ``robot_name`` (default omni4) in ``world``, truth from its
+    CSV. A ``sim://`` port: the in-process simulator, truth from it. Anything else (a real board):
+    odometry only. The robot is the one on the link (``robot_name``, if given, must name it); the
+    session leaves the controller stopped and in the MODE it was found in, however the demo ends.
     """
-    from omnibot.robot.description import load_robot
+    from omnibot.client.session import robot_session
     from omnibot.sim.world import load_world
 
-    robot = load_robot(robot_name)
     out.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
         truth_file = TruthFile(Path(tmp) / "truth.csv") if port is None else None
         world_map = load_world(world) if port is None else None
         context = (
-            spawn_pty_emulator(robot_name, world=world, seed=seed, truth=truth_file.path)
+            spawn_pty_emulator(
+                robot_name or "omni4", world=world, seed=seed, surface=surface, truth=truth_file.path
+            )
             if truth_file
             else _given(port or "")
         )
         started = time.monotonic()
-        with context as url, RobotClient.open(url, robot) as client:
+        with context as url, robot_session(url, robot_name) as session:
+            client, robot, hello = session.client, session.robot, session.hello
             device = getattr(client.link, "device", None)
             sim = getattr(device, "sim", None)
             if sim is not None:
@@ -403,23 +442,30 @@ def run_demo(port: str | None, robot_name: str, out: Path, seed: int = 1, world:
                 if truth_file or sim is not None
                 else None
             )
-            hello = client.hello()
             demo = Demo(client, robot, truth if truth is not None else (lambda: None))
             segments = demo.run()
         wall = time.monotonic() - started
         png = out / "demo_trajectory.png"
-        plot(truth, demo.recorder.odo_trail, world_map, png)
-        if truth is not None:
-            with (out / "demo_truth.csv").open("w") as f:
-                f.write("t,x,y,theta\n")
-                f.writelines(f"{t:.3f},{x:.4f},{y:.4f},{th:.4f}\n" for t, x, y, th in truth.rows())
+        written = [str(png)]
+        try:
+            plot(truth, demo.recorder.odo_trail, world_map, png)
+            if truth is not None:
+                with (out / "demo_truth.csv").open("w") as f:
+                    f.write("t,x,y,theta\n")
+                    f.writelines(f"{t:.3f},{x:.4f},{y:.4f},{th:.4f}\n" for t, x, y, th in truth.rows())
+                written.append(str(out / "demo_truth.csv"))
+        except OSError as exc:
+            raise ConfigError(f"cannot write in {out}: {exc.strerror or exc}", key="--out") from None
     link = (
         "client -> text protocol -> pty (115200 baud) -> firmware -> simulator"
         if port is None
         else f"client -> {port}"
     )
     header = f"omnibot demo: {hello.name} ({hello.motors} motors, protocol {hello.version}) via {link}"
-    return f"{header}\n\n{format_table(segments)}\n\nplot: {png}  truth: {out / 'demo_truth.csv'}  ({wall:.1f} s)"
+    failed = [seg.name for seg in segments if seg.failed]
+    verdict = f"\nNOT DONE: {'; '.join(failed)}" if failed else ""
+    files = "  ".join(written)
+    return f"{header}\n\n{format_table(segments)}\n\nwrote: {files}  ({wall:.1f} s){verdict}", not failed
 
 
 @contextmanager

@@ -1,19 +1,34 @@
 """``omnibot record`` and ``omnibot follow``: teach and repeat from the command line.
 
 Both default to the simulated robot in lockstep (faster than real time, deterministic for a seed);
-``--port URL`` drives any link instead (a real board, ``sim://...``, ``tcp://...``). Errors in the
-input (a malformed path file, an unknown follower, bad numbers) are OmnibotErrors, which the CLI
-prints as one line with exit status 2.
+``--port URL`` drives any link instead (a real board, ``sim://...``, ``tcp://...``), the robot being
+the one the controller names (:func:`omnibot.client.session.robot_on_link`). Either way the session
+leaves the controller stopped and in the MODE it was found in (:mod:`omnibot.client.session`).
+Errors in the input (a malformed path file, an unknown follower, bad numbers) are ConfigErrors: one
+line, exit status 2. A run that did not do its job exits 1 with the reason: a recording shorter than
+:data:`~omnibot.navigation.record.MIN_POINTS` points or :data:`~omnibot.navigation.record.MIN_LENGTH`
+m, a follow run outside its tolerances (:class:`~omnibot.navigation.metrics.Tolerances`).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
+from collections.abc import Iterator
 from pathlib import Path as FsPath
 from typing import Any
 
+from omnibot.cliargs import (
+    DeprecatedAlias,
+    add_robot_options,
+    check_sim_options,
+    check_writable,
+    seed_of,
+    sim_robot,
+    world_of,
+)
 from omnibot.errors import ConfigError
 
 
@@ -23,16 +38,32 @@ def _positive(value: float, flag: str) -> float:
     return value
 
 
-def _robot(name: str) -> Any:
+@contextlib.contextmanager
+def _robot_client(args: argparse.Namespace, start: Any = None) -> Iterator[tuple[Any, Any]]:
+    """(client, robot): ``--port``'s robot (checked against ``--robot``), or the simulated ``--robot``
+    standing at ``start``; the controller is left as it was found on every way out."""
+    from omnibot.client.session import guarded, robot_session
+    from omnibot.navigation.session import simulated_client
     from omnibot.robot.description import load_robot
 
-    return load_robot(name)
+    if args.port:
+        with robot_session(args.port, args.robot) as session:
+            yield session.client, session.robot
+        return
+    from omnibot.cliargs import check_world
 
-
-def _open_port(port: str, robot: Any) -> Any:
-    from omnibot.client.client import RobotClient
-
-    return RobotClient.open(port, robot)
+    check_world(args)
+    robot = load_robot(sim_robot(args))
+    world = world_of(args)
+    client = simulated_client(
+        robot,
+        surface=args.surface,
+        seed=seed_of(args),
+        start=start,
+        world=None if world == "empty" else world,
+    )
+    with guarded(client):
+        yield client, robot
 
 
 def run_follow(args: argparse.Namespace) -> int:
@@ -40,10 +71,11 @@ def run_follow(args: argparse.Namespace) -> int:
     from omnibot.control.paths.files import read_path
     from omnibot.estimation.estimator import ESTIMATORS
     from omnibot.estimation.odometry import Pose2D
-    from omnibot.navigation.session import FollowOptions, follow_path, simulated_client, summary
+    from omnibot.navigation.metrics import Tolerances
+    from omnibot.navigation.session import FollowOptions, follow_path, summary
 
+    check_sim_options(args, allowed=("surface",))
     path = read_path(args.path)
-    robot = _robot(args.robot)
     names = follower_names()
     if args.follower not in names:
         raise ConfigError(
@@ -56,54 +88,91 @@ def run_follow(args: argparse.Namespace) -> int:
         )
     rate = _positive(args.rate, "--rate")
     speed = _positive(args.speed, "--speed") if args.speed is not None else None
-    options = FollowOptions(
-        follower=args.follower,
-        speed=speed,
-        estimator=args.estimator,
-        rate=rate,
-        wheel_loop=not args.no_wheel_loop,
-        calibrate_gyro=args.calibrate_gyro,
-        slip=_slip(args),
+    tolerances = Tolerances(
+        final=_positive(args.final_tolerance, "--final-tolerance"),
+        cross_track=_positive(args.cross_track_tolerance, "--cross-track-tolerance"),
     )
-    surface = args.surface or "wood"
-    if args.port:
-        client = _open_port(args.port, robot)
-    else:
-        client = simulated_client(robot, surface=surface, seed=args.seed, start=Pose2D(*path.start))
-    with client:
+    out = _out_dir(args)
+    for flag in ("truth", "report", "plot"):
+        check_writable(getattr(args, flag), f"--{flag}")
+    targets = {
+        "truth": _target(args.truth, out, "follow_truth.csv"),
+        "report": _target(args.report, out, "follow_report.json"),
+        "plot": _target(args.plot, out, "follow_plot.png"),
+    }
+    with _robot_client(args, start=Pose2D(*path.start)) as (client, robot):
+        options = FollowOptions(
+            follower=args.follower,
+            speed=speed,
+            estimator=args.estimator,
+            rate=rate,
+            wheel_loop=not args.no_wheel_loop,
+            calibrate_gyro=args.calibrate_gyro,
+            slip=_slip(args, robot.name),
+            tolerances=tolerances,
+        )
         run, report, _ = follow_path(client, robot, path, options)
+    surface = args.surface or "the world's floor"
     report["path_file"] = str(args.path)
-    report["link"] = args.port or f"sim://{robot.name} (lockstep, surface {surface}, seed {args.seed})"
+    report["link"] = args.port or f"sim://{robot.name} (lockstep, surface {surface}, seed {seed_of(args)})"
     if options.slip is not None:
         report["slip_calibration"] = {"file": str(args.calibration), **options.slip.as_dict()}
     print(f"omnibot follow: {robot.name}, {args.follower}, {len(path)} points, {path.length:.2f} m")
     print(f"  {summary(report)}")
-    if args.truth:
-        if not run.has_truth:
+    if targets["truth"] is not None:
+        if run.has_truth:
+            _write_truth(run, targets["truth"])
+            print(f"  truth: {targets['truth']}")
+        elif args.truth:
             raise ConfigError("no ground truth on this link (only the simulator has one)", key="--truth")
-        _write_truth(run, FsPath(args.truth))
-        print(f"  truth: {args.truth}")
-    if args.report:
-        _write(FsPath(args.report), json.dumps(report, indent=2) + "\n", "--report")
-        print(f"  report: {args.report}")
-    if args.plot:
+    if targets["report"] is not None:
+        _write(targets["report"], json.dumps(report, indent=2) + "\n", "--report")
+        print(f"  report: {targets['report']}")
+    if targets["plot"] is not None:
         from omnibot.navigation.plot import plot_run
 
         try:
-            plot_run(run, args.plot, title=f"{robot.name}: {args.follower} on {FsPath(args.path).name}")
+            plot_run(
+                run, str(targets["plot"]), title=f"{robot.name}: {args.follower} on {FsPath(args.path).name}"
+            )
         except OSError as exc:
-            raise ConfigError(f"cannot write {args.plot}: {exc.strerror or exc}", key="--plot") from None
-        print(f"  plot: {args.plot}")
-    return 0 if report["completed"] else 1
+            raise ConfigError(
+                f"cannot write {targets['plot']}: {exc.strerror or exc}", key="--plot"
+            ) from None
+        print(f"  plot: {targets['plot']}")
+    if not report["completed"]:
+        print(f"omnibot follow: NOT COMPLETED: {'; '.join(report['failures'])}")
+        return 1
+    return 0
 
 
-def _slip(args: argparse.Namespace) -> Any:
-    """The floor's wheel-slip coefficients from ``--calibration`` (None without one)."""
+def _out_dir(args: argparse.Namespace) -> FsPath | None:
+    if not args.out:
+        return None
+    out = FsPath(args.out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(f"cannot make directory {out}: {exc.strerror or exc}", key="--out") from None
+    return out
+
+
+def _target(given: str | None, out: FsPath | None, name: str) -> FsPath | None:
+    """An output file: the one given, else ``name`` in ``--out DIR``, else none."""
+    if given:
+        return FsPath(given)
+    return out / name if out is not None else None
+
+
+def _slip(args: argparse.Namespace, robot: str) -> Any:
+    """The floor's wheel-slip coefficients from ``--calibration`` (None without one); the file must
+    be ``robot``'s."""
     if not args.calibration:
         return None
     from omnibot.calibration.calfile import load_calibration
 
     cal = load_calibration(args.calibration)
+    cal.check_robot(robot, str(args.calibration))
     try:
         return cal.slip_for(args.surface)
     except ConfigError as exc:
@@ -129,42 +198,50 @@ def run_record(args: argparse.Namespace) -> int:
     from omnibot.control.paths.files import write_path
     from omnibot.control.paths.standard import standard_path
     from omnibot.control.paths.teach import PathRecorder
-    from omnibot.navigation.record import teach
-    from omnibot.navigation.session import simulated_client
+    from omnibot.navigation.record import check_recording, teach
 
-    robot = _robot(args.robot)
+    check_sim_options(args)
+    if not args.path:
+        raise ConfigError("say where to write the path: --path FILE.csv", key="--path")
     mode = args.teach or ("listen" if args.port else "push")
     every = args.sample_time if args.sample_time is not None else args.sample_distance
     _positive(every, "--sample-time" if args.sample_time is not None else "--sample-distance")
     speed = _positive(args.speed, "--speed")
     duration = _positive(args.duration, "--duration")
+    heading = args.heading or "measured"
     recorder = PathRecorder(
         "time" if args.sample_time is not None else "distance",
         every,
-        store_heading=not args.fixed_heading,
+        store_heading=heading != "fixed",
         store_speed=args.store_speed,
     )
     shape = (
-        standard_path(args.shape, size=_positive(args.size, "--size"), heading=args.heading)
+        standard_path(
+            args.shape,
+            size=_positive(args.size, "--size"),
+            heading="tangent" if heading == "tangent" else "fixed",
+        )
         if mode != "listen"
         else None
     )
-    out = FsPath(args.out)
-    if args.port:
-        client = _open_port(args.port, robot)
-    else:
-        client = simulated_client(robot, surface=args.surface, seed=args.seed)
-    with client:
+    out = FsPath(args.path)
+    check_writable(out, "--path")
+    with _robot_client(args) as (client, robot):
         result = teach(client, robot, recorder, mode=mode, shape=shape, speed=speed, duration=duration)
-    try:
-        write_path(result.path, out)
-    except OSError as exc:
-        raise ConfigError(f"cannot write {out}: {exc}", key="--out") from None
+    problem = check_recording(result)
     what = {
         "push": f"pushed by hand along {args.shape}",
         "drive": f"driven along {args.shape}",
         "listen": "recorded",
     }
+    if problem is not None:
+        print(f"omnibot record: {robot.name} {what[mode]}: {problem}; nothing written")
+        return 1
+    assert result.path is not None  # check_recording saw to it
+    try:
+        write_path(result.path, out)
+    except OSError as exc:
+        raise ConfigError(f"cannot write {out}: {exc.strerror or exc}", key="--path") from None
     print(
         f"omnibot record: {robot.name} {what[mode]}: {len(result.path)} points, {result.path.length:.2f} m "
         f"in {result.duration:.1f} s -> {out}"
@@ -175,13 +252,17 @@ def run_record(args: argparse.Namespace) -> int:
 
 
 def add_follow_arguments(p: argparse.ArgumentParser) -> None:
+    from omnibot.navigation.metrics import Tolerances
+
     p.add_argument("path", help="path file: CSV t,x,y,theta[,v] (s, m, m, rad, m/s)")
     p.add_argument(
         "--follower", default="tracker", help="seed002, seed002-plain, pure_pursuit or tracker (default)"
     )
-    p.add_argument("--robot", default="omni4", help="preset name or description file (default omni4)")
-    p.add_argument(
-        "--port", help="link URL (default: the simulated robot in lockstep, standing at the path's start)"
+    add_robot_options(
+        p,
+        port_help="the simulated --robot in lockstep, standing at the path's start",
+        surface_help="the floor: the simulated floor (default: the world's) and the floor whose wheel slip "
+        "--calibration applies (also with --port)",
     )
     p.add_argument("--speed", type=float, help="speed cap, m/s (default: the robot's limit)")
     p.add_argument("--estimator", default="fused", help="estimator the follower sees (default fused)")
@@ -195,23 +276,36 @@ def add_follow_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--calibration",
         metavar="CAL.yaml",
-        help="calibration file from `omnibot calibrate`: its wheel slip for --surface corrects the encoders",
+        help="calibration file from `omnibot calibrate` (of this robot): its wheel slip for --surface "
+        "corrects the encoders",
+    )
+    tol = Tolerances()
+    p.add_argument(
+        "--final-tolerance",
+        type=float,
+        default=tol.final,
+        metavar="M",
+        help=f"the run is done if it ends within M of the path's end (default {tol.final:g} m)",
     )
     p.add_argument(
-        "--surface",
-        help="the floor: simulated floor (wood by default; carpet, concrete, linoleum) and the floor "
-        "whose slip --calibration applies",
+        "--cross-track-tolerance",
+        type=float,
+        default=tol.cross_track,
+        metavar="M",
+        help=f"... and never strays more than M from the path (default {tol.cross_track:g} m)",
     )
-    p.add_argument("--seed", type=int, default=1, help="simulator seed (default 1)")
+    p.add_argument("--out", metavar="DIR", help="write follow_report.json, follow_plot.png, follow_truth.csv")
     p.add_argument("--truth", metavar="FILE.csv", help="write the ground truth t,x,y,theta (simulator only)")
     p.add_argument("--report", metavar="FILE.json", help="write the tracking report")
     p.add_argument("--plot", metavar="FILE.png", help="plot the path, the driven trajectory and the error")
 
 
 def add_record_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--out", required=True, metavar="PATH.csv", help="path file to write")
-    p.add_argument("--port", help="link URL (default: the simulated robot in lockstep)")
-    p.add_argument("--robot", default="omni4", help="preset name or description file (default omni4)")
+    from omnibot.navigation.record import MIN_LENGTH, MIN_POINTS
+
+    p.add_argument("--path", metavar="FILE.csv", help="path file to write (required)")
+    p.add_argument("--out", action=DeprecatedAlias, dest="path", use="--path", help=argparse.SUPPRESS)
+    add_robot_options(p)
     p.add_argument(
         "--teach",
         choices=("push", "drive", "listen"),
@@ -223,7 +317,20 @@ def add_record_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--size", type=float, default=1.0, help="shape size, m (default 1)")
     p.add_argument(
-        "--heading", choices=("fixed", "tangent"), default="fixed", help="shape heading (default fixed)"
+        "--heading",
+        choices=("measured", "fixed", "tangent"),
+        help="measured (default): the shape is moved along at a fixed heading and the file keeps the "
+        "heading odometry measured; fixed: the start heading on every row; tangent: the shape is moved "
+        "along facing its tangent",
+    )
+    p.add_argument(
+        "--fixed-heading",
+        action=DeprecatedAlias,
+        dest="heading",
+        nargs=0,
+        const="fixed",
+        use="--heading fixed",
+        help=argparse.SUPPRESS,
     )
     p.add_argument("--speed", type=float, default=0.3, help="speed of the push or drive, m/s (default 0.3)")
     sampling = p.add_mutually_exclusive_group()
@@ -232,7 +339,8 @@ def add_record_arguments(p: argparse.ArgumentParser) -> None:
     )
     sampling.add_argument("--sample-time", type=float, help="keep a pose every T s instead")
     p.add_argument("--store-speed", action="store_true", help="add the v column (speed while taught)")
-    p.add_argument("--fixed-heading", action="store_true", help="store the start heading on every row")
     p.add_argument("--duration", type=float, default=30.0, help="listen: seconds to record (default 30)")
-    p.add_argument("--surface", default="wood", help="simulated floor (default wood)")
-    p.add_argument("--seed", type=int, default=1, help="simulator seed (default 1)")
+    p.epilog = (
+        f"A recording of fewer than {MIN_POINTS} points or shorter than {MIN_LENGTH:g} m is not written "
+        "(exit status 1)."
+    )

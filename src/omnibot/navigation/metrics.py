@@ -9,6 +9,7 @@ report says which (``source``).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -16,6 +17,35 @@ import numpy as np
 from omnibot.control.followers.base import wrap
 from omnibot.control.paths.profile import MotionLimits, min_traversal_time
 from omnibot.navigation.runner import FollowRun
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """What a follow run must achieve to count as done (``omnibot follow`` exits 1 otherwise): end
+    within ``final`` m of the path's end and never stray more than ``cross_track`` m from the path.
+    The defaults hold with room to spare for the trackers on every preset and floor the simulator has,
+    and catch a run that went astray (a wrong robot, a lost link, a latched emergency stop)."""
+
+    final: float = 0.15
+    cross_track: float = 0.30
+
+
+def judge(report: dict[str, Any], tolerances: Tolerances) -> dict[str, Any]:
+    """Decide ``report["completed"]`` from the follower's own verdict and the errors against
+    ``tolerances``; ``report["failures"]`` says why not (the numbers)."""
+    failures = []
+    if not report["follower_done"]:
+        failures.append(f"the follower did not reach the end in {report['duration_s']:.1f} s")
+    final, worst = report["final_error_m"], report["max_cross_track_m"]
+    if not final <= tolerances.final:  # NaN fails too
+        failures.append(f"final error {100 * final:.1f} cm > {100 * tolerances.final:.1f} cm")
+    if not worst <= tolerances.cross_track:
+        failures.append(f"max cross-track error {100 * worst:.1f} cm > {100 * tolerances.cross_track:.1f} cm")
+    report["tolerances"] = {"final_m": tolerances.final, "cross_track_m": tolerances.cross_track}
+    report["failures"] = failures
+    report["completed"] = not failures
+    return report
+
 
 TRUTH = "simulator ground truth"
 ODOMETRY = "odometry (the robot's own estimate; no ground truth on this link)"
@@ -45,6 +75,7 @@ def tracking_report(run: FollowRun, limits: MotionLimits) -> dict[str, Any]:
         "source": TRUTH if use_truth else ODOMETRY,
         "follower": run.follower,
         "estimator": run.estimator,
+        "follower_done": run.completed,
         "completed": run.completed,
         "rms_cross_track_m": float(np.sqrt(np.mean(dist**2))) if len(dist) else math.nan,
         "max_cross_track_m": float(dist.max()) if len(dist) else math.nan,

@@ -17,12 +17,12 @@ estimator's poses (the robot's dead reckoning, as seed 002 records with its enco
 
 from __future__ import annotations
 
-import contextlib
 import math
 from dataclasses import dataclass
 from typing import Any
 
 from omnibot.client.client import RobotClient
+from omnibot.client.session import Terminated
 from omnibot.control.followers.base import to_body, wrap
 from omnibot.control.paths.path import Path
 from omnibot.control.paths.profile import time_optimal_profile
@@ -38,11 +38,16 @@ HAND_STIFFNESS = 60.0
 HAND_DAMPING = 15.0
 """1/s: the hand's velocity gain."""
 HAND_TURN_STIFFNESS, HAND_TURN_DAMPING = 60.0, 15.0
+MIN_POINTS = 10
+"""A recording with fewer points is no path to follow (``omnibot record`` exits 1)."""
+MIN_LENGTH = 0.10
+"""m: nor is one shorter than this."""
 
 
 @dataclass
 class TeachResult:
-    path: Path
+    path: Path | None
+    """None when fewer than two poses were recorded."""
     mode: str
     duration: float
     distance: float
@@ -83,8 +88,11 @@ def teach(
         start = clock.now()
         d0 = nav.estimator.distance
         if mode == "listen":
-            with contextlib.suppress(KeyboardInterrupt):  # Ctrl-C ends the recording, keeps it
+            try:
                 client.sleep(duration)
+            except KeyboardInterrupt as exc:  # Ctrl-C ends the recording and keeps it; SIGTERM does not
+                if isinstance(exc, Terminated):
+                    raise
         else:
             assert shape is not None
             _move(client, robot, nav, shape, speed, mode)
@@ -93,12 +101,25 @@ def teach(
     finally:
         client.remove_listener(sample)
         nav.close()
-    path = recorder.path()
+    path = recorder.path() if len(recorder) >= 2 else None
     truth_error = None
     truth = nav.truth()
-    if truth is not None:
+    if truth is not None and path is not None:
         truth_error = math.hypot(path.x[-1] - truth[0], path.y[-1] - truth[1])
     return TeachResult(path, mode, elapsed, distance, truth_error)
+
+
+def check_recording(result: TeachResult) -> str | None:
+    """Why a recording is not a path worth writing (None: it is)."""
+    path = result.path
+    points = 0 if path is None else len(path)
+    length = 0.0 if path is None else path.length
+    if path is None or points < MIN_POINTS or length < MIN_LENGTH:
+        return (
+            f"recorded {points} points, {length:.2f} m in {result.duration:.1f} s: a path needs at least "
+            f"{MIN_POINTS} points and {MIN_LENGTH:g} m (did the robot move?)"
+        )
+    return None
 
 
 def _move(

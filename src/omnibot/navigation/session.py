@@ -17,7 +17,7 @@ from omnibot.control.paths.path import Path
 from omnibot.control.paths.profile import MotionLimits
 from omnibot.estimation.odometry import Pose2D
 from omnibot.estimation.slip import SlipParameters
-from omnibot.navigation.metrics import tracking_report
+from omnibot.navigation.metrics import Tolerances, judge, tracking_report
 from omnibot.navigation.runner import STANDSTILL, FollowRun, Navigator
 from omnibot.robot.description import RobotDescription
 
@@ -73,6 +73,8 @@ class FollowOptions:
     slip: SlipParameters | None = None
     """The floor's wheel slip (creep and distance scale) for the driven-wheel encoders, from
     ``omnibot calibrate``."""
+    tolerances: Tolerances = field(default_factory=Tolerances)
+    """What the run must achieve for its report to say ``completed``."""
 
 
 def follow_path(
@@ -99,7 +101,7 @@ def follow_path(
         run = nav.follow(path, follower)
     finally:
         nav.close()
-    report = tracking_report(run, MotionLimits.from_robot(robot, opts.speed))
+    report = judge(tracking_report(run, MotionLimits.from_robot(robot, opts.speed)), opts.tolerances)
     report["robot"] = robot.name
     report["rate_hz"] = opts.rate
     if opts.speed is not None:
@@ -130,6 +132,6 @@ def summary(report: dict[str, Any]) -> str:
         f"RMS {100 * report['rms_cross_track_m']:.2f} cm, max {100 * report['max_cross_track_m']:.2f} cm, "
         f"{report['duration_s']:.2f} s of minimum {report['min_time_s']:.2f} s "
         f"({report['time_ratio']:.2f}x), final error {100 * report['final_error_m']:.2f} cm"
-        + ("" if report["completed"] else ", NOT COMPLETED")
+        + ("" if report.get("completed", True) else ", NOT COMPLETED")
         + (f" [{report['source']}]" if not math.isnan(report["rms_cross_track_m"]) else "")
     )

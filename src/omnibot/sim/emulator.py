@@ -65,12 +65,18 @@ def run_pty_emulator(
 
 @contextmanager
 def spawn_pty_emulator(
-    robot: str, *, seed: int = 0, world: str | None = None, truth: Path | None = None
+    robot: str,
+    *,
+    seed: int = 0,
+    world: str | None = None,
+    truth: Path | None = None,
+    surface: str | None = None,
 ) -> Iterator[str]:
     """Run ``omnibot sim --pty`` as a child process and yield its device path; on exit SIGINT it,
     wait for it (killing it if it hangs) and close its pipes. LinkError if it does not start."""
     argv = [sys.executable, "-m", "omnibot", "sim", "--pty", "--robot", robot, "--seed", str(seed)]
     argv += ["--world", world] if world else []
+    argv += ["--surface", surface] if surface else []
     argv += ["--truth", str(truth)] if truth else []
     proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:

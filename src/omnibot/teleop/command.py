@@ -14,16 +14,11 @@ from typing import Any
 
 from omnibot.errors import ConfigError
 
-DEFAULT_PORT = "sim://omni4?world=room"
-
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--port", default=DEFAULT_PORT, help=f"link URL (default {DEFAULT_PORT}: the simulated robot)"
-    )
-    p.add_argument(
-        "--robot", help="preset or description file, for the limits (default: sim://'s preset, else omni4)"
-    )
+    from omnibot.cliargs import add_robot_options
+
+    add_robot_options(p, world="room", port_help="the simulated --robot, paced to the wall clock")
     group = p.add_mutually_exclusive_group()
     group.add_argument(
         "--joystick", action="store_true", help="read a pad through pygame (waits for one to be plugged)"
@@ -33,16 +28,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--config", metavar="FILE.yaml", help="teleop parameters for another pad (default: seed 003's)"
     )
     p.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (default: until Ctrl-C)")
-
-
-def robot_for(port: str, robot: str | None) -> str:
-    """The robot whose limits apply: ``--robot``, else the preset of a sim:// URL, else omni4."""
-    if robot:
-        return robot
-    from omnibot.transport.url import parse_link_url
-
-    base = parse_link_url(port)[-1]
-    return base.target if base.scheme == "sim" and base.target else "omni4"
 
 
 def _say(text: str) -> None:
@@ -75,7 +60,8 @@ def open_source(args: argparse.Namespace, config: Any, say: Callable[[str], None
 
 
 def run(args: argparse.Namespace) -> int:
-    from omnibot.client.client import RobotClient
+    from omnibot.cliargs import check_sim_options, sim_url
+    from omnibot.client.session import robot_session
     from omnibot.teleop.config import load_teleop_config
     from omnibot.teleop.keyboard import HELP
     from omnibot.teleop.loop import Teleop
@@ -83,12 +69,15 @@ def run(args: argparse.Namespace) -> int:
 
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
         raise ConfigError(f"expected a positive number of seconds, got {args.duration}", key="--duration")
+    check_sim_options(args)
     config = load_teleop_config(args.config)
-    robot = robot_for(args.port, args.robot)
+    url = sim_url(args)
     source = open_source(args, config, _say)
+    interrupted: KeyboardInterrupt | None = None
     with contextlib.ExitStack() as stack:
         stack.callback(source.close)
-        client = stack.enter_context(RobotClient.open(args.port, robot, timeout=max(0.2, config.vel_timeout)))
+        session = stack.enter_context(robot_session(url, args.robot, timeout=max(0.2, config.vel_timeout)))
+        client = session.client
         if hasattr(source, "__enter__"):
             stack.enter_context(source)
         device = sim_device(client.link)
@@ -102,10 +91,12 @@ def run(args: argparse.Namespace) -> int:
         _say(f"limits: {teleop.limits.speed:.2f} m/s, {teleop.limits.rate:.2f} rad/s")
         try:
             teleop.run(args.duration)  # stops the robot on the way out, Ctrl-C included
-        except KeyboardInterrupt:
-            _say("interrupted")
+        except KeyboardInterrupt as exc:  # the summary first, then the exit status says interrupted
+            interrupted = exc
         if device is not None:
             x, y, th = device.sim.pose
             _say(f"robot at x={x:.2f} m y={y:.2f} m heading={round(math.degrees(th))} deg")
         _say(f"sent {teleop.sent.vel} VEL, {teleop.sent.zero} zero VEL, {teleop.sent.errors} failed")
+    if interrupted is not None:
+        raise interrupted
     return 0

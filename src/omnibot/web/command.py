@@ -8,17 +8,18 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import sys
 import time
 
 from omnibot.errors import ConfigError
 
-DEFAULT_PORT = "sim://omni4?world=room"
 TOKEN_ENV = "OMNIBOT_DASHBOARD_TOKEN"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--port", default=DEFAULT_PORT, help=f"link URL of the robot (default {DEFAULT_PORT})")
-    p.add_argument("--robot", help="preset or description file (default: sim://'s preset, else omni4)")
+    from omnibot.cliargs import add_robot_options
+
+    add_robot_options(p, world="room", port_help="the simulated --robot, paced to the wall clock")
     p.add_argument(
         "--host", default="127.0.0.1", help="address to serve on (default 127.0.0.1: this machine only)"
     )
@@ -36,7 +37,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help=f"access token (default ${TOKEN_ENV}; required, and made up if not given, off loopback)",
     )
     p.add_argument(
-        "--world", help="room map to draw for a real robot: world name or YAML (sim:// shows its own)"
+        "--map",
+        metavar="NAME|FILE",
+        help="room map to draw for a real robot: world name or YAML (sim:// shows its own)",
     )
     p.add_argument(
         "--path", metavar="FILE.csv", help="a planned path to draw: x,y rows, or a path file (t,x,y,theta)"
@@ -55,9 +58,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from omnibot.cliargs import check_sim_options, sim_url
     from omnibot.navigation.webteach import PathTeacher
-    from omnibot.robot.description import load_robot
-    from omnibot.teleop.command import robot_for
+    from omnibot.robot.description import RobotDescription
     from omnibot.teleop.config import load_teleop_config
     from omnibot.web.dashboard import Dashboard
     from omnibot.web.scene import load_path
@@ -66,26 +69,36 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"expected a positive number of seconds, got {args.duration}", key="--duration")
     if not (math.isfinite(args.repeat_speed) and args.repeat_speed > 0):
         raise ConfigError(f"expected a positive speed in m/s, got {args.repeat_speed}", key="--repeat-speed")
+    room_map = args.map
+    if args.port and args.world is not None and room_map is None:  # --world was the map's old name
+        print(
+            "omnibot: warning: --world with --port is deprecated; use --map for the room map", file=sys.stderr
+        )
+        room_map, args.world = args.world, None
+    check_sim_options(args)
     config = load_teleop_config(args.config)
-    robot = load_robot(robot_for(args.port, args.robot))
-    teacher = PathTeacher(robot, period=config.period, speed=args.repeat_speed)
+    url = sim_url(args)
     path = load_path(args.path) if args.path else None
     token = args.token or os.environ.get(TOKEN_ENV) or None
+
+    def make_teach(robot: RobotDescription) -> PathTeacher:
+        return PathTeacher(robot, period=config.period, speed=args.repeat_speed)
+
     dash = Dashboard(
-        args.port,
-        robot,
+        url,
+        args.robot,
         host=args.host,
         http_port=args.http_port,
         token=token,
-        world=args.world,
+        world=room_map,
         path=path,
         config=config,
-        teach=teacher,
+        make_teach=make_teach,
         allow_hosts=args.allow_host,
     )
     dash.start()
     try:
-        print(f"omnibot dashboard for {args.port}: {dash.url}", flush=True)
+        print(f"omnibot dashboard for {url}: {dash.url}", flush=True)
         if dash.token and not args.token and not os.environ.get(TOKEN_ENV):
             print(
                 "  (an access token was made up because the server is reachable from other machines)",
@@ -95,8 +108,13 @@ def run(args: argparse.Namespace) -> int:
         end = math.inf if args.duration is None else time.monotonic() + args.duration
         while time.monotonic() < end and dash.link.alive:
             time.sleep(min(0.2, max(0.0, end - time.monotonic())))
+        lost = not dash.link.alive
     except KeyboardInterrupt:
         print("omnibot dashboard: stopping", flush=True)
+        raise
     finally:
         dash.stop()
+    if lost:
+        print("omnibot dashboard: the robot link ended", file=sys.stderr)
+        return 1
     return 0

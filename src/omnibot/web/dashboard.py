@@ -28,17 +28,17 @@ import secrets
 import socket
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from types import TracebackType
 from typing import Self
 
 import uvicorn
 
-from omnibot.client.client import RobotClient
+from omnibot.client.session import open_robot
 from omnibot.errors import ConfigError, OmnibotError
 from omnibot.estimation.odometry import Pose2D
-from omnibot.robot.description import RobotDescription, load_robot
+from omnibot.robot.description import RobotDescription
 from omnibot.sim.world import World, load_world
 from omnibot.teleop.config import TeleopConfig
 from omnibot.teleop.simlink import sim_device
@@ -97,13 +97,19 @@ class Dashboard:
         config: TeleopConfig | None = None,
         teach: TeachRepeat | None = None,
         allow_hosts: Sequence[str] = (),
+        make_teach: Callable[[RobotDescription], TeachRepeat] | None = None,
     ) -> None:
+        """``robot`` (a description, preset or file; None: the one the controller names) must be the
+        robot on the link; ``make_teach`` builds ``teach`` once the robot is known."""
         self.token = token = access_token(host, token)
         self.host = host
         HostPolicy.for_bind(host, 1, allow_hosts)  # a bad name fails here, before anything opens
-        description = self._robot(port_url, robot)
-        client = RobotClient.open(port_url, description, timeout=0.5)
+        session = open_robot(port_url, robot, timeout=0.5)
+        client, description = session.client, session.robot
         try:
+            mode = client.status().mode
+            if make_teach is not None:
+                teach = make_teach(description)
             device = sim_device(client.link)
             if world is not None:
                 the_world: World | None = world if isinstance(world, World) else load_world(world)
@@ -112,7 +118,12 @@ class Dashboard:
             # on a link without truth, odometry starts at the map's start pose (where the robot is put)
             start = the_world.start if device is None and the_world is not None else None
             self.link = RobotLink(
-                client, description, config, teach=teach, start=Pose2D(*start) if start else None
+                client,
+                description,
+                config,
+                teach=teach,
+                start=Pose2D(*start) if start else None,
+                mode=mode,
             )
             # a path file is drawn where following it from here would drive it; points as given
             points = path.placed(self.link.pose) if isinstance(path, PlannedPath) else path
@@ -139,14 +150,6 @@ class Dashboard:
             )
         )
         self._thread: threading.Thread | None = None
-
-    @staticmethod
-    def _robot(port_url: str, robot: RobotDescription | str | None) -> RobotDescription:
-        if isinstance(robot, RobotDescription):
-            return robot
-        from omnibot.teleop.command import robot_for
-
-        return load_robot(robot_for(port_url, robot))
 
     @property
     def url(self) -> str:

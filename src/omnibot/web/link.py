@@ -15,7 +15,8 @@ from the page has the teleop deadman: the page repeats its input while a key is 
 is dragged, and the robot stops (repeated zero VEL, then the VEL watchdog) when the input says
 "let go", when the page goes away, or when no input came for ``input_timeout``. The emergency stop
 sends STOP at the next period and ignores driving until the page sends ``resume``. On shutdown
-the link sends STOP and closes the client.
+the link leaves the controller as it was found (:func:`omnibot.client.session.leave`: STOP,
+telemetry off, its MODE back) and closes the client.
 """
 
 from __future__ import annotations
@@ -32,7 +33,8 @@ from typing import Any
 
 from omnibot.client.client import RobotClient
 from omnibot.client.events import ErrorEvent, Event, ResetEvent, WarnEvent
-from omnibot.errors import ControllerError, LinkError, OmnibotError
+from omnibot.client.session import leave
+from omnibot.errors import ControllerError, LinkError
 from omnibot.estimation.odometry import Pose2D
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription
@@ -88,8 +90,11 @@ class RobotLink:
         start: Pose2D | None = None,
         wall: Callable[[], float] = time.monotonic,
         sleep: Callable[[float], None] = time.sleep,
+        mode: int | None = None,
     ) -> None:
         self.client = client
+        self.mode = mode
+        """The MODE bits the controller was found in: put back on shutdown (None: text protocol only)."""
         self.robot = robot
         self.config = config or TeleopConfig()
         self.teach = teach
@@ -176,9 +181,7 @@ class RobotLink:
             log.exception("robot link failed")
             self._emit({"type": "log", "level": "error", "text": f"robot link stopped: {exc}"})
         finally:
-            with contextlib.suppress(OmnibotError):
-                client.stop()
-            client.close()
+            leave(client, self.mode)
 
     def setup(self) -> None:
         """Telemetry and sonars on (link thread; tests may call it directly with no thread)."""

@@ -1,0 +1,161 @@
+"""One grammar for every command that talks to a robot: ``--robot --port --seed --world --surface``.
+
+:func:`add_robot_options` declares them the same way on every command (same meaning, same
+defaults); :func:`sim_url` turns them into the ``sim://`` URL of the simulated robot a command
+drives when no ``--port`` is given. The defaults:
+
+* ``--robot``: the robot the controller names in its HELLO (``sim://PRESET`` names its preset);
+  with no ``--port`` the simulated robot is :data:`DEFAULT_ROBOT`. A ``--robot`` that names another
+  robot than the link's is refused (:func:`omnibot.client.session.robot_on_link`).
+* ``--port``: the simulated ``--robot`` (in lockstep, in-process; ``omnibot demo``: on a pty).
+* ``--seed``: :data:`DEFAULT_SEED`; ``--world``: ``empty`` unless a command needs walls (``demo``,
+  ``teleop``, ``dashboard``: ``room``); ``--surface``: the world's floor. These three shape the
+  simulated robot only: given with ``--port`` they are refused (put them in a ``sim://`` URL), so
+  nothing the user asked for is silently ignored.
+
+``--out`` is a directory wherever a command writes several files; a single output file is named for
+what it is (``record --path FILE``, ``calibrate --calibration FILE``). :class:`DeprecatedAlias` keeps
+old spellings working with a warning. ``--debug`` (every command) shows the traceback of an error.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from omnibot.errors import ConfigError
+
+DEFAULT_ROBOT = "omni4"
+DEFAULT_SEED = 1
+SIM_ONLY = ("seed", "world", "surface")
+
+
+class DeprecatedAlias(argparse.Action):
+    """An old spelling of an option: stores into the new one's ``dest`` and says it is deprecated."""
+
+    def __init__(self, option_strings: Sequence[str], dest: str, *, use: str, **kwargs: Any) -> None:
+        self.use = use
+        super().__init__(option_strings, dest, **kwargs)
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: Any,
+        option_string: str | None = None,
+    ) -> None:
+        print(f"omnibot: warning: {option_string} is deprecated; use {self.use}", file=sys.stderr)
+        setattr(namespace, self.dest, self.const if self.nargs == 0 else values)
+
+
+def add_debug_option(p: argparse.ArgumentParser) -> None:
+    """``--debug`` on a (sub)command; SUPPRESS keeps ``omnibot --debug CMD`` working too."""
+    p.add_argument(
+        "--debug", action="store_true", default=argparse.SUPPRESS, help="show the traceback of an error"
+    )
+
+
+def add_robot_options(
+    p: argparse.ArgumentParser,
+    *,
+    world: str = "empty",
+    port_help: str = "the simulated --robot in lockstep (sim://ROBOT?seed=...)",
+    surface_help: str = "",
+) -> None:
+    """``--robot --port --seed --world --surface`` with the shared meaning and defaults."""
+    p.add_argument(
+        "--robot",
+        metavar="PRESET|FILE",
+        help=f"the robot (default: the one the controller names; {DEFAULT_ROBOT} in the simulator); "
+        "it must be the robot on the link",
+    )
+    p.add_argument("--port", metavar="URL", help=f"link URL of the controller (default: {port_help})")
+    p.add_argument(
+        "--seed", type=int, metavar="N", help=f"simulator seed (default {DEFAULT_SEED}; not with --port)"
+    )
+    p.add_argument(
+        "--world",
+        metavar="NAME|FILE",
+        help=f"simulated world: empty, room, corridor or a YAML file (default {world}; not with --port)",
+    )
+    p.add_argument(
+        "--surface",
+        metavar="NAME",
+        help=surface_help
+        or "simulated floor: wood, carpet, concrete, linoleum (default: the world's; not with --port)",
+    )
+    p.set_defaults(default_world=world)
+
+
+def check_sim_options(args: argparse.Namespace, allowed: Sequence[str] = ()) -> None:
+    """With ``--port``, ``--seed/--world/--surface`` (those not in ``allowed``) are refused."""
+    if getattr(args, "port", None) is None:
+        return
+    given = [
+        f"--{name}" for name in SIM_ONLY if name not in allowed and getattr(args, name, None) is not None
+    ]
+    if given:
+        raise ConfigError(
+            f"{', '.join(given)} shape the simulated robot; with --port put them in a sim:// URL "
+            "(sim://omni4?seed=1&world=room&surface=wood)",
+            key=given[0],
+        )
+
+
+def check_writable(path: str | Path | None, flag: str) -> None:
+    """Refuse, before any robot moves, an output file that could not be written: its directory must
+    exist (or be makeable) and be writable, and it must not be a directory."""
+    if path is None:
+        return
+    target = Path(path)
+    if target.is_dir():
+        raise ConfigError(f"{target} is a directory; give the file to write", key=flag)
+    parent = target.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir() or not os.access(parent, os.W_OK):
+        raise ConfigError(f"cannot write {target}: {parent} is not a writable directory", key=flag)
+
+
+def seed_of(args: argparse.Namespace) -> int:
+    seed = getattr(args, "seed", None)
+    return DEFAULT_SEED if seed is None else int(seed)
+
+
+def world_of(args: argparse.Namespace) -> str:
+    world = getattr(args, "world", None)
+    return str(world if world is not None else getattr(args, "default_world", "empty"))
+
+
+def sim_robot(args: argparse.Namespace) -> str:
+    """The simulated robot when no ``--port`` is given."""
+    robot = getattr(args, "robot", None)
+    return str(robot) if robot else DEFAULT_ROBOT
+
+
+def sim_url(args: argparse.Namespace) -> str:
+    """``--port``, or the ``sim://`` URL of the simulated robot the options describe."""
+    if getattr(args, "port", None):
+        return str(args.port)
+    check_world(args)
+    query = f"seed={seed_of(args)}&world={world_of(args)}"
+    if getattr(args, "surface", None):
+        query += f"&surface={args.surface}"
+    return f"sim://{sim_robot(args)}?{query}"
+
+
+def check_world(args: argparse.Namespace) -> None:
+    """A bad ``--world`` or ``--surface`` is reported before anything starts."""
+    from omnibot.sim.surfaces import SURFACES
+    from omnibot.sim.world import load_world
+
+    surface = getattr(args, "surface", None)
+    if surface is not None and surface not in SURFACES:
+        raise ConfigError(
+            f"unknown surface {surface!r}; expected one of: {', '.join(SURFACES)}", key="--surface"
+        )
+    load_world(world_of(args))

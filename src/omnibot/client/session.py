@@ -1,0 +1,210 @@
+"""Leave the controller as you found it: one context manager around a command's use of a robot.
+
+::
+
+    with robot_session(url, "omni3") as s:     # open, HELLO: the robot on the link is the one asked
+        s.client.move(...)                     # for; STATUS: the MODE bits it was found in
+    # on every way out - the end, an error, Ctrl-C, SIGTERM (see :func:`terminate_cleanly`), the link
+    # dropping: STOP, telemetry off, MODE back to what it was (text protocol), the link closed
+
+:func:`robot_on_link` decides which robot a command drives: the one the controller names in its
+``HELLO`` (``sim://PRESET`` names its preset the same way). ``--robot`` may only name that same
+robot (a preset name, or a description file whose ``name`` is the controller's); a mismatch is a
+:class:`~omnibot.errors.ConfigError` of one line. :func:`guarded` gives the same exit to a client a
+command built itself (the lockstep simulator of ``follow``/``record``/``calibrate``).
+
+Cleanup never raises and never hangs: each command gets :data:`CLEANUP_TIMEOUT` s, and a link that
+is gone is just closed.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import threading
+from collections.abc import Iterator
+from dataclasses import dataclass
+from types import FrameType
+from typing import Literal
+
+from omnibot.client.client import DEFAULT_TIMEOUT, RobotClient
+from omnibot.client.commands import telem
+from omnibot.client.events import Telemetry
+from omnibot.client.limits import Limits
+from omnibot.client.views import Hello
+from omnibot.errors import ConfigError, LinkError, OmnibotError
+from omnibot.protocol import codes
+from omnibot.protocol.messages import Mode, Stop
+from omnibot.protocol.messages import Telem as TelemCommand
+from omnibot.robot.description import RobotDescription, load_robot, preset_names
+
+CLEANUP_TIMEOUT = 0.5
+"""Seconds (link clock) each cleanup command may wait for its reply."""
+
+StopPolicy = Literal["always", "on_error"]
+"""``always``: STOP on every way out; ``on_error``: only when the command did not end normally
+(``omnibot send`` leaves a MOVE it was asked to send running)."""
+RestorePolicy = Literal["mode", "protocol"]
+"""``mode``: the MODE bits found at the start come back; ``protocol``: only the text protocol
+(``omnibot send 'MODE,2'`` sets a mode on purpose)."""
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, turned into an exception so that every ``finally`` (and :func:`guarded`) runs."""
+
+
+@contextlib.contextmanager
+def terminate_cleanly() -> Iterator[None]:
+    """While inside, SIGTERM raises :class:`Terminated` in the main thread (no-op elsewhere)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def _raise(signum: int, frame: FrameType | None) -> None:
+        raise Terminated("SIGTERM")
+
+    previous = signal.signal(signal.SIGTERM, _raise)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def robot_on_link(name: str, requested: str | None, where: str) -> RobotDescription:
+    """The description of the robot the controller at ``where`` names ``name``; ``requested``
+    (``--robot``: a preset or a file) must describe that same robot."""
+    if requested is None:
+        if name in preset_names():
+            return load_robot(name)
+        raise ConfigError(
+            f"the controller on {where} is '{name}', which is not a preset: give its description file",
+            key="--robot",
+        )
+    robot = load_robot(requested)
+    if robot.name != name:
+        raise ConfigError(
+            f"{requested} is the robot '{robot.name}' but the controller on {where} is '{name}'",
+            key="--robot",
+        )
+    return robot
+
+
+def leave(client: RobotClient, mode: int | None, *, stop: bool = True, telemetry: bool = True) -> None:
+    """Put the controller back: STOP (if ``stop``), telemetry off (if ``telemetry``), MODE ``mode``
+    (None: only back to the text protocol), then close the link. Never raises."""
+    try:
+        if client.link.closed:
+            return
+        with contextlib.suppress(OmnibotError, OSError):
+            # replies still owed to the interrupted command would be taken for ours (text matching)
+            client.drain(CLEANUP_TIMEOUT)
+        commands: list[Stop | TelemCommand | Mode] = []
+        if stop:
+            commands.append(Stop())
+        if telemetry:
+            commands.append(telem(client.limits, 0.0))
+        if mode is not None:
+            commands.append(Mode(mode & ~codes.MODE_BINARY))
+        elif client.binary:
+            known = client.mode_bits if client.mode_bits is not None else codes.MODE_BINARY
+            commands.append(Mode(known & ~codes.MODE_BINARY))
+        for command in commands:
+            if client.link.closed:
+                break
+            with contextlib.suppress(OmnibotError, OSError):
+                client.execute(command, CLEANUP_TIMEOUT)
+    finally:
+        client.close()
+
+
+@contextlib.contextmanager
+def guarded(
+    client: RobotClient, *, stop: StopPolicy = "always", restore: RestorePolicy = "mode"
+) -> Iterator[RobotClient]:
+    """Run the body with ``client``; on every way out :func:`leave` the controller as it was found."""
+    try:
+        mode = client.status().mode if restore == "mode" else None
+    except BaseException:
+        client.close()
+        raise
+    seen = {"tel": False}
+
+    def saw(event: Telemetry) -> None:
+        seen["tel"] = True
+
+    client.on_telemetry(saw)
+    ended = False
+    try:
+        yield client
+        ended = True
+    finally:
+        client.remove_listener(saw)
+        leave(client, mode, stop=stop == "always" or not ended, telemetry=seen["tel"])
+
+
+@dataclass(frozen=True)
+class RobotSession:
+    """A command's robot: the client, the robot's description and the controller's HELLO."""
+
+    client: RobotClient
+    robot: RobotDescription
+    hello: Hello
+
+
+def open_robot(
+    url: str,
+    robot: str | RobotDescription | None = None,
+    *,
+    timeout: float | None = None,
+    reconnect: float | None = 0.0,
+) -> RobotSession:
+    """Open ``url`` and check that the robot on it is ``robot`` (None: take it from the link). A
+    link that cannot be opened, or no HELLO reply, is a ConfigError naming ``--port`` (the command
+    could not start: exit status 2). The caller closes the client (or :func:`guarded` does)."""
+    try:
+        client = RobotClient.open(
+            url, None, timeout=DEFAULT_TIMEOUT if timeout is None else timeout, reconnect=reconnect
+        )
+    except LinkError as exc:
+        raise ConfigError(f"cannot open {url}: {exc}", key="--port") from exc
+    try:
+        try:
+            hello = client.hello()
+        except LinkError as exc:
+            raise ConfigError(f"no controller answers on {url}: {exc}", key="--port") from exc
+        if isinstance(robot, RobotDescription):
+            if robot.name != hello.name:
+                raise ConfigError(
+                    f"the robot is '{robot.name}' but the controller on {url} is '{hello.name}'",
+                    key="--robot",
+                )
+            description = robot
+        else:
+            description = robot_on_link(hello.name, robot, url)
+        if hello.motors != description.n_wheels:
+            raise ConfigError(
+                f"the controller on {url} drives {hello.motors} motors, {description.name} has "
+                f"{description.n_wheels} wheels",
+                key="--robot",
+            )
+        client.limits = Limits.from_robot(description)
+    except BaseException:
+        client.close()
+        raise
+    return RobotSession(client, description, hello)
+
+
+@contextlib.contextmanager
+def robot_session(
+    url: str,
+    robot: str | RobotDescription | None = None,
+    *,
+    stop: StopPolicy = "always",
+    restore: RestorePolicy = "mode",
+    timeout: float | None = None,
+    reconnect: float | None = 0.0,
+) -> Iterator[RobotSession]:
+    """:func:`open_robot`, then :func:`guarded`: the controller is left as it was found."""
+    session = open_robot(url, robot, timeout=timeout, reconnect=reconnect)
+    with guarded(session.client, stop=stop, restore=restore):
+        yield session

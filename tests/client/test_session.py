@@ -1,0 +1,70 @@
+"""The session guard: the robot on the link, and the controller left as it was found."""
+
+from __future__ import annotations
+
+import os
+import signal
+import time
+
+import pytest
+
+from omnibot.client.client import RobotClient
+from omnibot.client.session import Terminated, guarded, leave, robot_on_link, robot_session, terminate_cleanly
+from omnibot.errors import ConfigError, ControllerError
+from omnibot.protocol import codes
+from omnibot.robot.description import PRESET_DIR
+from omnibot.teleop.simlink import sim_device
+
+
+def test_the_robot_is_the_one_on_the_link(tmp_path: object) -> None:
+    assert robot_on_link("omni3", None, "sim://omni3").name == "omni3"
+    assert robot_on_link("omni3", str(PRESET_DIR / "omni3.yaml"), "x").name == "omni3"
+    with pytest.raises(ConfigError, match="omni4 is the robot 'omni4' but the controller on x is 'omni3'"):
+        robot_on_link("omni3", "omni4", "x")
+    with pytest.raises(ConfigError, match="'bespoke', which is not a preset: give its description file"):
+        robot_on_link("bespoke", None, "x")
+
+
+def test_robot_session_takes_the_robot_from_hello_and_leaves_mode_and_protocol() -> None:
+    with robot_session("sim://mecanum4") as session:
+        client = session.client
+        device = sim_device(client.link)
+        assert device is not None
+        assert session.robot.name == "mecanum4" and session.hello.motors == 4
+        client.mode(closed_loop=True)
+        client.use_binary()
+        client.telemetry(0.02)
+        client.move(1.0, 0.3)
+    ctl = device.controller
+    assert client.link.closed
+    assert ctl.state == codes.STATE_IDLE and ctl.mode == 0 and not ctl.binary and ctl.telemetry.period == 0
+
+
+def test_guarded_stops_on_error_only_when_asked() -> None:
+    client = RobotClient.open("sim://omni4")
+    device = sim_device(client.link)
+    assert device is not None
+    with guarded(client, stop="on_error", restore="protocol"):
+        client.move(1.0, 0.3)
+    assert device.controller.state == codes.STATE_MOVING  # send's policy: a normal end keeps it moving
+    client = RobotClient.open("sim://omni4")
+    device = sim_device(client.link)
+    assert device is not None
+    with pytest.raises(ControllerError), guarded(client, stop="on_error", restore="protocol"):
+        client.move(1.0, 0.3)
+        raise ControllerError(36, "boom")
+    assert device.controller.state == codes.STATE_IDLE
+
+
+def test_leave_on_a_closed_link_does_nothing_and_never_raises() -> None:
+    client = RobotClient.open("sim://omni4")
+    client.close()
+    leave(client, 0)  # no exception
+
+
+def test_sigterm_becomes_terminated() -> None:
+    before = signal.getsignal(signal.SIGTERM)
+    with pytest.raises(Terminated), terminate_cleanly():
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(5)  # pragma: no cover - the handler raises before this ends
+    assert signal.getsignal(signal.SIGTERM) == before

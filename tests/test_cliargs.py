@@ -1,0 +1,41 @@
+"""The shared robot options: defaults, the sim:// URL they make, outputs checked early."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import pytest
+
+from omnibot.cliargs import add_robot_options, check_sim_options, check_writable, sim_url
+from omnibot.errors import ConfigError
+
+
+def parse(*argv: str, world: str = "empty") -> argparse.Namespace:
+    p = argparse.ArgumentParser()
+    add_robot_options(p, world=world)
+    return p.parse_args(list(argv))
+
+
+def test_defaults_make_the_simulated_robot() -> None:
+    assert sim_url(parse()) == "sim://omni4?seed=1&world=empty"
+    assert sim_url(parse("--robot", "omni3", "--seed", "4", "--surface", "carpet", world="room")) == (
+        "sim://omni3?seed=4&world=room&surface=carpet"
+    )
+    assert sim_url(parse("--port", "/dev/ttyUSB0")) == "/dev/ttyUSB0"
+
+
+def test_simulator_options_are_refused_with_a_port() -> None:
+    with pytest.raises(ConfigError, match="--seed, --world shape the simulated robot"):
+        check_sim_options(parse("--port", "sim://omni4", "--seed", "2", "--world", "room"))
+    check_sim_options(parse("--port", "sim://omni4", "--surface", "wood"), allowed=("surface",))
+
+
+def test_outputs_are_checked_before_anything_runs(tmp_path: Path) -> None:
+    check_writable(tmp_path / "new" / "deeper" / "x.csv", "--path")  # made later: fine
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    with pytest.raises(ConfigError, match="--path: cannot write"):
+        check_writable(blocker / "x.csv", "--path")
+    with pytest.raises(ConfigError, match="is a directory"):
+        check_writable(tmp_path, "--path")
