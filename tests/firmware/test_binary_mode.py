@@ -27,12 +27,12 @@ def run(rig: Rig, ms: int) -> None:
 def start(rig: Rig) -> None:
     """MODE,4 and the session-starting HELLO frame in one chunk, as a host would send them."""
     rig.hal.send("MODE,4\r\n")
-    rig.hal.rx += cmd(codes.HELLO, 1, 1, sync=True)
+    rig.hal.rx += cmd(codes.HELLO, 1, 2, sync=True)
     rig.ctrl.poll()
     out = rig.hal.take()
     assert out.startswith(b"OK\r\n")
     (p,) = packets(out[4:])
-    assert p.message == HelloReply(1, "omni4", 4) and p.seq == 1
+    assert p.message == HelloReply(2, "omni4", 4) and p.seq == 1
 
 
 def test_switch_and_hello() -> None:
