@@ -72,6 +72,7 @@ from omnibot.protocol.messages import (
 )
 from omnibot.protocol.messages import Hello as HelloCommand
 from omnibot.protocol.messages import Status as StatusCommand
+from omnibot.protocol.messages import Telemetry as TelemetryMessage
 from omnibot.robot.description import RobotDescription
 from omnibot.transport.base import Clock, Link
 
@@ -452,8 +453,8 @@ class RobotClient(TypedCalls):
                 self._reply_in_order(message, now)
         else:
             wire = self._wire
-            if isinstance(wire, BinaryWire) and item.seq:
-                kind = wire.receiver.classify(item.seq, item.sync)
+            if isinstance(wire, BinaryWire) and not isinstance(message, TelemetryMessage):
+                kind = wire.receiver.classify(item.seq, item.sync)  # seq 0: dropped
                 if kind != arq.OUT_OF_ORDER:
                     self._write(wire.ack(item.seq))
                 if kind != arq.NEW:
