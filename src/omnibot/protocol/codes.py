@@ -205,4 +205,4 @@ FRAME_MAX = 255  # bytes of a frame between its delimiters (the length byte L)
 SEQ_MAX = 255  # sequence numbers run 1..255 and wrap to 1; 0 = unsequenced (TEL only)
 WINDOW = 8  # frames a sender may have unacknowledged (8 keeps a 115200 line full with a 2 ms loop)
 RETRY_TIMEOUT_MS = 50
-RETRIES = 3  # retransmissions before giving up
+RETRIES = 10  # retransmissions before giving up (0.55 s): 1 % of bytes lost or corrupted never gets there
