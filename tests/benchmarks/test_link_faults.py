@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import json
+
+import pytest
+
 from benchmarks import link_faults
 
 
@@ -11,10 +15,15 @@ def test_every_command_has_its_own_parameters() -> None:
     assert link_faults.unvel((5, 5, 1, 100)) is None
 
 
-def test_quick_run() -> None:
-    outcomes = link_faults.run(200, kinds=("drop", "corrupt", "reorder"), rates=(0.01,))
+def test_quick_run(capsys: pytest.CaptureFixture[str]) -> None:
+    assert link_faults.main(["--quick", "--json"]) == 0  # non-zero if binary let anything through
+    outcomes = [link_faults.Outcome(**o) for o in json.loads(capsys.readouterr().out)]
+    assert {(o.protocol, o.kind) for o in outcomes} == {
+        (p, k) for p in ("text", "binary") for k in link_faults.KINDS
+    }
     for o in outcomes:
-        assert o.faults > 0, o
+        if o.kind != "stall":  # stalls are rare: 200 commands may meet none
+            assert o.faults > 0, o
         if o.protocol == "binary":
             assert (o.corrupted, o.lost_unseen, o.twice, o.false_failures) == (0, 0, 0, 0), o
     text_harm = sum(
@@ -22,3 +31,9 @@ def test_quick_run() -> None:
     )
     assert text_harm > 0  # the benchmark does see what a line without checks lets through
     assert "binary corrupt 1 %" in link_faults.report(outcomes)
+
+
+def test_bad_arguments(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit):
+        link_faults.main(["--commands", "0"])
+    assert "--commands must be at least 1" in capsys.readouterr().err
