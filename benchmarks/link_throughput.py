@@ -1,9 +1,12 @@
 """Protocol throughput on a 115200-baud line, text against binary, through the real firmware.
 
-Run: ``python -m benchmarks.link_throughput [--pty]``. By default the line is the in-process lockstep
-link (a UART paced at 115200 baud in both directions, simulated time, deterministic). With ``--pty``
-the same runs go through ``omnibot sim --pty`` in real time: a separate process, a pseudo-terminal
-paced to the baud rate, the firmware running in CPython.
+Run: ``python -m benchmarks.link_throughput [--pty] [--load N]``. By default the line is the
+in-process lockstep link (a UART paced at 115200 baud in both directions, simulated time,
+deterministic). With ``--pty`` the same runs go through ``omnibot sim --pty`` in real time: a
+separate process, a pseudo-terminal paced to the baud rate, the firmware running in CPython.
+``--load N`` runs N busy processes beside it (each a CPU-bound loop that ends on its own after
+LOAD_LIMIT_S, and is stopped when the runs end), to see whether a loaded host keeps the line full;
+it matters with ``--pty`` (lockstep time does not depend on the host's speed).
 
 1. Commands per second sustained: the host streams ``N`` commands as fast as the line and the
    protocol allow (text: no window, replies in order; binary: the ARQ window of docs/protocol.md)
@@ -19,6 +22,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import subprocess
+import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 
@@ -31,6 +36,8 @@ from omnibot.transport.lockstep import LockstepLink
 from omnibot.transport.url import open_link
 
 LINE_BYTES_PER_S = 115200 / 10
+LOAD_LIMIT_S = 600
+_BUSY = f"import time\nend = time.monotonic() + {LOAD_LIMIT_S}\nwhile time.monotonic() < end:\n    pass\n"
 VEL = Vel(40, 0, 0, 100)
 TEL_MASK = (
     codes.TEL_POWER
@@ -53,6 +60,20 @@ def open_line(pty: bool, seed: int = 1) -> Iterator[Link]:
     with spawn_pty_emulator("omni4", seed=seed) as path, open_link(f"serial://{path}") as link:
         drain(link, 0.2)
         yield link
+
+
+@contextmanager
+def busy_processes(n: int) -> Iterator[list[int]]:
+    """``n`` CPU-bound processes for the duration of the block (their PIDs); each also stops by
+    itself after LOAD_LIMIT_S."""
+    procs = [subprocess.Popen([sys.executable, "-c", _BUSY]) for _ in range(n)]
+    try:
+        yield [p.pid for p in procs]
+    finally:
+        for p in procs:
+            p.terminate()
+        for p in procs:
+            p.wait(timeout=10)
 
 
 def drain(link: Link, seconds: float) -> bytes:
@@ -153,6 +174,8 @@ def run(pty: bool, n: int = 2000) -> dict[str, object]:
         up_b, down_b, tel_b = closed_loop_load(link, binary_mode=True)
     return {
         "line": "pty emulator, real time" if pty else "lockstep, simulated time",
+        "binary_share_of_line": n / t_bin / (LINE_BYTES_PER_S / bin_len),
+        "text_share_of_line": n / t_text / (LINE_BYTES_PER_S / text_len),
         "text_command_bytes": text_len,
         "text_commands_per_s": n / t_text,
         "text_line_limit_per_s": LINE_BYTES_PER_S / text_len,
@@ -175,7 +198,7 @@ def report(r: dict[str, object]) -> str:
     line = LINE_BYTES_PER_S
     return "\n".join(
         [
-            f"line: {r['line']}, 115200 baud 8N1 = {line:,.0f} bytes/s each way",
+            f"line: {r['line']}, 115200 baud 8N1 = {line:,.0f} bytes/s each way, {r['load']} busy processes beside",
             f"VEL stream, text   ({r['text_command_bytes']} B): {r['text_commands_per_s']:7.1f} commands/s of "
             f"{r['text_line_limit_per_s']:7.1f} line limit = {pct(r['text_commands_per_s'], r['text_line_limit_per_s'])}",
             f"VEL stream, binary ({r['binary_command_bytes']} B): {r['binary_commands_per_s']:7.1f} commands/s of "
@@ -193,9 +216,14 @@ def report(r: dict[str, object]) -> str:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description="protocol throughput on a 115200-baud line")
     parser.add_argument("--pty", action="store_true", help="through the pty emulator in real time")
+    parser.add_argument("--load", type=int, default=0, metavar="N", help="N busy processes beside (0..8)")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
-    result = run(args.pty)
+    if not 0 <= args.load <= 8:
+        parser.error(f"--load must be 0..8, got {args.load}")
+    with busy_processes(args.load):
+        result = run(args.pty)
+    result["load"] = args.load
     print(json.dumps(result) if args.json else report(result))
     return 0
 

@@ -2,7 +2,15 @@
 
 from __future__ import annotations
 
-from benchmarks import firmware_command_time, link_throughput, odometry_drift, sim_speed, sonar_stop, tracking
+from benchmarks import (
+    firmware_command_time,
+    link_faults,
+    link_throughput,
+    odometry_drift,
+    sim_speed,
+    sonar_stop,
+    tracking,
+)
 
 
 def main() -> int:
@@ -11,6 +19,11 @@ def main() -> int:
         ("firmware time per command", lambda: firmware_command_time.main([])),
         ("line throughput, lockstep", lambda: link_throughput.main([])),
         ("line throughput, pty emulator", lambda: link_throughput.main(["--pty"])),
+        (
+            "line throughput, pty emulator, 2 busy processes beside",
+            lambda: link_throughput.main(["--pty", "--load", "2"]),
+        ),
+        ("link faults", lambda: link_faults.main([])),
         ("path tracking", lambda: tracking.main([])),
         ("odometry drift", lambda: odometry_drift.main([])),
         ("sonar stop", lambda: sonar_stop.main([])),

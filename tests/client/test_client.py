@@ -280,7 +280,7 @@ def test_binary_round_trip_on_sim(sim: RobotClient) -> None:
     sim.add_listener(rec)
     sim.mode(simulation=True)
     hello = sim.use_binary()
-    assert (hello.version, hello.name, hello.motors) == (1, "omni4", 4) and sim.binary
+    assert (hello.version, hello.name, hello.motors) == (2, "omni4", 4) and sim.binary
     assert sim.status().mode == codes.MODE_SIMULATION | codes.MODE_BINARY  # other bits kept
     pendings = [sim.submit(Move(10, 40, 0, 0)) for _ in range(6)]  # more than the window of 4
     for p in pendings:

@@ -17,16 +17,16 @@ from .conftest import ROBOT, Backend, RawLink
 
 def test_hello_format(raw: RawLink) -> None:
     raw.write(b"HELLO\n")
-    assert raw.line() == f"HELLO,1,{ROBOT},4\r\n".encode()
-    raw.write(b"hello,2,1\n")  # versions the host speaks: the highest shared one answers
-    assert raw.line() == f"HELLO,1,{ROBOT},4\r\n".encode()
+    assert raw.line() == f"HELLO,2,{ROBOT},4\r\n".encode()
+    raw.write(b"hello,3,2,1\n")  # versions the host speaks: the highest shared one answers
+    assert raw.line() == f"HELLO,2,{ROBOT},4\r\n".encode()
 
 
 def test_hello_versions(client: RobotClient) -> None:
-    hello = client.hello([1])
-    assert (hello.version, hello.name, hello.motors) == (1, ROBOT, 4)
+    hello = client.hello([2])
+    assert (hello.version, hello.name, hello.motors) == (2, ROBOT, 4)
     with pytest.raises(NotSupported) as info:
-        client.execute(Hello((2, 3)))
+        client.execute(Hello((1, 3)))
     assert info.value.code == codes.E_UNSUPPORTED
 
 
@@ -172,7 +172,7 @@ def test_binary_round_trip(client: RobotClient, backend: Backend) -> None:
     rec = EventRecorder()
     client.add_listener(rec)
     hello = client.use_binary()
-    assert client.binary and (hello.version, hello.name) == (1, ROBOT)
+    assert client.binary and (hello.version, hello.name) == (2, ROBOT)
     assert client.status().binary
     client.move(0.05, 0.4)
     client.wait_idle(timeout=3)  # IDLE arrives as an event frame, acknowledged

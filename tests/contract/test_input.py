@@ -32,7 +32,7 @@ def test_overlong_line_dropped_up_to_terminator(raw: RawLink, client: RobotClien
 
 def test_merged_commands_and_terminator_runs(raw: RawLink) -> None:
     raw.write(b"STATUS;HELLO;;\r\n\r\n;STATUS\r;\n")
-    assert raw.replies(3) == [STATUS_IDLE, b"HELLO,1,omni4,4\r\n", STATUS_IDLE]
+    assert raw.replies(3) == [STATUS_IDLE, b"HELLO,2,omni4,4\r\n", STATUS_IDLE]
     raw.nothing_more()  # empty commands get no reply
 
 

@@ -27,12 +27,12 @@ def run(rig: Rig, ms: int) -> None:
 def start(rig: Rig) -> None:
     """MODE,4 and the session-starting HELLO frame in one chunk, as a host would send them."""
     rig.hal.send("MODE,4\r\n")
-    rig.hal.rx += cmd(codes.HELLO, 1, 1, sync=True)
+    rig.hal.rx += cmd(codes.HELLO, 1, 2, sync=True)
     rig.ctrl.poll()
     out = rig.hal.take()
     assert out.startswith(b"OK\r\n")
     (p,) = packets(out[4:])
-    assert p.message == HelloReply(1, "omni4", 4) and p.seq == 1
+    assert p.message == HelloReply(2, "omni4", 4) and p.seq == 1
 
 
 def test_switch_and_hello() -> None:
@@ -128,3 +128,27 @@ def test_back_to_text_in_the_same_chunk() -> None:
     (p,) = packets(out[:end])
     assert p.message == Ok() and p.seq == 2
     assert out[end:] == b"STATUS,1,0,16,0;POWER,0,0,0,0;MOVE,0,0,0,0\r\n"
+
+
+def test_replayed_frames_run_once() -> None:
+    """Seq 0 is no sequence number: a command carrying it is dropped, SYNC or not; every other
+    command frame runs once however often it arrives (its kept reply answers the copies)."""
+    rig = make_rig()
+    start(rig)
+    hal = rig.hal
+    for sync in (False, True):
+        zero = cmd(codes.MOVE, 0, 100, 40, 0, 0, sync=sync)
+        hal.rx = zero + zero
+        rig.ctrl.poll()
+        assert hal.take() == b""
+        assert not rig.ctrl.executor.moving and len(rig.ctrl.queue) == 0
+    moves = [cmd(codes.MOVE, seq, 100, 40, 0, 0) for seq in range(2, 6)]
+    for i, move in enumerate(moves):
+        hal.rx = move + move + moves[max(i - 1, 0)] + move
+        rig.ctrl.poll()
+        assert {(p.message, p.seq) for p in packets(hal.take())} == {(Ok(), 2 + max(i - 1, 0)), (Ok(), 2 + i)}
+        assert len(rig.ctrl.queue) == i  # the first runs, the others wait: one each
+    hal.rx = b"".join(moves) * 2
+    rig.ctrl.poll()
+    assert [p.seq for p in packets(hal.take())] == [2, 3, 4, 5] * 2
+    assert len(rig.ctrl.queue) == 3

@@ -17,11 +17,11 @@ def err(code: int) -> str:
 
 
 def test_hello_on_reset_and_on_request(rig: Rig) -> None:
-    assert rig.hello == ["HELLO,1,omni4,4"]
-    assert rig.cmd("hello") == ["HELLO,1,omni4,4"]
-    assert rig.cmd("HELLO,1") == ["HELLO,1,omni4,4"]
-    assert rig.cmd("HELLO,2,1") == ["HELLO,1,omni4,4"]
-    assert rig.cmd("HELLO,2") == [err(codes.E_UNSUPPORTED)]
+    assert rig.hello == ["HELLO,2,omni4,4"]
+    assert rig.cmd("hello") == ["HELLO,2,omni4,4"]
+    assert rig.cmd("HELLO,2") == ["HELLO,2,omni4,4"]
+    assert rig.cmd("HELLO,3,2,1") == ["HELLO,2,omni4,4"]
+    assert rig.cmd("HELLO,1") == [err(codes.E_UNSUPPORTED)]
 
 
 def test_status_format(rig: Rig) -> None:
@@ -118,7 +118,7 @@ def test_line_too_long_then_next_command(rig: Rig) -> None:
 def test_one_reply_per_command_in_order_merged_and_split(rig: Rig) -> None:
     text = "HELLO;FOO;;\r\nMOVE,2,40,0,0;STATUS;MOVE,1\n"
     whole = rig.send(text)
-    assert whole[0] == "HELLO,1,omni4,4"
+    assert whole[0] == "HELLO,2,omni4,4"
     assert whole[1] == err(codes.E_UNKNOWN)
     assert whole[2] == "OK"
     assert whole[3].startswith("STATUS,0,0")
@@ -476,7 +476,7 @@ def test_closed_loop_needs_encoders() -> None:
 @pytest.mark.parametrize("robot", ["omni3", "mecanum4"])
 def test_other_presets_run_a_circle(robot: str) -> None:
     rig = make_rig(robot)
-    assert rig.hello == [f"HELLO,1,{robot},{rig.config['motors']}"]
+    assert rig.hello == [f"HELLO,2,{robot},{rig.config['motors']}"]
     v = max(int(rig.config["speed_min_cms"]) + 1, 20)
     assert rig.cmd(f"MOVE,2,{v},0,0;DELTA,0,0,10,0,36") == ["OK", "OK"]
     lines = rig.run(37 * 2000 // v + 10)

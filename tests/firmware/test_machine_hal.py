@@ -127,7 +127,7 @@ def test_controller_runs_on_machine_hal_across_tick_wrap(machine: Any) -> None:
     clock.us = (1 << 30) - 20000  # the tick counter wraps 20 ms into the run
     ctrl = Controller(hal, build_config(load_robot("omni4"), pins=PINS))
     uart: Any = hal._uart
-    assert uart.tx == b"HELLO,1,omni4,4\r\n"
+    assert uart.tx == b"HELLO,2,omni4,4\r\n"
     uart.rx = b"ROTATE,90,90\n"
     ctrl.poll()
     assert machine.pins[2].pwm.duty > 0

@@ -19,7 +19,7 @@ DRIVER = Path(__file__).with_name("mp_driver.py")
 MICROPYTHON = Path(sys.executable).with_name("micropython")
 
 SCRIPT = """
-> HELLO;hello,1;STATUS
+> HELLO;hello,2;STATUS
 > MOVE,2,40,0,0;DELTA,0,0,10,0,36;STATUS
 @ 100
 > STATUS;FOO;MOVE,1;MOVE,x,1,1,1;MOVE,99999,1,1,1;MOVE,500,40,0,0
@@ -78,7 +78,7 @@ def _hex(type_id: int, seq: int, *ints: int, sync: bool = False) -> str:
 BINARY_SCRIPT = "\n".join(
     [
         "> MODE,4",
-        _hex(codes.HELLO, 1, 1, sync=True),
+        _hex(codes.HELLO, 1, 2, sync=True),
         _hex(codes.MOVE, 2, 2, 40, 0, 0) + "00ff00" + _hex(codes.DELTA, 3, 0, 0, 10, 0, 3)[4:],
         _hex(codes.DELTA, 3, 0, 0, 10, 0, 3),
         _hex(codes.STATUS, 4),
@@ -128,7 +128,7 @@ def test_micropython_matches_cpython(tmp_path: Path, robot: str) -> None:
     out_cp = run([sys.executable, "-S"], stage, script)
     assert out_mp == out_cp
     lines = out_cp.splitlines()
-    assert lines[0] == f"0 HELLO,1,{robot},4"
+    assert lines[0] == f"0 HELLO,2,{robot},4"
     assert any(line.endswith(" IDLE") for line in lines)
     assert any(" TEL," in line for line in lines)
     assert any("ERROR,22," in line for line in lines)
@@ -147,7 +147,7 @@ def test_binary_mode_matches_cpython(tmp_path: Path) -> None:
     assert lines[1] == "0 OK"
     assert sum(" hex " in line for line in lines) >= 5
     assert lines[-3].endswith(b"\x00STATUS,1,0,16,0;POWER,0,0,0,0;MOVE,2,40,30,0\r\n".hex())
-    assert lines[-2] == "460 HELLO,1,omni4,4"
+    assert lines[-2] == "460 HELLO,2,omni4,4"
 
 
 def test_board_files_import_under_micropython(tmp_path: Path) -> None:

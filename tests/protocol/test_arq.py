@@ -87,7 +87,8 @@ def test_receiver_in_order_duplicate_and_out_of_order() -> None:
     assert rx.classify(13) == arq.OUT_OF_ORDER  # 12 is missing
     assert rx.classify(12) == arq.NEW
     assert rx.classify(13) == arq.NEW
-    assert rx.classify(0) == arq.NEW and rx.expected == 14  # unsequenced: no state
+    assert rx.classify(0) == arq.OUT_OF_ORDER and rx.expected == 14  # no seq: never run
+    assert rx.classify(0, sync=True) == arq.OUT_OF_ORDER and rx.expected == 14
     assert rx.classify(40, sync=True) == arq.NEW and rx.expected == 41
     assert rx.classify(40, sync=True) == arq.DUPLICATE  # a retransmitted SYNC frame
     rx.reset()

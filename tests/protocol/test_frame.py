@@ -17,22 +17,22 @@ from omnibot.protocol import codes, crc, frame
 @pytest.mark.parametrize(
     ("data", "value"),
     [
-        (b"123456789", 0x29B1),  # the catalogue check value of CRC-16/CCITT-FALSE
-        (b"", 0xFFFF),
-        (b"\x00", 0xE1F0),
-        (b"A", 0xB915),
+        (b"123456789", 0xCBF43926),  # the catalogue check value of CRC-32/ISO-HDLC
+        (b"", 0),
+        (b"\x00", 0xD202EF8D),
+        (b"A", 0xD3D99E8B),
     ],
 )
 def test_crc_known_answers(data: bytes, value: int) -> None:
-    assert crc.crc16(data) == value
-    assert crc.crc16_bitwise(data) == value
+    assert crc.crc32(data) == value
+    assert crc.crc32_bitwise(data) == value
 
 
-@given(st.binary(max_size=300), st.integers(0, 0xFFFF))
+@given(st.binary(max_size=300), st.integers(0, 0xFFFFFFFF))
 def test_crc_implementations_agree(data: bytes, init: int) -> None:
-    assert crc.crc16(data, init) == crc.crc16_bitwise(data, init)
+    assert crc.crc32(data, init) == crc.crc32_bitwise(data, init)
     half = len(data) // 2
-    assert crc.crc16(data[half:], crc.crc16(data[:half])) == crc.crc16(data)
+    assert crc.crc32(data[half:], crc.crc32(data[:half])) == crc.crc32(data)
 
 
 @pytest.mark.parametrize(
@@ -111,31 +111,49 @@ def test_fields_split_integers_and_text() -> None:
 def test_frame_layout() -> None:
     wire = frame.encode_frame(codes.MOVE, 1, bytes(frame.pack_ints([2, 40, 0, 0])))
     assert wire[0] == 0 and wire[-1] == 0 and 0 not in wire[1:-1]
-    raw = frame.cobs_decode(wire[1:-1])
-    assert raw[:6] == b"\x01\x01\x04\x50\x00\x00"
-    assert crc.crc16(raw[:-2]) == int.from_bytes(raw[-2:], "big")
-    fr = frame.parse_frame(wire[1:-1])
+    chunk = wire[1:-1]
+    assert chunk[1] == len(chunk) == 13  # L: the length between the delimiters
+    body, check = chunk[:-5], chunk[-5:]
+    assert frame.cobs_decode(body) == b"\x0d\x01\x01\x04\x50\x00\x00"
+    assert all(b & 0x80 for b in check) and check[-1] <= 0x8F
+    assert frame.check_value(chunk, len(body)) == crc.crc32(body)
+    fr = frame.parse_frame(chunk)
     assert (fr.type_id, fr.seq, fr.sync, fr.payload, fr.error) == (1, 1, False, b"\x04\x50\x00\x00", "")
     sync = frame.parse_frame(frame.encode_frame(codes.STOP, 9, sync=True)[1:-1])
     assert (sync.type_id, sync.seq, sync.sync) == (codes.STOP, 9, True)
 
 
+@given(st.integers(0, 0xFFFFFFFF))
+def test_check_bytes_round_trip(value: int) -> None:
+    data = frame.check_bytes(value)
+    assert len(data) == frame.CHECK_SIZE and min(data) >= 0x80
+    assert frame.check_value(data, 0) == value
+
+
 def test_frame_limits() -> None:
-    frame.encode_frame(codes.TEL, 0, b"\x01" * (codes.FRAME_MAX - 4))
+    longest = frame.encode_frame(codes.TEL, 0, b"\x01" * frame.PAYLOAD_MAX)
+    assert len(longest) == codes.FRAME_MAX + 2 and longest[2] == codes.FRAME_MAX
+    assert frame.parse_frame(longest[1:-1]).payload == b"\x01" * frame.PAYLOAD_MAX
     with pytest.raises(ValueError):
-        frame.encode_frame(codes.TEL, 0, b"\x01" * (codes.FRAME_MAX - 3))
+        frame.encode_frame(codes.TEL, 0, b"\x01" * (frame.PAYLOAD_MAX + 1))
     with pytest.raises(ValueError):
         frame.encode_frame(128, 0)
     with pytest.raises(ValueError):
         frame.encode_frame(1, 256)
 
 
+_OK = frame.encode_frame(codes.OK, 1)[1:-1]
+
+
 @pytest.mark.parametrize(
     ("chunk", "error"),
     [
         (b"\x03\x01\x02", "frame too short"),
-        (b"\x05\x01\x02\x03", "bad COBS"),
-        (frame.cobs_encode(b"\x01\x01\x00\x00"), "CRC mismatch"),
+        (_OK[:1] + b"\x0a" + _OK[2:], "length mismatch"),
+        (_OK[:-1] + b"\x7f", "bad check bytes"),
+        (_OK[:-1] + b"\x90", "bad check bytes"),
+        (_OK[:3] + b"\x21" + _OK[4:], "CRC mismatch"),
+        (b"\x05\x09\x01\x01" + frame.check_bytes(crc.crc32(b"\x05\x09\x01\x01")), "bad COBS"),
         (b"\x01" * 300, "frame too long"),
     ],
 )
@@ -176,7 +194,7 @@ def hx(b):
     return hexlify(b).decode()
 
 out = []
-out.append("%04x %04x" % (crc.crc16(b"123456789"), crc.crc16_bitwise(b"123456789")))
+out.append("%08x %08x" % (crc.crc32(b"123456789"), crc.crc32_bitwise(b"123456789")))
 move = frame.encode_message(codes.MOVE, 1, [2, 40, 0, 0])
 ok = frame.encode_message(codes.OK, 1)
 err = frame.encode_message(codes.ERROR_EVENT, 7, [23], b"unknown command", True)
@@ -230,5 +248,5 @@ def test_frame_layer_runs_the_same_under_micropython(tmp_path: Path) -> None:
         assert run.returncode == 0, run.stderr
     cpython, micro = (r.stdout for r in runs)
     assert micro == cpython
-    assert cpython.startswith("29b1 29b1\n")
-    assert "bad COBS" in cpython and "frame too long" in cpython
+    assert cpython.startswith("cbf43926 cbf43926\n")
+    assert "frame too short" in cpython and "frame too long" in cpython

@@ -25,7 +25,7 @@ def read_until(link: Link, marker: bytes, timeout: float = 5.0) -> bytes:
 def test_hello_at_power_up_and_a_move_moves_the_simulated_robot() -> None:
     device = SimDevice("omni4", seed=1)
     with LockstepLink(device) as link:
-        assert read_until(link, b"\r\n").startswith(b"HELLO,1,omni4,4\r\n")
+        assert read_until(link, b"\r\n").startswith(b"HELLO,2,omni4,4\r\n")
         t0 = time.perf_counter()
         link.write(b"MOVE,30,60,90,0;")
         out = read_until(link, b"IDLE\r\n")
@@ -54,7 +54,7 @@ def test_simulation_mode_reaches_no_motor() -> None:
 
 def test_sim_url_options_and_errors() -> None:
     with open_link("sim://omni3?seed=4&surface=carpet&world=room&baud=0") as link:
-        assert b"HELLO,1,omni3,3" in read_until(link, b"\r\n")
+        assert b"HELLO,2,omni3,3" in read_until(link, b"\r\n")
     with pytest.raises(ConfigError, match="did you mean"):
         open_link("sim://omni4?sead=1")
     with pytest.raises(ConfigError):

@@ -46,7 +46,7 @@ def test_pty_emulator_serves_the_firmware_and_writes_truth(tmp_path: Path) -> No
             while b"IDLE" not in out and time.monotonic() < deadline:
                 out += port.read(64)
         # the power-up HELLO may or may not reach us, depending on when the port was opened
-        assert out.removeprefix(b"HELLO,1,omni4,4\r\n") == b"HELLO,1,omni4,4\r\nOK\r\nIDLE\r\n"
+        assert out.removeprefix(b"HELLO,2,omni4,4\r\n") == b"HELLO,2,omni4,4\r\nOK\r\nIDLE\r\n"
         time.sleep(0.25)  # the truth file is flushed at least every 100 ms
         rows = list(csv.DictReader(truth.open()))
         assert rows and float(rows[-1]["y"]) > 0.1

@@ -113,3 +113,29 @@ def test_bad_arguments() -> None:
     with pytest.raises(ValueError, match="delay"):
         FaultLink(inner, delay=-1)
     inner.close()
+
+
+def test_any_positive_read_timeout_moves_lockstep_time() -> None:
+    """A wait left over by float rounding (1e-17 s) still reads the inner link, which steps a tick:
+    a caller looping until its deadline always sees time advance (RobotClient.sleep hung here)."""
+    with FaultLink(LockstepLink(EchoDevice(), baud=0)) as link:
+        before = link.clock.now()
+        assert link.read(timeout=1e-17) == b""
+        assert link.clock.now() > before
+
+
+def test_zero_timeout_read_returns_what_has_arrived() -> None:
+    with FaultLink(LockstepLink(EchoDevice(), baud=0)) as link:
+        link.write(b"ping\n")
+        link.clock.sleep(0.01)
+        assert link.read(timeout=0) == b"ping\n"
+
+
+@pytest.mark.parametrize("seconds", [0.05, 0.3])
+def test_client_sleep_on_a_faults_link_ends(seconds: float) -> None:
+    from omnibot.client import RobotClient
+
+    with RobotClient.open("faults+sim://omni4?seed=1", settle=0) as client:
+        start = client.clock.now()
+        client.sleep(seconds)
+        assert client.clock.now() == pytest.approx(start + seconds, abs=0.002)

@@ -29,11 +29,13 @@ Not thread-safe: use a client from one thread (listeners run in that thread, dur
 
 from __future__ import annotations
 
+import contextlib
 import math
 from collections.abc import Callable
 from types import TracebackType
 from typing import Self, TypeVar
 
+from omnibot.client import switch
 from omnibot.client.calls import TypedCalls
 from omnibot.client.errors import ControllerReset, controller_error
 from omnibot.client.events import (
@@ -72,6 +74,7 @@ from omnibot.protocol.messages import (
 )
 from omnibot.protocol.messages import Hello as HelloCommand
 from omnibot.protocol.messages import Status as StatusCommand
+from omnibot.protocol.messages import Telemetry as TelemetryMessage
 from omnibot.robot.description import RobotDescription
 from omnibot.transport.base import Clock, Link
 
@@ -199,7 +202,8 @@ class RobotClient(TypedCalls):
 
         The new link is read for ``settle`` seconds before the first command, so a controller's
         power-up ``HELLO`` (sim:// sends one at time 0) arrives as the greeting it is (a ResetEvent)
-        and is not taken for the reply to a ``HELLO`` the caller sends next."""
+        and is not taken for the reply to a ``HELLO`` the caller sends next. Without a greeting,
+        :meth:`find_protocol` runs: a controller left in binary mode is switched back to text."""
         from omnibot.transport.url import open_link, parse_link_url
 
         if robot is None:
@@ -211,6 +215,9 @@ class RobotClient(TypedCalls):
             client = cls(link, robot, **options)  # type: ignore[arg-type]
             if settle > 0:
                 client.sleep(settle)
+            if client.last_hello is None:  # no greeting: the controller may be in binary mode
+                with contextlib.suppress(LinkTimeout):  # nothing answers (yet): the first call says so
+                    client.find_protocol()
             return client
         except BaseException:
             link.close()
@@ -406,18 +413,21 @@ class RobotClient(TypedCalls):
 
     def use_binary(self) -> Hello:
         """Switch to the binary protocol (MODE with bit 2, keeping the other bits), start the
-        session with HELLO and return its reply (the protocol version in use)."""
-        if not self.binary:
-            self.drain()
-            mask = self.status().mode
-            self.execute(Mode(mask | codes.MODE_BINARY))
-        return self.hello(codes.VERSIONS)
+        session with HELLO and return its reply (the protocol version in use). Works over a noisy
+        line: each try is confirmed by a binary HELLO exchange (:mod:`omnibot.client.switch`)."""
+        return switch.to_binary(self)
 
     def use_text(self) -> None:
-        """Switch back to the text protocol (MODE with bit 2 clear, other bits kept)."""
-        if self.binary:
-            mask = self._mode if self._mode is not None else self.status().mode
-            self.execute(Mode(mask & ~codes.MODE_BINARY))
+        """Switch back to the text protocol (MODE with bit 2 clear, other bits kept); if the OK
+        is lost, a probe tells which protocol the controller speaks."""
+        switch.to_text(self)
+
+    def find_protocol(self) -> None:
+        """Ask the controller which protocol it speaks (a probe both protocols answer) and speak
+        it; a controller found in binary mode (left there by a client that was killed) is
+        switched back to text. Raises LinkTimeout if it never answers."""
+        if switch.find_protocol(self) is not None:
+            switch.to_text(self)
 
     # ------------------------------------------------------------------ input
 
@@ -452,8 +462,8 @@ class RobotClient(TypedCalls):
                 self._reply_in_order(message, now)
         else:
             wire = self._wire
-            if isinstance(wire, BinaryWire) and item.seq:
-                kind = wire.receiver.classify(item.seq, item.sync)
+            if isinstance(wire, BinaryWire) and not isinstance(message, TelemetryMessage):
+                kind = wire.receiver.classify(item.seq, item.sync)  # seq 0: dropped
                 if kind != arq.OUT_OF_ORDER:
                     self._write(wire.ack(item.seq))
                 if kind != arq.NEW:

@@ -1,7 +1,7 @@
 """Binary mode (MODE bit 2): frames over the same UART with sequence numbers, ACKs and retries.
 
 Uses the protocol package's MicroPython-safe layers as they are: :mod:`omnibot.protocol.frame`
-(COBS, CRC-16, varints) and :mod:`omnibot.protocol.arq` (window, retry, duplicate replies).
+(length, COBS, CRC-32, varints) and :mod:`omnibot.protocol.arq` (window, retry, duplicate replies).
 Replies carry the answered command's seq and are kept for duplicates; events get their own seq and
 are retransmitted until the host ACKs them (backlogged while the window is full); TEL has seq 0.
 """

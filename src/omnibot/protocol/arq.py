@@ -9,8 +9,8 @@ Both directions use the same rules (docs/protocol.md, "Sequence numbers, acknowl
 * Commands are acknowledged by their reply (same seq), events by an ACK frame (same seq).
 * The receiver (:class:`Receiver`) takes frames strictly in order: the expected seq is NEW
   (execute/deliver, then reply/ACK); one of the last ``window`` seqs is a DUPLICATE (re-send the
-  cached reply / re-ACK, never execute twice); anything else is OUT_OF_ORDER and dropped without an
-  answer, so the sender's retransmissions restore the order.
+  cached reply / re-ACK, never execute twice); anything else, seq 0 included, is OUT_OF_ORDER and
+  dropped without an answer, so the sender's retransmissions restore the order.
 * A SYNC frame that is not a duplicate is NEW whatever seq the receiver expected: the sender
   abandoned every earlier frame. STOP and HELLO are always sent SYNC; HELLO also resets the
   receiver (:meth:`Receiver.reset`) before it is classified, which starts a session.
@@ -149,9 +149,12 @@ class Receiver:
         self._replies = {}
 
     def classify(self, seq: int, sync: bool = False) -> int:
-        """NEW, DUPLICATE or OUT_OF_ORDER for an incoming frame; NEW advances the expected seq."""
+        """NEW, DUPLICATE or OUT_OF_ORDER for an incoming frame; NEW advances the expected seq.
+
+        Seq 0 is no sequence number (TEL, which is never classified): a command or event carrying
+        it is OUT_OF_ORDER, so a replayed frame can never run twice."""
         if seq == 0:
-            return NEW
+            return OUT_OF_ORDER
         if self.expected:
             back = seq_back(self.expected, seq)
             if 0 < back <= self.window:

@@ -1,18 +1,20 @@
 """Binary codec (docs/protocol.md, "Binary protocol"): messages <-> frames, no I/O.
 
-The frame layer (COBS, CRC, varints) is :mod:`omnibot.protocol.frame`, shared with the firmware.
-A message travels as its type id and its ``params()`` as zigzag varints; ERROR, WARN and the HELLO
-reply add their text after the integers::
+The frame layer (length, COBS, CRC-32, varints) is :mod:`omnibot.protocol.frame`, shared with the
+firmware. A message travels as its type id and its ``params()`` as zigzag varints; ERROR, WARN and
+the HELLO reply add their text after the integers::
 
-    0x00 | COBS( [S|type] [seq] [varint p1] ... [varint pn] [text ...] [CRC hi] [CRC lo] ) | 0x00
+    00 | COBS( L | S+type | seq | varint p1 ... varint pn | text ... ) | 5 check bytes | 00
 
-    MOVE,2,40,0,0 seq 1:  00 | 05 01 01 04 50 01 03 75 DE | 00    (11 bytes; text 14)
-                  frame:       01 01 04 50 00 00 75 DE
-                               type 01, seq 01, 2 -> 04, 40 -> 50, 0 -> 00, 0 -> 00, CRC 75DE
-    OK to seq 1:          00 | 05 20 01 0B C8 | 00                 (7 bytes)
+    MOVE,2,40,0,0 seq 1:  00 | 06 0d 01 01 04 50 01 01 | 8b ea 93 cb 8b | 00     (15 bytes; text 14)
+          COBS decoded:        0d 01 01 04 50 00 00
+                               L=13, type 01, seq 01, 2 -> 04, 40 -> 50, 0 -> 00, 0 -> 00
+    OK to seq 1:          00 | 04 09 20 01 | f0 cf d1 9b 84 | 00                     (11 bytes)
 
-seq: commands and events carry their own (1..255), a reply the seq of the command it answers, an
-ACK the seq of the event it acknowledges, TEL 0. :mod:`omnibot.protocol.arq` runs the retries.
+L is the frame's length between the delimiters; the check bytes carry the CRC-32 of the bytes
+before them as sent, 7 bits a byte. seq: commands and events carry their own (1..255), a reply the
+seq of the command it answers, an ACK the seq of the event it acknowledges, TEL 0.
+:mod:`omnibot.protocol.arq` runs the retries.
 """
 
 from __future__ import annotations

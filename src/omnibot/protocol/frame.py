@@ -1,33 +1,45 @@
-"""Binary frame layer: COBS framing, CRC-16, varint payloads (MicroPython-safe, bytes only).
+"""Binary frame layer: length, COBS framing, CRC-32, varint payloads (MicroPython-safe, bytes only).
 
-Layout on the wire (docs/protocol.md, "Binary protocol")::
+A frame on the wire (docs/protocol.md, "Frame"; protocol version 2)::
 
-    0x00 | COBS( type | seq | payload ... | CRC hi | CRC lo ) | 0x00
+    00 | COBS( L | S+type | seq | payload ... ) | K0 K1 K2 K3 K4 | 00
+         '--------- body: L - 5 bytes --------'  '- check, 5 -'
 
-    decoded frame, 4..254 bytes:
-    +-+-------+--------+---------- ... ----------+--------+--------+
-    |S| type  |  seq   | payload, 0..250 bytes    | CRC hi | CRC lo |
-    +-+-------+--------+---------- ... ----------+--------+--------+
-     bit 7 of the type byte (S) = SYNC: the sender abandoned every earlier frame
-     seq: 1..255 (0 = unsequenced); CRC-16/CCITT-FALSE over type .. payload, big-endian
-     payload: the message's integers as zigzag LEB128 varints, then (ERROR, WARN and the HELLO
-     reply only, after codes.TEXT_AFTER[type] integers) ASCII text up to the CRC
+    L        the frame's length on the wire between its two 00 delimiters (9..255); never 00, so
+             COBS copies it unchanged: it is always the frame's second byte
+    S+type   bit 7 (S) = SYNC: the sender abandoned every earlier frame; bits 0-6 the message type
+    seq      1..255 for commands, events, their replies and ACKs; 0 only in TEL
+    payload  the message's integers as zigzag LEB128 varints, then (ERROR, WARN and the HELLO
+             reply only, after codes.TEXT_AFTER[type] integers) ASCII text; 0..246 bytes
+    K0..K4   CRC-32 of the body *as sent* (the COBS bytes, L included), 7 bits a byte, low bits
+             first, bit 7 of each set so none is 00: K4 carries the top 4 bits (0x80..0x8F)
 
-COBS (Consistent Overhead Byte Stuffing) removes every 0x00 from the frame, so 0x00 only ever
-delimits frames: a receiver that lost track drops bytes up to the next 0x00 and is in step again.
-Each frame is sent between two delimiters, so garbage before a frame never spoils it; back-to-back
-frames give empty frames between delimiters, which are skipped.
+COBS (Consistent Overhead Byte Stuffing) removes every 00 from the body, so 00 only ever delimits
+frames: garbage ends at the next 00 and the frame after it, which starts with its own 00, is intact.
+
+What each part catches. The CRC covers exactly the bytes the wire carries between the delimiters
+(check bytes aside), COBS code bytes included, so an error that leaves the delimiters in place is
+an error of as many bits in the CRC's input and every one of 1 to 4 bits is detected (Hamming
+distance 5 at these lengths, see :mod:`omnibot.protocol.crc`); a flipped bit 7 of a check byte is
+seen at once. An error that cuts a frame (a byte lost, a byte turned into 00) or joins it to
+what follows (a delimiter lost or changed) changes its length and no longer matches L, nor
+usually the COBS block chain or the check bytes' bit 7; what is left for the CRC passes 1 time in
+2^32. tests/protocol/test_frame_errors.py tries every 1- and 2-bit error, byte drop and truncation
+of a frame set.
 
 Plain functions and one small class; no typing, dataclasses or struct at run time, so the firmware
 runs this very module on a board.
 """
 
 from omnibot.protocol import codes
-from omnibot.protocol.crc import crc16
+from omnibot.protocol.crc import crc32
 
 DELIMITER = b"\x00"
-MIN_SIZE = 4  # type, seq, CRC
-ENCODED_MAX = codes.FRAME_MAX + 2  # COBS adds at most 2 bytes to a frame of <= 254 bytes
+CHECK_SIZE = 5  # CRC-32 in 5 bytes of 7 bits
+OVERHEAD = 9  # COBS code byte, L, type, seq, check bytes
+MIN_SIZE = OVERHEAD  # a frame without payload, delimiters excluded
+ENCODED_MAX = codes.FRAME_MAX  # the longest frame between its delimiters
+PAYLOAD_MAX = codes.FRAME_MAX - OVERHEAD
 VARINT_BYTES_MAX = 5  # zigzag varints of up to 35 bits (signed 32-bit counters fit)
 
 
@@ -149,20 +161,46 @@ def unpack_fields(type_id: int, payload: bytes) -> "tuple[list[int], bytes]":
 
 
 # --- frames -----------------------------------------------------------------------------------------
+def check_bytes(crc: int) -> bytes:
+    """The 5 check bytes of a CRC-32: 7 bits each, low bits first, bit 7 set (never 00)."""
+    return bytes(
+        (
+            0x80 | (crc & 0x7F),
+            0x80 | ((crc >> 7) & 0x7F),
+            0x80 | ((crc >> 14) & 0x7F),
+            0x80 | ((crc >> 21) & 0x7F),
+            0x80 | (crc >> 28),
+        )
+    )
+
+
+def check_value(data: bytes, start: int) -> int:
+    """The CRC-32 in the 5 check bytes at ``data[start:]``, or -1 if they are not check bytes."""
+    crc = 0
+    shift = 0
+    for i in range(start, start + CHECK_SIZE):
+        byte = data[i]
+        if byte < 0x80:
+            return -1
+        crc |= (byte & 0x7F) << shift
+        shift += 7
+    return -1 if crc >> 32 else crc
+
+
 def encode_frame(type_id: int, seq: int, payload: bytes = b"", sync: bool = False) -> bytes:
     """A complete frame on the wire, delimiters included; raises ValueError if it does not fit."""
     if not 0 <= type_id <= codes.FRAME_TYPE_MASK or not 0 <= seq <= codes.SEQ_MAX:
         raise ValueError("type or seq out of range")
+    size = len(payload) + OVERHEAD
+    if size > codes.FRAME_MAX:
+        raise ValueError("frame too long")
     raw = bytearray()
+    raw.append(size)
     raw.append((type_id | codes.FRAME_SYNC) if sync else type_id)
     raw.append(seq)
     raw.extend(payload)
-    if len(raw) + 2 > codes.FRAME_MAX:
-        raise ValueError("frame too long")
-    crc = crc16(bytes(raw))
-    raw.append(crc >> 8)
-    raw.append(crc & 0xFF)
-    return DELIMITER + cobs_encode(bytes(raw)) + DELIMITER
+    body = cobs_encode(bytes(raw))  # len(raw) + 1 bytes: raw is shorter than one 254-byte block
+    return DELIMITER + body + check_bytes(crc32(body)) + DELIMITER
 
 
 def encode_message(
@@ -177,20 +215,29 @@ def encode_message(
 
 
 def parse_frame(chunk: bytes) -> Frame:
-    """The frame in one COBS chunk (the bytes between two delimiters), or an error Frame."""
-    if len(chunk) > ENCODED_MAX:
+    """The frame in one chunk (the bytes between two delimiters), or an error Frame."""
+    n = len(chunk)
+    if n > ENCODED_MAX:
         return Frame(-1, 0, False, chunk[:ENCODED_MAX], "frame too long")
+    if n < MIN_SIZE:
+        return Frame(-1, 0, False, chunk, "frame too short")
+    if chunk[1] != n:
+        return Frame(-1, 0, False, chunk, "length mismatch")
+    end = n - CHECK_SIZE
+    crc = check_value(chunk, end)
+    if crc < 0:
+        return Frame(-1, 0, False, chunk, "bad check bytes")
+    body = chunk[:end]
+    if crc32(body) != crc:
+        return Frame(-1, 0, False, chunk, "CRC mismatch")
     try:
-        raw = cobs_decode(chunk)
+        raw = cobs_decode(body)
     except ValueError:
         return Frame(-1, 0, False, chunk, "bad COBS")
-    if len(raw) < MIN_SIZE:
-        return Frame(-1, 0, False, chunk, "frame too short")
-    body = raw[:-2]
-    if crc16(body) != (raw[-2] << 8) | raw[-1]:
-        return Frame(-1, 0, False, chunk, "CRC mismatch")
-    head = body[0]
-    return Frame(head & codes.FRAME_TYPE_MASK, body[1], bool(head & codes.FRAME_SYNC), body[2:])
+    if len(raw) != end - 1 or raw[0] != n:
+        return Frame(-1, 0, False, chunk, "length mismatch")
+    head = raw[1]
+    return Frame(head & codes.FRAME_TYPE_MASK, raw[2], bool(head & codes.FRAME_SYNC), raw[3:])
 
 
 def decode(buf: bytes) -> "tuple[int, Frame | None]":

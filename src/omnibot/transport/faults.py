@@ -8,7 +8,9 @@ only on the seed and n, not on how the stream was cut into reads and writes.
 Delay: bytes are held ``delay + U(0, jitter)`` seconds on the link's clock (order kept) before they
 go on. Delayed writes are sent from within later ``read``/``write``/``clock.sleep`` calls; received
 bytes are timed from when this wrapper reads them from the inner link, so the delay is a minimum.
-Works on every link; on a lockstep link all of it happens in simulated time.
+Works on every link; on a lockstep link all of it happens in simulated time. Every ``read`` asks
+the inner link at least once with what is left of its timeout, however small: a lockstep link then
+moves on a tick, as it does for any positive wait, so a caller's wait loop always sees time advance.
 """
 
 from __future__ import annotations
@@ -173,17 +175,19 @@ class FaultLink(Link):
     def _read(self, max_bytes: int, timeout: float | None) -> bytes:
         clock: Clock = self.inner.clock
         deadline = None if timeout is None else clock.now() + timeout
+        asked = False  # the inner link has been read once: a wait of any length then ends
         while True:
             self.pump()
             now = clock.now()
             data = self.rx.pop_due(now, max_bytes)
             if data:
                 return data
-            if deadline is not None and now >= deadline - _EPS:
+            if asked and deadline is not None and now >= deadline - _EPS:
                 return b""
             times = [t for t in (deadline, self.tx.next_release(), self.rx.next_release()) if t is not None]
             wait = max(0.0, min(times) - now) if times else None
             got = self.inner.read(max_bytes, wait)
+            asked = True
             if got:
                 self.rx.push(clock.now(), self.rx.mangle(got))
 

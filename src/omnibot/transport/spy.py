@@ -5,7 +5,7 @@ stream or file. Timestamps come from the link's clock, relative to when the spy 
 trace of a lockstep link shows simulated time and is the same on every run::
 
     0.001000 TX   0000  48 45 4C 4C 4F 0A                                 HELLO.
-    0.004000 RX   0000  48 45 4C 4C 4F 2C 31 2C 6F 6D 6E 69 34 2C 34 0D  HELLO,1,omni4,4.
+    0.004000 RX   0000  48 45 4C 4C 4F 2C 32 2C 6F 6D 6E 69 34 2C 34 0D  HELLO,2,omni4,4.
     0.004000 RX   0010  0A                                                .
     0.104000 RX   <timeout>
     0.105000 ERR  serial port /dev/ttyUSB0 failed: ...

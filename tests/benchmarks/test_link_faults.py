@@ -1,0 +1,39 @@
+"""Smoke test of the link-fault benchmark: it runs, it sees what text suffers, binary suffers none."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from benchmarks import link_faults
+
+
+def test_every_command_has_its_own_parameters() -> None:
+    ks = [0, 1, 60, 61, 3720, 3721, 100_000, 3_348_899]
+    assert [link_faults.unvel(link_faults.vel(k).params()) for k in ks] == ks
+    assert link_faults.unvel((5, 5, 1, 100)) is None
+
+
+def test_quick_run(capsys: pytest.CaptureFixture[str]) -> None:
+    assert link_faults.main(["--quick", "--json"]) == 0  # non-zero if binary let anything through
+    outcomes = [link_faults.Outcome(**o) for o in json.loads(capsys.readouterr().out)]
+    assert {(o.protocol, o.kind) for o in outcomes} == {
+        (p, k) for p in ("text", "binary") for k in link_faults.KINDS
+    }
+    for o in outcomes:
+        if o.kind != "stall":  # stalls are rare: 200 commands may meet none
+            assert o.faults > 0, o
+        if o.protocol == "binary":
+            assert (o.corrupted, o.lost_unseen, o.twice, o.false_failures) == (0, 0, 0, 0), o
+    text_harm = sum(
+        o.corrupted + o.lost_unseen + o.twice + o.false_failures for o in outcomes if o.protocol == "text"
+    )
+    assert text_harm > 0  # the benchmark does see what a line without checks lets through
+    assert "binary corrupt 1 %" in link_faults.report(outcomes)
+
+
+def test_bad_arguments(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit):
+        link_faults.main(["--commands", "0"])
+    assert "--commands must be at least 1" in capsys.readouterr().err

@@ -1,0 +1,124 @@
+"""Protocol switching and discovery (client/switch.py), on clean and on noisy sim:// lines."""
+
+from __future__ import annotations
+
+import pytest
+
+from omnibot.client import RobotClient
+from omnibot.errors import LinkTimeout, ProtocolError
+from omnibot.firmware.controller import Controller
+from omnibot.protocol import codes
+from omnibot.sim.device import SimDevice
+from omnibot.transport import FaultLink, LockstepLink
+from omnibot.transport.base import Link
+
+NOISY = "drop=0.01&corrupt=0.01"  # 1 % of the bytes lost and 1 % corrupted, each way
+
+
+def firmware(client: RobotClient) -> Controller:
+    """The controller behind a (possibly fault-wrapped) sim:// client: the truth to check against."""
+    link: Link = client.link
+    while isinstance(link, FaultLink):
+        link = link.inner
+    assert isinstance(link, LockstepLink) and isinstance(link.device, SimDevice)
+    return link.device.controller
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_switching_works_on_a_noisy_line(seed: int) -> None:
+    """At 1 % faults each way the switch used to fail 10 times in 12 (issue 12)."""
+    with RobotClient.open(f"faults+sim://omni4?faults.seed={seed}&{NOISY}") as client:
+        ctrl = firmware(client)
+        ctrl.executor.set_mode(codes.MODE_SIMULATION)  # another bit, which the switch must keep
+        hello = client.use_binary()
+        assert hello.version == codes.PROTOCOL_VERSION and client.binary
+        assert ctrl.binary and ctrl.mode == codes.MODE_SIMULATION | codes.MODE_BINARY
+        assert client.status().binary
+        client.use_text()
+        assert not client.binary and not ctrl.binary and ctrl.mode == codes.MODE_SIMULATION
+
+
+def test_a_corrupted_mode_line_is_put_right_in_binary() -> None:
+    """MODE,4 with one bit flipped can read MODE,5 (simulation + binary): the switch confirms
+    the bits with a binary STATUS and sets them again."""
+    with RobotClient.open("sim://omni4?seed=1") as client:
+        ctrl = firmware(client)
+        wire = client.link
+        real_write = wire._write
+        first = [True]
+
+        def corrupt_mode(data: bytes) -> None:
+            if first[0] and data.startswith(b"MODE,4"):
+                first[0] = False
+                data = b"MODE,5" + data[6:]
+            real_write(data)
+
+        wire._write = corrupt_mode  # type: ignore[method-assign]
+        client.use_binary()
+        assert not first[0]
+        assert ctrl.mode == codes.MODE_BINARY and client.mode_bits == codes.MODE_BINARY
+
+
+@pytest.mark.parametrize("noise", ["", NOISY])
+def test_a_controller_left_in_binary_is_found_and_put_back_to_text(
+    noise: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A client killed in binary mode (e.g. by ``record``) leaves the controller there; the next
+    client that connects (and sees no greeting) finds it in binary and switches it back."""
+    device = SimDevice("omni4", seed=1)
+    link: Link = LockstepLink(device)
+    if noise:
+        link = FaultLink(link, drop=0.01, corrupt=0.01, seed=5)
+    first = RobotClient(link, "omni4")
+    first.sleep(0.05)  # the greeting
+    first.use_binary()
+    assert device.controller.binary
+    # the first client dies without use_text(); the next one opens the same line
+    monkeypatch.setattr("omnibot.transport.url.open_link", lambda url: link)
+    second = RobotClient.open("sim://omni4", settle=0.05)
+    assert not second.binary and not device.controller.binary
+    assert second.last_hello is not None and second.last_hello.name == "omni4"
+    assert not second.status().binary
+    second.close()
+
+
+def test_find_protocol_on_a_text_controller_reads_its_error_lines() -> None:
+    with RobotClient.open("sim://omni4?seed=1") as client:
+        client.find_protocol()
+        assert not client.binary
+        assert client.status().idle  # no ERROR line for the probe is left to be taken as a reply
+        assert client.outstanding == []
+
+
+def test_a_silent_line_times_out() -> None:
+    with RobotClient(LockstepLink(_Mute()), "omni4") as client:
+        with pytest.raises(LinkTimeout, match="none of"):
+            client.find_protocol()
+        with pytest.raises(LinkTimeout):
+            client.use_binary()
+
+
+def test_binary_needs_a_version_2_controller() -> None:
+    with RobotClient.open("sim://omni4?seed=1") as client:
+        assert client.last_hello is not None
+        client.last_hello = type(client.last_hello)(1, "old", 4)
+        with pytest.raises(ProtocolError, match="version 1"):
+            client.use_binary()
+
+
+class _Mute:
+    """A LockstepDevice that never answers."""
+
+    tick = 0.001
+
+    def __init__(self) -> None:
+        self.time = 0.0
+
+    def receive(self, data: bytes) -> None:
+        pass
+
+    def step(self) -> None:
+        self.time += self.tick
+
+    def transmit(self) -> bytes:
+        return b""
