@@ -9,7 +9,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import math
-import sys
 from collections.abc import Callable, Iterator
 from contextlib import AbstractContextManager, contextmanager
 from dataclasses import replace
@@ -19,8 +18,8 @@ from typing import TYPE_CHECKING
 from omnibot.errors import ConfigError
 
 if TYPE_CHECKING:
-    from omnibot.calibration.experiments import Progress
     from omnibot.client.client import RobotClient
+    from omnibot.progress import Progress
     from omnibot.robot.description import RobotDescription
 
 SIM_SURFACES = ("wood", "carpet")
@@ -122,13 +121,10 @@ def _courses(text: str | None) -> tuple[float, ...] | None:
 
 @contextmanager
 def tqdm_progress(desc: str, total: int) -> Iterator[Progress | None]:
-    """A tqdm bar on stderr (hidden when stderr is not a terminal)."""
-    from tqdm import tqdm
+    """A tqdm bar of runs on stderr (hidden when stderr is not a terminal)."""
+    from omnibot.progress import progress_bar
 
-    class Bar(tqdm):  # type: ignore[type-arg]
-        monitor_interval = 0  # no monitor thread left behind
-
-    with Bar(total=total or None, desc=desc, unit="run", disable=None, file=sys.stderr, leave=True) as bar:
+    with progress_bar(desc, total, unit="run") as bar:
         yield bar
 
 

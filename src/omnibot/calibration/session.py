@@ -25,7 +25,6 @@ from typing import Any
 from omnibot.calibration.accuracy import AccuracyPlan, AccuracyRow, reach_speed, run_accuracy
 from omnibot.calibration.experiments import (
     Plan,
-    Progress,
     Runner,
     RunResult,
     find_deadband,
@@ -53,6 +52,7 @@ from omnibot.client.client import RobotClient
 from omnibot.errors import ConfigError
 from omnibot.firmware.config import build_config
 from omnibot.navigation.slipcal import SlipCalibration
+from omnibot.progress import Progress
 from omnibot.protocol import codes
 from omnibot.robot.description import CalibrationSpec, MotorMapSpec, RobotDescription
 

@@ -34,7 +34,9 @@ from typing import Any
 
 from omnibot.client.client import RobotClient
 from omnibot.client.events import Event, RangeEvent, Telemetry, WarnEvent
+from omnibot.client.greet import wait_for_controller
 from omnibot.estimation.odometry import Pose2D, WheelOdometry
+from omnibot.progress import Progress, notice, progress_bar
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription
 from omnibot.sim.emulator import spawn_pty_emulator
@@ -126,12 +128,20 @@ class Recorder:
 class Demo:
     """Runs the examples on a client; ``truth`` gives ground truth when there is one."""
 
+    SEGMENTS = 5
+    """Examples :meth:`run` drives (the progress bar's total)."""
+
     def __init__(
-        self, client: RobotClient, robot: RobotDescription, truth: Callable[[], Pose2D | None]
+        self,
+        client: RobotClient,
+        robot: RobotDescription,
+        truth: Callable[[], Pose2D | None],
+        progress: Progress | None = None,
     ) -> None:
         self.client = client
         self.robot = robot
         self.truth = truth
+        self.progress = progress
         self.recorder = Recorder(robot)
         self.segments: list[Segment] = []
         client.add_listener(self.recorder)
@@ -146,6 +156,8 @@ class Demo:
     @contextmanager
     def segment(self, name: str, commands: str, commanded: str) -> Iterator[Segment]:
         seg = Segment(name, commands, commanded)
+        if self.progress is not None:
+            self.progress.set_postfix_str(name)
         seg.start, seg.start_odo, seg.t0 = self.pose(), self.odo(), self.client.clock.now()
         first = self._truth_rows()
         self.recorder.segment = seg
@@ -155,6 +167,8 @@ class Demo:
         seg.rows = (first, self._truth_rows())
         self.recorder.segment = None
         self.segments.append(seg)
+        if self.progress is not None:
+            self.progress.update(1)
 
     def best(self, seg: Segment) -> tuple[Pose2D, Pose2D, str] | None:
         """Start and end pose from truth if there is any, else odometry, and which it was."""
@@ -380,7 +394,7 @@ def run_demo(port: str | None, robot_name: str, out: Path, seed: int = 1, world:
         truth_file = TruthFile(Path(tmp) / "truth.csv") if port is None else None
         world_map = load_world(world) if port is None else None
         context = (
-            spawn_pty_emulator(robot_name, world=world, seed=seed, truth=truth_file.path)
+            spawn_pty_emulator(robot_name, world=world, seed=seed, truth=truth_file.path, notice=notice)
             if truth_file
             else _given(port or "")
         )
@@ -395,9 +409,10 @@ def run_demo(port: str | None, robot_name: str, out: Path, seed: int = 1, world:
                 if truth_file or sim is not None
                 else None
             )
-            hello = client.hello()
-            demo = Demo(client, robot, truth if truth is not None else (lambda: None))
-            segments = demo.run()
+            hello = wait_for_controller(client, notice=notice)
+            with progress_bar("demo", Demo.SEGMENTS, unit="example") as bar:
+                demo = Demo(client, robot, truth if truth is not None else (lambda: None), bar)
+                segments = demo.run()
         wall = time.monotonic() - started
         png = out / "demo_trajectory.png"
         plot(truth, demo.recorder.odo_trail, world_map, png)
