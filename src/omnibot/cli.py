@@ -2,8 +2,10 @@
 
 Every subcommand lives in its own function pair: ``_add_<name>(subparsers)`` declares its arguments,
 the handler does the work (importing heavy modules lazily so ``omnibot --help`` stays fast). Any
-:class:`~omnibot.errors.OmnibotError` becomes a one-line ``omnibot: error: ...`` on stderr and exit
-status 2, never a traceback.
+:class:`~omnibot.errors.OmnibotError`, and any file a command cannot read or write, becomes a one-line
+``omnibot: error: ...`` on stderr and exit status 2, never a traceback. A reader of standard output
+that goes away (``omnibot robot show omni4 | head -1``) ends the command quietly with status 141, as
+SIGPIPE ends a Unix tool.
 """
 
 from __future__ import annotations
@@ -11,6 +13,10 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
+import re
+import select
+import signal
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -21,16 +27,29 @@ from omnibot.errors import ConfigError, OmnibotError
 Handler = Callable[[argparse.Namespace], int]
 
 
-def parse_floats(text: str, count: int, what: str) -> list[float]:
-    """``"a,b,c"`` -> floats, with an error that says what was expected."""
-    parts = [p.strip() for p in text.split(",")]
+def parse_floats(text: str | Sequence[str], count: int, what: str) -> list[float]:
+    """``"a,b,c"`` (or ``["a", "b", "c"]``, or a mix) -> floats, with an error that says what was expected."""
+    joined = text if isinstance(text, str) else " ".join(text)
+    parts = re.split(r"[,\s]+", joined.strip())
     try:
         values = [float(p) for p in parts]
     except ValueError:
         values = []
     if len(values) != count or not all(math.isfinite(v) for v in values):
-        raise ConfigError(f"expected {count} comma-separated numbers, got {text!r}", key=what)
+        raise ConfigError(f"expected {count} numbers (comma- or space-separated), got {joined!r}", key=what)
     return values
+
+
+_NUMBER = r"-?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?"
+_NEGATIVE_NUMBERS = re.compile(rf"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?(,\s*{_NUMBER})*,?$")
+"""A negative number, or comma-separated numbers whose first is negative (``-0.2,0,0``, ``-1e-3``)."""
+
+
+def accept_negative_numbers(parser: argparse.ArgumentParser) -> None:
+    """Take option values such as ``-0.2,0,0`` or ``-1e-3`` as values, not as unknown options (argparse
+    before 3.14 takes only ``-1`` and ``-.5``). For parsers with no option that looks like a number."""
+    if hasattr(parser, "_negative_number_matcher"):
+        parser._negative_number_matcher = _NEGATIVE_NUMBERS
 
 
 # --------------------------------------------------------------------------- robot
@@ -120,13 +139,18 @@ def _add_kinematics(sub: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     p = sub.add_parser(
         "kinematics",
         help="wheel speeds for a body twist (or the twist for wheel speeds)",
-        description="Inverse kinematics by default; --wheels gives forward kinematics instead. "
-        "Write negative first values with '=': --twist=-0.2,0,0",
+        description="Inverse kinematics by default; --wheels gives forward kinematics instead. Numbers are "
+        "comma- or space-separated, negative ones too: --twist -0.2 0 0, --twist -0.2,0,0",
     )
+    accept_negative_numbers(p)
     p.add_argument("--robot", default="omni4", help="preset name or description file (default omni4)")
     group = p.add_mutually_exclusive_group()
-    group.add_argument("--twist", default="0,0,0", help="VX,VY,W in m/s, m/s, rad/s (body frame)")
-    group.add_argument("--wheels", help="wheel speeds in rad/s, comma-separated, preset wheel order")
+    group.add_argument(
+        "--twist", nargs="+", default="0,0,0", metavar="V", help="VX VY W in m/s, m/s, rad/s (body frame)"
+    )
+    group.add_argument(
+        "--wheels", nargs="+", metavar="W", help="wheel speeds in rad/s, in the preset's wheel order"
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(handler=_kinematics)
 
@@ -408,13 +432,43 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     handler: Handler = args.handler
     try:
-        return handler(args)
+        status = handler(args)
+        sys.stdout.flush()  # a reader that went away shows up here, not at interpreter exit
+        return status
     except OmnibotError as exc:
         print(f"omnibot: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("omnibot: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        if not _stdout_gone():
+            raise
+        # `omnibot ... | head -1`: stop quietly, as a Unix tool killed by SIGPIPE, and send what is still
+        # buffered to /dev/null so that Python's flush at exit does not complain (Python's docs, "Note
+        # on SIGPIPE" in the signal module)
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 128 + signal.SIGPIPE
+    except UnicodeDecodeError as exc:  # text where the reader checked for none (it names no file)
+        print(f"omnibot: error: not UTF-8 text: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        if exc.filename is None:
+            raise
+        print(f"omnibot: error: {exc.filename}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+
+
+def _stdout_gone() -> bool:
+    """Whether nobody reads standard output any more (the write end of a pipe whose reader closed)."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):
+        return False
+    poller = select.poll()
+    poller.register(fd, select.POLLOUT)
+    return any(ev & select.POLLERR for _, ev in poller.poll(0))
 
 
 if __name__ == "__main__":  # pragma: no cover

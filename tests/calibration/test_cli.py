@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import io
 import json
+import sys
 from pathlib import Path
 
 import pytest
@@ -137,3 +139,60 @@ def test_a_port_with_two_floors_asks_between_them(tmp_path: Path, capsys: pytest
     assert set(cal.slip) == {"lab", "hall"}
     assert cal.surfaces["lab"].k == pytest.approx(cal.surfaces["hall"].k, rel=0.05)
     assert "truth sim" in capsys.readouterr().out
+
+
+class NotATerminal(io.StringIO):
+    """Standard input from a pipe or /dev/null: empty, and not a terminal."""
+
+    def isatty(self) -> bool:
+        return False
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--port", "sim://omni4"], "needs a terminal to ask you to put the robot on floor"),
+        (
+            ["--truth", "tape", "--surface", "wood"],
+            "needs a terminal to ask you to measure every run (tape truth)",
+        ),
+        (["--port", "sim://omni4", "--yes", "--truth", "tape"], "measure every run"),
+        (["--port", "sim://omni4", "--yes", "--surface", "lab,hall"], "--yes: several surfaces need someone"),
+        (["--yes"], "--yes: only for a robot on --port"),
+    ],
+)
+def test_an_operator_is_asked_for_only_on_a_terminal(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    args: list[str],
+    message: str,
+) -> None:
+    """Refused in one line before anything moves, instead of an EOFError half-way."""
+    monkeypatch.setattr(sys, "stdin", NotATerminal())
+    code = main(
+        ["calibrate", "--quick", "--out", str(tmp_path / "c.yaml"), "--report", str(tmp_path / "r"), *args]
+    )
+    err = capsys.readouterr().err
+    assert code == 2 and message in err and err.count("\n") == 1
+    assert not (tmp_path / "c.yaml").exists()
+
+
+def test_yes_runs_unattended_on_a_port(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.setattr(sys, "stdin", NotATerminal())
+    port = ["--port", "sim://omni4?surface=wood", "--yes", "--quick", "--no-check", "--no-motor-map"]
+    skip = ["--no-rollers", "--no-slip"]
+    files = ["--out", str(tmp_path / "cal.yaml"), "--report", str(tmp_path / "r")]
+    assert main(["calibrate", *port, *skip, *files]) == 0
+    assert "omni4 on floor (truth sim)" in capsys.readouterr().out
+    assert list(load_calibration(tmp_path / "cal.yaml").surfaces) == ["floor"]
+
+
+def test_the_terminal_ending_is_a_clear_error(monkeypatch: pytest.MonkeyPatch) -> None:
+    from omnibot.calibration.cli import terminal_ask
+
+    monkeypatch.setattr(sys, "stdin", NotATerminal())
+    with pytest.raises(ConfigError, match="standard input ended while asking: 'Put the robot on lab'"):
+        terminal_ask("Put the robot on lab ")
