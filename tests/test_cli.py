@@ -143,3 +143,15 @@ def test_an_output_folder_that_cannot_be_made_is_a_one_line_error(
     out = tmp_path / "file" / "plots"
     assert main(["tour", "--robot", "omni4", "--duration", "0.1", "--out", str(out)]) == 2
     assert capsys.readouterr().err == f"omnibot: error: {out}: Not a directory\n"
+
+
+def test_a_full_standard_output_is_a_one_line_error() -> None:
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run(
+            [sys.executable, "-m", "omnibot", "robot", "urdf", "omni4"],
+            stdout=full,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+    assert proc.returncode == 2
+    assert proc.stderr == "omnibot: error: cannot write the output: No space left on device\n"

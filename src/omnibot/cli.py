@@ -11,6 +11,7 @@ SIGPIPE ends a Unix tool.
 from __future__ import annotations
 
 import argparse
+import errno
 import json
 import math
 import os
@@ -447,17 +448,37 @@ def main(argv: Sequence[str] | None = None) -> int:
         # `omnibot ... | head -1`: stop quietly, as a Unix tool killed by SIGPIPE, and send what is still
         # buffered to /dev/null so that Python's flush at exit does not complain (Python's docs, "Note
         # on SIGPIPE" in the signal module)
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
+        _silence_stdout()
         return 128 + signal.SIGPIPE
     except UnicodeDecodeError as exc:  # text where the reader checked for none (it names no file)
         print(f"omnibot: error: not UTF-8 text: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:
-        if exc.filename is None:
+        if exc.filename is not None:
+            print(f"omnibot: error: {exc.filename}: {exc.strerror or exc}", file=sys.stderr)
+            return 2
+        if exc.errno not in _FULL:
             raise
-        print(f"omnibot: error: {exc.filename}: {exc.strerror or exc}", file=sys.stderr)
+        # a full disk or /dev/full under standard output: what it still holds goes to /dev/null, so
+        # that Python's flush at exit does not fail again
+        print(f"omnibot: error: cannot write the output: {exc.strerror}", file=sys.stderr)
+        _silence_stdout()
         return 2
+
+
+_FULL = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
+"""Errors of a write that found no room."""
+
+
+def _silence_stdout() -> None:
+    """Point standard output's file descriptor at /dev/null (what it still buffers goes there)."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):
+        return
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, fd)
+    os.close(devnull)
 
 
 def _stdout_gone() -> bool:
