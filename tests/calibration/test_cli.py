@@ -5,10 +5,13 @@ from __future__ import annotations
 import io
 import json
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
 
+from omnibot.calibration import cli as calibration_cli
 from omnibot.calibration.calfile import load_calibration, merge_calibration, parse_calibration
 from omnibot.calibration.perturb import ACCEPTANCE, parse_perturbation, perturbed_robot
 from omnibot.cli import main
@@ -16,7 +19,33 @@ from omnibot.errors import ConfigError
 from omnibot.robot.description import RobotDescription, load_robot
 
 
-def test_quick_run_writes_the_file_and_the_report(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+class RecordingBar:
+    """Stands in for the terminal's progress bar: the runs counted and every total it was given."""
+
+    def __init__(self, total: int) -> None:
+        self.n, self.total, self.totals = 0, total, [total]
+
+    def update(self, n: float | None = 1) -> None:
+        self.n += int(n or 0)
+
+    def set_postfix_str(self, s: str = "", refresh: bool = True) -> None:
+        pass
+
+    def refresh(self) -> None:
+        self.totals.append(self.total)
+
+
+def test_quick_run_writes_the_file_and_the_report(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    bars: dict[str, RecordingBar] = {}
+
+    @contextmanager
+    def progress(desc: str, total: int) -> Iterator[RecordingBar]:
+        bars[desc] = RecordingBar(total)
+        yield bars[desc]
+
+    monkeypatch.setattr(calibration_cli, "tqdm_progress", progress)
     out, report = tmp_path / "cal.yaml", tmp_path / "report"
     argv = ["calibrate", "--quick", "--surface", "wood", "--perturb", "radius=1.05", "--out", str(out)]
     assert main([*argv, "--report", str(report)]) == 0
@@ -38,6 +67,10 @@ def test_quick_run_writes_the_file_and_the_report(tmp_path: Path, capsys: pytest
     data = json.loads((report / "accuracy.json").read_text())
     assert {"before, wood", "after (wood calibration), wood"} <= set(data)
     runs = json.loads((report / "runs.json").read_text())
+    # the bar ends counting every run really driven, from an estimate within a fifth of it
+    bar = bars["calibrate omni4 on wood"]
+    assert bar.n == bar.total == len(runs["surfaces"]["wood"]["runs"])
+    assert abs(bar.totals[0] / bar.n - 1) < 0.2
     first_power = next(r for r in runs["surfaces"]["wood"]["runs"] if r["group"].startswith("deadband"))
     assert first_power["command"] == "POWER,500,8,8,8,8"  # rotation's dead band first, from 8 counts
     motors = cal.calibration.motors
