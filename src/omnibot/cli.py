@@ -201,7 +201,8 @@ def _add_sim(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def _tour(args: argparse.Namespace) -> int:
-    from omnibot.demos.directions import format_table, plot_tour, run_tour
+    from omnibot.demos.directions import DIRECTIONS, format_table, plot_tour, run_tour
+    from omnibot.progress import progress_bar
     from omnibot.robot.description import load_robot, preset_names
     from omnibot.sim.surfaces import get_surface
 
@@ -213,7 +214,15 @@ def _tour(args: argparse.Namespace) -> int:
     out.mkdir(parents=True, exist_ok=True)
     for name in names:
         robot = load_robot(name)
-        runs = run_tour(robot, power=args.power, duration=args.duration, surface=args.surface, seed=args.seed)
+        with progress_bar(f"tour {robot.name}", len(DIRECTIONS), unit="motion") as bar:
+            runs = run_tour(
+                robot,
+                power=args.power,
+                duration=args.duration,
+                surface=args.surface,
+                seed=args.seed,
+                progress=bar,
+            )
         print(format_table(robot, runs))
         png = out / f"directions_{robot.name}.png"
         plot_tour(robot, runs, png)

@@ -41,6 +41,7 @@ def run_follow(args: argparse.Namespace) -> int:
     from omnibot.estimation.estimator import ESTIMATORS
     from omnibot.estimation.odometry import Pose2D
     from omnibot.navigation.session import FollowOptions, follow_path, simulated_client, summary
+    from omnibot.progress import progress_bar
 
     path = read_path(args.path)
     robot = _robot(args.robot)
@@ -70,7 +71,9 @@ def run_follow(args: argparse.Namespace) -> int:
         client = _open_port(args.port, robot)
     else:
         client = simulated_client(robot, surface=surface, seed=args.seed, start=Pose2D(*path.start))
-    with client:
+    metres = "{l_bar}{bar}| {n:.2f}/{total:.2f} m [{elapsed}<{remaining}]"
+    with client, progress_bar(f"follow {FsPath(args.path).name}", path.length, bar_format=metres) as bar:
+        options.progress = bar
         run, report, _ = follow_path(client, robot, path, options)
     report["path_file"] = str(args.path)
     report["link"] = args.port or f"sim://{robot.name} (lockstep, surface {surface}, seed {args.seed})"
