@@ -43,6 +43,10 @@ def test_kinematics_negative_twist_and_forward(capsys: pytest.CaptureFixture[str
         (["kinematics", "--wheels", "-1", "1", "1"], "--wheels: expected 4 numbers"),
         (["kinematics", "--robot", "omni5"], "unknown robot 'omni5'; did you mean 'omni4'?"),
         (["robot", "show", "nope.yaml"], "cannot read robot description nope.yaml"),
+        (["tour", "--duration", "-1"], "--duration: expected a positive number, got -1"),
+        (["send", "STATUS", "--timeout", "-1"], "--timeout: expected a positive number, got -1"),
+        (["send", "STATUS", "--idle-timeout", "0"], "--idle-timeout: expected a positive number, got 0"),
+        (["console", "--timeout", "nan"], "--timeout: expected a positive number, got nan"),
     ],
 )
 def test_bad_input_is_a_clear_error(

@@ -46,6 +46,13 @@ _NEGATIVE_NUMBERS = re.compile(rf"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?(,\s*{_NUMBE
 """A negative number, or comma-separated numbers whose first is negative (``-0.2,0,0``, ``-1e-3``)."""
 
 
+def positive(value: float, flag: str) -> float:
+    """``value`` if it is a positive finite number, else a ConfigError naming ``flag``."""
+    if not (math.isfinite(value) and value > 0):
+        raise ConfigError(f"expected a positive number, got {value:g}", key=flag)
+    return value
+
+
 def accept_negative_numbers(parser: argparse.ArgumentParser) -> None:
     """Take option values such as ``-0.2,0,0`` or ``-1e-3`` as values, not as unknown options (argparse
     before 3.14 takes only ``-1`` and ``-.5``). For parsers with no option that looks like a number."""
@@ -209,6 +216,7 @@ def _tour(args: argparse.Namespace) -> int:
     get_surface(args.surface)
     if not 0 < args.power <= 255:
         raise ConfigError(f"expected 1..255 PWM counts, got {args.power}", key="--power")
+    positive(args.duration, "--duration")
     names = preset_names() if args.robot == "all" else [args.robot]
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -250,6 +258,8 @@ def _add_tour(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 def _send(args: argparse.Namespace) -> int:
     from omnibot.console import run_send
 
+    positive(args.timeout, "--timeout")
+    positive(args.idle_timeout, "--idle-timeout")
     return run_send(args)
 
 
@@ -275,6 +285,7 @@ def _add_send(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 def _console(args: argparse.Namespace) -> int:
     from omnibot.console import run_console
 
+    positive(args.timeout, "--timeout")
     return run_console(args)
 
 
