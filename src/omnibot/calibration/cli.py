@@ -187,15 +187,15 @@ def port_opener(
 ) -> Callable[[str], AbstractContextManager[RobotClient]]:
     """surface -> the one real controller, after asking the person to put the robot there (except on
     the first surface when the robot is ``placed`` there already)."""
-    here: list[str] = ["(placed)"] if placed else []
+    where: dict[str, str | None] = {"surface": None}  # where the robot stands
 
     @contextmanager
     def open_client(surface: str) -> Iterator[RobotClient]:
-        if here == ["(placed)"]:
-            here[:] = [surface]
-        if here != [surface]:
+        if where["surface"] is None and placed:
+            where["surface"] = surface
+        if where["surface"] != surface:
             ask(f"Put the robot on {surface} with about 2 m of free floor around it, then press Enter: ")
-            here[:] = [surface]
+            where["surface"] = surface
         yield client
 
     return open_client
@@ -262,7 +262,7 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> in
     def chosen_truth(client: RobotClient) -> str:
         """The default truth of the link (checked for an operator at the terminal if it needs one)."""
         name = default_truth(client, robot)
-        if interactive and name in OPERATOR_TRUTHS and not any("truth" in r for r in operator):
+        if interactive and name in OPERATOR_TRUTHS:
             check_operator([f"measure every run ({name} truth: the robot has no wheel encoders)"])
         return name
 
