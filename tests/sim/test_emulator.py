@@ -15,6 +15,8 @@ import serial
 
 from omnibot.cli import main
 from omnibot.client.client import RobotClient
+from omnibot.errors import LinkError
+from omnibot.sim.emulator import spawn_pty_emulator
 
 
 def test_pty_emulator_serves_the_firmware_and_writes_truth(tmp_path: Path) -> None:
@@ -114,3 +116,16 @@ def test_an_unwritable_truth_file_is_refused_before_the_pty_appears(
     assert main(["sim", "--pty", "--truth", str(tmp_path / "missing" / "truth.csv")]) == 2
     captured = capsys.readouterr()
     assert captured.out == "" and "--truth: cannot write" in captured.err
+
+
+def test_a_slow_start_is_announced_and_a_stuck_one_ends_in_a_clear_error(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """With no numba cache the child compiles for seconds: the wait is announced after one second,
+    and a start that takes longer than allowed is a LinkError (the child is ended, not left behind)."""
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))
+    notices: list[str] = []
+    stuck = pytest.raises(LinkError, match=r"printed no device path within 1\.5 s")
+    with stuck, spawn_pty_emulator("omni4", notice=notices.append, start_timeout=1.5):
+        pass
+    assert len(notices) == 1 and notices[0].startswith("starting the simulated omni4 (omnibot sim --pty;")
