@@ -6,7 +6,7 @@ import pytest
 
 from omnibot.client.client import RobotClient
 from omnibot.client.greet import wait_for_controller
-from omnibot.errors import LinkTimeout
+from omnibot.errors import ControllerError, LinkTimeout
 from omnibot.transport.lockstep import LockstepLink
 
 
@@ -77,3 +77,18 @@ def test_no_controller_is_a_timeout_that_names_the_link() -> None:
     with client_of(BootingController(boot=1e9)) as client, pytest.raises(LinkTimeout) as caught:
         wait_for_controller(client, window=3.0, retry=1.0)
     assert "no reply to HELLO on lockstep://booting within 3 s" in str(caught.value)
+
+
+class RefusingController(BootingController):
+    """Answers every HELLO with an ERROR (a controller that does not speak this protocol version)."""
+
+    def receive(self, data: bytes) -> None:
+        if b"\n" in data:
+            self._out += b"ERROR,2,unknown command\r\n"
+
+
+def test_a_refused_hello_is_the_controllers_error_not_a_wait() -> None:
+    notices: list[str] = []
+    with client_of(RefusingController(boot=0.0)) as client, pytest.raises(ControllerError):
+        wait_for_controller(client, notice=notices.append)
+    assert notices == []

@@ -50,17 +50,19 @@ def wait_for_controller(
         until = min(now + retry, deadline)
         while not any(p.done for p in sent) and (left := until - clock.now()) > 0:
             client.pump(left)
-        answered = next((p for p in sent if p.done), None)
-        if answered is None:
-            if notice is not None and not announced:
-                announced = True
-                notice(f"waiting for the controller on {client.link.url} (HELLO, up to {window:g} s)...")
-            continue
-        if isinstance(answered.error, ControllerReset):  # it (re)started: it listens now
-            sent = [p for p in sent if not p.done]
-            continue
-        reply = answered.result()  # a ControllerError or LinkError raises
-        assert isinstance(reply, HelloReply)
-        for p in sent:  # the HELLOs it did not answer: nobody waits for them any more
-            p.timed_out = p.timed_out or not p.done
-        return Hello.from_reply(reply)
+        replied = next((p for p in sent if p.reply is not None), None)
+        if replied is not None:
+            reply = replied.result()  # an ERROR reply raises its ControllerError
+            assert isinstance(reply, HelloReply)
+            for p in sent:  # the HELLOs it did not answer: nobody waits for them any more
+                p.timed_out = p.timed_out or not p.done
+            return Hello.from_reply(reply)
+        for p in sent:
+            # a reset (the controller started and listens now) or a HELLO given up for a later one
+            # (binary: SYNC) just means asking again; anything else (the link failed) ends the wait
+            if p.error is not None and not isinstance(p.error, ControllerReset | LinkTimeout):
+                raise p.error
+        if notice is not None and not announced and not any(p.done for p in sent):
+            announced = True
+            notice(f"waiting for the controller on {client.link.url} (HELLO, up to {window:g} s)...")
+        sent = [p for p in sent if not p.done]
