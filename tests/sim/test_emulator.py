@@ -129,3 +129,9 @@ def test_a_slow_start_is_announced_and_a_stuck_one_ends_in_a_clear_error(
     with stuck, spawn_pty_emulator("omni4", notice=notices.append, start_timeout=1.5):
         pass
     assert len(notices) == 1 and notices[0].startswith("starting the simulated omni4 (omnibot sim --pty;")
+
+
+def test_a_child_that_fails_to_start_reports_its_error() -> None:
+    failed = pytest.raises(LinkError, match="did not start: omnibot: error: unknown robot 'omni7'")
+    with failed, spawn_pty_emulator("omni7"):
+        pass

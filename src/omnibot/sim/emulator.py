@@ -14,6 +14,7 @@ import select
 import signal
 import subprocess
 import sys
+import tempfile
 import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -92,38 +93,40 @@ def spawn_pty_emulator(
     start_timeout: float = START_TIMEOUT,
 ) -> Iterator[str]:
     """Run ``omnibot sim --pty`` as a child process and yield its device path; on exit SIGINT it,
-    wait for it (killing it if it hangs) and close its pipes. LinkError if it does not start within
+    wait for it (killing it if it hangs) and close its files. LinkError if it does not start within
     ``start_timeout`` s. ``notice`` (e.g. a line on a terminal) hears what is being waited for when
-    the start takes longer than a second."""
+    the start takes longer than a second. The child's stderr goes to a temporary file (read for the
+    error when it fails), so that however much it writes there it never blocks."""
     argv = [sys.executable, "-m", "omnibot", "sim", "--pty", "--robot", robot, "--seed", str(seed)]
     argv += ["--world", world] if world else []
     argv += ["--truth", str(truth)] if truth else []
-    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        assert proc.stdout is not None
-        ready, _, _ = select.select([proc.stdout], [], [], 1.0)
-        if not ready:
-            if notice is not None:
-                notice(
-                    f"starting the simulated {robot} (omnibot sim --pty; a first start compiles the physics, "
-                    f"up to {start_timeout:.0f} s)..."
-                )
-            ready, _, _ = select.select([proc.stdout], [], [], max(start_timeout - 1.0, 0.0))
-        path = proc.stdout.readline().strip() if ready else ""
-        if not path:
-            if proc.poll() is None:
-                raise LinkError(f"the pty emulator printed no device path within {start_timeout:g} s")
-            _, err = proc.communicate(timeout=10)
-            raise LinkError(f"the pty emulator did not start: {err.strip()}")
-        yield path
-    finally:
-        if proc.poll() is None:
-            proc.send_signal(signal.SIGINT)
+    with tempfile.TemporaryFile("w+") as err:
+        proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=err, text=True)
         try:
-            proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
-        for stream in (proc.stdout, proc.stderr):
-            if stream is not None:
-                stream.close()
+            assert proc.stdout is not None
+            ready, _, _ = select.select([proc.stdout], [], [], 1.0)
+            if not ready:
+                if notice is not None:
+                    notice(
+                        f"starting the simulated {robot} (omnibot sim --pty; a first start compiles the "
+                        f"physics, up to {start_timeout:.0f} s)..."
+                    )
+                ready, _, _ = select.select([proc.stdout], [], [], max(start_timeout - 1.0, 0.0))
+            path = proc.stdout.readline().strip() if ready else ""
+            if not path:
+                if proc.poll() is None:
+                    raise LinkError(f"the pty emulator printed no device path within {start_timeout:g} s")
+                proc.wait(timeout=10)
+                err.seek(0)
+                raise LinkError(f"the pty emulator did not start: {err.read().strip()}")
+            yield path
+        finally:
+            if proc.poll() is None:
+                proc.send_signal(signal.SIGINT)
+            try:
+                proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+            if proc.stdout is not None:
+                proc.stdout.close()
