@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from benchmarks import firmware_command_time, link_throughput, odometry_drift, sim_speed, tracking
+from benchmarks import firmware_command_time, link_throughput, odometry_drift, sim_speed, sonar_stop, tracking
 
 
 def main() -> int:
@@ -13,6 +13,7 @@ def main() -> int:
         ("line throughput, pty emulator", lambda: link_throughput.main(["--pty"])),
         ("path tracking", lambda: tracking.main([])),
         ("odometry drift", lambda: odometry_drift.main([])),
+        ("sonar stop", lambda: sonar_stop.main([])),
     ):
         print(f"\n== {title}")
         run()

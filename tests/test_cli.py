@@ -41,6 +41,12 @@ def test_kinematics_negative_twist_and_forward(capsys: pytest.CaptureFixture[str
         (["kinematics", "--twist", "1,nan,0"], "expected 3 numbers"),
         (["kinematics", "--twist", "1", "2", "3", "4"], "got '1 2 3 4'"),
         (["kinematics", "--wheels", "-1", "1", "1"], "--wheels: expected 4 numbers"),
+        (
+            ["kinematics", "--twist", "1e308,1e308,0"],
+            "--twist: the result overflows (it is not a finite number)",
+        ),
+        (["kinematics", "--twist", "0", "0", "1e308", "--json"], "--twist: the result overflows"),
+        (["kinematics", "--twist", "-1e308", "0", "1e308"], "--twist: the result overflows"),
         (["kinematics", "--robot", "omni5"], "unknown robot 'omni5'; did you mean 'omni4'?"),
         (["robot", "show", "nope.yaml"], "cannot read robot description nope.yaml"),
         (["tour", "--duration", "-1"], "--duration: expected a positive number, got -1"),

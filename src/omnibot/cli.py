@@ -112,6 +112,8 @@ def _add_robot(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 
 def _kinematics(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from omnibot.robot import kinematics as kin
     from omnibot.robot.description import load_robot
 
@@ -119,17 +121,23 @@ def _kinematics(args: argparse.Namespace) -> int:
     J = robot.wheel_matrix
     names = [w.name for w in robot.wheels]
     out: dict[str, object] = {"robot": robot.name, "wheel_names": names}
-    if args.wheels is not None:
-        speeds = parse_floats(args.wheels, robot.n_wheels, "--wheels")
-        result = kin.forward(J, speeds)
-        twist = [float(v) for v in result.twist]
-        residual = [float(v) for v in result.residual]
-        out |= {"wheel_speeds": speeds, "twist": twist, "residual": residual}
-    else:
-        twist = parse_floats(args.twist, 3, "--twist")
-        speeds = [float(v) for v in kin.inverse(J, twist)]
-        rims = [v * w.radius for v, w in zip(speeds, robot.wheels, strict=True)]
-        out |= {"twist": twist, "wheel_speeds": speeds, "rim_speeds": rims}
+    with np.errstate(over="ignore", invalid="ignore"):  # an overflow is refused below, not warned of
+        if args.wheels is not None:
+            speeds = parse_floats(args.wheels, robot.n_wheels, "--wheels")
+            result = kin.forward(J, speeds)
+            twist = [float(v) for v in result.twist]
+            residual = [float(v) for v in result.residual]
+            out |= {"wheel_speeds": speeds, "twist": twist, "residual": residual}
+            derived = [*twist, *residual]
+        else:
+            twist = parse_floats(args.twist, 3, "--twist")
+            speeds = [float(v) for v in kin.inverse(J, twist)]
+            rims = [v * w.radius for v, w in zip(speeds, robot.wheels, strict=True)]
+            out |= {"twist": twist, "wheel_speeds": speeds, "rim_speeds": rims}
+            derived = [*speeds, *rims]
+    if not all(math.isfinite(v) for v in derived):
+        given = "--wheels" if args.wheels is not None else "--twist"
+        raise ConfigError("the result overflows (it is not a finite number): give smaller values", key=given)
     if args.json:
         print(json.dumps(out))
         return 0

@@ -128,8 +128,9 @@ def test_mode() -> None:
     assert c.mode(OMNI4, 3) == Mode(3)
     with pytest.raises(ValueError, match="use_binary"):
         c.mode(OMNI4, codes.MODE_BINARY)
+    assert c.mode(OMNI4, codes.MODE_REFUSE_UNCOVERED) == Mode(8)
     with pytest.raises(ValueError, match="bits"):
-        c.mode(OMNI4, 8)
+        c.mode(OMNI4, 16)
     with pytest.raises(ValueError, match="encoders"):
         c.mode(Limits(has_encoders=False, robot="bare"), codes.MODE_CLOSED_LOOP)
 

@@ -52,6 +52,17 @@ def test_heading_is_unwrapped() -> None:
         ("t,x,y,theta\n0,0,0,0\n1,1,abc,0\n", "line 3, column y: 'abc' is not a number"),
         ("t,x,y,theta\n0,0,0,0\n1,1,0\n", "line 3: expected 4 fields (t,x,y,theta), got 3"),
         ("t,x,y,theta\n0,0,0,0\n1,nan,0,0\n", "line 3, column x: 'nan' is not finite"),
+        ("t,x,y,theta\n0,0,0,0\n1,1e300,0,0\n", "line 3, column x: 1e300 is out of range (at most 10000 m)"),
+        ("t,x,y,theta\n0,0,0,0\n1,0,-10001,0\n", "line 3, column y: -10001 is out of range"),
+        (
+            "t,x,y,theta\n0,0,0,0\n1,0,0,1e9\n",
+            "line 3, column theta: 1e9 is out of range (at most 10000 rad)",
+        ),
+        ("t,x,y,theta\n0,0,0,0\n1e7,1,0,0\n", "line 3, column t: 1e7 is out of range"),
+        (
+            "t,x,y,theta,v\n0,0,0,0,1e5\n1,1,0,0,1\n",
+            "line 2, column v: 1e5 is out of range (at most 100 m/s)",
+        ),
         ("t,x,y,theta\n1,0,0,0\n0.5,1,0,0\n", "line 3, column t: time 0.5 is before the previous row's 1"),
         ("t,x,y,theta,v\n0,0,0,0,0\n1,1,0,0,-2\n", "line 3, column v: speed -2 is negative"),
         ("t,x,y,theta\n0,0,0,0\n", "a path needs at least two rows after the header (line 1), got 1"),

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from omnibot.control.paths import MotionLimits, Path, standard_path, time_optimal_profile
-from omnibot.control.paths.profile import min_traversal_time
+from omnibot.control.paths.profile import MAX_SAMPLES, min_traversal_time
+from omnibot.errors import ConfigError
 from omnibot.robot.description import load_robot
 
 LIM = MotionLimits(v_max=0.5, a_max=2.0, w_max=10.0, alpha_max=20.0)
@@ -72,3 +73,18 @@ def test_limits_validation_and_scaling() -> None:
     assert LIM.with_turn_rate(3.0).w_max == 3.0
     with pytest.raises(ValueError, match="two points"):
         time_optimal_profile(Path(np.zeros(1), np.zeros(1), np.zeros(1)), LIM)
+
+
+def test_a_path_too_long_to_profile_is_refused_before_it_is_built() -> None:
+    limits = MotionLimits(v_max=1.0, a_max=1.0, w_max=1.0, alpha_max=1.0)
+    line = Path(np.array([0.0, 1e300]), np.zeros(2), np.zeros(2))  # would be 1e302 grid points
+    with pytest.raises(ConfigError, match=r"too long to profile: 1e\+300 m .* at most 200,000; split it"):
+        time_optimal_profile(line, limits)
+    turns = np.arange(0.0, 21_000.0, 3.0)  # 3,300 turns in place: 2,100 m of sigma
+    spin = Path(np.zeros(len(turns)), np.zeros(len(turns)), turns)
+    with pytest.raises(ConfigError, match="too long to profile"):
+        time_optimal_profile(spin, limits)
+    just = MAX_SAMPLES * 0.01 / 4  # a quarter of the budget builds
+    assert len(time_optimal_profile(Path(np.array([0.0, just]), np.zeros(2), np.zeros(2)), limits).t) > 1000
+    with pytest.raises(ValueError, match="positive resolution"):
+        time_optimal_profile(line, limits, resolution=0.0)

@@ -60,7 +60,8 @@ def test_demo_in_lockstep_meets_the_seed_examples(tmp_path: Path, monkeypatch: p
     assert abs(abs(number(rotate, r"heading ([+-]?[\d.]+) deg")) - 180) < 8
     approach = achieved(report, 5)
     assert approach.startswith("stopped")
-    assert 15 < number(approach, r"centre ([\d.]+) cm from the wall") < 40  # front 10 cm ahead of the centre
+    # front 10 cm ahead of the centre; the stop allows for a wall met at a slant, so it stops early
+    assert 15 < number(approach, r"centre ([\d.]+) cm from the wall") < 60
     assert (tmp_path / "demo_trajectory.png").stat().st_size > 20_000
     assert (tmp_path / "demo_truth.csv").read_text().startswith("t,x,y,theta\n")
 
@@ -76,3 +77,20 @@ def test_demo_command_through_the_pty_emulator(tmp_path: Path, capsys: pytest.Ca
 def test_demo_bad_port_is_a_clear_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["demo", "--port", "bogus://x", "--out", str(tmp_path)]) == 2
     assert "omnibot: error:" in capsys.readouterr().err
+
+
+def test_the_odometry_trail_starts_at_the_start_pose() -> None:
+    from omnibot.client.events import Telemetry
+    from omnibot.demos.seed000 import Recorder
+    from omnibot.estimation.odometry import Pose2D
+    from omnibot.robot.description import load_robot
+
+    recorder = Recorder(load_robot("omni4"))
+    for k in range(5):  # standing at the odometry's origin before the start is known
+        recorder(Telemetry(time=0.02 * k, controller_time=0.02 * k, encoders=(0, 0, 0, 0), heading=0.0))
+    assert recorder.odo_trail[0] == (0.0, 0.0)
+    recorder.start_at(Pose2D(1.0, 1.0, 0.0))
+    recorder(Telemetry(time=0.2, controller_time=0.2, encoders=(0, 100, 0, -100), heading=0.0))
+    trail = recorder.odo_trail
+    assert trail[0] == (1.0, 1.0) and (0.0, 0.0) not in trail
+    assert trail[-1][0] > 1.0 and abs(trail[-1][1] - 1.0) < 1e-9  # then it moves on from there

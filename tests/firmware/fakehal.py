@@ -14,6 +14,8 @@ class FakeHAL(HAL):
         self.rx = b""
         self.tx = bytearray()
         self.powers = [0] * motors
+        self.can_brake = False
+        self.braked = [False] * motors
         self.power_log: list[tuple[int, int, int]] = []
         self.enc = [0] * motors
         self.enc_gain = 0.0
@@ -40,7 +42,12 @@ class FakeHAL(HAL):
 
     def set_power(self, i: int, pwm: int) -> None:
         self.powers[i] = pwm
+        self.braked[i] = False
         self.power_log.append((self.t, i, pwm))
+
+    def brake(self, i: int) -> bool:
+        self.braked[i] = self.can_brake
+        return self.can_brake
 
     def encoder_count(self, i: int) -> int:
         return self.enc[i]

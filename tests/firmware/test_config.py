@@ -71,3 +71,30 @@ def test_stage_board_and_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str])
     assert "mpremote" in capsys.readouterr().out
     assert fwconfig.main(["omni4", "--print"]) == 0
     assert "CONFIG = {" in capsys.readouterr().out
+
+
+def test_a_number_that_is_not_finite_is_never_written() -> None:
+    config = fwconfig.build_config(load_robot("omni4"))
+    assert "inf" not in fwconfig.config_module_source(config)
+    for broken in ({"speed_max_cms": float("inf")}, {"kt": [[0.0, 1.0], [1.0, float("nan")]]}):
+        with pytest.raises(ConfigError, match=r"cannot hold .* every number must be finite") as info:
+            fwconfig.config_module_source({**config, **broken})
+        assert next(iter(broken)) in str(info.value)
+
+
+def test_a_limit_that_overflows_in_protocol_units_stages_nothing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import yaml
+
+    from omnibot.robot.description import PRESET_DIR
+
+    data = yaml.safe_load((PRESET_DIR / "omni4.yaml").read_text())
+    data["limits"]["speed_max"] = 1e307  # finite in m/s, infinite in cm/s
+    robot = tmp_path / "fast.yaml"
+    robot.write_text(yaml.safe_dump(data))
+    board = tmp_path / "board"
+    assert fwconfig.main([str(robot), str(board)]) == 2
+    err = capsys.readouterr().err
+    assert "cannot hold speed_max_cms = inf" in err and "Traceback" not in err
+    assert not board.exists()

@@ -84,7 +84,7 @@ def test_status_format(rig: Rig) -> None:
         ("CAL,10,-2,0,0", codes.E_CALIBRATION),
         ("CAL,1,5,0,1000", codes.E_CALIBRATION),
         ("CAL,0,0,0,0", codes.E_CALIBRATION),
-        ("MODE,8", codes.E_UNSUPPORTED),
+        ("MODE,16", codes.E_UNSUPPORTED),
         ("TELEM,100,256", codes.E_UNSUPPORTED),
     ],
 )
@@ -262,8 +262,8 @@ def test_emergency_stop_latch(rig: Rig) -> None:
     rig.cmd("SONAR,1,60,0,0,20")
     rig.hal.ranges[0] = 15
     assert rig.run(200) == []  # not moving: no stop
-    rig.cmd("MOVE,30000,40,0,0")
-    assert rig.run(100) == [f"WARN,13,{codes.TEXTS[13]}", "IDLE"]
+    # the guard knows the range already: the move is stopped before it starts
+    assert rig.cmd("MOVE,30000,40,0,0") == ["OK", f"WARN,13,{codes.TEXTS[13]}", "IDLE"]
     assert rig.hal.powers == [0, 0, 0, 0]
     assert rig.status().startswith("STATUS,3,0,")
     for c in ("MOVE,10,40,0,0", "ROTATE,90,90", "DELTA,0,0,0,0,1", "POWER,10,1,1,1,1", "VEL,10,0,0,100"):
@@ -272,7 +272,20 @@ def test_emergency_stop_latch(rig: Rig) -> None:
     assert rig.cmd("STOP") == ["OK"]
     assert rig.status().startswith("STATUS,1,0,")
     rig.hal.ranges[0] = 100
+    rig.run(100)  # a new reading
     assert rig.cmd("MOVE,10,40,0,0") == ["OK"]
+
+
+def test_emergency_stop_while_moving(rig: Rig) -> None:
+    rig.cmd("SONAR,1,60,0,0,20")
+    rig.hal.ranges[0] = 200
+    rig.run(100)
+    assert rig.cmd("MOVE,30000,40,0,0") == ["OK"]
+    assert rig.run(100) == []
+    rig.hal.ranges[0] = 15
+    assert rig.run(100) == [f"WARN,13,{codes.TEXTS[13]}", "IDLE"]
+    assert rig.hal.powers == [0, 0, 0, 0]
+    assert rig.status().startswith("STATUS,3,0,")
 
 
 def test_range_events_inside_and_outside(rig: Rig) -> None:

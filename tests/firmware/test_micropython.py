@@ -50,6 +50,24 @@ range 0 200
 @ 100
 > MOVE,xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx;STATUS
 @ 1000
+> STOP;SONAR,1,60,0,0,25
+range 0 300
+@ 100
+> MOVE,30000,100,0,0
+@ 100
+range 0 50
+@ 300
+range 0 -1
+@ 60
+range 0 30
+@ 100
+> STOP;MODE,8;MOVE,30000,60,90,0;STATUS
+range 0 300
+@ 100
+> VEL,30,0,0,100
+@ 200
+> MOVE,2,40,0,0;DELTA,0,0,10,0,3
+@ 300
 """
 
 

@@ -168,3 +168,40 @@ def test_piecewise_linear() -> None:
     assert f(-5) == 2.0 and f(50) == pytest.approx(1.5) and f(177.5) == pytest.approx(0.75) and f(999) == 0.5
     with pytest.raises(ValueError, match="increase strictly"):
         PiecewiseLinear(x=(0, 0), y=(1, 1))
+
+
+@pytest.mark.parametrize(
+    ("where", "text"),
+    [
+        ("limits.speed_max", "limits:\n  speed_max: .inf"),
+        ("wheels[0].x", None),
+        ("motor.current_limit", "motor:\n  current_limit: .inf"),
+        ("battery.voltage", "battery:\n  voltage: .nan"),
+        ("calibration.k_t.y", None),
+    ],
+)
+def test_numbers_that_are_not_finite_are_refused_naming_the_key(where: str, text: str | None) -> None:
+    data = preset_data("omni4")
+    if where == "wheels[0].x":
+        data["wheels"][0]["x"] = -math.inf
+        key = "wheels[0].x"
+    elif where == "calibration.k_t.y":
+        data["calibration"] = {"k": 100.0, "k_t": {"x": [0.0, 1.0], "y": [1.0, math.nan]}}
+        key = "calibration.k_t.y[1]"
+    else:
+        assert text is not None
+        section, rest = text.split(":\n  ")
+        name, value = rest.split(": ")
+        data[section] = {**data[section], name: yaml.safe_load(value)}
+        key = f"{section}.{name}" if section != "motor" else f"wheels[0].motor.{name}"
+    with pytest.raises(ConfigError, match="Input should be a finite number") as info:
+        parse_description(data, "x.yaml")
+    assert key in str(info.value)
+
+
+def test_no_current_limit_means_none_and_round_trips() -> None:
+    data = preset_data("omni4")
+    del data["motor"]["current_limit"]
+    robot = parse_description(data)
+    assert robot.wheels[0].motor.current_limit is None
+    assert parse_description(robot.model_dump(exclude_none=True)) == robot  # as calibration re-validates

@@ -140,7 +140,7 @@ def test_ten_seconds_at_full_power_stay_finite_and_bounded(name: str) -> None:
     no_load = max(
         robot.battery.voltage / (w.motor.torque_constant * w.motor.gear_ratio) for w in robot.wheels
     )
-    i_max = max(w.motor.current_limit for w in robot.wheels)
+    i_max = max(w.motor.current_max for w in robot.wheels)
     for k in range(10_000):
         # reverse everything at 5 s: plug braking from top speed, the hardest case for the integrator
         ph.step(patterns if k < 5000 else -patterns)
@@ -339,7 +339,7 @@ def test_current_limit_and_battery_sag() -> None:
     ph = Physics(robot)
     ph.step(np.full(4, 255.0))
     ph.step(np.full(4, 255.0))
-    limit = robot.wheels[0].motor.current_limit
+    limit = robot.wheels[0].motor.current_max
     np.testing.assert_allclose(np.abs(ph.motor_current), limit)
     assert ph.battery_voltage[0] < robot.battery.voltage - 0.5
 

@@ -90,7 +90,7 @@ def test_estop_ignores_driving_until_resume(stepper: Stepper) -> None:
 
 def test_gamepad_goes_through_the_teleop_mapping(stepper: Stepper) -> None:
     # browser axes: up negative; seed 003: axis 3 (joy convention) times -3.5, limited to 0.99 m/s
-    state = stepper.run(0.3, Joy(type="joy", axes=[0, 0, 0, 1.0], buttons=[0] * 7 + [1]))
+    state = stepper.run(0.3, Joy(type="joy", axes=[0, 0, 0, 1.0], buttons=[0.0] * 7 + [1.0]))
     assert state["drive"]["source"] == "gamepad"
     assert state["drive"]["twist"] == [0.99, 0.0, 0.0]
     state = stepper.run(0.5, Joy(type="joy", axes=[0, 0, 0, 1.0], buttons=[0] * 8))  # enable let go
@@ -136,3 +136,12 @@ def test_teach_hook_is_called_in_the_link_thread() -> None:
         assert "follow ok" in stepper.logs()
     finally:
         link.stop()
+
+
+def test_the_pose_is_labelled_by_what_it_is(stepper: Stepper) -> None:
+    state = stepper.run(0.2)
+    assert state["pose_source"] == "truth" and state["pose"][:2] == [1.0, 1.0]  # the room's start
+    stepper.link._device = None  # as on a real link: no simulator behind it
+    state = stepper.run(0.2)
+    assert state["pose_source"] == "odometry"
+    assert state["pose"] == state["odometry"]

@@ -200,3 +200,50 @@ def test_teach_and_repeat_from_the_page(browser: Browser) -> None:
             assert x1 - x0 > 0.2
         finally:
             context.close()
+
+
+def _open_page(browser: Browser, dashboard: Dashboard) -> Any:
+    context = browser.new_context(viewport={"width": 1400, "height": 950})
+    page = context.new_page()
+    page.goto(dashboard.url)
+    page.wait_for_function("window.omnibot && window.omnibot.state() !== null")
+    return context, page
+
+
+def test_a_path_file_is_drawn_from_the_robot_not_the_room_corner(browser: Browser, tmp_path: Path) -> None:
+    from omnibot.web.scene import load_path
+
+    file = tmp_path / "square.csv"  # a path file starts at its own origin, as `omnibot record` writes them
+    file.write_text("t,x,y,theta\n0,0,0,0\n2,1,0,0\n3,1,0.5,0\n")
+    with Dashboard(ROOM, http_port=0, path=load_path(file)) as dashboard:
+        context, page = _open_page(browser, dashboard)
+        try:
+            drawn = page.evaluate("window.omnibot.scene().path")
+            assert drawn[0] == [1.0, 1.0]  # on the robot at the room's start pose (1, 1), heading 0
+            assert drawn[-1] == [2.0, 1.5]
+            expect(page.locator("#pose")).to_contain_text("(truth)")  # sim:// gives ground truth
+            expect(page.locator("#legend-odo")).to_be_visible()
+        finally:
+            context.close()
+
+
+def test_on_a_real_link_the_pose_is_labelled_odometry_from_the_maps_start(browser: Browser) -> None:
+    from omnibot.sim.emulator import spawn_pty_emulator
+    from omnibot.web.scene import PlannedPath
+
+    path = PlannedPath(((0.0, 0.0), (0.5, 0.0)))
+    with (
+        spawn_pty_emulator("omni4", world="room", seed=1) as device,  # a serial line: no truth
+        Dashboard(device, "omni4", http_port=0, world="room", path=path) as dashboard,
+    ):
+        context, page = _open_page(browser, dashboard)
+        try:
+            expect(page.locator("#pose")).to_contain_text("(odometry)")
+            expect(page.locator("#pose")).not_to_contain_text("truth")
+            expect(page.locator("#legend-odo")).to_be_hidden()
+            assert latest(dashboard)["pose_source"] == "odometry"
+            # odometry starts where the room puts the robot, and the path file is drawn from there
+            expect(page.locator("#pose")).to_contain_text("x 1.00 m, y 1.00 m")
+            assert page.evaluate("window.omnibot.scene().path") == [[1.0, 1.0], [1.5, 1.0]]
+        finally:
+            context.close()

@@ -11,7 +11,7 @@ from omnibot.client.events import Telemetry
 from omnibot.errors import ConfigError
 from omnibot.robot.description import load_robot
 from omnibot.sim.world import load_world
-from omnibot.web.scene import build_scene, load_path
+from omnibot.web.scene import PlannedPath, build_scene, load_path
 from omnibot.web.state import StateTracker
 
 
@@ -32,19 +32,36 @@ def test_scene_has_the_room_robot_and_path() -> None:
 def test_load_path(tmp_path: Path) -> None:
     good = tmp_path / "path.csv"
     good.write_text("1,1\n2,1.5\n\n# a comment\n3,2,ignored\n")
-    assert load_path(good) == [(1.0, 1.0), (2.0, 1.5), (3.0, 2.0)]
+    assert load_path(good) == PlannedPath(((1.0, 1.0), (2.0, 1.5), (3.0, 2.0)), 0.0)
     taught = tmp_path / "taught.csv"  # the navigation path files: t,x,y,theta[,v]
-    taught.write_text("t,x,y,theta,v\n0,1,1,0,0.3\n1,1.3,1,0,0.3\n")
-    assert load_path(taught) == [(1.0, 1.0), (1.3, 1.0)]
+    taught.write_text("t,x,y,theta,v\n0,1,1,0.5,0.3\n1,1.3,1,0,0.3\n")
+    assert load_path(taught) == PlannedPath(((1.0, 1.0), (1.3, 1.0)), 0.5)
     bad = tmp_path / "bad.csv"
     bad.write_text("1,1\n2,oops\n")
     with pytest.raises(ConfigError, match=r"--path: .*bad.csv line 2: expected x,y in metres"):
+        load_path(bad)
+    bad.write_text("1,1\n1e300,0\n")
+    with pytest.raises(ConfigError, match=r"bad.csv line 2: x and y must be within 10000 m"):
+        load_path(bad)
+    bad.write_text("x,y,theta\n0,0,nan\n1,0,0\n")
+    with pytest.raises(ConfigError, match=r"bad.csv line 2: theta must be finite"):
         load_path(bad)
     bad.write_text("1,1\n")
     with pytest.raises(ConfigError, match="at least 2 points"):
         load_path(bad)
     with pytest.raises(ConfigError, match="cannot read path"):
         load_path(tmp_path / "missing.csv")
+
+
+def test_a_path_is_placed_where_following_it_would_drive_it() -> None:
+    path = PlannedPath(((0.0, 0.0), (1.0, 0.0), (1.0, 0.5)))  # x,y rows: start heading 0
+    assert path.placed(None) == [(0.0, 0.0), (1.0, 0.0), (1.0, 0.5)]
+    placed = path.placed((1.0, 1.0, 0.0))  # the room's start pose: shifted, not from the corner
+    assert placed == [(1.0, 1.0), (2.0, 1.0), (2.0, 1.5)]
+    turned = path.placed((2.0, 1.0, math.pi / 2))  # facing +y: the path's +x runs along +y
+    assert turned[1] == pytest.approx((2.0, 2.0)) and turned[2] == pytest.approx((1.5, 2.0))
+    headed = PlannedPath(((5.0, 5.0), (5.0, 6.0)), heading=math.pi / 2)  # its start faces +y
+    assert headed.placed((1.0, 1.0, 0.0))[1] == pytest.approx((2.0, 1.0))  # ahead of the robot
 
 
 def tel(t: float, counts: tuple[int, ...], heading: float = 0.0) -> Telemetry:

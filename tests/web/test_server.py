@@ -13,7 +13,8 @@ import pytest
 import websockets
 
 from omnibot.errors import ConfigError
-from omnibot.web.dashboard import Dashboard, access_token, bind, is_loopback
+from omnibot.web.access import is_loopback
+from omnibot.web.dashboard import Dashboard, access_token, bind
 from tests.web.conftest import ROOM
 
 

@@ -17,7 +17,8 @@ The examples (seed 000, sections III and VI.C):
    leaves a bend of its own; both run, so the difference is measured, not argued.
 3. ``ROTATE`` to face the nearest wall.
 4. A sonar approach: ``SONAR,1,60,0,100,25`` then ``MOVE,INF,60,0,0``: RANGE events inside 1 m,
-   and the emergency stop below 25 cm (``WARN,13``), released by ``STOP``.
+   and the emergency stop (``WARN,13``) where the echo falls below 25 cm plus the distance the robot
+   needs to stop from its speed (docs/safety.md), released by ``STOP``.
 """
 
 from __future__ import annotations
@@ -108,6 +109,13 @@ class Recorder:
         self.ranges: list[float] = []
         self.estop = False
 
+    def start_at(self, pose: Pose2D) -> None:
+        """Odometry in the world frame from ``pose`` (the true start): its trail starts there, with no
+        leg from the origin where the odometry stood before it knew the start."""
+        if self.odometry is not None:
+            self.odometry.pose = pose
+            self.odo_trail = [(pose.x, pose.y)]
+
     def __call__(self, event: Event) -> None:
         if isinstance(event, Telemetry) and event.encoders is not None and self.odometry is not None:
             pose = self.odometry.update(event.encoders, event.heading)
@@ -184,8 +192,8 @@ class Demo:
         c.telemetry(0.02, codes.TEL_ENCODERS | codes.TEL_HEADING | codes.TEL_QUEUE)
         c.sleep(0.1)
         start = self.pose()
-        if start is not None and self.recorder.odometry is not None:
-            self.recorder.odometry.pose = start  # odometry in the world frame, from the true start
+        if start is not None:
+            self.recorder.start_at(start)
 
         with self.segment(
             "circle, heading held",
@@ -245,7 +253,7 @@ class Demo:
         with self.segment(
             "sonar approach, emergency stop",
             "SONAR,1,60,0,100,25;MOVE,INF,60,0,0",
-            f"RANGE inside 1 m, WARN 13 below {100 * ESTOP_DISTANCE:.0f} cm",
+            f"RANGE inside 1 m, WARN 13 below {100 * ESTOP_DISTANCE:.0f} cm + the stop distance",
         ) as seg:
             c.sonar(1, 0.06, 0.0, 1.0, ESTOP_DISTANCE)
             c.move(math.inf, APPROACH_SPEED)

@@ -38,6 +38,9 @@ speed_kp, speed_ki          wheel-speed PI gains, PWM counts per rad/s (and per 
 control_period_ms           wheel-speed control period
 tracking, gyro              number of tracking wheels; True when there is a gyro
 sonar_period_min_ms         one entry per sonar: its shortest period (>= 60 ms)
+sonar_axes                  one entry per sonar: [axis deg, half cone deg, footprint lead cm, half width cm]
+stop_decel_cms2             deceleration the robot surely reaches when stopped, cm/s^2 (sonar stop)
+uncovered_speed_cms         fastest travel where no armed sonar looks, cm/s
 pins                        board pin map for MachineHAL (see hal.py)
 ==========================  =======================================================================
 """
@@ -47,12 +50,13 @@ from __future__ import annotations
 import argparse
 import math
 import shutil
+import sys
 from pathlib import Path
 from typing import Any
 
-from omnibot.errors import ConfigError
+from omnibot.errors import ConfigError, OmnibotError
 from omnibot.robot import kinematics
-from omnibot.robot.description import PiecewiseLinear, RobotDescription, load_robot
+from omnibot.robot.description import PiecewiseLinear, RobotDescription, SonarSpec, load_robot
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 SRC_DIR = PACKAGE_DIR.parent.parent
@@ -66,6 +70,7 @@ BOARD_MODULES = (
     "parser",
     "power",
     "queue",
+    "safety",
     "sonar",
     "speedctl",
     "telemetry",
@@ -111,6 +116,24 @@ def _default_k(robot: RobotDescription) -> float:
     volts = max(robot.battery.voltage - m.driver_drop, 0.1)
     v_free = volts / (m.torque_constant * m.gear_ratio) * w.radius
     return m.pwm_max / v_free
+
+
+def _sonar_axis(robot: RobotDescription, sonar: SonarSpec) -> list[float]:
+    """[axis deg, half cone deg, lead cm, half width cm] of a sonar: how far the footprint reaches
+    ahead of the sonar along its axis, and to either side of the axis (the sonar stop's geometry)."""
+    c, s = math.cos(sonar.angle), math.sin(sonar.angle)
+    along = []
+    across = []
+    for x, y in robot.footprint.outline():
+        dx, dy = x - sonar.x, y - sonar.y
+        along.append(c * dx + s * dy)
+        across.append(abs(-s * dx + c * dy))
+    return [
+        round(sonar.angle_deg, 6),
+        round(sonar.cone_deg / 2.0, 6),
+        round(max(0.0, *along) * 100.0, 6),
+        round(max(across) * 100.0, 6),
+    ]
 
 
 def build_config(
@@ -201,12 +224,38 @@ def build_config(
         "tracking": len(robot.encoders.tracking),
         "gyro": robot.gyro is not None,
         "sonar_period_min_ms": [max(60, math.ceil(s.period_min * 1000 - 1e-9)) for s in robot.sonars],
+        "sonar_axes": [_sonar_axis(robot, s) for s in robot.sonars],
+        "stop_decel_cms2": round(robot.stop_deceleration * 100.0, 6),
+        "uncovered_speed_cms": round(robot.uncovered_speed * 100.0, 6),
         "pins": pins if pins is not None else default_pins(robot),
     }
 
 
+def _non_finite(value: Any, where: str) -> str | None:
+    """Where in ``value`` (nested lists and dicts) a float is not finite, or None."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return f"{where} = {value!r}"
+    if isinstance(value, list | tuple):
+        items: Any = enumerate(value)
+    elif isinstance(value, dict):
+        items = value.items()
+    else:
+        return None
+    for key, item in items:
+        found = _non_finite(item, f"{where}[{key!r}]")
+        if found:
+            return found
+    return None
+
+
 def config_module_source(config: dict[str, Any]) -> str:
-    """The text of ``robot_config.py``: ``CONFIG = {...}`` with plain literals, one key a line."""
+    """The text of ``robot_config.py``: ``CONFIG = {...}`` with plain literals, one key a line.
+    A number that is not finite is refused (ConfigError naming it): ``inf`` and ``nan`` are not
+    literals, and the board would stop at a NameError."""
+    for key, value in config.items():
+        found = _non_finite(value, str(key))
+        if found:
+            raise ConfigError(f"the firmware config cannot hold {found}: every number must be finite")
     lines = [f'"""Firmware config of robot {config["name"]!r}, written by omnibot.firmware.config."""', ""]
     lines.append("CONFIG = {")
     for key, value in config.items():
@@ -257,7 +306,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--print", action="store_true", help="print robot_config.py")
     ap.add_argument("--power-min", type=int, default=None, help="dead band, PWM counts")
     args = ap.parse_args(argv)
-    config = build_config(load_robot(args.robot), power_min=args.power_min)
+    try:
+        config = build_config(load_robot(args.robot), power_min=args.power_min)
+        config_module_source(config)  # a number the board cannot read fails before a file is written
+    except OmnibotError as exc:
+        print(f"{ap.prog}: error: {exc}", file=sys.stderr)
+        return 2
     if args.print or not args.dest:
         print(config_module_source(config), end="")
     if args.dest:

@@ -2,10 +2,13 @@
 
 Each poll: advance the clock from ``hal.ticks_us()``; advance the motion timeline; read the UART
 and handle every complete command (immediate ones at once, motion commands into the queue, one
-reply each, in order); run the sonars (RANGE events, emergency stop); integrate the gyro; send a
+reply each, in order); run the sonars (RANGE events; the guard's speed limit and emergency stop,
+safety.py); integrate the gyro; send a
 TEL line when due. Text replies and events are lines ending in CR LF; after ``MODE`` with bit 2 the
 same messages travel as binary frames (docs/protocol.md), until a binary MODE clears the bit.
 """
+
+import math
 
 from omnibot.firmware import parser
 from omnibot.firmware.binlink import BinaryLink
@@ -14,6 +17,7 @@ from omnibot.firmware.limits import Limits
 from omnibot.firmware.motion import Executor
 from omnibot.firmware.power import PowerModel
 from omnibot.firmware.queue import CommandQueue
+from omnibot.firmware.safety import SonarGuard
 from omnibot.firmware.sonar import Sonars
 from omnibot.firmware.telemetry import Telemetry
 from omnibot.protocol import arq, codes
@@ -45,6 +49,8 @@ class Controller:
         self.queue = CommandQueue(int(config["queue_capacity"]))
         self.executor = Executor(config, hal, self.queue, self.model, self._warn, self._idle)
         self.sonars = Sonars(len(config["sonar_period_min_ms"]))
+        self.guard = SonarGuard(config, self.sonars)
+        self.executor.guard = self.guard
         self.telemetry = Telemetry()
         self.link = BinaryLink(hal.uart_write)
         self.binary = False
@@ -130,7 +136,12 @@ class Controller:
     @property
     def mode(self) -> int:
         """The MODE bits in force."""
-        return self.executor.mode | (codes.MODE_BINARY if self.binary else 0)
+        ex = self.executor
+        return (
+            ex.mode
+            | (codes.MODE_BINARY if self.binary else 0)
+            | (codes.MODE_REFUSE_UNCOVERED if self.guard.refuse else 0)
+        )
 
     def poll(self) -> None:
         """One pass of the main loop."""
@@ -144,14 +155,17 @@ class Controller:
             us %= 1000
         self._us = us
         self.executor.step(dt)
+        self._check_halt()
         data = hal.uart_read()
         if data:
             if self.binary:
                 self._binary_input(data)
             else:
                 self._text_input(data)
-        if self.sonars.count and self.sonars.poll(hal, self.now_ms, self.executor.moving, self._range) >= 0:
-            self.emergency_stop()
+        if self.sonars.count:
+            fresh = self.sonars.poll(hal, self.now_ms, self._range)
+            if fresh:
+                self._sonar_readings(fresh)
         if self.has_gyro:
             rate = hal.gyro_rate_mdps()
             if rate is not None:
@@ -165,9 +179,42 @@ class Controller:
         if self.binary:
             self.link.poll(self.now_ms)
 
+    def _sonar_readings(self, fresh: int) -> None:
+        """New readings (bit s: sonar s): the guard re-limits a travel or calls the emergency stop."""
+        g = self.guard
+        for s in range(self.sonars.count):
+            if fresh & (1 << s):
+                g.reading(s, self.sonars.last[s])
+        ex = self.executor
+        if not ex.moving:
+            return
+        if ex.travelling:
+            self._relimit()
+        elif g.below_stop():  # ROTATE, POWER: the threshold alone
+            self.emergency_stop()
+
+    def _relimit(self) -> None:
+        """The guard's inputs changed (a reading, SONAR, MODE): limit the running travel anew."""
+        self.executor.relimit()
+        self._check_halt()
+
+    def _check_halt(self) -> None:
+        """Report a motion the guard stopped (executor.halt): the emergency stop, or an uncovered one."""
+        code = self.executor.halt
+        if not code:
+            return
+        self.executor.halt = 0
+        if code == codes.W_SONAR_STOP:
+            self.emergency_stop()
+        else:
+            self._warn(codes.W_UNCOVERED_STOP)
+            self._idle()
+
     def emergency_stop(self) -> None:
-        """Sonar emergency stop: motors off, queue cleared, WARN 13, latched until STOP."""
+        """Sonar emergency stop: motors off (braked where the HAL can), queue cleared, WARN 13,
+        latched until STOP."""
         self.executor.stop()
+        self.executor.brake()
         self.latched = True
         self._warn(codes.W_SONAR_STOP)
         self._idle()
@@ -265,6 +312,8 @@ class Controller:
         code = self.limits.check(kw, p)
         if code == 0 and self.latched and kw in MOTION:
             code = codes.E_ESTOP
+        if code == 0 and self.guard.refuse and not self._covered(kw, p):
+            code = codes.E_UNCOVERED
         if code:
             self._error(code)
             return
@@ -275,9 +324,11 @@ class Controller:
                 return
             self._ok()
             ex.step(0)
+            self._check_halt()
         elif kw == codes.VEL:
             self._ok()
             ex.vel(p[0], p[1], p[2], p[3])
+            self._check_halt()
         elif kw == codes.STOP:
             was = ex.stop()
             ex.reset_move()
@@ -296,7 +347,9 @@ class Controller:
                 self.emit(self._hello_text())
         elif kw == codes.MODE:
             self._ok()
-            ex.set_mode(p[0] & ~codes.MODE_BINARY)
+            self.guard.refuse = bool(p[0] & codes.MODE_REFUSE_UNCOVERED)
+            ex.set_mode(p[0] & ~(codes.MODE_BINARY | codes.MODE_REFUSE_UNCOVERED))
+            self._relimit()
             binary = bool(p[0] & codes.MODE_BINARY)
             if binary != self.binary:
                 self.binary = binary
@@ -304,7 +357,9 @@ class Controller:
                 self._split.reset()
         elif kw == codes.SONAR:
             self.sonars.configure(p[0] - 1, p[1], p[2], p[3], p[4], self.now_ms)
+            self.guard.clear(p[0] - 1)
             self._ok()
+            self._relimit()
         elif kw == codes.TELEM:
             self.telemetry.configure(p[0], p[1], self.now_ms)
             self._ok()
@@ -315,6 +370,18 @@ class Controller:
                 self._error(codes.E_CALIBRATION)
         else:
             self._error(codes.E_INTERNAL)
+
+    def _covered(self, kw: int, p: "list[int]") -> bool:
+        """A MOVE or VEL travels where an armed sonar looks (or does not travel); others: True."""
+        if kw == codes.MOVE:
+            if p[0] == 0:
+                return True
+            a = math.radians(p[2])
+            s = 1.0 if (p[0] > 0) == (p[1] > 0) else -1.0
+            return self.guard.covers(s * math.cos(a), s * math.sin(a))
+        if kw == codes.VEL and (p[0] or p[1]):
+            return self.guard.covers(float(p[0]), float(p[1]))
+        return True
 
     def _cal(self, table: int, index: int, x: int, y: int) -> bool:
         if table == codes.CAL_K:

@@ -8,7 +8,10 @@ The controller calls only these methods, all non-blocking::
     uart_write(data: bytes)         queue bytes for sending
     set_power(i, pwm)               motor i (0-based) to signed PWM counts -pwm_max..pwm_max;
                                     positive turns the wheel the way that carries the robot along the
-                                    wheel's drive direction (the robot description's sign convention)
+                                    wheel's drive direction (the robot description's sign convention);
+                                    0 opens the driver (the motor coasts)
+    brake(i) -> bool                short motor i's terminals through the driver (dynamic braking)
+                                    until the next set_power; False: this driver cannot (it coasts)
     encoder_count(i) -> int         cumulative count of motor i's encoder, same sign as its power
     tracking_count(j) -> int        cumulative count of passive tracking wheel j
     gyro_rate_mdps() -> int | None  yaw rate in millidegrees/s, counter-clockwise positive; None: no gyro
@@ -49,6 +52,9 @@ class HAL:
 
     def set_power(self, i: int, pwm: int) -> None:
         pass
+
+    def brake(self, i: int) -> bool:
+        return False
 
     def encoder_count(self, i: int) -> int:
         return 0
@@ -208,6 +214,17 @@ class MachineHAL(HAL):
             d2.value(1 if pwm < 0 else 0)
         duty = abs(pwm) * 65535 // self._pwm_max
         pwm_out.duty_u16(duty if duty < 65535 else 65535)
+
+    def brake(self, i: int) -> bool:
+        """L298-style channel: both direction inputs low with the enable full on shorts the motor
+        ("fast motor stop"); a PWM/DIR driver (one direction pin) cannot brake."""
+        pwm_out, d1, d2 = self._motors[i]
+        if d2 is None:
+            return False
+        d1.value(0)
+        d2.value(0)
+        pwm_out.duty_u16(65535)
+        return True
 
     def encoder_count(self, i: int) -> int:
         return int(self._enc[i].count) if i < len(self._enc) else 0

@@ -6,11 +6,18 @@ so a run of queued motions keeps its timeline (37 moves of 50 ms take 1850 ms, w
 rate). Infinite motions (L or A = +-INF) and VEL end as soon as a command is queued behind them.
 DELTA repeats ``max(R, 1)`` times; with R = INF it repeats until a command is queued and then
 finishes the current repetition. The remembered MOVE is set when a MOVE or DELTA repetition starts.
+
+With a :class:`~omnibot.firmware.safety.SonarGuard` (``guard``), every travelling twist is scaled by
+the guard's factor (the sonar stop's speed limit) and a finite motion's time stretched to match, so it
+still covers its distance; :meth:`Executor.relimit` re-applies the factor after a new sonar reading.
+When the guard says the motion must not go on, the executor stops and leaves the reason in ``halt``
+(a protocol code) for the controller to report.
 """
 
 import math
 
 from omnibot.firmware.power import DEADBAND, SATURATED, PowerModel
+from omnibot.firmware.safety import LIMITED, UNCOVERED
 from omnibot.firmware.speedctl import SpeedControl
 from omnibot.firmware.watchdog import Watchdog
 from omnibot.protocol import codes
@@ -22,11 +29,13 @@ if TYPE_CHECKING:
 
     from omnibot.firmware.hal import HAL
     from omnibot.firmware.queue import CommandQueue
+    from omnibot.firmware.safety import SonarGuard
 
 INF = codes.INF
 MODE_SIMULATION = codes.MODE_SIMULATION
 MODE_CLOSED_LOOP = codes.MODE_CLOSED_LOOP
 NONE = 0  # no motion (kinds are the command ids of protocol/codes.py otherwise)
+BRAKED = 1 << 20  # applied-power marker of a braked motor: any power written next releases it
 LOOP_GUARD = 16  # motions started in one step at most (zero-length moves), keeps a poll short
 
 
@@ -59,6 +68,13 @@ class Executor:
         self.mode = 0
         self.remembered = [0, 0, 0, 0]
         self.watchdog = Watchdog()
+        self.guard: SonarGuard | None = None
+        self.halt = 0
+        self._k = 1.0
+        self._time_scale = 1.0
+        self._speed = 0.0  # translation speed last commanded, cm/s
+        self._coast = 0  # us left of coasting down to a speed the guard lowered
+        self._nominal = [0.0, 0.0, 0.0, 0.0]
         self._applied = [0] * self.n
         self._delta = [0, 0, 0, 0]
         self._reps = 0
@@ -90,6 +106,12 @@ class Executor:
     def moving(self) -> bool:
         return self.kind != NONE
 
+    @property
+    def travelling(self) -> bool:
+        """A MOVE, DELTA or VEL that translates the body (what the sonar guard limits)."""
+        n = self._nominal
+        return self.kind in (codes.MOVE, codes.DELTA, codes.VEL) and (n[0] != 0.0 or n[1] != 0.0)
+
     def set_mode(self, mode: int) -> None:
         """Change the mode bits; switching the closed loop re-plans the current motion's powers."""
         old = self.mode
@@ -107,7 +129,7 @@ class Executor:
 
     def apply(self) -> None:
         """Send the powers to the motors (zeros in simulation mode), only where they changed."""
-        sim = self.mode & MODE_SIMULATION
+        sim = self.mode & MODE_SIMULATION or self._coast > 0
         for i in range(self.n):
             p = 0 if sim else self.powers[i]
             if p != self._applied[i]:
@@ -124,10 +146,23 @@ class Executor:
         self.watchdog.disarm()
         self._feedback = False
         self._drag = False
+        self._coast = 0
+        self._speed = 0.0
         for i in range(self.n):
             self.powers[i] = 0
         self.apply()
         return was
+
+    def brake(self) -> bool:
+        """Brake every motor where the HAL can (``hal.brake``), after :meth:`stop`; the next power
+        written releases it. True if every motor brakes."""
+        every = True
+        for i in range(self.n):
+            if self.hal.brake(i):
+                self._applied[i] = BRAKED
+            else:
+                every = False
+        return every
 
     def reset_move(self) -> None:
         for i in range(4):
@@ -149,6 +184,10 @@ class Executor:
         """Advance the timeline by dt_us and start whatever is due."""
         if self.kind != NONE and not self.infinite:
             self.remaining -= dt_us
+        if self._coast > 0:
+            self._coast -= dt_us
+            if self._coast <= 0:
+                self.apply()
         guard = LOOP_GUARD
         while guard > 0:
             guard -= 1
@@ -252,7 +291,7 @@ class Executor:
         a = math.radians(D)
         self._drive(s * 0.01 * math.cos(a), s * 0.01 * math.sin(a), s * C * 0.001, False, gain)
         if not self.infinite:
-            self.remaining = _duration(abs(L), abs(V), self.model.scale) + carry
+            self.remaining = _duration(abs(L), abs(V), self._time_scale) + carry
 
     def _rotate(self, A: int, F: int, carry: int) -> None:
         self.infinite = abs(A) == INF
@@ -268,9 +307,32 @@ class Executor:
     def _drive(self, vx: float, vy: float, w: float, rotate: bool, gain: float = 1.0) -> None:
         """Compute and apply the powers for a twist (m/s, m/s, rad/s); ``gain`` is the roller drag's
         (:meth:`PowerModel.drag`)."""
+        n = self._nominal
+        n[0] = vx
+        n[1] = vy
+        n[2] = w
+        n[3] = gain
+        k = 1.0
+        g = self.guard
+        if g is not None and (vx != 0.0 or vy != 0.0):
+            k = g.factor(vx * 100.0, vy * 100.0)
+            if k <= 0.0:
+                self.halt = g.code
+                self.stop()
+                return
+            self._warn_once(g.flags)
+            vx *= k
+            vy *= k
+            w *= k
+            self._slow_down(math.sqrt(vx * vx + vy * vy) * 100.0, k < 1.0, g.decel)
+        else:
+            self._speed = 0.0
+            self._coast = 0
+        self._k = k
         model = self.model
         model.drag_gain = gain
         flags = model.compute(vx, vy, w, rotate, self.powers)
+        self._time_scale = model.scale * k
         self._warn_once(flags)
         t = self._twist
         t[0] = vx
@@ -292,6 +354,31 @@ class Executor:
         self._start_drag(flags)
         self.apply()
 
+    def _slow_down(self, speed: float, limited: bool, decel: float) -> None:
+        """When the guard lowers the speed, coast (powers off) until the robot must have slowed to it:
+        reduced power alone decelerates far less than the stop deceleration the guard counts on."""
+        bound = self._speed + decel * self._coast * 1e-6  # fastest the robot can be going now
+        self._speed = speed
+        if limited and bound > speed:
+            self._coast = int((bound - speed) / decel * 1e6)
+        else:
+            self._coast = 0
+
+    def relimit(self) -> None:
+        """Apply the guard's factor anew (a sonar reading came): re-drive the travel if it changed and
+        stretch or shrink a finite motion's remaining time so that it keeps its distance."""
+        g = self.guard
+        if g is None or not self.travelling:
+            return
+        n = self._nominal
+        k = g.factor(n[0] * 100.0, n[1] * 100.0)
+        if k == self._k:
+            return
+        old = self._time_scale
+        self._drive(n[0], n[1], n[2], self._rot, n[3])
+        if self.kind != NONE and not self.infinite and self.kind != codes.VEL:
+            self.remaining = int(self.remaining * old / self._time_scale)
+
     def _warn_once(self, flags: int) -> None:
         new = flags & ~self._warned
         self._warned |= flags
@@ -299,6 +386,10 @@ class Executor:
             self._warn(codes.W_SPEED_REDUCED)
         if new & DEADBAND:
             self._warn(codes.W_POWER_TOO_LOW)
+        if new & LIMITED:
+            self._warn(codes.W_SONAR_LIMIT)
+        if new & UNCOVERED:
+            self._warn(codes.W_UNCOVERED)
 
     # ------------------------------------------------------------------ roller drag (open loop)
 

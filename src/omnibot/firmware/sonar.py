@@ -3,8 +3,9 @@
 Each configured sonar is pinged every ``period`` ms on a fixed timeline: ``hal.sonar_start(s)``
 triggers it and ``hal.sonar_read(s)`` is polled until it returns the range (cm, -1 for no echo).
 A reading that meets the band is reported as ``RANGE,<sonar>,<cm>``: inside [LOW, HIGH] when
-LOW < HIGH, outside [HIGH, LOW] when LOW > HIGH; no-echo readings are never reported. A reading
-below STOP cm (STOP > 0) asks the controller for an emergency stop.
+LOW < HIGH, outside [HIGH, LOW] when LOW > HIGH; no-echo readings are never reported. Whether a
+reading stops the robot is the guard's business (safety.py): :meth:`Sonars.poll` says which sonars
+have a new reading.
 """
 
 SONAR_BASE = 1  # protocol number of the first sonar (HAL indices start at 0)
@@ -38,12 +39,12 @@ class Sonars:
         for s in range(self.count):
             self.period[s] = 0
 
-    def poll(self, hal: "HAL", now_ms: int, moving: bool, report: "Callable[[int, int], None]") -> int:
+    def poll(self, hal: "HAL", now_ms: int, report: "Callable[[int, int], None]") -> int:
         """Start due pings, collect readings, ``report(sonar, cm)`` those in their band.
 
-        Returns the sonar (HAL index) asking for an emergency stop, or -1.
+        Returns a bit mask of the sonars (bit s for HAL index s) with a new reading in :attr:`last`.
         """
-        want_stop = -1
+        fresh = 0
         for s in range(self.count):
             if self._pending[s]:
                 cm = hal.sonar_read(s)
@@ -53,14 +54,15 @@ class Sonars:
                     cm = -1
                 self._pending[s] = False
                 self.last[s] = cm
-                if self.period[s] == 0 or cm < 0:
+                if self.period[s] == 0:
+                    continue
+                fresh |= 1 << s
+                if cm < 0:
                     continue
                 lo = self.low[s]
                 hi = self.high[s]
                 if (lo < hi and lo <= cm <= hi) or (lo > hi and (cm < hi or cm > lo)):
                     report(s + SONAR_BASE, cm)
-                if moving and cm < self.stop[s]:
-                    want_stop = s
             elif self.period[s] > 0 and now_ms - self._next[s] >= 0:
                 self._next[s] += self.period[s]
                 if now_ms - self._next[s] >= 0:
@@ -68,7 +70,7 @@ class Sonars:
                 self._pending[s] = True
                 self._started[s] = now_ms
                 hal.sonar_start(s)
-        return want_stop
+        return fresh
 
 
 TYPE_CHECKING = False

@@ -113,6 +113,9 @@ TEXT_AFTER = {ERROR: 1, ERROR_EVENT: 1, WARN: 1, HELLO_REPLY: 2}
 W_SPEED_REDUCED = 11
 W_POWER_TOO_LOW = 12
 W_SONAR_STOP = 13
+W_SONAR_LIMIT = 14  # project: speed limited so the robot can stop before what a sonar sees
+W_UNCOVERED = 15  # project: travel where no armed sonar looks, speed limited
+W_UNCOVERED_STOP = 16  # project: a running motion turned where no armed sonar looks, stopped (MODE bit 3)
 E_QUEUE_FULL = 21
 E_TOO_LONG = 22
 E_UNKNOWN = 23
@@ -132,11 +135,15 @@ E_SONAR = 37
 E_CALIBRATION = 38  # project: CAL table, index or knot order
 E_UNSUPPORTED = 39  # project: MODE bit, TELEM mask bit or protocol version not supported
 E_ESTOP = 40
+E_UNCOVERED = 41  # project: travel where no armed sonar looks, refused (MODE bit 3)
 
 TEXTS = {
     W_SPEED_REDUCED: "speed reduced to what the motors can give",
     W_POWER_TOO_LOW: "power below what moves the robot, set to 0",
     W_SONAR_STOP: "emergency stop by sonar",
+    W_SONAR_LIMIT: "speed limited to stop before the sonar's obstacle",
+    W_UNCOVERED: "no sonar covers this direction, speed limited",
+    W_UNCOVERED_STOP: "no sonar covers this direction, motion stopped",
     E_QUEUE_FULL: "queue full",
     E_TOO_LONG: "command too long",
     E_UNKNOWN: "unknown command",
@@ -156,6 +163,7 @@ TEXTS = {
     E_CALIBRATION: "calibration table, index or knot order wrong",
     E_UNSUPPORTED: "mode, mask bit or version not supported",
     E_ESTOP: "motion blocked: emergency stop latched",
+    E_UNCOVERED: "motion refused: no sonar covers this direction",
 }
 
 # --- STATUS states -----------------------------------------------------------------------------------
@@ -167,7 +175,8 @@ STATE_ESTOP = 3
 MODE_SIMULATION = 1  # bit 0: run every algorithm, apply no power
 MODE_CLOSED_LOOP = 2  # bit 1: closed-loop wheel-speed control (needs motor encoders)
 MODE_BINARY = 4  # bit 2: binary framing in both directions (after the OK of this MODE)
-MODE_MASK = 7  # every defined bit; others get ERROR 39
+MODE_REFUSE_UNCOVERED = 8  # bit 3: with the sonar stop armed, refuse travel no armed sonar covers
+MODE_MASK = 15  # every defined bit; others get ERROR 39
 
 # --- TEL mask bits; groups follow t_ms and mask in bit order -------------------------------------
 TEL_POWER = 1  # n, p1..pn: applied motor powers

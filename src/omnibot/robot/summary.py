@@ -26,10 +26,11 @@ def describe(robot: RobotDescription) -> str:
         )
     m = robot.wheels[0].motor
     same = all(w.motor == m for w in robot.wheels)
+    current = "none" if m.current_limit is None else f"{m.current_limit:g} A"
     lines.append("")
     lines.append(
         f"motor{'s' if same else ' (wheel 1)'}    R {m.resistance:g} ohm, k {m.torque_constant:g} N m/A, gear {m.gear_ratio:g}:1, "
-        f"driver drop {m.driver_drop:g} V, current limit {m.current_limit:g} A, PWM {m.pwm_bits} bit"
+        f"driver drop {m.driver_drop:g} V, current limit {current}, PWM {m.pwm_bits} bit"
     )
     if not same:
         lines.append("          (motors differ per wheel)")

@@ -191,7 +191,7 @@ class Physics:
         W[..., kernels.W_DROP] = wp(lambda w: w.motor.driver_drop)
         W[..., kernels.W_INV_RES] = inv_res
         W[..., kernels.W_KE_RES] = ke * inv_res
-        W[..., kernels.W_I_MAX] = wp(lambda w: w.motor.current_limit)
+        W[..., kernels.W_I_MAX] = wp(lambda w: w.motor.current_max)
         W[..., kernels.W_KT] = kt
         W[..., kernels.W_EMF_DAMPING] = kt * ke * inv_res
         W[..., kernels.W_VISC] = wp(lambda w: w.motor.friction_viscous)

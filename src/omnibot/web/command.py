@@ -22,6 +22,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--host", default="127.0.0.1", help="address to serve on (default 127.0.0.1: this machine only)"
     )
+    p.add_argument(
+        "--allow-host",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help="a name the page may be opened by besides the bound address and the loopback names "
+        "(e.g. robot.local; repeat for more); others are refused (DNS rebinding)",
+    )
     p.add_argument("--http-port", type=int, default=8080, help="HTTP port (default 8080; 0: any free port)")
     p.add_argument(
         "--token",
@@ -73,6 +81,7 @@ def run(args: argparse.Namespace) -> int:
         path=path,
         config=config,
         teach=teacher,
+        allow_hosts=args.allow_host,
     )
     dash.start()
     try:

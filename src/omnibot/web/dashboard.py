@@ -11,18 +11,24 @@ Threads: ``omnibot-robot-link`` owns the client (:class:`~omnibot.web.link.Robot
 link URL, the robot, the world, the path, binding the port, a missing token) fails in the
 constructor, before any thread starts, with an :class:`~omnibot.errors.OmnibotError`.
 
+A planned path read from a file (:class:`~omnibot.web.scene.PlannedPath`) is drawn from the robot's
+pose at the start, as ``omnibot follow`` would drive it from there; a list of points is drawn as
+given, in the frame of the pose the page shows.
+
 Binding: 127.0.0.1 by default. Bound to any other address the dashboard requires an access token:
-the one given, or a fresh random one (printed in :attr:`Dashboard.url`).
+the one given, or a fresh random one (printed in :attr:`Dashboard.url`). Requests are answered only
+when their ``Host`` names this server (:class:`~omnibot.web.access.HostPolicy`: the loopback names,
+the bound address, the names in ``allow_hosts``), which defeats DNS rebinding.
 """
 
 from __future__ import annotations
 
 import contextlib
-import ipaddress
 import secrets
 import socket
 import threading
 import time
+from collections.abc import Sequence
 from pathlib import Path
 from types import TracebackType
 from typing import Self
@@ -31,27 +37,19 @@ import uvicorn
 
 from omnibot.client.client import RobotClient
 from omnibot.errors import ConfigError, OmnibotError
+from omnibot.estimation.odometry import Pose2D
 from omnibot.robot.description import RobotDescription, load_robot
 from omnibot.sim.world import World, load_world
 from omnibot.teleop.config import TeleopConfig
 from omnibot.teleop.simlink import sim_device
+from omnibot.web.access import HostCheck, HostPolicy, is_loopback
 from omnibot.web.link import RobotLink
 from omnibot.web.messages import MAX_FRAME
-from omnibot.web.scene import Point, build_scene
+from omnibot.web.scene import PlannedPath, Point, build_scene
 from omnibot.web.server import Hub, create_app
 from omnibot.web.teach import TeachRepeat
 
 TOKEN_MIN = 8
-
-
-def is_loopback(host: str) -> bool:
-    """True for 127.0.0.0/8, ::1 and localhost."""
-    if host.lower() == "localhost":
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False
 
 
 def access_token(host: str, token: str | None) -> str | None:
@@ -95,12 +93,14 @@ class Dashboard:
         http_port: int = 8080,
         token: str | None = None,
         world: World | str | Path | None = None,
-        path: list[Point] | None = None,
+        path: PlannedPath | Sequence[Point] | None = None,
         config: TeleopConfig | None = None,
         teach: TeachRepeat | None = None,
+        allow_hosts: Sequence[str] = (),
     ) -> None:
         self.token = token = access_token(host, token)
         self.host = host
+        HostPolicy.for_bind(host, 1, allow_hosts)  # a bad name fails here, before anything opens
         description = self._robot(port_url, robot)
         client = RobotClient.open(port_url, description, timeout=0.5)
         try:
@@ -109,8 +109,14 @@ class Dashboard:
                 the_world: World | None = world if isinstance(world, World) else load_world(world)
             else:
                 the_world = device.sim.world if device is not None else None
-            self.scene = build_scene(description, the_world, path)
-            self.link = RobotLink(client, description, config, teach=teach)
+            # on a link without truth, odometry starts at the map's start pose (where the robot is put)
+            start = the_world.start if device is None and the_world is not None else None
+            self.link = RobotLink(
+                client, description, config, teach=teach, start=Pose2D(*start) if start else None
+            )
+            # a path file is drawn where following it from here would drive it; points as given
+            points = path.placed(self.link.pose) if isinstance(path, PlannedPath) else path
+            self.scene = build_scene(description, the_world, points)
             self.scene["teach"] = teach is not None
             self._sock = bind(host, http_port)
         except BaseException:
@@ -119,9 +125,11 @@ class Dashboard:
         self.port = int(self._sock.getsockname()[1])
         self.hub = Hub(self.scene, self.link.outbox, self.link.submit)
         self.app = create_app(self.hub, token)
+        bound = str(self._sock.getsockname()[0])  # the address a name given to --host resolved to
+        self.host_check = HostCheck(self.app, HostPolicy.for_bind(host, self.port, [*allow_hosts, bound]))
         self._server = uvicorn.Server(
             uvicorn.Config(
-                self.app,
+                self.host_check,
                 log_level="warning",
                 log_config=None,  # leave the application's logging alone
                 access_log=False,

@@ -3,7 +3,7 @@
 ::
 
     web server (asyncio thread)                     link thread (owns RobotClient)
-      ws message -> parse_message() -> submit() --> inbox (queue.Queue)
+      ws message -> parse_message() -> submit() --> inbox (queue.Queue, at most INBOX_MAX)
                                                       every period (autorepeat_rate, Pacer):
                                                         drain inbox: drive / joy / estop / resume / teach
                                                         Deadman -> client.vel(..., vel_timeout)
@@ -57,6 +57,10 @@ log = logging.getLogger("omnibot.web")
 
 TEL_PERIOD = 0.05
 SONAR_PERIOD = 0.1
+INBOX_MAX = 256
+"""Requests waiting for the link thread; beyond it :meth:`RobotLink.submit` drops them (the server
+answers the page with an error), so a flood cannot grow memory or delay the link thread by more than
+one bounded batch a period."""
 DRIVE_RATE_MAX = math.pi
 """rad/s at full turn from the page (keys, slider): half a turn a second, whatever the robot could do."""
 
@@ -71,7 +75,8 @@ Request = Drive | Joy | EStop | Resume | Teach | PageGone
 
 class RobotLink:
     """Owns ``client`` in a thread of its own; :meth:`submit` and :attr:`outbox` are the only ways in
-    and out. ``wall``/``sleep`` are the wall clock (tests may pass fakes)."""
+    and out. ``start`` is where odometry starts on a link without ground truth (None: the origin);
+    ``wall``/``sleep`` are the wall clock (tests may pass fakes)."""
 
     def __init__(
         self,
@@ -80,6 +85,7 @@ class RobotLink:
         config: TeleopConfig | None = None,
         *,
         teach: TeachRepeat | None = None,
+        start: Pose2D | None = None,
         wall: Callable[[], float] = time.monotonic,
         sleep: Callable[[float], None] = time.sleep,
     ) -> None:
@@ -90,14 +96,16 @@ class RobotLink:
         self.limits = TwistLimits.from_limits(client.limits, self.config)
         self.drive_limits = TwistLimits(self.limits.speed, min(self.limits.rate, DRIVE_RATE_MAX))
         """Full scale of the page's keys, stick and turn slider."""
-        self.inbox: queue.Queue[Request] = queue.Queue()
+        self.inbox: queue.Queue[Request] = queue.Queue(maxsize=INBOX_MAX)
+        self._estop_waiting = threading.Event()
+        self._gone_waiting = threading.Event()
         self.outbox: queue.Queue[dict[str, Any]] = queue.Queue(maxsize=1000)
         self._wall, self._sleep = wall, sleep
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._device = sim_device(client.link)
-        start = self._truth()
-        self.tracker = StateTracker(robot, client.link.url, Pose2D(*start) if start else None)
+        truth = self._truth()
+        self.tracker = StateTracker(robot, client.link.url, Pose2D(*truth) if truth else start)
         self.deadman = Deadman(self.config.input_timeout, self.config.stop_repeats)
         self.estop = False
         self.following = False
@@ -109,9 +117,21 @@ class RobotLink:
 
     # ------------------------------------------------------------------ other threads
 
-    def submit(self, request: Request) -> None:
-        """Hand a validated request to the link thread (thread-safe)."""
-        self.inbox.put(request)
+    def submit(self, request: Request) -> bool:
+        """Hand a validated request to the link thread (thread-safe); False when the inbox is full
+        and it was dropped. An emergency stop or a page gone is never dropped: with the inbox full it
+        is flagged and acted on after the requests waiting (so nothing queued before it undoes it)."""
+        try:
+            self.inbox.put_nowait(request)
+        except queue.Full:
+            if isinstance(request, EStop):
+                self._estop_waiting.set()
+                return True
+            if isinstance(request, PageGone):
+                self._gone_waiting.set()
+                return True
+            return False
+        return True
 
     def start(self) -> None:
         self._thread = threading.Thread(target=self._run, name="omnibot-robot-link", daemon=True)
@@ -127,6 +147,12 @@ class RobotLink:
             self._thread = None
         else:
             self.client.close()
+
+    @property
+    def pose(self) -> tuple[float, float, float] | None:
+        """The pose the page shows: the simulator's truth, else odometry (before :meth:`start`, or
+        from the link thread)."""
+        return self._pose()
 
     @property
     def alive(self) -> bool:
@@ -180,6 +206,12 @@ class RobotLink:
             except queue.Empty:
                 break
             self._handle(request, now)
+        if self._gone_waiting.is_set():
+            self._gone_waiting.clear()
+            self._sample = None
+        if self._estop_waiting.is_set():
+            self._estop_waiting.clear()
+            self._estop()
         pose = self._pose()
         if self.teach is not None and not self.estop:
             self.following = self._call_teach(lambda t: t.tick(self.client, pose), False)
@@ -197,7 +229,8 @@ class RobotLink:
             "ended": self.deadman.last_end.value if self.deadman.last_end else None,
             "teach": self.teach is not None,
         }
-        self._emit(self.tracker.frame(self.client.clock.now(), pose, drive))
+        # truth only when the link is a simulator that gives it; else the tracker shows odometry as such
+        self._emit(self.tracker.frame(self.client.clock.now(), self._truth(), drive))
 
     def _handle(self, request: Request, now: float) -> None:
         if isinstance(request, EStop):

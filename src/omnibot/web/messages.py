@@ -13,24 +13,29 @@ Every websocket text frame is one JSON object with a ``type``::
 
 :func:`parse_message` returns the message or a one-line reason it was rejected (which the page
 shows); a rejected message is never acted on. Frames larger than :data:`MAX_FRAME` are rejected
-unread.
+unread, and so is JSON nested deeper than :data:`MAX_DEPTH` (checked before it is parsed). Types are
+strict: a number must be a JSON number (not ``"1"`` or ``true``), finite (``NaN``, ``Infinity`` and
+``1e999`` are refused), and a flag a JSON boolean.
 """
 
 from __future__ import annotations
 
 import json
+import math
 from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError
 
 MAX_FRAME = 4096
 """Characters: the largest message the page sends is a gamepad's state, well under this."""
+MAX_DEPTH = 4
+"""Nesting of JSON arrays and objects: a message is an object holding at most lists of numbers (2)."""
 
 Fraction = Annotated[float, Field(ge=-1.0, le=1.0, allow_inf_nan=False)]
 
 
 class _Message(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
 
 
 class Drive(_Message):
@@ -90,18 +95,55 @@ def _reason(error: ValidationError) -> str:
         elif item["type"] == "extra_forbidden":
             msg = "unknown key"
         elif isinstance(given, int | float | str) and not isinstance(given, bool):
-            msg += f" (got {given!r})"
+            shown = repr(given)
+            msg += f" (got {shown if len(shown) <= 40 else shown[:37] + '...'})"
         parts.append(f"{loc}: {msg}" if loc else msg)
     return "; ".join(parts)
+
+
+def nesting(text: str) -> int:
+    """How deep JSON text nests arrays and objects (brackets inside strings do not count); a scan
+    without recursion, so hostile text cannot exhaust the parser's stack."""
+    depth = deepest = 0
+    in_string = escaped = False
+    for ch in text:
+        if in_string:
+            if escaped:
+                escaped = False
+            elif ch == "\\":
+                escaped = True
+            elif ch == '"':
+                in_string = False
+        elif ch == '"':
+            in_string = True
+        elif ch in "[{":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif ch in "]}":
+            depth -= 1
+    return deepest
+
+
+def _no_constant(name: str) -> float:
+    raise ValueError(f"{name} is not a number a message may hold")
+
+
+def _finite(text: str) -> float:
+    value = float(text)
+    if not math.isfinite(value):
+        raise ValueError(f"{text} is out of range")
+    return value
 
 
 def parse_message(text: str) -> Message | str:
     """The validated message, or why it was rejected."""
     if len(text) > MAX_FRAME:
         return f"message too long ({len(text)} characters, at most {MAX_FRAME})"
+    if nesting(text) > MAX_DEPTH:
+        return f"message nested too deeply (at most {MAX_DEPTH} levels of arrays and objects)"
     try:
-        data = json.loads(text)
-    except ValueError as exc:
+        data = json.loads(text, parse_constant=_no_constant, parse_float=_finite)
+    except (ValueError, RecursionError) as exc:
         return f"not JSON: {exc}"
     if not isinstance(data, dict):
         return f"a message is a JSON object, got {type(data).__name__}"

@@ -3,6 +3,10 @@
 :func:`build_scene` turns a robot description, an optional world and an optional planned path into
 one JSON-ready dict (SI units, radians), sent to each page when it connects. :func:`load_path` reads
 a planned path from a CSV file (``x,y`` rows, or the ``x`` and ``y`` columns of a file with a header).
+
+A path is drawn where driving it would take the robot: ``omnibot follow`` drives a path from where
+the robot stands (the path's start pose on the robot's pose), so :meth:`PlannedPath.placed` puts the
+path's first point on the robot and turns it by the robot's heading less the path's start heading.
 """
 
 from __future__ import annotations
@@ -10,14 +14,38 @@ from __future__ import annotations
 import csv
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from omnibot.control.paths.files import LIMITS
 from omnibot.errors import ConfigError
 from omnibot.robot.description import RobotDescription
 from omnibot.sim.world import World
 
 Point = tuple[float, float]
+Pose = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class PlannedPath:
+    """A path to draw, in its file's frame: its points and its heading at the start (rad; the
+    ``theta`` column's first value, 0 for ``x,y`` rows)."""
+
+    points: tuple[Point, ...]
+    heading: float = 0.0
+
+    def placed(self, pose: Pose | None) -> list[Point]:
+        """The points where driving the path from ``pose`` takes them (None: as in the file)."""
+        if pose is None:
+            return list(self.points)
+        x0, y0 = self.points[0]
+        turn = pose[2] - self.heading
+        c, s = math.cos(turn), math.sin(turn)
+        return [
+            (pose[0] + c * (x - x0) - s * (y - y0), pose[1] + s * (x - x0) + c * (y - y0))
+            for x, y in self.points
+        ]
 
 
 def _points(vertices: Any) -> list[list[float]]:
@@ -63,7 +91,8 @@ def world_scene(world: World | None) -> dict[str, Any] | None:
 def build_scene(
     robot: RobotDescription, world: World | None = None, path: Sequence[Point] | None = None
 ) -> dict[str, Any]:
-    """The ``scene`` frame: robot, world (None: no map) and planned path (None: none)."""
+    """The ``scene`` frame: robot, world (None: no map) and planned path (None: none) in the frame
+    of the pose the page shows (see :meth:`PlannedPath.placed`)."""
     return {
         "type": "scene",
         "robot": robot_scene(robot),
@@ -72,10 +101,10 @@ def build_scene(
     }
 
 
-def load_path(file: str | Path) -> list[Point]:
-    """A planned path from a CSV file: with a header, its ``x`` and ``y`` columns (so the navigation
-    path files, ``t,x,y,theta[,v]``, are read as they are); without one, ``x,y`` in the first two
-    columns. Metres; blank lines and lines starting with ``#`` are skipped."""
+def load_path(file: str | Path) -> PlannedPath:
+    """A planned path from a CSV file: with a header, its ``x`` and ``y`` columns (and the first
+    ``theta``, so the navigation path files, ``t,x,y,theta[,v]``, are read as they are); without one,
+    ``x,y`` in the first two columns. Metres; blank lines and lines starting with ``#`` are skipped."""
     p = Path(file)
     try:
         text = p.read_text(encoding="utf-8")
@@ -84,6 +113,8 @@ def load_path(file: str | Path) -> list[Point]:
         raise ConfigError(f"cannot read path {p}: {reason}", key="--path") from None
     points: list[Point] = []
     ix, iy = 0, 1
+    ith: int | None = None
+    heading = 0.0
     first = True
     for n, row in enumerate(csv.reader(text.splitlines()), 1):
         if not row or not "".join(row).strip() or row[0].lstrip().startswith("#"):
@@ -93,6 +124,7 @@ def load_path(file: str | Path) -> list[Point]:
             names = [c.strip().lower() for c in row]
             if "x" in names and "y" in names:
                 ix, iy = names.index("x"), names.index("y")
+                ith = names.index("theta") if "theta" in names else None
                 continue
         try:
             x, y = float(row[ix]), float(row[iy])
@@ -100,9 +132,19 @@ def load_path(file: str | Path) -> list[Point]:
             raise ConfigError(
                 f"{p} line {n}: expected x,y in metres, got {','.join(row)!r}", key="--path"
             ) from None
+        bound = LIMITS["x"][0]
         if not (math.isfinite(x) and math.isfinite(y)):
             raise ConfigError(f"{p} line {n}: x and y must be finite", key="--path")
+        if max(abs(x), abs(y)) > bound:
+            raise ConfigError(f"{p} line {n}: x and y must be within {bound:g} m", key="--path")
+        if ith is not None and not points:
+            try:
+                heading = float(row[ith])
+            except (ValueError, IndexError):
+                raise ConfigError(f"{p} line {n}: expected theta in radians", key="--path") from None
+            if not math.isfinite(heading):
+                raise ConfigError(f"{p} line {n}: theta must be finite", key="--path")
         points.append((x, y))
     if len(points) < 2:
         raise ConfigError(f"{p}: a path needs at least 2 points, got {len(points)}", key="--path")
-    return points
+    return PlannedPath(tuple(points), heading)

@@ -3,7 +3,9 @@
 Units: t in s, x and y in m, theta in rad (the body heading to hold), v in m/s (the speed to drive
 at that point, e.g. as taught). Columns may come in any order; blank lines and lines starting with
 ``#`` are skipped. Rules: the header names each column once, no unknown columns; every row has one
-field per column, each a finite number; t never decreases; v is not negative; at least two rows.
+field per column, each a finite number within :data:`LIMITS` (a robot's path, not a typo of
+exponent: ``1e300`` would make the speed profile take gigabytes); t never decreases; v is not
+negative; at least two rows.
 A broken file raises :class:`PathFileError`, which names the file, the line and the column::
 
     path.csv: line 7, column theta: 'abc' is not a number
@@ -25,6 +27,8 @@ from omnibot.errors import ConfigError
 
 REQUIRED = ("t", "x", "y", "theta")
 OPTIONAL = ("v",)
+LIMITS = {"t": (1e6, "s"), "x": (1e4, "m"), "y": (1e4, "m"), "theta": (1e4, "rad"), "v": (100.0, "m/s")}
+"""Largest magnitude of each column: 10 km, 10,000 rad (1,600 turns), 11 days, 100 m/s."""
 
 
 class PathFileError(ConfigError):
@@ -77,6 +81,11 @@ def _parse(stream: IO[str], label: str) -> Path:
                 ) from None
             if not math.isfinite(value):
                 raise PathFileError(f"{label}: line {line}, column {col}: {text.strip()!r} is not finite")
+            bound, unit = LIMITS[col]
+            if abs(value) > bound:
+                raise PathFileError(
+                    f"{label}: line {line}, column {col}: {text.strip()} is out of range (at most {bound:g} {unit})"
+                )
             if col == "v" and value < 0:
                 raise PathFileError(f"{label}: line {line}, column v: speed {value:g} is negative")
             values = columns[col]

@@ -26,10 +26,13 @@ import numpy as np
 
 from omnibot.control.paths.geometry import curvature, heading_rate
 from omnibot.control.paths.path import FloatArray, Path
+from omnibot.errors import ConfigError
 from omnibot.robot.description import RobotDescription
 
 RHO = 0.1
 """m: the length a radian of turning in place counts for in sigma (only the grid depends on it)."""
+MAX_SAMPLES = 200_000
+"""Grid points a profile may have (2 km of path at the default 1 cm; about 100 MB while built)."""
 
 
 @dataclass(frozen=True)
@@ -165,16 +168,34 @@ class SpeedProfile:
         )
 
 
+def _check_size(path: Path, resolution: float) -> None:
+    """Refuse a path whose grid would exceed :data:`MAX_SAMPLES` (before a byte of it is built)."""
+    if not (math.isfinite(resolution) and resolution > 0):
+        raise ValueError(f"a speed profile needs a positive resolution, got {resolution}")
+    with np.errstate(over="ignore", invalid="ignore"):
+        seg = np.hypot(np.diff(path.s), RHO * np.diff(path.theta))
+        if not np.all(np.isfinite(seg)):
+            raise ConfigError("the path has points too far out to profile (its length is not finite)")
+        steps = float(np.sum(np.where(seg > 1e-12, np.maximum(1.0, np.ceil(seg / resolution - 1e-9)), 0.0)))
+    if steps > MAX_SAMPLES:
+        raise ConfigError(
+            f"the path is too long to profile: {float(np.sum(seg)):.4g} m of travel (turning included) "
+            f"needs {steps:.3g} steps of {resolution:g} m, at most {MAX_SAMPLES:,}; split it"
+        )
+
+
 def time_optimal_profile(
     path: Path, limits: MotionLimits, *, resolution: float = 0.01, use_path_speed: bool = True
 ) -> SpeedProfile:
     """The time-optimal profile of ``path`` under ``limits`` (see the module docstring).
 
     ``resolution`` is the grid step in sigma (m); ``use_path_speed`` caps the speed by the path's
-    v column when it has one.
+    v column when it has one. A path that would need more than :data:`MAX_SAMPLES` grid points
+    raises :class:`~omnibot.errors.ConfigError` (bounded memory, whatever the path).
     """
     if len(path) < 2:
         raise ValueError("a speed profile needs a path of at least two points")
+    _check_size(path, resolution)
     # per original point: curvature of travel, heading curvature, file speed
     kappa0 = curvature(path)  # signed, left positive
     hr = heading_rate(path)

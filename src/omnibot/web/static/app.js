@@ -81,6 +81,7 @@ function onState(s) {
   $("pose").textContent = s.pose
     ? `x ${fmt(s.pose[0])} m, y ${fmt(s.pose[1])} m, ${fmt((s.pose[2] * 180) / Math.PI, 0)}° (${s.pose_source})`
     : "unknown";
+  $("legend-odo").hidden = !(s.odometry && s.pose_source === "truth"); // the ghost is drawn only then
   const d = s.drive;
   $("twist").textContent = d.twist
     ? `vx ${fmt(d.twist[0])} m/s, vy ${fmt(d.twist[1])} m/s, w ${fmt(d.twist[2])} rad/s`
@@ -521,7 +522,7 @@ function setupTeach(available) {
 }
 
 window.addEventListener("resize", requestDraw);
-window.omnibot = { send, sendRaw, state: () => state, trail: () => trail };
+window.omnibot = { send, sendRaw, state: () => state, trail: () => trail, scene: () => scene };
 drawStick();
 connect();
 setInterval(driveTick, SEND_PERIOD);
