@@ -112,10 +112,10 @@ def spawn_pty_emulator(
                         f"physics, up to {start_timeout:.0f} s)..."
                     )
                 ready, _, _ = select.select([proc.stdout], [], [], max(start_timeout - 1.0, 0.0))
-            path = proc.stdout.readline().strip() if ready else ""
-            if not path:
-                if proc.poll() is None:
-                    raise LinkError(f"the pty emulator printed no device path within {start_timeout:g} s")
+            if not ready:
+                raise LinkError(f"the pty emulator printed no device path within {start_timeout:g} s")
+            path = proc.stdout.readline().strip()
+            if not path:  # its stdout closed: it is ending
                 proc.wait(timeout=10)
                 err.seek(0)
                 raise LinkError(f"the pty emulator did not start: {err.read().strip()}")
