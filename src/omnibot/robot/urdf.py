@@ -31,7 +31,8 @@ TRACKING_WIDTH = 0.01
 
 
 def _fmt(*values: float) -> str:
-    return " ".join(f"{v:.9g}" for v in values)
+    """Numbers as URDF attributes (9 significant digits, rounding noise such as 4e-16 or -0 shown as 0)."""
+    return " ".join(f"{round(v, 12) + 0.0:.9g}" for v in values)
 
 
 def hub_angle(wheel: WheelSpec) -> float:
