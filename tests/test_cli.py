@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -31,16 +33,26 @@ def test_kinematics_negative_twist_and_forward(capsys: pytest.CaptureFixture[str
 @pytest.mark.parametrize(
     ("argv", "message"),
     [
-        (["kinematics", "--twist", "1,2"], "--twist: expected 3 comma-separated numbers, got '1,2'"),
-        (["kinematics", "--twist", "a,b,c"], "expected 3 comma-separated numbers"),
-        (["kinematics", "--twist", "1,nan,0"], "expected 3 comma-separated numbers"),
+        (
+            ["kinematics", "--twist", "1,2"],
+            "--twist: expected 3 numbers (comma- or space-separated), got '1,2'",
+        ),
+        (["kinematics", "--twist", "a,b,c"], "expected 3 numbers"),
+        (["kinematics", "--twist", "1,nan,0"], "expected 3 numbers"),
+        (["kinematics", "--twist", "1", "2", "3", "4"], "got '1 2 3 4'"),
+        (["kinematics", "--wheels", "-1", "1", "1"], "--wheels: expected 4 numbers"),
         (
             ["kinematics", "--twist", "1e308,1e308,0"],
             "--twist: the result overflows (it is not a finite number)",
         ),
-        (["kinematics", "--twist", "0,0,1e308", "--json"], "--twist: the result overflows"),
+        (["kinematics", "--twist", "0", "0", "1e308", "--json"], "--twist: the result overflows"),
+        (["kinematics", "--twist", "-1e308", "0", "1e308"], "--twist: the result overflows"),
         (["kinematics", "--robot", "omni5"], "unknown robot 'omni5'; did you mean 'omni4'?"),
         (["robot", "show", "nope.yaml"], "cannot read robot description nope.yaml"),
+        (["tour", "--duration", "-1"], "--duration: expected a positive number, got -1"),
+        (["send", "STATUS", "--timeout", "-1"], "--timeout: expected a positive number, got -1"),
+        (["send", "STATUS", "--idle-timeout", "0"], "--idle-timeout: expected a positive number, got 0"),
+        (["console", "--timeout", "nan"], "--timeout: expected a positive number, got nan"),
     ],
 )
 def test_bad_input_is_a_clear_error(
@@ -64,3 +76,93 @@ def test_robot_urdf_to_file(tmp_path: Path) -> None:
     out = tmp_path / "omni4.urdf"
     assert main(["robot", "urdf", "omni4", "-o", str(out)]) == 0
     assert ET.parse(out).getroot().get("name") == "omni4"
+
+
+@pytest.mark.parametrize(
+    "twist",
+    [
+        ["--twist", "-0.2", "0.1", "0"],
+        ["--twist", "-0.2,0.1,0"],
+        ["--twist=-0.2,0.1,0"],
+        ["--twist", "-0.2,", "0.1,", "0"],
+        ["--twist", "-2e-1", "1e-1", "-0"],
+    ],
+)
+def test_negative_numbers_are_values_in_every_form(
+    twist: list[str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["kinematics", "--robot", "mecanum4", *twist, "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["twist"] == [-0.2, 0.1, 0.0]
+    wheels = [f"{-v:.12g}" for v in out["wheel_speeds"]]  # the opposite motion
+    assert wheels[0].startswith("-")  # the first value is negative: the case argparse refused
+    for form in (wheels, [",".join(wheels)]):
+        assert main(["kinematics", "--robot", "mecanum4", "--wheels", *form, "--json"]) == 0
+        np.testing.assert_allclose(json.loads(capsys.readouterr().out)["twist"], [0.2, -0.1, 0.0], atol=1e-9)
+
+
+def test_a_reader_that_goes_away_ends_the_command_quietly() -> None:
+    """``omnibot robot show omni4 | head -1``: no BrokenPipeError, status 141 as for SIGPIPE."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "omnibot", "robot", "show", "omni4"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()  # the reader is gone before the first byte
+    err = proc.stderr.read().decode()
+    proc.stderr.close()
+    assert proc.wait(timeout=60) == 141
+    assert err == ""
+
+
+NOT_UTF8 = b"name: caf\xe9\n"
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["robot", "show", "{bad}"], "cannot read robot description {bad}: not UTF-8 text (byte 9)"),
+        (["sim", "--pty", "--world", "{bad}"], "cannot read world {bad}: not UTF-8 text"),
+        (
+            ["teleop", "--port", "sim://omni4", "--config", "{bad}"],
+            "cannot read teleop config {bad}: not UTF-8",
+        ),
+        (["follow", "{path}", "--calibration", "{bad}"], "cannot read calibration file {bad}: not UTF-8"),
+        (["follow", "{bad}"], "{bad}: not a text (UTF-8) file"),
+    ],
+)
+def test_a_file_that_is_not_utf8_is_a_one_line_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], argv: list[str], message: str
+) -> None:
+    bad = tmp_path / "latin1.yaml"
+    bad.write_bytes(NOT_UTF8)
+    path = tmp_path / "line.csv"
+    path.write_text("t,x,y,theta\n0,0,0,0\n1,0.5,0,0\n", encoding="utf-8")
+    names = {"bad": str(bad), "path": str(path)}
+    assert main([a.format(**names) for a in argv]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("omnibot: error: ") and message.format(**names) in err
+    assert err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_an_output_folder_that_cannot_be_made_is_a_one_line_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    (tmp_path / "file").write_text("")
+    out = tmp_path / "file" / "plots"
+    assert main(["tour", "--robot", "omni4", "--duration", "0.1", "--out", str(out)]) == 2
+    assert capsys.readouterr().err == f"omnibot: error: --out: cannot make directory {out}: Not a directory\n"
+
+
+def test_a_full_standard_output_is_a_one_line_error() -> None:
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run(
+            [sys.executable, "-m", "omnibot", "robot", "urdf", "omni4"],
+            check=False,
+            stdout=full,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+    assert proc.returncode == 2
+    assert proc.stderr == "omnibot: error: cannot write the output: No space left on device\n"

@@ -15,14 +15,21 @@ Exit status, the same for every command (README's command table):
 * 70: a bug (an exception omnibot did not expect: one line, the traceback with ``--debug``);
 * 130: interrupted by SIGINT (Ctrl-C), 143: by SIGTERM (the robot is stopped first).
 
-Errors are one line on stderr (``omnibot: error: ...``); ``--debug`` adds the traceback.
+Errors are one line on stderr (``omnibot: error: ...``); ``--debug`` adds the traceback. Any file a
+command cannot read (not UTF-8 included) or write is such an error (status 2). A reader of standard
+output that goes away (``omnibot robot show omni4 | head -1``) ends the command quietly with status
+141, as SIGPIPE ends a Unix tool.
 """
 
 from __future__ import annotations
 
 import argparse
+import errno
 import json
 import math
+import os
+import re
+import select
 import sys
 import traceback
 from collections.abc import Callable, Sequence
@@ -33,20 +40,21 @@ from omnibot.cliargs import DEFAULT_SEED, add_debug_option, add_robot_options, s
 from omnibot.errors import ConfigError, KinematicsError, OmnibotError, ProtocolError
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_BUG = 0, 1, 2, 70
-EXIT_SIGINT, EXIT_SIGTERM = 130, 143
+EXIT_SIGINT, EXIT_SIGTERM, EXIT_SIGPIPE = 130, 143, 141
 
 Handler = Callable[[argparse.Namespace], int]
 
 
-def parse_floats(text: str, count: int, what: str) -> list[float]:
-    """``"a,b,c"`` -> floats, with an error that says what was expected."""
-    parts = [p.strip() for p in text.split(",")]
+def parse_floats(text: str | Sequence[str], count: int, what: str) -> list[float]:
+    """``"a,b,c"`` (or ``["a", "b", "c"]``, or a mix) -> floats, with an error that says what was expected."""
+    joined = text if isinstance(text, str) else " ".join(text)
+    parts = re.split(r"[,\s]+", joined.strip())
     try:
         values = [float(p) for p in parts]
     except ValueError:
         values = []
     if len(values) != count or not all(math.isfinite(v) for v in values):
-        raise ConfigError(f"expected {count} comma-separated numbers, got {text!r}", key=what)
+        raise ConfigError(f"expected {count} numbers (comma- or space-separated), got {joined!r}", key=what)
     return values
 
 
@@ -58,6 +66,25 @@ def output_dir(text: str, flag: str = "--out") -> Path:
     except OSError as exc:
         raise ConfigError(f"cannot make directory {out}: {exc.strerror or exc}", key=flag) from None
     return out
+
+
+_NUMBER = r"-?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?"
+_NEGATIVE_NUMBERS = re.compile(rf"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?(,\s*{_NUMBER})*,?$")
+"""A negative number, or comma-separated numbers whose first is negative (``-0.2,0,0``, ``-1e-3``)."""
+
+
+def positive(value: float, flag: str) -> float:
+    """``value`` if it is a positive finite number, else a ConfigError naming ``flag``."""
+    if not (math.isfinite(value) and value > 0):
+        raise ConfigError(f"expected a positive number, got {value:g}", key=flag)
+    return value
+
+
+def accept_negative_numbers(parser: argparse.ArgumentParser) -> None:
+    """Take option values such as ``-0.2,0,0`` or ``-1e-3`` as values, not as unknown options (argparse
+    before 3.14 takes only ``-1`` and ``-.5``). For parsers with no option that looks like a number."""
+    if hasattr(parser, "_negative_number_matcher"):
+        parser._negative_number_matcher = _NEGATIVE_NUMBERS
 
 
 # --------------------------------------------------------------------------- robot
@@ -155,13 +182,18 @@ def _add_kinematics(sub: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     p = sub.add_parser(
         "kinematics",
         help="wheel speeds for a body twist (or the twist for wheel speeds)",
-        description="Inverse kinematics by default; --wheels gives forward kinematics instead. "
-        "Write negative first values with '=': --twist=-0.2,0,0",
+        description="Inverse kinematics by default; --wheels gives forward kinematics instead. Numbers are "
+        "comma- or space-separated, negative ones too: --twist -0.2 0 0, --twist -0.2,0,0",
     )
+    accept_negative_numbers(p)
     p.add_argument("--robot", default="omni4", help="preset name or description file (default omni4)")
     group = p.add_mutually_exclusive_group()
-    group.add_argument("--twist", default="0,0,0", help="VX,VY,W in m/s, m/s, rad/s (body frame)")
-    group.add_argument("--wheels", help="wheel speeds in rad/s, comma-separated, preset wheel order")
+    group.add_argument(
+        "--twist", nargs="+", default="0,0,0", metavar="V", help="VX VY W in m/s, m/s, rad/s (body frame)"
+    )
+    group.add_argument(
+        "--wheels", nargs="+", metavar="W", help="wheel speeds in rad/s, in the preset's wheel order"
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(handler=_kinematics)
 
@@ -216,7 +248,8 @@ def _add_sim(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def _tour(args: argparse.Namespace) -> int:
-    from omnibot.demos.directions import format_table, plot_tour, run_tour
+    from omnibot.demos.directions import DIRECTIONS, format_table, plot_tour, run_tour
+    from omnibot.progress import progress_bar
     from omnibot.robot.description import load_robot, preset_names
     from omnibot.sim.surfaces import get_surface
 
@@ -224,11 +257,20 @@ def _tour(args: argparse.Namespace) -> int:
     get_surface(surface)
     if not 0 < args.power <= 255:
         raise ConfigError(f"expected 1..255 PWM counts, got {args.power}", key="--power")
+    positive(args.duration, "--duration")
     names = preset_names() if args.robot == "all" else [args.robot]
     robots = [load_robot(name) for name in names]
     out = output_dir(args.out)
     for robot in robots:
-        runs = run_tour(robot, power=args.power, duration=args.duration, surface=surface, seed=seed_of(args))
+        with progress_bar(f"tour {robot.name}", len(DIRECTIONS), unit="motion") as bar:
+            runs = run_tour(
+                robot,
+                power=args.power,
+                duration=args.duration,
+                surface=surface,
+                seed=seed_of(args),
+                progress=bar,
+            )
         print(format_table(robot, runs))
         png = out / f"directions_{robot.name}.png"
         try:
@@ -262,6 +304,8 @@ def _add_tour(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 def _send(args: argparse.Namespace) -> int:
     from omnibot.console import run_send
 
+    positive(args.timeout, "--timeout")
+    positive(args.idle_timeout, "--idle-timeout")
     return run_send(args)
 
 
@@ -288,6 +332,7 @@ def _add_send(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 def _console(args: argparse.Namespace) -> int:
     from omnibot.console import run_console
 
+    positive(args.timeout, "--timeout")
     return run_console(args)
 
 
@@ -479,8 +524,10 @@ def exit_status(exc: BaseException) -> int:
         return EXIT_SIGTERM
     if isinstance(exc, KeyboardInterrupt):
         return EXIT_SIGINT
-    if isinstance(exc, ConfigError | KinematicsError | ProtocolError):
+    if isinstance(exc, ConfigError | KinematicsError | ProtocolError | UnicodeDecodeError):
         return EXIT_USAGE
+    if isinstance(exc, OSError) and (exc.filename is not None or _output_full(exc)):
+        return EXIT_USAGE  # a file it cannot read or write, or no room for its output
     if isinstance(exc, OmnibotError):
         return EXIT_FAILED
     return EXIT_BUG
@@ -495,8 +542,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     handler: Handler = args.handler
     try:
         with terminate_cleanly():
-            return handler(args)
+            status = handler(args)
+            sys.stdout.flush()  # a reader that went away shows up here, not at interpreter exit
+            return status
     except (Exception, KeyboardInterrupt) as exc:
+        if isinstance(exc, BrokenPipeError) and _stdout_gone():
+            # `omnibot ... | head -1`: stop quietly, as a Unix tool killed by SIGPIPE, and send what is
+            # still buffered to /dev/null so that Python's flush at exit does not complain (Python's
+            # docs, "Note on SIGPIPE" in the signal module)
+            _silence_stdout()
+            return EXIT_SIGPIPE
         status = exit_status(exc)
         if args.debug:
             traceback.print_exc()
@@ -509,8 +564,53 @@ def main(argv: Sequence[str] | None = None) -> int:
                 file=sys.stderr,
             )
         else:
-            print(f"omnibot: error: {exc}", file=sys.stderr)
+            print(f"omnibot: error: {_message(exc)}", file=sys.stderr)
+        if _output_full(exc):
+            _silence_stdout()  # what standard output still holds goes to /dev/null: no second failure
         return status
+
+
+def _message(exc: BaseException) -> str:
+    """The one line an error is told in."""
+    if isinstance(exc, UnicodeDecodeError):  # text where the reader checked for none (it names no file)
+        return f"not UTF-8 text: {exc}"
+    if isinstance(exc, OSError) and exc.filename is not None:
+        return f"{exc.filename}: {exc.strerror or exc}"
+    if _output_full(exc):
+        assert isinstance(exc, OSError)
+        return f"cannot write the output: {exc.strerror}"
+    return str(exc)
+
+
+_FULL = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
+"""Errors of a write that found no room."""
+
+
+def _output_full(exc: BaseException) -> bool:
+    """A write to standard output that found no room (a full disk, /dev/full)."""
+    return isinstance(exc, OSError) and exc.filename is None and exc.errno in _FULL
+
+
+def _silence_stdout() -> None:
+    """Point standard output's file descriptor at /dev/null (what it still buffers goes there)."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):
+        return
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, fd)
+    os.close(devnull)
+
+
+def _stdout_gone() -> bool:
+    """Whether nobody reads standard output any more (the write end of a pipe whose reader closed)."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):
+        return False
+    poller = select.poll()
+    poller.register(fd, select.POLLOUT)
+    return any(ev & select.POLLERR for _, ev in poller.poll(0))
 
 
 if __name__ == "__main__":  # pragma: no cover

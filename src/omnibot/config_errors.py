@@ -24,12 +24,14 @@ from omnibot.errors import ConfigError
 
 def read_yaml(path: str | Path, what: str) -> Any:
     """The parsed content of a YAML file; ConfigError naming ``what`` and the file when it cannot be
-    read or is not YAML (validating the content is the caller's)."""
+    read, is not UTF-8 text or is not YAML (validating the content is the caller's)."""
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise ConfigError(f"cannot read {what} {path}: {exc.strerror}") from None
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"cannot read {what} {path}: not UTF-8 text (byte {exc.start})") from None
     try:
         return yaml.safe_load(text)
     except yaml.YAMLError as exc:

@@ -39,7 +39,7 @@ def usage_error(argv: list[str], capsys: pytest.CaptureFixture[str], message: st
         ["send", "--robot", "omni3", "--port", "sim://mecanum4", "STATUS"],
         ["console", "--robot", "omni4", "--port", "sim://omni3"],
         ["record", "--robot", "omni3", "--port", "sim://omni4", "--path", "{tmp}/p.csv"],
-        ["calibrate", "--robot", "omni3", "--port", "sim://omni4", "--out", "{tmp}"],
+        ["calibrate", "--robot", "omni3", "--port", "sim://omni4", "--yes", "--out", "{tmp}"],
         ["teleop", "--joystick", "--robot", "omni3", "--port", "sim://omni4", "--duration", "0.1"],
         ["dashboard", "--robot", "omni3", "--port", "sim://omni4", "--http-port", "0", "--duration", "0.1"],
     ],

@@ -130,7 +130,16 @@ def test_a_calibration_worse_than_none_is_neither_written_nor_kept(
     tmp_path: Path, fake_calibration: dict[str, Any], harness: Harness, capsys: pytest.CaptureFixture[str]
 ) -> None:
     cal = tmp_path / "cal.yaml"
-    argv = ["calibrate", "--port", "sim://mecanum4", "--out", str(tmp_path / "r"), "--calibration", str(cal)]
+    argv = [
+        "calibrate",
+        "--port",
+        "sim://mecanum4",
+        "--yes",
+        "--out",
+        str(tmp_path / "r"),
+        "--calibration",
+        str(cal),
+    ]
     assert main(argv) == 1
     out, err = capsys.readouterr()
     assert_one_line_error(err)
@@ -151,7 +160,7 @@ def test_a_calibration_better_than_none_is_written_and_kept(
     tmp_path: Path, fake_calibration: dict[str, Any], capsys: pytest.CaptureFixture[str]
 ) -> None:
     fake_calibration["after"] = [-0.01, 0.01]
-    assert main(["calibrate", "--port", "sim://mecanum4", "--out", str(tmp_path)]) == 0
+    assert main(["calibrate", "--port", "sim://mecanum4", "--yes", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     assert f"calibration: {tmp_path / 'calibration.yaml'}" in out
     assert "wood 4.0 % -> 1.0 %" in out

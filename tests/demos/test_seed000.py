@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
 
 from omnibot.cli import main
+from omnibot.demos import seed000
 from omnibot.demos.seed000 import run_demo
 
 
@@ -20,9 +23,32 @@ def number(text: str, pattern: str) -> float:
     return float(re.search(pattern, text).group(1))  # type: ignore[union-attr]
 
 
-def test_demo_in_lockstep_meets_the_seed_examples(tmp_path: Path) -> None:
+class CountingBar:
+    """Stands in for the terminal's progress bar."""
+
+    def __init__(self) -> None:
+        self.n, self.postfixes = 0, list[str]()
+
+    def update(self, n: float | None = 1) -> None:
+        self.n += int(n or 0)
+
+    def set_postfix_str(self, s: str = "", refresh: bool = True) -> None:
+        self.postfixes.append(s)
+
+
+def test_demo_in_lockstep_meets_the_seed_examples(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    bars: list[tuple[float | None, CountingBar]] = []
+
+    @contextmanager
+    def progress_bar(desc: str, total: float | None, unit: str = "it") -> Iterator[CountingBar]:
+        bars.append((total, CountingBar()))
+        yield bars[-1][1]
+
+    monkeypatch.setattr(seed000, "progress_bar", progress_bar)
     report, ok = run_demo("sim://omni4?world=room&seed=1", "omni4", tmp_path)
     assert ok
+    [(total, bar)] = bars  # the bar counts the examples really run, each named while it runs
+    assert total == bar.n == len(bar.postfixes) == 5 and bar.postfixes[0] == "circle, heading held"
     circle = achieved(report, 1)
     assert number(circle, r"ends ([\d.]+) cm") < 5.0
     assert abs(number(circle, r"heading ([+-][\d.]+) deg")) < 3.0

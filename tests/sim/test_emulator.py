@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import os
 import signal
 import subprocess
 import sys
@@ -13,6 +14,9 @@ import pytest
 import serial
 
 from omnibot.cli import main
+from omnibot.client.client import RobotClient
+from omnibot.errors import LinkError
+from omnibot.sim.emulator import spawn_pty_emulator
 
 
 def test_pty_emulator_serves_the_firmware_and_writes_truth(tmp_path: Path) -> None:
@@ -71,3 +75,63 @@ def test_pty_emulator_serves_the_firmware_and_writes_truth(tmp_path: Path) -> No
 def test_bad_emulator_arguments(argv: list[str], message: str, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(argv) == 2
     assert message in capsys.readouterr().err
+
+
+def test_a_first_start_with_no_numba_cache_answers_the_first_hello(tmp_path: Path) -> None:
+    """A fresh install: the kernels compile before the device path is printed, so the very first
+    HELLO is answered in time (what `make demo` on a new clone does)."""
+    cache = tmp_path / "numba"
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
+    with subprocess.Popen(
+        [sys.executable, "-m", "omnibot", "sim", "--pty"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    ) as proc:
+        try:
+            assert proc.stdout is not None
+            path = proc.stdout.readline().strip()
+            assert path.startswith("/dev/"), proc.stderr.read() if proc.stderr else ""
+            compiled = {p.name.split("-")[0] for p in cache.rglob("*.nbi")}
+            assert {"kernels.physics_step", "kernels.outline_contacts"} <= compiled
+            with RobotClient.open(path, timeout=3.0) as client:
+                hello = client.hello()
+            assert (hello.name, hello.motors) == ("omni4", 4)
+        finally:
+            proc.send_signal(signal.SIGTERM)
+            _, err = proc.communicate(timeout=10)
+    assert proc.returncode == 0 and "Traceback" not in err
+
+
+def test_a_bad_baud_rate_is_refused_before_the_pty_appears(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["sim", "--pty", "--baud", "-5"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and "--baud: expected a baud rate >= 0" in captured.err
+
+
+def test_an_unwritable_truth_file_is_refused_before_the_pty_appears(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["sim", "--pty", "--truth", str(tmp_path / "missing" / "truth.csv")]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and "--truth: cannot write" in captured.err
+
+
+def test_a_slow_start_is_announced_and_a_stuck_one_ends_in_a_clear_error(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """With no numba cache the child compiles for seconds: the wait is announced after one second,
+    and a start that takes longer than allowed is a LinkError (the child is ended, not left behind)."""
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))
+    notices: list[str] = []
+    stuck = pytest.raises(LinkError, match=r"printed no device path within 1\.5 s")
+    with stuck, spawn_pty_emulator("omni4", notice=notices.append, start_timeout=1.5):
+        pass
+    assert len(notices) == 1 and notices[0].startswith("starting the simulated omni4 (omnibot sim --pty;")
+
+
+def test_a_child_that_fails_to_start_reports_its_error() -> None:
+    failed = pytest.raises(LinkError, match="did not start: omnibot: error: unknown robot 'omni7'")
+    with failed, spawn_pty_emulator("omni7"):
+        pass

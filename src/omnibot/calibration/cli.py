@@ -28,8 +28,8 @@ from omnibot.cliargs import (
 from omnibot.errors import ConfigError
 
 if TYPE_CHECKING:
-    from omnibot.calibration.experiments import Progress
     from omnibot.client.client import RobotClient
+    from omnibot.progress import Progress
     from omnibot.robot.description import RobotDescription
 
 SIM_SURFACES = ("wood", "carpet")
@@ -104,6 +104,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         action="store_true",
         help="skip the wheel-slip runs (the driven-wheel odometry's creep on each floor)",
     )
+    p.add_argument(
+        "--yes",
+        action="store_true",
+        help="unattended on --port: the robot already stands on the (one) surface, with room around it, so "
+        "nobody is asked to place it (needs a truth that needs no operator: not tape)",
+    )
     p.add_argument("--no-check", action="store_true", help="skip the before/after accuracy moves")
     p.add_argument(
         "--no-upload", action="store_true", help="fit only: do not upload (no K_t runs, no after-check)"
@@ -142,13 +148,10 @@ def _courses(text: str | None) -> tuple[float, ...] | None:
 
 @contextmanager
 def tqdm_progress(desc: str, total: int) -> Iterator[Progress | None]:
-    """A tqdm bar on stderr (hidden when stderr is not a terminal)."""
-    from tqdm import tqdm
+    """A tqdm bar of runs on stderr (hidden when stderr is not a terminal)."""
+    from omnibot.progress import progress_bar
 
-    class Bar(tqdm):  # type: ignore[type-arg]
-        monitor_interval = 0  # no monitor thread left behind
-
-    with Bar(total=total or None, desc=desc, unit="run", disable=None, file=sys.stderr, leave=True) as bar:
+    with progress_bar(desc, total, unit="run") as bar:
         yield bar
 
 
@@ -181,24 +184,50 @@ def sim_opener(
     return open_client
 
 
+OPERATOR_TRUTHS = ("tape",)
+"""Truth strategies that ask a person to measure every run."""
+
+
+def terminal_ask(prompt: str) -> str:
+    """``input(prompt)``; ConfigError (not EOFError) when standard input ends."""
+    try:
+        return input(prompt)
+    except EOFError:
+        raise ConfigError(f"standard input ended while asking: {prompt.strip()!r}", key="calibrate") from None
+
+
+def check_operator(reasons: list[str]) -> None:
+    """ConfigError when the run needs someone at a terminal (``reasons``) and stdin is not one."""
+    if reasons and not sys.stdin.isatty():
+        raise ConfigError(
+            f"needs a terminal to ask you to {' and to '.join(reasons)} (standard input is not one); "
+            "run it on a terminal, or unattended with --yes and a truth that needs no operator",
+            key="calibrate",
+        )
+
+
 def port_opener(
-    client: RobotClient, ask: Callable[[str], str]
+    client: RobotClient, ask: Callable[[str], str], placed: bool = False
 ) -> Callable[[str], AbstractContextManager[RobotClient]]:
-    """surface -> the one real controller, after asking the person to put the robot there."""
-    state = {"surface": ""}
+    """surface -> the one real controller, after asking the person to put the robot there (except on
+    the first surface when the robot is ``placed`` there already)."""
+    where: dict[str, str | None] = {"surface": None}  # where the robot stands
 
     @contextmanager
     def open_client(surface: str) -> Iterator[RobotClient]:
-        if surface != state["surface"]:
+        if where["surface"] is None and placed:
+            where["surface"] = surface
+        if where["surface"] != surface:
             ask(f"Put the robot on {surface} with about 2 m of free floor around it, then press Enter: ")
-            state["surface"] = surface
+            where["surface"] = surface
         yield client
 
     return open_client
 
 
-def run(args: argparse.Namespace, ask: Callable[[str], str] = input) -> int:
-    """The ``omnibot calibrate`` handler; returns the exit status."""
+def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> int:
+    """The ``omnibot calibrate`` handler; returns the exit status. ``ask`` (default: the terminal,
+    checked to be one before the robot moves) asks the operator."""
     from omnibot.calibration.accuracy import AccuracyPlan
     from omnibot.calibration.calfile import write_calibration
     from omnibot.calibration.experiments import Plan
@@ -219,6 +248,19 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] = input) -> int:
     surfaces = _surfaces(args.surface, simulated)
     if args.truth is not None:
         parse_truth_spec(args.truth)
+    if args.yes and simulated:
+        raise ConfigError("only for a robot on --port (the simulator asks nothing)", key="--yes")
+    if args.yes and len(surfaces) > 1:
+        raise ConfigError("several surfaces need someone to move the robot between them", key="--yes")
+    operator = []
+    if not simulated and not args.yes:
+        operator.append("put the robot on " + " then on ".join(surfaces))
+    if args.truth is not None and parse_truth_spec(args.truth)[0] in OPERATOR_TRUTHS:
+        operator.append(f"measure every run ({args.truth} truth)")
+    interactive = ask is None
+    ask = ask or terminal_ask
+    if interactive:
+        check_operator(operator)
     if not args.move_length > 0:
         raise ConfigError(f"expected a positive length in m, got {args.move_length}", key="--move-length")
     base = Plan.quick() if args.quick else Plan()
@@ -255,13 +297,21 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] = input) -> int:
             true_robot = perturbed_robot(robot, ACCEPTANCE if args.perturb == "acceptance" else args.perturb)
         elif args.true_robot:
             true_robot = load_robot(args.true_robot)
-        truth: str | Callable[[RobotClient], str] = args.truth or (lambda c: default_truth(c, robot))
+
+        def chosen_truth(client: RobotClient) -> str:
+            """The link's default truth (checked for an operator at the terminal if it needs one)."""
+            name = default_truth(client, robot)
+            if interactive and name in OPERATOR_TRUTHS:
+                check_operator([f"measure every run ({name} truth: the robot has no wheel encoders)"])
+            return name
+
+        truth: str | Callable[[RobotClient], str] = args.truth or chosen_truth
         if client is None:
             opener = sim_opener(
                 robot, sim_robot(args), seed_of(args), true_robot, None if world == "empty" else world
             )
         else:
-            opener = port_opener(client, ask)
+            opener = port_opener(client, ask, placed=args.yes)
         result = calibrate(
             robot,
             surfaces,

@@ -21,7 +21,7 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import partial
-from typing import Any, Protocol
+from typing import Any
 
 from omnibot.calibration.patterns import Geometry, course_pattern, rotation_pattern, top_power
 from omnibot.calibration.tap import TelemetryTap
@@ -29,6 +29,7 @@ from omnibot.calibration.truth import ROTATE, STRAIGHT, TURN, Motion, RunInfo, T
 from omnibot.client.client import RobotClient
 from omnibot.client.events import WarnEvent
 from omnibot.errors import ConfigError
+from omnibot.progress import Progress
 from omnibot.protocol import text
 from omnibot.protocol.messages import Command
 from omnibot.robot.description import MotorMapSpec, RobotDescription
@@ -51,14 +52,6 @@ def speed_range(robot: RobotDescription, length: float) -> tuple[float, float]:
     hi = min(lim.speed_max, length / SHORTEST_MOVE)
     lo = max(lim.speed_min, 0.1 * hi) if lim.speed_min > 0 else 0.2 * hi
     return min(lo, hi), hi
-
-
-class Progress(Protocol):
-    """What the runner reports progress to (a tqdm bar fits)."""
-
-    def update(self, n: float | None = 1) -> bool | None: ...
-
-    def set_postfix_str(self, s: str = "", refresh: bool = True) -> None: ...
 
 
 @dataclass(frozen=True)

@@ -25,7 +25,6 @@ from typing import Any
 from omnibot.calibration.accuracy import AccuracyPlan, AccuracyRow, reach_speed, run_accuracy
 from omnibot.calibration.experiments import (
     Plan,
-    Progress,
     Runner,
     RunResult,
     find_deadband,
@@ -38,13 +37,22 @@ from omnibot.calibration.fits import SurfaceFit, average_kt, build_spec, fit_kt,
 from omnibot.calibration.gyro import GyroCalibration, calibrate_gyro, standstill_bias
 from omnibot.calibration.motors import (
     Balance,
+    balance_courses,
     balance_gains,
     identity,
     motor_deadbands,
     offsets_from_deadbands,
 )
 from omnibot.calibration.patterns import Geometry, top_power
-from omnibot.calibration.rollers import correct_runs, fit_rollers, offset_shift, roller_runs, tune_coast
+from omnibot.calibration.rollers import (
+    SHARES,
+    axis_courses,
+    correct_runs,
+    fit_rollers,
+    offset_shift,
+    roller_runs,
+    tune_coast,
+)
 from omnibot.calibration.slip import slip_step
 from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.truth import ROTATE, SQUARE, STRAIGHT, Ask, RunInfo, TruthContext, make_truth
@@ -53,6 +61,7 @@ from omnibot.client.client import RobotClient
 from omnibot.errors import ConfigError
 from omnibot.firmware.config import build_config
 from omnibot.navigation.slipcal import SlipCalibration
+from omnibot.progress import Progress
 from omnibot.protocol import codes
 from omnibot.robot.description import CalibrationSpec, MotorMapSpec, RobotDescription
 
@@ -129,19 +138,90 @@ class CalibrationResult:
         )
 
 
+def accuracy_runs(accuracy: AccuracyPlan, robot: RobotDescription) -> int:
+    """The runs of one accuracy check (:func:`~omnibot.calibration.accuracy.run_accuracy`)."""
+    moves = len(accuracy.courses_deg) * len(accuracy.move_speeds(robot)) * (2 if accuracy.back else 1)
+    return moves + 2 * len(accuracy.rotations)
+
+
+DEADBAND_RUNS = 10
+"""Runs a dead-band search takes, about (a sweep upward in ``deadband_step`` counts, then bisection)."""
+
+
 def expected_runs(
-    plan: Plan, geometry: Geometry, accuracy: AccuracyPlan | None, robot: RobotDescription
-) -> int:
-    """A rough count of the runs of one surface (for the progress bar)."""
+    plan: Plan,
+    geometry: Geometry,
+    accuracy: AccuracyPlan | None,
+    robot: RobotDescription,
+    upload: bool = True,
+) -> dict[str, int]:
+    """The runs each phase of one surface is expected to take, in the order they come (for the
+    progress bar). Exact where a phase's count is fixed; the dead-band searches and the sweeps
+    adapt to the robot, so theirs are estimates the bar corrects as each phase ends (:class:`Tally`)."""
     courses = len(plan.calibrated_courses(geometry))
-    n = (courses + 1) * 10
-    n += courses * plan.levels * plan.directions * 2 * 3 // 4
-    n += plan.levels * 2 * 2
-    n += plan.turn_rounds * len(plan.turn_curvatures) * len(plan.turn_courses_deg) * 2 + 4
-    if accuracy is not None:
-        moves = len(accuracy.courses_deg) * len(accuracy.move_speeds(robot)) * (2 if accuracy.back else 1)
-        n += 2 * (moves + 2 * len(accuracy.rotations))
-    return n
+    checks = accuracy_runs(accuracy, robot) if accuracy is not None else 0
+    powers = max(1, plan.balance_levels)
+    balance = len(balance_courses(geometry)) * (3 * powers + powers - 1 + geometry.motors)
+    rollers = plan.roller_rounds > 0 and all(geometry.roller_pitch)
+    axes = len(axis_courses(geometry))
+    phases = {
+        "before": checks,
+        "motor map": (1 + geometry.motors) * DEADBAND_RUNS + balance if plan.motor_map else 0,
+        "dead bands": (courses + 1) * (3 if plan.motor_map else DEADBAND_RUNS),
+        "sweeps": courses * plan.levels * plan.directions * 2,
+        "roller drag": len(SHARES) * (1 + plan.roller_rounds * axes) if rollers else 0,
+        "rotation sweep": plan.levels * 2 * 2,
+        "turns": plan.turn_rounds * len(plan.turn_curvatures) * len(plan.turn_courses_deg) * 2
+        if upload
+        else 0,
+        "roller gains": 3 * plan.roller_rounds * axes if rollers and upload else 0,
+        "rotation test": 2,
+        "squares": 2,
+        "after": checks if upload else 0,
+    }
+    return {name: n for name, n in phases.items() if n}
+
+
+class Tally:
+    """Keeps a progress bar's total true: the runs done plus the runs the phases still to come are
+    expected to take. Each phase's end (:meth:`done`) replaces its estimate by what it really took, so
+    when the last one ends the total is the number of runs driven."""
+
+    def __init__(self, bar: Progress | None, phases: dict[str, int]) -> None:
+        self.bar = bar
+        self.left = dict(phases)
+        self.runs = 0
+        """Runs counted so far (the bar's n)."""
+
+    @property
+    def total(self) -> int:
+        return self.runs + sum(self.left.values())
+
+    def update(self, n: float | None = 1) -> bool | None:
+        self.runs += int(n or 0)
+        return self.bar.update(n) if self.bar is not None else None
+
+    def set_postfix_str(self, s: str = "", refresh: bool = True) -> None:
+        if self.bar is not None:
+            self.bar.set_postfix_str(s, refresh)
+
+    def done(self, *phases: str) -> None:
+        """These phases have ended (or will not run): their runs are all counted."""
+        for phase in phases:
+            self.left.pop(phase, None)
+        self.recount()
+
+    def finish(self) -> None:
+        """Every phase has ended: the total is the runs driven."""
+        self.left.clear()
+        self.recount()
+
+    def recount(self) -> None:
+        if self.bar is not None and hasattr(self.bar, "total"):
+            self.bar.total = self.total
+            refresh = getattr(self.bar, "refresh", None)
+            if refresh is not None:
+                refresh()
 
 
 def _open_loop(client: RobotClient) -> None:
@@ -174,23 +254,27 @@ def calibrate_surface(
     tap.start()
     source = make_truth(truth, TruthContext(client, robot, tap, ask))
     notes: list[str] = []
-    with progress(
-        f"calibrate {robot.name} on {surface}", expected_runs(plan, geometry, accuracy, robot)
-    ) as bar:
-        runner = Runner(client, robot, source, tap, settle=plan.settle, progress=bar)
+    phases = expected_runs(plan, geometry, accuracy, robot, upload)
+    with progress(f"calibrate {robot.name} on {surface}", sum(phases.values())) as bar:
+        tally = Tally(bar, phases)
+        runner = Runner(client, robot, source, tap, settle=plan.settle, progress=tally)
         try:
             bias = standstill_bias(tap, plan.gyro_still) if tap.gyro else None
             before = run_accuracy(runner, accuracy) if accuracy is not None else None
+            tally.done("before")
 
             motors, balance = None, None
             if plan.motor_map:
                 motors, balance = fit_motor_map(runner, plan, notes)
                 runner.motors = motors
+            tally.done("motor map")
             deadbands = {f"course:{c:g}": find_deadband(runner, c, plan.deadband_step).power for c in courses}
             deadbands["rotation"] = find_deadband(runner, None, plan.deadband_step).power
+            tally.done("dead bands")
             straight: list[RunResult] = []
             for c in courses:
                 straight += straight_sweep(runner, plan, c, deadbands[f"course:{c:g}"])
+            tally.done("sweeps")
             rollers = None
             if (
                 plan.roller_rounds > 0
@@ -203,7 +287,9 @@ def calibrate_surface(
                     notes.append("roller drag: the runs could not tell it (no drag term uploaded)")
                 else:
                     straight = correct_runs(geometry, rollers, straight)
+            tally.done("roller drag")
             rotation = rotation_sweep(runner, plan, deadbands["rotation"])
+            tally.done("rotation sweep")
             fit = fit_surface(
                 surface,
                 straight,
@@ -236,8 +322,10 @@ def calibrate_surface(
             else:
                 notes.append("not uploaded: K_t (measured with curved MOVEs) kept from the description")
             fit.kt = spec.k_t
+            tally.done("turns")
             if upload and rollers is not None and spec.rollers is not None and spec.rollers.coast is not None:
                 spec = tune_rollers(runner, fit, spec, plan, notes)
+            tally.done("roller gains")
             reach = reach_speed(robot, spec, plan.move_length)
             top = speed_range(robot, plan.move_length)[1]
             if reach is None or reach < top:
@@ -251,12 +339,14 @@ def calibrate_surface(
             if bias is not None:  # the bias wanders: measure it again right before the rotation test
                 bias = standstill_bias(tap, plan.gyro_still) or bias
             rot_test = rotation_test(runner, plan)
+            tally.done("rotation test")
             gyro = calibrate_gyro(bias, rot_test) if bias is not None else None
             squares: list[SquareRun] = []
             if tap.odometry is not None and source.can(RunInfo(SQUARE, "")):
                 speed = plan.square_speed or round(0.5 * sum(speed_range(robot, plan.move_length)), 2)
                 rate = rotation_test_rate(robot)
                 squares = [drive_square(runner, plan.square_side, speed, rate, ccw) for ccw in (True, False)]
+            tally.done("squares")
             odometry = None
             if tap.odometry is not None and source.exact:
                 odometry = calibrate_odometry(robot, straight, rot_test, squares)
@@ -265,6 +355,7 @@ def calibrate_surface(
                     f"odometry corrections need an independent truth (sim, csv, tape), not {source.name}"
                 )
             after = run_accuracy(runner, accuracy) if accuracy is not None and upload else None
+            tally.finish()
         finally:
             runner.close()
             tap.stop()
@@ -448,7 +539,10 @@ def calibrate(
         result.average = build_spec(fits, robot, geometry, average_kt(fits))
         if accuracy is not None and upload:
             for surface in surfaces:
-                with open_client(surface) as client, progress(f"check the average on {surface}", 0) as bar:
+                with (
+                    open_client(surface) as client,
+                    progress(f"check the average on {surface}", accuracy_runs(accuracy, robot)) as bar,
+                ):
                     result.average_checks[surface] = check_average(
                         client,
                         robot,

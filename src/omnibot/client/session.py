@@ -30,9 +30,11 @@ from typing import Literal
 from omnibot.client.client import DEFAULT_TIMEOUT, RobotClient
 from omnibot.client.commands import telem
 from omnibot.client.events import Telemetry
+from omnibot.client.greet import wait_for_controller
 from omnibot.client.limits import Limits
 from omnibot.client.views import Hello
 from omnibot.errors import ConfigError, LinkError, OmnibotError
+from omnibot.progress import notice
 from omnibot.protocol import codes
 from omnibot.protocol.messages import Mode, Stop
 from omnibot.protocol.messages import Telem as TelemCommand
@@ -169,7 +171,7 @@ def open_robot(
         raise ConfigError(f"cannot open {url}: {exc}", key="--port") from exc
     try:
         try:
-            hello = client.hello()
+            hello = wait_for_controller(client, notice=notice)
         except LinkError as exc:
             raise ConfigError(f"no controller answers on {url}: {exc}", key="--port") from exc
         if isinstance(robot, RobotDescription):

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from omnibot.progress import Progress
 from omnibot.robot import kinematics as kin
 from omnibot.robot.description import RobotDescription
 from omnibot.sim.simulator import Simulator
@@ -90,13 +91,27 @@ def run_direction(
 
 
 def run_tour(
-    robot: RobotDescription, *, power: int = 180, duration: float = 1.0, surface: str = "wood", seed: int = 0
+    robot: RobotDescription,
+    *,
+    power: int = 180,
+    duration: float = 1.0,
+    surface: str = "wood",
+    seed: int = 0,
+    progress: Progress | None = None,
 ) -> list[DirectionRun]:
-    """Every direction of :data:`DIRECTIONS`, each from rest at the origin."""
-    return [
-        run_direction(robot, name, (vx, vy, w), power=power, duration=duration, surface=surface, seed=seed)
-        for name, vx, vy, w in DIRECTIONS
-    ]
+    """Every direction of :data:`DIRECTIONS`, each from rest at the origin (``progress`` counts them)."""
+    runs = []
+    for name, vx, vy, w in DIRECTIONS:
+        if progress is not None:
+            progress.set_postfix_str(name)
+        runs.append(
+            run_direction(
+                robot, name, (vx, vy, w), power=power, duration=duration, surface=surface, seed=seed
+            )
+        )
+        if progress is not None:
+            progress.update(1)
+    return runs
 
 
 def format_table(robot: RobotDescription, runs: list[DirectionRun]) -> str:

@@ -38,6 +38,7 @@ from omnibot.client.client import RobotClient
 from omnibot.client.events import Event, RangeEvent, Telemetry, WarnEvent
 from omnibot.errors import ConfigError
 from omnibot.estimation.odometry import Pose2D, WheelOdometry
+from omnibot.progress import Progress, notice, progress_bar
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription
 from omnibot.sim.emulator import spawn_pty_emulator
@@ -138,12 +139,20 @@ class Recorder:
 class Demo:
     """Runs the examples on a client; ``truth`` gives ground truth when there is one."""
 
+    SEGMENTS = 5
+    """Examples :meth:`run` drives (the progress bar's total)."""
+
     def __init__(
-        self, client: RobotClient, robot: RobotDescription, truth: Callable[[], Pose2D | None]
+        self,
+        client: RobotClient,
+        robot: RobotDescription,
+        truth: Callable[[], Pose2D | None],
+        progress: Progress | None = None,
     ) -> None:
         self.client = client
         self.robot = robot
         self.truth = truth
+        self.progress = progress
         self.recorder = Recorder(robot)
         self.segments: list[Segment] = []
         client.add_listener(self.recorder)
@@ -158,6 +167,8 @@ class Demo:
     @contextmanager
     def segment(self, name: str, commands: str, commanded: str) -> Iterator[Segment]:
         seg = Segment(name, commands, commanded)
+        if self.progress is not None:
+            self.progress.set_postfix_str(name)
         seg.start, seg.start_odo, seg.t0 = self.pose(), self.odo(), self.client.clock.now()
         first = self._truth_rows()
         self.recorder.segment = seg
@@ -167,6 +178,8 @@ class Demo:
         seg.rows = (first, self._truth_rows())
         self.recorder.segment = None
         self.segments.append(seg)
+        if self.progress is not None:
+            self.progress.update(1)
 
     def best(self, seg: Segment) -> tuple[Pose2D, Pose2D, str] | None:
         """Start and end pose from truth if there is any, else odometry, and which it was."""
@@ -425,7 +438,12 @@ def run_demo(
         world_map = load_world(world) if port is None else None
         context = (
             spawn_pty_emulator(
-                robot_name or "omni4", world=world, seed=seed, surface=surface, truth=truth_file.path
+                robot_name or "omni4",
+                world=world,
+                seed=seed,
+                surface=surface,
+                truth=truth_file.path,
+                notice=notice,
             )
             if truth_file
             else _given(port or "")
@@ -442,8 +460,9 @@ def run_demo(
                 if truth_file or sim is not None
                 else None
             )
-            demo = Demo(client, robot, truth if truth is not None else (lambda: None))
-            segments = demo.run()
+            with progress_bar("demo", Demo.SEGMENTS, unit="example") as bar:
+                demo = Demo(client, robot, truth if truth is not None else (lambda: None), bar)
+                segments = demo.run()
         wall = time.monotonic() - started
         png = out / "demo_trajectory.png"
         written = [str(png)]

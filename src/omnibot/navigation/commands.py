@@ -73,6 +73,7 @@ def run_follow(args: argparse.Namespace) -> int:
     from omnibot.estimation.odometry import Pose2D
     from omnibot.navigation.metrics import Tolerances
     from omnibot.navigation.session import FollowOptions, follow_path, summary
+    from omnibot.progress import progress_bar
 
     check_sim_options(args, allowed=("surface",))
     path = read_path(args.path)
@@ -100,7 +101,11 @@ def run_follow(args: argparse.Namespace) -> int:
         "report": _target(args.report, out, "follow_report.json"),
         "plot": _target(args.plot, out, "follow_plot.png"),
     }
-    with _robot_client(args, start=Pose2D(*path.start)) as (client, robot):
+    metres = "{l_bar}{bar}| {n:.2f}/{total:.2f} m [{elapsed}<{remaining}]"
+    with (
+        _robot_client(args, start=Pose2D(*path.start)) as (client, robot),
+        progress_bar(f"follow {FsPath(args.path).name}", path.length, bar_format=metres) as bar,
+    ):
         options = FollowOptions(
             follower=args.follower,
             speed=speed,
@@ -110,6 +115,7 @@ def run_follow(args: argparse.Namespace) -> int:
             calibrate_gyro=args.calibrate_gyro,
             slip=_slip(args, robot.name),
             tolerances=tolerances,
+            progress=bar,
         )
         run, report, _ = follow_path(client, robot, path, options)
     surface = args.surface or "the world's floor"

@@ -34,6 +34,7 @@ from omnibot.errors import OmnibotError
 from omnibot.estimation.estimator import Estimator, PoseEstimator, make_estimator
 from omnibot.estimation.odometry import Pose2D
 from omnibot.estimation.slip import SlipParameters
+from omnibot.progress import Progress
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription
 
@@ -345,8 +346,17 @@ class Navigator:
         if self._state == codes.STATE_ESTOP:
             raise NavigationError("emergency stop latched on the controller")
 
-    def follow(self, path: Path, follower: Follower, *, timeout: float | None = None) -> FollowRun:
-        """Drive ``path`` with ``follower`` until it is done (or ``timeout`` s, default from the path)."""
+    def follow(
+        self,
+        path: Path,
+        follower: Follower,
+        *,
+        timeout: float | None = None,
+        progress: Progress | None = None,
+    ) -> FollowRun:
+        """Drive ``path`` with ``follower`` until it is done (or ``timeout`` s, default from the path);
+        ``progress`` (a bar in metres) hears the distance the estimator says the robot has covered,
+        up to the path's length."""
         c = self.client
         clock = c.clock
         run = FollowRun(path, follower.name, self.estimator.name)
@@ -361,6 +371,7 @@ class Navigator:
             timeout = 3.0 * nominal + 10.0
         run.start_time = start
         distance0 = self.estimator.distance
+        shown = 0.0
         next_tick = start
         try:
             while True:
@@ -370,6 +381,10 @@ class Navigator:
                     break
                 self.send(command)
                 self._record(run, state, command)
+                if progress is not None:
+                    covered = min(max(self.estimator.distance - distance0, 0.0), path.length)
+                    progress.update(covered - shown)
+                    shown = covered
                 if state.t - start > timeout:
                     break
                 next_tick += period

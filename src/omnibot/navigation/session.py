@@ -19,6 +19,7 @@ from omnibot.estimation.odometry import Pose2D
 from omnibot.estimation.slip import SlipParameters
 from omnibot.navigation.metrics import Tolerances, judge, tracking_report
 from omnibot.navigation.runner import STANDSTILL, FollowRun, Navigator
+from omnibot.progress import Progress
 from omnibot.robot.description import RobotDescription
 
 DEFAULT_RATE = 100.0
@@ -75,6 +76,8 @@ class FollowOptions:
     ``omnibot calibrate``."""
     tolerances: Tolerances = field(default_factory=Tolerances)
     """What the run must achieve for its report to say ``completed``."""
+    progress: Progress | None = None
+    """A bar in metres that hears the distance covered (a terminal's, see :mod:`omnibot.progress`)."""
 
 
 def follow_path(
@@ -98,7 +101,7 @@ def follow_path(
         nav.prepare(opts.standstill)
         if opts.calibrate_gyro:
             nav.calibrate_gyro()
-        run = nav.follow(path, follower)
+        run = nav.follow(path, follower, progress=opts.progress)
     finally:
         nav.close()
     report = judge(tracking_report(run, MotionLimits.from_robot(robot, opts.speed)), opts.tolerances)

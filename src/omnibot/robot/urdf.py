@@ -1,10 +1,18 @@
 """URDF export of a robot description: a base link, one link per wheel on a continuous joint.
 
 Frames follow REP-103/REP-105: ``base_footprint`` on the floor under the centre, ``base_link`` at
-wheel-axle height. Each wheel joint's frame has x along the wheel's drive direction and its axis is
-+y of that frame, so a positive joint velocity is a positive wheel speed in omnibot's convention
-(the wheel carries the robot along its drive direction). Sonars and the gyro get fixed links so
-tools like RViz can show them. Seed 003 writes the equivalent by hand in robot_core.xacro.
+wheel-axle height. Each wheel joint sits at the wheel's position in the description; its frame has x
+along the direction the hub rolls and its axis is +y of that frame (the axle), so a positive joint
+velocity is a positive wheel speed in omnibot's convention. The hub rolls along the wheel's drive
+direction, except that a Swedish wheel (rollers at gamma) with drive angle d is drawn in its equivalent
+form (d + 2 gamma, -gamma) when that one rolls closer to the body's x axis (:func:`hub_angle`). The
+passive tracking wheels are links on continuous joints the same way; sonars and the gyro fixed links.
+
+Masses and inertias are physically valid (positive definite, triangle inequality) and add up to the
+description: the driven wheels carry 3 % of the mass, each tracking wheel 0.5 %, the body the rest;
+the robot's yaw inertia about its centre is the description's ``yaw_inertia`` (the body's share is
+what the wheels leave), and the body's roll and pitch inertias follow from that and the footprint's
+extent and height. Seed 003 writes the equivalent by hand in robot_core.xacro.
 """
 
 from __future__ import annotations
@@ -12,11 +20,35 @@ from __future__ import annotations
 import math
 import xml.etree.ElementTree as ET
 
-from omnibot.robot.description import RobotDescription
+from omnibot.robot.description import RobotDescription, WheelSpec
+
+WHEEL_MASS_SHARE = 0.03
+"""Share of the robot's mass in its driven wheels (all of them)."""
+TRACKING_MASS_SHARE = 0.005
+"""Share of the robot's mass in each passive tracking wheel."""
+TRACKING_WIDTH = 0.01
+"""m: width of a tracking wheel as drawn."""
 
 
 def _fmt(*values: float) -> str:
-    return " ".join(f"{v:.9g}" for v in values)
+    """Numbers as URDF attributes (9 significant digits, rounding noise such as 4e-16 or -0 shown as 0)."""
+    return " ".join(f"{round(v, 12) + 0.0:.9g}" for v in values)
+
+
+def hub_angle(wheel: WheelSpec) -> float:
+    """Direction (rad, body frame) the wheel's hub rolls in as drawn: its drive angle d, or for a wheel
+    with rollers at gamma the equivalent d + 2 gamma (the same constraint direction d + gamma and the
+    same cos(gamma), so the same wheel to kinematics) when that one is closer to the body's x axis."""
+    d = wheel.drive_angle
+    mirrored = d + 2 * wheel.gamma
+    return mirrored if abs(math.cos(mirrored)) > abs(math.cos(d)) + 1e-9 else d
+
+
+def disc_inertia(mass: float, radius: float, width: float, axle: float | None = None) -> tuple[float, float]:
+    """(about a diameter, about the axle) of a wheel: the axle's from the description when it gives
+    one, else a uniform disc's; a diameter's half the axle's plus the width's share."""
+    ia = axle if axle else mass * radius**2 / 2
+    return ia / 2 + mass * width**2 / 12, ia
 
 
 def _inertial(parent: ET.Element, mass: float, ixx: float, iyy: float, izz: float, z: float = 0.0) -> None:
@@ -38,6 +70,35 @@ def _geometry(parent: ET.Element, robot: RobotDescription) -> None:
         ET.SubElement(geom, "box", size=_fmt(max(xs) - min(xs), max(ys) - min(ys), fp.height))
 
 
+def _wheel(
+    root: ET.Element,
+    name: str,
+    joint_name: str,
+    x: float,
+    y: float,
+    z: float,
+    yaw: float,
+    radius: float,
+    width: float,
+    mass: float,
+    inertia: tuple[float, float],
+) -> None:
+    """A wheel link on a continuous joint from base_link: origin (x, y, z), x along yaw, axis +y."""
+    link = ET.SubElement(root, "link", name=name)
+    for tag in ("visual", "collision"):
+        el = ET.SubElement(link, tag)
+        ET.SubElement(el, "origin", xyz="0 0 0", rpy=_fmt(math.pi / 2, 0, 0))
+        geom = ET.SubElement(el, "geometry")
+        ET.SubElement(geom, "cylinder", radius=_fmt(radius), length=_fmt(width))
+    diameter, axle = inertia
+    _inertial(link, mass, diameter, axle, diameter)
+    j = ET.SubElement(root, "joint", name=joint_name, type="continuous")
+    ET.SubElement(j, "parent", link="base_link")
+    ET.SubElement(j, "child", link=name)
+    ET.SubElement(j, "origin", xyz=_fmt(x, y, z), rpy=_fmt(0, 0, yaw))
+    ET.SubElement(j, "axis", xyz="0 1 0")
+
+
 def to_urdf(robot: RobotDescription) -> str:
     """The robot as a URDF document (a string with an XML declaration)."""
     axle_height = max(w.radius for w in robot.wheels)
@@ -49,36 +110,51 @@ def to_urdf(robot: RobotDescription) -> str:
         el = ET.SubElement(base, tag)
         ET.SubElement(el, "origin", xyz=_fmt(0, 0, fp.height / 2), rpy="0 0 0")
         _geometry(el, robot)
-    wheel_mass = 0.03 * robot.mass / robot.n_wheels  # wheels carry 3% of the mass in the URDF
-    body_mass = robot.mass - wheel_mass * robot.n_wheels
-    # The yaw inertia is the description's; roll/pitch from a uniform slab of the footprint's size.
-    r_b = fp.bounding_radius
-    ixx = body_mass * (r_b**2 / 2 + fp.height**2) / 6
-    _inertial(base, body_mass, ixx, ixx, robot.yaw_inertia, fp.height / 2)
     joint = ET.SubElement(root, "joint", name="base_footprint_joint", type="fixed")
     ET.SubElement(joint, "parent", link="base_footprint")
     ET.SubElement(joint, "child", link="base_link")
     ET.SubElement(joint, "origin", xyz=_fmt(0, 0, axle_height), rpy="0 0 0")
 
+    wheel_mass = WHEEL_MASS_SHARE * robot.mass / robot.n_wheels
+    tracking_mass = TRACKING_MASS_SHARE * robot.mass
+    yaw_of_wheels = 0.0  # their share of the robot's yaw inertia about the centre
     for wheel in robot.wheels:
-        link = ET.SubElement(root, "link", name=f"{wheel.name}_wheel")
-        for tag in ("visual", "collision"):
-            el = ET.SubElement(link, tag)
-            ET.SubElement(el, "origin", xyz="0 0 0", rpy=_fmt(math.pi / 2, 0, 0))
-            geom = ET.SubElement(el, "geometry")
-            ET.SubElement(geom, "cylinder", radius=_fmt(wheel.radius), length=_fmt(wheel.width))
-        # A thin disc: I_axle = I (from the description), the two others half of it.
-        _inertial(
-            link, wheel_mass, wheel.inertia / 2 or 1e-7, wheel.inertia or 1e-7, wheel.inertia / 2 or 1e-7
-        )
         x, y = wheel.position
-        j = ET.SubElement(root, "joint", name=f"{wheel.name}_joint", type="continuous")
-        ET.SubElement(j, "parent", link="base_link")
-        ET.SubElement(j, "child", link=f"{wheel.name}_wheel")
-        ET.SubElement(
-            j, "origin", xyz=_fmt(x, y, wheel.radius - axle_height), rpy=_fmt(0, 0, wheel.drive_angle)
+        inertia = disc_inertia(wheel_mass, wheel.radius, wheel.width, wheel.inertia)
+        yaw_of_wheels += inertia[0] + wheel_mass * (x * x + y * y)
+        z = wheel.radius - axle_height
+        yaw = hub_angle(wheel)
+        size = (wheel.radius, wheel.width)
+        _wheel(root, f"{wheel.name}_wheel", f"{wheel.name}_joint", x, y, z, yaw, *size, wheel_mass, inertia)
+    for tw in robot.encoders.tracking:
+        inertia = disc_inertia(tracking_mass, tw.radius, TRACKING_WIDTH)
+        yaw_of_wheels += inertia[0] + tracking_mass * (tw.x**2 + tw.y**2)
+        size = (tw.radius, TRACKING_WIDTH)
+        name = f"{tw.name}_tracking_wheel"
+        z = tw.radius - axle_height
+        _wheel(
+            root,
+            name,
+            f"{tw.name}_tracking_joint",
+            tw.x,
+            tw.y,
+            z,
+            tw.direction,
+            *size,
+            tracking_mass,
+            inertia,
         )
-        ET.SubElement(j, "axis", xyz="0 1 0")
+
+    body_mass = robot.mass - wheel_mass * robot.n_wheels - tracking_mass * len(robot.encoders.tracking)
+    # The body's yaw inertia is what the wheels leave of the robot's (a tenth of it at least); its
+    # spread in x and in y follows the footprint's extent, its spread in z a uniform slab's.
+    izz = max(robot.yaw_inertia - yaw_of_wheels, 0.1 * robot.yaw_inertia)
+    outline = fp.outline()
+    ex = max(p[0] for p in outline) - min(p[0] for p in outline)
+    ey = max(p[1] for p in outline) - min(p[1] for p in outline)
+    sum_x2 = izz * ex**2 / (ex**2 + ey**2)  # the body's integral of x^2 dm; y^2 the rest of izz
+    sum_z2 = body_mass * fp.height**2 / 12
+    _inertial(base, body_mass, izz - sum_x2 + sum_z2, sum_x2 + sum_z2, izz, fp.height / 2)
 
     for sonar in robot.sonars:
         ET.SubElement(root, "link", name=f"sonar_{sonar.name}")

@@ -8,7 +8,9 @@ microsecond for one robot and scales linearly with the number of robots.
 Kernels compile lazily on their first call and are cached on disk (``cache=True``, next to this
 file or in ``NUMBA_CACHE_DIR``), so a new process loads them instead of compiling. Callers always
 pass the same argument types (C-contiguous float64 arrays, int64 id arrays, Python floats and
-bools), so each kernel compiles exactly once.
+bools), so each kernel compiles exactly once. :func:`warm_up` compiles (or loads) every kernel with
+those types at once: a real-time process (``omnibot sim --pty``) calls it before it serves anyone,
+and ``make setup`` runs it (``python -m omnibot.sim.kernels``) to fill the cache at install time.
 
 Parameter layouts (column indices below are compile-time constants):
 
@@ -481,11 +483,43 @@ def outline_contacts(
     return kept, clearance
 
 
+KERNELS = (physics_step, contact_speeds, surface_probe, outline_contacts)
+"""The kernels the simulator calls (the helpers they call compile with them)."""
+
+
+def warm_up() -> None:
+    """Compile every kernel now, or load it from the disk cache, with the argument types the
+    simulator passes (empty or trivial arrays: nothing is computed). About a second per kernel on
+    the first run of a fresh install, milliseconds once the cache is filled."""
+
+    def f(*shape: int) -> FloatArray:
+        return np.zeros(shape)
+
+    def i(*shape: int) -> IntArray:
+        return np.zeros(shape, dtype=np.int64)
+
+    # no surface: the step returns 1 before it touches anything
+    physics_step(
+        f(1, 3), f(1, 4), f(1, 1), f(1, 1), f(1, 1), f(1, 2), f(1), f(1, 1), i(1, 1),
+        f(1, 3), False, f(1, 1, W_COLUMNS), f(1, R_COLUMNS), f(0, S_COLUMNS), 0.001,
+    )  # fmt: skip
+    contact_speeds(f(0, 3), f(0, 0, W_COLUMNS), f(0, 0, 2))
+    surface_probe(f(0, 2), f(0, 2), i(1), i(0), i(0))
+    triangle = np.array([[0.1, 0.0], [-0.1, 0.1], [-0.1, -0.1]])
+    outline_contacts(triangle, 0.0, 0.0, 0.0, f(0, 2), i(1), f(0, 2), f(0), i(0), f(0, 2), i(0), f(0, 6))
+
+
 __all__ = [
+    "KERNELS",
     "ROLL_SPEED_EPS",
     "WHEEL_SPEED_EPS",
     "contact_speeds",
     "outline_contacts",
     "physics_step",
     "surface_probe",
+    "warm_up",
 ]
+
+
+if __name__ == "__main__":  # ``make setup``: fill the cache once, at install time
+    warm_up()
