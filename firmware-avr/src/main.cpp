@@ -1,0 +1,403 @@
+// omnibot's motor controller for the Arduino UNO: the text protocol of docs/protocol.md.
+// One main-loop pass: advance the clock, the motion timeline, read and answer every complete
+// command, run the sonar, send TEL when due; then sleep until the next interrupt (1 ms at most).
+#include <avr/pgmspace.h>
+#include <stdlib.h>
+
+#include "cal.h"
+#include "hal.h"
+#include "motion.h"
+
+#define UNO_MODE_MASK (P_MODE_SIMULATION | P_MODE_CLOSED_LOOP)  // no binary protocol on the UNO
+
+static char line[LINE_MAX + 1];
+static uint8_t line_len;
+static bool overflow;
+static bool latched;
+static uint32_t now_ms;
+static uint16_t us_part;
+static uint32_t last_ticks;
+static uint8_t tick_half;
+// sonar (sonar.py, one sonar)
+static uint16_t sonar_period;
+static int16_t sonar_low, sonar_high, sonar_stop, sonar_last = -1;
+static uint32_t sonar_next, sonar_started;
+static bool sonar_pending;
+// telemetry
+static uint16_t tel_period;
+static uint8_t tel_mask;
+static uint32_t tel_next;
+
+// ------------------------------------------------------------------ output
+
+static void out_P(PGM_P s) {
+    for (char c; (c = pgm_read_byte(s)); s++) uart_put(c);
+}
+static void out_s(const char *s) {
+    while (*s) uart_put(*s++);
+}
+static void out_i(int32_t v) {
+    char buf[12];
+    out_s(ltoa(v, buf, 10));
+}
+static void out_u(uint32_t v) {
+    char buf[11];
+    out_s(ultoa(v, buf, 10));
+}
+static void comma_i(int32_t v) {
+    uart_put(',');
+    out_i(v);
+}
+static void end_line() {
+    uart_put('\r');
+    uart_put('\n');
+}
+
+static PGM_P code_text(uint8_t code) {
+    for (uint8_t i = 0; i < CODE_TEXT_COUNT; i++)
+        if (pgm_read_byte(&CODE_TEXTS[i].code) == code) return (PGM_P)pgm_read_ptr(&CODE_TEXTS[i].text);
+    return PSTR("");
+}
+
+static void coded(PGM_P keyword, uint8_t code) {
+    out_P(keyword);
+    comma_i(code);
+    uart_put(',');
+    out_P(code_text(code));
+    end_line();
+}
+static void ok() {
+    out_P(PSTR("OK"));
+    end_line();
+}
+static void error(uint8_t code) { coded(PSTR("ERROR"), code); }
+void on_warn(uint8_t code) { coded(PSTR("WARN"), code); }
+void on_idle() {
+    out_P(PSTR("IDLE"));
+    end_line();
+}
+
+static uint8_t state() {
+    if (latched) return P_STATE_ESTOP;
+    return ex.moving() ? P_STATE_MOVING : P_STATE_IDLE;
+}
+
+static void hello() {
+    out_P(PSTR("HELLO,"));
+    out_i(P_PROTOCOL_VERSION);
+    out_P(PSTR("," ROBOT_NAME));
+    comma_i(MOTORS);
+    end_line();
+}
+
+static void status() {
+    out_P(PSTR("STATUS,"));
+    out_i(state());
+    comma_i(ex.queue.count);
+    comma_i(QUEUE_CAPACITY);
+    comma_i(ex.mode);
+    out_P(PSTR(";POWER"));
+    for (uint8_t i = 0; i < MOTORS; i++) comma_i(ex.powers[i]);
+    out_P(PSTR(";MOVE"));
+    for (uint8_t i = 0; i < 4; i++) comma_i(ex.remembered[i]);
+    end_line();
+}
+
+static void telemetry() {
+    out_P(PSTR("TEL,"));
+    out_u(now_ms);
+    comma_i(tel_mask);
+    if (tel_mask & P_TEL_POWER) {
+        comma_i(MOTORS);
+        for (uint8_t i = 0; i < MOTORS; i++) comma_i(ex.powers[i]);
+    }
+    if (tel_mask & P_TEL_ENCODERS) {
+        comma_i(HAS_ENCODERS ? MOTORS : 0);
+        for (uint8_t i = 0; i < (HAS_ENCODERS ? MOTORS : 0); i++) comma_i(encoder_count(i));
+    }
+    if (tel_mask & P_TEL_TRACKING) comma_i(0);  // no tracking wheels on the UNO wiring
+    if (tel_mask & P_TEL_GYRO) comma_i(0);      // no gyro on the UNO wiring
+    if (tel_mask & P_TEL_HEADING) comma_i(0);
+    if (tel_mask & P_TEL_BATTERY) comma_i(battery_mv());
+    if (tel_mask & P_TEL_QUEUE) {
+        comma_i(state());
+        comma_i(ex.queue.count);
+    }
+    if (tel_mask & P_TEL_SONAR) {
+        comma_i(SONARS);
+        if (SONARS) comma_i(sonar_last);
+    }
+    end_line();
+}
+
+// ------------------------------------------------------------------ checks (firmware/limits.py)
+
+static uint8_t check_move(int16_t L, int16_t V, int16_t D, int16_t C, uint8_t k) {
+    if (abs(L) >= (k == 1 ? L_MAX_EXCL : L2_MAX_EXCL) && !(k == 1 && abs(L) == P_INF)) return P_E_DISTANCE;
+    if (k == 1) {
+        if (abs(V) < V_MIN || abs(V) > V_MAX || V == 0) return P_E_SPEED;
+    } else if (abs(V) > V2_MAX) {
+        return P_E_SPEED;
+    }
+    if (abs(D) >= 360 * k) return P_E_COURSE;
+    if (abs(C) >= (k == 1 ? C_MAX_EXCL : C2_MAX_EXCL)) return P_E_CURVATURE;
+    return 0;
+}
+
+static uint8_t check(uint8_t kw, const int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
+    if (n < lo || n > hi) return P_E_PARAM_COUNT;
+    switch (kw) {
+        case K_MOVE:
+            return check_move(p[0], p[1], p[2], p[3], 1);
+        case K_DELTA:
+            if (p[4] < 0 || p[4] > P_INF) return P_E_REPEAT;
+            return check_move(p[0], p[1], p[2], p[3], 2);
+        case K_ROTATE:
+            if (abs(p[0]) > P_INF) return P_E_ANGLE;
+            if (p[1] == 0 || abs(p[1]) >= F_MAX_EXCL) return P_E_SPEED;
+            return 0;
+        case K_POWER:
+            if (p[0] < 1 || p[0] > 30000) return P_E_TIME;
+            for (uint8_t i = 1; i < n; i++)
+                if (abs(p[i]) > PWM_MAX) return P_E_SPEED;
+            return 0;
+        case K_VEL:
+            if ((int32_t)p[0] * p[0] + (int32_t)p[1] * p[1] > V_MAX_SQ || abs(p[2]) >= F_MAX_EXCL) return P_E_SPEED;
+            if (p[3] < 1 || p[3] > 1000) return P_E_TIME;
+            return 0;
+        case K_SONAR:
+            if (p[0] < 1 || p[0] > SONARS) return P_E_SONAR;
+            if (p[1] != 0 && (p[1] < SONAR_PERIOD_MIN || p[1] > 30000)) return P_E_SONAR_PERIOD;
+            for (uint8_t i = 2; i < 5; i++)
+                if (p[i] < 0 || p[i] > 500) return P_E_SONAR;
+            return 0;
+        case K_TELEM:
+            if (p[0] != 0 && (p[0] < P_TEL_PERIOD_MIN || p[0] > 30000)) return P_E_TIME;
+            if (p[1] & ~P_TEL_MASK) return P_E_UNSUPPORTED;
+            return 0;
+        case K_MODE:
+            if (p[0] & ~UNO_MODE_MASK) return P_E_UNSUPPORTED;
+            if ((p[0] & P_MODE_CLOSED_LOOP) && !HAS_ENCODERS) return P_E_UNSUPPORTED;
+            return 0;
+        case K_HELLO:
+            for (uint8_t i = 0; i < n; i++)
+                if (p[i] == P_PROTOCOL_VERSION) return 0;
+            return n ? P_E_UNSUPPORTED : 0;
+    }
+    return 0;
+}
+
+// ------------------------------------------------------------------ commands
+
+static void emergency_stop() {
+    ex.stop();
+    latched = true;
+    on_warn(P_W_SONAR_STOP);
+    on_idle();
+}
+
+static void execute(uint8_t kw, int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
+    uint8_t code = check(kw, p, n, lo, hi);
+    bool motion = kw == K_MOVE || kw == K_ROTATE || kw == K_DELTA || kw == K_POWER || kw == K_VEL;
+    if (!code && latched && motion) code = P_E_ESTOP;
+    if (code) {
+        error(code);
+        return;
+    }
+    switch (kw) {
+        case K_MOVE:
+        case K_ROTATE:
+        case K_DELTA:
+        case K_POWER:
+            if (!ex.queue.push(kw, p, n)) {
+                error(P_E_QUEUE_FULL);
+                return;
+            }
+            ok();
+            ex.step(0);
+            break;
+        case K_VEL:
+            ok();
+            ex.vel(p[0], p[1], p[2], p[3]);
+            break;
+        case K_STOP: {
+            bool was = ex.stop();
+            ex.reset_move();
+            latched = false;
+            ok();
+            if (was) on_idle();
+            break;
+        }
+        case K_STATUS:
+            status();
+            break;
+        case K_HELLO:
+            hello();
+            break;
+        case K_MODE:
+            ok();
+            ex.set_mode(p[0]);
+            break;
+        case K_SONAR:
+            sonar_period = p[1];
+            sonar_low = p[2];
+            sonar_high = p[3];
+            sonar_stop = p[4];
+            sonar_next = now_ms;
+            ok();
+            break;
+        case K_TELEM:
+            tel_period = p[0];
+            tel_mask = p[1];
+            tel_next = now_ms;
+            ok();
+            break;
+        case K_CAL:
+            if (cal_write(p[0], p[1], p[2], p[3])) ok();
+            else error(P_E_CALIBRATION);
+            break;
+        default:
+            error(P_E_INTERNAL);
+    }
+}
+
+static bool blank(char c) { return c == ' ' || c == '\t' || c == '\v' || c == '\f'; }
+
+// Parses one command (parser.py `parse`): keyword, at most 5 integer parameters in 16 bits.
+static void handle(char *cmd) {
+    char *end = cmd + line_len;
+    *end = ',';
+    char *field_end = cmd;
+    while (*field_end != ',') field_end++;
+    char *a = cmd, *b = field_end;
+    while (a < b && blank(*a)) a++;
+    while (b > a && blank(b[-1])) b--;
+    if (a == b && field_end == end) return;  // blank: no reply
+    uint8_t kw = 0, lo = 0, hi = 0;
+    for (uint8_t k = 0; k < K_COUNT && !kw; k++) {
+        const Keyword *e = &KEYWORDS[k];
+        uint8_t i = 0;
+        for (; a + i < b; i++) {
+            char c = a[i];
+            if (c >= 'a' && c <= 'z') c -= 32;
+            if (i >= sizeof(e->name) || c != (char)pgm_read_byte(&e->name[i])) break;
+        }
+        if (a + i == b && (i == sizeof(e->name) || pgm_read_byte(&e->name[i]) == 0)) {
+            kw = pgm_read_byte(&e->id);
+            lo = pgm_read_byte(&e->lo);
+            hi = pgm_read_byte(&e->hi);
+        }
+    }
+    if (!kw) return error(P_E_UNKNOWN);
+    uint8_t fields = 0;
+    for (char *c = field_end; c < end; c++)
+        if (*c == ',') fields++;
+    if (fields > P_PARAMS_MAX) return error(P_E_PARAM_COUNT);
+    int16_t p[P_PARAMS_MAX];
+    uint8_t n = 0;
+    char *c = field_end;
+    while (c < end) {
+        c++;  // past the comma
+        while (c < end && blank(*c)) c++;
+        bool neg = false;
+        if (*c == '-' || *c == '+') neg = *c++ == '-';
+        int32_t v = 0;
+        uint8_t digits = 0;
+        for (; *c >= '0' && *c <= '9'; c++, digits++)
+            if (v < 100000) v = v * 10 + (*c - '0');
+        while (c < end && blank(*c)) c++;
+        if (!digits || *c != ',') return error(P_E_NOT_INTEGER);
+        if (neg) v = -v;
+        if (v < -32768 || v > 32767) return error(P_E_RANGE16);
+        p[n++] = v;
+    }
+    execute(kw, p, n, lo, hi);
+}
+
+// Splits the byte stream into commands (parser.py LineSplitter).
+static void feed(char c) {
+    if (c == ';' || c == '\r' || c == '\n') {
+        if (overflow) {
+            overflow = false;
+            error(P_E_TOO_LONG);
+        } else if (line_len) {
+            handle(line);
+        }
+        line_len = 0;
+        return;
+    }
+    if (overflow) return;
+    if (line_len == LINE_MAX) {
+        overflow = true;
+        line_len = 0;
+        return;
+    }
+    line[line_len++] = c;
+}
+
+// ------------------------------------------------------------------ sonar (sonar.py)
+
+static void sonar_poll() {
+    if (!SONARS) return;
+    if (sonar_pending) {
+        int16_t cm = sonar_result();
+        if (cm == -2) {
+            if ((int32_t)(now_ms - sonar_started) < 100) return;
+            cm = -1;  // no echo within 100 ms
+        }
+        sonar_pending = false;
+        sonar_last = cm;
+        if (sonar_period == 0 || cm < 0) return;
+        if ((sonar_low < sonar_high && sonar_low <= cm && cm <= sonar_high) ||
+            (sonar_low > sonar_high && (cm < sonar_high || cm > sonar_low))) {
+            out_P(PSTR("RANGE,1"));
+            comma_i(cm);
+            end_line();
+        }
+        if (ex.moving() && cm < sonar_stop) emergency_stop();
+    } else if (sonar_period && (int32_t)(now_ms - sonar_next) >= 0) {
+        sonar_next += sonar_period;
+        if ((int32_t)(now_ms - sonar_next) >= 0) sonar_next = now_ms + sonar_period;
+        sonar_pending = true;
+        sonar_started = now_ms;
+        sonar_trigger();
+    }
+}
+
+static bool tel_due() {
+    if (!tel_period || (int32_t)(now_ms - tel_next) < 0) return false;
+    tel_next += tel_period;
+    if ((int32_t)(now_ms - tel_next) >= 0) tel_next = now_ms + tel_period;
+    return true;
+}
+
+// Paints the free RAM so the emulator can measure the deepest stack (docs/uno.md).
+extern uint8_t __heap_start;
+__attribute__((naked, used, section(".init3"))) static void paint_stack() {
+    uint8_t *p = &__heap_start;
+    while (p < (uint8_t *)SP - 16) *p++ = 0xAA;
+}
+
+int main() {
+    hal_init();
+    cal_init();
+    ex.init();
+    ex.set_mode(MODE_AT_RESET & UNO_MODE_MASK);
+    hello();
+    last_ticks = hal_ticks();
+    for (;;) {
+        uint32_t t = hal_ticks();
+        uint32_t ticks = t - last_ticks + tick_half;
+        last_ticks = t;
+        tick_half = ticks & 1;
+        int32_t dt = ticks >> 1;
+        us_part += dt % 1000;
+        now_ms += dt / 1000 + us_part / 1000;
+        us_part %= 1000;
+        ex.step(dt);
+        for (int16_t c; (c = uart_read()) >= 0;) feed(c);
+        sonar_poll();
+        if (tel_due()) telemetry();
+        hal_wait_for_event();
+    }
+}
