@@ -1,0 +1,365 @@
+/*
+ * unosim: omnibot's Arduino UNO firmware in simavr, in real time, with its UART on a pty.
+ *
+ *   unosim [--range CM] [--encoders CPS] [--report] FIRMWARE.elf
+ *
+ * The ATmega328P runs at 16 MHz, kept in step with the wall clock. Its USART0 is a pseudo-terminal
+ * whose path is the first line on stdout; bytes from the host reach the UART paced at 115200 baud
+ * (one byte per 10 bit times), the firmware's bytes leave at the pace of simavr's UART model.
+ * The wiring is that of firmware-avr/generated/uno_board.h (docs/uno.md):
+ *   - motors: signed PWM duty from each L298 channel's OCR, COM bit and IN1/IN2 pins;
+ *   - sonar: a falling edge on the trigger pin answers an echo pulse of 58 us per cm on ICP1
+ *     (none while the range is negative);
+ *   - encoders: single-channel edges at a rate per wheel (counts/s), set on stdin, or from the
+ *     duties with --encoders CPS (CPS counts/s at full duty);
+ *   - battery: ADC7 at 2500 mV (the pack at its nominal voltage).
+ * stdin lines: `range CM`, `wheels C1 C2 C3 C4` (counts/s), `battery MV` (ADC pin mV), `quit`.
+ * With --report, stdout gets `pwm T_US D1 D2 D3 D4` whenever a duty changes.
+ * On exit, stderr gets `stack BYTES`: the deepest stack the firmware reached (its free RAM is
+ * painted with 0xAA at reset).
+ */
+#define _GNU_SOURCE
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <poll.h>
+#include <pty.h>
+#include <sys/prctl.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <termios.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <simavr/avr_adc.h>
+#include <simavr/avr_ioport.h>
+#include <simavr/avr_uart.h>
+#include <simavr/sim_avr.h>
+#include <simavr/sim_elf.h>
+#include <simavr/sim_time.h>
+
+#include "../../firmware-avr/generated/uno_board.h"
+
+#define F_CPU 16000000UL
+#define BAUD 115200
+#define BYTE_CYCLES (F_CPU * 10 / BAUD)
+#define ENCODER_TICK_US 50
+#define FIFO 8192
+
+static avr_t *avr;
+static int pty_master = -1;
+static volatile sig_atomic_t quit;
+
+static uint8_t in_buf[FIFO];
+static size_t in_head, in_tail;  /* host -> UART */
+static uint8_t out_buf[FIFO];
+static size_t out_len;           /* UART -> host */
+static int uart_xoff;
+static avr_irq_t *uart_in;
+
+static const uint8_t motor_map[UNO_MOTORS][7] = UNO_MOTOR_MAP;
+static const struct { char port; uint8_t bit; } encoder_map[UNO_MOTORS] = UNO_ENCODER_MAP;
+static avr_irq_t *encoder_irq[UNO_MOTORS];
+static double wheel_cps[UNO_MOTORS];
+static double wheel_pos[UNO_MOTORS];
+static long wheel_count[UNO_MOTORS];
+static double model_cps;  /* --encoders: counts/s at full duty, 0 = rates from stdin */
+static int report;
+static int duty_last[UNO_MOTORS];
+
+static int range_cm = -1;
+static avr_irq_t *echo_irq;
+
+static void on_signal(int sig) {
+    (void)sig;
+    quit = 1;
+}
+
+/* ---------------------------------------------------------------- UART */
+
+static void uart_output(struct avr_irq_t *irq, uint32_t value, void *param) {
+    (void)irq;
+    (void)param;
+    if (out_len < FIFO) out_buf[out_len++] = (uint8_t)value;
+}
+
+static void uart_xon(struct avr_irq_t *irq, uint32_t value, void *param) {
+    (void)irq;
+    (void)value;
+    (void)param;
+    uart_xoff = 0;
+}
+
+static void uart_xoff_cb(struct avr_irq_t *irq, uint32_t value, void *param) {
+    (void)irq;
+    (void)value;
+    (void)param;
+    uart_xoff = 1;
+}
+
+static int feeding;
+
+/* one byte per 10 bit times at 115200 baud, as a real line delivers them */
+static avr_cycle_count_t feed_byte(avr_t *a, avr_cycle_count_t when, void *param) {
+    (void)a;
+    (void)param;
+    if (in_head == in_tail) {
+        feeding = 0;
+        return 0;
+    }
+    if (!uart_xoff) {
+        avr_raise_irq(uart_in, in_buf[in_tail]);
+        in_tail = (in_tail + 1) % FIFO;
+    }
+    return when + BYTE_CYCLES;
+}
+
+static void start_feeding(void) {
+    if (!feeding && in_head != in_tail) {
+        feeding = 1;
+        avr_cycle_timer_register(avr, BYTE_CYCLES, feed_byte, NULL);
+    }
+}
+
+/* ---------------------------------------------------------------- sonar */
+
+static avr_cycle_count_t echo_fall(avr_t *a, avr_cycle_count_t when, void *param) {
+    (void)a;
+    (void)when;
+    (void)param;
+    avr_raise_irq(echo_irq, 0);
+    return 0;
+}
+
+static avr_cycle_count_t echo_rise(avr_t *a, avr_cycle_count_t when, void *param) {
+    (void)when;
+    (void)param;
+    avr_raise_irq(echo_irq, 1);
+    avr_cycle_timer_register_usec(a, (uint32_t)range_cm * 58 + 29, echo_fall, NULL);
+    return 0;
+}
+
+static void trigger_changed(struct avr_irq_t *irq, uint32_t value, void *param) {
+    (void)param;
+    if (irq->value && !value && range_cm >= 0)  /* end of the trigger pulse */
+        avr_cycle_timer_register_usec(avr, 450, echo_rise, NULL);
+}
+
+/* ---------------------------------------------------------------- motors and encoders */
+
+static int duty(int i) {
+    const uint8_t *m = motor_map[i];
+    if (!(avr->data[m[1]] & (1 << m[2]))) return 0;
+    int in1 = (avr->data[m[3]] >> m[4]) & 1, in2 = (avr->data[m[5]] >> m[6]) & 1;
+    int d = avr->data[m[0]];
+    return in1 && !in2 ? d : (in2 && !in1 ? -d : 0);
+}
+
+static avr_cycle_count_t encoder_tick(avr_t *a, avr_cycle_count_t when, void *param) {
+    (void)param;
+    int changed = 0;
+    for (int i = 0; i < UNO_MOTORS; i++) {
+        int d = duty(i);
+        if (d != duty_last[i]) changed = 1;
+        duty_last[i] = d;
+        double cps = model_cps > 0 ? model_cps * d / 255.0 : wheel_cps[i];
+        wheel_pos[i] += cps * ENCODER_TICK_US * 1e-6;
+        long target = (long)floor(wheel_pos[i]);
+        if (target != wheel_count[i]) {  /* one edge per tick at most: the pin must be seen to change */
+            wheel_count[i] += target > wheel_count[i] ? 1 : -1;
+            avr_raise_irq(encoder_irq[i], wheel_count[i] & 1);
+        }
+    }
+    if (changed && report) {
+        printf("pwm %llu", (unsigned long long)avr_cycles_to_usec(a, when));
+        for (int i = 0; i < UNO_MOTORS; i++) printf(" %d", duty_last[i]);
+        printf("\n");
+        fflush(stdout);
+    }
+    return when + avr_usec_to_cycles(a, ENCODER_TICK_US);
+}
+
+/* ---------------------------------------------------------------- host side */
+
+static void command(char *line) {
+    int a[UNO_MOTORS];
+    if (sscanf(line, "range %d", &a[0]) == 1) {
+        range_cm = a[0];
+    } else if (sscanf(line, "wheels %d %d %d %d", &a[0], &a[1], &a[2], &a[3]) == 4) {
+        for (int i = 0; i < UNO_MOTORS; i++) wheel_cps[i] = a[i];
+    } else if (sscanf(line, "battery %d", &a[0]) == 1) {
+        avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0 + UNO_BATTERY_ADC), a[0]);
+    } else if (strncmp(line, "quit", 4) == 0) {
+        quit = 1;
+    } else {
+        fprintf(stderr, "unosim: unknown command: %s", line);
+    }
+}
+
+static int stdin_open = 1;
+static char stdin_line[256];
+static size_t stdin_len;
+
+static void read_stdin(void) {
+    char buf[256];
+    ssize_t n = read(0, buf, sizeof buf);
+    if (n <= 0) {
+        stdin_open = 0;  /* no more commands; the emulator runs on */
+        return;
+    }
+    for (ssize_t i = 0; i < n; i++) {
+        if (stdin_len < sizeof stdin_line - 1) stdin_line[stdin_len++] = buf[i];
+        if (buf[i] == '\n') {
+            stdin_line[stdin_len] = 0;
+            command(stdin_line);
+            stdin_len = 0;
+        }
+    }
+}
+
+static void read_pty(void) {
+    uint8_t buf[512];
+    ssize_t n = read(pty_master, buf, sizeof buf);
+    for (ssize_t i = 0; i < n; i++) {
+        size_t next = (in_head + 1) % FIFO;
+        if (next == in_tail) break;  /* a host far ahead of the line: the kernel keeps the rest */
+        in_buf[in_head] = buf[i];
+        in_head = next;
+    }
+    start_feeding();
+}
+
+static void write_pty(void) {
+    size_t done = 0;
+    while (done < out_len) {
+        ssize_t n = write(pty_master, out_buf + done, out_len - done);
+        if (n <= 0) break;  /* nobody reading: keep it for later */
+        done += (size_t)n;
+    }
+    memmove(out_buf, out_buf + done, out_len - done);
+    out_len -= done;
+}
+
+static double wall_us(const struct timespec *start) {
+    struct timespec now;
+    clock_gettime(CLOCK_MONOTONIC, &now);
+    return (now.tv_sec - start->tv_sec) * 1e6 + (now.tv_nsec - start->tv_nsec) / 1e3;
+}
+
+static void no_sleep(avr_t *a, avr_cycle_count_t how_long) {
+    (void)a;
+    (void)how_long;  /* the main loop keeps the emulator in step with the wall clock */
+}
+
+/* From the top of RAM down, the first eight painted bytes in a row: the stack never reached them. */
+static int stack_depth(void) {
+    int run = 0;
+    for (int addr = avr->ramend; addr >= 0x100; addr--) {
+        run = avr->data[addr] == 0xAA ? run + 1 : 0;
+        if (run == 8) return avr->ramend - (addr + 7);
+    }
+    return -1;
+}
+
+int main(int argc, char **argv) {
+    const char *elf = NULL;
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--range") && i + 1 < argc) range_cm = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--encoders") && i + 1 < argc) model_cps = atof(argv[++i]);
+        else if (!strcmp(argv[i], "--report")) report = 1;
+        else if (argv[i][0] != '-' && !elf) elf = argv[i];
+        else {
+            fprintf(stderr, "usage: unosim [--range CM] [--encoders CPS] [--report] FIRMWARE.elf\n");
+            return 2;
+        }
+    }
+    if (!elf) {
+        fprintf(stderr, "usage: unosim [--range CM] [--encoders CPS] [--report] FIRMWARE.elf\n");
+        return 2;
+    }
+    elf_firmware_t fw;
+    memset(&fw, 0, sizeof fw);
+    int saved_stdout = dup(1), devnull = open("/dev/null", O_WRONLY);
+    dup2(devnull, 1);  /* simavr's loader talks on stdout, which carries the pty path */
+    int loaded = elf_read_firmware(elf, &fw);
+    if (loaded != 0) {
+        fprintf(stderr, "unosim: cannot read %s\n", elf);
+        return 1;
+    }
+    avr = avr_make_mcu_by_name("atmega328p");
+    if (!avr) return 1;
+    avr_init(avr);
+    avr->frequency = F_CPU;
+    avr->avcc = avr->vcc = avr->aref = 5000;
+    avr->log = 0;
+    avr_load_firmware(avr, &fw);
+    fflush(stdout);
+    dup2(saved_stdout, 1);
+    close(saved_stdout);
+    close(devnull);
+    avr->sleep = no_sleep;
+
+    uint32_t flags = 0;
+    avr_ioctl(avr, AVR_IOCTL_UART_GET_FLAGS('0'), &flags);
+    flags &= ~(AVR_UART_FLAG_STDIO | AVR_UART_FLAG_POLL_SLEEP);
+    avr_ioctl(avr, AVR_IOCTL_UART_SET_FLAGS('0'), &flags);
+    uart_in = avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT);
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUTPUT), uart_output, NULL);
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XON), uart_xon, NULL);
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XOFF), uart_xoff_cb, NULL);
+
+    echo_irq = avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ(UNO_SONAR_ECHO_PORT), UNO_SONAR_ECHO_BIT);
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ(UNO_SONAR_TRIG_PORT), UNO_SONAR_TRIG_BIT),
+                            trigger_changed, NULL);
+    for (int i = 0; i < UNO_MOTORS; i++)
+        encoder_irq[i] = avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ(encoder_map[i].port), encoder_map[i].bit);
+    avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0 + UNO_BATTERY_ADC), 2500);
+    avr_cycle_timer_register_usec(avr, ENCODER_TICK_US, encoder_tick, NULL);
+
+    int slave;
+    if (openpty(&pty_master, &slave, NULL, NULL, NULL) != 0) {
+        perror("unosim: openpty");
+        return 1;
+    }
+    struct termios tio;
+    tcgetattr(slave, &tio);
+    cfmakeraw(&tio);
+    tcsetattr(slave, TCSANOW, &tio);
+    fcntl(pty_master, F_SETFL, fcntl(pty_master, F_GETFL) | O_NONBLOCK);
+    printf("%s\n", ttyname(slave));
+    fflush(stdout);
+
+    prctl(PR_SET_PDEATHSIG, SIGTERM);  /* ends with the process that started it */
+    signal(SIGTERM, on_signal);
+    signal(SIGINT, on_signal);
+    signal(SIGPIPE, SIG_IGN);
+
+    struct timespec start;
+    clock_gettime(CLOCK_MONOTONIC, &start);
+    int rc = 0;
+    while (!quit) {
+        for (int i = 0; i < 2000; i++) {
+            int state = avr_run(avr);
+            if (state == cpu_Done || state == cpu_Crashed) {
+                fprintf(stderr, "unosim: the firmware %s\n", state == cpu_Done ? "stopped" : "crashed");
+                quit = 1;
+                rc = 1;
+                break;
+            }
+        }
+        if (out_len) write_pty();
+        double ahead_us = avr_cycles_to_usec(avr, avr->cycle) - wall_us(&start);
+        int timeout_ms = ahead_us > 1000 ? (int)(ahead_us / 1000) : 0;
+        struct pollfd fds[2] = {{pty_master, POLLIN, 0}, {0, POLLIN, 0}};
+        if (poll(fds, stdin_open ? 2 : 1, timeout_ms) > 0) {
+            if (fds[0].revents & POLLIN) read_pty();
+            if (fds[1].revents & (POLLIN | POLLHUP)) read_stdin();
+        }
+    }
+    fprintf(stderr, "stack %d\n", stack_depth());
+    close(slave);
+    close(pty_master);
+    return rc;
+}
