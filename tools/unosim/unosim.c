@@ -3,7 +3,8 @@
  *
  *   unosim [--range CM] [--encoders CPS] [--report] FIRMWARE.elf
  *
- * The ATmega328P runs at 16 MHz, kept in step with the wall clock. Its USART0 is a pseudo-terminal
+ * The ATmega328P runs at 16 MHz, kept in step with the wall clock (never faster; on a busy host it
+ * falls behind by at most 20 ms and then slips, so the firmware's time never races). Its USART0 is a pseudo-terminal
  * whose path is the first line on stdout; bytes from the host reach the UART paced at 115200 baud
  * (one byte per 10 bit times), the firmware's bytes leave at the pace of simavr's UART model.
  * The wiring is that of firmware-avr/generated/uno_board.h (docs/uno.md):
@@ -34,6 +35,7 @@
 #include <unistd.h>
 
 #include <simavr/avr_adc.h>
+#include <simavr/avr_extint.h>
 #include <simavr/avr_ioport.h>
 #include <simavr/avr_uart.h>
 #include <simavr/sim_avr.h>
@@ -47,6 +49,7 @@
 #define BYTE_CYCLES (F_CPU * 10 / BAUD)
 #define ENCODER_TICK_US 50
 #define FIFO 8192
+#define MAX_LAG_US 20000.0 /* the emulated clock may lag the wall clock by this much, then it slips */
 
 static avr_t *avr;
 static int pty_master = -1;
@@ -300,6 +303,11 @@ int main(int argc, char **argv) {
     close(saved_stdout);
     close(devnull);
     avr->sleep = no_sleep;
+    /* INT0/INT1 (PD2, PD3) are motor pins the firmware never uses as interrupts; simavr 1.6 polls a
+     * low level on them every cycle whatever the mode, which would slow the emulation tenfold */
+    for (int i = 0; i < 2; i++)
+        avr_unconnect_irq(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 2 + i),
+                          avr_io_getirq(avr, AVR_IOCTL_EXTINT_GETIRQ(), EXTINT_IRQ_OUT_INT0 + i));
 
     uint32_t flags = 0;
     avr_ioctl(avr, AVR_IOCTL_UART_GET_FLAGS('0'), &flags);
@@ -339,8 +347,11 @@ int main(int argc, char **argv) {
     struct timespec start;
     clock_gettime(CLOCK_MONOTONIC, &start);
     int rc = 0;
+    double slip_us = 0;
     while (!quit) {
-        for (int i = 0; i < 2000; i++) {
+        /* run until 1 ms ahead of the wall clock (or 20000 steps, to keep the I/O responsive) */
+        double until_us = wall_us(&start) - slip_us + 1000;
+        for (int i = 0; i < 20000 && avr_cycles_to_usec(avr, avr->cycle) < until_us; i++) {
             int state = avr_run(avr);
             if (state == cpu_Done || state == cpu_Crashed) {
                 fprintf(stderr, "unosim: the firmware %s\n", state == cpu_Done ? "stopped" : "crashed");
@@ -350,14 +361,19 @@ int main(int argc, char **argv) {
             }
         }
         if (out_len) write_pty();
-        double ahead_us = avr_cycles_to_usec(avr, avr->cycle) - wall_us(&start);
-        int timeout_ms = ahead_us > 1000 ? (int)(ahead_us / 1000) : 0;
+        double ahead_us = avr_cycles_to_usec(avr, avr->cycle) - (wall_us(&start) - slip_us);
+        if (ahead_us < -MAX_LAG_US) {  /* fell behind (a busy host): slip, never race to catch up */
+            slip_us += -MAX_LAG_US - ahead_us;
+            ahead_us = -MAX_LAG_US;
+        }
+        int timeout_ms = ahead_us > 0 ? (int)(ahead_us / 1000) : 0;
         struct pollfd fds[2] = {{pty_master, POLLIN, 0}, {0, POLLIN, 0}};
         if (poll(fds, stdin_open ? 2 : 1, timeout_ms) > 0) {
             if (fds[0].revents & POLLIN) read_pty();
             if (fds[1].revents & (POLLIN | POLLHUP)) read_stdin();
         }
     }
+    fprintf(stderr, "time emulated %.0f us, wall %.0f us, slipped %.0f us\n", (double)avr_cycles_to_usec(avr, avr->cycle), wall_us(&start), slip_us);
     fprintf(stderr, "stack %d\n", stack_depth());
     close(slave);
     close(pty_master);
