@@ -9,7 +9,7 @@
 #include <util/atomic.h>
 #include <util/delay.h>
 
-#define RX_SIZE 64   // powers of two
+#define RX_SIZE 256  // powers of two; 256: an index wraps by itself
 #define TX_SIZE 128
 
 static volatile uint8_t rx_buf[RX_SIZE];

@@ -14,7 +14,8 @@
  *   - encoders: single-channel edges at a rate per wheel (counts/s), set on stdin, or from the
  *     duties with --encoders CPS (CPS counts/s at full duty);
  *   - battery: ADC7 at 2500 mV (the pack at its nominal voltage).
- * stdin lines: `range CM`, `wheels C1 C2 C3 C4` (counts/s), `battery MV` (ADC pin mV), `quit`.
+ * stdin lines: `range CM`, `wheels C1 C2 C3 C4` (counts/s), `battery MV` (ADC pin mV), `reset` (a
+ * power cycle that keeps the EEPROM), `quit`.
  * With --report, stdout gets `pwm T_US D1 D2 D3 D4` whenever a duty changes.
  * On exit, stderr gets `stack BYTES`: the deepest stack the firmware reached (its free RAM is
  * painted with 0xAA at reset).
@@ -194,6 +195,11 @@ static void command(char *line) {
         for (int i = 0; i < UNO_MOTORS; i++) wheel_cps[i] = a[i];
     } else if (sscanf(line, "battery %d", &a[0]) == 1) {
         avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0 + UNO_BATTERY_ADC), a[0]);
+    } else if (strncmp(line, "reset", 5) == 0) {
+        avr_reset(avr);  /* a power cycle: RAM and registers start over, the EEPROM keeps its bytes */
+        for (int i = 0; i < 2; i++)
+            avr_unconnect_irq(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 2 + i),
+                              avr_io_getirq(avr, AVR_IOCTL_EXTINT_GETIRQ(), EXTINT_IRQ_OUT_INT0 + i));
     } else if (strncmp(line, "quit", 4) == 0) {
         quit = 1;
     } else {

@@ -69,6 +69,7 @@ class UnoEmulator:
     ``encoder_cps``: encoder counts/s at full PWM duty (None: the wheels stand still)."""
 
     def __init__(self, robot: str, *, range_cm: int | None = None, encoder_cps: float | None = None) -> None:
+        self.robot = robot
         elf = build(robot)
         argv = [str(HARNESS), str(elf)]
         if range_cm is not None:
