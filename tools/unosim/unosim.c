@@ -15,7 +15,8 @@
  *     duties with --encoders CPS (CPS counts/s at full duty);
  *   - battery: ADC7 at 2500 mV (the pack at its nominal voltage).
  * stdin lines: `range CM`, `wheels C1 C2 C3 C4` (counts/s), `battery MV` (ADC pin mV), `reset` (a
- * power cycle that keeps the EEPROM), `quit`.
+ * power cycle that keeps the EEPROM), `stats` (prints `stats LONGEST AWAKE ELAPSED PASSES`: the
+ * longest main-loop pass, the cycles awake and elapsed and the passes since the last `stats`), `quit`.
  * With --report, stdout gets `pwm T_US D1 D2 D3 D4` whenever a duty changes.
  * On exit, stderr gets `stack BYTES`: the deepest stack the firmware reached (its free RAM is
  * painted with 0xAA at reset).
@@ -74,6 +75,9 @@ static int report;
 static int duty_last[UNO_MOTORS];
 
 static int range_cm = -1;
+/* main-loop passes: cycles awake between two sleeps (the firmware sleeps at the end of each pass) */
+static avr_cycle_count_t awake, stretch, longest, stats_from;
+static unsigned long passes;
 static avr_irq_t *echo_irq;
 
 static void on_signal(int sig) {
@@ -200,6 +204,14 @@ static void command(char *line) {
         for (int i = 0; i < 2; i++)
             avr_unconnect_irq(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 2 + i),
                               avr_io_getirq(avr, AVR_IOCTL_EXTINT_GETIRQ(), EXTINT_IRQ_OUT_INT0 + i));
+    } else if (strncmp(line, "stats", 5) == 0) {
+        /* cycles: longest pass, awake in all, elapsed; then the passes; and start counting anew */
+        printf("stats %llu %llu %llu %lu\n", (unsigned long long)longest, (unsigned long long)awake,
+               (unsigned long long)(avr->cycle - stats_from), passes);
+        fflush(stdout);
+        longest = awake = 0;
+        passes = 0;
+        stats_from = avr->cycle;
     } else if (strncmp(line, "quit", 4) == 0) {
         quit = 1;
     } else {
@@ -358,7 +370,16 @@ int main(int argc, char **argv) {
         /* run until 1 ms ahead of the wall clock (or 20000 steps, to keep the I/O responsive) */
         double until_us = wall_us(&start) - slip_us + 1000;
         for (int i = 0; i < 20000 && avr_cycles_to_usec(avr, avr->cycle) < until_us; i++) {
+            avr_cycle_count_t before = avr->cycle;
             int state = avr_run(avr);
+            if (state == cpu_Running) {
+                awake += avr->cycle - before;
+                stretch += avr->cycle - before;
+            } else if (stretch) {  /* the main loop went to sleep: one pass ended */
+                if (stretch > longest) longest = stretch;
+                passes++;
+                stretch = 0;
+            }
             if (state == cpu_Done || state == cpu_Crashed) {
                 fprintf(stderr, "unosim: the firmware %s\n", state == cpu_Done ? "stopped" : "crashed");
                 quit = 1;

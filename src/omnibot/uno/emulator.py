@@ -94,6 +94,17 @@ class UnoEmulator:
         self.proc.stdin.write(line.encode() + b"\n")
         self.proc.stdin.flush()
 
+    def stats(self, timeout: float = 5.0) -> tuple[int, int, int, int]:
+        """CPU cycles since the last call: (longest main-loop pass, awake, elapsed, passes)."""
+        self.command("stats")
+        assert self.proc.stdout is not None
+        ready, _, _ = select.select([self.proc.stdout], [], [], timeout)
+        line = self.proc.stdout.readline().decode().split() if ready else []
+        if len(line) != 5 or line[0] != "stats":
+            raise UnoError(f"unosim did not answer stats: {line}")
+        longest, awake, elapsed, passes = (int(v) for v in line[1:])
+        return longest, awake, elapsed, passes
+
     def set_range(self, cm: int | None) -> None:
         self.command(f"range {-1 if cm is None else cm}")
 
