@@ -13,6 +13,7 @@ its Arduino. Throughput at 115200 baud: ``VEL`` with one command outstanding, an
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import select
 import statistics
@@ -90,7 +91,9 @@ def main(argv: list[str] | None = None) -> int:
                 port.send(cleanup)
                 port.drain()
             med, worst = statistics.median(cycles), max(cycles)
-            print(f"| {label} | {med:,.0f} ({worst:,}) | {med / F_CPU * 1e6:,.0f} ({worst / F_CPU * 1e6:,.0f}) |")
+            print(
+                f"| {label} | {med:,.0f} ({worst:,}) | {med / F_CPU * 1e6:,.0f} ({worst / F_CPU * 1e6:,.0f}) |"
+            )
         emu.stats()
         n = 300
         line = b"VEL,40,0,0,100\n"
@@ -101,7 +104,7 @@ def main(argv: list[str] | None = None) -> int:
             os.write(port.fd, line)
             port.count_lines(1)
         paced = n / (time.monotonic() - start)
-        longest, awake, elapsed, passes = emu.stats()
+        longest, awake, elapsed, _ = emu.stats()
         print(
             f"\nVEL, one outstanding: {paced:,.0f} commands/s (line limit {limit:,.0f}/s, "
             f"{100 * paced / limit:.0f} %); CPU awake {100 * awake / elapsed:.0f} % of the time, "
@@ -109,12 +112,12 @@ def main(argv: list[str] | None = None) -> int:
         )
         port.buf = b""
         os.write(port.fd, line * n)  # back to back at line rate: more than the UNO can parse
-        try:
+        with contextlib.suppress(TimeoutError):
             port.count_lines(n, timeout=3.0)
-        except TimeoutError:
-            pass
         got = port.buf.count(b"OK")
-        print(f"VEL back to back at line rate: {got} of {n} answered ({100 * got / n:.0f} %); the rest was lost")
+        print(
+            f"VEL back to back at line rate: {got} of {n} answered ({100 * got / n:.0f} %); the rest was lost"
+        )
         port.send("STOP")
         port.drain()
     finally:
