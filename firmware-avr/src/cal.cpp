@@ -1,6 +1,7 @@
 #include "cal.h"
 
 #include <avr/eeprom.h>
+#include <math.h>
 #include <string.h>
 
 struct Table {
@@ -55,18 +56,24 @@ void cal_init() {
 
 static inline int16_t rd16(const int16_t *p) { return (int16_t)eeprom_read_word((const uint16_t *)p); }
 
-// Piecewise-linear y(x) / 1000, held constant outside the knots.
+// Piecewise-linear y(x) / 1000, held constant outside the knots. The knots are integers, so the
+// segment is found with integer compares (x <= x1 exactly when ceil(x) <= x1) and only its two
+// knots are converted to float.
 static float interp(const Table *t, float x) {
     uint8_t n = eeprom_read_byte(&t->n);
-    float x0 = rd16(&t->k[0].x), y0 = rd16(&t->k[0].y);
-    if (x <= x0 || n <= 1) return y0 * 0.001f;
+    int16_t x0 = rd16(&t->k[0].x);
+    if (n <= 1 || x <= x0) return rd16(&t->k[0].y) * 0.001f;
+    float c = ceilf(x);
+    int16_t cx = c > 32767.0f ? 32767 : (int16_t)c;
     for (uint8_t i = 1; i < n; i++) {
-        float x1 = rd16(&t->k[i].x), y1 = rd16(&t->k[i].y);
-        if (x <= x1) return (y0 + (x - x0) * (y1 - y0) / (x1 - x0)) * 0.001f;
+        int16_t x1 = rd16(&t->k[i].x);
+        if (cx <= x1) {
+            float y0 = rd16(&t->k[i - 1].y), y1 = rd16(&t->k[i].y);
+            return (y0 + (x - x0) * (y1 - y0) / (x1 - x0)) * 0.001f;
+        }
         x0 = x1;
-        y0 = y1;
     }
-    return y0 * 0.001f;
+    return rd16(&t->k[n - 1].y) * 0.001f;
 }
 
 float cal_k() { return rd16(EE(k)) * 0.1f; }

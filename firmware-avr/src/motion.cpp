@@ -25,6 +25,7 @@ const Slot &Queue::pop() {
 }
 
 void Executor::init() {
+    rim_init();
     for (uint8_t i = 0; i < MOTORS; i++) motor_set(i, 0);
     model.scale = 1.0f;
     model.drag_gain = 1.0f;

@@ -6,9 +6,14 @@
 
 #include "cal.h"
 
-float rim(uint8_t i, uint8_t j) {
-    return (int16_t)pgm_read_word(&RIM_Q[i][j]) * (1.0f / (1L << RIM_SHIFT));
+static float rim_f[MOTORS][3];  // RIM_Q in float, converted once
+
+void rim_init() {
+    for (uint8_t i = 0; i < MOTORS; i++)
+        for (uint8_t j = 0; j < 3; j++) rim_f[i][j] = (int16_t)pgm_read_word(&RIM_Q[i][j]) * (1.0f / (1L << RIM_SHIFT));
 }
+
+float rim(uint8_t i, uint8_t j) { return rim_f[i][j]; }
 
 // Angle (0..90 degrees) between a course and the nearest idle axis (calibration.py fold_course).
 static float fold_course(float course) {

@@ -19,4 +19,5 @@ struct PowerModel {
     uint8_t finish(float peak, int16_t *out);
 };
 
+void rim_init();  // at start-up
 float rim(uint8_t i, uint8_t j);
