@@ -119,7 +119,9 @@ void hal_init() {
     enc_last[0] = PINB;
     enc_last[1] = PINC;
     enc_last[2] = PIND;
+#if SONARS
     SONAR_TRIG_DDR |= _BV(SONAR_TRIG_BIT);
+#endif
     // ADC: AVcc reference, prescaler 128
     ADMUX = _BV(REFS0) | BATTERY_ADC;
     ADCSRA = _BV(ADEN) | _BV(ADPS2) | _BV(ADPS1) | _BV(ADPS0);
@@ -198,6 +200,7 @@ int32_t encoder_count(uint8_t i) {
     return v;
 }
 
+#if SONARS
 void sonar_trigger() {
     ATOMIC_BLOCK(ATOMIC_RESTORESTATE) {
         echo_state = 1;
@@ -215,6 +218,10 @@ int16_t sonar_result() {
     echo_state = 0;
     return echo_ticks / 116;  // 58 us per cm, 2 ticks per us
 }
+#else
+void sonar_trigger() {}
+int16_t sonar_result() { return -1; }
+#endif
 
 uint16_t battery_mv() {
     ADCSRA |= _BV(ADSC);

@@ -49,11 +49,11 @@ class Port:
         os.close(self.fd)
 
 
-def start(robot: str, range_cm: int | None = None) -> tuple[UnoEmulator, Port]:
+def start(robot: str, range_cm: int | None = None, report: bool = False) -> tuple[UnoEmulator, Port]:
     reason = missing_tools()
     if reason:
         pytest.skip(f"emulated UNO: {reason}")
-    emu = UnoEmulator(robot, range_cm=range_cm)
+    emu = UnoEmulator(robot, range_cm=range_cm, report=report)
     port = Port(emu.path)
     assert port.lines(1) == [f"HELLO,1,{robot},4"]
     return emu, port

@@ -116,3 +116,22 @@ def test_hello_names_the_robot(robot: str) -> None:
     finally:
         port.close()
         emu.close()
+
+
+@pytest.mark.parametrize("robot", ["omni4", "mecanum4"])
+def test_each_motor_drives_its_own_pins(robot: str) -> None:
+    """POWER reaches every motor's EN (PWM duty) and IN1/IN2 (direction) pins of the robot's wiring."""
+    emu, port = start(robot, report=True)
+    try:
+        powers = [100, -50, 30, -255]
+        assert port.ask("POWER,200," + ",".join(str(p) for p in powers)) == ["OK"]
+        t0, duties = emu.duties()
+        while duties != powers:  # the four motors may be set across two reports
+            t0, duties = emu.duties()
+        t1, duties = emu.duties()  # POWER's 200 ms are over: the motors stop
+        while duties != [0, 0, 0, 0]:
+            _, duties = emu.duties()
+        assert 0.19 <= (t1 - t0) / 1e6 <= 0.21  # emulated time
+    finally:
+        port.close()
+        emu.close()

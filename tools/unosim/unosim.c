@@ -1,13 +1,13 @@
 /*
  * unosim: omnibot's Arduino UNO firmware in simavr, in real time, with its UART on a pty.
  *
- *   unosim [--range CM] [--encoders CPS] [--report] FIRMWARE.elf
+ *   unosim --board ROBOT.board [--range CM] [--encoders CPS] [--report] FIRMWARE.elf
  *
  * The ATmega328P runs at 16 MHz, kept in step with the wall clock (never faster; on a busy host it
  * falls behind by at most 20 ms and then slips, so the firmware's time never races). Its USART0 is a pseudo-terminal
  * whose path is the first line on stdout; bytes from the host reach the UART paced at 115200 baud
  * (one byte per 10 bit times), the firmware's bytes leave at the pace of simavr's UART model.
- * The wiring is that of firmware-avr/generated/uno_board.h (docs/uno.md):
+ * The wiring is the robot's, read from firmware-avr/generated/<robot>.board (docs/uno.md):
  *   - motors: signed PWM duty from each L298 channel's OCR, COM bit and IN1/IN2 pins;
  *   - sonar: a falling edge on the trigger pin answers an echo pulse of 58 us per cm on ICP1
  *     (none while the range is negative);
@@ -44,7 +44,7 @@
 #include <simavr/sim_elf.h>
 #include <simavr/sim_time.h>
 
-#include "../../firmware-avr/generated/uno_board.h"
+#define MOTORS_MAX 4
 
 #define F_CPU 16000000UL
 #define BAUD 115200
@@ -64,15 +64,18 @@ static size_t out_len;           /* UART -> host */
 static int uart_xoff;
 static avr_irq_t *uart_in;
 
-static const uint8_t motor_map[UNO_MOTORS][7] = UNO_MOTOR_MAP;
-static const struct { char port; uint8_t bit; } encoder_map[UNO_MOTORS] = UNO_ENCODER_MAP;
-static avr_irq_t *encoder_irq[UNO_MOTORS];
-static double wheel_cps[UNO_MOTORS];
-static double wheel_pos[UNO_MOTORS];
-static long wheel_count[UNO_MOTORS];
+/* the wiring (--board): per motor OCR, TCCR, COM bit, IN1 PORT and bit, IN2 PORT and bit */
+static unsigned motor_map[MOTORS_MAX][7];
+static int motors, encoders;
+static struct { char port; int bit; } encoder_map[MOTORS_MAX], trigger_pin, echo_pin;
+static int has_sonar, battery_adc = -1;
+static avr_irq_t *encoder_irq[MOTORS_MAX];
+static double wheel_cps[MOTORS_MAX];
+static double wheel_pos[MOTORS_MAX];
+static long wheel_count[MOTORS_MAX];
 static double model_cps;  /* --encoders: counts/s at full duty, 0 = rates from stdin */
 static int report;
-static int duty_last[UNO_MOTORS];
+static int duty_last[MOTORS_MAX];
 
 static int range_cm = -1;
 /* main-loop passes: cycles awake between two sleeps (the firmware sleeps at the end of each pass) */
@@ -158,7 +161,7 @@ static void trigger_changed(struct avr_irq_t *irq, uint32_t value, void *param) 
 /* ---------------------------------------------------------------- motors and encoders */
 
 static int duty(int i) {
-    const uint8_t *m = motor_map[i];
+    const unsigned *m = motor_map[i];
     if (!(avr->data[m[1]] & (1 << m[2]))) return 0;
     int in1 = (avr->data[m[3]] >> m[4]) & 1, in2 = (avr->data[m[5]] >> m[6]) & 1;
     int d = avr->data[m[0]];
@@ -168,21 +171,21 @@ static int duty(int i) {
 static avr_cycle_count_t encoder_tick(avr_t *a, avr_cycle_count_t when, void *param) {
     (void)param;
     int changed = 0;
-    for (int i = 0; i < UNO_MOTORS; i++) {
+    for (int i = 0; i < motors; i++) {
         int d = duty(i);
         if (d != duty_last[i]) changed = 1;
         duty_last[i] = d;
         double cps = model_cps > 0 ? model_cps * d / 255.0 : wheel_cps[i];
         wheel_pos[i] += cps * ENCODER_TICK_US * 1e-6;
         long target = (long)floor(wheel_pos[i]);
-        if (target != wheel_count[i]) {  /* one edge per tick at most: the pin must be seen to change */
+        if (target != wheel_count[i] && i < encoders) {  /* one edge per tick at most: the pin must be seen to change */
             wheel_count[i] += target > wheel_count[i] ? 1 : -1;
             avr_raise_irq(encoder_irq[i], wheel_count[i] & 1);
         }
     }
     if (changed && report) {
         printf("pwm %llu", (unsigned long long)avr_cycles_to_usec(a, when));
-        for (int i = 0; i < UNO_MOTORS; i++) printf(" %d", duty_last[i]);
+        for (int i = 0; i < motors; i++) printf(" %d", duty_last[i]);
         printf("\n");
         fflush(stdout);
     }
@@ -192,13 +195,13 @@ static avr_cycle_count_t encoder_tick(avr_t *a, avr_cycle_count_t when, void *pa
 /* ---------------------------------------------------------------- host side */
 
 static void command(char *line) {
-    int a[UNO_MOTORS];
+    int a[MOTORS_MAX];
     if (sscanf(line, "range %d", &a[0]) == 1) {
         range_cm = a[0];
     } else if (sscanf(line, "wheels %d %d %d %d", &a[0], &a[1], &a[2], &a[3]) == 4) {
-        for (int i = 0; i < UNO_MOTORS; i++) wheel_cps[i] = a[i];
-    } else if (sscanf(line, "battery %d", &a[0]) == 1) {
-        avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0 + UNO_BATTERY_ADC), a[0]);
+        for (int i = 0; i < MOTORS_MAX; i++) wheel_cps[i] = a[i];
+    } else if (sscanf(line, "battery %d", &a[0]) == 1 && battery_adc >= 0) {
+        avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0 + battery_adc), a[0]);
     } else if (strncmp(line, "reset", 5) == 0) {
         avr_reset(avr);  /* a power cycle: RAM and registers start over, the EEPROM keeps its bytes */
         for (int i = 0; i < 2; i++)
@@ -263,6 +266,40 @@ static void write_pty(void) {
     out_len -= done;
 }
 
+static int read_board(const char *path) {
+    FILE *f = fopen(path, "r");
+    if (!f) {
+        perror(path);
+        return -1;
+    }
+    char line[256], port;
+    unsigned m[7];
+    int bit, ok = 1;
+    while (ok && fgets(line, sizeof line, f)) {
+        if (line[0] == '#' || line[0] == '\n') continue;
+        if (sscanf(line, "motor %x %x %u %x %u %x %u", &m[0], &m[1], &m[2], &m[3], &m[4], &m[5], &m[6]) == 7 &&
+            motors < MOTORS_MAX)
+            memcpy(motor_map[motors++], m, sizeof m);
+        else if (sscanf(line, "encoder %c %d", &port, &bit) == 2 && encoders < MOTORS_MAX) {
+            encoder_map[encoders].port = port;
+            encoder_map[encoders++].bit = bit;
+        } else if (sscanf(line, "trigger %c %d", &port, &bit) == 2) {
+            trigger_pin.port = port;
+            trigger_pin.bit = bit;
+            has_sonar |= 1;
+        } else if (sscanf(line, "echo %c %d", &port, &bit) == 2) {
+            echo_pin.port = port;
+            echo_pin.bit = bit;
+            has_sonar |= 2;
+        } else if (sscanf(line, "battery %d", &battery_adc) != 1) {
+            fprintf(stderr, "unosim: %s: cannot read: %s", path, line);
+            ok = 0;
+        }
+    }
+    fclose(f);
+    return ok && motors ? 0 : -1;
+}
+
 static double wall_us(const struct timespec *start) {
     struct timespec now;
     clock_gettime(CLOCK_MONOTONIC, &now);
@@ -285,19 +322,24 @@ static int stack_depth(void) {
 }
 
 int main(int argc, char **argv) {
-    const char *elf = NULL;
+    const char *elf = NULL, *board = NULL;
     for (int i = 1; i < argc; i++) {
-        if (!strcmp(argv[i], "--range") && i + 1 < argc) range_cm = atoi(argv[++i]);
+        if (!strcmp(argv[i], "--board") && i + 1 < argc) board = argv[++i];
+        else if (!strcmp(argv[i], "--range") && i + 1 < argc) range_cm = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--encoders") && i + 1 < argc) model_cps = atof(argv[++i]);
         else if (!strcmp(argv[i], "--report")) report = 1;
         else if (argv[i][0] != '-' && !elf) elf = argv[i];
         else {
-            fprintf(stderr, "usage: unosim [--range CM] [--encoders CPS] [--report] FIRMWARE.elf\n");
-            return 2;
+            elf = NULL;
+            break;
         }
     }
-    if (!elf) {
-        fprintf(stderr, "usage: unosim [--range CM] [--encoders CPS] [--report] FIRMWARE.elf\n");
+    if (!elf || !board) {
+        fprintf(stderr, "usage: unosim --board ROBOT.board [--range CM] [--encoders CPS] [--report] FIRMWARE.elf\n");
+        return 2;
+    }
+    if (read_board(board) != 0) {
+        fprintf(stderr, "unosim: %s is not a board file (firmware-avr/generated/<robot>.board)\n", board);
         return 2;
     }
     elf_firmware_t fw;
@@ -336,12 +378,15 @@ int main(int argc, char **argv) {
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XON), uart_xon, NULL);
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XOFF), uart_xoff_cb, NULL);
 
-    echo_irq = avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ(UNO_SONAR_ECHO_PORT), UNO_SONAR_ECHO_BIT);
-    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ(UNO_SONAR_TRIG_PORT), UNO_SONAR_TRIG_BIT),
-                            trigger_changed, NULL);
-    for (int i = 0; i < UNO_MOTORS; i++)
+    if (has_sonar == 3) {
+        echo_irq = avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ(echo_pin.port), echo_pin.bit);
+        avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ(trigger_pin.port), trigger_pin.bit),
+                                trigger_changed, NULL);
+    }
+    for (int i = 0; i < encoders; i++)
         encoder_irq[i] = avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ(encoder_map[i].port), encoder_map[i].bit);
-    avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0 + UNO_BATTERY_ADC), 2500);
+    if (battery_adc >= 0)
+        avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0 + battery_adc), 2500);
     avr_cycle_timer_register_usec(avr, ENCODER_TICK_US, encoder_tick, NULL);
 
     int slave;

@@ -3,7 +3,8 @@
 One source of truth: ``firmware-avr/generated/<robot>.h`` holds the protocol codes and texts
 (:mod:`omnibot.protocol.codes`), the robot's limits, the rim-speed matrix in fixed point, the
 default calibration tables (all from :func:`omnibot.firmware.config.build_config`, as the
-MicroPython firmware gets them) and the UNO pin map of the robot's wiring (:data:`UNO_PINS`).
+MicroPython firmware gets them) and the UNO pin map of the robot's wiring (:data:`UNO_WIRING`);
+``<robot>.board`` gives the same wiring to the emulator harness.
 ``tests/firmware/test_avrgen.py`` fails when a checked-in header is stale.
 
 ::
@@ -34,20 +35,34 @@ EEPROM_BYTES = 1024  # ATmega328P
 _PORTS = {**{f"D{i}": ("D", i) for i in range(8)}, **{f"D{i}": ("B", i - 8) for i in range(8, 14)}}
 _PORTS.update({f"A{i}": ("C", i) for i in range(6)})
 
-# The wiring of an UNO with two L298 boards (EN = PWM, IN1/IN2 = direction) and an HC-SR04 sonar,
-# as in seeds 000 and 003. The PWM pins are the four of timers 0 and 2 (timer 1 is the clock and
-# times the sonar echo by input capture on D8); encoders are single-channel (their direction is
-# that of the motor's power), read by pin-change interrupts; the battery divider is on ADC7 (the
-# SMD UNO and the Nano have it; a DIP UNO reads 0 there).
-UNO_PINS: dict[str, Any] = {
-    "pwm": ["D3", "D5", "D6", "D11"],  # OC2B, OC0B, OC0A, OC2A
-    "in1": ["D2", "D7", "A1", "D12"],
-    "in2": ["D4", "A0", "A2", "D13"],
-    "sonar_trig": "D9",
-    "sonar_echo": "D8",  # ICP1
-    "encoders": ["D10", "A3", "A4", "A5"],
-    "battery_adc": 7,
-    "battery_mv_per_count": 0.0,  # set per robot from the description (divider for the pack)
+# The wiring of an UNO with two L298 boards (EN = PWM, IN1/IN2 = direction) and, on seed 000's robot,
+# an HC-SR04 sonar. Motors in the robot description's wheel order. The PWM pins are the four of
+# timers 0 and 2 (timer 1 is the clock and times the sonar echo by input capture on D8); encoders
+# are single-channel (their direction is that of the motor's power), read by pin-change interrupts;
+# the battery divider is on ADC7 (the SMD UNO and the Nano have it; a DIP UNO reads 0 there).
+UNO_WIRING: dict[str, dict[str, Any]] = {
+    # seed 000 names no pins ("connected to Arduino GPIO pins"): this is ours
+    "omni4": {
+        "pwm": ["D3", "D5", "D6", "D11"],  # OC2B, OC0B, OC0A, OC2A
+        "in1": ["D2", "D7", "A1", "D12"],
+        "in2": ["D4", "A0", "A2", "D13"],
+        "sonar_trig": "D9",
+        "sonar_echo": "D8",  # ICP1
+        "encoders": ["D10", "A3", "A4", "A5"],
+        "battery_adc": 7,
+    },
+    # seed 003 (section 4.3), wheels left_front, right_front, right_back, left_back: its enable pins
+    # 5, 6, 11 and its direction pins as they are, except that left_back's enable moves from D10
+    # (timer 1, our clock) to D3 and motor A's IN1 from D3 to D10
+    "mecanum4": {
+        "pwm": ["D5", "D6", "D11", "D3"],
+        "in1": ["D10", "D8", "D2", "D9"],
+        "in2": ["D4", "D7", "D13", "D12"],
+        "sonar_trig": None,
+        "sonar_echo": None,
+        "encoders": ["A0", "A1", "A2", "A3"],
+        "battery_adc": 7,
+    },
 }
 # Timer/compare register of each PWM pin.
 _PWM_REGS = {"D3": ("OCR2B", "TCCR2A", "COM2B1"), "D5": ("OCR0B", "TCCR0A", "COM0B1")}
@@ -236,24 +251,34 @@ def header_source(robot_name: str) -> str:
         + "};"
     )
     w("")
+    pins = UNO_WIRING.get(robot_name)
+    if pins is None:
+        raise ConfigError(f"no UNO wiring for {robot_name!r} (avrgen.UNO_WIRING has {', '.join(UNO_WIRING)})")
+    if sonars and pins["sonar_trig"] is None:
+        raise ConfigError(f"{robot_name} has a sonar but its UNO wiring none", key="sonars")
     w("/* ---- Arduino UNO pin map (docs/uno.md) ---- */")
     for i in range(n):
-        pwm = UNO_PINS["pwm"][i]
+        pwm = pins["pwm"][i]
         ocr, tccr, com = _PWM_REGS[pwm]
         port, bit = _pin(pwm)
         w(f"#define M{i}_PWM_PORT PORT{port}\n#define M{i}_PWM_DDR DDR{port}\n#define M{i}_PWM_BIT {bit}")
         w(f"#define M{i}_OCR {ocr}\n#define M{i}_TCCR {tccr}\n#define M{i}_COM {com}")
         for side in ("in1", "in2"):
-            port, bit = _pin(UNO_PINS[side][i])
+            port, bit = _pin(pins[side][i])
             s = side.upper()
             w(f"#define M{i}_{s}_PORT PORT{port}\n#define M{i}_{s}_DDR DDR{port}\n#define M{i}_{s}_BIT {bit}")
-        port, bit = _pin(UNO_PINS["encoders"][i])
+        port, bit = _pin(pins["encoders"][i])
         group, base = _PCINT[port]
         w(f"#define M{i}_ENC_PIN PIN{port}\n#define M{i}_ENC_BIT {bit}\n#define M{i}_ENC_PCIE {group}")
         w(f"#define M{i}_ENC_PCMSK PCMSK{group}\n#define M{i}_ENC_PCINT {base + bit}")
-    port, bit = _pin(UNO_PINS["sonar_trig"])
-    w(f"#define SONAR_TRIG_PORT PORT{port}\n#define SONAR_TRIG_DDR DDR{port}\n#define SONAR_TRIG_BIT {bit}")
-    w(f"#define BATTERY_ADC {UNO_PINS['battery_adc']}")
+    if sonars:
+        port, bit = _pin(pins["sonar_trig"])
+        w(
+            f"#define SONAR_TRIG_PORT PORT{port}\n#define SONAR_TRIG_DDR DDR{port}\n#define SONAR_TRIG_BIT {bit}"
+        )
+        if _pin(pins["sonar_echo"]) != ("B", 0):
+            raise ConfigError("the sonar echo must be on D8 (ICP1, timer 1's input capture)", key="pins")
+    w(f"#define BATTERY_ADC {pins['battery_adc']}")
     battery = robot.battery.voltage
     # full scale (1023 counts at 5 V) is twice the nominal pack voltage: a 1:2 divider per 5 V of pack
     w(f"#define BATTERY_MV_FULL_SCALE {round(2 * battery * 1000)}UL")
@@ -266,29 +291,24 @@ _ADDR.update({"TCCR2A": 0xB0, "OCR2A": 0xB3, "OCR2B": 0xB4})
 _COM_BITS = {"COM0A1": 7, "COM0B1": 5, "COM2A1": 7, "COM2B1": 5}
 
 
-def board_source() -> str:
-    """The text of ``firmware-avr/generated/uno_board.h``: the UNO wiring for the emulator harness
-    (plain C: register addresses and port bits, the same map the firmware's headers carry)."""
-    out = [
-        "/* Generated by `python -m omnibot.firmware.avrgen`: the UNO wiring (docs/uno.md) for tools/unosim. */",
-        "#pragma once",
-        f"#define UNO_MOTORS {len(UNO_PINS['pwm'])}",
-        "/* per motor: OCR address, TCCR address, COM bit, IN1 PORT address and bit, IN2 PORT address and bit */",
-        "#define UNO_MOTOR_MAP { \\",
-    ]
-    for i, pwm in enumerate(UNO_PINS["pwm"]):
+def board_source(robot_name: str) -> str:
+    """The text of ``firmware-avr/generated/<robot>.board``: the robot's UNO wiring for the emulator
+    harness (tools/unosim ``--board``), as data-space register addresses and port bits."""
+    pins = UNO_WIRING[robot_name]
+    out = [f"# UNO wiring of {robot_name} for tools/unosim, generated by python -m omnibot.firmware.avrgen"]
+    out.append("# motor OCR TCCR COM-bit IN1-PORT IN1-bit IN2-PORT IN2-bit (addresses in hex)")
+    for i, pwm in enumerate(pins["pwm"]):
         ocr, tccr, com = _PWM_REGS[pwm]
-        p1, b1 = _pin(UNO_PINS["in1"][i])
-        p2, b2 = _pin(UNO_PINS["in2"][i])
-        row = [_ADDR[ocr], _ADDR[tccr], _COM_BITS[com], _ADDR[f"PORT{p1}"], b1, _ADDR[f"PORT{p2}"], b2]
-        out.append("    {" + ", ".join(f"0x{v:02X}" if v > 7 else str(v) for v in row) + "}, \\")
-    out.append("}")
-    enc = [_pin(p) for p in UNO_PINS["encoders"]]
-    out.append("#define UNO_ENCODER_MAP {" + ", ".join(f"{{'{p}', {b}}}" for p, b in enc) + "}")
-    for key in ("sonar_trig", "sonar_echo"):
-        p, b = _pin(UNO_PINS[key])
-        out.append(f"#define UNO_{key.upper()}_PORT '{p}'\n#define UNO_{key.upper()}_BIT {b}")
-    out.append(f"#define UNO_BATTERY_ADC {UNO_PINS['battery_adc']}")
+        p1, b1 = _pin(pins["in1"][i])
+        p2, b2 = _pin(pins["in2"][i])
+        regs = (_ADDR[ocr], _ADDR[tccr], _COM_BITS[com], _ADDR[f"PORT{p1}"], b1, _ADDR[f"PORT{p2}"], b2)
+        out.append("motor {:x} {:x} {} {:x} {} {:x} {}".format(*regs))
+    for enc in pins["encoders"]:
+        out.append("encoder {} {}".format(*_pin(enc)))
+    if pins["sonar_trig"] is not None:
+        out.append("trigger {} {}".format(*_pin(pins["sonar_trig"])))
+        out.append("echo {} {}".format(*_pin(pins["sonar_echo"])))
+    out.append(f"battery {pins['battery_adc']}")
     return "\n".join(out) + "\n"
 
 
@@ -296,10 +316,16 @@ def header_path(robot_name: str) -> Path:
     return OUT_DIR / f"{robot_name}.h"
 
 
+def board_path(robot_name: str) -> Path:
+    return OUT_DIR / f"{robot_name}.board"
+
+
 def generated_files() -> dict[Path, str]:
     """Every generated file and its text: one header per robot and the board's wiring."""
-    files = {header_path(name): header_source(name) for name in ROBOTS}
-    files[OUT_DIR / "uno_board.h"] = board_source()
+    files = {}
+    for name in ROBOTS:
+        files[header_path(name)] = header_source(name)
+        files[board_path(name)] = board_source(name)
     return files
 
 

@@ -66,16 +66,28 @@ def build(robot: str) -> Path:
 
 class UnoEmulator:
     """One running emulated UNO. ``range_cm``: the sonar's fixed reading (None: no echo);
-    ``encoder_cps``: encoder counts/s at full PWM duty (None: the wheels stand still)."""
+    ``encoder_cps``: encoder counts/s at full PWM duty (None: the wheels stand still); ``report``:
+    the harness writes ``pwm T_US D1 .. Dn`` on its stdout when a motor's duty changes (read them
+    with :meth:`duties`)."""
 
-    def __init__(self, robot: str, *, range_cm: int | None = None, encoder_cps: float | None = None) -> None:
+    def __init__(
+        self,
+        robot: str,
+        *,
+        range_cm: int | None = None,
+        encoder_cps: float | None = None,
+        report: bool = False,
+    ) -> None:
         self.robot = robot
         elf = build(robot)
-        argv = [str(HARNESS), str(elf)]
+        board = FIRMWARE_DIR / "generated" / f"{robot}.board"
+        argv = [str(HARNESS), "--board", str(board), str(elf)]
         if range_cm is not None:
             argv += ["--range", str(range_cm)]
         if encoder_cps is not None:
             argv += ["--encoders", str(encoder_cps)]
+        if report:
+            argv.append("--report")
         self.proc = subprocess.Popen(
             argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE
         )
@@ -104,6 +116,15 @@ class UnoEmulator:
             raise UnoError(f"unosim did not answer stats: {line}")
         longest, awake, elapsed, passes = (int(v) for v in line[1:])
         return longest, awake, elapsed, passes
+
+    def duties(self, timeout: float = 5.0) -> tuple[int, list[int]]:
+        """The next duty report: (emulated time in us, signed duty of each motor as its pins show)."""
+        assert self.proc.stdout is not None
+        ready, _, _ = select.select([self.proc.stdout], [], [], timeout)
+        fields = self.proc.stdout.readline().decode().split() if ready else []
+        if len(fields) < 2 or fields[0] != "pwm":
+            raise UnoError(f"unosim sent no duty report: {fields}")
+        return int(fields[1]), [int(v) for v in fields[2:]]
 
     def set_range(self, cm: int | None) -> None:
         self.command(f"range {-1 if cm is None else cm}")
