@@ -88,8 +88,9 @@ class UnoEmulator:
             argv += ["--encoders", str(encoder_cps)]
         if report:
             argv.append("--report")
+        # unbuffered: readline must not read ahead of what select() reports
         self.proc = subprocess.Popen(
-            argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE
+            argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, bufsize=0
         )
         assert self.proc.stdout is not None
         ready, _, _ = select.select([self.proc.stdout], [], [], STARTUP_TIMEOUT)
