@@ -48,7 +48,7 @@ uno-sim: avr-tools
 	$(MAKE) -C firmware-avr ROBOT=mecanum4
 	$(MAKE) -C tools/unosim
 
-test: lint browser
+test: lint browser avr-tools
 	SDL_VIDEODRIVER=dummy MPLBACKEND=Agg $(BIN)/python -m pytest -q
 
 bench: setup

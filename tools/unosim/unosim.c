@@ -14,7 +14,8 @@
  *   - encoders: single-channel edges at a rate per wheel (counts/s), set on stdin, or from the
  *     duties with --encoders CPS (CPS counts/s at full duty);
  *   - battery: ADC7 at 2500 mV (the pack at its nominal voltage).
- * stdin lines: `range CM`, `wheels C1 C2 C3 C4` (counts/s), `battery MV` (ADC pin mV), `reset` (a
+ * stdin lines: `range CM`, `wheels C1 C2 C3 C4` (counts/s), `counts C1 C2 C3 C4` (absolute counts the
+ * encoders move to, one edge per 50 us at most: hardware in the loop), `battery MV` (ADC pin mV), `reset` (a
  * power cycle that keeps the EEPROM), `stats` (prints `stats LONGEST AWAKE ELAPSED PASSES`: the
  * longest main-loop pass, the cycles awake and elapsed and the passes since the last `stats`), `quit`.
  * With --report, stdout gets `pwm T_US D1 D2 D3 D4` whenever a duty changes.
@@ -74,6 +75,8 @@ static double wheel_cps[MOTORS_MAX];
 static double wheel_pos[MOTORS_MAX];
 static long wheel_count[MOTORS_MAX];
 static double model_cps;  /* --encoders: counts/s at full duty, 0 = rates from stdin */
+static int counts_given;  /* `counts` on stdin: the encoders follow absolute counts (hardware in the loop) */
+static long counts_target[MOTORS_MAX];
 static int report;
 static int duty_last[MOTORS_MAX];
 
@@ -175,9 +178,14 @@ static avr_cycle_count_t encoder_tick(avr_t *a, avr_cycle_count_t when, void *pa
         int d = duty(i);
         if (d != duty_last[i]) changed = 1;
         duty_last[i] = d;
-        double cps = model_cps > 0 ? model_cps * d / 255.0 : wheel_cps[i];
-        wheel_pos[i] += cps * ENCODER_TICK_US * 1e-6;
-        long target = (long)floor(wheel_pos[i]);
+        long target;
+        if (counts_given) {
+            target = counts_target[i];
+        } else {
+            double cps = model_cps > 0 ? model_cps * d / 255.0 : wheel_cps[i];
+            wheel_pos[i] += cps * ENCODER_TICK_US * 1e-6;
+            target = (long)floor(wheel_pos[i]);
+        }
         if (target != wheel_count[i] && i < encoders) {  /* one edge per tick at most: the pin must be seen to change */
             wheel_count[i] += target > wheel_count[i] ? 1 : -1;
             avr_raise_irq(encoder_irq[i], wheel_count[i] & 1);
@@ -200,6 +208,9 @@ static void command(char *line) {
         range_cm = a[0];
     } else if (sscanf(line, "wheels %d %d %d %d", &a[0], &a[1], &a[2], &a[3]) == 4) {
         for (int i = 0; i < MOTORS_MAX; i++) wheel_cps[i] = a[i];
+    } else if (sscanf(line, "counts %ld %ld %ld %ld", &counts_target[0], &counts_target[1], &counts_target[2],
+                      &counts_target[3]) == 4) {
+        counts_given = 1;
     } else if (sscanf(line, "battery %d", &a[0]) == 1 && battery_adc >= 0) {
         avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0 + battery_adc), a[0]);
     } else if (strncmp(line, "reset", 5) == 0) {

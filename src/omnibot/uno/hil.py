@@ -1,0 +1,126 @@
+"""Hardware in the loop, simulated: the emulated UNO's PWM drives omnibot's physics, the physics
+drives the UNO's encoder edges, sonar echo and battery voltage back.
+
+::
+
+    python -m omnibot.uno.hil omni4 --world room    # prints the UNO's pty path, runs until Ctrl-C
+    omnibot demo --port serial://THAT_PATH          # seed 000's examples on the emulated UNO
+
+The physics (:class:`~omnibot.sim.simulator.Simulator`, 1 kHz) follows the wall clock, as the
+emulated UNO does. Every millisecond the loop takes the duties the harness reports (the signed PWM
+each L298 channel's pins show), steps the physics to now, and sends the harness the motor
+encoders' counts (it makes the edges), the sonar's range and the battery voltage on ADC7. The UNO
+wiring has no gyro and no tracking wheels, so its TEL sends 0 for them and the host's odometry
+runs on the wheel encoders alone.
+"""
+
+from __future__ import annotations
+
+import argparse
+import select
+import signal
+import sys
+import threading
+import time
+from types import FrameType
+
+from omnibot.robot.description import load_robot
+from omnibot.sim.simulator import Simulator
+from omnibot.uno.emulator import UnoEmulator, UnoError
+
+PERIOD = 0.001  # s between exchanges with the harness
+SONAR_PERIOD = 0.01  # s between sonar range updates
+BATTERY_PERIOD = 0.1  # s between battery updates
+MAX_STEPS = 50  # physics steps caught up in one pass at most (a busy host slips, as the UNO does)
+
+
+class UnoHil:
+    """The emulated UNO of ``robot`` with omnibot's physics of the same robot in ``world``."""
+
+    def __init__(self, robot: str, *, world: str | None = "room", seed: int = 1) -> None:
+        self.robot = load_robot(robot)
+        self.sim = Simulator(self.robot, world=world, seed=seed)
+        self.emu = UnoEmulator(robot, report=True)
+        self.path = self.emu.path
+        encoder_index = {e.wheel: k for k, e in enumerate(self.robot.encoders.motors)}
+        self._encoder_of_wheel = [encoder_index.get(w.name) for w in self.robot.wheels]
+        self._stop = threading.Event()
+
+    def stop(self) -> None:
+        self._stop.set()
+
+    def _duties(self) -> list[int] | None:
+        """The latest duty report waiting on the harness's stdout, if any."""
+        out = self.emu.proc.stdout
+        assert out is not None
+        latest = None
+        while select.select([out], [], [], 0)[0]:
+            fields = out.readline().decode().split()
+            if not fields:
+                raise UnoError("unosim stopped")
+            if fields[0] == "pwm":
+                latest = [int(v) for v in fields[2:]]
+        return latest
+
+    def run(self) -> None:
+        """Exchange with the harness until :meth:`stop` (or the harness ends)."""
+        sim = self.sim
+        start = time.monotonic()
+        next_sonar = next_battery = 0.0
+        nominal = self.robot.battery.voltage
+        while not self._stop.is_set() and self.emu.proc.poll() is None:
+            duties = self._duties()
+            if duties is not None:
+                sim.set_pwm(duties)
+            lag = time.monotonic() - start - sim.time
+            steps = min(MAX_STEPS, int(lag / sim.dt))
+            if steps > 0:
+                sim.step(steps)
+            if lag / sim.dt > MAX_STEPS:  # slip rather than race
+                start = time.monotonic() - sim.time
+            counts = sim.encoder_counts()
+            wheel_counts = [0 if k is None else counts[k] for k in self._encoder_of_wheel]
+            self.emu.command("counts " + " ".join(str(c) for c in wheel_counts))
+            if sim.sonars and sim.time >= next_sonar:
+                reading = sim.sonar_ping(0)
+                self.emu.set_range(None if reading is None else round(reading * 100.0))
+                next_sonar = sim.time + SONAR_PERIOD
+            if sim.time >= next_battery:
+                # ADC7 sees the pack through the divider: full scale (5 V) is twice the nominal voltage
+                self.emu.command(f"battery {round(sim.battery_voltage / nominal * 2500)}")
+                next_battery = sim.time + BATTERY_PERIOD
+            self._stop.wait(PERIOD)
+
+    def close(self) -> None:
+        self.stop()
+        self.emu.close()
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m omnibot.uno.hil", description=__doc__.split("\n")[0])
+    ap.add_argument("robot", nargs="?", default="omni4", help="omni4 (seed 000) or mecanum4 (seed 003)")
+    ap.add_argument("--world", default="room", help="simulator world (default room)")
+    ap.add_argument("--seed", type=int, default=1, help="simulator seed (default 1)")
+    args = ap.parse_args(argv)
+    try:
+        hil = UnoHil(args.robot, world=args.world, seed=args.seed)
+    except UnoError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+
+    def on_signal(signum: int, frame: FrameType | None) -> None:
+        hil.stop()
+
+    signal.signal(signal.SIGTERM, on_signal)
+    print(hil.path, flush=True)
+    try:
+        hil.run()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        hil.close()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
