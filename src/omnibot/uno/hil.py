@@ -3,8 +3,13 @@ drives the UNO's encoder edges, sonar echo and battery voltage back.
 
 ::
 
-    python -m omnibot.uno.hil omni4 --world room    # prints the UNO's pty path, runs until Ctrl-C
-    omnibot demo --port serial://THAT_PATH          # seed 000's examples on the emulated UNO
+    omnibot demo --port uno://omni4                 # seed 000's examples on the emulated UNO
+    python -m omnibot.uno.hil omni4 --world room    # or: print the UNO's pty path, run until Ctrl-C,
+    omnibot demo --port serial://THAT_PATH          #     and drive it as any serial board
+
+Importing this module registers the ``uno`` URL scheme, ``uno://ROBOT?world=room&seed=1``: the
+emulated UNO with the physics running in a thread, opened as a serial link whose ``device.sim`` is
+the simulator (so the demo takes its ground truth from it, as for ``sim://``).
 
 The physics (:class:`~omnibot.sim.simulator.Simulator`, 1 kHz) follows the wall clock, as the
 emulated UNO does. Every millisecond the loop takes the duties the harness reports (the signed PWM
@@ -24,12 +29,15 @@ import threading
 import time
 from types import FrameType
 
+from omnibot.errors import ConfigError
 from omnibot.robot.description import load_robot
 from omnibot.sim.simulator import Simulator
+from omnibot.transport.serial_link import SerialLink
+from omnibot.transport.url import LinkUrl, register_scheme
 from omnibot.uno.emulator import UnoEmulator, UnoError
 
 PERIOD = 0.001  # s between exchanges with the harness
-SONAR_PERIOD = 0.01  # s between sonar range updates
+SONAR_PERIOD = 0.002  # s between sonar range updates (the harness echoes the latest one)
 BATTERY_PERIOD = 0.1  # s between battery updates
 MAX_STEPS = 50  # physics steps caught up in one pass at most (a busy host slips, as the UNO does)
 
@@ -82,7 +90,9 @@ class UnoHil:
             wheel_counts = [0 if k is None else counts[k] for k in self._encoder_of_wheel]
             self.emu.command("counts " + " ".join(str(c) for c in wheel_counts))
             if sim.sonars and sim.time >= next_sonar:
-                reading = sim.sonar_ping(0)
+                # measured now, not rate-limited: the firmware's own ping period paces the HC-SR04
+                pose = sim.pose
+                reading = sim.sonars[0].measure((pose.x, pose.y, pose.theta), sim.world)
                 self.emu.set_range(None if reading is None else round(reading * 100.0))
                 next_sonar = sim.time + SONAR_PERIOD
             if sim.time >= next_battery:
@@ -94,6 +104,46 @@ class UnoHil:
     def close(self) -> None:
         self.stop()
         self.emu.close()
+
+
+class UnoLink(SerialLink):
+    """The serial link to a :class:`UnoHil` that runs in a thread; closing it stops both."""
+
+    def __init__(self, hil: UnoHil, url: str) -> None:
+        self.device = hil
+        self._runner = threading.Thread(target=hil.run, name="uno-hil", daemon=True)
+        self._runner.start()
+        try:
+            super().__init__(hil.path, url=url)
+        except BaseException:
+            self._stop_hil()
+            raise
+
+    def _stop_hil(self) -> None:
+        self.device.stop()
+        self._runner.join(timeout=5)
+        self.device.close()
+
+    def _close(self) -> None:
+        try:
+            super()._close()
+        finally:
+            self._stop_hil()
+
+
+def _open_uno(u: LinkUrl) -> UnoLink:
+    if not u.target:
+        raise ConfigError("uno:// needs a robot: uno://omni4 or uno://mecanum4")
+    hil = UnoHil(u.target, world=u.get_str("world", "room") or None, seed=u.get_int("seed", 1, minimum=0))
+    return UnoLink(hil, u.url)
+
+
+register_scheme(
+    "uno",
+    _open_uno,
+    options=("world", "seed"),
+    help="uno://ROBOT?world=room&seed=1: the Arduino UNO firmware in simavr, hardware in the loop",
+)
 
 
 def main(argv: list[str] | None = None) -> int:
