@@ -2,13 +2,21 @@
 
 from __future__ import annotations
 
-from benchmarks import firmware_command_time, link_throughput, odometry_drift, sim_speed, tracking
+from benchmarks import (
+    firmware_command_time,
+    link_throughput,
+    odometry_drift,
+    sim_speed,
+    tracking,
+    uno_command_cycles,
+)
 
 
 def main() -> int:
     for title, run in (
         ("simulator speed", lambda: sim_speed.main([])),
         ("firmware time per command", lambda: firmware_command_time.main([])),
+        ("UNO firmware cycles per command (simavr)", lambda: uno_command_cycles.main([])),
         ("line throughput, lockstep", lambda: link_throughput.main([])),
         ("line throughput, pty emulator", lambda: link_throughput.main(["--pty"])),
         ("path tracking", lambda: tracking.main([])),
