@@ -77,6 +77,23 @@
 #define K_HELLO 11
 #define K_CAL 12
 #define K_COUNT 12
+/* binary message types and framing */
+#define T_ACK 31
+#define T_OK 32
+#define T_ERROR 33
+#define T_HELLO_REPLY 34
+#define T_STATUS_REPLY 35
+#define T_RANGE 64
+#define T_WARN 65
+#define T_ERROR_EVENT 66
+#define T_IDLE 67
+#define T_TEL 68
+#define P_FRAME_SYNC 128
+#define P_FRAME_MAX 254
+#define P_SEQ_MAX 255
+#define P_WINDOW 8
+#define P_RETRY_TIMEOUT_MS 50
+#define P_RETRIES 3
 /* keyword, id, fewest and most parameters (POWER: T and one power per motor) */
 struct Keyword { char name[7]; uint8_t id, lo, hi; };
 static const Keyword KEYWORDS[K_COUNT] PROGMEM = {

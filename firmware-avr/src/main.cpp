@@ -4,16 +4,18 @@
 #include <avr/pgmspace.h>
 #include <stdlib.h>
 
+#include "binlink.h"
 #include "cal.h"
 #include "hal.h"
 #include "motion.h"
 
-#define UNO_MODE_MASK (P_MODE_SIMULATION | P_MODE_CLOSED_LOOP)  // no binary protocol on the UNO
+#define UNO_MODE_MASK (P_MODE_SIMULATION | P_MODE_CLOSED_LOOP | P_MODE_BINARY)
 
 static char line[LINE_MAX + 1];
 static uint8_t line_len;
 static bool overflow;
 static bool latched;
+static bool binary;  // MODE bit 2: frames both ways
 static uint32_t now_ms;
 static uint16_t us_part;
 static uint32_t last_ticks;
@@ -67,15 +69,34 @@ static void coded(PGM_P keyword, uint8_t code) {
     end_line();
 }
 static void ok() {
+    if (binary) {
+        bin::begin(T_OK, bin::seq());
+        bin::send_reply();
+        return;
+    }
     out_P(PSTR("OK"));
     end_line();
 }
-static void error(uint8_t code) { coded(PSTR("ERROR"), code); }
-void on_warn(uint8_t code) { coded(PSTR("WARN"), code); }
+// Binary ERROR and WARN frames carry no text: the code table's text applies (docs/protocol.md).
+static void error(uint8_t code) {
+    if (binary) {
+        bin::begin(T_ERROR, bin::seq());
+        bin::put(code);
+        bin::send_reply();
+        return;
+    }
+    coded(PSTR("ERROR"), code);
+}
+void on_warn(uint8_t code) {
+    if (binary) return bin::event(T_WARN, code, 0, 1);
+    coded(PSTR("WARN"), code);
+}
 void on_idle() {
+    if (binary) return bin::event(T_IDLE, 0, 0, 0);
     out_P(PSTR("IDLE"));
     end_line();
 }
+uint32_t controller_ms() { return now_ms; }
 
 static uint8_t state() {
     if (latched) return P_STATE_ESTOP;
@@ -83,6 +104,14 @@ static uint8_t state() {
 }
 
 static void hello() {
+    if (binary) {
+        bin::begin(T_HELLO_REPLY, bin::seq());
+        bin::put(P_PROTOCOL_VERSION);
+        bin::put(MOTORS);
+        bin::text_P(PSTR(ROBOT_NAME));
+        bin::send_reply();
+        return;
+    }
     out_P(PSTR("HELLO,"));
     out_i(P_PROTOCOL_VERSION);
     out_P(PSTR("," ROBOT_NAME));
@@ -90,12 +119,25 @@ static void hello() {
     end_line();
 }
 
+static uint8_t mode_bits() { return ex.mode | (binary ? P_MODE_BINARY : 0); }
+
 static void status() {
+    if (binary) {
+        bin::begin(T_STATUS_REPLY, bin::seq());
+        bin::put(state());
+        bin::put(ex.queue.count);
+        bin::put(QUEUE_CAPACITY);
+        bin::put(mode_bits());
+        for (uint8_t i = 0; i < MOTORS; i++) bin::put(ex.powers[i]);
+        for (uint8_t i = 0; i < 4; i++) bin::put(ex.remembered[i]);
+        bin::send_reply();
+        return;
+    }
     out_P(PSTR("STATUS,"));
     out_i(state());
     comma_i(ex.queue.count);
     comma_i(QUEUE_CAPACITY);
-    comma_i(ex.mode);
+    comma_i(mode_bits());
     out_P(PSTR(";POWER"));
     for (uint8_t i = 0; i < MOTORS; i++) comma_i(ex.powers[i]);
     out_P(PSTR(";MOVE"));
@@ -103,31 +145,42 @@ static void status() {
     end_line();
 }
 
+static void field(int32_t v) {
+    if (binary) bin::put(v);
+    else comma_i(v);
+}
+
 static void telemetry() {
-    out_P(PSTR("TEL,"));
-    out_u(now_ms);
-    comma_i(tel_mask);
+    if (binary) {
+        bin::begin(T_TEL, 0);
+        bin::put_u32(now_ms);
+    } else {
+        out_P(PSTR("TEL,"));
+        out_u(now_ms);
+    }
+    field(tel_mask);
     if (tel_mask & P_TEL_POWER) {
-        comma_i(MOTORS);
-        for (uint8_t i = 0; i < MOTORS; i++) comma_i(ex.powers[i]);
+        field(MOTORS);
+        for (uint8_t i = 0; i < MOTORS; i++) field(ex.powers[i]);
     }
     if (tel_mask & P_TEL_ENCODERS) {
-        comma_i(HAS_ENCODERS ? MOTORS : 0);
-        for (uint8_t i = 0; i < (HAS_ENCODERS ? MOTORS : 0); i++) comma_i(encoder_count(i));
+        field(HAS_ENCODERS ? MOTORS : 0);
+        for (uint8_t i = 0; i < (HAS_ENCODERS ? MOTORS : 0); i++) field(encoder_count(i));
     }
-    if (tel_mask & P_TEL_TRACKING) comma_i(0);  // no tracking wheels on the UNO wiring
-    if (tel_mask & P_TEL_GYRO) comma_i(0);      // no gyro on the UNO wiring
-    if (tel_mask & P_TEL_HEADING) comma_i(0);
-    if (tel_mask & P_TEL_BATTERY) comma_i(battery_mv());
+    if (tel_mask & P_TEL_TRACKING) field(0);  // no tracking wheels on the UNO wiring
+    if (tel_mask & P_TEL_GYRO) field(0);      // no gyro on the UNO wiring
+    if (tel_mask & P_TEL_HEADING) field(0);
+    if (tel_mask & P_TEL_BATTERY) field(battery_mv());
     if (tel_mask & P_TEL_QUEUE) {
-        comma_i(state());
-        comma_i(ex.queue.count);
+        field(state());
+        field(ex.queue.count);
     }
     if (tel_mask & P_TEL_SONAR) {
-        comma_i(SONARS);
-        if (SONARS) comma_i(sonar_last);
+        field(SONARS);
+        if (SONARS) field(sonar_last);
     }
-    end_line();
+    if (binary) bin::send_plain();
+    else end_line();
 }
 
 // ------------------------------------------------------------------ checks (firmware/limits.py)
@@ -234,10 +287,18 @@ static void execute(uint8_t kw, int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
         case K_HELLO:
             hello();
             break;
-        case K_MODE:
-            ok();
-            ex.set_mode(p[0]);
+        case K_MODE: {
+            ok();  // in the mode the command came in
+            ex.set_mode(p[0] & ~P_MODE_BINARY);
+            bool b = p[0] & P_MODE_BINARY;
+            if (b != binary) {  // from the next byte on, both ways
+                binary = b;
+                bin::reset();
+                line_len = 0;
+                overflow = false;
+            }
             break;
+        }
         case K_SONAR:
             sonar_period = p[1];
             sonar_low = p[2];
@@ -314,6 +375,27 @@ static void handle(char *cmd) {
     execute(kw, p, n, lo, hi);
 }
 
+// A binary command frame (controller.py `_frame`): the same checks and execution as text.
+void on_frame(uint8_t type, int32_t *ints, uint8_t n) {
+    const Keyword *e = 0;
+    for (uint8_t k = 0; k < K_COUNT; k++)
+        if (pgm_read_byte(&KEYWORDS[k].id) == type) e = &KEYWORDS[k];
+    if (!e) return error(P_E_UNKNOWN);
+    if (n == 255) return error(P_E_NOT_INTEGER);
+    if (n > P_PARAMS_MAX) return error(P_E_PARAM_COUNT);
+    int16_t p[P_PARAMS_MAX];
+    for (uint8_t i = 0; i < n; i++) {
+        if (ints[i] < -32768 || ints[i] > 32767) return error(P_E_RANGE16);
+        p[i] = ints[i];
+    }
+    execute(type, p, n, pgm_read_byte(&e->lo), pgm_read_byte(&e->hi));
+}
+
+void on_query_again(uint8_t type) {
+    if (type == K_HELLO) hello();
+    else status();
+}
+
 // Splits the byte stream into commands (parser.py LineSplitter).
 static void feed(char c) {
     if (c == ';' || c == '\r' || c == '\n') {
@@ -350,9 +432,13 @@ static void sonar_poll() {
         if (sonar_period == 0 || cm < 0) return;
         if ((sonar_low < sonar_high && sonar_low <= cm && cm <= sonar_high) ||
             (sonar_low > sonar_high && (cm < sonar_high || cm > sonar_low))) {
-            out_P(PSTR("RANGE,1"));
-            comma_i(cm);
-            end_line();
+            if (binary) {
+                bin::event(T_RANGE, 1, cm, 2);
+            } else {
+                out_P(PSTR("RANGE,1"));
+                comma_i(cm);
+                end_line();
+            }
         }
         if (ex.moving() && cm < sonar_stop) emergency_stop();
     } else if (sonar_period && (int32_t)(now_ms - sonar_next) >= 0) {
@@ -395,9 +481,13 @@ int main() {
         now_ms += dt / 1000 + us_part / 1000;
         us_part %= 1000;
         ex.step(dt);
-        for (int16_t c; (c = uart_read()) >= 0;) feed(c);
+        for (int16_t c; (c = uart_read()) >= 0;) {
+            if (binary) bin::feed(c);
+            else feed(c);
+        }
         sonar_poll();
         if (tel_due()) telemetry();
+        if (binary) bin::poll(now_ms);
         hal_wait_for_event();
     }
 }

@@ -189,7 +189,7 @@ def _uno_backend(stack: list[Callable[[], None]]) -> Backend:
     def obstacle() -> Iterator[tuple[Link, float]]:
         yield link, MP_SONAR_CM / 100.0 + 0.5
 
-    return Backend("uno", True, False, lambda: (link, False), obstacle, 1.0, binary=False)
+    return Backend("uno", True, False, lambda: (link, False), obstacle, 1.0)
 
 
 # ------------------------------------------------------------------ fixtures

@@ -130,6 +130,22 @@ def header_source(robot_name: str) -> str:
     for name, kid in codes.COMMANDS.items():
         w(f"#define K_{name} {kid}")
     w(f"#define K_COUNT {len(codes.COMMANDS)}")
+    w("/* binary message types and framing */")
+    for key in (
+        "ACK",
+        "OK",
+        "ERROR",
+        "HELLO_REPLY",
+        "STATUS_REPLY",
+        "RANGE",
+        "WARN",
+        "ERROR_EVENT",
+        "IDLE",
+        "TEL",
+    ):
+        w(f"#define T_{key} {getattr(codes, key)}")
+    for key in ("FRAME_SYNC", "FRAME_MAX", "SEQ_MAX", "WINDOW", "RETRY_TIMEOUT_MS", "RETRIES"):
+        w(f"#define P_{key} {getattr(codes, key)}")
     w("/* keyword, id, fewest and most parameters (POWER: T and one power per motor) */")
     w("struct Keyword { char name[7]; uint8_t id, lo, hi; };")
     w("static const Keyword KEYWORDS[K_COUNT] PROGMEM = {")
