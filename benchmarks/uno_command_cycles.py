@@ -19,6 +19,9 @@ import select
 import statistics
 import time
 
+from benchmarks.link_throughput import VEL, closed_loop_load, drain, stream_binary, switch_to_binary
+from omnibot.protocol import binary
+from omnibot.transport.url import open_link
 from omnibot.uno.emulator import UnoEmulator, missing_tools
 
 F_CPU = 16e6
@@ -124,8 +127,34 @@ def main(argv: list[str] | None = None) -> int:
         os.close(port.fd)
         emu.close()
     print(f"deepest stack: {emu.stack_bytes} bytes")
+    throughput(args.robot)
     return 0
 
 
-if __name__ == "__main__":
-    raise SystemExit(main())
+def throughput(robot: str, n: int = 1000, seconds: float = 5.0) -> None:
+    """Binary VEL stream (window of 8) and the 100 Hz closed loop, text and binary, measured as
+    benchmarks.link_throughput measures the MicroPython firmware."""
+    bin_len = len(binary.encode(VEL, seq=1))
+    limit = LINE_BYTES_PER_S / bin_len
+    emu = UnoEmulator(robot)
+    try:
+        with open_link(f"serial://{emu.path}") as link:
+            drain(link, 0.2)
+            switch_to_binary(link)
+            rate = n / stream_binary(link, n)
+        print(
+            f"VEL stream, binary ({bin_len} B, window 8): {rate:,.0f} commands/s of {limit:,.0f} line limit "
+            f"({100 * rate / limit:.0f} %)"
+        )
+        for binary_mode in (False, True):
+            emu.command("reset")  # text mode, TEL off
+            with open_link(f"serial://{emu.path}") as link:
+                drain(link, 0.2)
+                up, down, tels = closed_loop_load(link, binary_mode=binary_mode, seconds=seconds)
+            print(
+                f"closed loop VEL 100 Hz + TEL 100 Hz, {'binary' if binary_mode else 'text'}: "
+                f"up {up:,.0f} B/s ({100 * up / LINE_BYTES_PER_S:.1f} %), down {down:,.0f} B/s "
+                f"({100 * down / LINE_BYTES_PER_S:.1f} %), {tels / seconds:.0f} TEL/s"
+            )
+    finally:
+        emu.close()

@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import os
 import re
+import time
 
 import pytest
 
 from omnibot.firmware.config import build_config
 from omnibot.firmware.controller import Controller
+from omnibot.protocol import codes
+from omnibot.protocol.frame import encode_message
 from omnibot.robot.description import load_robot
 from omnibot.uno.emulator import FIRMWARE_DIR, UnoEmulator
 from tests.firmware.fakehal import FakeHAL
@@ -104,6 +108,19 @@ def test_static_ram_and_measured_stack_fit() -> None:
         port.write("MOVE,2,40,0,0;DELTA,0,0,10,0,10;VEL,30,30,100,200\n")
         port.lines(3)
         port.ask("STOP;TELEM,0,0;SONAR,1,0,0,0,0", 3)
+        # and a binary session: frames in and out, TEL frames, events
+        port.ask("MODE,4")
+        for k, frame in enumerate(
+            [
+                encode_message(codes.HELLO, 1, [1], sync=True),
+                encode_message(codes.TELEM, 2, [10, 255]),
+                encode_message(codes.MOVE, 3, [10, 40, 30, 20]),
+                encode_message(codes.STATUS, 4),
+                encode_message(codes.TELEM, 5, [0, 0]),
+            ]
+        ):
+            os.write(port.fd, frame)
+            time.sleep(0.05 if k != 2 else 0.3)
     finally:
         port.close()
         emu.close()
