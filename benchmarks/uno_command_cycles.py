@@ -158,3 +158,7 @@ def throughput(robot: str, n: int = 1000, seconds: float = 5.0) -> None:
             )
     finally:
         emu.close()
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
