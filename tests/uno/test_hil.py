@@ -64,3 +64,38 @@ def test_circle_lands_where_the_micropython_firmware_lands() -> None:
     (x0, y0, t0), (x1, y1, t1) = ends
     assert ((x1 - x0) ** 2 + (y1 - y0) ** 2) ** 0.5 < 0.03, ends
     assert abs(t1 - t0) < 0.09, ends
+
+
+def test_closed_loop_rotation_turns_the_simulated_robot() -> None:
+    """MODE 2 on the UNO: the PI on the (single-channel) encoders brings ROTATE,90 near 90 degrees,
+    as the contract suite checks on the physics backends (the UNO has no gyro, so the simulator's
+    ground truth measures the turn)."""
+    import math
+
+    from omnibot.client import RobotClient
+    from omnibot.robot.description import load_robot
+
+    reason = missing_tools()
+    if reason:
+        pytest.skip(f"emulated UNO: {reason}")
+    with RobotClient.open("uno://omni4?world=empty&seed=1", load_robot("omni4")) as client:
+        sim = client.link.device.sim  # type: ignore[attr-defined]
+        client.mode(closed_loop=True)
+        before = sim.pose.theta
+        client.rotate(math.radians(90), math.radians(180))
+        client.wait_idle(timeout=3)
+        client.sleep(0.3)
+        turned = math.degrees(sim.pose.theta - before)
+        assert client.status().closed_loop
+        # the loop corrects the feedforward: its powers part from the open loop's during a turn
+        client.rotate(math.inf, math.radians(180))
+        client.sleep(0.3)
+        corrected = client.status().powers
+        client.stop()
+        client.mode(0)
+        client.rotate(math.inf, math.radians(180))
+        client.sleep(0.1)
+        feedforward = client.status().powers
+        client.stop()
+    assert abs(turned - 90) < 15, turned
+    assert corrected != feedforward, (corrected, feedforward)
