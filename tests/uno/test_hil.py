@@ -36,8 +36,9 @@ def test_move_turns_the_simulated_wheels_and_the_sonar_sees_the_room() -> None:
         port.ask("TELEM,0,0")
     finally:
         port.close()
-        hil.close()
+        hil.stop()
         runner.join(timeout=5)
+        hil.close()
 
 
 def test_circle_lands_where_the_micropython_firmware_lands() -> None:

@@ -1,7 +1,7 @@
 /*
  * unosim: omnibot's Arduino UNO firmware in simavr, in real time, with its UART on a pty.
  *
- *   unosim --board ROBOT.board [--range CM] [--encoders CPS] [--report] FIRMWARE.elf
+ *   unosim --board ROBOT.board [--range CM] [--encoders CPS] [--report] [--lockstep] FIRMWARE.elf
  *
  * The ATmega328P runs at 16 MHz, kept in step with the wall clock (never faster; on a busy host it
  * falls behind by at most 20 ms and then slips, so the firmware's time never races). Its USART0 is a pseudo-terminal
@@ -19,6 +19,9 @@
  * power cycle that keeps the EEPROM), `stats` (prints `stats LONGEST AWAKE ELAPSED PASSES`: the
  * longest main-loop pass, the cycles awake and elapsed and the passes since the last `stats`), `quit`.
  * With --report, stdout gets `pwm T_US D1 D2 D3 D4` whenever a duty changes.
+ * With --lockstep (hardware in the loop), stdout also gets `t T_US` every 2 emulated milliseconds
+ * and the emulator never runs more than 5 ms ahead of the last `sync T_US` on stdin: the physics
+ * that answers with `sync` and `counts` sets the pace, so a busy host slows both alike.
  * On exit, stderr gets `stack BYTES`: the deepest stack the firmware reached (its free RAM is
  * painted with 0xAA at reset).
  */
@@ -78,6 +81,10 @@ static double model_cps;  /* --encoders: counts/s at full duty, 0 = rates from s
 static int counts_given;  /* `counts` on stdin: the encoders follow absolute counts (hardware in the loop) */
 static long counts_target[MOTORS_MAX];
 static int report;
+static int lockstep;
+static double synced_us;  /* --lockstep: the peer has caught up to here */
+#define LOCKSTEP_AHEAD_US 5000.0
+#define LOCKSTEP_PERIOD_US 2000
 static int duty_last[MOTORS_MAX];
 
 static int range_cm = -1;
@@ -191,6 +198,10 @@ static avr_cycle_count_t encoder_tick(avr_t *a, avr_cycle_count_t when, void *pa
             avr_raise_irq(encoder_irq[i], wheel_count[i] & 1);
         }
     }
+    if (lockstep && (when / avr_usec_to_cycles(a, ENCODER_TICK_US)) % (LOCKSTEP_PERIOD_US / ENCODER_TICK_US) == 0) {
+        printf("t %llu\n", (unsigned long long)avr_cycles_to_usec(a, when));
+        fflush(stdout);
+    }
     if (changed && report) {
         printf("pwm %llu", (unsigned long long)avr_cycles_to_usec(a, when));
         for (int i = 0; i < motors; i++) printf(" %d", duty_last[i]);
@@ -211,6 +222,8 @@ static void command(char *line) {
     } else if (sscanf(line, "counts %ld %ld %ld %ld", &counts_target[0], &counts_target[1], &counts_target[2],
                       &counts_target[3]) == 4) {
         counts_given = 1;
+    } else if (sscanf(line, "sync %lf", &synced_us) == 1) {
+        /* the peer's time: the emulator may run up to LOCKSTEP_AHEAD_US past it */
     } else if (sscanf(line, "battery %d", &a[0]) == 1 && battery_adc >= 0) {
         avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0 + battery_adc), a[0]);
     } else if (strncmp(line, "reset", 5) == 0) {
@@ -339,6 +352,7 @@ int main(int argc, char **argv) {
         else if (!strcmp(argv[i], "--range") && i + 1 < argc) range_cm = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--encoders") && i + 1 < argc) model_cps = atof(argv[++i]);
         else if (!strcmp(argv[i], "--report")) report = 1;
+        else if (!strcmp(argv[i], "--lockstep")) lockstep = report = 1;
         else if (argv[i][0] != '-' && !elf) elf = argv[i];
         else {
             elf = NULL;
@@ -346,7 +360,7 @@ int main(int argc, char **argv) {
         }
     }
     if (!elf || !board) {
-        fprintf(stderr, "usage: unosim --board ROBOT.board [--range CM] [--encoders CPS] [--report] FIRMWARE.elf\n");
+        fprintf(stderr, "usage: unosim --board ROBOT.board [--range CM] [--encoders CPS] [--report] [--lockstep] FIRMWARE.elf\n");
         return 2;
     }
     if (read_board(board) != 0) {
@@ -425,6 +439,7 @@ int main(int argc, char **argv) {
     while (!quit) {
         /* run until 1 ms ahead of the wall clock (or 20000 steps, to keep the I/O responsive) */
         double until_us = wall_us(&start) - slip_us + 1000;
+        if (lockstep && until_us > synced_us + LOCKSTEP_AHEAD_US) until_us = synced_us + LOCKSTEP_AHEAD_US;
         for (int i = 0; i < 20000 && avr_cycles_to_usec(avr, avr->cycle) < until_us; i++) {
             avr_cycle_count_t before = avr->cycle;
             int state = avr_run(avr);
@@ -445,11 +460,16 @@ int main(int argc, char **argv) {
         }
         if (out_len) write_pty();
         double ahead_us = avr_cycles_to_usec(avr, avr->cycle) - (wall_us(&start) - slip_us);
-        if (ahead_us < -MAX_LAG_US) {  /* fell behind (a busy host): slip, never race to catch up */
+        if (lockstep && ahead_us < 0) {  /* held back by the peer: that is the pace, not a lag */
+            slip_us += -ahead_us;
+            ahead_us = 0;
+        } else if (ahead_us < -MAX_LAG_US) {  /* fell behind (a busy host): slip, never race to catch up */
             slip_us += -MAX_LAG_US - ahead_us;
             ahead_us = -MAX_LAG_US;
         }
         int timeout_ms = ahead_us > 0 ? (int)(ahead_us / 1000) : 0;
+        if (lockstep && avr_cycles_to_usec(avr, avr->cycle) >= synced_us + LOCKSTEP_AHEAD_US)
+            timeout_ms = 1;  /* waiting for the peer's sync */
         struct pollfd fds[2] = {{pty_master, POLLIN, 0}, {0, POLLIN, 0}};
         if (poll(fds, stdin_open ? 2 : 1, timeout_ms) > 0) {
             if (fds[0].revents & POLLIN) read_pty();

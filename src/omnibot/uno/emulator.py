@@ -68,7 +68,8 @@ class UnoEmulator:
     """One running emulated UNO. ``range_cm``: the sonar's fixed reading (None: no echo);
     ``encoder_cps``: encoder counts/s at full PWM duty (None: the wheels stand still); ``report``:
     the harness writes ``pwm T_US D1 .. Dn`` on its stdout when a motor's duty changes (read them
-    with :meth:`duties`)."""
+    with :meth:`duties`); ``lockstep``: also ``t T_US`` every emulated millisecond, and the emulator
+    waits for ``sync T_US`` (hardware in the loop, :mod:`omnibot.uno.hil`)."""
 
     def __init__(
         self,
@@ -77,6 +78,7 @@ class UnoEmulator:
         range_cm: int | None = None,
         encoder_cps: float | None = None,
         report: bool = False,
+        lockstep: bool = False,
     ) -> None:
         self.robot = robot
         elf = build(robot)
@@ -88,6 +90,8 @@ class UnoEmulator:
             argv += ["--encoders", str(encoder_cps)]
         if report:
             argv.append("--report")
+        if lockstep:
+            argv.append("--lockstep")
         # unbuffered: readline must not read ahead of what select() reports
         self.proc = subprocess.Popen(
             argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, bufsize=0

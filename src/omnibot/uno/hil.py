@@ -11,10 +11,13 @@ Importing this module registers the ``uno`` URL scheme, ``uno://ROBOT?world=room
 emulated UNO with the physics running in a thread, opened as a serial link whose ``device.sim`` is
 the simulator (so the demo takes its ground truth from it, as for ``sim://``).
 
-The physics (:class:`~omnibot.sim.simulator.Simulator`, 1 kHz) follows the wall clock, as the
-emulated UNO does. Every millisecond the loop takes the duties the harness reports (the signed PWM
-each L298 channel's pins show), steps the physics to now, and sends the harness the motor
-encoders' counts (it makes the edges), the sonar's range and the battery voltage on ADC7. The UNO
+The physics (:class:`~omnibot.sim.simulator.Simulator`, 1 kHz) follows the emulated UNO's time in
+lockstep (``unosim --lockstep``): the harness reports each duty change with its time (the signed
+PWM each L298 channel's pins show) and every 2 emulated milliseconds; the loop steps the physics
+to that time, applies the duties at their time, and answers with the motor encoders' counts (the
+harness makes the edges), the sonar's range, the battery voltage on ADC7 and ``sync``, without
+which the emulator does not run more than 5 ms ahead. A busy host slows both alike instead of
+letting them drift apart. The UNO
 wiring has no gyro and no tracking wheels, so its TEL sends 0 for them and the host's odometry
 runs on the wheel encoders alone.
 """
@@ -26,7 +29,6 @@ import select
 import signal
 import sys
 import threading
-import time
 from types import FrameType
 
 from omnibot.errors import ConfigError
@@ -36,10 +38,8 @@ from omnibot.transport.serial_link import SerialLink
 from omnibot.transport.url import LinkUrl, register_scheme
 from omnibot.uno.emulator import UnoEmulator, UnoError
 
-PERIOD = 0.001  # s between exchanges with the harness
 SONAR_PERIOD = 0.002  # s between sonar range updates (the harness echoes the latest one)
 BATTERY_PERIOD = 0.1  # s between battery updates
-MAX_STEPS = 50  # physics steps caught up in one pass at most (a busy host slips, as the UNO does)
 
 
 class UnoHil:
@@ -48,7 +48,7 @@ class UnoHil:
     def __init__(self, robot: str, *, world: str | None = "room", seed: int = 1) -> None:
         self.robot = load_robot(robot)
         self.sim = Simulator(self.robot, world=world, seed=seed)
-        self.emu = UnoEmulator(robot, report=True)
+        self.emu = UnoEmulator(robot, lockstep=True)
         self.path = self.emu.path
         encoder_index = {e.wheel: k for k, e in enumerate(self.robot.encoders.motors)}
         self._encoder_of_wheel = [encoder_index.get(w.name) for w in self.robot.wheels]
@@ -57,49 +57,49 @@ class UnoHil:
     def stop(self) -> None:
         self._stop.set()
 
-    def _duties(self) -> list[int] | None:
-        """The latest duty report waiting on the harness's stdout, if any."""
-        out = self.emu.proc.stdout
-        assert out is not None
-        latest = None
-        while select.select([out], [], [], 0)[0]:
-            fields = out.readline().decode().split()
-            if not fields:
-                raise UnoError("unosim stopped")
-            if fields[0] == "pwm":
-                latest = [int(v) for v in fields[2:]]
-        return latest
+    def _step_to(self, t_us: int) -> None:
+        steps = int((t_us * 1e-6 - self.sim.time) / self.sim.dt + 1e-9)
+        if steps > 0:
+            self.sim.step(steps)
 
     def run(self) -> None:
-        """Exchange with the harness until :meth:`stop` (or the harness ends)."""
+        """Follow the harness's time until :meth:`stop` (or the harness ends): apply each duty report
+        at its time, and at each time report step the physics there and answer."""
         sim = self.sim
-        start = time.monotonic()
+        out = self.emu.proc.stdout
+        assert out is not None
         next_sonar = next_battery = 0.0
         nominal = self.robot.battery.voltage
         while not self._stop.is_set() and self.emu.proc.poll() is None:
-            duties = self._duties()
-            if duties is not None:
-                sim.set_pwm(duties)
-            lag = time.monotonic() - start - sim.time
-            steps = min(MAX_STEPS, int(lag / sim.dt))
-            if steps > 0:
-                sim.step(steps)
-            if lag / sim.dt > MAX_STEPS:  # slip rather than race
-                start = time.monotonic() - sim.time
+            try:
+                if not select.select([out], [], [], 0.1)[0]:
+                    continue
+                fields = out.readline().decode().split()
+            except (ValueError, OSError):  # closed under us: the emulator was stopped
+                return
+            if not fields:
+                return  # the harness ended
+            t_us = int(fields[1])
+            self._step_to(t_us)
+            if fields[0] == "pwm":
+                sim.set_pwm([int(v) for v in fields[2:]])
+                continue
             counts = sim.encoder_counts()
-            wheel_counts = [0 if k is None else counts[k] for k in self._encoder_of_wheel]
-            self.emu.command("counts " + " ".join(str(c) for c in wheel_counts))
+            answer = [
+                "counts " + " ".join(str(0 if k is None else counts[k]) for k in self._encoder_of_wheel)
+            ]
             if sim.sonars and sim.time >= next_sonar:
                 # measured now, not rate-limited: the firmware's own ping period paces the HC-SR04
                 pose = sim.pose
                 reading = sim.sonars[0].measure((pose.x, pose.y, pose.theta), sim.world)
-                self.emu.set_range(None if reading is None else round(reading * 100.0))
+                answer.append(f"range {-1 if reading is None else round(reading * 100.0)}")
                 next_sonar = sim.time + SONAR_PERIOD
             if sim.time >= next_battery:
                 # ADC7 sees the pack through the divider: full scale (5 V) is twice the nominal voltage
-                self.emu.command(f"battery {round(sim.battery_voltage / nominal * 2500)}")
+                answer.append(f"battery {round(sim.battery_voltage / nominal * 2500)}")
                 next_battery = sim.time + BATTERY_PERIOD
-            self._stop.wait(PERIOD)
+            answer.append(f"sync {t_us}")
+            self.emu.command("\n".join(answer))  # one write
 
     def close(self) -> None:
         self.stop()
