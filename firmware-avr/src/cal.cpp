@@ -34,8 +34,32 @@ static void load_table(Table *dst, const Knot *src, uint8_t n) {
     eeprom_update_block(&t, dst, sizeof(t));
 }
 
+// Shortcuts for the tables' reset values, refreshed after every CAL: the motor map is the identity
+// (offsets 0, every gain knot 1.0) and no roller drag coefficient is set.
+static bool map_identity, no_roller_drag;
+
+static void refresh_shortcuts() {
+    map_identity = no_roller_drag = true;
+    for (uint8_t i = 0; i < MOTORS; i++) {
+        if (eeprom_read_word((const uint16_t *)EE(offset[i]))) map_identity = false;
+        if (eeprom_read_word((const uint16_t *)EE(rcos[i])) || eeprom_read_word((const uint16_t *)EE(rsin[i])))
+            no_roller_drag = false;
+        uint8_t n = eeprom_read_byte(EE(gain[i].n));
+        for (uint8_t k = 0; k < n; k++)
+            if (eeprom_read_word((const uint16_t *)EE(gain[i].k[k].y)) != P_CAL_SCALE) map_identity = false;
+    }
+}
+
+bool cal_any_roller_drag() { return !no_roller_drag; }
+
+static void load_defaults();
+
 void cal_init() {
-    if (eeprom_read_word(EE(magic)) == MAGIC) return;
+    if (eeprom_read_word(EE(magic)) != MAGIC) load_defaults();
+    refresh_shortcuts();
+}
+
+static void load_defaults() {
     eeprom_update_word((uint16_t *)EE(k), DEFAULT_K);
     load_table(EE(kt), DEFAULT_KT, DEFAULT_KT_N);
     load_table(EE(kr), DEFAULT_KR, DEFAULT_KR_N);
@@ -98,7 +122,7 @@ float cal_kl(float power, float folded) {
 
 float cal_motor_power(uint8_t i, float a) {
     float m = a < 0 ? -a : a;
-    if (m == 0.0f || i >= MOTORS) return a;
+    if (map_identity || m == 0.0f || i >= MOTORS) return a;
     float p = rd16(EE(offset[i])) * 0.1f * (m < 1.0f ? m : 1.0f) + interp(EE(gain[i]), m) * m;
     return a > 0 ? p : -p;
 }
@@ -120,8 +144,16 @@ static void set_table_identity(Table *t) {
     eeprom_update_byte(&t->n, 1);
 }
 
-// The checks and conversions of firmware/controller.py `_cal` and calibration.py `set_knot`.
+static bool write(int16_t table, int16_t index, int16_t x, int16_t y);
+
 bool cal_write(int16_t table, int16_t index, int16_t x, int16_t y) {
+    bool ok = write(table, index, x, y);
+    if (ok) refresh_shortcuts();
+    return ok;
+}
+
+// The checks and conversions of firmware/controller.py `_cal` and calibration.py `set_knot`.
+static bool write(int16_t table, int16_t index, int16_t x, int16_t y) {
     if (table == P_CAL_K) {
         if (index != 0 || x != 0 || y <= 0) return false;
         eeprom_update_word((uint16_t *)EE(k), y);

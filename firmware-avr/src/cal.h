@@ -12,3 +12,4 @@ float cal_kl(float power, float folded_course);
 float cal_coast(float speed_cms);  // s
 float cal_motor_power(uint8_t i, float a);
 float cal_roller(uint8_t which, uint8_t i);  // which 0: cosine, 1: sine coefficient, PWM counts
+bool cal_any_roller_drag();  // some roller drag coefficient is not 0

@@ -216,12 +216,9 @@ void Executor::drive(float vx, float vy, float w, bool rotate, float gain) {
     twist[1] = vy;
     twist[2] = w;
     rot = rotate;
-    if (flags & DEADBAND) {
-        for (uint8_t i = 0; i < MOTORS; i++) ff[i] = target[i] = 0;
-    } else {
-        for (uint8_t i = 0; i < MOTORS; i++) ff[i] = model.raw[i];
-        model.wheel_speeds(vx, vy, w, target);
-    }
+    dead = flags & DEADBAND;
+    for (uint8_t i = 0; i < MOTORS; i++) ff[i] = dead ? 0 : model.raw[i];
+    if (mode & P_MODE_CLOSED_LOOP) update_targets();  // only the speed loop needs them
     if ((mode & P_MODE_CLOSED_LOOP) && !feedback) {
         start_feedback();
     } else if (feedback) {
@@ -251,7 +248,17 @@ void Executor::drag_step() {
     apply();
 }
 
+// The wheel speeds (rad/s) of the current twist, the speed loop's set points.
+void Executor::update_targets() {
+    if (dead) {
+        for (uint8_t i = 0; i < MOTORS; i++) target[i] = 0;
+    } else {
+        model.wheel_speeds(twist[0], twist[1], twist[2], target);
+    }
+}
+
 void Executor::start_feedback() {
+    update_targets();
     for (uint8_t i = 0; i < MOTORS; i++) {
         last_counts[i] = encoder_count(i);
         integ[i] = correction[i] = 0;

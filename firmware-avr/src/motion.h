@@ -38,6 +38,7 @@ struct Executor {
     int32_t watchdog_us;
     float twist[3];
     bool rot;
+    bool dead;  // the last twist's powers fell in the dead band
     float ff[MOTORS], target[MOTORS];
     bool feedback, dragging;
     int32_t control_due;
@@ -66,6 +67,7 @@ struct Executor {
     void start_drag(uint8_t flags);
     void drag_step();
     void start_feedback();
+    void update_targets();
     void feedback_step(int32_t dt_us);
     int16_t limit(float p);
 };

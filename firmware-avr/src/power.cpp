@@ -19,8 +19,10 @@ float rim(uint8_t i, uint8_t j) { return rim_f[i][j]; }
 static float fold_course(float course) {
     float best = 90.0f;
     for (uint8_t a = 0; a < IDLE_AXES; a++) {
-        float d = fmodf(course - (int16_t)pgm_read_word(&IDLE_AXES_CDEG[a]) * 0.01f, 180.0f);
-        if (d < 0) d += 180.0f;
+        // course in [-180, 180], axis in [0, 180): (course - axis) mod 180 without fmodf
+        float d = course - (int16_t)pgm_read_word(&IDLE_AXES_CDEG[a]) * 0.01f;
+        while (d < 0) d += 180.0f;
+        while (d >= 180.0f) d -= 180.0f;
         if (d > 90.0f) d = 180.0f - d;
         if (d < best) best = d;
     }
@@ -58,7 +60,7 @@ uint8_t PowerModel::compute(float vx, float vy, float w, bool rotate, int16_t *o
 }
 
 bool PowerModel::drags() {
-    if (ux == 0 && uy == 0) return false;
+    if ((ux == 0 && uy == 0) || !cal_any_roller_drag()) return false;
     for (uint8_t i = 0; i < MOTORS; i++)
         if (pgm_read_float(&ROLLER_PITCH[i]) > 0 && (cal_roller(0, i) != 0 || cal_roller(1, i) != 0)) return true;
     return false;
