@@ -118,9 +118,7 @@ def main(argv: list[str] | None = None) -> int:
         with contextlib.suppress(TimeoutError):
             port.count_lines(n, timeout=3.0)
         got = port.buf.count(b"OK")
-        print(
-            f"VEL back to back at line rate: {got} of {n} answered ({100 * got / n:.0f} %), {n - got} lost"
-        )
+        print(f"VEL back to back at line rate: {got} of {n} answered ({100 * got / n:.0f} %), {n - got} lost")
         port.send("STOP")
         port.drain()
     finally:
