@@ -26,11 +26,20 @@ def test_missing_simavr_headers_are_named(monkeypatch: pytest.MonkeyPatch, tmp_p
     assert reason is not None and "libsimavr-dev" in reason
 
 
+def test_robot_without_uno_firmware_is_named(monkeypatch: pytest.MonkeyPatch) -> None:
+    if missing_tools():
+        pytest.skip(f"emulated UNO: {missing_tools()}")
+    with pytest.raises(
+        UnoError, match=r"no UNO firmware for robot 'omni3': it is generated for mecanum4, omni4"
+    ):
+        emulator.build("omni3")
+
+
 def test_failed_build_reports_makes_last_lines(monkeypatch: pytest.MonkeyPatch) -> None:
     if missing_tools():
         pytest.skip(f"emulated UNO: {missing_tools()}")
-    with pytest.raises(UnoError, match=r"make .*ROBOT=no-such-robot failed"):
-        emulator.build("no-such-robot")
+    with pytest.raises(UnoError, match=r"make .* no-such-target failed: .*No rule to make target"):
+        emulator._make("-C", str(emulator.FIRMWARE_DIR), "no-such-target")
 
 
 def test_cli_error_is_one_line(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:

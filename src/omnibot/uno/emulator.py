@@ -59,6 +59,11 @@ def build(robot: str) -> Path:
     reason = missing_tools()
     if reason:
         raise UnoError(reason)
+    if not (FIRMWARE_DIR / "generated" / f"{robot}.h").exists():
+        known = ", ".join(sorted(p.stem for p in (FIRMWARE_DIR / "generated").glob("*.h")))
+        raise UnoError(
+            f"no UNO firmware for robot {robot!r}: it is generated for {known} (omnibot.firmware.avrgen)"
+        )
     _make("-C", str(FIRMWARE_DIR), f"ROBOT={robot}")
     _make("-C", str(HARNESS_DIR))
     return FIRMWARE_DIR / "build" / robot / "omnibot.elf"
