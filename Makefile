@@ -33,7 +33,7 @@ browser:
 	  $$SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends chromium; }
 
 # Debian's AVR toolchain and simavr for the Arduino UNO firmware (firmware-avr/) and its emulator
-# harness (tools/unosim/). Installed only when missing, like chromium above.
+# harness (firmware-avr/unosim/). Installed only when missing, like chromium above.
 AVR_PKGS := gcc-avr avr-libc binutils-avr simavr libsimavr-dev libelf-dev pkg-config
 avr-tools:
 	@command -v avr-gcc >/dev/null 2>&1 && [ -f /usr/include/simavr/sim_avr.h ] || { \
@@ -46,7 +46,7 @@ avr-tools:
 uno-sim: avr-tools
 	$(MAKE) -C firmware-avr ROBOT=omni4
 	$(MAKE) -C firmware-avr ROBOT=mecanum4
-	$(MAKE) -C tools/unosim
+	$(MAKE) -C firmware-avr/unosim
 
 test: lint browser avr-tools
 	SDL_VIDEODRIVER=dummy MPLBACKEND=Agg $(BIN)/python -m pytest -q

@@ -2,7 +2,7 @@
 
     python -m benchmarks.uno_command_cycles [--robot omni4] [--reps 20]
 
-The firmware sleeps at the end of every main-loop pass; the harness (tools/unosim) counts the
+The firmware sleeps at the end of every main-loop pass; the harness (firmware-avr/unosim) counts the
 cycles the CPU is awake between two sleeps. A command is answered in the pass that reads its
 terminator, so the longest pass after sending it is that command's cost (parse, check, queue or
 execute, reply queued for the UART; interrupts that land in the pass included). Figures are the

@@ -1,7 +1,7 @@
 """The emulated Arduino UNO: omnibot's AVR firmware in simavr, its UART on a pty at 115200 baud.
 
 :func:`build` compiles the firmware of a robot (``make -C firmware-avr ROBOT=...``) and the harness
-(``make -C tools/unosim``); :class:`UnoEmulator` starts the harness and gives the pty's path, which
+(``make -C firmware-avr/unosim``); :class:`UnoEmulator` starts the harness and gives the pty's path, which
 any serial client opens (``serial://PATH``). Both need a source checkout and Debian's AVR toolchain
 and simavr (``make avr-tools``); :func:`missing_tools` says what is absent.
 
@@ -23,7 +23,7 @@ from omnibot.errors import OmnibotError
 
 ROOT = Path(__file__).resolve().parents[3]
 FIRMWARE_DIR = ROOT / "firmware-avr"
-HARNESS_DIR = ROOT / "tools" / "unosim"
+HARNESS_DIR = FIRMWARE_DIR / "unosim"
 HARNESS = HARNESS_DIR / "unosim"
 SIMAVR_HEADER = Path("/usr/include/simavr/sim_avr.h")
 STARTUP_TIMEOUT = 10.0
