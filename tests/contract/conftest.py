@@ -60,16 +60,10 @@ class Backend:
     """(link, sonar stop distance in m): driving straight ahead on the link reads below it soon."""
     timeout: float
     """Reply timeout for the client, s of the link's clock."""
-    binary: bool = True
-    """The controller speaks the binary protocol (MODE bit 2)."""
 
     def require_physics(self, why: str) -> None:
         if not self.physics:
             pytest.skip(f"{self.name} backend has no robot physics: {why}")
-
-    def require_binary(self) -> None:
-        if not self.binary:
-            pytest.skip(f"{self.name} backend has no binary protocol (docs/uno.md says why)")
 
 
 # ------------------------------------------------------------------ sim (lockstep)

@@ -169,7 +169,6 @@ def test_pipelined_replies_match_in_order(client: RobotClient) -> None:
 
 
 def test_binary_round_trip(client: RobotClient, backend: Backend) -> None:
-    backend.require_binary()
     rec = EventRecorder()
     client.add_listener(rec)
     hello = client.use_binary()
