@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import select
 import shutil
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -174,6 +175,7 @@ def main(argv: list[str] | None = None) -> int:
     except UnoError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
+    signal.signal(signal.SIGTERM, lambda signum, frame: emu.proc.terminate())
     print(emu.path, flush=True)
     try:
         emu.proc.wait()
