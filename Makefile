@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: setup demo test lint bench clean browser
+.PHONY: setup demo test lint bench clean browser avr-tools uno-sim
 
 setup: $(STAMP)
 
@@ -33,7 +33,23 @@ browser:
 	  $$SUDO apt-get update -qq && \
 	  $$SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends chromium; }
 
-test: lint browser
+# Debian's AVR toolchain and simavr for the Arduino UNO firmware (firmware-avr/) and its emulator
+# harness (firmware-avr/unosim/). Installed only when missing, like chromium above.
+AVR_PKGS := gcc-avr avr-libc binutils-avr simavr libsimavr-dev libelf-dev pkg-config
+avr-tools:
+	@command -v avr-gcc >/dev/null 2>&1 && [ -f /usr/include/simavr/sim_avr.h ] || { \
+	  echo "make avr-tools: installing Debian's AVR toolchain and simavr"; \
+	  SUDO=$$([ "$$(id -u)" -eq 0 ] || echo sudo); \
+	  $$SUDO apt-get update -qq && \
+	  $$SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $(AVR_PKGS); }
+
+# The emulated UNO: the firmware of both robots and the simavr harness that runs it.
+uno-sim: avr-tools
+	$(MAKE) -C firmware-avr ROBOT=omni4
+	$(MAKE) -C firmware-avr ROBOT=mecanum4
+	$(MAKE) -C firmware-avr/unosim
+
+test: lint browser avr-tools
 	SDL_VIDEODRIVER=dummy MPLBACKEND=Agg $(BIN)/python -m pytest -q
 
 bench: setup

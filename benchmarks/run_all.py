@@ -10,6 +10,7 @@ from benchmarks import (
     sim_speed,
     sonar_stop,
     tracking,
+    uno_command_cycles,
 )
 
 
@@ -17,6 +18,7 @@ def main() -> int:
     for title, run in (
         ("simulator speed", lambda: sim_speed.main([])),
         ("firmware time per command", lambda: firmware_command_time.main([])),
+        ("UNO firmware cycles per command (simavr)", lambda: uno_command_cycles.main([])),
         ("line throughput, lockstep", lambda: link_throughput.main([])),
         ("line throughput, pty emulator", lambda: link_throughput.main(["--pty"])),
         (

@@ -6,12 +6,15 @@ backend        what runs the firmware                                           
 sim            ``sim://omni4?seed=1``: in-process lockstep simulator             simulated   yes
 pty            ``omnibot sim --pty`` child process, opened as ``serial://PATH``  wall clock  yes
 micropython    ``micropython run_unix.py omni4`` on pipes (firmware/unixhal.py)  wall clock  no
+uno            the Arduino UNO firmware (firmware-avr/) in simavr, pty at 115200  wall clock  no
 =============  ================================================================  ==========  =======
 
 Each test gets ``client``: a :class:`RobotClient` in text mode with the controller reset to a known
 state (STOP, MODE 0, TELEM and sonar off). The processes live for the session; the sim backend
 makes a fresh simulator per test. ``obstacle`` gives a link on which driving straight ahead meets
-something (the ``room`` world, or MicroPython's fixed fake sonar range), for the emergency stop.
+something (the ``room`` world, or the fixed sonar range of MicroPython and the UNO), for the
+emergency stop. The uno backend is skipped, with the reason, where Debian's AVR toolchain or simavr
+is missing (``make avr-tools``).
 """
 
 from __future__ import annotations
@@ -161,9 +164,31 @@ def _micropython_backend(stack: list[Callable[[], None]]) -> Backend:
     return Backend("micropython", True, False, lambda: (link, False), obstacle, 1.0)
 
 
+# ------------------------------------------------------------------ Arduino UNO in simavr
+
+
+def _uno_backend(stack: list[Callable[[], None]]) -> Backend:
+    from omnibot.uno.emulator import UnoEmulator, missing_tools
+
+    reason = missing_tools()
+    if reason:
+        pytest.skip(f"uno backend: {reason}")
+    # encoders turn with the PWM duty (440 counts per wheel turn, about 6 turns/s at full duty)
+    emulator = UnoEmulator(ROBOT, range_cm=MP_SONAR_CM, encoder_cps=2600.0)
+    stack.append(emulator.close)
+    link = open_link(f"serial://{emulator.path}")
+    stack.append(link.close)
+
+    @contextmanager
+    def obstacle() -> Iterator[tuple[Link, float]]:
+        yield link, MP_SONAR_CM / 100.0 + 0.5
+
+    return Backend("uno", True, False, lambda: (link, False), obstacle, 1.0)
+
+
 # ------------------------------------------------------------------ fixtures
 
-BACKENDS = ["sim", "pty", "micropython"]
+BACKENDS = ["sim", "pty", "micropython", "uno"]
 
 
 @pytest.fixture(scope="session", params=BACKENDS)
@@ -174,6 +199,8 @@ def backend(request: pytest.FixtureRequest) -> Iterator[Backend]:
             yield _sim_backend()
         elif request.param == "pty":
             yield _pty_backend(cleanup)
+        elif request.param == "uno":
+            yield _uno_backend(cleanup)
         else:
             yield _micropython_backend(cleanup)
     finally:

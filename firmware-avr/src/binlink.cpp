@@ -1,0 +1,296 @@
+#include "binlink.h"
+
+#include "hal.h"
+
+namespace bin {
+
+#define KEPT_BYTES 16     // replies up to this many frame bytes are kept; longer ones (STATUS) run again
+#define EVENT_BYTES 12
+#define BACKLOG 8         // events waiting for the send window (binlink.py keeps 16); more are dropped
+#define CHUNK_MAX 48      // encoded command frames are at most ~22 bytes; longer chunks are dropped
+#define FRAME_MAX 72      // largest frame we send (a TEL of every group, 32-bit extremes)
+
+static const uint8_t W = P_WINDOW;
+static const uint16_t RETRY_MS = P_RETRY_TIMEOUT_MS;
+static const uint8_t RETRIES = P_RETRIES;
+
+static uint8_t chunk[CHUNK_MAX];
+static uint8_t chunk_len;
+static bool chunk_overflow;
+static uint8_t out[FRAME_MAX];
+static uint8_t out_len;
+static bool out_overflow;
+static uint8_t cur_seq;
+
+// receiver (arq.Receiver)
+static uint8_t expected;
+struct Kept {
+    uint8_t seq, len;  // len 0: free; 255: a query to run again
+    uint8_t type;
+    uint8_t data[KEPT_BYTES];
+};
+static Kept kept[W];
+static uint8_t kept_next;
+
+// sender (arq.Sender) for events
+struct Pending {
+    uint8_t seq, len, resent;
+    uint32_t deadline;
+    uint8_t data[EVENT_BYTES];
+};
+static Pending pending[W];
+static uint8_t pending_n;
+static uint8_t next_seq = 1;
+static bool sync_flag = true;
+struct Waiting {
+    uint8_t type, n;
+    int16_t a, b;
+};
+static Waiting backlog[BACKLOG];
+static uint8_t backlog_head, backlog_n;
+
+static uint8_t seq_next(uint8_t s) { return s % P_SEQ_MAX + 1; }
+static uint8_t seq_back(uint8_t expect, uint8_t s) { return (uint8_t)(((int16_t)expect - s + P_SEQ_MAX) % P_SEQ_MAX); }
+
+void reset() {
+    chunk_len = 0;
+    chunk_overflow = false;
+    expected = 0;
+    for (uint8_t i = 0; i < W; i++) kept[i].len = 0;
+    pending_n = 0;
+    next_seq = 1;
+    sync_flag = true;
+    backlog_n = 0;
+}
+
+uint8_t seq() { return cur_seq; }
+
+// CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF), bitwise as protocol/crc.py crc16_bitwise
+static uint16_t crc16(const uint8_t *p, uint8_t n) {
+    uint16_t crc = 0xFFFF;
+    while (n--) {
+        crc ^= (uint16_t)(*p++) << 8;
+        for (uint8_t i = 0; i < 8; i++) crc = crc & 0x8000 ? (crc << 1) ^ 0x1021 : crc << 1;
+    }
+    return crc;
+}
+
+// Writes 00 | COBS(frame) | 00 (frames are under 254 bytes: one code byte per zero).
+static void write_frame(const uint8_t *f, uint8_t n) {
+    uart_put(0);
+    uint8_t start = 0;
+    for (uint8_t i = 0; i <= n; i++) {
+        if (i == n || f[i] == 0) {
+            uart_put(i - start + 1);
+            for (uint8_t k = start; k < i; k++) uart_put(f[k]);
+            start = i + 1;
+        }
+    }
+    uart_put(0);
+}
+
+void begin(uint8_t type, uint8_t s, bool sync) {
+    out[0] = sync ? type | P_FRAME_SYNC : type;
+    out[1] = s;
+    out_len = 2;
+    out_overflow = false;
+}
+
+static void byte(uint8_t b) {
+    if (out_len < FRAME_MAX - 2) out[out_len++] = b;
+    else out_overflow = true;
+}
+
+static void put_zigzag(uint32_t z) {
+    while (z >= 0x80) {
+        byte((z & 0x7F) | 0x80);
+        z >>= 7;
+    }
+    byte(z);
+}
+
+void put(int32_t v) { put_zigzag(v >= 0 ? (uint32_t)v << 1 : (((uint32_t)(-(v + 1))) << 1) | 1); }
+
+// An unsigned 32-bit value (TEL's t_ms): zigzag of a non-negative number needs 33 bits.
+void put_u32(uint32_t v) {
+    byte((v << 1 & 0x7F) | (v >= 0x40 ? 0x80 : 0));
+    if (v >= 0x40) put_zigzag(v >> 6);  // the rest, 7 bits a byte, as an unsigned varint
+}
+
+void text_P(const char *s) {
+    for (char c; (c = pgm_read_byte(s)); s++) byte(c);
+}
+
+static uint8_t finish() {
+    uint16_t crc = crc16(out, out_len);
+    out[out_len++] = crc >> 8;
+    out[out_len++] = crc & 0xFF;
+    return out_len;
+}
+
+void send_reply() {
+    uint8_t n = finish();
+    Kept &k = kept[kept_next];
+    kept_next = (kept_next + 1) % W;
+    k.seq = out[1];
+    k.type = out[0] & 0x7F;
+    if (n <= KEPT_BYTES) {
+        k.len = n;
+        for (uint8_t i = 0; i < n; i++) k.data[i] = out[i];
+    } else {
+        k.len = 255;  // a query (STATUS, HELLO): answered again from the state of then
+    }
+    write_frame(out, n);
+}
+
+void send_plain() { write_frame(out, finish()); }
+
+static void send_event(uint8_t type, int16_t a, int16_t b, uint8_t n, uint32_t now) {
+    uint8_t s = next_seq;
+    next_seq = seq_next(s);
+    begin(type, s, sync_flag);
+    sync_flag = false;
+    if (n > 0) put(a);
+    if (n > 1) put(b);
+    uint8_t len = finish();
+    Pending &p = pending[pending_n++];
+    p.seq = s;
+    p.len = len;
+    p.resent = 0;
+    p.deadline = now + RETRY_MS;
+    for (uint8_t i = 0; i < len; i++) p.data[i] = out[i];
+    write_frame(out, len);
+}
+
+static bool ready() { return pending_n == 0 || seq_back(next_seq, pending[0].seq) < W; }
+
+void event(uint8_t type, int16_t a, int16_t b, uint8_t n) {
+    if (backlog_n || !ready() || pending_n >= W) {
+        if (backlog_n < BACKLOG) {
+            Waiting &w = backlog[(backlog_head + backlog_n++) % BACKLOG];
+            w.type = type;
+            w.a = a;
+            w.b = b;
+            w.n = n;
+        }
+        return;
+    }
+    send_event(type, a, b, n, controller_ms());
+}
+
+static void ack(uint8_t s) {
+    for (uint8_t i = 0; i < pending_n; i++) {
+        if (pending[i].seq == s) {
+            for (uint8_t k = i + 1; k < pending_n; k++) pending[k - 1] = pending[k];
+            pending_n--;
+            return;
+        }
+    }
+}
+
+void poll(uint32_t now) {
+    for (uint8_t i = 0; i < pending_n; i++) {
+        Pending &p = pending[i];
+        if ((int32_t)(now - p.deadline) < 0) continue;
+        if (p.resent >= RETRIES) {  // give up on it and every later one; the next frame is SYNC
+            pending_n = i;
+            sync_flag = true;
+            break;
+        }
+        p.deadline = now + RETRY_MS;
+        p.resent++;
+        write_frame(p.data, p.len);
+    }
+    while (backlog_n && ready() && pending_n < W) {
+        Waiting &w = backlog[backlog_head];
+        backlog_head = (backlog_head + 1) % BACKLOG;
+        backlog_n--;
+        send_event(w.type, w.a, w.b, w.n, now);
+    }
+}
+
+// NEW 0, DUPLICATE 1, OUT_OF_ORDER 2 (arq.Receiver.classify)
+static uint8_t classify(uint8_t s, bool sync) {
+    if (s == 0) return 0;
+    if (expected) {
+        uint8_t back = seq_back(expected, s);
+        if (back > 0 && back <= W) return 1;
+        if (back && !sync) return 2;
+    }
+    expected = seq_next(s);
+    return 0;
+}
+
+static void duplicate(uint8_t s) {
+    for (uint8_t i = 0; i < W; i++) {
+        Kept &k = kept[i];
+        uint8_t back = seq_back(expected, k.seq);
+        if (k.len && k.seq == s && back > 0 && back <= W) {
+            if (k.len == 255) {
+                cur_seq = s;
+                on_query_again(k.type == T_HELLO_REPLY ? K_HELLO : K_STATUS);
+            } else {
+                write_frame(k.data, k.len);
+            }
+            return;
+        }
+    }
+}
+
+static void frame(uint8_t *f, uint8_t n) {
+    // COBS decode in place: the output is never longer than the input
+    uint8_t i = 0, o = 0;
+    while (i < n) {
+        uint8_t code = f[i];
+        if (code == 0 || i + code > n) return;  // bad COBS: dropped, the host retries
+        for (uint8_t k = 1; k < code; k++) f[o++] = f[i + k];
+        i += code;
+        if (code != 0xFF && i < n) f[o++] = 0;
+    }
+    if (o < 4 || crc16(f, o - 2) != ((uint16_t)f[o - 2] << 8 | f[o - 1])) return;
+    uint8_t type = f[0] & 0x7F, s = f[1];
+    bool sync = f[0] & P_FRAME_SYNC;
+    if (type == T_ACK) {
+        ack(s);
+        return;
+    }
+    if (type == K_HELLO && sync) {
+        expected = 0;
+        for (uint8_t k = 0; k < W; k++) kept[k].len = 0;
+    }
+    uint8_t kind = classify(s, sync);
+    if (kind == 1) return duplicate(s);
+    if (kind == 2) return;
+    cur_seq = s;
+    int32_t ints[P_PARAMS_MAX + 1];
+    uint8_t count = 0;
+    uint8_t end = o - 2;
+    for (uint8_t k = 2; k < end;) {
+        uint32_t z = 0;
+        uint8_t shift = 0;
+        for (;;) {
+            if (k >= end || shift >= 35) return on_frame(type, ints, 255);  // bad varint
+            uint8_t b = f[k++];
+            z |= (uint32_t)(b & 0x7F) << shift;
+            shift += 7;
+            if (b < 0x80) break;
+        }
+        if (count <= P_PARAMS_MAX) ints[count] = z & 1 ? -(int32_t)((z + 1) >> 1) : (int32_t)(z >> 1);
+        if (count < 255) count++;
+    }
+    on_frame(type, ints, count);
+}
+
+void feed(uint8_t c) {
+    if (c == 0) {
+        if (chunk_len && !chunk_overflow) frame(chunk, chunk_len);
+        chunk_len = 0;
+        chunk_overflow = false;
+    } else if (chunk_len < CHUNK_MAX) {
+        chunk[chunk_len++] = c;
+    } else {
+        chunk_overflow = true;  // longer than any command frame: dropped up to the next 00
+    }
+}
+
+}  // namespace bin

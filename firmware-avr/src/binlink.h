@@ -1,0 +1,31 @@
+// Binary mode (MODE bit 2, docs/protocol.md "Binary protocol"): COBS frames with CRC-16 and zigzag
+// varints, sequence numbers, duplicate replies, event retransmission (firmware/binlink.py, arq.py).
+#pragma once
+#include <stdint.h>
+
+namespace bin {
+
+// A new session (entering binary mode): forget frames, sequence state and waiting events.
+void reset();
+// One received byte; a complete good frame is handed to `on_frame` (declared below).
+void feed(uint8_t c);
+// Building one outgoing frame: begin, put the integers (and text), then send.
+void begin(uint8_t type, uint8_t seq, bool sync = false);
+void put(int32_t v);
+void put_u32(uint32_t v);
+void text_P(const char *s);  // from flash
+void send_reply();           // a reply to the command being handled (kept for duplicates)
+void send_plain();           // TEL: seq 0, neither kept nor acknowledged
+// Events (RANGE, WARN, IDLE): sequenced, retransmitted until ACKed, backlogged while the window is full.
+void event(uint8_t type, int16_t a, int16_t b, uint8_t n);
+void poll(uint32_t now_ms);  // retransmissions and backlog, every main-loop pass
+uint8_t seq();               // seq of the command being handled
+
+}  // namespace bin
+
+// Provided by the controller: a received command frame, classified NEW (`type` is the command's
+// id; `ints` hold `n` integers, n = 255 when the payload was not integers).
+void on_frame(uint8_t type, int32_t *ints, uint8_t n);
+// Provided by the controller: a duplicate STATUS or HELLO whose reply was not kept: answer again.
+void on_query_again(uint8_t type);
+uint32_t controller_ms();

@@ -1,0 +1,15 @@
+// Seed 000's calibration tables (K, K_t, K_r, K_l curves) and the motor map, kept in EEPROM so a
+// calibration survives a power cycle; CAL writes one knot (docs/protocol.md, CAL).
+#pragma once
+#include <stdint.h>
+
+void cal_init();              // loads the generated defaults when the EEPROM holds none for this robot
+bool cal_write(int16_t table, int16_t index, int16_t x, int16_t y);  // CAL,T,I,X,Y; false: ERROR 38
+float cal_k();                // PWM counts per m/s of rim speed
+float cal_kt(float power);
+float cal_kr(float power);
+float cal_kl(float power, float folded_course);
+float cal_coast(float speed_cms);  // s
+float cal_motor_power(uint8_t i, float a);
+float cal_roller(uint8_t which, uint8_t i);  // which 0: cosine, 1: sine coefficient, PWM counts
+bool cal_any_roller_drag();  // some roller drag coefficient is not 0

@@ -1,0 +1,60 @@
+// Parameter checks of every command against the protocol and the robot's limits (firmware/limits.py).
+#include "checks.h"
+
+#include <stdlib.h>
+
+static uint8_t check_move(int16_t L, int16_t V, int16_t D, int16_t C, uint8_t k) {
+    if (abs(L) >= (k == 1 ? L_MAX_EXCL : L2_MAX_EXCL) && !(k == 1 && abs(L) == P_INF)) return P_E_DISTANCE;
+    if (k == 1) {
+        if (abs(V) < V_MIN || abs(V) > V_MAX || V == 0) return P_E_SPEED;
+    } else if (abs(V) > V2_MAX) {
+        return P_E_SPEED;
+    }
+    if (abs(D) >= 360 * k) return P_E_COURSE;
+    if (abs(C) >= (k == 1 ? C_MAX_EXCL : C2_MAX_EXCL)) return P_E_CURVATURE;
+    return 0;
+}
+
+uint8_t check(uint8_t kw, const int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
+    if (n < lo || n > hi) return P_E_PARAM_COUNT;
+    switch (kw) {
+        case K_MOVE:
+            return check_move(p[0], p[1], p[2], p[3], 1);
+        case K_DELTA:
+            if (p[4] < 0 || p[4] > P_INF) return P_E_REPEAT;
+            return check_move(p[0], p[1], p[2], p[3], 2);
+        case K_ROTATE:
+            if (abs(p[0]) > P_INF) return P_E_ANGLE;
+            if (p[1] == 0 || abs(p[1]) >= F_MAX_EXCL) return P_E_SPEED;
+            return 0;
+        case K_POWER:
+            if (p[0] < 1 || p[0] > 30000) return P_E_TIME;
+            for (uint8_t i = 1; i < n; i++)
+                if (abs(p[i]) > PWM_MAX) return P_E_SPEED;
+            return 0;
+        case K_VEL:
+            if ((int32_t)p[0] * p[0] + (int32_t)p[1] * p[1] > V_MAX_SQ || abs(p[2]) >= F_MAX_EXCL) return P_E_SPEED;
+            if (p[3] < 1 || p[3] > 1000) return P_E_TIME;
+            return 0;
+        case K_SONAR:
+            if (p[0] < 1 || p[0] > SONARS) return P_E_SONAR;
+            if (p[1] != 0 && (p[1] < SONAR_PERIOD_MIN || p[1] > 30000)) return P_E_SONAR_PERIOD;
+            for (uint8_t i = 2; i < 5; i++)
+                if (p[i] < 0 || p[i] > 500) return P_E_SONAR;
+            return 0;
+        case K_TELEM:
+            if (p[0] != 0 && (p[0] < P_TEL_PERIOD_MIN || p[0] > 30000)) return P_E_TIME;
+            if (p[1] & ~P_TEL_MASK) return P_E_UNSUPPORTED;
+            return 0;
+        case K_MODE:
+            if (p[0] & ~UNO_MODE_MASK) return P_E_UNSUPPORTED;
+            if ((p[0] & P_MODE_CLOSED_LOOP) && !HAS_ENCODERS) return P_E_UNSUPPORTED;
+            return 0;
+        case K_HELLO:
+            for (uint8_t i = 0; i < n; i++)
+                if (p[i] == P_PROTOCOL_VERSION) return 0;
+            return n ? P_E_UNSUPPORTED : 0;
+    }
+    return 0;
+}
+

@@ -1,0 +1,231 @@
+// ATmega328P peripherals. Timer 1 (prescaler 8, 0.5 us) is the clock and times the sonar echo by
+// input capture on ICP1 (D8); its compare B wakes the main loop every millisecond. Timers 0 and 2
+// give the motors' PWM (fast PWM, prescaler 64: 976 Hz). USART0 runs at 115200 baud (U2X).
+#include "hal.h"
+
+#include <avr/interrupt.h>
+#include <avr/io.h>
+#include <avr/sleep.h>
+#include <util/atomic.h>
+#include <util/delay.h>
+
+#define RX_SIZE 256  // powers of two; 256: an index wraps by itself
+#define TX_SIZE 128
+
+static volatile uint8_t rx_buf[RX_SIZE];
+static volatile uint8_t rx_head, rx_tail;
+static volatile uint8_t tx_buf[TX_SIZE];
+static volatile uint8_t tx_head, tx_tail;
+static volatile uint16_t overflows;
+static volatile int32_t enc[MOTORS];
+static int8_t dir[MOTORS];
+static volatile uint8_t enc_last[3];
+static volatile uint16_t echo_start;
+static volatile uint8_t echo_state;  // 0 idle, 1 waiting for the rising edge, 2 for the falling one, 3 done
+static volatile uint16_t echo_ticks;
+
+ISR(USART_RX_vect) {
+    uint8_t c = UDR0;
+    uint8_t next = (rx_head + 1) & (RX_SIZE - 1);
+    if (next != rx_tail) {
+        rx_buf[rx_head] = c;
+        rx_head = next;
+    }
+}
+
+ISR(USART_UDRE_vect) {
+    if (tx_head == tx_tail) {
+        UCSR0B &= ~_BV(UDRIE0);
+        return;
+    }
+    UDR0 = tx_buf[tx_tail];
+    tx_tail = (tx_tail + 1) & (TX_SIZE - 1);
+}
+
+ISR(TIMER1_OVF_vect) { overflows++; }
+
+ISR(TIMER1_COMPB_vect) { OCR1B += 2000; }  // 1 ms: wakes the main loop
+
+ISR(TIMER1_CAPT_vect) {
+    uint16_t t = ICR1;
+    if (echo_state == 1) {
+        echo_start = t;
+        TCCR1B &= ~_BV(ICES1);  // now the falling edge
+        echo_state = 2;
+    } else if (echo_state == 2) {
+        echo_ticks = t - echo_start;
+        echo_state = 3;
+        TIMSK1 &= ~_BV(ICIE1);
+    }
+}
+
+static inline void count_edges(uint8_t group, uint8_t now) {
+    uint8_t changed = now ^ enc_last[group];
+    enc_last[group] = now;
+#define ENC_EDGE(i)                                                      \
+    if (M##i##_ENC_PCIE == group && (changed & _BV(M##i##_ENC_BIT))) \
+        enc[i] += dir[i];
+    ENC_EDGE(0)
+#if MOTORS > 1
+    ENC_EDGE(1)
+#endif
+#if MOTORS > 2
+    ENC_EDGE(2)
+#endif
+#if MOTORS > 3
+    ENC_EDGE(3)
+#endif
+}
+
+ISR(PCINT0_vect) { count_edges(0, PINB); }
+ISR(PCINT1_vect) { count_edges(1, PINC); }
+ISR(PCINT2_vect) { count_edges(2, PIND); }
+
+#define PIN_OUT(p) (p##_DDR |= _BV(p##_BIT))
+#define PIN_SET(p, v) ((v) ? (p##_PORT |= _BV(p##_BIT)) : (p##_PORT &= ~_BV(p##_BIT)))
+
+void hal_init() {
+    // UART 115200 8N1, double speed
+    UCSR0A = _BV(U2X0);
+    UBRR0 = (F_CPU / 8 / BAUD) - 1;
+    UCSR0B = _BV(RXEN0) | _BV(TXEN0) | _BV(RXCIE0);
+    UCSR0C = _BV(UCSZ01) | _BV(UCSZ00);
+    // timer 1: normal mode, prescaler 8, overflow + compare B + (on demand) capture interrupts
+    TCCR1A = 0;
+    TCCR1B = _BV(CS11) | _BV(ICNC1);
+    OCR1B = 2000;
+    TIMSK1 = _BV(TOIE1) | _BV(OCIE1B);
+    // timers 0 and 2: fast PWM, prescaler 64; outputs connected per motor when it runs
+    TCCR0A = _BV(WGM01) | _BV(WGM00);
+    TCCR0B = _BV(CS01) | _BV(CS00);
+    TCCR2A = _BV(WGM21) | _BV(WGM20);
+    TCCR2B = _BV(CS22);
+#define MOTOR_PINS(i)        \
+    PIN_OUT(M##i##_PWM);     \
+    PIN_OUT(M##i##_IN1);     \
+    PIN_OUT(M##i##_IN2);     \
+    PCICR |= _BV(M##i##_ENC_PCIE); \
+    M##i##_ENC_PCMSK |= _BV(M##i##_ENC_PCINT & 7);
+    MOTOR_PINS(0)
+#if MOTORS > 1
+    MOTOR_PINS(1)
+#endif
+#if MOTORS > 2
+    MOTOR_PINS(2)
+#endif
+#if MOTORS > 3
+    MOTOR_PINS(3)
+#endif
+    enc_last[0] = PINB;
+    enc_last[1] = PINC;
+    enc_last[2] = PIND;
+#if SONARS
+    SONAR_TRIG_DDR |= _BV(SONAR_TRIG_BIT);
+#endif
+    // ADC: AVcc reference, prescaler 128
+    ADMUX = _BV(REFS0) | BATTERY_ADC;
+    ADCSRA = _BV(ADEN) | _BV(ADPS2) | _BV(ADPS1) | _BV(ADPS0);
+    set_sleep_mode(SLEEP_MODE_IDLE);
+    sei();
+}
+
+uint32_t hal_ticks() {
+    uint16_t hi, lo;
+    ATOMIC_BLOCK(ATOMIC_RESTORESTATE) {
+        hi = overflows;
+        lo = TCNT1;
+        if ((TIFR1 & _BV(TOV1)) && lo < 0x8000) hi++;
+    }
+    return ((uint32_t)hi << 16) | lo;
+}
+
+bool hal_rx_pending() { return rx_head != rx_tail; }
+
+void hal_wait_for_event() {
+    cli();
+    if (rx_head == rx_tail) {
+        sleep_enable();
+        sei();
+        sleep_cpu();
+        sleep_disable();
+    }
+    sei();
+}
+
+int16_t uart_read() {
+    if (rx_head == rx_tail) return -1;
+    uint8_t c = rx_buf[rx_tail];
+    rx_tail = (rx_tail + 1) & (RX_SIZE - 1);
+    return c;
+}
+
+void uart_put(char c) {
+    uint8_t next = (tx_head + 1) & (TX_SIZE - 1);
+    while (next == tx_tail) {
+    }
+    tx_buf[tx_head] = c;
+    tx_head = next;
+    UCSR0B |= _BV(UDRIE0);
+}
+
+void motor_set(uint8_t i, int16_t p) {
+    uint8_t duty = p < 0 ? -p : p;
+    if (p != 0) dir[i] = p > 0 ? 1 : -1;  // single-channel encoders count in the last direction
+#define MOTOR_SET(k)                                    \
+    case k:                                             \
+        M##k##_OCR = duty;                              \
+        if (duty) M##k##_TCCR |= _BV(M##k##_COM);       \
+        else M##k##_TCCR &= ~_BV(M##k##_COM);           \
+        PIN_SET(M##k##_PWM, 0);                         \
+        PIN_SET(M##k##_IN1, p > 0);                     \
+        PIN_SET(M##k##_IN2, p < 0);                     \
+        break;
+    switch (i) {
+        MOTOR_SET(0)
+#if MOTORS > 1
+        MOTOR_SET(1)
+#endif
+#if MOTORS > 2
+        MOTOR_SET(2)
+#endif
+#if MOTORS > 3
+        MOTOR_SET(3)
+#endif
+    }
+}
+
+int32_t encoder_count(uint8_t i) {
+    int32_t v;
+    ATOMIC_BLOCK(ATOMIC_RESTORESTATE) { v = enc[i]; }
+    return v;
+}
+
+#if SONARS
+void sonar_trigger() {
+    ATOMIC_BLOCK(ATOMIC_RESTORESTATE) {
+        echo_state = 1;
+        TCCR1B |= _BV(ICES1);  // rising edge first
+        TIFR1 = _BV(ICF1);
+        TIMSK1 |= _BV(ICIE1);
+    }
+    SONAR_TRIG_PORT |= _BV(SONAR_TRIG_BIT);
+    _delay_us(10);
+    SONAR_TRIG_PORT &= ~_BV(SONAR_TRIG_BIT);
+}
+
+int16_t sonar_result() {
+    if (echo_state != 3) return -2;
+    echo_state = 0;
+    return echo_ticks / 116;  // 58 us per cm, 2 ticks per us
+}
+#else
+void sonar_trigger() {}
+int16_t sonar_result() { return -1; }
+#endif
+
+uint16_t battery_mv() {
+    ADCSRA |= _BV(ADSC);
+    while (ADCSRA & _BV(ADSC)) {
+    }
+    return (uint32_t)ADC * BATTERY_MV_FULL_SCALE / 1023;
+}

@@ -1,0 +1,413 @@
+// omnibot's motor controller for the Arduino UNO: the text protocol of docs/protocol.md.
+// One main-loop pass: advance the clock, the motion timeline, read and answer every complete
+// command, run the sonar, send TEL when due; then sleep until the next interrupt (1 ms at most).
+#include <avr/pgmspace.h>
+#include <stdlib.h>
+
+#include "binlink.h"
+#include "cal.h"
+#include "hal.h"
+#include "checks.h"
+#include "motion.h"
+#include "textout.h"
+
+static char line[LINE_MAX + 1];
+static uint8_t line_len;
+static bool overflow;
+static bool latched;
+static bool binary;  // MODE bit 2: frames both ways
+static uint32_t now_ms;
+static uint16_t us_part;
+static uint32_t last_ticks;
+static uint8_t tick_half;
+// sonar (sonar.py, one sonar)
+static uint16_t sonar_period;
+static int16_t sonar_low, sonar_high, sonar_stop, sonar_last = -1;
+static uint32_t sonar_next, sonar_started;
+static bool sonar_pending;
+// telemetry
+static uint16_t tel_period;
+static uint8_t tel_mask;
+static uint32_t tel_next;
+
+// ------------------------------------------------------------------ replies and events
+
+static PGM_P code_text(uint8_t code) {
+    for (uint8_t i = 0; i < CODE_TEXT_COUNT; i++)
+        if (pgm_read_byte(&CODE_TEXTS[i].code) == code) return (PGM_P)pgm_read_ptr(&CODE_TEXTS[i].text);
+    return PSTR("");
+}
+
+static void coded(PGM_P keyword, uint8_t code) {
+    out_P(keyword);
+    comma_i(code);
+    uart_put(',');
+    out_P(code_text(code));
+    end_line();
+}
+static void ok() {
+    if (binary) {
+        bin::begin(T_OK, bin::seq());
+        bin::send_reply();
+        return;
+    }
+    out_P(PSTR("OK"));
+    end_line();
+}
+// Binary ERROR and WARN frames carry no text: the code table's text applies (docs/protocol.md).
+static void error(uint8_t code) {
+    if (binary) {
+        bin::begin(T_ERROR, bin::seq());
+        bin::put(code);
+        bin::send_reply();
+        return;
+    }
+    coded(PSTR("ERROR"), code);
+}
+void on_warn(uint8_t code) {
+    if (binary) return bin::event(T_WARN, code, 0, 1);
+    coded(PSTR("WARN"), code);
+}
+void on_idle() {
+    if (binary) return bin::event(T_IDLE, 0, 0, 0);
+    out_P(PSTR("IDLE"));
+    end_line();
+}
+uint32_t controller_ms() { return now_ms; }
+
+static uint8_t state() {
+    if (latched) return P_STATE_ESTOP;
+    return ex.moving() ? P_STATE_MOVING : P_STATE_IDLE;
+}
+
+static void hello() {
+    if (binary) {
+        bin::begin(T_HELLO_REPLY, bin::seq());
+        bin::put(P_PROTOCOL_VERSION);
+        bin::put(MOTORS);
+        bin::text_P(PSTR(ROBOT_NAME));
+        bin::send_reply();
+        return;
+    }
+    out_P(PSTR("HELLO,"));
+    out_i(P_PROTOCOL_VERSION);
+    out_P(PSTR("," ROBOT_NAME));
+    comma_i(MOTORS);
+    end_line();
+}
+
+static uint8_t mode_bits() { return ex.mode | (binary ? P_MODE_BINARY : 0); }
+
+static void status() {
+    if (binary) {
+        bin::begin(T_STATUS_REPLY, bin::seq());
+        bin::put(state());
+        bin::put(ex.queue.count);
+        bin::put(QUEUE_CAPACITY);
+        bin::put(mode_bits());
+        for (uint8_t i = 0; i < MOTORS; i++) bin::put(ex.powers[i]);
+        for (uint8_t i = 0; i < 4; i++) bin::put(ex.remembered[i]);
+        bin::send_reply();
+        return;
+    }
+    out_P(PSTR("STATUS,"));
+    out_i(state());
+    comma_i(ex.queue.count);
+    comma_i(QUEUE_CAPACITY);
+    comma_i(mode_bits());
+    out_P(PSTR(";POWER"));
+    for (uint8_t i = 0; i < MOTORS; i++) comma_i(ex.powers[i]);
+    out_P(PSTR(";MOVE"));
+    for (uint8_t i = 0; i < 4; i++) comma_i(ex.remembered[i]);
+    end_line();
+}
+
+static void field(int32_t v) {
+    if (binary) bin::put(v);
+    else comma_i(v);
+}
+
+static void telemetry() {
+    if (binary) {
+        bin::begin(T_TEL, 0);
+        bin::put_u32(now_ms);
+    } else {
+        out_P(PSTR("TEL,"));
+        out_u(now_ms);
+    }
+    field(tel_mask);
+    if (tel_mask & P_TEL_POWER) {
+        field(MOTORS);
+        for (uint8_t i = 0; i < MOTORS; i++) field(ex.powers[i]);
+    }
+    if (tel_mask & P_TEL_ENCODERS) {
+        field(HAS_ENCODERS ? MOTORS : 0);
+        for (uint8_t i = 0; i < (HAS_ENCODERS ? MOTORS : 0); i++) field(encoder_count(i));
+    }
+    if (tel_mask & P_TEL_TRACKING) field(0);  // no tracking wheels on the UNO wiring
+    if (tel_mask & P_TEL_GYRO) field(0);      // no gyro on the UNO wiring
+    if (tel_mask & P_TEL_HEADING) field(0);
+    if (tel_mask & P_TEL_BATTERY) field(battery_mv());
+    if (tel_mask & P_TEL_QUEUE) {
+        field(state());
+        field(ex.queue.count);
+    }
+    if (tel_mask & P_TEL_SONAR) {
+        field(SONARS);
+        if (SONARS) field(sonar_last);
+    }
+    if (binary) bin::send_plain();
+    else end_line();
+}
+
+// ------------------------------------------------------------------ commands
+
+static void emergency_stop() {
+    ex.stop();
+    latched = true;
+    on_warn(P_W_SONAR_STOP);
+    on_idle();
+}
+
+static void execute(uint8_t kw, int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
+    uint8_t code = check(kw, p, n, lo, hi);
+    bool motion = kw == K_MOVE || kw == K_ROTATE || kw == K_DELTA || kw == K_POWER || kw == K_VEL;
+    if (!code && latched && motion) code = P_E_ESTOP;
+    if (code) {
+        error(code);
+        return;
+    }
+    switch (kw) {
+        case K_MOVE:
+        case K_ROTATE:
+        case K_DELTA:
+        case K_POWER:
+            if (!ex.queue.push(kw, p, n)) {
+                error(P_E_QUEUE_FULL);
+                return;
+            }
+            ok();
+            ex.step(0);
+            break;
+        case K_VEL:
+            ok();
+            ex.vel(p[0], p[1], p[2], p[3]);
+            break;
+        case K_STOP: {
+            bool was = ex.stop();
+            ex.reset_move();
+            latched = false;
+            ok();
+            if (was) on_idle();
+            break;
+        }
+        case K_STATUS:
+            status();
+            break;
+        case K_HELLO:
+            hello();
+            break;
+        case K_MODE: {
+            ok();  // in the mode the command came in
+            ex.set_mode(p[0] & ~P_MODE_BINARY);
+            bool b = p[0] & P_MODE_BINARY;
+            if (b != binary) {  // from the next byte on, both ways
+                binary = b;
+                bin::reset();
+                line_len = 0;
+                overflow = false;
+            }
+            break;
+        }
+        case K_SONAR:
+            sonar_period = p[1];
+            sonar_low = p[2];
+            sonar_high = p[3];
+            sonar_stop = p[4];
+            sonar_next = now_ms;
+            ok();
+            break;
+        case K_TELEM:
+            tel_period = p[0];
+            tel_mask = p[1];
+            tel_next = now_ms;
+            ok();
+            break;
+        case K_CAL:
+            if (cal_write(p[0], p[1], p[2], p[3])) ok();
+            else error(P_E_CALIBRATION);
+            break;
+        default:
+            error(P_E_INTERNAL);
+    }
+}
+
+static bool blank(char c) { return c == ' ' || c == '\t' || c == '\v' || c == '\f'; }
+
+// Parses one command (parser.py `parse`): keyword, at most 5 integer parameters in 16 bits.
+static void handle(char *cmd) {
+    char *end = cmd + line_len;
+    *end = ',';
+    char *field_end = cmd;
+    while (*field_end != ',') field_end++;
+    char *a = cmd, *b = field_end;
+    while (a < b && blank(*a)) a++;
+    while (b > a && blank(b[-1])) b--;
+    if (a == b && field_end == end) return;  // blank: no reply
+    uint8_t kw = 0, lo = 0, hi = 0;
+    for (uint8_t k = 0; k < K_COUNT && !kw; k++) {
+        const Keyword *e = &KEYWORDS[k];
+        uint8_t i = 0;
+        for (; a + i < b; i++) {
+            char c = a[i];
+            if (c >= 'a' && c <= 'z') c -= 32;
+            if (i >= sizeof(e->name) || c != (char)pgm_read_byte(&e->name[i])) break;
+        }
+        if (a + i == b && (i == sizeof(e->name) || pgm_read_byte(&e->name[i]) == 0)) {
+            kw = pgm_read_byte(&e->id);
+            lo = pgm_read_byte(&e->lo);
+            hi = pgm_read_byte(&e->hi);
+        }
+    }
+    if (!kw) return error(P_E_UNKNOWN);
+    uint8_t fields = 0;
+    for (char *c = field_end; c < end; c++)
+        if (*c == ',') fields++;
+    if (fields > P_PARAMS_MAX) return error(P_E_PARAM_COUNT);
+    int16_t p[P_PARAMS_MAX];
+    uint8_t n = 0;
+    char *c = field_end;
+    while (c < end) {
+        c++;  // past the comma
+        while (c < end && blank(*c)) c++;
+        bool neg = false;
+        if (*c == '-' || *c == '+') neg = *c++ == '-';
+        int32_t v = 0;
+        uint8_t digits = 0;
+        for (; *c >= '0' && *c <= '9'; c++, digits++)
+            if (v < 100000) v = v * 10 + (*c - '0');
+        while (c < end && blank(*c)) c++;
+        if (!digits || *c != ',') return error(P_E_NOT_INTEGER);
+        if (neg) v = -v;
+        if (v < -32768 || v > 32767) return error(P_E_RANGE16);
+        p[n++] = v;
+    }
+    execute(kw, p, n, lo, hi);
+}
+
+// A binary command frame (controller.py `_frame`): the same checks and execution as text.
+void on_frame(uint8_t type, int32_t *ints, uint8_t n) {
+    const Keyword *e = 0;
+    for (uint8_t k = 0; k < K_COUNT; k++)
+        if (pgm_read_byte(&KEYWORDS[k].id) == type) e = &KEYWORDS[k];
+    if (!e) return error(P_E_UNKNOWN);
+    if (n == 255) return error(P_E_NOT_INTEGER);
+    if (n > P_PARAMS_MAX) return error(P_E_PARAM_COUNT);
+    int16_t p[P_PARAMS_MAX];
+    for (uint8_t i = 0; i < n; i++) {
+        if (ints[i] < -32768 || ints[i] > 32767) return error(P_E_RANGE16);
+        p[i] = ints[i];
+    }
+    execute(type, p, n, pgm_read_byte(&e->lo), pgm_read_byte(&e->hi));
+}
+
+void on_query_again(uint8_t type) {
+    if (type == K_HELLO) hello();
+    else status();
+}
+
+// Splits the byte stream into commands (parser.py LineSplitter).
+static void feed(char c) {
+    if (c == ';' || c == '\r' || c == '\n') {
+        if (overflow) {
+            overflow = false;
+            error(P_E_TOO_LONG);
+        } else if (line_len) {
+            handle(line);
+        }
+        line_len = 0;
+        return;
+    }
+    if (overflow) return;
+    if (line_len == LINE_MAX) {
+        overflow = true;
+        line_len = 0;
+        return;
+    }
+    line[line_len++] = c;
+}
+
+// ------------------------------------------------------------------ sonar (sonar.py)
+
+static void sonar_poll() {
+    if (!SONARS) return;
+    if (sonar_pending) {
+        int16_t cm = sonar_result();
+        if (cm == -2) {
+            if ((int32_t)(now_ms - sonar_started) < 100) return;
+            cm = -1;  // no echo within 100 ms
+        }
+        sonar_pending = false;
+        sonar_last = cm;
+        if (sonar_period == 0 || cm < 0) return;
+        if ((sonar_low < sonar_high && sonar_low <= cm && cm <= sonar_high) ||
+            (sonar_low > sonar_high && (cm < sonar_high || cm > sonar_low))) {
+            if (binary) {
+                bin::event(T_RANGE, 1, cm, 2);
+            } else {
+                out_P(PSTR("RANGE,1"));
+                comma_i(cm);
+                end_line();
+            }
+        }
+        if (ex.moving() && cm < sonar_stop) emergency_stop();
+    } else if (sonar_period && (int32_t)(now_ms - sonar_next) >= 0) {
+        sonar_next += sonar_period;
+        if ((int32_t)(now_ms - sonar_next) >= 0) sonar_next = now_ms + sonar_period;
+        sonar_pending = true;
+        sonar_started = now_ms;
+        sonar_trigger();
+    }
+}
+
+static bool tel_due() {
+    if (!tel_period || (int32_t)(now_ms - tel_next) < 0) return false;
+    tel_next += tel_period;
+    if ((int32_t)(now_ms - tel_next) >= 0) tel_next = now_ms + tel_period;
+    return true;
+}
+
+// Paints the free RAM so the emulator can measure the deepest stack (docs/uno.md).
+extern uint8_t __heap_start;
+__attribute__((naked, used, section(".init3"))) static void paint_stack() {
+    uint8_t *p = &__heap_start;
+    while (p < (uint8_t *)SP - 16) *p++ = 0xAA;
+}
+
+int main() {
+    hal_init();
+    cal_init();
+    ex.init();
+    ex.set_mode(MODE_AT_RESET & UNO_MODE_MASK);
+    hello();
+    last_ticks = hal_ticks();
+    for (;;) {
+        uint32_t t = hal_ticks();
+        uint32_t ticks = t - last_ticks + tick_half;
+        last_ticks = t;
+        tick_half = ticks & 1;
+        int32_t dt = ticks >> 1;
+        us_part += dt % 1000;
+        now_ms += dt / 1000 + us_part / 1000;
+        us_part %= 1000;
+        ex.step(dt);
+        for (int16_t c; (c = uart_read()) >= 0;) {
+            if (binary) bin::feed(c);
+            else feed(c);
+        }
+        sonar_poll();
+        if (tel_due()) telemetry();
+        if (binary) bin::poll(now_ms);
+        hal_wait_for_event();
+    }
+}

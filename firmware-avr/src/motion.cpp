@@ -1,0 +1,293 @@
+#include "motion.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+#include "cal.h"
+#include "hal.h"
+
+Executor ex;
+
+bool Queue::push(uint8_t kind, const int16_t *p, uint8_t n) {
+    if (count >= QUEUE_CAPACITY) return false;
+    Slot &s = slots[(head + count) % QUEUE_CAPACITY];
+    s.kind = kind;
+    for (uint8_t i = 0; i < 5; i++) s.p[i] = i < n ? p[i] : 0;
+    count++;
+    return true;
+}
+
+const Slot &Queue::pop() {
+    const Slot &s = slots[head];
+    head = (head + 1) % QUEUE_CAPACITY;
+    count--;
+    return s;
+}
+
+void Executor::init() {
+    rim_init();
+    for (uint8_t i = 0; i < MOTORS; i++) motor_set(i, 0);
+    model.scale = 1.0f;
+    model.drag_gain = 1.0f;
+}
+
+void Executor::apply() {
+    bool sim = mode & P_MODE_SIMULATION;
+    for (uint8_t i = 0; i < MOTORS; i++) {
+        int16_t p = sim ? 0 : powers[i];
+        if (p != applied[i]) {
+            applied[i] = p;
+            motor_set(i, p);
+        }
+    }
+}
+
+void Executor::set_mode(uint8_t m) {
+    uint8_t old = mode;
+    mode = m;
+    if ((old ^ m) & P_MODE_CLOSED_LOOP) {
+        if (m & P_MODE_CLOSED_LOOP) {
+            start_feedback();
+        } else {
+            feedback = false;
+            if (kind != NONE && kind != K_POWER) start_drag(model.compute(twist[0], twist[1], twist[2], rot, powers));
+        }
+    }
+    apply();
+}
+
+bool Executor::stop() {
+    bool was = kind != NONE;
+    queue.clear();
+    kind = NONE;
+    watchdog = false;
+    feedback = dragging = false;
+    for (uint8_t i = 0; i < MOTORS; i++) powers[i] = 0;
+    apply();
+    return was;
+}
+
+void Executor::reset_move() {
+    for (uint8_t i = 0; i < 4; i++) remembered[i] = 0;
+}
+
+void Executor::vel(int16_t vx, int16_t vy, int16_t w, int16_t t_ms) {
+    queue.clear();
+    if (kind != K_VEL) warned = 0;
+    kind = K_VEL;
+    infinite = false;
+    watchdog = true;
+    watchdog_us = (int32_t)t_ms * 1000;
+    drive(vx * 0.01f, vy * 0.01f, w * (float)(M_PI / 180), vx == 0 && vy == 0);
+}
+
+void Executor::step(int32_t dt_us) {
+    if (kind != NONE && !infinite) remaining -= dt_us;
+    for (uint8_t guard = 16; guard > 0; guard--) {  // motions started in one step at most
+        if (kind == NONE) {
+            if (!queue.count) break;
+            start_next(0);
+        } else if (kind == K_VEL) {
+            if (queue.count) {
+                watchdog = false;
+                start_next(0);
+            } else if (watchdog) {
+                watchdog_us -= dt_us;
+                if (watchdog_us <= 0) finish();
+            }
+            break;
+        } else if (infinite) {
+            if (!queue.count) break;
+            start_next(0);
+        } else if (remaining > 0) {
+            break;
+        } else if (kind == K_DELTA && (reps_inf ? queue.count == 0 : reps > 0)) {
+            repeat(remaining);
+        } else if (queue.count) {
+            start_next(remaining);
+        } else {
+            finish();
+        }
+    }
+    if (kind == NONE) return;
+    if (feedback) {
+        feedback_step(dt_us);
+    } else if (dragging) {
+        control_due -= dt_us;
+        if (control_due <= 0) drag_step();
+    }
+}
+
+void Executor::finish() {
+    stop();
+    on_idle();
+}
+
+void Executor::start_next(int64_t carry) {
+    const Slot &s = queue.pop();
+    kind = s.kind;
+    warned = 0;
+    if (kind == K_MOVE) {
+        for (uint8_t i = 0; i < 4; i++) remembered[i] = s.p[i];
+        move(carry);
+    } else if (kind == K_DELTA) {
+        for (uint8_t i = 0; i < 4; i++) delta[i] = s.p[i];
+        reps_inf = s.p[4] == P_INF;
+        reps = s.p[4] < 1 ? 1 : s.p[4];
+        repeat(carry);
+    } else if (kind == K_ROTATE) {
+        rotate(s.p[0], s.p[1], carry);
+    } else {  // POWER
+        infinite = false;
+        remaining = (int64_t)s.p[0] * 1000 + carry;
+        feedback = dragging = false;
+        for (uint8_t i = 0; i < MOTORS; i++) powers[i] = s.p[i + 1];
+        apply();
+    }
+}
+
+static int16_t clamp(int32_t v, int16_t m) { return v > m ? m : (v < -m ? -m : v); }
+
+void Executor::repeat(int64_t carry) {
+    if (!reps_inf) reps--;
+    int16_t *m = remembered;
+    if (abs(m[0]) != P_INF) m[0] = clamp((int32_t)m[0] + delta[0], L_CLAMP);
+    int32_t v = (int32_t)m[1] + delta[1];
+    if (v != 0 && labs(v) < V_MIN) {
+        v = v > 0 ? V_MIN : -V_MIN;
+    } else if (labs(v) > V_MAX) {
+        v = v > 0 ? V_MAX : -V_MAX;
+        warn_once(SATURATED);
+    }
+    m[1] = v;
+    int32_t c = (int32_t)m[2] + delta[2];
+    m[2] = c >= 0 ? c % 360 : -((-c) % 360);
+    m[3] = clamp((int32_t)m[3] + delta[3], C_CLAMP);
+    if (reps_inf && (m[0] == 0 || m[1] == 0)) {  // zero-length: it would spin without moving
+        reps_inf = false;
+        reps = 0;
+    }
+    move(carry);
+}
+
+// Microseconds for amount / rate, stretched by 1/scale when the powers were saturated.
+static int64_t duration(int16_t amount, int16_t rate, float scale) {
+    int64_t t = (int64_t)amount * 1000000 / rate;
+    if (scale < 1.0f) t = (int64_t)(t / scale);
+    return t;
+}
+
+void Executor::move(int64_t carry) {
+    int16_t L = remembered[0], V = remembered[1], D = remembered[2], C = remembered[3];
+    infinite = abs(L) == P_INF;
+    if (L == 0 || V == 0) {
+        remaining = carry;
+        drive(0, 0, 0, false);
+        return;
+    }
+    float gain = 1.0f;
+    if (!infinite) {
+        gain += cal_coast(abs(V)) * abs(V) / abs(L);
+        if (gain < 0) gain = 0;
+    }
+    float s = (L > 0) == (V > 0) ? abs(V) : -abs(V);
+    float a = D * (float)(M_PI / 180);
+    drive(s * 0.01f * cosf(a), s * 0.01f * sinf(a), s * C * 0.001f, false, gain);
+    if (!infinite) remaining = duration(abs(L), abs(V), model.scale) + carry;
+}
+
+void Executor::rotate(int16_t A, int16_t F, int64_t carry) {
+    infinite = abs(A) == P_INF;
+    if (A == 0) {
+        remaining = carry;
+        drive(0, 0, 0, true);
+        return;
+    }
+    float w = abs(F) * (float)(M_PI / 180);
+    drive(0, 0, (A > 0) == (F > 0) ? w : -w, true);
+    if (!infinite) remaining = duration(abs(A), abs(F), model.scale) + carry;
+}
+
+void Executor::drive(float vx, float vy, float w, bool rotate, float gain) {
+    model.drag_gain = gain;
+    uint8_t flags = model.compute(vx, vy, w, rotate, powers);
+    warn_once(flags);
+    twist[0] = vx;
+    twist[1] = vy;
+    twist[2] = w;
+    rot = rotate;
+    dead = flags & DEADBAND;
+    for (uint8_t i = 0; i < MOTORS; i++) ff[i] = dead ? 0 : model.raw[i];
+    if (mode & P_MODE_CLOSED_LOOP) update_targets();  // only the speed loop needs them
+    if ((mode & P_MODE_CLOSED_LOOP) && !feedback) {
+        start_feedback();
+    } else if (feedback) {
+        for (uint8_t i = 0; i < MOTORS; i++) powers[i] = limit(ff[i] + correction[i]);
+    }
+    start_drag(flags);
+    apply();
+}
+
+void Executor::warn_once(uint8_t flags) {
+    uint8_t fresh = flags & ~warned;
+    warned |= flags;
+    if (fresh & SATURATED) on_warn(P_W_SPEED_REDUCED);
+    if (fresh & DEADBAND) on_warn(P_W_POWER_TOO_LOW);
+}
+
+void Executor::start_drag(uint8_t flags) {
+    dragging = !feedback && !(flags & DEADBAND) && model.drags();
+    if (dragging) drag_step();
+}
+
+void Executor::drag_step() {
+    control_due = (int32_t)CONTROL_PERIOD_MS * 1000;
+    int32_t counts[MOTORS];
+    for (uint8_t i = 0; i < MOTORS; i++) counts[i] = encoder_count(i);
+    warn_once(model.drag(counts, powers) & SATURATED);
+    apply();
+}
+
+// The wheel speeds (rad/s) of the current twist, the speed loop's set points.
+void Executor::update_targets() {
+    if (dead) {
+        for (uint8_t i = 0; i < MOTORS; i++) target[i] = 0;
+    } else {
+        model.wheel_speeds(twist[0], twist[1], twist[2], target);
+    }
+}
+
+void Executor::start_feedback() {
+    update_targets();
+    for (uint8_t i = 0; i < MOTORS; i++) {
+        last_counts[i] = encoder_count(i);
+        integ[i] = correction[i] = 0;
+    }
+    acc_us = 0;
+    feedback = HAS_ENCODERS && (mode & P_MODE_CLOSED_LOOP) && kind != NONE && kind != K_POWER;
+}
+
+int16_t Executor::limit(float p) {
+    if (p >= PWM_MAX) return PWM_MAX;
+    if (p <= -PWM_MAX) return -PWM_MAX;
+    return lroundf(p);
+}
+
+// PI on each wheel's encoder-measured speed every control period, integral frozen while saturated.
+void Executor::feedback_step(int32_t dt_us) {
+    acc_us += dt_us;
+    if (acc_us < (int32_t)CONTROL_PERIOD_MS * 1000) return;
+    float dt = acc_us * 1e-6f;
+    acc_us = 0;
+    for (uint8_t i = 0; i < MOTORS; i++) {
+        int32_t c = encoder_count(i);
+        float speed = (c - last_counts[i]) * (6.2831853f / pgm_read_word(&ENCODER_CPR[i])) / dt;
+        last_counts[i] = c;
+        float err = target[i] - speed;
+        correction[i] = SPEED_KP * err + SPEED_KI * integ[i];
+        float p = ff[i] + correction[i];
+        if (-PWM_MAX < p && p < PWM_MAX) integ[i] += err * dt;
+        powers[i] = limit(p);
+    }
+    apply();
+}

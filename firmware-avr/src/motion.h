@@ -1,0 +1,78 @@
+// The command queue and the motion executor: timeline of MOVE/ROTATE/DELTA/POWER, VEL and its
+// watchdog, STOP, the remembered MOVE, the mode bits, the closed wheel-speed loop (firmware/motion.py).
+#pragma once
+#include <stdint.h>
+
+#include "power.h"
+
+#define NONE 0
+
+struct Slot {
+    uint8_t kind;
+    int16_t p[5];
+};
+
+struct Queue {
+    Slot slots[QUEUE_CAPACITY];
+    uint8_t head, count;
+    bool push(uint8_t kind, const int16_t *p, uint8_t n);
+    const Slot &pop();
+    void clear() { head = count = 0; }
+};
+
+struct Executor {
+    Queue queue;
+    PowerModel model;
+    uint8_t kind;
+    bool infinite;
+    int64_t remaining;  // us of the running motion (ROTATE,30000,1 lasts 30000 s)
+    int16_t powers[MOTORS];
+    int16_t applied[MOTORS];
+    uint8_t mode;
+    int16_t remembered[4];
+    int16_t delta[4];
+    uint16_t reps;
+    bool reps_inf;
+    uint8_t warned;
+    bool watchdog;
+    int32_t watchdog_us;
+    float twist[3];
+    bool rot;
+    bool dead;  // the last twist's powers fell in the dead band
+    float ff[MOTORS], target[MOTORS];
+    bool feedback, dragging;
+    int32_t control_due;
+    // closed loop (speedctl.py)
+    float integ[MOTORS], correction[MOTORS];
+    int32_t last_counts[MOTORS];
+    int32_t acc_us;
+
+    void init();
+    bool moving() const { return kind != NONE; }
+    void set_mode(uint8_t m);
+    void apply();
+    bool stop();
+    void reset_move();
+    void vel(int16_t vx, int16_t vy, int16_t w, int16_t t_ms);
+    void step(int32_t dt_us);
+
+  private:
+    void finish();
+    void start_next(int64_t carry);
+    void repeat(int64_t carry);
+    void move(int64_t carry);
+    void rotate(int16_t a, int16_t f, int64_t carry);
+    void drive(float vx, float vy, float w, bool rotate, float gain = 1.0f);
+    void warn_once(uint8_t flags);
+    void start_drag(uint8_t flags);
+    void drag_step();
+    void start_feedback();
+    void update_targets();
+    void feedback_step(int32_t dt_us);
+    int16_t limit(float p);
+};
+
+extern Executor ex;
+// provided by the controller
+void on_warn(uint8_t code);
+void on_idle();

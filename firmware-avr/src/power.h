@@ -1,0 +1,23 @@
+// Motor powers for a body twist: seed 000's formulas (1)-(3) through the kinematics (firmware/power.py).
+#pragma once
+#include <stdint.h>
+
+#define SATURATED 1
+#define DEADBAND 2
+
+struct PowerModel {
+    float raw[MOTORS];    // powers before rounding, after saturation
+    float base[MOTORS];   // powers of compute(), before the roller drag
+    float scale;          // saturation factor of the last computation (1: none)
+    float drag_gain;      // the MOVE's coast factor of the roller drag
+    float ux, uy;         // direction of travel of the last twist (0, 0: none)
+
+    uint8_t compute(float vx, float vy, float w, bool rotate, int16_t *out);
+    void wheel_speeds(float vx, float vy, float w, float *out);  // rad/s
+    bool drags();
+    uint8_t drag(const int32_t *counts, int16_t *out);
+    uint8_t finish(float peak, int16_t *out);
+};
+
+void rim_init();  // at start-up
+float rim(uint8_t i, uint8_t j);

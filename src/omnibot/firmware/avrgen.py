@@ -1,0 +1,365 @@
+"""The Arduino UNO firmware's header, generated from the protocol and the robot description (CPython).
+
+One source of truth: ``firmware-avr/generated/<robot>.h`` holds the protocol codes and texts
+(:mod:`omnibot.protocol.codes`), the robot's limits, the rim-speed matrix in fixed point, the
+default calibration tables (all from :func:`omnibot.firmware.config.build_config`, as the
+MicroPython firmware gets them) and the UNO pin map of the robot's wiring (:data:`UNO_WIRING`);
+``<robot>.board`` gives the same wiring to the emulator harness.
+``tests/firmware/test_avrgen.py`` fails when a checked-in header is stale.
+
+::
+
+    python -m omnibot.firmware.avrgen           # rewrite every generated header
+    python -m omnibot.firmware.avrgen omni4     # print one robot's header
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+from typing import Any
+
+from omnibot.errors import ConfigError
+from omnibot.firmware.config import build_config
+from omnibot.protocol import codes
+from omnibot.robot.description import load_robot
+
+ROOT = Path(__file__).resolve().parents[3]
+OUT_DIR = ROOT / "firmware-avr" / "generated"
+ROBOTS = ("omni4", "mecanum4")  # seed 000's robot and seed 003's
+INT16_MAX = 32767
+EEPROM_BYTES = 1024  # ATmega328P
+
+# Arduino UNO pins (D0..D13, A0..A5) -> (port letter, bit).
+_PORTS = {**{f"D{i}": ("D", i) for i in range(8)}, **{f"D{i}": ("B", i - 8) for i in range(8, 14)}}
+_PORTS.update({f"A{i}": ("C", i) for i in range(6)})
+
+# The wiring of an UNO with two L298 boards (EN = PWM, IN1/IN2 = direction) and, on seed 000's robot,
+# an HC-SR04 sonar. Motors in the robot description's wheel order. The PWM pins are the four of
+# timers 0 and 2 (timer 1 is the clock and times the sonar echo by input capture on D8); encoders
+# are single-channel (their direction is that of the motor's power), read by pin-change interrupts;
+# the battery divider is on ADC7 (the SMD UNO and the Nano have it; a DIP UNO reads 0 there).
+UNO_WIRING: dict[str, dict[str, Any]] = {
+    # seed 000 names no pins ("connected to Arduino GPIO pins"): this is ours
+    "omni4": {
+        "pwm": ["D3", "D5", "D6", "D11"],  # OC2B, OC0B, OC0A, OC2A
+        "in1": ["D2", "D7", "A1", "D12"],
+        "in2": ["D4", "A0", "A2", "D13"],
+        "sonar_trig": "D9",
+        "sonar_echo": "D8",  # ICP1
+        "encoders": ["D10", "A3", "A4", "A5"],
+        "battery_adc": 7,
+    },
+    # seed 003 (section 4.3), wheels left_front, right_front, right_back, left_back: its enable pins
+    # 5, 6, 11 and its direction pins as they are, except that left_back's enable moves from D10
+    # (timer 1, our clock) to D3 and motor A's IN1 from D3 to D10
+    "mecanum4": {
+        "pwm": ["D5", "D6", "D11", "D3"],
+        "in1": ["D10", "D8", "D2", "D9"],
+        "in2": ["D4", "D7", "D13", "D12"],
+        "sonar_trig": None,
+        "sonar_echo": None,
+        "encoders": ["A0", "A1", "A2", "A3"],
+        "battery_adc": 7,
+    },
+}
+# Timer/compare register of each PWM pin.
+_PWM_REGS = {"D3": ("OCR2B", "TCCR2A", "COM2B1"), "D5": ("OCR0B", "TCCR0A", "COM0B1")}
+_PWM_REGS.update({"D6": ("OCR0A", "TCCR0A", "COM0A1"), "D11": ("OCR2A", "TCCR2A", "COM2A1")})
+# Pin-change interrupt group of each port (PCINT0..7 = PB, 8..14 = PC, 16..23 = PD).
+_PCINT = {"B": (0, 0), "C": (1, 8), "D": (2, 16)}
+
+
+def _c_string(text: str) -> str:
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def _pin(name: str) -> tuple[str, int]:
+    if name not in _PORTS:
+        raise ConfigError(f"{name!r} is not an Arduino UNO pin (D0..D13, A0..A5)", key="pins")
+    return _PORTS[name]
+
+
+def _table_rows(t: list[list[float]], xscale: float, yscale: float) -> tuple[int, list[str]]:
+    xs, ys = t
+    if len(xs) > codes.CAL_KNOTS_MAX:
+        raise ConfigError(f"{len(xs)} knots, the UNO holds {codes.CAL_KNOTS_MAX}", key="calibration")
+    rows = [f"{{{round(x * xscale)}, {round(y * yscale)}}}" for x, y in zip(xs, ys, strict=True)]
+    rows += ["{0, 0}"] * (codes.CAL_KNOTS_MAX - len(xs))
+    return len(xs), rows
+
+
+def _fixed_shift(rows: list[list[float]]) -> int:
+    """The largest shift that keeps every value of ``rows`` times 2**shift inside int16."""
+    peak = max(abs(v) for row in rows for v in row) or 1.0
+    return max(0, min(14, math.floor(math.log2(INT16_MAX / peak))))
+
+
+def header_source(robot_name: str) -> str:
+    """The text of ``firmware-avr/generated/<robot>.h``."""
+    robot = load_robot(robot_name)
+    cfg = build_config(robot)
+    n = int(cfg["motors"])
+    if n > codes.MOTORS_MAX:
+        raise ConfigError(f"{n} motors, the UNO firmware drives {codes.MOTORS_MAX}", key="wheels")
+    sonars = len(cfg["sonar_period_min_ms"])
+    if sonars > 1:
+        raise ConfigError(f"{sonars} sonars, the UNO wiring has one", key="sonars")
+    if len(cfg["kl_courses"]) > codes.CAL_KL_CURVES:
+        raise ConfigError(
+            f"{len(cfg['kl_courses'])} K_l curves, at most {codes.CAL_KL_CURVES}", key="calibration"
+        )
+    out: list[str] = []
+    w = out.append
+    w(f"/* Generated by `python -m omnibot.firmware.avrgen` for robot {robot.name!r}: do not edit. */")
+    w(
+        f"/* Sources: omnibot/protocol/codes.py, the robot description {robot_name!r}, omnibot/firmware/avrgen.py. */"
+    )
+    w("#pragma once")
+    w("#include <stdint.h>")
+    w("#include <avr/pgmspace.h>")
+    w("")
+    w("/* ---- protocol (codes.py) ---- */")
+    for key in ("PROTOCOL_VERSION", "INF", "PARAMS_MAX", "LINE_MAX", "EVENT_LINE_MAX", "POWER_MAX"):
+        w(f"#define P_{key} {getattr(codes, key)}")
+    for key in sorted(
+        k for k in vars(codes) if k.startswith(("W_", "E_", "STATE_", "MODE_", "TEL_", "CAL_"))
+    ):
+        w(f"#define P_{key} {getattr(codes, key)}")
+    for name, kid in codes.COMMANDS.items():
+        w(f"#define K_{name} {kid}")
+    w(f"#define K_COUNT {len(codes.COMMANDS)}")
+    w("/* binary message types and framing */")
+    for key in (
+        "ACK",
+        "OK",
+        "ERROR",
+        "HELLO_REPLY",
+        "STATUS_REPLY",
+        "RANGE",
+        "WARN",
+        "ERROR_EVENT",
+        "IDLE",
+        "TEL",
+    ):
+        w(f"#define T_{key} {getattr(codes, key)}")
+    for key in ("FRAME_SYNC", "FRAME_MAX", "SEQ_MAX", "WINDOW", "RETRY_TIMEOUT_MS", "RETRIES"):
+        w(f"#define P_{key} {getattr(codes, key)}")
+    w("/* keyword, id, fewest and most parameters (POWER: T and one power per motor) */")
+    w("struct Keyword { char name[7]; uint8_t id, lo, hi; };")
+    w("static const Keyword KEYWORDS[K_COUNT] PROGMEM = {")
+    for name, kid in codes.COMMANDS.items():
+        lo, hi = codes.PARAM_COUNTS[kid]
+        if kid == codes.POWER:
+            lo = hi = n + 1
+        w(f"    {{{_c_string(name)}, {kid}, {lo}, {hi}}},")
+    w("};")
+    for code, text in sorted(codes.TEXTS.items()):
+        w(f"static const char TEXT_{code}[] PROGMEM = {_c_string(text)};")
+    w("struct CodeText { uint8_t code; const char *text; };")
+    w(f"static const CodeText CODE_TEXTS[{len(codes.TEXTS)}] PROGMEM = {{")
+    w("    " + ", ".join(f"{{{c}, TEXT_{c}}}" for c in sorted(codes.TEXTS)))
+    w("};")
+    w(f"#define CODE_TEXT_COUNT {len(codes.TEXTS)}")
+    w("")
+    w("/* ---- robot ---- */")
+    w(f"#define ROBOT_NAME {_c_string(robot.name)}")
+    w(f"#define MOTORS {n}")
+    w(f"#define SONARS {sonars}")
+    w(f"#define SONAR_PERIOD_MIN {max(60, *cfg['sonar_period_min_ms']) if sonars else 60}")
+    w(f"#define QUEUE_CAPACITY {int(cfg['queue_capacity'])}")
+    w(f"#define LINE_MAX {int(cfg['line_max'])}")
+    w(f"#define BAUD {int(cfg['baud'])}UL")
+    w(f"#define PWM_MAX {int(cfg['pwm_max'])}")
+    w(f"#define POWER_MIN {int(cfg['power_min'])}")
+    lmax, vmin, vmax = float(cfg["distance_max_cm"]), float(cfg["speed_min_cms"]), float(cfg["speed_max_cms"])
+    cmax, fmax = float(cfg["curvature_max"]), float(cfg["rate_max_dps"])
+    w("/* limits: an integer x is out when x >= *_EXCL (exclusive bounds) or outside [V_MIN, V_MAX] */")
+    w(f"#define L_MAX_EXCL {math.ceil(lmax)}")
+    w(f"#define L2_MAX_EXCL {math.ceil(2 * lmax)}")
+    w(f"#define V_MIN {math.ceil(vmin)}")
+    w(f"#define V_MAX {math.floor(vmax)}")
+    w(f"#define V2_MAX {math.floor(2 * vmax)}")
+    w(f"#define V_MAX_SQ {math.floor(vmax * vmax)}L")
+    w(f"#define C_MAX_EXCL {math.ceil(cmax)}")
+    w(f"#define C2_MAX_EXCL {math.ceil(2 * cmax)}")
+    w(f"#define F_MAX_EXCL {math.ceil(fmax)}")
+    w("/* DELTA keeps its results inside the limits (motion.py _clamp): |v| <= ceil(lim) - 1 */")
+    w(f"#define L_CLAMP {math.ceil(lmax) - 1}")
+    w(f"#define C_CLAMP {math.ceil(cmax) - 1}")
+    cpr = [int(c) for c in cfg["encoder_cpr"]]
+    w(f"#define HAS_ENCODERS {1 if all(cpr) else 0}")
+    w("static const uint16_t ENCODER_CPR[MOTORS] PROGMEM = {" + ", ".join(str(c) for c in cpr) + "};")
+    w(f"#define CONTROL_PERIOD_MS {int(cfg['control_period_ms'])}")
+    w(f"#define SPEED_KP {float(cfg['speed_kp'])!r}f")
+    w(f"#define SPEED_KI {float(cfg['speed_ki'])!r}f")
+    w(f"#define MODE_AT_RESET {int(cfg['mode'])}")
+    w("")
+    w("/* ---- kinematics: rim speed (m/s) per unit twist, fixed point: RIM_Q[i][j] / 2^RIM_SHIFT ---- */")
+    shift = _fixed_shift(cfg["rim"])
+    w(f"#define RIM_SHIFT {shift}")
+    w("static const int16_t RIM_Q[MOTORS][3] PROGMEM = {")
+    for row in cfg["rim"]:
+        w("    {" + ", ".join(str(round(v * (1 << shift))) for v in row) + "},")
+    w("};")
+    axes = [float(a) for a in cfg["idle_axes"]]
+    w(f"#define IDLE_AXES {len(axes)}")
+    w("/* directions of travel (0.01 degree) along which some wheel stands still: K_l's course folding */")
+    w(
+        "static const int16_t IDLE_AXES_CDEG[IDLE_AXES] PROGMEM = {"
+        + ", ".join(str(round(a * 100)) for a in axes)
+        + "};"
+    )
+    w("")
+    w("/* ---- default calibration, in CAL units (docs/protocol.md): knots {X, Y} ---- */")
+    w(f"#define CAL_KNOTS {codes.CAL_KNOTS_MAX}")
+    w(f"#define CAL_CURVES {codes.CAL_KL_CURVES}")
+    w(f"#define DEFAULT_K {round(float(cfg['k']) * 10)}")
+    w("struct Knot { int16_t x, y; };")
+    for name, table in (("KT", cfg["kt"]), ("KR", cfg["kr"]), ("COAST", cfg["roller_coast"])):
+        count, rows = _table_rows(table, 1, codes.CAL_SCALE)
+        w(f"#define DEFAULT_{name}_N {count}")
+        w(f"static const Knot DEFAULT_{name}[CAL_KNOTS] PROGMEM = {{" + ", ".join(rows) + "};")
+    w(f"#define DEFAULT_KL_CURVES {len(cfg['kl_courses'])}")
+    w(
+        "static const int16_t DEFAULT_KL_COURSE[CAL_CURVES] PROGMEM = {"
+        + ", ".join(
+            [str(round(c)) for c in cfg["kl_courses"]]
+            + ["0"] * (codes.CAL_KL_CURVES - len(cfg["kl_courses"]))
+        )
+        + "};"
+    )
+    counts = []
+    w("static const Knot DEFAULT_KL[CAL_CURVES][CAL_KNOTS] PROGMEM = {")
+    for k in range(codes.CAL_KL_CURVES):
+        table = cfg["kl_tables"][k] if k < len(cfg["kl_tables"]) else [[0.0], [1.0]]
+        count, rows = _table_rows(table, 1, codes.CAL_SCALE)
+        counts.append(count if k < len(cfg["kl_tables"]) else 0)
+        w("    {" + ", ".join(rows) + "},")
+    w("};")
+    w("static const uint8_t DEFAULT_KL_N[CAL_CURVES] PROGMEM = {" + ", ".join(str(c) for c in counts) + "};")
+    gcounts = []
+    w("static const Knot DEFAULT_GAIN[MOTORS][CAL_KNOTS] PROGMEM = {")
+    for table in cfg["motor_gain"]:
+        count, rows = _table_rows(table, 1, codes.CAL_SCALE)
+        gcounts.append(count)
+        w("    {" + ", ".join(rows) + "},")
+    w("};")
+    w("static const uint8_t DEFAULT_GAIN_N[MOTORS] PROGMEM = {" + ", ".join(str(c) for c in gcounts) + "};")
+    for name, key in (("OFFSET", "motor_offset"), ("ROLLER_COS", "roller_cos"), ("ROLLER_SIN", "roller_sin")):
+        w(
+            f"static const int16_t DEFAULT_{name}[MOTORS] PROGMEM = {{"
+            + ", ".join(str(round(float(v) * 10)) for v in cfg[key])
+            + "};"
+        )
+    radii = ", ".join(f"{float(r)!r}f" for r in cfg["radius"])
+    w(f"static const float WHEEL_RADIUS_M[MOTORS] PROGMEM = {{{radii}}};")
+    w("/* each wheel's rollers' rolling direction and encoder counts per roller pitch (roller drag) */")
+    w(
+        "static const float ROLLER_DIR[MOTORS][2] PROGMEM = {"
+        + ", ".join("{" + ", ".join(f"{float(v)!r}f" for v in row) + "}" for row in cfg["roller_dir"])
+        + "};"
+    )
+    w(
+        "static const float ROLLER_PITCH[MOTORS] PROGMEM = {"
+        + ", ".join(f"{float(p)!r}f" for p in cfg["roller_pitch"])
+        + "};"
+    )
+    w("")
+    pins = UNO_WIRING.get(robot_name)
+    if pins is None:
+        raise ConfigError(f"no UNO wiring for {robot_name!r} (avrgen.UNO_WIRING has {', '.join(UNO_WIRING)})")
+    if sonars and pins["sonar_trig"] is None:
+        raise ConfigError(f"{robot_name} has a sonar but its UNO wiring none", key="sonars")
+    w("/* ---- Arduino UNO pin map (docs/uno.md) ---- */")
+    for i in range(n):
+        pwm = pins["pwm"][i]
+        ocr, tccr, com = _PWM_REGS[pwm]
+        port, bit = _pin(pwm)
+        w(f"#define M{i}_PWM_PORT PORT{port}\n#define M{i}_PWM_DDR DDR{port}\n#define M{i}_PWM_BIT {bit}")
+        w(f"#define M{i}_OCR {ocr}\n#define M{i}_TCCR {tccr}\n#define M{i}_COM {com}")
+        for side in ("in1", "in2"):
+            port, bit = _pin(pins[side][i])
+            s = side.upper()
+            w(f"#define M{i}_{s}_PORT PORT{port}\n#define M{i}_{s}_DDR DDR{port}\n#define M{i}_{s}_BIT {bit}")
+        port, bit = _pin(pins["encoders"][i])
+        group, base = _PCINT[port]
+        w(f"#define M{i}_ENC_PIN PIN{port}\n#define M{i}_ENC_BIT {bit}\n#define M{i}_ENC_PCIE {group}")
+        w(f"#define M{i}_ENC_PCMSK PCMSK{group}\n#define M{i}_ENC_PCINT {base + bit}")
+    if sonars:
+        port, bit = _pin(pins["sonar_trig"])
+        w(
+            f"#define SONAR_TRIG_PORT PORT{port}\n#define SONAR_TRIG_DDR DDR{port}\n#define SONAR_TRIG_BIT {bit}"
+        )
+        if _pin(pins["sonar_echo"]) != ("B", 0):
+            raise ConfigError("the sonar echo must be on D8 (ICP1, timer 1's input capture)", key="pins")
+    w(f"#define BATTERY_ADC {pins['battery_adc']}")
+    battery = robot.battery.voltage
+    # full scale (1023 counts at 5 V) is twice the nominal pack voltage: a 1:2 divider per 5 V of pack
+    w(f"#define BATTERY_MV_FULL_SCALE {round(2 * battery * 1000)}UL")
+    return "\n".join(out) + "\n"
+
+
+# ATmega328P data-space addresses of the registers the emulator harness reads.
+_ADDR = {"PORTB": 0x25, "PORTC": 0x28, "PORTD": 0x2B, "TCCR0A": 0x44, "OCR0A": 0x47, "OCR0B": 0x48}
+_ADDR.update({"TCCR2A": 0xB0, "OCR2A": 0xB3, "OCR2B": 0xB4})
+_COM_BITS = {"COM0A1": 7, "COM0B1": 5, "COM2A1": 7, "COM2B1": 5}
+
+
+def board_source(robot_name: str) -> str:
+    """The text of ``firmware-avr/generated/<robot>.board``: the robot's UNO wiring for the emulator
+    harness (firmware-avr/unosim ``--board``), as data-space register addresses and port bits."""
+    pins = UNO_WIRING[robot_name]
+    out = [
+        f"# UNO wiring of {robot_name} for firmware-avr/unosim, generated by python -m omnibot.firmware.avrgen"
+    ]
+    out.append("# motor OCR TCCR COM-bit IN1-PORT IN1-bit IN2-PORT IN2-bit (addresses in hex)")
+    for i, pwm in enumerate(pins["pwm"]):
+        ocr, tccr, com = _PWM_REGS[pwm]
+        p1, b1 = _pin(pins["in1"][i])
+        p2, b2 = _pin(pins["in2"][i])
+        regs = (_ADDR[ocr], _ADDR[tccr], _COM_BITS[com], _ADDR[f"PORT{p1}"], b1, _ADDR[f"PORT{p2}"], b2)
+        out.append("motor {:x} {:x} {} {:x} {} {:x} {}".format(*regs))
+    for enc in pins["encoders"]:
+        out.append("encoder {} {}".format(*_pin(enc)))
+    if pins["sonar_trig"] is not None:
+        out.append("trigger {} {}".format(*_pin(pins["sonar_trig"])))
+        out.append("echo {} {}".format(*_pin(pins["sonar_echo"])))
+    out.append(f"battery {pins['battery_adc']}")
+    return "\n".join(out) + "\n"
+
+
+def header_path(robot_name: str) -> Path:
+    return OUT_DIR / f"{robot_name}.h"
+
+
+def board_path(robot_name: str) -> Path:
+    return OUT_DIR / f"{robot_name}.board"
+
+
+def generated_files() -> dict[Path, str]:
+    """Every generated file and its text: one header per robot and the board's wiring."""
+    files = {}
+    for name in ROBOTS:
+        files[header_path(name)] = header_source(name)
+        files[board_path(name)] = board_source(name)
+    return files
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m omnibot.firmware.avrgen", description=__doc__.split("\n")[0])
+    ap.add_argument("robot", nargs="?", help="print this robot's header instead of writing every file")
+    args = ap.parse_args(argv)
+    if args.robot:
+        print(header_source(args.robot), end="")
+        return 0
+    for path, text in generated_files().items():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text, encoding="utf-8")
+        print(path)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

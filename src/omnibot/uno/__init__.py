@@ -1,0 +1,1 @@
+"""The Arduino UNO controller: building ``firmware-avr/`` and running it in simavr (``firmware-avr/unosim``)."""

@@ -1,0 +1,192 @@
+"""The emulated Arduino UNO: omnibot's AVR firmware in simavr, its UART on a pty at 115200 baud.
+
+:func:`build` compiles the firmware of a robot (``make -C firmware-avr ROBOT=...``) and the harness
+(``make -C firmware-avr/unosim``); :class:`UnoEmulator` starts the harness and gives the pty's path, which
+any serial client opens (``serial://PATH``). Both need a source checkout and Debian's AVR toolchain
+and simavr (``make avr-tools``); :func:`missing_tools` says what is absent.
+
+::
+
+    python -m omnibot.uno.emulator omni4 --range 100    # prints the pty path, runs until Ctrl-C
+"""
+
+from __future__ import annotations
+
+import argparse
+import select
+import shutil
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+from omnibot.errors import OmnibotError
+
+ROOT = Path(__file__).resolve().parents[3]
+FIRMWARE_DIR = ROOT / "firmware-avr"
+HARNESS_DIR = FIRMWARE_DIR / "unosim"
+HARNESS = HARNESS_DIR / "unosim"
+SIMAVR_HEADER = Path("/usr/include/simavr/sim_avr.h")
+STARTUP_TIMEOUT = 10.0
+
+
+class UnoError(OmnibotError):
+    """The UNO firmware or its emulator could not be built or started."""
+
+
+def missing_tools() -> str | None:
+    """Why the emulated UNO cannot be built here, or None when everything is installed."""
+    if not (FIRMWARE_DIR / "Makefile").exists() or not (HARNESS_DIR / "unosim.c").exists():
+        return f"the UNO firmware sources are not in {ROOT} (a source checkout is needed)"
+    absent = [tool for tool in ("make", "avr-g++", "avr-objcopy", "cc") if shutil.which(tool) is None]
+    if not SIMAVR_HEADER.exists():
+        absent.append("libsimavr-dev")
+    if absent:
+        return f"missing {', '.join(absent)}: `make avr-tools` installs Debian's AVR toolchain and simavr"
+    return None
+
+
+def _make(*args: str) -> None:
+    proc = subprocess.run(
+        ["make", "--no-print-directory", "-s", *args], check=False, capture_output=True, text=True
+    )
+    if proc.returncode != 0:
+        tail = (proc.stdout + proc.stderr).strip().splitlines()[-5:]
+        raise UnoError(f"make {' '.join(args)} failed: " + " | ".join(tail))
+
+
+def build(robot: str) -> Path:
+    """Build the robot's firmware and the harness (incrementally); returns the firmware's ELF."""
+    reason = missing_tools()
+    if reason:
+        raise UnoError(reason)
+    if not (FIRMWARE_DIR / "generated" / f"{robot}.h").exists():
+        known = ", ".join(sorted(p.stem for p in (FIRMWARE_DIR / "generated").glob("*.h")))
+        raise UnoError(
+            f"no UNO firmware for robot {robot!r}: it is generated for {known} (omnibot.firmware.avrgen)"
+        )
+    _make("-C", str(FIRMWARE_DIR), f"ROBOT={robot}")
+    _make("-C", str(HARNESS_DIR))
+    return FIRMWARE_DIR / "build" / robot / "omnibot.elf"
+
+
+class UnoEmulator:
+    """One running emulated UNO. ``range_cm``: the sonar's fixed reading (None: no echo);
+    ``encoder_cps``: encoder counts/s at full PWM duty (None: the wheels stand still); ``report``:
+    the harness writes ``pwm T_US D1 .. Dn`` on its stdout when a motor's duty changes (read them
+    with :meth:`duties`); ``lockstep``: also ``t T_US`` every emulated millisecond, and the emulator
+    waits for ``sync T_US`` (hardware in the loop, :mod:`omnibot.uno.hil`)."""
+
+    def __init__(
+        self,
+        robot: str,
+        *,
+        range_cm: int | None = None,
+        encoder_cps: float | None = None,
+        report: bool = False,
+        lockstep: bool = False,
+    ) -> None:
+        self.robot = robot
+        elf = build(robot)
+        board = FIRMWARE_DIR / "generated" / f"{robot}.board"
+        argv = [str(HARNESS), "--board", str(board), str(elf)]
+        if range_cm is not None:
+            argv += ["--range", str(range_cm)]
+        if encoder_cps is not None:
+            argv += ["--encoders", str(encoder_cps)]
+        if report:
+            argv.append("--report")
+        if lockstep:
+            argv.append("--lockstep")
+        # unbuffered: readline must not read ahead of what select() reports
+        self.proc = subprocess.Popen(
+            argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, bufsize=0
+        )
+        assert self.proc.stdout is not None
+        ready, _, _ = select.select([self.proc.stdout], [], [], STARTUP_TIMEOUT)
+        line = self.proc.stdout.readline().decode().strip() if ready else ""
+        if not line.startswith("/"):
+            _, err = self._stop()
+            raise UnoError(f"unosim did not print a pty path: {line!r} {err.strip()}")
+        self.path = line
+        self.stack_bytes: int | None = None
+
+    def command(self, line: str) -> None:
+        """Send the harness a stdin command (``range CM``, ``wheels C1 C2 C3 C4``, ``battery MV``)."""
+        assert self.proc.stdin is not None
+        self.proc.stdin.write(line.encode() + b"\n")
+        self.proc.stdin.flush()
+
+    def stats(self, timeout: float = 5.0) -> tuple[int, int, int, int]:
+        """CPU cycles since the last call: (longest main-loop pass, awake, elapsed, passes)."""
+        self.command("stats")
+        assert self.proc.stdout is not None
+        ready, _, _ = select.select([self.proc.stdout], [], [], timeout)
+        line = self.proc.stdout.readline().decode().split() if ready else []
+        if len(line) != 5 or line[0] != "stats":
+            raise UnoError(f"unosim did not answer stats: {line}")
+        longest, awake, elapsed, passes = (int(v) for v in line[1:])
+        return longest, awake, elapsed, passes
+
+    def duties(self, timeout: float = 5.0) -> tuple[int, list[int]]:
+        """The next duty report: (emulated time in us, signed duty of each motor as its pins show)."""
+        assert self.proc.stdout is not None
+        ready, _, _ = select.select([self.proc.stdout], [], [], timeout)
+        fields = self.proc.stdout.readline().decode().split() if ready else []
+        if len(fields) < 2 or fields[0] != "pwm":
+            raise UnoError(f"unosim sent no duty report: {fields}")
+        return int(fields[1]), [int(v) for v in fields[2:]]
+
+    def set_range(self, cm: int | None) -> None:
+        self.command(f"range {-1 if cm is None else cm}")
+
+    def _stop(self) -> tuple[int, str]:
+        if self.proc.poll() is None:
+            self.proc.terminate()
+        try:
+            _, err = self.proc.communicate(timeout=5)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            _, err = self.proc.communicate()
+        return self.proc.returncode, err.decode(errors="replace")
+
+    def close(self) -> None:
+        """Stop the emulator; ``stack_bytes`` is then the deepest stack the firmware used."""
+        if self.proc.returncode is not None and self.stack_bytes is not None:
+            return
+        code, err = self._stop()
+        for line in err.splitlines():
+            if line.startswith("stack "):
+                self.stack_bytes = int(line.split()[1])
+        if code not in (0, -15):
+            raise UnoError(f"unosim exited with {code}: {err.strip()}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m omnibot.uno.emulator", description=__doc__.split("\n")[0])
+    ap.add_argument("robot", nargs="?", default="omni4", help="omni4 (seed 000) or mecanum4 (seed 003)")
+    ap.add_argument(
+        "--range", type=int, default=None, help="the sonar's fixed reading, cm (default: no echo)"
+    )
+    ap.add_argument("--encoders", type=float, default=None, help="encoder counts/s at full duty")
+    args = ap.parse_args(argv)
+    try:
+        emu = UnoEmulator(args.robot, range_cm=args.range, encoder_cps=args.encoders)
+    except UnoError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    signal.signal(signal.SIGTERM, lambda signum, frame: emu.proc.terminate())
+    print(emu.path, flush=True)
+    try:
+        emu.proc.wait()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        emu.close()
+    if emu.stack_bytes is not None:
+        print(f"deepest stack: {emu.stack_bytes} bytes", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,176 @@
+"""Hardware in the loop, simulated: the emulated UNO's PWM drives omnibot's physics, the physics
+drives the UNO's encoder edges, sonar echo and battery voltage back.
+
+::
+
+    omnibot demo --port uno://omni4                 # seed 000's examples on the emulated UNO
+    python -m omnibot.uno.hil omni4 --world room    # or: print the UNO's pty path, run until Ctrl-C,
+    omnibot demo --port serial://THAT_PATH          #     and drive it as any serial board
+
+Importing this module registers the ``uno`` URL scheme, ``uno://ROBOT?world=room&seed=1``: the
+emulated UNO with the physics running in a thread, opened as a serial link whose ``device.sim`` is
+the simulator (so the demo takes its ground truth from it, as for ``sim://``).
+
+The physics (:class:`~omnibot.sim.simulator.Simulator`, 1 kHz) follows the emulated UNO's time in
+lockstep (``unosim --lockstep``): the harness reports each duty change with its time (the signed
+PWM each L298 channel's pins show) and every 2 emulated milliseconds; the loop steps the physics
+to that time, applies the duties at their time, and answers with the motor encoders' counts (the
+harness makes the edges), the sonar's range, the battery voltage on ADC7 and ``sync``, without
+which the emulator does not run more than 5 ms ahead. A busy host slows both alike instead of
+letting them drift apart. The UNO
+wiring has no gyro and no tracking wheels, so its TEL sends 0 for them and the host's odometry
+runs on the wheel encoders alone.
+"""
+
+from __future__ import annotations
+
+import argparse
+import select
+import signal
+import sys
+import threading
+from types import FrameType
+
+from omnibot.errors import ConfigError
+from omnibot.robot.description import load_robot
+from omnibot.sim.simulator import Simulator
+from omnibot.transport.serial_link import SerialLink
+from omnibot.transport.url import LinkUrl, register_scheme
+from omnibot.uno.emulator import UnoEmulator, UnoError
+
+SONAR_PERIOD = 0.002  # s between sonar range updates (the harness echoes the latest one)
+BATTERY_PERIOD = 0.1  # s between battery updates
+
+
+class UnoHil:
+    """The emulated UNO of ``robot`` with omnibot's physics of the same robot in ``world``."""
+
+    def __init__(self, robot: str, *, world: str | None = "room", seed: int = 1) -> None:
+        self.robot = load_robot(robot)
+        self.sim = Simulator(self.robot, world=world, seed=seed)
+        self.emu = UnoEmulator(robot, lockstep=True)
+        self.path = self.emu.path
+        encoder_index = {e.wheel: k for k, e in enumerate(self.robot.encoders.motors)}
+        self._encoder_of_wheel = [encoder_index.get(w.name) for w in self.robot.wheels]
+        self._stop = threading.Event()
+
+    def stop(self) -> None:
+        self._stop.set()
+
+    def _step_to(self, t_us: int) -> None:
+        steps = int((t_us * 1e-6 - self.sim.time) / self.sim.dt + 1e-9)
+        if steps > 0:
+            self.sim.step(steps)
+
+    def run(self) -> None:
+        """Follow the harness's time until :meth:`stop` (or the harness ends): apply each duty report
+        at its time, and at each time report step the physics there and answer."""
+        sim = self.sim
+        out = self.emu.proc.stdout
+        assert out is not None
+        next_sonar = next_battery = 0.0
+        nominal = self.robot.battery.voltage
+        while not self._stop.is_set() and self.emu.proc.poll() is None:
+            try:
+                if not select.select([out], [], [], 0.1)[0]:
+                    continue
+                fields = out.readline().decode().split()
+            except (ValueError, OSError):  # closed under us: the emulator was stopped
+                return
+            if not fields:
+                return  # the harness ended
+            t_us = int(fields[1])
+            self._step_to(t_us)
+            if fields[0] == "pwm":
+                sim.set_pwm([int(v) for v in fields[2:]])
+                continue
+            counts = sim.encoder_counts()
+            answer = [
+                "counts " + " ".join(str(0 if k is None else counts[k]) for k in self._encoder_of_wheel)
+            ]
+            if sim.sonars and sim.time >= next_sonar:
+                # measured now, not rate-limited: the firmware's own ping period paces the HC-SR04
+                pose = sim.pose
+                reading = sim.sonars[0].measure((pose.x, pose.y, pose.theta), sim.world)
+                answer.append(f"range {-1 if reading is None else round(reading * 100.0)}")
+                next_sonar = sim.time + SONAR_PERIOD
+            if sim.time >= next_battery:
+                # ADC7 sees the pack through the divider: full scale (5 V) is twice the nominal voltage
+                answer.append(f"battery {round(sim.battery_voltage / nominal * 2500)}")
+                next_battery = sim.time + BATTERY_PERIOD
+            answer.append(f"sync {t_us}")
+            self.emu.command("\n".join(answer))  # one write
+
+    def close(self) -> None:
+        self.stop()
+        self.emu.close()
+
+
+class UnoLink(SerialLink):
+    """The serial link to a :class:`UnoHil` that runs in a thread; closing it stops both."""
+
+    def __init__(self, hil: UnoHil, url: str) -> None:
+        self.device = hil
+        self._runner = threading.Thread(target=hil.run, name="uno-hil", daemon=True)
+        self._runner.start()
+        try:
+            super().__init__(hil.path, url=url)
+        except BaseException:
+            self._stop_hil()
+            raise
+
+    def _stop_hil(self) -> None:
+        self.device.stop()
+        self._runner.join(timeout=5)
+        self.device.close()
+
+    def _close(self) -> None:
+        try:
+            super()._close()
+        finally:
+            self._stop_hil()
+
+
+def _open_uno(u: LinkUrl) -> UnoLink:
+    if not u.target:
+        raise ConfigError("uno:// needs a robot: uno://omni4 or uno://mecanum4")
+    hil = UnoHil(u.target, world=u.get_str("world", "room") or None, seed=u.get_int("seed", 1, minimum=0))
+    return UnoLink(hil, u.url)
+
+
+register_scheme(
+    "uno",
+    _open_uno,
+    options=("world", "seed"),
+    help="uno://ROBOT?world=room&seed=1: the Arduino UNO firmware in simavr, hardware in the loop",
+)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m omnibot.uno.hil", description=__doc__.split("\n")[0])
+    ap.add_argument("robot", nargs="?", default="omni4", help="omni4 (seed 000) or mecanum4 (seed 003)")
+    ap.add_argument("--world", default="room", help="simulator world (default room)")
+    ap.add_argument("--seed", type=int, default=1, help="simulator seed (default 1)")
+    args = ap.parse_args(argv)
+    try:
+        hil = UnoHil(args.robot, world=args.world, seed=args.seed)
+    except UnoError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+
+    def on_signal(signum: int, frame: FrameType | None) -> None:
+        hil.stop()
+
+    signal.signal(signal.SIGTERM, on_signal)
+    print(hil.path, flush=True)
+    try:
+        hil.run()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        hil.close()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

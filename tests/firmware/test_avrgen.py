@@ -1,0 +1,60 @@
+"""The UNO firmware's generated headers: up to date, and faithful to the Python definitions."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from omnibot.errors import ConfigError
+from omnibot.firmware import avrgen
+from omnibot.firmware.config import build_config
+from omnibot.protocol import codes
+from omnibot.robot.description import load_robot
+
+
+def test_checked_in_headers_are_up_to_date() -> None:
+    for path, text in avrgen.generated_files().items():
+        assert path.exists(), f"{path} is missing: run `python -m omnibot.firmware.avrgen`"
+        assert path.read_text(encoding="utf-8") == text, (
+            f"{path.name} is stale: run `python -m omnibot.firmware.avrgen` and commit the result"
+        )
+
+
+def _define(text: str, name: str) -> str:
+    m = re.search(rf"^#define {name} (.+)$", text, re.MULTILINE)
+    assert m, name
+    return m.group(1)
+
+
+@pytest.mark.parametrize("robot", avrgen.ROBOTS)
+def test_header_carries_codes_limits_and_kinematics(robot: str) -> None:
+    text = avrgen.header_source(robot)
+    cfg = build_config(load_robot(robot))
+    for code, message in codes.TEXTS.items():
+        assert f'TEXT_{code}[] PROGMEM = "{message}";' in text
+    for name, kid in codes.COMMANDS.items():
+        assert _define(text, f"K_{name}") == str(kid)
+    assert _define(text, "ROBOT_NAME") == f'"{robot}"'
+    assert int(_define(text, "V_MAX")) == int(cfg["speed_max_cms"])
+    shift = int(_define(text, "RIM_SHIFT"))
+    rows = re.search(r"RIM_Q\[MOTORS\]\[3\] PROGMEM = \{\n(.*?)\n\};", text, re.DOTALL)
+    assert rows
+    fixed = [[int(v) for v in row.strip(" {},").split(", ")] for row in rows.group(1).splitlines()]
+    for row_q, row in zip(fixed, cfg["rim"], strict=True):
+        for q, v in zip(row_q, row, strict=True):
+            assert abs(q / (1 << shift) - v) <= 0.5 / (1 << shift)
+            assert -32768 <= q <= 32767
+    assert int(_define(text, "DEFAULT_K")) == round(cfg["k"] * 10)
+
+
+def test_limits_round_to_the_same_integer_checks() -> None:
+    text = avrgen.header_source("omni4")
+    # rate_max_dps 899.54: an integer F is out when abs(F) >= 900, as abs(F) >= 899.54 in Python
+    assert _define(text, "F_MAX_EXCL") == "900"
+    assert _define(text, "V_MIN") == "30" and _define(text, "L_CLAMP") == "499"
+
+
+def test_unknown_pin_is_a_config_error() -> None:
+    with pytest.raises(ConfigError, match="not an Arduino UNO pin"):
+        avrgen._pin("D14")

@@ -1,0 +1,99 @@
+"""The UNO firmware's binary protocol against the MicroPython firmware's: the same frames answer
+the same frames (sequence numbers, duplicates, SYNC, events, every error a frame can trigger)."""
+
+from __future__ import annotations
+
+import os
+import select
+import time
+
+from omnibot.firmware.config import build_config
+from omnibot.firmware.controller import Controller
+from omnibot.protocol import codes
+from omnibot.protocol.frame import Frame, FrameDecoder, encode_frame, encode_message
+from omnibot.robot.description import load_robot
+from tests.firmware.fakehal import FakeHAL
+
+from .conftest import start
+
+MOVE = codes.MOVE
+
+
+def _bad_crc() -> bytes:
+    good = bytearray(encode_message(codes.STATUS, 9))
+    good[3] ^= 0x01
+    return bytes(good)
+
+
+# Each step: bytes the host sends. Frames are compared decoded: (type, seq, SYNC, integers, text).
+STEPS: list[bytes] = [
+    b"MODE,4\n",
+    encode_message(codes.HELLO, 1, [1], sync=True),
+    encode_message(codes.STATUS, 2),
+    encode_message(MOVE, 3, [0, 20, 0, 0]),  # ERROR 28
+    encode_frame(13, 4),  # ERROR 23: unknown type
+    encode_message(MOVE, 5, [1, 40, 0, 0, 0, 0]),  # ERROR 24
+    encode_message(MOVE, 6, [40000, 40, 0, 0]),  # ERROR 34
+    encode_frame(MOVE, 7, b"\x80"),  # ERROR 25: truncated varint
+    encode_message(MOVE, 6, [40000, 40, 0, 0]),  # duplicate: the kept reply again
+    encode_message(codes.STATUS, 2),  # duplicate of a STATUS
+    encode_message(codes.STATUS, 12),  # out of order: no answer
+    _bad_crc(),  # no answer
+    encode_message(MOVE, 8, [30000, 40, 30, 0]),
+    encode_message(codes.STATUS, 9),
+    # OK, then the IDLE event (seq 1, SYNC), acknowledged at once (before its 50 ms retry)
+    encode_message(codes.STOP, 10, sync=True) + encode_frame(codes.ACK, 1),
+    encode_message(codes.TELEM, 11, [0, 0]),
+    encode_message(codes.CAL, 12, [18, 0, 0, 0]),  # ERROR 38
+    encode_message(codes.HELLO, 13, [2]),  # ERROR 39
+    encode_message(codes.MODE, 14, [0]),  # back to text after this OK frame
+    b"STATUS\n",
+]
+
+
+def decode_all(data: bytes) -> list[tuple[object, ...] | bytes]:
+    """Frames as (type, seq, sync, ints, text); text lines as bytes."""
+    out: list[tuple[object, ...] | bytes] = []
+    text, sep, rest = data.partition(b"\x00")
+    for line in text.split(b"\r\n")[:-1]:  # complete lines only
+        if line:
+            out.append(line)
+    if sep:
+        frames: list[Frame] = []
+        FrameDecoder().feed(sep + rest, frames)
+        for fr in frames:
+            ints, tail = fr.fields()
+            out.append((fr.type_id, fr.seq, fr.sync, tuple(ints), tail))
+    return out
+
+
+def reference(robot: str) -> list[list[tuple[object, ...] | bytes]]:
+    config = build_config(load_robot(robot))
+    hal = FakeHAL(config["motors"], len(config["sonar_period_min_ms"]))
+    ctrl = Controller(hal, config)
+    hal.take()
+    out = []
+    for data in STEPS:
+        hal.rx += data
+        ctrl.poll()
+        out.append(decode_all(hal.take()))
+    return out
+
+
+def test_same_frames_as_the_micropython_firmware() -> None:
+    emu, port = start("omni4")
+    try:
+        for data, expected in zip(STEPS, reference("omni4"), strict=True):
+            os.write(port.fd, data)
+            got = b""
+            deadline = time.monotonic() + 2.0
+            while time.monotonic() < deadline and len(decode_all(got)) < len(expected):
+                if select.select([port.fd], [], [], 0.05)[0]:
+                    got += os.read(port.fd, 4096)
+            # nothing more within 30 ms (less than an event's 50 ms retry)
+            if select.select([port.fd], [], [], 0.03)[0]:
+                got += os.read(port.fd, 4096)
+            assert decode_all(got) == expected, data
+    finally:
+        port.close()
+        emu.close()

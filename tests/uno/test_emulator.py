@@ -1,0 +1,159 @@
+"""The UNO firmware in simavr against the MicroPython firmware: same replies, same powers."""
+
+from __future__ import annotations
+
+import os
+import re
+import time
+
+import pytest
+
+from omnibot.firmware.config import build_config
+from omnibot.firmware.controller import Controller
+from omnibot.protocol import codes
+from omnibot.protocol.frame import encode_message
+from omnibot.robot.description import load_robot
+from omnibot.uno.emulator import FIRMWARE_DIR, UnoEmulator
+from tests.firmware.fakehal import FakeHAL
+
+from .conftest import Port, start
+
+# Command scripts; each line is sent as one write and answered line by line.
+SCRIPT = [
+    "STATUS",
+    "MOVE,30000,40,0,0;STATUS;STOP",
+    "MOVE,30000,-40,30,0;STATUS;STOP",
+    "MOVE,-30000,60,135,50;STATUS;STOP",
+    "MOVE,30000,70,-100,-99;STATUS;STOP",
+    "ROTATE,30000,90;STATUS;STOP",
+    "ROTATE,-30000,400;STATUS;STOP",
+    "VEL,20,-30,45,1000;STATUS;STOP",
+    "VEL,0,0,-200,1000;STATUS;STOP",
+    "POWER,1000,10,-20,30,-255;STATUS;STOP",
+    "CAL,0,0,0,2000;CAL,1,0,0,1100;CAL,10,-1,0,0;CAL,10,0,40,1400;CAL,10,1,255,1050;CAL,11,-1,45,0",
+    "CAL,11,0,40,1100;CAL,11,1,255,1000;CAL,12,-2,0,0;CAL,3,0,0,385;CAL,20,0,60,1050;CAL,20,1,200,980",
+    "MOVE,30000,40,20,0;STATUS;STOP",
+    "MOVE,30000,80,70,10;STATUS;STOP",
+    "CAL,12,-1,40,0;CAL,11,-1,50,0;CAL,10,5,3,4;CAL,21,0,0,0;CAL,6,0,-1,0",
+    # roller drag (at the encoders' origin: phase 0) with its coast table
+    "CAL,4,0,0,150;CAL,4,1,0,-80;CAL,5,2,0,90;CAL,4,3,0,40;CAL,6,0,30,200;CAL,6,1,80,-100",
+    "MOVE,100,40,0,0;STATUS;STOP",
+    "MOVE,30000,60,60,0;STATUS;STOP",
+    "VEL,-30,20,0,1000;STATUS;STOP",
+    "MOVE,500,40,0,0;MOVE,1,29,0,0;DELTA,1000,0,0,0,0;ROTATE,90,0;POWER,0,1,1,1,1;VEL,0,0,0,0",
+    "SONAR,2,60,0,0,0;SONAR,1,59,0,0,0;TELEM,5,1;TELEM,100,256;MODE,16;HELLO,2;HELLO,3,1",
+    "FOO;MOVE,x,1,1,1;move , 1 , +40 , 0 , -0;STATUS,1;MOVE,40000,1,1,1;" + "9" * 70,
+    "STOP;STATUS",
+]
+POWERS = re.compile(r"POWER((?:,-?\d+)+);")
+
+
+def reference(robot: str) -> list[list[str]]:
+    """The MicroPython firmware's replies to each line of SCRIPT (time stands still), without the
+    IDLE events: on the UNO time runs, and a short MOVE may end between two replies."""
+    config = build_config(load_robot(robot))
+    hal = FakeHAL(config["motors"], len(config["sonar_period_min_ms"]))
+    ctrl = Controller(hal, config)
+    hal.lines()
+    out: list[list[str]] = []
+    for text in SCRIPT:
+        hal.send(text + "\n")
+        ctrl.poll()
+        out.append([line for line in hal.lines() if line != "IDLE"])
+    return out
+
+
+def split_powers(line: str) -> tuple[str, list[int]]:
+    m = POWERS.search(line)
+    if not m:
+        return line, []
+    return line[: m.start(1)] + line[m.end(1) :], [int(v) for v in m.group(1)[1:].split(",")]
+
+
+def test_same_replies_and_powers_as_the_micropython_firmware(uno: tuple[UnoEmulator, Port]) -> None:
+    emu, port = uno
+    robot = emu.robot
+    expected: list[str] = []
+    got: list[str] = []
+    for text, replies in zip(SCRIPT, reference(robot), strict=True):
+        expected += replies
+        got += port.ask(text, len(replies), skip=("IDLE",))
+    for g, e in zip(got, expected, strict=True):
+        g_text, g_powers = split_powers(g)
+        e_text, e_powers = split_powers(e)
+        assert g_text == e_text
+        # single-precision floats and round-half-away-from-zero against Python's doubles and round()
+        assert all(abs(a - b) <= 1 for a, b in zip(g_powers, e_powers, strict=True)), (g, e)
+
+
+def test_calibration_survives_a_power_cycle() -> None:
+    emu, port = start("omni4")
+    try:
+        before = port.ask("MOVE,30000,40,30,0;STATUS;STOP", 4)[1]
+        assert port.ask("CAL,0,0,0,2000;MOVE,30000,40,30,0;STATUS;STOP", 5)[2] != before
+        changed = port.ask("MOVE,30000,40,30,0;STATUS;STOP", 4)[1]
+        emu.command("reset")
+        assert port.lines(1) == ["HELLO,1,omni4,4"]
+        assert port.ask("MOVE,30000,40,30,0;STATUS;STOP", 4)[1] == changed  # K from the EEPROM
+        port.ask("CAL,0,0,0,1449")  # the preset's K again
+    finally:
+        port.close()
+        emu.close()
+
+
+def test_static_ram_and_measured_stack_fit() -> None:
+    emu, port = start("omni4", range_cm=100)
+    try:
+        port.ask("SONAR,1,60,0,500,0;TELEM,10,255", 2)
+        port.write("MOVE,2,40,0,0;DELTA,0,0,10,0,10;VEL,30,30,100,200\n")
+        port.lines(3)
+        port.ask("STOP;TELEM,0,0;SONAR,1,0,0,0,0", 3)
+        # and a binary session: frames in and out, TEL frames, events
+        port.ask("MODE,4")
+        for k, frame in enumerate(
+            [
+                encode_message(codes.HELLO, 1, [1], sync=True),
+                encode_message(codes.TELEM, 2, [10, 255]),
+                encode_message(codes.MOVE, 3, [10, 40, 30, 20]),
+                encode_message(codes.STATUS, 4),
+                encode_message(codes.TELEM, 5, [0, 0]),
+            ]
+        ):
+            os.write(port.fd, frame)
+            time.sleep(0.05 if k != 2 else 0.3)
+    finally:
+        port.close()
+        emu.close()
+    report = (FIRMWARE_DIR / "build" / "omni4" / "size.txt").read_text()
+    static = int(re.search(r"static RAM (\d+) of 2048", report).group(1))  # type: ignore[union-attr]
+    assert static <= 0.75 * 2048
+    assert emu.stack_bytes is not None and 0 < emu.stack_bytes < 2048 - static - 64, (static, emu.stack_bytes)
+
+
+@pytest.mark.parametrize("robot", ["omni4", "mecanum4"])
+def test_hello_names_the_robot(robot: str) -> None:
+    emu, port = start(robot)
+    try:
+        assert port.ask("HELLO") == [f"HELLO,1,{robot},4"]
+    finally:
+        port.close()
+        emu.close()
+
+
+@pytest.mark.parametrize("robot", ["omni4", "mecanum4"])
+def test_each_motor_drives_its_own_pins(robot: str) -> None:
+    """POWER reaches every motor's EN (PWM duty) and IN1/IN2 (direction) pins of the robot's wiring."""
+    emu, port = start(robot, report=True)
+    try:
+        powers = [100, -50, 30, -255]
+        assert port.ask("POWER,200," + ",".join(str(p) for p in powers)) == ["OK"]
+        t0, duties = emu.duties()
+        while duties != powers:  # the four motors may be set across two reports
+            t0, duties = emu.duties()
+        t1, duties = emu.duties()  # POWER's 200 ms are over: the motors stop
+        while duties != [0, 0, 0, 0]:
+            _, duties = emu.duties()
+        assert 0.19 <= (t1 - t0) / 1e6 <= 0.21  # emulated time
+    finally:
+        port.close()
+        emu.close()
