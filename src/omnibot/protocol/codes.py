@@ -68,6 +68,9 @@ PARAM_COUNTS = {
     CAL: (4, 4),
 }
 QUEUED = (MOVE, ROTATE, DELTA, POWER)  # commands that go through the queue
+# Where a text command may spell INF as a token (``INF``, ``-INF``, any case): MOVE's L, ROTATE's A,
+# DELTA's R (index of the parameter). Elsewhere ``INF`` is not an integer (ERROR 25).
+INF_PARAMS = {MOVE: 0, ROTATE: 0, DELTA: 4}
 
 # --- replies and events (binary message types; text keywords in KEYWORDS) ------------------------
 OK = 32
@@ -132,6 +135,7 @@ E_SONAR = 37
 E_CALIBRATION = 38  # project: CAL table, index or knot order
 E_UNSUPPORTED = 39  # project: MODE bit, TELEM mask bit or protocol version not supported
 E_ESTOP = 40
+E_CHECKSUM = 41  # project: a text command's "*" check does not match (docs/protocol.md, tags)
 
 TEXTS = {
     W_SPEED_REDUCED: "speed reduced to what the motors can give",
@@ -156,6 +160,7 @@ TEXTS = {
     E_CALIBRATION: "calibration table, index or knot order wrong",
     E_UNSUPPORTED: "mode, mask bit or version not supported",
     E_ESTOP: "motion blocked: emergency stop latched",
+    E_CHECKSUM: "checksum mismatch",
 }
 
 # --- STATUS states -----------------------------------------------------------------------------------
