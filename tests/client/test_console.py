@@ -67,7 +67,8 @@ def test_send_no_reply_exits_2(capsys: pytest.CaptureFixture[str]) -> None:
         assert main(["send", "STATUS", "--port", "silent://x", "--timeout", "3"]) == 2
     finally:
         unregister_scheme("silent")
-    assert "no reply to STATUS" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "no reply to HELLO" in err and "STATUS was not sent" in err
 
 
 PIPED = """\
