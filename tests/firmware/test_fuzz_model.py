@@ -30,8 +30,27 @@ SONAR_MIN = [max(60, int(p)) for p in CONFIG["sonar_period_min_ms"]]
 ENCODERS = all(int(c) > 0 for c in CONFIG["encoder_cpr"])
 
 INF = 30000
-KEYWORDS = ["MOVE", "ROTATE", "DELTA", "STOP", "POWER", "VEL", "MODE", "SONAR", "TELEM", "STATUS", "HELLO", "CAL"]
-COUNTS = {"MOVE": (4, 4), "ROTATE": (2, 2), "DELTA": (5, 5), "STOP": (0, 0), "POWER": (1 + MOTORS, 1 + MOTORS)}
+KEYWORDS = [
+    "MOVE",
+    "ROTATE",
+    "DELTA",
+    "STOP",
+    "POWER",
+    "VEL",
+    "MODE",
+    "SONAR",
+    "TELEM",
+    "STATUS",
+    "HELLO",
+    "CAL",
+]
+COUNTS = {
+    "MOVE": (4, 4),
+    "ROTATE": (2, 2),
+    "DELTA": (5, 5),
+    "STOP": (0, 0),
+    "POWER": (1 + MOTORS, 1 + MOTORS),
+}
 COUNTS |= {"VEL": (4, 4), "MODE": (1, 1), "SONAR": (5, 5), "TELEM": (2, 2), "STATUS": (0, 0), "HELLO": (0, 5)}
 COUNTS |= {"CAL": (4, 4)}
 INF_AT = {"MOVE": 0, "ROTATE": 0, "DELTA": 4}  # "L = ±INF", "A = ±INF", "R = INF"
@@ -83,7 +102,7 @@ def model(line: bytes) -> str:
     return {"STATUS": "STATUS", "HELLO": "HELLO", "CAL": "OK|ERROR 38"}.get(keyword, "OK")
 
 
-def _move(L: int, V: int, D: int, C: int, k: int) -> int:  # noqa: N803 - the protocol's names
+def _move(L: int, V: int, D: int, C: int, k: int) -> int:
     if not (abs(L) < L_MAX * k or (k == 1 and abs(L) == INF)):
         return 32
     if (k == 1 and not V_MIN <= abs(V) <= V_MAX) or abs(V) > V_MAX * k:
@@ -164,7 +183,9 @@ INTS = st.one_of(
     st.sampled_from([32767, 32768, -32768, -32769, 99999, -99999, 10**12]),
 )
 NUMBER = st.builds(lambda v, sign: ("+" if sign and v >= 0 else "") + str(v), INTS, st.booleans())
-JUNK = st.sampled_from(["", "1.5", "0x10", "1_0", "+", "-", "x", "INF", "-inf", "Inf", "INFINITY", "1e3", "#", "*"])
+JUNK = st.sampled_from(
+    ["", "1.5", "0x10", "1_0", "+", "-", "x", "INF", "-inf", "Inf", "INFINITY", "1e3", "#", "*"]
+)
 FIELD = st.builds(lambda a, v, b: a + v + b, SPACE, st.one_of(NUMBER, NUMBER, NUMBER, JUNK), SPACE)
 JUNK_WORD = st.text(st.characters(min_codepoint=32, max_codepoint=126, exclude_characters=";,"), max_size=6)
 
@@ -193,7 +214,9 @@ def command_lines(draw: st.DrawFn) -> bytes:
 LINE = command_lines()
 
 
-@settings(max_examples=800, derandomize=True, deadline=None, database=None, suppress_health_check=list(HealthCheck))
+@settings(
+    max_examples=800, derandomize=True, deadline=None, database=None, suppress_health_check=list(HealthCheck)
+)
 @given(line=LINE)
 def test_reply_matches_the_protocol_model(line: bytes) -> None:
     expected = model(line)
