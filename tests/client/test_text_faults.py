@@ -12,8 +12,9 @@ from dataclasses import dataclass, field
 
 import pytest
 
-from omnibot.client import RobotClient
+from omnibot.client import EventRecorder, ResetEvent, RobotClient
 from omnibot.errors import ControllerError, LinkTimeout, OmnibotError
+from omnibot.firmware.controller import Controller
 from omnibot.protocol import codes
 from omnibot.protocol.messages import Telem
 from omnibot.transport import FaultLink, open_link
@@ -179,3 +180,17 @@ def test_tagged_commands_on_the_wire(clients: list[RobotClient]) -> None:
     assert pendings[0].result().keyword == "OK"
     with pytest.raises(ControllerError, match="unknown command"):
         pendings[1].result()
+
+
+def test_reset_of_a_tagged_controller_is_seen_and_tags_asked_again() -> None:
+    with RobotClient.open("sim://omni4?seed=1") as client:
+        resets = EventRecorder()
+        client.on_reset(resets)
+        client.status()
+        assert client.tags is True
+        device = client.link.device  # type: ignore[attr-defined]
+        device.controller = Controller(device.hal, device.controller.config)  # reboots: greets
+        client.sleep(0.05)
+        assert len(resets.of(ResetEvent)) == 1 and client.tags is None
+        assert client.status().idle
+        assert client.tags is True

@@ -610,9 +610,10 @@ class RobotClient(TypedCalls):
         for p in self._outstanding:
             if p.seq == tag:
                 self._outstanding.remove(p)
+                self._synced = True  # a reply matched: an untagged HELLO from now on is a reset
+                self._hello_answered = False
                 if p.probe:
                     self._set_tags(True)
-                    self._synced = True
                 if isinstance(reply, ErrorReply) or p.accepts(reply):
                     self._complete(p, reply)
                 else:
