@@ -263,7 +263,10 @@ def test_bad_check_is_malformed_both_ways() -> None:
 
 
 def test_every_command_fits_with_the_longest_tag() -> None:
-    longest: list[m.Message] = [m.Delta(-32768, -32768, -32768, -32768, -32768), m.Power(-32768, (-32768,) * 4)]
+    longest: list[m.Message] = [
+        m.Delta(-32768, -32768, -32768, -32768, -32768),
+        m.Power(-32768, (-32768,) * 4),
+    ]
     for command in longest:
         assert len(text.encode(command, terminator=b"", tag=text.TAG_MAX)) <= codes.LINE_MAX
     with pytest.raises(ProtocolError, match="tag 10000 outside"):
