@@ -16,7 +16,7 @@ from omnibot.client import EventRecorder, ResetEvent, RobotClient
 from omnibot.errors import ControllerError, LinkTimeout, OmnibotError
 from omnibot.firmware.controller import Controller
 from omnibot.protocol import codes
-from omnibot.protocol.messages import Telem
+from omnibot.protocol.messages import Move, Ok, Telem
 from omnibot.transport import FaultLink, open_link
 from omnibot.transport.base import Link
 
@@ -194,3 +194,30 @@ def test_reset_of_a_tagged_controller_is_seen_and_tags_asked_again() -> None:
         assert len(resets.of(ResetEvent)) == 1 and client.tags is None
         assert client.status().idle
         assert client.tags is True
+
+
+def test_late_tagged_reply_lands_on_its_own_command() -> None:
+    held: list[bytes] = []
+
+    def slow(line: bytes) -> bytes:  # answers MOVE only when the next command comes
+        if line.startswith(b"HELLO#"):
+            return b"HELLO,1,fake,4" + line[5:].split(b"*")[0] + b"\r\n"
+        reply = b"OK" if not line.startswith(b"STATUS") else b"STATUS,1,0,16,0;POWER,0,0,0,0;MOVE,0,0,0,0"
+        tag = line.rstrip(b"\n").split(b"#")[1].split(b"*")[0]
+        out = b"".join(held)
+        held.clear()
+        answer = reply + b"#" + tag + b"\r\n"
+        if line.startswith(b"MOVE"):
+            held.append(answer)
+            return out
+        return out + answer
+
+    link = ScriptedLink(slow)
+    client = RobotClient(link, timeout=0.5)
+    move = client.submit(Move(10, 40, 0, 0))
+    with pytest.raises(LinkTimeout) as info:
+        move.result()
+    assert "may or may not have run" in str(info.value.__notes__)
+    assert client.tags is True and client.status().idle  # the late OK does not answer STATUS
+    assert move.reply == Ok()  # it landed on MOVE
+    assert move.result() == Ok()

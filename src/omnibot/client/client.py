@@ -620,8 +620,8 @@ class RobotClient(TypedCalls):
                     p._fail(ProtocolError(f"{reply.keyword} is no reply to {p.line}"))
                 return
         late = self._late.pop(tag, None)
-        if late is not None and late.reply is None:  # its caller has had LinkTimeout
-            late.reply = reply
+        if late is not None and not late.done:  # its caller has had LinkTimeout: record what came
+            self._complete(late, reply)
             return
         if self._tags is None and isinstance(reply, HelloReply):  # a late answer to an earlier probe
             self._set_tags(True)
