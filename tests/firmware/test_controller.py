@@ -546,7 +546,7 @@ def test_reply_echoes_tag_and_check(rig: Rig, tag: str | None, check: bool) -> N
         ("MOVE,10,40,0,0", "OK"),
         ("FOO,1", err(codes.E_UNKNOWN)),
         ("MOVE,1,x,0,0", err(codes.E_NOT_INTEGER)),
-        ("HELLO", "HELLO,1,omni4,4"),
+        ("HELLO", f"HELLO,{codes.PROTOCOL_VERSION},omni4,4"),
     ):
         assert rig.cmd(_tagged(body, tag, check)) == [_tagged(reply, tag, check)]
     status = rig.cmd(_tagged("STATUS", tag, check))[0]
