@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: setup demo test lint bench clean browser avr-tools uno-sim
+.PHONY: setup demo test lint bench clean browser avr-tools uno-sim fuzz
 
 setup: $(STAMP)
 
@@ -55,5 +55,15 @@ test: lint browser avr-tools
 bench: setup
 	$(BIN)/python -m benchmarks.run_all
 
+# Coverage-guided fuzzing (atheris, the `fuzz` extra) of the controller's text input, checked against
+# the host codec, and of the binary decoders: FUZZ_SECONDS per target. Not part of `make test`, which
+# runs the same targets on a bounded hypothesis budget (tests/fuzz/). Crashes land in fuzz/crash-*.
+FUZZ_SECONDS ?= 600
+fuzz: setup
+	$(BIN)/python -m pip install --quiet -e '.[fuzz]'
+	@mkdir -p fuzz
+	cd fuzz && PYTHONPATH=.. SDL_VIDEODRIVER=dummy $(BIN)/python -m tests.fuzz.run text --seconds $(FUZZ_SECONDS) --corpus corpus-text
+	cd fuzz && PYTHONPATH=.. SDL_VIDEODRIVER=dummy $(BIN)/python -m tests.fuzz.run binary --seconds $(FUZZ_SECONDS) --corpus corpus-binary
+
 clean:
-	rm -rf $(VENV) build src/*.egg-info .pytest_cache .mypy_cache .ruff_cache
+	rm -rf $(VENV) build src/*.egg-info .pytest_cache .mypy_cache .ruff_cache fuzz

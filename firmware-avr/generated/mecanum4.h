@@ -27,6 +27,7 @@
 #define P_CAL_SCALE 1000
 #define P_E_ANGLE 29
 #define P_E_CALIBRATION 38
+#define P_E_CHECKSUM 26
 #define P_E_COURSE 31
 #define P_E_CURVATURE 30
 #define P_E_DISTANCE 32
@@ -126,6 +127,7 @@ static const char TEXT_22[] PROGMEM = "command too long";
 static const char TEXT_23[] PROGMEM = "unknown command";
 static const char TEXT_24[] PROGMEM = "wrong number of parameters";
 static const char TEXT_25[] PROGMEM = "parameter is not an integer";
+static const char TEXT_26[] PROGMEM = "checksum mismatch";
 static const char TEXT_27[] PROGMEM = "time out of range";
 static const char TEXT_28[] PROGMEM = "speed or power out of range";
 static const char TEXT_29[] PROGMEM = "angle out of range";
@@ -142,10 +144,10 @@ static const char TEXT_39[] PROGMEM = "mode, mask bit or version not supported";
 static const char TEXT_40[] PROGMEM = "motion blocked: emergency stop latched";
 static const char TEXT_41[] PROGMEM = "motion refused: no sonar covers this direction";
 struct CodeText { uint8_t code; const char *text; };
-static const CodeText CODE_TEXTS[26] PROGMEM = {
-    {11, TEXT_11}, {12, TEXT_12}, {13, TEXT_13}, {14, TEXT_14}, {15, TEXT_15}, {16, TEXT_16}, {21, TEXT_21}, {22, TEXT_22}, {23, TEXT_23}, {24, TEXT_24}, {25, TEXT_25}, {27, TEXT_27}, {28, TEXT_28}, {29, TEXT_29}, {30, TEXT_30}, {31, TEXT_31}, {32, TEXT_32}, {33, TEXT_33}, {34, TEXT_34}, {35, TEXT_35}, {36, TEXT_36}, {37, TEXT_37}, {38, TEXT_38}, {39, TEXT_39}, {40, TEXT_40}, {41, TEXT_41}
+static const CodeText CODE_TEXTS[27] PROGMEM = {
+    {11, TEXT_11}, {12, TEXT_12}, {13, TEXT_13}, {14, TEXT_14}, {15, TEXT_15}, {16, TEXT_16}, {21, TEXT_21}, {22, TEXT_22}, {23, TEXT_23}, {24, TEXT_24}, {25, TEXT_25}, {26, TEXT_26}, {27, TEXT_27}, {28, TEXT_28}, {29, TEXT_29}, {30, TEXT_30}, {31, TEXT_31}, {32, TEXT_32}, {33, TEXT_33}, {34, TEXT_34}, {35, TEXT_35}, {36, TEXT_36}, {37, TEXT_37}, {38, TEXT_38}, {39, TEXT_39}, {40, TEXT_40}, {41, TEXT_41}
 };
-#define CODE_TEXT_COUNT 26
+#define CODE_TEXT_COUNT 27
 
 /* ---- robot ---- */
 #define ROBOT_NAME "mecanum4"

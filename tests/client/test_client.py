@@ -81,7 +81,7 @@ def test_text_reply_of_another_kind_realigns() -> None:
 
 def test_timed_out_command_keeps_its_place() -> None:
     link = ScriptedLink()
-    client = RobotClient(link, timeout=0.5)
+    client = RobotClient(link, timeout=0.5, tags=False)  # untagged text: replies matched in order
     late = client.submit(Move(10, 40, 0, 0))
     with pytest.raises(LinkTimeout, match="no reply to MOVE,10,40,0,0"):
         late.result()
@@ -240,7 +240,7 @@ def test_wait_idle_and_sleep_on_sim(sim: RobotClient) -> None:
 
 def test_values_checked_before_sending() -> None:
     link = ScriptedLink(controller)
-    client = RobotClient(link, "omni4")
+    client = RobotClient(link, "omni4", tags=False)
     with pytest.raises(ValueError, match="speed"):
         client.move(1.0, 2.0)
     with pytest.raises(ValueError, match="use_binary"):
@@ -262,7 +262,7 @@ def test_set_mode_keeps_other_bits(sim: RobotClient) -> None:
 
 def test_submit_text() -> None:
     link = ScriptedLink(controller)
-    client = RobotClient(link)
+    client = RobotClient(link, tags=False)
     pendings = client.submit_text("move,1,40,0,0;;STATUS\r\n;foo")
     assert [p.line for p in pendings] == ["move,1,40,0,0", "STATUS", "foo"]
     assert link.written == b"move,1,40,0,0\nSTATUS\nfoo\n"  # sent as typed

@@ -31,9 +31,11 @@ class BootingController:
         for byte in data:
             self._line.append(byte)
             if byte == 0x0A:
-                if self._line.startswith(b"HELLO"):
+                if b"#" in self._line or b"*" in self._line:  # a tagged question: unknown to it
+                    self._out += b"ERROR,23,unknown command\r\n"
+                elif self._line.startswith(b"HELLO"):
                     self.hellos_heard += 1
-                    self._out += b"HELLO,1,fake,4\r\n"
+                    self._out += b"HELLO,2,fake,4\r\n"
                 self._line.clear()
 
     def step(self) -> None:
@@ -41,7 +43,7 @@ class BootingController:
         self.time = self._steps * self.tick
         if self.greets and not self._greeted and self.time >= self.boot:
             self._greeted = True
-            self._out += b"HELLO,1,fake,4\r\n"
+            self._out += b"HELLO,2,fake,4\r\n"
 
     def transmit(self) -> bytes:
         out, self._out = bytes(self._out), bytearray()

@@ -6,7 +6,7 @@ import re
 
 import pytest
 
-from omnibot.protocol import codes
+from omnibot.protocol import codes, linecheck
 from tests.firmware.conftest import Rig, make_rig
 
 STATUS_RE = re.compile(r"^STATUS,(\d),(\d+),(\d+),(\d+);POWER(,-?\d+)+;MOVE,-?\d+,-?\d+,-?\d+,-?\d+$")
@@ -536,3 +536,47 @@ def test_cal_roller_drag_off_in_closed_loop() -> None:
     assert rig.send("CAL,0,0,0,4400;CAL,4,0,0,-40;CAL,4,2,0,-40;MODE,2\n") == ["OK"] * 4
     rig.cmd("MOVE,30000,50,0,0")
     assert rig.hal.powers == [0, 220, 0, -220]  # the feedforward, without the drag
+
+
+# ------------------------------------------------------------------ INF, tags and checks
+
+
+def test_docs_inf_move_runs(rig: Rig) -> None:
+    ok, status = rig.cmd("MOVE,INF,60,0,0;STATUS")
+    assert ok == "OK"
+    assert status.startswith("STATUS,0,0,16,0;") and status.endswith(";MOVE,30000,60,0,0")
+    assert rig.cmd("DELTA,0,0,0,0,-INF") == [err(codes.E_REPEAT)]
+
+
+def _tagged(body: str, tag: str | None, check: bool) -> str:
+    data = body.encode()
+    return (data + linecheck.suffix(data, None if tag is None else tag.encode(), check)).decode()
+
+
+@pytest.mark.parametrize(("tag", "check"), [("7", False), ("0042", True), (None, True), ("9999", True)])
+def test_reply_echoes_tag_and_check(rig: Rig, tag: str | None, check: bool) -> None:
+    for body, reply in (
+        ("MOVE,10,40,0,0", "OK"),
+        ("FOO,1", err(codes.E_UNKNOWN)),
+        ("MOVE,1,x,0,0", err(codes.E_NOT_INTEGER)),
+        ("HELLO", f"HELLO,{codes.PROTOCOL_VERSION},omni4,4"),
+    ):
+        assert rig.cmd(_tagged(body, tag, check)) == [_tagged(reply, tag, check)]
+    status = rig.cmd(_tagged("STATUS", tag, check))[0]
+    end = linecheck.split(status.encode())[0]
+    assert status.startswith("STATUS,0,0,16,0;") and status == _tagged(status[:end], tag, check)
+
+
+def test_untagged_command_gets_todays_reply(rig: Rig) -> None:
+    assert rig.cmd("MOVE,10,40,0,0") == ["OK"]
+    assert rig.cmd("STOP") == ["OK", "IDLE"]  # events are never tagged
+
+
+def test_bad_check_refuses_the_command_untagged(rig: Rig) -> None:
+    good = _tagged("MOVE,10,40,0,0", "5", True)
+    bad = good.replace("10", "90")
+    assert rig.cmd(bad) == [err(codes.E_CHECKSUM)]
+    assert rig.status() == "STATUS,1,0,16,0;POWER,0,0,0,0;MOVE,0,0,0,0"  # nothing ran
+    assert rig.cmd(good[:-1] + "G") == [err(codes.E_NOT_INTEGER)]  # not a check: left in the body
+    assert rig.cmd("STATUS#12345") == [err(codes.E_UNKNOWN)]  # five digits are no tag
+    assert rig.cmd(good) == [_tagged("OK", "5", True)]

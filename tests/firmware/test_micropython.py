@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from omnibot.firmware.config import build_config, stage_board
-from omnibot.protocol import codes, frame
+from omnibot.protocol import codes, frame, linecheck
 from omnibot.robot.description import load_robot
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -69,6 +69,23 @@ range 0 300
 > MOVE,2,40,0,0;DELTA,0,0,10,0,3
 @ 300
 """
+
+
+def _tagged(body: bytes, tag: bytes | None) -> bytes:
+    return body + linecheck.suffix(body, tag, True)
+
+
+# INF tokens, tags and checks (a bad one too), VT/FF inside commands, syntax before range
+SCRIPT += "\n".join(
+    [
+        "hex "
+        + (_tagged(b"MOVE,INF,60,0,0", b"12") + b";STATUS#3;" + _tagged(b"STOP", b"9999") + b"\n").hex(),
+        "hex " + (b"ROTATE,-inf,91" + _tagged(b"ROTATE,-inf,90", None)[-5:] + b"\nSTOP*1234\n").hex(),
+        "hex " + b"MOVE,\x0b1,40,0,0\n\x0b\nMOVE,1,2\x0c,0,0\nMOVE,99999,x,0,0\nSTOP\n".hex(),
+        "@ 10",
+        "",
+    ]
+)
 
 
 def _hex(type_id: int, seq: int, *ints: int, sync: bool = False) -> str:
@@ -132,6 +149,13 @@ def test_micropython_matches_cpython(tmp_path: Path, robot: str) -> None:
     assert any(line.endswith(" IDLE") for line in lines)
     assert any(" TEL," in line for line in lines)
     assert any("ERROR,22," in line for line in lines)
+    tagged = [line.split(" ", 1)[1] for line in lines if "#" in line or "*" in line]
+    assert [t.split("#")[0].split(";")[-1] for t in tagged] == ["OK", "MOVE,30000,60,0,0", "OK"]
+    assert tagged[0] == _tagged(b"OK", b"12").decode() and tagged[2] == _tagged(b"OK", b"9999").decode()
+    texts = [line.split(" ", 1)[-1] for line in lines]
+    first = texts.index(f"ERROR,26,{codes.TEXTS[26]}")
+    errors = [f"ERROR,{c},{codes.TEXTS[c]}" for c in (26, 26, 25, 23, 25, 25)]
+    assert texts[first : first + 7] == [*errors, "OK"]
 
 
 def test_binary_mode_matches_cpython(tmp_path: Path) -> None:

@@ -98,3 +98,60 @@ def test_parse_errors(text: bytes, code: int) -> None:
 
 def test_blank_command_is_ignored() -> None:
     assert parser.parse(b"   ", []) == 0
+
+
+@pytest.mark.parametrize(
+    "text",
+    [b"MOVE,\x0b1,40,0,0", b"MOVE,1\x0c,40,0,0", b"MOVE,1,40,0,0\x0b", b"MOVE,1,40,0,\x850"],
+)
+def test_only_space_and_tab_separate(text: bytes) -> None:
+    """VT, FF and other bytes str.strip() would eat are part of the field: not an integer."""
+    assert parser.parse(text, []) == -codes.E_NOT_INTEGER
+
+
+def test_vertical_tab_and_form_feed_are_not_blank() -> None:
+    assert parser.parse(b"\x0b", []) == -codes.E_UNKNOWN
+    assert parser.parse(b"\x0c", []) == -codes.E_UNKNOWN
+    assert parser.parse(b" \t ", []) == 0
+    assert parser.parse(b"\x0bSTATUS", []) == -codes.E_UNKNOWN
+
+
+def test_syntax_is_checked_before_ranges() -> None:
+    """An out-of-range value ahead of a non-integer: the syntax error (25) wins over the range (34)."""
+    assert parser.parse(b"MOVE,99999,x,0,0", []) == -codes.E_NOT_INTEGER
+    assert parser.parse(b"MOVE,0,99999,0,1.5", []) == -codes.E_NOT_INTEGER
+    p = [7]
+    assert parser.parse(b"MOVE,99999,1,0,0", p) == -codes.E_RANGE16
+    assert p == []
+
+
+@pytest.mark.parametrize(
+    ("text", "params"),
+    [
+        (b"MOVE,INF,60,0,0", [30000, 60, 0, 0]),
+        (b"move,-inf,60,0,0", [-30000, 60, 0, 0]),
+        (b"MOVE, +Inf ,60,0,0", [30000, 60, 0, 0]),
+        (b"ROTATE,-INF,90", [-30000, 90]),
+        (b"DELTA,0,0,10,0,INF", [0, 0, 10, 0, 30000]),
+        (b"DELTA,0,0,10,0,-INF", [0, 0, 10, 0, -30000]),  # syntax fine; the repeat's range refuses it
+    ],
+)
+def test_inf_token_where_the_protocol_allows_it(text: bytes, params: list[int]) -> None:
+    p: list[int] = []
+    assert parser.parse(text, p) > 0
+    assert p == params
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        b"MOVE,1,INF,0,0",
+        b"DELTA,INF,0,0,0,1",
+        b"POWER,INF,0,0,0,0",
+        b"ROTATE,90,INF",
+        b"MOVE,INFINITY,40,0,0",
+        b"MOVE,IN F,40,0,0",
+    ],
+)
+def test_inf_token_elsewhere_is_not_an_integer(text: bytes) -> None:
+    assert parser.parse(text, []) == -codes.E_NOT_INTEGER

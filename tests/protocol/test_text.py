@@ -233,3 +233,63 @@ def test_decoder_hands_over_the_rest_after_a_switch() -> None:
     assert next(it) == m.Ok()
     assert dec.rest() == b"\x00\x05\x20\x01\x0b\xc8\x00"
     assert list(it) == []
+
+
+# ------------------------------------------------------------------ tags, checks, INF, separators
+
+
+def test_tagged_command_and_reply_round_trip() -> None:
+    line = text.encode(m.Move(2, 40, 0, 0), tag=17)
+    assert line == b"MOVE,2,40,0,0#17*9230\n"
+    assert text.decode_command(line) == (len(line), m.Move(2, 40, 0, 0))
+    reply = text.encode(m.Ok(), tag=17)
+    assert reply == b"OK#17*BA98\r\n"
+    assert text.decode_tagged(reply) == (len(reply), m.Ok(), 17)
+    assert text.decode(reply) == (len(reply), m.Ok())
+    assert text.decode_tagged(b"OK#5\r\n")[1:] == (m.Ok(), 5)  # a tag without a check
+    status = text.encode(m.StatusReply(1, 0, 16, 0, (0, 0, 0, 0), (0, 0, 0, 0)), tag=9999)
+    assert text.decode_tagged(status)[2] == 9999
+
+
+def test_bad_check_is_malformed_both_ways() -> None:
+    reply = bytearray(text.encode(m.Ok(), tag=17))
+    reply[0] ^= 0x01  # "NK": the check no longer matches
+    _, msg, tag = text.decode_tagged(bytes(reply))
+    assert isinstance(msg, m.Malformed) and msg.reason == "checksum mismatch" and tag is None
+    command = bytearray(text.encode(m.Move(2, 40, 0, 0), tag=3))
+    command[5] = ord("3")
+    bad = text.decode_command(bytes(command))[1]
+    assert isinstance(bad, m.Malformed) and bad.code == codes.E_CHECKSUM
+
+
+def test_every_command_fits_with_the_longest_tag() -> None:
+    longest: list[m.Message] = [
+        m.Delta(-32768, -32768, -32768, -32768, -32768),
+        m.Power(-32768, (-32768,) * 4),
+    ]
+    for command in longest:
+        assert len(text.encode(command, terminator=b"", tag=text.TAG_MAX)) <= codes.LINE_MAX
+    with pytest.raises(ProtocolError, match="tag 10000 outside"):
+        text.encode(m.Stop(), tag=10000)
+
+
+@pytest.mark.parametrize(
+    ("line", "code"),
+    [
+        (b"MOVE,\x0b1,40,0,0", codes.E_NOT_INTEGER),
+        (b"MOVE,1\x0c,40,0,0", codes.E_NOT_INTEGER),
+        (b"MOVE,1,40,0,\x850", codes.E_NOT_INTEGER),  # str.strip() would eat NEL
+        (b"\x0b", codes.E_UNKNOWN),
+        (b"MOVE,99999,x,0,0", codes.E_NOT_INTEGER),
+        (b"MOVE,1,INF,0,0", codes.E_NOT_INTEGER),
+    ],
+)
+def test_command_input_rules(line: bytes, code: int) -> None:
+    msg = text.parse_command(line)
+    assert isinstance(msg, m.Malformed) and msg.code == code
+
+
+def test_inf_tokens() -> None:
+    assert text.parse_command(b"MOVE,INF,60,0,0") == m.Move(30000, 60, 0, 0)
+    assert text.parse_command(b"rotate,-inf,90") == m.Rotate(-30000, 90)
+    assert text.parse_command(b"DELTA,0,0,10,0,Inf") == m.Delta(0, 0, 10, 0, 30000)

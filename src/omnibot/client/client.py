@@ -15,14 +15,22 @@ Timeouts count on ``link.clock`` (simulated time on sim://) and raise LinkTimeou
 the link fails the call (and every command awaiting a reply); the client then tries
 ``link.reopen(retry=reconnect)`` so that the next call can work.
 
-Text replies carry no sequence number: ``OK``/``ERROR`` answer the oldest command waiting, a
-``STATUS`` or ``HELLO`` reply the oldest STATUS or HELLO (commands before it whose reply never came
-fail with ProtocolError). An ``ERROR`` line while no command waits (the firmware never sends
-one) becomes an :class:`~omnibot.client.events.ErrorEvent`; a ``HELLO`` line nobody asked for is
-a controller reset (:class:`~omnibot.client.events.ResetEvent`; waiting commands fail with
-ControllerReset). A command that timed out keeps its place in the line until its reply comes,
-so later replies still match; over a noisy line use the binary protocol, whose replies carry the
-command's seq.
+Text replies, tagged (docs/protocol.md, "Tags and checks"): before its first text command the client
+asks the controller with a tagged ``HELLO#n*check`` whether it echoes tags (``tags=None``; True or
+False skip the question). If it does, every command carries ``#tag*check`` and a reply is matched
+by its tag alone, so a lost or late reply affects only its own command: that call raises
+LinkTimeout ("may or may not have run") and later calls work. A reply whose check fails is dropped
+(an Unexpected event), so no corrupted OK is ever taken for an answer. A controller that does not
+know tags (ERROR 23 to the question, twice) gets today's untagged commands.
+
+Untagged replies carry no sequence number: ``OK``/``ERROR`` answer the oldest untagged command
+waiting, a ``STATUS`` or ``HELLO`` reply the oldest STATUS or HELLO (commands before it whose reply
+never came fail with ProtocolError). An ``ERROR`` line while no command waits becomes an
+:class:`~omnibot.client.events.ErrorEvent` (ERROR 26: a tagged command arrived corrupted and did
+not run); a ``HELLO`` line nobody asked for is a controller reset
+(:class:`~omnibot.client.events.ResetEvent`; waiting commands fail with ControllerReset). After an
+untagged command timed out, the next call first resynchronises: it sends ``STATUS`` and waits for
+that reply, which tells every earlier reply from the later ones.
 
 Not thread-safe: use a client from one thread (listeners run in that thread, during the waits).
 """
@@ -52,7 +60,7 @@ from omnibot.client.events import (
 from omnibot.client.limits import Limits
 from omnibot.client.views import Hello
 from omnibot.client.wire import BinaryWire, TextWire, Wire
-from omnibot.errors import LinkError, LinkTimeout, ProtocolError
+from omnibot.errors import ControllerError, LinkError, LinkTimeout, ProtocolError
 from omnibot.protocol import arq, codes, text
 from omnibot.protocol.binary import Packet
 from omnibot.protocol.messages import (
@@ -83,6 +91,11 @@ E = TypeVar("E", bound=Event)
 MOTION = (Move, Rotate, Delta, Power, Vel)
 DEFAULT_TIMEOUT = 1.0
 """Seconds (link clock) to wait for a reply."""
+PROBE_TRIES = 3
+"""Tagged HELLOs sent at most to learn whether a text controller echoes tags."""
+RESYNC_TRIES = 3
+"""Untagged text: STATUS exchanges tried at most to get back in step after a timeout."""
+_LATE_MAX = 64  # tagged commands that timed out, kept so that a late reply still lands on them
 _RETRY_POLL = codes.RETRY_TIMEOUT_MS / 2000.0  # binary: look at retransmissions this often (s)
 _FOREVER_STEP = 1.0
 
@@ -106,7 +119,9 @@ class Pending:
         self.line = line
         """The command as text, for messages."""
         self.seq = seq
-        """Binary sequence number (0 in text)."""
+        """Binary sequence number; in text the tag (0: untagged)."""
+        self.probe = False
+        """Text: the tagged HELLO that asks whether the controller echoes tags."""
         self.deadline = deadline
         """Link-clock time after which :meth:`result` raises LinkTimeout."""
         self.reply: Reply | None = None
@@ -125,6 +140,8 @@ class Pending:
         can only get an ERROR; other raw text anything but a HELLO reply (send HELLO typed)."""
         if isinstance(reply, ErrorReply):
             return True
+        if self.probe:
+            return not isinstance(reply, HelloReply)  # untagged: the answer of a controller without tags
         if self.command is None:
             return not self.malformed and not isinstance(reply, HelloReply)
         if isinstance(self.command, StatusCommand):
@@ -141,8 +158,11 @@ class Pending:
             deadline = self.deadline if timeout is None else client.clock.now() + timeout
             try:
                 client._wait(lambda: self.done, deadline, f"no reply to {self.line}")
-            except LinkTimeout:
+            except LinkTimeout as exc:
                 self.timed_out = True
+                client._timed_out(self)
+                if client._tags and self.seq:
+                    exc.add_note("it may or may not have run (a tagged text command)")
                 raise
         if self.error is not None:
             raise self.error
@@ -164,7 +184,8 @@ class RobotClient(TypedCalls):
     ``robot`` (a description, preset name or file) adds the robot's limits to the checks made
     before sending; without it only the protocol's ranges are checked. ``timeout`` is the reply
     timeout in seconds of ``link.clock``; ``reconnect`` the seconds ``link.reopen`` may retry after
-    a LinkError (None: do not reopen).
+    a LinkError (None: do not reopen). ``tags``: text commands with ``#tag*check`` (True), without
+    (False), or as the controller answers a tagged HELLO before the first command (None).
     """
 
     def __init__(
@@ -175,6 +196,7 @@ class RobotClient(TypedCalls):
         limits: Limits | None = None,
         timeout: float = DEFAULT_TIMEOUT,
         reconnect: float | None = 0.0,
+        tags: bool | None = None,
     ) -> None:
         self.link = link
         if limits is None:
@@ -184,7 +206,14 @@ class RobotClient(TypedCalls):
         self.reconnect = reconnect
         self.last_hello: Hello | None = None
         """The last HELLO seen (a reply or a reset greeting)."""
-        self._wire: Wire = TextWire()
+        self._tags_auto = tags is None
+        self._tags = tags
+        self._probing = False
+        self._resync = False  # untagged text: a command timed out, get in step before the next
+        self._resyncing = False
+        self._late: dict[int, Pending] = {}  # tag -> tagged command that timed out
+        self._heard = False  # a byte has come from the link
+        self._wire: Wire = TextWire(bool(tags))
         self._outstanding: list[Pending] = []
         self._listeners = Listeners()
         self._moving = False
@@ -234,6 +263,11 @@ class RobotClient(TypedCalls):
     def binary(self) -> bool:
         """True while the client speaks the binary protocol."""
         return self._wire.binary
+
+    @property
+    def tags(self) -> bool | None:
+        """True if text commands carry ``#tag*check``; None until the controller was asked."""
+        return self._tags
 
     @property
     def moving(self) -> bool:
@@ -311,7 +345,7 @@ class RobotClient(TypedCalls):
             if bad:
                 raise ProtocolError(f"cannot send malformed commands in binary mode: {bad}")
             return [self.submit(cmd, timeout) for cmd, _ in chunks if cmd is not None]
-        return [self._send(cmd, chunk + b"\n", timeout, malformed=cmd is None) for cmd, chunk in chunks]
+        return [self._send(cmd, chunk, timeout, malformed=cmd is None) for cmd, chunk in chunks]
 
     def submit_raw(self, data: bytes, replies: int = 1, timeout: float | None = None) -> list[Pending]:
         """Write ``data`` unchanged (text mode only) and expect ``replies`` replies to it (OK,
@@ -330,9 +364,12 @@ class RobotClient(TypedCalls):
     def _send(
         self, command: Command | None, raw: bytes | None, timeout: float | None, malformed: bool = False
     ) -> Pending:
+        """Send ``command``, or in text ``raw`` (one command as typed, without its terminator)."""
         self._ensure_open()
         self._wait_for_switch()
         wait = self.timeout if timeout is None else timeout
+        if not self.binary:
+            self._text_ready(command, raw, wait)
         wire = self._wire
         sync = isinstance(command, Stop | HelloCommand)
         if isinstance(wire, BinaryWire) and not sync and not wire.ready():
@@ -340,8 +377,8 @@ class RobotClient(TypedCalls):
         if isinstance(wire, BinaryWire) and sync:
             self._give_up(wire.take_failed())
         now = self.clock.now()
-        if raw is not None and not wire.binary:
-            seq, data = 0, raw
+        if raw is not None and isinstance(wire, TextWire):
+            seq, data = wire.frame_raw(raw)
         else:
             assert command is not None
             seq, data = wire.frame(command, round(now * 1000))
@@ -358,6 +395,111 @@ class RobotClient(TypedCalls):
         self._outstanding.append(pending)
         self._write(data)
         return pending
+
+    def _text_ready(self, command: Command | None, raw: bytes | None, wait: float) -> None:
+        """Before a text command: learn whether the controller echoes tags (once), and get back in
+        step after an untagged command timed out."""
+        if self._probing or self._resyncing:
+            return
+        what = (text.encode(command) if command is not None else raw or b"").decode("latin-1").strip()
+        if self._tags is None:
+            self._probing = True
+            try:
+                self._detect_tags(wait)
+            except LinkTimeout as exc:
+                raise LinkTimeout(f"{exc} ({what} was not sent)") from None
+            finally:
+                self._probing = False
+        if self._resync and not self._tags:
+            self._resyncing = True
+            try:
+                self._resync_now(wait)
+            except LinkTimeout as exc:
+                raise LinkTimeout(f"{exc} ({what} was not sent)") from None
+            finally:
+                self._resyncing = False
+
+    def _detect_tags(self, wait: float) -> None:
+        """Send tagged HELLOs until a tagged reply (tags on) or two untagged answers (a controller
+        without tags: ERROR 23). A corrupted question gets ERROR 26 or 23 untagged, so one untagged
+        answer is not enough."""
+        wire = self._wire
+        assert isinstance(wire, TextWire)
+        untagged = 0
+        for _ in range(PROBE_TRIES):
+            tag, data = wire.frame(HelloCommand(), 0, tag=True)
+            probe = Pending(self, HelloCommand(), data.decode("ascii").strip(), tag, self.clock.now() + wait)
+            probe.probe = True
+            self._outstanding.append(probe)
+            self._write(data)
+
+            def answered(p: Pending = probe) -> bool:
+                return p.done or self._tags is not None
+
+            try:
+                self._wait(answered, probe.deadline, "")
+            except LinkTimeout:
+                self._outstanding.remove(probe)
+                if not self._heard:  # not a byte from the controller yet: it is not there
+                    break
+                continue
+            if self._tags is not None:  # a tagged reply (maybe to an earlier probe) came
+                if probe in self._outstanding:
+                    self._outstanding.remove(probe)
+                return
+            reply = probe.reply
+            if not (isinstance(reply, ErrorReply) and reply.code == codes.E_CHECKSUM):
+                untagged += 1
+                if untagged == 2:
+                    break
+        if untagged:
+            self._set_tags(False)
+            return
+        raise LinkTimeout(
+            f"no reply to HELLO, sent to ask whether the controller takes tagged text commands "
+            f"(timeout on {self.link.url})"
+        )
+
+    def _set_tags(self, on: bool | None) -> None:
+        self._tags = on
+        wire = self._wire
+        if isinstance(wire, TextWire):
+            wire.tags = bool(on)
+
+    def _resync_now(self, wait: float) -> None:
+        """Untagged text: give up the commands still waiting (their replies can no longer be told
+        from later ones), then STATUS and its reply."""
+        for _ in range(RESYNC_TRIES):
+            self._pump_once(0.0)  # replies already here still land on their commands
+            for p in self._outstanding:
+                p._fail(
+                    LinkTimeout(f"no reply to {p.line}: text replies out of step; it may or may not have run")
+                )
+            self._outstanding.clear()
+            try:
+                self.submit(StatusCommand(), wait).result()
+            except (LinkTimeout, ControllerError):
+                continue
+            self._resync = False
+            return
+        raise LinkTimeout(
+            f"text replies out of step and no reply to STATUS after {RESYNC_TRIES} tries "
+            f"(timeout on {self.link.url})"
+        )
+
+    def _timed_out(self, pending: Pending) -> None:
+        """A call gave up on ``pending``: keep a tagged one aside for a late reply; after an
+        untagged one, resynchronise before the next text command."""
+        if self.binary:
+            return
+        if pending.seq and not pending.probe:
+            if pending in self._outstanding:
+                self._outstanding.remove(pending)
+            self._late[pending.seq] = pending
+            while len(self._late) > _LATE_MAX:
+                del self._late[next(iter(self._late))]
+        elif not pending.seq:
+            self._resync = True
 
     def _wait_for_switch(self) -> None:
         """Wait for a MODE that switches protocols: nothing may be sent until its OK is in."""
@@ -432,6 +574,7 @@ class RobotClient(TypedCalls):
     # ------------------------------------------------------------------ input
 
     def _process(self, data: bytes) -> int:
+        self._heard = True
         handled = 0
         while data:
             wire = self._wire
@@ -458,6 +601,8 @@ class RobotClient(TypedCalls):
         ):
             if isinstance(self._wire, BinaryWire):
                 self._reply_by_seq(item.seq, message)
+            elif item.seq:
+                self._reply_by_tag(item.seq, message, now)
             else:
                 self._reply_in_order(message, now)
         else:
@@ -470,12 +615,37 @@ class RobotClient(TypedCalls):
                     return
             self._event(event_from_message(message, now))
 
+    def _reply_by_tag(self, tag: int, reply: Reply, now: float) -> None:
+        """A tagged text reply answers the command with that tag, wherever it is in the line."""
+        for p in self._outstanding:
+            if p.seq == tag:
+                self._outstanding.remove(p)
+                self._synced = True  # a reply matched: an untagged HELLO from now on is a reset
+                self._hello_answered = False
+                if p.probe:
+                    self._set_tags(True)
+                if isinstance(reply, ErrorReply) or p.accepts(reply):
+                    self._complete(p, reply)
+                else:
+                    p._fail(ProtocolError(f"{reply.keyword} is no reply to {p.line}"))
+                return
+        late = self._late.pop(tag, None)
+        if late is not None and not late.done:  # its caller has had LinkTimeout: record what came
+            self._complete(late, reply)
+            return
+        if self._tags is None and isinstance(reply, HelloReply):  # a late answer to an earlier probe
+            self._set_tags(True)
+            return
+        self._event(event_from_message(reply, now))
+
     def _reply_in_order(self, reply: Reply, now: float) -> None:
-        for i, p in enumerate(self._outstanding):
+        waiting = [p for p in self._outstanding if not p.seq or p.probe]  # the untagged ones
+        for i, p in enumerate(waiting):
             if p.accepts(reply):
-                for lost in self._outstanding[:i]:
+                for lost in waiting[:i]:
                     lost._fail(ProtocolError(f"no reply to {lost.line}: a later reply came first"))
-                del self._outstanding[: i + 1]
+                done = waiting[: i + 1]
+                self._outstanding = [q for q in self._outstanding if q not in done]
                 self._complete(p, reply)
                 self._hello_answered = isinstance(reply, HelloReply)
                 self._synced = True
@@ -526,7 +696,7 @@ class RobotClient(TypedCalls):
             self._mode = command.mask
             binary = bool(command.mask & codes.MODE_BINARY)
             if binary != self.binary:
-                self._wire = BinaryWire() if binary else TextWire()
+                self._wire = BinaryWire() if binary else TextWire(bool(self._tags))
 
     def _event(self, event: Event) -> None:
         if isinstance(event, IdleEvent):
@@ -544,8 +714,12 @@ class RobotClient(TypedCalls):
         self._outstanding.clear()
         self._moving = False
         self._mode = None
+        self._late.clear()
+        self._resync = False
+        if self._tags_auto and not self._probing:  # perhaps another firmware now: ask again
+            self._set_tags(None)
         if self.binary:
-            self._wire = TextWire()
+            self._wire = TextWire(bool(self._tags))
         self._listeners.dispatch(event)
 
     # ------------------------------------------------------------------ link
@@ -587,7 +761,7 @@ class RobotClient(TypedCalls):
         for p in self._outstanding:
             p._fail(exc)
         self._outstanding.clear()
-        self._wire = BinaryWire() if self.binary else TextWire()
+        self._wire = BinaryWire() if self.binary else TextWire(bool(self._tags))
         self._moving = False
         self._broken = True
         self._synced = False

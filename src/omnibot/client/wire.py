@@ -4,6 +4,7 @@ Both turn a command into bytes (``frame``) and received bytes into packets (``fe
 the client can stop at the reply that switches protocols and hand the rest over (``rest``)::
 
     TextWire:    command -> "MOVE,2,40,0,0\\n"        bytes -> Packet(message, seq=0) | Malformed
+                 tagged:  "MOVE,2,40,0,0#17*C3A1\\n"  bytes -> Packet(message, seq=tag)  (0: untagged)
     BinaryWire:  command -> frame (seq, SYNC, retry)  bytes -> Packet(message, seq, event) | Malformed
                  + ack(seq) for events, service(now_ms) for retransmissions (arq.Sender)
 
@@ -18,7 +19,7 @@ import re
 from collections.abc import Iterator
 from typing import Final
 
-from omnibot.protocol import arq, binary, text
+from omnibot.protocol import arq, binary, codes, text
 from omnibot.protocol.binary import Packet
 from omnibot.protocol.messages import Ack, Command, HelloReply, Malformed, Stop
 from omnibot.protocol.messages import Hello as HelloCommand
@@ -28,23 +29,43 @@ _TAIL_MAX = 300
 
 
 class TextWire:
-    """The line protocol: commands end with LF; replies are matched in order by the client."""
+    """The line protocol: commands end with LF. With ``tags`` each command carries ``#tag*check``
+    (tags 1..9999 in turn) and the client matches replies by tag; untagged ones in order."""
 
     binary = False
 
-    def __init__(self) -> None:
+    def __init__(self, tags: bool = False) -> None:
+        self.tags = tags
         self._decoder = text.TextDecoder()
+        self._last_tag = 0
 
     def ready(self) -> bool:
         return True
 
-    def frame(self, command: Command, now_ms: int) -> tuple[int, bytes]:
-        """(seq, bytes) of a command; seq is 0 in text."""
-        return 0, text.encode(command)
+    def next_tag(self) -> int:
+        self._last_tag = self._last_tag % text.TAG_MAX + 1
+        return self._last_tag
+
+    def frame(self, command: Command, now_ms: int, tag: bool | None = None) -> tuple[int, bytes]:
+        """(tag, bytes) of a command; tag 0: untagged. ``tag`` overrides :attr:`tags`."""
+        if not (self.tags if tag is None else tag):
+            return 0, text.encode(command)
+        n = self.next_tag()
+        return n, text.encode(command, tag=n)
+
+    def frame_raw(self, chunk: bytes) -> tuple[int, bytes]:
+        """(tag, bytes) of a command typed by hand (without its terminator): tagged if tags are on
+        and it still fits in a command, else as it is."""
+        if self.tags:
+            n = self.next_tag()
+            tagged = text.with_suffix(chunk, n)
+            if len(tagged) <= codes.LINE_MAX:
+                return n, tagged + codes.COMMAND_END
+        return 0, chunk + codes.COMMAND_END
 
     def feed(self, data: bytes) -> Iterator[Packet | Malformed]:
-        for message in self._decoder.feed(data):
-            yield message if isinstance(message, Malformed) else Packet(message)
+        for message, tag in self._decoder.feed_tagged(data):
+            yield message if isinstance(message, Malformed) else Packet(message, tag or 0)
 
     def rest(self) -> bytes:
         return self._decoder.rest()

@@ -76,7 +76,7 @@ BOARD_MODULES = (
     "telemetry",
     "watchdog",
 )
-PROTOCOL_MODULES = ("codes", "crc", "frame", "arq")
+PROTOCOL_MODULES = ("codes", "crc", "frame", "arq", "linecheck")
 
 
 def default_pins(robot: RobotDescription) -> dict[str, Any]:

@@ -20,7 +20,7 @@ from omnibot.firmware.queue import CommandQueue
 from omnibot.firmware.safety import SonarGuard
 from omnibot.firmware.sonar import Sonars
 from omnibot.firmware.telemetry import Telemetry
-from omnibot.protocol import arq, codes
+from omnibot.protocol import arq, codes, linecheck
 
 TYPE_CHECKING = False
 if TYPE_CHECKING:
@@ -64,6 +64,8 @@ class Controller:
         self._ends: list[int] = []
         self._frames: list[Frame] = []
         self._params: list[int] = []
+        self._tag: bytes | None = None  # text: the tag of the command being answered
+        self._check = False  # text: it carried a "*" check, so its reply does
         mode = int(config.get("mode", 0))
         if mode & codes.MODE_CLOSED_LOOP and not self.limits.has_encoders:
             mode &= ~codes.MODE_CLOSED_LOOP
@@ -76,17 +78,25 @@ class Controller:
         """Send one text line (CR LF added)."""
         self.hal.uart_write((line + "\r\n").encode())
 
+    def _reply(self, line: str) -> None:
+        """Send a text reply, with the command's tag and a check if it had them."""
+        if self._tag is None and not self._check:
+            self.emit(line)
+            return
+        data = line.encode()
+        self.hal.uart_write(data + linecheck.suffix(data, self._tag, self._check) + b"\r\n")
+
     def _ok(self) -> None:
         if self.binary:
             self.link.reply(codes.OK, self._seq, [])
         else:
-            self.emit("OK")
+            self._reply("OK")
 
     def _error(self, code: int) -> None:
         if self.binary:
             self.link.reply(codes.ERROR, self._seq, [code])
         else:
-            self.emit(f"ERROR,{code},{codes.TEXTS[code]}")
+            self._reply(f"ERROR,{code},{codes.TEXTS[code]}")
 
     def _warn(self, code: int) -> None:
         if self.binary:
@@ -123,7 +133,7 @@ class Controller:
             self.link.reply(codes.STATUS_REPLY, self._seq, ints)
             return
         powers = ",".join([str(v) for v in ex.powers])
-        self.emit(f"STATUS,{state},{queued},{cap},{mode};POWER,{powers};MOVE,{m[0]},{m[1]},{m[2]},{m[3]}")
+        self._reply(f"STATUS,{state},{queued},{cap},{mode};POWER,{powers};MOVE,{m[0]},{m[1]},{m[2]},{m[3]}")
 
     # ------------------------------------------------------------------ loop
 
@@ -292,18 +302,31 @@ class Controller:
         self.execute(t, ints)
 
     def handle(self, cmd: "bytes | None") -> None:
-        """Handle one text command (None: it was too long); exactly one reply."""
+        """Handle one text command (None: it was too long); exactly one reply, which echoes the
+        command's ``#tag`` and carries a ``*`` check if the command did (a bad check: ERROR 26,
+        untagged, nothing run)."""
+        self._tag = None
+        self._check = False
         if cmd is None:
             self._error(codes.E_TOO_LONG)
             return
+        end, tag_start, tag_end, checked = linecheck.split(cmd)
+        if checked == linecheck.BAD_CHECK:
+            self._error(codes.E_CHECKSUM)
+            return
         p = self._params
-        kw = parser.parse(cmd, p)
+        kw = parser.parse(cmd[:end] if end < len(cmd) else cmd, p)
         if kw == 0:
             return
+        if tag_start >= 0:
+            self._tag = cmd[tag_start:tag_end]
+        self._check = checked == linecheck.CHECKED
         if kw < 0:
             self._error(-kw)
-            return
-        self.execute(kw, p)
+        else:
+            self.execute(kw, p)
+        self._tag = None
+        self._check = False
 
     # ------------------------------------------------------------------ commands
 
@@ -344,7 +367,7 @@ class Controller:
                     codes.HELLO_REPLY, self._seq, [codes.PROTOCOL_VERSION, self.motors], self.name.encode()
                 )
             else:
-                self.emit(self._hello_text())
+                self._reply(self._hello_text())
         elif kw == codes.MODE:
             self._ok()
             self.guard.refuse = bool(p[0] & codes.MODE_REFUSE_UNCOVERED)

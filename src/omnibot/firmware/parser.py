@@ -3,6 +3,8 @@
 ``;``, CR and LF terminate a command; a run of them counts as one and empty commands are ignored.
 A command longer than ``line_max`` bytes is reported once (``None`` in the output list, which the
 controller answers with ERROR 22) and everything up to the next terminator is dropped.
+:func:`parse` reads one command's body (the controller splits off a ``#tag*check`` suffix first,
+see :mod:`omnibot.protocol.linecheck`).
 """
 
 from omnibot.protocol import codes
@@ -53,15 +55,21 @@ class LineSplitter:
         self._overflow = False
 
 
+SPACES = b" \t"  # what may surround a keyword or parameter (not VT, FF, CR or LF)
+_INF = b"INF"
+
+
 def parse(command: bytes, params: list[int]) -> int:
     """Parse ``KEYWORD[,p1,...,p5]`` into ``params`` (cleared first).
 
     Returns the keyword id (> 0), 0 for a blank command, or -code for ERROR 23, 24, 25 or 34.
-    Surrounding spaces are allowed around the keyword and each parameter.
+    Spaces and tabs are allowed around the keyword and each parameter. The whole command's syntax
+    is checked before any range: every parameter an integer (25), then each inside 16 bits (34).
+    ``INF``/``-INF`` (any case) is 30000/-30000 where the protocol allows it (codes.INF_PARAMS).
     """
     del params[:]
     fields = command.split(b",")
-    keyword = fields[0].strip().upper()
+    keyword = fields[0].strip(SPACES).upper()
     if not keyword and len(fields) == 1:
         return 0
     kw = KEYWORDS.get(keyword, 0)
@@ -69,13 +77,20 @@ def parse(command: bytes, params: list[int]) -> int:
         return -codes.E_UNKNOWN
     if len(fields) - 1 > codes.PARAMS_MAX:
         return -codes.E_PARAM_COUNT
+    inf_at = codes.INF_PARAMS.get(kw, -1) + 1
     for i in range(1, len(fields)):
-        tok = fields[i].strip()
-        digits = tok[1:] if tok[:1] in (b"-", b"+") else tok
+        tok = fields[i].strip(SPACES)
+        sign = tok[:1] in (b"-", b"+")
+        digits = tok[1:] if sign else tok
+        if i == inf_at and digits.upper() == _INF:
+            params.append(-codes.INF if tok[:1] == b"-" else codes.INF)
+            continue
         if not digits or not digits.isdigit():
+            del params[:]
             return -codes.E_NOT_INTEGER
-        value = int(tok)
+        params.append(int(tok))
+    for value in params:
         if value < codes.INT_MIN or value > codes.INT_MAX:
+            del params[:]
             return -codes.E_RANGE16
-        params.append(value)
     return kw

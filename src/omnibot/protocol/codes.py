@@ -68,6 +68,9 @@ PARAM_COUNTS = {
     CAL: (4, 4),
 }
 QUEUED = (MOVE, ROTATE, DELTA, POWER)  # commands that go through the queue
+# Where a text command may spell INF as a token (``INF``, ``-INF``, any case): MOVE's L, ROTATE's A,
+# DELTA's R (index of the parameter). Elsewhere ``INF`` is not an integer (ERROR 25).
+INF_PARAMS = {MOVE: 0, ROTATE: 0, DELTA: 4}
 
 # --- replies and events (binary message types; text keywords in KEYWORDS) ------------------------
 OK = 32
@@ -121,6 +124,7 @@ E_TOO_LONG = 22
 E_UNKNOWN = 23
 E_PARAM_COUNT = 24
 E_NOT_INTEGER = 25
+E_CHECKSUM = 26  # project: a text command's "*" check does not match (docs/protocol.md, tags)
 E_TIME = 27
 E_SPEED = 28
 E_ANGLE = 29
@@ -164,6 +168,7 @@ TEXTS = {
     E_UNSUPPORTED: "mode, mask bit or version not supported",
     E_ESTOP: "motion blocked: emergency stop latched",
     E_UNCOVERED: "motion refused: no sonar covers this direction",
+    E_CHECKSUM: "checksum mismatch",
 }
 
 # --- STATUS states -----------------------------------------------------------------------------------

@@ -10,9 +10,13 @@ Layout::
         STATUS,<state>,<queued>,<capacity>,<mode>;POWER,<p1>..<pn>;MOVE,<L>,<V>,<D>,<C>  CR LF
         (";" is part of a reply line; only CR and LF end one)
 
+    either may end with the project's suffix ``#tag*check`` (protocol/linecheck.py): a command's
+    tag (1..4 digits) comes back on its reply; check = CRC-16 of the line before "*", 4 hex digits
+
 ``decode(buf)`` reads replies and events (the host's direction), ``decode_command(buf)`` commands;
 both return ``(bytes used, message or None)`` and never raise on bad input: a bad line comes back as
-:class:`Malformed`. :class:`TextDecoder` keeps the buffer for a byte stream.
+:class:`Malformed` (a line whose check does not match too). ``decode_tagged`` also returns a reply's
+tag. :class:`TextDecoder` keeps the buffer for a byte stream.
 """
 
 from __future__ import annotations
@@ -22,7 +26,7 @@ from collections.abc import Iterator
 from typing import Final
 
 from omnibot.errors import ProtocolError
-from omnibot.protocol import codes
+from omnibot.protocol import codes, linecheck
 from omnibot.protocol.messages import (
     COMMAND_BY_KEYWORD,
     Ack,
@@ -44,31 +48,52 @@ from omnibot.protocol.messages import (
 _COMMAND_END_RE: Final = re.compile(rb"[;\r\n]")
 _LINE_END_RE: Final = re.compile(rb"[\r\n]")
 _INT_RE: Final = re.compile(r"[+-]?[0-9]+\Z")
+_INF_RE: Final = re.compile(r"[+-]?inf\Z", re.IGNORECASE)
+_SPACES: Final = " \t"  # what may surround a command's keyword or parameter (not VT, FF, ...)
+TAG_MAX: Final = 10**linecheck.TAG_DIGITS - 1
+"""The largest tag (tags are 0..9999; the client uses 1..9999, 0 meaning none)."""
 _LABEL_BAD_RE: Final = re.compile(r"[\x00-\x1f\x7f-\U0010ffff]")
 
 Decoded = Message | Malformed
 
 
 # --- encoding ------------------------------------------------------------------------------------------
-def encode(message: Message, terminator: bytes | None = None) -> bytes:
+def encode(message: Message, terminator: bytes | None = None, tag: int | None = None) -> bytes:
     """One message as a line: a command ends with LF, a reply or event with CR LF (or ``terminator``).
 
+    With ``tag`` (0..9999) the line ends with ``#tag*check`` (see protocol/linecheck.py).
     Raises ProtocolError for what the text protocol cannot carry (a parameter outside 16 bits, more
     than 5 parameters, a command over 64 bytes, a text with control characters, an ACK).
     """
     if isinstance(message, Ack):
         raise ProtocolError("ACK exists only in the binary protocol")
     if is_command(message):
-        line = _join(message.keyword, check_command(message))
+        line = with_suffix(_join(message.keyword, check_command(message)).encode("ascii"), tag)
         if len(line) > codes.LINE_MAX:
             raise ProtocolError(f"{message.keyword}: command longer than {codes.LINE_MAX} bytes")
         end = codes.COMMAND_END if terminator is None else terminator
     else:
-        line = _reply_line(message)
+        line = with_suffix(_reply_line(message).encode("ascii"), tag)
         if len(line) > codes.EVENT_LINE_MAX:
             raise ProtocolError(f"{message.keyword}: line longer than {codes.EVENT_LINE_MAX} bytes")
         end = codes.LINE_END if terminator is None else terminator
-    return line.encode("ascii") + end
+    return line + end
+
+
+def with_suffix(line: bytes, tag: int | None) -> bytes:
+    """``line`` with ``#tag*check`` appended (``line`` itself if ``tag`` is None)."""
+    if tag is None:
+        return line
+    if not 0 <= tag <= TAG_MAX:
+        raise ProtocolError(f"tag {tag} outside 0..{TAG_MAX}")
+    return line + linecheck.suffix(line, str(tag).encode(), True)
+
+
+def split_suffix(line: bytes) -> tuple[bytes, int | None, bool]:
+    """(body, tag or None, check failed) of a line without its terminator."""
+    end, tag_start, tag_end, checked = linecheck.split(line)
+    tag = int(line[tag_start:tag_end]) if tag_start >= 0 else None
+    return line[:end], tag, checked == linecheck.BAD_CHECK
 
 
 def _join(keyword: str, params: tuple[int, ...]) -> str:
@@ -104,12 +129,24 @@ def decode(buf: bytes | bytearray) -> tuple[int, Decoded | None]:
     are needed. A line longer than 256 bytes is returned as Malformed as soon as that is certain;
     the caller then drops bytes up to the next terminator (:class:`TextDecoder` does).
     """
+    used, message, _ = decode_tagged(buf)
+    return used, message
+
+
+def decode_tagged(buf: bytes | bytearray) -> tuple[int, Decoded | None, int | None]:
+    """:func:`decode` that also returns the line's tag (None: untagged)."""
     used, line, cut = _next_line(buf, _LINE_END_RE, codes.EVENT_LINE_MAX)
     if line is None:
-        return used, None
+        return used, None, None
     if cut:
-        return used, Malformed(line, "line too long")
-    return used, parse_line(line)
+        return used, Malformed(line, "line too long"), None
+    body, tag, bad = split_suffix(line)
+    if bad:
+        return used, Malformed(line, "checksum mismatch"), None
+    message = parse_line(body)
+    if isinstance(message, Malformed):
+        return used, Malformed(line, message.reason), None
+    return used, message, tag
 
 
 def decode_command(buf: bytes | bytearray) -> tuple[int, Command | Malformed | None]:
@@ -142,27 +179,36 @@ def _next_line(buf: bytes | bytearray, ends: re.Pattern[bytes], limit: int) -> t
     return used, bytes(buf[start:end]), False
 
 
-def _ints(fields: list[str]) -> list[int] | None:
+def _ints(fields: list[str], spaces: str | None = None, inf_at: int = -1) -> list[int] | None:
+    """The fields as integers (``INF`` tokens too at index ``inf_at``), None if one is not."""
     out = []
-    for f in fields:
-        token = f.strip()
-        if not _INT_RE.match(token):
+    for i, f in enumerate(fields):
+        token = f.strip(spaces)
+        if i == inf_at and _INF_RE.match(token):
+            out.append(-codes.INF if token[0] == "-" else codes.INF)
+        elif _INT_RE.match(token):
+            out.append(int(token))
+        else:
             return None
-        out.append(int(token))
     return out
 
 
 def parse_command(line: bytes) -> Command | Malformed | None:
-    """One command without its terminator; None for a blank one.
+    """One command without its terminator; None for a blank one. A ``#tag*check`` suffix is split
+    off (and checked: ERROR 26 if it does not match), as the controller does.
 
-    Checks, in order: length (22), keyword (23), at most 5 parameters (24), integers (25),
-    16-bit range (34), the command's parameter count (24). Limits of the robot are the
-    controller's business.
+    Checks, in order: length (22), check (41), keyword (23), at most 5 parameters (24), integers
+    (25), 16-bit range (34), the command's parameter count (24). Only spaces and tabs surround
+    fields; ``INF``/``-INF`` (any case) is 30000/-30000 where codes.INF_PARAMS allows it. Limits of
+    the robot are the controller's business.
     """
     if len(line) > codes.LINE_MAX:
         return Malformed(line, "command too long", codes.E_TOO_LONG)
-    fields = line.decode("latin-1").split(",")
-    keyword = fields[0].strip().upper()
+    body, _, bad = split_suffix(line)
+    if bad:
+        return Malformed(line, "checksum mismatch", codes.E_CHECKSUM)
+    fields = body.decode("latin-1").split(",")
+    keyword = fields[0].strip(_SPACES).upper()
     if not keyword and len(fields) == 1:
         return None
     cls = COMMAND_BY_KEYWORD.get(keyword)
@@ -170,7 +216,7 @@ def parse_command(line: bytes) -> Command | Malformed | None:
         return Malformed(line, "unknown command", codes.E_UNKNOWN)
     if len(fields) - 1 > codes.PARAMS_MAX:
         return Malformed(line, "wrong number of parameters", codes.E_PARAM_COUNT)
-    params = _ints(fields[1:])
+    params = _ints(fields[1:], _SPACES, codes.INF_PARAMS.get(cls.TYPE, -1))
     if params is None:
         return Malformed(line, "parameter is not an integer", codes.E_NOT_INTEGER)
     if any(not codes.INT_MIN <= p <= codes.INT_MAX for p in params):
@@ -260,10 +306,14 @@ class TextDecoder:
 
     def feed(self, data: bytes) -> Iterator[Decoded]:
         """Append ``data``; iterate over the messages now complete."""
+        return (message for message, _ in self.feed_tagged(data))
+
+    def feed_tagged(self, data: bytes) -> Iterator[tuple[Decoded, int | None]]:
+        """:meth:`feed` with each message's tag (None: untagged; always None for commands)."""
         self._buf.extend(data)
         return self._drain()
 
-    def _drain(self) -> Iterator[Decoded]:
+    def _drain(self) -> Iterator[tuple[Decoded, int | None]]:
         while True:
             if self._skipping:
                 found = self._ends.search(self._buf)
@@ -272,14 +322,19 @@ class TextDecoder:
                     return
                 del self._buf[: found.start()]
                 self._skipping = False
-            used, message = decode_command(self._buf) if self.commands else decode(self._buf)
+            tag = None
+            message: Decoded | None
+            if self.commands:
+                used, message = decode_command(self._buf)
+            else:
+                used, message, tag = decode_tagged(self._buf)
             if used == 0:
                 return
             cut = isinstance(message, Malformed) and self._ends.search(self._buf, 0, used) is None
             del self._buf[:used]
             self._skipping = cut
             if message is not None:
-                yield message
+                yield message, tag
 
     def rest(self) -> bytes:
         """Take the bytes not decoded yet (e.g. the first binary frames after a MODE switch)."""
