@@ -477,6 +477,12 @@ def _add_calibrate(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> 
 # --------------------------------------------------------------------------- parser
 
 
+def _add_log(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    from omnibot.logs.commands import add_log_command
+
+    add_log_command(sub)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="omnibot", description="Drive omnidirectional mobile robots, real or simulated."
@@ -513,6 +519,7 @@ ADDERS: list[Callable[[argparse._SubParsersAction[argparse.ArgumentParser]], Non
     _add_teleop,
     _add_dashboard,
     _add_calibrate,
+    _add_log,
 ]
 
 
@@ -536,12 +543,13 @@ def exit_status(exc: BaseException) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``omnibot`` command line; returns the exit status."""
     from omnibot.client.session import Terminated, terminate_cleanly
+    from omnibot.logs.recorder import recording
 
     parser = build_parser()
     args = parser.parse_args(argv)
     handler: Handler = args.handler
     try:
-        with terminate_cleanly():
+        with terminate_cleanly(), recording(getattr(args, "log", None)):
             status = handler(args)
             sys.stdout.flush()  # a reader that went away shows up here, not at interpreter exit
             return status

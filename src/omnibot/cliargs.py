@@ -88,7 +88,17 @@ def add_robot_options(
         help=surface_help
         or "simulated floor: wood, carpet, concrete, linoleum (default: the world's; not with --port)",
     )
+    add_log_option(p)
     p.set_defaults(default_world=world)
+
+
+def add_log_option(p: argparse.ArgumentParser) -> None:
+    """``--log FILE.mcap``: record the run (:mod:`omnibot.logs.recorder`; ``omnibot log``)."""
+    p.add_argument(
+        "--log",
+        metavar="FILE.mcap",
+        help="record the run: link bytes, protocol, telemetry, estimate, truth, URDF (MCAP, ROS 2 messages)",
+    )
 
 
 def check_sim_options(args: argparse.Namespace, allowed: Sequence[str] = ()) -> None:

@@ -33,7 +33,7 @@ import contextlib
 import math
 from collections.abc import Callable
 from types import TracebackType
-from typing import Self, TypeVar
+from typing import Protocol, Self, TypeVar
 
 from omnibot.client import switch
 from omnibot.client.calls import TypedCalls
@@ -48,6 +48,7 @@ from omnibot.client.events import (
     Telemetry,
     WarnEvent,
     event_from_message,
+    log,
 )
 from omnibot.client.limits import Limits
 from omnibot.client.views import Hello
@@ -61,6 +62,7 @@ from omnibot.protocol.messages import (
     ErrorReply,
     HelloReply,
     Malformed,
+    Message,
     Mode,
     Move,
     Ok,
@@ -85,6 +87,18 @@ DEFAULT_TIMEOUT = 1.0
 """Seconds (link clock) to wait for a reply."""
 _RETRY_POLL = codes.RETRY_TIMEOUT_MS / 2000.0  # binary: look at retransmissions this often (s)
 _FOREVER_STEP = 1.0
+
+
+class Tracer(Protocol):
+    """What a recorder hears from the client (:meth:`RobotClient.add_tracer`): every byte on the link
+    as the ``spy+`` wrapper sees it, and every command sent and reply matched, decoded (events go to
+    listeners). Times are the link clock's."""
+
+    def link_bytes(self, t: float, kind: str, data: bytes = b"", note: str = "") -> None:
+        """``TX`` written, ``RX`` read, ``ERR`` the link failed (``note``), ``CLOSE``."""
+
+    def message(self, t: float, direction: str, message: Message | Malformed) -> None:
+        """``command`` sent or ``reply`` matched."""
 
 
 class Pending:
@@ -192,6 +206,7 @@ class RobotClient(TypedCalls):
         self._broken = False
         self._hello_answered = False  # text: the last reply matched was a HELLO reply
         self._synced = False  # text: a reply has been matched since the client started
+        self._tracers: list[Tracer] = []
 
     @classmethod
     def open(
@@ -258,6 +273,27 @@ class RobotClient(TypedCalls):
 
     def remove_listener(self, callback: Callable[[E], object]) -> None:
         self._listeners.remove(callback)
+
+    def add_tracer(self, tracer: Tracer) -> None:
+        """Hand ``tracer`` the link's bytes and the commands and replies (a recorder)."""
+        self._tracers.append(tracer)
+
+    def remove_tracer(self, tracer: Tracer) -> None:
+        self._tracers = [t for t in self._tracers if t is not tracer]
+
+    def _trace_bytes(self, kind: str, data: bytes = b"", note: str = "") -> None:
+        for tracer in self._tracers:
+            try:
+                tracer.link_bytes(self.clock.now(), kind, data, note)
+            except Exception:
+                log.exception("tracer %r failed", tracer)
+
+    def _trace_message(self, direction: str, message: Message | Malformed) -> None:
+        for tracer in self._tracers:
+            try:
+                tracer.message(self.clock.now(), direction, message)
+            except Exception:
+                log.exception("tracer %r failed", tracer)
 
     def on_telemetry(self, callback: Callable[[Telemetry], object]) -> None:
         self._listeners.add(callback, Telemetry)
@@ -356,6 +392,8 @@ class RobotClient(TypedCalls):
             line = text.encode(command).decode("ascii").strip()
         pending = Pending(self, command, line, seq, now + wait, malformed)
         self._outstanding.append(pending)
+        if command is not None and self._tracers:
+            self._trace_message("command", command)
         self._write(data)
         return pending
 
@@ -509,6 +547,8 @@ class RobotClient(TypedCalls):
 
     def _complete(self, pending: Pending, reply: Reply) -> None:
         pending.reply = reply
+        if self._tracers:
+            self._trace_message("reply", reply)
         if isinstance(reply, ErrorReply):
             pending.error = controller_error(reply.code, reply.description, pending.line)
             return
@@ -570,18 +610,25 @@ class RobotClient(TypedCalls):
         self._outstanding = [p for p in self._outstanding if not p.done]
 
     def _write(self, data: bytes) -> None:
+        if self._tracers:
+            self._trace_bytes("TX", data)
         try:
             self.link.write(data)
         except LinkError as exc:
+            self._trace_bytes("ERR", note=str(exc))
             self._link_failed(exc)
             raise
 
     def _read(self, timeout: float) -> bytes:
         try:
-            return self.link.read(4096, timeout)
+            data = self.link.read(4096, timeout)
         except LinkError as exc:
+            self._trace_bytes("ERR", note=str(exc))
             self._link_failed(exc)
             raise
+        if data and self._tracers:
+            self._trace_bytes("RX", data)
+        return data
 
     def _link_failed(self, exc: LinkError) -> None:
         for p in self._outstanding:
@@ -611,6 +658,8 @@ class RobotClient(TypedCalls):
 
     def close(self) -> None:
         """Close the link (idempotent). The controller stays in its mode (see use_text)."""
+        if self._tracers and not self.link.closed:
+            self._trace_bytes("CLOSE")
         self.link.close()
 
     def __enter__(self) -> Self:
