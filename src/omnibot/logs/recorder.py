@@ -19,7 +19,8 @@ clock of the moment recording started):
 * a telemetry event: ``joint_states`` (wheel joints of the URDF: angle, speed, and the motor power
   in PWM counts as effort), ``imu`` (gyro rate, heading as orientation), ``range/<sonar>`` per sonar,
   the estimate (the ``estimator`` named, run on each sample) as ``odom`` and ``/tf`` odom ->
-  base_link, and the simulator's truth as ``/omnibot/truth`` when the link is an in-process one;
+  base_link (and exactly, heading unwrapped, as ``/omnibot/estimate`` geometry_msgs/Pose2D, which
+  ``omnibot log replay`` compares with), and the simulator's truth as ``/omnibot/truth`` when the link is an in-process one;
 * :meth:`start`: ``robot_description`` (the URDF) and ``calibration`` (the description's calibration
   tables, YAML), both ``std_msgs/msg/String``, and the MCAP metadata ``omnibot`` that ``omnibot log
   replay`` needs (the description, the estimator, the start pose).
@@ -54,6 +55,7 @@ from omnibot.logs import schemas
 from omnibot.logs.topics import (
     CALIBRATION,
     CMD_VEL,
+    ESTIMATE,
     IMU,
     JOINT_STATES,
     LINK,
@@ -366,6 +368,8 @@ class Recorder:
             body = world_to_body((est.vx, est.vy, est.w), est.theta)
             pose = Pose2D(est.x, est.y, est.theta)
             self.write_pose(ODOM, ns, pose, (float(body[0]), float(body[1]), est.w), tf=True)
+            pose2d = schemas.new("geometry_msgs/msg/Pose2D", x=est.x, y=est.y, theta=est.theta)
+            self.write(ESTIMATE, "geometry_msgs/msg/Pose2D", pose2d, ns)
         if self._simulator is not None:
             pose, vel = self._simulator.pose, self._simulator.twist
             self.write_pose(TRUTH, ns, Pose2D(pose.x, pose.y, pose.theta), (vel.vx, vel.vy, vel.w))

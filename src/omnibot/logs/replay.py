@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from omnibot.client.events import Telemetry
 from omnibot.errors import ConfigError
 from omnibot.estimation.estimator import Estimate, make_estimator
-from omnibot.logs.run import PoseRow, Run
+from omnibot.logs.run import Run
 from omnibot.protocol import text
 from omnibot.protocol.messages import Telemetry as TelMessage
 from omnibot.robot.description import RobotDescription
@@ -61,16 +61,16 @@ def replay_log(run: Run, estimator: str | None = None) -> Replay:
     est = make_estimator(name, robot_of(run))
     estimates = [(tel.time, est.update(tel)) for tel in telemetry_of(run) if tel.encoders is not None]
     difference: float | None = None
-    if name == recorded and run.estimate:
-        difference = _max_difference(run.estimate, [e for _, e in estimates])
+    if name == recorded and run.estimate_exact:
+        difference = _max_difference(run.estimate_exact, [e for _, e in estimates])
     return Replay(name, recorded, estimates, difference)
 
 
-def _max_difference(live: list[PoseRow], offline: list[Estimate]) -> float:
+def _max_difference(live: list[tuple[float, float, float, float]], offline: list[Estimate]) -> float:
+    """The largest of the position (m) and heading (rad) differences; inf if the counts differ."""
     if len(live) != len(offline):
         return math.inf
     worst = 0.0
-    for row, e in zip(live, offline, strict=True):
-        heading = abs(math.remainder(row[3] - e.theta, math.tau))
-        worst = max(worst, math.hypot(row[1] - e.x, row[2] - e.y), heading)
+    for (_, x, y, theta), e in zip(live, offline, strict=True):
+        worst = max(worst, math.hypot(x - e.x, y - e.y), abs(theta - e.theta))
     return worst

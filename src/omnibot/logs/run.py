@@ -15,6 +15,7 @@ from omnibot.logs.reader import LogFile
 from omnibot.logs.topics import (
     CALIBRATION,
     CMD_VEL,
+    ESTIMATE,
     IMU,
     JOINT_STATES,
     LINK,
@@ -48,6 +49,8 @@ class Run:
     times: dict[str, list[float]] = field(default_factory=lambda: defaultdict(list))
     """topic -> the log times of its messages (s)."""
     estimate: list[PoseRow] = field(default_factory=list)
+    estimate_exact: list[tuple[float, float, float, float]] = field(default_factory=list)
+    """t, x, y, theta of ``/omnibot/estimate`` (theta unwrapped, as the estimator had it)."""
     truth: list[PoseRow] = field(default_factory=list)
     joints: list[tuple[float, list[str], list[float], list[float], list[float]]] = field(default_factory=list)
     """t, names, positions (rad), velocities (rad/s), efforts (PWM counts)."""
@@ -117,6 +120,8 @@ def load_run(path: str | Path) -> Run:
         msg = m.decode()
         if m.topic == ODOM:
             run.estimate.append(_pose(t, msg))
+        elif m.topic == ESTIMATE:
+            run.estimate_exact.append((t, float(msg.x), float(msg.y), float(msg.theta)))
         elif m.topic == TRUTH:
             run.truth.append(_pose(t, msg))
         elif m.topic == JOINT_STATES:
@@ -150,7 +155,7 @@ def load_run(path: str | Path) -> Run:
     return run
 
 
-_DECODED = {ODOM, TRUTH, JOINT_STATES, IMU, CMD_VEL, PROTOCOL, LINK, ROBOT_DESCRIPTION, CALIBRATION}
+_DECODED = {ODOM, ESTIMATE, TRUTH, JOINT_STATES, IMU, CMD_VEL, PROTOCOL, LINK, ROBOT_DESCRIPTION, CALIBRATION}
 
 
 def rate_and_gap(times: list[float]) -> tuple[float, float]:

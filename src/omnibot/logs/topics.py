@@ -13,6 +13,8 @@ CALIBRATION = "calibration"
 LINK = "/omnibot/link"
 PROTOCOL = "/omnibot/protocol"
 TRUTH = "/omnibot/truth"
+ESTIMATE = "/omnibot/estimate"
+"""The estimate's pose exactly (geometry_msgs/Pose2D: theta unwrapped, no quaternion rounding)."""
 RANGE_PREFIX = "range/"
 
 
