@@ -56,6 +56,7 @@ def drive(path: Path, seconds: float = 2.0, *, binary: bool = False) -> Recorded
         client.add_tracer(TxSpy())
         client.add_listener(events, Telemetry)
         sim = simulator_of(client)
+        assert sim is not None
         client.on_telemetry(lambda _: run.truth.append((sim.pose.x, sim.pose.y, sim.pose.theta)))
         if binary:
             client.use_binary()
@@ -64,7 +65,7 @@ def drive(path: Path, seconds: float = 2.0, *, binary: bool = False) -> Recorded
         for i in range(steps):
             vx = 0.3 * math.sin(math.pi * i / steps)
             cmd = client.vel(vx, 0.1, 0.5, 0.2)
-            run.vels.append(cmd)  # type: ignore[arg-type]
+            run.vels.append(cmd)
             client.sleep(0.01)
     rec.close()
     run.telemetry = events.of(Telemetry)

@@ -3,6 +3,7 @@ and by Foxglove's stream reader."""
 
 from __future__ import annotations
 
+import itertools
 import json
 import os
 import signal
@@ -71,7 +72,7 @@ def test_a_killed_run_is_readable_up_to_its_last_chunk(killed: Path) -> None:
     tels = [text.parse_line(line.text.encode()) for line in lines if line.keyword == "TEL"]
     assert len(tels) > 100
     times = [t.t_ms for t in tels]  # type: ignore[union-attr]
-    assert times == sorted(times) and all(b - a == 10 for a, b in zip(times, times[1:], strict=False))
+    assert times == sorted(times) and all(b - a == 10 for a, b in itertools.pairwise(times))
     assert sum(1 for m in messages if m.topic == topics.ODOM) == len(tels)
 
 

@@ -165,6 +165,7 @@ class Recorder:
     ) -> None:
         self.path = Path(path)
         try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
             self._file: IO[bytes] = open(self.path, "wb", buffering=0)  # noqa: SIM115 (closed in close())
         except OSError as exc:
             raise ConfigError(f"cannot write {self.path}: {exc.strerror or exc}", key="--log") from None
