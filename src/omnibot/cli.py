@@ -36,7 +36,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from omnibot import __version__
-from omnibot.cliargs import DEFAULT_SEED, add_debug_option, add_robot_options, seed_of
+from omnibot.cliargs import DEFAULT_SEED, add_debug_option, add_log_option, add_robot_options, seed_of
 from omnibot.errors import ConfigError, KinematicsError, OmnibotError, ProtocolError
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_BUG = 0, 1, 2, 70
@@ -217,8 +217,13 @@ def _sim(args: argparse.Namespace) -> int:
     if not args.pty:
         raise ConfigError("only the pty emulator exists so far: add --pty", key="omnibot sim")
     truth = Path(args.truth) if args.truth else None
+    log = Path(args.log) if args.log else None
+    if log is not None:
+        from omnibot.cliargs import check_writable
+
+        check_writable(log, "--log")
     return run_pty_emulator(
-        robot, seed=args.seed, surface=args.surface, world=args.world, truth=truth, baud=args.baud
+        robot, seed=args.seed, surface=args.surface, world=args.world, truth=truth, baud=args.baud, log=log
     )
 
 
@@ -241,6 +246,7 @@ def _add_sim(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument("--world", help="world name (empty, room, corridor) or world YAML file (default empty)")
     p.add_argument("--truth", metavar="FILE.csv", help="write the ground-truth trajectory t,x,y,theta")
     p.add_argument("--baud", type=int, default=115200, help="pace bytes to this baud rate (default 115200)")
+    add_log_option(p)
     p.set_defaults(handler=_sim)
 
 

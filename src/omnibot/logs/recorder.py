@@ -199,7 +199,7 @@ class Recorder:
 
     # ------------------------------------------------------------------ time
 
-    def _ns(self, t: float) -> int:
+    def ns(self, t: float) -> int:
         """Link-clock seconds -> ns since the epoch (the first time seen is when recording started)."""
         if self._t0 is None:
             self._t0 = t
@@ -265,7 +265,7 @@ class Recorder:
             self.estimator = make_estimator(self.estimator_name, robot)
         except ConfigError as exc:
             log.warning("no estimate in the log: %s", exc)
-        ns = self._ns(t)
+        ns = self.ns(t)
         self.write(
             ROBOT_DESCRIPTION,
             "std_msgs/msg/String",
@@ -320,7 +320,7 @@ class Recorder:
 
     def link_bytes(self, t: float, kind: str, data: bytes = b"", note: str = "") -> None:
         """Bytes on the link: ``TX`` written, ``RX`` read, ``ERR`` a failure, ``CLOSE``."""
-        ns = self._ns(t)
+        ns = self.ns(t)
         msg = schemas.new(
             schemas.LINK_BYTES,
             stamp=stamp(ns),
@@ -332,7 +332,7 @@ class Recorder:
 
     def message(self, t: float, direction: str, message: Message | Malformed) -> None:
         """A decoded protocol message: ``command`` sent, ``reply`` matched, ``event``."""
-        ns = self._ns(t)
+        ns = self.ns(t)
         if isinstance(message, Malformed):
             keyword, line = "MALFORMED", f"{message.reason}: {message.raw!r}"
         else:
@@ -354,7 +354,7 @@ class Recorder:
             self.telemetry(event)
 
     def telemetry(self, tel: Telemetry) -> None:
-        ns = self._ns(tel.time)
+        ns = self.ns(tel.time)
         if tel.encoders is not None and self._joints and len(tel.encoders) == len(self._joints):
             self._joint_states(ns, tel)
         if tel.gyro_rate is not None or tel.heading is not None:
