@@ -216,6 +216,11 @@ def _sim(args: argparse.Namespace) -> int:
         load_world(args.world)  # a bad world is reported before the pty appears
     if not args.pty:
         raise ConfigError("only the pty emulator exists so far: add --pty", key="omnibot sim")
+    if args.foxglove is not None:
+        raise ConfigError(
+            "sim --pty records its side with --log; --foxglove goes on the command that drives it",
+            key="--foxglove",
+        )
     truth = Path(args.truth) if args.truth else None
     log = Path(args.log) if args.log else None
     if log is not None:
@@ -555,7 +560,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     handler: Handler = args.handler
     try:
-        with terminate_cleanly(), recording(getattr(args, "log", None)):
+        with (
+            terminate_cleanly(),
+            recording(getattr(args, "log", None), foxglove=getattr(args, "foxglove", None)),
+        ):
             status = handler(args)
             sys.stdout.flush()  # a reader that went away shows up here, not at interpreter exit
             return status

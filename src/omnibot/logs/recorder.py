@@ -35,11 +35,12 @@ from __future__ import annotations
 import contextlib
 import logging
 import math
+import sys
 import time
 from collections import Counter
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import IO, Any, cast
+from typing import IO, Any, Protocol, cast
 
 import numpy as np
 import yaml
@@ -128,6 +129,14 @@ def odometry(ns: int, frame: str, child: str, pose: Pose2D, body: tuple[float, f
     )
 
 
+class Mirror(Protocol):
+    """Something that gets every message the recorder writes (the Foxglove live server)."""
+
+    def __call__(self, topic: str, typename: str, data: bytes, ns: int) -> None: ...
+
+    def close(self) -> None: ...
+
+
 class _Direct:
     """A file the MCAP writer writes straight to the OS (no user-space buffer a SIGKILL would lose;
     the writer already hands over whole chunks)."""
@@ -152,28 +161,35 @@ class _Direct:
 
 
 class Recorder:
-    """Writes one MCAP file; see the module docstring for what each method records."""
+    """Writes one MCAP file (``path``; None: no file) and hands every message to ``mirrors``
+    (``mirror(topic, typename, cdr_bytes, ns)``: the Foxglove live server); see the module docstring
+    for what each method records."""
 
     def __init__(
         self,
-        path: str | Path,
+        path: str | Path | None,
         *,
         estimator: str = DEFAULT_ESTIMATOR,
         chunk_size: int = CHUNK_SIZE,
         flush_period: float = FLUSH_PERIOD,
         compression: str = "zstd",
+        mirrors: Sequence[Mirror] = (),
     ) -> None:
-        self.path = Path(path)
-        try:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._file: IO[bytes] = open(self.path, "wb", buffering=0)  # noqa: SIM115 (closed in close())
-        except OSError as exc:
-            raise ConfigError(f"cannot write {self.path}: {exc.strerror or exc}", key="--log") from None
-        kinds = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
-        self._writer = Writer(
-            cast("IO[Any]", _Direct(self._file)), chunk_size=chunk_size, compression=kinds[compression]
-        )
-        self._writer.start(profile="ros2", library=f"omnibot {__version__}")
+        self.path = Path(path) if path is not None else None
+        self.mirrors = list(mirrors)
+        self._file: IO[bytes] | None = None
+        self._writer: Writer | None = None
+        if self.path is not None:
+            try:
+                self.path.parent.mkdir(parents=True, exist_ok=True)
+                self._file = open(self.path, "wb", buffering=0)  # noqa: SIM115 (closed in close())
+            except OSError as exc:
+                raise ConfigError(f"cannot write {self.path}: {exc.strerror or exc}", key="--log") from None
+            kinds = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
+            self._writer = Writer(
+                cast("IO[Any]", _Direct(self._file)), chunk_size=chunk_size, compression=kinds[compression]
+            )
+            self._writer.start(profile="ros2", library=f"omnibot {__version__}")
         self.compression = compression
         self.estimator_name = estimator
         self.flush_period = flush_period
@@ -208,18 +224,18 @@ class Recorder:
 
     # ------------------------------------------------------------------ writing
 
-    def _channel(self, topic: str, typename: str) -> int:
+    def _channel(self, writer: Writer, topic: str, typename: str) -> int:
         known = self._channels.get(topic)
         if known is not None:
             return known[0]
         schema = self._schemas.get(typename)
         if schema is None:
-            schema = self._writer.register_schema(
+            schema = writer.register_schema(
                 typename, "ros2msg", schemas.schema_text(typename).encode("utf-8")
             )
             self._schemas[typename] = schema
         qos = _QOS_LATCHED if topic in _LATCHED else _QOS_VOLATILE
-        channel = self._writer.register_channel(topic, "cdr", schema, {"offered_qos_profiles": qos})
+        channel = writer.register_channel(topic, "cdr", schema, {"offered_qos_profiles": qos})
         self._channels[topic] = (channel, typename)
         return channel
 
@@ -233,8 +249,16 @@ class Recorder:
             self.lost += 1
             log.exception("cannot serialize a %s for %s", typename, topic)
             return
-        channel = self._channel(topic, typename)
         self.counts[topic] += 1
+        for mirror in self.mirrors:
+            try:
+                mirror(topic, typename, data, ns)
+            except Exception:
+                log.exception("mirror %r failed on %s", mirror, topic)
+        if self._writer is None:
+            self._last_ns = max(self._last_ns, ns)
+            return
+        channel = self._channel(self._writer, topic, typename)
         self._writer.add_message(
             channel, log_time=ns, publish_time=ns, data=data, sequence=self.counts[topic]
         )
@@ -246,7 +270,7 @@ class Recorder:
 
     def flush(self) -> None:
         """Write the open chunk now."""
-        if not self.closed:
+        if not self.closed and self._writer is not None:
             self._writer.flush()  # type: ignore[no-untyped-call]
             self._last_flush = time.monotonic()
 
@@ -278,6 +302,8 @@ class Recorder:
             )
             self.write(CALIBRATION, "std_msgs/msg/String", schemas.new("std_msgs/msg/String", data=cal), ns)
         description = yaml.safe_dump(robot.model_dump(mode="json", exclude_none=True), sort_keys=False)
+        if self._writer is None:
+            return
         self._writer.add_metadata(
             "omnibot",
             {
@@ -462,13 +488,19 @@ class Recorder:
         for client in list(self._clients):
             self.detach(client)
         try:
-            self._writer.add_metadata("rosbag2", {"serialized_metadata": self._rosbag2_metadata()})
-            self._writer.finish()  # type: ignore[no-untyped-call]
+            if self._writer is not None:
+                self._writer.add_metadata("rosbag2", {"serialized_metadata": self._rosbag2_metadata()})
+                self._writer.finish()  # type: ignore[no-untyped-call]
         finally:
             self.closed = True
-            self._file.close()
+            if self._file is not None:
+                self._file.close()
+            for mirror in self.mirrors:
+                with contextlib.suppress(Exception):
+                    mirror.close()
 
     def _rosbag2_metadata(self) -> str:
+        assert self.path is not None
         start = self._first_ns or self._epoch_ns
         duration = max(0, self._last_ns - start)
         total = sum(self.counts.values())
@@ -526,14 +558,29 @@ class Recording:
     """A command's ``--log``: the file is made when the first client is attached (a command that
     fails before it talks to a robot leaves no file)."""
 
-    def __init__(self, path: str | Path, estimator: str = DEFAULT_ESTIMATOR) -> None:
-        self.path = Path(path)
+    def __init__(
+        self, path: str | Path | None, estimator: str = DEFAULT_ESTIMATOR, foxglove: int | None = None
+    ) -> None:
+        self.path = Path(path) if path is not None else None
         self.estimator = estimator
+        self.foxglove = foxglove
         self.recorder: Recorder | None = None
 
     def attach(self, client: RobotClient, robot: RobotDescription | None, guess: bool) -> None:
         if self.recorder is None:
-            self.recorder = Recorder(self.path, estimator=self.estimator)
+            mirrors: list[Mirror] = []
+            if self.foxglove is not None:
+                from omnibot.logs.live import FoxgloveLive
+
+                live = FoxgloveLive(self.foxglove)
+                print(f"omnibot: Foxglove live on ws://127.0.0.1:{live.port}", file=sys.stderr)
+                mirrors.append(live)
+            try:
+                self.recorder = Recorder(self.path, estimator=self.estimator, mirrors=mirrors)
+            except BaseException:
+                for mirror in mirrors:
+                    mirror.close()
+                raise
         self.recorder.attach(client, robot, guess=guess)
 
     def close(self) -> None:
@@ -546,17 +593,22 @@ _ACTIVE: list[Recording] = []
 
 
 @contextlib.contextmanager
-def recording(path: str | Path | None, *, estimator: str = DEFAULT_ESTIMATOR) -> Iterator[Recording | None]:
-    """``--log FILE``: while inside, every client a command opens (:func:`attach_active`, called by
-    :mod:`omnibot.client.session`) is recorded into ``path``; None records nothing. The file must
-    be writable (checked at once, before any robot moves)."""
-    if path is None:
+def recording(
+    path: str | Path | None, *, estimator: str = DEFAULT_ESTIMATOR, foxglove: int | None = None
+) -> Iterator[Recording | None]:
+    """``--log FILE`` / ``--foxglove PORT``: while inside, every client a command opens
+    (:func:`attach_active`, called by :mod:`omnibot.client.session`) is recorded into ``path`` and
+    served live to Foxglove on ``foxglove``; None and None record nothing. The file must be writable
+    (checked at once, before any robot moves)."""
+    if path is None and foxglove is None:
         yield None
         return
     from omnibot.cliargs import check_writable
 
     check_writable(path, "--log")
-    rec = Recording(path, estimator)
+    if foxglove is not None and not 0 <= foxglove <= 65535:
+        raise ConfigError(f"expected a port 0..65535 (0: any free one), got {foxglove}", key="--foxglove")
+    rec = Recording(path, estimator, foxglove)
     _ACTIVE.append(rec)
     try:
         yield rec
