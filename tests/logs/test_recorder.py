@@ -130,3 +130,23 @@ def test_telemetry_round_trips_through_the_protocol_line() -> None:
     line = text.encode(tel).decode().strip()
     assert text.parse_line(line.encode()) == tel
     assert Telemetry.from_message(tel, 1.0).encoders == (10, 20, 30, 40)
+
+
+def test_a_second_link_goes_on_from_the_last_message(tmp_path: Path) -> None:
+    """calibrate opens a fresh simulated robot per floor, each clock starting at 0 again."""
+    from omnibot.client import RobotClient
+    from omnibot.client.session import guarded
+    from omnibot.logs.reader import LogFile
+    from omnibot.robot.description import load_robot
+
+    robot = load_robot("omni4")
+    rec = Recorder(tmp_path / "two.mcap")
+    for seed in (1, 2):
+        client = RobotClient.open(f"sim://omni4?seed={seed}", robot)
+        with guarded(client, robot=robot):
+            rec.attach(client, robot)
+            client.telemetry(0.01)
+            client.sleep(0.5)
+    rec.close()
+    times = [m.ns for m in LogFile.open(tmp_path / "two.mcap").messages()]
+    assert times == sorted(times) and (times[-1] - times[0]) / 1e9 > 0.9

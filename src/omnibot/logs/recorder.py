@@ -327,8 +327,12 @@ class Recorder:
             self._clients.append(client)
             client.add_tracer(self)
             client.add_listener(self.event)
+            if self._t0 is not None:
+                # another link (calibrate: a fresh simulated robot per floor, its clock from 0 again):
+                # its time goes on from the last message, so the log's time never runs backwards
+                self._epoch_ns, self._t0 = self._last_ns, client.clock.now()
             if self.robot is not None:
-                self._simulator = simulator_of(client)  # calibrate: a fresh simulated robot per floor
+                self._simulator = simulator_of(client)
         if self.robot is not None:
             return
         hello = client.last_hello
