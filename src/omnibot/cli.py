@@ -554,7 +554,7 @@ def exit_status(exc: BaseException) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``omnibot`` command line; returns the exit status."""
     from omnibot.client.session import Terminated, terminate_cleanly
-    from omnibot.logs.recorder import recording
+    from omnibot.logs.active import recording
 
     parser = build_parser()
     args = parser.parse_args(argv)

@@ -152,7 +152,7 @@ def guarded(
 
 def _record(client: RobotClient, robot: RobotDescription | None, *, guess: bool = False) -> None:
     """Hand the client to the command's ``--log`` recorder, if it has one."""
-    from omnibot.logs.recorder import attach_active
+    from omnibot.logs.active import attach_active
 
     attach_active(client, robot, guess=guess)
 

@@ -35,10 +35,9 @@ from __future__ import annotations
 import contextlib
 import logging
 import math
-import sys
 import time
 from collections import Counter
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import IO, Any, Protocol, cast
 
@@ -53,6 +52,7 @@ from omnibot.errors import ConfigError
 from omnibot.estimation.estimator import Estimator, make_estimator
 from omnibot.estimation.odometry import Pose2D
 from omnibot.logs import schemas
+from omnibot.logs.active import DEFAULT_ESTIMATOR
 from omnibot.logs.topics import (
     CALIBRATION,
     CMD_VEL,
@@ -78,7 +78,6 @@ CHUNK_SIZE = 256 * 1024
 """Uncompressed bytes after which a chunk is compressed and written."""
 FLUSH_PERIOD = 1.0
 """Wall-clock seconds after which an open chunk is written anyway (what a SIGKILL can lose)."""
-DEFAULT_ESTIMATOR = "fused"
 
 _QOS_VOLATILE = (
     "- history: keep_last\n  depth: 10\n  reliability: reliable\n  durability: volatile\n"
@@ -553,80 +552,3 @@ class Recorder:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
-
-
-# ---------------------------------------------------------------------- the command's recorder
-
-
-class Recording:
-    """A command's ``--log``: the file is made when the first client is attached (a command that
-    fails before it talks to a robot leaves no file)."""
-
-    def __init__(
-        self, path: str | Path | None, estimator: str = DEFAULT_ESTIMATOR, foxglove: int | None = None
-    ) -> None:
-        self.path = Path(path) if path is not None else None
-        self.estimator = estimator
-        self.foxglove = foxglove
-        self.recorder: Recorder | None = None
-
-    def attach(self, client: RobotClient, robot: RobotDescription | None, guess: bool) -> None:
-        if self.recorder is None:
-            mirrors: list[Mirror] = []
-            if self.foxglove is not None:
-                from omnibot.logs.live import FoxgloveLive
-
-                live = FoxgloveLive(self.foxglove)
-                print(f"omnibot: Foxglove live on ws://127.0.0.1:{live.port}", file=sys.stderr)
-                mirrors.append(live)
-            try:
-                self.recorder = Recorder(self.path, estimator=self.estimator, mirrors=mirrors)
-            except BaseException:
-                for mirror in mirrors:
-                    mirror.close()
-                raise
-        self.recorder.attach(client, robot, guess=guess)
-
-    def close(self) -> None:
-        if self.recorder is not None:
-            self.recorder.close()
-
-
-_ACTIVE: list[Recording] = []
-"""The running command's recording (at most one; a list so that no ``global`` is needed)."""
-
-
-@contextlib.contextmanager
-def recording(
-    path: str | Path | None, *, estimator: str = DEFAULT_ESTIMATOR, foxglove: int | None = None
-) -> Iterator[Recording | None]:
-    """``--log FILE`` / ``--foxglove PORT``: while inside, every client a command opens
-    (:func:`attach_active`, called by :mod:`omnibot.client.session`) is recorded into ``path`` and
-    served live to Foxglove on ``foxglove``; None and None record nothing. The file must be writable
-    (checked at once, before any robot moves)."""
-    if path is None and foxglove is None:
-        yield None
-        return
-    from omnibot.cliargs import check_writable
-
-    check_writable(path, "--log")
-    if foxglove is not None and not 0 <= foxglove <= 65535:
-        raise ConfigError(f"expected a port 0..65535 (0: any free one), got {foxglove}", key="--foxglove")
-    rec = Recording(path, estimator, foxglove)
-    _ACTIVE.append(rec)
-    try:
-        yield rec
-    finally:
-        _ACTIVE.remove(rec)
-        rec.close()
-
-
-def active() -> Recorder | None:
-    """The recorder of the running command (None when it records nothing or has not started)."""
-    return _ACTIVE[-1].recorder if _ACTIVE else None
-
-
-def attach_active(client: RobotClient, robot: RobotDescription | None = None, *, guess: bool = False) -> None:
-    """Record ``client`` into the running command's log, if there is one (see Recorder.attach)."""
-    if _ACTIVE:
-        _ACTIVE[-1].attach(client, robot, guess)
