@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: setup demo test lint bench clean browser avr-tools uno-sim fuzz
+.PHONY: setup demo test lint bench clean browser avr-tools uno-sim mcap-readers fuzz
 
 setup: $(STAMP)
 
@@ -49,7 +49,19 @@ uno-sim: avr-tools
 	$(MAKE) -C firmware-avr ROBOT=mecanum4
 	$(MAKE) -C firmware-avr/unosim
 
-test: lint browser avr-tools
+# Foxglove's own MCAP libraries (@mcap/core, @mcap/support, @foxglove/rosmsg2-serialization; versions
+# pinned in tests/logs/node/package.json) for the log tests, installed with npm into .cache/ (git-ignored)
+# when missing. Without node and npm the tests that need them skip and say why.
+MCAP_READERS := .cache/mcap-readers
+mcap-readers:
+	@command -v npm >/dev/null 2>&1 || { echo "make mcap-readers: no npm; the Foxglove reader tests will skip"; exit 0; }; \
+	mkdir -p $(MCAP_READERS); \
+	cmp -s tests/logs/node/package.json $(MCAP_READERS)/package.json && [ -d $(MCAP_READERS)/node_modules/@mcap/core ] || { \
+	  echo "make mcap-readers: installing Foxglove's MCAP libraries into $(MCAP_READERS)"; \
+	  cp tests/logs/node/package.json $(MCAP_READERS)/package.json && \
+	  npm install --prefix $(MCAP_READERS) --no-audit --no-fund --silent; }
+
+test: lint browser avr-tools mcap-readers
 	SDL_VIDEODRIVER=dummy MPLBACKEND=Agg $(BIN)/python -m pytest -q
 
 bench: setup
@@ -66,4 +78,4 @@ fuzz: setup
 	cd fuzz && PYTHONPATH=.. SDL_VIDEODRIVER=dummy $(BIN)/python -m tests.fuzz.run binary --seconds $(FUZZ_SECONDS) --corpus corpus-binary
 
 clean:
-	rm -rf $(VENV) build src/*.egg-info .pytest_cache .mypy_cache .ruff_cache fuzz
+	rm -rf $(VENV) build src/*.egg-info .pytest_cache .mypy_cache .ruff_cache .cache fuzz

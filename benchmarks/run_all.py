@@ -6,6 +6,7 @@ from benchmarks import (
     firmware_command_time,
     link_faults,
     link_throughput,
+    log_cost,
     odometry_drift,
     sim_speed,
     sonar_stop,
@@ -29,6 +30,7 @@ def main() -> int:
         ("path tracking", lambda: tracking.main([])),
         ("odometry drift", lambda: odometry_drift.main([])),
         ("sonar stop", lambda: sonar_stop.main([])),
+        ("recording cost (--log)", lambda: log_cost.main([])),
     ):
         print(f"\n== {title}")
         run()

@@ -36,7 +36,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from omnibot import __version__
-from omnibot.cliargs import DEFAULT_SEED, add_debug_option, add_robot_options, seed_of
+from omnibot.cliargs import DEFAULT_SEED, add_debug_option, add_log_option, add_robot_options, seed_of
 from omnibot.errors import ConfigError, KinematicsError, OmnibotError, ProtocolError
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_BUG = 0, 1, 2, 70
@@ -216,9 +216,19 @@ def _sim(args: argparse.Namespace) -> int:
         load_world(args.world)  # a bad world is reported before the pty appears
     if not args.pty:
         raise ConfigError("only the pty emulator exists so far: add --pty", key="omnibot sim")
+    if args.foxglove is not None:
+        raise ConfigError(
+            "sim --pty records its side with --log; --foxglove goes on the command that drives it",
+            key="--foxglove",
+        )
     truth = Path(args.truth) if args.truth else None
+    log = Path(args.log) if args.log else None
+    if log is not None:
+        from omnibot.cliargs import check_writable
+
+        check_writable(log, "--log")
     return run_pty_emulator(
-        robot, seed=args.seed, surface=args.surface, world=args.world, truth=truth, baud=args.baud
+        robot, seed=args.seed, surface=args.surface, world=args.world, truth=truth, baud=args.baud, log=log
     )
 
 
@@ -241,6 +251,7 @@ def _add_sim(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument("--world", help="world name (empty, room, corridor) or world YAML file (default empty)")
     p.add_argument("--truth", metavar="FILE.csv", help="write the ground-truth trajectory t,x,y,theta")
     p.add_argument("--baud", type=int, default=115200, help="pace bytes to this baud rate (default 115200)")
+    add_log_option(p)
     p.set_defaults(handler=_sim)
 
 
@@ -477,6 +488,12 @@ def _add_calibrate(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> 
 # --------------------------------------------------------------------------- parser
 
 
+def _add_log(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    from omnibot.logs.commands import add_log_command
+
+    add_log_command(sub)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="omnibot", description="Drive omnidirectional mobile robots, real or simulated."
@@ -513,6 +530,7 @@ ADDERS: list[Callable[[argparse._SubParsersAction[argparse.ArgumentParser]], Non
     _add_teleop,
     _add_dashboard,
     _add_calibrate,
+    _add_log,
 ]
 
 
@@ -536,12 +554,16 @@ def exit_status(exc: BaseException) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``omnibot`` command line; returns the exit status."""
     from omnibot.client.session import Terminated, terminate_cleanly
+    from omnibot.logs.active import recording
 
     parser = build_parser()
     args = parser.parse_args(argv)
     handler: Handler = args.handler
     try:
-        with terminate_cleanly():
+        with (
+            terminate_cleanly(),
+            recording(getattr(args, "log", None), foxglove=getattr(args, "foxglove", None)),
+        ):
             status = handler(args)
             sys.stdout.flush()  # a reader that went away shows up here, not at interpreter exit
             return status

@@ -88,7 +88,26 @@ def add_robot_options(
         help=surface_help
         or "simulated floor: wood, carpet, concrete, linoleum (default: the world's; not with --port)",
     )
+    add_log_option(p)
     p.set_defaults(default_world=world)
+
+
+def add_log_option(p: argparse.ArgumentParser) -> None:
+    """``--log FILE.mcap``: record the run (:mod:`omnibot.logs.recorder`; ``omnibot log``);
+    ``--foxglove [PORT]``: serve it live to Foxglove (:mod:`omnibot.logs.live`)."""
+    p.add_argument(
+        "--log",
+        metavar="FILE.mcap",
+        help="record the run: link bytes, protocol, telemetry, estimate, truth, URDF (MCAP, ROS 2 messages)",
+    )
+    p.add_argument(
+        "--foxglove",
+        type=int,
+        nargs="?",
+        const=8765,
+        metavar="PORT",
+        help="serve the same channels live to Foxglove on ws://127.0.0.1:PORT (default 8765)",
+    )
 
 
 def check_sim_options(args: argparse.Namespace, allowed: Sequence[str] = ()) -> None:

@@ -41,7 +41,7 @@ import contextlib
 import math
 from collections.abc import Callable
 from types import TracebackType
-from typing import Self, TypeVar
+from typing import Protocol, Self, TypeVar
 
 from omnibot.client import switch
 from omnibot.client.calls import TypedCalls
@@ -56,6 +56,7 @@ from omnibot.client.events import (
     Telemetry,
     WarnEvent,
     event_from_message,
+    log,
 )
 from omnibot.client.limits import Limits
 from omnibot.client.views import Hello
@@ -69,6 +70,7 @@ from omnibot.protocol.messages import (
     ErrorReply,
     HelloReply,
     Malformed,
+    Message,
     Mode,
     Move,
     Ok,
@@ -98,6 +100,18 @@ RESYNC_TRIES = 3
 _LATE_MAX = 64  # tagged commands that timed out, kept so that a late reply still lands on them
 _RETRY_POLL = codes.RETRY_TIMEOUT_MS / 2000.0  # binary: look at retransmissions this often (s)
 _FOREVER_STEP = 1.0
+
+
+class Tracer(Protocol):
+    """What a recorder hears from the client (:meth:`RobotClient.add_tracer`): every byte on the link
+    as the ``spy+`` wrapper sees it, and every command sent and reply matched, decoded (events go to
+    listeners). Times are the link clock's."""
+
+    def link_bytes(self, t: float, kind: str, data: bytes = b"", note: str = "") -> None:
+        """``TX`` written, ``RX`` read, ``ERR`` the link failed (``note``), ``CLOSE``."""
+
+    def message(self, t: float, direction: str, message: Message | Malformed) -> None:
+        """``command`` sent or ``reply`` matched."""
 
 
 class Pending:
@@ -221,6 +235,7 @@ class RobotClient(TypedCalls):
         self._broken = False
         self._hello_answered = False  # text: the last reply matched was a HELLO reply
         self._synced = False  # text: a reply has been matched since the client started
+        self._tracers: list[Tracer] = []
 
     @classmethod
     def open(
@@ -292,6 +307,27 @@ class RobotClient(TypedCalls):
 
     def remove_listener(self, callback: Callable[[E], object]) -> None:
         self._listeners.remove(callback)
+
+    def add_tracer(self, tracer: Tracer) -> None:
+        """Hand ``tracer`` the link's bytes and the commands and replies (a recorder)."""
+        self._tracers.append(tracer)
+
+    def remove_tracer(self, tracer: Tracer) -> None:
+        self._tracers = [t for t in self._tracers if t is not tracer]
+
+    def _trace_bytes(self, kind: str, data: bytes = b"", note: str = "") -> None:
+        for tracer in self._tracers:
+            try:
+                tracer.link_bytes(self.clock.now(), kind, data, note)
+            except Exception:
+                log.exception("tracer %r failed", tracer)
+
+    def _trace_message(self, direction: str, message: Message | Malformed) -> None:
+        for tracer in self._tracers:
+            try:
+                tracer.message(self.clock.now(), direction, message)
+            except Exception:
+                log.exception("tracer %r failed", tracer)
 
     def on_telemetry(self, callback: Callable[[Telemetry], object]) -> None:
         self._listeners.add(callback, Telemetry)
@@ -393,6 +429,8 @@ class RobotClient(TypedCalls):
             line = text.encode(command).decode("ascii").strip()
         pending = Pending(self, command, line, seq, now + wait, malformed)
         self._outstanding.append(pending)
+        if command is not None and self._tracers:
+            self._trace_message("command", command)
         self._write(data)
         return pending
 
@@ -679,6 +717,8 @@ class RobotClient(TypedCalls):
 
     def _complete(self, pending: Pending, reply: Reply) -> None:
         pending.reply = reply
+        if self._tracers:
+            self._trace_message("reply", reply)
         if isinstance(reply, ErrorReply):
             pending.error = controller_error(reply.code, reply.description, pending.line)
             return
@@ -744,18 +784,25 @@ class RobotClient(TypedCalls):
         self._outstanding = [p for p in self._outstanding if not p.done]
 
     def _write(self, data: bytes) -> None:
+        if self._tracers:
+            self._trace_bytes("TX", data)
         try:
             self.link.write(data)
         except LinkError as exc:
+            self._trace_bytes("ERR", note=str(exc))
             self._link_failed(exc)
             raise
 
     def _read(self, timeout: float) -> bytes:
         try:
-            return self.link.read(4096, timeout)
+            data = self.link.read(4096, timeout)
         except LinkError as exc:
+            self._trace_bytes("ERR", note=str(exc))
             self._link_failed(exc)
             raise
+        if data and self._tracers:
+            self._trace_bytes("RX", data)
+        return data
 
     def _link_failed(self, exc: LinkError) -> None:
         for p in self._outstanding:
@@ -785,6 +832,8 @@ class RobotClient(TypedCalls):
 
     def close(self) -> None:
         """Close the link (idempotent). The controller stays in its mode (see use_text)."""
+        if self._tracers and not self.link.closed:
+            self._trace_bytes("CLOSE")
         self.link.close()
 
     def __enter__(self) -> Self:

@@ -121,10 +121,16 @@ def leave(client: RobotClient, mode: int | None, *, stop: bool = True, telemetry
 
 @contextlib.contextmanager
 def guarded(
-    client: RobotClient, *, stop: StopPolicy = "always", restore: RestorePolicy = "mode"
+    client: RobotClient,
+    *,
+    stop: StopPolicy = "always",
+    restore: RestorePolicy = "mode",
+    robot: RobotDescription | None = None,
 ) -> Iterator[RobotClient]:
-    """Run the body with ``client``; on every way out :func:`leave` the controller as it was found."""
+    """Run the body with ``client``; on every way out :func:`leave` the controller as it was found.
+    With ``--log`` the client (the robot ``robot``) is recorded (:mod:`omnibot.logs.recorder`)."""
     try:
+        _record(client, robot, guess=True)
         mode = client.status().mode if restore == "mode" else None
     except BaseException:
         client.close()
@@ -142,6 +148,13 @@ def guarded(
     finally:
         client.remove_listener(saw)
         leave(client, mode, stop=stop == "always" or not ended, telemetry=seen["tel"])
+
+
+def _record(client: RobotClient, robot: RobotDescription | None, *, guess: bool = False) -> None:
+    """Hand the client to the command's ``--log`` recorder, if it has one."""
+    from omnibot.logs.active import attach_active
+
+    attach_active(client, robot, guess=guess)
 
 
 @dataclass(frozen=True)
@@ -170,6 +183,7 @@ def open_robot(
     except LinkError as exc:
         raise ConfigError(f"cannot open {url}: {exc}", key="--port") from exc
     try:
+        _record(client, None)
         try:
             hello = wait_for_controller(client, notice=notice)
         except LinkError as exc:
@@ -190,6 +204,7 @@ def open_robot(
                 key="--robot",
             )
         client.limits = Limits.from_robot(description)
+        _record(client, description)
     except BaseException:
         client.close()
         raise

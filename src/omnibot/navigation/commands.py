@@ -62,7 +62,7 @@ def _robot_client(args: argparse.Namespace, start: Any = None) -> Iterator[tuple
         start=start,
         world=None if world == "empty" else world,
     )
-    with guarded(client):
+    with guarded(client, robot=robot):
         yield client, robot
 
 

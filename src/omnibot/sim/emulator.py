@@ -40,6 +40,7 @@ def run_pty_emulator(
     baud: int = DEFAULT_BAUD,
     stop: threading.Event | None = None,
     out: TextIO = sys.stdout,
+    log: Path | None = None,
 ) -> int:
     """Serve the simulated robot on a new pty until ``stop`` is set or SIGINT/SIGTERM; exit status.
     ConfigError (before the pty exists) for a bad baud rate or a truth file that cannot be written."""
@@ -52,6 +53,11 @@ def run_pty_emulator(
         recorder = TruthRecorder(truth) if truth is not None else None
     except OSError as exc:
         raise ConfigError(f"cannot write {truth}: {exc.strerror}", key="--truth") from None
+    log_recorder = None
+    if log is not None:
+        from omnibot.logs.recorder import Recorder
+
+        log_recorder = Recorder(log)  # --log: the bytes both ways and the truth (omnibot.logs.device)
     previous: dict[signal.Signals, Any] = {}
 
     def _on_signal(signum: int, frame: FrameType | None) -> None:
@@ -59,7 +65,11 @@ def run_pty_emulator(
 
     try:
         kernels.warm_up()  # compile before announcing the pty: a first step must not stall the link
-        device = SimDevice(robot, seed=seed, surface=surface, world=world, truth_recorder=recorder)
+        device: Any = SimDevice(robot, seed=seed, surface=surface, world=world, truth_recorder=recorder)
+        if log_recorder is not None:
+            from omnibot.logs.device import RecordedDevice
+
+            device = RecordedDevice(device, log_recorder, robot)
         bridge = PtyBridge(device, baud=baud)
         if threading.current_thread() is threading.main_thread():
             for sig in (signal.SIGINT, signal.SIGTERM):
@@ -74,6 +84,8 @@ def run_pty_emulator(
             signal.signal(sig, handler)
         if recorder is not None:
             recorder.close()
+        if log_recorder is not None:
+            log_recorder.close()
     return 0
 
 

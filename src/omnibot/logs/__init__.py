@@ -1,0 +1,5 @@
+"""Logs people open in their own tools: MCAP recording (ROS 2 messages), inspection, offline replay.
+
+``recorder`` writes a run (``--log FILE.mcap``); ``reader`` reads one back (also one cut short by a
+crash); ``info``, ``plot``, ``export``, ``replay`` are ``omnibot log``'s subcommands.
+"""

@@ -1,0 +1,99 @@
+"""The running command's ``--log`` / ``--foxglove``: which recorder the clients a command opens go to.
+
+Light on purpose (the recorder, MCAP and rosbags are imported only when a command records):
+:func:`recording` wraps a command, :func:`attach_active` is what :mod:`omnibot.client.session` calls
+for every client it opens.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from omnibot.errors import ConfigError
+
+if TYPE_CHECKING:
+    from omnibot.client.client import RobotClient
+    from omnibot.logs.recorder import Mirror, Recorder
+    from omnibot.robot.description import RobotDescription
+
+DEFAULT_ESTIMATOR = "fused"
+
+
+class Recording:
+    """A command's ``--log``: the file is made when the first client is attached (a command that
+    fails before it talks to a robot leaves no file)."""
+
+    def __init__(
+        self, path: str | Path | None, estimator: str = DEFAULT_ESTIMATOR, foxglove: int | None = None
+    ) -> None:
+        self.path = Path(path) if path is not None else None
+        self.estimator = estimator
+        self.foxglove = foxglove
+        self.recorder: Recorder | None = None
+
+    def attach(self, client: RobotClient, robot: RobotDescription | None, guess: bool) -> None:
+        if self.recorder is None:
+            mirrors: list[Mirror] = []
+            if self.foxglove is not None:
+                from omnibot.logs.live import FoxgloveLive
+
+                live = FoxgloveLive(self.foxglove)
+                print(f"omnibot: Foxglove live on ws://127.0.0.1:{live.port}", file=sys.stderr)
+                mirrors.append(live)
+            try:
+                from omnibot.logs.recorder import Recorder
+
+                self.recorder = Recorder(self.path, estimator=self.estimator, mirrors=mirrors)
+            except BaseException:
+                for mirror in mirrors:
+                    mirror.close()
+                raise
+        self.recorder.attach(client, robot, guess=guess)
+
+    def close(self) -> None:
+        if self.recorder is not None:
+            self.recorder.close()
+
+
+_ACTIVE: list[Recording] = []
+"""The running command's recording (at most one; a list so that no ``global`` is needed)."""
+
+
+@contextlib.contextmanager
+def recording(
+    path: str | Path | None, *, estimator: str = DEFAULT_ESTIMATOR, foxglove: int | None = None
+) -> Iterator[Recording | None]:
+    """``--log FILE`` / ``--foxglove PORT``: while inside, every client a command opens
+    (:func:`attach_active`, called by :mod:`omnibot.client.session`) is recorded into ``path`` and
+    served live to Foxglove on ``foxglove``; None and None record nothing. The file must be writable
+    (checked at once, before any robot moves)."""
+    if path is None and foxglove is None:
+        yield None
+        return
+    from omnibot.cliargs import check_writable
+
+    check_writable(path, "--log")
+    if foxglove is not None and not 0 <= foxglove <= 65535:
+        raise ConfigError(f"expected a port 0..65535 (0: any free one), got {foxglove}", key="--foxglove")
+    rec = Recording(path, estimator, foxglove)
+    _ACTIVE.append(rec)
+    try:
+        yield rec
+    finally:
+        _ACTIVE.remove(rec)
+        rec.close()
+
+
+def active() -> Recorder | None:
+    """The recorder of the running command (None when it records nothing or has not started)."""
+    return _ACTIVE[-1].recorder if _ACTIVE else None
+
+
+def attach_active(client: RobotClient, robot: RobotDescription | None = None, *, guess: bool = False) -> None:
+    """Record ``client`` into the running command's log, if there is one (see Recorder.attach)."""
+    if _ACTIVE:
+        _ACTIVE[-1].attach(client, robot, guess)

@@ -1,0 +1,277 @@
+"""``omnibot log``: inspect, plot, export, print and replay a recorded run (``--log FILE.mcap``).
+
+Each subcommand reads the whole log once (:func:`omnibot.logs.run.load_run`); a file cut short by a
+crash is read up to its last chunk, and every subcommand says so on stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from omnibot.errors import ConfigError
+from omnibot.logs.run import Run, keyword_counts, load_run, rate_and_gap
+from omnibot.transport.spy import SpyEvent, format_event
+
+EXIT_OK, EXIT_FAILED = 0, 1
+
+
+def _load(args: argparse.Namespace) -> Run:
+    run = load_run(args.file)
+    if run.cut_short:
+        print(
+            f"omnibot: warning: {args.file} was cut short ({run.cut_short}); read up to its last chunk",
+            file=sys.stderr,
+        )
+    return run
+
+
+# --------------------------------------------------------------------------- info
+
+
+def info_lines(run: Run) -> list[str]:
+    """The report of ``omnibot log info``."""
+    meta = run.omnibot_metadata()
+    lines = [
+        f"file      {run.path}" + ("  (cut short: read up to its last chunk)" if run.cut_short else ""),
+        f"robot     {meta.get('robot', '?')} on {meta.get('url', '?')} (omnibot {meta.get('version', '?')})",
+        f"duration  {run.duration:.3f} s, {sum(len(v) for v in run.times.values())} messages",
+        "",
+        f"{'topic':24s} {'type':34s} {'count':>7s} {'rate Hz':>8s} {'max gap s':>9s}",
+    ]
+    for topic in sorted(run.topics):
+        times = run.times[topic]
+        rate, gap = rate_and_gap(times)
+        lines.append(f"{topic:24s} {run.topics[topic]:34s} {len(times):7d} {rate:8.1f} {gap:9.3f}")
+    commands, events = keyword_counts(run, "command"), keyword_counts(run, "event")
+    replies = keyword_counts(run, "reply")
+    lines += [
+        "",
+        "protocol  commands " + _counts(commands),
+        "          replies  " + _counts(replies),
+        "          events   " + _counts(events),
+    ]
+    tx = sum(len(d) for _, k, d, _ in run.link if k == "TX")
+    rx = sum(len(d) for _, k, d, _ in run.link if k == "RX")
+    link_errors = [note for _, k, _, note in run.link if k == "ERR"]
+    tel = [t for t, d, kw, _ in run.protocol if d == "event" and kw == "TEL"]
+    rate, gap = rate_and_gap(tel)
+    unanswered = sum(commands.values()) - sum(replies.values())
+    lines += [
+        f"link      {tx} bytes sent, {rx} received ({(tx + rx) / run.duration if run.duration else 0:.0f} B/s); "
+        f"{len(link_errors)} link errors; {events.get('MALFORMED', 0)} malformed; "
+        f"{max(0, unanswered)} commands without a reply",
+        f"          telemetry {len(tel)} samples at {rate:.1f} Hz, longest gap {gap:.3f} s",
+    ]
+    problems = run.problems()
+    lines.append(f"problems  {len(problems)} (warnings, errors, malformed, link errors)")
+    lines += [f"  {t:10.3f} {kind:10s} {text}" for t, kind, text in problems[:20]]
+    if len(problems) > 20:
+        lines.append(f"  ... {len(problems) - 20} more")
+    return lines
+
+
+def _counts(counts: dict[str, int]) -> str:
+    return ", ".join(f"{k} {v}" for k, v in sorted(counts.items())) or "none"
+
+
+def _info(args: argparse.Namespace) -> int:
+    print("\n".join(info_lines(_load(args))))
+    return EXIT_OK
+
+
+# --------------------------------------------------------------------------- protocol
+
+
+def _protocol(args: argparse.Namespace) -> int:
+    run = _load(args)
+    if not run.link:
+        raise ConfigError(f"{args.file} has no link bytes (/omnibot/link)", key="FILE")
+    t0 = run.link[0][0]
+    for t, kind, data, note in run.link:
+        event = SpyEvent(t - t0, kind if kind in ("TX", "RX", "ERR", "CLOSE") else "ERR", data, note)  # type: ignore[arg-type]
+        for line in format_event(event):
+            print(line)
+    return EXIT_OK
+
+
+# --------------------------------------------------------------------------- export
+
+
+def _write_csv(path: Path, header: list[str], rows: Sequence[Sequence[object]]) -> None:
+    with path.open("w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f)
+        w.writerow(header)
+        w.writerows(rows)
+
+
+def export_csv(run: Run, out: Path) -> list[Path]:
+    """One CSV per kind of record (and the URDF and calibration as files); the paths written."""
+    written: list[Path] = []
+
+    def put(name: str, header: list[str], rows: list[list[object]]) -> None:
+        if rows:
+            _write_csv(out / name, header, rows)
+            written.append(out / name)
+
+    pose = ["t", "x", "y", "theta", "vx", "vy", "w"]
+    put("odom.csv", pose, [list(r) for r in run.estimate])
+    put("truth.csv", pose, [list(r) for r in run.truth])
+    if run.joints:
+        names = run.joints[0][1]
+        header = ["t"] + [f"{n}_{q}" for q in ("position", "velocity", "effort") for n in names]
+        put("joint_states.csv", header, [[t, *p, *v, *e] for t, _, p, v, e in run.joints])
+    put("imu.csv", ["t", "yaw_rate", "yaw"], [list(r) for r in run.imu])
+    put("cmd_vel.csv", ["t", "vx", "vy", "w"], [list(r) for r in run.cmd_vel])
+    for sonar, rows in sorted(run.ranges.items()):
+        put(f"range_{sonar}.csv", ["t", "range"], [list(r) for r in rows])
+    put("protocol.csv", ["t", "direction", "keyword", "text"], [list(r) for r in run.protocol])
+    put("link.csv", ["t", "kind", "hex", "note"], [[t, k, d.hex(" "), n] for t, k, d, n in run.link])
+    for name, text in (("robot.urdf", run.robot_description), ("calibration.yaml", run.calibration)):
+        if text:
+            (out / name).write_text(text, encoding="utf-8")
+            written.append(out / name)
+    return written
+
+
+def _export(args: argparse.Namespace) -> int:
+    from omnibot.cli import output_dir
+
+    run = _load(args)
+    out = output_dir(args.csv, "--csv")
+    try:
+        written = export_csv(run, out)
+    except OSError as exc:
+        raise ConfigError(f"cannot write in {out}: {exc.strerror or exc}", key="--csv") from None
+    for path in written:
+        print(path)
+    return EXIT_OK
+
+
+# --------------------------------------------------------------------------- plot
+
+
+def plot_run(run: Run, path: str) -> None:
+    """Estimate against truth, wheel speeds, powers, problems over time: one PNG."""
+    from omnibot.plots.figure import new_figure, save
+
+    fig, ax = new_figure(2, 2, size=(12.0, 8.0))
+    xy = ax[0][0]
+    if run.truth:
+        xy.plot([r[1] for r in run.truth], [r[2] for r in run.truth], "k-", label="truth (simulator)")
+    if run.estimate:
+        xy.plot([r[1] for r in run.estimate], [r[2] for r in run.estimate], "C0--", label="estimate (odom)")
+    xy.set(xlabel="x (m)", ylabel="y (m)", title="estimate against truth", aspect="equal")
+    xy.legend(loc="best", fontsize=8)
+    wheels, powers, problems = ax[0][1], ax[1][0], ax[1][1]
+    if run.joints:
+        t = [j[0] for j in run.joints]
+        for i, name in enumerate(run.joints[0][1]):
+            wheels.plot(t, [j[3][i] for j in run.joints], label=name)
+            if run.joints[0][4]:
+                powers.plot(t, [j[4][i] if i < len(j[4]) else math.nan for j in run.joints], label=name)
+        wheels.legend(loc="best", fontsize=8)
+        powers.legend(loc="best", fontsize=8)
+    wheels.set(xlabel="t (s)", ylabel="rad/s", title="wheel speeds")
+    powers.set(xlabel="t (s)", ylabel="PWM counts", title="motor powers")
+    kinds = sorted({k for _, k, _ in run.problems()})
+    for i, kind in enumerate(kinds):
+        times = [t for t, k, _ in run.problems() if k == kind]
+        problems.plot(times, [i] * len(times), "|", markersize=12, label=kind)
+    problems.set(
+        xlabel="t (s)",
+        title=f"link errors, warnings ({len(run.problems())})",
+        xlim=(0, max(run.duration, 1e-3)),
+    )
+    problems.set_yticks(range(len(kinds)), kinds)
+    save(fig, path)
+
+
+def _plot(args: argparse.Namespace) -> int:
+    from omnibot.cliargs import check_writable
+
+    check_writable(args.plot, "-o")
+    run = _load(args)
+    try:
+        plot_run(run, args.plot)
+    except OSError as exc:
+        raise ConfigError(f"cannot write {args.plot}: {exc.strerror or exc}", key="-o") from None
+    print(f"wrote {args.plot}", file=sys.stderr)
+    return EXIT_OK
+
+
+# --------------------------------------------------------------------------- replay
+
+
+def _replay(args: argparse.Namespace) -> int:
+    from omnibot.logs.replay import replay_log
+
+    run = _load(args)
+    result = replay_log(run, args.estimator)
+    if not result.estimates:
+        print(f"omnibot: error: {args.file} has no telemetry with encoders to replay", file=sys.stderr)
+        return EXIT_FAILED
+    if args.csv:
+        from omnibot.cliargs import check_writable
+
+        check_writable(args.csv, "--csv")
+        rows = [[t, e.t, e.x, e.y, e.theta, e.vx, e.vy, e.w] for t, e in result.estimates]
+        _write_csv(Path(args.csv), ["t", "controller_time", "x", "y", "theta", "vx", "vy", "w"], rows)
+    last = result.estimates[-1][1]
+    print(
+        f"replayed {len(result.estimates)} telemetry samples with {result.estimator}: "
+        f"final pose x={last.x:.4f} m y={last.y:.4f} m theta={math.degrees(last.theta):.2f} deg"
+    )
+    if run.truth:
+        truth = run.truth[-1]
+        print(
+            f"truth at the end: x={truth[1]:.4f} m y={truth[2]:.4f} m theta={math.degrees(truth[3]):.2f} deg; "
+            f"error {math.hypot(truth[1] - last.x, truth[2] - last.y):.4f} m"
+        )
+    if result.max_difference is None:
+        return EXIT_OK
+    if result.max_difference == 0.0:
+        print("the live estimate is reproduced exactly")
+        return EXIT_OK
+    print(
+        f"omnibot: error: the replay differs from the live estimate by up to {result.max_difference:g}",
+        file=sys.stderr,
+    )
+    return EXIT_FAILED
+
+
+# --------------------------------------------------------------------------- parser
+
+
+def add_log_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    p = sub.add_parser("log", help="inspect, plot, export and replay a run recorded with --log FILE.mcap")
+    lsub = p.add_subparsers(dest="log_command", required=True, metavar="{info,plot,export,protocol,replay}")
+    info = lsub.add_parser("info", help="duration, channels, rates, gaps, errors and warnings, link health")
+    info.set_defaults(handler=_info)
+    plot = lsub.add_parser(
+        "plot", help="estimate against truth, wheel speeds and powers, link errors over time"
+    )
+    plot.add_argument(
+        "-o",
+        "--out",
+        dest="plot",
+        default="log.png",
+        metavar="FILE.png",
+        help="the plot to write (default log.png)",
+    )
+    plot.set_defaults(handler=_plot)
+    export = lsub.add_parser("export", help="write the records as CSV files")
+    export.add_argument("--csv", required=True, metavar="DIR", help="directory for the CSV files")
+    export.set_defaults(handler=_export)
+    proto = lsub.add_parser("protocol", help="the byte trace both ways, as spy+ prints it")
+    proto.set_defaults(handler=_protocol)
+    replay = lsub.add_parser("replay", help="re-run an estimator on the recorded telemetry")
+    replay.add_argument("--estimator", help="the estimator to run (default: the one recorded)")
+    replay.add_argument("--csv", metavar="FILE.csv", help="write the replayed estimate")
+    replay.set_defaults(handler=_replay)
+    for q in (info, plot, export, proto, replay):
+        q.add_argument("file", metavar="FILE.mcap", help="a log written with --log")

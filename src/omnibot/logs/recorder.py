@@ -1,0 +1,554 @@
+"""The MCAP recorder: a plain object the client (and later the runtime) hands what happens to.
+
+::
+
+    rec = Recorder("run.mcap")                 # ros2 profile, zstd chunks, rosbag2's metadata
+    rec.attach(client, robot)                  # the client's byte trace, messages and events
+    ...                                        # the run
+    rec.close()                                # summary + rosbag2 metadata (a killed run keeps
+                                               # every chunk written before it died)
+
+What is called, and what it writes (topic, type; every time on the link clock, mapped onto the wall
+clock of the moment recording started):
+
+* :meth:`link_bytes` (the client's byte trace, as ``spy+`` sees it): ``/omnibot/link``
+  ``omnibot_msgs/msg/LinkBytes``;
+* :meth:`message` (each command sent, reply matched; events come through :meth:`event`, a client
+  listener): ``/omnibot/protocol`` ``omnibot_msgs/msg/ProtocolLine``; a VEL also as ``cmd_vel``
+  ``geometry_msgs/msg/TwistStamped``;
+* a telemetry event: ``joint_states`` (wheel joints of the URDF: angle, speed, and the motor power
+  in PWM counts as effort), ``imu`` (gyro rate, heading as orientation), ``range/<sonar>`` per sonar,
+  the estimate (the ``estimator`` named, run on each sample) as ``odom`` and ``/tf`` odom ->
+  base_link (and exactly, heading unwrapped, as ``/omnibot/estimate`` geometry_msgs/Pose2D, which
+  ``omnibot log replay`` compares with), and the simulator's truth as ``/omnibot/truth`` when the link is an in-process one;
+* :meth:`start`: ``robot_description`` (the URDF) and ``calibration`` (the description's calibration
+  tables, YAML), both ``std_msgs/msg/String``, and the MCAP metadata ``omnibot`` that ``omnibot log
+  replay`` needs (the description, the estimator, the start pose).
+
+Bounded memory: messages go to the current chunk, which is compressed and written when it reaches
+``chunk_size`` bytes or is ``flush_period`` s (wall clock) old; only the chunk indexes (one per chunk)
+stay in memory. The file is written unbuffered, so a SIGKILL loses only the open chunk.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import math
+import time
+from collections import Counter
+from collections.abc import Sequence
+from pathlib import Path
+from typing import IO, Any, Protocol, cast
+
+import numpy as np
+import yaml
+from mcap.writer import CompressionType, Writer
+
+from omnibot import __version__
+from omnibot.client.client import RobotClient
+from omnibot.client.events import Event, Telemetry
+from omnibot.errors import ConfigError
+from omnibot.estimation.estimator import Estimator, make_estimator
+from omnibot.estimation.odometry import Pose2D
+from omnibot.logs import schemas
+from omnibot.logs.active import DEFAULT_ESTIMATOR
+from omnibot.logs.topics import (
+    CALIBRATION,
+    CMD_VEL,
+    ESTIMATE,
+    IMU,
+    JOINT_STATES,
+    LINK,
+    ODOM,
+    PROTOCOL,
+    ROBOT_DESCRIPTION,
+    TF,
+    TRUTH,
+    range_topic,
+)
+from omnibot.protocol import text
+from omnibot.protocol.messages import Malformed, Message, Vel
+from omnibot.robot.description import RobotDescription, load_robot, preset_names
+from omnibot.robot.kinematics import world_to_body
+
+log = logging.getLogger("omnibot.logs")
+
+CHUNK_SIZE = 256 * 1024
+"""Uncompressed bytes after which a chunk is compressed and written."""
+FLUSH_PERIOD = 1.0
+"""Wall-clock seconds after which an open chunk is written anyway (what a SIGKILL can lose)."""
+
+_QOS_VOLATILE = (
+    "- history: keep_last\n  depth: 10\n  reliability: reliable\n  durability: volatile\n"
+    "  deadline: {sec: 0, nsec: 0}\n  lifespan: {sec: 0, nsec: 0}\n  liveliness: automatic\n"
+    "  liveliness_lease_duration: {sec: 0, nsec: 0}\n  avoid_ros_namespace_conventions: false\n"
+)
+_QOS_LATCHED = _QOS_VOLATILE.replace("depth: 10", "depth: 1").replace("volatile", "transient_local")
+_LATCHED = {ROBOT_DESCRIPTION, CALIBRATION}
+
+
+def stamp(ns: int) -> Any:
+    """A builtin_interfaces/Time for ``ns`` nanoseconds since the epoch."""
+    return schemas.new("builtin_interfaces/msg/Time", sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
+
+
+def header(ns: int, frame: str) -> Any:
+    return schemas.new("std_msgs/msg/Header", stamp=stamp(ns), frame_id=frame)
+
+
+def quaternion(yaw: float) -> Any:
+    return schemas.new("geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2))
+
+
+def vector(x: float = 0.0, y: float = 0.0, z: float = 0.0) -> Any:
+    return schemas.new("geometry_msgs/msg/Vector3", x=x, y=y, z=z)
+
+
+def twist(vx: float, vy: float, w: float) -> Any:
+    return schemas.new("geometry_msgs/msg/Twist", linear=vector(vx, vy), angular=vector(z=w))
+
+
+def odometry(ns: int, frame: str, child: str, pose: Pose2D, body: tuple[float, float, float]) -> Any:
+    """nav_msgs/Odometry: ``pose`` in ``frame``, ``body`` twist (vx, vy, w) in ``child``."""
+    zeros = np.zeros(36, dtype=np.float64)
+    position = schemas.new("geometry_msgs/msg/Point", x=pose.x, y=pose.y, z=0.0)
+    return schemas.new(
+        "nav_msgs/msg/Odometry",
+        header=header(ns, frame),
+        child_frame_id=child,
+        pose=schemas.new(
+            "geometry_msgs/msg/PoseWithCovariance",
+            pose=schemas.new("geometry_msgs/msg/Pose", position=position, orientation=quaternion(pose.theta)),
+            covariance=zeros,
+        ),
+        twist=schemas.new(
+            "geometry_msgs/msg/TwistWithCovariance", twist=twist(*body), covariance=zeros.copy()
+        ),
+    )
+
+
+class Mirror(Protocol):
+    """Something that gets every message the recorder writes (the Foxglove live server)."""
+
+    def __call__(self, topic: str, typename: str, data: bytes, ns: int) -> None: ...
+
+    def close(self) -> None: ...
+
+
+class _Direct:
+    """A file the MCAP writer writes straight to the OS (no user-space buffer a SIGKILL would lose;
+    the writer already hands over whole chunks)."""
+
+    def __init__(self, raw: IO[bytes]) -> None:
+        self._raw = raw
+        self._pos = 0
+
+    def write(self, data: bytes | memoryview) -> int:
+        view = memoryview(data)
+        while view:
+            n = self._raw.write(view)
+            view = view[n or 0 :]
+        self._pos += len(data)
+        return len(data)
+
+    def tell(self) -> int:
+        return self._pos
+
+    def flush(self) -> None:
+        pass
+
+
+class Recorder:
+    """Writes one MCAP file (``path``; None: no file) and hands every message to ``mirrors``
+    (``mirror(topic, typename, cdr_bytes, ns)``: the Foxglove live server); see the module docstring
+    for what each method records."""
+
+    def __init__(
+        self,
+        path: str | Path | None,
+        *,
+        estimator: str = DEFAULT_ESTIMATOR,
+        chunk_size: int = CHUNK_SIZE,
+        flush_period: float = FLUSH_PERIOD,
+        compression: str = "zstd",
+        mirrors: Sequence[Mirror] = (),
+    ) -> None:
+        self.path = Path(path) if path is not None else None
+        self.mirrors = list(mirrors)
+        self._file: IO[bytes] | None = None
+        self._writer: Writer | None = None
+        if self.path is not None:
+            try:
+                self.path.parent.mkdir(parents=True, exist_ok=True)
+                self._file = open(self.path, "wb", buffering=0)  # noqa: SIM115 (closed in close())
+            except OSError as exc:
+                raise ConfigError(f"cannot write {self.path}: {exc.strerror or exc}", key="--log") from None
+            kinds = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
+            self._writer = Writer(
+                cast("IO[Any]", _Direct(self._file)), chunk_size=chunk_size, compression=kinds[compression]
+            )
+            self._writer.start(profile="ros2", library=f"omnibot {__version__}")
+        self.compression = compression
+        self.estimator_name = estimator
+        self.flush_period = flush_period
+        self._schemas: dict[str, int] = {}
+        self._channels: dict[str, tuple[int, str]] = {}
+        self.counts: Counter[str] = Counter()
+        """Messages written per topic."""
+        self.lost = 0
+        """Messages that could not be serialized (a bug; logged): 0 in a good run."""
+        self._epoch_ns = time.time_ns()
+        self._t0: float | None = None
+        self._first_ns: int | None = None
+        self._last_ns = 0
+        self._last_flush = time.monotonic()
+        self.robot: RobotDescription | None = None
+        self.estimator: Estimator | None = None
+        self._simulator: Any = None
+        self._joints: list[str] = []
+        self._cpr: list[float] = []
+        self._last_tel: tuple[float, tuple[int, ...]] | None = None
+        self._clients: list[RobotClient] = []
+        self.closed = False
+
+    # ------------------------------------------------------------------ time
+
+    def ns(self, t: float) -> int:
+        """Link-clock seconds -> ns since the epoch (the first time seen is when recording started)."""
+        if self._t0 is None:
+            self._t0 = t
+        ns = self._epoch_ns + round((t - self._t0) * 1e9)
+        return max(ns, 0)
+
+    # ------------------------------------------------------------------ writing
+
+    def _channel(self, writer: Writer, topic: str, typename: str) -> int:
+        known = self._channels.get(topic)
+        if known is not None:
+            return known[0]
+        schema = self._schemas.get(typename)
+        if schema is None:
+            schema = writer.register_schema(
+                typename, "ros2msg", schemas.schema_text(typename).encode("utf-8")
+            )
+            self._schemas[typename] = schema
+        qos = _QOS_LATCHED if topic in _LATCHED else _QOS_VOLATILE
+        channel = writer.register_channel(topic, "cdr", schema, {"offered_qos_profiles": qos})
+        self._channels[topic] = (channel, typename)
+        return channel
+
+    def write(self, topic: str, typename: str, message: Any, ns: int) -> None:
+        """Serialize ``message`` (a ``typename`` object) onto ``topic`` at ``ns``."""
+        if self.closed:
+            return
+        try:
+            data = schemas.serialize(message, typename)
+        except Exception:
+            self.lost += 1
+            log.exception("cannot serialize a %s for %s", typename, topic)
+            return
+        self.counts[topic] += 1
+        for mirror in self.mirrors:
+            try:
+                mirror(topic, typename, data, ns)
+            except Exception:
+                log.exception("mirror %r failed on %s", mirror, topic)
+        if self._writer is None:
+            self._last_ns = max(self._last_ns, ns)
+            return
+        channel = self._channel(self._writer, topic, typename)
+        self._writer.add_message(
+            channel, log_time=ns, publish_time=ns, data=data, sequence=self.counts[topic]
+        )
+        self._first_ns = ns if self._first_ns is None else min(self._first_ns, ns)
+        self._last_ns = max(self._last_ns, ns)
+        now = time.monotonic()
+        if now - self._last_flush >= self.flush_period:
+            self.flush()
+
+    def flush(self) -> None:
+        """Write the open chunk now."""
+        if not self.closed and self._writer is not None:
+            self._writer.flush()  # type: ignore[no-untyped-call]
+            self._last_flush = time.monotonic()
+
+    # ------------------------------------------------------------------ the run's context
+
+    def start(self, robot: RobotDescription, *, simulator: Any = None, url: str = "", t: float = 0.0) -> None:
+        """The robot (URDF, calibration, estimator) and, on an in-process link, its simulator."""
+        from omnibot.robot.urdf import to_urdf
+
+        self.robot = robot
+        self._simulator = simulator
+        self._joints = [f"{w.name}_joint" for w in robot.wheels]
+        cpr = {m.wheel: m.counts_per_rev for m in robot.encoders.motors}
+        self._cpr = [float(cpr.get(w.name, 0)) for w in robot.wheels]
+        try:
+            self.estimator = make_estimator(self.estimator_name, robot)
+        except ConfigError as exc:
+            log.warning("no estimate in the log: %s", exc)
+        ns = self.ns(t)
+        self.write(
+            ROBOT_DESCRIPTION,
+            "std_msgs/msg/String",
+            schemas.new("std_msgs/msg/String", data=to_urdf(robot)),
+            ns,
+        )
+        if robot.calibration is not None:
+            cal = yaml.safe_dump(
+                robot.calibration.model_dump(mode="json", exclude_none=True), sort_keys=False
+            )
+            self.write(CALIBRATION, "std_msgs/msg/String", schemas.new("std_msgs/msg/String", data=cal), ns)
+        description = yaml.safe_dump(robot.model_dump(mode="json", exclude_none=True), sort_keys=False)
+        if self._writer is None:
+            return
+        self._writer.add_metadata(
+            "omnibot",
+            {
+                "version": __version__,
+                "robot": robot.name,
+                "url": url,
+                "estimator": self.estimator_name if self.estimator is not None else "",
+                "description": description,
+            },
+        )
+
+    def attach(
+        self, client: RobotClient, robot: RobotDescription | None = None, *, guess: bool = False
+    ) -> None:
+        """Record what ``client`` sends, receives and decodes (once per client); ``robot`` starts the
+        recording's context (:meth:`start`) if it has none yet. ``guess``: without ``robot``, take
+        the preset the controller's HELLO names (else no URDF, no estimate)."""
+        from omnibot.navigation.runner import simulator_of
+
+        if not any(c is client for c in self._clients):
+            self._clients.append(client)
+            client.add_tracer(self)
+            client.add_listener(self.event)
+            if self._t0 is not None:
+                # another link (calibrate: a fresh simulated robot per floor, its clock from 0 again):
+                # its time goes on from the last message, so the log's time never runs backwards
+                self._epoch_ns, self._t0 = self._last_ns, client.clock.now()
+            if self.robot is not None:
+                self._simulator = simulator_of(client)
+        if self.robot is not None:
+            return
+        hello = client.last_hello
+        if robot is None and guess and hello is not None and hello.name in preset_names():
+            robot = load_robot(hello.name)
+        if robot is not None:
+            self.start(robot, simulator=simulator_of(client), url=client.link.url, t=client.clock.now())
+
+    def detach(self, client: RobotClient) -> None:
+        client.remove_tracer(self)
+        client.remove_listener(self.event)
+        self._clients = [c for c in self._clients if c is not client]
+
+    # ------------------------------------------------------------------ what the client reports
+
+    def link_bytes(self, t: float, kind: str, data: bytes = b"", note: str = "") -> None:
+        """Bytes on the link: ``TX`` written, ``RX`` read, ``ERR`` a failure, ``CLOSE``."""
+        ns = self.ns(t)
+        msg = schemas.new(
+            schemas.LINK_BYTES,
+            stamp=stamp(ns),
+            kind=kind,
+            data=np.frombuffer(data, dtype=np.uint8),
+            note=note,
+        )
+        self.write(LINK, schemas.LINK_BYTES, msg, ns)
+
+    def message(self, t: float, direction: str, message: Message | Malformed) -> None:
+        """A decoded protocol message: ``command`` sent, ``reply`` matched, ``event``."""
+        ns = self.ns(t)
+        if isinstance(message, Malformed):
+            keyword, line = "MALFORMED", f"{message.reason}: {message.raw!r}"
+        else:
+            keyword, line = message.keyword, text.encode(message).decode("ascii", "replace").strip()
+        msg = schemas.new(
+            schemas.PROTOCOL_LINE, stamp=stamp(ns), direction=direction, keyword=keyword, text=line
+        )
+        self.write(PROTOCOL, schemas.PROTOCOL_LINE, msg, ns)
+        if direction == "command" and isinstance(message, Vel):
+            cmd = twist(message.vx / 100, message.vy / 100, math.radians(message.w))
+            stamped = schemas.new("geometry_msgs/msg/TwistStamped", header=header(ns, "base_link"), twist=cmd)
+            self.write(CMD_VEL, "geometry_msgs/msg/TwistStamped", stamped, ns)
+
+    def event(self, event: Event) -> None:
+        """A client listener: every event as a protocol line, telemetry as ROS messages too."""
+        if event.message is not None:
+            self.message(event.time, "event", event.message)
+        if isinstance(event, Telemetry):
+            self.telemetry(event)
+
+    def telemetry(self, tel: Telemetry) -> None:
+        ns = self.ns(tel.time)
+        if tel.encoders is not None and self._joints and len(tel.encoders) == len(self._joints):
+            self._joint_states(ns, tel)
+        if tel.gyro_rate is not None or tel.heading is not None:
+            self._imu(ns, tel)
+        if tel.ranges is not None and self.robot is not None:
+            for sonar, distance in zip(self.robot.sonars, tel.ranges, strict=False):
+                self.write(
+                    range_topic(sonar.name), "sensor_msgs/msg/Range", self._range(ns, sonar, distance), ns
+                )
+        if self.estimator is not None and tel.encoders is not None:
+            est = self.estimator.update(tel)
+            body = world_to_body((est.vx, est.vy, est.w), est.theta)
+            pose = Pose2D(est.x, est.y, est.theta)
+            self.write_pose(ODOM, ns, pose, (float(body[0]), float(body[1]), est.w), tf=True)
+            pose2d = schemas.new("geometry_msgs/msg/Pose2D", x=est.x, y=est.y, theta=est.theta)
+            self.write(ESTIMATE, "geometry_msgs/msg/Pose2D", pose2d, ns)
+        if self._simulator is not None:
+            pose, vel = self._simulator.pose, self._simulator.twist
+            self.write_pose(TRUTH, ns, Pose2D(pose.x, pose.y, pose.theta), (vel.vx, vel.vy, vel.w))
+
+    def write_pose(
+        self, topic: str, ns: int, pose: Pose2D, body: tuple[float, float, float], *, tf: bool = False
+    ) -> None:
+        """An Odometry odom -> base_link on ``topic`` (and the transform on ``/tf`` if ``tf``)."""
+        self.write(topic, "nav_msgs/msg/Odometry", odometry(ns, "odom", "base_link", pose, body), ns)
+        if tf:
+            transform = schemas.new(
+                "geometry_msgs/msg/TransformStamped",
+                header=header(ns, "odom"),
+                child_frame_id="base_link",
+                transform=schemas.new(
+                    "geometry_msgs/msg/Transform",
+                    translation=vector(pose.x, pose.y),
+                    rotation=quaternion(pose.theta),
+                ),
+            )
+            self.write(
+                TF,
+                "tf2_msgs/msg/TFMessage",
+                schemas.new("tf2_msgs/msg/TFMessage", transforms=[transform]),
+                ns,
+            )
+
+    def _joint_states(self, ns: int, tel: Telemetry) -> None:
+        assert tel.encoders is not None
+        angles = [
+            2 * math.pi * c / cpr if cpr else 0.0 for c, cpr in zip(tel.encoders, self._cpr, strict=True)
+        ]
+        speeds = [0.0] * len(angles)
+        if self._last_tel is not None:
+            t_prev, prev = self._last_tel
+            dt = tel.controller_time - t_prev
+            if dt > 0:
+                speeds = [
+                    2 * math.pi * (c - p) / cpr / dt if cpr else 0.0
+                    for c, p, cpr in zip(tel.encoders, prev, self._cpr, strict=True)
+                ]
+        self._last_tel = (tel.controller_time, tel.encoders)
+        effort = [float(p) for p in tel.powers] if tel.powers is not None else []
+        msg = schemas.new(
+            "sensor_msgs/msg/JointState",
+            header=header(ns, "base_link"),
+            name=list(self._joints),
+            position=np.array(angles, dtype=np.float64),
+            velocity=np.array(speeds, dtype=np.float64),
+            effort=np.array(effort, dtype=np.float64),
+        )
+        self.write(JOINT_STATES, "sensor_msgs/msg/JointState", msg, ns)
+
+    def _imu(self, ns: int, tel: Telemetry) -> None:
+        unknown = np.zeros(9, dtype=np.float64)
+        unknown[0] = -1.0  # REP 145: no linear acceleration measured
+        orientation_cov = np.zeros(9, dtype=np.float64)
+        if tel.heading is None:
+            orientation_cov[0] = -1.0
+        msg = schemas.new(
+            "sensor_msgs/msg/Imu",
+            header=header(ns, "imu_link"),
+            orientation=quaternion(tel.heading or 0.0),
+            orientation_covariance=orientation_cov,
+            angular_velocity=vector(z=tel.gyro_rate or 0.0),
+            angular_velocity_covariance=np.zeros(9, dtype=np.float64),
+            linear_acceleration=vector(),
+            linear_acceleration_covariance=unknown,
+        )
+        self.write(IMU, "sensor_msgs/msg/Imu", msg, ns)
+
+    def _range(self, ns: int, sonar: Any, distance: float | None) -> Any:
+        return schemas.new(
+            "sensor_msgs/msg/Range",
+            header=header(ns, f"sonar_{sonar.name}"),
+            radiation_type=0,  # ULTRASOUND
+            field_of_view=math.radians(sonar.cone_deg),
+            min_range=float(sonar.min_range),
+            max_range=float(sonar.max_range),
+            range=math.inf if distance is None else float(distance),  # REP 117: no echo is +inf
+        )
+
+    # ------------------------------------------------------------------ the end
+
+    def close(self) -> None:
+        """Detach, write the open chunk, rosbag2's metadata and the summary; close the file."""
+        if self.closed:
+            return
+        for client in list(self._clients):
+            self.detach(client)
+        try:
+            if self._writer is not None:
+                self._writer.add_metadata("rosbag2", {"serialized_metadata": self._rosbag2_metadata()})
+                self._writer.finish()  # type: ignore[no-untyped-call]
+        finally:
+            self.closed = True
+            if self._file is not None:
+                self._file.close()
+            for mirror in self.mirrors:
+                with contextlib.suppress(Exception):
+                    mirror.close()
+
+    def _rosbag2_metadata(self) -> str:
+        assert self.path is not None
+        start = self._first_ns or self._epoch_ns
+        duration = max(0, self._last_ns - start)
+        total = sum(self.counts.values())
+        topics = [
+            {
+                "topic_metadata": {
+                    "name": topic,
+                    "type": typename,
+                    "serialization_format": "cdr",
+                    "offered_qos_profiles": yaml.safe_load(
+                        _QOS_LATCHED if topic in _LATCHED else _QOS_VOLATILE
+                    ),
+                    "type_description_hash": schemas.type_hash(typename),
+                },
+                "message_count": self.counts[topic],
+            }
+            for topic, (_, typename) in self._channels.items()
+        ]
+        info = {
+            "rosbag2_bagfile_information": {
+                "version": 9,
+                "storage_identifier": "mcap",
+                "relative_file_paths": [self.path.name],
+                "duration": {"nanoseconds": duration},
+                "starting_time": {"nanoseconds_since_epoch": start},
+                "message_count": total,
+                "topics_with_message_count": topics,
+                "compression_format": "",
+                "compression_mode": "",
+                "files": [
+                    {
+                        "path": self.path.name,
+                        "starting_time": {"nanoseconds_since_epoch": start},
+                        "duration": {"nanoseconds": duration},
+                        "message_count": total,
+                    }
+                ],
+                "custom_data": {"omnibot_version": __version__},
+                "ros_distro": "humble",
+            }
+        }
+        return yaml.safe_dump(info, sort_keys=False)
+
+    def __enter__(self) -> Recorder:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

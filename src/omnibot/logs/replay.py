@@ -1,0 +1,76 @@
+"""Re-run an estimator offline on a log's telemetry, to tune it without driving again.
+
+The telemetry is taken from the protocol lines (``/omnibot/protocol``, the TEL events exactly as the
+controller sent them, in protocol integers), decoded by the same code the client decodes them with,
+and fed to the estimator the recorder ran (or another one). With the recorded estimator, the
+estimate is the live one, bit for bit: :func:`replay_log` compares it with ``odom``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from omnibot.client.events import Telemetry
+from omnibot.errors import ConfigError
+from omnibot.estimation.estimator import Estimate, make_estimator
+from omnibot.logs.run import Run
+from omnibot.protocol import text
+from omnibot.protocol.messages import Telemetry as TelMessage
+from omnibot.robot.description import RobotDescription
+
+
+@dataclass(frozen=True)
+class Replay:
+    estimator: str
+    recorded_estimator: str
+    estimates: list[tuple[float, Estimate]]
+    """(log time s, estimate) after each telemetry sample that carried encoders."""
+    max_difference: float | None
+    """Largest distance (m) and heading difference (rad) from the recorded estimate, whichever is
+    larger; None when the log has no estimate to compare with or another estimator was run."""
+
+
+def robot_of(run: Run) -> RobotDescription:
+    description = run.description()
+    if description is None:
+        raise ConfigError(
+            f"{run.path} has no robot description (omnibot metadata): cannot replay", key="FILE"
+        )
+    return RobotDescription.model_validate(description)
+
+
+def telemetry_of(run: Run) -> list[Telemetry]:
+    """The TEL events of the run, decoded as the client decoded them live."""
+    out = []
+    for t, direction, keyword, line in run.protocol:
+        if direction != "event" or keyword != "TEL":
+            continue
+        message = text.parse_line(line.encode("ascii"))
+        if isinstance(message, TelMessage):
+            out.append(Telemetry.from_message(message, t))
+    return out
+
+
+def replay_log(run: Run, estimator: str | None = None) -> Replay:
+    """Run ``estimator`` (default: the one recorded) over the run's telemetry."""
+    recorded = run.omnibot_metadata().get("estimator", "")
+    name = estimator or recorded
+    if not name:
+        raise ConfigError(f"{run.path} names no estimator: give --estimator", key="--estimator")
+    est = make_estimator(name, robot_of(run))
+    estimates = [(tel.time, est.update(tel)) for tel in telemetry_of(run) if tel.encoders is not None]
+    difference: float | None = None
+    if name == recorded and run.estimate_exact:
+        difference = _max_difference(run.estimate_exact, [e for _, e in estimates])
+    return Replay(name, recorded, estimates, difference)
+
+
+def _max_difference(live: list[tuple[float, float, float, float]], offline: list[Estimate]) -> float:
+    """The largest of the position (m) and heading (rad) differences; inf if the counts differ."""
+    if len(live) != len(offline):
+        return math.inf
+    worst = 0.0
+    for (_, x, y, theta), e in zip(live, offline, strict=True):
+        worst = max(worst, math.hypot(x - e.x, y - e.y), abs(theta - e.theta))
+    return worst

@@ -1,0 +1,77 @@
+"""The message types of an omnibot log: ROS 2's own (from rosbags' Humble type store) and ours.
+
+Standard topics carry standard ROS 2 messages so that Foxglove and ``ros2 bag`` understand them;
+omnibot's own records are the package ``omnibot_msgs``, defined here in ROS 2 ``.msg`` syntax and
+registered in the same type store, so one serializer (rosbags' CDR) writes every message::
+
+    /omnibot/link       omnibot_msgs/msg/LinkBytes        raw bytes both ways (TX, RX, ERR, CLOSE)
+    /omnibot/protocol   omnibot_msgs/msg/ProtocolLine     each command, reply and event as text
+    /omnibot/truth      nav_msgs/msg/Odometry             the simulator's ground truth
+
+:func:`typestore` returns the store; :func:`schema_text` the ``ros2msg`` schema (the definition
+followed by its dependencies, rosbag2's layout) and :func:`type_hash` the RIHS01 type hash.
+"""
+
+from __future__ import annotations
+
+from functools import cache
+from typing import Any
+
+from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys.msg import get_types_from_msg
+from rosbags.typesys.store import Typestore
+
+LINK_BYTES = "omnibot_msgs/msg/LinkBytes"
+PROTOCOL_LINE = "omnibot_msgs/msg/ProtocolLine"
+
+OWN_TYPES = {
+    LINK_BYTES: (
+        "# Bytes that went over the link to the controller, as the spy+ wrapper sees them.\n"
+        "builtin_interfaces/Time stamp\n"
+        "string kind  # TX (host wrote), RX (host read), ERR (the link failed), CLOSE\n"
+        "uint8[] data\n"
+        "string note  # the error of an ERR\n"
+    ),
+    PROTOCOL_LINE: (
+        "# One protocol message, decoded, in the text protocol's form (also when sent in binary).\n"
+        "builtin_interfaces/Time stamp\n"
+        "string direction  # command (host to controller), reply, event\n"
+        "string keyword  # MOVE, OK, TEL, ...\n"
+        "string text  # the whole message, e.g. MOVE,2,40,0,0\n"
+    ),
+}
+
+
+@cache
+def typestore() -> Typestore:
+    """ROS 2 Humble's message types plus ``omnibot_msgs``."""
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    for name, text in OWN_TYPES.items():
+        store.register(get_types_from_msg(text, name))
+    return store
+
+
+def schema_text(typename: str) -> str:
+    """The ``ros2msg`` schema of ``typename``: its definition, then each dependency after a line
+    of ``=`` and ``MSG: pkg/Name`` (what rosbag2 and Foxglove read)."""
+    text, _ = typestore().generate_msgdef(typename, ros_version=2)
+    return text
+
+
+def type_hash(typename: str) -> str:
+    """The RIHS01 type description hash rosbag2 puts in its metadata."""
+    return typestore().hash_rihs01(typename)
+
+
+def new(typename: str, **fields: Any) -> Any:
+    """A message object of ``typename``."""
+    return typestore().types[typename](**fields)
+
+
+def serialize(message: Any, typename: str) -> bytes:
+    """CDR bytes (little endian, with the encapsulation header) of ``message``."""
+    return bytes(typestore().serialize_cdr(message, typename))
+
+
+def deserialize(data: bytes | memoryview, typename: str) -> Any:
+    return typestore().deserialize_cdr(data, typename)

@@ -1,0 +1,23 @@
+"""Topic names of an omnibot log: the ROS 2 bridge's names for the standard ones (ros2_controllers
+and robot_state_publisher conventions), ``/omnibot/...`` for omnibot's own records."""
+
+from __future__ import annotations
+
+ODOM = "odom"
+TF = "/tf"
+IMU = "imu"
+JOINT_STATES = "joint_states"
+CMD_VEL = "cmd_vel"
+ROBOT_DESCRIPTION = "robot_description"
+CALIBRATION = "calibration"
+LINK = "/omnibot/link"
+PROTOCOL = "/omnibot/protocol"
+TRUTH = "/omnibot/truth"
+ESTIMATE = "/omnibot/estimate"
+"""The estimate's pose exactly (geometry_msgs/Pose2D: theta unwrapped, no quaternion rounding)."""
+RANGE_PREFIX = "range/"
+
+
+def range_topic(sonar: str) -> str:
+    """The sensor_msgs/Range topic of the sonar named ``sonar`` in the description."""
+    return f"{RANGE_PREFIX}{sonar}"

@@ -1,0 +1,121 @@
+"""``--foxglove``: a plain ``websockets`` client speaking the ``foxglove.sdk.v1`` subprotocol
+subscribes to the live channels and decodes what it gets: the values the client sent."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import math
+import os
+import struct
+import time
+from typing import Any
+
+import pytest
+import websockets
+from websockets.typing import Subprotocol
+
+from omnibot.cli import main
+from omnibot.client import RobotClient
+from omnibot.client.session import guarded
+from omnibot.logs import schemas, topics
+from omnibot.logs.live import FoxgloveLive
+from omnibot.logs.recorder import Recorder
+from omnibot.protocol.messages import Vel
+from omnibot.robot.description import load_robot
+
+MESSAGE_DATA = 0x01
+SDK_RUNTIME = (
+    "the Foxglove SDK starts one process-wide async runtime on first use (eventpoll, eventfd, a "
+    "socket pair) that lives until exit; test_each_server_leaves_nothing_behind checks that"
+)
+
+
+@pytest.mark.allow_leaks(SDK_RUNTIME)
+def test_each_server_leaves_nothing_behind() -> None:
+    def run_one() -> None:
+        live = FoxgloveLive(0)
+        text = schemas.new("std_msgs/msg/String", data="x")
+        live("x", "std_msgs/msg/String", schemas.serialize(text, "std_msgs/msg/String"), 1)
+        live.close()
+
+    def fds() -> int:
+        return len(os.listdir("/proc/self/fd"))
+
+    run_one()  # the runtime exists from here on
+    time.sleep(0.5)  # a stopped server's socket closes in the runtime's own thread, soon after stop()
+    before = fds()
+    for _ in range(3):
+        run_one()
+    deadline = time.monotonic() + 5.0
+    while fds() > before and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert fds() <= before
+
+
+@pytest.mark.allow_leaks(SDK_RUNTIME)
+def test_a_websocket_client_gets_the_live_channels() -> None:
+    robot = load_robot("omni4")
+    live = FoxgloveLive(0)
+    rec = Recorder(None, mirrors=[live])
+    client = RobotClient.open("sim://omni4?seed=2", robot)
+    sent: list[Vel] = []
+
+    def drive(steps: int) -> None:
+        for i in range(steps):
+            sent.append(client.vel(0.2, 0.05 * math.sin(i / 10), 0.3, 0.2))
+            client.sleep(0.01)
+
+    async def session() -> tuple[dict[int, str], list[tuple[int, bytes]]]:
+        url = f"ws://127.0.0.1:{live.port}"
+        async with websockets.connect(url, subprotocols=[Subprotocol("foxglove.sdk.v1")]) as ws:
+            assert ws.subprotocol == "foxglove.sdk.v1"
+            info = json.loads(await asyncio.wait_for(ws.recv(), 5))
+            assert info["op"] == "serverInfo"
+            drive(20)  # the channels are advertised once they carry a message
+            channels: dict[str, dict[str, Any]] = {}
+            while topics.CMD_VEL not in channels or topics.ODOM not in channels:
+                msg = json.loads(await asyncio.wait_for(ws.recv(), 5))
+                if msg["op"] == "advertise":
+                    channels |= {c["topic"]: c for c in msg["channels"]}
+            assert channels[topics.ODOM]["schemaEncoding"] == "ros2msg"
+            assert channels[topics.ODOM]["encoding"] == "cdr"
+            wanted = {1: topics.CMD_VEL, 2: topics.ODOM}
+            subs = [{"id": sid, "channelId": channels[topic]["id"]} for sid, topic in wanted.items()]
+            await ws.send(json.dumps({"op": "subscribe", "subscriptions": subs}))
+            await asyncio.sleep(0.3)
+            drive(50)
+            got: list[tuple[int, bytes]] = []
+            try:
+                while True:
+                    frame = await asyncio.wait_for(ws.recv(), 1.0)
+                    if isinstance(frame, bytes) and frame[0] == MESSAGE_DATA:
+                        sub, _ = struct.unpack_from("<IQ", frame, 1)
+                        got.append((sub, frame[13:]))
+            except TimeoutError:
+                pass
+            return wanted, got
+
+    try:
+        with guarded(client, robot=robot):
+            rec.attach(client, robot)
+            client.telemetry(0.01)
+            wanted, got = asyncio.run(session())
+    finally:
+        rec.close()  # stops the server
+    cmd = [
+        schemas.deserialize(d, "geometry_msgs/msg/TwistStamped")
+        for s, d in got
+        if wanted[s] == topics.CMD_VEL
+    ]
+    odom = [schemas.deserialize(d, "nav_msgs/msg/Odometry") for s, d in got if wanted[s] == topics.ODOM]
+    assert len(cmd) >= 50 and len(odom) >= 40
+    expected = sent[-len(cmd) :]
+    assert [round(m.twist.linear.y * 100) for m in cmd] == [v.vy for v in expected]
+    assert [round(math.degrees(m.twist.angular.z)) for m in cmd] == [v.w for v in expected]
+    assert odom[-1].pose.pose.position.x > 0.05  # the robot drove ahead, and the estimate saw it
+
+
+def test_sim_refuses_foxglove(capsys: Any) -> None:
+    assert main(["sim", "--pty", "--foxglove"]) == 2
+    assert "--foxglove goes on the command that drives it" in capsys.readouterr().err

@@ -1,0 +1,152 @@
+"""A recorded run read back by rosbags (a reader we did not write): every message decodes, and the
+values are the ones sent and received."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+from rosbags.highlevel import AnyReader
+
+from omnibot.client.events import Telemetry
+from omnibot.logs import schemas, topics
+from omnibot.logs.recorder import Recorder
+from omnibot.protocol import text
+from omnibot.protocol.messages import Telemetry as TelMessage
+from tests.logs.conftest import RecordedRun
+
+
+def read_all(path: Path) -> tuple[dict[str, str], dict[str, list[object]]]:
+    """(topic -> type, topic -> decoded messages) through rosbags' AnyReader."""
+    out: dict[str, list[object]] = {}
+    with AnyReader([path]) as reader:
+        types = {c.topic: c.msgtype for c in reader.connections}
+        for connection, _, raw in reader.messages():
+            out.setdefault(connection.topic, []).append(reader.deserialize(raw, connection.msgtype))
+    return types, out
+
+
+def test_every_message_decodes_with_rosbags(recorded: RecordedRun) -> None:
+    types, messages = read_all(recorded.path)
+    assert {topic: len(msgs) for topic, msgs in messages.items()} == recorded.counts
+    assert types[topics.ODOM] == "nav_msgs/msg/Odometry"
+    assert types[topics.TF] == "tf2_msgs/msg/TFMessage"
+    assert types[topics.IMU] == "sensor_msgs/msg/Imu"
+    assert types[topics.JOINT_STATES] == "sensor_msgs/msg/JointState"
+    assert types[topics.CMD_VEL] == "geometry_msgs/msg/TwistStamped"
+    assert types["range/front"] == "sensor_msgs/msg/Range"
+    assert types[topics.ROBOT_DESCRIPTION] == "std_msgs/msg/String"
+    assert types[topics.LINK] == schemas.LINK_BYTES
+    assert types[topics.PROTOCOL] == schemas.PROTOCOL_LINE
+
+
+def test_values_are_what_was_sent_and_received(recorded: RecordedRun) -> None:
+    _, messages = read_all(recorded.path)
+    cmd = messages[topics.CMD_VEL]
+    assert len(cmd) == len(recorded.vels) > 100
+    for m, vel in zip(cmd, recorded.vels, strict=True):
+        tw = m.twist  # type: ignore[attr-defined]
+        assert tw.linear.x == pytest.approx(vel.vx / 100)
+        assert tw.linear.y == pytest.approx(vel.vy / 100)
+        assert tw.angular.z == pytest.approx(math.radians(vel.w))
+    tel_lines = [m.text for m in messages[topics.PROTOCOL] if m.keyword == "TEL"]  # type: ignore[attr-defined]
+    assert len(tel_lines) == len(recorded.telemetry) > 100
+    for line, tel in zip(tel_lines, recorded.telemetry, strict=True):
+        assert text.parse_line(line.encode()) == tel.message
+    joints = messages[topics.JOINT_STATES]
+    assert len(joints) == len(recorded.telemetry)
+    for js, tel in zip(joints, recorded.telemetry, strict=True):
+        assert list(js.name) == ["m1_joint", "m2_joint", "m3_joint", "m4_joint"]  # type: ignore[attr-defined]
+        assert tel.encoders is not None and tel.powers is not None
+        assert [round(p * 440 / (2 * math.pi)) for p in js.position] == list(tel.encoders)  # type: ignore[attr-defined]
+        assert list(js.effort) == [float(p) for p in tel.powers]  # type: ignore[attr-defined]
+    imu = messages[topics.IMU]
+    for m, tel in zip(imu, recorded.telemetry, strict=True):
+        assert m.angular_velocity.z == pytest.approx(tel.gyro_rate)  # type: ignore[attr-defined]
+        yaw = 2 * math.atan2(m.orientation.z, m.orientation.w)  # type: ignore[attr-defined]
+        assert math.remainder(yaw - (tel.heading or 0.0), math.tau) == pytest.approx(0.0, abs=1e-12)
+    truths = messages[topics.TRUTH]
+    assert len(truths) == len(recorded.truth)
+    for m, (x, y, theta) in zip(truths, recorded.truth, strict=True):
+        pose = m.pose.pose  # type: ignore[attr-defined]
+        assert (pose.position.x, pose.position.y) == (x, y)
+        assert 2 * math.atan2(pose.orientation.z, pose.orientation.w) == pytest.approx(theta)
+    assert math.hypot(*recorded.truth[-1][:2]) > 0.2  # the robot did move
+
+
+def test_link_bytes_are_the_bytes_written(recorded: RecordedRun) -> None:
+    _, messages = read_all(recorded.path)
+    tx = b"".join(bytes(m.data) for m in messages[topics.LINK] if m.kind == "TX")  # type: ignore[attr-defined]
+    assert tx == recorded.tx
+    assert b"VEL," in tx
+
+
+def test_robot_description_is_the_urdf(recorded: RecordedRun) -> None:
+    from omnibot.robot.description import load_robot
+    from omnibot.robot.urdf import to_urdf
+
+    _, messages = read_all(recorded.path)
+    assert messages[topics.ROBOT_DESCRIPTION][0].data == to_urdf(load_robot("omni4"))  # type: ignore[attr-defined]
+    assert "k_l" in messages[topics.CALIBRATION][0].data  # type: ignore[attr-defined]
+
+
+def test_rosbag2_metadata_and_profile(recorded: RecordedRun) -> None:
+    import yaml
+    from mcap.reader import make_reader
+
+    with recorded.path.open("rb") as f:
+        reader = make_reader(f)
+        assert reader.get_header().profile == "ros2"
+        meta = {m.name: m.metadata for m in reader.iter_metadata()}
+        summary = reader.get_summary()
+    assert summary is not None
+    chunks = summary.chunk_indexes
+    assert chunks and {c.compression for c in chunks} == {"zstd"}
+    info = yaml.safe_load(meta["rosbag2"]["serialized_metadata"])["rosbag2_bagfile_information"]
+    assert info["storage_identifier"] == "mcap"
+    assert info["message_count"] == sum(recorded.counts.values())
+    listed = {t["topic_metadata"]["name"]: t["message_count"] for t in info["topics_with_message_count"]}
+    assert listed == recorded.counts
+    assert all(
+        t["topic_metadata"]["type_description_hash"].startswith("RIHS01_")
+        for t in info["topics_with_message_count"]
+    )
+
+
+def test_a_malformed_line_is_recorded_as_such(tmp_path: Path) -> None:
+    from omnibot.protocol.messages import Malformed
+
+    rec = Recorder(tmp_path / "m.mcap")
+    rec.message(0.0, "event", Malformed(b"TEL,1,x", "not an integer"))
+    rec.close()
+    _, messages = read_all(tmp_path / "m.mcap")
+    (line,) = messages[topics.PROTOCOL]
+    assert line.keyword == "MALFORMED" and "TEL,1,x" in line.text  # type: ignore[attr-defined]
+
+
+def test_telemetry_round_trips_through_the_protocol_line() -> None:
+    tel = TelMessage(1234, (1, -2, 3, -4), (10, 20, 30, 40), None, 55, -9000, 7200, (0, 1), (42,))
+    line = text.encode(tel).decode().strip()
+    assert text.parse_line(line.encode()) == tel
+    assert Telemetry.from_message(tel, 1.0).encoders == (10, 20, 30, 40)
+
+
+def test_a_second_link_goes_on_from_the_last_message(tmp_path: Path) -> None:
+    """calibrate opens a fresh simulated robot per floor, each clock starting at 0 again."""
+    from omnibot.client import RobotClient
+    from omnibot.client.session import guarded
+    from omnibot.logs.reader import LogFile
+    from omnibot.robot.description import load_robot
+
+    robot = load_robot("omni4")
+    rec = Recorder(tmp_path / "two.mcap")
+    for seed in (1, 2):
+        client = RobotClient.open(f"sim://omni4?seed={seed}", robot)
+        with guarded(client, robot=robot):
+            rec.attach(client, robot)
+            client.telemetry(0.01)
+            client.sleep(0.5)
+    rec.close()
+    times = [m.ns for m in LogFile.open(tmp_path / "two.mcap").messages()]
+    assert times == sorted(times) and (times[-1] - times[0]) / 1e9 > 0.9
