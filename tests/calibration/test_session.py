@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from omnibot.calibration.experiments import Plan
 from omnibot.calibration.patterns import Geometry
+from omnibot.calibration.plan import Plan
 from omnibot.calibration.session import Tally, expected_runs
 from omnibot.robot.description import load_robot
 

@@ -11,7 +11,7 @@ from typing import Any, cast
 import pytest
 
 from omnibot.calibration.accuracy import AccuracyRow
-from omnibot.calibration.session import CalibrationResult, SurfaceSession
+from omnibot.calibration.results import CalibrationResult, SurfaceSession
 from omnibot.calibration.verdict import judge_calibration
 from omnibot.cli import main
 from omnibot.client.client import RobotClient

@@ -28,7 +28,7 @@ from typing import Any
 import yaml
 from pydantic import ValidationError
 
-from omnibot.calibration.session import CalibrationResult, describe_spec
+from omnibot.calibration.results import CalibrationResult
 from omnibot.config_errors import read_yaml
 from omnibot.errors import ConfigError
 from omnibot.estimation.slip import SlipParameters
@@ -82,6 +82,30 @@ class CalibrationFile:
                 f"{', '.join(self.slip) or 'none'}"
             )
         return self.slip[surface]
+
+
+def describe_spec(spec: CalibrationSpec) -> dict[str, Any]:
+    """A calibration section as plain data (the YAML layout of a description's ``calibration:``)."""
+    out: dict[str, Any] = {"k": spec.k}
+    if spec.k_l is not None:
+        out["k_l"] = {
+            "courses_deg": list(spec.k_l.courses_deg),
+            "curves": [{"x": [int(x) for x in c.x], "y": list(c.y)} for c in spec.k_l.curves],
+        }
+    for name in ("k_t", "k_r"):
+        t = getattr(spec, name)
+        if t is not None:
+            out[name] = {"x": [int(x) for x in t.x], "y": list(t.y)}
+    if spec.motors is not None:
+        out["motors"] = {
+            "offset": list(spec.motors.offset),
+            "gain": [{"x": [int(x) for x in g.x], "y": list(g.y)} for g in spec.motors.gain],
+        }
+    if spec.rollers is not None:
+        out["rollers"] = {"cos": list(spec.rollers.cos), "sin": list(spec.rollers.sin)}
+        if spec.rollers.coast is not None:
+            out["rollers"]["coast"] = {"x": list(spec.rollers.coast.x), "y": list(spec.rollers.coast.y)}
+    return out
 
 
 def document(result: CalibrationResult, truth: str = "", warning: str = "") -> dict[str, Any]:

@@ -230,8 +230,8 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> in
     checked to be one before the robot moves) asks the operator."""
     from omnibot.calibration.accuracy import AccuracyPlan
     from omnibot.calibration.calfile import write_calibration
-    from omnibot.calibration.experiments import Plan
     from omnibot.calibration.perturb import ACCEPTANCE, perturbed_robot
+    from omnibot.calibration.plan import Plan
     from omnibot.calibration.report import accuracy_entries, slip_summary, write_report
     from omnibot.calibration.session import calibrate
     from omnibot.calibration.tables import summary_table

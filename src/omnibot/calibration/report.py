@@ -21,7 +21,8 @@ from pathlib import Path
 from typing import Any
 
 from omnibot.calibration.accuracy import AccuracyRow, reach_speed, summarize
-from omnibot.calibration.session import CalibrationResult, SurfaceSession, describe_spec
+from omnibot.calibration.calfile import describe_spec
+from omnibot.calibration.results import CalibrationResult, SurfaceSession
 from omnibot.calibration.tables import move_grid, rotate_lines, summary_table
 from omnibot.errors import ConfigError
 from omnibot.navigation.slipcal import SlipCalibration

@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from omnibot.calibration.accuracy import AccuracyRow
-from omnibot.calibration.session import CalibrationResult
+from omnibot.calibration.results import CalibrationResult
 
 
 @dataclass(frozen=True)
