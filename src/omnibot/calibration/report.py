@@ -57,6 +57,17 @@ def accuracy_markdown(result: CalibrationResult) -> str:
         "",
         summary_table(entries) if entries else "(no accuracy checks were run)",
     ]
+    if result.average is not None and result.average_better is not None:
+        lines += [
+            "",
+            "The average over the floors is "
+            + (
+                "better than no calibration on every floor: the file's `calibration`."
+                if result.average_better
+                else "worse than no calibration on a floor: not kept; each floor keeps its own tables "
+                "(`surfaces.<floor>.calibration`, uploaded where the robot stands)."
+            ),
+        ]
     reach = [(f"{s.surface} calibration", s.reach) for s in result.sessions]
     if result.average is not None and result.sessions:
         length = result.sessions[0].fit.move_length

@@ -46,12 +46,21 @@ class CalibrationResult:
     robot: RobotDescription
     sessions: list[SurfaceSession]
     average: CalibrationSpec | None = None
+    """The tables averaged over the surfaces (seed 000's), when there are several."""
     average_checks: dict[str, list[AccuracyRow]] = field(default_factory=dict)
+    """The accuracy check of :attr:`average` on each surface."""
+    average_better: bool | None = None
+    """Its verdict (:func:`~omnibot.calibration.verdict.judge_average`): False when it is worse than
+    no calibration on some surface, None when it was not checked."""
 
     @property
-    def chosen(self) -> CalibrationSpec:
-        """The averaged calibration over several surfaces, else the one surface's."""
-        return self.average if self.average is not None else self.sessions[0].spec
+    def chosen(self) -> CalibrationSpec | None:
+        """The tables for a robot that does not say which floor it stands on: the one surface's, or
+        the average over several unless its check found it worse than none on one of them (then
+        None: each floor keeps only its own, :attr:`SurfaceSession.spec`)."""
+        if self.average is None:
+            return self.sessions[0].spec if len(self.sessions) == 1 else None
+        return None if self.average_better is False else self.average
 
     @property
     def gyro(self) -> GyroCalibration | None:

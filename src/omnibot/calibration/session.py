@@ -46,6 +46,7 @@ from omnibot.calibration.slip import slip_step
 from omnibot.calibration.tap import TelemetryTap, standstill_bias
 from omnibot.calibration.truth import Ask, TruthContext, TruthSource, make_truth
 from omnibot.calibration.umbmark import OdometryCalibration, SquareRun, calibrate_odometry
+from omnibot.calibration.verdict import judge_average
 from omnibot.client.client import RobotClient
 from omnibot.errors import ConfigError
 from omnibot.firmware.config import build_config
@@ -585,7 +586,8 @@ def calibrate(
     progress: ProgressFactory = no_progress,
     upload: bool = True,
 ) -> CalibrationResult:
-    """Calibrate on every surface, then average and check the average on every surface."""
+    """Calibrate on every surface, then average and check the average on every surface (it is kept
+    only when it is better than none on every one: :attr:`CalibrationResult.average_better`)."""
     plan = plan or Plan()
     sessions = []
 
@@ -627,4 +629,6 @@ def calibrate(
                         ask=ask,
                         progress=bar,
                     )
+            average = judge_average(result)
+            result.average_better = None if average is None else average.better
     return result
