@@ -65,7 +65,7 @@ def no_progress(desc: str, total: int) -> Iterator[Progress | None]:
 
 
 def accuracy_runs(accuracy: AccuracyPlan, robot: RobotDescription) -> int:
-    """The runs of one accuracy check (:func:`~omnibot.calibration.accuracy.run_accuracy`)."""
+    """The runs of one accuracy check (:func:`~omnibot.calibration.check.run_accuracy`)."""
     moves = len(accuracy.courses_deg) * len(accuracy.move_speeds(robot)) * (2 if accuracy.back else 1)
     return moves + 2 * len(accuracy.rotations)
 

@@ -11,9 +11,9 @@ sonar       a sonar facing a wall: range before and after a straight run (no rot
 tape        a person measures each run and types the result at a prompt
 ==========  ===================================================================================
 
-A strategy takes a :meth:`~TruthSource.mark` before a run and turns it into a :class:`Motion` after
-it (the robot stopped): the displacement in the body frame at the run's start, and the angle
-turned, each None where the strategy cannot tell. :class:`TruthChain` asks the first strategy that
+A strategy takes a :meth:`~TruthSource.mark` before a run and turns it into a
+:class:`~omnibot.calibration.runs.Motion` after it (the robot stopped): the displacement in the body
+frame at the run's start, and the angle turned, each None where the strategy cannot tell. :class:`TruthChain` asks the first strategy that
 can measure a run (``sonar`` falls back to ``encoders`` for rotations).
 """
 
