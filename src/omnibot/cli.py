@@ -36,7 +36,14 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from omnibot import __version__
-from omnibot.cliargs import DEFAULT_SEED, add_debug_option, add_log_option, add_robot_options, seed_of
+from omnibot.cliargs import (
+    DEFAULT_SEED,
+    add_debug_option,
+    add_log_option,
+    add_robot_options,
+    output_dir,
+    seed_of,
+)
 from omnibot.errors import ConfigError, KinematicsError, OmnibotError, ProtocolError
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_BUG = 0, 1, 2, 70
@@ -56,16 +63,6 @@ def parse_floats(text: str | Sequence[str], count: int, what: str) -> list[float
     if len(values) != count or not all(math.isfinite(v) for v in values):
         raise ConfigError(f"expected {count} numbers (comma- or space-separated), got {joined!r}", key=what)
     return values
-
-
-def output_dir(text: str, flag: str = "--out") -> Path:
-    """``--out DIR`` made (with its parents); one line if it cannot be."""
-    out = Path(text)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ConfigError(f"cannot make directory {out}: {exc.strerror or exc}", key=flag) from None
-    return out
 
 
 _NUMBER = r"-?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?"

@@ -178,3 +178,13 @@ def check_world(args: argparse.Namespace) -> None:
             f"unknown surface {surface!r}; expected one of: {', '.join(SURFACES)}", key="--surface"
         )
     load_world(world_of(args))
+
+
+def output_dir(text: str, flag: str = "--out") -> Path:
+    """``--out DIR`` made (with its parents); one line if it cannot be."""
+    out = Path(text)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(f"cannot make directory {out}: {exc.strerror or exc}", key=flag) from None
+    return out

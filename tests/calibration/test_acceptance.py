@@ -31,10 +31,11 @@ import pytest
 
 from omnibot.calibration.accuracy import AccuracyPlan, AccuracyRow, summarize
 from omnibot.calibration.calfile import load_calibration, write_calibration
-from omnibot.calibration.experiments import Plan
 from omnibot.calibration.perturb import ACCEPTANCE, perturbed_robot
+from omnibot.calibration.plan import Plan
 from omnibot.calibration.report import accuracy_entries, write_report
-from omnibot.calibration.session import CalibrationResult, calibrate
+from omnibot.calibration.results import CalibrationResult
+from omnibot.calibration.session import calibrate
 from omnibot.calibration.tables import summary_table
 from omnibot.client.client import RobotClient
 from omnibot.robot.description import RobotDescription, load_robot

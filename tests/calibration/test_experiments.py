@@ -8,7 +8,6 @@ from collections.abc import Iterator
 import pytest
 
 from omnibot.calibration.experiments import (
-    Plan,
     Runner,
     find_deadband,
     power_levels,
@@ -17,8 +16,10 @@ from omnibot.calibration.experiments import (
     turning_runs,
 )
 from omnibot.calibration.patterns import Geometry
+from omnibot.calibration.plan import Plan
+from omnibot.calibration.runs import STRAIGHT, RunInfo
 from omnibot.calibration.tap import TelemetryTap
-from omnibot.calibration.truth import STRAIGHT, RunInfo, SimTruth
+from omnibot.calibration.truth import SimTruth
 from omnibot.errors import ConfigError
 from omnibot.robot.description import RobotDescription, load_robot
 from tests.calibration.conftest import sim_client

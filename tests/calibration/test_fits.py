@@ -6,7 +6,6 @@ import itertools
 
 import pytest
 
-from omnibot.calibration.experiments import RunResult
 from omnibot.calibration.fits import (
     FACTOR_MAX,
     RateCurve,
@@ -18,7 +17,7 @@ from omnibot.calibration.fits import (
     knot_powers,
     rate_points,
 )
-from omnibot.calibration.truth import Motion
+from omnibot.calibration.runs import Motion, RunResult
 from omnibot.client import commands
 from omnibot.protocol import codes
 from omnibot.robot.description import CalibrationSpec, CourseTable, PiecewiseLinear

@@ -6,10 +6,11 @@ import math
 
 import pytest
 
-from omnibot.calibration.experiments import Plan, Runner
-from omnibot.calibration.gyro import GyroCalibration, calibrate_gyro, fit_scale, standstill_bias
+from omnibot.calibration.experiments import Runner
+from omnibot.calibration.gyro import GyroCalibration, calibrate_gyro, fit_scale
+from omnibot.calibration.plan import Plan
 from omnibot.calibration.session import rotation_test
-from omnibot.calibration.tap import TelemetryTap
+from omnibot.calibration.tap import TelemetryTap, standstill_bias
 from omnibot.calibration.truth import SimTruth
 from omnibot.robot.description import RobotDescription
 from tests.calibration.conftest import sim_client

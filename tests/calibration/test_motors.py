@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from omnibot.calibration.motors import Balance, balance_courses, identity, offsets_from_deadbands
+from omnibot.calibration.motorfit import Balance, balance_courses, identity, offsets_from_deadbands
 from omnibot.calibration.patterns import Geometry, apply_map, course_pattern, map_power, top_power
 from omnibot.firmware.calibration import Calibration
 from omnibot.robot.description import MotorMapSpec, PiecewiseLinear, RobotDescription, load_robot

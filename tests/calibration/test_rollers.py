@@ -9,9 +9,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from omnibot.calibration.experiments import RunResult
 from omnibot.calibration.patterns import Geometry
-from omnibot.calibration.rollers import (
+from omnibot.calibration.rollerfit import (
     GROUP,
     RollerFit,
     axis_courses,
@@ -19,7 +18,7 @@ from omnibot.calibration.rollers import (
     fit_rollers,
     offset_shift,
 )
-from omnibot.calibration.truth import Motion
+from omnibot.calibration.runs import Motion, RunResult
 from omnibot.firmware.power import roller_terms
 from omnibot.robot.description import RobotDescription
 from tests.calibration.test_fits import run as straight_run

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
-from omnibot.calibration.experiments import Plan
+from omnibot.calibration.accuracy import AccuracyPlan
 from omnibot.calibration.patterns import Geometry
-from omnibot.calibration.session import Tally, expected_runs
+from omnibot.calibration.plan import Plan
+from omnibot.calibration.session import STEPS, Tally, expected_runs
 from omnibot.robot.description import load_robot
 
 
@@ -49,3 +50,13 @@ def test_phases_that_do_not_run_expect_nothing() -> None:
     assert "before" not in full and "after" not in full  # no accuracy check
     bare = expected_runs(Plan(motor_map=False, roller_rounds=0), geometry, None, robot, upload=False)
     assert set(full) - set(bare) == {"motor map", "roller drag", "turns", "roller gains"}
+
+
+def test_every_phase_is_one_named_steps() -> None:
+    """calibrate_surface is its STEPS: each progress phase ends with its own step, in the order the
+    phases are expected, so the bar's total ends at the runs driven."""
+    robot = load_robot("omni4")
+    phases = list(expected_runs(Plan(), Geometry.of(robot), AccuracyPlan(), robot))
+    stepped = [step.phase for step in STEPS if step.phase is not None]
+    assert stepped == phases
+    assert len({step.name for step in STEPS}) == len(STEPS)

@@ -11,15 +11,11 @@ import pytest
 from omnibot.calibration.experiments import Runner
 from omnibot.calibration.patterns import course_pattern
 from omnibot.calibration.perturb import perturbed_robot
+from omnibot.calibration.runs import ROTATE, SQUARE, STRAIGHT, Motion, RunInfo, relative
 from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.truth import (
-    ROTATE,
-    SQUARE,
-    STRAIGHT,
     TRUTHS,
     CsvTruth,
-    Motion,
-    RunInfo,
     SimTruth,
     TapeTruth,
     TruthChain,
@@ -27,7 +23,6 @@ from omnibot.calibration.truth import (
     default_truth,
     make_truth,
     parse_truth_spec,
-    relative,
 )
 from omnibot.client.client import RobotClient
 from omnibot.errors import ConfigError

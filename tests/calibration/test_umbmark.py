@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from omnibot.calibration.truth import Motion
+from omnibot.calibration.runs import Motion
 from omnibot.calibration.umbmark import Increment, corrected_robot, fit_squares, integrate, umbmark
 from omnibot.estimation.odometry import WheelOdometry
 from omnibot.robot.description import RobotDescription

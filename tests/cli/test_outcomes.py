@@ -10,13 +10,16 @@ from typing import Any, cast
 
 import pytest
 
+from omnibot.calibration import cli as calibration_cli
 from omnibot.calibration.accuracy import AccuracyRow
-from omnibot.calibration.session import CalibrationResult, SurfaceSession
-from omnibot.calibration.verdict import judge_calibration
-from omnibot.cli import main
+from omnibot.calibration.calfile import load_calibration
+from omnibot.calibration.results import CalibrationResult, SurfaceSession
+from omnibot.calibration.verdict import judge_average, judge_calibration
+from omnibot.cli import build_parser, main
 from omnibot.client.client import RobotClient
 from omnibot.control.paths.files import write_path
 from omnibot.control.paths.standard import standard_path
+from omnibot.errors import ConfigError
 from omnibot.navigation.metrics import Tolerances, judge
 from omnibot.robot.description import load_robot
 from tests.cli.conftest import Harness, assert_one_line_error
@@ -69,19 +72,39 @@ def row(course: float, error: float, kind: str = "move") -> AccuracyRow:
     return AccuracyRow(kind, course, 0.3, 1.0, 1.0 + error, error)
 
 
-def result(before: list[float], after: list[float]) -> CalibrationResult:
+def session(surface: str, before: list[float], after: list[float], k: float | None = None) -> SurfaceSession:
     robot = load_robot("mecanum4")
     assert robot.calibration is not None
-    session = SurfaceSession(
-        surface="wood",
+    return SurfaceSession(
+        surface=surface,
         truth="sim",
         fit=cast(Any, SimpleNamespace(deadbands={})),
-        spec=robot.calibration,
+        spec=robot.calibration if k is None else robot.calibration.model_copy(update={"k": k}),
         runs=[],
         before=[row(45.0 * k, e) for k, e in enumerate(before)],
         after=[row(45.0 * k, e) for k, e in enumerate(after)],
     )
-    return CalibrationResult(robot, [session])
+
+
+def result(before: list[float], after: list[float]) -> CalibrationResult:
+    return CalibrationResult(load_robot("mecanum4"), [session("wood", before, after)])
+
+
+def two_floors(average: list[float], carpet_after: list[float] | None = None) -> CalibrationResult:
+    """Wood and carpet, each floor's own tables better than none unless ``carpet_after`` says
+    otherwise; ``average``: the average's errors on wood (on carpet it helps)."""
+    wood = session("wood", [-0.03, 0.05], [-0.01, 0.01], k=150.0)
+    carpet = session("carpet", [-0.34, -0.30], carpet_after or [-0.05, 0.06], k=190.0)
+    made = CalibrationResult(load_robot("mecanum4"), [wood, carpet])
+    made.average = carpet.spec.model_copy(update={"k": 170.0})
+    made.average_checks = {
+        "wood": [row(0.0, average[0]), row(45.0, average[1])],
+        "carpet": carpet.after or [],
+    }
+    verdict = judge_average(made)
+    assert verdict is not None
+    made.average_better = verdict.better  # as calibrate() sets it
+    return made
 
 
 def test_calibration_verdict() -> None:
@@ -90,12 +113,18 @@ def test_calibration_verdict() -> None:
     assert worse.worst == "wood: MOVE course 0 deg at 0.3 m/s: -3.0 % before, -32.0 % after"
     assert "wood 4.0 % -> 16.5 %" in worse.summary
     assert judge_calibration(result([-0.03, 0.05], [-0.01, 0.01])).better is True
-    averaged = result([-0.03, 0.05], [-0.01, 0.01])
-    averaged.average = averaged.sessions[0].spec
-    averaged.average_checks = {"wood": [row(0.0, -0.32), row(45.0, 0.01)]}
-    refused = judge_calibration(averaged)
-    assert refused.better is False and "-32.0 % after" in refused.worst
-    assert refused.hint.startswith("each floor's own tables: wood 4.0 % -> 1.0 %")
+    # the average over the floors is judged on its own: worse than none on wood, it is not kept,
+    # while each floor's own tables are
+    refused = judge_calibration(two_floors([-0.32, 0.01]))
+    assert refused.better is True and refused.summary.endswith("wood 4.0 % -> 1.0 %, carpet 32.0 % -> 5.5 %")
+    assert refused.average is not None and refused.average.better is False
+    assert "wood: MOVE course 0 deg at 0.3 m/s: -3.0 % before, -32.0 % after" in refused.average.worst
+    kept = judge_calibration(two_floors([-0.02, 0.01]))
+    assert kept.better is True and kept.average is not None and kept.average.better is True
+    # a floor whose own tables are worse than none makes the calibration worse than none
+    bad = judge_calibration(two_floors([-0.02, 0.01], carpet_after=[-0.5, -0.5]))
+    assert bad.better is False and bad.worst.startswith("carpet: MOVE")
+    assert bad.hint == "better than none on wood: calibrate that floor alone (--surface NAME)"
     unchecked = result([], [])
     unchecked.sessions[0].before = None
     assert judge_calibration(unchecked).better is None
@@ -107,7 +136,7 @@ def fake_calibration(monkeypatch: pytest.MonkeyPatch) -> dict[str, Any]:
     state: dict[str, Any] = {"after": [-0.32, 0.01], "uploads": []}
 
     def fake_calibrate(robot: Any, surfaces: list[str], open_client: Any, **kwargs: Any) -> CalibrationResult:
-        made = result([-0.03, 0.05], state["after"])
+        made = state["result"] if "result" in state else result([-0.03, 0.05], state["after"])
         made.robot = robot
         return made
 
@@ -165,6 +194,37 @@ def test_a_calibration_better_than_none_is_written_and_kept(
     assert f"calibration: {tmp_path / 'calibration.yaml'}" in out
     assert "wood 4.0 % -> 1.0 %" in out
     assert (tmp_path / "calibration.yaml").read_text().startswith("# omnibot calibrate: mecanum4")
+
+
+def test_two_floors_keep_their_own_tables_when_their_average_is_worse_than_none(
+    tmp_path: Path, fake_calibration: dict[str, Any], capsys: pytest.CaptureFixture[str]
+) -> None:
+    fake_calibration["result"] = two_floors([-0.32, 0.01])
+    cal = tmp_path / "calibration.yaml"
+    port = ["calibrate", "--port", "sim://mecanum4", "--surface", "wood,carpet", "--out", str(tmp_path)]
+    assert calibration_cli.run(build_parser().parse_args(port), ask=lambda prompt: "") == 0
+    out = capsys.readouterr().out
+    assert "check: mean abs error of the accuracy check: wood 4.0 % -> 1.0 %, carpet 32.0 % -> 5.5 %" in out
+    assert "average over the floors: wood 4.0 % -> 16.5 %, carpet 32.0 % -> 5.5 %: not kept" in out
+    assert f"calibration: {cal} (tables per floor: wood, carpet;" in out
+    loaded = load_calibration(cal)
+    assert loaded.calibration is None and "not kept" in cal.read_text()
+    assert (loaded.for_surface("wood").k, loaded.for_surface("carpet").k) == (150.0, 190.0)
+    with pytest.raises(ConfigError, match="say which floor the robot is on"):
+        loaded.for_surface(None)
+    # the board keeps the tables of the floor it stands on at the end: carpet's
+    assert [spec.k for spec in fake_calibration["uploads"]] == [190.0]
+    assert "controller: carpet's tables uploaded (CAL)" in out
+
+
+def test_an_average_better_than_none_everywhere_is_the_files_calibration(
+    tmp_path: Path, fake_calibration: dict[str, Any], capsys: pytest.CaptureFixture[str]
+) -> None:
+    fake_calibration["result"] = two_floors([-0.02, 0.01])
+    assert main(["calibrate", "--surface", "wood,carpet", "--out", str(tmp_path)]) == 0
+    assert "carpet 32.0 % -> 5.5 %: kept as the file's calibration" in capsys.readouterr().out
+    loaded = load_calibration(tmp_path / "calibration.yaml")
+    assert loaded.calibration is not None and loaded.calibration.k == 170.0
 
 
 def test_the_old_calibrate_spelling_still_works(

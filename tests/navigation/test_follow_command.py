@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import json
 from pathlib import Path as FsPath
+from typing import Any
 
 import pytest
 
 from omnibot.cli import main
+from omnibot.client.client import RobotClient
 from omnibot.control.paths import standard_path, write_path
 
 
@@ -95,6 +97,23 @@ def test_follow_applies_the_floors_slip_from_a_calibration_file(tmp_path: FsPath
     data = json.loads(report.read_text())
     assert data["slip_calibration"] == {"file": str(cal), "roll": 0.016, "compliance": 0.0, "scale": 1.0}
     assert data["rms_cross_track_m"] < 0.01
+
+
+def test_follow_uploads_the_floors_tables(tmp_path: FsPath, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The board gets the tables of the floor it stands on (CAL), not the file's average."""
+    uploads = []
+    upload = RobotClient.upload_calibration
+
+    def record(client: RobotClient, spec: Any) -> Any:
+        uploads.append(spec.k)
+        return upload(client, spec)
+
+    monkeypatch.setattr(RobotClient, "upload_calibration", record)
+    path_file, cal = tmp_path / "l.csv", tmp_path / "cal.yaml"
+    write_path(standard_path("line", size=0.3), path_file)
+    cal.write_text(CALIBRATION.replace("calibration: {k: 160.0}\n", ""))  # no tables for any floor
+    assert main(["follow", str(path_file), "--surface", "carpet", "--calibration", str(cal)]) == 0
+    assert uploads == [190.0]
 
 
 @pytest.mark.parametrize(

@@ -1,10 +1,11 @@
-"""Open-loop accuracy: MOVEs over courses and speeds and ROTATEs, commanded against achieved.
+"""Open-loop accuracy: what the check measures, its rows and summary, and a calibration's reach
+(plain data and the firmware's power model, no I/O; :mod:`omnibot.calibration.check` drives it).
 
-Run before and after uploading a calibration, this is the before/after table of the report. Each
-MOVE on course ``c`` is followed by one back on ``c + 180`` (so the robot stays near its start);
-both are rows. Errors: distance (achieved / commanded - 1), course (direction of the displacement
-against the commanded course, degrees) and heading (how far the body turned, degrees; a straight
-MOVE should not turn it). For ROTATE the error is the angle's.
+Run before and after uploading a calibration, the check is the before/after table of the report.
+Each MOVE on course ``c`` is followed by one back on ``c + 180`` (so the robot stays near its
+start); both are rows. Errors: distance (achieved / commanded - 1), course (direction of the
+displacement against the commanded course, degrees) and heading (how far the body turned, degrees;
+a straight MOVE should not turn it). For ROTATE the error is the angle's.
 """
 
 from __future__ import annotations
@@ -13,15 +14,12 @@ import math
 import statistics
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
-from functools import partial
 from typing import Any
 
-from omnibot.calibration.experiments import Runner, speed_range
-from omnibot.calibration.truth import ROTATE, STRAIGHT, RunInfo
+from omnibot.calibration.plan import speed_range
 from omnibot.firmware.calibration import Calibration
 from omnibot.firmware.config import build_config
 from omnibot.firmware.power import PowerModel
-from omnibot.protocol import codes
 from omnibot.robot.description import CalibrationSpec, RobotDescription
 
 REACH_COURSES = tuple(float(c) for c in range(0, 360, 15))
@@ -70,79 +68,6 @@ class AccuracyRow:
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
-
-
-def _wrap_deg(a: float) -> float:
-    return (a + 180.0) % 360.0 - 180.0
-
-
-def run_accuracy(runner: Runner, plan: AccuracyPlan) -> list[AccuracyRow]:
-    """Every MOVE and ROTATE of the plan, measured by the runner's truth."""
-    client, robot = runner.client, runner.robot
-    rows: list[AccuracyRow] = []
-    length = round(plan.length, 2)
-    for speed in plan.move_speeds(robot):
-        for course in plan.courses_deg:
-            for c in (course, course + 180.0) if plan.back else (course,):
-                info = RunInfo(
-                    STRAIGHT,
-                    f"check: move {100 * length:.0f} cm at {speed:g} m/s on course {c:g} deg",
-                    math.radians(c),
-                )
-                runner.note(f"check course {c:g} at {speed:g}")
-                r = runner.run(
-                    info,
-                    partial(client.move, length, speed, math.radians(c)),
-                    length / speed,
-                    "check",
-                    course_deg=c,
-                )
-                m = r.truth
-                d = None if m is None else m.distance
-                direction = None if m is None else m.direction
-                rows.append(
-                    AccuracyRow(
-                        kind="move",
-                        course_deg=c,
-                        speed=speed,
-                        commanded=length,
-                        achieved=d,
-                        error=None if d is None else d / length - 1.0,
-                        course_error_deg=None
-                        if direction is None
-                        else _wrap_deg(math.degrees(direction) - c),
-                        heading_error_deg=None if m is None or m.theta is None else math.degrees(m.theta),
-                        source="" if m is None else m.source,
-                        saturated=codes.W_SPEED_REDUCED in r.warnings,
-                    )
-                )
-    for angle, rate in plan.rotations:
-        for sign in (1, -1):
-            a = sign * angle
-            info = RunInfo(ROTATE, f"check: rotate {a:g} deg at {rate:g} deg/s")
-            runner.note(f"check rotate {a:g}")
-            r = runner.run(
-                info,
-                partial(client.rotate, math.radians(a), math.radians(rate)),
-                angle / rate,
-                "check",
-            )
-            m = r.truth
-            got = None if m is None or m.theta is None else math.degrees(m.theta)
-            rows.append(
-                AccuracyRow(
-                    kind="rotate",
-                    course_deg=0.0,
-                    speed=rate,
-                    commanded=a,
-                    achieved=got,
-                    error=None if got is None else got / a - 1.0,
-                    heading_error_deg=None if got is None else got - a,
-                    source="" if m is None else m.source,
-                    saturated=codes.W_SPEED_REDUCED in r.warnings,
-                )
-            )
-    return rows
 
 
 def reach_speed(

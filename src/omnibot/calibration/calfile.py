@@ -3,10 +3,10 @@
 ::
 
     # omnibot calibrate: omni4 on wood, carpet (truth sim)
-    calibration:          # what the controller uses (the average over the surfaces); paste it into
-      k: 162.1            # the robot description, or merge it with `merge_calibration`
+    calibration:          # the tables for any floor: the one floor's, or the average over the
+      k: 162.1            # floors when it is better than none on each (else left out); paste it into
       k_l: {courses_deg: [0.0, 15.0, 30.0, 45.0], curves: [{x: [...], y: [...]}, ...]}
-      k_t: {x: [...], y: [...]}
+      k_t: {x: [...], y: [...]}    # the robot description, or merge it with `merge_calibration`
       k_r: {x: [...], y: [...]}
     surfaces:             # each surface's own calibration, dead bands and wheel slip
       wood: {calibration: {...}, deadband: {course:0: 48, rotation: 40},
@@ -14,8 +14,9 @@
     gyro: {bias: -0.0032, scale: 1.008}                              # true = scale * (rate - bias)
     odometry: {wheel_radius_scale: 1.038, wheel_base_scale: 0.989}  # for wheel odometry
 
-Only the ``calibration`` section goes to the controller (CAL commands); ``gyro`` and ``odometry``
-are host-side corrections (:func:`omnibot.calibration.umbmark.corrected_robot`).
+A ``calibration`` section goes to the controller (CAL commands): the floor's own
+(:meth:`CalibrationFile.for_surface`) where the robot stands; ``gyro`` and ``odometry`` are host-side
+corrections (:func:`omnibot.calibration.umbmark.corrected_robot`).
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from typing import Any
 import yaml
 from pydantic import ValidationError
 
-from omnibot.calibration.session import CalibrationResult, describe_spec
+from omnibot.calibration.results import CalibrationResult
 from omnibot.config_errors import read_yaml
 from omnibot.errors import ConfigError
 from omnibot.estimation.slip import SlipParameters
@@ -39,7 +40,9 @@ TOP_KEYS = ("robot", "calibration", "surfaces", "gyro", "odometry", "info")
 
 @dataclass(frozen=True)
 class CalibrationFile:
-    calibration: CalibrationSpec
+    calibration: CalibrationSpec | None
+    """The tables for any floor; None in a file of several floors whose average was worse than none
+    on one of them (each floor then has only its own, :attr:`surfaces`)."""
     surfaces: dict[str, CalibrationSpec] = field(default_factory=dict)
     deadbands: dict[str, dict[str, int]] = field(default_factory=dict)
     gyro: dict[str, float] | None = None
@@ -56,8 +59,15 @@ class CalibrationFile:
             )
 
     def for_surface(self, surface: str | None) -> CalibrationSpec:
-        """A surface's own calibration (None: the file's ``calibration``)."""
+        """A surface's own calibration (None: the file's ``calibration``, the tables for any floor)."""
         if surface is None:
+            if self.calibration is None:
+                raise ConfigError(
+                    f"the calibration file has tables for each floor ({', '.join(self.surfaces)}) and none "
+                    "for every floor (their average was worse than none on one): say which floor the "
+                    "robot is on",
+                    key="surface",
+                )
             return self.calibration
         if surface not in self.surfaces:
             raise ConfigError(
@@ -84,10 +94,36 @@ class CalibrationFile:
         return self.slip[surface]
 
 
+def describe_spec(spec: CalibrationSpec) -> dict[str, Any]:
+    """A calibration section as plain data (the YAML layout of a description's ``calibration:``)."""
+    out: dict[str, Any] = {"k": spec.k}
+    if spec.k_l is not None:
+        out["k_l"] = {
+            "courses_deg": list(spec.k_l.courses_deg),
+            "curves": [{"x": [int(x) for x in c.x], "y": list(c.y)} for c in spec.k_l.curves],
+        }
+    for name in ("k_t", "k_r"):
+        t = getattr(spec, name)
+        if t is not None:
+            out[name] = {"x": [int(x) for x in t.x], "y": list(t.y)}
+    if spec.motors is not None:
+        out["motors"] = {
+            "offset": list(spec.motors.offset),
+            "gain": [{"x": [int(x) for x in g.x], "y": list(g.y)} for g in spec.motors.gain],
+        }
+    if spec.rollers is not None:
+        out["rollers"] = {"cos": list(spec.rollers.cos), "sin": list(spec.rollers.sin)}
+        if spec.rollers.coast is not None:
+            out["rollers"]["coast"] = {"x": list(spec.rollers.coast.x), "y": list(spec.rollers.coast.y)}
+    return out
+
+
 def document(result: CalibrationResult, truth: str = "", warning: str = "") -> dict[str, Any]:
     """The YAML document of a calibration result (plain data); ``warning`` marks one that its own
     check found worse than none (``omnibot calibrate --force``)."""
-    doc: dict[str, Any] = {"robot": result.robot.name, "calibration": describe_spec(result.chosen)}
+    doc: dict[str, Any] = {"robot": result.robot.name}
+    if (chosen := result.chosen) is not None:
+        doc["calibration"] = describe_spec(chosen)
     doc["surfaces"] = {
         s.surface: {
             "calibration": describe_spec(s.spec),
@@ -107,9 +143,19 @@ def document(result: CalibrationResult, truth: str = "", warning: str = "") -> d
         "surfaces": [s.surface for s in result.sessions],
         "truth": truth or (result.sessions[0].truth if result.sessions else ""),
         "written": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),
+        **({"average": _average_note(result)} if result.average is not None else {}),
         **({"warning": warning} if warning else {}),
     }
     return doc
+
+
+def _average_note(result: CalibrationResult) -> str:
+    """What became of the average over the floors."""
+    if result.average_better is False:
+        return "not kept: worse than no calibration on a floor (each floor has its own tables)"
+    if result.average_better is None:
+        return "kept as calibration, unchecked"
+    return "kept as calibration: better than none on every floor"
 
 
 def _odometry(values: dict[str, Any]) -> dict[str, Any]:
@@ -122,8 +168,9 @@ def dumps(doc: dict[str, Any]) -> str:
     head = (
         (f"# {warning}\n" if warning else "")
         + f"# omnibot calibrate: {doc.get('robot', '?')} on {', '.join(doc.get('info', {}).get('surfaces', []))}\n"
-        "# `calibration` goes to the controller (CAL) and into a robot description; `gyro` and `odometry`\n"
-        "# are host-side corrections. See docs/calibration.md.\n"
+        "# A `calibration` section goes to the controller (CAL) and into a robot description: the floor's\n"
+        "# own (`surfaces.<floor>`) where the robot stands; `gyro` and `odometry` are host-side\n"
+        "# corrections. See docs/calibration.md.\n"
     )
     return head + yaml.safe_dump(doc, sort_keys=False, default_flow_style=None, width=200)
 
@@ -168,7 +215,7 @@ def parse_calibration(data: Any, source: str = "") -> CalibrationFile:
     unknown = [k for k in data if k not in TOP_KEYS]
     if unknown:
         raise ConfigError(f"{source}: unknown key(s) {unknown}; expected {', '.join(TOP_KEYS)}".lstrip(": "))
-    if "calibration" not in data:
+    if "calibration" not in data and not data.get("surfaces"):
         raise ConfigError(f"{source}: no 'calibration' section".lstrip(": "))
     surfaces, deadbands, slips = {}, {}, {}
     for name, entry in (data.get("surfaces") or {}).items():
@@ -187,7 +234,7 @@ def parse_calibration(data: Any, source: str = "") -> CalibrationFile:
         if "slip" in odometry:
             slips[str(name)] = SlipParameters.from_mapping(odometry["slip"], f"surfaces.{name}.odometry.slip")
     return CalibrationFile(
-        calibration=_spec(data["calibration"], "calibration"),
+        calibration=_spec(data["calibration"], "calibration") if "calibration" in data else None,
         surfaces=surfaces,
         deadbands=deadbands,
         gyro=data.get("gyro"),

@@ -230,8 +230,8 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> in
     checked to be one before the robot moves) asks the operator."""
     from omnibot.calibration.accuracy import AccuracyPlan
     from omnibot.calibration.calfile import write_calibration
-    from omnibot.calibration.experiments import Plan
     from omnibot.calibration.perturb import ACCEPTANCE, perturbed_robot
+    from omnibot.calibration.plan import Plan
     from omnibot.calibration.report import accuracy_entries, slip_summary, write_report
     from omnibot.calibration.session import calibrate
     from omnibot.calibration.tables import summary_table
@@ -326,9 +326,9 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> in
         verdict = judge_calibration(result)
         keep = verdict.better is not False or args.force
         if client is not None and not args.no_upload:
-            if keep and result.average is not None:
-                client.upload_calibration(result.average)  # the averaged table stays on the real board
-            elif not keep and robot.calibration is not None:
+            if keep:  # the board keeps the tables of the floor it stands on (the last one)
+                client.upload_calibration(result.sessions[-1].spec)
+            elif robot.calibration is not None:
                 client.upload_calibration(robot.calibration)  # back to the tables it was built with
     truth_name = result.sessions[0].truth if result.sessions else ""
     files = write_report(result, out_dir)
@@ -343,8 +343,18 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> in
         for note in s.notes:
             print(f"note ({s.surface}): {note}")
     print(f"report: {out_dir} ({', '.join(f.name for f in files)})")
-    print(f"check: {verdict.summary}")
+    print(f"check: {verdict.summary}" + (" (each floor's own tables)" if len(result.sessions) > 1 else ""))
+    if verdict.average is not None and verdict.average.better is not None:
+        average = verdict.average.summary.removeprefix("mean abs error of the accuracy check: ")
+        kept = (
+            "kept as the file's calibration for any floor"
+            if verdict.average.better
+            else f"not kept, worse than none ({verdict.average.worst}): each floor keeps its own tables"
+        )
+        print(f"average over the floors: {average}: {kept}")
     if verdict.better is False:
+        if verdict.hint:
+            print(f"hint: {verdict.hint}")
         warning = f"WORSE THAN NO CALIBRATION: {verdict.worst}"
         if args.force:
             cal = write_calibration(cal_file, result, truth_name, warning=warning)
@@ -355,7 +365,15 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> in
             )
         return 1
     cal = write_calibration(cal_file, result, truth_name)
-    print(f"calibration: {cal}")
+    floors = ""
+    if result.chosen is None:
+        floors = (
+            f" (tables per floor: {', '.join(s.surface for s in result.sessions)}; pick one with --surface, "
+            f"e.g. omnibot follow --calibration {cal} --surface {result.sessions[0].surface})"
+        )
+    print(f"calibration: {cal}{floors}")
+    if client is not None and not args.no_upload:
+        print(f"controller: {result.sessions[-1].surface}'s tables uploaded (CAL)")
     return 0
 
 

@@ -13,6 +13,10 @@ a serial port and the simulator in lockstep.
   stays near its start).
 * :func:`rotation_sweep`: the same for rotation in place, both directions.
 * :func:`turning_runs`: curved MOVEs; the body's turn against the commanded one (for K_t).
+* :func:`drive_square`: UMBmark's square, CCW or CW, its telemetry logged (umbmark.py fits it).
+
+What to measure is the :class:`~omnibot.calibration.plan.Plan`; each run's outcome a
+:class:`~omnibot.calibration.runs.RunResult`.
 """
 
 from __future__ import annotations
@@ -24,11 +28,13 @@ from functools import partial
 from typing import Any
 
 from omnibot.calibration.patterns import Geometry, course_pattern, rotation_pattern, top_power
+from omnibot.calibration.plan import Plan, speed_range
+from omnibot.calibration.runs import ROTATE, SQUARE, STRAIGHT, TURN, RunInfo, RunResult, relative
 from omnibot.calibration.tap import TelemetryTap
-from omnibot.calibration.truth import ROTATE, STRAIGHT, TURN, Motion, RunInfo, TruthSource, relative
+from omnibot.calibration.truth import TruthSource
+from omnibot.calibration.umbmark import SquareRun
 from omnibot.client.client import RobotClient
 from omnibot.client.events import WarnEvent
-from omnibot.errors import ConfigError
 from omnibot.progress import Progress
 from omnibot.protocol import text
 from omnibot.protocol.messages import Command
@@ -38,143 +44,8 @@ MOVED_DISTANCE = 0.005
 """m: a run that goes less than this did not move the robot (dead band search)."""
 MOVED_ANGLE = math.radians(1.0)
 """rad: the same for rotations."""
-SHORTEST_MOVE = 1.0
-"""s: the calibration covers speeds at which a MOVE of the reference length lasts at least this."""
 STILL_TIMEOUT = 5.0
 """s the runner waits at most for the encoders to stop after a run."""
-
-
-def speed_range(robot: RobotDescription, length: float) -> tuple[float, float]:
-    """(slowest, fastest) MOVE speed the calibration and its checks cover for moves of ``length``:
-    the robot's limits, the top cut to where such a MOVE still lasts :data:`SHORTEST_MOVE` (a 30 kg
-    robot's 5 m/s is not for 1 m moves)."""
-    lim = robot.limits
-    hi = min(lim.speed_max, length / SHORTEST_MOVE)
-    lo = max(lim.speed_min, 0.1 * hi) if lim.speed_min > 0 else 0.2 * hi
-    return min(lo, hi), hi
-
-
-@dataclass(frozen=True)
-class Plan:
-    """How much to measure. The defaults suit the simulator; :meth:`quick` a real robot and a tape."""
-
-    course_count: int = 4
-    """Calibrated courses, evenly from 0 to the robot's largest folded course (omni4: 0, 15, 30, 45)."""
-    courses_deg: tuple[float, ...] | None = None
-    """Explicit calibrated courses (folded degrees); overrides ``course_count``."""
-    directions: int = 4
-    """Raw courses per calibrated course (course + each idle axis and its opposite)."""
-    probe: float = 1.0
-    """s of power of the first run at the lowest power level (later levels: from the rate so far)."""
-    t_min: float = 0.15
-    """Shortest run, s."""
-    rotate_rate_min: float = 0.5
-    """rad/s: the slowest rotation the sweep needs to time (sets the longest rotation run)."""
-    levels: int = 8
-    """Power levels from the dead band to full power (denser near the dead band)."""
-    deadband_step: int = 8
-    settle: float = 0.4
-    """s to wait after a run for the robot to coast to a stop before measuring."""
-    speed_margin: float = 1.2
-    """A sweep stops above this times the robot's top speed."""
-    move_length: float = 1.0
-    """m: the MOVE length the translation fit is exact for (start/stop losses are per move)."""
-    rotate_angle: float = math.radians(135.0)
-    """rad: the ROTATE angle the rotation fit is exact for."""
-    turn_courses_deg: tuple[float, ...] = (0.0, 45.0)
-    turn_curvatures: tuple[float, ...] = (1.0, 2.0, 4.0, 7.0)
-    """1/m, each run with both signs (clipped to the robot's curvature limit)."""
-    turn_speed: float | None = None
-    """m/s of the curved MOVEs (default: the middle of the robot's speed range)."""
-    turn_angle: float = math.radians(120.0)
-    """rad the body should turn in one curved MOVE (its length follows, 0.3..1.5 m)."""
-    turn_rounds: int = 2
-    gyro_still: float = 3.0
-    """s of standstill for the gyro bias."""
-    rotation_turns: float = 2.0
-    """Full turns each way of the rotation test (gyro scale, wheel base)."""
-    square_side: float = 1.0
-    square_speed: float | None = None
-    motor_map: bool = True
-    """Fit the motor map (each motor's dead-band offset and gain table) before the sweeps."""
-    balance_levels: int = 4
-    """Nominal powers of the balance runs, spread over what the speed range needs."""
-    roller_rounds: int = 4
-    """Rounds of the idle axes at each power for the idle wheels' roller drag (rollers.py; 0: none)."""
-    slip: bool = True
-    """Drive the wheel-slip runs (12 out-and-back, wheel-speed loop on) and fit the floor's creep."""
-
-    @classmethod
-    def quick(cls) -> Plan:
-        """Seed 000's own scope: courses 0 and 45 (fold range ends), two directions, fewer powers."""
-        return cls(course_count=2, directions=2, levels=6, turn_curvatures=(2.0, 5.0), turn_rounds=1)
-
-    def calibrated_courses(self, geometry: Geometry) -> list[float]:
-        top = geometry.fold_max
-        if self.courses_deg is not None:
-            bad = [c for c in self.courses_deg if not 0.0 <= c <= top + 1e-9]
-            if bad or list(self.courses_deg) != sorted(set(self.courses_deg)):
-                raise ConfigError(
-                    f"calibrated courses must increase strictly within 0..{top:g} degrees for this robot, "
-                    f"got {list(self.courses_deg)}",
-                    key="courses",
-                )
-            return [float(c) for c in self.courses_deg]
-        n = max(1, self.course_count)
-        return [0.0] if n == 1 else [round(top * k / (n - 1), 3) for k in range(n)]
-
-
-@dataclass(frozen=True)
-class RunResult:
-    """One run: what was commanded, what the truth and the robot's own sensors say it did."""
-
-    kind: str
-    group: str
-    """``course:<folded deg>``, ``rotation``, ``deadband:...``, ``turn``, ``square``, ``gyro``."""
-    command: str
-    duration: float
-    """s the motors were driven (POWER T, MOVE L/V, ROTATE A/F)."""
-    truth: Motion | None
-    odometry: Motion | None = None
-    gyro: float | None = None
-    """Heading change (rad) integrated by the controller from its gyro, bias included."""
-    gyro_time: float | None = None
-    """Controller seconds between the gyro marks."""
-    power: int | None = None
-    course_deg: float | None = None
-    folded_deg: float | None = None
-    sign: int = 1
-    commanded: float | None = None
-    """Commanded amount of a MOVE (m) or a turn (rad)."""
-    p_arg: float | None = None
-    """The firmware's power argument of the calibrated part (K times the busiest rim speed)."""
-    warnings: tuple[int, ...] = ()
-    counts: tuple[int, ...] | None = None
-    """The controller's wheel encoder counts at the start (from telemetry), when it has encoders."""
-    correction: float = 0.0
-    """m added to a straight run's path by a later fit (the idle wheels' roller drag, rollers.py)."""
-
-    @property
-    def amount(self) -> float | None:
-        """Path length (m, straight: the arc when the body turned, see :attr:`Motion.path`, plus
-        :attr:`correction`) or angle (rad, rotations and turns, signed by the command) achieved."""
-        if self.truth is None:
-            return None
-        if self.kind == STRAIGHT:
-            path = self.truth.path
-            return None if path is None else path + self.correction
-        return None if self.truth.theta is None else self.sign * self.truth.theta
-
-    def as_dict(self) -> dict[str, Any]:
-        out: dict[str, Any] = {
-            k: v for k, v in self.__dict__.items() if k not in ("truth", "odometry") and v is not None
-        }
-        for key in ("truth", "odometry"):
-            m = getattr(self, key)
-            if m is not None:
-                out[key] = {k: v for k, v in m.__dict__.items() if v is not None}
-        out["warnings"] = list(self.warnings)
-        return out
 
 
 @dataclass
@@ -542,3 +413,27 @@ def turning_runs(runner: Runner, plan: Plan, k: float) -> list[RunResult]:
                 )
                 out.append(r)
     return out
+
+
+def drive_square(runner: Runner, side: float, speed: float, rate: float, ccw: bool) -> SquareRun:
+    """Four legs on course 0 with a +-90 degree ROTATE after each, each from rest; logged."""
+    client = runner.client
+    turn = math.pi / 2 if ccw else -math.pi / 2
+    side, speed = round(side, 2), round(speed, 2)
+    duration = 4 * (side / speed + abs(turn) / rate)
+    direction = "ccw" if ccw else "cw"
+
+    def send() -> str:
+        for _ in range(4):  # each motion from rest, as UMBmark stops at the corners
+            client.move(side, speed)
+            client.wait_idle(timeout=side / speed + 10.0)
+            client.sleep(runner.settle)
+            client.rotate(turn, rate)
+            client.wait_idle(timeout=abs(turn) / rate + 10.0)
+            client.sleep(runner.settle)
+        return f"square {direction}: 4 x (MOVE {side:g} m at {speed:g} m/s; ROTATE {math.degrees(turn):+.0f} deg)"
+
+    runner.tap.record()
+    info = RunInfo(SQUARE, f"square {direction}, side {100 * side:.0f} cm")
+    result = runner.run(info, send, duration, "square", sign=1 if ccw else -1, commanded=side)
+    return SquareRun(ccw, side, result, runner.tap.take_log())

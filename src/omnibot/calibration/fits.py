@@ -31,10 +31,11 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
 
-from omnibot.calibration.experiments import RunResult, speed_range
-from omnibot.calibration.motors import Balance
+from omnibot.calibration.motorfit import Balance
 from omnibot.calibration.patterns import Geometry
-from omnibot.calibration.rollers import CoastTuning, RollerFit
+from omnibot.calibration.plan import speed_range
+from omnibot.calibration.rollerfit import CoastTuning, RollerFit
+from omnibot.calibration.runs import RunResult
 from omnibot.errors import ConfigError
 from omnibot.robot.description import (
     CalibrationSpec,

@@ -5,7 +5,7 @@ the usual one for a MEMS gyro::
 
     measured = true / scale + bias        so    true = scale * (measured - bias)
 
-* bias: the mean rate over a standstill (``Plan.gyro_still`` s);
+* bias: the mean rate over a standstill (``Plan.gyro_still`` s, :func:`omnibot.calibration.tap.standstill_bias`);
 * scale: over rotations whose true angle is known (the rotation test, measured by the truth
   strategy), least squares of true angle against the bias-corrected integrated angle
   ``gyro_heading_change - bias * duration``.
@@ -14,13 +14,11 @@ the usual one for a MEMS gyro::
 from __future__ import annotations
 
 import math
-import statistics
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
 
-from omnibot.calibration.experiments import RunResult
-from omnibot.calibration.tap import TelemetryTap
+from omnibot.calibration.runs import RunResult
 
 
 @dataclass(frozen=True)
@@ -40,14 +38,6 @@ class GyroCalibration:
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
-
-
-def standstill_bias(tap: TelemetryTap, seconds: float) -> tuple[float, float, int] | None:
-    """(mean rate, its standard error, samples) over ``seconds`` of standstill; None without a gyro."""
-    rates = [t.gyro_rate for t in tap.collect(seconds) if t.gyro_rate is not None]
-    if not tap.gyro or len(rates) < 2:
-        return None
-    return statistics.fmean(rates), statistics.stdev(rates) / math.sqrt(len(rates)), len(rates)
 
 
 def fit_scale(runs: Sequence[RunResult], bias: float) -> tuple[float | None, int]:

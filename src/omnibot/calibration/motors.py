@@ -1,7 +1,8 @@
-"""The motor map: each motor's dead-band offset and a gain table that balances unequal motors.
+"""The motor map, measured: each motor's dead band alone and the balance runs (the fit is
+:mod:`omnibot.calibration.motorfit`).
 
 The firmware gives motor i ``sign(a) (offset_i + gain_i(|a|) |a|)`` for the nominal power ``a``
-of the calibration factors (docs/firmware.md); :func:`map_power` is the same on the host, so the
+of the calibration factors (docs/firmware.md); :func:`~omnibot.calibration.patterns.map_power` is the same on the host, so the
 sweeps' raw POWER patterns drive the robot exactly as the firmware will.
 
 * **Offsets.** A motor's Coulomb friction needs a fixed power before its wheel turns at all; below
@@ -23,31 +24,23 @@ sweeps' raw POWER patterns drive the robot exactly as the firmware will.
 from __future__ import annotations
 
 import math
-import statistics
 from collections.abc import Sequence
-from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
 from omnibot.calibration.experiments import MOVED_ANGLE, MOVED_DISTANCE, Runner, lowest_moving
-from omnibot.calibration.patterns import Geometry, apply_map
-from omnibot.calibration.truth import STRAIGHT, RunInfo
-from omnibot.robot.description import MotorMapSpec, PiecewiseLinear
-
-GAIN_STEP = 0.08
-"""Log-gain step of the finite-difference Jacobian."""
-GAIN_LIMIT = 0.4
-"""abs(log-gain) is kept below this (a factor 1.5)."""
-MIN_DISTANCE = 0.02
-"""m: a balance run shorter than this tells nothing."""
-
-
-def identity(n: int) -> MotorMapSpec:
-    return MotorMapSpec(offset=(0.0,) * n, gain=(PiecewiseLinear(x=(0.0,), y=(1.0,)),) * n)
-
-
-# --------------------------------------------------------------------------- offsets
+from omnibot.calibration.motorfit import (
+    GAIN_STEP,
+    Balance,
+    balance_courses,
+    balance_errors,
+    constant_gains,
+    gain_step,
+    rms,
+)
+from omnibot.calibration.patterns import apply_map
+from omnibot.calibration.runs import STRAIGHT, RunInfo
+from omnibot.robot.description import MotorMapSpec
 
 
 def motor_deadbands(runner: Runner, step: int = 8, duration: float = 0.5) -> list[int]:
@@ -74,59 +67,6 @@ def motor_deadbands(runner: Runner, step: int = 8, duration: float = 0.5) -> lis
     return out
 
 
-def offsets_from_deadbands(single: Sequence[int], rotation: int, pwm_max: int) -> tuple[float, ...]:
-    """``offset_i = deadband_i * rotation / mean(deadband)`` (see the module docstring), 0.1 counts;
-    all zero when a motor never moved the robot alone."""
-    if not single or any(d > pwm_max for d in single) or rotation > pwm_max:
-        return (0.0,) * len(single)
-    mean = statistics.fmean(single)
-    return tuple(round(d * rotation / mean, 1) for d in single)
-
-
-# --------------------------------------------------------------------------- gains
-
-
-def balance_courses(geometry: Geometry, folded: Sequence[float] | None = None) -> list[float]:
-    """Raw courses (degrees) of the balance runs: each folded course (default: 0 and the largest)
-    from every idle axis, both ways."""
-    axes = sorted(a % 180.0 for a in geometry.idle_axes)
-    out: list[float] = []
-    for a in axes:
-        for f in folded if folded is not None else (0.0, geometry.fold_max):
-            c = a + f
-            out += [round(c % 360.0, 6), round((c + 180.0) % 360.0, 6)]
-    return sorted(set(out))
-
-
-@dataclass
-class Balance:
-    """The balance runs' outcome: the gain table of each motor and the errors before and after."""
-
-    powers: list[int] = field(default_factory=list)
-    log_gains: list[list[float]] = field(default_factory=list)
-    """Per power, each motor's log-gain."""
-    before: list[float] = field(default_factory=list)
-    """Per power, the rms error (rad) with equal gains."""
-    after: list[float] = field(default_factory=list)
-    """Per power, the rms error (rad) with the fitted gains."""
-
-    def as_dict(self) -> dict[str, list[Any]]:
-        return {
-            "powers": self.powers,
-            "log_gains": self.log_gains,
-            "before": self.before,
-            "after": self.after,
-        }
-
-    def tables(self, n: int) -> tuple[PiecewiseLinear, ...]:
-        if not self.powers:
-            return identity(n).gain
-        xs = tuple(float(p) for p in self.powers)
-        return tuple(
-            PiecewiseLinear(x=xs, y=tuple(round(math.exp(g[i]), 3) for g in self.log_gains)) for i in range(n)
-        )
-
-
 def _errors(
     runner: Runner, courses: Sequence[float], power: int, motors: MotorMapSpec, duration: float
 ) -> np.ndarray:
@@ -140,24 +80,8 @@ def _errors(
         pattern = apply_map(motors, [power * v / peak for v in rims], geo.pwm_max)
         info = RunInfo(STRAIGHT, f"balance, course {c:g} deg, nominal power {power}", math.radians(c))
         r = runner.power_run(pattern, duration, info, "balance", power=power, course_deg=c)
-        m = r.truth
-        if m is None or m.x is None or m.y is None or m.theta is None or (m.distance or 0.0) < MIN_DISTANCE:
-            out += [math.nan, math.nan]
-            continue
-        course = math.atan2(m.y, m.x) - 0.5 * m.theta  # the body-frame course of an arc
-        err = (course - math.radians(c) + math.pi) % (2 * math.pi) - math.pi
-        out += [err, m.theta / max(m.path or m.distance or 0.0, MIN_DISTANCE)]
+        out += balance_errors(r.truth, c)
     return np.asarray(out)
-
-
-def _with_gains(offsets: Sequence[float], x: np.ndarray) -> MotorMapSpec:
-    gains = tuple(PiecewiseLinear(x=(0.0,), y=(float(math.exp(v)),)) for v in x)
-    return MotorMapSpec(offset=tuple(offsets), gain=gains)
-
-
-def _rms(e: np.ndarray) -> float:
-    ok = e[np.isfinite(e)]
-    return float(np.sqrt(np.mean(ok * ok))) if ok.size else math.inf
 
 
 def balance_gains(
@@ -181,13 +105,13 @@ def balance_gains(
     for k, power in enumerate(powers):
         duration = durations[k] if durations is not None else 1.0
         runner.note(f"balance at {power}")
-        e0 = _errors(runner, courses, power, _with_gains(offsets, np.zeros(n)), duration)
+        e0 = _errors(runner, courses, power, constant_gains(offsets, np.zeros(n)), duration)
         if np.count_nonzero(np.isfinite(e0)) < e0.size // 2:
             continue
         e = e0
         if x.any():
-            ex = _errors(runner, courses, power, _with_gains(offsets, x), duration)
-            if _rms(ex) < _rms(e0):
+            ex = _errors(runner, courses, power, constant_gains(offsets, x), duration)
+            if rms(ex) < rms(e0):
                 e = ex
             else:
                 x = np.zeros(n)
@@ -196,19 +120,16 @@ def balance_gains(
             for i in range(n):
                 xi = x.copy()
                 xi[i] += GAIN_STEP
-                ei = _errors(runner, courses, power, _with_gains(offsets, xi), duration)
+                ei = _errors(runner, courses, power, constant_gains(offsets, xi), duration)
                 cols.append((ei - e) / GAIN_STEP)
             jac = np.column_stack(cols)
         for _ in range(2):
-            rows = np.isfinite(e) & np.all(np.isfinite(jac), axis=1)
-            a = np.vstack([jac[rows], np.ones((1, n))])  # the last row holds the sum of log-gains at 0
-            step = np.linalg.lstsq(a, -np.concatenate([e[rows], [x.sum()]]), rcond=None)[0]
-            trial = np.clip(x + step, -GAIN_LIMIT, GAIN_LIMIT)
-            et = _errors(runner, courses, power, _with_gains(offsets, trial), duration)
-            if _rms(et) < _rms(e):
+            trial = gain_step(jac, e, x)
+            et = _errors(runner, courses, power, constant_gains(offsets, trial), duration)
+            if rms(et) < rms(e):
                 x, e = trial, et
         result.powers.append(power)
         result.log_gains.append([float(v) for v in x])
-        result.before.append(_rms(e0))
-        result.after.append(_rms(e))
+        result.before.append(rms(e0))
+        result.after.append(rms(e))
     return result

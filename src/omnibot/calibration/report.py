@@ -21,7 +21,8 @@ from pathlib import Path
 from typing import Any
 
 from omnibot.calibration.accuracy import AccuracyRow, reach_speed, summarize
-from omnibot.calibration.session import CalibrationResult, SurfaceSession, describe_spec
+from omnibot.calibration.calfile import describe_spec
+from omnibot.calibration.results import CalibrationResult, SurfaceSession
 from omnibot.calibration.tables import move_grid, rotate_lines, summary_table
 from omnibot.errors import ConfigError
 from omnibot.navigation.slipcal import SlipCalibration
@@ -56,6 +57,17 @@ def accuracy_markdown(result: CalibrationResult) -> str:
         "",
         summary_table(entries) if entries else "(no accuracy checks were run)",
     ]
+    if result.average is not None and result.average_better is not None:
+        lines += [
+            "",
+            "The average over the floors is "
+            + (
+                "better than no calibration on every floor: the file's `calibration`."
+                if result.average_better
+                else "worse than no calibration on a floor: not kept; each floor keeps its own tables "
+                "(`surfaces.<floor>.calibration`, uploaded where the robot stands)."
+            ),
+        ]
     reach = [(f"{s.surface} calibration", s.reach) for s in result.sessions]
     if result.average is not None and result.sessions:
         length = result.sessions[0].fit.move_length

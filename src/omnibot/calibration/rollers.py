@@ -1,15 +1,5 @@
-"""The idle wheels' roller drag: measured, fitted, and taken out of the axis-course sweeps.
-
-Seed 000, section IV: on courses along a motor axis two wheels do not turn, and the friction of
-their rollers "depends very much on wheel angle position ... can vary K_l as much as twice"; its
-authors set those wheels by hand before such runs and advised courses near 45 degrees. The
-controller knows each wheel's angle from its encoder, so it can make up for that drag itself
-(:meth:`omnibot.firmware.power.PowerModel.drag`): per wheel, ``cos_i cos(phi_i) + sin_i sin(phi_i)``
-PWM counts of the busiest motor, phi_i the roller phase (one period per roller pitch of encoder
-counts from the encoders' origin, the controller's power-up) weighted by the wheel's rollers' share
-of the travel (:func:`omnibot.firmware.power.roller_terms`). The drag also brakes the coast after the
-motors stop, which a MOVE of T s makes up with ``1 + coast(V) / T`` times the drag while it drives.
-This module finds the coefficients and the coast table.
+"""The idle wheels' roller drag, measured: the drag runs and the MOVEs that tune its coast
+(:mod:`omnibot.calibration.rollerfit` fits both).
 
 Runs (:func:`roller_runs`): raw POWER along each idle axis in turn, round the circle (omni4: 0, 90,
 180, 270 degrees), at three powers over the working range and two durations each (the second twice
@@ -17,130 +7,35 @@ the first). Each run turns the next axis's idle wheels by its whole distance, so
 phases come out spread over the pitch; the encoder counts at each run's start give the phases of the
 wheels that stand still.
 
-Fit (:func:`fit_rollers`), least squares over the runs j::
-
-    distance_j = e_g + T_j r_g - s (T_j + k_P) D_j,   D_j = sum_i cos_i c_ij + sin_i s_ij
-
-with g the run's course and power (its own start/stop offset e_g and rate r_g), s the slope of the
-rate against power (m/s per PWM count), k_P the coast time at power P and c_ij, s_ij the terms of the
-wheels that stand still during run j. For given k_P it is linear; the k_P are found by coordinate
-search. The drag is kept when it halves the runs' rms scatter and explains them better than its
-parameters are worth (the Bayesian information criterion). :func:`correct_runs` then adds the drag
-at each axis-course sweep run's own phases back to its distance (``RunResult.correction``), so K_l
-on the axes is fitted for the mean drag, which is what the controller's K_l must give once it adds
-the rest.
+Coast (:func:`tune_coast`): MOVEs round the motor axes with and without the drag term uploaded; the
+gain that cancels the drag in them gives the coast table the controller uses.
 """
 
 from __future__ import annotations
 
 import math
-import statistics
-from collections import defaultdict
-from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, replace
+from collections.abc import Sequence
 from functools import partial
 
-import numpy as np
-from numpy.typing import NDArray
+from omnibot.calibration.experiments import Runner
+from omnibot.calibration.patterns import course_pattern, top_power
+from omnibot.calibration.plan import Plan
+from omnibot.calibration.rollerfit import (
+    GROUP,
+    CoastTuning,
+    RollerFit,
+    axis_courses,
+    coast_row,
+    coast_tuning,
+    fit_coast_speed,
+)
+from omnibot.calibration.runs import STRAIGHT, RunInfo, RunResult
+from omnibot.robot.description import CalibrationSpec, PiecewiseLinear
 
-from omnibot.calibration.experiments import Plan, Runner, RunResult
-from omnibot.calibration.patterns import Geometry, course_pattern, top_power
-from omnibot.calibration.truth import STRAIGHT, RunInfo
-from omnibot.robot.description import CalibrationSpec, PiecewiseLinear, RollerDragSpec
-
-GROUP = "rollers"
 PROBE = 0.6
 """s of each power's first run, which sets the durations of the others."""
 SHARES = (0.3, 0.55, 0.8)
 """The runs' powers, as fractions of the way from the axis's dead band to full power."""
-COAST_GRID = tuple(0.02 * k for k in range(151))
-"""s: the coast times tried (0..3 s)."""
-
-
-@dataclass(frozen=True)
-class RollerFit:
-    """The fitted drag coefficients, the coast table and how much of the runs' scatter they explain."""
-
-    cos: tuple[float, ...]
-    sin: tuple[float, ...]
-    slope: float
-    """m/s of travel per PWM count of the busiest motor, along the axes."""
-    speeds: tuple[float, ...]
-    """m/s: each power's mean steady speed."""
-    coast: tuple[float, ...]
-    """s: each power's coast time k_P."""
-    runs: int
-    rms_before: float
-    """m: rms residual of the runs' distances without the drag terms."""
-    rms_after: float
-    """m: the same with them."""
-    kept: bool
-    """False when the terms did not explain enough (the spec then holds no drag)."""
-
-    @property
-    def coast_table(self) -> PiecewiseLinear:
-        """Coast time against speed (m/s), from rest (0 s) through each power's point."""
-        return coast_table(zip(self.speeds, self.coast, strict=True))
-
-    @property
-    def spec(self) -> RollerDragSpec:
-        if not self.kept:
-            return RollerDragSpec(cos=(0.0,) * len(self.cos), sin=(0.0,) * len(self.sin))
-        return RollerDragSpec(cos=self.cos, sin=self.sin, coast=self.coast_table)
-
-    def drag(self, geometry: Geometry, course_deg: float, counts: Sequence[int]) -> float:
-        """PWM counts of drag (busiest motor) on a run along the course from these counts, counting
-        only the wheels that stand still on it (a turning wheel's drag averages out)."""
-        if not self.kept:
-            return 0.0
-        fc, fs = geometry.roller_terms(course_deg, counts)
-        return sum(self.cos[i] * fc[i] + self.sin[i] * fs[i] for i in geometry.idle_wheels(course_deg))
-
-    def as_dict(self) -> dict[str, object]:
-        return {k: list(v) if isinstance(v, tuple) else v for k, v in self.__dict__.items()}
-
-
-def coast_table(points: Iterable[tuple[float, float]]) -> PiecewiseLinear:
-    """A coast table from (speed m/s, seconds) points: from rest (0 s), speeds rounded to 1 cm/s
-    (the CAL resolution; a point no faster than the one before is dropped), times to 1 ms."""
-    xs, ys = [0.0], [0.0]
-    for v, k in sorted(points):
-        if round(v, 2) > xs[-1]:
-            xs.append(round(v, 2))
-            ys.append(round(k, 3))
-    return PiecewiseLinear(x=tuple(xs), y=tuple(ys))
-
-
-def axis_courses(geometry: Geometry) -> list[float]:
-    """Every idle axis and its opposite (degrees, 0..360), round the circle."""
-    return sorted({round((a + s) % 360.0, 6) for a in geometry.idle_axes for s in (0.0, 180.0)})
-
-
-def offset_shift(geometry: Geometry, ahead: Sequence[tuple[float, float, float]]) -> list[float]:
-    """PWM counts to add to each motor's dead-band offset so that no course runs ahead of the others.
-
-    ``ahead``: (course, PWM counts of the busiest motor by which a MOVE on it ran ahead of the mean
-    of the courses, m of distance per such count). Adding d_i to motor i's offset moves a course
-    whose pattern gives motor i the share w_i by ``w . d / w . w`` of the busiest motor. Least
-    squares in distance (fast MOVEs, where a count moves little, weigh less), with the offsets' sum
-    held (the mean is K_l's) and the minimum-norm split between motors that always drive together;
-    motors that drive none of the courses get 0.
-    """
-    n = geometry.motors
-    rows, rhs = [], []
-    for course, counts, weight in ahead:
-        rims = geometry.translation_rim(course)
-        busiest = max(abs(v) for v in rims)
-        w = [abs(v) / busiest for v in rims]
-        ww = sum(v * v for v in w)
-        rows.append([weight * v / ww for v in w])
-        rhs.append(-weight * counts)
-    if not rows:
-        return [0.0] * n
-    rows.append([10.0 * max(abs(a[2]) for a in ahead)] * n)
-    rhs.append(0.0)
-    coef = np.linalg.lstsq(np.asarray(rows), np.asarray(rhs), rcond=None)[0]
-    return [round(float(v), 1) for v in coef]
 
 
 def roller_runs(runner: Runner, plan: Plan, deadband: int, rounds: int = 4) -> list[RunResult]:
@@ -173,141 +68,6 @@ def roller_runs(runner: Runner, plan: Plan, deadband: int, rounds: int = 4) -> l
             for course in courses:
                 out.append(run(course, power, first * (1 + k % 2), GROUP))
     return out
-
-
-def fit_rollers(geometry: Geometry, runs: Sequence[RunResult]) -> RollerFit | None:
-    """Drag coefficients and coast times from :func:`roller_runs` (the module docstring); None when
-    the runs cannot tell them (no truth, fewer than two powers, phases that did not spread)."""
-    usable = [
-        r
-        for r in runs
-        if r.group == GROUP and r.amount is not None and r.counts is not None and r.power is not None
-    ]
-    powers = sorted({r.power for r in usable if r.power is not None})
-    if len(powers) < 2:
-        return None
-    n = geometry.motors
-    groups = sorted({(r.course_deg or 0.0, r.power or 0) for r in usable})
-    g_index = {g: i for i, g in enumerate(groups)}
-    p_index = {p: i for i, p in enumerate(powers)}
-    m, ng = len(usable), len(groups)
-    plain = np.zeros((m, 2 * ng))  # e_g and r_g columns
-    terms = np.zeros((m, 2 * n))  # -c_ij, -s_ij of the wheels standing still
-    durations = np.zeros(m)
-    level = np.zeros(m, dtype=int)
-    b = np.zeros(m)
-    for j, r in enumerate(usable):
-        assert r.counts is not None and r.power is not None and r.amount is not None
-        course = r.course_deg or 0.0
-        g = g_index[(course, r.power)]
-        plain[j, 2 * g] = 1.0
-        plain[j, 2 * g + 1] = r.duration
-        fc, fs = geometry.roller_terms(course, r.counts[:n])
-        for i in geometry.idle_wheels(course):
-            terms[j, i], terms[j, n + i] = -fc[i], -fs[i]
-        durations[j], level[j], b[j] = r.duration, p_index[r.power], r.amount
-    active = [c for c in range(2 * n) if np.any(terms[:, c] != 0.0)]
-    if not active:
-        return None
-    _, cost0 = _lstsq(plain, b)
-
-    def solve(coast: Sequence[float]) -> tuple[NDArray[np.float64], float]:
-        weight = durations + np.asarray(coast)[level]
-        return _lstsq(np.hstack((plain, terms[:, active] * weight[:, None])), b)
-
-    # wheels whose phases always move together (a mecanum robot's diagonal pair) share their drag:
-    # their columns coincide and the minimum-norm solution splits it evenly
-    if np.linalg.matrix_rank(plain) < plain.shape[1]:
-        return None
-    rank = int(np.linalg.matrix_rank(np.hstack((plain, terms[:, active])))) - plain.shape[1]
-    if rank == 0 or m <= plain.shape[1] + rank + len(powers):
-        return None
-    coast = [0.0] * len(powers)
-    for _ in range(3):  # coordinate search over each power's coast time
-        for q in range(len(powers)):
-            trials = [(solve([*coast[:q], k, *coast[q + 1 :]])[1], k) for k in COAST_GRID]
-            coast[q] = min(trials)[1]
-    coef, cost = solve(coast)
-    rates = coef[1 : 2 * ng : 2]
-    # s: the rate's slope against power, common to the courses (each course its own intercept)
-    courses = sorted({c for c, _ in groups})
-    X = np.zeros((ng, 1 + len(courses)))
-    for g, (c, p) in enumerate(groups):
-        X[g, 0], X[g, 1 + courses.index(c)] = p, 1.0
-    slope = float(np.linalg.lstsq(X, rates, rcond=None)[0][0])
-    if slope <= 0.0:
-        return None
-    drag = np.zeros(2 * n)
-    drag[active] = coef[2 * ng :] / slope
-    speeds = defaultdict(list)
-    for (_, p), rate in zip(groups, rates, strict=True):
-        speeds[p].append(float(rate))
-    # kept when it halves the runs' rms scatter and passes the Bayesian information criterion on
-    # the residuals the groups' own offsets and rates leave (a term that acts on every MOVE should
-    # explain something, not fit noise through the coast times' freedom)
-    k_params, dof = rank + len(powers), m - 2 * ng
-    kept = cost <= 0.25 * cost0 and (
-        cost <= 0.0 or dof * math.log(max(cost0, 1e-30) / cost) > k_params * math.log(max(dof, 2))
-    )
-    return RollerFit(
-        cos=tuple(round(float(v), 2) for v in drag[:n]),
-        sin=tuple(round(float(v), 2) for v in drag[n:]),
-        slope=slope,
-        speeds=tuple(statistics.fmean(speeds[p]) for p in powers),
-        coast=tuple(coast),
-        runs=m,
-        rms_before=math.sqrt(cost0 / m),
-        rms_after=math.sqrt(cost / m),
-        kept=bool(kept),
-    )
-
-
-def _lstsq(A: NDArray[np.float64], b: NDArray[np.float64]) -> tuple[NDArray[np.float64], float]:
-    coef = np.asarray(np.linalg.lstsq(A, b, rcond=None)[0], dtype=np.float64)
-    residual = b - A @ coef
-    return coef, float(residual @ residual)
-
-
-def correct_runs(geometry: Geometry, fit: RollerFit, runs: Sequence[RunResult]) -> list[RunResult]:
-    """The runs with the drag at their own phases added back to the straight ones along an idle
-    axis: ``s (T + coast) drag``, the distance they would have covered at the mean drag."""
-    out = []
-    axes = set(axis_courses(geometry))
-    table = fit.coast_table
-    for r in runs:
-        course = r.course_deg
-        if r.kind != STRAIGHT or r.counts is None or course is None or round(course % 360.0, 6) not in axes:
-            out.append(r)
-            continue
-        drag = fit.drag(geometry, course, r.counts[: geometry.motors])
-        speed = (r.amount or 0.0) / r.duration if r.duration > 0 else 0.0
-        out.append(replace(r, correction=fit.slope * (r.duration + table(speed)) * drag))
-    return out
-
-
-@dataclass(frozen=True)
-class CoastTuning:
-    """What :func:`tune_coast` measured at each speed and the coast table it gives."""
-
-    speeds: tuple[float, ...]
-    """m/s of the MOVEs."""
-    drag: tuple[float, ...]
-    """m of distance lost per PWM count of drag, without the term (lambda)."""
-    power: tuple[float, ...]
-    """m of distance gained per PWM count the term adds (mu)."""
-    gains: tuple[float, ...]
-    """The drag gain each speed needs, ``lambda / mu`` (the controller's ``1 + coast / T``)."""
-    table: PiecewiseLinear
-    runs: int
-    ahead: tuple[tuple[float, float, float], ...] = ()
-    """(course, PWM counts, m per count): how far each course's MOVEs ran ahead of the mean of the
-    courses at the same speed, in power, and mu (:func:`offset_shift` evens it out)."""
-
-    def as_dict(self) -> dict[str, object]:
-        out: dict[str, object] = {k: list(v) for k, v in self.__dict__.items() if isinstance(v, tuple)}
-        out["table"] = {"x": list(self.table.x), "y": list(self.table.y)}
-        out["runs"] = self.runs
-        return out
 
 
 def tune_coast(
@@ -365,29 +125,14 @@ def tune_coast(
                     if r.truth is None or r.truth.distance is None or r.counts is None:
                         continue
                     d = fit.drag(geo, course, r.counts[: geo.motors])
-                    rows.append(
-                        [1.0 if c == course else 0.0 for c in courses] + [-d, (gain if on else 0.0) * d]
-                    )
+                    rows.append(coast_row(courses, course, d, gain if on else 0.0))
                     b.append(r.truth.distance)
-            unknowns = len(courses) + 2
-            if len(b) <= unknowns or np.linalg.matrix_rank(np.asarray(rows)) < unknowns:
+            got = fit_coast_speed(courses, rows, b)
+            if got is None:
                 return None
-            coef, _ = _lstsq(np.asarray(rows), np.asarray(b))
-            lam, mu = float(coef[-2]), float(coef[-1])
-            if mu <= 0.0 or lam <= 0.0:
-                return None
+            lam, mu, course_ahead = got
             found.append((speed, lam, mu, lam / mu))
-            offsets = coef[: len(courses)]
-            mean = float(np.mean(offsets))
-            ahead += [(c, (float(e) - mean) / mu, mu) for c, e in zip(courses, offsets, strict=True)]
+            ahead += course_ahead
     finally:
         runner.client.upload_calibration(spec)
-    return CoastTuning(
-        speeds=tuple(f[0] for f in found),
-        drag=tuple(f[1] for f in found),
-        power=tuple(f[2] for f in found),
-        gains=tuple(f[3] for f in found),
-        table=coast_table((speed, (g - 1.0) * length / speed) for speed, _, _, g in found),
-        runs=runs,
-        ahead=tuple(ahead),
-    )
+    return coast_tuning(found, ahead, runs, length)

@@ -1,62 +1,52 @@
 """The whole calibration of one robot: per surface, then averaged over the surfaces.
 
-Per surface (:func:`calibrate_surface`), on one client::
+Per surface (:func:`calibrate_surface`), on one client, the named steps of :data:`STEPS` in order,
+each reading and filling in one :class:`SurfaceRun`::
 
-    telemetry on -> gyro bias at standstill -> accuracy before
-    -> motor map -> dead bands -> straight sweeps (each calibrated course) -> roller drag
-    -> rotation sweep -> fit K, K_l, K_r
-    -> upload -> curved MOVEs, fit K_t (rounds) -> upload -> roller drag's coast from MOVEs -> upload
-    -> rotation test (gyro scale, wheel base) -> squares CCW and CW (UMBmark) -> accuracy after
+    gyro bias (standstill) -> accuracy before -> motor map -> dead bands -> straight sweeps
+    -> roller drag -> rotation sweep -> fit K, K_l, K_r -> turns: upload, curved MOVEs, fit K_t
+    -> roller gains: the drag's coast from MOVEs, upload -> reach -> rotation test -> gyro scale
+    -> squares CCW and CW (UMBmark) -> odometry corrections -> accuracy after
+    then the wheel slip (its own progress bar)
 
 Over surfaces (:func:`calibrate`): each surface as above, then the averaged calibration (seed 000
-averaged wood and carpet), uploaded and checked on every surface again.
+averaged wood and carpet), uploaded and checked on every surface again. The results are
+:mod:`omnibot.calibration.results`' types.
 """
 
 from __future__ import annotations
 
 import math
-import statistics
 from collections.abc import Callable, Iterator
 from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass, field
 from functools import partial
-from typing import Any
 
-from omnibot.calibration.accuracy import AccuracyPlan, AccuracyRow, reach_speed, run_accuracy
+from omnibot.calibration.accuracy import AccuracyPlan, AccuracyRow, reach_speed
+from omnibot.calibration.check import run_accuracy
 from omnibot.calibration.experiments import (
-    Plan,
     Runner,
-    RunResult,
+    drive_square,
     find_deadband,
     rotation_sweep,
-    speed_range,
     straight_sweep,
     turning_runs,
 )
 from omnibot.calibration.fits import SurfaceFit, average_kt, build_spec, fit_kt, fit_surface, robot_table
-from omnibot.calibration.gyro import GyroCalibration, calibrate_gyro, standstill_bias
-from omnibot.calibration.motors import (
-    Balance,
-    balance_courses,
-    balance_gains,
-    identity,
-    motor_deadbands,
-    offsets_from_deadbands,
-)
+from omnibot.calibration.gyro import GyroCalibration, calibrate_gyro
+from omnibot.calibration.motorfit import Balance, balance_courses, identity, offsets_from_deadbands
+from omnibot.calibration.motors import balance_gains, motor_deadbands
 from omnibot.calibration.patterns import Geometry, top_power
-from omnibot.calibration.rollers import (
-    SHARES,
-    axis_courses,
-    correct_runs,
-    fit_rollers,
-    offset_shift,
-    roller_runs,
-    tune_coast,
-)
+from omnibot.calibration.plan import Plan, speed_range
+from omnibot.calibration.results import CalibrationResult, SurfaceSession
+from omnibot.calibration.rollerfit import RollerFit, axis_courses, correct_runs, fit_rollers, offset_shift
+from omnibot.calibration.rollers import SHARES, roller_runs, tune_coast
+from omnibot.calibration.runs import ROTATE, SQUARE, STRAIGHT, RunInfo, RunResult
 from omnibot.calibration.slip import slip_step
-from omnibot.calibration.tap import TelemetryTap
-from omnibot.calibration.truth import ROTATE, SQUARE, STRAIGHT, Ask, RunInfo, TruthContext, make_truth
-from omnibot.calibration.umbmark import OdometryCalibration, SquareRun, calibrate_odometry, drive_square
+from omnibot.calibration.tap import TelemetryTap, standstill_bias
+from omnibot.calibration.truth import Ask, TruthContext, TruthSource, make_truth
+from omnibot.calibration.umbmark import OdometryCalibration, SquareRun, calibrate_odometry
+from omnibot.calibration.verdict import judge_average
 from omnibot.client.client import RobotClient
 from omnibot.errors import ConfigError
 from omnibot.firmware.config import build_config
@@ -74,72 +64,8 @@ def no_progress(desc: str, total: int) -> Iterator[Progress | None]:
     yield None
 
 
-@dataclass
-class SurfaceSession:
-    """Everything measured and fitted on one surface."""
-
-    surface: str
-    truth: str
-    fit: SurfaceFit
-    spec: CalibrationSpec
-    runs: list[RunResult]
-    gyro: GyroCalibration | None = None
-    odometry: OdometryCalibration | None = None
-    before: list[AccuracyRow] | None = None
-    after: list[AccuracyRow] | None = None
-    notes: list[str] = field(default_factory=list)
-    slip: SlipCalibration | None = None
-    """The floor's wheel creep (driven-wheel odometry), when the robot has wheel encoders."""
-    reach: float | None = None
-    """m/s: the fastest MOVE of the reference length the floor's tables power on every course
-    (:func:`~omnibot.calibration.accuracy.reach_speed`)."""
-
-
-@dataclass
-class CalibrationResult:
-    robot: RobotDescription
-    sessions: list[SurfaceSession]
-    average: CalibrationSpec | None = None
-    average_checks: dict[str, list[AccuracyRow]] = field(default_factory=dict)
-
-    @property
-    def chosen(self) -> CalibrationSpec:
-        """The averaged calibration over several surfaces, else the one surface's."""
-        return self.average if self.average is not None else self.sessions[0].spec
-
-    @property
-    def gyro(self) -> GyroCalibration | None:
-        cals = [s.gyro for s in self.sessions if s.gyro is not None]
-        if not cals:
-            return None
-        scales = [c.scale for c in cals if c.scale is not None]
-        last = cals[-1]
-        return GyroCalibration(
-            bias=last.bias,
-            bias_std=last.bias_std,
-            samples=last.samples,
-            scale=statistics.fmean(scales) if scales else None,
-            rotations=sum(c.rotations for c in cals),
-        )
-
-    @property
-    def odometry(self) -> OdometryCalibration | None:
-        cals = [s.odometry for s in self.sessions if s.odometry is not None]
-        if len(cals) <= 1:
-            return cals[0] if cals else None
-        r = statistics.fmean(c.wheel_radius_scale for c in cals)
-        w = statistics.fmean(c.rotation_scale for c in cals)
-        return OdometryCalibration(
-            wheel_radius_scale=round(r, 4),
-            wheel_base_scale=round(r / w, 4),
-            rotation_scale=round(w, 4),
-            straight_runs=sum(c.straight_runs for c in cals),
-            rotation_runs=sum(c.rotation_runs for c in cals),
-        )
-
-
 def accuracy_runs(accuracy: AccuracyPlan, robot: RobotDescription) -> int:
-    """The runs of one accuracy check (:func:`~omnibot.calibration.accuracy.run_accuracy`)."""
+    """The runs of one accuracy check (:func:`~omnibot.calibration.check.run_accuracy`)."""
     moves = len(accuracy.courses_deg) * len(accuracy.move_speeds(robot)) * (2 if accuracy.back else 1)
     return moves + 2 * len(accuracy.rotations)
 
@@ -232,6 +158,255 @@ def _open_loop(client: RobotClient) -> None:
         client.mode(mode & ~unwanted)
 
 
+@dataclass
+class SurfaceRun:
+    """One surface's calibration in progress: what its steps share and what they found so far."""
+
+    surface: str
+    plan: Plan
+    accuracy: AccuracyPlan | None
+    upload: bool
+    runner: Runner
+    notes: list[str] = field(default_factory=list)
+    bias: tuple[float, float, int] | None = None
+    """The gyro's standstill bias (mean, its standard error, samples)."""
+    before: list[AccuracyRow] | None = None
+    motors: MotorMapSpec | None = None
+    balance: Balance | None = None
+    deadbands: dict[str, int] = field(default_factory=dict)
+    straight: list[RunResult] = field(default_factory=list)
+    rollers: RollerFit | None = None
+    rotation: list[RunResult] = field(default_factory=list)
+    fitted: SurfaceFit | None = None
+    section: CalibrationSpec | None = None
+    """The calibration section as it stands (uploaded when ``upload``)."""
+    reach: float | None = None
+    rot_test: list[RunResult] = field(default_factory=list)
+    gyro: GyroCalibration | None = None
+    squares: list[SquareRun] = field(default_factory=list)
+    odometry: OdometryCalibration | None = None
+    after: list[AccuracyRow] | None = None
+    slip: SlipCalibration | None = None
+
+    @property
+    def client(self) -> RobotClient:
+        return self.runner.client
+
+    @property
+    def robot(self) -> RobotDescription:
+        return self.runner.robot
+
+    @property
+    def geometry(self) -> Geometry:
+        return self.runner.geometry
+
+    @property
+    def tap(self) -> TelemetryTap:
+        return self.runner.tap
+
+    @property
+    def source(self) -> TruthSource:
+        return self.runner.truth
+
+    @property
+    def fit(self) -> SurfaceFit:
+        assert self.fitted is not None, "the fit step has not run"
+        return self.fitted
+
+    @property
+    def spec(self) -> CalibrationSpec:
+        assert self.section is not None, "the fit step has not run"
+        return self.section
+
+    def session(self) -> SurfaceSession:
+        """The surface's result."""
+        return SurfaceSession(
+            surface=self.surface,
+            truth=self.source.describe(),
+            fit=self.fit,
+            spec=self.spec,
+            runs=self.runner.log,
+            gyro=self.gyro,
+            odometry=self.odometry,
+            before=self.before,
+            after=self.after,
+            notes=self.notes,
+            slip=self.slip,
+            reach=self.reach,
+        )
+
+
+def _gyro_bias(s: SurfaceRun) -> None:
+    s.bias = standstill_bias(s.tap, s.plan.gyro_still) if s.tap.gyro else None
+
+
+def _accuracy_before(s: SurfaceRun) -> None:
+    s.before = run_accuracy(s.runner, s.accuracy) if s.accuracy is not None else None
+
+
+def _motor_map(s: SurfaceRun) -> None:
+    if s.plan.motor_map:
+        s.motors, s.balance = fit_motor_map(s.runner, s.plan, s.notes)
+        s.runner.motors = s.motors
+
+
+def _deadbands(s: SurfaceRun) -> None:
+    step = s.plan.deadband_step
+    s.deadbands = {
+        f"course:{c:g}": find_deadband(s.runner, c, step).power for c in s.plan.calibrated_courses(s.geometry)
+    }
+    s.deadbands["rotation"] = find_deadband(s.runner, None, step).power
+
+
+def _sweeps(s: SurfaceRun) -> None:
+    for c in s.plan.calibrated_courses(s.geometry):
+        s.straight += straight_sweep(s.runner, s.plan, c, s.deadbands[f"course:{c:g}"])
+
+
+def _roller_drag(s: SurfaceRun) -> None:
+    """The idle wheels' roller drag, fitted and taken out of the axis courses' sweeps."""
+    plan, geometry = s.plan, s.geometry
+    if not (
+        plan.roller_rounds > 0 and all(geometry.roller_pitch) and s.source.can(RunInfo(STRAIGHT, "", 0.0))
+    ):
+        return
+    axis = s.deadbands.get("course:0") or find_deadband(s.runner, 0.0, plan.deadband_step).power
+    s.rollers = fit_rollers(geometry, roller_runs(s.runner, plan, axis, plan.roller_rounds))
+    if s.rollers is None:
+        s.notes.append("roller drag: the runs could not tell it (no drag term uploaded)")
+    else:
+        s.straight = correct_runs(geometry, s.rollers, s.straight)
+
+
+def _rotation_sweep(s: SurfaceRun) -> None:
+    s.rotation = rotation_sweep(s.runner, s.plan, s.deadbands["rotation"])
+
+
+def _fit(s: SurfaceRun) -> None:
+    """K, K_l and K_r from the sweeps; the section with the description's K_t."""
+    robot = s.robot
+    fit = fit_surface(
+        s.surface,
+        s.straight,
+        s.rotation,
+        s.deadbands,
+        s.geometry,
+        move_length=s.plan.move_length,
+        rotate_angle=s.plan.rotate_angle,
+    )
+    fit.motors, fit.balance, fit.rollers = s.motors, s.balance, s.rollers
+    described = robot.calibration.k if robot.calibration is not None else None
+    if described is not None and not 1 / 3 < fit.k / described < 3:
+        s.notes.append(
+            f"the fitted K ({fit.k:g}) is far from the description's ({described:g}): the runs may "
+            "be too short for this robot (a heavy one coasts for long; try a longer --move-length) "
+            "- check fig5_rates.png before using the tables"
+        )
+    s.fitted = fit
+    s.section = build_spec([fit], robot, s.geometry, robot_table(robot, "k_t"))
+
+
+def _turns(s: SurfaceRun) -> None:
+    """Upload, then K_t from curved MOVEs (``plan.turn_rounds`` rounds, each uploaded)."""
+    fit, spec = s.fit, s.spec
+    if s.upload:
+        s.client.upload_calibration(spec)
+        for _ in range(s.plan.turn_rounds):
+            turns = turning_runs(s.runner, s.plan, spec.k)
+            new_kt = fit_kt(turns, spec.k_t)
+            if new_kt is None:
+                s.notes.append("no curved MOVE turned measurably: K_t kept")
+                break
+            spec = build_spec([fit], s.robot, s.geometry, new_kt)
+            s.client.upload_calibration(spec)
+    else:
+        s.notes.append("not uploaded: K_t (measured with curved MOVEs) kept from the description")
+    fit.kt = spec.k_t
+    s.section = spec
+
+
+def _roller_gains(s: SurfaceRun) -> None:
+    spec = s.spec
+    if s.upload and s.rollers is not None and spec.rollers is not None and spec.rollers.coast is not None:
+        s.section = tune_rollers(s.runner, s.fit, spec, s.plan, s.notes)
+
+
+def _reach(s: SurfaceRun) -> None:
+    length = s.plan.move_length
+    s.reach = reach = reach_speed(s.robot, s.spec, length)
+    top = speed_range(s.robot, length)[1]
+    if reach is None or reach < top:
+        s.notes.append(
+            f"MOVEs of {length:g} m reach "
+            + ("no speed" if reach is None else f"{reach:g} m/s")
+            + f" on every course with these tables (the robot's top: {top:g} m/s); faster ones "
+            "saturate a motor (the controller warns 11, speed reduced) and fall short"
+        )
+
+
+def _rotation_test(s: SurfaceRun) -> None:
+    if s.bias is not None:  # the bias wanders: measure it again right before the rotation test
+        s.bias = standstill_bias(s.tap, s.plan.gyro_still) or s.bias
+    s.rot_test = rotation_test(s.runner, s.plan)
+
+
+def _gyro_scale(s: SurfaceRun) -> None:
+    s.gyro = calibrate_gyro(s.bias, s.rot_test) if s.bias is not None else None
+
+
+def _squares(s: SurfaceRun) -> None:
+    if s.tap.odometry is not None and s.source.can(RunInfo(SQUARE, "")):
+        plan, robot = s.plan, s.robot
+        speed = plan.square_speed or round(0.5 * sum(speed_range(robot, plan.move_length)), 2)
+        rate = rotation_test_rate(robot)
+        s.squares = [drive_square(s.runner, plan.square_side, speed, rate, ccw) for ccw in (True, False)]
+
+
+def _odometry(s: SurfaceRun) -> None:
+    if s.tap.odometry is not None and s.source.exact:
+        s.odometry = calibrate_odometry(s.robot, s.straight, s.rot_test, s.squares)
+    elif s.tap.odometry is not None:
+        s.notes.append(
+            f"odometry corrections need an independent truth (sim, csv, tape), not {s.source.name}"
+        )
+
+
+def _accuracy_after(s: SurfaceRun) -> None:
+    s.after = run_accuracy(s.runner, s.accuracy) if s.accuracy is not None and s.upload else None
+
+
+@dataclass(frozen=True)
+class Step:
+    """One named step of a surface's calibration."""
+
+    name: str
+    run: Callable[[SurfaceRun], None]
+    phase: str | None = None
+    """The progress phase (:func:`expected_runs`) whose runs it drives; None: it drives none."""
+
+
+STEPS: tuple[Step, ...] = (
+    Step("gyro bias", _gyro_bias),
+    Step("accuracy before", _accuracy_before, "before"),
+    Step("motor map", _motor_map, "motor map"),
+    Step("dead bands", _deadbands, "dead bands"),
+    Step("straight sweeps", _sweeps, "sweeps"),
+    Step("roller drag", _roller_drag, "roller drag"),
+    Step("rotation sweep", _rotation_sweep, "rotation sweep"),
+    Step("fit K, K_l, K_r", _fit),
+    Step("turns (K_t)", _turns, "turns"),
+    Step("roller gains", _roller_gains, "roller gains"),
+    Step("reach", _reach),
+    Step("rotation test", _rotation_test, "rotation test"),
+    Step("gyro scale", _gyro_scale),
+    Step("squares", _squares, "squares"),
+    Step("odometry", _odometry),
+    Step("accuracy after", _accuracy_after, "after"),
+)
+"""A surface's calibration, in order. Every phase of :func:`expected_runs` is one step's, so when
+the last step ends the progress bar's total is the runs driven."""
+
+
 def calibrate_surface(
     client: RobotClient,
     robot: RobotDescription,
@@ -244,148 +419,49 @@ def calibrate_surface(
     progress: ProgressFactory = no_progress,
     upload: bool = True,
 ) -> SurfaceSession:
-    """Measure, fit and (``upload``) apply the calibration of ``robot`` on one surface."""
+    """Measure, fit and (``upload``) apply the calibration of ``robot`` on one surface: :data:`STEPS`,
+    then the wheel slip."""
     plan = plan or Plan()
-    geometry = Geometry.of(robot)
-    courses = plan.calibrated_courses(geometry)
+    phases = expected_runs(plan, Geometry.of(robot), accuracy, robot, upload)  # checks the courses
     client.stop()
     _open_loop(client)
     tap = TelemetryTap(client, robot)
     tap.start()
     source = make_truth(truth, TruthContext(client, robot, tap, ask))
-    notes: list[str] = []
-    phases = expected_runs(plan, geometry, accuracy, robot, upload)
     with progress(f"calibrate {robot.name} on {surface}", sum(phases.values())) as bar:
         tally = Tally(bar, phases)
         runner = Runner(client, robot, source, tap, settle=plan.settle, progress=tally)
+        state = SurfaceRun(surface, plan, accuracy, upload, runner)
         try:
-            bias = standstill_bias(tap, plan.gyro_still) if tap.gyro else None
-            before = run_accuracy(runner, accuracy) if accuracy is not None else None
-            tally.done("before")
-
-            motors, balance = None, None
-            if plan.motor_map:
-                motors, balance = fit_motor_map(runner, plan, notes)
-                runner.motors = motors
-            tally.done("motor map")
-            deadbands = {f"course:{c:g}": find_deadband(runner, c, plan.deadband_step).power for c in courses}
-            deadbands["rotation"] = find_deadband(runner, None, plan.deadband_step).power
-            tally.done("dead bands")
-            straight: list[RunResult] = []
-            for c in courses:
-                straight += straight_sweep(runner, plan, c, deadbands[f"course:{c:g}"])
-            tally.done("sweeps")
-            rollers = None
-            if (
-                plan.roller_rounds > 0
-                and all(geometry.roller_pitch)
-                and source.can(RunInfo(STRAIGHT, "", 0.0))
-            ):
-                axis = deadbands.get("course:0") or find_deadband(runner, 0.0, plan.deadband_step).power
-                rollers = fit_rollers(geometry, roller_runs(runner, plan, axis, plan.roller_rounds))
-                if rollers is None:
-                    notes.append("roller drag: the runs could not tell it (no drag term uploaded)")
-                else:
-                    straight = correct_runs(geometry, rollers, straight)
-            tally.done("roller drag")
-            rotation = rotation_sweep(runner, plan, deadbands["rotation"])
-            tally.done("rotation sweep")
-            fit = fit_surface(
-                surface,
-                straight,
-                rotation,
-                deadbands,
-                geometry,
-                move_length=plan.move_length,
-                rotate_angle=plan.rotate_angle,
-            )
-            fit.motors, fit.balance, fit.rollers = motors, balance, rollers
-            described = robot.calibration.k if robot.calibration is not None else None
-            if described is not None and not 1 / 3 < fit.k / described < 3:
-                notes.append(
-                    f"the fitted K ({fit.k:g}) is far from the description's ({described:g}): the runs may "
-                    "be too short for this robot (a heavy one coasts for long; try a longer --move-length) "
-                    "- check fig5_rates.png before using the tables"
-                )
-            kt = robot_table(robot, "k_t")
-            spec = build_spec([fit], robot, geometry, kt)
-            if upload:
-                client.upload_calibration(spec)
-                for _ in range(plan.turn_rounds):
-                    turns = turning_runs(runner, plan, spec.k)
-                    new_kt = fit_kt(turns, spec.k_t)
-                    if new_kt is None:
-                        notes.append("no curved MOVE turned measurably: K_t kept")
-                        break
-                    spec = build_spec([fit], robot, geometry, new_kt)
-                    client.upload_calibration(spec)
-            else:
-                notes.append("not uploaded: K_t (measured with curved MOVEs) kept from the description")
-            fit.kt = spec.k_t
-            tally.done("turns")
-            if upload and rollers is not None and spec.rollers is not None and spec.rollers.coast is not None:
-                spec = tune_rollers(runner, fit, spec, plan, notes)
-            tally.done("roller gains")
-            reach = reach_speed(robot, spec, plan.move_length)
-            top = speed_range(robot, plan.move_length)[1]
-            if reach is None or reach < top:
-                notes.append(
-                    f"MOVEs of {plan.move_length:g} m reach "
-                    + ("no speed" if reach is None else f"{reach:g} m/s")
-                    + f" on every course with these tables (the robot's top: {top:g} m/s); faster ones "
-                    "saturate a motor (the controller warns 11, speed reduced) and fall short"
-                )
-
-            if bias is not None:  # the bias wanders: measure it again right before the rotation test
-                bias = standstill_bias(tap, plan.gyro_still) or bias
-            rot_test = rotation_test(runner, plan)
-            tally.done("rotation test")
-            gyro = calibrate_gyro(bias, rot_test) if bias is not None else None
-            squares: list[SquareRun] = []
-            if tap.odometry is not None and source.can(RunInfo(SQUARE, "")):
-                speed = plan.square_speed or round(0.5 * sum(speed_range(robot, plan.move_length)), 2)
-                rate = rotation_test_rate(robot)
-                squares = [drive_square(runner, plan.square_side, speed, rate, ccw) for ccw in (True, False)]
-            tally.done("squares")
-            odometry = None
-            if tap.odometry is not None and source.exact:
-                odometry = calibrate_odometry(robot, straight, rot_test, squares)
-            elif tap.odometry is not None:
-                notes.append(
-                    f"odometry corrections need an independent truth (sim, csv, tape), not {source.name}"
-                )
-            after = run_accuracy(runner, accuracy) if accuracy is not None and upload else None
-            tally.finish()
+            for step in STEPS:
+                step.run(state)
+                if step.phase is not None:
+                    tally.done(step.phase)
         finally:
             runner.close()
             tap.stop()
-    slip = None
-    if plan.slip and tap.odometry is not None and source.exact:
-        with progress(f"wheel slip on {surface}", 12) as slip_bar:
-            try:
-                slip = slip_step(client, robot, source, slip_bar)
-            except ConfigError as exc:
-                notes.append(f"wheel slip not calibrated: {exc}")
-            finally:  # back to what the rest of the calibration expects (the runs end stopped)
-                if client.binary:
-                    client.use_text()
-                _open_loop(client)
-    elif plan.slip and tap.odometry is not None:
-        notes.append(f"wheel slip needs an independent truth (sim, csv, tape), not {source.name}")
-    return SurfaceSession(
-        surface=surface,
-        truth=source.describe(),
-        fit=fit,
-        spec=spec,
-        runs=runner.log,
-        gyro=gyro,
-        odometry=odometry,
-        before=before,
-        after=after,
-        notes=notes,
-        slip=slip,
-        reach=reach,
-    )
+    _wheel_slip(state, progress)
+    return state.session()
+
+
+def _wheel_slip(s: SurfaceRun, progress: ProgressFactory) -> None:
+    """The floor's wheel slip (its own runs, wheel-speed loop on), when the robot has wheel encoders
+    and the truth is independent of them; the controller back in open loop after."""
+    client = s.client
+    if not (s.plan.slip and s.tap.odometry is not None):
+        return
+    if not s.source.exact:
+        s.notes.append(f"wheel slip needs an independent truth (sim, csv, tape), not {s.source.name}")
+        return
+    with progress(f"wheel slip on {s.surface}", 12) as slip_bar:
+        try:
+            s.slip = slip_step(client, s.robot, s.source, slip_bar)
+        except ConfigError as exc:
+            s.notes.append(f"wheel slip not calibrated: {exc}")
+        finally:  # back to what the rest of the calibration expects (the runs end stopped)
+            if client.binary:
+                client.use_text()
+            _open_loop(client)
 
 
 def tune_rollers(
@@ -510,7 +586,8 @@ def calibrate(
     progress: ProgressFactory = no_progress,
     upload: bool = True,
 ) -> CalibrationResult:
-    """Calibrate on every surface, then average and check the average on every surface."""
+    """Calibrate on every surface, then average and check the average on every surface (it is kept
+    only when it is better than none on every one: :attr:`CalibrationResult.average_better`)."""
     plan = plan or Plan()
     sessions = []
 
@@ -552,28 +629,6 @@ def calibrate(
                         ask=ask,
                         progress=bar,
                     )
+            average = judge_average(result)
+            result.average_better = None if average is None else average.better
     return result
-
-
-def describe_spec(spec: CalibrationSpec) -> dict[str, Any]:
-    """A calibration section as plain data (the YAML layout of a description's ``calibration:``)."""
-    out: dict[str, Any] = {"k": spec.k}
-    if spec.k_l is not None:
-        out["k_l"] = {
-            "courses_deg": list(spec.k_l.courses_deg),
-            "curves": [{"x": [int(x) for x in c.x], "y": list(c.y)} for c in spec.k_l.curves],
-        }
-    for name in ("k_t", "k_r"):
-        t = getattr(spec, name)
-        if t is not None:
-            out[name] = {"x": [int(x) for x in t.x], "y": list(t.y)}
-    if spec.motors is not None:
-        out["motors"] = {
-            "offset": list(spec.motors.offset),
-            "gain": [{"x": [int(x) for x in g.x], "y": list(g.y)} for g in spec.motors.gain],
-        }
-    if spec.rollers is not None:
-        out["rollers"] = {"cos": list(spec.rollers.cos), "sin": list(spec.rollers.sin)}
-        if spec.rollers.coast is not None:
-            out["rollers"]["coast"] = {"x": list(spec.rollers.coast.x), "y": list(spec.rollers.coast.y)}
-    return out

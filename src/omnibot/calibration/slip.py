@@ -13,7 +13,8 @@ import math
 from collections.abc import Callable
 from typing import Any
 
-from omnibot.calibration.truth import STRAIGHT, RunInfo, TruthSource
+from omnibot.calibration.runs import STRAIGHT, RunInfo
+from omnibot.calibration.truth import TruthSource
 from omnibot.client.client import RobotClient
 from omnibot.navigation.runner import Navigator
 from omnibot.navigation.slipcal import SlipCalibration, calibrate_slip

@@ -8,6 +8,9 @@ stretch of time (a square run, a standstill) for later replay.
 
 from __future__ import annotations
 
+import math
+import statistics
+
 from omnibot.client.client import RobotClient
 from omnibot.client.events import Telemetry
 from omnibot.estimation.odometry import Pose2D, WheelOdometry
@@ -24,12 +27,6 @@ TAP_MASK = (
 )
 
 
-def has_wheel_encoders(robot: RobotDescription) -> bool:
-    """True when every driven wheel has a motor encoder (wheel odometry works)."""
-    names = {e.wheel for e in robot.encoders.motors}
-    return all(w.name in names for w in robot.wheels)
-
-
 class TelemetryTap:
     """Telemetry listener of one client (see the module docstring)."""
 
@@ -38,7 +35,7 @@ class TelemetryTap:
         self.robot = robot
         self.period = period
         self.latest: Telemetry | None = None
-        self.odometry = WheelOdometry(robot) if has_wheel_encoders(robot) else None
+        self.odometry = WheelOdometry(robot) if robot.has_wheel_encoders else None
         self.gyro = robot.gyro is not None
         self._log: list[Telemetry] | None = None
         self._extra: list[WheelOdometry] = []
@@ -118,10 +115,18 @@ def replay_odometry(
     robot: RobotDescription, log: list[Telemetry], start: Pose2D | None = None
 ) -> Pose2D | None:
     """Wheel odometry over recorded samples with ``robot``'s geometry (e.g. corrected radii)."""
-    if not has_wheel_encoders(robot):
+    if not robot.has_wheel_encoders:
         return None
     odo = WheelOdometry(robot, start=start)
     for tel in log:
         if tel.encoders is not None:
             odo.update(tel.encoders, None)
     return odo.pose
+
+
+def standstill_bias(tap: TelemetryTap, seconds: float) -> tuple[float, float, int] | None:
+    """(mean rate, its standard error, samples) over ``seconds`` of standstill; None without a gyro."""
+    rates = [t.gyro_rate for t in tap.collect(seconds) if t.gyro_rate is not None]
+    if not tap.gyro or len(rates) < 2:
+        return None
+    return statistics.fmean(rates), statistics.stdev(rates) / math.sqrt(len(rates)), len(rates)

@@ -11,9 +11,9 @@ sonar       a sonar facing a wall: range before and after a straight run (no rot
 tape        a person measures each run and types the result at a prompt
 ==========  ===================================================================================
 
-A strategy takes a :meth:`~TruthSource.mark` before a run and turns it into a :class:`Motion` after
-it (the robot stopped): the displacement in the body frame at the run's start, and the angle
-turned, each None where the strategy cannot tell. :class:`TruthChain` asks the first strategy that
+A strategy takes a :meth:`~TruthSource.mark` before a run and turns it into a
+:class:`~omnibot.calibration.runs.Motion` after it (the robot stopped): the displacement in the body
+frame at the run's start, and the angle turned, each None where the strategy cannot tell. :class:`TruthChain` asks the first strategy that
 can measure a run (``sonar`` falls back to ``encoders`` for rotations).
 """
 
@@ -28,7 +28,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from omnibot.calibration.tap import TelemetryTap, has_wheel_encoders
+from omnibot.calibration.calfile import load_calibration
+from omnibot.calibration.runs import ROTATE, SQUARE, STRAIGHT, TURN, Motion, RunInfo, relative
+from omnibot.calibration.tap import TelemetryTap
+from omnibot.calibration.umbmark import corrected_robot
 from omnibot.client.client import RobotClient
 from omnibot.errors import ConfigError
 from omnibot.estimation.odometry import Pose2D, WheelOdometry
@@ -36,71 +39,6 @@ from omnibot.robot.description import RobotDescription
 
 Ask = Callable[[str], str]
 """A prompt function (``input`` by default; tests pass a fake person)."""
-
-STRAIGHT = "straight"
-ROTATE = "rotate"
-TURN = "turn"
-SQUARE = "square"
-
-
-@dataclass(frozen=True)
-class RunInfo:
-    """What a run is, for strategies that need to know (sonar: the course) or to ask (tape)."""
-
-    kind: str
-    """``straight`` (translation), ``rotate`` (in place), ``turn`` (curved move), ``square``."""
-    text: str
-    course: float | None = None
-    """Commanded course of a straight run, rad (body frame)."""
-
-
-@dataclass(frozen=True)
-class Motion:
-    """What a run did, in the body frame at its start; None where the source cannot tell."""
-
-    x: float | None = None
-    """m forward."""
-    y: float | None = None
-    """m to the left."""
-    theta: float | None = None
-    """rad turned, counter-clockwise positive."""
-    along: float | None = None
-    """m along the commanded course, when only that is known (sonar, a tape length)."""
-    source: str = ""
-
-    @property
-    def distance(self) -> float | None:
-        """Length of the displacement (or the distance along the course when that is all there is)."""
-        if self.x is not None and self.y is not None:
-            return math.hypot(self.x, self.y)
-        return self.along
-
-    @property
-    def path(self) -> float | None:
-        """Length of the path, taking it as a circular arc when the body turned: a robot whose body
-        turns at a constant rate while it translates at a constant body-frame velocity drives an arc,
-        whose length is ``chord * (theta / 2) / sin(theta / 2)``."""
-        chord = self.distance
-        if chord is None or self.theta is None or self.x is None:
-            return chord
-        half = 0.5 * abs(self.theta)
-        if half < 1e-6:
-            return chord
-        return chord * half / math.sin(half) if half < 0.95 * math.pi else None
-
-    @property
-    def direction(self) -> float | None:
-        """Direction of the displacement in the start body frame, rad."""
-        if self.x is None or self.y is None or (self.x == 0.0 and self.y == 0.0):
-            return None
-        return math.atan2(self.y, self.x)
-
-
-def relative(x0: float, y0: float, th0: float, x1: float, y1: float, th1: float, source: str) -> Motion:
-    """The motion from pose 0 to pose 1 (world frame) expressed in pose 0's body frame."""
-    dx, dy = x1 - x0, y1 - y0
-    c, s = math.cos(th0), math.sin(th0)
-    return Motion(x=c * dx + s * dy, y=-s * dx + c * dy, theta=th1 - th0, source=source)
 
 
 class TruthSource:
@@ -259,7 +197,7 @@ class EncoderTruth(TruthSource):
 @register_truth("encoders")
 def _encoders(ctx: TruthContext, arg: str) -> TruthSource:
     """``encoders``, or ``encoders:CAL.yaml`` to use that file's odometry corrections."""
-    if not has_wheel_encoders(ctx.robot):
+    if not ctx.robot.has_wheel_encoders:
         raise ConfigError(
             f"truth 'encoders' needs an encoder on every wheel; {ctx.robot.name} has encoders on "
             f"{[e.wheel for e in ctx.robot.encoders.motors] or 'none'}",
@@ -267,9 +205,6 @@ def _encoders(ctx: TruthContext, arg: str) -> TruthSource:
         )
     if not arg:
         return EncoderTruth(ctx.tap)
-    from omnibot.calibration.calfile import load_calibration
-    from omnibot.calibration.umbmark import corrected_robot
-
     cal = load_calibration(arg)
     cal.check_robot(ctx.robot.name, arg)
     odo = cal.odometry or {}
@@ -429,7 +364,7 @@ def make_truth(spec: str, ctx: TruthContext) -> TruthSource:
     """The strategy named by ``spec``; strategies that cannot measure rotations fall back to encoders."""
     name, arg = parse_truth_spec(spec)
     primary = TRUTHS[name](ctx, arg)
-    if primary.kinds != TruthSource.kinds and name != "encoders" and has_wheel_encoders(ctx.robot):
+    if primary.kinds != TruthSource.kinds and name != "encoders" and ctx.robot.has_wheel_encoders:
         return TruthChain([primary, EncoderTruth(ctx.tap)])
     return primary
 
@@ -438,4 +373,4 @@ def default_truth(client: RobotClient, robot: RobotDescription) -> str:
     """``sim`` on an in-process simulator, else ``encoders`` if every wheel has one, else ``tape``."""
     if simulator_of(client) is not None:
         return "sim"
-    return "encoders" if has_wheel_encoders(robot) else "tape"
+    return "encoders" if robot.has_wheel_encoders else "tape"

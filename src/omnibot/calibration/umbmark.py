@@ -27,16 +27,16 @@ import math
 import statistics
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from omnibot.calibration.experiments import Runner, RunResult
-from omnibot.calibration.tap import has_wheel_encoders
-from omnibot.calibration.truth import SQUARE, STRAIGHT, Motion, RunInfo
-from omnibot.client.events import Telemetry
+from omnibot.calibration.runs import STRAIGHT, Motion, RunResult
 from omnibot.estimation.odometry import Pose2D, compose_arc
 from omnibot.robot.description import RobotDescription, parse_description
+
+if TYPE_CHECKING:  # the samples' type only: the square runs are driven by experiments.drive_square
+    from omnibot.client.events import Telemetry
 
 
 @dataclass
@@ -53,30 +53,6 @@ class SquareRun:
         if t is None or o is None or t.x is None or t.y is None or o.x is None or o.y is None:
             return None
         return (t.x - o.x, t.y - o.y)
-
-
-def drive_square(runner: Runner, side: float, speed: float, rate: float, ccw: bool) -> SquareRun:
-    """Four legs on course 0 with a +-90 degree ROTATE after each, each from rest; logged."""
-    client = runner.client
-    turn = math.pi / 2 if ccw else -math.pi / 2
-    side, speed = round(side, 2), round(speed, 2)
-    duration = 4 * (side / speed + abs(turn) / rate)
-    direction = "ccw" if ccw else "cw"
-
-    def send() -> str:
-        for _ in range(4):  # each motion from rest, as UMBmark stops at the corners
-            client.move(side, speed)
-            client.wait_idle(timeout=side / speed + 10.0)
-            client.sleep(runner.settle)
-            client.rotate(turn, rate)
-            client.wait_idle(timeout=abs(turn) / rate + 10.0)
-            client.sleep(runner.settle)
-        return f"square {direction}: 4 x (MOVE {side:g} m at {speed:g} m/s; ROTATE {math.degrees(turn):+.0f} deg)"
-
-    runner.tap.record()
-    info = RunInfo(SQUARE, f"square {direction}, side {100 * side:.0f} cm")
-    result = runner.run(info, send, duration, "square", sign=1 if ccw else -1, commanded=side)
-    return SquareRun(ccw, side, result, runner.tap.take_log())
 
 
 @dataclass(frozen=True)
@@ -175,7 +151,7 @@ Increment = tuple[float, float, float]
 
 def increments(robot: RobotDescription, log: Sequence[Telemetry]) -> list[Increment]:
     """Body-frame odometry increments (dx, dy, dtheta) between consecutive TEL samples."""
-    if not has_wheel_encoders(robot):
+    if not robot.has_wheel_encoders:
         return []
     cpr = {e.wheel: e.counts_per_rev for e in robot.encoders.motors}
     rad = np.array([2.0 * math.pi / cpr[w.name] for w in robot.wheels])

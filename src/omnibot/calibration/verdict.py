@@ -1,11 +1,16 @@
 """Is a calibration better than none? Its own before/after accuracy check decides.
 
 On every surface that was checked both ways, the mean absolute error of the check (MOVEs' distance
-and ROTATEs' angle, as fractions of what was commanded) with the calibration that would be kept (the
-average over the surfaces, else the surface's own) is compared with the one before calibrating. If
-it is larger on any surface, the calibration is worse than none: ``omnibot calibrate`` neither
-uploads it nor writes it as if good (``--force`` writes it, marked), and exits 1 with the worst
-line. The physics of the calibration is not judged here, only its result.
+and ROTATEs' angle, as fractions of what was commanded) is compared with the one before calibrating:
+
+* **each floor's own tables** (:func:`judge_floors`): if they are worse than none on their floor,
+  the calibration is worse than none: ``omnibot calibrate`` neither uploads it nor writes it as if
+  good (``--force`` writes it, marked), and exits 1 with the worst line;
+* **the average over the floors** (:func:`judge_average`), checked on every floor: kept as the
+  file's ``calibration`` (the tables for a robot that does not say which floor it is on) only when
+  it is not worse than none on any of them; otherwise each floor keeps only its own tables.
+
+The physics of the calibration is not judged here, only its result.
 """
 
 from __future__ import annotations
@@ -14,7 +19,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from omnibot.calibration.accuracy import AccuracyRow
-from omnibot.calibration.session import CalibrationResult
+from omnibot.calibration.results import CalibrationResult
+
+Check = tuple[str, Sequence[AccuracyRow] | None, Sequence[AccuracyRow] | None]
+"""(surface, the check's rows before calibrating, with the tables judged)."""
 
 
 @dataclass(frozen=True)
@@ -27,7 +35,9 @@ class Verdict:
     worst: str = ""
     """The check's line that got worst (course, speed: before -> after)."""
     hint: str = ""
-    """When the average over the floors is refused: how each floor's own tables did."""
+    """When some floors' own tables are worse than none and others are not: what to do."""
+    average: Verdict | None = None
+    """The average over the floors (None: one floor, or no average)."""
 
 
 def mean_abs_error(rows: Sequence[AccuracyRow]) -> float | None:
@@ -63,42 +73,50 @@ def worst_line(surface: str, before: Sequence[AccuracyRow], after: Sequence[Accu
     return max(grown)[1] if grown else ""
 
 
-def judge_calibration(result: CalibrationResult) -> Verdict:
-    """The verdict of ``result``'s own accuracy checks (see the module docstring)."""
+def judge(checks: Sequence[Check]) -> Verdict:
+    """Better than none on every surface checked both ways (see the module docstring)?"""
     parts: list[str] = []
     worse: list[tuple[float, str]] = []
-    checked = False
-    for session in result.sessions:
-        after = result.average_checks.get(session.surface) if result.average is not None else session.after
-        if session.before is None or after is None:
+    better: list[str] = []
+    for surface, before, after in checks:
+        if before is None or after is None:
             continue
-        b, a = mean_abs_error(session.before), mean_abs_error(after)
+        b, a = mean_abs_error(before), mean_abs_error(after)
         if b is None or a is None:
             continue
-        checked = True
-        parts.append(f"{session.surface} {100 * b:.1f} % -> {100 * a:.1f} %")
+        parts.append(f"{surface} {100 * b:.1f} % -> {100 * a:.1f} %")
         if a > b:
-            worse.append((a - b, worst_line(session.surface, session.before, after)))
-    if not checked:
+            worse.append((a - b, worst_line(surface, before, after)))
+        else:
+            better.append(surface)
+    if not parts:
         return Verdict(None, "no before/after accuracy check to judge the calibration by")
     summary = "mean abs error of the accuracy check: " + ", ".join(parts)
     if worse:
-        return Verdict(False, summary, max(worse)[1], _own_tables(result))
+        hint = ""
+        if better:
+            hint = (
+                f"better than none on {', '.join(better)}: calibrate "
+                + ("that floor" if len(better) == 1 else "those floors")
+                + " alone (--surface NAME)"
+            )
+        return Verdict(False, summary, max(worse)[1], hint)
     return Verdict(True, summary)
 
 
-def _own_tables(result: CalibrationResult) -> str:
-    """Each floor's own tables against none, when the refused calibration is the average."""
+def judge_floors(result: CalibrationResult) -> Verdict:
+    """Each floor's own tables against none, on that floor."""
+    return judge([(s.surface, s.before, s.after) for s in result.sessions])
+
+
+def judge_average(result: CalibrationResult) -> Verdict | None:
+    """The average over the floors against none, on every floor (None: no average)."""
     if result.average is None:
-        return ""
-    own = []
-    for session in result.sessions:
-        b = mean_abs_error(session.before) if session.before else None
-        a = mean_abs_error(session.after) if session.after else None
-        if a is not None and b is not None:
-            own.append(f"{session.surface} {100 * b:.1f} % -> {100 * a:.1f} %")
-    if not own:
-        return ""
-    return (
-        "each floor's own tables: " + ", ".join(own) + " (calibrate one floor at a time with --surface NAME)"
-    )
+        return None
+    return judge([(s.surface, s.before, result.average_checks.get(s.surface)) for s in result.sessions])
+
+
+def judge_calibration(result: CalibrationResult) -> Verdict:
+    """The verdict on ``result``: each floor's own tables decide, the average's verdict attached."""
+    own = judge_floors(result)
+    return Verdict(own.better, own.summary, own.worst, own.hint, judge_average(result))

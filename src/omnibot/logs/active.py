@@ -14,13 +14,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from omnibot.errors import ConfigError
+from omnibot.logs.topics import DEFAULT_ESTIMATOR
 
 if TYPE_CHECKING:
     from omnibot.client.client import RobotClient
     from omnibot.logs.recorder import Mirror, Recorder
     from omnibot.robot.description import RobotDescription
-
-DEFAULT_ESTIMATOR = "fused"
 
 
 class Recording:

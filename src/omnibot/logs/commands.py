@@ -139,7 +139,7 @@ def export_csv(run: Run, out: Path) -> list[Path]:
 
 
 def _export(args: argparse.Namespace) -> int:
-    from omnibot.cli import output_dir
+    from omnibot.cliargs import output_dir
 
     run = _load(args)
     out = output_dir(args.csv, "--csv")

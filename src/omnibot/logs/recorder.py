@@ -52,10 +52,10 @@ from omnibot.errors import ConfigError
 from omnibot.estimation.estimator import Estimator, make_estimator
 from omnibot.estimation.odometry import Pose2D
 from omnibot.logs import schemas
-from omnibot.logs.active import DEFAULT_ESTIMATOR
 from omnibot.logs.topics import (
     CALIBRATION,
     CMD_VEL,
+    DEFAULT_ESTIMATOR,
     ESTIMATE,
     IMU,
     JOINT_STATES,

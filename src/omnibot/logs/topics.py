@@ -21,3 +21,7 @@ RANGE_PREFIX = "range/"
 def range_topic(sonar: str) -> str:
     """The sensor_msgs/Range topic of the sonar named ``sonar`` in the description."""
     return f"{RANGE_PREFIX}{sonar}"
+
+
+DEFAULT_ESTIMATOR = "fused"
+"""The estimator a recording runs for its ``odom`` and ``/omnibot/estimate`` when a command has none."""

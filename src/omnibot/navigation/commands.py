@@ -106,6 +106,9 @@ def run_follow(args: argparse.Namespace) -> int:
         _robot_client(args, start=Pose2D(*path.start)) as (client, robot),
         progress_bar(f"follow {FsPath(args.path).name}", path.length, bar_format=metres) as bar,
     ):
+        tables, slip = _calibration(args, robot.name)
+        if tables is not None:
+            client.upload_calibration(tables)  # the floor's own tables (docs/calibration.md)
         options = FollowOptions(
             follower=args.follower,
             speed=speed,
@@ -113,7 +116,7 @@ def run_follow(args: argparse.Namespace) -> int:
             rate=rate,
             wheel_loop=not args.no_wheel_loop,
             calibrate_gyro=args.calibrate_gyro,
-            slip=_slip(args, robot.name),
+            slip=slip,
             tolerances=tolerances,
             progress=bar,
         )
@@ -170,17 +173,18 @@ def _target(given: str | None, out: FsPath | None, name: str) -> FsPath | None:
     return out / name if out is not None else None
 
 
-def _slip(args: argparse.Namespace, robot: str) -> Any:
-    """The floor's wheel-slip coefficients from ``--calibration`` (None without one); the file must
-    be ``robot``'s."""
+def _calibration(args: argparse.Namespace, robot: str) -> tuple[Any, Any]:
+    """(the floor's calibration tables, its wheel-slip coefficients) from ``--calibration`` for the
+    floor ``--surface`` names ((None, None) without a file); the file must be ``robot``'s."""
     if not args.calibration:
-        return None
+        return None, None
     from omnibot.calibration.calfile import load_calibration
 
     cal = load_calibration(args.calibration)
     cal.check_robot(robot, str(args.calibration))
     try:
-        return cal.slip_for(args.surface)
+        slip = cal.slip_for(args.surface)
+        return cal.for_surface(args.surface), slip
     except ConfigError as exc:
         raise ConfigError(f"{args.calibration}: {exc}", key="--surface") from None
 
@@ -267,8 +271,8 @@ def add_follow_arguments(p: argparse.ArgumentParser) -> None:
     add_robot_options(
         p,
         port_help="the simulated --robot in lockstep, standing at the path's start",
-        surface_help="the floor: the simulated floor (default: the world's) and the floor whose wheel slip "
-        "--calibration applies (also with --port)",
+        surface_help="the floor: the simulated floor (default: the world's) and the floor whose tables and "
+        "wheel slip --calibration applies (also with --port)",
     )
     p.add_argument("--speed", type=float, help="speed cap, m/s (default: the robot's limit)")
     p.add_argument("--estimator", default="fused", help="estimator the follower sees (default fused)")
@@ -282,8 +286,8 @@ def add_follow_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--calibration",
         metavar="CAL.yaml",
-        help="calibration file from `omnibot calibrate` (of this robot): its wheel slip for --surface "
-        "corrects the encoders",
+        help="calibration file from `omnibot calibrate` (of this robot): its tables for --surface are "
+        "uploaded (CAL) and its wheel slip there corrects the encoders",
     )
     tol = Tolerances()
     p.add_argument(

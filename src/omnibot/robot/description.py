@@ -446,6 +446,12 @@ class RobotDescription(_Spec):
     def n_wheels(self) -> int:
         return len(self.wheels)
 
+    @property
+    def has_wheel_encoders(self) -> bool:
+        """True when every driven wheel has a motor encoder (wheel odometry works)."""
+        names = {e.wheel for e in self.encoders.motors}
+        return all(w.name in names for w in self.wheels)
+
     @cached_property
     def stop_deceleration(self) -> float:
         """Deceleration (m/s^2) the robot surely reaches with its motors cut, in its worst direction.

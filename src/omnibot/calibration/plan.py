@@ -1,0 +1,94 @@
+"""How much a calibration measures: the :class:`Plan` of one surface and the speed range it covers
+(plain data, no I/O)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from omnibot.calibration.patterns import Geometry
+from omnibot.errors import ConfigError
+from omnibot.robot.description import RobotDescription
+
+SHORTEST_MOVE = 1.0
+"""s: the calibration covers speeds at which a MOVE of the reference length lasts at least this."""
+
+
+def speed_range(robot: RobotDescription, length: float) -> tuple[float, float]:
+    """(slowest, fastest) MOVE speed the calibration and its checks cover for moves of ``length``:
+    the robot's limits, the top cut to where such a MOVE still lasts :data:`SHORTEST_MOVE` (a 30 kg
+    robot's 5 m/s is not for 1 m moves)."""
+    lim = robot.limits
+    hi = min(lim.speed_max, length / SHORTEST_MOVE)
+    lo = max(lim.speed_min, 0.1 * hi) if lim.speed_min > 0 else 0.2 * hi
+    return min(lo, hi), hi
+
+
+@dataclass(frozen=True)
+class Plan:
+    """How much to measure. The defaults suit the simulator; :meth:`quick` a real robot and a tape."""
+
+    course_count: int = 4
+    """Calibrated courses, evenly from 0 to the robot's largest folded course (omni4: 0, 15, 30, 45)."""
+    courses_deg: tuple[float, ...] | None = None
+    """Explicit calibrated courses (folded degrees); overrides ``course_count``."""
+    directions: int = 4
+    """Raw courses per calibrated course (course + each idle axis and its opposite)."""
+    probe: float = 1.0
+    """s of power of the first run at the lowest power level (later levels: from the rate so far)."""
+    t_min: float = 0.15
+    """Shortest run, s."""
+    rotate_rate_min: float = 0.5
+    """rad/s: the slowest rotation the sweep needs to time (sets the longest rotation run)."""
+    levels: int = 8
+    """Power levels from the dead band to full power (denser near the dead band)."""
+    deadband_step: int = 8
+    settle: float = 0.4
+    """s to wait after a run for the robot to coast to a stop before measuring."""
+    speed_margin: float = 1.2
+    """A sweep stops above this times the robot's top speed."""
+    move_length: float = 1.0
+    """m: the MOVE length the translation fit is exact for (start/stop losses are per move)."""
+    rotate_angle: float = math.radians(135.0)
+    """rad: the ROTATE angle the rotation fit is exact for."""
+    turn_courses_deg: tuple[float, ...] = (0.0, 45.0)
+    turn_curvatures: tuple[float, ...] = (1.0, 2.0, 4.0, 7.0)
+    """1/m, each run with both signs (clipped to the robot's curvature limit)."""
+    turn_speed: float | None = None
+    """m/s of the curved MOVEs (default: the middle of the robot's speed range)."""
+    turn_angle: float = math.radians(120.0)
+    """rad the body should turn in one curved MOVE (its length follows, 0.3..1.5 m)."""
+    turn_rounds: int = 2
+    gyro_still: float = 3.0
+    """s of standstill for the gyro bias."""
+    rotation_turns: float = 2.0
+    """Full turns each way of the rotation test (gyro scale, wheel base)."""
+    square_side: float = 1.0
+    square_speed: float | None = None
+    motor_map: bool = True
+    """Fit the motor map (each motor's dead-band offset and gain table) before the sweeps."""
+    balance_levels: int = 4
+    """Nominal powers of the balance runs, spread over what the speed range needs."""
+    roller_rounds: int = 4
+    """Rounds of the idle axes at each power for the idle wheels' roller drag (rollers.py; 0: none)."""
+    slip: bool = True
+    """Drive the wheel-slip runs (12 out-and-back, wheel-speed loop on) and fit the floor's creep."""
+
+    @classmethod
+    def quick(cls) -> Plan:
+        """Seed 000's own scope: courses 0 and 45 (fold range ends), two directions, fewer powers."""
+        return cls(course_count=2, directions=2, levels=6, turn_curvatures=(2.0, 5.0), turn_rounds=1)
+
+    def calibrated_courses(self, geometry: Geometry) -> list[float]:
+        top = geometry.fold_max
+        if self.courses_deg is not None:
+            bad = [c for c in self.courses_deg if not 0.0 <= c <= top + 1e-9]
+            if bad or list(self.courses_deg) != sorted(set(self.courses_deg)):
+                raise ConfigError(
+                    f"calibrated courses must increase strictly within 0..{top:g} degrees for this robot, "
+                    f"got {list(self.courses_deg)}",
+                    key="courses",
+                )
+            return [float(c) for c in self.courses_deg]
+        n = max(1, self.course_count)
+        return [0.0] if n == 1 else [round(top * k / (n - 1), 3) for k in range(n)]

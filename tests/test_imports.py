@@ -1,0 +1,263 @@
+"""The import graph of src/omnibot, read from the modules' syntax trees: no cycles, and the pure
+modules (fits, kinematics, codecs, the firmware...) never load the client or a transport.
+
+Edges: every ``import`` and ``from ... import`` of an omnibot module, at module level and inside
+functions alike (a lazy import still runs when its function does, so it closes a cycle as surely as
+one at the top), except those under ``if TYPE_CHECKING:`` (never run). ``from pkg import name``
+is an edge to ``pkg.name`` when that is a module, else to ``pkg``. Imports made by
+``importlib.import_module`` with a computed name are invisible here.
+
+For cycles a submodule's implicit import of its own package's ``__init__`` is not an edge (a
+package that imports its submodules is the usual layout, not a loop; import-linter counts the
+same way). For purity it is: importing ``omnibot.client.events`` runs ``omnibot/client/__init__.py``,
+which loads the client.
+"""
+
+from __future__ import annotations
+
+import ast
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+ROOT = "omnibot"
+
+ALLOWED_CYCLES: dict[frozenset[str], str] = {
+    # control/followers: base.py's follower registry imports its own package lazily (in
+    # make_follower/follower_names) so that the built-in followers are registered on first use, and
+    # the package's __init__ imports base and every follower.
+    frozenset(
+        {
+            "omnibot.control.followers",
+            "omnibot.control.followers.base",
+            "omnibot.control.followers.pure_pursuit",
+            "omnibot.control.followers.seed002",
+            "omnibot.control.followers.tracker",
+        }
+    ): "followers registry <-> its package (lazy import in base.py)",
+    # estimation: estimator.py imports SlipModel from slip.py; slip.py's fit helper builds a
+    # PoseEstimator with a lazy import of estimator.py.
+    frozenset({"omnibot.estimation.estimator", "omnibot.estimation.slip"}): (
+        "estimator <-> slip (lazy import in slip.py)"
+    ),
+}
+"""Cycles outside calibration/ found when this test was written (owned by other work in progress:
+do not add to this list, take entries out as they are untangled). Each is the exact set of modules
+of one strongly connected component, so a new module or import joining one fails the test too."""
+
+PURE: tuple[str, ...] = (
+    "omnibot.calibration.accuracy",
+    "omnibot.calibration.calfile",
+    "omnibot.calibration.fits",
+    "omnibot.calibration.gyro",
+    "omnibot.calibration.motorfit",
+    "omnibot.calibration.patterns",
+    "omnibot.calibration.perturb",
+    "omnibot.calibration.plan",
+    "omnibot.calibration.results",
+    "omnibot.calibration.rollerfit",
+    "omnibot.calibration.runs",
+    "omnibot.calibration.tables",
+    "omnibot.calibration.umbmark",
+    "omnibot.calibration.verdict",
+    "omnibot.control.paths",
+    "omnibot.control.pid",
+    "omnibot.control.followers",
+    "omnibot.estimation",
+    "omnibot.firmware",
+    "omnibot.protocol",
+    "omnibot.robot.description",
+    "omnibot.robot.kinematics",
+)
+"""Modules (and packages, with every module under them) that compute or encode and do no I/O on a
+link: they must not load the client or a transport, not even through another module."""
+
+IO_PACKAGES = ("omnibot.client", "omnibot.transport")
+
+
+def module_files() -> dict[str, Path]:
+    """Every module of src/omnibot by its dotted name (a package by its ``__init__.py``)."""
+    out = {}
+    for path in sorted((SRC / ROOT).rglob("*.py")):
+        parts = list(path.relative_to(SRC).with_suffix("").parts)
+        if parts[-1] == "__init__":
+            parts.pop()
+        out[".".join(parts)] = path
+    return out
+
+
+MODULES = module_files()
+
+
+def _type_checking(node: ast.If) -> bool:
+    test = node.test
+    return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING"
+    )
+
+
+def _walk(node: ast.AST) -> Iterator[ast.Import | ast.ImportFrom]:
+    """The import statements under ``node``, skipping ``if TYPE_CHECKING:`` bodies."""
+    for child in ast.iter_child_nodes(node):
+        if isinstance(child, ast.Import | ast.ImportFrom):
+            yield child
+        elif isinstance(child, ast.If) and _type_checking(child):
+            for other in child.orelse:
+                yield from _walk_stmt(other)
+        else:
+            yield from _walk(child)
+
+
+def _walk_stmt(stmt: ast.stmt) -> Iterator[ast.Import | ast.ImportFrom]:
+    if isinstance(stmt, ast.Import | ast.ImportFrom):
+        yield stmt
+    else:
+        yield from _walk(stmt)
+
+
+def imports_of(name: str) -> set[str]:
+    """The omnibot modules ``name`` imports (see the module docstring)."""
+    path = MODULES[name]
+    package = name.split(".") if path.name == "__init__.py" else name.split(".")[:-1]
+    out: set[str] = set()
+    for node in _walk(ast.parse(path.read_text(encoding="utf-8"), str(path))):
+        if isinstance(node, ast.Import):
+            out.update(alias.name for alias in node.names)
+            continue
+        if node.level:
+            base = package[: len(package) - node.level + 1]
+            module = ".".join(base + ([node.module] if node.module else []))
+        else:
+            module = node.module or ""
+        for alias in node.names:
+            sub = f"{module}.{alias.name}"
+            out.add(sub if sub in MODULES else module)
+    return {m for m in out if m in MODULES and m != name}
+
+
+GRAPH = {name: imports_of(name) for name in MODULES}
+
+
+def cycles(graph: dict[str, set[str]]) -> list[frozenset[str]]:
+    """The strongly connected components of more than one module (Tarjan, iteratively)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[frozenset[str]] = []
+    for root in sorted(graph):
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            node, children = work[-1]
+            child = next(children, None)
+            if child is not None:
+                if child not in index:
+                    index[child] = low[child] = len(index)
+                    stack.append(child)
+                    on_stack.add(child)
+                    work.append((child, iter(sorted(graph[child]))))
+                elif child in on_stack:
+                    low[node] = min(low[node], index[child])
+                continue
+            work.pop()
+            if work:
+                parent = work[-1][0]
+                low[parent] = min(low[parent], low[node])
+            if low[node] == index[node]:
+                component = set()
+                while True:
+                    member = stack.pop()
+                    on_stack.discard(member)
+                    component.add(member)
+                    if member == node:
+                        break
+                if len(component) > 1:
+                    found.append(frozenset(component))
+    return found
+
+
+def loop_through(component: frozenset[str], graph: dict[str, set[str]]) -> list[str]:
+    """One closed path through a component, for the failure message."""
+    start = min(component)
+    path, seen = [start], {start}
+    while True:
+        nxt = sorted(m for m in graph[path[-1]] if m in component)
+        back = [m for m in nxt if m in seen]
+        if back:
+            return [*path[path.index(back[0]) :], back[0]]
+        path.append(next(m for m in nxt if m not in seen))
+        seen.add(path[-1])
+
+
+def with_packages(graph: dict[str, set[str]]) -> dict[str, set[str]]:
+    """The graph with each import also running its target's packages' ``__init__``."""
+    out = {}
+    for name, targets in graph.items():
+        parents = {".".join(t.split(".")[:k]) for t in targets for k in range(1, t.count(".") + 1)}
+        out[name] = targets | {p for p in parents if p in MODULES}
+    return out
+
+
+def loads(name: str, graph: dict[str, set[str]]) -> dict[str, str]:
+    """Every module importing ``name`` loads, each with the module that imported it."""
+    via = {p: name for p in with_packages({name: {name}})[name] if p != name}  # its own packages
+    todo = [name, *via]
+    while todo:
+        current = todo.pop()
+        for target in sorted(graph[current]):
+            if target not in via and target != name:
+                via[target] = current
+                todo.append(target)
+    return via
+
+
+def chain(name: str, target: str, via: dict[str, str]) -> str:
+    out = [target]
+    while out[-1] != name:
+        out.append(via[out[-1]])
+    return " -> ".join(reversed(out))
+
+
+def _under(module: str, prefixes: tuple[str, ...]) -> bool:
+    return any(module == p or module.startswith(p + ".") for p in prefixes)
+
+
+def test_the_graph_is_read() -> None:
+    """The reader sees top-level, lazy, relative and ``from pkg import module`` imports, and skips
+    TYPE_CHECKING ones (checked on modules whose imports are known)."""
+    assert "omnibot.calibration.session" in GRAPH["omnibot.calibration.cli"]  # lazy, in run()
+    assert "omnibot.client.client" in GRAPH["omnibot.calibration.session"]
+    assert "omnibot.control.followers" in GRAPH["omnibot.control.followers.base"]  # from pkg import mod
+    assert "omnibot.client.events" not in GRAPH["omnibot.calibration.umbmark"]  # TYPE_CHECKING only
+    assert cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [frozenset("abc")]
+
+
+def test_no_import_cycles() -> None:
+    found = {c: loop_through(c, GRAPH) for c in cycles(GRAPH)}
+    new = [" -> ".join(loop) for c, loop in found.items() if c not in ALLOWED_CYCLES]
+    assert not new, "import cycles:\n  " + "\n  ".join(new)
+    gone = [why for c, why in ALLOWED_CYCLES.items() if c not in found]
+    assert not gone, "no longer a cycle (take it out of ALLOWED_CYCLES): " + "; ".join(gone)
+
+
+def test_calibration_has_no_cycle_at_all() -> None:
+    assert not [c for c in cycles(GRAPH) if any(m.startswith("omnibot.calibration") for m in c)]
+
+
+@pytest.mark.parametrize("name", [m for m in MODULES if _under(m, PURE)])
+def test_pure_modules_load_no_client_or_transport(name: str) -> None:
+    graph = with_packages(GRAPH)
+    via = loads(name, graph)
+    bad = [chain(name, m, via) for m in sorted(via) if _under(m, IO_PACKAGES)]
+    assert not bad, f"{name} loads the client or a transport:\n  " + "\n  ".join(bad[:3])
+
+
+def test_the_pure_list_names_real_modules() -> None:
+    assert all(p in MODULES for p in PURE)
