@@ -100,21 +100,22 @@
 #define P_WINDOW 8
 #define P_RETRY_TIMEOUT_MS 50
 #define P_RETRIES 10
-/* keyword, id, fewest and most parameters (POWER: T and one power per motor) */
-struct Keyword { char name[7]; uint8_t id, lo, hi; };
+/* keyword, id, fewest and most parameters (POWER: T and one power per motor), the number (1..) of
+   the parameter that may be INF (0: none; codes.INF_PARAMS) */
+struct Keyword { char name[7]; uint8_t id, lo, hi, inf; };
 static const Keyword KEYWORDS[K_COUNT] PROGMEM = {
-    {"MOVE", 1, 4, 4},
-    {"ROTATE", 2, 2, 2},
-    {"DELTA", 3, 5, 5},
-    {"POWER", 4, 5, 5},
-    {"STOP", 5, 0, 0},
-    {"VEL", 6, 4, 4},
-    {"MODE", 7, 1, 1},
-    {"SONAR", 8, 5, 5},
-    {"TELEM", 9, 2, 2},
-    {"STATUS", 10, 0, 0},
-    {"HELLO", 11, 0, 5},
-    {"CAL", 12, 4, 4},
+    {"MOVE", 1, 4, 4, 1},
+    {"ROTATE", 2, 2, 2, 1},
+    {"DELTA", 3, 5, 5, 5},
+    {"POWER", 4, 5, 5, 0},
+    {"STOP", 5, 0, 0, 0},
+    {"VEL", 6, 4, 4, 0},
+    {"MODE", 7, 1, 1, 0},
+    {"SONAR", 8, 5, 5, 0},
+    {"TELEM", 9, 2, 2, 0},
+    {"STATUS", 10, 0, 0, 0},
+    {"HELLO", 11, 0, 5, 0},
+    {"CAL", 12, 4, 4, 0},
 };
 static const char TEXT_11[] PROGMEM = "speed reduced to what the motors can give";
 static const char TEXT_12[] PROGMEM = "power below what moves the robot, set to 0";

@@ -41,9 +41,8 @@ static PGM_P code_text(uint8_t code) {
 static void coded(PGM_P keyword, uint8_t code) {
     out_P(keyword);
     comma_i(code);
-    uart_put(',');
+    out_c(',');
     out_P(code_text(code));
-    end_line();
 }
 static void ok() {
     if (binary) {
@@ -52,7 +51,7 @@ static void ok() {
         return;
     }
     out_P(PSTR("OK"));
-    end_line();
+    end_reply();
 }
 // Binary ERROR and WARN frames carry no text: the code table's text applies (docs/protocol.md).
 static void error(uint8_t code) {
@@ -63,10 +62,12 @@ static void error(uint8_t code) {
         return;
     }
     coded(PSTR("ERROR"), code);
+    end_reply();
 }
 void on_warn(uint8_t code) {
     if (binary) return bin::event(T_WARN, code, 0, 1);
     coded(PSTR("WARN"), code);
+    end_line();
 }
 void on_idle() {
     if (binary) return bin::event(T_IDLE, 0, 0, 0);
@@ -93,7 +94,7 @@ static void hello() {
     out_i(P_PROTOCOL_VERSION);
     out_P(PSTR("," ROBOT_NAME));
     comma_i(MOTORS);
-    end_line();
+    end_reply();
 }
 
 static uint8_t mode_bits() { return ex.mode | (binary ? P_MODE_BINARY : 0); }
@@ -119,7 +120,7 @@ static void status() {
     for (uint8_t i = 0; i < MOTORS; i++) comma_i(ex.powers[i]);
     out_P(PSTR(";MOVE"));
     for (uint8_t i = 0; i < 4; i++) comma_i(ex.remembered[i]);
-    end_line();
+    end_reply();
 }
 
 static void field(int32_t v) {
@@ -242,57 +243,108 @@ static void execute(uint8_t kw, int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
     }
 }
 
-static bool blank(char c) { return c == ' ' || c == '\t' || c == '\v' || c == '\f'; }
+static bool blank(char c) { return c == ' ' || c == '\t'; }  // VT, FF: part of their field
+static bool digit(char c) { return c >= '0' && c <= '9'; }
+static uint8_t upper(char c) { return c >= 'a' && c <= 'z' ? c - 32 : c; }
+static int8_t hex(char c) {
+    if (digit(c)) return c - '0';
+    c = upper(c);
+    return c >= 'A' && c <= 'F' ? c - 'A' + 10 : -1;
+}
 
-// Parses one command (parser.py `parse`): keyword, at most 5 integer parameters in 16 bits.
-static void handle(char *cmd) {
-    char *end = cmd + line_len;
-    *end = ',';
+// Parses one command's body (parser.py `parse`): the keyword's table entry into `e`, the parameters
+// into `p` and `n`. Returns 0, 255 for a blank command, or the ERROR code (23, 24, 25, 34): the
+// whole command's syntax comes before any range.
+static uint8_t parse(char *cmd, uint8_t len, const Keyword *&e, int16_t *p, uint8_t &n) {
+    char *end = cmd + len;
+    *end = ',';  // sentinel (the line buffer has room for it)
     char *field_end = cmd;
     while (*field_end != ',') field_end++;
     char *a = cmd, *b = field_end;
     while (a < b && blank(*a)) a++;
     while (b > a && blank(b[-1])) b--;
-    if (a == b && field_end == end) return;  // blank: no reply
-    uint8_t kw = 0, lo = 0, hi = 0;
-    for (uint8_t k = 0; k < K_COUNT && !kw; k++) {
-        const Keyword *e = &KEYWORDS[k];
+    if (a == b && field_end == end) return 255;
+    e = 0;
+    for (uint8_t k = 0; k < K_COUNT && !e; k++) {
+        const Keyword *t = &KEYWORDS[k];
         uint8_t i = 0;
-        for (; a + i < b; i++) {
-            char c = a[i];
-            if (c >= 'a' && c <= 'z') c -= 32;
-            if (i >= sizeof(e->name) || c != (char)pgm_read_byte(&e->name[i])) break;
-        }
-        if (a + i == b && (i == sizeof(e->name) || pgm_read_byte(&e->name[i]) == 0)) {
-            kw = pgm_read_byte(&e->id);
-            lo = pgm_read_byte(&e->lo);
-            hi = pgm_read_byte(&e->hi);
-        }
+        for (; a + i < b; i++)
+            if (i >= sizeof(t->name) || upper(a[i]) != pgm_read_byte(&t->name[i])) break;
+        if (a + i == b && (i == sizeof(t->name) || pgm_read_byte(&t->name[i]) == 0)) e = t;
     }
-    if (!kw) return error(P_E_UNKNOWN);
+    if (!e) return P_E_UNKNOWN;
     uint8_t fields = 0;
     for (char *c = field_end; c < end; c++)
         if (*c == ',') fields++;
-    if (fields > P_PARAMS_MAX) return error(P_E_PARAM_COUNT);
-    int16_t p[P_PARAMS_MAX];
-    uint8_t n = 0;
-    char *c = field_end;
-    while (c < end) {
+    if (fields > P_PARAMS_MAX) return P_E_PARAM_COUNT;
+    uint8_t inf_at = pgm_read_byte(&e->inf);
+    bool wide = false;
+    n = 0;
+    for (char *c = field_end; c < end;) {
         c++;  // past the comma
-        while (c < end && blank(*c)) c++;
+        while (blank(*c)) c++;
         bool neg = false;
         if (*c == '-' || *c == '+') neg = *c++ == '-';
         int32_t v = 0;
-        uint8_t digits = 0;
-        for (; *c >= '0' && *c <= '9'; c++, digits++)
-            if (v < 100000) v = v * 10 + (*c - '0');
-        while (c < end && blank(*c)) c++;
-        if (!digits || *c != ',') return error(P_E_NOT_INTEGER);
+        if (n + 1 == inf_at && upper(c[0]) == 'I' && upper(c[1]) == 'N' && upper(c[2]) == 'F') {
+            v = P_INF;
+            c += 3;
+        } else {
+            uint8_t digits = 0;
+            for (; digit(*c); c++, digits++)
+                if (v < 100000) v = v * 10 + (*c - '0');
+            if (!digits) return P_E_NOT_INTEGER;
+        }
+        while (blank(*c)) c++;
+        if (*c != ',') return P_E_NOT_INTEGER;
         if (neg) v = -v;
-        if (v < -32768 || v > 32767) return error(P_E_RANGE16);
+        if (v < -32768 || v > 32767) wide = true;
         p[n++] = v;
     }
-    execute(kw, p, n, lo, hi);
+    return wide ? P_E_RANGE16 : 0;
+}
+
+// Handles one text command: its "#tag" and "*check" suffix (linecheck.split; a bad check is
+// ERROR 26, untagged, and nothing runs), then the body; the reply carries the command's suffix.
+static void handle(char *cmd, uint8_t len) {
+    uint8_t end = len;
+    bool checked = false;
+    if (len > 4 && cmd[len - 5] == '*') {
+        uint16_t want = 0;
+        bool all_hex = true;
+        for (uint8_t i = len - 4; i < len; i++) {
+            int8_t h = hex(cmd[i]);
+            if (h < 0) all_hex = false;
+            want = want << 4 | (h & 0xF);
+        }
+        if (all_hex) {
+            end = len - 5;
+            uint16_t crc = 0xFFFF;
+            for (uint8_t i = 0; i < end; i++) crc = crc16_update(crc, cmd[i]);
+            if (crc != want) return error(P_E_CHECKSUM);
+            checked = true;
+        }
+    }
+    uint8_t i = end;
+    while (i > 0 && end - i <= 4 && digit(cmd[i - 1])) i--;
+    uint8_t tag_at = i, tag_len = 0;
+    if (i > 0 && cmd[i - 1] == '#' && end - i >= 1 && end - i <= 4) {
+        tag_len = end - i;
+        end = i - 1;
+    }
+    const Keyword *e;
+    int16_t p[P_PARAMS_MAX];
+    uint8_t n;
+    uint8_t code = parse(cmd, end, e, p, n);
+    if (code == 255) return;
+    ReplySuffix &r = reply_suffix;
+    for (uint8_t k = 0; k < tag_len; k++) r.tag[k] = cmd[tag_at + k];
+    r.tag_len = tag_len;
+    r.check = checked;
+    if (code) error(code);
+    else execute(pgm_read_byte(&e->id), p, n, pgm_read_byte(&e->lo), pgm_read_byte(&e->hi));
+    r.tag_len = 0;
+    r.check = false;
 }
 
 // A binary command frame (controller.py `_frame`): the same checks and execution as text.
@@ -323,7 +375,7 @@ static void feed(char c) {
             overflow = false;
             error(P_E_TOO_LONG);
         } else if (line_len) {
-            handle(line);
+            handle(line, line_len);
         }
         line_len = 0;
         return;

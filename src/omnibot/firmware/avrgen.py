@@ -146,14 +146,16 @@ def header_source(robot_name: str) -> str:
         w(f"#define T_{key} {getattr(codes, key)}")
     for key in ("FRAME_SYNC", "FRAME_MAX", "SEQ_MAX", "WINDOW", "RETRY_TIMEOUT_MS", "RETRIES"):
         w(f"#define P_{key} {getattr(codes, key)}")
-    w("/* keyword, id, fewest and most parameters (POWER: T and one power per motor) */")
-    w("struct Keyword { char name[7]; uint8_t id, lo, hi; };")
+    w("/* keyword, id, fewest and most parameters (POWER: T and one power per motor), the number (1..) of")
+    w("   the parameter that may be INF (0: none; codes.INF_PARAMS) */")
+    w("struct Keyword { char name[7]; uint8_t id, lo, hi, inf; };")
     w("static const Keyword KEYWORDS[K_COUNT] PROGMEM = {")
     for name, kid in codes.COMMANDS.items():
         lo, hi = codes.PARAM_COUNTS[kid]
         if kid == codes.POWER:
             lo = hi = n + 1
-        w(f"    {{{_c_string(name)}, {kid}, {lo}, {hi}}},")
+        inf = codes.INF_PARAMS.get(kid, -1) + 1
+        w(f"    {{{_c_string(name)}, {kid}, {lo}, {hi}, {inf}}},")
     w("};")
     for code, text in sorted(codes.TEXTS.items()):
         w(f"static const char TEXT_{code}[] PROGMEM = {_c_string(text)};")
