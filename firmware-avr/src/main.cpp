@@ -1,7 +1,9 @@
 // omnibot's motor controller for the Arduino UNO: the text protocol of docs/protocol.md.
 // One main-loop pass: advance the clock, the motion timeline, read and answer every complete
-// command, run the sonar, send TEL when due; then sleep until the next interrupt (1 ms at most).
+// command, run the sonar and its guard, send TEL when due; then sleep until the next interrupt
+// (1 ms at most).
 #include <avr/pgmspace.h>
+#include <math.h>
 #include <stdlib.h>
 
 #include "binlink.h"
@@ -9,6 +11,7 @@
 #include "hal.h"
 #include "checks.h"
 #include "motion.h"
+#include "safety.h"
 #include "textout.h"
 
 static char line[LINE_MAX + 1];
@@ -20,9 +23,8 @@ static uint32_t now_ms;
 static uint16_t us_part;
 static uint32_t last_ticks;
 static uint8_t tick_half;
-// sonar (sonar.py, one sonar)
-static uint16_t sonar_period;
-static int16_t sonar_low, sonar_high, sonar_stop, sonar_last = -1;
+// sonar (sonar.py, one sonar; its period and STOP are the guard's)
+static int16_t sonar_low, sonar_high, sonar_last = -1;
 static uint32_t sonar_next, sonar_started;
 static bool sonar_pending;
 // telemetry
@@ -97,7 +99,9 @@ static void hello() {
     end_reply();
 }
 
-static uint8_t mode_bits() { return ex.mode | (binary ? P_MODE_BINARY : 0); }
+static uint8_t mode_bits() {
+    return ex.mode | (binary ? P_MODE_BINARY : 0) | (guard.refuse ? P_MODE_REFUSE_UNCOVERED : 0);
+}
 
 static void status() {
     if (binary) {
@@ -163,17 +167,50 @@ static void telemetry() {
 
 // ------------------------------------------------------------------ commands
 
+// Sonar emergency stop: motors off and braked, queue cleared, WARN 13, latched until STOP.
 static void emergency_stop() {
     ex.stop();
+    ex.brake();
     latched = true;
     on_warn(P_W_SONAR_STOP);
     on_idle();
+}
+
+// Reports a motion the guard stopped (ex.halt): the emergency stop, or an uncovered one.
+static void check_halt() {
+    uint8_t code = ex.halt;
+    if (!code) return;
+    ex.halt = 0;
+    if (code == P_W_SONAR_STOP) {
+        emergency_stop();
+    } else {
+        on_warn(P_W_UNCOVERED_STOP);
+        on_idle();
+    }
+}
+
+// The guard's inputs changed (a reading, SONAR, MODE): limit the running travel anew.
+static void relimit() {
+    ex.relimit();
+    check_halt();
+}
+
+// A MOVE or VEL travels where the armed sonar looks (or does not travel); other commands: true.
+static bool covered(uint8_t kw, const int16_t *p) {
+    if (kw == K_MOVE) {
+        if (p[0] == 0) return true;
+        float a = p[2] * (float)(M_PI / 180), s = (p[0] > 0) == (p[1] > 0) ? 1.0f : -1.0f;
+        return guard.covers(s * cosf(a), s * sinf(a));
+    }
+    if (kw == K_VEL && (p[0] || p[1])) return guard.covers(p[0], p[1]);
+    return true;
 }
 
 static void execute(uint8_t kw, int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
     uint8_t code = check(kw, p, n, lo, hi);
     bool motion = kw == K_MOVE || kw == K_ROTATE || kw == K_DELTA || kw == K_POWER || kw == K_VEL;
     if (!code && latched && motion) code = P_E_ESTOP;
+    if (!code && guard.refuse && !covered(kw, p)) code = P_E_UNCOVERED;
     if (code) {
         error(code);
         return;
@@ -189,10 +226,12 @@ static void execute(uint8_t kw, int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
             }
             ok();
             ex.step(0);
+            check_halt();
             break;
         case K_VEL:
             ok();
             ex.vel(p[0], p[1], p[2], p[3]);
+            check_halt();
             break;
         case K_STOP: {
             bool was = ex.stop();
@@ -210,7 +249,9 @@ static void execute(uint8_t kw, int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
             break;
         case K_MODE: {
             ok();  // in the mode the command came in
-            ex.set_mode(p[0] & ~P_MODE_BINARY);
+            guard.refuse = p[0] & P_MODE_REFUSE_UNCOVERED;
+            ex.set_mode(p[0] & ~(P_MODE_BINARY | P_MODE_REFUSE_UNCOVERED));
+            relimit();
             bool b = p[0] & P_MODE_BINARY;
             if (b != binary) {  // from the next byte on, both ways
                 binary = b;
@@ -221,12 +262,14 @@ static void execute(uint8_t kw, int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
             break;
         }
         case K_SONAR:
-            sonar_period = p[1];
+            guard.period = p[1];
             sonar_low = p[2];
             sonar_high = p[3];
-            sonar_stop = p[4];
+            guard.stop = p[4];
             sonar_next = now_ms;
+            guard.clear();
             ok();
+            relimit();
             break;
         case K_TELEM:
             tel_period = p[0];
@@ -401,9 +444,9 @@ static void sonar_poll() {
         }
         sonar_pending = false;
         sonar_last = cm;
-        if (sonar_period == 0 || cm < 0) return;
-        if ((sonar_low < sonar_high && sonar_low <= cm && cm <= sonar_high) ||
-            (sonar_low > sonar_high && (cm < sonar_high || cm > sonar_low))) {
+        if (guard.period == 0) return;
+        if (cm >= 0 && ((sonar_low < sonar_high && sonar_low <= cm && cm <= sonar_high) ||
+                        (sonar_low > sonar_high && (cm < sonar_high || cm > sonar_low)))) {
             if (binary) {
                 bin::event(T_RANGE, 1, cm, 2);
             } else {
@@ -412,10 +455,13 @@ static void sonar_poll() {
                 end_line();
             }
         }
-        if (ex.moving() && cm < sonar_stop) emergency_stop();
-    } else if (sonar_period && (int32_t)(now_ms - sonar_next) >= 0) {
-        sonar_next += sonar_period;
-        if ((int32_t)(now_ms - sonar_next) >= 0) sonar_next = now_ms + sonar_period;
+        guard.reading(cm);  // the guard re-limits a travel or calls the emergency stop
+        if (!ex.moving()) return;
+        if (ex.travelling()) relimit();
+        else if (guard.below_stop()) emergency_stop();  // ROTATE, POWER: the threshold alone
+    } else if (guard.period && (int32_t)(now_ms - sonar_next) >= 0) {
+        sonar_next += guard.period;
+        if ((int32_t)(now_ms - sonar_next) >= 0) sonar_next = now_ms + guard.period;
         sonar_pending = true;
         sonar_started = now_ms;
         sonar_trigger();
@@ -440,7 +486,7 @@ int main() {
     hal_init();
     cal_init();
     ex.init();
-    ex.set_mode(MODE_AT_RESET & UNO_MODE_MASK);
+    ex.set_mode(MODE_AT_RESET & (P_MODE_SIMULATION | P_MODE_CLOSED_LOOP));
     hello();
     last_ticks = hal_ticks();
     for (;;) {
@@ -453,6 +499,7 @@ int main() {
         now_ms += dt / 1000 + us_part / 1000;
         us_part %= 1000;
         ex.step(dt);
+        check_halt();
         for (int16_t c; (c = uart_read()) >= 0;) {
             if (binary) bin::feed(c);
             else feed(c);
