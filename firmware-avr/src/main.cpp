@@ -20,7 +20,7 @@ static bool overflow;
 static bool latched;
 static bool binary;  // MODE bit 2: frames both ways
 static uint32_t now_ms;
-static uint16_t us_part;
+static uint32_t us_part;
 static uint32_t last_ticks;
 static uint8_t tick_half;
 // sonar (sonar.py, one sonar; its period and STOP are the guard's)
@@ -495,9 +495,11 @@ int main() {
         last_ticks = t;
         tick_half = ticks & 1;
         int32_t dt = ticks >> 1;
-        us_part += dt % 1000;
-        now_ms += dt / 1000 + us_part / 1000;
-        us_part %= 1000;
+        us_part += dt;  // a pass lasts a few ms at most: subtracting beats dividing on the AVR
+        while (us_part >= 1000) {
+            us_part -= 1000;
+            now_ms++;
+        }
         ex.step(dt);
         check_halt();
         for (int16_t c; (c = uart_read()) >= 0;) {
