@@ -121,9 +121,10 @@ def test_calibration_survives_a_power_cycle() -> None:
 def test_static_ram_and_measured_stack_fit() -> None:
     emu, port = start("omni4", range_cm=100)
     try:
-        port.ask("SONAR,1,60,0,500,0;TELEM,10,255", 2)
+        port.ask("SONAR,1,60,0,500,20;TELEM,10,255", 2)  # the sonar stop armed: the guard runs
         port.write("MOVE,2,40,0,0;DELTA,0,0,10,0,10;VEL,30,30,100,200\n")
         port.lines(3)
+        time.sleep(0.3)
         port.ask("STOP;TELEM,0,0;SONAR,1,0,0,0,0", 3)
         # and a binary session: frames in and out, TEL frames, events
         port.ask("MODE,4")
