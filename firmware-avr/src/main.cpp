@@ -1,4 +1,4 @@
-// omnibot's motor controller for the Arduino UNO: the text protocol of docs/protocol.md.
+// omnibot's motor controller for the Arduino UNO: the text and binary protocols of docs/protocol.md.
 // One main-loop pass: advance the clock, the motion timeline, read and answer every complete
 // command, run the sonar and its guard, send TEL when due; then sleep until the next interrupt
 // (1 ms at most).
