@@ -54,6 +54,8 @@ SCRIPT = [
     # the sonar stop's guard: uncovered travel refused with MODE bit 3 (ERROR 41), or limited (WARN 15)
     "SONAR,1,60,0,0,25;MODE,8;MOVE,30000,40,90,0;VEL,0,30,0,100;MOVE,30000,40,0,0;STATUS;STOP",
     "MODE,0;MOVE,30000,100,90,0;STATUS;STOP;SONAR,1,0,0,0,0;MOVE,30000,100,90,0;STATUS;STOP",
+    # a motion that turns uncovered while running is stopped (WARN 16)
+    "SONAR,1,60,0,0,25;MODE,8;MOVE,30000,40,0,0;DELTA,0,0,90,0,1;STATUS;MODE,0;SONAR,1,0,0,0,0;STOP",
     # separators (VT and FF are not spaces), syntax before ranges, INF tokens where allowed
     "MOVE,\x0b1,40,0,0;\x0b;MOVE,1,40,0,0\x0c;\t ;MOVE,99999,x,0,0;MOVE,99999,40,0,0;SONAR,1,inf,0,0,0",
     "MOVE,inf,60,0,0;STATUS;STOP;ROTATE,-Inf,90;STATUS;STOP;ROTATE,+INF,90;STOP;MOVE,1,INF,0,0",
