@@ -20,13 +20,21 @@ import statistics
 import time
 
 from benchmarks.link_throughput import VEL, closed_loop_load, drain, stream_binary, switch_to_binary
-from omnibot.protocol import binary
+from omnibot.protocol import binary, linecheck
 from omnibot.transport.url import open_link
 from omnibot.uno.emulator import UnoEmulator, missing_tools
 
 F_CPU = 16e6
 LINE_BYTES_PER_S = 11520
 CRLF = b"\r\n"
+
+
+def tagged(command: str, tag: str = "12") -> str:
+    """``command`` with a tag and its CRC-16 check (docs/protocol.md, Tags and checks)."""
+    data = command.encode()
+    return (data + linecheck.suffix(data, tag.encode(), True)).decode()
+
+
 # (label, setup sent first, the measured command, cleanup)
 CASES = [
     ("MOVE (queued)", "MOVE,400,30,0,0", "MOVE,10,40,0,0", "STOP"),
@@ -36,6 +44,8 @@ CASES = [
     ("MOVE from idle (starts, computes powers)", "", "MOVE,30000,40,30,10", "STOP"),
     ("VEL (computes powers)", "", "VEL,20,-30,45,1000", "STOP"),
     ("STATUS", "", "STATUS", ""),
+    ("STATUS, tagged and checked (#12*...)", "", tagged("STATUS"), ""),
+    ("MOVE (queued), tagged and checked", "MOVE,400,30,0,0", tagged("MOVE,10,40,0,0"), "STOP"),
     ("HELLO", "", "HELLO", ""),
     ("TEL line, every group (TELEM,1000,255 sends one at once)", "", "TELEM,1000,255", "TELEM,0,0"),
     ("ERROR 23 (unknown command)", "", "FOO", ""),

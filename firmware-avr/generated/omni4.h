@@ -100,21 +100,22 @@
 #define P_WINDOW 8
 #define P_RETRY_TIMEOUT_MS 50
 #define P_RETRIES 10
-/* keyword, id, fewest and most parameters (POWER: T and one power per motor) */
-struct Keyword { char name[7]; uint8_t id, lo, hi; };
+/* keyword, id, fewest and most parameters (POWER: T and one power per motor), the number (1..) of
+   the parameter that may be INF (0: none; codes.INF_PARAMS) */
+struct Keyword { char name[7]; uint8_t id, lo, hi, inf; };
 static const Keyword KEYWORDS[K_COUNT] PROGMEM = {
-    {"MOVE", 1, 4, 4},
-    {"ROTATE", 2, 2, 2},
-    {"DELTA", 3, 5, 5},
-    {"POWER", 4, 5, 5},
-    {"STOP", 5, 0, 0},
-    {"VEL", 6, 4, 4},
-    {"MODE", 7, 1, 1},
-    {"SONAR", 8, 5, 5},
-    {"TELEM", 9, 2, 2},
-    {"STATUS", 10, 0, 0},
-    {"HELLO", 11, 0, 5},
-    {"CAL", 12, 4, 4},
+    {"MOVE", 1, 4, 4, 1},
+    {"ROTATE", 2, 2, 2, 1},
+    {"DELTA", 3, 5, 5, 5},
+    {"POWER", 4, 5, 5, 0},
+    {"STOP", 5, 0, 0, 0},
+    {"VEL", 6, 4, 4, 0},
+    {"MODE", 7, 1, 1, 0},
+    {"SONAR", 8, 5, 5, 0},
+    {"TELEM", 9, 2, 2, 0},
+    {"STATUS", 10, 0, 0, 0},
+    {"HELLO", 11, 0, 5, 0},
+    {"CAL", 12, 4, 4, 0},
 };
 static const char TEXT_11[] PROGMEM = "speed reduced to what the motors can give";
 static const char TEXT_12[] PROGMEM = "power below what moves the robot, set to 0";
@@ -178,6 +179,23 @@ static const uint16_t ENCODER_CPR[MOTORS] PROGMEM = {440, 440, 440, 440};
 #define SPEED_KP 1.81125f
 #define SPEED_KI 36.225f
 #define MODE_AT_RESET 0
+/* sonar stop (safety.py): sonar 1's axis, half cone (rad), footprint lead and half width (cm); */
+/* the stop deceleration (cm/s^2), slowest and uncovered speeds (cm/s), a loop pass + latency (ms) */
+#define GUARD_AX 1.0f
+#define GUARD_AY 0.0f
+#define GUARD_HALF 0.1308996938995747f
+#define GUARD_LEAD 0.0f
+#define GUARD_WIDTH 10.0f
+#define GUARD_DECEL 219.62f
+#define GUARD_V_MIN 30.0f
+#define GUARD_UNCOVERED 30.0f
+#define GUARD_LOOP_MS 4.0f
+#define GUARD_SOUND_CMS 34300.0f
+#define GUARD_STEPS 12
+#define GUARD_STEP 0.08726646259971647f
+/* the wall incidences the room allows for (travel_room): cos and sin of each */
+static const float GUARD_COS[GUARD_STEPS] PROGMEM = {0.9961946980917455f, 0.984807753012208f, 0.9659258262890683f, 0.9396926207859084f, 0.9063077870366499f, 0.8660254037844387f, 0.8191520442889918f, 0.766044443118978f, 0.7071067811865476f, 0.6427876096865395f, 0.5735764363510462f, 0.5000000000000001f};
+static const float GUARD_SIN[GUARD_STEPS] PROGMEM = {0.08715574274765817f, 0.17364817766693033f, 0.25881904510252074f, 0.3420201433256687f, 0.4226182617406994f, 0.49999999999999994f, 0.573576436351046f, 0.6427876096865393f, 0.7071067811865475f, 0.7660444431189779f, 0.8191520442889917f, 0.8660254037844386f};
 
 /* ---- kinematics: rim speed (m/s) per unit twist, fixed point: RIM_Q[i][j] / 2^RIM_SHIFT ---- */
 #define RIM_SHIFT 14

@@ -7,7 +7,7 @@ namespace bin {
 #define KEPT_BYTES 16     // replies up to this many frame bytes are kept; longer ones (STATUS) run again
 #define EVENT_BYTES 12
 #define BACKLOG 8         // events waiting for the send window (binlink.py keeps 16); more are dropped
-#define CHUNK_MAX 48      // encoded command frames are at most ~22 bytes; longer chunks are dropped
+#define CHUNK_MAX 48      // command frames are at most 34 bytes (5 varints of 5); longer chunks are dropped
 #define FRAME_MAX 72      // largest frame we send (a TEL of every group, 32-bit extremes)
 
 static const uint8_t W = P_WINDOW;
@@ -65,39 +65,57 @@ void reset() {
 
 uint8_t seq() { return cur_seq; }
 
-// CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF), bitwise as protocol/crc.py crc16_bitwise
-static uint16_t crc16(const uint8_t *p, uint8_t n) {
-    uint16_t crc = 0xFFFF;
-    while (n--) {
-        crc ^= (uint16_t)(*p++) << 8;
-        for (uint8_t i = 0; i < 8; i++) crc = crc & 0x8000 ? (crc << 1) ^ 0x1021 : crc << 1;
-    }
-    return crc;
+// CRC-32/ISO-HDLC (reflected 0xEDB88320, init and final XOR 0xFFFFFFFF) as protocol/crc.py, a nibble
+// at a time from a 16-entry table in flash (64 B; a byte table would take 1 KB).
+static const uint32_t CRC_NIBBLE[16] PROGMEM = {
+    0x00000000UL, 0x1DB71064UL, 0x3B6E20C8UL, 0x26D930ACUL, 0x76DC4190UL, 0x6B6B51F4UL, 0x4DB26158UL, 0x5005713CUL,
+    0xEDB88320UL, 0xF00F9344UL, 0xD6D6A3E8UL, 0xCB61B38CUL, 0x9B64C2B0UL, 0x86D3D2D4UL, 0xA00AE278UL, 0xBDBDF21CUL};
+
+static uint32_t crc32_byte(uint32_t crc, uint8_t b) {
+    crc ^= b;
+    crc = pgm_read_dword(&CRC_NIBBLE[crc & 0x0F]) ^ (crc >> 4);
+    return pgm_read_dword(&CRC_NIBBLE[crc & 0x0F]) ^ (crc >> 4);
 }
 
-// Writes 00 | COBS(frame) | 00 (frames are under 254 bytes: one code byte per zero).
+static uint32_t crc32(const uint8_t *p, uint8_t n) {
+    uint32_t crc = 0xFFFFFFFFUL;
+    while (n--) crc = crc32_byte(crc, *p++);
+    return ~crc;
+}
+
+static uint32_t wire_crc;
+static void wire(uint8_t b) {
+    wire_crc = crc32_byte(wire_crc, b);
+    uart_put(b);
+}
+
+// Writes 00 | COBS(L | type | seq | payload) | K0..K4 | 00: the body is under 254 bytes (one COBS
+// block); the CRC-32 covers the body as sent, in 5 check bytes of 7 bits with bit 7 set.
 static void write_frame(const uint8_t *f, uint8_t n) {
     uart_put(0);
+    wire_crc = 0xFFFFFFFFUL;
     uint8_t start = 0;
     for (uint8_t i = 0; i <= n; i++) {
         if (i == n || f[i] == 0) {
-            uart_put(i - start + 1);
-            for (uint8_t k = start; k < i; k++) uart_put(f[k]);
+            wire(i - start + 1);
+            for (uint8_t k = start; k < i; k++) wire(f[k]);
             start = i + 1;
         }
     }
+    uint32_t crc = ~wire_crc;
+    for (uint8_t k = 0; k < 5; k++, crc >>= 7) uart_put(0x80 | (crc & 0x7F));
     uart_put(0);
 }
 
 void begin(uint8_t type, uint8_t s, bool sync) {
-    out[0] = sync ? type | P_FRAME_SYNC : type;
-    out[1] = s;
-    out_len = 2;
+    out[1] = sync ? type | P_FRAME_SYNC : type;
+    out[2] = s;
+    out_len = 3;
     out_overflow = false;
 }
 
 static void byte(uint8_t b) {
-    if (out_len < FRAME_MAX - 2) out[out_len++] = b;
+    if (out_len < FRAME_MAX) out[out_len++] = b;
     else out_overflow = true;
 }
 
@@ -121,10 +139,10 @@ void text_P(const char *s) {
     for (char c; (c = pgm_read_byte(s)); s++) byte(c);
 }
 
+// Sets L, the frame's length on the wire between its delimiters (COBS code byte, L .. payload, the
+// 5 check bytes); the bytes to encode are out[0 .. out_len).
 static uint8_t finish() {
-    uint16_t crc = crc16(out, out_len);
-    out[out_len++] = crc >> 8;
-    out[out_len++] = crc & 0xFF;
+    out[0] = out_len + 6;
     return out_len;
 }
 
@@ -132,8 +150,8 @@ void send_reply() {
     uint8_t n = finish();
     Kept &k = kept[kept_next];
     kept_next = (kept_next + 1) % W;
-    k.seq = out[1];
-    k.type = out[0] & 0x7F;
+    k.seq = out[2];
+    k.type = out[1] & 0x7F;
     if (n <= KEPT_BYTES) {
         k.len = n;
         for (uint8_t i = 0; i < n; i++) k.data[i] = out[i];
@@ -211,7 +229,7 @@ void poll(uint32_t now) {
 
 // NEW 0, DUPLICATE 1, OUT_OF_ORDER 2 (arq.Receiver.classify)
 static uint8_t classify(uint8_t s, bool sync) {
-    if (s == 0) return 0;
+    if (s == 0) return 2;  // seq 0 is never a command's: a replay can never run twice
     if (expected) {
         uint8_t back = seq_back(expected, s);
         if (back > 0 && back <= W) return 1;
@@ -237,17 +255,29 @@ static void duplicate(uint8_t s) {
     }
 }
 
+// One chunk between delimiters (frame.parse_frame): its length byte, check bytes, CRC-32 over the
+// bytes as received, COBS, the length again. Anything wrong: dropped unanswered, the host retries.
 static void frame(uint8_t *f, uint8_t n) {
+    if (n < 9 || f[1] != n) return;
+    uint8_t end = n - 5;
+    uint32_t crc = 0;
+    for (uint8_t k = 0; k < 5; k++) {
+        if (f[end + k] < 0x80) return;
+        crc |= (uint32_t)(f[end + k] & 0x7F) << (7 * k);
+    }
+    if (f[end + 4] > 0x8F || crc32(f, end) != crc) return;
     // COBS decode in place: the output is never longer than the input
     uint8_t i = 0, o = 0;
-    while (i < n) {
+    while (i < end) {
         uint8_t code = f[i];
-        if (code == 0 || i + code > n) return;  // bad COBS: dropped, the host retries
+        if (code == 0 || i + code > end) return;
         for (uint8_t k = 1; k < code; k++) f[o++] = f[i + k];
         i += code;
-        if (code != 0xFF && i < n) f[o++] = 0;
+        if (code != 0xFF && i < end) f[o++] = 0;
     }
-    if (o < 4 || crc16(f, o - 2) != ((uint16_t)f[o - 2] << 8 | f[o - 1])) return;
+    if (o != end - 1 || f[0] != n) return;
+    f++;  // past L
+    o--;
     uint8_t type = f[0] & 0x7F, s = f[1];
     bool sync = f[0] & P_FRAME_SYNC;
     if (type == T_ACK) {
@@ -264,7 +294,7 @@ static void frame(uint8_t *f, uint8_t n) {
     cur_seq = s;
     int32_t ints[P_PARAMS_MAX + 1];
     uint8_t count = 0;
-    uint8_t end = o - 2;
+    end = o;
     for (uint8_t k = 2; k < end;) {
         uint32_t z = 0;
         uint8_t shift = 0;

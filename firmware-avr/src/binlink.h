@@ -1,5 +1,6 @@
-// Binary mode (MODE bit 2, docs/protocol.md "Binary protocol"): COBS frames with CRC-16 and zigzag
-// varints, sequence numbers, duplicate replies, event retransmission (firmware/binlink.py, arq.py).
+// Binary mode (MODE bit 2, docs/protocol.md "Binary protocol", version 2): frames with their length,
+// COBS and a CRC-32 over the bytes as sent, zigzag varints, sequence numbers, duplicate replies,
+// event retransmission (firmware/binlink.py, protocol/frame.py, arq.py).
 #pragma once
 #include <stdint.h>
 

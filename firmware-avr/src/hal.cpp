@@ -194,6 +194,28 @@ void motor_set(uint8_t i, int16_t p) {
     }
 }
 
+void motor_brake(uint8_t i) {
+#define MOTOR_BRAKE(k)                         \
+    case k:                                    \
+        M##k##_TCCR &= ~_BV(M##k##_COM);       \
+        PIN_SET(M##k##_IN1, 0);                \
+        PIN_SET(M##k##_IN2, 0);                \
+        PIN_SET(M##k##_PWM, 1);                \
+        break;
+    switch (i) {
+        MOTOR_BRAKE(0)
+#if MOTORS > 1
+        MOTOR_BRAKE(1)
+#endif
+#if MOTORS > 2
+        MOTOR_BRAKE(2)
+#endif
+#if MOTORS > 3
+        MOTOR_BRAKE(3)
+#endif
+    }
+}
+
 int32_t encoder_count(uint8_t i) {
     int32_t v;
     ATOMIC_BLOCK(ATOMIC_RESTORESTATE) { v = enc[i]; }

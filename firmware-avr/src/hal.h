@@ -11,6 +11,7 @@ int16_t uart_read();            // next received byte, -1 when none
 void uart_put(char c);          // queues one byte (waits while the transmit ring is full)
 
 void motor_set(uint8_t i, int16_t power);  // signed PWM counts, -255..255; 0 = coast
+void motor_brake(uint8_t i);               // L298 fast motor stop (EN high, IN1 = IN2 = 0)
 int32_t encoder_count(uint8_t i);
 
 void sonar_trigger();           // 10 us trigger pulse; the echo is timed by input capture

@@ -1,7 +1,9 @@
-// omnibot's motor controller for the Arduino UNO: the text protocol of docs/protocol.md.
+// omnibot's motor controller for the Arduino UNO: the text and binary protocols of docs/protocol.md.
 // One main-loop pass: advance the clock, the motion timeline, read and answer every complete
-// command, run the sonar, send TEL when due; then sleep until the next interrupt (1 ms at most).
+// command, run the sonar and its guard, send TEL when due; then sleep until the next interrupt
+// (1 ms at most).
 #include <avr/pgmspace.h>
+#include <math.h>
 #include <stdlib.h>
 
 #include "binlink.h"
@@ -9,6 +11,7 @@
 #include "hal.h"
 #include "checks.h"
 #include "motion.h"
+#include "safety.h"
 #include "textout.h"
 
 static char line[LINE_MAX + 1];
@@ -17,12 +20,11 @@ static bool overflow;
 static bool latched;
 static bool binary;  // MODE bit 2: frames both ways
 static uint32_t now_ms;
-static uint16_t us_part;
+static uint32_t us_part;
 static uint32_t last_ticks;
 static uint8_t tick_half;
-// sonar (sonar.py, one sonar)
-static uint16_t sonar_period;
-static int16_t sonar_low, sonar_high, sonar_stop, sonar_last = -1;
+// sonar (sonar.py, one sonar; its period and STOP are the guard's)
+static int16_t sonar_low, sonar_high, sonar_last = -1;
 static uint32_t sonar_next, sonar_started;
 static bool sonar_pending;
 // telemetry
@@ -41,9 +43,8 @@ static PGM_P code_text(uint8_t code) {
 static void coded(PGM_P keyword, uint8_t code) {
     out_P(keyword);
     comma_i(code);
-    uart_put(',');
+    out_c(',');
     out_P(code_text(code));
-    end_line();
 }
 static void ok() {
     if (binary) {
@@ -52,7 +53,7 @@ static void ok() {
         return;
     }
     out_P(PSTR("OK"));
-    end_line();
+    end_reply();
 }
 // Binary ERROR and WARN frames carry no text: the code table's text applies (docs/protocol.md).
 static void error(uint8_t code) {
@@ -63,10 +64,12 @@ static void error(uint8_t code) {
         return;
     }
     coded(PSTR("ERROR"), code);
+    end_reply();
 }
 void on_warn(uint8_t code) {
     if (binary) return bin::event(T_WARN, code, 0, 1);
     coded(PSTR("WARN"), code);
+    end_line();
 }
 void on_idle() {
     if (binary) return bin::event(T_IDLE, 0, 0, 0);
@@ -93,10 +96,12 @@ static void hello() {
     out_i(P_PROTOCOL_VERSION);
     out_P(PSTR("," ROBOT_NAME));
     comma_i(MOTORS);
-    end_line();
+    end_reply();
 }
 
-static uint8_t mode_bits() { return ex.mode | (binary ? P_MODE_BINARY : 0); }
+static uint8_t mode_bits() {
+    return ex.mode | (binary ? P_MODE_BINARY : 0) | (guard.refuse ? P_MODE_REFUSE_UNCOVERED : 0);
+}
 
 static void status() {
     if (binary) {
@@ -119,7 +124,7 @@ static void status() {
     for (uint8_t i = 0; i < MOTORS; i++) comma_i(ex.powers[i]);
     out_P(PSTR(";MOVE"));
     for (uint8_t i = 0; i < 4; i++) comma_i(ex.remembered[i]);
-    end_line();
+    end_reply();
 }
 
 static void field(int32_t v) {
@@ -162,17 +167,50 @@ static void telemetry() {
 
 // ------------------------------------------------------------------ commands
 
+// Sonar emergency stop: motors off and braked, queue cleared, WARN 13, latched until STOP.
 static void emergency_stop() {
     ex.stop();
+    ex.brake();
     latched = true;
     on_warn(P_W_SONAR_STOP);
     on_idle();
+}
+
+// Reports a motion the guard stopped (ex.halt): the emergency stop, or an uncovered one.
+static void check_halt() {
+    uint8_t code = ex.halt;
+    if (!code) return;
+    ex.halt = 0;
+    if (code == P_W_SONAR_STOP) {
+        emergency_stop();
+    } else {
+        on_warn(P_W_UNCOVERED_STOP);
+        on_idle();
+    }
+}
+
+// The guard's inputs changed (a reading, SONAR, MODE): limit the running travel anew.
+static void relimit() {
+    ex.relimit();
+    check_halt();
+}
+
+// A MOVE or VEL travels where the armed sonar looks (or does not travel); other commands: true.
+static bool covered(uint8_t kw, const int16_t *p) {
+    if (kw == K_MOVE) {
+        if (p[0] == 0) return true;
+        float a = p[2] * (float)(M_PI / 180), s = (p[0] > 0) == (p[1] > 0) ? 1.0f : -1.0f;
+        return guard.covers(s * cosf(a), s * sinf(a));
+    }
+    if (kw == K_VEL && (p[0] || p[1])) return guard.covers(p[0], p[1]);
+    return true;
 }
 
 static void execute(uint8_t kw, int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
     uint8_t code = check(kw, p, n, lo, hi);
     bool motion = kw == K_MOVE || kw == K_ROTATE || kw == K_DELTA || kw == K_POWER || kw == K_VEL;
     if (!code && latched && motion) code = P_E_ESTOP;
+    if (!code && guard.refuse && !covered(kw, p)) code = P_E_UNCOVERED;
     if (code) {
         error(code);
         return;
@@ -188,10 +226,12 @@ static void execute(uint8_t kw, int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
             }
             ok();
             ex.step(0);
+            check_halt();
             break;
         case K_VEL:
             ok();
             ex.vel(p[0], p[1], p[2], p[3]);
+            check_halt();
             break;
         case K_STOP: {
             bool was = ex.stop();
@@ -209,7 +249,9 @@ static void execute(uint8_t kw, int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
             break;
         case K_MODE: {
             ok();  // in the mode the command came in
-            ex.set_mode(p[0] & ~P_MODE_BINARY);
+            guard.refuse = p[0] & P_MODE_REFUSE_UNCOVERED;
+            ex.set_mode(p[0] & ~(P_MODE_BINARY | P_MODE_REFUSE_UNCOVERED));
+            relimit();
             bool b = p[0] & P_MODE_BINARY;
             if (b != binary) {  // from the next byte on, both ways
                 binary = b;
@@ -220,12 +262,14 @@ static void execute(uint8_t kw, int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
             break;
         }
         case K_SONAR:
-            sonar_period = p[1];
+            guard.period = p[1];
             sonar_low = p[2];
             sonar_high = p[3];
-            sonar_stop = p[4];
+            guard.stop = p[4];
             sonar_next = now_ms;
+            guard.clear();
             ok();
+            relimit();
             break;
         case K_TELEM:
             tel_period = p[0];
@@ -242,57 +286,108 @@ static void execute(uint8_t kw, int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
     }
 }
 
-static bool blank(char c) { return c == ' ' || c == '\t' || c == '\v' || c == '\f'; }
+static bool blank(char c) { return c == ' ' || c == '\t'; }  // VT, FF: part of their field
+static bool digit(char c) { return c >= '0' && c <= '9'; }
+static uint8_t upper(char c) { return c >= 'a' && c <= 'z' ? c - 32 : c; }
+static int8_t hex(char c) {
+    if (digit(c)) return c - '0';
+    c = upper(c);
+    return c >= 'A' && c <= 'F' ? c - 'A' + 10 : -1;
+}
 
-// Parses one command (parser.py `parse`): keyword, at most 5 integer parameters in 16 bits.
-static void handle(char *cmd) {
-    char *end = cmd + line_len;
-    *end = ',';
+// Parses one command's body (parser.py `parse`): the keyword's table entry into `e`, the parameters
+// into `p` and `n`. Returns 0, 255 for a blank command, or the ERROR code (23, 24, 25, 34): the
+// whole command's syntax comes before any range.
+static uint8_t parse(char *cmd, uint8_t len, const Keyword *&e, int16_t *p, uint8_t &n) {
+    char *end = cmd + len;
+    *end = ',';  // sentinel (the line buffer has room for it)
     char *field_end = cmd;
     while (*field_end != ',') field_end++;
     char *a = cmd, *b = field_end;
     while (a < b && blank(*a)) a++;
     while (b > a && blank(b[-1])) b--;
-    if (a == b && field_end == end) return;  // blank: no reply
-    uint8_t kw = 0, lo = 0, hi = 0;
-    for (uint8_t k = 0; k < K_COUNT && !kw; k++) {
-        const Keyword *e = &KEYWORDS[k];
+    if (a == b && field_end == end) return 255;
+    e = 0;
+    for (uint8_t k = 0; k < K_COUNT && !e; k++) {
+        const Keyword *t = &KEYWORDS[k];
         uint8_t i = 0;
-        for (; a + i < b; i++) {
-            char c = a[i];
-            if (c >= 'a' && c <= 'z') c -= 32;
-            if (i >= sizeof(e->name) || c != (char)pgm_read_byte(&e->name[i])) break;
-        }
-        if (a + i == b && (i == sizeof(e->name) || pgm_read_byte(&e->name[i]) == 0)) {
-            kw = pgm_read_byte(&e->id);
-            lo = pgm_read_byte(&e->lo);
-            hi = pgm_read_byte(&e->hi);
-        }
+        for (; a + i < b; i++)
+            if (i >= sizeof(t->name) || upper(a[i]) != pgm_read_byte(&t->name[i])) break;
+        if (a + i == b && (i == sizeof(t->name) || pgm_read_byte(&t->name[i]) == 0)) e = t;
     }
-    if (!kw) return error(P_E_UNKNOWN);
+    if (!e) return P_E_UNKNOWN;
     uint8_t fields = 0;
     for (char *c = field_end; c < end; c++)
         if (*c == ',') fields++;
-    if (fields > P_PARAMS_MAX) return error(P_E_PARAM_COUNT);
-    int16_t p[P_PARAMS_MAX];
-    uint8_t n = 0;
-    char *c = field_end;
-    while (c < end) {
+    if (fields > P_PARAMS_MAX) return P_E_PARAM_COUNT;
+    uint8_t inf_at = pgm_read_byte(&e->inf);
+    bool wide = false;
+    n = 0;
+    for (char *c = field_end; c < end;) {
         c++;  // past the comma
-        while (c < end && blank(*c)) c++;
+        while (blank(*c)) c++;
         bool neg = false;
         if (*c == '-' || *c == '+') neg = *c++ == '-';
         int32_t v = 0;
-        uint8_t digits = 0;
-        for (; *c >= '0' && *c <= '9'; c++, digits++)
-            if (v < 100000) v = v * 10 + (*c - '0');
-        while (c < end && blank(*c)) c++;
-        if (!digits || *c != ',') return error(P_E_NOT_INTEGER);
+        if (n + 1 == inf_at && upper(c[0]) == 'I' && upper(c[1]) == 'N' && upper(c[2]) == 'F') {
+            v = P_INF;
+            c += 3;
+        } else {
+            uint8_t digits = 0;
+            for (; digit(*c); c++, digits++)
+                if (v < 100000) v = v * 10 + (*c - '0');
+            if (!digits) return P_E_NOT_INTEGER;
+        }
+        while (blank(*c)) c++;
+        if (*c != ',') return P_E_NOT_INTEGER;
         if (neg) v = -v;
-        if (v < -32768 || v > 32767) return error(P_E_RANGE16);
+        if (v < -32768 || v > 32767) wide = true;
         p[n++] = v;
     }
-    execute(kw, p, n, lo, hi);
+    return wide ? P_E_RANGE16 : 0;
+}
+
+// Handles one text command: its "#tag" and "*check" suffix (linecheck.split; a bad check is
+// ERROR 26, untagged, and nothing runs), then the body; the reply carries the command's suffix.
+static void handle(char *cmd, uint8_t len) {
+    uint8_t end = len;
+    bool checked = false;
+    if (len > 4 && cmd[len - 5] == '*') {
+        uint16_t want = 0;
+        bool all_hex = true;
+        for (uint8_t i = len - 4; i < len; i++) {
+            int8_t h = hex(cmd[i]);
+            if (h < 0) all_hex = false;
+            want = want << 4 | (h & 0xF);
+        }
+        if (all_hex) {
+            end = len - 5;
+            uint16_t crc = 0xFFFF;
+            for (uint8_t i = 0; i < end; i++) crc = crc16_update(crc, cmd[i]);
+            if (crc != want) return error(P_E_CHECKSUM);
+            checked = true;
+        }
+    }
+    uint8_t i = end;
+    while (i > 0 && end - i <= 4 && digit(cmd[i - 1])) i--;
+    uint8_t tag_at = i, tag_len = 0;
+    if (i > 0 && cmd[i - 1] == '#' && end - i >= 1 && end - i <= 4) {
+        tag_len = end - i;
+        end = i - 1;
+    }
+    const Keyword *e;
+    int16_t p[P_PARAMS_MAX];
+    uint8_t n;
+    uint8_t code = parse(cmd, end, e, p, n);
+    if (code == 255) return;
+    ReplySuffix &r = reply_suffix;
+    for (uint8_t k = 0; k < tag_len; k++) r.tag[k] = cmd[tag_at + k];
+    r.tag_len = tag_len;
+    r.check = checked;
+    if (code) error(code);
+    else execute(pgm_read_byte(&e->id), p, n, pgm_read_byte(&e->lo), pgm_read_byte(&e->hi));
+    r.tag_len = 0;
+    r.check = false;
 }
 
 // A binary command frame (controller.py `_frame`): the same checks and execution as text.
@@ -323,7 +418,7 @@ static void feed(char c) {
             overflow = false;
             error(P_E_TOO_LONG);
         } else if (line_len) {
-            handle(line);
+            handle(line, line_len);
         }
         line_len = 0;
         return;
@@ -349,9 +444,9 @@ static void sonar_poll() {
         }
         sonar_pending = false;
         sonar_last = cm;
-        if (sonar_period == 0 || cm < 0) return;
-        if ((sonar_low < sonar_high && sonar_low <= cm && cm <= sonar_high) ||
-            (sonar_low > sonar_high && (cm < sonar_high || cm > sonar_low))) {
+        if (guard.period == 0) return;
+        if (cm >= 0 && ((sonar_low < sonar_high && sonar_low <= cm && cm <= sonar_high) ||
+                        (sonar_low > sonar_high && (cm < sonar_high || cm > sonar_low)))) {
             if (binary) {
                 bin::event(T_RANGE, 1, cm, 2);
             } else {
@@ -360,10 +455,13 @@ static void sonar_poll() {
                 end_line();
             }
         }
-        if (ex.moving() && cm < sonar_stop) emergency_stop();
-    } else if (sonar_period && (int32_t)(now_ms - sonar_next) >= 0) {
-        sonar_next += sonar_period;
-        if ((int32_t)(now_ms - sonar_next) >= 0) sonar_next = now_ms + sonar_period;
+        guard.reading(cm);  // the guard re-limits a travel or calls the emergency stop
+        if (!ex.moving()) return;
+        if (ex.travelling()) relimit();
+        else if (guard.below_stop()) emergency_stop();  // ROTATE, POWER: the threshold alone
+    } else if (guard.period && (int32_t)(now_ms - sonar_next) >= 0) {
+        sonar_next += guard.period;
+        if ((int32_t)(now_ms - sonar_next) >= 0) sonar_next = now_ms + guard.period;
         sonar_pending = true;
         sonar_started = now_ms;
         sonar_trigger();
@@ -388,7 +486,7 @@ int main() {
     hal_init();
     cal_init();
     ex.init();
-    ex.set_mode(MODE_AT_RESET & UNO_MODE_MASK);
+    ex.set_mode(MODE_AT_RESET & (P_MODE_SIMULATION | P_MODE_CLOSED_LOOP));
     hello();
     last_ticks = hal_ticks();
     for (;;) {
@@ -397,10 +495,13 @@ int main() {
         last_ticks = t;
         tick_half = ticks & 1;
         int32_t dt = ticks >> 1;
-        us_part += dt % 1000;
-        now_ms += dt / 1000 + us_part / 1000;
-        us_part %= 1000;
+        us_part += dt;  // a pass lasts a few ms at most: subtracting beats dividing on the AVR
+        while (us_part >= 1000) {
+            us_part -= 1000;
+            now_ms++;
+        }
         ex.step(dt);
+        check_halt();
         for (int16_t c; (c = uart_read()) >= 0;) {
             if (binary) bin::feed(c);
             else feed(c);

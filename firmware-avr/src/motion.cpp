@@ -5,6 +5,9 @@
 
 #include "cal.h"
 #include "hal.h"
+#include "safety.h"
+
+#define BRAKED 0x7FFF  // applied[i] of a braked motor: the next power is written whatever it is
 
 Executor ex;
 
@@ -32,7 +35,7 @@ void Executor::init() {
 }
 
 void Executor::apply() {
-    bool sim = mode & P_MODE_SIMULATION;
+    bool sim = (mode & P_MODE_SIMULATION) || coast_us > 0;
     for (uint8_t i = 0; i < MOTORS; i++) {
         int16_t p = sim ? 0 : powers[i];
         if (p != applied[i]) {
@@ -62,9 +65,18 @@ bool Executor::stop() {
     kind = NONE;
     watchdog = false;
     feedback = dragging = false;
+    coast_us = 0;
+    speed = 0;
     for (uint8_t i = 0; i < MOTORS; i++) powers[i] = 0;
     apply();
     return was;
+}
+
+void Executor::brake() {
+    for (uint8_t i = 0; i < MOTORS; i++) {
+        motor_brake(i);
+        applied[i] = BRAKED;
+    }
 }
 
 void Executor::reset_move() {
@@ -83,6 +95,10 @@ void Executor::vel(int16_t vx, int16_t vy, int16_t w, int16_t t_ms) {
 
 void Executor::step(int32_t dt_us) {
     if (kind != NONE && !infinite) remaining -= dt_us;
+    if (coast_us > 0) {
+        coast_us -= dt_us;
+        if (coast_us <= 0) apply();
+    }
     for (uint8_t guard = 16; guard > 0; guard--) {  // motions started in one step at most
         if (kind == NONE) {
             if (!queue.count) break;
@@ -193,7 +209,7 @@ void Executor::move(int64_t carry) {
     float s = (L > 0) == (V > 0) ? abs(V) : -abs(V);
     float a = D * (float)(M_PI / 180);
     drive(s * 0.01f * cosf(a), s * 0.01f * sinf(a), s * C * 0.001f, false, gain);
-    if (!infinite) remaining = duration(abs(L), abs(V), model.scale) + carry;
+    if (!infinite) remaining = duration(abs(L), abs(V), time_scale) + carry;
 }
 
 void Executor::rotate(int16_t A, int16_t F, int64_t carry) {
@@ -209,8 +225,31 @@ void Executor::rotate(int16_t A, int16_t F, int64_t carry) {
 }
 
 void Executor::drive(float vx, float vy, float w, bool rotate, float gain) {
+    nominal[0] = vx;
+    nominal[1] = vy;
+    nominal[2] = w;
+    nominal[3] = gain;
+    float f = 1.0f;
+    if (vx != 0 || vy != 0) {
+        f = guard.factor(vx * 100.0f, vy * 100.0f);
+        if (f <= 0) {
+            halt = guard.code;
+            stop();
+            return;
+        }
+        warn_once(guard.flags);
+        vx *= f;
+        vy *= f;
+        w *= f;
+        slow_down(sqrtf(vx * vx + vy * vy) * 100.0f, f < 1.0f);
+    } else {
+        speed = 0;
+        coast_us = 0;
+    }
+    k = f;
     model.drag_gain = gain;
     uint8_t flags = model.compute(vx, vy, w, rotate, powers);
+    time_scale = model.scale * f;
     warn_once(flags);
     twist[0] = vx;
     twist[1] = vy;
@@ -228,11 +267,30 @@ void Executor::drive(float vx, float vy, float w, bool rotate, float gain) {
     apply();
 }
 
+// When the guard lowers the speed, coast (powers off) until the robot must have slowed to it:
+// reduced power alone decelerates far less than the stop deceleration the guard counts on.
+void Executor::slow_down(float v, bool limited) {
+    float bound = speed + GUARD_DECEL * coast_us * 1e-6f;  // fastest the robot can be going now
+    speed = v;
+    coast_us = limited && bound > v ? (int32_t)((bound - v) / GUARD_DECEL * 1e6f) : 0;
+}
+
+void Executor::relimit() {
+    if (!travelling()) return;
+    float f = guard.factor(nominal[0] * 100.0f, nominal[1] * 100.0f);
+    if (f == k) return;
+    float old = time_scale;
+    drive(nominal[0], nominal[1], nominal[2], rot, nominal[3]);
+    if (kind != NONE && !infinite && kind != K_VEL) remaining = (int64_t)(remaining * old / time_scale);
+}
+
 void Executor::warn_once(uint8_t flags) {
     uint8_t fresh = flags & ~warned;
     warned |= flags;
     if (fresh & SATURATED) on_warn(P_W_SPEED_REDUCED);
     if (fresh & DEADBAND) on_warn(P_W_POWER_TOO_LOW);
+    if (fresh & LIMITED) on_warn(P_W_SONAR_LIMIT);
+    if (fresh & UNCOVERED) on_warn(P_W_UNCOVERED);
 }
 
 void Executor::start_drag(uint8_t flags) {

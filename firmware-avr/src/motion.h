@@ -1,5 +1,6 @@
 // The command queue and the motion executor: timeline of MOVE/ROTATE/DELTA/POWER, VEL and its
-// watchdog, STOP, the remembered MOVE, the mode bits, the closed wheel-speed loop (firmware/motion.py).
+// watchdog, STOP, the remembered MOVE, the mode bits, the closed wheel-speed loop, the sonar guard's
+// speed limit (firmware/motion.py).
 #pragma once
 #include <stdint.h>
 
@@ -36,7 +37,13 @@ struct Executor {
     uint8_t warned;
     bool watchdog;
     int32_t watchdog_us;
-    float twist[3];
+    float twist[3];    // the twist driven (m/s, m/s, rad/s), after the guard's factor
+    float nominal[4];  // the twist commanded and the roller drag's gain, before the guard
+    float k;           // the guard's factor in force
+    float time_scale;  // saturation and guard factor: a finite MOVE's time is stretched by 1/time_scale
+    float speed;       // travel speed driven, cm/s
+    int32_t coast_us;  // left of coasting (powers off) down to a speed the guard lowered
+    uint8_t halt;      // the guard stopped the motion: W_SONAR_STOP or E_UNCOVERED, for the controller
     bool rot;
     bool dead;  // the last twist's powers fell in the dead band
     float ff[MOTORS], target[MOTORS];
@@ -49,9 +56,14 @@ struct Executor {
 
     void init();
     bool moving() const { return kind != NONE; }
+    bool travelling() const {
+        return (kind == K_MOVE || kind == K_DELTA || kind == K_VEL) && (nominal[0] != 0 || nominal[1] != 0);
+    }
     void set_mode(uint8_t m);
     void apply();
     bool stop();
+    void brake();    // after stop(): every motor braked (L298: EN high, IN1 = IN2 = 0) until the next power
+    void relimit();  // the guard's inputs changed: re-drive the travel with its new factor
     void reset_move();
     void vel(int16_t vx, int16_t vy, int16_t w, int16_t t_ms);
     void step(int32_t dt_us);
@@ -63,6 +75,7 @@ struct Executor {
     void move(int64_t carry);
     void rotate(int16_t a, int16_t f, int64_t carry);
     void drive(float vx, float vy, float w, bool rotate, float gain = 1.0f);
+    void slow_down(float v, bool limited);
     void warn_once(uint8_t flags);
     void start_drag(uint8_t flags);
     void drag_step();

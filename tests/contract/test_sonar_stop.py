@@ -1,18 +1,23 @@
-"""The sonar stop in the room world on the lockstep simulator (fixed seeds): the robot stops before
-the wall at every speed and angle it allows for, travel no sonar covers is limited or refused, and
-with the stop off nothing changes. benchmarks/sonar_stop.py runs the full grid."""
+"""The sonar stop in the room world (fixed seeds): the robot stops before the wall at every speed and
+angle it allows for, travel no sonar covers is limited or refused, and with the stop off nothing
+changes. On the lockstep simulator (``sim``) and on the Arduino UNO firmware in simavr with the same
+physics in the loop (``uno``, docs/uno.md; skipped with the reason without the AVR tools), timed by
+the simulator's clock. benchmarks/sonar_stop.py runs the full grid."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Iterator
 from contextlib import contextmanager
+from typing import Protocol
 
 import pytest
 
 from omnibot.client import ControllerError, EventRecorder, RobotClient, WarnEvent
 from omnibot.protocol import codes
+from omnibot.robot.description import RobotDescription
 from omnibot.sim.device import SimDevice
+from omnibot.sim.simulator import Simulator
 from omnibot.transport.lockstep import LockstepLink
 
 WALL = 0.0  # the room's west wall, x = 0
@@ -29,25 +34,60 @@ def start_pose(angle_deg: float, course_deg: float) -> tuple[float, float, float
     )
 
 
+class Device(Protocol):
+    """What the tests read of the robot: the simulator (ground truth) and the description."""
+
+    sim: Simulator
+    robot: RobotDescription
+
+
+@pytest.fixture(params=["sim", "uno"])
+def backend(request: pytest.FixtureRequest) -> str:
+    if request.param == "uno":
+        from omnibot.uno.emulator import missing_tools
+
+        reason = missing_tools()
+        if reason:
+            pytest.skip(f"uno backend: {reason}")
+    return str(request.param)
+
+
 @contextmanager
-def room(angle_deg: float, course_deg: float = 0.0, seed: int = 1) -> Iterator[tuple[RobotClient, SimDevice]]:
-    device = SimDevice("omni4", world="room", seed=seed, start_pose=start_pose(angle_deg, course_deg))
+def room(
+    backend: str, angle_deg: float, course_deg: float = 0.0, seed: int = 1
+) -> Iterator[tuple[RobotClient, Device]]:
+    pose = start_pose(angle_deg, course_deg)
+    if backend == "uno":
+        from omnibot.uno.hil import UnoHil, UnoLink
+
+        hil = UnoHil("omni4", world="room", seed=seed, start_pose=pose)
+        with RobotClient(UnoLink(hil, "uno://omni4"), "omni4", timeout=2.0) as client:
+            yield client, hil
+        return
+    device = SimDevice("omni4", world="room", seed=seed, start_pose=pose)
     with RobotClient(LockstepLink(device), "omni4", timeout=2.0) as client:
         yield client, device
 
 
-def gap(device: SimDevice) -> float:
+def wait(client: RobotClient, device: Device, seconds: float) -> None:
+    """Let ``seconds`` of the simulator's time pass (the emulated UNO may run slower than the wall)."""
+    end = device.sim.time + seconds
+    while device.sim.time < end:
+        client.sleep(0.02)
+
+
+def gap(device: Device) -> float:
     """Least distance between the robot's outline and the west wall, m."""
     pose = device.sim.pose
     c, s = math.cos(pose.theta), math.sin(pose.theta)
     return min(pose.x + c * x - s * y for x, y in device.robot.footprint.outline()) - WALL
 
 
-def drive(client: RobotClient, device: SimDevice, seconds: float) -> float:
-    """Let the robot run for ``seconds``; the least wall gap on the way (m)."""
+def drive(client: RobotClient, device: Device, seconds: float) -> float:
+    """Let the robot run for ``seconds`` of simulated time; the least wall gap on the way (m)."""
     least = gap(device)
-    end = client.clock.now() + seconds
-    while client.clock.now() < end:
+    end = device.sim.time + seconds
+    while device.sim.time < end:
         client.sleep(0.02)
         least = min(least, gap(device))
     return least
@@ -56,8 +96,8 @@ def drive(client: RobotClient, device: SimDevice, seconds: float) -> float:
 @pytest.mark.parametrize("stop", [0.10, 0.25])
 @pytest.mark.parametrize("angle", [30, 90, 135])
 @pytest.mark.parametrize("speed", [0.5, 1.0])
-def test_stops_before_the_wall(speed: float, angle: int, stop: float) -> None:
-    with room(angle) as (client, device):
+def test_stops_before_the_wall(backend: str, speed: float, angle: int, stop: float) -> None:
+    with room(backend, angle) as (client, device):
         rec = EventRecorder()
         client.add_listener(rec, WarnEvent)
         client.sonar(1, 0.06, 0.0, 0.0, stop)
@@ -73,39 +113,39 @@ def test_stops_before_the_wall(speed: float, angle: int, stop: float) -> None:
         assert math.hypot(device.sim.twist.vx, device.sim.twist.vy) < 0.01
 
 
-def test_uncovered_travel_is_limited() -> None:
-    with room(90, course_deg=90) as (client, device):
+def test_uncovered_travel_is_limited(backend: str) -> None:
+    with room(backend, 90, course_deg=90) as (client, device):
         rec = EventRecorder()
         client.add_listener(rec, WarnEvent)
         client.sonar(1, 0.06, 0.0, 0.0, 0.25)
         client.move(math.inf, 1.0, course=math.pi / 2)
-        client.sleep(1.5)
+        wait(client, device, 1.5)
         speed = math.hypot(device.sim.twist.vx, device.sim.twist.vy)
         assert 0.2 < speed < 0.36  # omni4's uncovered speed, 0.3 m/s
         assert [w.code for w in rec.of(WarnEvent)] == [codes.W_UNCOVERED]
         client.stop()
 
 
-def test_uncovered_travel_is_refused_with_mode_bit_3() -> None:
-    with room(90, course_deg=90) as (client, device):
+def test_uncovered_travel_is_refused_with_mode_bit_3(backend: str) -> None:
+    with room(backend, 90, course_deg=90) as (client, device):
         client.mode(codes.MODE_REFUSE_UNCOVERED)
         client.sonar(1, 0.06, 0.0, 0.0, 0.25)
         with pytest.raises(ControllerError) as info:
             client.move(math.inf, 1.0, course=math.pi / 2)
         assert info.value.code == codes.E_UNCOVERED
-        client.sleep(0.5)
+        wait(client, device, 0.5)
         assert device.sim.pose.x == pytest.approx(start_pose(90, 90)[0], abs=1e-3)
         assert client.status().mode == codes.MODE_REFUSE_UNCOVERED
 
 
-def test_stop_off_drives_as_before() -> None:
+def test_stop_off_drives_as_before(backend: str) -> None:
     """RANGE events without a stop threshold: full speed sideways and into the wall, no warnings."""
-    with room(90) as (client, device):
+    with room(backend, 90) as (client, device):
         rec = EventRecorder()
         client.add_listener(rec, WarnEvent)
         client.sonar(1, 0.06, 0.0, 1.0, 0.0)
         client.move(math.inf, 1.0)
-        client.sleep(2.5)
+        wait(client, device, 2.5)
         assert device.sim.collisions  # nothing stops it
         assert rec.events == []
         client.stop()

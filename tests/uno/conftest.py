@@ -9,6 +9,7 @@ from collections.abc import Iterator
 
 import pytest
 
+from omnibot.protocol import codes
 from omnibot.uno.emulator import UnoEmulator, missing_tools
 
 
@@ -55,7 +56,7 @@ def start(robot: str, range_cm: int | None = None, report: bool = False) -> tupl
         pytest.skip(f"emulated UNO: {reason}")
     emu = UnoEmulator(robot, range_cm=range_cm, report=report)
     port = Port(emu.path)
-    assert port.lines(1) == [f"HELLO,1,{robot},4"]
+    assert port.lines(1) == [f"HELLO,{codes.PROTOCOL_VERSION},{robot},4"]
     return emu, port
 
 

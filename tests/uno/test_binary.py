@@ -1,5 +1,6 @@
 """The UNO firmware's binary protocol against the MicroPython firmware's: the same frames answer
-the same frames (sequence numbers, duplicates, SYNC, events, every error a frame can trigger)."""
+the same frames (version 2: length byte, CRC-32; sequence numbers, seq 0 dropped, duplicates, SYNC,
+events, every error a frame can trigger, damaged frames dropped, the probe in text and in binary)."""
 
 from __future__ import annotations
 
@@ -19,16 +20,22 @@ from .conftest import start
 MOVE = codes.MOVE
 
 
-def _bad_crc() -> bytes:
-    good = bytearray(encode_message(codes.STATUS, 9))
-    good[3] ^= 0x01
-    return bytes(good)
+def _damaged(index: int, mask: int) -> bytes:
+    frame = bytearray(encode_message(codes.STATUS, 9))
+    frame[index] ^= mask
+    return bytes(frame)
+
+
+VERSION = codes.PROTOCOL_VERSION
+PROBE = encode_message(codes.HELLO, 1, [VERSION], sync=True) + b";\r\n"
 
 
 # Each step: bytes the host sends. Frames are compared decoded: (type, seq, SYNC, integers, text).
 STEPS: list[bytes] = [
+    PROBE,  # text: ERROR lines for the garbage
     b"MODE,4\n",
-    encode_message(codes.HELLO, 1, [1], sync=True),
+    encode_message(codes.HELLO, 1, [VERSION], sync=True),
+    encode_message(codes.STATUS, 0),  # seq 0 is never a command: dropped
     encode_message(codes.STATUS, 2),
     encode_message(MOVE, 3, [0, 20, 0, 0]),  # ERROR 28
     encode_frame(13, 4),  # ERROR 23: unknown type
@@ -38,16 +45,22 @@ STEPS: list[bytes] = [
     encode_message(MOVE, 6, [40000, 40, 0, 0]),  # duplicate: the kept reply again
     encode_message(codes.STATUS, 2),  # duplicate of a STATUS
     encode_message(codes.STATUS, 12),  # out of order: no answer
-    _bad_crc(),  # no answer
+    _damaged(3, 0x01),  # a bit of the body: the CRC fails, no answer
+    _damaged(2, 0x02),  # the length byte: no answer
+    _damaged(-2, 0x10),  # the top check byte above 0x8F: no answer
+    encode_message(codes.STATUS, 9)[:-4] + b"\x00",  # cut short: no answer
     encode_message(MOVE, 8, [30000, 40, 30, 0]),
     encode_message(codes.STATUS, 9),
     # OK, then the IDLE event (seq 1, SYNC), acknowledged at once (before its 50 ms retry)
     encode_message(codes.STOP, 10, sync=True) + encode_frame(codes.ACK, 1),
     encode_message(codes.TELEM, 11, [0, 0]),
     encode_message(codes.CAL, 12, [18, 0, 0, 0]),  # ERROR 38
-    encode_message(codes.HELLO, 13, [2]),  # ERROR 39
+    encode_message(codes.HELLO, 13, [1]),  # ERROR 39: version 1 is withdrawn
     encode_message(codes.MODE, 14, [0]),  # back to text after this OK frame
     b"STATUS\n",
+    b"MODE,4\n",
+    PROBE,  # binary: the HELLO reply, the text terminators dropped as garbage
+    encode_message(codes.MODE, 2, [0]),
 ]
 
 

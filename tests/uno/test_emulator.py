@@ -10,13 +10,20 @@ import pytest
 
 from omnibot.firmware.config import build_config
 from omnibot.firmware.controller import Controller
-from omnibot.protocol import codes
+from omnibot.protocol import codes, linecheck
 from omnibot.protocol.frame import encode_message
 from omnibot.robot.description import load_robot
 from omnibot.uno.emulator import FIRMWARE_DIR, UnoEmulator
 from tests.firmware.fakehal import FakeHAL
 
 from .conftest import Port, start
+
+
+def checked(command: str, tag: str | None = None) -> str:
+    """``command`` with a tag (if given) and its CRC-16 check suffix."""
+    data = command.encode()
+    return (data + linecheck.suffix(data, None if tag is None else tag.encode(), True)).decode()
+
 
 # Command scripts; each line is sent as one write and answered line by line.
 SCRIPT = [
@@ -43,6 +50,21 @@ SCRIPT = [
     "MOVE,500,40,0,0;MOVE,1,29,0,0;DELTA,1000,0,0,0,0;ROTATE,90,0;POWER,0,1,1,1,1;VEL,0,0,0,0",
     "SONAR,2,60,0,0,0;SONAR,1,59,0,0,0;TELEM,5,1;TELEM,100,256;MODE,16;HELLO,2;HELLO,3,1",
     "FOO;MOVE,x,1,1,1;move , 1 , +40 , 0 , -0;STATUS,1;MOVE,40000,1,1,1;" + "9" * 70,
+    "STOP;STATUS",
+    # the sonar stop's guard: uncovered travel refused with MODE bit 3 (ERROR 41), or limited (WARN 15)
+    "SONAR,1,60,0,0,25;MODE,8;MOVE,30000,40,90,0;VEL,0,30,0,100;MOVE,30000,40,0,0;STATUS;STOP",
+    "MODE,0;MOVE,30000,100,90,0;STATUS;STOP;SONAR,1,0,0,0,0;MOVE,30000,100,90,0;STATUS;STOP",
+    # a motion that turns uncovered while running is stopped (WARN 16)
+    "SONAR,1,60,0,0,25;MODE,8;MOVE,30000,40,0,0;DELTA,0,0,90,0,1;STATUS;MODE,0;SONAR,1,0,0,0,0;STOP",
+    # separators (VT and FF are not spaces), syntax before ranges, INF tokens where allowed
+    "MOVE,\x0b1,40,0,0;\x0b;MOVE,1,40,0,0\x0c;\t ;MOVE,99999,x,0,0;MOVE,99999,40,0,0;SONAR,1,inf,0,0,0",
+    "MOVE,inf,60,0,0;STATUS;STOP;ROTATE,-Inf,90;STATUS;STOP;ROTATE,+INF,90;STOP;MOVE,1,INF,0,0",
+    "DELTA,0,0,0,0,INF;STOP;DELTA,0,0,0,0,-INF;DELTA,0,0,0,inf,0;POWER,INF,1,1,1,1;MOVE,INFX,40,0,0",
+    # tags and checks: echoed in the reply; a bad check is ERROR 26 untagged; not a suffix: refused
+    "HELLO#1;" + checked("HELLO", "2") + ";" + checked("STATUS") + ";MOVE,2,40,0,0#17;STOP#9999",
+    checked("MOVE,30000,40,0,0", "3") + ";" + checked("STATUS", "4") + ";" + checked("STOP", "5"),
+    "STATUS*0000;STATUS#1*0000;FOO#6;MOVE,1#7;STATUS#12345;STATUS#;STATUS*12G4;#5;" + checked("", "8"),
+    checked("MOVE,99999,40,0,0", "33") + ";" + checked("VEL,1,1,1,0") + ";" + checked("DELTA,1,1") + ";",
     "STOP;STATUS",
 ]
 POWERS = re.compile(r"POWER((?:,-?\d+)+);")
@@ -93,7 +115,7 @@ def test_calibration_survives_a_power_cycle() -> None:
         assert port.ask("CAL,0,0,0,2000;MOVE,30000,40,30,0;STATUS;STOP", 5)[2] != before
         changed = port.ask("MOVE,30000,40,30,0;STATUS;STOP", 4)[1]
         emu.command("reset")
-        assert port.lines(1) == ["HELLO,1,omni4,4"]
+        assert port.lines(1) == [f"HELLO,{codes.PROTOCOL_VERSION},omni4,4"]
         assert port.ask("MOVE,30000,40,30,0;STATUS;STOP", 4)[1] == changed  # K from the EEPROM
         port.ask("CAL,0,0,0,1449")  # the preset's K again
     finally:
@@ -104,15 +126,16 @@ def test_calibration_survives_a_power_cycle() -> None:
 def test_static_ram_and_measured_stack_fit() -> None:
     emu, port = start("omni4", range_cm=100)
     try:
-        port.ask("SONAR,1,60,0,500,0;TELEM,10,255", 2)
+        port.ask("SONAR,1,60,0,500,20;TELEM,10,255", 2)  # the sonar stop armed: the guard runs
         port.write("MOVE,2,40,0,0;DELTA,0,0,10,0,10;VEL,30,30,100,200\n")
         port.lines(3)
+        time.sleep(0.3)
         port.ask("STOP;TELEM,0,0;SONAR,1,0,0,0,0", 3)
         # and a binary session: frames in and out, TEL frames, events
         port.ask("MODE,4")
         for k, frame in enumerate(
             [
-                encode_message(codes.HELLO, 1, [1], sync=True),
+                encode_message(codes.HELLO, 1, [codes.PROTOCOL_VERSION], sync=True),
                 encode_message(codes.TELEM, 2, [10, 255]),
                 encode_message(codes.MOVE, 3, [10, 40, 30, 20]),
                 encode_message(codes.STATUS, 4),
@@ -134,7 +157,7 @@ def test_static_ram_and_measured_stack_fit() -> None:
 def test_hello_names_the_robot(robot: str) -> None:
     emu, port = start(robot)
     try:
-        assert port.ask("HELLO") == [f"HELLO,1,{robot},4"]
+        assert port.ask("HELLO") == [f"HELLO,{codes.PROTOCOL_VERSION},{robot},4"]
     finally:
         port.close()
         emu.close()

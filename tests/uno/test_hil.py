@@ -6,6 +6,7 @@ import threading
 
 import pytest
 
+from omnibot.protocol import codes
 from omnibot.uno.emulator import missing_tools
 from omnibot.uno.hil import UnoHil
 
@@ -21,7 +22,7 @@ def test_move_turns_the_simulated_wheels_and_the_sonar_sees_the_room() -> None:
     runner.start()
     port = Port(hil.path)
     try:
-        assert port.lines(1) == ["HELLO,1,omni4,4"]
+        assert port.lines(1) == [f"HELLO,{codes.PROTOCOL_VERSION},omni4,4"]
         assert port.ask("SONAR,1,60,0,500,0") == ["OK"]
         ranges = [int(line.split(",")[2]) for line in port.lines(3) if line.startswith("RANGE,1,")]
         assert ranges and all(20 <= cm <= 500 for cm in ranges), ranges

@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from omnibot.errors import ConfigError
+from omnibot.firmware import safety
 from omnibot.firmware.config import build_config
 from omnibot.protocol import codes
 from omnibot.robot.description import load_robot
@@ -69,6 +70,37 @@ _PWM_REGS = {"D3": ("OCR2B", "TCCR2A", "COM2B1"), "D5": ("OCR0B", "TCCR0A", "COM
 _PWM_REGS.update({"D6": ("OCR0A", "TCCR0A", "COM0A1"), "D11": ("OCR2A", "TCCR2A", "COM2A1")})
 # Pin-change interrupt group of each port (PCINT0..7 = PB, 8..14 = PC, 16..23 = PD).
 _PCINT = {"B": (0, 0), "C": (1, 8), "D": (2, 16)}
+
+
+def _guard(w: Any, cfg: dict[str, Any]) -> None:
+    """The sonar stop's constants (firmware/safety.py) for the UNO's one sonar (zeros without one)."""
+    axis = (cfg["sonar_axes"] or [[0.0, safety.HALF_CONE_DEG, 0.0, 0.0]])[0]
+    w("/* sonar stop (safety.py): sonar 1's axis, half cone (rad), footprint lead and half width (cm); */")
+    w("/* the stop deceleration (cm/s^2), slowest and uncovered speeds (cm/s), a loop pass + latency (ms) */")
+    w(f"#define GUARD_AX {math.cos(math.radians(float(axis[0])))!r}f")
+    w(f"#define GUARD_AY {math.sin(math.radians(float(axis[0])))!r}f")
+    w(f"#define GUARD_HALF {math.radians(float(axis[1]))!r}f")
+    w(f"#define GUARD_LEAD {float(axis[2])!r}f")
+    w(f"#define GUARD_WIDTH {float(axis[3])!r}f")
+    w(f"#define GUARD_DECEL {float(cfg.get('stop_decel_cms2', 100.0))!r}f")
+    w(f"#define GUARD_V_MIN {float(cfg['speed_min_cms'])!r}f")
+    w(f"#define GUARD_UNCOVERED {float(cfg.get('uncovered_speed_cms', 25.0))!r}f")
+    w(f"#define GUARD_LOOP_MS {1000.0 / float(cfg.get('loop_hz', 500)) + safety.LATENCY_MS!r}f")
+    w(f"#define GUARD_SOUND_CMS {safety.SOUND_CMS!r}f")
+    steps = [safety.INCIDENCE_MAX * k / safety.INCIDENCE_STEPS for k in range(1, safety.INCIDENCE_STEPS + 1)]
+    w(f"#define GUARD_STEPS {safety.INCIDENCE_STEPS}")
+    w(f"#define GUARD_STEP {safety.INCIDENCE_MAX / safety.INCIDENCE_STEPS!r}f")
+    w("/* the wall incidences the room allows for (travel_room): cos and sin of each */")
+    w(
+        "static const float GUARD_COS[GUARD_STEPS] PROGMEM = {"
+        + ", ".join(f"{math.cos(a)!r}f" for a in steps)
+        + "};"
+    )
+    w(
+        "static const float GUARD_SIN[GUARD_STEPS] PROGMEM = {"
+        + ", ".join(f"{math.sin(a)!r}f" for a in steps)
+        + "};"
+    )
 
 
 def _c_string(text: str) -> str:
@@ -146,14 +178,16 @@ def header_source(robot_name: str) -> str:
         w(f"#define T_{key} {getattr(codes, key)}")
     for key in ("FRAME_SYNC", "FRAME_MAX", "SEQ_MAX", "WINDOW", "RETRY_TIMEOUT_MS", "RETRIES"):
         w(f"#define P_{key} {getattr(codes, key)}")
-    w("/* keyword, id, fewest and most parameters (POWER: T and one power per motor) */")
-    w("struct Keyword { char name[7]; uint8_t id, lo, hi; };")
+    w("/* keyword, id, fewest and most parameters (POWER: T and one power per motor), the number (1..) of")
+    w("   the parameter that may be INF (0: none; codes.INF_PARAMS) */")
+    w("struct Keyword { char name[7]; uint8_t id, lo, hi, inf; };")
     w("static const Keyword KEYWORDS[K_COUNT] PROGMEM = {")
     for name, kid in codes.COMMANDS.items():
         lo, hi = codes.PARAM_COUNTS[kid]
         if kid == codes.POWER:
             lo = hi = n + 1
-        w(f"    {{{_c_string(name)}, {kid}, {lo}, {hi}}},")
+        inf = codes.INF_PARAMS.get(kid, -1) + 1
+        w(f"    {{{_c_string(name)}, {kid}, {lo}, {hi}, {inf}}},")
     w("};")
     for code, text in sorted(codes.TEXTS.items()):
         w(f"static const char TEXT_{code}[] PROGMEM = {_c_string(text)};")
@@ -195,6 +229,7 @@ def header_source(robot_name: str) -> str:
     w(f"#define SPEED_KP {float(cfg['speed_kp'])!r}f")
     w(f"#define SPEED_KI {float(cfg['speed_ki'])!r}f")
     w(f"#define MODE_AT_RESET {int(cfg['mode'])}")
+    _guard(w, cfg)
     w("")
     w("/* ---- kinematics: rim speed (m/s) per unit twist, fixed point: RIM_Q[i][j] / 2^RIM_SHIFT ---- */")
     shift = _fixed_shift(cfg["rim"])

@@ -45,9 +45,16 @@ BATTERY_PERIOD = 0.1  # s between battery updates
 class UnoHil:
     """The emulated UNO of ``robot`` with omnibot's physics of the same robot in ``world``."""
 
-    def __init__(self, robot: str, *, world: str | None = "room", seed: int = 1) -> None:
+    def __init__(
+        self,
+        robot: str,
+        *,
+        world: str | None = "room",
+        seed: int = 1,
+        start_pose: tuple[float, float, float] | None = None,
+    ) -> None:
         self.robot = load_robot(robot)
-        self.sim = Simulator(self.robot, world=world, seed=seed)
+        self.sim = Simulator(self.robot, world=world, seed=seed, start_pose=start_pose)
         self.emu = UnoEmulator(robot, lockstep=True)
         self.path = self.emu.path
         encoder_index = {e.wheel: k for k, e in enumerate(self.robot.encoders.motors)}
