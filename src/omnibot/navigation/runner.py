@@ -20,7 +20,6 @@ import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
@@ -32,11 +31,12 @@ from omnibot.control.followers.base import STOP, Command, Follower, State
 from omnibot.control.paths.path import Path
 from omnibot.errors import OmnibotError
 from omnibot.estimation.estimator import Estimator, PoseEstimator, make_estimator
-from omnibot.estimation.odometry import Pose2D
 from omnibot.estimation.slip import SlipParameters
+from omnibot.motion import Pose2D
 from omnibot.progress import Progress
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription
+from omnibot.transport.device import find_simulator
 
 WATCHDOG = 0.15
 """VEL watchdog, s: the motors stop this long after the last command if the host goes quiet."""
@@ -104,19 +104,6 @@ class FrameMap:
             self.path_start.y + self.s * dx + self.c * dy,
             theta + self.dth,
         )
-
-
-def simulator_of(client: RobotClient) -> Any | None:
-    """The in-process simulator behind a ``sim://`` link (None for any other link)."""
-    link: Any = client.link
-    for _ in range(4):
-        device = getattr(link, "device", None)
-        if device is not None:
-            return getattr(device, "sim", None)
-        link = getattr(link, "inner", None) or getattr(link, "link", None)
-        if link is None:
-            return None
-    return None
 
 
 def ramp_fraction(t: float, total: float, ramp: float) -> float:
@@ -210,7 +197,7 @@ class Navigator:
             any(e.wheel == w.name for e in robot.encoders.motors) for w in robot.wheels
         )
         self.binary = binary
-        self.sim = simulator_of(client)
+        self.sim = find_simulator(client.link)
         self.frame: FrameMap | None = None
         self._offset = math.inf
         self._offset_time = 0.0

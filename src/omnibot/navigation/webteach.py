@@ -27,8 +27,8 @@ from omnibot.control.followers.base import Follower, State, make_follower
 from omnibot.control.paths.path import Path
 from omnibot.control.paths.teach import PathRecorder
 from omnibot.estimation.estimator import PoseEstimator
-from omnibot.estimation.odometry import Pose2D
 from omnibot.estimation.slip import SlipParameters
+from omnibot.motion import Pose2D
 from omnibot.navigation.runner import submit_vel
 from omnibot.navigation.session import follower_limits
 from omnibot.robot.description import RobotDescription

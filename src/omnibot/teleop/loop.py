@@ -25,9 +25,10 @@ from typing import Protocol
 from omnibot.client.client import RobotClient
 from omnibot.client.errors import EmergencyStopLatched
 from omnibot.errors import ControllerError, LinkError
+from omnibot.motion import Twist
 from omnibot.teleop.config import TeleopConfig
 from omnibot.teleop.deadman import Action, Deadman, Sample
-from omnibot.teleop.mapping import JoyState, Twist, TwistLimits, joy_to_command, limit_twist
+from omnibot.teleop.mapping import JoyState, TwistLimits, joy_to_command, limit_twist
 from omnibot.teleop.pacing import Pacer
 
 log = logging.getLogger("omnibot.teleop")

@@ -35,14 +35,13 @@ from omnibot.client.client import RobotClient
 from omnibot.client.events import ErrorEvent, Event, ResetEvent, WarnEvent
 from omnibot.client.session import leave
 from omnibot.errors import ControllerError, LinkError
-from omnibot.estimation.odometry import Pose2D
+from omnibot.motion import Pose2D, Twist
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription
 from omnibot.teleop.config import TeleopConfig
 from omnibot.teleop.deadman import Deadman, Sample
 from omnibot.teleop.mapping import (
     JoyState,
-    Twist,
     TwistLimits,
     axes_tuple,
     fractions_to_twist,
@@ -50,7 +49,7 @@ from omnibot.teleop.mapping import (
     limit_twist,
 )
 from omnibot.teleop.pacing import Pacer
-from omnibot.teleop.simlink import sim_device
+from omnibot.transport.device import find_device
 from omnibot.web.messages import Drive, EStop, Joy, Resume, Teach
 from omnibot.web.state import StateTracker
 from omnibot.web.teach import NOT_AVAILABLE, TeachRepeat
@@ -108,7 +107,7 @@ class RobotLink:
         self._wall, self._sleep = wall, sleep
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
-        self._device = sim_device(client.link)
+        self._device = find_device(client.link)
         truth = self._truth()
         self.tracker = StateTracker(robot, client.link.url, Pose2D(*truth) if truth else start)
         self.deadman = Deadman(self.config.input_timeout, self.config.stop_repeats)

@@ -23,21 +23,11 @@ from typing import Any, ClassVar, TypeVar
 from omnibot.control.paths.path import Path
 from omnibot.control.paths.profile import MotionLimits, SpeedProfile, time_optimal_profile
 from omnibot.errors import ConfigError
+from omnibot.motion import Estimate
 
-
-@dataclass(frozen=True)
-class State:
-    """The robot's estimated state: world pose and world-frame velocity at time ``t`` (s)."""
-
-    t: float
-    x: float
-    y: float
-    theta: float
-    vx: float = 0.0
-    vy: float = 0.0
-    w: float = 0.0
-    slipping: bool = False
-    """The estimator saw the wheels slip (its velocity is then less trustworthy)."""
+State = Estimate
+"""The robot's estimated state: world pose and world-frame velocity at time ``t`` (s); the
+estimators' :class:`~omnibot.motion.Estimate` itself."""
 
 
 @dataclass(frozen=True)
