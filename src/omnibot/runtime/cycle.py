@@ -19,6 +19,9 @@ class Notice:
     level: Level
     text: str
     source: str = ""
+    kind: str = ""
+    """``"control"`` for a change of the source in control (logs and the page show them; a CLI's
+    status lines need not)."""
 
 
 @dataclass(frozen=True)

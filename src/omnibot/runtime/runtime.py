@@ -242,7 +242,7 @@ class Runtime:
             text = (
                 f"in control: {decision.reason}" if decision.source else f"nobody drives: {decision.reason}"
             )
-            cycle.notices.append(Notice(level, text))
+            cycle.notices.append(Notice(level, text, kind="control"))
             log.log(logging.WARNING if decision.lock else logging.INFO, "%s", text)
         self.decision = cycle.decision = decision
         if decision.twist is not None:
@@ -312,8 +312,7 @@ class Runtime:
     def _failed(self, source: str, exc: BaseException, line: str = "") -> None:
         self.sent.errors += 1
         if isinstance(exc, EmergencyStopLatched):
-            self._latch()
-            self._notices.append(Notice("error", f"{source}: refused, {LATCHED_TEXT}", source))
+            self._latch()  # one notice for everyone; the refused source sees cycle.latched
             return
         text = f"the controller refused {line}: {exc}" if line else f"command failed: {exc}"
         if self._last_error.get(source) != text:

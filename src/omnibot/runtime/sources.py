@@ -33,7 +33,7 @@ from omnibot.control.paths.path import Path
 from omnibot.motion import Estimate, Twist
 from omnibot.runtime.cycle import Cycle
 from omnibot.teleop.config import TeleopConfig
-from omnibot.teleop.deadman import Deadman, Phase, Sample, Why
+from omnibot.teleop.deadman import Action, Deadman, Phase, Sample, Why
 from omnibot.teleop.mapping import JoyState, TwistLimits, joy_to_command, limit_twist
 
 APPROACH_GAP = 0.02
@@ -75,6 +75,8 @@ class DeadmanSource:
         self.config = config
         self.deadman = Deadman(config.input_timeout, config.stop_repeats)
         self.sample: Sample | None = None
+        self.action = Action(None)
+        """The deadman's action of the last cycle."""
         self.ended: Why | None = None
         """Why driving ended on the last cycle it did (None otherwise)."""
         self.twist: Twist | None = None
@@ -90,6 +92,7 @@ class DeadmanSource:
 
     def propose(self, cycle: Cycle) -> Proposal | None:
         action = self.deadman.update(cycle.now, self.read(cycle.now))
+        self.action = action
         self.ended = action.ended
         self.twist = action.twist
         if action.twist is None:
@@ -129,12 +132,16 @@ class PadSource(DeadmanSource):
         super().__init__(name or device.name, config, priority=priority)
         self.device = device
         self.limits = limits
+        self.closing = False
+        """Set when teleop ends: the pad reads as gone, so the deadman sends its stop sequence."""
 
     @property
     def quit(self) -> bool:
         return self.device.quit
 
     def read(self, now: float) -> Sample | None:
+        if self.closing:
+            return None
         joy = self.device.read(now)
         if joy is None:
             return None
