@@ -53,8 +53,8 @@ def test_repeat_drives_back_to_the_start_then_follows_the_path(taught: tuple[Ste
     path = teacher.path
     assert path is not None
     stepper.link.submit(Teach(type="teach", action="follow"))
-    state = stepper.run(0.5, Drive(type="drive", vx=-0.5))  # page input is ignored while following
-    assert state["drive"]["state"] == "following"
+    state = stepper.run(0.5)
+    assert state["drive"]["state"] == "following" and state["drive"]["control"] == "repeat"
     assert any("driving" in text and "to its start first" in text for text in stepper.logs())
     trail = []
     for _ in range(200):
@@ -79,19 +79,44 @@ def test_estop_ends_a_repeat_and_bad_order_is_explained(taught: tuple[Stepper, P
     stepper.run(0.3)
     stepper.link.submit(EStop(type="estop"))
     state = stepper.run(0.3)
-    assert state["drive"]["state"] == "estop" and teacher.follower is None
-    client = stepper.link.client
-    assert teacher.command("record", client, None).startswith("teaching")
-    assert teacher.command("follow", client, None) == "stop teaching first"
-    assert "too short" in teacher.command("stop", client, None)
-    assert teacher.command("stop", client, None) == "nothing to stop"
+    assert state["drive"]["state"] == "estop" and teacher.source is None
+    assert any(t.startswith("repeat ended") and "emergency stop (page)" in t for t in stepper.logs())
+    assert teacher.command("record", None).startswith("teaching")
+    assert teacher.command("follow", None) == "stop teaching first"
+    assert "too short" in teacher.command("stop", None)
+    assert teacher.command("stop", None) == "nothing to stop"
     with pytest.raises(ValueError, match="unknown teach action"):
-        teacher.command("dance", client, None)
+        teacher.command("dance", None)
+
+
+def test_the_page_takes_over_from_a_repeat_and_hands_back(taught: tuple[Stepper, PathTeacher]) -> None:
+    stepper, teacher = taught
+    path = teacher.path
+    assert path is not None
+    stepper.link.submit(Teach(type="teach", action="follow"))
+    stepper.run(0.6)
+    state = stepper.run(0.4, Drive(type="drive", vy=-0.5))  # the page outranks the repeat
+    assert state["drive"]["state"] == "driving" and state["drive"]["control"] == "page"
+    assert "page (priority 100) over repeat" in state["drive"]["reason"]
+    assert teacher.source is not None and teacher.source.overrides == 1
+    stepper.run(1.0, Drive(type="drive", enable=False))  # let go: the stop sequence, then the repeat
+    state = stepper.run(0.1)
+    assert state["drive"]["control"] == "repeat" and state["drive"]["state"] == "following"
+    for _ in range(200):
+        state = stepper.run(0.1)
+        if state["drive"]["state"] != "following":
+            break
+    assert teacher.source is None, "the repeat did not finish after it was handed back"
+    est = stepper.link.runtime.estimate_now()
+    assert est is not None and math.hypot(est.x - path.x[-1], est.y - path.y[-1]) < 0.02
+    end = truth(stepper.link.client).pose  # the hard sideways push cost the odometry ~3 cm
+    assert math.hypot(end.x - path.x[-1], end.y - path.y[-1]) < 0.05
+    assert "repeat finished" in stepper.logs()
 
 
 def test_gains_scale_with_the_control_period() -> None:
     assert gains_for(0.01)["cross"] == 45.0
     slow = gains_for(0.05)
-    assert slow["cross"] * 0.05 < 0.5 and slow["lead"] == pytest.approx(0.09)
+    assert slow["cross"] * 0.05 < 0.5 and slow["lead"] == pytest.approx(0.065)
     with pytest.raises(ValueError, match="must be positive"):
         PathTeacher(load_robot("omni4"), period=0.0)

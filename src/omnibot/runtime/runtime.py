@@ -89,7 +89,7 @@ class Runtime:
     teleop). ``vel_timeout`` is the VEL watchdog of a source without its own ``watchdog``.
     ``wait_replies``: send each VEL and wait for its reply (a refusal is known within the cycle; for
     loops of 20 Hz); otherwise VEL is submitted and its reply collected at the next cycle (100 Hz
-    loops: no round trip inside the cycle). Either way a refused command or a latched emergency stop
+    loops: no round trip inside the cycle). A source's own ``wait_reply`` attribute overrides it. Either way a refused command or a latched emergency stop
     becomes a :class:`Notice` every sink (every front end) and the refused source are handed.
     """
 
@@ -124,6 +124,12 @@ class Runtime:
         """The controller's state from its telemetry (codes.STATE_*), None until one carries it."""
         self.last_twist: Twist | None = None
         self.cycles = 0
+        self.samples = 0
+        """Telemetry samples received so far."""
+        self.rtt: float | None = None
+        """Round trip of the last VEL whose reply was awaited, s (link clock)."""
+        self.error_hooks: list[Callable[[str, BaseException], object]] = []
+        """Called with (source, exception) when a command fails (after the notice)."""
         self._offset = math.inf
         self._offset_time = 0.0
         self._telemetry: list[Telemetry] = []
@@ -180,6 +186,7 @@ class Runtime:
         self._pending.clear()
 
     def _on_telemetry(self, event: Telemetry) -> None:
+        self.samples += 1
         lag = event.time - event.controller_time
         # the least-delayed sample gives the clock offset (allowed to creep up 20 us/s for drift)
         self._offset = min(self._offset + 2e-5 * max(0.0, event.time - self._offset_time), lag)
@@ -221,11 +228,12 @@ class Runtime:
         e = est.predict(est.t + horizon)
         return Estimate(now, e.x, e.y, e.theta, e.vx, e.vy, e.w, e.slipping, e.standstill)
 
-    def step(self) -> Cycle:
-        """One cycle: collect, estimate, ask the sources, arbitrate, send, fan out."""
+    def step(self, now: float | None = None) -> Cycle:
+        """One cycle: collect, estimate, ask the sources, arbitrate, send, fan out (``now``: the cycle
+        clock's time, default the pacer's)."""
         self.start()
         self._collect()
-        now = self.pacer.now()
+        now = self.pacer.now() if now is None else now
         cycle = Cycle(self.cycles, now, self.client.clock.now(), self.estimate_now())
         self.cycles += 1
         cycle.telemetry, self._telemetry = self._telemetry, []
@@ -285,8 +293,10 @@ class Runtime:
                 self.latched = False
                 self.notify("info", "emergency stop released by a fresh press of the deadman", source)
             sent = clamp_to(client.limits, twist)
-            if self.wait_replies:
+            if getattr(self.sources.get(source), "wait_reply", self.wait_replies):
+                t0 = client.clock.now()
                 client.vel(sent.vx, sent.vy, sent.w, watchdog)
+                self.rtt = client.clock.now() - t0
             else:
                 self._pending.append((client.submit(vel_command(client.limits, *sent, watchdog)), source))
         except (ControllerError, LinkError, ValueError) as exc:
@@ -311,6 +321,8 @@ class Runtime:
 
     def _failed(self, source: str, exc: BaseException, line: str = "") -> None:
         self.sent.errors += 1
+        for hook in self.error_hooks:
+            hook(source, exc)
         if isinstance(exc, EmergencyStopLatched):
             self._latch()  # one notice for everyone; the refused source sees cycle.latched
             return

@@ -72,6 +72,7 @@ class DeadmanSource:
         self.priority = priority
         self.timeout = config.input_timeout if timeout is None else timeout
         self.watchdog = config.vel_timeout
+        self.wait_reply = True  # a person's 20 Hz: a refusal is known at once
         self.config = config
         self.deadman = Deadman(config.input_timeout, config.stop_repeats)
         self.sample: Sample | None = None
@@ -164,6 +165,7 @@ class FollowerSource:
     ) -> None:
         self.name = name
         self.priority = priority
+        self.wait_reply = False  # 100 Hz: replies are collected at the next cycle
         self.follower = follower
         self.path = path
         self.watchdog = watchdog
@@ -177,7 +179,9 @@ class FollowerSource:
         """The state the follower last steered by."""
         self.twist: Twist | None = None
         self.overrides = 0
+        """How often another source or a lock took the robot from it."""
         self._standing_by = False
+        self._driven = False  # it has had the robot at least once
         self._s = 0.0  # progress along self.path, m
 
     @property
@@ -216,14 +220,18 @@ class FollowerSource:
                 self.end(f"stopped: {previous.reason}")
                 return None
             if not self._standing_by:
-                self.overrides += 1
+                self.overrides += self._driven
                 self._standing_by = True
-            return Proposal(Twist())  # stand by: ready to take the robot back
+            return Proposal(Twist())  # stand by: ready to take the robot (back)
         if self._standing_by:
             self._standing_by = False
-            self._resume(state)
+            if self._driven:
+                self._resume(state)
+            else:  # it never had the robot: start now, on the whole path
+                self.follower.start(self.path, state.t)
             if self.finished:
                 return None
+        self._driven = True
         command = self.follower.update(state)
         self.state = state
         if self.follower.done:
