@@ -203,7 +203,8 @@ class PathTeacher:
             self.runtime.remove_source(self.source.name)
             self.source = None
         client = self.runtime.client
-        client.stop()
+        if not self.runtime.latched:  # STOP would release a latched sonar stop behind the user's back
+            client.stop()
         if self._mode is not None:
             client.mode(self._mode)
             self._mode = None

@@ -32,19 +32,18 @@ from omnibot.runtime.cycle import Cycle, Notice
 
 
 class NoticePrinter:
-    """Passes each notice (and changes of control) to ``say`` (a CLI front end's status lines)."""
+    """Passes each notice to ``say`` (a CLI front end's status lines); changes of control too when
+    ``control`` is set."""
 
-    def __init__(
-        self, say: Callable[[str], object], *, levels: tuple[str, ...] = ("info", "warn", "error")
-    ) -> None:
+    def __init__(self, say: Callable[[str], object], *, control: bool = False) -> None:
         self.say = say
-        self.levels = levels
+        self.control = control
         self.seen: list[Notice] = []
 
     def __call__(self, cycle: Cycle) -> None:
         for notice in cycle.notices:
             self.seen.append(notice)
-            if notice.level in self.levels:
+            if notice.kind != "control" or self.control:
                 self.say(notice.text)
 
 
