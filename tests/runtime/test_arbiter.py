@@ -59,7 +59,7 @@ def test_bad_sources_are_refused() -> None:
     arbiter, _, _ = make()
     with pytest.raises(ValueError, match="already arbitrated"):
         arbiter.add("pad", 1, 0.1)
-    with pytest.raises(ValueError, match="priority must be 0..255"):
+    with pytest.raises(ValueError, match=r"priority must be 0\.\.255"):
         arbiter.add("x", PRIORITY_MAX + 1, 0.1)
     with pytest.raises(ValueError, match="timeout > 0"):
         arbiter.add("y", 1, 0.0)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pytest
@@ -44,7 +45,7 @@ class Rig:
     path: Path
     stick: dict[str, object]
 
-    def run(self, seconds: float) -> dict[str, object]:
+    def run(self, seconds: float) -> dict[str, Any]:
         return self.stepper.run(seconds)
 
     @property
