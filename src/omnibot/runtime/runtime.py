@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import logging
 import math
+from collections import deque
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Protocol
@@ -25,6 +26,9 @@ log = logging.getLogger("omnibot.runtime")
 
 PREDICT_MAX = 0.1
 """s: the estimate is extrapolated to the cycle's time by at most this much (older: held)."""
+KEEP = 1000
+"""Telemetry samples and events kept for the next cycle: the newest, when nobody cycled for a while
+(a standstill, a scripted manoeuvre)."""
 LATCHED_TEXT = "emergency stop latched by the controller (sonar): let go and press again to release"
 
 
@@ -132,8 +136,8 @@ class Runtime:
         """Called with (source, exception) when a command fails (after the notice)."""
         self._offset = math.inf
         self._offset_time = 0.0
-        self._telemetry: list[Telemetry] = []
-        self._events: list[Event] = []
+        self._telemetry: deque[Telemetry] = deque(maxlen=KEEP)
+        self._events: deque[Event] = deque(maxlen=KEEP)
         self._notices: list[Notice] = []
         self._pending: list[tuple[Pending, str]] = []
         self._last_error: dict[str, str] = {}
@@ -201,14 +205,12 @@ class Runtime:
             self.estimator.update(event)
         for hook in self.telemetry_hooks:
             hook(event)
-        if len(self._telemetry) < 10_000:  # nobody steps (a long wait): keep the newest cycle's worth
-            self._telemetry.append(event)
+        self._telemetry.append(event)
 
     def _on_event(self, event: Event) -> None:
         if isinstance(event, WarnEvent) and event.code == codes.W_SONAR_STOP:
             self._latch()
-        if len(self._events) < 10_000:
-            self._events.append(event)
+        self._events.append(event)
 
     def _latch(self) -> None:
         if not self.latched:
@@ -236,8 +238,9 @@ class Runtime:
         now = self.pacer.now() if now is None else now
         cycle = Cycle(self.cycles, now, self.client.clock.now(), self.estimate_now())
         self.cycles += 1
-        cycle.telemetry, self._telemetry = self._telemetry, []
-        cycle.events, self._events = self._events, []
+        cycle.telemetry, cycle.events = list(self._telemetry), list(self._events)
+        self._telemetry.clear()
+        self._events.clear()
         cycle.notices, self._notices = self._notices, []
         cycle.latched = self.latched
         cycle.decision = self.decision  # the previous cycle's, while sources are asked
