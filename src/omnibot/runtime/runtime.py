@@ -32,10 +32,9 @@ KEEP = 1000
 LATCHED_TEXT = "emergency stop latched by the controller (sonar): let go and press again to release"
 
 
-class Sink(Protocol):
-    """Anything called with each completed :class:`Cycle` (a plain function will do)."""
-
-    def __call__(self, cycle: Cycle) -> object: ...
+Sink = Callable[[Cycle], object]
+"""Anything called with each completed :class:`Cycle` (a function, a bound method, an object with
+``__call__``); see :mod:`omnibot.runtime.sinks`."""
 
 
 class Pacer(Protocol):
