@@ -23,6 +23,8 @@ from omnibot.runtime.cycle import NOBODY, Cycle, Decision, Level, Notice
 from omnibot.runtime.sources import Proposal, Source
 
 log = logging.getLogger("omnibot.runtime")
+log.addHandler(logging.NullHandler())  # a library's log: shown where the application configures logging
+# (front ends get every notice themselves; without this Python would print warnings twice on stderr)
 
 PREDICT_MAX = 0.1
 """s: the estimate is extrapolated to the cycle's time by at most this much (older: held)."""
@@ -264,9 +266,10 @@ class Runtime:
         for sink in list(self.sinks):
             try:
                 sink(cycle)
-            except Exception:  # a broken view must not stop the robot loop
+            except Exception as exc:  # a broken view must not stop the robot loop
                 log.exception("a runtime sink failed; it is removed")
                 self.remove_sink(sink)
+                self._notices.append(Notice("error", f"a view failed and was removed: {exc}"))
         return cycle
 
     def run(self, until: Callable[[], bool] | None = None, duration: float | None = None) -> None:
