@@ -47,13 +47,16 @@ class EStop:
         self.lock = Lock(name, priority, self._engaged)
 
     def press(self, by: str) -> None:
+        """Engage the stop; ``by`` says who pressed it (shown in the reason)."""
         self.pressed_by = by
 
     def resume(self) -> None:
+        """Release the stop: sources may drive again (a person with a fresh input)."""
         self.pressed_by = ""
 
     @property
     def engaged(self) -> bool:
+        """True while the stop is pressed."""
         return bool(self.pressed_by)
 
     def _engaged(self) -> str | None:
@@ -82,6 +85,7 @@ class Arbiter:
         self._inputs: dict[str, _Input] = {}
 
     def add(self, name: str, priority: int, timeout: float) -> None:
+        """Arbitrate a source: ``priority`` 0-255 (higher wins), active ``timeout`` s after a proposal."""
         if name in self._inputs:
             raise ValueError(f"a source named {name!r} is already arbitrated")
         if not 0 <= priority <= PRIORITY_MAX or not timeout > 0:
@@ -89,6 +93,7 @@ class Arbiter:
         self._inputs[name] = _Input(name, priority, timeout)
 
     def remove(self, name: str) -> None:
+        """Stop arbitrating the source ``name`` (no-op if unknown)."""
         self._inputs.pop(name, None)
 
     def decide(self, now: float, proposals: dict[str, Twist | None]) -> Decision:

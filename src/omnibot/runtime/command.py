@@ -32,6 +32,7 @@ STANDSTILL = 3.0
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Declare ``omnibot run``'s options (the robot options shared with every command, then its own)."""
     from omnibot.cliargs import add_robot_options
 
     add_robot_options(
@@ -95,6 +96,7 @@ class Parts:
     closers: list[Callable[[], object]] = field(default_factory=list)
 
     def close(self) -> None:
+        """Release the input devices opened for the run (errors ignored: this runs on the way out)."""
         for close in reversed(self.closers):
             with contextlib.suppress(Exception):
                 close()
@@ -161,6 +163,7 @@ def compose(runtime: Any, robot: Any, args: argparse.Namespace, config: Any, pat
 
 
 def run(args: argparse.Namespace) -> int:
+    """``omnibot run``: compose the front ends, run them, return the exit status."""
     from omnibot.cliargs import check_sim_options, sim_url
     from omnibot.control.paths.files import read_path
     from omnibot.teleop.config import load_teleop_config

@@ -42,9 +42,11 @@ Sink = Callable[[Cycle], object]
 class Pacer(Protocol):
     """When cycles happen: ``now()`` is the cycle clock, ``wait()`` waits (pumping the client)."""
 
-    def now(self) -> float: ...
+    def now(self) -> float:
+        """The cycle clock, s."""
 
-    def wait(self) -> None: ...
+    def wait(self) -> None:
+        """Wait for the next cycle, pumping the client meanwhile."""
 
 
 class LinkPacer:
@@ -59,9 +61,11 @@ class LinkPacer:
         self._next = client.clock.now()
 
     def now(self) -> float:
+        """The link clock, s."""
         return self.client.clock.now()
 
     def wait(self) -> None:
+        """Sleep through the client (lockstep on ``sim://``) until the next cycle is due."""
         self._next += self.period
         self.client.sleep(max(0.0, self._next - self.client.clock.now()))
 
@@ -149,21 +153,26 @@ class Runtime:
     # ------------------------------------------------------------------ composition
 
     def add_source(self, source: Source) -> None:
+        """Add a command source (arbitrated from the next cycle on)."""
         self.arbiter.add(source.name, source.priority, source.timeout)
         self.sources[source.name] = source
 
     def remove_source(self, name: str) -> None:
+        """Remove the source ``name`` (no-op if unknown)."""
         self.arbiter.remove(name)
         self.sources.pop(name, None)
 
     def add_sink(self, sink: Sink) -> None:
+        """Add a sink: called with every completed cycle."""
         self.sinks.append(sink)
 
     def remove_sink(self, sink: Sink) -> None:
+        """Remove a sink (no-op if unknown)."""
         if sink in self.sinks:
             self.sinks.remove(sink)
 
     def add_lock(self, lock: Lock) -> None:
+        """Add a lock that masks sources at or below its priority while engaged."""
         self.arbiter.locks.append(lock)
 
     def notify(self, level: Level, text: str, source: str = "") -> None:

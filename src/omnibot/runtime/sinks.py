@@ -41,6 +41,7 @@ class NoticePrinter:
         self.seen: list[Notice] = []
 
     def __call__(self, cycle: Cycle) -> None:
+        """Say every notice of the cycle (changes of control only with ``control``)."""
         for notice in cycle.notices:
             self.seen.append(notice)
             if notice.kind != "control" or self.control:
@@ -54,11 +55,13 @@ class TeachSink:
         self.recorder = recorder or PathRecorder("distance", 0.02)
 
     def __call__(self, cycle: Cycle) -> None:
+        """Offer the cycle's estimated pose to the recorder."""
         e = cycle.estimate
         if e is not None:
             self.recorder.add(e.t, e.x, e.y, e.theta)
 
     def path(self) -> Path:
+        """The path recorded so far."""
         return self.recorder.path()
 
 
@@ -73,6 +76,7 @@ class Trace:
         self.command: list[tuple[float, float, float]] = []
 
     def __call__(self, cycle: Cycle) -> None:
+        """Record the cycle if it sent a twist (from ``source``, when given)."""
         if cycle.sent is None or cycle.estimate is None:
             return
         if self.source is not None and cycle.decision.source != self.source:

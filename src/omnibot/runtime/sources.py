@@ -84,6 +84,7 @@ class DeadmanSource:
         """The twist of the last proposal (None when silent)."""
 
     def read(self, now: float) -> Sample | None:
+        """The newest input at ``now`` (None: no input device)."""
         return self.sample
 
     @property
@@ -92,6 +93,7 @@ class DeadmanSource:
         return self.deadman.phase is Phase.DRIVING
 
     def propose(self, cycle: Cycle) -> Proposal | None:
+        """The deadman's twist for this cycle (None while idle)."""
         action = self.deadman.update(cycle.now, self.read(cycle.now))
         self.action = action
         self.ended = action.ended
@@ -113,9 +115,11 @@ class JoySource(Protocol):
     name: str
 
     @property
-    def quit(self) -> bool: ...
+    def quit(self) -> bool:
+        """True when the user asked to leave through this device."""
 
-    def read(self, now: float) -> JoyState | None: ...
+    def read(self, now: float) -> JoyState | None:
+        """The device's state now, or None while there is no device."""
 
 
 class PadSource(DeadmanSource):
@@ -138,9 +142,11 @@ class PadSource(DeadmanSource):
 
     @property
     def quit(self) -> bool:
+        """True when the user asked to leave through the device."""
         return self.device.quit
 
     def read(self, now: float) -> Sample | None:
+        """The device's state mapped and limited as teleop maps it (None: no device, or closing)."""
         if self.closing:
             return None
         joy = self.device.read(now)
@@ -186,17 +192,21 @@ class FollowerSource:
 
     @property
     def completed(self) -> bool:
+        """The follower reached the path's end (not ended early)."""
         return self.finished and not self.failure and self.follower.done
 
     def start(self, t: float) -> None:
+        """Start the follower on the path at time ``t`` (done by the first cycle otherwise)."""
         self.follower.start(self.path, t)
         self.started = True
 
     def end(self, why: str = "") -> None:
+        """End the run; ``why`` (if not empty) says why it ended early."""
         self.finished = True
         self.failure = self.failure or why
 
     def propose(self, cycle: Cycle) -> Proposal | None:
+        """The follower's twist, a stand-by zero while overridden, None once finished."""
         if self.finished:
             return None
         for notice in cycle.notices:
@@ -299,6 +309,7 @@ class ScriptSource:
         self._t0: float | None = None
 
     def propose(self, cycle: Cycle) -> Proposal | None:
+        """The script's twist at the cycle's time since the first cycle (None: nothing to say)."""
         if self.finished:
             return None
         if self._t0 is None:
