@@ -40,7 +40,7 @@ def drive(job: tuple[str, str, float, int, bool, bool]) -> dict[str, Any]:
     from omnibot.control.paths.path import Path
     from omnibot.control.paths.standard import random_path
     from omnibot.estimation.estimator import estimator_names, make_estimator
-    from omnibot.estimation.odometry import Pose2D
+    from omnibot.motion import Pose2D
     from omnibot.navigation.runner import Navigator
     from omnibot.navigation.session import follower_limits, simulated_client
     from omnibot.robot.description import load_robot

@@ -430,6 +430,25 @@ def _add_dashboard(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> 
     p.set_defaults(handler=_dashboard)
 
 
+def _run(args: argparse.Namespace) -> int:
+    from omnibot.runtime.command import run
+
+    return run(args)
+
+
+def _add_run(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    from omnibot.runtime.command import add_arguments
+
+    p = sub.add_parser(
+        "run",
+        help="several front ends on one runtime: --teleop pad|keyboard, --dashboard, --follow PATH",
+        description="One runtime owns the robot; each front end is a source (pad/keyboard 200, the page 100, "
+        "the follower 10) arbitrated as twist_mux does; the dashboard's emergency stop overrides all.",
+    )
+    add_arguments(p)
+    p.set_defaults(handler=_run)
+
+
 # --------------------------------------------------------------------------- record, follow
 
 
@@ -526,6 +545,7 @@ ADDERS: list[Callable[[argparse._SubParsersAction[argparse.ArgumentParser]], Non
     _add_follow,
     _add_teleop,
     _add_dashboard,
+    _add_run,
     _add_calibrate,
     _add_log,
 ]

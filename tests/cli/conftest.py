@@ -34,7 +34,7 @@ from omnibot.client.client import RobotClient
 from omnibot.errors import ControllerError
 from omnibot.protocol import codes
 from omnibot.sim.device import SimDevice
-from omnibot.teleop.simlink import sim_device
+from omnibot.transport.device import find_device
 
 ENDINGS = ("normal", "error", "sigint", "sigterm", "link")
 FALLBACK_PUMPS = 400
@@ -58,7 +58,7 @@ class Harness:
     pumps: int = 0
 
     def moving(self, client: RobotClient) -> bool:
-        device = sim_device(client.link)
+        device = find_device(client.link)
         if device is None:
             return False
         tw = device.sim.twist

@@ -13,7 +13,7 @@ from omnibot.client.session import Terminated, guarded, leave, robot_on_link, ro
 from omnibot.errors import ConfigError, ControllerError
 from omnibot.protocol import codes
 from omnibot.robot.description import PRESET_DIR
-from omnibot.teleop.simlink import sim_device
+from omnibot.transport.device import find_device
 
 
 def test_the_robot_is_the_one_on_the_link(tmp_path: object) -> None:
@@ -28,7 +28,7 @@ def test_the_robot_is_the_one_on_the_link(tmp_path: object) -> None:
 def test_robot_session_takes_the_robot_from_hello_and_leaves_mode_and_protocol() -> None:
     with robot_session("sim://mecanum4") as session:
         client = session.client
-        device = sim_device(client.link)
+        device = find_device(client.link)
         assert device is not None
         assert session.robot.name == "mecanum4" and session.hello.motors == 4
         client.mode(closed_loop=True)
@@ -42,13 +42,13 @@ def test_robot_session_takes_the_robot_from_hello_and_leaves_mode_and_protocol()
 
 def test_guarded_stops_on_error_only_when_asked() -> None:
     client = RobotClient.open("sim://omni4")
-    device = sim_device(client.link)
+    device = find_device(client.link)
     assert device is not None
     with guarded(client, stop="on_error", restore="protocol"):
         client.move(1.0, 0.3)
     assert device.controller.state == codes.STATE_MOVING  # send's policy: a normal end keeps it moving
     client = RobotClient.open("sim://omni4")
-    device = sim_device(client.link)
+    device = find_device(client.link)
     assert device is not None
     with pytest.raises(ControllerError), guarded(client, stop="on_error", restore="protocol"):
         client.move(1.0, 0.3)

@@ -83,7 +83,7 @@ def test_demo_bad_port_is_a_clear_error(tmp_path: Path, capsys: pytest.CaptureFi
 def test_the_odometry_trail_starts_at_the_start_pose() -> None:
     from omnibot.client.events import Telemetry
     from omnibot.demos.seed000 import Recorder
-    from omnibot.estimation.odometry import Pose2D
+    from omnibot.motion import Pose2D
     from omnibot.robot.description import load_robot
 
     recorder = Recorder(load_robot("omni4"))

@@ -8,15 +8,8 @@ from dataclasses import dataclass
 import pytest
 
 from omnibot.errors import ConfigError
-from omnibot.estimation.estimator import (
-    ESTIMATORS,
-    Estimate,
-    PoseEstimator,
-    estimator_names,
-    make_estimator,
-    replay,
-)
-from omnibot.estimation.odometry import Pose2D
+from omnibot.estimation.estimator import ESTIMATORS, PoseEstimator, estimator_names, make_estimator, replay
+from omnibot.motion import Estimate, Pose2D
 from omnibot.robot.description import load_robot
 from omnibot.sim.simulator import Simulator
 

@@ -7,7 +7,8 @@ import math
 import pytest
 
 from omnibot.errors import ConfigError
-from omnibot.estimation.odometry import Pose2D, WheelOdometry, compose_arc
+from omnibot.estimation.odometry import WheelOdometry, compose_arc
+from omnibot.motion import Pose2D
 from omnibot.robot.description import load_robot
 from omnibot.sim.simulator import Simulator
 

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from omnibot.errors import ConfigError
-from omnibot.estimation.odometry import Pose2D
 from omnibot.estimation.tracking import Seed002Odometry, TrackingGeometry, TrackingOdometry
+from omnibot.motion import Pose2D
 from omnibot.robot.description import load_robot, parse_description
 from omnibot.sim.simulator import Simulator
 

@@ -15,9 +15,9 @@ from omnibot.client import EventRecorder, RobotClient
 from omnibot.client.events import Telemetry
 from omnibot.client.session import guarded
 from omnibot.logs.recorder import Recorder
-from omnibot.navigation.runner import simulator_of
 from omnibot.protocol.messages import Vel
 from omnibot.robot.description import load_robot
+from omnibot.transport.device import find_simulator
 
 REPO = Path(__file__).resolve().parents[2]
 READERS = REPO / ".cache" / "mcap-readers"
@@ -55,7 +55,7 @@ def drive(path: Path, seconds: float = 2.0, *, binary: bool = False) -> Recorded
         rec.attach(client, robot)
         client.add_tracer(TxSpy())
         client.add_listener(events, Telemetry)
-        sim = simulator_of(client)
+        sim = find_simulator(client.link)
         assert sim is not None
         client.on_telemetry(lambda _: run.truth.append((sim.pose.x, sim.pose.y, sim.pose.theta)))
         if binary:

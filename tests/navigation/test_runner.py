@@ -10,7 +10,7 @@ import pytest
 from omnibot.client.client import RobotClient
 from omnibot.control.followers import make_follower
 from omnibot.control.paths import Path, standard_path
-from omnibot.estimation.odometry import Pose2D
+from omnibot.motion import Pose2D
 from omnibot.navigation.metrics import ODOMETRY, TRUTH, tracking_report
 from omnibot.navigation.runner import FrameMap, Navigator
 from omnibot.navigation.session import FollowOptions, follower_limits, simulate_follow
@@ -70,7 +70,7 @@ def test_gyro_calibration_spin_learns_the_scale() -> None:
         bias, scale = nav.calibrate_gyro(turns=1.0, rate=3.0)
         sim = nav.sim
         nav.close()
-    assert sim is not None
+    assert sim is not None and sim.gyro is not None
     assert bias == pytest.approx(sim.gyro.bias, abs=1e-3)
     assert scale == pytest.approx(sim.gyro.scale_error, abs=3e-3)
     assert abs(sim.pose.theta) < 0.2  # one turn each way: back where it started

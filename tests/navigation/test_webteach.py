@@ -10,7 +10,9 @@ import pytest
 
 from omnibot.client import RobotClient
 from omnibot.navigation.webteach import PathTeacher, gains_for
+from omnibot.protocol import codes
 from omnibot.robot.description import load_robot
+from omnibot.runtime.runtime import LATCHED_TEXT
 from omnibot.web.link import RobotLink
 from omnibot.web.messages import Drive, EStop, Teach
 from tests.teleop.fakes import truth
@@ -53,8 +55,8 @@ def test_repeat_drives_back_to_the_start_then_follows_the_path(taught: tuple[Ste
     path = teacher.path
     assert path is not None
     stepper.link.submit(Teach(type="teach", action="follow"))
-    state = stepper.run(0.5, Drive(type="drive", vx=-0.5))  # page input is ignored while following
-    assert state["drive"]["state"] == "following"
+    state = stepper.run(0.5)
+    assert state["drive"]["state"] == "following" and state["drive"]["control"] == "repeat"
     assert any("driving" in text and "to its start first" in text for text in stepper.logs())
     trail = []
     for _ in range(200):
@@ -79,19 +81,102 @@ def test_estop_ends_a_repeat_and_bad_order_is_explained(taught: tuple[Stepper, P
     stepper.run(0.3)
     stepper.link.submit(EStop(type="estop"))
     state = stepper.run(0.3)
-    assert state["drive"]["state"] == "estop" and teacher.follower is None
-    client = stepper.link.client
-    assert teacher.command("record", client, None).startswith("teaching")
-    assert teacher.command("follow", client, None) == "stop teaching first"
-    assert "too short" in teacher.command("stop", client, None)
-    assert teacher.command("stop", client, None) == "nothing to stop"
+    assert state["drive"]["state"] == "estop" and teacher.source is None
+    assert any(t.startswith("repeat ended") and "emergency stop (page)" in t for t in stepper.logs())
+    assert teacher.command("record", None).startswith("teaching")
+    assert teacher.command("follow", None) == "stop teaching first"
+    assert "too short" in teacher.command("stop", None)
+    assert teacher.command("stop", None) == "nothing to stop"
     with pytest.raises(ValueError, match="unknown teach action"):
-        teacher.command("dance", client, None)
+        teacher.command("dance", None)
+
+
+def test_the_page_takes_over_from_a_repeat_and_hands_back(taught: tuple[Stepper, PathTeacher]) -> None:
+    stepper, teacher = taught
+    path = teacher.path
+    assert path is not None
+    stepper.link.submit(Teach(type="teach", action="follow"))
+    stepper.run(0.6)
+    state = stepper.run(0.4, Drive(type="drive", vy=-0.5))  # the page outranks the repeat
+    assert state["drive"]["state"] == "driving" and state["drive"]["control"] == "page"
+    assert "page (priority 100) over repeat" in state["drive"]["reason"]
+    assert teacher.source is not None and teacher.source.overrides == 1
+    stepper.run(1.0, Drive(type="drive", enable=False))  # let go: the stop sequence, then the repeat
+    state = stepper.run(0.1)
+    assert state["drive"]["control"] == "repeat" and state["drive"]["state"] == "following"
+    for _ in range(200):
+        state = stepper.run(0.1)
+        if state["drive"]["state"] != "following":
+            break
+    assert teacher.source is None, "the repeat did not finish after it was handed back"
+    est = stepper.link.runtime.estimate_now()
+    assert est is not None and math.hypot(est.x - path.x[-1], est.y - path.y[-1]) < 0.02
+    end = truth(stepper.link.client).pose  # the hard sideways push cost the odometry ~3 cm
+    assert math.hypot(end.x - path.x[-1], end.y - path.y[-1]) < 0.05
+    stepper.run(0.1)  # a sink's notice reaches the page with the next cycle
+    assert "repeat finished" in stepper.logs()
 
 
 def test_gains_scale_with_the_control_period() -> None:
     assert gains_for(0.01)["cross"] == 45.0
     slow = gains_for(0.05)
-    assert slow["cross"] * 0.05 < 0.5 and slow["lead"] == pytest.approx(0.09)
+    assert slow["cross"] * 0.05 < 0.5 and slow["lead"] == pytest.approx(0.065)
     with pytest.raises(ValueError, match="must be positive"):
         PathTeacher(load_robot("omni4"), period=0.0)
+
+
+def teach_l(url: str) -> tuple[Stepper, PathTeacher]:
+    """The L of the ``taught`` fixture, taught on ``url``."""
+    client = RobotClient.open(url, timeout=0.5)
+    robot = load_robot("omni4")
+    teacher = PathTeacher(robot, period=0.05, speed=0.3)
+    stepper = Stepper(RobotLink(client, robot, teach=teacher))
+    stepper.run(1.0)
+    stepper.link.submit(Teach(type="teach", action="record"))
+    stepper.run(0.8, Drive(type="drive", vx=0.5))
+    stepper.run(0.8, Drive(type="drive", vy=0.5))
+    stepper.run(0.5, Drive(type="drive", enable=False))
+    stepper.link.submit(Teach(type="teach", action="stop"))
+    stepper.run(0.1)
+    assert teacher.path is not None
+    return stepper, teacher
+
+
+def test_repeat_reports_a_latched_sonar_stop() -> None:
+    stepper, teacher = teach_l("sim://omni4?world=room&seed=2")
+    try:
+        client = stepper.link.client
+        client.sonar(1, period=0.06, stop=5.0)  # every wall is nearer than 5 m: moving latches the stop
+        stepper.link.submit(Teach(type="teach", action="follow"))
+        state = stepper.run(1.0)
+        logs = stepper.logs()
+        assert teacher.source is None and state["drive"]["state"] != "following"
+        assert state["drive"]["latched"] is True
+        assert LATCHED_TEXT in logs
+        assert "repeat ended: emergency stop latched on the controller" in logs
+        # ending the repeat did not release the latch (no STOP): a fresh input from the page does
+        x0 = truth(client).pose.x
+        state = stepper.run(0.5, Drive(type="drive", vx=-0.5))
+        assert state["drive"]["latched"] is False and truth(client).pose.x < x0 - 0.03
+    finally:
+        stepper.link.stop()
+
+
+def test_repeat_reports_a_refused_command() -> None:
+    stepper, teacher = teach_l("sim://omni4?world=room&seed=2")
+    try:
+        client = stepper.link.client
+        # only the front sonar armed (too short a stop distance to latch here), and travel it does not
+        # cover refused: the repeat's first leg, back to the start, is refused (ERROR 41)
+        client.sonar(1, period=0.06, stop=0.05)
+        client.mode((client.mode_bits or 0) | codes.MODE_REFUSE_UNCOVERED)
+        stepper.link.submit(Teach(type="teach", action="follow"))
+        state = stepper.run(1.0)
+        logs = stepper.logs()
+        assert teacher.source is None and state["drive"]["state"] != "following"
+        refused = [line for line in logs if line.startswith("the controller refused VEL")]
+        assert refused and "no sonar covers this direction" in refused[0]
+        assert any(line.startswith("repeat ended: the controller refused VEL") for line in logs)
+        assert state["link"]["errors"] >= 1
+    finally:
+        stepper.link.stop()

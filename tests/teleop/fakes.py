@@ -7,7 +7,7 @@ from collections.abc import Callable
 from omnibot.sim.simulator import Simulator
 from omnibot.teleop.config import TeleopConfig
 from omnibot.teleop.mapping import JoyState
-from omnibot.teleop.simlink import sim_device
+from omnibot.transport.device import find_device
 
 
 class FakeWall:
@@ -43,7 +43,7 @@ def seed_pad(
 
 def truth(client: object) -> Simulator:
     """The simulator behind a sim:// client."""
-    device = sim_device(client.link)  # type: ignore[attr-defined]
+    device = find_device(client.link)  # type: ignore[attr-defined]
     assert device is not None
     return device.sim
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
+from omnibot.motion import ZERO, Twist
 from omnibot.teleop.deadman import Deadman, Phase, Sample, Why
-from omnibot.teleop.mapping import ZERO, Twist
 
 FWD = Twist(0.5, 0.0, 0.0)
 

@@ -9,9 +9,10 @@ from collections.abc import Iterator
 import pytest
 
 from omnibot.errors import ConfigError
+from omnibot.motion import Twist
 from omnibot.teleop.config import TeleopConfig
 from omnibot.teleop.keyboard import Key, KeyboardSource, KeyState, parse_keys
-from omnibot.teleop.mapping import Twist, joy_to_command
+from omnibot.teleop.mapping import joy_to_command
 
 CONFIG = TeleopConfig()
 

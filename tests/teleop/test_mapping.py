@@ -9,10 +9,10 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from omnibot.client.limits import Limits
+from omnibot.motion import Twist
 from omnibot.teleop.config import TeleopConfig
 from omnibot.teleop.mapping import (
     JoyState,
-    Twist,
     TwistLimits,
     deadzone,
     fractions_to_twist,

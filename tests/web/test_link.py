@@ -110,29 +110,33 @@ class RecordingTeacher:
     def __init__(self) -> None:
         self.calls: list[str] = []
         self.poses: list[Any] = []
+        self.runtime: Any = None
 
-    def command(self, action: str, client: RobotClient, pose: Any) -> str:
+    def attach(self, runtime: Any, pose: Any) -> None:
+        self.runtime = runtime
+        self.poses.append(pose)
+
+    def command(self, action: str, pose: Any) -> str:
         self.calls.append(action)
         return f"{action} ok"
 
-    def tick(self, client: RobotClient, pose: Any) -> bool:
-        self.poses.append(pose)
+    @property
+    def following(self) -> bool:
         return self.calls[-1:] == ["follow"]
 
 
-def test_teach_hook_is_called_in_the_link_thread() -> None:
+def test_teach_hook_joins_the_runtime_in_the_link_thread() -> None:
     client = RobotClient.open("sim://omni4?world=room", timeout=0.5)
     teacher = RecordingTeacher()
     link = RobotLink(client, load_robot("omni4"), teach=teacher)
     try:
         stepper = Stepper(link)
-        link.submit(Teach(type="teach", action="follow"))
-        state = stepper.run(0.2, Drive(type="drive", vx=0.5))
-        assert state["drive"]["state"] == "following"  # page input is ignored while following
+        assert teacher.runtime is link.runtime  # attached once, at setup
         assert teacher.poses[-1][:2] == pytest.approx((1.0, 1.0), abs=0.01)
-        link.submit(EStop(type="estop"))
-        stepper.run(0.1)
-        assert teacher.calls == ["follow", "stop"]
+        link.submit(Teach(type="teach", action="follow"))
+        state = stepper.run(0.2)
+        assert state["drive"]["state"] == "following"
+        assert teacher.calls == ["follow"]
         assert "follow ok" in stepper.logs()
     finally:
         link.stop()

@@ -84,6 +84,7 @@ def test_emergency_stop_stops_the_robot_and_ignores_driving_until_resume(
     page.click("#estop")
     wait_for(lambda: latest(dashboard)["drive"]["state"] == "estop", timeout=1.0, what="e-stop")
     expect(page.locator("#drive-state")).to_have_text("E-STOP")
+    expect(page.locator("#control")).to_contain_text("emergency stop (page)")  # who holds the robot
     wait_for(lambda: not moving(dashboard), timeout=1.0, what="the robot to stop")
     assert latest(dashboard)["robot_state"] in ("idle", "estop")
     page.keyboard.up("w")

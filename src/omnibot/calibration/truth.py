@@ -112,8 +112,9 @@ class SimTruth(TruthSource):
 
 def simulator_of(client: RobotClient) -> Any:
     """The Simulator behind an in-process link, or None."""
-    device = getattr(client.link, "device", None)
-    return getattr(device, "sim", None)
+    from omnibot.transport.device import find_simulator
+
+    return find_simulator(client.link)
 
 
 @register_truth("sim")

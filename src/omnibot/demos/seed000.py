@@ -37,11 +37,13 @@ from typing import Any
 from omnibot.client.client import RobotClient
 from omnibot.client.events import Event, RangeEvent, Telemetry, WarnEvent
 from omnibot.errors import ConfigError
-from omnibot.estimation.odometry import Pose2D, WheelOdometry
+from omnibot.estimation.odometry import WheelOdometry
+from omnibot.motion import Pose2D
 from omnibot.progress import Progress, notice, progress_bar
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription
 from omnibot.sim.emulator import spawn_pty_emulator
+from omnibot.transport.device import find_simulator
 
 CIRCLE_STEP = 0.02
 SPIN_STEP = 0.03
@@ -451,8 +453,7 @@ def run_demo(
         started = time.monotonic()
         with context as url, robot_session(url, robot_name) as session:
             client, robot, hello = session.client, session.robot, session.hello
-            device = getattr(client.link, "device", None)
-            sim = getattr(device, "sim", None)
+            sim = find_simulator(client.link)
             if sim is not None:
                 world_map = sim.world
             truth = (

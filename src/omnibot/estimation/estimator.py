@@ -19,16 +19,16 @@ from __future__ import annotations
 import math
 from collections import deque
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
 
 from omnibot.errors import ConfigError
 from omnibot.estimation.heading import HeadingFilter, HeadingFilterConfig
-from omnibot.estimation.odometry import COUNT_MODULUS, Pose2D, compose_arc, count_delta
+from omnibot.estimation.odometry import COUNT_MODULUS, compose_arc, count_delta
 from omnibot.estimation.slip import SlipModel, SlipParameters
 from omnibot.estimation.tracking import Seed002Odometry, TrackingGeometry
+from omnibot.motion import Estimate, Pose2D
 from omnibot.robot.description import RobotDescription
 from omnibot.robot.kinematics import world_to_body
 
@@ -59,40 +59,6 @@ class SensorSample(Protocol):
     def tracking(self) -> tuple[int, ...] | None: ...
     @property
     def heading(self) -> float | None: ...
-
-
-@dataclass(frozen=True)
-class Estimate:
-    """Pose (world frame), world-frame velocity and flags at controller time ``t``."""
-
-    t: float
-    x: float
-    y: float
-    theta: float
-    vx: float = 0.0
-    vy: float = 0.0
-    w: float = 0.0
-    slipping: bool = False
-    standstill: bool = True
-
-    @property
-    def pose(self) -> Pose2D:
-        return Pose2D(self.x, self.y, self.theta)
-
-    def predict(self, t: float) -> Estimate:
-        """Extrapolated to time ``t`` at constant velocity (latency compensation)."""
-        dt = t - self.t
-        return Estimate(
-            t,
-            self.x + self.vx * dt,
-            self.y + self.vy * dt,
-            self.theta + self.w * dt,
-            self.vx,
-            self.vy,
-            self.w,
-            self.slipping,
-            self.standstill,
-        )
 
 
 class Estimator(Protocol):

@@ -17,22 +17,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
+from omnibot import motion
 from omnibot.errors import ConfigError
 from omnibot.robot import kinematics as kin
 from omnibot.robot.description import RobotDescription
 
 COUNT_MODULUS = 1 << 32
 
-
-@dataclass(frozen=True)
-class Pose2D:
-    x: float
-    y: float
-    theta: float
+Pose2D = motion.Pose2D
+"""The planar pose (:class:`omnibot.motion.Pose2D`; named here too for older imports)."""
 
 
 def count_delta(new: np.ndarray, old: np.ndarray) -> np.ndarray:

@@ -22,7 +22,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from omnibot.errors import ConfigError
-from omnibot.estimation.odometry import CountTracker, Pose2D, compose_arc
+from omnibot.estimation.odometry import CountTracker, compose_arc
+from omnibot.motion import Pose2D
 from omnibot.robot.description import RobotDescription, TrackingWheelSpec
 
 

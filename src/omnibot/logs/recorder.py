@@ -320,7 +320,7 @@ class Recorder:
         """Record what ``client`` sends, receives and decodes (once per client); ``robot`` starts the
         recording's context (:meth:`start`) if it has none yet. ``guess``: without ``robot``, take
         the preset the controller's HELLO names (else no URDF, no estimate)."""
-        from omnibot.navigation.runner import simulator_of
+        from omnibot.transport.device import find_simulator
 
         if not any(c is client for c in self._clients):
             self._clients.append(client)
@@ -331,14 +331,16 @@ class Recorder:
                 # its time goes on from the last message, so the log's time never runs backwards
                 self._epoch_ns, self._t0 = self._last_ns, client.clock.now()
             if self.robot is not None:
-                self._simulator = simulator_of(client)
+                self._simulator = find_simulator(client.link)
         if self.robot is not None:
             return
         hello = client.last_hello
         if robot is None and guess and hello is not None and hello.name in preset_names():
             robot = load_robot(hello.name)
         if robot is not None:
-            self.start(robot, simulator=simulator_of(client), url=client.link.url, t=client.clock.now())
+            self.start(
+                robot, simulator=find_simulator(client.link), url=client.link.url, t=client.clock.now()
+            )
 
     def detach(self, client: RobotClient) -> None:
         client.remove_tracer(self)

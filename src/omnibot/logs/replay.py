@@ -13,8 +13,9 @@ from dataclasses import dataclass
 
 from omnibot.client.events import Telemetry
 from omnibot.errors import ConfigError
-from omnibot.estimation.estimator import Estimate, make_estimator
+from omnibot.estimation.estimator import make_estimator
 from omnibot.logs.run import Run
+from omnibot.motion import Estimate
 from omnibot.protocol import text
 from omnibot.protocol.messages import Telemetry as TelMessage
 from omnibot.robot.description import RobotDescription

@@ -70,7 +70,7 @@ def run_follow(args: argparse.Namespace) -> int:
     from omnibot.control.followers.base import follower_names
     from omnibot.control.paths.files import read_path
     from omnibot.estimation.estimator import ESTIMATORS
-    from omnibot.estimation.odometry import Pose2D
+    from omnibot.motion import Pose2D
     from omnibot.navigation.metrics import Tolerances
     from omnibot.navigation.session import FollowOptions, follow_path, summary
     from omnibot.progress import progress_bar

@@ -84,7 +84,7 @@ def teach(
     clock = client.clock
     try:
         nav.prepare()
-        client.on_telemetry(sample)
+        nav.runtime.telemetry_hooks.append(sample)  # after the runtime's estimator, as every sample
         start = clock.now()
         d0 = nav.estimator.distance
         if mode == "listen":
@@ -99,7 +99,8 @@ def teach(
         elapsed = clock.now() - start
         distance = nav.estimator.distance - d0
     finally:
-        client.remove_listener(sample)
+        if sample in nav.runtime.telemetry_hooks:
+            nav.runtime.telemetry_hooks.remove(sample)
         nav.close()
     path = recorder.path() if len(recorder) >= 2 else None
     truth_error = None

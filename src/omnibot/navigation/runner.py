@@ -1,17 +1,21 @@
-"""The navigation loop: telemetry -> estimator -> follower -> VEL, on the link's clock.
+"""The navigator: ``omnibot follow`` and ``record`` on the runtime (telemetry -> estimator ->
+follower -> VEL, on the link's clock).
 
 ::
 
-    TEL every 10 ms (binary) --on_telemetry--> estimator(s) --estimate--+
-                                                                         v
-    every 1/rate s on link.clock: predict the estimate to now -> follower.update(State) -> VEL
-                                  (body frame, cm/s and deg/s, watchdog 150 ms; not awaited)
+    TEL every 10 ms (binary) --runtime listener--> estimator (+ observers) --estimate--+
+                                                                                        v
+    runtime cycle every 1/rate s on link.clock: predict the estimate to now -> FollowerSource
+        (follower.update(State)) -> arbiter -> VEL (body frame, watchdog 150 ms; not awaited)
+        -> sinks: the run's trace (estimate, command, truth), the progress bar
 
 Everything waits through :meth:`RobotClient.sleep`, so the same loop runs on a real port (wall
 clock) and in lockstep on ``sim://`` (simulated time, faster than real time and deterministic for
-a seed). Replies to VEL are collected without blocking; an ERROR reply stops the run. With a
-simulated robot the ground truth is sampled at every tick (followers never see it), mapped into
-the path's frame (the estimator starts at the path's first pose, the robot is taken to stand there).
+a seed). Replies to VEL are collected without blocking at the next cycle; an ERROR reply or a
+latched emergency stop ends the run (:class:`NavigationError`). With a simulated robot the ground
+truth is sampled at every tick (followers never see it), mapped into the path's frame (the
+estimator starts at the path's first pose, the robot is taken to stand there). The runtime
+(:mod:`omnibot.runtime`) is the navigator's: other sources (a pad, the dashboard) may join it.
 """
 
 from __future__ import annotations
@@ -20,7 +24,6 @@ import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
@@ -32,11 +35,15 @@ from omnibot.control.followers.base import STOP, Command, Follower, State
 from omnibot.control.paths.path import Path
 from omnibot.errors import OmnibotError
 from omnibot.estimation.estimator import Estimator, PoseEstimator, make_estimator
-from omnibot.estimation.odometry import Pose2D
 from omnibot.estimation.slip import SlipParameters
+from omnibot.motion import Pose2D
 from omnibot.progress import Progress
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription
+from omnibot.runtime.cycle import Cycle
+from omnibot.runtime.runtime import LinkPacer, Runtime, clamp_to
+from omnibot.runtime.sources import FollowerSource
+from omnibot.transport.device import find_simulator
 
 WATCHDOG = 0.15
 """VEL watchdog, s: the motors stop this long after the last command if the host goes quiet."""
@@ -106,19 +113,6 @@ class FrameMap:
         )
 
 
-def simulator_of(client: RobotClient) -> Any | None:
-    """The in-process simulator behind a ``sim://`` link (None for any other link)."""
-    link: Any = client.link
-    for _ in range(4):
-        device = getattr(link, "device", None)
-        if device is not None:
-            return getattr(device, "sim", None)
-        link = getattr(link, "inner", None) or getattr(link, "link", None)
-        if link is None:
-            return None
-    return None
-
-
 def ramp_fraction(t: float, total: float, ramp: float) -> float:
     """The fraction of full speed at time ``t`` of a motion ``total`` s long that speeds up over the
     first ``ramp`` s and slows down over the last (a trapezoid; 0 outside it)."""
@@ -128,14 +122,7 @@ def ramp_fraction(t: float, total: float, ramp: float) -> float:
 def submit_vel(client: RobotClient, command: Command, watchdog: float = WATCHDOG) -> Pending:
     """VEL for ``command`` clamped to what the controller accepts, submitted without waiting."""
     lim = client.limits
-    vmax = max(0.0, (lim.speed_max_cms - 1.0) / 100.0)
-    vx, vy = command.vx, command.vy
-    speed = math.hypot(vx, vy)
-    if speed > vmax:
-        vx, vy = vx * vmax / speed, vy * vmax / speed
-    wmax = math.radians(max(0.0, lim.rate_max_dps - 1.0))
-    w = max(-wmax, min(wmax, command.w))
-    return client.submit(vel_command(lim, vx, vy, w, watchdog))
+    return client.submit(vel_command(lim, *clamp_to(lim, command), watchdog))
 
 
 class _GyroProbe:
@@ -210,12 +197,12 @@ class Navigator:
             any(e.wheel == w.name for e in robot.encoders.motors) for w in robot.wheels
         )
         self.binary = binary
-        self.sim = simulator_of(client)
+        self.sim = find_simulator(client.link)
         self.frame: FrameMap | None = None
-        self._offset = math.inf
-        self._offset_time = 0.0
+        self.runtime = Runtime(client, estimator=self.estimator)
+        """The one loop that owns the client; it feeds the estimator and the observers."""
+        self.runtime.telemetry_hooks.extend(obs.update for obs in self.observers.values())
         self._pending: list[Pending] = []
-        self._state = 1
         self._started = False
 
     # ------------------------------------------------------------------ setup
@@ -236,7 +223,7 @@ class Navigator:
         mask = codes.TEL_ENCODERS | codes.TEL_HEADING | codes.TEL_QUEUE
         if self.robot.encoders.tracking:
             mask |= codes.TEL_TRACKING
-        c.on_telemetry(self._on_telemetry)
+        self.runtime.start()
         self._started = True
         if self.sim is not None:
             p = self.sim.pose
@@ -297,29 +284,15 @@ class Navigator:
                 self.client.stop()
                 self.client.telemetry(0.0)
         finally:
-            self.client.remove_listener(self._on_telemetry)
-
-    def _on_telemetry(self, event: Telemetry) -> None:
-        lag = event.time - event.controller_time
-        # the least-delayed sample gives the clock offset (allowed to creep up 20 us/s for drift)
-        self._offset = min(self._offset + 2e-5 * max(0.0, event.time - self._offset_time), lag)
-        self._offset_time = event.time
-        if event.state is not None:
-            self._state = event.state
-        self.estimator.update(event)
-        for obs in self.observers.values():
-            obs.update(event)
+            self.runtime.close()
 
     # ------------------------------------------------------------------ state
 
     def state(self) -> State:
         """The estimate, extrapolated to now on the link clock."""
-        now = self.client.clock.now()
-        est = self.estimator.estimate
-        offset = self._offset if math.isfinite(self._offset) else 0.0
-        horizon = min(max(0.0, now - (est.t + offset)), 0.1)
-        e = est.predict(est.t + horizon)
-        return State(now, e.x, e.y, e.theta, e.vx, e.vy, e.w, e.slipping)
+        state = self.runtime.estimate_now()
+        assert state is not None  # the runtime has the navigator's estimator
+        return state
 
     def truth(self) -> tuple[float, float, float] | None:
         """Ground truth now, in the path's frame (None without a simulator)."""
@@ -343,7 +316,7 @@ class Navigator:
             if not p.done:
                 keep.append(p)
         self._pending = keep
-        if self._state == codes.STATE_ESTOP:
+        if self.runtime.state == codes.STATE_ESTOP:
             raise NavigationError("emergency stop latched on the controller")
 
     def follow(
@@ -360,9 +333,10 @@ class Navigator:
         c = self.client
         clock = c.clock
         run = FollowRun(path, follower.name, self.estimator.name)
-        period = follower.dt
+        runtime = self.runtime
         start = clock.now()
-        follower.start(path, self.state().t)
+        source = FollowerSource(follower, path, watchdog=WATCHDOG)
+        source.start(self.state().t)
         if timeout is None:
             profile = getattr(follower, "profile", None)
             nominal = (
@@ -372,26 +346,35 @@ class Navigator:
         run.start_time = start
         distance0 = self.estimator.distance
         shown = 0.0
-        next_tick = start
+
+        def trace(cycle: Cycle) -> None:
+            nonlocal shown
+            if (
+                cycle.sent is None
+                or cycle.decision.source != source.name
+                or source.state is None
+                or source.twist is None
+            ):
+                return
+            self._record(run, source.state, source.twist)
+            if progress is not None:
+                covered = min(max(self.estimator.distance - distance0, 0.0), path.length)
+                progress.update(covered - shown)
+                shown = covered
+
+        runtime.pacer = LinkPacer(c, follower.dt)
+        runtime.add_source(source)
+        runtime.add_sink(trace)
         try:
-            while True:
-                state = self.state()
-                command = follower.update(state)
-                if follower.done:
-                    break
-                self.send(command)
-                self._record(run, state, command)
-                if progress is not None:
-                    covered = min(max(self.estimator.distance - distance0, 0.0), path.length)
-                    progress.update(covered - shown)
-                    shown = covered
-                if state.t - start > timeout:
-                    break
-                next_tick += period
-                c.sleep(max(0.0, next_tick - clock.now()))
+            runtime.run(until=lambda: source.finished or clock.now() - start > timeout)
+            if source.failure:
+                raise NavigationError(source.failure)
             run.completed = follower.done
             run.end_time = clock.now()
         finally:
+            runtime.remove_source(source.name)
+            runtime.remove_sink(trace)
+            runtime.discard_pending()
             self._pending.clear()
             if not c.link.closed:
                 c.stop()

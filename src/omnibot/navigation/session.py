@@ -15,8 +15,8 @@ from omnibot.client.client import RobotClient
 from omnibot.control.followers.base import make_follower
 from omnibot.control.paths.path import Path
 from omnibot.control.paths.profile import MotionLimits
-from omnibot.estimation.odometry import Pose2D
 from omnibot.estimation.slip import SlipParameters
+from omnibot.motion import Pose2D
 from omnibot.navigation.metrics import Tolerances, judge, tracking_report
 from omnibot.navigation.runner import STANDSTILL, FollowRun, Navigator
 from omnibot.progress import Progress

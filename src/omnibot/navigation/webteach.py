@@ -1,19 +1,22 @@
 """Teach and repeat from the dashboard: record the path the robot is driven along, then follow it.
 
-:class:`PathTeacher` is the dashboard's teach hook (:class:`omnibot.web.teach.TeachRepeat`). It keeps
-its own estimate of the pose from the controller's telemetry (the ``fused`` estimator, started at
-the pose the page shows, so the page and the path share a frame), and:
+:class:`PathTeacher` is the dashboard's teach hook (:class:`omnibot.web.teach.TeachRepeat`). It joins
+the dashboard's runtime: the runtime's estimator (the ``fused`` one, started at the pose the page
+shows, so the page and the path share a frame) gives the state, predicted to each cycle's time;
+a sink of its own records and watches the repeat, and:
 
 * **Teach** starts a :class:`~omnibot.control.paths.teach.PathRecorder` (a pose every 2 cm, heading
   kept): drive the robot with the page's stick, keys or a gamepad;
 * **Stop** ends the recording (or stops a repeat);
-* **Repeat** follows the taught path with the ``tracker`` at the dashboard's command rate, speed
-  capped at ``speed``, with the controller's wheel-speed loop on (MODE bit 1, when every wheel has an
+* **Repeat** adds a :class:`~omnibot.runtime.sources.FollowerSource` (the same follower path as
+  ``omnibot follow``) with the ``tracker`` at the dashboard's command rate, speed capped at
+  ``speed``, with the controller's wheel-speed loop on (MODE bit 1, when every wheel has an
   encoder; the previous mode comes back when the repeat ends). If the robot is not where the path
   starts, it first drives straight there.
 
-Everything runs in the dashboard's link thread, which owns the client; the page's driving is
-ignored while a path is followed, and the emergency stop ends a repeat.
+The page's driving has a higher priority than the repeat: it takes over, and when it lets go
+the repeat resumes from where the robot is (:mod:`omnibot.runtime.sources`). The emergency stop, a
+command the controller refuses and a latched sonar stop end the repeat, and the page is told why.
 """
 
 from __future__ import annotations
@@ -21,17 +24,19 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from omnibot.client.client import RobotClient
-from omnibot.client.events import Telemetry
-from omnibot.control.followers.base import Follower, State, make_follower
+import numpy as np
+
+from omnibot.control.followers.base import make_follower
 from omnibot.control.paths.path import Path
 from omnibot.control.paths.teach import PathRecorder
 from omnibot.estimation.estimator import PoseEstimator
-from omnibot.estimation.odometry import Pose2D
 from omnibot.estimation.slip import SlipParameters
-from omnibot.navigation.runner import submit_vel
+from omnibot.motion import Pose2D
 from omnibot.navigation.session import follower_limits
 from omnibot.robot.description import RobotDescription
+from omnibot.runtime.cycle import Cycle
+from omnibot.runtime.runtime import Runtime
+from omnibot.runtime.sources import FollowerSource
 
 APPROACH_GAP = 0.02
 """m: farther than this from the path's start, a repeat first drives straight to it."""
@@ -41,7 +46,8 @@ WATCHDOG = 0.25
 
 def gains_for(period: float) -> dict[str, float]:
     """Tracker gains for a control period (the defaults are for 100 Hz): the loop gain per period
-    stays below 0.5, the lead covers telemetry age plus one period."""
+    stays below 0.5. The runtime predicts the state to the cycle's time (telemetry age covered), so the
+    lead is the 100 Hz one (0.04 s of actuation) plus half a period (a command holds for a period)."""
     scale = min(1.0, 0.01 / period)
     return {
         "cross": 45.0 * scale,
@@ -50,7 +56,7 @@ def gains_for(period: float) -> dict[str, float]:
         "along_i": 20.0 * scale * scale,
         "heading": 8.0 * scale,
         "heading_i": 10.0 * scale * scale,
-        "lead": 0.04 + period,
+        "lead": 0.04 + 0.5 * period,
     }
 
 
@@ -64,6 +70,7 @@ class PathTeacher:
         period: float = 0.05,
         speed: float = 0.3,
         slip: SlipParameters | None = None,
+        priority: int = 10,
     ) -> None:
         if not (period > 0 and speed > 0):
             raise ValueError(f"period and speed must be positive, got {period} and {speed}")
@@ -71,30 +78,53 @@ class PathTeacher:
         self.period = period
         self.speed = speed
         self.slip = slip
-        self.estimator: PoseEstimator | None = None
+        self.priority = priority
+        self.runtime: Runtime | None = None
         self.recorder: PathRecorder | None = None
         self.path: Path | None = None
         """The last taught path (estimator frame = the page's frame)."""
-        self.follower: Follower | None = None
-        self._client: RobotClient | None = None
-        self._start: Pose2D = Pose2D(0.0, 0.0, 0.0)
+        self.source: FollowerSource | None = None
+        """The repeat under way (None when not repeating)."""
         self._mode: int | None = None  # the MODE to restore after a repeat
         cpr = {e.wheel for e in robot.encoders.motors}
         self.wheel_loop = all(w.name in cpr for w in robot.wheels)
 
+    @property
+    def following(self) -> bool:
+        return self.source is not None
+
+    @property
+    def estimator(self) -> PoseEstimator | None:
+        est = None if self.runtime is None else self.runtime.estimator
+        return est if isinstance(est, PoseEstimator) else None
+
     # ------------------------------------------------------------------ the hook
 
-    def command(self, action: str, client: RobotClient, pose: tuple[float, float, float] | None) -> str:
+    def attach(self, runtime: Runtime, pose: tuple[float, float, float] | None) -> None:
+        """Join ``runtime``: its estimator (made here unless it has one) and a sink."""
+        self.runtime = runtime
+        if runtime.estimator is None:
+            tracking = len(self.robot.encoders.tracking) >= 2
+            runtime.estimator = PoseEstimator(
+                self.robot,
+                translation="tracking" if tracking else "encoders",
+                start=Pose2D(*pose) if pose is not None else Pose2D(0.0, 0.0, 0.0),
+                name="teach",
+                slip=self.slip,
+            )
+        runtime.add_sink(self._on_cycle)
+
+    def command(self, action: str, pose: tuple[float, float, float] | None) -> str:
         """Teach (``record``), Stop (``stop``) or Repeat (``follow``); the line the page shows."""
-        self._attach(client, pose)
         if action == "record":
-            self.follower = None
+            if self.source is not None:
+                self._end_repeat()
             self.recorder = PathRecorder("distance", 0.02)
             self._record()
             return "teaching: drive the path, then press Stop"
         if action == "stop":
-            if self.follower is not None:
-                self._end_repeat(client)
+            if self.source is not None:
+                self._end_repeat()
                 return "repeat stopped"
             if self.recorder is None:
                 return "nothing to stop"
@@ -108,60 +138,31 @@ class PathTeacher:
                 return "stop teaching first"
             if self.path is None:
                 return "nothing taught yet: press Teach and drive a path"
-            return self._repeat(client)
+            if self.source is not None:
+                return "already repeating"
+            return self._repeat()
         raise ValueError(f"unknown teach action {action!r}")
-
-    def tick(self, client: RobotClient, pose: tuple[float, float, float] | None) -> bool:
-        """Every link period: record a pose, or send the follower's command; True while following."""
-        self._attach(client, pose)
-        if self.recorder is not None:
-            self._record()
-        follower = self.follower
-        if follower is None:
-            return False
-        command = follower.update(self.state(client))
-        if follower.done:
-            self._end_repeat(client)
-            return False
-        submit_vel(client, command, WATCHDOG)
-        return True
 
     # ------------------------------------------------------------------ helpers
 
-    def state(self, client: RobotClient) -> State:
-        """The latest estimate, stamped with the link clock's now (the tracker's ``lead`` covers the
-        telemetry's age, at most a period)."""
-        assert self.estimator is not None
-        est = self.estimator.estimate
-        now = client.clock.now()
-        return State(now, est.x, est.y, est.theta, est.vx, est.vy, est.w, est.slipping)
-
-    def _attach(self, client: RobotClient, pose: tuple[float, float, float] | None) -> None:
-        if self._client is client:
-            return
-        if self._client is not None:
-            self._client.remove_listener(self._on_telemetry)
-        self._client = client
-        self._start = Pose2D(*pose) if pose is not None else Pose2D(0.0, 0.0, 0.0)
-        self.estimator = None
-        client.on_telemetry(self._on_telemetry)
-
-    def _on_telemetry(self, event: Telemetry) -> None:
-        if self.estimator is None:
-            tracking = event.tracking is not None and len(self.robot.encoders.tracking) >= 2
-            self.estimator = PoseEstimator(
-                self.robot,
-                translation="tracking" if tracking else "encoders",
-                start=self._start,
-                name="teach",
-                slip=self.slip,
-            )
-        self.estimator.update(event)
+    def _on_cycle(self, cycle: Cycle) -> None:
+        if self.recorder is not None:
+            self._record()
+        source = self.source
+        if source is not None and source.finished:
+            failure = source.failure
+            self._end_repeat()
+            assert self.runtime is not None
+            if failure:
+                self.runtime.notify("warn", f"repeat ended: {failure}", "repeat")
+            else:
+                self.runtime.notify("info", "repeat finished", "repeat")
 
     def _record(self) -> None:
-        if self.recorder is None or self.estimator is None:
+        est = self.estimator
+        if self.recorder is None or est is None or self.runtime is None or not self.runtime.samples:
             return
-        e = self.estimator.estimate
+        e = est.estimate
         self.recorder.add(e.t, e.x, e.y, e.theta)
 
     def _finish(self) -> Path | None:
@@ -173,29 +174,37 @@ class PathTeacher:
             return None
         return path if path.length >= 0.05 else None
 
-    def _repeat(self, client: RobotClient) -> str:
-        assert self.path is not None
-        if self.estimator is None:
+    def _repeat(self) -> str:
+        assert self.path is not None and self.runtime is not None
+        runtime = self.runtime
+        state = runtime.estimate_now()
+        if state is None or not runtime.samples:
             return "no telemetry yet: cannot locate the robot"
         path = self.path
-        e = self.estimator.estimate
-        gap = math.hypot(path.x[0] - e.x, path.y[0] - e.y)
+        gap = math.hypot(path.x[0] - state.x, path.y[0] - state.y)
         note = ""
         if gap > APPROACH_GAP:
-            path = _with_approach(path, e.x, e.y, e.theta)
+            path = _with_approach(path, state.x, state.y, state.theta)
             note = f", driving {gap:.2f} m to its start first"
         limits = follower_limits(self.robot, self.speed)
         follower = make_follower("tracker", limits, rate=1.0 / self.period, **gains_for(self.period))
+        client = runtime.client
         if self.wheel_loop:
             self._mode = client.mode_bits if client.mode_bits is not None else client.status().mode
             client.mode(closed_loop=True)
-        follower.start(path, client.clock.now())
-        self.follower = follower
+        self.source = FollowerSource(follower, path, name="repeat", priority=self.priority, watchdog=WATCHDOG)
+        self.source.start(state.t)
+        runtime.add_source(self.source)
         return f"repeating the taught {self.path.length:.2f} m{note}"
 
-    def _end_repeat(self, client: RobotClient) -> None:
-        self.follower = None
-        client.stop()
+    def _end_repeat(self) -> None:
+        assert self.runtime is not None
+        if self.source is not None:
+            self.runtime.remove_source(self.source.name)
+            self.source = None
+        client = self.runtime.client
+        if not self.runtime.latched:  # STOP would release a latched sonar stop behind the user's back
+            client.stop()
         if self._mode is not None:
             client.mode(self._mode)
             self._mode = None
@@ -203,8 +212,6 @@ class PathTeacher:
 
 def _with_approach(path: Path, x: float, y: float, theta: float) -> Path:
     """``path`` with a straight run from (x, y) to its start in front (heading turning to the path's)."""
-    import numpy as np
-
     kwargs: dict[str, Any] = {}
     if path.v is not None:
         kwargs["v"] = np.concatenate(([path.v[0]], path.v))

@@ -31,14 +31,6 @@ if TYPE_CHECKING:
 FloatArray = NDArray[np.float64]
 
 
-class Twist(NamedTuple):
-    """A planar velocity: vx, vy in m/s, w in rad/s."""
-
-    vx: float
-    vy: float
-    w: float
-
-
 def contact_rows(
     x: ArrayLike, y: ArrayLike, drive_angles: ArrayLike, gammas: ArrayLike
 ) -> tuple[FloatArray, FloatArray]:

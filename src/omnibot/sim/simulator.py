@@ -46,8 +46,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from omnibot.errors import SimulationError
+from omnibot.motion import Twist
 from omnibot.robot.description import RobotDescription
-from omnibot.robot.kinematics import Twist
 from omnibot.sim.clock import SimClock
 from omnibot.sim.sensors import Gyro, MotorEncoders, Sonar, TrackingWheels
 from omnibot.sim.world import Contact, Pose, World, convex_hull, load_world

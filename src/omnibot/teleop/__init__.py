@@ -6,12 +6,13 @@
       -> JoyState (ROS joy convention)            mapping.py    pure
       -> joy_to_command(config) -> limit_twist()  mapping.py    pure, seed 003's parameters (config.py)
       -> Deadman.update()                         deadman.py    pure: drive / repeated zero / silent
-      -> client.vel(..., vel_timeout)             loop.py       paced in real time (pacing.py)
+      -> runtime: arbitrate, client.vel(..., vel_timeout)   loop.py  (a PadSource of omnibot.runtime),
+                                                                 paced in real time (pacing.py)
 
-Modules: ``config`` (TeleopConfig, YAML), ``mapping`` (JoyState, Twist, deadzone, limits),
-``deadman`` (when to stop), ``pacing`` (real time on sim:// and real links), ``loop`` (Teleop),
-``joystick`` (pygame), ``keyboard`` (terminal), ``simlink`` (the simulator behind a link),
-``command`` (``omnibot teleop``).
+Modules: ``config`` (TeleopConfig, YAML), ``mapping`` (JoyState, deadzone, limits; ``Twist`` is
+:mod:`omnibot.motion`'s), ``deadman`` (when to stop), ``pacing`` (real time on sim:// and real
+links), ``loop`` (Teleop), ``joystick`` (pygame), ``keyboard`` (terminal), ``command``
+(``omnibot teleop``).
 """
 
 from importlib import import_module

@@ -65,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
     from omnibot.teleop.config import load_teleop_config
     from omnibot.teleop.keyboard import HELP
     from omnibot.teleop.loop import Teleop
-    from omnibot.teleop.simlink import sim_device
+    from omnibot.transport.device import find_device
 
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
         raise ConfigError(f"expected a positive number of seconds, got {args.duration}", key="--duration")
@@ -80,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
         client = session.client
         if hasattr(source, "__enter__"):
             stack.enter_context(source)
-        device = sim_device(client.link)
+        device = find_device(client.link)
         where = "simulated, paced to the wall clock" if device is not None else "real time"
         _say(
             f"{client.link.url} ({where}), {source.name}; VEL every {config.period * 1000:.0f} ms, watchdog {config.vel_timeout:g} s"

@@ -23,7 +23,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from enum import Enum
 
-from omnibot.teleop.mapping import ZERO, Twist
+from omnibot.motion import ZERO, Twist
 
 
 class Phase(Enum):

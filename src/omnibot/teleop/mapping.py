@@ -21,26 +21,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from omnibot.client.limits import Limits
+from omnibot.motion import ZERO, Twist
 from omnibot.teleop.config import TeleopConfig
-
-
-@dataclass(frozen=True)
-class Twist:
-    """A body twist: vx, vy in m/s (x forward, y left), w in rad/s (counter-clockwise)."""
-
-    vx: float = 0.0
-    vy: float = 0.0
-    w: float = 0.0
-
-    @property
-    def is_zero(self) -> bool:
-        return self.vx == 0.0 and self.vy == 0.0 and self.w == 0.0
-
-    def scaled(self, k: float) -> Twist:
-        return Twist(self.vx * k, self.vy * k, self.w * k)
-
-
-ZERO = Twist()
 
 
 @dataclass(frozen=True)

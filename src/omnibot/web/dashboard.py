@@ -37,11 +37,11 @@ import uvicorn
 
 from omnibot.client.session import open_robot
 from omnibot.errors import ConfigError, OmnibotError
-from omnibot.estimation.odometry import Pose2D
+from omnibot.motion import Pose2D
 from omnibot.robot.description import RobotDescription
 from omnibot.sim.world import World, load_world
 from omnibot.teleop.config import TeleopConfig
-from omnibot.teleop.simlink import sim_device
+from omnibot.transport.device import find_device
 from omnibot.web.access import HostCheck, HostPolicy, is_loopback
 from omnibot.web.link import RobotLink
 from omnibot.web.messages import MAX_FRAME
@@ -110,7 +110,7 @@ class Dashboard:
             mode = client.status().mode
             if make_teach is not None:
                 teach = make_teach(description)
-            device = sim_device(client.link)
+            device = find_device(client.link)
             if world is not None:
                 the_world: World | None = world if isinstance(world, World) else load_world(world)
             else:

@@ -1,22 +1,27 @@
-"""The robot link thread: the one thread that owns the client, fed by the web server through queues.
+"""The robot link thread: the one thread that runs the runtime (which owns the client), fed by the
+web server through queues.
 
 ::
 
-    web server (asyncio thread)                     link thread (owns RobotClient)
+    web server (asyncio thread)                     link thread (runs the Runtime)
       ws message -> parse_message() -> submit() --> inbox (queue.Queue, at most INBOX_MAX)
                                                       every period (autorepeat_rate, Pacer):
-                                                        drain inbox: drive / joy / estop / resume / teach
-                                                        Deadman -> client.vel(..., vel_timeout)
+                                                        drain inbox: drive / joy -> the page source,
+                                                          estop / resume -> the estop lock, teach
+                                                        runtime cycle: sources (page 100, repeat 10,
+                                                          any other) -> arbiter -> VEL -> sinks
                                                         pump: TEL -> StateTracker, WARN -> log
-      broadcaster <- outbox (queue.Queue) <-------- state frame (and log frames)
+      broadcaster <- outbox (queue.Queue) <-------- state frame (who drives and why), log frames
+                                                    (every runtime notice)
 
 The client is not thread-safe, so nothing else touches it once :meth:`RobotLink.start` ran. Driving
-from the page has the teleop deadman: the page repeats its input while a key is held or the stick
-is dragged, and the robot stops (repeated zero VEL, then the VEL watchdog) when the input says
-"let go", when the page goes away, or when no input came for ``input_timeout``. The emergency stop
-sends STOP at the next period and ignores driving until the page sends ``resume``. On shutdown
-the link leaves the controller as it was found (:func:`omnibot.client.session.leave`: STOP,
-telemetry off, its MODE back) and closes the client.
+from the page has the teleop deadman (a :class:`~omnibot.runtime.sources.DeadmanSource`): the page
+repeats its input while a key is held or the stick is dragged, and the robot stops (repeated zero
+VEL, then the VEL watchdog) when the input says "let go", when the page goes away, or when no input
+came for ``input_timeout``. The page outranks the repeat: it takes over and hands back. The emergency
+stop is the runtime's top lock: STOP at once, nothing drives (a repeat ends) until the page sends
+``resume``. On shutdown the link leaves the controller as it was found
+(:func:`omnibot.client.session.leave`: STOP, telemetry off, its MODE back) and closes the client.
 """
 
 from __future__ import annotations
@@ -35,14 +40,17 @@ from omnibot.client.client import RobotClient
 from omnibot.client.events import ErrorEvent, Event, ResetEvent, WarnEvent
 from omnibot.client.session import leave
 from omnibot.errors import ControllerError, LinkError
-from omnibot.estimation.odometry import Pose2D
+from omnibot.motion import Pose2D, Twist
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription
+from omnibot.runtime.arbiter import EStop as EStopLock
+from omnibot.runtime.cycle import Cycle
+from omnibot.runtime.runtime import Runtime
+from omnibot.runtime.sources import DeadmanSource
 from omnibot.teleop.config import TeleopConfig
-from omnibot.teleop.deadman import Deadman, Sample
+from omnibot.teleop.deadman import Deadman, Phase, Sample
 from omnibot.teleop.mapping import (
     JoyState,
-    Twist,
     TwistLimits,
     axes_tuple,
     fractions_to_twist,
@@ -50,7 +58,7 @@ from omnibot.teleop.mapping import (
     limit_twist,
 )
 from omnibot.teleop.pacing import Pacer
-from omnibot.teleop.simlink import sim_device
+from omnibot.transport.device import find_device
 from omnibot.web.messages import Drive, EStop, Joy, Resume, Teach
 from omnibot.web.state import StateTracker
 from omnibot.web.teach import NOT_AVAILABLE, TeachRepeat
@@ -65,6 +73,8 @@ answers the page with an error), so a flood cannot grow memory or delay the link
 one bounded batch a period."""
 DRIVE_RATE_MAX = math.pi
 """rad/s at full turn from the page (keys, slider): half a turn a second, whatever the robot could do."""
+PAGE_PRIORITY = 100
+"""The page's driving in arbitration: above the repeat (10), so it takes over and hands back."""
 
 
 @dataclass(frozen=True)
@@ -76,9 +86,10 @@ Request = Drive | Joy | EStop | Resume | Teach | PageGone
 
 
 class RobotLink:
-    """Owns ``client`` in a thread of its own; :meth:`submit` and :attr:`outbox` are the only ways in
-    and out. ``start`` is where odometry starts on a link without ground truth (None: the origin);
-    ``wall``/``sleep`` are the wall clock (tests may pass fakes)."""
+    """Runs the runtime (the owner of ``client``) in a thread of its own; :meth:`submit` and
+    :attr:`outbox` are the only ways in and out. ``start`` is where odometry starts on a link without
+    ground truth (None: the origin); ``wall``/``sleep`` are the wall clock (tests may pass fakes).
+    More sources and sinks may join :attr:`runtime` before :meth:`start` (``omnibot run``)."""
 
     def __init__(
         self,
@@ -91,6 +102,7 @@ class RobotLink:
         wall: Callable[[], float] = time.monotonic,
         sleep: Callable[[float], None] = time.sleep,
         mode: int | None = None,
+        runtime: Runtime | None = None,
     ) -> None:
         self.client = client
         self.mode = mode
@@ -108,17 +120,34 @@ class RobotLink:
         self._wall, self._sleep = wall, sleep
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
-        self._device = sim_device(client.link)
+        self._device = find_device(client.link)
         truth = self._truth()
         self.tracker = StateTracker(robot, client.link.url, Pose2D(*truth) if truth else start)
-        self.deadman = Deadman(self.config.input_timeout, self.config.stop_repeats)
-        self.estop = False
-        self.following = False
-        self._sample: Sample | None = None
+        self.page = DeadmanSource("page", self.config, priority=PAGE_PRIORITY)
+        """The page's stick, keys and browser gamepad."""
+        self.estop_lock = EStopLock()
+        self.runtime = runtime or Runtime(
+            client, period=self.config.period, vel_timeout=self.config.vel_timeout
+        )
+        self.runtime.add_source(self.page)
+        self.runtime.add_lock(self.estop_lock.lock)
+        self.runtime.error_hooks.append(self._command_failed)
         self._source = ""
         self._twist: Twist | None = None
         self._configured: float | None = None
         self._reset = False
+
+    @property
+    def deadman(self) -> Deadman:
+        return self.page.deadman
+
+    @property
+    def estop(self) -> bool:
+        return self.estop_lock.engaged
+
+    @property
+    def following(self) -> bool:
+        return self.teach is not None and self.teach.following
 
     # ------------------------------------------------------------------ other threads
 
@@ -151,6 +180,7 @@ class RobotLink:
                 log.error("the robot link thread did not stop within %s s", timeout)
             self._thread = None
         else:
+            self.runtime.close()
             self.client.close()
 
     @property
@@ -170,6 +200,7 @@ class RobotLink:
         try:
             self.setup()
             pacer = Pacer(client, self.config.period, wall=self._wall, sleep=self._sleep)
+            self.runtime.pacer = pacer
             while not self._stop.is_set():
                 self.tick(pacer.now())
                 try:
@@ -181,14 +212,19 @@ class RobotLink:
             log.exception("robot link failed")
             self._emit({"type": "log", "level": "error", "text": f"robot link stopped: {exc}"})
         finally:
+            self.runtime.close()
             leave(client, self.mode)
 
     def setup(self) -> None:
-        """Telemetry and sonars on (link thread; tests may call it directly with no thread)."""
+        """Telemetry and sonars on, the teach hook joined (link thread; tests may call it directly with
+        no thread)."""
         client = self.client
         if self._configured is None:
             client.on_telemetry(self.tracker)
             client.add_listener(self._on_event, WarnEvent, ErrorEvent, ResetEvent)
+            self.runtime.start()
+            if self.teach is not None:
+                self.teach.attach(self.runtime, self._pose())
         self._reset = False
         try:
             client.telemetry(TEL_PERIOD, codes.TEL_MASK)
@@ -199,7 +235,7 @@ class RobotLink:
         self._configured = client.clock.now()
 
     def tick(self, now: float) -> None:
-        """One period: handle the requests waiting, drive, emit a state frame (link thread)."""
+        """One period: handle the requests waiting, one runtime cycle, a state frame (link thread)."""
         if self._reset:
             self._log("warn", "the controller restarted: telemetry and sonars set up again")
             self.setup()
@@ -211,21 +247,40 @@ class RobotLink:
             self._handle(request, now)
         if self._gone_waiting.is_set():
             self._gone_waiting.clear()
-            self._sample = None
+            self.page.sample = None
         if self._estop_waiting.is_set():
             self._estop_waiting.clear()
             self._estop()
-        pose = self._pose()
-        if self.teach is not None and not self.estop:
-            self.following = self._call_teach(lambda t: t.tick(self.client, pose), False)
-        if not self.estop and not self.following:
-            action = self.deadman.update(now, self._sample)
-            if action.twist is not None:
-                self._send(action.twist)
-            self._twist = action.twist
+        cycle = self.runtime.step(now)
+        self._after(cycle)
+
+    def _after(self, cycle: Cycle) -> None:
+        for notice in cycle.notices:
+            self._log(notice.level, notice.text)
+        if cycle.sent is not None:
+            health = self.tracker.health
+            if self.runtime.rtt is not None:
+                health.rtt = self.runtime.rtt
+            if not health.ok:
+                health.ok, health.error = True, ""
+                self._log("info", "robot link back")
+        decision = cycle.decision
+        page = self.page.deadman.phase
+        self._twist = self.page.twist if decision.source == self.page.name else cycle.sent
+        if self.estop:
+            state = "estop"
+        elif page is not Phase.IDLE:
+            state = page.value
+        elif self.following:
+            state = "following"
+        else:
+            state = "idle"
         drive = {
-            "state": "estop" if self.estop else "following" if self.following else self.deadman.phase.value,
+            "state": state,
             "source": self._source,
+            "control": decision.source,
+            "reason": decision.reason,
+            "latched": cycle.latched,
             "twist": None
             if self._twist is None
             else [round(v, 3) for v in (self._twist.vx, self._twist.vy, self._twist.w)],
@@ -240,34 +295,30 @@ class RobotLink:
             self._estop()
         elif isinstance(request, Resume):
             if self.estop:
-                self.estop = False
+                self.estop_lock.resume()
                 self._log("info", "emergency stop cleared: drive again with a fresh input")
         elif isinstance(request, Teach):
             self._teach(request.action)
         elif isinstance(request, PageGone):
-            self._sample = None
+            self.page.sample = None
         elif self.estop:
             return  # driving is ignored until resume
         elif isinstance(request, Drive):
             twist = fractions_to_twist(request.vx, request.vy, request.w, self.drive_limits)
-            self._sample = Sample(twist, request.enable, now)
+            self.page.sample = Sample(twist, request.enable, now)
             self._source = request.source
         else:  # Joy: the Gamepad API's axes are up/left negative, ROS joy's positive
             joy = JoyState(
                 axes_tuple([-a for a in request.axes]), tuple(int(b > 0.5) for b in request.buttons), now
             )
             cmd = joy_to_command(self.config, joy)
-            self._sample = Sample(limit_twist(cmd.twist, self.limits), cmd.enabled, now)
+            self.page.sample = Sample(limit_twist(cmd.twist, self.limits), cmd.enabled, now)
             self._source = "gamepad"
 
     def _estop(self) -> None:
-        self.estop = True
-        self._sample = None
-        self.deadman.reset()
+        self.estop_lock.press("page")
+        self.page.reset()
         self._twist = None
-        if self.following and self.teach is not None:
-            self._call_teach(lambda t: t.command("stop", self.client, self._pose()), "")
-            self.following = False
         try:
             self.client.stop()
             self._log("warn", "emergency stop: STOP sent; press Resume to drive again")
@@ -278,31 +329,20 @@ class RobotLink:
         if self.teach is None:
             self._log("error", NOT_AVAILABLE)
             return
-        text = self._call_teach(lambda t: t.command(action, self.client, self._pose()), "")
+        try:
+            text = self.teach.command(action, self._pose())
+        except Exception as exc:
+            self._log("error", f"teach and repeat failed: {exc}")
+            return
         if text:
             self._log("info", text)
 
-    def _call_teach(self, call: Callable[[TeachRepeat], Any], default: Any) -> Any:
-        assert self.teach is not None
-        try:
-            return call(self.teach)
-        except Exception as exc:
-            self._log("error", f"teach and repeat failed: {exc}")
-            return default
-
-    def _send(self, twist: Twist) -> None:
-        client = self.client
-        t0 = client.clock.now()
-        try:
-            client.vel(twist.vx, twist.vy, twist.w, self.config.vel_timeout)
-        except (ControllerError, LinkError, ValueError) as exc:
-            self._link_error(exc)
-            return
+    def _command_failed(self, source: str, exc: BaseException) -> None:
         health = self.tracker.health
-        health.rtt = client.clock.now() - t0
-        if not health.ok:
-            health.ok, health.error = True, ""
-            self._log("info", "robot link back")
+        health.errors += 1
+        if isinstance(exc, LinkError):
+            health.ok = False
+            health.error = str(exc)
 
     def _link_error(self, exc: Exception) -> None:
         health = self.tracker.health

@@ -15,7 +15,8 @@ from typing import Any
 
 from omnibot.client.events import Telemetry
 from omnibot.errors import ConfigError
-from omnibot.estimation.odometry import Pose2D, WheelOdometry
+from omnibot.estimation.odometry import WheelOdometry
+from omnibot.motion import Pose2D
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription
 

@@ -17,41 +17,21 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any, ClassVar, TypeVar
 
 from omnibot.control.paths.path import Path
 from omnibot.control.paths.profile import MotionLimits, SpeedProfile, time_optimal_profile
 from omnibot.errors import ConfigError
+from omnibot.motion import Estimate, Twist
+
+State = Estimate
+"""The robot's estimated state: world pose and world-frame velocity at time ``t`` (s); the
+estimators' :class:`~omnibot.motion.Estimate` itself."""
 
 
-@dataclass(frozen=True)
-class State:
-    """The robot's estimated state: world pose and world-frame velocity at time ``t`` (s)."""
-
-    t: float
-    x: float
-    y: float
-    theta: float
-    vx: float = 0.0
-    vy: float = 0.0
-    w: float = 0.0
-    slipping: bool = False
-    """The estimator saw the wheels slip (its velocity is then less trustworthy)."""
-
-
-@dataclass(frozen=True)
-class Command:
-    """A body-frame velocity command: vx, vy m/s (x forward, y left), w rad/s (counter-clockwise)."""
-
-    vx: float
-    vy: float
-    w: float
-
-    @property
-    def speed(self) -> float:
-        return math.hypot(self.vx, self.vy)
-
+Command = Twist
+"""A body-frame velocity command: vx, vy m/s (x forward, y left), w rad/s (counter-clockwise);
+the shared :class:`~omnibot.motion.Twist`."""
 
 STOP = Command(0.0, 0.0, 0.0)
 PLAN_MARGIN = 0.7

@@ -86,6 +86,9 @@ function onState(s) {
   $("twist").textContent = d.twist
     ? `vx ${fmt(d.twist[0])} m/s, vy ${fmt(d.twist[1])} m/s, w ${fmt(d.twist[2])} rad/s`
     : "none";
+  $("control").textContent = d.reason
+    ? d.latched ? `${d.reason}; the controller latched its emergency stop` : d.reason
+    : "-";
   $("robot-state").textContent = s.robot_state || "-";
   $("battery").textContent = s.battery ? `${fmt(s.battery)} V` : "-";
   $("ranges").textContent = s.ranges

@@ -1,0 +1,84 @@
+"""The types every layer shares: a pose, a twist, and the estimated state of the robot.
+
+* :class:`Pose2D`: a planar pose (x, y in m, theta in rad), world or path frame;
+* :class:`Twist`: a planar velocity (vx, vy in m/s, w in rad/s); body frame for commands
+  (x forward, y left, counter-clockwise positive), world frame where a docstring says so;
+* :class:`Estimate`: the robot's estimated pose and world-frame velocity at a time, what the
+  estimators produce, the runtime fans out to its sinks and the followers steer by (``State``
+  in :mod:`omnibot.control.followers.base` is this class).
+
+Nothing here imports anything of omnibot: any module may use these types.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+
+@dataclass(frozen=True)
+class Pose2D:
+    """A planar pose: x, y in m, theta in rad (counter-clockwise from x)."""
+
+    x: float
+    y: float
+    theta: float
+
+
+class Twist(NamedTuple):
+    """A planar velocity: vx, vy in m/s, w in rad/s (body frame unless said otherwise)."""
+
+    vx: float = 0.0
+    vy: float = 0.0
+    w: float = 0.0
+
+    @property
+    def is_zero(self) -> bool:
+        return self.vx == 0.0 and self.vy == 0.0 and self.w == 0.0
+
+    @property
+    def speed(self) -> float:
+        """The planar speed, m/s."""
+        return math.hypot(self.vx, self.vy)
+
+    def scaled(self, k: float) -> Twist:
+        return Twist(self.vx * k, self.vy * k, self.w * k)
+
+
+ZERO = Twist()
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """Pose (world frame), world-frame velocity and flags at time ``t`` (s)."""
+
+    t: float
+    x: float
+    y: float
+    theta: float
+    vx: float = 0.0
+    vy: float = 0.0
+    w: float = 0.0
+    slipping: bool = False
+    """The estimator saw the wheels slip (its velocity is then less trustworthy)."""
+    standstill: bool = True
+
+    @property
+    def pose(self) -> Pose2D:
+        return Pose2D(self.x, self.y, self.theta)
+
+    def predict(self, t: float) -> Estimate:
+        """Extrapolated to time ``t`` at constant velocity (latency compensation)."""
+        dt = t - self.t
+        return Estimate(
+            t,
+            self.x + self.vx * dt,
+            self.y + self.vy * dt,
+            self.theta + self.w * dt,
+            self.vx,
+            self.vy,
+            self.w,
+            self.slipping,
+            self.standstill,
+        )

@@ -1,0 +1,53 @@
+"""The host runtime: the one loop that owns the client in a process; every front end plugs into it.
+
+Teleop (pad, keyboard), the dashboard (its stick, keys, browser gamepad, emergency stop, teach and
+repeat), ``omnibot follow`` and ``omnibot run`` are sources, locks and sinks of one
+:class:`Runtime`; none of them has a loop or a client of its own. One cycle, every ``period`` s
+(100 Hz by default; on ``sim://`` on the lockstep link's simulated time, so runs are deterministic)::
+
+    TEL, WARN, ERROR, RESET --listeners--> estimator (+ telemetry hooks), events, latch
+                                                |
+    every period (pacer: link clock, or the wall clock with the simulator kept in step):
+      1. collect       replies to last cycle's VELs: ERROR -> Notice to every sink and the source;
+                       ERROR 40 / WARN 13 / TEL state 3: the latched emergency stop -> Notice
+      2. estimate      the estimator's state predicted to now (telemetry age, at most 0.1 s)
+      3. sources       source.propose(cycle) -> twist | None, each (pad, page, follower, script...)
+      4. arbitrate     twist_mux: highest priority active within its timeout; locks (emergency
+                       stop 255, deadman) mask sources at or below their priority -> Decision + why
+      5. send          one VEL (clamped; the source's watchdog timeout); a fresh press of a person's
+                       deadman sends STOP first when the controller latched its emergency stop
+      6. sinks         sink(cycle): dashboard state, traces for plots and reports, teach, logs
+                       (later ROS 2 publishers, the MCAP recorder)
+      7. wait          pacer.wait(): the client pumps replies and events meanwhile
+
+The pieces: :mod:`~omnibot.runtime.cycle` (what a cycle carries), :mod:`~omnibot.runtime.arbiter`
+(priorities, timeouts, locks), :mod:`~omnibot.runtime.sources` (pad, page, follower, script),
+:mod:`~omnibot.runtime.sinks` (the sink protocol, teach, traces, notices), :mod:`~omnibot.runtime.runtime`
+(the cycle). docs/architecture.md has the whole picture and how a new front end plugs in.
+"""
+
+from omnibot.runtime.arbiter import PRIORITY_MAX, Arbiter, EStop, Lock, deadman_lock
+from omnibot.runtime.cycle import Cycle, Decision, Notice
+from omnibot.runtime.runtime import LinkPacer, Runtime, Sink, clamp_to
+from omnibot.runtime.sources import DeadmanSource, FollowerSource, PadSource, Proposal, ScriptSource, Source
+
+__all__ = [
+    "PRIORITY_MAX",
+    "Arbiter",
+    "Cycle",
+    "DeadmanSource",
+    "Decision",
+    "EStop",
+    "FollowerSource",
+    "LinkPacer",
+    "Lock",
+    "Notice",
+    "PadSource",
+    "Proposal",
+    "Runtime",
+    "ScriptSource",
+    "Sink",
+    "Source",
+    "clamp_to",
+    "deadman_lock",
+]

@@ -1,0 +1,293 @@
+"""``omnibot run``: several front ends on one runtime in one process (docs/architecture.md).
+
+::
+
+    omnibot run [ROBOT OPTIONS] [--teleop pad|keyboard] [--dashboard [--host ...]] [--follow PATH.csv]
+
+Each option adds a source (the pad or keyboard at priority 200, the page's stick and keys at 100,
+the follower at 10) or a front end (the dashboard, whose link thread then runs the runtime) to one
+:class:`~omnibot.runtime.runtime.Runtime`; the controller is left as it was found on every way out.
+Imports here are light: :func:`add_arguments` runs whenever ``omnibot`` builds its parser.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import math
+import os
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from omnibot.errors import ConfigError
+
+PAD_PRIORITY = 200
+"""A person at the robot (pad, keyboard) outranks the page (100) and the follower (10)."""
+FOLLOWER_PRIORITY = 10
+STANDSTILL = 3.0
+"""s standing still before a follow, while the gyro's bias is learned (as ``omnibot follow``)."""
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Declare ``omnibot run``'s options (the robot options shared with every command, then its own)."""
+    from omnibot.cliargs import add_robot_options
+
+    add_robot_options(
+        p,
+        world="room",
+        port_help="the simulated --robot: in lockstep, or paced to the wall clock with --teleop or --dashboard",
+    )
+    p.add_argument(
+        "--teleop",
+        choices=("pad", "keyboard"),
+        help="drive with a gamepad (pygame) or this terminal's keys, with the deadman (priority 200)",
+    )
+    p.add_argument(
+        "--dashboard", action="store_true", help="serve the dashboard (its stick and keys: priority 100)"
+    )
+    p.add_argument("--host", default="127.0.0.1", help="--dashboard: address to serve on (default 127.0.0.1)")
+    p.add_argument("--http-port", type=int, default=8080, help="--dashboard: HTTP port (default 8080)")
+    p.add_argument(
+        "--token", help="--dashboard: access token (required, and made up if not given, off loopback)"
+    )
+    p.add_argument(
+        "--allow-host",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help="--dashboard: another name of this host",
+    )
+    p.add_argument(
+        "--follow",
+        metavar="PATH.csv",
+        help="follow a path file (priority 10); the robot is taken to stand at its first pose",
+    )
+    p.add_argument(
+        "--follower", default="tracker", help="--follow: seed002, pure_pursuit or tracker (default)"
+    )
+    p.add_argument("--speed", type=float, help="--follow: speed cap, m/s (default: the robot's limit)")
+    p.add_argument(
+        "--config", metavar="FILE.yaml", help="teleop parameters (pad mapping, rate; default seed 003's)"
+    )
+    p.add_argument(
+        "--duration",
+        type=float,
+        metavar="S",
+        help="run for S seconds (default: until Ctrl-C, or the follow's end)",
+    )
+
+
+def _say(text: str) -> None:
+    print(f"run: {text}", flush=True)
+
+
+@dataclass
+class Parts:
+    """What ``run`` added to the runtime, and how to end it."""
+
+    follower: Any = None
+    pad: Any = None
+    device: Any = None
+    lost: bool = False
+    """The dashboard's robot link ended."""
+    closers: list[Callable[[], object]] = field(default_factory=list)
+
+    def close(self) -> None:
+        """Release the input devices opened for the run (errors ignored: this runs on the way out)."""
+        for close in reversed(self.closers):
+            with contextlib.suppress(Exception):
+                close()
+
+
+def _check(args: argparse.Namespace) -> None:
+    from omnibot.control.followers.base import follower_names
+
+    if not (args.teleop or args.dashboard or args.follow):
+        raise ConfigError("nothing to run: give --teleop, --dashboard and/or --follow")
+    if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
+        raise ConfigError(f"expected a positive number of seconds, got {args.duration}", key="--duration")
+    if args.speed is not None and not (math.isfinite(args.speed) and args.speed > 0):
+        raise ConfigError(f"expected a positive speed in m/s, got {args.speed}", key="--speed")
+    if args.follower not in follower_names():
+        raise ConfigError(
+            f"unknown follower '{args.follower}'; expected one of: {', '.join(follower_names())}",
+            key="--follower",
+        )
+
+
+def compose(runtime: Any, robot: Any, args: argparse.Namespace, config: Any, path: Any) -> Parts:
+    """Add the pad and the follower to ``runtime`` (any thread: before it runs)."""
+    from omnibot.control.followers.base import make_follower
+    from omnibot.estimation.estimator import make_estimator
+    from omnibot.motion import Pose2D
+    from omnibot.navigation.runner import WATCHDOG
+    from omnibot.navigation.session import follower_limits
+    from omnibot.navigation.webteach import WATCHDOG as SLOW_WATCHDOG
+    from omnibot.navigation.webteach import gains_for
+    from omnibot.runtime.sinks import NoticePrinter
+    from omnibot.runtime.sources import FollowerSource, PadSource
+    from omnibot.teleop.command import open_source
+    from omnibot.teleop.mapping import TwistLimits
+
+    parts = Parts()
+    period = runtime.period
+    if path is not None:
+        runtime.estimator = make_estimator("fused", robot, Pose2D(*path.start))
+        gains = gains_for(period) if args.follower == "tracker" and period > 0.0101 else {}
+        follower = make_follower(
+            args.follower, follower_limits(robot, args.speed), rate=1.0 / period, **gains
+        )
+        parts.follower = FollowerSource(
+            follower,
+            path,
+            priority=FOLLOWER_PRIORITY,
+            watchdog=WATCHDOG if period <= 0.0101 else SLOW_WATCHDOG,
+        )
+        runtime.add_source(parts.follower)
+    if args.teleop:
+        flags = argparse.Namespace(keyboard=args.teleop == "keyboard", joystick=args.teleop == "pad")
+        device = open_source(flags, config, _say)
+        parts.closers.append(device.close)
+        if hasattr(device, "__enter__"):
+            device.__enter__()
+            parts.closers.append(lambda: device.__exit__(None, None, None))
+        parts.device = device
+        limits = TwistLimits.from_limits(runtime.client.limits, config)
+        parts.pad = PadSource(device, config, limits, name=args.teleop, priority=PAD_PRIORITY)
+        runtime.add_source(parts.pad)
+    runtime.add_sink(NoticePrinter(_say, control=True))
+    return parts
+
+
+def run(args: argparse.Namespace) -> int:
+    """``omnibot run``: compose the front ends, run them, return the exit status."""
+    from omnibot.cliargs import check_sim_options, sim_url
+    from omnibot.control.paths.files import read_path
+    from omnibot.teleop.config import load_teleop_config
+
+    _check(args)
+    check_sim_options(args)
+    config = load_teleop_config(args.config)
+    url = sim_url(args)
+    try:
+        path = read_path(args.follow) if args.follow else None
+    except (OSError, ValueError) as exc:
+        raise ConfigError(f"cannot read {args.follow}: {exc}", key="--follow") from None
+    if args.dashboard:
+        parts = _with_dashboard(args, url, config, path)
+    else:
+        parts = _in_this_thread(args, url, config, path)
+    return _result(parts)
+
+
+def _result(parts: Parts) -> int:
+    if parts.lost:
+        print("omnibot run: the robot link ended", file=sys.stderr)
+        return 1
+    source = parts.follower
+    if source is None:
+        return 0
+    if source.completed:
+        _say("follow completed")
+        return 0
+    why = source.failure or ("not finished" if source.started else "never started")
+    _say(f"follow NOT COMPLETED: {why}")
+    return 1
+
+
+def _in_this_thread(args: argparse.Namespace, url: str, config: Any, path: Any) -> Parts:
+    from omnibot.client.errors import NotSupported
+    from omnibot.client.session import robot_session
+    from omnibot.protocol import codes
+    from omnibot.runtime.runtime import LinkPacer, Runtime
+    from omnibot.teleop.pacing import Pacer
+
+    person = bool(args.teleop)
+    period = config.period if person else 0.01
+    with robot_session(url, args.robot, timeout=max(0.2, config.vel_timeout)) as session:
+        client, robot = session.client, session.robot
+        runtime = Runtime(client, period=period, vel_timeout=config.vel_timeout)
+        parts = compose(runtime, robot, args, config, path)
+        try:
+            runtime.start()
+            if not person:
+                with contextlib.suppress(NotSupported):
+                    client.use_binary()
+            client.telemetry(period if period >= 0.01 else 0.01, codes.TEL_MASK)
+            if path is not None:
+                _say(f"standing still {STANDSTILL:g} s while the gyro's bias is learned")
+                client.sleep(STANDSTILL)
+            # the schedule starts now (a person's input is paced to the wall clock, a follow alone
+            # to the link's: lockstep on sim://)
+            runtime.pacer = Pacer(client, period) if person else LinkPacer(client, period)
+            follower = parts.follower
+            device = parts.device
+
+            def done() -> bool:
+                if device is not None and device.quit:
+                    return True
+                return follower is not None and follower.finished and not person
+
+            runtime.run(until=done, duration=args.duration)
+        finally:
+            _stop_pad(runtime, parts, config)
+            runtime.close()
+            parts.close()
+    return parts
+
+
+def _stop_pad(runtime: Any, parts: Parts, config: Any) -> None:
+    """The pad's stop sequence when it was driving (as teleop ends)."""
+    pad = parts.pad
+    if pad is None or runtime.client.link.closed:
+        return
+    pad.closing = True
+    for _ in range(config.stop_repeats):
+        runtime.step()
+        if pad.action.twist is None:
+            break
+        runtime.pacer.wait()
+
+
+def _with_dashboard(args: argparse.Namespace, url: str, config: Any, path: Any) -> Parts:
+    from omnibot.navigation.webteach import PathTeacher
+    from omnibot.robot.description import RobotDescription
+    from omnibot.web.command import TOKEN_ENV
+    from omnibot.web.dashboard import Dashboard
+
+    token = args.token or os.environ.get(TOKEN_ENV) or None
+
+    def make_teach(robot: RobotDescription) -> PathTeacher:
+        return PathTeacher(robot, period=config.period)
+
+    dash = Dashboard(
+        url,
+        args.robot,
+        host=args.host,
+        http_port=args.http_port,
+        token=token,
+        config=config,
+        make_teach=None if path is not None else make_teach,  # a --follow path owns the estimator's frame
+        allow_hosts=args.allow_host,
+    )
+    parts = Parts()
+    try:
+        parts = compose(dash.link.runtime, dash.link.robot, args, config, path)
+        dash.start()
+        _say(f"dashboard for {url}: {dash.url}")
+        if dash.token and not token:
+            _say("(an access token was made up because the server is reachable from other machines)")
+        _say("Ctrl-C stops it (and the robot)")
+        end = math.inf if args.duration is None else time.monotonic() + args.duration
+        while time.monotonic() < end and dash.link.alive:
+            if parts.device is not None and parts.device.quit:
+                break
+            time.sleep(min(0.1, max(0.0, end - time.monotonic())))
+        parts.lost = not dash.link.alive
+    finally:
+        dash.stop()
+        parts.close()
+    return parts

@@ -1,0 +1,67 @@
+"""What one cycle of the runtime saw and did: the record every sink and source is handed."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+from omnibot.client.events import Event, Telemetry
+from omnibot.motion import Estimate, Twist
+
+Level = Literal["info", "warn", "error"]
+
+
+@dataclass(frozen=True)
+class Notice:
+    """Something every front end must be told (a refused command, a latched emergency stop, a change
+    of the source in control); ``source`` names the command source it concerns ("" for none)."""
+
+    level: Level
+    text: str
+    source: str = ""
+    kind: str = ""
+    """``"control"`` for a change of the source in control (logs and the page show them; a CLI's
+    status lines need not)."""
+
+
+@dataclass(frozen=True)
+class Decision:
+    """The arbiter's verdict for a cycle: who drives (``source``, "" for nobody), what it asked for
+    (``twist``, None: nothing to send) and why, in words for status lines, the page and logs."""
+
+    source: str
+    twist: Twist | None
+    reason: str
+    lock: str = ""
+    """The lock that holds the robot ("" for none)."""
+    estop: bool = False
+    """That lock is an emergency stop (priority 255): whatever ran is over, not paused."""
+
+
+NOBODY = Decision("", None, "no source active")
+
+
+@dataclass
+class Cycle:
+    """One cycle: times, the state, what arrived since the last cycle, the decision, what was sent.
+
+    ``now`` is the clock sources and timeouts use (the wall clock when a person is in the loop and
+    the simulator is paced to it, else the link clock); ``t`` is the link clock, the estimate's.
+    Sources are handed the cycle before :attr:`decision` is made (it still holds the previous
+    cycle's); sinks get it complete.
+    """
+
+    index: int
+    now: float
+    t: float
+    estimate: Estimate | None
+    """The estimator's state predicted to ``t`` (None without an estimator or before telemetry)."""
+    telemetry: list[Telemetry] = field(default_factory=list)
+    events: list[Event] = field(default_factory=list)
+    """Every other event since the last cycle (WARN, ERROR, RANGE, IDLE, RESET...)."""
+    decision: Decision = NOBODY
+    sent: Twist | None = None
+    """The twist sent with VEL this cycle (clamped to the controller's limits; None: nothing sent)."""
+    notices: list[Notice] = field(default_factory=list)
+    latched: bool = False
+    """The controller holds a latched emergency stop (sonar): it refuses motion until STOP."""

@@ -1,0 +1,348 @@
+"""The runtime: the one loop that owns the client (see the package docstring for its cycle)."""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections import deque
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from typing import Protocol
+
+from omnibot.client.client import Pending, RobotClient
+from omnibot.client.commands import vel as vel_command
+from omnibot.client.errors import EmergencyStopLatched
+from omnibot.client.events import ErrorEvent, Event, ResetEvent, Telemetry, WarnEvent
+from omnibot.client.limits import Limits
+from omnibot.errors import ControllerError, LinkError
+from omnibot.estimation.estimator import Estimator
+from omnibot.motion import Estimate, Twist
+from omnibot.protocol import codes
+from omnibot.runtime.arbiter import Arbiter, Lock
+from omnibot.runtime.cycle import NOBODY, Cycle, Decision, Level, Notice
+from omnibot.runtime.sources import Proposal, Source
+
+log = logging.getLogger("omnibot.runtime")
+log.addHandler(logging.NullHandler())  # a library's log: shown where the application configures logging
+# (front ends get every notice themselves; without this Python would print warnings twice on stderr)
+
+PREDICT_MAX = 0.1
+"""s: the estimate is extrapolated to the cycle's time by at most this much (older: held)."""
+KEEP = 1000
+"""Telemetry samples and events kept for the next cycle: the newest, when nobody cycled for a while
+(a standstill, a scripted manoeuvre)."""
+LATCHED_TEXT = "emergency stop latched by the controller (sonar): let go and press again to release"
+
+
+Sink = Callable[[Cycle], object]
+"""Anything called with each completed :class:`Cycle` (a function, a bound method, an object with
+``__call__``); see :mod:`omnibot.runtime.sinks`."""
+
+
+class Pacer(Protocol):
+    """When cycles happen: ``now()`` is the cycle clock, ``wait()`` waits (pumping the client)."""
+
+    def now(self) -> float:
+        """The cycle clock, s."""
+
+    def wait(self) -> None:
+        """Wait for the next cycle, pumping the client meanwhile."""
+
+
+class LinkPacer:
+    """Cycles every ``period`` s of the link clock: real time on a real link, simulated time (lockstep,
+    deterministic) on ``sim://``. A late cycle is not made up for: the next one is due a period later."""
+
+    def __init__(self, client: RobotClient, period: float) -> None:
+        if not period > 0:
+            raise ValueError(f"period must be > 0 s, got {period}")
+        self.client = client
+        self.period = period
+        self._next = client.clock.now()
+
+    def now(self) -> float:
+        """The link clock, s."""
+        return self.client.clock.now()
+
+    def wait(self) -> None:
+        """Sleep through the client (lockstep on ``sim://``) until the next cycle is due."""
+        self._next += self.period
+        self.client.sleep(max(0.0, self._next - self.client.clock.now()))
+
+
+@dataclass
+class Counters:
+    """What the runtime sent: VELs with motion, zero VELs, commands that failed."""
+
+    vel: int = 0
+    zero: int = 0
+    errors: int = 0
+
+
+def clamp_to(limits: Limits, twist: Twist) -> Twist:
+    """``twist`` inside what the controller accepts (VEL's bounds just inside, so rounding to 1 cm/s and
+    1 degree/s never crosses them): the translation scaled down, the turn rate clipped."""
+    vmax = max(0.0, (limits.speed_max_cms - 1.0) / 100.0)
+    vx, vy = twist.vx, twist.vy
+    speed = math.hypot(vx, vy)
+    if speed > vmax:
+        vx, vy = vx * vmax / speed, vy * vmax / speed
+    wmax = math.radians(max(0.0, limits.rate_max_dps - 1.0))
+    return Twist(vx, vy, max(-wmax, min(wmax, twist.w)))
+
+
+class Runtime:
+    """Owns ``client``: one cycle per :meth:`step`, :meth:`run` loops them on ``pacer``.
+
+    ``estimator`` turns telemetry into the state sources and sinks see (None: no state, e.g. plain
+    teleop). ``vel_timeout`` is the VEL watchdog of a source without its own ``watchdog``.
+    ``wait_replies``: send each VEL and wait for its reply (a refusal is known within the cycle; for
+    loops of 20 Hz); otherwise VEL is submitted and its reply collected at the next cycle (100 Hz
+    loops: no round trip inside the cycle). A source's own ``wait_reply`` attribute overrides it. Either way a refused command or a latched emergency stop
+    becomes a :class:`Notice` every sink (every front end) and the refused source are handed.
+    """
+
+    def __init__(
+        self,
+        client: RobotClient,
+        *,
+        period: float = 0.01,
+        estimator: Estimator | None = None,
+        sources: Iterable[Source] = (),
+        sinks: Iterable[Sink] = (),
+        locks: Iterable[Lock] = (),
+        pacer: Pacer | None = None,
+        vel_timeout: float = 0.25,
+        wait_replies: bool = False,
+    ) -> None:
+        self.client = client
+        self.period = period
+        self.estimator = estimator
+        self.arbiter = Arbiter(list(locks))
+        self.sources: dict[str, Source] = {}
+        self.sinks: list[Sink] = list(sinks)
+        self.pacer: Pacer = pacer or LinkPacer(client, period)
+        self.vel_timeout = vel_timeout
+        self.wait_replies = wait_replies
+        self.telemetry_hooks: list[Callable[[Telemetry], object]] = []
+        """More consumers of each telemetry sample, called right after the estimator (observers)."""
+        self.decision: Decision = NOBODY
+        self.sent = Counters()
+        self.latched = False
+        self.state: int | None = None
+        """The controller's state from its telemetry (codes.STATE_*), None until one carries it."""
+        self.last_twist: Twist | None = None
+        self.cycles = 0
+        self.samples = 0
+        """Telemetry samples received so far."""
+        self.rtt: float | None = None
+        """Round trip of the last VEL whose reply was awaited, s (link clock)."""
+        self.error_hooks: list[Callable[[str, BaseException], object]] = []
+        """Called with (source, exception) when a command fails (after the notice)."""
+        self._offset = math.inf
+        self._offset_time = 0.0
+        self._telemetry: deque[Telemetry] = deque(maxlen=KEEP)
+        self._events: deque[Event] = deque(maxlen=KEEP)
+        self._notices: list[Notice] = []
+        self._pending: list[tuple[Pending, str]] = []
+        self._last_error: dict[str, str] = {}
+        self._listening = False
+        for source in sources:
+            self.add_source(source)
+
+    # ------------------------------------------------------------------ composition
+
+    def add_source(self, source: Source) -> None:
+        """Add a command source (arbitrated from the next cycle on)."""
+        self.arbiter.add(source.name, source.priority, source.timeout)
+        self.sources[source.name] = source
+
+    def remove_source(self, name: str) -> None:
+        """Remove the source ``name`` (no-op if unknown)."""
+        self.arbiter.remove(name)
+        self.sources.pop(name, None)
+
+    def add_sink(self, sink: Sink) -> None:
+        """Add a sink: called with every completed cycle."""
+        self.sinks.append(sink)
+
+    def remove_sink(self, sink: Sink) -> None:
+        """Remove a sink (no-op if unknown)."""
+        if sink in self.sinks:
+            self.sinks.remove(sink)
+
+    def add_lock(self, lock: Lock) -> None:
+        """Add a lock that masks sources at or below its priority while engaged."""
+        self.arbiter.locks.append(lock)
+
+    def notify(self, level: Level, text: str, source: str = "") -> None:
+        """Tell every front end (sinks get it with the next cycle; the log at once)."""
+        self._notices.append(Notice(level, text, source))
+        log.log({"info": logging.INFO, "warn": logging.WARNING}.get(level, logging.ERROR), "%s", text)
+
+    # ------------------------------------------------------------------ listening
+
+    def start(self) -> None:
+        """Listen to telemetry and events (idempotent; :meth:`step` calls it)."""
+        if self._listening:
+            return
+        self._listening = True
+        self.client.on_telemetry(self._on_telemetry)
+        self.client.add_listener(self._on_event, WarnEvent, ErrorEvent, ResetEvent)
+
+    def close(self) -> None:
+        """Stop listening (the client stays open: whoever opened it closes it)."""
+        if not self._listening:
+            return
+        self._listening = False
+        self.client.remove_listener(self._on_telemetry)
+        self.client.remove_listener(self._on_event)
+        self._pending.clear()
+
+    def _on_telemetry(self, event: Telemetry) -> None:
+        self.samples += 1
+        lag = event.time - event.controller_time
+        # the least-delayed sample gives the clock offset (allowed to creep up 20 us/s for drift)
+        self._offset = min(self._offset + 2e-5 * max(0.0, event.time - self._offset_time), lag)
+        self._offset_time = event.time
+        if event.state is not None:
+            self.state = event.state
+            if event.state == codes.STATE_ESTOP:
+                self._latch()
+            elif self.latched:
+                self.latched = False
+        if self.estimator is not None:
+            self.estimator.update(event)
+        for hook in self.telemetry_hooks:
+            hook(event)
+        self._telemetry.append(event)
+
+    def _on_event(self, event: Event) -> None:
+        if isinstance(event, WarnEvent) and event.code == codes.W_SONAR_STOP:
+            self._latch()
+        self._events.append(event)
+
+    def _latch(self) -> None:
+        if not self.latched:
+            self.latched = True
+            self.notify("warn", LATCHED_TEXT)
+
+    # ------------------------------------------------------------------ the cycle
+
+    def estimate_now(self) -> Estimate | None:
+        """The estimate extrapolated to now on the link clock (telemetry age, at most PREDICT_MAX)."""
+        if self.estimator is None:
+            return None
+        now = self.client.clock.now()
+        est = self.estimator.estimate
+        offset = self._offset if math.isfinite(self._offset) else 0.0
+        horizon = min(max(0.0, now - (est.t + offset)), PREDICT_MAX)
+        e = est.predict(est.t + horizon)
+        return Estimate(now, e.x, e.y, e.theta, e.vx, e.vy, e.w, e.slipping, e.standstill)
+
+    def step(self, now: float | None = None) -> Cycle:
+        """One cycle: collect, estimate, ask the sources, arbitrate, send, fan out (``now``: the cycle
+        clock's time, default the pacer's)."""
+        self.start()
+        self._collect()
+        now = self.pacer.now() if now is None else now
+        cycle = Cycle(self.cycles, now, self.client.clock.now(), self.estimate_now())
+        self.cycles += 1
+        cycle.telemetry, cycle.events = list(self._telemetry), list(self._events)
+        self._telemetry.clear()
+        self._events.clear()
+        cycle.notices, self._notices = self._notices, []
+        cycle.latched = self.latched
+        cycle.decision = self.decision  # the previous cycle's, while sources are asked
+        proposals: dict[str, Proposal | None] = {}
+        for name, source in list(self.sources.items()):
+            proposals[name] = source.propose(cycle)
+        decision = self.arbiter.decide(now, {n: p.twist if p else None for n, p in proposals.items()})
+        if (decision.source, decision.lock) != (self.decision.source, self.decision.lock):
+            level: Level = "warn" if decision.lock else "info"
+            text = (
+                f"in control: {decision.reason}" if decision.source else f"nobody drives: {decision.reason}"
+            )
+            cycle.notices.append(Notice(level, text, kind="control"))
+            log.log(logging.WARNING if decision.lock else logging.INFO, "%s", text)
+        self.decision = cycle.decision = decision
+        if decision.twist is not None:
+            proposal = proposals.get(decision.source)
+            cycle.sent = self._send(decision.source, decision.twist, proposal is not None and proposal.fresh)
+        cycle.latched = self.latched
+        cycle.notices.extend(self._notices)
+        self._notices = []
+        for sink in list(self.sinks):
+            try:
+                sink(cycle)
+            except Exception as exc:  # a broken view must not stop the robot loop
+                log.exception("a runtime sink failed; it is removed")
+                self.remove_sink(sink)
+                self._notices.append(Notice("error", f"a view failed and was removed: {exc}"))
+        return cycle
+
+    def run(self, until: Callable[[], bool] | None = None, duration: float | None = None) -> None:
+        """Cycle until ``until()`` is true or ``duration`` s of the cycle clock passed."""
+        start = self.pacer.now()
+        while not (until is not None and until()) and (
+            duration is None or self.pacer.now() - start < duration
+        ):
+            self.step()
+            if until is not None and until():
+                break
+            self.pacer.wait()
+
+    def discard_pending(self) -> None:
+        """Forget the replies still awaited (a run that ended: its STOP follows)."""
+        self._pending.clear()
+
+    # ------------------------------------------------------------------ sending
+
+    def _send(self, source: str, twist: Twist, fresh: bool) -> Twist | None:
+        client = self.client
+        watchdog = getattr(self.sources.get(source), "watchdog", None) or self.vel_timeout
+        try:
+            if fresh and self.latched:
+                client.stop()  # a person let go and pressed again: release the latched stop
+                self.latched = False
+                self.notify("info", "emergency stop released by a fresh press of the deadman", source)
+            sent = clamp_to(client.limits, twist)
+            if getattr(self.sources.get(source), "wait_reply", self.wait_replies):
+                t0 = client.clock.now()
+                client.vel(sent.vx, sent.vy, sent.w, watchdog)
+                self.rtt = client.clock.now() - t0
+            else:
+                self._pending.append((client.submit(vel_command(client.limits, *sent, watchdog)), source))
+        except (ControllerError, LinkError, ValueError) as exc:
+            self._failed(source, exc)
+            return None
+        self._last_error.pop(source, None)
+        self.last_twist = twist
+        if twist.is_zero:
+            self.sent.zero += 1
+        else:
+            self.sent.vel += 1
+        return sent
+
+    def _collect(self) -> None:
+        keep = []
+        for pending, source in self._pending:
+            if pending.error is not None:
+                self._failed(source, pending.error, pending.line)
+            elif not pending.done:
+                keep.append((pending, source))
+        self._pending = keep
+
+    def _failed(self, source: str, exc: BaseException, line: str = "") -> None:
+        self.sent.errors += 1
+        for hook in self.error_hooks:
+            hook(source, exc)
+        if isinstance(exc, EmergencyStopLatched):
+            self._latch()  # one notice for everyone; the refused source sees cycle.latched
+            return
+        text = f"the controller refused {line}: {exc}" if line else f"command failed: {exc}"
+        if self._last_error.get(source) != text:
+            self._last_error[source] = text
+            self.notify("error", text, source)
+        else:
+            self._notices.append(Notice("error", text, source))

@@ -1,0 +1,321 @@
+"""Command sources: whatever proposes a body twist each cycle (a person, a follower, a script).
+
+A source is any object with a ``name``, a ``priority`` (0-255, higher wins), a ``timeout`` (s a
+proposal stays active in arbitration) and ``propose(cycle) -> Proposal | None``; ``watchdog`` (the
+VEL timeout for its commands, s) is optional. Sources never touch the client: the runtime sends.
+
+* :class:`DeadmanSource`: a person's input with teleop's deadman (drive while enabled, then
+  ``stop_repeats`` zero twists, then silence); :class:`PadSource` reads a joystick or the keyboard
+  through teleop's mapping, the dashboard sets :attr:`DeadmanSource.sample` from the page's stick,
+  keys and browser gamepad. A fresh press of the deadman asks the runtime to release a latched
+  emergency stop (:attr:`Proposal.fresh`): a person who let go and pressed again.
+* :class:`FollowerSource`: a path follower (repeat). The hand-back policy: while another source or a
+  lock has the robot, the follower stands by (its controller is not updated, so nothing winds up);
+  when the robot comes back to it, it resumes from where the robot now is, driving straight back to
+  the path's nearest point ahead of the progress made (if farther than ``APPROACH_GAP``) and then
+  along the rest. ``on_override="stop"`` ends the run at the first override instead. An emergency
+  stop (a lock of priority 255), a refused command or a latched emergency stop on the controller end
+  the run (:attr:`FollowerSource.failure`): nothing drives off on its own after one.
+* :class:`ScriptSource`: twists from a function of time (scripts, tests, demos).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Literal, Protocol
+
+import numpy as np
+
+from omnibot.control.followers.base import Follower
+from omnibot.control.paths.path import Path
+from omnibot.motion import Estimate, Twist
+from omnibot.runtime.cycle import Cycle
+from omnibot.teleop.config import TeleopConfig
+from omnibot.teleop.deadman import Action, Deadman, Phase, Sample, Why
+from omnibot.teleop.mapping import JoyState, TwistLimits, joy_to_command, limit_twist
+
+APPROACH_GAP = 0.02
+"""m: farther than this from the path, a follower that gets the robot back first drives straight to it."""
+
+
+@dataclass(frozen=True)
+class Proposal:
+    """A source's twist for this cycle; ``fresh``: a person just pressed the deadman again (the
+    runtime then releases a latched emergency stop with STOP before the VEL)."""
+
+    twist: Twist
+    fresh: bool = False
+
+
+class Source(Protocol):
+    """What the runtime asks of a command source (see the module docstring)."""
+
+    name: str
+    priority: int
+    timeout: float
+
+    def propose(self, cycle: Cycle) -> Proposal | None:
+        """This cycle's twist, or None when the source has nothing to say."""
+        ...
+
+
+class DeadmanSource:
+    """A person's input through teleop's deadman; set :attr:`sample` (the newest input) from outside,
+    or override :meth:`read`."""
+
+    def __init__(
+        self, name: str, config: TeleopConfig, *, priority: int = 100, timeout: float | None = None
+    ) -> None:
+        self.name = name
+        self.priority = priority
+        self.timeout = config.input_timeout if timeout is None else timeout
+        self.watchdog = config.vel_timeout
+        self.wait_reply = True  # a person's 20 Hz: a refusal is known at once
+        self.config = config
+        self.deadman = Deadman(config.input_timeout, config.stop_repeats)
+        self.sample: Sample | None = None
+        self.action = Action(None)
+        """The deadman's action of the last cycle."""
+        self.ended: Why | None = None
+        """Why driving ended on the last cycle it did (None otherwise)."""
+        self.twist: Twist | None = None
+        """The twist of the last proposal (None when silent)."""
+
+    def read(self, now: float) -> Sample | None:
+        """The newest input at ``now`` (None: no input device)."""
+        return self.sample
+
+    @property
+    def held(self) -> bool:
+        """The deadman is held (driving)."""
+        return self.deadman.phase is Phase.DRIVING
+
+    def propose(self, cycle: Cycle) -> Proposal | None:
+        """The deadman's twist for this cycle (None while idle)."""
+        action = self.deadman.update(cycle.now, self.read(cycle.now))
+        self.action = action
+        self.ended = action.ended
+        self.twist = action.twist
+        if action.twist is None:
+            return None
+        return Proposal(action.twist, fresh=action.started)
+
+    def reset(self) -> None:
+        """Forget the drive and the input (after an emergency stop): silent until a fresh input."""
+        self.sample = None
+        self.deadman.reset()
+        self.twist = None
+
+
+class JoySource(Protocol):
+    """A pad, the keyboard, or a script standing in for them (teleop's input devices)."""
+
+    name: str
+
+    @property
+    def quit(self) -> bool:
+        """True when the user asked to leave through this device."""
+
+    def read(self, now: float) -> JoyState | None:
+        """The device's state now, or None while there is no device."""
+
+
+class PadSource(DeadmanSource):
+    """A joystick or the keyboard (``device``) through teleop's mapping and limits."""
+
+    def __init__(
+        self,
+        device: JoySource,
+        config: TeleopConfig,
+        limits: TwistLimits,
+        *,
+        name: str | None = None,
+        priority: int = 100,
+    ) -> None:
+        super().__init__(name or device.name, config, priority=priority)
+        self.device = device
+        self.limits = limits
+        self.closing = False
+        """Set when teleop ends: the pad reads as gone, so the deadman sends its stop sequence."""
+
+    @property
+    def quit(self) -> bool:
+        """True when the user asked to leave through the device."""
+        return self.device.quit
+
+    def read(self, now: float) -> Sample | None:
+        """The device's state mapped and limited as teleop maps it (None: no device, or closing)."""
+        if self.closing:
+            return None
+        joy = self.device.read(now)
+        if joy is None:
+            return None
+        cmd = joy_to_command(self.config, joy)
+        return Sample(limit_twist(cmd.twist, self.limits), cmd.enabled, joy.time)
+
+
+class FollowerSource:
+    """Follows ``path`` with ``follower`` (see the module docstring for the hand-back policy)."""
+
+    def __init__(
+        self,
+        follower: Follower,
+        path: Path,
+        *,
+        name: str = "follower",
+        priority: int = 10,
+        watchdog: float = 0.15,
+        on_override: Literal["resume", "stop"] = "resume",
+    ) -> None:
+        self.name = name
+        self.priority = priority
+        self.wait_reply = False  # 100 Hz: replies are collected at the next cycle
+        self.follower = follower
+        self.path = path
+        self.watchdog = watchdog
+        self.timeout = max(2.0 * follower.dt, 0.05)
+        self.on_override = on_override
+        self.started = False
+        self.finished = False
+        self.failure = ""
+        """Why the run ended early ("" while running or when it completed)."""
+        self.state: Estimate | None = None
+        """The state the follower last steered by."""
+        self.twist: Twist | None = None
+        self.overrides = 0
+        """How often another source or a lock took the robot from it."""
+        self._standing_by = False
+        self._driven = False  # it has had the robot at least once
+        self._s = 0.0  # progress along self.path, m
+
+    @property
+    def completed(self) -> bool:
+        """The follower reached the path's end (not ended early)."""
+        return self.finished and not self.failure and self.follower.done
+
+    def start(self, t: float) -> None:
+        """Start the follower on the path at time ``t`` (done by the first cycle otherwise)."""
+        self.follower.start(self.path, t)
+        self.started = True
+
+    def end(self, why: str = "") -> None:
+        """End the run; ``why`` (if not empty) says why it ended early."""
+        self.finished = True
+        self.failure = self.failure or why
+
+    def propose(self, cycle: Cycle) -> Proposal | None:
+        """The follower's twist, a stand-by zero while overridden, None once finished."""
+        if self.finished:
+            return None
+        for notice in cycle.notices:
+            if notice.source == self.name and notice.level == "error":
+                self.end(notice.text)
+                return None
+        if cycle.latched:
+            self.end("emergency stop latched on the controller")
+            return None
+        state = cycle.estimate
+        if state is None:
+            return None
+        if not self.started:
+            self.start(state.t)
+        previous = cycle.decision
+        if previous.estop:
+            self.end(f"stopped: {previous.reason}")
+            return None
+        if previous.source not in ("", self.name) or previous.lock:
+            if self.on_override == "stop":
+                self.end(f"stopped: {previous.reason}")
+                return None
+            if not self._standing_by:
+                self.overrides += self._driven
+                self._standing_by = True
+            return Proposal(Twist())  # stand by: ready to take the robot (back)
+        if self._standing_by:
+            self._standing_by = False
+            if self._driven:
+                self._resume(state)
+            else:  # it never had the robot: start now, on the whole path
+                self.follower.start(self.path, state.t)
+            if self.finished:
+                return None
+        self._driven = True
+        command = self.follower.update(state)
+        self.state = state
+        if self.follower.done:
+            self.end()
+            return None
+        self._s = self.path.project_near(state.x, state.y, self._s).s if len(self.path) > 1 else 0.0
+        self.twist = Twist(command.vx, command.vy, command.w)
+        return Proposal(self.twist)
+
+    def _resume(self, state: Estimate) -> None:
+        """Start again on the rest of the path, from where the robot now is."""
+        rest = remainder(self.path, self._s, state)
+        if rest is None:
+            self.end()
+            return
+        self.follower.start(rest, state.t)
+
+
+def remainder(path: Path, s: float, state: Estimate) -> Path | None:
+    """The path from the nearest point ahead of arc length ``s`` (the progress made) on, with a
+    straight run from the robot's pose in front when it is farther than ``APPROACH_GAP``; None when
+    less than a point is left."""
+    proj = path.project_near(state.x, state.y, s, behind=0.0, ahead=0.5)
+    i = proj.index + 1
+    if i >= len(path):
+        return None
+    cols: dict[str, Any] = {
+        "x": np.concatenate(([proj.x], path.x[i:])),
+        "y": np.concatenate(([proj.y], path.y[i:])),
+        "theta": np.concatenate(([path.theta[i - 1]], path.theta[i:])),
+    }
+    if path.v is not None:
+        cols["v"] = np.concatenate(([path.v[i - 1]], path.v[i:]))
+    if math.hypot(proj.x - state.x, proj.y - state.y) > APPROACH_GAP:
+        cols = {
+            "x": np.concatenate(([state.x], cols["x"])),
+            "y": np.concatenate(([state.y], cols["y"])),
+            "theta": np.concatenate(([state.theta], cols["theta"])),
+            **({"v": np.concatenate(([cols["v"][0]], cols["v"]))} if "v" in cols else {}),
+        }
+    return Path(**cols)
+
+
+class ScriptSource:
+    """Twists from ``script(t)`` on the cycle's clock (None: nothing to say); ends when it returns
+    :data:`END`."""
+
+    END = "end"
+
+    def __init__(
+        self,
+        script: Callable[[float], Twist | str | None],
+        *,
+        name: str = "script",
+        priority: int = 50,
+        timeout: float = 0.5,
+        watchdog: float = 0.25,
+    ) -> None:
+        self.name = name
+        self.priority = priority
+        self.timeout = timeout
+        self.watchdog = watchdog
+        self.script = script
+        self.finished = False
+        self._t0: float | None = None
+
+    def propose(self, cycle: Cycle) -> Proposal | None:
+        """The script's twist at the cycle's time since the first cycle (None: nothing to say)."""
+        if self.finished:
+            return None
+        if self._t0 is None:
+            self._t0 = cycle.now
+        out = self.script(cycle.now - self._t0)
+        if isinstance(out, str):
+            self.finished = True
+            return None
+        return None if out is None else Proposal(out)

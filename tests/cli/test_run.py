@@ -1,0 +1,76 @@
+"""``omnibot run``: the follower alone in lockstep, its failures, and the dashboard composed with it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from omnibot.cli import main
+from omnibot.control.paths.files import write_path
+from omnibot.control.paths.standard import standard_path
+from omnibot.runtime import command
+from tests.cli.conftest import Harness, assert_one_line_error
+
+
+@pytest.fixture
+def circle(tmp_path: Path) -> Path:
+    target = tmp_path / "circle.csv"
+    write_path(standard_path("circle", size=0.5), target)
+    return target
+
+
+def test_follow_alone_runs_in_lockstep_and_leaves_the_controller_as_found(
+    circle: Path, harness: Harness, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["run", "--follow", str(circle), "--port", "spy+faults+sim://omni4?world=empty"]) == 0
+    out = capsys.readouterr().out
+    assert "run: in control: follower (priority 10)" in out and "run: follow completed" in out
+    harness.assert_left_as_found()
+
+
+def test_a_follow_that_does_not_complete_is_status_1(
+    circle: Path, harness: Harness, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    real = command.compose
+
+    def latching(runtime: Any, robot: Any, args: Any, config: Any, path: Any) -> command.Parts:
+        # the front sonar latches its stop on the room's wall as soon as the robot moves towards it
+        runtime.client.sonar(1, period=0.06, stop=5.0)
+        return real(runtime, robot, args, config, path)
+
+    monkeypatch.setattr(command, "compose", latching)
+    assert main(["run", "--follow", str(circle), "--port", "sim://omni4?world=room", "--duration", "20"]) == 1
+    out = capsys.readouterr().out
+    assert "emergency stop latched by the controller (sonar)" in out
+    assert "run: follow NOT COMPLETED: emergency stop latched on the controller" in out
+    harness.assert_left_as_found()
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["run"], "nothing to run: give --teleop, --dashboard and/or --follow"),
+        (["run", "--follow", "nope.csv"], "--follow: cannot read nope.csv"),
+        (["run", "--dashboard", "--duration", "-1"], "--duration: expected a positive number of seconds"),
+        (["run", "--follow", "x.csv", "--follower", "magic"], "--follower: unknown follower 'magic'"),
+    ],
+)
+def test_bad_arguments_are_one_line_errors(
+    argv: list[str], message: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert_one_line_error(err)
+    assert message in err
+
+
+def test_the_dashboard_runs_the_follower_in_its_link_thread(
+    circle: Path, harness: Harness, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = ["run", "--follow", str(circle), "--dashboard", "--http-port", "0", "--world", "empty"]
+    assert main([*argv, "--duration", "12"]) == 0
+    out = capsys.readouterr().out
+    assert "run: dashboard for sim://omni4" in out and "run: follow completed" in out
+    harness.assert_left_as_found()
