@@ -23,15 +23,6 @@ from omnibot.transport.base import Link
 from .fakes import ScriptedLink, controller
 
 
-class _TickingFaultLink(FaultLink):
-    """Workaround until the faults+ fix of branch binlink is merged: a FaultLink read whose timeout
-    is a rounding leftover (1e-17 s) returns at once without moving lockstep time, so a wait loop
-    would spin; every read here waits at least a microsecond (one tick of the simulator)."""
-
-    def _read(self, max_bytes: int, timeout: float | None) -> bytes:
-        return super()._read(max_bytes, None if timeout is None else max(timeout, 1e-6))
-
-
 @dataclass
 class Tally:
     ok: list[int] = field(default_factory=list)  # masks of the calls that returned OK
@@ -41,7 +32,7 @@ class Tally:
 
 def faulty(drop: float = 0.0, corrupt: float = 0.0, direction: str = "both", seed: int = 1) -> Link:
     inner = open_link("sim://omni4?seed=1")
-    return _TickingFaultLink(inner, drop=drop, corrupt=corrupt, seed=seed, direction=direction)  # type: ignore[arg-type]
+    return FaultLink(inner, drop=drop, corrupt=corrupt, seed=seed, direction=direction)  # type: ignore[arg-type]
 
 
 def run(client: RobotClient, n: int = 250) -> Tally:

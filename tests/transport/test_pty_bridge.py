@@ -91,3 +91,44 @@ def test_device_failure_surfaces_on_stop() -> None:
     with pytest.raises(LinkError, match="boom"):
         bridge.stop()
     bridge.stop()  # idempotent
+
+
+def _starved(bridge: PtyBridge, wakes: list[float]) -> list[tuple[int, int]]:
+    """Drive the bridge's loop by hand (never started: no thread, no real time), waking at each of
+    ``wakes`` (s) with 20,000 bytes from the host waiting; (bytes to the device, to the host) each time."""
+    try:
+        bridge.connected = True
+        bridge._begin(0.0)
+        bridge._to_device += b"x" * 20_000
+        seen = []
+        for now in wakes:
+            bridge._advance(now)
+            seen.append((bridge.bytes_to_device, len(bridge._wire)))
+        return seen
+    finally:
+        bridge.close()
+
+
+def test_a_late_loop_catches_up_the_line_with_the_device() -> None:
+    """A bridge that wakes every 10 ms (starved) still passes the line's 11,520 B/s both ways."""
+    bridge = PtyBridge(EchoDevice(per_byte=True), baud=115200)
+    seen = _starved(bridge, [k * 0.010 for k in range(1, 11)])
+    for k, (to_device, to_host) in enumerate(seen, start=1):
+        line = k * 0.010 * 11_520  # bytes the line carries in that time
+        assert line - 16 <= to_device <= line + 16, (k, to_device)
+        assert line - 2 * 16 <= to_host <= to_device, (k, to_host)  # echoed a tick later, same pace
+    assert bridge.skipped_ticks == 0 and bridge.steps in (99, 100)  # ticks summed in floating point
+
+
+def test_beyond_max_catch_up_the_time_is_skipped_not_raced() -> None:
+    """Half a second behind (more than max_catch_up): the backlog is skipped, only the due tick runs."""
+    bridge = PtyBridge(EchoDevice(per_byte=True), baud=115200, max_catch_up=0.1)
+    ((to_device, _),) = _starved(bridge, [0.5])
+    assert bridge.steps == 1 and bridge.skipped_ticks == 499
+    assert to_device <= 16  # only the ticks stepped carry bytes: skipped time is lost to the line too
+
+
+def test_unpaced_bridge_passes_everything_on_the_first_tick() -> None:
+    bridge = PtyBridge(EchoDevice(per_byte=True), baud=0)
+    ((to_device, to_host),) = _starved(bridge, [0.001])
+    assert to_device == to_host == 20_000

@@ -9,7 +9,10 @@ The bridge owns the master side. The device (any :class:`~omnibot.transport.lock
 is stepped once per ``device.tick`` of wall-clock time; a late loop catches up with several steps, and
 beyond ``max_catch_up`` seconds behind it skips ticks (counted in ``skipped_ticks``) instead of
 racing. Bytes are paced to ``baud`` in both directions (a pty itself does not pace), with a
-:class:`~omnibot.transport.pacing.Pacer` per direction.
+:class:`~omnibot.transport.pacing.Pacer` per direction that runs on the device's time: every tick
+stepped passes the bytes the line carries in one tick, so a loop that wakes late (a starved process)
+catches up the line with the device instead of losing all but one burst of it. The long-run rate
+stays at most the baud rate, since the device's time never runs ahead of the wall clock.
 
 The host may open, close and reopen the slave at will: while no one has it open the master reports a
 hang-up (reads give EIO); the bridge keeps the device running, discards what the device sends (a UART
@@ -20,6 +23,7 @@ with nothing attached), flushes stale bytes, and carries on when the slave is op
 from __future__ import annotations
 
 import errno
+import math
 import os
 import select
 import termios
@@ -88,6 +92,7 @@ class PtyBridge:
         self.bytes_to_device = 0
         self.bytes_to_host = 0
         self.bytes_discarded = 0
+        self._begin(time.monotonic())
 
     # -- lifecycle -----------------------------------------------------------------------------
 
@@ -147,43 +152,62 @@ class PtyBridge:
         master = self._master
         if master is None:
             raise LinkError("pty bridge is closed")
-        device, tick = self.device, self.device.tick
-        to_device, to_host = bytearray(), bytearray()
-        pace_in = Pacer(self.baud, burst=self.burst)
-        pace_out = Pacer(self.baud, burst=self.burst)
+        self._begin(time.monotonic())
         poller = select.poll()
         poller.register(master, select.POLLIN)
-        next_tick = time.monotonic() + tick
-
         while not self._stop.is_set() and not (stop is not None and stop.is_set()):
-            self._poll(master, poller, to_device, to_host)
-            now = time.monotonic()
-            if now - next_tick > self.max_catch_up:
-                skipped = int((now - next_tick) / tick)
-                self.skipped_ticks += skipped
-                next_tick += skipped * tick
-            while next_tick <= now:
-                n = pace_in.take(len(to_device))
-                if n:
-                    device.receive(bytes(to_device[:n]))
-                    del to_device[:n]
-                    self.bytes_to_device += n
-                device.step()
-                self.steps += 1
-                out = device.transmit()
-                if out:
-                    if self.connected:
-                        to_host += out
-                    else:
-                        self.bytes_discarded += len(out)
-                next_tick += tick
-            if to_host and self.connected:
-                self._send(master, to_host, pace_out)
-            wait = next_tick - time.monotonic()
+            self._poll(master, poller)
+            self._advance(time.monotonic())
+            if self._wire and self.connected:
+                self._send(master)
+            wait = self._next_tick - time.monotonic()
             if wait > 0:
                 time.sleep(wait)
 
-    def _poll(self, master: int, poller: select.poll, to_device: bytearray, to_host: bytearray) -> None:
+    def _begin(self, now: float) -> None:
+        """Start the device's clock and the line at wall-clock time ``now``."""
+        self._line_time = now
+        self._next_tick = now + self.device.tick
+        self._to_device = bytearray()  # read from the host, not yet on the line
+        self._to_host = bytearray()  # sent by the device, not yet on the line
+        self._wire = bytearray()  # on the line to the host, not yet written to the pty
+        # enough burst for one tick's bytes, or a long tick would carry less than the line
+        burst = max(self.burst, math.ceil(self.device.tick * self.baud / 10)) if self.baud else self.burst
+        self._pace_in = Pacer(self.baud, burst=burst, clock=self._line_clock)
+        self._pace_out = Pacer(self.baud, burst=burst, clock=self._line_clock)
+
+    def _line_clock(self) -> float:
+        return self._line_time
+
+    def _advance(self, now: float) -> None:
+        """Step the device through every tick due at wall-clock time ``now``, each with its bytes."""
+        tick = self.device.tick
+        if now - self._next_tick > self.max_catch_up:
+            skipped = int((now - self._next_tick) / tick)
+            self.skipped_ticks += skipped
+            self._next_tick += skipped * tick
+        while self._next_tick <= now:
+            self._line_time = self._next_tick
+            n = self._pace_in.take(len(self._to_device))
+            if n:
+                self.device.receive(bytes(self._to_device[:n]))
+                del self._to_device[:n]
+                self.bytes_to_device += n
+            self.device.step()
+            self.steps += 1
+            out = self.device.transmit()
+            if out:
+                if self.connected:
+                    self._to_host += out
+                else:
+                    self.bytes_discarded += len(out)
+            n = self._pace_out.take(len(self._to_host))
+            if n:
+                self._wire += self._to_host[:n]
+                del self._to_host[:n]
+            self._next_tick += tick
+
+    def _poll(self, master: int, poller: select.poll) -> None:
         events = 0
         for _, ev in poller.poll(0):
             events |= ev
@@ -191,15 +215,16 @@ class PtyBridge:
         if hung_up:
             if self.connected:  # the host closed the slave: drop what is in flight
                 self.connected = False
-                self.bytes_discarded += len(to_host)
-                to_host.clear()
+                self.bytes_discarded += len(self._to_host) + len(self._wire)
+                self._to_host.clear()
+                self._wire.clear()
                 termios.tcflush(master, termios.TCIOFLUSH)
             return
         if not self.connected:
             self.connected = True
             if self.on_connect is not None:
                 self.on_connect()
-        if events & select.POLLIN and len(to_device) < _READ_CHUNK:
+        if events & select.POLLIN and len(self._to_device) < _READ_CHUNK:
             try:
                 data = os.read(master, _READ_CHUNK)
             except BlockingIOError:
@@ -209,14 +234,12 @@ class PtyBridge:
                     self.connected = False
                     return
                 raise
-            to_device += data
+            self._to_device += data
 
-    def _send(self, master: int, to_host: bytearray, pacer: Pacer) -> None:
-        n = pacer.take(len(to_host))
-        if not n:
-            return
+    def _send(self, master: int) -> None:
+        """Write what the line has carried to the host (already paced)."""
         try:
-            written = os.write(master, to_host[:n])
+            written = os.write(master, self._wire)
         except BlockingIOError:
             written = 0
         except OSError as exc:
@@ -224,5 +247,5 @@ class PtyBridge:
                 self.connected = False
                 return
             raise
-        del to_host[:written]
+        del self._wire[:written]
         self.bytes_to_host += written
