@@ -15,7 +15,7 @@ import pytest
 from omnibot.client import EventRecorder, ResetEvent, RobotClient
 from omnibot.errors import ControllerError, LinkTimeout, OmnibotError
 from omnibot.firmware.controller import Controller
-from omnibot.protocol import codes
+from omnibot.protocol import codes, text
 from omnibot.protocol.messages import Move, Ok, Telem
 from omnibot.transport import FaultLink, open_link
 from omnibot.transport.base import Link
@@ -191,13 +191,13 @@ def test_late_tagged_reply_lands_on_its_own_command() -> None:
     held: list[bytes] = []
 
     def slow(line: bytes) -> bytes:  # answers MOVE only when the next command comes
+        tag = int(line.rstrip(b"\n").split(b"#")[1].split(b"*")[0])
         if line.startswith(b"HELLO#"):
-            return b"HELLO,1,fake,4" + line[5:].split(b"*")[0] + b"\r\n"
+            return text.with_suffix(b"HELLO,2,fake,4", tag) + b"\r\n"
         reply = b"OK" if not line.startswith(b"STATUS") else b"STATUS,1,0,16,0;POWER,0,0,0,0;MOVE,0,0,0,0"
-        tag = line.rstrip(b"\n").split(b"#")[1].split(b"*")[0]
         out = b"".join(held)
         held.clear()
-        answer = reply + b"#" + tag + b"\r\n"
+        answer = text.with_suffix(reply, tag) + b"\r\n"
         if line.startswith(b"MOVE"):
             held.append(answer)
             return out

@@ -293,3 +293,15 @@ def test_inf_tokens() -> None:
     assert text.parse_command(b"MOVE,INF,60,0,0") == m.Move(30000, 60, 0, 0)
     assert text.parse_command(b"rotate,-inf,90") == m.Rotate(-30000, 90)
     assert text.parse_command(b"DELTA,0,0,10,0,Inf") == m.Delta(0, 0, 10, 0, 30000)
+
+
+def test_a_client_decoder_takes_no_tagged_reply_without_its_check() -> None:
+    """A line end moved in front of the ``*`` (a reordered byte) cuts the check off: the client, whose
+    every tagged command carries one, must not take what is left for an answer."""
+    strict, lenient = text.TextDecoder(require_check=True), text.TextDecoder()
+    cut = b"OK#12\r\n"
+    [(bad, tag)] = list(strict.feed_tagged(cut))
+    assert isinstance(bad, m.Malformed) and bad.reason == "tagged reply without its check" and tag is None
+    assert list(lenient.feed_tagged(cut)) == [(m.Ok(), 12)]  # a host that tags without checks
+    whole = text.with_suffix(b"OK", 12) + b"\r\n"
+    assert list(strict.feed_tagged(whole + b"OK\r\n")) == [(m.Ok(), 12), (m.Ok(), None)]

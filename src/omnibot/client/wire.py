@@ -36,7 +36,7 @@ class TextWire:
 
     def __init__(self, tags: bool = False) -> None:
         self.tags = tags
-        self._decoder = text.TextDecoder()
+        self._decoder = text.TextDecoder(require_check=True)  # every tagged command has a check
         self._last_tag = 0
 
     def ready(self) -> bool:

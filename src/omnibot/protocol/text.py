@@ -133,16 +133,23 @@ def decode(buf: bytes | bytearray) -> tuple[int, Decoded | None]:
     return used, message
 
 
-def decode_tagged(buf: bytes | bytearray) -> tuple[int, Decoded | None, int | None]:
-    """:func:`decode` that also returns the line's tag (None: untagged)."""
+def decode_tagged(
+    buf: bytes | bytearray, require_check: bool = False
+) -> tuple[int, Decoded | None, int | None]:
+    """:func:`decode` that also returns the line's tag (None: untagged). ``require_check``: a tagged
+    line without its ``*`` check is damaged (a host that sends every tagged command with a check gets
+    every tagged reply with one; a line end moved in front of the ``*`` cuts it off)."""
     used, line, cut = _next_line(buf, _LINE_END_RE, codes.EVENT_LINE_MAX)
     if line is None:
         return used, None, None
     if cut:
         return used, Malformed(line, "line too long"), None
-    body, tag, bad = split_suffix(line)
-    if bad:
+    end, tag_start, tag_end, checked = linecheck.split(line)
+    if checked == linecheck.BAD_CHECK:
         return used, Malformed(line, "checksum mismatch"), None
+    if require_check and tag_start >= 0 and checked == linecheck.NO_CHECK:
+        return used, Malformed(line, "tagged reply without its check"), None
+    body, tag = line[:end], int(line[tag_start:tag_end]) if tag_start >= 0 else None
     message = parse_line(body)
     if isinstance(message, Malformed):
         return used, Malformed(line, message.reason), None
@@ -298,8 +305,10 @@ class TextDecoder:
     to binary) and :meth:`rest` hands over the bytes not yet decoded.
     """
 
-    def __init__(self, commands: bool = False) -> None:
+    def __init__(self, commands: bool = False, require_check: bool = False) -> None:
         self.commands = commands
+        self.require_check = require_check
+        """Replies: a tagged line without its check is Malformed (see :func:`decode_tagged`)."""
         self._buf = bytearray()
         self._skipping = False
         self._ends = _COMMAND_END_RE if commands else _LINE_END_RE
@@ -327,7 +336,7 @@ class TextDecoder:
             if self.commands:
                 used, message = decode_command(self._buf)
             else:
-                used, message, tag = decode_tagged(self._buf)
+                used, message, tag = decode_tagged(self._buf, self.require_check)
             if used == 0:
                 return
             cut = isinstance(message, Malformed) and self._ends.search(self._buf, 0, used) is None
