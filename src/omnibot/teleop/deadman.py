@@ -27,6 +27,8 @@ from omnibot.motion import ZERO, Twist
 
 
 class Phase(Enum):
+    """Where the deadman is: idle, driving while the button is held, or stopping after it let go."""
+
     IDLE = "idle"
     DRIVING = "driving"
     STOPPING = "stopping"
