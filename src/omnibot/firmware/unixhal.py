@@ -157,7 +157,8 @@ class UnixHAL(HAL):
         self._ping[s] = _now_us()
 
     def sonar_read(self, s: int) -> "int | None":
-        """Sonar ``s``'s fixed reading in cm once SONAR_DELAY_US has passed (None before, -1 when not pinged)."""
+        """Sonar ``s``'s fixed reading in cm once SONAR_DELAY_US has passed (None before, -1 when not
+        pinged)."""
         start = self._ping[s]
         if start < 0:
             return -1

@@ -169,7 +169,8 @@ class SimDevice:
         self.hal.rx += data
 
     def step(self) -> None:
-        """One simulator step, with a firmware poll (and its PWM handed over) at the controller's loop rate."""
+        """One simulator step, with a firmware poll (and its PWM handed over) at the controller's loop
+        rate."""
         if self._steps % self._poll_every == 0:
             self.controller.poll()
             self.hal.apply_power()

@@ -88,7 +88,8 @@ class Seed002Follower(Follower):
         self._arrived = False
 
     def start(self, path: Path, t: float) -> None:
-        """Begin following ``path`` at time ``t``: resample it into segments, plan the speed, reset the heading PID."""
+        """Begin following ``path`` at time ``t``: resample it into segments, plan the speed, reset the
+        heading PID."""
         super().start(path, t)
         self.points = resample(path, self.segment)
         self.profile = self.plan(path, self.margin)

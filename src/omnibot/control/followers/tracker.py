@@ -91,7 +91,8 @@ class ProfileTracker(Follower):
         """Last along-track, cross-track (m) and heading (rad) errors of the estimate."""
 
     def start(self, path: Path, t: float) -> None:
-        """Begin following ``path`` at time ``t``: plan the speed profile, zero the reference time and integrals."""
+        """Begin following ``path`` at time ``t``: plan the speed profile, zero the reference time and
+        the integrals."""
         super().start(path, t)
         self.profile = self.plan(path, self.margin)
         self.tau = 0.0
