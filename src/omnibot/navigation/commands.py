@@ -68,7 +68,7 @@ def _robot_client(args: argparse.Namespace, start: Any = None) -> Iterator[tuple
 
 def run_follow(args: argparse.Namespace) -> int:
     """Run ``omnibot follow``: follow a path file and report tracking; the exit status (1 when the run
-    failed its tolerances or the link)."""
+    did not complete, its failures printed)."""
     from omnibot.control.followers.base import follower_names
     from omnibot.control.paths.files import read_path
     from omnibot.estimation.estimator import ESTIMATORS
@@ -207,8 +207,8 @@ def _write_truth(run: Any, target: FsPath) -> None:
 
 
 def run_record(args: argparse.Namespace) -> int:
-    """Run ``omnibot record``: record a taught or standard path to ``--path``; the exit status (1 when the
-    recording is too short to follow)."""
+    """Run ``omnibot record``: record a taught or standard path to ``--path``; the exit status (1 when
+    the recording is no path to follow, and nothing is written)."""
     from omnibot.control.paths.files import write_path
     from omnibot.control.paths.standard import standard_path
     from omnibot.control.paths.teach import PathRecorder

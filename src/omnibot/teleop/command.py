@@ -61,7 +61,8 @@ def open_source(args: argparse.Namespace, config: Any, say: Callable[[str], None
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run ``omnibot teleop`` until the user quits; the exit status (non-zero when the link failed)."""
+    """Run ``omnibot teleop`` for ``--duration`` s or until the user quits, then print what was sent;
+    0 (Ctrl-C is raised again after the summary)."""
     from omnibot.cliargs import check_sim_options, sim_url
     from omnibot.client.session import robot_session
     from omnibot.teleop.config import load_teleop_config

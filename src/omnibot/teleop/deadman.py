@@ -27,7 +27,8 @@ from omnibot.motion import ZERO, Twist
 
 
 class Phase(Enum):
-    """Where the deadman is: idle, driving while the button is held, or stopping after it let go."""
+    """Where the deadman is (see the module diagram): idle, driving while it is held, or stopping
+    (zero VELs) after driving ended."""
 
     IDLE = "idle"
     DRIVING = "driving"

@@ -59,7 +59,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run ``omnibot web``: serve the dashboard until interrupted; the exit status."""
+    """Run ``omnibot web``: serve the dashboard for ``--duration`` s or until interrupted; the exit
+    status (1 when the robot link ended)."""
     from omnibot.cliargs import check_sim_options, sim_url
     from omnibot.navigation.webteach import PathTeacher
     from omnibot.robot.description import RobotDescription
