@@ -511,6 +511,7 @@ def _add_log(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``omnibot`` argument parser: one subcommand per entry of ``ADDERS``."""
     parser = argparse.ArgumentParser(
         prog="omnibot", description="Drive omnidirectional mobile robots, real or simulated."
     )

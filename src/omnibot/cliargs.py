@@ -48,6 +48,7 @@ class DeprecatedAlias(argparse.Action):
         values: Any,
         option_string: str | None = None,
     ) -> None:
+        """Warn on stderr that the old spelling is deprecated, then store the value as the new option does."""
         print(f"omnibot: warning: {option_string} is deprecated; use {self.use}", file=sys.stderr)
         setattr(namespace, self.dest, self.const if self.nargs == 0 else values)
 
@@ -141,11 +142,13 @@ def check_writable(path: str | Path | None, flag: str) -> None:
 
 
 def seed_of(args: argparse.Namespace) -> int:
+    """The ``--seed`` given, or ``DEFAULT_SEED`` when the command has none or it was left out."""
     seed = getattr(args, "seed", None)
     return DEFAULT_SEED if seed is None else int(seed)
 
 
 def world_of(args: argparse.Namespace) -> str:
+    """The simulated world's name: ``--world``, else the command's ``default_world``, else ``empty``."""
     world = getattr(args, "world", None)
     return str(world if world is not None else getattr(args, "default_world", "empty"))
 

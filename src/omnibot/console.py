@@ -184,6 +184,7 @@ class Console:
         client.add_listener(self._event)
 
     def say(self, line: str) -> None:
+        """Print one line of the console's own output (flushed at once)."""
         print(line, file=self.out, flush=True)
 
     def _event(self, event: Event) -> None:

@@ -35,6 +35,7 @@ class Twist(NamedTuple):
 
     @property
     def is_zero(self) -> bool:
+        """True when all three components are exactly zero."""
         return self.vx == 0.0 and self.vy == 0.0 and self.w == 0.0
 
     @property
@@ -43,6 +44,7 @@ class Twist(NamedTuple):
         return math.hypot(self.vx, self.vy)
 
     def scaled(self, k: float) -> Twist:
+        """This twist with every component multiplied by ``k``."""
         return Twist(self.vx * k, self.vy * k, self.w * k)
 
 
@@ -66,6 +68,7 @@ class Estimate:
 
     @property
     def pose(self) -> Pose2D:
+        """The position and heading alone."""
         return Pose2D(self.x, self.y, self.theta)
 
     def predict(self, t: float) -> Estimate:

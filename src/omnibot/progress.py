@@ -15,9 +15,11 @@ from typing import Any, Protocol
 class Progress(Protocol):
     """What a long run reports its progress to (a tqdm bar fits)."""
 
-    def update(self, n: float | None = 1) -> bool | None: ...
+    def update(self, n: float | None = 1) -> bool | None:
+        """Advance the bar by ``n`` steps."""
 
-    def set_postfix_str(self, s: str = "", refresh: bool = True) -> None: ...
+    def set_postfix_str(self, s: str = "", refresh: bool = True) -> None:
+        """Show ``s`` after the bar."""
 
 
 def on_terminal() -> bool:

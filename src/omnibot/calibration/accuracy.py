@@ -28,6 +28,8 @@ REACH_COURSES = tuple(float(c) for c in range(0, 360, 15))
 
 @dataclass(frozen=True)
 class AccuracyPlan:
+    """What an accuracy check drives: MOVEs on each course at each speed (and back), and ROTATEs."""
+
     courses_deg: tuple[float, ...] = (0.0, 15.0, 30.0, 45.0, 60.0, 75.0, 90.0)
     speeds: tuple[float, ...] | None = None
     """m/s; default: four from the lowest speed to 90 % of the highest of :func:`speed_range`."""
@@ -37,6 +39,8 @@ class AccuracyPlan:
     """(angle, rate) in degrees and degrees/s, each both ways."""
 
     def move_speeds(self, robot: RobotDescription) -> list[float]:
+        """The MOVE speeds for ``robot``, m/s: :attr:`speeds`, else four from the lowest to 90 % of the
+        highest."""
         if self.speeds is not None:
             return list(self.speeds)
         lo, hi = speed_range(robot, self.length)
@@ -45,11 +49,14 @@ class AccuracyPlan:
 
     @classmethod
     def quick(cls) -> AccuracyPlan:
+        """A short check: courses 0, 45 and 90 degrees, one rotation."""
         return cls(courses_deg=(0.0, 45.0, 90.0), speeds=None, rotations=((90.0, 90.0),))
 
 
 @dataclass(frozen=True)
 class AccuracyRow:
+    """One run of an accuracy check: what was commanded and what was achieved, with its errors."""
+
     kind: str
     """``move`` or ``rotate``."""
     course_deg: float
@@ -67,6 +74,7 @@ class AccuracyRow:
     """The controller warned that the motors could not give the power asked (warning 11, speed reduced)."""
 
     def as_dict(self) -> dict[str, Any]:
+        """The row as plain data (for the JSON report)."""
         return asdict(self)
 
 
@@ -122,6 +130,7 @@ class Summary:
     rotate_max: float | None
 
     def as_dict(self) -> dict[str, Any]:
+        """The summary as plain data (for the JSON report)."""
         return asdict(self)
 
 
@@ -131,6 +140,7 @@ def _stats(values: Sequence[float | None]) -> tuple[float | None, float | None]:
 
 
 def summarize(rows: Sequence[AccuracyRow]) -> Summary:
+    """Mean and largest absolute distance, heading and course errors of the MOVEs and ROTATEs in ``rows``."""
     moves = [r for r in rows if r.kind == "move"]
     rot = [r for r in rows if r.kind == "rotate"]
     dm, dx = _stats([r.error for r in moves])

@@ -40,6 +40,9 @@ TOP_KEYS = ("robot", "calibration", "surfaces", "gyro", "odometry", "info")
 
 @dataclass(frozen=True)
 class CalibrationFile:
+    """A calibration file as read: the tables for any floor, each floor's own, dead bands, gyro, odometry
+    and wheel slip."""
+
     calibration: CalibrationSpec | None
     """The tables for any floor; None in a file of several floors whose average was worse than none
     on one of them (each floor then has only its own, :attr:`surfaces`)."""
@@ -178,6 +181,8 @@ def dumps(doc: dict[str, Any]) -> str:
 def write_calibration(
     path: str | Path, result: CalibrationResult, truth: str = "", warning: str = ""
 ) -> Path:
+    """Write ``result`` as a calibration file at ``path`` (directories made); the path written, ConfigError
+    when it cannot be written."""
     path = Path(path)
     try:
         if path.parent != Path():
@@ -245,6 +250,7 @@ def parse_calibration(data: Any, source: str = "") -> CalibrationFile:
 
 
 def load_calibration(path: str | Path) -> CalibrationFile:
+    """Read and check the calibration file at ``path``; ConfigError naming what is wrong."""
     return parse_calibration(read_yaml(path, "calibration file"), str(path))
 
 

@@ -37,6 +37,7 @@ SIM_SURFACES = ("wood", "carpet")
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Add ``omnibot calibrate`` and its options to ``sub``."""
     p = sub.add_parser(
         "calibrate",
         help="seed 000's power calibration (K, K_l, K_t, K_r), gyro and odometry geometry, with a report",

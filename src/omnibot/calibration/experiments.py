@@ -71,6 +71,7 @@ class Runner:
         self._warns.append(event.code)
 
     def close(self) -> None:
+        """Stop listening to the client's warnings."""
         self.client.remove_listener(self._warn)
 
     def run(
@@ -129,6 +130,7 @@ class Runner:
     def power_run(
         self, powers: Sequence[int], duration: float, info: RunInfo, group: str, **meta: Any
     ) -> RunResult:
+        """One POWER run: ``powers`` per motor for ``duration`` s, measured as :meth:`run` does."""
         return self.run(info, lambda: self.client.power(duration, powers), duration, group, **meta)
 
     def note(self, message: str) -> None:
@@ -371,6 +373,7 @@ def rotation_sweep(runner: Runner, plan: Plan, deadband: int) -> list[RunResult]
 
 
 def turn_speed(plan: Plan, robot: RobotDescription) -> float:
+    """The speed of the curved MOVEs, m/s: the plan's, else the middle of the robot's speed range."""
     return (
         plan.turn_speed
         if plan.turn_speed is not None

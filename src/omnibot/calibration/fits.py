@@ -191,6 +191,8 @@ class RateCurve:
 
     @classmethod
     def fit(cls, points: Sequence[RatePoint], deadband: int | None = None) -> RateCurve:
+        """The curve through the measured ``points`` (made monotone), zero up to ``deadband``;
+        ConfigError when no run moved the robot."""
         pts = sorted((p.power, p.rim) for p in points)
         if not pts or max(r for _, r in pts) <= 0.0:
             raise ConfigError(
@@ -242,6 +244,7 @@ class RateCurve:
         return m
 
     def rim_at(self, power: float) -> float:
+        """Rim speed at ``power`` PWM counts, m/s (held below the first level, linear beyond the last)."""
         ps, rs, m = self.powers, self.rims, self._slopes
         if power <= ps[0]:
             return rs[0]
@@ -297,6 +300,7 @@ class RateCurve:
         return sum((p - pm) * (r - rm) for p, r in pairs) / srr
 
     def as_dict(self) -> dict[str, Any]:
+        """The measured levels as plain data."""
         return {"powers": list(self.powers), "rims": list(self.rims)}
 
 
@@ -337,12 +341,15 @@ def factor_table(curves: Sequence[RateCurve], k: float, knots: Sequence[int]) ->
 def translation_knots(
     robot: RobotDescription, geometry: Geometry, k: float, courses: Sequence[float], length: float = 1.0
 ) -> tuple[int, ...]:
+    """Power knots (PWM counts) of the translation sweeps: from 0.7 of the power the slowest speed
+    needs on the course that needs least to 1.15 of what the fastest needs on the one that needs most."""
     slow, fast = speed_range(robot, length)
     factors = [geometry.translation_factor(c) for c in courses]
     return knot_powers(0.7 * k * slow * min(factors), 1.15 * k * fast * max(factors), geometry.pwm_max)
 
 
 def rotation_knots(robot: RobotDescription, geometry: Geometry, k: float) -> tuple[int, ...]:
+    """Power knots (PWM counts) of the rotation sweeps, from 0.2 rad/s to the robot's top turn rate."""
     rot = geometry.rotation_factor()
     return knot_powers(k * rot * 0.2, k * rot * robot.limits.angular_speed_max, geometry.pwm_max)
 
@@ -510,11 +517,13 @@ def average_motors(maps: Sequence[MotorMapSpec]) -> MotorMapSpec:
 
 
 def robot_table(robot: RobotDescription, name: str) -> PiecewiseLinear | None:
+    """The robot's current calibration table ``name`` (``kt``, ``kr`` ...), None when it has none."""
     cal = robot.calibration
     table = getattr(cal, name) if cal is not None else None
     return table if isinstance(table, PiecewiseLinear) else None
 
 
 def average_kt(fits: Sequence[SurfaceFit]) -> PiecewiseLinear | None:
+    """The K_t tables of the surfaces averaged, None when no surface has one."""
     tables = [f.kt for f in fits if f.kt is not None]
     return average_tables(tables) if tables else None

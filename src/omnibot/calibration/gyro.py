@@ -23,6 +23,8 @@ from omnibot.calibration.runs import RunResult
 
 @dataclass(frozen=True)
 class GyroCalibration:
+    """The gyro's calibration: standstill bias (rad/s) with its uncertainty, and scale from rotations."""
+
     bias: float
     """rad/s read at standstill."""
     bias_std: float
@@ -37,6 +39,7 @@ class GyroCalibration:
         return (self.scale or 1.0) * (measured - self.bias)
 
     def as_dict(self) -> dict[str, Any]:
+        """The calibration as plain data (for the calibration file)."""
         return asdict(self)
 
 
@@ -57,5 +60,6 @@ def fit_scale(runs: Sequence[RunResult], bias: float) -> tuple[float | None, int
 
 
 def calibrate_gyro(bias: tuple[float, float, int], runs: Sequence[RunResult]) -> GyroCalibration:
+    """The gyro calibration from a standstill bias ``(mean, std, samples)`` and the rotation test's runs."""
     scale, used = fit_scale(runs, bias[0])
     return GyroCalibration(bias=bias[0], bias_std=bias[1], samples=bias[2], scale=scale, rotations=used)

@@ -34,6 +34,7 @@ MIN_DISTANCE = 0.02
 
 
 def identity(n: int) -> MotorMapSpec:
+    """The motor map that changes nothing: no offsets, gain 1 for each of ``n`` motors."""
     return MotorMapSpec(offset=(0.0,) * n, gain=(PiecewiseLinear(x=(0.0,), y=(1.0,)),) * n)
 
 
@@ -74,6 +75,7 @@ class Balance:
     """Per power, the rms error (rad) with the fitted gains."""
 
     def as_dict(self) -> dict[str, list[Any]]:
+        """The outcome as plain data (for the JSON report)."""
         return {
             "powers": self.powers,
             "log_gains": self.log_gains,
@@ -82,6 +84,8 @@ class Balance:
         }
 
     def tables(self, n: int) -> tuple[PiecewiseLinear, ...]:
+        """Each of ``n`` motors' gain table (exp of its log-gains per power); identity when nothing was
+        fitted."""
         if not self.powers:
             return identity(n).gain
         xs = tuple(float(p) for p in self.powers)
@@ -111,10 +115,12 @@ def gain_step(jac: np.ndarray, e: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 
 def constant_gains(offsets: Sequence[float], x: np.ndarray) -> MotorMapSpec:
+    """A motor map with ``offsets`` and one constant gain per motor, exp of ``x``."""
     gains = tuple(PiecewiseLinear(x=(0.0,), y=(float(math.exp(v)),)) for v in x)
     return MotorMapSpec(offset=tuple(offsets), gain=gains)
 
 
 def rms(e: np.ndarray) -> float:
+    """Root mean square of the finite values of ``e`` (inf when there are none)."""
     ok = e[np.isfinite(e)]
     return float(np.sqrt(np.mean(ok * ok))) if ok.size else math.inf

@@ -39,6 +39,7 @@ class Geometry:
 
     @classmethod
     def of(cls, robot: RobotDescription) -> Geometry:
+        """The geometry of ``robot`` as the firmware sees it (from its generated config)."""
         cfg = build_config(robot)
         rim = tuple((float(r[0]), float(r[1]), float(r[2])) for r in cfg["rim"])
         return cls(
@@ -51,6 +52,7 @@ class Geometry:
 
     @property
     def motors(self) -> int:
+        """The number of driven motors."""
         return len(self.rim)
 
     @property

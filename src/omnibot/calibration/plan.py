@@ -80,6 +80,8 @@ class Plan:
         return cls(course_count=2, directions=2, levels=6, turn_curvatures=(2.0, 5.0), turn_rounds=1)
 
     def calibrated_courses(self, geometry: Geometry) -> list[float]:
+        """The courses to calibrate, degrees: the plan's (checked to increase within 0..fold_max), else
+        ``course_count`` spread evenly over it; ConfigError for bad ones."""
         top = geometry.fold_max
         if self.courses_deg is not None:
             bad = [c for c in self.courses_deg if not 0.0 <= c <= top + 1e-9]

@@ -45,6 +45,7 @@ def accuracy_entries(result: CalibrationResult) -> list[tuple[str, list[Accuracy
 
 
 def accuracy_markdown(result: CalibrationResult) -> str:
+    """The accuracy report as Markdown: each check's summary and its MOVE and ROTATE tables."""
     entries = accuracy_entries(result)
     lines = [
         f"# Calibration accuracy: {result.robot.name}",
@@ -150,6 +151,7 @@ def slip_summary(slip: SlipCalibration) -> str:
 
 
 def accuracy_json(result: CalibrationResult) -> dict[str, Any]:
+    """Each accuracy check's summary and rows as plain data, by label."""
     return {
         label: {"summary": summarize(rows).as_dict(), "rows": [r.as_dict() for r in rows]}
         for label, rows in accuracy_entries(result)
@@ -157,6 +159,8 @@ def accuracy_json(result: CalibrationResult) -> dict[str, Any]:
 
 
 def runs_json(result: CalibrationResult) -> dict[str, Any]:
+    """Every surface session's runs, fits and calibration as plain data (the JSON run log)."""
+
     def session(s: SurfaceSession) -> dict[str, Any]:
         return {
             "truth": s.truth,

@@ -43,6 +43,9 @@ class SurfaceSession:
 
 @dataclass
 class CalibrationResult:
+    """A whole calibration: the robot, one session per surface and the average over the surfaces with its
+    checks."""
+
     robot: RobotDescription
     sessions: list[SurfaceSession]
     average: CalibrationSpec | None = None
@@ -64,6 +67,7 @@ class CalibrationResult:
 
     @property
     def gyro(self) -> GyroCalibration | None:
+        """The gyro over all sessions: the last bias, the mean scale; None when no session calibrated it."""
         cals = [s.gyro for s in self.sessions if s.gyro is not None]
         if not cals:
             return None
@@ -79,6 +83,7 @@ class CalibrationResult:
 
     @property
     def odometry(self) -> OdometryCalibration | None:
+        """The odometry geometry over all sessions (scales averaged); None when no session calibrated it."""
         cals = [s.odometry for s in self.sessions if s.odometry is not None]
         if len(cals) <= 1:
             return cals[0] if cals else None

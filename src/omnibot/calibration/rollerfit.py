@@ -73,6 +73,7 @@ class RollerFit:
 
     @property
     def spec(self) -> RollerDragSpec:
+        """The roller drag section for the calibration: the fitted terms when kept, zero drag otherwise."""
         if not self.kept:
             return RollerDragSpec(cos=(0.0,) * len(self.cos), sin=(0.0,) * len(self.sin))
         return RollerDragSpec(cos=self.cos, sin=self.sin, coast=self.coast_table)
@@ -86,6 +87,7 @@ class RollerFit:
         return sum(self.cos[i] * fc[i] + self.sin[i] * fs[i] for i in geometry.idle_wheels(course_deg))
 
     def as_dict(self) -> dict[str, object]:
+        """The fit as plain data (for the JSON report)."""
         return {k: list(v) if isinstance(v, tuple) else v for k, v in self.__dict__.items()}
 
 
@@ -261,6 +263,7 @@ class CoastTuning:
     courses at the same speed, in power, and mu (:func:`offset_shift` evens it out)."""
 
     def as_dict(self) -> dict[str, object]:
+        """The fit as plain data (for the JSON report)."""
         out: dict[str, object] = {k: list(v) for k, v in self.__dict__.items() if isinstance(v, tuple)}
         out["table"] = {"x": list(self.table.x), "y": list(self.table.y)}
         out["runs"] = self.runs

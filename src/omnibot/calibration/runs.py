@@ -120,6 +120,7 @@ class RunResult:
         return None if self.truth.theta is None else self.sign * self.truth.theta
 
     def as_dict(self) -> dict[str, Any]:
+        """The run as plain data (for the JSON run log), unset fields left out."""
         out: dict[str, Any] = {
             k: v for k, v in self.__dict__.items() if k not in ("truth", "odometry") and v is not None
         }

@@ -61,6 +61,7 @@ ProgressFactory = Callable[[str, int], AbstractContextManager[Progress | None]]
 
 @contextmanager
 def no_progress(desc: str, total: int) -> Iterator[Progress | None]:
+    """A progress context that shows nothing (yields None)."""
     yield None
 
 
@@ -121,13 +122,16 @@ class Tally:
 
     @property
     def total(self) -> int:
+        """The bar's total: runs done plus the runs still expected of the phases to come."""
         return self.runs + sum(self.left.values())
 
     def update(self, n: float | None = 1) -> bool | None:
+        """Count ``n`` runs done."""
         self.runs += int(n or 0)
         return self.bar.update(n) if self.bar is not None else None
 
     def set_postfix_str(self, s: str = "", refresh: bool = True) -> None:
+        """Show ``s`` after the bar."""
         if self.bar is not None:
             self.bar.set_postfix_str(s, refresh)
 
@@ -143,6 +147,7 @@ class Tally:
         self.recount()
 
     def recount(self) -> None:
+        """Give the bar its current :attr:`total` and redraw it."""
         if self.bar is not None and hasattr(self.bar, "total"):
             self.bar.total = self.total
             refresh = getattr(self.bar, "refresh", None)
@@ -190,31 +195,38 @@ class SurfaceRun:
 
     @property
     def client(self) -> RobotClient:
+        """The runner's robot client."""
         return self.runner.client
 
     @property
     def robot(self) -> RobotDescription:
+        """The robot being calibrated."""
         return self.runner.robot
 
     @property
     def geometry(self) -> Geometry:
+        """The robot's geometry as the firmware sees it."""
         return self.runner.geometry
 
     @property
     def tap(self) -> TelemetryTap:
+        """The runner's telemetry tap."""
         return self.runner.tap
 
     @property
     def source(self) -> TruthSource:
+        """The ground truth the runs are measured by."""
         return self.runner.truth
 
     @property
     def fit(self) -> SurfaceFit:
+        """The surface's fit (AssertionError before the fit step)."""
         assert self.fitted is not None, "the fit step has not run"
         return self.fitted
 
     @property
     def spec(self) -> CalibrationSpec:
+        """The calibration section as it stands (AssertionError before the fit step)."""
         assert self.section is not None, "the fit step has not run"
         return self.section
 

@@ -32,9 +32,12 @@ class SourceRuns:
         self.live = source.live
 
     def start(self) -> object:
+        """Mark the start of a slip run with the truth source."""
         return self.source.mark()
 
     def displacement(self, mark: object, course: float) -> tuple[float, float] | None:
+        """The measured displacement of a slip run on ``course`` (rad) in the start's body frame, m; None
+        when the source cannot measure it."""
         run = RunInfo(STRAIGHT, f"slip run on course {math.degrees(course):.0f} deg", course)
         if not self.source.can(run):
             return None

@@ -45,6 +45,7 @@ def move_grid(rows: Sequence[AccuracyRow], field: str = "error") -> str:
 
 
 def rotate_lines(rows: Sequence[AccuracyRow]) -> str:
+    """The ROTATE rows as a Markdown table (commanded, rate, achieved, error); "" when there are none."""
     rot = [r for r in rows if r.kind == "rotate"]
     if not rot:
         return ""
@@ -56,6 +57,8 @@ def rotate_lines(rows: Sequence[AccuracyRow]) -> str:
 
 
 def summary_line(label: str, s: Summary) -> str:
+    """One Markdown summary row: ``label``, then the mean and largest errors of ``s``."""
+
     def p(v: float | None) -> str:
         return "-" if v is None else f"{100 * v:.1f}"
 
@@ -75,4 +78,5 @@ SUMMARY_HEAD = (
 
 
 def summary_table(entries: Sequence[tuple[str, Sequence[AccuracyRow]]]) -> str:
+    """The Markdown summary table of the accuracy checks, one row per ``(label, rows)`` entry."""
     return "\n".join([SUMMARY_HEAD, *(summary_line(label, summarize(rows)) for label, rows in entries)])

@@ -78,6 +78,7 @@ class TelemetryTap:
 
     @property
     def odometry_pose(self) -> Pose2D | None:
+        """The pose of the tap's encoder odometry, None without one."""
         return self.odometry.pose if self.odometry is not None else None
 
     def counts(self) -> tuple[int, ...] | None:

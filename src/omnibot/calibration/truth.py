@@ -52,15 +52,19 @@ class TruthSource:
     """True when it can also measure while the robot moves (the simulator)."""
 
     def can(self, run: RunInfo) -> bool:
+        """Whether this source can measure ``run`` (by its kind)."""
         return run.kind in self.kinds
 
     def mark(self) -> Any:
+        """Take what :meth:`measure` needs before a run (None by default)."""
         return None
 
     def measure(self, mark: Any, run: RunInfo) -> Motion | None:
+        """The motion since ``mark`` for ``run``, None when it could not be measured."""
         raise NotImplementedError
 
     def describe(self) -> str:
+        """The source as the ``--truth`` option names it."""
         return self.name
 
 
@@ -101,10 +105,12 @@ class SimTruth(TruthSource):
         self.sim = sim
 
     def mark(self) -> tuple[float, float, float]:
+        """The simulator's true pose now ``(x, y, theta)``."""
         p = self.sim.pose
         return (p.x, p.y, p.theta)
 
     def measure(self, mark: Any, run: RunInfo) -> Motion:
+        """The simulator's true motion since ``mark``."""
         p = self.sim.pose
         x0, y0, th0 = mark
         return relative(x0, y0, th0, p.x, p.y, p.theta, "sim")
@@ -151,13 +157,16 @@ class CsvTruth(TruthSource):
             ) from None
 
     def mark(self) -> tuple[float, float, float]:
+        """The file's latest pose ``(x, y, theta)``."""
         return self._last()
 
     def measure(self, mark: Any, run: RunInfo) -> Motion:
+        """The motion between ``mark`` and the file's latest pose."""
         (x0, y0, th0), (x1, y1, th1) = mark, self._last()
         return relative(x0, y0, th0, x1, y1, th1, "csv")
 
     def describe(self) -> str:
+        """``csv:`` and the file's path."""
         return f"csv:{self.path}"
 
 
@@ -186,9 +195,11 @@ class EncoderTruth(TruthSource):
         return self.odometry.pose if self.odometry is not None else self.tap.odometry_pose
 
     def mark(self) -> Any:
+        """The encoder odometry's pose now (None before the first telemetry)."""
         return self._pose()
 
     def measure(self, mark: Any, run: RunInfo) -> Motion | None:
+        """The odometry's motion since ``mark``, None when either pose is unknown."""
         end = self._pose()
         if mark is None or end is None:
             return None
@@ -239,6 +250,7 @@ class SonarTruth(TruthSource):
         ctx.client.sonar(index + 1, period)
 
     def can(self, run: RunInfo) -> bool:
+        """Only straight runs within 60 degrees of the sonar's axis (it measures the range's change)."""
         return (
             run.kind == STRAIGHT and run.course is not None and abs(math.cos(run.course - self.angle)) >= 0.5
         )
@@ -252,9 +264,11 @@ class SonarTruth(TruthSource):
         return statistics.median(v for v in values if v is not None) if values else None
 
     def mark(self) -> float | None:
+        """The sonar's range now, m: the median of the last window's readings (None without one)."""
         return self._range()
 
     def measure(self, mark: Any, run: RunInfo) -> Motion | None:
+        """The distance along the course from the change of range, None when either range is missing."""
         after = self._range()
         if mark is None or after is None or run.course is None:
             return None
@@ -303,6 +317,8 @@ class TapeTruth(TruthSource):
             prompt = f"  please type {count} number(s) separated by commas (or nothing to skip): "
 
     def measure(self, mark: Any, run: RunInfo) -> Motion | None:
+        """Ask the person what the tape measured (distance, angle, or end point and heading change); None
+        when they give nothing."""
         if run.kind == STRAIGHT:
             got = self._numbers(f"{run.text}: distance travelled [cm]? ", 1)
             return None if got is None else Motion(along=got[0] / 100.0, source="tape")
@@ -332,18 +348,22 @@ class TruthChain(TruthSource):
         self.exact = sources[0].exact
 
     def can(self, run: RunInfo) -> bool:
+        """Whether any source of the chain can measure ``run``."""
         return any(s.can(run) for s in self.sources)
 
     def mark(self) -> list[Any]:
+        """Every source's mark, in order."""
         return [s.mark() for s in self.sources]
 
     def measure(self, mark: Any, run: RunInfo) -> Motion | None:
+        """The measurement of the first source that can measure ``run``."""
         for source, m in zip(self.sources, mark, strict=True):
             if source.can(run):
                 return source.measure(m, run)
         return None
 
     def describe(self) -> str:
+        """The sources' names joined by "then"."""
         return " then ".join(s.describe() for s in self.sources)
 
 

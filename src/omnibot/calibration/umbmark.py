@@ -41,6 +41,8 @@ if TYPE_CHECKING:  # the samples' type only: the square runs are driven by exper
 
 @dataclass
 class SquareRun:
+    """One UMBmark square: its direction, side (m), the run's measurement and its telemetry."""
+
     ccw: bool
     side: float
     result: RunResult
@@ -103,6 +105,7 @@ class OdometryCalibration:
     rotation_runs: int = 0
 
     def as_dict(self) -> dict[str, Any]:
+        """The result as plain data (for the calibration file), unset fields left out."""
         return {k: v for k, v in asdict(self).items() if v is not None}
 
 
@@ -113,6 +116,8 @@ def ratio(pairs: Sequence[tuple[float, float]]) -> float | None:
 
 
 def distance_pairs(runs: Sequence[RunResult], minimum: float = 0.1) -> list[tuple[float, float]]:
+    """(truth, odometry) path lengths of the straight runs measured both ways, the true one at least
+    ``minimum`` m."""
     out = []
     for r in runs:
         if r.kind != STRAIGHT or r.truth is None or r.odometry is None:
@@ -124,6 +129,7 @@ def distance_pairs(runs: Sequence[RunResult], minimum: float = 0.1) -> list[tupl
 
 
 def angle_pairs(runs: Sequence[RunResult]) -> list[tuple[float, float]]:
+    """(truth, odometry) heading changes of the runs measured both ways, rad."""
     out = []
     for r in runs:
         if r.truth is None or r.odometry is None or r.truth.theta is None or r.odometry.theta is None:

@@ -41,6 +41,7 @@ class Verdict:
 
 
 def mean_abs_error(rows: Sequence[AccuracyRow]) -> float | None:
+    """Mean absolute error of the rows that have one, None when none has."""
     errors = [abs(r.error) for r in rows if r.error is not None]
     return sum(errors) / len(errors) if errors else None
 

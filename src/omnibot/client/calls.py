@@ -44,9 +44,11 @@ class TypedCalls:
     _mode: int | None
 
     def execute(self, command: Command, timeout: float | None = None) -> Reply:
+        """Send ``command`` and wait for its reply (the client implements it)."""
         raise NotImplementedError
 
     def submit(self, command: Command, timeout: float | None = None) -> Any:
+        """Send ``command`` and return a handle on its future reply (the client implements it)."""
         raise NotImplementedError
 
     def move(self, distance: float, speed: float, course: float = 0.0, curvature: float = 0.0) -> Move:

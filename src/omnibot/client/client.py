@@ -306,6 +306,7 @@ class RobotClient(TypedCalls):
         self._listeners.add(callback, *types)
 
     def remove_listener(self, callback: Callable[[E], object]) -> None:
+        """Stop calling ``callback`` (no error if it was not listening)."""
         self._listeners.remove(callback)
 
     def add_tracer(self, tracer: Tracer) -> None:
@@ -313,6 +314,7 @@ class RobotClient(TypedCalls):
         self._tracers.append(tracer)
 
     def remove_tracer(self, tracer: Tracer) -> None:
+        """Stop handing ``tracer`` anything."""
         self._tracers = [t for t in self._tracers if t is not tracer]
 
     def _trace_bytes(self, kind: str, data: bytes = b"", note: str = "") -> None:
@@ -330,21 +332,27 @@ class RobotClient(TypedCalls):
                 log.exception("tracer %r failed", tracer)
 
     def on_telemetry(self, callback: Callable[[Telemetry], object]) -> None:
+        """Call ``callback`` with every TEL sample."""
         self._listeners.add(callback, Telemetry)
 
     def on_range(self, callback: Callable[[RangeEvent], object]) -> None:
+        """Call ``callback`` with every RANGE event."""
         self._listeners.add(callback, RangeEvent)
 
     def on_warn(self, callback: Callable[[WarnEvent], object]) -> None:
+        """Call ``callback`` with every WARN event."""
         self._listeners.add(callback, WarnEvent)
 
     def on_error(self, callback: Callable[[ErrorEvent], object]) -> None:
+        """Call ``callback`` with every ERROR event (a fault of the motion logic, not a rejected command)."""
         self._listeners.add(callback, ErrorEvent)
 
     def on_idle(self, callback: Callable[[IdleEvent], object]) -> None:
+        """Call ``callback`` with every IDLE event (the queue ran empty, the motors stopped)."""
         self._listeners.add(callback, IdleEvent)
 
     def on_reset(self, callback: Callable[[ResetEvent], object]) -> None:
+        """Call ``callback`` when the controller resets (its HELLO line arrives unasked)."""
         self._listeners.add(callback, ResetEvent)
 
     # ------------------------------------------------------------------ sending

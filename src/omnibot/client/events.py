@@ -52,6 +52,8 @@ class Event:
 
 @dataclass(frozen=True, kw_only=True)
 class RangeEvent(Event):
+    """``RANGE``: a sonar reading inside its band."""
+
     sonar: int
     """Sonar number, 1..k as in the protocol."""
     distance: float | None
@@ -60,28 +62,38 @@ class RangeEvent(Event):
 
 @dataclass(frozen=True, kw_only=True)
 class WarnEvent(Event):
+    """``WARN``: a warning of the motion or sensor logic, its code and text."""
+
     code: int
     text: str
 
 
 @dataclass(frozen=True, kw_only=True)
 class ErrorEvent(Event):
+    """``ERROR`` as an event: a fault of the motion logic, its code and text."""
+
     code: int
     text: str
 
 
 @dataclass(frozen=True, kw_only=True)
 class IdleEvent(Event):
+    """``IDLE``: the queue ran empty and the motors stopped."""
+
     pass
 
 
 @dataclass(frozen=True, kw_only=True)
 class ResetEvent(Event):
+    """HELLO unasked: the controller (re)started; ``hello`` says what it is."""
+
     hello: Hello
 
 
 @dataclass(frozen=True, kw_only=True)
 class Unexpected(Event):
+    """Bytes that were no valid message, or a reply nobody was waiting for; ``reason`` says which."""
+
     reason: str
 
 
@@ -108,6 +120,7 @@ class Telemetry(Event):
 
     @classmethod
     def from_message(cls, tel: TelMessage, time: float) -> Telemetry:
+        """The sample of a TEL message in SI units, decoded at link time ``time`` s."""
         return cls(
             time=time,
             message=tel,
@@ -166,6 +179,7 @@ class Listeners:
         self._entries = [e for e in self._entries if e[0] is not callback]
 
     def dispatch(self, event: Event) -> None:
+        """Call every callback registered for the type of ``event``."""
         for callback, types in list(self._entries):
             if isinstance(event, types):
                 try:
@@ -181,6 +195,7 @@ class EventRecorder:
         self.events: list[Event] = []
 
     def __call__(self, event: Event) -> None:
+        """Keep ``event``."""
         self.events.append(event)
 
     def of(self, kind: type[E]) -> list[E]:
@@ -188,4 +203,5 @@ class EventRecorder:
         return [e for e in self.events if isinstance(e, kind)]
 
     def clear(self) -> None:
+        """Forget the recorded events."""
         self.events.clear()

@@ -1,11 +1,11 @@
-"""Finding and switching the controller's protocol, also over a noisy line (docs/protocol.md).
+r"""Finding and switching the controller's protocol, also over a noisy line (docs/protocol.md).
 
 Text has no check, so any text exchange may be lost or changed on the way; the binary HELLO
 exchange cannot be changed unseen. Each step therefore ends in a question the controller can only
 answer one way per protocol, the *probe* (docs/protocol.md, "Switching and version negotiation")::
 
     host:        00 HELLO frame (SYNC, our versions) 00 ; CR LF
-    binary controller:  HELLO reply frame (the session starts; ";\\r\\n" is garbage before the next frame)
+    binary controller:  HELLO reply frame (the session starts; ";\r\n" is garbage before the next frame)
     text controller:    ERROR lines for the garbage (or its HELLO greeting if it just reset)
 
 * :func:`find_protocol`: probe until one of the answers comes; the client then speaks what the

@@ -19,6 +19,7 @@ class Hello:
 
     @classmethod
     def from_reply(cls, reply: HelloReply) -> Hello:
+        """The client's view of a HELLO reply."""
         return cls(reply.version, reply.name, reply.motors)
 
 
@@ -37,6 +38,7 @@ class MoveState:
 
     @classmethod
     def from_protocol(cls, move: tuple[int, int, int, int]) -> MoveState:
+        """The remembered MOVE from its protocol integers (cm, cm/s, degrees, 1/(1000 cm)) in SI."""
         L, V, D, C = move
         return cls(_distance(L), units.from_cm(V), units.from_deg(D), units.from_curvature(C))
 
@@ -57,6 +59,7 @@ class Status:
 
     @classmethod
     def from_reply(cls, reply: StatusReply) -> Status:
+        """The client's view of a STATUS reply, in SI."""
         return cls(
             reply.state,
             reply.queued,
@@ -73,10 +76,12 @@ class Status:
 
     @property
     def moving(self) -> bool:
+        """True while the controller executes a motion."""
         return self.state == codes.STATE_MOVING
 
     @property
     def idle(self) -> bool:
+        """True when the controller has nothing to do."""
         return self.state == codes.STATE_IDLE
 
     @property
@@ -86,12 +91,15 @@ class Status:
 
     @property
     def simulation(self) -> bool:
+        """True when the controller simulates its motors (MODE bit ``MODE_SIMULATION``)."""
         return bool(self.mode & codes.MODE_SIMULATION)
 
     @property
     def closed_loop(self) -> bool:
+        """True when the wheel-speed loop is closed on the encoders (MODE bit ``MODE_CLOSED_LOOP``)."""
         return bool(self.mode & codes.MODE_CLOSED_LOOP)
 
     @property
     def binary(self) -> bool:
+        """True when the link speaks binary frames (MODE bit ``MODE_BINARY``)."""
         return bool(self.mode & codes.MODE_BINARY)

@@ -1,14 +1,14 @@
-"""The two wire formats the client speaks: text lines and binary frames with ARQ (no I/O).
+r"""The two wire formats the client speaks: text lines and binary frames with ARQ (no I/O).
 
 Both turn a command into bytes (``frame``) and received bytes into packets (``feed``), lazily, so
 the client can stop at the reply that switches protocols and hand the rest over (``rest``)::
 
-    TextWire:    command -> "MOVE,2,40,0,0\\n"        bytes -> Packet(message, seq=0) | Malformed
-                 tagged:  "MOVE,2,40,0,0#17*C3A1\\n"  bytes -> Packet(message, seq=tag)  (0: untagged)
+    TextWire:    command -> "MOVE,2,40,0,0\n"        bytes -> Packet(message, seq=0) | Malformed
+                 tagged:  "MOVE,2,40,0,0#17*C3A1\n"  bytes -> Packet(message, seq=tag)  (0: untagged)
     BinaryWire:  command -> frame (seq, SYNC, retry)  bytes -> Packet(message, seq, event) | Malformed
                  + ack(seq) for events, service(now_ms) for retransmissions (arq.Sender)
 
-A binary controller that resets speaks text again and greets with ``HELLO,...\\r\\n``;
+A binary controller that resets speaks text again and greets with ``HELLO,...\r\n``;
 :class:`BinaryWire` spots that line between frames and reports it as a HELLO packet with
 ``event=True`` (the client then treats it as a reset and goes back to text).
 """
@@ -40,9 +40,11 @@ class TextWire:
         self._last_tag = 0
 
     def ready(self) -> bool:
+        """Always True: the line protocol has no send window."""
         return True
 
     def next_tag(self) -> int:
+        """The next tag, 1..TAG_MAX in turn."""
         self._last_tag = self._last_tag % text.TAG_MAX + 1
         return self._last_tag
 
@@ -64,16 +66,20 @@ class TextWire:
         return 0, chunk + codes.COMMAND_END
 
     def feed(self, data: bytes) -> Iterator[Packet | Malformed]:
+        """Decode received bytes into tagged packets (tag 0: untagged) or Malformed lines."""
         for message, tag in self._decoder.feed_tagged(data):
             yield message if isinstance(message, Malformed) else Packet(message, tag or 0)
 
     def rest(self) -> bytes:
+        """The bytes of an unfinished line, handed to the next wire when the protocol switches."""
         return self._decoder.rest()
 
     def service(self, now_ms: int) -> list[bytes]:
+        """Nothing to retransmit: the line protocol has no retries."""
         return []
 
     def take_failed(self) -> list[int]:
+        """Nothing fails here: the line protocol has no retries."""
         return []
 
 
@@ -102,9 +108,11 @@ class BinaryWire:
         return seq, data
 
     def ack(self, seq: int) -> bytes:
+        """The ACK frame for event ``seq``."""
         return binary.encode(Ack(), seq)
 
     def feed(self, data: bytes) -> Iterator[Packet | Malformed]:
+        """Decode received bytes into packets or Malformed frames, watching for a reset's text HELLO line."""
         yield from self._decoder.feed(data)
         cut = data.rfind(b"\x00")
         self._tail = (data[cut + 1 :] if cut >= 0 else self._tail + data)[-_TAIL_MAX:]
@@ -116,6 +124,7 @@ class BinaryWire:
             yield Packet(hello, 0, event=True)
 
     def rest(self) -> bytes:
+        """The bytes not yet decoded for the next wire: after a reset, those that followed its HELLO line."""
         pending = self._decoder.rest()
         if self._after_reset is not None:
             pending, self._after_reset = self._after_reset, None

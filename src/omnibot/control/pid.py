@@ -43,6 +43,7 @@ class PID:
         self._prev: float | None = None
 
     def reset(self) -> None:
+        """Zero the integral, derivative and output, and forget the last measurement."""
         self.integral = 0.0
         self.derivative = 0.0
         self.output = 0.0

@@ -36,6 +36,9 @@ DIRECTIONS: tuple[tuple[str, float, float, float], ...] = (
 
 @dataclass(frozen=True)
 class DirectionRun:
+    """One open-loop run: the PWM pattern, commanded and achieved direction (degrees), distance (m),
+    heading change (degrees) and the pose trail."""
+
     name: str
     pwm: tuple[int, ...]
     commanded_deg: float | None
@@ -67,6 +70,8 @@ def run_direction(
     surface: str,
     seed: int,
 ) -> DirectionRun:
+    """Drive ``robot`` open-loop in the direction of ``twist`` for ``duration`` s on a fresh simulator,
+    the busiest motor at ``power`` PWM counts; what it achieved."""
     sim = Simulator(robot, surface=surface, seed=seed)
     pwm = wheel_pattern(robot, twist, power)
     trail: list[tuple[float, float, float]] = []
@@ -115,6 +120,7 @@ def run_tour(
 
 
 def format_table(robot: RobotDescription, runs: list[DirectionRun]) -> str:
+    """The runs as a text table: PWM per motor, commanded and achieved direction, distance and heading."""
     lines = [
         f"{robot.name}: open-loop main directions (seed 003, Fig. 4)",
         f"  {'motion':15s} {'PWM per motor':24s} {'commanded':>9s} {'achieved':>9s} {'distance':>9s} {'heading':>8s}",

@@ -57,6 +57,7 @@ ESTOP_DISTANCE = 0.25
 
 
 def wrap(angle: float) -> float:
+    """``angle`` wrapped into [-pi, pi), rad."""
     return (angle + math.pi) % (2 * math.pi) - math.pi
 
 
@@ -100,6 +101,7 @@ class TruthFile:
             return []
 
     def latest(self) -> Pose2D | None:
+        """The last row's pose, None while the file has none."""
         rows = self.rows()
         return Pose2D(*rows[-1][1:]) if rows else None
 
@@ -122,6 +124,7 @@ class Recorder:
             self.odo_trail = [(pose.x, pose.y)]
 
     def __call__(self, event: Event) -> None:
+        """Take one client event: telemetry into odometry, RANGE and WARN into the current segment."""
         if isinstance(event, Telemetry) and event.encoders is not None and self.odometry is not None:
             pose = self.odometry.update(event.encoders, event.heading)
             self.odo_trail.append((pose.x, pose.y))
@@ -160,14 +163,17 @@ class Demo:
         client.add_listener(self.recorder)
 
     def pose(self) -> Pose2D | None:
+        """The true pose after the truth file's next flush (None without ground truth)."""
         self.client.sleep(0.15)  # the truth file is flushed every 100 ms
         return self.truth()
 
     def odo(self) -> Pose2D | None:
+        """The encoder odometry's pose, None before the start is known."""
         return self.recorder.odometry.pose if self.recorder.odometry else None
 
     @contextmanager
     def segment(self, name: str, commands: str, commanded: str) -> Iterator[Segment]:
+        """Run one example as a :class:`Segment`: its start and end poses and the events seen in between."""
         seg = Segment(name, commands, commanded)
         if self.progress is not None:
             self.progress.set_postfix_str(name)
@@ -192,6 +198,7 @@ class Demo:
         return None
 
     def run(self) -> list[Segment]:
+        """Drive every example (a skipped one says why) and return them in order; telemetry off at the end."""
         c = self.client
         c.stop()
         c.telemetry(0.02, codes.TEL_ENCODERS | codes.TEL_HEADING | codes.TEL_QUEUE)
@@ -303,6 +310,7 @@ class Demo:
         )
 
     def best_pose(self) -> Pose2D | None:
+        """The true pose, else the odometry's (None when neither is known)."""
         return self.truth() or self.odo()
 
     def _bend(self, seg: Segment) -> float:
@@ -361,9 +369,11 @@ class TruthSource:
             )
 
     def rows(self) -> list[tuple[float, float, float, float]]:
+        """Every true pose so far as ``(t, x, y, theta)``."""
         return self.file.rows() if self.file is not None else self._trail
 
     def __call__(self) -> Pose2D | None:
+        """The true pose now (None without ground truth)."""
         if self._sim is not None:
             p = self._sim.pose
             return Pose2D(p.x, p.y, p.theta)
@@ -390,6 +400,7 @@ def format_table(segments: list[Segment]) -> str:
 
 
 def plot(truth: TruthSource | None, odo_trail: list[tuple[float, float]], world: Any, path: Path) -> None:
+    """Plot the walls, the true trail and the odometry trail to the image file ``path``."""
     from omnibot.plots.figure import new_figure, save
 
     fig, axes = new_figure(1, 1, size=(7.5, 6.2))

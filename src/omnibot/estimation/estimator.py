@@ -52,13 +52,20 @@ class SensorSample(Protocol):
     """One telemetry sample: what an estimator reads (None: the group was not sent)."""
 
     @property
-    def controller_time(self) -> float: ...
+    def controller_time(self) -> float:
+        """The controller's clock at this sample, s."""
+
     @property
-    def encoders(self) -> tuple[int, ...] | None: ...
+    def encoders(self) -> tuple[int, ...] | None:
+        """Cumulative driven-wheel encoder counts, one per motor encoder."""
+
     @property
-    def tracking(self) -> tuple[int, ...] | None: ...
+    def tracking(self) -> tuple[int, ...] | None:
+        """Cumulative tracking-wheel encoder counts, one per tracking wheel."""
+
     @property
-    def heading(self) -> float | None: ...
+    def heading(self) -> float | None:
+        """The gyro's integrated heading, rad."""
 
 
 class Estimator(Protocol):
@@ -71,7 +78,8 @@ class Estimator(Protocol):
     def distance(self) -> float:
         """Path length driven so far, m."""
 
-    def update(self, sample: SensorSample) -> Estimate: ...
+    def update(self, sample: SensorSample) -> Estimate:
+        """Fold in one sample; the new estimate."""
 
 
 class PoseEstimator:
@@ -276,6 +284,7 @@ class PoseEstimator:
         return acc + 0.2 * abs(second(3, p.theta))
 
     def estimate_pose_tuple(self) -> tuple[float, float, float]:
+        """The current pose as ``(x, y, theta)`` (m, m, rad)."""
         p = self._pose
         return (p.x, p.y, p.theta)
 
@@ -323,9 +332,11 @@ class Seed002Estimator:
 
     @property
     def distance(self) -> float:
+        """Distance travelled by the tracking wheels since the start, m."""
         return self.odometry.distance
 
     def update(self, sample: SensorSample) -> Estimate:
+        """Fold in one sample: tracking-wheel increments for position, the raw gyro sum for heading."""
         last = self._last
         self._last = sample
         d_theta = 0.0

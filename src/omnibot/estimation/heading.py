@@ -99,14 +99,17 @@ class HeadingFilter:
 
     @property
     def theta(self) -> float:
+        """Estimated heading, rad."""
         return float(self.x[0])
 
     @property
     def bias(self) -> float:
+        """Estimated gyro bias, rad/s."""
         return float(self.x[1])
 
     @property
     def scale(self) -> float:
+        """Estimated gyro scale error (a fraction: 0.01 reads 1 % high)."""
         return float(self.x[2])
 
     def calibrated(self, bias: float, scale: float, bias_std: float, scale_std: float) -> None:

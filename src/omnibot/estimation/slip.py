@@ -88,6 +88,7 @@ class SlipParameters:
             raise ConfigError(f"{where}: {exc}") from None
 
     def as_dict(self) -> dict[str, float]:
+        """The coefficients as a mapping, rounded for a calibration file (``odometry.slip``)."""
         return {
             "roll": round(self.roll, 6),
             "compliance": round(self.compliance, 6),

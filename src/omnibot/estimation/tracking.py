@@ -94,6 +94,8 @@ class Seed002Odometry:
         self._counts = CountTracker(self.geometry.n, "tracking")
 
     def update(self, counts: Sequence[int], dtheta: float) -> Pose2D:
+        """Fold in new cumulative counts (added in the start heading's frame) and the rotation (rad)
+        since the last call (added to the heading only); the new pose."""
         delta = self._counts.step(counts)
         if delta is None:
             return self.pose

@@ -366,10 +366,12 @@ def board_source(robot_name: str) -> str:
 
 
 def header_path(robot_name: str) -> Path:
+    """Where the generated header for ``robot_name`` goes."""
     return OUT_DIR / f"{robot_name}.h"
 
 
 def board_path(robot_name: str) -> Path:
+    """Where the generated board wiring for ``robot_name`` goes."""
     return OUT_DIR / f"{robot_name}.board"
 
 
@@ -383,6 +385,7 @@ def generated_files() -> dict[Path, str]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Write every generated file (or print one robot's header); the exit status."""
     ap = argparse.ArgumentParser(prog="python -m omnibot.firmware.avrgen", description=__doc__.split("\n")[0])
     ap.add_argument("robot", nargs="?", help="print this robot's header instead of writing every file")
     args = ap.parse_args(argv)

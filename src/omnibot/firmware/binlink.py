@@ -29,11 +29,14 @@ class BinaryLink:
         self._backlog = []
 
     def reply(self, type_id: int, seq: int, ints: "list[int]", text: bytes = b"") -> None:
+        """Send a reply frame with the command's ``seq``, remembered so a repeated command gets it again."""
         data = frame.encode_message(type_id, seq, ints, text)
         self.rx.remember(seq, data)
         self._write(data)
 
     def event(self, type_id: int, ints: "list[int]", now_ms: int, text: bytes = b"") -> None:
+        """Send an event frame reliably; while the send window is full it waits in a bounded backlog
+        (dropped beyond BACKLOG_MAX)."""
         if self._backlog or not self.tx.ready():
             if len(self._backlog) < BACKLOG_MAX:
                 self._backlog.append((type_id, ints, text))
@@ -41,6 +44,7 @@ class BinaryLink:
         self._send_event(type_id, ints, text, now_ms)
 
     def telemetry(self, ints: "list[int]") -> None:
+        """Send a telemetry frame (seq 0, never acknowledged or repeated)."""
         self._write(frame.encode_message(codes.TEL, 0, ints))
 
     def poll(self, now_ms: int) -> None:

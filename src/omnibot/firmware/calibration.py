@@ -108,9 +108,11 @@ class Calibration:
         return interp(self.roller_coast[0], self.roller_coast[1], speed)
 
     def k_t(self, power: float) -> float:
+        """K_t at ``power`` PWM counts (linear between knots, held outside them)."""
         return interp(self.kt[0], self.kt[1], power)
 
     def k_r(self, power: float) -> float:
+        """K_r at ``power`` PWM counts (linear between knots, held outside them)."""
         return interp(self.kr[0], self.kr[1], power)
 
     def set_knot(self, table: int, index: int, power: int, value: float) -> bool:

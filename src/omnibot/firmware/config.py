@@ -300,6 +300,7 @@ def stage_board(dest: str | Path, config: dict[str, Any]) -> list[Path]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Stage the board files for a robot (or print its ``robot_config.py``); the exit status."""
     ap = argparse.ArgumentParser(prog="python -m omnibot.firmware.config", description=__doc__.split("\n")[0])
     ap.add_argument("robot", help="preset name or robot description file")
     ap.add_argument("dest", nargs="?", help="directory to stage the board files in")

@@ -139,6 +139,7 @@ class Controller:
 
     @property
     def state(self) -> int:
+        """The STATE code reported by STATUS: emergency stop latched, moving or idle."""
         if self.latched:
             return codes.STATE_ESTOP
         return codes.STATE_MOVING if self.executor.moving else codes.STATE_IDLE

@@ -39,39 +39,51 @@ class HAL:
     """Base HAL: a board without sensors. Subclasses override what they have."""
 
     def ticks_us(self) -> int:
+        """A free-running microsecond counter (wraps on a board; use :meth:`ticks_diff`)."""
         raise NotImplementedError
 
     def ticks_diff(self, a: int, b: int) -> int:
+        """``a - b`` in microseconds, correct across the counter's wrap."""
         return a - b
 
     def uart_read(self) -> bytes:
+        """The bytes received since the last call (b"" when none); never blocks."""
         return b""
 
     def uart_write(self, data: bytes) -> None:
+        """Send ``data`` to the host."""
         pass
 
     def set_power(self, i: int, pwm: int) -> None:
+        """Drive motor ``i`` at signed ``pwm`` counts (the sign is the direction)."""
         pass
 
     def brake(self, i: int) -> bool:
+        """Short motor ``i``'s terminals to brake it; False when the driver cannot."""
         return False
 
     def encoder_count(self, i: int) -> int:
+        """Cumulative quadrature count of motor ``i``'s encoder."""
         return 0
 
     def tracking_count(self, j: int) -> int:
+        """Cumulative count of tracking wheel ``j``'s encoder."""
         return 0
 
     def gyro_rate_mdps(self) -> "int | None":
+        """The gyro's yaw rate in millidegrees/s, None without a gyro."""
         return None
 
     def sonar_start(self, s: int) -> None:
+        """Trigger sonar ``s``'s ping."""
         pass
 
     def sonar_read(self, s: int) -> "int | None":
+        """Sonar ``s``'s last range in cm: -1 for no echo, None while the echo is still awaited."""
         return -1
 
     def battery_mv(self) -> int:
+        """The battery voltage in mV (0 when not measured)."""
         return 0
 
 
@@ -185,12 +197,15 @@ class MachineHAL(HAL):
             self._poll.register(sys.stdin, select.POLLIN)
 
     def ticks_us(self) -> int:
+        """``time.ticks_us()``: wraps, compare with :meth:`ticks_diff`."""
         return int(self._time.ticks_us())
 
     def ticks_diff(self, a: int, b: int) -> int:
+        """``time.ticks_diff(a, b)``: ``a - b`` in microseconds across the wrap."""
         return int(self._time.ticks_diff(a, b))
 
     def uart_read(self) -> bytes:
+        """The bytes waiting on the hardware UART, or on USB stdin when there is none; never blocks."""
         if self._uart is not None:
             if self._uart.any():
                 return bytes(self._uart.read())
@@ -202,12 +217,14 @@ class MachineHAL(HAL):
         return out
 
     def uart_write(self, data: bytes) -> None:
+        """Send ``data`` on the hardware UART, or on USB stdout when there is none."""
         if self._uart is not None:
             self._uart.write(data)
         else:
             self._stdout.write(data)
 
     def set_power(self, i: int, pwm: int) -> None:
+        """Set motor ``i``'s direction pins by the sign of ``pwm`` and its enable pin's duty by its size."""
         pwm_out, d1, d2 = self._motors[i]
         d1.value(1 if pwm > 0 else 0)
         if d2 is not None:
@@ -227,12 +244,15 @@ class MachineHAL(HAL):
         return True
 
     def encoder_count(self, i: int) -> int:
+        """Motor ``i``'s encoder count (0 for a motor without one)."""
         return int(self._enc[i].count) if i < len(self._enc) else 0
 
     def tracking_count(self, j: int) -> int:
+        """Tracking wheel ``j``'s encoder count (0 when there is none)."""
         return int(self._track[j].count) if j < len(self._track) else 0
 
     def gyro_rate_mdps(self) -> "int | None":
+        """The MPU6050's yaw rate in millidegrees/s (read over I2C), None without a gyro."""
         if self._i2c is None:
             return None
         self._i2c.readfrom_mem_into(0x68, 0x47, self._gbuf)  # GYRO_ZOUT_H, GYRO_ZOUT_L
@@ -242,13 +262,17 @@ class MachineHAL(HAL):
         return raw * 1000 // 131  # 131 LSB per deg/s at +-250 deg/s
 
     def sonar_start(self, s: int) -> None:
+        """Send sonar ``s``'s 10 us trigger pulse (nothing for a sonar the board lacks)."""
         if s < len(self._sonars):
             self._sonars[s].start()
 
     def sonar_read(self, s: int) -> "int | None":
+        """Sonar ``s``'s range in cm from its timed echo: -1 for no echo (or no such sonar), None while
+        awaited."""
         return self._sonars[s].read() if s < len(self._sonars) else -1
 
     def battery_mv(self) -> int:
+        """The battery voltage in mV from the ADC (divider included), 0 without one."""
         if self._adc is None:
             return 0
         return int(self._adc.read_u16() * self._mv_per_lsb)

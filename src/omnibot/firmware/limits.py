@@ -36,6 +36,7 @@ class Limits:
                 self.has_encoders = False
 
     def check(self, kw: int, p: list[int]) -> int:
+        """Check command ``kw``'s parameters against the robot's bounds: 0 when valid, else the ERROR code."""
         n = len(p)
         lo, hi = codes.PARAM_COUNTS[kw]
         if kw == codes.POWER:

@@ -8,6 +8,7 @@ from omnibot.firmware.hal import MachineHAL
 
 
 def run() -> None:
+    """Build the board's HAL and controller from ``robot_config`` and poll the controller forever."""
     config = __import__("robot_config").CONFIG
     hal = MachineHAL(config["pins"], config["baud"], config["pwm_max"])
     controller = Controller(hal, config)

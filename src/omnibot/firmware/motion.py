@@ -104,6 +104,7 @@ class Executor:
 
     @property
     def moving(self) -> bool:
+        """True while a motion runs (idle otherwise)."""
         return self.kind != NONE
 
     @property
@@ -165,6 +166,7 @@ class Executor:
         return every
 
     def reset_move(self) -> None:
+        """Zero the remembered MOVE that DELTA adds to."""
         for i in range(4):
             self.remembered[i] = 0
 

@@ -51,6 +51,7 @@ class LineSplitter:
                 self._buf[:] = b""
 
     def reset(self) -> None:
+        """Drop the partial line and any overflow."""
         self._buf[:] = b""
         self._overflow = False
 

@@ -35,5 +35,6 @@ class CommandQueue:
         return slot
 
     def clear(self) -> None:
+        """Empty the queue."""
         self._head = 0
         self._count = 0

@@ -67,6 +67,7 @@ class SonarGuard:
         self._missed = [False] * n
 
     def armed(self, s: int) -> bool:
+        """Whether sonar ``s`` guards the motion: it measures (period > 0) and has a stop distance."""
         return self.sonars.period[s] > 0 and self.sonars.stop[s] > 0
 
     def reading(self, s: int, cm: int) -> None:

@@ -36,6 +36,7 @@ class Sonars:
         self._next[s] = now_ms
 
     def off(self) -> None:
+        """Stop every sonar measuring."""
         for s in range(self.count):
             self.period[s] = 0
 

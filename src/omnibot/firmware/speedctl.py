@@ -29,6 +29,7 @@ class SpeedControl:
         return all(r != 0.0 for r in self.rad_per_count)
 
     def reset(self, counts: list[int]) -> None:
+        """Start afresh from these encoder ``counts``: no integral, no correction."""
         for i in range(self.n):
             self._integ[i] = 0.0
             self.correction[i] = 0.0

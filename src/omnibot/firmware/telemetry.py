@@ -23,6 +23,7 @@ class Telemetry:
         self.rate_mdps = 0
 
     def configure(self, period: int, mask: int, now_ms: int) -> None:
+        """Send TEL every ``period`` ms (0: off) with the groups of ``mask``, the first one due now."""
         self.period = period
         self.mask = mask
         self._next = now_ms
@@ -37,6 +38,7 @@ class Telemetry:
             self._rem -= whole * NANODEG_PER_CDEG
 
     def due(self, now_ms: int) -> bool:
+        """Whether a TEL line is due at ``now_ms``; advances the schedule (skipping missed periods)."""
         if self.period == 0 or now_ms - self._next < 0:
             return False
         self._next += self.period

@@ -75,9 +75,11 @@ class UnixHAL(HAL):
     # ---------------------------------------------------------------- time
 
     def ticks_us(self) -> int:
+        """Microseconds from ``time.ticks_us`` (MicroPython) or ``time.monotonic_ns`` (CPython)."""
         return _now_us()
 
     def ticks_diff(self, a: int, b: int) -> int:
+        """``a - b`` in microseconds (``time.ticks_diff`` where it exists)."""
         if _ticks_diff is not None:
             return int(_ticks_diff(a, b))
         return a - b
@@ -89,6 +91,7 @@ class UnixHAL(HAL):
         self._poll.poll(ms)
 
     def uart_read(self) -> bytes:
+        """The bytes waiting on stdin (b"" when none or at its end, which sets :attr:`eof`); never blocks."""
         if self.eof:
             return b""
         out = b""
@@ -110,6 +113,7 @@ class UnixHAL(HAL):
         return out
 
     def uart_write(self, data: bytes) -> None:
+        """Write ``data`` to stdout."""
         if self._os is not None:
             view = memoryview(data)
             while view:
@@ -135,20 +139,26 @@ class UnixHAL(HAL):
             self.counts[i] += self.speed[i] * dt / (TWO_PI * self.radius[i]) * self.cpr[i]
 
     def set_power(self, i: int, pwm: int) -> None:
+        """Set motor ``i``'s PWM for the wheel model."""
         self.pwm[i] = pwm
 
     def encoder_count(self, i: int) -> int:
+        """Motor ``i``'s modelled encoder count."""
         return int(self.counts[i])
 
     def gyro_rate_mdps(self) -> "int | None":
+        """No gyro in this model: the rate is always 0."""
         return 0
 
     # ---------------------------------------------------------------- sonar, battery
 
     def sonar_start(self, s: int) -> None:
+        """Ping sonar ``s`` (its fixed reading is ready SONAR_DELAY_US later)."""
         self._ping[s] = _now_us()
 
     def sonar_read(self, s: int) -> "int | None":
+        """Sonar ``s``'s fixed reading in cm once SONAR_DELAY_US has passed (None before, -1 when not
+        pinged)."""
         start = self._ping[s]
         if start < 0:
             return -1
@@ -158,6 +168,7 @@ class UnixHAL(HAL):
         return self.sonar_cm
 
     def battery_mv(self) -> int:
+        """The fixed BATTERY_MV."""
         return BATTERY_MV
 
 

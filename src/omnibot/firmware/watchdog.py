@@ -9,13 +9,16 @@ class Watchdog:
         self.left_us = 0
 
     def arm(self, ms: int) -> None:
+        """Start counting down ``ms`` milliseconds."""
         self.armed = True
         self.left_us = ms * 1000
 
     def disarm(self) -> None:
+        """Stop counting down."""
         self.armed = False
 
     def expired(self, dt_us: int) -> bool:
+        """Count ``dt_us`` off; True once, when the countdown runs out."""
         if not self.armed:
             return False
         self.left_us -= dt_us

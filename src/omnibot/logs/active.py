@@ -35,6 +35,8 @@ class Recording:
         self.recorder: Recorder | None = None
 
     def attach(self, client: RobotClient, robot: RobotDescription | None, guess: bool) -> None:
+        """Record ``client`` (the file is made on the first attach, with the Foxglove mirror if asked);
+        ``robot`` None with ``guess``: the preset its HELLO names."""
         if self.recorder is None:
             mirrors: list[Mirror] = []
             if self.foxglove is not None:
@@ -54,6 +56,7 @@ class Recording:
         self.recorder.attach(client, robot, guess=guess)
 
     def close(self) -> None:
+        """Close the recording's file (nothing when none was made)."""
         if self.recorder is not None:
             self.recorder.close()
 

@@ -248,6 +248,7 @@ def _replay(args: argparse.Namespace) -> int:
 
 
 def add_log_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Add ``omnibot log`` and its subcommands (info, plot, export, protocol, replay) to ``sub``."""
     p = sub.add_parser("log", help="inspect, plot, export and replay a run recorded with --log FILE.mcap")
     lsub = p.add_subparsers(dest="log_command", required=True, metavar="{info,plot,export,protocol,replay}")
     info = lsub.add_parser("info", help="duration, channels, rates, gaps, errors and warnings, link health")

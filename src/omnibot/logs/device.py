@@ -35,10 +35,12 @@ class RecordedDevice:
         return getattr(self._device, name)
 
     def receive(self, data: bytes) -> None:
+        """Record the host's bytes (TX), then hand them to the device."""
         self._recorder.link_bytes(self._device.time, "TX", data)
         self._device.receive(data)
 
     def transmit(self) -> bytes:
+        """Take the device's bytes, recorded as RX."""
         out: bytes = self._device.transmit()
         if out:
             self._recorder.link_bytes(self._device.time, "RX", out)

@@ -31,6 +31,8 @@ class FoxgloveLive:
         self._channels: dict[str, Any] = {}
 
     def __call__(self, topic: str, typename: str, data: bytes, ns: int) -> None:
+        """Publish one recorded message (CDR ``data`` of ``typename``) on ``topic``, its channel made
+        on first use."""
         channel = self._channels.get(topic)
         if channel is None:
             schema = self._foxglove.Schema(
@@ -43,6 +45,7 @@ class FoxgloveLive:
         channel.log(data, log_time=ns)
 
     def close(self) -> None:
+        """Close every channel and stop the server."""
         for channel in self._channels.values():
             channel.close()
         self._channels.clear()

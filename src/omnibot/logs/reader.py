@@ -36,6 +36,7 @@ class LogMessage:
         return self.ns / 1e9
 
     def decode(self) -> Any:
+        """The message decoded from its CDR bytes."""
         return schemas.deserialize(self.data, self.typename)
 
 
@@ -51,6 +52,7 @@ class LogFile:
 
     @classmethod
     def open(cls, path: str | Path) -> LogFile:
+        """The MCAP file at ``path``; ConfigError when it is missing, unreadable or no MCAP file."""
         p = Path(path)
         if not p.is_file():
             raise ConfigError(f"no log file {p}", key="FILE")
@@ -113,4 +115,5 @@ class LogFile:
             return f.read(8) == b"\x89MCAP0\r\n"
 
     def read_all(self) -> list[LogMessage]:
+        """Every message in file order, as a list."""
         return list(self.messages())

@@ -94,18 +94,22 @@ def stamp(ns: int) -> Any:
 
 
 def header(ns: int, frame: str) -> Any:
+    """A ``std_msgs/Header`` stamped at ``ns`` in ``frame``."""
     return schemas.new("std_msgs/msg/Header", stamp=stamp(ns), frame_id=frame)
 
 
 def quaternion(yaw: float) -> Any:
+    """A ``geometry_msgs/Quaternion`` of a rotation by ``yaw`` rad about z."""
     return schemas.new("geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2))
 
 
 def vector(x: float = 0.0, y: float = 0.0, z: float = 0.0) -> Any:
+    """A ``geometry_msgs/Vector3``."""
     return schemas.new("geometry_msgs/msg/Vector3", x=x, y=y, z=z)
 
 
 def twist(vx: float, vy: float, w: float) -> Any:
+    """A ``geometry_msgs/Twist``: ``vx``, ``vy`` m/s and ``w`` rad/s about z."""
     return schemas.new("geometry_msgs/msg/Twist", linear=vector(vx, vy), angular=vector(z=w))
 
 
@@ -131,9 +135,11 @@ def odometry(ns: int, frame: str, child: str, pose: Pose2D, body: tuple[float, f
 class Mirror(Protocol):
     """Something that gets every message the recorder writes (the Foxglove live server)."""
 
-    def __call__(self, topic: str, typename: str, data: bytes, ns: int) -> None: ...
+    def __call__(self, topic: str, typename: str, data: bytes, ns: int) -> None:
+        """Take one message: its ``topic``, ``typename``, CDR ``data`` and time ``ns``."""
 
-    def close(self) -> None: ...
+    def close(self) -> None:
+        """Release what the mirror holds (a server, channels)."""
 
 
 class _Direct:
@@ -343,6 +349,7 @@ class Recorder:
             )
 
     def detach(self, client: RobotClient) -> None:
+        """Stop recording ``client``."""
         client.remove_tracer(self)
         client.remove_listener(self.event)
         self._clients = [c for c in self._clients if c is not client]
@@ -385,6 +392,8 @@ class Recorder:
             self.telemetry(event)
 
     def telemetry(self, tel: Telemetry) -> None:
+        """Record a TEL sample: joint states, IMU, sonar ranges, the estimator's odometry and pose, and
+        the simulator's truth when there is one."""
         ns = self.ns(tel.time)
         if tel.encoders is not None and self._joints and len(tel.encoders) == len(self._joints):
             self._joint_states(ns, tel)

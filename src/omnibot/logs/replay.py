@@ -23,6 +23,9 @@ from omnibot.robot.description import RobotDescription
 
 @dataclass(frozen=True)
 class Replay:
+    """A log's telemetry run through an estimator again: its estimates and how far they are from the
+    recorded ones."""
+
     estimator: str
     recorded_estimator: str
     estimates: list[tuple[float, Estimate]]
@@ -33,6 +36,7 @@ class Replay:
 
 
 def robot_of(run: Run) -> RobotDescription:
+    """The robot description a log carries; ConfigError when it has none."""
     description = run.description()
     if description is None:
         raise ConfigError(

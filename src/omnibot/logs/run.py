@@ -31,6 +31,7 @@ PoseRow = tuple[float, float, float, float, float, float, float]
 
 
 def yaw_of(q: object) -> float:
+    """The yaw (rad) of a quaternion about z."""
     z, w = float(getattr(q, "z", 0.0)), float(getattr(q, "w", 1.0))
     return 2.0 * math.atan2(z, w)
 
@@ -67,6 +68,7 @@ class Run:
 
     @property
     def duration(self) -> float:
+        """Time from the first message to the last, s."""
         return max(0.0, (self.end_ns - self.start_ns) / 1e9)
 
     def problems(self) -> list[tuple[float, str, str]]:
@@ -80,9 +82,11 @@ class Run:
         return sorted(out)
 
     def omnibot_metadata(self) -> dict[str, str]:
+        """The log's ``omnibot`` metadata (empty when it has none)."""
         return self.metadata.get("omnibot", {})
 
     def description(self) -> dict[str, object] | None:
+        """The robot description recorded in the metadata, None when there is none."""
         text = self.omnibot_metadata().get("description")
         loaded = yaml.safe_load(text) if text else None
         return loaded if isinstance(loaded, dict) else None
@@ -168,4 +172,6 @@ def rate_and_gap(times: list[float]) -> tuple[float, float]:
 
 
 def keyword_counts(run: Run, direction: str) -> Counter[str]:
+    """How often each keyword occurs among the protocol lines of one ``direction`` (``command``,
+    ``reply`` or ``event``)."""
     return Counter(kw for _, d, kw, _ in run.protocol if d == direction)

@@ -74,4 +74,5 @@ def serialize(message: Any, typename: str) -> bytes:
 
 
 def deserialize(data: bytes | memoryview, typename: str) -> Any:
+    """A ROS 2 message of ``typename`` from its CDR bytes."""
     return typestore().deserialize_cdr(data, typename)

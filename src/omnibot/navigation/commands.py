@@ -67,6 +67,8 @@ def _robot_client(args: argparse.Namespace, start: Any = None) -> Iterator[tuple
 
 
 def run_follow(args: argparse.Namespace) -> int:
+    """Run ``omnibot follow``: follow a path file and report tracking; the exit status (1 when the run
+    did not complete, its failures printed)."""
     from omnibot.control.followers.base import follower_names
     from omnibot.control.paths.files import read_path
     from omnibot.estimation.estimator import ESTIMATORS
@@ -205,6 +207,8 @@ def _write_truth(run: Any, target: FsPath) -> None:
 
 
 def run_record(args: argparse.Namespace) -> int:
+    """Run ``omnibot record``: record a taught or standard path to ``--path``; the exit status (1 when
+    the recording is no path to follow, and nothing is written)."""
     from omnibot.control.paths.files import write_path
     from omnibot.control.paths.standard import standard_path
     from omnibot.control.paths.teach import PathRecorder
@@ -262,6 +266,7 @@ def run_record(args: argparse.Namespace) -> int:
 
 
 def add_follow_arguments(p: argparse.ArgumentParser) -> None:
+    """The ``omnibot follow`` options: path file, follower, robot or port, estimator and tolerances."""
     from omnibot.navigation.metrics import Tolerances
 
     p.add_argument("path", help="path file: CSV t,x,y,theta[,v] (s, m, m, rad, m/s)")
@@ -311,6 +316,7 @@ def add_follow_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def add_record_arguments(p: argparse.ArgumentParser) -> None:
+    """The ``omnibot record`` options: the file to write, robot or port, and how the path is taught."""
     from omnibot.navigation.record import MIN_LENGTH, MIN_POINTS
 
     p.add_argument("--path", metavar="FILE.csv", help="path file to write (required)")

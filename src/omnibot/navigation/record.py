@@ -46,6 +46,8 @@ MIN_LENGTH = 0.10
 
 @dataclass
 class TeachResult:
+    """What a teach-in run gave: the recorded path, how it was taught, its duration (s) and length (m)."""
+
     path: Path | None
     """None when fewer than two poses were recorded."""
     mode: str

@@ -79,10 +79,12 @@ class FollowRun:
 
     @property
     def duration(self) -> float:
+        """Time from the run's start to its end, s."""
         return self.end_time - self.start_time
 
     @property
     def has_truth(self) -> bool:
+        """Whether ground truth was recorded (simulator runs only)."""
         return bool(self.truth)
 
     def arrays(self) -> dict[str, np.ndarray]:
@@ -105,6 +107,7 @@ class FrameMap:
         self.path_start = path_start
 
     def __call__(self, x: float, y: float, theta: float) -> tuple[float, float, float]:
+        """A simulator world pose ``(x, y, theta)`` in the path's frame (m, m, rad)."""
         dx, dy = x - self.sim_start.x, y - self.sim_start.y
         return (
             self.path_start.x + self.c * dx - self.s * dy,

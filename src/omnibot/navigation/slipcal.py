@@ -174,9 +174,12 @@ class SimulatorTruth:
         self.nav = nav
 
     def start(self) -> object:
+        """Mark where the robot truly is now (the simulator's pose)."""
         return self.nav.truth()
 
     def displacement(self, mark: object, course: float) -> tuple[float, float] | None:
+        """The true displacement since ``mark`` in the body frame of the mark's heading, m; None without
+        truth."""
         now = self.nav.truth()
         if now is None or not isinstance(mark, tuple):
             return None

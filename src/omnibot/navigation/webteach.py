@@ -91,10 +91,12 @@ class PathTeacher:
 
     @property
     def following(self) -> bool:
+        """True while a recorded path is being followed."""
         return self.source is not None
 
     @property
     def estimator(self) -> PoseEstimator | None:
+        """The runtime's pose estimator, None when detached or it has another kind."""
         est = None if self.runtime is None else self.runtime.estimator
         return est if isinstance(est, PoseEstimator) else None
 

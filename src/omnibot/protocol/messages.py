@@ -73,10 +73,12 @@ class Move(_Message):
     TYPE: ClassVar[int] = codes.MOVE
 
     def params(self) -> tuple[int, ...]:
+        """L, V, D, C in wire order."""
         return (self.distance, self.speed, self.course, self.curvature)
 
     @classmethod
     def from_params(cls, params: Sequence[int], label: str = "") -> Self:
+        """Build one from its integers in wire order; ProtocolError when their count is wrong."""
         _command_count(cls, params)
         return cls(*params)
 
@@ -90,10 +92,12 @@ class Rotate(_Message):
     TYPE: ClassVar[int] = codes.ROTATE
 
     def params(self) -> tuple[int, ...]:
+        """A, F in wire order."""
         return (self.angle, self.rate)
 
     @classmethod
     def from_params(cls, params: Sequence[int], label: str = "") -> Self:
+        """Build one from its integers in wire order; ProtocolError when their count is wrong."""
         _command_count(cls, params)
         return cls(*params)
 
@@ -110,10 +114,12 @@ class Delta(_Message):
     TYPE: ClassVar[int] = codes.DELTA
 
     def params(self) -> tuple[int, ...]:
+        """L, V, D, C, R in wire order."""
         return (self.distance, self.speed, self.course, self.curvature, self.repeat)
 
     @classmethod
     def from_params(cls, params: Sequence[int], label: str = "") -> Self:
+        """Build one from its integers in wire order; ProtocolError when their count is wrong."""
         _command_count(cls, params)
         return cls(*params)
 
@@ -137,10 +143,12 @@ class Power(_Message):
         object.__setattr__(self, "powers", tuple(self.powers))
 
     def params(self) -> tuple[int, ...]:
+        """T then one power per motor, in wire order."""
         return (self.time_ms, *self.powers)
 
     @classmethod
     def from_params(cls, params: Sequence[int], label: str = "") -> Self:
+        """Build one from T and the motors' powers; ProtocolError when their count is wrong."""
         _command_count(cls, params)
         return cls(params[0], tuple(params[1:]))
 
@@ -156,10 +164,12 @@ class Vel(_Message):
     TYPE: ClassVar[int] = codes.VEL
 
     def params(self) -> tuple[int, ...]:
+        """VX, VY, W, T in wire order."""
         return (self.vx, self.vy, self.w, self.time_ms)
 
     @classmethod
     def from_params(cls, params: Sequence[int], label: str = "") -> Self:
+        """Build one from its integers in wire order; ProtocolError when their count is wrong."""
         _command_count(cls, params)
         return cls(*params)
 
@@ -172,10 +182,12 @@ class Mode(_Message):
     TYPE: ClassVar[int] = codes.MODE
 
     def params(self) -> tuple[int, ...]:
+        """The mode mask alone."""
         return (self.mask,)
 
     @classmethod
     def from_params(cls, params: Sequence[int], label: str = "") -> Self:
+        """Build one from its integers in wire order; ProtocolError when their count is wrong."""
         _command_count(cls, params)
         return cls(*params)
 
@@ -192,10 +204,12 @@ class Sonar(_Message):
     TYPE: ClassVar[int] = codes.SONAR
 
     def params(self) -> tuple[int, ...]:
+        """S, P, LOW, HIGH, STOP in wire order."""
         return (self.sonar, self.period_ms, self.low, self.high, self.stop)
 
     @classmethod
     def from_params(cls, params: Sequence[int], label: str = "") -> Self:
+        """Build one from its integers in wire order; ProtocolError when their count is wrong."""
         _command_count(cls, params)
         return cls(*params)
 
@@ -209,10 +223,12 @@ class Telem(_Message):
     TYPE: ClassVar[int] = codes.TELEM
 
     def params(self) -> tuple[int, ...]:
+        """P, MASK in wire order."""
         return (self.period_ms, self.mask)
 
     @classmethod
     def from_params(cls, params: Sequence[int], label: str = "") -> Self:
+        """Build one from its integers in wire order; ProtocolError when their count is wrong."""
         _command_count(cls, params)
         return cls(*params)
 
@@ -236,10 +252,12 @@ class Hello(_Message):
         object.__setattr__(self, "versions", tuple(self.versions))
 
     def params(self) -> tuple[int, ...]:
+        """The versions, in wire order."""
         return self.versions
 
     @classmethod
     def from_params(cls, params: Sequence[int], label: str = "") -> Self:
+        """Build one from the versions offered; ProtocolError when their count is wrong."""
         _command_count(cls, params)
         return cls(tuple(params))
 
@@ -255,10 +273,12 @@ class Cal(_Message):
     TYPE: ClassVar[int] = codes.CAL
 
     def params(self) -> tuple[int, ...]:
+        """T, I, X, Y in wire order."""
         return (self.table, self.index, self.x, self.y)
 
     @classmethod
     def from_params(cls, params: Sequence[int], label: str = "") -> Self:
+        """Build one from its integers in wire order; ProtocolError when their count is wrong."""
         _command_count(cls, params)
         return cls(*params)
 
@@ -319,13 +339,17 @@ class HelloReply(_Message):
     TYPE: ClassVar[int] = codes.HELLO_REPLY
 
     def params(self) -> tuple[int, ...]:
+        """Version and motor count (the binary order; the text line puts the robot's name between them)."""
         return (self.version, self.motors)  # binary order; the text puts the name in between
 
     def label(self) -> str:
+        """The robot's name."""
         return self.name
 
     @classmethod
     def from_params(cls, params: Sequence[int], label: str = "") -> Self:
+        """Build one from version and motor count plus the name as ``label``; ProtocolError unless two
+        integers."""
         _count(cls, params, 2)
         return cls(params[0], label, params[1])
 
@@ -349,10 +373,13 @@ class StatusReply(_Message):
             raise ProtocolError(f"StatusReply.move needs L,V,D,C, got {self.move}")
 
     def params(self) -> tuple[int, ...]:
+        """State, queued, capacity, mode, the powers, then the remembered MOVE's L, V, D, C."""
         return (self.state, self.queued, self.capacity, self.mode, *self.powers, *self.move)
 
     @classmethod
     def from_params(cls, params: Sequence[int], label: str = "") -> Self:
+        """Build one from 8 to 40 integers (the powers are those between mode and the last four);
+        ProtocolError otherwise."""
         _count(cls, params, 8, 8 + 32)
         p = tuple(params)
         move = (p[-4], p[-3], p[-2], p[-1])
@@ -369,10 +396,12 @@ class Range(_Message):
     TYPE: ClassVar[int] = codes.RANGE
 
     def params(self) -> tuple[int, ...]:
+        """Sonar index and range (cm) in wire order."""
         return (self.sonar, self.cm)
 
     @classmethod
     def from_params(cls, params: Sequence[int], label: str = "") -> Self:
+        """Build one from sonar index and range; ProtocolError unless two integers."""
         _count(cls, params, 2)
         return cls(*params)
 
@@ -438,6 +467,8 @@ class Telemetry(_Message):
         return sum(bit for bit, name, _ in TEL_GROUPS if getattr(self, name) is not None)
 
     def params(self) -> tuple[int, ...]:
+        """Time (ms), mask, then each group present in ``TEL_GROUPS`` order (counted groups led by their
+        length)."""
         out = [self.t_ms, self.mask]
         for _, name, counted in TEL_GROUPS:
             value = getattr(self, name)

@@ -193,6 +193,8 @@ class WheelSpec(_Spec):
 
 
 class BatterySpec(_Spec):
+    """The battery: nominal voltage (V), internal resistance (ohm) and capacity (Ah)."""
+
     voltage: float = Field(gt=0, description="nominal voltage, V")
     internal_resistance: float = Field(default=0.05, ge=0, description="ohm")
     capacity_ah: float = Field(default=2.0, gt=0)
@@ -217,10 +219,13 @@ class TrackingWheelSpec(_Spec):
 
     @property
     def direction(self) -> float:
+        """The measuring direction in the body frame, rad."""
         return math.radians(self.direction_deg)
 
 
 class EncoderSpec(_Spec):
+    """The robot's encoders: on the driven wheels' motors and on passive tracking wheels."""
+
     motors: tuple[MotorEncoderSpec, ...] = ()
     tracking: tuple[TrackingWheelSpec, ...] = ()
 
@@ -257,10 +262,12 @@ class SonarSpec(_Spec):
 
     @property
     def angle(self) -> float:
+        """The sonar's pointing angle in the body frame, rad."""
         return math.radians(self.angle_deg)
 
     @property
     def cone(self) -> float:
+        """The full width of the sonar's cone, rad."""
         return math.radians(self.cone_deg)
 
 
@@ -302,6 +309,7 @@ class PiecewiseLinear(_Spec):
         return self
 
     def __call__(self, value: float) -> float:
+        """y at ``value``: linear between knots, the end values outside them."""
         xs, ys = self.x, self.y
         if value <= xs[0]:
             return ys[0]
@@ -444,6 +452,7 @@ class RobotDescription(_Spec):
 
     @property
     def n_wheels(self) -> int:
+        """The number of driven wheels."""
         return len(self.wheels)
 
     @property
@@ -496,6 +505,7 @@ class RobotDescription(_Spec):
         return wheel_matrix(self)
 
     def wheel(self, name: str) -> WheelSpec:
+        """The wheel called ``name``; ConfigError with the closest names if there is none."""
         for w in self.wheels:
             if w.name == name:
                 return w

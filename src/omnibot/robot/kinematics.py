@@ -93,6 +93,8 @@ def inverse(J: FloatArray, twist: ArrayLike) -> FloatArray:
 
 
 class ForwardResult(NamedTuple):
+    """What :func:`forward` returns: the least-squares body twist and the per-wheel residual."""
+
     twist: FloatArray
     residual: FloatArray
     """Per wheel: measured minus the speed the fitted rigid motion implies (rad/s); non-zero means slip."""
@@ -127,6 +129,8 @@ def world_to_body(twist: ArrayLike, theta: float) -> FloatArray:
 
 
 class Saturated(NamedTuple):
+    """What :func:`saturate` returns: the scaled values and the common factor applied."""
+
     values: FloatArray
     scale: float
     """Common factor applied (1.0 when nothing exceeded the limit)."""

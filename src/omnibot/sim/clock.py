@@ -36,9 +36,11 @@ class SimClock:
         self._us = int(start_us)
 
     def now(self) -> float:
+        """Simulated time, s."""
         return self._us / 1_000_000
 
     def ticks_us(self) -> int:
+        """Simulated time in whole microseconds."""
         return self._us
 
     def advance_us(self, us: int) -> None:
@@ -62,9 +64,11 @@ class WallClock:
         self._origin_ns = time.monotonic_ns()
 
     def now(self) -> float:
+        """Seconds since this clock was made (monotonic)."""
         return (time.monotonic_ns() - self._origin_ns) * 1e-9
 
     def ticks_us(self) -> int:
+        """Microseconds since this clock was made (monotonic)."""
         return (time.monotonic_ns() - self._origin_ns) // 1000
 
     def __repr__(self) -> str:

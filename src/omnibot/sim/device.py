@@ -53,9 +53,11 @@ class SimHAL(HAL):
         self._sonar_cm: list[int] = [-1] * len(robot.sonars)
 
     def ticks_us(self) -> int:
+        """The simulator's time in whole microseconds."""
         return self.sim.clock.ticks_us()
 
     def uart_read(self) -> bytes:
+        """Take everything the host has sent (b"" when nothing)."""
         if not self.rx:
             return b""
         data = bytes(self.rx)
@@ -63,9 +65,11 @@ class SimHAL(HAL):
         return data
 
     def uart_write(self, data: bytes) -> None:
+        """Queue ``data`` for the host."""
         self.tx += data
 
     def set_power(self, i: int, pwm: int) -> None:
+        """Set motor ``i``'s signed PWM; the simulator gets it at :meth:`apply_power`."""
         if self.pwm[i] != pwm:
             self.pwm[i] = pwm
             self._pwm_dirty = True
@@ -77,18 +81,23 @@ class SimHAL(HAL):
             self._pwm_dirty = False
 
     def encoder_count(self, i: int) -> int:
+        """Cumulative encoder count of driven wheel ``i`` (0 when that wheel has no encoder)."""
         k = self._encoder_of_wheel[i]
         return 0 if k is None else self.sim.encoder_counts()[k]
 
     def tracking_count(self, j: int) -> int:
+        """Cumulative encoder count of tracking wheel ``j``."""
         return self.sim.tracking_counts()[j]
 
     def gyro_rate_mdps(self) -> int | None:
+        """The gyro's yaw rate in millidegrees/s, None when the robot has no gyro."""
         if self.sim.robot.gyro is None:
             return None
         return round(math.degrees(self.sim.gyro_rate()) * 1000.0)
 
     def sonar_start(self, s: int) -> None:
+        """Fire sonar ``s``: its range (cm, -1 for no echo) is ready after the echo's round trip (or the
+        echo timeout)."""
         reading = self.sim.sonar_ping(s)
         if reading is None:
             self._sonar_cm[s] = -1
@@ -98,11 +107,13 @@ class SimHAL(HAL):
             self._sonar_ready[s] = self.sim.time + 2.0 * reading / SPEED_OF_SOUND
 
     def sonar_read(self, s: int) -> int | None:
+        """Sonar ``s``'s range in cm (-1: no echo), None while its echo is still on the way."""
         if self.sim.time < self._sonar_ready[s]:
             return None
         return self._sonar_cm[s]
 
     def battery_mv(self) -> int:
+        """The battery voltage in mV."""
         return round(self.sim.battery_voltage * 1000.0)
 
 
@@ -145,16 +156,21 @@ class SimDevice:
 
     @property
     def time(self) -> float:
+        """Simulated time, s."""
         return self.sim.time
 
     @property
     def tick(self) -> float:
+        """The length of one simulator step, s."""
         return self._tick
 
     def receive(self, data: bytes) -> None:
+        """Bytes from the host, for the firmware's next UART read."""
         self.hal.rx += data
 
     def step(self) -> None:
+        """One simulator step, with a firmware poll (and its PWM handed over) at the controller's loop
+        rate."""
         if self._steps % self._poll_every == 0:
             self.controller.poll()
             self.hal.apply_power()
@@ -162,6 +178,7 @@ class SimDevice:
         self.sim.step()
 
     def transmit(self) -> bytes:
+        """Take everything the firmware has sent (b"" when nothing)."""
         if not self.hal.tx:
             return b""
         data = bytes(self.hal.tx)

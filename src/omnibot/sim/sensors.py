@@ -49,6 +49,7 @@ class NormalBlock:
         self._next = 0
 
     def __call__(self) -> float:
+        """The next standard normal draw."""
         k = self._next
         if k >= len(self._values):
             self._values = self._rng.standard_normal(self._block).tolist()
@@ -105,6 +106,7 @@ class MotorEncoders:
 
     @property
     def counts(self) -> IntArray:
+        """Cumulative counts per wheel since the start, less the edges the encoder missed."""
         if self._source is not None:
             self._feed(self._source())
         return np.asarray(self._edges - self._origin - self._lost, dtype=np.int64)
@@ -159,6 +161,7 @@ class TrackingWheels:
 
     @property
     def counts(self) -> IntArray:
+        """Cumulative counts per tracking wheel."""
         return _count(self.distance / self._circ, self._cpr)
 
 

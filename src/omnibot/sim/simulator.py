@@ -103,13 +103,16 @@ class PhysicsLike(Protocol):
     @lifted.setter
     def lifted(self, mask: NDArray[np.bool_]) -> None: ...
 
-    def reset(self, pose: ArrayLike | None = None) -> None: ...
+    def reset(self, pose: ArrayLike | None = None) -> None:
+        """Put every robot at rest at ``pose`` ((3,) or (n, 3); the origin when None), time 0."""
 
     def step(
         self, pwm: ArrayLike, surface_ids: ArrayLike | None = None, external_force: ArrayLike | None = None
-    ) -> None: ...
+    ) -> None:
+        """Advance one step with these PWM values, floor surfaces under the wheels and external forces."""
 
-    def contact_points_world(self) -> FloatArray: ...
+    def contact_points_world(self) -> FloatArray:
+        """(N, M, 2) wheel contact points in the world frame, m."""
 
 
 PhysicsFactory = Callable[..., PhysicsLike]
@@ -130,10 +133,12 @@ class Snapshot:
 
     @property
     def pose(self) -> Pose:
+        """The position and heading (m, m, rad)."""
         return Pose(self.x, self.y, self.theta)
 
     @property
     def twist(self) -> Twist:
+        """The world-frame velocity (m/s, m/s, rad/s)."""
         return Twist(self.vx, self.vy, self.w)
 
 
@@ -197,6 +202,7 @@ class TruthRecorder:
             self._next_flush = snap.t + self.flush_every
 
     def close(self) -> None:
+        """Flush, close the file if this writer opened it, and ignore later rows."""
         if self.closed:
             return
         self.closed = True
@@ -337,6 +343,7 @@ class Simulator:
 
     @property
     def physics(self) -> PhysicsLike:
+        """The physics engine the simulator steps."""
         return self._physics
 
     @property
@@ -363,6 +370,7 @@ class Simulator:
 
     @property
     def pwm(self) -> list[int]:
+        """The PWM values applied to the motors now."""
         return [int(v) for v in self._pwm[0]]
 
     @property
@@ -384,6 +392,7 @@ class Simulator:
         return max(0.0, bat.voltage - bat.internal_resistance * current)
 
     def snapshot(self) -> Snapshot:
+        """The robot's time, pose and velocity now."""
         x, y, th = self._pose_row.tolist()
         vx, vy, w = self._twist_row.tolist()
         return Snapshot(self.clock.now(), x, y, th, vx, vy, w)
@@ -480,6 +489,7 @@ class Simulator:
         fn(self.snapshot())
 
     def remove_listener(self, fn: Listener) -> None:
+        """Stop calling ``fn``."""
         self._listeners = [s for s in self._listeners if s.fn != fn]
         self._next_notify_us = min((slot.next_us for slot in self._listeners), default=0)
 

@@ -116,6 +116,7 @@ class ShapeSpec(_Spec):
 
     @property
     def is_closed(self) -> bool:
+        """Whether the outline is closed (only a polyline may be open)."""
         return self.shape != "polyline" or bool(self.closed)
 
     def vertices(self) -> FloatArray:
@@ -184,6 +185,8 @@ class PatchSpec(ShapeSpec):
 
 
 class StartSpec(_Spec):
+    """The robot's start pose in the world: x, y (m) and heading (degrees)."""
+
     x: float
     y: float
     theta_deg: float = 0.0

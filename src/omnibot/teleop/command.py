@@ -16,6 +16,7 @@ from omnibot.errors import ConfigError
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    """The ``omnibot teleop`` options: robot or port, input device, limits and the teleop config file."""
     from omnibot.cliargs import add_robot_options
 
     add_robot_options(p, world="room", port_help="the simulated --robot, paced to the wall clock")
@@ -60,6 +61,8 @@ def open_source(args: argparse.Namespace, config: Any, say: Callable[[str], None
 
 
 def run(args: argparse.Namespace) -> int:
+    """Run ``omnibot teleop`` for ``--duration`` s or until the user quits, then print what was sent;
+    0 (Ctrl-C is raised again after the summary)."""
     from omnibot.cliargs import check_sim_options, sim_url
     from omnibot.client.session import robot_session
     from omnibot.teleop.config import load_teleop_config

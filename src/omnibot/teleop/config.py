@@ -64,6 +64,8 @@ class LinearScales(_Strict):
 
 
 class AngularAxes(_Strict):
+    """Which pad axis turns the robot (None: no axis does)."""
+
     yaw: int | None = Field(default=None, ge=0)
 
 

@@ -27,6 +27,9 @@ from omnibot.motion import ZERO, Twist
 
 
 class Phase(Enum):
+    """Where the deadman is (see the module diagram): idle, driving while it is held, or stopping
+    (zero VELs) after driving ended."""
+
     IDLE = "idle"
     DRIVING = "driving"
     STOPPING = "stopping"

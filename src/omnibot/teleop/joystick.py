@@ -56,6 +56,7 @@ class JoystickSource:
 
     @property
     def attached(self) -> bool:
+        """True while a pad is attached and read."""
         return self._active is not None
 
     def read(self, now: float) -> JoyState | None:

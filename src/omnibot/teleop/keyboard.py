@@ -97,6 +97,7 @@ class KeyState:
         self._held: dict[Direction, tuple[int, float, bool]] = {}  # direction -> (sign, until, turbo)
 
     def press(self, key: Key, now: float) -> None:
+        """Take one key press at ``now`` s: quit, stop (drop every held direction) or hold a direction."""
         if key.quit:
             self.quit = True
         elif key.stop:
@@ -161,6 +162,7 @@ class KeyboardSource:
         return self.state.quit
 
     def read(self, now: float) -> JoyState:
+        """Drain the terminal's pending input and return the pad-like state it leaves."""
         while select.select([self.fd], [], [], 0)[0]:
             try:
                 data = os.read(self.fd, 64)

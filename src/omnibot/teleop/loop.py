@@ -87,6 +87,7 @@ class Teleop:
 
     @property
     def deadman(self) -> Deadman:
+        """The pad's deadman (its phase says whether teleop drives)."""
         return self.pad.deadman
 
     @property
@@ -96,10 +97,12 @@ class Teleop:
 
     @property
     def latched(self) -> bool:
+        """True while the controller's emergency stop is latched (only STOP releases it)."""
         return self.runtime.latched
 
     @property
     def last_twist(self) -> Twist | None:
+        """The last twist sent, None before the first."""
         return self.runtime.last_twist
 
     def sample(self, now: float) -> Sample | None:

@@ -38,11 +38,13 @@ class JoyState:
     time: float = 0.0
 
     def axis(self, index: int | None) -> float:
+        """Axis ``index``'s deflection, 0.0 when unmapped (None) or absent on this pad."""
         if index is None or not 0 <= index < len(self.axes):
             return 0.0
         return self.axes[index]
 
     def button(self, index: int | None) -> bool:
+        """Whether button ``index`` is pressed; False when unmapped (None) or absent on this pad."""
         return index is not None and 0 <= index < len(self.buttons) and bool(self.buttons[index])
 
 

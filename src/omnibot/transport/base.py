@@ -55,9 +55,11 @@ class WallClock:
     """The real clock: :func:`time.monotonic` and :func:`time.sleep`."""
 
     def now(self) -> float:
+        """The host's monotonic time, s."""
         return time.monotonic()
 
     def sleep(self, seconds: float) -> None:
+        """Sleep ``seconds`` of wall time (nothing when <= 0)."""
         if seconds > 0:
             time.sleep(seconds)
 

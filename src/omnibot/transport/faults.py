@@ -165,6 +165,7 @@ class FaultLink(Link):
             self.inner.write(due)
 
     def reopen(self, retry: float | None = None) -> None:
+        """Reopen the wrapped link (LinkError if this one was closed)."""
         self._check_open()
         self.inner.reopen(retry)
 

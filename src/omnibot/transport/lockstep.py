@@ -81,6 +81,7 @@ class PacedFifo:
         return self._pending
 
     def push(self, now: float, data: bytes) -> None:
+        """Put ``data`` on the line at ``now`` s, after anything still on it."""
         if not data:
             return
         start = max(now, self._line_free)
@@ -89,6 +90,7 @@ class PacedFifo:
         self._pending += len(data)
 
     def pop_due(self, now: float) -> bytes:
+        """The bytes whose last bit has arrived by ``now`` s (a chunk may be split)."""
         out = bytearray()
         while self._chunks:
             start, data = self._chunks[0]
@@ -108,6 +110,7 @@ class PacedFifo:
         return bytes(out)
 
     def clear(self) -> None:
+        """Drop everything on the line."""
         self._chunks.clear()
         self._pending = 0
 
@@ -119,6 +122,7 @@ class LockstepClock:
         self._link = link
 
     def now(self) -> float:
+        """The device's simulated time, s."""
         return self._link.device.time
 
     def sleep(self, seconds: float) -> None:

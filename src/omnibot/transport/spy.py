@@ -94,9 +94,11 @@ class SpyLink(Link):
 
     @property
     def clock(self) -> Clock:
+        """The wrapped link's clock."""
         return self.inner.clock
 
     def reopen(self, retry: float | None = None) -> None:
+        """Reopen the wrapped link (LinkError if this one was closed)."""
         self._check_open()
         self.inner.reopen(retry)
 

@@ -110,9 +110,12 @@ class LinkUrl:
         return ConfigError(f"expected {what}, got {value!r} in URL {self.source!r}", key=name)
 
     def get_str(self, name: str, default: str) -> str:
+        """Option ``name`` as given, or ``default``."""
         return self.options.get(name, default)
 
     def get_int(self, name: str, default: int, *, minimum: int | None = None) -> int:
+        """Option ``name`` as an integer (``default`` when absent); ConfigError if not one or below
+        ``minimum``."""
         value = self.options.get(name)
         if value is None:
             return default
@@ -127,6 +130,8 @@ class LinkUrl:
     def get_float(
         self, name: str, default: float, *, minimum: float = 0.0, maximum: float | None = None
     ) -> float:
+        """Option ``name`` as a number in [``minimum``, ``maximum``] (``default`` when absent); ConfigError
+        otherwise."""
         value = self.options.get(name)
         if value is None:
             return default
@@ -140,6 +145,8 @@ class LinkUrl:
         return number
 
     def get_bool(self, name: str, default: bool = False) -> bool:
+        """Option ``name`` as a flag: bare or 1/true/yes/on is True, 0/false/no/off False; ConfigError
+        otherwise."""
         value = self.options.get(name)
         if value is None:
             return default

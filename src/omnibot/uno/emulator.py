@@ -138,6 +138,7 @@ class UnoEmulator:
         return int(fields[1]), [int(v) for v in fields[2:]]
 
     def set_range(self, cm: int | None) -> None:
+        """Fix the emulated sonar's reading at ``cm`` (None: no echo)."""
         self.command(f"range {-1 if cm is None else cm}")
 
     def _stop(self) -> tuple[int, str]:
@@ -163,6 +164,7 @@ class UnoEmulator:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run the emulated UNO and print its pty's path for a host to open; the exit status."""
     ap = argparse.ArgumentParser(prog="python -m omnibot.uno.emulator", description=__doc__.split("\n")[0])
     ap.add_argument("robot", nargs="?", default="omni4", help="omni4 (seed 000) or mecanum4 (seed 003)")
     ap.add_argument(

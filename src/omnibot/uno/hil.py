@@ -62,6 +62,7 @@ class UnoHil:
         self._stop = threading.Event()
 
     def stop(self) -> None:
+        """Ask :meth:`run` to return (thread-safe)."""
         self._stop.set()
 
     def _step_to(self, t_us: int) -> None:
@@ -109,6 +110,7 @@ class UnoHil:
             self.emu.command("\n".join(answer))  # one write
 
     def close(self) -> None:
+        """Stop the run and close the emulator."""
         self.stop()
         self.emu.close()
 
@@ -154,6 +156,7 @@ register_scheme(
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run the hardware-in-the-loop UNO and print its pty's path for a host to open; the exit status."""
     ap = argparse.ArgumentParser(prog="python -m omnibot.uno.hil", description=__doc__.split("\n")[0])
     ap.add_argument("robot", nargs="?", default="omni4", help="omni4 (seed 000) or mecanum4 (seed 003)")
     ap.add_argument("--world", default="room", help="simulator world (default room)")

@@ -124,6 +124,7 @@ class HostCheck:
         self.refused = 0
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        """Pass the request on when the policy allows its single ``Host`` header; refuse it otherwise."""
         if scope["type"] not in ("http", "websocket"):
             await self.app(scope, receive, send)
             return

@@ -17,6 +17,7 @@ TOKEN_ENV = "OMNIBOT_DASHBOARD_TOKEN"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    """The ``omnibot web`` options: robot or port, address, port and access token of the dashboard."""
     from omnibot.cliargs import add_robot_options
 
     add_robot_options(p, world="room", port_help="the simulated --robot, paced to the wall clock")
@@ -58,6 +59,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Run ``omnibot web``: serve the dashboard for ``--duration`` s or until interrupted; the exit
+    status (1 when the robot link ended)."""
     from omnibot.cliargs import check_sim_options, sim_url
     from omnibot.navigation.webteach import PathTeacher
     from omnibot.robot.description import RobotDescription

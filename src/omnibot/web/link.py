@@ -139,14 +139,17 @@ class RobotLink:
 
     @property
     def deadman(self) -> Deadman:
+        """The page's deadman (its phase says whether the page drives)."""
         return self.page.deadman
 
     @property
     def estop(self) -> bool:
+        """True while the page's emergency stop is engaged (until Resume)."""
         return self.estop_lock.engaged
 
     @property
     def following(self) -> bool:
+        """True while a taught path is being followed."""
         return self.teach is not None and self.teach.following
 
     # ------------------------------------------------------------------ other threads
@@ -168,6 +171,7 @@ class RobotLink:
         return True
 
     def start(self) -> None:
+        """Start the link thread."""
         self._thread = threading.Thread(target=self._run, name="omnibot-robot-link", daemon=True)
         self._thread.start()
 
@@ -191,6 +195,7 @@ class RobotLink:
 
     @property
     def alive(self) -> bool:
+        """Whether the link thread runs."""
         return self._thread is not None and self._thread.is_alive()
 
     # ------------------------------------------------------------------ link thread

@@ -60,19 +60,27 @@ class Joy(_Message):
 
 
 class EStop(_Message):
+    """The page's emergency stop: STOP now, driving ignored until :class:`Resume`."""
+
     type: Literal["estop"]
 
 
 class Resume(_Message):
+    """Clear the page's emergency stop; driving needs a fresh input."""
+
     type: Literal["resume"]
 
 
 class Teach(_Message):
+    """Teach-in: record a path, stop recording, or follow the recorded path."""
+
     type: Literal["teach"]
     action: Literal["record", "stop", "follow"]
 
 
 class Ping(_Message):
+    """A round-trip probe: the server answers ``pong`` with the page's ``t``."""
+
     type: Literal["ping"]
     t: float = Field(allow_inf_nan=False)
 

@@ -100,6 +100,7 @@ class Hub:
 
     @property
     def logs(self) -> list[dict[str, Any]]:
+        """The recent log frames, oldest first (the last 200; from any thread)."""
         with self._lock:
             return list(self._logs)
 
@@ -117,6 +118,8 @@ class Hub:
                 self._logs = [*self._logs[-199:], frame]
 
     async def broadcast_forever(self) -> None:
+        """Forever: drain the outbox every BROADCAST_PERIOD and send its frames to every page, of the state
+        frames only the newest."""
         while True:
             frames: list[dict[str, Any]] = []
             while True:

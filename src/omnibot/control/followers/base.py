@@ -53,6 +53,7 @@ def to_body(vx: float, vy: float, w: float, theta: float, dt: float = 0.0) -> Co
 
 
 def clamp_speed(vx: float, vy: float, v_max: float) -> tuple[float, float]:
+    """``(vx, vy)`` scaled down to the speed ``v_max`` m/s when faster (kept as is when ``v_max`` <= 0)."""
     speed = math.hypot(vx, vy)
     if speed > v_max > 0:
         return vx * v_max / speed, vy * v_max / speed
@@ -129,6 +130,7 @@ def register(name: str, **defaults: Any) -> Callable[[F], F]:
 
 
 def follower_names() -> list[str]:
+    """The names of the registered followers (the built-in ones are registered on first call)."""
     from omnibot.control import followers  # noqa: F401  (registers the built-in followers)
 
     return list(FOLLOWERS)

@@ -56,10 +56,12 @@ class PurePursuit(Follower):
         self.profile: SpeedProfile | None = None
 
     def start(self, path: Path, t: float) -> None:
+        """Begin following ``path`` at time ``t``: plan its speed profile with the follower's margin."""
         super().start(path, t)
         self.profile = self.plan(path, self.margin)
 
     def update(self, state: State) -> Command:
+        """Steer toward the look-ahead point on the path at the profile's speed; STOP once done."""
         path, prof = self.path, self.profile
         assert path is not None and prof is not None
         if self.done:

@@ -43,6 +43,7 @@ class VelocityResponse:
         self._sent: deque[tuple[float, float, float, float]] = deque()
 
     def reset(self) -> None:
+        """Forget what was learned: unit gains, initial uncertainty, no commands remembered."""
         self.G = np.eye(2)
         self.g_w = 1.0
         self._P = np.eye(2) * 0.5

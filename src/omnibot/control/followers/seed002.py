@@ -88,6 +88,8 @@ class Seed002Follower(Follower):
         self._arrived = False
 
     def start(self, path: Path, t: float) -> None:
+        """Begin following ``path`` at time ``t``: resample it into segments, plan the speed, reset the
+        heading PID."""
         super().start(path, t)
         self.points = resample(path, self.segment)
         self.profile = self.plan(path, self.margin)
@@ -118,6 +120,7 @@ class Seed002Follower(Follower):
         return along >= length
 
     def update(self, state: State) -> Command:
+        """Seed 002's segment-by-segment command for this state; STOP once done."""
         p, prof = self.points, self.profile
         assert p is not None and prof is not None and self.path is not None
         dt = self.dt if self._last is None else max(state.t - self._last.t, 1e-6)

@@ -91,6 +91,8 @@ class ProfileTracker(Follower):
         """Last along-track, cross-track (m) and heading (rad) errors of the estimate."""
 
     def start(self, path: Path, t: float) -> None:
+        """Begin following ``path`` at time ``t``: plan the speed profile, zero the reference time and
+        the integrals."""
         super().start(path, t)
         self.profile = self.plan(path, self.margin)
         self.tau = 0.0
@@ -101,6 +103,7 @@ class ProfileTracker(Follower):
             self.response.reset()
 
     def update(self, state: State) -> Command:
+        """Track the time-parametrised reference with feedforward plus feedback; STOP once done."""
         prof, path = self.profile, self.path
         assert prof is not None and path is not None
         if self.done:

@@ -88,6 +88,7 @@ class Path:
 
     @property
     def length(self) -> float:
+        """Total arc length, m."""
         return float(self.s[-1])
 
     @property
@@ -97,10 +98,12 @@ class Path:
 
     @property
     def start(self) -> tuple[float, float, float]:
+        """The first pose ``(x, y, theta)`` (m, m, rad)."""
         return float(self.x[0]), float(self.y[0]), float(self.theta[0])
 
     @property
     def end(self) -> tuple[float, float, float]:
+        """The last pose ``(x, y, theta)`` (m, m, rad)."""
         return float(self.x[-1]), float(self.y[-1]), float(self.theta[-1])
 
     def with_columns(
@@ -116,6 +119,7 @@ class Path:
         )
 
     def without_speed(self) -> Path:
+        """The same path without its speed column (timestamps kept)."""
         return Path(self.x, self.y, self.theta, self.t, None)
 
     def at(self, s: float) -> tuple[float, float, float]:
@@ -146,6 +150,7 @@ class Path:
         return self.project(x, y, self.index_at(s - behind), self.index_at(s + ahead) + 2)
 
     def heading_at(self, s: float) -> float:
+        """Heading at arc length ``s``, rad (clamped to the path, linear between points)."""
         return self.at(s)[2]
 
     def direction_at(self, s: float) -> tuple[float, float]:

@@ -56,6 +56,7 @@ class MotionLimits:
 
     @property
     def lateral(self) -> float:
+        """Largest lateral (centripetal) acceleration, m/s²: ``a_lat``, or ``a_max`` when unset."""
         return self.a_max if self.a_lat is None else self.a_lat
 
     @classmethod
@@ -77,6 +78,7 @@ class MotionLimits:
         )
 
     def with_turn_rate(self, w_max: float) -> MotionLimits:
+        """These limits with the turn rate capped at ``w_max`` rad/s (never raised)."""
         return replace(self, w_max=min(self.w_max, w_max))
 
 

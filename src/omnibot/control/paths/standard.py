@@ -83,6 +83,7 @@ SHAPES: dict[str, Callable[[float], FloatArray]] = {
 
 
 def standard_names() -> list[str]:
+    """The names of the standard paths (see the module docstring)."""
     return list(SHAPES)
 
 
