@@ -1,0 +1,76 @@
+"""The recorder (and its Foxglove live server) plugged into a host runtime.
+
+``--log`` / ``--foxglove`` on a command that runs on the runtime: :func:`omnibot.logs.active.attach_runtime`
+(called by :meth:`Runtime.start <omnibot.runtime.runtime.Runtime.start>`) adds
+
+* :class:`RuntimeRecorder`, a sink: the arbitration at each change on ``/omnibot/control``
+  (``omnibot_msgs/msg/Control``: source, reason, lock, the twist it asked for) and, when the runtime
+  has an estimator, *its* estimate after each sample (``odom``, ``/tf``, ``/omnibot/estimate``: the
+  one the follower steers by, not a second estimator); the commands go out as VELs the recorder
+  already writes as ``cmd_vel``;
+* the Foxglove Teleop panel as a source (:class:`omnibot.logs.live.PanelSource`) when the command
+  serves Foxglove live.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from omnibot.client.events import Telemetry
+from omnibot.logs import schemas
+from omnibot.logs.recorder import Recorder, stamp, twist
+from omnibot.logs.topics import CONTROL
+from omnibot.motion import Pose2D
+from omnibot.runtime.cycle import Cycle, Decision
+
+if TYPE_CHECKING:
+    from omnibot.runtime.runtime import Runtime
+
+
+class RuntimeRecorder:
+    """A runtime sink writing its arbitration into ``recorder``; adopts the runtime's estimator."""
+
+    def __init__(self, recorder: Recorder, runtime: Runtime) -> None:
+        self.recorder = recorder
+        self.runtime = runtime
+        self._last: tuple[str, str, str, bool] | None = None
+        estimator = runtime.estimator
+        if estimator is not None:
+            e = estimator.estimate
+            slip = getattr(estimator, "slip_model", None) is not None
+            recorder.adopt(estimator.name, Pose2D(e.x, e.y, e.theta), slip=slip)
+            runtime.telemetry_hooks.append(self._sample)
+
+    def _sample(self, tel: Telemetry) -> None:
+        """Right after the runtime's estimator took ``tel``: its estimate, as it is now."""
+        estimator = self.runtime.estimator
+        if estimator is not None and tel.encoders is not None:
+            self.recorder.estimate(tel.time, estimator.estimate)
+
+    def __call__(self, cycle: Cycle) -> None:
+        d = cycle.decision
+        key = (d.source, d.reason, d.lock, cycle.latched)
+        if key != self._last:
+            self._last = key
+            self.control(cycle.t, d, cycle.latched)
+
+    def control(self, t: float, d: Decision, latched: bool) -> None:
+        """One ``/omnibot/control`` message: ``d`` at link time ``t``."""
+        ns = self.recorder.ns(t)
+        tw = d.twist
+        msg = schemas.new(
+            schemas.CONTROL,
+            stamp=stamp(ns),
+            source=d.source,
+            reason=d.reason,
+            lock=d.lock,
+            estop=d.estop,
+            latched=latched,
+            twist=twist(tw.vx, tw.vy, tw.w) if tw is not None else twist(0.0, 0.0, 0.0),
+        )
+        self.recorder.write(CONTROL, schemas.CONTROL, msg, ns)
+
+    def close(self) -> None:
+        """Stop taking the runtime's estimate (the recorder stays open)."""
+        if self._sample in self.runtime.telemetry_hooks:
+            self.runtime.telemetry_hooks.remove(self._sample)
