@@ -19,7 +19,7 @@ import logging
 import threading
 from typing import Any
 
-from foxglove.websocket import Capability, ServerListener
+from foxglove.websocket import Capability, Client, ClientChannel, ServerListener
 
 from omnibot.errors import ConfigError
 from omnibot.logs import schemas
@@ -94,14 +94,25 @@ def decode_twist(encoding: str, data: bytes) -> Twist:
 
 
 class _Listener(ServerListener):
-    """The SDK's server listener: client-published twists on :data:`TELEOP` go to the panel source."""
+    """The SDK's server listener: client-published twists on :data:`TELEOP` go to the panel source
+    (the channels a client advertises are remembered by client and channel id)."""
 
     def __init__(self, panel: PanelSource) -> None:
         self.panel = panel
+        self._channels: dict[tuple[int, int], ClientChannel] = {}
 
-    def on_message_data(self, client: Any, channel: Any, data: bytes) -> None:
+    def on_client_advertise(self, client: Client, channel: ClientChannel) -> None:
         if channel.topic.lstrip("/") != TELEOP or channel.schema_name not in TWIST_SCHEMAS:
             log.warning("Foxglove client publishes %s (%s): ignored", channel.topic, channel.schema_name)
+            return
+        self._channels[(client.id, channel.id)] = channel
+
+    def on_client_unadvertise(self, client: Client, client_channel_id: int) -> None:
+        self._channels.pop((client.id, client_channel_id), None)
+
+    def on_message_data(self, client: Client, client_channel_id: int, data: bytes) -> None:
+        channel = self._channels.get((client.id, client_channel_id))
+        if channel is None:
             return
         try:
             twist = decode_twist(channel.encoding, bytes(data))
