@@ -73,3 +73,35 @@ def test_the_control_schema_is_declared() -> None:
     text = schemas.schema_text(schemas.CONTROL)
     assert text.startswith("builtin_interfaces/Time stamp\nstring source\nstring reason\nstring lock\n")
     assert "\nMSG: geometry_msgs/Twist\n" in text  # its dependencies follow, as rosbag2 writes them
+
+
+def test_an_estimator_installed_mid_run_is_adopted_and_replayed_exactly(tmp_path: Path) -> None:
+    """The dashboard's teach installs its estimator after the runtime started, telemetry flowing."""
+    from omnibot.client import RobotClient
+    from omnibot.estimation.estimator import make_estimator
+    from omnibot.logs.replay import replay_log
+    from omnibot.motion import Pose2D, Twist
+    from omnibot.robot.description import load_robot
+    from omnibot.runtime.sources import ScriptSource
+
+    robot = load_robot("omni4")
+    path = tmp_path / "mid.mcap"
+    with Recorder(path) as rec, RobotClient.open("sim://omni4?seed=4", robot, timeout=0.5) as client:
+        rec.attach(client, robot)
+        runtime = Runtime(client, period=0.01, sources=[ScriptSource(lambda t: Twist(0.2, 0.1, 0.3))])
+        recording = sink.RuntimeRecorder(rec, runtime)
+        runtime.add_sink(recording)
+        client.telemetry(0.01)
+        runtime.run(duration=0.3)
+        assert rec.counts[topics.ESTIMATE] > 10  # the recorder's own estimator, so far
+        runtime.estimator = make_estimator("encoders", robot, Pose2D(0.3, 0.2, 0.1))
+        runtime.run(duration=0.5)
+        runtime.close()
+        recording.close()
+        client.stop()
+    run = load_run(path)
+    adopted = run.metadata[topics.ADOPTED]
+    assert adopted["name"] == "encoders" and adopted["start"] == "0.3 0.2 0.1"
+    replay = replay_log(run)
+    assert len(replay.estimates) > 40 and replay.max_difference == 0.0
+    assert replay.estimates[0][1].x == pytest.approx(0.3, abs=0.01)

@@ -19,6 +19,7 @@ from omnibot.logs.topics import DEFAULT_ESTIMATOR
 if TYPE_CHECKING:
     from omnibot.client.client import RobotClient
     from omnibot.logs.recorder import Mirror, Recorder
+    from omnibot.logs.sink import RuntimeRecorder
     from omnibot.robot.description import RobotDescription
     from omnibot.runtime.runtime import Runtime
 
@@ -35,6 +36,7 @@ class Recording:
         self.foxglove = foxglove
         self.recorder: Recorder | None = None
         self._runtimes: list[Runtime] = []
+        self._sinks: list[RuntimeRecorder] = []
 
     def attach(self, client: RobotClient, robot: RobotDescription | None, guess: bool) -> None:
         if self.recorder is None:
@@ -63,13 +65,17 @@ class Recording:
         from omnibot.logs.sink import RuntimeRecorder
 
         self._runtimes.append(runtime)
-        runtime.add_sink(RuntimeRecorder(self.recorder, runtime))
+        sink = RuntimeRecorder(self.recorder, runtime)
+        self._sinks.append(sink)
+        runtime.add_sink(sink)
         for mirror in self.recorder.mirrors:
             panel = getattr(mirror, "panel", None)  # a FoxgloveLive's Teleop panel
             if panel is not None and panel.name not in runtime.sources:
                 runtime.add_source(panel)
 
     def close(self) -> None:
+        for sink in self._sinks:
+            sink.close()
         if self.recorder is not None:
             self.recorder.close()
 

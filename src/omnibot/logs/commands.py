@@ -232,6 +232,8 @@ def _replay(args: argparse.Namespace) -> int:
             f"truth at the end: x={truth[1]:.4f} m y={truth[2]:.4f} m theta={math.degrees(truth[3]):.2f} deg; "
             f"error {math.hypot(truth[1] - last.x, truth[2] - last.y):.4f} m"
         )
+    if result.note:
+        print(result.note)
     if result.max_difference is None:
         return EXIT_OK
     if result.max_difference == 0.0:

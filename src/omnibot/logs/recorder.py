@@ -214,6 +214,7 @@ class Recorder:
         self._clients: list[RobotClient] = []
         self.samples = 0
         """Telemetry samples with encoders seen (what an estimator is fed)."""
+        self.last_sample: Telemetry | None = None
         self.closed = False
 
     # ------------------------------------------------------------------ time
@@ -401,6 +402,7 @@ class Recorder:
                 )
         if tel.encoders is not None:
             self.samples += 1
+            self.last_sample = tel
             if self.estimator is not None:
                 self.estimate(tel.time, self.estimator.update(tel))
         if self._simulator is not None:
@@ -416,13 +418,15 @@ class Recorder:
         pose2d = schemas.new("geometry_msgs/msg/Pose2D", x=est.x, y=est.y, theta=est.theta)
         self.write(ESTIMATE, "geometry_msgs/msg/Pose2D", pose2d, ns)
 
-    def adopt(self, name: str, start: Pose2D, *, slip: bool = False) -> None:
+    def adopt(self, name: str, start: Pose2D, *, before: Telemetry | None = None, slip: bool = False) -> None:
         """From now on the estimate is another's (a runtime's: the one a follower steers by), handed
-        in with :meth:`estimate` after each sample; the recorder's own estimator stops. The MCAP
-        metadata ``omnibot_estimator`` tells ``log replay`` how to reproduce it: its ``name``, the
-        ``start`` pose, the telemetry ``samples`` (with encoders) and ``estimates`` recorded before
-        (which it skips), and whether a floor's ``slip`` correction was on (not in the log)."""
+        in with :meth:`estimate` after each sample, from ``before`` on (the sample about to be
+        folded in, None: the next); the recorder's own estimator stops. The MCAP metadata
+        ``omnibot_estimator`` tells ``log replay`` how to reproduce it: its ``name``, the ``start``
+        pose, the telemetry ``samples`` (with encoders) and ``estimates`` recorded before (which it
+        skips), and whether a floor's ``slip`` correction was on (not in the log: no exact replay)."""
         self.estimator = None
+        samples = self.samples - (1 if before is not None and before is self.last_sample else 0)
         if self._writer is None or self.closed:
             return
         self._writer.add_metadata(
@@ -430,7 +434,7 @@ class Recorder:
             {
                 "name": name,
                 "start": f"{start.x!r} {start.y!r} {start.theta!r}",
-                "samples": str(self.samples),
+                "samples": str(samples),
                 "estimates": str(self.counts[ESTIMATE]),
                 "slip": "yes" if slip else "",
             },

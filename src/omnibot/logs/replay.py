@@ -31,6 +31,8 @@ class Replay:
     max_difference: float | None
     """Largest distance (m) and heading difference (rad) from the recorded estimate, whichever is
     larger; None when the log has no estimate to compare with or another estimator was run."""
+    note: str = ""
+    """Why the live estimate was not compared ("" when it was or there was none)."""
 
 
 def robot_of(run: Run) -> RobotDescription:
@@ -74,9 +76,15 @@ def replay_log(run: Run, estimator: str | None = None) -> Replay:
     est = make_estimator(name, robot_of(run), start)
     estimates = [(tel.time, est.update(tel)) for tel in samples]
     difference: float | None = None
-    if name == recorded and live and not (adopted and adopted.get("slip")):
-        difference = _max_difference(live, [e for _, e in estimates])
-    return Replay(name, recorded, estimates, difference)
+    note = ""
+    if name == recorded and live and adopted and adopted.get("slip"):
+        note = "not compared with the live estimate: it corrected for a floor's slip, which the log does not hold"
+    elif name == recorded and live:
+        offline = [e for _, e in estimates]
+        if adopted:  # the runtime may have ended before the recording (the session's last samples)
+            offline = offline[: len(live)]
+        difference = _max_difference(live, offline)
+    return Replay(name, recorded, estimates, difference, note)
 
 
 def _max_difference(live: list[tuple[float, float, float, float]], offline: list[Estimate]) -> float:

@@ -24,6 +24,7 @@ from omnibot.motion import Pose2D
 from omnibot.runtime.cycle import Cycle, Decision
 
 if TYPE_CHECKING:
+    from omnibot.estimation.estimator import Estimator
     from omnibot.runtime.runtime import Runtime
 
 
@@ -34,17 +35,33 @@ class RuntimeRecorder:
         self.recorder = recorder
         self.runtime = runtime
         self._last: tuple[str, str, str, bool] | None = None
-        estimator = runtime.estimator
-        if estimator is not None:
-            e = estimator.estimate
-            slip = getattr(estimator, "slip_model", None) is not None
-            recorder.adopt(estimator.name, Pose2D(e.x, e.y, e.theta), slip=slip)
-            runtime.telemetry_hooks.append(self._sample)
+        self._adopted: Estimator | None = None
+        # made before the runtime listens (Runtime.start): this listener sees each sample before
+        # the runtime's estimator does, so an estimator installed later (the dashboard's teach) is
+        # adopted with the pose it starts from
+        self._listener = self._before
+        runtime.client.on_telemetry(self._listener)
+        runtime.telemetry_hooks.append(self._after)
+        if runtime.estimator is not None:
+            self._adopt(runtime.estimator, None)
 
-    def _sample(self, tel: Telemetry) -> None:
+    def _before(self, tel: Telemetry) -> None:
+        estimator = self.runtime.estimator
+        if estimator is not None and estimator is not self._adopted and tel.encoders is not None:
+            # the recorder's own estimator may have written this sample already: the log then has
+            # two estimates at its time, the recorder's and the adopted one's (replay knows)
+            self._adopt(estimator, tel)
+
+    def _adopt(self, estimator: Estimator, before: Telemetry | None) -> None:
+        self._adopted = estimator
+        e = estimator.estimate
+        slip = getattr(estimator, "slip_model", None) is not None
+        self.recorder.adopt(estimator.name, Pose2D(e.x, e.y, e.theta), before=before, slip=slip)
+
+    def _after(self, tel: Telemetry) -> None:
         """Right after the runtime's estimator took ``tel``: its estimate, as it is now."""
         estimator = self.runtime.estimator
-        if estimator is not None and tel.encoders is not None:
+        if estimator is not None and estimator is self._adopted and tel.encoders is not None:
             self.recorder.estimate(tel.time, estimator.estimate)
 
     def __call__(self, cycle: Cycle) -> None:
@@ -72,5 +89,6 @@ class RuntimeRecorder:
 
     def close(self) -> None:
         """Stop taking the runtime's estimate (the recorder stays open)."""
-        if self._sample in self.runtime.telemetry_hooks:
-            self.runtime.telemetry_hooks.remove(self._sample)
+        self.runtime.client.remove_listener(self._listener)
+        if self._after in self.runtime.telemetry_hooks:
+            self.runtime.telemetry_hooks.remove(self._after)
