@@ -67,6 +67,11 @@ def test_follow_log_has_the_arbitration_and_the_followers_estimate(
     capsys.readouterr()
     assert main(["log", "replay", str(log)]) == 0
     assert "the live estimate is reproduced exactly" in capsys.readouterr().out
+    assert main(["log", "info", str(log)]) == 0
+    assert "follower   follower (priority 10)" in capsys.readouterr().out
+    assert main(["log", "export", str(log), "--csv", str(tmp_path / "csv")]) == 0
+    with (tmp_path / "csv" / "control.csv").open() as f:
+        assert [r["source"] for r in csv.DictReader(f)] == [c.source for c in controls]
 
 
 def test_the_control_schema_is_declared() -> None:
