@@ -110,3 +110,14 @@ def test_an_estimator_installed_mid_run_is_adopted_and_replayed_exactly(tmp_path
     replay = replay_log(run)
     assert len(replay.estimates) > 40 and replay.max_difference == 0.0
     assert replay.estimates[0][1].x == pytest.approx(0.3, abs=0.01)
+
+
+def test_an_unregistered_pose_estimator_is_replayed_by_its_recipe() -> None:
+    from omnibot.estimation.estimator import PoseEstimator
+    from omnibot.robot.description import load_robot
+
+    robot = load_robot("omni4")
+    teach = PoseEstimator(robot, translation="encoders", name="teach")  # as the dashboard's teach makes it
+    assert sink.registered_name(teach) == "encoders+gyro"
+    raw = PoseEstimator(robot, translation="encoders", heading="gyro", name="mine")
+    assert sink.registered_name(raw) == "encoders+raw-gyro"

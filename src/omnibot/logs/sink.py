@@ -17,6 +17,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from omnibot.client.events import Telemetry
+from omnibot.estimation.estimator import ESTIMATORS
 from omnibot.logs import schemas
 from omnibot.logs.recorder import Recorder, stamp, twist
 from omnibot.logs.topics import CONTROL
@@ -26,6 +27,25 @@ from omnibot.runtime.cycle import Cycle, Decision
 if TYPE_CHECKING:
     from omnibot.estimation.estimator import Estimator
     from omnibot.runtime.runtime import Runtime
+
+
+_RECIPES = {
+    ("tracking", "fused"): "tracking+gyro",
+    ("tracking", "gyro"): "tracking+raw-gyro",
+    ("encoders", "fused"): "encoders+gyro",
+    ("encoders", "gyro"): "encoders+raw-gyro",
+    ("encoders", "encoders"): "encoders",
+}
+"""A pose estimator's (translation, heading) -> the registered estimator that is made the same way."""
+
+
+def registered_name(estimator: Estimator) -> str:
+    """The name ``make_estimator`` rebuilds ``estimator`` by (``log replay``): its own when registered,
+    else its recipe's (the dashboard's teach makes a pose estimator named "teach")."""
+    if estimator.name in ESTIMATORS:
+        return estimator.name
+    recipe = (getattr(estimator, "translation", ""), getattr(estimator, "heading_source", ""))
+    return _RECIPES.get(recipe, estimator.name)
 
 
 class RuntimeRecorder:
@@ -56,7 +76,7 @@ class RuntimeRecorder:
         self._adopted = estimator
         e = estimator.estimate
         slip = getattr(estimator, "slip_model", None) is not None
-        self.recorder.adopt(estimator.name, Pose2D(e.x, e.y, e.theta), before=before, slip=slip)
+        self.recorder.adopt(registered_name(estimator), Pose2D(e.x, e.y, e.theta), before=before, slip=slip)
 
     def _after(self, tel: Telemetry) -> None:
         """Right after the runtime's estimator took ``tel``: its estimate, as it is now."""
