@@ -1,4 +1,4 @@
-"""The MCAP recorder: a plain object the client (and later the runtime) hands what happens to.
+"""The MCAP recorder: a plain object the client hands what happens to (and, on a runtime, its sink: :mod:`omnibot.logs.sink`).
 
 ::
 
