@@ -176,7 +176,9 @@ class Listeners:
 
     def remove(self, callback: Callable[[E], object]) -> None:
         """Forget every registration of ``callback`` (no error if there is none)."""
-        self._entries = [e for e in self._entries if e[0] is not callback]
+        self._entries = [
+            e for e in self._entries if e[0] != callback
+        ]  # a bound method is a new object each time
 
     def dispatch(self, event: Event) -> None:
         """Call every callback registered for the type of ``event``."""

@@ -19,7 +19,9 @@ from omnibot.logs.topics import DEFAULT_ESTIMATOR
 if TYPE_CHECKING:
     from omnibot.client.client import RobotClient
     from omnibot.logs.recorder import Mirror, Recorder
+    from omnibot.logs.sink import RuntimeRecorder
     from omnibot.robot.description import RobotDescription
+    from omnibot.runtime.runtime import Runtime
 
 
 class Recording:
@@ -33,6 +35,8 @@ class Recording:
         self.estimator = estimator
         self.foxglove = foxglove
         self.recorder: Recorder | None = None
+        self._runtimes: list[Runtime] = []
+        self._sinks: list[RuntimeRecorder] = []
 
     def attach(self, client: RobotClient, robot: RobotDescription | None, guess: bool) -> None:
         """Record ``client`` (the file is made on the first attach, with the Foxglove mirror if asked);
@@ -55,8 +59,26 @@ class Recording:
                 raise
         self.recorder.attach(client, robot, guess=guess)
 
+    def attach_runtime(self, runtime: Runtime) -> None:
+        """Record ``runtime``'s arbitration and estimate; the Teleop panel of a Foxglove live server
+        becomes one of its sources (once per runtime; nothing before a client was recorded)."""
+        if self.recorder is None or any(r is runtime for r in self._runtimes):
+            return
+        from omnibot.logs.sink import RuntimeRecorder
+
+        self._runtimes.append(runtime)
+        sink = RuntimeRecorder(self.recorder, runtime)
+        self._sinks.append(sink)
+        runtime.add_sink(sink)
+        for mirror in self.recorder.mirrors:
+            panel = getattr(mirror, "panel", None)  # a FoxgloveLive's Teleop panel
+            if panel is not None and panel.name not in runtime.sources:
+                runtime.add_source(panel)
+
     def close(self) -> None:
         """Close the recording's file (nothing when none was made)."""
+        for sink in self._sinks:
+            sink.close()
         if self.recorder is not None:
             self.recorder.close()
 
@@ -99,3 +121,10 @@ def attach_active(client: RobotClient, robot: RobotDescription | None = None, *,
     """Record ``client`` into the running command's log, if there is one (see Recorder.attach)."""
     if _ACTIVE:
         _ACTIVE[-1].attach(client, robot, guess)
+
+
+def attach_runtime(runtime: Runtime) -> None:
+    """Plug the running command's recording into ``runtime`` (see Recording.attach_runtime); called
+    by :meth:`Runtime.start <omnibot.runtime.runtime.Runtime.start>`."""
+    if _ACTIVE:
+        _ACTIVE[-1].attach_runtime(runtime)

@@ -67,6 +67,11 @@ def info_lines(run: Run) -> list[str]:
         f"{max(0, unanswered)} commands without a reply",
         f"          telemetry {len(tel)} samples at {rate:.1f} Hz, longest gap {gap:.3f} s",
     ]
+    if run.control:
+        lines.append(f"control   {len(run.control)} changes of the source in control")
+        lines += [
+            f"  {t:10.3f} {source or '(nobody)':10s} {reason}" for t, source, reason, _ in run.control[:20]
+        ]
     problems = run.problems()
     lines.append(f"problems  {len(problems)} (warnings, errors, malformed, link errors)")
     lines += [f"  {t:10.3f} {kind:10s} {text}" for t, kind, text in problems[:20]]
@@ -130,6 +135,7 @@ def export_csv(run: Run, out: Path) -> list[Path]:
     for sonar, rows in sorted(run.ranges.items()):
         put(f"range_{sonar}.csv", ["t", "range"], [list(r) for r in rows])
     put("protocol.csv", ["t", "direction", "keyword", "text"], [list(r) for r in run.protocol])
+    put("control.csv", ["t", "source", "reason", "lock"], [list(r) for r in run.control])
     put("link.csv", ["t", "kind", "hex", "note"], [[t, k, d.hex(" "), n] for t, k, d, n in run.link])
     for name, text in (("robot.urdf", run.robot_description), ("calibration.yaml", run.calibration)):
         if text:
@@ -232,6 +238,8 @@ def _replay(args: argparse.Namespace) -> int:
             f"truth at the end: x={truth[1]:.4f} m y={truth[2]:.4f} m theta={math.degrees(truth[3]):.2f} deg; "
             f"error {math.hypot(truth[1] - last.x, truth[2] - last.y):.4f} m"
         )
+    if result.note:
+        print(result.note)
     if result.max_difference is None:
         return EXIT_OK
     if result.max_difference == 0.0:

@@ -1,4 +1,4 @@
-"""The MCAP recorder: a plain object the client (and later the runtime) hands what happens to.
+"""The MCAP recorder: a plain object the client hands what happens to (and, on a runtime, its sink: :mod:`omnibot.logs.sink`).
 
 ::
 
@@ -53,6 +53,7 @@ from omnibot.estimation.estimator import Estimator, make_estimator
 from omnibot.estimation.odometry import Pose2D
 from omnibot.logs import schemas
 from omnibot.logs.topics import (
+    ADOPTED,
     CALIBRATION,
     CMD_VEL,
     DEFAULT_ESTIMATOR,
@@ -67,6 +68,7 @@ from omnibot.logs.topics import (
     TRUTH,
     range_topic,
 )
+from omnibot.motion import Estimate
 from omnibot.protocol import text
 from omnibot.protocol.messages import Malformed, Message, Vel
 from omnibot.robot.description import RobotDescription, load_robot, preset_names
@@ -216,6 +218,9 @@ class Recorder:
         self._cpr: list[float] = []
         self._last_tel: tuple[float, tuple[int, ...]] | None = None
         self._clients: list[RobotClient] = []
+        self.samples = 0
+        """Telemetry samples with encoders seen (what an estimator is fed)."""
+        self.last_sample: Telemetry | None = None
         self.closed = False
 
     # ------------------------------------------------------------------ time
@@ -404,16 +409,45 @@ class Recorder:
                 self.write(
                     range_topic(sonar.name), "sensor_msgs/msg/Range", self._range(ns, sonar, distance), ns
                 )
-        if self.estimator is not None and tel.encoders is not None:
-            est = self.estimator.update(tel)
-            body = world_to_body((est.vx, est.vy, est.w), est.theta)
-            pose = Pose2D(est.x, est.y, est.theta)
-            self.write_pose(ODOM, ns, pose, (float(body[0]), float(body[1]), est.w), tf=True)
-            pose2d = schemas.new("geometry_msgs/msg/Pose2D", x=est.x, y=est.y, theta=est.theta)
-            self.write(ESTIMATE, "geometry_msgs/msg/Pose2D", pose2d, ns)
+        if tel.encoders is not None:
+            self.samples += 1
+            self.last_sample = tel
+            if self.estimator is not None:
+                self.estimate(tel.time, self.estimator.update(tel))
         if self._simulator is not None:
             pose, vel = self._simulator.pose, self._simulator.twist
             self.write_pose(TRUTH, ns, Pose2D(pose.x, pose.y, pose.theta), (vel.vx, vel.vy, vel.w))
+
+    def estimate(self, t: float, est: Estimate) -> None:
+        """An estimate at link time ``t``: ``odom``, ``/tf`` odom -> base_link, ``/omnibot/estimate``."""
+        ns = self.ns(t)
+        body = world_to_body((est.vx, est.vy, est.w), est.theta)
+        pose = Pose2D(est.x, est.y, est.theta)
+        self.write_pose(ODOM, ns, pose, (float(body[0]), float(body[1]), est.w), tf=True)
+        pose2d = schemas.new("geometry_msgs/msg/Pose2D", x=est.x, y=est.y, theta=est.theta)
+        self.write(ESTIMATE, "geometry_msgs/msg/Pose2D", pose2d, ns)
+
+    def adopt(self, name: str, start: Pose2D, *, before: Telemetry | None = None, slip: bool = False) -> None:
+        """From now on the estimate is another's (a runtime's: the one a follower steers by), handed
+        in with :meth:`estimate` after each sample, from ``before`` on (the sample about to be
+        folded in, None: the next); the recorder's own estimator stops. The MCAP metadata
+        ``omnibot_estimator`` tells ``log replay`` how to reproduce it: its ``name``, the ``start``
+        pose, the telemetry ``samples`` (with encoders) and ``estimates`` recorded before (which it
+        skips), and whether a floor's ``slip`` correction was on (not in the log: no exact replay)."""
+        self.estimator = None
+        samples = self.samples - (1 if before is not None and before is self.last_sample else 0)
+        if self._writer is None or self.closed:
+            return
+        self._writer.add_metadata(
+            ADOPTED,
+            {
+                "name": name,
+                "start": f"{start.x!r} {start.y!r} {start.theta!r}",
+                "samples": str(samples),
+                "estimates": str(self.counts[ESTIMATE]),
+                "slip": "yes" if slip else "",
+            },
+        )
 
     def write_pose(
         self, topic: str, ns: int, pose: Pose2D, body: tuple[float, float, float], *, tf: bool = False

@@ -15,7 +15,8 @@ from omnibot.client.events import Telemetry
 from omnibot.errors import ConfigError
 from omnibot.estimation.estimator import make_estimator
 from omnibot.logs.run import Run
-from omnibot.motion import Estimate
+from omnibot.logs.topics import ADOPTED
+from omnibot.motion import Estimate, Pose2D
 from omnibot.protocol import text
 from omnibot.protocol.messages import Telemetry as TelMessage
 from omnibot.robot.description import RobotDescription
@@ -33,6 +34,8 @@ class Replay:
     max_difference: float | None
     """Largest distance (m) and heading difference (rad) from the recorded estimate, whichever is
     larger; None when the log has no estimate to compare with or another estimator was run."""
+    note: str = ""
+    """Why the live estimate was not compared ("" when it was or there was none)."""
 
 
 def robot_of(run: Run) -> RobotDescription:
@@ -59,16 +62,33 @@ def telemetry_of(run: Run) -> list[Telemetry]:
 
 def replay_log(run: Run, estimator: str | None = None) -> Replay:
     """Run ``estimator`` (default: the one recorded) over the run's telemetry."""
-    recorded = run.omnibot_metadata().get("estimator", "")
+    adopted = run.metadata.get(ADOPTED)
+    recorded = adopted["name"] if adopted else run.omnibot_metadata().get("estimator", "")
     name = estimator or recorded
     if not name:
         raise ConfigError(f"{run.path} names no estimator: give --estimator", key="--estimator")
-    est = make_estimator(name, robot_of(run))
-    estimates = [(tel.time, est.update(tel)) for tel in telemetry_of(run) if tel.encoders is not None]
+    samples = [tel for tel in telemetry_of(run) if tel.encoders is not None]
+    live = run.estimate_exact
+    start: Pose2D | None = None
+    if adopted:
+        # the estimate is a runtime's (the follower's), from its start pose and from the sample
+        # after which it was adopted; before that the recorder's own estimator wrote it
+        x, y, theta = (float(v) for v in adopted["start"].split())
+        start = Pose2D(x, y, theta)
+        samples = samples[int(adopted["samples"]) :]
+        live = live[int(adopted["estimates"]) :]
+    est = make_estimator(name, robot_of(run), start)
+    estimates = [(tel.time, est.update(tel)) for tel in samples]
     difference: float | None = None
-    if name == recorded and run.estimate_exact:
-        difference = _max_difference(run.estimate_exact, [e for _, e in estimates])
-    return Replay(name, recorded, estimates, difference)
+    note = ""
+    if name == recorded and live and adopted and adopted.get("slip"):
+        note = "not compared with the live estimate: it corrected for a floor's slip, which the log does not hold"
+    elif name == recorded and live:
+        offline = [e for _, e in estimates]
+        if adopted:  # the runtime may have ended before the recording (the session's last samples)
+            offline = offline[: len(live)]
+        difference = _max_difference(live, offline)
+    return Replay(name, recorded, estimates, difference, note)
 
 
 def _max_difference(live: list[tuple[float, float, float, float]], offline: list[Estimate]) -> float:

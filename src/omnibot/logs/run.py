@@ -15,6 +15,7 @@ from omnibot.logs.reader import LogFile
 from omnibot.logs.topics import (
     CALIBRATION,
     CMD_VEL,
+    CONTROL,
     ESTIMATE,
     IMU,
     JOINT_STATES,
@@ -58,6 +59,8 @@ class Run:
     imu: list[tuple[float, float, float]] = field(default_factory=list)
     """t, yaw rate (rad/s), yaw (rad)."""
     cmd_vel: list[tuple[float, float, float, float]] = field(default_factory=list)
+    control: list[tuple[float, str, str, str]] = field(default_factory=list)
+    """t, source in control, why, lock: the runtime's arbitration at each change."""
     ranges: dict[str, list[tuple[float, float]]] = field(default_factory=lambda: defaultdict(list))
     protocol: list[tuple[float, str, str, str]] = field(default_factory=list)
     """t, direction, keyword, text."""
@@ -124,6 +127,8 @@ def load_run(path: str | Path) -> Run:
         msg = m.decode()
         if m.topic == ODOM:
             run.estimate.append(_pose(t, msg))
+        elif m.topic == CONTROL:
+            run.control.append((t, str(msg.source), str(msg.reason), str(msg.lock)))
         elif m.topic == ESTIMATE:
             run.estimate_exact.append((t, float(msg.x), float(msg.y), float(msg.theta)))
         elif m.topic == TRUTH:
@@ -159,7 +164,19 @@ def load_run(path: str | Path) -> Run:
     return run
 
 
-_DECODED = {ODOM, ESTIMATE, TRUTH, JOINT_STATES, IMU, CMD_VEL, PROTOCOL, LINK, ROBOT_DESCRIPTION, CALIBRATION}
+_DECODED = {
+    CONTROL,
+    ODOM,
+    ESTIMATE,
+    TRUTH,
+    JOINT_STATES,
+    IMU,
+    CMD_VEL,
+    PROTOCOL,
+    LINK,
+    ROBOT_DESCRIPTION,
+    CALIBRATION,
+}
 
 
 def rate_and_gap(times: list[float]) -> tuple[float, float]:

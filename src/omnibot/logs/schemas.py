@@ -6,6 +6,7 @@ registered in the same type store, so one serializer (rosbags' CDR) writes every
 
     /omnibot/link       omnibot_msgs/msg/LinkBytes        raw bytes both ways (TX, RX, ERR, CLOSE)
     /omnibot/protocol   omnibot_msgs/msg/ProtocolLine     each command, reply and event as text
+    /omnibot/control    omnibot_msgs/msg/Control          the runtime's arbitration, at each change
     /omnibot/truth      nav_msgs/msg/Odometry             the simulator's ground truth
 
 :func:`typestore` returns the store; :func:`schema_text` the ``ros2msg`` schema (the definition
@@ -23,6 +24,7 @@ from rosbags.typesys.store import Typestore
 
 LINK_BYTES = "omnibot_msgs/msg/LinkBytes"
 PROTOCOL_LINE = "omnibot_msgs/msg/ProtocolLine"
+CONTROL = "omnibot_msgs/msg/Control"
 
 OWN_TYPES = {
     LINK_BYTES: (
@@ -38,6 +40,16 @@ OWN_TYPES = {
         "string direction  # command (host to controller), reply, event\n"
         "string keyword  # MOVE, OK, TEL, ...\n"
         "string text  # the whole message, e.g. MOVE,2,40,0,0\n"
+    ),
+    CONTROL: (
+        "# The runtime's arbitration (twist_mux): which command source is in control and why.\n"
+        "builtin_interfaces/Time stamp\n"
+        "string source  # the source that drives (pad, page, foxglove, follower...), empty for nobody\n"
+        "string reason  # in words, e.g. pad (priority 200) over follower\n"
+        "string lock  # the lock that holds the robot (emergency stop, deadman), empty for none\n"
+        "bool estop  # that lock is an emergency stop\n"
+        "bool latched  # the controller holds a latched emergency stop (sonar)\n"
+        "geometry_msgs/Twist twist  # what the source asked for (m/s, rad/s; zero when nothing)\n"
     ),
 }
 

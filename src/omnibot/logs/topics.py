@@ -15,7 +15,13 @@ PROTOCOL = "/omnibot/protocol"
 TRUTH = "/omnibot/truth"
 ESTIMATE = "/omnibot/estimate"
 """The estimate's pose exactly (geometry_msgs/Pose2D: theta unwrapped, no quaternion rounding)."""
+CONTROL = "/omnibot/control"
+"""The runtime's arbitration: which source is in control and why, at each change."""
+TELEOP = "cmd_vel"
+"""What Foxglove's Teleop panel publishes on (geometry_msgs/Twist) to drive through the runtime."""
 RANGE_PREFIX = "range/"
+ADOPTED = "omnibot_estimator"
+"""MCAP metadata: the estimate is a runtime's from here on (see ``Recorder.adopt``)."""
 
 
 def range_topic(sonar: str) -> str:

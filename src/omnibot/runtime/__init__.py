@@ -17,7 +17,7 @@ repeat), ``omnibot follow`` and ``omnibot run`` are sources, locks and sinks of 
       5. send          one VEL (clamped; the source's watchdog timeout); a fresh press of a person's
                        deadman sends STOP first when the controller latched its emergency stop
       6. sinks         sink(cycle): dashboard state, traces for plots and reports, teach, logs
-                       (later ROS 2 publishers, the MCAP recorder)
+                       (the MCAP recorder; later ROS 2 publishers)
       7. wait          pacer.wait(): the client pumps replies and events meanwhile
 
 The pieces: :mod:`~omnibot.runtime.cycle` (what a cycle carries), :mod:`~omnibot.runtime.arbiter`

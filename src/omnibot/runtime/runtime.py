@@ -16,6 +16,7 @@ from omnibot.client.events import ErrorEvent, Event, ResetEvent, Telemetry, Warn
 from omnibot.client.limits import Limits
 from omnibot.errors import ControllerError, LinkError
 from omnibot.estimation.estimator import Estimator
+from omnibot.logs.active import attach_runtime
 from omnibot.motion import Estimate, Twist
 from omnibot.protocol import codes
 from omnibot.runtime.arbiter import Arbiter, Lock
@@ -187,6 +188,7 @@ class Runtime:
         if self._listening:
             return
         self._listening = True
+        attach_runtime(self)  # a command's --log / --foxglove: the recorder's sink, the panel's source
         self.client.on_telemetry(self._on_telemetry)
         self.client.add_listener(self._on_event, WarnEvent, ErrorEvent, ResetEvent)
 
