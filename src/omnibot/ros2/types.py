@@ -19,9 +19,7 @@ try:
     from cyclonedds.idl import IdlStruct, make_idl_struct
     from cyclonedds.idl import types as idl
 except ImportError as exc:  # pragma: no cover - the message says how to get it
-    raise ImportError(
-        "the ROS 2 bridge needs cyclonedds: pip install 'omnibot[ros2]'"
-    ) from exc
+    raise ImportError("the ROS 2 bridge needs cyclonedds: pip install 'omnibot[ros2]'") from exc
 
 _BASE: dict[str, Any] = {
     "bool": bool,
