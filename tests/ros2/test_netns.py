@@ -8,7 +8,6 @@ import pytest
 
 from omnibot.ros2 import netns
 
-
 HEADER = "Inter-|   Receive |  Transmit\n face |bytes packets|bytes packets\n"
 
 

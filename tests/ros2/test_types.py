@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -29,7 +30,7 @@ def _same(a: Any, b: Any) -> None:
         for x, y in zip(a, b, strict=True):
             _same(x, y)
     else:
-        assert a == b or (a != a and b != b), (a, b)  # NaN equals NaN here
+        assert a == b or (math.isnan(a) and math.isnan(b)), (a, b)
 
 
 def _messages() -> list[tuple[str, Any]]:
@@ -84,9 +85,7 @@ def _messages() -> list[tuple[str, Any]]:
         hardware_id="omni4",
         values=[schemas.new("diagnostic_msgs/msg/KeyValue", key="source", value="ros2")],
     )
-    diagnostics = schemas.new(
-        "diagnostic_msgs/msg/DiagnosticArray", header=header(ns, ""), status=[status]
-    )
+    diagnostics = schemas.new("diagnostic_msgs/msg/DiagnosticArray", header=header(ns, ""), status=[status])
     stamped = schemas.new(
         "geometry_msgs/msg/TwistStamped", header=header(ns, "base_link"), twist=twist(0.2, -0.1, 0.5)
     )

@@ -92,6 +92,19 @@ class CmdVelSource:
         return Proposal(self.twist)
 
 
+class _Mirror:
+    """The recorder's mirror: every message it builds goes to :meth:`Ros2Sink.publish`."""
+
+    def __init__(self, sink: Ros2Sink) -> None:
+        self.sink = sink
+
+    def __call__(self, topic: str, typename: str, data: bytes, ns: int) -> None:
+        self.sink.publish(topic, typename, data, ns)
+
+    def close(self) -> None:
+        """Nothing to release (the node is the sink's owner's)."""
+
+
 def _covariance(variances: tuple[float, ...]) -> Any:
     return np.diag(np.array(variances, dtype=np.float64)).reshape(36)
 
@@ -108,7 +121,7 @@ class Ros2Sink:
         self.published: dict[str, int] = {}
         """Messages published per topic."""
         self._last_diagnostics = -math.inf
-        self.recorder = Recorder(None, estimator=estimator, mirrors=[self.publish])
+        self.recorder = Recorder(None, estimator=estimator, mirrors=[_Mirror(self)])
         self._started = False
 
     @staticmethod

@@ -27,11 +27,11 @@ from omnibot.ros2.types import dds_type
 try:
     from cyclonedds.core import Qos
     from cyclonedds.domain import Domain, DomainParticipant
-    from cyclonedds.util import duration
     from cyclonedds.pub import DataWriter
     from cyclonedds.qos import Policy
     from cyclonedds.sub import DataReader
     from cyclonedds.topic import Topic
+    from cyclonedds.util import duration
 except ImportError as exc:  # pragma: no cover - the message says how to get it
     raise ImportError("the ROS 2 bridge needs cyclonedds: pip install 'omnibot[ros2]'") from exc
 

@@ -50,16 +50,18 @@ def _member(desc: tuple[Any, Any]) -> Any:
     if kind == 1:  # BASE
         name, bound = detail
         if name == "string":
-            return idl.bounded_str[bound] if bound else str
+            return idl.bounded_str[bound] if bound else str  # type: ignore[misc]
         return _BASE[name]
     if kind == 2:  # NAME
         return dds_type(detail)
     if kind == 3:  # ARRAY
         inner, size = detail
-        return idl.array[_member(inner), size]
+        return idl.array[_member(inner), size]  # type: ignore[misc]
     if kind == 4:  # SEQUENCE
         inner, bound = detail
-        return idl.sequence[_member(inner), bound] if bound else idl.sequence[_member(inner)]
+        if bound:
+            return idl.sequence[_member(inner), bound]  # type: ignore[misc]
+        return idl.sequence[_member(inner)]  # type: ignore[misc]
     raise ValueError(f"unknown field kind {node}")
 
 
@@ -118,7 +120,7 @@ def to_dds(message: Any, typename: str) -> IdlStruct:
     _, fields = typestore().fielddefs[typename]
     cls = dds_type(typename)
     if not fields:
-        return cls(structure_needs_at_least_one_member=0)
+        return cls(structure_needs_at_least_one_member=0)  # type: ignore[call-arg]
     return cls(**{name: _convert(getattr(message, name), desc, True) for name, desc in fields})
 
 
