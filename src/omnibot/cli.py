@@ -449,6 +449,25 @@ def _add_run(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.set_defaults(handler=_run)
 
 
+def _ros2(args: argparse.Namespace) -> int:
+    from omnibot.ros2.command import run
+
+    return run(args)
+
+
+def _add_ros2(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    from omnibot.ros2.command import add_arguments
+
+    p = sub.add_parser(
+        "ros2",
+        help="the robot on ROS 2 (DDS, no ROS install): cmd_vel in; odom, tf, imu, ranges, joint_states out",
+        description="A cmd_vel source and publishing sink of one runtime, on cyclonedds with ROS 2's "
+        "conventions (pip install 'omnibot[ros2]'). ROS_DOMAIN_ID and ROS_AUTOMATIC_DISCOVERY_RANGE apply.",
+    )
+    add_arguments(p)
+    p.set_defaults(handler=_ros2)
+
+
 # --------------------------------------------------------------------------- record, follow
 
 
@@ -547,6 +566,7 @@ ADDERS: list[Callable[[argparse._SubParsersAction[argparse.ArgumentParser]], Non
     _add_teleop,
     _add_dashboard,
     _add_run,
+    _add_ros2,
     _add_calibrate,
     _add_log,
 ]

@@ -51,7 +51,7 @@ def test_a_follow_that_does_not_complete_is_status_1(
 @pytest.mark.parametrize(
     ("argv", "message"),
     [
-        (["run"], "nothing to run: give --teleop, --dashboard and/or --follow"),
+        (["run"], "nothing to run: give --teleop, --dashboard, --follow and/or --ros2"),
         (["run", "--follow", "nope.csv"], "--follow: cannot read nope.csv"),
         (["run", "--dashboard", "--duration", "-1"], "--duration: expected a positive number of seconds"),
         (["run", "--follow", "x.csv", "--follower", "magic"], "--follower: unknown follower 'magic'"),

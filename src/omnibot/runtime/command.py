@@ -3,9 +3,10 @@
 ::
 
     omnibot run [ROBOT OPTIONS] [--teleop pad|keyboard] [--dashboard [--host ...]] [--follow PATH.csv]
+                [--ros2 [--namespace NS]]
 
 Each option adds a source (the pad or keyboard at priority 200, the page's stick and keys at 100,
-the follower at 10) or a front end (the dashboard, whose link thread then runs the runtime) to one
+ROS 2's cmd_vel at 90, the follower at 10) or a front end (the dashboard, whose link thread then runs the runtime) to one
 :class:`~omnibot.runtime.runtime.Runtime`; the controller is left as it was found on every way out.
 Imports here are light: :func:`add_arguments` runs whenever ``omnibot`` builds its parser.
 """
@@ -34,6 +35,7 @@ STANDSTILL = 3.0
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Declare ``omnibot run``'s options (the robot options shared with every command, then its own)."""
     from omnibot.cliargs import add_robot_options
+    from omnibot.ros2.command import add_bridge_options
 
     add_robot_options(
         p,
@@ -70,6 +72,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--speed", type=float, help="--follow: speed cap, m/s (default: the robot's limit)")
     p.add_argument(
+        "--ros2",
+        action="store_true",
+        help="ROS 2 on DDS: cmd_vel (priority 90) in; odom, tf, imu, ranges, joint_states out",
+    )
+    add_bridge_options(p)
+    p.add_argument(
         "--config", metavar="FILE.yaml", help="teleop parameters (pad mapping, rate; default seed 003's)"
     )
     p.add_argument(
@@ -104,9 +112,11 @@ class Parts:
 
 def _check(args: argparse.Namespace) -> None:
     from omnibot.control.followers.base import follower_names
+    from omnibot.ros2.command import check as check_ros2
 
-    if not (args.teleop or args.dashboard or args.follow):
-        raise ConfigError("nothing to run: give --teleop, --dashboard and/or --follow")
+    if not (args.teleop or args.dashboard or args.follow or args.ros2):
+        raise ConfigError("nothing to run: give --teleop, --dashboard, --follow and/or --ros2")
+    check_ros2(args)
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
         raise ConfigError(f"expected a positive number of seconds, got {args.duration}", key="--duration")
     if args.speed is not None and not (math.isfinite(args.speed) and args.speed > 0):
@@ -158,6 +168,11 @@ def compose(runtime: Any, robot: Any, args: argparse.Namespace, config: Any, pat
         limits = TwistLimits.from_limits(runtime.client.limits, config)
         parts.pad = PadSource(device, config, limits, name=args.teleop, priority=PAD_PRIORITY)
         runtime.add_source(parts.pad)
+    if args.ros2:
+        from omnibot.ros2.command import attach
+
+        node = attach(runtime, robot, args)
+        parts.closers.append(node.close)
     runtime.add_sink(NoticePrinter(_say, control=True))
     return parts
 
@@ -202,11 +217,13 @@ def _in_this_thread(args: argparse.Namespace, url: str, config: Any, path: Any) 
     from omnibot.client.errors import NotSupported
     from omnibot.client.session import robot_session
     from omnibot.protocol import codes
+    from omnibot.ros2.command import PERIOD as ROS2_PERIOD
     from omnibot.runtime.runtime import LinkPacer, Runtime
     from omnibot.teleop.pacing import Pacer
 
     person = bool(args.teleop)
-    period = config.period if person else 0.01
+    wall = person or args.ros2  # a person or ROS 2 nodes: paced to the wall clock
+    period = config.period if person else ROS2_PERIOD if args.ros2 else 0.01
     with robot_session(url, args.robot, timeout=max(0.2, config.vel_timeout)) as session:
         client, robot = session.client, session.robot
         runtime = Runtime(client, period=period, vel_timeout=config.vel_timeout)
@@ -222,14 +239,14 @@ def _in_this_thread(args: argparse.Namespace, url: str, config: Any, path: Any) 
                 client.sleep(STANDSTILL)
             # the schedule starts now (a person's input is paced to the wall clock, a follow alone
             # to the link's: lockstep on sim://)
-            runtime.pacer = Pacer(client, period) if person else LinkPacer(client, period)
+            runtime.pacer = Pacer(client, period) if wall else LinkPacer(client, period)
             follower = parts.follower
             device = parts.device
 
             def done() -> bool:
                 if device is not None and device.quit:
                     return True
-                return follower is not None and follower.finished and not person
+                return follower is not None and follower.finished and not wall
 
             runtime.run(until=done, duration=args.duration)
         finally:

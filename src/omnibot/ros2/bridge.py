@@ -1,0 +1,234 @@
+"""The ROS 2 bridge: a source (``cmd_vel``) and a sink (odom, tf, imu, ranges, joint states, the
+URDF, diagnostics) of the host runtime, with no loop of its own.
+
+* :class:`CmdVelSource` takes what arrived on ``cmd_vel`` (geometry_msgs/TwistStamped, or Twist)
+  each cycle without blocking and proposes the newest twist while it is younger than
+  ``cmd_vel_timeout`` (ros2_controllers' name and 0.5 s default); then it is silent, and the VEL
+  watchdog (:data:`WATCHDOG`) stops the robot.
+* :class:`Ros2Sink` feeds every cycle's telemetry and events to the MCAP recorder's message
+  building (:class:`~omnibot.logs.recorder.Recorder` without a file) and publishes what it builds:
+  ``odom`` (nav_msgs/Odometry with covariances) and ``/tf`` odom -> base_link from the estimator,
+  ``imu``, ``range/<sonar>``, ``joint_states`` (the URDF's wheel joints), ``robot_description``
+  (transient-local), plus ``/tf_static`` (the sensors' frames, as in the URDF) and ``diagnostics``
+  (who drives and why, the latched emergency stop, refusals) once a second.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from typing import Any
+
+import numpy as np
+
+from omnibot.logs import schemas
+from omnibot.logs.recorder import Recorder, header, quaternion, vector
+from omnibot.logs.topics import IMU, JOINT_STATES, ODOM, RANGE_PREFIX, ROBOT_DESCRIPTION, TF
+from omnibot.motion import Twist
+from omnibot.robot.description import RobotDescription
+from omnibot.ros2.dds import DEFAULT, LATCHED, SENSOR_DATA, Node, Profile
+from omnibot.ros2.types import from_dds, to_dds
+from omnibot.runtime.cycle import Cycle
+from omnibot.runtime.sources import Proposal
+
+log = logging.getLogger("omnibot.ros2")
+
+CMD_VEL_PRIORITY = 90
+"""Below the page's stick (100) and a pad (200): a person overrides Nav2; above scripts (50)."""
+CMD_VEL_TIMEOUT = 0.5
+"""s a cmd_vel stays in force (ros2_controllers' ``cmd_vel_timeout``)."""
+WATCHDOG = 0.2
+"""s: the VEL timeout of cmd_vel's commands (the robot stops this long after they end)."""
+TF_STATIC = "/tf_static"
+DIAGNOSTICS = "/diagnostics"
+TWIST = "geometry_msgs/msg/Twist"
+TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
+
+POSE_VARIANCE = (1e-3, 1e-3, 1e6, 1e6, 1e6, 4e-3)
+"""Odometry pose variances (x, y, z, roll, pitch, yaw): a planar base's, large for what it cannot
+observe (robot_localization's convention)."""
+TWIST_VARIANCE = (1e-3, 1e-3, 1e6, 1e6, 1e6, 2e-3)
+
+
+class CmdVelSource:
+    """``cmd_vel`` into the runtime's arbitration (see the module docstring)."""
+
+    def __init__(
+        self,
+        node: Node,
+        *,
+        stamped: bool = True,
+        timeout: float = CMD_VEL_TIMEOUT,
+        priority: int = CMD_VEL_PRIORITY,
+        name: str = "ros2",
+    ) -> None:
+        self.name = name
+        self.priority = priority
+        self.timeout = timeout
+        self.watchdog = WATCHDOG
+        self.wait_reply = False
+        self.typename = TWIST_STAMPED if stamped else TWIST
+        self.reader = node.reader("cmd_vel", self.typename)
+        self.twist: Twist | None = None
+        self.received_at = -math.inf
+        self.received = 0
+        """Messages taken so far."""
+
+    def propose(self, cycle: Cycle) -> Proposal | None:
+        """The newest cmd_vel while younger than the timeout (on ``cycle.now``), else None."""
+        samples = [s for s in self.reader.take(N=64) if hasattr(s, "__idl_typename__")]
+        if samples:
+            msg = from_dds(samples[-1], self.typename)
+            body = msg.twist if self.typename == TWIST_STAMPED else msg
+            values = (body.linear.x, body.linear.y, body.angular.z)
+            self.received += len(samples)
+            if all(math.isfinite(v) for v in values):
+                self.twist = Twist(*values)
+                self.received_at = cycle.now
+            else:
+                log.warning("cmd_vel with a non-finite value ignored: %s", values)
+        if self.twist is None or cycle.now - self.received_at > self.timeout:
+            return None
+        return Proposal(self.twist)
+
+
+class _Mirror:
+    """The recorder's mirror: every message it builds goes to :meth:`Ros2Sink.publish`."""
+
+    def __init__(self, sink: Ros2Sink) -> None:
+        self.sink = sink
+
+    def __call__(self, topic: str, typename: str, data: bytes, ns: int) -> None:
+        self.sink.publish(topic, typename, data, ns)
+
+    def close(self) -> None:
+        """Nothing to release (the node is the sink's owner's)."""
+
+
+def _covariance(variances: tuple[float, ...]) -> Any:
+    return np.diag(np.array(variances, dtype=np.float64)).reshape(36)
+
+
+class Ros2Sink:
+    """Publishes each cycle's state on ROS 2 topics (see the module docstring)."""
+
+    def __init__(self, node: Node, robot: RobotDescription, *, estimator: str = "fused") -> None:
+        self.node = node
+        self.robot = robot
+        self._writers: dict[str, Any] = {}
+        for topic, typename, profile in self.topics(robot):
+            self._writers[topic] = (node.writer(topic, typename, profile), typename)
+        self.published: dict[str, int] = {}
+        """Messages published per topic."""
+        self._last_diagnostics = -math.inf
+        self.recorder = Recorder(None, estimator=estimator, mirrors=[_Mirror(self)])
+        self._started = False
+
+    @staticmethod
+    def topics(robot: RobotDescription) -> list[tuple[str, str, Profile]]:
+        """Every topic published: (name, type, QoS profile)."""
+        topics = [
+            (ODOM, "nav_msgs/msg/Odometry", DEFAULT),
+            (TF, "tf2_msgs/msg/TFMessage", Profile(depth=100)),
+            (TF_STATIC, "tf2_msgs/msg/TFMessage", LATCHED),
+            (JOINT_STATES, "sensor_msgs/msg/JointState", DEFAULT),
+            (ROBOT_DESCRIPTION, "std_msgs/msg/String", LATCHED),
+            (DIAGNOSTICS, "diagnostic_msgs/msg/DiagnosticArray", DEFAULT),
+        ]
+        if robot.gyro is not None:
+            topics.append((IMU, "sensor_msgs/msg/Imu", SENSOR_DATA))
+        topics += [(RANGE_PREFIX + s.name, "sensor_msgs/msg/Range", SENSOR_DATA) for s in robot.sonars]
+        return topics
+
+    def publish(self, topic: str, typename: str, data: bytes, ns: int) -> None:
+        """A recorder mirror: publish the message if it is one of ours (odom gets covariances)."""
+        known = self._writers.get(topic)
+        if known is None or known[1] != typename:
+            return
+        message = schemas.deserialize(data, typename)
+        if topic == ODOM:
+            message.pose.covariance = _covariance(POSE_VARIANCE)
+            message.twist.covariance = _covariance(TWIST_VARIANCE)
+        self.write(topic, message)
+
+    def write(self, topic: str, message: Any) -> None:
+        """Publish a rosbags message object on ``topic``."""
+        writer, typename = self._writers[topic]
+        writer.write(to_dds(message, typename))
+        self.published[topic] = self.published.get(topic, 0) + 1
+
+    def start(self, t: float) -> None:
+        """The URDF on ``robot_description`` and the sensors' frames on ``/tf_static``."""
+        self._started = True
+        self.recorder.start(self.robot, t=t)
+        self.write(TF_STATIC, self.static_transforms(self.recorder.ns(t)))
+
+    def static_transforms(self, ns: int) -> Any:
+        """base_link -> each sonar and the imu, placed as the URDF places them."""
+        z = self.robot.footprint.height / 2
+        frames = [(f"sonar_{s.name}", s.x, s.y, s.angle) for s in self.robot.sonars]
+        if self.robot.gyro is not None:
+            frames.append(("imu_link", 0.0, 0.0, 0.0))
+        transforms = [
+            schemas.new(
+                "geometry_msgs/msg/TransformStamped",
+                header=header(ns, "base_link"),
+                child_frame_id=name,
+                transform=schemas.new(
+                    "geometry_msgs/msg/Transform", translation=vector(x, y, z), rotation=quaternion(yaw)
+                ),
+            )
+            for name, x, y, yaw in frames
+        ]
+        return schemas.new("tf2_msgs/msg/TFMessage", transforms=transforms)
+
+    def __call__(self, cycle: Cycle) -> None:
+        """The runtime's cycle: its telemetry and events published, diagnostics once a second or when
+        a notice came."""
+        if not self._started:
+            self.start(cycle.t)
+        for event in (*cycle.telemetry, *cycle.events):
+            self.recorder.event(event)
+        if cycle.now - self._last_diagnostics >= 1.0 or cycle.notices:
+            self._last_diagnostics = cycle.now
+            self.write(DIAGNOSTICS, self.diagnostics(cycle))
+
+    def diagnostics(self, cycle: Cycle) -> Any:
+        """diagnostic_msgs/DiagnosticArray: control (who drives, why, locks) and the controller."""
+        decision = cycle.decision
+        worst = max((n.level for n in cycle.notices), key=("info", "warn", "error").index, default="info")
+        level = 2 if cycle.latched or decision.estop or worst == "error" else 1 if worst == "warn" else 0
+        text = "; ".join(n.text for n in cycle.notices) or decision.reason
+        if cycle.latched:
+            text = "emergency stop latched on the controller; " + text
+
+        def kv(key: str, value: object) -> Any:
+            return schemas.new("diagnostic_msgs/msg/KeyValue", key=key, value=str(value))
+
+        status = schemas.new(
+            "diagnostic_msgs/msg/DiagnosticStatus",
+            level=level,
+            name="omnibot: control",
+            message=text,
+            hardware_id=self.robot.name,
+            values=[
+                kv("source", decision.source or "none"),
+                kv("lock", decision.lock or "none"),
+                kv("emergency_stop", cycle.latched or decision.estop),
+                kv(
+                    "sent",
+                    ""
+                    if cycle.sent is None
+                    else f"{cycle.sent.vx:.3f},{cycle.sent.vy:.3f},{cycle.sent.w:.3f}",
+                ),
+            ],
+        )
+        return schemas.new(
+            "diagnostic_msgs/msg/DiagnosticArray",
+            header=header(self.recorder.ns(cycle.t), ""),
+            status=[status],
+        )
+
+    def close(self) -> None:
+        """Stop publishing (the node is closed by its owner)."""
+        self.recorder.close()

@@ -1,0 +1,164 @@
+"""One DDS participant with ROS 2's wire conventions (rmw_cyclonedds'), on cyclonedds.
+
+* topics ``rt/<namespace>/<name>`` (an absolute name such as ``/tf`` is not namespaced);
+* QoS as rclpy's defaults: reliable, keep-last 10, volatile; sensor data best-effort keep-last 5;
+  ``robot_description`` transient-local keep-last 1 (robot_state_publisher's);
+* each reader and writer carries ``typehash=RIHS01_<hex>;`` in its USER_DATA, as rmw puts it;
+* ``ROS_DOMAIN_ID``, ``ROS_AUTOMATIC_DISCOVERY_RANGE`` (``LOCALHOST``, ``OFF``, ``SUBNET``) and the
+  older ``ROS_LOCALHOST_ONLY=1`` mean what they mean to rmw: localhost-only discovery is unicast to
+  127.0.0.1 with multicast off.
+
+Under pytest a participant is refused outside a private network namespace
+(:func:`~omnibot.ros2.netns.check_participant_allowed`), and discovery is always localhost-only.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from omnibot.errors import ConfigError
+from omnibot.logs.schemas import type_hash
+from omnibot.ros2 import netns
+from omnibot.ros2.types import dds_type
+
+try:
+    from cyclonedds.core import Qos
+    from cyclonedds.domain import Domain, DomainParticipant
+    from cyclonedds.pub import DataWriter
+    from cyclonedds.qos import Policy
+    from cyclonedds.sub import DataReader
+    from cyclonedds.topic import Topic
+    from cyclonedds.util import duration
+except ImportError as exc:  # pragma: no cover - the message says how to get it
+    raise ImportError("the ROS 2 bridge needs cyclonedds: pip install 'omnibot[ros2]'") from exc
+
+_RELIABLE = Policy.Reliability.Reliable(max_blocking_time=duration(milliseconds=100))
+
+
+@dataclass(frozen=True)
+class Profile:
+    """A QoS profile of rclpy's."""
+
+    reliable: bool = True
+    depth: int = 10
+    transient_local: bool = False
+
+
+DEFAULT = Profile()
+SENSOR_DATA = Profile(reliable=False, depth=5)
+LATCHED = Profile(depth=1, transient_local=True)
+
+
+def qos(profile: Profile, typename: str) -> Qos:
+    """The DDS QoS of ``profile`` with ``typename``'s RIHS01 hash in USER_DATA."""
+    return Qos(
+        _RELIABLE if profile.reliable else Policy.Reliability.BestEffort,
+        Policy.History.KeepLast(profile.depth),
+        Policy.Durability.TransientLocal if profile.transient_local else Policy.Durability.Volatile,
+        Policy.Userdata(f"typehash={type_hash(typename)};".encode()),
+    )
+
+
+def topic_name(name: str, namespace: str = "") -> str:
+    """The DDS topic of the ROS topic ``name`` in ``namespace`` (``rt/`` + the fully qualified name)."""
+    if name.startswith("/"):
+        return "rt" + name
+    ns = namespace.strip("/")
+    return f"rt/{ns}/{name}" if ns else f"rt/{name}"
+
+
+def domain_id(env: Mapping[str, str]) -> int:
+    """``ROS_DOMAIN_ID`` (0 when unset)."""
+    text = env.get("ROS_DOMAIN_ID", "").strip()
+    if not text:
+        return 0
+    if not text.isdigit() or int(text) > 232:
+        raise ConfigError(f"ROS_DOMAIN_ID must be an integer 0-232, got {text!r}", key="ROS_DOMAIN_ID")
+    return int(text)
+
+
+def discovery_range(env: Mapping[str, str]) -> str:
+    """``LOCALHOST``, ``OFF`` or ``SUBNET`` as rmw reads the environment (``SUBNET`` by default; the
+    old ``ROS_LOCALHOST_ONLY=1`` means ``LOCALHOST``); always ``LOCALHOST`` under pytest."""
+    if netns.under_pytest():
+        return "LOCALHOST"
+    value = env.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "").strip().upper()
+    if value in ("", "SYSTEM_DEFAULT"):
+        return "LOCALHOST" if env.get("ROS_LOCALHOST_ONLY", "").strip() == "1" else "SUBNET"
+    if value not in ("LOCALHOST", "OFF", "SUBNET"):
+        raise ConfigError(
+            f"ROS_AUTOMATIC_DISCOVERY_RANGE must be LOCALHOST, OFF or SUBNET, got {value!r}",
+            key="ROS_AUTOMATIC_DISCOVERY_RANGE",
+        )
+    return value
+
+
+def config_xml(domain: int, scope: str) -> str:
+    """cyclonedds' configuration for ``scope`` (rmw_cyclonedds' for that discovery range)."""
+    general = ""
+    peers = ""
+    if scope == "LOCALHOST":
+        general = (
+            '<General><Interfaces><NetworkInterface address="127.0.0.1"/></Interfaces>'
+            "<AllowMulticast>false</AllowMulticast></General>"
+        )
+        peers = '<Peers><Peer address="127.0.0.1"/></Peers><ParticipantIndex>auto</ParticipantIndex>'
+        peers += "<MaxAutoParticipantIndex>100</MaxAutoParticipantIndex>"
+    elif scope == "OFF":
+        general = "<General><AllowMulticast>false</AllowMulticast></General>"
+        peers = "<ParticipantIndex>none</ParticipantIndex>"
+    discovery = f"<Discovery>{peers}</Discovery>" if peers else ""
+    return f'<CycloneDDS><Domain Id="{domain}">{general}{discovery}</Domain></CycloneDDS>'
+
+
+_DOMAINS: dict[int, tuple[Any, str]] = {}
+
+
+def _domain(domain: int, scope: str) -> Any:
+    """The process's one configured domain ``domain`` (cyclonedds allows one configuration each)."""
+    known = _DOMAINS.get(domain)
+    if known is not None:
+        if known[1] != scope:
+            raise ConfigError(f"DDS domain {domain} is already open with discovery range {known[1]}")
+        return known[0]
+    made = Domain(domain, config_xml(domain, scope))
+    _DOMAINS[domain] = (made, scope)
+    return made
+
+
+class Node:
+    """A participant with ROS 2 naming and QoS: :meth:`writer` and :meth:`reader` of ROS types."""
+
+    def __init__(self, namespace: str = "", env: Mapping[str, str] | None = None) -> None:
+        env = os.environ if env is None else env
+        netns.check_participant_allowed()
+        self.namespace = namespace.strip("/")
+        self.domain_id = domain_id(env)
+        self.scope = discovery_range(env)
+        self._domain = _domain(self.domain_id, self.scope)
+        self.participant = DomainParticipant(self.domain_id)
+        self._topics: dict[str, Any] = {}
+
+    def _topic(self, name: str, typename: str) -> Any:
+        dds = topic_name(name, self.namespace)
+        topic = self._topics.get(dds)
+        if topic is None:
+            topic = Topic(self.participant, dds, dds_type(typename))
+            self._topics[dds] = topic
+        return topic
+
+    def writer(self, name: str, typename: str, profile: Profile = DEFAULT) -> Any:
+        """A DataWriter of ``typename`` on the ROS topic ``name``."""
+        return DataWriter(self.participant, self._topic(name, typename), qos=qos(profile, typename))
+
+    def reader(self, name: str, typename: str, profile: Profile = DEFAULT) -> Any:
+        """A DataReader of ``typename`` on the ROS topic ``name``."""
+        return DataReader(self.participant, self._topic(name, typename), qos=qos(profile, typename))
+
+    def close(self) -> None:
+        """Delete the participant (and everything it made)."""
+        self._topics.clear()
+        self.participant = None  # type: ignore[assignment]

@@ -1,0 +1,139 @@
+"""The bridge on DDS, each test in a private network namespace (tests/ros2/netns_helper.py)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from tests.ros2.netns_helper import run_in_namespace
+
+SUBSCRIBER = r"""
+import json, subprocess, sys, time
+from omnibot.ros2.dds import LATCHED, Node
+from omnibot.ros2.types import from_dds
+
+bridge = subprocess.Popen(
+    [sys.executable, "-m", "omnibot", *COMMAND, "--port", "sim://omni4", "--duration", "8"],
+    stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+)
+node = Node()
+readers = {
+    "odom": (node.reader("odom", "nav_msgs/msg/Odometry"), "nav_msgs/msg/Odometry"),
+    "joint_states": (node.reader("joint_states", "sensor_msgs/msg/JointState"), "sensor_msgs/msg/JointState"),
+    "robot_description": (node.reader("robot_description", "std_msgs/msg/String", LATCHED), "std_msgs/msg/String"),
+    "/tf": (node.reader("/tf", "tf2_msgs/msg/TFMessage"), "tf2_msgs/msg/TFMessage"),
+}
+got = {name: [] for name in readers}
+end = time.monotonic() + 7
+while time.monotonic() < end and not all(len(v) >= 5 for k, v in got.items() if k != "robot_description"):
+    for name, (reader, typename) in readers.items():
+        for sample in reader.take(N=100):
+            if hasattr(sample, "__idl_typename__"):
+                got[name].append(from_dds(sample, typename))
+    time.sleep(0.02)
+bridge.terminate()
+out, _ = bridge.communicate(timeout=20)
+odom = got["odom"][-1] if got["odom"] else None
+joints = got["joint_states"][-1] if got["joint_states"] else None
+tf = got["/tf"][-1] if got["/tf"] else None
+print(json.dumps({
+    "counts": {k: len(v) for k, v in got.items()},
+    "odom_frames": [odom.header.frame_id, odom.child_frame_id] if odom else None,
+    "odom_cov": [float(odom.pose.covariance[0]), float(odom.pose.covariance[35])] if odom else None,
+    "joints": list(joints.name) if joints else None,
+    "tf": [tf.transforms[0].header.frame_id, tf.transforms[0].child_frame_id] if tf else None,
+    "urdf": got["robot_description"][0].data[:200] if got["robot_description"] else "",
+    "bridge": out,
+}))
+"""
+
+
+@pytest.mark.parametrize("command", [["ros2"], ["run", "--ros2"]], ids=["ros2", "run --ros2"])
+def test_a_subscriber_receives_odom_and_joint_states(command: list[str]) -> None:
+    from omnibot.robot.description import load_robot
+
+    script = f"COMMAND = {command!r}\n" + SUBSCRIBER
+    result = json.loads(run_in_namespace(script).stdout.strip().splitlines()[-1])
+    counts = result["counts"]
+    assert counts["odom"] >= 5 and counts["joint_states"] >= 5 and counts["/tf"] >= 5, result
+    assert counts["robot_description"] == 1, result
+    assert result["odom_frames"] == ["odom", "base_link"]
+    assert result["odom_cov"][0] > 0 and result["odom_cov"][1] > 0
+    assert result["tf"] == ["odom", "base_link"]
+    assert result["joints"] == [f"{w.name}_joint" for w in load_robot("omni4").wheels]
+    assert "<robot" in result["urdf"]
+    if command == ["ros2"]:
+        assert "domain 0" in result["bridge"] and "discovery localhost" in result["bridge"]
+
+
+TELEOP = r"""
+import json, time
+from omnibot.client.session import robot_session
+from omnibot.logs import schemas
+from omnibot.logs.recorder import header, twist
+from omnibot.protocol import codes
+from omnibot.ros2.bridge import CmdVelSource, Ros2Sink, WATCHDOG
+from omnibot.ros2.dds import Node
+from omnibot.ros2.types import to_dds
+from omnibot.runtime.runtime import Runtime
+from omnibot.teleop.pacing import Pacer
+from omnibot.transport.device import find_simulator
+
+PERIOD = 0.02
+TS = "geometry_msgs/msg/TwistStamped"
+with robot_session("sim://omni4?seed=3", "omni4", timeout=0.5) as session:
+    client = session.client
+    sim = find_simulator(client.link)
+    bridge = Node("robot1")
+    teleop = Node("robot1")  # another participant, as teleop_twist_joy's
+    writer = teleop.writer("cmd_vel", TS)
+    runtime = Runtime(client, period=PERIOD)
+    source = CmdVelSource(bridge)
+    runtime.add_source(source)
+    runtime.add_sink(Ros2Sink(bridge, session.robot))
+    runtime.start()
+    client.telemetry(PERIOD, codes.TEL_MASK)
+    runtime.pacer = Pacer(client, PERIOD)
+    command = schemas.new(TS, header=header(0, "base_link"), twist=twist(0.0, 0.2, 0.0))
+    trace, t0, next_pub, last_rx = [], None, 0.0, None
+    start = sim.pose
+    for _ in range(int(4.0 / PERIOD)):
+        now = time.monotonic()
+        t0 = now if t0 is None else t0
+        if now - t0 < 2.0 and now >= next_pub:  # 20 Hz for 2 s, then silence
+            writer.write(to_dds(command, TS))
+            next_pub = now + 0.05
+        cycle = runtime.step()
+        if source.received:
+            last_rx = source.received_at
+        speed = (sim.twist.vx ** 2 + sim.twist.vy ** 2) ** 0.5
+        trace.append((cycle.now, speed, sim.pose.x, sim.pose.y, cycle.decision.source))
+        runtime.pacer.wait()
+    runtime.close()
+    bridge.close(); teleop.close()
+import math
+moving = [row for row in trace if row[1] > 0.1]
+dx, dy = trace[-1][2] - start.x, trace[-1][3] - start.y
+c, s = math.cos(start.theta), math.sin(start.theta)
+body = (c * dx + s * dy, -s * dx + c * dy)  # the displacement in the starting body frame
+stopped_at = next((row[0] for row in trace if last_rx is not None and row[0] > last_rx and row[1] < 0.01), None)
+print(json.dumps({
+    "received": source.received, "moving": len(moving),
+    "max_speed": max(r[1] for r in trace), "last_rx": last_rx, "stopped_at": stopped_at,
+    "forward": body[0], "left": body[1], "sources": sorted({r[4] for r in trace}),
+    "bound": source.timeout + WATCHDOG,
+}))
+"""
+
+
+def test_cmd_vel_at_20_hz_drives_the_robot_and_silence_stops_it() -> None:
+    result = json.loads(run_in_namespace(TELEOP).stdout.strip().splitlines()[-1])
+    assert result["received"] >= 20, result
+    assert "ros2" in result["sources"]
+    assert abs(result["max_speed"] - 0.2) < 0.03, result
+    # it went where it was told: sideways to the left (a holonomic base), not forward
+    assert result["left"] > 0.3 and abs(result["forward"]) < 0.03, result
+    assert result["stopped_at"] is not None, result
+    # stopped within cmd_vel_timeout plus the watchdog (plus the motors' spin-down) of the last message
+    assert result["stopped_at"] - result["last_rx"] <= result["bound"] + 0.3, result

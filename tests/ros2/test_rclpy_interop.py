@@ -1,0 +1,90 @@
+"""A genuine rclpy (Jazzy wheels, Fast DDS) drives and watches ``omnibot ros2``, in a private network
+namespace. The wheels are the test-only extra ``ros2-test``; without them the test skips."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+
+import pytest
+
+from omnibot.logs.schemas import type_hash
+from omnibot.robot.description import load_robot
+from tests.ros2.netns_helper import run_in_namespace
+
+INTEROP = r"""
+import json, os, subprocess, sys, time
+os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+bridge = subprocess.Popen(
+    [sys.executable, "-m", "omnibot", "ros2", "--port", "sim://omni4", "--duration", "12"],
+    stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+)
+import rclpy
+from rclpy.node import Node
+from rclpy.qos import qos_profile_sensor_data
+from geometry_msgs.msg import TwistStamped
+from nav_msgs.msg import Odometry
+from sensor_msgs.msg import JointState, Imu
+
+rclpy.init()
+node = Node("teleop_twist_joy_stand_in")
+got = {"odom": [], "joint_states": [], "imu": []}
+node.create_subscription(Odometry, "odom", lambda m: got["odom"].append((time.monotonic(), m)), 10)
+node.create_subscription(JointState, "joint_states", lambda m: got["joint_states"].append(m), 10)
+node.create_subscription(Imu, "imu", lambda m: got["imu"].append(m), qos_profile_sensor_data)
+pub = node.create_publisher(TwistStamped, "cmd_vel", 10)
+
+def spin(seconds, publish):
+    end = time.monotonic() + seconds
+    next_pub = 0.0
+    while time.monotonic() < end:
+        if publish and time.monotonic() >= next_pub:
+            msg = TwistStamped()
+            msg.header.stamp = node.get_clock().now().to_msg()
+            msg.header.frame_id = "base_link"
+            msg.twist.linear.y = 0.2
+            pub.publish(msg)
+            next_pub = time.monotonic() + 0.05  # 20 Hz, as teleop_twist_joy
+        rclpy.spin_once(node, timeout_sec=0.01)
+
+deadline = time.monotonic() + 6
+while not got["odom"] and time.monotonic() < deadline:
+    rclpy.spin_once(node, timeout_sec=0.05)
+hashes = {}
+for topic in ("/odom", "/cmd_vel", "/joint_states"):
+    infos = node.get_publishers_info_by_topic(topic) or node.get_subscriptions_info_by_topic(topic)
+    hashes[topic] = [str(i.topic_type_hash) for i in infos]
+y0 = got["odom"][-1][1].pose.pose.position.y if got["odom"] else None
+spin(2.5, True)
+stop_sent = time.monotonic()
+y_moving = got["odom"][-1][1].pose.pose.position.y if got["odom"] else None
+spin(1.5, False)
+last = got["odom"][-1][1] if got["odom"] else None
+still = [m.twist.twist.linear.y for t, m in got["odom"] if t > stop_sent + 0.5 + 0.2 + 0.3]
+bridge.terminate()
+out, _ = bridge.communicate(timeout=20)
+print(json.dumps({
+    "odom": len(got["odom"]), "joint_states": len(got["joint_states"]), "imu": len(got["imu"]),
+    "joints": list(got["joint_states"][-1].name) if got["joint_states"] else [],
+    "y0": y0, "y_moving": y_moving, "y_end": last.pose.pose.position.y if last else None,
+    "still": still, "hashes": hashes, "bridge": out[-2000:],
+}))
+node.destroy_node()
+rclpy.shutdown()
+"""
+
+
+@pytest.mark.skipif(
+    importlib.util.find_spec("rclpy") is None,
+    reason="rclpy is not installed (the test-only extra: pip install 'omnibot[ros2-test]')",
+)
+def test_rclpy_drives_and_watches_the_bridge() -> None:
+    result = json.loads(run_in_namespace(INTEROP, timeout=90).stdout.strip().splitlines()[-1])
+    print({k: v for k, v in result.items() if k not in ("bridge", "still")})
+    assert result["odom"] > 20 and result["joint_states"] > 20 and result["imu"] > 20, result
+    assert result["joints"] == [f"{w.name}_joint" for w in load_robot("omni4").wheels], result
+    assert result["y_moving"] - result["y0"] > 0.3, result  # 0.2 m/s sideways for 2.5 s
+    assert result["still"] and max(abs(v) for v in result["still"]) < 0.02, result
+    assert abs(result["y_end"] - result["y_moving"]) < 0.2, result
+    assert result["hashes"]["/odom"] == [type_hash("nav_msgs/msg/Odometry")], result
+    assert result["hashes"]["/joint_states"] == [type_hash("sensor_msgs/msg/JointState")], result
