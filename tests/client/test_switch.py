@@ -11,6 +11,7 @@ from omnibot.protocol import codes
 from omnibot.sim.device import SimDevice
 from omnibot.transport import FaultLink, LockstepLink
 from omnibot.transport.base import Link
+from tests.client.fakes import Silent
 
 NOISY = "drop=0.01&corrupt=0.01"  # 1 % of the bytes lost and 1 % corrupted, each way
 
@@ -91,7 +92,7 @@ def test_find_protocol_on_a_text_controller_reads_its_error_lines() -> None:
 
 
 def test_a_silent_line_times_out() -> None:
-    with RobotClient(LockstepLink(_Mute()), "omni4") as client:
+    with RobotClient(LockstepLink(Silent()), "omni4") as client:
         with pytest.raises(LinkTimeout, match="none of"):
             client.find_protocol()
         with pytest.raises(LinkTimeout):
@@ -104,21 +105,3 @@ def test_binary_needs_a_version_2_controller() -> None:
         client.last_hello = type(client.last_hello)(1, "old", 4)
         with pytest.raises(ProtocolError, match="version 1"):
             client.use_binary()
-
-
-class _Mute:
-    """A LockstepDevice that never answers."""
-
-    tick = 0.001
-
-    def __init__(self) -> None:
-        self.time = 0.0
-
-    def receive(self, data: bytes) -> None:
-        pass
-
-    def step(self) -> None:
-        self.time += self.tick
-
-    def transmit(self) -> bytes:
-        return b""
