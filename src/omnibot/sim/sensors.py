@@ -21,8 +21,9 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from omnibot.motion import Pose2D
 from omnibot.robot.description import GyroSpec, SonarSpec, TrackingWheelSpec
-from omnibot.sim.world import Pose, World
+from omnibot.sim.world import World
 
 IntArray = NDArray[np.int64]
 FloatArray = NDArray[np.float64]
@@ -244,11 +245,11 @@ class Sonar:
         self.last: float | None = None
         self.last_time: float | None = None
 
-    def pose_in_world(self, pose: Sequence[float]) -> Pose:
+    def pose_in_world(self, pose: Sequence[float]) -> Pose2D:
         """The sensor's own pose for a robot pose (x, y, theta)."""
         x, y, th = (float(c) for c in pose[:3])
         c, s = math.cos(th), math.sin(th)
-        return Pose(
+        return Pose2D(
             x + c * self.spec.x - s * self.spec.y, y + s * self.spec.x + c * self.spec.y, th + self.spec.angle
         )
 

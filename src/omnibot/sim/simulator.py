@@ -46,11 +46,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from omnibot.errors import SimulationError
-from omnibot.motion import Twist
+from omnibot.motion import Pose2D, Twist
 from omnibot.robot.description import RobotDescription
 from omnibot.sim.clock import SimClock
 from omnibot.sim.sensors import Gyro, MotorEncoders, Sonar, TrackingWheels
-from omnibot.sim.world import Contact, Pose, World, convex_hull, load_world
+from omnibot.sim.world import Contact, World, convex_hull, load_world
 
 FloatArray = NDArray[np.float64]
 
@@ -132,9 +132,9 @@ class Snapshot:
     w: float
 
     @property
-    def pose(self) -> Pose:
+    def pose(self) -> Pose2D:
         """The position and heading (m, m, rad)."""
-        return Pose(self.x, self.y, self.theta)
+        return Pose2D(self.x, self.y, self.theta)
 
     @property
     def twist(self) -> Twist:
@@ -157,7 +157,7 @@ class CollisionEvent:
     depth: float
     speed: float
     owner: str
-    pose: Pose
+    pose: Pose2D
 
 
 Listener = Callable[[Snapshot], None]
@@ -255,7 +255,7 @@ class Simulator:
         world: World | str | Path | None = None,
         seed: int = 0,
         dt: float = 0.001,
-        start_pose: Sequence[float] | None = None,
+        start_pose: Pose2D | Sequence[float] | None = None,
         truth_recorder: TruthRecorder | None = None,
         physics_factory: PhysicsFactory | None = None,
     ) -> None:
@@ -280,9 +280,10 @@ class Simulator:
         self._surface_map = np.array([known.index(s) for s in self.world.surface_names], dtype=np.int64)
         self._floor_ids = np.full((1, robot.n_wheels), self._surface_map[0], dtype=np.int64)
 
-        start = start_pose if start_pose is not None else self.world.start or (0.0, 0.0, 0.0)
+        given = start_pose if start_pose is not None else self.world.start or Pose2D(0.0, 0.0, 0.0)
+        start = (given.x, given.y, given.theta) if isinstance(given, Pose2D) else tuple(given)
         if len(start) != 3:
-            raise SimulationError(f"start_pose is (x, y, theta), got {tuple(start)}")
+            raise SimulationError(f"start_pose is (x, y, theta), got {start}")
         self._physics.reset(pose=np.array([start], dtype=float))
         # views of robot 0's state: the physics updates its arrays in place
         self._pose_row = self._physics.pose[0]
@@ -352,10 +353,10 @@ class Simulator:
         return self.clock.now()
 
     @property
-    def pose(self) -> Pose:
+    def pose(self) -> Pose2D:
         """True world pose (x, y in m, theta in rad, continuous: not wrapped)."""
         x, y, th = self._pose_row.tolist()
-        return Pose(x, y, th)
+        return Pose2D(x, y, th)
 
     @property
     def twist(self) -> Twist:

@@ -40,7 +40,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any, Literal, NamedTuple
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -48,6 +48,7 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationErr
 
 from omnibot.config_errors import explain, read_yaml, suggest
 from omnibot.errors import ConfigError
+from omnibot.motion import Pose2D
 from omnibot.sim import kernels
 from omnibot.sim.surfaces import SURFACES
 
@@ -238,14 +239,6 @@ def load_world(name_or_path: str | Path) -> World:
 # --------------------------------------------------------------------------- geometry
 
 
-class Pose(NamedTuple):
-    """A planar pose: x, y in m, theta in rad."""
-
-    x: float
-    y: float
-    theta: float
-
-
 @dataclass(frozen=True)
 class Contact:
     """The robot outline overlapping a wall or obstacle.
@@ -282,8 +275,8 @@ class World:
                 names.append(patch.surface)
         self.surface_names: tuple[str, ...] = tuple(names)
         """Surface id -> name; id 0 is the floor."""
-        self.start: Pose | None = (
-            Pose(spec.start.x, spec.start.y, math.radians(spec.start.theta_deg)) if spec.start else None
+        self.start: Pose2D | None = (
+            Pose2D(spec.start.x, spec.start.y, math.radians(spec.start.theta_deg)) if spec.start else None
         )
 
         segs: list[FloatArray] = []
