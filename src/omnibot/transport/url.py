@@ -73,7 +73,7 @@ __all__ = [
     "unregister_scheme",
 ]
 
-SCHEME_PROVIDERS: dict[str, str] = {"sim": "omnibot.sim.device", "uno": "omnibot.uno.hil"}
+SCHEME_PROVIDERS: dict[str, str] = {"sim": "omnibot.sim.scheme", "uno": "omnibot.uno.hil"}
 """Scheme -> module that registers it when imported (imported on first use of the scheme)."""
 
 _PYSERIAL_OPTIONS: dict[str, tuple[str, ...]] = {
