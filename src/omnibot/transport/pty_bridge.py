@@ -244,8 +244,8 @@ def serve_together(
     """Serve several bridges from one real-time loop, their devices stepped together by ``step()``
     once per tick (a fleet of simulated robots on one clock: ``omnibot sim --pty`` with several
     robots), until ``stop`` or any bridge's own stop is set. Their devices share one tick."""
-    masters = [b._master for b in bridges]
-    if not bridges or any(m is None for m in masters):
+    masters = [b._master for b in bridges if b._master is not None]
+    if not bridges or len(masters) != len(bridges):
         raise LinkError("pty bridge is closed")
     lead = bridges[0]
     if any(b.device.tick != lead.device.tick for b in bridges):
@@ -263,12 +263,10 @@ def serve_together(
 
     while not stopped():
         for bridge, master, poller in zip(bridges, masters, pollers, strict=True):
-            assert master is not None
             bridge._poll(master, poller)
         _advance_together(bridges, step, time.monotonic())
         for bridge, master in zip(bridges, masters, strict=True):
             if bridge._wire and bridge.connected:
-                assert master is not None
                 bridge._send(master)
         wait = lead._next_tick - time.monotonic()
         if wait > 0:
