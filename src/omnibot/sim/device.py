@@ -1,6 +1,6 @@
 """The simulated motor controller: the real firmware running on the simulator through a simulator HAL.
 
-This is the module that joins firmware and simulator for the transport (DESIGN.md's import rules)::
+This module joins firmware and simulator; :mod:`omnibot.sim.scheme` puts the pair behind a link::
 
     host bytes --receive()--> SimHAL UART --> firmware Controller.poll() --set_power--> Simulator
     host bytes <-transmit()-- SimHAL UART <--         (events, replies, TEL)   <--sensors--/
@@ -10,7 +10,7 @@ serves the in-process lockstep link (``sim://PRESET``), the real-time pty emulat
 --pty``) and tests. The firmware is polled at the robot's ``controller.loop_hz`` (an Arduino-class
 loop), the physics steps at 1 kHz.
 
-:mod:`omnibot.sim.scheme` opens ``sim://`` URLs on it (one robot, or a robot of a fleet).
+``sim://`` URLs open it alone or as a robot of a fleet (:mod:`omnibot.sim.fleet`).
 """
 
 from __future__ import annotations
