@@ -205,7 +205,7 @@ def _sim(args: argparse.Namespace) -> int:
     from omnibot.sim.world import load_world
 
     robots = args.robot or ["omni4"]
-    if len(robots) > 1:
+    if len(robots) > 1 or "?" in robots[0]:  # a fleet (of one, too: a robot's own options)
         return _sim_fleet(args, robots)
     robot = load_robot(robots[0])
     if args.surface is not None and args.surface not in SURFACES:

@@ -106,6 +106,7 @@ def test_a_fleet_on_one_pty_per_robot_shares_one_world() -> None:
         ),
         (["sim", "--pty", "--robot", "omni4", "--robot", "omni4?nmae=b"], "unknown option 'nmae' in --robot"),
         (["sim", "--pty", "--robot", "omni4", "--robot", "omni4?pose=1,1"], "expected pose=X,Y,THETA"),
+        (["sim", "--pty", "--robot", "omni4?pose=1,1"], "--robot: expected pose=X,Y,THETA"),  # a fleet of one
         (
             ["sim", "--pty", "--robot", "omni4", "--robot", "omni4?name=r1&pose=1,0,0"],
             "fleet already has a robot named 'r1'",

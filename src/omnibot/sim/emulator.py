@@ -133,7 +133,10 @@ def parse_member(text: str, index: int, seed: int) -> FleetMember:
         own_seed = int(options.get("seed", seed + index))
     except ValueError:
         raise ConfigError(f"expected seed=N in --robot {text!r}", key="--robot") from None
-    pose = parse_pose(options["pose"], text) if "pose" in options else None
+    try:
+        pose = parse_pose(options["pose"]) if "pose" in options else None
+    except ConfigError as exc:
+        raise ConfigError(f"{str(exc).removeprefix('pose: ')} in --robot {text!r}", key="--robot") from None
     return FleetMember(target, options.get("name") or f"r{index + 1}", own_seed, pose)
 
 
