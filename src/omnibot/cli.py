@@ -204,7 +204,10 @@ def _sim(args: argparse.Namespace) -> int:
     from omnibot.sim.surfaces import SURFACES
     from omnibot.sim.world import load_world
 
-    robot = load_robot(args.robot)
+    robots = args.robot or ["omni4"]
+    if len(robots) > 1 or "?" in robots[0]:  # a fleet (of one, too: a robot's own options)
+        return _sim_fleet(args, robots)
+    robot = load_robot(robots[0])
     if args.surface is not None and args.surface not in SURFACES:
         raise ConfigError(
             f"unknown surface {args.surface!r}; expected one of: {', '.join(SURFACES)}", key="--surface"
@@ -229,6 +232,18 @@ def _sim(args: argparse.Namespace) -> int:
     )
 
 
+def _sim_fleet(args: argparse.Namespace, robots: list[str]) -> int:
+    from omnibot.sim.emulator import parse_member, run_pty_fleet
+
+    if not args.pty:
+        raise ConfigError("only the pty emulator exists so far: add --pty", key="omnibot sim")
+    for flag, given in (("--truth", args.truth), ("--log", args.log), ("--foxglove", args.foxglove)):
+        if given is not None:
+            raise ConfigError(f"{flag} records one robot: not with several --robot", key=flag)
+    members = [parse_member(text, k, args.seed) for k, text in enumerate(robots)]
+    return run_pty_fleet(members, surface=args.surface, world=args.world, baud=args.baud)
+
+
 def _add_sim(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "sim",
@@ -237,12 +252,18 @@ def _add_sim(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "pacing bytes to the baud rate. The first stdout line is the device path. Ends on SIGINT/SIGTERM.",
     )
     p.add_argument("--pty", action="store_true", help="serve on a pseudo-terminal (required)")
-    p.add_argument("--robot", default="omni4", help="preset name or description file (default omni4)")
+    p.add_argument(
+        "--robot",
+        action="append",
+        metavar="PRESET|FILE",
+        help="preset name or description file (default omni4); repeat it for a fleet in one world, one "
+        "pty each (a line NAME PATH per robot): PRESET?name=R&pose=X,Y,THETA&seed=N (pose in m, m, degrees)",
+    )
     p.add_argument(
         "--seed",
         type=int,
         default=DEFAULT_SEED,
-        help=f"random seed of the sensor noise (default {DEFAULT_SEED})",
+        help=f"random seed of the sensor noise (default {DEFAULT_SEED}; a fleet's k-th robot: seed + k)",
     )
     p.add_argument("--surface", help="floor surface: wood, carpet, concrete, linoleum (default: the world's)")
     p.add_argument("--world", help="world name (empty, room, corridor) or world YAML file (default empty)")

@@ -37,7 +37,6 @@ import uvicorn
 
 from omnibot.client.session import open_robot
 from omnibot.errors import ConfigError, OmnibotError
-from omnibot.motion import Pose2D
 from omnibot.robot.description import RobotDescription
 from omnibot.sim.world import World, load_world
 from omnibot.teleop.config import TeleopConfig
@@ -122,7 +121,7 @@ class Dashboard:
                 description,
                 config,
                 teach=teach,
-                start=Pose2D(*start) if start else None,
+                start=start,
                 mode=mode,
             )
             # a path file is drawn where following it from here would drive it; points as given
