@@ -252,13 +252,35 @@ def _replay(args: argparse.Namespace) -> int:
     return EXIT_FAILED
 
 
+# --------------------------------------------------------------------------- recover
+
+
+def _recover(args: argparse.Namespace) -> int:
+    from omnibot.cliargs import check_writable
+    from omnibot.logs.recover import recover
+
+    check_writable(args.out, "-o")
+    result = recover(args.file, args.out, force=args.force)
+    if result.cut_short is None and not args.force:
+        print(f"{result.source} is whole (it has its summary): nothing to recover")
+        return EXIT_OK
+    print(
+        f"wrote {result.target}: {result.messages} messages, {result.duration:.3f} s"
+        + (f" (the log was cut short: {result.cut_short})" if result.cut_short else "")
+    )
+    return EXIT_OK
+
+
 # --------------------------------------------------------------------------- parser
 
 
 def add_log_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    """Add ``omnibot log`` and its subcommands (info, plot, export, protocol, replay) to ``sub``."""
+    """Add ``omnibot log`` and its subcommands (info, plot, export, protocol, replay, recover) to
+    ``sub``."""
     p = sub.add_parser("log", help="inspect, plot, export and replay a run recorded with --log FILE.mcap")
-    lsub = p.add_subparsers(dest="log_command", required=True, metavar="{info,plot,export,protocol,replay}")
+    lsub = p.add_subparsers(
+        dest="log_command", required=True, metavar="{info,plot,export,protocol,replay,recover}"
+    )
     info = lsub.add_parser("info", help="duration, channels, rates, gaps, errors and warnings, link health")
     info.set_defaults(handler=_info)
     plot = lsub.add_parser(
@@ -282,5 +304,11 @@ def add_log_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     replay.add_argument("--estimator", help="the estimator to run (default: the one recorded)")
     replay.add_argument("--csv", metavar="FILE.csv", help="write the replayed estimate")
     replay.set_defaults(handler=_replay)
-    for q in (info, plot, export, proto, replay):
+    rec = lsub.add_parser("recover", help="rewrite a log cut short (SIGKILL) whole, for rosbags and ros2 bag")
+    rec.add_argument(
+        "-o", "--out", metavar="OUT.mcap", help="the file to write (default FILE-recovered.mcap beside it)"
+    )
+    rec.add_argument("--force", action="store_true", help="rewrite a whole log too")
+    rec.set_defaults(handler=_recover)
+    for q in (info, plot, export, proto, replay, rec):
         q.add_argument("file", metavar="FILE.mcap", help="a log written with --log")
