@@ -500,6 +500,11 @@ class Recorder:
             },
         )
 
+    def add_metadata(self, name: str, values: dict[str, str]) -> None:
+        """An MCAP metadata record ``name`` (nothing without a file, or once closed)."""
+        if self._writer is not None and not self.closed:
+            self._writer.add_metadata(name, values)
+
     def write_pose(
         self, topic: str, ns: int, pose: Pose2D, body: tuple[float, float, float], *, tf: bool = False
     ) -> None:
