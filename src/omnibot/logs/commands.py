@@ -12,12 +12,15 @@ import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from omnibot.errors import ConfigError
 from omnibot.logs.run import Run, keyword_counts, load_run, rate_and_gap
 from omnibot.motion import Twist
 from omnibot.transport.spy import SpyEvent, format_event
+
+if TYPE_CHECKING:
+    from omnibot.logs.follower_replay import RecordedFollower
 
 EXIT_OK, EXIT_FAILED = 0, 1
 
@@ -257,12 +260,7 @@ def _replay(args: argparse.Namespace, run: Run | None = None) -> int:
 def _replay_all(args: argparse.Namespace) -> int:
     """``omnibot log replay``: the estimator, then the follower (when the log has a follower run or
     one is asked for); the worse of the two statuses."""
-    from omnibot.logs.follower_replay import (
-        RecordedFollower,
-        make_replayed,
-        parse_options,
-        recorded_followers,
-    )
+    from omnibot.logs.follower_replay import make_replayed, parse_options, recorded_followers
 
     run = _load(args)
     runs = recorded_followers(run)
@@ -293,7 +291,9 @@ def _replay_all(args: argparse.Namespace) -> int:
     return status
 
 
-def _replay_follower(args: argparse.Namespace, chosen: Any, options: dict[str, Any], runs: int) -> int:
+def _replay_follower(
+    args: argparse.Namespace, chosen: RecordedFollower, options: dict[str, Any], runs: int
+) -> int:
     """Re-run the recorded follower (or ``--follower`` with ``--follower-option``s) on the recorded
     cycles; 1 when the live follower's own commands are not reproduced exactly."""
     from omnibot.logs.follower_replay import replay_follower
