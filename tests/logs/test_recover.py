@@ -101,3 +101,16 @@ def test_a_whole_log_rewritten_keeps_every_message(recorded: RecordedRun, tmp_pa
     assert result.cut_short is None and result.messages == sum(recorded.counts.values())
     again = [(m.topic, m.ns, m.data) for m in LogFile.open(out).read_all()]
     assert again == [(m.topic, m.ns, m.data) for m in LogFile.open(recorded.path).read_all()]
+
+
+def test_a_file_torn_inside_a_chunk_is_recovered_up_to_it(recorded: RecordedRun, tmp_path: Path) -> None:
+    torn = tmp_path / "torn.mcap"
+    data = recorded.path.read_bytes()
+    torn.write_bytes(data[: len(data) * 3 // 5])  # a disk that filled up in the middle of a chunk
+    ours = LogFile.open(torn).read_all()
+    assert 0 < len(ours) < sum(recorded.counts.values())
+    out = recover(torn, tmp_path / "whole.mcap")
+    assert out.cut_short is not None and out.messages == len(ours)
+    with AnyReader([out.target]) as reader:
+        theirs = [(c.topic, t, bytes(raw)) for c, t, raw in reader.messages()]
+    assert sorted(theirs) == sorted((m.topic, m.ns, m.data) for m in ours)
