@@ -621,7 +621,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         with (
             terminate_cleanly(),
-            recording(getattr(args, "log", None), foxglove=getattr(args, "foxglove", None)),
+            recording(
+                getattr(args, "log", None),
+                foxglove=getattr(args, "foxglove", None),
+                foxglove_token=getattr(args, "foxglove_token", None),
+            ),
         ):
             status = handler(args)
             sys.stdout.flush()  # a reader that went away shows up here, not at interpreter exit

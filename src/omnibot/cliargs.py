@@ -95,7 +95,8 @@ def add_robot_options(
 
 def add_log_option(p: argparse.ArgumentParser) -> None:
     """``--log FILE.mcap``: record the run (:mod:`omnibot.logs.recorder`; ``omnibot log``);
-    ``--foxglove [PORT]``: serve it live to Foxglove (:mod:`omnibot.logs.live`)."""
+    ``--foxglove [[HOST:]PORT]`` (``--foxglove-token``): serve it live to Foxglove
+    (:mod:`omnibot.logs.live`)."""
     p.add_argument(
         "--log",
         metavar="FILE.mcap",
@@ -103,11 +104,17 @@ def add_log_option(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--foxglove",
-        type=int,
         nargs="?",
-        const=8765,
-        metavar="PORT",
-        help="serve the same channels live to Foxglove on ws://127.0.0.1:PORT (default 8765)",
+        const="8765",
+        metavar="[HOST:]PORT",
+        help="serve the same channels live to Foxglove on ws://HOST:PORT (default 127.0.0.1:8765; "
+        "an access token off loopback)",
+    )
+    p.add_argument(
+        "--foxglove-token",
+        metavar="TOKEN",
+        help="--foxglove: access token (default $OMNIBOT_FOXGLOVE_TOKEN; required, and made up if not "
+        "given, off loopback)",
     )
 
 

@@ -24,7 +24,6 @@ the bound address, the names in ``allow_hosts``), which defeats DNS rebinding.
 from __future__ import annotations
 
 import contextlib
-import secrets
 import socket
 import threading
 import time
@@ -41,23 +40,12 @@ from omnibot.robot.description import RobotDescription
 from omnibot.sim.world import World, load_world
 from omnibot.teleop.config import TeleopConfig
 from omnibot.transport.device import find_device
-from omnibot.web.access import HostCheck, HostPolicy, is_loopback
+from omnibot.web.access import HostCheck, HostPolicy, access_token
 from omnibot.web.link import RobotLink
 from omnibot.web.messages import MAX_FRAME
 from omnibot.web.scene import PlannedPath, Point, build_scene
 from omnibot.web.server import Hub, create_app
 from omnibot.web.teach import TeachRepeat
-
-TOKEN_MIN = 8
-
-
-def access_token(host: str, token: str | None) -> str | None:
-    """The token the server requires: the one given (checked), else a fresh one off loopback, else None."""
-    if token is not None:
-        if len(token) < TOKEN_MIN:
-            raise ConfigError(f"an access token needs at least {TOKEN_MIN} characters", key="--token")
-        return token
-    return None if is_loopback(host) else secrets.token_urlsafe(18)
 
 
 def bind(host: str, port: int) -> socket.socket:
