@@ -28,8 +28,6 @@ from omnibot.errors import ConfigError
 PAD_PRIORITY = 200
 """A person at the robot (pad, keyboard) outranks the page (100) and the follower (10)."""
 FOLLOWER_PRIORITY = 10
-STANDSTILL = 3.0
-"""s standing still before a follow, while the gyro's bias is learned (as ``omnibot follow``)."""
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -133,12 +131,13 @@ def compose(runtime: Any, robot: Any, args: argparse.Namespace, config: Any, pat
     from omnibot.control.followers.base import make_follower
     from omnibot.estimation.estimator import make_estimator
     from omnibot.motion import Pose2D
-    from omnibot.navigation.runner import WATCHDOG
+    from omnibot.navigation.runner import STANDSTILL, WATCHDOG
     from omnibot.navigation.session import follower_limits
     from omnibot.navigation.webteach import WATCHDOG as SLOW_WATCHDOG
     from omnibot.navigation.webteach import gains_for
     from omnibot.runtime.sinks import NoticePrinter
     from omnibot.runtime.sources import FollowerSource, PadSource
+    from omnibot.runtime.standstill import Standstill
     from omnibot.teleop.command import open_source
     from omnibot.teleop.mapping import TwistLimits
 
@@ -157,6 +156,9 @@ def compose(runtime: Any, robot: Any, args: argparse.Namespace, config: Any, pat
             watchdog=WATCHDOG if period <= 0.0101 else SLOW_WATCHDOG,
         )
         runtime.add_source(parts.follower)
+        # as `omnibot follow`: the follower waits while the gyro's bias is learned (a person may drive)
+        Standstill(runtime, STANDSTILL, FOLLOWER_PRIORITY)
+        _say(f"the follower stands still {STANDSTILL:g} s first, while the gyro's bias is learned")
     if args.teleop:
         flags = argparse.Namespace(keyboard=args.teleop == "keyboard", joystick=args.teleop == "pad")
         device = open_source(flags, config, _say)
@@ -234,9 +236,6 @@ def _in_this_thread(args: argparse.Namespace, url: str, config: Any, path: Any) 
                 with contextlib.suppress(NotSupported):
                     client.use_binary()
             client.telemetry(period if period >= 0.01 else 0.01, codes.TEL_MASK)
-            if path is not None:
-                _say(f"standing still {STANDSTILL:g} s while the gyro's bias is learned")
-                client.sleep(STANDSTILL)
             # the schedule starts now (a person's input is paced to the wall clock, a follow alone
             # to the link's: lockstep on sim://)
             runtime.pacer = Pacer(client, period) if wall else LinkPacer(client, period)
