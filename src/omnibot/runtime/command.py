@@ -16,7 +16,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import math
-import os
 import sys
 import time
 from collections.abc import Callable
@@ -34,6 +33,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """Declare ``omnibot run``'s options (the robot options shared with every command, then its own)."""
     from omnibot.cliargs import add_robot_options
     from omnibot.ros2.command import add_bridge_options
+    from omnibot.web.command import add_server_options
 
     add_robot_options(
         p,
@@ -48,18 +48,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--dashboard", action="store_true", help="serve the dashboard (its stick and keys: priority 100)"
     )
-    p.add_argument("--host", default="127.0.0.1", help="--dashboard: address to serve on (default 127.0.0.1)")
-    p.add_argument("--http-port", type=int, default=8080, help="--dashboard: HTTP port (default 8080)")
-    p.add_argument(
-        "--token", help="--dashboard: access token (required, and made up if not given, off loopback)"
-    )
-    p.add_argument(
-        "--allow-host",
-        action="append",
-        default=[],
-        metavar="NAME",
-        help="--dashboard: another name of this host",
-    )
+    add_server_options(p, "--dashboard: ")
     p.add_argument(
         "--follow",
         metavar="PATH.csv",
@@ -271,10 +260,10 @@ def _stop_pad(runtime: Any, parts: Parts, config: Any) -> None:
 def _with_dashboard(args: argparse.Namespace, url: str, config: Any, path: Any) -> Parts:
     from omnibot.navigation.webteach import PathTeacher
     from omnibot.robot.description import RobotDescription
-    from omnibot.web.command import TOKEN_ENV
+    from omnibot.web.command import server_options
     from omnibot.web.dashboard import Dashboard
 
-    token = args.token or os.environ.get(TOKEN_ENV) or None
+    server = server_options(args)
 
     def make_teach(robot: RobotDescription) -> PathTeacher:
         return PathTeacher(robot, period=config.period)
@@ -282,19 +271,16 @@ def _with_dashboard(args: argparse.Namespace, url: str, config: Any, path: Any) 
     dash = Dashboard(
         url,
         args.robot,
-        host=args.host,
-        http_port=args.http_port,
-        token=token,
         config=config,
         make_teach=None if path is not None else make_teach,  # a --follow path owns the estimator's frame
-        allow_hosts=args.allow_host,
+        **server,
     )
     parts = Parts()
     try:
         parts = compose(dash.link.runtime, dash.link.robot, args, config, path)
         dash.start()
         _say(f"dashboard for {url}: {dash.url}")
-        if dash.token and not token:
+        if dash.token and not server["token"]:
             _say("(an access token was made up because the server is reachable from other machines)")
         _say("Ctrl-C stops it (and the robot)")
         end = math.inf if args.duration is None else time.monotonic() + args.duration
