@@ -219,7 +219,7 @@ def _plot(args: argparse.Namespace) -> int:
 
 
 def _replay(args: argparse.Namespace, run: Run | None = None) -> int:
-    from omnibot.logs.replay import replay_log
+    from omnibot.logs.replay import replay_log, truth_in_frame
 
     run = _load(args) if run is None else run
     result = replay_log(run, args.estimator)
@@ -237,11 +237,12 @@ def _replay(args: argparse.Namespace, run: Run | None = None) -> int:
         f"replayed {len(result.estimates)} telemetry samples with {result.estimator}: "
         f"final pose x={last.x:.4f} m y={last.y:.4f} m theta={math.degrees(last.theta):.2f} deg"
     )
-    if run.truth:
-        truth = run.truth[-1]
+    truth = truth_in_frame(run, result)
+    if truth:  # the simulator's, moved into the estimate's frame (it started where the estimate did)
+        _, x, y, theta = truth[-1]
         print(
-            f"truth at the end: x={truth[1]:.4f} m y={truth[2]:.4f} m theta={math.degrees(truth[3]):.2f} deg; "
-            f"error {math.hypot(truth[1] - last.x, truth[2] - last.y):.4f} m"
+            f"truth at the end (in the estimate's frame): x={x:.4f} m y={y:.4f} m "
+            f"theta={math.degrees(theta):.2f} deg; error {math.hypot(x - last.x, y - last.y):.4f} m"
         )
     if result.note:
         print(result.note)
