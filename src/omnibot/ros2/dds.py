@@ -22,7 +22,7 @@ from typing import Any
 from omnibot.errors import ConfigError
 from omnibot.logs.schemas import type_hash
 from omnibot.ros2 import netns
-from omnibot.ros2.types import dds_type
+from omnibot.ros2.types import dds_type, request_type
 
 try:
     from cyclonedds.core import Qos
@@ -52,22 +52,24 @@ SENSOR_DATA = Profile(reliable=False, depth=5)
 LATCHED = Profile(depth=1, transient_local=True)
 
 
-def qos(profile: Profile, typename: str) -> Qos:
-    """The DDS QoS of ``profile`` with ``typename``'s RIHS01 hash in USER_DATA."""
+def qos(profile: Profile, typename: str, user_data: str = "") -> Qos:
+    """The DDS QoS of ``profile`` with ``user_data`` and ``typename``'s RIHS01 hash in USER_DATA."""
     return Qos(
         _RELIABLE if profile.reliable else Policy.Reliability.BestEffort,
         Policy.History.KeepLast(profile.depth),
         Policy.Durability.TransientLocal if profile.transient_local else Policy.Durability.Volatile,
-        Policy.Userdata(f"typehash={type_hash(typename)};".encode()),
+        Policy.Userdata(f"{user_data}typehash={type_hash(typename)};".encode()),
     )
 
 
-def topic_name(name: str, namespace: str = "") -> str:
-    """The DDS topic of the ROS topic ``name`` in ``namespace`` (``rt/`` + the fully qualified name)."""
+def topic_name(name: str, namespace: str = "", kind: str = "rt", suffix: str = "") -> str:
+    """The DDS topic of the ROS topic ``name`` in ``namespace``: ``kind`` (``rt`` a topic; ``rq`` and
+    ``rr`` a service's requests and replies) + ``/`` + the fully qualified name + ``suffix``
+    (``Request``, ``Reply``), as rmw_cyclonedds' ``make_fqtopic``."""
     if name.startswith("/"):
-        return "rt" + name
+        return kind + name + suffix
     ns = namespace.strip("/")
-    return f"rt/{ns}/{name}" if ns else f"rt/{name}"
+    return f"{kind}/{ns}/{name}{suffix}" if ns else f"{kind}/{name}{suffix}"
 
 
 def domain_id(env: Mapping[str, str]) -> int:
@@ -141,6 +143,7 @@ class Node:
         self._domain = _domain(self.domain_id, self.scope)
         self.participant = DomainParticipant(self.domain_id)
         self._topics: dict[str, Any] = {}
+        self._services = 0
 
     def _topic(self, name: str, typename: str) -> Any:
         dds = topic_name(name, self.namespace)
@@ -157,6 +160,28 @@ class Node:
     def reader(self, name: str, typename: str, profile: Profile = DEFAULT) -> Any:
         """A DataReader of ``typename`` on the ROS topic ``name``."""
         return DataReader(self.participant, self._topic(name, typename), qos=qos(profile, typename))
+
+    def service_endpoints(self, name: str, srv: str) -> tuple[Any, Any]:
+        """The request reader and reply writer of the ROS service ``name`` of type ``srv``
+        (``pkg/srv/Name``), as rmw_cyclonedds makes a service's: topics ``rq/<ns>/<name>Request`` and
+        ``rr/<ns>/<name>Reply`` (:func:`~omnibot.ros2.types.request_type`), the services' default QoS
+        (reliable, volatile, keep-last 10) and ``serviceid=<id>;`` in both USER_DATA (a client pairs
+        them by it): the id is the participant's GUID prefix and a counter, formatted as rmw does."""
+        self._services += 1
+        guid = self.participant.guid.bytes[:12] + self._services.to_bytes(4, "big")
+        csid = f"{guid[0]:2x}" + "".join(f".{b:x}" for b in guid[1:])
+        user = f"serviceid={csid};"
+        endpoints = []
+        for kind, suffix, part, make in (
+            ("rq", "Request", "_Request", DataReader),
+            ("rr", "Reply", "_Response", DataWriter),
+        ):
+            typename = srv + part
+            dds = topic_name(name, self.namespace, kind, suffix)
+            topic = Topic(self.participant, dds, request_type(typename))
+            self._topics[dds] = topic
+            endpoints.append(make(self.participant, topic, qos=qos(DEFAULT, typename, user)))
+        return endpoints[0], endpoints[1]
 
     def close(self) -> None:
         """Delete the participant (and everything it made)."""
