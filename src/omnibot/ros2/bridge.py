@@ -138,6 +138,32 @@ def status(level: int, name: str, message: str, hardware_id: str, values: dict[s
     )
 
 
+def battery_state(robot: RobotDescription, voltage: float, ns: int) -> Any:
+    """sensor_msgs/BatteryState: the ``voltage`` the controller reports, the description's design
+    capacity; what the controller does not measure (current, charge, percentage, temperature) is NaN,
+    as the message asks."""
+    nan = math.nan
+    return schemas.new(
+        "sensor_msgs/msg/BatteryState",
+        header=header(ns, "base_link"),
+        voltage=float(voltage),
+        temperature=nan,
+        current=nan,
+        charge=nan,
+        capacity=nan,
+        design_capacity=float(robot.battery.capacity_ah),
+        percentage=nan,
+        power_supply_status=0,  # UNKNOWN: the controller does not say whether it charges
+        power_supply_health=0,  # UNKNOWN
+        power_supply_technology=0,  # UNKNOWN
+        present=True,
+        cell_voltage=np.array([], dtype=np.float32),
+        cell_temperature=np.array([], dtype=np.float32),
+        location="",
+        serial_number="",
+    )
+
+
 class Ros2Sink:
     """Publishes each cycle's state on ROS 2 topics (see the module docstring); ``prefix`` is the tf
     frame prefix (:func:`omnibot.ros2.frames.frame_prefix`)."""
@@ -246,36 +272,10 @@ class Ros2Sink:
             self.recorder.estimate(cycle.t, cycle.estimate)
         if self.voltage is not None and cycle.now - self._last_battery >= 1.0:
             self._last_battery = cycle.now
-            self.write(BATTERY, self.battery_state(self.recorder.ns(cycle.t)))
+            self.write(BATTERY, battery_state(self.robot, self.voltage, self.recorder.ns(cycle.t)))
         if cycle.now - self._last_diagnostics >= 1.0 or cycle.notices:
             self._last_diagnostics = cycle.now
             self.write(DIAGNOSTICS, self.diagnostics(cycle))
-
-    def battery_state(self, ns: int) -> Any:
-        """sensor_msgs/BatteryState: the reported voltage, the description's design capacity; what the
-        controller does not measure (current, charge, percentage, temperature) is NaN, as the message
-        asks."""
-        spec = self.robot.battery
-        nan = math.nan
-        return schemas.new(
-            "sensor_msgs/msg/BatteryState",
-            header=header(ns, "base_link"),
-            voltage=float(self.voltage if self.voltage is not None else nan),
-            temperature=nan,
-            current=nan,
-            charge=nan,
-            capacity=nan,
-            design_capacity=float(spec.capacity_ah),
-            percentage=nan,
-            power_supply_status=0,  # UNKNOWN: the controller does not say whether it charges
-            power_supply_health=0,  # UNKNOWN
-            power_supply_technology=0,  # UNKNOWN
-            present=True,
-            cell_voltage=np.array([], dtype=np.float32),
-            cell_temperature=np.array([], dtype=np.float32),
-            location="",
-            serial_number="",
-        )
 
     def diagnostics(self, cycle: Cycle) -> Any:
         """diagnostic_msgs/DiagnosticArray: control (who drives, why, locks), the battery, and what the

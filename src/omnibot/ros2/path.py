@@ -101,6 +101,8 @@ class PathSource:
         """m along the current path."""
         self.cross = 0.0
         """m off the current path (left positive)."""
+        self.refused = ""
+        """Why the last path was refused ("" once one is taken)."""
 
     def propose(self, cycle: Cycle) -> Proposal | None:
         """The follower's twist for the newest path (None when there is none to follow)."""
@@ -136,7 +138,6 @@ class PathSource:
             )
         if not msg.poses:
             if self.current is None or self.current.finished:
-                self.state, self.detail = "idle", "an empty path: nothing to cancel"
                 self.notify("info", "path: an empty path, nothing to cancel")
             else:
                 self.cancel("an empty path")
@@ -153,7 +154,7 @@ class PathSource:
             self.robot, path, self.period, self.follower, self.speed, name=self.name, priority=self.priority
         )
         self.watchdog = self.current.watchdog
-        self.progress, self.cross = 0.0, 0.0
+        self.progress, self.cross, self.refused = 0.0, 0.0, ""
         self.state = "following"
         self.detail = f"{len(msg.poses)} poses, {path.length:.2f} m"
         self.notify("info", f"path {'replaced' if replaced else 'received'}: following {self.detail}")
@@ -161,9 +162,7 @@ class PathSource:
 
     def _refuse(self, text: str) -> bool:
         self.notify("warn", text)
-        if self.current is None or self.current.finished:
-            self.state = "idle"
-        self.detail = text
+        self.refused = text
         return False
 
     def _ended(self, current: FollowerSource) -> None:
@@ -178,9 +177,9 @@ class PathSource:
         """The ``omnibot: path`` diagnostic status."""
         path = self.current.path if self.current is not None else None
         return status(
-            1 if self.state == "failed" else 0,
+            1 if self.state == "failed" or self.refused else 0,
             "omnibot: path",
-            f"{self.state}: {self.detail}",
+            f"{self.state}: {self.detail}" + (f" ({self.refused})" if self.refused else ""),
             self.robot.name,
             {
                 "state": self.state,
@@ -189,5 +188,6 @@ class PathSource:
                 "progress": f"{self.progress:.3f}",
                 "cross_track": f"{self.cross:.3f}",
                 "received": self.received,
+                "refused": self.refused or "none",
             },
         )
