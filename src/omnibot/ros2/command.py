@@ -207,6 +207,15 @@ def attach(runtime: Any, robot: Any, args: argparse.Namespace, spec: RobotSpec |
     return node
 
 
+_PRINTING = threading.Lock()
+
+
+def _say(text: str) -> None:
+    """A status line, whole (the robots' threads print at once)."""
+    with _PRINTING:
+        print(text, flush=True)
+
+
 class _Fleet:
     """What the robots' threads share: the stop, the start line, the first failure."""
 
@@ -236,7 +245,7 @@ def _serve(args: argparse.Namespace, spec: RobotSpec, fleet: _Fleet, label: str)
         client, robot = session.client, session.robot
         runtime = Runtime(client, period=PERIOD)
         node = attach(runtime, robot, args, spec)
-        runtime.add_sink(NoticePrinter(lambda text: print(f"{label}{text}", flush=True), control=True))
+        runtime.add_sink(NoticePrinter(lambda text: _say(f"{label}{text}"), control=True))
         try:
             try:
                 fleet.ready.wait()
@@ -247,10 +256,9 @@ def _serve(args: argparse.Namespace, spec: RobotSpec, fleet: _Fleet, label: str)
             runtime.pacer = Pacer(client, PERIOD)
             ns = f" namespace /{node.namespace}" if node.namespace else ""
             frames = f", frames {spec.prefix}odom" if spec.prefix else ""
-            print(
+            _say(
                 f"{label}{robot.name} on {url}: domain {node.domain_id}{ns}{frames}, "
-                f"discovery {node.scope.lower()}",
-                flush=True,
+                f"discovery {node.scope.lower()}"
             )
             runtime.run(until=fleet.stop.is_set, duration=args.duration)
         finally:

@@ -15,6 +15,7 @@ Under pytest a participant is refused outside a private network namespace
 from __future__ import annotations
 
 import os
+import threading
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -117,18 +118,24 @@ def config_xml(domain: int, scope: str) -> str:
 
 
 _DOMAINS: dict[int, tuple[Any, str]] = {}
+_DOMAINS_LOCK = threading.Lock()
+_ENTITIES = threading.RLock()
+"""Entities are made one at a time in a process: cyclonedds fails to make the topics of one type from
+two threads at once (several robots open their nodes in threads of their own)."""
 
 
 def _domain(domain: int, scope: str) -> Any:
-    """The process's one configured domain ``domain`` (cyclonedds allows one configuration each)."""
-    known = _DOMAINS.get(domain)
-    if known is not None:
-        if known[1] != scope:
-            raise ConfigError(f"DDS domain {domain} is already open with discovery range {known[1]}")
-        return known[0]
-    made = Domain(domain, config_xml(domain, scope))
-    _DOMAINS[domain] = (made, scope)
-    return made
+    """The process's one configured domain ``domain`` (cyclonedds allows one configuration each; the
+    robots of one process open their nodes in threads of their own)."""
+    with _DOMAINS_LOCK:
+        known = _DOMAINS.get(domain)
+        if known is not None:
+            if known[1] != scope:
+                raise ConfigError(f"DDS domain {domain} is already open with discovery range {known[1]}")
+            return known[0]
+        made = Domain(domain, config_xml(domain, scope))
+        _DOMAINS[domain] = (made, scope)
+        return made
 
 
 class Node:
@@ -141,7 +148,8 @@ class Node:
         self.domain_id = domain_id(env)
         self.scope = discovery_range(env)
         self._domain = _domain(self.domain_id, self.scope)
-        self.participant = DomainParticipant(self.domain_id)
+        with _ENTITIES:
+            self.participant = DomainParticipant(self.domain_id)
         self._topics: dict[str, Any] = {}
         self._services = 0
 
@@ -155,11 +163,13 @@ class Node:
 
     def writer(self, name: str, typename: str, profile: Profile = DEFAULT) -> Any:
         """A DataWriter of ``typename`` on the ROS topic ``name``."""
-        return DataWriter(self.participant, self._topic(name, typename), qos=qos(profile, typename))
+        with _ENTITIES:
+            return DataWriter(self.participant, self._topic(name, typename), qos=qos(profile, typename))
 
     def reader(self, name: str, typename: str, profile: Profile = DEFAULT) -> Any:
         """A DataReader of ``typename`` on the ROS topic ``name``."""
-        return DataReader(self.participant, self._topic(name, typename), qos=qos(profile, typename))
+        with _ENTITIES:
+            return DataReader(self.participant, self._topic(name, typename), qos=qos(profile, typename))
 
     def service_endpoints(self, name: str, srv: str) -> tuple[Any, Any]:
         """The request reader and reply writer of the ROS service ``name`` of type ``srv``
@@ -171,7 +181,12 @@ class Node:
         guid = self.participant.guid.bytes[:12] + self._services.to_bytes(4, "big")
         csid = f"{guid[0]:2x}" + "".join(f".{b:x}" for b in guid[1:])
         user = f"serviceid={csid};"
-        endpoints = []
+        with _ENTITIES:
+            requests, replies = self._service_endpoints(name, srv, user)
+        return requests, replies
+
+    def _service_endpoints(self, name: str, srv: str, user: str) -> list[Any]:
+        endpoints: list[Any] = []
         for kind, suffix, part, make in (
             ("rq", "Request", "_Request", DataReader),
             ("rr", "Reply", "_Response", DataWriter),
@@ -181,7 +196,7 @@ class Node:
             topic = Topic(self.participant, dds, request_type(typename))
             self._topics[dds] = topic
             endpoints.append(make(self.participant, topic, qos=qos(DEFAULT, typename, user)))
-        return endpoints[0], endpoints[1]
+        return endpoints
 
     def close(self) -> None:
         """Delete the participant (and everything it made)."""

@@ -8,6 +8,7 @@ builds the cyclonedds :class:`~cyclonedds.idl.IdlStruct` class from rosbags' fie
 
 from __future__ import annotations
 
+import threading
 from functools import cache
 from typing import Any
 
@@ -66,9 +67,19 @@ def _member(desc: tuple[Any, Any]) -> Any:
     raise ValueError(f"unknown field kind {node}")
 
 
-@cache
+_BUILDING = threading.RLock()
+"""One class per type in a process (robots open their nodes in threads; cyclonedds refuses a second
+class of a type name it knows)."""
+
+
 def dds_type(typename: str) -> type[IdlStruct]:
     """The final cyclonedds struct of the ROS 2 message ``typename`` (e.g. ``nav_msgs/msg/Odometry``)."""
+    with _BUILDING:
+        return _dds_type(typename)
+
+
+@cache
+def _dds_type(typename: str) -> type[IdlStruct]:
     _, fields = typestore().fielddefs[typename]
     members = {name: _member(desc) for name, desc in fields}
     if not members:  # an empty ROS message has one uint8 member on the wire
@@ -148,8 +159,14 @@ def register_service_types() -> None:
             store.register({name: definition})
 
 
-@cache
 def request_type(typename: str) -> type[IdlStruct]:
+    """:func:`_request_type`, one class per type in a process."""
+    with _BUILDING:
+        return _request_type(typename)
+
+
+@cache
+def _request_type(typename: str) -> type[IdlStruct]:
     """rmw_cyclonedds' wire type of a service request or reply of ``typename``
     (``pkg/srv/Name_Request`` or ``_Response``): the final struct ``pkg::srv::dds_::Name_Request_`` whose
     members are the request header (``guid``: the client's request writer's instance handle, ``seq``:
