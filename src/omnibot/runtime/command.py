@@ -27,7 +27,6 @@ from omnibot.errors import ConfigError
 
 PAD_PRIORITY = 200
 """A person at the robot (pad, keyboard) outranks the page (100) and the follower (10)."""
-FOLLOWER_PRIORITY = 10
 STANDSTILL = 3.0
 """s standing still before a follow, while the gyro's bias is learned (as ``omnibot follow``)."""
 
@@ -128,40 +127,11 @@ def _check(args: argparse.Namespace) -> None:
         )
 
 
-def follower_source(
-    robot: Any,
-    path: Any,
-    period: float,
-    follower: str = "tracker",
-    speed: float | None = None,
-    *,
-    name: str = "follower",
-    priority: int = FOLLOWER_PRIORITY,
-) -> Any:
-    """The follower source ``omnibot follow`` and ``run --follow`` drive ``path`` with at ``period``
-    (the tracker's gains scaled as for the page's Repeat above 100 Hz); ROS 2's ``path`` uses it too."""
-    from omnibot.control.followers.base import make_follower
-    from omnibot.navigation.runner import WATCHDOG
-    from omnibot.navigation.session import follower_limits
-    from omnibot.navigation.webteach import WATCHDOG as SLOW_WATCHDOG
-    from omnibot.navigation.webteach import gains_for
-    from omnibot.runtime.sources import FollowerSource
-
-    gains = gains_for(period) if follower == "tracker" and period > 0.0101 else {}
-    made = make_follower(follower, follower_limits(robot, speed), rate=1.0 / period, **gains)
-    return FollowerSource(
-        made,
-        path,
-        name=name,
-        priority=priority,
-        watchdog=WATCHDOG if period <= 0.0101 else SLOW_WATCHDOG,
-    )
-
-
 def compose(runtime: Any, robot: Any, args: argparse.Namespace, config: Any, path: Any) -> Parts:
     """Add the pad and the follower to ``runtime`` (any thread: before it runs)."""
     from omnibot.estimation.estimator import make_estimator
     from omnibot.motion import Pose2D
+    from omnibot.runtime.following import follower_source
     from omnibot.runtime.sinks import NoticePrinter
     from omnibot.runtime.sources import PadSource
     from omnibot.teleop.command import open_source
