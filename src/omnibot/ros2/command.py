@@ -162,7 +162,8 @@ def check(args: argparse.Namespace) -> list[RobotSpec]:
 
 def attach(runtime: Any, robot: Any, args: argparse.Namespace, spec: RobotSpec | None = None) -> Any:
     """Add the bridge to ``runtime``: the cmd_vel and path sources, the odometry reset and publishing
-    sinks; gives the runtime the fused estimator when it has none. Returns the node (close it)."""
+    sinks; gives the runtime the fused estimator at its first cycle when it has none. Returns the
+    node (close it)."""
     try:
         from omnibot.ros2.bridge import CmdVelSource, Ros2Sink
         from omnibot.ros2.dds import Node
@@ -174,11 +175,19 @@ def attach(runtime: Any, robot: Any, args: argparse.Namespace, spec: RobotSpec |
     from omnibot.ros2.netns import UnsafeNetwork
 
     spec = spec or robot_specs(args)[0]
-    if runtime.estimator is None:
-        try:
-            runtime.estimator = make_estimator("fused", robot)
-        except ConfigError as exc:
-            runtime.notify("warn", f"no odometry: {exc}")
+    tried = False
+
+    def estimator_when_missing(cycle: Any) -> None:
+        """At the first cycle, the fused estimator unless another front end installed its own (the
+        dashboard's teach, a --follow's): odom is the estimate the runtime has."""
+        nonlocal tried
+        if runtime.estimator is None and not tried:
+            tried = True
+            try:
+                runtime.estimator = make_estimator("fused", robot)
+            except ConfigError as exc:
+                runtime.notify("warn", f"no odometry: {exc}")
+
     try:
         node = Node(spec.namespace)
     except UnsafeNetwork as exc:
@@ -200,6 +209,7 @@ def attach(runtime: Any, robot: Any, args: argparse.Namespace, spec: RobotSpec |
     reset = OdometryReset(
         node, runtime, odom_frame=odom, notify=notify, on_reset=path.cancel, hardware_id=robot.name
     )
+    runtime.add_sink(estimator_when_missing)
     runtime.add_source(CmdVelSource(node, stamped=not args.twist, timeout=args.cmd_vel_timeout))
     runtime.add_source(path)
     runtime.add_sink(reset)
