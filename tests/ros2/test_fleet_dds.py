@@ -149,3 +149,17 @@ def test_two_robots_in_one_process_each_in_its_namespace() -> None:
     assert result["battery_state"][0] == "r1/base_link" and 6.0 < result["battery_state"][1] < 13.0, result
     assert result["battery_state"][2:] == [True, True]
     assert result["battery"][0].endswith(" V"), result["battery"]
+
+
+def test_a_robot_that_cannot_be_opened_ends_the_fleet_before_any_moves() -> None:
+    script = (
+        "import json, subprocess, sys\n"
+        "r = subprocess.run([sys.executable, '-m', 'omnibot', 'ros2', '--port', 'sim://omni4?seed=1',"
+        " '--namespace', 'r1', '--port', 'sim://nosuch', '--namespace', 'r2', '--duration', '30'],"
+        " capture_output=True, text=True, timeout=120)\n"
+        "print(json.dumps([r.returncode, r.stdout, r.stderr]))\n"
+    )
+    rc, out, err = json.loads(run_in_namespace(script, timeout=180).stdout.strip().splitlines()[-1])
+    assert rc == 2, (out, err)
+    assert err.strip() == "omnibot: error: unknown robot 'nosuch'; expected one of: mecanum4, omni3, omni4"
+    assert "on sim://omni4" not in out  # r1 never started: the robots start together or not at all
