@@ -460,9 +460,11 @@ def _add_ros2(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
     p = sub.add_parser(
         "ros2",
-        help="the robot on ROS 2 (DDS, no ROS install): cmd_vel in; odom, tf, imu, ranges, joint_states out",
-        description="A cmd_vel source and publishing sink of one runtime, on cyclonedds with ROS 2's "
-        "conventions (pip install 'omnibot[ros2]'). ROS_DOMAIN_ID and ROS_AUTOMATIC_DISCOVERY_RANGE apply.",
+        help="robots on ROS 2 (DDS, no ROS install): cmd_vel, path, initialpose in; odom, tf, imu, ranges, "
+        "joint_states, battery out",
+        description="cmd_vel and path sources, an odometry reset and publishing sinks of one runtime per "
+        "robot, on cyclonedds with ROS 2's conventions (pip install 'omnibot[ros2]'). ROS_DOMAIN_ID and "
+        "ROS_AUTOMATIC_DISCOVERY_RANGE apply.",
     )
     add_arguments(p)
     p.set_defaults(handler=_ros2)
