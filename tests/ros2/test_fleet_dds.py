@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import json
 
+import pytest
+
 from tests.ros2.netns_helper import run_in_namespace
 
 SCRIPT = r"""
@@ -19,8 +21,8 @@ from omnibot.ros2.dds import DEFAULT, LATCHED, Node, qos
 from omnibot.ros2.types import request_type, to_dds
 
 bridge = subprocess.Popen(
-    [sys.executable, "-m", "omnibot", "ros2", "--port", "sim://omni4?seed=1", "--namespace", "r1",
-     "--port", "sim://omni3?seed=2", "--namespace", "r2", "--duration", "120"],
+    [sys.executable, "-m", "omnibot", "ros2", "--port", URL1, "--namespace", "r1",
+     "--port", URL2, "--namespace", "r2", "--duration", "120"],
     stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
 )
 node = Node()
@@ -118,8 +120,19 @@ print(json.dumps(result))
 """
 
 
-def test_two_robots_in_one_process_each_in_its_namespace() -> None:
-    result = json.loads(run_in_namespace(SCRIPT, timeout=240).stdout.strip().splitlines()[-1])
+@pytest.mark.parametrize(
+    ("url1", "url2"),
+    [
+        ("sim://omni4?seed=1", "sim://omni3?seed=2"),
+        ("sim://omni4?fleet=f&name=r1&pose=0,0,0", "sim://omni3?fleet=f&name=r2&pose=1.5,0,0"),
+    ],
+    ids=["independent simulators", "one simulated world"],
+)
+def test_two_robots_in_one_process_each_in_its_namespace(url1: str, url2: str) -> None:
+    if "fleet=" in url1:
+        pytest.importorskip("omnibot.sim.fleet_link", reason="this simulator holds one robot per world")
+    script = f"URL1, URL2 = {url1!r}, {url2!r}\n" + SCRIPT
+    result = json.loads(run_in_namespace(script, timeout=240).stdout.strip().splitlines()[-1])
     assert result["started"], result["bridge"]
     assert result["odom_frames"] == [["r1/odom", "r1/base_link"], ["r2/odom", "r2/base_link"]]
     assert {("r1/odom", "r1/base_link"), ("r2/odom", "r2/base_link")} <= {tuple(f) for f in result["tf"]}
@@ -142,9 +155,8 @@ def test_two_robots_in_one_process_each_in_its_namespace() -> None:
     assert max(abs(v) for v in result["r2_after_path"][:2]) < 0.02, result
     assert "ros2 [r1]: path received: following 11 poses" in result["bridge"]
     assert "ros2 [r1]: path completed" in result["bridge"]
-    assert (
-        "ros2 [r2]: omni3 on sim://omni3?seed=2: domain 0 namespace /r2, frames r2/odom" in result["bridge"]
-    )
+    assert f"ros2 [r2]: omni3 on {url2}: domain 0 namespace /r2, frames r2/odom" in result["bridge"]
+    assert "has not waited" not in result["bridge"]  # a shared world's clock never held up
     # the simulated controller reports its battery: published and in diagnostics
     assert result["battery_state"][0] == "r1/base_link" and 6.0 < result["battery_state"][1] < 13.0, result
     assert result["battery_state"][2:] == [True, True]

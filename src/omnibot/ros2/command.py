@@ -9,15 +9,17 @@
 Each robot has its own runtime (wall-clock paced at :data:`PERIOD`), participant, namespace and tf
 frame prefix; the bridge is its ``cmd_vel`` and ``path`` sources, its ``initialpose`` /
 ``reset_odometry`` sink and its publishing sink (:mod:`omnibot.ros2.bridge`). With several robots
-the i-th ``--namespace`` (and ``--frame-prefix``, when given) goes with the i-th ``--port``, each
-robot runs in a thread of its own, and one robot failing ends them all. ``omnibot run --ros2`` adds
-the same to the other front ends (one robot). Imports here are light: :func:`add_arguments` runs
-whenever ``omnibot`` builds its parser.
+the i-th ``--namespace`` (and ``--frame-prefix``, when given) goes with the i-th ``--port``; every
+robot's link is opened first (one that cannot be opened ends the command before any robot moves),
+then each robot runs in a thread of its own, and one robot failing ends them all. ``omnibot run
+--ros2`` adds the same to the other front ends (one robot). Imports here are light:
+:func:`add_arguments` runs whenever ``omnibot`` builds its parser.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import threading
 from dataclasses import dataclass
@@ -226,89 +228,98 @@ def _say(text: str) -> None:
         print(text, flush=True)
 
 
-class _Fleet:
-    """What the robots' threads share: the stop, the start line, the first failure."""
+@dataclass
+class _Robot:
+    """One robot of the process: its spec, client, runtime and node."""
 
-    def __init__(self, count: int) -> None:
-        self.stop = threading.Event()
-        self.ready = threading.Barrier(count)
-        self.failure: BaseException | None = None
-
-    def fail(self, exc: BaseException) -> None:
-        if self.failure is None:
-            self.failure = exc
-        self.stop.set()
-        self.ready.abort()
+    spec: RobotSpec
+    url: str
+    client: Any
+    robot: Any
+    runtime: Any
+    node: Any
+    label: str
 
 
-def _serve(args: argparse.Namespace, spec: RobotSpec, fleet: _Fleet, label: str) -> None:
-    """One robot: open it, wait until every robot is open, run its runtime until the stop."""
-    from omnibot.cliargs import sim_url
-    from omnibot.client.session import robot_session
-    from omnibot.protocol import codes
+def _open(args: argparse.Namespace, spec: RobotSpec, session: Any, url: str, label: str) -> _Robot:
+    """The robot's runtime with the bridge attached (not yet running)."""
     from omnibot.runtime.runtime import Runtime
     from omnibot.runtime.sinks import NoticePrinter
+
+    runtime = Runtime(session.client, period=PERIOD)
+    node = attach(runtime, session.robot, args, spec)
+    runtime.add_sink(NoticePrinter(lambda text: _say(f"{label}{text}"), control=True))
+    return _Robot(spec, url, session.client, session.robot, runtime, node, label)
+
+
+def _serve(one: _Robot, args: argparse.Namespace, stop: threading.Event) -> None:
+    """Run one robot's runtime, wall-clock paced, until ``stop`` or ``--duration``."""
+    from omnibot.protocol import codes
     from omnibot.teleop.pacing import Pacer
 
-    url = spec.url or sim_url(args)
-    with robot_session(url, args.robot, timeout=0.5) as session:
-        client, robot = session.client, session.robot
-        runtime = Runtime(client, period=PERIOD)
-        node = attach(runtime, robot, args, spec)
-        runtime.add_sink(NoticePrinter(lambda text: _say(f"{label}{text}"), control=True))
-        try:
-            try:
-                fleet.ready.wait()
-            except threading.BrokenBarrierError:
-                return  # another robot could not start: this one never moved
-            runtime.start()
-            client.telemetry(PERIOD, codes.TEL_MASK)
-            runtime.pacer = Pacer(client, PERIOD)
-            ns = f" namespace /{node.namespace}" if node.namespace else ""
-            frames = f", frames {spec.prefix}odom" if spec.prefix else ""
-            _say(
-                f"{label}{robot.name} on {url}: domain {node.domain_id}{ns}{frames}, "
-                f"discovery {node.scope.lower()}"
-            )
-            runtime.run(until=fleet.stop.is_set, duration=args.duration)
-        finally:
-            runtime.close()
-            node.close()
+    runtime, client, node, spec = one.runtime, one.client, one.node, one.spec
+    runtime.start()
+    client.telemetry(PERIOD, codes.TEL_MASK)
+    runtime.pacer = Pacer(client, PERIOD)
+    ns = f" namespace /{node.namespace}" if node.namespace else ""
+    frames = f", frames {spec.prefix}odom" if spec.prefix else ""
+    _say(
+        f"{one.label}{one.robot.name} on {one.url}: domain {node.domain_id}{ns}{frames}, "
+        f"discovery {node.scope.lower()}"
+    )
+    runtime.run(until=stop.is_set, duration=args.duration)
 
 
 def run(args: argparse.Namespace) -> int:
-    """``omnibot ros2``: run the bridge for each robot until Ctrl-C or ``--duration``."""
-    from omnibot.cliargs import check_sim_options
+    """``omnibot ros2``: run the bridge for each robot until Ctrl-C or ``--duration``.
+
+    Every robot's link is opened (and its controller greeted) first, in this thread, one after the
+    other: a robot that cannot be opened ends the command before any robot moves, and the links of a
+    shared simulated world are all open before any runtime waits on one. Then one robot runs here;
+    several run a thread each (the first to end, or to fail, ends them all)."""
+    from omnibot.cliargs import check_sim_options, sim_url
+    from omnibot.client.session import robot_session
 
     specs = check(args)
     check_sim_options(args)
-    if len(specs) == 1:
-        fleet = _Fleet(1)
-        _serve(args, specs[0], fleet, "ros2: ")
-        return 0
-    fleet = _Fleet(len(specs))
+    several = len(specs) > 1
+    stop = threading.Event()
+    with contextlib.ExitStack() as stack:
+        robots: list[_Robot] = []
+        for spec in specs:
+            url = spec.url or sim_url(args)
+            session = stack.enter_context(robot_session(url, args.robot, timeout=0.5))
+            label = f"ros2 [{spec.namespace}]: " if several else "ros2: "
+            one = _open(args, spec, session, url, label)
+            stack.callback(one.node.close)
+            stack.callback(one.runtime.close)
+            robots.append(one)
+        if not several:
+            _serve(robots[0], args, stop)
+            return 0
+        failures: list[BaseException] = []
 
-    def serve(spec: RobotSpec) -> None:
+        def serve(one: _Robot) -> None:
+            try:
+                _serve(one, args, stop)
+            except BaseException as exc:  # handed to this thread, which reports it
+                failures.append(exc)
+            finally:
+                stop.set()  # one robot's end (--duration, a failure) ends the fleet
+
+        threads = [
+            threading.Thread(target=serve, args=(one,), name=f"ros2-{one.spec.namespace}") for one in robots
+        ]
         try:
-            _serve(args, spec, fleet, f"ros2 [{spec.namespace}]: ")
-        except BaseException as exc:
-            fleet.fail(exc)
-        else:
-            fleet.stop.set()  # one robot's end (--duration, a lost link) ends the fleet
-
-    threads = [threading.Thread(target=serve, args=(spec,), name=f"ros2-{spec.namespace}") for spec in specs]
-    try:
-        for thread in threads:
-            thread.start()
-        while any(thread.is_alive() for thread in threads):
             for thread in threads:
-                thread.join(timeout=0.1)
-    except BaseException:
-        fleet.stop.set()
-        fleet.ready.abort()
-        for thread in threads:
-            thread.join()
-        raise
-    if fleet.failure is not None:
-        raise fleet.failure
+                thread.start()
+            while any(thread.is_alive() for thread in threads):
+                for thread in threads:
+                    thread.join(timeout=0.1)
+        finally:
+            stop.set()
+            for thread in threads:
+                thread.join()
+        if failures:
+            raise failures[0]
     return 0
