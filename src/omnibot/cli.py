@@ -460,9 +460,11 @@ _add_run = _command_in(
 _add_ros2 = _command_in(
     "omnibot.ros2.command",
     "ros2",
-    summary="the robot on ROS 2 (DDS, no ROS install): cmd_vel in; odom, tf, imu, ranges, joint_states out",
-    description="A cmd_vel source and publishing sink of one runtime, on cyclonedds with ROS 2's "
-    "conventions (pip install 'omnibot[ros2]'). ROS_DOMAIN_ID and ROS_AUTOMATIC_DISCOVERY_RANGE apply.",
+    summary="robots on ROS 2 (DDS, no ROS install): cmd_vel, path, initialpose in; odom, tf, imu, ranges, "
+    "joint_states, battery out",
+    description="cmd_vel and path sources, an odometry reset and publishing sinks of one runtime per "
+    "robot, on cyclonedds with ROS 2's conventions (pip install 'omnibot[ros2]'). ROS_DOMAIN_ID and "
+    "ROS_AUTOMATIC_DISCOVERY_RANGE apply.",
 )
 _add_record = _command_in(
     "omnibot.navigation.commands",

@@ -66,15 +66,23 @@ def add_robot_options(
     world: str = "empty",
     port_help: str = "the simulated --robot in lockstep (sim://ROBOT?seed=...)",
     surface_help: str = "",
+    several: bool = False,
 ) -> None:
-    """``--robot --port --seed --world --surface`` with the shared meaning and defaults."""
+    """``--robot --port --seed --world --surface`` with the shared meaning and defaults (``several``:
+    ``--port`` may be repeated, one robot each; ``args.port`` is then a list or None)."""
     p.add_argument(
         "--robot",
         metavar="PRESET|FILE",
         help=f"the robot (default: the one the controller names; {DEFAULT_ROBOT} in the simulator); "
         "it must be the robot on the link",
     )
-    p.add_argument("--port", metavar="URL", help=f"link URL of the controller (default: {port_help})")
+    p.add_argument(
+        "--port",
+        metavar="URL",
+        action="append" if several else "store",
+        help=f"link URL of the controller (default: {port_help})"
+        + ("; repeat for more robots" if several else ""),
+    )
     p.add_argument(
         "--seed", type=int, metavar="N", help=f"simulator seed (default {DEFAULT_SEED}; not with --port)"
     )

@@ -26,7 +26,6 @@ from omnibot.errors import ConfigError
 
 PAD_PRIORITY = 200
 """A person at the robot (pad, keyboard) outranks the page (100) and the follower (10)."""
-FOLLOWER_PRIORITY = 10
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -117,15 +116,12 @@ def _check(args: argparse.Namespace) -> None:
 
 def compose(runtime: Any, robot: Any, args: argparse.Namespace, config: Any, path: Any) -> Parts:
     """Add the pad and the follower to ``runtime`` (any thread: before it runs)."""
-    from omnibot.control.followers.base import make_follower
     from omnibot.estimation.estimator import make_estimator
     from omnibot.motion import Pose2D
-    from omnibot.navigation.runner import STANDSTILL, WATCHDOG
-    from omnibot.navigation.session import follower_limits
-    from omnibot.navigation.webteach import WATCHDOG as SLOW_WATCHDOG
-    from omnibot.navigation.webteach import gains_for
+    from omnibot.navigation.runner import STANDSTILL
+    from omnibot.runtime.following import FOLLOWER_PRIORITY, follower_source
     from omnibot.runtime.sinks import NoticePrinter
-    from omnibot.runtime.sources import FollowerSource, PadSource
+    from omnibot.runtime.sources import PadSource
     from omnibot.runtime.standstill import Standstill
     from omnibot.teleop.command import open_source
     from omnibot.teleop.mapping import TwistLimits
@@ -134,16 +130,7 @@ def compose(runtime: Any, robot: Any, args: argparse.Namespace, config: Any, pat
     period = runtime.period
     if path is not None:
         runtime.estimator = make_estimator("fused", robot, Pose2D(*path.start))
-        gains = gains_for(period) if args.follower == "tracker" and period > 0.0101 else {}
-        follower = make_follower(
-            args.follower, follower_limits(robot, args.speed), rate=1.0 / period, **gains
-        )
-        parts.follower = FollowerSource(
-            follower,
-            path,
-            priority=FOLLOWER_PRIORITY,
-            watchdog=WATCHDOG if period <= 0.0101 else SLOW_WATCHDOG,
-        )
+        parts.follower = follower_source(robot, path, period, args.follower, args.speed)
         runtime.add_source(parts.follower)
         # as `omnibot follow`: the follower waits while the gyro's bias is learned (a person may drive)
         Standstill(runtime, STANDSTILL, FOLLOWER_PRIORITY)
