@@ -231,3 +231,66 @@ def test_four_motors_sag_the_battery_more_than_two() -> None:
     sag = robot.battery.voltage - ph.battery_voltage
     assert 0.0 < sag[0] < sag[1], sag
     assert sag[1] > 1.5 * sag[0]
+
+
+# --------------------------------------------------------------------------- seed 002: slowing down, coasting
+
+
+def omni3_at_top_speed() -> tuple[Physics, np.ndarray]:
+    """omni3 driven straight ahead at full power for 4 s (about 5.3 m/s), and its forward pattern."""
+    robot = load_robot("omni3")
+    w = kin.inverse(robot.wheel_matrix, (1.0, 0.0, 0.0))
+    pattern = w / np.abs(w).max()
+    ph = Physics(robot)
+    for _ in range(4000):
+        ph.step(255.0 * pattern)
+    assert ph.twist[0, 0] > 5.0
+    return ph, pattern
+
+
+def seconds_until(ph: Physics, pwm: np.ndarray, speed: float, limit: float = 10.0) -> float:
+    start = ph.time
+    while ph.twist[0, 0] > speed:
+        ph.step(pwm)
+        assert ph.time - start < limit, f"still {ph.twist[0, 0]:.2f} m/s after {limit} s"
+    return ph.time - start
+
+
+def test_omni3_slows_from_5_to_2_m_per_s_in_about_1_s() -> None:
+    """Seed 002: "decrease it's speed from 5m/sec to 2m/sec in 1 sec" with its speed loop. Commanding
+    the power that holds 2 m/s (100 counts: 2.06 m/s steady) the drivers brake on the back-EMF; the
+    speed is within 10 % of 2 m/s after 1.18 s (tolerance 0.8 .. 1.6 s)."""
+    ph, pattern = omni3_at_top_speed()
+    assert 0.8 <= seconds_until(ph, 100.0 * pattern, 2.2) <= 1.6
+
+
+def test_omni3_coasts_far_with_its_drivers_off() -> None:
+    """Seed 002's overshoot "due to slip, inertia and inability of motors to suddenly ... decelerate":
+    with the drivers off only the wheels' friction stops 30 kg: 4.7 s and about 15 m from 5.3 to 2 m/s."""
+    ph, pattern = omni3_at_top_speed()
+    x0 = ph.pose[0, 0]
+    assert 3.5 <= seconds_until(ph, 0.0 * pattern, 2.0) <= 6.0
+    assert ph.pose[0, 0] - x0 > 10.0
+
+
+# --------------------------------------------------------------------------- seed 003: its Fig. 4 patterns
+
+FIG4 = {  # wheel powers in the preset's order (left_front, right_front, right_back, left_back)
+    "forward": ([200, 200, 200, 200], 0.0),  # Fig. 4(a): all four wheels forward
+    "left": ([-200, 200, -200, 200], 90.0),  # the diagonal pairs against each other
+    "forward-left": ([0, 200, 0, 200], 45.0),  # one diagonal pair alone
+}
+
+
+@pytest.mark.parametrize("motion", sorted(FIG4))
+def test_mecanum4_rollers_turn_seed003_s_patterns_into_its_directions(motion: str) -> None:
+    """The wheel patterns of seed 003's Fig. 4, given as powers (not through the kinematics): the
+    rollers' forces add up to motion in the figure's direction (within 3 degrees, no turn)."""
+    powers, direction = FIG4[motion]
+    ph = Physics(load_robot("mecanum4"))
+    for _ in range(1000):
+        ph.step(np.array(powers, dtype=float))
+    x, y, theta = ph.pose[0]
+    assert math.hypot(x, y) > 0.15
+    assert abs(math.degrees(math.remainder(math.atan2(y, x) - math.radians(direction), math.tau))) < 3.0
+    assert abs(theta) < 0.02
