@@ -57,6 +57,7 @@ def test_mecanum4_is_seed003_alpha_beta_gamma_mirrored_into_omnibot_s_frame() ->
     r = load_robot("mecanum4")
     seed = {"alpha": [35.77, 144.23, 215.77, 324.23], "beta": [144.23, 35.77, -35.77, -144.23]}
     for w, a, b in zip(r.wheels, seed["alpha"], seed["beta"], strict=True):
+        assert w.alpha_deg is not None and w.beta_deg is not None
         assert math.remainder(w.alpha_deg - (90 - a), 360) == pytest.approx(0, abs=1e-9)
         assert math.remainder(w.beta_deg - (180 - b), 360) == pytest.approx(0, abs=1e-9)
     assert [w.gamma_deg for w in r.wheels] == [-45, 45, -45, 45]

@@ -153,7 +153,7 @@ FIRMWARE_SHIFT = 40.0
 """OSLL omnibot v0.038's CALIBRATION_MOVE_SHIFT: the counts it adds to every motor's power."""
 
 
-def steady_rim_speed(course: float | None, slopes: Sequence[float], surface: str = "wood") -> np.ndarray:
+def steady_rim_speed(course: float | None, slopes: np.ndarray, surface: str = "wood") -> np.ndarray:
     """Steady rim speed (m/s) of the busiest wheel for each slope s, driven as OSLL omnibot v0.038 does.
 
     Every wheel with a rim speed u_i in the pattern gets sign(u_i) (40 + s |u_i| / max |u|) counts
@@ -183,7 +183,7 @@ def slope_for_rim_speed(course: float | None, speeds: Sequence[float]) -> np.nda
     slopes = np.arange(0.0, 216.0, 5.0)
     rim = steady_rim_speed(course, slopes)
     moving = rim > 0.01
-    return np.interp(speeds, rim[moving], slopes[moving])
+    return np.asarray(np.interp(speeds, rim[moving], slopes[moving]))
 
 
 RIM_SPEEDS = (0.2, 0.3, 0.4, 0.5, 0.6)
