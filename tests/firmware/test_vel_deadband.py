@@ -2,7 +2,7 @@
 and WARN 12 says so, once per VEL stream; the closed loop and the other commands are left alone.
 
 omni4 with its preset calibration: the K_l tables' intercept (the dead band they were fitted from)
-is about 44 PWM counts; 0.2 m/s forward + 0.1 m/s sideways gives the sideways pair 37.
+is about 44 PWM counts; 0.2 m/s forward + 0.1 m/s sideways gives the sideways pair 41.
 """
 
 from __future__ import annotations
@@ -35,10 +35,10 @@ def test_the_calibrations_dead_band_is_the_intercept_of_its_lowest_knots() -> No
 
 def test_a_weak_wheel_of_an_open_loop_vel_is_set_to_0_with_warn_12(omni4: Rig) -> None:
     assert omni4.cmd("VEL,20,10,0,500") == ["OK", WARN_12]
-    assert omni4.hal.powers == [0, 74, 0, -74]  # the sideways pair (37) would not turn
+    assert omni4.hal.powers == [0, 82, 0, -82]  # the sideways pair (41) would not turn
     assert omni4.cmd("VEL,20,10,0,500") == ["OK"]  # once per VEL stream
     assert omni4.run(100) == []
-    assert omni4.hal.powers == [0, 74, 0, -74]  # every control period (the roller drag's too)
+    assert omni4.hal.powers == [0, 82, 0, -82]  # every control period (the roller drag's too)
     assert omni4.cmd("VEL,0,10,0,500") == ["OK"]  # 63 on its own: turns
     assert omni4.hal.powers == [63, 0, -63, 0]
 
@@ -61,7 +61,7 @@ def test_the_floor_is_per_wheel() -> None:
     config = build_config(load_robot("omni4"))
     model = PowerModel(config, Calibration(config))
     out = [0] * 4
-    model.floor = 40.0
-    assert model.compute(0.2, 0.1, 0.0, False, out) & WEAK and out == [0, 74, 0, -74]
+    model.floor = 42.0
+    assert model.compute(0.2, 0.1, 0.0, False, out) & WEAK and out == [0, 82, 0, -82]
     model.floor = 0.0
-    assert not model.compute(0.2, 0.1, 0.0, False, out) & WEAK and out == [37, 74, -37, -74]
+    assert not model.compute(0.2, 0.1, 0.0, False, out) & WEAK and out == [41, 82, -41, -82]
