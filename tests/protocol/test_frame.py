@@ -100,8 +100,8 @@ def test_varint_rejects_truncated_or_overlong(bad: bytes) -> None:
 def test_fields_split_integers_and_text() -> None:
     payload = frame.pack_fields(codes.ERROR, [23], b"unknown, command")
     assert frame.unpack_fields(codes.ERROR, payload) == ([23], b"unknown, command")
-    assert frame.unpack_fields(codes.HELLO_REPLY, frame.pack_fields(codes.HELLO_REPLY, [1, 4], b"x")) == (
-        [1, 4],
+    assert frame.unpack_fields(codes.HELLO_REPLY, frame.pack_fields(codes.HELLO_REPLY, [1, 4, 8], b"x")) == (
+        [1, 4, 8],
         b"x",
     )
     with pytest.raises(ValueError):

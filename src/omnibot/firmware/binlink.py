@@ -4,6 +4,8 @@ Uses the protocol package's MicroPython-safe layers as they are: :mod:`omnibot.p
 (length, COBS, CRC-32, varints) and :mod:`omnibot.protocol.arq` (window, retry, duplicate replies).
 Replies carry the answered command's seq and are kept for duplicates; events get their own seq and
 are retransmitted until the host ACKs them (backlogged while the window is full); TEL has seq 0.
+Both windows are codes.WINDOW (32): the HELLO reply announces the receiver's, and the host takes
+events with that window too. 32 kept replies of at most 255 bytes (OK: 11) fit a board's heap.
 """
 
 from omnibot.protocol import arq, codes, frame
@@ -17,15 +19,15 @@ class BinaryLink:
     def __init__(self, write: "Callable[[bytes], None]") -> None:
         self._write = write
         self.decoder = frame.FrameDecoder()
-        self.tx = arq.Sender()
-        self.rx = arq.Receiver()
+        self.tx = arq.Sender(window=codes.WINDOW)
+        self.rx = arq.Receiver(window=codes.WINDOW)
         self._backlog: list[tuple[int, list[int], bytes]] = []
 
     def reset(self) -> None:
         """A new session: forget frames, sequence state and waiting events."""
         self.decoder.reset()
-        self.tx = arq.Sender()
-        self.rx = arq.Receiver()
+        self.tx = arq.Sender(window=codes.WINDOW)
+        self.rx = arq.Receiver(window=codes.WINDOW)
         self._backlog = []
 
     def reply(self, type_id: int, seq: int, ints: "list[int]", text: bytes = b"") -> None:

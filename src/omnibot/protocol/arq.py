@@ -3,14 +3,18 @@
 Both directions use the same rules (docs/protocol.md, "Sequence numbers, acknowledgement, retry"):
 
 * A sequenced frame carries seq 1..255 (wrapping to 1). The sender (:class:`Sender`) sends a frame
-  only if its seq is less than ``window`` after the oldest unacknowledged one, retransmits a frame
+  only if its seq is less than ``window`` after the oldest unacknowledged one (the window its
+  receiver takes: a controller announces it in its HELLO reply), retransmits a frame
   ``timeout_ms`` after it was last sent, ``retries`` times at most, then gives up on it and on
   every later frame still pending, and marks its next frame SYNC.
 * Commands are acknowledged by their reply (same seq), events by an ACK frame (same seq).
 * The receiver (:class:`Receiver`) takes frames strictly in order: the expected seq is NEW
   (execute/deliver, then reply/ACK); one of the last ``window`` seqs is a DUPLICATE (re-send the
   cached reply / re-ACK, never execute twice); anything else, seq 0 included, is OUT_OF_ORDER and
-  dropped without an answer, so the sender's retransmissions restore the order.
+  dropped without an answer, so the sender's retransmissions restore the order. On a line that
+  keeps the frames' order a frame arrives at most W_s behind and W_s - 1 ahead of the expected seq
+  (W_s: its sender's window); with W_s <= ``window`` <= codes.WINDOW_LIMIT the two ranges never
+  meet in the 255 seqs, so a duplicate is never taken for a new frame nor a new one for a duplicate.
 * A SYNC frame that is not a duplicate is NEW whatever seq the receiver expected: the sender
   abandoned every earlier frame. STOP and HELLO are always sent SYNC; HELLO also resets the
   receiver (:meth:`Receiver.reset`) before it is classified, which starts a session.
