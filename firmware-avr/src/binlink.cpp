@@ -187,7 +187,10 @@ static void send_event(uint8_t type, int16_t a, int16_t b, uint8_t n, uint32_t n
     write_frame(out, len);
 }
 
-static bool ready() { return pending_n == 0 || seq_back(next_seq, pending[0].seq) < W; }
+// arq.Sender.ready: within the window, and nothing follows a SYNC frame before its ACK.
+static bool ready() {
+    return pending_n == 0 || (!(pending[0].data[1] & P_FRAME_SYNC) && seq_back(next_seq, pending[0].seq) < W);
+}
 
 void event(uint8_t type, int16_t a, int16_t b, uint8_t n) {
     if (backlog_n || !ready() || pending_n >= W) {

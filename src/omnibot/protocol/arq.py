@@ -16,7 +16,8 @@ Both directions use the same rules (docs/protocol.md, "Sequence numbers, acknowl
   (W_s: its sender's window); with W_s <= ``window`` <= codes.WINDOW_LIMIT the two ranges never
   meet in the 255 seqs, so a duplicate is never taken for a new frame nor a new one for a duplicate.
 * A SYNC frame that is not a duplicate is NEW whatever seq the receiver expected: the sender
-  abandoned every earlier frame. STOP and HELLO are always sent SYNC; HELLO also resets the
+  abandoned every earlier frame. The sender sends nothing after a SYNC frame until it is
+  acknowledged, so it starts the window again from a seq the receiver has taken. STOP and HELLO are always sent SYNC; HELLO also resets the
   receiver (:meth:`Receiver.reset`) before it is classified, which starts a session.
 
 Time is a number of milliseconds passed in by the caller (``now``); nothing here reads a clock.
@@ -42,11 +43,12 @@ def seq_back(expected: int, seq: int) -> int:
 class _Out:
     """A frame awaiting acknowledgement."""
 
-    def __init__(self, seq: int, frame: bytes, deadline: int) -> None:
+    def __init__(self, seq: int, frame: bytes, deadline: int, sync: bool) -> None:
         self.seq = seq
         self.frame = frame
         self.deadline = deadline
         self.resent = 0
+        self.sync = sync
 
 
 class Sender:
@@ -69,13 +71,19 @@ class Sender:
         self.retries = retries
         self._next = first_seq
         self._sync = True
+        self._sync_seq = 0  # the seq just allocated with SYNC (0: the last one had none)
         self._pending: list[_Out] = []
         self._failed: list[int] = []
 
     def ready(self) -> bool:
         """True if another frame may be sent now: its seq is less than ``window`` after the oldest
-        unacknowledged one (so a receiver always tells a retransmission from a new frame)."""
-        return not self._pending or seq_back(self._next, self._pending[0].seq) < self.window
+        unacknowledged one (so a receiver always tells a retransmission from a new frame), and
+        that one is no SYNC frame: nothing follows a SYNC frame before it is acknowledged, so a
+        line that loses everything costs one seq per give-up, not a window of them."""
+        if not self._pending:
+            return True
+        oldest = self._pending[0]
+        return not oldest.sync and seq_back(self._next, oldest.seq) < self.window
 
     def pending(self) -> "list[int]":
         """Seqs sent and not yet acknowledged, oldest first."""
@@ -96,11 +104,12 @@ class Sender:
         self._next = seq_next(seq)
         flag = sync or self._sync
         self._sync = False
+        self._sync_seq = seq if flag else 0
         return seq, flag
 
     def track(self, seq: int, frame: bytes, now: int) -> None:
         """Remember a frame just written, for retransmission until it is acknowledged."""
-        self._pending.append(_Out(seq, frame, now + self.timeout_ms))
+        self._pending.append(_Out(seq, frame, now + self.timeout_ms, seq == self._sync_seq))
 
     def ack(self, seq: int) -> bool:
         """The peer acknowledged ``seq``; False if it was not pending (late or duplicate ack)."""
