@@ -8,10 +8,13 @@ import os
 import select
 import time
 
+from omnibot.client import RobotClient
+from omnibot.client.wire import BinaryWire
 from omnibot.firmware.config import build_config
 from omnibot.firmware.controller import Controller
 from omnibot.protocol import codes
 from omnibot.protocol.frame import Frame, FrameDecoder, encode_frame, encode_message
+from omnibot.protocol.messages import Ok, Vel
 from omnibot.robot.description import load_robot
 from tests.firmware.fakehal import FakeHAL
 
@@ -133,3 +136,26 @@ def test_same_frames_as_the_micropython_firmware() -> None:
         port.close()
         emu.close()
     assert announced == [codes.WINDOW_MIN] * 2  # the session's HELLO and the last probe's
+
+
+def test_a_client_keeps_to_the_window_the_uno_announces() -> None:
+    """The UNO announces the protocol's least window; RobotClient keeps to it and every command of a
+    stream three windows long is answered."""
+    emu, port = start("omni4")
+    port.close()
+    try:
+        with RobotClient.open(f"serial://{emu.path}") as client:
+            hello = client.use_binary()
+            assert hello.window == codes.WINDOW_MIN
+            wire = client._wire
+            assert isinstance(wire, BinaryWire) and wire.sender.window == codes.WINDOW_MIN
+            flying = []
+            calls = []
+            for k in range(3 * codes.WINDOW_MIN):
+                calls.append(client.submit(Vel(30 + k, 0, 0, 100)))
+                flying.append(len(wire.sender.pending()))
+            assert max(flying) == codes.WINDOW_MIN
+            assert all(isinstance(call.result(timeout=2.0), Ok) for call in calls)
+            client.use_text()
+    finally:
+        emu.close()
