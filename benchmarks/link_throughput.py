@@ -1,12 +1,14 @@
 """Protocol throughput on a 115200-baud line, text against binary, through the real firmware.
 
-Run: ``python -m benchmarks.link_throughput [--pty] [--load N]``. By default the line is the
+Run: ``python -m benchmarks.link_throughput [--pty] [--load N] [--window W]``. By default the line is the
 in-process lockstep link (a UART paced at 115200 baud in both directions, simulated time,
 deterministic). With ``--pty`` the same runs go through ``omnibot sim --pty`` in real time: a
 separate process, a pseudo-terminal paced to the baud rate, the firmware running in CPython.
 ``--load N`` runs N busy processes beside it (each a CPU-bound loop that ends on its own after
 LOAD_LIMIT_S, and is stopped when the runs end), to see whether a loaded host keeps the line full;
-it matters with ``--pty`` (lockstep time does not depend on the host's speed).
+it matters with ``--pty`` (lockstep time does not depend on the host's speed). ``--window W`` keeps
+the binary stream to W frames in flight (8 = the protocol's least, the window before version 2
+announced one) to compare windows on the same machine.
 
 1. Commands per second sustained: the host streams ``N`` commands as fast as the line and the
    protocol allow (text: no window, replies in order; binary: the ARQ window the controller
@@ -176,14 +178,14 @@ def closed_loop_load(link: Link, binary_mode: bool, seconds: float = 10.0) -> tu
     return sent / elapsed, received / elapsed, tels
 
 
-def run(pty: bool, n: int = 2000) -> dict[str, object]:
+def run(pty: bool, n: int = 2000, window: int = codes.WINDOW) -> dict[str, object]:
     text_len = len(text.encode(VEL, terminator=b";"))
     bin_len = len(binary.encode(VEL, seq=1))
     with open_line(pty) as link:
         t_text = stream_text(link, n)
     with open_line(pty) as link:
         switch_to_binary(link)
-        window = start_session(link)
+        window = min(start_session(link), window)
         t_bin = stream_binary(link, n, window)
     with open_line(pty) as link:
         up_t, down_t, tel_t = closed_loop_load(link, binary_mode=False)
@@ -236,12 +238,22 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description="protocol throughput on a 115200-baud line")
     parser.add_argument("--pty", action="store_true", help="through the pty emulator in real time")
     parser.add_argument("--load", type=int, default=0, metavar="N", help="N busy processes beside (0..8)")
+    parser.add_argument(
+        "--window",
+        type=int,
+        default=codes.WINDOW,
+        metavar="W",
+        help=f"binary: at most W frames in flight, if the controller takes that many "
+        f"({codes.WINDOW_MIN}..{codes.WINDOW}, default {codes.WINDOW}: what a host sends)",
+    )
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
     if not 0 <= args.load <= 8:
         parser.error(f"--load must be 0..8, got {args.load}")
+    if not codes.WINDOW_MIN <= args.window <= codes.WINDOW:
+        parser.error(f"--window must be {codes.WINDOW_MIN}..{codes.WINDOW}, got {args.window}")
     with busy_processes(args.load):
-        result = run(args.pty)
+        result = run(args.pty, window=args.window)
     result["load"] = args.load
     print(json.dumps(result) if args.json else report(result))
     return 0

@@ -40,3 +40,9 @@ def test_binary_stream_fills_the_line_with_the_announced_window() -> None:
     frame_bytes = len(binary.encode(link_throughput.VEL, seq=1))
     assert window == codes.WINDOW
     assert 300 / seconds / (link_throughput.LINE_BYTES_PER_S / frame_bytes) > 0.99
+
+
+def test_window_is_bounded(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit):
+        link_throughput.main(["--window", str(codes.WINDOW + 1)])
+    assert f"--window must be {codes.WINDOW_MIN}..{codes.WINDOW}" in capsys.readouterr().err
