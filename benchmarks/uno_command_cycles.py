@@ -157,10 +157,13 @@ def throughput(robot: str, n: int = 1000, seconds: float = 5.0) -> None:
             drain(link, 0.2)
             switch_to_binary(link)
             window = start_session(link)
+            emu.stats()
             rate = n / stream_binary(link, n, window)
+            _, awake, elapsed, _ = emu.stats()
         print(
             f"VEL stream, binary ({bin_len} B, window {window}): {rate:,.0f} commands/s of {limit:,.0f} line limit "
-            f"({100 * rate / limit:.0f} %)"
+            f"({100 * rate / limit:.0f} %); CPU awake {100 * awake / elapsed:.0f} % of the time, "
+            f"{awake / F_CPU / n * 1e6:,.0f} µs a command"
         )
         for binary_mode in (False, True):
             emu.command("reset")  # text mode, TEL off
