@@ -17,8 +17,9 @@ Both directions use the same rules (docs/protocol.md, "Sequence numbers, acknowl
   meet in the 255 seqs, so a duplicate is never taken for a new frame nor a new one for a duplicate.
 * A SYNC frame that is not a duplicate is NEW whatever seq the receiver expected: the sender
   abandoned every earlier frame. The sender sends nothing after a SYNC frame until it is
-  acknowledged, so it starts the window again from a seq the receiver has taken. STOP and HELLO are always sent SYNC; HELLO also resets the
-  receiver (:meth:`Receiver.reset`) before it is classified, which starts a session.
+  acknowledged, so it starts the window again from a seq the receiver has taken. STOP and HELLO
+  are always sent SYNC; HELLO also resets the receiver (:meth:`Receiver.reset`) before it is
+  classified, which starts a session.
 
 Time is a number of milliseconds passed in by the caller (``now``); nothing here reads a clock.
 """
