@@ -59,14 +59,42 @@ def test_timeout_retransmits_then_gives_up() -> None:
         seq, _ = tx.allocate()
         tx.track(seq, b"f%d" % seq, now)
     assert tx.poll(49) == []
-    assert tx.poll(50) == [b"f2"]
-    assert tx.poll(60) == [b"f3"]
-    assert tx.poll(100) == [b"f2"]
-    assert tx.poll(110) == [b"f3"]
+    assert tx.poll(50) == [b"f2", b"f3"]  # the oldest and every frame after it (go-back-N)
+    assert tx.poll(60) == [] and tx.poll(99) == []
+    assert tx.poll(100) == [b"f2", b"f3"]
     assert tx.take_failed() == []
     assert tx.poll(150) == []  # f2 out of retries: it and every later frame are given up
     assert tx.take_failed() == [2, 3] and tx.take_failed() == []
     assert tx.pending() == [] and tx.allocate() == (4, True)  # the next frame resynchronises
+
+
+def test_progress_restarts_the_timer() -> None:
+    """While the oldest frame keeps being acknowledged, a full window waiting on the line is not
+    sent again (32 frames take 44 ms of a 115200-baud line); an acknowledgement of a later frame
+    alone is no progress (the oldest's reply was lost)."""
+    tx = session(window=8, timeout_ms=50, retries=1)
+    for seq in range(2, 6):
+        assert tx.allocate() == (seq, False)
+        tx.track(seq, b"f%d" % seq, 0)
+    assert tx.ack(2) and tx.poll(45) == []  # acknowledged at 40..45: due again at 95
+    assert tx.poll(94) == [] and tx.ack(3) and tx.poll(94) == []  # due at 144
+    assert tx.poll(143) == [] and tx.poll(144) == [b"f4", b"f5"]
+    assert tx.ack(5) and tx.poll(193) == []  # 5 before 4: not the oldest, no restart
+    assert tx.poll(194) == [] and tx.take_failed() == [4]  # f4's second time out: given up
+    assert tx.pending() == []
+
+
+def test_retransmissions_count_for_the_oldest_frame_only() -> None:
+    """A frame sent again only because an older one was lost has not failed itself: it gets the
+    full budget once it is the oldest."""
+    tx = session(window=8, timeout_ms=50, retries=2)
+    for seq in (2, 3):
+        tx.allocate()
+        tx.track(seq, b"f%d" % seq, 0)
+    assert tx.poll(50) == [b"f2", b"f3"] and tx.poll(100) == [b"f2", b"f3"]
+    assert tx.ack(2) and tx.poll(105) == []  # f3 the oldest now, sent twice but never timed out
+    assert tx.poll(155) == [b"f3"] and tx.poll(205) == [b"f3"] and tx.take_failed() == []
+    assert tx.poll(255) == [] and tx.take_failed() == [3]
 
 
 def test_nothing_follows_an_unacknowledged_sync_frame() -> None:
