@@ -1,9 +1,10 @@
 """What a faulty line does to commands, text against binary, through the client and the real firmware.
 
-Run: ``python -m benchmarks.link_faults [--commands N] [--quick] [--json]``. Each scenario opens a
+Run: ``python -m benchmarks.link_faults [--commands N] [--waiting W] [--quick] [--json]``. Each scenario opens a
 lockstep link (115200 baud, simulated time) to a fresh simulated omni4, puts a fault wrapper on it
 (both directions), switches to the protocol and streams N ``VEL`` commands through
-:class:`~omnibot.client.RobotClient` (``submit``, at most 8 waiting, every reply awaited). Every
+:class:`~omnibot.client.RobotClient` (``submit``, at most W waiting, 8 by default; 32 fills the
+binary window the simulated controller announces; every reply awaited). Every
 ``VEL`` has its own parameters, so the controller's log of what it executed (every command it
 answered OK, taken inside the firmware) tells each command apart. Per 10,000 commands:
 
@@ -167,7 +168,9 @@ def executed_log(ctrl: Controller) -> list[tuple[int, tuple[int, ...]]]:
     return log
 
 
-def run_one(protocol: str, kind: str, rate: float, n: int, seed: int = 1) -> Outcome:
+def run_one(
+    protocol: str, kind: str, rate: float, n: int, seed: int = 1, waiting_max: int = WAITING
+) -> Outcome:
     device = SimDevice("omni4", seed=seed)
     inner = LockstepLink(device)
     link = fault_link(inner, kind, rate, seed)
@@ -197,7 +200,7 @@ def run_one(protocol: str, kind: str, rate: float, n: int, seed: int = 1) -> Out
                 waiting.append((k, client.submit(vel(k))))
             except OmnibotError:
                 ok[k] = False
-            while len(waiting) >= WAITING:
+            while len(waiting) >= waiting_max:
                 settle(*waiting.popleft())
         while waiting:
             settle(*waiting.popleft())
@@ -218,9 +221,11 @@ def run_one(protocol: str, kind: str, rate: float, n: int, seed: int = 1) -> Out
     return out
 
 
-def run(n: int, kinds: tuple[str, ...] = KINDS, rates: tuple[float, ...] = RATES) -> list[Outcome]:
+def run(
+    n: int, kinds: tuple[str, ...] = KINDS, rates: tuple[float, ...] = RATES, waiting: int = WAITING
+) -> list[Outcome]:
     return [
-        run_one(protocol, kind, rate, n)
+        run_one(protocol, kind, rate, n, waiting_max=waiting)
         for rate in rates
         for kind in kinds
         for protocol in ("text", "binary")
@@ -244,13 +249,25 @@ def report(outcomes: list[Outcome]) -> str:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description="commands through a faulty line, text against binary")
     parser.add_argument("--commands", type=int, default=5000, help="commands per scenario (default 5000)")
+    parser.add_argument(
+        "--waiting",
+        type=int,
+        default=WAITING,
+        metavar="W",
+        help=f"calls waiting for their replies at most (1..{codes.WINDOW}, default {WAITING})",
+    )
     parser.add_argument("--quick", action="store_true", help="200 commands, 1 %% only: a smoke test")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
     if args.commands < 1:
         parser.error("--commands must be at least 1")
+    if not 1 <= args.waiting <= codes.WINDOW:
+        parser.error(f"--waiting must be 1..{codes.WINDOW}, got {args.waiting}")
     start = time.monotonic()
-    outcomes = run(200, rates=(0.01,)) if args.quick else run(args.commands)
+    if args.quick:
+        outcomes = run(200, rates=(0.01,), waiting=args.waiting)
+    else:
+        outcomes = run(args.commands, waiting=args.waiting)
     if args.json:
         print(json.dumps([asdict(o) for o in outcomes]))
     else:

@@ -1,15 +1,18 @@
 """Protocol throughput on a 115200-baud line, text against binary, through the real firmware.
 
-Run: ``python -m benchmarks.link_throughput [--pty] [--load N]``. By default the line is the
+Run: ``python -m benchmarks.link_throughput [--pty] [--load N] [--window W]``. By default the line is the
 in-process lockstep link (a UART paced at 115200 baud in both directions, simulated time,
 deterministic). With ``--pty`` the same runs go through ``omnibot sim --pty`` in real time: a
 separate process, a pseudo-terminal paced to the baud rate, the firmware running in CPython.
 ``--load N`` runs N busy processes beside it (each a CPU-bound loop that ends on its own after
 LOAD_LIMIT_S, and is stopped when the runs end), to see whether a loaded host keeps the line full;
-it matters with ``--pty`` (lockstep time does not depend on the host's speed).
+it matters with ``--pty`` (lockstep time does not depend on the host's speed). ``--window W`` keeps
+the binary stream to W frames in flight (8 = the protocol's least, the window before version 2
+announced one) to compare windows on the same machine.
 
 1. Commands per second sustained: the host streams ``N`` commands as fast as the line and the
-   protocol allow (text: no window, replies in order; binary: the ARQ window of docs/protocol.md)
+   protocol allow (text: no window, replies in order; binary: the ARQ window the controller
+   announces in its HELLO reply, docs/protocol.md)
    and we time until the last reply is in. The command is ``VEL,40,0,0,100`` (immediate, so the
    controller's 16-deep motion queue cannot overflow; a stream of ``MOVE,2,40,0,0`` at line rate
    queues 800 moves of 50 ms per second and must end in ERROR 21). The line limit is 11,520 bytes/s
@@ -28,7 +31,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 
 from omnibot.protocol import binary, codes, text
-from omnibot.protocol.messages import Mode, Ok, Telem, Telemetry, Vel
+from omnibot.protocol.messages import Hello, HelloReply, Mode, Ok, Telem, Telemetry, Vel
 from omnibot.sim.device import SimDevice
 from omnibot.sim.emulator import spawn_pty_emulator
 from omnibot.transport.base import Link
@@ -111,14 +114,29 @@ def switch_to_binary(link: Link) -> None:
         reply += chunk
 
 
-def stream_binary(link: Link, n: int) -> float:
-    """Send n VEL frames with at most WINDOW unacknowledged; seconds until the n-th OK."""
-    frames = [binary.encode(VEL, seq=k % codes.SEQ_MAX + 1) for k in range(n)]
+def start_session(link: Link) -> int:
+    """The session-starting HELLO frame (seq 1, SYNC); the window the host may use: the one the
+    controller announces in its reply, at most the host's own (codes.WINDOW)."""
+    link.write(binary.encode(Hello(codes.VERSIONS), seq=1, sync=True))
+    decoder = binary.BinaryDecoder()
+    while True:
+        chunk = link.read(timeout=1.0)
+        if not chunk:
+            raise RuntimeError("no HELLO reply frame")
+        for item in decoder.feed(chunk):
+            if isinstance(item, binary.Packet) and isinstance(item.message, HelloReply):
+                return min(item.message.window, codes.WINDOW)
+
+
+def stream_binary(link: Link, n: int, window: int) -> float:
+    """Send n VEL frames (seqs after the HELLO's) with at most ``window`` unacknowledged; seconds
+    until the n-th OK."""
+    frames = [binary.encode(VEL, seq=(k + 1) % codes.SEQ_MAX + 1) for k in range(n)]
     decoder = binary.BinaryDecoder()
     sent = acked = 0
     t0 = link.clock.now()
     while acked < n:
-        while sent < n and sent - acked < codes.WINDOW:
+        while sent < n and sent - acked < window:
             link.write(frames[sent])
             sent += 1
         chunk = link.read(timeout=2.0)
@@ -160,20 +178,22 @@ def closed_loop_load(link: Link, binary_mode: bool, seconds: float = 10.0) -> tu
     return sent / elapsed, received / elapsed, tels
 
 
-def run(pty: bool, n: int = 2000) -> dict[str, object]:
+def run(pty: bool, n: int = 2000, window: int = codes.WINDOW) -> dict[str, object]:
     text_len = len(text.encode(VEL, terminator=b";"))
     bin_len = len(binary.encode(VEL, seq=1))
     with open_line(pty) as link:
         t_text = stream_text(link, n)
     with open_line(pty) as link:
         switch_to_binary(link)
-        t_bin = stream_binary(link, n)
+        window = min(start_session(link), window)
+        t_bin = stream_binary(link, n, window)
     with open_line(pty) as link:
         up_t, down_t, tel_t = closed_loop_load(link, binary_mode=False)
     with open_line(pty) as link:
         up_b, down_b, tel_b = closed_loop_load(link, binary_mode=True)
     return {
         "line": "pty emulator, real time" if pty else "lockstep, simulated time",
+        "binary_window": window,
         "binary_share_of_line": n / t_bin / (LINE_BYTES_PER_S / bin_len),
         "text_share_of_line": n / t_text / (LINE_BYTES_PER_S / text_len),
         "text_command_bytes": text_len,
@@ -201,7 +221,8 @@ def report(r: dict[str, object]) -> str:
             f"line: {r['line']}, 115200 baud 8N1 = {line:,.0f} bytes/s each way, {r['load']} busy processes beside",
             f"VEL stream, text   ({r['text_command_bytes']} B): {r['text_commands_per_s']:7.1f} commands/s of "
             f"{r['text_line_limit_per_s']:7.1f} line limit = {pct(r['text_commands_per_s'], r['text_line_limit_per_s'])}",
-            f"VEL stream, binary ({r['binary_command_bytes']} B): {r['binary_commands_per_s']:7.1f} commands/s of "
+            f"VEL stream, binary ({r['binary_command_bytes']} B, window {r['binary_window']}): "
+            f"{r['binary_commands_per_s']:7.1f} commands/s of "
             f"{r['binary_line_limit_per_s']:7.1f} line limit = {pct(r['binary_commands_per_s'], r['binary_line_limit_per_s'])}",
             f"closed loop VEL 100 Hz + TEL 100 Hz, text:   up {r['closed_loop_text_up_Bps']:7.0f} B/s "
             f"({pct(r['closed_loop_text_up_Bps'], line)}), down {r['closed_loop_text_down_Bps']:7.0f} B/s "
@@ -217,12 +238,22 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description="protocol throughput on a 115200-baud line")
     parser.add_argument("--pty", action="store_true", help="through the pty emulator in real time")
     parser.add_argument("--load", type=int, default=0, metavar="N", help="N busy processes beside (0..8)")
+    parser.add_argument(
+        "--window",
+        type=int,
+        default=codes.WINDOW,
+        metavar="W",
+        help=f"binary: at most W frames in flight, if the controller takes that many "
+        f"({codes.WINDOW_MIN}..{codes.WINDOW}, default {codes.WINDOW}: what a host sends)",
+    )
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
     if not 0 <= args.load <= 8:
         parser.error(f"--load must be 0..8, got {args.load}")
+    if not codes.WINDOW_MIN <= args.window <= codes.WINDOW:
+        parser.error(f"--window must be {codes.WINDOW_MIN}..{codes.WINDOW}, got {args.window}")
     with busy_processes(args.load):
-        result = run(args.pty)
+        result = run(args.pty, window=args.window)
     result["load"] = args.load
     print(json.dumps(result) if args.json else report(result))
     return 0

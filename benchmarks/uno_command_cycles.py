@@ -19,7 +19,14 @@ import select
 import statistics
 import time
 
-from benchmarks.link_throughput import VEL, closed_loop_load, drain, stream_binary, switch_to_binary
+from benchmarks.link_throughput import (
+    VEL,
+    closed_loop_load,
+    drain,
+    start_session,
+    stream_binary,
+    switch_to_binary,
+)
 from omnibot.protocol import binary, linecheck
 from omnibot.transport.url import open_link
 from omnibot.uno.emulator import UnoEmulator, missing_tools
@@ -140,8 +147,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def throughput(robot: str, n: int = 1000, seconds: float = 5.0) -> None:
-    """Binary VEL stream (window of 8) and the 100 Hz closed loop, text and binary, measured as
-    benchmarks.link_throughput measures the MicroPython firmware."""
+    """Binary VEL stream (with the window the UNO announces: 8) and the 100 Hz closed loop, text
+    and binary, measured as benchmarks.link_throughput measures the MicroPython firmware."""
     bin_len = len(binary.encode(VEL, seq=1))
     limit = LINE_BYTES_PER_S / bin_len
     emu = UnoEmulator(robot)
@@ -149,10 +156,14 @@ def throughput(robot: str, n: int = 1000, seconds: float = 5.0) -> None:
         with open_link(f"serial://{emu.path}") as link:
             drain(link, 0.2)
             switch_to_binary(link)
-            rate = n / stream_binary(link, n)
+            window = start_session(link)
+            emu.stats()
+            rate = n / stream_binary(link, n, window)
+            _, awake, elapsed, _ = emu.stats()
         print(
-            f"VEL stream, binary ({bin_len} B, window 8): {rate:,.0f} commands/s of {limit:,.0f} line limit "
-            f"({100 * rate / limit:.0f} %)"
+            f"VEL stream, binary ({bin_len} B, window {window}): {rate:,.0f} commands/s of {limit:,.0f} line limit "
+            f"({100 * rate / limit:.0f} %); CPU awake {100 * awake / elapsed:.0f} % of the time, "
+            f"{awake / F_CPU / n * 1e6:,.0f} µs a command"
         )
         for binary_mode in (False, True):
             emu.command("reset")  # text mode, TEL off

@@ -97,7 +97,8 @@
 #define P_FRAME_SYNC 128
 #define P_FRAME_MAX 255
 #define P_SEQ_MAX 255
-#define P_WINDOW 8
+#define P_WINDOW_MIN 8
+#define P_WINDOW 32
 #define P_RETRY_TIMEOUT_MS 50
 #define P_RETRIES 10
 /* keyword, id, fewest and most parameters (POWER: T and one power per motor), the number (1..) of

@@ -10,7 +10,13 @@ namespace bin {
 #define CHUNK_MAX 48      // command frames are at most 34 bytes (5 varints of 5); longer chunks are dropped
 #define FRAME_MAX 72      // largest frame we send (a TEL of every group, 32-bit extremes)
 
-static const uint8_t W = P_WINDOW;
+// The window this controller takes and announces in its HELLO reply: the protocol's least. Each slot
+// costs 20 B of kept reply and 19 B of pending event, and 8 command frames (at most 25 bytes each on
+// the wire: 5 varints of 16 bits) fit in the 256-byte receive ring, so a host streaming commands that
+// run slower than the line (a turning MOVE: 2.2 ms) can never overflow it (docs/uno.md). The host
+// takes our events with its window of P_WINDOW, so 8 events in flight are within it.
+static const uint8_t W = P_WINDOW_MIN;
+static_assert(P_WINDOW_MIN <= P_WINDOW, "the host takes events with a window of P_WINDOW");
 static const uint16_t RETRY_MS = P_RETRY_TIMEOUT_MS;
 static const uint8_t RETRIES = P_RETRIES;
 
@@ -64,6 +70,7 @@ void reset() {
 }
 
 uint8_t seq() { return cur_seq; }
+uint8_t window() { return W; }
 
 // CRC-32/ISO-HDLC (reflected 0xEDB88320, init and final XOR 0xFFFFFFFF) as protocol/crc.py, a nibble
 // at a time from a 16-entry table in flash (64 B; a byte table would take 1 KB).
@@ -180,7 +187,10 @@ static void send_event(uint8_t type, int16_t a, int16_t b, uint8_t n, uint32_t n
     write_frame(out, len);
 }
 
-static bool ready() { return pending_n == 0 || seq_back(next_seq, pending[0].seq) < W; }
+// arq.Sender.ready: within the window, and nothing follows a SYNC frame before its ACK.
+static bool ready() {
+    return pending_n == 0 || (!(pending[0].data[1] & P_FRAME_SYNC) && seq_back(next_seq, pending[0].seq) < W);
+}
 
 void event(uint8_t type, int16_t a, int16_t b, uint8_t n) {
     if (backlog_n || !ready() || pending_n >= W) {

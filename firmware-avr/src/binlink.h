@@ -21,6 +21,7 @@ void send_plain();           // TEL: seq 0, neither kept nor acknowledged
 void event(uint8_t type, int16_t a, int16_t b, uint8_t n);
 void poll(uint32_t now_ms);  // retransmissions and backlog, every main-loop pass
 uint8_t seq();               // seq of the command being handled
+uint8_t window();            // the send window we take (announced in the HELLO reply)
 
 }  // namespace bin
 

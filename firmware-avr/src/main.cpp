@@ -88,6 +88,7 @@ static void hello() {
         bin::begin(T_HELLO_REPLY, bin::seq());
         bin::put(P_PROTOCOL_VERSION);
         bin::put(MOTORS);
+        bin::put(bin::window());
         bin::text_P(PSTR(ROBOT_NAME));
         bin::send_reply();
         return;

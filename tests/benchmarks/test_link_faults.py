@@ -7,6 +7,7 @@ import json
 import pytest
 
 from benchmarks import link_faults
+from omnibot.protocol import codes
 
 
 def test_every_command_has_its_own_parameters() -> None:
@@ -37,3 +38,16 @@ def test_bad_arguments(capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit):
         link_faults.main(["--commands", "0"])
     assert "--commands must be at least 1" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("kind", link_faults.KINDS)
+def test_binary_with_the_window_full_lets_nothing_through(kind: str) -> None:
+    """32 calls in flight, the whole window the simulated controller announces, at 1 % faults."""
+    o = link_faults.run_one("binary", kind, 0.01, 200, waiting_max=codes.WINDOW)
+    assert (o.corrupted, o.lost_unseen, o.twice, o.false_failures) == (0, 0, 0, 0), o
+
+
+def test_waiting_is_bounded(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit):
+        link_faults.main(["--waiting", str(codes.WINDOW + 1)])
+    assert f"--waiting must be 1..{codes.WINDOW}" in capsys.readouterr().err

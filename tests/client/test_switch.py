@@ -5,9 +5,11 @@ from __future__ import annotations
 import pytest
 
 from omnibot.client import RobotClient
+from omnibot.client.wire import BinaryWire
 from omnibot.errors import LinkTimeout, ProtocolError
 from omnibot.firmware.controller import Controller
 from omnibot.protocol import codes
+from omnibot.protocol.messages import Ok, Vel
 from omnibot.sim.device import SimDevice
 from omnibot.transport import FaultLink, LockstepLink
 from omnibot.transport.base import Link
@@ -105,3 +107,34 @@ def test_binary_needs_a_version_2_controller() -> None:
         client.last_hello = type(client.last_hello)(1, "old", 4)
         with pytest.raises(ProtocolError, match="version 1"):
             client.use_binary()
+
+
+@pytest.mark.parametrize("window", [codes.WINDOW_MIN, codes.WINDOW])
+def test_binary_sends_up_to_the_window_the_controller_announces(
+    window: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The HELLO reply's window bounds the commands in flight (a controller may take fewer than
+    the host's codes.WINDOW, as the UNO does), and fills it: every command runs once."""
+    with RobotClient.open("sim://omni4") as client:
+        ctrl = firmware(client)
+        ctrl.link.window = window
+        ran: list[int] = []
+        vel = ctrl.executor.vel
+
+        def counted(vx: int, vy: int, w: int, t_ms: int) -> None:
+            ran.append(vx)
+            vel(vx, vy, w, t_ms)
+
+        monkeypatch.setattr(ctrl.executor, "vel", counted)
+        hello = client.use_binary()
+        assert hello.window == window
+        wire = client._wire
+        assert isinstance(wire, BinaryWire) and wire.sender.window == window
+        flying = []
+        calls = []
+        for k in range(3 * window):
+            calls.append(client.submit(Vel(k % 90, 0, 0, 100)))
+            flying.append(len(wire.sender.pending()))
+        assert max(flying) == window
+        assert all(isinstance(call.result(), Ok) for call in calls)
+        assert ran == [k % 90 for k in range(3 * window)]

@@ -32,7 +32,7 @@ def start(rig: Rig) -> None:
     out = rig.hal.take()
     assert out.startswith(b"OK\r\n")
     (p,) = packets(out[4:])
-    assert p.message == HelloReply(2, "omni4", 4) and p.seq == 1
+    assert p.message == HelloReply(2, "omni4", 4, codes.WINDOW) and p.seq == 1
 
 
 def test_switch_and_hello() -> None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from hypothesis import strategies as st
 
+from omnibot.protocol import codes
 from omnibot.protocol import messages as m
 
 i16 = st.integers(-32768, 32767)
@@ -42,19 +43,30 @@ telemetry = st.builds(
     ranges=st.none() | st.lists(st.integers(-1, 500), max_size=4).map(tuple),
 )
 
+status_replies = st.builds(
+    m.StatusReply,
+    st.sampled_from([0, 1, 3]),
+    st.integers(0, 64),
+    st.integers(0, 64),
+    st.integers(0, 255),
+    small_tuple,
+    st.tuples(i16, i16, i16, i16),
+)
+# The binary HELLO reply announces the controller's window; the text line has none (window 0).
+binary_hellos = st.builds(
+    m.HelloReply,
+    st.integers(0, 255),
+    names,
+    st.integers(0, 8),
+    st.integers(codes.WINDOW_MIN, codes.WINDOW_LIMIT),
+)
+text_hellos = st.builds(m.HelloReply, st.integers(0, 255), names, st.integers(0, 8))
+
 replies: st.SearchStrategy[m.Reply] = st.one_of(
-    st.just(m.Ok()),
-    st.builds(m.ErrorReply, st.integers(0, 99), texts),
-    st.builds(m.HelloReply, st.integers(0, 255), names, st.integers(0, 8)),
-    st.builds(
-        m.StatusReply,
-        st.sampled_from([0, 1, 3]),
-        st.integers(0, 64),
-        st.integers(0, 64),
-        st.integers(0, 255),
-        small_tuple,
-        st.tuples(i16, i16, i16, i16),
-    ),
+    st.just(m.Ok()), st.builds(m.ErrorReply, st.integers(0, 99), texts), binary_hellos, status_replies
+)
+text_replies: st.SearchStrategy[m.Reply] = st.one_of(
+    st.just(m.Ok()), st.builds(m.ErrorReply, st.integers(0, 99), texts), text_hellos, status_replies
 )
 
 events: st.SearchStrategy[m.Event] = st.one_of(
@@ -66,4 +78,5 @@ events: st.SearchStrategy[m.Event] = st.one_of(
 )
 
 host_bound = replies | events  # controller -> host
+text_host_bound = text_replies | events
 messages = commands | host_bound

@@ -94,9 +94,9 @@ def test_worked_examples() -> None:
     assert binary.encode(m.Stop(), 2, sync=True).hex(" ") == "00 04 09 85 02 e6 fd b5 c8 80 00"
     assert binary.encode(m.Ack(), 7).hex(" ") == "00 04 09 1f 07 f9 d1 a7 96 8f 00"
     assert binary.encode(m.Hello((2,)), 1, sync=True).hex(" ") == "00 05 0a 8b 01 04 b0 b2 a6 93 89 00"
-    assert (
-        binary.encode(m.HelloReply(2, "omni4", 4), 1).hex(" ")
-        == "00 0b 10 22 01 04 08 6f 6d 6e 69 34 b6 ed d6 92 81 00"
+    assert (  # version 2, 4 motors, window 32 (zigzag 64 = 40), then the name
+        binary.encode(m.HelloReply(2, "omni4", 4, 32), 1).hex(" ")
+        == "00 0c 11 22 01 04 08 40 6f 6d 6e 69 34 89 a1 94 83 8f 00"
     )
     err = binary.encode(m.ErrorReply(23, "unknown command"), 3)
     assert err.hex(" ") == "00 14 19 21 03 2e 75 6e 6b 6e 6f 77 6e 20 63 6f 6d 6d 61 6e 64 95 e0 80 ce 84 00"
@@ -108,8 +108,22 @@ def test_header_fields() -> None:
     assert binary.type_id(m.ErrorReply(1), event=True) == codes.ERROR_EVENT
     assert binary.type_id(m.ErrorReply(1)) == codes.ERROR
     assert binary.type_id(m.Warn(1), event=True) == codes.WARN
-    reply = binary.decode(binary.encode(m.HelloReply(1, "omni4", 4), 1))[1]
-    assert reply == binary.Packet(m.HelloReply(1, "omni4", 4), 1)
+    reply = binary.decode(binary.encode(m.HelloReply(1, "omni4", 4, 8), 1))[1]
+    assert reply == binary.Packet(m.HelloReply(1, "omni4", 4, 8), 1)
+
+
+@pytest.mark.parametrize("window", [0, codes.WINDOW_MIN - 1, codes.WINDOW_LIMIT + 1])
+def test_hello_reply_window_outside_the_protocol_is_malformed(window: int) -> None:
+    data = frame.encode_message(codes.HELLO_REPLY, 1, [2, 4, window], b"omni4")
+    got = binary.decode(data)[1]
+    assert isinstance(got, m.Malformed) and "window" in got.reason
+
+
+def test_hello_reply_without_a_window_is_malformed() -> None:
+    """A frame of the HELLO reply as it was before the window (version, motors, name): the name's
+    first letter is read as the window, which no controller may announce ("o" is -56)."""
+    got = binary.decode(frame.encode_message(codes.HELLO_REPLY, 1, [2, 4], b"omni4"))[1]
+    assert isinstance(got, m.Malformed) and "window -56" in got.reason
 
 
 @pytest.mark.parametrize(

@@ -100,8 +100,8 @@ def test_varint_rejects_truncated_or_overlong(bad: bytes) -> None:
 def test_fields_split_integers_and_text() -> None:
     payload = frame.pack_fields(codes.ERROR, [23], b"unknown, command")
     assert frame.unpack_fields(codes.ERROR, payload) == ([23], b"unknown, command")
-    assert frame.unpack_fields(codes.HELLO_REPLY, frame.pack_fields(codes.HELLO_REPLY, [1, 4], b"x")) == (
-        [1, 4],
+    assert frame.unpack_fields(codes.HELLO_REPLY, frame.pack_fields(codes.HELLO_REPLY, [1, 4, 8], b"x")) == (
+        [1, 4, 8],
         b"x",
     )
     with pytest.raises(ValueError):
@@ -217,6 +217,9 @@ for fr in frames:
     out.append(line)
 tx = arq.Sender(window=2, timeout_ms=50, retries=1)
 rx = arq.Receiver(window=2)
+s0 = tx.allocate()
+tx.track(s0[0], b"sync", 0)
+out.append(repr([s0, tx.ready(), tx.ack(s0[0]), tx.ready()]))
 s1 = tx.allocate()
 tx.track(s1[0], b"one", 0)
 s2 = tx.allocate()

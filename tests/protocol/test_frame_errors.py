@@ -88,7 +88,7 @@ FRAMES: list[tuple[str, bytes]] = [
     ("OK", frame.encode_message(codes.OK, 1)),
     ("ERROR", frame.encode_message(codes.ERROR, 3, [23], b"unknown command")),
     ("ERROR no text", frame.encode_message(codes.ERROR, 4, [40])),
-    ("HELLO reply", frame.encode_message(codes.HELLO_REPLY, 1, [2, 4], b"omni4")),
+    ("HELLO reply", frame.encode_message(codes.HELLO_REPLY, 1, [2, 4, 32], b"omni4")),
     ("STATUS reply", frame.encode_message(codes.STATUS_REPLY, 10, [1, 0, 16, 4, 0, 0, 0, 0, 2, 40, 30, 0])),
     ("RANGE", frame.encode_message(codes.RANGE, 12, [1, 15])),
     ("WARN", frame.encode_message(codes.WARN, 13, [13])),

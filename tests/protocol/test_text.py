@@ -54,7 +54,7 @@ def test_command_round_trip(cmd: m.Command) -> None:
     assert text.decode_command(text.encode(cmd, b";")) == (len(line), cmd)
 
 
-@given(s.host_bound)
+@given(s.text_host_bound)
 def test_reply_and_event_round_trip(msg: m.Message) -> None:
     line = text.encode(msg)
     assert line.endswith(b"\r\n")
@@ -68,7 +68,7 @@ def test_commands_any_split(cmds: list[m.Command], end: bytes) -> None:
         assert got == cmds
 
 
-@given(st.lists(s.host_bound, max_size=8))
+@given(st.lists(s.text_host_bound, max_size=8))
 def test_replies_any_split(msgs: list[m.Message]) -> None:
     data = b"".join(text.encode(x) for x in msgs)
     for got in splits(data):
@@ -195,7 +195,7 @@ def test_bad_lines_are_malformed(line: bytes) -> None:
     assert isinstance(msg, m.Malformed) and msg.raw == line
 
 
-@given(st.binary(max_size=300), st.lists(s.host_bound, min_size=1, max_size=4))
+@given(st.binary(max_size=300), st.lists(s.text_host_bound, min_size=1, max_size=4))
 def test_garbage_never_raises_and_whole_lines_after_it_survive(garbage: bytes, msgs: list[m.Message]) -> None:
     tail = b"".join(text.encode(x) for x in msgs)
     got = chunked(garbage + b"\r\n" + tail, 5)

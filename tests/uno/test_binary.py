@@ -8,10 +8,13 @@ import os
 import select
 import time
 
+from omnibot.client import RobotClient
+from omnibot.client.wire import BinaryWire
 from omnibot.firmware.config import build_config
 from omnibot.firmware.controller import Controller
 from omnibot.protocol import codes
 from omnibot.protocol.frame import Frame, FrameDecoder, encode_frame, encode_message
+from omnibot.protocol.messages import Ok, Vel
 from omnibot.robot.description import load_robot
 from tests.firmware.fakehal import FakeHAL
 
@@ -93,8 +96,26 @@ def reference(robot: str) -> list[list[tuple[object, ...] | bytes]]:
     return out
 
 
+def windows(items: list[tuple[object, ...] | bytes]) -> tuple[list[tuple[object, ...] | bytes], list[object]]:
+    """The items with each HELLO reply's window (its own per controller) set to None, and the windows."""
+    out: list[tuple[object, ...] | bytes] = []
+    found: list[object] = []
+    for item in items:
+        if isinstance(item, tuple) and item[0] == codes.HELLO_REPLY:
+            ints = item[3]
+            assert isinstance(ints, tuple)
+            found.append(ints[2])
+            out.append((*item[:3], (*ints[:2], None, *ints[3:]), item[4]))
+        else:
+            out.append(item)
+    return out, found
+
+
 def test_same_frames_as_the_micropython_firmware() -> None:
+    """The same frames, but for the window each announces in its HELLO reply: the MicroPython
+    firmware takes codes.WINDOW, the UNO the protocol's least (its RAM and receive ring)."""
     emu, port = start("omni4")
+    announced: list[object] = []
     try:
         for data, expected in zip(STEPS, reference("omni4"), strict=True):
             os.write(port.fd, data)
@@ -106,7 +127,35 @@ def test_same_frames_as_the_micropython_firmware() -> None:
             # nothing more within 30 ms (less than an event's 50 ms retry)
             if select.select([port.fd], [], [], 0.03)[0]:
                 got += os.read(port.fd, 4096)
-            assert decode_all(got) == expected, data
+            ours, uno_windows = windows(decode_all(got))
+            theirs, mp_windows = windows(expected)
+            assert ours == theirs, data
+            assert mp_windows == [codes.WINDOW] * len(uno_windows)
+            announced += uno_windows
     finally:
         port.close()
+        emu.close()
+    assert announced == [codes.WINDOW_MIN] * 2  # the session's HELLO and the last probe's
+
+
+def test_a_client_keeps_to_the_window_the_uno_announces() -> None:
+    """The UNO announces the protocol's least window; RobotClient keeps to it and every command of a
+    stream three windows long is answered."""
+    emu, port = start("omni4")
+    port.close()
+    try:
+        with RobotClient.open(f"serial://{emu.path}") as client:
+            hello = client.use_binary()
+            assert hello.window == codes.WINDOW_MIN
+            wire = client._wire
+            assert isinstance(wire, BinaryWire) and wire.sender.window == codes.WINDOW_MIN
+            flying = []
+            calls = []
+            for k in range(3 * codes.WINDOW_MIN):
+                calls.append(client.submit(Vel(30 + k, 0, 0, 100)))
+                flying.append(len(wire.sender.pending()))
+            assert max(flying) == codes.WINDOW_MIN
+            assert all(isinstance(call.result(timeout=2.0), Ok) for call in calls)
+            client.use_text()
+    finally:
         emu.close()

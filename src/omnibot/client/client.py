@@ -734,6 +734,8 @@ class RobotClient(TypedCalls):
             self._moving = reply.state == codes.STATE_MOVING
         elif isinstance(reply, HelloReply):
             self.last_hello = Hello.from_reply(reply)
+            if isinstance(self._wire, BinaryWire):
+                self._wire.hello(reply)
         elif isinstance(command, MOTION):
             self._moving = True
         elif isinstance(command, Stop):

@@ -124,6 +124,7 @@ def _probe(client: RobotClient) -> Hello | bool | None:
                 continue
             if isinstance(item.message, HelloReply):
                 wire.sender.ack(seq)
+                wire.hello(item.message)
                 client._wire = wire
                 client._mode = None
                 client.last_hello = Hello.from_reply(item.message)

@@ -11,16 +11,18 @@ from omnibot.protocol.messages import HelloReply, StatusReply
 
 @dataclass(frozen=True)
 class Hello:
-    """``HELLO,<version>,<robot name>,<motors>``: what the controller is."""
+    """``HELLO,<version>,<robot name>,<motors>``: what the controller is (``window``: the send
+    window it announced in a binary HELLO reply, 0 from a text one)."""
 
     version: int
     name: str
     motors: int
+    window: int = 0
 
     @classmethod
     def from_reply(cls, reply: HelloReply) -> Hello:
         """The client's view of a HELLO reply."""
-        return cls(reply.version, reply.name, reply.motors)
+        return cls(reply.version, reply.name, reply.motors, reply.window)
 
 
 def _distance(cm: int) -> float:

@@ -90,8 +90,8 @@ class BinaryWire:
 
     def __init__(self) -> None:
         self._decoder = binary.BinaryDecoder()
-        self.sender = arq.Sender()
-        self.receiver = arq.Receiver()
+        self.sender = arq.Sender(window=codes.WINDOW_MIN)  # what every controller takes, until its HELLO
+        self.receiver = arq.Receiver(window=codes.WINDOW)  # events: a controller sends at most this many
         self._tail = b""  # bytes since the last 0x00, to spot a reset HELLO line
         self._after_reset: bytes | None = None
 
@@ -106,6 +106,11 @@ class BinaryWire:
         data = binary.encode(command, seq, sync=sync)
         self.sender.track(seq, data, now_ms)
         return seq, data
+
+    def hello(self, reply: HelloReply) -> None:
+        """A binary HELLO reply came: send up to the window the controller announced (at most ours)."""
+        if reply.window:
+            self.sender.window = min(reply.window, codes.WINDOW)
 
     def ack(self, seq: int) -> bytes:
         """The ACK frame for event ``seq``."""

@@ -4,6 +4,9 @@ Uses the protocol package's MicroPython-safe layers as they are: :mod:`omnibot.p
 (length, COBS, CRC-32, varints) and :mod:`omnibot.protocol.arq` (window, retry, duplicate replies).
 Replies carry the answered command's seq and are kept for duplicates; events get their own seq and
 are retransmitted until the host ACKs them (backlogged while the window is full); TEL has seq 0.
+Both windows are ``window`` (codes.WINDOW, 32, by default): the HELLO reply announces it, and the
+host takes events with a window of codes.WINDOW, so it may be WINDOW_MIN..WINDOW. 32 kept replies
+of at most 255 bytes (an OK: 11) fit a board's heap.
 """
 
 from omnibot.protocol import arq, codes, frame
@@ -14,18 +17,19 @@ BACKLOG_MAX = 16  # events waiting for the send window; more are dropped
 class BinaryLink:
     """The controller's binary session state."""
 
-    def __init__(self, write: "Callable[[bytes], None]") -> None:
+    def __init__(self, write: "Callable[[bytes], None]", window: int = codes.WINDOW) -> None:
         self._write = write
+        self.window = window  # taken and announced from the next session on (WINDOW_MIN..WINDOW)
         self.decoder = frame.FrameDecoder()
-        self.tx = arq.Sender()
-        self.rx = arq.Receiver()
+        self.tx = arq.Sender(window=window)
+        self.rx = arq.Receiver(window=window)
         self._backlog: list[tuple[int, list[int], bytes]] = []
 
     def reset(self) -> None:
         """A new session: forget frames, sequence state and waiting events."""
         self.decoder.reset()
-        self.tx = arq.Sender()
-        self.rx = arq.Receiver()
+        self.tx = arq.Sender(window=self.window)
+        self.rx = arq.Receiver(window=self.window)
         self._backlog = []
 
     def reply(self, type_id: int, seq: int, ints: "list[int]", text: bytes = b"") -> None:

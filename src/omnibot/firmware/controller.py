@@ -365,7 +365,10 @@ class Controller:
         elif kw == codes.HELLO:
             if self.binary:
                 self.link.reply(
-                    codes.HELLO_REPLY, self._seq, [codes.PROTOCOL_VERSION, self.motors], self.name.encode()
+                    codes.HELLO_REPLY,
+                    self._seq,
+                    [codes.PROTOCOL_VERSION, self.motors, self.link.rx.window],
+                    self.name.encode(),
                 )
             else:
                 self._reply(self._hello_text())

@@ -3,17 +3,27 @@
 Both directions use the same rules (docs/protocol.md, "Sequence numbers, acknowledgement, retry"):
 
 * A sequenced frame carries seq 1..255 (wrapping to 1). The sender (:class:`Sender`) sends a frame
-  only if its seq is less than ``window`` after the oldest unacknowledged one, retransmits a frame
-  ``timeout_ms`` after it was last sent, ``retries`` times at most, then gives up on it and on
-  every later frame still pending, and marks its next frame SYNC.
+  only if its seq is less than ``window`` after the oldest unacknowledged one (the window its
+  receiver takes: a controller announces it in its HELLO reply). One timer runs for the oldest
+  unacknowledged frame, restarted whenever it is acknowledged (the line makes progress): when it
+  runs out (``timeout_ms``), the sender sends the oldest frame again and every one after it (the
+  receiver dropped those as out of order: go-back-N). After ``retries`` such retransmissions of
+  the same oldest frame it gives up on it and on every later frame still pending, and marks its
+  next frame SYNC. A full window waiting on the line (32 frames: 44 ms of a 115200-baud line, more
+  with pauses) therefore never times out while replies keep coming.
 * Commands are acknowledged by their reply (same seq), events by an ACK frame (same seq).
 * The receiver (:class:`Receiver`) takes frames strictly in order: the expected seq is NEW
   (execute/deliver, then reply/ACK); one of the last ``window`` seqs is a DUPLICATE (re-send the
   cached reply / re-ACK, never execute twice); anything else, seq 0 included, is OUT_OF_ORDER and
-  dropped without an answer, so the sender's retransmissions restore the order.
+  dropped without an answer, so the sender's retransmissions restore the order. On a line that
+  keeps the frames' order a frame arrives at most W_s behind and W_s - 1 ahead of the expected seq
+  (W_s: its sender's window); with W_s <= ``window`` <= codes.WINDOW_LIMIT the two ranges never
+  meet in the 255 seqs, so a duplicate is never taken for a new frame nor a new one for a duplicate.
 * A SYNC frame that is not a duplicate is NEW whatever seq the receiver expected: the sender
-  abandoned every earlier frame. STOP and HELLO are always sent SYNC; HELLO also resets the
-  receiver (:meth:`Receiver.reset`) before it is classified, which starts a session.
+  abandoned every earlier frame. The sender sends nothing after a SYNC frame until it is
+  acknowledged, so it starts the window again from a seq the receiver has taken. STOP and HELLO
+  are always sent SYNC; HELLO also resets the receiver (:meth:`Receiver.reset`) before it is
+  classified, which starts a session.
 
 Time is a number of milliseconds passed in by the caller (``now``); nothing here reads a clock.
 """
@@ -38,11 +48,11 @@ def seq_back(expected: int, seq: int) -> int:
 class _Out:
     """A frame awaiting acknowledgement."""
 
-    def __init__(self, seq: int, frame: bytes, deadline: int) -> None:
+    def __init__(self, seq: int, frame: bytes, sync: bool) -> None:
         self.seq = seq
         self.frame = frame
-        self.deadline = deadline
-        self.resent = 0
+        self.resent = 0  # retransmissions while it was the oldest
+        self.sync = sync
 
 
 class Sender:
@@ -65,13 +75,21 @@ class Sender:
         self.retries = retries
         self._next = first_seq
         self._sync = True
+        self._sync_seq = 0  # the seq just allocated with SYNC (0: the last one had none)
         self._pending: list[_Out] = []
+        self._deadline = 0  # when the oldest pending frame is due again
+        self._progress = False  # the oldest was acknowledged since the last poll: restart the timer
         self._failed: list[int] = []
 
     def ready(self) -> bool:
         """True if another frame may be sent now: its seq is less than ``window`` after the oldest
-        unacknowledged one (so a receiver always tells a retransmission from a new frame)."""
-        return not self._pending or seq_back(self._next, self._pending[0].seq) < self.window
+        unacknowledged one (so a receiver always tells a retransmission from a new frame), and
+        that one is no SYNC frame: nothing follows a SYNC frame before it is acknowledged, so a
+        line that loses everything costs one seq per give-up, not a window of them."""
+        if not self._pending:
+            return True
+        oldest = self._pending[0]
+        return not oldest.sync and seq_back(self._next, oldest.seq) < self.window
 
     def pending(self) -> "list[int]":
         """Seqs sent and not yet acknowledged, oldest first."""
@@ -92,34 +110,44 @@ class Sender:
         self._next = seq_next(seq)
         flag = sync or self._sync
         self._sync = False
+        self._sync_seq = seq if flag else 0
         return seq, flag
 
     def track(self, seq: int, frame: bytes, now: int) -> None:
         """Remember a frame just written, for retransmission until it is acknowledged."""
-        self._pending.append(_Out(seq, frame, now + self.timeout_ms))
+        if not self._pending:
+            self._deadline = now + self.timeout_ms
+            self._progress = False
+        self._pending.append(_Out(seq, frame, seq == self._sync_seq))
 
     def ack(self, seq: int) -> bool:
         """The peer acknowledged ``seq``; False if it was not pending (late or duplicate ack)."""
         for i in range(len(self._pending)):
             if self._pending[i].seq == seq:
                 self._pending.pop(i)
+                self._progress = self._progress or i == 0
                 return True
         return False
 
     def poll(self, now: int) -> "list[bytes]":
-        """Frames to retransmit at time ``now``, oldest first; gives up after ``retries``."""
-        out: list[bytes] = []
-        for i in range(len(self._pending)):
-            entry = self._pending[i]
-            if now < entry.deadline:
-                continue
-            if entry.resent >= self.retries:
-                self._abandon(i)
-                break
-            entry.deadline = now + self.timeout_ms
-            entry.resent += 1
-            out.append(entry.frame)
-        return out
+        """Frames to retransmit at time ``now``: none while the oldest keeps being acknowledged
+        within ``timeout_ms``, else every pending frame, oldest first; gives up after ``retries``
+        retransmissions of the same oldest frame."""
+        if not self._pending:
+            return []
+        if self._progress:
+            self._progress = False
+            self._deadline = now + self.timeout_ms
+            return []
+        if now < self._deadline:
+            return []
+        head = self._pending[0]
+        if head.resent >= self.retries:
+            self._abandon(0)
+            return []
+        head.resent += 1
+        self._deadline = now + self.timeout_ms
+        return [entry.frame for entry in self._pending]
 
     def take_failed(self) -> "list[int]":
         """Seqs given up on or abandoned since the last call (they get no reply), oldest first."""

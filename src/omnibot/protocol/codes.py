@@ -110,7 +110,7 @@ KEYWORDS = {
 REPLIES = (OK, ERROR, HELLO_REPLY, STATUS_REPLY)  # frame seq = the answered command's seq
 EVENTS = (RANGE, WARN, ERROR_EVENT, IDLE)  # own seq, acknowledged by the host with ACK
 # Binary payload: these types carry this many integers, then the rest of the frame is ASCII text.
-TEXT_AFTER = {ERROR: 1, ERROR_EVENT: 1, WARN: 1, HELLO_REPLY: 2}
+TEXT_AFTER = {ERROR: 1, ERROR_EVENT: 1, WARN: 1, HELLO_REPLY: 3}  # HELLO reply: version, motors, window
 
 # --- WARN and ERROR codes ----------------------------------------------------------------------------
 W_SPEED_REDUCED = 11
@@ -217,6 +217,11 @@ FRAME_SYNC = 0x80  # flag in the type byte: the sender abandoned every earlier f
 FRAME_TYPE_MASK = 0x7F
 FRAME_MAX = 255  # bytes of a frame between its delimiters (the length byte L)
 SEQ_MAX = 255  # sequence numbers run 1..255 and wrap to 1; 0 = unsequenced (TEL only)
-WINDOW = 8  # frames a sender may have unacknowledged (8 keeps a 115200 line full with a 2 ms loop)
+# Send windows (docs/protocol.md, "Window"): a controller announces the window it takes in its binary
+# HELLO reply (WINDOW_MIN..WINDOW_LIMIT); the host sends at most min(that, WINDOW) frames unacknowledged
+# (WINDOW_MIN before the reply) and takes the controller's events with a window of WINDOW.
+WINDOW_MIN = 8  # the least a controller announces (the UNO's): a line full with a 2 ms loop, no host load
+WINDOW = 32  # this implementation's window: the host's, the MicroPython controller's (a loaded host)
+WINDOW_LIMIT = 127  # the most: W duplicates behind and W - 1 new seqs ahead must not meet in SEQ_MAX
 RETRY_TIMEOUT_MS = 50
 RETRIES = 10  # retransmissions before giving up (0.55 s): 1 % of bytes lost or corrupted never gets there

@@ -331,16 +331,20 @@ class ErrorReply(_Coded):
 
 @dataclass(frozen=True)
 class HelloReply(_Message):
-    """``HELLO,<version>,<robot name>,<motors>``: the answer to HELLO, also sent after a reset."""
+    """``HELLO,<version>,<robot name>,<motors>``: the answer to HELLO, also sent after a reset.
+
+    ``window`` is the binary frame's: the send window the controller takes (codes.WINDOW_MIN ..
+    codes.WINDOW_LIMIT). The text line has none (0)."""
 
     version: int
     name: str
     motors: int
+    window: int = 0
     TYPE: ClassVar[int] = codes.HELLO_REPLY
 
     def params(self) -> tuple[int, ...]:
-        """Version and motor count (the binary order; the text line puts the robot's name between them)."""
-        return (self.version, self.motors)  # binary order; the text puts the name in between
+        """Version, motor count and window (the binary order; the text line is version, name, motors)."""
+        return (self.version, self.motors, self.window)
 
     def label(self) -> str:
         """The robot's name."""
@@ -348,10 +352,14 @@ class HelloReply(_Message):
 
     @classmethod
     def from_params(cls, params: Sequence[int], label: str = "") -> Self:
-        """Build one from version and motor count plus the name as ``label``; ProtocolError unless two
-        integers."""
-        _count(cls, params, 2)
-        return cls(params[0], label, params[1])
+        """Build one from version, motor count and window plus the name as ``label`` (the binary
+        frame); ProtocolError unless three integers and a window the protocol allows."""
+        _count(cls, params, 3)
+        if not codes.WINDOW_MIN <= params[2] <= codes.WINDOW_LIMIT:
+            raise ProtocolError(
+                f"HELLO reply: window {params[2]} outside {codes.WINDOW_MIN}..{codes.WINDOW_LIMIT}"
+            )
+        return cls(params[0], label, params[1], params[2])
 
 
 @dataclass(frozen=True)
