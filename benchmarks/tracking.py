@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-ROBOTS = {"omni4": (0.5, 1.0), "omni3": (2.0, 3.0)}
+ROBOTS = {"omni4": (0.5, 1.0), "omni3": (2.0, 3.0), "mecanum4": (0.5, 1.0)}
 """preset: (speed cap m/s, path size m)."""
 FOLLOWERS = ("seed002", "pure_pursuit", "tracker")
 SURFACES = ("wood", "carpet")
