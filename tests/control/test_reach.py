@@ -39,7 +39,9 @@ def test_omni3_course_bounds_follow_its_wheel_angles() -> None:
     assert course_speed_bound(robot, math.pi / 2) == pytest.approx(rim, rel=1e-9)
     assert course_speed_bound(robot, 0.0) == pytest.approx(rim / math.cos(math.radians(30)), rel=1e-9)
     lo, hi = speed_bound(robot)
-    assert lo == pytest.approx(rim, rel=1e-6) and hi == pytest.approx(rim / math.cos(math.radians(30)), rel=1e-3)
+    assert lo == pytest.approx(rim, rel=1e-6) and hi == pytest.approx(
+        rim / math.cos(math.radians(30)), rel=1e-3
+    )
     assert lo < 5.0 < hi  # seed 002's 5 m/s: on some courses only
     # turning while it goes takes wheel speed from the translation
     assert speed_bound(robot, w=2.0)[0] < lo
