@@ -200,10 +200,10 @@ static const float GUARD_SIN[GUARD_STEPS] PROGMEM = {0.08715574274765817f, 0.173
 /* ---- kinematics: rim speed (m/s) per unit twist, fixed point: RIM_Q[i][j] / 2^RIM_SHIFT ---- */
 #define RIM_SHIFT 14
 static const int16_t RIM_Q[MOTORS][3] PROGMEM = {
-    {-16384, 16384, 2143},
-    {16384, 16384, -2143},
-    {-16384, 16384, -2143},
+    {16384, -16384, -2143},
     {16384, 16384, 2143},
+    {16384, -16384, 2143},
+    {16384, 16384, -2143},
 };
 #define IDLE_AXES 2
 /* directions of travel (0.01 degree) along which some wheel stands still: K_l's course folding */
@@ -245,7 +245,7 @@ static const int16_t DEFAULT_ROLLER_COS[MOTORS] PROGMEM = {0, 0, 0, 0};
 static const int16_t DEFAULT_ROLLER_SIN[MOTORS] PROGMEM = {0, 0, 0, 0};
 static const float WHEEL_RADIUS_M[MOTORS] PROGMEM = {0.0325f, 0.0325f, 0.0325f, 0.0325f};
 /* each wheel's rollers' rolling direction and encoder counts per roller pitch (roller drag) */
-static const float ROLLER_DIR[MOTORS][2] PROGMEM = {{-0.707106781f, -0.707106781f}, {-0.707106781f, 0.707106781f}, {-0.707106781f, -0.707106781f}, {-0.707106781f, 0.707106781f}};
+static const float ROLLER_DIR[MOTORS][2] PROGMEM = {{0.707106781f, 0.707106781f}, {-0.707106781f, 0.707106781f}, {0.707106781f, 0.707106781f}, {-0.707106781f, 0.707106781f}};
 static const float ROLLER_PITCH[MOTORS] PROGMEM = {48.888888889f, 48.888888889f, 48.888888889f, 48.888888889f};
 
 /* ---- Arduino UNO pin map (docs/uno.md) ---- */

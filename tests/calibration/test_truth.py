@@ -174,7 +174,9 @@ def test_encoders_with_corrections(tmp_path: Path, omni4: RobotDescription) -> N
         plain, fixed = make_truth("encoders", ctx), make_truth(f"encoders:{cal}", ctx)
         marks = plain.mark(), fixed.mark()
         info = RunInfo(STRAIGHT, "x", 0.0)
-        r = runner.power_run(course_pattern(runner.geometry, 45.0, 120), 1.0, info, "t")
+        # on an axis: at 45 degrees the four driven wheels push against the rollers' combined drag and
+        # creep 2 % (docs/simulator.md), which a radius correction is not meant to remove
+        r = runner.power_run(course_pattern(runner.geometry, 0.0, 120), 1.0, info, "t")
         a, b = plain.measure(marks[0], info), fixed.measure(marks[1], info)
         assert r.truth is not None and r.truth.distance is not None and a is not None and b is not None
         assert a.distance == pytest.approx(r.truth.distance / 1.05, rel=0.01)  # the nominal radius: 5 % short

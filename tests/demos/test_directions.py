@@ -13,8 +13,8 @@ from omnibot.robot.description import load_robot
 
 def test_mecanum4_wheel_patterns_are_seed003s() -> None:
     robot = load_robot("mecanum4")
-    assert wheel_pattern(robot, (1, 0, 0), 200) == [-200, 200, -200, 200]
-    assert wheel_pattern(robot, (0, 1, 0), 200) == [200, 200, 200, 200]
+    assert wheel_pattern(robot, (1, 0, 0), 200) == [200, 200, 200, 200]  # Fig. 4(a): all forward
+    assert wheel_pattern(robot, (0, 1, 0), 200) == [-200, 200, -200, 200]
     assert wheel_pattern(robot, (1, 1, 0), 200) == [0, 200, 0, 200]  # diagonal: one pair idle
 
 

@@ -53,18 +53,22 @@ def test_omni3_keeps_seed002_numbers() -> None:
     assert r.gyro is not None and r.gyro.model == "MPU6050"
 
 
-def test_mecanum4_keeps_seed003_alpha_beta_gamma() -> None:
+def test_mecanum4_is_seed003_alpha_beta_gamma_mirrored_into_omnibot_s_frame() -> None:
     r = load_robot("mecanum4")
-    assert [w.alpha_deg for w in r.wheels] == [35.77, 144.23, 215.77, 324.23]
-    assert [w.gamma_deg for w in r.wheels] == [45, -45, 45, -45]
+    seed = {"alpha": [35.77, 144.23, 215.77, 324.23], "beta": [144.23, 35.77, -35.77, -144.23]}
+    for w, a, b in zip(r.wheels, seed["alpha"], seed["beta"], strict=True):
+        assert w.alpha_deg is not None and w.beta_deg is not None
+        assert math.remainder(w.alpha_deg - (90 - a), 360) == pytest.approx(0, abs=1e-9)
+        assert math.remainder(w.beta_deg - (180 - b), 360) == pytest.approx(0, abs=1e-9)
+    assert [w.gamma_deg for w in r.wheels] == [-45, 45, -45, 45]
     assert all(pytest.approx(0.0937) == w.L and w.radius == pytest.approx(0.0325) for w in r.wheels)
 
 
 def test_polar_form_converts_to_cartesian() -> None:
     w = load_robot("mecanum4").wheels[0]
-    assert w.position[0] == pytest.approx(0.0937 * math.cos(math.radians(35.77)))
-    assert w.position[1] == pytest.approx(0.0937 * math.sin(math.radians(35.77)))
-    assert math.degrees(w.drive_angle) == pytest.approx(35.77 + 144.23 - 90)
+    assert w.position[0] == pytest.approx(0.0937 * math.cos(math.radians(54.23)))
+    assert w.position[1] == pytest.approx(0.0937 * math.sin(math.radians(54.23)))
+    assert math.degrees(w.drive_angle) == pytest.approx(54.23 + 35.77 - 90)
 
 
 def test_wheel_motor_overrides_merge_with_the_default() -> None:

@@ -15,7 +15,7 @@ from omnibot.robot.description import load_robot
 
 
 def seed003_motor_speeds(vx: float, vy: float, vtheta: float) -> np.ndarray:
-    """Seed 003's own computation, written out as in its ROS node (section 4.2)."""
+    """Seed 003's own computation, written out as in its ROS node (section 4.2), in its own frame."""
     alpha = np.deg2rad([35.77, 144.23, 215.77, 324.23])
     beta = np.deg2rad([144.23, 35.77, -35.77, -144.23])
     gamma = np.deg2rad([45, -45, 45, -45])
@@ -30,21 +30,42 @@ def seed003_motor_speeds(vx: float, vy: float, vtheta: float) -> np.ndarray:
     return np.asarray(np.linalg.inv(j2) @ j1 @ np.array([vx, vy, vtheta]))
 
 
+def seed003_in_omnibot_frame(vx: float, vy: float, w: float) -> np.ndarray:
+    """Seed 003's equations for an omnibot twist: its frame has x left and y forward, the mirror image
+    of omnibot's (x forward, y left), so its twist is (vy, vx, -w)."""
+    return seed003_motor_speeds(vy, vx, -w)
+
+
 @pytest.mark.parametrize("twist", [(0.2, 0, 0), (0, 0.2, 0), (0.1, 0.1, 0), (0, 0, 1.5), (0.3, -0.2, 0.7)])
 def test_mecanum4_matches_seed003_computation(twist: tuple[float, float, float]) -> None:
     robot = load_robot("mecanum4")
     np.testing.assert_allclose(
-        kin.inverse(robot.wheel_matrix, twist), seed003_motor_speeds(*twist), atol=1e-12
+        kin.inverse(robot.wheel_matrix, twist), seed003_in_omnibot_frame(*twist), atol=1e-12
     )
 
 
-def test_mecanum4_main_directions_follow_seed003_signs() -> None:
-    """Forward: left wheels negative, right positive in seed 003's wiring; rotation: diagonal pairs."""
-    J = load_robot("mecanum4").wheel_matrix
-    forward = kin.inverse(J, (0.1, 0, 0))
-    assert np.sign(forward).tolist() == [-1, 1, -1, 1]
-    spin = kin.inverse(J, (0, 0, 1))
-    assert np.sign(spin).tolist() == [1, -1, -1, 1]
+def test_mecanum4_wheels_sit_where_their_names_say() -> None:
+    """front: x > 0, left: y > 0 in omnibot's frame; in seed 003's frame (x left, y forward) the same."""
+    robot = load_robot("mecanum4")
+    for wheel in robot.wheels:
+        x, y = wheel.position
+        assert (x > 0) == wheel.name.endswith("front") and (y > 0) == wheel.name.startswith("left")
+    seed_alpha = np.deg2rad([35.77, 144.23, 215.77, 324.23])  # x' left, y' forward
+    for wheel, a in zip(robot.wheels, seed_alpha, strict=True):
+        left, forward = 0.0937 * math.cos(a), 0.0937 * math.sin(a)
+        np.testing.assert_allclose(wheel.position, (forward, left), atol=1e-12)
+
+
+def test_mecanum4_main_directions_follow_seed003_fig4() -> None:
+    """Fig. 4(a): forward turns all four wheels forward; sideways and rotation turn pairs against each other."""
+    J = load_robot("mecanum4").wheel_matrix  # wheels: left_front, right_front, right_back, left_back
+    assert np.sign(kin.inverse(J, (0.1, 0, 0))).tolist() == [1, 1, 1, 1]
+    assert np.sign(kin.inverse(J, (0, 0.1, 0))).tolist() == [-1, 1, -1, 1]  # left: the diagonals oppose
+    spin = kin.inverse(J, (0, 0, 1))  # counter-clockwise: left side back, right side forward
+    assert np.sign(spin).tolist() == [-1, 1, 1, -1]
+    diagonal = kin.inverse(J, (0.1, 0.1, 0))  # forward-left: one diagonal pair stands still
+    np.testing.assert_allclose(diagonal[[0, 2]], 0.0, atol=1e-12)
+    assert (diagonal[[1, 3]] > 0).all()
 
 
 @pytest.mark.parametrize("theta_deg", [0, 30, 45, 90, 135, 200, 270, 333])

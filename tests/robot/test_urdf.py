@@ -71,8 +71,7 @@ def test_omni_wheels_roll_along_their_drive_direction_and_mecanum_ones_along_x()
     for preset in ("omni4", "omni3"):
         assert all(hub_angle(w) == w.drive_angle for w in load_robot(preset).wheels)
     mecanum = load_robot("mecanum4")
-    # seed 003's beta values give every wheel a drive direction of +90 degrees: the hubs are drawn in
-    # the equivalent form (d + 2 gamma, -gamma), rolling along x with their axles along y
+    # in omnibot's frame every mecanum4 wheel drives along +x: the hubs roll along x, axles along y
     assert all(math.isclose(abs(math.cos(hub_angle(w))), 1.0) for w in mecanum.wheels)
 
 

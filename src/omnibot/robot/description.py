@@ -125,6 +125,12 @@ class RollerSpec(_Spec):
     grip: float = Field(
         default=1.0, gt=0, description="roller material's floor friction relative to soft rubber (scales mu)"
     )
+    combined_drag: float = Field(
+        default=0.0,
+        ge=0,
+        description="viscous loss while the wheel drives and its rollers roll at once, "
+        "fraction of load per m/s at 45 degrees (docs/simulator.md)",
+    )
 
 
 class WheelSpec(_Spec):

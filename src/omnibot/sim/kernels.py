@@ -51,7 +51,9 @@ W_GRIP_LOAD = 20
 W_RR_TOP = 21
 W_RR_VAR = 22
 W_ROLLER_COUNT = 23
-W_COLUMNS = 24
+W_RADIUS = 24
+W_SCRUB_LOAD = 25
+W_COLUMNS = 26
 
 # robot parameter columns
 R_M_DT, R_I_DT, R_BATT_RES, R_BATT_RELAX = 0, 1, 2, 3
@@ -160,6 +162,16 @@ def physics_step(
             ft, kt = _secant(surf[sid, S_MU] * p[W_GRIP_LOAD], inv_veps, slip * inv_veps)
             fn, kn = _secant(roll_max, _INV_ROLL_EPS, roll * _INV_ROLL_EPS)
             fa, ka = _secant(p[W_STATIC], _INV_WHEEL_EPS, omega * _INV_WHEEL_EPS)
+            # combined rolling and driving: viscous scrub on both rolling directions, weighted by
+            # sin(2 beta) of the contact's direction (0 when the wheel or its rollers stand still)
+            rim = p[W_RADIUS] * omega
+            both = rim * rim + roll * roll
+            if p[W_SCRUB_LOAD] > 0.0 and both > 1e-12:
+                scrub = p[W_SCRUB_LOAD] * 2.0 * abs(rim) * abs(roll) / both
+                fn += scrub * roll
+                kn += scrub
+                fa += scrub * p[W_RADIUS] * rim
+                ka += scrub * p[W_RADIUS] * p[W_RADIUS]
             fa -= p[W_KT] * amps - p[W_VISC] * omega  # the motor drives the axle row
             ka += emf + p[W_VISC]
             traction[i, j] = -ft

@@ -15,12 +15,20 @@ by +90 degrees. With v_c = v + w x p_i the body velocity at the contact point::
     floor force         F_i = -g mu N_i tanh(s_i / v_eps) t_i  -  c_i(phi_i) N_i tanh(q_i / q_eps) n_i
     roller resistance   c_i(phi) = c0_i k_surf (1 + f_i (1 - cos(count_i phi)) / 2)   (f = 1: up to 2x)
     wheel reaction      tau_floor = -r (F_i . u_i) = -r cos(gamma) F_t + r sin(gamma) F_n
+    combined drag       b_i N_i sin(2 beta_i) on both rolling directions: -b N sin(2 beta) q_i along n_i,
+                        and the torque -r^2 b N sin(2 beta) omega_i at the axle, where
+                        sin(2 beta) = 2 |r omega| |q| / ((r omega)^2 + q^2)
 
 with g = RollerSpec.grip (the roller material's friction relative to soft rubber), c0 its
 rolling_resistance, f its friction_variation, phi the wheel angle (0 = least friction), and mu,
 v_eps, k_surf from the :class:`~omnibot.sim.surfaces.Surface` under the wheel. For a plain omni
 wheel (gamma = 0) the reaction is -r F_t; the sin term keeps the mecanum model energy-consistent:
-the floor forces only ever dissipate (power F_t s + F_n q <= 0).
+the floor forces only ever dissipate (power F_t s + F_n q <= 0). The combined drag (b =
+RollerSpec.combined_drag, per unit load and m/s) is the rollers' extra loss while the wheel drives
+and its rollers roll at once (the contact crosses the roller diagonally, at angle beta from the
+wheel's rolling direction): zero on a wheel that stands still or whose rollers do not turn, largest
+at 45 degrees; it is a linear damping with its weight taken at the step's start, so it stays
+implicit and dissipative. Sizes and sources of every effect: docs/simulator.md.
 
 Motor and driver (one per wheel), with d = clip(pwm / pwm_max, -1, 1)::
 
@@ -202,6 +210,8 @@ class Physics:
         W[..., kernels.W_RR_VAR] = rr_var
         W[..., kernels.W_RR_TOP] = rr0 + rr_var
         W[..., kernels.W_ROLLER_COUNT] = wp(lambda w: w.rollers.count)
+        W[..., kernels.W_RADIUS] = r
+        self._scrub = wp(lambda w: w.rollers.combined_drag)
         self._wp = W
 
         self._mass = rp(lambda rb: rb.mass)
@@ -225,6 +235,7 @@ class Physics:
         self._load.flags.writeable = False
         self._wp[..., kernels.W_LOAD] = self._load
         self._wp[..., kernels.W_GRIP_LOAD] = self._grip * self._load
+        self._wp[..., kernels.W_SCRUB_LOAD] = self._scrub * self._load
 
     # ------------------------------------------------------------------ state access
 
