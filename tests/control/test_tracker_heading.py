@@ -18,7 +18,9 @@ def test_tracker_holds_a_turning_body_on_a_random_path(preset: str, heading: str
     robot = load_robot(preset)
     path = smooth_random_path(1, length=2.0, radius_min=0.4, wavelength=1.0, heading=heading)
     assert path.theta.max() - path.theta.min() > 0.5  # the body really turns
-    _, report = simulate_follow(robot, path, FollowOptions(follower="tracker", speed=speed, standstill=1.0), seed=4)
+    _, report = simulate_follow(
+        robot, path, FollowOptions(follower="tracker", speed=speed, standstill=1.0), seed=4
+    )
     assert report["completed"], report["failures"]
     assert report["rms_cross_track_m"] <= 0.01
     assert report["max_cross_track_m"] <= 0.03
