@@ -112,3 +112,38 @@ def test_tracker_does_not_hold_the_robot_inside_a_curve() -> None:
     assert done
     steady = np.array(dist[len(dist) // 4 : 3 * len(dist) // 4])
     assert float(np.mean(steady)) < 0.0008
+
+
+def body_lag_run(path: Path, follower: Follower, tau: float = 0.04) -> tuple[list[float], bool]:
+    """A robot whose wheel loops lag in the body frame (its body velocity follows the command with
+    ``tau``), as a turning robot's do; the cross-track distances and whether it finished."""
+    dt = 0.01
+    x, y, th = path.start
+    bx = by = w = 0.0
+    follower.start(path, 0.0)
+    t, dist = 0.0, list[float]()
+    while t < 30.0:
+        c, s = math.cos(th), math.sin(th)
+        cmd = follower.update(State(t, x, y, th, c * bx - s * by, s * bx + c * by, w))
+        if follower.done:
+            return dist, True
+        a = dt / tau
+        bx, by, w = bx + a * (cmd.vx - bx), by + a * (cmd.vy - by), w + a * (cmd.w - w)
+        c, s = math.cos(th + 0.5 * w * dt), math.sin(th + 0.5 * w * dt)
+        x, y, th, t = x + (c * bx - s * by) * dt, y + (s * bx + c * by) * dt, th + w * dt, t + dt
+        dist.append(float(path.distances(np.array([[x, y]]))[0]))
+    return dist, False
+
+
+def test_tracker_turns_its_command_by_the_heading_it_will_have() -> None:
+    # the body faces its course round a lemniscate at up to 1 m/s (turning at up to 5 rad/s): a
+    # body-frame command turned by today's heading acts 40 ms later on a body already turned
+    fast = MotionLimits(v_max=1.0, a_max=2.0, w_max=15.0, alpha_max=20.0)
+    path = standard_path("lemniscate", size=1.0, heading="tangent")
+    rms = {}
+    for turn_lead in (0.0, 0.04):
+        dist, done = body_lag_run(path, make_follower("tracker", fast, turn_lead=turn_lead))
+        assert done
+        rms[turn_lead] = math.sqrt(sum(d * d for d in dist) / len(dist))
+    assert rms[0.04] < 0.3 * rms[0.0]
+    assert rms[0.04] < 0.0002

@@ -37,6 +37,9 @@ STOP = Command(0.0, 0.0, 0.0)
 PLAN_MARGIN = 0.7
 """Fraction of the acceleration limits every follower plans its speeds with (the same speed schedule
 for all of them; the rest of the grip is left for feedback)."""
+PLAN_WHEEL_USE = 0.85
+"""Fraction of the wheels' free-running speed every follower plans with (the rest is the floor's load
+and the wheel-speed loop's headroom; see :mod:`omnibot.control.reach`)."""
 
 
 def wrap(angle: float) -> float:
@@ -97,8 +100,10 @@ class Follower(ABC):
         """The command for the next control period."""
 
     def plan(self, path: Path, margin: float = PLAN_MARGIN) -> SpeedProfile:
-        """The time-optimal profile within ``margin`` of the limits (honouring the path's v)."""
-        return time_optimal_profile(path, self.limits.scaled(margin))
+        """The time-optimal profile within ``margin`` of the acceleration limits and
+        :data:`PLAN_WHEEL_USE` of the wheels' free speed (honouring the path's v)."""
+        limits = self.limits.scaled(margin)
+        return time_optimal_profile(path, limits.with_wheel_use(min(limits.wheel_use, PLAN_WHEEL_USE)))
 
     def at_end(self, state: State, tolerance: float | None = None) -> bool:
         """Within ``tolerance`` of the path's end, nearly stopped."""

@@ -70,6 +70,7 @@ class ProfileTracker(Follower):
         lag_span: float = 0.10,
         settle: float = 1.5,
         adapt: bool = True,
+        turn_lead: float | None = None,
         **options: Any,
     ) -> None:
         super().__init__(limits, rate=rate, **options)
@@ -80,6 +81,7 @@ class ProfileTracker(Follower):
         self.k_heading, self.i_heading = heading, heading_i
         self.lag_start, self.lag_span = lag_start, lag_span
         self.settle = settle
+        self.turn_lead = lead if turn_lead is None else turn_lead
         self.response = VelocityResponse() if adapt else None
         self.profile: SpeedProfile | None = None
         self.tau = 0.0
@@ -160,7 +162,9 @@ class ProfileTracker(Follower):
         vx, vy = clamp_speed(vx, vy, limits.v_max)
         w = ref.w + self.k_heading * e_th + self.i_heading * integral[2]
         w = max(-limits.w_max, min(limits.w_max, w))
-        command = to_body(vx, vy, w, state.theta, self.dt)
+        # into the body frame at the heading the body will have when the command acts: a body
+        # turning at w while it goes would otherwise drive w x turn_lead off the course
+        command = to_body(vx, vy, w, state.theta + state.w * self.turn_lead, self.dt)
         model = self.response
         if model is None:
             return command

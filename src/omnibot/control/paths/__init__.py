@@ -1,6 +1,7 @@
 """Paths: the :class:`Path` type, CSV files, teaching, geometry, standard paths and speed profiles."""
 
 from omnibot.control.paths.files import PathFileError, format_path, parse_path, read_path, write_path
+from omnibot.control.paths.generator import smooth_random_path
 from omnibot.control.paths.geometry import curvature, douglas_peucker, heading_rate, resample
 from omnibot.control.paths.path import Path, Projection
 from omnibot.control.paths.profile import MotionLimits, Reference, SpeedProfile, time_optimal_profile
@@ -23,6 +24,7 @@ __all__ = [
     "random_path",
     "read_path",
     "resample",
+    "smooth_random_path",
     "standard_names",
     "standard_path",
     "time_optimal_profile",

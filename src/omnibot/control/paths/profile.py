@@ -5,7 +5,11 @@ turn in place (ds = 0) is a stretch of path like any other. With u = d sigma / d
 is v = u ds/d sigma and its turn rate w = u d theta/d sigma. At each point of a fine grid:
 
 * speed caps: v <= v_max, |w| <= w_max, v^2 |kappa| <= a_lat (the wheels' grip sideways),
-  v^2 |d^2 theta/ds^2| <= alpha_max / 2, and v <= the path file's v when it has one;
+  v^2 |d^2 theta/ds^2| <= alpha_max / 2, v <= the path file's v when it has one, and, when the
+  limits carry the robot's wheel rows (:mod:`omnibot.control.reach`), no wheel faster than
+  ``wheel_use`` of its free-running speed for the body twist there: translation along the course
+  as seen from the body (the path's direction turned by -theta) and the turn rate together, so a
+  body turning while it goes, or a course the wheels serve badly, slows the profile;
 * acceleration: the tangential acceleration may use what the lateral one leaves of the friction
   ellipse, a_t <= a_max sqrt(1 - (v^2 kappa / a_lat)^2), and the angular one alpha_max / 2.
 
@@ -45,6 +49,11 @@ class MotionLimits:
     alpha_max: float
     a_lat: float | None = None
     """Sideways (centripetal) acceleration limit; None: a_max (a friction circle)."""
+    wheels: tuple[tuple[float, float, float], ...] | None = None
+    """Per wheel, the fraction of its free-running speed one unit of body twist (vx, vy, w) needs
+    (:func:`omnibot.control.reach.wheel_rows`); None: no wheel-speed cap."""
+    wheel_use: float = 1.0
+    """The fraction of the wheels' free-running speed the profile may use."""
 
     def __post_init__(self) -> None:
         for name in ("v_max", "a_max", "w_max", "alpha_max"):
@@ -53,6 +62,8 @@ class MotionLimits:
                 raise ValueError(f"motion limit {name} must be a positive number, got {value}")
         if self.a_lat is not None and not self.a_lat > 0:
             raise ValueError(f"motion limit a_lat must be positive, got {self.a_lat}")
+        if not 0 < self.wheel_use <= 1:
+            raise ValueError(f"motion limit wheel_use must be in (0, 1], got {self.wheel_use}")
 
     @property
     def lateral(self) -> float:
@@ -61,10 +72,23 @@ class MotionLimits:
 
     @classmethod
     def from_robot(cls, robot: RobotDescription, speed: float | None = None) -> MotionLimits:
-        """The robot's own limits, the speed capped at ``speed`` m/s when given."""
+        """The robot's own limits, the speed capped at ``speed`` m/s when given, with its wheels'
+        free-running speeds (:mod:`omnibot.control.reach`)."""
+        from omnibot.control.reach import wheel_rows
+
         lim = robot.limits
         v = lim.speed_max if speed is None else min(speed, lim.speed_max)
-        return cls(v, lim.acceleration_max, lim.angular_speed_max, lim.angular_acceleration_max)
+        return cls(
+            v,
+            lim.acceleration_max,
+            lim.angular_speed_max,
+            lim.angular_acceleration_max,
+            wheels=wheel_rows(robot),
+        )
+
+    def with_wheel_use(self, fraction: float) -> MotionLimits:
+        """These limits using at most ``fraction`` of the wheels' free-running speed."""
+        return replace(self, wheel_use=fraction)
 
     def scaled(self, factor: float, speed_factor: float = 1.0) -> MotionLimits:
         """Accelerations times ``factor``, speeds times ``speed_factor`` (a planning margin)."""
@@ -276,6 +300,8 @@ def time_optimal_profile(
         head = np.where(HC > 0, np.sqrt(0.5 * limits.alpha_max / HC), inf)
         cap = np.minimum(cap, np.where(rs_pt > 0, head / rs_pt, inf))
         cap = np.minimum(cap, np.where(rs_pt > 0, VF / rs_pt, inf))
+        if limits.wheels is not None:
+            cap = np.minimum(cap, _wheel_cap(limits, np.array(ths), rs, np.array(rt_seg), tx_seg, ty_seg))
     cap[0] = cap[-1] = 0.0
 
     def accel(j: int, u: float) -> float:
@@ -319,6 +345,23 @@ def time_optimal_profile(
         ty=np.array(ty_seg),
         kappa=np.array(kap),
     )
+
+
+def _wheel_cap(
+    limits: MotionLimits, theta: FloatArray, rs: FloatArray, rt: FloatArray, tx: list[float], ty: list[float]
+) -> FloatArray:
+    """The largest u = d sigma/dt at each point for which no wheel exceeds ``wheel_use`` of its free
+    speed (the segment on either side of the point, whichever is the harder)."""
+    assert limits.wheels is not None
+    rows = np.array(limits.wheels)
+    c, s = np.cos(theta), np.sin(theta)
+    tx_a, ty_a = np.array(tx), np.array(ty)
+    # body-frame twist per unit u on the segment starting at each point
+    bx, by = rs * (c * tx_a + s * ty_a), rs * (-s * tx_a + c * ty_a)
+    need = np.abs(np.outer(bx, rows[:, 0]) + np.outer(by, rows[:, 1]) + np.outer(rt, rows[:, 2])).max(axis=1)
+    need = np.maximum(need, np.concatenate(([need[0]], need[:-1])))
+    with np.errstate(divide="ignore"):
+        return np.where(need > 1e-12, limits.wheel_use / need, math.inf)
 
 
 def min_traversal_time(path: Path, limits: MotionLimits) -> float:

@@ -3,7 +3,8 @@
 Every path starts at the origin heading along +x, is scaled by ``size`` (m) and sampled every
 ``spacing`` m of arc length. ``heading`` picks the theta column: ``"fixed"`` holds the start heading
 (what an omnidirectional robot can do, and what seed 002 does), ``"tangent"`` turns the body with
-the direction of travel.
+the direction of travel, ``"swing"`` swings it independently of the course, 90 degrees either side
+of the start heading, one period every 2 ``size`` m of travel (theta = pi/2 sin(pi s / size)).
 
 ====================  ============================================================================
 name                  shape (size s)
@@ -28,7 +29,9 @@ from omnibot.control.paths.geometry import resample
 from omnibot.control.paths.path import FloatArray, Path, tangent_headings
 from omnibot.errors import ConfigError
 
-HEADINGS = ("fixed", "tangent")
+HEADINGS = ("fixed", "tangent", "swing")
+SWING = 0.5 * math.pi
+"""rad: the amplitude of the ``swing`` heading."""
 
 
 def _arc(cx: float, cy: float, r: float, a0: float, a1: float, n: int) -> FloatArray:
@@ -98,17 +101,19 @@ def standard_path(name: str, size: float = 1.0, heading: str = "fixed", spacing:
         hint = f"; did you mean '{close[0]}'?" if close else f"; expected one of: {', '.join(SHAPES)}"
         raise ConfigError(f"unknown path '{name}'" + hint) from None
     if heading not in HEADINGS:
-        raise ConfigError(f"unknown heading mode '{heading}'; expected fixed or tangent")
+        raise ConfigError(f"unknown heading mode '{heading}'; expected fixed, tangent or swing")
     if not size > 0:
         raise ConfigError(f"path size must be positive, got {size}")
     pts = shape(size)
     dense = resample(Path.from_points(pts, theta=0.0), spacing)
-    return _with_heading(dense, heading)
+    return _with_heading(dense, heading, size)
 
 
-def _with_heading(path: Path, heading: str) -> Path:
+def _with_heading(path: Path, heading: str, size: float = 1.0) -> Path:
     if heading == "fixed":
         return path.with_columns(theta=np.zeros(len(path)))
+    if heading == "swing":
+        return path.with_columns(theta=SWING * np.sin(math.pi * path.s / size))
     th = tangent_headings(path.x, path.y)
     th = th - (th[0] - math.atan2(path.y[1] - path.y[0], path.x[1] - path.x[0]))
     return path.with_columns(theta=th)
@@ -119,7 +124,7 @@ def random_path(
 ) -> Path:
     """A smooth pseudo-random drive of about ``length`` m: straights and arcs of radius size/2..2 size.
 
-    ``heading``: ``fixed``, ``tangent``, or ``mixed`` (the body turns with the path plus a slow
+    ``heading``: ``fixed``, ``tangent``, ``swing`` or ``mixed`` (the body turns with the path plus a slow
     sideways swing of +-45 degrees, so the drive exercises translation and rotation together).
     """
     rng = np.random.default_rng(seed)
@@ -153,5 +158,5 @@ def random_path(
         swing = 0.25 * math.pi * np.sin(2 * math.pi * dense.s / (7.0 * size))
         return base.with_columns(theta=base.theta + swing)
     if heading not in HEADINGS:
-        raise ConfigError(f"unknown heading mode '{heading}'; expected fixed, tangent or mixed")
-    return _with_heading(dense, heading)
+        raise ConfigError(f"unknown heading mode '{heading}'; expected fixed, tangent, swing or mixed")
+    return _with_heading(dense, heading, size)
