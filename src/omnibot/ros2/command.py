@@ -21,6 +21,9 @@ from omnibot.errors import ConfigError
 PERIOD = 0.02
 """s: the runtime's cycle with ROS 2 (odom, tf, joint states at 50 Hz)."""
 INSTALL = "the ROS 2 bridge needs cyclonedds: pip install 'omnibot[ros2]'"
+SONAR_PERIOD = 0.1
+"""s between pings of each sonar (the controller pings only the sonars it is told to; without this
+every ``range/<sonar>`` would say +inf, no echo, for a sonar that never pinged)."""
 
 
 def add_bridge_options(p: argparse.ArgumentParser) -> None:
@@ -80,7 +83,14 @@ def attach(runtime: Any, robot: Any, args: argparse.Namespace) -> Any:
         raise ConfigError(str(exc)) from None
     runtime.add_source(CmdVelSource(node, stamped=not args.twist, timeout=args.cmd_vel_timeout))
     runtime.add_sink(Ros2Sink(node, robot))
+    start_sonars(runtime.client, robot)
     return node
+
+
+def start_sonars(client: Any, robot: Any) -> None:
+    """Have the controller ping every sonar each :data:`SONAR_PERIOD` (their readings ride in TEL)."""
+    for number in range(1, len(robot.sonars) + 1):
+        client.sonar(number, SONAR_PERIOD)
 
 
 def run(args: argparse.Namespace) -> int:
