@@ -3,7 +3,7 @@
 Run by the interpreter of a ROS 2 distribution's wheels (Jazzy's in the project's venv, Kilted's in
 ``.cache/ros2-kilted``), in the test's private network namespace; it imports nothing of omnibot.
 ``argv[1]`` is a JSON plan: ``sonars`` (names), ``twist`` (vx, vy, w), ``drive`` and ``silence`` (s).
-It waits for ``odom``, reads the graph (type names, RIHS01 hashes, QoS of every endpoint), publishes
+It waits for ``odom`` and for the bridge to match its ``cmd_vel``, reads the graph (type names, RIHS01 hashes, QoS of every endpoint), publishes
 TwistStamped at 20 Hz for ``drive`` s, listens ``silence`` s more and prints one JSON line: what it
 received (stamps in ns and the values) and what the graph said.
 """
@@ -106,8 +106,8 @@ def main() -> None:
         node.create_subscription(Range, f"range/{sonar}", on_range(f"range/{sonar}"), qos_profile_sensor_data)
     publisher = node.create_publisher(TwistStamped, "cmd_vel", 10)
 
-    end = time.monotonic() + WAIT
-    while not got["odom"] and time.monotonic() < end:
+    end = time.monotonic() + WAIT  # the bridge publishes and has matched our cmd_vel
+    while (not got["odom"] or publisher.get_subscription_count() < 1) and time.monotonic() < end:
         rclpy.spin_once(node, timeout_sec=0.05)
     topics = ["/odom", "/imu", "/joint_states", "/tf", "/tf_static", "/robot_description", "/cmd_vel"]
     graph = endpoints(node, topics + [f"/range/{s}" for s in plan["sonars"]])

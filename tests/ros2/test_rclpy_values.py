@@ -60,36 +60,43 @@ with robot_session("sim://omni4?seed=5&world=room", "omni4", timeout=0.5) as ses
     capture.close = lambda: None
     sink.recorder.mirrors.append(capture)
     trace = []  # (runtime time, true speed, true turn rate) per cycle
-    timeline = []  # the simulator's state every 2 ms: time, pose, body twist, wheel angles, true ranges
-    truth = {}  # that state at each TEL sample's instant (its controller time: the simulator's clock)
+    timeline = []  # the simulator's state every 2 ms: time, pose, body twist, wheel angles
+    samples = []  # (controller time: the simulator's clock, stamp) of each TEL sample
 
-    def snap(_):
+    def snap(_):  # cheap: the runtime must keep its pace; the rest is worked out after the run
         pose, twist = sim.pose, sim.twist
-        ranges = []
-        for sonar in sim.sonars:
-            sp = sonar.pose_in_world((pose.x, pose.y, pose.theta))
-            r = sim.world.cone_range(sp.x, sp.y, sp.theta, sonar.spec.cone, sonar.spec.max_range)
-            ranges.append(None if math.isinf(r) else r)
-        wheels = [float(a) for a in sim.physics.wheel_angle[0]]
-        timeline.append((sim.time, [pose.x, pose.y, pose.theta], [twist.vx, twist.vy, twist.w], wheels, ranges))
+        timeline.append((sim.time, (pose.x, pose.y, pose.theta), (twist.vx, twist.vy, twist.w), sim.physics.wheel_angle[0].tolist()))
 
     def record(cycle):
         twist = sim.twist
         trace.append((cycle.now, math.hypot(twist.vx, twist.vy), twist.w))
-        for tel in cycle.telemetry:
-            i = bisect.bisect_left(timeline, tel.controller_time, key=lambda row: row[0])
-            i = min(range(max(0, i - 1), min(len(timeline), i + 1)), key=lambda k: abs(timeline[k][0] - tel.controller_time))
-            t, pose, body, wheels, ranges = timeline[i]
-            j = bisect.bisect_left(timeline, tel.controller_time - SONAR_PERIOD - 0.05, key=lambda row: row[0])
-            window = [row[4] for row in timeline[j : i + 1]]
+        samples.extend((tel.controller_time, sink.recorder.ns(tel.time)) for tel in cycle.telemetry)
+
+    def true_ranges(pose):
+        ranges = []
+        for sonar in sim.sonars:
+            sp = sonar.pose_in_world(pose)
+            r = sim.world.cone_range(sp.x, sp.y, sp.theta, sonar.spec.cone, sonar.spec.max_range)
+            ranges.append(None if math.isinf(r) else r)
+        return ranges
+
+    def truth_at_samples():
+        # the state at each TEL sample's instant, and the span of each sonar's true range over the
+        # window its reading can come from
+        times = [row[0] for row in timeline]
+        ranges = [true_ranges(row[1]) for row in timeline]
+        truth = {}
+        for at, ns in samples:
+            i = bisect.bisect_left(times, at)
+            i = min(range(max(0, i - 1), min(len(times), i + 1)), key=lambda k: abs(times[k] - at))
+            j = bisect.bisect_left(times, at - SONAR_PERIOD - 0.05)
             spans = []
-            for k in range(len(ranges)):
-                seen = [w[k] for w in window if w[k] is not None]
+            for k in range(len(sim.sonars)):
+                seen = [r[k] for r in ranges[j : i + 1] if r[k] is not None]
                 spans.append([min(seen), max(seen)] if seen else None)
-            truth[sink.recorder.ns(tel.time)] = {
-                "dt": t - tel.controller_time, "pose": pose, "twist": body, "wheels": wheels,
-                "ranges": ranges, "spans": spans,
-            }
+            t, pose, body, wheels = timeline[i]
+            truth[ns] = {"dt": t - at, "pose": pose, "twist": body, "wheels": wheels, "ranges": ranges[i], "spans": spans}
+        return truth
 
     import bisect, math
     from omnibot.ros2.command import SONAR_PERIOD
@@ -113,6 +120,7 @@ with robot_session("sim://omni4?seed=5&world=room", "omni4", timeout=0.5) as ses
     runtime.close()
     node.close()
     sim.remove_listener(snap)
+    truth = truth_at_samples()
 print(json.dumps({
     "start": [start.x, start.y, start.theta], "truth": truth, "sent": sent,
     "received": source.received, "last_rx": source.received_at, "trace": trace, "rc": peer.returncode, "peer": out.strip().splitlines()[-1] if out.strip() else None,
