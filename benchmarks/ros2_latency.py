@@ -7,10 +7,12 @@ why, where none can be made.
 The bridge as ``omnibot ros2 --port sim://omni4`` runs it (one runtime paced to the wall clock at
 ``--period``, the ``cmd_vel`` source and the publishing sink) in this process; a teleop stand-in in
 another process (a cyclonedds participant, the wire of rmw_cyclonedds) publishes TwistStamped at
-20 Hz, each with a new forward speed. Measured per command: from its publication to the VEL that
+20 Hz (each 0-20 ms after its beat, seeded: the commands fall at every phase of the bridge's cycle,
+as an unsynchronised teleop's do), each with a new forward speed, once matched with the bridge. Measured per command: from its publication to the VEL that
 carries it being written to the link (a runtime sink placed before the bridge's, which runs right
 after the cycle's VEL). A command waits for the next cycle: half a period on average, a period at
-most; the rest is DDS delivery and the cycle's own work.
+most; the rest is DDS delivery and the cycle's own work. A command that a newer one replaced before
+a cycle took it (the loop waited longer than 50 ms for a core) never reaches the link: counted.
 """
 
 from __future__ import annotations
@@ -35,7 +37,7 @@ SPEEDS = 20
 its neighbours by its speed."""
 
 PEER = r"""
-import json, sys, time
+import json, random, sys, time
 from omnibot.logs import schemas
 from omnibot.logs.recorder import header, twist
 from omnibot.ros2.dds import Node
@@ -45,13 +47,17 @@ TS = "geometry_msgs/msg/TwistStamped"
 duration, rate, speeds = float(sys.argv[1]), float(sys.argv[2]), int(sys.argv[3])
 node = Node()
 writer = node.writer("cmd_vel", TS)
-time.sleep(1.5)  # discovery
+end = time.monotonic() + 10
+while writer.get_publication_matched_status().current_count < 1 and time.monotonic() < end:
+    time.sleep(0.01)  # discovery: the bridge's cmd_vel reader matched
+time.sleep(0.2)
 sent = []
+jitter = random.Random(1)
 start = time.monotonic()
 for k in range(int(duration * rate)):
     vx = 0.10 + 0.01 * (k % speeds)
     message = to_dds(schemas.new(TS, header=header(0, "base_link"), twist=twist(vx, 0.0, 0.0)), TS)
-    target = start + k / rate
+    target = start + k / rate + jitter.uniform(0.0, 0.02)  # every phase of the bridge's cycle
     time.sleep(max(0.0, target - time.monotonic()))
     sent.append((round(vx * 100), time.monotonic()))
     writer.write(message)
