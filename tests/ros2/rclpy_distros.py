@@ -30,19 +30,19 @@ in the environment: inherited by another distribution's interpreter, it would lo
 libraries (or none). Dropped from a peer's environment so its own bootstrapper runs."""
 
 
-def peer_env(env: dict[str, str] | None = None) -> dict[str, str]:
-    """``env`` (this process's) without :data:`BOOTSTRAP`."""
-    return {k: v for k, v in (os.environ if env is None else env).items() if k not in BOOTSTRAP}
+def peer_env() -> dict[str, str]:
+    """This process's environment without :data:`BOOTSTRAP`."""
+    return {k: v for k, v in os.environ.items() if k not in BOOTSTRAP}
 
 
 @cache
-def _probe(python: str) -> str:
-    """The distribution name rclpy reports in ``python`` ('' when rclpy cannot be imported)."""
-    code = "import os, rclpy, rclpy.node, ament_index_python; print(os.environ.get('ROS_DISTRO', 'ok'))"
+def _imports_rclpy(python: str) -> bool:
+    """``python`` imports rclpy and the messages the node uses."""
+    code = "import rclpy.node, geometry_msgs.msg, nav_msgs.msg, sensor_msgs.msg"
     result = subprocess.run(
-        [python, "-c", code], capture_output=True, text=True, check=False, timeout=60, env=peer_env()
+        [python, "-c", code], capture_output=True, check=False, timeout=60, env=peer_env()
     )
-    return result.stdout.strip() if result.returncode == 0 else ""
+    return result.returncode == 0
 
 
 def interpreter(distro: str) -> str:
@@ -55,6 +55,6 @@ def interpreter(distro: str) -> str:
         return sys.executable
     if not KILTED.exists():
         pytest.skip(f"ROS 2 Kilted's rclpy is not installed in {KILTED.parent.parent}: make ros2-kilted")
-    if not _probe(str(KILTED)):
+    if not _imports_rclpy(str(KILTED)):
         pytest.skip(f"ROS 2 Kilted's rclpy in {KILTED.parent.parent} does not import: make ros2-kilted")
     return str(KILTED)
