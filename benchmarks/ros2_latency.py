@@ -84,7 +84,9 @@ def measure(duration: float, period: float) -> dict[str, Any]:
         client, robot = session.client, session.robot
         runtime = Runtime(client, period=period)
         runtime.add_sink(on_link)  # before the bridge's sink: right after the cycle's VEL
-        node = attach(runtime, robot, Namespace(namespace="", twist=False, cmd_vel_timeout=0.5))
+        node = attach(
+            runtime, robot, Namespace(namespace="", frame_prefix=None, twist=False, cmd_vel_timeout=0.5)
+        )
         env = dict(os.environ)
         env["PYTHONPATH"] = os.pathsep.join([p for p in sys.path if p])
         peer = subprocess.Popen(

@@ -132,7 +132,7 @@ def run(robots: int, rate: float, duration: float, *, bridge: bool = True) -> Re
             session = stack.enter_context(robot_session(f"sim://omni4?seed={k + 1}", "omni4", timeout=0.5))
             runtime = Runtime(session.client, period=period)
             if bridge:
-                options = Namespace(namespace=name, twist=False, cmd_vel_timeout=0.5)
+                options = Namespace(namespace=name, frame_prefix=None, twist=False, cmd_vel_timeout=0.5)
                 stack.callback(attach(runtime, session.robot, options).close)
                 sink = next(s for s in runtime.sinks if isinstance(s, Ros2Sink))
                 sink.recorder.mirrors.append(windows[k])

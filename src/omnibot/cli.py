@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import errno
+import importlib
 import json
 import math
 import os
@@ -34,6 +35,7 @@ import sys
 import traceback
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TypeAlias
 
 from omnibot import __version__
 from omnibot.cliargs import (
@@ -204,7 +206,10 @@ def _sim(args: argparse.Namespace) -> int:
     from omnibot.sim.surfaces import SURFACES
     from omnibot.sim.world import load_world
 
-    robot = load_robot(args.robot)
+    robots = args.robot or ["omni4"]
+    if len(robots) > 1 or "?" in robots[0]:  # a fleet (of one, too: a robot's own options)
+        return _sim_fleet(args, robots)
+    robot = load_robot(robots[0])
     if args.surface is not None and args.surface not in SURFACES:
         raise ConfigError(
             f"unknown surface {args.surface!r}; expected one of: {', '.join(SURFACES)}", key="--surface"
@@ -229,6 +234,18 @@ def _sim(args: argparse.Namespace) -> int:
     )
 
 
+def _sim_fleet(args: argparse.Namespace, robots: list[str]) -> int:
+    from omnibot.sim.emulator import parse_member, run_pty_fleet
+
+    if not args.pty:
+        raise ConfigError("only the pty emulator exists so far: add --pty", key="omnibot sim")
+    for flag, given in (("--truth", args.truth), ("--log", args.log), ("--foxglove", args.foxglove)):
+        if given is not None:
+            raise ConfigError(f"{flag} records one robot: not with several --robot", key=flag)
+    members = [parse_member(text, k, args.seed) for k, text in enumerate(robots)]
+    return run_pty_fleet(members, surface=args.surface, world=args.world, baud=args.baud)
+
+
 def _add_sim(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "sim",
@@ -237,12 +254,18 @@ def _add_sim(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "pacing bytes to the baud rate. The first stdout line is the device path. Ends on SIGINT/SIGTERM.",
     )
     p.add_argument("--pty", action="store_true", help="serve on a pseudo-terminal (required)")
-    p.add_argument("--robot", default="omni4", help="preset name or description file (default omni4)")
+    p.add_argument(
+        "--robot",
+        action="append",
+        metavar="PRESET|FILE",
+        help="preset name or description file (default omni4); repeat it for a fleet in one world, one "
+        "pty each (a line NAME PATH per robot): PRESET?name=R&pose=X,Y,THETA&seed=N (pose in m, m, degrees)",
+    )
     p.add_argument(
         "--seed",
         type=int,
         default=DEFAULT_SEED,
-        help=f"random seed of the sensor noise (default {DEFAULT_SEED})",
+        help=f"random seed of the sensor noise (default {DEFAULT_SEED}; a fleet's k-th robot: seed + k)",
     )
     p.add_argument("--surface", help="floor surface: wood, carpet, concrete, linoleum (default: the world's)")
     p.add_argument("--world", help="world name (empty, room, corridor) or world YAML file (default empty)")
@@ -389,126 +412,80 @@ def _add_demo(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.set_defaults(handler=_demo)
 
 
-# --------------------------------------------------------------------------- teleop, dashboard
+# --------------------------------------------------------------------------- teleop ... follow
+
+Adder: TypeAlias = "Callable[[argparse._SubParsersAction[argparse.ArgumentParser]], None]"
 
 
-def _teleop(args: argparse.Namespace) -> int:
-    from omnibot.teleop.command import run
+def _command_in(
+    module: str, name: str, *, add: str = "add_arguments", run: str = "run", summary: str, description: str
+) -> Adder:
+    """The adder of the subcommand ``name`` (``summary``: its line in ``omnibot --help``) whose options
+    (``module.add(p)``) and handler (``module.run(args)``) live in ``module``: imported when the parser
+    is built and when the command runs, so the heavy imports stay in the handler."""
 
-    return run(args)
+    def handler(args: argparse.Namespace) -> int:
+        status: int = getattr(importlib.import_module(module), run)(args)
+        return status
 
+    def adder(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+        p = sub.add_parser(name, help=summary, description=description)
+        getattr(importlib.import_module(module), add)(p)
+        p.set_defaults(handler=handler)
 
-def _add_teleop(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    from omnibot.teleop.command import add_arguments
-
-    p = sub.add_parser(
-        "teleop",
-        help="drive the robot from a joystick (pygame) or the keyboard, with a deadman",
-        description="Sends VEL with its watchdog at autorepeat_rate; letting go of the enable button, "
-        "losing the pad or going quiet stops the robot. On sim:// simulated time follows the wall clock.",
-    )
-    add_arguments(p)
-    p.set_defaults(handler=_teleop)
-
-
-def _dashboard(args: argparse.Namespace) -> int:
-    from omnibot.web.command import run
-
-    return run(args)
+    return adder
 
 
-def _add_dashboard(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    from omnibot.web.command import add_arguments
-
-    p = sub.add_parser(
-        "dashboard",
-        help="a web page showing the robot live (map, trail, sonars, charts) and driving it",
-        description="Serves the dashboard over HTTP and a websocket; bound to 127.0.0.1 unless --host "
-        "says otherwise, and then an access token is required.",
-    )
-    add_arguments(p)
-    p.set_defaults(handler=_dashboard)
-
-
-def _run(args: argparse.Namespace) -> int:
-    from omnibot.runtime.command import run
-
-    return run(args)
-
-
-def _add_run(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    from omnibot.runtime.command import add_arguments
-
-    p = sub.add_parser(
-        "run",
-        help="several front ends on one runtime: --teleop pad|keyboard, --dashboard, --follow PATH",
-        description="One runtime owns the robot; each front end is a source (pad/keyboard 200, the page 100, "
-        "the follower 10) arbitrated as twist_mux does; the dashboard's emergency stop overrides all.",
-    )
-    add_arguments(p)
-    p.set_defaults(handler=_run)
-
-
-def _ros2(args: argparse.Namespace) -> int:
-    from omnibot.ros2.command import run
-
-    return run(args)
-
-
-def _add_ros2(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    from omnibot.ros2.command import add_arguments
-
-    p = sub.add_parser(
-        "ros2",
-        help="the robot on ROS 2 (DDS, no ROS install): cmd_vel in; odom, tf, imu, ranges, joint_states out",
-        description="A cmd_vel source and publishing sink of one runtime, on cyclonedds with ROS 2's "
-        "conventions (pip install 'omnibot[ros2]'). ROS_DOMAIN_ID and ROS_AUTOMATIC_DISCOVERY_RANGE apply.",
-    )
-    add_arguments(p)
-    p.set_defaults(handler=_ros2)
-
-
-# --------------------------------------------------------------------------- record, follow
-
-
-def _record(args: argparse.Namespace) -> int:
-    from omnibot.navigation.commands import run_record
-
-    return run_record(args)
-
-
-def _add_record(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    from omnibot.navigation.commands import add_record_arguments
-
-    p = sub.add_parser(
-        "record",
-        help="teach a path: record the robot's odometry while it is pushed by hand or driven",
-        description="Samples the robot's own pose estimate (encoders, tracking wheels, gyro) by distance or "
-        "time into a path file t,x,y,theta[,v]. In the simulator a hand pushes the robot along a shape with "
-        "the motors off (seed 002's teaching), or VEL commands drive it; with --port it listens.",
-    )
-    add_record_arguments(p)
-    p.set_defaults(handler=_record)
-
-
-def _follow(args: argparse.Namespace) -> int:
-    from omnibot.navigation.commands import run_follow
-
-    return run_follow(args)
-
-
-def _add_follow(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    from omnibot.navigation.commands import add_follow_arguments
-
-    p = sub.add_parser(
-        "follow",
-        help="repeat a path: a path follower drives it, with a report and a plot",
-        description="Runs a path follower at 100 Hz on the host (VEL out, TEL in); by default on the simulated "
-        "robot in lockstep, measured against its ground truth. Exit status 1 if the run was not completed "
-        "(the follower did not finish, or the run was outside --final-tolerance/--cross-track-tolerance).",
-    )
-    add_follow_arguments(p)
-    p.set_defaults(handler=_follow)
+_add_teleop = _command_in(
+    "omnibot.teleop.command",
+    "teleop",
+    summary="drive the robot from a joystick (pygame) or the keyboard, with a deadman",
+    description="Sends VEL with its watchdog at autorepeat_rate; letting go of the enable button, "
+    "losing the pad or going quiet stops the robot. On sim:// simulated time follows the wall clock.",
+)
+_add_dashboard = _command_in(
+    "omnibot.web.command",
+    "dashboard",
+    summary="a web page showing the robot live (map, trail, sonars, charts) and driving it",
+    description="Serves the dashboard over HTTP and a websocket; bound to 127.0.0.1 unless --host "
+    "says otherwise, and then an access token is required.",
+)
+_add_run = _command_in(
+    "omnibot.runtime.command",
+    "run",
+    summary="several front ends on one runtime: --teleop pad|keyboard, --dashboard, --follow PATH",
+    description="One runtime owns the robot; each front end is a source (pad/keyboard 200, the page 100, "
+    "the follower 10) arbitrated as twist_mux does; the dashboard's emergency stop overrides all.",
+)
+_add_ros2 = _command_in(
+    "omnibot.ros2.command",
+    "ros2",
+    summary="robots on ROS 2 (DDS, no ROS install): cmd_vel, path, initialpose in; odom, tf, imu, ranges, "
+    "joint_states, battery out",
+    description="cmd_vel and path sources, an odometry reset and publishing sinks of one runtime per "
+    "robot, on cyclonedds with ROS 2's conventions (pip install 'omnibot[ros2]'). ROS_DOMAIN_ID and "
+    "ROS_AUTOMATIC_DISCOVERY_RANGE apply.",
+)
+_add_record = _command_in(
+    "omnibot.navigation.commands",
+    "record",
+    add="add_record_arguments",
+    run="run_record",
+    summary="teach a path: record the robot's odometry while it is pushed by hand or driven",
+    description="Samples the robot's own pose estimate (encoders, tracking wheels, gyro) by distance or "
+    "time into a path file t,x,y,theta[,v]. In the simulator a hand pushes the robot along a shape with "
+    "the motors off (seed 002's teaching), or VEL commands drive it; with --port it listens.",
+)
+_add_follow = _command_in(
+    "omnibot.navigation.commands",
+    "follow",
+    add="add_follow_arguments",
+    run="run_follow",
+    summary="repeat a path: a path follower drives it, with a report and a plot",
+    description="Runs a path follower at 100 Hz on the host (VEL out, TEL in); by default on the simulated "
+    "robot in lockstep, measured against its ground truth. Exit status 1 if the run was not completed "
+    "(the follower did not finish, or the run was outside --final-tolerance/--cross-track-tolerance).",
+)
 
 
 # --------------------------------------------------------------------------- calibrate
@@ -553,7 +530,7 @@ def _add_debug(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
                 _add_debug(action)
 
 
-ADDERS: list[Callable[[argparse._SubParsersAction[argparse.ArgumentParser]], None]] = [
+ADDERS: list[Adder] = [
     _add_robot,
     _add_kinematics,
     _add_sim,
@@ -600,7 +577,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         with (
             terminate_cleanly(),
-            recording(getattr(args, "log", None), foxglove=getattr(args, "foxglove", None)),
+            recording(
+                getattr(args, "log", None),
+                foxglove=getattr(args, "foxglove", None),
+                foxglove_token=getattr(args, "foxglove_token", None),
+            ),
         ):
             status = handler(args)
             sys.stdout.flush()  # a reader that went away shows up here, not at interpreter exit

@@ -66,15 +66,23 @@ def add_robot_options(
     world: str = "empty",
     port_help: str = "the simulated --robot in lockstep (sim://ROBOT?seed=...)",
     surface_help: str = "",
+    several: bool = False,
 ) -> None:
-    """``--robot --port --seed --world --surface`` with the shared meaning and defaults."""
+    """``--robot --port --seed --world --surface`` with the shared meaning and defaults (``several``:
+    ``--port`` may be repeated, one robot each; ``args.port`` is then a list or None)."""
     p.add_argument(
         "--robot",
         metavar="PRESET|FILE",
         help=f"the robot (default: the one the controller names; {DEFAULT_ROBOT} in the simulator); "
         "it must be the robot on the link",
     )
-    p.add_argument("--port", metavar="URL", help=f"link URL of the controller (default: {port_help})")
+    p.add_argument(
+        "--port",
+        metavar="URL",
+        action="append" if several else "store",
+        help=f"link URL of the controller (default: {port_help})"
+        + ("; repeat for more robots" if several else ""),
+    )
     p.add_argument(
         "--seed", type=int, metavar="N", help=f"simulator seed (default {DEFAULT_SEED}; not with --port)"
     )
@@ -95,7 +103,8 @@ def add_robot_options(
 
 def add_log_option(p: argparse.ArgumentParser) -> None:
     """``--log FILE.mcap``: record the run (:mod:`omnibot.logs.recorder`; ``omnibot log``);
-    ``--foxglove [PORT]``: serve it live to Foxglove (:mod:`omnibot.logs.live`)."""
+    ``--foxglove [[HOST:]PORT]`` (``--foxglove-token``): serve it live to Foxglove
+    (:mod:`omnibot.logs.live`)."""
     p.add_argument(
         "--log",
         metavar="FILE.mcap",
@@ -103,11 +112,17 @@ def add_log_option(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--foxglove",
-        type=int,
         nargs="?",
-        const=8765,
-        metavar="PORT",
-        help="serve the same channels live to Foxglove on ws://127.0.0.1:PORT (default 8765)",
+        const="8765",
+        metavar="[HOST:]PORT",
+        help="serve the same channels live to Foxglove on ws://HOST:PORT (default 127.0.0.1:8765; "
+        "an access token off loopback)",
+    )
+    p.add_argument(
+        "--foxglove-token",
+        metavar="TOKEN",
+        help="--foxglove: access token (default $OMNIBOT_FOXGLOVE_TOKEN; required, and made up if not "
+        "given, off loopback)",
     )
 
 

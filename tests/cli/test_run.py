@@ -70,7 +70,9 @@ def test_the_dashboard_runs_the_follower_in_its_link_thread(
     circle: Path, harness: Harness, capsys: pytest.CaptureFixture[str]
 ) -> None:
     argv = ["run", "--follow", str(circle), "--dashboard", "--http-port", "0", "--world", "empty"]
-    assert main([*argv, "--duration", "12"]) == 0
+    assert main([*argv, "--duration", "15"]) == 0  # 3 s standing still, then about 8 s of circle
     out = capsys.readouterr().out
     assert "run: dashboard for sim://omni4" in out and "run: follow completed" in out
+    # the standstill of `omnibot follow`, on the dashboard's runtime too
+    assert "run: nobody drives: follower held by the standstill: the gyro's bias is learned (3 s)" in out
     harness.assert_left_as_found()

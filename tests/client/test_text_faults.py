@@ -212,3 +212,21 @@ def test_late_tagged_reply_lands_on_its_own_command() -> None:
     assert client.tags is True and client.status().idle  # the late OK does not answer STATUS
     assert move.reply == Ok()  # it landed on MOVE
     assert move.result() == Ok()
+
+
+def test_a_step_before_a_command_that_times_out_says_the_command_was_not_sent() -> None:
+    # the tag probe: nothing answers at all
+    silent = RobotClient(ScriptedLink(), timeout=0.2)
+    with pytest.raises(LinkTimeout, match=r"no reply to HELLO.*\(STATUS was not sent\)"):
+        silent.status()
+    assert b"STATUS" not in bytes(silent.link.written)  # type: ignore[attr-defined]
+    # the resync of an untagged client: a command timed out, then the controller fell silent
+    answers = {"on": True}
+    link = ScriptedLink(lambda line: controller(line) if answers["on"] and b"TELEM" not in line else b"")
+    client = RobotClient(link, tags=False, timeout=0.2)
+    with pytest.raises(LinkTimeout):
+        client.execute(Telem(0, 1))
+    answers["on"] = False
+    with pytest.raises(LinkTimeout, match=r"\(TELEM,0,2 was not sent\)"):
+        client.execute(Telem(0, 2))
+    assert b"TELEM,0,2" not in bytes(link.written)

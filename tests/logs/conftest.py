@@ -4,8 +4,12 @@ telemetry at 100 Hz, recorded by :class:`omnibot.logs.recorder.Recorder` fed by 
 from __future__ import annotations
 
 import math
+import os
 import shutil
+import signal
 import subprocess
+import sys
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -87,4 +91,61 @@ def node_reader() -> Path:
         subprocess.run(["make", "-s", "mcap-readers"], cwd=REPO, check=True, timeout=600)
     script = READERS / "read_mcap.mjs"
     shutil.copyfile(REPO / "tests" / "logs" / "node" / "read_mcap.mjs", script)
+    return script
+
+
+def kill_mid_run(path: Path) -> None:
+    """``omnibot send --log`` a motion that never ends (MOVE INF: until the next command)
+    with telemetry at 100 Hz; SIGKILL it once its log holds several chunks."""
+    env = {**os.environ, "PYTHONPATH": str(REPO / "src")}
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "omnibot",
+            "send",
+            "--log",
+            str(path),
+            "TELEM,10,255",
+            "MOVE,30000,40,0,0",
+            "--wait-idle",
+            "--idle-timeout",
+            "100000",
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        env=env,
+    )
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and proc.poll() is None:
+            if path.exists() and path.stat().st_size > 60_000:
+                break
+            time.sleep(0.05)
+        assert proc.poll() is None, "the run ended by itself"
+        assert path.stat().st_size > 60_000, "the log did not grow"
+    finally:
+        if proc.poll() is None:
+            os.kill(proc.pid, signal.SIGKILL)
+        proc.wait(timeout=10)
+    assert proc.returncode == -signal.SIGKILL
+
+
+@pytest.fixture(scope="session")
+def killed(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A log whose recorder (``omnibot send --log`` in a subprocess) was killed with SIGKILL."""
+    path = tmp_path_factory.mktemp("killed") / "killed.mcap"
+    kill_mid_run(path)
+    return path
+
+
+def node_script(name: str, where: Path) -> Path:
+    """Foxglove reader script ``name`` (tests/logs/node/) copied into ``where``, beside a link to the
+    npm packages ``make mcap-readers`` installed (nothing is written where they are)."""
+    node_reader()  # node/npm present and the packages installed, else skip
+    script = where / name
+    shutil.copyfile(REPO / "tests" / "logs" / "node" / name, script)
+    modules = where / "node_modules"
+    if not modules.exists():
+        modules.symlink_to(READERS / "node_modules", target_is_directory=True)
     return script

@@ -119,3 +119,60 @@ def test_a_websocket_client_gets_the_live_channels() -> None:
 def test_sim_refuses_foxglove(capsys: Any) -> None:
     assert main(["sim", "--pty", "--foxglove"]) == 2
     assert "--foxglove goes on the command that drives it" in capsys.readouterr().err
+
+
+@pytest.mark.allow_leaks(SDK_RUNTIME)
+def test_a_token_guards_the_live_server() -> None:
+    """Bound with a token (on 127.0.0.1: tests bind nothing else), the SDK's server is reached only
+    through the gate: refused without the token or with a wrong one, served with it."""
+    from websockets.exceptions import InvalidStatus
+
+    token = "live-token-123"
+    live = FoxgloveLive(0, token=token)
+    try:
+        assert live.url == f"ws://127.0.0.1:{live.port}/?token={token}"
+
+        async def handshake(query: str) -> str:
+            url = f"ws://127.0.0.1:{live.port}/{query}"
+            async with websockets.connect(url, subprotocols=[Subprotocol("foxglove.sdk.v1")]) as ws:
+                info = json.loads(await asyncio.wait_for(ws.recv(), 5))
+                return str(info["op"])
+
+        for query in ("", "?token=wrong-token-1"):
+            with pytest.raises(InvalidStatus) as refused:
+                asyncio.run(handshake(query))
+            assert refused.value.response.status_code == 403
+        assert asyncio.run(handshake(f"?token={token}")) == "serverInfo"
+    finally:
+        live.close()
+
+
+def test_foxglove_address_and_token_are_checked_before_anything_runs(
+    capsys: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from omnibot.logs.active import FoxgloveBind
+    from omnibot.logs.live import parse_address
+
+    assert parse_address("8765") == ("127.0.0.1", 8765)
+    assert parse_address("0.0.0.0:0") == ("0.0.0.0", 0)
+    assert parse_address("[::1]:9000") == ("::1", 9000)
+    assert parse_address("robot.local:8765") == ("robot.local", 8765)
+    monkeypatch.delenv("OMNIBOT_FOXGLOVE_TOKEN", raising=False)
+    assert FoxgloveBind.parse("8765") == FoxgloveBind("127.0.0.1", 8765)
+    made = FoxgloveBind.parse("0.0.0.0:8765")  # parsed only: nothing is bound
+    assert made.token is not None and len(made.token) >= 16 and made.made_up
+    assert FoxgloveBind.parse("0.0.0.0:8765", "given-token").token == "given-token"
+    monkeypatch.setenv("OMNIBOT_FOXGLOVE_TOKEN", "from-the-env")
+    assert FoxgloveBind.parse("127.0.0.1:0") == FoxgloveBind("127.0.0.1", 0, "from-the-env")
+    monkeypatch.delenv("OMNIBOT_FOXGLOVE_TOKEN")
+    cases = [
+        (["--foxglove", "::1:8765"], "expected [HOST:]PORT"),
+        (["--foxglove", "70000"], "expected [HOST:]PORT"),
+        (["--foxglove", "host:"], "expected [HOST:]PORT"),
+        (["--foxglove", "0", "--foxglove-token", "short"], "at least 8 characters"),
+        (["--foxglove-token", "long-enough-token"], "--foxglove-token goes with --foxglove"),
+    ]
+    for extra, message in cases:
+        assert main(["send", "--port", "sim://omni4", "STATUS", *extra]) == 2, extra
+        err = capsys.readouterr().err
+        assert message in err and "Traceback" not in err, err

@@ -7,7 +7,13 @@ from pathlib import Path as FsPath
 import pytest
 
 from omnibot.cli import main
-from omnibot.control.paths import read_path
+from omnibot.control.paths import read_path, standard_path
+from omnibot.control.paths.teach import PathRecorder
+from omnibot.navigation.record import teach
+from omnibot.navigation.session import simulated_client
+from omnibot.robot.description import load_robot
+from omnibot.runtime.runtime import Runtime
+from tests.navigation.test_runner import Drivers
 
 
 def test_record_by_pushing_then_follow_with_seed002(
@@ -54,3 +60,24 @@ def test_record_by_driving_and_by_time(tmp_path: FsPath) -> None:
     path = read_path(taught)
     assert path.t is not None and path.t[1] == pytest.approx(0.1, abs=0.011)
     assert path.length == pytest.approx(1.26, rel=0.1)
+
+
+def test_teach_drive_is_a_script_on_the_runtime(monkeypatch: pytest.MonkeyPatch) -> None:
+    robot = load_robot("omni4")
+    drivers = Drivers()
+    runtimes: list[Runtime] = []
+    start = Runtime.start
+
+    def watched(runtime: Runtime) -> None:  # every runtime the recording makes: who drove it
+        if runtime not in runtimes:
+            runtimes.append(runtime)
+            runtime.add_sink(drivers)
+        start(runtime)
+
+    monkeypatch.setattr(Runtime, "start", watched)
+    recorder = PathRecorder("distance", 0.02)
+    with simulated_client(robot, seed=1) as client:
+        result = teach(client, robot, recorder, mode="drive", shape=standard_path("line", size=0.3))
+    assert len(runtimes) == 1 and drivers.sources == {"drive"}
+    assert runtimes[0].sent.vel > 100 and runtimes[0].sent.errors == 0
+    assert result.path is not None and result.path.length == pytest.approx(0.6, rel=0.05)

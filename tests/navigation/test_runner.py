@@ -10,11 +10,14 @@ import pytest
 from omnibot.client.client import RobotClient
 from omnibot.control.followers import make_follower
 from omnibot.control.paths import Path, standard_path
-from omnibot.motion import Pose2D
+from omnibot.motion import Pose2D, Twist
 from omnibot.navigation.metrics import ODOMETRY, TRUTH, tracking_report
-from omnibot.navigation.runner import FrameMap, Navigator
+from omnibot.navigation.runner import FrameMap, NavigationError, Navigator
 from omnibot.navigation.session import FollowOptions, follower_limits, simulate_follow
 from omnibot.robot.description import load_robot
+from omnibot.runtime.arbiter import EStop
+from omnibot.runtime.cycle import Cycle
+from omnibot.runtime.sources import ScriptSource
 
 
 def test_tracker_follows_a_circle_against_ground_truth() -> None:
@@ -66,11 +69,52 @@ def test_gyro_calibration_spin_learns_the_scale() -> None:
     robot = load_robot("omni4")
     with RobotClient.open("sim://omni4?seed=3", robot) as client:
         nav = Navigator(client, robot)
+        drivers = Drivers()
+        nav.runtime.add_sink(drivers)
         nav.prepare(0.5)
         bias, scale = nav.calibrate_gyro(turns=1.0, rate=3.0)
         sim = nav.sim
         nav.close()
+    # the spins are a script on the runtime: it sent every VEL, nothing else drove
+    assert drivers.sources == {"gyro-spin"} and nav.runtime.sent.vel > 500
+    assert nav.runtime.sent.errors == 0
     assert sim is not None and sim.gyro is not None
     assert bias == pytest.approx(sim.gyro.bias, abs=1e-3)
     assert scale == pytest.approx(sim.gyro.scale_error, abs=3e-3)
     assert abs(sim.pose.theta) < 0.2  # one turn each way: back where it started
+
+
+class Drivers:
+    """A runtime sink: which sources sent a twist."""
+
+    def __init__(self) -> None:
+        self.sources: set[str] = set()
+
+    def __call__(self, cycle: Cycle) -> None:
+        if cycle.sent is not None:
+            self.sources.add(cycle.decision.source)
+
+
+def test_a_manoeuvre_is_a_script_on_the_runtime_and_an_emergency_stop_ends_it() -> None:
+    robot = load_robot("omni4")
+    with RobotClient.open("sim://omni4?seed=1", robot) as client:
+        nav = Navigator(client, robot)
+        nav.prepare(0.2)
+        sent: list[Twist] = []
+
+        def keep(cycle: Cycle) -> None:
+            if cycle.sent is not None:
+                sent.append(cycle.sent)
+
+        nav.runtime.add_sink(keep)
+        nav.drive(lambda t: Twist(0.2, 0.0, 0.0) if t < 0.5 else ScriptSource.END, name="nudge")
+        assert len(sent) == 50 and set(sent) == {Twist(0.2, 0.0, 0.0)}  # 0.5 s at 100 Hz
+        assert "nudge" not in nav.runtime.sources  # it leaves the runtime when it ends
+        stop = EStop()
+        nav.runtime.add_lock(stop.lock)
+        stop.press("test")
+        with pytest.raises(NavigationError, match=r"stopped: manoeuvre held by emergency stop \(test\)"):
+            nav.drive(lambda t: Twist(0.2, 0.0, 0.0))
+        nav.close()
+        moved = nav.truth()
+    assert len(sent) == 50 and moved is not None and 0.05 < moved[0] < 0.15

@@ -17,6 +17,7 @@ from omnibot.navigation.slipcal import (
     simulate_slip_calibration,
 )
 from omnibot.robot.description import load_robot
+from tests.navigation.test_runner import Drivers
 
 
 class EndPoints:
@@ -57,9 +58,14 @@ def test_wood_creeps_an_order_of_magnitude_less_and_end_points_fit_roll_only(
     robot = load_robot("omni4")
     with simulated_client(robot, surface="wood", seed=3) as client:
         nav = Navigator(client, robot)
+        drivers = Drivers()
+        nav.runtime.add_sink(drivers)
         nav.prepare(1.0)
         wood = calibrate_slip(nav, EndPoints(SimulatorTruth(nav)))
         nav.close()
+    assert (
+        drivers.sources == {"slip-run"} and nav.runtime.sent.errors == 0
+    )  # the runs: a script on the runtime
     assert 0.0 < wood.params.roll < 0.25 * carpet.params.roll
     assert wood.params.compliance == 0.0 and not wood.speed_ups
 

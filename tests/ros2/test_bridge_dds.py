@@ -14,7 +14,7 @@ from omnibot.ros2.dds import LATCHED, Node
 from omnibot.ros2.types import from_dds
 
 bridge = subprocess.Popen(
-    [sys.executable, "-m", "omnibot", *COMMAND, "--port", "sim://omni4", "--duration", "8"],
+    [sys.executable, "-m", "omnibot", *COMMAND, "--port", "sim://omni4", "--duration", "40"],
     stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
 )
 node = Node()
@@ -25,7 +25,7 @@ readers = {
     "/tf": (node.reader("/tf", "tf2_msgs/msg/TFMessage"), "tf2_msgs/msg/TFMessage"),
 }
 got = {name: [] for name in readers}
-end = time.monotonic() + 7
+end = time.monotonic() + 30  # a loaded machine takes seconds to start the bridge
 while time.monotonic() < end and not all(len(v) >= 5 for k, v in got.items() if k != "robot_description"):
     for name, (reader, typename) in readers.items():
         for sample in reader.take(N=100):

@@ -25,6 +25,75 @@ def test_bad_options_are_refused(args: list[str], words: str, capsys: pytest.Cap
     assert words in err and "Traceback" not in err
 
 
+TWO = ["--port", "sim://omni4", "--namespace", "r1", "--port", "sim://omni3", "--namespace", "r2"]
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (
+            ["--port", "sim://omni4", "--port", "sim://omni3", "--namespace", "r1"],
+            "2 robots (--port) but 1 --namespace",
+        ),
+        (["--port", "sim://omni4", "--port", "sim://omni3"], "2 robots (--port) but 0 --namespace"),
+        (
+            ["--port", "sim://omni4", "--namespace", "r1", "--namespace", "r2"],
+            "at most one of each per robot",
+        ),
+        (
+            ["--port", "sim://omni4", "--namespace", "r1", "--port", "sim://omni3", "--namespace", "/r1/"],
+            "two robots with the namespace 'r1'",
+        ),
+        (
+            [*TWO, "--frame-prefix", "", "--frame-prefix", ""],
+            "two robots with the tf frame prefix '(none)'",
+        ),
+        (
+            [*TWO, "--frame-prefix", "a"],
+            "--frame-prefix",
+        ),
+        (["--port", "sim://omni4", "--frame-prefix", "1x"], "not a valid tf frame prefix"),
+        (
+            [*TWO, "--log", "x.mcap"],
+            "--log and --foxglove record one robot",
+        ),
+        (["--port", "sim://omni4", "--speed", "0"], "--speed"),
+    ],
+)
+def test_robots_that_do_not_pair_up_are_refused(
+    args: list[str], words: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["ros2", *args, "--duration", "1"]) == 2
+    err = capsys.readouterr().err
+    assert words in err and "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_robots_pair_up_in_order() -> None:
+    from omnibot.cli import build_parser
+    from omnibot.ros2.command import RobotSpec, robot_specs
+
+    args = build_parser().parse_args(
+        [
+            "ros2",
+            "--port",
+            "sim://a",
+            "--namespace",
+            "r1",
+            "--port",
+            "sim://b",
+            "--namespace",
+            "r2",
+            "--frame-prefix",
+            "",
+            "--frame-prefix",
+            "two",
+        ]
+    )
+    assert robot_specs(args) == [RobotSpec("sim://a", "r1", ""), RobotSpec("sim://b", "r2", "two/")]
+    one = build_parser().parse_args(["ros2", "--namespace", "/fleet/r1/"])
+    assert robot_specs(one) == [RobotSpec(None, "fleet/r1", "fleet/r1/")]
+
+
 def test_without_cyclonedds_it_says_how_to_install(
     monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:

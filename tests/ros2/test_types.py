@@ -14,6 +14,7 @@ from omnibot.estimation.odometry import Pose2D
 from omnibot.logs import schemas
 from omnibot.logs.recorder import header, odometry, quaternion, twist, vector
 from omnibot.robot.description import load_robot
+from omnibot.ros2.bridge import battery_state
 from omnibot.ros2.types import dds_name, dds_type, from_dds, to_dds
 
 
@@ -91,6 +92,22 @@ def _messages() -> list[tuple[str, Any]]:
         "geometry_msgs/msg/TwistStamped", header=header(ns, "base_link"), twist=twist(0.2, -0.1, 0.5)
     )
     urdf = schemas.new("std_msgs/msg/String", data="<robot name='omni4'/>")
+    battery = battery_state(load_robot("omni4"), 11.75, ns)
+    battery.design_capacity = 2.5  # float32: a value it holds exactly (the preset's 2.2 Ah is not)
+    point = schemas.new("geometry_msgs/msg/Point", x=0.5, y=-0.25, z=0.0)
+    pose = schemas.new("geometry_msgs/msg/Pose", position=point, orientation=quaternion(0.4))
+    path = schemas.new(
+        "nav_msgs/msg/Path",
+        header=header(ns, "r1/odom"),
+        poses=[schemas.new("geometry_msgs/msg/PoseStamped", header=header(ns, "r1/odom"), pose=pose)] * 3,
+    )
+    initial = schemas.new(
+        "geometry_msgs/msg/PoseWithCovarianceStamped",
+        header=header(ns, "r1/odom"),
+        pose=schemas.new(
+            "geometry_msgs/msg/PoseWithCovariance", pose=pose, covariance=np.arange(36, dtype=np.float64)
+        ),
+    )
     return [
         ("nav_msgs/msg/Odometry", odom),
         ("tf2_msgs/msg/TFMessage", tf),
@@ -101,6 +118,9 @@ def _messages() -> list[tuple[str, Any]]:
         ("geometry_msgs/msg/TwistStamped", stamped),
         ("geometry_msgs/msg/Twist", twist(1.0, 0.0, -0.5)),
         ("std_msgs/msg/String", urdf),
+        ("sensor_msgs/msg/BatteryState", battery),
+        ("nav_msgs/msg/Path", path),
+        ("geometry_msgs/msg/PoseWithCovarianceStamped", initial),
     ]
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import math
 import os
 import signal
 import subprocess
@@ -66,9 +67,54 @@ def test_pty_emulator_serves_the_firmware_and_writes_truth(tmp_path: Path) -> No
     assert header == "t,x,y,theta"
 
 
+def test_a_fleet_on_one_pty_per_robot_shares_one_world() -> None:
+    """Two robots in one room, each on its own pty: the omni4's sonar sees the omni3 in front of it."""
+    argv = [sys.executable, "-m", "omnibot", "sim", "--pty", "--world", "room", "--baud", "0"]
+    argv += ["--robot", "omni4?name=a&pose=1,1,0", "--robot", "omni3?name=b&pose=2.6,1.05,0&seed=7"]
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout is not None
+        lines = [proc.stdout.readline().split() for _ in range(2)]
+        assert [name for name, _ in lines] == ["a", "b"]
+        (_, path_a), (_, path_b) = lines
+        with serial.Serial(path_a, timeout=0.2) as a, serial.Serial(path_b, timeout=0.2) as b:
+            a.write(b"HELLO;SONAR,1,100,1,500,0;")
+            b.write(b"HELLO;")
+            out_a = out_b = b""
+            deadline = time.monotonic() + 10
+            while (b"RANGE" not in out_a or b"omni3" not in out_b) and time.monotonic() < deadline:
+                out_a += a.read(64)
+                out_b += b.read(64)
+            out_a += a.read_until(b"\n")
+        assert b"HELLO,2,omni4,4\r\nOK\r\n" in out_a and b"HELLO,2,omni3,3\r\n" in out_b
+        cm = int(out_a.split(b"RANGE,1,")[1].split(b"\r\n")[0])
+        expected = math.hypot(2.6 - 1.1, 0.05) - 0.32  # a's sonar on its front face; b a 0.32 m circle
+        assert cm == pytest.approx(expected * 100, abs=2)
+    finally:
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=10)
+    assert proc.returncode == 0, err
+    assert "Traceback" not in err
+
+
 @pytest.mark.parametrize(
     ("argv", "message"),
     [
+        (
+            ["sim", "--pty", "--robot", "omni4", "--robot", "omni3"],
+            "--robot: robot 'r2' at (0, 0, 0 deg) overlaps",
+        ),
+        (["sim", "--pty", "--robot", "omni4", "--robot", "omni4?nmae=b"], "unknown option 'nmae' in --robot"),
+        (["sim", "--pty", "--robot", "omni4", "--robot", "omni4?pose=1,1"], "expected pose=X,Y,THETA"),
+        (["sim", "--pty", "--robot", "omni4?pose=1,1"], "--robot: expected pose=X,Y,THETA"),  # a fleet of one
+        (
+            ["sim", "--pty", "--robot", "omni4", "--robot", "omni4?name=r1&pose=1,0,0"],
+            "fleet already has a robot named 'r1'",
+        ),
+        (
+            ["sim", "--pty", "--robot", "omni4", "--robot", "omni4?pose=1,0,0", "--truth", "t.csv"],
+            "--truth records",
+        ),
         (["sim", "--pty", "--robot", "omni7"], "unknown robot 'omni7'"),
         (["sim", "--pty", "--surface", "ice"], "unknown surface 'ice'"),
         (["sim", "--pty", "--world", "kitchen"], "kitchen"),

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from omnibot.errors import ConfigError, SimulationError
+from omnibot.motion import Pose2D
 from omnibot.robot import kinematics as kin
 from omnibot.robot.description import RobotDescription, load_robot
 from omnibot.sim.simulator import CollisionEvent, PwmRangeError, Simulator, Snapshot, TruthRecorder
@@ -54,7 +55,7 @@ def test_time_moves_only_with_steps(omni4, backend) -> None:
     assert sim.clock.ticks_us() == 5000
     sim.advance(1.0)
     assert sim.time == pytest.approx(1.005) and sim.clock.ticks_us() == 1_005_000
-    assert sim.pose == (0.0, 0.0, 0.0)  # no PWM, nothing moves
+    assert sim.pose == Pose2D(0.0, 0.0, 0.0)  # no PWM, nothing moves
     with pytest.raises(SimulationError, match="microseconds"):
         Simulator(omni4, dt=1.5e-7, physics_factory=backend)
 
@@ -76,7 +77,8 @@ def test_drives_where_the_kinematics_says(omni4, backend) -> None:
     sim = Simulator(omni4, physics_factory=backend)
     sim.set_pwm(pwm_for(omni4, (0.0, 1.0, 0.0)))
     sim.advance(1.0)
-    x, y, th = sim.pose
+    p = sim.pose
+    x, y, th = p.x, p.y, p.theta
     assert y > 0.3 and abs(x) < 0.01 * y and abs(th) < 0.01
     assert sim.twist.vy > 0.3
     assert len(sim.wheel_speeds) == 4
@@ -84,9 +86,9 @@ def test_drives_where_the_kinematics_says(omni4, backend) -> None:
 
 def test_start_pose_from_world_and_argument(omni4) -> None:
     sim = Simulator(omni4, world="room", physics_factory=FakePhysics)
-    assert sim.pose == (1.0, 1.0, 0.0)
+    assert sim.pose == Pose2D(1.0, 1.0, 0.0)
     sim = Simulator(omni4, world="room", start_pose=(2.0, 2.0, 1.0), physics_factory=FakePhysics)
-    assert sim.pose == (2.0, 2.0, 1.0)
+    assert sim.pose == Pose2D(2.0, 2.0, 1.0)
     with pytest.raises(SimulationError, match=r"overlaps walls\[0\]"):
         Simulator(omni4, world="room", start_pose=(0.05, 2.0, 0.0), physics_factory=FakePhysics)
 
@@ -152,7 +154,7 @@ def test_sliding_along_a_wall_at_an_angle_keeps_out(omni4, backend) -> None:
     for _ in range(150):
         sim.step(10)
         outline = np.array(omni4.footprint.outline())
-        _, y, th = sim.pose
+        y, th = sim.pose.y, sim.pose.theta
         c, s = math.cos(th), math.sin(th)
         ys = y + s * outline[:, 0] + c * outline[:, 1]
         assert ys.max() < 4.0 + 0.01

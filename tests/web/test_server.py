@@ -13,8 +13,8 @@ import pytest
 import websockets
 
 from omnibot.errors import ConfigError
-from omnibot.web.access import is_loopback
-from omnibot.web.dashboard import Dashboard, access_token, bind
+from omnibot.web.access import access_token, is_loopback
+from omnibot.web.dashboard import Dashboard, bind
 from tests.web.conftest import ROOM
 
 

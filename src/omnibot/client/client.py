@@ -222,9 +222,8 @@ class RobotClient(TypedCalls):
         """The last HELLO seen (a reply or a reset greeting)."""
         self._tags_auto = tags is None
         self._tags = tags
-        self._probing = False
         self._resync = False  # untagged text: a command timed out, get in step before the next
-        self._resyncing = False
+        self._preparing = ""  # the step before a text command under way: "probe" (tags?), "resync"
         self._late: dict[int, Pending] = {}  # tag -> tagged command that timed out
         self._heard = False  # a byte has come from the link
         self._wire: Wire = TextWire(bool(tags))
@@ -445,25 +444,24 @@ class RobotClient(TypedCalls):
     def _text_ready(self, command: Command | None, raw: bytes | None, wait: float) -> None:
         """Before a text command: learn whether the controller echoes tags (once), and get back in
         step after an untagged command timed out."""
-        if self._probing or self._resyncing:
+        if self._preparing:
             return
         what = (text.encode(command) if command is not None else raw or b"").decode("latin-1").strip()
         if self._tags is None:
-            self._probing = True
-            try:
-                self._detect_tags(wait)
-            except LinkTimeout as exc:
-                raise LinkTimeout(f"{exc} ({what} was not sent)") from None
-            finally:
-                self._probing = False
+            self._prepare("probe", self._detect_tags, wait, what)
         if self._resync and not self._tags:
-            self._resyncing = True
-            try:
-                self._resync_now(wait)
-            except LinkTimeout as exc:
-                raise LinkTimeout(f"{exc} ({what} was not sent)") from None
-            finally:
-                self._resyncing = False
+            self._prepare("resync", self._resync_now, wait, what)
+
+    def _prepare(self, step: str, run: Callable[[float], None], wait: float, what: str) -> None:
+        """Run a step before the text command ``what``: ``step`` names it while it runs (its own
+        commands skip :meth:`_text_ready`); a timeout says that ``what`` was not sent."""
+        self._preparing = step
+        try:
+            run(wait)
+        except LinkTimeout as exc:
+            raise LinkTimeout(f"{exc} ({what} was not sent)") from None
+        finally:
+            self._preparing = ""
 
     def _detect_tags(self, wait: float) -> None:
         """Send tagged HELLOs until a tagged reply (tags on) or two untagged answers (a controller
@@ -764,7 +762,7 @@ class RobotClient(TypedCalls):
         self._mode = None
         self._late.clear()
         self._resync = False
-        if self._tags_auto and not self._probing:  # perhaps another firmware now: ask again
+        if self._tags_auto and self._preparing != "probe":  # perhaps another firmware now: ask again
             self._set_tags(None)
         if self.binary:
             self._wire = TextWire(bool(self._tags))

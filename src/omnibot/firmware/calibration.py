@@ -103,6 +103,24 @@ class Calibration:
         last = self.kl[n - 1]
         return interp(last[0], last[1], power)
 
+    def start_power(self) -> float:
+        """The least power that turns a translating wheel, PWM counts (0: the tables do not say).
+
+        A K_l table is fitted to rates anchored at zero at the dead band, so ``p K_l(p)`` runs close
+        to ``a + b p`` near its lowest knots: ``a``, that line's intercept through the two lowest
+        knots, is the dead band the calibration measured. The smallest over the courses (seed 000's
+        flat factors give 0)."""
+        low = -1.0
+        for t in self.kl:
+            xs, ys = t[0], t[1]
+            if len(xs) < 2:
+                return 0.0
+            p0 = xs[0] * ys[0]
+            a = p0 - xs[0] * (xs[1] * ys[1] - p0) / (xs[1] - xs[0])
+            if low < 0.0 or a < low:
+                low = a
+        return max(low, 0.0)
+
     def coast(self, speed: float) -> float:
         """Seconds the roller drag acts beyond a motion ending at ``speed`` (cm/s)."""
         return interp(self.roller_coast[0], self.roller_coast[1], speed)

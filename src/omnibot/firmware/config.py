@@ -14,6 +14,8 @@ Keys of the config dict (all plain ints, floats, strings, lists, dicts):
 ==========================  =======================================================================
 name, motors                robot name (HELLO) and motor count
 pwm_max, power_min          PWM full scale; dead band (largest ``motor.deadband`` unless given)
+vel_dead_band               True: an open-loop VEL sets a wheel below the K_l tables' dead band to 0
+                            (WARN 12; the UNO firmware does not yet)
 radius                      wheel radii, m
 J                           inverse kinematics, rad/s of each wheel per (vx, vy, w) in m/s, rad/s
 rim                         J times the wheel radius: rim speed (m/s) per unit twist
@@ -185,6 +187,7 @@ def build_config(
         "motors": robot.n_wheels,
         "pwm_max": max(w.motor.pwm_max for w in robot.wheels),
         "power_min": int(power_min if power_min is not None else max(w.motor.deadband for w in robot.wheels)),
+        "vel_dead_band": True,
         "radius": radius,
         "J": [[float(v) for v in row] for row in J],
         "rim": [[float(v) * r for v in row] for row, r in zip(J, radius, strict=True)],

@@ -16,7 +16,7 @@ When the guard says the motion must not go on, the executor stops and leaves the
 
 import math
 
-from omnibot.firmware.power import DEADBAND, SATURATED, PowerModel
+from omnibot.firmware.power import DEADBAND, SATURATED, WEAK, PowerModel
 from omnibot.firmware.safety import LIMITED, UNCOVERED
 from omnibot.firmware.speedctl import SpeedControl
 from omnibot.firmware.watchdog import Watchdog
@@ -61,6 +61,7 @@ class Executor:
         self.v_min = float(cfg["speed_min_cms"])
         self.v_max = float(cfg["speed_max_cms"])
         self.c_max = float(cfg["curvature_max"])
+        self.vel_dead_band = bool(cfg.get("vel_dead_band", True))
         self.kind = NONE
         self.infinite = False
         self.remaining = 0
@@ -333,6 +334,14 @@ class Executor:
         self._k = k
         model = self.model
         model.drag_gain = gain
+        model.floor = 0.0
+        if (
+            self.vel_dead_band
+            and self.kind == codes.VEL
+            and (vx != 0.0 or vy != 0.0)
+            and not self._closed_loop()
+        ):
+            model.floor = model.cal.start_power()  # open loop: a wheel below it stalls (WARN 12)
         flags = model.compute(vx, vy, w, rotate, self.powers)
         self._time_scale = model.scale * k
         self._warn_once(flags)
@@ -355,6 +364,10 @@ class Executor:
             self.speedctl.hold(self._ff, self.powers)  # a new command keeps the speed loop's correction
         self._start_drag(flags)
         self.apply()
+
+    def _closed_loop(self) -> bool:
+        """The wheel-speed loop drives the motion (MODE bit 1 and encoders on every wheel)."""
+        return bool(self.mode & MODE_CLOSED_LOOP) and self.speedctl.available
 
     def _slow_down(self, speed: float, limited: bool, decel: float) -> None:
         """When the guard lowers the speed, coast (powers off) until the robot must have slowed to it:
@@ -386,7 +399,7 @@ class Executor:
         self._warned |= flags
         if new & SATURATED:
             self._warn(codes.W_SPEED_REDUCED)
-        if new & DEADBAND:
+        if new & (DEADBAND | WEAK):
             self._warn(codes.W_POWER_TOO_LOW)
         if new & LIMITED:
             self._warn(codes.W_SONAR_LIMIT)

@@ -14,7 +14,8 @@ gain, identity by default), and a translation gets the rollers' drag on top (:me
 zero by default). Then, keeping the
 direction, all powers are scaled by one factor if any exceeds ``pwm_max`` (SATURATED) and, when every
 non-zero power is below ``power_min`` (the dead band: too little to move the robot), all are set to 0
-(DEADBAND).
+(DEADBAND). With ``floor`` set (an open-loop VEL: :meth:`Executor.vel`), each wheel whose power is
+below it is set to 0 on its own (WEAK): it would not turn, and the robot goes off the course asked.
 """
 
 import math
@@ -23,6 +24,7 @@ from omnibot.firmware.calibration import Calibration, fold_course
 
 SATURATED = 1
 DEADBAND = 2
+WEAK = 16  # safety.py owns 4 (LIMITED) and 8 (UNCOVERED)
 
 TYPE_CHECKING = False
 if TYPE_CHECKING:
@@ -76,6 +78,8 @@ class PowerModel:
         self.roller_pitch = [float(p) for p in cfg.get("roller_pitch", [0.0] * n)]
         self.base = [0.0] * n
         self.drag_gain = 1.0
+        self.floor = 0.0
+        """PWM counts: a wheel given less (not 0) is set to 0 (WEAK); 0 for no such check."""
         self._fc = [0.0] * n
         self._fs = [0.0] * n
         self._ux = 0.0
@@ -88,7 +92,7 @@ class PowerModel:
             out[i] = (row[0] * vx + row[1] * vy + row[2] * w) / self.radius[i]
 
     def compute(self, vx: float, vy: float, w: float, rotate: bool, out: list[int]) -> int:
-        """Fill ``out`` with powers for the twist; return SATURATED | DEADBAND flags.
+        """Fill ``out`` with powers for the twist; return SATURATED | DEADBAND | WEAK flags.
 
         ``rotate`` selects K_r (turning in place) instead of K_l/K_t. The float powers before rounding
         (after saturation) are left in ``self.raw`` and the saturation factor in ``self.scale``.
@@ -199,4 +203,10 @@ class PowerModel:
             for i in range(n):
                 out[i] = 0
             flags |= DEADBAND
+        floor = self.floor
+        if floor > 0.0:
+            for i in range(n):
+                if out[i] != 0 and abs(out[i]) < floor:
+                    out[i] = 0
+                    flags |= WEAK
         return flags

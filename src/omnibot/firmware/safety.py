@@ -33,7 +33,7 @@ if TYPE_CHECKING:
 
     from omnibot.firmware.sonar import Sonars
 
-LIMITED = 4  # executor warning flags (power.py owns 1 and 2)
+LIMITED = 4  # executor warning flags (power.py owns 1, 2 and 16)
 UNCOVERED = 8
 LATENCY_MS = 2  # driver and bookkeeping on top of the echo and one loop pass
 SOUND_CMS = 34300.0

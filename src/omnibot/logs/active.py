@@ -8,8 +8,10 @@ for every client it opens.
 from __future__ import annotations
 
 import contextlib
+import os
 import sys
 from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -24,12 +26,42 @@ if TYPE_CHECKING:
     from omnibot.runtime.runtime import Runtime
 
 
+FOXGLOVE_TOKEN_ENV = "OMNIBOT_FOXGLOVE_TOKEN"
+"""What ``--foxglove-token`` defaults to (a token on the command line shows in ``ps``)."""
+
+
+@dataclass(frozen=True)
+class FoxgloveBind:
+    """Where ``--foxglove`` serves: ``host``, ``port`` and the access ``token`` (None: none, loopback);
+    ``made_up``: the token was made up (bound off loopback without one given)."""
+
+    host: str
+    port: int
+    token: str | None = None
+    made_up: bool = False
+
+    @classmethod
+    def parse(cls, address: str | int, token: str | None = None) -> FoxgloveBind:
+        """``--foxglove [HOST:]PORT`` and ``--foxglove-token`` (default ``$OMNIBOT_FOXGLOVE_TOKEN``),
+        checked: the dashboard's token rules (:func:`omnibot.web.access.access_token`)."""
+        from omnibot.logs.live import parse_address
+        from omnibot.web.access import access_token
+
+        host, port = parse_address(address)
+        given = token or os.environ.get(FOXGLOVE_TOKEN_ENV) or None
+        required = access_token(host, given, key="--foxglove-token")
+        return cls(host, port, required, made_up=given is None and required is not None)
+
+
 class Recording:
     """A command's ``--log``: the file is made when the first client is attached (a command that
     fails before it talks to a robot leaves no file)."""
 
     def __init__(
-        self, path: str | Path | None, estimator: str = DEFAULT_ESTIMATOR, foxglove: int | None = None
+        self,
+        path: str | Path | None,
+        estimator: str = DEFAULT_ESTIMATOR,
+        foxglove: FoxgloveBind | None = None,
     ) -> None:
         self.path = Path(path) if path is not None else None
         self.estimator = estimator
@@ -43,11 +75,17 @@ class Recording:
         ``robot`` None with ``guess``: the preset its HELLO names."""
         if self.recorder is None:
             mirrors: list[Mirror] = []
-            if self.foxglove is not None:
+            bind = self.foxglove
+            if bind is not None:
                 from omnibot.logs.live import FoxgloveLive
 
-                live = FoxgloveLive(self.foxglove)
-                print(f"omnibot: Foxglove live on ws://127.0.0.1:{live.port}", file=sys.stderr)
+                live = FoxgloveLive(bind.port, host=bind.host, token=bind.token)
+                print(f"omnibot: Foxglove live on {live.url}", file=sys.stderr)
+                if bind.made_up:
+                    print(
+                        "  (an access token was made up because the server is reachable from other machines)",
+                        file=sys.stderr,
+                    )
                 mirrors.append(live)
             try:
                 from omnibot.logs.recorder import Recorder
@@ -89,21 +127,26 @@ _ACTIVE: list[Recording] = []
 
 @contextlib.contextmanager
 def recording(
-    path: str | Path | None, *, estimator: str = DEFAULT_ESTIMATOR, foxglove: int | None = None
+    path: str | Path | None,
+    *,
+    estimator: str = DEFAULT_ESTIMATOR,
+    foxglove: str | int | None = None,
+    foxglove_token: str | None = None,
 ) -> Iterator[Recording | None]:
-    """``--log FILE`` / ``--foxglove PORT``: while inside, every client a command opens
-    (:func:`attach_active`, called by :mod:`omnibot.client.session`) is recorded into ``path`` and
-    served live to Foxglove on ``foxglove``; None and None record nothing. The file must be writable
-    (checked at once, before any robot moves)."""
+    """``--log FILE`` / ``--foxglove [HOST:]PORT`` (``--foxglove-token``): while inside, every client
+    a command opens (:func:`attach_active`, called by :mod:`omnibot.client.session`) is recorded
+    into ``path`` and served live to Foxglove at ``foxglove``; None and None record nothing. The file
+    must be writable and the address and token valid (checked at once, before any robot moves)."""
+    if foxglove is None and foxglove_token is not None:
+        raise ConfigError("--foxglove-token goes with --foxglove [HOST:]PORT", key="--foxglove-token")
     if path is None and foxglove is None:
         yield None
         return
     from omnibot.cliargs import check_writable
 
     check_writable(path, "--log")
-    if foxglove is not None and not 0 <= foxglove <= 65535:
-        raise ConfigError(f"expected a port 0..65535 (0: any free one), got {foxglove}", key="--foxglove")
-    rec = Recording(path, estimator, foxglove)
+    bind = FoxgloveBind.parse(foxglove, foxglove_token) if foxglove is not None else None
+    rec = Recording(path, estimator, bind)
     _ACTIVE.append(rec)
     try:
         yield rec

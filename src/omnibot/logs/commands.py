@@ -12,10 +12,15 @@ import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from omnibot.errors import ConfigError
 from omnibot.logs.run import Run, keyword_counts, load_run, rate_and_gap
+from omnibot.motion import Twist
 from omnibot.transport.spy import SpyEvent, format_event
+
+if TYPE_CHECKING:
+    from omnibot.logs.follower_replay import RecordedFollower
 
 EXIT_OK, EXIT_FAILED = 0, 1
 
@@ -213,10 +218,10 @@ def _plot(args: argparse.Namespace) -> int:
 # --------------------------------------------------------------------------- replay
 
 
-def _replay(args: argparse.Namespace) -> int:
-    from omnibot.logs.replay import replay_log
+def _replay(args: argparse.Namespace, run: Run | None = None) -> int:
+    from omnibot.logs.replay import replay_log, truth_in_frame
 
-    run = _load(args)
+    run = _load(args) if run is None else run
     result = replay_log(run, args.estimator)
     if not result.estimates:
         print(f"omnibot: error: {args.file} has no telemetry with encoders to replay", file=sys.stderr)
@@ -232,11 +237,12 @@ def _replay(args: argparse.Namespace) -> int:
         f"replayed {len(result.estimates)} telemetry samples with {result.estimator}: "
         f"final pose x={last.x:.4f} m y={last.y:.4f} m theta={math.degrees(last.theta):.2f} deg"
     )
-    if run.truth:
-        truth = run.truth[-1]
+    truth = truth_in_frame(run, result)
+    if truth:  # the simulator's, moved into the estimate's frame (it started where the estimate did)
+        _, x, y, theta = truth[-1]
         print(
-            f"truth at the end: x={truth[1]:.4f} m y={truth[2]:.4f} m theta={math.degrees(truth[3]):.2f} deg; "
-            f"error {math.hypot(truth[1] - last.x, truth[2] - last.y):.4f} m"
+            f"truth at the end (in the estimate's frame): x={x:.4f} m y={y:.4f} m "
+            f"theta={math.degrees(theta):.2f} deg; error {math.hypot(x - last.x, y - last.y):.4f} m"
         )
     if result.note:
         print(result.note)
@@ -252,13 +258,119 @@ def _replay(args: argparse.Namespace) -> int:
     return EXIT_FAILED
 
 
+def _replay_all(args: argparse.Namespace) -> int:
+    """``omnibot log replay``: the estimator, then the follower (when the log has a follower run or
+    one is asked for); the worse of the two statuses."""
+    from omnibot.logs.follower_replay import make_replayed, parse_options, recorded_followers
+
+    run = _load(args)
+    runs = recorded_followers(run)
+    asked = args.follower is not None or args.follower_option or args.commands_csv or args.run
+    chosen: RecordedFollower | None = None
+    if runs:
+        number = args.run or runs[0].run
+        found = [r for r in runs if r.run == number]
+        if not found:
+            numbers = ", ".join(str(r.run) for r in runs)
+            raise ConfigError(f"{args.file} has follower runs {numbers}, not {number}", key="--run")
+        chosen = found[0]
+    elif asked:
+        raise ConfigError(
+            f"{args.file} has no follower run (record `omnibot follow` or `run --follow` with --log)",
+            key="--follower",
+        )
+    options = parse_options(args.follower_option)
+    if chosen is not None:
+        make_replayed(chosen, args.follower, options)  # a bad follower or option: said before anything runs
+    if args.commands_csv:
+        from omnibot.cliargs import check_writable
+
+        check_writable(args.commands_csv, "--commands-csv")
+    status = _replay(args, run)
+    if chosen is not None:
+        status = max(status, _replay_follower(args, chosen, options, len(runs)))
+    return status
+
+
+def _replay_follower(
+    args: argparse.Namespace, chosen: RecordedFollower, options: dict[str, Any], runs: int
+) -> int:
+    """Re-run the recorded follower (or ``--follower`` with ``--follower-option``s) on the recorded
+    cycles; 1 when the live follower's own commands are not reproduced exactly."""
+    from omnibot.logs.follower_replay import replay_follower
+
+    result = replay_follower(chosen, args.follower, options)
+    rec = result.recorded
+    if runs > 1:
+        print(f"follower run {rec.run} of {runs} (--run N for another)")
+    if args.commands_csv:
+        rows = [[r.t, r.source, *(_xyw(r.live)), *(_xyw(r.replayed))] for r in result.rows]
+        header = ["t", "in_control", "live_vx", "live_vy", "live_w", "replay_vx", "replay_vy", "replay_w"]
+        _write_csv(Path(args.commands_csv), header, rows)
+    options_text = ", ".join(f"{k}={v}" for k, v in sorted(result.options.items()))
+    print(
+        f"replayed follower {result.follower} ({options_text}) on {len(result.rows)} cycles "
+        f"of {rec.follower} following a {rec.path.length:.2f} m path"
+    )
+    if result.is_live:
+        if result.reproduced:
+            print(f"the live follower's commands are reproduced exactly ({result.compared} cycles)")
+            return EXIT_OK
+        print(
+            f"omnibot: error: the replay differs from the live follower's commands by up to "
+            f"{result.max_difference:g} over {result.compared} cycles",
+            file=sys.stderr,
+        )
+        return EXIT_FAILED
+    rx, ry, rw = result.rms
+    silent = sum(1 for r in result.rows if r.live is not None and r.replayed is None)
+    print(
+        f"against the live commands over the {result.compared} cycles the live follower drove"
+        + (f" ({silent} where the replayed one had fallen silent)" if silent else "")
+        + f": RMS difference vx {rx:.4f} m/s, vy {ry:.4f} m/s, w {rw:.4f} rad/s"
+    )
+    ended = (
+        "never fell silent" if result.finished_at is None else f"fell silent at t={result.finished_at:.3f} s"
+    )
+    print(f"  it {ended}; open loop: the robot moved as the live commands drove it, not as these would have")
+    return EXIT_OK
+
+
+def _xyw(twist: Twist | None) -> list[object]:
+    if twist is None:
+        return ["", "", ""]
+    return [twist.vx, twist.vy, twist.w]
+
+
+# --------------------------------------------------------------------------- recover
+
+
+def _recover(args: argparse.Namespace) -> int:
+    from omnibot.cliargs import check_writable
+    from omnibot.logs.recover import recover
+
+    check_writable(args.out, "-o")
+    result = recover(args.file, args.out, force=args.force)
+    if result.cut_short is None and not args.force:
+        print(f"{result.source} is whole (it has its summary): nothing to recover")
+        return EXIT_OK
+    print(
+        f"wrote {result.target}: {result.messages} messages, {result.duration:.3f} s"
+        + (f" (the log was cut short: {result.cut_short})" if result.cut_short else "")
+    )
+    return EXIT_OK
+
+
 # --------------------------------------------------------------------------- parser
 
 
 def add_log_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    """Add ``omnibot log`` and its subcommands (info, plot, export, protocol, replay) to ``sub``."""
+    """Add ``omnibot log`` and its subcommands (info, plot, export, protocol, replay, recover) to
+    ``sub``."""
     p = sub.add_parser("log", help="inspect, plot, export and replay a run recorded with --log FILE.mcap")
-    lsub = p.add_subparsers(dest="log_command", required=True, metavar="{info,plot,export,protocol,replay}")
+    lsub = p.add_subparsers(
+        dest="log_command", required=True, metavar="{info,plot,export,protocol,replay,recover}"
+    )
     info = lsub.add_parser("info", help="duration, channels, rates, gaps, errors and warnings, link health")
     info.set_defaults(handler=_info)
     plot = lsub.add_parser(
@@ -278,9 +390,28 @@ def add_log_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     export.set_defaults(handler=_export)
     proto = lsub.add_parser("protocol", help="the byte trace both ways, as spy+ prints it")
     proto.set_defaults(handler=_protocol)
-    replay = lsub.add_parser("replay", help="re-run an estimator on the recorded telemetry")
+    replay = lsub.add_parser(
+        "replay", help="re-run an estimator, and a follower, on the recorded telemetry and cycles"
+    )
     replay.add_argument("--estimator", help="the estimator to run (default: the one recorded)")
     replay.add_argument("--csv", metavar="FILE.csv", help="write the replayed estimate")
-    replay.set_defaults(handler=_replay)
-    for q in (info, plot, export, proto, replay):
+    replay.add_argument("--follower", help="the follower to run (default: the one recorded)")
+    replay.add_argument(
+        "--follower-option",
+        action="append",
+        metavar="KEY=VALUE",
+        help="a follower option (repeatable), e.g. cross=30 or heading_gains=[4,0.5,0.1]",
+    )
+    replay.add_argument("--run", type=int, metavar="N", help="the follower run to replay (default the first)")
+    replay.add_argument(
+        "--commands-csv", metavar="FILE.csv", help="write the live and the replayed follower's commands"
+    )
+    replay.set_defaults(handler=_replay_all)
+    rec = lsub.add_parser("recover", help="rewrite a log cut short (SIGKILL) whole, for rosbags and ros2 bag")
+    rec.add_argument(
+        "-o", "--out", metavar="OUT.mcap", help="the file to write (default FILE-recovered.mcap beside it)"
+    )
+    rec.add_argument("--force", action="store_true", help="rewrite a whole log too")
+    rec.set_defaults(handler=_recover)
+    for q in (info, plot, export, proto, replay, rec):
         q.add_argument("file", metavar="FILE.mcap", help="a log written with --log")

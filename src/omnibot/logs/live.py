@@ -1,9 +1,15 @@
-"""``--foxglove [PORT]``: the recorder's messages served live through the Foxglove SDK's WebSocket
-server (``foxglove-sdk``), the same channels and ROS 2 schemas as the log file, so Foxglove shows a
-running robot as it shows a recorded one; and Foxglove's Teleop panel as a command source.
+"""``--foxglove [HOST:]PORT``: the recorder's messages served live through the Foxglove SDK's
+WebSocket server (``foxglove-sdk``), the same channels and ROS 2 schemas as the log file, so Foxglove
+shows a running robot as it shows a recorded one; and Foxglove's Teleop panel as a command source.
 
-The server binds 127.0.0.1 only: it takes commands that move the robot and has no access token, so
-no other address is offered (the ``--foxglove`` option takes a port, never a host).
+Binding: 127.0.0.1 by default, with no token, as the SDK's server is. Bound to any other address
+(``--foxglove 0.0.0.0:8765``) it takes commands that move the robot from the network, so it requires
+an access token, as the dashboard does and with the dashboard's code
+(:func:`omnibot.web.access.access_token`: the one given with ``--foxglove-token`` or
+``$OMNIBOT_FOXGLOVE_TOKEN``, else a random one, printed in the URL). The SDK's server has no way to
+check one, so it then listens on 127.0.0.1 on a port of its own behind a
+:class:`~omnibot.logs.gate.TokenGate`, which relays only the connections whose URL carries the
+token (``ws://HOST:PORT/?token=TOKEN``). A token given on loopback is required there too.
 
 Client publish: a Foxglove client may advertise ``cmd_vel`` (or ``/cmd_vel``) with a
 ``geometry_msgs/Twist`` schema (``geometry_msgs/msg/Twist`` too) in ``cdr`` or ``json``, as the
@@ -23,6 +29,7 @@ from foxglove.websocket import Capability, Client, ClientChannel, ServerListener
 
 from omnibot.errors import ConfigError
 from omnibot.logs import schemas
+from omnibot.logs.gate import TokenGate
 from omnibot.logs.topics import TELEOP
 from omnibot.motion import Twist
 from omnibot.runtime.cycle import Cycle
@@ -122,31 +129,75 @@ class _Listener(ServerListener):
         self.panel.put(twist)
 
 
-class FoxgloveLive:
-    """A Foxglove WebSocket server on 127.0.0.1:``port`` (0: a free port, see :attr:`port`); call it as
-    a recorder mirror, ``live(topic, typename, cdr_bytes, ns)``; :attr:`panel` is the Teleop panel's
-    source (a runtime adds it); :meth:`close` stops it."""
+def parse_address(text: str | int) -> tuple[str, int]:
+    """``--foxglove``'s ``[HOST:]PORT`` (``8765``, ``0.0.0.0:8765``, ``[::1]:8765``, ``robot.local:0``)
+    as (host, port); the host is 127.0.0.1 when left out. ConfigError when it is neither."""
+    value = str(text).strip()
+    if value.isdigit():
+        host, port = HOST, value
+    elif value.startswith("["):  # [IPv6]:PORT
+        end = value.find("]:")
+        host, port = (value[1:end], value[end + 2 :]) if end > 0 else ("", "")
+    else:
+        host, sep, port = value.rpartition(":")
+        if not sep or ":" in host:  # an IPv6 address needs its brackets
+            host = ""
+    if not host or not port.isdigit() or not 0 <= int(port) <= 65535:
+        raise ConfigError(
+            f"expected [HOST:]PORT with a port 0..65535 (0: any free one), e.g. 8765 or 0.0.0.0:8765; "
+            f"got {value!r}",
+            key="--foxglove",
+        )
+    return host, int(port)
 
-    def __init__(self, port: int = DEFAULT_PORT, *, name: str = "omnibot") -> None:
+
+class FoxgloveLive:
+    """A Foxglove WebSocket server on ``host:port`` (0: a free port, see :attr:`port`; off loopback or
+    with a ``token``, behind a :class:`~omnibot.logs.gate.TokenGate`: see the module docstring); call
+    it as a recorder mirror, ``live(topic, typename, cdr_bytes, ns)``; :attr:`panel` is the Teleop
+    panel's source (a runtime adds it); :attr:`url` is where to connect; :meth:`close` stops it."""
+
+    def __init__(
+        self, port: int = DEFAULT_PORT, *, host: str = HOST, token: str | None = None, name: str = "omnibot"
+    ) -> None:
         import foxglove
 
+        from omnibot.web.access import access_token
+
+        self.host = host
+        self.token = access_token(host, token, key="--foxglove-token")
         self._foxglove = foxglove
         self._context = foxglove.Context()
         self.panel = PanelSource()
+        inner = (HOST, 0) if self.token is not None else (host, port)
         try:
             self._server = foxglove.start_server(
                 name=name,
-                host=HOST,
-                port=port,
+                host=inner[0],
+                port=inner[1],
                 context=self._context,
                 capabilities=[Capability.ClientPublish],
                 supported_encodings=["cdr", "json"],
                 server_listener=_Listener(self.panel),
             )
         except Exception as exc:  # the SDK raises its own error for a port in use
-            raise ConfigError(f"cannot serve Foxglove on {HOST}:{port}: {exc}", key="--foxglove") from None
-        self.port: int = self._server.port
+            raise ConfigError(f"cannot serve Foxglove on {host}:{port}: {exc}", key="--foxglove") from None
+        self._gate: TokenGate | None = None
+        if self.token is not None:
+            try:
+                self._gate = TokenGate(host, port, self._server.port, self.token)
+            except BaseException:
+                self._server.stop()
+                raise
+        self.port: int = self._gate.port if self._gate is not None else self._server.port
         self._channels: dict[str, Any] = {}
+
+    @property
+    def url(self) -> str:
+        """Where a Foxglove client connects (with ``?token=`` when one is required)."""
+        host = f"[{self.host}]" if ":" in self.host else self.host
+        query = f"?token={self.token}" if self.token else ""
+        return f"ws://{host}:{self.port}/{query}"
 
     def __call__(self, topic: str, typename: str, data: bytes, ns: int) -> None:
         """Publish one recorded message (CDR ``data`` of ``typename``) on ``topic``, its channel made
@@ -167,4 +218,6 @@ class FoxgloveLive:
         for channel in self._channels.values():
             channel.close()
         self._channels.clear()
+        if self._gate is not None:
+            self._gate.close()
         self._server.stop()

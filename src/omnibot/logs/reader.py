@@ -66,14 +66,12 @@ class LogFile:
             raise ConfigError(f"{p} is not an MCAP file", key="FILE")
         return log
 
-    def messages(self, topics: set[str] | None = None) -> Iterator[LogMessage]:
-        """Every message (of ``topics``, if given) in file order; metadata is collected on the way."""
-        schema_names: dict[int, str] = {}
-        channels: dict[int, Channel] = {}
+    def records(self) -> Iterator[Any]:
+        """Every record of the file in file order (``mcap.records``: Header, Schema, Channel, Message,
+        Metadata, ...), up to where it was cut short (then :attr:`cut_short` says why)."""
         self.cut_short = None
         with self.path.open("rb") as f:
-            reader = StreamReader(f, skip_magic=False)
-            records = reader.records
+            records = StreamReader(f, skip_magic=False).records
             while True:
                 try:
                     record = next(records)
@@ -85,26 +83,37 @@ class LogFile:
                 except Exception as exc:  # the mcap reader's struct/zstd errors on a torn chunk
                     self.cut_short = f"{type(exc).__name__}: {exc}"
                     break
-                if isinstance(record, Schema):
-                    schema_names[record.id] = record.name
-                elif isinstance(record, Channel):
-                    channels[record.id] = record
-                elif isinstance(record, Metadata):
-                    self.metadata[record.name] = dict(record.metadata)
-                elif isinstance(record, Message):
-                    channel = channels.get(record.channel_id)
-                    if channel is None or (topics is not None and channel.topic not in topics):
-                        continue
-                    yield LogMessage(
-                        channel.topic,
-                        schema_names.get(channel.schema_id, ""),
-                        record.log_time,
-                        bytes(record.data),
-                    )
-                elif type(record).__name__ == "Header":
-                    self.profile = getattr(record, "profile", "")
+                yield record
         if self.cut_short is None and not self._has_footer():
             self.cut_short = "no summary (the recording did not end normally)"
+
+    def messages(self, topics: set[str] | None = None) -> Iterator[LogMessage]:
+        """Every message (of ``topics``, if given) in file order; metadata is collected on the way."""
+        schema_names: dict[int, str] = {}
+        channels: dict[int, Channel] = {}
+        for record in self.records():
+            if isinstance(record, Schema):
+                schema_names[record.id] = record.name
+            elif isinstance(record, Channel):
+                channels[record.id] = record
+            elif isinstance(record, Metadata):
+                self.metadata[record.name] = dict(record.metadata)
+            elif isinstance(record, Message):
+                channel = channels.get(record.channel_id)
+                if channel is None or (topics is not None and channel.topic not in topics):
+                    continue
+                yield LogMessage(
+                    channel.topic,
+                    schema_names.get(channel.schema_id, ""),
+                    record.log_time,
+                    bytes(record.data),
+                )
+            elif type(record).__name__ == "Header":
+                self.profile = getattr(record, "profile", "")
+
+    def is_whole(self) -> bool:
+        """The file ends with its footer (a recording that ended normally, summary and all)."""
+        return self._has_footer()
 
     def _has_footer(self) -> bool:
         with self.path.open("rb") as f:

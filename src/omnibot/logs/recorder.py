@@ -37,7 +37,7 @@ import logging
 import math
 import time
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import IO, Any, Protocol, cast
 
@@ -132,6 +132,58 @@ def odometry(ns: int, frame: str, child: str, pose: Pose2D, body: tuple[float, f
             "geometry_msgs/msg/TwistWithCovariance", twist=twist(*body), covariance=zeros.copy()
         ),
     )
+
+
+def offered_qos(topic: str) -> str:
+    """The ``offered_qos_profiles`` (rosbag2's YAML) of ``topic``: transient local for the URDF and
+    the calibration (sent once), volatile for the rest."""
+    return _QOS_LATCHED if topic in _LATCHED else _QOS_VOLATILE
+
+
+def rosbag2_metadata(
+    file_name: str, channels: Mapping[str, str], counts: Mapping[str, int], start_ns: int, end_ns: int
+) -> str:
+    """rosbag2's ``serialized_metadata`` (its ``metadata.yaml``) of one MCAP file ``file_name`` with
+    ``channels`` (topic -> type), ``counts`` messages per topic, from ``start_ns`` to ``end_ns``."""
+    duration = max(0, end_ns - start_ns)
+    total = sum(counts.get(topic, 0) for topic in channels)
+    topics = [
+        {
+            "topic_metadata": {
+                "name": topic,
+                "type": typename,
+                "serialization_format": "cdr",
+                "offered_qos_profiles": yaml.safe_load(offered_qos(topic)),
+                "type_description_hash": schemas.type_hash(typename),
+            },
+            "message_count": counts.get(topic, 0),
+        }
+        for topic, typename in channels.items()
+    ]
+    info = {
+        "rosbag2_bagfile_information": {
+            "version": 9,
+            "storage_identifier": "mcap",
+            "relative_file_paths": [file_name],
+            "duration": {"nanoseconds": duration},
+            "starting_time": {"nanoseconds_since_epoch": start_ns},
+            "message_count": total,
+            "topics_with_message_count": topics,
+            "compression_format": "",
+            "compression_mode": "",
+            "files": [
+                {
+                    "path": file_name,
+                    "starting_time": {"nanoseconds_since_epoch": start_ns},
+                    "duration": {"nanoseconds": duration},
+                    "message_count": total,
+                }
+            ],
+            "custom_data": {"omnibot_version": __version__},
+            "ros_distro": "jazzy",
+        }
+    }
+    return yaml.safe_dump(info, sort_keys=False)
 
 
 class Mirror(Protocol):
@@ -244,8 +296,7 @@ class Recorder:
                 typename, "ros2msg", schemas.schema_text(typename).encode("utf-8")
             )
             self._schemas[typename] = schema
-        qos = _QOS_LATCHED if topic in _LATCHED else _QOS_VOLATILE
-        channel = writer.register_channel(topic, "cdr", schema, {"offered_qos_profiles": qos})
+        channel = writer.register_channel(topic, "cdr", schema, {"offered_qos_profiles": offered_qos(topic)})
         self._channels[topic] = (channel, typename)
         return channel
 
@@ -449,6 +500,11 @@ class Recorder:
             },
         )
 
+    def add_metadata(self, name: str, values: dict[str, str]) -> None:
+        """An MCAP metadata record ``name`` (nothing without a file, or once closed)."""
+        if self._writer is not None and not self.closed:
+            self._writer.add_metadata(name, values)
+
     def write_pose(
         self, topic: str, ns: int, pose: Pose2D, body: tuple[float, float, float], *, tf: bool = False
     ) -> None:
@@ -550,48 +606,9 @@ class Recorder:
 
     def _rosbag2_metadata(self) -> str:
         assert self.path is not None
+        channels = {topic: typename for topic, (_, typename) in self._channels.items()}
         start = self._first_ns or self._epoch_ns
-        duration = max(0, self._last_ns - start)
-        total = sum(self.counts.values())
-        topics = [
-            {
-                "topic_metadata": {
-                    "name": topic,
-                    "type": typename,
-                    "serialization_format": "cdr",
-                    "offered_qos_profiles": yaml.safe_load(
-                        _QOS_LATCHED if topic in _LATCHED else _QOS_VOLATILE
-                    ),
-                    "type_description_hash": schemas.type_hash(typename),
-                },
-                "message_count": self.counts[topic],
-            }
-            for topic, (_, typename) in self._channels.items()
-        ]
-        info = {
-            "rosbag2_bagfile_information": {
-                "version": 9,
-                "storage_identifier": "mcap",
-                "relative_file_paths": [self.path.name],
-                "duration": {"nanoseconds": duration},
-                "starting_time": {"nanoseconds_since_epoch": start},
-                "message_count": total,
-                "topics_with_message_count": topics,
-                "compression_format": "",
-                "compression_mode": "",
-                "files": [
-                    {
-                        "path": self.path.name,
-                        "starting_time": {"nanoseconds_since_epoch": start},
-                        "duration": {"nanoseconds": duration},
-                        "message_count": total,
-                    }
-                ],
-                "custom_data": {"omnibot_version": __version__},
-                "ros_distro": "jazzy",
-            }
-        }
-        return yaml.safe_dump(info, sort_keys=False)
+        return rosbag2_metadata(self.path.name, channels, self.counts, start, self._last_ns)
 
     def __enter__(self) -> Recorder:
         return self

@@ -4,17 +4,24 @@ The telemetry is taken from the protocol lines (``/omnibot/protocol``, the TEL e
 controller sent them, in protocol integers), decoded by the same code the client decodes them with,
 and fed to the estimator the recorder ran (or another one). With the recorded estimator, the
 estimate is the live one, bit for bit: :func:`replay_log` compares it with ``odom``.
+
+The simulator's truth is in world coordinates; an estimate is in the frame it was started in (the
+origin, or the pose a runtime started it at: the path's first pose for ``run --follow``, where the
+simulated robot stands wherever its world puts it). :func:`truth_in_frame` moves the truth into the
+estimate's frame (the truth at the replay's first sample onto the estimator's start pose), so the
+two are compared where they mean the same.
 """
 
 from __future__ import annotations
 
+import bisect
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from omnibot.client.events import Telemetry
 from omnibot.errors import ConfigError
 from omnibot.estimation.estimator import make_estimator
-from omnibot.logs.run import Run
+from omnibot.logs.run import PoseRow, Run
 from omnibot.logs.topics import ADOPTED
 from omnibot.motion import Estimate, Pose2D
 from omnibot.protocol import text
@@ -36,6 +43,8 @@ class Replay:
     larger; None when the log has no estimate to compare with or another estimator was run."""
     note: str = ""
     """Why the live estimate was not compared ("" when it was or there was none)."""
+    start: Pose2D = field(default_factory=lambda: Pose2D(0.0, 0.0, 0.0))
+    """Where the replayed estimator started (its frame's pose at the first sample)."""
 
 
 def robot_of(run: Run) -> RobotDescription:
@@ -77,6 +86,7 @@ def replay_log(run: Run, estimator: str | None = None) -> Replay:
         start = Pose2D(x, y, theta)
         samples = samples[int(adopted["samples"]) :]
         live = live[int(adopted["estimates"]) :]
+    start = start or Pose2D(0.0, 0.0, 0.0)
     est = make_estimator(name, robot_of(run), start)
     estimates = [(tel.time, est.update(tel)) for tel in samples]
     difference: float | None = None
@@ -88,7 +98,27 @@ def replay_log(run: Run, estimator: str | None = None) -> Replay:
         if adopted:  # the runtime may have ended before the recording (the session's last samples)
             offline = offline[: len(live)]
         difference = _max_difference(live, offline)
-    return Replay(name, recorded, estimates, difference, note)
+    return Replay(name, recorded, estimates, difference, note, start)
+
+
+def truth_in_frame(run: Run, replay: Replay) -> list[tuple[float, float, float, float]]:
+    """The run's truth (t, x, y, theta) from the replay's first sample on, in the replayed estimate's
+    frame: moved so that the truth at that sample stands at the estimator's start pose (empty without
+    truth or samples)."""
+    if not run.truth or not replay.estimates:
+        return []
+    t0 = replay.estimates[0][0]
+    rows = run.truth[max(0, bisect.bisect_left([r[0] for r in run.truth], t0) - 1) :]
+    anchor = min(rows[:2], key=lambda r: abs(r[0] - t0))  # the truth read with the first sample
+    return [(r[0], *_moved(r, anchor, replay.start)) for r in rows if r[0] >= anchor[0]]
+
+
+def _moved(row: PoseRow, anchor: PoseRow, start: Pose2D) -> tuple[float, float, float]:
+    """``row``'s pose seen from ``anchor``, placed at ``start``: start o anchor^-1 o row."""
+    turn = start.theta - anchor[3]
+    c, s = math.cos(turn), math.sin(turn)
+    dx, dy = row[1] - anchor[1], row[2] - anchor[2]
+    return (start.x + c * dx - s * dy, start.y + s * dx + c * dy, row[3] + turn)
 
 
 def _max_difference(live: list[tuple[float, float, float, float]], offline: list[Estimate]) -> float:

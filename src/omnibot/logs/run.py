@@ -8,6 +8,7 @@ import math
 from collections import Counter, defaultdict
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import yaml
 
@@ -16,6 +17,7 @@ from omnibot.logs.topics import (
     CALIBRATION,
     CMD_VEL,
     CONTROL,
+    CYCLE,
     ESTIMATE,
     IMU,
     JOINT_STATES,
@@ -68,6 +70,8 @@ class Run:
     """t, kind, data, note."""
     robot_description: str = ""
     calibration: str = ""
+    cycles: list[tuple[float, Any]] = field(default_factory=list)
+    """t, the decoded ``/omnibot/cycle`` message: each runtime cycle while a follower ran."""
 
     @property
     def duration(self) -> float:
@@ -158,6 +162,8 @@ def load_run(path: str | Path) -> Run:
             run.robot_description = str(msg.data)
         elif m.topic == CALIBRATION:
             run.calibration = str(msg.data)
+        elif m.topic == CYCLE:
+            run.cycles.append((t, msg))
     run.start_ns, run.end_ns = first or 0, last
     run.cut_short = log.cut_short
     run.metadata = log.metadata
@@ -165,6 +171,7 @@ def load_run(path: str | Path) -> Run:
 
 
 _DECODED = {
+    CYCLE,
     CONTROL,
     ODOM,
     ESTIMATE,

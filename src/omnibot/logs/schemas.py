@@ -7,6 +7,7 @@ registered in the same type store, so one serializer (rosbags' CDR) writes every
     /omnibot/link       omnibot_msgs/msg/LinkBytes        raw bytes both ways (TX, RX, ERR, CLOSE)
     /omnibot/protocol   omnibot_msgs/msg/ProtocolLine     each command, reply and event as text
     /omnibot/control    omnibot_msgs/msg/Control          the runtime's arbitration, at each change
+    /omnibot/cycle      omnibot_msgs/msg/Cycle            each runtime cycle while a follower runs
     /omnibot/truth      nav_msgs/msg/Odometry             the simulator's ground truth
 
 :func:`typestore` returns the store; :func:`schema_text` the ``ros2msg`` schema (the definition
@@ -25,6 +26,7 @@ from rosbags.typesys.store import Typestore
 LINK_BYTES = "omnibot_msgs/msg/LinkBytes"
 PROTOCOL_LINE = "omnibot_msgs/msg/ProtocolLine"
 CONTROL = "omnibot_msgs/msg/Control"
+CYCLE = "omnibot_msgs/msg/Cycle"
 
 OWN_TYPES = {
     LINK_BYTES: (
@@ -50,6 +52,32 @@ OWN_TYPES = {
         "bool estop  # that lock is an emergency stop\n"
         "bool latched  # the controller holds a latched emergency stop (sonar)\n"
         "geometry_msgs/Twist twist  # what the source asked for (m/s, rad/s; zero when nothing)\n"
+    ),
+    CYCLE: (
+        "# One cycle of the runtime while a path follower runs: what the command sources were handed\n"
+        "# and what was decided (omnibot log replay re-runs the follower on it).\n"
+        "builtin_interfaces/Time stamp\n"
+        "uint32 run  # the follower run (MCAP metadata omnibot_follower/RUN)\n"
+        "uint64 index  # the runtime's cycle number\n"
+        "float64 now  # the cycle clock, s\n"
+        "float64 t  # the link clock, s\n"
+        "bool has_estimate  # false: no estimate yet (the fields below are zero)\n"
+        "float64 estimate_t  # the estimate handed to the sources: its time (s), pose, world velocity\n"
+        "float64 x\n"
+        "float64 y\n"
+        "float64 theta\n"
+        "float64 vx\n"
+        "float64 vy\n"
+        "float64 w\n"
+        "bool slipping\n"
+        "bool standstill\n"
+        "string source  # the source in control after this cycle's decision, empty for nobody\n"
+        "string lock  # the lock that holds the robot, empty for none\n"
+        "bool estop  # that lock is an emergency stop\n"
+        "bool latched  # the controller holds a latched emergency stop\n"
+        "bool has_twist  # the decision carries a twist (sent with VEL)\n"
+        "geometry_msgs/Twist twist  # what the source in control asked for (m/s, rad/s)\n"
+        "string[] errors  # error notices for the follower this cycle (a refused command...)\n"
     ),
 }
 

@@ -10,19 +10,30 @@
   already writes as ``cmd_vel``;
 * the Foxglove Teleop panel as a source (:class:`omnibot.logs.live.PanelSource`) when the command
   serves Foxglove live.
+
+While a path follower (:class:`~omnibot.runtime.sources.FollowerSource`) is among the runtime's
+sources, :class:`FollowerLog` also writes each cycle on ``/omnibot/cycle`` (``omnibot_msgs/msg/Cycle``:
+the cycle's clocks, the estimate the sources were handed, the decision and its twist, the follower's
+error notices) and, once per follower run, the MCAP metadata ``omnibot_follower/RUN`` (the follower's
+registered name, its options and limits, the path, its start time): what ``omnibot log replay``
+needs to re-run the follower (:mod:`omnibot.logs.follower_replay`).
 """
 
 from __future__ import annotations
 
+import dataclasses
+import json
+from collections.abc import Iterable
 from typing import TYPE_CHECKING
 
 from omnibot.client.events import Telemetry
 from omnibot.estimation.estimator import ESTIMATORS
 from omnibot.logs import schemas
 from omnibot.logs.recorder import Recorder, stamp, twist
-from omnibot.logs.topics import CONTROL
+from omnibot.logs.topics import CONTROL, CYCLE, FOLLOWER
 from omnibot.motion import Pose2D
 from omnibot.runtime.cycle import Cycle, Decision
+from omnibot.runtime.sources import FollowerSource
 
 if TYPE_CHECKING:
     from omnibot.estimation.estimator import Estimator
@@ -56,6 +67,7 @@ class RuntimeRecorder:
         self.runtime = runtime
         self._last: tuple[str, str, str, bool] | None = None
         self._adopted: Estimator | None = None
+        self._follower = FollowerLog(recorder)
         # made before the runtime listens (Runtime.start): this listener sees each sample before
         # the runtime's estimator does, so an estimator installed later (the dashboard's teach) is
         # adopted with the pose it starts from
@@ -92,6 +104,7 @@ class RuntimeRecorder:
         if key != self._last:
             self._last = key
             self.control(cycle.t, d, cycle.latched)
+        self._follower(cycle, self.runtime.sources.values())
 
     def control(self, t: float, d: Decision, latched: bool) -> None:
         """One ``/omnibot/control`` message: ``d`` at link time ``t``."""
@@ -114,3 +127,87 @@ class RuntimeRecorder:
         self.runtime.client.remove_listener(self._listener)
         if self._after in self.runtime.telemetry_hooks:
             self.runtime.telemetry_hooks.remove(self._after)
+
+
+def path_columns(path: object) -> dict[str, list[float] | None]:
+    """A path's columns (x, y, theta, t, v) as lists of floats (None for a column it lacks)."""
+    out: dict[str, list[float] | None] = {}
+    for name in ("x", "y", "theta", "t", "v"):
+        col = getattr(path, name, None)
+        out[name] = None if col is None else [float(v) for v in col]
+    return out
+
+
+class FollowerLog:
+    """Part of :class:`RuntimeRecorder`: each cycle while a follower source runs, and each follower
+    run's metadata (see the module docstring)."""
+
+    def __init__(self, recorder: Recorder) -> None:
+        self.recorder = recorder
+        self.runs = 0
+        """Follower runs seen so far (the run number of the current one)."""
+        self._source: FollowerSource | None = None
+        self._described = False
+
+    def __call__(self, cycle: Cycle, sources: Iterable[object]) -> None:
+        """Record ``cycle`` if a follower is among ``sources`` (the first one found)."""
+        source = next((s for s in sources if isinstance(s, FollowerSource)), None)
+        if source is None:
+            self._source = None
+            return
+        if source is not self._source:
+            self._source, self._described = source, False
+            self.runs += 1
+        if not self._described and source.started:
+            self._described = True
+            self.describe(source)
+        self.cycle(cycle, source.name)
+
+    def describe(self, source: FollowerSource) -> None:
+        """The metadata ``omnibot_follower/RUN`` of a follower run that has started."""
+        follower = source.follower
+        self.recorder.add_metadata(
+            f"{FOLLOWER}/{self.runs}",
+            {
+                "source": source.name,
+                "follower": follower.name,
+                "options": json.dumps(follower.options),
+                "limits": json.dumps(dataclasses.asdict(follower.limits)),
+                "path": json.dumps(path_columns(source.path)),
+                "t0": repr(float(follower.t0)),
+                "on_override": source.on_override,
+            },
+        )
+
+    def cycle(self, cycle: Cycle, name: str) -> None:
+        """One ``/omnibot/cycle`` message (the follower source is called ``name``)."""
+        ns = self.recorder.ns(cycle.t)
+        e = cycle.estimate
+        d = cycle.decision
+        tw = d.twist
+        msg = schemas.new(
+            schemas.CYCLE,
+            stamp=stamp(ns),
+            run=self.runs,
+            index=cycle.index,
+            now=float(cycle.now),
+            t=float(cycle.t),
+            has_estimate=e is not None,
+            estimate_t=float(e.t) if e else 0.0,
+            x=float(e.x) if e else 0.0,
+            y=float(e.y) if e else 0.0,
+            theta=float(e.theta) if e else 0.0,
+            vx=float(e.vx) if e else 0.0,
+            vy=float(e.vy) if e else 0.0,
+            w=float(e.w) if e else 0.0,
+            slipping=bool(e.slipping) if e else False,
+            standstill=bool(e.standstill) if e else False,
+            source=d.source,
+            lock=d.lock,
+            estop=d.estop,
+            latched=cycle.latched,
+            has_twist=tw is not None,
+            twist=twist(tw.vx, tw.vy, tw.w) if tw is not None else twist(0.0, 0.0, 0.0),
+            errors=[n.text for n in cycle.notices if n.level == "error" and n.source == name],
+        )
+        self.recorder.write(CYCLE, schemas.CYCLE, msg, ns)

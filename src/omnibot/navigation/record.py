@@ -10,7 +10,8 @@ estimator's poses (the robot's dead reckoning, as seed 002 records with its enco
   a torque that holds the target heading. The robot's backdriven gearmotors resist; the hand does
   not care.
 * ``drive``: the robot is driven by commands: VEL with the shape's time-optimal profile as a
-  script (a stand-in for teleop), open loop - what is recorded is what the robot actually did.
+  script (a stand-in for teleop; a :class:`~omnibot.runtime.sources.ScriptSource` on the
+  navigator's runtime), open loop - what is recorded is what the robot actually did.
 * ``listen``: nothing is sent but telemetry requests; someone else drives or pushes the robot
   (a real robot) for ``duration`` seconds or until interrupted.
 """
@@ -28,9 +29,11 @@ from omnibot.control.paths.path import Path
 from omnibot.control.paths.profile import time_optimal_profile
 from omnibot.control.paths.teach import PathRecorder
 from omnibot.errors import ConfigError
+from omnibot.motion import Twist
 from omnibot.navigation.runner import Navigator
 from omnibot.navigation.session import follower_limits
 from omnibot.robot.description import RobotDescription
+from omnibot.runtime.sources import ScriptSource
 
 TEACH_MODES = ("push", "drive", "listen")
 HAND_STIFFNESS = 60.0
@@ -130,38 +133,42 @@ def _move(
 ) -> None:
     limits = follower_limits(robot, speed).scaled(0.5)
     profile = time_optimal_profile(shape.without_speed(), limits)
+    end = profile.min_time + 1.0
+    period = 0.01
+    if mode == "drive":  # the profile as a script on the navigator's runtime
+
+        def script(t: float) -> Twist | str:
+            if t > end:
+                return ScriptSource.END
+            ref = profile.at(t)
+            return to_body(ref.vx, ref.vy, ref.w, nav.state().theta, period)
+
+        nav.drive(script, name="drive", period=period)
+        client.sleep(0.5)
+        return
     clock = client.clock
     t0 = clock.now()
-    period = 0.01
     sim = nav.sim
-    while True:
-        t = clock.now() - t0
-        if t > profile.min_time + 1.0:
-            break
+    assert sim is not None and nav.frame is not None
+    while (t := clock.now() - t0) <= end:
         ref = profile.at(t)
-        if mode == "push":
-            assert sim is not None and nav.frame is not None
-            # the hand works in the recording's frame, the shape drawn from where the robot stood
-            x, y, th = nav.frame(sim.pose.x, sim.pose.y, sim.pose.theta)
-            tw = sim.twist
-            c, s = math.cos(th), math.sin(th)
-            vx, vy = c * tw.vx - s * tw.vy, s * tw.vx + c * tw.vy
-            x0, y0, th0 = shape.start
-            home = nav.start_pose
-            tx, ty, tth = ref.x - x0 + home.x, ref.y - y0 + home.y, ref.theta - th0 + home.theta
-            m = robot.mass
-            fx = m * (ref.ax + HAND_STIFFNESS * (tx - x) + HAND_DAMPING * (ref.vx - vx))
-            fy = m * (ref.ay + HAND_STIFFNESS * (ty - y) + HAND_DAMPING * (ref.vy - vy))
-            torque = robot.yaw_inertia * (
-                HAND_TURN_STIFFNESS * wrap(tth - th) + HAND_TURN_DAMPING * (ref.w - tw.w)
-            )
-            cw, sw = math.cos(-nav.frame.dth), math.sin(-nav.frame.dth)
-            fx, fy = cw * fx - sw * fy, sw * fx + cw * fy
-            sim.push((fx, fy), torque, period, motors_off=True)
-        else:
-            est = nav.state()
-            cmd = to_body(ref.vx, ref.vy, ref.w, est.theta, period)
-            nav.send(cmd)
+        # the hand works in the recording's frame, the shape drawn from where the robot stood
+        x, y, th = nav.frame(sim.pose.x, sim.pose.y, sim.pose.theta)
+        tw = sim.twist
+        c, s = math.cos(th), math.sin(th)
+        vx, vy = c * tw.vx - s * tw.vy, s * tw.vx + c * tw.vy
+        x0, y0, th0 = shape.start
+        home = nav.start_pose
+        tx, ty, tth = ref.x - x0 + home.x, ref.y - y0 + home.y, ref.theta - th0 + home.theta
+        m = robot.mass
+        fx = m * (ref.ax + HAND_STIFFNESS * (tx - x) + HAND_DAMPING * (ref.vx - vx))
+        fy = m * (ref.ay + HAND_STIFFNESS * (ty - y) + HAND_DAMPING * (ref.vy - vy))
+        torque = robot.yaw_inertia * (
+            HAND_TURN_STIFFNESS * wrap(tth - th) + HAND_TURN_DAMPING * (ref.w - tw.w)
+        )
+        cw, sw = math.cos(-nav.frame.dth), math.sin(-nav.frame.dth)
+        fx, fy = cw * fx - sw * fy, sw * fx + cw * fy
+        sim.push((fx, fy), torque, period, motors_off=True)
         client.sleep(period)
     client.stop()
     client.sleep(0.5)

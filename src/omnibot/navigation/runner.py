@@ -12,7 +12,9 @@ follower -> VEL, on the link's clock).
 Everything waits through :meth:`RobotClient.sleep`, so the same loop runs on a real port (wall
 clock) and in lockstep on ``sim://`` (simulated time, faster than real time and deterministic for
 a seed). Replies to VEL are collected without blocking at the next cycle; an ERROR reply or a
-latched emergency stop ends the run (:class:`NavigationError`). With a simulated robot the ground
+latched emergency stop ends the run (:class:`NavigationError`). Scripted manoeuvres (``record
+--teach drive``, the gyro spin, the slip runs) drive on the same runtime (:meth:`Navigator.drive`, a
+:class:`~omnibot.runtime.sources.ScriptSource`): nothing but the runtime sends a VEL. With a simulated robot the ground
 truth is sampled at every tick (followers never see it), mapped into the path's frame (the
 estimator starts at the path's first pose, the robot is taken to stand there). The runtime
 (:mod:`omnibot.runtime`) is the navigator's: other sources (a pad, the dashboard) may join it.
@@ -22,13 +24,12 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from omnibot.client.client import Pending, RobotClient
-from omnibot.client.commands import vel as vel_command
+from omnibot.client.client import RobotClient
 from omnibot.client.errors import NotSupported
 from omnibot.client.events import Telemetry
 from omnibot.control.followers.base import STOP, Command, Follower, State
@@ -36,13 +37,13 @@ from omnibot.control.paths.path import Path
 from omnibot.errors import OmnibotError
 from omnibot.estimation.estimator import Estimator, PoseEstimator, make_estimator
 from omnibot.estimation.slip import SlipParameters
-from omnibot.motion import Pose2D
+from omnibot.motion import Pose2D, Twist
 from omnibot.progress import Progress
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription
 from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.runtime import LinkPacer, Runtime, clamp_to
-from omnibot.runtime.sources import FollowerSource
+from omnibot.runtime.runtime import LinkPacer, Runtime
+from omnibot.runtime.sources import FollowerSource, ScriptSource
 from omnibot.transport.device import find_simulator
 
 WATCHDOG = 0.15
@@ -122,12 +123,6 @@ def ramp_fraction(t: float, total: float, ramp: float) -> float:
     return max(0.0, min(1.0, t / ramp, (total - t) / ramp))
 
 
-def submit_vel(client: RobotClient, command: Command, watchdog: float = WATCHDOG) -> Pending:
-    """VEL for ``command`` clamped to what the controller accepts, submitted without waiting."""
-    lim = client.limits
-    return client.submit(vel_command(lim, *clamp_to(lim, command), watchdog))
-
-
 class _GyroProbe:
     """The gyro's heading and the encoders' rotation at every telemetry sample (gyro calibration)."""
 
@@ -205,7 +200,6 @@ class Navigator:
         self.runtime = Runtime(client, estimator=self.estimator)
         """The one loop that owns the client; it feeds the estimator and the observers."""
         self.runtime.telemetry_hooks.extend(obs.update for obs in self.observers.values())
-        self._pending: list[Pending] = []
         self._started = False
 
     # ------------------------------------------------------------------ setup
@@ -247,25 +241,27 @@ class Navigator:
         """
         c = self.client
         probe = _GyroProbe(self.robot)
-        c.on_telemetry(probe.update)
+        hooks = self.runtime.telemetry_hooks
+        hooks.append(probe.update)
         try:
             c.sleep(STANDSTILL)
             marks = [probe.mark()]
             estimators = [self.estimator, *self.observers.values()]
             start = [e.estimate.theta for e in estimators]
             ramp = 0.5
+            total = 2.0 * math.pi * turns / rate + 2.0 * ramp
             for sign in (1.0, -1.0):
-                duration = 2.0 * math.pi * turns / rate + ramp
-                t0 = c.clock.now()
-                while (t := c.clock.now() - t0) < duration + ramp:
-                    k = ramp_fraction(t, duration + ramp, ramp)
-                    self.send(Command(0.0, 0.0, sign * rate * k))
-                    c.sleep(0.01)
-                c.stop()
+
+                def spin(t: float, sign: float = sign) -> Twist | str:
+                    if t >= total:
+                        return ScriptSource.END
+                    return Twist(0.0, 0.0, sign * rate * ramp_fraction(t, total, ramp))
+
+                self.drive(spin, name="gyro-spin")
                 c.sleep(STANDSTILL)
                 marks.append(probe.mark())
         finally:
-            c.remove_listener(probe.update)
+            hooks.remove(probe.update)
         fit = probe.fit(marks)
         if fit is None:
             raise NavigationError("gyro calibration needs telemetry with encoders and gyro heading")
@@ -306,21 +302,31 @@ class Navigator:
 
     # ------------------------------------------------------------------ running
 
-    def send(self, command: Command) -> None:
-        """VEL for ``command`` (clamped to what the controller accepts), without waiting."""
-        self._collect()
-        self._pending.append(submit_vel(self.client, command))
-
-    def _collect(self) -> None:
-        keep = []
-        for p in self._pending:
-            if p.error is not None:
-                raise NavigationError(f"the controller refused {p.line}: {p.error}")
-            if not p.done:
-                keep.append(p)
-        self._pending = keep
-        if self.runtime.state == codes.STATE_ESTOP:
-            raise NavigationError("emergency stop latched on the controller")
+    def drive(
+        self,
+        script: Callable[[float], Twist | str | None],
+        *,
+        name: str = "manoeuvre",
+        period: float = 0.01,
+    ) -> None:
+        """Drive a scripted manoeuvre on the runtime, then STOP: ``script(t)`` gives the twist ``t`` s
+        after its start (:data:`ScriptSource.END` ends it), one VEL every ``period`` s of the link
+        clock (watchdog :data:`WATCHDOG`, not awaited). NavigationError when the controller refused a
+        command or latched its emergency stop."""
+        c = self.client
+        runtime = self.runtime
+        source = ScriptSource(script, name=name, watchdog=WATCHDOG)
+        runtime.pacer = LinkPacer(c, period)
+        runtime.add_source(source)
+        try:
+            runtime.run(until=lambda: source.finished)
+            if source.failure:
+                raise NavigationError(source.failure)
+        finally:
+            runtime.remove_source(source.name)
+            runtime.discard_pending()
+            if not c.link.closed:
+                c.stop()
 
     def follow(
         self,
@@ -378,7 +384,6 @@ class Navigator:
             runtime.remove_source(source.name)
             runtime.remove_sink(trace)
             runtime.discard_pending()
-            self._pending.clear()
             if not c.link.closed:
                 c.stop()
         self._record(run, self.state(), STOP)

@@ -16,12 +16,13 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Protocol
 
-from omnibot.control.followers.base import Command
 from omnibot.errors import ConfigError
 from omnibot.estimation.slip import SlipLeg, SlipParameters, SlipProbe, fit_slip, leg_error
+from omnibot.motion import Twist
 from omnibot.navigation.runner import Navigator, ramp_fraction
 from omnibot.robot.description import RobotDescription
 from omnibot.robot.kinematics import body_to_world, world_to_body
+from omnibot.runtime.sources import ScriptSource
 
 
 class RunTruth(Protocol):
@@ -81,24 +82,27 @@ def drive_run(
     accel: float,
     at_cruise: Callable[[], object] | None = None,
 ) -> None:
-    """One straight run along ``course`` (rad, body frame at the start) from rest to rest;
-    ``at_cruise`` is called once, 0.1 s into the cruise (the speed-up's creep then counted)."""
-    c = nav.client
+    """One straight run along ``course`` (rad, body frame at the start) from rest to rest, a script on
+    the navigator's runtime (:meth:`~omnibot.navigation.runner.Navigator.drive`); ``at_cruise`` is
+    called once, 0.1 s into the cruise (the speed-up's creep then counted)."""
     heading0 = nav.estimator.estimate.theta
-    period = 0.01
     t_acc = speed / accel
     cruise = max(0.0, distance - speed * t_acc) / speed
     total = 2.0 * t_acc + cruise
-    t0 = c.clock.now()
-    while (t := c.clock.now() - t0) < total:
-        if at_cruise is not None and t >= t_acc + 0.1:
-            at_cruise()
-            at_cruise = None
+    cruising = at_cruise
+
+    def run(t: float) -> Twist | str:
+        nonlocal cruising
+        if t >= total:
+            return ScriptSource.END
+        if cruising is not None and t >= t_acc + 0.1:
+            cruising()
+            cruising = None
         v = speed * ramp_fraction(t, total, t_acc)
         err = heading0 - nav.estimator.estimate.theta
-        nav.send(Command(v * math.cos(course), v * math.sin(course), HEADING_GAIN * err))
-        c.sleep(period)
-    c.stop()
+        return Twist(v * math.cos(course), v * math.sin(course), HEADING_GAIN * err)
+
+    nav.drive(run, name="slip-run")
 
 
 def calibrate_slip(
@@ -123,7 +127,7 @@ def calibrate_slip(
     fewer than two runs could be measured.
     """
     probe = SlipProbe(nav.robot)
-    nav.client.on_telemetry(probe.update)
+    nav.runtime.telemetry_hooks.append(probe.update)
     legs: list[SlipLeg] = []
     speed_ups: list[SlipLeg] = []
     measured: list[float] = []
@@ -154,7 +158,7 @@ def calibrate_slip(
             if progress is not None:
                 progress(i + 1, len(order))
     finally:
-        nav.client.remove_listener(probe.update)
+        nav.runtime.telemetry_hooks.remove(probe.update)
     if len(legs) < 2:
         raise ConfigError(
             f"wheel slip needs at least two measured runs; the truth measured {len(legs)} of {len(order)}"

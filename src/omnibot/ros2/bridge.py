@@ -7,16 +7,21 @@ URDF, diagnostics) of the host runtime, with no loop of its own.
   watchdog (:data:`WATCHDOG`) stops the robot.
 * :class:`Ros2Sink` feeds every cycle's telemetry and events to the MCAP recorder's message
   building (:class:`~omnibot.logs.recorder.Recorder` without a file) and publishes what it builds:
-  ``odom`` (nav_msgs/Odometry with covariances) and ``/tf`` odom -> base_link from the estimator,
-  ``imu``, ``range/<sonar>``, ``joint_states`` (the URDF's wheel joints), ``robot_description``
-  (transient-local), plus ``/tf_static`` (the sensors' frames, as in the URDF) and ``diagnostics``
-  (who drives and why, the latched emergency stop, refusals) once a second.
+  ``odom`` (nav_msgs/Odometry with covariances) and ``/tf`` odom -> base_link from the runtime's
+  estimator (the one a path follower steers by and ``initialpose`` sets), ``imu``,
+  ``range/<sonar>``, ``joint_states`` (the URDF's wheel joints), ``robot_description``
+  (transient-local), plus ``/tf_static`` (the sensors' frames, as in the URDF), ``battery_state``
+  (sensor_msgs/BatteryState, once a second while the controller reports its voltage) and
+  ``diagnostics`` (who drives and why, the latched emergency stop, refusals, the battery and what
+  the ``reporters`` add: the path follower, odometry resets) once a second and at every notice.
+  Every frame carries the robot's tf frame prefix (:mod:`omnibot.ros2.frames`).
 """
 
 from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -27,6 +32,7 @@ from omnibot.logs.topics import IMU, JOINT_STATES, ODOM, RANGE_PREFIX, ROBOT_DES
 from omnibot.motion import Twist
 from omnibot.robot.description import RobotDescription
 from omnibot.ros2.dds import DEFAULT, LATCHED, SENSOR_DATA, Node, Profile
+from omnibot.ros2.frames import prefixed, urdf_for_tf
 from omnibot.ros2.types import from_dds, to_dds
 from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.sources import Proposal
@@ -41,6 +47,7 @@ WATCHDOG = 0.2
 """s: the VEL timeout of cmd_vel's commands (the robot stops this long after they end)."""
 TF_STATIC = "/tf_static"
 DIAGNOSTICS = "/diagnostics"
+BATTERY = "battery_state"
 TWIST = "geometry_msgs/msg/Twist"
 TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
 
@@ -109,19 +116,81 @@ def _covariance(variances: tuple[float, ...]) -> Any:
     return np.diag(np.array(variances, dtype=np.float64)).reshape(36)
 
 
-class Ros2Sink:
-    """Publishes each cycle's state on ROS 2 topics (see the module docstring)."""
+Reporter = Callable[[], Any]
+"""Something that adds a diagnostic_msgs/DiagnosticStatus to every ``/diagnostics`` message (the path
+follower, odometry resets)."""
 
-    def __init__(self, node: Node, robot: RobotDescription, *, estimator: str = "fused") -> None:
+
+def kv(key: str, value: object) -> Any:
+    """A diagnostic_msgs/KeyValue."""
+    return schemas.new("diagnostic_msgs/msg/KeyValue", key=key, value=str(value))
+
+
+def status(level: int, name: str, message: str, hardware_id: str, values: dict[str, object]) -> Any:
+    """A diagnostic_msgs/DiagnosticStatus (``level`` 0 OK, 1 WARN, 2 ERROR)."""
+    return schemas.new(
+        "diagnostic_msgs/msg/DiagnosticStatus",
+        level=level,
+        name=name,
+        message=message,
+        hardware_id=hardware_id,
+        values=[kv(k, v) for k, v in values.items()],
+    )
+
+
+def battery_state(robot: RobotDescription, voltage: float, ns: int) -> Any:
+    """sensor_msgs/BatteryState: the ``voltage`` the controller reports, the description's design
+    capacity; what the controller does not measure (current, charge, percentage, temperature) is NaN,
+    as the message asks."""
+    nan = math.nan
+    return schemas.new(
+        "sensor_msgs/msg/BatteryState",
+        header=header(ns, "base_link"),
+        voltage=float(voltage),
+        temperature=nan,
+        current=nan,
+        charge=nan,
+        capacity=nan,
+        design_capacity=float(robot.battery.capacity_ah),
+        percentage=nan,
+        power_supply_status=0,  # UNKNOWN: the controller does not say whether it charges
+        power_supply_health=0,  # UNKNOWN
+        power_supply_technology=0,  # UNKNOWN
+        present=True,
+        cell_voltage=np.array([], dtype=np.float32),
+        cell_temperature=np.array([], dtype=np.float32),
+        location="",
+        serial_number="",
+    )
+
+
+class Ros2Sink:
+    """Publishes each cycle's state on ROS 2 topics (see the module docstring); ``prefix`` is the tf
+    frame prefix (:func:`omnibot.ros2.frames.frame_prefix`)."""
+
+    def __init__(
+        self,
+        node: Node,
+        robot: RobotDescription,
+        *,
+        prefix: str = "",
+        reporters: Sequence[Reporter] = (),
+    ) -> None:
         self.node = node
         self.robot = robot
+        self.prefix = prefix
+        self.reporters = list(reporters)
         self._writers: dict[str, Any] = {}
         for topic, typename, profile in self.topics(robot):
             self._writers[topic] = (node.writer(topic, typename, profile), typename)
         self.published: dict[str, int] = {}
         """Messages published per topic."""
         self._last_diagnostics = -math.inf
-        self.recorder = Recorder(None, estimator=estimator, mirrors=[_Mirror(self)])
+        self._last_battery = -math.inf
+        self.voltage: float | None = None
+        """The battery voltage the controller last reported, V (None: it reports none)."""
+        # the recorder builds the messages; the estimate is the runtime's (published each cycle)
+        self.recorder = Recorder(None, mirrors=[_Mirror(self)])
         self._started = False
 
     @staticmethod
@@ -134,6 +203,7 @@ class Ros2Sink:
             (JOINT_STATES, "sensor_msgs/msg/JointState", DEFAULT),
             (ROBOT_DESCRIPTION, "std_msgs/msg/String", LATCHED),
             (DIAGNOSTICS, "diagnostic_msgs/msg/DiagnosticArray", DEFAULT),
+            (BATTERY, "sensor_msgs/msg/BatteryState", DEFAULT),
         ]
         if robot.gyro is not None:
             topics.append((IMU, "sensor_msgs/msg/Imu", SENSOR_DATA))
@@ -141,7 +211,8 @@ class Ros2Sink:
         return topics
 
     def publish(self, topic: str, typename: str, data: bytes, ns: int) -> None:
-        """A recorder mirror: publish the message if it is one of ours (odom gets covariances)."""
+        """A recorder mirror: publish the message if it is one of ours (odom gets covariances, the URDF
+        the frame prefix and ``base_link`` as its root)."""
         known = self._writers.get(topic)
         if known is None or known[1] != typename:
             return
@@ -149,18 +220,21 @@ class Ros2Sink:
         if topic == ODOM:
             message.pose.covariance = _covariance(POSE_VARIANCE)
             message.twist.covariance = _covariance(TWIST_VARIANCE)
+        elif topic == ROBOT_DESCRIPTION:
+            message.data = urdf_for_tf(message.data, self.prefix)
         self.write(topic, message)
 
     def write(self, topic: str, message: Any) -> None:
-        """Publish a rosbags message object on ``topic``."""
+        """Publish a rosbags message object on ``topic`` (its frames prefixed)."""
         writer, typename = self._writers[topic]
-        writer.write(to_dds(message, typename))
+        writer.write(to_dds(prefixed(message, self.prefix), typename))
         self.published[topic] = self.published.get(topic, 0) + 1
 
     def start(self, t: float) -> None:
         """The URDF on ``robot_description`` and the sensors' frames on ``/tf_static``."""
         self._started = True
         self.recorder.start(self.robot, t=t)
+        self.recorder.estimator = None  # the runtime's estimate is published instead
         self.write(TF_STATIC, self.static_transforms(self.recorder.ns(t)))
 
     def static_transforms(self, ns: int) -> Any:
@@ -183,50 +257,74 @@ class Ros2Sink:
         return schemas.new("tf2_msgs/msg/TFMessage", transforms=transforms)
 
     def __call__(self, cycle: Cycle) -> None:
-        """The runtime's cycle: its telemetry and events published, diagnostics once a second or when
-        a notice came."""
+        """The runtime's cycle: its telemetry and events published, the estimate after new samples,
+        the battery and diagnostics once a second (diagnostics also when a notice came)."""
         if not self._started:
             self.start(cycle.t)
+        sampled = False
         for event in (*cycle.telemetry, *cycle.events):
             self.recorder.event(event)
+        for tel in cycle.telemetry:
+            sampled |= tel.encoders is not None
+            if tel.battery is not None:
+                self.voltage = tel.battery
+        if sampled and cycle.estimate is not None:
+            self.recorder.estimate(cycle.t, cycle.estimate)
+        if self.voltage is not None and cycle.now - self._last_battery >= 1.0:
+            self._last_battery = cycle.now
+            self.write(BATTERY, battery_state(self.robot, self.voltage, self.recorder.ns(cycle.t)))
         if cycle.now - self._last_diagnostics >= 1.0 or cycle.notices:
             self._last_diagnostics = cycle.now
             self.write(DIAGNOSTICS, self.diagnostics(cycle))
 
     def diagnostics(self, cycle: Cycle) -> Any:
-        """diagnostic_msgs/DiagnosticArray: control (who drives, why, locks) and the controller."""
+        """diagnostic_msgs/DiagnosticArray: control (who drives, why, locks), the battery, and what the
+        reporters add."""
         decision = cycle.decision
         worst = max((n.level for n in cycle.notices), key=("info", "warn", "error").index, default="info")
         level = 2 if cycle.latched or decision.estop or worst == "error" else 1 if worst == "warn" else 0
         text = "; ".join(n.text for n in cycle.notices) or decision.reason
         if cycle.latched:
             text = "emergency stop latched on the controller; " + text
-
-        def kv(key: str, value: object) -> Any:
-            return schemas.new("diagnostic_msgs/msg/KeyValue", key=key, value=str(value))
-
-        status = schemas.new(
-            "diagnostic_msgs/msg/DiagnosticStatus",
-            level=level,
-            name="omnibot: control",
-            message=text,
-            hardware_id=self.robot.name,
-            values=[
-                kv("source", decision.source or "none"),
-                kv("lock", decision.lock or "none"),
-                kv("emergency_stop", cycle.latched or decision.estop),
-                kv(
-                    "sent",
-                    ""
-                    if cycle.sent is None
-                    else f"{cycle.sent.vx:.3f},{cycle.sent.vy:.3f},{cycle.sent.w:.3f}",
-                ),
-            ],
-        )
+        sent = cycle.sent
+        statuses = [
+            status(
+                level,
+                "omnibot: control",
+                text,
+                self.robot.name,
+                {
+                    "source": decision.source or "none",
+                    "lock": decision.lock or "none",
+                    "emergency_stop": cycle.latched or decision.estop,
+                    "sent": "" if sent is None else f"{sent.vx:.3f},{sent.vy:.3f},{sent.w:.3f}",
+                },
+            ),
+            self._battery_status(),
+        ]
+        statuses += [report() for report in self.reporters]
         return schemas.new(
             "diagnostic_msgs/msg/DiagnosticArray",
             header=header(self.recorder.ns(cycle.t), ""),
-            status=[status],
+            status=statuses,
+        )
+
+    def _battery_status(self) -> Any:
+        nominal = self.robot.battery.voltage
+        if self.voltage is None:
+            return status(
+                0,
+                "omnibot: battery",
+                "not reported by the controller (no battery_state published)",
+                self.robot.name,
+                {"nominal_voltage": nominal},
+            )
+        return status(
+            0,
+            "omnibot: battery",
+            f"{self.voltage:.2f} V",
+            self.robot.name,
+            {"voltage": f"{self.voltage:.3f}", "nominal_voltage": nominal},
         )
 
     def close(self) -> None:

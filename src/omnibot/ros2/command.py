@@ -1,19 +1,28 @@
-"""``omnibot ros2``: the robot on ROS 2 (DDS) without a ROS installation.
+"""``omnibot ros2``: robots on ROS 2 (DDS) without a ROS installation.
 
 ::
 
-    omnibot ros2 [ROBOT OPTIONS] [--namespace NS] [--twist] [--cmd-vel-timeout S] [--duration S]
+    omnibot ros2 [ROBOT OPTIONS] [--namespace NS] [--frame-prefix P] [--twist] [--cmd-vel-timeout S]
+                 [--speed M/S] [--duration S]
+    omnibot ros2 --port URL1 --namespace r1 --port URL2 --namespace r2 ...   # several robots
 
-One runtime owns the robot (wall-clock paced at :data:`PERIOD`); the bridge is its ``cmd_vel`` source
-and its publishing sink (:mod:`omnibot.ros2.bridge`). ``omnibot run --ros2`` adds the same to the
-other front ends. Imports here are light: :func:`add_arguments` runs whenever ``omnibot`` builds its
-parser.
+Each robot has its own runtime (wall-clock paced at :data:`PERIOD`), participant, namespace and tf
+frame prefix; the bridge is its ``cmd_vel`` and ``path`` sources, its ``initialpose`` /
+``reset_odometry`` sink and its publishing sink (:mod:`omnibot.ros2.bridge`). With several robots
+the i-th ``--namespace`` (and ``--frame-prefix``, when given) goes with the i-th ``--port``; every
+robot's link is opened first (one that cannot be opened ends the command before any robot moves),
+then each robot runs in a thread of its own, and one robot failing ends them all. ``omnibot run
+--ros2`` adds the same to the other front ends (one robot). Imports here are light:
+:func:`add_arguments` runs whenever ``omnibot`` builds its parser.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
+import threading
+from dataclasses import dataclass
 from typing import Any
 
 from omnibot.errors import ConfigError
@@ -26,9 +35,23 @@ SONAR_PERIOD = 0.1
 every ``range/<sonar>`` would say +inf, no echo, for a sonar that never pinged)."""
 
 
-def add_bridge_options(p: argparse.ArgumentParser) -> None:
-    """The bridge's own options (``omnibot ros2`` and ``omnibot run --ros2``)."""
-    p.add_argument("--namespace", default="", help="ROS namespace of the robot's topics (default: none)")
+def add_bridge_options(p: argparse.ArgumentParser, *, several: bool = False) -> None:
+    """The bridge's own options (``omnibot ros2``, where ``several`` robots may be given, and ``omnibot
+    run --ros2``)."""
+    more = "; one per --port, in the same order" if several else ""
+    p.add_argument(
+        "--namespace",
+        action="append" if several else "store",
+        default=None if several else "",
+        help=f"ROS namespace of the robot's topics (default: none){more}",
+    )
+    p.add_argument(
+        "--frame-prefix",
+        action="append" if several else "store",
+        metavar="PREFIX",
+        help="tf frame prefix of the robot's frames, e.g. r1/ (default: the namespace, as "
+        f"ros2_controllers' tf_frame_prefix; '' for none){more}",
+    )
     p.add_argument(
         "--twist",
         action="store_true",
@@ -47,42 +70,155 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """Declare ``omnibot ros2``'s options."""
     from omnibot.cliargs import add_robot_options
 
-    add_robot_options(p, world="room", port_help="the simulated --robot, paced to the wall clock")
-    add_bridge_options(p)
+    add_robot_options(
+        p, world="room", port_help="the simulated --robot, paced to the wall clock", several=True
+    )
+    add_bridge_options(p, several=True)
+    p.add_argument(
+        "--speed",
+        type=float,
+        metavar="M/S",
+        help="speed cap of the path follower (default: the robot's limit)",
+    )
     p.add_argument("--duration", type=float, metavar="S", help="run for S seconds (default: until Ctrl-C)")
 
 
-def check(args: argparse.Namespace) -> None:
-    """Refuse bad bridge options with one line."""
+@dataclass(frozen=True)
+class RobotSpec:
+    """One robot of ``omnibot ros2``: its link URL (None: the simulated one the options describe), ROS
+    namespace and tf frame prefix."""
+
+    url: str | None
+    namespace: str
+    prefix: str
+
+
+def _listed(value: Any) -> list[str]:
+    if value is None:
+        return []
+    return list(value) if isinstance(value, list) else [value]
+
+
+def check_namespace(namespace: str) -> str:
+    """``namespace`` without its slashes, or a one-line error."""
+    text = namespace.strip("/")
+    parts = text.split("/") if text else []
+    if any(
+        not part or not (part[0].isalpha() or part[0] == "_") or not part.replace("_", "").isalnum()
+        for part in parts
+    ):
+        raise ConfigError(f"not a valid ROS namespace: {namespace!r}", key="--namespace")
+    return text
+
+
+def robot_specs(args: argparse.Namespace) -> list[RobotSpec]:
+    """The robots the options describe (one line for mismatched counts or a shared namespace or
+    prefix)."""
+    from omnibot.ros2.frames import frame_prefix
+
+    ports = _listed(getattr(args, "port", None))
+    namespaces = _listed(args.namespace)
+    prefixes = _listed(args.frame_prefix)
+    count = max(1, len(ports))
+    if count > 1 and len(namespaces) != count:
+        raise ConfigError(
+            f"{count} robots (--port) but {len(namespaces)} --namespace: give each robot its own "
+            "namespace, in the order of the --port options",
+            key="--namespace",
+        )
+    if len(namespaces) > count or len(prefixes) > count or (prefixes and len(prefixes) != count):
+        raise ConfigError(
+            f"{count} robot{'s' if count > 1 else ''} (--port) but {len(namespaces)} --namespace and "
+            f"{len(prefixes)} --frame-prefix: give at most one of each per robot, in the order of --port",
+            key="--namespace" if len(namespaces) > count else "--frame-prefix",
+        )
+    names = [check_namespace(ns) for ns in namespaces] or [""]
+    given: list[str | None] = list(prefixes) or [None] * count
+    frames = [frame_prefix(p, ns) for p, ns in zip(given, names, strict=True)]
+    for label, values, key in (
+        ("namespace", names, "--namespace"),
+        ("tf frame prefix", frames, "--frame-prefix"),
+    ):
+        seen = [v for i, v in enumerate(values) if v in values[:i]]
+        if seen:
+            raise ConfigError(
+                f"two robots with the {label} {seen[0] or '(none)'!r}: each robot needs its own", key=key
+            )
+    urls: list[str | None] = list(ports) or [None]
+    return [RobotSpec(url, ns, prefix) for url, ns, prefix in zip(urls, names, frames, strict=True)]
+
+
+def check(args: argparse.Namespace) -> list[RobotSpec]:
+    """Refuse bad bridge options with one line; the robots they describe."""
     timeout = args.cmd_vel_timeout
     if not (math.isfinite(timeout) and timeout > 0):
         raise ConfigError(f"expected a positive number of seconds, got {timeout}", key="--cmd-vel-timeout")
     duration = getattr(args, "duration", None)
     if duration is not None and not (math.isfinite(duration) and duration > 0):
         raise ConfigError(f"expected a positive number of seconds, got {duration}", key="--duration")
-    bad = [part for part in args.namespace.strip("/").split("/") if args.namespace.strip("/")]
-    if any(
-        not part or not (part[0].isalpha() or part[0] == "_") or not part.replace("_", "").isalnum()
-        for part in bad
-    ):
-        raise ConfigError(f"not a valid ROS namespace: {args.namespace!r}", key="--namespace")
+    speed = getattr(args, "speed", None)
+    if speed is not None and not (math.isfinite(speed) and speed > 0):
+        raise ConfigError(f"expected a positive speed in m/s, got {speed}", key="--speed")
+    specs = robot_specs(args)
+    if len(specs) > 1 and (getattr(args, "log", None) or getattr(args, "foxglove", None)):
+        raise ConfigError("--log and --foxglove record one robot: not with several --port", key="--log")
+    return specs
 
 
-def attach(runtime: Any, robot: Any, args: argparse.Namespace) -> Any:
-    """Add the cmd_vel source and the publishing sink to ``runtime``; returns the node (close it)."""
+def attach(runtime: Any, robot: Any, args: argparse.Namespace, spec: RobotSpec | None = None) -> Any:
+    """Add the bridge to ``runtime``: the cmd_vel and path sources, the odometry reset and publishing
+    sinks; gives the runtime the fused estimator at its first cycle when it has none. Returns the
+    node (close it)."""
     try:
         from omnibot.ros2.bridge import CmdVelSource, Ros2Sink
         from omnibot.ros2.dds import Node
+        from omnibot.ros2.odometry import OdometryReset
+        from omnibot.ros2.path import PathSource
     except ImportError:
         raise ConfigError(INSTALL) from None
+    from omnibot.estimation.estimator import make_estimator
     from omnibot.ros2.netns import UnsafeNetwork
 
+    spec = spec or robot_specs(args)[0]
+    tried = False
+
+    def estimator_when_missing(cycle: Any) -> None:
+        """At the first cycle, the fused estimator unless another front end installed its own (the
+        dashboard's teach, a --follow's): odom is the estimate the runtime has."""
+        nonlocal tried
+        if runtime.estimator is None and not tried:
+            tried = True
+            try:
+                runtime.estimator = make_estimator("fused", robot)
+            except ConfigError as exc:
+                runtime.notify("warn", f"no odometry: {exc}")
+
     try:
-        node = Node(args.namespace)
+        node = Node(spec.namespace)
     except UnsafeNetwork as exc:
         raise ConfigError(str(exc)) from None
+
+    def notify(level: Any, text: str) -> None:
+        runtime.notify(level, text)
+
+    odom = spec.prefix + "odom"
+    path = PathSource(
+        node,
+        robot,
+        runtime.period,
+        odom_frame=odom,
+        notify=notify,
+        follower=getattr(args, "follower", "tracker"),
+        speed=getattr(args, "speed", None),
+    )
+    reset = OdometryReset(
+        node, runtime, odom_frame=odom, notify=notify, on_reset=path.cancel, hardware_id=robot.name
+    )
+    runtime.add_sink(estimator_when_missing)
     runtime.add_source(CmdVelSource(node, stamped=not args.twist, timeout=args.cmd_vel_timeout))
-    runtime.add_sink(Ros2Sink(node, robot))
+    runtime.add_source(path)
+    runtime.add_sink(reset)
+    runtime.add_sink(Ros2Sink(node, robot, prefix=spec.prefix, reporters=[path.status, reset.status]))
     start_sonars(runtime.client, robot)
     return node
 
@@ -93,34 +229,107 @@ def start_sonars(client: Any, robot: Any) -> None:
         client.sonar(number, SONAR_PERIOD)
 
 
-def run(args: argparse.Namespace) -> int:
-    """``omnibot ros2``: run the bridge until Ctrl-C or ``--duration``."""
-    from omnibot.cliargs import check_sim_options, sim_url
-    from omnibot.client.session import robot_session
-    from omnibot.protocol import codes
+_PRINTING = threading.Lock()
+
+
+def _say(text: str) -> None:
+    """A status line, whole (the robots' threads print at once)."""
+    with _PRINTING:
+        print(text, flush=True)
+
+
+@dataclass
+class _Robot:
+    """One robot of the process: its spec, client, runtime and node."""
+
+    spec: RobotSpec
+    url: str
+    client: Any
+    robot: Any
+    runtime: Any
+    node: Any
+    label: str
+
+
+def _open(args: argparse.Namespace, spec: RobotSpec, session: Any, url: str, label: str) -> _Robot:
+    """The robot's runtime with the bridge attached (not yet running)."""
     from omnibot.runtime.runtime import Runtime
     from omnibot.runtime.sinks import NoticePrinter
+
+    runtime = Runtime(session.client, period=PERIOD)
+    node = attach(runtime, session.robot, args, spec)
+    runtime.add_sink(NoticePrinter(lambda text: _say(f"{label}{text}"), control=True))
+    return _Robot(spec, url, session.client, session.robot, runtime, node, label)
+
+
+def _serve(one: _Robot, args: argparse.Namespace, stop: threading.Event) -> None:
+    """Run one robot's runtime, wall-clock paced, until ``stop`` or ``--duration``."""
+    from omnibot.protocol import codes
     from omnibot.teleop.pacing import Pacer
 
-    check(args)
+    runtime, client, node, spec = one.runtime, one.client, one.node, one.spec
+    runtime.start()
+    client.telemetry(PERIOD, codes.TEL_MASK)
+    runtime.pacer = Pacer(client, PERIOD)
+    ns = f" namespace /{node.namespace}" if node.namespace else ""
+    frames = f", frames {spec.prefix}odom" if spec.prefix else ""
+    _say(
+        f"{one.label}{one.robot.name} on {one.url}: domain {node.domain_id}{ns}{frames}, "
+        f"discovery {node.scope.lower()}"
+    )
+    runtime.run(until=stop.is_set, duration=args.duration)
+
+
+def run(args: argparse.Namespace) -> int:
+    """``omnibot ros2``: run the bridge for each robot until Ctrl-C or ``--duration``.
+
+    Every robot's link is opened (and its controller greeted) first, in this thread, one after the
+    other: a robot that cannot be opened ends the command before any robot moves, and the links of a
+    shared simulated world are all open before any runtime waits on one. Then one robot runs here;
+    several run a thread each (the first to end, or to fail, ends them all)."""
+    from omnibot.cliargs import check_sim_options, sim_url
+    from omnibot.client.session import robot_session
+
+    specs = check(args)
     check_sim_options(args)
-    url = sim_url(args)
-    with robot_session(url, args.robot, timeout=0.5) as session:
-        client, robot = session.client, session.robot
-        runtime = Runtime(client, period=PERIOD)
-        node = attach(runtime, robot, args)
-        runtime.add_sink(NoticePrinter(lambda text: print(f"ros2: {text}", flush=True), control=True))
+    several = len(specs) > 1
+    stop = threading.Event()
+    with contextlib.ExitStack() as stack:
+        robots: list[_Robot] = []
+        for spec in specs:
+            url = spec.url or sim_url(args)
+            session = stack.enter_context(robot_session(url, args.robot, timeout=0.5))
+            label = f"ros2 [{spec.namespace}]: " if several else "ros2: "
+            one = _open(args, spec, session, url, label)
+            stack.callback(one.node.close)
+            stack.callback(one.runtime.close)
+            robots.append(one)
+        if not several:
+            _serve(robots[0], args, stop)
+            return 0
+        failures: list[BaseException] = []
+
+        def serve(one: _Robot) -> None:
+            try:
+                _serve(one, args, stop)
+            except BaseException as exc:  # handed to this thread, which reports it
+                failures.append(exc)
+            finally:
+                stop.set()  # one robot's end (--duration, a failure) ends the fleet
+
+        threads = [
+            threading.Thread(target=serve, args=(one,), name=f"ros2-{one.spec.namespace}") for one in robots
+        ]
         try:
-            runtime.start()
-            client.telemetry(PERIOD, codes.TEL_MASK)
-            runtime.pacer = Pacer(client, PERIOD)
-            ns = f" namespace /{node.namespace}" if node.namespace else ""
-            print(
-                f"ros2: {robot.name} on {url}: domain {node.domain_id}{ns}, discovery {node.scope.lower()}",
-                flush=True,
-            )
-            runtime.run(duration=args.duration)
+            for thread in threads:
+                thread.start()
+            while any(thread.is_alive() for thread in threads):
+                for thread in threads:
+                    thread.join(timeout=0.1)
         finally:
-            runtime.close()
-            node.close()
+            stop.set()
+            for thread in threads:
+                thread.join()
+        if failures:
+            raise failures[0]
     return 0

@@ -17,6 +17,7 @@ Under pytest a participant is refused outside a private network namespace
 from __future__ import annotations
 
 import os
+import threading
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -24,7 +25,7 @@ from typing import Any
 from omnibot.errors import ConfigError
 from omnibot.logs.schemas import type_hash
 from omnibot.ros2 import netns
-from omnibot.ros2.types import dds_type
+from omnibot.ros2.types import dds_type, request_type
 
 try:
     from cyclonedds.core import Qos
@@ -54,22 +55,24 @@ SENSOR_DATA = Profile(reliable=False, depth=5)
 LATCHED = Profile(depth=1, transient_local=True)
 
 
-def qos(profile: Profile, typename: str) -> Qos:
-    """The DDS QoS of ``profile`` with ``typename``'s RIHS01 hash in USER_DATA."""
+def qos(profile: Profile, typename: str, user_data: str = "") -> Qos:
+    """The DDS QoS of ``profile`` with ``user_data`` and ``typename``'s RIHS01 hash in USER_DATA."""
     return Qos(
         _RELIABLE if profile.reliable else Policy.Reliability.BestEffort,
         Policy.History.KeepLast(profile.depth),
         Policy.Durability.TransientLocal if profile.transient_local else Policy.Durability.Volatile,
-        Policy.Userdata(f"typehash={type_hash(typename)};".encode()),
+        Policy.Userdata(f"{user_data}typehash={type_hash(typename)};".encode()),
     )
 
 
-def topic_name(name: str, namespace: str = "") -> str:
-    """The DDS topic of the ROS topic ``name`` in ``namespace`` (``rt/`` + the fully qualified name)."""
+def topic_name(name: str, namespace: str = "", kind: str = "rt", suffix: str = "") -> str:
+    """The DDS topic of the ROS topic ``name`` in ``namespace``: ``kind`` (``rt`` a topic; ``rq`` and
+    ``rr`` a service's requests and replies) + ``/`` + the fully qualified name + ``suffix``
+    (``Request``, ``Reply``), as rmw_cyclonedds' ``make_fqtopic``."""
     if name.startswith("/"):
-        return "rt" + name
+        return kind + name + suffix
     ns = namespace.strip("/")
-    return f"rt/{ns}/{name}" if ns else f"rt/{name}"
+    return f"{kind}/{ns}/{name}{suffix}" if ns else f"{kind}/{name}{suffix}"
 
 
 def domain_id(env: Mapping[str, str]) -> int:
@@ -126,18 +129,24 @@ def config_xml(domain: int, scope: str) -> str:
 
 
 _DOMAINS: dict[int, tuple[Any, str]] = {}
+_DOMAINS_LOCK = threading.Lock()
+_ENTITIES = threading.RLock()
+"""Entities are made one at a time in a process: cyclonedds fails to make the topics of one type from
+two threads at once (several robots open their nodes in threads of their own)."""
 
 
 def _domain(domain: int, scope: str) -> Any:
-    """The process's one configured domain ``domain`` (cyclonedds allows one configuration each)."""
-    known = _DOMAINS.get(domain)
-    if known is not None:
-        if known[1] != scope:
-            raise ConfigError(f"DDS domain {domain} is already open with discovery range {known[1]}")
-        return known[0]
-    made = Domain(domain, config_xml(domain, scope))
-    _DOMAINS[domain] = (made, scope)
-    return made
+    """The process's one configured domain ``domain`` (cyclonedds allows one configuration each; the
+    robots of one process open their nodes in threads of their own)."""
+    with _DOMAINS_LOCK:
+        known = _DOMAINS.get(domain)
+        if known is not None:
+            if known[1] != scope:
+                raise ConfigError(f"DDS domain {domain} is already open with discovery range {known[1]}")
+            return known[0]
+        made = Domain(domain, config_xml(domain, scope))
+        _DOMAINS[domain] = (made, scope)
+        return made
 
 
 class Node:
@@ -150,8 +159,10 @@ class Node:
         self.domain_id = domain_id(env)
         self.scope = discovery_range(env)
         self._domain = _domain(self.domain_id, self.scope)
-        self.participant = DomainParticipant(self.domain_id)
+        with _ENTITIES:
+            self.participant = DomainParticipant(self.domain_id)
         self._topics: dict[str, Any] = {}
+        self._services = 0
 
     def _topic(self, name: str, typename: str) -> Any:
         dds = topic_name(name, self.namespace)
@@ -163,11 +174,40 @@ class Node:
 
     def writer(self, name: str, typename: str, profile: Profile = DEFAULT) -> Any:
         """A DataWriter of ``typename`` on the ROS topic ``name``."""
-        return DataWriter(self.participant, self._topic(name, typename), qos=qos(profile, typename))
+        with _ENTITIES:
+            return DataWriter(self.participant, self._topic(name, typename), qos=qos(profile, typename))
 
     def reader(self, name: str, typename: str, profile: Profile = DEFAULT) -> Any:
         """A DataReader of ``typename`` on the ROS topic ``name``."""
-        return DataReader(self.participant, self._topic(name, typename), qos=qos(profile, typename))
+        with _ENTITIES:
+            return DataReader(self.participant, self._topic(name, typename), qos=qos(profile, typename))
+
+    def service_endpoints(self, name: str, srv: str) -> tuple[Any, Any]:
+        """The request reader and reply writer of the ROS service ``name`` of type ``srv``
+        (``pkg/srv/Name``), as rmw_cyclonedds makes a service's: topics ``rq/<ns>/<name>Request`` and
+        ``rr/<ns>/<name>Reply`` (:func:`~omnibot.ros2.types.request_type`), the services' default QoS
+        (reliable, volatile, keep-last 10) and ``serviceid=<id>;`` in both USER_DATA (a client pairs
+        them by it): the id is the participant's GUID prefix and a counter, formatted as rmw does."""
+        self._services += 1
+        guid = self.participant.guid.bytes[:12] + self._services.to_bytes(4, "big")
+        csid = f"{guid[0]:2x}" + "".join(f".{b:x}" for b in guid[1:])
+        user = f"serviceid={csid};"
+        with _ENTITIES:
+            requests, replies = self._service_endpoints(name, srv, user)
+        return requests, replies
+
+    def _service_endpoints(self, name: str, srv: str, user: str) -> list[Any]:
+        endpoints: list[Any] = []
+        for kind, suffix, part, make in (
+            ("rq", "Request", "_Request", DataReader),
+            ("rr", "Reply", "_Response", DataWriter),
+        ):
+            typename = srv + part
+            dds = topic_name(name, self.namespace, kind, suffix)
+            topic = Topic(self.participant, dds, request_type(typename))
+            self._topics[dds] = topic
+            endpoints.append(make(self.participant, topic, qos=qos(DEFAULT, typename, user)))
+        return endpoints
 
     def close(self) -> None:
         """Delete the participant (and everything it made)."""

@@ -8,10 +8,12 @@ builds the cyclonedds :class:`~cyclonedds.idl.IdlStruct` class from rosbags' fie
 
 from __future__ import annotations
 
+import threading
 from functools import cache
 from typing import Any
 
 import numpy as np
+from rosbags.typesys.msg import get_types_from_msg
 
 from omnibot.logs.schemas import typestore
 
@@ -65,9 +67,19 @@ def _member(desc: tuple[Any, Any]) -> Any:
     raise ValueError(f"unknown field kind {node}")
 
 
-@cache
+_BUILDING = threading.RLock()
+"""One class per type in a process (robots open their nodes in threads; cyclonedds refuses a second
+class of a type name it knows)."""
+
+
 def dds_type(typename: str) -> type[IdlStruct]:
     """The final cyclonedds struct of the ROS 2 message ``typename`` (e.g. ``nav_msgs/msg/Odometry``)."""
+    with _BUILDING:
+        return _dds_type(typename)
+
+
+@cache
+def _dds_type(typename: str) -> type[IdlStruct]:
     _, fields = typestore().fielddefs[typename]
     members = {name: _member(desc) for name, desc in fields}
     if not members:  # an empty ROS message has one uint8 member on the wire
@@ -115,13 +127,57 @@ _NUMPY = {
 }
 
 
+def dds_fields(message: Any, typename: str) -> dict[str, Any]:
+    """The members of the DDS sample of a rosbags message object of ``typename``."""
+    _, fields = typestore().fielddefs[typename]
+    if not fields:
+        return {"structure_needs_at_least_one_member": 0}
+    return {name: _convert(getattr(message, name), desc, True) for name, desc in fields}
+
+
 def to_dds(message: Any, typename: str) -> IdlStruct:
     """The DDS sample of a rosbags message object of ``typename``."""
+    return dds_type(typename)(**dds_fields(message, typename))
+
+
+SERVICE_TYPES = {
+    "std_srvs/srv/Trigger_Request": "",
+    "std_srvs/srv/Trigger_Response": "bool success  # indicate successful run of triggered service\n"
+    "string message  # informational, e.g. for error messages\n",
+}
+"""Service request and response types (rosbags' store has messages only): std_srvs' definitions."""
+
+
+def register_service_types() -> None:
+    """Put :data:`SERVICE_TYPES` in the type store (once); rosbags gives an empty request the one
+    ``uint8`` member rosidl gives it, so the RIHS01 hashes are ROS 2's."""
+    store = typestore()
+    for name, text in SERVICE_TYPES.items():
+        if name not in store.fielddefs:
+            # rosbags names what it parses pkg/msg/Name; the definition is registered under the srv name
+            ((_, definition),) = get_types_from_msg(text, "omnibot_srv/msg/Parsed").items()
+            store.register({name: definition})
+
+
+def request_type(typename: str) -> type[IdlStruct]:
+    """:func:`_request_type`, one class per type in a process."""
+    with _BUILDING:
+        return _request_type(typename)
+
+
+@cache
+def _request_type(typename: str) -> type[IdlStruct]:
+    """rmw_cyclonedds' wire type of a service request or reply of ``typename``
+    (``pkg/srv/Name_Request`` or ``_Response``): the final struct ``pkg::srv::dds_::Name_Request_`` whose
+    members are the request header (``guid``: the client's request writer's instance handle, ``seq``:
+    the client's sequence number; rmw_cyclonedds' ``cdds_request_header_t``) and then the message's."""
+    register_service_types()
     _, fields = typestore().fielddefs[typename]
-    cls = dds_type(typename)
-    if not fields:
-        return cls(structure_needs_at_least_one_member=0)  # type: ignore[call-arg]
-    return cls(**{name: _convert(getattr(message, name), desc, True) for name, desc in fields})
+    members: dict[str, Any] = {"guid": idl.uint64, "seq": idl.int64}
+    members.update({name: _member(desc) for name, desc in fields})
+    cls = make_idl_struct(typename.rsplit("/", 1)[1] + "_", dds_name(typename), members)
+    cls.__idl_annotations__["extensibility"] = "final"
+    return cls
 
 
 def from_dds(sample: Any, typename: str) -> Any:

@@ -16,7 +16,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import math
-import os
 import sys
 import time
 from collections.abc import Callable
@@ -27,15 +26,13 @@ from omnibot.errors import ConfigError
 
 PAD_PRIORITY = 200
 """A person at the robot (pad, keyboard) outranks the page (100) and the follower (10)."""
-FOLLOWER_PRIORITY = 10
-STANDSTILL = 3.0
-"""s standing still before a follow, while the gyro's bias is learned (as ``omnibot follow``)."""
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Declare ``omnibot run``'s options (the robot options shared with every command, then its own)."""
     from omnibot.cliargs import add_robot_options
     from omnibot.ros2.command import add_bridge_options
+    from omnibot.web.command import add_server_options
 
     add_robot_options(
         p,
@@ -50,18 +47,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--dashboard", action="store_true", help="serve the dashboard (its stick and keys: priority 100)"
     )
-    p.add_argument("--host", default="127.0.0.1", help="--dashboard: address to serve on (default 127.0.0.1)")
-    p.add_argument("--http-port", type=int, default=8080, help="--dashboard: HTTP port (default 8080)")
-    p.add_argument(
-        "--token", help="--dashboard: access token (required, and made up if not given, off loopback)"
-    )
-    p.add_argument(
-        "--allow-host",
-        action="append",
-        default=[],
-        metavar="NAME",
-        help="--dashboard: another name of this host",
-    )
+    add_server_options(p, "--dashboard: ")
     p.add_argument(
         "--follow",
         metavar="PATH.csv",
@@ -130,15 +116,13 @@ def _check(args: argparse.Namespace) -> None:
 
 def compose(runtime: Any, robot: Any, args: argparse.Namespace, config: Any, path: Any) -> Parts:
     """Add the pad and the follower to ``runtime`` (any thread: before it runs)."""
-    from omnibot.control.followers.base import make_follower
     from omnibot.estimation.estimator import make_estimator
     from omnibot.motion import Pose2D
-    from omnibot.navigation.runner import WATCHDOG
-    from omnibot.navigation.session import follower_limits
-    from omnibot.navigation.webteach import WATCHDOG as SLOW_WATCHDOG
-    from omnibot.navigation.webteach import gains_for
+    from omnibot.navigation.runner import STANDSTILL
+    from omnibot.runtime.following import FOLLOWER_PRIORITY, follower_source
     from omnibot.runtime.sinks import NoticePrinter
-    from omnibot.runtime.sources import FollowerSource, PadSource
+    from omnibot.runtime.sources import PadSource
+    from omnibot.runtime.standstill import Standstill
     from omnibot.teleop.command import open_source
     from omnibot.teleop.mapping import TwistLimits
 
@@ -146,17 +130,11 @@ def compose(runtime: Any, robot: Any, args: argparse.Namespace, config: Any, pat
     period = runtime.period
     if path is not None:
         runtime.estimator = make_estimator("fused", robot, Pose2D(*path.start))
-        gains = gains_for(period) if args.follower == "tracker" and period > 0.0101 else {}
-        follower = make_follower(
-            args.follower, follower_limits(robot, args.speed), rate=1.0 / period, **gains
-        )
-        parts.follower = FollowerSource(
-            follower,
-            path,
-            priority=FOLLOWER_PRIORITY,
-            watchdog=WATCHDOG if period <= 0.0101 else SLOW_WATCHDOG,
-        )
+        parts.follower = follower_source(robot, path, period, args.follower, args.speed)
         runtime.add_source(parts.follower)
+        # as `omnibot follow`: the follower waits while the gyro's bias is learned (a person may drive)
+        Standstill(runtime, STANDSTILL, FOLLOWER_PRIORITY)
+        _say(f"the follower stands still {STANDSTILL:g} s first, while the gyro's bias is learned")
     if args.teleop:
         flags = argparse.Namespace(keyboard=args.teleop == "keyboard", joystick=args.teleop == "pad")
         device = open_source(flags, config, _say)
@@ -234,9 +212,6 @@ def _in_this_thread(args: argparse.Namespace, url: str, config: Any, path: Any) 
                 with contextlib.suppress(NotSupported):
                     client.use_binary()
             client.telemetry(period if period >= 0.01 else 0.01, codes.TEL_MASK)
-            if path is not None:
-                _say(f"standing still {STANDSTILL:g} s while the gyro's bias is learned")
-                client.sleep(STANDSTILL)
             # the schedule starts now (a person's input is paced to the wall clock, a follow alone
             # to the link's: lockstep on sim://)
             runtime.pacer = Pacer(client, period) if wall else LinkPacer(client, period)
@@ -272,10 +247,10 @@ def _stop_pad(runtime: Any, parts: Parts, config: Any) -> None:
 def _with_dashboard(args: argparse.Namespace, url: str, config: Any, path: Any) -> Parts:
     from omnibot.navigation.webteach import PathTeacher
     from omnibot.robot.description import RobotDescription
-    from omnibot.web.command import TOKEN_ENV
+    from omnibot.web.command import server_options
     from omnibot.web.dashboard import Dashboard
 
-    token = args.token or os.environ.get(TOKEN_ENV) or None
+    server = server_options(args)
 
     def make_teach(robot: RobotDescription) -> PathTeacher:
         return PathTeacher(robot, period=config.period)
@@ -283,19 +258,16 @@ def _with_dashboard(args: argparse.Namespace, url: str, config: Any, path: Any) 
     dash = Dashboard(
         url,
         args.robot,
-        host=args.host,
-        http_port=args.http_port,
-        token=token,
         config=config,
         make_teach=None if path is not None else make_teach,  # a --follow path owns the estimator's frame
-        allow_hosts=args.allow_host,
+        **server,
     )
     parts = Parts()
     try:
         parts = compose(dash.link.runtime, dash.link.robot, args, config, path)
         dash.start()
         _say(f"dashboard for {url}: {dash.url}")
-        if dash.token and not token:
+        if dash.token and not server["token"]:
             _say("(an access token was made up because the server is reachable from other machines)")
         _say("Ctrl-C stops it (and the robot)")
         end = math.inf if args.duration is None else time.monotonic() + args.duration

@@ -16,7 +16,9 @@ VEL timeout for its commands, s) is optional. Sources never touch the client: th
   along the rest. ``on_override="stop"`` ends the run at the first override instead. An emergency
   stop (a lock of priority 255), a refused command or a latched emergency stop on the controller end
   the run (:attr:`FollowerSource.failure`): nothing drives off on its own after one.
-* :class:`ScriptSource`: twists from a function of time (scripts, tests, demos).
+* :class:`ScriptSource`: twists from a function of time (scripts, tests, demos, the navigator's
+  scripted manoeuvres: ``record --teach drive``, the gyro spin, the slip runs); like a follower it
+  ends at a refused command or an emergency stop.
 """
 
 from __future__ import annotations
@@ -209,12 +211,9 @@ class FollowerSource:
         """The follower's twist, a stand-by zero while overridden, None once finished."""
         if self.finished:
             return None
-        for notice in cycle.notices:
-            if notice.source == self.name and notice.level == "error":
-                self.end(notice.text)
-                return None
-        if cycle.latched:
-            self.end("emergency stop latched on the controller")
+        why = must_end(cycle, self.name)
+        if why:
+            self.end(why)
             return None
         state = cycle.estimate
         if state is None:
@@ -222,9 +221,6 @@ class FollowerSource:
         if not self.started:
             self.start(state.t)
         previous = cycle.decision
-        if previous.estop:
-            self.end(f"stopped: {previous.reason}")
-            return None
         if previous.source not in ("", self.name) or previous.lock:
             if self.on_override == "stop":
                 self.end(f"stopped: {previous.reason}")
@@ -241,7 +237,7 @@ class FollowerSource:
                 self.follower.start(self.path, state.t)
             if self.finished:
                 return None
-        self._driven = True
+        self._driven = self._driven or previous.source == self.name  # the arbiter gave it the robot
         command = self.follower.update(state)
         self.state = state
         if self.follower.done:
@@ -258,6 +254,20 @@ class FollowerSource:
             self.end()
             return
         self.follower.start(rest, state.t)
+
+
+def must_end(cycle: Cycle, name: str) -> str:
+    """Why a source that drives on its own (a follower, a script) must end now, "" for no reason: a
+    command of its own refused, the controller's latched emergency stop, or an emergency stop lock
+    (nothing drives off on its own after one)."""
+    for notice in cycle.notices:
+        if notice.source == name and notice.level == "error":
+            return notice.text
+    if cycle.latched:
+        return "emergency stop latched on the controller"
+    if cycle.decision.estop:
+        return f"stopped: {cycle.decision.reason}"
+    return ""
 
 
 def remainder(path: Path, s: float, state: Estimate) -> Path | None:
@@ -286,8 +296,10 @@ def remainder(path: Path, s: float, state: Estimate) -> Path | None:
 
 
 class ScriptSource:
-    """Twists from ``script(t)`` on the cycle's clock (None: nothing to say); ends when it returns
-    :data:`END`."""
+    """Twists from ``script(t)``, ``t`` s on the cycle's clock since its first cycle (None: nothing
+    to say); it ends when the script returns :data:`END`, or early (:attr:`failure` says why) when a
+    command of its own is refused, the controller latches its emergency stop or an emergency stop
+    lock engages."""
 
     END = "end"
 
@@ -306,11 +318,17 @@ class ScriptSource:
         self.watchdog = watchdog
         self.script = script
         self.finished = False
+        self.failure = ""
+        """Why the script ended early ("" while running or when it ran to its end)."""
         self._t0: float | None = None
 
     def propose(self, cycle: Cycle) -> Proposal | None:
         """The script's twist at the cycle's time since the first cycle (None: nothing to say)."""
         if self.finished:
+            return None
+        self.failure = must_end(cycle, self.name)
+        if self.failure:
+            self.finished = True
             return None
         if self._t0 is None:
             self._t0 = cycle.now

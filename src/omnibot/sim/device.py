@@ -1,6 +1,6 @@
 """The simulated motor controller: the real firmware running on the simulator through a simulator HAL.
 
-This is the one module that joins firmware, simulator and transport (DESIGN.md's import rules)::
+This module joins firmware and simulator; :mod:`omnibot.sim.scheme` puts the pair behind a link::
 
     host bytes --receive()--> SimHAL UART --> firmware Controller.poll() --set_power--> Simulator
     host bytes <-transmit()-- SimHAL UART <--         (events, replies, TEL)   <--sensors--/
@@ -10,9 +10,7 @@ serves the in-process lockstep link (``sim://PRESET``), the real-time pty emulat
 --pty``) and tests. The firmware is polled at the robot's ``controller.loop_hz`` (an Arduino-class
 loop), the physics steps at 1 kHz.
 
-Importing this module registers the ``sim`` URL scheme::
-
-    sim://PRESET_OR_FILE?seed=0&surface=wood&world=empty&baud=115200
+``sim://`` URLs open it alone or as a robot of a fleet (:mod:`omnibot.sim.fleet`).
 """
 
 from __future__ import annotations
@@ -21,15 +19,13 @@ import math
 from pathlib import Path
 from typing import Any
 
-from omnibot.errors import ConfigError
 from omnibot.firmware.config import build_config
 from omnibot.firmware.controller import Controller
 from omnibot.firmware.hal import HAL
 from omnibot.robot.description import RobotDescription, load_robot
+from omnibot.sim.clock import SimClock
 from omnibot.sim.simulator import Simulator, TruthRecorder
 from omnibot.sim.world import World
-from omnibot.transport.lockstep import DEFAULT_BAUD, LockstepLink
-from omnibot.transport.url import LinkUrl, register_scheme
 
 SPEED_OF_SOUND = 343.0
 """m/s at 20 degrees C; an HC-SR04 echo takes 2 d / c."""
@@ -132,6 +128,7 @@ class SimDevice:
         truth_recorder: TruthRecorder | None = None,
         true_robot: RobotDescription | None = None,
         firmware_overrides: dict[str, Any] | None = None,
+        clock: SimClock | None = None,
     ) -> None:
         """``robot`` is what the firmware is built for; ``true_robot`` (default: the same) is what the
         simulator simulates, so a robot whose real parameters differ from its description can be tested.
@@ -145,6 +142,7 @@ class SimDevice:
             dt=dt,
             start_pose=start_pose,
             truth_recorder=truth_recorder,
+            clock=clock,
         )
         self.hal = SimHAL(self.sim)
         config = build_config(self.robot)
@@ -171,11 +169,16 @@ class SimDevice:
     def step(self) -> None:
         """One simulator step, with a firmware poll (and its PWM handed over) at the controller's loop
         rate."""
+        self.control()
+        self.sim.step()
+
+    def control(self) -> None:
+        """The firmware's half of a step: a poll (and its PWM handed over) at the controller's loop rate.
+        A fleet polls every robot's firmware first, then steps their physics together."""
         if self._steps % self._poll_every == 0:
             self.controller.poll()
             self.hal.apply_power()
         self._steps += 1
-        self.sim.step()
 
     def transmit(self) -> bytes:
         """Take everything the firmware has sent (b"" when nothing)."""
@@ -184,23 +187,3 @@ class SimDevice:
         data = bytes(self.hal.tx)
         self.hal.tx.clear()
         return data
-
-
-def _open_sim(u: LinkUrl) -> LockstepLink:
-    if not u.target:
-        raise ConfigError("sim:// needs a robot: sim://omni4, sim://omni3, sim://mecanum4 or sim://FILE.yaml")
-    device = SimDevice(
-        u.target,
-        surface=u.get_str("surface", "") or None,
-        world=u.get_str("world", "") or None,
-        seed=u.get_int("seed", 0, minimum=0),
-    )
-    return LockstepLink(device, baud=u.get_int("baud", DEFAULT_BAUD, minimum=0), url=u.url)
-
-
-register_scheme(
-    "sim",
-    _open_sim,
-    options=("seed", "surface", "world", "baud"),
-    help="sim://PRESET?seed=N&surface=NAME&world=NAME&baud=115200: in-process lockstep simulator",
-)

@@ -6,6 +6,10 @@ answer in real time: the arguments are checked, the truth file is open and the p
 compiled (or loaded from numba's cache), so a first start on a fresh install does not leave a HELLO
 unanswered. Bytes are paced to the baud rate in both directions. SIGINT or SIGTERM end it cleanly:
 the pty is closed, the truth file flushed and closed.
+
+With several ``--robot`` options (:func:`run_pty_fleet`) the robots share one world and one clock
+(:class:`~omnibot.sim.fleet.Fleet`), each on its own pty: a line ``NAME PATH`` per robot, so a fleet
+can be driven from separate processes on one machine.
 """
 
 from __future__ import annotations
@@ -18,16 +22,18 @@ import tempfile
 import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from types import FrameType
 from typing import Any, TextIO
 
 from omnibot.errors import ConfigError, LinkError
+from omnibot.motion import Pose2D
 from omnibot.robot.description import RobotDescription
 from omnibot.sim.device import SimDevice
 from omnibot.sim.simulator import TruthRecorder
 from omnibot.transport.lockstep import DEFAULT_BAUD
-from omnibot.transport.pty_bridge import PtyBridge
+from omnibot.transport.pty_bridge import PtyBridge, serve_together
 
 
 def run_pty_emulator(
@@ -86,6 +92,104 @@ def run_pty_emulator(
             recorder.close()
         if log_recorder is not None:
             log_recorder.close()
+    return 0
+
+
+@dataclass(frozen=True)
+class FleetMember:
+    """One robot of ``omnibot sim --pty`` with several ``--robot``: ``PRESET_OR_FILE?name=R&pose=X,Y,THETA&seed=N``."""
+
+    robot: str
+    name: str
+    seed: int
+    pose: Pose2D | None = None
+
+
+MEMBER_OPTIONS = ("name", "pose", "seed")
+
+
+def parse_member(text: str, index: int, seed: int) -> FleetMember:
+    """A ``--robot`` of a fleet: the preset or file, then the robot's own options as in a ``sim://``
+    URL (``name`` default ``r1``, ``r2``... by position, ``seed`` default ``seed + index``, ``pose``
+    default the world's start). ConfigError naming ``--robot`` for anything else."""
+    from omnibot.sim.fleet_link import parse_pose
+
+    target, _, query = text.partition("?")
+    options: dict[str, str] = {}
+    for piece in query.split("&") if query else []:
+        key, _, value = piece.partition("=")
+        if key not in MEMBER_OPTIONS:
+            raise ConfigError(
+                f"unknown option {key!r} in --robot {text!r}: a robot of a fleet takes "
+                f"{', '.join(MEMBER_OPTIONS)} (world, surface and baud are the fleet's: --world ...)",
+                key="--robot",
+            )
+        if key in options:
+            raise ConfigError(f"option {key!r} given twice in --robot {text!r}", key="--robot")
+        options[key] = value
+    if not target:
+        raise ConfigError(f"--robot {text!r} names no robot (e.g. omni4?name=r1&pose=1,1,0)", key="--robot")
+    try:
+        own_seed = int(options.get("seed", seed + index))
+    except ValueError:
+        raise ConfigError(f"expected seed=N in --robot {text!r}", key="--robot") from None
+    try:
+        pose = parse_pose(options["pose"]) if "pose" in options else None
+    except ConfigError as exc:
+        raise ConfigError(f"{str(exc).removeprefix('pose: ')} in --robot {text!r}", key="--robot") from None
+    return FleetMember(target, options.get("name") or f"r{index + 1}", own_seed, pose)
+
+
+def run_pty_fleet(
+    members: list[FleetMember],
+    *,
+    surface: str | None = None,
+    world: str | None = None,
+    baud: int = DEFAULT_BAUD,
+    stop: threading.Event | None = None,
+    out: TextIO = sys.stdout,
+) -> int:
+    """Serve several simulated robots in one world, one pty each, on one real-time clock, until
+    ``stop`` or SIGINT/SIGTERM; exit status. Prints ``NAME PATH`` per robot once all can answer.
+    ConfigError (before any pty exists) for a bad baud rate, a name taken twice or a pose that
+    overlaps a wall, an obstacle or another robot."""
+    from omnibot.sim import kernels
+    from omnibot.sim.fleet import Fleet
+    from omnibot.sim.world import load_world
+
+    if baud < 0:
+        raise ConfigError(f"expected a baud rate >= 0 (0: unpaced), got {baud}", key="--baud")
+    stop = stop or threading.Event()
+    room = load_world(world or "empty")
+    fleet = Fleet(room.with_floor(surface) if surface is not None and surface != room.floor else room)
+    for member in members:
+        try:
+            fleet.add(member.name, member.robot, seed=member.seed, pose=member.pose)
+        except ConfigError as exc:
+            text = str(exc).removeprefix(f"{exc.key}: ") if exc.key else str(exc)
+            raise ConfigError(text, key="--robot") from None
+    previous: dict[signal.Signals, Any] = {}
+
+    def _on_signal(signum: int, frame: FrameType | None) -> None:
+        stop.set()
+
+    kernels.warm_up()
+    bridges: list[PtyBridge] = []
+    try:
+        for name in fleet.names:
+            bridges.append(PtyBridge(fleet.device(name), baud=baud))
+        if threading.current_thread() is threading.main_thread():
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                previous[sig] = signal.signal(sig, _on_signal)
+        for name, bridge in zip(fleet.names, bridges, strict=True):
+            print(name, bridge.path, file=out)
+        out.flush()
+        serve_together(bridges, fleet.step, stop)
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        for bridge in bridges:
+            bridge.close()
     return 0
 
 

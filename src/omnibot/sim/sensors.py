@@ -21,8 +21,9 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from omnibot.motion import Pose2D
 from omnibot.robot.description import GyroSpec, SonarSpec, TrackingWheelSpec
-from omnibot.sim.world import Pose, World
+from omnibot.sim.world import World, cone_range
 
 IntArray = NDArray[np.int64]
 FloatArray = NDArray[np.float64]
@@ -244,29 +245,34 @@ class Sonar:
         self.last: float | None = None
         self.last_time: float | None = None
 
-    def pose_in_world(self, pose: Sequence[float]) -> Pose:
+    def pose_in_world(self, pose: Sequence[float]) -> Pose2D:
         """The sensor's own pose for a robot pose (x, y, theta)."""
         x, y, th = (float(c) for c in pose[:3])
         c, s = math.cos(th), math.sin(th)
-        return Pose(
+        return Pose2D(
             x + c * self.spec.x - s * self.spec.y, y + s * self.spec.x + c * self.spec.y, th + self.spec.angle
         )
 
-    def measure(self, pose: Sequence[float], world: World) -> float | None:
-        """One measurement now, ignoring the cycle time."""
+    def measure(self, pose: Sequence[float], world: World, others: FloatArray | None = None) -> float | None:
+        """One measurement now, ignoring the cycle time; ``others`` are edges ``(K, 4)`` of other
+        bodies in the world frame (a fleet's other robots), seen as the world's walls are."""
         spec = self.spec
         miss, noise = self._rng.random(), self._rng.normal(0.0, 1.0)  # drawn every time: stable streams
         sp = self.pose_in_world(pose)
         true = world.cone_range(sp.x, sp.y, sp.theta, spec.cone, spec.max_range)
+        if others is not None and len(others):
+            true = min(true, cone_range(others, sp.x, sp.y, sp.theta, spec.cone, spec.max_range))
         if math.isinf(true) or miss < spec.miss_probability:
             return None
         value = max(true + spec.noise_std * float(noise), spec.min_range)
         return value if value <= spec.max_range else None
 
-    def ping(self, now: float, pose: Sequence[float], world: World) -> float | None:
+    def ping(
+        self, now: float, pose: Sequence[float], world: World, others: FloatArray | None = None
+    ) -> float | None:
         """Measure at time ``now`` (s) unless the last measurement is younger than ``period_min``."""
         if self.last_time is not None and now - self.last_time < self.spec.period_min - 1e-9:
             return self.last
-        self.last = self.measure(pose, world)
+        self.last = self.measure(pose, world, others)
         self.last_time = now
         return self.last

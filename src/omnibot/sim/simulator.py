@@ -46,11 +46,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from omnibot.errors import SimulationError
-from omnibot.motion import Twist
+from omnibot.motion import Pose2D, Twist
 from omnibot.robot.description import RobotDescription
 from omnibot.sim.clock import SimClock
 from omnibot.sim.sensors import Gyro, MotorEncoders, Sonar, TrackingWheels
-from omnibot.sim.world import Contact, Pose, World, convex_hull, load_world
+from omnibot.sim.world import Contact, World, convex_hull, load_world
 
 FloatArray = NDArray[np.float64]
 
@@ -132,9 +132,9 @@ class Snapshot:
     w: float
 
     @property
-    def pose(self) -> Pose:
+    def pose(self) -> Pose2D:
         """The position and heading (m, m, rad)."""
-        return Pose(self.x, self.y, self.theta)
+        return Pose2D(self.x, self.y, self.theta)
 
     @property
     def twist(self) -> Twist:
@@ -157,7 +157,7 @@ class CollisionEvent:
     depth: float
     speed: float
     owner: str
-    pose: Pose
+    pose: Pose2D
 
 
 Listener = Callable[[Snapshot], None]
@@ -245,6 +245,8 @@ class Simulator:
     a wood floor). ``start_pose`` (x, y, theta) overrides the world's start (else the origin).
     ``physics_factory`` replaces :class:`~omnibot.sim.physics.Physics` (tests use a stand-in); the
     simulator keeps views of its ``pose`` and ``twist`` arrays, so it must update them in place.
+    ``clock`` is the simulator's own clock (default a new one at 0; a fleet starts a robot that
+    joins late at the fleet's time); the simulator advances it on every step.
     """
 
     def __init__(
@@ -255,9 +257,10 @@ class Simulator:
         world: World | str | Path | None = None,
         seed: int = 0,
         dt: float = 0.001,
-        start_pose: Sequence[float] | None = None,
+        start_pose: Pose2D | Sequence[float] | None = None,
         truth_recorder: TruthRecorder | None = None,
         physics_factory: PhysicsFactory | None = None,
+        clock: SimClock | None = None,
     ) -> None:
         self.robot = robot
         self.seed = seed
@@ -266,7 +269,7 @@ class Simulator:
             raise SimulationError(f"dt must be a positive whole number of microseconds, got {dt} s")
         self._dt_us = dt_us
         self.dt = dt_us / 1e6
-        self.clock = SimClock()
+        self.clock = clock or SimClock()
 
         w = load_world("empty") if world is None else world if isinstance(world, World) else load_world(world)
         self.world = w.with_floor(surface) if surface is not None and surface != w.floor else w
@@ -280,9 +283,10 @@ class Simulator:
         self._surface_map = np.array([known.index(s) for s in self.world.surface_names], dtype=np.int64)
         self._floor_ids = np.full((1, robot.n_wheels), self._surface_map[0], dtype=np.int64)
 
-        start = start_pose if start_pose is not None else self.world.start or (0.0, 0.0, 0.0)
+        given = start_pose if start_pose is not None else self.world.start or Pose2D(0.0, 0.0, 0.0)
+        start = (given.x, given.y, given.theta) if isinstance(given, Pose2D) else tuple(given)
         if len(start) != 3:
-            raise SimulationError(f"start_pose is (x, y, theta), got {tuple(start)}")
+            raise SimulationError(f"start_pose is (x, y, theta), got {start}")
         self._physics.reset(pose=np.array([start], dtype=float))
         # views of robot 0's state: the physics updates its arrays in place
         self._pose_row = self._physics.pose[0]
@@ -295,6 +299,10 @@ class Simulator:
         self._outline = np.ascontiguousarray(convex_hull(robot.footprint.outline()), dtype=float)
         self._pushes: list[tuple[int, float, float, float]] = []
         self._force = np.zeros((1, 3))
+        self._applied = [0.0, 0.0, 0.0]
+        self.neighbours: Callable[[], FloatArray] | None = None
+        """Edges ``(K, 4)`` of other bodies in the world frame now (a fleet's other robots), which the
+        sonars see as they see walls; None: nothing but the world."""
         self._touching: dict[str, int] = {}
         self.collisions: list[CollisionEvent] = []
         self._collision_listeners: list[CollisionListener] = []
@@ -342,6 +350,11 @@ class Simulator:
     # ------------------------------------------------------------------ state
 
     @property
+    def outline(self) -> FloatArray:
+        """The robot's footprint as a convex outline in its own frame (V, 2), counter-clockwise."""
+        return self._outline
+
+    @property
     def physics(self) -> PhysicsLike:
         """The physics engine the simulator steps."""
         return self._physics
@@ -352,10 +365,10 @@ class Simulator:
         return self.clock.now()
 
     @property
-    def pose(self) -> Pose:
+    def pose(self) -> Pose2D:
         """True world pose (x, y in m, theta in rad, continuous: not wrapped)."""
         x, y, th = self._pose_row.tolist()
-        return Pose(x, y, th)
+        return Pose2D(x, y, th)
 
     @property
     def twist(self) -> Twist:
@@ -445,6 +458,13 @@ class Simulator:
         end = self.clock.ticks_us() + round(duration * 1e6)
         self._pushes.append((end, float(force_xy[0]), float(force_xy[1]), float(torque)))
 
+    def apply_force(self, fx: float, fy: float, torque: float = 0.0) -> None:
+        """A world-frame force (N) and torque (N m) acting during the next step only (forces of one
+        step add up): how a fleet applies the contacts between its robots."""
+        self._applied[0] += fx
+        self._applied[1] += fy
+        self._applied[2] += torque
+
     # ------------------------------------------------------------------ sensors
 
     def encoder_counts(self) -> list[int]:
@@ -476,7 +496,8 @@ class Simulator:
             raise SimulationError(
                 f"robot '{self.robot.name}' has {len(self.sonars)} sonars, no index {index}"
             )
-        return self.sonars[index].ping(self.time, self._physics.pose[0], self.world)
+        others = self.neighbours() if self.neighbours is not None else None
+        return self.sonars[index].ping(self.time, self._physics.pose[0], self.world, others)
 
     # ------------------------------------------------------------------ listeners
 
@@ -520,6 +541,9 @@ class Simulator:
             dx, dy = x - self._clear_x, y - self._clear_y
             if self._clear <= 0.0 or dx * dx + dy * dy >= self._clear * self._clear:
                 fx, fy, tz = self._contact_force(now_us, x, y, th, vx0, vy0, w0)
+        if self._applied[0] or self._applied[1] or self._applied[2]:
+            fx, fy, tz = fx + self._applied[0], fy + self._applied[1], tz + self._applied[2]
+            self._applied = [0.0, 0.0, 0.0]
         if self._pushes:
             self._pushes = [p for p in self._pushes if p[0] > now_us]
             for _, px, py, pz in self._pushes:
@@ -600,12 +624,23 @@ class Simulator:
         return fx_sum, fy_sum, tz_sum
 
     def _touch(self, now_us: int, row: list[float], speed: float) -> None:
-        owner = self.world.contact_owners[int(row[5])]
-        last = self._touching.get(owner)
-        self._touching[owner] = now_us
-        if last is not None and now_us - last <= CONTACT_RELEASE * 1e6:
+        if self._still_touching(self.world.contact_owners[int(row[5])], now_us):
             return
         (contact,) = self.world.contact_list([row])
+        self._collide(contact, speed)
+
+    def touch(self, contact: Contact, speed: float) -> None:
+        """A contact with something outside the world (a fleet's other robot) at this step: a
+        :class:`CollisionEvent` when the robot starts touching ``contact.owner``, as for walls."""
+        if not self._still_touching(contact.owner, self.clock.ticks_us()):
+            self._collide(contact, speed)
+
+    def _still_touching(self, owner: str, now_us: int) -> bool:
+        last = self._touching.get(owner)
+        self._touching[owner] = now_us
+        return last is not None and now_us - last <= CONTACT_RELEASE * 1e6
+
+    def _collide(self, contact: Contact, speed: float) -> None:
         event = CollisionEvent(
             self.time,
             contact.point[0],

@@ -40,7 +40,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any, Literal, NamedTuple
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -48,6 +48,7 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationErr
 
 from omnibot.config_errors import explain, read_yaml, suggest
 from omnibot.errors import ConfigError
+from omnibot.motion import Pose2D
 from omnibot.sim import kernels
 from omnibot.sim.surfaces import SURFACES
 
@@ -238,14 +239,6 @@ def load_world(name_or_path: str | Path) -> World:
 # --------------------------------------------------------------------------- geometry
 
 
-class Pose(NamedTuple):
-    """A planar pose: x, y in m, theta in rad."""
-
-    x: float
-    y: float
-    theta: float
-
-
 @dataclass(frozen=True)
 class Contact:
     """The robot outline overlapping a wall or obstacle.
@@ -282,8 +275,8 @@ class World:
                 names.append(patch.surface)
         self.surface_names: tuple[str, ...] = tuple(names)
         """Surface id -> name; id 0 is the floor."""
-        self.start: Pose | None = (
-            Pose(spec.start.x, spec.start.y, math.radians(spec.start.theta_deg)) if spec.start else None
+        self.start: Pose2D | None = (
+            Pose2D(spec.start.x, spec.start.y, math.radians(spec.start.theta_deg)) if spec.start else None
         )
 
         segs: list[FloatArray] = []
@@ -381,38 +374,9 @@ class World:
         """Distance from (x, y) to the nearest edge point within ``heading +- cone/2`` (inf if none).
 
         ``cone`` (rad) must be below pi. Exact: each edge is clipped to the cone, then its point
-        nearest the apex is taken.
+        nearest the apex is taken (:func:`cone_range` on the world's edges).
         """
-        if not 0 < cone < math.pi:
-            raise ValueError(f"cone must be in (0, pi), got {cone}")
-        if len(self.segments) == 0:
-            return math.inf
-        A = self.segments[:, :2] - np.array([x, y])
-        E = self.segments[:, 2:] - self.segments[:, :2]
-        r = np.array([math.cos(heading - cone / 2), math.sin(heading - cone / 2)])
-        left = np.array([math.cos(heading + cone / 2), math.sin(heading + cone / 2)])
-        lo = np.zeros(len(A))
-        hi = np.ones(len(A))
-        # inside the cone: cross(r, p) >= 0 and cross(p, left) >= 0, each linear in t along the edge
-        for f0, f1 in (
-            (r[0] * A[:, 1] - r[1] * A[:, 0], r[0] * E[:, 1] - r[1] * E[:, 0]),
-            (A[:, 0] * left[1] - A[:, 1] * left[0], E[:, 0] * left[1] - E[:, 1] * left[0]),
-        ):
-            with np.errstate(divide="ignore", invalid="ignore"):
-                tc = -f0 / f1
-            lo = np.where(f1 > 1e-15, np.maximum(lo, tc), lo)
-            hi = np.where(f1 < -1e-15, np.minimum(hi, tc), hi)
-            hi = np.where((np.abs(f1) <= 1e-15) & (f0 < 0), -1.0, hi)
-        ok = lo <= hi
-        if not ok.any():
-            return math.inf
-        ee = np.einsum("ij,ij->i", E, E)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t_near = np.where(ee > 0, -np.einsum("ij,ij->i", A, E) / ee, 0.0)
-        t = np.clip(t_near, lo, np.maximum(lo, hi))
-        dist = np.hypot(A[:, 0] + t * E[:, 0], A[:, 1] + t * E[:, 1])
-        best = float(np.where(ok, dist, math.inf).min())
-        return best if best <= max_range else math.inf
+        return cone_range(self.segments, x, y, heading, cone, max_range)
 
     # ------------------------------------------------------------------ surfaces
 
@@ -492,6 +456,57 @@ class World:
 
 
 # --------------------------------------------------------------------------- pure geometry helpers
+
+
+def cone_range(
+    segments: FloatArray, x: float, y: float, heading: float, cone: float, max_range: float = math.inf
+) -> float:
+    """Distance from (x, y) to the nearest point of any edge ``(K, 4)`` within ``heading +- cone/2``.
+
+    inf if none within ``max_range``; ``cone`` (rad) must be below pi. Exact: each edge is clipped
+    to the cone, then its point nearest the apex is taken.
+    """
+    if not 0 < cone < math.pi:
+        raise ValueError(f"cone must be in (0, pi), got {cone}")
+    if len(segments) == 0:
+        return math.inf
+    A = segments[:, :2] - np.array([x, y])
+    E = segments[:, 2:] - segments[:, :2]
+    r = np.array([math.cos(heading - cone / 2), math.sin(heading - cone / 2)])
+    left = np.array([math.cos(heading + cone / 2), math.sin(heading + cone / 2)])
+    lo = np.zeros(len(A))
+    hi = np.ones(len(A))
+    # inside the cone: cross(r, p) >= 0 and cross(p, left) >= 0, each linear in t along the edge
+    for f0, f1 in (
+        (r[0] * A[:, 1] - r[1] * A[:, 0], r[0] * E[:, 1] - r[1] * E[:, 0]),
+        (A[:, 0] * left[1] - A[:, 1] * left[0], E[:, 0] * left[1] - E[:, 1] * left[0]),
+    ):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            tc = -f0 / f1
+        lo = np.where(f1 > 1e-15, np.maximum(lo, tc), lo)
+        hi = np.where(f1 < -1e-15, np.minimum(hi, tc), hi)
+        hi = np.where((np.abs(f1) <= 1e-15) & (f0 < 0), -1.0, hi)
+    ok = lo <= hi
+    if not ok.any():
+        return math.inf
+    ee = np.einsum("ij,ij->i", E, E)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t_near = np.where(ee > 0, -np.einsum("ij,ij->i", A, E) / ee, 0.0)
+    t = np.clip(t_near, lo, np.maximum(lo, hi))
+    dist = np.hypot(A[:, 0] + t * E[:, 0], A[:, 1] + t * E[:, 1])
+    best = float(np.where(ok, dist, math.inf).min())
+    return best if best <= max_range else math.inf
+
+
+def placed(outline: FloatArray, x: float, y: float, theta: float) -> FloatArray:
+    """A body-frame outline (V, 2) placed at pose (x, y, theta): its world-frame vertices."""
+    c, s = math.cos(theta), math.sin(theta)
+    return np.asarray(outline @ np.array([[c, s], [-s, c]]) + np.array([x, y]), dtype=float)
+
+
+def closed_edges(vertices: FloatArray) -> FloatArray:
+    """The edges ``(V, 4)`` of a closed polygon, ``x0, y0, x1, y1``."""
+    return np.hstack((vertices, np.roll(vertices, -1, axis=0)))
 
 
 def _ccw(v: FloatArray) -> FloatArray:

@@ -97,8 +97,8 @@ def run(args: argparse.Namespace) -> int:
         except KeyboardInterrupt as exc:  # the summary first, then the exit status says interrupted
             interrupted = exc
         if device is not None:
-            x, y, th = device.sim.pose
-            _say(f"robot at x={x:.2f} m y={y:.2f} m heading={round(math.degrees(th))} deg")
+            p = device.sim.pose
+            _say(f"robot at x={p.x:.2f} m y={p.y:.2f} m heading={round(math.degrees(p.theta))} deg")
         _say(f"sent {teleop.sent.vel} VEL, {teleop.sent.zero} zero VEL, {teleop.sent.errors} failed")
     if interrupted is not None:
         raise interrupted

@@ -176,15 +176,22 @@ class LockstepLink(Link):
         return max(1, math.ceil(seconds / self.device.tick - _EPS))
 
     def _step(self) -> None:
-        device = self.device
-        due = self._to_device.pop_due(device.time)
-        if due:
-            device.receive(due)
-        device.step()
+        self._feed()
+        self.device.step()
         self.steps += 1
-        out = device.transmit()
+        self._drain()
+
+    def _feed(self) -> None:
+        """Before a tick: hand the device the bytes whose last bit has reached it."""
+        due = self._to_device.pop_due(self.device.time)
+        if due:
+            self.device.receive(due)
+
+    def _drain(self) -> None:
+        """After a tick: put what the device sent on the line to the host; take what has arrived."""
+        out = self.device.transmit()
         if out:
-            self._to_host.push(device.time, out)
+            self._to_host.push(self.device.time, out)
         self._collect()
 
     def _collect(self) -> None:

@@ -30,7 +30,7 @@ import termios
 import threading
 import time
 import tty
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from types import TracebackType
 from typing import Self
 
@@ -38,7 +38,7 @@ from omnibot.errors import LinkError
 from omnibot.transport.lockstep import DEFAULT_BAUD, LockstepDevice
 from omnibot.transport.pacing import Pacer
 
-__all__ = ["PtyBridge"]
+__all__ = ["PtyBridge", "serve_together"]
 
 _READ_CHUNK = 4096
 
@@ -149,20 +149,7 @@ class PtyBridge:
 
     def run(self, stop: threading.Event | None = None) -> None:
         """Serve the device until ``stop`` (or :meth:`stop`) is set. Call :meth:`close` afterwards."""
-        master = self._master
-        if master is None:
-            raise LinkError("pty bridge is closed")
-        self._begin(time.monotonic())
-        poller = select.poll()
-        poller.register(master, select.POLLIN)
-        while not self._stop.is_set() and not (stop is not None and stop.is_set()):
-            self._poll(master, poller)
-            self._advance(time.monotonic())
-            if self._wire and self.connected:
-                self._send(master)
-            wait = self._next_tick - time.monotonic()
-            if wait > 0:
-                time.sleep(wait)
+        serve_together([self], self.device.step, stop)
 
     def _begin(self, now: float) -> None:
         """Start the device's clock and the line at wall-clock time ``now``."""
@@ -181,31 +168,31 @@ class PtyBridge:
 
     def _advance(self, now: float) -> None:
         """Step the device through every tick due at wall-clock time ``now``, each with its bytes."""
-        tick = self.device.tick
-        if now - self._next_tick > self.max_catch_up:
-            skipped = int((now - self._next_tick) / tick)
-            self.skipped_ticks += skipped
-            self._next_tick += skipped * tick
-        while self._next_tick <= now:
-            self._line_time = self._next_tick
-            n = self._pace_in.take(len(self._to_device))
-            if n:
-                self.device.receive(bytes(self._to_device[:n]))
-                del self._to_device[:n]
-                self.bytes_to_device += n
-            self.device.step()
-            self.steps += 1
-            out = self.device.transmit()
-            if out:
-                if self.connected:
-                    self._to_host += out
-                else:
-                    self.bytes_discarded += len(out)
-            n = self._pace_out.take(len(self._to_host))
-            if n:
-                self._wire += self._to_host[:n]
-                del self._to_host[:n]
-            self._next_tick += tick
+        _advance_together([self], self.device.step, now)
+
+    def _before_tick(self) -> None:
+        """The line's bytes of one tick reach the device (paced)."""
+        self._line_time = self._next_tick
+        n = self._pace_in.take(len(self._to_device))
+        if n:
+            self.device.receive(bytes(self._to_device[:n]))
+            del self._to_device[:n]
+            self.bytes_to_device += n
+
+    def _after_tick(self) -> None:
+        """What the device sent in one tick goes on the line (paced); the next tick is due."""
+        self.steps += 1
+        out = self.device.transmit()
+        if out:
+            if self.connected:
+                self._to_host += out
+            else:
+                self.bytes_discarded += len(out)
+        n = self._pace_out.take(len(self._to_host))
+        if n:
+            self._wire += self._to_host[:n]
+            del self._to_host[:n]
+        self._next_tick += self.device.tick
 
     def _poll(self, master: int, poller: select.poll) -> None:
         events = 0
@@ -249,3 +236,55 @@ class PtyBridge:
             raise
         del self._wire[:written]
         self.bytes_to_host += written
+
+
+def serve_together(
+    bridges: Sequence[PtyBridge], step: Callable[[], None], stop: threading.Event | None = None
+) -> None:
+    """Serve several bridges from one real-time loop, their devices stepped together by ``step()``
+    once per tick (a fleet of simulated robots on one clock: ``omnibot sim --pty`` with several
+    robots), until ``stop`` or any bridge's own stop is set. Their devices share one tick."""
+    masters = [b._master for b in bridges if b._master is not None]
+    if not bridges or len(masters) != len(bridges):
+        raise LinkError("pty bridge is closed")
+    lead = bridges[0]
+    if any(b.device.tick != lead.device.tick for b in bridges):
+        raise ValueError("the devices served together must share one tick")
+    start = time.monotonic()
+    pollers = []
+    for bridge, master in zip(bridges, masters, strict=True):
+        bridge._begin(start)
+        poller = select.poll()
+        poller.register(master, select.POLLIN)
+        pollers.append(poller)
+
+    def stopped() -> bool:
+        return (stop is not None and stop.is_set()) or any(b._stop.is_set() for b in bridges)
+
+    while not stopped():
+        for bridge, master, poller in zip(bridges, masters, pollers, strict=True):
+            bridge._poll(master, poller)
+        _advance_together(bridges, step, time.monotonic())
+        for bridge, master in zip(bridges, masters, strict=True):
+            if bridge._wire and bridge.connected:
+                bridge._send(master)
+        wait = lead._next_tick - time.monotonic()
+        if wait > 0:
+            time.sleep(wait)
+
+
+def _advance_together(bridges: Sequence[PtyBridge], step: Callable[[], None], now: float) -> None:
+    """Step through every tick due at wall-clock time ``now``, each with every bridge's bytes."""
+    lead = bridges[0]
+    tick = lead.device.tick
+    if now - lead._next_tick > lead.max_catch_up:  # too far behind: skip ticks, not race
+        skipped = int((now - lead._next_tick) / tick)
+        for bridge in bridges:
+            bridge.skipped_ticks += skipped
+            bridge._next_tick += skipped * tick
+    while lead._next_tick <= now:
+        for bridge in bridges:
+            bridge._before_tick()
+        step()
+        for bridge in bridges:
+            bridge._after_tick()

@@ -18,9 +18,13 @@ Grammar::
       tcp://host:port                     a TCP connection ([::1]:port for IPv6)
           connect_timeout=5   seconds per connect attempt
           retry=0             seconds to keep retrying to connect
-    base (scheme "sim", registered by the simulator; see register_scheme):
+    base (scheme "sim", registered by omnibot.sim.scheme; see register_scheme):
       sim://PRESET                        in-process lockstep simulator, simulated time
           seed=N surface=NAME world=NAME baud=115200 (0 = unpaced)
+          pose=X,Y,THETA      start pose, m, m, degrees (default: the world's start)
+          fleet=NAME          one robot of a fleet: the links of one process with the same
+                              fleet share one world and one simulated clock (omnibot.sim.fleet_link)
+          name=R              the robot's name in its fleet (default r1, r2, ...)
     wrappers:
       spy+<url>       trace every read and write (hexdump, timestamps on the link's clock)
           file=PATH     write the trace to PATH (default: stderr)
@@ -32,7 +36,7 @@ Grammar::
           dir=both|tx|rx     which direction to disturb (default both)
 
 Examples: ``/dev/ttyACM0``, ``serial:///dev/ttyUSB0?baud=57600&retry=5``, ``tcp://192.168.1.7:4000``,
-``sim://omni4?seed=3``, ``spy+sim://omni4?file=trace.txt``,
+``sim://omni4?seed=3``, ``sim://omni3?fleet=lab&name=r2&pose=2,1,90``, ``spy+sim://omni4?file=trace.txt``,
 ``faults+tcp://localhost:4000?drop=0.01&corrupt=0.01&delay_ms=5&seed=1``.
 
 Options: all options sit in the one query at the end. An option belongs to the innermost layer that
@@ -73,7 +77,7 @@ __all__ = [
     "unregister_scheme",
 ]
 
-SCHEME_PROVIDERS: dict[str, str] = {"sim": "omnibot.sim.device", "uno": "omnibot.uno.hil"}
+SCHEME_PROVIDERS: dict[str, str] = {"sim": "omnibot.sim.scheme", "uno": "omnibot.uno.hil"}
 """Scheme -> module that registers it when imported (imported on first use of the scheme)."""
 
 _PYSERIAL_OPTIONS: dict[str, tuple[str, ...]] = {

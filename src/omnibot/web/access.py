@@ -20,6 +20,7 @@ from __future__ import annotations
 import hmac
 import ipaddress
 import math
+import secrets
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
@@ -107,6 +108,20 @@ def same_origin(origin: str | None, host: str | None) -> bool:
     if origin is None:
         return True
     return bool(host) and urlsplit(origin).netloc.lower() == (host or "").lower()
+
+
+TOKEN_MIN = 8
+"""Characters an access token given by the user must have at least."""
+
+
+def access_token(host: str, token: str | None, key: str = "--token") -> str | None:
+    """The token a server bound to ``host`` requires: the one given (checked; ``key`` names the option
+    in the error), else a fresh random one off loopback, else None (the dashboard, Foxglove live)."""
+    if token is not None:
+        if len(token) < TOKEN_MIN:
+            raise ConfigError(f"an access token needs at least {TOKEN_MIN} characters", key=key)
+        return token
+    return None if is_loopback(host) else secrets.token_urlsafe(18)
 
 
 def token_ok(token: str | None, given: str | None) -> bool:

@@ -10,10 +10,56 @@ import math
 import os
 import sys
 import time
+from typing import TypedDict
 
 from omnibot.errors import ConfigError
 
 TOKEN_ENV = "OMNIBOT_DASHBOARD_TOKEN"
+
+
+def add_server_options(p: argparse.ArgumentParser, note: str = "") -> None:
+    """The dashboard server's options (``--host``, ``--allow-host``, ``--http-port``, ``--token``), for
+    ``omnibot dashboard`` and ``omnibot run --dashboard``; ``note`` starts each help text."""
+    p.add_argument(
+        "--host",
+        default="127.0.0.1",
+        help=f"{note}address to serve on (default 127.0.0.1: this machine only)",
+    )
+    p.add_argument(
+        "--allow-host",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help=f"{note}a name the page may be opened by besides the bound address and the loopback names "
+        "(e.g. robot.local; repeat for more); others are refused (DNS rebinding)",
+    )
+    p.add_argument(
+        "--http-port", type=int, default=8080, help=f"{note}HTTP port (default 8080; 0: any free port)"
+    )
+    p.add_argument(
+        "--token",
+        help=f"{note}access token (default ${TOKEN_ENV}; required, and made up if not given, off loopback)",
+    )
+
+
+class ServerOptions(TypedDict):
+    """The :class:`~omnibot.web.dashboard.Dashboard` keywords of its server options."""
+
+    host: str
+    http_port: int
+    token: str | None
+    allow_hosts: list[str]
+
+
+def server_options(args: argparse.Namespace) -> ServerOptions:
+    """The :class:`~omnibot.web.dashboard.Dashboard` keywords the server options give (the token from
+    ``--token`` or ``$OMNIBOT_DASHBOARD_TOKEN``; None: made up off loopback)."""
+    return ServerOptions(
+        host=args.host,
+        http_port=args.http_port,
+        token=args.token or os.environ.get(TOKEN_ENV) or None,
+        allow_hosts=args.allow_host,
+    )
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -21,22 +67,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     from omnibot.cliargs import add_robot_options
 
     add_robot_options(p, world="room", port_help="the simulated --robot, paced to the wall clock")
-    p.add_argument(
-        "--host", default="127.0.0.1", help="address to serve on (default 127.0.0.1: this machine only)"
-    )
-    p.add_argument(
-        "--allow-host",
-        action="append",
-        default=[],
-        metavar="NAME",
-        help="a name the page may be opened by besides the bound address and the loopback names "
-        "(e.g. robot.local; repeat for more); others are refused (DNS rebinding)",
-    )
-    p.add_argument("--http-port", type=int, default=8080, help="HTTP port (default 8080; 0: any free port)")
-    p.add_argument(
-        "--token",
-        help=f"access token (default ${TOKEN_ENV}; required, and made up if not given, off loopback)",
-    )
+    add_server_options(p)
     p.add_argument(
         "--map",
         metavar="NAME|FILE",
@@ -82,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
     config = load_teleop_config(args.config)
     url = sim_url(args)
     path = load_path(args.path) if args.path else None
-    token = args.token or os.environ.get(TOKEN_ENV) or None
+    server = server_options(args)
 
     def make_teach(robot: RobotDescription) -> PathTeacher:
         return PathTeacher(robot, period=config.period, speed=args.repeat_speed)
@@ -90,19 +121,16 @@ def run(args: argparse.Namespace) -> int:
     dash = Dashboard(
         url,
         args.robot,
-        host=args.host,
-        http_port=args.http_port,
-        token=token,
         world=room_map,
         path=path,
         config=config,
         make_teach=make_teach,
-        allow_hosts=args.allow_host,
+        **server,
     )
     dash.start()
     try:
         print(f"omnibot dashboard for {url}: {dash.url}", flush=True)
-        if dash.token and not args.token and not os.environ.get(TOKEN_ENV):
+        if dash.token and not server["token"]:
             print(
                 "  (an access token was made up because the server is reachable from other machines)",
                 flush=True,

@@ -24,7 +24,6 @@ the bound address, the names in ``allow_hosts``), which defeats DNS rebinding.
 from __future__ import annotations
 
 import contextlib
-import secrets
 import socket
 import threading
 import time
@@ -37,28 +36,16 @@ import uvicorn
 
 from omnibot.client.session import open_robot
 from omnibot.errors import ConfigError, OmnibotError
-from omnibot.motion import Pose2D
 from omnibot.robot.description import RobotDescription
 from omnibot.sim.world import World, load_world
 from omnibot.teleop.config import TeleopConfig
 from omnibot.transport.device import find_device
-from omnibot.web.access import HostCheck, HostPolicy, is_loopback
+from omnibot.web.access import HostCheck, HostPolicy, access_token
 from omnibot.web.link import RobotLink
 from omnibot.web.messages import MAX_FRAME
 from omnibot.web.scene import PlannedPath, Point, build_scene
 from omnibot.web.server import Hub, create_app
 from omnibot.web.teach import TeachRepeat
-
-TOKEN_MIN = 8
-
-
-def access_token(host: str, token: str | None) -> str | None:
-    """The token the server requires: the one given (checked), else a fresh one off loopback, else None."""
-    if token is not None:
-        if len(token) < TOKEN_MIN:
-            raise ConfigError(f"an access token needs at least {TOKEN_MIN} characters", key="--token")
-        return token
-    return None if is_loopback(host) else secrets.token_urlsafe(18)
 
 
 def bind(host: str, port: int) -> socket.socket:
@@ -122,7 +109,7 @@ class Dashboard:
                 description,
                 config,
                 teach=teach,
-                start=Pose2D(*start) if start else None,
+                start=start,
                 mode=mode,
             )
             # a path file is drawn where following it from here would drive it; points as given

@@ -381,8 +381,8 @@ class RobotLink:
     def _truth(self) -> tuple[float, float, float] | None:
         if self._device is None:
             return None
-        x, y, th = self._device.sim.pose
-        return (float(x), float(y), float(th))
+        p = self._device.sim.pose
+        return (p.x, p.y, p.theta)
 
     def _log(self, level: str, text: str) -> None:
         self._emit({"type": "log", "level": level, "text": text})

@@ -80,6 +80,8 @@ class Follower(ABC):
         self.progress = 0.0
         """Arc length (m) of the path reached so far."""
         self.t0 = 0.0
+        self.options: dict[str, Any] = {}
+        """The options it was made with (:func:`make_follower` sets them; ``log replay`` remakes it)."""
 
     def start(self, path: Path, t: float) -> None:
         """Begin following ``path`` at time ``t`` (the robot stands at its start)."""
@@ -119,6 +121,7 @@ def register(name: str, **defaults: Any) -> Callable[[F], F]:
         def factory(limits: MotionLimits, **options: Any) -> Follower:
             follower = cls(limits, **{**defaults, **options})
             follower.name = name  # type: ignore[misc]
+            follower.options = {**defaults, **options}
             return follower
 
         if name in FOLLOWERS:

@@ -1,0 +1,39 @@
+"""The follower source of a path, made one way for ``omnibot follow``, ``run --follow`` and ROS 2's
+``path`` topic."""
+
+from __future__ import annotations
+
+from omnibot.control.followers.base import make_follower
+from omnibot.control.paths.path import Path
+from omnibot.navigation.runner import WATCHDOG
+from omnibot.navigation.session import follower_limits
+from omnibot.navigation.webteach import WATCHDOG as SLOW_WATCHDOG
+from omnibot.navigation.webteach import gains_for
+from omnibot.robot.description import RobotDescription
+from omnibot.runtime.sources import FollowerSource
+
+FOLLOWER_PRIORITY = 10
+"""The follower's priority: below every person and ROS 2's cmd_vel."""
+
+
+def follower_source(
+    robot: RobotDescription,
+    path: Path,
+    period: float,
+    follower: str = "tracker",
+    speed: float | None = None,
+    *,
+    name: str = "follower",
+    priority: int = FOLLOWER_PRIORITY,
+) -> FollowerSource:
+    """The follower source ``omnibot follow`` and ``run --follow`` drive ``path`` with at ``period``
+    (the tracker's gains scaled as for the page's Repeat above 100 Hz); ROS 2's ``path`` uses it too."""
+    gains = gains_for(period) if follower == "tracker" and period > 0.0101 else {}
+    made = make_follower(follower, follower_limits(robot, speed), rate=1.0 / period, **gains)
+    return FollowerSource(
+        made,
+        path,
+        name=name,
+        priority=priority,
+        watchdog=WATCHDOG if period <= 0.0101 else SLOW_WATCHDOG,
+    )
