@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: setup demo test lint bench clean browser avr-tools uno-sim mcap-readers fuzz
+.PHONY: setup demo test lint bench clean browser avr-tools uno-sim mcap-readers fuzz ros2-interop ros2-kilted
 
 setup: $(STAMP)
 
@@ -60,6 +60,23 @@ mcap-readers:
 	  echo "make mcap-readers: installing Foxglove's MCAP libraries into $(MCAP_READERS)"; \
 	  cp tests/logs/node/package.json $(MCAP_READERS)/package.json && \
 	  npm install --prefix $(MCAP_READERS) --no-audit --no-fund --silent; }
+
+# Genuine rclpy for the ROS 2 interop tests (tests/ros2/test_rclpy_*.py), never a runtime dependency:
+# Jazzy's wheels are the `ros2-test` extra of the project's venv; Kilted's share their names (ros-rclpy,
+# ros-rmw, ...), so they get their own venv in .cache/ros2-kilted (pins in
+# tests/ros2/kilted/requirements.txt), rebuilt when the pins change. Without them those tests skip.
+KILTED := .cache/ros2-kilted
+# its wheels are built for CPython 3.11 only
+KILTED_PYTHON ?= python3.11
+ros2-kilted:
+	@cmp -s tests/ros2/kilted/requirements.txt $(KILTED)/requirements.txt || { \
+	  echo "make ros2-kilted: installing ROS 2 Kilted's rclpy into $(KILTED)"; \
+	  rm -rf $(KILTED) && $(KILTED_PYTHON) -m venv $(KILTED) && \
+	  $(KILTED)/bin/python -m pip install --quiet -r tests/ros2/kilted/requirements.txt && \
+	  cp tests/ros2/kilted/requirements.txt $(KILTED)/requirements.txt; }
+
+ros2-interop: setup ros2-kilted
+	$(BIN)/python -m pip install --quiet -e '.[ros2-test]'
 
 test: lint browser avr-tools mcap-readers
 	SDL_VIDEODRIVER=dummy MPLBACKEND=Agg $(BIN)/python -m pytest -q

@@ -8,6 +8,8 @@ from benchmarks import (
     link_throughput,
     log_cost,
     odometry_drift,
+    ros2_latency,
+    ros2_rates,
     sim_speed,
     sonar_stop,
     tracking,
@@ -31,6 +33,11 @@ def main() -> int:
         ("odometry drift", lambda: odometry_drift.main([])),
         ("sonar stop", lambda: sonar_stop.main([])),
         ("recording cost (--log)", lambda: log_cost.main([])),
+        ("ROS 2: cmd_vel -> VEL latency (private network namespace)", lambda: ros2_latency.main([])),
+        (
+            "ROS 2: odom rates, CPU, robots per process (private network namespace)",
+            lambda: ros2_rates.main([]),
+        ),
     ):
         print(f"\n== {title}")
         run()

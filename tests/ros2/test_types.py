@@ -77,6 +77,7 @@ def _messages() -> list[tuple[str, Any]]:
         min_range=0.03125,  # float32: values it holds exactly
         max_range=4.0,
         range=float("inf"),
+        variance=2.0**-16,  # Jazzy's Range (Humble's has no variance)
     )
     status = schemas.new(
         "diagnostic_msgs/msg/DiagnosticStatus",

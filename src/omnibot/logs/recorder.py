@@ -180,7 +180,7 @@ def rosbag2_metadata(
                 }
             ],
             "custom_data": {"omnibot_version": __version__},
-            "ros_distro": "humble",
+            "ros_distro": "jazzy",
         }
     }
     return yaml.safe_dump(info, sort_keys=False)
@@ -581,6 +581,7 @@ class Recorder:
             min_range=float(sonar.min_range),
             max_range=float(sonar.max_range),
             range=math.inf if distance is None else float(distance),  # REP 117: no echo is +inf
+            variance=float(sonar.noise_std) ** 2,
         )
 
     # ------------------------------------------------------------------ the end

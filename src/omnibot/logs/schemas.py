@@ -1,4 +1,4 @@
-"""The message types of an omnibot log: ROS 2's own (from rosbags' Humble type store) and ours.
+"""The message types of an omnibot log: ROS 2's own (from rosbags' Jazzy type store) and ours.
 
 Standard topics carry standard ROS 2 messages so that Foxglove and ``ros2 bag`` understand them;
 omnibot's own records are the package ``omnibot_msgs``, defined here in ROS 2 ``.msg`` syntax and
@@ -84,8 +84,11 @@ OWN_TYPES = {
 
 @cache
 def typestore() -> Typestore:
-    """ROS 2 Humble's message types plus ``omnibot_msgs``."""
-    store = get_typestore(Stores.ROS2_HUMBLE)
+    """ROS 2 Jazzy's message types (Kilted's are the same) plus ``omnibot_msgs``.
+
+    Not Humble's: its sensor_msgs/Range lacks ``variance``, so Jazzy's and Kilted's subscribers (rclpy,
+    rviz2) would never take our ranges (another type hash, a shorter message)."""
+    store = get_typestore(Stores.ROS2_JAZZY)
     for name, text in OWN_TYPES.items():
         store.register(get_types_from_msg(text, name))
     return store

@@ -30,6 +30,9 @@ from omnibot.errors import ConfigError
 PERIOD = 0.02
 """s: the runtime's cycle with ROS 2 (odom, tf, joint states at 50 Hz)."""
 INSTALL = "the ROS 2 bridge needs cyclonedds: pip install 'omnibot[ros2]'"
+SONAR_PERIOD = 0.1
+"""s between pings of each sonar (the controller pings only the sonars it is told to; without this
+every ``range/<sonar>`` would say +inf, no echo, for a sonar that never pinged)."""
 
 
 def add_bridge_options(p: argparse.ArgumentParser, *, several: bool = False) -> None:
@@ -216,7 +219,14 @@ def attach(runtime: Any, robot: Any, args: argparse.Namespace, spec: RobotSpec |
     runtime.add_source(path)
     runtime.add_sink(reset)
     runtime.add_sink(Ros2Sink(node, robot, prefix=spec.prefix, reporters=[path.status, reset.status]))
+    start_sonars(runtime.client, robot)
     return node
+
+
+def start_sonars(client: Any, robot: Any) -> None:
+    """Have the controller ping every sonar each :data:`SONAR_PERIOD` (their readings ride in TEL)."""
+    for number in range(1, len(robot.sonars) + 1):
+        client.sonar(number, SONAR_PERIOD)
 
 
 _PRINTING = threading.Lock()

@@ -4,6 +4,8 @@
 * QoS as rclpy's defaults: reliable, keep-last 10, volatile; sensor data best-effort keep-last 5;
   ``robot_description`` transient-local keep-last 1 (robot_state_publisher's);
 * each reader and writer carries ``typehash=RIHS01_<hex>;`` in its USER_DATA, as rmw puts it;
+* Fast DDS's XTypes type information is ignored (:data:`COMPATIBILITY`): endpoints match on type
+  names, as between rmw implementations;
 * ``ROS_DOMAIN_ID``, ``ROS_AUTOMATIC_DISCOVERY_RANGE`` (``LOCALHOST``, ``OFF``, ``SUBNET``) and the
   older ``ROS_LOCALHOST_ONLY=1`` mean what they mean to rmw: localhost-only discovery is unicast to
   127.0.0.1 with multicast off.
@@ -99,6 +101,15 @@ def discovery_range(env: Mapping[str, str]) -> str:
     return value
 
 
+FAST_DDS = "1.15"
+"""eProsima Fast DDS's RTPS vendor id (ROS 2's default rmw)."""
+COMPATIBILITY = f"<Compatibility><IgnoreTypeInformation>{FAST_DDS}</IgnoreTypeInformation></Compatibility>"
+"""Match Fast DDS's endpoints on type names, as rmw does (the RIHS01 hash rides in USER_DATA), not on
+its XTypes type information: Kilted's Fast DDS (3.x) answers cyclonedds' request for the minimal type
+of a message with arrays or sequences (Odometry, Imu, JointState) with the complete one, the type
+never resolves and the endpoints never match (Range and Twist, without collections, did)."""
+
+
 def config_xml(domain: int, scope: str) -> str:
     """cyclonedds' configuration for ``scope`` (rmw_cyclonedds' for that discovery range)."""
     general = ""
@@ -114,7 +125,7 @@ def config_xml(domain: int, scope: str) -> str:
         general = "<General><AllowMulticast>false</AllowMulticast></General>"
         peers = "<ParticipantIndex>none</ParticipantIndex>"
     discovery = f"<Discovery>{peers}</Discovery>" if peers else ""
-    return f'<CycloneDDS><Domain Id="{domain}">{general}{discovery}</Domain></CycloneDDS>'
+    return f'<CycloneDDS><Domain Id="{domain}">{general}{COMPATIBILITY}{discovery}</Domain></CycloneDDS>'
 
 
 _DOMAINS: dict[int, tuple[Any, str]] = {}
