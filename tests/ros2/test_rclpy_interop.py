@@ -47,7 +47,7 @@ def spin(seconds, publish):
             next_pub = time.monotonic() + 0.05  # 20 Hz, as teleop_twist_joy
         rclpy.spin_once(node, timeout_sec=0.01)
 
-deadline = time.monotonic() + 6
+deadline = time.monotonic() + 30  # the bridge may take several seconds to start on a loaded machine
 while not got["odom"] and time.monotonic() < deadline:
     rclpy.spin_once(node, timeout_sec=0.05)
 hashes = {}

