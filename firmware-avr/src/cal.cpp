@@ -120,6 +120,23 @@ float cal_kl(float power, float folded) {
     return interp(EE(kl[n - 1]), power);
 }
 
+// The intercept of p K_l(p) through the two lowest knots, x0 x1 (y0 - y1) / (x1 - x0), the smallest
+// over the curves (calibration.py start_power), rounded up: a whole power is below it when below this.
+int16_t cal_start_power() {
+    float low = 1e30f;  // there is always a curve (CAL,12,-2 keeps one)
+    for (uint8_t c = eeprom_read_byte(EE(curves)); c-- > 0;) {
+        struct {
+            uint8_t n;
+            Knot k[2];
+        } t;
+        eeprom_read_block(&t, EE(kl[c]), sizeof t);
+        if (t.n < 2) return 0;
+        float a = (float)((int32_t)t.k[0].x * t.k[1].x) * (t.k[0].y - t.k[1].y) / (t.k[1].x - t.k[0].x);
+        if (a < low) low = a;
+    }
+    return low > 0 ? (int16_t)ceilf(low * 0.001f) : 0;
+}
+
 float cal_motor_power(uint8_t i, float a) {
     float m = a < 0 ? -a : a;
     if (map_identity || m == 0.0f || i >= MOTORS) return a;

@@ -9,6 +9,7 @@ float cal_k();                // PWM counts per m/s of rim speed
 float cal_kt(float power);
 float cal_kr(float power);
 float cal_kl(float power, float folded_course);
+int16_t cal_start_power();  // the K_l tables' dead band, whole PWM counts up (0: they do not say)
 float cal_coast(float speed_cms);  // s
 float cal_motor_power(uint8_t i, float a);
 float cal_roller(uint8_t which, uint8_t i);  // which 0: cosine, 1: sine coefficient, PWM counts

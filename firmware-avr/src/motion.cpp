@@ -248,6 +248,9 @@ void Executor::drive(float vx, float vy, float w, bool rotate, float gain) {
     }
     k = f;
     model.drag_gain = gain;
+    // an open-loop VEL: a wheel below the K_l tables' dead band would not turn (WARN 12)
+    bool open_vel = kind == K_VEL && (vx != 0 || vy != 0) && !(HAS_ENCODERS && (mode & P_MODE_CLOSED_LOOP));
+    model.weak_floor = open_vel ? cal_start_power() : 0;
     uint8_t flags = model.compute(vx, vy, w, rotate, powers);
     time_scale = model.scale * f;
     warn_once(flags);
@@ -288,7 +291,7 @@ void Executor::warn_once(uint8_t flags) {
     uint8_t fresh = flags & ~warned;
     warned |= flags;
     if (fresh & SATURATED) on_warn(P_W_SPEED_REDUCED);
-    if (fresh & DEADBAND) on_warn(P_W_POWER_TOO_LOW);
+    if (fresh & (DEADBAND | WEAK)) on_warn(P_W_POWER_TOO_LOW);
     if (fresh & LIMITED) on_warn(P_W_SONAR_LIMIT);
     if (fresh & UNCOVERED) on_warn(P_W_UNCOVERED);
 }

@@ -91,7 +91,7 @@ uint8_t PowerModel::drag(const int32_t *counts, int16_t *out) {
     return finish(peak, out);
 }
 
-// Direction-keeping saturation (one factor for every motor), rounding, the dead band.
+// Direction-keeping saturation (one factor for every motor), rounding, the dead band, the weak wheels.
 uint8_t PowerModel::finish(float peak, int16_t *out) {
     uint8_t flags = 0;
     scale = 1.0f;
@@ -115,5 +115,10 @@ uint8_t PowerModel::finish(float peak, int16_t *out) {
         for (uint8_t i = 0; i < MOTORS; i++) out[i] = 0;
         flags |= DEADBAND;
     }
+    for (uint8_t i = 0; i < MOTORS; i++)
+        if (out[i] && abs(out[i]) < weak_floor) {
+            out[i] = 0;
+            flags |= WEAK;
+        }
     return flags;
 }

@@ -4,6 +4,7 @@
 
 #define SATURATED 1
 #define DEADBAND 2
+#define WEAK 16  // safety.h owns 4 and 8
 
 struct PowerModel {
     float raw[MOTORS];    // powers before rounding, after saturation
@@ -11,6 +12,7 @@ struct PowerModel {
     float scale;          // saturation factor of the last computation (1: none)
     float drag_gain;      // the MOVE's coast factor of the roller drag
     float ux, uy;         // direction of travel of the last twist (0, 0: none)
+    int16_t weak_floor;   // a wheel given less (not 0) is set to 0 (WEAK); 0: no such check
 
     uint8_t compute(float vx, float vy, float w, bool rotate, int16_t *out);
     void wheel_speeds(float vx, float vy, float w, float *out);  // rad/s

@@ -109,6 +109,31 @@ def test_binary_needs_a_version_2_controller() -> None:
             client.use_binary()
 
 
+@pytest.mark.parametrize("name", ["omni4", "bot"])
+def test_a_controller_from_before_the_hello_window_is_named_in_one_line(
+    name: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A controller flashed before the HELLO reply frame had its window (version, motors, name)
+    is refused with what it is, not a timeout: "omni4"'s "o" reads as window -56 (malformed),
+    "bot"'s "b" as 49 (allowed, but the text HELLO's name shows it)."""
+    with RobotClient.open("sim://omni4") as client:
+        ctrl = firmware(client)
+        ctrl.name = name
+        client.last_hello = client.hello()  # the text HELLO: the name
+        reply = ctrl.link.reply
+
+        def old_reply(type_id: int, seq: int, ints: list[int], text: bytes = b"") -> None:
+            reply(type_id, seq, ints[:2] if type_id == codes.HELLO_REPLY else ints, text)
+
+        monkeypatch.setattr(ctrl.link, "reply", old_reply)
+        with pytest.raises(ProtocolError) as info:
+            client.use_binary()
+        assert str(info.value) == (
+            "the controller's binary HELLO has no window field: its firmware predates this host; "
+            "flash the current firmware"
+        )
+
+
 @pytest.mark.parametrize("window", [codes.WINDOW_MIN, codes.WINDOW])
 def test_binary_sends_up_to_the_window_the_controller_announces(
     window: int, monkeypatch: pytest.MonkeyPatch

@@ -1,5 +1,6 @@
 """Stopping and not moving: STOP over an endless DELTA, the sonar emergency-stop latch, the VEL
-watchdog, simulation mode (powers computed, none applied); and one physics check (sim backends)."""
+watchdog, an open-loop VEL's wheels below the dead band, simulation mode (powers computed, none
+applied); and one physics check (sim backends)."""
 
 from __future__ import annotations
 
@@ -92,6 +93,24 @@ def test_vel_refreshed_keeps_running(client: RobotClient) -> None:
     assert rec.events == [] and client.status().moving
     client.sleep(0.3)
     assert len(rec.of(IdleEvent)) == 1
+
+
+def test_open_loop_vel_sets_a_weak_wheel_to_0(client: RobotClient) -> None:
+    """omni4's K_l tables were fitted from a dead band of about 44 PWM counts: 0.2 m/s forward with
+    0.1 m/s sideways gives the sideways pair 41, which an open-loop VEL sets to 0 with WARN 12, once
+    a VEL stream (every firmware: MicroPython and the UNO's); the closed loop drives them instead."""
+    rec = EventRecorder()
+    client.add_listener(rec, WarnEvent)
+    client.vel(0.2, 0.1, 0.0, 0.5)
+    client.vel(0.2, 0.1, 0.0, 0.5)
+    assert client.status().powers == (0, 82, 0, -82)
+    assert [w.code for w in rec.of(WarnEvent)] == [codes.W_POWER_TOO_LOW]
+    client.stop()
+    client.mode(closed_loop=True)  # omni4 has motor encoders
+    client.vel(0.2, 0.1, 0.0, 0.5)
+    assert client.status().powers[0] > 0
+    client.stop()
+    assert len(rec.of(WarnEvent)) == 1
 
 
 def test_simulation_mode_computes_but_applies_nothing(client: RobotClient) -> None:

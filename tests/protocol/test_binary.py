@@ -119,11 +119,30 @@ def test_hello_reply_window_outside_the_protocol_is_malformed(window: int) -> No
     assert isinstance(got, m.Malformed) and "window" in got.reason
 
 
-def test_hello_reply_without_a_window_is_malformed() -> None:
+@pytest.mark.parametrize("name", [b"omni4", b"mecanum4", b"Q"])
+def test_hello_reply_without_a_window_says_the_firmware_predates_the_host(name: bytes) -> None:
     """A frame of the HELLO reply as it was before the window (version, motors, name): the name's
-    first letter is read as the window, which no controller may announce ("o" is -56)."""
-    got = binary.decode(frame.encode_message(codes.HELLO_REPLY, 1, [2, 4], b"omni4"))[1]
-    assert isinstance(got, m.Malformed) and "window -56" in got.reason
+    first letter is read as the window, which no controller may announce ("o" is -56), and the
+    reason says what it is."""
+    got = binary.decode(frame.encode_message(codes.HELLO_REPLY, 1, [2, 4], name))[1]
+    assert isinstance(got, m.Malformed) and got.reason == m.HELLO_WITHOUT_WINDOW
+    assert "no window field" in m.HELLO_WITHOUT_WINDOW and "\n" not in m.HELLO_WITHOUT_WINDOW
+
+
+@pytest.mark.parametrize("window", [-1, -70])
+def test_a_negative_window_that_is_no_letter_is_just_out_of_range(window: int) -> None:
+    got = binary.decode(frame.encode_message(codes.HELLO_REPLY, 1, [2, 4, window], b"omni4"))[1]
+    assert isinstance(got, m.Malformed) and got.reason == f"HELLO reply: window {window} outside 8..127"
+
+
+def test_a_window_read_from_a_letter_is_told_by_the_text_name() -> None:
+    """``b`` reads as window 49, which the protocol allows: only the name the controller gave in
+    its text HELLO shows a frame from before the window."""
+    got = binary.decode(frame.encode_message(codes.HELLO_REPLY, 1, [2, 4], b"bot"))[1]
+    assert isinstance(got, binary.Packet) and got.message == m.HelloReply(2, "ot", 4, 49)
+    assert m.predates_window(got.message, "bot")
+    assert not m.predates_window(m.HelloReply(2, "bot", 4, 49), "bot")
+    assert not m.predates_window(got.message, "pot")
 
 
 @pytest.mark.parametrize(

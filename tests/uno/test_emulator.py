@@ -36,11 +36,15 @@ SCRIPT = [
     "ROTATE,-30000,400;STATUS;STOP",
     "VEL,20,-30,45,1000;STATUS;STOP",
     "VEL,0,0,-200,1000;STATUS;STOP",
+    # an open-loop VEL: a wheel below the K_l tables' dead band is set to 0, WARN 12 once a VEL stream
+    "VEL,20,10,0,500;STATUS;VEL,20,10,0,500;VEL,5,0,0,500;STATUS;VEL,0,10,0,500;STATUS;STOP",
+    "MODE,2;VEL,20,10,0,500;STOP;MODE,0",  # the closed loop drives the slow wheels instead
     "POWER,1000,10,-20,30,-255;STATUS;STOP",
     "CAL,0,0,0,2000;CAL,1,0,0,1100;CAL,10,-1,0,0;CAL,10,0,40,1400;CAL,10,1,255,1050;CAL,11,-1,45,0",
     "CAL,11,0,40,1100;CAL,11,1,255,1000;CAL,12,-2,0,0;CAL,3,0,0,385;CAL,20,0,60,1050;CAL,20,1,200,980",
     "MOVE,30000,40,20,0;STATUS;STOP",
     "MOVE,30000,80,70,10;STATUS;STOP",
+    "VEL,30,4,0,500;STATUS;VEL,30,1,0,500;STATUS;STOP",  # the dead band of the tables just written
     "CAL,12,-1,40,0;CAL,11,-1,50,0;CAL,10,5,3,4;CAL,21,0,0,0;CAL,6,0,-1,0",
     # roller drag (at the encoders' origin: phase 0) with its coast table
     "CAL,4,0,0,150;CAL,4,1,0,-80;CAL,5,2,0,90;CAL,4,3,0,40;CAL,6,0,30,200;CAL,6,1,80,-100",
@@ -74,7 +78,6 @@ def reference(robot: str) -> list[list[str]]:
     """The MicroPython firmware's replies to each line of SCRIPT (time stands still), without the
     IDLE events: on the UNO time runs, and a short MOVE may end between two replies."""
     config = build_config(load_robot(robot))
-    config["vel_dead_band"] = False  # VEL's weak-wheel check (docs/firmware.md) is not in firmware-avr yet
     hal = FakeHAL(config["motors"], len(config["sonar_period_min_ms"]))
     ctrl = Controller(hal, config)
     hal.lines()

@@ -29,7 +29,16 @@ from omnibot.client.wire import BinaryWire, TextWire
 from omnibot.errors import LinkTimeout, ProtocolError
 from omnibot.protocol import codes, text
 from omnibot.protocol.binary import Packet
-from omnibot.protocol.messages import ErrorReply, HelloReply, Mode, Ok, StatusReply
+from omnibot.protocol.messages import (
+    HELLO_WITHOUT_WINDOW,
+    ErrorReply,
+    HelloReply,
+    Malformed,
+    Mode,
+    Ok,
+    StatusReply,
+    predates_window,
+)
 from omnibot.protocol.messages import Hello as HelloCommand
 
 if TYPE_CHECKING:
@@ -120,9 +129,14 @@ def _probe(client: RobotClient) -> Hello | bool | None:
                 break  # the ERROR lines for the probe are in
             continue
         for item in wire.feed(data):
+            if isinstance(item, Malformed) and item.reason == HELLO_WITHOUT_WINDOW:
+                raise ProtocolError(HELLO_WITHOUT_WINDOW)  # binary, but no session this host can run
             if not isinstance(item, Packet) or item.event or item.seq != seq:
                 continue
             if isinstance(item.message, HelloReply):
+                known = client.last_hello
+                if known is not None and predates_window(item.message, known.name):
+                    raise ProtocolError(HELLO_WITHOUT_WINDOW)
                 wire.sender.ack(seq)
                 wire.hello(item.message)
                 client._wire = wire

@@ -15,7 +15,7 @@ Keys of the config dict (all plain ints, floats, strings, lists, dicts):
 name, motors                robot name (HELLO) and motor count
 pwm_max, power_min          PWM full scale; dead band (largest ``motor.deadband`` unless given)
 vel_dead_band               True: an open-loop VEL sets a wheel below the K_l tables' dead band to 0
-                            (WARN 12; the UNO firmware does not yet)
+                            (WARN 12; the UNO firmware always does)
 radius                      wheel radii, m
 J                           inverse kinematics, rad/s of each wheel per (vx, vy, w) in m/s, rad/s
 rim                         J times the wheel radius: rim speed (m/s) per unit twist

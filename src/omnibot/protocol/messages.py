@@ -353,13 +353,43 @@ class HelloReply(_Message):
     @classmethod
     def from_params(cls, params: Sequence[int], label: str = "") -> Self:
         """Build one from version, motor count and window plus the name as ``label`` (the binary
-        frame); ProtocolError unless three integers and a window the protocol allows."""
+        frame); ProtocolError unless three integers and a window the protocol allows (with
+        :data:`HELLO_WITHOUT_WINDOW` when the window reads as a name's letter: a frame from before it)."""
         _count(cls, params, 3)
-        if not codes.WINDOW_MIN <= params[2] <= codes.WINDOW_LIMIT:
+        window = params[2]
+        if not codes.WINDOW_MIN <= window <= codes.WINDOW_LIMIT:
+            if _name_letter(window) and label.isascii() and label.isprintable():
+                raise ProtocolError(HELLO_WITHOUT_WINDOW)
             raise ProtocolError(
-                f"HELLO reply: window {params[2]} outside {codes.WINDOW_MIN}..{codes.WINDOW_LIMIT}"
+                f"HELLO reply: window {window} outside {codes.WINDOW_MIN}..{codes.WINDOW_LIMIT}"
             )
-        return cls(params[0], label, params[1], params[2])
+        return cls(params[0], label, params[1], window)
+
+
+HELLO_WITHOUT_WINDOW = (
+    "the controller's binary HELLO has no window field: its firmware predates this host; "
+    "flash the current firmware"
+)
+"""Why a HELLO reply frame from before the window (version, motors, name) is refused."""
+
+
+def _zigzag(value: int) -> int:
+    """The zigzag code of ``value``: the byte it was read from when that byte ends a varint."""
+    return 2 * value if value >= 0 else -2 * value - 1
+
+
+def _name_letter(value: int) -> bool:
+    """True if ``value`` is what a printable ASCII byte reads as in the window's place: a HELLO
+    reply frame from before the window has its name's first letter there."""
+    return 0x21 <= _zigzag(value) <= 0x7E
+
+
+def predates_window(reply: HelloReply, name: str) -> bool:
+    """True if ``reply`` was read from a HELLO reply frame from before the window, sent by the
+    controller whose text HELLO said ``name``: its window is that name's first letter and its name
+    the rest. (A letter that reads as a window the protocol allows, as ``b`` = 49 does, passes
+    :meth:`HelloReply.from_params`; the name the controller gave in text tells it apart.)"""
+    return len(name) > 1 and reply.name == name[1:] and _zigzag(reply.window) == ord(name[0])
 
 
 @dataclass(frozen=True)
