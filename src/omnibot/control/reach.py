@@ -85,7 +85,9 @@ FLOOR_COURSES = 72
 """Courses (evenly spaced over a turn) in a floor's speed table (:func:`floor_speed_table`)."""
 
 
-def _floor_drive(robot: RobotDescription, floor: Surface, courses: FloatArray, speeds: FloatArray) -> FloatArray:
+def _floor_drive(
+    robot: RobotDescription, floor: Surface, courses: FloatArray, speeds: FloatArray
+) -> FloatArray:
     """N: the net force along each of ``courses`` (rad, body frame) the floor leaves the body at
     ``speeds`` m/s under full power (positive: the robot still accelerates), each wheel turning as
     fast as its axle's balance and its traction's slip allow (arrays of one shape (k,))."""
@@ -126,7 +128,9 @@ def _floor_drive(robot: RobotDescription, floor: Surface, courses: FloatArray, s
     for _ in range(300):  # battery sag and traction slip, relaxed to their fixed point
         amps = duty * np.maximum(v_bus - drop, 0.0) / res - ke * omega / res
         amps = np.where(on, np.clip(amps, -i_max, i_max), 0.0)
-        v_bus = np.maximum(v_bus + relax * (v_open - r_batt * np.sum(duty * amps, axis=1, keepdims=True) - v_bus), 0.0)
+        v_bus = np.maximum(
+            v_bus + relax * (v_open - r_batt * np.sum(duty * amps, axis=1, keepdims=True) - v_bus), 0.0
+        )
         roll = body_n + na * omega
         rim = radius * omega
         both = rim * rim + roll * roll
