@@ -8,9 +8,18 @@ import numpy as np
 import pytest
 
 from omnibot.control.paths import MotionLimits, Path, time_optimal_profile
-from omnibot.control.reach import course_speed_bound, free_wheel_speeds, speed_bound, wheel_rows
-from omnibot.robot.description import load_robot
+from omnibot.control.reach import (
+    course_speed_bound,
+    floor_course_speed,
+    floor_speed_table,
+    free_wheel_speeds,
+    speed_bound,
+    wheel_rows,
+)
+from omnibot.errors import ConfigError
+from omnibot.robot.description import RobotDescription, load_robot
 from omnibot.robot.kinematics import inverse, wheel_matrix
+from omnibot.sim.physics import Physics
 
 
 def test_free_speed_is_where_the_motor_torque_meets_its_friction() -> None:
@@ -64,3 +73,70 @@ def test_the_profile_keeps_every_wheel_below_its_free_speed() -> None:
     assert time_optimal_profile(turning, limits).min_time > time_optimal_profile(sideways, limits).min_time
     with pytest.raises(ValueError, match="wheel_use"):
         limits.with_wheel_use(1.5)
+
+
+def simulated_top_speed(robot: RobotDescription, surface: str, course: float, seconds: float = 4.0) -> float:
+    """m/s: the simulator's speed along ``course`` at full power (the busiest wheel at full PWM, the
+    others in proportion), averaged over the last half of a run from rest. The idle wheels stand
+    at their rollers' mean resistance (count phi = 90 degrees), as the bound assumes."""
+    physics = Physics(robot, surfaces=(surface,), dt=0.002)
+    physics.wheel_angle = np.array([0.5 * math.pi / w.rollers.count for w in robot.wheels])
+    need = wheel_matrix(robot) @ np.array([math.cos(course), math.sin(course), 0.0])
+    pwm = np.array([w.motor.pwm_max for w in robot.wheels]) * need / np.max(np.abs(need))
+    steps = round(seconds / physics.dt)
+    speeds = []
+    for k in range(steps):
+        physics.step(pwm[None])
+        if k >= steps // 2:
+            vx, vy, _ = physics.twist[0]
+            speeds.append(vx * math.cos(course) + vy * math.sin(course))
+    return float(np.mean(speeds))
+
+
+@pytest.mark.parametrize(
+    ("preset", "surface", "course_deg", "tolerance"),
+    [
+        ("omni4", "carpet", 45, 0.01),  # issue 17: 0.72 m/s where 1 m/s was planned
+        ("omni4", "carpet", 0, 0.01),
+        ("omni4", "wood", 45, 0.01),
+        ("omni4", "wood", 90, 0.01),
+        ("mecanum4", "carpet", 45, 0.01),
+    ],
+)
+def test_the_floor_bound_is_the_simulators_steady_speed_at_full_power(
+    preset: str, surface: str, course_deg: float, tolerance: float
+) -> None:
+    robot = load_robot(preset)
+    course = math.radians(course_deg)
+    bound = floor_course_speed(robot, course, surface)
+    assert bound == pytest.approx(simulated_top_speed(robot, surface, course), rel=tolerance)
+    assert bound < course_speed_bound(robot, course)  # the floor takes some of the free speed
+
+
+def test_carpet_forbids_omni4_its_1_m_s_at_45_degrees_and_wood_does_not() -> None:
+    robot = load_robot("omni4")
+    carpet, wood = floor_speed_table(robot, "carpet"), floor_speed_table(robot, "wood")
+    assert len(carpet) == 72 and all(c < w for c, w in zip(carpet, wood, strict=True))
+    assert carpet[9] == pytest.approx(0.72, abs=0.01)  # 45 degrees: seed 000's 1 m/s is out of reach
+    assert min(wood) > 0.85 and carpet[0] > 1.0  # on wood, and on carpet's axes, 1 m/s at 85 %
+    assert carpet[0] == pytest.approx(carpet[18], rel=1e-6)  # the square's symmetry: 0 and 90 degrees
+    with pytest.raises(ConfigError, match="unknown surface 'mud'"):
+        floor_course_speed(robot, 0.0, "mud")
+
+
+def test_the_profile_plans_within_the_floors_reach() -> None:
+    robot = load_robot("omni4")
+    diagonal = Path.from_points([(0.0, 0.0), (3.0, 3.0)], theta=0.0)  # course 45 in the body
+    ahead = Path.from_points([(0.0, 0.0), (4.0, 0.0)], theta=0.0)
+    free = MotionLimits.from_robot(robot, 1.0)
+    carpet = MotionLimits.from_robot(robot, 1.0, surface="carpet")
+    assert free.floor is None and carpet.floor == floor_speed_table(robot, "carpet")
+    reach = floor_course_speed(robot, math.pi / 4, "carpet")
+    assert time_optimal_profile(diagonal, free).speed.max() == pytest.approx(1.0, rel=1e-6)
+    assert time_optimal_profile(diagonal, carpet).speed.max() == pytest.approx(reach, rel=1e-3)
+    assert time_optimal_profile(diagonal, carpet.with_wheel_use(0.85)).speed.max() == pytest.approx(
+        0.85 * reach, rel=1e-3
+    )
+    assert time_optimal_profile(ahead, carpet).speed.max() == pytest.approx(1.0, rel=1e-6)  # reach 1.27
+    with pytest.raises(ValueError, match="floor"):
+        MotionLimits(1.0, 1.0, 1.0, 1.0, floor=(1.0, 0.0))

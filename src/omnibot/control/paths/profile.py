@@ -25,7 +25,6 @@ authority for feedback.
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass, replace
 
@@ -119,12 +118,17 @@ class MotionLimits:
         return replace(self, w_max=min(self.w_max, w_max))
 
 
-@functools.lru_cache(maxsize=32)
+_FLOOR_TABLES: dict[tuple[str, str], tuple[float, ...]] = {}
+
+
 def _floor_table(robot: RobotDescription, surface: str) -> tuple[float, ...]:
-    """The robot's floor speed table on ``surface`` (computed once per description and floor)."""
+    """The robot's floor speed table on ``surface``, computed once per description and floor."""
     from omnibot.control.reach import floor_speed_table
 
-    return floor_speed_table(robot, surface)
+    key = (robot.model_dump_json(), surface)
+    if key not in _FLOOR_TABLES:
+        _FLOOR_TABLES[key] = floor_speed_table(robot, surface)
+    return _FLOOR_TABLES[key]
 
 
 @dataclass(frozen=True)
