@@ -118,3 +118,12 @@ def test_a_manoeuvre_is_a_script_on_the_runtime_and_an_emergency_stop_ends_it() 
         nav.close()
         moved = nav.truth()
     assert len(sent) == 50 and moved is not None and 0.05 < moved[0] < 0.15
+
+
+def test_follower_limits_plan_within_a_floors_reach() -> None:
+    from omnibot.control.reach import floor_speed_table
+
+    robot = load_robot("omni4")
+    assert follower_limits(robot, 1.0).floor is None  # default: the motors' free speed only
+    assert follower_limits(robot, 1.0, "carpet").floor == floor_speed_table(robot, "carpet")
+    assert FollowOptions().floor is None

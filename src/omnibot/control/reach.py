@@ -14,14 +14,16 @@ the map as rows of fractions of each wheel's free speed, what
 :class:`~omnibot.control.paths.profile.MotionLimits` carries to cap the time-optimal profile.
 
 On a floor (:func:`floor_course_speed`) the bound is where the wheels' torque-speed lines meet the
-floor's load: at full power along a course (the busiest wheel at full PWM, the others in
-proportion), each wheel's motor current ``(d (V_bus - V_drop) - k G omega) / R`` (clipped at its
-limit) with the battery sagging under all of them, less the axle's friction, against the floor's
-forces of :mod:`omnibot.sim.physics` at that speed: every roller's rolling resistance
-(``c N`` times the surface's multiplier, its phase-mean), and the combined rolling-and-driving drag
-``b N sin(2 beta)`` on the roller and at the axle. The same description and surface numbers the
-simulator uses (one source of truth); the steady speed is where the drive along the course
-balances the load (wheels rolling without slip, no turn).
+floor's load. To hold speed v along a course (no turn) the floor's forces of
+:mod:`omnibot.sim.physics` at that speed must be balanced: every roller's rolling resistance
+(``c N`` times the surface's multiplier, its phase-mean) and the combined rolling-and-driving drag
+``b N sin(2 beta)`` on the roller, held by the wheels' traction (the least-norm forces that keep
+the body on its course; they set each wheel's slip, so its speed), and at each axle that drag, the
+axle friction and the traction's torque, which the motor's ``eta G k i`` must supply. The current
+``i`` at the wheel's speed needs the PWM fraction ``d = (i R + k G omega) / (V_bus - V_drop)``,
+the battery sagging under every motor's ``d i``. The top speed on the course is where the busiest
+wheel needs full PWM (or its current limit). The same description and surface numbers the
+simulator uses (one source of truth).
 """
 
 from __future__ import annotations
@@ -85,12 +87,13 @@ FLOOR_COURSES = 72
 """Courses (evenly spaced over a turn) in a floor's speed table (:func:`floor_speed_table`)."""
 
 
-def _floor_drive(
+def _floor_spare(
     robot: RobotDescription, floor: Surface, courses: FloatArray, speeds: FloatArray
 ) -> FloatArray:
-    """N: the net force along each of ``courses`` (rad, body frame) the floor leaves the body at
-    ``speeds`` m/s under full power (positive: the robot still accelerates), each wheel turning as
-    fast as its axle's balance and its traction's slip allow (arrays of one shape (k,))."""
+    """1 less the largest PWM fraction any wheel needs to hold ``speeds`` m/s steadily along
+    ``courses`` (rad, body frame; arrays of one shape (k,)) on ``floor``: positive where the
+    motors can, negative where they cannot (also when a wheel would need more than its current
+    limit). See the module docstring."""
     from omnibot.sim.kernels import ROLL_SPEED_EPS, WHEEL_SPEED_EPS
     from omnibot.sim.physics import static_loads
 
@@ -102,15 +105,12 @@ def _floor_drive(
     x, y = each(lambda w: w.position[0]), each(lambda w: w.position[1])
     gamma, radius = each(lambda w: w.gamma), each(lambda w: w.radius)
     traction, roller = contact_rows(x, y, each(lambda w: w.drive_angle), gamma)
+    share = np.linalg.pinv(traction.T)  # (m, 3): the least-norm traction forces for a body force
     load = static_loads(x[None], y[None], np.array([robot.mass]), np.zeros((1, len(wheels)), bool))[0]
     twist = np.stack((np.cos(courses), np.sin(courses), np.zeros_like(courses)), axis=-1) * speeds[:, None]
     ta, na = -radius * np.cos(gamma), radius * np.sin(gamma)
     body_t, body_n = twist @ traction.T, twist @ roller.T  # (k, m)
     grip = each(lambda w: w.rollers.grip) * floor.mu * load
-    # full power along the course: the busiest wheel at full PWM, the others in proportion
-    direction = twist @ wheel_matrix(robot).T
-    duty = direction / np.maximum(np.max(np.abs(direction), axis=1, keepdims=True), 1e-12)
-    on = np.abs(duty) * each(lambda w: w.motor.pwm_max) >= np.maximum(each(lambda w: w.motor.deadband), 1e-9)
     res = each(lambda w: w.motor.resistance)
     ke = each(lambda w: w.motor.torque_constant * w.motor.gear_ratio)
     kt = ke * each(lambda w: w.motor.gear_efficiency)
@@ -124,27 +124,31 @@ def _floor_drive(
     relax = 1.0 / (1.0 + r_batt * float(np.sum(1.0 / res)))
     v_bus = np.full((len(courses), 1), v_open)
     omega = body_t / -ta  # rolling without slip to start
-    ft = fn = np.zeros_like(omega)
-    for _ in range(300):  # battery sag and traction slip, relaxed to their fixed point
-        amps = duty * np.maximum(v_bus - drop, 0.0) / res - ke * omega / res
-        amps = np.where(on, np.clip(amps, -i_max, i_max), 0.0)
-        v_bus = np.maximum(
-            v_bus + relax * (v_open - r_batt * np.sum(duty * amps, axis=1, keepdims=True) - v_bus), 0.0
-        )
+    duty = amps = np.zeros_like(omega)
+    for _ in range(300):  # traction slip and battery sag, relaxed to their fixed point
         roll = body_n + na * omega
         rim = radius * omega
         both = rim * rim + roll * roll
         sin2 = np.where(both > 1e-12, 2.0 * np.abs(rim) * np.abs(roll) / np.maximum(both, 1e-12), 0.0)
         fn = rolling * np.tanh(roll / ROLL_SPEED_EPS) + combined * sin2 * roll
+        # the wheels' traction holds the body against the rollers' forces: sum ft T + fn N = 0
+        ft = -(fn @ roller) @ share.T
+        # each axle balances: ft ta + fn na + friction = the motor's kt i
         axle = static * np.tanh(omega / WHEEL_SPEED_EPS) + viscous * omega + combined * sin2 * radius * rim
-        ft = -(fn * na + axle - kt * amps) / ta  # the axle balances: ft ta + fn na + fa = 0
+        amps = (ft * ta + fn * na + axle) / kt
+        duty = (amps * res + ke * omega) / np.maximum(v_bus - drop, 1e-9)
+        sagged = v_open - r_batt * np.sum(duty * amps, axis=1, keepdims=True)
+        v_bus, moved = (
+            np.maximum(v_bus + relax * (sagged - v_bus), 0.0),
+            float(np.max(np.abs(sagged - v_bus))),
+        )
         slip = floor.slip_velocity * np.arctanh(np.clip(ft / np.maximum(grip, 1e-12), -0.999, 0.999))
         settled = 0.5 * omega + 0.5 * (slip - body_t) / ta
-        if float(np.max(np.abs(settled - omega))) < 1e-9:
+        if max(float(np.max(np.abs(settled - omega))), moved) < 1e-9:
             break
         omega = settled
-    body = -(ft @ traction + fn @ roller)  # (k, 3)
-    return np.asarray(body[:, 0] * np.cos(courses) + body[:, 1] * np.sin(courses), dtype=float)
+    over_current = np.any(np.abs(amps) > i_max, axis=1)
+    return np.where(over_current, -1.0, 1.0 - np.max(np.abs(duty), axis=1))
 
 
 def _floor_speeds(robot: RobotDescription, surface: str | Surface, courses: FloatArray) -> FloatArray:
@@ -152,19 +156,18 @@ def _floor_speeds(robot: RobotDescription, surface: str | Surface, courses: Floa
     floor = get_surface(surface)
     lo = np.full(courses.shape, 1e-4)
     hi = 1.5 * np.array([course_speed_bound(robot, float(c)) for c in courses])
-    stalled = _floor_drive(robot, floor, courses, lo) <= 0.0
-    free = _floor_drive(robot, floor, courses, hi) > 0.0
+    stalled = _floor_spare(robot, floor, courses, lo) <= 0.0
     while np.any(hi - lo > 1e-5 * hi):
         mid = 0.5 * (lo + hi)
-        ahead = _floor_drive(robot, floor, courses, mid) > 0.0
+        ahead = _floor_spare(robot, floor, courses, mid) > 0.0
         lo, hi = np.where(ahead, mid, lo), np.where(ahead, hi, mid)
-    return np.where(stalled, 0.0, np.where(free, hi, 0.5 * (lo + hi)))
+    return np.where(stalled, 0.0, 0.5 * (lo + hi))
 
 
 def floor_course_speed(robot: RobotDescription, course: float, surface: str | Surface) -> float:
-    """m/s: the steady speed along ``course`` (rad, body frame) under full power on ``surface``
-    (a name or :class:`~omnibot.sim.surfaces.Surface`), where the motors' drive meets the floor's
-    load (module docstring); 0 when the motors cannot start the robot on that course."""
+    """m/s: the fastest steady speed along ``course`` (rad, body frame) on ``surface`` (a name or
+    :class:`~omnibot.sim.surfaces.Surface`): where the busiest wheel needs full PWM against the
+    floor's load (module docstring); 0 when the motors cannot move the robot on that course."""
     return float(_floor_speeds(robot, surface, np.array([float(course)]))[0])
 
 
