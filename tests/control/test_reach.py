@@ -136,6 +136,11 @@ def test_carpet_forbids_omni4_its_1_m_s_at_45_degrees_and_wood_does_not() -> Non
     assert carpet[9] == pytest.approx(0.72, abs=0.01)  # 45 degrees: seed 000's 1 m/s is out of reach
     assert min(wood) > 0.85 and carpet[0] > 1.0  # on wood, and on carpet's axes, 1 m/s at 85 %
     assert carpet[0] == pytest.approx(carpet[18], rel=1e-6)  # the square's symmetry: 0 and 90 degrees
+    # the table is solved for all courses at once: each entry is that course's own bound
+    mecanum = load_robot("mecanum4")
+    table = floor_speed_table(mecanum, "carpet")
+    for k in (0, 9, 18):
+        assert table[k] == pytest.approx(floor_course_speed(mecanum, k * math.pi / 36, "carpet"), rel=1e-4)
     with pytest.raises(ConfigError, match="unknown surface 'mud'"):
         floor_course_speed(robot, 0.0, "mud")
 

@@ -125,8 +125,10 @@ def _floor_spare(
     v_bus = np.full((len(courses), 1), v_open)
     omega = body_t / -ta  # rolling without slip to start
     duty = amps = np.zeros_like(omega)
+    # the rollers roll at the no-slip speed: the traction's slip (mm/s) would only move the steep
+    # regularised resistance of rollers that stand still, and make the fixed point below unstable
+    roll = body_n + na * omega
     for _ in range(300):  # traction slip and battery sag, relaxed to their fixed point
-        roll = body_n + na * omega
         rim = radius * omega
         both = rim * rim + roll * roll
         sin2 = np.where(both > 1e-12, 2.0 * np.abs(rim) * np.abs(roll) / np.maximum(both, 1e-12), 0.0)
