@@ -13,7 +13,7 @@ from omnibot.control.paths import Path, standard_path
 from omnibot.motion import Pose2D, Twist
 from omnibot.navigation.metrics import ODOMETRY, TRUTH, tracking_report
 from omnibot.navigation.runner import FrameMap, NavigationError, Navigator
-from omnibot.navigation.session import FollowOptions, follower_limits, simulate_follow
+from omnibot.navigation.session import PLAN_FLOOR_USE, FollowOptions, follower_limits, simulate_follow
 from omnibot.robot.description import load_robot
 from omnibot.runtime.arbiter import EStop
 from omnibot.runtime.cycle import Cycle
@@ -125,5 +125,6 @@ def test_follower_limits_plan_within_a_floors_reach() -> None:
 
     robot = load_robot("omni4")
     assert follower_limits(robot, 1.0).floor is None  # default: the motors' free speed only
-    assert follower_limits(robot, 1.0, "carpet").floor == floor_speed_table(robot, "carpet")
+    carpet = follower_limits(robot, 1.0, "carpet")
+    assert carpet.floor == floor_speed_table(robot, "carpet") and carpet.floor_use == PLAN_FLOOR_USE < 1
     assert FollowOptions().floor is None

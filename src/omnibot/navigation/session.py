@@ -8,7 +8,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from omnibot.client.client import RobotClient
@@ -24,6 +24,9 @@ from omnibot.robot.description import RobotDescription
 
 DEFAULT_RATE = 100.0
 """Control rate of the follower loop, Hz."""
+PLAN_FLOOR_USE = 0.95
+"""The fraction of a floor's reach (:func:`omnibot.control.reach.floor_speed_table`) followers plan
+with: the reach already carries the floor's load, so only the wheel loop's headroom is left."""
 
 
 def follower_limits(
@@ -31,8 +34,8 @@ def follower_limits(
 ) -> MotionLimits:
     """What followers may plan with: the robot's limits, the speed capped at ``speed`` (and, given a
     ``floor``, at its reach per course), and the turn rate kept inside 90 % of the gyro's range (a
-    saturated gyro loses heading)."""
-    limits = MotionLimits.from_robot(robot, speed, surface=floor)
+    saturated gyro loses heading); the floor's reach at :data:`PLAN_FLOOR_USE`."""
+    limits = replace(MotionLimits.from_robot(robot, speed, surface=floor), floor_use=PLAN_FLOOR_USE)
     if robot.gyro is not None:
         limits = limits.with_turn_rate(0.9 * robot.gyro.range)
     return limits

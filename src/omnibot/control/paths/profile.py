@@ -11,7 +11,7 @@ is v = u ds/d sigma and its turn rate w = u d theta/d sigma. At each point of a 
   as seen from the body (the path's direction turned by -theta) and the turn rate together, so a
   body turning while it goes, or a course the wheels serve badly, slows the profile; and, when
   they carry a floor's speed table (``MotionLimits.from_robot(..., surface=...)``), translation
-  along each body course no faster than ``wheel_use`` of what the floor's load leaves the motors;
+  along each body course no faster than ``floor_use`` of what the floor's load leaves the motors;
 * acceleration: the tangential acceleration may use what the lateral one leaves of the friction
   ellipse, a_t <= a_max sqrt(1 - (v^2 kappa / a_lat)^2), and the angular one alpha_max / 2.
 
@@ -59,7 +59,10 @@ class MotionLimits:
     floor: tuple[float, ...] | None = None
     """The top speed on a floor, m/s, on evenly spaced body-frame courses from 0 (the body's x axis;
     :func:`omnibot.control.reach.floor_speed_table`): translation along a course is capped at
-    ``wheel_use`` of it (interpolated); None: no floor cap."""
+    ``floor_use`` of it (interpolated); None: no floor cap."""
+    floor_use: float = 1.0
+    """The fraction of the floor's reach the profile may use: apart from ``wheel_use``, whose margin
+    also stands for the floor's load, which the reach already carries."""
 
     def __post_init__(self) -> None:
         for name in ("v_max", "a_max", "w_max", "alpha_max"):
@@ -70,6 +73,8 @@ class MotionLimits:
             raise ValueError(f"motion limit a_lat must be positive, got {self.a_lat}")
         if not 0 < self.wheel_use <= 1:
             raise ValueError(f"motion limit wheel_use must be in (0, 1], got {self.wheel_use}")
+        if not 0 < self.floor_use <= 1:
+            raise ValueError(f"motion limit floor_use must be in (0, 1], got {self.floor_use}")
         if self.floor is not None and (len(self.floor) < 2 or not all(v > 0 for v in self.floor)):
             raise ValueError("motion limit floor needs at least two courses, each with a positive speed")
 
@@ -376,7 +381,7 @@ def _wheel_cap(
     limits: MotionLimits, theta: FloatArray, rs: FloatArray, rt: FloatArray, tx: list[float], ty: list[float]
 ) -> FloatArray:
     """The largest u = d sigma/dt at each point for which no wheel exceeds ``wheel_use`` of its free
-    speed and the translation ``wheel_use`` of the floor's reach on its body course (the segment on
+    speed and the translation ``floor_use`` of the floor's reach on its body course (the segment on
     either side of the point, whichever is the harder)."""
     c, s = np.cos(theta), np.sin(theta)
     tx_a, ty_a = np.array(tx), np.array(ty)
@@ -397,7 +402,7 @@ def _wheel_cap(
             k = np.minimum(np.floor(course).astype(int), len(limits.floor) - 1)
             reach = table[k] + (course - k) * (table[k + 1] - table[k])
             speed = np.hypot(bx, by)
-            floor_cap = np.where(speed > 1e-12, limits.wheel_use * reach / np.maximum(speed, 1e-12), math.inf)
+            floor_cap = np.where(speed > 1e-12, limits.floor_use * reach / np.maximum(speed, 1e-12), math.inf)
             floor_cap = np.minimum(floor_cap, np.concatenate(([floor_cap[0]], floor_cap[:-1])))
             cap = np.minimum(cap, floor_cap)
         return cap
