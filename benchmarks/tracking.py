@@ -467,14 +467,14 @@ def format_floor_bounds(robots: list[str], surfaces: list[str]) -> str:
     """Each robot's top speed on each floor: where its motors' torque-speed line meets the floor's
     load at full power (:func:`omnibot.control.reach.floor_speed_table`), on the top suite's
     courses and the worst one."""
-    from omnibot.control.followers.base import PLAN_WHEEL_USE
     from omnibot.control.paths.profile import MotionLimits
+    from omnibot.navigation.session import PLAN_FLOOR_USE
     from omnibot.robot.description import load_robot
 
     cols = " | ".join(f"{c} deg" for c in TOP_COURSES)
     out = [
         "\n### Top speed on each floor (full power against the floor's load; what the top suite plans with)\n",
-        f"| robot | floor | asked (m/s) | {cols} | worst course | planned on every course ({PLAN_WHEEL_USE:.0%}) |",
+        f"| robot | floor | asked (m/s) | {cols} | worst course | planned on every course ({PLAN_FLOOR_USE:.0%}) |",
         "|---|---|---|" + "---|" * len(TOP_COURSES) + "---|---|",
     ]
     for name in robots:
@@ -483,11 +483,11 @@ def format_floor_bounds(robots: list[str], surfaces: list[str]) -> str:
             table = MotionLimits.from_robot(robot, surface=surface).floor
             assert table is not None
             step = 360.0 / len(table)
-            worst = int(np.argmin(table))
+            worst = int(np.flatnonzero(np.isclose(table, min(table), rtol=1e-4))[0])
             at = " | ".join(f"{table[round(float(c) / step) % len(table)]:.2f}" for c in TOP_COURSES)
             out.append(
                 f"| {name} | {surface} | {ROBOTS[name].top:.2f} | {at} | {table[worst]:.2f} at {worst * step:.0f} deg | "
-                f"{PLAN_WHEEL_USE * table[worst]:.2f} |"
+                f"{PLAN_FLOOR_USE * table[worst]:.2f} |"
             )
     return "\n".join(out)
 
