@@ -22,7 +22,10 @@ Suites:
   the worst path is reported, not only the mean.
 * ``top``: straight runs long enough to cruise at the top speed on the courses 0, 45 and 90
   degrees (heading held), and one with the body swinging; with the speed each robot's motors
-  allow (:mod:`omnibot.control.reach`) and the peak each run reached.
+  allow (:mod:`omnibot.control.reach`) and the peak each run reached. This suite plans within the
+  floor's reach (:func:`~omnibot.control.reach.floor_speed_table`: the motors' torque-speed line
+  against the floor's load on each course) and its time is against the minimum on that floor, so
+  a course the floor forbids shows the bound that forbids it instead of a time the robot cannot make.
 
 The suites with a turning body spin in place first (``calibrate_gyro``: the gyro's scale error is
 learned; a 1 % scale error is 3.6 degrees a turn). The top speeds: omni4 1 m/s (seed 000's
@@ -183,6 +186,7 @@ def one_run(job: Job) -> dict[str, Any]:
             calibrate_gyro=calibrate,
             slip=params,
             follower_options=dict(tuning) if follower == "tracker" else {},
+            floor=surface if suite == "top" else None,
         ),
         surface=surface,
         seed=seed,
@@ -362,19 +366,21 @@ def _combos(results: list[dict[str, Any]]) -> list[tuple[str, str]]:
 
 
 @functools.cache
-def profile_peak(preset: str, spec: str) -> float:
+def profile_peak(preset: str, spec: str, surface: str | None = None) -> float:
     """m/s: the top speed of the path's minimum-time profile at the robot's top speed (100 % of its
-    limits and of the wheels' free speed): what the limits let this path reach at all."""
+    limits, of the wheels' free speed and, given a ``surface``, of that floor's reach): what the
+    limits let this path reach at all."""
     from omnibot.control.paths.profile import MotionLimits, time_optimal_profile
     from omnibot.robot.description import load_robot
 
-    limits = MotionLimits.from_robot(load_robot(preset), ROBOTS[preset].top)
+    limits = MotionLimits.from_robot(load_robot(preset), ROBOTS[preset].top, surface=surface)
     return float(np.max(time_optimal_profile(build_path(preset, spec), limits, use_path_speed=False).speed))
 
 
 def format_pairs(results: list[dict[str, Any]], title: str, followers: list[str], speeds: bool) -> str:
     """Per robot and floor, a row per path: seed 002's method and ours side by side (``speeds``: the
-    peak speed the limits allow on the path and the peak the tracker reached)."""
+    peak speed the limits allow on the path, within the floor's reach, and the peak the tracker
+    reached)."""
     out = []
     for robot, surface in _combos(results):
         top = ROBOTS[robot].top
@@ -393,7 +399,8 @@ def format_pairs(results: list[dict[str, Any]], title: str, followers: list[str]
             speed_cells = ""
             if speeds:
                 ours = cells.get("tracker", first)
-                speed_cells = f" {profile_peak(robot, spec):.2f} | {ours['peak_speed_m_s']:.2f} |"
+                peak = profile_peak(robot, spec, surface)
+                speed_cells = f" {peak:.2f} | {ours['peak_speed_m_s']:.2f} |"
             out.append(
                 f"| {spec} | {first['min_time_s']:.2f} |{speed_cells} "
                 + " | ".join(_cell(cells[f]) if f in cells else "-" for f in followers)
@@ -453,6 +460,35 @@ def format_bounds(robots: list[str]) -> str:
             f"| {name} | {top:.2f} | {float(np.min(free_wheel_speeds(robot))):.1f} | {lo:.2f} - {hi:.2f} | "
             f"{tlo:.2f} - {thi:.2f} | {PLAN_WHEEL_USE * lo:.2f} | {verdict} |"
         )
+    return "\n".join(out)
+
+
+def format_floor_bounds(robots: list[str], surfaces: list[str]) -> str:
+    """Each robot's top speed on each floor: where its motors' torque-speed line meets the floor's
+    load at full power (:func:`omnibot.control.reach.floor_speed_table`), on the top suite's
+    courses and the worst one."""
+    from omnibot.control.paths.profile import MotionLimits
+    from omnibot.navigation.session import PLAN_FLOOR_USE
+    from omnibot.robot.description import load_robot
+
+    cols = " | ".join(f"{c} deg" for c in TOP_COURSES)
+    out = [
+        "\n### Top speed on each floor (full power against the floor's load; what the top suite plans with)\n",
+        f"| robot | floor | asked (m/s) | {cols} | worst course | planned on every course ({PLAN_FLOOR_USE:.0%}) |",
+        "|---|---|---|" + "---|" * len(TOP_COURSES) + "---|---|",
+    ]
+    for name in robots:
+        robot = load_robot(name)
+        for surface in surfaces:
+            table = MotionLimits.from_robot(robot, surface=surface).floor
+            assert table is not None
+            step = 360.0 / len(table)
+            worst = int(np.flatnonzero(np.isclose(table, min(table), rtol=1e-4))[0])
+            at = " | ".join(f"{table[round(float(c) / step) % len(table)]:.2f}" for c in TOP_COURSES)
+            out.append(
+                f"| {name} | {surface} | {ROBOTS[name].top:.2f} | {at} | {table[worst]:.2f} at {worst * step:.0f} deg | "
+                f"{PLAN_FLOOR_USE * table[worst]:.2f} |"
+            )
     return "\n".join(out)
 
 
@@ -609,6 +645,7 @@ def main(argv: list[str] | None = None) -> int:
             f"\n## Top speed (straight runs of {', '.join(f'{r} {top_length(r)} m' for r in robots)}; {slip}; seed {seeds[0]}; {len(rs)} runs)"
         )
         print(format_bounds(robots))
+        print(format_floor_bounds(robots, args.surfaces.split(",")))
         print(format_pairs(rs, "Top speed", pair, speeds=True))
         print(suite_goals(rs, "top speed"))
     if args.seed002_plot and "standard" in suites:

@@ -3,14 +3,24 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from omnibot.control.paths import MotionLimits, Path, time_optimal_profile
-from omnibot.control.reach import course_speed_bound, free_wheel_speeds, speed_bound, wheel_rows
-from omnibot.robot.description import load_robot
+from omnibot.control.reach import (
+    course_speed_bound,
+    floor_course_speed,
+    floor_speed_table,
+    free_wheel_speeds,
+    speed_bound,
+    wheel_rows,
+)
+from omnibot.errors import ConfigError
+from omnibot.robot.description import RobotDescription, load_robot
 from omnibot.robot.kinematics import inverse, wheel_matrix
+from omnibot.sim.physics import Physics
 
 
 def test_free_speed_is_where_the_motor_torque_meets_its_friction() -> None:
@@ -64,3 +74,95 @@ def test_the_profile_keeps_every_wheel_below_its_free_speed() -> None:
     assert time_optimal_profile(turning, limits).min_time > time_optimal_profile(sideways, limits).min_time
     with pytest.raises(ValueError, match="wheel_use"):
         limits.with_wheel_use(1.5)
+
+
+def simulated_top_speed(robot: RobotDescription, surface: str, course: float, seconds: float = 4.0) -> float:
+    """m/s: the simulator's speed along ``course`` with the busiest wheel at full PWM and the others
+    steered to hold the course (no sideways speed, no turn), averaged over the last half of a run
+    from rest. The idle wheels stand at their rollers' mean resistance (count phi = 90 degrees), as
+    the bound assumes. Deterministic: the physics alone, in fixed steps."""
+    physics = Physics(robot, surfaces=(surface,), dt=0.002)
+    physics.wheel_angle = np.array([0.5 * math.pi / w.rollers.count for w in robot.wheels])
+    along = np.array([math.cos(course), math.sin(course)])
+    side = np.array([-along[1], along[0]])
+    J = wheel_matrix(robot)
+    pwm_max = np.array([w.motor.pwm_max for w in robot.wheels])
+    steps = round(seconds / physics.dt)
+    speeds = []
+    for k in range(steps):
+        vx, vy, w = physics.twist[0]
+        drift = vx * side[0] + vy * side[1]
+        need = J @ np.array([*(10.0 * along - 20.0 * drift * side), -20.0 * w])
+        physics.step((pwm_max * need / np.max(np.abs(need)))[None])
+        if k >= steps // 2:
+            speeds.append(vx * along[0] + vy * along[1])
+    return float(np.mean(speeds))
+
+
+@pytest.mark.parametrize(
+    ("preset", "surface", "course_deg", "tolerance"),
+    [
+        ("omni4", "carpet", 45, 0.01),  # issue 17: 0.72 m/s where 1 m/s was planned
+        ("omni4", "carpet", 0, 0.01),
+        ("omni4", "carpet", 30, 0.03),
+        ("omni4", "wood", 45, 0.01),
+        ("omni4", "wood", 90, 0.01),
+        ("omni4", "wood", 30, 0.03),
+        ("mecanum4", "carpet", 45, 0.03),
+        ("mecanum4", "wood", 0, 0.01),
+    ],
+)
+def test_the_floor_bound_is_the_simulators_steady_speed_at_full_power(
+    preset: str, surface: str, course_deg: float, tolerance: float
+) -> None:
+    robot = load_robot(preset)
+    course = math.radians(course_deg)
+    bound = floor_course_speed(robot, course, surface)
+    assert bound == pytest.approx(simulated_top_speed(robot, surface, course), rel=tolerance)
+    assert bound < course_speed_bound(robot, course)  # the floor takes some of the free speed
+
+
+def test_the_floor_bound_is_conservative_where_the_traction_split_is_not_the_best() -> None:
+    # near a motor axis the least-norm traction forces are not the split the motors do best with
+    robot = load_robot("omni4")
+    course = math.radians(15)
+    bound = floor_course_speed(robot, course, "carpet")
+    assert bound < simulated_top_speed(robot, "carpet", course) < 1.2 * bound
+
+
+def test_carpet_forbids_omni4_its_1_m_s_at_45_degrees_and_wood_does_not() -> None:
+    robot = load_robot("omni4")
+    carpet, wood = floor_speed_table(robot, "carpet"), floor_speed_table(robot, "wood")
+    assert len(carpet) == 72 and all(c < w for c, w in zip(carpet, wood, strict=True))
+    assert carpet[9] == pytest.approx(0.72, abs=0.01)  # 45 degrees: seed 000's 1 m/s is out of reach
+    assert min(wood) > 0.85 and carpet[0] > 1.0  # on wood, and on carpet's axes, 1 m/s at 85 %
+    assert carpet[0] == pytest.approx(carpet[18], rel=1e-6)  # the square's symmetry: 0 and 90 degrees
+    # the table is solved for all courses at once: each entry is that course's own bound
+    mecanum = load_robot("mecanum4")
+    table = floor_speed_table(mecanum, "carpet")
+    for k in (0, 9, 18):
+        assert table[k] == pytest.approx(floor_course_speed(mecanum, k * math.pi / 36, "carpet"), rel=1e-4)
+    with pytest.raises(ConfigError, match="unknown surface 'mud'"):
+        floor_course_speed(robot, 0.0, "mud")
+
+
+def test_the_profile_plans_within_the_floors_reach() -> None:
+    robot = load_robot("omni4")
+    diagonal = Path.from_points([(0.0, 0.0), (3.0, 3.0)], theta=0.0)  # course 45 in the body
+    ahead = Path.from_points([(0.0, 0.0), (4.0, 0.0)], theta=0.0)
+    free = MotionLimits.from_robot(robot, 1.0)
+    carpet = MotionLimits.from_robot(robot, 1.0, surface="carpet")
+    assert free.floor is None and carpet.floor == floor_speed_table(robot, "carpet")
+    reach = floor_course_speed(robot, math.pi / 4, "carpet")
+    assert time_optimal_profile(diagonal, free).speed.max() == pytest.approx(1.0, rel=1e-6)
+    assert time_optimal_profile(diagonal, carpet).speed.max() == pytest.approx(reach, rel=1e-3)
+    assert time_optimal_profile(diagonal, carpet.with_wheel_use(0.85)).speed.max() == pytest.approx(
+        reach, rel=1e-3
+    )  # the wheels' margin is not the floor's: 85 % of their free speed is 1.89 m/s here
+    planned = replace(carpet, floor_use=0.9)
+    assert time_optimal_profile(diagonal, planned).speed.max() == pytest.approx(0.9 * reach, rel=1e-3)
+    assert time_optimal_profile(ahead, carpet).speed.max() == pytest.approx(1.0, rel=1e-6)  # reach 1.27
+    with pytest.raises(ValueError, match="floor"):
+        MotionLimits(1.0, 1.0, 1.0, 1.0, floor=(1.0, 0.0))
+    with pytest.raises(ValueError, match="floor_use"):
+        replace(carpet, floor_use=0.0)

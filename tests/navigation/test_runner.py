@@ -13,7 +13,7 @@ from omnibot.control.paths import Path, standard_path
 from omnibot.motion import Pose2D, Twist
 from omnibot.navigation.metrics import ODOMETRY, TRUTH, tracking_report
 from omnibot.navigation.runner import FrameMap, NavigationError, Navigator
-from omnibot.navigation.session import FollowOptions, follower_limits, simulate_follow
+from omnibot.navigation.session import PLAN_FLOOR_USE, FollowOptions, follower_limits, simulate_follow
 from omnibot.robot.description import load_robot
 from omnibot.runtime.arbiter import EStop
 from omnibot.runtime.cycle import Cycle
@@ -118,3 +118,13 @@ def test_a_manoeuvre_is_a_script_on_the_runtime_and_an_emergency_stop_ends_it() 
         nav.close()
         moved = nav.truth()
     assert len(sent) == 50 and moved is not None and 0.05 < moved[0] < 0.15
+
+
+def test_follower_limits_plan_within_a_floors_reach() -> None:
+    from omnibot.control.reach import floor_speed_table
+
+    robot = load_robot("omni4")
+    assert follower_limits(robot, 1.0).floor is None  # default: the motors' free speed only
+    carpet = follower_limits(robot, 1.0, "carpet")
+    assert carpet.floor == floor_speed_table(robot, "carpet") and carpet.floor_use == PLAN_FLOOR_USE < 1
+    assert FollowOptions().floor is None

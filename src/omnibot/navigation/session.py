@@ -8,7 +8,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from omnibot.client.client import RobotClient
@@ -24,12 +24,18 @@ from omnibot.robot.description import RobotDescription
 
 DEFAULT_RATE = 100.0
 """Control rate of the follower loop, Hz."""
+PLAN_FLOOR_USE = 0.95
+"""The fraction of a floor's reach (:func:`omnibot.control.reach.floor_speed_table`) followers plan
+with: the reach already carries the floor's load, so only the wheel loop's headroom is left."""
 
 
-def follower_limits(robot: RobotDescription, speed: float | None = None) -> MotionLimits:
-    """What followers may plan with: the robot's limits, the speed capped at ``speed``, and the turn
-    rate kept inside 90 % of the gyro's range (a saturated gyro loses heading)."""
-    limits = MotionLimits.from_robot(robot, speed)
+def follower_limits(
+    robot: RobotDescription, speed: float | None = None, floor: str | None = None
+) -> MotionLimits:
+    """What followers may plan with: the robot's limits, the speed capped at ``speed`` (and, given a
+    ``floor``, at its reach per course), and the turn rate kept inside 90 % of the gyro's range (a
+    saturated gyro loses heading); the floor's reach at :data:`PLAN_FLOOR_USE`."""
+    limits = replace(MotionLimits.from_robot(robot, speed, surface=floor), floor_use=PLAN_FLOOR_USE)
     if robot.gyro is not None:
         limits = limits.with_turn_rate(0.9 * robot.gyro.range)
     return limits
@@ -74,6 +80,9 @@ class FollowOptions:
     slip: SlipParameters | None = None
     """The floor's wheel slip (creep and distance scale) for the driven-wheel encoders, from
     ``omnibot calibrate``."""
+    floor: str | None = None
+    """Plan within this floor's reach per course (:func:`omnibot.control.reach.floor_speed_table`),
+    and measure the time against the minimum on it; None: the motors' free-running speed only."""
     tolerances: Tolerances = field(default_factory=Tolerances)
     """What the run must achieve for its report to say ``completed``."""
     progress: Progress | None = None
@@ -86,7 +95,7 @@ def follow_path(
     """Follow ``path`` through ``client`` (the robot standing at the path's start); the run, its
     report (:func:`~omnibot.navigation.metrics.tracking_report`) and the navigator (for observers)."""
     opts = options or FollowOptions()
-    limits = follower_limits(robot, opts.speed)
+    limits = follower_limits(robot, opts.speed, opts.floor)
     follower = make_follower(opts.follower, limits, rate=opts.rate, **opts.follower_options)
     nav = Navigator(
         client,
@@ -104,7 +113,9 @@ def follow_path(
         run = nav.follow(path, follower, progress=opts.progress)
     finally:
         nav.close()
-    report = judge(tracking_report(run, MotionLimits.from_robot(robot, opts.speed)), opts.tolerances)
+    report = judge(
+        tracking_report(run, MotionLimits.from_robot(robot, opts.speed, surface=opts.floor)), opts.tolerances
+    )
     report["robot"] = robot.name
     report["rate_hz"] = opts.rate
     if opts.speed is not None:

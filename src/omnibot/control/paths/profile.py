@@ -9,7 +9,9 @@ is v = u ds/d sigma and its turn rate w = u d theta/d sigma. At each point of a 
   limits carry the robot's wheel rows (:mod:`omnibot.control.reach`), no wheel faster than
   ``wheel_use`` of its free-running speed for the body twist there: translation along the course
   as seen from the body (the path's direction turned by -theta) and the turn rate together, so a
-  body turning while it goes, or a course the wheels serve badly, slows the profile;
+  body turning while it goes, or a course the wheels serve badly, slows the profile; and, when
+  they carry a floor's speed table (``MotionLimits.from_robot(..., surface=...)``), translation
+  along each body course no faster than ``floor_use`` of what the floor's load leaves the motors;
 * acceleration: the tangential acceleration may use what the lateral one leaves of the friction
   ellipse, a_t <= a_max sqrt(1 - (v^2 kappa / a_lat)^2), and the angular one alpha_max / 2.
 
@@ -53,7 +55,14 @@ class MotionLimits:
     """Per wheel, the fraction of its free-running speed one unit of body twist (vx, vy, w) needs
     (:func:`omnibot.control.reach.wheel_rows`); None: no wheel-speed cap."""
     wheel_use: float = 1.0
-    """The fraction of the wheels' free-running speed the profile may use."""
+    """The fraction of the wheels' free-running speed (and of the floor's reach) the profile may use."""
+    floor: tuple[float, ...] | None = None
+    """The top speed on a floor, m/s, on evenly spaced body-frame courses from 0 (the body's x axis;
+    :func:`omnibot.control.reach.floor_speed_table`): translation along a course is capped at
+    ``floor_use`` of it (interpolated); None: no floor cap."""
+    floor_use: float = 1.0
+    """The fraction of the floor's reach the profile may use: apart from ``wheel_use``, whose margin
+    also stands for the floor's load, which the reach already carries."""
 
     def __post_init__(self) -> None:
         for name in ("v_max", "a_max", "w_max", "alpha_max"):
@@ -64,6 +73,10 @@ class MotionLimits:
             raise ValueError(f"motion limit a_lat must be positive, got {self.a_lat}")
         if not 0 < self.wheel_use <= 1:
             raise ValueError(f"motion limit wheel_use must be in (0, 1], got {self.wheel_use}")
+        if not 0 < self.floor_use <= 1:
+            raise ValueError(f"motion limit floor_use must be in (0, 1], got {self.floor_use}")
+        if self.floor is not None and (len(self.floor) < 2 or not all(v > 0 for v in self.floor)):
+            raise ValueError("motion limit floor needs at least two courses, each with a positive speed")
 
     @property
     def lateral(self) -> float:
@@ -71,9 +84,12 @@ class MotionLimits:
         return self.a_max if self.a_lat is None else self.a_lat
 
     @classmethod
-    def from_robot(cls, robot: RobotDescription, speed: float | None = None) -> MotionLimits:
+    def from_robot(
+        cls, robot: RobotDescription, speed: float | None = None, surface: str | None = None
+    ) -> MotionLimits:
         """The robot's own limits, the speed capped at ``speed`` m/s when given, with its wheels'
-        free-running speeds (:mod:`omnibot.control.reach`)."""
+        free-running speeds and, given a ``surface``, the top speed per course the floor's load
+        leaves its motors (:mod:`omnibot.control.reach`)."""
         from omnibot.control.reach import wheel_rows
 
         lim = robot.limits
@@ -84,6 +100,7 @@ class MotionLimits:
             lim.angular_speed_max,
             lim.angular_acceleration_max,
             wheels=wheel_rows(robot),
+            floor=None if surface is None else _floor_table(robot, surface),
         )
 
     def with_wheel_use(self, fraction: float) -> MotionLimits:
@@ -104,6 +121,19 @@ class MotionLimits:
     def with_turn_rate(self, w_max: float) -> MotionLimits:
         """These limits with the turn rate capped at ``w_max`` rad/s (never raised)."""
         return replace(self, w_max=min(self.w_max, w_max))
+
+
+_FLOOR_TABLES: dict[tuple[str, str], tuple[float, ...]] = {}
+
+
+def _floor_table(robot: RobotDescription, surface: str) -> tuple[float, ...]:
+    """The robot's floor speed table on ``surface``, computed once per description and floor."""
+    from omnibot.control.reach import floor_speed_table
+
+    key = (robot.model_dump_json(), surface)
+    if key not in _FLOOR_TABLES:
+        _FLOOR_TABLES[key] = floor_speed_table(robot, surface)
+    return _FLOOR_TABLES[key]
 
 
 @dataclass(frozen=True)
@@ -300,7 +330,7 @@ def time_optimal_profile(
         head = np.where(HC > 0, np.sqrt(0.5 * limits.alpha_max / HC), inf)
         cap = np.minimum(cap, np.where(rs_pt > 0, head / rs_pt, inf))
         cap = np.minimum(cap, np.where(rs_pt > 0, VF / rs_pt, inf))
-        if limits.wheels is not None:
+        if limits.wheels is not None or limits.floor is not None:
             cap = np.minimum(cap, _wheel_cap(limits, np.array(ths), rs, np.array(rt_seg), tx_seg, ty_seg))
     cap[0] = cap[-1] = 0.0
 
@@ -351,17 +381,31 @@ def _wheel_cap(
     limits: MotionLimits, theta: FloatArray, rs: FloatArray, rt: FloatArray, tx: list[float], ty: list[float]
 ) -> FloatArray:
     """The largest u = d sigma/dt at each point for which no wheel exceeds ``wheel_use`` of its free
-    speed (the segment on either side of the point, whichever is the harder)."""
-    assert limits.wheels is not None
-    rows = np.array(limits.wheels)
+    speed and the translation ``floor_use`` of the floor's reach on its body course (the segment on
+    either side of the point, whichever is the harder)."""
     c, s = np.cos(theta), np.sin(theta)
     tx_a, ty_a = np.array(tx), np.array(ty)
     # body-frame twist per unit u on the segment starting at each point
     bx, by = rs * (c * tx_a + s * ty_a), rs * (-s * tx_a + c * ty_a)
-    need = np.abs(np.outer(bx, rows[:, 0]) + np.outer(by, rows[:, 1]) + np.outer(rt, rows[:, 2])).max(axis=1)
-    need = np.maximum(need, np.concatenate(([need[0]], need[:-1])))
+    cap = np.full(len(bx), math.inf)
     with np.errstate(divide="ignore"):
-        return np.where(need > 1e-12, limits.wheel_use / need, math.inf)
+        if limits.wheels is not None:
+            rows = np.array(limits.wheels)
+            need = np.abs(np.outer(bx, rows[:, 0]) + np.outer(by, rows[:, 1]) + np.outer(rt, rows[:, 2]))
+            need = need.max(axis=1)
+            need = np.maximum(need, np.concatenate(([need[0]], need[:-1])))
+            cap = np.where(need > 1e-12, limits.wheel_use / need, math.inf)
+        if limits.floor is not None:
+            table = np.array(limits.floor + limits.floor[:1])
+            step = 2.0 * math.pi / len(limits.floor)
+            course = np.mod(np.arctan2(by, bx), 2.0 * math.pi) / step
+            k = np.minimum(np.floor(course).astype(int), len(limits.floor) - 1)
+            reach = table[k] + (course - k) * (table[k + 1] - table[k])
+            speed = np.hypot(bx, by)
+            floor_cap = np.where(speed > 1e-12, limits.floor_use * reach / np.maximum(speed, 1e-12), math.inf)
+            floor_cap = np.minimum(floor_cap, np.concatenate(([floor_cap[0]], floor_cap[:-1])))
+            cap = np.minimum(cap, floor_cap)
+        return cap
 
 
 def min_traversal_time(path: Path, limits: MotionLimits) -> float:
