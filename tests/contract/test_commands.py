@@ -5,6 +5,7 @@ from __future__ import annotations
 import itertools
 import math
 import re
+import statistics
 
 import pytest
 
@@ -111,7 +112,11 @@ def test_mode_bits(client: RobotClient) -> None:
     assert client.status().mode == 0
 
 
-def test_telemetry_stream(client: RobotClient) -> None:
+def test_telemetry_stream(client: RobotClient, backend: Backend) -> None:
+    """TEL every 50 ms on the controller's clock. The controller keeps an absolute schedule (a late
+    sample does not delay the next): in lockstep each gap is the period to the millisecond; a
+    controller on the host's real clock may be preempted on a loaded machine, so there each sample
+    may be late by up to half a period and the schedule holds on average."""
     rec = EventRecorder()
     client.on_telemetry(rec)
     client.telemetry(0.05, codes.TEL_MASK)
@@ -120,7 +125,11 @@ def test_telemetry_stream(client: RobotClient) -> None:
     samples = rec.of(Telemetry)
     assert len(samples) >= 4
     gaps = [b.controller_time - a.controller_time for a, b in itertools.pairwise(samples)]
-    assert all(0.045 <= g <= 0.055 for g in gaps), gaps
+    if backend.realtime:
+        assert all(0.025 <= g <= 0.075 for g in gaps), gaps
+        assert 0.045 <= statistics.fmean(gaps) <= 0.055, gaps
+    else:
+        assert all(0.045 <= g <= 0.055 for g in gaps), gaps
     tel = samples[-1]
     assert tel.powers == (0, 0, 0, 0)
     assert tel.encoders is not None and len(tel.encoders) == 4
