@@ -247,7 +247,8 @@ class Navigator:
         (:func:`~omnibot.calibration.gyro.fit_spins`) gives the gyro's bias and scale error. Every
         fused estimator's heading filter takes them (as known to 2e-4 rad/s and 0.05 %) and its heading
         is set from the body's rotation over the manoeuvre. The robot ends where it started (within
-        its own odometry). Returns the learned (bias, scale).
+        its own odometry). A rate above the robot's ``angular_speed_max`` is capped to it (with one
+        rate left the creep is not fitted). Returns the learned (bias, scale).
         """
         c = self.client
         probe = _GyroProbe(self.robot)
@@ -260,7 +261,7 @@ class Navigator:
             estimators = [self.estimator, *self.observers.values()]
             start = [e.estimate.theta for e in estimators]
             ramp = 0.5
-            for rate in rates:
+            for rate in (min(r, self.robot.limits.angular_speed_max) for r in rates):
                 total = 2.0 * math.pi * turns / rate + 2.0 * ramp
                 for sign in (1.0, -1.0):
 
