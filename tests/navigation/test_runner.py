@@ -13,7 +13,13 @@ from omnibot.control.paths import Path, standard_path
 from omnibot.motion import Pose2D, Twist
 from omnibot.navigation.metrics import ODOMETRY, TRUTH, tracking_report
 from omnibot.navigation.runner import FrameMap, NavigationError, Navigator
-from omnibot.navigation.session import PLAN_FLOOR_USE, FollowOptions, follower_limits, simulate_follow
+from omnibot.navigation.session import (
+    PLAN_FLOOR_USE,
+    FollowOptions,
+    follower_limits,
+    simulate_follow,
+    simulated_client,
+)
 from omnibot.robot.description import load_robot
 from omnibot.runtime.arbiter import EStop
 from omnibot.runtime.cycle import Cycle
@@ -65,23 +71,29 @@ def test_report_without_truth_says_so() -> None:
     assert report["max_cross_track_m"] < 0.02
 
 
-def test_gyro_calibration_spin_learns_the_scale() -> None:
-    robot = load_robot("omni4")
-    with RobotClient.open("sim://omni4?seed=3", robot) as client:
+@pytest.mark.parametrize("name", ["omni4", "mecanum4"])
+@pytest.mark.parametrize("surface", ["wood", "carpet"])
+def test_gyro_calibration_spin_learns_the_scale(name: str, surface: str) -> None:
+    # on carpet mecanum rollers make the body turn 2 % beyond the encoders at 1 rad/s: a spin at one
+    # rate read that creep as a gyro scale error of +1.2 % (true -0.9 %); two rates tell them apart
+    robot = load_robot(name)
+    with simulated_client(robot, surface=surface, seed=1) as client:
         nav = Navigator(client, robot)
         drivers = Drivers()
         nav.runtime.add_sink(drivers)
         nav.prepare(0.5)
-        bias, scale = nav.calibrate_gyro(turns=1.0, rate=3.0)
+        bias, scale = nav.calibrate_gyro()
         sim = nav.sim
+        heading = nav.estimator.estimate.theta
         nav.close()
     # the spins are a script on the runtime: it sent every VEL, nothing else drove
     assert drivers.sources == {"gyro-spin"} and nav.runtime.sent.vel > 500
     assert nav.runtime.sent.errors == 0
     assert sim is not None and sim.gyro is not None
-    assert bias == pytest.approx(sim.gyro.bias, abs=1e-3)
-    assert scale == pytest.approx(sim.gyro.scale_error, abs=3e-3)
-    assert abs(sim.pose.theta) < 0.2  # one turn each way: back where it started
+    assert bias == pytest.approx(sim.gyro.bias, abs=3e-4)
+    assert scale == pytest.approx(sim.gyro.scale_error, abs=5e-4)  # what the heading filter is told
+    assert abs(sim.pose.theta) < 0.2  # one turn each way at each rate: back where it started
+    assert heading == pytest.approx(sim.pose.theta, abs=5e-3)  # the estimate turned with the body
 
 
 class Drivers:

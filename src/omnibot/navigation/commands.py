@@ -286,7 +286,7 @@ def add_follow_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--calibrate-gyro",
         action="store_true",
-        help="spin in place one turn each way first (learns the gyro scale)",
+        help="spin in place one turn each way at two rates first (learns the gyro scale)",
     )
     p.add_argument(
         "--calibration",

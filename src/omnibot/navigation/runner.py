@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from omnibot.calibration.gyro import Spin, SpinFit, fit_spins
 from omnibot.client.client import RobotClient
 from omnibot.client.errors import NotSupported
 from omnibot.client.events import Telemetry
@@ -54,6 +55,9 @@ STANDSTILL = 3.0
 """Seconds of standstill before a run (the gyro bias is learned while the wheels do not turn): at
 an MPU6050's noise density 3 s pin the bias to 5e-5 rad/s (0.03 degree in 10 s of driving); with
 1 s the omni3 figure eight on carpet ended 0.17 degree off."""
+SPIN_RATES = (1.0, 2.5)
+"""rad/s of the gyro calibration's spins: two rates tell the floor's creep (a rate) from the gyro's
+scale error (a fraction of the angle); mecanum4 on carpet creeps 0.02 rad/s beyond its encoders."""
 
 
 class NavigationError(OmnibotError):
@@ -139,24 +143,25 @@ class _GyroProbe:
     def mark(self) -> int:
         return len(self.rows) - 1
 
-    def fit(self, marks: list[int]) -> tuple[float, float, float] | None:
-        """(bias, scale, encoder rotation over the manoeuvre) from the spins between ``marks``
-        and the standstill just before the first; None without enough telemetry."""
+    def fit(self, marks: list[int], moving: list[float]) -> tuple[SpinFit, float] | None:
+        """The spins' fit (:func:`~omnibot.calibration.gyro.fit_spins`) from the stretches between
+        ``marks`` (the wheels turning ``moving`` s in each) and the standstill just before the first,
+        with the body's rotation over the manoeuvre; None without enough telemetry."""
         if len(self.rows) < 10 or min(marks) < 0:
             return None
         rows = np.array(self.rows)
-        A, b = [], []
         still = rows[: marks[0] + 1]
-        if len(still) > 1:  # standstill: d_psi = bias T
-            A.append([0.0, still[-1, 0] - still[0, 0]])
-            b.append(still[-1, 1] - still[0, 1])
-        for i, j in itertools.pairwise(marks):
-            d_enc = rows[j, 2] - rows[i, 2]
-            A.append([d_enc, rows[j, 0] - rows[i, 0]])
-            b.append(rows[j, 1] - rows[i, 1] - d_enc)
-        (scale, bias), *_ = np.linalg.lstsq(np.array(A), np.array(b), rcond=None)
-        turned = float(rows[marks[-1], 2] - rows[marks[0], 2])
-        return float(bias), float(scale), turned
+        spins = [
+            Spin(
+                gyro=float(rows[j, 1] - rows[i, 1]),
+                encoders=float(rows[j, 2] - rows[i, 2]),
+                duration=float(rows[j, 0] - rows[i, 0]),
+                moving=m,
+            )
+            for (i, j), m in zip(itertools.pairwise(marks), moving, strict=True)
+        ]
+        fit = fit_spins(float(still[-1, 0] - still[0, 0]), float(still[-1, 1] - still[0, 1]), spins)
+        return fit, sum(fit.true_rotation(s) for s in spins)
 
 
 class Navigator:
@@ -228,50 +233,61 @@ class Navigator:
         c.telemetry(period, mask)
         c.sleep(standstill)
 
-    def calibrate_gyro(self, turns: float = 1.0, rate: float = 1.0) -> tuple[float, float]:
-        """Spin in place ``turns`` times each way at ``rate`` rad/s, standing still after each.
+    def calibrate_gyro(
+        self, turns: float = 1.0, rates: tuple[float, ...] = SPIN_RATES
+    ) -> tuple[float, float]:
+        """Spin in place ``turns`` times each way at each of ``rates`` (rad/s), standing still after each.
 
-        Turning in place from rest to rest, the wheels do not slip (whatever creep the ramps cause
-        comes back when braking), so the encoders' rotation over each spin is a good reference: with
-        the gyro's heading change over the same stretch, ``d_psi = (1 + scale) d_enc + bias T`` for
-        each spin and ``d_psi = bias T`` for the standstill before, a least-squares fit gives the
-        gyro's bias and scale error. Every fused estimator's heading filter takes them (as known to
-        2e-4 rad/s and 0.05 %) and its heading is set from the encoders' rotation over the manoeuvre.
-        The robot ends where it started (within its own odometry). Returns the learned (bias, scale).
+        Turning in place from rest to rest, the encoders' rotation over each spin is the reference:
+        whatever creep the ramps cause comes back when braking, and on a floor where the wheels creep
+        all the time the body turns (mecanum rollers on carpet) the creep is a near-constant rate,
+        told apart from the gyro's scale by the two spin rates. With the gyro's heading change over
+        the same stretch, ``d_psi = (1 + scale) (d_enc + creep T_moving) + bias T`` for each spin and
+        ``d_psi = bias T`` for the standstill before, a least-squares fit
+        (:func:`~omnibot.calibration.gyro.fit_spins`) gives the gyro's bias and scale error. Every
+        fused estimator's heading filter takes them (as known to 2e-4 rad/s and 0.05 %) and its heading
+        is set from the body's rotation over the manoeuvre. The robot ends where it started (within
+        its own odometry). A rate above the robot's ``angular_speed_max`` is capped to it (with one
+        rate left the creep is not fitted). Returns the learned (bias, scale).
         """
         c = self.client
         probe = _GyroProbe(self.robot)
         hooks = self.runtime.telemetry_hooks
         hooks.append(probe.update)
+        moving: list[float] = []
         try:
             c.sleep(STANDSTILL)
             marks = [probe.mark()]
             estimators = [self.estimator, *self.observers.values()]
             start = [e.estimate.theta for e in estimators]
             ramp = 0.5
-            total = 2.0 * math.pi * turns / rate + 2.0 * ramp
-            for sign in (1.0, -1.0):
+            for rate in (min(r, self.robot.limits.angular_speed_max) for r in rates):
+                total = 2.0 * math.pi * turns / rate + 2.0 * ramp
+                for sign in (1.0, -1.0):
 
-                def spin(t: float, sign: float = sign) -> Twist | str:
-                    if t >= total:
-                        return ScriptSource.END
-                    return Twist(0.0, 0.0, sign * rate * ramp_fraction(t, total, ramp))
+                    def spin(
+                        t: float, sign: float = sign, rate: float = rate, total: float = total
+                    ) -> Twist | str:
+                        if t >= total:
+                            return ScriptSource.END
+                        return Twist(0.0, 0.0, sign * rate * ramp_fraction(t, total, ramp))
 
-                self.drive(spin, name="gyro-spin")
-                c.sleep(STANDSTILL)
-                marks.append(probe.mark())
+                    self.drive(spin, name="gyro-spin")
+                    c.sleep(STANDSTILL)
+                    marks.append(probe.mark())
+                    moving.append(total)
         finally:
             hooks.remove(probe.update)
-        fit = probe.fit(marks)
-        if fit is None:
+        result = probe.fit(marks, moving)
+        if result is None:
             raise NavigationError("gyro calibration needs telemetry with encoders and gyro heading")
-        bias, scale, turned = fit
+        fit, turned = result
         for est, theta in zip(estimators, start, strict=True):
             if isinstance(est, PoseEstimator) and est.heading_source == "fused":
-                est.filter.calibrated(bias, scale, bias_std=2e-4, scale_std=5e-4)
+                est.filter.calibrated(fit.bias, fit.scale_error, bias_std=2e-4, scale_std=5e-4)
                 p = est.estimate
                 est.reset(Pose2D(p.x, p.y, theta + turned))
-        return bias, scale
+        return fit.bias, fit.scale_error
 
     def close(self) -> None:
         """Stop the robot and the telemetry, detach the listener (idempotent)."""

@@ -75,8 +75,8 @@ class FollowOptions:
     observers: tuple[str, ...] = ()
     standstill: float = STANDSTILL
     calibrate_gyro: bool = False
-    """Spin in place one turn each way first (the gyro's scale error is learned; the robot ends where
-    it started, within its odometry)."""
+    """Spin in place one turn each way at two rates first (the gyro's scale error is learned; the
+    robot ends where it started, within its odometry)."""
     slip: SlipParameters | None = None
     """The floor's wheel slip (creep and distance scale) for the driven-wheel encoders, from
     ``omnibot calibrate``."""
