@@ -13,6 +13,7 @@ passes or fails the same way on every machine; a test's own ``@settings`` adds t
 from __future__ import annotations
 
 import os
+import signal
 import threading
 import time
 from collections.abc import Iterator
@@ -28,6 +29,11 @@ GRACE = 2.0  # seconds to wait for stragglers before calling it a leak
 
 def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line("markers", "allow_leaks(reason): skip the thread/process/fd leak check")
+    # A shell's background job (``pytest ... &``) starts with SIGINT ignored, and children inherit an
+    # ignored signal: the commands under test would then never see the Ctrl-C the tests send them.
+    # A handler here is reset to the default in every child, as a terminal's foreground job has it.
+    if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 PROCESS_CACHES = ("/matplotlib/mpl-data/fonts/",)
