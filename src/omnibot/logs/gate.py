@@ -24,7 +24,7 @@ import threading
 from urllib.parse import parse_qs, urlsplit
 
 from omnibot.errors import ConfigError
-from omnibot.web.access import token_ok
+from omnibot.web.access import listening_socket, token_ok
 
 HEAD_LIMIT = 8192
 """Bytes an upgrade request's head may have."""
@@ -34,20 +34,9 @@ REFUSED = b"This server needs its access token: ws://HOST:PORT/?token=TOKEN (pri
 
 
 def listen(host: str, port: int, key: str) -> socket.socket:
-    """A listening TCP socket on ``host:port`` (0: a free port); ConfigError (``key``) saying why not."""
-    try:
-        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE)
-    except (socket.gaierror, UnicodeError) as exc:
-        raise ConfigError(f"cannot resolve {host!r}: {exc}", key=key) from None
-    family, kind, proto, _, address = infos[0]
-    sock = socket.socket(family, kind, proto)
-    try:
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        sock.bind(address)
-        sock.listen(16)
-    except OSError as exc:
-        sock.close()
-        raise ConfigError(f"cannot listen on {host}:{port}: {exc.strerror or exc}", key=key) from None
+    """A non-blocking listening TCP socket on ``host:port`` (0: a free port); ConfigError (``key``)
+    saying why not."""
+    sock = listening_socket(host, port, host_key=key, port_key=key, backlog=16)
     sock.setblocking(False)
     return sock
 

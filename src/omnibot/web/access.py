@@ -21,6 +21,7 @@ import hmac
 import ipaddress
 import math
 import secrets
+import socket
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
@@ -187,3 +188,22 @@ class RateLimit:
             return False
         self._level -= 1.0
         return True
+
+
+def listening_socket(host: str, port: int, *, host_key: str, port_key: str, backlog: int) -> socket.socket:
+    """A listening TCP socket on ``host:port`` (0: any free port), or a ConfigError saying why not:
+    an address that does not resolve (``host_key``) or cannot be listened on (``port_key``)."""
+    try:
+        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE)
+    except (socket.gaierror, UnicodeError) as exc:
+        raise ConfigError(f"cannot resolve {host!r}: {exc}", key=host_key) from None
+    family, kind, proto, _, address = infos[0]
+    sock = socket.socket(family, kind, proto)
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        sock.bind(address)
+        sock.listen(backlog)
+    except OSError as exc:
+        sock.close()
+        raise ConfigError(f"cannot listen on {host}:{port}: {exc.strerror or exc}", key=port_key) from None
+    return sock

@@ -40,7 +40,7 @@ from omnibot.robot.description import RobotDescription
 from omnibot.sim.world import World, load_world
 from omnibot.teleop.config import TeleopConfig
 from omnibot.transport.device import find_device
-from omnibot.web.access import HostCheck, HostPolicy, access_token
+from omnibot.web.access import HostCheck, HostPolicy, access_token, listening_socket
 from omnibot.web.link import RobotLink
 from omnibot.web.messages import MAX_FRAME
 from omnibot.web.scene import PlannedPath, Point, build_scene
@@ -52,20 +52,7 @@ def bind(host: str, port: int) -> socket.socket:
     """A listening TCP socket on ``host:port`` (0: any free port), or a ConfigError saying why not."""
     if not 0 <= port <= 65535:
         raise ConfigError(f"expected a port 0..65535, got {port}", key="--http-port")
-    try:
-        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE)
-    except (socket.gaierror, UnicodeError) as exc:
-        raise ConfigError(f"cannot resolve {host!r}: {exc}", key="--host") from None
-    family, kind, proto, _, address = infos[0]
-    sock = socket.socket(family, kind, proto)
-    try:
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        sock.bind(address)
-        sock.listen(64)
-    except OSError as exc:
-        sock.close()
-        raise ConfigError(f"cannot listen on {host}:{port}: {exc.strerror}", key="--http-port") from None
-    return sock
+    return listening_socket(host, port, host_key="--host", port_key="--http-port", backlog=64)
 
 
 class Dashboard:
