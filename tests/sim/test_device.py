@@ -9,17 +9,10 @@ import pytest
 
 from omnibot.errors import ConfigError
 from omnibot.sim.device import SimDevice
-from omnibot.transport.base import Link
 from omnibot.transport.lockstep import LockstepLink
 from omnibot.transport.url import open_link
 
-
-def read_until(link: Link, marker: bytes, timeout: float = 5.0) -> bytes:
-    out = b""
-    deadline = link.clock.now() + timeout
-    while marker not in out and link.clock.now() < deadline:
-        out += link.read(timeout=0.05)
-    return out
+from .linkio import read_until
 
 
 def test_hello_at_power_up_and_a_move_moves_the_simulated_robot() -> None:

@@ -18,8 +18,9 @@ from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.runtime import Runtime
 from omnibot.runtime.sources import ScriptSource
 from omnibot.sim.fleet_link import FleetLink, open_fleets
-from omnibot.transport.base import Link
 from omnibot.transport.url import open_link
+
+from .linkio import read_until
 
 HALF = 0.10
 """Half the side of omni4's square footprint, m."""
@@ -38,14 +39,6 @@ def link_of(url: str) -> FleetLink:
     link = open_link(url)
     assert isinstance(link, FleetLink)
     return link
-
-
-def read_until(link: Link, marker: bytes, timeout: float = 5.0) -> bytes:
-    out = b""
-    deadline = link.clock.now() + timeout
-    while marker not in out and link.clock.now() < deadline:
-        out += link.read(timeout=0.05)
-    return out
 
 
 def test_two_robots_driving_into_each_other_stop_at_contact(fleet: str) -> None:
