@@ -1,9 +1,10 @@
 """The motor map, measured: each motor's dead band alone and the balance runs (the fit is
 :mod:`omnibot.calibration.motorfit`).
 
-The firmware gives motor i ``sign(a) (offset_i + gain_i(|a|) |a|)`` for the nominal power ``a``
-of the calibration factors (docs/firmware.md); :func:`~omnibot.calibration.patterns.map_power` is the same on the host, so the
-sweeps' raw POWER patterns drive the robot exactly as the firmware will.
+The firmware gives motor i ``sign(a) (offset_i + gain_i(|a|) |a|) + speed_i u_i`` for the nominal
+power ``a`` of the calibration factors at the wheel's rim speed ``u_i`` (docs/firmware.md);
+:func:`~omnibot.calibration.patterns.map_power` is the same on the host, so the sweeps' raw POWER
+patterns drive the robot as the firmware will.
 
 * **Offsets.** A motor's Coulomb friction needs a fixed power before its wheel turns at all; below
   it a slowly turning wheel (the side pair of an omni4 on course 15) stands still and the robot
@@ -11,14 +12,14 @@ sweeps' raw POWER patterns drive the robot exactly as the firmware will.
   POWER only; its wheel also pushes the robot, so the number is a little high) and scaled so that
   their mean is the dead band of rotation in place, where no idle roller drags:
   ``offset_i = deadband_i * rotation / mean(deadband)``.
-* **Gains.** Unequal motors turn the body on a straight run and pull it off its course. At a few
-  nominal powers the balance runs drive every idle axis and the course halfway between two of
-  them, both ways; the errors are each run's course error and its turn per metre. The log-gains
-  (their sum held at zero: a common factor is the K_l tables' business) are found by Gauss-Newton
-  with a finite-difference Jacobian at the first power that moves the robot, reused (chord method)
-  at the others, a step kept only when it lowers the rms error (:func:`balance_gains`). Measuring
-  the Jacobian again at every power, and Broyden updates of it, were tried: on carpet the steps then
-  went astray (the acceptance check's carpet mean rose from 2.8 % to 6.7 and 4.8 %).
+* **Gain and speed term** (the two-number motor model, :mod:`~omnibot.calibration.motorfit`).
+  Unequal motors turn the body on a straight run and pull it off its course. At a few nominal
+  powers the balance runs drive every idle axis and the course halfway between two of them, both
+  ways; the errors are each run's course error and its turn per metre, and each run's speed is
+  measured too (its rim speeds are what the speed terms multiply). The Jacobian is measured per
+  gain at the first power that moves the robot and reused at the others; each Gauss-Newton step
+  fits the gains and speed terms to every power's runs at once and is kept only when it lowers the
+  rms error (:func:`balance_model`).
 """
 
 from __future__ import annotations
@@ -35,10 +36,11 @@ from omnibot.calibration.motorfit import (
     balance_courses,
     balance_errors,
     constant_gains,
-    gain_step,
+    model_step,
+    motor_model,
     rms,
 )
-from omnibot.calibration.patterns import apply_map
+from omnibot.calibration.patterns import Geometry, apply_map
 from omnibot.calibration.runs import STRAIGHT, RunInfo
 from omnibot.robot.description import MotorMapSpec
 
@@ -68,68 +70,118 @@ def motor_deadbands(runner: Runner, step: int = 8, duration: float = 0.5) -> lis
 
 
 def _errors(
-    runner: Runner, courses: Sequence[float], power: int, motors: MotorMapSpec, duration: float
-) -> np.ndarray:
-    """Course error (rad) and turn (rad per metre of path) of a run on each course; NaN where the
-    robot hardly moved or the truth cannot tell."""
+    runner: Runner,
+    courses: Sequence[float],
+    power: int,
+    motors: MotorMapSpec,
+    duration: float,
+    speeds: Sequence[float] | None = None,
+) -> tuple[np.ndarray, list[float]]:
+    """Course error (rad) and turn (rad per metre of path) of a run on each course (NaN where the
+    robot hardly moved or the truth cannot tell), and each run's speed along its path (m/s, NaN where
+    unknown). ``speeds``: the busiest wheel's rim speed each run is taken to reach, for the map's
+    speed terms (none: 0)."""
     geo = runner.geometry
     out: list[float] = []
-    for c in courses:
+    moved: list[float] = []
+    for k, c in enumerate(courses):
         rims = geo.translation_rim(c)
         peak = max(abs(v) for v in rims)
-        pattern = apply_map(motors, [power * v / peak for v in rims], geo.pwm_max)
+        u = speeds[k] if speeds is not None and math.isfinite(speeds[k]) else 0.0
+        pattern = apply_map(
+            motors, [power * v / peak for v in rims], geo.pwm_max, [u * v / peak for v in rims]
+        )
         info = RunInfo(STRAIGHT, f"balance, course {c:g} deg, nominal power {power}", math.radians(c))
         r = runner.power_run(pattern, duration, info, "balance", power=power, course_deg=c)
         out += balance_errors(r.truth, c)
-    return np.asarray(out)
+        m = r.truth
+        path = (m.path or m.distance) if m is not None else None
+        moved.append(path / duration if path is not None and math.isfinite(out[-1]) else math.nan)
+    return np.asarray(out), moved
 
 
-def balance_gains(
+def _ratios(
+    geo: Geometry, courses: Sequence[float], speeds: Sequence[float], power: int, k: float
+) -> np.ndarray:
+    """Per error row (two per course), each motor's ``K u / a`` in that run (0 where it does not drive)."""
+    rows = []
+    for c, v in zip(courses, speeds, strict=True):
+        rims = geo.translation_rim(c)
+        peak = max(abs(r) for r in rims)
+        row = [k * v / power if abs(r) > 1e-9 * peak else 0.0 for r in rims]  # u / a = v peak / (power peak)
+        rows += [row, row]
+    return np.asarray(rows, dtype=float)
+
+
+def balance_model(
     runner: Runner,
     offsets: Sequence[float],
     powers: Sequence[int],
+    k: float,
     durations: Sequence[float] | None = None,
     folded: Sequence[float] | None = None,
+    rounds: int = 3,
 ) -> Balance:
-    """Log-gains at each nominal power that zero the balance runs' errors (module docstring).
+    """Each motor's gain and speed term that zero the balance runs' errors at every power at once
+    (module docstring); ``k`` is the calibration's K (PWM counts per m/s), the speed terms' unit.
 
     Powers at which the robot hardly moves are left out; the Jacobian is measured at the first power
-    that moves it and reused at the others, each starting from the previous power's gains.
+    that moves it; ``rounds`` Gauss-Newton steps, each kept only when it lowers the rms error over
+    all powers.
     """
     geo = runner.geometry
     n = geo.motors
     courses = balance_courses(geo, folded)
     result = Balance()
-    jac: np.ndarray | None = None
-    x = np.zeros(n)
-    for k, power in enumerate(powers):
-        duration = durations[k] if durations is not None else 1.0
+    base = constant_gains(offsets, np.zeros(n))
+    used: list[tuple[int, float]] = []
+    e0: list[np.ndarray] = []
+    speeds: list[list[float]] = []
+    for j, power in enumerate(powers):
+        duration = durations[j] if durations is not None else 1.0
         runner.note(f"balance at {power}")
-        e0 = _errors(runner, courses, power, constant_gains(offsets, np.zeros(n)), duration)
-        if np.count_nonzero(np.isfinite(e0)) < e0.size // 2:
+        e, moved = _errors(runner, courses, power, base, duration)
+        if np.count_nonzero(np.isfinite(e)) < e.size // 2:
             continue
-        e = e0
-        if x.any():
-            ex = _errors(runner, courses, power, constant_gains(offsets, x), duration)
-            if rms(ex) < rms(e0):
-                e = ex
-            else:
-                x = np.zeros(n)
-        if jac is None:
-            cols = []
-            for i in range(n):
-                xi = x.copy()
-                xi[i] += GAIN_STEP
-                ei = _errors(runner, courses, power, constant_gains(offsets, xi), duration)
-                cols.append((ei - e) / GAIN_STEP)
-            jac = np.column_stack(cols)
-        for _ in range(2):
-            trial = gain_step(jac, e, x)
-            et = _errors(runner, courses, power, constant_gains(offsets, trial), duration)
-            if rms(et) < rms(e):
-                x, e = trial, et
-        result.powers.append(power)
-        result.log_gains.append([float(v) for v in x])
-        result.before.append(rms(e0))
-        result.after.append(rms(e))
+        used.append((power, duration))
+        e0.append(e)
+        # the busiest wheel's rim speed: the run's speed times its rim factor
+        speeds.append([v * geo.translation_factor(c) for v, c in zip(moved, courses, strict=True)])
+        result.rates += [
+            (geo.fold(c), power, u) for c, u in zip(courses, speeds[-1], strict=True) if math.isfinite(u)
+        ]
+    if not used:
+        return result
+    power0, duration0 = used[0]
+    cols = []
+    for i in range(n):
+        xi = np.zeros(n)
+        xi[i] = GAIN_STEP
+        ei, _ = _errors(runner, courses, power0, constant_gains(offsets, xi), duration0, speeds[0])
+        cols.append((ei - e0[0]) / GAIN_STEP)
+    jac1 = np.column_stack(cols)
+    jac = np.vstack([jac1] * len(used))
+    ratios = np.vstack([_ratios(geo, courses, v, p, k) for (p, _), v in zip(used, speeds, strict=True)])
+
+    def measure(x: np.ndarray) -> list[np.ndarray]:
+        motors = motor_model(offsets, x, k)
+        return [_errors(runner, courses, p, motors, d, v)[0] for (p, d), v in zip(used, speeds, strict=True)]
+
+    x = np.zeros(2 * n)
+    errs = e0
+    for _ in range(rounds):
+        trial = model_step(jac, np.concatenate(errs), ratios, x)
+        et = measure(trial)
+        if rms(np.concatenate(et)) < rms(np.concatenate(errs)):
+            x, errs = trial, et
+        else:
+            break
+    model = motor_model(offsets, x, k)
+    log_gains = [math.log(g.y[0]) for g in model.gain]
+    for (p, _), before, after in zip(used, e0, errs, strict=True):
+        result.powers.append(p)
+        result.log_gains.append(log_gains)
+        result.before.append(rms(before))
+        result.after.append(rms(after))
+    result.speed = list(model.speed or ())
     return result
