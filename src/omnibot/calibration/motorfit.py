@@ -36,7 +36,7 @@ import numpy as np
 
 from omnibot.calibration.patterns import Geometry
 from omnibot.calibration.runs import Motion
-from omnibot.robot.description import MotorMapSpec, PiecewiseLinear
+from omnibot.robot.description import MotorMapSpec, PiecewiseLinear, RobotDescription
 
 GAIN_STEP = 0.08
 """Log-gain step of the finite-difference Jacobian."""
@@ -88,6 +88,10 @@ class Balance:
     """Per power, the rms error (rad) with the fitted gains."""
     speed: list[float] = field(default_factory=list)
     """Each motor's speed term, PWM counts per m/s (empty: none fitted)."""
+    torque: list[float] = field(default_factory=list)
+    """Each motor's torque constant (and back-EMF) against the nominal one, as fitted."""
+    load: list[float] = field(default_factory=list)
+    """Each motor's load factor (winding resistance over gear efficiency) against the nominal one."""
     rates: list[tuple[float, int, float]] = field(default_factory=list)
     """(folded course, nominal power, rim speed m/s of the busiest wheel) of each balance run that moved."""
 
@@ -97,6 +101,8 @@ class Balance:
             "powers": self.powers,
             "log_gains": self.log_gains,
             "speed": self.speed,
+            "torque": self.torque,
+            "load": self.load,
             "before": self.before,
             "after": self.after,
         }
@@ -144,51 +150,96 @@ def balance_errors(m: Motion | None, course_deg: float) -> list[float]:
     return [err, m.theta / max(m.path or m.distance or 0.0, MIN_DISTANCE)]
 
 
-SPEED_LIMIT = 0.5
-"""abs(speed term) / K is kept below this (a motor's back-EMF at most half the whole K apart)."""
-SPEED_RIDGE = 0.02
-"""Weight that pulls the speed terms (in units of K) towards 0 where the runs cannot tell them."""
+TORQUE_LIMIT = 0.3
+"""abs(log) of a motor's torque constant against the nominal one is kept below this (a factor 1.35)."""
+TORQUE_STEP = 0.15
+"""Largest change of a log torque constant in one step (a trust region: the errors are not linear)."""
+LOAD_PRIOR = 1.0
+"""Weight (per unit log) that holds a motor's load factor at 1 unless the runs tell otherwise."""
+HOLD = 10.0
+"""Weight of the rows that hold the log torque constants' and load factors' means at 0."""
+
+
+def emf_counts(robot: RobotDescription) -> tuple[float, ...]:
+    """Each motor's nominal back-EMF E in PWM counts per m/s of its wheel's rim speed:
+    ``pwm_max k G / (r (V - V_drop))`` from the description (battery voltage without sag)."""
+    out = []
+    for w in robot.wheels:
+        m = w.motor
+        volts = max(robot.battery.voltage - m.driver_drop, 0.1 * robot.battery.voltage)
+        out.append(m.pwm_max * m.torque_constant * m.gear_ratio / (w.radius * volts))
+    return tuple(out)
+
+
+def model_terms(y: np.ndarray, emf: Sequence[float], k: float) -> tuple[np.ndarray, np.ndarray]:
+    """Gains and speed terms (counts per m/s) of the motor model ``y = (log s_1..n, log rho_1..n)``:
+    torque constants s (times the nominal) and load factors rho (resistance over gear efficiency,
+    times the nominal): ``gain = rho / s``, ``speed = (s - gain) E``."""
+    n = len(emf)
+    s, rho = np.exp(y[:n]), np.exp(y[n:])
+    gain = rho / s
+    return gain, (s - gain) * np.asarray(emf, dtype=float)
 
 
 def model_step(
     jac: np.ndarray,
     e: np.ndarray,
     ratios: np.ndarray,
-    x: np.ndarray,
+    y: np.ndarray,
+    emf: Sequence[float],
+    k: float,
+    weights: np.ndarray | None = None,
 ) -> np.ndarray:
-    """The motor model after one Gauss-Newton step on the errors ``e`` of the runs at ``x``.
+    """The motor model after one step on the errors ``e`` measured at ``y`` (as :func:`model_terms`).
 
-    ``x`` is ``(g_1 - 1 .. g_n - 1, c_1 / K .. c_n / K)`` (gains and speed terms in units of K);
-    ``jac`` (rows: errors, columns: motors) the errors' response per relative power change of each
-    motor; ``ratios`` (rows as ``e``) each motor's ``K u / a`` in that run (0 where it does not drive).
-    The error's response to ``x`` is ``jac`` for the gains and ``jac * ratios`` for the speed terms.
-    Rows with a NaN are left out; the gains' sum and the speed terms' sum are held at 0, the speed
-    terms pulled lightly towards 0 (:data:`SPEED_RIDGE`) and both clipped (:data:`GAIN_LIMIT`,
-    :data:`SPEED_LIMIT`).
+    The errors respond to motor i's relative power change as ``jac`` (rows: errors, columns: motors,
+    per unit gain), and the change is ``gain_i - 1 + (speed_i / K) ratio`` with ``ratio = K u / a`` of
+    that motor in that run (0 where it does not drive): the step minimises that linear model of the
+    errors (rows weighted by ``weights``), the load factors held lightly at 1 (:data:`LOAD_PRIOR`),
+    the means of both logs at 0 (a common factor is the K_l tables' business) by Gauss-Newton on
+    ``y``, each change at most :data:`TORQUE_STEP`, the torque constants within :data:`TORQUE_LIMIT`.
+    Rows with a NaN are left out.
     """
     n = jac.shape[1]
+    w = np.ones(e.size) if weights is None else weights
     rows = np.isfinite(e) & np.all(np.isfinite(jac), axis=1) & np.all(np.isfinite(ratios), axis=1)
-    a = np.hstack([jac[rows], jac[rows] * ratios[rows]])
-    hold = np.zeros((2, 2 * n))
-    hold[0, :n] = 1.0
-    hold[1, n:] = 1.0
-    ridge = np.hstack([np.zeros((n, n)), SPEED_RIDGE * np.eye(n)])
-    lhs = np.vstack([a, 10.0 * hold, ridge])
-    rhs = np.concatenate([-e[rows], -10.0 * np.array([x[:n].sum(), x[n:].sum()]), -SPEED_RIDGE * x[n:]])
-    step = np.linalg.lstsq(lhs, rhs, rcond=None)[0]
-    out = x + step
-    limit = math.exp(GAIN_LIMIT) - 1.0
-    out[:n] = np.clip(out[:n], math.exp(-GAIN_LIMIT) - 1.0, limit)
-    out[n:] = np.clip(out[n:], -SPEED_LIMIT, SPEED_LIMIT)
-    return np.asarray(out)
+    jr, rr, er, wr = jac[rows], ratios[rows], e[rows], w[rows]
+    g0, c0 = model_terms(y, emf, k)
+
+    def residuals(z: np.ndarray) -> np.ndarray:
+        g, c = model_terms(z, emf, k)
+        change = (g - g0)[None, :] + ((c - c0) / k)[None, :] * rr
+        fit = wr * (er + np.sum(jr * change, axis=1))
+        hold = HOLD * np.array([z[:n].mean(), z[n:].mean()])
+        return np.concatenate([fit, LOAD_PRIOR * z[n:], hold])
+
+    z = y.copy()
+    for _ in range(8):
+        r0 = residuals(z)
+        cols = []
+        for j in range(2 * n):
+            dz = z.copy()
+            dz[j] += 1e-6
+            cols.append((residuals(dz) - r0) / 1e-6)
+        a = np.column_stack(cols)
+        step = np.linalg.lstsq(a, -r0, rcond=None)[0]
+        z = z + step
+        z = y + np.clip(z - y, -TORQUE_STEP, TORQUE_STEP)
+        z[:n] = np.clip(z[:n], -TORQUE_LIMIT, TORQUE_LIMIT)
+        if np.max(np.abs(step)) < 1e-5:
+            break
+    return z
 
 
-def motor_model(offsets: Sequence[float], x: np.ndarray, k: float) -> MotorMapSpec:
-    """A motor map with ``offsets``, one constant gain and one speed term per motor (``x`` as
-    :func:`model_step`'s, K the calibration's PWM counts per m/s)."""
-    n = len(offsets)
-    gains = tuple(PiecewiseLinear(x=(0.0,), y=(round(1.0 + float(v), 3),)) for v in x[:n])
-    return MotorMapSpec(offset=tuple(offsets), gain=gains, speed=tuple(round(float(v) * k, 1) for v in x[n:]))
+def motor_model(offsets: Sequence[float], y: np.ndarray, emf: Sequence[float], k: float) -> MotorMapSpec:
+    """A motor map with ``offsets`` and the motor model ``y`` (:func:`model_terms`): one constant gain
+    and one speed term per motor."""
+    gain, speed = model_terms(y, emf, k)
+    return MotorMapSpec(
+        offset=tuple(offsets),
+        gain=tuple(PiecewiseLinear(x=(0.0,), y=(round(float(g), 3),)) for g in gain),
+        speed=tuple(round(float(c), 1) for c in speed),
+    )
 
 
 def constant_gains(offsets: Sequence[float], x: np.ndarray) -> MotorMapSpec:

@@ -36,6 +36,7 @@ from omnibot.calibration.motorfit import (
     balance_courses,
     balance_errors,
     constant_gains,
+    emf_counts,
     model_step,
     motor_model,
     rms,
@@ -122,15 +123,19 @@ def balance_model(
     folded: Sequence[float] | None = None,
     rounds: int = 3,
 ) -> Balance:
-    """Each motor's gain and speed term that zero the balance runs' errors at every power at once
-    (module docstring); ``k`` is the calibration's K (PWM counts per m/s), the speed terms' unit.
+    """Each motor's torque constant and load factor (its gain and speed term) that zero the balance
+    runs' errors at every power at once (module docstring); ``k`` is the calibration's K (PWM counts
+    per m/s), the speed terms' scale.
 
-    Powers at which the robot hardly moves are left out; the Jacobian is measured at the first power
-    that moves it; ``rounds`` Gauss-Newton steps, each kept only when it lowers the rms error over
-    all powers.
+    Powers at which the robot hardly moves are left out; the Jacobian is measured at the second
+    power that moves it (the first is near the dead band, where the errors are least linear); each
+    power's rows are weighted by its rms error before, so that no power (the top one, where a weak
+    motor runs into its current limit, which no map makes up for) outweighs the rest; ``rounds``
+    steps, each kept only when it lowers the weighted rms error.
     """
     geo = runner.geometry
     n = geo.motors
+    emf = emf_counts(runner.robot)
     courses = balance_courses(geo, folded)
     result = Balance()
     base = constant_gains(offsets, np.zeros(n))
@@ -152,31 +157,32 @@ def balance_model(
         ]
     if not used:
         return result
-    power0, duration0 = used[0]
+    at = min(1, len(used) - 1)
+    power_j, duration_j = used[at]
     cols = []
     for i in range(n):
         xi = np.zeros(n)
         xi[i] = GAIN_STEP
-        ei, _ = _errors(runner, courses, power0, constant_gains(offsets, xi), duration0, speeds[0])
-        cols.append((ei - e0[0]) / GAIN_STEP)
-    jac1 = np.column_stack(cols)
-    jac = np.vstack([jac1] * len(used))
+        ei, _ = _errors(runner, courses, power_j, constant_gains(offsets, xi), duration_j, speeds[at])
+        cols.append((ei - e0[at]) / GAIN_STEP)
+    jac = np.vstack([np.column_stack(cols)] * len(used))
     ratios = np.vstack([_ratios(geo, courses, v, p, k) for (p, _), v in zip(used, speeds, strict=True)])
+    weights = np.concatenate([np.full(e.size, 1.0 / max(rms(e), 1e-3)) for e in e0])
 
-    def measure(x: np.ndarray) -> list[np.ndarray]:
-        motors = motor_model(offsets, x, k)
+    def measure(y: np.ndarray) -> list[np.ndarray]:
+        motors = motor_model(offsets, y, emf, k)
         return [_errors(runner, courses, p, motors, d, v)[0] for (p, d), v in zip(used, speeds, strict=True)]
 
-    x = np.zeros(2 * n)
+    y = np.zeros(2 * n)
     errs = e0
     for _ in range(rounds):
-        trial = model_step(jac, np.concatenate(errs), ratios, x)
+        trial = model_step(jac, np.concatenate(errs), ratios, y, emf, k, weights)
         et = measure(trial)
-        if rms(np.concatenate(et)) < rms(np.concatenate(errs)):
-            x, errs = trial, et
+        if rms(weights * np.concatenate(et)) < rms(weights * np.concatenate(errs)):
+            y, errs = trial, et
         else:
             break
-    model = motor_model(offsets, x, k)
+    model = motor_model(offsets, y, emf, k)
     log_gains = [math.log(g.y[0]) for g in model.gain]
     for (p, _), before, after in zip(used, e0, errs, strict=True):
         result.powers.append(p)
@@ -184,4 +190,6 @@ def balance_model(
         result.before.append(rms(before))
         result.after.append(rms(after))
     result.speed = list(model.speed or ())
+    result.torque = [round(float(v), 3) for v in np.exp(y[:n])]
+    result.load = [round(float(v), 3) for v in np.exp(y[n:])]
     return result

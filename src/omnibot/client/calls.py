@@ -11,9 +11,9 @@ from collections.abc import Sequence
 from typing import Any, TypeVar
 
 from omnibot.client import commands
+from omnibot.client.errors import CalibrationRejected
 from omnibot.client.limits import Limits
 from omnibot.client.views import Hello, Status
-from omnibot.errors import ControllerError
 from omnibot.protocol import codes
 from omnibot.protocol.messages import (
     Cal,
@@ -119,14 +119,14 @@ class TypedCalls:
         for command, pending in [(c, self.submit(c)) for c in sent]:
             try:
                 pending.result()
-            except ControllerError as e:
-                if e.code != codes.E_CALIBRATION or command.table != codes.CAL_SPEED:
+            except CalibrationRejected as e:
+                if command.table != codes.CAL_SPEED:
                     raise
                 if command.y != 0:  # a controller older than the motor map's speed term
-                    raise ControllerError(
+                    raise CalibrationRejected(
                         e.code,
                         "the controller does not know the motor map's speed terms (CAL table 7): "
-                        "update its firmware, or calibrate it again for a map without them",
+                        "update its firmware, or use a calibration without them",
                     ) from None
                 # a zero speed term is what such a controller already does
         return sent

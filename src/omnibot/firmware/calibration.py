@@ -193,6 +193,8 @@ class Calibration:
             return False
         if index == -1:
             courses = self.kl_courses
+            if power < 0 or power > codes.CAL_COURSE_MAX:
+                return False
             if (k > 0 and power <= courses[k - 1]) or (k + 1 < len(courses) and power >= courses[k + 1]):
                 return False
             if k == len(courses):

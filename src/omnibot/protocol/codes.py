@@ -208,6 +208,7 @@ CAL_GAIN = 20  # 20 + i: gain table of motor i: knot I = (X nominal power, Y gai
 CAL_MOTORS = 8  # motors with a gain table at most
 CAL_KL = 10  # 10 + k: K_l curve k; I = -1 sets its course (X degrees), I = -2 drops curves k.., I >= 0 a knot
 CAL_KL_DROP = -2
+CAL_COURSE_MAX = 90  # a K_l curve's course, degrees: 0..90 (courses fold onto 0..90 at most)
 CAL_KL_CURVES = 8
 CAL_KNOTS_MAX = 16
 CAL_SCALE = 1000
