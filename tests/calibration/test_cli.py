@@ -8,6 +8,7 @@ import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -142,7 +143,7 @@ def test_calibration_file_errors(tmp_path: Path) -> None:
     old = parse_calibration({"calibration": {"k": 100, "motors": {"offset": [30.0, 31.0], "gain": flat}}})
     motors = old.for_surface(None).motors
     assert motors is not None and motors.speed is None and motors.speed_term(1) == 0.0
-    new = {"k": 100, "motors": {"offset": [30.0, 31.0], "gain": flat, "speed": [21.6, -23.9]}}
+    new: dict[str, Any] = {"k": 100, "motors": {"offset": [30.0, 31.0], "gain": flat, "speed": [21.6, -23.9]}}
     motors = parse_calibration({"calibration": new}).for_surface(None).motors
     assert motors is not None and motors.speed == (21.6, -23.9)
     for speed, message in (

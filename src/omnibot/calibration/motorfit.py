@@ -89,9 +89,10 @@ class Balance:
     speed: list[float] = field(default_factory=list)
     """Each motor's speed term, PWM counts per m/s (empty: none fitted)."""
     torque: list[float] = field(default_factory=list)
-    """Each motor's torque constant (and back-EMF) against the nominal one, as fitted."""
-    load: list[float] = field(default_factory=list)
-    """Each motor's load factor (winding resistance over gear efficiency) against the nominal one."""
+    """Each motor's torque constant against the nominal one, as its speed term implies
+    (:func:`torque_of`; empty: none fitted)."""
+    after_speed: list[float] = field(default_factory=list)
+    """Per power, the rms error (rad) with the gains and speed terms (empty: the speed terms not kept)."""
     rates: list[tuple[float, int, float]] = field(default_factory=list)
     """(folded course, nominal power, rim speed m/s of the busiest wheel) of each balance run that moved."""
 
@@ -102,7 +103,7 @@ class Balance:
             "log_gains": self.log_gains,
             "speed": self.speed,
             "torque": self.torque,
-            "load": self.load,
+            "after_speed": self.after_speed,
             "before": self.before,
             "after": self.after,
         }
@@ -132,8 +133,6 @@ class Balance:
         fitted."""
         if not self.powers:
             return identity(n).gain
-        if all(g == self.log_gains[0] for g in self.log_gains):  # the motor model: one gain each
-            return tuple(PiecewiseLinear(x=(0.0,), y=(round(math.exp(v), 3),)) for v in self.log_gains[0])
         xs = tuple(float(p) for p in self.powers)
         return tuple(
             PiecewiseLinear(x=xs, y=tuple(round(math.exp(g[i]), 3) for g in self.log_gains)) for i in range(n)
@@ -150,14 +149,11 @@ def balance_errors(m: Motion | None, course_deg: float) -> list[float]:
     return [err, m.theta / max(m.path or m.distance or 0.0, MIN_DISTANCE)]
 
 
-TORQUE_LIMIT = 0.3
-"""abs(log) of a motor's torque constant against the nominal one is kept below this (a factor 1.35)."""
-TORQUE_STEP = 0.15
-"""Largest change of a log torque constant in one step (a trust region: the errors are not linear)."""
-LOAD_PRIOR = 1.0
-"""Weight (per unit log) that holds a motor's load factor at 1 unless the runs tell otherwise."""
-HOLD = 10.0
-"""Weight of the rows that hold the log torque constants' and load factors' means at 0."""
+SPEED_RIDGE = 0.05
+"""Weight (per unit of speed term / K) that holds the speed terms at 0 where the runs cannot tell them
+(a light floor, whose courses load the motors alike)."""
+SPEED_LIMIT = 0.5
+"""abs(speed term) / K is kept below this."""
 
 
 def emf_counts(robot: RobotDescription) -> tuple[float, ...]:
@@ -171,75 +167,48 @@ def emf_counts(robot: RobotDescription) -> tuple[float, ...]:
     return tuple(out)
 
 
-def model_terms(y: np.ndarray, emf: Sequence[float], k: float) -> tuple[np.ndarray, np.ndarray]:
-    """Gains and speed terms (counts per m/s) of the motor model ``y = (log s_1..n, log rho_1..n)``:
-    torque constants s (times the nominal) and load factors rho (resistance over gear efficiency,
-    times the nominal): ``gain = rho / s``, ``speed = (s - gain) E``."""
-    n = len(emf)
-    s, rho = np.exp(y[:n]), np.exp(y[n:])
-    gain = rho / s
-    return gain, (s - gain) * np.asarray(emf, dtype=float)
+def torque_of(speed: float, emf: float) -> float:
+    """The torque constant (times the nominal) that a speed term implies for a motor that differs from
+    the nominal one in its torque constant alone: ``speed = (s - 1/s) E`` solved for s."""
+    q = speed / emf
+    return (q + math.sqrt(q * q + 4.0)) / 2.0
 
 
-def model_step(
-    jac: np.ndarray,
-    e: np.ndarray,
-    ratios: np.ndarray,
-    y: np.ndarray,
-    emf: Sequence[float],
-    k: float,
-    weights: np.ndarray | None = None,
-) -> np.ndarray:
-    """The motor model after one step on the errors ``e`` measured at ``y`` (as :func:`model_terms`).
+def gain_step(jac: np.ndarray, e: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The log-gains after one Gauss-Newton step on the errors ``e`` (Jacobian ``jac``), their sum
+    held at 0, clipped to :data:`GAIN_LIMIT`; rows with a NaN are left out."""
+    n = x.size
+    rows = np.isfinite(e) & np.all(np.isfinite(jac), axis=1)
+    a = np.vstack([jac[rows], np.ones((1, n))])  # the last row holds the sum of log-gains at 0
+    step = np.linalg.lstsq(a, -np.concatenate([e[rows], [x.sum()]]), rcond=None)[0]
+    return np.asarray(np.clip(x + step, -GAIN_LIMIT, GAIN_LIMIT))
 
-    The errors respond to motor i's relative power change as ``jac`` (rows: errors, columns: motors,
-    per unit gain), and the change is ``gain_i - 1 + (speed_i / K) ratio`` with ``ratio = K u / a`` of
-    that motor in that run (0 where it does not drive): the step minimises that linear model of the
-    errors (rows weighted by ``weights``), the load factors held lightly at 1 (:data:`LOAD_PRIOR`),
-    the means of both logs at 0 (a common factor is the K_l tables' business) by Gauss-Newton on
-    ``y``, each change at most :data:`TORQUE_STEP`, the torque constants within :data:`TORQUE_LIMIT`.
-    Rows with a NaN are left out.
+
+def centred_ratios(ratios: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each motor's ``K u / a`` less its mean over the runs it drives in (0 where it does not drive),
+    and those means."""
+    drives = ratios > 0.0
+    counts = np.maximum(drives.sum(axis=0), 1)
+    mean = np.where(drives, ratios, 0.0).sum(axis=0) / counts
+    return np.where(drives, ratios - mean[None, :], 0.0), mean
+
+
+def speed_step(jac: np.ndarray, e: np.ndarray, centred: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """Speed terms / K that zero the errors ``e`` best (rows weighted by ``weights``).
+
+    With gains re-centred at each power, a speed term c changes motor i's power in a run by
+    ``(c_i / K) (K u / a - its mean at that power)`` relative (``centred``), to which the errors
+    respond as ``jac`` (per relative power, rows as ``e``): one linear least squares, the sum held at
+    0 (a common share is the K_l tables'), held lightly at 0 (:data:`SPEED_RIDGE`), clipped to
+    :data:`SPEED_LIMIT`; rows with a NaN are left out.
     """
     n = jac.shape[1]
-    w = np.ones(e.size) if weights is None else weights
-    rows = np.isfinite(e) & np.all(np.isfinite(jac), axis=1) & np.all(np.isfinite(ratios), axis=1)
-    jr, rr, er, wr = jac[rows], ratios[rows], e[rows], w[rows]
-    g0, c0 = model_terms(y, emf, k)
-
-    def residuals(z: np.ndarray) -> np.ndarray:
-        g, c = model_terms(z, emf, k)
-        change = (g - g0)[None, :] + ((c - c0) / k)[None, :] * rr
-        fit = wr * (er + np.sum(jr * change, axis=1))
-        hold = HOLD * np.array([z[:n].mean(), z[n:].mean()])
-        return np.concatenate([fit, LOAD_PRIOR * z[n:], hold])
-
-    z = y.copy()
-    for _ in range(8):
-        r0 = residuals(z)
-        cols = []
-        for j in range(2 * n):
-            dz = z.copy()
-            dz[j] += 1e-6
-            cols.append((residuals(dz) - r0) / 1e-6)
-        a = np.column_stack(cols)
-        step = np.linalg.lstsq(a, -r0, rcond=None)[0]
-        z = z + step
-        z = y + np.clip(z - y, -TORQUE_STEP, TORQUE_STEP)
-        z[:n] = np.clip(z[:n], -TORQUE_LIMIT, TORQUE_LIMIT)
-        if np.max(np.abs(step)) < 1e-5:
-            break
-    return z
-
-
-def motor_model(offsets: Sequence[float], y: np.ndarray, emf: Sequence[float], k: float) -> MotorMapSpec:
-    """A motor map with ``offsets`` and the motor model ``y`` (:func:`model_terms`): one constant gain
-    and one speed term per motor."""
-    gain, speed = model_terms(y, emf, k)
-    return MotorMapSpec(
-        offset=tuple(offsets),
-        gain=tuple(PiecewiseLinear(x=(0.0,), y=(round(float(g), 3),)) for g in gain),
-        speed=tuple(round(float(c), 1) for c in speed),
-    )
+    rows = np.isfinite(e) & np.all(np.isfinite(jac), axis=1)
+    a = weights[rows, None] * jac[rows] * centred[rows]
+    lhs = np.vstack([a, 10.0 * np.ones((1, n)), SPEED_RIDGE * np.eye(n)])
+    rhs = np.concatenate([-weights[rows] * e[rows], np.zeros(1 + n)])
+    c = np.linalg.lstsq(lhs, rhs, rcond=None)[0]
+    return np.asarray(np.clip(c, -SPEED_LIMIT, SPEED_LIMIT))
 
 
 def constant_gains(offsets: Sequence[float], x: np.ndarray) -> MotorMapSpec:

@@ -35,11 +35,13 @@ from omnibot.calibration.motorfit import (
     Balance,
     balance_courses,
     balance_errors,
+    centred_ratios,
     constant_gains,
     emf_counts,
-    model_step,
-    motor_model,
+    gain_step,
     rms,
+    speed_step,
+    torque_of,
 )
 from omnibot.calibration.patterns import Geometry, apply_map
 from omnibot.calibration.runs import STRAIGHT, RunInfo
@@ -121,75 +123,97 @@ def balance_model(
     k: float,
     durations: Sequence[float] | None = None,
     folded: Sequence[float] | None = None,
-    rounds: int = 3,
 ) -> Balance:
-    """Each motor's torque constant and load factor (its gain and speed term) that zero the balance
-    runs' errors at every power at once (module docstring); ``k`` is the calibration's K (PWM counts
-    per m/s), the speed terms' scale.
+    """Each motor's gain at each nominal power and its speed term that zero the balance runs' errors
+    (module docstring); ``k`` is the calibration's K (PWM counts per m/s), the speed terms' scale.
 
-    Powers at which the robot hardly moves are left out; the Jacobian is measured at the second
-    power that moves it (the first is near the dead band, where the errors are least linear); each
-    power's rows are weighted by its rms error before, so that no power (the top one, where a weak
-    motor runs into its current limit, which no map makes up for) outweighs the rest; ``rounds``
-    steps, each kept only when it lowers the weighted rms error.
+    First the gains: at each power Gauss-Newton on the log-gains, the Jacobian measured at the first
+    power that moves the robot and reused at the others, each power starting from the previous one's
+    gains, a step kept only when it lowers the rms error (powers at which the robot hardly moves are
+    left out). Then the speed terms, from what the gains left over: one linear least squares over
+    every power's runs (:func:`~omnibot.calibration.motorfit.speed_step`, each power's rows weighted
+    by its rms error), the gains re-centred so that each power's mean stays; kept only when the runs
+    through them lower the weighted rms error.
     """
     geo = runner.geometry
     n = geo.motors
-    emf = emf_counts(runner.robot)
     courses = balance_courses(geo, folded)
     result = Balance()
-    base = constant_gains(offsets, np.zeros(n))
-    used: list[tuple[int, float]] = []
-    e0: list[np.ndarray] = []
-    speeds: list[list[float]] = []
+    jac: np.ndarray | None = None
+    x = np.zeros(n)
+    done: list[tuple[int, float, np.ndarray, list[float]]] = []  # power, duration, errors, speeds
     for j, power in enumerate(powers):
         duration = durations[j] if durations is not None else 1.0
         runner.note(f"balance at {power}")
-        e, moved = _errors(runner, courses, power, base, duration)
-        if np.count_nonzero(np.isfinite(e)) < e.size // 2:
+        e0, moved = _errors(runner, courses, power, constant_gains(offsets, np.zeros(n)), duration)
+        if np.count_nonzero(np.isfinite(e0)) < e0.size // 2:
             continue
-        used.append((power, duration))
-        e0.append(e)
+        e = e0
+        if x.any():
+            ex, _ = _errors(runner, courses, power, constant_gains(offsets, x), duration)
+            if rms(ex) < rms(e0):
+                e = ex
+            else:
+                x = np.zeros(n)
+        if jac is None:
+            cols = []
+            for i in range(n):
+                xi = x.copy()
+                xi[i] += GAIN_STEP
+                ei, _ = _errors(runner, courses, power, constant_gains(offsets, xi), duration)
+                cols.append((ei - e) / GAIN_STEP)
+            jac = np.column_stack(cols)
+        for _ in range(2):
+            trial = gain_step(jac, e, x)
+            et, _ = _errors(runner, courses, power, constant_gains(offsets, trial), duration)
+            if rms(et) < rms(e):
+                x, e = trial, et
+        result.powers.append(power)
+        result.log_gains.append([float(v) for v in x])
+        result.before.append(rms(e0))
+        result.after.append(rms(e))
         # the busiest wheel's rim speed: the run's speed times its rim factor
-        speeds.append([v * geo.translation_factor(c) for v, c in zip(moved, courses, strict=True)])
+        speeds = [v * geo.translation_factor(c) for v, c in zip(moved, courses, strict=True)]
         result.rates += [
-            (geo.fold(c), power, u) for c, u in zip(courses, speeds[-1], strict=True) if math.isfinite(u)
+            (geo.fold(c), power, u) for c, u in zip(courses, speeds, strict=True) if math.isfinite(u)
         ]
-    if not used:
-        return result
-    at = min(1, len(used) - 1)
-    power_j, duration_j = used[at]
-    cols = []
-    for i in range(n):
-        xi = np.zeros(n)
-        xi[i] = GAIN_STEP
-        ei, _ = _errors(runner, courses, power_j, constant_gains(offsets, xi), duration_j, speeds[at])
-        cols.append((ei - e0[at]) / GAIN_STEP)
-    jac = np.vstack([np.column_stack(cols)] * len(used))
-    ratios = np.vstack([_ratios(geo, courses, v, p, k) for (p, _), v in zip(used, speeds, strict=True)])
-    weights = np.concatenate([np.full(e.size, 1.0 / max(rms(e), 1e-3)) for e in e0])
-
-    def measure(y: np.ndarray) -> list[np.ndarray]:
-        motors = motor_model(offsets, y, emf, k)
-        return [_errors(runner, courses, p, motors, d, v)[0] for (p, d), v in zip(used, speeds, strict=True)]
-
-    y = np.zeros(2 * n)
-    errs = e0
-    for _ in range(rounds):
-        trial = model_step(jac, np.concatenate(errs), ratios, y, emf, k, weights)
-        et = measure(trial)
-        if rms(weights * np.concatenate(et)) < rms(weights * np.concatenate(errs)):
-            y, errs = trial, et
-        else:
-            break
-    model = motor_model(offsets, y, emf, k)
-    log_gains = [math.log(g.y[0]) for g in model.gain]
-    for (p, _), before, after in zip(used, e0, errs, strict=True):
-        result.powers.append(p)
-        result.log_gains.append(log_gains)
-        result.before.append(rms(before))
-        result.after.append(rms(after))
-    result.speed = list(model.speed or ())
-    result.torque = [round(float(v), 3) for v in np.exp(y[:n])]
-    result.load = [round(float(v), 3) for v in np.exp(y[n:])]
+        done.append((power, duration, e, speeds))
+    if jac is not None and len(done) >= 2:
+        _speed_terms(runner, result, offsets, courses, jac, done, k)
     return result
+
+
+def _speed_terms(
+    runner: Runner,
+    result: Balance,
+    offsets: Sequence[float],
+    courses: Sequence[float],
+    jac: np.ndarray,
+    done: list[tuple[int, float, np.ndarray, list[float]]],
+    k: float,
+) -> None:
+    """Fit the speed terms on what the gains left over and keep them (with the gains re-centred) when
+    the balance runs through them are better (:func:`balance_model`)."""
+    geo = runner.geometry
+    blocks = [centred_ratios(_ratios(geo, courses, v, p, k)) for p, _, _, v in done]
+    centred = np.vstack([b[0] for b in blocks])
+    errors = np.concatenate([e for _, _, e, _ in done])
+    weights = np.concatenate([np.full(e.size, 1.0 / max(rms(e), 1e-3)) for _, _, e, _ in done])
+    c = speed_step(np.vstack([jac] * len(done)), errors, centred, weights)
+    if not np.any(np.abs(c) * k >= 0.05):
+        return
+    log_gains = []
+    after = []
+    for (power, duration, _, v), (_, mean), x in zip(done, blocks, result.log_gains, strict=True):
+        gains = np.maximum(np.exp(x) - c * mean, 0.05)
+        motors = constant_gains(offsets, np.log(gains)).model_copy(update={"speed": tuple(c * k)})
+        et, _ = _errors(runner, courses, power, motors, duration, v)
+        log_gains.append([float(g) for g in np.log(gains)])
+        after.append(et)
+    new = np.concatenate(after)
+    if rms(weights * new) < rms(weights * errors):
+        result.log_gains = log_gains
+        result.after_speed = [rms(e) for e in after]
+        result.speed = [round(float(v) * k, 1) for v in c]
+        emf = emf_counts(runner.robot)
+        result.torque = [round(torque_of(sp, em), 3) for sp, em in zip(result.speed, emf, strict=True)]

@@ -88,7 +88,7 @@ def expected_runs(
     courses = len(plan.calibrated_courses(geometry))
     checks = accuracy_runs(accuracy, robot) if accuracy is not None else 0
     powers = max(1, plan.balance_levels)
-    balance = len(balance_courses(geometry)) * (4 * powers + geometry.motors)
+    balance = len(balance_courses(geometry)) * (5 * powers - 1 + geometry.motors)
     rollers = plan.roller_rounds > 0 and all(geometry.roller_pitch)
     axes = len(axis_courses(geometry))
     phases = {
