@@ -154,6 +154,10 @@ SPEED_RIDGE = 0.05
 (a light floor, whose courses load the motors alike)."""
 SPEED_LIMIT = 0.5
 """abs(speed term) / K is kept below this."""
+SPEED_KEEP = 0.75
+"""The speed terms are kept only when the balance runs through them have at most this fraction of the
+weighted rms error of the gains alone: a clear improvement, not a fit to the runs' scatter (on the
+acceptance robot they were fitted with signs against its motors' when kept on any improvement)."""
 
 
 def emf_counts(robot: RobotDescription) -> tuple[float, ...]:

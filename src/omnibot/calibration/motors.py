@@ -32,6 +32,7 @@ import numpy as np
 from omnibot.calibration.experiments import MOVED_ANGLE, MOVED_DISTANCE, Runner, lowest_moving
 from omnibot.calibration.motorfit import (
     GAIN_STEP,
+    SPEED_KEEP,
     Balance,
     balance_courses,
     balance_errors,
@@ -133,7 +134,7 @@ def balance_model(
     left out). Then the speed terms, from what the gains left over: one linear least squares over
     every power's runs (:func:`~omnibot.calibration.motorfit.speed_step`, each power's rows weighted
     by its rms error), the gains re-centred so that each power's mean stays; kept only when the runs
-    through them lower the weighted rms error.
+    through them clearly lower the weighted rms error (:data:`~omnibot.calibration.motorfit.SPEED_KEEP`).
     """
     geo = runner.geometry
     n = geo.motors
@@ -211,7 +212,7 @@ def _speed_terms(
         log_gains.append([float(g) for g in np.log(gains)])
         after.append(et)
     new = np.concatenate(after)
-    if rms(weights * new) < rms(weights * errors):
+    if rms(weights * new) <= SPEED_KEEP * rms(weights * errors):
         result.log_gains = log_gains
         result.after_speed = [rms(e) for e in after]
         result.speed = [round(float(v) * k, 1) for v in c]
