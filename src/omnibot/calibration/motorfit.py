@@ -11,17 +11,19 @@ power ``a`` of the calibration factors and the wheel's rim speed ``u_i`` (docs/f
   counts: the load's torque through the winding's resistance, and the back-EMF), so a motor whose
   torque constant is ``s`` times the nominal one needs ``a_load / s + s a_emf`` where the nominal
   motor needs ``a = a_load + a_emf``: ``a / s + (s - 1/s) E u`` with ``E u = a_emf`` (E: the nominal
-  back-EMF in counts per m/s of rim speed). One constant gain ``1/s`` and one speed term
+  back-EMF in counts per m/s of rim speed, :func:`emf_counts`). One gain ``1/s`` and one speed term
   ``(s - 1/s) E`` per motor hold on every course and floor, however the load's share of the power
   changes with them; a resistance or gear efficiency apart changes the gain alone, which is why the
-  two are fitted as two numbers. One gain table over power (the map before) can only be right for
-  one mix of load and speed.
-* **The fit.** The balance runs' errors (:func:`balance_errors`: each run's course error and its turn
-  per metre) respond to motor i's power change ``dP_i`` as ``J_ri dP_i / a_ri`` (``J``: measured per
-  log-gain at one power, reused at the others as the gain fit did); the change is
-  ``(g_i - 1) a_ri + c_i u_ri``, linear in the gains and speed terms, so each step is one linear least
-  squares over every power at once (:func:`model_step`), the gains' mean and the speed terms' sum held
-  (a common factor is the K_l tables' business).
+  two are two numbers. One gain table over power (the map before) can only be right for one mix of
+  load and speed.
+* **Gains** at each power: the Gauss-Newton step on the log-gains, their sum held at zero
+  (:func:`gain_step`), on the balance runs' errors (:func:`balance_errors`: each run's course error
+  and its turn per metre).
+* **Speed terms** from what the gains left over: a speed term changes a motor's power in a run by
+  ``(c / K) (K u / a)`` relative; with the gains re-centred at each power only the runs' departure
+  from the power's mean ``K u / a`` counts (:func:`centred_ratios`), and one linear least squares
+  over every power gives them (:func:`speed_step`). :func:`torque_of` is the torque constant a
+  speed term implies for a motor that differs in its torque constant alone.
 """
 
 from __future__ import annotations

@@ -12,14 +12,18 @@ patterns drive the robot as the firmware will.
   POWER only; its wheel also pushes the robot, so the number is a little high) and scaled so that
   their mean is the dead band of rotation in place, where no idle roller drags:
   ``offset_i = deadband_i * rotation / mean(deadband)``.
-* **Gain and speed term** (the two-number motor model, :mod:`~omnibot.calibration.motorfit`).
+* **Gains and speed terms** (the two-number motor model, :mod:`~omnibot.calibration.motorfit`).
   Unequal motors turn the body on a straight run and pull it off its course. At a few nominal
   powers the balance runs drive every idle axis and the course halfway between two of them, both
   ways; the errors are each run's course error and its turn per metre, and each run's speed is
-  measured too (its rim speeds are what the speed terms multiply). The Jacobian is measured per
-  gain at the first power that moves the robot and reused at the others; each Gauss-Newton step
-  fits the gains and speed terms to every power's runs at once and is kept only when it lowers the
-  rms error (:func:`balance_model`).
+  measured too (its rim speeds are what the speed terms multiply). The log-gains (their sum held at
+  zero: a common factor is the K_l tables' business) are found at each power by Gauss-Newton with a
+  finite-difference Jacobian at the first power that moves the robot, reused (chord method) at the
+  others, a step kept only when it lowers the rms error. Measuring the Jacobian again at every
+  power, and Broyden updates of it, were tried: on carpet the steps then went astray (the
+  acceptance check's carpet mean rose from 2.8 % to 6.7 and 4.8 %). The speed terms then come from
+  what the gains left over (:func:`balance_model`); a joint Gauss-Newton of both numbers per motor
+  over every power was tried and wandered off on wood (docs/calibration.md).
 """
 
 from __future__ import annotations
