@@ -130,7 +130,7 @@ def test_after_within_3_percent(outcome: tuple[CalibrationResult, Path, float]) 
 
 @pytest.mark.xfail(
     strict=True,
-    reason="open (issue 17): the two-number motor model meets it with the true motors' numbers (1.3 %, "
+    reason="open (issue 17): the two-number motor model meets it with the true motors' numbers (0.9 %, "
     "benchmarks/motor_model.py), but the fit from the balance runs does not find them: carpet's MOVEs in "
     "reach miss by up to 6.0 % and keep their course no better than before (docs/calibration.md)",
 )
