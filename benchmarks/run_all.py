@@ -7,6 +7,7 @@ from benchmarks import (
     link_faults,
     link_throughput,
     log_cost,
+    motor_model,
     odometry_drift,
     ros2_latency,
     ros2_rates,
@@ -29,6 +30,10 @@ def main() -> int:
             lambda: link_throughput.main(["--pty", "--load", "2"]),
         ),
         ("link faults", lambda: link_faults.main([])),
+        (
+            "motor model: the acceptance robot on carpet, true motors",
+            lambda: motor_model.main(["--map", "model"]),
+        ),
         ("path tracking", lambda: tracking.main([])),
         ("odometry drift", lambda: odometry_drift.main([])),
         ("sonar stop", lambda: sonar_stop.main([])),

@@ -11,6 +11,7 @@
 #define P_LINE_MAX 64
 #define P_EVENT_LINE_MAX 256
 #define P_POWER_MAX 255
+#define P_CAL_COURSE_MAX 90
 #define P_CAL_GAIN 20
 #define P_CAL_K 0
 #define P_CAL_KL 10
@@ -25,6 +26,7 @@
 #define P_CAL_ROLLER_COS 4
 #define P_CAL_ROLLER_SIN 5
 #define P_CAL_SCALE 1000
+#define P_CAL_SPEED 7
 #define P_E_ANGLE 29
 #define P_E_CALIBRATION 38
 #define P_E_CHECKSUM 26
@@ -215,35 +217,15 @@ static const int16_t IDLE_AXES_CDEG[IDLE_AXES] PROGMEM = {4500, 13500};
 #define CAL_CURVES 8
 #define DEFAULT_K 1188
 struct Knot { int16_t x, y; };
-#define DEFAULT_KT_N 2
-static const Knot DEFAULT_KT[CAL_KNOTS] PROGMEM = {{0, 1250}, {255, 1250}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}};
-#define DEFAULT_KR_N 11
-static const Knot DEFAULT_KR[CAL_KNOTS] PROGMEM = {{10, 5250}, {20, 3080}, {30, 2359}, {45, 1881}, {60, 1645}, {80, 1472}, {100, 1371}, {130, 1284}, {160, 1237}, {200, 1207}, {255, 1203}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}};
-#define DEFAULT_COAST_N 1
-static const Knot DEFAULT_COAST[CAL_KNOTS] PROGMEM = {{0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}};
 #define DEFAULT_KL_CURVES 2
-static const int16_t DEFAULT_KL_COURSE[CAL_CURVES] PROGMEM = {0, 45, 0, 0, 0, 0, 0, 0};
-static const Knot DEFAULT_KL[CAL_CURVES][CAL_KNOTS] PROGMEM = {
-    {{10, 5803}, {20, 3361}, {30, 2549}, {45, 2011}, {60, 1745}, {80, 1549}, {100, 1435}, {130, 1338}, {160, 1283}, {200, 1249}, {255, 1247}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-    {{10, 5719}, {20, 3311}, {30, 2509}, {45, 1976}, {60, 1710}, {80, 1513}, {100, 1396}, {130, 1292}, {160, 1229}, {200, 1180}, {255, 1165}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-    {{0, 1000}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-    {{0, 1000}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-    {{0, 1000}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-    {{0, 1000}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-    {{0, 1000}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-    {{0, 1000}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-};
-static const uint8_t DEFAULT_KL_N[CAL_CURVES] PROGMEM = {11, 11, 0, 0, 0, 0, 0, 0};
-static const Knot DEFAULT_GAIN[MOTORS][CAL_KNOTS] PROGMEM = {
-    {{0, 1000}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-    {{0, 1000}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-    {{0, 1000}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-    {{0, 1000}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-};
-static const uint8_t DEFAULT_GAIN_N[MOTORS] PROGMEM = {1, 1, 1, 1};
+static const uint8_t DEFAULT_KL_COURSE[2] PROGMEM = {0, 45};
+/* knots of K_t, K_r, the coast, each K_l curve and each motor's gain, one after the other */
+static const Knot DEFAULT_KNOTS[40] PROGMEM = {{0, 1250}, {255, 1250}, {10, 5250}, {20, 3080}, {30, 2359}, {45, 1881}, {60, 1645}, {80, 1472}, {100, 1371}, {130, 1284}, {160, 1237}, {200, 1207}, {255, 1203}, {0, 0}, {10, 5803}, {20, 3361}, {30, 2549}, {45, 2011}, {60, 1745}, {80, 1549}, {100, 1435}, {130, 1338}, {160, 1283}, {200, 1249}, {255, 1247}, {10, 5719}, {20, 3311}, {30, 2509}, {45, 1976}, {60, 1710}, {80, 1513}, {100, 1396}, {130, 1292}, {160, 1229}, {200, 1180}, {255, 1165}, {0, 1000}, {0, 1000}, {0, 1000}, {0, 1000}};
+static const uint8_t DEFAULT_N[9] PROGMEM = {2, 11, 1, 11, 11, 1, 1, 1, 1};
 static const int16_t DEFAULT_OFFSET[MOTORS] PROGMEM = {0, 0, 0, 0};
 static const int16_t DEFAULT_ROLLER_COS[MOTORS] PROGMEM = {0, 0, 0, 0};
 static const int16_t DEFAULT_ROLLER_SIN[MOTORS] PROGMEM = {0, 0, 0, 0};
+static const int16_t DEFAULT_SPEED[MOTORS] PROGMEM = {0, 0, 0, 0};
 static const float WHEEL_RADIUS_M[MOTORS] PROGMEM = {0.0325f, 0.0325f, 0.0325f, 0.0325f};
 /* each wheel's rollers' rolling direction and encoder counts per roller pitch (roller drag) */
 static const float ROLLER_DIR[MOTORS][2] PROGMEM = {{0.707106781f, 0.707106781f}, {-0.707106781f, 0.707106781f}, {0.707106781f, 0.707106781f}, {-0.707106781f, 0.707106781f}};

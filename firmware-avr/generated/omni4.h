@@ -11,6 +11,7 @@
 #define P_LINE_MAX 64
 #define P_EVENT_LINE_MAX 256
 #define P_POWER_MAX 255
+#define P_CAL_COURSE_MAX 90
 #define P_CAL_GAIN 20
 #define P_CAL_K 0
 #define P_CAL_KL 10
@@ -25,6 +26,7 @@
 #define P_CAL_ROLLER_COS 4
 #define P_CAL_ROLLER_SIN 5
 #define P_CAL_SCALE 1000
+#define P_CAL_SPEED 7
 #define P_E_ANGLE 29
 #define P_E_CALIBRATION 38
 #define P_E_CHECKSUM 26
@@ -215,35 +217,15 @@ static const int16_t IDLE_AXES_CDEG[IDLE_AXES] PROGMEM = {0, 9000};
 #define CAL_CURVES 8
 #define DEFAULT_K 1449
 struct Knot { int16_t x, y; };
-#define DEFAULT_KT_N 2
-static const Knot DEFAULT_KT[CAL_KNOTS] PROGMEM = {{0, 1550}, {255, 1550}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}};
-#define DEFAULT_KR_N 11
-static const Knot DEFAULT_KR[CAL_KNOTS] PROGMEM = {{10, 4929}, {20, 2949}, {30, 2291}, {45, 1856}, {60, 1640}, {80, 1483}, {100, 1393}, {130, 1316}, {160, 1275}, {200, 1253}, {255, 1252}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}};
-#define DEFAULT_COAST_N 1
-static const Knot DEFAULT_COAST[CAL_KNOTS] PROGMEM = {{0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}};
 #define DEFAULT_KL_CURVES 2
-static const int16_t DEFAULT_KL_COURSE[CAL_CURVES] PROGMEM = {0, 45, 0, 0, 0, 0, 0, 0};
-static const Knot DEFAULT_KL[CAL_CURVES][CAL_KNOTS] PROGMEM = {
-    {{10, 5316}, {20, 3137}, {30, 2412}, {45, 1931}, {60, 1691}, {80, 1513}, {100, 1409}, {130, 1315}, {160, 1260}, {200, 1218}, {255, 1210}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-    {{10, 5984}, {20, 3714}, {30, 2967}, {45, 2482}, {60, 2255}, {80, 2108}, {100, 2050}, {130, 2202}, {160, 2231}, {200, 2257}, {255, 2279}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-    {{0, 1000}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-    {{0, 1000}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-    {{0, 1000}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-    {{0, 1000}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-    {{0, 1000}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-    {{0, 1000}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-};
-static const uint8_t DEFAULT_KL_N[CAL_CURVES] PROGMEM = {11, 11, 0, 0, 0, 0, 0, 0};
-static const Knot DEFAULT_GAIN[MOTORS][CAL_KNOTS] PROGMEM = {
-    {{0, 1000}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-    {{0, 1000}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-    {{0, 1000}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-    {{0, 1000}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}},
-};
-static const uint8_t DEFAULT_GAIN_N[MOTORS] PROGMEM = {1, 1, 1, 1};
+static const uint8_t DEFAULT_KL_COURSE[2] PROGMEM = {0, 45};
+/* knots of K_t, K_r, the coast, each K_l curve and each motor's gain, one after the other */
+static const Knot DEFAULT_KNOTS[40] PROGMEM = {{0, 1550}, {255, 1550}, {10, 4929}, {20, 2949}, {30, 2291}, {45, 1856}, {60, 1640}, {80, 1483}, {100, 1393}, {130, 1316}, {160, 1275}, {200, 1253}, {255, 1252}, {0, 0}, {10, 5316}, {20, 3137}, {30, 2412}, {45, 1931}, {60, 1691}, {80, 1513}, {100, 1409}, {130, 1315}, {160, 1260}, {200, 1218}, {255, 1210}, {10, 5984}, {20, 3714}, {30, 2967}, {45, 2482}, {60, 2255}, {80, 2108}, {100, 2050}, {130, 2202}, {160, 2231}, {200, 2257}, {255, 2279}, {0, 1000}, {0, 1000}, {0, 1000}, {0, 1000}};
+static const uint8_t DEFAULT_N[9] PROGMEM = {2, 11, 1, 11, 11, 1, 1, 1, 1};
 static const int16_t DEFAULT_OFFSET[MOTORS] PROGMEM = {0, 0, 0, 0};
 static const int16_t DEFAULT_ROLLER_COS[MOTORS] PROGMEM = {0, 0, 0, 0};
 static const int16_t DEFAULT_ROLLER_SIN[MOTORS] PROGMEM = {0, 0, 0, 0};
+static const int16_t DEFAULT_SPEED[MOTORS] PROGMEM = {0, 0, 0, 0};
 static const float WHEEL_RADIUS_M[MOTORS] PROGMEM = {0.025f, 0.025f, 0.025f, 0.025f};
 /* each wheel's rollers' rolling direction and encoder counts per roller pitch (roller drag) */
 static const float ROLLER_DIR[MOTORS][2] PROGMEM = {{-1.0f, 0.0f}, {-0.0f, 1.0f}, {1.0f, 0.0f}, {-0.0f, -1.0f}};

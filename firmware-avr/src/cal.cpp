@@ -14,34 +14,39 @@ struct Store {
     int16_t k;
     Table kt, kr, coast;
     uint8_t curves;
-    int16_t course[CAL_CURVES];
+    uint8_t course[CAL_CURVES];  // degrees, 0..P_CAL_COURSE_MAX
     Table kl[CAL_CURVES];
-    int16_t offset[MOTORS], rcos[MOTORS], rsin[MOTORS];
+    int16_t offset[MOTORS], rcos[MOTORS], rsin[MOTORS], speed[MOTORS];
     Table gain[MOTORS];
 };
 static_assert(sizeof(Store) <= 1024, "calibration tables exceed the EEPROM");
 
 static Store EEMEM ee;
-// tells this robot's defaults apart from another build's tables
-static const uint16_t MAGIC = 0xCA10 ^ (MOTORS << 8) ^ DEFAULT_K;
+// tells this robot's defaults apart from another build's tables, and this layout (0xCA11: speed terms,
+// byte courses) from an older one
+static const uint16_t MAGIC = 0xCA11 ^ (MOTORS << 8) ^ DEFAULT_K;
 
 #define EE(field) (&ee.field)
 
-static void load_table(Table *dst, const Knot *src, uint8_t n) {
+// The next table of the generated defaults (DEFAULT_KNOTS, DEFAULT_N: K_t, K_r, coast, the K_l
+// curves, the gains, in that order), its knots only.
+static void load_table(Table *dst, uint8_t &table, const Knot *&src) {
     Table t;
-    t.n = n;
-    memcpy_P(t.k, src, sizeof(t.k));
-    eeprom_update_block(&t, dst, sizeof(t));
+    t.n = pgm_read_byte(&DEFAULT_N[table++]);
+    memcpy_P(t.k, src, t.n * sizeof(Knot));
+    src += t.n;
+    eeprom_update_block(&t, dst, 1 + t.n * sizeof(Knot));
 }
 
 // Shortcuts for the tables' reset values, refreshed after every CAL: the motor map is the identity
-// (offsets 0, every gain knot 1.0) and no roller drag coefficient is set.
+// (offsets 0, every gain knot 1.0, speed terms 0) and no roller drag coefficient is set.
 static bool map_identity, no_roller_drag;
 
 static void refresh_shortcuts() {
     map_identity = no_roller_drag = true;
     for (uint8_t i = 0; i < MOTORS; i++) {
-        if (eeprom_read_word((const uint16_t *)EE(offset[i]))) map_identity = false;
+        if (eeprom_read_word((const uint16_t *)EE(offset[i])) || eeprom_read_word((const uint16_t *)EE(speed[i])))
+            map_identity = false;
         if (eeprom_read_word((const uint16_t *)EE(rcos[i])) || eeprom_read_word((const uint16_t *)EE(rsin[i])))
             no_roller_drag = false;
         uint8_t n = eeprom_read_byte(EE(gain[i].n));
@@ -60,20 +65,23 @@ void cal_init() {
 }
 
 static void load_defaults() {
+    uint8_t table = 0;
+    const Knot *src = DEFAULT_KNOTS;
     eeprom_update_word((uint16_t *)EE(k), DEFAULT_K);
-    load_table(EE(kt), DEFAULT_KT, DEFAULT_KT_N);
-    load_table(EE(kr), DEFAULT_KR, DEFAULT_KR_N);
-    load_table(EE(coast), DEFAULT_COAST, DEFAULT_COAST_N);
+    load_table(EE(kt), table, src);
+    load_table(EE(kr), table, src);
+    load_table(EE(coast), table, src);
     eeprom_update_byte(EE(curves), DEFAULT_KL_CURVES);
-    for (uint8_t c = 0; c < CAL_CURVES; c++) {
-        eeprom_update_word((uint16_t *)EE(course[c]), pgm_read_word(&DEFAULT_KL_COURSE[c]));
-        load_table(EE(kl[c]), DEFAULT_KL[c], pgm_read_byte(&DEFAULT_KL_N[c]));
+    for (uint8_t c = 0; c < DEFAULT_KL_CURVES; c++) {
+        eeprom_update_byte(EE(course[c]), pgm_read_byte(&DEFAULT_KL_COURSE[c]));
+        load_table(EE(kl[c]), table, src);
     }
     for (uint8_t i = 0; i < MOTORS; i++) {
         eeprom_update_word((uint16_t *)EE(offset[i]), pgm_read_word(&DEFAULT_OFFSET[i]));
         eeprom_update_word((uint16_t *)EE(rcos[i]), pgm_read_word(&DEFAULT_ROLLER_COS[i]));
         eeprom_update_word((uint16_t *)EE(rsin[i]), pgm_read_word(&DEFAULT_ROLLER_SIN[i]));
-        load_table(EE(gain[i]), DEFAULT_GAIN[i], pgm_read_byte(&DEFAULT_GAIN_N[i]));
+        eeprom_update_word((uint16_t *)EE(speed[i]), pgm_read_word(&DEFAULT_SPEED[i]));
+        load_table(EE(gain[i]), table, src);
     }
     eeprom_update_word(EE(magic), MAGIC);
 }
@@ -108,11 +116,11 @@ float cal_roller(uint8_t which, uint8_t i) { return rd16(which ? EE(rsin[i]) : E
 
 float cal_kl(float power, float folded) {
     uint8_t n = eeprom_read_byte(EE(curves));
-    if (n == 1 || folded <= rd16(EE(course[0]))) return interp(EE(kl[0]), power);
+    if (n == 1 || folded <= eeprom_read_byte(EE(course[0]))) return interp(EE(kl[0]), power);
     for (uint8_t i = 1; i < n; i++) {
-        float c1 = rd16(EE(course[i]));
+        float c1 = eeprom_read_byte(EE(course[i]));
         if (folded <= c1) {
-            float c0 = rd16(EE(course[i - 1]));
+            float c0 = eeprom_read_byte(EE(course[i - 1]));
             float a = interp(EE(kl[i - 1]), power), b = interp(EE(kl[i]), power);
             return a + (folded - c0) * (b - a) / (c1 - c0);
         }
@@ -137,10 +145,13 @@ int16_t cal_start_power() {
     return low > 0 ? (int16_t)ceilf(low * 0.001f) : 0;
 }
 
-float cal_motor_power(uint8_t i, float a) {
+// sign(a) (offset + gain(|a|) |a|) + speed u, never against a (calibration.py motor_power)
+float cal_motor_power(uint8_t i, float a, float u) {
     float m = a < 0 ? -a : a;
     if (map_identity || m == 0.0f || i >= MOTORS) return a;
-    float p = rd16(EE(offset[i])) * 0.1f * (m < 1.0f ? m : 1.0f) + interp(EE(gain[i]), m) * m;
+    if (a < 0) u = -u;
+    float p = (rd16(EE(offset[i])) * (m < 1.0f ? m : 1.0f) + rd16(EE(speed[i])) * u) * 0.1f + interp(EE(gain[i]), m) * m;
+    if (p < 0) p = 0;
     return a > 0 ? p : -p;
 }
 
@@ -176,9 +187,10 @@ static bool write(int16_t table, int16_t index, int16_t x, int16_t y) {
         eeprom_update_word((uint16_t *)EE(k), y);
         return true;
     }
-    if (table == P_CAL_ROLLER_COS || table == P_CAL_ROLLER_SIN) {
+    if (table == P_CAL_ROLLER_COS || table == P_CAL_ROLLER_SIN || table == P_CAL_SPEED) {
         if (index < 0 || index >= MOTORS || x != 0) return false;
-        eeprom_update_word((uint16_t *)(table == P_CAL_ROLLER_COS ? EE(rcos[index]) : EE(rsin[index])), y);
+        int16_t *field = table == P_CAL_ROLLER_COS ? EE(rcos[index]) : table == P_CAL_ROLLER_SIN ? EE(rsin[index]) : EE(speed[index]);
+        eeprom_update_word((uint16_t *)field, y);
         return true;
     }
     if (table == P_CAL_ROLLER_COAST) return x >= 0 && write_knot(EE(coast), index, x, y);
@@ -206,9 +218,10 @@ static bool write(int16_t table, int16_t index, int16_t x, int16_t y) {
     }
     if (k < 0 || k > n || (k == n && index != -1)) return false;
     if (index == -1) {
-        if ((k > 0 && x <= rd16(EE(course[k - 1]))) || (k + 1 < n && x >= rd16(EE(course[k + 1]))))
+        if (x > P_CAL_COURSE_MAX || (k > 0 && x <= eeprom_read_byte(EE(course[k - 1]))) ||
+            (k + 1 < n && x >= eeprom_read_byte(EE(course[k + 1]))))
             return false;
-        eeprom_update_word((uint16_t *)EE(course[k]), x);
+        eeprom_update_byte(EE(course[k]), x);
         if (k == n) {
             set_table_identity(EE(kl[k]));
             eeprom_update_byte(EE(curves), n + 1);

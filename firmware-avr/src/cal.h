@@ -11,6 +11,6 @@ float cal_kr(float power);
 float cal_kl(float power, float folded_course);
 int16_t cal_start_power();  // the K_l tables' dead band, whole PWM counts up (0: they do not say)
 float cal_coast(float speed_cms);  // s
-float cal_motor_power(uint8_t i, float a);
+float cal_motor_power(uint8_t i, float a, float u);  // nominal power a, rim speed u (m/s)
 float cal_roller(uint8_t which, uint8_t i);  // which 0: cosine, 1: sine coefficient, PWM counts
 bool cal_any_roller_drag();  // some roller drag coefficient is not 0

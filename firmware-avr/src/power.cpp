@@ -52,7 +52,8 @@ uint8_t PowerModel::compute(float vx, float vy, float w, bool rotate, int16_t *o
     if (rot_max > 0) f_rot = k * (rotate ? cal_kr(k * rot_max) : cal_kt(k * rot_max));
     float peak = 0;
     for (uint8_t i = 0; i < MOTORS; i++) {
-        float p = cal_motor_power(i, f_tr * (rim(i, 0) * vx + rim(i, 1) * vy) + f_rot * rim(i, 2) * w);
+        float t = rim(i, 0) * vx + rim(i, 1) * vy, r = rim(i, 2) * w;
+        float p = cal_motor_power(i, f_tr * t + f_rot * r, t + r);
         raw[i] = base[i] = p;
         if (fabsf(p) > peak) peak = fabsf(p);
     }

@@ -8,6 +8,7 @@ import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -137,6 +138,22 @@ def test_calibration_file_errors(tmp_path: Path) -> None:
         parse_calibration(
             {"calibration": {"k": 100, "motors": {"offset": [-3], "gain": [{"x": [0], "y": [1]}]}}}
         )
+    # the motor model's speed terms: optional (files without them load as before), one per motor
+    flat = [{"x": [0], "y": [1.0]}] * 2
+    old = parse_calibration({"calibration": {"k": 100, "motors": {"offset": [30.0, 31.0], "gain": flat}}})
+    motors = old.for_surface(None).motors
+    assert motors is not None and motors.speed is None and motors.speed_term(1) == 0.0
+    new: dict[str, Any] = {"k": 100, "motors": {"offset": [30.0, 31.0], "gain": flat, "speed": [21.6, -23.9]}}
+    motors = parse_calibration({"calibration": new}).for_surface(None).motors
+    assert motors is not None and motors.speed == (21.6, -23.9)
+    for speed, message in (
+        ([1.0], "speed needs one entry per motor"),
+        ([1.0, 5000.0], "speed terms must lie within"),
+        (["fast", 1.0], r"calibration\.motors\.speed\.0: Input should be a valid number"),
+        ([1.0, ".nan"], "speed"),
+    ):
+        with pytest.raises(ConfigError, match=message):
+            parse_calibration({"calibration": {**new, "motors": {**new["motors"], "speed": speed}}})
     bad = tmp_path / "bad.yaml"
     bad.write_text("calibration: [", encoding="utf-8")
     with pytest.raises(ConfigError, match="not valid YAML"):

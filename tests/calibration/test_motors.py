@@ -4,11 +4,21 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from omnibot.calibration.motorfit import Balance, balance_courses, identity, offsets_from_deadbands
+from omnibot.calibration.motorfit import (
+    Balance,
+    balance_courses,
+    centred_ratios,
+    emf_counts,
+    identity,
+    offsets_from_deadbands,
+    speed_step,
+    torque_of,
+)
 from omnibot.calibration.patterns import Geometry, apply_map, course_pattern, map_power, top_power
 from omnibot.firmware.calibration import Calibration
 from omnibot.robot.description import MotorMapSpec, PiecewiseLinear, RobotDescription, load_robot
@@ -23,9 +33,11 @@ MAP = MotorMapSpec(
     ),
 )
 
+SPEEDY = MAP.model_copy(update={"speed": (21.6, -23.9, 0.0, 150.0)})
 
-@given(st.integers(0, 3), st.floats(-255, 255, allow_nan=False))
-def test_map_power_is_the_firmwares(i: int, a: float) -> None:
+
+@given(st.integers(0, 3), st.floats(-255, 255, allow_nan=False), st.floats(-2, 2, allow_nan=False))
+def test_map_power_is_the_firmwares(i: int, a: float, u: float) -> None:
     fw = Calibration(
         {
             "k": 100.0,
@@ -35,9 +47,10 @@ def test_map_power_is_the_firmwares(i: int, a: float) -> None:
             "kr": [[0], [1.0]],
             "motor_offset": list(MAP.offset),
             "motor_gain": [[list(g.x), list(g.y)] for g in MAP.gain],
+            "motor_speed": list(SPEEDY.speed or ()),
         }
     )
-    assert map_power(MAP, i, a) == pytest.approx(fw.motor_power(i, a), abs=1e-9)
+    assert map_power(SPEEDY, i, a, u) == pytest.approx(fw.motor_power(i, a, u), abs=1e-9)
 
 
 def test_patterns_through_the_map(omni4: RobotDescription) -> None:
@@ -71,3 +84,43 @@ def test_balance_courses_and_tables() -> None:
     tables = b.tables(2)
     assert tables[0] == PiecewiseLinear(x=(50.0, 100.0), y=(round(math.exp(0.1), 3), 1.0))
     assert Balance().tables(3) == identity(3).gain
+
+
+def test_the_speed_term_of_a_torque_constant() -> None:
+    """A motor with s times the nominal torque constant (and back-EMF) needs ``a / s + (s - 1/s) E u``
+    where the nominal one needs ``a``: its speed term is (s - 1/s) E, and ``torque_of`` inverts it."""
+    emf = emf_counts(load_robot("omni4"))
+    assert emf == pytest.approx((255 * 0.006 * 10 / (0.025 * (7.4 - 2.0)),) * 4)  # 113 counts per m/s
+    for s in (0.8, 0.9, 1.0, 1.1, 1.25):
+        assert torque_of((s - 1 / s) * emf[0], emf[0]) == pytest.approx(s)
+
+
+def test_speed_step_finds_the_speed_terms_the_gains_left_over() -> None:
+    """Motors +-10 % apart in torque constant, balanced by gains at each power: what is left depends on
+    how far each run's load share (K u / a) is from the power's mean, and the speed step finds
+    (s - 1/s) E from it; the ratios' means come back from ``centred_ratios``."""
+    rng = np.random.default_rng(5)
+    n, k, emf = 4, 190.0, 113.0
+    s = np.array([1.1, 0.9, 0.9, 1.1])
+    truth = (s - 1 / s) * emf / k
+    truth -= truth.mean()  # a common share is the K_l tables'
+    jac = rng.normal(size=(48, n))
+    ratios = rng.uniform(0.2, 0.9, size=(48, n))
+    ratios[::3, 0] = 0.0  # motor 1 does not drive in every run
+    centred, mean = centred_ratios(ratios)
+    assert mean[1] == pytest.approx(ratios[:, 1].mean())
+    assert mean[0] == pytest.approx(ratios[ratios[:, 0] > 0, 0].mean()) and np.all(centred[::3, 0] == 0.0)
+    e = -np.sum(jac * truth[None, :] * centred, axis=1)
+    got = speed_step(jac, e, centred, np.ones(48))
+    assert got * k == pytest.approx(truth * k, abs=1.0)  # counts per m/s
+    assert speed_step(jac, np.zeros(48), centred, np.ones(48)) == pytest.approx(np.zeros(n))
+
+
+def test_balance_rate_interpolates_the_runs() -> None:
+    b = Balance(rates=[(0.0, 50, 0.2), (0.0, 50, 0.3), (0.0, 100, 0.5), (45.0, 100, 0.3), (45.0, 200, 0.5)])
+    assert b.rate(50, 10.0) == pytest.approx(0.25)  # the median of course 0's runs at 50
+    assert b.rate(25, 0.0) == pytest.approx(0.125)  # through 0 below the lowest power
+    assert b.rate(75, 0.0) == pytest.approx(0.375)
+    assert b.rate(150, 0.0) == pytest.approx(0.75)  # along the last segment above
+    assert b.rate(150, 40.0) == pytest.approx(0.4)
+    assert Balance().rate(100, 0.0) == 0.0

@@ -377,3 +377,27 @@ def test_open_lets_the_power_up_greeting_settle() -> None:
         client.sleep(0.1)
     assert hello.name == "omni4"
     assert resets == []  # the greeting was consumed while settling, and nothing else looked like one
+
+
+def test_an_older_controller_takes_a_map_without_speed_terms(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A controller from before CAL table 7 (ERROR 38 for it): a map without speed terms uploads (it
+    has none anyway), one with them fails in one line naming the firmware."""
+    from omnibot.robot.description import MotorMapSpec, PiecewiseLinear, load_robot
+    from omnibot.sim.device import SimDevice
+
+    old_cal = Controller._cal
+
+    def older(self: Controller, table: int, index: int, x: int, y: int) -> bool:
+        return table != codes.CAL_SPEED and old_cal(self, table, index, x, y)
+
+    monkeypatch.setattr(Controller, "_cal", older)
+    robot = load_robot("omni4")
+    spec = robot.calibration
+    assert spec is not None
+    with RobotClient(LockstepLink(SimDevice(robot)), robot) as client:
+        assert any(c.table == codes.CAL_SPEED for c in client.upload_calibration(spec))
+        flat = PiecewiseLinear(x=(0.0,), y=(1.0,))
+        motors = MotorMapSpec(offset=(30.0,) * 4, gain=(flat,) * 4, speed=(5.0, 0.0, 0.0, -5.0))
+        with pytest.raises(ControllerError, match="does not know the motor map's speed terms") as info:
+            client.upload_calibration(spec.model_copy(update={"motors": motors}))
+        assert info.value.code == codes.E_CALIBRATION and "\n" not in str(info.value)

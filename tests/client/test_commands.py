@@ -191,9 +191,18 @@ def test_cal_and_calibration_upload() -> None:
     assert c.calibration(CalibrationSpec(k=220.0), motors=2)[1:] == [
         Cal(codes.CAL_OFFSET, 0, 0, 0),
         Cal(codes.CAL_GAIN, 0, 0, 1000),
+        Cal(codes.CAL_SPEED, 0, 0, 0),
         Cal(codes.CAL_OFFSET, 1, 0, 0),
         Cal(codes.CAL_GAIN + 1, 0, 0, 1000),
+        Cal(codes.CAL_SPEED, 1, 0, 0),
         *no_drag,
+    ]
+    # the motor model's speed terms, 0.1 counts per m/s (a map without them sends 0: no speed term)
+    speedy = motors.model_copy(update={"speed": (21.64, -23.9)})
+    sent = c.calibration(CalibrationSpec(k=220.0, motors=speedy), motors=2)
+    assert [m for m in sent if m.table == codes.CAL_SPEED] == [
+        Cal(codes.CAL_SPEED, 0, 0, 216),
+        Cal(codes.CAL_SPEED, 1, 0, -239),
     ]
     drag = RollerDragSpec(
         cos=(-4.96, 0.0), sin=(0.35, 0.0), coast=PiecewiseLinear(x=(0.0, 0.64), y=(0.0, 0.34))
@@ -216,7 +225,9 @@ def test_cal_and_calibration_upload() -> None:
     assert c.calibration(CalibrationSpec(k=220.0, motors=motors))[1:] == [
         Cal(codes.CAL_OFFSET, 0, 0, 0),
         Cal(codes.CAL_GAIN, 0, 0, 1000),
+        Cal(codes.CAL_SPEED, 0, 0, 0),
         Cal(codes.CAL_OFFSET, 1, 0, 382),
         Cal(codes.CAL_GAIN + 1, 0, 50, 1100),
         Cal(codes.CAL_GAIN + 1, 1, 200, 900),
+        Cal(codes.CAL_SPEED, 1, 0, 0),
     ]

@@ -9,7 +9,15 @@ import statistics
 
 import pytest
 
-from omnibot.client import EventRecorder, IdleEvent, NotSupported, OutOfRange, RobotClient, Telemetry
+from omnibot.client import (
+    CalibrationRejected,
+    EventRecorder,
+    IdleEvent,
+    NotSupported,
+    OutOfRange,
+    RobotClient,
+    Telemetry,
+)
 from omnibot.protocol import codes, units
 from omnibot.protocol.messages import Cal, Hello, Mode, Move, Status
 
@@ -158,6 +166,36 @@ def test_cal_upload(client: RobotClient) -> None:
     sent = client.upload_calibration(spec)  # the robot's own values: changes nothing
     assert sent[0].params() == (codes.CAL_K, 0, 0, units.to_cal_k(spec.k))
     assert all(isinstance(c, Cal) for c in sent)
+
+
+def test_cal_motor_speed_terms(client: RobotClient) -> None:
+    """The motor map's speed terms (CAL table 7): motor i gets ``speed_i u_i`` more at rim speed
+    ``u_i`` (m/s), never against its direction; a course beyond 90 degrees and a motor that does not
+    exist are refused (ERROR 38)."""
+    from omnibot.robot.description import MotorMapSpec, PiecewiseLinear, load_robot
+
+    spec = load_robot(ROBOT).calibration
+    assert spec is not None
+    flat = PiecewiseLinear(x=(0.0,), y=(1.0,))
+    mapped = spec.model_copy(
+        update={"motors": MotorMapSpec(offset=(0.0,) * 4, gain=(flat,) * 4, speed=(0.0, 100.0, 0.0, -50.0))}
+    )
+    try:
+        client.vel(0.2, 0.0, 0.0, 0.5)
+        base = client.status().powers
+        client.stop()
+        client.upload_calibration(mapped)
+        client.vel(0.2, 0.0, 0.0, 0.5)
+        got = client.status().powers
+        client.stop()
+        p = base[1]
+        assert p > 40 and base == (0, p, 0, -p)
+        assert got == (0, p + 20, 0, -(p - 10))  # rim speeds +0.2 and -0.2 m/s
+        for bad in ((codes.CAL_SPEED, 4, 0, 10), (codes.CAL_SPEED, 0, 1, 10), (codes.CAL_KL + 1, -1, 91, 0)):
+            with pytest.raises(CalibrationRejected):
+                client.execute(Cal(*bad))
+    finally:
+        client.upload_calibration(spec)
 
 
 def test_stop_when_idle_sends_no_idle(client: RobotClient) -> None:

@@ -119,6 +119,39 @@ def test_motor_map_offset_gain_and_ramp() -> None:
     assert not cal.set_knot(21, 0, 0, 0.0)  # gains are positive
 
 
+def test_motor_map_speed_term() -> None:
+    """``sign(a) (offset + gain |a|) + speed u``: the speed term follows the rim speed u (m/s), with the
+    direction of a; it never turns a power against a, and a wheel meant to stand still stays still."""
+    cal = Calibration({**_cal_cfg(), "motors": 2})
+    assert cal.speed == [0.0, 0.0] and cal.motor_power(1, 80.0, 0.5) == 80.0
+    assert cal.set_knot(7, 1, 0, 40.0) and cal.set_knot(21, 0, 0, 0.9)
+    assert cal.motor_power(1, 80.0, 0.5) == pytest.approx(0.9 * 80 + 20)
+    assert cal.motor_power(1, -80.0, -0.5) == pytest.approx(-(0.9 * 80 + 20))
+    assert cal.set_knot(7, 1, 0, -400.0)
+    assert cal.motor_power(1, 80.0, 0.5) == 0.0  # 72 - 200: not reversed
+    assert cal.motor_power(1, 0.0, 0.5) == 0.0
+    assert not cal.set_knot(7, 2, 0, 1.0) and not cal.set_knot(7, 0, 3, 1.0)  # no motor 2; X must be 0
+
+
+def test_power_model_gives_each_motor_its_rim_speed() -> None:
+    cfg = build_config(load_robot("omni4").model_copy(update={"calibration": FORMULA_CALIBRATION}))
+    model = PowerModel(cfg, Calibration(cfg))
+    out = [0] * 4
+    model.compute(1.0, 0.0, 0.0, False, out)
+    assert out == [0, 220, 0, -220]
+    assert model.cal.set_knot(7, 1, 0, 30.0) and model.cal.set_knot(7, 3, 0, 30.0)
+    model.compute(1.0, 0.0, 0.0, False, out)
+    assert out == [0, 250, 0, -250]  # rim speeds +1 and -1 m/s, both 30 counts harder
+    model.compute(0.0, 0.0, 1.0, True, out)  # rotation: rim speed 0.096 m/s on every wheel
+    assert abs(out[1] - out[0] - 30 * 0.096) <= 1
+
+
+def test_k_l_courses_lie_within_0_to_90() -> None:
+    cal = _cal()
+    assert not cal.set_knot(12, -1, 91, 0) and not cal.set_knot(10, -1, -1, 0)
+    assert cal.set_knot(12, -1, 90, 0)
+
+
 def test_dropping_k_l_curves() -> None:
     cal = _cal()
     assert not cal.set_knot(10, -2, 0, 0)  # curve 0 always stays
@@ -139,6 +172,10 @@ def test_config_carries_the_motor_map() -> None:
     cfg = build_config(robot.model_copy(update={"calibration": spec}))
     assert cfg["motor_offset"] == [1.0, 2.0, 3.0, 4.0] and cfg["motor_gain"][3] == [[50.0], [1.1]]
     assert build_config(robot)["motor_gain"] == [[[0.0], [1.0]]] * 4
+    assert cfg["motor_speed"] == [0.0] * 4 and build_config(robot)["motor_speed"] == [0.0] * 4
+    speedy = MotorMapSpec(offset=(1, 2, 3, 4), gain=(gain,) * 4, speed=(5.0, 0.0, -5.0, 1.5))
+    fast = build_config(robot.model_copy(update={"calibration": spec.model_copy(update={"motors": speedy})}))
+    assert fast["motor_speed"] == [5.0, 0.0, -5.0, 1.5]
     three = spec.model_copy(update={"motors": MotorMapSpec(offset=(1, 2, 3), gain=(gain,) * 3)})
     with pytest.raises(ConfigError, match="3 motors for a robot with 4"):
         build_config(robot.model_copy(update={"calibration": three}))

@@ -114,6 +114,8 @@ def describe_spec(spec: CalibrationSpec) -> dict[str, Any]:
             "offset": list(spec.motors.offset),
             "gain": [{"x": [int(x) for x in g.x], "y": list(g.y)} for g in spec.motors.gain],
         }
+        if spec.motors.speed is not None:
+            out["motors"]["speed"] = list(spec.motors.speed)
     if spec.rollers is not None:
         out["rollers"] = {"cos": list(spec.rollers.cos), "sin": list(spec.rollers.sin)}
         if spec.rollers.coast is not None:

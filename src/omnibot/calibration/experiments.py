@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 from functools import partial
 from typing import Any
 
-from omnibot.calibration.patterns import Geometry, course_pattern, rotation_pattern, top_power
+from omnibot.calibration.patterns import Geometry, Rate, course_pattern, rotation_pattern, top_power
 from omnibot.calibration.plan import Plan, speed_range
 from omnibot.calibration.runs import ROTATE, SQUARE, STRAIGHT, TURN, RunInfo, RunResult, relative
 from omnibot.calibration.tap import TelemetryTap
@@ -60,6 +60,8 @@ class Runner:
     progress: Progress | None = None
     motors: MotorMapSpec | None = None
     """The motor map the sweeps' patterns go through (the firmware's, mirrored; None: raw)."""
+    rate: Rate | None = None
+    """The rim speed a nominal power gives, for the map's speed term (the balance runs' measure)."""
     log: list[RunResult] = field(default_factory=list)
     _warns: list[int] = field(default_factory=list)
 
@@ -171,11 +173,11 @@ def find_deadband(runner: Runner, course_deg: float | None, step: int = 8, durat
     def attempt(power: int) -> bool:
         flip[0] ^= 1
         if rotation:
-            pattern = rotation_pattern(geo, power, ccw=bool(flip[0]), motors=runner.motors)
+            pattern = rotation_pattern(geo, power, ccw=bool(flip[0]), motors=runner.motors, rate=runner.rate)
             info = RunInfo(ROTATE, f"dead band, rotation, power {power}")
         else:
             c = (course_deg or 0.0) + (0.0 if flip[0] else 180.0)
-            pattern = course_pattern(geo, c, power, runner.motors)
+            pattern = course_pattern(geo, c, power, runner.motors, runner.rate)
             info = RunInfo(STRAIGHT, f"dead band, course {c:g} deg, power {power}", math.radians(c))
         runner.note(f"dead band {group}: {power}")
         result = runner.power_run(pattern, duration, info, f"deadband:{group}", power=power)
@@ -319,8 +321,10 @@ def _straight_info(raw: float, power: int, duration: float) -> RunInfo:
     )
 
 
-def _rotation_pattern(geo: Geometry, ccw: bool, motors: MotorMapSpec | None, power: int) -> list[int]:
-    return rotation_pattern(geo, power, ccw, motors)
+def _rotation_pattern(
+    geo: Geometry, ccw: bool, motors: MotorMapSpec | None, rate: Rate | None, power: int
+) -> list[int]:
+    return rotation_pattern(geo, power, ccw, motors, rate)
 
 
 def _rotation_info(ccw: bool, power: int, duration: float) -> RunInfo:
@@ -332,7 +336,7 @@ def straight_sweep(runner: Runner, plan: Plan, folded_deg: float, deadband: int)
     geo = runner.geometry
     targets = [
         Target(
-            pattern=partial(course_pattern, geo, raw, motors=runner.motors),
+            pattern=partial(course_pattern, geo, raw, motors=runner.motors, rate=runner.rate),
             info=partial(_straight_info, raw),
             meta={"course_deg": raw, "folded_deg": folded_deg},
         )
@@ -351,7 +355,7 @@ def rotation_sweep(runner: Runner, plan: Plan, deadband: int) -> list[RunResult]
     geo = runner.geometry
     targets = [
         Target(
-            pattern=partial(_rotation_pattern, geo, ccw, runner.motors),
+            pattern=partial(_rotation_pattern, geo, ccw, runner.motors, runner.rate),
             info=partial(_rotation_info, ccw),
             meta={"sign": 1 if ccw else -1},
         )

@@ -508,11 +508,16 @@ def average_rollers(drags: Sequence[RollerDragSpec]) -> RollerDragSpec:
 
 
 def average_motors(maps: Sequence[MotorMapSpec]) -> MotorMapSpec:
-    """The mean of motor maps: offsets averaged, gain tables averaged on the union of their knots."""
+    """The mean of motor maps: offsets and speed terms averaged, gain tables averaged on the union of
+    their knots."""
     n = len(maps[0].offset)
+    speed = None
+    if any(m.speed is not None for m in maps):
+        speed = tuple(round(statistics.fmean(m.speed_term(i) for m in maps), 1) for i in range(n))
     return MotorMapSpec(
         offset=tuple(round(statistics.fmean(m.offset[i] for m in maps), 1) for i in range(n)),
         gain=tuple(average_tables([m.gain[i] for m in maps]) for i in range(n)),
+        speed=speed,
     )
 
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from omnibot.firmware.calibration import fold_course
@@ -116,18 +116,32 @@ class Geometry:
         return max(abs(v) for v in self.rotation_rim())
 
 
-def map_power(motors: MotorMapSpec | None, i: int, a: float) -> float:
-    """Motor i's power for the nominal power ``a``, as the firmware computes it."""
+Rate = Callable[[float, float], float]
+"""(nominal power of the busiest motor, folded course in degrees) -> that motor's rim speed (m/s) the
+power is expected to give: what the motor map's speed term needs for a raw POWER pattern."""
+
+
+def map_power(motors: MotorMapSpec | None, i: int, a: float, u: float = 0.0) -> float:
+    """Motor i's power for the nominal power ``a`` at rim speed ``u`` (m/s), as the firmware computes it
+    (:meth:`omnibot.firmware.calibration.Calibration.motor_power`)."""
     m = abs(a)
     if motors is None or m == 0.0:
         return a
-    p = motors.offset[i] * min(m, 1.0) + motors.gain[i](m) * m
+    p = motors.offset[i] * min(m, 1.0) + motors.gain[i](m) * m + motors.speed_term(i) * (u if a > 0 else -u)
+    p = max(p, 0.0)
     return p if a > 0 else -p
 
 
-def apply_map(motors: MotorMapSpec | None, nominal: Sequence[float], pwm_max: int) -> list[int]:
-    """The integer powers the firmware would send for nominal powers (clipped, not rescaled)."""
-    return [max(-pwm_max, min(pwm_max, round(map_power(motors, i, a)))) for i, a in enumerate(nominal)]
+def apply_map(
+    motors: MotorMapSpec | None, nominal: Sequence[float], pwm_max: int, speeds: Sequence[float] | None = None
+) -> list[int]:
+    """The integer powers the firmware would send for nominal powers at rim ``speeds`` (m/s; none: 0)
+    (clipped, not rescaled)."""
+    us = speeds if speeds is not None else [0.0] * len(nominal)
+    return [
+        max(-pwm_max, min(pwm_max, round(map_power(motors, i, a, u))))
+        for i, (a, u) in enumerate(zip(nominal, us, strict=True))
+    ]
 
 
 def top_power(motors: MotorMapSpec | None, pwm_max: int) -> int:
@@ -141,28 +155,40 @@ def top_power(motors: MotorMapSpec | None, pwm_max: int) -> int:
 
 
 def scaled_pattern(
-    rims: list[float], power: int, motors: MotorMapSpec | None = None, pwm_max: int = 255
+    rims: list[float], power: int, motors: MotorMapSpec | None = None, pwm_max: int = 255, speed: float = 0.0
 ) -> list[int]:
     """Integer powers proportional to ``rims`` with the busiest motor at nominal ``power`` (sign kept),
-    through the motor map when there is one."""
+    through the motor map when there is one, the busiest wheel's rim at ``speed`` m/s."""
     peak = max(abs(v) for v in rims)
     if peak <= 0.0:
         raise ValueError("a pattern needs at least one wheel that turns")
     if motors is None:
         return [round(power * v / peak) for v in rims]
-    return apply_map(motors, [power * v / peak for v in rims], pwm_max)
+    return apply_map(motors, [power * v / peak for v in rims], pwm_max, [speed * v / peak for v in rims])
 
 
 def course_pattern(
-    geometry: Geometry, course_deg: float, power: int, motors: MotorMapSpec | None = None
+    geometry: Geometry,
+    course_deg: float,
+    power: int,
+    motors: MotorMapSpec | None = None,
+    rate: Rate | None = None,
 ) -> list[int]:
-    """Seed 000's straight-run pattern generalised: busiest motor at ``power`` along the course."""
-    return scaled_pattern(geometry.translation_rim(course_deg), power, motors, geometry.pwm_max)
+    """Seed 000's straight-run pattern generalised: busiest motor at ``power`` along the course (its
+    rim speed for the map's speed term from ``rate``; none: 0)."""
+    speed = rate(power, geometry.fold(course_deg)) if rate is not None else 0.0
+    return scaled_pattern(geometry.translation_rim(course_deg), power, motors, geometry.pwm_max, speed)
 
 
 def rotation_pattern(
-    geometry: Geometry, power: int, ccw: bool = True, motors: MotorMapSpec | None = None
+    geometry: Geometry,
+    power: int,
+    ccw: bool = True,
+    motors: MotorMapSpec | None = None,
+    rate: Rate | None = None,
 ) -> list[int]:
-    """Rotation in place, busiest motor at ``power``; ``ccw`` False turns clockwise."""
+    """Rotation in place, busiest motor at ``power``; ``ccw`` False turns clockwise (the rim speed for
+    the map's speed term from ``rate`` at course 0, where no wheel is loaded by a course; none: 0)."""
     rims = geometry.rotation_rim()
-    return scaled_pattern(rims if ccw else [-v for v in rims], power, motors, geometry.pwm_max)
+    speed = rate(power, 0.0) if rate is not None else 0.0
+    return scaled_pattern(rims if ccw else [-v for v in rims], power, motors, geometry.pwm_max, speed)

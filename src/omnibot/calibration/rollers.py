@@ -52,7 +52,7 @@ def roller_runs(runner: Runner, plan: Plan, deadband: int, rounds: int = 4) -> l
             math.radians(course),
         )
         runner.note(f"roller drag: course {course:g}, power {power}")
-        pattern = course_pattern(geo, course, power, runner.motors)
+        pattern = course_pattern(geo, course, power, runner.motors, runner.rate)
         return runner.power_run(
             pattern, duration, info, group, power=power, course_deg=course, folded_deg=0.0
         )

@@ -35,7 +35,7 @@ from omnibot.calibration.experiments import (
 from omnibot.calibration.fits import SurfaceFit, average_kt, build_spec, fit_kt, fit_surface, robot_table
 from omnibot.calibration.gyro import GyroCalibration, calibrate_gyro
 from omnibot.calibration.motorfit import Balance, balance_courses, identity, offsets_from_deadbands
-from omnibot.calibration.motors import balance_gains, motor_deadbands
+from omnibot.calibration.motors import balance_model, motor_deadbands
 from omnibot.calibration.patterns import Geometry, top_power
 from omnibot.calibration.plan import Plan, speed_range
 from omnibot.calibration.results import CalibrationResult, SurfaceSession
@@ -88,7 +88,7 @@ def expected_runs(
     courses = len(plan.calibrated_courses(geometry))
     checks = accuracy_runs(accuracy, robot) if accuracy is not None else 0
     powers = max(1, plan.balance_levels)
-    balance = len(balance_courses(geometry)) * (3 * powers + powers - 1 + geometry.motors)
+    balance = len(balance_courses(geometry)) * (5 * powers - 1 + geometry.motors)
     rollers = plan.roller_rounds > 0 and all(geometry.roller_pitch)
     axes = len(axis_courses(geometry))
     phases = {
@@ -496,7 +496,7 @@ def tune_rollers(
     if fit.motors is not None:
         shift = offset_shift(geometry, fit.coast.ahead)
         offsets = tuple(max(0.0, round(o + d, 1)) for o, d in zip(fit.motors.offset, shift, strict=True))
-        fit.motors = MotorMapSpec(offset=offsets, gain=fit.motors.gain)
+        fit.motors = fit.motors.model_copy(update={"offset": offsets})
         runner.motors = fit.motors
     spec = build_spec([fit], robot, geometry, spec.k_t)
     runner.client.upload_calibration(spec)
@@ -508,6 +508,7 @@ def fit_motor_map(runner: Runner, plan: Plan, notes: list[str]) -> tuple[MotorMa
     nominal powers spread over what the robot's speed range needs (by the described K)."""
     geo, robot = runner.geometry, runner.robot
     runner.motors = None
+    runner.rate = None
     rotation = find_deadband(runner, None, plan.deadband_step).power
     single = motor_deadbands(runner, plan.deadband_step)
     offsets = offsets_from_deadbands(single, rotation, geo.pwm_max)
@@ -522,8 +523,10 @@ def fit_motor_map(runner: Runner, plan: Plan, notes: list[str]) -> tuple[MotorMa
     powers = sorted({max(1, round(lo * (hi / lo) ** (i / max(n - 1, 1)))) for i in range(n)})
     # long enough for about half the reference move at the speed each power is meant for
     durations = [min(max(0.5 * plan.move_length * k * max(factors) / p, 1.0), 3.0) for p in powers]
-    balance = balance_gains(runner, offsets, powers, durations)
-    return MotorMapSpec(offset=offsets, gain=balance.tables(geo.motors)), balance
+    balance = balance_model(runner, offsets, powers, k, durations)
+    runner.rate = balance.rate if balance.rates else None
+    speed = tuple(balance.speed) if balance.speed else None
+    return MotorMapSpec(offset=offsets, gain=balance.tables(geo.motors), speed=speed), balance
 
 
 def rotation_test_rate(robot: RobotDescription) -> float:

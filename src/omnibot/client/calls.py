@@ -11,6 +11,7 @@ from collections.abc import Sequence
 from typing import Any, TypeVar
 
 from omnibot.client import commands
+from omnibot.client.errors import CalibrationRejected
 from omnibot.client.limits import Limits
 from omnibot.client.views import Hello, Status
 from omnibot.protocol import codes
@@ -115,8 +116,19 @@ class TypedCalls:
         """Upload a calibration section (K, K_t, K_r, K_l, motor map, roller drag) with CAL commands; the
         commands sent."""
         sent = commands.calibration(spec, self.limits.motors)
-        for pending in [self.submit(c) for c in sent]:
-            pending.result()
+        for command, pending in [(c, self.submit(c)) for c in sent]:
+            try:
+                pending.result()
+            except CalibrationRejected as e:
+                if command.table != codes.CAL_SPEED:
+                    raise
+                if command.y != 0:  # a controller older than the motor map's speed term
+                    raise CalibrationRejected(
+                        e.code,
+                        "the controller does not know the motor map's speed terms (CAL table 7): "
+                        "update its firmware, or use a calibration without them",
+                    ) from None
+                # a zero speed term is what such a controller already does
         return sent
 
     def status(self) -> Status:

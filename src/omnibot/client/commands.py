@@ -258,6 +258,7 @@ def calibration(spec: CalibrationSpec, motors: int | None = None) -> list[Cal]:
         for i, (offset, gain) in enumerate(zip(motor_map.offset, motor_map.gain, strict=True)):
             out.append(Cal(codes.CAL_OFFSET, i, 0, round(10 * offset)))
             out += _knots(codes.CAL_GAIN + i, gain)
+            out.append(Cal(codes.CAL_SPEED, i, 0, round(10 * motor_map.speed_term(i))))
     rollers = spec.rollers
     if rollers is None and motors is not None:
         rollers = RollerDragSpec(cos=(0.0,) * motors, sin=(0.0,) * motors)

@@ -138,6 +138,8 @@ def header_source(robot_name: str) -> str:
     sonars = len(cfg["sonar_period_min_ms"])
     if sonars > 1:
         raise ConfigError(f"{sonars} sonars, the UNO wiring has one", key="sonars")
+    if not all(0 <= round(c) <= codes.CAL_COURSE_MAX for c in cfg["kl_courses"]):
+        raise ConfigError(f"K_l courses must lie within 0..{codes.CAL_COURSE_MAX} degrees", key="calibration")
     if len(cfg["kl_courses"]) > codes.CAL_KL_CURVES:
         raise ConfigError(
             f"{len(cfg['kl_courses'])} K_l curves, at most {codes.CAL_KL_CURVES}", key="calibration"
@@ -252,37 +254,32 @@ def header_source(robot_name: str) -> str:
     w(f"#define CAL_CURVES {codes.CAL_KL_CURVES}")
     w(f"#define DEFAULT_K {round(float(cfg['k']) * 10)}")
     w("struct Knot { int16_t x, y; };")
-    for name, table in (("KT", cfg["kt"]), ("KR", cfg["kr"]), ("COAST", cfg["roller_coast"])):
+    # the tables' knots one after the other, only those used (cal.cpp loads them in this order)
+    tables = [cfg["kt"], cfg["kr"], cfg["roller_coast"], *cfg["kl_tables"], *cfg["motor_gain"]]
+    counts, knots = [], []
+    for table in tables:
         count, rows = _table_rows(table, 1, codes.CAL_SCALE)
-        w(f"#define DEFAULT_{name}_N {count}")
-        w(f"static const Knot DEFAULT_{name}[CAL_KNOTS] PROGMEM = {{" + ", ".join(rows) + "};")
+        counts.append(count)
+        knots += rows[:count]
     w(f"#define DEFAULT_KL_CURVES {len(cfg['kl_courses'])}")
     w(
-        "static const int16_t DEFAULT_KL_COURSE[CAL_CURVES] PROGMEM = {"
-        + ", ".join(
-            [str(round(c)) for c in cfg["kl_courses"]]
-            + ["0"] * (codes.CAL_KL_CURVES - len(cfg["kl_courses"]))
-        )
+        f"static const uint8_t DEFAULT_KL_COURSE[{len(cfg['kl_courses'])}] PROGMEM = {{"
+        + ", ".join(str(round(c)) for c in cfg["kl_courses"])
         + "};"
     )
-    counts = []
-    w("static const Knot DEFAULT_KL[CAL_CURVES][CAL_KNOTS] PROGMEM = {")
-    for k in range(codes.CAL_KL_CURVES):
-        table = cfg["kl_tables"][k] if k < len(cfg["kl_tables"]) else [[0.0], [1.0]]
-        count, rows = _table_rows(table, 1, codes.CAL_SCALE)
-        counts.append(count if k < len(cfg["kl_tables"]) else 0)
-        w("    {" + ", ".join(rows) + "},")
-    w("};")
-    w("static const uint8_t DEFAULT_KL_N[CAL_CURVES] PROGMEM = {" + ", ".join(str(c) for c in counts) + "};")
-    gcounts = []
-    w("static const Knot DEFAULT_GAIN[MOTORS][CAL_KNOTS] PROGMEM = {")
-    for table in cfg["motor_gain"]:
-        count, rows = _table_rows(table, 1, codes.CAL_SCALE)
-        gcounts.append(count)
-        w("    {" + ", ".join(rows) + "},")
-    w("};")
-    w("static const uint8_t DEFAULT_GAIN_N[MOTORS] PROGMEM = {" + ", ".join(str(c) for c in gcounts) + "};")
-    for name, key in (("OFFSET", "motor_offset"), ("ROLLER_COS", "roller_cos"), ("ROLLER_SIN", "roller_sin")):
+    w("/* knots of K_t, K_r, the coast, each K_l curve and each motor's gain, one after the other */")
+    w(f"static const Knot DEFAULT_KNOTS[{len(knots)}] PROGMEM = {{" + ", ".join(knots) + "};")
+    w(
+        f"static const uint8_t DEFAULT_N[{len(counts)}] PROGMEM = {{"
+        + ", ".join(str(c) for c in counts)
+        + "};"
+    )
+    for name, key in (
+        ("OFFSET", "motor_offset"),
+        ("ROLLER_COS", "roller_cos"),
+        ("ROLLER_SIN", "roller_sin"),
+        ("SPEED", "motor_speed"),
+    ):
         w(
             f"static const int16_t DEFAULT_{name}[MOTORS] PROGMEM = {{"
             + ", ".join(str(round(float(v) * 10)) for v in cfg[key])

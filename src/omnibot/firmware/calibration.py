@@ -5,9 +5,11 @@ interpolated linearly between knots and held constant outside them. ``K_l`` has 
 (degrees, 0..45 for seed 000) and is interpolated between the two nearest courses.
 
 The motor map (a project addition) makes unequal motors act alike: motor i gets
-``sign(a) (offset_i + gain_i(|a|) |a|)`` for the nominal power ``a`` that the factors give
-(:meth:`Calibration.motor_power`): the offset lifts every turning wheel out of its own dead band, the
-gain table balances the motors over the power range. Identity by default.
+``sign(a) (offset_i + gain_i(|a|) |a|) + speed_i u`` for the nominal power ``a`` that the factors give
+and its rim speed ``u`` (m/s) (:meth:`Calibration.motor_power`): the offset lifts every turning wheel
+out of its own dead band, the gain scales the load's share of the power and the speed term corrects
+the back-EMF's share (a motor with s times the nominal torque constant has gain 1/s and speed term
+(s - 1/s) E, E the nominal back-EMF in counts per m/s; docs/calibration.md). Identity by default.
 
 The roller drag (a project addition, :class:`~omnibot.firmware.power.PowerModel` applies it) holds two
 coefficients per wheel, ``roller_cos`` and ``roller_sin`` (PWM counts, zero by default), and the
@@ -26,6 +28,7 @@ TABLE_GAIN = codes.CAL_GAIN  # 20 + i: motor i's gain table
 TABLE_ROLLER_COS = codes.CAL_ROLLER_COS
 TABLE_ROLLER_SIN = codes.CAL_ROLLER_SIN
 TABLE_ROLLER_COAST = codes.CAL_ROLLER_COAST
+TABLE_SPEED = codes.CAL_SPEED
 KNOTS_MAX = codes.CAL_KNOTS_MAX
 KL_DROP = codes.CAL_KL_DROP
 
@@ -73,20 +76,25 @@ class Calibration:
         n = int(cfg.get("motors", 0))
         self.offset = [float(v) for v in cfg.get("motor_offset", [0.0] * n)]
         self.gain = [_table(t) for t in cfg.get("motor_gain", [[[0.0], [1.0]]] * n)]
+        self.speed = [float(v) for v in cfg.get("motor_speed", [0.0] * len(self.offset))]
         self.roller_cos = [float(v) for v in cfg.get("roller_cos", [0.0] * n)]
         self.roller_sin = [float(v) for v in cfg.get("roller_sin", [0.0] * n)]
         self.roller_coast = _table(cfg.get("roller_coast", [[0.0], [0.0]]))
 
-    def motor_power(self, i: int, a: float) -> float:
-        """Motor i's power for the nominal power ``a``: ``sign(a) (offset_i + gain_i(|a|) |a|)``.
+    def motor_power(self, i: int, a: float, u: float = 0.0) -> float:
+        """Motor i's power for the nominal power ``a`` at rim speed ``u`` (m/s):
+        ``sign(a) (offset_i + gain_i(|a|) |a|) + speed_i u``.
 
-        Below one count the offset ramps in with ``|a|``, so a wheel meant to stand still stays still.
+        Below one count the offset ramps in with ``|a|``, so a wheel meant to stand still stays still;
+        the speed term never turns the power against ``a`` (it is 0 then).
         """
         m = abs(a)
         if m == 0.0 or i >= len(self.offset):
             return a
         t = self.gain[i]
         p = self.offset[i] * min(m, 1.0) + interp(t[0], t[1], m) * m
+        p += self.speed[i] * (u if a > 0 else -u)
+        p = max(p, 0.0)
         return p if a > 0 else -p
 
     def k_l(self, power: float, folded_course: float) -> float:
@@ -142,7 +150,8 @@ class Calibration:
         index -2 drops curves k and after (k >= 1: one curve stays). ``TABLE_OFFSET`` sets motor
         ``index``'s offset to ``value`` counts; ``TABLE_GAIN + i`` writes a knot of motor i's gain table;
         ``TABLE_ROLLER_COS`` and ``TABLE_ROLLER_SIN`` set wheel ``index``'s roller drag coefficient;
-        ``TABLE_ROLLER_COAST`` writes a knot (``power``: speed in cm/s, ``value`` in s).
+        ``TABLE_ROLLER_COAST`` writes a knot (``power``: speed in cm/s, ``value`` in s);
+        ``TABLE_SPEED`` sets motor ``index``'s speed term (PWM counts per m/s).
         """
         if table == TABLE_K:
             if value <= 0:
@@ -153,8 +162,10 @@ class Calibration:
             return _write(self.kt, index, power, value)
         if table == TABLE_KR:
             return _write(self.kr, index, power, value)
-        if table in (TABLE_ROLLER_COS, TABLE_ROLLER_SIN):
+        if table in (TABLE_ROLLER_COS, TABLE_ROLLER_SIN, TABLE_SPEED):
             coeffs = self.roller_cos if table == TABLE_ROLLER_COS else self.roller_sin
+            if table == TABLE_SPEED:
+                coeffs = self.speed
             if index < 0 or index >= len(coeffs) or power != 0:
                 return False
             coeffs[index] = value
@@ -182,6 +193,8 @@ class Calibration:
             return False
         if index == -1:
             courses = self.kl_courses
+            if power < 0 or power > codes.CAL_COURSE_MAX:
+                return False
             if (k > 0 and power <= courses[k - 1]) or (k + 1 < len(courses) and power >= courses[k + 1]):
                 return False
             if k == len(courses):

@@ -24,6 +24,7 @@ k                           calibration K, PWM counts per m/s of rim speed
 kl_courses, kl_tables       K_l: courses (deg) and one [powers, factors] table per course
 kt, kr                      K_t and K_r as [powers, factors]
 motor_offset, motor_gain    motor map: each motor's dead-band offset (counts) and [powers, gains]
+motor_speed                 motor map: each motor's speed term, PWM counts per m/s of its rim speed
 roller_cos, roller_sin      roller drag coefficients of each wheel, PWM counts (0: none)
 roller_coast                [speeds cm/s, s]: how long the drag outlasts a MOVE (its coast)
 roller_dir                  each wheel's rollers' rolling direction in the body frame, [x, y]
@@ -199,6 +200,7 @@ def build_config(
         "kr": _table(cal.k_r if cal else None),
         "motor_offset": [float(o) for o in motors.offset] if motors else [0.0] * robot.n_wheels,
         "motor_gain": [_table(g) for g in motors.gain] if motors else [_table(None)] * robot.n_wheels,
+        "motor_speed": list(motors.speed) if motors and motors.speed else [0.0] * robot.n_wheels,
         "roller_cos": list(rollers.cos) if rollers else [0.0] * robot.n_wheels,
         "roller_sin": list(rollers.sin) if rollers else [0.0] * robot.n_wheels,
         "roller_coast": (

@@ -413,7 +413,7 @@ class Controller:
     def _cal(self, table: int, index: int, x: int, y: int) -> bool:
         if table == codes.CAL_K:
             return index == 0 and x == 0 and self.calibration.set_knot(table, 0, 0, y * 0.1)
-        if table in (codes.CAL_ROLLER_COS, codes.CAL_ROLLER_SIN):
+        if table in (codes.CAL_ROLLER_COS, codes.CAL_ROLLER_SIN, codes.CAL_SPEED):
             return self.calibration.set_knot(table, index, x, y * 0.1)
         if table == codes.CAL_ROLLER_COAST:  # signed: seconds x 1000
             return x >= 0 and self.calibration.set_knot(table, index, x, y / codes.CAL_SCALE)

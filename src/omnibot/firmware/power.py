@@ -9,8 +9,8 @@ precomputed by config.py). The translation part and the rotation part get their 
 
 where each factor's power argument is the largest uncalibrated power of its part (K |s|) and the
 course is folded onto the calibrated range (:func:`calibration.fold_course`). Each motor's power then
-goes through the motor map (:meth:`calibration.Calibration.motor_power`: its dead-band offset and
-gain, identity by default), and a translation gets the rollers' drag on top (:meth:`PowerModel.drag`,
+goes through the motor map (:meth:`calibration.Calibration.motor_power`: its dead-band offset, gain
+and speed term at the wheel's rim speed ``s_i``, identity by default), and a translation gets the rollers' drag on top (:meth:`PowerModel.drag`,
 zero by default). Then, keeping the
 direction, all powers are scaled by one factor if any exceeds ``pwm_max`` (SATURATED) and, when every
 non-zero power is below ``power_min`` (the dead band: too little to move the robot), all are set to 0
@@ -125,7 +125,8 @@ class PowerModel:
         peak = 0.0
         for i in range(n):
             row = rim[i]
-            p = cal.motor_power(i, f_tr * (row[0] * vx + row[1] * vy) + f_rot * row[2] * w)
+            t = row[0] * vx + row[1] * vy
+            p = cal.motor_power(i, f_tr * t + f_rot * row[2] * w, t + row[2] * w)
             raw[i] = p
             self.base[i] = p
             peak = max(peak, abs(p))

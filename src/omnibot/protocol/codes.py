@@ -203,10 +203,12 @@ CAL_OFFSET = 3  # dead-band offset of motor I (X = 0), Y in 0.1 PWM counts
 CAL_ROLLER_COS = 4  # roller drag of wheel I (X = 0): cosine coefficient, Y in 0.1 PWM counts (signed)
 CAL_ROLLER_SIN = 5  # the same, sine coefficient
 CAL_ROLLER_COAST = 6  # roller drag's coast time: knot I = (X speed cm/s, Y ms)
+CAL_SPEED = 7  # motor I's speed term (X = 0): Y in 0.1 PWM counts per m/s of its rim speed (signed)
 CAL_GAIN = 20  # 20 + i: gain table of motor i: knot I = (X nominal power, Y gain x 1000)
 CAL_MOTORS = 8  # motors with a gain table at most
 CAL_KL = 10  # 10 + k: K_l curve k; I = -1 sets its course (X degrees), I = -2 drops curves k.., I >= 0 a knot
 CAL_KL_DROP = -2
+CAL_COURSE_MAX = 90  # a K_l curve's course, degrees: 0..90 (courses fold onto 0..90 at most)
 CAL_KL_CURVES = 8
 CAL_KNOTS_MAX = 16
 CAL_SCALE = 1000

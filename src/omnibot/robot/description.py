@@ -341,11 +341,21 @@ class CourseTable(_Spec):
         return self
 
 
+SPEED_TERM_MAX = 3276.7
+"""PWM counts per m/s: the largest speed term CAL can carry (0.1 counts per m/s in 16 bits)."""
+
+
 class MotorMapSpec(_Spec):
-    """Per-motor map of the nominal power a: ``sign(a) (offset_i + gain_i(|a|) |a|)`` (firmware)."""
+    """Per-motor map of the nominal power a at rim speed u (m/s):
+    ``sign(a) (offset_i + gain_i(|a|) |a|) + speed_i u`` (firmware). With a constant gain it is the
+    two-number motor model: the gain scales the load's share of the power, the speed term corrects
+    the back-EMF's (docs/calibration.md, motor map)."""
 
     offset: tuple[float, ...] = Field(description="dead-band offset of each motor, PWM counts")
     gain: tuple[PiecewiseLinear, ...] = Field(description="gain of each motor over the nominal power")
+    speed: tuple[float, ...] | None = Field(
+        default=None, description="speed term of each motor, PWM counts per m/s of its rim speed (none: 0)"
+    )
 
     @model_validator(mode="after")
     def _check(self) -> MotorMapSpec:
@@ -353,7 +363,18 @@ class MotorMapSpec(_Spec):
             raise ValueError("offset and gain need one entry per motor")
         if any(o < 0 for o in self.offset) or any(y <= 0 for g in self.gain for y in g.y):
             raise ValueError("offsets must be >= 0 and gains > 0")
+        if self.speed is not None:
+            if len(self.speed) != len(self.offset):
+                raise ValueError(
+                    f"speed needs one entry per motor ({len(self.offset)}), got {len(self.speed)}"
+                )
+            if any(abs(s) > SPEED_TERM_MAX for s in self.speed):
+                raise ValueError(f"speed terms must lie within +-{SPEED_TERM_MAX} PWM counts per m/s")
         return self
+
+    def speed_term(self, i: int) -> float:
+        """Motor i's speed term, PWM counts per m/s (0 without one)."""
+        return self.speed[i] if self.speed is not None else 0.0
 
 
 class RollerDragSpec(_Spec):

@@ -1,0 +1,119 @@
+"""What the two-number motor model can do, against what the calibration's fit finds (issue 17).
+
+    python -m benchmarks.motor_model [--surface carpet] [--map fit|gain|model]
+
+Calibrates omni4 with the acceptance perturbation (wheel radius +5 %, torque constants +10, -10, -10,
++10 %) on one floor, as tests/calibration/test_acceptance.py does (seed 3, ``Plan(levels=7)``, 1 m
+MOVEs at 0.3, 0.6 and 0.9 m/s on courses 0..90 and back), with the motor map
+
+* ``fit``: as ``omnibot calibrate`` fits it (motors.py: gains per power, then speed terms);
+* ``gain``: each motor's true gain 1/s, one constant per motor, no speed term;
+* ``model``: the true two-number model, gain 1/s and speed term (s - 1/s) E (E from the description).
+
+The known maps replace the balance fit (its first power's runs still measure the speeds the host's
+patterns need; the offsets are measured as always). Prints the check's summary, the floor's reach and
+every MOVE within it. A few minutes of CPU per run.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+
+import numpy as np
+
+from omnibot.calibration import session
+from omnibot.calibration.accuracy import AccuracyPlan
+from omnibot.calibration.experiments import Runner
+from omnibot.calibration.motorfit import Balance, emf_counts
+from omnibot.calibration.motors import balance_model
+from omnibot.calibration.perturb import ACCEPTANCE, parse_perturbation, perturbed_robot
+from omnibot.calibration.plan import Plan
+from omnibot.calibration.report import accuracy_entries
+from omnibot.calibration.tables import summary_table
+from omnibot.client.client import RobotClient
+from omnibot.robot.description import RobotDescription, load_robot
+from omnibot.sim.device import SimDevice
+from omnibot.transport.lockstep import LockstepLink
+
+SEED = 3
+
+
+def known_map(kind: str) -> Callable[..., Balance]:
+    """A replacement of :func:`omnibot.calibration.motors.balance_model` giving the true motors' map."""
+
+    def balance(
+        runner: Runner,
+        offsets: Sequence[float],
+        powers: Sequence[int],
+        k: float,
+        durations: Sequence[float] | None = None,
+        folded: Sequence[float] | None = None,
+    ) -> Balance:
+        result = balance_model(runner, offsets, powers[:1], k, durations[:1] if durations else None, folded)
+        s = np.array(parse_perturbation(ACCEPTANCE, runner.geometry.motors)["torque_constant"])
+        result.log_gains = [[float(v) for v in np.log(1.0 / s)]] * len(result.powers)
+        if kind == "model":
+            emf = np.array(emf_counts(runner.robot))
+            result.speed = [round(float(v), 1) for v in (s - 1.0 / s) * emf]
+        return result
+
+    return balance
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run one calibration and print its check."""
+    ap = argparse.ArgumentParser(prog="python -m benchmarks.motor_model", description=__doc__.split("\n")[0])
+    ap.add_argument("--surface", default="carpet", choices=["wood", "carpet"])
+    ap.add_argument("--map", default="model", choices=["fit", "gain", "model"])
+    args = ap.parse_args(argv)
+    nominal = load_robot("omni4")
+    true = perturbed_robot(nominal, ACCEPTANCE)
+    if args.map != "fit":
+        session.__dict__["balance_model"] = known_map(args.map)  # the session's fit, replaced
+    try:
+        return run(nominal, true, args.surface, args.map)
+    finally:
+        session.__dict__["balance_model"] = balance_model
+
+
+def run(nominal: RobotDescription, true: RobotDescription, surface_name: str, kind: str) -> int:
+    """Calibrate on ``surface_name`` and print the check (:func:`main`)."""
+
+    @contextmanager
+    def open_client(surface: str) -> Iterator[RobotClient]:
+        dev = SimDevice(nominal, true_robot=true, surface=surface, seed=SEED)
+        with RobotClient(LockstepLink(dev), nominal) as client:
+            yield client
+
+    result = session.calibrate(
+        nominal,
+        [surface_name],
+        open_client,
+        truth="sim",
+        plan=Plan(levels=7),
+        accuracy=AccuracyPlan(speeds=(0.3, 0.6, 0.9)),
+    )
+    s = result.sessions[0]
+    print(f"motor map ({kind}): {s.spec.motors}")
+    print(summary_table(accuracy_entries(result)))
+    reach = s.reach or 0.0
+    within = [r for r in s.after or [] if r.kind == "move" and r.speed <= reach]
+    if not within:
+        print("no MOVE of the check within the calibration's reach")
+        return 1
+    errors = [abs(r.error or 0.0) for r in within]
+    courses = [abs(r.course_error_deg) for r in within if r.course_error_deg is not None]
+    print(
+        f"reach {reach:.2f} m/s: {len(within)} MOVEs within it, distance error max {100 * max(errors):.1f} %, "
+        f"mean {100 * sum(errors) / len(errors):.1f} %"
+        + (f"; course error mean {sum(courses) / len(courses):.1f} deg" if courses else "")
+    )
+    for r in within:
+        print(f"  course {r.course_deg:5.1f} at {r.speed:.2f} m/s: {100 * (r.error or 0.0):+5.1f} %")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
