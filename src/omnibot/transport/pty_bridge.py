@@ -6,9 +6,10 @@
                  <--                                  <-- paced  <--           <-- device.transmit()
 
 The bridge owns the master side. The device (any :class:`~omnibot.transport.lockstep.LockstepDevice`)
-is stepped once per ``device.tick`` of wall-clock time; a late loop catches up with several steps, and
-beyond ``max_catch_up`` seconds behind it skips ticks (counted in ``skipped_ticks``) instead of
-racing. Bytes are paced to ``baud`` in both directions (a pty itself does not pace), with a
+is stepped once per ``device.tick`` of wall-clock time: the loop wakes every ``period`` (4 ms,
+SERVICE_PERIOD) and steps every tick due by then; a late loop catches up the same way, and beyond
+``max_catch_up`` seconds behind it skips ticks (counted in ``skipped_ticks``) instead of racing.
+Bytes are paced to ``baud`` in both directions (a pty itself does not pace), with a
 :class:`~omnibot.transport.pacing.Pacer` per direction that runs on the device's time: every tick
 stepped passes the bytes the line carries in one tick, so a loop that wakes late (a starved process)
 catches up the line with the device instead of losing all but one burst of it. The long-run rate
