@@ -19,16 +19,25 @@ announced one) to compare windows on the same machine.
    divided by the command's length on the wire.
 2. Closed-loop load: VEL at 100 Hz with telemetry (powers, encoders, gyro, heading, battery, queue)
    at 100 Hz back, for 10 s: bytes per second in each direction against the line's 11,520.
+
+Also reported, to tell where a slow binary run lost its time: the load average before and after,
+the longest wait for a reply during the binary stream and, with ``--pty`` on Linux, the CPU time
+and the run-queue wait (runnable, not running: /proc/PID/schedstat) per second of that stream, of
+the emulator's process and of the host's thread.
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
+import os
 import subprocess
 import sys
-from collections.abc import Iterator
+import threading
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from pathlib import Path
 
 from omnibot.protocol import binary, codes, text
 from omnibot.protocol.messages import Hello, HelloReply, Mode, Ok, Telem, Telemetry, Vel
@@ -53,14 +62,18 @@ TEL_MASK = (
 
 
 @contextmanager
-def open_line(pty: bool, seed: int = 1) -> Iterator[Link]:
-    """A link to a fresh simulated omni4 controller, lockstep or through the pty emulator."""
+def open_line(pty: bool, seed: int = 1, started: Callable[[int], object] | None = None) -> Iterator[Link]:
+    """A link to a fresh simulated omni4 controller, lockstep or through the pty emulator (whose
+    process id ``started`` hears)."""
     if not pty:
         with LockstepLink(SimDevice("omni4", seed=seed)) as link:
             drain(link, 0.05)
             yield link
         return
-    with spawn_pty_emulator("omni4", seed=seed) as path, open_link(f"serial://{path}") as link:
+    with (
+        spawn_pty_emulator("omni4", seed=seed, started=started) as path,
+        open_link(f"serial://{path}") as link,
+    ):
         drain(link, 0.2)
         yield link
 
@@ -77,6 +90,24 @@ def busy_processes(n: int) -> Iterator[list[int]]:
             p.terminate()
         for p in procs:
             p.wait(timeout=10)
+
+
+def load_average() -> float | None:
+    """The 1-minute load average (None where /proc/loadavg does not exist)."""
+    try:
+        return float(Path("/proc/loadavg").read_text().split()[0])
+    except OSError:
+        return None
+
+
+def scheduled(path: str) -> tuple[float, float] | None:
+    """(s on a CPU, s runnable but waiting for one) so far of the task whose schedstat is at
+    ``path`` (/proc/PID/schedstat, /proc/self/task/TID/schedstat); None where there is none."""
+    try:
+        on_cpu, waiting = Path(path).read_text().split()[:2]
+    except (OSError, ValueError):
+        return None
+    return int(on_cpu) / 1e9, int(waiting) / 1e9
 
 
 def drain(link: Link, seconds: float) -> bytes:
@@ -128,9 +159,9 @@ def start_session(link: Link) -> int:
                 return min(item.message.window, codes.WINDOW)
 
 
-def stream_binary(link: Link, n: int, window: int) -> float:
+def stream_binary(link: Link, n: int, window: int, replies_at: list[float] | None = None) -> float:
     """Send n VEL frames (seqs after the HELLO's) with at most ``window`` unacknowledged; seconds
-    until the n-th OK."""
+    until the n-th OK. ``replies_at`` gets the link clock's time of every read that brought OKs."""
     frames = [binary.encode(VEL, seq=(k + 1) % codes.SEQ_MAX + 1) for k in range(n)]
     decoder = binary.BinaryDecoder()
     sent = acked = 0
@@ -142,9 +173,12 @@ def stream_binary(link: Link, n: int, window: int) -> float:
         chunk = link.read(timeout=2.0)
         if not chunk:
             raise RuntimeError(f"binary stream stalled after {acked} of {n} replies")
-        acked += sum(
+        oks = sum(
             1 for p in decoder.feed(chunk) if isinstance(p, binary.Packet) and isinstance(p.message, Ok)
         )
+        acked += oks
+        if oks and replies_at is not None:
+            replies_at.append(link.clock.now())
     return link.clock.now() - t0
 
 
@@ -178,21 +212,42 @@ def closed_loop_load(link: Link, binary_mode: bool, seconds: float = 10.0) -> tu
     return sent / elapsed, received / elapsed, tels
 
 
+def per_second(
+    before: tuple[float, float] | None, after: tuple[float, float] | None, seconds: float
+) -> list[float] | None:
+    """[CPU, run-queue wait] per second between two :func:`scheduled` readings."""
+    if before is None or after is None:
+        return None
+    return [(b - a) / seconds for a, b in zip(before, after, strict=True)]
+
+
 def run(pty: bool, n: int = 2000, window: int = codes.WINDOW) -> dict[str, object]:
     text_len = len(text.encode(VEL, terminator=b";"))
     bin_len = len(binary.encode(VEL, seq=1))
+    load_before = load_average()
     with open_line(pty) as link:
         t_text = stream_text(link, n)
-    with open_line(pty) as link:
+    emulator: list[int] = []
+    host = f"/proc/self/task/{threading.get_native_id()}/schedstat"
+    with open_line(pty, started=emulator.append) as link:
         switch_to_binary(link)
         window = min(start_session(link), window)
-        t_bin = stream_binary(link, n, window)
+        replies_at: list[float] = []
+        emu = f"/proc/{emulator[0]}/schedstat" if emulator else os.devnull
+        emu0, host0 = scheduled(emu), scheduled(host)
+        t_bin = stream_binary(link, n, window, replies_at)
+        emu1, host1 = scheduled(emu), scheduled(host)
     with open_line(pty) as link:
         up_t, down_t, tel_t = closed_loop_load(link, binary_mode=False)
     with open_line(pty) as link:
         up_b, down_b, tel_b = closed_loop_load(link, binary_mode=True)
+    gaps = [b - a for a, b in itertools.pairwise(replies_at)]
     return {
         "line": "pty emulator, real time" if pty else "lockstep, simulated time",
+        "load_average_before_after": [load_before, load_average()],
+        "binary_longest_reply_gap_s": max(gaps, default=0.0),
+        "binary_emulator_cpu_wait_per_s": per_second(emu0, emu1, t_bin) if pty else None,
+        "binary_host_cpu_wait_per_s": per_second(host0, host1, t_bin) if pty else None,
         "binary_window": window,
         "binary_share_of_line": n / t_bin / (LINE_BYTES_PER_S / bin_len),
         "text_share_of_line": n / t_text / (LINE_BYTES_PER_S / text_len),
@@ -215,6 +270,12 @@ def report(r: dict[str, object]) -> str:
     def pct(x: object, of: object) -> str:
         return f"{100 * float(x) / float(of):5.1f}%"  # type: ignore[arg-type]
 
+    def sched(who: str, cpu_wait: object) -> str:
+        if not isinstance(cpu_wait, list):
+            return ""
+        cpu, wait = cpu_wait
+        return f"; {who} {100 * cpu:.1f}% of a CPU, runnable but waiting {100 * wait:.1f}% of the time"
+
     line = LINE_BYTES_PER_S
     return "\n".join(
         [
@@ -230,6 +291,10 @@ def report(r: dict[str, object]) -> str:
             f"closed loop VEL 100 Hz + TEL 100 Hz, binary: up {r['closed_loop_binary_up_Bps']:7.0f} B/s "
             f"({pct(r['closed_loop_binary_up_Bps'], line)}), down {r['closed_loop_binary_down_Bps']:7.0f} B/s "
             f"({pct(r['closed_loop_binary_down_Bps'], line)}), {r['closed_loop_binary_tel_per_s']:.0f} TEL/s",
+            f"binary stream: longest wait for a reply {1e3 * float(r['binary_longest_reply_gap_s']):.0f} ms"  # type: ignore[arg-type]
+            + sched("emulator", r["binary_emulator_cpu_wait_per_s"])
+            + sched("host", r["binary_host_cpu_wait_per_s"]),
+            f"load average before, after: {r['load_average_before_after']}",
         ]
     )
 

@@ -184,3 +184,19 @@ def test_a_child_that_fails_to_start_reports_its_error() -> None:
     failed = pytest.raises(LinkError, match="did not start: omnibot: error: unknown robot 'omni7'")
     with failed, spawn_pty_emulator("omni7"):
         pass
+
+
+def test_the_spawned_emulator_runs_in_a_session_of_its_own() -> None:
+    """A session (a scheduling autogroup on Linux) of its own, as if started from another terminal:
+    the caller's busy processes do not take its CPU share, and it answers on its pty."""
+    pids: list[int] = []
+    with spawn_pty_emulator("omni4", seed=1, started=pids.append) as path:
+        (pid,) = pids
+        assert os.getsid(pid) == pid != os.getsid(0)
+        with serial.Serial(path, 115200, timeout=0.2) as port:
+            port.write(b"STATUS;")
+            out = b""
+            deadline = time.monotonic() + 10
+            while b"STATUS," not in out and time.monotonic() < deadline:
+                out += port.read(64)
+        assert b"STATUS," in out

@@ -10,7 +10,8 @@ import pytest
 import serial
 
 from omnibot.errors import LinkError
-from omnibot.transport.pty_bridge import PtyBridge
+from omnibot.transport import pty_bridge
+from omnibot.transport.pty_bridge import SERVICE_PERIOD, PtyBridge, next_wake
 
 from .fakes import EchoDevice
 
@@ -134,3 +135,52 @@ def test_unpaced_bridge_passes_everything_on_the_first_tick() -> None:
     bridge = PtyBridge(EchoDevice(per_byte=True), baud=0)
     ((to_device, to_host),) = _starved(bridge, [0.001])
     assert to_device == to_host == 20_000
+
+
+def test_the_next_pass_is_a_period_later_but_not_before_a_tick_is_due() -> None:
+    assert next_wake(1.0, 1.001, 0.004) == pytest.approx(1.004)
+    assert next_wake(1.0, 1.010, 0.004) == 1.010  # nothing to step before then
+    assert next_wake(1.0, 1.001, 0.0) == 1.001  # period 0: every tick
+
+
+class _FakeTime:
+    """Stands in for the bridge module's ``time``: sleeping advances the clock; ``stop`` is set once
+    ``until`` s have passed, so the loop runs a fixed stretch of fake time with no real waiting."""
+
+    def __init__(self, until: float, stop: threading.Event) -> None:
+        self.now, self.until, self.stop, self.sleeps, self.last_pass = 0.0, until, stop, 0, 0.0
+
+    def monotonic(self) -> float:
+        return self.now
+
+    def sleep(self, seconds: float) -> None:
+        self.sleeps += 1
+        self.last_pass = self.now
+        self.now += seconds
+        if self.now >= self.until:
+            self.stop.set()
+
+
+@pytest.mark.parametrize(("period", "passes"), [(SERVICE_PERIOD, round(1 / SERVICE_PERIOD)), (0.0, 1000)])
+def test_the_loop_wakes_once_a_period_and_still_steps_every_tick(
+    period: float, passes: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """One second of (fake) wall time: the loop wakes 250 times with a 4 ms period instead of 1,000
+    times (what the process costs), and either way the device has stepped every tick due by its last
+    pass (ms ticks 1 .. last pass), none skipped."""
+    stop = threading.Event()
+    clock = _FakeTime(1.0, stop)
+    monkeypatch.setattr(pty_bridge, "time", clock)
+    bridge = PtyBridge(EchoDevice(), period=period)
+    try:
+        bridge.run(stop)
+    finally:
+        bridge.close()
+    assert abs(clock.sleeps - passes) <= 1
+    assert abs(bridge.steps - round(clock.last_pass / 0.001)) <= 1 and bridge.skipped_ticks == 0
+    assert bridge.steps >= 990
+
+
+def test_a_negative_period_is_refused() -> None:
+    with pytest.raises(ValueError, match="service period must be >= 0 s"):
+        PtyBridge(EchoDevice(), period=-0.001)

@@ -208,19 +208,37 @@ def spawn_pty_emulator(
     surface: str | None = None,
     notice: Callable[[str], object] | None = None,
     start_timeout: float = START_TIMEOUT,
+    started: Callable[[int], object] | None = None,
 ) -> Iterator[str]:
     """Run ``omnibot sim --pty`` as a child process and yield its device path; on exit SIGINT it,
     wait for it (killing it if it hangs) and close its files. LinkError if it does not start within
     ``start_timeout`` s. ``notice`` (e.g. a line on a terminal) hears what is being waited for when
-    the start takes longer than a second. The child's stderr goes to a temporary file (read for the
-    error when it fails), so that however much it writes there it never blocks."""
+    the start takes longer than a second; ``started`` hears the child's process id once it runs. The
+    child's stderr goes to a temporary file (read for the error when it fails), so that however much
+    it writes there it never blocks.
+
+    The child runs in a session of its own, as an emulator started from another terminal does: it
+    stands for the robot's controller, a processor of its own, so what the caller's session runs
+    must not take its share of the CPU. With Linux's autogroup scheduling (a group per session) two
+    busy loops in the caller's session left the emulator runnable but unscheduled for 0.4-2 s at a
+    time on a loaded machine (BENCHMARKS.md, protocol throughput). A Ctrl-C at the terminal reaches
+    the caller only, which then ends the child as above (after its own cleanup on the line)."""
     argv = [sys.executable, "-m", "omnibot", "sim", "--pty", "--robot", robot, "--seed", str(seed)]
     argv += ["--world", world] if world else []
     argv += ["--surface", surface] if surface else []
     argv += ["--truth", str(truth)] if truth else []
     with tempfile.TemporaryFile("w+") as err:
-        proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=err, text=True)
+        proc = subprocess.Popen(
+            argv,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE,
+            stderr=err,
+            text=True,
+            start_new_session=True,
+        )
         try:
+            if started is not None:
+                started(proc.pid)
             assert proc.stdout is not None
             ready, _, _ = select.select([proc.stdout], [], [], 1.0)
             if not ready:

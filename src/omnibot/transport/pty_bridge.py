@@ -6,9 +6,10 @@
                  <--                                  <-- paced  <--           <-- device.transmit()
 
 The bridge owns the master side. The device (any :class:`~omnibot.transport.lockstep.LockstepDevice`)
-is stepped once per ``device.tick`` of wall-clock time; a late loop catches up with several steps, and
-beyond ``max_catch_up`` seconds behind it skips ticks (counted in ``skipped_ticks``) instead of
-racing. Bytes are paced to ``baud`` in both directions (a pty itself does not pace), with a
+is stepped once per ``device.tick`` of wall-clock time: the loop wakes every ``period`` (4 ms,
+SERVICE_PERIOD) and steps every tick due by then; a late loop catches up the same way, and beyond
+``max_catch_up`` seconds behind it skips ticks (counted in ``skipped_ticks``) instead of racing.
+Bytes are paced to ``baud`` in both directions (a pty itself does not pace), with a
 :class:`~omnibot.transport.pacing.Pacer` per direction that runs on the device's time: every tick
 stepped passes the bytes the line carries in one tick, so a loop that wakes late (a starved process)
 catches up the line with the device instead of losing all but one burst of it. The long-run rate
@@ -42,6 +43,14 @@ __all__ = ["PtyBridge", "serve_together"]
 
 _READ_CHUNK = 4096
 
+SERVICE_PERIOD = 0.004
+"""s of wall clock between the loop's passes. Each pass reads what the host wrote, steps every tick
+due (each with its paced bytes) and writes what the line carried, so the device's time and the line
+keep real time whatever the period; the period only sets how often the process wakes and so what
+it costs. Waking every 1 ms tick cost about 8 % of a core in syscalls and wake-ups alone (the steps
+themselves about 0.7 %), enough for a busy machine's scheduler to leave the emulator behind; a
+period of a few ms is what a USB serial adapter's latency timer gives a real host anyway."""
+
 
 class PtyBridge:
     """A pty pair whose master end is served by ``device`` in real time.
@@ -58,14 +67,19 @@ class PtyBridge:
         baud: int = DEFAULT_BAUD,
         burst: int = 16,
         max_catch_up: float = 0.1,
+        period: float = SERVICE_PERIOD,
         on_connect: Callable[[], None] | None = None,
     ) -> None:
         if device.tick <= 0:
             raise ValueError(f"device tick must be > 0 s, got {device.tick}")
+        if period < 0:
+            raise ValueError(f"service period must be >= 0 s, got {period}")
         self.device = device
         self.baud = baud
         self.burst = burst
         self.max_catch_up = max_catch_up
+        self.period = period
+        """Wall-clock seconds between the loop's passes (at least one tick): see SERVICE_PERIOD."""
         self.on_connect = on_connect
         """Called in the bridge's thread each time a host opens the slave (e.g. to reset the device
         the way opening an Arduino's port pulses DTR)."""
@@ -264,13 +278,20 @@ def serve_together(
     while not stopped():
         for bridge, master, poller in zip(bridges, masters, pollers, strict=True):
             bridge._poll(master, poller)
-        _advance_together(bridges, step, time.monotonic())
+        now = time.monotonic()
+        _advance_together(bridges, step, now)
         for bridge, master in zip(bridges, masters, strict=True):
             if bridge._wire and bridge.connected:
                 bridge._send(master)
-        wait = lead._next_tick - time.monotonic()
+        wait = next_wake(now, lead._next_tick, lead.period) - time.monotonic()
         if wait > 0:
             time.sleep(wait)
+
+
+def next_wake(now: float, next_tick: float, period: float) -> float:
+    """When a pass that started at ``now`` should be followed by the next one: ``period`` later, but
+    never before the next tick is due (nothing to step until then)."""
+    return max(next_tick, now + period)
 
 
 def _advance_together(bridges: Sequence[PtyBridge], step: Callable[[], None], now: float) -> None:
