@@ -52,10 +52,13 @@ def test_carpet_creep_is_found_and_removed(carpet: SlipCalibration) -> None:
     assert len(raw) == SLIP_COURSES == 16 and carpet.courses_deg[:4] == [11.25, 191.25, 33.75, 213.75]
     # carpet: the encoders over-read by several percent on every course
     assert min(raw) > 0.03 and np.mean(raw) > 0.06
-    # the floor's coefficients take nearly all of it out (measured: 15.8 % -> 0.7 % mean, max 2.2 %)
+    # the floor's coefficients take nearly all of it out (measured: 15.8 % -> 0.7 % mean, max 2.6 %)
     assert np.mean(corrected) < 0.1 * np.mean(raw) and max(corrected) < 0.03
+    # no distance scale: the nominal robot's radius is as described, and a scale would only stand
+    # in for part of the creep model's mismatch (SCALE_EXPLAINS)
+    assert carpet.params.scale == 1.0
     assert 0.008 < carpet.params.roll < 0.03
-    # the combined rolling-and-driving drag is found (omni4's rollers on carpet; 0.027 measured)
+    # the combined rolling-and-driving drag is found (omni4's rollers on carpet; 0.035 measured)
     assert 0.01 < carpet.params.combined < 0.06
     # the simulator's truth is read after each speed-up too, which pins down the acceleration term
     assert len(carpet.speed_ups) == 16 and 0.005 < carpet.params.compliance < 0.05
@@ -176,15 +179,16 @@ def test_carpet_odometry_on_every_course_and_turning_after_calibration(
     older = fit_slip(robot, carpet.legs + carpet.speed_ups, compliance=True, scale=True, combined=False)
     before = np.array([leg_error(leg, older, robot) for leg in legs])
     straight = np.array([label.startswith("course") for label, _ in carpet_checks])
-    # measured (0.3 and 0.6 m/s; raw 3.3-14.8 %): corrected mean 1.7 %, max 3.8 % (a swinging run);
-    # the 45-degree courses 0.06-0.49 % (the rolling-only form on the same runs: 1.0-1.7 %); the axis
-    # courses up to 3.6 % (their idle wheels' drag is wherever they stopped, up to 2x); the
-    # rolling-only form on the same runs: mean 2.3 %, max 4.0 %
+    # measured (0.3 and 0.6 m/s; raw 3.3-14.8 %): corrected mean 1.7 %, max 4.4 % (course 90 at 0.6 m/s:
+    # its idle wheels' drag is wherever they stopped, up to 2x, and it was 8.9 % raw); the 45-degree
+    # courses 0.14-0.53 % (the rolling-only form on the same runs: 1.9-3.1 %); the turning runs
+    # 0.7-4.2 % (2.2-5.5 %); the rolling-only form on the same runs: mean 2.9 %, max 5.5 %
     diagonal = np.array(
         [label in ("course 45", "course 135", "course 225", "course 315") for label, _ in carpet_checks]
     )
     assert raw.min() > 0.025 and raw.mean() > 0.06
-    assert fitted.max() < 0.045 and fitted.mean() < 0.02
+    assert fitted.max() < 0.05 and fitted.mean() < 0.02
     assert fitted[straight].mean() < 0.015 and fitted[diagonal].max() < 0.01
+    assert fitted[~straight].max() < 0.045 and np.all(fitted[~straight] < before[~straight])
     assert fitted[diagonal].max() < 0.6 * before[diagonal].min()
     assert fitted.mean() < 0.8 * before.mean() and fitted.max() < before.max()
