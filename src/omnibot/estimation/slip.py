@@ -193,7 +193,7 @@ SCALE_EXPLAINS = 0.5
 """A fitted distance scale must leave less than this fraction of the squared error the creep terms
 leave alone. Measured on omni4 on carpet: a scale of 0.988 that took out 23 % of it made the
 estimate 1.2 % short on every metre (the standard square: 2.4 cm RMS against 0.75 with the scale
-at 1); a 4 % radius error leaves under 1e-4 without its scale."""
+at 1); on synthetic runs with a 4 % radius error the scale takes out all but 1e-28 of it."""
 
 CREEP_COLUMNS = ("roll", "combined", "compliance")
 """The creep coefficients, in the order of :func:`_regressors`' columns."""
