@@ -20,14 +20,35 @@ def _course(deg: float, speed: float = 0.4) -> tuple[float, float, float]:
 def test_omni4_pattern_matches_which_wheels_push() -> None:
     model = SlipModel(load_robot("omni4"))
     # course 0: m1 and m3 only roll (their rollers drag), m2 and m4 push against that drag
-    p, _ = model.patterns(_course(0))
+    p = model.patterns(_course(0)).roll
     assert np.allclose(np.abs(p), [0.0, 1.0, 0.0, 1.0], atol=1e-6)
     # course 30: every roller rolls, every wheel pushes one drag's worth
-    p, _ = model.patterns(_course(30))
+    p = model.patterns(_course(30)).roll
     assert np.allclose(np.abs(p), 1.0, atol=1e-3)
     # standing still, or turning in place (omni4's rollers do not roll then): no creep
-    assert np.allclose(model.patterns((0.0, 0.0, 0.0))[0], 0.0)
-    assert np.allclose(model.patterns((0.0, 0.0, 2.0))[0], 0.0, atol=1e-9)
+    for still in ((0.0, 0.0, 0.0), (0.0, 0.0, 2.0)):
+        patterns = model.patterns(still)
+        assert np.allclose(patterns.roll, 0.0, atol=1e-9) and np.allclose(patterns.combined, 0.0, atol=1e-9)
+
+
+def test_omni4_combined_drag_pattern_depends_on_the_course() -> None:
+    model = SlipModel(load_robot("omni4"))
+    # on an axis no wheel both drives and rolls: no combined drag
+    assert np.allclose(model.patterns(_course(0, 0.5)).combined, 0.0, atol=1e-12)
+    assert np.allclose(model.patterns(_course(90, 0.5)).combined, 0.0, atol=1e-12)
+    # at 45 degrees every contact crosses its roller at 45 degrees (sin 2 beta = 1): each wheel
+    # pushes against one roller's drag, its rolling speed 0.5 sin 45
+    c45 = model.patterns(_course(45, 0.5)).combined
+    assert np.allclose(np.abs(c45), 0.5 * math.sin(math.radians(45)), atol=1e-9)
+    # at 30 degrees: sin 2 beta = sin 60 on every wheel; m2/m4 push against m1/m3's rollers (x)
+    c30 = model.patterns(_course(30, 0.5)).combined
+    s60 = math.sin(math.radians(60))
+    assert np.allclose(
+        np.abs(c30), [s60 * 0.5 * math.sin(math.radians(30)), s60 * 0.5 * math.cos(math.radians(30))] * 2
+    )
+    # viscous: twice the speed, twice the pattern; the rolling pattern does not change
+    assert np.allclose(model.patterns(_course(30, 1.0)).combined, 2 * c30)
+    assert np.allclose(model.patterns(_course(30, 1.0)).roll, model.patterns(_course(30, 0.5)).roll)
 
 
 def test_creep_reverses_with_the_motion_and_scales_with_its_coefficient() -> None:
@@ -68,9 +89,26 @@ def test_fit_recovers_the_roll_coefficient_of_synthetic_runs(robot: str) -> None
     legs = [_synthetic_leg(robot, truth, math.radians(deg), 0.3) for deg in (10, 75, 140, 200, 290)]
     fitted = fit_slip(load_robot(robot), legs)
     assert fitted.roll == pytest.approx(truth.roll, rel=1e-6)
-    assert fitted.compliance == 0.0
+    assert fitted.compliance == 0.0 and fitted.combined == 0.0  # not needed: not taken
     assert all(leg_error(leg) > 0.01 for leg in legs)
     assert all(leg_error(leg, fitted, load_robot(robot)) < 1e-8 for leg in legs)
+
+
+def test_fit_recovers_rolling_and_combined_creep_of_synthetic_runs() -> None:
+    robot = load_robot("omni4")
+    truth = SlipParameters(roll=0.015, combined=0.03)
+    legs = [
+        _synthetic_leg("omni4", truth, math.radians(deg), speed)
+        for deg in (11.25, 191.25, 33.75, 213.75, 56.25, 236.25)
+        for speed in (0.5, 0.25)
+    ]
+    fitted = fit_slip(robot, legs)
+    assert fitted.roll == pytest.approx(0.015, rel=1e-6) and fitted.combined == pytest.approx(0.03, rel=1e-6)
+    assert all(leg_error(leg, fitted, robot) < 1e-8 for leg in legs)
+    # the older form (no combined term) cannot: its error depends on the course
+    rolling_only = fit_slip(robot, legs, combined=False)
+    assert rolling_only.combined == 0.0
+    assert max(leg_error(leg, rolling_only, robot) for leg in legs) > 0.005
 
 
 def test_fit_needs_runs_and_leg_error_needs_the_robot() -> None:
@@ -88,6 +126,8 @@ def test_fit_needs_runs_and_leg_error_needs_the_robot() -> None:
         ({"roll": 0.01, "rol": 0.0}, r"unknown key\(s\) \['rol'\]"),
         ({"roll": "fast"}, "slip.roll: 'fast' is not a number"),
         ({"compliance": float("nan")}, "must be a finite number"),
+        ({"combined": "lots"}, "slip.combined: 'lots' is not a number"),
+        ({"combined": float("inf")}, "combined must be a finite number"),
     ],
 )
 def test_parameters_from_a_file_give_clear_errors(data: object, message: str) -> None:
@@ -96,9 +136,19 @@ def test_parameters_from_a_file_give_clear_errors(data: object, message: str) ->
 
 
 def test_parameters_round_trip() -> None:
-    p = SlipParameters(roll=0.0161, compliance=0.002)
+    p = SlipParameters(roll=0.0161, compliance=0.002, combined=0.031)
     assert SlipParameters.from_mapping(p.as_dict()) == p
+    assert list(p.as_dict()) == ["roll", "combined", "compliance", "scale"]
     assert SlipParameters.from_mapping({"roll": 0.01}) == SlipParameters(0.01, 0.0)
+
+
+def test_files_with_the_older_three_keys_still_load() -> None:
+    # written before the combined drag: the model they were fitted with, combined 0
+    old = SlipParameters.from_mapping({"roll": 0.0199, "compliance": 0.0153, "scale": 1.0})
+    assert old == SlipParameters(roll=0.0199, compliance=0.0153, scale=1.0, combined=0.0)
+    model = SlipModel(load_robot("omni4"), old)
+    p = model.patterns(_course(45))
+    assert np.allclose(model.creep(_course(45)), 0.0199 * p.roll)
 
 
 def test_fit_never_returns_a_negative_coefficient() -> None:
@@ -136,3 +186,4 @@ def test_fit_keeps_scale_1_when_a_radius_error_explains_nothing() -> None:
             legs.append(SlipLeg(leg.twists, leg.accels, leg.dt, leg.headings, leg.encoder_disp, noisy))
     fitted = fit_slip(load_robot("omni4"), legs, scale=True)
     assert fitted.scale == 1.0 and fitted.roll == pytest.approx(0.01, rel=0.1)
+    assert fitted.combined < 0.002  # noise, not a combined drag: at most a trace of one

@@ -72,7 +72,7 @@ class Plan:
     roller_rounds: int = 4
     """Rounds of the idle axes at each power for the idle wheels' roller drag (rollers.py; 0: none)."""
     slip: bool = True
-    """Drive the wheel-slip runs (12 out-and-back, wheel-speed loop on) and fit the floor's creep."""
+    """Drive the wheel-slip runs (16 out-and-back, wheel-speed loop on) and fit the floor's creep."""
 
     @classmethod
     def quick(cls) -> Plan:

@@ -123,13 +123,14 @@ def accuracy_markdown(result: CalibrationResult) -> str:
             "displacement against the truth's, raw and with the fitted creep taken out",
             "(`surfaces.<floor>.odometry.slip`, for `omnibot follow --calibration`).",
             "",
-            "| surface | roll (m/s) | compliance (s) | scale | runs | raw error, mean / max | corrected, mean / max |",
-            "|---|---|---|---|---|---|---|",
+            "| surface | roll (m/s) | combined | compliance (s) | scale | runs | raw error, mean / max | corrected, mean / max |",
+            "|---|---|---|---|---|---|---|---|",
         ]
         for surface, slip in slips:
             raw, fixed = slip.errors(corrected=False), slip.errors(corrected=True)
             lines.append(
-                f"| {surface} | {slip.params.roll:.4f} | {slip.params.compliance:.4f} | {slip.params.scale:.4f} | "
+                f"| {surface} | {slip.params.roll:.4f} | {slip.params.combined:.4f} | {slip.params.compliance:.4f} | "
+                f"{slip.params.scale:.4f} | "
                 f"{len(raw)} | "
                 f"{100 * statistics.fmean(raw):.1f} % / {100 * max(raw):.1f} % | "
                 f"{100 * statistics.fmean(fixed):.1f} % / {100 * max(fixed):.1f} % |"
@@ -144,7 +145,8 @@ def slip_summary(slip: SlipCalibration) -> str:
     """One line: the coefficients and the runs' odometry error before and after taking them out."""
     raw, fixed = slip.errors(corrected=False), slip.errors(corrected=True)
     return (
-        f"roll {slip.params.roll:.4f} m/s, compliance {slip.params.compliance:.4f} s, "
+        f"roll {slip.params.roll:.4f} m/s, combined {slip.params.combined:.4f}, "
+        f"compliance {slip.params.compliance:.4f} s, "
         f"scale {slip.params.scale:.4f}; {len(raw)} runs, "
         f"encoder error {100 * statistics.fmean(raw):.1f} % -> {100 * statistics.fmean(fixed):.1f} % (mean)"
     )

@@ -50,7 +50,7 @@ from omnibot.calibration.verdict import judge_average
 from omnibot.client.client import RobotClient
 from omnibot.errors import ConfigError
 from omnibot.firmware.config import build_config
-from omnibot.navigation.slipcal import SlipCalibration
+from omnibot.navigation.slipcal import SLIP_COURSES, SlipCalibration
 from omnibot.progress import Progress
 from omnibot.protocol import codes
 from omnibot.robot.description import CalibrationSpec, MotorMapSpec, RobotDescription
@@ -465,7 +465,7 @@ def _wheel_slip(s: SurfaceRun, progress: ProgressFactory) -> None:
     if not s.source.exact:
         s.notes.append(f"wheel slip needs an independent truth (sim, csv, tape), not {s.source.name}")
         return
-    with progress(f"wheel slip on {s.surface}", 12) as slip_bar:
+    with progress(f"wheel slip on {s.surface}", SLIP_COURSES) as slip_bar:
         try:
             s.slip = slip_step(client, s.robot, s.source, slip_bar)
         except ConfigError as exc:

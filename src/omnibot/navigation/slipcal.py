@@ -1,6 +1,6 @@
 """Wheel-slip calibration drive: straight runs in every direction, fitted by :func:`fit_slip`.
 
-The robot drives out and back along evenly spaced courses (0, 180, 30, 210, ... degrees, so it ends
+The robot drives out and back along evenly spaced courses (11.25, 191.25, 33.75, ... degrees, so it ends
 near where it started), out at full speed and back at half of it, with its wheel-speed loop and its
 heading held by the gyro, each run from rest to rest. For each run the encoders' displacement is
 compared with the truth's (a :class:`RunTruth`: the simulator, or any of ``omnibot calibrate``'s
@@ -43,6 +43,11 @@ class RunTruth(Protocol):
 HEADING_GAIN = 4.0
 """1/s: heading hold while driving a run."""
 
+SLIP_COURSES = 16
+"""Runs of the slip calibration: courses every 22.5 degrees, so that on omni4 they cross the rollers
+at 11.25 and 33.75 degrees off the axes (the combined drag's weight 0.38 and 0.92), which tells the
+rolling creep from the combined drag's."""
+
 
 @dataclass
 class SlipCalibration:
@@ -64,13 +69,16 @@ class SlipCalibration:
 
 
 def course_order(count: int) -> list[float]:
-    """``count`` courses (even) evenly over the circle, each followed by its opposite."""
+    """``count`` courses (even) evenly over the circle, each followed by its opposite, half a step off
+    0 degrees: no course runs along a wheel's axis, so every wheel turns on every run and its rollers'
+    drag averages over the wheel's angle, as the model's does (an idle wheel's drag depends on where
+    it stopped, up to 2x, which made the fit depend on it)."""
     if count < 2 or count % 2:
         raise ConfigError(f"slip calibration needs an even number of courses >= 2, got {count}")
     half = 360.0 / count
     out = []
     for i in range(count // 2):
-        out += [i * half, i * half + 180.0]
+        out += [(i + 0.5) * half, (i + 0.5) * half + 180.0]
     return out
 
 
@@ -109,7 +117,7 @@ def calibrate_slip(
     nav: Navigator,
     truth: RunTruth,
     *,
-    courses: int = 12,
+    courses: int = SLIP_COURSES,
     speed: float = 0.3,
     distance: float = 0.5,
     accel: float = 1.0,
@@ -208,6 +216,7 @@ def simulate_slip_calibration(
 
 
 __all__: Sequence[str] = (
+    "SLIP_COURSES",
     "RunTruth",
     "SimulatorTruth",
     "SlipCalibration",
