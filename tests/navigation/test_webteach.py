@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from omnibot.client import RobotClient
+from omnibot.navigation.session import follower_limits
 from omnibot.navigation.webteach import PathTeacher, gains_for
 from omnibot.protocol import codes
 from omnibot.robot.description import load_robot
@@ -119,6 +120,8 @@ def test_the_page_takes_over_from_a_repeat_and_hands_back(taught: tuple[Stepper,
 
 def test_gains_scale_with_the_control_period() -> None:
     assert gains_for(0.01)["cross"] == 45.0
+    assert gains_for(0.05, follower_limits(load_robot("omni3"), 1.0))["heading"] == pytest.approx(0.2 * 4.0)
+    assert gains_for(0.05, follower_limits(load_robot("omni4"), 1.0))["heading"] == pytest.approx(0.2 * 8.0)
     slow = gains_for(0.05)
     assert slow["cross"] * 0.05 < 0.5 and slow["lead"] == pytest.approx(0.065)
     with pytest.raises(ValueError, match="must be positive"):

@@ -27,7 +27,9 @@ from typing import Any
 import numpy as np
 
 from omnibot.control.followers.base import make_follower
+from omnibot.control.followers.tracker import HEADING_GAIN, heading_gain
 from omnibot.control.paths.path import Path
+from omnibot.control.paths.profile import MotionLimits
 from omnibot.control.paths.teach import PathRecorder
 from omnibot.estimation.estimator import PoseEstimator
 from omnibot.estimation.slip import SlipParameters
@@ -44,17 +46,20 @@ WATCHDOG = 0.25
 """s: the VEL watchdog while following (longer than the dashboard's command period)."""
 
 
-def gains_for(period: float) -> dict[str, float]:
+def gains_for(period: float, limits: MotionLimits | None = None) -> dict[str, float]:
     """Tracker gains for a control period (the defaults are for 100 Hz): the loop gain per period
     stays below 0.5. The runtime predicts the state to the cycle's time (telemetry age covered), so the
-    lead is the 100 Hz one (0.04 s of actuation) plus half a period (a command holds for a period)."""
+    lead is the 100 Hz one (0.04 s of actuation) plus half a period (a command holds for a period).
+    The heading gain is the robot's (:func:`~omnibot.control.followers.tracker.heading_gain`, given
+    its ``limits``), scaled the same way."""
     scale = min(1.0, 0.01 / period)
+    heading = HEADING_GAIN if limits is None else heading_gain(limits, 0.04)
     return {
         "cross": 45.0 * scale,
         "cross_i": 100.0 * scale * scale,
         "along": 10.0 * scale,
         "along_i": 20.0 * scale * scale,
-        "heading": 8.0 * scale,
+        "heading": heading * scale,
         "heading_i": 10.0 * scale * scale,
         "lead": 0.04 + 0.5 * period,
     }
@@ -189,7 +194,7 @@ class PathTeacher:
             path = _with_approach(path, state.x, state.y, state.theta)
             note = f", driving {gap:.2f} m to its start first"
         limits = follower_limits(self.robot, self.speed)
-        follower = make_follower("tracker", limits, rate=1.0 / self.period, **gains_for(self.period))
+        follower = make_follower("tracker", limits, rate=1.0 / self.period, **gains_for(self.period, limits))
         client = runtime.client
         if self.wheel_loop:
             self._mode = client.mode_bits if client.mode_bits is not None else client.status().mode

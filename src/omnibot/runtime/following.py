@@ -28,8 +28,9 @@ def follower_source(
 ) -> FollowerSource:
     """The follower source ``omnibot follow`` and ``run --follow`` drive ``path`` with at ``period``
     (the tracker's gains scaled as for the page's Repeat above 100 Hz); ROS 2's ``path`` uses it too."""
-    gains = gains_for(period) if follower == "tracker" and period > 0.0101 else {}
-    made = make_follower(follower, follower_limits(robot, speed), rate=1.0 / period, **gains)
+    limits = follower_limits(robot, speed)
+    gains = gains_for(period, limits) if follower == "tracker" and period > 0.0101 else {}
+    made = make_follower(follower, limits, rate=1.0 / period, **gains)
     return FollowerSource(
         made,
         path,

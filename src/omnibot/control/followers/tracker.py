@@ -12,7 +12,7 @@ velocity and turn rate at every instant. Each control period (100 Hz or more):
    is taken at the same instant;
 3. **feedback** on the error in the path frame at the reference point: cross-track with a PI
    (gain ``cross``, integral ``cross_i``, clamped), along-track with a PI (``along``, ``along_i``),
-   and heading with a PI (``heading``, ``heading_i``);
+   and heading with a PI (``heading``, by default :func:`heading_gain`; ``heading_i``);
 4. **command**: v = v_ref + k_t e_t t + k_n e_n n and w = w_ref + k_theta e_theta, turned into the
    body frame with the heading at the middle of the next period, speed clamped to the limit.
 
@@ -45,6 +45,23 @@ from omnibot.control.paths.profile import MotionLimits, SpeedProfile
 STEADY_ACCEL = 0.5
 """m/s^2: the response model learns only while the reference accelerates less than this (and the
 estimator sees no slip): it is a steady-state gain."""
+HEADING_GAIN = 8.0
+"""1/s: the heading loop's gain on a robot whose angular acceleration can deliver it (see
+:func:`heading_gain`)."""
+HEADING_STEP = 0.1
+"""rad: a heading error whose correction (gain x error, rad/s) the robot must be able to add within
+the tracker's lead at its angular acceleration limit (:func:`heading_gain`)."""
+
+
+def heading_gain(limits: MotionLimits, lead: float) -> float:
+    """1/s: the heading loop's gain, :data:`HEADING_GAIN` or less: at most what lets the robot add the
+    correction of a :data:`HEADING_STEP` error within ``lead`` s at its angular acceleration limit.
+
+    A heavier body gets a softer loop: omni3 (30 kg, 10 rad/s^2) 4/s, omni4 and mecanum4 (20 rad/s^2)
+    8/s. A stiffer one asks a body that lags in heading (its wheels at their grip, on carpet) for
+    turn rates it cannot reach, and the grip the correction takes is the translation's.
+    """
+    return min(HEADING_GAIN, limits.alpha_max * lead / HEADING_STEP)
 
 
 @register("tracker")
@@ -64,7 +81,7 @@ class ProfileTracker(Follower):
         cross_i: float = 100.0,
         along: float = 10.0,
         along_i: float = 20.0,
-        heading: float = 8.0,
+        heading: float | None = None,
         heading_i: float = 10.0,
         lag_start: float = 0.03,
         lag_span: float = 0.10,
@@ -78,7 +95,8 @@ class ProfileTracker(Follower):
         self.lead = lead
         self.k_cross, self.i_cross = cross, cross_i
         self.k_along, self.i_along = along, along_i
-        self.k_heading, self.i_heading = heading, heading_i
+        self.k_heading = heading_gain(limits, lead) if heading is None else heading
+        self.i_heading = heading_i
         self.lag_start, self.lag_span = lag_start, lag_span
         self.settle = settle
         self.turn_lead = lead if turn_lead is None else turn_lead
