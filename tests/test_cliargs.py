@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from omnibot.cliargs import add_robot_options, check_sim_options, check_writable, sim_url
+from omnibot.cliargs import add_robot_options, check_sim_options, check_writable, seed_of, sim_url
 from omnibot.errors import ConfigError
 
 
@@ -23,6 +23,14 @@ def test_defaults_make_the_simulated_robot() -> None:
         "sim://omni3?seed=4&world=room&surface=carpet"
     )
     assert sim_url(parse("--port", "/dev/ttyUSB0")) == "/dev/ttyUSB0"
+
+
+def test_a_negative_seed_is_refused() -> None:
+    assert seed_of(parse("--seed", "0")) == 0
+    with pytest.raises(ConfigError, match="--seed: expected an integer >= 0, got -1"):
+        seed_of(parse("--seed", "-1"))
+    with pytest.raises(ConfigError, match="--seed"):
+        sim_url(parse("--seed", "-1"))
 
 
 def test_simulator_options_are_refused_with_a_port() -> None:

@@ -229,8 +229,9 @@ def _sim(args: argparse.Namespace) -> int:
         from omnibot.cliargs import check_writable
 
         check_writable(log, "--log")
+    seed = seed_of(args)
     return run_pty_emulator(
-        robot, seed=args.seed, surface=args.surface, world=args.world, truth=truth, baud=args.baud, log=log
+        robot, seed=seed, surface=args.surface, world=args.world, truth=truth, baud=args.baud, log=log
     )
 
 
@@ -242,7 +243,7 @@ def _sim_fleet(args: argparse.Namespace, robots: list[str]) -> int:
     for flag, given in (("--truth", args.truth), ("--log", args.log), ("--foxglove", args.foxglove)):
         if given is not None:
             raise ConfigError(f"{flag} records one robot: not with several --robot", key=flag)
-    members = [parse_member(text, k, args.seed) for k, text in enumerate(robots)]
+    members = [parse_member(text, k, seed_of(args)) for k, text in enumerate(robots)]
     return run_pty_fleet(members, surface=args.surface, world=args.world, baud=args.baud)
 
 

@@ -157,9 +157,14 @@ def check_writable(path: str | Path | None, flag: str) -> None:
 
 
 def seed_of(args: argparse.Namespace) -> int:
-    """The ``--seed`` given, or ``DEFAULT_SEED`` when the command has none or it was left out."""
+    """The ``--seed`` given, or ``DEFAULT_SEED`` when the command has none or it was left out; a
+    negative one is refused (the simulator's random streams take seeds >= 0, as ``sim://`` does)."""
     seed = getattr(args, "seed", None)
-    return DEFAULT_SEED if seed is None else int(seed)
+    if seed is None:
+        return DEFAULT_SEED
+    if int(seed) < 0:
+        raise ConfigError(f"expected an integer >= 0, got {seed}", key="--seed")
+    return int(seed)
 
 
 def world_of(args: argparse.Namespace) -> str:

@@ -125,6 +125,11 @@ def test_unwritable_output_is_refused_before_the_robot_moves(
         (["follow", "{line}", "--port", "sim://omni4", "--seed", "3"], "--seed"),
         (["demo", "--port", "sim://omni4", "--world", "room"], "put them in a sim:// URL"),
         (["send", "STATUS", "--port", "/dev/omnibot-no-such-port"], "--port: cannot open"),
+        # a negative seed reached numpy's SeedSequence (exit 70) where no sim:// URL checked it
+        (["follow", "{line}", "--seed", "-1"], "--seed: expected an integer >= 0"),
+        (["tour", "--seed", "-1"], "--seed: expected an integer >= 0"),
+        (["sim", "--pty", "--seed", "-1"], "--seed: expected an integer >= 0"),
+        (["sim", "--pty", "--robot", "omni4?seed=-1", "--robot", "omni3"], "seed=N (N >= 0)"),
     ],
 )
 def test_bad_files_and_options_are_one_line_usage_errors(

@@ -131,8 +131,10 @@ def parse_member(text: str, index: int, seed: int) -> FleetMember:
         raise ConfigError(f"--robot {text!r} names no robot (e.g. omni4?name=r1&pose=1,1,0)", key="--robot")
     try:
         own_seed = int(options.get("seed", seed + index))
+        if own_seed < 0:
+            raise ValueError(own_seed)
     except ValueError:
-        raise ConfigError(f"expected seed=N in --robot {text!r}", key="--robot") from None
+        raise ConfigError(f"expected seed=N (N >= 0) in --robot {text!r}", key="--robot") from None
     try:
         pose = parse_pose(options["pose"]) if "pose" in options else None
     except ConfigError as exc:
