@@ -13,7 +13,8 @@ Exit status, the same for every command (README's command table):
 * 2: the command could not start: bad arguments, files or protocol text, the wrong robot, unwritable
   output, a link that cannot be opened or whose controller does not answer HELLO;
 * 70: a bug (an exception omnibot did not expect: one line, the traceback with ``--debug``);
-* 130: interrupted by SIGINT (Ctrl-C), 143: by SIGTERM (the robot is stopped first).
+* 130: interrupted by SIGINT (Ctrl-C), 143: by SIGTERM, 129: by SIGHUP (its terminal or SSH session
+  closed; not under ``nohup``); the robot is stopped first.
 
 Errors are one line on stderr (``omnibot: error: ...``); ``--debug`` adds the traceback. Any file a
 command cannot read (not UTF-8 included) or write is such an error (status 2). A reader of standard
@@ -49,7 +50,7 @@ from omnibot.cliargs import (
 from omnibot.errors import ConfigError, KinematicsError, OmnibotError, ProtocolError
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_BUG = 0, 1, 2, 70
-EXIT_SIGINT, EXIT_SIGTERM, EXIT_SIGPIPE = 130, 143, 141
+EXIT_SIGINT, EXIT_SIGPIPE = 130, 141
 
 Handler = Callable[[argparse.Namespace], int]
 
@@ -252,7 +253,7 @@ def _add_sim(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "sim",
         help="run the simulated robot (firmware + physics) on a pseudo-terminal",
         description="Runs the firmware and the simulator as one process on a pty, in real time, "
-        "pacing bytes to the baud rate. The first stdout line is the device path. Ends on SIGINT/SIGTERM.",
+        "pacing bytes to the baud rate. The first stdout line is the device path. Ends on SIGINT/SIGTERM/SIGHUP.",
     )
     p.add_argument("--pty", action="store_true", help="serve on a pseudo-terminal (required)")
     p.add_argument(
@@ -555,7 +556,7 @@ def exit_status(exc: BaseException) -> int:
     from omnibot.client.session import Terminated
 
     if isinstance(exc, Terminated):
-        return EXIT_SIGTERM
+        return 128 + exc.signum
     if isinstance(exc, KeyboardInterrupt):
         return EXIT_SIGINT
     if isinstance(exc, ConfigError | KinematicsError | ProtocolError | UnicodeDecodeError):
@@ -598,7 +599,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.debug:
             traceback.print_exc()
         if isinstance(exc, KeyboardInterrupt):
-            signal_name = "SIGTERM" if isinstance(exc, Terminated) else "SIGINT"
+            signal_name = exc.signum.name if isinstance(exc, Terminated) else "SIGINT"
             print(f"omnibot: interrupted ({signal_name})", file=sys.stderr)
         elif status == EXIT_BUG:
             print(

@@ -67,6 +67,23 @@ def test_pty_emulator_serves_the_firmware_and_writes_truth(tmp_path: Path) -> No
     assert header == "t,x,y,theta"
 
 
+def test_sighup_ends_the_emulator_cleanly(tmp_path: Path) -> None:
+    """Its terminal closing (SIGHUP) ends it as SIGTERM does: status 0, the truth file whole."""
+    if signal.getsignal(signal.SIGHUP) == signal.SIG_IGN:
+        pytest.skip("the suite runs under nohup: the emulator inherits an ignored SIGHUP and runs on")
+    truth = tmp_path / "truth.csv"
+    argv = [sys.executable, "-m", "omnibot", "sim", "--pty", "--baud", "0", "--truth", str(truth)]
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout is not None
+        assert proc.stdout.readline().startswith("/dev/")
+    finally:
+        proc.send_signal(signal.SIGHUP)
+        _, err = proc.communicate(timeout=10)
+    assert proc.returncode == 0, err
+    assert truth.read_text().splitlines()[0] == "t,x,y,theta"
+
+
 def test_a_fleet_on_one_pty_per_robot_shares_one_world() -> None:
     """Two robots in one room, each on its own pty: the omni4's sonar sees the omni3 in front of it."""
     argv = [sys.executable, "-m", "omnibot", "sim", "--pty", "--world", "room", "--baud", "0"]

@@ -4,8 +4,8 @@ The first line on stdout is the pty's device path, so any serial program (pyseri
 omnibot client with ``--port /dev/pts/N``) can open it. The path is printed only once the emulator can
 answer in real time: the arguments are checked, the truth file is open and the physics kernels are
 compiled (or loaded from numba's cache), so a first start on a fresh install does not leave a HELLO
-unanswered. Bytes are paced to the baud rate in both directions. SIGINT or SIGTERM end it cleanly:
-the pty is closed, the truth file flushed and closed.
+unanswered. Bytes are paced to the baud rate in both directions. SIGINT, SIGTERM or SIGHUP (not
+under ``nohup``) end it cleanly: the pty is closed, the truth file flushed and closed.
 
 With several ``--robot`` options (:func:`run_pty_fleet`) the robots share one world and one clock
 (:class:`~omnibot.sim.fleet.Fleet`), each on its own pty: a line ``NAME PATH`` per robot, so a fleet
@@ -48,7 +48,7 @@ def run_pty_emulator(
     out: TextIO = sys.stdout,
     log: Path | None = None,
 ) -> int:
-    """Serve the simulated robot on a new pty until ``stop`` is set or SIGINT/SIGTERM; exit status.
+    """Serve the simulated robot on a new pty until ``stop`` is set or SIGINT/SIGTERM/SIGHUP; its status.
     ConfigError (before the pty exists) for a bad baud rate or a truth file that cannot be written."""
     from omnibot.sim import kernels
 
@@ -78,7 +78,7 @@ def run_pty_emulator(
             device = RecordedDevice(device, log_recorder, robot)
         bridge = PtyBridge(device, baud=baud)
         if threading.current_thread() is threading.main_thread():
-            for sig in (signal.SIGINT, signal.SIGTERM):
+            for sig in _ending_signals():
                 previous[sig] = signal.signal(sig, _on_signal)
         print(bridge.path, file=out, flush=True)
         try:
@@ -93,6 +93,15 @@ def run_pty_emulator(
         if log_recorder is not None:
             log_recorder.close()
     return 0
+
+
+def _ending_signals() -> list[signal.Signals]:
+    """The signals that end the emulator cleanly: SIGINT, SIGTERM and SIGHUP (its terminal closed),
+    unless ``nohup`` ignores SIGHUP."""
+    ending = [signal.SIGINT, signal.SIGTERM]
+    if signal.getsignal(signal.SIGHUP) is not signal.SIG_IGN:
+        ending.append(signal.SIGHUP)
+    return ending
 
 
 @dataclass(frozen=True)
@@ -152,7 +161,7 @@ def run_pty_fleet(
     out: TextIO = sys.stdout,
 ) -> int:
     """Serve several simulated robots in one world, one pty each, on one real-time clock, until
-    ``stop`` or SIGINT/SIGTERM; exit status. Prints ``NAME PATH`` per robot once all can answer.
+    ``stop`` or SIGINT/SIGTERM/SIGHUP; exit status. Prints ``NAME PATH`` per robot once all can answer.
     ConfigError (before any pty exists) for a bad baud rate, a name taken twice or a pose that
     overlaps a wall, an obstacle or another robot."""
     from omnibot.sim import kernels
@@ -181,7 +190,7 @@ def run_pty_fleet(
         for name in fleet.names:
             bridges.append(PtyBridge(fleet.device(name), baud=baud))
         if threading.current_thread() is threading.main_thread():
-            for sig in (signal.SIGINT, signal.SIGTERM):
+            for sig in _ending_signals():
                 previous[sig] = signal.signal(sig, _on_signal)
         for name, bridge in zip(fleet.names, bridges, strict=True):
             print(name, bridge.path, file=out)
