@@ -97,6 +97,19 @@ def test_the_link_dying_is_one_line_and_exit_1(pty_robot: PtyRobot) -> None:
     assert err.startswith("omnibot: error:")
 
 
+@pytest.mark.parametrize("command", ["dashboard", "run"])
+def test_the_link_dying_ends_the_dashboard_with_exit_1(pty_robot: PtyRobot, command: str) -> None:
+    """It served the dead robot until --duration and exited 0 before."""
+    argv = ["dashboard"] if command == "dashboard" else ["run", "--dashboard"]
+    dash = Command(*argv, "--port", pty_robot.path, "--http-port", "0", "--duration", "60")
+    dash.wait_for("Ctrl-C stops it")
+    pty_robot.kill()
+    code, _out, err = dash.finish()
+    assert code == 1, err
+    assert f"omnibot {command}: the robot link ended: serial port {pty_robot.path} failed" in err
+    assert "Traceback" not in err
+
+
 @pytest.mark.parametrize(
     ("argv", "ready", "signum", "status"),
     [

@@ -289,6 +289,12 @@ class RobotClient(TypedCalls):
         return self._moving
 
     @property
+    def broken(self) -> bool:
+        """True after the link failed, until it is open again (the reopen after the failure did not
+        work: the next call tries again first, or fails with reconnecting off)."""
+        return self._broken
+
+    @property
     def mode_bits(self) -> int | None:
         """The MODE bits last set or reported by STATUS; None if not known yet."""
         return self._mode
