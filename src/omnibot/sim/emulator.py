@@ -5,7 +5,9 @@ omnibot client with ``--port /dev/pts/N``) can open it. The path is printed only
 answer in real time: the arguments are checked, the truth file is open and the physics kernels are
 compiled (or loaded from numba's cache), so a first start on a fresh install does not leave a HELLO
 unanswered. Bytes are paced to the baud rate in both directions. SIGINT, SIGTERM or SIGHUP (not
-under ``nohup``) end it cleanly: the pty is closed, the truth file flushed and closed.
+under ``nohup``) end it cleanly: the pty is closed, the truth file flushed and closed. Started by
+:func:`spawn_pty_emulator` (``omnibot demo``), it also ends when that parent is gone (killed by
+SIGKILL, the parent could not end it: it would serve nobody for ever).
 
 With several ``--robot`` options (:func:`run_pty_fleet`) the robots share one world and one clock
 (:class:`~omnibot.sim.fleet.Fleet`), each on its own pty: a line ``NAME PATH`` per robot, so a fleet
@@ -14,6 +16,7 @@ can be driven from separate processes on one machine.
 
 from __future__ import annotations
 
+import os
 import select
 import signal
 import subprocess
@@ -77,6 +80,7 @@ def run_pty_emulator(
 
             device = RecordedDevice(device, log_recorder, robot)
         bridge = PtyBridge(device, baud=baud)
+        _end_with_parent(stop)
         if threading.current_thread() is threading.main_thread():
             for sig in _ending_signals():
                 previous[sig] = signal.signal(sig, _on_signal)
@@ -93,6 +97,27 @@ def run_pty_emulator(
         if log_recorder is not None:
             log_recorder.close()
     return 0
+
+
+PARENT_ENV = "OMNIBOT_SIM_PARENT"
+"""Set by :func:`spawn_pty_emulator` to its PID: the emulator ends once its parent is another."""
+PARENT_POLL = 0.5
+"""s between two looks at the parent."""
+
+
+def _end_with_parent(stop: threading.Event) -> None:
+    """With :data:`PARENT_ENV` set, set ``stop`` once this process's parent is no longer that PID
+    (it died: the orphan was handed to init or a subreaper)."""
+    parent = os.environ.get(PARENT_ENV, "")
+    if not parent.isdigit():
+        return
+
+    def watch() -> None:
+        while not stop.wait(PARENT_POLL):
+            if os.getppid() != int(parent):
+                stop.set()
+
+    threading.Thread(target=watch, name="omnibot-parent-watch", daemon=True).start()
 
 
 def _ending_signals() -> list[signal.Signals]:
@@ -230,7 +255,8 @@ def spawn_pty_emulator(
     argv += ["--surface", surface] if surface else []
     argv += ["--truth", str(truth)] if truth else []
     with tempfile.TemporaryFile("w+") as err:
-        proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=err, text=True)
+        env = {**os.environ, PARENT_ENV: str(os.getpid())}
+        proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=err, text=True, env=env)
         try:
             assert proc.stdout is not None
             ready, _, _ = select.select([proc.stdout], [], [], 1.0)
