@@ -110,6 +110,10 @@ def _robot_urdf(args: argparse.Namespace) -> int:
     from omnibot.robot.description import load_robot
     from omnibot.robot.urdf import to_urdf
 
+    if args.out:
+        from omnibot.cliargs import check_distinct
+
+        check_distinct([("--out", args.out)], [("ROBOT", args.robot)])
     text = to_urdf(load_robot(args.robot))
     if args.out:
         try:
@@ -227,9 +231,10 @@ def _sim(args: argparse.Namespace) -> int:
     truth = Path(args.truth) if args.truth else None
     log = Path(args.log) if args.log else None
     if log is not None:
-        from omnibot.cliargs import check_writable
+        from omnibot.cliargs import check_distinct, check_writable
 
         check_writable(log, "--log")
+        check_distinct([("--truth", truth), ("--log", log)])
     seed = seed_of(args)
     return run_pty_emulator(
         robot, seed=seed, surface=args.surface, world=args.world, truth=truth, baud=args.baud, log=log

@@ -94,6 +94,17 @@ def test_log_replay_reproduces_live(followed: Path, capsys: pytest.CaptureFixtur
     assert main(["log", "replay", str(followed), "--estimator", "nope"]) == 2
 
 
+def test_an_output_over_the_log_is_refused(followed: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The recorded log was overwritten by the replay's CSV (exit 0), or the plot failed as a bug."""
+    before = followed.read_bytes()
+    assert main(["log", "replay", str(followed), "--csv", str(followed)]) == 2
+    assert main(["log", "plot", str(followed), "-o", str(followed)]) == 2
+    err = capsys.readouterr().err
+    assert f"--csv: {followed} is also FILE.mcap" in err and "the plot's format is its extension" in err
+    assert "internal error" not in err
+    assert followed.read_bytes() == before
+
+
 def test_bad_files_are_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["log", "info", str(tmp_path / "none.mcap")]) == 2
     (tmp_path / "x.mcap").write_text("not mcap")

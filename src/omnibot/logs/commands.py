@@ -203,9 +203,10 @@ def plot_run(run: Run, path: str) -> None:
 
 
 def _plot(args: argparse.Namespace) -> int:
-    from omnibot.cliargs import check_writable
+    from omnibot.cliargs import check_distinct, check_plot
 
-    check_writable(args.plot, "-o")
+    check_plot(args.plot, "-o")
+    check_distinct([("-o", args.plot)], [("FILE.mcap", args.file)])
     run = _load(args)
     try:
         plot_run(run, args.plot)
@@ -282,6 +283,9 @@ def _replay_all(args: argparse.Namespace) -> int:
     options = parse_options(args.follower_option)
     if chosen is not None:
         make_replayed(chosen, args.follower, options)  # a bad follower or option: said before anything runs
+    from omnibot.cliargs import check_distinct
+
+    check_distinct([("--csv", args.csv), ("--commands-csv", args.commands_csv)], [("FILE.mcap", args.file)])
     if args.commands_csv:
         from omnibot.cliargs import check_writable
 
