@@ -581,6 +581,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     handler: Handler = args.handler
+    if sys.stdout is None:  # started with its standard output closed (`>&-`): what it says would be lost
+        print(
+            "omnibot: error: standard output is closed; give it a file (>/dev/null to discard)",
+            file=sys.stderr,
+        )
+        return EXIT_USAGE
     try:
         with (
             terminate_cleanly(),
