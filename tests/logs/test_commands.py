@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import warnings
 from pathlib import Path
 
 import pytest
@@ -85,6 +86,14 @@ def test_log_plot(recorded: RecordedRun, tmp_path: Path) -> None:
     png = tmp_path / "run.png"
     assert main(["log", "plot", str(recorded.path), "-o", str(png)]) == 0
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_log_plot_of_a_log_without_powers_warns_of_nothing(followed: Path, tmp_path: Path) -> None:
+    """follow drives VEL on the wheel loop (no powers logged): matplotlib's 'No artists with labels'
+    warning reached the user's terminal."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert main(["log", "plot", str(followed), "-o", str(tmp_path / "run.png")]) == 0
 
 
 def test_log_replay_reproduces_live(followed: Path, capsys: pytest.CaptureFixture[str]) -> None:
