@@ -64,6 +64,8 @@ def test_a_description_file_of_the_robot_on_the_link_is_accepted(
     usage_error(
         ["send", "--robot", str(other), "--port", "sim://omni3", "STATUS"], capsys, "is the robot 'omni3b'"
     )
+    # sim://FILE needs no --robot FILE besides: it was refused as "not a preset: give its description file"
+    assert main(["send", "--port", f"sim://{other}", "STATUS"]) == 0
 
 
 def test_a_calibration_of_another_robot_is_refused(

@@ -81,6 +81,16 @@ def terminate_cleanly() -> Iterator[None]:
             signal.signal(signum, handler)
 
 
+def _simulated_robot(client: RobotClient, name: str) -> RobotDescription | None:
+    """The description a simulated controller on the link runs (``sim://PRESET|FILE``), when it is
+    the robot ``name`` its HELLO gave; None on a real link."""
+    from omnibot.transport.device import find_device
+
+    device = find_device(client.link)
+    robot = getattr(device, "robot", None)
+    return robot if isinstance(robot, RobotDescription) and robot.name == name else None
+
+
 def robot_on_link(name: str, requested: str | None, where: str) -> RobotDescription:
     """The description of the robot the controller at ``where`` names ``name``; ``requested``
     (``--robot``: a preset or a file) must describe that same robot."""
@@ -204,6 +214,8 @@ def open_robot(
                     key="--robot",
                 )
             description = robot
+        elif robot is None and (simulated := _simulated_robot(client, hello.name)) is not None:
+            description = simulated  # sim://FILE: the file in the URL describes the robot
         else:
             description = robot_on_link(hello.name, robot, url)
         if hello.motors != description.n_wheels:
