@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import shlex
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
@@ -114,6 +115,19 @@ def test_a_reader_that_goes_away_ends_the_command_quietly() -> None:
     proc.stderr.close()
     assert proc.wait(timeout=60) == 141
     assert err == ""
+
+
+@pytest.mark.parametrize("argv", [["robot", "list"], ["sim", "--pty"]])
+def test_a_closed_standard_output_is_a_one_line_error(argv: list[str]) -> None:
+    """``omnibot robot list >&-`` failed as a bug (exit 70); ``sim --pty`` served a pty nobody was told of."""
+    command = shlex.join([sys.executable, "-m", "omnibot", *argv])
+    proc = subprocess.run(
+        ["sh", "-c", f"exec {command} >&-"], check=False, capture_output=True, text=True, timeout=60
+    )
+    assert proc.returncode == 2, proc.stderr
+    assert (
+        proc.stderr == "omnibot: error: standard output is closed; give it a file (>/dev/null to discard)\n"
+    )
 
 
 NOT_UTF8 = b"name: caf\xe9\n"

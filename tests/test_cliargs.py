@@ -3,11 +3,20 @@
 from __future__ import annotations
 
 import argparse
+import re
 from pathlib import Path
 
 import pytest
 
-from omnibot.cliargs import add_robot_options, check_sim_options, check_writable, sim_url
+from omnibot.cliargs import (
+    add_robot_options,
+    check_distinct,
+    check_plot,
+    check_sim_options,
+    check_writable,
+    seed_of,
+    sim_url,
+)
 from omnibot.errors import ConfigError
 
 
@@ -23,6 +32,38 @@ def test_defaults_make_the_simulated_robot() -> None:
         "sim://omni3?seed=4&world=room&surface=carpet"
     )
     assert sim_url(parse("--port", "/dev/ttyUSB0")) == "/dev/ttyUSB0"
+
+
+def test_a_negative_seed_is_refused() -> None:
+    assert seed_of(parse("--seed", "0")) == 0
+    with pytest.raises(ConfigError, match="--seed: expected an integer >= 0, got -1"):
+        seed_of(parse("--seed", "-1"))
+    with pytest.raises(ConfigError, match="--seed"):
+        sim_url(parse("--seed", "-1"))
+
+
+def test_an_output_may_be_no_input_and_no_other_output(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "path.csv").write_text("t,x,y,theta\n")
+    with pytest.raises(ConfigError, match=re.escape("--truth: ./path.csv is also PATH: give another file")):
+        check_distinct([("--truth", "./path.csv")], [("PATH", tmp_path / "path.csv")])
+    (tmp_path / "link.csv").symlink_to(tmp_path / "path.csv")
+    with pytest.raises(ConfigError, match=re.escape("--log: link.csv is also PATH")):
+        check_distinct([("--log", "link.csv")], [("PATH", "path.csv")])
+    with pytest.raises(ConfigError, match=re.escape("a.csv is also --csv")):
+        check_distinct([("--csv", "a.csv"), ("--commands-csv", str(tmp_path / "a.csv"))])
+    check_distinct([("--out", "omni4")], [("ROBOT", "omni4")])  # a preset's name is no file
+    check_distinct([("--csv", "a.csv"), ("--commands-csv", None)], [("PATH", "path.csv")])
+
+
+def test_a_plot_is_named_with_a_format_matplotlib_writes(tmp_path: Path) -> None:
+    check_plot(tmp_path / "p.svg", "--plot")
+    check_plot(tmp_path / "p.PNG", "--plot")
+    for name in ("p.txt", "p.mcap", "p"):  # matplotlib raised after the run, or wrote p.png unasked
+        with pytest.raises(ConfigError, match=rf"--plot: .*{name}: the plot's format is its extension"):
+            check_plot(tmp_path / name, "--plot")
 
 
 def test_simulator_options_are_refused_with_a_port() -> None:

@@ -13,7 +13,8 @@ Exit status, the same for every command (README's command table):
 * 2: the command could not start: bad arguments, files or protocol text, the wrong robot, unwritable
   output, a link that cannot be opened or whose controller does not answer HELLO;
 * 70: a bug (an exception omnibot did not expect: one line, the traceback with ``--debug``);
-* 130: interrupted by SIGINT (Ctrl-C), 143: by SIGTERM (the robot is stopped first).
+* 130: interrupted by SIGINT (Ctrl-C), 143: by SIGTERM, 129: by SIGHUP (its terminal or SSH session
+  closed; not under ``nohup``); the robot is stopped first.
 
 Errors are one line on stderr (``omnibot: error: ...``); ``--debug`` adds the traceback. Any file a
 command cannot read (not UTF-8 included) or write is such an error (status 2). A reader of standard
@@ -49,7 +50,7 @@ from omnibot.cliargs import (
 from omnibot.errors import ConfigError, KinematicsError, OmnibotError, ProtocolError
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_BUG = 0, 1, 2, 70
-EXIT_SIGINT, EXIT_SIGTERM, EXIT_SIGPIPE = 130, 143, 141
+EXIT_SIGINT, EXIT_SIGPIPE = 130, 141
 
 Handler = Callable[[argparse.Namespace], int]
 
@@ -109,6 +110,10 @@ def _robot_urdf(args: argparse.Namespace) -> int:
     from omnibot.robot.description import load_robot
     from omnibot.robot.urdf import to_urdf
 
+    if args.out:
+        from omnibot.cliargs import check_distinct
+
+        check_distinct([("--out", args.out)], [("ROBOT", args.robot)])
     text = to_urdf(load_robot(args.robot))
     if args.out:
         try:
@@ -226,11 +231,13 @@ def _sim(args: argparse.Namespace) -> int:
     truth = Path(args.truth) if args.truth else None
     log = Path(args.log) if args.log else None
     if log is not None:
-        from omnibot.cliargs import check_writable
+        from omnibot.cliargs import check_distinct, check_writable
 
         check_writable(log, "--log")
+        check_distinct([("--truth", truth), ("--log", log)])
+    seed = seed_of(args)
     return run_pty_emulator(
-        robot, seed=args.seed, surface=args.surface, world=args.world, truth=truth, baud=args.baud, log=log
+        robot, seed=seed, surface=args.surface, world=args.world, truth=truth, baud=args.baud, log=log
     )
 
 
@@ -242,7 +249,7 @@ def _sim_fleet(args: argparse.Namespace, robots: list[str]) -> int:
     for flag, given in (("--truth", args.truth), ("--log", args.log), ("--foxglove", args.foxglove)):
         if given is not None:
             raise ConfigError(f"{flag} records one robot: not with several --robot", key=flag)
-    members = [parse_member(text, k, args.seed) for k, text in enumerate(robots)]
+    members = [parse_member(text, k, seed_of(args)) for k, text in enumerate(robots)]
     return run_pty_fleet(members, surface=args.surface, world=args.world, baud=args.baud)
 
 
@@ -251,7 +258,7 @@ def _add_sim(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "sim",
         help="run the simulated robot (firmware + physics) on a pseudo-terminal",
         description="Runs the firmware and the simulator as one process on a pty, in real time, "
-        "pacing bytes to the baud rate. The first stdout line is the device path. Ends on SIGINT/SIGTERM.",
+        "pacing bytes to the baud rate. The first stdout line is the device path. Ends on SIGINT/SIGTERM/SIGHUP.",
     )
     p.add_argument("--pty", action="store_true", help="serve on a pseudo-terminal (required)")
     p.add_argument(
@@ -554,7 +561,7 @@ def exit_status(exc: BaseException) -> int:
     from omnibot.client.session import Terminated
 
     if isinstance(exc, Terminated):
-        return EXIT_SIGTERM
+        return 128 + exc.signum
     if isinstance(exc, KeyboardInterrupt):
         return EXIT_SIGINT
     if isinstance(exc, ConfigError | KinematicsError | ProtocolError | UnicodeDecodeError):
@@ -574,6 +581,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     handler: Handler = args.handler
+    if sys.stdout is None:  # started with its standard output closed (`>&-`): what it says would be lost
+        print(
+            "omnibot: error: standard output is closed; give it a file (>/dev/null to discard)",
+            file=sys.stderr,
+        )
+        return EXIT_USAGE
     try:
         with (
             terminate_cleanly(),
@@ -597,7 +610,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.debug:
             traceback.print_exc()
         if isinstance(exc, KeyboardInterrupt):
-            signal_name = "SIGTERM" if isinstance(exc, Terminated) else "SIGINT"
+            signal_name = exc.signum.name if isinstance(exc, Terminated) else "SIGINT"
             print(f"omnibot: interrupted ({signal_name})", file=sys.stderr)
         elif status == EXIT_BUG:
             print(

@@ -156,10 +156,51 @@ def check_writable(path: str | Path | None, flag: str) -> None:
         raise ConfigError(f"cannot write {target}: {parent} is not a writable directory", key=flag)
 
 
+def check_distinct(
+    outputs: Sequence[tuple[str, str | Path | None]], inputs: Sequence[tuple[str, str | Path | None]] = ()
+) -> None:
+    """Refuse, before anything runs, an output file that is one of the command's inputs or another
+    of its outputs (the same file, by any name): writing it would destroy what the user gave (the
+    path followed, the log replayed, the robot description) or one result would overwrite another.
+    Each file comes with its option as the user knows it (an input's may be its metavar, ``PATH``);
+    inputs that are no existing files (a preset's name) are left out."""
+    seen: dict[Path, str] = {}
+    given_inputs = [(role, given) for role, given in inputs if given and Path(given).is_file()]
+    for role, given in [*given_inputs, *outputs]:
+        if not given:
+            continue
+        key = Path(given).resolve()
+        if key in seen:
+            raise ConfigError(f"{given} is also {seen[key]}: give another file to write", key=role)
+        seen[key] = role
+
+
+def check_plot(path: str | Path | None, flag: str) -> None:
+    """:func:`check_writable`, and the file's extension names a format matplotlib writes (.png,
+    .svg, .pdf ...): refused before the robot moves, not after it, and no ``.png`` added unasked."""
+    if path is None:
+        return
+    check_writable(path, flag)
+    from matplotlib.figure import Figure
+
+    kinds = Figure().canvas.get_supported_filetypes()
+    suffix = Path(path).suffix.lower().removeprefix(".")
+    if suffix not in kinds:
+        raise ConfigError(
+            f"{path}: the plot's format is its extension, one of {', '.join('.' + k for k in sorted(kinds))}",
+            key=flag,
+        )
+
+
 def seed_of(args: argparse.Namespace) -> int:
-    """The ``--seed`` given, or ``DEFAULT_SEED`` when the command has none or it was left out."""
+    """The ``--seed`` given, or ``DEFAULT_SEED`` when the command has none or it was left out; a
+    negative one is refused (the simulator's random streams take seeds >= 0, as ``sim://`` does)."""
     seed = getattr(args, "seed", None)
-    return DEFAULT_SEED if seed is None else int(seed)
+    if seed is None:
+        return DEFAULT_SEED
+    if int(seed) < 0:
+        raise ConfigError(f"expected an integer >= 0, got {seed}", key="--seed")
+    return int(seed)
 
 
 def world_of(args: argparse.Namespace) -> str:

@@ -136,6 +136,9 @@ def run_send(args: argparse.Namespace, out: TextIO | None = None) -> int:
         if not line.isascii():
             print(f"omnibot: error: commands are ASCII only: {line!r}", file=sys.stderr)
             return 2
+    if not "".join(args.commands).replace(";", "").strip():  # `send "$EMPTY"`: nothing was sent, no OK
+        print("omnibot: error: no command to send (the arguments are empty)", file=sys.stderr)
+        return 2
     check_sim_options(args)
     status = 0
     with robot_session(

@@ -8,7 +8,9 @@ ends the command the way a test asks, the first time the client waits while the 
 * ``sigint`` / ``sigterm``: a real signal to this process (``signal.raise_signal``), handled by the
   command's own handlers (``main`` turns SIGTERM into a clean exit);
 * ``error``: the controller fails a command (ControllerError);
-* ``link``: the link is closed under the client (the cable pulled).
+* ``link``: the link is closed under the client;
+* ``unplug``: the cable pulled: every read and write of the link fails from then on, and ``sim://``
+  cannot be reopened (the error must still say why the link broke, not only that it cannot be opened).
 
 Over the pty emulator (``omnibot sim --pty`` and the command as subprocesses): :class:`PtyRobot`
 starts the emulator (this test owns its PID), and :func:`controller_state` asks it for STATUS
@@ -31,15 +33,15 @@ from typing import Any
 import pytest
 
 from omnibot.client.client import RobotClient
-from omnibot.errors import ControllerError
+from omnibot.errors import ControllerError, LinkError
 from omnibot.protocol import codes
 from omnibot.sim.device import SimDevice
 from omnibot.transport.device import find_device
 
-ENDINGS = ("normal", "error", "sigint", "sigterm", "link")
+ENDINGS = ("normal", "error", "sigint", "sigterm", "link", "unplug")
 FALLBACK_PUMPS = 400
 """Waits after which a command that never moves the robot is ended anyway."""
-EXIT = {"normal": 0, "error": 1, "sigint": 130, "sigterm": 143, "link": 1}
+EXIT = {"normal": 0, "error": 1, "sigint": 130, "sigterm": 143, "link": 1, "unplug": 1}
 """The exit status each way of ending must give (README's command table)."""
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -80,6 +82,13 @@ class Harness:
             raise ControllerError(36, "internal fault (injected by the test)")
         elif self.ending == "link":
             client.link.close()
+        elif self.ending == "unplug":
+
+            def unplugged(*args: object) -> bytes:
+                raise LinkError("unplugged by the test")
+
+            link: Any = client.link
+            link._read = link._write = unplugged
 
     def controller(self) -> Any:
         """The firmware of the last simulated controller the command made."""

@@ -64,6 +64,8 @@ def test_a_description_file_of_the_robot_on_the_link_is_accepted(
     usage_error(
         ["send", "--robot", str(other), "--port", "sim://omni3", "STATUS"], capsys, "is the robot 'omni3b'"
     )
+    # sim://FILE needs no --robot FILE besides: it was refused as "not a preset: give its description file"
+    assert main(["send", "--port", f"sim://{other}", "STATUS"]) == 0
 
 
 def test_a_calibration_of_another_robot_is_refused(
@@ -125,6 +127,11 @@ def test_unwritable_output_is_refused_before_the_robot_moves(
         (["follow", "{line}", "--port", "sim://omni4", "--seed", "3"], "--seed"),
         (["demo", "--port", "sim://omni4", "--world", "room"], "put them in a sim:// URL"),
         (["send", "STATUS", "--port", "/dev/omnibot-no-such-port"], "--port: cannot open"),
+        # a negative seed reached numpy's SeedSequence (exit 70) where no sim:// URL checked it
+        (["follow", "{line}", "--seed", "-1"], "--seed: expected an integer >= 0"),
+        (["tour", "--seed", "-1"], "--seed: expected an integer >= 0"),
+        (["sim", "--pty", "--seed", "-1"], "--seed: expected an integer >= 0"),
+        (["sim", "--pty", "--robot", "omni4?seed=-1", "--robot", "omni3"], "seed=N (N >= 0)"),
     ],
 )
 def test_bad_files_and_options_are_one_line_usage_errors(
@@ -140,6 +147,48 @@ def test_bad_files_and_options_are_one_line_usage_errors(
         "bad_world": tmp_path / "bad_world.yaml",
     }
     usage_error([a.format(**names) for a in argv], capsys, message)
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["follow", "{given}", "--truth", "{given}"], "--truth: {given} is also PATH"),
+        (["follow", "{given}", "--log", "{given}"], "--log: {given} is also PATH"),
+        (
+            ["follow", "{out}/follow_truth.csv", "--out", "{out}"],
+            "--out: {out}/follow_truth.csv is also PATH",
+        ),
+        (["follow", "{line}", "--report", "{given}", "--calibration", "{given}"], "is also --calibration"),
+        (["record", "--path", "{tmp}/p.csv", "--log", "{tmp}/p.csv"], "--log: {tmp}/p.csv is also --path"),
+        (["calibrate", "--robot", "{given}", "--calibration", "{given}"], "is also --robot"),
+        (["robot", "urdf", "{robot}", "-o", "{robot}"], "--out: {robot} is also ROBOT"),
+        (
+            ["follow", "{line}", "--plot", "{tmp}/p.txt"],
+            "--plot: {tmp}/p.txt: the plot's format is its extension",
+        ),
+    ],
+)
+def test_an_output_that_is_an_input_or_another_output_is_refused(
+    argv: list[str],
+    message: str,
+    line: Path,
+    tmp_path: Path,
+    harness: Harness,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The user's file was replaced by the result (the path by the truth, the description by the URDF)."""
+    out = tmp_path / "out"
+    out.mkdir()
+    given = tmp_path / "given.csv"
+    given.write_text(line.read_text())
+    (out / "follow_truth.csv").write_text(line.read_text())
+    robot = tmp_path / "robot.yaml"
+    robot.write_text((PRESET_DIR / "omni4.yaml").read_text())
+    names = {"given": given, "line": line, "tmp": tmp_path, "out": out, "robot": robot}
+    usage_error([a.format(**names) for a in argv], capsys, message.format(**names))
+    assert given.read_text() == (out / "follow_truth.csv").read_text() == line.read_text()
+    assert robot.read_text() == (PRESET_DIR / "omni4.yaml").read_text()
+    assert not harness.devices  # refused before any robot was made
 
 
 def test_deprecated_spellings_still_work(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -1,5 +1,5 @@
 """The commands as a user runs them: subprocesses over the pty emulator (``omnibot sim --pty``),
-ended normally, by SIGINT, by SIGTERM and by the emulator dying. Afterwards a second connection
+ended normally, by SIGINT, by SIGTERM, by SIGHUP and by the emulator dying. Afterwards a second connection
 asks the controller for STATUS: it must answer in text, idle, in MODE 0 (slow: marked, run in CI).
 """
 
@@ -40,8 +40,13 @@ def test_record_then_follow_leave_the_text_protocol_and_mode_0(pty_robot: PtyRob
     assert_left_as_found(pty_robot.path)
 
 
-@pytest.mark.parametrize(("signum", "status"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+@pytest.mark.parametrize(
+    ("signum", "status"), [(signal.SIGINT, 130), (signal.SIGTERM, 143), (signal.SIGHUP, 129)]
+)
 def test_a_signal_during_a_move_stops_the_robot(pty_robot: PtyRobot, signum: int, status: int) -> None:
+    """SIGHUP is the terminal or SSH session closing: it left the robot driving before."""
+    if signum == signal.SIGHUP and signal.getsignal(signal.SIGHUP) == signal.SIG_IGN:
+        pytest.skip("the suite runs under nohup: the command inherits an ignored SIGHUP and runs on")
     send = Command("send", "--port", pty_robot.path, "--binary", "MOVE,300,40,0,0", "--wait-idle")
     send.wait_for("<- OK")
     send.signal(signum)
@@ -90,6 +95,19 @@ def test_the_link_dying_is_one_line_and_exit_1(pty_robot: PtyRobot) -> None:
     assert code == 1, err
     assert_one_line_error(err)
     assert err.startswith("omnibot: error:")
+
+
+@pytest.mark.parametrize("command", ["dashboard", "run"])
+def test_the_link_dying_ends_the_dashboard_with_exit_1(pty_robot: PtyRobot, command: str) -> None:
+    """It served the dead robot until --duration and exited 0 before."""
+    argv = ["dashboard"] if command == "dashboard" else ["run", "--dashboard"]
+    dash = Command(*argv, "--port", pty_robot.path, "--http-port", "0", "--duration", "60")
+    dash.wait_for("Ctrl-C stops it")
+    pty_robot.kill()
+    code, _out, err = dash.finish()
+    assert code == 1, err
+    assert f"omnibot {command}: the robot link ended: serial port {pty_robot.path} failed" in err
+    assert "Traceback" not in err
 
 
 @pytest.mark.parametrize(

@@ -1,9 +1,9 @@
 """Every command that talks to a robot, on every preset, over ``sim://`` (in-process, ``main(argv)``).
 
-Each is ended normally, by an error, by SIGINT, by SIGTERM and by its link closing; the exit status
-must match the ending (README's command table), no traceback, and the simulated controller must be
-left stopped, with telemetry off, in MODE 0 and the text protocol (what it started with), except
-when the link is gone (nobody can reach it then).
+Each is ended normally, by an error, by SIGINT, by SIGTERM, by its link closing and by its cable
+pulled; the exit status must match the ending (README's command table), no traceback, and the
+simulated controller must be left stopped, with telemetry off, in MODE 0 and the text protocol
+(what it started with), except when the link is gone (nobody can reach it then).
 """
 
 from __future__ import annotations
@@ -85,7 +85,7 @@ INTERRUPTED = ["follow-port", "record", "record-port", "demo", "send", "console"
 CASES = [
     (command, ending, PRESETS[k % len(PRESETS)])
     for k, (command, ending) in enumerate(
-        itertools.product(INTERRUPTED, ("error", "sigint", "sigterm", "link"))
+        itertools.product(INTERRUPTED, ("error", "sigint", "sigterm", "link", "unplug"))
     )
 ]
 
@@ -108,7 +108,9 @@ def test_every_way_out_leaves_the_controller_as_found(
     assert_one_line_error(err)
     if ending in ("sigint", "sigterm"):
         assert f"omnibot: interrupted ({ending.upper()})" in err
-    if ending != "link":
+    if ending == "unplug":  # why the link broke, not only that its port cannot be opened since
+        assert "unplugged by the test" in err, err
+    if ending not in ("link", "unplug"):
         harness.assert_left_as_found()
 
 

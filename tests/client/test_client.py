@@ -349,6 +349,25 @@ def test_reconnect_after_write_error() -> None:
     assert link.reopens == 1 and client.status().idle
 
 
+def test_a_link_that_stays_broken_is_told_by_its_failure(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The port gone for good: later calls (a cleanup's STOP) name why the link broke, not only that
+    the port cannot be opened now (which hid the failure behind "cannot open serial port")."""
+    link = ScriptedLink(controller)
+    client = RobotClient(link)
+
+    def gone(retry: float | None = None) -> None:
+        raise LinkError("cannot open the port: no such file")
+
+    monkeypatch.setattr(link, "reopen", gone)
+    link.fail_reads = 1
+    with pytest.raises(LinkError, match="unplugged"):
+        client.status()
+    assert client.broken
+    with pytest.raises(LinkError, match="fake link unplugged; reopening it failed: cannot open the port"):
+        client.stop()
+    assert client.broken
+
+
 def test_no_reconnect_when_off() -> None:
     link = ScriptedLink(controller)
     client = RobotClient(link, reconnect=None)

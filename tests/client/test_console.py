@@ -49,6 +49,8 @@ def test_send_binary(capsys: pytest.CaptureFixture[str]) -> None:
         ["send", "STATUS", "--port", "sim://omni5"],
         ["send", "STATUS", "--port", "bogus://x"],
         ["send", "STATUS", "--port", "/dev/omnibot-no-such-port"],
+        ["send", ""],  # nothing sent is no success (it exited 0)
+        ["send", ";", " ; "],
     ],
 )
 def test_send_bad_input_or_link_exits_2(argv: list[str], capsys: pytest.CaptureFixture[str]) -> None:

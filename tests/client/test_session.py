@@ -62,9 +62,26 @@ def test_leave_on_a_closed_link_does_nothing_and_never_raises() -> None:
     leave(client, 0)  # no exception
 
 
-def test_sigterm_becomes_terminated() -> None:
-    before = signal.getsignal(signal.SIGTERM)
-    with pytest.raises(Terminated), terminate_cleanly():
-        os.kill(os.getpid(), signal.SIGTERM)
-        time.sleep(5)  # pragma: no cover - the handler raises before this ends
-    assert signal.getsignal(signal.SIGTERM) == before
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGHUP])
+def test_sigterm_and_sighup_become_terminated(signum: signal.Signals) -> None:
+    """SIGHUP too: an SSH session that drops must not leave the robot driving."""
+    before = signal.signal(signal.SIGHUP, signal.SIG_DFL)
+    try:
+        with pytest.raises(Terminated) as ended, terminate_cleanly():
+            os.kill(os.getpid(), signum)
+            time.sleep(5)  # pragma: no cover - the handler raises before this ends
+        assert ended.value.signum == signum
+        assert signal.getsignal(signal.SIGHUP) == signal.SIG_DFL
+    finally:
+        signal.signal(signal.SIGHUP, before)
+
+
+def test_a_sighup_ignored_by_nohup_stays_ignored() -> None:
+    before = signal.signal(signal.SIGHUP, signal.SIG_IGN)
+    try:
+        with terminate_cleanly():
+            assert signal.getsignal(signal.SIGHUP) == signal.SIG_IGN
+            os.kill(os.getpid(), signal.SIGHUP)  # ignored: nothing happens
+        assert signal.getsignal(signal.SIGHUP) == signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGHUP, before)

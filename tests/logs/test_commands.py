@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import warnings
 from pathlib import Path
 
 import pytest
@@ -87,11 +88,30 @@ def test_log_plot(recorded: RecordedRun, tmp_path: Path) -> None:
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+def test_log_plot_of_a_log_without_powers_warns_of_nothing(followed: Path, tmp_path: Path) -> None:
+    """follow drives VEL on the wheel loop (no powers logged): matplotlib's 'No artists with labels'
+    warning reached the user's terminal."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert main(["log", "plot", str(followed), "-o", str(tmp_path / "run.png")]) == 0
+
+
 def test_log_replay_reproduces_live(followed: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["log", "replay", str(followed)]) == 0
     assert "reproduced exactly" in capsys.readouterr().out
     assert main(["log", "replay", str(followed), "--estimator", "encoders"]) == 0
     assert main(["log", "replay", str(followed), "--estimator", "nope"]) == 2
+
+
+def test_an_output_over_the_log_is_refused(followed: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The recorded log was overwritten by the replay's CSV (exit 0), or the plot failed as a bug."""
+    before = followed.read_bytes()
+    assert main(["log", "replay", str(followed), "--csv", str(followed)]) == 2
+    assert main(["log", "plot", str(followed), "-o", str(followed)]) == 2
+    err = capsys.readouterr().err
+    assert f"--csv: {followed} is also FILE.mcap" in err and "the plot's format is its extension" in err
+    assert "internal error" not in err
+    assert followed.read_bytes() == before
 
 
 def test_bad_files_are_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -17,7 +17,7 @@ import serial
 from omnibot.cli import main
 from omnibot.client.client import RobotClient
 from omnibot.errors import LinkError
-from omnibot.sim.emulator import spawn_pty_emulator
+from omnibot.sim.emulator import PARENT_ENV, spawn_pty_emulator
 
 
 def test_pty_emulator_serves_the_firmware_and_writes_truth(tmp_path: Path) -> None:
@@ -65,6 +65,71 @@ def test_pty_emulator_serves_the_firmware_and_writes_truth(tmp_path: Path) -> No
     assert "Traceback" not in err
     header = truth.read_text().splitlines()[0]
     assert header == "t,x,y,theta"
+
+
+def test_sighup_ends_the_emulator_cleanly(tmp_path: Path) -> None:
+    """Its terminal closing (SIGHUP) ends it as SIGTERM does: status 0, the truth file whole."""
+    if signal.getsignal(signal.SIGHUP) == signal.SIG_IGN:
+        pytest.skip("the suite runs under nohup: the emulator inherits an ignored SIGHUP and runs on")
+    truth = tmp_path / "truth.csv"
+    argv = [sys.executable, "-m", "omnibot", "sim", "--pty", "--baud", "0", "--truth", str(truth)]
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout is not None
+        assert proc.stdout.readline().startswith("/dev/")
+    finally:
+        proc.send_signal(signal.SIGHUP)
+        _, err = proc.communicate(timeout=10)
+    assert proc.returncode == 0, err
+    assert truth.read_text().splitlines()[0] == "t,x,y,theta"
+
+
+def _alive(pid: int) -> bool:
+    """Whether ``pid`` is a running (not zombie) process (Linux /proc)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+def test_an_emulator_whose_parent_was_killed_ends_by_itself() -> None:
+    """``omnibot demo`` killed by SIGKILL cannot end its emulator: it used to serve nobody for ever."""
+    script = (
+        "import time\nfrom omnibot.sim.emulator import spawn_pty_emulator\n"
+        "with spawn_pty_emulator('omni4') as path:\n    print(path, flush=True)\n    time.sleep(600)\n"
+    )
+    parent = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
+    try:
+        assert parent.stdout is not None
+        assert parent.stdout.readline().startswith("/dev/")
+        children = Path(f"/proc/{parent.pid}/task/{parent.pid}/children").read_text().split()
+        assert len(children) == 1
+        emulator = int(children[0])
+    finally:
+        parent.kill()
+        parent.wait()
+        if parent.stdout is not None:
+            parent.stdout.close()
+    deadline = time.monotonic() + 30
+    while _alive(emulator) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    left = _alive(emulator)
+    if left:  # this test's own grandchild
+        os.kill(emulator, signal.SIGKILL)
+    assert not left, "the emulator outlived the process that started it"
+
+
+def test_an_emulator_whose_named_parent_is_not_its_parent_ends() -> None:
+    env = {**os.environ, PARENT_ENV: "1"}  # its parent is this test, not PID 1: as if orphaned
+    argv = [sys.executable, "-m", "omnibot", "sim", "--pty", "--baud", "0"]
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        _, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert proc.returncode == 0, err
 
 
 def test_a_fleet_on_one_pty_per_robot_shares_one_world() -> None:

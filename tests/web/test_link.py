@@ -8,6 +8,7 @@ from typing import Any
 import pytest
 
 from omnibot.client import RobotClient
+from omnibot.errors import LinkError
 from omnibot.robot.description import load_robot
 from omnibot.teleop.pacing import Pacer
 from omnibot.web.link import PageGone, RobotLink
@@ -149,3 +150,30 @@ def test_the_pose_is_labelled_by_what_it_is(stepper: Stepper) -> None:
     state = stepper.run(0.2)
     assert state["pose_source"] == "odometry"
     assert state["pose"] == state["odometry"]
+
+
+def test_a_link_lost_for_good_ends_the_link_thread(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The cable pulled and the port not back: the thread ends and says why (the command then exits
+    1); it used to retry every period for ever, the dashboard serving a dead robot and exiting 0."""
+    client = RobotClient.open("sim://omni4?world=room&seed=1", timeout=0.5)
+    wall = FakeWall()
+    link = RobotLink(client, load_robot("omni4"), wall=wall, sleep=wall.sleep)
+
+    def unplugged(*args: object) -> bytes:
+        raise LinkError("unplugged by the test")
+
+    monkeypatch.setattr(client.link, "_read", unplugged)
+    monkeypatch.setattr(client.link, "_write", unplugged)  # and sim:// cannot be reopened
+    link.start()
+    try:
+        assert link._thread is not None
+        link._thread.join(timeout=60)
+        assert not link.alive, "the link thread is still retrying a link that is gone"
+    finally:
+        link.stop()
+    assert link.ended == "unplugged by the test"
+    texts = []
+    while not link.outbox.empty():
+        frame = link.outbox.get_nowait()
+        texts += [frame["text"]] if frame["type"] == "log" else []
+    assert "robot link ended: unplugged by the test" in texts

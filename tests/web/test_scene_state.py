@@ -36,6 +36,9 @@ def test_load_path(tmp_path: Path) -> None:
     taught = tmp_path / "taught.csv"  # the navigation path files: t,x,y,theta[,v]
     taught.write_text("t,x,y,theta,v\n0,1,1,0.5,0.3\n1,1.3,1,0,0.3\n")
     assert load_path(taught) == PlannedPath(((1.0, 1.0), (1.3, 1.0)), 0.5)
+    saved = tmp_path / "saved.csv"  # a spreadsheet's "CSV UTF-8": a byte order mark, CRLF line ends
+    saved.write_bytes(b"\xef\xbb\xbfx,y\r\n1,1\r\n2,1.5\r\n")
+    assert load_path(saved) == PlannedPath(((1.0, 1.0), (2.0, 1.5)), 0.0)
     bad = tmp_path / "bad.csv"
     bad.write_text("1,1\n2,oops\n")
     with pytest.raises(ConfigError, match=r"--path: .*bad.csv line 2: expected x,y in metres"):

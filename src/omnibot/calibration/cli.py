@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 from omnibot.cliargs import (
     DeprecatedAlias,
     add_robot_options,
+    check_distinct,
     check_sim_options,
     check_writable,
     seed_of,
@@ -243,6 +244,10 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> in
 
     check_sim_options(args, allowed=("surface",))
     cal_file, out_dir = _outputs(args)
+    check_distinct(
+        [("--calibration" if args.calibration else "--out", cal_file), ("--log", args.log)],
+        [("--robot", args.robot), ("--true-robot", args.true_robot)],
+    )
     simulated = args.port is None
     if not simulated and (args.perturb or args.true_robot):
         raise ConfigError("--perturb and --true-robot need the simulator (leave out --port)")

@@ -232,6 +232,7 @@ class RobotClient(TypedCalls):
         self._moving = False
         self._mode: int | None = None
         self._broken = False
+        self._failure: LinkError | None = None  # why the link broke (told again if it stays broken)
         self._hello_answered = False  # text: the last reply matched was a HELLO reply
         self._synced = False  # text: a reply has been matched since the client started
         self._tracers: list[Tracer] = []
@@ -287,6 +288,12 @@ class RobotClient(TypedCalls):
     def moving(self) -> bool:
         """True from the OK of a motion command until IDLE (or STOP, or a STATUS saying idle)."""
         return self._moving
+
+    @property
+    def broken(self) -> bool:
+        """True after the link failed, until it is open again (the reopen after the failure did not
+        work: the next call tries again first, or fails with reconnecting off)."""
+        return self._broken
 
     @property
     def mode_bits(self) -> int | None:
@@ -819,6 +826,7 @@ class RobotClient(TypedCalls):
         self._wire = BinaryWire() if self.binary else TextWire(bool(self._tags))
         self._moving = False
         self._broken = True
+        self._failure = exc
         self._synced = False
         if self.reconnect is not None and not self.link.closed:
             try:
@@ -832,8 +840,11 @@ class RobotClient(TypedCalls):
             raise LinkError(f"link {self.link.url} is closed")
         if self._broken:
             if self.reconnect is None:
-                raise LinkError(f"link {self.link.url} failed and reconnecting is off")
-            self.link.reopen(retry=self.reconnect)
+                raise LinkError(f"link {self.link.url} failed and reconnecting is off ({self._failure})")
+            try:
+                self.link.reopen(retry=self.reconnect)
+            except LinkError as exc:  # the failure is the news, not the port missing since
+                raise LinkError(f"{self._failure}; reopening it failed: {exc}") from exc
             self._broken = False
 
     # ------------------------------------------------------------------ lifetime

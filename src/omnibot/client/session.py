@@ -52,24 +52,43 @@ RestorePolicy = Literal["mode", "protocol"]
 
 
 class Terminated(KeyboardInterrupt):
-    """SIGTERM, turned into an exception so that every ``finally`` (and :func:`guarded`) runs."""
+    """SIGTERM or SIGHUP (the terminal or SSH session it ran in went away), turned into an exception
+    so that every ``finally`` (and :func:`guarded`) runs; :attr:`signum` says which."""
+
+    def __init__(self, signum: int = signal.SIGTERM) -> None:
+        self.signum = signal.Signals(signum)
+        super().__init__(self.signum.name)
 
 
 @contextlib.contextmanager
 def terminate_cleanly() -> Iterator[None]:
-    """While inside, SIGTERM raises :class:`Terminated` in the main thread (no-op elsewhere)."""
+    """While inside, SIGTERM and SIGHUP raise :class:`Terminated` in the main thread (no-op
+    elsewhere). A SIGHUP ignored when the command started (``nohup``) stays ignored."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
 
     def _raise(signum: int, frame: FrameType | None) -> None:
-        raise Terminated("SIGTERM")
+        raise Terminated(signum)
 
-    previous = signal.signal(signal.SIGTERM, _raise)
+    previous = {signal.SIGTERM: signal.signal(signal.SIGTERM, _raise)}
+    if signal.getsignal(signal.SIGHUP) is not signal.SIG_IGN:
+        previous[signal.SIGHUP] = signal.signal(signal.SIGHUP, _raise)
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+
+
+def _simulated_robot(client: RobotClient, name: str) -> RobotDescription | None:
+    """The description a simulated controller on the link runs (``sim://PRESET|FILE``), when it is
+    the robot ``name`` its HELLO gave; None on a real link."""
+    from omnibot.transport.device import find_device
+
+    device = find_device(client.link)
+    robot = getattr(device, "robot", None)
+    return robot if isinstance(robot, RobotDescription) and robot.name == name else None
 
 
 def robot_on_link(name: str, requested: str | None, where: str) -> RobotDescription:
@@ -195,6 +214,8 @@ def open_robot(
                     key="--robot",
                 )
             description = robot
+        elif robot is None and (simulated := _simulated_robot(client, hello.name)) is not None:
+            description = simulated  # sim://FILE: the file in the URL describes the robot
         else:
             description = robot_on_link(hello.name, robot, url)
         if hello.motors != description.n_wheels:

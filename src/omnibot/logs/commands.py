@@ -177,7 +177,7 @@ def plot_run(run: Run, path: str) -> None:
     if run.estimate:
         xy.plot([r[1] for r in run.estimate], [r[2] for r in run.estimate], "C0--", label="estimate (odom)")
     xy.set(xlabel="x (m)", ylabel="y (m)", title="estimate against truth", aspect="equal")
-    xy.legend(loc="best", fontsize=8)
+    _legend(xy)
     wheels, powers, problems = ax[0][1], ax[1][0], ax[1][1]
     if run.joints:
         t = [j[0] for j in run.joints]
@@ -185,8 +185,8 @@ def plot_run(run: Run, path: str) -> None:
             wheels.plot(t, [j[3][i] for j in run.joints], label=name)
             if run.joints[0][4]:
                 powers.plot(t, [j[4][i] if i < len(j[4]) else math.nan for j in run.joints], label=name)
-        wheels.legend(loc="best", fontsize=8)
-        powers.legend(loc="best", fontsize=8)
+        _legend(wheels)
+        _legend(powers)
     wheels.set(xlabel="t (s)", ylabel="rad/s", title="wheel speeds")
     powers.set(xlabel="t (s)", ylabel="PWM counts", title="motor powers")
     kinds = sorted({k for _, k, _ in run.problems()})
@@ -202,10 +202,18 @@ def plot_run(run: Run, path: str) -> None:
     save(fig, path)
 
 
-def _plot(args: argparse.Namespace) -> int:
-    from omnibot.cliargs import check_writable
+def _legend(ax: Any) -> None:
+    """A legend where something was drawn (matplotlib warns on stderr about an empty one: a log
+    without powers, VEL on the wheel loop, or a log cut before its first sample)."""
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(loc="best", fontsize=8)
 
-    check_writable(args.plot, "-o")
+
+def _plot(args: argparse.Namespace) -> int:
+    from omnibot.cliargs import check_distinct, check_plot
+
+    check_plot(args.plot, "-o")
+    check_distinct([("-o", args.plot)], [("FILE.mcap", args.file)])
     run = _load(args)
     try:
         plot_run(run, args.plot)
@@ -282,6 +290,9 @@ def _replay_all(args: argparse.Namespace) -> int:
     options = parse_options(args.follower_option)
     if chosen is not None:
         make_replayed(chosen, args.follower, options)  # a bad follower or option: said before anything runs
+    from omnibot.cliargs import check_distinct
+
+    check_distinct([("--csv", args.csv), ("--commands-csv", args.commands_csv)], [("FILE.mcap", args.file)])
     if args.commands_csv:
         from omnibot.cliargs import check_writable
 

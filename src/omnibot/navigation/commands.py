@@ -23,6 +23,8 @@ from typing import Any
 from omnibot.cliargs import (
     DeprecatedAlias,
     add_robot_options,
+    check_distinct,
+    check_plot,
     check_sim_options,
     check_writable,
     seed_of,
@@ -96,13 +98,18 @@ def run_follow(args: argparse.Namespace) -> int:
         cross_track=_positive(args.cross_track_tolerance, "--cross-track-tolerance"),
     )
     out = _out_dir(args)
-    for flag in ("truth", "report", "plot"):
+    for flag in ("truth", "report"):
         check_writable(getattr(args, flag), f"--{flag}")
+    check_plot(args.plot, "--plot")
     targets = {
         "truth": _target(args.truth, out, "follow_truth.csv"),
         "report": _target(args.report, out, "follow_report.json"),
         "plot": _target(args.plot, out, "follow_plot.png"),
     }
+    check_distinct(
+        [*((f"--{k}" if getattr(args, k) else "--out", v) for k, v in targets.items()), ("--log", args.log)],
+        [("PATH", args.path), ("--calibration", args.calibration)],
+    )
     metres = "{l_bar}{bar}| {n:.2f}/{total:.2f} m [{elapsed}<{remaining}]"
     with (
         _robot_client(args, start=Pose2D(*path.start)) as (client, robot),
@@ -240,6 +247,7 @@ def run_record(args: argparse.Namespace) -> int:
     )
     out = FsPath(args.path)
     check_writable(out, "--path")
+    check_distinct([("--path", out), ("--log", args.log)])
     with _robot_client(args) as (client, robot):
         result = teach(client, robot, recorder, mode=mode, shape=shape, speed=speed, duration=duration)
     problem = check_recording(result)

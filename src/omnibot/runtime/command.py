@@ -85,8 +85,8 @@ class Parts:
     follower: Any = None
     pad: Any = None
     device: Any = None
-    lost: bool = False
-    """The dashboard's robot link ended."""
+    lost: str | None = None
+    """Why the dashboard's robot link ended (None: it did not)."""
     closers: list[Callable[[], object]] = field(default_factory=list)
 
     def close(self) -> None:
@@ -177,8 +177,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _result(parts: Parts) -> int:
-    if parts.lost:
-        print("omnibot run: the robot link ended", file=sys.stderr)
+    if parts.lost is not None:
+        print(f"omnibot run: the robot link ended: {parts.lost}", file=sys.stderr)
         return 1
     source = parts.follower
     if source is None:
@@ -275,7 +275,8 @@ def _with_dashboard(args: argparse.Namespace, url: str, config: Any, path: Any) 
             if parts.device is not None and parts.device.quit:
                 break
             time.sleep(min(0.1, max(0.0, end - time.monotonic())))
-        parts.lost = not dash.link.alive
+        if not dash.link.alive:
+            parts.lost = dash.link.ended or "its thread stopped"
     finally:
         dash.stop()
         parts.close()

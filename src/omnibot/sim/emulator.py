@@ -4,8 +4,10 @@ The first line on stdout is the pty's device path, so any serial program (pyseri
 omnibot client with ``--port /dev/pts/N``) can open it. The path is printed only once the emulator can
 answer in real time: the arguments are checked, the truth file is open and the physics kernels are
 compiled (or loaded from numba's cache), so a first start on a fresh install does not leave a HELLO
-unanswered. Bytes are paced to the baud rate in both directions. SIGINT or SIGTERM end it cleanly:
-the pty is closed, the truth file flushed and closed.
+unanswered. Bytes are paced to the baud rate in both directions. SIGINT, SIGTERM or SIGHUP (not
+under ``nohup``) end it cleanly: the pty is closed, the truth file flushed and closed. Started by
+:func:`spawn_pty_emulator` (``omnibot demo``), it also ends when that parent is gone (killed by
+SIGKILL, the parent could not end it: it would serve nobody for ever).
 
 With several ``--robot`` options (:func:`run_pty_fleet`) the robots share one world and one clock
 (:class:`~omnibot.sim.fleet.Fleet`), each on its own pty: a line ``NAME PATH`` per robot, so a fleet
@@ -14,6 +16,7 @@ can be driven from separate processes on one machine.
 
 from __future__ import annotations
 
+import os
 import select
 import signal
 import subprocess
@@ -48,7 +51,7 @@ def run_pty_emulator(
     out: TextIO = sys.stdout,
     log: Path | None = None,
 ) -> int:
-    """Serve the simulated robot on a new pty until ``stop`` is set or SIGINT/SIGTERM; exit status.
+    """Serve the simulated robot on a new pty until ``stop`` is set or SIGINT/SIGTERM/SIGHUP; its status.
     ConfigError (before the pty exists) for a bad baud rate or a truth file that cannot be written."""
     from omnibot.sim import kernels
 
@@ -77,8 +80,9 @@ def run_pty_emulator(
 
             device = RecordedDevice(device, log_recorder, robot)
         bridge = PtyBridge(device, baud=baud)
+        _end_with_parent(stop)
         if threading.current_thread() is threading.main_thread():
-            for sig in (signal.SIGINT, signal.SIGTERM):
+            for sig in _ending_signals():
                 previous[sig] = signal.signal(sig, _on_signal)
         print(bridge.path, file=out, flush=True)
         try:
@@ -93,6 +97,36 @@ def run_pty_emulator(
         if log_recorder is not None:
             log_recorder.close()
     return 0
+
+
+PARENT_ENV = "OMNIBOT_SIM_PARENT"
+"""Set by :func:`spawn_pty_emulator` to its PID: the emulator ends once its parent is another."""
+PARENT_POLL = 0.5
+"""s between two looks at the parent."""
+
+
+def _end_with_parent(stop: threading.Event) -> None:
+    """With :data:`PARENT_ENV` set, set ``stop`` once this process's parent is no longer that PID
+    (it died: the orphan was handed to init or a subreaper)."""
+    parent = os.environ.get(PARENT_ENV, "")
+    if not parent.isdigit():
+        return
+
+    def watch() -> None:
+        while not stop.wait(PARENT_POLL):
+            if os.getppid() != int(parent):
+                stop.set()
+
+    threading.Thread(target=watch, name="omnibot-parent-watch", daemon=True).start()
+
+
+def _ending_signals() -> list[signal.Signals]:
+    """The signals that end the emulator cleanly: SIGINT, SIGTERM and SIGHUP (its terminal closed),
+    unless ``nohup`` ignores SIGHUP."""
+    ending = [signal.SIGINT, signal.SIGTERM]
+    if signal.getsignal(signal.SIGHUP) is not signal.SIG_IGN:
+        ending.append(signal.SIGHUP)
+    return ending
 
 
 @dataclass(frozen=True)
@@ -131,8 +165,10 @@ def parse_member(text: str, index: int, seed: int) -> FleetMember:
         raise ConfigError(f"--robot {text!r} names no robot (e.g. omni4?name=r1&pose=1,1,0)", key="--robot")
     try:
         own_seed = int(options.get("seed", seed + index))
+        if own_seed < 0:
+            raise ValueError(own_seed)
     except ValueError:
-        raise ConfigError(f"expected seed=N in --robot {text!r}", key="--robot") from None
+        raise ConfigError(f"expected seed=N (N >= 0) in --robot {text!r}", key="--robot") from None
     try:
         pose = parse_pose(options["pose"]) if "pose" in options else None
     except ConfigError as exc:
@@ -150,7 +186,7 @@ def run_pty_fleet(
     out: TextIO = sys.stdout,
 ) -> int:
     """Serve several simulated robots in one world, one pty each, on one real-time clock, until
-    ``stop`` or SIGINT/SIGTERM; exit status. Prints ``NAME PATH`` per robot once all can answer.
+    ``stop`` or SIGINT/SIGTERM/SIGHUP; exit status. Prints ``NAME PATH`` per robot once all can answer.
     ConfigError (before any pty exists) for a bad baud rate, a name taken twice or a pose that
     overlaps a wall, an obstacle or another robot."""
     from omnibot.sim import kernels
@@ -179,7 +215,7 @@ def run_pty_fleet(
         for name in fleet.names:
             bridges.append(PtyBridge(fleet.device(name), baud=baud))
         if threading.current_thread() is threading.main_thread():
-            for sig in (signal.SIGINT, signal.SIGTERM):
+            for sig in _ending_signals():
                 previous[sig] = signal.signal(sig, _on_signal)
         for name, bridge in zip(fleet.names, bridges, strict=True):
             print(name, bridge.path, file=out)
@@ -228,12 +264,14 @@ def spawn_pty_emulator(
     argv += ["--surface", surface] if surface else []
     argv += ["--truth", str(truth)] if truth else []
     with tempfile.TemporaryFile("w+") as err:
+        env = {**os.environ, PARENT_ENV: str(os.getpid())}
         proc = subprocess.Popen(
             argv,
             stdin=subprocess.DEVNULL,
             stdout=subprocess.PIPE,
             stderr=err,
             text=True,
+            env=env,
             start_new_session=True,
         )
         try:

@@ -146,6 +146,9 @@ def run(args: argparse.Namespace) -> int:
     finally:
         dash.stop()
     if lost:
-        print("omnibot dashboard: the robot link ended", file=sys.stderr)
+        print(
+            f"omnibot dashboard: the robot link ended: {dash.link.ended or 'its thread stopped'}",
+            file=sys.stderr,
+        )
         return 1
     return 0

@@ -136,6 +136,8 @@ class RobotLink:
         self._twist: Twist | None = None
         self._configured: float | None = None
         self._reset = False
+        self.ended: str | None = None
+        """Why the link thread ended by itself (the link lost and not reopened); None otherwise."""
 
     @property
     def deadman(self) -> Deadman:
@@ -212,9 +214,14 @@ class RobotLink:
                     pacer.wait()
                 except LinkError as exc:
                     self._link_error(exc)
+                    if client.broken or client.link.closed:  # the port is gone and did not come back
+                        self.ended = str(exc)
+                        self._log("error", f"robot link ended: {exc}")
+                        break
                     self._sleep(self.config.period)
         except Exception as exc:  # pragma: no cover - reported, then the link ends
             log.exception("robot link failed")
+            self.ended = str(exc)
             self._emit({"type": "log", "level": "error", "text": f"robot link stopped: {exc}"})
         finally:
             self.runtime.close()

@@ -107,7 +107,7 @@ def load_path(file: str | Path) -> PlannedPath:
     ``x,y`` in the first two columns. Metres; blank lines and lines starting with ``#`` are skipped."""
     p = Path(file)
     try:
-        text = p.read_text(encoding="utf-8")
+        text = p.read_text(encoding="utf-8-sig")  # a spreadsheet's "CSV UTF-8" starts with a BOM
     except (OSError, UnicodeDecodeError) as exc:
         reason = exc.strerror if isinstance(exc, OSError) else "not a text (UTF-8) file"
         raise ConfigError(f"cannot read path {p}: {reason}", key="--path") from None
