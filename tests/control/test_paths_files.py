@@ -84,3 +84,12 @@ def test_unreadable_file_and_stream(tmp_path: FsPath) -> None:
     assert len(read_path(stream, "stdin")) == 2
     with pytest.raises(PathFileError, match="cannot write"):
         write_path(parse_path("t,x,y,theta\n0,0,0,0\n1,1,0,0\n"), tmp_path / "no" / "dir.csv")
+
+
+def test_a_spreadsheets_csv_utf8_with_a_byte_order_mark(tmp_path: FsPath) -> None:
+    """A spreadsheet's "CSV UTF-8" starts with a byte order mark and ends lines with CRLF."""
+    file = tmp_path / "from spreadsheet.csv"
+    file.write_bytes(b"\xef\xbb\xbft,x,y,theta\r\n0,0,0,0\r\n1,0.5,0,0\r\n")
+    path = read_path(file)
+    assert path.x.tolist() == [0.0, 0.5]
+    assert path.t is not None and path.t.tolist() == [0.0, 1.0]

@@ -40,7 +40,8 @@ def read_path(source: str | FsPath | IO[str], name: str | None = None) -> Path:
     if isinstance(source, str | FsPath):
         label = name or str(source)
         try:
-            with open(source, encoding="utf-8", newline="") as f:
+            # utf-8-sig: a spreadsheet's "CSV UTF-8" starts with a byte order mark
+            with open(source, encoding="utf-8-sig", newline="") as f:
                 return _parse(f, label)
         except OSError as exc:
             raise PathFileError(f"{label}: cannot read: {exc.strerror or exc}") from None
