@@ -20,6 +20,15 @@ from omnibot.errors import LinkError
 from omnibot.sim.emulator import PARENT_ENV, spawn_pty_emulator
 
 
+def read_port(port: serial.Serial, marker: bytes, timeout: float = 10.0) -> bytes:
+    """What the emulator's pty gives until ``marker`` arrives or ``timeout`` s of wall time pass."""
+    out = b""
+    deadline = time.monotonic() + timeout
+    while marker not in out and time.monotonic() < deadline:
+        out += port.read(64)
+    return out
+
+
 def test_pty_emulator_serves_the_firmware_and_writes_truth(tmp_path: Path) -> None:
     truth = tmp_path / "truth.csv"
     proc = subprocess.Popen(
@@ -46,10 +55,7 @@ def test_pty_emulator_serves_the_firmware_and_writes_truth(tmp_path: Path) -> No
         assert path.startswith("/dev/")
         with serial.Serial(path, 115200, timeout=0.2) as port:
             port.write(b"HELLO;MOVE,20,40,90,0;")
-            out = b""
-            deadline = time.monotonic() + 10
-            while b"IDLE" not in out and time.monotonic() < deadline:
-                out += port.read(64)
+            out = read_port(port, b"IDLE")
         # the power-up HELLO reaches us whole, in part or not at all, depending on when the port was
         # opened (opening it flushes what the pty holds, as a serial port's open does)
         replies = b"HELLO,2,omni4,4\r\nOK\r\nIDLE\r\n"
@@ -260,8 +266,5 @@ def test_the_spawned_emulator_runs_in_a_session_of_its_own() -> None:
         assert os.getsid(pid) == pid != os.getsid(0)
         with serial.Serial(path, 115200, timeout=0.2) as port:
             port.write(b"STATUS;")
-            out = b""
-            deadline = time.monotonic() + 10
-            while b"STATUS," not in out and time.monotonic() < deadline:
-                out += port.read(64)
+            out = read_port(port, b"STATUS,")
         assert b"STATUS," in out
