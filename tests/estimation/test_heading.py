@@ -62,6 +62,10 @@ def test_outside_slip_flag_and_saturated_gyro() -> None:
     sat = HeadingFilter(HeadingFilterConfig(gyro_range=4.0))
     inc = sat.update(DT, 0.04, 0.06)  # the gyro is pinned at its range: the wheels say 6 rad/s
     assert inc == pytest.approx(0.06)
+    theta = 0.06
+    for _ in range(49):  # a spin past the range on wheels that agree: they carry it throughout
+        theta += sat.update(DT, 0.04, 0.06)
+    assert theta == pytest.approx(0.06 * 50)
 
 
 def test_a_clipped_gyro_is_the_least_the_body_turned() -> None:

@@ -98,6 +98,7 @@ class HeadingFilter:
         self._ref = theta
         self._mismatch = 0.0
         self._distrust = 0.0
+        self._skid = 0.0
         self.slipping = False
         """The last update did not trust the encoders (slip seen, or held after one)."""
 
@@ -164,7 +165,7 @@ class HeadingFilter:
             # only where they are trusted and say more, in the same direction (a body spinning past
             # the range usually has a wheel skidding, and skidding wheels read less)
             bridged = None if d_ref is None else d_ref * (1.0 + scale) + bias * dt
-            held = slip or self._distrust > 0.0
+            held = slip or self._skid > 0.0
             if bridged is not None and not held and bridged * d_psi > 0 and abs(bridged) > abs(d_psi):
                 d_psi = bridged
             else:
@@ -186,7 +187,9 @@ class HeadingFilter:
             decay = math.exp(-dt / c.slip_window)
             self._mismatch = self._mismatch * decay + (d_ref - inc)
             limit = c.slip_threshold + 3.0 * ref_resolution
-            if slip or saturated or abs(self._mismatch) > limit:
+            skid = slip or abs(self._mismatch) > limit
+            self._skid = c.slip_hold if skid else max(0.0, self._skid - dt)  # a clip alone is no skid
+            if skid or saturated:
                 self._distrust = c.slip_hold
                 self._mismatch = 0.0
             else:
