@@ -62,6 +62,29 @@ def test_outside_slip_flag_and_saturated_gyro() -> None:
     sat = HeadingFilter(HeadingFilterConfig(gyro_range=4.0))
     inc = sat.update(DT, 0.04, 0.06)  # the gyro is pinned at its range: the wheels say 6 rad/s
     assert inc == pytest.approx(0.06)
+    theta = 0.06
+    for _ in range(49):  # a spin past the range on wheels that agree: they carry it throughout
+        theta += sat.update(DT, 0.04, 0.06)
+    assert theta == pytest.approx(0.06 * 50)
+
+
+def test_a_clipped_gyro_is_the_least_the_body_turned() -> None:
+    """A body spinning past the gyro's range usually has a wheel skidding: wheels that read less
+    than the clipped gyro, or are flagged as slipping, must not replace it (omni3 at top speed)."""
+    flagged = HeadingFilter(HeadingFilterConfig(gyro_range=4.0))
+    assert flagged.update(DT, 0.04, 0.06, slip=True) == pytest.approx(0.04)  # skidding: the clip holds
+    slower = HeadingFilter(HeadingFilterConfig(gyro_range=4.0))
+    before = slower.P[0, 0]
+    assert slower.update(DT, 0.04, 0.02) == pytest.approx(0.04)  # less than the clip: cannot be
+    assert slower.P[0, 0] > before + (0.04 * 0.05) ** 2 * 0.9  # what the clip hides widens the heading
+    reverse = HeadingFilter(HeadingFilterConfig(gyro_range=4.0))
+    assert reverse.update(DT, -0.04, 0.06) == pytest.approx(-0.04)  # the other way: not the body's
+    spun = HeadingFilter(HeadingFilterConfig(gyro_range=4.0))
+    theta = 0.0
+    for k in range(20):  # 0.2 s at 4.1 rad/s, wheels reading 2 rad/s and flagged after the first
+        theta += 0.041
+        spun.update(DT, 0.04, 0.02, slip=k > 0)
+    assert spun.theta == pytest.approx(theta, abs=0.03)  # the encoders' bridge: 0.4 rad short
 
 
 def test_reset_heading_keeps_the_learned_gyro() -> None:

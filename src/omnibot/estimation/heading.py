@@ -23,7 +23,9 @@ counts for little then, and nothing at all while a slip is seen: a slip check co
 rotation with the gyro's over a short window (plus any slip flag from elsewhere: the wheel-fit
 residual, the tracking wheels), and while it fires the reference follows the filter (no
 information), so a slip never enters the heading. At standstill the rotation is known to be zero:
-the gyro's rate is its bias. A saturated gyro sample is replaced by the encoders' rotation.
+the gyro's rate is its bias. A saturated gyro sample is the least the body turned: it is replaced
+by the encoders' rotation only where they are trusted and say more, else kept (the heading's
+variance grown by what the clip may hide).
 """
 
 from __future__ import annotations
@@ -67,7 +69,9 @@ class HeadingFilterConfig:
     slip_hold: float = 0.3
     """Seconds the encoder reference stays distrusted after the last slip."""
     gyro_range: float = math.inf
-    """Gyro saturation, rad/s; samples near it use the encoders' rotation instead."""
+    """Gyro saturation, rad/s; samples near it are the least the body turned (see :meth:`HeadingFilter.update`)."""
+    clip_excess: float = 0.05
+    """How far past the range a clipped sample's true rate may be, as a fraction of it (heading variance)."""
 
     @classmethod
     def from_gyro(cls, spec: GyroSpec, **overrides: float) -> HeadingFilterConfig:
@@ -94,6 +98,7 @@ class HeadingFilter:
         self._ref = theta
         self._mismatch = 0.0
         self._distrust = 0.0
+        self._skid = 0.0
         self.slipping = False
         """The last update did not trust the encoders (slip seen, or held after one)."""
 
@@ -154,8 +159,17 @@ class HeadingFilter:
             return 0.0
         theta, bias, scale, _ = (float(v) for v in self.x)
         saturated = abs(d_psi) > 0.97 * c.gyro_range * dt
-        if saturated and d_ref is not None:
-            d_psi = d_ref * (1.0 + scale) + bias * dt  # what the gyro would have said
+        clip_var = 0.0
+        if saturated:
+            # a clipped reading is the least the body turned: the encoders' rotation replaces it
+            # only where they are trusted and say more, in the same direction (a body spinning past
+            # the range usually has a wheel skidding, and skidding wheels read less)
+            bridged = None if d_ref is None else d_ref * (1.0 + scale) + bias * dt
+            held = slip or self._skid > 0.0
+            if bridged is not None and not held and bridged * d_psi > 0 and abs(bridged) > abs(d_psi):
+                d_psi = bridged
+            else:
+                clip_var = (c.clip_excess * c.gyro_range * dt) ** 2
         k = 1.0 + scale
         inc = 0.0 if standstill else (d_psi - bias * dt) / k  # standing: the body does not turn
         F = np.eye(4)
@@ -163,7 +177,9 @@ class HeadingFilter:
             F[0, 1], F[0, 2] = -dt / k, -inc / k
         self.x[0] = theta + inc
         drift = c.ref_drift**2 + (c.slip_per_accel2 * accel * accel) ** 2
-        Q = np.diag([c.angle_random_walk**2 * dt, c.bias_walk**2 * dt, c.scale_walk**2 * dt, drift * dt])
+        Q = np.diag(
+            [c.angle_random_walk**2 * dt + clip_var, c.bias_walk**2 * dt, c.scale_walk**2 * dt, drift * dt]
+        )
         self.P = F @ self.P @ F.T + Q
 
         trusted = False
@@ -171,7 +187,9 @@ class HeadingFilter:
             decay = math.exp(-dt / c.slip_window)
             self._mismatch = self._mismatch * decay + (d_ref - inc)
             limit = c.slip_threshold + 3.0 * ref_resolution
-            if slip or saturated or abs(self._mismatch) > limit:
+            skid = slip or abs(self._mismatch) > limit
+            self._skid = c.slip_hold if skid else max(0.0, self._skid - dt)  # a clip alone is no skid
+            if skid or saturated:
                 self._distrust = c.slip_hold
                 self._mismatch = 0.0
             else:
