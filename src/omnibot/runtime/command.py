@@ -275,8 +275,7 @@ def _with_dashboard(args: argparse.Namespace, url: str, config: Any, path: Any) 
             if parts.device is not None and parts.device.quit:
                 break
             time.sleep(min(0.1, max(0.0, end - time.monotonic())))
-        if not dash.link.alive:
-            parts.lost = dash.link.ended or "its thread stopped"
+        parts.lost = dash.link.lost
     finally:
         dash.stop()
         parts.close()

@@ -139,16 +139,13 @@ def run(args: argparse.Namespace) -> int:
         end = math.inf if args.duration is None else time.monotonic() + args.duration
         while time.monotonic() < end and dash.link.alive:
             time.sleep(min(0.2, max(0.0, end - time.monotonic())))
-        lost = not dash.link.alive
+        lost = dash.link.lost
     except KeyboardInterrupt:
         print("omnibot dashboard: stopping", flush=True)
         raise
     finally:
         dash.stop()
-    if lost:
-        print(
-            f"omnibot dashboard: the robot link ended: {dash.link.ended or 'its thread stopped'}",
-            file=sys.stderr,
-        )
+    if lost is not None:
+        print(f"omnibot dashboard: the robot link ended: {lost}", file=sys.stderr)
         return 1
     return 0

@@ -200,6 +200,14 @@ class RobotLink:
         """Whether the link thread runs."""
         return self._thread is not None and self._thread.is_alive()
 
+    @property
+    def lost(self) -> str | None:
+        """Why the link thread, once started, no longer runs (:attr:`ended`, or that it stopped);
+        None while it runs."""
+        if self.alive:
+            return None
+        return self.ended or "its thread stopped"
+
     # ------------------------------------------------------------------ link thread
 
     def _run(self) -> None:
