@@ -163,9 +163,10 @@ class Calibration:
         if table == TABLE_KR:
             return _write(self.kr, index, power, value)
         if table in (TABLE_ROLLER_COS, TABLE_ROLLER_SIN, TABLE_SPEED):
-            coeffs = self.roller_cos if table == TABLE_ROLLER_COS else self.roller_sin
             if table == TABLE_SPEED:
                 coeffs = self.speed
+            else:
+                coeffs = self.roller_cos if table == TABLE_ROLLER_COS else self.roller_sin
             if index < 0 or index >= len(coeffs) or power != 0:
                 return False
             coeffs[index] = value
