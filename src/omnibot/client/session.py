@@ -39,6 +39,7 @@ from omnibot.protocol import codes
 from omnibot.protocol.messages import Mode, Stop
 from omnibot.protocol.messages import Telem as TelemCommand
 from omnibot.robot.description import RobotDescription, load_robot, preset_names
+from omnibot.signals import ending_signals
 
 CLEANUP_TIMEOUT = 0.5
 """Seconds (link clock) each cleanup command may wait for its reply."""
@@ -71,9 +72,7 @@ def terminate_cleanly() -> Iterator[None]:
     def _raise(signum: int, frame: FrameType | None) -> None:
         raise Terminated(signum)
 
-    previous = {signal.SIGTERM: signal.signal(signal.SIGTERM, _raise)}
-    if signal.getsignal(signal.SIGHUP) is not signal.SIG_IGN:
-        previous[signal.SIGHUP] = signal.signal(signal.SIGHUP, _raise)
+    previous = {signum: signal.signal(signum, _raise) for signum in ending_signals()}
     try:
         yield
     finally:

@@ -33,6 +33,7 @@ from typing import Any, TextIO
 from omnibot.errors import ConfigError, LinkError
 from omnibot.motion import Pose2D
 from omnibot.robot.description import RobotDescription
+from omnibot.signals import ending_signals
 from omnibot.sim.device import SimDevice
 from omnibot.sim.simulator import TruthRecorder
 from omnibot.transport.lockstep import DEFAULT_BAUD
@@ -121,12 +122,8 @@ def _end_with_parent(stop: threading.Event) -> None:
 
 
 def _ending_signals() -> list[signal.Signals]:
-    """The signals that end the emulator cleanly: SIGINT, SIGTERM and SIGHUP (its terminal closed),
-    unless ``nohup`` ignores SIGHUP."""
-    ending = [signal.SIGINT, signal.SIGTERM]
-    if signal.getsignal(signal.SIGHUP) is not signal.SIG_IGN:
-        ending.append(signal.SIGHUP)
-    return ending
+    """The signals that end the emulator cleanly: SIGINT, and those that end any omnibot process."""
+    return [signal.SIGINT, *ending_signals()]
 
 
 @dataclass(frozen=True)
