@@ -186,7 +186,7 @@ def one_run(job: Job) -> dict[str, Any]:
             calibrate_gyro=calibrate,
             slip=params,
             follower_options=dict(tuning) if follower == "tracker" else {},
-            floor=surface if suite == "top" else None,
+            floor=surface,
         ),
         surface=surface,
         seed=seed,
@@ -463,31 +463,46 @@ def format_bounds(robots: list[str]) -> str:
     return "\n".join(out)
 
 
+TOP_TURN = 2.0
+"""rad/s: the turn rate of the floor bound's turning column (:func:`format_floor_bounds`)."""
+
+
 def format_floor_bounds(robots: list[str], surfaces: list[str]) -> str:
     """Each robot's top speed on each floor: where its motors' torque-speed line meets the floor's
-    load at full power (:func:`omnibot.control.reach.floor_speed_table`), on the top suite's
-    courses and the worst one."""
+    load at full power (:func:`omnibot.control.reach.floor_reach`), on the top suite's courses and
+    the worst one, with no turn and turning at :data:`TOP_TURN` (each wheel's translation and
+    rotation parts together)."""
     from omnibot.control.paths.profile import MotionLimits
     from omnibot.navigation.session import PLAN_FLOOR_USE
     from omnibot.robot.description import load_robot
 
     cols = " | ".join(f"{c} deg" for c in TOP_COURSES)
     out = [
-        "\n### Top speed on each floor (full power against the floor's load; what the top suite plans with)\n",
-        f"| robot | floor | asked (m/s) | {cols} | worst course | planned on every course ({PLAN_FLOOR_USE:.0%}) |",
-        "|---|---|---|" + "---|" * len(TOP_COURSES) + "---|---|",
+        "\n### Top speed on each floor (full power against the floor's load; what the suites plan with)\n",
+        f"| robot | floor | asked (m/s) | {cols} | worst course | planned on every course ({PLAN_FLOOR_USE:.0%}) "
+        f"| turning {TOP_TURN:g} rad/s: {cols} | worst course, turning |",
+        "|---|---|---|" + "---|" * len(TOP_COURSES) + "---|---|" + "---|" * len(TOP_COURSES) + "---|",
     ]
     for name in robots:
         robot = load_robot(name)
         for surface in surfaces:
-            table = MotionLimits.from_robot(robot, surface=surface).floor
-            assert table is not None
+            reach = MotionLimits.from_robot(robot, surface=surface).floor
+            assert reach is not None
+            table = reach.courses
             step = 360.0 / len(table)
             worst = int(np.flatnonzero(np.isclose(table, min(table), rtol=1e-4))[0])
             at = " | ".join(f"{table[round(float(c) / step) % len(table)]:.2f}" for c in TOP_COURSES)
+            turning = [
+                min(reach.at(math.radians(k * step), w) for w in (TOP_TURN, -TOP_TURN))
+                for k in range(len(table))
+            ]
+            slowest = int(np.argmin(turning))
+            at_turning = " | ".join(
+                f"{turning[round(float(c) / step) % len(table)]:.2f}" for c in TOP_COURSES
+            )
             out.append(
                 f"| {name} | {surface} | {ROBOTS[name].top:.2f} | {at} | {table[worst]:.2f} at {worst * step:.0f} deg | "
-                f"{PLAN_FLOOR_USE * table[worst]:.2f} |"
+                f"{PLAN_FLOOR_USE * table[worst]:.2f} | {at_turning} | {turning[slowest]:.2f} at {slowest * step:.0f} deg |"
             )
     return "\n".join(out)
 
