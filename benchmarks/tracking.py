@@ -22,10 +22,15 @@ Suites:
   the worst path is reported, not only the mean.
 * ``top``: straight runs long enough to cruise at the top speed on the courses 0, 45 and 90
   degrees (heading held), and one with the body swinging; with the speed each robot's motors
-  allow (:mod:`omnibot.control.reach`) and the peak each run reached. This suite plans within the
-  floor's reach (:func:`~omnibot.control.reach.floor_speed_table`: the motors' torque-speed line
-  against the floor's load on each course) and its time is against the minimum on that floor, so
-  a course the floor forbids shows the bound that forbids it instead of a time the robot cannot make.
+  allow (:mod:`omnibot.control.reach`) and the peak each run reached.
+
+``heading``, ``random`` and ``top`` (each at the top speed) plan within the floor
+(``FollowOptions.floor``: the motors' reach for each body twist against the floor's load,
+:func:`~omnibot.control.reach.floor_reach`, and the accelerations the wheels' grip leaves beside the
+floor's drag, :func:`~omnibot.control.reach.floor_grip`) and their time is against the minimum on
+that floor, so what the floor forbids shows as the bound that forbids it instead of a time the robot
+cannot make. ``standard`` plans with the robot's own limits (its speed caps are within every
+floor's reach; its tables were measured so).
 
 The suites with a turning body spin in place first (``calibrate_gyro``: the gyro's scale error is
 learned; a 1 % scale error is 3.6 degrees a turn). The top speeds: omni4 1 m/s (seed 000's
@@ -186,7 +191,7 @@ def one_run(job: Job) -> dict[str, Any]:
             calibrate_gyro=calibrate,
             slip=params,
             follower_options=dict(tuning) if follower == "tracker" else {},
-            floor=surface,
+            floor=None if suite == "standard" else surface,
         ),
         surface=surface,
         seed=seed,

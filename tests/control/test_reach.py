@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import replace
 
@@ -234,3 +235,53 @@ def test_the_profile_keeps_a_turning_body_within_the_floors_reach() -> None:
         twist * np.minimum(allowed / np.maximum(np.hypot(twist[:, 0], twist[:, 1]), 1e-9), 1e9)[:, None]
     )
     assert _floor_spare(robot, get_surface("carpet"), translation_only).min() < 0.0
+
+
+def test_the_grip_leaves_less_acceleration_on_carpet_as_the_floors_drag_grows_with_speed() -> None:
+    from omnibot.control.reach import _floor_load, floor_grip
+    from omnibot.sim.surfaces import get_surface
+
+    robot = load_robot("omni4")
+    speeds, carpet = floor_grip(robot, "carpet", 1.0)
+    _, wood = floor_grip(robot, "wood", 1.0)
+    assert speeds[0] == 0.0 and speeds[-1] == pytest.approx(1.0) and len(speeds) == len(carpet)
+    # issue 17: a turning body's start on carpet asked more than the grip beside the rollers' drag
+    assert carpet[0] == pytest.approx(0.75, abs=0.03) and wood[0] == 1.0
+    assert all(b <= a for a, b in itertools.pairwise(carpet)) and carpet[-1] < 0.3
+    assert all(c < w for c, w in zip(carpet, wood, strict=True))
+    # at the fraction found the busiest wheel pushes at its grip, on its worst course
+    k, v = carpet[3], speeds[3]
+    limits = robot.limits
+    c = np.radians(np.arange(0, 360, 10))
+    twist = np.stack((v * np.cos(c), v * np.sin(c), 0 * c), axis=-1)
+    worst = 0.0
+    for turn in (1.0, -1.0):
+        push = k * np.stack(
+            (
+                robot.mass * limits.acceleration_max * np.cos(c),
+                robot.mass * limits.acceleration_max * np.sin(c),
+                turn * 0.5 * robot.yaw_inertia * limits.angular_acceleration_max + 0 * c,
+            ),
+            axis=-1,
+        )
+        worst = max(worst, float(np.abs(_floor_load(robot, get_surface("carpet"), twist, push)[2]).max()))
+    assert worst == pytest.approx(1.0, abs=0.02)
+    # omni3 (30 kg) asks more of its wheels than they hold even on wood
+    assert floor_grip(load_robot("omni3"), "wood", 5.0)[1][-1] == pytest.approx(0.72, abs=0.02)
+
+
+def test_the_profile_accelerates_within_what_the_grip_leaves() -> None:
+    robot = load_robot("omni4")
+    diagonal = Path.from_points([(0.0, 0.0), (3.0, 3.0)], theta=0.0)
+    free = MotionLimits.from_robot(robot, 1.0)
+    carpet = MotionLimits.from_robot(robot, 1.0, surface="carpet")
+    assert free.grip is None and carpet.grip is not None
+    plan = time_optimal_profile(diagonal, carpet)
+    v = plan.speed
+    accel = np.diff(v * v) / (2.0 * np.diff(plan.s))
+    # each step within the fraction at its slower end (where the passes take it from)
+    allowed = np.maximum(carpet.grip_at(v[:-1]), carpet.grip_at(v[1:])) * carpet.a_max
+    assert np.all(np.abs(accel) <= allowed * 1.01 + 1e-9)
+    assert np.abs(accel).max() < 0.8 * carpet.a_max  # the carpet's drag takes a quarter at a creep
+    assert plan.min_time > time_optimal_profile(diagonal, replace(carpet, grip=None)).min_time
+    np.testing.assert_allclose(free.grip_at(np.array([0.0, 3.0])), 1.0)

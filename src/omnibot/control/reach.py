@@ -96,6 +96,17 @@ def _floor_spare(
     in N m, body frame; None: steady, no wrench): positive where the motors can, negative where
     they cannot (also when a wheel would need more than its current limit). See the module
     docstring."""
+    duty, amps, _ = _floor_load(robot, floor, twist, wrench)
+    i_max = np.array([w.motor.current_max for w in robot.wheels])
+    over_current = np.any(np.abs(amps) > i_max, axis=1)
+    return np.where(over_current, -1.0, 1.0 - np.max(np.abs(duty), axis=1))
+
+
+def _floor_load(
+    robot: RobotDescription, floor: Surface, twist: FloatArray, wrench: FloatArray | None = None
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Each wheel's PWM fraction, current (A) and traction force as a fraction of its grip, each
+    (k, m), holding the body ``twist`` (k, 3) while giving it ``wrench`` (:func:`_floor_spare`)."""
     from omnibot.sim.kernels import ROLL_SPEED_EPS, WHEEL_SPEED_EPS
     from omnibot.sim.physics import static_loads
 
@@ -115,7 +126,7 @@ def _floor_spare(
     res = each(lambda w: w.motor.resistance)
     ke = each(lambda w: w.motor.torque_constant * w.motor.gear_ratio)
     kt = ke * each(lambda w: w.motor.gear_efficiency)
-    drop, i_max = each(lambda w: w.motor.driver_drop), each(lambda w: w.motor.current_max)
+    drop = each(lambda w: w.motor.driver_drop)
     static, viscous = each(lambda w: w.motor.friction_static), each(lambda w: w.motor.friction_viscous)
     # the phase-mean of the rollers' resistance c(phi) N on this floor, and the combined drag b N
     rolling = each(lambda w: w.rollers.rolling_resistance * (1.0 + 0.5 * w.rollers.friction_variation))
@@ -125,7 +136,7 @@ def _floor_spare(
     relax = 1.0 / (1.0 + r_batt * float(np.sum(1.0 / res)))
     v_bus = np.full((len(twist), 1), v_open)
     omega = body_t / -ta  # rolling without slip to start
-    duty = amps = np.zeros_like(omega)
+    duty = amps = ft = np.zeros_like(omega)
     # the rollers roll at the no-slip speed: the traction's slip (mm/s) would only move the steep
     # regularised resistance of rollers that stand still, and make the fixed point below unstable
     roll = body_n + na * omega
@@ -135,8 +146,9 @@ def _floor_spare(
         both = rim * rim + roll * roll
         sin2 = np.where(both > 1e-12, 2.0 * np.abs(rim) * np.abs(roll) / np.maximum(both, 1e-12), 0.0)
         fn = rolling * np.tanh(roll / ROLL_SPEED_EPS) + combined * sin2 * roll
-        # the wheels' traction holds the body against the rollers' forces: sum ft T + fn N = wrench
-        ft = (push - fn @ roller) @ share.T
+        # ft and fn are the forces the contacts put on the floor (the body feels them reversed):
+        # the wheels' traction holds the body against the rollers' and gives it the wrench
+        ft = -(push + fn @ roller) @ share.T
         # each axle balances: ft ta + fn na + friction = the motor's kt i
         axle = static * np.tanh(omega / WHEEL_SPEED_EPS) + viscous * omega + combined * sin2 * radius * rim
         amps = (ft * ta + fn * na + axle) / kt
@@ -151,8 +163,7 @@ def _floor_spare(
         if max(float(np.max(np.abs(settled - omega))), moved) < 1e-9:
             break
         omega = settled
-    over_current = np.any(np.abs(amps) > i_max, axis=1)
-    return np.where(over_current, -1.0, 1.0 - np.max(np.abs(duty), axis=1))
+    return duty, amps, ft / np.maximum(grip, 1e-12)
 
 
 def _floor_reach(robot: RobotDescription, surface: str | Surface, directions: FloatArray) -> FloatArray:
@@ -278,3 +289,57 @@ def floor_reach(
     ).reshape(-1, 3)
     table = _floor_reach(robot, surface, directions).reshape(shares, courses)
     return FloorReach(radius, tuple(tuple(float(v) for v in row) for row in table))
+
+
+GRIP_SPEEDS = 12
+"""Speeds (evenly from standstill to the top speed) in a floor's grip table (:func:`floor_grip`)."""
+GRIP_COURSES = 36
+"""Courses (evenly over a turn) :func:`floor_grip` takes the worst of."""
+GRIP_LEAST = 0.05
+"""The least fraction of its accelerations :func:`floor_grip` leaves a robot (where the floor's drag
+alone takes the grip, beyond the floor's reach, the profile must still move)."""
+
+
+def floor_grip(
+    robot: RobotDescription, surface: str | Surface, top: float, speeds: int = GRIP_SPEEDS
+) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """The accelerations the wheels' grip leaves beside the floor's drag: at each of ``speeds``
+    speeds evenly from 0 to ``top`` m/s (at 0: a creep, the rollers' resistance already on), the
+    largest fraction (at most 1) of the robot's limits,
+    accelerating at ``acceleration_max`` along the course while the turn accelerates at half
+    ``angular_acceleration_max`` (what :func:`~omnibot.control.paths.profile.time_optimal_profile`
+    asks at once), for which no wheel's traction (the body's force and torque shared least-norm
+    over the wheels, with the rollers' drag at that speed) exceeds its grip, on the worst course
+    and either turn. Returns (speeds, fractions)."""
+    from omnibot.sim.kernels import ROLL_SPEED_EPS
+
+    floor = get_surface(surface)
+    limits = robot.limits
+    v = np.linspace(0.0, top, speeds)
+    # the rollers' resistance is there as soon as the robot creeps: at standstill, that of a creep
+    moving = np.concatenate(([min(4.0 * ROLL_SPEED_EPS, 0.5 * v[1])], v[1:]))
+    c = 2.0 * math.pi * np.arange(GRIP_COURSES) / GRIP_COURSES
+    vv, cc, ss = (a.ravel() for a in np.meshgrid(moving, c, (1.0, -1.0), indexing="ij"))
+    twist = np.stack((vv * np.cos(cc), vv * np.sin(cc), 0.0 * vv), axis=-1)
+    push = np.stack(
+        (
+            robot.mass * limits.acceleration_max * np.cos(cc),
+            robot.mass * limits.acceleration_max * np.sin(cc),
+            ss * 0.5 * robot.yaw_inertia * limits.angular_acceleration_max,
+        ),
+        axis=-1,
+    )
+
+    def held(k: FloatArray) -> FloatArray:
+        grip = _floor_load(robot, floor, twist, k[:, None] * push)[2]
+        held_all: FloatArray = np.max(np.abs(grip), axis=1) <= 1.0
+        return held_all
+
+    lo, hi = np.zeros(len(vv)), np.ones(len(vv))
+    full = held(hi)
+    for _ in range(14):
+        mid = 0.5 * (lo + hi)
+        ok = held(mid)
+        lo, hi = np.where(ok, mid, lo), np.where(ok, hi, mid)
+    k = np.where(full, 1.0, lo).reshape(speeds, -1).min(axis=1)
+    return tuple(float(x) for x in v), tuple(float(max(x, GRIP_LEAST)) for x in k)

@@ -14,7 +14,9 @@ is v = u ds/d sigma and its turn rate w = u d theta/d sigma. At each point of a 
   (translation along its body course and the turn together) no larger than ``floor_use`` of what
   the floor's load leaves the motors;
 * acceleration: the tangential acceleration may use what the lateral one leaves of the friction
-  ellipse, a_t <= a_max sqrt(1 - (v^2 kappa / a_lat)^2), and the angular one alpha_max / 2.
+  ellipse, a_t <= a_max sqrt(1 - (v^2 kappa / a_lat)^2), and the angular one alpha_max / 2; on a
+  floor (``grip``) all of them, and the lateral and heading caps, times the fraction the wheels'
+  grip leaves beside the floor's drag at that speed.
 
 A forward pass from rest accelerates as hard as allowed, a backward pass from rest at the end
 brakes as late as allowed, and the smaller of the two (and the caps) is the time-optimal profile of
@@ -68,6 +70,10 @@ class MotionLimits:
     floor_use: float = 1.0
     """The fraction of the floor's reach the profile may use: apart from ``wheel_use``, whose margin
     also stands for the floor's load, which the reach already carries."""
+    grip: tuple[tuple[float, ...], tuple[float, ...]] | None = None
+    """(speeds, fractions): the fraction of the accelerations (and of the lateral one) the wheels'
+    grip leaves beside a floor's drag at each speed (:func:`omnibot.control.reach.floor_grip`),
+    interpolated; None: all of them."""
 
     def __post_init__(self) -> None:
         for name in ("v_max", "a_max", "w_max", "alpha_max"):
@@ -104,6 +110,7 @@ class MotionLimits:
             lim.angular_acceleration_max,
             wheels=wheel_rows(robot),
             floor=None if surface is None else _floor_table(robot, surface),
+            grip=None if surface is None else _grip_table(robot, surface, v),
         )
 
     def with_wheel_use(self, fraction: float) -> MotionLimits:
@@ -120,6 +127,14 @@ class MotionLimits:
             alpha_max=self.alpha_max * factor,
             a_lat=None if self.a_lat is None else self.a_lat * factor,
         )
+
+    def grip_at(self, speed: FloatArray) -> FloatArray:
+        """The fraction of the accelerations the floor's grip leaves at each ``speed`` (m/s; 1
+        without a floor)."""
+        if self.grip is None:
+            return np.ones_like(speed)
+        speeds, fractions = self.grip
+        return np.interp(speed, speeds, fractions)
 
     def with_turn_rate(self, w_max: float) -> MotionLimits:
         """These limits with the turn rate capped at ``w_max`` rad/s (never raised)."""
@@ -140,6 +155,20 @@ class MotionLimits:
 
 
 _FLOOR_TABLES: dict[tuple[str, str], FloorReach] = {}
+_GRIP_TABLES: dict[tuple[str, str, float], tuple[tuple[float, ...], tuple[float, ...]]] = {}
+
+
+def _grip_table(
+    robot: RobotDescription, surface: str, top: float
+) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """The robot's grip table on ``surface`` up to ``top`` m/s, computed once per description, floor
+    and speed."""
+    from omnibot.control.reach import floor_grip
+
+    key = (robot.model_dump_json(), surface, top)
+    if key not in _GRIP_TABLES:
+        _GRIP_TABLES[key] = floor_grip(robot, surface, top)
+    return _GRIP_TABLES[key]
 
 
 def _floor_table(robot: RobotDescription, surface: str) -> FloorReach:
@@ -341,24 +370,30 @@ def time_optimal_profile(
         cap = np.full(n, inf)
         cap = np.minimum(cap, np.where(rs_pt > 0, limits.v_max / rs_pt, inf))
         cap = np.minimum(cap, np.where(rt_pt > 0, limits.w_max / rt_pt, inf))
-        lat = np.where(K > 0, np.sqrt(limits.lateral / K), inf)
-        cap = np.minimum(cap, np.where(rs_pt > 0, lat / rs_pt, inf))
-        head = np.where(HC > 0, np.sqrt(0.5 * limits.alpha_max / HC), inf)
-        cap = np.minimum(cap, np.where(rs_pt > 0, head / rs_pt, inf))
         cap = np.minimum(cap, np.where(rs_pt > 0, VF / rs_pt, inf))
         if limits.wheels is not None or limits.floor is not None:
             cap = np.minimum(cap, _wheel_cap(limits, np.array(ths), rs, np.array(rt_seg), tx_seg, ty_seg))
+        # the grip's caps: lateral v^2 kappa and heading v^2 theta'' within the accelerations the
+        # grip leaves at that speed (found from above: the fraction only grows as the speed falls)
+        speed_cap = cap
+        for _ in range(3 if limits.grip is not None else 1):
+            left = limits.grip_at(np.where(np.isfinite(speed_cap), speed_cap * rs_pt, inf))
+            lat = np.where(K > 0, np.sqrt(left * limits.lateral / K), inf)
+            head = np.where(HC > 0, np.sqrt(0.5 * left * limits.alpha_max / HC), inf)
+            speed_cap = np.minimum(cap, np.where(rs_pt > 0, np.minimum(lat, head) / rs_pt, inf))
+        cap = speed_cap
     cap[0] = cap[-1] = 0.0
 
     def accel(j: int, u: float) -> float:
         a = inf
+        k = 1.0 if limits.grip is None else float(limits.grip_at(np.array([u * rs_pt[j]]))[0])
         if rs_pt[j] > 0:
             v = u * rs_pt[j]
-            use = v * v * K[j] / limits.lateral
-            a = min(a, limits.a_max * math.sqrt(max(0.0, 1.0 - use * use)) / rs_pt[j])
+            use = v * v * K[j] / (k * limits.lateral)
+            a = min(a, k * limits.a_max * math.sqrt(max(0.0, 1.0 - use * use)) / rs_pt[j])
         if rt_pt[j] > 0:
-            a = min(a, 0.5 * limits.alpha_max / rt_pt[j])
-        return a if math.isfinite(a) else limits.a_max
+            a = min(a, 0.5 * k * limits.alpha_max / rt_pt[j])
+        return a if math.isfinite(a) else k * limits.a_max
 
     u = cap.copy()
     dsig = np.diff(S)
