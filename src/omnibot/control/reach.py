@@ -24,6 +24,14 @@ axle friction and the traction's torque, which the motor's ``eta G k i`` must su
 the battery sagging under every motor's ``d i``. The top speed on the course is where the busiest
 wheel needs full PWM (or its current limit). The same description and surface numbers the
 simulator uses (one source of truth).
+
+:func:`floor_reach` does the same for any body twist (vx, vy, w): each wheel's speed is its
+translation part plus its rotation part, so a turn takes reach from the translation (or, on a
+wheel it runs against, gives some): a table over the body course and the turn's share of the
+twist, :class:`FloorReach`. :func:`floor_grip` gives what the wheels' grip (mu N) leaves for
+accelerating beside the floor's drag, as a fraction of the robot's accelerations at each speed:
+past it a wheel's creep grows far faster than its force (the simulator's slip is
+v_s artanh(F / mu N)) and its encoder over-reads.
 """
 
 from __future__ import annotations
