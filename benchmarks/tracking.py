@@ -22,10 +22,15 @@ Suites:
   the worst path is reported, not only the mean.
 * ``top``: straight runs long enough to cruise at the top speed on the courses 0, 45 and 90
   degrees (heading held), and one with the body swinging; with the speed each robot's motors
-  allow (:mod:`omnibot.control.reach`) and the peak each run reached. This suite plans within the
-  floor's reach (:func:`~omnibot.control.reach.floor_speed_table`: the motors' torque-speed line
-  against the floor's load on each course) and its time is against the minimum on that floor, so
-  a course the floor forbids shows the bound that forbids it instead of a time the robot cannot make.
+  allow (:mod:`omnibot.control.reach`) and the peak each run reached.
+
+``heading``, ``random`` and ``top`` (each at the top speed) plan within the floor
+(``FollowOptions.floor``: the motors' reach for each body twist against the floor's load,
+:func:`~omnibot.control.reach.floor_reach`, and the accelerations the wheels' grip leaves beside the
+floor's drag, :func:`~omnibot.control.reach.floor_grip`) and their time is against the minimum on
+that floor, so what the floor forbids shows as the bound that forbids it instead of a time the robot
+cannot make. ``standard`` plans with the robot's own limits (its speed caps are within every
+floor's reach; its tables were measured so).
 
 The suites with a turning body spin in place first (``calibrate_gyro``: the gyro's scale error is
 learned; a 1 % scale error is 3.6 degrees a turn). The top speeds: omni4 1 m/s (seed 000's
@@ -186,7 +191,7 @@ def one_run(job: Job) -> dict[str, Any]:
             calibrate_gyro=calibrate,
             slip=params,
             follower_options=dict(tuning) if follower == "tracker" else {},
-            floor=surface if suite == "top" else None,
+            floor=None if suite == "standard" else surface,
         ),
         surface=surface,
         seed=seed,
@@ -463,31 +468,46 @@ def format_bounds(robots: list[str]) -> str:
     return "\n".join(out)
 
 
+TOP_TURN = 2.0
+"""rad/s: the turn rate of the floor bound's turning column (:func:`format_floor_bounds`)."""
+
+
 def format_floor_bounds(robots: list[str], surfaces: list[str]) -> str:
     """Each robot's top speed on each floor: where its motors' torque-speed line meets the floor's
-    load at full power (:func:`omnibot.control.reach.floor_speed_table`), on the top suite's
-    courses and the worst one."""
+    load at full power (:func:`omnibot.control.reach.floor_reach`), on the top suite's courses and
+    the worst one, with no turn and turning at :data:`TOP_TURN` (each wheel's translation and
+    rotation parts together)."""
     from omnibot.control.paths.profile import MotionLimits
     from omnibot.navigation.session import PLAN_FLOOR_USE
     from omnibot.robot.description import load_robot
 
     cols = " | ".join(f"{c} deg" for c in TOP_COURSES)
     out = [
-        "\n### Top speed on each floor (full power against the floor's load; what the top suite plans with)\n",
-        f"| robot | floor | asked (m/s) | {cols} | worst course | planned on every course ({PLAN_FLOOR_USE:.0%}) |",
-        "|---|---|---|" + "---|" * len(TOP_COURSES) + "---|---|",
+        "\n### Top speed on each floor (full power against the floor's load; what the suites plan with)\n",
+        f"| robot | floor | asked (m/s) | {cols} | worst course | planned on every course ({PLAN_FLOOR_USE:.0%}) "
+        f"| turning {TOP_TURN:g} rad/s: {cols} | worst course, turning |",
+        "|---|---|---|" + "---|" * len(TOP_COURSES) + "---|---|" + "---|" * len(TOP_COURSES) + "---|",
     ]
     for name in robots:
         robot = load_robot(name)
         for surface in surfaces:
-            table = MotionLimits.from_robot(robot, surface=surface).floor
-            assert table is not None
+            reach = MotionLimits.from_robot(robot, surface=surface).floor
+            assert reach is not None
+            table = reach.courses
             step = 360.0 / len(table)
             worst = int(np.flatnonzero(np.isclose(table, min(table), rtol=1e-4))[0])
             at = " | ".join(f"{table[round(float(c) / step) % len(table)]:.2f}" for c in TOP_COURSES)
+            turning = [
+                min(reach.at(math.radians(k * step), w) for w in (TOP_TURN, -TOP_TURN))
+                for k in range(len(table))
+            ]
+            slowest = int(np.argmin(turning))
+            at_turning = " | ".join(
+                f"{turning[round(float(c) / step) % len(table)]:.2f}" for c in TOP_COURSES
+            )
             out.append(
                 f"| {name} | {surface} | {ROBOTS[name].top:.2f} | {at} | {table[worst]:.2f} at {worst * step:.0f} deg | "
-                f"{PLAN_FLOOR_USE * table[worst]:.2f} |"
+                f"{PLAN_FLOOR_USE * table[worst]:.2f} | {at_turning} | {turning[slowest]:.2f} at {slowest * step:.0f} deg |"
             )
     return "\n".join(out)
 

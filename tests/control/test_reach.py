@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import replace
 
@@ -10,6 +11,7 @@ import pytest
 
 from omnibot.control.paths import MotionLimits, Path, time_optimal_profile
 from omnibot.control.reach import (
+    FloorReach,
     course_speed_bound,
     floor_course_speed,
     floor_speed_table,
@@ -152,7 +154,8 @@ def test_the_profile_plans_within_the_floors_reach() -> None:
     ahead = Path.from_points([(0.0, 0.0), (4.0, 0.0)], theta=0.0)
     free = MotionLimits.from_robot(robot, 1.0)
     carpet = MotionLimits.from_robot(robot, 1.0, surface="carpet")
-    assert free.floor is None and carpet.floor == floor_speed_table(robot, "carpet")
+    assert free.floor is None and carpet.floor is not None
+    assert carpet.floor.courses == floor_speed_table(robot, "carpet")
     reach = floor_course_speed(robot, math.pi / 4, "carpet")
     assert time_optimal_profile(diagonal, free).speed.max() == pytest.approx(1.0, rel=1e-6)
     assert time_optimal_profile(diagonal, carpet).speed.max() == pytest.approx(reach, rel=1e-3)
@@ -162,7 +165,123 @@ def test_the_profile_plans_within_the_floors_reach() -> None:
     planned = replace(carpet, floor_use=0.9)
     assert time_optimal_profile(diagonal, planned).speed.max() == pytest.approx(0.9 * reach, rel=1e-3)
     assert time_optimal_profile(ahead, carpet).speed.max() == pytest.approx(1.0, rel=1e-6)  # reach 1.27
-    with pytest.raises(ValueError, match="floor"):
-        MotionLimits(1.0, 1.0, 1.0, 1.0, floor=(1.0, 0.0))
+    with pytest.raises(ValueError, match="positive reach"):
+        FloorReach(0.1, ((1.0, 1.0), (1.0, 0.0), (1.0, 1.0)))
+    with pytest.raises(ValueError, match="odd number"):
+        FloorReach(0.1, ((1.0, 1.0), (1.0, 1.0)))
     with pytest.raises(ValueError, match="floor_use"):
         replace(carpet, floor_use=0.0)
+
+
+def test_the_floor_reach_with_a_turn_is_each_wheels_translation_and_rotation_together() -> None:
+    from omnibot.control.reach import _floor_reach, floor_reach, turn_radius
+
+    robot = load_robot("omni4")
+    reach = floor_reach(robot, "carpet")
+    assert reach.courses == floor_speed_table(robot, "carpet")  # no turn: the course table
+    assert reach.radius == pytest.approx(turn_radius(robot)) == pytest.approx(0.096)
+    # issue 17: at 45 degrees carpet gives 0.72 m/s; turning at 2 rad/s the wheels have less left
+    diagonal = math.pi / 4
+    assert reach.at(diagonal, 0.0) == pytest.approx(0.72, abs=0.01)
+    turning = reach.at(diagonal, 2.0)
+    assert 0.5 < turning < 0.67 and turning < course_speed_bound(robot, diagonal, 2.0)
+    assert reach.at(diagonal, -2.0) == pytest.approx(turning, rel=1e-3)  # the square's symmetry
+    assert reach.at(diagonal, 50.0) == 0.0  # the spin alone is beyond the motors
+    # between the table's courses and turn shares the interpolation is the solved reach within 2 %
+    rng = np.random.default_rng(3)
+    twist = np.column_stack((rng.normal(size=(20, 2)), rng.normal(size=20) * 4.0))
+    solved = _floor_reach(robot, "carpet", twist)
+    np.testing.assert_allclose(reach.multiple(twist), solved, rtol=0.02)
+    assert reach.multiple(np.zeros((1, 3)))[0] == math.inf
+
+
+def test_omni3_turning_while_it_goes_the_turn_helps_the_wheel_it_runs_against() -> None:
+    from omnibot.control.reach import floor_reach
+
+    robot = load_robot("omni3")
+    wood = floor_reach(robot, "wood")
+    ahead = wood.at(0.0, 0.0)
+    assert ahead == pytest.approx(floor_course_speed(robot, 0.0, "wood"), rel=1e-3)
+    assert wood.at(0.0, 2.0) == pytest.approx(wood.at(0.0, -2.0), rel=1e-3)
+    assert wood.at(0.0, 2.0) < 0.92 * ahead
+    # course 90: wheel 3 alone carries it; a turn one way takes its speed, the other way gives it
+    side = wood.at(math.pi / 2, 0.0)
+    assert wood.at(math.pi / 2, 2.0) < 0.92 * side < side < wood.at(math.pi / 2, -2.0)
+
+
+def test_the_profile_keeps_a_turning_body_within_the_floors_reach() -> None:
+    from omnibot.control.reach import _floor_spare
+    from omnibot.sim.surfaces import get_surface
+
+    robot = load_robot("omni4")
+    n = 4001
+    along = np.linspace(0.0, 4.0, n)
+    swing = Path(along * math.sqrt(0.5), along * math.sqrt(0.5), 1.5 * np.sin(math.pi * along))
+    limits = replace(MotionLimits.from_robot(robot, 1.0, surface="carpet"), floor_use=0.95)
+    plan = time_optimal_profile(swing, limits)
+    c, s = np.cos(plan.theta), np.sin(plan.theta)
+    v = plan.u * plan.rs
+    twist = np.column_stack(
+        (v * (c * plan.tx + s * plan.ty), v * (-s * plan.tx + c * plan.ty), plan.u * plan.rt)
+    )
+    spare = _floor_spare(robot, get_surface("carpet"), twist)
+    assert spare.min() > 0.0  # no wheel past full power in steady driving along the plan
+    # the translation's course table alone let the turn take the wheels past it
+    assert np.abs(twist[:, 2]).max() > 1.0 and limits.floor is not None
+    courses = np.mod(np.arctan2(twist[:, 1], twist[:, 0]), 2 * math.pi)
+    table = np.array(limits.floor.courses + limits.floor.courses[:1])
+    allowed = 0.95 * np.interp(courses, np.linspace(0, 2 * math.pi, len(table)), table)
+    translation_only = (
+        twist * np.minimum(allowed / np.maximum(np.hypot(twist[:, 0], twist[:, 1]), 1e-9), 1e9)[:, None]
+    )
+    assert _floor_spare(robot, get_surface("carpet"), translation_only).min() < 0.0
+
+
+def test_the_grip_leaves_less_acceleration_on_carpet_as_the_floors_drag_grows_with_speed() -> None:
+    from omnibot.control.reach import _floor_load, floor_grip
+    from omnibot.sim.surfaces import get_surface
+
+    robot = load_robot("omni4")
+    speeds, carpet = floor_grip(robot, "carpet", 1.0)
+    _, wood = floor_grip(robot, "wood", 1.0)
+    assert speeds[0] == 0.0 and speeds[-1] == pytest.approx(1.0) and len(speeds) == len(carpet)
+    # issue 17: a turning body's start on carpet asked more than the grip beside the rollers' drag
+    assert carpet[0] == pytest.approx(0.75, abs=0.03) and wood[0] == 1.0
+    assert all(b <= a for a, b in itertools.pairwise(carpet)) and carpet[-1] < 0.3
+    assert all(c < w for c, w in zip(carpet, wood, strict=True))
+    # at the fraction found the busiest wheel pushes at its grip, on its worst course
+    k, v = carpet[3], speeds[3]
+    limits = robot.limits
+    c = np.radians(np.arange(0, 360, 10))
+    twist = np.stack((v * np.cos(c), v * np.sin(c), 0 * c), axis=-1)
+    worst = 0.0
+    for turn in (1.0, -1.0):
+        push = k * np.stack(
+            (
+                robot.mass * limits.acceleration_max * np.cos(c),
+                robot.mass * limits.acceleration_max * np.sin(c),
+                turn * 0.5 * robot.yaw_inertia * limits.angular_acceleration_max + 0 * c,
+            ),
+            axis=-1,
+        )
+        worst = max(worst, float(np.abs(_floor_load(robot, get_surface("carpet"), twist, push)[2]).max()))
+    assert worst == pytest.approx(1.0, abs=0.02)
+    # omni3 (30 kg) asks more of its wheels than they hold even on wood
+    assert floor_grip(load_robot("omni3"), "wood", 5.0)[1][-1] == pytest.approx(0.72, abs=0.02)
+
+
+def test_the_profile_accelerates_within_what_the_grip_leaves() -> None:
+    robot = load_robot("omni4")
+    diagonal = Path.from_points([(0.0, 0.0), (3.0, 3.0)], theta=0.0)
+    free = MotionLimits.from_robot(robot, 1.0)
+    carpet = MotionLimits.from_robot(robot, 1.0, surface="carpet")
+    assert free.grip is None and carpet.grip is not None
+    plan = time_optimal_profile(diagonal, carpet)
+    v = plan.speed
+    accel = np.diff(v * v) / (2.0 * np.diff(plan.s))
+    # each step within the fraction at its slower end (where the passes take it from)
+    allowed = np.maximum(carpet.grip_at(v[:-1]), carpet.grip_at(v[1:])) * carpet.a_max
+    assert np.all(np.abs(accel) <= allowed * 1.01 + 1e-9)
+    assert np.abs(accel).max() < 0.8 * carpet.a_max  # the carpet's drag takes a quarter at a creep
+    assert plan.min_time > time_optimal_profile(diagonal, replace(carpet, grip=None)).min_time
+    np.testing.assert_allclose(free.grip_at(np.array([0.0, 3.0])), 1.0)

@@ -80,3 +80,26 @@ def test_tracker_keeps_omni3_on_a_swinging_lemniscate_on_carpet() -> None:
     assert report["rms_cross_track_m"] <= 0.01
     assert report["max_cross_track_m"] <= 0.03
     assert report["time_ratio"] <= 1.25
+
+
+def test_a_command_beyond_the_robots_reach_is_scaled_as_a_whole() -> None:
+    """omni3 at top speed with the body swinging: the feedback asked more than the wheels give, the
+    wheel loops saturated one by one, the turn fell behind and then overshot past the gyro's range.
+    The tracker now sends the twist it asks, scaled down to the reach, course and turn share kept."""
+    from omnibot.control.followers.base import Command
+    from omnibot.control.followers.tracker import within_reach
+
+    robot = load_robot("omni3")
+    limits = follower_limits(robot, 5.0)
+    rows = np.array(limits.wheels)
+    asked = Command(1.29, 4.44, 2.66)  # seed 2's wood line-swing, 0.3 s before the body overshot
+    assert np.max(np.abs(rows @ np.array(asked))) > 1.0
+    sent = within_reach(limits, asked)
+    assert np.max(np.abs(rows @ np.array(sent))) == pytest.approx(1.0)
+    np.testing.assert_allclose(np.array(sent) / np.array(asked), sent.w / asked.w)
+    assert within_reach(limits, Command(2.0, 0.5, 1.0)) == Command(2.0, 0.5, 1.0)  # within: as asked
+    # on a floor, what its load leaves the motors: less than the free-running wheels
+    wood = follower_limits(robot, 5.0, "wood")
+    assert wood.floor is not None
+    on_wood = within_reach(wood, asked)
+    assert on_wood.w < sent.w and wood.floor.multiple(np.array([on_wood]))[0] == pytest.approx(1.0)

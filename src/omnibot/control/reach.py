@@ -24,12 +24,21 @@ axle friction and the traction's torque, which the motor's ``eta G k i`` must su
 the battery sagging under every motor's ``d i``. The top speed on the course is where the busiest
 wheel needs full PWM (or its current limit). The same description and surface numbers the
 simulator uses (one source of truth).
+
+:func:`floor_reach` does the same for any body twist (vx, vy, w): each wheel's speed is its
+translation part plus its rotation part, so a turn takes reach from the translation (or, on a
+wheel it runs against, gives some): a table over the body course and the turn's share of the
+twist, :class:`FloorReach`. :func:`floor_grip` gives what the wheels' grip (mu N) leaves for
+accelerating beside the floor's drag, as a fraction of the robot's accelerations at each speed:
+past it a wheel's creep grows far faster than its force (the simulator's slip is
+v_s artanh(F / mu N)) and its encoder over-reads.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -88,12 +97,24 @@ FLOOR_COURSES = 72
 
 
 def _floor_spare(
-    robot: RobotDescription, floor: Surface, courses: FloatArray, speeds: FloatArray
+    robot: RobotDescription, floor: Surface, twist: FloatArray, wrench: FloatArray | None = None
 ) -> FloatArray:
-    """1 less the largest PWM fraction any wheel needs to hold ``speeds`` m/s steadily along
-    ``courses`` (rad, body frame; arrays of one shape (k,)) on ``floor``: positive where the
-    motors can, negative where they cannot (also when a wheel would need more than its current
-    limit). See the module docstring."""
+    """1 less the largest PWM fraction any wheel needs to hold each body ``twist`` (k, 3) of
+    (vx, vy, w) on ``floor`` while giving the body ``wrench`` (k, 3: force x, y in N and torque
+    in N m, body frame; None: steady, no wrench): positive where the motors can, negative where
+    they cannot (also when a wheel would need more than its current limit). See the module
+    docstring."""
+    duty, amps, _ = _floor_load(robot, floor, twist, wrench)
+    i_max = np.array([w.motor.current_max for w in robot.wheels])
+    over_current = np.any(np.abs(amps) > i_max, axis=1)
+    return np.where(over_current, -1.0, 1.0 - np.max(np.abs(duty), axis=1))
+
+
+def _floor_load(
+    robot: RobotDescription, floor: Surface, twist: FloatArray, wrench: FloatArray | None = None
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Each wheel's PWM fraction, current (A) and traction force as a fraction of its grip, each
+    (k, m), holding the body ``twist`` (k, 3) while giving it ``wrench`` (:func:`_floor_spare`)."""
     from omnibot.sim.kernels import ROLL_SPEED_EPS, WHEEL_SPEED_EPS
     from omnibot.sim.physics import static_loads
 
@@ -107,14 +128,13 @@ def _floor_spare(
     traction, roller = contact_rows(x, y, each(lambda w: w.drive_angle), gamma)
     share = np.linalg.pinv(traction.T)  # (m, 3): the least-norm traction forces for a body force
     load = static_loads(x[None], y[None], np.array([robot.mass]), np.zeros((1, len(wheels)), bool))[0]
-    twist = np.stack((np.cos(courses), np.sin(courses), np.zeros_like(courses)), axis=-1) * speeds[:, None]
     ta, na = -radius * np.cos(gamma), radius * np.sin(gamma)
     body_t, body_n = twist @ traction.T, twist @ roller.T  # (k, m)
     grip = each(lambda w: w.rollers.grip) * floor.mu * load
     res = each(lambda w: w.motor.resistance)
     ke = each(lambda w: w.motor.torque_constant * w.motor.gear_ratio)
     kt = ke * each(lambda w: w.motor.gear_efficiency)
-    drop, i_max = each(lambda w: w.motor.driver_drop), each(lambda w: w.motor.current_max)
+    drop = each(lambda w: w.motor.driver_drop)
     static, viscous = each(lambda w: w.motor.friction_static), each(lambda w: w.motor.friction_viscous)
     # the phase-mean of the rollers' resistance c(phi) N on this floor, and the combined drag b N
     rolling = each(lambda w: w.rollers.rolling_resistance * (1.0 + 0.5 * w.rollers.friction_variation))
@@ -122,19 +142,21 @@ def _floor_spare(
     combined = each(lambda w: w.rollers.combined_drag) * load
     v_open, r_batt = robot.battery.voltage, robot.battery.internal_resistance
     relax = 1.0 / (1.0 + r_batt * float(np.sum(1.0 / res)))
-    v_bus = np.full((len(courses), 1), v_open)
+    v_bus = np.full((len(twist), 1), v_open)
     omega = body_t / -ta  # rolling without slip to start
-    duty = amps = np.zeros_like(omega)
+    duty = amps = ft = np.zeros_like(omega)
     # the rollers roll at the no-slip speed: the traction's slip (mm/s) would only move the steep
     # regularised resistance of rollers that stand still, and make the fixed point below unstable
     roll = body_n + na * omega
+    push = np.zeros_like(twist) if wrench is None else wrench
     for _ in range(300):  # traction slip and battery sag, relaxed to their fixed point
         rim = radius * omega
         both = rim * rim + roll * roll
         sin2 = np.where(both > 1e-12, 2.0 * np.abs(rim) * np.abs(roll) / np.maximum(both, 1e-12), 0.0)
         fn = rolling * np.tanh(roll / ROLL_SPEED_EPS) + combined * sin2 * roll
-        # the wheels' traction holds the body against the rollers' forces: sum ft T + fn N = 0
-        ft = -(fn @ roller) @ share.T
+        # ft and fn are the forces the contacts put on the floor (the body feels them reversed):
+        # the wheels' traction holds the body against the rollers' and gives it the wrench
+        ft = -(push + fn @ roller) @ share.T
         # each axle balances: ft ta + fn na + friction = the motor's kt i
         axle = static * np.tanh(omega / WHEEL_SPEED_EPS) + viscous * omega + combined * sin2 * radius * rim
         amps = (ft * ta + fn * na + axle) / kt
@@ -149,21 +171,27 @@ def _floor_spare(
         if max(float(np.max(np.abs(settled - omega))), moved) < 1e-9:
             break
         omega = settled
-    over_current = np.any(np.abs(amps) > i_max, axis=1)
-    return np.where(over_current, -1.0, 1.0 - np.max(np.abs(duty), axis=1))
+    return duty, amps, ft / np.maximum(grip, 1e-12)
+
+
+def _floor_reach(robot: RobotDescription, surface: str | Surface, directions: FloatArray) -> FloatArray:
+    """The largest multiple of each body twist in ``directions`` (k, 3) that the motors can hold
+    steadily on ``surface`` (module docstring; one bisection for all); 0 where they cannot move it."""
+    floor = get_surface(surface)
+    rows = np.array(wheel_rows(robot))
+    lo = np.full(len(directions), 1e-4)
+    hi = 1.5 / np.maximum(np.max(np.abs(directions @ rows.T), axis=1), 1e-9)  # the free-speed bound
+    stalled = _floor_spare(robot, floor, lo[:, None] * directions) <= 0.0
+    while np.any(hi - lo > 1e-5 * hi):
+        mid = 0.5 * (lo + hi)
+        ahead = _floor_spare(robot, floor, mid[:, None] * directions) > 0.0
+        lo, hi = np.where(ahead, mid, lo), np.where(ahead, hi, mid)
+    return np.where(stalled, 0.0, 0.5 * (lo + hi))
 
 
 def _floor_speeds(robot: RobotDescription, surface: str | Surface, courses: FloatArray) -> FloatArray:
-    """m/s: :func:`floor_course_speed` on each of ``courses`` at once (one bisection for all)."""
-    floor = get_surface(surface)
-    lo = np.full(courses.shape, 1e-4)
-    hi = 1.5 * np.array([course_speed_bound(robot, float(c)) for c in courses])
-    stalled = _floor_spare(robot, floor, courses, lo) <= 0.0
-    while np.any(hi - lo > 1e-5 * hi):
-        mid = 0.5 * (lo + hi)
-        ahead = _floor_spare(robot, floor, courses, mid) > 0.0
-        lo, hi = np.where(ahead, mid, lo), np.where(ahead, hi, mid)
-    return np.where(stalled, 0.0, 0.5 * (lo + hi))
+    """m/s: :func:`floor_course_speed` on each of ``courses`` at once."""
+    return _floor_reach(robot, surface, np.stack((np.cos(courses), np.sin(courses), 0.0 * courses), axis=-1))
 
 
 def floor_course_speed(robot: RobotDescription, course: float, surface: str | Surface) -> float:
@@ -176,7 +204,150 @@ def floor_course_speed(robot: RobotDescription, course: float, surface: str | Su
 def floor_speed_table(
     robot: RobotDescription, surface: str | Surface, courses: int = FLOOR_COURSES
 ) -> tuple[float, ...]:
-    """:func:`floor_course_speed` on ``courses`` evenly spaced courses from 0 (body x axis), what
-    :class:`~omnibot.control.paths.profile.MotionLimits` carries as its floor."""
+    """:func:`floor_course_speed` on ``courses`` evenly spaced courses from 0 (body x axis): the
+    translation row of :func:`floor_reach`."""
     table = _floor_speeds(robot, surface, 2.0 * math.pi * np.arange(courses) / courses)
     return tuple(float(v) for v in table)
+
+
+TURN_SHARES = 37
+"""Turn shares (evenly spaced from a turn to the right to one to the left, 5 degrees apart) in a
+floor's reach table (:func:`floor_reach`)."""
+
+
+def turn_radius(robot: RobotDescription) -> float:
+    """m: the wheels' mean distance from the centre, the length that makes a turn rate a speed
+    (R w is about the rim speed a turn asks of a wheel) in :class:`FloorReach`."""
+    return float(np.mean([math.hypot(*w.position) for w in robot.wheels]))
+
+
+@dataclass(frozen=True)
+class FloorReach:
+    """How far each body twist can go on a floor: the motors' steady reach (:func:`floor_reach`).
+
+    A twist (vx, vy, w) has a course c = atan2(vy, vx) and a turn share phi = atan2(R w, v) (v its
+    speed, R :attr:`radius`); ``table[j][k]`` is the largest hypot(v, R w) the motors hold on turn
+    share j (evenly from -90 to 90 degrees) and course k (evenly over a turn from 0, the body's x
+    axis). Row ``len(table) // 2`` (share 0) is translation alone (:func:`floor_speed_table`), the
+    last and first rows turning in place. In between, the table is interpolated bilinearly.
+    """
+
+    radius: float
+    table: tuple[tuple[float, ...], ...]
+
+    def __post_init__(self) -> None:
+        widths = {len(row) for row in self.table}
+        if not self.radius > 0 or len(self.table) < 3 or len(self.table) % 2 == 0:
+            raise ValueError("a floor reach needs a positive radius and an odd number (>= 3) of turn shares")
+        if len(widths) != 1 or min(widths) < 2 or not all(v > 0 for row in self.table for v in row):
+            raise ValueError("a floor reach needs at least two courses per share, each with a positive reach")
+
+    @property
+    def courses(self) -> tuple[float, ...]:
+        """m/s: the top speed on each course with no turn (the share-0 row)."""
+        return self.table[len(self.table) // 2]
+
+    def multiple(self, twist: FloatArray) -> FloatArray:
+        """The largest factor each body twist of ``twist`` (k, 3) may be multiplied by within the
+        reach (inf for a zero twist)."""
+        grid = np.array(self.table)
+        shares, courses = grid.shape
+        grid = np.concatenate((grid, grid[:, :1]), axis=1)  # the course wraps round
+        speed = np.hypot(twist[:, 0], twist[:, 1])
+        turn = self.radius * twist[:, 2]
+        size = np.hypot(speed, turn)
+        share = (np.arctan2(turn, speed) / math.pi + 0.5) * (shares - 1)  # 0 .. shares - 1
+        course = np.mod(np.arctan2(twist[:, 1], twist[:, 0]), 2.0 * math.pi) * courses / (2.0 * math.pi)
+        j = np.clip(np.floor(share).astype(int), 0, shares - 2)
+        k = np.minimum(np.floor(course).astype(int), courses - 1)
+        fj, fk = share - j, course - k
+        reach = (1.0 - fj) * ((1.0 - fk) * grid[j, k] + fk * grid[j, k + 1]) + fj * (
+            (1.0 - fk) * grid[j + 1, k] + fk * grid[j + 1, k + 1]
+        )
+        with np.errstate(divide="ignore"):
+            return np.where(size > 1e-12, reach / np.maximum(size, 1e-12), math.inf)
+
+    def at(self, course: float, w: float) -> float:
+        """m/s: the fastest translation along ``course`` (rad, body frame) while turning at ``w``
+        rad/s (0 when the turn alone is beyond reach), from the table."""
+        direction = np.array([[math.cos(course), math.sin(course), 0.0]])
+        lo, hi = 0.0, max(max(row) for row in self.table)  # the reach is at least the speed
+        if self.multiple(np.array([[0.0, 0.0, w]]))[0] < 1.0:
+            return 0.0
+        for _ in range(40):  # the speed at which (v, w) reaches the table's edge
+            mid = 0.5 * (lo + hi)
+            inside = self.multiple(np.array([[mid * direction[0, 0], mid * direction[0, 1], w]]))[0] >= 1.0
+            lo, hi = (mid, hi) if inside else (lo, mid)
+        return lo
+
+
+def floor_reach(
+    robot: RobotDescription, surface: str | Surface, courses: int = FLOOR_COURSES, shares: int = TURN_SHARES
+) -> FloorReach:
+    """The motors' steady reach on ``surface`` for every body twist (:class:`FloorReach`): the
+    translation of :func:`floor_course_speed` and a turn together, each wheel's speed the sum of
+    its translation and rotation parts, the busiest at full PWM against the floor's load (module
+    docstring). What :class:`~omnibot.control.paths.profile.MotionLimits` carries as its floor."""
+    radius = turn_radius(robot)
+    phi = np.linspace(-0.5 * math.pi, 0.5 * math.pi, shares)[:, None]
+    course = 2.0 * math.pi * np.arange(courses)[None, :] / courses
+    directions = np.stack(
+        np.broadcast_arrays(np.cos(phi) * np.cos(course), np.cos(phi) * np.sin(course), np.sin(phi) / radius),
+        axis=-1,
+    ).reshape(-1, 3)
+    table = _floor_reach(robot, surface, directions).reshape(shares, courses)
+    return FloorReach(radius, tuple(tuple(float(v) for v in row) for row in table))
+
+
+GRIP_SPEEDS = 12
+"""Speeds (evenly from standstill to the top speed) in a floor's grip table (:func:`floor_grip`)."""
+GRIP_COURSES = 36
+"""Courses (evenly over a turn) :func:`floor_grip` takes the worst of."""
+GRIP_LEAST = 0.05
+"""The least fraction of its accelerations :func:`floor_grip` leaves a robot (where the floor's drag
+alone takes the grip, beyond the floor's reach, the profile must still move)."""
+
+
+def floor_grip(
+    robot: RobotDescription, surface: str | Surface, top: float, speeds: int = GRIP_SPEEDS
+) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """The accelerations the wheels' grip leaves beside the floor's drag: at each of ``speeds``
+    speeds evenly from 0 to ``top`` m/s (at 0: a creep, the rollers' resistance already on), the
+    largest fraction (at most 1) of the robot's limits,
+    accelerating at ``acceleration_max`` along the course while the turn accelerates at half
+    ``angular_acceleration_max`` (what :func:`~omnibot.control.paths.profile.time_optimal_profile`
+    asks at once), for which no wheel's traction (the body's force and torque shared least-norm
+    over the wheels, with the rollers' drag at that speed) exceeds its grip, on the worst course
+    and either turn. Returns (speeds, fractions)."""
+    from omnibot.sim.kernels import ROLL_SPEED_EPS
+
+    floor = get_surface(surface)
+    limits = robot.limits
+    v = np.linspace(0.0, top, speeds)
+    # the rollers' resistance is there as soon as the robot creeps: at standstill, that of a creep
+    moving = np.concatenate(([min(4.0 * ROLL_SPEED_EPS, 0.5 * v[1])], v[1:]))
+    c = 2.0 * math.pi * np.arange(GRIP_COURSES) / GRIP_COURSES
+    vv, cc, ss = (a.ravel() for a in np.meshgrid(moving, c, (1.0, -1.0), indexing="ij"))
+    twist = np.stack((vv * np.cos(cc), vv * np.sin(cc), 0.0 * vv), axis=-1)
+    push = np.stack(
+        (
+            robot.mass * limits.acceleration_max * np.cos(cc),
+            robot.mass * limits.acceleration_max * np.sin(cc),
+            ss * 0.5 * robot.yaw_inertia * limits.angular_acceleration_max,
+        ),
+        axis=-1,
+    )
+
+    def held(k: FloatArray) -> FloatArray:
+        grip = _floor_load(robot, floor, twist, k[:, None] * push)[2]
+        held_all: FloatArray = np.max(np.abs(grip), axis=1) <= 1.0
+        return held_all
+
+    lo, hi = np.zeros(len(vv)), np.ones(len(vv))
+    full = held(hi)
+    for _ in range(14):
+        mid = 0.5 * (lo + hi)
+        ok = held(mid)
+        lo, hi = np.where(ok, mid, lo), np.where(ok, hi, mid)
+    k = np.where(full, 1.0, lo).reshape(speeds, -1).min(axis=1)
+    return tuple(float(x) for x in v), tuple(float(max(x, GRIP_LEAST)) for x in k)

@@ -14,7 +14,9 @@ velocity and turn rate at every instant. Each control period (100 Hz or more):
    (gain ``cross``, integral ``cross_i``, clamped), along-track with a PI (``along``, ``along_i``),
    and heading with a PI (``heading``, by default :func:`heading_gain`; ``heading_i``);
 4. **command**: v = v_ref + k_t e_t t + k_n e_n n and w = w_ref + k_theta e_theta, turned into the
-   body frame with the heading at the middle of the next period, speed clamped to the limit.
+   body frame with the heading at the middle of the next period, speed clamped to the limit, and
+   the twist scaled down as a whole where it would be beyond the robot's reach
+   (:func:`within_reach`: the wheels' free speed and the floor's load).
 
 The path is done when the reference has reached the end and the robot is within ``end_tolerance``
 of the last point and nearly still (or ``settle`` seconds after the reference ended).
@@ -88,6 +90,7 @@ class ProfileTracker(Follower):
         settle: float = 1.5,
         adapt: bool = True,
         turn_lead: float | None = None,
+        reach: bool = True,
         **options: Any,
     ) -> None:
         super().__init__(limits, rate=rate, **options)
@@ -100,6 +103,9 @@ class ProfileTracker(Follower):
         self.lag_start, self.lag_span = lag_start, lag_span
         self.settle = settle
         self.turn_lead = lead if turn_lead is None else turn_lead
+        self.reach = reach
+        """Scale a command beyond the robot's reach down as a whole (:func:`within_reach`); False
+        sends it as asked (the wheel loops saturate one by one)."""
         self.response = VelocityResponse() if adapt else None
         self.profile: SpeedProfile | None = None
         self.tau = 0.0
@@ -185,14 +191,33 @@ class ProfileTracker(Follower):
         command = to_body(vx, vy, w, state.theta + state.w * self.turn_lead, self.dt)
         model = self.response
         if model is None:
-            return command
+            return within_reach(limits, command) if self.reach else command
         c, s = math.cos(state.theta), math.sin(state.theta)
         if not state.slipping and math.hypot(ref.ax, ref.ay) < STEADY_ACCEL:
             model.observe(state.t, c * state.vx + s * state.vy, -s * state.vx + c * state.vy, state.w, dt)
         ux, uy = clamp_speed(*model.compensate(command.vx, command.vy, command.w)[:2], 1.3 * limits.v_max)
         uw = max(-limits.w_max, min(limits.w_max, command.w / model.g_w))
-        model.sent(state.t, ux, uy, uw)
-        return Command(ux, uy, uw)
+        command = Command(ux, uy, uw)
+        if self.reach:
+            command = within_reach(limits, command)
+        model.sent(state.t, command.vx, command.vy, command.w)
+        return command
+
+
+def within_reach(limits: MotionLimits, command: Command) -> Command:
+    """``command`` scaled down as a whole, if need be, to the robot's reach: no wheel past its
+    free-running speed and, given the limits' floor, the twist within what the floor's load leaves
+    the motors (:meth:`~omnibot.control.paths.profile.MotionLimits.reach`).
+
+    Past it the wheel-speed loops saturate one by one, and the twist the wheels then give is not
+    the one asked: at omni3's top speed with the body swinging the translation took the wheels and
+    the turn fell behind, until the body caught up and overshot past the gyro's range. Scaled as a
+    whole, the command keeps its course and its share of turn, and only the pace drops (which the
+    lag governor then follows)."""
+    k = float(limits.reach(np.array([[command.vx, command.vy, command.w]]))[0])
+    if k >= 1.0:
+        return command
+    return Command(command.vx * k, command.vy * k, command.w * k)
 
 
 def _direction(vx: float, vy: float, prof: SpeedProfile, tau: float) -> tuple[float, float]:

@@ -10,10 +10,13 @@ is v = u ds/d sigma and its turn rate w = u d theta/d sigma. At each point of a 
   ``wheel_use`` of its free-running speed for the body twist there: translation along the course
   as seen from the body (the path's direction turned by -theta) and the turn rate together, so a
   body turning while it goes, or a course the wheels serve badly, slows the profile; and, when
-  they carry a floor's speed table (``MotionLimits.from_robot(..., surface=...)``), translation
-  along each body course no faster than ``floor_use`` of what the floor's load leaves the motors;
+  they carry a floor's reach (``MotionLimits.from_robot(..., surface=...)``), the body twist
+  (translation along its body course and the turn together) no larger than ``floor_use`` of what
+  the floor's load leaves the motors;
 * acceleration: the tangential acceleration may use what the lateral one leaves of the friction
-  ellipse, a_t <= a_max sqrt(1 - (v^2 kappa / a_lat)^2), and the angular one alpha_max / 2.
+  ellipse, a_t <= a_max sqrt(1 - (v^2 kappa / a_lat)^2), and the angular one alpha_max / 2; on a
+  floor (``grip``) all of them, and the lateral and heading caps, times the fraction the wheels'
+  grip leaves beside the floor's drag at that speed.
 
 A forward pass from rest accelerates as hard as allowed, a backward pass from rest at the end
 brakes as late as allowed, and the smaller of the two (and the caps) is the time-optimal profile of
@@ -27,6 +30,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -34,6 +38,9 @@ from omnibot.control.paths.geometry import curvature, heading_rate
 from omnibot.control.paths.path import FloatArray, Path
 from omnibot.errors import ConfigError
 from omnibot.robot.description import RobotDescription
+
+if TYPE_CHECKING:
+    from omnibot.control.reach import FloorReach
 
 RHO = 0.1
 """m: the length a radian of turning in place counts for in sigma (only the grid depends on it)."""
@@ -56,13 +63,17 @@ class MotionLimits:
     (:func:`omnibot.control.reach.wheel_rows`); None: no wheel-speed cap."""
     wheel_use: float = 1.0
     """The fraction of the wheels' free-running speed (and of the floor's reach) the profile may use."""
-    floor: tuple[float, ...] | None = None
-    """The top speed on a floor, m/s, on evenly spaced body-frame courses from 0 (the body's x axis;
-    :func:`omnibot.control.reach.floor_speed_table`): translation along a course is capped at
-    ``floor_use`` of it (interpolated); None: no floor cap."""
+    floor: FloorReach | None = None
+    """The motors' reach on a floor for every body twist (:func:`omnibot.control.reach.floor_reach`:
+    translation along a body course and a turn together): the twist is capped at ``floor_use`` of
+    it; None: no floor cap."""
     floor_use: float = 1.0
     """The fraction of the floor's reach the profile may use: apart from ``wheel_use``, whose margin
     also stands for the floor's load, which the reach already carries."""
+    grip: tuple[tuple[float, ...], tuple[float, ...]] | None = None
+    """(speeds, fractions): the fraction of the accelerations (and of the lateral one) the wheels'
+    grip leaves beside a floor's drag at each speed (:func:`omnibot.control.reach.floor_grip`),
+    interpolated; None: all of them."""
 
     def __post_init__(self) -> None:
         for name in ("v_max", "a_max", "w_max", "alpha_max"):
@@ -75,8 +86,6 @@ class MotionLimits:
             raise ValueError(f"motion limit wheel_use must be in (0, 1], got {self.wheel_use}")
         if not 0 < self.floor_use <= 1:
             raise ValueError(f"motion limit floor_use must be in (0, 1], got {self.floor_use}")
-        if self.floor is not None and (len(self.floor) < 2 or not all(v > 0 for v in self.floor)):
-            raise ValueError("motion limit floor needs at least two courses, each with a positive speed")
 
     @property
     def lateral(self) -> float:
@@ -88,8 +97,8 @@ class MotionLimits:
         cls, robot: RobotDescription, speed: float | None = None, surface: str | None = None
     ) -> MotionLimits:
         """The robot's own limits, the speed capped at ``speed`` m/s when given, with its wheels'
-        free-running speeds and, given a ``surface``, the top speed per course the floor's load
-        leaves its motors (:mod:`omnibot.control.reach`)."""
+        free-running speeds and, given a ``surface``, the reach the floor's load leaves its motors
+        (:mod:`omnibot.control.reach`)."""
         from omnibot.control.reach import wheel_rows
 
         lim = robot.limits
@@ -101,6 +110,7 @@ class MotionLimits:
             lim.angular_acceleration_max,
             wheels=wheel_rows(robot),
             floor=None if surface is None else _floor_table(robot, surface),
+            grip=None if surface is None else _grip_table(robot, surface, v),
         )
 
     def with_wheel_use(self, fraction: float) -> MotionLimits:
@@ -118,21 +128,56 @@ class MotionLimits:
             a_lat=None if self.a_lat is None else self.a_lat * factor,
         )
 
+    def grip_at(self, speed: FloatArray) -> FloatArray:
+        """The fraction of the accelerations the floor's grip leaves at each ``speed`` (m/s; 1
+        without a floor)."""
+        if self.grip is None:
+            return np.ones_like(speed)
+        speeds, fractions = self.grip
+        return np.interp(speed, speeds, fractions)
+
     def with_turn_rate(self, w_max: float) -> MotionLimits:
         """These limits with the turn rate capped at ``w_max`` rad/s (never raised)."""
         return replace(self, w_max=min(self.w_max, w_max))
 
+    def reach(self, twist: FloatArray, wheel_use: float = 1.0, floor_use: float = 1.0) -> FloatArray:
+        """The largest factor each body twist of ``twist`` (k, 3: vx, vy, w) may be multiplied by
+        with no wheel beyond ``wheel_use`` of its free-running speed and the twist within
+        ``floor_use`` of the floor's reach (inf where neither caps it)."""
+        cap = np.full(len(twist), math.inf)
+        with np.errstate(divide="ignore"):
+            if self.wheels is not None:
+                need = np.max(np.abs(twist @ np.array(self.wheels).T), axis=1)
+                cap = np.where(need > 1e-12, wheel_use / np.maximum(need, 1e-12), math.inf)
+        if self.floor is not None:
+            cap = np.minimum(cap, floor_use * self.floor.multiple(twist))
+        return cap
 
-_FLOOR_TABLES: dict[tuple[str, str], tuple[float, ...]] = {}
+
+_FLOOR_TABLES: dict[tuple[str, str], FloorReach] = {}
+_GRIP_TABLES: dict[tuple[str, str, float], tuple[tuple[float, ...], tuple[float, ...]]] = {}
 
 
-def _floor_table(robot: RobotDescription, surface: str) -> tuple[float, ...]:
-    """The robot's floor speed table on ``surface``, computed once per description and floor."""
-    from omnibot.control.reach import floor_speed_table
+def _grip_table(
+    robot: RobotDescription, surface: str, top: float
+) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """The robot's grip table on ``surface`` up to ``top`` m/s, computed once per description, floor
+    and speed."""
+    from omnibot.control.reach import floor_grip
+
+    key = (robot.model_dump_json(), surface, top)
+    if key not in _GRIP_TABLES:
+        _GRIP_TABLES[key] = floor_grip(robot, surface, top)
+    return _GRIP_TABLES[key]
+
+
+def _floor_table(robot: RobotDescription, surface: str) -> FloorReach:
+    """The robot's reach on ``surface``, computed once per description and floor."""
+    from omnibot.control.reach import floor_reach
 
     key = (robot.model_dump_json(), surface)
     if key not in _FLOOR_TABLES:
-        _FLOOR_TABLES[key] = floor_speed_table(robot, surface)
+        _FLOOR_TABLES[key] = floor_reach(robot, surface)
     return _FLOOR_TABLES[key]
 
 
@@ -325,24 +370,30 @@ def time_optimal_profile(
         cap = np.full(n, inf)
         cap = np.minimum(cap, np.where(rs_pt > 0, limits.v_max / rs_pt, inf))
         cap = np.minimum(cap, np.where(rt_pt > 0, limits.w_max / rt_pt, inf))
-        lat = np.where(K > 0, np.sqrt(limits.lateral / K), inf)
-        cap = np.minimum(cap, np.where(rs_pt > 0, lat / rs_pt, inf))
-        head = np.where(HC > 0, np.sqrt(0.5 * limits.alpha_max / HC), inf)
-        cap = np.minimum(cap, np.where(rs_pt > 0, head / rs_pt, inf))
         cap = np.minimum(cap, np.where(rs_pt > 0, VF / rs_pt, inf))
         if limits.wheels is not None or limits.floor is not None:
             cap = np.minimum(cap, _wheel_cap(limits, np.array(ths), rs, np.array(rt_seg), tx_seg, ty_seg))
+        # the grip's caps: lateral v^2 kappa and heading v^2 theta'' within the accelerations the
+        # grip leaves at that speed (found from above: the fraction only grows as the speed falls)
+        speed_cap = cap
+        for _ in range(3 if limits.grip is not None else 1):
+            left = limits.grip_at(np.where(np.isfinite(speed_cap), speed_cap * rs_pt, inf))
+            lat = np.where(K > 0, np.sqrt(left * limits.lateral / K), inf)
+            head = np.where(HC > 0, np.sqrt(0.5 * left * limits.alpha_max / HC), inf)
+            speed_cap = np.minimum(cap, np.where(rs_pt > 0, np.minimum(lat, head) / rs_pt, inf))
+        cap = speed_cap
     cap[0] = cap[-1] = 0.0
 
     def accel(j: int, u: float) -> float:
         a = inf
+        k = 1.0 if limits.grip is None else float(limits.grip_at(np.array([u * rs_pt[j]]))[0])
         if rs_pt[j] > 0:
             v = u * rs_pt[j]
-            use = v * v * K[j] / limits.lateral
-            a = min(a, limits.a_max * math.sqrt(max(0.0, 1.0 - use * use)) / rs_pt[j])
+            use = v * v * K[j] / (k * limits.lateral)
+            a = min(a, k * limits.a_max * math.sqrt(max(0.0, 1.0 - use * use)) / rs_pt[j])
         if rt_pt[j] > 0:
-            a = min(a, 0.5 * limits.alpha_max / rt_pt[j])
-        return a if math.isfinite(a) else limits.a_max
+            a = min(a, 0.5 * k * limits.alpha_max / rt_pt[j])
+        return a if math.isfinite(a) else k * limits.a_max
 
     u = cap.copy()
     dsig = np.diff(S)
@@ -381,31 +432,14 @@ def _wheel_cap(
     limits: MotionLimits, theta: FloatArray, rs: FloatArray, rt: FloatArray, tx: list[float], ty: list[float]
 ) -> FloatArray:
     """The largest u = d sigma/dt at each point for which no wheel exceeds ``wheel_use`` of its free
-    speed and the translation ``floor_use`` of the floor's reach on its body course (the segment on
-    either side of the point, whichever is the harder)."""
+    speed and the twist ``floor_use`` of the floor's reach (the segment on either side of the
+    point, whichever is the harder)."""
     c, s = np.cos(theta), np.sin(theta)
     tx_a, ty_a = np.array(tx), np.array(ty)
     # body-frame twist per unit u on the segment starting at each point
     bx, by = rs * (c * tx_a + s * ty_a), rs * (-s * tx_a + c * ty_a)
-    cap = np.full(len(bx), math.inf)
-    with np.errstate(divide="ignore"):
-        if limits.wheels is not None:
-            rows = np.array(limits.wheels)
-            need = np.abs(np.outer(bx, rows[:, 0]) + np.outer(by, rows[:, 1]) + np.outer(rt, rows[:, 2]))
-            need = need.max(axis=1)
-            need = np.maximum(need, np.concatenate(([need[0]], need[:-1])))
-            cap = np.where(need > 1e-12, limits.wheel_use / need, math.inf)
-        if limits.floor is not None:
-            table = np.array(limits.floor + limits.floor[:1])
-            step = 2.0 * math.pi / len(limits.floor)
-            course = np.mod(np.arctan2(by, bx), 2.0 * math.pi) / step
-            k = np.minimum(np.floor(course).astype(int), len(limits.floor) - 1)
-            reach = table[k] + (course - k) * (table[k + 1] - table[k])
-            speed = np.hypot(bx, by)
-            floor_cap = np.where(speed > 1e-12, limits.floor_use * reach / np.maximum(speed, 1e-12), math.inf)
-            floor_cap = np.minimum(floor_cap, np.concatenate(([floor_cap[0]], floor_cap[:-1])))
-            cap = np.minimum(cap, floor_cap)
-        return cap
+    cap = limits.reach(np.stack((bx, by, rt), axis=-1), limits.wheel_use, limits.floor_use)
+    return np.minimum(cap, np.concatenate(([cap[0]], cap[:-1])))
 
 
 def min_traversal_time(path: Path, limits: MotionLimits) -> float:
