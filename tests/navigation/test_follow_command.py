@@ -41,6 +41,22 @@ def test_follow_writes_report_plot_and_truth(tmp_path: FsPath, capsys: pytest.Ca
     assert truth.read_text().startswith("t,x,y,theta\n0.000,0.0")
 
 
+def test_follow_on_a_floor_plans_within_its_reach(tmp_path: FsPath) -> None:
+    """Carpet cannot give omni4 1 m/s on a 45 degree course: --surface carpet plans (and times the
+    run against the minimum) within what the floor lets the motors give."""
+    path_file = tmp_path / "diagonal.csv"
+    path_file.write_text("t,x,y,theta\n0,0,0,0\n1,0.5,0.5,0\n2,1,1,0\n")
+    minimum = {}
+    for surface in ("wood", "carpet"):
+        report = tmp_path / f"{surface}.json"
+        argv = ["follow", str(path_file), "--speed", "1", "--surface", surface, "--report", str(report)]
+        assert main(argv) == 0
+        data = json.loads(report.read_text())
+        assert data["time_ratio"] <= 1.25, data
+        minimum[surface] = data["min_time_s"]
+    assert minimum["carpet"] > 1.2 * minimum["wood"], minimum
+
+
 @pytest.mark.parametrize(
     ("argv", "message"),
     [

@@ -126,6 +126,7 @@ def run_follow(args: argparse.Namespace) -> int:
             wheel_loop=not args.no_wheel_loop,
             calibrate_gyro=args.calibrate_gyro,
             slip=slip,
+            floor=args.surface,  # plan within what this floor lets the motors give
             tolerances=tolerances,
             progress=bar,
         )
@@ -284,8 +285,8 @@ def add_follow_arguments(p: argparse.ArgumentParser) -> None:
     add_robot_options(
         p,
         port_help="the simulated --robot in lockstep, standing at the path's start",
-        surface_help="the floor: the simulated floor (default: the world's) and the floor whose tables and "
-        "wheel slip --calibration applies (also with --port)",
+        surface_help="the floor: the simulated floor (default: the world's), the floor whose reach the plan "
+        "keeps within and whose tables and wheel slip --calibration applies (also with --port)",
     )
     p.add_argument("--speed", type=float, help="speed cap, m/s (default: the robot's limit)")
     p.add_argument("--estimator", default="fused", help="estimator the follower sees (default fused)")
