@@ -35,7 +35,7 @@ from omnibot.calibration.experiments import (
 from omnibot.calibration.fits import SurfaceFit, average_kt, build_spec, fit_kt, fit_surface, robot_table
 from omnibot.calibration.gyro import GyroCalibration, calibrate_gyro
 from omnibot.calibration.motorfit import Balance, balance_courses, identity, offsets_from_deadbands
-from omnibot.calibration.motors import balance_model, motor_deadbands
+from omnibot.calibration.motors import balance_model, motor_deadbands, stand_test
 from omnibot.calibration.patterns import Geometry, top_power
 from omnibot.calibration.plan import Plan, speed_range
 from omnibot.calibration.results import CalibrationResult, SurfaceSession
@@ -44,7 +44,7 @@ from omnibot.calibration.rollers import SHARES, roller_runs, tune_coast
 from omnibot.calibration.runs import ROTATE, SQUARE, STRAIGHT, RunInfo, RunResult
 from omnibot.calibration.slip import slip_step
 from omnibot.calibration.tap import TelemetryTap, standstill_bias
-from omnibot.calibration.truth import Ask, TruthContext, TruthSource, make_truth
+from omnibot.calibration.truth import Ask, TruthContext, TruthSource, make_truth, simulator_of
 from omnibot.calibration.umbmark import OdometryCalibration, SquareRun, calibrate_odometry
 from omnibot.calibration.verdict import judge_average
 from omnibot.client.client import RobotClient
@@ -523,10 +523,28 @@ def fit_motor_map(runner: Runner, plan: Plan, notes: list[str]) -> tuple[MotorMa
     powers = sorted({max(1, round(lo * (hi / lo) ** (i / max(n - 1, 1)))) for i in range(n)})
     # long enough for about half the reference move at the speed each power is meant for
     durations = [min(max(0.5 * plan.move_length * k * max(factors) / p, 1.0), 3.0) for p in powers]
-    balance = balance_model(runner, offsets, powers, k, durations)
+    lift = stand_lift(runner.client)
+    stand = stand_test(runner, lift) if lift is not None else None
+    if stand is None:
+        notes.append("motor map: no stand test (the robot cannot be lifted here), so no speed terms")
+    balance = balance_model(runner, offsets, powers, k, durations, stand=stand)
     runner.rate = balance.rate if balance.rates else None
     speed = tuple(balance.speed) if balance.speed else None
     return MotorMapSpec(offset=offsets, gain=balance.tables(geo.motors), speed=speed), balance
+
+
+def stand_lift(client: RobotClient) -> Callable[[bool], None] | None:
+    """How to put the robot on a stand and back: the simulator's wheels lifted off the floor; None
+    where nobody can (a real robot: not yet asked for)."""
+    sim = simulator_of(client)
+    if sim is None:
+        return None
+
+    def lift(up: bool) -> None:
+        for wheel in sim.robot.wheels:
+            sim.lift_wheel(wheel.name, up)
+
+    return lift
 
 
 def rotation_test_rate(robot: RobotDescription) -> float:
