@@ -58,6 +58,9 @@ from omnibot.robot.description import CalibrationSpec, MotorMapSpec, RobotDescri
 ProgressFactory = Callable[[str, int], AbstractContextManager[Progress | None]]
 """(description, expected runs) -> a context giving a progress bar (or None)."""
 
+Lift = Callable[[RobotClient, bool], None]
+"""Puts the robot on a stand, every wheel off the floor (True), and back where it stood (False)."""
+
 
 @contextmanager
 def no_progress(desc: str, total: int) -> Iterator[Progress | None]:
@@ -172,6 +175,8 @@ class SurfaceRun:
     accuracy: AccuracyPlan | None
     upload: bool
     runner: Runner
+    stand: Lift | None = None
+    """How to put the robot on a stand where the link has no simulator (None: nobody can)."""
     notes: list[str] = field(default_factory=list)
     bias: tuple[float, float, int] | None = None
     """The gyro's standstill bias (mean, its standard error, samples)."""
@@ -258,7 +263,7 @@ def _accuracy_before(s: SurfaceRun) -> None:
 
 def _motor_map(s: SurfaceRun) -> None:
     if s.plan.motor_map:
-        s.motors, s.balance = fit_motor_map(s.runner, s.plan, s.notes)
+        s.motors, s.balance = fit_motor_map(s.runner, s.plan, s.notes, s.stand)
         s.runner.motors = s.motors
 
 
@@ -430,6 +435,7 @@ def calibrate_surface(
     ask: Ask = input,
     progress: ProgressFactory = no_progress,
     upload: bool = True,
+    stand: Lift | None = None,
 ) -> SurfaceSession:
     """Measure, fit and (``upload``) apply the calibration of ``robot`` on one surface: :data:`STEPS`,
     then the wheel slip."""
@@ -443,7 +449,7 @@ def calibrate_surface(
     with progress(f"calibrate {robot.name} on {surface}", sum(phases.values())) as bar:
         tally = Tally(bar, phases)
         runner = Runner(client, robot, source, tap, settle=plan.settle, progress=tally)
-        state = SurfaceRun(surface, plan, accuracy, upload, runner)
+        state = SurfaceRun(surface, plan, accuracy, upload, runner, stand)
         try:
             for step in STEPS:
                 step.run(state)
@@ -503,9 +509,13 @@ def tune_rollers(
     return spec
 
 
-def fit_motor_map(runner: Runner, plan: Plan, notes: list[str]) -> tuple[MotorMapSpec, Balance]:
-    """Offsets from the motors' own dead bands, then gains from the balance runs (motors.py) at
-    nominal powers spread over what the robot's speed range needs (by the described K)."""
+def fit_motor_map(
+    runner: Runner, plan: Plan, notes: list[str], stand: Lift | None = None
+) -> tuple[MotorMapSpec, Balance]:
+    """Offsets from the motors' own dead bands, the torque constants from the stand test (the
+    simulator's wheels lifted, else ``stand``; neither: no speed terms), then the gains from the
+    balance runs (motors.py) at nominal powers spread over what the robot's speed range needs (by the
+    described K)."""
     geo, robot = runner.geometry, runner.robot
     runner.motors = None
     runner.rate = None
@@ -523,19 +533,20 @@ def fit_motor_map(runner: Runner, plan: Plan, notes: list[str]) -> tuple[MotorMa
     powers = sorted({max(1, round(lo * (hi / lo) ** (i / max(n - 1, 1)))) for i in range(n)})
     # long enough for about half the reference move at the speed each power is meant for
     durations = [min(max(0.5 * plan.move_length * k * max(factors) / p, 1.0), 3.0) for p in powers]
-    lift = stand_lift(runner.client)
-    stand = stand_test(runner, lift) if lift is not None else None
-    if stand is None:
-        notes.append("motor map: no stand test (the robot cannot be lifted here), so no speed terms")
-    balance = balance_model(runner, offsets, powers, k, durations, stand=stand)
+    lift = simulator_lift(runner.client) or (partial(stand, runner.client) if stand is not None else None)
+    torque = stand_test(runner, lift) if lift is not None else None
+    if torque is None:
+        notes.append(
+            "motor map: no stand test (nobody to lift the robot, or a wheel without an encoder), so no speed terms"
+        )
+    balance = balance_model(runner, offsets, powers, k, durations, stand=torque)
     runner.rate = balance.rate if balance.rates else None
     speed = tuple(balance.speed) if balance.speed else None
     return MotorMapSpec(offset=offsets, gain=balance.tables(geo.motors), speed=speed), balance
 
 
-def stand_lift(client: RobotClient) -> Callable[[bool], None] | None:
-    """How to put the robot on a stand and back: the simulator's wheels lifted off the floor; None
-    where nobody can (a real robot: not yet asked for)."""
+def simulator_lift(client: RobotClient) -> Callable[[bool], None] | None:
+    """The stand of a simulated robot: its wheels lifted off the floor; None on another link."""
     sim = simulator_of(client)
     if sim is None:
         return None
@@ -618,8 +629,10 @@ def calibrate(
     ask: Ask = input,
     progress: ProgressFactory = no_progress,
     upload: bool = True,
+    stand: Lift | None = None,
 ) -> CalibrationResult:
-    """Calibrate on every surface, then average and check the average on every surface (it is kept
+    """Calibrate on every surface (``stand``: how to lift a robot that is not simulated, for the motor
+    map's stand test), then average and check the average on every surface (it is kept
     only when it is better than none on every one: :attr:`CalibrationResult.average_better`)."""
     plan = plan or Plan()
     sessions = []
@@ -640,6 +653,7 @@ def calibrate(
                     ask=ask,
                     progress=progress,
                     upload=upload,
+                    stand=stand,
                 )
             )
     result = CalibrationResult(robot, sessions)
