@@ -11,8 +11,9 @@ MOVEs at 0.3, 0.6 and 0.9 m/s on courses 0..90 and back), with the motor map
 * ``gain``: each motor's true gain 1/s, one constant per motor, no speed term;
 * ``model``: the true two-number model, gain 1/s and speed term (s - 1/s) E (E from the description).
 
-The known maps replace the balance fit (its first power's runs still measure the speeds the host's
-patterns need; the offsets are measured as always, the stand test runs but is not used). Prints the check's summary, the floor's reach and
+The known maps replace the balance fit's outcome (its runs still measure the speeds the host's
+patterns need at every power; the offsets are measured as always, the stand test runs but is not
+used). Prints the check's summary, the floor's reach and
 every MOVE within it. A few minutes of CPU per run.
 """
 
@@ -53,7 +54,7 @@ def known_map(kind: str) -> Callable[..., Balance]:
         folded: Sequence[float] | None = None,
         stand: Stand | None = None,
     ) -> Balance:
-        result = balance_model(runner, offsets, powers[:1], k, durations[:1] if durations else None, folded)
+        result = balance_model(runner, offsets, powers, k, durations, folded)
         s = np.array(parse_perturbation(ACCEPTANCE, runner.geometry.motors)["torque_constant"])
         result.log_gains = [[float(v) for v in np.log(1.0 / s)]] * len(result.powers)
         if kind == "model":

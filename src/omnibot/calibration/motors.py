@@ -145,9 +145,10 @@ class _Power:
 def stand_test(runner: Runner, lift: Callable[[bool], None], duration: float = 1.6) -> Stand | None:
     """The robot on a stand (``lift(True)``; lowered again after): every motor at each of
     :data:`~omnibot.calibration.motorfit.STAND_POWERS` for ``duration`` s, each free wheel's steady
-    speed from its encoder over the second half; the torque constants
-    (:func:`~omnibot.calibration.motorfit.stand_torque`). None without an encoder on every wheel."""
-    robot, client, tap = runner.robot, runner.client, runner.tap
+    speed from its encoder over the run's second half; the torque constants
+    (:func:`~omnibot.calibration.motorfit.stand_torque`). None without an encoder on every wheel or
+    when a wheel did not turn."""
+    robot, tap = runner.robot, runner.tap
     if not robot.has_wheel_encoders:
         return None
     cpr = {e.wheel: e.counts_per_rev for e in robot.encoders.motors}
@@ -159,13 +160,15 @@ def stand_test(runner: Runner, lift: Callable[[bool], None], duration: float = 1
         for frac in STAND_POWERS:
             power = round(frac * runner.geometry.pwm_max)
             runner.note(f"stand at {power}")
-            client.power(duration, [power] * runner.geometry.motors)
-            client.sleep(0.5 * duration)
-            a = tap.latest
-            client.sleep(0.4 * duration)
-            b = tap.latest
-            client.wait_idle(timeout=4.0 * duration + 10.0)
-            runner.wait_still()
+            tap.record()
+            pattern = [power] * runner.geometry.motors
+            runner.power_run(pattern, duration, RunInfo(STRAIGHT, f"stand test, power {power}"), "stand")
+            log = [t for t in tap.take_log() if t.encoders is not None]
+            if not log:
+                return None
+            start = log[0].controller_time
+            steady = [t for t in log if 0.5 * duration <= t.controller_time - start <= 0.95 * duration]
+            a, b = (steady[0], steady[-1]) if len(steady) >= 2 else (None, None)
             if a is None or b is None or a.encoders is None or b.encoders is None:
                 return None
             dt = b.controller_time - a.controller_time

@@ -34,8 +34,14 @@ from omnibot.calibration.experiments import (
 )
 from omnibot.calibration.fits import SurfaceFit, average_kt, build_spec, fit_kt, fit_surface, robot_table
 from omnibot.calibration.gyro import GyroCalibration, calibrate_gyro
-from omnibot.calibration.motorfit import Balance, balance_courses, identity, offsets_from_deadbands
-from omnibot.calibration.motors import balance_model, motor_deadbands, stand_test
+from omnibot.calibration.motorfit import (
+    STAND_POWERS,
+    Balance,
+    balance_courses,
+    identity,
+    offsets_from_deadbands,
+)
+from omnibot.calibration.motors import MODEL_ROUNDS, balance_model, motor_deadbands, stand_test
 from omnibot.calibration.patterns import Geometry, top_power
 from omnibot.calibration.plan import Plan, speed_range
 from omnibot.calibration.results import CalibrationResult, SurfaceSession
@@ -91,7 +97,9 @@ def expected_runs(
     courses = len(plan.calibrated_courses(geometry))
     checks = accuracy_runs(accuracy, robot) if accuracy is not None else 0
     powers = max(1, plan.balance_levels)
-    balance = len(balance_courses(geometry)) * (5 * powers - 1 + geometry.motors)
+    # each power through the offsets and once per motor (its Jacobian), then each Gauss-Newton step
+    balance = len(balance_courses(geometry)) * ((1 + geometry.motors) * powers + MODEL_ROUNDS * powers)
+    balance += len(STAND_POWERS) if robot.has_wheel_encoders else 0  # the stand test, where it can run
     rollers = plan.roller_rounds > 0 and all(geometry.roller_pitch)
     axes = len(axis_courses(geometry))
     phases = {
