@@ -19,8 +19,9 @@ power ``a`` of the calibration factors and the wheel's rim speed ``u_i`` (docs/f
   from the load's share of the power: on wood it stays at 0.7-1.3 (the 45 degree courses lowest),
   on carpet 0.1-0.9, and where it varies most (near the dead band, or where the drivers limit the
   current) the runs are erratic or no map balances them. A fit of both numbers per motor on the
-  acceptance robot's balance runs had a Fisher information of condition number 1.6e3 on carpet and
-  7e4 on wood (docs/calibration.md): the data fix one combination per motor, not two.
+  acceptance robot's balance runs has a Fisher information of condition number 1.8e4 on carpet and
+  4.5e4 on wood (:func:`floor_information`, docs/calibration.md): the data fix one combination per
+  motor, not two.
 * **The stand test** (:func:`stand_torque`) measures the torque constants where the load is known:
   the robot lifted, each free wheel's speed at three powers; the slope gives s (the back-EMF) through
   the description's friction, the common share (the bus voltage under load) set so that their
