@@ -6,12 +6,14 @@ Calibrates omni4 with the acceptance perturbation (wheel radius +5 %, torque con
 +10 %) on one floor, as tests/calibration/test_acceptance.py does (seed 3, ``Plan(levels=7)``, 1 m
 MOVEs at 0.3, 0.6 and 0.9 m/s on courses 0..90 and back), with the motor map
 
-* ``fit``: as ``omnibot calibrate`` fits it (motors.py: gains per power, then speed terms);
+* ``fit``: as ``omnibot calibrate`` fits it (motors.py: the stand test's torque constants, then one
+  gain per motor with its speed term tied to it, from the balance runs);
 * ``gain``: each motor's true gain 1/s, one constant per motor, no speed term;
 * ``model``: the true two-number model, gain 1/s and speed term (s - 1/s) E (E from the description).
 
-The known maps replace the balance fit (its first power's runs still measure the speeds the host's
-patterns need; the offsets are measured as always). Prints the check's summary, the floor's reach and
+The known maps replace the balance fit's outcome (its runs still measure the speeds the host's
+patterns need at every power; the offsets are measured as always, the stand test runs but is not
+used). Prints the check's summary, the floor's reach and
 every MOVE within it. A few minutes of CPU per run.
 """
 
@@ -26,7 +28,7 @@ import numpy as np
 from omnibot.calibration import session
 from omnibot.calibration.accuracy import AccuracyPlan
 from omnibot.calibration.experiments import Runner
-from omnibot.calibration.motorfit import Balance, emf_counts
+from omnibot.calibration.motorfit import Balance, Stand, emf_counts
 from omnibot.calibration.motors import balance_model
 from omnibot.calibration.perturb import ACCEPTANCE, parse_perturbation, perturbed_robot
 from omnibot.calibration.plan import Plan
@@ -50,8 +52,9 @@ def known_map(kind: str) -> Callable[..., Balance]:
         k: float,
         durations: Sequence[float] | None = None,
         folded: Sequence[float] | None = None,
+        stand: Stand | None = None,
     ) -> Balance:
-        result = balance_model(runner, offsets, powers[:1], k, durations[:1] if durations else None, folded)
+        result = balance_model(runner, offsets, powers, k, durations, folded)
         s = np.array(parse_perturbation(ACCEPTANCE, runner.geometry.motors)["torque_constant"])
         result.log_gains = [[float(v) for v in np.log(1.0 / s)]] * len(result.powers)
         if kind == "model":

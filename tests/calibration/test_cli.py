@@ -166,6 +166,21 @@ def test_calibration_file_errors(tmp_path: Path) -> None:
     ).calibration == (preset.calibration)
 
 
+def test_a_real_robot_is_asked_onto_the_stand_and_back() -> None:
+    """The motor map's stand test on a robot without a simulator behind its link: the person lifts
+    it (every wheel off the floor) and puts it back (``--yes``: nobody is asked, no speed terms)."""
+    prompts: list[str] = []
+
+    def ask(prompt: str) -> str:
+        prompts.append(prompt)
+        return ""
+
+    lift = calibration_cli.asked_stand(ask)
+    lift(None, True)  # type: ignore[arg-type]
+    lift(None, False)  # type: ignore[arg-type]
+    assert prompts[0].startswith("Lift the robot onto a stand") and "back on the floor" in prompts[1]
+
+
 def test_a_port_with_two_floors_asks_between_them(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     from omnibot.calibration.cli import run
     from omnibot.cli import build_parser

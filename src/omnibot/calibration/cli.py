@@ -227,6 +227,20 @@ def port_opener(
     return open_client
 
 
+def asked_stand(ask: Callable[[str], str]) -> Callable[[RobotClient, bool], None]:
+    """The motor map's stand test on a real robot: ask the person to lift it and to put it back."""
+
+    def lift(client: RobotClient, up: bool) -> None:
+        if up:
+            ask(
+                "Lift the robot onto a stand so that no wheel touches anything (they will spin), then press Enter: "
+            )
+        else:
+            ask("Put the robot back on the floor where it stood, then press Enter: ")
+
+    return lift
+
+
 def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> int:
     """The ``omnibot calibrate`` handler; returns the exit status. ``ask`` (default: the terminal,
     checked to be one before the robot moves) asks the operator."""
@@ -260,7 +274,8 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> in
         raise ConfigError("several surfaces need someone to move the robot between them", key="--yes")
     operator = []
     if not simulated and not args.yes:
-        operator.append("put the robot on " + " then on ".join(surfaces))
+        stand = "" if args.no_motor_map else " (and on a stand, wheels in the air, for the motors)"
+        operator.append("put the robot on " + " then on ".join(surfaces) + stand)
     if args.truth is not None and parse_truth_spec(args.truth)[0] in OPERATOR_TRUTHS:
         operator.append(f"measure every run ({args.truth} truth)")
     interactive = ask is None
@@ -328,6 +343,7 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> in
             ask=ask,
             progress=tqdm_progress,
             upload=not args.no_upload,
+            stand=None if args.yes else asked_stand(ask),
         )
         verdict = judge_calibration(result)
         keep = verdict.better is not False or args.force

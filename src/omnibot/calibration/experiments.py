@@ -89,7 +89,7 @@ class Runner:
         self._warns.clear()
         command = send()
         self.client.wait_idle(timeout=4.0 * duration + 10.0)  # saturation stretches a motion
-        self._settle()
+        self.wait_still()
         truth = self.truth.measure(mark, info) if self.truth.can(info) else None
         odo1, h1, t1 = self.tap.odometry_pose, self.tap.heading, self._ctime()
         odometry = None
@@ -113,7 +113,7 @@ class Runner:
             self.progress.update(1)
         return result
 
-    def _settle(self) -> None:
+    def wait_still(self) -> None:
         """Wait ``settle`` s, then until no encoder count moves (a heavy robot coasts for long)."""
         self.client.sleep(self.settle)
         last = self.tap.counts()

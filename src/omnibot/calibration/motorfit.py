@@ -7,23 +7,27 @@ power ``a`` of the calibration factors and the wheel's rim speed ``u_i`` (docs/f
 
 * **Offsets.** ``offset_i = deadband_i * rotation / mean(deadband)`` (:func:`offsets_from_deadbands`):
   each motor's dead band alone, scaled so that their mean is the dead band of rotation in place.
-* **The motor model.** A DC motor through its driver needs ``P = R tau / (k G) + k G omega`` (in PWM
-  counts: the load's torque through the winding's resistance, and the back-EMF), so a motor whose
-  torque constant is ``s`` times the nominal one needs ``a_load / s + s a_emf`` where the nominal
-  motor needs ``a = a_load + a_emf``: ``a / s + (s - 1/s) E u`` with ``E u = a_emf`` (E: the nominal
-  back-EMF in counts per m/s of rim speed, :func:`emf_counts`). One gain ``1/s`` and one speed term
-  ``(s - 1/s) E`` per motor hold on every course and floor, however the load's share of the power
-  changes with them; a resistance or gear efficiency apart changes the gain alone, which is why the
-  two are two numbers. One gain table over power (the map before) can only be right for one mix of
-  load and speed.
-* **Gains** at each power: the Gauss-Newton step on the log-gains, their sum held at zero
-  (:func:`gain_step`), on the balance runs' errors (:func:`balance_errors`: each run's course error
-  and its turn per metre).
-* **Speed terms** from what the gains left over: a speed term changes a motor's power in a run by
-  ``(c / K) (K u / a)`` relative; with the gains re-centred at each power only the runs' departure
-  from the power's mean ``K u / a`` counts (:func:`centred_ratios`), and one linear least squares
-  over every power gives them (:func:`speed_step`). :func:`torque_of` is the torque constant a
-  speed term implies for a motor that differs in its torque constant alone.
+* **The motor model.** A DC motor through its driver needs ``P = R tau / (eta k G) + k G omega``
+  (in PWM counts: the load's torque through the winding's resistance, and the back-EMF). Where the
+  nominal motor needs ``a = a_load + E u`` (E: the nominal back-EMF in counts per m/s of rim speed,
+  :func:`emf_counts`), a motor with ``s`` times its torque constant and ``r`` times its load factor
+  (resistance over gear efficiency) needs ``r a_load / s + s E u = g a + (s - g) E u`` with
+  ``g = r / s``: a gain and a speed term ``(s - g) E`` per motor, right on every course and floor
+  however the load's share of the power changes with them.
+* **Why the floor alone cannot tell the two apart.** A speed term c acts in a run as the gain
+  ``g + (c / K) rho`` with ``rho = K u / a``; the balance runs' errors see only that sum. rho comes
+  from the load's share of the power: on wood it stays at 0.7-1.3 (the 45 degree courses lowest),
+  on carpet 0.1-0.9, and where it varies most (near the dead band, or where the drivers limit the
+  current) the runs are erratic or no map balances them. A fit of both numbers per motor on the
+  acceptance robot's balance runs has a Fisher information of condition number 1.8e4 on carpet and
+  4.5e4 on wood (:func:`floor_information`, docs/calibration.md): the data fix one combination per
+  motor, not two.
+* **The stand test** (:func:`stand_torque`) measures the torque constants where the load is known:
+  the robot lifted, each free wheel's speed at three powers; the slope gives s (the back-EMF) through
+  the description's friction, the common share (the bus voltage under load) set so that their
+  geometric mean is 1. The balance runs then fit one gain per motor with its speed term tied to it,
+  ``(s - g) E`` (:func:`gain_rows`, :func:`gain_fit_step`: Gauss-Newton over every power at once,
+  well conditioned), on each run's course error and turn per metre (:func:`balance_errors`).
 """
 
 from __future__ import annotations
@@ -77,35 +81,78 @@ def balance_courses(geometry: Geometry, folded: Sequence[float] | None = None) -
     return sorted(set(out))
 
 
+@dataclass(frozen=True)
+class Information:
+    """How well the balance runs tell the gains apart: the Fisher information of the linearised fit,
+    the common share the fit holds taken out."""
+
+    condition: float
+    """Largest over smallest eigenvalue (inf: some combination is not measured at all)."""
+    stderr: tuple[float, ...]
+    """Standard error of each gain at the fit's residual scatter."""
+
+
+@dataclass(frozen=True)
+class Stand:
+    """The stand test: each motor's free wheel speed at a few powers, and the torque constants."""
+
+    powers: tuple[float, ...]
+    speeds: tuple[tuple[float, ...], ...]
+    """rad/s, per power, per motor."""
+    torque: tuple[float, ...]
+    """Each motor's torque constant against the description's."""
+    stderr: tuple[float, ...]
+    """Standard error of each (from the slope's scatter over the powers)."""
+    bus: float
+    """The bus voltage on the stand against the described one, as the common share came out."""
+
+    def as_dict(self) -> dict[str, Any]:
+        """The stand test as plain data (for the JSON report)."""
+        return {
+            "powers": list(self.powers),
+            "speeds": [list(r) for r in self.speeds],
+            "torque": list(self.torque),
+            "stderr": list(self.stderr),
+            "bus": self.bus,
+        }
+
+
 @dataclass
 class Balance:
     """The balance runs' outcome: the gain table of each motor and the errors before and after."""
 
     powers: list[int] = field(default_factory=list)
     log_gains: list[list[float]] = field(default_factory=list)
-    """Per power, each motor's log-gain."""
+    """Per power, each motor's log-gain (one gain per motor: the same at every power)."""
     before: list[float] = field(default_factory=list)
-    """Per power, the rms error (rad) with equal gains."""
+    """Per power, the rms error (rad) through the offsets alone."""
     after: list[float] = field(default_factory=list)
-    """Per power, the rms error (rad) with the fitted gains."""
+    """Per power, the rms error (rad) through the fitted map."""
     speed: list[float] = field(default_factory=list)
     """Each motor's speed term, PWM counts per m/s (empty: none fitted)."""
     torque: list[float] = field(default_factory=list)
-    """Each motor's torque constant against the nominal one, as its speed term implies
-    (:func:`torque_of`; empty: none fitted)."""
-    after_speed: list[float] = field(default_factory=list)
-    """Per power, the rms error (rad) with the gains and speed terms (empty: the speed terms not kept)."""
+    """Each motor's torque constant against the nominal one, from the stand test (empty: not run)."""
+    information: Information | None = None
+    """How well the runs told the gains apart (None: nothing fitted)."""
+    floor_only: Information | None = None
+    """How well the same runs would tell both numbers per motor apart without the stand (None: nothing
+    fitted)."""
+    stand: Stand | None = None
+    """The stand test the speed terms come from (None: not run, the speed terms 0)."""
     rates: list[tuple[float, int, float]] = field(default_factory=list)
     """(folded course, nominal power, rim speed m/s of the busiest wheel) of each balance run that moved."""
 
-    def as_dict(self) -> dict[str, list[Any]]:
+    def as_dict(self) -> dict[str, Any]:
         """The outcome as plain data (for the JSON report)."""
         return {
             "powers": self.powers,
             "log_gains": self.log_gains,
             "speed": self.speed,
             "torque": self.torque,
-            "after_speed": self.after_speed,
+            "condition": None if self.information is None else self.information.condition,
+            "stderr": None if self.information is None else list(self.information.stderr),
+            "floor_only_condition": None if self.floor_only is None else self.floor_only.condition,
+            "stand": None if self.stand is None else self.stand.as_dict(),
             "before": self.before,
             "after": self.after,
         }
@@ -151,15 +198,14 @@ def balance_errors(m: Motion | None, course_deg: float) -> list[float]:
     return [err, m.theta / max(m.path or m.distance or 0.0, MIN_DISTANCE)]
 
 
-SPEED_RIDGE = 0.05
-"""Weight (per unit of speed term / K) that holds the speed terms at 0 where the runs cannot tell them
-(a light floor, whose courses load the motors alike)."""
-SPEED_LIMIT = 0.5
-"""abs(speed term) / K is kept below this."""
-SPEED_KEEP = 0.75
-"""The speed terms are kept only when the balance runs through them have at most this fraction of the
-weighted rms error of the gains alone: a clear improvement, not a fit to the runs' scatter (on the
-acceptance robot they were fitted with signs against its motors' when kept on any improvement)."""
+GAIN_RIDGE = 0.05
+"""Weight (per unit of gain, against the heaviest error row's 1) that holds each gain lightly at
+``1 / s`` where the runs cannot tell it."""
+COMMON = 10.0
+"""Weight of the row that holds the gains' common share (the K_l tables')."""
+ERROR_FLOOR = 0.02
+"""rad (and rad per metre): a power's rms error below this counts as this in its weight (the runs'
+scatter)."""
 
 
 def emf_counts(robot: RobotDescription) -> tuple[float, ...]:
@@ -173,48 +219,152 @@ def emf_counts(robot: RobotDescription) -> tuple[float, ...]:
     return tuple(out)
 
 
-def torque_of(speed: float, emf: float) -> float:
-    """The torque constant (times the nominal) that a speed term implies for a motor that differs from
-    the nominal one in its torque constant alone: ``speed = (s - 1/s) E`` solved for s."""
-    q = speed / emf
-    return (q + math.sqrt(q * q + 4.0)) / 2.0
+def gain_rows(jac: np.ndarray, ratios: np.ndarray, emf: np.ndarray, k: float) -> np.ndarray:
+    """The errors' response to each motor's gain when its speed term is ``(s - g) E`` (``emf``: E per
+    motor; ``ratios``: ``K u / a`` per error row and motor, 0 where it does not drive).
+
+    In a run where motor i's nominal power is ``a`` and its rim speed ``u``, gain g and speed term
+    ``c = (s - g) E`` give it ``g a + (s - g) E u``: it acts as the gain
+    ``g (1 - E u / a) + s E u / a``, whose slope in g is ``1 - (E / K) rho`` with ``rho = K u / a``;
+    the errors respond to that gain as ``jac`` (per unit of gain: the finite-difference Jacobian of
+    the run's power). With the torque constants unknown (no stand) pass ``emf`` 0: the gains alone."""
+    return np.asarray(jac * (1.0 - ratios * (emf / k)[None, :]))
 
 
-def gain_step(jac: np.ndarray, e: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """The log-gains after one Gauss-Newton step on the errors ``e`` (Jacobian ``jac``), their sum
-    held at 0, clipped to :data:`GAIN_LIMIT`; rows with a NaN are left out."""
-    n = x.size
-    rows = np.isfinite(e) & np.all(np.isfinite(jac), axis=1)
-    a = np.vstack([jac[rows], np.ones((1, n))])  # the last row holds the sum of log-gains at 0
-    step = np.linalg.lstsq(a, -np.concatenate([e[rows], [x.sum()]]), rcond=None)[0]
-    return np.asarray(np.clip(x + step, -GAIN_LIMIT, GAIN_LIMIT))
+def gain_fit_step(
+    rows: np.ndarray, e: np.ndarray, weights: np.ndarray, torque: np.ndarray, ridge: float = GAIN_RIDGE
+) -> np.ndarray:
+    """The gains g that zero ``e + rows g`` best (``rows``: :func:`gain_rows`; ``e``: the errors
+    extrapolated to all gains 0 along them, :func:`gain_origin`; rows weighted by ``weights``):
+    ``sum(torque * g)`` held at n (the motors' load factors, resistance over gear efficiency, average
+    the nominal: a common share is the K_l tables'), held lightly at ``1 / torque`` (``ridge``: the
+    motor that differs in its torque constant alone), clipped to :data:`GAIN_LIMIT`; rows with a NaN
+    are left out."""
+    n = torque.size
+    ok = np.isfinite(e) & np.all(np.isfinite(rows), axis=1)
+    weights = weights / max(float(np.max(weights[ok])), 1e-300) if ok.any() else weights
+    lhs = np.vstack([weights[ok, None] * rows[ok], COMMON * torque[None, :], ridge * np.eye(n)])
+    rhs = np.concatenate([-weights[ok] * e[ok], [COMMON * n], ridge / torque])
+    out = np.linalg.lstsq(lhs, rhs, rcond=None)[0]
+    return np.asarray(np.clip(out, math.exp(-GAIN_LIMIT), math.exp(GAIN_LIMIT)))
 
 
-def centred_ratios(ratios: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Each motor's ``K u / a`` less its mean over the runs it drives in (0 where it does not drive),
-    and those means."""
-    drives = ratios > 0.0
-    counts = np.maximum(drives.sum(axis=0), 1)
-    mean = np.where(drives, ratios, 0.0).sum(axis=0) / counts
-    return np.where(drives, ratios - mean[None, :], 0.0), mean
+def effective_gains(gains: np.ndarray, speed: np.ndarray, ratios: np.ndarray, k: float) -> np.ndarray:
+    """The gain each motor acts with in each error row's run: ``g + (c / K) rho`` (``ratios``: rho =
+    ``K u / a``, 0 where it does not drive)."""
+    return np.asarray(gains[None, :] + (speed / k)[None, :] * ratios)
 
 
-def speed_step(jac: np.ndarray, e: np.ndarray, centred: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    """Speed terms / K that zero the errors ``e`` best (rows weighted by ``weights``).
+def gain_origin(
+    e: np.ndarray,
+    jac: np.ndarray,
+    acted: np.ndarray,
+    ratios: np.ndarray,
+    torque: np.ndarray,
+    emf: np.ndarray,
+    k: float,
+) -> np.ndarray:
+    """The errors ``e`` of runs whose motors acted with the gains ``acted`` (:func:`effective_gains`),
+    extrapolated along the Jacobian ``jac`` to the model's gains 0 with speed terms ``s E``: the
+    constant part of the linear model that :func:`gain_fit_step` zeroes with ``gain_rows``."""
+    return np.asarray(e + np.sum(jac * (ratios * (torque * emf / k)[None, :] - acted), axis=1))
 
-    With gains re-centred at each power, a speed term c changes motor i's power in a run by
-    ``(c_i / K) (K u / a - its mean at that power)`` relative (``centred``), to which the errors
-    respond as ``jac`` (per relative power, rows as ``e``): one linear least squares, the sum held at
-    0 (a common share is the K_l tables'), held lightly at 0 (:data:`SPEED_RIDGE`), clipped to
-    :data:`SPEED_LIMIT`; rows with a NaN are left out.
-    """
+
+STAND_POWERS = (0.4, 0.65, 0.9)
+"""The stand test's powers, fractions of pwm_max (well above a free wheel's dead band)."""
+
+
+def stand_torque(
+    robot: RobotDescription, powers: Sequence[float], speeds: Sequence[Sequence[float]]
+) -> Stand:
+    """Each motor's torque constant (times the description's) from its free wheel's steady speed
+    (rad/s, ``speeds[j][i]`` for motor i at PWM ``powers[j]``) on the stand.
+
+    A free wheel's motor needs ``lambda V P / P_max = s k G omega + R (tau_c + b omega) / (eta s k G)``
+    (back-EMF, and the current its own friction draws; V the description's battery less the driver's
+    drop): the slope ``d omega / d P`` (least squares over the powers) gives ``k G s^2 - X s + R b /
+    (eta k G) = 0`` with ``X = lambda V / (P_max slope)``, solved for s (the description's k, G, R,
+    b, eta). ``lambda``, the bus voltage against the described one (the battery's sag under the
+    four motors' current, the driver's drop), is common to all motors and so is the torque
+    constants' common share, which only the K_l tables see: it is chosen so that their geometric
+    mean is 1. The slope's standard error gives each s's."""
+    p = np.asarray(powers, dtype=float)
+    slopes, ses = [], []
+    for i in range(robot.n_wheels):
+        w = np.asarray([row[i] for row in speeds], dtype=float)
+        coef, res, *_ = np.polyfit(p, w, 1, full=True)
+        dof = max(p.size - 2, 1)
+        slopes.append(float(coef[0]))
+        ses.append(math.sqrt(float(res[0]) / dof / float(np.sum((p - p.mean()) ** 2))) if res.size else 0.0)
+
+    def solve(i: int, slope: float, scale: float) -> float:
+        m = robot.wheels[i].motor
+        volts = max(robot.battery.voltage - m.driver_drop, 0.1 * robot.battery.voltage)
+        kg = m.torque_constant * m.gear_ratio
+        visc = m.resistance * m.friction_viscous / (m.gear_efficiency * kg)
+        if slope <= 0.0:
+            return math.nan
+        x = scale * volts / (m.pwm_max * slope)
+        return (x + math.sqrt(max(x * x - 4.0 * kg * visc, 0.0))) / (2.0 * kg)
+
+    def log_mean(scale: float) -> float:
+        return float(np.mean([math.log(solve(i, sl, scale)) for i, sl in enumerate(slopes)]))
+
+    lo, hi = 0.2, 5.0
+    if not all(sl > 0.0 for sl in slopes):
+        return Stand(
+            tuple(p.tolist()), _rows(speeds), (math.nan,) * len(slopes), (math.nan,) * len(slopes), math.nan
+        )
+    for _ in range(60):  # log_mean rises with the scale
+        mid = math.sqrt(lo * hi)
+        lo, hi = (mid, hi) if log_mean(mid) < 0.0 else (lo, mid)
+    scale = math.sqrt(lo * hi)
+    torque = tuple(solve(i, sl, scale) for i, sl in enumerate(slopes))
+    stderr = tuple(
+        abs(solve(i, sl - se, scale) - t) if se > 0.0 else 0.0
+        for i, (sl, se, t) in enumerate(zip(slopes, ses, torque, strict=True))
+    )
+    return Stand(tuple(p.tolist()), _rows(speeds), torque, stderr, scale)
+
+
+def _rows(speeds: Sequence[Sequence[float]]) -> tuple[tuple[float, ...], ...]:
+    return tuple(tuple(float(v) for v in row) for row in speeds)
+
+
+def information(rows: np.ndarray, weights: np.ndarray, scatter: float, held: np.ndarray) -> Information:
+    """The Fisher information ``rows^T W rows`` of the weighted rows on the parameters less the
+    directions ``held`` (a vector, or one column per direction: the common shares the fit holds), its
+    condition number, and the parameters' standard errors at a residual scatter ``scatter`` (rms of
+    the weighted residuals)."""
+    ok = np.all(np.isfinite(rows), axis=1) & np.isfinite(weights)
+    a = weights[ok, None] * rows[ok]
+    n = rows.shape[1]
+    h = held.reshape(n, -1)
+    q = np.linalg.svd(h, full_matrices=True)[0][:, h.shape[1] :]  # the complement of the held shares
+    f = q.T @ (a.T @ a) @ q
+    eig = np.linalg.eigvalsh(f)
+    if eig[0] <= 1e-12 * max(eig[-1], 1e-300):
+        return Information(math.inf, (math.inf,) * n)
+    cov = scatter * scatter * (q @ np.linalg.inv(f) @ q.T)
+    return Information(float(eig[-1] / eig[0]), tuple(float(math.sqrt(max(v, 0.0))) for v in np.diag(cov)))
+
+
+def floor_information(
+    jac: np.ndarray, ratios: np.ndarray, weights: np.ndarray, scatter: float
+) -> Information:
+    """How well balance runs alone would tell both numbers per motor apart (no stand): the
+    :func:`information` of the gains and speed terms / K, which act in a run as ``g + (c / K) rho``
+    (rows ``[J, J rho]``), their two common shares held."""
     n = jac.shape[1]
-    rows = np.isfinite(e) & np.all(np.isfinite(jac), axis=1)
-    a = weights[rows, None] * jac[rows] * centred[rows]
-    lhs = np.vstack([a, 10.0 * np.ones((1, n)), SPEED_RIDGE * np.eye(n)])
-    rhs = np.concatenate([-weights[rows] * e[rows], np.zeros(1 + n)])
-    c = np.linalg.lstsq(lhs, rhs, rcond=None)[0]
-    return np.asarray(np.clip(c, -SPEED_LIMIT, SPEED_LIMIT))
+    held = np.zeros((2 * n, 2))
+    held[:n, 0] = held[n:, 1] = 1.0
+    return information(np.hstack([jac, jac * ratios]), weights, scatter, held)
+
+
+def model_map(offsets: Sequence[float], gains: np.ndarray, speed: np.ndarray) -> MotorMapSpec:
+    """The motor map of ``offsets``, one constant gain and one speed term (counts per m/s) per motor."""
+    tables = tuple(PiecewiseLinear(x=(0.0,), y=(float(g),)) for g in gains)
+    return MotorMapSpec(offset=tuple(offsets), gain=tables, speed=tuple(float(c) for c in speed))
 
 
 def constant_gains(offsets: Sequence[float], x: np.ndarray) -> MotorMapSpec:

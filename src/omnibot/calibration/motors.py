@@ -12,41 +12,49 @@ patterns drive the robot as the firmware will.
   POWER only; its wheel also pushes the robot, so the number is a little high) and scaled so that
   their mean is the dead band of rotation in place, where no idle roller drags:
   ``offset_i = deadband_i * rotation / mean(deadband)``.
-* **Gains and speed terms** (the two-number motor model, :mod:`~omnibot.calibration.motorfit`).
-  Unequal motors turn the body on a straight run and pull it off its course. At a few nominal
-  powers the balance runs drive every idle axis and the course halfway between two of them, both
-  ways; the errors are each run's course error and its turn per metre, and each run's speed is
-  measured too (its rim speeds are what the speed terms multiply). The log-gains (their sum held at
-  zero: a common factor is the K_l tables' business) are found at each power by Gauss-Newton with a
-  finite-difference Jacobian at the first power that moves the robot, reused (chord method) at the
-  others, a step kept only when it lowers the rms error. Measuring the Jacobian again at every
-  power, and Broyden updates of it, were tried: on carpet the steps then went astray (the
-  acceptance check's carpet mean rose from 2.8 % to 6.7 and 4.8 %). The speed terms then come from
-  what the gains left over (:func:`balance_model`); a joint Gauss-Newton of both numbers per motor
-  over every power was tried and wandered off on wood (docs/calibration.md).
+* **Speed terms: the stand test** (:func:`stand_test`). The robot lifted (wheels off the floor),
+  every motor at three powers; each free wheel's steady speed (its encoder) gives its torque
+  constant s (:func:`~omnibot.calibration.motorfit.stand_torque`), and with it the speed term
+  ``(s - g) E`` of whatever gain g the floor asks for. The floor's balance runs cannot tell the two
+  numbers apart (docs/calibration.md); without a stand (a real robot: not yet asked for; a robot
+  without wheel encoders) the speed terms stay 0.
+* **Gains** (:func:`balance_model`). Unequal motors turn the body on a straight run and pull it off
+  its course. At a few nominal powers the balance runs drive every idle axis and the course halfway
+  between two of them, both ways, through the offsets alone, and once more with each motor's power
+  up by 8 % (the Jacobian at that power); the errors are each run's course error and its turn per
+  metre, and each run's speed is measured (its rim speeds are what the speed terms multiply). One
+  gain per motor, its speed term tied to it, is then fitted over every power at once by Gauss-Newton
+  (each step driven, kept only when it lowers the errors).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
 from omnibot.calibration.experiments import MOVED_ANGLE, MOVED_DISTANCE, Runner, lowest_moving
 from omnibot.calibration.motorfit import (
+    ERROR_FLOOR,
     GAIN_STEP,
-    SPEED_KEEP,
+    STAND_POWERS,
     Balance,
+    Stand,
     balance_courses,
     balance_errors,
-    centred_ratios,
     constant_gains,
+    effective_gains,
     emf_counts,
-    gain_step,
+    floor_information,
+    gain_fit_step,
+    gain_origin,
+    gain_rows,
+    information,
+    model_map,
     rms,
-    speed_step,
-    torque_of,
+    stand_torque,
 )
 from omnibot.calibration.patterns import Geometry, apply_map
 from omnibot.calibration.runs import STRAIGHT, RunInfo
@@ -121,6 +129,59 @@ def _ratios(
     return np.asarray(rows, dtype=float)
 
 
+@dataclass
+class _Power:
+    """One nominal power's balance runs: the errors with the offsets alone, the Jacobian, the speeds."""
+
+    power: int
+    duration: float
+    e0: np.ndarray
+    speeds: list[float]
+    """The busiest wheel's rim speed in each course's run (m/s, NaN where unknown)."""
+    jac: np.ndarray
+    ratios: np.ndarray
+
+
+def stand_test(runner: Runner, lift: Callable[[bool], None], duration: float = 1.6) -> Stand | None:
+    """The robot on a stand (``lift(True)``; lowered again after): every motor at each of
+    :data:`~omnibot.calibration.motorfit.STAND_POWERS` for ``duration`` s, each free wheel's steady
+    speed from its encoder over the run's second half; the torque constants
+    (:func:`~omnibot.calibration.motorfit.stand_torque`). None without an encoder on every wheel or
+    when a wheel did not turn."""
+    robot, tap = runner.robot, runner.tap
+    if not robot.has_wheel_encoders:
+        return None
+    cpr = {e.wheel: e.counts_per_rev for e in robot.encoders.motors}
+    per_count = [2.0 * math.pi / cpr[w.name] for w in robot.wheels]
+    powers: list[float] = []
+    speeds: list[list[float]] = []
+    lift(True)
+    try:
+        for frac in STAND_POWERS:
+            power = round(frac * runner.geometry.pwm_max)
+            runner.note(f"stand at {power}")
+            tap.record()
+            pattern = [power] * runner.geometry.motors
+            runner.power_run(pattern, duration, RunInfo(STRAIGHT, f"stand test, power {power}"), "stand")
+            log = [t for t in tap.take_log() if t.encoders is not None]
+            if not log:
+                return None
+            start = log[0].controller_time
+            steady = [t for t in log if 0.5 * duration <= t.controller_time - start <= 0.95 * duration]
+            a, b = (steady[0], steady[-1]) if len(steady) >= 2 else (None, None)
+            if a is None or b is None or a.encoders is None or b.encoders is None:
+                return None
+            dt = b.controller_time - a.controller_time
+            powers.append(float(power))
+            speeds.append(
+                [(y - x) * c / dt for x, y, c in zip(a.encoders, b.encoders, per_count, strict=True)]
+            )
+    finally:
+        lift(False)
+    stand = stand_torque(robot, powers, speeds)
+    return stand if all(math.isfinite(t) and t > 0.0 for t in stand.torque) else None
+
+
 def balance_model(
     runner: Runner,
     offsets: Sequence[float],
@@ -128,97 +189,97 @@ def balance_model(
     k: float,
     durations: Sequence[float] | None = None,
     folded: Sequence[float] | None = None,
+    stand: Stand | None = None,
 ) -> Balance:
-    """Each motor's gain at each nominal power and its speed term that zero the balance runs' errors
-    (module docstring); ``k`` is the calibration's K (PWM counts per m/s), the speed terms' scale.
+    """Each motor's gain (and, with the ``stand`` test's torque constants s, its speed term
+    ``(s - g) E``) that zero the balance runs' errors at every power at once (module docstring);
+    ``k`` is the calibration's K (PWM counts per m/s).
 
-    First the gains: at each power Gauss-Newton on the log-gains, the Jacobian measured at the first
-    power that moves the robot and reused at the others, each power starting from the previous one's
-    gains, a step kept only when it lowers the rms error (powers at which the robot hardly moves are
-    left out). Then the speed terms, from what the gains left over: one linear least squares over
-    every power's runs (:func:`~omnibot.calibration.motorfit.speed_step`, each power's rows weighted
-    by its rms error), the gains re-centred so that each power's mean stays; kept only when the runs
-    through them clearly lower the weighted rms error (:data:`~omnibot.calibration.motorfit.SPEED_KEEP`).
+    At each power: the runs through the offsets alone, and the finite-difference Jacobian of the
+    errors against each motor's power (powers at which the robot hardly moves are left out). Then
+    Gauss-Newton on the gains over every power's runs together
+    (:func:`~omnibot.calibration.motorfit.gain_fit_step`; each power's rows weighted by 1 / its rms
+    error at the current gains, so that a power whose runs no map can balance, such as one where the
+    drivers limit the current, does not pull the others), each step driven and kept only when it
+    lowers the errors (:func:`_score`).
     """
     geo = runner.geometry
     n = geo.motors
     courses = balance_courses(geo, folded)
-    result = Balance()
-    jac: np.ndarray | None = None
-    x = np.zeros(n)
-    done: list[tuple[int, float, np.ndarray, list[float]]] = []  # power, duration, errors, speeds
+    result = Balance(stand=stand)
+    blocks: list[_Power] = []
+    base = constant_gains(offsets, np.zeros(n))
     for j, power in enumerate(powers):
         duration = durations[j] if durations is not None else 1.0
         runner.note(f"balance at {power}")
-        e0, moved = _errors(runner, courses, power, constant_gains(offsets, np.zeros(n)), duration)
+        e0, moved = _errors(runner, courses, power, base, duration)
         if np.count_nonzero(np.isfinite(e0)) < e0.size // 2:
             continue
-        e = e0
-        if x.any():
-            ex, _ = _errors(runner, courses, power, constant_gains(offsets, x), duration)
-            if rms(ex) < rms(e0):
-                e = ex
-            else:
-                x = np.zeros(n)
-        if jac is None:
-            cols = []
-            for i in range(n):
-                xi = x.copy()
-                xi[i] += GAIN_STEP
-                ei, _ = _errors(runner, courses, power, constant_gains(offsets, xi), duration)
-                cols.append((ei - e) / GAIN_STEP)
-            jac = np.column_stack(cols)
-        for _ in range(2):
-            trial = gain_step(jac, e, x)
-            et, _ = _errors(runner, courses, power, constant_gains(offsets, trial), duration)
-            if rms(et) < rms(e):
-                x, e = trial, et
-        result.powers.append(power)
-        result.log_gains.append([float(v) for v in x])
-        result.before.append(rms(e0))
-        result.after.append(rms(e))
+        cols = []
+        for i in range(n):
+            xi = np.zeros(n)
+            xi[i] = GAIN_STEP
+            ei, _ = _errors(runner, courses, power, constant_gains(offsets, xi), duration)
+            cols.append((ei - e0) / GAIN_STEP)
         # the busiest wheel's rim speed: the run's speed times its rim factor
         speeds = [v * geo.translation_factor(c) for v, c in zip(moved, courses, strict=True)]
+        ratios = _ratios(geo, courses, speeds, power, k)
+        blocks.append(_Power(power, duration, e0, speeds, np.column_stack(cols), ratios))
         result.rates += [
             (geo.fold(c), power, u) for c, u in zip(courses, speeds, strict=True) if math.isfinite(u)
         ]
-        done.append((power, duration, e, speeds))
-    if jac is not None and len(done) >= 2:
-        _speed_terms(runner, result, offsets, courses, jac, done, k)
+    if not blocks:
+        return result
+    torque = np.asarray(stand.torque if stand is not None else (1.0,) * n, dtype=float)
+    emf = np.asarray(emf_counts(runner.robot)) if stand is not None else np.zeros(n)
+    rows = np.vstack([gain_rows(b.jac, b.ratios, emf, k) for b in blocks])
+    jac = np.vstack([b.jac for b in blocks])
+    ratios = np.vstack([b.ratios for b in blocks])
+    gains = np.ones(n)
+    speed = np.zeros(n)  # the runs so far: the offsets alone
+    errors = [b.e0 for b in blocks]
+    step = 1.0
+    for _ in range(MODEL_ROUNDS):
+        acted = effective_gains(gains, speed, ratios, k)
+        origin = gain_origin(np.concatenate(errors), jac, acted, ratios, torque, emf, k)
+        trial = gains + step * (gain_fit_step(rows, origin, _weights(errors), torque) - gains)
+        trial_speed = (torque - trial) * emf
+        motors = model_map(offsets, trial, trial_speed)
+        got = [_errors(runner, courses, b.power, motors, b.duration, b.speeds)[0] for b in blocks]
+        if _score(got, blocks) < _score(errors, blocks):
+            gains, speed, errors, step = trial, trial_speed, got, 1.0
+        else:
+            step *= 0.5  # the linear model overshot: half the step next time
+    weights = _weights(errors)
+    scatter = rms(weights * np.concatenate(errors))
+    scatter = scatter if math.isfinite(scatter) else 1.0
+    result.information = information(rows, weights, scatter, torque)
+    result.floor_only = floor_information(jac, ratios, weights, scatter)
+    result.powers = [b.power for b in blocks]
+    result.log_gains = [[float(math.log(g)) for g in gains] for _ in blocks]
+    result.before = [rms(b.e0) for b in blocks]
+    result.after = [rms(e) for e in errors]
+    if stand is not None:
+        result.speed = [round(float(c), 1) for c in speed]
+        result.torque = [round(float(t), 3) for t in torque]
     return result
 
 
-def _speed_terms(
-    runner: Runner,
-    result: Balance,
-    offsets: Sequence[float],
-    courses: Sequence[float],
-    jac: np.ndarray,
-    done: list[tuple[int, float, np.ndarray, list[float]]],
-    k: float,
-) -> None:
-    """Fit the speed terms on what the gains left over and keep them (with the gains re-centred) when
-    the balance runs through them are better (:func:`balance_model`)."""
-    geo = runner.geometry
-    blocks = [centred_ratios(_ratios(geo, courses, v, p, k)) for p, _, _, v in done]
-    centred = np.vstack([b[0] for b in blocks])
-    errors = np.concatenate([e for _, _, e, _ in done])
-    weights = np.concatenate([np.full(e.size, 1.0 / max(rms(e), 1e-3)) for _, _, e, _ in done])
-    c = speed_step(np.vstack([jac] * len(done)), errors, centred, weights)
-    if not np.any(np.abs(c) * k >= 0.05):
-        return
-    log_gains = []
-    after = []
-    for (power, duration, _, v), (_, mean), x in zip(done, blocks, result.log_gains, strict=True):
-        gains = np.maximum(np.exp(x) - c * mean, 0.05)
-        motors = constant_gains(offsets, np.log(gains)).model_copy(update={"speed": tuple(c * k)})
-        et, _ = _errors(runner, courses, power, motors, duration, v)
-        log_gains.append([float(g) for g in np.log(gains)])
-        after.append(et)
-    new = np.concatenate(after)
-    if rms(weights * new) <= SPEED_KEEP * rms(weights * errors):
-        result.log_gains = log_gains
-        result.after_speed = [rms(e) for e in after]
-        result.speed = [round(float(v) * k, 1) for v in c]
-        emf = emf_counts(runner.robot)
-        result.torque = [round(torque_of(sp, em), 3) for sp, em in zip(result.speed, emf, strict=True)]
+WEIGHT_POWER = 2.0
+"""Each power's rows are weighted by 1 / its rms error to this power (least squares: to twice it): the
+powers whose runs the map balances lead; one near the dead band (erratic) or where the drivers limit the
+current (no map balances it) hardly counts."""
+MODEL_ROUNDS = 3
+"""Gauss-Newton steps of the gain fit, each driven (8 runs per power on omni4); a step that does not
+lower the errors is not kept and the next one is half as long."""
+
+
+def _weights(errors: Sequence[np.ndarray]) -> np.ndarray:
+    """Each power's rows weighted by 1 / its rms error (at least :data:`ERROR_FLOOR`)."""
+    return np.concatenate([np.full(e.size, 1.0 / max(rms(e), ERROR_FLOOR) ** WEIGHT_POWER) for e in errors])
+
+
+def _score(errors: Sequence[np.ndarray], blocks: Sequence[_Power]) -> float:
+    """The rms over the powers of each power's rms error relative to its runs through the offsets alone."""
+    rel = [rms(e) / max(rms(b.e0), ERROR_FLOOR) for e, b in zip(errors, blocks, strict=True)]
+    return float(np.sqrt(np.mean(np.square(rel))))

@@ -17,7 +17,7 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-from omnibot.firmware.calibration import fold_course
+from omnibot.firmware.calibration import fold_course, map_motor
 from omnibot.firmware.config import build_config
 from omnibot.firmware.power import roller_terms
 from omnibot.robot.description import MotorMapSpec, RobotDescription
@@ -122,14 +122,11 @@ power is expected to give: what the motor map's speed term needs for a raw POWER
 
 
 def map_power(motors: MotorMapSpec | None, i: int, a: float, u: float = 0.0) -> float:
-    """Motor i's power for the nominal power ``a`` at rim speed ``u`` (m/s), as the firmware computes it
-    (:meth:`omnibot.firmware.calibration.Calibration.motor_power`)."""
-    m = abs(a)
-    if motors is None or m == 0.0:
+    """Motor i's power for the nominal power ``a`` at rim speed ``u`` (m/s): the firmware's formula
+    (:func:`omnibot.firmware.calibration.map_motor`) with the map's gain tables."""
+    if motors is None or a == 0.0:
         return a
-    p = motors.offset[i] * min(m, 1.0) + motors.gain[i](m) * m + motors.speed_term(i) * (u if a > 0 else -u)
-    p = max(p, 0.0)
-    return p if a > 0 else -p
+    return map_motor(motors.offset[i], motors.gain[i](abs(a)), motors.speed_term(i), a, u)
 
 
 def apply_map(

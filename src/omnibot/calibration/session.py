@@ -34,8 +34,14 @@ from omnibot.calibration.experiments import (
 )
 from omnibot.calibration.fits import SurfaceFit, average_kt, build_spec, fit_kt, fit_surface, robot_table
 from omnibot.calibration.gyro import GyroCalibration, calibrate_gyro
-from omnibot.calibration.motorfit import Balance, balance_courses, identity, offsets_from_deadbands
-from omnibot.calibration.motors import balance_model, motor_deadbands
+from omnibot.calibration.motorfit import (
+    STAND_POWERS,
+    Balance,
+    balance_courses,
+    identity,
+    offsets_from_deadbands,
+)
+from omnibot.calibration.motors import MODEL_ROUNDS, balance_model, motor_deadbands, stand_test
 from omnibot.calibration.patterns import Geometry, top_power
 from omnibot.calibration.plan import Plan, speed_range
 from omnibot.calibration.results import CalibrationResult, SurfaceSession
@@ -44,7 +50,7 @@ from omnibot.calibration.rollers import SHARES, roller_runs, tune_coast
 from omnibot.calibration.runs import ROTATE, SQUARE, STRAIGHT, RunInfo, RunResult
 from omnibot.calibration.slip import slip_step
 from omnibot.calibration.tap import TelemetryTap, standstill_bias
-from omnibot.calibration.truth import Ask, TruthContext, TruthSource, make_truth
+from omnibot.calibration.truth import Ask, TruthContext, TruthSource, make_truth, simulator_of
 from omnibot.calibration.umbmark import OdometryCalibration, SquareRun, calibrate_odometry
 from omnibot.calibration.verdict import judge_average
 from omnibot.client.client import RobotClient
@@ -57,6 +63,9 @@ from omnibot.robot.description import CalibrationSpec, MotorMapSpec, RobotDescri
 
 ProgressFactory = Callable[[str, int], AbstractContextManager[Progress | None]]
 """(description, expected runs) -> a context giving a progress bar (or None)."""
+
+Lift = Callable[[RobotClient, bool], None]
+"""Puts the robot on a stand, every wheel off the floor (True), and back where it stood (False)."""
 
 
 @contextmanager
@@ -88,7 +97,9 @@ def expected_runs(
     courses = len(plan.calibrated_courses(geometry))
     checks = accuracy_runs(accuracy, robot) if accuracy is not None else 0
     powers = max(1, plan.balance_levels)
-    balance = len(balance_courses(geometry)) * (5 * powers - 1 + geometry.motors)
+    # each power through the offsets and once per motor (its Jacobian), then each Gauss-Newton step
+    balance = len(balance_courses(geometry)) * ((1 + geometry.motors) * powers + MODEL_ROUNDS * powers)
+    balance += len(STAND_POWERS) if robot.has_wheel_encoders else 0  # the stand test, where it can run
     rollers = plan.roller_rounds > 0 and all(geometry.roller_pitch)
     axes = len(axis_courses(geometry))
     phases = {
@@ -172,6 +183,8 @@ class SurfaceRun:
     accuracy: AccuracyPlan | None
     upload: bool
     runner: Runner
+    stand: Lift | None = None
+    """How to put the robot on a stand where the link has no simulator (None: nobody can)."""
     notes: list[str] = field(default_factory=list)
     bias: tuple[float, float, int] | None = None
     """The gyro's standstill bias (mean, its standard error, samples)."""
@@ -258,7 +271,7 @@ def _accuracy_before(s: SurfaceRun) -> None:
 
 def _motor_map(s: SurfaceRun) -> None:
     if s.plan.motor_map:
-        s.motors, s.balance = fit_motor_map(s.runner, s.plan, s.notes)
+        s.motors, s.balance = fit_motor_map(s.runner, s.plan, s.notes, s.stand)
         s.runner.motors = s.motors
 
 
@@ -430,6 +443,7 @@ def calibrate_surface(
     ask: Ask = input,
     progress: ProgressFactory = no_progress,
     upload: bool = True,
+    stand: Lift | None = None,
 ) -> SurfaceSession:
     """Measure, fit and (``upload``) apply the calibration of ``robot`` on one surface: :data:`STEPS`,
     then the wheel slip."""
@@ -443,7 +457,7 @@ def calibrate_surface(
     with progress(f"calibrate {robot.name} on {surface}", sum(phases.values())) as bar:
         tally = Tally(bar, phases)
         runner = Runner(client, robot, source, tap, settle=plan.settle, progress=tally)
-        state = SurfaceRun(surface, plan, accuracy, upload, runner)
+        state = SurfaceRun(surface, plan, accuracy, upload, runner, stand)
         try:
             for step in STEPS:
                 step.run(state)
@@ -503,9 +517,13 @@ def tune_rollers(
     return spec
 
 
-def fit_motor_map(runner: Runner, plan: Plan, notes: list[str]) -> tuple[MotorMapSpec, Balance]:
-    """Offsets from the motors' own dead bands, then gains from the balance runs (motors.py) at
-    nominal powers spread over what the robot's speed range needs (by the described K)."""
+def fit_motor_map(
+    runner: Runner, plan: Plan, notes: list[str], stand: Lift | None = None
+) -> tuple[MotorMapSpec, Balance]:
+    """Offsets from the motors' own dead bands, the torque constants from the stand test (the
+    simulator's wheels lifted, else ``stand``; neither: no speed terms), then the gains from the
+    balance runs (motors.py) at nominal powers spread over what the robot's speed range needs (by the
+    described K)."""
     geo, robot = runner.geometry, runner.robot
     runner.motors = None
     runner.rate = None
@@ -523,10 +541,29 @@ def fit_motor_map(runner: Runner, plan: Plan, notes: list[str]) -> tuple[MotorMa
     powers = sorted({max(1, round(lo * (hi / lo) ** (i / max(n - 1, 1)))) for i in range(n)})
     # long enough for about half the reference move at the speed each power is meant for
     durations = [min(max(0.5 * plan.move_length * k * max(factors) / p, 1.0), 3.0) for p in powers]
-    balance = balance_model(runner, offsets, powers, k, durations)
+    lift = simulator_lift(runner.client) or (partial(stand, runner.client) if stand is not None else None)
+    torque = stand_test(runner, lift) if lift is not None else None
+    if torque is None:
+        notes.append(
+            "motor map: no stand test (nobody to lift the robot, or a wheel without an encoder), so no speed terms"
+        )
+    balance = balance_model(runner, offsets, powers, k, durations, stand=torque)
     runner.rate = balance.rate if balance.rates else None
     speed = tuple(balance.speed) if balance.speed else None
     return MotorMapSpec(offset=offsets, gain=balance.tables(geo.motors), speed=speed), balance
+
+
+def simulator_lift(client: RobotClient) -> Callable[[bool], None] | None:
+    """The stand of a simulated robot: its wheels lifted off the floor; None on another link."""
+    sim = simulator_of(client)
+    if sim is None:
+        return None
+
+    def lift(up: bool) -> None:
+        for wheel in sim.robot.wheels:
+            sim.lift_wheel(wheel.name, up)
+
+    return lift
 
 
 def rotation_test_rate(robot: RobotDescription) -> float:
@@ -600,8 +637,10 @@ def calibrate(
     ask: Ask = input,
     progress: ProgressFactory = no_progress,
     upload: bool = True,
+    stand: Lift | None = None,
 ) -> CalibrationResult:
-    """Calibrate on every surface, then average and check the average on every surface (it is kept
+    """Calibrate on every surface (``stand``: how to lift a robot that is not simulated, for the motor
+    map's stand test), then average and check the average on every surface (it is kept
     only when it is better than none on every one: :attr:`CalibrationResult.average_better`)."""
     plan = plan or Plan()
     sessions = []
@@ -622,6 +661,7 @@ def calibrate(
                     ask=ask,
                     progress=progress,
                     upload=upload,
+                    stand=stand,
                 )
             )
     result = CalibrationResult(robot, sessions)

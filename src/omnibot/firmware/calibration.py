@@ -37,6 +37,17 @@ if TYPE_CHECKING:
     from typing import Any
 
 
+def map_motor(offset: float, gain: float, speed: float, a: float, u: float) -> float:
+    """One motor's power for the nominal power ``a`` (not 0) at rim speed ``u`` (m/s), with its offset,
+    its gain at ``|a|`` and its speed term: ``sign(a) (offset min(|a|, 1) + gain |a|) + speed u``, never
+    against ``a`` (0 then). The one formula of the firmware and of the host's calibration runs
+    (:func:`omnibot.calibration.patterns.map_power`)."""
+    m = abs(a)
+    p = offset * min(m, 1.0) + gain * m + speed * (u if a > 0 else -u)
+    p = max(p, 0.0)
+    return p if a > 0 else -p
+
+
 def interp(xs: list[float], ys: list[float], x: float) -> float:
     """Piecewise-linear y(x), held constant outside the knots."""
     n = len(xs)
@@ -88,14 +99,10 @@ class Calibration:
         Below one count the offset ramps in with ``|a|``, so a wheel meant to stand still stays still;
         the speed term never turns the power against ``a`` (it is 0 then).
         """
-        m = abs(a)
-        if m == 0.0 or i >= len(self.offset):
+        if a == 0.0 or i >= len(self.offset):
             return a
         t = self.gain[i]
-        p = self.offset[i] * min(m, 1.0) + interp(t[0], t[1], m) * m
-        p += self.speed[i] * (u if a > 0 else -u)
-        p = max(p, 0.0)
-        return p if a > 0 else -p
+        return map_motor(self.offset[i], interp(t[0], t[1], abs(a)), self.speed[i], a, u)
 
     def k_l(self, power: float, folded_course: float) -> float:
         """K_l(power, course), the course already folded (see :func:`fold_course`)."""
