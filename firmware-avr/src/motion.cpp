@@ -334,7 +334,8 @@ int16_t Executor::limit(float p) {
     return lroundf(p);
 }
 
-// PI on each wheel's encoder-measured speed every control period, integral frozen while saturated.
+// PI on each wheel's encoder-measured speed every control period; large errors integrate less (lag,
+// not load), and no integration pushes a saturated output further (speedctl.py).
 void Executor::feedback_step(int32_t dt_us) {
     acc_us += dt_us;
     if (acc_us < (int32_t)CONTROL_PERIOD_MS * 1000) return;
@@ -347,7 +348,10 @@ void Executor::feedback_step(int32_t dt_us) {
         float err = target[i] - speed;
         correction[i] = SPEED_KP * err + SPEED_KI * integ[i];
         float p = ff[i] + correction[i];
-        if (-PWM_MAX < p && p < PWM_MAX) integ[i] += err * dt;
+        if ((p < PWM_MAX || err < 0) && (p > -PWM_MAX || err > 0)) {
+            float x = err * (1 / SPEED_BAND);
+            integ[i] += err * dt / (1 + x * x);
+        }
         powers[i] = limit(p);
     }
     apply();

@@ -230,6 +230,7 @@ def header_source(robot_name: str) -> str:
     w(f"#define CONTROL_PERIOD_MS {int(cfg['control_period_ms'])}")
     w(f"#define SPEED_KP {float(cfg['speed_kp'])!r}f")
     w(f"#define SPEED_KI {float(cfg['speed_ki'])!r}f")
+    w(f"#define SPEED_BAND {float(cfg['speed_band'])!r}f")
     w(f"#define MODE_AT_RESET {int(cfg['mode'])}")
     _guard(w, cfg)
     w("")

@@ -38,8 +38,6 @@ baud, loop_hz               UART speed; nominal main-loop rate (informative)
 mode                        MODE bits at reset (bit 1 when controller.wheel_speed_control)
 encoder_cpr                 counts per wheel revolution of each motor's encoder, 0 = none
 speed_kp, speed_ki          wheel-speed PI gains, PWM counts per rad/s (and per rad)
-speed_ka                    acceleration feedforward, PWM counts per rad/s^2: row i, wheel i's power
-                            for each wheel's angular acceleration (body inertia shared by the wheels)
 speed_band                  wheel-speed error, rad/s, at which the integral grows at half its rate
                             (where kp gives 5 % of full power)
 control_period_ms           wheel-speed control period
@@ -60,8 +58,6 @@ import shutil
 import sys
 from pathlib import Path
 from typing import Any
-
-import numpy as np
 
 from omnibot.errors import ConfigError, OmnibotError
 from omnibot.robot import kinematics
@@ -123,39 +119,13 @@ SPEED_BAND_POWER = 0.05
 full power (``speed_band``): larger errors are mostly lag, which the integral should not store."""
 
 
-def _free_speed(robot: RobotDescription) -> float:
-    """The first wheel's free-running speed at full PWM from the motor model, rad/s."""
-    m = robot.wheels[0].motor
-    return max(robot.battery.voltage - m.driver_drop, 0.1) / (m.torque_constant * m.gear_ratio)
-
-
 def _default_k(robot: RobotDescription) -> float:
     """PWM counts per m/s of rim speed from the motor model, when the description gives no K."""
-    return robot.wheels[0].motor.pwm_max / (_free_speed(robot) * robot.wheels[0].radius)
-
-
-def _accel_feedforward(robot: RobotDescription) -> list[list[float]]:
-    """PWM counts per rad/s^2 of wheel acceleration (row i: motor i, column j: wheel j's acceleration).
-
-    The wheel forces that accelerate the body are the least-squares ones (``R (R^T R)^-1 M`` per unit
-    body acceleration, R the rim-speed matrix, M the body's mass and yaw inertia), so one wheel's
-    share depends on what the others do; each wheel also turns its own and its rotor's inertia.
-    A motor's torque needs current (torque constant, gear ratio and efficiency) and that current
-    needs volts across its resistance, given as PWM of the supply the driver leaves (motor model).
-    """
-    rim = np.array(robot.wheel_matrix, dtype=float) * np.array([w.radius for w in robot.wheels])[:, None]
-    mass = np.diag([robot.mass, robot.mass, robot.yaw_inertia])
-    gram = np.linalg.pinv(rim.T @ rim)
-    force = rim @ gram @ mass @ gram @ rim.T  # N of rim force per m/s^2 of rim acceleration
-    out = []
-    for i, w in enumerate(robot.wheels):
-        m = w.motor
-        volts = max(robot.battery.voltage - m.driver_drop, 0.1)
-        per_torque = m.resistance / (m.torque_constant * m.gear_ratio * m.gear_efficiency) / volts * m.pwm_max
-        row = [w.radius * force[i, j] * v.radius for j, v in enumerate(robot.wheels)]
-        row[i] += w.inertia + m.gear_ratio**2 * m.rotor_inertia
-        out.append([round(float(per_torque * t), 6) for t in row])
-    return out
+    w = robot.wheels[0]
+    m = w.motor
+    volts = max(robot.battery.voltage - m.driver_drop, 0.1)
+    v_free = volts / (m.torque_constant * m.gear_ratio) * w.radius
+    return m.pwm_max / v_free
 
 
 def _sonar_axis(robot: RobotDescription, sonar: SonarSpec) -> list[float]:
@@ -263,7 +233,6 @@ def build_config(
         "encoder_cpr": encoder_cpr,
         "speed_kp": round(kp, 6),
         "speed_ki": round(ki, 6),
-        "speed_ka": _accel_feedforward(robot) if has_encoders else [[0.0] * robot.n_wheels] * robot.n_wheels,
         "speed_band": round(SPEED_BAND_POWER * pwm_max / kp, 6) if kp > 0 else 0.0,
         "control_period_ms": control_period_ms,
         "tracking": len(robot.encoders.tracking),

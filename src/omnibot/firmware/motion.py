@@ -97,7 +97,6 @@ class Executor:
             float(cfg["speed_ki"]),
             period_us,
             model.pwm_max,
-            [[float(v) for v in row] for row in cfg.get("speed_ka", [])] or None,
             float(cfg.get("speed_band", 0.0)),
         )
         for i in range(self.n):

@@ -1,17 +1,13 @@
 """Closed-loop wheel-speed control (MODE bit 1): feedforward power plus PI on each wheel's speed.
 
 Wheel speeds come from the motor encoders (counts per wheel revolution from the robot description),
-measured every ``period_us``. Three things keep the integral to the steady load the feedforward
-misses, so that it does not carry the wheel past its target when the target stops changing:
+measured every ``period_us``. Two rules keep the integral to the steady load the feedforward misses,
+so that it does not carry the wheel past its target when the target stops changing:
 
-* **acceleration feedforward** (ODrive's torque feedforward from its velocity ramp): the power that
-  accelerates the body and the wheels at the rate the target changed over the last period,
-  ``ka`` (PWM counts per rad/s^2, one row per wheel: a wheel's share of the body's inertia depends on
-  what the other wheels do). Without it the wheels lag a ramp and the integral stores that power.
 * **large errors integrate less** (PX4's rate-loop I factor): the integral grows at
-  ``1 / (1 + (err / band)^2)`` of its rate, so the lag of a step (a motor at its current limit,
-  which the firmware cannot see) is not stored; never 0, so a steady error larger than ``band``
-  that the feedforward leaves is still removed, only more slowly.
+  ``1 / (1 + (err / band)^2)`` of its rate, so the lag of a step or of a steep ramp (a motor at its
+  driver's current limit, which the firmware cannot see) is mostly not stored; never 0, so a
+  steady error larger than ``band`` that the feedforward leaves is still removed, only more slowly.
 * **conditional integration at the PWM limit** (ros2_control's ``conditional_integration``): no
   integration that would push an output further into saturation; the opposite still is integrated.
 """
@@ -23,14 +19,7 @@ class SpeedControl:
     """PI correction of the feedforward powers from encoder-measured wheel speeds."""
 
     def __init__(
-        self,
-        cpr: list[int],
-        kp: float,
-        ki: float,
-        period_us: int,
-        pwm_max: int,
-        ka: list[list[float]] | None = None,
-        band: float = 0.0,
+        self, cpr: list[int], kp: float, ki: float, period_us: int, pwm_max: int, band: float = 0.0
     ) -> None:
         self.n = len(cpr)
         self.rad_per_count = [2.0 * math.pi / c if c > 0 else 0.0 for c in cpr]
@@ -38,15 +27,11 @@ class SpeedControl:
         self.ki = ki
         self.period_us = period_us
         self.pwm_max = pwm_max
-        self.ka = ka if ka is not None else [[0.0] * self.n for _ in range(self.n)]
         self.band = band  # rad/s; 0: every error integrates at the full rate
         self.speed = [0.0] * self.n
         self.correction = [0.0] * self.n
         self._integ = [0.0] * self.n
         self._last = [0] * self.n
-        self._prev = [0.0] * self.n  # the targets of the last period
-        self._accel = [0.0] * self.n
-        self._fresh = True  # no period yet: the targets' rate of change is unknown
         self._acc_us = 0
 
     @property
@@ -60,37 +45,25 @@ class SpeedControl:
             self._integ[i] = 0.0
             self.correction[i] = 0.0
             self._last[i] = counts[i]
-        self._fresh = True
         self._acc_us = 0
 
     def update(
         self, dt_us: int, counts: list[int], target: list[float], ff: list[float], out: list[int]
     ) -> bool:
-        """Accumulate time; every period write ff + PI + acceleration feedforward into ``out``;
-        True when it did."""
+        """Accumulate time; every period write ff + PI into ``out``; True when it did."""
         self._acc_us += dt_us
         if self._acc_us < self.period_us:
             return False
         dt = self._acc_us * 1e-6
         self._acc_us = 0
-        n = self.n
-        accel = self._accel
-        for i in range(n):
-            accel[i] = 0.0 if self._fresh else (target[i] - self._prev[i]) / dt
-            self._prev[i] = target[i]
-        self._fresh = False
         lim = self.pwm_max
         band = self.band
-        for i in range(n):
+        for i in range(self.n):
             c = counts[i]
             self.speed[i] = (c - self._last[i]) * self.rad_per_count[i] / dt
             self._last[i] = c
             err = target[i] - self.speed[i]
-            row = self.ka[i]
-            push = 0.0
-            for j in range(n):
-                push += row[j] * accel[j]
-            self.correction[i] = self.kp * err + self.ki * self._integ[i] + push
+            self.correction[i] = self.kp * err + self.ki * self._integ[i]
             p = ff[i] + self.correction[i]
             if (p < lim or err < 0.0) and (p > -lim or err > 0.0):
                 if band > 0.0:
