@@ -349,7 +349,7 @@ void Executor::feedback_step(int32_t dt_us) {
         correction[i] = SPEED_KP * err + SPEED_KI * integ[i];
         float p = ff[i] + correction[i];
         if ((p < PWM_MAX || err < 0) && (p > -PWM_MAX || err > 0)) {
-            float x = err * (1 / SPEED_BAND);
+            float x = err * SPEED_BAND_INV;
             integ[i] += err * dt / (1 + x * x);
         }
         powers[i] = limit(p);
