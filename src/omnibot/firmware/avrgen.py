@@ -231,7 +231,7 @@ def header_source(robot_name: str) -> str:
     w(f"#define SPEED_KP {float(cfg['speed_kp'])!r}f")
     w(f"#define SPEED_KI {float(cfg['speed_ki'])!r}f")
     band = float(cfg["speed_band"])
-    w("/* 1 / speed_band (rad/s): the integral grows at 1 / (1 + (err / band)^2) of its rate; 0: the plain PI */")
+    w("/* 1 / speed_band (rad/s): the integral grows at 1 / (1 + (err * inv)^2) of its rate; 0: plain PI */")
     w(f"#define SPEED_BAND_INV {1.0 / band if band > 0 else 0.0!r}f")
     w(f"#define MODE_AT_RESET {int(cfg['mode'])}")
     _guard(w, cfg)
