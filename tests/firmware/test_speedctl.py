@@ -1,13 +1,15 @@
-"""The wheel-speed loop (firmware/speedctl.py): large errors integrate less, no integration further
-into saturation, and what that does to the overshoot on a floor the feedforward underestimates.
+"""The wheel-speed loop (firmware/speedctl.py): after a step in a wheel's target, large errors
+integrate less until the wheel is within the band, and what that does to the overshoot.
 
 mecanum4 on carpet in the simulator (the MicroPython firmware in lockstep): its feedforward gives
 about three quarters of the power the carpet needs, so the integral has work to do, and the old
-loop stored the lag of the rise in it too (issue 17: 0.96 m/s for 0.8 in the tracking benchmark).
-Before this loop, on course 90: a step to 0.8 m/s went 28 % past it, a 1.4 m/s^2 ramp 18 %.
+loop stored the lag of the rise in it too. Before this loop, on course 90 a step to 0.8 m/s went
+28 % past it (benchmarks/speed_loop.py).
 """
 
 from __future__ import annotations
+
+import math
 
 import pytest
 from benchmarks.speed_loop import run
@@ -21,28 +23,44 @@ PWM_MAX = 255
 PERIOD = 10_000
 
 
-@pytest.mark.parametrize(("ramp", "bound"), [(False, 0.10), (True, 0.15)], ids=["step", "ramp"])
-def test_mecanum4_on_carpet_stays_near_the_asked_speed(ramp: bool, bound: float) -> None:
-    result = run("mecanum4", "carpet", 90.0, 0.8, ramp)
-    assert result.wheel < bound  # was 0.28 (step) and 0.18 (ramp)
-    assert result.body < bound
-    assert result.rise < 1.0  # and still gets there
+def test_mecanum4_on_carpet_stays_near_the_asked_speed_after_a_step() -> None:
+    result = run("mecanum4", "carpet", 90.0, 0.8, ramp=False)
+    assert result.wheel < 0.10  # was 0.28
+    assert result.body < 0.10  # was 0.30
+    assert result.rise < 0.6  # and still gets there (0.48 s before, 0.50 now)
 
 
-def test_large_errors_integrate_less_but_never_not_at_all() -> None:
+def test_large_errors_integrate_less_after_a_step_only() -> None:
     band = 5.0
     sc = SpeedControl([CPR], 0.0, 1.0, PERIOD, PWM_MAX, band)
     out = [0]
     sc.reset([0])
-    sc.update(PERIOD, [0], [band], [0.0], out)  # err = band: half the rate
-    assert sc._integ[0] == pytest.approx(band * 0.01 / 2)
-    sc.reset([0])
-    sc.update(PERIOD, [0], [4 * band], [0.0], out)  # err = 4 bands: 1/17 of the rate
+    sc.update(PERIOD, [0], [4 * band], [0.0], out)  # a step from rest, err = 4 bands: 1/17 of the rate
     assert sc._integ[0] == pytest.approx(4 * band * 0.01 / 17)
-    sc = SpeedControl([CPR], 0.0, 1.0, PERIOD, PWM_MAX)  # no band: the plain PI
+    sc.update(PERIOD, [0], [4 * band], [0.0], out)  # still rising
+    assert sc._integ[0] == pytest.approx(2 * 4 * band * 0.01 / 17)
+    sc.reset([0])
+    for k in range(1, 5):  # a ramp in steps smaller than the band: the plain PI
+        sc.update(PERIOD, [0], [0.9 * band * k], [0.0], out)
+    assert sc._integ[0] == pytest.approx(0.9 * band * 0.01 * (1 + 2 + 3 + 4))
+    sc = SpeedControl([CPR], 0.0, 1.0, PERIOD, PWM_MAX)  # no band: the plain PI after a step too
     sc.reset([0])
     sc.update(PERIOD, [0], [4 * band], [0.0], out)
     assert sc._integ[0] == pytest.approx(4 * band * 0.01)
+
+
+def test_the_rise_ends_when_the_wheel_is_within_the_band() -> None:
+    band = 5.0
+    sc = SpeedControl([CPR], 0.0, 1.0, PERIOD, PWM_MAX, band)
+    out = [0]
+    sc.reset([0])
+    sc.update(PERIOD, [0], [20.0], [0.0], out)  # step: rising
+    per_period = 11  # counts in 10 ms: 15.7 rad/s
+    assert 20.0 - per_period * 2 * math.pi / CPR / 0.01 < band
+    sc.update(PERIOD, [per_period], [20.0], [0.0], out)  # within the band: the rise is over
+    before = sc._integ[0]
+    sc.update(PERIOD, [per_period], [20.0], [0.0], out)  # wheel stopped, err 20: the full rate again
+    assert sc._integ[0] - before == pytest.approx(20.0 * 0.01)
 
 
 def test_a_large_steady_error_is_still_integrated_away() -> None:
@@ -61,16 +79,14 @@ def test_a_large_steady_error_is_still_integrated_away() -> None:
     assert speed == pytest.approx(target, rel=0.02)
 
 
-def test_no_integration_further_into_saturation_but_back_out_of_it() -> None:
-    sc = SpeedControl([CPR], 1.0, 1.0, PERIOD, PWM_MAX)
+def test_no_integration_while_saturated() -> None:
+    sc = SpeedControl([CPR], 1.0, 1.0, PERIOD, PWM_MAX, 5.0)
     out = [0]
     sc.reset([0])
-    sc.update(PERIOD, [0], [30.0], [250.0], out)  # saturated, asking for more: frozen
+    sc.update(PERIOD, [0], [30.0], [250.0], out)
     assert out == [PWM_MAX] and sc._integ == [0.0]
-    sc.update(PERIOD, [21], [1.0], [300.0], out)  # saturated, the error pulls back: integrated
-    assert out == [PWM_MAX] and sc._integ[0] < 0.0
-    sc.update(PERIOD, [21], [30.0], [-300.0], out)  # saturated low, the error pulls back up
-    assert out == [-PWM_MAX] and sc._integ[0] > -0.01
+    sc.update(PERIOD, [0], [30.0], [-300.0], out)
+    assert out == [-PWM_MAX] and sc._integ == [0.0]
 
 
 def test_the_band_is_where_the_p_term_gives_5_percent_of_full_power() -> None:
