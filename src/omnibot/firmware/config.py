@@ -38,8 +38,8 @@ baud, loop_hz               UART speed; nominal main-loop rate (informative)
 mode                        MODE bits at reset (bit 1 when controller.wheel_speed_control)
 encoder_cpr                 counts per wheel revolution of each motor's encoder, 0 = none
 speed_kp, speed_ki          wheel-speed PI gains, PWM counts per rad/s (and per rad)
-speed_band                  wheel-speed error, rad/s, at which the integral grows at half its rate
-                            (where kp gives 5 % of full power)
+speed_band                  rad/s (where kp gives 5 % of full power): a target jump larger than it is
+                            a step, after which the integral grows at 1 / (1 + (err / band)^2)
 control_period_ms           wheel-speed control period
 tracking, gyro              number of tracking wheels; True when there is a gyro
 sonar_period_min_ms         one entry per sonar: its shortest period (>= 60 ms)
@@ -115,8 +115,8 @@ def _idle_axes(robot: RobotDescription) -> list[float]:
 
 
 SPEED_BAND_POWER = 0.05
-"""The speed loop's integral grows at half its rate at the error its P term answers with this share of
-full power (``speed_band``): larger errors are mostly lag, which the integral should not store."""
+"""``speed_band`` is the wheel-speed error the loop's P term answers with this share of full power:
+after a step the integral grows at half its rate there (larger errors are the rise's lag)."""
 
 
 def _default_k(robot: RobotDescription) -> float:
