@@ -323,7 +323,9 @@ void Executor::start_feedback() {
     for (uint8_t i = 0; i < MOTORS; i++) {
         last_counts[i] = encoder_count(i);
         integ[i] = correction[i] = 0;
+        prev_target[i] = 0;  // the wheels taken as at rest: a target that starts them is a step
     }
+    rising = 0;
     acc_us = 0;
     feedback = HAS_ENCODERS && (mode & P_MODE_CLOSED_LOOP) && kind != NONE && kind != K_POWER;
 }
@@ -334,7 +336,9 @@ int16_t Executor::limit(float p) {
     return lroundf(p);
 }
 
-// PI on each wheel's encoder-measured speed every control period, integral frozen while saturated.
+// PI on each wheel's encoder-measured speed every control period, integral frozen while saturated;
+// after a step in a wheel's target it grows slower the larger the error, until the wheel is within
+// the band (speedctl.py).
 void Executor::feedback_step(int32_t dt_us) {
     acc_us += dt_us;
     if (acc_us < (int32_t)CONTROL_PERIOD_MS * 1000) return;
@@ -347,7 +351,17 @@ void Executor::feedback_step(int32_t dt_us) {
         float err = target[i] - speed;
         correction[i] = SPEED_KP * err + SPEED_KI * integ[i];
         float p = ff[i] + correction[i];
-        if (-PWM_MAX < p && p < PWM_MAX) integ[i] += err * dt;
+        float x = (target[i] - prev_target[i]) * SPEED_BAND_INV;
+        prev_target[i] = target[i];
+        if (x > 1 || x < -1) {
+            rising |= 1 << i;
+        } else if (err * SPEED_BAND_INV <= 1 && err * SPEED_BAND_INV >= -1) {
+            rising &= ~(1 << i);
+        }
+        if (-PWM_MAX < p && p < PWM_MAX) {
+            x = rising & (1 << i) ? err * SPEED_BAND_INV : 0;
+            integ[i] += err * dt / (1 + x * x);
+        }
         powers[i] = limit(p);
     }
     apply();

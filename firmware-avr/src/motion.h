@@ -51,6 +51,8 @@ struct Executor {
     int32_t control_due;
     // closed loop (speedctl.py)
     float integ[MOTORS], correction[MOTORS];
+    float prev_target[MOTORS];  // the targets of the last period
+    uint8_t rising;             // bit i: wheel i's target stepped and it is not yet within the band
     int32_t last_counts[MOTORS];
     int32_t acc_us;
 

@@ -38,6 +38,8 @@ baud, loop_hz               UART speed; nominal main-loop rate (informative)
 mode                        MODE bits at reset (bit 1 when controller.wheel_speed_control)
 encoder_cpr                 counts per wheel revolution of each motor's encoder, 0 = none
 speed_kp, speed_ki          wheel-speed PI gains, PWM counts per rad/s (and per rad)
+speed_band                  rad/s (where kp gives 5 % of full power): a target jump larger than it is
+                            a step, after which the integral grows at 1 / (1 + (err / band)^2)
 control_period_ms           wheel-speed control period
 tracking, gyro              number of tracking wheels; True when there is a gyro
 sonar_period_min_ms         one entry per sonar: its shortest period (>= 60 ms)
@@ -112,6 +114,11 @@ def _idle_axes(robot: RobotDescription) -> list[float]:
     return sorted(axes)
 
 
+SPEED_BAND_POWER = 0.05
+"""``speed_band`` is the wheel-speed error the loop's P term answers with this share of full power:
+after a step the integral grows at half its rate there (larger errors are the rise's lag)."""
+
+
 def _default_k(robot: RobotDescription) -> float:
     """PWM counts per m/s of rim speed from the motor model, when the description gives no K."""
     w = robot.wheels[0]
@@ -183,10 +190,11 @@ def build_config(
         kp, ki = 0.5 * kr, 10.0 * kr
     lim = robot.limits
     has_encoders = all(encoder_cpr)
+    pwm_max = max(w.motor.pwm_max for w in robot.wheels)
     return {
         "name": robot.name,
         "motors": robot.n_wheels,
-        "pwm_max": max(w.motor.pwm_max for w in robot.wheels),
+        "pwm_max": pwm_max,
         "power_min": int(power_min if power_min is not None else max(w.motor.deadband for w in robot.wheels)),
         "vel_dead_band": True,
         "radius": radius,
@@ -225,6 +233,7 @@ def build_config(
         "encoder_cpr": encoder_cpr,
         "speed_kp": round(kp, 6),
         "speed_ki": round(ki, 6),
+        "speed_band": round(SPEED_BAND_POWER * pwm_max / kp, 6) if kp > 0 else 0.0,
         "control_period_ms": control_period_ms,
         "tracking": len(robot.encoders.tracking),
         "gyro": robot.gyro is not None,

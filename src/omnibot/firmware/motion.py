@@ -97,6 +97,7 @@ class Executor:
             float(cfg["speed_ki"]),
             period_us,
             model.pwm_max,
+            float(cfg.get("speed_band", 0.0)),
         )
         for i in range(self.n):
             hal.set_power(i, 0)

@@ -1,7 +1,14 @@
 """Closed-loop wheel-speed control (MODE bit 1): feedforward power plus PI on each wheel's speed.
 
 Wheel speeds come from the motor encoders (counts per wheel revolution from the robot description),
-measured every ``period_us``. The integral is frozen while the output saturates (anti-windup).
+measured every ``period_us``. The integral is frozen while the output saturates (anti-windup), and
+after a step in a wheel's target (a jump larger than ``band`` in one period: a MOVE from rest, a VEL
+that changes the speed at once) it grows at ``1 / (1 + (err / band)^2)`` of its rate until the wheel
+is within ``band`` of the target (PX4's rate-loop I factor, which answers the same bounce-back after
+a large setpoint change): the lag of the rise, a motor at its driver's current limit the firmware
+cannot see, is then not stored to carry the wheel past its target. Never 0, so a steady error the
+feedforward leaves is still removed. Targets that move by small steps (a host's ramp, a turning
+body) integrate at the full rate, as before.
 """
 
 import math
@@ -10,17 +17,22 @@ import math
 class SpeedControl:
     """PI correction of the feedforward powers from encoder-measured wheel speeds."""
 
-    def __init__(self, cpr: list[int], kp: float, ki: float, period_us: int, pwm_max: int) -> None:
+    def __init__(
+        self, cpr: list[int], kp: float, ki: float, period_us: int, pwm_max: int, band: float = 0.0
+    ) -> None:
         self.n = len(cpr)
         self.rad_per_count = [2.0 * math.pi / c if c > 0 else 0.0 for c in cpr]
         self.kp = kp
         self.ki = ki
         self.period_us = period_us
         self.pwm_max = pwm_max
+        self.band = band  # rad/s; 0: every error integrates at the full rate
         self.speed = [0.0] * self.n
         self.correction = [0.0] * self.n
         self._integ = [0.0] * self.n
         self._last = [0] * self.n
+        self._prev = [0.0] * self.n  # the targets of the last period
+        self._rising = [False] * self.n  # after a step, until the wheel is within band of its target
         self._acc_us = 0
 
     @property
@@ -29,11 +41,14 @@ class SpeedControl:
         return all(r != 0.0 for r in self.rad_per_count)
 
     def reset(self, counts: list[int]) -> None:
-        """Start afresh from these encoder ``counts``: no integral, no correction."""
+        """Start afresh from these encoder ``counts``: no integral, no correction, the wheels taken
+        as at rest (a target that starts them is a step)."""
         for i in range(self.n):
             self._integ[i] = 0.0
             self.correction[i] = 0.0
             self._last[i] = counts[i]
+            self._prev[i] = 0.0
+            self._rising[i] = False
         self._acc_us = 0
 
     def update(
@@ -46,6 +61,7 @@ class SpeedControl:
         dt = self._acc_us * 1e-6
         self._acc_us = 0
         lim = self.pwm_max
+        band = self.band
         for i in range(self.n):
             c = counts[i]
             self.speed[i] = (c - self._last[i]) * self.rad_per_count[i] / dt
@@ -53,8 +69,18 @@ class SpeedControl:
             err = target[i] - self.speed[i]
             self.correction[i] = self.kp * err + self.ki * self._integ[i]
             p = ff[i] + self.correction[i]
+            jump = target[i] - self._prev[i]
+            self._prev[i] = target[i]
+            if jump > band or jump < -band:
+                self._rising[i] = band > 0.0
+            elif -band <= err <= band:
+                self._rising[i] = False
             if -lim < p < lim:
-                self._integ[i] += err * dt
+                if self._rising[i]:
+                    x = err / band
+                    self._integ[i] += err * dt / (1.0 + x * x)
+                else:
+                    self._integ[i] += err * dt
             out[i] = self._limit(p)
         return True
 

@@ -1,0 +1,110 @@
+"""The firmware's wheel-speed loop on steps and ramps: how far past the asked speed the wheels and the
+body go (issue 17: mecanum4 drove over the asked speed on carpet).
+
+    python -m benchmarks.speed_loop [--robots mecanum4,omni4,omni3] [--surfaces carpet,wood]
+
+Each run: the simulator with the MicroPython firmware in lockstep, MODE 2 (the wheel-speed loop),
+then VEL commands every 20 ms as a host sends them, either a ramp at 1.4 m/s^2 (the tracking
+profile's acceleration) up to the speed asked or a step to it, held 1.5 s, on courses 0, 45
+(44.5: 0.8 m/s on 45 degrees rounds past speed_max in whole cm/s) and 90 degrees. Reported:
+
+* wheel: the largest ``|wheel speed| / |its final target|`` of the wheels that drive (target at
+  least half the largest), after the target reached its final value, minus 1;
+* body: the body's largest speed over the speed it settles at (the mean of the last 0.5 s), minus 1,
+  and over the speed asked (on carpet at 45 degrees a mecanum body settles above what its wheels'
+  speeds say: roller creep, not the loop);
+* rise: the time the body first reaches 98 % of its settled speed.
+
+A few seconds of CPU per robot and floor; deterministic (seed 1).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from dataclasses import dataclass
+
+from omnibot.sim.device import SimDevice
+
+CYCLE = 0.02  # s between VEL commands
+ACCEL = 1.4  # m/s^2, the tracking profile's
+HOLD = 1.5  # s at the asked speed
+SPEEDS = {"mecanum4": 0.8, "omni4": 0.8, "omni3": 3.0}
+COURSES = (0.0, 44.5, 90.0)
+
+
+@dataclass
+class Result:
+    """One run's overshoots (fractions) and rise time (s)."""
+
+    wheel: float
+    body: float
+    body_asked: float
+    rise: float
+
+
+def run(robot: str, surface: str, course: float, speed: float, ramp: bool, seed: int = 1) -> Result:
+    """Drive one step or ramp on the firmware's closed loop and measure it."""
+    dev = SimDevice(robot, surface=surface, seed=seed)
+    steps = round(CYCLE / dev.tick)
+
+    def send(line: str) -> None:
+        dev.receive((line + "\n").encode())
+        for _ in range(steps):
+            dev.step()
+        dev.transmit()
+
+    send("MODE,2")
+    c, s = math.cos(math.radians(course)), math.sin(math.radians(course))
+    ramp_time = speed / ACCEL if ramp else 0.0
+    target = dev.controller.executor._target  # the loop's wheel targets, rad/s
+    t = 0.0
+    wheel_peak = [0.0] * len(target)
+    final: list[float] = []
+    body: list[tuple[float, float]] = []
+    while t < ramp_time + HOLD:
+        v = min(speed, ACCEL * (t + CYCLE)) if ramp else speed
+        send(f"VEL,{int(v * c * 100)},{int(v * s * 100)},0,200")
+        t += CYCLE
+        tw = dev.sim.twist
+        body.append((t, math.hypot(tw.vx, tw.vy)))
+        if v == speed:
+            final = final or list(target)
+            for i, w in enumerate(dev.sim.wheel_speeds):
+                wheel_peak[i] = max(wheel_peak[i], abs(w))
+    send("STOP")
+    top = max(abs(f) for f in final)
+    wheel = max(p / abs(f) for p, f in zip(wheel_peak, final, strict=True) if abs(f) >= 0.5 * top)
+    tail = [b for tb, b in body if tb > t - 0.5]
+    settled = sum(tail) / len(tail)
+    peak = max(b for _, b in body)
+    rise = next((tb for tb, b in body if b >= 0.98 * settled), math.nan)
+    return Result(wheel - 1.0, peak / settled - 1.0, peak / speed - 1.0, rise)
+
+
+def main() -> None:
+    """Print one markdown table: every robot, floor, course, ramp and step."""
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--robots", default="mecanum4")
+    ap.add_argument("--surfaces", default="carpet,wood")
+    args = ap.parse_args()
+    print(
+        "| robot | floor | course (deg) | input | wheel overshoot | body over settled | body over asked | rise (s) |"
+    )
+    print("|---|---|---|---|---|---|---|---|")
+    for robot in args.robots.split(","):
+        speed = SPEEDS.get(robot, 0.5)
+        for surface in args.surfaces.split(","):
+            for course in COURSES:
+                for ramp in (True, False):
+                    r = run(robot, surface, course, speed, ramp)
+                    kind = f"ramp {ACCEL} m/s^2 to {speed}" if ramp else f"step to {speed}"
+                    print(
+                        f"| {robot} | {surface} | {course:g} | {kind} | {100 * r.wheel:.0f} % "
+                        f"| {100 * r.body:.0f} % | {100 * r.body_asked:+.0f} % | {r.rise:.2f} |",
+                        flush=True,
+                    )
+
+
+if __name__ == "__main__":
+    main()
