@@ -180,12 +180,12 @@ def test_cal_motor_speed_terms(client: RobotClient) -> None:
     mapped = spec.model_copy(
         update={"motors": MotorMapSpec(offset=(0.0,) * 4, gain=(flat,) * 4, speed=(0.0, 100.0, 0.0, -50.0))}
     )
-    try:
-        client.vel(0.2, 0.0, 0.0, 0.5)
+    try:  # VELs in force for the longest 1 s (STOP ends them): a loaded machine may delay the STATUS
+        client.vel(0.2, 0.0, 0.0, 1.0)
         base = client.status().powers
         client.stop()
         client.upload_calibration(mapped)
-        client.vel(0.2, 0.0, 0.0, 0.5)
+        client.vel(0.2, 0.0, 0.0, 1.0)
         got = client.status().powers
         client.stop()
         p = base[1]

@@ -101,13 +101,13 @@ def test_open_loop_vel_sets_a_weak_wheel_to_0(client: RobotClient) -> None:
     a VEL stream (every firmware: MicroPython and the UNO's); the closed loop drives them instead."""
     rec = EventRecorder()
     client.add_listener(rec, WarnEvent)
-    client.vel(0.2, 0.1, 0.0, 0.5)
-    client.vel(0.2, 0.1, 0.0, 0.5)
+    client.vel(0.2, 0.1, 0.0, 1.0)  # the longest a VEL stays in force: a STATUS may come late under load
+    client.vel(0.2, 0.1, 0.0, 1.0)
     assert client.status().powers == (0, 82, 0, -82)
     assert [w.code for w in rec.of(WarnEvent)] == [codes.W_POWER_TOO_LOW]
     client.stop()
     client.mode(closed_loop=True)  # omni4 has motor encoders
-    client.vel(0.2, 0.1, 0.0, 0.5)
+    client.vel(0.2, 0.1, 0.0, 1.0)
     assert client.status().powers[0] > 0
     client.stop()
     assert len(rec.of(WarnEvent)) == 1
