@@ -36,6 +36,7 @@ class RecordingBar:
         self.totals.append(self.total)
 
 
+@pytest.mark.timeout(600)  # CPU-bound (lockstep simulation): passed the 120 s hang guard beside other suites
 def test_quick_run_writes_the_file_and_the_report(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
