@@ -167,6 +167,7 @@ def test_calibration_file_errors(tmp_path: Path) -> None:
     ).calibration == (preset.calibration)
 
 
+@pytest.mark.timeout(600)  # CPU-bound, deterministic: 87 s beside two busy loops
 def test_a_port_with_two_floors_asks_between_them(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     from omnibot.calibration.cli import run
     from omnibot.cli import build_parser
