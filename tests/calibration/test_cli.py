@@ -36,6 +36,7 @@ class RecordingBar:
         self.totals.append(self.total)
 
 
+@pytest.mark.timeout(600)  # CPU-bound (lockstep simulation): passed the 120 s hang guard beside other suites
 def test_quick_run_writes_the_file_and_the_report(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -181,6 +182,7 @@ def test_a_real_robot_is_asked_onto_the_stand_and_back() -> None:
     assert prompts[0].startswith("Lift the robot onto a stand") and "back on the floor" in prompts[1]
 
 
+@pytest.mark.timeout(600)  # CPU-bound, deterministic: 87 s beside two busy loops
 def test_a_port_with_two_floors_asks_between_them(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     from omnibot.calibration.cli import run
     from omnibot.cli import build_parser

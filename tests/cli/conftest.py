@@ -192,7 +192,7 @@ def pty_robot() -> Iterator[PtyRobot]:
 def controller_state(path: str) -> tuple[int, int]:
     """(state, MODE) of the controller on ``path``, asked through a second connection, in text
     (a controller left in binary mode does not answer: LinkTimeout)."""
-    with RobotClient.open(path, timeout=2.0) as client:
+    with RobotClient.open(path, timeout=10.0) as client:  # the emulator answers late on a loaded machine
         status = client.status()
         client.sleep(0.3)  # still moving after this long means nobody stopped it
         again = client.status()

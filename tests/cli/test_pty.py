@@ -16,7 +16,9 @@ from omnibot.control.paths.standard import standard_path
 from omnibot.protocol import codes
 from tests.cli.conftest import Command, PtyRobot, assert_one_line_error, controller_state
 
-pytestmark = pytest.mark.slow
+# real-time runs of whole commands (a Python start each): far slower than the 120 s hang guard allows
+# for on a loaded machine's busiest moments
+pytestmark = [pytest.mark.slow, pytest.mark.timeout(300)]
 
 
 def assert_left_as_found(path: str) -> None:

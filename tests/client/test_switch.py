@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from omnibot.client import RobotClient
+from omnibot.client import ErrorEvent, EventRecorder, RobotClient
+from omnibot.client.greet import wait_for_controller
 from omnibot.client.wire import BinaryWire
 from omnibot.errors import LinkTimeout, ProtocolError
 from omnibot.firmware.controller import Controller
@@ -14,6 +15,7 @@ from omnibot.sim.device import SimDevice
 from omnibot.transport import FaultLink, LockstepLink
 from omnibot.transport.base import Link
 from tests.client.fakes import Silent
+from tests.sim.linkio import read_until
 
 NOISY = "drop=0.01&corrupt=0.01"  # 1 % of the bytes lost and 1 % corrupted, each way
 
@@ -91,6 +93,33 @@ def test_find_protocol_on_a_text_controller_reads_its_error_lines() -> None:
         assert not client.binary
         assert client.status().idle  # no ERROR line for the probe is left to be taken as a reply
         assert client.outstanding == []
+
+
+@pytest.mark.parametrize(("delay", "direction"), [(0.12, "rx"), (0.2, "rx"), (0.4, "rx"), (0.15, "both")])
+def test_a_slow_line_is_found_in_text_and_leaves_no_probe_answer_behind(
+    delay: float, direction: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Answers 0.1 s or more late (the pty emulator on a loaded machine, a radio link): a text
+    controller answers each probe with two ERROR 23 lines, and those owed to the probes sent before
+    the first answer came were read after find_protocol had returned, as the answers to the next
+    commands: the tag question took them for "no tags" and the first HELLO got ERROR 23 (``follow``
+    over the pty failed so under load), or the client asked again for ever."""
+    device = SimDevice("omni4", seed=1)
+    inner = LockstepLink(device)
+    read_until(inner, b"\r\n")  # the power-up greeting, gone before the host opens the line
+    link = FaultLink(inner, delay=delay, direction=direction)  # type: ignore[arg-type]
+    monkeypatch.setattr("omnibot.transport.url.open_link", lambda url: link)
+    with RobotClient.open("sim://omni4", timeout=2.0) as client:
+        assert client.last_hello is None and not client.binary  # no greeting: the probes found text
+        errors = EventRecorder()
+        client.add_listener(errors, ErrorEvent)
+        hello = wait_for_controller(client, window=5.0)
+        assert hello.name == "omni4" and client.tags is True
+        assert client.status().idle and client.outstanding == []
+        client.use_binary()
+        client.use_text()
+        assert not device.controller.binary and client.status().idle
+        assert errors.events == []
 
 
 def test_a_silent_line_times_out() -> None:

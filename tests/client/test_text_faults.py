@@ -187,6 +187,22 @@ def test_reset_of_a_tagged_controller_is_seen_and_tags_asked_again() -> None:
         assert client.tags is True
 
 
+@pytest.mark.parametrize("owed", [1, 2])
+def test_untagged_lines_owed_to_an_earlier_client_do_not_fool_the_tag_question(owed: int) -> None:
+    """An ERROR line left on the line (a previous client's command) answers the first tagged HELLO;
+    the HELLO reply tagged for it then came while no HELLO waited and was taken for a reset, which
+    failed the next command and asked again, for ever. A tagged HELLO reply is never a reset."""
+    link = open_link("sim://omni4?seed=1")
+    link.read(timeout=0.05)  # the power-up greeting
+    link.write(b"FOO\n" * owed)  # a previous client's, its ERROR still to come
+    with RobotClient(link) as client:
+        resets = EventRecorder()
+        client.on_reset(resets)
+        assert client.status().idle
+        assert client.tags is True and client.hello().name == "omni4"
+        assert resets.events == []
+
+
 def test_late_tagged_reply_lands_on_its_own_command() -> None:
     held: list[bytes] = []
 

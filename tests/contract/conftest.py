@@ -32,9 +32,10 @@ from pathlib import Path
 
 import pytest
 
-from omnibot.client import RobotClient
+from omnibot.client import RobotClient, Telemetry
 from omnibot.errors import LinkError
 from omnibot.firmware.config import build_config, write_config_module
+from omnibot.protocol import codes
 from omnibot.protocol.messages import Mode
 from omnibot.robot.description import load_robot
 from omnibot.transport import Link, open_link
@@ -298,3 +299,78 @@ class RawLink:
         self._buf = b""
         extra = [ln for ln in got.split(b"\r\n") if ln and not ln.startswith(self.EVENTS)]
         assert not extra, f"unexpected replies: {extra}"
+
+
+class ControllerClock:
+    """How long the controller moved, on its own clock: TEL samples (the queue's state, every 10 ms)
+    carry the controller's time. The host's clock, which events are stamped with, says as much about
+    the load as about the controller on the wall-clock backends: a pty emulator, simavr or this test
+    not scheduled for a few tenths of a second stretches it.
+
+    ``command(call)`` runs a call that sends one command and waits for its reply; the command ran
+    after the last TEL sample that came before the reply (the controller writes in order), and
+    :meth:`until_idle` gives the controller's time from that sample to the first sample after the
+    reply that says idle: the motion's duration, at most 20 ms long (two sample periods)."""
+
+    PERIOD = 0.01
+
+    def __init__(self, client: RobotClient) -> None:
+        self.client = client
+        self.log: list[tuple[str, float, int | None]] = []  # ("tel", time, state) / ("reply", 0, None)
+        self._start: int | None = None  # the log index of the command's reply
+
+    def __enter__(self) -> ControllerClock:
+        self.client.on_telemetry(self._tel)
+        self.client.add_tracer(self)
+        self.client.telemetry(self.PERIOD, codes.TEL_QUEUE)
+        deadline = self.client.clock.now() + 10.0
+        while not any(kind == "tel" for kind, _, _ in self.log):  # a sample before any command
+            assert self.client.clock.now() < deadline, "no TEL sample"
+            self.client.pump(0.05)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.client.remove_tracer(self)
+        self.client.remove_listener(self._tel)
+        if not self.client.link.closed:
+            self.client.telemetry(0)
+
+    def _tel(self, event: Telemetry) -> None:
+        self.log.append(("tel", event.controller_time, event.state))
+
+    def link_bytes(self, t: float, kind: str, data: bytes = b"", note: str = "") -> None:
+        """(the tracer's byte hook: not needed)"""
+
+    def message(self, t: float, direction: str, message: object) -> None:
+        if direction == "reply":
+            self.log.append(("reply", 0.0, None))
+
+    def command(self, call: Callable[[], object]) -> object:
+        replies = sum(1 for kind, _, _ in self.log if kind == "reply")
+        result = call()
+        seen = 0
+        for i, (kind, _, _) in enumerate(self.log):
+            if kind == "reply":
+                seen += 1
+                if seen == replies + 1:
+                    self._start = i
+                    break
+        assert self._start is not None, "the command got no reply"
+        return result
+
+    def until_idle(self) -> float:
+        """Controller seconds from the command to the first idle sample after its reply."""
+        assert self._start is not None
+        before = [t for kind, t, _ in self.log[: self._start] if kind == "tel"]
+        assert before, "no TEL sample came before the command's reply"
+
+        def idle() -> float | None:
+            after = self.log[self._start :]
+            return next((t for kind, t, s in after if kind == "tel" and s == codes.STATE_IDLE), None)
+
+        deadline = self.client.clock.now() + 10.0  # the sample after IDLE: late on a loaded machine
+        while idle() is None and self.client.clock.now() < deadline:
+            self.client.pump(0.05)
+        end = idle()
+        assert end is not None, "no idle TEL sample after the command"
+        return end - before[-1]

@@ -21,7 +21,7 @@ from omnibot.client import (
 from omnibot.protocol import codes, units
 from omnibot.protocol.messages import Cal, Hello, Mode, Move, Status
 
-from .conftest import ROBOT, Backend, RawLink
+from .conftest import ROBOT, Backend, ControllerClock, RawLink
 
 
 def test_hello_format(raw: RawLink) -> None:
@@ -55,12 +55,13 @@ def test_status_format(raw: RawLink) -> None:
 def test_move_runs_then_idle(client: RobotClient) -> None:
     rec = EventRecorder()
     client.add_listener(rec, IdleEvent)
-    start = client.clock.now()
-    sent = client.move(0.1, 0.4)  # 10 cm at 40 cm/s: 0.25 s
-    assert sent == Move(10, 40, 0, 0)
-    assert client.status().moving
-    client.wait_idle(timeout=3)
-    took = rec.events[0].time - start
+    with ControllerClock(client) as clock:
+        sent = clock.command(lambda: client.move(0.1, 0.4))  # 10 cm at 40 cm/s: 0.25 s
+        assert sent == Move(10, 40, 0, 0)
+        assert client.status().moving
+        client.wait_idle(timeout=10)
+        took = clock.until_idle()
+    assert len(rec.events) == 1
     assert 0.2 <= took <= 0.6, took
     status = client.status()
     assert status.idle and status.powers == (0, 0, 0, 0)
@@ -68,21 +69,20 @@ def test_move_runs_then_idle(client: RobotClient) -> None:
 
 
 def test_rotate(client: RobotClient) -> None:
-    start = client.clock.now()
-    assert client.rotate(math.radians(45), math.radians(180)).params() == (45, 180)
-    assert client.status().moving
-    client.wait_idle(timeout=3)
-    assert 0.2 <= client.clock.now() - start <= 0.7
+    with ControllerClock(client) as clock:
+        sent = clock.command(lambda: client.rotate(math.radians(45), math.radians(180)))
+        assert sent.params() == (45, 180)  # type: ignore[attr-defined]
+        assert client.status().moving
+        client.wait_idle(timeout=10)
+        assert 0.2 <= clock.until_idle() <= 0.7
     assert client.status().move.speed == 0.0  # ROTATE leaves the remembered MOVE alone
 
 
 def test_delta_circle_and_remembered_move(client: RobotClient) -> None:
-    start = client.clock.now()
-    pendings = client.submit_text("MOVE,2,40,0,0;DELTA,0,0,10,0,3")
-    for p in pendings:
-        p.result()
-    client.wait_idle(timeout=3)
-    assert 0.15 <= client.clock.now() - start <= 0.6  # 4 moves of 50 ms
+    with ControllerClock(client) as clock:
+        clock.command(lambda: [p.result() for p in client.submit_text("MOVE,2,40,0,0;DELTA,0,0,10,0,3")])
+        client.wait_idle(timeout=10)
+        assert 0.15 <= clock.until_idle() <= 0.6  # 4 moves of 50 ms
     status = client.status()
     assert status.idle
     assert (status.move.distance, status.move.speed, round(math.degrees(status.move.course))) == (
@@ -96,10 +96,10 @@ def test_infinite_move_ends_at_next_command(client: RobotClient) -> None:
     client.move(math.inf, 0.4)
     client.sleep(0.1)
     assert client.status().moving
-    client.move(0.1, 0.4)  # the endless MOVE stops at once, this one runs 0.25 s
-    start = client.clock.now()
-    client.wait_idle(timeout=3)
-    assert client.clock.now() - start <= 0.6
+    with ControllerClock(client) as clock:
+        clock.command(lambda: client.move(0.1, 0.4))  # the endless MOVE stops at once, this one runs 0.25 s
+        client.wait_idle(timeout=10)
+        assert clock.until_idle() <= 0.6
     assert client.status().move.distance == 0.1
 
 

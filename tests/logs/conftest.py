@@ -94,9 +94,27 @@ def node_reader() -> Path:
     return script
 
 
+KILL_AFTER = 200
+"""TEL samples the killed run's log must hold (readable) before it is killed: its tests count more
+than 100 of them, and more than 500 messages in all."""
+
+
+def readable_tels(path: Path) -> int:
+    """TEL lines in the chunks of a log being written (what a SIGKILL now would leave readable)."""
+    from omnibot.logs import topics
+    from omnibot.logs.reader import LogFile
+
+    if not path.exists():
+        return 0
+    messages = LogFile.open(path).read_all()
+    return sum(1 for m in messages if m.topic == topics.PROTOCOL and m.decode().keyword == "TEL")
+
+
 def kill_mid_run(path: Path) -> None:
     """``omnibot send --log`` a motion that never ends (MOVE INF: until the next command)
-    with telemetry at 100 Hz; SIGKILL it once its log holds several chunks."""
+    with telemetry at 100 Hz; SIGKILL it once its log holds several chunks, with KILL_AFTER TEL
+    samples in them (not after a file size: a chunk is written every wall-clock second, and on a
+    loaded machine the simulation gets less of it, so as many bytes held fewer samples)."""
     env = {**os.environ, "PYTHONPATH": str(REPO / "src")}
     proc = subprocess.Popen(
         [
@@ -117,11 +135,11 @@ def kill_mid_run(path: Path) -> None:
         env=env,
     )
     try:
-        deadline = time.monotonic() + 60
+        deadline = time.monotonic() + 120
         while time.monotonic() < deadline and proc.poll() is None:
-            if path.exists() and path.stat().st_size > 60_000:
+            if path.exists() and path.stat().st_size > 60_000 and readable_tels(path) >= KILL_AFTER:
                 break
-            time.sleep(0.05)
+            time.sleep(0.2)
         assert proc.poll() is None, "the run ended by itself"
         assert path.stat().st_size > 60_000, "the log did not grow"
     finally:

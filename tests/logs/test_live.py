@@ -47,7 +47,7 @@ def test_each_server_leaves_nothing_behind() -> None:
     before = fds()
     for _ in range(3):
         run_one()
-    deadline = time.monotonic() + 5.0
+    deadline = time.monotonic() + 30.0  # the runtime's thread closes them, late on a loaded machine
     while fds() > before and time.monotonic() < deadline:
         time.sleep(0.05)
     assert fds() <= before

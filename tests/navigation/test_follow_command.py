@@ -163,6 +163,7 @@ def test_follow_calibration_errors_are_one_line(
     assert message in err and "Traceback" not in err
 
 
+@pytest.mark.timeout(600)  # CPU-bound, deterministic: 57 s beside two busy loops
 def test_calibrate_then_follow_on_carpet(tmp_path: FsPath) -> None:
     """The workflow: calibrate on the floor (its wheel slip among the rest), then follow with it."""
     cal, report = tmp_path / "cal.yaml", tmp_path / "report"

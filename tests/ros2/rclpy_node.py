@@ -2,10 +2,14 @@
 
 Run by the interpreter of a ROS 2 distribution's wheels (Jazzy's in the project's venv, Kilted's in
 ``.cache/ros2-kilted``), in the test's private network namespace; it imports nothing of omnibot.
-``argv[1]`` is a JSON plan: ``sonars`` (names), ``twist`` (vx, vy, w), ``drive`` and ``silence`` (s).
-It waits for ``odom`` and for the bridge to match its ``cmd_vel``, reads the graph (type names, RIHS01 hashes, QoS of every endpoint), publishes
-TwistStamped at 20 Hz for ``drive`` s, listens ``silence`` s more and prints one JSON line: what it
-received (stamps in ns and the values) and what the graph said.
+``argv[1]`` is a JSON plan: ``sonars`` (names), ``twist`` (vx, vy, w), ``drive`` and ``silence`` (s),
+``least`` (messages).
+It waits for ``odom``, for the bridge to match its ``cmd_vel`` and for the graph to show an endpoint
+of the bridge's on every topic, reads the graph (type names, RIHS01 hashes, QoS of every endpoint),
+publishes TwistStamped at 20 Hz for ``drive`` s, listens ``silence`` s more, and on until it has
+``least`` messages of each topic (the bridge publishes fewer in a wall-clock second on a loaded
+machine), and prints one JSON line: what it received (stamps in ns and the values) and what the graph
+said.
 """
 
 from __future__ import annotations
@@ -24,8 +28,9 @@ from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import Imu, JointState, Range
 
-WAIT = 10.0
-"""s to wait for the bridge's first odom (discovery and the simulator's start)."""
+WAIT = 60.0
+"""s to wait for the bridge's first odom (discovery and the simulator's start: seconds on a loaded
+machine), and at most for the ``least`` messages of each topic after the silence."""
 
 
 def ns(msg: Any) -> int:
@@ -106,17 +111,29 @@ def main() -> None:
         node.create_subscription(Range, f"range/{sonar}", on_range(f"range/{sonar}"), qos_profile_sensor_data)
     publisher = node.create_publisher(TwistStamped, "cmd_vel", 10)
 
-    end = time.monotonic() + WAIT  # the bridge publishes and has matched our cmd_vel
-    while (not got["odom"] or publisher.get_subscription_count() < 1) and time.monotonic() < end:
-        rclpy.spin_once(node, timeout_sec=0.05)
     topics = ["/odom", "/imu", "/joint_states", "/tf", "/tf_static", "/robot_description", "/cmd_vel"]
-    graph = endpoints(node, topics + [f"/range/{s}" for s in plan["sonars"]])
+    topics += [f"/range/{s}" for s in plan["sonars"]]
+
+    def discovered() -> bool:  # the bridge publishes, has matched our cmd_vel, and rclpy's graph has it
+        if not got["odom"] or publisher.get_subscription_count() < 1:
+            return False
+        graph = endpoints(node, topics)
+        return all(any(e["node"] != node.get_name() for e in graph[t]) for t in topics)
+
+    end = time.monotonic() + WAIT
+    while not discovered() and time.monotonic() < end:
+        rclpy.spin_once(node, timeout_sec=0.05)
+    graph = endpoints(node, topics)
 
     vx, vy, w = plan["twist"]
     start = time.monotonic()
     drive_end, end = start + plan["drive"], start + plan["drive"] + plan["silence"]
     next_publish, sent, last_sent = start, 0, None
-    while time.monotonic() < end:
+    streams = ["odom", "imu", "joint_states"] + [f"range/{s}" for s in plan["sonars"]]
+    hard_end = end + WAIT
+    while time.monotonic() < end or (
+        time.monotonic() < hard_end and min(len(got[k]) for k in streams) < plan.get("least", 0)
+    ):
         now = time.monotonic()
         if now < drive_end and now >= next_publish:
             msg = TwistStamped()

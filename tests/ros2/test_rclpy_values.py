@@ -6,6 +6,7 @@ graph shows every endpoint's type and RIHS01 hash. In a private network namespac
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 from typing import Any
@@ -21,6 +22,9 @@ TWIST = (0.0, 0.2, 1.5)
 """Commanded: sideways at 0.2 m/s while turning (every odom, imu and range field moves; omni4's open
 loop turns at a fraction of the 1.5 rad/s asked: the values are judged against what the robot did)."""
 DRIVE, SILENCE = 2.5, 1.2
+LEAST = 150
+"""Messages of each topic the peer takes at least (it listens on after the silence until it has
+them: the bridge's 50 Hz are of the simulator's time, which a loaded machine gives less of)."""
 
 BRIDGE = r"""
 import json, os, signal, subprocess, tempfile, time
@@ -67,8 +71,12 @@ with robot_session("sim://omni4?seed=5&world=room", "omni4", timeout=0.5) as ses
         pose, twist = sim.pose, sim.twist
         timeline.append((sim.time, (pose.x, pose.y, pose.theta), (twist.vx, twist.vy, twist.w), sim.physics.wheel_angle[0].tolist()))
 
+    first_rx = []  # the runtime's time of the cycle that took the first cmd_vel
+
     def record(cycle):
         twist = sim.twist
+        if source.received and not first_rx:
+            first_rx.append(cycle.now)
         trace.append((cycle.now, math.hypot(twist.vx, twist.vy), twist.w, sim.time))
         samples.extend((tel.controller_time, sink.recorder.ns(tel.time), "tel") for tel in cycle.telemetry)
         samples.append((cycle.t, sink.recorder.ns(cycle.t), "cycle"))  # odom: the estimate at the cycle
@@ -109,7 +117,7 @@ with robot_session("sim://omni4?seed=5&world=room", "omni4", timeout=0.5) as ses
     start = sim.pose
     out, err = tempfile.TemporaryFile("w+"), tempfile.TemporaryFile("w+")  # no pipe to fill
     peer = subprocess.Popen([PYTHON, "-X", "faulthandler", NODE, PLAN], stdout=out, stderr=err, env=env)
-    end = time.monotonic() + 30
+    end = time.monotonic() + 150  # the peer's start, discovery and its run: far longer on a loaded machine
     while peer.poll() is None and time.monotonic() < end:
         runtime.step()
         runtime.pacer.wait()
@@ -127,7 +135,7 @@ with robot_session("sim://omni4?seed=5&world=room", "omni4", timeout=0.5) as ses
     truth = truth_at_samples()
 print(json.dumps({
     "start": [start.x, start.y, start.theta], "truth": truth, "sent": sent,
-    "received": source.received, "last_rx": source.received_at, "trace": trace, "rc": peer.returncode, "peer": out.strip().splitlines()[-1] if out.strip() else None,
+    "received": source.received, "first_rx": first_rx[0] if first_rx else None, "last_rx": source.received_at, "trace": trace, "rc": peer.returncode, "peer": out.strip().splitlines()[-1] if out.strip() else None,
     "stderr": err[-3000:],
 }))
 """
@@ -138,11 +146,12 @@ def run(distro: str) -> dict[str, Any]:
     python = interpreter(distro)
     plan = {"sonars": [s.name for s in load_robot("omni4").sonars], "twist": TWIST, "drive": DRIVE}
     plan["silence"] = SILENCE
+    plan["least"] = LEAST
     script = (
         f"PYTHON = {python!r}\nNODE = {str(NODE)!r}\nPLAN = {json.dumps(plan)!r}\nBOOTSTRAP = {BOOTSTRAP!r}\n"
     )
     script += BRIDGE
-    result: dict[str, Any] = json.loads(run_in_namespace(script, timeout=120).stdout.strip().splitlines()[-1])
+    result: dict[str, Any] = json.loads(run_in_namespace(script, timeout=240).stdout.strip().splitlines()[-1])
     assert result["rc"] == 0 and result["peer"], result["stderr"]
     result["peer"] = json.loads(result["peer"])
     result["estimate_truth"] = {int(k): v for k, v in result["truth"]["cycle"].items()}
@@ -291,13 +300,22 @@ def test_joint_states_turn_as_the_wheels(session: dict[str, Any]) -> None:
 
 
 def test_the_robot_stops_within_cmd_vel_timeout_and_the_watchdog(session: dict[str, Any]) -> None:
-    """teleop_twist_joy's 20 Hz stream, then silence: every message taken, the robot stopped (true
+    """teleop_twist_joy's 20 Hz stream, then silence: every message taken (but those KEEP_LAST 10 drops
+    in a stall of the bridge), the robot stopped (true
     speed and turn rate) within cmd_vel_timeout + the watchdog (+ 0.3 s for the motors to spin down)
     of the last one, as tests/ros2/test_rclpy_interop.py checks on odom."""
     from omnibot.ros2.bridge import CMD_VEL_TIMEOUT, WATCHDOG
 
-    assert session["received"] == session["peer"]["sent"] > 40
     last = session["last_rx"]
+    sent, received = session["peer"]["sent"], session["received"]
+    # Every message taken, but for what the reader's history (KEEP_LAST 10, ROS's default) drops when
+    # the bridge's cycle stalls longer than 10 messages take (a loaded machine stalled it 0.9 s while the
+    # peer started): at most the messages (20 Hz, 2 of slack for the peer's catch-up) past 10 of a gap
+    cycles = [t for t, _, _, _ in session["trace"] if t <= last]
+    taking = max(0, next(i for i, t in enumerate(cycles) if t >= session["first_rx"]) - 1)
+    gaps = [b - a for a, b in itertools.pairwise(cycles[taking:])]
+    droppable = sum(max(0, math.ceil(g * 20) + 2 - 10) for g in gaps)
+    assert sent > 40 and sent - droppable <= received <= sent, (sent, received, max(gaps))
     # cmd_vel_timeout runs on the runtime's clock (the wall's: the peer is a real process); the
     # watchdog and the spin-down on the controller's (simulated time, slower than the wall's when
     # the machine is loaded)

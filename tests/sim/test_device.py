@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import time
 
 import pytest
 
@@ -19,11 +18,11 @@ def test_hello_at_power_up_and_a_move_moves_the_simulated_robot() -> None:
     device = SimDevice("omni4", seed=1)
     with LockstepLink(device) as link:
         assert read_until(link, b"\r\n").startswith(b"HELLO,2,omni4,4\r\n")
-        t0 = time.perf_counter()
         link.write(b"MOVE,30,60,90,0;")
         out = read_until(link, b"IDLE\r\n")
         assert out == b"OK\r\nIDLE\r\n"
-        assert time.perf_counter() - t0 < 2.0  # lockstep runs faster than real time
+        # (how fast lockstep runs is a benchmark's matter; that it never waits for the wall clock,
+        # tests/transport/test_lockstep.py's)
         pose = device.sim.pose
         assert 0.15 < pose.y < 0.45  # course 90: to the left; open loop, so only roughly 30 cm
         assert abs(pose.x) < 0.05 and abs(pose.theta) < 0.2

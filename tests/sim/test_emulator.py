@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import math
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -20,7 +21,7 @@ from omnibot.errors import LinkError
 from omnibot.sim.emulator import PARENT_ENV, spawn_pty_emulator
 
 
-def read_port(port: serial.Serial, marker: bytes, timeout: float = 10.0) -> bytes:
+def read_port(port: serial.Serial, marker: bytes, timeout: float = 30.0) -> bytes:
     """What the emulator's pty gives until ``marker`` arrives or ``timeout`` s of wall time pass."""
     out = b""
     deadline = time.monotonic() + timeout
@@ -61,8 +62,13 @@ def test_pty_emulator_serves_the_firmware_and_writes_truth(tmp_path: Path) -> No
         replies = b"HELLO,2,omni4,4\r\nOK\r\nIDLE\r\n"
         assert out.endswith(replies), out
         assert b"HELLO,2,omni4,4\r\n".endswith(out[: len(out) - len(replies)]), out
-        time.sleep(0.25)  # the truth file is flushed at least every 100 ms
-        rows = list(csv.DictReader(truth.open()))
+        # the truth file is flushed at least every 100 ms of the emulator's time: read it until the
+        # move is there (a loaded machine runs the emulator late)
+        deadline = time.monotonic() + 30
+        rows: list[dict[str, str]] = []
+        while not (rows and float(rows[-1]["y"]) > 0.1) and time.monotonic() < deadline:
+            time.sleep(0.05)
+            rows = list(csv.DictReader(truth.open()))
         assert rows and float(rows[-1]["y"]) > 0.1
     finally:
         proc.send_signal(signal.SIGTERM)
@@ -152,11 +158,11 @@ def test_a_fleet_on_one_pty_per_robot_shares_one_world() -> None:
             a.write(b"HELLO;SONAR,1,100,1,500,0;")
             b.write(b"HELLO;")
             out_a = out_b = b""
-            deadline = time.monotonic() + 10
-            while (b"RANGE" not in out_a or b"omni3" not in out_b) and time.monotonic() < deadline:
+            deadline = time.monotonic() + 30  # generous: a loaded machine runs the emulator late
+            while not (re.search(rb"RANGE,1,\d+\r\n", out_a) and b"omni3,3\r\n" in out_b):
+                assert time.monotonic() < deadline, (out_a, out_b)
                 out_a += a.read(64)
                 out_b += b.read(64)
-            out_a += a.read_until(b"\n")
         assert b"HELLO,2,omni4,4\r\nOK\r\n" in out_a and b"HELLO,2,omni3,3\r\n" in out_b
         cm = int(out_a.split(b"RANGE,1,")[1].split(b"\r\n")[0])
         expected = math.hypot(2.6 - 1.1, 0.05) - 0.32  # a's sonar on its front face; b a 0.32 m circle
@@ -197,6 +203,8 @@ def test_bad_emulator_arguments(argv: list[str], message: str, capsys: pytest.Ca
     assert message in capsys.readouterr().err
 
 
+# the compile is CPU-bound: 31 s in a loaded run, several times that on a busier one
+@pytest.mark.timeout(600)
 def test_a_first_start_with_no_numba_cache_answers_the_first_hello(tmp_path: Path) -> None:
     """A fresh install: the kernels compile before the device path is printed, so the very first
     HELLO is answered in time (what `make demo` on a new clone does)."""
@@ -215,7 +223,9 @@ def test_a_first_start_with_no_numba_cache_answers_the_first_hello(tmp_path: Pat
             assert path.startswith("/dev/"), proc.stderr.read() if proc.stderr else ""
             compiled = {p.name.split("-")[0] for p in cache.rglob("*.nbi")}
             assert {"kernels.physics_step", "kernels.outline_contacts"} <= compiled
-            with RobotClient.open(path, timeout=3.0) as client:
+            # in time: compiling once the path is out took the kernels' 30 s; a loaded machine may
+            # take a second or two to answer
+            with RobotClient.open(path, timeout=10.0) as client:
                 hello = client.hello()
             assert (hello.name, hello.motors) == ("omni4", 4)
         finally:

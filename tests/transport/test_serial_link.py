@@ -11,6 +11,7 @@ import pytest
 from omnibot.errors import ConfigError, LinkError
 from omnibot.transport import SerialLink, open_link
 from omnibot.transport.pty_bridge import PtyBridge
+from tests.client.fakes import FakeClock
 
 from .fakes import EchoDevice
 
@@ -30,10 +31,10 @@ def test_loop_roundtrip_and_timeout() -> None:
 def test_open_failure_and_retry_window() -> None:
     with pytest.raises(LinkError, match="cannot open serial port /dev/omnibot-missing"):
         SerialLink("/dev/omnibot-missing")
-    t0 = time.monotonic()
+    clock = FakeClock()  # the retry window on the link's clock, not on a loaded machine's wall clock
     with pytest.raises(LinkError):
-        SerialLink("/dev/omnibot-missing", open_retry=0.2, retry_interval=0.05)
-    assert 0.2 <= time.monotonic() - t0 < 2.0
+        SerialLink("/dev/omnibot-missing", open_retry=0.2, retry_interval=0.05, clock=clock)
+    assert clock.t == pytest.approx(0.2)  # tried at 0, 0.05, .. 0.2, then gave up
 
 
 def test_bad_baud() -> None:
@@ -55,7 +56,7 @@ def test_pty_echo_via_url() -> None:
         link.write(b"HELLO\n")
         data = b""
         while not data.endswith(b"\n"):
-            chunk = link.read(timeout=2)
+            chunk = link.read(timeout=10)  # the bridge's thread, late on a loaded machine
             assert chunk
             data += chunk
         assert data == b"HELLO\n"
@@ -81,11 +82,11 @@ def test_port_going_away_then_reopen_with_retry(tmp_path: Path) -> None:
 
         bridge = PtyBridge(EchoDevice()).start()  # plugged in again
         threading.Timer(0.1, port.symlink_to, args=(bridge.path,)).start()
-        link.reopen(retry=2.0)
+        link.reopen(retry=20.0)  # ends when the timer's thread has run: late on a loaded machine
         link.write(b"back\n")
         data = b""
         while not data.endswith(b"\n"):
-            chunk = link.read(timeout=2)
+            chunk = link.read(timeout=10)
             assert chunk
             data += chunk
         assert data == b"back\n"

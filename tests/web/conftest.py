@@ -14,7 +14,7 @@ import shutil
 from collections.abc import Iterator
 
 import pytest
-from playwright.sync_api import Browser, Page, sync_playwright
+from playwright.sync_api import Browser, Page, expect, sync_playwright
 
 from omnibot.web.dashboard import Dashboard
 
@@ -30,6 +30,11 @@ CHROMIUM_ARGS = [
     "--disable-sync",
 ]
 ROOM = "sim://omni4?world=room&seed=1"
+WAIT_MS = 30_000
+"""How long an ``expect`` waits for the page (playwright's default, 5 s, is short on a loaded machine:
+the dashboard's threads, the simulator and chromium share two cores with the rest of the suite)."""
+
+expect.set_options(timeout=WAIT_MS)
 
 
 @pytest.fixture

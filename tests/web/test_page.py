@@ -2,7 +2,9 @@
 
 Each test drives the simulated robot (``sim://omni4`` in the room world, paced to the wall clock by
 the link thread) and checks what the robot did on the simulator's ground truth, as streamed in the
-state frames (``dashboard.hub.latest``), and what the page shows.
+state frames (``dashboard.hub.latest``), and what the page shows. A key or the stick is held until
+the robot has gone far enough (not for a wall-clock time: on a loaded machine the simulation gets
+less of a wall-clock second), and every wait is for a condition, with a generous deadline.
 """
 
 from __future__ import annotations
@@ -33,11 +35,16 @@ def pose(dashboard: Dashboard) -> list[float]:
     return list(p)
 
 
-def wait_for(predicate: Any, timeout: float = 5.0, what: str = "condition") -> None:
+def wait_for(predicate: Any, timeout: float = 30.0, what: str = "condition") -> None:
     end = time.monotonic() + timeout
     while not predicate():
         assert time.monotonic() < end, f"timed out waiting for {what}"
         time.sleep(0.02)
+
+
+def sim_time(dashboard: Dashboard) -> float:
+    """The link clock of the latest state frame: the simulator's time."""
+    return float(latest(dashboard)["t"])
 
 
 def moving(dashboard: Dashboard) -> bool:
@@ -64,12 +71,12 @@ def test_keyboard_drives_the_robot_and_releasing_stops_it(page: Page, dashboard:
     page.keyboard.down("w")
     wait_for(lambda: latest(dashboard)["drive"]["state"] == "driving", what="driving")
     expect(page.locator("#drive-state")).to_contain_text("driving (keyboard)")
-    time.sleep(1.0)
+    wait_for(lambda: pose(dashboard)[0] - x0 > 0.3, what="0.3 m forward")  # about a second at half speed
     page.keyboard.up("w")
     wait_for(lambda: latest(dashboard)["drive"]["ended"] == "released", what="release")
     wait_for(lambda: not moving(dashboard), what="the robot to stop")
     x1, y1, _ = pose(dashboard)
-    assert x1 - x0 > 0.3  # forward (+x in the room) at half speed for about a second
+    assert x1 - x0 > 0.3  # forward (+x in the room)
     assert abs(y1 - y0) < 0.05
     expect(page.locator("#pose")).not_to_contain_text("x 1.00 m")
     time.sleep(0.3)
@@ -82,10 +89,10 @@ def test_emergency_stop_stops_the_robot_and_ignores_driving_until_resume(
     page.keyboard.down("w")
     wait_for(lambda: moving(dashboard), what="moving")
     page.click("#estop")
-    wait_for(lambda: latest(dashboard)["drive"]["state"] == "estop", timeout=1.0, what="e-stop")
+    wait_for(lambda: latest(dashboard)["drive"]["state"] == "estop", what="e-stop")
     expect(page.locator("#drive-state")).to_have_text("E-STOP")
     expect(page.locator("#control")).to_contain_text("emergency stop (page)")  # who holds the robot
-    wait_for(lambda: not moving(dashboard), timeout=1.0, what="the robot to stop")
+    wait_for(lambda: not moving(dashboard), what="the robot to stop")
     assert latest(dashboard)["robot_state"] in ("idle", "estop")
     page.keyboard.up("w")
     # driving is ignored while the emergency stop is engaged
@@ -126,18 +133,21 @@ def test_on_screen_joystick_and_gamepad_messages_drive(page: Page, dashboard: Da
     page.mouse.move(cx, cy)
     page.mouse.down()
     page.mouse.move(cx - 40, cy, steps=4)  # stick left: strafe left (+y)
-    time.sleep(0.8)
+    wait_for(lambda: pose(dashboard)[1] - y0 > 0.15, what="0.15 m to the left")
     page.mouse.up()
     wait_for(lambda: latest(dashboard)["drive"]["ended"] == "released", what="release")
     x1, y1, _ = pose(dashboard)
     assert y1 - y0 > 0.15 and abs(x1 - x0) < 0.05
     # a gamepad (standard layout), mapped with seed 003's teleop config: hold button 7 and move axis 3;
     # the browser's +0.3 is joy's -0.3, times scale_linear.x = -3.5: forward
-    for _ in range(16):
+    sources = set()
+    end = time.monotonic() + 30.0
+    while pose(dashboard)[0] - x1 <= 0.1:  # at 20 Hz, as the page polls a pad
+        assert time.monotonic() < end, "timed out waiting for the gamepad drive"
         page.evaluate("window.omnibot.send({type: 'joy', axes: [0, 0, 0, 0.3], buttons: [0,0,0,0,0,0,0,1]})")
         time.sleep(0.05)
-    assert latest(dashboard)["drive"]["source"] == "gamepad"
-    wait_for(lambda: pose(dashboard)[0] - x1 > 0.1, what="gamepad drive")
+        sources.add(latest(dashboard)["drive"]["source"])
+    assert "gamepad" in sources
 
 
 def test_screenshot(browser: Browser, tmp_path: Path) -> None:
@@ -182,11 +192,12 @@ def test_teach_and_repeat_from_the_page(browser: Browser) -> None:
             teach = page.locator("[data-teach='record']")
             expect(teach).to_be_enabled()
             expect(page.locator("#teach-note")).to_contain_text("Repeat drives to its start")
-            time.sleep(0.5)  # standing: the gyro's bias
+            t0 = sim_time(dashboard)
+            wait_for(lambda: sim_time(dashboard) - t0 >= 0.5, what="0.5 s standing")  # the gyro's bias
             x0 = pose(dashboard)[0]
             teach.click()
             page.keyboard.down("w")
-            time.sleep(0.8)
+            wait_for(lambda: pose(dashboard)[0] - x0 > 0.25, what="0.25 m forward")
             page.keyboard.up("w")
             wait_for(lambda: not moving(dashboard), what="the robot to stop")
             page.locator("[data-teach='stop']").click()

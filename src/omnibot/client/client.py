@@ -684,8 +684,12 @@ class RobotClient(TypedCalls):
         if late is not None and not late.done:  # its caller has had LinkTimeout: record what came
             self._complete(late, reply)
             return
-        if self._tags is None and isinstance(reply, HelloReply):  # a late answer to an earlier probe
-            self._set_tags(True)
+        if isinstance(reply, HelloReply):
+            # The late answer to a tagged HELLO given up (a probe): never a reset, whose greeting is
+            # untagged; it does say that the controller echoes tags (a stale untagged line may have
+            # answered the probes before it: taken for a reset, it made the client ask again forever).
+            if self._tags_auto:
+                self._set_tags(True)
             return
         self._event(event_from_message(reply, now))
 

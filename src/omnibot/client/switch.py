@@ -8,12 +8,18 @@ answer one way per protocol, the *probe* (docs/protocol.md, "Switching and versi
     binary controller:  HELLO reply frame (the session starts; ";\r\n" is garbage before the next frame)
     text controller:    ERROR lines for the garbage (or its HELLO greeting if it just reset)
 
-* :func:`find_protocol`: probe until one of the answers comes; the client then speaks what the
-  controller speaks (used on connect when no greeting came, and after a switch went wrong).
+* :func:`find_protocol`: probe until one of the answers comes (waiting longer for each probe: a
+  slow or loaded line answers late); the client then speaks what the controller speaks (used on
+  connect when no greeting came, and after a switch went wrong). A text answer ends with a STATUS
+  exchange: the ERROR lines owed to earlier probes come before its reply and are dropped with it, so
+  none is taken for the answer to a later command.
 * :func:`to_binary`: read the MODE bits (two text STATUS replies that agree), send ``MODE,<bits|4>``,
   probe until an answer comes; send MODE again while the answer is text; then check the bits with
   a binary STATUS and set them again if a corrupted MODE changed them.
 * :func:`to_text`: the binary MODE frame with bit 2 clear; if its OK frame never comes, probe.
+  Then a STATUS exchange as after a probe: a reply slower than the retry time had the MODE frame
+  sent again, and each copy reached a text controller as ERROR lines (and as a partial line that
+  would have spoilt the next command).
 
 Each function works on the client's link directly (no Pending, no reply matching), so what a lost
 text reply leaves behind cannot confuse it; it fails the commands still waiting when it starts.
@@ -49,7 +55,9 @@ ATTEMPTS: Final = 8
 PROBES: Final = 3
 """Probes after each MODE command of to_binary."""
 ANSWER_TIME: Final = 0.1
-"""Seconds (link clock) to wait for the answer to one probe or text command."""
+"""Seconds (link clock) to wait for the answer to the first probe or to one text command."""
+ANSWER_TIME_MAX: Final = 0.8
+"""Seconds (link clock) a later probe waits at most: each waits twice as long as the one before."""
 _QUIET: Final = 0.02
 
 
@@ -58,10 +66,15 @@ def find_protocol(client: RobotClient, attempts: int = ATTEMPTS) -> Hello | None
     started and its HELLO is returned; text -> the client speaks text, None. Raises LinkTimeout
     if no probe got an answer."""
     _forget_waiting(client, "the client is probing the controller's protocol")
+    window = ANSWER_TIME
     for _ in range(attempts):
-        found = _probe(client)
-        if found is not None:
-            return found if isinstance(found, Hello) else None
+        found = _probe(client, window)
+        if isinstance(found, Hello):
+            return found
+        if found is False:
+            _skip_owed_text(client)
+            return None
+        window = min(2.0 * window, ANSWER_TIME_MAX)
     raise LinkTimeout(f"the controller answered none of {attempts} probes (on {client.link.url})")
 
 
@@ -104,23 +117,25 @@ def to_text(client: RobotClient) -> None:
         mask = client.mode_bits if client.mode_bits is not None else client.status().mode
         try:
             client.execute(Mode(mask & ~codes.MODE_BINARY))
-            return
         except LinkTimeout:  # the OK frame was lost, or the MODE frame: which one, ask
             find_protocol(client)
+        else:
+            _skip_owed_text(client)
+            return
     raise LinkTimeout(f"the controller did not switch to text after {ATTEMPTS} tries (on {client.link.url})")
 
 
 # ---------------------------------------------------------------------------------------------------
-def _probe(client: RobotClient) -> Hello | bool | None:
+def _probe(client: RobotClient, window: float = ANSWER_TIME) -> Hello | bool | None:
     """One probe: the Hello of a binary controller (the client now speaks binary), False for a
-    text controller (the client speaks text; its answers to the probe are read and dropped), None
-    if no answer came within ANSWER_TIME."""
+    text controller (the client speaks text; the answers that came are read and dropped), None
+    if no answer came within ``window`` s."""
     wire = BinaryWire()
     clock = client.clock
     seq, frame = wire.frame(HelloCommand(codes.VERSIONS), round(clock.now() * 1000))
     client._write(frame + b";\r\n")
     lines = text.TextDecoder()
-    deadline = clock.now() + ANSWER_TIME
+    deadline = clock.now() + window
     text_seen = False
     while (remaining := deadline - clock.now()) > 0:
         data = client._read(min(remaining, _QUIET) if text_seen else remaining)
@@ -154,6 +169,21 @@ def _probe(client: RobotClient) -> Hello | bool | None:
     return None
 
 
+def _skip_owed_text(client: RobotClient) -> None:
+    """Read up to the reply of a STATUS sent now: the text a controller still owes comes before it
+    (it answers in order) and is dropped. A probe gets two ERROR lines from a text controller, and
+    those sent before the one answered are owed still on a line slower than their wait; a binary
+    frame sent again after the switch to text (its OK slower than the retry time) gets ERROR lines
+    too, and leaves a partial line, which the LF in front of STATUS ends. Taken for the answer to
+    the next command instead (in text nothing tells them apart, and tags are not known yet after
+    a probe), they failed it. Each STATUS waits the client's reply timeout; LinkTimeout if none is
+    answered."""
+    for _ in range(ATTEMPTS):
+        if _text_exchange(client, b"\nSTATUS\n", (StatusReply,), client.timeout) is not None:
+            return
+    raise LinkTimeout(f"the controller answered none of {ATTEMPTS} STATUS in text (on {client.link.url})")
+
+
 def _read_mode(client: RobotClient) -> int:
     """The MODE bits from text STATUS replies: two that agree (a corrupted digit rarely repeats)."""
     seen: list[int] = []
@@ -166,12 +196,14 @@ def _read_mode(client: RobotClient) -> int:
     raise LinkTimeout(f"no two STATUS replies agreed on the MODE bits (on {client.link.url})")
 
 
-def _text_exchange(client: RobotClient, line: bytes, kinds: tuple[type, ...]) -> object | None:
-    """Write one text command and read until a reply of ``kinds`` (returned) or ANSWER_TIME."""
+def _text_exchange(
+    client: RobotClient, line: bytes, kinds: tuple[type, ...], wait: float = ANSWER_TIME
+) -> object | None:
+    """Write one text command and read until a reply of ``kinds`` (returned) or ``wait`` s."""
     client._write(line)
     lines = text.TextDecoder()
     clock = client.clock
-    deadline = clock.now() + ANSWER_TIME
+    deadline = clock.now() + wait
     while (remaining := deadline - clock.now()) > 0:
         data = client._read(remaining)
         for message in lines.feed(data):
