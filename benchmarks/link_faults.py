@@ -18,8 +18,8 @@ Faults, each alone, at a rate p of 1 % and 0.1 % per byte, both ways, fixed seed
 * drop: the byte is lost; corrupt: one bit of the byte flips (``faults+`` wrapper);
 * delay: the line pauses 2-20 ms before the byte (order kept);
 * stall: the line stops for 0.1-0.4 s at random times, p of the time in all (each way: at 1 %
-  one stall every 25 s); stalls are shorter than the binary protocol's retry budget of 0.55 s: a
-  longer outage is reported as a failure ("may or may not have run") by design;
+  one stall every 25 s); stalls are shorter than the binary protocol's retry budget (the host's
+  3.2 s): a longer outage is reported as a failure ("may or may not have run") by design;
 * reorder: the byte swaps places with one 1-8 bytes later in the same chunk.
 """
 

@@ -315,6 +315,26 @@ def test_binary_survives_a_noisy_line() -> None:
     client.close()
 
 
+@pytest.mark.parametrize("late", [0.3, 2.5])
+def test_binary_calls_outlast_a_stalled_line(late: float) -> None:
+    """Replies held ``late`` seconds (a controller, line or host not scheduled for that long): the
+    host's retransmissions turn patient after the fast ones (3.2 s in all) and a call waits for
+    them, so no call fails for it."""
+    link = FaultLink(open_link("sim://omni4?seed=1"), seed=3, direction="rx")
+    client = RobotClient(link, "omni4")
+    client.use_binary()
+    link.delay = late
+    start = client.clock.now()
+    client.move(2.0, 0.4)  # 5 s long: still moving when the STATUS after it runs
+    assert client.status().moving
+    assert client.clock.now() - start >= 2 * late  # both replies were held
+    client.wait_idle(timeout=10)
+    link.delay = 0.0
+    assert client.status().idle
+    client.use_text()
+    client.close()
+
+
 def test_binary_controller_reset_returns_to_text(sim: RobotClient) -> None:
     sim.use_binary()
     rec = EventRecorder()

@@ -132,6 +132,23 @@ def test_ack_stops_retransmission() -> None:
     assert tx.poll(1000) == [] and tx.take_failed() == []
 
 
+def test_the_hosts_retransmissions_turn_patient_after_the_fast_ones() -> None:
+    """The host's sender: codes.RETRIES - 1 retransmissions 50 ms apart (a lossy line's lost byte
+    costs 50 ms, as the controller's), then waits of 100, 200 and 400 ms up to its HOST_RETRIES
+    (3.2 s in all: a stalled line costs no call); the next frame starts fast again."""
+    tx = arq.Sender(retries=codes.HOST_RETRIES, max_timeout_ms=codes.HOST_RETRY_TIMEOUT_MAX_MS)
+    first, _ = tx.allocate()
+    tx.track(first, b"a", 0)
+    sent = [now for now in range(0, 5000) if tx.poll(now)]
+    assert sent[:10] == list(range(50, 550, 50))
+    assert [b - a for a, b in itertools.pairwise(sent)][9:] == [100, 200, 400, 400, 400, 400, 400]
+    assert tx.take_failed() == [first] and tx.budget_ms() == 3200 == sent[-1] + 400
+    second, _ = tx.allocate()
+    tx.track(second, b"b", 5000)
+    assert [now for now in range(5000, 5200) if tx.poll(now)] == [5050, 5100, 5150]
+    assert arq.Sender().budget_ms() == 550  # the controller's: 10 retransmissions 50 ms apart
+
+
 def test_sync_abandons_pending_frames() -> None:
     tx = session()
     for now in range(3):

@@ -421,6 +421,8 @@ class RobotClient(TypedCalls):
         if not self.binary:
             self._text_ready(command, raw, wait)
         wire = self._wire
+        if isinstance(wire, BinaryWire):  # the retransmissions answer or fail the call: wait for them
+            wait = max(wait, wire.sender.budget_ms() / 1000.0 + _RETRY_POLL)
         sync = isinstance(command, Stop | HelloCommand)
         if isinstance(wire, BinaryWire) and not sync and not wire.ready():
             self._wait(wire.ready, self.clock.now() + wait, "binary send window full")
@@ -797,7 +799,7 @@ class RobotClient(TypedCalls):
             if p.seq in seqs:
                 p._fail(
                     LinkTimeout(
-                        f"no reply to {p.line} after {codes.RETRIES} retries; it may or may not have run"
+                        f"no reply to {p.line} after {codes.HOST_RETRIES} retries; it may or may not have run"
                     )
                 )
         self._outstanding = [p for p in self._outstanding if not p.done]

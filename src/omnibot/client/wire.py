@@ -90,7 +90,11 @@ class BinaryWire:
 
     def __init__(self) -> None:
         self._decoder = binary.BinaryDecoder()
-        self.sender = arq.Sender(window=codes.WINDOW_MIN)  # what every controller takes, until its HELLO
+        self.sender = arq.Sender(  # the window every controller takes, until its HELLO
+            window=codes.WINDOW_MIN,
+            retries=codes.HOST_RETRIES,
+            max_timeout_ms=codes.HOST_RETRY_TIMEOUT_MAX_MS,
+        )
         self.receiver = arq.Receiver(window=codes.WINDOW)  # events: a controller sends at most this many
         self._tail = b""  # bytes since the last 0x00, to spot a reset HELLO line
         self._after_reset: bytes | None = None

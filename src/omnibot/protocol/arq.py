@@ -69,10 +69,13 @@ class Sender:
         timeout_ms: int = codes.RETRY_TIMEOUT_MS,
         retries: int = codes.RETRIES,
         first_seq: int = 1,
+        max_timeout_ms: int = 0,
     ) -> None:
         self.window = window
         self.timeout_ms = timeout_ms
         self.retries = retries
+        # above timeout_ms: the retransmissions after the first codes.RETRIES wait twice the last
+        self.max_timeout_ms = max_timeout_ms
         self._next = first_seq
         self._sync = True
         self._sync_seq = 0  # the seq just allocated with SYNC (0: the last one had none)
@@ -146,8 +149,26 @@ class Sender:
             self._abandon(0)
             return []
         head.resent += 1
-        self._deadline = now + self.timeout_ms
+        self._deadline = now + self._wait(head.resent)
         return [entry.frame for entry in self._pending]
+
+    def _wait(self, resent: int) -> int:
+        """ms to wait for progress after the ``resent``-th retransmission of the oldest frame:
+        ``timeout_ms`` for the first :data:`codes.RETRIES` (a lossy line's lost byte costs one
+        such wait), then, with ``max_timeout_ms`` above it, twice the wait before, up to that (a
+        line, controller or host stalled for seconds costs no call)."""
+        late = resent - codes.RETRIES
+        if late < 0 or self.max_timeout_ms <= self.timeout_ms:
+            return self.timeout_ms
+        wait = self.timeout_ms << (late + 1)
+        return wait if wait < self.max_timeout_ms else self.max_timeout_ms
+
+    def budget_ms(self) -> int:
+        """ms from sending a frame that is the oldest until it is given up without progress."""
+        total = self.timeout_ms
+        for resent in range(1, self.retries + 1):
+            total += self._wait(resent)
+        return total
 
     def take_failed(self) -> "list[int]":
         """Seqs given up on or abandoned since the last call (they get no reply), oldest first."""

@@ -227,3 +227,7 @@ WINDOW = 32  # this implementation's window: the host's, the MicroPython control
 WINDOW_LIMIT = 127  # the most: W duplicates behind and W - 1 new seqs ahead must not meet in SEQ_MAX
 RETRY_TIMEOUT_MS = 50
 RETRIES = 10  # retransmissions before giving up (0.55 s): 1 % of bytes lost or corrupted never gets there
+# The host's: after 9 retransmissions 50 ms apart, 8 more waiting 100, 200, then 400 ms (3.2 s in
+# all), so a stalled line, controller or host (a pty emulator not scheduled for a second) costs no call.
+HOST_RETRIES = 17
+HOST_RETRY_TIMEOUT_MAX_MS = 400
