@@ -92,10 +92,14 @@ def test_gyro_calibration_spin_learns_the_scale(name: str, surface: str) -> None
     assert drivers.sources == {"gyro-spin"} and nav.runtime.sent.vel > 500
     assert nav.runtime.sent.errors == 0
     assert sim is not None and sim.gyro is not None
-    assert bias == pytest.approx(sim.gyro.bias, abs=3e-4)
+    assert bias == pytest.approx(
+        sim.gyro.bias, abs=1e-4
+    )  # the standstills': 2e-5 (fitted with the scale: 1.3e-4)
     assert scale == pytest.approx(sim.gyro.scale_error, abs=5e-4)  # what the heading filter is told
     assert abs(sim.pose.theta) < 0.2  # one turn each way at each rate: back where it started
-    assert heading == pytest.approx(sim.pose.theta, abs=5e-3)  # the estimate turned with the body
+    assert heading == pytest.approx(
+        sim.pose.theta, abs=1e-3
+    )  # the estimate turned with the body (0.03 degree)
 
 
 def test_the_gyro_spin_leaves_the_heading_within_the_gyro_noise() -> None:
