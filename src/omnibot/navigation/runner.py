@@ -254,10 +254,11 @@ class Navigator:
         the body turns (mecanum rollers on carpet) the creep is a near-constant rate, told apart from
         the gyro's scale by the two spin rates: ``d_psi - bias T = (1 + scale) (d_enc + creep
         T_moving)`` for each spin (:func:`~omnibot.calibration.gyro.fit_spins`). Every fused
-        estimator's heading filter takes bias and scale (as known to 2e-4 rad/s and 0.05 %) and its
-        heading is set from the body's rotation over the manoeuvre by the gyro, bias and scale
-        corrected (an encoder error over the spins would be a heading offset: omni4 on carpet, 0.18
-        degree). The robot ends where it started (within its own odometry). A rate above the robot's
+        estimator's heading filter takes bias and scale, as known to 5e-5 rad/s (a 3 s standstill's
+        mean; looser, the driven wheels' creep in rotation at speed read as bias: omni3 at 4 m/s on
+        carpet) and 0.05 %, and its heading is set from the body's rotation over the manoeuvre by
+        the gyro, bias and scale corrected (an encoder error over the spins would be a heading
+        offset: omni4 on carpet, 0.18 degree). The robot ends where it started (within its own odometry). A rate above the robot's
         ``angular_speed_max`` is capped to it (with one rate left the creep is not fitted). Returns the
         learned (bias, scale).
         """
@@ -297,7 +298,7 @@ class Navigator:
             raise NavigationError("gyro calibration needs telemetry with encoders and gyro heading")
         for est, theta in zip(estimators, start, strict=True):
             if isinstance(est, PoseEstimator) and est.heading_source == "fused":
-                est.filter.calibrated(fit.bias, fit.scale_error, bias_std=2e-4, scale_std=5e-4)
+                est.filter.calibrated(fit.bias, fit.scale_error, bias_std=5e-5, scale_std=5e-4)
                 p = est.estimate
                 est.reset(Pose2D(p.x, p.y, theta + fit.turned))
         return fit.bias, fit.scale_error
