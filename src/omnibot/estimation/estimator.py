@@ -313,6 +313,7 @@ class PoseEstimator:
             standstill=standstill,
             slip=slip,
             accel=accel,
+            speed=0.0 if wheel is None or dt <= 0 else math.hypot(wheel[0], wheel[1]) / dt,
             ref_resolution=self.rotation_resolution,
         )
 

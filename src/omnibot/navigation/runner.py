@@ -22,14 +22,13 @@ estimator starts at the path's first pose, the robot is taken to stand there). T
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from omnibot.calibration.gyro import Spin, SpinFit, fit_spins
+from omnibot.calibration.gyro import Spin, SpinFit, Standstill, fit_spins
 from omnibot.client.client import RobotClient
 from omnibot.client.errors import NotSupported
 from omnibot.client.events import Telemetry
@@ -143,25 +142,34 @@ class _GyroProbe:
     def mark(self) -> int:
         return len(self.rows) - 1
 
-    def fit(self, marks: list[int], moving: list[float]) -> tuple[SpinFit, float] | None:
-        """The spins' fit (:func:`~omnibot.calibration.gyro.fit_spins`) from the stretches between
-        ``marks`` (the wheels turning ``moving`` s in each) and the standstill just before the first,
-        with the body's rotation over the manoeuvre; None without enough telemetry."""
-        if len(self.rows) < 10 or min(marks) < 0:
+    def fit(self, marks: list[int], moving: list[float]) -> SpinFit | None:
+        """The spins' fit (:func:`~omnibot.calibration.gyro.fit_spins`) from ``marks``: the start and
+        end of a standstill, then of each spin's standstill after it (the spin between the two, its
+        wheels turning ``moving`` s); None without enough telemetry."""
+        if len(self.rows) < 10 or min(marks) < 0 or len(marks) != 2 * len(moving) + 2:
             return None
         rows = np.array(self.rows)
-        still = rows[: marks[0] + 1]
+
+        def still(i: int, j: int) -> Standstill:
+            t, psi = rows[i : j + 1, 0], rows[i : j + 1, 1]
+            slope = float(np.polyfit(t - t[0], psi, 1)[0])
+            duration = float(t[-1] - t[0])
+            return Standstill(slope * duration, duration, float(t[[0, -1]].mean()))
+
+        standstills = [still(i, j) for i, j in zip(marks[::2], marks[1::2], strict=True)]
         spins = [
             Spin(
                 gyro=float(rows[j, 1] - rows[i, 1]),
                 encoders=float(rows[j, 2] - rows[i, 2]),
                 duration=float(rows[j, 0] - rows[i, 0]),
                 moving=m,
+                time=float(rows[[i, j], 0].mean()),
             )
-            for (i, j), m in zip(itertools.pairwise(marks), moving, strict=True)
+            for i, j, m in zip(marks[1:-1:2], marks[2::2], moving, strict=True)
         ]
-        fit = fit_spins(float(still[-1, 0] - still[0, 0]), float(still[-1, 1] - still[0, 1]), spins)
-        return fit, sum(fit.true_rotation(s) for s in spins)
+        if min(s.duration for s in standstills) <= 0:
+            return None
+        return fit_spins(standstills, spins)
 
 
 class Navigator:
@@ -236,19 +244,23 @@ class Navigator:
     def calibrate_gyro(
         self, turns: float = 1.0, rates: tuple[float, ...] = SPIN_RATES
     ) -> tuple[float, float]:
-        """Spin in place ``turns`` times each way at each of ``rates`` (rad/s), standing still after each.
+        """Spin in place ``turns`` times each way at each of ``rates`` (rad/s), standing still before
+        and after each.
 
-        Turning in place from rest to rest, the encoders' rotation over each spin is the reference:
-        whatever creep the ramps cause comes back when braking, and on a floor where the wheels creep
-        all the time the body turns (mecanum rollers on carpet) the creep is a near-constant rate,
-        told apart from the gyro's scale by the two spin rates. With the gyro's heading change over
-        the same stretch, ``d_psi = (1 + scale) (d_enc + creep T_moving) + bias T`` for each spin and
-        ``d_psi = bias T`` for the standstill before, a least-squares fit
-        (:func:`~omnibot.calibration.gyro.fit_spins`) gives the gyro's bias and scale error. Every
-        fused estimator's heading filter takes them (as known to 2e-4 rad/s and 0.05 %) and its heading
-        is set from the body's rotation over the manoeuvre. The robot ends where it started (within
-        its own odometry). A rate above the robot's ``angular_speed_max`` is capped to it (with one
-        rate left the creep is not fitted). Returns the learned (bias, scale).
+        Still (:data:`STANDSTILL` s, after :data:`SETTLE` s of coming to rest), the gyro reads its bias
+        alone: the standstills pin it, and its walk, without the encoders. Turning in place from rest
+        to rest, the encoders' rotation over each spin is the reference for the scale: whatever creep
+        the ramps cause comes back when braking, and on a floor where the wheels creep all the time
+        the body turns (mecanum rollers on carpet) the creep is a near-constant rate, told apart from
+        the gyro's scale by the two spin rates: ``d_psi - bias T = (1 + scale) (d_enc + creep
+        T_moving)`` for each spin (:func:`~omnibot.calibration.gyro.fit_spins`). Every fused
+        estimator's heading filter takes bias and scale, as known to 5e-5 rad/s (a 3 s standstill's
+        mean; looser, the driven wheels' creep in rotation at speed read as bias: omni3 at 4 m/s on
+        carpet) and 0.05 %, and its heading is set from the body's rotation over the manoeuvre by
+        the gyro, bias and scale corrected (an encoder error over the spins would be a heading
+        offset: omni4 on carpet, 0.18 degree). The robot ends where it started (within its own odometry). A rate above the robot's
+        ``angular_speed_max`` is capped to it (with one rate left the creep is not fitted). Returns the
+        learned (bias, scale).
         """
         c = self.client
         probe = _GyroProbe(self.robot)
@@ -256,8 +268,9 @@ class Navigator:
         hooks.append(probe.update)
         moving: list[float] = []
         try:
+            marks = [0]  # the first standstill runs from the probe's first sample
             c.sleep(STANDSTILL)
-            marks = [probe.mark()]
+            marks.append(probe.mark())
             estimators = [self.estimator, *self.observers.values()]
             start = [e.estimate.theta for e in estimators]
             ramp = 0.5
@@ -273,20 +286,21 @@ class Navigator:
                         return Twist(0.0, 0.0, sign * rate * ramp_fraction(t, total, ramp))
 
                     self.drive(spin, name="gyro-spin")
+                    c.sleep(SETTLE)  # the body comes to rest: the standstill after is the gyro's bias alone
+                    marks.append(probe.mark())
                     c.sleep(STANDSTILL)
                     marks.append(probe.mark())
                     moving.append(total)
         finally:
             hooks.remove(probe.update)
-        result = probe.fit(marks, moving)
-        if result is None:
+        fit = probe.fit(marks, moving)
+        if fit is None:
             raise NavigationError("gyro calibration needs telemetry with encoders and gyro heading")
-        fit, turned = result
         for est, theta in zip(estimators, start, strict=True):
             if isinstance(est, PoseEstimator) and est.heading_source == "fused":
-                est.filter.calibrated(fit.bias, fit.scale_error, bias_std=2e-4, scale_std=5e-4)
+                est.filter.calibrated(fit.bias, fit.scale_error, bias_std=5e-5, scale_std=5e-4)
                 p = est.estimate
-                est.reset(Pose2D(p.x, p.y, theta + turned))
+                est.reset(Pose2D(p.x, p.y, theta + fit.turned))
         return fit.bias, fit.scale_error
 
     def close(self) -> None:
