@@ -24,7 +24,9 @@ def test_a_killed_run_is_readable_up_to_its_last_chunk(killed: Path) -> None:
     assert len(tels) > 100
     times = [t.t_ms for t in tels]  # type: ignore[union-attr]
     assert times == sorted(times) and all(b - a == 10 for a, b in itertools.pairwise(times))
-    assert sum(1 for m in messages if m.topic == topics.ODOM) == len(tels)
+    # each TEL's odometry is written right after it: the chunk the kill cut short may end between
+    # the last TEL and its odometry, never earlier
+    assert len(tels) - 1 <= sum(1 for m in messages if m.topic == topics.ODOM) <= len(tels)
 
 
 def test_foxglove_reads_a_killed_run(killed: Path) -> None:
