@@ -102,6 +102,22 @@ def test_gyro_calibration_spin_learns_the_scale(name: str, surface: str) -> None
     )  # the estimate turned with the body (0.03 degree)
 
 
+def test_the_gyro_spin_stays_within_a_small_gyros_range() -> None:
+    """A gyro of 2 rad/s range: the spin at 2.5 rad/s would clip it (the heading then 36 degrees off);
+    the spin is capped at 95 % of the range (a planned turn rate at 90 %)."""
+    omni4 = load_robot("omni4")
+    assert omni4.gyro is not None
+    robot = omni4.model_copy(update={"gyro": omni4.gyro.model_copy(update={"range": 2.0})})
+    with simulated_client(robot, seed=1) as client:
+        nav = Navigator(client, robot)
+        nav.prepare(0.5)
+        nav.calibrate_gyro()
+        truth = nav.truth()
+        heading = nav.estimator.estimate.theta
+        nav.close()
+    assert truth is not None and heading == pytest.approx(truth[2], abs=2e-3)
+
+
 def test_the_gyro_spin_leaves_the_heading_within_the_gyro_noise() -> None:
     # omni4 on carpet with the floor's slip calibration (as benchmarks/tracking.py's floor_slip finds
     # it): the encoders miss about 1 mrad of each spin. With the bias fitted together with the scale

@@ -57,6 +57,11 @@ an MPU6050's noise density 3 s pin the bias to 5e-5 rad/s (0.03 degree in 10 s o
 SPIN_RATES = (1.0, 2.5)
 """rad/s of the gyro calibration's spins: two rates tell the floor's creep (a rate) from the gyro's
 scale error (a fraction of the angle); mecanum4 on carpet creeps 0.02 rad/s beyond its encoders."""
+GYRO_USE = 0.9
+"""The share of the gyro's range a planned turn rate keeps within: a saturated gyro loses heading."""
+SPIN_GYRO_USE = 0.95
+"""The share of the gyro's range the calibration's spins keep within (a steady spin in place, ramped:
+it overshoots far less than a path's turns)."""
 
 
 class NavigationError(OmnibotError):
@@ -258,9 +263,9 @@ class Navigator:
         mean; looser, the driven wheels' creep in rotation at speed read as bias: omni3 at 4 m/s on
         carpet) and 0.05 %, and its heading is set from the body's rotation over the manoeuvre by
         the gyro, bias and scale corrected (an encoder error over the spins would be a heading
-        offset: omni4 on carpet, 0.18 degree). The robot ends where it started (within its own odometry). A rate above the robot's
-        ``angular_speed_max`` is capped to it (with one rate left the creep is not fitted). Returns the
-        learned (bias, scale).
+        offset: omni4 on carpet, 0.18 degree). The robot ends where it started (within its own odometry).
+        A rate above the robot's ``angular_speed_max`` or :data:`SPIN_GYRO_USE` of its gyro's range is
+        capped to it (with one rate left the creep is not fitted). Returns the learned (bias, scale).
         """
         c = self.client
         probe = _GyroProbe(self.robot)
@@ -274,7 +279,10 @@ class Navigator:
             estimators = [self.estimator, *self.observers.values()]
             start = [e.estimate.theta for e in estimators]
             ramp = 0.5
-            for rate in (min(r, self.robot.limits.angular_speed_max) for r in rates):
+            cap = self.robot.limits.angular_speed_max
+            if self.robot.gyro is not None:
+                cap = min(cap, SPIN_GYRO_USE * self.robot.gyro.range)
+            for rate in (min(r, cap) for r in rates):
                 total = 2.0 * math.pi * turns / rate + 2.0 * ramp
                 for sign in (1.0, -1.0):
 

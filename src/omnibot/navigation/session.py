@@ -18,7 +18,7 @@ from omnibot.control.paths.profile import MotionLimits
 from omnibot.estimation.slip import SlipParameters
 from omnibot.motion import Pose2D
 from omnibot.navigation.metrics import Tolerances, judge, tracking_report
-from omnibot.navigation.runner import STANDSTILL, FollowRun, Navigator
+from omnibot.navigation.runner import GYRO_USE, STANDSTILL, FollowRun, Navigator
 from omnibot.progress import Progress
 from omnibot.robot.description import RobotDescription
 
@@ -37,7 +37,7 @@ def follower_limits(
     saturated gyro loses heading); the floor's reach at :data:`PLAN_FLOOR_USE`."""
     limits = replace(MotionLimits.from_robot(robot, speed, surface=floor), floor_use=PLAN_FLOOR_USE)
     if robot.gyro is not None:
-        limits = limits.with_turn_rate(0.9 * robot.gyro.range)
+        limits = limits.with_turn_rate(GYRO_USE * robot.gyro.range)
     return limits
 
 
