@@ -42,6 +42,9 @@ from omnibot.robot.description import RobotDescription
 if TYPE_CHECKING:
     from omnibot.control.reach import FloorReach
 
+Grip = tuple[tuple[float, ...], tuple[float, ...]]
+"""(speeds m/s, fractions): the share of the accelerations a floor's grip leaves at each speed."""
+
 RHO = 0.1
 """m: the length a radian of turning in place counts for in sigma (only the grid depends on it)."""
 MAX_SAMPLES = 200_000
@@ -70,7 +73,7 @@ class MotionLimits:
     floor_use: float = 1.0
     """The fraction of the floor's reach the profile may use: apart from ``wheel_use``, whose margin
     also stands for the floor's load, which the reach already carries."""
-    grip: tuple[tuple[float, ...], tuple[float, ...]] | None = None
+    grip: Grip | None = None
     """(speeds, fractions): the fraction of the accelerations (and of the lateral one) the wheels'
     grip leaves beside a floor's drag at each speed (:func:`omnibot.control.reach.floor_grip`),
     interpolated; None: all of them."""
@@ -103,14 +106,15 @@ class MotionLimits:
 
         lim = robot.limits
         v = lim.speed_max if speed is None else min(speed, lim.speed_max)
+        floor, grip = (None, None) if surface is None else _floor_tables(robot, surface, v)
         return cls(
             v,
             lim.acceleration_max,
             lim.angular_speed_max,
             lim.angular_acceleration_max,
             wheels=wheel_rows(robot),
-            floor=None if surface is None else _floor_table(robot, surface),
-            grip=None if surface is None else _grip_table(robot, surface, v),
+            floor=floor,
+            grip=grip,
         )
 
     def with_wheel_use(self, fraction: float) -> MotionLimits:
@@ -154,31 +158,22 @@ class MotionLimits:
         return cap
 
 
-_FLOOR_TABLES: dict[tuple[str, str], FloorReach] = {}
-_GRIP_TABLES: dict[tuple[str, str, float], tuple[tuple[float, ...], tuple[float, ...]]] = {}
+_REACH_CACHE: dict[tuple[str, str], FloorReach] = {}
+_GRIP_CACHE: dict[tuple[str, str, float], Grip] = {}
 
 
-def _grip_table(
-    robot: RobotDescription, surface: str, top: float
-) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    """The robot's grip table on ``surface`` up to ``top`` m/s, computed once per description, floor
-    and speed."""
-    from omnibot.control.reach import floor_grip
-
-    key = (robot.model_dump_json(), surface, top)
-    if key not in _GRIP_TABLES:
-        _GRIP_TABLES[key] = floor_grip(robot, surface, top)
-    return _GRIP_TABLES[key]
-
-
-def _floor_table(robot: RobotDescription, surface: str) -> FloorReach:
-    """The robot's reach on ``surface``, computed once per description and floor."""
-    from omnibot.control.reach import floor_reach
+def _floor_tables(robot: RobotDescription, surface: str, top: float) -> tuple[FloorReach, Grip]:
+    """The robot's reach on ``surface`` (computed once per description and floor) and its grip table
+    up to ``top`` m/s (once per description, floor and speed): :func:`omnibot.control.reach.floor_reach`,
+    :func:`~omnibot.control.reach.floor_grip`."""
+    from omnibot.control.reach import floor_grip, floor_reach
 
     key = (robot.model_dump_json(), surface)
-    if key not in _FLOOR_TABLES:
-        _FLOOR_TABLES[key] = floor_reach(robot, surface)
-    return _FLOOR_TABLES[key]
+    if key not in _REACH_CACHE:
+        _REACH_CACHE[key] = floor_reach(robot, surface)
+    if (*key, top) not in _GRIP_CACHE:
+        _GRIP_CACHE[(*key, top)] = floor_grip(robot, surface, top)
+    return _REACH_CACHE[key], _GRIP_CACHE[(*key, top)]
 
 
 @dataclass(frozen=True)
