@@ -110,6 +110,10 @@ def test_a_move_whose_wheels_fall_behind_warns_17_after_idle() -> None:
     # backwards just the same
     assert rig.cmd("MOVE,-100,50,0,0") == ["OK"]
     assert rig.run(2100) == ["IDLE", SHORT]
+    # a main loop slower than the control period (30 ms a pass) judges it just the same
+    slow = wheels(make_rig(), 0.85)
+    slow.cmd("MOVE,100,50,30,0")
+    assert slow.run(2100, step_us=30000) == ["IDLE", SHORT]
 
 
 @pytest.mark.parametrize(

@@ -238,9 +238,10 @@ class Executor:
         if self.progress.state == COASTING:
             self._watch_due -= dt_us
             if self._watch_due <= 0:
-                self._watch_due += self._drag_period
+                elapsed = self._drag_period - self._watch_due  # a slow loop's checks are further apart
+                self._watch_due = self._drag_period
                 self._read_counts()
-                if self.progress.step(self._counts, self._drag_period):
+                if self.progress.step(self._counts, elapsed):
                     self._warn(codes.W_SHORT)
 
     def _finish(self) -> None:
