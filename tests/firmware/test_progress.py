@@ -206,6 +206,11 @@ def test_acceptance_robot_beyond_its_reach_warns_17_where_it_falls_short(
             assert short.progress < 0.9
             fine = sim_move(client, back, 0.9)
             assert fine.distance == pytest.approx(1.0, abs=0.02) and fine.warnings == set()
+        # at the calibration's own reach (0.81 m/s, from PWM saturation alone) the current limit already
+        # costs courses 30 and 60 one way 12 % (measured -12.3 / -12.0 %, turning 44 degrees): warned
+        for course in (30.0, 60.0):
+            at_reach = sim_move(client, course, 0.81)
+            assert at_reach.distance < 0.9 and at_reach.warnings == {codes.W_SHORT}
         # on the axis, within the drivers' current, no warning; at 0.3 m/s on every course none either
         assert sim_move(client, 0.0, 0.9).warnings == set()
         for course in (15.0, 75.0, 195.0, 255.0):
