@@ -17,7 +17,7 @@ are 5 % larger reads 5 % short when it lands): the tolerance covers such errors,
 """
 
 COAST_MAX_US = 3000000  # the longest coast watched; a robot pushed about is judged then
-IDLE = 0
+OFF = 0  # no MOVE watched
 MOVING = 1
 COASTING = 2
 
@@ -36,7 +36,7 @@ class ProgressWatch:
         self.ty = [float(v) for v in travel[1]]
         self.tolerance = float(cfg.get("progress_tolerance", 0.0))
         self.available = self.tolerance > 0.0 and all(int(c) > 0 for c in cfg["encoder_cpr"])
-        self.state = IDLE
+        self.state = OFF
         self.distance = 0.0
         self.progress = 0.0
         self._share = [0.0] * n
@@ -52,7 +52,7 @@ class ProgressWatch:
     def start(self, counts: "list[int]", ux: float, uy: float, distance_m: float) -> None:
         """Watch a MOVE of ``distance_m`` along the body-frame unit vector (ux, uy) from ``counts``."""
         if not self.available or distance_m <= 0.0:
-            self.state = IDLE
+            self.state = OFF
             return
         for i in range(len(self._share)):
             self._share[i] = self.tx[i] * ux + self.ty[i] * uy
@@ -62,7 +62,7 @@ class ProgressWatch:
 
     def cancel(self) -> None:
         """End the watch unjudged."""
-        self.state = IDLE
+        self.state = OFF
 
     def ended(self, counts: "list[int]") -> None:
         """The watched MOVE's timeline ended with the queue empty: watch its coast."""
@@ -92,5 +92,5 @@ class ProgressWatch:
             self._last[i] = counts[i]
         if not still and self._coast_us < COAST_MAX_US:
             return False
-        self.state = IDLE
+        self.state = OFF
         return self.measure(counts) < (1.0 - self.tolerance) * self.distance
