@@ -67,6 +67,7 @@
 #define P_TEL_SONAR 128
 #define P_TEL_TRACKING 4
 #define P_W_POWER_TOO_LOW 12
+#define P_W_SHORT 17
 #define P_W_SONAR_LIMIT 14
 #define P_W_SONAR_STOP 13
 #define P_W_SPEED_REDUCED 11

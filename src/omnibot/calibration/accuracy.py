@@ -72,6 +72,14 @@ class AccuracyRow:
     source: str = ""
     saturated: bool = False
     """The controller warned that the motors could not give the power asked (warning 11, speed reduced)."""
+    short: bool = False
+    """The controller warned that the MOVE stood still short of its distance on its wheel encoders
+    (warning 17)."""
+
+    @property
+    def warned(self) -> bool:
+        """The controller warned about this run (warning 11 or 17)."""
+        return self.saturated or self.short
 
     def as_dict(self) -> dict[str, Any]:
         """The row as plain data (for the JSON report)."""
@@ -113,6 +121,22 @@ def reach_speed(
                 return best
         best = v
     return best
+
+
+def checked_reach(reach: float | None, rows: Sequence[AccuracyRow]) -> float | None:
+    """``reach`` (:func:`reach_speed`) lowered to what the check's MOVEs showed: when the controller
+    warned about a MOVE at or below it (warning 11 or 17: a motor could not give the power, or the MOVE
+    fell short on its encoders), the fastest speed the check drove below the slowest such MOVE without a
+    warning on any course (None when there is none)."""
+    if reach is None:
+        return None
+    moves = [r for r in rows if r.kind == "move"]
+    warned = [r.speed for r in moves if r.warned and r.speed <= reach]
+    if not warned:
+        return reach
+    slowest = min(warned)
+    clean = [r.speed for r in moves if r.speed < slowest]
+    return max(clean) if clean else None
 
 
 @dataclass(frozen=True)

@@ -54,6 +54,7 @@ def run_accuracy(runner: Runner, plan: AccuracyPlan) -> list[AccuracyRow]:
                         heading_error_deg=None if m is None or m.theta is None else math.degrees(m.theta),
                         source="" if m is None else m.source,
                         saturated=codes.W_SPEED_REDUCED in r.warnings,
+                        short=codes.W_SHORT in r.warnings,
                     )
                 )
     for angle, rate in plan.rotations:

@@ -22,7 +22,7 @@ from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass, field
 from functools import partial
 
-from omnibot.calibration.accuracy import AccuracyPlan, AccuracyRow, reach_speed
+from omnibot.calibration.accuracy import AccuracyPlan, AccuracyRow, checked_reach, reach_speed
 from omnibot.calibration.check import run_accuracy
 from omnibot.calibration.experiments import (
     Runner,
@@ -398,6 +398,14 @@ def _odometry(s: SurfaceRun) -> None:
 
 def _accuracy_after(s: SurfaceRun) -> None:
     s.after = run_accuracy(s.runner, s.accuracy) if s.accuracy is not None and s.upload else None
+    reach = checked_reach(s.reach, s.after or [])
+    if reach != s.reach:
+        s.notes.append(
+            f"the check's MOVEs at or below the computed reach ({s.reach:g} m/s) were warned about "
+            "(a motor short of power, or short on the encoders): the reach is "
+            + ("no speed checked" if reach is None else f"{reach:g} m/s")
+        )
+        s.reach = reach
 
 
 @dataclass(frozen=True)

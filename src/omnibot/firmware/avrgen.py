@@ -29,6 +29,9 @@ from omnibot.robot.description import load_robot
 ROOT = Path(__file__).resolve().parents[3]
 OUT_DIR = ROOT / "firmware-avr" / "generated"
 ROBOTS = ("omni4", "mecanum4")  # seed 000's robot and seed 003's
+NOT_SENT = frozenset({codes.W_SHORT})
+"""Codes the UNO never sends, so their texts stay out of its flash: WARN 17's encoder progress check
+(firmware/progress.py) is the MicroPython firmware's only (omni4's image has no room for it)."""
 INT16_MAX = 32767
 EEPROM_BYTES = 1024  # ATmega328P
 
@@ -191,13 +194,14 @@ def header_source(robot_name: str) -> str:
         inf = codes.INF_PARAMS.get(kid, -1) + 1
         w(f"    {{{_c_string(name)}, {kid}, {lo}, {hi}, {inf}}},")
     w("};")
-    for code, text in sorted(codes.TEXTS.items()):
+    texts = {c: t for c, t in codes.TEXTS.items() if c not in NOT_SENT}
+    for code, text in sorted(texts.items()):
         w(f"static const char TEXT_{code}[] PROGMEM = {_c_string(text)};")
     w("struct CodeText { uint8_t code; const char *text; };")
-    w(f"static const CodeText CODE_TEXTS[{len(codes.TEXTS)}] PROGMEM = {{")
-    w("    " + ", ".join(f"{{{c}, TEXT_{c}}}" for c in sorted(codes.TEXTS)))
+    w(f"static const CodeText CODE_TEXTS[{len(texts)}] PROGMEM = {{")
+    w("    " + ", ".join(f"{{{c}, TEXT_{c}}}" for c in sorted(texts)))
     w("};")
-    w(f"#define CODE_TEXT_COUNT {len(codes.TEXTS)}")
+    w(f"#define CODE_TEXT_COUNT {len(texts)}")
     w("")
     w("/* ---- robot ---- */")
     w(f"#define ROBOT_NAME {_c_string(robot.name)}")

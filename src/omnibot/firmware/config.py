@@ -37,6 +37,10 @@ queue_capacity, line_max    command queue slots, longest command
 baud, loop_hz               UART speed; nominal main-loop rate (informative)
 mode                        MODE bits at reset (bit 1 when controller.wheel_speed_control)
 encoder_cpr                 counts per wheel revolution of each motor's encoder, 0 = none
+travel                      [x row, y row]: body travel (m, body frame) per encoder count of each wheel,
+                            the least-squares forward kinematics (0 for a wheel without an encoder)
+progress_tolerance          a MOVE whose encoders measure it short of its distance by more than this
+                            share, once the wheels stand still, gets WARN 17 (0: no check; progress.py)
 speed_kp, speed_ki          wheel-speed PI gains, PWM counts per rad/s (and per rad)
 speed_band                  rad/s (where kp gives 5 % of full power): a target jump larger than it is
                             a step, after which the integral grows at 1 / (1 + (err / band)^2)
@@ -59,6 +63,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from omnibot.errors import ConfigError, OmnibotError
 from omnibot.robot import kinematics
 from omnibot.robot.description import PiecewiseLinear, RobotDescription, SonarSpec, load_robot
@@ -74,6 +80,7 @@ BOARD_MODULES = (
     "motion",
     "parser",
     "power",
+    "progress",
     "queue",
     "safety",
     "sonar",
@@ -112,6 +119,22 @@ def _idle_axes(robot: RobotDescription) -> list[float]:
         if all(min(abs(a - b), 180.0 - abs(a - b)) > 1e-6 for b in axes):
             axes.append(a)
     return sorted(axes)
+
+
+PROGRESS_TOLERANCE = 0.10
+"""A MOVE short by more than this share on its encoders gets WARN 17 (progress.py): above a wheel
+radius a few % off the description's and the encoders' counting, below the 13-16 % a MOVE loses when
+a current-limited pair of unequal motors turns the robot (docs/calibration.md, beyond the reach)."""
+
+
+def _travel(robot: RobotDescription, cpr: list[int]) -> list[list[float]]:
+    """Body travel (m) along x and y per encoder count of each wheel: the pseudo-inverse of the
+    inverse kinematics, 0 for a wheel without an encoder (then the firmware has no progress check)."""
+    forward = np.linalg.pinv(np.asarray(robot.wheel_matrix, dtype=float))
+    return [
+        [round(float(forward[row, i]) * 2.0 * math.pi / c, 12) if c > 0 else 0.0 for i, c in enumerate(cpr)]
+        for row in (0, 1)
+    ]
 
 
 SPEED_BAND_POWER = 0.05
@@ -231,6 +254,8 @@ def build_config(
         "loop_hz": ctl.loop_hz,
         "mode": 2 if ctl.wheel_speed_control and has_encoders else 0,
         "encoder_cpr": encoder_cpr,
+        "travel": _travel(robot, encoder_cpr),
+        "progress_tolerance": PROGRESS_TOLERANCE if has_encoders else 0.0,
         "speed_kp": round(kp, 6),
         "speed_ki": round(ki, 6),
         "speed_band": round(SPEED_BAND_POWER * pwm_max / kp, 6) if kp > 0 else 0.0,

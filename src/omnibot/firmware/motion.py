@@ -12,11 +12,15 @@ the guard's factor (the sonar stop's speed limit) and a finite motion's time str
 still covers its distance; :meth:`Executor.relimit` re-applies the factor after a new sonar reading.
 When the guard says the motion must not go on, the executor stops and leaves the reason in ``halt``
 (a protocol code) for the controller to report.
+
+A finite MOVE on a robot with encoders is watched through its coast (:mod:`~omnibot.firmware.progress`):
+when the wheels stand still short of its distance beyond the tolerance, WARN 17.
 """
 
 import math
 
 from omnibot.firmware.power import DEADBAND, SATURATED, WEAK, PowerModel
+from omnibot.firmware.progress import COASTING, ProgressWatch
 from omnibot.firmware.safety import LIMITED, UNCOVERED
 from omnibot.firmware.speedctl import SpeedControl
 from omnibot.firmware.watchdog import Watchdog
@@ -91,6 +95,8 @@ class Executor:
         period_us = int(cfg["control_period_ms"]) * 1000
         self._drag_period = period_us
         self._drag_due = 0
+        self.progress = ProgressWatch(cfg)
+        self._watch_due = 0
         self.speedctl = SpeedControl(
             [int(c) for c in cfg["encoder_cpr"]],
             float(cfg["speed_kp"]),
@@ -119,6 +125,8 @@ class Executor:
         """Change the mode bits; switching the closed loop re-plans the current motion's powers."""
         old = self.mode
         self.mode = mode
+        if mode & MODE_SIMULATION:
+            self.progress.cancel()  # no power applied: nothing to measure
         if (old ^ mode) & MODE_CLOSED_LOOP:
             if mode & MODE_CLOSED_LOOP:
                 self._start_feedback()
@@ -151,6 +159,7 @@ class Executor:
         self._drag = False
         self._coast = 0
         self._speed = 0.0
+        self.progress.cancel()
         for i in range(self.n):
             self.powers[i] = 0
         self.apply()
@@ -175,6 +184,7 @@ class Executor:
     def vel(self, vx: int, vy: int, w: int, t_ms: int) -> None:
         """Hold a body velocity (cm/s, cm/s, deg/s) for t_ms unless refreshed; clears the queue."""
         self.queue.clear()
+        self.progress.cancel()
         if self.kind != codes.VEL:
             self._warned = 0
         self.kind = codes.VEL
@@ -225,16 +235,35 @@ class Executor:
             self._drag_due -= dt_us
             if self._drag_due <= 0:
                 self._drag_step()
+        if self.progress.state == COASTING:
+            self._watch_due -= dt_us
+            if self._watch_due <= 0:
+                elapsed = self._drag_period - self._watch_due  # a slow loop's checks are further apart
+                self._watch_due = self._drag_period
+                self._read_counts()
+                if self.progress.step(self._counts, elapsed):
+                    self._warn(codes.W_SHORT)
 
     def _finish(self) -> None:
+        watched = self.progress.moving
         self.stop()
+        if watched:
+            self._read_counts()
+            self.progress.ended(self._counts)
+            self._watch_due = self._drag_period
         self._on_idle()
+
+    def _read_counts(self) -> None:
+        """Every motor encoder's count into ``_counts``."""
+        for i in range(self.n):
+            self._counts[i] = self.hal.encoder_count(i)
 
     def _start_next(self, carry: int) -> None:
         slot = self.queue.pop()
         kind = slot[0]
         self.kind = kind
         self._warned = 0
+        self.progress.cancel()  # a MOVE starts its own watch (_move)
         if kind == codes.MOVE:
             for i in range(4):
                 self.remembered[i] = slot[i + 1]
@@ -296,6 +325,10 @@ class Executor:
         self._drive(s * 0.01 * math.cos(a), s * 0.01 * math.sin(a), s * C * 0.001, False, gain)
         if not self.infinite:
             self.remaining = _duration(abs(L), abs(V), self._time_scale) + carry
+            if self.kind == codes.MOVE and not self.mode & MODE_SIMULATION:
+                u = 1.0 if s > 0 else -1.0
+                self._read_counts()
+                self.progress.start(self._counts, u * math.cos(a), u * math.sin(a), abs(L) * 0.01)
 
     def _rotate(self, A: int, F: int, carry: int) -> None:
         self.infinite = abs(A) == INF
@@ -418,8 +451,7 @@ class Executor:
     def _drag_step(self) -> None:
         """Recompute the drag from the encoders now; the next time one control period on."""
         self._drag_due = self._drag_period
-        for i in range(self.n):
-            self._counts[i] = self.hal.encoder_count(i)
+        self._read_counts()
         self._warn_once(self.model.drag(self._counts, self.powers) & SATURATED)
         self.apply()
 

@@ -119,6 +119,7 @@ W_SONAR_STOP = 13
 W_SONAR_LIMIT = 14  # project: speed limited so the robot can stop before what a sonar sees
 W_UNCOVERED = 15  # project: travel where no armed sonar looks, speed limited
 W_UNCOVERED_STOP = 16  # project: a running motion turned where no armed sonar looks, stopped (MODE bit 3)
+W_SHORT = 17  # project: a MOVE stood still short of its distance, as its wheel encoders measured
 E_QUEUE_FULL = 21
 E_TOO_LONG = 22
 E_UNKNOWN = 23
@@ -148,6 +149,7 @@ TEXTS = {
     W_SONAR_LIMIT: "speed limited to stop before the sonar's obstacle",
     W_UNCOVERED: "no sonar covers this direction, speed limited",
     W_UNCOVERED_STOP: "no sonar covers this direction, motion stopped",
+    W_SHORT: "MOVE fell short of its distance (encoders)",
     E_QUEUE_FULL: "queue full",
     E_TOO_LONG: "command too long",
     E_UNKNOWN: "unknown command",
