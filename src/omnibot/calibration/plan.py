@@ -43,6 +43,8 @@ class Plan:
     levels: int = 8
     """Power levels from the dead band to full power (denser near the dead band)."""
     deadband_step: int = 8
+    deadband_positions: int = 1
+    """Wheel positions each dead band is the mean over (experiments.spread_deadband; 1: one search)."""
     settle: float = 0.4
     """s to wait after a run for the robot to coast to a stop before measuring."""
     speed_margin: float = 1.2
@@ -70,7 +72,14 @@ class Plan:
     balance_levels: int = 4
     """Nominal powers of the balance runs, spread over what the speed range needs."""
     roller_rounds: int = 4
-    """Rounds of the idle axes at each power for the idle wheels' roller drag (rollers.py; 0: none)."""
+    """Rounds of the idle axes at each power for the idle wheels' roller drag (rollers.py; 0: none),
+    and of the coast MOVEs at each speed."""
+    coast_slow_rounds: int = 4
+    """Rounds of the coast MOVEs at their slowest speed, where a PWM count is the largest share of the
+    speed and the MOVEs tell the motor pairs' offsets apart best (rollers.tune_coast)."""
+    slow_rounds: int = 2
+    """Rounds of MOVEs at the bottom of the speed range on every raw course of each calibrated course,
+    through the fitted tables, that anchor K_l's slow end (fits.anchor_slow_end; 0: none)."""
     slip: bool = True
     """Drive the wheel-slip runs (16 out-and-back, wheel-speed loop on) and fit the floor's creep."""
 

@@ -29,10 +29,19 @@ from omnibot.calibration.experiments import (
     drive_square,
     find_deadband,
     rotation_sweep,
+    slow_moves,
     straight_sweep,
     turning_runs,
 )
-from omnibot.calibration.fits import SurfaceFit, average_kt, build_spec, fit_kt, fit_surface, robot_table
+from omnibot.calibration.fits import (
+    SurfaceFit,
+    anchor_slow_end,
+    average_kt,
+    build_spec,
+    fit_kt,
+    fit_surface,
+    robot_table,
+)
 from omnibot.calibration.gyro import GyroCalibration, calibrate_gyro
 from omnibot.calibration.motorfit import (
     STAND_POWERS,
@@ -112,7 +121,8 @@ def expected_runs(
         "turns": plan.turn_rounds * len(plan.turn_curvatures) * len(plan.turn_courses_deg) * 2
         if upload
         else 0,
-        "roller gains": 3 * plan.roller_rounds * axes if rollers and upload else 0,
+        "roller gains": (3 * plan.roller_rounds + plan.coast_slow_rounds) * axes if rollers and upload else 0,
+        "slow end": courses * plan.directions * plan.slow_rounds if upload else 0,
         "rotation test": 2,
         "squares": 2,
         "after": checks if upload else 0,
@@ -276,11 +286,12 @@ def _motor_map(s: SurfaceRun) -> None:
 
 
 def _deadbands(s: SurfaceRun) -> None:
-    step = s.plan.deadband_step
+    step, positions = s.plan.deadband_step, s.plan.deadband_positions
     s.deadbands = {
-        f"course:{c:g}": find_deadband(s.runner, c, step).power for c in s.plan.calibrated_courses(s.geometry)
+        f"course:{c:g}": find_deadband(s.runner, c, step, positions=positions).power
+        for c in s.plan.calibrated_courses(s.geometry)
     }
-    s.deadbands["rotation"] = find_deadband(s.runner, None, step).power
+    s.deadbands["rotation"] = find_deadband(s.runner, None, step, positions=positions).power
 
 
 def _sweeps(s: SurfaceRun) -> None:
@@ -356,6 +367,19 @@ def _roller_gains(s: SurfaceRun) -> None:
         s.section = tune_rollers(s.runner, s.fit, spec, s.plan, s.notes)
 
 
+def _slow_end(s: SurfaceRun) -> None:
+    """K_l's slow end from MOVEs at the bottom of the speed range through the tables as they stand
+    (:func:`~omnibot.calibration.fits.anchor_slow_end`); the new section, uploaded."""
+    plan = s.plan
+    if not (s.upload and plan.slow_rounds > 0 and s.source.can(RunInfo(STRAIGHT, "", 0.0))):
+        return
+    speed = round(speed_range(s.robot, plan.move_length)[0], 2)
+    anchors = anchor_slow_end(s.fit, s.spec, s.geometry, slow_moves(s.runner, plan, speed), speed)
+    if anchors:
+        s.section = build_spec([s.fit], s.robot, s.geometry, s.spec.k_t)
+        s.client.upload_calibration(s.section)
+
+
 def _reach(s: SurfaceRun) -> None:
     length = s.plan.move_length
     s.reach = reach = reach_speed(s.robot, s.spec, length)
@@ -421,6 +445,7 @@ STEPS: tuple[Step, ...] = (
     Step("fit K, K_l, K_r", _fit),
     Step("turns (K_t)", _turns, "turns"),
     Step("roller gains", _roller_gains, "roller gains"),
+    Step("slow end (K_l)", _slow_end, "slow end"),
     Step("reach", _reach),
     Step("rotation test", _rotation_test, "rotation test"),
     Step("gyro scale", _gyro_scale),
@@ -503,7 +528,9 @@ def tune_rollers(
     # position, which no gain can make up for
     fastest = max(bottom, 0.9 * min(top, reach or top))
     speeds = sorted({round(bottom + (fastest - bottom) * k / 3, 2) for k in range(4)})
-    fit.coast = tune_coast(runner, spec, fit.rollers, speeds, plan.move_length, plan.roller_rounds)
+    fit.coast = tune_coast(
+        runner, spec, fit.rollers, speeds, plan.move_length, plan.roller_rounds, plan.coast_slow_rounds
+    )
     if fit.coast is None:
         notes.append("roller drag: the MOVEs could not tell its coast; the drag runs' own is kept")
         return spec
@@ -527,8 +554,8 @@ def fit_motor_map(
     geo, robot = runner.geometry, runner.robot
     runner.motors = None
     runner.rate = None
-    rotation = find_deadband(runner, None, plan.deadband_step).power
-    single = motor_deadbands(runner, plan.deadband_step)
+    rotation = find_deadband(runner, None, plan.deadband_step, positions=plan.deadband_positions).power
+    single = motor_deadbands(runner, plan.deadband_step, positions=plan.deadband_positions)
     offsets = offsets_from_deadbands(single, rotation, geo.pwm_max)
     if not any(offsets):
         notes.append(f"motor dead bands {single} (rotation {rotation}): no offsets")
