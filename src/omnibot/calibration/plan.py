@@ -43,7 +43,7 @@ class Plan:
     levels: int = 8
     """Power levels from the dead band to full power (denser near the dead band)."""
     deadband_step: int = 8
-    deadband_positions: int = 1
+    deadband_positions: int = 3
     """Wheel positions each dead band is the mean over (experiments.spread_deadband; 1: one search)."""
     settle: float = 0.4
     """s to wait after a run for the robot to coast to a stop before measuring."""
@@ -74,7 +74,7 @@ class Plan:
     roller_rounds: int = 4
     """Rounds of the idle axes at each power for the idle wheels' roller drag (rollers.py; 0: none),
     and of the coast MOVEs at each speed."""
-    coast_slow_rounds: int = 4
+    coast_slow_rounds: int = 8
     """Rounds of the coast MOVEs at their slowest speed, where a PWM count is the largest share of the
     speed and the MOVEs tell the motor pairs' offsets apart best (rollers.tune_coast)."""
     slow_rounds: int = 2
@@ -85,8 +85,17 @@ class Plan:
 
     @classmethod
     def quick(cls) -> Plan:
-        """Seed 000's own scope: courses 0 and 45 (fold range ends), two directions, fewer powers."""
-        return cls(course_count=2, directions=2, levels=6, turn_curvatures=(2.0, 5.0), turn_rounds=1)
+        """Seed 000's own scope: courses 0 and 45 (fold range ends), two directions, fewer powers, one
+        search per dead band, one round of slow-end MOVEs (a person with a tape measures every run)."""
+        return cls(
+            course_count=2,
+            directions=2,
+            levels=6,
+            turn_curvatures=(2.0, 5.0),
+            turn_rounds=1,
+            deadband_positions=1,
+            slow_rounds=1,
+        )
 
     def calibrated_courses(self, geometry: Geometry) -> list[float]:
         """The courses to calibrate, degrees: the plan's (checked to increase within 0..fold_max), else

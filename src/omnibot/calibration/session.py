@@ -91,6 +91,8 @@ def accuracy_runs(accuracy: AccuracyPlan, robot: RobotDescription) -> int:
 
 DEADBAND_RUNS = 10
 """Runs a dead-band search takes, about (a sweep upward in ``deadband_step`` counts, then bisection)."""
+DEADBAND_AGAIN = 5
+"""Runs a dead band takes at each further wheel position, about (the ROTATE and a bracketed search)."""
 
 
 def expected_runs(
@@ -111,10 +113,11 @@ def expected_runs(
     balance += len(STAND_POWERS) if robot.has_wheel_encoders else 0  # the stand test, where it can run
     rollers = plan.roller_rounds > 0 and all(geometry.roller_pitch)
     axes = len(axis_courses(geometry))
+    again = (max(1, plan.deadband_positions) - 1) * DEADBAND_AGAIN  # each further wheel position
     phases = {
         "before": checks,
-        "motor map": (1 + geometry.motors) * DEADBAND_RUNS + balance if plan.motor_map else 0,
-        "dead bands": (courses + 1) * (3 if plan.motor_map else DEADBAND_RUNS),
+        "motor map": (1 + geometry.motors) * (DEADBAND_RUNS + again) + balance if plan.motor_map else 0,
+        "dead bands": (courses + 1) * ((3 if plan.motor_map else DEADBAND_RUNS) + again),
         "sweeps": courses * plan.levels * plan.directions * 2,
         "roller drag": len(SHARES) * (1 + plan.roller_rounds * axes) if rollers else 0,
         "rotation sweep": plan.levels * 2 * 2,
