@@ -86,7 +86,8 @@ class Plan:
     @classmethod
     def quick(cls) -> Plan:
         """Seed 000's own scope: courses 0 and 45 (fold range ends), two directions, fewer powers, one
-        search per dead band, one round of slow-end MOVEs (a person with a tape measures every run)."""
+        search per dead band, no extra coast MOVEs, one round of slow-end MOVEs (a person with a tape
+        measures every run)."""
         return cls(
             course_count=2,
             directions=2,
@@ -94,6 +95,7 @@ class Plan:
             turn_curvatures=(2.0, 5.0),
             turn_rounds=1,
             deadband_positions=1,
+            coast_slow_rounds=4,
             slow_rounds=1,
         )
 

@@ -105,8 +105,8 @@ def tune_coast(
         for speed in speeds:
             gain = 1.0 + table(speed) * speed / length
             rows, b = [], []
-            slowest = speed == min(speeds) and slow_rounds is not None
-            for k in range(slow_rounds if slowest and slow_rounds is not None else rounds):
+            n = slow_rounds if slow_rounds is not None and speed == min(speeds) else rounds
+            for k in range(n):
                 on = k % 2 == 0
                 runner.client.upload_calibration(spec if on else off)
                 for course in courses:

@@ -5,8 +5,8 @@ each reading and filling in one :class:`SurfaceRun`::
 
     gyro bias (standstill) -> accuracy before -> motor map -> dead bands -> straight sweeps
     -> roller drag -> rotation sweep -> fit K, K_l, K_r -> turns: upload, curved MOVEs, fit K_t
-    -> roller gains: the drag's coast from MOVEs, upload -> reach -> rotation test -> gyro scale
-    -> squares CCW and CW (UMBmark) -> odometry corrections -> accuracy after
+    -> roller gains: the drag's coast from MOVEs, upload -> slow end: K_l from MOVEs, upload
+    -> reach -> rotation test -> gyro scale -> squares CCW and CW (UMBmark) -> odometry corrections -> accuracy after
     then the wheel slip (its own progress bar)
 
 Over surfaces (:func:`calibrate`): each surface as above, then the averaged calibration (seed 000
