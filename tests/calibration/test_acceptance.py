@@ -107,16 +107,15 @@ def test_the_robot_really_differs(outcome: tuple[CalibrationResult, Path, float]
 
 
 def test_after_within_3_percent(outcome: tuple[CalibrationResult, Path, float]) -> None:
-    """Within each floor's reach the calibrated MOVEs land: on wood within 3 % on every course and
-    speed in reach (measured 1.7 %, mean 0.5 %), on carpet within 4 % (measured 3.1 %, mean 1.1 %: the
-    3 % goal is :func:`test_carpet_goal_within_3_percent`). The reach is the 45 degree course's: it
-    needs 1 + 45/80 times the axis's power (docs/simulator.md), measured 0.81 m/s on wood, 0.56 on
-    carpet."""
+    """Within each floor's reach the calibrated MOVEs land within 3 % on every course and speed in
+    reach (measured wood 1.0 %, mean 0.4 %; carpet 0.9 %, mean 0.3 %, and
+    :func:`test_carpet_goal_within_3_percent`). The reach is the 45 degree course's: it needs 1 +
+    45/80 times the axis's power (docs/simulator.md), measured 0.81 m/s on wood, 0.56 on carpet."""
     result, _, _ = outcome
     wood, carpet = result.sessions
     assert wood.reach is not None and 0.6 <= wood.reach < 0.9
     assert carpet.reach is not None and 0.45 <= carpet.reach < 0.6
-    for session, within_max in ((wood, 0.03), (carpet, 0.04)):
+    for session, within_max in ((wood, 0.03), (carpet, 0.03)):
         surface = session.surface
         after = rows(result, f"after ({surface} calibration), {surface}")
         before = summarize(rows(result, f"before, {surface}"))
@@ -142,18 +141,12 @@ def test_after_within_3_percent(outcome: tuple[CalibrationResult, Path, float]) 
         assert all(r.warned for r in moves(after) if (r.error or 0.0) < -0.1)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="open (issue 17): the motor map now finds the motors (stand test), but carpet's MOVEs in reach "
-    "miss by 3.1 % (course 15 at 0.3 m/s; 1.2 % in a run with the same map where the wheels stood elsewhere "
-    "after the stand test): the dead bands and the roller coast measured after the map move course 15's "
-    "K_l by 2-3 % with the wheels' roller positions (docs/calibration.md)",
-)
 def test_carpet_goal_within_3_percent(outcome: tuple[CalibrationResult, Path, float]) -> None:
-    """Issue 17's goal: carpet's MOVEs within its reach land within 3 % (measured 3.1 %, mean 1.1 %),
+    """Issue 17's goal: carpet's MOVEs within its reach land within 3 % (measured 0.9 %, mean 0.3 %;
+    with the wheels started at five other angles 0.8-2.4 %, ``benchmarks.motor_model --wheels N``),
     and keep their course better than before calibrating on the same MOVEs (measured 13.4 -> 7.3
-    degrees mean). The motor map's speed terms come from the stand test's torque constants
-    (docs/calibration.md)."""
+    degrees mean). The motor map's speed terms come from the stand test's torque constants, K_l's
+    slow end from MOVEs at 0.3 m/s (docs/calibration.md)."""
     result, _, _ = outcome
     carpet = result.sessions[1]
     assert carpet.reach is not None
@@ -172,8 +165,8 @@ def test_carpet_goal_within_3_percent(outcome: tuple[CalibrationResult, Path, fl
 def test_motor_map_balances_unequal_motors(
     outcome: tuple[CalibrationResult, Path, float], nominal: RobotDescription
 ) -> None:
-    """Measured: torque constants within 0.001 on both floors; gains within 0.015 on carpet, 0.053 on
-    wood; speed terms within 1.5 and 5.9 counts per m/s (docs/calibration.md)."""
+    """Measured: gains within 0.029 on carpet, 0.036 on wood; speed terms within 3.1 and 4.0 counts
+    per m/s (docs/calibration.md)."""
     result, _, _ = outcome
     for session in result.sessions:
         motors = session.spec.motors
@@ -182,7 +175,11 @@ def test_motor_map_balances_unequal_motors(
         assert min(motors.offset[1], motors.offset[2]) > max(motors.offset[0], motors.offset[3])
         balance = session.fit.balance
         assert balance is not None and len(balance.powers) >= 3
-        assert sum(balance.after) < 0.7 * sum(balance.before)
+        # the map balances every power below the top (measured wood 0.28 -> 0.05 rad rms summed); at
+        # the top the drivers limit the current and no map balances the runs (0.59 -> 0.57 on wood,
+        # 0.96 -> 0.95 on carpet): it must not make them worse
+        assert sum(balance.after[:-1]) < 0.7 * sum(balance.before[:-1])
+        assert balance.after[-1] <= balance.before[-1]
         # the two numbers per motor: the stand test's torque constants s (geometric mean 1: the common
         # share is the K_l tables'), the gains 1/s and speed terms (s - 1/s) E they need
         s = np.array([1.1, 0.9, 0.9, 1.1])

@@ -8,10 +8,13 @@ from collections.abc import Iterator
 import pytest
 
 from omnibot.calibration.experiments import (
+    SLOW,
     Runner,
     find_deadband,
+    lowest_moving,
     power_levels,
     rotation_sweep,
+    slow_moves,
     straight_sweep,
     turning_runs,
 )
@@ -94,3 +97,33 @@ def test_plan_courses() -> None:
     with pytest.raises(ConfigError, match=r"within 0\.\.30"):
         Plan(courses_deg=(0.0, 45.0)).calibrated_courses(geo)
     assert math.isclose(Plan(courses_deg=(0.0, 30.0)).calibrated_courses(geo)[-1], 30.0)
+
+
+def test_a_search_near_an_earlier_result_brackets_it() -> None:
+    tried: list[int] = []
+
+    def attempt(power: int) -> bool:
+        tried.append(power)
+        return power >= 37
+
+    assert lowest_moving(attempt, 8, 255) == 38
+    first = len(tried)
+    tried.clear()
+    assert lowest_moving(attempt, 8, 255, near=38) == 38  # from 30 in steps of 4, then bisection
+    assert tried[0] == 34 and len(tried) < first
+    tried.clear()
+    # a position where it moves far lower: the search ends at the bottom of its bracket (30 + 2)
+    assert lowest_moving(lambda p: p >= 20, 8, 255, near=38) == 32
+
+
+def test_slow_moves_drive_every_raw_course_of_each_calibrated_course(runner: Runner) -> None:
+    plan = Plan(courses_deg=(0.0, 45.0), directions=2, slow_rounds=1)
+    runs = slow_moves(runner, plan, 0.3)
+    assert [(r.folded_deg, r.course_deg) for r in runs] == [
+        (0.0, 0.0),
+        (0.0, 180.0),
+        (45.0, 45.0),
+        (45.0, 225.0),
+    ]
+    assert all(r.group == SLOW and r.command.startswith("MOVE") and r.commanded == 1.0 for r in runs)
+    assert all(r.truth is not None and 0.5 < (r.truth.distance or 0.0) < 1.5 for r in runs)

@@ -6,21 +6,26 @@ import itertools
 
 import pytest
 
+from omnibot.calibration.experiments import SLOW
 from omnibot.calibration.fits import (
     FACTOR_MAX,
     RateCurve,
     RatePoint,
+    SurfaceFit,
+    anchor_slow_end,
     average_tables,
+    build_spec,
     factor_table,
     fit_kt,
     isotonic,
     knot_powers,
     rate_points,
 )
+from omnibot.calibration.patterns import Geometry
 from omnibot.calibration.runs import Motion, RunResult
 from omnibot.client import commands
 from omnibot.protocol import codes
-from omnibot.robot.description import CalibrationSpec, CourseTable, PiecewiseLinear
+from omnibot.robot.description import CalibrationSpec, CourseTable, PiecewiseLinear, RobotDescription
 
 DEADBAND = 50.0
 SLOPE = 0.007  # m/s of rim speed per PWM count above the dead band
@@ -148,3 +153,54 @@ def test_a_fitted_spec_uploads() -> None:
     assert cals[0].params() == (codes.CAL_K, 0, 0, 1500)
     # K, K_t, K_r, two K_l curves, dropping any curves after them
     assert len(cals) == 1 + 2 * len(table.x) + 2 * (1 + len(table.x)) + 1
+
+
+def test_a_point_joins_the_curve_monotone() -> None:
+    curve = RateCurve((50.0, 60.0, 80.0, 100.0), (0.0, 0.07, 0.21, 0.35))
+    moved = curve.with_point(70.0, 0.13)
+    assert moved.powers == (50.0, 60.0, 70.0, 80.0, 100.0)
+    assert moved.rim_at(70.0) == pytest.approx(0.13)
+    assert moved.power_for(0.13) == pytest.approx(70.0)
+    # a level at the same power is replaced; a point out of order is pooled with its neighbour
+    assert curve.with_point(80.0, 0.2).rims == (0.0, 0.07, 0.2, 0.35)
+    assert curve.with_point(90.0, 0.19).rims == pytest.approx((0.0, 0.07, 0.2, 0.2, 0.35))
+
+
+def slow_run(folded: float, raw: float, ratio: float) -> RunResult:
+    return RunResult(
+        kind="straight",
+        group=SLOW,
+        command="MOVE",
+        duration=1.0 / 0.3,
+        truth=Motion(x=ratio, y=0.0, theta=0.0, source="test"),
+        course_deg=raw,
+        folded_deg=folded,
+        commanded=1.0,
+    )
+
+
+def test_slow_moves_anchor_the_curve_where_the_tables_put_them(omni4: RobotDescription) -> None:
+    """The sweep read the slow end 3 % fast on course 45: MOVEs at the bottom speed through its tables
+    fall 3 % short (0.96 and 0.98 of the length), and the curve is made to pass through what they
+    reached at the power the tables gave them; the firmware then gives that speed more power. A
+    course without MOVEs keeps its curve."""
+    geo = Geometry.of(omni4)
+    curves = {c: RateCurve((30.0, 60.0, 90.0, 120.0), (0.0, 0.2, 0.4, 0.6)) for c in (0.0, 45.0)}
+    fit = SurfaceFit("carpet", 150.0, (0.0, 45.0), dict(curves), None)
+    spec = build_spec([fit], omni4, geo, None)
+    assert spec.k_l is not None
+    runs = [slow_run(45.0, raw, ratio) for raw in (45.0, 135.0) for ratio in (0.96, 0.98)]
+    anchors = anchor_slow_end(fit, spec, geo, runs, 0.3)
+    assert set(anchors) == {45.0} and fit.anchors == anchors
+    a = anchors[45.0]
+    u = 0.3 * geo.translation_factor(45.0)
+    p = spec.k * u
+    assert a.power == pytest.approx(p * spec.k_l.curves[1](p))
+    assert a.ratio == pytest.approx(0.97) and a.rim == pytest.approx(0.97 * u) and a.runs == 4
+    assert a.spread == pytest.approx(0.01 / 2 * (4 / 3) ** 0.5)  # stdev / sqrt(n)
+    assert fit.translation[45.0].rim_at(a.power) == pytest.approx(0.97 * u)
+    assert fit.translation[0.0] is curves[0.0]
+    after = build_spec([fit], omni4, geo, None)
+    assert after.k_l is not None
+    assert p * after.k_l.curves[1](p) > a.power + 1.0  # more power for the same speed
+    assert after.k_l.curves[0] == spec.k_l.curves[0]

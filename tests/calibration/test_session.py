@@ -49,7 +49,8 @@ def test_phases_that_do_not_run_expect_nothing() -> None:
     full = expected_runs(Plan(), geometry, None, robot)
     assert "before" not in full and "after" not in full  # no accuracy check
     bare = expected_runs(Plan(motor_map=False, roller_rounds=0), geometry, None, robot, upload=False)
-    assert set(full) - set(bare) == {"motor map", "roller drag", "turns", "roller gains"}
+    assert set(full) - set(bare) == {"motor map", "roller drag", "turns", "roller gains", "slow end"}
+    assert full["slow end"] == 4 * 4 * Plan().slow_rounds  # every raw course of each calibrated course
 
 
 def test_every_phase_is_one_named_steps() -> None:

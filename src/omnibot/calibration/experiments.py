@@ -163,8 +163,11 @@ def _moved(result: RunResult, rotation: bool) -> bool:
     return d is not None and d >= MOVED_DISTANCE
 
 
-def find_deadband(runner: Runner, course_deg: float | None, step: int = 8, duration: float = 0.5) -> Deadband:
-    """Lowest moving power for the straight pattern of ``course_deg`` (None: rotation in place)."""
+def find_deadband(
+    runner: Runner, course_deg: float | None, step: int = 8, duration: float = 0.5, positions: int = 1
+) -> Deadband:
+    """Lowest moving power for the straight pattern of ``course_deg`` (None: rotation in place), the
+    mean over ``positions`` wheel positions (:func:`spread_deadband`)."""
     geo = runner.geometry
     rotation = course_deg is None
     group = "rotation" if rotation else f"course:{geo.fold(course_deg or 0.0):g}"
@@ -183,14 +186,54 @@ def find_deadband(runner: Runner, course_deg: float | None, step: int = 8, durat
         result = runner.power_run(pattern, duration, info, f"deadband:{group}", power=power)
         return _moved(result, rotation)
 
-    return Deadband(group, lowest_moving(attempt, step, geo.pwm_max))
+    return Deadband(group, spread_deadband(runner, attempt, step, positions))
 
 
-def lowest_moving(attempt: Callable[[int], bool], step: int, pwm_max: int) -> int:
+def spread_deadband(runner: Runner, attempt: Callable[[int], bool], step: int, positions: int) -> int:
+    """The dead band of ``attempt``'s pattern as the mean over ``positions`` wheel positions.
+
+    Near the dead band a run barely turns the wheels, so where they stand decides how hard their
+    rollers drag (seed 000: up to twice) and a single search lands several counts off the power a
+    motion that turns the wheels through every position needs. The first search runs from zero;
+    before each further one a ROTATE (:func:`turn_wheels`) turns every wheel on by ``1 +
+    1 / positions`` roller pitches, and the search brackets the first result (a few runs)."""
+    pwm_max = runner.geometry.pwm_max
+    first = lowest_moving(attempt, step, pwm_max)
+    found = [first]
+    if first <= pwm_max:
+        for _ in range(1, positions):
+            turn_wheels(runner, 1.0 + 1.0 / positions)
+            found.append(lowest_moving(attempt, step, pwm_max, near=first))
+    return round(sum(found) / len(found))
+
+
+TURN_RATE = math.radians(60.0)
+"""rad/s of the ROTATEs that move the wheels on between dead-band searches."""
+
+
+def turn_wheels(runner: Runner, pitches: float) -> RunResult:
+    """ROTATE in place so that every wheel turns by about ``pitches`` of its roller pitch (the
+    described radius and roller count; the same direction each time, so the positions move on)."""
+    robot, geo = runner.robot, runner.geometry
+    pitch = max(2.0 * math.pi * w.radius / w.rollers.count for w in robot.wheels)  # m of rim per roller
+    angle = pitches * pitch / min(abs(v) for v in geo.rotation_rim())
+    info = RunInfo(ROTATE, f"wheels on: rotate {math.degrees(angle):.1f} deg")
+    runner.note("dead band: wheels on")
+    return runner.run(
+        info, partial(runner.client.rotate, angle, TURN_RATE), angle / TURN_RATE, "deadband:turn"
+    )
+
+
+def lowest_moving(attempt: Callable[[int], bool], step: int, pwm_max: int, near: int | None = None) -> int:
     """The lowest power for which ``attempt(power)`` (a run) moved the robot: upwards in ``step``
-    counts, then bisection to 2 counts; ``pwm_max + 1`` when not even full power moved it."""
+    counts, then bisection to 2 counts; ``pwm_max + 1`` when not even full power moved it. ``near``:
+    an earlier search's result; the search then starts ``step`` below it in half steps."""
     low, high = 0, None
     power = step
+    if near is not None:
+        low = max(0, min(near, pwm_max) - step)
+        step = max(2, step // 2)
+        power = low + step
     while power <= pwm_max:
         if attempt(power):
             high = power
@@ -374,6 +417,40 @@ def rotation_sweep(runner: Runner, plan: Plan, deadband: int) -> list[RunResult]
         stop,
         0.3 * plan.rotate_rate_min,
     )
+
+
+SLOW = "slow"
+"""The group of :func:`slow_moves`' MOVEs."""
+
+
+def slow_moves(runner: Runner, plan: Plan, speed: float) -> list[RunResult]:
+    """MOVEs of the reference length at ``speed`` on every raw course of each calibrated course,
+    ``plan.slow_rounds`` times round, through the tables in the controller (what
+    :func:`~omnibot.calibration.fits.anchor_slow_end` needs)."""
+    geo, length = runner.geometry, round(plan.move_length, 2)
+    speed = round(speed, 2)  # the protocol's resolution: cm/s
+    out: list[RunResult] = []
+    for _ in range(plan.slow_rounds):
+        for folded in plan.calibrated_courses(geo):
+            for raw in geo.raw_courses(folded, plan.directions):
+                info = RunInfo(
+                    STRAIGHT,
+                    f"slow end: move {100 * length:.0f} cm at {speed:g} m/s on course {raw:g} deg",
+                    math.radians(raw),
+                )
+                runner.note(f"slow end: course {raw:g}")
+                out.append(
+                    runner.run(
+                        info,
+                        partial(runner.client.move, length, speed, math.radians(raw)),
+                        length / speed,
+                        SLOW,
+                        course_deg=raw,
+                        folded_deg=folded,
+                        commanded=length,
+                    )
+                )
+    return out
 
 
 def turn_speed(plan: Plan, robot: RobotDescription) -> float:

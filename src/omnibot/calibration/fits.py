@@ -287,6 +287,14 @@ class RateCurve:
         slope = (top - rs[j]) / (ps[-1] - ps[j]) if ps[-1] > ps[j] else 0.0
         return max(slope, 1e-4)
 
+    def with_point(self, power: float, rim: float) -> RateCurve:
+        """The curve with (``power``, ``rim``) measured as well: the point added (replacing a level
+        at the same power) and the curve made monotone again."""
+        pts = sorted(
+            [(p, r) for p, r in zip(self.powers, self.rims, strict=True) if p != power] + [(power, rim)]
+        )
+        return RateCurve(tuple(p for p, _ in pts), tuple(isotonic([r for _, r in pts])))
+
     def slope_k(self) -> float:
         """PWM counts per m/s of rim speed over the upper half of the curve: the motor's K."""
         pairs = [(p, r) for p, r in zip(self.powers, self.rims, strict=True) if r >= 0.3 * self.rims[-1]]
@@ -405,6 +413,8 @@ class SurfaceFit:
     """The idle wheels' roller drag (its runs were taken out of the axis-course sweeps)."""
     coast: CoastTuning | None = None
     """The roller drag's coast table as MOVEs measured it (replaces the drag runs' own)."""
+    anchors: dict[float, SlowAnchor] = field(default_factory=dict)
+    """Per calibrated course, the slow end's point measured with MOVEs (:func:`anchor_slow_end`)."""
 
     @property
     def roller_spec(self) -> RollerDragSpec | None:
@@ -415,6 +425,62 @@ class SurfaceFit:
         if self.coast is not None and spec.coast is not None:
             spec = spec.model_copy(update={"coast": self.coast.table})
         return spec
+
+
+@dataclass(frozen=True)
+class SlowAnchor:
+    """One calibrated course's MOVEs at the bottom of the speed range (:func:`anchor_slow_end`)."""
+
+    speed: float
+    """m/s commanded."""
+    power: float
+    """The nominal power of the busiest motor the tables gave them (``p K_l(p)``, ``p = K u``)."""
+    rim: float
+    """m/s: the effective rim speed they reached (the busiest wheel's, for moves of the reference
+    length: commanded speed times distance over length)."""
+    ratio: float
+    """Mean distance achieved over commanded."""
+    spread: float
+    """Their distances' standard error, as a fraction of the length."""
+    runs: int
+
+
+def anchor_slow_end(
+    fit: SurfaceFit, spec: CalibrationSpec, geometry: Geometry, runs: Sequence[RunResult], speed: float
+) -> dict[float, SlowAnchor]:
+    """Add to each calibrated course's rate curve the point its MOVEs at ``speed`` measured
+    (:func:`~omnibot.calibration.experiments.slow_moves`, driven with ``spec`` in the controller).
+
+    At the bottom of the speed range a PWM count is a large share of the speed (2 % at 0.3 m/s on
+    the simulated carpet), while the sweep's POWER runs at one level scatter by several % with where
+    the wheels stand when each starts: the two levels that bracket the slowest MOVE place its power
+    only to a count or two. The MOVEs measure the effective rim speed at exactly the power the
+    firmware gives them, averaged over every raw course and where the wheels happen to stand; the
+    curve then passes through that point. Courses without measured MOVEs are left as they are."""
+    out: dict[float, SlowAnchor] = {}
+    table = spec.k_l
+    if table is None:
+        return out
+    for idx, course in enumerate(table.courses_deg):
+        if course not in fit.translation:
+            continue
+        ratios = [
+            r.truth.distance / r.commanded
+            for r in runs
+            if r.folded_deg == course and r.truth is not None and r.truth.distance is not None and r.commanded
+        ]
+        if not ratios:
+            continue
+        u = speed * geometry.translation_factor(course)
+        p = spec.k * u
+        power = p * table.curves[idx](p)
+        ratio = statistics.fmean(ratios)
+        spread = statistics.stdev(ratios) / math.sqrt(len(ratios)) if len(ratios) > 1 else 0.0
+        anchor = SlowAnchor(speed, power, u * ratio, ratio, spread, len(ratios))
+        fit.translation[course] = fit.translation[course].with_point(anchor.power, anchor.rim)
+        out[course] = anchor
+    fit.anchors = out
+    return out
 
 
 def fit_surface(

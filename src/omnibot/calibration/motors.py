@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from omnibot.calibration.experiments import MOVED_ANGLE, MOVED_DISTANCE, Runner, lowest_moving
+from omnibot.calibration.experiments import MOVED_ANGLE, MOVED_DISTANCE, Runner, spread_deadband
 from omnibot.calibration.motorfit import (
     ERROR_FLOOR,
     GAIN_STEP,
@@ -61,8 +61,10 @@ from omnibot.calibration.runs import STRAIGHT, RunInfo
 from omnibot.robot.description import MotorMapSpec
 
 
-def motor_deadbands(runner: Runner, step: int = 8, duration: float = 0.5) -> list[int]:
-    """Each motor's dead band alone: the lowest POWER on that motor only that moves the robot."""
+def motor_deadbands(runner: Runner, step: int = 8, duration: float = 0.5, positions: int = 1) -> list[int]:
+    """Each motor's dead band alone: the lowest POWER on that motor only that moves the robot (the
+    other wheels' rollers drag by where they stand: the mean over ``positions`` wheel positions,
+    :func:`~omnibot.calibration.experiments.spread_deadband`)."""
     geo = runner.geometry
     out = []
     for i in range(geo.motors):
@@ -81,7 +83,7 @@ def motor_deadbands(runner: Runner, step: int = 8, duration: float = 0.5) -> lis
             d, th = m.distance, m.theta
             return (d is not None and d >= MOVED_DISTANCE) or (th is not None and abs(th) >= MOVED_ANGLE)
 
-        out.append(lowest_moving(attempt, step, geo.pwm_max))
+        out.append(spread_deadband(runner, attempt, step, positions))
     return out
 
 

@@ -43,6 +43,8 @@ class Plan:
     levels: int = 8
     """Power levels from the dead band to full power (denser near the dead band)."""
     deadband_step: int = 8
+    deadband_positions: int = 3
+    """Wheel positions each dead band is the mean over (experiments.spread_deadband; 1: one search)."""
     settle: float = 0.4
     """s to wait after a run for the robot to coast to a stop before measuring."""
     speed_margin: float = 1.2
@@ -70,14 +72,32 @@ class Plan:
     balance_levels: int = 4
     """Nominal powers of the balance runs, spread over what the speed range needs."""
     roller_rounds: int = 4
-    """Rounds of the idle axes at each power for the idle wheels' roller drag (rollers.py; 0: none)."""
+    """Rounds of the idle axes at each power for the idle wheels' roller drag (rollers.py; 0: none),
+    and of the coast MOVEs at each speed."""
+    coast_slow_rounds: int = 8
+    """Rounds of the coast MOVEs at their slowest speed, where a PWM count is the largest share of the
+    speed and the MOVEs tell the motor pairs' offsets apart best (rollers.tune_coast)."""
+    slow_rounds: int = 2
+    """Rounds of MOVEs at the bottom of the speed range on every raw course of each calibrated course,
+    through the fitted tables, that anchor K_l's slow end (fits.anchor_slow_end; 0: none)."""
     slip: bool = True
     """Drive the wheel-slip runs (16 out-and-back, wheel-speed loop on) and fit the floor's creep."""
 
     @classmethod
     def quick(cls) -> Plan:
-        """Seed 000's own scope: courses 0 and 45 (fold range ends), two directions, fewer powers."""
-        return cls(course_count=2, directions=2, levels=6, turn_curvatures=(2.0, 5.0), turn_rounds=1)
+        """Seed 000's own scope: courses 0 and 45 (fold range ends), two directions, fewer powers, one
+        search per dead band, no extra coast MOVEs, one round of slow-end MOVEs (a person with a tape
+        measures every run)."""
+        return cls(
+            course_count=2,
+            directions=2,
+            levels=6,
+            turn_curvatures=(2.0, 5.0),
+            turn_rounds=1,
+            deadband_positions=1,
+            coast_slow_rounds=4,
+            slow_rounds=1,
+        )
 
     def calibrated_courses(self, geometry: Geometry) -> list[float]:
         """The courses to calibrate, degrees: the plan's (checked to increase within 0..fold_max), else

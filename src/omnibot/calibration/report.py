@@ -17,6 +17,7 @@ import json
 import math
 import statistics
 from collections.abc import Sequence
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -171,6 +172,7 @@ def runs_json(result: CalibrationResult) -> dict[str, Any]:
             "balance": None if s.fit.balance is None else s.fit.balance.as_dict(),
             "rollers": None if s.fit.rollers is None else s.fit.rollers.as_dict(),
             "roller_coast": None if s.fit.coast is None else s.fit.coast.as_dict(),
+            "anchors": {f"course:{c:g}": asdict(a) for c, a in s.fit.anchors.items()},
             "reach": s.reach,
             "k": s.fit.k,
             "rate_points": {g: [p.__dict__ for p in pts] for g, pts in s.fit.points.items()},

@@ -77,9 +77,11 @@ def tune_coast(
     speeds: Sequence[float],
     length: float,
     rounds: int = 4,
+    slow_rounds: int | None = None,
 ) -> CoastTuning | None:
-    """MOVEs of ``length`` round the motor axes at each speed, alternately with and without the drag
-    term of ``spec`` uploaded, and the coast table that makes the term cancel the drag in them.
+    """MOVEs of ``length`` round the motor axes at each speed (``rounds`` times round; the slowest
+    speed ``slow_rounds`` times, default the same), alternately with and without the drag term of
+    ``spec`` uploaded, and the coast table that makes the term cancel the drag in them.
 
     Per speed, with D_j the drag at the run's phases and g_j the term's gain (0 when off)::
 
@@ -103,7 +105,8 @@ def tune_coast(
         for speed in speeds:
             gain = 1.0 + table(speed) * speed / length
             rows, b = [], []
-            for k in range(rounds):
+            n = slow_rounds if slow_rounds is not None and speed == min(speeds) else rounds
+            for k in range(n):
                 on = k % 2 == 0
                 runner.client.upload_calibration(spec if on else off)
                 for course in courses:

@@ -5,8 +5,8 @@ each reading and filling in one :class:`SurfaceRun`::
 
     gyro bias (standstill) -> accuracy before -> motor map -> dead bands -> straight sweeps
     -> roller drag -> rotation sweep -> fit K, K_l, K_r -> turns: upload, curved MOVEs, fit K_t
-    -> roller gains: the drag's coast from MOVEs, upload -> reach -> rotation test -> gyro scale
-    -> squares CCW and CW (UMBmark) -> odometry corrections -> accuracy after
+    -> roller gains: the drag's coast from MOVEs, upload -> slow end: K_l from MOVEs, upload
+    -> reach -> rotation test -> gyro scale -> squares CCW and CW (UMBmark) -> odometry corrections -> accuracy after
     then the wheel slip (its own progress bar)
 
 Over surfaces (:func:`calibrate`): each surface as above, then the averaged calibration (seed 000
@@ -29,10 +29,19 @@ from omnibot.calibration.experiments import (
     drive_square,
     find_deadband,
     rotation_sweep,
+    slow_moves,
     straight_sweep,
     turning_runs,
 )
-from omnibot.calibration.fits import SurfaceFit, average_kt, build_spec, fit_kt, fit_surface, robot_table
+from omnibot.calibration.fits import (
+    SurfaceFit,
+    anchor_slow_end,
+    average_kt,
+    build_spec,
+    fit_kt,
+    fit_surface,
+    robot_table,
+)
 from omnibot.calibration.gyro import GyroCalibration, calibrate_gyro
 from omnibot.calibration.motorfit import (
     STAND_POWERS,
@@ -82,6 +91,8 @@ def accuracy_runs(accuracy: AccuracyPlan, robot: RobotDescription) -> int:
 
 DEADBAND_RUNS = 10
 """Runs a dead-band search takes, about (a sweep upward in ``deadband_step`` counts, then bisection)."""
+DEADBAND_AGAIN = 5
+"""Runs a dead band takes at each further wheel position, about (the ROTATE and a bracketed search)."""
 
 
 def expected_runs(
@@ -102,17 +113,19 @@ def expected_runs(
     balance += len(STAND_POWERS) if robot.has_wheel_encoders else 0  # the stand test, where it can run
     rollers = plan.roller_rounds > 0 and all(geometry.roller_pitch)
     axes = len(axis_courses(geometry))
+    again = (max(1, plan.deadband_positions) - 1) * DEADBAND_AGAIN  # each further wheel position
     phases = {
         "before": checks,
-        "motor map": (1 + geometry.motors) * DEADBAND_RUNS + balance if plan.motor_map else 0,
-        "dead bands": (courses + 1) * (3 if plan.motor_map else DEADBAND_RUNS),
+        "motor map": (1 + geometry.motors) * (DEADBAND_RUNS + again) + balance if plan.motor_map else 0,
+        "dead bands": (courses + 1) * ((3 if plan.motor_map else DEADBAND_RUNS) + again),
         "sweeps": courses * plan.levels * plan.directions * 2,
         "roller drag": len(SHARES) * (1 + plan.roller_rounds * axes) if rollers else 0,
         "rotation sweep": plan.levels * 2 * 2,
         "turns": plan.turn_rounds * len(plan.turn_curvatures) * len(plan.turn_courses_deg) * 2
         if upload
         else 0,
-        "roller gains": 3 * plan.roller_rounds * axes if rollers and upload else 0,
+        "roller gains": (3 * plan.roller_rounds + plan.coast_slow_rounds) * axes if rollers and upload else 0,
+        "slow end": courses * plan.directions * plan.slow_rounds if upload else 0,
         "rotation test": 2,
         "squares": 2,
         "after": checks if upload else 0,
@@ -276,11 +289,12 @@ def _motor_map(s: SurfaceRun) -> None:
 
 
 def _deadbands(s: SurfaceRun) -> None:
-    step = s.plan.deadband_step
+    step, positions = s.plan.deadband_step, s.plan.deadband_positions
     s.deadbands = {
-        f"course:{c:g}": find_deadband(s.runner, c, step).power for c in s.plan.calibrated_courses(s.geometry)
+        f"course:{c:g}": find_deadband(s.runner, c, step, positions=positions).power
+        for c in s.plan.calibrated_courses(s.geometry)
     }
-    s.deadbands["rotation"] = find_deadband(s.runner, None, step).power
+    s.deadbands["rotation"] = find_deadband(s.runner, None, step, positions=positions).power
 
 
 def _sweeps(s: SurfaceRun) -> None:
@@ -356,6 +370,19 @@ def _roller_gains(s: SurfaceRun) -> None:
         s.section = tune_rollers(s.runner, s.fit, spec, s.plan, s.notes)
 
 
+def _slow_end(s: SurfaceRun) -> None:
+    """K_l's slow end from MOVEs at the bottom of the speed range through the tables as they stand
+    (:func:`~omnibot.calibration.fits.anchor_slow_end`); the new section, uploaded."""
+    plan = s.plan
+    if not (s.upload and plan.slow_rounds > 0 and s.source.can(RunInfo(STRAIGHT, "", 0.0))):
+        return
+    speed = round(speed_range(s.robot, plan.move_length)[0], 2)
+    anchors = anchor_slow_end(s.fit, s.spec, s.geometry, slow_moves(s.runner, plan, speed), speed)
+    if anchors:
+        s.section = build_spec([s.fit], s.robot, s.geometry, s.spec.k_t)
+        s.client.upload_calibration(s.section)
+
+
 def _reach(s: SurfaceRun) -> None:
     length = s.plan.move_length
     s.reach = reach = reach_speed(s.robot, s.spec, length)
@@ -429,6 +456,7 @@ STEPS: tuple[Step, ...] = (
     Step("fit K, K_l, K_r", _fit),
     Step("turns (K_t)", _turns, "turns"),
     Step("roller gains", _roller_gains, "roller gains"),
+    Step("slow end (K_l)", _slow_end, "slow end"),
     Step("reach", _reach),
     Step("rotation test", _rotation_test, "rotation test"),
     Step("gyro scale", _gyro_scale),
@@ -511,7 +539,9 @@ def tune_rollers(
     # position, which no gain can make up for
     fastest = max(bottom, 0.9 * min(top, reach or top))
     speeds = sorted({round(bottom + (fastest - bottom) * k / 3, 2) for k in range(4)})
-    fit.coast = tune_coast(runner, spec, fit.rollers, speeds, plan.move_length, plan.roller_rounds)
+    fit.coast = tune_coast(
+        runner, spec, fit.rollers, speeds, plan.move_length, plan.roller_rounds, plan.coast_slow_rounds
+    )
     if fit.coast is None:
         notes.append("roller drag: the MOVEs could not tell its coast; the drag runs' own is kept")
         return spec
@@ -535,8 +565,8 @@ def fit_motor_map(
     geo, robot = runner.geometry, runner.robot
     runner.motors = None
     runner.rate = None
-    rotation = find_deadband(runner, None, plan.deadband_step).power
-    single = motor_deadbands(runner, plan.deadband_step)
+    rotation = find_deadband(runner, None, plan.deadband_step, positions=plan.deadband_positions).power
+    single = motor_deadbands(runner, plan.deadband_step, positions=plan.deadband_positions)
     offsets = offsets_from_deadbands(single, rotation, geo.pwm_max)
     if not any(offsets):
         notes.append(f"motor dead bands {single} (rotation {rotation}): no offsets")
