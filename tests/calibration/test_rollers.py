@@ -4,7 +4,6 @@ drives the real runs)."""
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -12,13 +11,10 @@ import pytest
 
 from omnibot.calibration.patterns import Geometry
 from omnibot.calibration.rollerfit import (
-    COAST_MAX,
     GROUP,
-    CoastMove,
     RollerFit,
     axis_courses,
     correct_runs,
-    fit_coast,
     fit_rollers,
     offset_shift,
 )
@@ -159,85 +155,3 @@ def test_offset_shift_evens_out_the_axis_courses(geo: Geometry) -> None:
     # a fast MOVE's counts (small mu) weigh less than a slow one's
     slow_fast = [(0.0, 1.0, 0.02), (90.0, -1.0, 0.02), (0.0, -4.0, 0.002), (90.0, 4.0, 0.002)]
     assert offset_shift(geo, slow_fast)[1] < 0.0
-
-
-SPEEDS = (0.3, 0.38, 0.45, 0.53)
-LENGTH = 1.0
-
-
-def true_coast(speed: float) -> float:
-    """s: the coast line the synthetic MOVEs follow (as the default run's carpet: negative when slow)."""
-    return -1.2 + 4.0 * (speed - 0.3)
-
-
-def coast_moves(
-    noise: float, seed: int = 7, skip: float | None = None, coast: Callable[[float], float] = true_coast
-) -> list[CoastMove]:
-    """MOVEs as tune_coast makes them (the slowest speed twice as often, term on every other round,
-    gain from a drag run's guess), with ``distance = e + mu (g - G(V)) D`` plus ``noise`` m."""
-    rng = np.random.default_rng(seed)
-    out = []
-    for speed in SPEEDS:
-        need = 1.0 + coast(speed) * speed / LENGTH
-        guess = 1.0 + 0.3 * speed / LENGTH
-        mu = 0.03 - 0.08 * (speed - 0.3)
-        for k in range(8 if speed == SPEEDS[0] else 4):
-            for course in (0.0, 90.0, 180.0, 270.0):
-                d = float(rng.uniform(-6.0, 6.0))
-                g = guess if k % 2 == 0 else 0.0
-                e = 0.97 + 0.004 * (course // 90)
-                distance = e + mu * (g - need) * d + float(rng.normal(0.0, noise))
-                if speed != skip:
-                    out.append(CoastMove(speed, course, d, g, distance))
-    return out
-
-
-def coast_of(found: list[tuple[float, float, float, float]]) -> list[float]:
-    return [(gain - 1.0) * LENGTH / speed for speed, _, _, gain in found]
-
-
-def test_coast_line_recovers_the_coast_at_every_speed() -> None:
-    got = fit_coast(SPEEDS, coast_moves(noise=0.0), LENGTH)
-    assert got is not None
-    found, ahead = got
-    assert [f[0] for f in found] == list(SPEEDS)
-    assert coast_of(found) == pytest.approx([true_coast(v) for v in SPEEDS], abs=0.01)
-    assert found[0][2] == pytest.approx(0.03, rel=0.01)  # mu at 0.3 m/s
-    assert found[0][1] == pytest.approx(found[0][2] * found[0][3])  # lambda = mu G
-    # course 270 runs 6 mm ahead of the mean of the courses, in PWM counts of mu
-    lead = {c: n for c, n, mu in ahead if mu == pytest.approx(found[0][2])}
-    assert lead[270.0] == pytest.approx(0.006 / 0.03, rel=0.02)
-
-
-def test_coast_line_holds_under_scatter_where_one_number_per_speed_does_not() -> None:
-    # 2 cm of scatter: each speed's own lambda / mu (the per-speed fit before 2026-12-02) puts the
-    # coast at 0.53 m/s at -1.31 s, 1 s off, and at 3 cm cannot tell 0.53 m/s at all (which lost
-    # the whole table); the line fitted over all 80 MOVEs stays within 0.4 s at every speed
-    got = fit_coast(SPEEDS, coast_moves(noise=0.02, seed=9), LENGTH)
-    assert got is not None
-    assert coast_of(got[0]) == pytest.approx([true_coast(v) for v in SPEEDS], abs=0.4)
-    got = fit_coast(SPEEDS, coast_moves(noise=0.03, seed=9), LENGTH)
-    assert got is not None and len(got[0]) == len(SPEEDS)
-
-
-def test_a_speed_without_moves_still_gets_its_point_on_the_line() -> None:
-    got = fit_coast(SPEEDS, coast_moves(noise=0.001, skip=0.45), LENGTH)
-    assert got is not None
-    found, ahead = got
-    assert coast_of(found)[2] == pytest.approx(true_coast(0.45), abs=0.1)
-    assert found[2][1:3] == (0.0, 0.0) and all(mu != 0.0 for _, _, mu in ahead)
-    assert len(ahead) == 12  # three speeds' four courses
-
-
-def test_coast_line_stays_within_its_bounds_and_says_when_it_cannot_tell() -> None:
-    # MOVEs that want a longer coast than any drag run's get the bound, not an extrapolation
-    got = fit_coast(SPEEDS, coast_moves(0.0, coast=lambda v: 5.0), LENGTH)
-    assert got is not None
-    assert coast_of(got[0]) == pytest.approx([COAST_MAX] * len(SPEEDS))
-    # and a gain that would drive against the travel is never fitted
-    got = fit_coast(SPEEDS, coast_moves(0.0, coast=lambda v: -5.0), LENGTH)
-    assert got is not None and all(gain >= 0.0 for *_, gain in got[0])
-    assert fit_coast(SPEEDS, [m for m in coast_moves(0.0) if m.speed == 0.3], LENGTH) is None  # one speed
-    assert fit_coast(SPEEDS, [], LENGTH) is None
-    off = [replace(m, gain=0.0) for m in coast_moves(0.0)]  # the term never on: nothing to tell
-    assert fit_coast(SPEEDS, off, LENGTH) is None

@@ -270,110 +270,27 @@ class CoastTuning:
         return out
 
 
-@dataclass(frozen=True)
-class CoastMove:
-    """One MOVE of :func:`omnibot.calibration.rollers.tune_coast`."""
-
-    speed: float
-    """m/s commanded."""
-    course: float
-    drag: float
-    """PWM counts of drag at the MOVE's phases (:meth:`RollerFit.drag`), ``D``."""
-    gain: float
-    """The drag term's gain uploaded for it, ``g`` (0 when the term was off)."""
-    distance: float
-    """m achieved."""
+def coast_row(courses: Sequence[float], course: float, drag: float, gain: float) -> list[float]:
+    """One MOVE's row of :func:`fit_coast_speed`: its course's offset, ``-D`` and ``g D``."""
+    return [1.0 if c == course else 0.0 for c in courses] + [-drag, gain * drag]
 
 
-COAST_MAX = COAST_GRID[-1]
-"""s: the longest coast a fitted coast line may reach at the MOVEs' speeds (the drag runs' own bound,
-:data:`COAST_GRID`); the shortest is where the term's gain reaches 0 (``-L / V``)."""
-
-
-def fit_coast(
-    speeds: Sequence[float], moves: Sequence[CoastMove], length: float
-) -> tuple[list[tuple[float, float, float, float]], list[tuple[float, float, float]]] | None:
-    """The coast line fitted over every speed's MOVEs at once, and how far each course ran ahead.
-
-    Per speed V, ``distance_j = e_(course,V) + mu_V (g_j - G(V)) D_j``: the drag costs
-    ``lambda_V D = mu_V G(V) D`` and the term gives back ``mu_V g D``, so ``G(V)`` is the gain that
-    cancels it. One coast line ``k(V)`` (linear in V between the slowest and fastest speed, both
-    ends within :data:`COAST_BOUNDS` and a gain no less than 0) sets ``G(V) = 1 + k(V) V / L`` at
-    every speed (k(V) <= :data:`COAST_MAX`, G(V) >= 0: the term never drives against the travel);
-    its two ends by a grid search (0.1 s, then 0.01 s), the offsets and mu_V by least squares for
-    each. One free coast per speed rests on a speed's few MOVEs, whose drag's spread
-    over the phases is what tells it; the line lets every speed's MOVEs inform every other's, and a
-    speed whose MOVEs cannot tell still gets its point on the line.
-
-    Returns each of ``speeds``' (speed, lambda, mu, gain) (lambda and mu 0 where it has no MOVEs)
-    and (course, PWM counts, mu) of each course's lead over the mean of the courses at its speed
-    (:func:`offset_shift`); speeds whose mu came out <= 0 give no lead. None when the MOVEs cannot
-    tell (fewer than two speeds with MOVEs, too few MOVEs, drag that did not spread).
-    """
-    speeds = sorted(set(speeds))
-    used = sorted({m.speed for m in moves})
-    if len(used) < 2 or not set(used) <= set(speeds):
+def fit_coast_speed(
+    courses: Sequence[float], rows: Sequence[Sequence[float]], distances: Sequence[float]
+) -> tuple[float, float, list[tuple[float, float, float]]] | None:
+    """(lambda, mu, ahead) of one speed's MOVEs (:func:`omnibot.calibration.rollers.tune_coast`):
+    ``distance_j = e_course - lambda D_j + mu g_j D_j`` by least squares, and how far each course
+    ran ahead of the mean of the courses (course, PWM counts, mu); None when the runs cannot tell."""
+    unknowns = len(courses) + 2
+    if len(distances) <= unknowns or np.linalg.matrix_rank(np.asarray(rows)) < unknowns:
         return None
-    s_index = {v: i for i, v in enumerate(used)}
-    groups = sorted({(m.speed, m.course) for m in moves})
-    g_index = {g: i for i, g in enumerate(groups)}
-    ng, ns = len(groups), len(used)
-    if len(moves) <= ng + ns + 2:
+    coef, _ = _lstsq(np.asarray(rows), np.asarray(distances))
+    lam, mu = float(coef[-2]), float(coef[-1])
+    if mu <= 0.0 or lam <= 0.0:
         return None
-    plain = np.zeros((len(moves), ng))
-    drag, gain = np.array([m.drag for m in moves]), np.array([m.gain for m in moves])
-    level = np.array([s_index[m.speed] for m in moves])
-    for j, m in enumerate(moves):
-        plain[j, g_index[(m.speed, m.course)]] = 1.0
-    b = np.array([m.distance for m in moves])
-    every, v = np.asarray(speeds), np.asarray(used)
-    lo, hi = speeds[0], speeds[-1]
-
-    def line(ends: tuple[float, float], at: NDArray[np.float64]) -> NDArray[np.float64]:
-        return ends[0] + (ends[1] - ends[0]) * (at - lo) / (hi - lo)
-
-    def solve(ends: tuple[float, float]) -> tuple[NDArray[np.float64], float]:
-        if np.any(1.0 + line(ends, every) * every / length < 0.0):
-            return np.zeros(0), math.inf  # a gain below 0 would drive against the travel
-        need = 1.0 + line(ends, v) * v / length
-        cols = np.zeros((len(moves), ns))
-        cols[np.arange(len(moves)), level] = (gain - need[level]) * drag
-        return _lstsq(np.hstack((plain, cols)), b)
-
-    # every speed with MOVEs must tell its lambda and mu apart (MOVEs with and without the term)
-    each = np.eye(ns)[level] * drag[:, None]
-    if np.linalg.matrix_rank(np.hstack((plain, each, each * gain[:, None]))) < ng + 2 * ns:
-        return None
-    best = (math.inf, (0.0, 0.0))
-    for step, span in ((0.1, None), (0.01, 0.1)):
-        for a in _grid(-length / lo, best[1][0], step, span):
-            for c in _grid(-length / hi, best[1][1], step, span):
-                cost = solve((a, c))[1]
-                if cost < best[0]:
-                    best = (cost, (a, c))
-    coef, _ = solve(best[1])
-    mus = {speed: float(coef[ng + i]) for i, speed in enumerate(used)}
-    need = 1.0 + line(best[1], every) * every / length
-    found = [
-        (s, mus.get(s, 0.0) * float(g), mus.get(s, 0.0), float(g)) for s, g in zip(speeds, need, strict=True)
-    ]
-    ahead = []
-    for speed, mu in mus.items():
-        mine = [(c, float(coef[g_index[(s, c)]])) for s, c in groups if s == speed]
-        if mu <= 0.0:
-            continue
-        mean = statistics.fmean(e for _, e in mine)
-        ahead += [(c, (e - mean) / mu, mu) for c, e in mine]
-    return found, ahead
-
-
-def _grid(shortest: float, centre: float, step: float, span: float | None) -> list[float]:
-    """Coast times from ``shortest`` to :data:`COAST_MAX` in ``step``s: all, or ``centre +- span``."""
-    lo, hi = math.ceil(shortest / step) * step, COAST_MAX
-    if span is not None:
-        lo, hi = max(lo, centre - span), min(hi, centre + span)
-    n = round((hi - lo) / step)
-    return [round(lo + step * k, 6) for k in range(n + 1)]
+    offsets = coef[: len(courses)]
+    mean = float(np.mean(offsets))
+    return lam, mu, [(c, (float(e) - mean) / mu, mu) for c, e in zip(courses, offsets, strict=True)]
 
 
 def coast_tuning(

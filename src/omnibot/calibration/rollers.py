@@ -22,12 +22,12 @@ from omnibot.calibration.patterns import course_pattern, top_power
 from omnibot.calibration.plan import Plan
 from omnibot.calibration.rollerfit import (
     GROUP,
-    CoastMove,
     CoastTuning,
     RollerFit,
     axis_courses,
+    coast_row,
     coast_tuning,
-    fit_coast,
+    fit_coast_speed,
 )
 from omnibot.calibration.runs import STRAIGHT, RunInfo, RunResult
 from omnibot.robot.description import CalibrationSpec, PiecewiseLinear
@@ -89,8 +89,7 @@ def tune_coast(
 
     so the gain that cancels it is ``lambda / mu``: the POWER runs' coast times are a first guess,
     but a MOVE drives at the powers K_l gives, where the motors may be current-limited for longer.
-    The gains come from one coast line fitted over every speed's MOVEs (:func:`fit_coast`).
-    Leaves the controller with ``spec`` uploaded. None when the MOVEs could not tell.
+    Leaves the controller with ``spec`` uploaded. None when a speed's runs could not tell.
     """
     geo = runner.geometry
     rollers = spec.rollers
@@ -99,11 +98,13 @@ def tune_coast(
     off = spec.model_copy(update={"rollers": None})
     courses = axis_courses(geo)
     table = rollers.coast or PiecewiseLinear(x=(0.0,), y=(0.0,))
-    moves: list[CoastMove] = []
+    found: list[tuple[float, float, float, float]] = []
+    ahead: list[tuple[float, float, float]] = []
     runs = 0
     try:
         for speed in speeds:
             gain = 1.0 + table(speed) * speed / length
+            rows, b = [], []
             n = slow_rounds if slow_rounds is not None and speed == min(speeds) else rounds
             for k in range(n):
                 on = k % 2 == 0
@@ -127,11 +128,14 @@ def tune_coast(
                     if r.truth is None or r.truth.distance is None or r.counts is None:
                         continue
                     d = fit.drag(geo, course, r.counts[: geo.motors])
-                    moves.append(CoastMove(speed, course, d, gain if on else 0.0, r.truth.distance))
+                    rows.append(coast_row(courses, course, d, gain if on else 0.0))
+                    b.append(r.truth.distance)
+            got = fit_coast_speed(courses, rows, b)
+            if got is None:
+                return None
+            lam, mu, course_ahead = got
+            found.append((speed, lam, mu, lam / mu))
+            ahead += course_ahead
     finally:
         runner.client.upload_calibration(spec)
-    got = fit_coast(speeds, moves, length)
-    if got is None:
-        return None
-    found, ahead = got
     return coast_tuning(found, ahead, runs, length)
