@@ -43,7 +43,9 @@ class Result:
     rise: float
 
 
-def run(robot: str, surface: str, course: float, speed: float, ramp: bool, seed: int = 1) -> Result:
+def run(
+    robot: str, surface: str, course: float, speed: float, ramp: bool, seed: int = 1, plan: bool = False
+) -> Result:
     """Drive one step or ramp on the firmware's closed loop and measure it."""
     dev = SimDevice(robot, surface=surface, seed=seed)
     steps = round(CYCLE / dev.tick)
@@ -64,7 +66,8 @@ def run(robot: str, surface: str, course: float, speed: float, ramp: bool, seed:
     body: list[tuple[float, float]] = []
     while t < ramp_time + HOLD:
         v = min(speed, ACCEL * (t + CYCLE)) if ramp else speed
-        send(f"VEL,{int(v * c * 100)},{int(v * s * 100)},0,200")
+        a = f",{round(ACCEL * 100) if ramp and v < speed else 0}" if plan else ""
+        send(f"VEL,{int(v * c * 100)},{int(v * s * 100)},0,200{a}")
         t += CYCLE
         tw = dev.sim.twist
         body.append((t, math.hypot(tw.vx, tw.vy)))
@@ -87,6 +90,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--robots", default="mecanum4")
     ap.add_argument("--surfaces", default="carpet,wood")
+    ap.add_argument("--plan", action="store_true", help="VEL carries the ramp's acceleration")
     args = ap.parse_args()
     print(
         "| robot | floor | course (deg) | input | wheel overshoot | body over settled | body over asked | rise (s) |"
@@ -97,7 +101,7 @@ def main() -> None:
         for surface in args.surfaces.split(","):
             for course in COURSES:
                 for ramp in (True, False):
-                    r = run(robot, surface, course, speed, ramp)
+                    r = run(robot, surface, course, speed, ramp, plan=args.plan)
                     kind = f"ramp {ACCEL} m/s^2 to {speed}" if ramp else f"step to {speed}"
                     print(
                         f"| {robot} | {surface} | {course:g} | {kind} | {100 * r.wheel:.0f} % "

@@ -85,6 +85,9 @@ class Follower(ABC):
         self.t0 = 0.0
         self.options: dict[str, Any] = {}
         """The options it was made with (:func:`make_follower` sets them; ``log replay`` remakes it)."""
+        self.planned_accel = 0.0
+        """m/s^2: the planned rate of change of the last command's speed (0: no plan); the runtime
+        sends it with the VEL to a controller whose wheel-speed loop feeds it forward."""
 
     def start(self, path: Path, t: float) -> None:
         """Begin following ``path`` at time ``t`` (the robot stands at its start)."""

@@ -132,6 +132,7 @@ class ProfileTracker(Follower):
         """Track the time-parametrised reference with feedforward plus feedback; STOP once done."""
         prof, path = self.profile, self.path
         assert prof is not None and path is not None
+        self.planned_accel = 0.0
         if self.done:
             return STOP
         dt = self.dt if self._last_t is None else max(0.0, state.t - self._last_t)
@@ -163,6 +164,7 @@ class ProfileTracker(Follower):
         pth = state.theta + state.w * lead
         self.progress = ref.s
         tx, ty = _direction(ref.vx, ref.vy, prof, self.tau + lead)
+        self.planned_accel = (ref.ax * tx + ref.ay * ty) * pace  # the reference's speed-up, m/s^2
         nx, ny = -ty, tx
 
         # 3. feedback in the path frame
