@@ -367,11 +367,11 @@ class Executor:
             for i in range(self.n):
                 self._ff[i] = model.raw[i]
             model.wheel_speeds(vx, vy, w, self._target)
-            g = self._growth if self.kind == codes.VEL else 0.0
-            if g != 0.0:  # the planned acceleration's torque (closed loop: the speed loop's feedforward)
+            growth = self._growth if self.kind == codes.VEL else 0.0
+            if growth != 0.0:  # the planned acceleration's torque (the speed loop's feedforward)
                 for i in range(self.n):
                     row = self._accel_ff[i]
-                    self._ff[i] += g * (row[0] * vx + row[1] * vy)
+                    self._ff[i] += growth * (row[0] * vx + row[1] * vy)
         if self.mode & MODE_CLOSED_LOOP and not self._feedback:
             self._start_feedback()
         elif self._feedback:
