@@ -15,10 +15,10 @@ from omnibot.estimation.estimator import make_estimator
 from omnibot.motion import Pose2D, Twist
 from omnibot.navigation.session import follower_limits
 from omnibot.protocol import codes
-from omnibot.protocol.messages import Command, Reply, Vel
+from omnibot.protocol.messages import Command, Vel
 from omnibot.robot.description import load_robot
 from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.runtime import ACCEL_TURN_MAX, Runtime, clamp_to
+from omnibot.runtime.runtime import Runtime, clamp_to
 from omnibot.runtime.sources import FollowerSource, ScriptSource
 from tests.teleop.fakes import truth
 
@@ -89,38 +89,3 @@ def test_a_followers_planned_acceleration_goes_only_to_a_controller_that_takes_i
         assert max(accels) > 50 and min(accels) < -50  # cm/s^2: it sped up and braked
     else:
         assert accels == [0] * len(sent)
-
-
-class PlannedScript(ScriptSource):
-    """A script that plans an acceleration of 1.4 m/s^2 with each of its twists."""
-
-    accel = 1.4
-
-
-def test_the_planned_acceleration_is_left_out_while_the_body_turns_fast(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    """VEL's A is the translation's acceleration alone: past ACCEL_TURN_MAX of turn it is not sent."""
-    fast = ACCEL_TURN_MAX + 0.1
-    with RobotClient.open("sim://omni4?seed=1", timeout=0.5) as client:
-        client.hello(codes.VERSIONS)
-        sent: list[Vel] = []
-        execute = client.execute
-
-        def recorded(command: Command, timeout: float | None = None) -> Reply:
-            if isinstance(command, Vel):
-                sent.append(command)
-            return execute(command, timeout)
-
-        monkeypatch.setattr(client, "execute", recorded)
-        script = PlannedScript(
-            lambda t: (
-                Twist(0.3, 0.0, 0.0) if t < 0.2 else Twist(0.3, 0.0, fast) if t < 0.4 else ScriptSource.END
-            )
-        )
-        runtime = Runtime(client, period=0.01, sources=[script], wait_replies=True)
-        runtime.run(until=lambda: script.finished)
-        runtime.close()
-    straight = [v.accel for v in sent if v.w == 0]
-    turning = [v.accel for v in sent if v.w != 0]
-    assert straight and set(straight) == {140} and turning and set(turning) == {0}

@@ -32,11 +32,6 @@ PREDICT_MAX = 0.1
 KEEP = 1000
 """Telemetry samples and events kept for the next cycle: the newest, when nobody cycled for a while
 (a standstill, a scripted manoeuvre)."""
-ACCEL_TURN_MAX = 0.5
-"""rad/s: a VEL carries its source's planned acceleration (protocol version 3) only while the body
-turns slower than this. The field is the translation's alone; a body that turns faster needs torque
-for its turn that no field carries, and feeding the translation's alone upset the wheel loops'
-balance (omni3 at 5 m/s with its body swinging 0.96 -> 1.08 cm RMS; BENCHMARKS.md)."""
 LATCHED_TEXT = "emergency stop latched by the controller (sonar): let go and press again to release"
 
 
@@ -316,8 +311,6 @@ class Runtime:
                 self.latched = False
                 self.notify("info", "emergency stop released by a fresh press of the deadman", source)
             sent = clamp_to(client.limits, twist)
-            if abs(sent.w) > ACCEL_TURN_MAX:
-                accel = 0.0
             if getattr(self.sources.get(source), "wait_reply", self.wait_replies):
                 t0 = client.clock.now()
                 client.vel(sent.vx, sent.vy, sent.w, watchdog, accel)

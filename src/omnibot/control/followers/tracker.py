@@ -112,6 +112,7 @@ class ProfileTracker(Follower):
         """Reference time, s (the profile's clock, slowed by the governor)."""
         self._last_t: float | None = None
         self._integral = np.zeros(3)  # along, cross, heading
+        self._holds_heading = False
         self._ended_at: float | None = None
         self.errors = (0.0, 0.0, 0.0)
         """Last along-track, cross-track (m) and heading (rad) errors of the estimate."""
@@ -122,6 +123,7 @@ class ProfileTracker(Follower):
         super().start(path, t)
         self.profile = self.plan(path, self.margin)
         self.tau = 0.0
+        self._holds_heading = float(np.ptp(path.theta)) == 0.0  # planned_accel only then
         self._last_t = t
         self._ended_at = None
         self._integral[:] = 0.0
@@ -164,7 +166,8 @@ class ProfileTracker(Follower):
         pth = state.theta + state.w * lead
         self.progress = ref.s
         tx, ty = _direction(ref.vx, ref.vy, prof, self.tau + lead)
-        self.planned_accel = (ref.ax * tx + ref.ay * ty) * pace  # the reference's speed-up, m/s^2
+        if self._holds_heading:  # the reference's speed-up, m/s^2 (the translation's alone: see base)
+            self.planned_accel = (ref.ax * tx + ref.ay * ty) * pace
         nx, ny = -ty, tx
 
         # 3. feedback in the path frame
