@@ -154,15 +154,18 @@ def test_tracker_turns_its_command_by_the_heading_it_will_have() -> None:
     [
         ("line", "fixed", True),
         ("line", "tangent", True),
+        ("circle", "fixed", False),
         ("circle", "tangent", False),
         ("line", "swing", False),
     ],
 )
-def test_tracker_plans_its_acceleration_only_while_the_heading_is_held(
+def test_tracker_plans_its_acceleration_only_going_straight_with_the_heading_held(
     shape: str, heading: str, planned: bool
 ) -> None:
     """planned_accel: the profile's speed-up (at most the planned a_max, braking at the end) on a
-    path that holds the heading; 0 on one that turns the body (VEL's A is the translation's alone)."""
+    straight path that holds the heading; none where the body turns or the path curves (VEL's A is
+    the speed-up along the travel alone), but for the few cycles where the reference nearly stands
+    (its start and end)."""
     path = standard_path(shape, size=1.0, heading=heading)
     f = make_follower("tracker", LIMITS)
     seen: list[float] = []
@@ -171,8 +174,8 @@ def test_tracker_plans_its_acceleration_only_while_the_heading_is_held(
     if planned:
         assert 0.5 * LIMITS.a_max < max(seen) <= LIMITS.a_max and min(seen) < -0.5 * LIMITS.a_max
         assert seen[-1] == 0.0  # STOP plans nothing
-    else:
-        assert seen == [0.0] * len(seen)
+    else:  # where the reference stands nearly still, going nowhere yet, it is straight
+        assert sum(1 for a in seen if a) <= 10 < len(seen) // 20
 
 
 def _recording(f: Follower, seen: list[float]) -> Follower:

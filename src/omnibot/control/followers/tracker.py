@@ -47,6 +47,10 @@ from omnibot.control.paths.profile import MotionLimits, SpeedProfile
 STEADY_ACCEL = 0.5
 """m/s^2: the response model learns only while the reference accelerates less than this (and the
 estimator sees no slip): it is a steady-state gain."""
+STRAIGHT_ACCEL = 1e-6
+"""m/s^2: the tracker plans its acceleration for VEL (:attr:`~Follower.planned_accel`) only where the
+reference goes straight (its acceleration across its velocity below this) with the heading held:
+the field carries the speed-up along the travel alone (see the base class)."""
 HEADING_GAIN = 8.0
 """1/s: the heading loop's gain on a robot whose angular acceleration can deliver it (see
 :func:`heading_gain`)."""
@@ -166,8 +170,9 @@ class ProfileTracker(Follower):
         pth = state.theta + state.w * lead
         self.progress = ref.s
         tx, ty = _direction(ref.vx, ref.vy, prof, self.tau + lead)
-        if self._holds_heading:  # the reference's speed-up, m/s^2 (the translation's alone: see base)
-            self.planned_accel = (ref.ax * tx + ref.ay * ty) * pace
+        straight = abs(ref.ax * ty - ref.ay * tx) < STRAIGHT_ACCEL
+        if self._holds_heading and straight and self.tau < end:  # (at its end the reference stands)
+            self.planned_accel = (ref.ax * tx + ref.ay * ty) * pace  # the reference's speed-up, m/s^2
         nx, ny = -ty, tx
 
         # 3. feedback in the path frame
