@@ -5,8 +5,9 @@ body go (issue 17: mecanum4 drove over the asked speed on carpet).
 
 Each run: the simulator with the MicroPython firmware in lockstep, MODE 2 (the wheel-speed loop),
 then VEL commands every 20 ms as a host sends them, either a ramp at 1.4 m/s^2 (the tracking
-profile's acceleration) up to the speed asked or a step to it, held 1.5 s, on courses 0, 45
-(44.5: 0.8 m/s on 45 degrees rounds past speed_max in whole cm/s) and 90 degrees. Reported:
+profile's acceleration) up to the speed asked, without and with its planned acceleration (VEL's A,
+protocol version 3: the firmware feeds its torque forward), or a step to it, held 1.5 s, on courses
+0, 45 (44.5: 0.8 m/s on 45 degrees rounds past speed_max in whole cm/s) and 90 degrees. Reported:
 
 * wheel: the largest ``|wheel speed| / |its final target|`` of the wheels that drive (target at
   least half the largest), after the target reached its final value, minus 1;
@@ -43,8 +44,11 @@ class Result:
     rise: float
 
 
-def run(robot: str, surface: str, course: float, speed: float, ramp: bool, seed: int = 1) -> Result:
-    """Drive one step or ramp on the firmware's closed loop and measure it."""
+def run(
+    robot: str, surface: str, course: float, speed: float, ramp: bool, seed: int = 1, plan: bool = False
+) -> Result:
+    """Drive one step or ramp on the firmware's closed loop and measure it; ``plan``: a ramp's VELs
+    carry its acceleration (A, cm/s^2) until its last."""
     dev = SimDevice(robot, surface=surface, seed=seed)
     steps = round(CYCLE / dev.tick)
 
@@ -64,7 +68,8 @@ def run(robot: str, surface: str, course: float, speed: float, ramp: bool, seed:
     body: list[tuple[float, float]] = []
     while t < ramp_time + HOLD:
         v = min(speed, ACCEL * (t + CYCLE)) if ramp else speed
-        send(f"VEL,{int(v * c * 100)},{int(v * s * 100)},0,200")
+        a = f",{round(ACCEL * 100)}" if plan and ramp and v < speed else ""
+        send(f"VEL,{int(v * c * 100)},{int(v * s * 100)},0,200{a}")
         t += CYCLE
         tw = dev.sim.twist
         body.append((t, math.hypot(tw.vx, tw.vy)))
@@ -96,9 +101,10 @@ def main() -> None:
         speed = SPEEDS.get(robot, 0.5)
         for surface in args.surfaces.split(","):
             for course in COURSES:
-                for ramp in (True, False):
-                    r = run(robot, surface, course, speed, ramp)
+                for ramp, plan in ((True, False), (True, True), (False, False)):
+                    r = run(robot, surface, course, speed, ramp, plan=plan)
                     kind = f"ramp {ACCEL} m/s^2 to {speed}" if ramp else f"step to {speed}"
+                    kind += " with A" if plan else ""
                     print(
                         f"| {robot} | {surface} | {course:g} | {kind} | {100 * r.wheel:.0f} % "
                         f"| {100 * r.body:.0f} % | {100 * r.body_asked:+.0f} % | {r.rise:.2f} |",

@@ -32,7 +32,7 @@ from omnibot.errors import ControllerError, LinkError, LinkTimeout, ProtocolErro
 from omnibot.firmware.config import build_config
 from omnibot.firmware.controller import Controller
 from omnibot.protocol import codes
-from omnibot.protocol.messages import Hello, Malformed, Move, Ok, StatusReply, Stop
+from omnibot.protocol.messages import Hello, Malformed, Move, Ok, StatusReply, Stop, Vel
 from omnibot.protocol.messages import Status as StatusCommand
 from omnibot.protocol.messages import Telemetry as TelMessage
 from omnibot.transport import FaultLink, LockstepLink, open_link
@@ -281,7 +281,7 @@ def test_binary_round_trip_on_sim(sim: RobotClient) -> None:
     sim.add_listener(rec)
     sim.mode(simulation=True)
     hello = sim.use_binary()
-    assert (hello.version, hello.name, hello.motors) == (2, "omni4", 4) and sim.binary
+    assert (hello.version, hello.name, hello.motors) == (3, "omni4", 4) and sim.binary
     assert sim.status().mode == codes.MODE_SIMULATION | codes.MODE_BINARY  # other bits kept
     pendings = [sim.submit(Move(10, 40, 0, 0)) for _ in range(6)]  # more than the window of 4
     for p in pendings:
@@ -441,3 +441,16 @@ def test_an_older_controller_takes_a_map_without_speed_terms(monkeypatch: pytest
         with pytest.raises(ControllerError, match="does not know the motor map's speed terms") as info:
             client.upload_calibration(spec.model_copy(update={"motors": motors}))
         assert info.value.code == codes.E_CALIBRATION and "\n" not in str(info.value)
+
+
+def test_vel_carries_an_acceleration_only_to_a_controller_that_agreed_on_version_3() -> None:
+    with RobotClient.open("sim://omni4?seed=1", timeout=0.5) as client:
+        client.hello()  # a bare HELLO: version 2, what every host speaks
+        assert not client.takes_vel_accel
+        with pytest.raises(ValueError, match="does not take VEL's acceleration"):
+            client.vel(0.3, 0.0, 0.0, 0.2, accel=1.4)
+        assert client.vel(0.3, 0.0, 0.0, 0.2) == Vel(30, 0, 0, 200)  # no acceleration: fine
+        assert client.hello(codes.VERSIONS).version == codes.VEL_ACCEL_VERSION
+        assert client.takes_vel_accel
+        assert client.vel(0.3, 0.0, 0.0, 0.2, accel=1.4) == Vel(30, 0, 0, 200, 140)
+        client.stop()

@@ -122,6 +122,13 @@ def test_vel() -> None:
     for t in (0.0, 1.001, 2.0):
         with pytest.raises(ValueError, match="timeout"):
             c.vel(OMNI4, 0.1, 0.0, 0.0, t)
+    assert c.vel(OMNI4, 0.35, -0.2, 0.0, 0.1, accel=1.4) == Vel(35, -20, 0, 100, 140)
+    assert c.vel(OMNI4, 0.35, -0.2, 0.0, 0.1, accel=-0.014).params() == (35, -20, 0, 100, -1)
+    assert c.vel(OMNI4, 0.35, -0.2, 0.0, 0.1, accel=0.0).params() == (35, -20, 0, 100)
+    with pytest.raises(ValueError, match="VEL accel 400 is 40000 cm/s\\^2, outside the protocol's 16-bit"):
+        c.vel(OMNI4, 0.1, 0.0, 0.0, 0.1, accel=400.0)
+    with pytest.raises(ValueError, match="VEL accel: expected a finite number"):
+        c.vel(OMNI4, 0.1, 0.0, 0.0, 0.1, accel=math.nan)
 
 
 def test_mode() -> None:

@@ -108,7 +108,7 @@ def test_console_piped(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFi
     assert "<- IDLE" in lines and "idle" in lines
     assert "<- ERROR,23,unknown command" in lines
     assert any(line.startswith("idle, 0/16 queued, mode 0") for line in lines)
-    assert "binary protocol, version 2" in lines and "text protocol" in lines
+    assert "binary protocol, version 3" in lines and "text protocol" in lines
     assert any(line.startswith("<- STATUS,1,0,16,4;") for line in lines)
     assert "!! expected seconds, got 'x'" in lines
     assert any(line.startswith("?? unknown console command") for line in lines)

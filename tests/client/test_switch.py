@@ -36,7 +36,7 @@ def test_switching_works_on_a_noisy_line(seed: int) -> None:
         ctrl = firmware(client)
         ctrl.executor.set_mode(codes.MODE_SIMULATION)  # another bit, which the switch must keep
         hello = client.use_binary()
-        assert hello.version == codes.PROTOCOL_VERSION and client.binary
+        assert hello.version == max(codes.VERSIONS) and client.binary
         assert ctrl.binary and ctrl.mode == codes.MODE_SIMULATION | codes.MODE_BINARY
         assert client.status().binary
         client.use_text()
@@ -175,9 +175,9 @@ def test_binary_sends_up_to_the_window_the_controller_announces(
         ran: list[int] = []
         vel = ctrl.executor.vel
 
-        def counted(vx: int, vy: int, w: int, t_ms: int) -> None:
+        def counted(vx: int, vy: int, w: int, t_ms: int, accel: int = 0) -> None:
             ran.append(vx)
-            vel(vx, vy, w, t_ms)
+            vel(vx, vy, w, t_ms, accel)
 
         monkeypatch.setattr(ctrl.executor, "vel", counted)
         hello = client.use_binary()

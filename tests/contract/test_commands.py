@@ -24,18 +24,25 @@ from omnibot.protocol.messages import Cal, Hello, Mode, Move, Status
 from .conftest import ROBOT, Backend, ControllerClock, RawLink
 
 
-def test_hello_format(raw: RawLink) -> None:
-    raw.write(b"HELLO\n")
+def latest(backend: Backend) -> int:
+    """The highest protocol version the backend's controller speaks (the UNO's: 2, docs/uno.md)."""
+    return 2 if backend.name == "uno" else codes.VEL_ACCEL_VERSION
+
+
+def test_hello_format(raw: RawLink, backend: Backend) -> None:
+    raw.write(b"HELLO\n")  # a bare HELLO: the version every host speaks
     assert raw.line() == f"HELLO,2,{ROBOT},4\r\n".encode()
-    raw.write(b"hello,3,2,1\n")  # versions the host speaks: the highest shared one answers
+    raw.write(b"hello,4,2,1\n")  # versions the host speaks: the highest shared one answers
     assert raw.line() == f"HELLO,2,{ROBOT},4\r\n".encode()
+    raw.write(b"hello,2,3\n")
+    assert raw.line() == f"HELLO,{latest(backend)},{ROBOT},4\r\n".encode()
 
 
 def test_hello_versions(client: RobotClient) -> None:
     hello = client.hello([2])
     assert (hello.version, hello.name, hello.motors) == (2, ROBOT, 4)
     with pytest.raises(NotSupported) as info:
-        client.execute(Hello((1, 3)))
+        client.execute(Hello((1, 4)))
     assert info.value.code == codes.E_UNSUPPORTED
 
 
@@ -219,7 +226,7 @@ def test_binary_round_trip(client: RobotClient, backend: Backend) -> None:
     rec = EventRecorder()
     client.add_listener(rec)
     hello = client.use_binary()
-    assert client.binary and (hello.version, hello.name) == (2, ROBOT)
+    assert client.binary and (hello.version, hello.name) == (latest(backend), ROBOT)
     assert client.status().binary
     client.move(0.05, 0.4)
     client.wait_idle(timeout=3)  # IDLE arrives as an event frame, acknowledged

@@ -147,3 +147,45 @@ def test_tracker_turns_its_command_by_the_heading_it_will_have() -> None:
         rms[turn_lead] = math.sqrt(sum(d * d for d in dist) / len(dist))
     assert rms[0.04] < 0.3 * rms[0.0]
     assert rms[0.04] < 0.0002
+
+
+@pytest.mark.parametrize(
+    ("shape", "heading", "planned"),
+    [
+        ("line", "fixed", True),
+        ("line", "tangent", True),
+        ("circle", "fixed", False),
+        ("circle", "tangent", False),
+        ("line", "swing", False),
+    ],
+)
+def test_tracker_plans_its_acceleration_only_going_straight_with_the_heading_held(
+    shape: str, heading: str, planned: bool
+) -> None:
+    """planned_accel: the profile's speed-up (at most the planned a_max, braking at the end) on a
+    straight path that holds the heading; none where the body turns or the path curves (VEL's A is
+    the speed-up along the travel alone), but for the few cycles where the reference nearly stands
+    (its start and end)."""
+    path = standard_path(shape, size=1.0, heading=heading)
+    f = make_follower("tracker", LIMITS)
+    seen: list[float] = []
+    dist, _, done = simulate("tracker", path, follower=_recording(f, seen))
+    assert done and max(dist) < 0.01
+    if planned:
+        assert 0.5 * LIMITS.a_max < max(seen) <= LIMITS.a_max and min(seen) < -0.5 * LIMITS.a_max
+        assert seen[-1] == 0.0  # STOP plans nothing
+    else:  # where the reference stands nearly still, going nowhere yet, it is straight
+        assert sum(1 for a in seen if a) <= 10 < len(seen) // 20
+
+
+def _recording(f: Follower, seen: list[float]) -> Follower:
+    """``f`` with each update's planned_accel appended to ``seen``."""
+    update = f.update
+
+    def recorded(state: State) -> Command:
+        command = update(state)
+        seen.append(f.planned_accel)
+        return command
+
+    f.update = recorded  # type: ignore[method-assign]
+    return f

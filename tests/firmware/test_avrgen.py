@@ -61,3 +61,12 @@ def test_limits_round_to_the_same_integer_checks() -> None:
 def test_unknown_pin_is_a_config_error() -> None:
     with pytest.raises(ConfigError, match="not an Arduino UNO pin"):
         avrgen._pin("D14")
+
+
+@pytest.mark.parametrize("robot", avrgen.ROBOTS)
+def test_the_uno_takes_vel_without_its_acceleration(robot: str) -> None:
+    """The UNO speaks protocol version 2 only (docs/uno.md): its keyword table gives VEL four
+    parameters, so a VEL with A gets ERROR 24 instead of being half read."""
+    text = avrgen.header_source(robot)
+    assert '{"VEL", 6, 4, 4, 0},' in text
+    assert _define(text, "P_PROTOCOL_VERSION") == "2"

@@ -98,3 +98,18 @@ def test_a_limit_that_overflows_in_protocol_units_stages_nothing(
     err = capsys.readouterr().err
     assert "cannot hold speed_max_cms = inf" in err and "Traceback" not in err
     assert not board.exists()
+
+
+def test_acceleration_feedforward_pushes_each_wheel_its_way() -> None:
+    """accel_ff: a wheel's PWM counts per m/s^2 of body acceleration; they drive the wheel the way
+    the body's velocity in the same direction turns it (same signs as J), and a heavier robot
+    needs proportionally more (the body's share dominates the wheels' own inertia)."""
+    robot = load_robot("mecanum4")
+    cfg = fwconfig.build_config(robot)
+    for row, j in zip(cfg["accel_ff"], cfg["J"], strict=True):
+        assert len(row) == 2
+        for a, w in zip(row, j[:2], strict=False):
+            assert a * w > 0
+    heavy = fwconfig.build_config(robot.model_copy(update={"mass": 2 * robot.mass}))
+    for row, h in zip(cfg["accel_ff"], heavy["accel_ff"], strict=True):
+        assert 1.8 * row[0] < h[0] < 2.0 * row[0]

@@ -20,8 +20,17 @@ def test_hello_on_reset_and_on_request(rig: Rig) -> None:
     assert rig.hello == ["HELLO,2,omni4,4"]
     assert rig.cmd("hello") == ["HELLO,2,omni4,4"]
     assert rig.cmd("HELLO,2") == ["HELLO,2,omni4,4"]
-    assert rig.cmd("HELLO,3,2,1") == ["HELLO,2,omni4,4"]
+    assert rig.cmd("HELLO,4,2,1") == ["HELLO,2,omni4,4"]
     assert rig.cmd("HELLO,1") == [err(codes.E_UNSUPPORTED)]
+
+
+def test_hello_agrees_on_the_highest_shared_version(rig: Rig) -> None:
+    """A host that lists 3 learns that VEL takes the planned acceleration; a bare HELLO and the reset
+    greeting stay at 2, what every host speaks (an old host is never told a version it lacks)."""
+    assert rig.cmd("HELLO,2,3") == ["HELLO,3,omni4,4"]
+    assert rig.cmd("HELLO,3") == ["HELLO,3,omni4,4"]
+    assert rig.cmd("HELLO,4,3,2") == ["HELLO,3,omni4,4"]
+    assert rig.cmd("HELLO") == ["HELLO,2,omni4,4"]
 
 
 def test_status_format(rig: Rig) -> None:
@@ -44,6 +53,11 @@ def test_status_format(rig: Rig) -> None:
         ("POWER,0,0,0,0,0", codes.E_TIME),
         ("POWER,30001,0,0,0,0", codes.E_TIME),
         ("VEL,0,0,0,0", codes.E_TIME),
+        ("VEL,0,0,0,0,140", codes.E_TIME),
+        ("VEL,10,0,0,100,140,1", codes.E_PARAM_COUNT),
+        ("VEL,10,0,0,100,x", codes.E_NOT_INTEGER),
+        ("VEL,10,0,0,100,40000", codes.E_RANGE16),
+        ("VEL,90,90,0,100,140", codes.E_SPEED),
         ("VEL,0,0,0,1001", codes.E_TIME),
         ("TELEM,5,1", codes.E_TIME),
         ("MOVE,10,29,0,0", codes.E_SPEED),
@@ -583,3 +597,34 @@ def test_bad_check_refuses_the_command_untagged(rig: Rig) -> None:
     assert rig.cmd(good[:-1] + "G") == [err(codes.E_NOT_INTEGER)]  # not a check: left in the body
     assert rig.cmd("STATUS#12345") == [err(codes.E_UNKNOWN)]  # five digits are no tag
     assert rig.cmd(good) == [_tagged("OK", "5", True)]
+
+
+def test_vel_feeds_its_planned_acceleration_forward_in_the_closed_loop() -> None:
+    """VEL's fifth field, A cm/s^2 along (VX, VY), adds each wheel's accel_ff row times the body's
+    acceleration to the speed loop's feedforward, for as long as that VEL holds."""
+    rig = make_rig()
+    ex = rig.ctrl.executor
+    assert rig.cmd("MODE,2") == ["OK"]
+    assert rig.cmd("VEL,30,40,0,200") == ["OK"]
+    plain = list(ex._ff)
+    assert rig.cmd("VEL,30,40,0,200,150") == ["OK"]  # 1.5 m/s^2 along (0.6, 0.8)
+    rows = rig.config["accel_ff"]
+    for i in range(4):
+        assert ex._ff[i] - plain[i] == pytest.approx(1.5 * (0.6 * rows[i][0] + 0.8 * rows[i][1]))
+    assert rig.cmd("VEL,30,40,0,200,-150") == ["OK"]  # braking: the other way
+    for i in range(4):
+        assert ex._ff[i] - plain[i] == pytest.approx(-1.5 * (0.6 * rows[i][0] + 0.8 * rows[i][1]))
+    assert rig.cmd("VEL,30,40,0,200") == ["OK"]  # the next VEL without A: none
+    assert ex._ff == pytest.approx(plain)
+    assert rig.cmd("VEL,0,0,90,200,150") == ["OK"]  # turning in place: no translation to speed up
+    turning = list(ex._ff)
+    assert rig.cmd("VEL,0,0,90,200") == ["OK"]
+    assert ex._ff == turning
+
+
+def test_vel_acceleration_leaves_the_open_loop_powers_alone() -> None:
+    rig = make_rig()
+    assert rig.cmd("VEL,30,40,0,200") == ["OK"]
+    plain = rig.status()
+    assert rig.cmd("VEL,30,40,0,200,150") == ["OK"]
+    assert rig.status() == plain

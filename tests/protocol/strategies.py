@@ -21,7 +21,7 @@ commands: st.SearchStrategy[m.Command] = st.one_of(
     st.builds(m.Delta, i16, i16, i16, i16, i16),
     st.just(m.Stop()),
     st.builds(m.Power, i16, st.lists(i16, min_size=1, max_size=4).map(tuple)),
-    st.builds(m.Vel, i16, i16, i16, i16),
+    st.builds(m.Vel, i16, i16, i16, i16, i16),
     st.builds(m.Mode, i16),
     st.builds(m.Sonar, i16, i16, i16, i16, i16),
     st.builds(m.Telem, i16, i16),

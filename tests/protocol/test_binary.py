@@ -242,3 +242,12 @@ def test_bandwidth_figures() -> None:
     assert 100 * (sizes["ok"] + sizes["tel"]) == 5900 <= 0.52 * LINE
     assert 50 * sizes["tel_worst"] + 100 * sizes["ok"] <= 0.5 * LINE
     assert 100 * (4 + sizes["text_tel"]) > 0.5 * LINE  # the text protocol does not fit
+
+
+def test_vel_carries_the_planned_acceleration_only_when_there_is_one() -> None:
+    with_a = binary.encode(m.Vel(80, 0, 0, 200, 140), 3)
+    without = binary.encode(m.Vel(80, 0, 0, 200), 3)
+    assert len(with_a) == len(without) + 2  # 140 zigzags to 280: two varint bytes
+    assert without == binary.encode(m.Vel(80, 0, 0, 200, 0), 3)
+    assert binary.decode(with_a) == (len(with_a), binary.Packet(m.Vel(80, 0, 0, 200, 140), 3, False))
+    assert binary.decode(without) == (len(without), binary.Packet(m.Vel(80, 0, 0, 200), 3, False))

@@ -101,6 +101,11 @@ def test_commands_are_case_insensitive_and_spaces_are_ignored() -> None:
         (b"MOVE,1,2,3", codes.E_PARAM_COUNT),
         (b"STOP,1", codes.E_PARAM_COUNT),
         (b"POWER,1,2,3,4,5,6", codes.E_PARAM_COUNT),
+        (b"VEL,1,2,3", codes.E_PARAM_COUNT),
+        (b"VEL,1,2,3,4,5,6", codes.E_PARAM_COUNT),
+        (b"VEL,1,2,3,4,x", codes.E_NOT_INTEGER),
+        (b"VEL,1,2,3,4,", codes.E_NOT_INTEGER),
+        (b"VEL,1,2,3,4,32768", codes.E_RANGE16),
         (b"MOVE,1,2,x,4", codes.E_NOT_INTEGER),
         (b"MOVE,1,2,,4", codes.E_NOT_INTEGER),
         (b"MOVE,1,2,3.5,4", codes.E_NOT_INTEGER),
@@ -305,3 +310,13 @@ def test_a_client_decoder_takes_no_tagged_reply_without_its_check() -> None:
     assert list(lenient.feed_tagged(cut)) == [(m.Ok(), 12)]  # a host that tags without checks
     whole = text.with_suffix(b"OK", 12) + b"\r\n"
     assert list(strict.feed_tagged(whole + b"OK\r\n")) == [(m.Ok(), 12), (m.Ok(), None)]
+
+
+def test_vel_takes_the_planned_acceleration_as_an_optional_fifth_field() -> None:
+    """Version 3's VEL,VX,VY,W,T,A; without A (or with A = 0) the command is version 2's, byte for
+    byte, so a controller that does not know A reads what it always read."""
+    assert text.decode_command(b"VEL,80,0,0,200,140\n")[1] == m.Vel(80, 0, 0, 200, 140)
+    assert text.decode_command(b"VEL,80,0,0,200\n")[1] == m.Vel(80, 0, 0, 200)
+    assert m.Vel(80, 0, 0, 200).accel == 0
+    assert text.encode(m.Vel(80, 0, 0, 200, -140)) == b"VEL,80,0,0,200,-140\n"
+    assert text.encode(m.Vel(80, 0, 0, 200, 0)) == b"VEL,80,0,0,200\n"

@@ -8,10 +8,18 @@ import math
 import pytest
 
 from omnibot.client import RobotClient
-from omnibot.motion import Twist
+from omnibot.client.client import Pending
+from omnibot.control.followers import make_follower
+from omnibot.control.paths import standard_path
+from omnibot.estimation.estimator import make_estimator
+from omnibot.motion import Pose2D, Twist
+from omnibot.navigation.session import follower_limits
+from omnibot.protocol import codes
+from omnibot.protocol.messages import Command, Vel
+from omnibot.robot.description import load_robot
 from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.runtime import Runtime, clamp_to
-from omnibot.runtime.sources import ScriptSource
+from omnibot.runtime.sources import FollowerSource, ScriptSource
 from tests.teleop.fakes import truth
 
 
@@ -47,3 +55,37 @@ def test_commands_are_clamped_to_the_controllers_limits() -> None:
     assert fast.speed == pytest.approx(vmax) and fast.vx == pytest.approx(fast.vy)
     assert fast.w == pytest.approx(math.radians(limits.rate_max_dps - 1.0))
     assert clamp_to(limits, Twist(0.1, -0.1, -0.5)) == Twist(0.1, -0.1, -0.5)
+
+
+@pytest.mark.parametrize("versions", [(2,), codes.VERSIONS])
+def test_a_followers_planned_acceleration_goes_only_to_a_controller_that_takes_it(
+    versions: tuple[int, ...], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The tracker's VELs carry its profile's acceleration (speeding up, then braking) once the
+    controller's HELLO agreed on version 3; a controller that answered 2 gets version 2's VEL."""
+    robot = load_robot("mecanum4")
+    path = standard_path("line", size=0.4)
+    with RobotClient.open("sim://mecanum4?seed=1&world=empty", robot) as client:
+        takes = client.hello(versions).version >= codes.VEL_ACCEL_VERSION
+        assert client.takes_vel_accel is takes is (versions == codes.VERSIONS)
+        sent: list[Vel] = []
+        submit = client.submit
+
+        def recorded(command: Command, timeout: float | None = None) -> Pending:
+            if isinstance(command, Vel):
+                sent.append(command)
+            return submit(command, timeout)
+
+        monkeypatch.setattr(client, "submit", recorded)
+        runtime = Runtime(client, period=0.01, estimator=make_estimator("fused", robot, Pose2D(*path.start)))
+        follower = FollowerSource(make_follower("tracker", follower_limits(robot, 0.3)), path)
+        runtime.add_source(follower)
+        client.telemetry(0.01, codes.TEL_MASK)
+        runtime.run(until=lambda: follower.finished, duration=20.0)
+        runtime.close()
+    assert follower.completed and len(sent) > 50
+    accels = [v.accel for v in sent]
+    if takes:
+        assert max(accels) > 50 and min(accels) < -50  # cm/s^2: it sped up and braked
+    else:
+        assert accels == [0] * len(sent)

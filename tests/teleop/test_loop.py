@@ -34,9 +34,9 @@ def make(
     sent: list[tuple[float, tuple[float, ...]]] = []
     real_vel = client.vel
 
-    def vel(vx: float, vy: float, w: float, timeout: float):
+    def vel(vx: float, vy: float, w: float, timeout: float, accel: float = 0.0):
         sent.append((wall(), (vx, vy, w, timeout)))
-        return real_vel(vx, vy, w, timeout)
+        return real_vel(vx, vy, w, timeout, accel)
 
     client.vel = vel  # type: ignore[method-assign]
     pacer = Pacer(client, config.period, wall=wall, sleep=wall.sleep)

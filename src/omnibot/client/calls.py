@@ -43,6 +43,7 @@ class TypedCalls:
 
     limits: Limits
     _mode: int | None
+    last_hello: Hello | None
 
     def execute(self, command: Command, timeout: float | None = None) -> Reply:
         """Send ``command`` and wait for its reply (the client implements it)."""
@@ -77,9 +78,22 @@ class TypedCalls:
         """POWER: raw PWM counts, one per motor, for ``time`` s (no calibration)."""
         return self._run(commands.power(self.limits, time, powers))
 
-    def vel(self, vx: float, vy: float, w: float, timeout: float) -> Vel:
-        """VEL: hold (vx, vy) m/s and w rad/s for at most ``timeout`` s unless refreshed."""
-        return self._run(commands.vel(self.limits, vx, vy, w, timeout))
+    def vel(self, vx: float, vy: float, w: float, timeout: float, accel: float = 0.0) -> Vel:
+        """VEL: hold (vx, vy) m/s and w rad/s for at most ``timeout`` s unless refreshed; ``accel``
+        the planned rate of change of the speed (m/s^2; :attr:`takes_vel_accel` must be true)."""
+        if accel and not self.takes_vel_accel:
+            raise ValueError(
+                "VEL accel: the controller does not take VEL's acceleration (protocol version "
+                f"{codes.VEL_ACCEL_VERSION}; check client.takes_vel_accel)"
+            )
+        return self._run(commands.vel(self.limits, vx, vy, w, timeout, accel))
+
+    @property
+    def takes_vel_accel(self) -> bool:
+        """The controller's last HELLO reply agreed on protocol version 3 or later: VEL may carry the
+        planned acceleration (the client lists its versions when it greets the controller; a reset
+        greeting says 2, so after a reset the client sends none until it asks again)."""
+        return self.last_hello is not None and self.last_hello.version >= codes.VEL_ACCEL_VERSION
 
     def stop(self) -> Stop:
         """STOP: motors off, queue cleared, remembered MOVE reset, emergency-stop latch released."""

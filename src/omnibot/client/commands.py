@@ -146,9 +146,12 @@ def power(limits: Limits, time: float, powers: Sequence[int]) -> Power:
     return Power(T, values)
 
 
-def vel(limits: Limits, vx: float, vy: float, w: float, timeout: float) -> Vel:
+def vel(limits: Limits, vx: float, vy: float, w: float, timeout: float, accel: float = 0.0) -> Vel:
     """VEL: hold body velocity ``vx``, ``vy`` m/s and ``w`` rad/s for at most ``timeout`` s
-    (0.001..1) unless refreshed; the motors stop when it runs out (watchdog)."""
+    (0.001..1) unless refreshed; the motors stop when it runs out (watchdog). ``accel``: the planned
+    rate of change of the speed hypot(vx, vy), m/s^2, along (vx, vy); the controller's wheel-speed
+    loop feeds its torque forward (protocol version 3, docs/protocol.md)."""
+    A = _convert("VEL accel", accel, units.to_cm, "cm/s^2") if accel else 0
     VX = _convert("VEL vx", vx, units.to_cm, "cm/s")
     VY = _convert("VEL vy", vy, units.to_cm, "cm/s")
     W = _convert("VEL w", w, units.to_deg, "degrees/s")
@@ -160,7 +163,7 @@ def vel(limits: Limits, vx: float, vy: float, w: float, timeout: float) -> Vel:
         raise _fail("VEL w", w, W, "degrees/s", f"abs(W) < {limits.rate_max_dps:g}")
     if not 1 <= T <= VEL_TIME_MAX_MS:
         raise _fail("VEL timeout", timeout, T, "ms", f"1..{VEL_TIME_MAX_MS} ms")
-    return Vel(VX, VY, W, T)
+    return Vel(VX, VY, W, T, A)
 
 
 def mode(limits: Limits, mask: int) -> Mode:

@@ -203,7 +203,8 @@ def open_robot(
     try:
         _record(client, None)
         try:
-            hello = wait_for_controller(client, notice=notice)
+            # the versions listed: the reply says whether VEL may carry the planned acceleration
+            hello = wait_for_controller(client, codes.VERSIONS, notice=notice)
         except LinkError as exc:
             raise ConfigError(f"no controller answers on {url}: {exc}", key="--port") from exc
         if isinstance(robot, RobotDescription):

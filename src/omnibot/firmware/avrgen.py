@@ -191,6 +191,8 @@ def header_source(robot_name: str) -> str:
         lo, hi = codes.PARAM_COUNTS[kid]
         if kid == codes.POWER:
             lo = hi = n + 1
+        elif kid == codes.VEL:
+            hi = 4  # protocol version 2 only: no room for VEL's acceleration (docs/uno.md)
         inf = codes.INF_PARAMS.get(kid, -1) + 1
         w(f"    {{{_c_string(name)}, {kid}, {lo}, {hi}, {inf}}},")
     w("};")

@@ -116,8 +116,8 @@ class Controller:
         else:
             self.emit(f"RANGE,{sonar},{cm}")
 
-    def _hello_text(self) -> str:
-        return f"HELLO,{codes.PROTOCOL_VERSION},{self.name},{self.motors}"
+    def _hello_text(self, version: int = codes.PROTOCOL_VERSION) -> str:
+        return f"HELLO,{version},{self.name},{self.motors}"
 
     def _status(self) -> None:
         ex = self.executor
@@ -351,7 +351,7 @@ class Controller:
             self._check_halt()
         elif kw == codes.VEL:
             self._ok()
-            ex.vel(p[0], p[1], p[2], p[3])
+            ex.vel(p[0], p[1], p[2], p[3], p[4] if len(p) > 4 else 0)
             self._check_halt()
         elif kw == codes.STOP:
             was = ex.stop()
@@ -363,15 +363,21 @@ class Controller:
         elif kw == codes.STATUS:
             self._status()
         elif kw == codes.HELLO:
+            version = 0  # the highest one the host's list shares (limits: there is one)
+            for v in p:
+                if v in codes.VERSIONS and v > version:
+                    version = v
+            if version == 0:  # a bare HELLO: the version every host speaks
+                version = codes.PROTOCOL_VERSION
             if self.binary:
                 self.link.reply(
                     codes.HELLO_REPLY,
                     self._seq,
-                    [codes.PROTOCOL_VERSION, self.motors, self.link.rx.window],
+                    [version, self.motors, self.link.rx.window],
                     self.name.encode(),
                 )
             else:
-                self._reply(self._hello_text())
+                self._reply(self._hello_text(version))
         elif kw == codes.MODE:
             self._ok()
             self.guard.refuse = bool(p[0] & codes.MODE_REFUSE_UNCOVERED)

@@ -63,7 +63,7 @@ class Limits:
                     return codes.E_SPEED
             return 0
         if kw == codes.VEL:
-            vx, vy, w, t = p
+            vx, vy, w, t = p[0], p[1], p[2], p[3]
             if vx * vx + vy * vy > self.v_max * self.v_max or abs(w) >= self.f_max:
                 return codes.E_SPEED
             if not 1 <= t <= VEL_TIME_MAX:

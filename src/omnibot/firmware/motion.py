@@ -89,6 +89,8 @@ class Executor:
         self._rot = False
         self._ff = [0.0] * self.n
         self._target = [0.0] * self.n
+        self._growth = 0.0  # a VEL's planned acceleration over its translation speed, 1/s
+        self._accel_ff = cfg.get("accel_ff") or [[0.0, 0.0]] * self.n  # PWM counts per m/s^2
         self._counts = [0] * self.n
         self._feedback = False
         self._drag = False
@@ -181,10 +183,16 @@ class Executor:
         for i in range(4):
             self.remembered[i] = 0
 
-    def vel(self, vx: int, vy: int, w: int, t_ms: int) -> None:
-        """Hold a body velocity (cm/s, cm/s, deg/s) for t_ms unless refreshed; clears the queue."""
+    def vel(self, vx: int, vy: int, w: int, t_ms: int, accel: int = 0) -> None:
+        """Hold a body velocity (cm/s, cm/s, deg/s) for t_ms unless refreshed; clears the queue.
+
+        ``accel``: the host's planned rate of change of the translation speed hypot(vx, vy), cm/s^2,
+        along (vx, vy) (the turn's is taken as 0); the closed loop feeds its torque forward.
+        """
         self.queue.clear()
         self.progress.cancel()
+        speed = math.sqrt(vx * vx + vy * vy)
+        self._growth = accel / speed if speed > 0 else 0.0  # 1/s
         if self.kind != codes.VEL:
             self._warned = 0
         self.kind = codes.VEL
@@ -392,6 +400,11 @@ class Executor:
             for i in range(self.n):
                 self._ff[i] = model.raw[i]
             model.wheel_speeds(vx, vy, w, self._target)
+            growth = self._growth if self.kind == codes.VEL else 0.0
+            if growth != 0.0:  # the planned acceleration's torque (the speed loop's feedforward)
+                for i in range(self.n):
+                    row = self._accel_ff[i]
+                    self._ff[i] += growth * (row[0] * vx + row[1] * vy)
         if self.mode & MODE_CLOSED_LOOP and not self._feedback:
             self._start_feedback()
         elif self._feedback:

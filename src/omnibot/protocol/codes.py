@@ -5,8 +5,9 @@ module on the board, the host codecs import it under CPython; one table, so both
 """
 
 # --- versions and limits ---------------------------------------------------------------------------
-PROTOCOL_VERSION = 2  # first field of the HELLO reply; one number covers text and binary framing
-VERSIONS = (2,)  # protocol versions this implementation speaks (1 had CRC-16 frames without a length)
+PROTOCOL_VERSION = 2  # the reset HELLO's and a bare HELLO's version; one number covers text and binary
+VERSIONS = (2, 3)  # protocol versions this implementation speaks (1 had CRC-16 frames without a length)
+VEL_ACCEL_VERSION = 3  # version 3 = 2 + VEL's optional fifth parameter, the planned acceleration
 INF = 30000  # "infinite" distance, angle or repeat
 INT_MIN = -32768  # command parameters are 16-bit signed
 INT_MAX = 32767
@@ -59,7 +60,7 @@ PARAM_COUNTS = {
     DELTA: (5, 5),
     POWER: (2, 5),
     STOP: (0, 0),
-    VEL: (4, 4),
+    VEL: (4, 5),
     MODE: (1, 1),
     SONAR: (5, 5),
     TELEM: (2, 2),

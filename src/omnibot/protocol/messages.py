@@ -155,16 +155,21 @@ class Power(_Message):
 
 @dataclass(frozen=True)
 class Vel(_Message):
-    """``VEL,VX,VY,W,T``: hold body velocity (cm/s, cm/s, degrees/s) for at most T ms."""
+    """``VEL,VX,VY,W,T[,A]``: hold body velocity (cm/s, cm/s, degrees/s) for at most T ms; A
+    (protocol version 3) is the host's planned rate of change of the speed, cm/s^2 (0: none, and
+    then it is not sent, so a version 2 controller reads the same command)."""
 
     vx: int
     vy: int
     w: int
     time_ms: int
+    accel: int = 0
     TYPE: ClassVar[int] = codes.VEL
 
     def params(self) -> tuple[int, ...]:
-        """VX, VY, W, T in wire order."""
+        """VX, VY, W, T (and A when it is not 0) in wire order."""
+        if self.accel:
+            return (self.vx, self.vy, self.w, self.time_ms, self.accel)
         return (self.vx, self.vy, self.w, self.time_ms)
 
     @classmethod

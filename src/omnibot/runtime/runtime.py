@@ -303,6 +303,8 @@ class Runtime:
     def _send(self, source: str, twist: Twist, fresh: bool) -> Twist | None:
         client = self.client
         watchdog = getattr(self.sources.get(source), "watchdog", None) or self.vel_timeout
+        # a follower's planned acceleration, for a controller whose wheel loop takes it
+        accel = getattr(self.sources.get(source), "accel", 0.0) if client.takes_vel_accel else 0.0
         try:
             if fresh and self.latched:
                 client.stop()  # a person let go and pressed again: release the latched stop
@@ -311,10 +313,11 @@ class Runtime:
             sent = clamp_to(client.limits, twist)
             if getattr(self.sources.get(source), "wait_reply", self.wait_replies):
                 t0 = client.clock.now()
-                client.vel(sent.vx, sent.vy, sent.w, watchdog)
+                client.vel(sent.vx, sent.vy, sent.w, watchdog, accel)
                 self.rtt = client.clock.now() - t0
             else:
-                self._pending.append((client.submit(vel_command(client.limits, *sent, watchdog)), source))
+                command = vel_command(client.limits, *sent, watchdog, accel)
+                self._pending.append((client.submit(command), source))
         except (ControllerError, LinkError, ValueError) as exc:
             self._failed(source, exc)
             return None

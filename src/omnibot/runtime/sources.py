@@ -186,6 +186,9 @@ class FollowerSource:
         self.state: Estimate | None = None
         """The state the follower last steered by."""
         self.twist: Twist | None = None
+        self.accel = 0.0
+        """m/s^2: the follower's planned rate of change of its last proposal's speed (the runtime
+        sends it with the VEL to a controller that takes it)."""
         self.overrides = 0
         """How often another source or a lock took the robot from it."""
         self._standing_by = False
@@ -228,6 +231,7 @@ class FollowerSource:
             if not self._standing_by:
                 self.overrides += self._driven
                 self._standing_by = True
+            self.accel = 0.0
             return Proposal(Twist())  # stand by: ready to take the robot (back)
         if self._standing_by:
             self._standing_by = False
@@ -245,6 +249,7 @@ class FollowerSource:
             return None
         self._s = self.path.project_near(state.x, state.y, self._s).s if len(self.path) > 1 else 0.0
         self.twist = Twist(command.vx, command.vy, command.w)
+        self.accel = self.follower.planned_accel
         return Proposal(self.twist)
 
     def _resume(self, state: Estimate) -> None:

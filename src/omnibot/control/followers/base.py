@@ -85,6 +85,13 @@ class Follower(ABC):
         self.t0 = 0.0
         self.options: dict[str, Any] = {}
         """The options it was made with (:func:`make_follower` sets them; ``log replay`` remakes it)."""
+        self.planned_accel = 0.0
+        """m/s^2: the planned rate of change of the last command's speed (0: no plan); the runtime
+        sends it with the VEL to a controller whose wheel-speed loop feeds it forward. The tracker
+        plans it only where the reference goes straight with the body's heading held: it is the
+        speed-up along the travel, and a turning body or a curving path also needs torque for the
+        turn or across the travel, which VEL does not carry; fed alone it cost the heading (omni4 on
+        a swinging random path 0.048 -> 0.059 rad RMS) and the track on a circle (BENCHMARKS.md)."""
 
     def start(self, path: Path, t: float) -> None:
         """Begin following ``path`` at time ``t`` (the robot stands at its start)."""

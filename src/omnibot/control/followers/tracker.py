@@ -47,6 +47,10 @@ from omnibot.control.paths.profile import MotionLimits, SpeedProfile
 STEADY_ACCEL = 0.5
 """m/s^2: the response model learns only while the reference accelerates less than this (and the
 estimator sees no slip): it is a steady-state gain."""
+STRAIGHT_ACCEL = 1e-6
+"""m/s^2: the tracker plans its acceleration for VEL (:attr:`~Follower.planned_accel`) only where the
+reference goes straight (its acceleration across its velocity below this) with the heading held:
+the field carries the speed-up along the travel alone (see the base class)."""
 HEADING_GAIN = 8.0
 """1/s: the heading loop's gain on a robot whose angular acceleration can deliver it (see
 :func:`heading_gain`)."""
@@ -112,6 +116,7 @@ class ProfileTracker(Follower):
         """Reference time, s (the profile's clock, slowed by the governor)."""
         self._last_t: float | None = None
         self._integral = np.zeros(3)  # along, cross, heading
+        self._holds_heading = False
         self._ended_at: float | None = None
         self.errors = (0.0, 0.0, 0.0)
         """Last along-track, cross-track (m) and heading (rad) errors of the estimate."""
@@ -122,6 +127,7 @@ class ProfileTracker(Follower):
         super().start(path, t)
         self.profile = self.plan(path, self.margin)
         self.tau = 0.0
+        self._holds_heading = float(np.ptp(path.theta)) == 0.0  # planned_accel only then
         self._last_t = t
         self._ended_at = None
         self._integral[:] = 0.0
@@ -132,6 +138,7 @@ class ProfileTracker(Follower):
         """Track the time-parametrised reference with feedforward plus feedback; STOP once done."""
         prof, path = self.profile, self.path
         assert prof is not None and path is not None
+        self.planned_accel = 0.0
         if self.done:
             return STOP
         dt = self.dt if self._last_t is None else max(0.0, state.t - self._last_t)
@@ -163,6 +170,9 @@ class ProfileTracker(Follower):
         pth = state.theta + state.w * lead
         self.progress = ref.s
         tx, ty = _direction(ref.vx, ref.vy, prof, self.tau + lead)
+        straight = abs(ref.ax * ty - ref.ay * tx) < STRAIGHT_ACCEL
+        if self._holds_heading and straight and self.tau < end:  # (at its end the reference stands)
+            self.planned_accel = (ref.ax * tx + ref.ay * ty) * pace  # the reference's speed-up, m/s^2
         nx, ny = -ty, tx
 
         # 3. feedback in the path frame
