@@ -159,8 +159,6 @@ def _accel_ff(robot: RobotDescription, J: Any) -> list[list[float]]:
     forces that give the body its mass times the acceleration, plus the wheel's and the rotor's own
     inertia, as the motor current that makes the torque and the voltage that drives it through the
     winding (no back-EMF: the speed's share is the feedforward's)."""
-    import numpy as np
-
     wheels = robot.wheels
     traction, _ = kinematics.contact_rows(
         [w.position[0] for w in wheels],
