@@ -8,7 +8,7 @@ from functools import partial
 
 from omnibot.calibration.accuracy import AccuracyPlan, AccuracyRow
 from omnibot.calibration.experiments import Runner
-from omnibot.calibration.runs import ROTATE, STRAIGHT, RunInfo
+from omnibot.calibration.runs import ROTATE, RunInfo
 from omnibot.protocol import codes
 
 
@@ -24,19 +24,8 @@ def run_accuracy(runner: Runner, plan: AccuracyPlan) -> list[AccuracyRow]:
     for speed in plan.move_speeds(robot):
         for course in plan.courses_deg:
             for c in (course, course + 180.0) if plan.back else (course,):
-                info = RunInfo(
-                    STRAIGHT,
-                    f"check: move {100 * length:.0f} cm at {speed:g} m/s on course {c:g} deg",
-                    math.radians(c),
-                )
                 runner.note(f"check course {c:g} at {speed:g}")
-                r = runner.run(
-                    info,
-                    partial(client.move, length, speed, math.radians(c)),
-                    length / speed,
-                    "check",
-                    course_deg=c,
-                )
+                r = runner.move("check", length, speed, c, "check")
                 m = r.truth
                 d = None if m is None else m.distance
                 direction = None if m is None else m.direction

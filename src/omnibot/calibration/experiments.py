@@ -113,6 +113,28 @@ class Runner:
             self.progress.update(1)
         return result
 
+    def move(
+        self,
+        what: str,
+        length: float,
+        speed: float,
+        course_deg: float,
+        group: str,
+        detail: str = "",
+        **meta: Any,
+    ) -> RunResult:
+        """A straight MOVE of ``length`` m at ``speed`` m/s on ``course_deg``, run as :meth:`run` (its
+        ``course_deg`` in the result); described as ``<what>: move <cm> cm at <speed> m/s on course
+        <course> deg<detail>``."""
+        course = math.radians(course_deg)
+        info = RunInfo(
+            STRAIGHT,
+            f"{what}: move {100 * length:.0f} cm at {speed:g} m/s on course {course_deg:g} deg{detail}",
+            course,
+        )
+        send = partial(self.client.move, length, speed, course)
+        return self.run(info, send, length / speed, group, course_deg=course_deg, **meta)
+
     def wait_still(self) -> None:
         """Wait ``settle`` s, then until no encoder count moves (a heavy robot coasts for long)."""
         self.client.sleep(self.settle)
@@ -433,22 +455,9 @@ def slow_moves(runner: Runner, plan: Plan, speed: float) -> list[RunResult]:
     for _ in range(plan.slow_rounds):
         for folded in plan.calibrated_courses(geo):
             for raw in geo.raw_courses(folded, plan.directions):
-                info = RunInfo(
-                    STRAIGHT,
-                    f"slow end: move {100 * length:.0f} cm at {speed:g} m/s on course {raw:g} deg",
-                    math.radians(raw),
-                )
                 runner.note(f"slow end: course {raw:g}")
                 out.append(
-                    runner.run(
-                        info,
-                        partial(runner.client.move, length, speed, math.radians(raw)),
-                        length / speed,
-                        SLOW,
-                        course_deg=raw,
-                        folded_deg=folded,
-                        commanded=length,
-                    )
+                    runner.move("slow end", length, speed, raw, SLOW, folded_deg=folded, commanded=length)
                 )
     return out
 

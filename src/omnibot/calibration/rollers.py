@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from functools import partial
 
 from omnibot.calibration.experiments import Runner
 from omnibot.calibration.patterns import course_pattern, top_power
@@ -110,20 +109,9 @@ def tune_coast(
                 on = k % 2 == 0
                 runner.client.upload_calibration(spec if on else off)
                 for course in courses:
-                    info = RunInfo(
-                        STRAIGHT,
-                        f"roller drag gain: move {100 * length:.0f} cm at {speed:g} m/s on course {course:g} "
-                        f"deg ({'with' if on else 'without'} the term)",
-                        math.radians(course),
-                    )
                     runner.note(f"roller gain {speed:g} m/s")
-                    r = runner.run(
-                        info,
-                        partial(runner.client.move, length, speed, math.radians(course)),
-                        length / speed,
-                        f"{GROUP}:gain",
-                        course_deg=course,
-                    )
+                    detail = f" ({'with' if on else 'without'} the term)"
+                    r = runner.move("roller drag gain", length, speed, course, f"{GROUP}:gain", detail)
                     runs += 1
                     if r.truth is None or r.truth.distance is None or r.counts is None:
                         continue
