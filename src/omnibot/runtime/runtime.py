@@ -301,17 +301,17 @@ class Runtime:
     # ------------------------------------------------------------------ sending
 
     def _send(self, source: str, twist: Twist, fresh: bool) -> Twist | None:
-        client = self.client
-        watchdog = getattr(self.sources.get(source), "watchdog", None) or self.vel_timeout
+        client, origin = self.client, self.sources.get(source)
+        watchdog = getattr(origin, "watchdog", None) or self.vel_timeout
         # a follower's planned acceleration, for a controller whose wheel loop takes it
-        accel = getattr(self.sources.get(source), "accel", 0.0) if client.takes_vel_accel else 0.0
+        accel = getattr(origin, "accel", 0.0) if client.takes_vel_accel else 0.0
         try:
             if fresh and self.latched:
                 client.stop()  # a person let go and pressed again: release the latched stop
                 self.latched = False
                 self.notify("info", "emergency stop released by a fresh press of the deadman", source)
             sent = clamp_to(client.limits, twist)
-            if getattr(self.sources.get(source), "wait_reply", self.wait_replies):
+            if getattr(origin, "wait_reply", self.wait_replies):
                 t0 = client.clock.now()
                 client.vel(sent.vx, sent.vy, sent.w, watchdog, accel)
                 self.rtt = client.clock.now() - t0
