@@ -11,6 +11,7 @@ from omnibot.client.client import RobotClient
 from omnibot.control.followers import make_follower
 from omnibot.control.paths import Path, standard_path
 from omnibot.control.paths.standard import SWING
+from omnibot.errors import ConfigError
 from omnibot.estimation.slip import SlipParameters
 from omnibot.motion import Pose2D, Twist
 from omnibot.navigation.metrics import ODOMETRY, TRUTH, tracking_report
@@ -18,6 +19,7 @@ from omnibot.navigation.runner import FrameMap, NavigationError, Navigator
 from omnibot.navigation.session import (
     PLAN_FLOOR_USE,
     FollowOptions,
+    follow_path,
     follower_limits,
     simulate_follow,
     simulated_client,
@@ -211,3 +213,32 @@ def test_omni3_keeps_its_heading_when_its_spin_clips_the_gyro() -> None:
     error = np.angle(np.exp(1j * (arrays["estimate"][:, 2] - arrays["truth"][:, 2])))
     assert np.max(np.abs(error)) < math.radians(3.0)
     assert report["completed"] and report["max_cross_track_m"] < 0.03
+
+
+def test_a_controller_without_a_gyro_is_followed_on_the_encoders_with_a_warning() -> None:
+    """The host's description has a gyro, the controller has none (as the UNO firmware): its heading
+    is 0 in every TEL. Taken at its word the body turned nowhere and the tracker spun the robot
+    round; the estimator finds the gyro silent and the run goes on with the encoders' heading."""
+    robot = load_robot("mecanum4")
+    bare = robot.model_copy(update={"gyro": None})  # what the controller's firmware is built from
+    path = standard_path("circle", size=0.5, heading="tangent")
+    with simulated_client(bare, seed=1, start=Pose2D(*path.start)) as client:
+        run, report, nav = follow_path(client, robot, path, FollowOptions(speed=0.3))
+        assert nav.truth() is not None
+        with pytest.raises(NavigationError, match=r"stood still .* run without --calibrate-gyro"):
+            nav.prepare(0.2)
+            nav.calibrate_gyro()
+        nav.close()
+    assert report["completed"] and report["final_error_m"] < 0.03, report
+    assert len(report["warnings"]) == 1 and "no working gyro" in report["warnings"][0]
+    assert run.warnings == report["warnings"]
+
+
+def test_a_robot_described_without_a_gyro_cannot_calibrate_one() -> None:
+    bare = load_robot("omni4").model_copy(update={"gyro": None})
+    with simulated_client(bare, seed=1) as client:
+        nav = Navigator(client, bare)
+        nav.prepare(0.2)
+        with pytest.raises(ConfigError, match="omni4 has no gyro to calibrate"):
+            nav.calibrate_gyro()
+        nav.close()

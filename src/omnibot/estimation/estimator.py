@@ -26,6 +26,7 @@ import numpy as np
 from omnibot.errors import ConfigError
 from omnibot.estimation.heading import HeadingFilter, HeadingFilterConfig
 from omnibot.estimation.odometry import COUNT_MODULUS, compose_arc, count_delta
+from omnibot.estimation.silence import GyroSilence
 from omnibot.estimation.slip import SlipModel, SlipParameters
 from omnibot.estimation.tracking import Seed002Odometry, TrackingGeometry
 from omnibot.motion import Estimate, Pose2D
@@ -73,6 +74,9 @@ class Estimator(Protocol):
 
     name: str
     estimate: Estimate
+    alerts: list[str]
+    """What the estimator found wrong with the robot's sensors, each once (e.g. a silent gyro); the
+    runtime tells every front end and empties it."""
 
     @property
     def distance(self) -> float:
@@ -88,7 +92,9 @@ class PoseEstimator:
     ``translation``: ``"tracking"`` (passive tracking wheels), ``"encoders"`` (driven-wheel encoders)
     or ``"auto"`` (tracking wheels when the robot has them). ``heading``: ``"fused"`` (gyro with bias
     and scale learned against the encoders), ``"gyro"`` (the raw gyro sum, seed 002's (1)) or
-    ``"encoders"`` (the wheels' rotation only). ``slip``: the floor's wheel slip
+    ``"encoders"`` (the wheels' rotation only) or ``"auto"`` (fused when the robot has a gyro); a gyro whose heading stands still while the encoders
+    turn the body (:mod:`omnibot.estimation.silence`: a controller without one sends 0) gives way to
+    the encoders, with an alert. ``slip``: the floor's wheel slip
     (:mod:`omnibot.estimation.slip`, from ``omnibot calibrate``): the driven wheels' increments are
     scaled and their predicted creep taken out before the forward kinematics.
     """
@@ -106,10 +112,12 @@ class PoseEstimator:
     ) -> None:
         if translation == "auto":
             translation = "tracking" if len(robot.encoders.tracking) >= 2 else "encoders"
+        if heading == "auto":
+            heading = "fused" if robot.gyro is not None else "encoders"
         if translation not in ("tracking", "encoders"):
             raise ConfigError(f"unknown translation source {translation!r}; expected tracking or encoders")
         if heading not in ("fused", "gyro", "encoders"):
-            raise ConfigError(f"unknown heading source {heading!r}; expected fused, gyro or encoders")
+            raise ConfigError(f"unknown heading source {heading!r}; expected fused, gyro, encoders or auto")
         cpr = {e.wheel: e.counts_per_rev for e in robot.encoders.motors}
         self.has_encoders = all(w.name in cpr for w in robot.wheels)
         if heading in ("fused", "gyro") and robot.gyro is None:
@@ -117,6 +125,11 @@ class PoseEstimator:
         if (translation == "encoders" or heading == "encoders") and not self.has_encoders:
             raise ConfigError(f"robot {robot.name} lacks an encoder on every driven wheel")
         self.name = name or f"{translation}+{heading}"
+        self.robot_name = robot.name
+        self.alerts: list[str] = []
+        self.silence = GyroSilence()
+        """Whether the gyro says nothing (then the heading comes from the encoders)."""
+        self._still_theta = start.theta if start else 0.0
         self.translation = translation
         self.heading_source = heading
         self.tracking = (
@@ -159,6 +172,7 @@ class PoseEstimator:
     def reset(self, pose: Pose2D) -> None:
         """Put the estimate at ``pose`` (keeps the gyro's learned bias and scale)."""
         self._pose = pose
+        self._still_theta = pose.theta - self.silence.turned
         self.filter.reset_heading(pose.theta)
         e = self.estimate
         self.estimate = Estimate(e.t, pose.x, pose.y, pose.theta, 0.0, 0.0, 0.0, e.slipping, e.standstill)
@@ -299,23 +313,35 @@ class PoseEstimator:
         accel: float,
     ) -> float:
         d_ref = wheel[2] if wheel is not None else None
-        if self.heading_source == "encoders":
+        if self.heading_source == "encoders" or self.silence.silent:
             return d_ref or 0.0
         if sample.heading is None or last.heading is None:
             return d_ref or 0.0
+        silence = self.silence
+        if silence.update(sample.heading, d_ref):
+            self.alerts.append(
+                f"{silence.finding()}; heading from the wheel encoders from now on (describe "
+                f"{self.robot_name} without a gyro for this controller: docs/navigation.md)"
+            )
+            # the heading stood still since the gyro's last change: the encoders' rotation replaces it
+            return self._still_theta + silence.turned - self._pose.theta
         d_psi = sample.heading - last.heading
         if self.heading_source == "gyro":
-            return d_psi
-        return self.filter.update(
-            dt,
-            d_psi,
-            d_ref,
-            standstill=standstill,
-            slip=slip,
-            accel=accel,
-            speed=0.0 if wheel is None or dt <= 0 else math.hypot(wheel[0], wheel[1]) / dt,
-            ref_resolution=self.rotation_resolution,
-        )
+            d_theta = d_psi
+        else:
+            d_theta = self.filter.update(
+                dt,
+                d_psi,
+                d_ref,
+                standstill=standstill,
+                slip=slip,
+                accel=accel,
+                speed=0.0 if wheel is None or dt <= 0 else math.hypot(wheel[0], wheel[1]) / dt,
+                ref_resolution=self.rotation_resolution,
+            )
+        if silence.turned == 0.0:  # the gyro's heading changed: the still stretch starts here
+            self._still_theta = self._pose.theta + d_theta
+        return d_theta
 
 
 class Seed002Estimator:
@@ -325,6 +351,7 @@ class Seed002Estimator:
         if robot.gyro is None:
             raise ConfigError(f"robot {robot.name} has no gyro for seed 002's heading")
         self.name = name
+        self.alerts: list[str] = []
         self.odometry = Seed002Odometry(robot, start)
         start = start or Pose2D(0.0, 0.0, 0.0)
         self.estimate = Estimate(0.0, start.x, start.y, start.theta)
@@ -374,7 +401,7 @@ def _pose_estimator(name: str, translation: str = "auto", heading: str = "fused"
 
 
 ESTIMATORS: dict[str, EstimatorFactory] = {
-    "fused": _pose_estimator("fused"),
+    "fused": _pose_estimator("fused", "auto", "auto"),
     "tracking+gyro": _pose_estimator("tracking+gyro", "tracking"),
     "tracking+raw-gyro": _pose_estimator("tracking+raw-gyro", "tracking", "gyro"),
     "encoders+gyro": _pose_estimator("encoders+gyro", "encoders"),
@@ -383,7 +410,7 @@ ESTIMATORS: dict[str, EstimatorFactory] = {
     "seed002": lambda r, s, _slip: Seed002Estimator(r, s),
 }
 """Estimators by name: ``fused`` is the best the robot's sensors allow (tracking wheels if any, gyro
-fused with the encoders); the others isolate one source each, for comparison. Every one but
+fused with the encoders if any, else the encoders' rotation); the others isolate one source each, for comparison. Every one but
 ``seed002`` (as written) takes the floor's slip coefficients for its driven-wheel encoders."""
 
 

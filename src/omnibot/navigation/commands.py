@@ -138,6 +138,8 @@ def run_follow(args: argparse.Namespace) -> int:
         report["slip_calibration"] = {"file": str(args.calibration), **options.slip.as_dict()}
     print(f"omnibot follow: {robot.name}, {args.follower}, {len(path)} points, {path.length:.2f} m")
     print(f"  {summary(report)}")
+    for text in report["warnings"]:
+        print(f"  warning: {text}")
     if targets["truth"] is not None:
         if run.has_truth:
             _write_truth(run, targets["truth"])
@@ -252,6 +254,8 @@ def run_record(args: argparse.Namespace) -> int:
     with _robot_client(args) as (client, robot):
         result = teach(client, robot, recorder, mode=mode, shape=shape, speed=speed, duration=duration)
     problem = check_recording(result)
+    for text in result.warnings:
+        print(f"omnibot record: warning: {text}")
     what = {
         "push": f"pushed by hand along {args.shape}",
         "drive": f"driven along {args.shape}",

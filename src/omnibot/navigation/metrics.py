@@ -87,6 +87,7 @@ def tracking_report(run: FollowRun, limits: MotionLimits) -> dict[str, Any]:
         "final_heading_error_rad": wrap(final.theta - end[2]) if final else math.nan,
         "path_length_m": path.length,
         "samples": len(dist),
+        "warnings": list(run.warnings),
     }
     if use_truth and run.final_estimate is not None and run.final_truth is not None:
         fe, ft = run.final_estimate, run.final_truth

@@ -19,7 +19,7 @@ estimator's poses (the robot's dead reckoning, as seed 002 records with its enco
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from omnibot.client.client import RobotClient
@@ -58,6 +58,8 @@ class TeachResult:
     distance: float
     truth_error: float | None
     """Distance between the recorded end and the true end (simulator only), m."""
+    warnings: list[str] = field(default_factory=list)
+    """What the runtime warned about while recording (e.g. a silent gyro)."""
 
 
 def teach(
@@ -112,7 +114,7 @@ def teach(
     truth = nav.truth()
     if truth is not None and path is not None:
         truth_error = math.hypot(path.x[-1] - truth[0], path.y[-1] - truth[1])
-    return TeachResult(path, mode, elapsed, distance, truth_error)
+    return TeachResult(path, mode, elapsed, distance, truth_error, list(nav.warnings))
 
 
 def check_recording(result: TeachResult) -> str | None:

@@ -34,14 +34,15 @@ from omnibot.client.errors import NotSupported
 from omnibot.client.events import Telemetry
 from omnibot.control.followers.base import STOP, Command, Follower, State
 from omnibot.control.paths.path import Path
-from omnibot.errors import OmnibotError
+from omnibot.errors import ConfigError, OmnibotError
 from omnibot.estimation.estimator import Estimator, PoseEstimator, make_estimator
+from omnibot.estimation.silence import GyroSilence
 from omnibot.estimation.slip import SlipParameters
 from omnibot.motion import Pose2D, Twist
 from omnibot.progress import Progress
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription
-from omnibot.runtime.cycle import Cycle
+from omnibot.runtime.cycle import Cycle, Notice
 from omnibot.runtime.runtime import LinkPacer, Runtime
 from omnibot.runtime.sources import FollowerSource, ScriptSource
 from omnibot.transport.device import find_simulator
@@ -85,6 +86,8 @@ class FollowRun:
     final_estimate: Pose2D | None = None
     final_truth: Pose2D | None = None
     distance: float = 0.0
+    warnings: list[str] = field(default_factory=list)
+    """What the runtime warned about up to the run's end (e.g. a silent gyro, a latched stop)."""
 
     @property
     def duration(self) -> float:
@@ -137,11 +140,14 @@ class _GyroProbe:
     def __init__(self, robot: RobotDescription) -> None:
         self._encoders = PoseEstimator(robot, translation="encoders", heading="encoders", name="gyro-probe")
         self.rows: list[tuple[float, float, float]] = []  # controller time, gyro heading, encoder heading
+        self.silence = GyroSilence()
 
     def update(self, event: Telemetry) -> None:
         if event.heading is None:
             return
+        before = self._encoders.estimate.theta
         est = self._encoders.update(event)
+        self.silence.update(event.heading, est.theta - before)
         self.rows.append((event.controller_time, event.heading, est.theta))
 
     def mark(self) -> int:
@@ -218,7 +224,14 @@ class Navigator:
         self.runtime = Runtime(client, estimator=self.estimator)
         """The one loop that owns the client; it feeds the estimator and the observers."""
         self.runtime.telemetry_hooks.extend(obs.update for obs in self.observers.values())
+        self.warnings: list[str] = []
+        """The runtime's warnings and errors so far (e.g. the estimator's alerts), for the report."""
+        self.runtime.notice_hooks.append(self._heard)
         self._started = False
+
+    def _heard(self, notice: Notice) -> None:
+        if notice.level != "info":
+            self.warnings.append(notice.text)
 
     # ------------------------------------------------------------------ setup
 
@@ -267,6 +280,8 @@ class Navigator:
         A rate above the robot's ``angular_speed_max`` or :data:`SPIN_GYRO_USE` of its gyro's range is
         capped to it (with one rate left the creep is not fitted). Returns the learned (bias, scale).
         """
+        if self.robot.gyro is None:
+            raise ConfigError(f"robot {self.robot.name} has no gyro to calibrate")
         c = self.client
         probe = _GyroProbe(self.robot)
         hooks = self.runtime.telemetry_hooks
@@ -301,6 +316,11 @@ class Navigator:
                     moving.append(total)
         finally:
             hooks.remove(probe.update)
+        if probe.silence.silent:
+            raise NavigationError(
+                f"gyro calibration: {probe.silence.finding()}; run without --calibrate-gyro, or describe "
+                f"{self.robot.name} without a gyro for this controller"
+            )
         fit = probe.fit(marks, moving)
         if fit is None:
             raise NavigationError("gyro calibration needs telemetry with encoders and gyro heading")
@@ -431,6 +451,7 @@ class Navigator:
         truth = self.truth()
         run.final_truth = Pose2D(*truth) if truth is not None else None
         run.distance = self.estimator.distance - distance0
+        run.warnings = list(self.warnings)
         return run
 
     def _record(self, run: FollowRun, state: State, command: Command) -> None:

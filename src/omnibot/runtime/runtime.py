@@ -140,6 +140,9 @@ class Runtime:
         """Round trip of the last VEL whose reply was awaited, s (link clock)."""
         self.error_hooks: list[Callable[[str, BaseException], object]] = []
         """Called with (source, exception) when a command fails (after the notice)."""
+        self.notice_hooks: list[Callable[[Notice], object]] = []
+        """Called at once with every notice, in the thread that gives it (a command's own report:
+        sinks get notices only with a cycle, and a robot pushed by hand runs none)."""
         self._offset = math.inf
         self._offset_time = 0.0
         self._telemetry: deque[Telemetry] = deque(maxlen=KEEP)
@@ -178,7 +181,10 @@ class Runtime:
 
     def notify(self, level: Level, text: str, source: str = "") -> None:
         """Tell every front end (sinks get it with the next cycle; the log at once)."""
-        self._notices.append(Notice(level, text, source))
+        notice = Notice(level, text, source)
+        self._notices.append(notice)
+        for hook in self.notice_hooks:
+            hook(notice)
         log.log({"info": logging.INFO, "warn": logging.WARNING}.get(level, logging.ERROR), "%s", text)
 
     # ------------------------------------------------------------------ listening
@@ -215,6 +221,9 @@ class Runtime:
                 self.latched = False
         if self.estimator is not None:
             self.estimator.update(event)
+            alerts = self.estimator.alerts
+            while alerts:
+                self.notify("warn", alerts.pop(0), "estimator")
         for hook in self.telemetry_hooks:
             hook(event)
         self._telemetry.append(event)

@@ -18,8 +18,8 @@ to that time, applies the duties at their time, and answers with the motor encod
 harness makes the edges), the sonar's range, the battery voltage on ADC7 and ``sync``, without
 which the emulator does not run more than 5 ms ahead. A busy host slows both alike instead of
 letting them drift apart. The UNO
-wiring has no gyro and no tracking wheels, so its TEL sends 0 for them and the host's odometry
-runs on the wheel encoders alone.
+wiring has no gyro and no tracking wheels, so its TEL sends 0 for them; the host's estimator finds
+the gyro silent once the body turns and keeps to the wheel encoders (docs/navigation.md).
 """
 
 from __future__ import annotations
