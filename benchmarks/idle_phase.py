@@ -15,9 +15,11 @@ one MOVE, so theirs averages out).
 The tables are ``--calibration``'s (the surface's own section), or, without one, those of a
 calibration run in-process first as ``omnibot calibrate`` runs it (``nominal``: the default plan and
 check, seed ``--seed``) or as the acceptance test does (``acceptance``: wheel radius +5 %, torque
-constants +10, -10, -10, +10 %, ``Plan(levels=7)``, check at 0.3, 0.6 and 0.9 m/s, seed 3);
-``--out DIR`` keeps that calibration's file. Prints one table per course and speed: the distance
-error at each phase with and without the term, and the spread (max - min) of each.
+constants +10, -10, -10, +10 %, ``Plan(levels=7)``, check at 0.3, 0.6 and 0.9 m/s, seed 3),
+its wheels started at angles drawn with seed ``--wheels N`` (0: all at 0), and its check's mean
+error and axis MOVEs printed; ``--out DIR`` keeps that calibration's file. Prints one table per
+course and speed: the distance error at each phase with and without the term, and the spread
+(max - min) of each. A few seconds with ``--calibration``; a calibration first adds 1-3 minutes.
 """
 
 from __future__ import annotations
@@ -30,6 +32,8 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
+import numpy as np
+
 from omnibot.calibration import session
 from omnibot.calibration.accuracy import AccuracyPlan
 from omnibot.calibration.calfile import load_calibration, write_calibration
@@ -39,6 +43,7 @@ from omnibot.calibration.perturb import ACCEPTANCE, perturbed_robot
 from omnibot.calibration.plan import Plan
 from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.truth import SimTruth
+from omnibot.calibration.verdict import mean_abs_error
 from omnibot.client.client import RobotClient
 from omnibot.robot.description import CalibrationSpec, RobotDescription, load_robot
 from omnibot.sim.device import SimDevice
@@ -54,13 +59,17 @@ def robots(kind: str) -> tuple[RobotDescription, RobotDescription]:
     return nominal, perturbed_robot(nominal, ACCEPTANCE) if kind == "acceptance" else nominal
 
 
-def calibrate(kind: str, surface: str, seed: int, out: Path) -> Path:
-    """Calibrate in-process (see the module docstring) and write the file to ``out``; its path."""
+def calibrate(kind: str, surface: str, seed: int, out: Path, wheels: int = 0) -> Path:
+    """Calibrate in-process (see the module docstring), write the file to ``out`` and print the
+    check's mean error and its axis MOVEs; the file's path."""
     nominal, true = robots(kind)
 
     @contextmanager
     def open_client(name: str) -> Iterator[RobotClient]:
         dev = SimDevice(nominal, true_robot=true, surface=name, seed=seed)
+        if wheels:  # the wheels turned before the calibration starts (the counts show it)
+            angles = dev.sim.physics.wheel_angle
+            angles[0, :] = np.random.default_rng(wheels).uniform(0.0, 2 * np.pi, angles.shape[1])
         with RobotClient(LockstepLink(dev), nominal) as client:
             yield client
 
@@ -70,6 +79,13 @@ def calibrate(kind: str, surface: str, seed: int, out: Path) -> Path:
         else (Plan(), AccuracyPlan())
     )
     result = session.calibrate(nominal, [surface], open_client, truth="sim", plan=plan, accuracy=accuracy)
+    after = result.sessions[0].after or []
+    axis = [r for r in after if r.kind == "move" and r.course_deg % 90 == 0 and r.speed <= 0.55]
+    print(
+        f"check ({kind}, {surface}, wheels {wheels}): mean abs error {100 * (mean_abs_error(after) or 0):.1f} %; "
+        "axis MOVEs: "
+        + ", ".join(f"{r.course_deg:g} at {r.speed:g} {100 * (r.error or 0):+.1f}" for r in axis)
+    )
     return write_calibration(out / "calibration.yaml", result, "sim")
 
 
@@ -155,6 +171,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--steps", type=int, default=8, help="phases over the span (default 8)")
     ap.add_argument("--span", default="pitch", choices=["pitch", "turn"])
     ap.add_argument("--seed", type=int, help="the simulator's seed (default: 1 nominal, 3 acceptance)")
+    ap.add_argument("--wheels", type=int, default=0, help="seed of the wheels' start angles (0: all at 0)")
     args = ap.parse_args(argv)
     try:
         courses = [float(c) for c in args.courses.split(",")]
@@ -172,7 +189,7 @@ def main(argv: list[str] | None = None) -> int:
     if path is None:
         out = args.out or Path(tempfile.mkdtemp(prefix="idle_phase_"))
         out.mkdir(parents=True, exist_ok=True)
-        path = calibrate(args.robot, args.surface, seed, out)
+        path = calibrate(args.robot, args.surface, seed, out, args.wheels)
         print(f"calibration: {path}")
     spec = load_calibration(path).for_surface(args.surface)
     results = sweep(args.robot, args.surface, spec, courses, speeds, phases, seed)
