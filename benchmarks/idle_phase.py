@@ -7,7 +7,8 @@
 On a course along a motor axis (omni4: 0 and 90 degrees) two wheels do not turn, and their rollers'
 resistance depends on where each wheel stands (seed 000: "as much as twice"). This sets both idle
 wheels of the course to the same angle, one step after another over one roller pitch (``--span
-pitch``, default) or a whole wheel turn (``turn``), and drives a 1 m MOVE there on the simulator in
+pitch``, default) or a whole wheel turn (``turn``: 33 steps, not a multiple of the roller
+count, so that they fall on different roller phases), and drives a 1 m MOVE there on the simulator in
 lockstep with the calibration's tables, once with its roller drag term and once without it. The
 driven wheels stand where the MOVEs before left them (they turn through dozens of roller pitches in
 one MOVE, so theirs averages out).
@@ -45,6 +46,7 @@ from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.truth import SimTruth
 from omnibot.calibration.verdict import mean_abs_error
 from omnibot.client.client import RobotClient
+from omnibot.errors import ConfigError
 from omnibot.robot.description import CalibrationSpec, RobotDescription, load_robot
 from omnibot.sim.device import SimDevice
 from omnibot.transport.lockstep import LockstepLink
@@ -131,13 +133,16 @@ def sweep(
 
 
 def table(
-    results: dict[tuple[float, float, bool], list[float]], phases: Sequence[float], span: str
+    results: dict[tuple[float, float, bool], list[float]], phases: Sequence[float], count: int, span: str
 ) -> list[str]:
     """Markdown rows: per course and speed, the error at each phase with and without the term."""
-    unit = "pitch" if span == "pitch" else "turn"
-    scale = 1.0 if span == "pitch" else 1.0 / max(1.0, max(phases) + phases[1] - phases[0])
-    head = " | ".join(f"{p * scale:.3g}" for p in phases)
+    per = 1.0 if span == "pitch" else float(count)  # the header's unit: a pitch or a wheel turn
+    head = " | ".join(f"{p / per:.3g}" for p in phases)
+    unit = "a roller pitch" if span == "pitch" else "a wheel turn"
     lines = [
+        f"(distance error %, both idle wheels at the angle given as a fraction of {unit}, 0: the least"
+        " resistant roller position)",
+        "",
         f"| course, m/s, term | {head} | spread | mean |",
         "|---|" + "---|" * (len(phases) + 2),
     ]
@@ -151,11 +156,6 @@ def table(
         lines.append(
             f"| {course:g}, {speed:g}, {'on' if on else 'off'} | {cells} | {spread:.1f} | {mean:+.1f} |"
         )
-    lines.insert(
-        0,
-        f"(distance error %, both idle wheels at the phase given in {unit}s of a roller pitch"
-        + (")" if span == "pitch" else "; phase as a fraction of a wheel turn)"),
-    )
     return lines
 
 
@@ -168,7 +168,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, help="directory to keep the in-process calibration's file in")
     ap.add_argument("--courses", default="0,90", help="courses, degrees (default 0,90)")
     ap.add_argument("--speeds", default="0.3,0.5", help="MOVE speeds, m/s (default 0.3,0.5)")
-    ap.add_argument("--steps", type=int, default=8, help="phases over the span (default 8)")
+    ap.add_argument("--steps", type=int, help="phases over the span (default 8 over a pitch, 33 over a turn)")
     ap.add_argument("--span", default="pitch", choices=["pitch", "turn"])
     ap.add_argument("--seed", type=int, help="the simulator's seed (default: 1 nominal, 3 acceptance)")
     ap.add_argument("--wheels", type=int, default=0, help="seed of the wheels' start angles (0: all at 0)")
@@ -178,22 +178,26 @@ def main(argv: list[str] | None = None) -> int:
         speeds = [float(v) for v in args.speeds.split(",")]
     except ValueError:
         ap.error("--courses and --speeds take comma-separated numbers")
-    if args.steps < 2 or any(v <= 0 for v in speeds):
+    steps = args.steps or (8 if args.span == "pitch" else 33)
+    if steps < 2 or any(v <= 0 for v in speeds):
         ap.error("--steps must be at least 2 and every speed positive")
     seed = args.seed if args.seed is not None else (3 if args.robot == "acceptance" else 1)
     nominal, _ = robots(args.robot)
     count = nominal.wheels[0].rollers.count
     width = 1.0 if args.span == "pitch" else float(count)
-    phases = [width * k / args.steps for k in range(args.steps)]
+    phases = [width * k / steps for k in range(steps)]
     path = args.calibration
     if path is None:
         out = args.out or Path(tempfile.mkdtemp(prefix="idle_phase_"))
         out.mkdir(parents=True, exist_ok=True)
         path = calibrate(args.robot, args.surface, seed, out, args.wheels)
         print(f"calibration: {path}")
-    spec = load_calibration(path).for_surface(args.surface)
+    try:
+        spec = load_calibration(path).for_surface(args.surface)
+    except ConfigError as exc:
+        ap.error(str(exc))
     results = sweep(args.robot, args.surface, spec, courses, speeds, phases, seed)
-    print("\n".join(table(results, phases, args.span)))
+    print("\n".join(table(results, phases, count, args.span)))
     return 0
 
 
