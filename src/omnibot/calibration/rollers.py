@@ -89,9 +89,10 @@ def set_idle_phase(runner: Runner, course: float, target: float, loss: float = 0
     (omni4: 11.7 degrees per roller pitch). It turns one to two pitches, always the same way (a
     ROTATE of a few degrees does not get out of its dead band), asking ``loss`` pitches more (a short
     open-loop ROTATE falls short by about its start and stop: on the simulated carpet 4 degrees of
-    11-23, a third of a pitch), and once more when it still missed by more than :data:`MIN_SHIFT`. The wheels' phases relative to each other move only with
-    travel, so the other idle wheels follow at whatever offset the MOVEs before left them. The phase
-    reached is what the encoders then say, not the one asked."""
+    11-23, a third of a pitch), and once more when it still missed by more than :data:`MIN_SHIFT`.
+    The wheels' phases relative to each other move only with travel, so the other idle wheels
+    follow at whatever offset the MOVEs before left them. The phase reached is what the encoders
+    then say, not the one asked."""
     geo, robot = runner.geometry, runner.robot
     idle = geo.idle_wheels(course)
     if not idle or not geo.roller_pitch[idle[0]] > 0.0:
@@ -156,9 +157,9 @@ def tune_coast(
         distance_j = e_course - lambda D_j + mu g_j D_j
 
     so the gain that cancels it is ``lambda / mu`` (the slowest speed's is 1), and the coast table is
-    ``(gain - 1) L / V``. Without the slowest speed's coefficients (the MOVEs could not tell them) the
-    drag runs' are kept and every speed measures its gain. Leaves the controller with the resulting
-    section uploaded. None when a speed's runs could not tell."""
+    ``(gain - 1) L / V``. Leaves the controller with ``spec`` uploaded (the session uploads the
+    section built with the result). None when a speed's runs could not tell (then the drag runs'
+    coefficients and coast stand)."""
     geo = runner.geometry
     rollers = spec.rollers
     if rollers is None or not fit.kept:
@@ -171,12 +172,12 @@ def tune_coast(
     runs, loss = 0, 0.0
     try:
         for speed in sorted(speeds):
-            slowest = not found and idle is None
+            slowest = not found
             term = probe_drag(rollers) if slowest else rollers
             table = term.coast or PiecewiseLinear(x=(0.0,), y=(0.0,))
             gain = 1.0 + table(speed) * speed / length
             on_spec = spec.model_copy(update={"rollers": term})
-            rows, full, b = [], [], []
+            rows, full, b = [], [], []  # rows: the faster speeds' fit; full: the slowest's
             n = slow_rounds if slow_rounds is not None and slowest else rounds
             for k in range(n):
                 on = k % 2 == 0
@@ -197,11 +198,12 @@ def tune_coast(
                     b.append(r.truth.distance)
             if slowest:
                 idle = fit_idle_drag(geo, courses, full, b)
-                if idle is not None:
-                    found.append((speed, 0.0, idle.power, 1.0))
-                    ahead += idle.ahead
-                    rollers = RollerDragSpec(cos=idle.cos, sin=idle.sin)  # gain 1 at the faster speeds
-                    continue
+                if idle is None:
+                    return None
+                found.append((speed, idle.power, idle.power, 1.0))
+                ahead += idle.ahead
+                rollers = RollerDragSpec(cos=idle.cos, sin=idle.sin)  # gain 1 at the faster speeds
+                continue
             got = fit_coast_speed(courses, rows, b)
             if got is None:
                 return None
