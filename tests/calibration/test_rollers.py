@@ -26,12 +26,12 @@ from omnibot.calibration.rollerfit import (
     offset_shift,
     spec_drag,
 )
-from omnibot.calibration.rollers import set_idle_phase, tune_coast
+from omnibot.calibration.rollers import probe_drag, set_idle_phase, tune_coast
 from omnibot.calibration.runs import Motion, RunResult
 from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.truth import SimTruth
 from omnibot.firmware.power import roller_terms
-from omnibot.robot.description import CalibrationSpec, RobotDescription, RollerDragSpec
+from omnibot.robot.description import CalibrationSpec, PiecewiseLinear, RobotDescription, RollerDragSpec
 from tests.calibration.conftest import sim_client
 from tests.calibration.test_fits import run as straight_run
 
@@ -291,3 +291,18 @@ def test_moves_at_chosen_phases_make_the_axis_courses_independent_of_the_idle_wh
         after = [axis_spread(runner, c) for c in (0.0, 90.0)]
     assert min(before) > 0.2
     assert max(abs(v) for v in after) < 0.02
+
+
+def test_the_probe_is_as_large_as_the_largest_wheels_drag_with_each_wheels_phase() -> None:
+    drag = RollerDragSpec(
+        cos=(-0.8, -3.0, 0.0, 0.0),
+        sin=(-0.6, -4.0, 0.0, 1.0),
+        coast=PiecewiseLinear(x=(0.0, 0.3), y=(0.0, -1.2)),
+    )
+    probe = probe_drag(drag)
+    assert probe.coast is None  # gain 1: the counts the term adds are the counts uploaded
+    amps = [math.hypot(c, s) for c, s in zip(probe.cos, probe.sin, strict=True)]
+    assert amps == pytest.approx([5.0, 5.0, 0.0, 5.0], abs=0.01)
+    assert probe.cos[0] / probe.sin[0] == pytest.approx(0.8 / 0.6, rel=0.01)  # its own phase
+    none = RollerDragSpec(cos=(0.0,) * 4, sin=(0.0,) * 4)
+    assert probe_drag(none).cos == (0.0,) * 4
