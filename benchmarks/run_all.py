@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from benchmarks import (
     firmware_command_time,
+    idle_phase,
     link_faults,
     link_throughput,
     log_cost,
@@ -34,6 +35,7 @@ def main() -> int:
             "motor model: the acceptance robot on carpet, true motors",
             lambda: motor_model.main(["--map", "model"]),
         ),
+        ("axis MOVEs against the idle wheels' phase: nominal omni4 on carpet", lambda: idle_phase.main([])),
         ("path tracking", lambda: tracking.main([])),
         ("odometry drift", lambda: odometry_drift.main([])),
         ("sonar stop", lambda: sonar_stop.main([])),

@@ -108,7 +108,7 @@ def test_the_robot_really_differs(outcome: tuple[CalibrationResult, Path, float]
 
 def test_after_within_3_percent(outcome: tuple[CalibrationResult, Path, float]) -> None:
     """Within each floor's reach the calibrated MOVEs land within 3 % on every course and speed in
-    reach (measured wood 1.0 %, mean 0.4 %; carpet 0.9 %, mean 0.3 %, and
+    reach (measured wood 1.1 %, mean 0.4 %; carpet 1.2 %, mean 0.5 %, and
     :func:`test_carpet_goal_within_3_percent`). The reach is the 45 degree course's: it needs 1 +
     45/80 times the axis's power (docs/simulator.md), measured 0.81 m/s on wood, 0.56 on carpet."""
     result, _, _ = outcome
@@ -122,7 +122,7 @@ def test_after_within_3_percent(outcome: tuple[CalibrationResult, Path, float]) 
         summary = summarize(after)
         assert summary.moves == 42
         assert summary.distance_mean is not None and before.distance_mean is not None
-        assert summary.distance_mean < before.distance_mean / 2.5  # measured / 4.0 (wood), / 5.7 (carpet)
+        assert summary.distance_mean < before.distance_mean / 2.5  # measured / 4.2 (wood), / 6.1 (carpet)
         # every MOVE within the floor's reach, on every course 0..90 and back
         assert session.reach is not None
         within = [r for r in moves(after) if r.speed <= session.reach]
@@ -138,7 +138,8 @@ def test_after_within_3_percent(outcome: tuple[CalibrationResult, Path, float]) 
         assert not any(r.saturated for r in within)
         # and no MOVE falls more than 10 % short without a warning, 11 or 17 (wood's 15 and 75 out at
         # 0.9 m/s have 17 alone), but where the encoders count the slip: carpet's axis courses at 0.9
-        # m/s, beyond its reach, are 16-20 % short unwarned (docs/calibration.md, "Beyond the reach")
+        # m/s, beyond its reach, are 7.5-8 % short unwarned (16-20 % before the roller drag came from
+        # MOVEs at chosen idle phases; docs/calibration.md, "Beyond the reach")
         unwarned = [r for r in moves(after) if (r.error or 0.0) < -0.1 and not r.warned]
         if surface == "wood":
             assert not unwarned
@@ -147,8 +148,8 @@ def test_after_within_3_percent(outcome: tuple[CalibrationResult, Path, float]) 
 
 
 def test_carpet_goal_within_3_percent(outcome: tuple[CalibrationResult, Path, float]) -> None:
-    """Issue 17's goal: carpet's MOVEs within its reach land within 3 % (measured 0.9 %, mean 0.3 %;
-    with the wheels started at five other angles 0.8-2.4 %, ``benchmarks.motor_model --wheels N``),
+    """Issue 17's goal: carpet's MOVEs within its reach land within 3 % (measured 1.2 %, mean 0.5 %;
+    with the wheels started at three other angles 1.7-2.2 %, ``benchmarks.motor_model --wheels N``),
     and keep their course better than before calibrating on the same MOVEs (measured 13.4 -> 7.3
     degrees mean). The motor map's speed terms come from the stand test's torque constants, K_l's
     slow end from MOVEs at 0.3 m/s (docs/calibration.md)."""
@@ -206,8 +207,9 @@ def test_roller_drag_term_takes_out_the_wheel_position(
 ) -> None:
     """The same MOVE on course 90 (wheels m2 and m4 idle) with the idle wheels at their least and
     most resistant positions (half a roller pitch apart): 30 % apart without the controller's drag
-    term, within 6 % with it (measured 4.9 %; 3 % before the combined drag, when carpet's reach let
-    the coast MOVEs span 0.30-0.72 m/s instead of 0.30-0.46)."""
+    term, within 6 % with it (measured 1.0 % on 2026-12-02, the drag from the drag runs and from
+    MOVEs at chosen idle phases alike: on this robot the drag runs' fit was right, on the nominal
+    one it was not, tests/calibration/test_rollers.py)."""
     result, _, _ = outcome
     carpet = result.sessions[1].spec
     fit = result.sessions[1].fit.rollers

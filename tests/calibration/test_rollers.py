@@ -1,27 +1,41 @@
-"""The roller drag fit on synthetic runs with known answers (no simulator; the acceptance test
-drives the real runs)."""
+"""The roller drag fit on synthetic runs with known answers, and its MOVEs at chosen idle phases on the
+simulated nominal omni4 on carpet (lockstep; the acceptance test drives the whole calibration)."""
 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+from omnibot.calibration.calfile import load_calibration
+from omnibot.calibration.experiments import Runner
 from omnibot.calibration.patterns import Geometry
 from omnibot.calibration.rollerfit import (
     GROUP,
     RollerFit,
     axis_courses,
     correct_runs,
+    fit_idle_drag,
     fit_rollers,
+    idle_row,
     offset_shift,
+    spec_drag,
 )
+from omnibot.calibration.rollers import probe_drag, set_idle_phase, tune_coast
 from omnibot.calibration.runs import Motion, RunResult
+from omnibot.calibration.tap import TelemetryTap
+from omnibot.calibration.truth import SimTruth
 from omnibot.firmware.power import roller_terms
-from omnibot.robot.description import RobotDescription
+from omnibot.robot.description import CalibrationSpec, PiecewiseLinear, RobotDescription, RollerDragSpec
+from tests.calibration.conftest import sim_client
 from tests.calibration.test_fits import run as straight_run
+
+DATA = Path(__file__).resolve().parents[1] / "data"
 
 COS = (-5.0, -4.0, -6.0, -3.0)
 SIN = (0.5, 1.0, -0.5, 0.0)
@@ -155,3 +169,140 @@ def test_offset_shift_evens_out_the_axis_courses(geo: Geometry) -> None:
     # a fast MOVE's counts (small mu) weigh less than a slow one's
     slow_fast = [(0.0, 1.0, 0.02), (90.0, -1.0, 0.02), (0.0, -4.0, 0.002), (90.0, 4.0, 0.002)]
     assert offset_shift(geo, slow_fast)[1] < 0.0
+
+
+def synthetic_moves(
+    geo: Geometry, uploaded: RollerDragSpec, gain: float = 1.0, noise: float = 0.002, rounds: int = 8
+) -> tuple[list[list[float]], list[float]]:
+    """MOVE rows as tune_coast makes them at one speed: round the axes, the term of ``uploaded`` on in
+    every other round, random phases; the true drag is COS/SIN and a count is worth MU of distance."""
+    rng = np.random.default_rng(2)
+    courses = axis_courses(geo)
+    rows, b = [], []
+    for k in range(rounds):
+        for course in courses:
+            counts = tuple(int(v) for v in rng.integers(-5000, 5000, size=4))
+            term = gain * spec_drag(geo, uploaded, course, counts) if k % 2 == 0 else 0.0
+            distance = 0.98 + 0.01 * (course // 90) + MU * (term - drag(geo, course, counts))
+            rows.append(idle_row(geo, courses, course, counts, term))
+            b.append(distance + float(rng.normal(0.0, noise)))
+    return rows, b
+
+
+MU = 0.023
+"""m of a 1 m MOVE per PWM count (carpet at 0.3 m/s)."""
+
+
+def test_moves_measure_each_idle_wheels_drag(geo: Geometry) -> None:
+    # the term uploaded is the drag runs' estimate: the wrong size and phase (as on the nominal omni4)
+    wrong = RollerDragSpec(cos=(-0.8, -3.0, -1.0, -3.1), sin=(-0.8, -1.9, -1.4, -2.1))
+    rows, b = synthetic_moves(geo, wrong, gain=0.65)
+    got = fit_idle_drag(geo, axis_courses(geo), rows, b)
+    assert got is not None
+    assert got.cos == pytest.approx(COS, abs=0.4) and got.sin == pytest.approx(SIN, abs=0.4)
+    assert got.power == pytest.approx(MU, rel=0.05)
+    # courses 90 and 270 ran 1 cm ahead of 0 and 180 (about 0.43 counts at MU)
+    lead = {c: counts for c, counts, _ in got.ahead}
+    assert lead[90.0] - lead[0.0] == pytest.approx(0.01 / MU, abs=0.15)
+    # without the term nothing tells what a count is worth: no answer rather than a guess
+    off_rows = [[*r[:-1], 0.0] for r in rows]
+    assert fit_idle_drag(geo, axis_courses(geo), off_rows, b) is None
+    assert fit_idle_drag(geo, axis_courses(geo), [], []) is None
+    assert fit_idle_drag(geo, axis_courses(geo), rows[:10], b[:10]) is None  # too few MOVEs
+
+
+@contextmanager
+def carpet_runner(robot: RobotDescription) -> Iterator[Runner]:
+    """A runner on the simulated nominal omni4 on carpet (lockstep, seed 1), truth from the simulator."""
+    with sim_client(robot, "carpet", seed=1) as client:
+        tap = TelemetryTap(client, robot)
+        tap.start()
+        runner = Runner(client, robot, SimTruth(client.link.device.sim), tap)  # type: ignore[attr-defined]
+        try:
+            yield runner
+        finally:
+            runner.close()
+            tap.stop()
+
+
+def axis_spread(runner: Runner, course: float) -> float:
+    """Distance of a 1 m MOVE at 0.3 m/s on ``course`` from the idle wheels' least resistant position
+    less that from their most resistant one (half a pitch on), m."""
+    got = []
+    for phase in (0.0, 0.5):
+        sim = runner.client.link.device.sim  # type: ignore[attr-defined]
+        pitch = 2.0 * math.pi / runner.robot.wheels[0].rollers.count
+        for i in runner.geometry.idle_wheels(course):
+            sim.physics.wheel_angle[0, i] = (round(sim.physics.wheel_angle[0, i] / pitch) + phase) * pitch
+        r = runner.move("spread", 1.0, 0.3, course, "spread")
+        assert r.truth is not None and r.truth.distance is not None
+        got.append(r.truth.distance)
+    return got[0] - got[1]
+
+
+def carpet_tables() -> CalibrationSpec:
+    return load_calibration(DATA / "omni4_carpet_calibration_before_idle_phase.yaml").for_surface("carpet")
+
+
+def test_set_idle_phase_puts_the_first_idle_wheel_where_asked(omni4: RobotDescription) -> None:
+    with carpet_runner(omni4) as runner:
+        runner.client.upload_calibration(carpet_tables())
+        geo = runner.geometry
+        loss = 0.0
+        for course, target in ((0.0, 0.3), (90.0, 0.8), (0.0, 0.55)):
+            loss = set_idle_phase(runner, course, target, loss)
+            runner.client.sleep(0.1)
+            counts = runner.tap.counts()
+            assert counts is not None
+            i = geo.idle_wheels(course)[0]
+            phase = (counts[i] % geo.roller_pitch[i]) / geo.roller_pitch[i]
+            assert abs((phase - target + 0.5) % 1.0 - 0.5) < 0.15
+        # a short open-loop ROTATE on carpet falls short by about a third of a pitch (4 degrees): the
+        # first call learns it with a second ROTATE, the later ones ask for it at once
+        assert 0.2 < loss < 0.5
+        turns = [r for r in runner.log if r.group == f"{GROUP}:phase"]
+        assert len(turns) == 4 and all(r.truth is not None for r in turns)
+        # a rotation in place: the robot stays where it stood
+        assert all(math.hypot(r.truth.x or 0.0, r.truth.y or 0.0) < 0.005 for r in turns if r.truth)
+
+
+def test_moves_at_chosen_phases_make_the_axis_courses_independent_of_the_idle_wheels(
+    omni4: RobotDescription,
+) -> None:
+    """The nominal omni4's default carpet tables (before: the drag runs' term, the wrong size and
+    phase) on axis MOVEs at 0.3 m/s: the idle wheels' position moves them by 26-36 % with that term
+    and by under 2 % once the slowest coast MOVEs have measured each wheel's drag (measured 0.5 and
+    0.6 %)."""
+    spec = carpet_tables()
+    assert spec.rollers is not None
+    fit = RollerFit(spec.rollers.cos, spec.rollers.sin, 0.007, (0.5,), (0.0,), 48, 0.03, 0.001, True)
+    with carpet_runner(omni4) as runner:
+        runner.client.upload_calibration(spec)
+        before = [axis_spread(runner, c) for c in (0.0, 90.0)]
+        tuning = tune_coast(runner, spec, fit, (0.3,), 1.0, rounds=4, slow_rounds=8)
+        assert tuning is not None and tuning.cos is not None and tuning.sin is not None
+        assert tuning.gains == (1.0,) and tuning.table.y == (0.0, 0.0)
+        # the simulator's rollers: every wheel alike, least drag at angle 0 (the encoders' origin), a
+        # swing of +-0.31 N per wheel on carpet, about 4 PWM counts of the two driving motors
+        for c, s in zip(tuning.cos, tuning.sin, strict=True):
+            assert -5.5 < c < -3.5 and abs(s) < 0.8
+        tuned = RollerDragSpec(cos=tuning.cos, sin=tuning.sin, coast=tuning.table)
+        runner.client.upload_calibration(spec.model_copy(update={"rollers": tuned}))
+        after = [axis_spread(runner, c) for c in (0.0, 90.0)]
+    assert min(before) > 0.2
+    assert max(abs(v) for v in after) < 0.02
+
+
+def test_the_probe_is_as_large_as_the_largest_wheels_drag_with_each_wheels_phase() -> None:
+    drag = RollerDragSpec(
+        cos=(-0.8, -3.0, 0.0, 0.0),
+        sin=(-0.6, -4.0, 0.0, 1.0),
+        coast=PiecewiseLinear(x=(0.0, 0.3), y=(0.0, -1.2)),
+    )
+    probe = probe_drag(drag)
+    assert probe.coast is None  # gain 1: the counts the term adds are the counts uploaded
+    amps = [math.hypot(c, s) for c, s in zip(probe.cos, probe.sin, strict=True)]
+    assert amps == pytest.approx([5.0, 5.0, 0.0, 5.0], abs=0.01)
+    assert probe.cos[0] / probe.sin[0] == pytest.approx(0.8 / 0.6, rel=0.01)  # its own phase
+    none = RollerDragSpec(cos=(0.0,) * 4, sin=(0.0,) * 4)
+    assert probe_drag(none).cos == (0.0,) * 4

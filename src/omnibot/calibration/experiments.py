@@ -233,17 +233,18 @@ TURN_RATE = math.radians(60.0)
 """rad/s of the ROTATEs that move the wheels on between dead-band searches."""
 
 
-def turn_wheels(runner: Runner, pitches: float) -> RunResult:
+def turn_wheels(
+    runner: Runner, pitches: float, group: str = "deadband:turn", what: str = "dead band"
+) -> RunResult:
     """ROTATE in place so that every wheel turns by about ``pitches`` of its roller pitch (the
-    described radius and roller count; the same direction each time, so the positions move on)."""
+    described radius and roller count; counter-clockwise for ``pitches`` > 0, the direction in which
+    omni4's wheels count up). The robot stays where it is; only its heading changes."""
     robot, geo = runner.robot, runner.geometry
     pitch = max(2.0 * math.pi * w.radius / w.rollers.count for w in robot.wheels)  # m of rim per roller
     angle = pitches * pitch / min(abs(v) for v in geo.rotation_rim())
     info = RunInfo(ROTATE, f"wheels on: rotate {math.degrees(angle):.1f} deg")
-    runner.note("dead band: wheels on")
-    return runner.run(
-        info, partial(runner.client.rotate, angle, TURN_RATE), angle / TURN_RATE, "deadband:turn"
-    )
+    runner.note(f"{what}: wheels on")
+    return runner.run(info, partial(runner.client.rotate, angle, TURN_RATE), abs(angle) / TURN_RATE, group)
 
 
 def lowest_moving(attempt: Callable[[int], bool], step: int, pwm_max: int, near: int | None = None) -> int:

@@ -418,12 +418,15 @@ class SurfaceFit:
 
     @property
     def roller_spec(self) -> RollerDragSpec | None:
-        """The roller drag section: the fit's, with the MOVEs' coast table when there is one."""
+        """The roller drag section: the fit's, with the MOVEs' coast table and drag coefficients when
+        they measured them."""
         if self.rollers is None:
             return None
         spec = self.rollers.spec
         if self.coast is not None and spec.coast is not None:
             spec = spec.model_copy(update={"coast": self.coast.table})
+            if self.coast.cos is not None and self.coast.sin is not None:
+                spec = spec.model_copy(update={"cos": self.coast.cos, "sin": self.coast.sin})
         return spec
 
 

@@ -76,7 +76,8 @@ class Plan:
     and of the coast MOVEs at each speed."""
     coast_slow_rounds: int = 8
     """Rounds of the coast MOVEs at their slowest speed, where a PWM count is the largest share of the
-    speed and the MOVEs tell the motor pairs' offsets apart best (rollers.tune_coast)."""
+    speed: they measure each idle wheel's drag (rollers.tune_coast; 13 unknowns on omni4) and tell
+    the motor pairs' offsets apart best."""
     slow_rounds: int = 2
     """Rounds of MOVEs at the bottom of the speed range on every raw course of each calibrated course,
     through the fitted tables, that anchor K_l's slow end (fits.anchor_slow_end; 0: none)."""

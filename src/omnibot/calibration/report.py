@@ -92,15 +92,17 @@ def accuracy_markdown(result: CalibrationResult) -> str:
             "",
             "## Roller drag (wheels standing still on a motor axis)",
             "",
-            "Each wheel's drag amplitude (PWM counts, over its roller phase), the drag runs' rms distance",
-            "scatter without and with the term (kept: uploaded), and the coast table the MOVEs gave (s the",
-            "drag outlasts a MOVE, at its speed; the drag runs' own where there were no MOVEs).",
+            "Each wheel's drag amplitude (PWM counts, over its roller phase; the slowest coast MOVEs' where",
+            "they measured it, else the drag runs'), the drag runs' rms distance scatter without and with",
+            "the term (kept: uploaded), and the coast table the MOVEs gave (s the drag outlasts a MOVE, at",
+            "its speed; the drag runs' own where there were no MOVEs).",
             "",
             "| surface | amplitude per wheel | runs | rms before / after, mm | kept | coast s at m/s |",
             "|---|---|---|---|---|---|",
         ]
         for surface, fit, tuned in drags:
-            amps = ", ".join(f"{math.hypot(c, s):.1f}" for c, s in zip(fit.cos, fit.sin, strict=True))
+            cos, sin = (tuned.cos, tuned.sin) if tuned and tuned.cos and tuned.sin else (fit.cos, fit.sin)
+            amps = ", ".join(f"{math.hypot(c, s):.1f}" for c, s in zip(cos, sin, strict=True))
             pts = (
                 zip(tuned.table.x, tuned.table.y, strict=True)
                 if tuned

@@ -124,7 +124,10 @@ def expected_runs(
         "turns": plan.turn_rounds * len(plan.turn_curvatures) * len(plan.turn_courses_deg) * 2
         if upload
         else 0,
-        "roller gains": (3 * plan.roller_rounds + plan.coast_slow_rounds) * axes if rollers and upload else 0,
+        # each MOVE and the ROTATE before it that sets the idle wheels' phase (most MOVEs need one)
+        "roller gains": 2 * (3 * plan.roller_rounds + plan.coast_slow_rounds) * axes
+        if rollers and upload
+        else 0,
         "slow end": courses * plan.directions * plan.slow_rounds if upload else 0,
         "rotation test": 2,
         "squares": 2,
