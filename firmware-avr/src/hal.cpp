@@ -18,18 +18,17 @@ static volatile uint8_t tx_buf[TX_SIZE];
 static volatile uint8_t tx_head, tx_tail;
 static volatile uint16_t overflows;
 // Single-channel encoders: an edge says that a wheel turned, not which way. It is counted in the
-// direction the wheel last took (`turn`), which follows the motor's power (`drive`) only once the
-// wheel can have turned around: a power against a turning wheel brakes it first (a reversal, the
-// closed loop braking or dithering an idle wheel's sign around zero speed), and the edges of that
-// while are the old direction's. The wheel has turned around when, at an edge after a power of the
-// other sign, it had made no edge for ENC_STOP_MS (it had stopped) or, under a strong power (at
-// least ENC_STRONG: well above the motors' dead band, so it can turn the wheel quickly), for
-// ENC_TURN_MS (the pause at the turnaround); and at the latest after ENC_HOLD edges against a strong
-// power or 255 against a weak one, should a turnaround come without a pause (docs/uno.md).
-#define ENC_STOP_MS 30  // 1 edge in 30 ms: 0.5 rad/s at 440 edges a turn, 1.2 cm/s on a 2.5 cm wheel
-#define ENC_TURN_MS 5
-#define ENC_STRONG 64
-#define ENC_HOLD 16
+// direction the wheel last took (`turn`), which follows the sign of the motor's power (`drive`) only
+// once the wheel can have turned around: a power against a turning wheel brakes it first (a
+// reversal; the closed loop braking a wheel, or dithering the sign of an idle one around zero
+// speed), and the edges of that while are the old direction's. At an edge after a power of the
+// other sign the wheel has turned around if it had made no edge for ENC_STOP_MS (it had stopped),
+// or under a strong power (at least ENC_STRONG, well above the motors' dead band: it turns the
+// wheel around quickly) for ENC_TURN_MS (the pause at the turnaround); and at the latest after 255
+// edges against the power, should it have turned the wheel around without a pause (docs/uno.md).
+#define ENC_STOP_MS 30  // 1 edge in 30 ms: 0.5 rad/s with 440 edges a turn, 1.2 cm/s on a 2.5 cm wheel
+#define ENC_TURN_MS 5   // the simulated omni4 pauses 10-15 ms at a turnaround under a strong power
+#define ENC_STRONG 64   // PWM counts (omni4's dead band is about 44)
 
 struct Wheel {
     int8_t turn;    // the direction counted: -1, 0 (never driven), 1
@@ -91,7 +90,7 @@ static inline void count_edge(Wheel &w, volatile int32_t &count) {
     s >>= strong;
     if (s != d) {
         h = w.held;
-        if (w.quiet >= (strong ? ENC_TURN_MS : ENC_STOP_MS) || h >= (strong ? ENC_HOLD : 255)) {
+        if (w.quiet >= (strong ? ENC_TURN_MS : ENC_STOP_MS) || h == 255) {
             w.turn = d = s;
             h = 0;
         } else {
