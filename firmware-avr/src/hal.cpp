@@ -24,17 +24,19 @@ static volatile uint16_t overflows;
 // speed), and the edges of that while are the old direction's. At an edge after a power of the
 // other sign the wheel has turned around if it had made no edge for ENC_STOP_MS (it had stopped),
 // or under a strong power (at least ENC_STRONG, well above the motors' dead band: it turns the
-// wheel around quickly) for ENC_TURN_MS (the pause at the turnaround); and at the latest after 255
-// edges against the power, should it have turned the wheel around without a pause (docs/uno.md).
+// wheel around quickly) for ENC_TURN_MS (the pause at the turnaround); and at the latest once the
+// power has had its sign for ENC_HOLD_MS (strong) or 255 ms (weak), should it have turned the
+// wheel around without a pause (docs/uno.md).
 #define ENC_STOP_MS 30  // 1 edge in 30 ms: 0.5 rad/s with 440 edges a turn, 1.2 cm/s on a 2.5 cm wheel
 #define ENC_TURN_MS 5   // the simulated omni4 pauses 10-15 ms at a turnaround under a strong power
+#define ENC_HOLD_MS 50  // a strong power stops the simulated omni4's wheels from full speed in 20 ms
 #define ENC_STRONG 64   // PWM counts (omni4's dead band is about 44)
 
 struct Wheel {
     int8_t turn;    // the direction counted: -1, 0 (never driven), 1
     int8_t drive;   // the last non-zero power's sign, doubled when strong
     uint8_t quiet;  // ms since the last edge, up to 255
-    uint8_t held;   // edges in a row counted against the power
+    uint8_t age;    // ms since the power took its sign, up to 255
 };
 
 static volatile int32_t enc[MOTORS];
@@ -66,8 +68,10 @@ ISR(TIMER1_OVF_vect) { overflows++; }
 
 ISR(TIMER1_COMPB_vect) {  // 1 ms: wakes the main loop, times the encoders' pauses
     OCR1B += 2000;
-    for (uint8_t i = 0; i < MOTORS; i++)
-        if (wheel[i].quiet != 255) wheel[i].quiet++;
+    for (Wheel &w : wheel) {
+        if (w.quiet != 255) w.quiet++;
+        if (w.age != 255) w.age++;
+    }
 }
 
 ISR(TIMER1_CAPT_vect) {
@@ -84,22 +88,13 @@ ISR(TIMER1_CAPT_vect) {
 }
 
 static inline void count_edge(Wheel &w, volatile int32_t &count) {
-    int8_t d = w.turn, s = w.drive;
-    uint8_t h = 0;
+    int8_t s = w.drive;
     bool strong = s == 2 || s == -2;
-    s >>= strong;
-    if (s != d) {
-        h = w.held;
-        if (w.quiet >= (strong ? ENC_TURN_MS : ENC_STOP_MS) || h == 255) {
-            w.turn = d = s;
-            h = 0;
-        } else {
-            h++;
-        }
-    }
-    w.held = h;
+    if (strong) s /= 2;
+    if (s != w.turn && (w.quiet >= (strong ? ENC_TURN_MS : ENC_STOP_MS) || w.age >= (strong ? ENC_HOLD_MS : 255)))
+        w.turn = s;
     w.quiet = 0;
-    count += d;
+    count += w.turn;
 }
 
 // Every pin-change group runs this one handler: it finds which encoder pins changed.
@@ -223,7 +218,11 @@ void uart_put(char c) {
 
 void motor_set(uint8_t i, int16_t p) {
     uint8_t duty = p < 0 ? -p : p;
-    if (p != 0) wheel[i].drive = (p > 0 ? 1 : -1) << (duty >= ENC_STRONG);  // the encoder's turn follows
+    if (p != 0) {  // the encoder's direction follows (count_edge)
+        int8_t s = duty >= ENC_STRONG ? (p > 0 ? 2 : -2) : (p > 0 ? 1 : -1);
+        if ((s ^ wheel[i].drive) < 0) wheel[i].age = 0;
+        wheel[i].drive = s;
+    }
 #define MOTOR_SET(k)                                    \
     case k:                                             \
         M##k##_OCR = duty;                              \
