@@ -24,12 +24,13 @@ static volatile uint16_t overflows;
 // speed), and the edges of that while are the old direction's. At an edge after a power of the
 // other sign the wheel has turned around if it had made no edge for ENC_STOP_MS (it had stopped),
 // or under a strong power (at least ENC_STRONG, well above the motors' dead band: it turns the
-// wheel around quickly) for ENC_TURN_MS (the pause at the turnaround); and at the latest once the
-// power has had its sign for ENC_HOLD_MS (strong) or 255 ms (weak), should it have turned the
-// wheel around without a pause (docs/uno.md).
+// wheel around quickly) for ENC_TURN_MS (the pause at the turnaround). At the latest it follows
+// once the power has had its sign for ENC_HOLD_MS (strong) or 255 ms (weak): a wheel can turn
+// around without a pause (one at rest on an edge's brink, one that slips), and the closed loop,
+// measuring a speed against its power, would push it faster still (docs/uno.md).
 #define ENC_STOP_MS 30  // 1 edge in 30 ms: 0.5 rad/s with 440 edges a turn, 1.2 cm/s on a 2.5 cm wheel
 #define ENC_TURN_MS 5   // the simulated omni4 pauses 10-15 ms at a turnaround under a strong power
-#define ENC_HOLD_MS 50  // a strong power stops the simulated omni4's wheels from full speed in 20 ms
+#define ENC_HOLD_MS 20  // a strong power stops the simulated omni4's wheels from full speed in 20 ms
 #define ENC_STRONG 64   // PWM counts (omni4's dead band is about 44)
 
 struct Wheel {
