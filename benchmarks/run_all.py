@@ -16,6 +16,7 @@ from benchmarks import (
     sonar_stop,
     tracking,
     uno_command_cycles,
+    uno_encoder_counts,
 )
 
 
@@ -24,6 +25,10 @@ def main() -> int:
         ("simulator speed", lambda: sim_speed.main([])),
         ("firmware time per command", lambda: firmware_command_time.main([])),
         ("UNO firmware cycles per command (simavr)", lambda: uno_command_cycles.main([])),
+        (
+            "UNO encoder counts through reversals (simavr, physics in the loop)",
+            lambda: uno_encoder_counts.main([]),
+        ),
         ("line throughput, lockstep", lambda: link_throughput.main([])),
         ("line throughput, pty emulator", lambda: link_throughput.main(["--pty"])),
         (

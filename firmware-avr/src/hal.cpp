@@ -17,9 +17,32 @@ static volatile uint8_t rx_head, rx_tail;
 static volatile uint8_t tx_buf[TX_SIZE];
 static volatile uint8_t tx_head, tx_tail;
 static volatile uint16_t overflows;
+// Single-channel encoders: an edge says that a wheel turned, not which way. It is counted in the
+// direction the wheel last took (`turn`), which follows the sign of the motor's power (`drive`) only
+// once the wheel can have turned around: a power against a turning wheel brakes it first (a
+// reversal; the closed loop braking a wheel, or dithering the sign of an idle one around zero
+// speed), and the edges of that while are the old direction's. At an edge after a power of the
+// other sign the wheel has turned around if it had made no edge for ENC_STOP_MS (it had stopped),
+// or under a strong power (at least ENC_STRONG, well above the motors' dead band: it turns the
+// wheel around quickly) for ENC_TURN_MS (the pause at the turnaround). At the latest it follows
+// once the power has had its sign for ENC_HOLD_MS (strong) or 255 ms (weak): a wheel can turn
+// around without a pause (one at rest on an edge's brink, one that slips), and the closed loop,
+// measuring a speed against its power, would push it faster still (docs/uno.md).
+#define ENC_STOP_MS 30  // 1 edge in 30 ms: 0.5 rad/s with 440 edges a turn, 1.2 cm/s on a 2.5 cm wheel
+#define ENC_TURN_MS 5   // the simulated omni4 pauses 10-15 ms at a turnaround under a strong power
+#define ENC_HOLD_MS 20  // a strong power stops the simulated omni4's wheels from full speed in 20 ms
+#define ENC_STRONG 64   // PWM counts (omni4's dead band is about 44)
+
+struct Wheel {
+    int8_t turn;    // the direction counted: -1, 0 (never driven), 1
+    int8_t drive;   // the last non-zero power's sign, doubled when strong
+    uint8_t quiet;  // ms since the last edge, up to 255
+    uint8_t age;    // ms since the power took its sign, up to 255
+};
+
 static volatile int32_t enc[MOTORS];
-static int8_t dir[MOTORS];
-static volatile uint8_t enc_last[3];
+static Wheel wheel[MOTORS];
+static uint8_t enc_level;  // bit i: motor i's encoder pin as last seen
 static volatile uint16_t echo_start;
 static volatile uint8_t echo_state;  // 0 idle, 1 waiting for the rising edge, 2 for the falling one, 3 done
 static volatile uint16_t echo_ticks;
@@ -44,7 +67,13 @@ ISR(USART_UDRE_vect) {
 
 ISR(TIMER1_OVF_vect) { overflows++; }
 
-ISR(TIMER1_COMPB_vect) { OCR1B += 2000; }  // 1 ms: wakes the main loop
+ISR(TIMER1_COMPB_vect) {  // 1 ms: wakes the main loop, times the encoders' pauses
+    OCR1B += 2000;
+    for (Wheel &w : wheel) {
+        if (w.quiet != 255) w.quiet++;
+        if (w.age != 255) w.age++;
+    }
+}
 
 ISR(TIMER1_CAPT_vect) {
     uint16_t t = ICR1;
@@ -59,27 +88,38 @@ ISR(TIMER1_CAPT_vect) {
     }
 }
 
-static inline void count_edges(uint8_t group, uint8_t now) {
-    uint8_t changed = now ^ enc_last[group];
-    enc_last[group] = now;
-#define ENC_EDGE(i)                                                      \
-    if (M##i##_ENC_PCIE == group && (changed & _BV(M##i##_ENC_BIT))) \
-        enc[i] += dir[i];
-    ENC_EDGE(0)
-#if MOTORS > 1
-    ENC_EDGE(1)
-#endif
-#if MOTORS > 2
-    ENC_EDGE(2)
-#endif
-#if MOTORS > 3
-    ENC_EDGE(3)
-#endif
+static inline void count_edge(Wheel &w, volatile int32_t &count) {
+    int8_t s = w.drive;
+    bool strong = s == 2 || s == -2;
+    if (strong) s /= 2;
+    if (s != w.turn && (w.quiet >= (strong ? ENC_TURN_MS : ENC_STOP_MS) || w.age >= (strong ? ENC_HOLD_MS : 255)))
+        w.turn = s;
+    w.quiet = 0;
+    count += w.turn;
 }
 
-ISR(PCINT0_vect) { count_edges(0, PINB); }
-ISR(PCINT1_vect) { count_edges(1, PINC); }
-ISR(PCINT2_vect) { count_edges(2, PIND); }
+// Every pin-change group runs this one handler: it finds which encoder pins changed.
+ISR(PCINT0_vect) {
+    uint8_t now = 0;
+#define ENC_LEVEL(i) \
+    if (M##i##_ENC_PIN & _BV(M##i##_ENC_BIT)) now |= _BV(i);
+    ENC_LEVEL(0)
+#if MOTORS > 1
+    ENC_LEVEL(1)
+#endif
+#if MOTORS > 2
+    ENC_LEVEL(2)
+#endif
+#if MOTORS > 3
+    ENC_LEVEL(3)
+#endif
+    uint8_t changed = now ^ enc_level;
+    enc_level = now;
+    for (uint8_t i = 0; i < MOTORS; i++, changed >>= 1)
+        if (changed & 1) count_edge(wheel[i], enc[i]);
+}
+ISR(PCINT1_vect, ISR_ALIASOF(PCINT0_vect));
+ISR(PCINT2_vect, ISR_ALIASOF(PCINT0_vect));
 
 #define PIN_OUT(p) (p##_DDR |= _BV(p##_BIT))
 #define PIN_SET(p, v) ((v) ? (p##_PORT |= _BV(p##_BIT)) : (p##_PORT &= ~_BV(p##_BIT)))
@@ -116,9 +156,18 @@ void hal_init() {
 #if MOTORS > 3
     MOTOR_PINS(3)
 #endif
-    enc_last[0] = PINB;
-    enc_last[1] = PINC;
-    enc_last[2] = PIND;
+#define ENC_INIT(i) \
+    if (M##i##_ENC_PIN & _BV(M##i##_ENC_BIT)) enc_level |= _BV(i);
+    ENC_INIT(0)
+#if MOTORS > 1
+    ENC_INIT(1)
+#endif
+#if MOTORS > 2
+    ENC_INIT(2)
+#endif
+#if MOTORS > 3
+    ENC_INIT(3)
+#endif
 #if SONARS
     SONAR_TRIG_DDR |= _BV(SONAR_TRIG_BIT);
 #endif
@@ -170,7 +219,11 @@ void uart_put(char c) {
 
 void motor_set(uint8_t i, int16_t p) {
     uint8_t duty = p < 0 ? -p : p;
-    if (p != 0) dir[i] = p > 0 ? 1 : -1;  // single-channel encoders count in the last direction
+    if (p != 0) {  // the encoder's direction follows (count_edge)
+        int8_t s = duty >= ENC_STRONG ? (p > 0 ? 2 : -2) : (p > 0 ? 1 : -1);
+        if ((s ^ wheel[i].drive) < 0) wheel[i].age = 0;
+        wheel[i].drive = s;
+    }
 #define MOTOR_SET(k)                                    \
     case k:                                             \
         M##k##_OCR = duty;                              \

@@ -20,7 +20,7 @@
  * longest main-loop pass, the cycles awake and elapsed and the passes since the last `stats`), `quit`.
  * With --report, stdout gets `pwm T_US D1 D2 D3 D4` whenever a duty changes.
  * With --lockstep (hardware in the loop), stdout also gets `t T_US` every 2 emulated milliseconds
- * and the emulator never runs more than 5 ms ahead of the last `sync T_US` on stdin: the physics
+ * and the emulator never runs more than 3 ms ahead of the last `sync T_US` on stdin: the physics
  * that answers with `sync` and `counts` sets the pace, so a busy host slows both alike.
  * On exit, stderr gets `stack BYTES`: the deepest stack the firmware reached (its free RAM is
  * painted with 0xAA at reset).
@@ -83,7 +83,7 @@ static long counts_target[MOTORS_MAX];
 static int report;
 static int lockstep;
 static double synced_us;  /* --lockstep: the peer has caught up to here */
-#define LOCKSTEP_AHEAD_US 5000.0
+#define LOCKSTEP_AHEAD_US 3000.0  /* the longest the encoders go without news: below the firmware's 5 ms turnaround pause */
 #define LOCKSTEP_PERIOD_US 2000
 static int duty_last[MOTORS_MAX];
 

@@ -101,3 +101,47 @@ def test_closed_loop_rotation_turns_the_simulated_robot() -> None:
         client.stop()
     assert abs(turned - 90) < 15, turned
     assert corrected != feedforward, (corrected, feedforward)
+
+
+@pytest.mark.parametrize("closed_loop", [True, False], ids=["closed", "open"])
+def test_single_channel_counts_follow_the_wheels_through_reversals(closed_loop: bool) -> None:
+    """The UNO's encoders have one channel: an edge does not say which way the wheel turned. Driven
+    forward, reversed, sideways (in the closed loop the reversed pair coasts down under the loop's
+    weak braking powers, their sign dithering around zero) and stopped, the firmware's counts end
+    within a few counts of the simulated wheels'. Counted in the sign of the last power, they
+    ended 30-45 counts off in the closed loop; the open loop, which brakes only at the reversal,
+    stays within the bound either way and guards against a turnaround held too long."""
+    from omnibot.client import RobotClient
+    from omnibot.client.events import Telemetry
+    from omnibot.robot.description import load_robot
+
+    reason = missing_tools()
+    if reason:
+        pytest.skip(f"emulated UNO: {reason}")
+    samples: list[Telemetry] = []
+    with RobotClient.open("uno://omni4?world=empty&seed=1", load_robot("omni4")) as client:
+        sim = client.link.device.sim  # type: ignore[attr-defined]
+        client.on_telemetry(samples.append)
+        client.mode(closed_loop=closed_loop)
+        client.telemetry(0.02, codes.TEL_ENCODERS)
+        turned = []
+        for vx, vy in ((0.3, 0.0), (-0.3, 0.0), (0.0, 0.3), (0.0, 0.0)):
+            for _ in range(10):  # 0.5 s of each, a VEL every 50 ms
+                client.vel(vx, vy, 0.0, 0.2)
+                client.sleep(0.05)
+            turned.append(sim.encoder_counts())
+        client.stop()
+        # at rest: the simulated counts still for 0.1 s of the emulated time, and a TEL sampled after
+        counts, still_since = sim.encoder_counts(), sim.time
+        for _ in range(100):  # at most 10 s of the host's clock
+            client.sleep(0.1)
+            now = sim.encoder_counts()
+            if now != counts:
+                counts, still_since = now, sim.time
+            elif sim.time - still_since >= 0.1 and samples and samples[-1].controller_time >= sim.time - 0.02:
+                break
+        fw = samples[-1].encoders
+        client.telemetry(0)
+    assert fw is not None
+    assert turned[0][1] > 150 and turned[1][1] < turned[0][1] - 100 and counts[0] > 150, turned  # they turned
+    assert all(abs(f - c) <= 6 for f, c in zip(fw, counts, strict=True)), (fw, counts)

@@ -16,10 +16,11 @@ lockstep (``unosim --lockstep``): the harness reports each duty change with its 
 PWM each L298 channel's pins show) and every 2 emulated milliseconds; the loop steps the physics
 to that time, applies the duties at their time, and answers with the motor encoders' counts (the
 harness makes the edges), the sonar's range, the battery voltage on ADC7 and ``sync``, without
-which the emulator does not run more than 5 ms ahead. A busy host slows both alike instead of
-letting them drift apart. The UNO
-wiring has no gyro and no tracking wheels, so its TEL sends 0 for them; the host's estimator finds
-the gyro silent once the body turns and keeps to the wheel encoders (docs/navigation.md).
+which the emulator does not run more than 3 ms ahead (the longest its encoders go without news:
+the firmware takes a 5 ms pause for a wheel's turnaround). A busy host slows both alike instead of
+letting them drift apart. The UNO wiring has no gyro and no tracking wheels, so its TEL sends 0
+for them; the host's estimator finds the gyro silent once the body turns and keeps to the wheel
+encoders (docs/navigation.md).
 """
 
 from __future__ import annotations
