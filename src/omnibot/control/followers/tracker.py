@@ -12,11 +12,16 @@ velocity and turn rate at every instant. Each control period (100 Hz or more):
    is taken at the same instant;
 3. **feedback** on the error in the path frame at the reference point: cross-track with a PI
    (gain ``cross``, integral ``cross_i``, clamped), along-track with a PI (``along``, ``along_i``),
-   and heading with a PI (``heading``, by default :func:`heading_gain`; ``heading_i``);
+   and heading with a PI (``heading``, by default :func:`heading_gain`; ``heading_i``) towards the
+   path's heading where the robot is along it (the reference's, moved by the along-track error);
 4. **command**: v = v_ref + k_t e_t t + k_n e_n n and w = w_ref + k_theta e_theta, turned into the
    body frame with the heading at the middle of the next period, speed clamped to the limit, and
    the twist scaled down as a whole where it would be beyond the robot's reach
-   (:func:`within_reach`: the wheels' free speed and the floor's load).
+   (:func:`within_reach`: the wheels' free speed and the floor's load);
+5. **planned acceleration** for the VEL (:attr:`~Follower.planned_body_accel`): the reference's
+   acceleration (the world's, centripetal included, and the heading's angular one) turned into the
+   command's body axes, for a controller of protocol version 4 to feed forward on every VEL; for one
+   of version 3, :attr:`~Follower.planned_accel` on straight runs with the heading held.
 
 The path is done when the reference has reached the end and the robot is within ``end_tolerance``
 of the last point and nearly still (or ``settle`` seconds after the reference ended).
@@ -48,9 +53,13 @@ STEADY_ACCEL = 0.5
 """m/s^2: the response model learns only while the reference accelerates less than this (and the
 estimator sees no slip): it is a steady-state gain."""
 STRAIGHT_ACCEL = 1e-6
-"""m/s^2: the tracker plans its acceleration for VEL (:attr:`~Follower.planned_accel`) only where the
-reference goes straight (its acceleration across its velocity below this) with the heading held:
-the field carries the speed-up along the travel alone (see the base class)."""
+"""m/s^2: the tracker plans version 3's acceleration for VEL (:attr:`~Follower.planned_accel`) only
+where the reference goes straight (its acceleration across its velocity below this) with the heading
+held: the field carries the speed-up along the travel alone (see the base class). Version 4's
+(:attr:`~Follower.planned_body_accel`) carries the whole acceleration and goes with every VEL."""
+MOVING_SPEED = 1e-3
+"""m/s: below this reference speed the heading asked is the reference's own (a turn in place), above
+it the path's heading at the robot's progress."""
 HEADING_GAIN = 8.0
 """1/s: the heading loop's gain on a robot whose angular acceleration can deliver it (see
 :func:`heading_gain`)."""
@@ -139,6 +148,7 @@ class ProfileTracker(Follower):
         prof, path = self.profile, self.path
         assert prof is not None and path is not None
         self.planned_accel = 0.0
+        self.planned_body_accel = None
         if self.done:
             return STOP
         dt = self.dt if self._last_t is None else max(0.0, state.t - self._last_t)
@@ -173,12 +183,18 @@ class ProfileTracker(Follower):
         straight = abs(ref.ax * ty - ref.ay * tx) < STRAIGHT_ACCEL
         if self._holds_heading and straight and self.tau < end:  # (at its end the reference stands)
             self.planned_accel = (ref.ax * tx + ref.ay * ty) * pace  # the reference's speed-up, m/s^2
+        # the reference's whole acceleration (world frame; the turn's), 0 once it stands at the end
+        moving = pace if self.tau < end else 0.0
+        acc_x, acc_y, alpha = ref.ax * moving, ref.ay * moving, ref.alpha * moving
         nx, ny = -ty, tx
 
         # 3. feedback in the path frame
         ex, ey = ref.x - px, ref.y - py
         e_t, e_n = ex * tx + ey * ty, ex * nx + ey * ny
-        e_th = wrap(ref.theta - pth)
+        # the heading asked is the path's where the robot is along it, e_t behind the reference (on
+        # a path whose heading changes with its length; where the reference turns in place, its own)
+        turn = ref.w / ref.speed if ref.speed > MOVING_SPEED else 0.0  # rad per m of the path
+        e_th = wrap(ref.theta - turn * e_t - pth)
         self.errors = (e_t, e_n, e_th)
         limits = self.limits
         integral = self._integral
@@ -198,7 +214,10 @@ class ProfileTracker(Follower):
         w = max(-limits.w_max, min(limits.w_max, w))
         # into the body frame at the heading the body will have when the command acts: a body
         # turning at w while it goes would otherwise drive w x turn_lead off the course
-        command = to_body(vx, vy, w, state.theta + state.w * self.turn_lead, self.dt)
+        heading = state.theta + state.w * self.turn_lead
+        command = to_body(vx, vy, w, heading, self.dt)
+        body = to_body(acc_x, acc_y, alpha, heading + 0.5 * w * self.dt)  # the same axes
+        self.planned_body_accel = (body.vx, body.vy, body.w)
         model = self.response
         if model is None:
             return within_reach(limits, command) if self.reach else command
