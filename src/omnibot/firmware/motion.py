@@ -91,7 +91,7 @@ class Executor:
         self._target = [0.0] * self.n
         self._acc = [0.0, 0.0, 0.0]  # a VEL's planned body acceleration, m/s^2, m/s^2, rad/s^2
         self._acc_on = False  # the VEL carries one
-        self._acc_turning = False  # version 4's: the body's own, the turn's terms follow (_accel)
+        self._acc_turning = False  # version 4's: the wheels' part takes the turning axes' term (_accel)
         self._body_ff = cfg.get("body_ff") or [[0.0, 0.0, 0.0]] * self.n  # PWM counts per m/s^2
         self._wheel_ff = cfg.get("wheel_ff") or [0.0] * self.n  # PWM counts per rad/s^2 of a wheel
         self._J = cfg["J"]

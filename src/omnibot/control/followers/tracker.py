@@ -54,11 +54,11 @@ STEADY_ACCEL = 0.5
 estimator sees no slip, and its speed changes slower than :data:`STEADY_SPEEDUP`): it is a
 steady-state gain."""
 STEADY_SPEEDUP = 0.1
-"""m/s^2: ... and while the reference's speed changes slower than this. The model compares the body's
-velocity with the command of ``delay`` before (the wheel loop's lag); a controller that feeds the
-planned acceleration forward (protocol version 4) follows a ramp with less lag, and learning on
-ramps up to 0.5 m/s^2 the model read that as gain (omni3 carpet line-swing at top speed 0.90 -> 1.00
-cm RMS, against its own estimate 0.15 -> 0.37 cm)."""
+"""m/s^2: the response model also learns only while the reference's speed changes slower than this.
+It compares the body's velocity with the command of ``delay`` before (the wheel loop's lag); a
+controller that feeds the planned acceleration forward (protocol version 4) follows a ramp with less
+lag, and learning on ramps up to 0.5 m/s^2 the model read that as gain (omni3 carpet line-swing at
+top speed 1.00 cm RMS, 0.37 against its own estimate; with this 0.91 and 0.15)."""
 STRAIGHT_ACCEL = 1e-6
 """m/s^2: the tracker plans version 3's acceleration for VEL (:attr:`~Follower.planned_accel`) only
 where the reference goes straight (its acceleration across its velocity below this) with the heading
