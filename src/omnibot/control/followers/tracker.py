@@ -111,6 +111,7 @@ class ProfileTracker(Follower):
         adapt: bool = True,
         turn_lead: float | None = None,
         reach: bool = True,
+        progress_heading: bool = True,
         **options: Any,
     ) -> None:
         super().__init__(limits, rate=rate, **options)
@@ -126,6 +127,9 @@ class ProfileTracker(Follower):
         self.reach = reach
         """Scale a command beyond the robot's reach down as a whole (:func:`within_reach`); False
         sends it as asked (the wheel loops saturate one by one)."""
+        self.progress_heading = progress_heading
+        """Ask for the path's heading where the robot is along it; False: the reference's own,
+        wherever the robot is."""
         self.response = VelocityResponse() if adapt else None
         self.profile: SpeedProfile | None = None
         self.tau = 0.0
@@ -200,7 +204,8 @@ class ProfileTracker(Follower):
         e_t, e_n = ex * tx + ey * ty, ex * nx + ey * ny
         # the heading asked is the path's where the robot is along it, e_t behind the reference (on
         # a path whose heading changes with its length; where the reference turns in place, its own)
-        turn = ref.w / ref.speed if ref.speed > MOVING_SPEED else 0.0  # rad per m of the path
+        on_path = self.progress_heading and ref.speed > MOVING_SPEED
+        turn = ref.w / ref.speed if on_path else 0.0  # rad per m of the path
         e_th = wrap(ref.theta - turn * e_t - pth)
         self.errors = (e_t, e_n, e_th)
         limits = self.limits
