@@ -281,7 +281,7 @@ def test_binary_round_trip_on_sim(sim: RobotClient) -> None:
     sim.add_listener(rec)
     sim.mode(simulation=True)
     hello = sim.use_binary()
-    assert (hello.version, hello.name, hello.motors) == (3, "omni4", 4) and sim.binary
+    assert (hello.version, hello.name, hello.motors) == (codes.VERSIONS[-1], "omni4", 4) and sim.binary
     assert sim.status().mode == codes.MODE_SIMULATION | codes.MODE_BINARY  # other bits kept
     pendings = [sim.submit(Move(10, 40, 0, 0)) for _ in range(6)]  # more than the window of 4
     for p in pendings:
@@ -446,11 +446,21 @@ def test_an_older_controller_takes_a_map_without_speed_terms(monkeypatch: pytest
 def test_vel_carries_an_acceleration_only_to_a_controller_that_agreed_on_version_3() -> None:
     with RobotClient.open("sim://omni4?seed=1", timeout=0.5) as client:
         client.hello()  # a bare HELLO: version 2, what every host speaks
-        assert not client.takes_vel_accel
+        assert not client.takes_vel_accel and not client.takes_vel_body_accel
         with pytest.raises(ValueError, match="does not take VEL's acceleration"):
             client.vel(0.3, 0.0, 0.0, 0.2, accel=1.4)
+        with pytest.raises(ValueError, match="does not take VEL's body acceleration"):
+            client.vel(0.3, 0.0, 0.0, 0.2, body_accel=(1.4, 0.0, 0.0))
         assert client.vel(0.3, 0.0, 0.0, 0.2) == Vel(30, 0, 0, 200)  # no acceleration: fine
-        assert client.hello(codes.VERSIONS).version == codes.VEL_ACCEL_VERSION
-        assert client.takes_vel_accel
+        assert client.hello((2, 3)).version == codes.VEL_ACCEL_VERSION
+        assert client.takes_vel_accel and not client.takes_vel_body_accel
         assert client.vel(0.3, 0.0, 0.0, 0.2, accel=1.4) == Vel(30, 0, 0, 200, 140)
+        with pytest.raises(ValueError, match="does not take VEL's body acceleration"):
+            client.vel(0.3, 0.0, 0.0, 0.2, body_accel=(1.4, 0.0, 0.0))
+        assert client.hello(codes.VERSIONS).version == codes.VEL_BODY_ACCEL_VERSION
+        assert client.takes_vel_accel and client.takes_vel_body_accel
+        sent = client.vel(0.3, 0.1, 0.5, 0.2, body_accel=(1.4, -0.25, -2.0))
+        assert sent == Vel(30, 10, 29, 200, body=(140, -25, -115))
+        with pytest.raises(ValueError, match="not both"):
+            client.vel(0.3, 0.0, 0.0, 0.2, accel=1.0, body_accel=(1.0, 0.0, 0.0))
         client.stop()

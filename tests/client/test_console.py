@@ -13,6 +13,7 @@ from omnibot.cli import main
 from omnibot.client import ErrorEvent, RangeEvent, ResetEvent, Telemetry, Unexpected, WarnEvent
 from omnibot.client.views import Hello
 from omnibot.console import format_event, run_console
+from omnibot.protocol import codes
 from omnibot.protocol.messages import Malformed
 from omnibot.protocol.messages import Telemetry as TelMessage
 from omnibot.transport import LockstepLink, register_scheme, unregister_scheme
@@ -108,7 +109,7 @@ def test_console_piped(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFi
     assert "<- IDLE" in lines and "idle" in lines
     assert "<- ERROR,23,unknown command" in lines
     assert any(line.startswith("idle, 0/16 queued, mode 0") for line in lines)
-    assert "binary protocol, version 3" in lines and "text protocol" in lines
+    assert f"binary protocol, version {codes.VERSIONS[-1]}" in lines and "text protocol" in lines
     assert any(line.startswith("<- STATUS,1,0,16,4;") for line in lines)
     assert "!! expected seconds, got 'x'" in lines
     assert any(line.startswith("?? unknown console command") for line in lines)

@@ -175,9 +175,11 @@ def test_binary_sends_up_to_the_window_the_controller_announces(
         ran: list[int] = []
         vel = ctrl.executor.vel
 
-        def counted(vx: int, vy: int, w: int, t_ms: int, accel: int = 0) -> None:
+        def counted(
+            vx: int, vy: int, w: int, t_ms: int, accel: int = 0, body: list[int] | None = None
+        ) -> None:
             ran.append(vx)
-            vel(vx, vy, w, t_ms, accel)
+            vel(vx, vy, w, t_ms, accel, body)
 
         monkeypatch.setattr(ctrl.executor, "vel", counted)
         hello = client.use_binary()

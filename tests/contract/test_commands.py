@@ -26,23 +26,37 @@ from .conftest import ROBOT, Backend, ControllerClock, RawLink
 
 def latest(backend: Backend) -> int:
     """The highest protocol version the backend's controller speaks (the UNO's: 2, docs/uno.md)."""
-    return 2 if backend.name == "uno" else codes.VEL_ACCEL_VERSION
+    return 2 if backend.name == "uno" else codes.VERSIONS[-1]
 
 
 def test_hello_format(raw: RawLink, backend: Backend) -> None:
     raw.write(b"HELLO\n")  # a bare HELLO: the version every host speaks
     assert raw.line() == f"HELLO,2,{ROBOT},4\r\n".encode()
-    raw.write(b"hello,4,2,1\n")  # versions the host speaks: the highest shared one answers
+    raw.write(b"hello,5,2,1\n")  # versions the host speaks: the highest shared one answers
     assert raw.line() == f"HELLO,2,{ROBOT},4\r\n".encode()
     raw.write(b"hello,2,3\n")
+    assert raw.line() == f"HELLO,{min(latest(backend), 3)},{ROBOT},4\r\n".encode()
+    raw.write(b"hello,2,3,4\n")
     assert raw.line() == f"HELLO,{latest(backend)},{ROBOT},4\r\n".encode()
+
+
+def test_vel_with_the_body_acceleration(raw: RawLink, backend: Backend) -> None:
+    """Version 4's VEL,VX,VY,W,T,AX,AY,AW runs on a controller of version 4 and gets ERROR 24 (more
+    than 5 parameters) from the UNO, which speaks version 2: it never misreads the fields."""
+    raw.write(b"VEL,30,0,45,100,140,-20,300\n")
+    if latest(backend) >= codes.VEL_BODY_ACCEL_VERSION:
+        assert raw.line() == b"OK\r\n"
+    else:
+        assert raw.line().startswith(b"ERROR,24,")
+    raw.write(b"STOP\n")
+    assert raw.line() == b"OK\r\n"
 
 
 def test_hello_versions(client: RobotClient) -> None:
     hello = client.hello([2])
     assert (hello.version, hello.name, hello.motors) == (2, ROBOT, 4)
     with pytest.raises(NotSupported) as info:
-        client.execute(Hello((1, 4)))
+        client.execute(Hello((1, 5)))
     assert info.value.code == codes.E_UNSUPPORTED
 
 

@@ -30,6 +30,8 @@ CASES: dict[int, tuple[type[ControllerError], list[str]]] = {
             "POWER,100,10,10",
             "DELTA,1,2,3,4,5,6",
             "HELLO,1,2,3,4,5,6",
+            "VEL,30,0,0,100,1,2",  # version 4's VEL has 7 parameters, version 3's 5: never 6
+            "VEL,30,0,0,100,1,2,3,4",
         ],
     ),
     codes.E_NOT_INTEGER: (
@@ -72,7 +74,7 @@ CASES: dict[int, tuple[type[ControllerError], list[str]]] = {
         CalibrationRejected,
         ["CAL,0,1,0,2200", "CAL,0,0,0,0", "CAL,18,0,0,0", "CAL,1,0,-5,1000"],
     ),
-    codes.E_UNSUPPORTED: (NotSupported, ["MODE,16", "MODE,32", "TELEM,100,256", "HELLO,1", "HELLO,0,1,4"]),
+    codes.E_UNSUPPORTED: (NotSupported, ["MODE,16", "MODE,32", "TELEM,100,256", "HELLO,1", "HELLO,0,1,5"]),
 }
 
 

@@ -189,3 +189,33 @@ def _recording(f: Follower, seen: list[float]) -> Follower:
 
     f.update = recorded  # type: ignore[method-assign]
     return f
+
+
+def test_tracker_plans_the_bodys_whole_acceleration_on_every_command() -> None:
+    """planned_body_accel: the profile's acceleration in the command's body axes. Round a circle
+    with the heading along the travel at its steady speed v, it is v^2 / R towards the centre (the
+    body's left when it turns left), along the body's y, with no angular acceleration; speeding up
+    from rest it points along the travel; STOP plans none."""
+    path = standard_path("circle", size=1.0, heading="tangent")  # radius 0.5 m
+    f = make_follower("tracker", LIMITS)
+    seen: list[tuple[tuple[float, float, float] | None, float]] = []
+    update = f.update
+
+    def recorded(state: State) -> Command:
+        command = update(state)
+        seen.append((f.planned_body_accel, command.w))
+        return command
+
+    f.update = recorded  # type: ignore[method-assign]
+    dist, _, done = simulate("tracker", path, follower=f)
+    assert done and max(dist) < 0.01
+    assert seen[-1][0] is None  # STOP
+    planned = [(a, w) for a, w in seen if a is not None]
+    assert len(planned) == len(seen) - 1
+    first = planned[1][0]
+    assert first is not None and first[0] > 0.5 * LIMITS.a_max * 0.7 and abs(first[1]) < 0.2 * first[0]
+    v = LIMITS.v_max
+    middle = planned[len(planned) // 3 : 2 * len(planned) // 3]
+    for (ax, ay, alpha), w in middle:
+        assert ay * w > 0 and ay == pytest.approx(v * v / 0.5, rel=0.05)
+        assert abs(ax) < 0.05 and abs(alpha) < 0.05

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import math
 import re
 
 import pytest
 
 from omnibot.protocol import codes, linecheck
+from omnibot.robot import kinematics
+from omnibot.robot.description import load_robot
 from tests.firmware.conftest import Rig, make_rig
 
 STATUS_RE = re.compile(r"^STATUS,(\d),(\d+),(\d+),(\d+);POWER(,-?\d+)+;MOVE,-?\d+,-?\d+,-?\d+,-?\d+$")
@@ -20,17 +23,23 @@ def test_hello_on_reset_and_on_request(rig: Rig) -> None:
     assert rig.hello == ["HELLO,2,omni4,4"]
     assert rig.cmd("hello") == ["HELLO,2,omni4,4"]
     assert rig.cmd("HELLO,2") == ["HELLO,2,omni4,4"]
-    assert rig.cmd("HELLO,4,2,1") == ["HELLO,2,omni4,4"]
+    assert rig.cmd("HELLO,5,2,1") == ["HELLO,2,omni4,4"]
     assert rig.cmd("HELLO,1") == [err(codes.E_UNSUPPORTED)]
 
 
-def test_hello_agrees_on_the_highest_shared_version(rig: Rig) -> None:
-    """A host that lists 3 learns that VEL takes the planned acceleration; a bare HELLO and the reset
-    greeting stay at 2, what every host speaks (an old host is never told a version it lacks)."""
+def test_hello_agrees_on_the_highest_shared_version(rig: Rig, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A host that lists 3 learns that VEL takes the planned acceleration, 4 the body's; a bare
+    HELLO and the reset greeting stay at 2, what every host speaks (an old host is never told a
+    version it lacks); a controller of version 3 answers a host of 4 with 3."""
     assert rig.cmd("HELLO,2,3") == ["HELLO,3,omni4,4"]
     assert rig.cmd("HELLO,3") == ["HELLO,3,omni4,4"]
-    assert rig.cmd("HELLO,4,3,2") == ["HELLO,3,omni4,4"]
+    assert rig.cmd("HELLO,2,3,4") == ["HELLO,4,omni4,4"]
+    assert rig.cmd("HELLO,5,4,3,2") == ["HELLO,4,omni4,4"]
+    assert rig.cmd("HELLO,2,4") == ["HELLO,4,omni4,4"]
     assert rig.cmd("HELLO") == ["HELLO,2,omni4,4"]
+    monkeypatch.setattr(codes, "VERSIONS", (2, 3))  # a version 3 controller
+    assert rig.cmd("HELLO,2,3,4") == ["HELLO,3,omni4,4"]
+    assert rig.cmd("HELLO,2") == ["HELLO,2,omni4,4"]
 
 
 def test_status_format(rig: Rig) -> None:
@@ -600,15 +609,17 @@ def test_bad_check_refuses_the_command_untagged(rig: Rig) -> None:
 
 
 def test_vel_feeds_its_planned_acceleration_forward_in_the_closed_loop() -> None:
-    """VEL's fifth field, A cm/s^2 along (VX, VY), adds each wheel's accel_ff row times the body's
-    acceleration to the speed loop's feedforward, for as long as that VEL holds."""
+    """VEL's fifth field, A cm/s^2 along (VX, VY), adds to each wheel's feedforward its share of the
+    body's acceleration (body_ff) and its own inertia's (wheel_ff times its angular acceleration),
+    for as long as that VEL holds."""
     rig = make_rig()
     ex = rig.ctrl.executor
     assert rig.cmd("MODE,2") == ["OK"]
     assert rig.cmd("VEL,30,40,0,200") == ["OK"]
     plain = list(ex._ff)
     assert rig.cmd("VEL,30,40,0,200,150") == ["OK"]  # 1.5 m/s^2 along (0.6, 0.8)
-    rows = rig.config["accel_ff"]
+    body, own, J = rig.config["body_ff"], rig.config["wheel_ff"], rig.config["J"]
+    rows = [[b[k] + f * j[k] for k in (0, 1)] for b, f, j in zip(body, own, J, strict=True)]
     for i in range(4):
         assert ex._ff[i] - plain[i] == pytest.approx(1.5 * (0.6 * rows[i][0] + 0.8 * rows[i][1]))
     assert rig.cmd("VEL,30,40,0,200,-150") == ["OK"]  # braking: the other way
@@ -620,6 +631,90 @@ def test_vel_feeds_its_planned_acceleration_forward_in_the_closed_loop() -> None
     turning = list(ex._ff)
     assert rig.cmd("VEL,0,0,90,200") == ["OK"]
     assert ex._ff == turning
+
+
+def _added_ff(rig: Rig, vel: str, accel: str) -> list[float]:
+    """Each wheel's feedforward with ``VEL,<vel>,<accel>`` less that of ``VEL,<vel>`` (closed loop)."""
+    assert rig.cmd("MODE,2") == ["OK"]
+    assert rig.cmd(f"VEL,{vel}") == ["OK"]
+    plain = list(rig.ctrl.executor._ff)
+    assert rig.cmd(f"VEL,{vel},{accel}") == ["OK"]
+    return [a - b for a, b in zip(rig.ctrl.executor._ff, plain, strict=True)]
+
+
+def _newtons_per_count(robot: str) -> list[float]:
+    """The traction force (N, along each wheel's drive direction) of one PWM count of current-making
+    voltage: the motor's torque constant, gear, efficiency and winding, the wheel's radius."""
+    description = load_robot(robot)
+    out = []
+    for w in description.wheels:
+        m = w.motor
+        amps = (description.battery.voltage - m.driver_drop) / m.pwm_max / m.resistance
+        out.append(
+            amps * m.torque_constant * m.gear_ratio * m.gear_efficiency / (w.radius * math.cos(w.gamma))
+        )
+    return out
+
+
+@pytest.mark.parametrize("robot", ["omni4", "omni3", "mecanum4"])
+@pytest.mark.parametrize(
+    ("vel", "accel"),
+    [
+        ("30,40,0,200", "100,-50,0"),  # speeding up along x, braking sideways, no turn
+        ("30,0,60,200", "0,31,0"),  # a steady circle to the left: the centripetal 0.3 x 1.047 m/s^2
+        ("-20,25,-45,200", "-80,35,-120"),  # everything at once
+        ("0,0,90,200", "0,0,300"),  # spinning up in place
+    ],
+)
+def test_vel_body_acceleration_gives_the_body_its_force_and_torque(robot: str, vel: str, accel: str) -> None:
+    """Version 4's VEL,VX,VY,W,T,AX,AY,AW: the traction forces the wheels' added feedforward makes
+    (without the wheels' own inertia) sum to the body's mass times (AX, AY) and its yaw inertia times
+    AW: each wheel gets its share with the right sign (a wrong sign or wheel breaks the sums)."""
+    description = load_robot(robot)
+    rig = make_rig(robot, wheel_ff=[0.0] * description.n_wheels)
+    added = _added_ff(rig, vel, accel)
+    forces = [c * n for c, n in zip(added, _newtons_per_count(robot), strict=True)]
+    traction, _ = kinematics.contact_rows(
+        [w.position[0] for w in description.wheels],
+        [w.position[1] for w in description.wheels],
+        [w.drive_angle for w in description.wheels],
+        [w.gamma for w in description.wheels],
+    )
+    ax, ay, aw = (int(v) for v in accel.split(","))
+    want = [
+        description.mass * ax * 0.01,
+        description.mass * ay * 0.01,
+        description.yaw_inertia * math.radians(aw),
+    ]
+    assert list(traction.T @ forces) == pytest.approx(want, abs=1e-3 * max(1.0, *map(abs, want)))
+
+
+def test_vel_body_acceleration_turns_each_wheel_at_the_rate_of_its_target() -> None:
+    """The wheels' own inertia needs their angular acceleration, the rate at which each wheel's
+    target changes: the body's acceleration less the turn's w x v (the body's axes turn with it).
+    Driving straight in the world at a steady speed while spinning (no acceleration of the centre),
+    the body-frame velocity turns the other way: the added power follows the targets' change."""
+    rig = make_rig("omni4", body_ff=[[0.0, 0.0, 0.0]] * 4)
+    ex = rig.ctrl.executor
+    own = rig.config["wheel_ff"]
+    added = _added_ff(rig, "90,0,90,200", "0,0,0")
+    before = list(ex._target)
+    dt = 0.05  # the body turned by 4.5 degrees: the world velocity (0.9, 0) is now at -4.5 in the body
+    turned = math.radians(90) * dt
+    assert rig.cmd(f"VEL,{90 * math.cos(turned):.0f},{-90 * math.sin(turned):.0f},90,200") == ["OK"]
+    rates = [(a - b) / dt for a, b in zip(ex._target, before, strict=True)]  # rad/s^2
+    assert [a / f for a, f in zip(added, own, strict=True)] == pytest.approx(rates, rel=0.05, abs=3.0)
+    assert rates[0] < -50 and rates[2] > 50  # wheels 0 and 2 (driving y) take the turn of the velocity
+
+
+def test_vel_takes_4_5_or_7_parameters(rig: Rig) -> None:
+    """Version 4's VEL has 7 parameters (the one command past 5); 6 or 8 are refused, nothing run."""
+    assert rig.cmd("VEL,30,40,0,200,10,20") == [err(codes.E_PARAM_COUNT)]
+    assert rig.cmd("VEL,30,40,0,200,10,20,30,40") == [err(codes.E_PARAM_COUNT)]
+    assert rig.cmd("MOVE,10,40,0,0,1,2") == [err(codes.E_PARAM_COUNT)]
+    assert rig.status() == "STATUS,1,0,16,0;POWER,0,0,0,0;MOVE,0,0,0,0"
+    assert rig.cmd("VEL,30,40,0,200,10,20,30") == ["OK"]
+    assert rig.cmd("VEL,-32768,-32768,-32768,1000,-32768,-32768,-32768#9999*0000")[0].startswith("ERROR,26")
 
 
 def test_vel_acceleration_leaves_the_open_loop_powers_alone() -> None:

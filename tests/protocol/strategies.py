@@ -22,6 +22,7 @@ commands: st.SearchStrategy[m.Command] = st.one_of(
     st.just(m.Stop()),
     st.builds(m.Power, i16, st.lists(i16, min_size=1, max_size=4).map(tuple)),
     st.builds(m.Vel, i16, i16, i16, i16, i16),
+    st.builds(m.Vel, i16, i16, i16, i16, body=st.tuples(i16, i16, i16)),  # version 4
     st.builds(m.Mode, i16),
     st.builds(m.Sonar, i16, i16, i16, i16, i16),
     st.builds(m.Telem, i16, i16),

@@ -244,6 +244,21 @@ def test_bandwidth_figures() -> None:
     assert 100 * (4 + sizes["text_tel"]) > 0.5 * LINE  # the text protocol does not fit
 
 
+def test_vel_carries_the_body_acceleration_as_three_more_varints() -> None:
+    """Version 4: AX, AY, AW after T (3 bytes more for zeros, 5 for a typical plan, 9 at worst); a
+    frame with 6 or 8 integers gets ERROR 24 as the text does."""
+    v4 = m.Vel(35, -20, 45, 100, body=(140, -60, 200))
+    frame_bytes = binary.encode(v4, 5)
+    assert binary.decode(frame_bytes) == (len(frame_bytes), binary.Packet(v4, 5, False))
+    assert len(frame_bytes) == len(binary.encode(m.Vel(35, -20, 45, 100), 5)) + 5 == 21
+    assert len(binary.encode(m.Vel(35, -20, 45, 100, body=(0, 0, 0)), 5)) == 19
+    assert len(binary.encode(m.Vel(-32768, -32768, -32768, 1000, body=(-32768,) * 3), 5)) == 31
+    for ints in ((35, -20, 45, 100, 140, -60), (35, -20, 45, 100, 140, -60, 200, 1)):
+        wire = frame.encode_frame(codes.VEL, 6, bytes(frame.pack_ints(ints)))
+        _, got = binary.decode(wire)
+        assert isinstance(got, m.Malformed) and got.code == codes.E_PARAM_COUNT
+
+
 def test_vel_carries_the_planned_acceleration_only_when_there_is_one() -> None:
     with_a = binary.encode(m.Vel(80, 0, 0, 200, 140), 3)
     without = binary.encode(m.Vel(80, 0, 0, 200), 3)

@@ -320,3 +320,22 @@ def test_vel_takes_the_planned_acceleration_as_an_optional_fifth_field() -> None
     assert m.Vel(80, 0, 0, 200).accel == 0
     assert text.encode(m.Vel(80, 0, 0, 200, -140)) == b"VEL,80,0,0,200,-140\n"
     assert text.encode(m.Vel(80, 0, 0, 200, 0)) == b"VEL,80,0,0,200\n"
+
+
+def test_vel_takes_the_body_acceleration_as_three_more_fields() -> None:
+    """Version 4's VEL,VX,VY,W,T,AX,AY,AW (the one command with more than 5 parameters); zeros are
+    sent (the plan says the body does not accelerate); 6 fields, or 8, are refused as a controller
+    refuses them (ERROR 24), and the longest form with a tag and check fits the 64-byte limit."""
+    v4 = m.Vel(35, -20, 45, 100, body=(140, -60, 200))
+    assert text.encode(v4) == b"VEL,35,-20,45,100,140,-60,200\n"
+    assert text.decode_command(b"VEL,35,-20,45,100,140,-60,200\n")[1] == v4
+    assert text.encode(m.Vel(35, -20, 45, 100, body=(0, 0, 0))) == b"VEL,35,-20,45,100,0,0,0\n"
+    for bad in (b"VEL,35,-20,45,100,140,-60", b"VEL,35,-20,45,100,140,-60,200,1", b"MOVE,1,2,3,4,5,6"):
+        parsed = text.parse_command(bad)
+        assert isinstance(parsed, m.Malformed) and parsed.code == codes.E_PARAM_COUNT
+    worst = m.Vel(-32768, -32768, -32768, 1000, body=(-32768, -32768, -32768))
+    assert len(text.with_suffix(text.encode(worst).rstrip(b"\n"), 9999)) <= codes.LINE_MAX
+    with pytest.raises(ValueError, match="not both"):
+        m.Vel(35, -20, 45, 100, 140, body=(140, 0, 0))
+    with pytest.raises(ProtocolError, match="4, 5 or 7"):
+        m.Vel.from_params((35, -20, 45, 100, 140, -60))

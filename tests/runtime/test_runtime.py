@@ -57,17 +57,20 @@ def test_commands_are_clamped_to_the_controllers_limits() -> None:
     assert clamp_to(limits, Twist(0.1, -0.1, -0.5)) == Twist(0.1, -0.1, -0.5)
 
 
-@pytest.mark.parametrize("versions", [(2,), codes.VERSIONS])
+@pytest.mark.parametrize("versions", [(2,), (2, 3), codes.VERSIONS])
 def test_a_followers_planned_acceleration_goes_only_to_a_controller_that_takes_it(
     versions: tuple[int, ...], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """The tracker's VELs carry its profile's acceleration (speeding up, then braking) once the
-    controller's HELLO agreed on version 3; a controller that answered 2 gets version 2's VEL."""
+    """The tracker's VELs carry its profile's acceleration once the controller's HELLO agreed on it:
+    version 4 the body's on every VEL (speeding up, then braking, along the line), version 3 the
+    speed's (the line is straight, the heading held); a controller that answered 2 gets neither."""
     robot = load_robot("mecanum4")
     path = standard_path("line", size=0.4)
     with RobotClient.open("sim://mecanum4?seed=1&world=empty", robot) as client:
-        takes = client.hello(versions).version >= codes.VEL_ACCEL_VERSION
-        assert client.takes_vel_accel is takes is (versions == codes.VERSIONS)
+        version = client.hello(versions).version
+        assert version == max(versions)
+        assert client.takes_vel_accel is (version >= codes.VEL_ACCEL_VERSION)
+        assert client.takes_vel_body_accel is (version >= codes.VEL_BODY_ACCEL_VERSION)
         sent: list[Vel] = []
         submit = client.submit
 
@@ -85,7 +88,13 @@ def test_a_followers_planned_acceleration_goes_only_to_a_controller_that_takes_i
         runtime.close()
     assert follower.completed and len(sent) > 50
     accels = [v.accel for v in sent]
-    if takes:
-        assert max(accels) > 50 and min(accels) < -50  # cm/s^2: it sped up and braked
+    bodies = [v.body for v in sent]
+    if version == 4:
+        assert accels == [0] * len(sent) and None not in bodies[:-1]  # (the last is the end's STOP)
+        along = [b[0] for b in bodies if b is not None]  # the line runs along the body's x
+        assert max(along) > 50 and min(along) < -50  # cm/s^2: it sped up and braked
+    elif version == 3:
+        assert bodies == [None] * len(sent)
+        assert max(accels) > 50 and min(accels) < -50
     else:
-        assert accels == [0] * len(sent)
+        assert accels == [0] * len(sent) and bodies == [None] * len(sent)

@@ -34,9 +34,16 @@ def make(
     sent: list[tuple[float, tuple[float, ...]]] = []
     real_vel = client.vel
 
-    def vel(vx: float, vy: float, w: float, timeout: float, accel: float = 0.0):
+    def vel(
+        vx: float,
+        vy: float,
+        w: float,
+        timeout: float,
+        accel: float = 0.0,
+        body_accel: tuple[float, float, float] | None = None,
+    ):
         sent.append((wall(), (vx, vy, w, timeout)))
-        return real_vel(vx, vy, w, timeout, accel)
+        return real_vel(vx, vy, w, timeout, accel, body_accel)
 
     client.vel = vel  # type: ignore[method-assign]
     pacer = Pacer(client, config.period, wall=wall, sleep=wall.sleep)

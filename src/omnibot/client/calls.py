@@ -78,15 +78,30 @@ class TypedCalls:
         """POWER: raw PWM counts, one per motor, for ``time`` s (no calibration)."""
         return self._run(commands.power(self.limits, time, powers))
 
-    def vel(self, vx: float, vy: float, w: float, timeout: float, accel: float = 0.0) -> Vel:
+    def vel(
+        self,
+        vx: float,
+        vy: float,
+        w: float,
+        timeout: float,
+        accel: float = 0.0,
+        body_accel: tuple[float, float, float] | None = None,
+    ) -> Vel:
         """VEL: hold (vx, vy) m/s and w rad/s for at most ``timeout`` s unless refreshed; ``accel``
-        the planned rate of change of the speed (m/s^2; :attr:`takes_vel_accel` must be true)."""
+        the planned rate of change of the speed (m/s^2; :attr:`takes_vel_accel` must be true), or
+        ``body_accel`` the body's planned acceleration (m/s^2 along its x and y axes, rad/s^2;
+        :attr:`takes_vel_body_accel` must be true)."""
         if accel and not self.takes_vel_accel:
             raise ValueError(
                 "VEL accel: the controller does not take VEL's acceleration (protocol version "
                 f"{codes.VEL_ACCEL_VERSION}; check client.takes_vel_accel)"
             )
-        return self._run(commands.vel(self.limits, vx, vy, w, timeout, accel))
+        if body_accel is not None and not self.takes_vel_body_accel:
+            raise ValueError(
+                "VEL body_accel: the controller does not take VEL's body acceleration (protocol "
+                f"version {codes.VEL_BODY_ACCEL_VERSION}; check client.takes_vel_body_accel)"
+            )
+        return self._run(commands.vel(self.limits, vx, vy, w, timeout, accel, body_accel))
 
     @property
     def takes_vel_accel(self) -> bool:
@@ -94,6 +109,12 @@ class TypedCalls:
         planned acceleration (the client lists its versions when it greets the controller; a reset
         greeting says 2, so after a reset the client sends none until it asks again)."""
         return self.last_hello is not None and self.last_hello.version >= codes.VEL_ACCEL_VERSION
+
+    @property
+    def takes_vel_body_accel(self) -> bool:
+        """The controller's last HELLO reply agreed on protocol version 4 or later: VEL may carry the
+        body's planned acceleration (AX, AY, AW), as :attr:`takes_vel_accel` for version 3."""
+        return self.last_hello is not None and self.last_hello.version >= codes.VEL_BODY_ACCEL_VERSION
 
     def stop(self) -> Stop:
         """STOP: motors off, queue cleared, remembered MOVE reset, emergency-stop latch released."""

@@ -146,12 +146,32 @@ def power(limits: Limits, time: float, powers: Sequence[int]) -> Power:
     return Power(T, values)
 
 
-def vel(limits: Limits, vx: float, vy: float, w: float, timeout: float, accel: float = 0.0) -> Vel:
+def vel(
+    limits: Limits,
+    vx: float,
+    vy: float,
+    w: float,
+    timeout: float,
+    accel: float = 0.0,
+    body_accel: tuple[float, float, float] | None = None,
+) -> Vel:
     """VEL: hold body velocity ``vx``, ``vy`` m/s and ``w`` rad/s for at most ``timeout`` s
     (0.001..1) unless refreshed; the motors stop when it runs out (watchdog). ``accel``: the planned
-    rate of change of the speed hypot(vx, vy), m/s^2, along (vx, vy); the controller's wheel-speed
-    loop feeds its torque forward (protocol version 3, docs/protocol.md)."""
+    rate of change of the speed hypot(vx, vy), m/s^2, along (vx, vy) (protocol version 3);
+    ``body_accel``: the body's planned acceleration (m/s^2 along its x and y axes, the centre's in
+    the world; rad/s^2) (version 4; not with ``accel``). The controller's wheel-speed loop feeds
+    their torque forward (docs/protocol.md)."""
+    if accel and body_accel is not None:
+        raise ValueError("VEL: give accel (version 3) or body_accel (version 4), not both")
     A = _convert("VEL accel", accel, units.to_cm, "cm/s^2") if accel else 0
+    body = None
+    if body_accel is not None:
+        ax, ay, aw = body_accel
+        body = (
+            _convert("VEL body_accel x", ax, units.to_cm, "cm/s^2"),
+            _convert("VEL body_accel y", ay, units.to_cm, "cm/s^2"),
+            _convert("VEL body_accel w", aw, units.to_deg, "degrees/s^2"),
+        )
     VX = _convert("VEL vx", vx, units.to_cm, "cm/s")
     VY = _convert("VEL vy", vy, units.to_cm, "cm/s")
     W = _convert("VEL w", w, units.to_deg, "degrees/s")
@@ -163,7 +183,7 @@ def vel(limits: Limits, vx: float, vy: float, w: float, timeout: float, accel: f
         raise _fail("VEL w", w, W, "degrees/s", f"abs(W) < {limits.rate_max_dps:g}")
     if not 1 <= T <= VEL_TIME_MAX_MS:
         raise _fail("VEL timeout", timeout, T, "ms", f"1..{VEL_TIME_MAX_MS} ms")
-    return Vel(VX, VY, W, T, A)
+    return Vel(VX, VY, W, T, A, body)
 
 
 def mode(limits: Limits, mask: int) -> Mode:

@@ -44,9 +44,12 @@ progress_tolerance          a MOVE whose encoders measure it short of its distan
 speed_kp, speed_ki          wheel-speed PI gains, PWM counts per rad/s (and per rad)
 speed_band                  rad/s (where kp gives 5 % of full power): a target jump larger than it is
                             a step, after which the integral grows at 1 / (1 + (err / band)^2)
-accel_ff                    per wheel, PWM counts per m/s^2 of body acceleration along x and y: the
-                            power that accelerates the body and the wheel (a VEL's planned
-                            acceleration, fed forward by the closed loop)
+body_ff                     per wheel [x, y, w]: PWM counts per m/s^2 of the body's acceleration along
+                            its x and y axes and per rad/s^2 of its angular acceleration (the wheel's
+                            least-norm share of the force and torque; a VEL's planned acceleration,
+                            fed forward by the closed loop)
+wheel_ff                    per wheel: PWM counts per rad/s^2 of the wheel's own angular acceleration
+                            (its and its rotor's inertia)
 control_period_ms           wheel-speed control period
 tracking, gyro              number of tracking wheels; True when there is a gyro
 sonar_period_min_ms         one entry per sonar: its shortest period (>= 60 ms)
@@ -154,11 +157,14 @@ def _default_k(robot: RobotDescription) -> float:
     return m.pwm_max / v_free
 
 
-def _accel_ff(robot: RobotDescription, J: Any) -> list[list[float]]:
-    """Each wheel's PWM counts per m/s^2 of body acceleration along x and y: the least-norm traction
-    forces that give the body its mass times the acceleration, plus the wheel's and the rotor's own
-    inertia, as the motor current that makes the torque and the voltage that drives it through the
-    winding (no back-EMF: the speed's share is the feedforward's)."""
+def _accel_ff(robot: RobotDescription) -> tuple[list[list[float]], list[float]]:
+    """The power each wheel needs to accelerate the robot, as the motor current that makes the
+    torque and the voltage that drives it through the winding (no back-EMF: the speed's share is
+    the feedforward's): ``body_ff``, each wheel's PWM counts per m/s^2 of the body's acceleration
+    along x and y and per rad/s^2 of its angular acceleration (the least-norm traction forces that
+    give the body its mass times the acceleration and its yaw inertia times the angular one, as
+    :func:`~omnibot.control.reach.floor_grip` shares them), and ``wheel_ff``, each wheel's PWM counts
+    per rad/s^2 of its own angular acceleration (the wheel's and the rotor's inertia)."""
     wheels = robot.wheels
     traction, _ = kinematics.contact_rows(
         [w.position[0] for w in wheels],
@@ -166,16 +172,16 @@ def _accel_ff(robot: RobotDescription, J: Any) -> list[list[float]]:
         [w.drive_angle for w in wheels],
         [w.gamma for w in wheels],
     )
-    share = np.linalg.pinv(traction.T)[:, :2] * robot.mass
-    rows = []
+    share = np.linalg.pinv(traction.T) * np.array([robot.mass, robot.mass, robot.yaw_inertia])
+    body, own = [], []
     for i, w in enumerate(wheels):
         m = w.motor
-        torque = w.radius * math.cos(w.gamma) * share[i]  # N m at the wheel per unit acceleration
-        torque = torque + (w.inertia + m.rotor_inertia * m.gear_ratio**2) * np.asarray(J[i][:2])
-        amps = torque / (m.torque_constant * m.gear_ratio * m.gear_efficiency)
         volts = max(robot.battery.voltage - m.driver_drop, 1e-9)
-        rows.append([round(float(v), 6) for v in amps * m.resistance / volts * m.pwm_max])
-    return rows
+        counts = m.resistance / (m.torque_constant * m.gear_ratio * m.gear_efficiency) / volts * m.pwm_max
+        torque = w.radius * math.cos(w.gamma) * share[i]  # N m at the wheel per unit acceleration
+        body.append([round(float(v) * counts, 6) for v in torque])
+        own.append(round((w.inertia + m.rotor_inertia * m.gear_ratio**2) * counts, 6))
+    return body, own
 
 
 def _sonar_axis(robot: RobotDescription, sonar: SonarSpec) -> list[float]:
@@ -241,6 +247,7 @@ def build_config(
     lim = robot.limits
     has_encoders = all(encoder_cpr)
     pwm_max = max(w.motor.pwm_max for w in robot.wheels)
+    body_ff, wheel_ff = _accel_ff(robot)
     return {
         "name": robot.name,
         "motors": robot.n_wheels,
@@ -286,7 +293,8 @@ def build_config(
         "speed_kp": round(kp, 6),
         "speed_ki": round(ki, 6),
         "speed_band": round(SPEED_BAND_POWER * pwm_max / kp, 6) if kp > 0 else 0.0,
-        "accel_ff": _accel_ff(robot, J),
+        "body_ff": body_ff,
+        "wheel_ff": wheel_ff,
         "control_period_ms": control_period_ms,
         "tracking": len(robot.encoders.tracking),
         "gyro": robot.gyro is not None,

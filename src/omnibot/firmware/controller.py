@@ -293,7 +293,7 @@ class Controller:
         except ValueError:
             self._error(codes.E_NOT_INTEGER)
             return
-        if len(ints) > codes.PARAMS_MAX:
+        if len(ints) > codes.params_max(t):
             self._error(codes.E_PARAM_COUNT)
             return
         for v in ints:
@@ -351,7 +351,8 @@ class Controller:
             self._check_halt()
         elif kw == codes.VEL:
             self._ok()
-            ex.vel(p[0], p[1], p[2], p[3], p[4] if len(p) > 4 else 0)
+            n = len(p)  # 4, 5 (version 3's A) or 7 (version 4's AX, AY, AW)
+            ex.vel(p[0], p[1], p[2], p[3], p[4] if n == 5 else 0, p[4:] if n == 7 else None)
             self._check_halt()
         elif kw == codes.STOP:
             was = ex.stop()

@@ -41,7 +41,7 @@ class Limits:
         lo, hi = codes.PARAM_COUNTS[kw]
         if kw == codes.POWER:
             lo = hi = self.motors + 1
-        if n < lo or n > hi:
+        if n < lo or n > hi or (kw == codes.VEL and n == 6):  # VEL: 4, 5 (A) or 7 (AX, AY, AW)
             return codes.E_PARAM_COUNT
         if kw == codes.MOVE:
             return self._move(p[0], p[1], p[2], p[3], 1)

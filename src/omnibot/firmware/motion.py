@@ -89,8 +89,12 @@ class Executor:
         self._rot = False
         self._ff = [0.0] * self.n
         self._target = [0.0] * self.n
-        self._growth = 0.0  # a VEL's planned acceleration over its translation speed, 1/s
-        self._accel_ff = cfg.get("accel_ff") or [[0.0, 0.0]] * self.n  # PWM counts per m/s^2
+        self._acc = [0.0, 0.0, 0.0]  # a VEL's planned body acceleration, m/s^2, m/s^2, rad/s^2
+        self._acc_on = False  # the VEL carries one
+        self._acc_turning = False  # version 4's: the wheels' part takes the turning axes' term (_accel)
+        self._body_ff = cfg.get("body_ff") or [[0.0, 0.0, 0.0]] * self.n  # PWM counts per m/s^2
+        self._wheel_ff = cfg.get("wheel_ff") or [0.0] * self.n  # PWM counts per rad/s^2 of a wheel
+        self._J = cfg["J"]
         self._counts = [0] * self.n
         self._feedback = False
         self._drag = False
@@ -183,16 +187,32 @@ class Executor:
         for i in range(4):
             self.remembered[i] = 0
 
-    def vel(self, vx: int, vy: int, w: int, t_ms: int, accel: int = 0) -> None:
+    def vel(
+        self, vx: int, vy: int, w: int, t_ms: int, accel: int = 0, body: "list[int] | None" = None
+    ) -> None:
         """Hold a body velocity (cm/s, cm/s, deg/s) for t_ms unless refreshed; clears the queue.
 
-        ``accel``: the host's planned rate of change of the translation speed hypot(vx, vy), cm/s^2,
-        along (vx, vy) (the turn's is taken as 0); the closed loop feeds its torque forward.
+        ``accel`` (version 3): the host's planned rate of change of the translation speed
+        hypot(vx, vy), cm/s^2, along (vx, vy) (the turn's is taken as 0). ``body`` (version 4): the
+        body's planned acceleration [AX, AY, AW], cm/s^2 along its x and y axes (its centre's in
+        the world) and deg/s^2. The closed loop feeds their torque forward (:meth:`_accel`).
         """
         self.queue.clear()
         self.progress.cancel()
-        speed = math.sqrt(vx * vx + vy * vy)
-        self._growth = accel / speed if speed > 0 else 0.0  # 1/s
+        acc = self._acc
+        self._acc_turning = body is not None
+        if body is not None:
+            acc[0] = body[0] * 0.01
+            acc[1] = body[1] * 0.01
+            acc[2] = math.radians(body[2])
+            self._acc_on = True
+        else:
+            speed = math.sqrt(vx * vx + vy * vy)
+            self._acc_on = accel != 0 and speed > 0
+            g = accel * 0.01 / speed if self._acc_on else 0.0  # 1/s
+            acc[0] = g * vx
+            acc[1] = g * vy
+            acc[2] = 0.0
         if self.kind != codes.VEL:
             self._warned = 0
         self.kind = codes.VEL
@@ -400,17 +420,38 @@ class Executor:
             for i in range(self.n):
                 self._ff[i] = model.raw[i]
             model.wheel_speeds(vx, vy, w, self._target)
-            growth = self._growth if self.kind == codes.VEL else 0.0
-            if growth != 0.0:  # the planned acceleration's torque (the speed loop's feedforward)
-                for i in range(self.n):
-                    row = self._accel_ff[i]
-                    self._ff[i] += growth * (row[0] * vx + row[1] * vy)
+            if self._acc_on and self.kind == codes.VEL:
+                self._accel(vx, vy, w, k)
         if self.mode & MODE_CLOSED_LOOP and not self._feedback:
             self._start_feedback()
         elif self._feedback:
             self.speedctl.hold(self._ff, self.powers)  # a new command keeps the speed loop's correction
         self._start_drag(flags)
         self.apply()
+
+    def _accel(self, vx: float, vy: float, w: float, k: float) -> None:
+        """Add the planned acceleration's power to each wheel's feedforward (the speed loop's), for
+        the twist (vx, vy, w) as driven, ``k`` the guard's scale of it (and of its acceleration).
+
+        The body's acceleration (ax, ay, alpha) takes each wheel's share of its force and torque
+        (``body_ff``); the wheel's own inertia needs its angular acceleration, the inverse
+        kinematics of the rate at which the body-frame twist changes. The body's axes turn with it
+        at w, so that rate is (ax + w vy, ay - w vx, alpha): on a circle at a steady speed the
+        body accelerates towards the centre (v w) while its twist, and so every wheel's speed,
+        stays the same. Version 3's A is the rate along (vx, vy) with no turn: both the same.
+        """
+        a = self._acc
+        ax, ay, aw = a[0] * k, a[1] * k, a[2] * k
+        rx, ry = ax, ay
+        if self._acc_turning:
+            rx = ax + w * vy
+            ry = ay - w * vx
+        for i in range(self.n):
+            b = self._body_ff[i]
+            j = self._J[i]
+            self._ff[i] += (
+                b[0] * ax + b[1] * ay + b[2] * aw + self._wheel_ff[i] * (j[0] * rx + j[1] * ry + j[2] * aw)
+            )
 
     def _closed_loop(self) -> bool:
         """The wheel-speed loop drives the motion (MODE bit 1 and encoders on every wheel)."""

@@ -61,7 +61,7 @@ _INF = b"INF"
 
 
 def parse(command: bytes, params: list[int]) -> int:
-    """Parse ``KEYWORD[,p1,...,p5]`` into ``params`` (cleared first).
+    """Parse ``KEYWORD[,p1,...,p5]`` (VEL up to p7) into ``params`` (cleared first).
 
     Returns the keyword id (> 0), 0 for a blank command, or -code for ERROR 23, 24, 25 or 34.
     Spaces and tabs are allowed around the keyword and each parameter. The whole command's syntax
@@ -76,7 +76,7 @@ def parse(command: bytes, params: list[int]) -> int:
     kw = KEYWORDS.get(keyword, 0)
     if kw == 0:
         return -codes.E_UNKNOWN
-    if len(fields) - 1 > codes.PARAMS_MAX:
+    if len(fields) - 1 > codes.params_max(kw):
         return -codes.E_PARAM_COUNT
     inf_at = codes.INF_PARAMS.get(kw, -1) + 1
     for i in range(1, len(fields)):

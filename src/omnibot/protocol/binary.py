@@ -84,7 +84,7 @@ def from_frame(fr: frame.Frame) -> Packet | Malformed:
     except (ValueError, UnicodeDecodeError):
         return Malformed(fr.payload, "bad payload", codes.E_NOT_INTEGER)
     if fr.type_id in codes.PARAM_COUNTS:
-        if len(params) > codes.PARAMS_MAX:
+        if len(params) > codes.params_max(fr.type_id):
             return Malformed(fr.payload, "wrong number of parameters", codes.E_PARAM_COUNT)
         if any(not codes.INT_MIN <= p <= codes.INT_MAX for p in params):
             return Malformed(fr.payload, "value outside 16-bit range", codes.E_RANGE16)

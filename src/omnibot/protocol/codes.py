@@ -6,12 +6,14 @@ module on the board, the host codecs import it under CPython; one table, so both
 
 # --- versions and limits ---------------------------------------------------------------------------
 PROTOCOL_VERSION = 2  # the reset HELLO's and a bare HELLO's version; one number covers text and binary
-VERSIONS = (2, 3)  # protocol versions this implementation speaks (1 had CRC-16 frames without a length)
+VERSIONS = (2, 3, 4)  # protocol versions this implementation speaks (1 had CRC-16 frames without a length)
 VEL_ACCEL_VERSION = 3  # version 3 = 2 + VEL's optional fifth parameter, the planned acceleration
+VEL_BODY_ACCEL_VERSION = 4  # version 4 = 3 + VEL,VX,VY,W,T,AX,AY,AW: the planned body acceleration
 INF = 30000  # "infinite" distance, angle or repeat
 INT_MIN = -32768  # command parameters are 16-bit signed
 INT_MAX = 32767
 PARAMS_MAX = 5  # parameters of one command (events and telemetry may carry more fields)
+VEL_PARAMS_MAX = 7  # VEL's in version 4 (VX, VY, W, T, AX, AY, AW): the one command allowed more
 LINE_MAX = 64  # longest command, host -> controller, terminator excluded
 EVENT_LINE_MAX = 256  # longest reply/event line, controller -> host, CR LF excluded
 POWER_MAX = 255  # raw motor power -255..255
@@ -60,7 +62,7 @@ PARAM_COUNTS = {
     DELTA: (5, 5),
     POWER: (2, 5),
     STOP: (0, 0),
-    VEL: (4, 5),
+    VEL: (4, 7),  # 4, 5 (version 3's A) or 7 (version 4's AX, AY, AW); 6 is refused
     MODE: (1, 1),
     SONAR: (5, 5),
     TELEM: (2, 2),
@@ -68,6 +70,14 @@ PARAM_COUNTS = {
     HELLO: (0, 5),
     CAL: (4, 4),
 }
+
+
+def params_max(kind: int) -> int:
+    """The most parameters command ``kind`` may carry before its own count is checked (ERROR 24
+    beyond): 5, VEL 7 (version 4); a version 2 or 3 controller takes 5 for VEL too."""
+    return VEL_PARAMS_MAX if kind == VEL else PARAMS_MAX
+
+
 QUEUED = (MOVE, ROTATE, DELTA, POWER)  # commands that go through the queue
 # Where a text command may spell INF as a token (``INF``, ``-INF``, any case): MOVE's L, ROTATE's A,
 # DELTA's R (index of the parameter). Elsewhere ``INF`` is not an integer (ERROR 25).

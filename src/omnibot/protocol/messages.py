@@ -155,28 +155,44 @@ class Power(_Message):
 
 @dataclass(frozen=True)
 class Vel(_Message):
-    """``VEL,VX,VY,W,T[,A]``: hold body velocity (cm/s, cm/s, degrees/s) for at most T ms; A
-    (protocol version 3) is the host's planned rate of change of the speed, cm/s^2 (0: none, and
-    then it is not sent, so a version 2 controller reads the same command)."""
+    """``VEL,VX,VY,W,T[,A]`` or ``VEL,VX,VY,W,T,AX,AY,AW``: hold body velocity (cm/s, cm/s,
+    degrees/s) for at most T ms. A (protocol version 3) is the host's planned rate of change of the
+    speed, cm/s^2 (0: none, and then it is not sent, so a version 2 controller reads the same
+    command). ``body`` (version 4) is the planned acceleration of the body: AX, AY cm/s^2 along the
+    body's x and y axes (the centre's acceleration in the world, centripetal included) and AW
+    degrees/s^2; None: not sent. A VEL carries one of the two at most."""
 
     vx: int
     vy: int
     w: int
     time_ms: int
     accel: int = 0
+    body: tuple[int, int, int] | None = None
     TYPE: ClassVar[int] = codes.VEL
 
+    def __post_init__(self) -> None:
+        if self.accel and self.body is not None:
+            raise ValueError("VEL carries version 3's A or version 4's AX, AY, AW, not both")
+
     def params(self) -> tuple[int, ...]:
-        """VX, VY, W, T (and A when it is not 0) in wire order."""
+        """VX, VY, W, T (then A when it is not 0, or AX, AY, AW when given) in wire order."""
+        if self.body is not None:
+            return (self.vx, self.vy, self.w, self.time_ms, *self.body)
         if self.accel:
             return (self.vx, self.vy, self.w, self.time_ms, self.accel)
         return (self.vx, self.vy, self.w, self.time_ms)
 
     @classmethod
     def from_params(cls, params: Sequence[int], label: str = "") -> Self:
-        """Build one from its integers in wire order; ProtocolError when their count is wrong."""
+        """Build one from its integers in wire order (4, 5 or 7 of them); ProtocolError when their
+        count is wrong."""
         _command_count(cls, params)
-        return cls(*params)
+        if len(params) == 6:
+            raise ProtocolError("Vel takes 4, 5 or 7 integers, got 6")
+        vx, vy, w, t = params[:4]
+        if len(params) == 7:
+            return cls(vx, vy, w, t, body=(params[4], params[5], params[6]))
+        return cls(vx, vy, w, t, params[4] if len(params) == 5 else 0)
 
 
 @dataclass(frozen=True)
@@ -602,10 +618,11 @@ def is_command(message: object) -> TypeGuard[Command]:
 
 def check_command(message: Command) -> tuple[int, ...]:
     """The command's parameters; raises ProtocolError if a controller would reject their form
-    (more than 5, or one outside the 16-bit range). Limits of the robot are not checked."""
+    (more than 5, VEL 7, or one outside the 16-bit range). Limits of the robot are not checked."""
     params = message.params()
-    if len(params) > codes.PARAMS_MAX:
-        raise ProtocolError(f"{message.keyword}: more than {codes.PARAMS_MAX} parameters")
+    most = codes.params_max(message.TYPE)
+    if len(params) > most:
+        raise ProtocolError(f"{message.keyword}: more than {most} parameters")
     for p in params:
         if not codes.INT_MIN <= p <= codes.INT_MAX:
             raise ProtocolError(f"{message.keyword}: parameter {p} outside the 16-bit range")

@@ -204,7 +204,7 @@ def parse_command(line: bytes) -> Command | Malformed | None:
     """One command without its terminator; None for a blank one. A ``#tag*check`` suffix is split
     off (and checked: ERROR 26 if it does not match), as the controller does.
 
-    Checks, in order: length (22), check (41), keyword (23), at most 5 parameters (24), integers
+    Checks, in order: length (22), check (41), keyword (23), at most 5 parameters (VEL 7; 24), integers
     (25), 16-bit range (34), the command's parameter count (24). Only spaces and tabs surround
     fields; ``INF``/``-INF`` (any case) is 30000/-30000 where codes.INF_PARAMS allows it. Limits of
     the robot are the controller's business.
@@ -221,7 +221,7 @@ def parse_command(line: bytes) -> Command | Malformed | None:
     cls = COMMAND_BY_KEYWORD.get(keyword)
     if cls is None:
         return Malformed(line, "unknown command", codes.E_UNKNOWN)
-    if len(fields) - 1 > codes.PARAMS_MAX:
+    if len(fields) - 1 > codes.params_max(cls.TYPE):
         return Malformed(line, "wrong number of parameters", codes.E_PARAM_COUNT)
     params = _ints(fields[1:], _SPACES, codes.INF_PARAMS.get(cls.TYPE, -1))
     if params is None:

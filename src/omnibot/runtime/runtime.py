@@ -312,8 +312,10 @@ class Runtime:
     def _send(self, source: str, twist: Twist, fresh: bool) -> Twist | None:
         client, origin = self.client, self.sources.get(source)
         watchdog = getattr(origin, "watchdog", None) or self.vel_timeout
-        # a follower's planned acceleration, for a controller whose wheel loop takes it
-        accel = getattr(origin, "accel", 0.0) if client.takes_vel_accel else 0.0
+        # a follower's planned acceleration, for a controller whose wheel loop takes it: the body's
+        # whole (version 4) or the speed's along the travel (version 3)
+        body = getattr(origin, "body_accel", None) if client.takes_vel_body_accel else None
+        accel = getattr(origin, "accel", 0.0) if client.takes_vel_accel and body is None else 0.0
         try:
             if fresh and self.latched:
                 client.stop()  # a person let go and pressed again: release the latched stop
@@ -322,10 +324,10 @@ class Runtime:
             sent = clamp_to(client.limits, twist)
             if getattr(origin, "wait_reply", self.wait_replies):
                 t0 = client.clock.now()
-                client.vel(sent.vx, sent.vy, sent.w, watchdog, accel)
+                client.vel(sent.vx, sent.vy, sent.w, watchdog, accel, body)
                 self.rtt = client.clock.now() - t0
             else:
-                command = vel_command(client.limits, *sent, watchdog, accel)
+                command = vel_command(client.limits, *sent, watchdog, accel, body)
                 self._pending.append((client.submit(command), source))
         except (ControllerError, LinkError, ValueError) as exc:
             self._failed(source, exc)

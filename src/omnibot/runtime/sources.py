@@ -189,6 +189,9 @@ class FollowerSource:
         self.accel = 0.0
         """m/s^2: the follower's planned rate of change of its last proposal's speed (the runtime
         sends it with the VEL to a controller that takes it)."""
+        self.body_accel: tuple[float, float, float] | None = None
+        """The follower's planned acceleration of the body for its last proposal (m/s^2 along the
+        body's axes, rad/s^2; None: no plan), sent with the VEL to a controller of version 4."""
         self.overrides = 0
         """How often another source or a lock took the robot from it."""
         self._standing_by = False
@@ -232,6 +235,7 @@ class FollowerSource:
                 self.overrides += self._driven
                 self._standing_by = True
             self.accel = 0.0
+            self.body_accel = None
             return Proposal(Twist())  # stand by: ready to take the robot (back)
         if self._standing_by:
             self._standing_by = False
@@ -250,6 +254,7 @@ class FollowerSource:
         self._s = self.path.project_near(state.x, state.y, self._s).s if len(self.path) > 1 else 0.0
         self.twist = Twist(command.vx, command.vy, command.w)
         self.accel = self.follower.planned_accel
+        self.body_accel = self.follower.planned_body_accel
         return Proposal(self.twist)
 
     def _resume(self, state: Estimate) -> None:

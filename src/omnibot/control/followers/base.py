@@ -90,8 +90,15 @@ class Follower(ABC):
         sends it with the VEL to a controller whose wheel-speed loop feeds it forward. The tracker
         plans it only where the reference goes straight with the body's heading held: it is the
         speed-up along the travel, and a turning body or a curving path also needs torque for the
-        turn or across the travel, which VEL does not carry; fed alone it cost the heading (omni4 on
-        a swinging random path 0.048 -> 0.059 rad RMS) and the track on a circle (BENCHMARKS.md)."""
+        turn or across the travel, which version 3's VEL does not carry (version 4's does:
+        :attr:`planned_body_accel`); fed alone it cost the heading (omni4 on a swinging random path
+        0.048 -> 0.059 rad RMS) and the track on a circle (BENCHMARKS.md)."""
+        self.planned_body_accel: tuple[float, float, float] | None = None
+        """The planned acceleration of the body for the last command (m/s^2 along the body's x and y
+        axes: its centre's acceleration in the world, centripetal included; rad/s^2), or None (no
+        plan); the runtime sends it with the VEL to a controller of protocol version 4, whose
+        wheel-speed loop feeds each wheel its share forward (it carries the turn's and the
+        sideways acceleration that :attr:`planned_accel` cannot)."""
 
     def start(self, path: Path, t: float) -> None:
         """Begin following ``path`` at time ``t`` (the robot stands at its start)."""

@@ -191,6 +191,9 @@ class Reference:
     ax: float
     ay: float
     speed: float
+    alpha: float = 0.0
+    """The heading's angular acceleration, rad/s^2 (within the segment: the turn rate u theta' changes
+    with the pace u only)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -261,6 +264,7 @@ class SpeedProfile:
             ax=a_t * tx - a_n * ty,
             ay=a_t * ty + a_n * tx,
             speed=v,
+            alpha=acc * rt,
         )
 
 
