@@ -112,12 +112,15 @@ def test_the_reach_is_lowered_where_the_current_limit_makes_moves_fall_short(acc
     onto 30 degrees, but there the drivers' current limit turns the body and four of the eight raw
     courses fall 10-12 % short (warning 17); 5 % slower each round, they land at 0.63 m/s (measured:
     -12.3 % at 0.81, -5.8 at 0.73, -2.1 at 0.69, within 3 % at 0.66 but for two back courses at +3.3).
-    On the axes every MOVE lands at the top of the speed range: the reach there is kept."""
+    On the axes every MOVE lands at the top of the speed range, at each of three wheel positions: the
+    reach there is kept."""
     spec = wood_spec(acceptance_wood.robot)
-    got = measure_reach(acceptance_wood, spec, Plan(reach_courses=(0.0, 2 / 3)))
+    got = measure_reach(acceptance_wood, spec, Plan(reach_courses=(0.0, 2 / 3), reach_phases=3))
     assert got.computed == {0.0: 1.0, 30.0: 0.81}
-    assert got.measured[0.0] == 1.0  # kept: all four axis MOVEs landed at once
-    assert [r.course_deg for r in got.rows if r.course_deg % 90 == 0] == [0.0, 90.0, 180.0, 270.0]
+    assert got.measured[0.0] == 1.0  # kept: all four axis MOVEs landed at once, at three wheel positions
+    assert [r.course_deg for r in got.rows if r.course_deg % 90 == 0] == [0.0, 90.0, 180.0, 270.0] * 3
+    turns = [r for r in acceptance_wood.log if r.group == "reach:turn"]
+    assert len(turns) == 2 and all(r.kind == "rotate" for r in turns)  # the wheels moved on between
     reach = got.measured[30.0]
     assert reach is not None and 0.6 <= reach <= 0.7
     first = [r for r in got.rows if r.speed == 0.81]
@@ -155,3 +158,4 @@ def test_no_reach_where_not_even_the_slowest_lands(acceptance_wood: Runner) -> N
     assert got.measured == {0.0: None} and got.table is None
     assert [r.speed for r in got.rows[::4]] == [1.0, 0.5]  # 0.25 is below the speed range (0.3..1 m/s)
     assert not any(lands(r, 0.03) for r in got.rows[4:]) and all(r.error is not None for r in got.rows)
+    assert not [r for r in acceptance_wood.log if r.group == "reach:turn"]  # one wheel position

@@ -233,16 +233,20 @@ TURN_RATE = math.radians(60.0)
 """rad/s of the ROTATEs that move the wheels on between dead-band searches."""
 
 
-def turn_wheels(runner: Runner, pitches: float) -> RunResult:
+def turn_wheels(runner: Runner, pitches: float, what: str = "dead band") -> RunResult:
     """ROTATE in place so that every wheel turns by about ``pitches`` of its roller pitch (the
-    described radius and roller count; the same direction each time, so the positions move on)."""
+    described radius and roller count; the same direction each time, so the positions move on);
+    ``what`` names the step (its group is ``<what>:turn``)."""
     robot, geo = runner.robot, runner.geometry
     pitch = max(2.0 * math.pi * w.radius / w.rollers.count for w in robot.wheels)  # m of rim per roller
     angle = pitches * pitch / min(abs(v) for v in geo.rotation_rim())
     info = RunInfo(ROTATE, f"wheels on: rotate {math.degrees(angle):.1f} deg")
-    runner.note("dead band: wheels on")
+    runner.note(f"{what}: wheels on")
     return runner.run(
-        info, partial(runner.client.rotate, angle, TURN_RATE), angle / TURN_RATE, "deadband:turn"
+        info,
+        partial(runner.client.rotate, angle, TURN_RATE),
+        angle / TURN_RATE,
+        f"{what.replace(' ', '')}:turn",
     )
 
 

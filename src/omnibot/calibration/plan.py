@@ -87,6 +87,10 @@ class Plan:
     """A reach MOVE lands when its distance is within this share of the length, unwarned."""
     reach_step: float = 0.05
     """Each round of reach MOVEs that does not land is driven again this share slower."""
+    reach_phases: int = 1
+    """Wheel positions each round of reach MOVEs on a course with idle wheels (omni4's axes) is driven
+    at, 1 + 1/n roller pitches apart (the idle wheels' drag depends on where they stand; more than one
+    was tried and is not the default, docs/calibration.md)."""
     slip: bool = True
     """Drive the wheel-slip runs (16 out-and-back, wheel-speed loop on) and fit the floor's creep."""
 

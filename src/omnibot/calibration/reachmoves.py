@@ -12,14 +12,19 @@ range), measured by the calibration's truth as the check measures them. Where on
 (its distance off by more than ``Plan.reach_goal``, or the controller warned 11 or 17), it and its
 opposite course (so the robot stays near its start) are driven again ``Plan.reach_step`` slower,
 until they land. A course that landed at a speed is taken to land slower too (the current drawn and
-the load the wheels push against grow with speed).
+the load the wheels push against grow with speed). On a course where wheels stand idle (omni4's
+axes) each round is driven at ``Plan.reach_phases`` wheel positions (a ROTATE in place moves every
+wheel on by a third of a roller pitch between them): the idle wheels' rollers drag with where they
+stand, and near the floor's grip that decides whether the two driven wheels slip, so one position
+could land where another falls 10 % short.
 """
 
 from __future__ import annotations
 
 from omnibot.calibration.accuracy import AccuracyRow, ReachMeasure, reach_speed
 from omnibot.calibration.check import move_row
-from omnibot.calibration.experiments import Runner
+from omnibot.calibration.experiments import Runner, turn_wheels
+from omnibot.calibration.patterns import Geometry
 from omnibot.calibration.plan import Plan, speed_range
 from omnibot.robot.description import CalibrationSpec
 
@@ -38,6 +43,13 @@ def slower(speed: float, step: float) -> float:
     return round(min(speed - 0.01, speed * (1.0 - step)), 2)
 
 
+def phase_count(geometry: Geometry, folded: float, plan: Plan) -> int:
+    """Wheel positions a round of reach MOVEs on ``folded`` is driven at: ``plan.reach_phases`` where
+    wheels stand idle on it (their rollers' drag depends on where they stand, and near the floor's
+    grip that decides whether the driven wheels slip), else 1 (every wheel turns through the MOVE)."""
+    return max(1, plan.reach_phases) if geometry.idle_wheels(folded) else 1
+
+
 def measure_reach(runner: Runner, spec: CalibrationSpec, plan: Plan) -> ReachMeasure:
     """Drive the reach MOVEs through the tables in the controller (``spec``, without a reach) on every
     course of ``plan.reach_folds`` (module docstring)."""
@@ -51,11 +63,15 @@ def measure_reach(runner: Runner, spec: CalibrationSpec, plan: Plan) -> ReachMea
         out.computed[folded] = computed
         speed = None if computed is None else round(min(computed, top), 2)
         pending = raw
+        phases = phase_count(geo, folded, plan)
         while speed is not None and pending:
             rows = []
-            for course in pending:
-                runner.note(f"reach: course {course:g} at {speed:g}")
-                rows.append(move_row(runner, "reach", length, speed, course, REACH))
+            for k in range(phases):
+                if k:
+                    turn_wheels(runner, 1.0 + 1.0 / phases, REACH)
+                for course in pending:
+                    runner.note(f"reach: course {course:g} at {speed:g}")
+                    rows.append(move_row(runner, "reach", length, speed, course, REACH))
             out.rows += rows
             missed = {r.course_deg for r in rows if not lands(r, plan.reach_goal)}
             if not missed:

@@ -61,7 +61,7 @@ from omnibot.calibration.motorfit import (
 from omnibot.calibration.motors import MODEL_ROUNDS, balance_model, motor_deadbands, stand_test
 from omnibot.calibration.patterns import Geometry, top_power
 from omnibot.calibration.plan import Plan, speed_range
-from omnibot.calibration.reachmoves import measure_reach
+from omnibot.calibration.reachmoves import measure_reach, phase_count
 from omnibot.calibration.results import CalibrationResult, SurfaceSession
 from omnibot.calibration.rollerfit import RollerFit, axis_courses, correct_runs, fit_rollers, offset_shift
 from omnibot.calibration.rollers import SHARES, roller_runs, tune_coast
@@ -135,7 +135,12 @@ def expected_runs(
         else 0,
         "roller gains": (3 * plan.roller_rounds + plan.coast_slow_rounds) * axes if rollers and upload else 0,
         "slow end": courses * plan.directions * plan.slow_rounds if upload else 0,
-        "reach": sum(len(geometry.every_raw_course(f)) for f in plan.reach_folds(geometry)) if upload else 0,
+        "reach": sum(
+            (len(geometry.every_raw_course(f)) + 1) * phase_count(geometry, f, plan) - 1
+            for f in plan.reach_folds(geometry)
+        )
+        if upload
+        else 0,
         "rotation test": 2,
         "squares": 2,
         "after": checks if upload else 0,
