@@ -35,7 +35,7 @@ from contextlib import contextmanager
 import numpy as np
 
 from omnibot.calibration import session
-from omnibot.calibration.accuracy import AccuracyPlan, within_reach
+from omnibot.calibration.accuracy import AccuracyPlan, describe_reach, within_reach
 from omnibot.calibration.experiments import Runner
 from omnibot.calibration.motorfit import Balance, Stand, emf_counts
 from omnibot.calibration.motors import balance_model
@@ -163,11 +163,7 @@ def run(
         return 1
     errors = [abs(r.error or 0.0) for r in within]
     courses = [abs(r.course_error_deg) for r in within if r.course_error_deg is not None]
-    per_course = (
-        ", ".join(f"{c:g} deg {v:g}" for c, v in zip(table.courses_deg, table.speed, strict=True))
-        if table is not None
-        else "every course"
-    )
+    per_course = describe_reach(table) if table is not None else "every course"
     print(
         f"reach {s.reach or 0.0:.2f} m/s ({per_course}): {len(within)} MOVEs within it, distance error max "
         f"{100 * max(errors):.1f} %, mean {100 * sum(errors) / len(errors):.1f} %"

@@ -172,6 +172,11 @@ def lowest_reach(tables: Sequence[ReachSpec | None]) -> ReachSpec | None:
     return ReachSpec(courses_deg=tuple(courses), speed=tuple(min(t(c) for t in known) for c in courses))
 
 
+def describe_reach(reach: ReachSpec) -> str:
+    """A reach table as text: ``0 deg 1, 15 deg 0.76, ...`` (m/s)."""
+    return ", ".join(f"{c:g} deg {v:g}" for c, v in zip(reach.courses_deg, reach.speed, strict=True))
+
+
 def within_reach(row: AccuracyRow, reach: ReachSpec | None, fold: Callable[[float], float]) -> bool:
     """A MOVE of the check asked no faster than the reach on its course (False without a reach)."""
     return reach is not None and row.speed <= reach(fold(row.course_deg)) + 1e-9

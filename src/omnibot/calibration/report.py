@@ -21,7 +21,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from omnibot.calibration.accuracy import AccuracyRow, reach_speed, summarize
+from omnibot.calibration.accuracy import AccuracyRow, describe_reach, reach_speed, summarize
 from omnibot.calibration.calfile import describe_spec
 from omnibot.calibration.results import CalibrationResult, SurfaceSession
 from omnibot.calibration.tables import move_grid, rotate_lines, summary_table
@@ -351,9 +351,7 @@ def reach_lines(result: CalibrationResult) -> list[str]:
     ]
     for label, spec, computed in rows:
         if spec.reach is not None:
-            cells = ", ".join(
-                f"{c:g} deg {v:g}" for c, v in zip(spec.reach.courses_deg, spec.reach.speed, strict=True)
-            )
+            cells = describe_reach(spec.reach)
         else:
             cells = "-" if computed is None else f"{computed:g} (computed, every course)"
         out.append(f"| {label} | {cells} |")

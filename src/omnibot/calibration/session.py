@@ -6,7 +6,8 @@ each reading and filling in one :class:`SurfaceRun`::
     gyro bias (standstill) -> accuracy before -> motor map -> dead bands -> straight sweeps
     -> roller drag -> rotation sweep -> fit K, K_l, K_r -> turns: upload, curved MOVEs, fit K_t
     -> roller gains: the drag's coast from MOVEs, upload -> slow end: K_l from MOVEs, upload
-    -> reach: MOVEs at the computed reach per course, slowed until they land, upload -> rotation test -> gyro scale -> squares CCW and CW (UMBmark) -> odometry corrections -> accuracy after
+    -> reach: MOVEs at the computed reach per course, slowed until they land, upload
+    -> rotation test -> gyro scale -> squares CCW and CW (UMBmark) -> odometry corrections -> accuracy after
     then the wheel slip (its own progress bar)
 
 Over surfaces (:func:`calibrate`): each surface as above, then the averaged calibration (seed 000
@@ -28,6 +29,7 @@ from omnibot.calibration.accuracy import (
     ReachMeasure,
     checked_reach,
     checked_reach_table,
+    describe_reach,
     lowest_reach,
     reach_speed,
 )
@@ -421,9 +423,7 @@ def _reach(s: SurfaceRun) -> None:
                 if v < min(measure.computed[c] or 0.0, top) - 1e-9
             ]
             s.notes.append(
-                f"reach of {length:g} m MOVEs, driven: "
-                + ", ".join(f"{c:g} deg {v:g}" for c, v in zip(table.courses_deg, table.speed, strict=True))
-                + " m/s"
+                f"reach of {length:g} m MOVEs, driven: {describe_reach(table)} m/s"
                 + (
                     f" (slower than the tables can power, where MOVEs fell short: {'; '.join(slowed)})"
                     if slowed
@@ -481,14 +481,7 @@ def _accuracy_after(s: SurfaceRun) -> None:
             s.notes.append(
                 "the check's MOVEs within the driven reach were warned about (a motor short of power, or "
                 "short on the encoders): the reach is "
-                + (
-                    "none"
-                    if checked is None
-                    else ", ".join(
-                        f"{c:g} deg {v:g}" for c, v in zip(checked.courses_deg, checked.speed, strict=True)
-                    )
-                    + " m/s"
-                )
+                + ("none" if checked is None else f"{describe_reach(checked)} m/s")
             )
             s.section = s.spec.model_copy(update={"reach": checked})
             s.reach = None if checked is None else min(checked.speed)
