@@ -2,7 +2,7 @@
 
 :func:`~omnibot.calibration.accuracy.reach_speed` computes how fast the tables can power a MOVE of
 the reference length without a motor's PWM saturating. The drivers' current limit and the floor's
-grip come first on some courses (docs/calibration.md, "The reach"): next to the diagonals a
+grip come first on some courses (docs/calibration.md, "The reach from MOVEs"): next to the diagonals a
 current-limited pair of unequal motors turns the body and the MOVE falls short one way; on a soft
 floor the two driven wheels of an axis course slip under the whole load. Neither saturates a PWM, and
 the slip hides from the encoders too. So on each of :meth:`~omnibot.calibration.plan.Plan.reach_folds`
@@ -13,8 +13,8 @@ range), measured by the calibration's truth as the check measures them. Where on
 opposite course (so the robot stays near its start) are driven again ``Plan.reach_step`` slower,
 until they land. A course that landed at a speed is taken to land slower too (the current drawn and
 the load the wheels push against grow with speed). On a course where wheels stand idle (omni4's
-axes) each round is driven at ``Plan.reach_phases`` wheel positions (a ROTATE in place moves every
-wheel on by a third of a roller pitch between them): the idle wheels' rollers drag with where they
+axes) each round is driven at ``Plan.reach_phases`` wheel positions, n (a ROTATE in place moves every
+wheel on by 1 + 1/n roller pitches between them): the idle wheels' rollers drag with where they
 stand, and near the floor's grip that decides whether the two driven wheels slip, so one position
 could land where another falls 10 % short.
 """

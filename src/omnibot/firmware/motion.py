@@ -18,7 +18,7 @@ when the wheels stand still short of its distance beyond the tolerance, WARN 17.
 
 An open-loop MOVE (and each DELTA repetition) asked faster than the calibrated reach on its folded
 course (:meth:`~omnibot.firmware.calibration.Calibration.reach_at`, uploaded with CAL table 8) runs
-at the reach, its distance kept (WARN 18, once a motion): faster, the calibration saw such MOVEs fall
+at the reach, its distance kept (WARN 18, once a command): faster, the calibration saw such MOVEs fall
 short. The remembered MOVE keeps the speed asked.
 """
 
