@@ -598,9 +598,11 @@ def tune_rollers(
     robot, geometry = runner.robot, runner.geometry
     assert fit.rollers is not None
     bottom, top = speed_range(robot, plan.move_length)
-    reach = reach_speed(robot, spec, plan.move_length)
-    # up to 90 % of the reach: at the reach itself a motor runs out of power at the worst wheel
-    # position, which no gain can make up for
+    # up to 90 % of the reach of the courses the MOVEs drive (the motor axes; at the reach itself a
+    # motor runs out of power at the worst wheel position, which no gain can make up for). Not every
+    # course's: the axes' reach is the faster, and the controller holds the coast of the fastest
+    # speed beyond it, so MOVEs on the axes up to their reach need it measured there
+    reach = reach_speed(robot, spec, plan.move_length, axis_courses(geometry))
     fastest = max(bottom, 0.9 * min(top, reach or top))
     speeds = sorted({round(bottom + (fastest - bottom) * k / 3, 2) for k in range(4)})
     fit.coast = tune_coast(
