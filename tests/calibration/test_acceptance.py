@@ -259,6 +259,9 @@ def test_roller_drag_term_takes_out_the_wheel_position(
     # the MOVEs' coast: the faster the MOVE, the more the drag outlasts it and the more power it needs
     tuning = result.sessions[1].fit.coast
     assert tuning is not None and len(tuning.speeds) == 4
+    # up to 90 % of the axes' computed reach (carpet 0.80 m/s: measured 0.79), where the axis MOVEs run
+    # up to their driven reach, not of the slowest course's (0.56: 0.50, and held beyond)
+    assert tuning.speeds[-1] > 0.7
     # mu falls with speed overall; neighbouring speeds' least-squares fits may cross by a few %
     assert tuning.gains[-1] > tuning.gains[0] and tuning.power[0] > max(tuning.power[1:])
     assert tuning.power[-1] < 0.9 * tuning.power[0]
