@@ -22,6 +22,7 @@
 #define P_CAL_KT 1
 #define P_CAL_MOTORS 8
 #define P_CAL_OFFSET 3
+#define P_CAL_REACH 8
 #define P_CAL_ROLLER_COAST 6
 #define P_CAL_ROLLER_COS 4
 #define P_CAL_ROLLER_SIN 5
@@ -67,6 +68,7 @@
 #define P_TEL_SONAR 128
 #define P_TEL_TRACKING 4
 #define P_W_POWER_TOO_LOW 12
+#define P_W_REACH 18
 #define P_W_SHORT 17
 #define P_W_SONAR_LIMIT 14
 #define P_W_SONAR_STOP 13

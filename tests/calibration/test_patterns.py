@@ -54,3 +54,17 @@ def test_power_arguments(geo: Geometry) -> None:
     assert geo.translation_factor(0.0) == pytest.approx(1.0)
     assert geo.translation_factor(45.0) == pytest.approx(0.5**0.5)
     assert geo.rotation_factor() == pytest.approx(0.096)
+
+
+@pytest.mark.parametrize(("preset", "counts"), [("omni4", (4, 8, 4)), ("omni3", (6, 12, 6))])
+def test_every_raw_course_of_a_folded_course(preset: str, counts: tuple[int, int, int]) -> None:
+    """The reach MOVEs' courses: every raw course that folds onto it, mirror images too (a
+    current-limited pair of unequal motors loses one way only), each half returning to its start."""
+    geo = Geometry.of(load_robot(preset))
+    for folded, count in zip((0.0, 0.5 * geo.fold_max, geo.fold_max), counts, strict=True):
+        raws = geo.every_raw_course(folded)
+        assert len(raws) == len(set(raws)) == count
+        assert all(geo.fold(c) == pytest.approx(folded, abs=1e-6) for c in raws)
+        assert all(round((c + 180.0) % 360.0, 6) in raws for c in raws)
+    omni4 = Geometry.of(load_robot("omni4"))
+    assert omni4.every_raw_course(30.0) == [30.0, 120.0, 210.0, 300.0, 330.0, 60.0, 150.0, 240.0]

@@ -49,8 +49,13 @@ def test_phases_that_do_not_run_expect_nothing() -> None:
     full = expected_runs(Plan(), geometry, None, robot)
     assert "before" not in full and "after" not in full  # no accuracy check
     bare = expected_runs(Plan(motor_map=False, roller_rounds=0), geometry, None, robot, upload=False)
-    assert set(full) - set(bare) == {"motor map", "roller drag", "turns", "roller gains", "slow end"}
+    assert set(full) - set(bare) == {"motor map", "roller drag", "turns", "roller gains", "slow end", "reach"}
     assert full["slow end"] == 4 * 4 * Plan().slow_rounds  # every raw course of each calibrated course
+    # the reach's first round: every raw course folding onto 0, 15, 30 and 45 degrees (4, 8, 8, 4); --quick
+    # 0, 30, 45; with three wheel positions the axes' three times, two ROTATEs between them
+    assert full["reach"] == 24 and expected_runs(Plan.quick(), geometry, None, robot)["reach"] == 16
+    assert expected_runs(Plan(reach_phases=3), geometry, None, robot)["reach"] == 34
+    assert "reach" not in expected_runs(Plan(reach_courses=()), geometry, None, robot)
 
 
 def test_every_phase_is_one_named_steps() -> None:

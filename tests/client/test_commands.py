@@ -15,6 +15,7 @@ from omnibot.robot.description import (
     CourseTable,
     MotorMapSpec,
     PiecewiseLinear,
+    ReachSpec,
     RollerDragSpec,
 )
 
@@ -203,6 +204,7 @@ def test_cal_and_calibration_upload() -> None:
         Cal(codes.CAL_GAIN + 1, 0, 0, 1000),
         Cal(codes.CAL_SPEED, 1, 0, 0),
         *no_drag,
+        Cal(codes.CAL_REACH, 0, 0, 0),  # no reach: the controller runs every MOVE as asked
     ]
     # the motor model's speed terms, 0.1 counts per m/s (a map without them sends 0: no speed term)
     speedy = motors.model_copy(update={"speed": (21.64, -23.9)})
@@ -227,6 +229,16 @@ def test_cal_and_calibration_upload() -> None:
     close = drag.model_copy(update={"coast": PiecewiseLinear(x=(0.5, 0.503), y=(0.1, 0.2))})
     with pytest.raises(ValueError, match="1 cm/s apart"):
         c.calibration(CalibrationSpec(k=220.0, rollers=close))
+    # the reach: folded courses in degrees, speeds in cm/s (rounded down: never faster than measured)
+    reach = ReachSpec(courses_deg=(0.0, 15.0, 30.0, 45.0), speed=(0.9, 0.815, 0.68, 0.775))
+    assert c.calibration(CalibrationSpec(k=220.0, reach=reach))[1:] == [
+        Cal(codes.CAL_REACH, 0, 0, 90),
+        Cal(codes.CAL_REACH, 1, 15, 81),
+        Cal(codes.CAL_REACH, 2, 30, 68),
+        Cal(codes.CAL_REACH, 3, 45, 77),
+    ]
+    with pytest.raises(ValueError, match="1 degree apart"):
+        c.calibration(CalibrationSpec(k=220.0, reach=ReachSpec(courses_deg=(30.0, 30.2), speed=(0.5, 0.6))))
     with pytest.raises(ValueError, match="2 motors for a robot with 4"):
         c.calibration(CalibrationSpec(k=220.0, motors=motors), motors=4)
     assert c.calibration(CalibrationSpec(k=220.0, motors=motors))[1:] == [

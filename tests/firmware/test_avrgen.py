@@ -33,7 +33,8 @@ def test_header_carries_codes_limits_and_kinematics(robot: str) -> None:
     cfg = build_config(load_robot(robot))
     for code, message in codes.TEXTS.items():
         if code in avrgen.NOT_SENT:  # the UNO never sends it: its text would only take flash
-            assert f"TEXT_{code}[]" not in text and _define(text, "P_W_SHORT") == str(code)
+            name = next(k for k, v in vars(codes).items() if k.startswith("W_") and v == code)
+            assert f"TEXT_{code}[]" not in text and _define(text, f"P_{name}") == str(code)
         else:
             assert f'TEXT_{code}[] PROGMEM = "{message}";' in text
     for name, kid in codes.COMMANDS.items():

@@ -52,6 +52,10 @@ range 0 200
 @ 100
 > CAL,3,1,0,255;CAL,21,0,50,1100;CAL,21,1,150,900;CAL,11,-2,0,0;MOVE,20,40,30,0;STATUS
 @ 100
+> STOP;CAL,8,0,0,30;CAL,8,1,45,20;CAL,8,1,45,-1;MOVE,20,40,30,0;STATUS
+@ 1000
+> CAL,8,0,0,0;MOVE,20,40,30,0
+@ 600
 > MOVE,xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx;STATUS
 @ 1000
 > STOP;SONAR,1,60,0,0,25
@@ -153,6 +157,8 @@ def test_micropython_matches_cpython(tmp_path: Path, robot: str) -> None:
     assert any(line.endswith(" IDLE") for line in lines)
     assert any(" TEL," in line for line in lines)
     assert any("ERROR,22," in line for line in lines)
+    # the calibrated reach (CAL table 8): course 30 folds between 30 and 20 cm/s, run at 23 with WARN 18
+    assert sum(line.endswith(f"WARN,18,{codes.TEXTS[codes.W_REACH]}") for line in lines) == 1
     tagged = [line.split(" ", 1)[1] for line in lines if "#" in line or "*" in line]
     assert [t.split("#")[0].split(";")[-1] for t in tagged] == ["OK", "MOVE,30000,60,0,0", "OK"]
     assert tagged[0] == _tagged(b"OK", b"12").decode() and tagged[2] == _tagged(b"OK", b"9999").decode()

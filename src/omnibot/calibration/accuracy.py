@@ -12,15 +12,15 @@ from __future__ import annotations
 
 import math
 import statistics
-from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from omnibot.calibration.plan import speed_range
 from omnibot.firmware.calibration import Calibration
 from omnibot.firmware.config import build_config
 from omnibot.firmware.power import PowerModel
-from omnibot.robot.description import CalibrationSpec, RobotDescription
+from omnibot.robot.description import CalibrationSpec, ReachSpec, RobotDescription
 
 REACH_COURSES = tuple(float(c) for c in range(0, 360, 15))
 """Courses (degrees) :func:`reach_speed` checks."""
@@ -75,6 +75,9 @@ class AccuracyRow:
     short: bool = False
     """The controller warned that the MOVE stood still short of its distance on its wheel encoders
     (warning 17)."""
+    clamped: bool = False
+    """The controller warned that it ran the MOVE at the calibrated reach, slower than asked (warning
+    18)."""
 
     @property
     def warned(self) -> bool:
@@ -127,16 +130,79 @@ def checked_reach(reach: float | None, rows: Sequence[AccuracyRow]) -> float | N
     """``reach`` (:func:`reach_speed`) lowered to what the check's MOVEs showed: when the controller
     warned about a MOVE at or below it (warning 11 or 17: a motor could not give the power, or the MOVE
     fell short on its encoders), the fastest speed the check drove below the slowest such MOVE without a
-    warning on any course (None when there is none)."""
+    warning on any course (None when there is none). A MOVE the controller ran at the reach (warning
+    18) counts at the speed it ran, the reach."""
     if reach is None:
         return None
     moves = [r for r in rows if r.kind == "move"]
-    warned = [r.speed for r in moves if r.warned and r.speed <= reach]
+    warned = [min(r.speed, reach) if r.clamped else r.speed for r in moves if r.warned]
+    warned = [v for v in warned if v <= reach]
     if not warned:
         return reach
     slowest = min(warned)
     clean = [r.speed for r in moves if r.speed < slowest]
     return max(clean) if clean else None
+
+
+def checked_reach_table(
+    reach: ReachSpec | None, rows: Sequence[AccuracyRow], fold: Callable[[float], float]
+) -> ReachSpec | None:
+    """:func:`checked_reach` on each course of a reach table, with the check's MOVEs whose folded
+    course (``fold``) is nearest to it; None when a course keeps no speed."""
+    if reach is None:
+        return None
+    courses = reach.courses_deg
+    groups: dict[float, list[AccuracyRow]] = {c: [] for c in courses}
+    for r in rows:
+        if r.kind == "move":
+            f = fold(r.course_deg)
+            groups[min(courses, key=lambda c: abs(c - f))].append(r)
+    speeds = [checked_reach(v, groups[c]) for c, v in zip(courses, reach.speed, strict=True)]
+    if any(v is None for v in speeds):
+        return None
+    return ReachSpec(courses_deg=courses, speed=tuple(v for v in speeds if v is not None))
+
+
+def lowest_reach(tables: Sequence[ReachSpec | None]) -> ReachSpec | None:
+    """The slowest of several reach tables on every course of their union (None if any has none)."""
+    if not tables or any(t is None for t in tables):
+        return None
+    known = [t for t in tables if t is not None]
+    courses = sorted({c for t in known for c in t.courses_deg})
+    return ReachSpec(courses_deg=tuple(courses), speed=tuple(min(t(c) for t in known) for c in courses))
+
+
+def describe_reach(reach: ReachSpec) -> str:
+    """A reach table as text: ``0 deg 1, 15 deg 0.76, ...`` (m/s)."""
+    return ", ".join(f"{c:g} deg {v:g}" for c, v in zip(reach.courses_deg, reach.speed, strict=True))
+
+
+def within_reach(row: AccuracyRow, reach: ReachSpec | None, fold: Callable[[float], float]) -> bool:
+    """A MOVE of the check asked no faster than the reach on its course (False without a reach)."""
+    return reach is not None and row.speed <= reach(fold(row.course_deg)) + 1e-9
+
+
+@dataclass
+class ReachMeasure:
+    """What :func:`measure_reach` found."""
+
+    computed: dict[float, float | None] = field(default_factory=dict)
+    """Per folded course, the reach the tables can power (m/s, :func:`reach_speed`)."""
+    measured: dict[float, float | None] = field(default_factory=dict)
+    """Per folded course, the fastest speed at which every MOVE landed (None: not even the bottom of
+    the speed range)."""
+    rows: list[AccuracyRow] = field(default_factory=list)
+    """Every reach MOVE, in the order driven."""
+
+    @property
+    def table(self) -> ReachSpec | None:
+        """The reach per folded course; None when a course has none."""
+        speeds = [self.measured[c] for c in sorted(self.measured)]
+        if not speeds or any(v is None for v in speeds):
+            return None
+        return ReachSpec(
+            courses_deg=tuple(sorted(self.measured)), speed=tuple(v for v in speeds if v is not None)
+        )
 
 
 @dataclass(frozen=True)

@@ -8,6 +8,7 @@
       k_l: {courses_deg: [0.0, 15.0, 30.0, 45.0], curves: [{x: [...], y: [...]}, ...]}
       k_t: {x: [...], y: [...]}    # the robot description, or merge it with `merge_calibration`
       k_r: {x: [...], y: [...]}
+      reach: {courses_deg: [0.0, 15.0, 30.0, 45.0], speed: [0.9, 0.81, 0.68, 0.78]}  # m/s (optional)
     surfaces:             # each surface's own calibration, dead bands and wheel slip
       wood: {calibration: {...}, deadband: {course:0: 48, rotation: 40},
              odometry: {slip: {roll: 0.0021, compliance: 0.0}}}
@@ -120,6 +121,8 @@ def describe_spec(spec: CalibrationSpec) -> dict[str, Any]:
         out["rollers"] = {"cos": list(spec.rollers.cos), "sin": list(spec.rollers.sin)}
         if spec.rollers.coast is not None:
             out["rollers"]["coast"] = {"x": list(spec.rollers.coast.x), "y": list(spec.rollers.coast.y)}
+    if spec.reach is not None:
+        out["reach"] = {"courses_deg": list(spec.reach.courses_deg), "speed": list(spec.reach.speed)}
     return out
 
 

@@ -16,6 +16,31 @@ def _wrap_deg(a: float) -> float:
     return (a + 180.0) % 360.0 - 180.0
 
 
+def move_row(
+    runner: Runner, what: str, length: float, speed: float, course: float, group: str
+) -> AccuracyRow:
+    """One straight MOVE (``runner.move``) as an accuracy row: its errors by the runner's truth and the
+    controller's warnings."""
+    r = runner.move(what, length, speed, course, group)
+    m = r.truth
+    d = None if m is None else m.distance
+    direction = None if m is None else m.direction
+    return AccuracyRow(
+        kind="move",
+        course_deg=course,
+        speed=speed,
+        commanded=length,
+        achieved=d,
+        error=None if d is None else d / length - 1.0,
+        course_error_deg=None if direction is None else _wrap_deg(math.degrees(direction) - course),
+        heading_error_deg=None if m is None or m.theta is None else math.degrees(m.theta),
+        source="" if m is None else m.source,
+        saturated=codes.W_SPEED_REDUCED in r.warnings,
+        short=codes.W_SHORT in r.warnings,
+        clamped=codes.W_REACH in r.warnings,
+    )
+
+
 def run_accuracy(runner: Runner, plan: AccuracyPlan) -> list[AccuracyRow]:
     """Every MOVE and ROTATE of the plan, measured by the runner's truth."""
     client, robot = runner.client, runner.robot
@@ -25,27 +50,7 @@ def run_accuracy(runner: Runner, plan: AccuracyPlan) -> list[AccuracyRow]:
         for course in plan.courses_deg:
             for c in (course, course + 180.0) if plan.back else (course,):
                 runner.note(f"check course {c:g} at {speed:g}")
-                r = runner.move("check", length, speed, c, "check")
-                m = r.truth
-                d = None if m is None else m.distance
-                direction = None if m is None else m.direction
-                rows.append(
-                    AccuracyRow(
-                        kind="move",
-                        course_deg=c,
-                        speed=speed,
-                        commanded=length,
-                        achieved=d,
-                        error=None if d is None else d / length - 1.0,
-                        course_error_deg=None
-                        if direction is None
-                        else _wrap_deg(math.degrees(direction) - c),
-                        heading_error_deg=None if m is None or m.theta is None else math.degrees(m.theta),
-                        source="" if m is None else m.source,
-                        saturated=codes.W_SPEED_REDUCED in r.warnings,
-                        short=codes.W_SHORT in r.warnings,
-                    )
-                )
+                rows.append(move_row(runner, "check", length, speed, c, "check"))
     for angle, rate in plan.rotations:
         for sign in (1, -1):
             a = sign * angle

@@ -81,6 +81,19 @@ class Geometry:
         step = len(candidates) / count
         return [candidates[int(k * step)] for k in range(count)]
 
+    def every_raw_course(self, folded_deg: float) -> list[float]:
+        """Every raw course (degrees, 0..360) that folds to ``folded_deg``: ``axis + folded`` for each
+        idle axis and its opposite, then ``axis - folded`` (its mirror image), so each half returns
+        the robot to its start and a course's opposite is in the same half."""
+        bases = sorted({round((a + s) % 360.0, 6) for a in self.idle_axes for s in (0.0, 180.0)})
+        out: list[float] = []
+        for sign in (1.0, -1.0):
+            for b in bases:
+                c = round((b + sign * folded_deg) % 360.0, 6)
+                if c not in out:
+                    out.append(c)
+        return out
+
     def translation_rim(self, course_deg: float) -> list[float]:
         """Rim speed of each wheel for 1 m/s along ``course_deg``."""
         c, s = math.cos(math.radians(course_deg)), math.sin(math.radians(course_deg))

@@ -81,14 +81,25 @@ class Plan:
     slow_rounds: int = 2
     """Rounds of MOVEs at the bottom of the speed range on every raw course of each calibrated course,
     through the fitted tables, that anchor K_l's slow end (fits.anchor_slow_end; 0: none)."""
+    reach_courses: tuple[float, ...] = (0.0, 1 / 3, 2 / 3, 1.0)
+    """Folded courses, as shares of the robot's largest (omni4: 0, 15, 30, 45 degrees), on which MOVEs
+    at the computed reach are driven and slowed until they land (reachmoves.py; (): none)."""
+    reach_goal: float = 0.03
+    """A reach MOVE lands when its distance is within this share of the length, unwarned."""
+    reach_step: float = 0.05
+    """Each round of reach MOVEs that does not land is driven again this share slower."""
+    reach_phases: int = 1
+    """Wheel positions each round of reach MOVEs on a course with idle wheels (omni4's axes) is driven
+    at, 1 + 1/n roller pitches apart (the idle wheels' drag depends on where they stand; more than one
+    was tried and is not the default, docs/calibration.md)."""
     slip: bool = True
     """Drive the wheel-slip runs (16 out-and-back, wheel-speed loop on) and fit the floor's creep."""
 
     @classmethod
     def quick(cls) -> Plan:
         """Seed 000's own scope: courses 0 and 45 (fold range ends), two directions, fewer powers, one
-        search per dead band, no extra coast MOVEs, one round of slow-end MOVEs (a person with a tape
-        measures every run)."""
+        search per dead band, no extra coast MOVEs, one round of slow-end MOVEs, the reach driven on the
+        axes, next to the diagonals and on them only (a person with a tape measures every run)."""
         return cls(
             course_count=2,
             directions=2,
@@ -98,7 +109,12 @@ class Plan:
             deadband_positions=1,
             coast_slow_rounds=4,
             slow_rounds=1,
+            reach_courses=(0.0, 2 / 3, 1.0),
         )
+
+    def reach_folds(self, geometry: Geometry) -> list[float]:
+        """The folded courses (whole degrees) the reach MOVEs are driven on (:attr:`reach_courses`)."""
+        return sorted({float(round(share * geometry.fold_max)) for share in self.reach_courses})
 
     def calibrated_courses(self, geometry: Geometry) -> list[float]:
         """The courses to calibrate, degrees: the plan's (checked to increase within 0..fold_max), else

@@ -21,7 +21,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from omnibot.calibration.accuracy import AccuracyRow, reach_speed, summarize
+from omnibot.calibration.accuracy import AccuracyRow, describe_reach, reach_speed, summarize
 from omnibot.calibration.calfile import describe_spec
 from omnibot.calibration.results import CalibrationResult, SurfaceSession
 from omnibot.calibration.tables import move_grid, rotate_lines, summary_table
@@ -70,22 +70,8 @@ def accuracy_markdown(result: CalibrationResult) -> str:
                 "(`surfaces.<floor>.calibration`, uploaded where the robot stands)."
             ),
         ]
-    reach = [(f"{s.surface} calibration", s.reach) for s in result.sessions]
-    if result.average is not None and result.sessions:
-        length = result.sessions[0].fit.move_length
-        reach.append(("average calibration", reach_speed(result.robot, result.average, length)))
     if result.sessions:
-        lines += [
-            "",
-            "## Reach",
-            "",
-            "The fastest MOVE of the reference length each calibration powers on every course without",
-            "a motor saturating (the roller drag at its worst phase); faster MOVEs fall short.",
-            "",
-            "| calibration | m/s |",
-            "|---|---|",
-            *(f"| {label} | {'-' if v is None else f'{v:g}'} |" for label, v in reach),
-        ]
+        lines += ["", *reach_lines(result)]
     drags = [(s.surface, s.fit.rollers, s.fit.coast) for s in result.sessions if s.fit.rollers is not None]
     if drags:
         lines += [
@@ -176,6 +162,13 @@ def runs_json(result: CalibrationResult) -> dict[str, Any]:
             "roller_coast": None if s.fit.coast is None else s.fit.coast.as_dict(),
             "anchors": {f"course:{c:g}": asdict(a) for c, a in s.fit.anchors.items()},
             "reach": s.reach,
+            "reach_moves": None
+            if s.reach_moves is None
+            else {
+                "computed": {f"course:{c:g}": v for c, v in s.reach_moves.computed.items()},
+                "measured": {f"course:{c:g}": v for c, v in s.reach_moves.measured.items()},
+                "rows": [r.as_dict() for r in s.reach_moves.rows],
+            },
             "k": s.fit.k,
             "rate_points": {g: [p.__dict__ for p in pts] for g, pts in s.fit.points.items()},
             "gyro": None if s.gyro is None else s.gyro.as_dict(),
@@ -337,3 +330,31 @@ def _json(value: Any) -> Any:
     if isinstance(value, tuple):
         return list(value)
     raise TypeError(f"not JSON: {type(value).__name__}")
+
+
+def reach_lines(result: CalibrationResult) -> list[str]:
+    """The report's reach section: each calibration's reach per folded course (driven), else the one
+    computed from the tables."""
+    rows = [(f"{s.surface} calibration", s.spec, s.reach) for s in result.sessions]
+    if result.average is not None and result.sessions:
+        length = result.sessions[0].fit.move_length
+        rows.append(
+            ("average calibration", result.average, reach_speed(result.robot, result.average, length))
+        )
+    out = [
+        "## Reach",
+        "",
+        "The fastest MOVE of the reference length that lands within the calibration's goal on each folded",
+        "course, driven and slowed until it did (the controller runs a MOVE asked faster at it, warning 18);",
+        "where it was not driven, the fastest the tables power on every course without a motor saturating.",
+        "",
+        "| calibration | m/s |",
+        "|---|---|",
+    ]
+    for label, spec, computed in rows:
+        if spec.reach is not None:
+            cells = describe_reach(spec.reach)
+        else:
+            cells = "-" if computed is None else f"{computed:g} (computed, every course)"
+        out.append(f"| {label} | {cells} |")
+    return out

@@ -9,7 +9,7 @@ import statistics
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from omnibot.calibration.accuracy import AccuracyRow
+from omnibot.calibration.accuracy import AccuracyRow, ReachMeasure
 from omnibot.calibration.fits import SurfaceFit
 from omnibot.calibration.gyro import GyroCalibration
 from omnibot.calibration.runs import RunResult
@@ -37,8 +37,11 @@ class SurfaceSession:
     slip: SlipCalibration | None = None
     """The floor's wheel creep (driven-wheel odometry), when the robot has wheel encoders."""
     reach: float | None = None
-    """m/s: the fastest MOVE of the reference length the floor's tables power on every course
+    """m/s: the slowest course's reach, where MOVEs of the reference length land on every course (the
+    section's ``reach`` table, driven); without one, the fastest the tables power on every course
     (:func:`~omnibot.calibration.accuracy.reach_speed`)."""
+    reach_moves: ReachMeasure | None = None
+    """The reach MOVEs (:func:`~omnibot.calibration.reachmoves.measure_reach`), when they were driven."""
 
 
 @dataclass

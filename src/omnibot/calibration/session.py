@@ -6,7 +6,8 @@ each reading and filling in one :class:`SurfaceRun`::
     gyro bias (standstill) -> accuracy before -> motor map -> dead bands -> straight sweeps
     -> roller drag -> rotation sweep -> fit K, K_l, K_r -> turns: upload, curved MOVEs, fit K_t
     -> roller gains: the drag's coast from MOVEs, upload -> slow end: K_l from MOVEs, upload
-    -> reach -> rotation test -> gyro scale -> squares CCW and CW (UMBmark) -> odometry corrections -> accuracy after
+    -> reach: MOVEs at the computed reach per course, slowed until they land, upload
+    -> rotation test -> gyro scale -> squares CCW and CW (UMBmark) -> odometry corrections -> accuracy after
     then the wheel slip (its own progress bar)
 
 Over surfaces (:func:`calibrate`): each surface as above, then the averaged calibration (seed 000
@@ -22,7 +23,16 @@ from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass, field
 from functools import partial
 
-from omnibot.calibration.accuracy import AccuracyPlan, AccuracyRow, checked_reach, reach_speed
+from omnibot.calibration.accuracy import (
+    AccuracyPlan,
+    AccuracyRow,
+    ReachMeasure,
+    checked_reach,
+    checked_reach_table,
+    describe_reach,
+    lowest_reach,
+    reach_speed,
+)
 from omnibot.calibration.check import run_accuracy
 from omnibot.calibration.experiments import (
     Runner,
@@ -53,6 +63,7 @@ from omnibot.calibration.motorfit import (
 from omnibot.calibration.motors import MODEL_ROUNDS, balance_model, motor_deadbands, stand_test
 from omnibot.calibration.patterns import Geometry, top_power
 from omnibot.calibration.plan import Plan, speed_range
+from omnibot.calibration.reachmoves import measure_reach, phase_count
 from omnibot.calibration.results import CalibrationResult, SurfaceSession
 from omnibot.calibration.rollerfit import RollerFit, axis_courses, correct_runs, fit_rollers, offset_shift
 from omnibot.calibration.rollers import SHARES, roller_runs, tune_coast
@@ -129,6 +140,12 @@ def expected_runs(
         if rollers and upload
         else 0,
         "slow end": courses * plan.directions * plan.slow_rounds if upload else 0,
+        "reach": sum(
+            (len(geometry.every_raw_course(f)) + 1) * phase_count(geometry, f, plan) - 1
+            for f in plan.reach_folds(geometry)
+        )
+        if upload
+        else 0,
         "rotation test": 2,
         "squares": 2,
         "after": checks if upload else 0,
@@ -215,6 +232,8 @@ class SurfaceRun:
     section: CalibrationSpec | None = None
     """The calibration section as it stands (uploaded when ``upload``)."""
     reach: float | None = None
+    """m/s: the slowest course's reach (the section's ``reach`` table; else computed)."""
+    reach_moves: ReachMeasure | None = None
     rot_test: list[RunResult] = field(default_factory=list)
     gyro: GyroCalibration | None = None
     squares: list[SquareRun] = field(default_factory=list)
@@ -274,6 +293,7 @@ class SurfaceRun:
             notes=self.notes,
             slip=self.slip,
             reach=self.reach,
+            reach_moves=self.reach_moves,
         )
 
 
@@ -387,9 +407,38 @@ def _slow_end(s: SurfaceRun) -> None:
 
 
 def _reach(s: SurfaceRun) -> None:
-    length = s.plan.move_length
-    s.reach = reach = reach_speed(s.robot, s.spec, length)
+    """The reach: computed from the tables (PWM saturation), then, where the truth can measure straight
+    runs and the tables are in the controller, MOVEs at it on the reach courses slowed until they land
+    (:func:`~omnibot.calibration.reachmoves.measure_reach`); their reach goes into the section, uploaded."""
+    plan, length = s.plan, s.plan.move_length
     top = speed_range(s.robot, length)[1]
+    s.reach = reach = reach_speed(s.robot, s.spec, length)
+    if s.upload and plan.reach_courses and s.source.can(RunInfo(STRAIGHT, "", 0.0)):
+        s.reach_moves = measure = measure_reach(s.runner, s.spec, plan)
+        table = measure.table
+        if table is not None:
+            s.section = s.spec.model_copy(update={"reach": table})
+            s.client.upload_calibration(s.section)
+            s.reach = min(table.speed)
+            slowed = [
+                f"{c:g} deg {measure.computed[c] or 0:g} -> {v:g} m/s"
+                for c, v in zip(table.courses_deg, table.speed, strict=True)
+                if v < min(measure.computed[c] or 0.0, top) - 1e-9
+            ]
+            s.notes.append(
+                f"reach of {length:g} m MOVEs, driven: {describe_reach(table)} m/s"
+                + (
+                    f" (slower than the tables can power, where MOVEs fell short: {'; '.join(slowed)})"
+                    if slowed
+                    else ""
+                )
+                + "; the controller runs a MOVE asked faster at it (warning 18)"
+            )
+            return
+        s.notes.append(
+            "reach: on some course not even MOVEs at the bottom of the speed range landed within "
+            f"{100 * plan.reach_goal:g} %: the calibration has no reach (the controller runs MOVEs as asked)"
+        )
     if reach is None or reach < top:
         s.notes.append(
             f"MOVEs of {length:g} m reach "
@@ -428,6 +477,18 @@ def _odometry(s: SurfaceRun) -> None:
 
 def _accuracy_after(s: SurfaceRun) -> None:
     s.after = run_accuracy(s.runner, s.accuracy) if s.accuracy is not None and s.upload else None
+    table = s.spec.reach
+    if table is not None:
+        checked = checked_reach_table(table, s.after or [], s.geometry.fold)
+        if checked != table:
+            s.notes.append(
+                "the check's MOVEs within the driven reach were warned about (a motor short of power, or "
+                "short on the encoders): the reach is "
+                + ("none" if checked is None else f"{describe_reach(checked)} m/s")
+            )
+            s.section = s.spec.model_copy(update={"reach": checked})
+            s.reach = None if checked is None else min(checked.speed)
+        return
     reach = checked_reach(s.reach, s.after or [])
     if reach != s.reach:
         s.notes.append(
@@ -460,7 +521,7 @@ STEPS: tuple[Step, ...] = (
     Step("turns (K_t)", _turns, "turns"),
     Step("roller gains", _roller_gains, "roller gains"),
     Step("slow end (K_l)", _slow_end, "slow end"),
-    Step("reach", _reach),
+    Step("reach", _reach, "reach"),
     Step("rotation test", _rotation_test, "rotation test"),
     Step("gyro scale", _gyro_scale),
     Step("squares", _squares, "squares"),
@@ -537,9 +598,11 @@ def tune_rollers(
     robot, geometry = runner.robot, runner.geometry
     assert fit.rollers is not None
     bottom, top = speed_range(robot, plan.move_length)
-    reach = reach_speed(robot, spec, plan.move_length)
-    # up to 90 % of the reach: at the reach itself a motor runs out of power at the worst wheel
-    # position, which no gain can make up for
+    # up to 90 % of the reach of the courses the MOVEs drive (the motor axes; at the reach itself a
+    # motor runs out of power at the worst wheel position, which no gain can make up for). Not every
+    # course's: the axes' reach is the faster, and the controller holds the coast of the fastest
+    # speed beyond it, so MOVEs on the axes up to their reach need it measured there
+    reach = reach_speed(robot, spec, plan.move_length, axis_courses(geometry))
     fastest = max(bottom, 0.9 * min(top, reach or top))
     speeds = sorted({round(bottom + (fastest - bottom) * k / 3, 2) for k in range(4)})
     fit.coast = tune_coast(
@@ -710,6 +773,9 @@ def calibrate(
         geometry = Geometry.of(robot)
         fits = [s.fit for s in sessions]
         result.average = build_spec(fits, robot, geometry, average_kt(fits))
+        reach = lowest_reach([s.spec.reach for s in sessions])  # the slower floor's on every course
+        if reach is not None:
+            result.average = result.average.model_copy(update={"reach": reach})
         if accuracy is not None and upload:
             for surface in surfaces:
                 with (

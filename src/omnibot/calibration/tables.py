@@ -25,14 +25,18 @@ def _fold_back(course: float) -> float:
 def move_grid(rows: Sequence[AccuracyRow], field: str = "error") -> str:
     """Distance errors (%) or heading errors (degrees) of MOVEs: a line per course, a column per speed,
     each cell ``out / back`` (``*``: the controller warned that it had to reduce the speed, warning 11;
-    ``!``: that the MOVE fell short on its wheel encoders, warning 17)."""
+    ``!``: that the MOVE fell short on its wheel encoders, warning 17; ``^``: that it ran the MOVE at
+    the calibrated reach, warning 18)."""
     moves = [r for r in rows if r.kind == "move"]
     speeds = sorted({r.speed for r in moves})
     cells: dict[tuple[float, float], list[str]] = defaultdict(list)
     fmt = _pct if field == "error" else _deg
     for r in moves:
         cells[(_fold_back(r.course_deg), r.speed)].append(
-            fmt(getattr(r, field)) + ("*" if r.saturated else "") + ("!" if r.short else "")
+            fmt(getattr(r, field))
+            + ("*" if r.saturated else "")
+            + ("!" if r.short else "")
+            + ("^" if r.clamped else "")
         )
     courses = sorted({c for c, _ in cells})
     unit = "distance error %" if field == "error" else field.removesuffix("_deg").replace("_", " ") + " deg"
@@ -45,6 +49,10 @@ def move_grid(rows: Sequence[AccuracyRow], field: str = "error") -> str:
         notes.append("\\* the controller warned: speed reduced (a motor could not get the power asked)")
     if any(r.short for r in moves):
         notes.append("! the controller warned: the MOVE fell short of its distance on the wheel encoders")
+    if any(r.clamped for r in moves):
+        notes.append(
+            "^ the controller warned: run at the calibrated reach, slower than asked (distance kept)"
+        )
     for note in notes:
         lines += ["", note]
     return "\n".join(lines)

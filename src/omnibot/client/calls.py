@@ -7,6 +7,7 @@
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
 from typing import Any, TypeVar
 
@@ -36,6 +37,7 @@ from omnibot.protocol.messages import Status as StatusCommand
 from omnibot.robot.description import CalibrationSpec
 
 C = TypeVar("C", bound=Command)
+log = logging.getLogger("omnibot.client")
 
 
 class TypedCalls:
@@ -44,6 +46,8 @@ class TypedCalls:
     limits: Limits
     _mode: int | None
     last_hello: Hello | None
+    takes_reach: bool | None = None
+    """Whether the controller took the calibrated reach at the last upload (None: none uploaded yet)."""
 
     def execute(self, command: Command, timeout: float | None = None) -> Reply:
         """Send ``command`` and wait for its reply (the client implements it)."""
@@ -148,13 +152,25 @@ class TypedCalls:
         return self._run(commands.cal(self.limits, table, index, x, y))
 
     def upload_calibration(self, spec: CalibrationSpec) -> list[Cal]:
-        """Upload a calibration section (K, K_t, K_r, K_l, motor map, roller drag) with CAL commands; the
-        commands sent."""
+        """Upload a calibration section (K, K_t, K_r, K_l, motor map, roller drag, reach) with CAL
+        commands; the commands sent. A controller that does not know the reach (CAL table 8: older
+        firmware, the UNO's) takes the rest, and :attr:`takes_reach` says so (False)."""
         sent = commands.calibration(spec, self.limits.motors)
         for command, pending in [(c, self.submit(c)) for c in sent]:
             try:
                 pending.result()
+                if command.table == codes.CAL_REACH:
+                    self.takes_reach = True
             except CalibrationRejected as e:
+                if command.table == codes.CAL_REACH:
+                    if command.index == 0:  # said once: the controller clamps no MOVE to a reach
+                        self.takes_reach = False
+                        if spec.reach is not None:
+                            log.warning(
+                                "the controller does not know the calibrated reach (CAL table 8): "
+                                "MOVEs faster than it run as asked and may fall short"
+                            )
+                    continue
                 if command.table != codes.CAL_SPEED:
                     raise
                 if command.y != 0:  # a controller older than the motor map's speed term

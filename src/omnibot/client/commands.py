@@ -30,7 +30,13 @@ from collections.abc import Callable, Sequence
 from omnibot.client.limits import Limits
 from omnibot.protocol import codes, units
 from omnibot.protocol.messages import Cal, Delta, Mode, Move, Power, Rotate, Sonar, Telem, Vel
-from omnibot.robot.description import CalibrationSpec, MotorMapSpec, PiecewiseLinear, RollerDragSpec
+from omnibot.robot.description import (
+    CalibrationSpec,
+    MotorMapSpec,
+    PiecewiseLinear,
+    ReachSpec,
+    RollerDragSpec,
+)
 
 INF = codes.INF
 TIME_MAX_MS = 30000  # POWER T, SONAR and TELEM periods
@@ -251,11 +257,24 @@ def _knots(table: int, curve: PiecewiseLinear) -> list[Cal]:
     ]
 
 
+def _reach(reach: ReachSpec | None) -> list[Cal]:
+    """The reach's CAL table 8 knots (course degrees, cm/s); none: one knot of 0 (no reach known)."""
+    if reach is None:
+        return [Cal(codes.CAL_REACH, 0, 0, 0)]
+    xs = [round(c) for c in reach.courses_deg]
+    if any(b <= a for a, b in itertools.pairwise(xs)) or not 0 <= xs[0] <= xs[-1] <= codes.CAL_COURSE_MAX:
+        raise ValueError(f"reach: courses {list(reach.courses_deg)} are not 1 degree apart within 0..90")
+    return [
+        Cal(codes.CAL_REACH, i, x, max(1, math.floor(100.0 * v + 1e-6)))
+        for i, (x, v) in enumerate(zip(xs, reach.speed, strict=True))
+    ]
+
+
 def calibration(spec: CalibrationSpec, motors: int | None = None) -> list[Cal]:
     """The CAL commands that upload a calibration section: K, then K_t, K_r, K_l (knot 0 upwards,
     dropping curves the controller may hold beyond the section's), then the motor map and the roller
-    drag. A section without them uploads the identity map and no drag when the robot's ``motors``
-    are known, so the controller uses exactly the section."""
+    drag, then the reach. A section without them uploads the identity map, no drag and no reach when
+    the robot's ``motors`` are known, so the controller uses exactly the section."""
     out = [Cal(codes.CAL_K, 0, 0, units.to_cal_k(spec.k))]
     if spec.k_t is not None:
         out += _knots(codes.CAL_KT, spec.k_t)
@@ -298,6 +317,8 @@ def calibration(spec: CalibrationSpec, motors: int | None = None) -> list[Cal]:
             raise ValueError(f"roller coast: speeds {list(coast.x)} m/s are not 1 cm/s apart")
         for i, (x, y) in enumerate(zip(xs, coast.y, strict=True)):
             out.append(Cal(codes.CAL_ROLLER_COAST, i, x, units.to_milli(y)))
+    if spec.reach is not None or motors is not None:
+        out += _reach(spec.reach)
     for c in out:
         if not all(codes.INT_MIN <= p <= codes.INT_MAX for p in c.params()):
             raise ValueError(f"CAL {c.params()}: a value is outside the protocol's 16-bit range")

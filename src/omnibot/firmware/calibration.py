@@ -15,6 +15,11 @@ The roller drag (a project addition, :class:`~omnibot.firmware.power.PowerModel`
 coefficients per wheel, ``roller_cos`` and ``roller_sin`` (PWM counts, zero by default), and the
 coast table ``roller_coast`` (``[speeds cm/s, seconds]``: how much longer than the motion the drag
 acts, as it also brakes the coast after a MOVE; zero by default).
+
+The reach (a project addition) is ``[folded courses (degrees), speeds cm/s]``: the fastest open-loop
+MOVE that lands on each course, as the calibration measured it (interpolated between the courses,
+held outside them; 0: no reach known, the default). The executor runs a MOVE asked faster at the
+reach (WARN 18).
 """
 
 from omnibot.protocol import codes
@@ -29,6 +34,7 @@ TABLE_ROLLER_COS = codes.CAL_ROLLER_COS
 TABLE_ROLLER_SIN = codes.CAL_ROLLER_SIN
 TABLE_ROLLER_COAST = codes.CAL_ROLLER_COAST
 TABLE_SPEED = codes.CAL_SPEED
+TABLE_REACH = codes.CAL_REACH
 KNOTS_MAX = codes.CAL_KNOTS_MAX
 KL_DROP = codes.CAL_KL_DROP
 
@@ -91,6 +97,7 @@ class Calibration:
         self.roller_cos = [float(v) for v in cfg.get("roller_cos", [0.0] * n)]
         self.roller_sin = [float(v) for v in cfg.get("roller_sin", [0.0] * n)]
         self.roller_coast = _table(cfg.get("roller_coast", [[0.0], [0.0]]))
+        self.reach = _table(cfg.get("reach", [[0.0], [0.0]]))
 
     def motor_power(self, i: int, a: float, u: float = 0.0) -> float:
         """Motor i's power for the nominal power ``a`` at rim speed ``u`` (m/s):
@@ -140,6 +147,10 @@ class Calibration:
         """Seconds the roller drag acts beyond a motion ending at ``speed`` (cm/s)."""
         return interp(self.roller_coast[0], self.roller_coast[1], speed)
 
+    def reach_at(self, folded_course: float) -> float:
+        """The calibrated reach (cm/s) of a MOVE on the folded course; 0: none known."""
+        return interp(self.reach[0], self.reach[1], folded_course)
+
     def k_t(self, power: float) -> float:
         """K_t at ``power`` PWM counts (linear between knots, held outside them)."""
         return interp(self.kt[0], self.kt[1], power)
@@ -158,7 +169,8 @@ class Calibration:
         ``index``'s offset to ``value`` counts; ``TABLE_GAIN + i`` writes a knot of motor i's gain table;
         ``TABLE_ROLLER_COS`` and ``TABLE_ROLLER_SIN`` set wheel ``index``'s roller drag coefficient;
         ``TABLE_ROLLER_COAST`` writes a knot (``power``: speed in cm/s, ``value`` in s);
-        ``TABLE_SPEED`` sets motor ``index``'s speed term (PWM counts per m/s).
+        ``TABLE_SPEED`` sets motor ``index``'s speed term (PWM counts per m/s); ``TABLE_REACH`` writes a
+        knot of the reach (``power``: folded course in degrees, ``value``: cm/s, 0 none).
         """
         if table == TABLE_K:
             if value <= 0:
@@ -180,6 +192,10 @@ class Calibration:
             return True
         if table == TABLE_ROLLER_COAST:
             return _write(self.roller_coast, index, power, value)
+        if table == TABLE_REACH:
+            if power < 0 or power > codes.CAL_COURSE_MAX or value < 0:
+                return False
+            return _write(self.reach, index, power, value)
         if table == TABLE_OFFSET:
             if index < 0 or index >= len(self.offset) or power != 0:
                 return False

@@ -27,6 +27,7 @@ motor_offset, motor_gain    motor map: each motor's dead-band offset (counts) an
 motor_speed                 motor map: each motor's speed term, PWM counts per m/s of its rim speed
 roller_cos, roller_sin      roller drag coefficients of each wheel, PWM counts (0: none)
 roller_coast                [speeds cm/s, s]: how long the drag outlasts a MOVE (its coast)
+reach                       [folded courses deg, speeds cm/s]: the calibrated reach ([[0], [0]]: none)
 roller_dir                  each wheel's rollers' rolling direction in the body frame, [x, y]
 roller_pitch                encoder counts per roller pitch of each wheel (0: no encoder)
 distance_max_cm             exclusive bound of abs(L) (MOVE)
@@ -271,6 +272,11 @@ def build_config(
         "roller_coast": (
             [[round(100.0 * x, 6) for x in rollers.coast.x], list(rollers.coast.y)]
             if rollers and rollers.coast
+            else [[0.0], [0.0]]
+        ),
+        "reach": (
+            [list(cal.reach.courses_deg), [round(100.0 * v, 6) for v in cal.reach.speed]]
+            if cal and cal.reach
             else [[0.0], [0.0]]
         ),
         "roller_dir": [[round(float(v), 9) for v in row[:2]] for row in roller_rows],

@@ -424,6 +424,8 @@ class Controller:
             return self.calibration.set_knot(table, index, x, y * 0.1)
         if table == codes.CAL_ROLLER_COAST:  # signed: seconds x 1000
             return x >= 0 and self.calibration.set_knot(table, index, x, y / codes.CAL_SCALE)
+        if table == codes.CAL_REACH:  # cm/s
+            return self.calibration.set_knot(table, index, x, float(y))
         if x < 0 or y < 0:
             return False
         if table == codes.CAL_OFFSET:

@@ -15,10 +15,16 @@ When the guard says the motion must not go on, the executor stops and leaves the
 
 A finite MOVE on a robot with encoders is watched through its coast (:mod:`~omnibot.firmware.progress`):
 when the wheels stand still short of its distance beyond the tolerance, WARN 17.
+
+An open-loop MOVE (and each DELTA repetition) asked faster than the calibrated reach on its folded
+course (:meth:`~omnibot.firmware.calibration.Calibration.reach_at`, uploaded with CAL table 8) runs
+at the reach, its distance kept (WARN 18, once a command): faster, the calibration saw such MOVEs fall
+short. The remembered MOVE keeps the speed asked.
 """
 
 import math
 
+from omnibot.firmware.calibration import fold_course
 from omnibot.firmware.power import DEADBAND, SATURATED, WEAK, PowerModel
 from omnibot.firmware.progress import COASTING, ProgressWatch
 from omnibot.firmware.safety import LIMITED, UNCOVERED
@@ -41,6 +47,7 @@ MODE_CLOSED_LOOP = codes.MODE_CLOSED_LOOP
 NONE = 0  # no motion (kinds are the command ids of protocol/codes.py otherwise)
 BRAKED = 1 << 20  # applied-power marker of a braked motor: any power written next releases it
 LOOP_GUARD = 16  # motions started in one step at most (zero-length moves), keeps a poll short
+REACHED = 32  # warning flag: a MOVE asked beyond the calibrated reach (power.py and safety.py own 1..16)
 
 
 class Executor:
@@ -345,14 +352,20 @@ class Executor:
             self.remaining = carry
             self._drive(0.0, 0.0, 0.0, False)
             return
+        speed = abs(V)
+        if not self._closed_loop():
+            reach = int(self.model.cal.reach_at(fold_course(D, self.model.axes)))
+            if 0 < reach < speed:  # the calibration saw faster MOVEs fall short: the distance goes first
+                speed = reach
+                self._warn_once(REACHED)
         gain = 1.0
         if not self.infinite:  # the rollers' drag also shortens the coast after a finite MOVE of L/V s
-            gain = max(0.0, gain + self.model.cal.coast(abs(V)) * abs(V) / abs(L))
-        s = abs(V) if (L > 0) == (V > 0) else -abs(V)
+            gain = max(0.0, gain + self.model.cal.coast(speed) * speed / abs(L))
+        s = speed if (L > 0) == (V > 0) else -speed
         a = math.radians(D)
         self._drive(s * 0.01 * math.cos(a), s * 0.01 * math.sin(a), s * C * 0.001, False, gain)
         if not self.infinite:
-            self.remaining = _duration(abs(L), abs(V), self._time_scale) + carry
+            self.remaining = _duration(abs(L), speed, self._time_scale) + carry
             if self.kind == codes.MOVE and not self.mode & MODE_SIMULATION:
                 u = 1.0 if s > 0 else -1.0
                 self._read_counts()
@@ -493,6 +506,8 @@ class Executor:
             self._warn(codes.W_SONAR_LIMIT)
         if new & UNCOVERED:
             self._warn(codes.W_UNCOVERED)
+        if new & REACHED:
+            self._warn(codes.W_REACH)
 
     # ------------------------------------------------------------------ roller drag (open loop)
 

@@ -131,6 +131,9 @@ W_SONAR_LIMIT = 14  # project: speed limited so the robot can stop before what a
 W_UNCOVERED = 15  # project: travel where no armed sonar looks, speed limited
 W_UNCOVERED_STOP = 16  # project: a running motion turned where no armed sonar looks, stopped (MODE bit 3)
 W_SHORT = 17  # project: a MOVE stood still short of its distance, as its wheel encoders measured
+W_REACH = (
+    18  # project: an open-loop MOVE asked faster than the calibrated reach on its course, run at the reach
+)
 E_QUEUE_FULL = 21
 E_TOO_LONG = 22
 E_UNKNOWN = 23
@@ -161,6 +164,7 @@ TEXTS = {
     W_UNCOVERED: "no sonar covers this direction, speed limited",
     W_UNCOVERED_STOP: "no sonar covers this direction, motion stopped",
     W_SHORT: "MOVE fell short of its distance (encoders)",
+    W_REACH: "speed reduced to the calibrated reach",
     E_QUEUE_FULL: "queue full",
     E_TOO_LONG: "command too long",
     E_UNKNOWN: "unknown command",
@@ -217,6 +221,7 @@ CAL_ROLLER_COS = 4  # roller drag of wheel I (X = 0): cosine coefficient, Y in 0
 CAL_ROLLER_SIN = 5  # the same, sine coefficient
 CAL_ROLLER_COAST = 6  # roller drag's coast time: knot I = (X speed cm/s, Y ms)
 CAL_SPEED = 7  # motor I's speed term (X = 0): Y in 0.1 PWM counts per m/s of its rim speed (signed)
+CAL_REACH = 8  # the calibrated reach: knot I = (X folded course degrees, Y speed cm/s; 0: none)
 CAL_GAIN = 20  # 20 + i: gain table of motor i: knot I = (X nominal power, Y gain x 1000)
 CAL_MOTORS = 8  # motors with a gain table at most
 CAL_KL = 10  # 10 + k: K_l curve k; I = -1 sets its course (X degrees), I = -2 drops curves k.., I >= 0 a knot

@@ -399,12 +399,37 @@ class RollerDragSpec(_Spec):
         return self
 
 
+class ReachSpec(_Spec):
+    """The calibrated reach: the fastest open-loop MOVE (of the calibration's reference length) that
+    lands within the calibration's goal on each folded course, as the calibration measured it
+    (docs/calibration.md); linear between the courses, held outside them."""
+
+    courses_deg: tuple[float, ...] = Field(description="folded courses, degrees (0..90, increasing)")
+    speed: tuple[float, ...] = Field(description="m/s on each course")
+
+    @model_validator(mode="after")
+    def _check(self) -> ReachSpec:
+        if len(self.courses_deg) != len(self.speed) or not self.speed:
+            raise ValueError("courses_deg and speed need the same, non-zero length")
+        if any(b <= a for a, b in zip(self.courses_deg, self.courses_deg[1:], strict=False)):
+            raise ValueError("courses_deg must increase strictly")
+        if self.courses_deg[0] < 0.0 or self.courses_deg[-1] > 90.0:
+            raise ValueError("courses_deg must lie within 0..90 (folded courses)")
+        if any(v <= 0 for v in self.speed):
+            raise ValueError("speeds must be > 0 m/s")
+        return self
+
+    def __call__(self, folded_deg: float) -> float:
+        """m/s on the folded course: linear between the courses, held outside them."""
+        return PiecewiseLinear(x=self.courses_deg, y=self.speed)(folded_deg)
+
+
 class CalibrationSpec(_Spec):
     """Seed 000's power calibration: P = K * K_l * V ... with factors as piecewise-linear tables.
 
     ``k`` is PWM counts per m/s of wheel rim speed; the tables are dimensionless factors of power.
     ``motors`` (optional) is the per-motor map applied after them, ``rollers`` (optional) the idle
-    wheels' roller drag added on top.
+    wheels' roller drag added on top, ``reach`` (optional) the fastest MOVE per course that lands.
     """
 
     k: float = Field(gt=0, description="PWM counts per m/s of rim speed")
@@ -413,6 +438,8 @@ class CalibrationSpec(_Spec):
     k_r: PiecewiseLinear | None = None
     motors: MotorMapSpec | None = None
     rollers: RollerDragSpec | None = None
+    reach: ReachSpec | None = None
+    """The calibrated reach (none: the controller knows none and runs every MOVE as asked)."""
 
 
 class ControllerSpec(_Spec):

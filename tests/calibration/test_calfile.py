@@ -1,0 +1,65 @@
+"""The calibration file's reach: written, read back, and a file from before it (no reach)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import yaml
+
+from omnibot.calibration.calfile import describe_spec, dumps, load_calibration, parse_calibration
+from omnibot.errors import ConfigError
+from omnibot.robot.description import ReachSpec, load_robot
+from tests.calibration.conftest import sim_client
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+OLD = DATA / "omni4_acceptance_wood_calibration.yaml"
+"""A calibration file written before the reach (2026-12-02)."""
+
+
+def test_the_reach_round_trips(tmp_path: Path) -> None:
+    spec = load_calibration(OLD).for_surface("wood")
+    reach = ReachSpec(courses_deg=(0.0, 15.0, 30.0, 45.0), speed=(1.0, 0.76, 0.63, 0.76))
+    doc = {
+        "robot": "omni4",
+        "surfaces": {"wood": {"calibration": describe_spec(spec.model_copy(update={"reach": reach}))}},
+    }
+    path = tmp_path / "cal.yaml"
+    path.write_text(dumps(doc), encoding="utf-8")
+    assert (
+        "reach:\n        courses_deg: [0.0, 15.0, 30.0, 45.0]\n        speed: [1.0, 0.76, 0.63, 0.76]\n"
+        in path.read_text()
+    )
+    back = load_calibration(path).for_surface("wood")
+    assert back.reach == reach and back.model_copy(update={"reach": None}) == spec
+
+
+def test_a_file_without_the_reach_loads_and_clears_the_controllers() -> None:
+    """An older file has no reach: it loads as before, and its upload leaves the controller without one
+    (CAL,8,0,0,0), so every MOVE runs as asked, as before the reach, whatever an earlier upload held."""
+    assert "reach" not in yaml.safe_load(OLD.read_text())["surfaces"]["wood"]["calibration"]
+    spec = load_calibration(OLD).for_surface("wood")
+    assert spec.reach is None
+    robot = load_robot("omni4")
+    with sim_client(robot, "wood") as client:
+        cal = client.link.device.controller.calibration  # type: ignore[attr-defined]
+        reach = ReachSpec(courses_deg=(0.0, 45.0), speed=(0.5, 0.4))
+        client.upload_calibration(spec.model_copy(update={"reach": reach}))
+        assert cal.reach_at(0.0) == 50.0 and client.takes_reach
+        sent = client.upload_calibration(spec)
+        assert sent[-1].params() == (8, 0, 0, 0) and cal.reach_at(0.0) == 0.0
+
+
+@pytest.mark.parametrize(
+    ("reach", "message"),
+    [
+        ({"courses_deg": [0.0, 45.0], "speed": [0.9]}, "same, non-zero length"),
+        ({"courses_deg": [30.0, 15.0], "speed": [0.9, 0.8]}, "increase strictly"),
+        ({"courses_deg": [0.0, 120.0], "speed": [0.9, 0.8]}, "within 0..90"),
+        ({"courses_deg": [0.0], "speed": [0.0]}, "speeds must be > 0"),
+        ({"courses_deg": [0.0], "speeds": [0.9]}, r"calibration\.reach\.speeds: unknown key"),
+    ],
+)
+def test_bad_reach_is_a_one_line_error(reach: dict[str, list[float]], message: str) -> None:
+    with pytest.raises(ConfigError, match=message):
+        parse_calibration({"calibration": {"k": 150.0, "reach": reach}})
