@@ -29,12 +29,10 @@ import argparse
 import math
 import statistics
 import tempfile
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from pathlib import Path
 
-import numpy as np
-
+from benchmarks.motor_model import lockstep_clients
 from omnibot.calibration import session
 from omnibot.calibration.accuracy import AccuracyPlan
 from omnibot.calibration.calfile import load_calibration, write_calibration
@@ -65,15 +63,7 @@ def calibrate(kind: str, surface: str, seed: int, out: Path, wheels: int = 0) ->
     """Calibrate in-process (see the module docstring), write the file to ``out`` and print the
     check's mean error and its axis MOVEs; the file's path."""
     nominal, true = robots(kind)
-
-    @contextmanager
-    def open_client(name: str) -> Iterator[RobotClient]:
-        dev = SimDevice(nominal, true_robot=true, surface=name, seed=seed)
-        if wheels:  # the wheels turned before the calibration starts (the counts show it)
-            angles = dev.sim.physics.wheel_angle
-            angles[0, :] = np.random.default_rng(wheels).uniform(0.0, 2 * np.pi, angles.shape[1])
-        with RobotClient(LockstepLink(dev), nominal) as client:
-            yield client
+    open_client = lockstep_clients(nominal, true, seed, wheels)
 
     plan, accuracy = (
         (Plan(levels=7), AccuracyPlan(speeds=(0.3, 0.6, 0.9)))

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager
 
 import numpy as np
 
@@ -121,10 +121,12 @@ def main(argv: list[str] | None = None) -> int:
         session.__dict__.update(replaced)
 
 
-def run(
-    nominal: RobotDescription, true: RobotDescription, surface_name: str, kind: str, seed: int, wheels: int
-) -> int:
-    """Calibrate on ``surface_name`` and print the check (:func:`main`)."""
+def lockstep_clients(
+    nominal: RobotDescription, true: RobotDescription, seed: int, wheels: int
+) -> Callable[[str], AbstractContextManager[RobotClient]]:
+    """``open_client(surface)`` for :func:`omnibot.calibration.session.calibrate`: the lockstep
+    simulator of ``true`` driven as ``nominal``, its wheels started at angles drawn with seed
+    ``wheels`` (0: all at 0)."""
 
     @contextmanager
     def open_client(surface: str) -> Iterator[RobotClient]:
@@ -134,6 +136,15 @@ def run(
             angles[0, :] = np.random.default_rng(wheels).uniform(0.0, 2 * np.pi, angles.shape[1])
         with RobotClient(LockstepLink(dev), nominal) as client:
             yield client
+
+    return open_client
+
+
+def run(
+    nominal: RobotDescription, true: RobotDescription, surface_name: str, kind: str, seed: int, wheels: int
+) -> int:
+    """Calibrate on ``surface_name`` and print the check (:func:`main`)."""
+    open_client = lockstep_clients(nominal, true, seed, wheels)
 
     result = session.calibrate(
         nominal,

@@ -18,7 +18,7 @@ from omnibot.client.events import Telemetry
 from omnibot.protocol import codes
 from omnibot.robot.description import load_robot
 from omnibot.uno.emulator import missing_tools
-from omnibot.uno.hil import UnoLink
+from omnibot.uno.hil import UnoLink, counts_at_rest
 
 STEPS = (
     (0.3, 0.0, 0.0),
@@ -45,19 +45,11 @@ def run(robot: str, closed_loop: bool) -> tuple[list[int], list[int]]:
                 client.vel(vx, vy, w, 0.2)
                 client.sleep(0.05)
         client.stop()
-        counts, still_since = sim.encoder_counts(), sim.time
-        for _ in range(100):  # the wheels still for 0.1 s of emulated time, and a TEL sampled since
-            client.sleep(0.1)
-            now = sim.encoder_counts()
-            if now != counts:
-                counts, still_since = now, sim.time
-            elif sim.time - still_since >= 0.1 and samples and samples[-1].controller_time >= sim.time - 0.02:
-                break
+        counts, firmware = counts_at_rest(client, sim, samples)
         client.telemetry(0)
-    firmware = samples[-1].encoders if samples else None
     if firmware is None:
         raise RuntimeError("no TEL with encoder counts came")
-    return counts, list(firmware)
+    return counts, firmware
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -8,7 +8,7 @@ import pytest
 
 from omnibot.protocol import codes
 from omnibot.uno.emulator import missing_tools
-from omnibot.uno.hil import UnoHil
+from omnibot.uno.hil import UnoHil, counts_at_rest
 
 from .conftest import Port
 
@@ -131,16 +131,7 @@ def test_single_channel_counts_follow_the_wheels_through_reversals(closed_loop: 
                 client.sleep(0.05)
             turned.append(sim.encoder_counts())
         client.stop()
-        # at rest: the simulated counts still for 0.1 s of the emulated time, and a TEL sampled after
-        counts, still_since = sim.encoder_counts(), sim.time
-        for _ in range(100):  # at most 10 s of the host's clock
-            client.sleep(0.1)
-            now = sim.encoder_counts()
-            if now != counts:
-                counts, still_since = now, sim.time
-            elif sim.time - still_since >= 0.1 and samples and samples[-1].controller_time >= sim.time - 0.02:
-                break
-        fw = samples[-1].encoders
+        counts, fw = counts_at_rest(client, sim, samples)
         client.telemetry(0)
     assert fw is not None
     assert turned[0][1] > 150 and turned[1][1] < turned[0][1] - 100 and counts[0] > 150, turned  # they turned

@@ -30,7 +30,9 @@ import select
 import signal
 import sys
 import threading
+from collections.abc import Sequence
 from types import FrameType
+from typing import TYPE_CHECKING
 
 from omnibot.errors import ConfigError
 from omnibot.robot.description import load_robot
@@ -38,6 +40,10 @@ from omnibot.sim.simulator import Simulator
 from omnibot.transport.serial_link import SerialLink
 from omnibot.transport.url import LinkUrl, register_scheme
 from omnibot.uno.emulator import UnoEmulator, UnoError
+
+if TYPE_CHECKING:
+    from omnibot.client.client import RobotClient
+    from omnibot.client.events import Telemetry
 
 SONAR_PERIOD = 0.002  # s between sonar range updates (the harness echoes the latest one)
 BATTERY_PERIOD = 0.1  # s between battery updates
@@ -139,6 +145,24 @@ class UnoLink(SerialLink):
             super()._close()
         finally:
             self._stop_hil()
+
+
+def counts_at_rest(
+    client: RobotClient, sim: Simulator, samples: Sequence[Telemetry]
+) -> tuple[list[int], list[int] | None]:
+    """Wait (at most 10 s of the host's clock) until the simulated encoders have stood still for
+    0.1 s of the emulated time and a TEL in ``samples`` (the client's telemetry, encoders on) was
+    sampled since; the simulated counts and the firmware's (None: no TEL with encoders came)."""
+    counts, still_since = sim.encoder_counts(), sim.time
+    for _ in range(100):
+        client.sleep(0.1)
+        now = sim.encoder_counts()
+        if now != counts:
+            counts, still_since = now, sim.time
+        elif sim.time - still_since >= 0.1 and samples and samples[-1].controller_time >= sim.time - 0.02:
+            break
+    firmware = samples[-1].encoders if samples else None
+    return list(counts), None if firmware is None else list(firmware)
 
 
 def _open_uno(u: LinkUrl) -> UnoLink:
