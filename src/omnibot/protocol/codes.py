@@ -131,9 +131,7 @@ W_SONAR_LIMIT = 14  # project: speed limited so the robot can stop before what a
 W_UNCOVERED = 15  # project: travel where no armed sonar looks, speed limited
 W_UNCOVERED_STOP = 16  # project: a running motion turned where no armed sonar looks, stopped (MODE bit 3)
 W_SHORT = 17  # project: a MOVE stood still short of its distance, as its wheel encoders measured
-W_REACH = (
-    18  # project: an open-loop MOVE asked faster than the calibrated reach on its course, run at the reach
-)
+W_REACH = 18  # project: an open-loop MOVE asked beyond the calibrated reach, run at the reach
 E_QUEUE_FULL = 21
 E_TOO_LONG = 22
 E_UNKNOWN = 23
