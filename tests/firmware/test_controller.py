@@ -677,12 +677,7 @@ def test_vel_body_acceleration_gives_the_body_its_force_and_torque(robot: str, v
     rig = make_rig(robot, wheel_ff=[0.0] * description.n_wheels)
     added = _added_ff(rig, vel, accel)
     forces = [c * n for c, n in zip(added, _newtons_per_count(robot), strict=True)]
-    traction, _ = kinematics.contact_rows(
-        [w.position[0] for w in description.wheels],
-        [w.position[1] for w in description.wheels],
-        [w.drive_angle for w in description.wheels],
-        [w.gamma for w in description.wheels],
-    )
+    traction, _ = kinematics.robot_contact_rows(description)
     ax, ay, aw = (int(v) for v in accel.split(","))
     want = [
         description.mass * ax * 0.01,

@@ -187,6 +187,8 @@ def test_contact_rows_are_the_kinematics_rows_and_their_rollers(preset: str) -> 
     )
     rim = np.array([x.radius * np.cos(x.gamma) for x in w])
     assert np.allclose(traction / rim[:, None], robot.wheel_matrix)
+    mine = kin.robot_contact_rows(robot)  # the same rows from the description
+    assert np.array_equal(mine[0], traction) and np.array_equal(mine[1], roller)
     # the roller rolls across the rim's direction: unit, perpendicular translation parts
     assert np.allclose(np.einsum("ij,ij->i", traction[:, :2], roller[:, :2]), 0.0)
     assert np.allclose(np.hypot(roller[:, 0], roller[:, 1]), 1.0)

@@ -47,7 +47,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from omnibot.errors import ConfigError
 from omnibot.robot.description import RobotDescription
-from omnibot.robot.kinematics import contact_rows
+from omnibot.robot.kinematics import robot_contact_rows
 
 FloatArray = NDArray[np.float64]
 
@@ -126,12 +126,7 @@ class SlipModel:
     def __init__(self, robot: RobotDescription, params: SlipParameters | None = None) -> None:
         gamma = np.array([w.gamma for w in robot.wheels])
         radius = np.array([w.radius for w in robot.wheels])
-        traction, roller = contact_rows(
-            [w.position[0] for w in robot.wheels],
-            [w.position[1] for w in robot.wheels],
-            [w.drive_angle for w in robot.wheels],
-            gamma,
-        )  # the simulator's contact rows: rim speed r cos(gamma) omega = T q
+        traction, roller = robot_contact_rows(robot)  # the simulator's: rim speed r cos(gamma) omega = T q
         self.rim_per_rad = radius * np.cos(gamma)
         """m of rim travel along the traction direction per rad of wheel turn."""
         # a roller rolls with the body and, on mecanum wheels, with the wheel's own turn

@@ -167,12 +167,7 @@ def _accel_ff(robot: RobotDescription) -> tuple[list[list[float]], list[float]]:
     :func:`~omnibot.control.reach.floor_grip` shares them), and ``wheel_ff``, each wheel's PWM counts
     per rad/s^2 of its own angular acceleration (the wheel's and the rotor's inertia)."""
     wheels = robot.wheels
-    traction, _ = kinematics.contact_rows(
-        [w.position[0] for w in wheels],
-        [w.position[1] for w in wheels],
-        [w.drive_angle for w in wheels],
-        [w.gamma for w in wheels],
-    )
+    traction, _ = kinematics.robot_contact_rows(robot)
     share = np.linalg.pinv(traction.T) * np.array([robot.mass, robot.mass, robot.yaw_inertia])
     body, own = [], []
     for i, w in enumerate(wheels):
@@ -232,12 +227,7 @@ def build_config(
             f"roller drag for {len(rollers.cos)} wheels on a robot with {robot.n_wheels}",
             key="calibration.rollers",
         )
-    _, roller_rows = kinematics.contact_rows(
-        [w.position[0] for w in robot.wheels],
-        [w.position[1] for w in robot.wheels],
-        [w.drive_angle for w in robot.wheels],
-        [w.gamma for w in robot.wheels],
-    )
+    _, roller_rows = kinematics.robot_contact_rows(robot)
     cpr = {e.wheel: e.counts_per_rev for e in robot.encoders.motors}
     encoder_cpr = [int(cpr.get(w.name, 0)) for w in robot.wheels]
     ctl = robot.controller

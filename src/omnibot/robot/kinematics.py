@@ -46,6 +46,17 @@ def contact_rows(
     return traction, roller
 
 
+def robot_contact_rows(robot: RobotDescription) -> tuple[FloatArray, FloatArray]:
+    """:func:`contact_rows` of a robot's wheels, in their order: (traction, roller), each (n, 3)."""
+    wheels = robot.wheels
+    return contact_rows(
+        [w.position[0] for w in wheels],
+        [w.position[1] for w in wheels],
+        [w.drive_angle for w in wheels],
+        [w.gamma for w in wheels],
+    )
+
+
 def wheel_rows(
     positions: ArrayLike, drive_angles: ArrayLike, gammas: ArrayLike, radii: ArrayLike
 ) -> FloatArray:
