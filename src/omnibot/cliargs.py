@@ -53,6 +53,18 @@ class DeprecatedAlias(argparse.Action):
         setattr(namespace, self.dest, self.const if self.nargs == 0 else values)
 
 
+def add_wheel_loop_option(p: argparse.ArgumentParser) -> None:
+    """``--open-loop`` on every command that drives through the runtime (``follow``, ``teleop``,
+    ``dashboard``, ``ros2``, ``run``): by default the controller's wheel-speed loop is closed on the
+    motor encoders (:class:`~omnibot.runtime.runtime.Runtime`'s ``wheel_loop``)."""
+    p.add_argument(
+        "--open-loop",
+        action="store_true",
+        help="drive without the controller's wheel-speed loop (default: closed where every motor has an "
+        "encoder); the robot then goes as fast as the floor and the power calibration let it",
+    )
+
+
 def add_debug_option(p: argparse.ArgumentParser) -> None:
     """``--debug`` on a (sub)command; SUPPRESS keeps ``omnibot --debug CMD`` working too."""
     p.add_argument(

@@ -71,6 +71,12 @@ class Estimate:
         """The position and heading alone."""
         return Pose2D(self.x, self.y, self.theta)
 
+    @property
+    def body_twist(self) -> Twist:
+        """The velocity in the body frame (the world-frame vx, vy turned by -theta): what a VEL asks."""
+        c, s = math.cos(self.theta), math.sin(self.theta)
+        return Twist(c * self.vx + s * self.vy, -s * self.vx + c * self.vy, self.w)
+
     def predict(self, t: float) -> Estimate:
         """Extrapolated to time ``t`` at constant velocity (latency compensation)."""
         dt = t - self.t

@@ -57,6 +57,9 @@ sonar_period_min_ms         one entry per sonar: its shortest period (>= 60 ms)
 sonar_axes                  one entry per sonar: [axis deg, half cone deg, footprint lead cm, half width cm]
 stop_decel_cms2             deceleration the robot surely reaches when stopped, cm/s^2 (sonar stop)
 uncovered_speed_cms         fastest travel where no armed sonar looks, cm/s
+accel_max_cms2              the robot's acceleration limit, cm/s^2: the closed loop slews a VEL without a
+                            planned acceleration at it (and brakes to rest at it)
+angular_accel_max_dps2      the same for the turn rate, deg/s^2
 pins                        board pin map for MachineHAL (see hal.py)
 ==========================  =======================================================================
 """
@@ -298,6 +301,8 @@ def build_config(
         "sonar_axes": [_sonar_axis(robot, s) for s in robot.sonars],
         "stop_decel_cms2": round(robot.stop_deceleration * 100.0, 6),
         "uncovered_speed_cms": round(robot.uncovered_speed * 100.0, 6),
+        "accel_max_cms2": round(lim.acceleration_max * 100.0, 6),
+        "angular_accel_max_dps2": round(math.degrees(lim.angular_acceleration_max), 6),
         "pins": pins if pins is not None else default_pins(robot),
     }
 

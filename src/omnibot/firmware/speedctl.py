@@ -84,6 +84,13 @@ class SpeedControl:
             out[i] = self._limit(p)
         return True
 
+    def rise(self) -> None:
+        """Take every wheel as after a step (the controller slews its targets at the robot's
+        acceleration limits: a step spread over time): large errors integrate less until the wheel is
+        within ``band`` of its target."""
+        for i in range(self.n):
+            self._rising[i] = self.band > 0.0
+
     def hold(self, ff: list[float], out: list[int]) -> None:
         """New feedforward between periods: write it plus the last correction (not the bare
         feedforward, which would drop the loop's work until the next period)."""

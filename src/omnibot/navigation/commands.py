@@ -23,6 +23,7 @@ from typing import Any
 from omnibot.cliargs import (
     DeprecatedAlias,
     add_robot_options,
+    add_wheel_loop_option,
     check_distinct,
     check_plot,
     check_sim_options,
@@ -123,7 +124,7 @@ def run_follow(args: argparse.Namespace) -> int:
             speed=speed,
             estimator=args.estimator,
             rate=rate,
-            wheel_loop=not args.no_wheel_loop,
+            wheel_loop=not args.open_loop,
             calibrate_gyro=args.calibrate_gyro,
             slip=slip,
             floor=args.surface,  # plan within what this floor lets the motors give
@@ -295,7 +296,16 @@ def add_follow_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--speed", type=float, help="speed cap, m/s (default: the robot's limit)")
     p.add_argument("--estimator", default="fused", help="estimator the follower sees (default fused)")
     p.add_argument("--rate", type=float, default=100.0, help="control rate, Hz (default 100)")
-    p.add_argument("--no-wheel-loop", action="store_true", help="leave the controller's wheel-speed loop off")
+    add_wheel_loop_option(p)
+    p.add_argument(
+        "--no-wheel-loop",
+        action=DeprecatedAlias,
+        dest="open_loop",
+        nargs=0,
+        const=True,
+        use="--open-loop",
+        help=argparse.SUPPRESS,
+    )
     p.add_argument(
         "--calibrate-gyro",
         action="store_true",

@@ -76,7 +76,7 @@ def teach(
     """Record a path (see the module docstring for ``mode``); ``shape`` is what push/drive follow."""
     if mode not in TEACH_MODES:
         raise ConfigError(f"unknown teach mode '{mode}'; expected one of: {', '.join(TEACH_MODES)}")
-    nav = Navigator(client, robot, estimator=estimator, wheel_loop=mode == "drive")
+    nav = Navigator(client, robot, estimator=estimator, wheel_loop=True if mode == "drive" else None)
     if mode == "push" and nav.sim is None:
         raise ConfigError(
             "teach mode 'push' needs the simulator (sim://); on a real robot push it yourself with 'listen'"

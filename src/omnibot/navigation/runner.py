@@ -189,8 +189,9 @@ class Navigator:
     ``estimator`` names the estimator the followers see (:data:`omnibot.estimation.ESTIMATORS`);
     ``observers`` are more estimators fed the same telemetry (for comparisons): names, or
     estimators made with :func:`~omnibot.estimation.estimator.make_estimator` (keyed by their
-    name). ``wheel_loop`` turns on the controller's wheel-speed loop (MODE bit 1) when every wheel
-    has an encoder.
+    name). ``wheel_loop`` is the runtime's (:class:`~omnibot.runtime.runtime.Runtime`): close the
+    controller's wheel-speed loop (MODE bit 1) when every wheel has an encoder (True), open it (False),
+    or leave the MODE as found (None: the motors are off, the robot is pushed by hand).
     ``slip`` is the floor's wheel-slip calibration (creep and distance scale) for the driven-wheel
     encoders (every estimator).
     """
@@ -202,7 +203,7 @@ class Navigator:
         *,
         estimator: str = "fused",
         observers: Sequence[str | Estimator] = (),
-        wheel_loop: bool = True,
+        wheel_loop: bool | None = True,
         binary: bool = True,
         start: Pose2D | None = None,
         slip: SlipParameters | None = None,
@@ -215,13 +216,10 @@ class Navigator:
         for obs in observers:
             est = make_estimator(obs, robot, self.start_pose, slip) if isinstance(obs, str) else obs
             self.observers[est.name] = est
-        self.wheel_loop = wheel_loop and all(
-            any(e.wheel == w.name for e in robot.encoders.motors) for w in robot.wheels
-        )
         self.binary = binary
         self.sim = find_simulator(client.link)
         self.frame: FrameMap | None = None
-        self.runtime = Runtime(client, estimator=self.estimator)
+        self.runtime = Runtime(client, estimator=self.estimator, wheel_loop=wheel_loop)
         """The one loop that owns the client; it feeds the estimator and the observers."""
         self.runtime.telemetry_hooks.extend(obs.update for obs in self.observers.values())
         self.warnings: list[str] = []
@@ -246,8 +244,6 @@ class Navigator:
                 period = 0.01
             except NotSupported:
                 pass
-        if self.wheel_loop:
-            c.mode(closed_loop=True)
         mask = codes.TEL_ENCODERS | codes.TEL_HEADING | codes.TEL_QUEUE
         if self.robot.encoders.tracking:
             mask |= codes.TEL_TRACKING

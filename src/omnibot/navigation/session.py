@@ -71,6 +71,7 @@ class FollowOptions:
     estimator: str = "fused"
     rate: float = DEFAULT_RATE
     wheel_loop: bool = True
+    """Close the controller's wheel-speed loop (False: open loop, ``--open-loop``)."""
     follower_options: dict[str, Any] = field(default_factory=dict)
     observers: tuple[str, ...] = ()
     standstill: float = STANDSTILL

@@ -68,11 +68,12 @@ def add_bridge_options(p: argparse.ArgumentParser, *, several: bool = False) -> 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Declare ``omnibot ros2``'s options."""
-    from omnibot.cliargs import add_robot_options
+    from omnibot.cliargs import add_robot_options, add_wheel_loop_option
 
     add_robot_options(
         p, world="room", port_help="the simulated --robot, paced to the wall clock", several=True
     )
+    add_wheel_loop_option(p)
     add_bridge_options(p, several=True)
     p.add_argument(
         "--speed",
@@ -256,7 +257,7 @@ def _open(args: argparse.Namespace, spec: RobotSpec, session: Any, url: str, lab
     from omnibot.runtime.runtime import Runtime
     from omnibot.runtime.sinks import NoticePrinter
 
-    runtime = Runtime(session.client, period=PERIOD)
+    runtime = Runtime(session.client, period=PERIOD, wheel_loop=not args.open_loop)
     node = attach(runtime, session.robot, args, spec)
     runtime.add_sink(NoticePrinter(lambda text: _say(f"{label}{text}"), control=True))
     return _Robot(spec, url, session.client, session.robot, runtime, node, label)

@@ -30,7 +30,7 @@ PAD_PRIORITY = 200
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Declare ``omnibot run``'s options (the robot options shared with every command, then its own)."""
-    from omnibot.cliargs import add_robot_options
+    from omnibot.cliargs import add_robot_options, add_wheel_loop_option
     from omnibot.ros2.command import add_bridge_options
     from omnibot.web.command import add_server_options
 
@@ -66,6 +66,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--config", metavar="FILE.yaml", help="teleop parameters (pad mapping, rate; default seed 003's)"
     )
+    add_wheel_loop_option(p)
     p.add_argument(
         "--duration",
         type=float,
@@ -143,7 +144,7 @@ def compose(runtime: Any, robot: Any, args: argparse.Namespace, config: Any, pat
             device.__enter__()
             parts.closers.append(lambda: device.__exit__(None, None, None))
         parts.device = device
-        limits = TwistLimits.from_limits(runtime.client.limits, config)
+        limits = TwistLimits.from_limits(runtime.client.limits, config, robot)
         parts.pad = PadSource(device, config, limits, name=args.teleop, priority=PAD_PRIORITY)
         runtime.add_source(parts.pad)
     if args.ros2:
@@ -204,7 +205,9 @@ def _in_this_thread(args: argparse.Namespace, url: str, config: Any, path: Any) 
     period = config.period if person else ROS2_PERIOD if args.ros2 else 0.01
     with robot_session(url, args.robot, timeout=max(0.2, config.vel_timeout)) as session:
         client, robot = session.client, session.robot
-        runtime = Runtime(client, period=period, vel_timeout=config.vel_timeout)
+        runtime = Runtime(
+            client, period=period, vel_timeout=config.vel_timeout, wheel_loop=not args.open_loop
+        )
         parts = compose(runtime, robot, args, config, path)
         try:
             runtime.start()
@@ -260,6 +263,7 @@ def _with_dashboard(args: argparse.Namespace, url: str, config: Any, path: Any) 
         args.robot,
         config=config,
         make_teach=None if path is not None else make_teach,  # a --follow path owns the estimator's frame
+        wheel_loop=not args.open_loop,
         **server,
     )
     parts = Parts()

@@ -33,6 +33,10 @@ KEEP = 1000
 """Telemetry samples and events kept for the next cycle: the newest, when nobody cycled for a while
 (a standstill, a scripted manoeuvre)."""
 LATCHED_TEXT = "emergency stop latched by the controller (sonar): let go and press again to release"
+OPEN_LOOP_TEXT = (
+    "open loop{why}: the wheels get the calibrated powers for a speed, so the robot goes as fast as the "
+    "floor lets it, not at the speed asked"
+)
 
 
 Sink = Callable[[Cycle], object]
@@ -101,6 +105,12 @@ class Runtime:
     loops of 20 Hz); otherwise VEL is submitted and its reply collected at the next cycle (100 Hz
     loops: no round trip inside the cycle). A source's own ``wait_reply`` attribute overrides it. Either way a refused command or a latched emergency stop
     becomes a :class:`Notice` every sink (every front end) and the refused source are handed.
+
+    ``wheel_loop``: when the runtime starts, the controller's wheel-speed loop (MODE bit 1) is closed
+    on the motor encoders (True: every VEL, whoever sends it, is then a velocity the wheels hold
+    whatever the floor), opened (False: the user asked for open loop) or left as found (None). A
+    robot without encoders on every motor stays open loop, and every front end is told so once.
+    :attr:`closed_loop` says what was done.
     """
 
     def __init__(
@@ -115,8 +125,12 @@ class Runtime:
         pacer: Pacer | None = None,
         vel_timeout: float = 0.25,
         wait_replies: bool = False,
+        wheel_loop: bool | None = True,
     ) -> None:
         self.client = client
+        self.wheel_loop = wheel_loop
+        self.closed_loop: bool | None = None
+        """The wheel-speed loop is closed (True), open (False), or was left as found (None)."""
         self.period = period
         self.estimator = estimator
         self.arbiter = Arbiter(list(locks))
@@ -197,6 +211,29 @@ class Runtime:
         attach_runtime(self)  # a command's --log / --foxglove: the recorder's sink, the panel's source
         self.client.on_telemetry(self._on_telemetry)
         self.client.add_listener(self._on_event, WarnEvent, ErrorEvent, ResetEvent)
+        self._set_wheel_loop()
+
+    def _set_wheel_loop(self) -> None:
+        """Close (or open) the controller's wheel-speed loop as :attr:`wheel_loop` asks."""
+        want, client = self.wheel_loop, self.client
+        if want is None or client.link.closed:
+            return
+        if want and client.limits.has_encoders is False:
+            self.closed_loop = False
+            robot = client.limits.robot or "the robot"
+            self.notify("warn", OPEN_LOOP_TEXT.format(why=f" ({robot} has no encoder on every motor)"))
+            return
+        try:
+            client.mode(closed_loop=want)
+        except (ControllerError, LinkError, ValueError) as exc:
+            self.closed_loop = False
+            self.notify(
+                "warn", OPEN_LOOP_TEXT.format(why=f" (the controller refused its wheel-speed loop: {exc})")
+            )
+            return
+        self.closed_loop = want
+        if not want:
+            self.notify("info", OPEN_LOOP_TEXT.format(why=" as asked"))
 
     def close(self) -> None:
         """Stop listening (the client stays open: whoever opened it closes it)."""

@@ -32,11 +32,11 @@ import numpy as np
 
 from omnibot.control.followers.base import Follower
 from omnibot.control.paths.path import Path
-from omnibot.motion import Estimate, Twist
+from omnibot.motion import ZERO, Estimate, Twist
 from omnibot.runtime.cycle import Cycle
 from omnibot.teleop.config import TeleopConfig
 from omnibot.teleop.deadman import Action, Deadman, Phase, Sample, Why
-from omnibot.teleop.mapping import JoyState, TwistLimits, joy_to_command, limit_twist
+from omnibot.teleop.mapping import JoyState, TwistLimits, TwistRamp, joy_to_command, limit_twist
 
 APPROACH_GAP = 0.02
 """m: farther than this from the path, a follower that gets the robot back first drives straight to it."""
@@ -65,10 +65,22 @@ class Source(Protocol):
 
 class DeadmanSource:
     """A person's input through teleop's deadman; set :attr:`sample` (the newest input) from outside,
-    or override :meth:`read`."""
+    or override :meth:`read`. With ``limits`` of finite accelerations (the robot's, through
+    :meth:`TwistLimits.from_limits`) the twist ramps while the deadman is held
+    (:class:`~omnibot.teleop.mapping.TwistRamp`, its planned acceleration sent with the VEL as
+    :attr:`body_accel`), the stop sequence too: it ramps down for its ``stop_repeats`` periods, and a
+    controller on its wheel-speed loop brakes on at the same limits when its VEL watchdog runs out
+    (:meth:`~omnibot.firmware.motion.Executor.brake_to_rest`). A drive starts from the robot's
+    estimated twist when the runtime has an estimate."""
 
     def __init__(
-        self, name: str, config: TeleopConfig, *, priority: int = 100, timeout: float | None = None
+        self,
+        name: str,
+        config: TeleopConfig,
+        *,
+        priority: int = 100,
+        timeout: float | None = None,
+        limits: TwistLimits | None = None,
     ) -> None:
         self.name = name
         self.priority = priority
@@ -84,6 +96,10 @@ class DeadmanSource:
         """Why driving ended on the last cycle it did (None otherwise)."""
         self.twist: Twist | None = None
         """The twist of the last proposal (None when silent)."""
+        self.ramp = TwistRamp(limits) if limits is not None else None
+        self.body_accel: tuple[float, float, float] | None = None
+        """The ramp's planned acceleration of the last proposal (None: a step, or no ramp)."""
+        self._last = 0.0  # cycle time of the last proposal while driving
 
     def read(self, now: float) -> Sample | None:
         """The newest input at ``now`` (None: no input device)."""
@@ -99,16 +115,31 @@ class DeadmanSource:
         action = self.deadman.update(cycle.now, self.read(cycle.now))
         self.action = action
         self.ended = action.ended
-        self.twist = action.twist
-        if action.twist is None:
+        twist = action.twist
+        self.body_accel = None
+        ramp = self.ramp
+        if ramp is not None and ramp.limited:
+            if twist is None:
+                ramp.reset()
+            else:  # driving, or the stop sequence: down to rest at the same limits
+                if action.started:
+                    ramp.reset(cycle.estimate.body_twist if cycle.estimate is not None else ZERO)
+                    self._last = cycle.now - self.config.period
+                twist = ramp.step(twist, cycle.now - self._last)
+                self._last = cycle.now
+                self.body_accel = ramp.body_accel
+        self.twist = twist
+        if twist is None:
             return None
-        return Proposal(action.twist, fresh=action.started)
+        return Proposal(twist, fresh=action.started)
 
     def reset(self) -> None:
         """Forget the drive and the input (after an emergency stop): silent until a fresh input."""
         self.sample = None
         self.deadman.reset()
         self.twist = None
+        if self.ramp is not None:
+            self.ramp.reset()
 
 
 class JoySource(Protocol):
@@ -136,7 +167,7 @@ class PadSource(DeadmanSource):
         name: str | None = None,
         priority: int = 100,
     ) -> None:
-        super().__init__(name or device.name, config, priority=priority)
+        super().__init__(name or device.name, config, priority=priority, limits=limits)
         self.device = device
         self.limits = limits
         self.closing = False

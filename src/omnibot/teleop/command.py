@@ -17,9 +17,10 @@ from omnibot.errors import ConfigError
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The ``omnibot teleop`` options: robot or port, input device, limits and the teleop config file."""
-    from omnibot.cliargs import add_robot_options
+    from omnibot.cliargs import add_robot_options, add_wheel_loop_option
 
     add_robot_options(p, world="room", port_help="the simulated --robot, paced to the wall clock")
+    add_wheel_loop_option(p)
     group = p.add_mutually_exclusive_group()
     group.add_argument(
         "--joystick", action="store_true", help="read a pad through pygame (waits for one to be plugged)"
@@ -90,7 +91,9 @@ def run(args: argparse.Namespace) -> int:
         )
         if source.name == "keyboard":
             _say(HELP)
-        teleop = Teleop(client, config, source, on_message=_say)
+        teleop = Teleop(
+            client, config, source, on_message=_say, robot=session.robot, wheel_loop=not args.open_loop
+        )
         _say(f"limits: {teleop.limits.speed:.2f} m/s, {teleop.limits.rate:.2f} rad/s")
         try:
             teleop.run(args.duration)  # stops the robot on the way out, Ctrl-C included

@@ -25,6 +25,7 @@ from typing import Protocol
 
 from omnibot.client.client import RobotClient
 from omnibot.motion import Twist
+from omnibot.robot.description import RobotDescription
 from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.runtime import Counters, Runtime
 from omnibot.runtime.sinks import NoticePrinter
@@ -56,7 +57,9 @@ class Source(Protocol):
 
 class Teleop:
     """Drives ``client`` from ``source`` through a runtime; :meth:`step` is one period, :meth:`run`
-    loops in real time."""
+    loops in real time. ``robot``'s description ramps the twist at its accelerations
+    (:class:`~omnibot.teleop.mapping.TwistRamp`); ``wheel_loop`` is the runtime's (the controller's
+    wheel-speed loop closed by default)."""
 
     def __init__(
         self,
@@ -67,11 +70,13 @@ class Teleop:
         limits: TwistLimits | None = None,
         pacer: Pacer | None = None,
         on_message: Callable[[str], None] = print,
+        robot: RobotDescription | None = None,
+        wheel_loop: bool | None = True,
     ) -> None:
         self.client = client
         self.config = config
         self.source = source
-        self.limits = limits or TwistLimits.from_limits(client.limits, config)
+        self.limits = limits or TwistLimits.from_limits(client.limits, config, robot)
         self.pacer = pacer or Pacer(client, config.period)
         self.on_message = on_message
         self.pad = PadSource(source, config, self.limits)
@@ -83,6 +88,7 @@ class Teleop:
             pacer=self.pacer,
             vel_timeout=config.vel_timeout,
             wait_replies=True,
+            wheel_loop=wheel_loop,
         )
 
     @property

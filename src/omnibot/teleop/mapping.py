@@ -9,6 +9,9 @@
                     scale_angular.yaw * a[axis_angular.yaw])
       -> limit_twist(): one factor s <= 1 for the whole twist, so that |(vx, vy)| <= speed and
            |w| <= rate: the robot goes where the stick points, only slower
+      -> TwistRamp: while the deadman is held, the twist sent changes by at most the robot's
+           acceleration_max (translation) and angular_acceleration_max per second: a heavy robot
+           ramps up, and a tap of a key is a short move
 
 An axis or button index past what the pad has reads 0 / not pressed (as in teleop_twist_joy). The
 turbo button is an enable button of its own, with the turbo scales.
@@ -22,6 +25,7 @@ from dataclasses import dataclass
 
 from omnibot.client.limits import Limits
 from omnibot.motion import ZERO, Twist
+from omnibot.robot.description import RobotDescription
 from omnibot.teleop.config import TeleopConfig
 
 
@@ -91,15 +95,22 @@ def joy_to_command(config: TeleopConfig, joy: JoyState) -> TeleopCommand:
 
 @dataclass(frozen=True)
 class TwistLimits:
-    """The largest planar speed (m/s) and turn rate (rad/s) a twist may have."""
+    """The largest planar speed (m/s) and turn rate (rad/s) a twist may have, and how fast a person's
+    twist may change: ``accel`` (m/s^2, the translation) and ``angular_accel`` (rad/s^2); inf: at once."""
 
     speed: float
     rate: float
+    accel: float = math.inf
+    angular_accel: float = math.inf
 
     @classmethod
-    def from_limits(cls, limits: Limits, config: TeleopConfig | None = None) -> TwistLimits:
+    def from_limits(
+        cls, limits: Limits, config: TeleopConfig | None = None, robot: RobotDescription | None = None
+    ) -> TwistLimits:
         """The controller's VEL bounds (as the client checks them) just inside, so that rounding
-        to 1 cm/s and 1 degree/s never crosses them; capped by the config's speed caps."""
+        to 1 cm/s and 1 degree/s never crosses them; capped by the config's speed caps. ``robot``'s
+        description gives the accelerations (its ``limits.acceleration_max`` and
+        ``angular_acceleration_max``); without it a twist changes at once."""
         speed = max(0.0, limits.speed_max_cms - 1.0) / 100.0
         rate = math.radians(max(0.0, limits.rate_max_dps - 1.0))
         if config is not None:
@@ -107,7 +118,52 @@ class TwistLimits:
                 speed = min(speed, config.speed_max)
             if config.angular_speed_max is not None:
                 rate = min(rate, config.angular_speed_max)
-        return cls(speed, rate)
+        if robot is None:
+            return cls(speed, rate)
+        return cls(speed, rate, robot.limits.acceleration_max, robot.limits.angular_acceleration_max)
+
+
+class TwistRamp:
+    """A twist rate-limited to ``limits``' accelerations: :meth:`step` moves the last twist towards
+    the one asked by at most ``accel * dt`` (the translation, as a vector: the robot's velocity
+    turns as fast as it can) and ``angular_accel * dt`` (the turn rate).
+
+    :attr:`body_accel` is the body's acceleration of the last step along its own axes and the
+    angular one (m/s^2, m/s^2, rad/s^2): the rate of change of the body-frame twist less the turning
+    axes' part ``(-w vy, w vx)``, as VEL's version-4 fields carry it, so the controller's wheel-speed
+    loop feeds the ramp's force forward."""
+
+    def __init__(self, limits: TwistLimits) -> None:
+        self.limits = limits
+        self.twist = ZERO
+        self.body_accel: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    @property
+    def limited(self) -> bool:
+        """The limits ramp anything (a finite acceleration)."""
+        return math.isfinite(self.limits.accel) or math.isfinite(self.limits.angular_accel)
+
+    def reset(self, twist: Twist = ZERO) -> None:
+        """Start from ``twist`` (a stop: the robot is braked to rest by the controller)."""
+        self.twist = twist
+        self.body_accel = (0.0, 0.0, 0.0)
+
+    def step(self, target: Twist, dt: float) -> Twist:
+        """The twist ``dt`` s after the last one, on its way to ``target``."""
+        last = self.twist
+        if not dt > 0:
+            return last
+        dvx, dvy, dw = target.vx - last.vx, target.vy - last.vy, target.w - last.w
+        dv = math.hypot(dvx, dvy)
+        most = self.limits.accel * dt
+        if dv > most:
+            dvx, dvy = dvx * most / dv, dvy * most / dv
+        most = self.limits.angular_accel * dt
+        dw = max(-most, min(most, dw))
+        twist = Twist(last.vx + dvx, last.vy + dvy, last.w + dw)
+        self.body_accel = (dvx / dt - twist.w * twist.vy, dvy / dt + twist.w * twist.vx, dw / dt)
+        self.twist = twist
+        return twist
 
 
 def limit_twist(twist: Twist, limits: TwistLimits) -> Twist:

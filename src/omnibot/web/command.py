@@ -64,9 +64,10 @@ def server_options(args: argparse.Namespace) -> ServerOptions:
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The ``omnibot web`` options: robot or port, address, port and access token of the dashboard."""
-    from omnibot.cliargs import add_robot_options
+    from omnibot.cliargs import add_robot_options, add_wheel_loop_option
 
     add_robot_options(p, world="room", port_help="the simulated --robot, paced to the wall clock")
+    add_wheel_loop_option(p)
     add_server_options(p)
     p.add_argument(
         "--map",
@@ -125,6 +126,7 @@ def run(args: argparse.Namespace) -> int:
         path=path,
         config=config,
         make_teach=make_teach,
+        wheel_loop=not args.open_loop,
         **server,
     )
     dash.start()

@@ -72,9 +72,11 @@ class Dashboard:
         teach: TeachRepeat | None = None,
         allow_hosts: Sequence[str] = (),
         make_teach: Callable[[RobotDescription], TeachRepeat] | None = None,
+        wheel_loop: bool = True,
     ) -> None:
         """``robot`` (a description, preset or file; None: the one the controller names) must be the
-        robot on the link; ``make_teach`` builds ``teach`` once the robot is known."""
+        robot on the link; ``make_teach`` builds ``teach`` once the robot is known; ``wheel_loop``:
+        the runtime closes the controller's wheel-speed loop (False: open loop)."""
         self.token = token = access_token(host, token)
         self.host = host
         HostPolicy.for_bind(host, 1, allow_hosts)  # a bad name fails here, before anything opens
@@ -98,6 +100,7 @@ class Dashboard:
                 teach=teach,
                 start=start,
                 mode=mode,
+                wheel_loop=wheel_loop,
             )
             # a path file is drawn where following it from here would drive it; points as given
             points = path.placed(self.link.pose) if isinstance(path, PlannedPath) else path

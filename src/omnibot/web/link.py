@@ -103,6 +103,7 @@ class RobotLink:
         sleep: Callable[[float], None] = time.sleep,
         mode: int | None = None,
         runtime: Runtime | None = None,
+        wheel_loop: bool = True,
     ) -> None:
         self.client = client
         self.mode = mode
@@ -110,7 +111,7 @@ class RobotLink:
         self.robot = robot
         self.config = config or TeleopConfig()
         self.teach = teach
-        self.limits = TwistLimits.from_limits(client.limits, self.config)
+        self.limits = TwistLimits.from_limits(client.limits, self.config, robot)
         self.drive_limits = TwistLimits(self.limits.speed, min(self.limits.rate, DRIVE_RATE_MAX))
         """Full scale of the page's keys, stick and turn slider."""
         self.inbox: queue.Queue[Request] = queue.Queue(maxsize=INBOX_MAX)
@@ -123,11 +124,11 @@ class RobotLink:
         self._device = find_device(client.link)
         truth = self._truth()
         self.tracker = StateTracker(robot, client.link.url, Pose2D(*truth) if truth else start)
-        self.page = DeadmanSource("page", self.config, priority=PAGE_PRIORITY)
+        self.page = DeadmanSource("page", self.config, priority=PAGE_PRIORITY, limits=self.limits)
         """The page's stick, keys and browser gamepad."""
         self.estop_lock = EStopLock()
         self.runtime = runtime or Runtime(
-            client, period=self.config.period, vel_timeout=self.config.vel_timeout
+            client, period=self.config.period, vel_timeout=self.config.vel_timeout, wheel_loop=wheel_loop
         )
         self.runtime.add_source(self.page)
         self.runtime.add_lock(self.estop_lock.lock)
