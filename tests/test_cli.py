@@ -160,6 +160,51 @@ def test_a_file_that_is_not_utf8_is_a_one_line_error(
     assert err.count("\n") == 1 and "Traceback" not in err
 
 
+DUPLICATE = "name: a\n\nname: b\n"
+
+
+@pytest.mark.parametrize(
+    ("argv", "what"),
+    [
+        (["robot", "show", "{bad}"], "robot description"),
+        (["sim", "--pty", "--world", "{bad}"], "world"),
+        (["teleop", "--port", "sim://omni4", "--config", "{bad}"], "teleop config"),
+        (["dashboard", "--http-port", "0", "--config", "{bad}"], "teleop config"),
+        (["follow", "{path}", "--calibration", "{bad}"], "calibration file"),
+    ],
+)
+def test_a_file_that_gives_a_key_twice_is_a_one_line_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], argv: list[str], what: str
+) -> None:
+    bad = tmp_path / "twice.yaml"
+    bad.write_text(DUPLICATE, encoding="utf-8")
+    path = tmp_path / "line.csv"
+    path.write_text("t,x,y,theta\n0,0,0,0\n1,0.5,0,0\n", encoding="utf-8")
+    assert main([a.format(bad=bad, path=path) for a in argv]) == 2
+    assert capsys.readouterr().err == (
+        f"omnibot: error: invalid {what} {bad}: name: duplicate key on line 3 (first on line 1)\n"
+    )
+
+
+def test_seed_003s_parameter_file_as_printed_is_refused_by_the_command() -> None:
+    """``omnibot teleop --config`` with seed 003's file pasted as the seed prints it: exit 2 and one
+    line naming the key and both lines, before anything is opened (it used to drive without x)."""
+    printed = Path(__file__).resolve().parent / "data" / "seed003_teleop_as_printed.yaml"
+    proc = subprocess.run(
+        [sys.executable, "-m", "omnibot", "teleop", "--keyboard", "--config", str(printed)],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert proc.returncode == 2
+    assert proc.stdout == ""
+    assert proc.stderr == (
+        f"omnibot: error: invalid teleop config {printed}: teleop_node.ros__parameters.axis_linear: "
+        "duplicate key on line 18 (first on line 11), and 2 more duplicate keys\n"
+    )
+
+
 def test_an_output_folder_that_cannot_be_made_is_a_one_line_error(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

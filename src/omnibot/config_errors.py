@@ -1,5 +1,11 @@
 """Config errors that name the bad key and suggest the right one (robot descriptions, worlds, ...).
 
+Every YAML omnibot reads goes through :func:`load_yaml` (:func:`read_yaml` for a file): PyYAML's safe
+loader, except that a mapping that gives a key twice is refused (``yaml.safe_load`` keeps the last
+one and drops the first without a word)::
+
+    invalid robot description mine.yaml: wheels[1].radius: duplicate key on line 14 (first on line 12)
+
 ``explain(error, root, what, source)`` turns a pydantic ValidationError of a strict model tree
 (``extra="forbid"``) into one :class:`~omnibot.errors.ConfigError` listing every problem::
 
@@ -21,10 +27,91 @@ from pydantic import BaseModel, ValidationError
 
 from omnibot.errors import ConfigError
 
+_MERGE = "tag:yaml.org,2002:merge"
+
+
+class DuplicateKeyError(yaml.constructor.ConstructorError):
+    """A mapping gives ``key`` (its path from the document's root) on ``line`` and again on
+    ``again`` (1-based lines): the first repeat in the document; ``more`` repeats follow it."""
+
+    def __init__(self, key: str, first: yaml.Node, second: yaml.Node, more: int = 0) -> None:
+        super().__init__(
+            f"while constructing a mapping with the key {key}",
+            first.start_mark,
+            "found it again",
+            second.start_mark,
+        )
+        self.key = key
+        self.line = first.start_mark.line + 1
+        self.again = second.start_mark.line + 1
+        self.more = more
+
+
+class UniqueKeyLoader(yaml.SafeLoader):
+    """``yaml.SafeLoader`` that raises :class:`DuplicateKeyError` for a mapping with a key given twice
+    (keys compare as the values they load as: ``1`` and ``0x1`` are one key). Keys merged in with
+    ``<<`` may be overridden, as YAML's merge keys intend."""
+
+    def construct_document(self, node: yaml.Node) -> Any:
+        """Check every mapping of the document before constructing it."""
+        repeats: list[tuple[str, yaml.Node, yaml.Node]] = []
+        todo: list[tuple[yaml.Node, str]] = [(node, "")]
+        seen: set[int] = set()  # each node once: anchors and aliases (even recursive ones)
+        while todo:
+            current, path = todo.pop()
+            if id(current) in seen:
+                continue
+            seen.add(id(current))
+            if isinstance(current, yaml.MappingNode):
+                todo += self._check_mapping(current, path, repeats)
+            elif isinstance(current, yaml.SequenceNode):
+                todo += [(item, f"{path}[{i}]") for i, item in enumerate(current.value)]
+        if repeats:
+            key, first, second = min(repeats, key=lambda r: r[2].start_mark.index)
+            raise DuplicateKeyError(key, first, second, len(repeats) - 1)
+        return super().construct_document(node)
+
+    def _check_mapping(
+        self, node: yaml.MappingNode, path: str, repeats: list[tuple[str, yaml.Node, yaml.Node]]
+    ) -> list[tuple[yaml.Node, str]]:
+        """The mapping's values with their paths; each repeated key (path, first, repeat) to ``repeats``."""
+        firsts: dict[Any, yaml.Node] = {}
+        children = []
+        for key_node, value_node in node.value:
+            if key_node.tag == _MERGE:
+                children.append((value_node, path))
+                continue
+            key = self.construct_object(key_node, deep=True)
+            name = f"{path}.{key}" if path else str(key)
+            try:
+                first = firsts.setdefault(key, key_node)
+            except TypeError:  # an unhashable key: the constructor reports it
+                first = key_node
+            if first is not key_node:
+                repeats.append((name, first, key_node))
+            children.append((value_node, name))
+        return children
+
+
+def load_yaml(text: str, what: str = "", source: str = "") -> Any:
+    """Parse YAML ``text`` (one document) with :class:`UniqueKeyLoader`; ConfigError naming ``what``
+    and ``source`` (a file name) when it is not YAML or gives a key twice."""
+    try:
+        return yaml.load(text, Loader=UniqueKeyLoader)
+    except DuplicateKeyError as exc:
+        head = " ".join(part for part in ("invalid", what, source) if part)
+        more = f", and {exc.more} more duplicate key{'s' if exc.more > 1 else ''}" if exc.more else ""
+        raise ConfigError(
+            f"{head}: {exc.key}: duplicate key on line {exc.again} (first on line {exc.line}){more}"
+        ) from None
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"{source or what or 'the text'} is not valid YAML: {exc}") from None
+
 
 def read_yaml(path: str | Path, what: str) -> Any:
-    """The parsed content of a YAML file; ConfigError naming ``what`` and the file when it cannot be
-    read, is not UTF-8 text or is not YAML (validating the content is the caller's)."""
+    """The parsed content of a YAML file (:func:`load_yaml`); ConfigError naming ``what`` and the file
+    when it cannot be read, is not UTF-8 text, is not YAML or gives a key twice (validating the content
+    is the caller's)."""
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
@@ -32,10 +119,7 @@ def read_yaml(path: str | Path, what: str) -> Any:
         raise ConfigError(f"cannot read {what} {path}: {exc.strerror}") from None
     except UnicodeDecodeError as exc:
         raise ConfigError(f"cannot read {what} {path}: not UTF-8 text (byte {exc.start})") from None
-    try:
-        return yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{path} is not valid YAML: {exc}") from None
+    return load_yaml(text, what, str(path))
 
 
 def suggest(what: str, given: str, choices: Iterable[str]) -> str:

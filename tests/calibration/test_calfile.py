@@ -1,4 +1,5 @@
-"""The calibration file's reach: written, read back, and a file from before it (no reach)."""
+"""The calibration file's reach: written, read back, and a file from before it (no reach); a file
+edited by hand that gives a key twice is refused."""
 
 from __future__ import annotations
 
@@ -63,3 +64,22 @@ def test_a_file_without_the_reach_loads_and_clears_the_controllers() -> None:
 def test_bad_reach_is_a_one_line_error(reach: dict[str, list[float]], message: str) -> None:
     with pytest.raises(ConfigError, match=message):
         parse_calibration({"calibration": {"k": 150.0, "reach": reach}})
+
+
+def test_a_key_given_twice_is_refused_naming_its_place_and_lines(tmp_path: Path) -> None:
+    """A hand edit that adds a line instead of changing one: ``k`` again under wood's calibration."""
+    lines = OLD.read_text().splitlines()
+    wood = lines.index("  wood:")
+    k = next(i for i in range(wood, len(lines)) if lines[i].startswith("      k: "))
+    lines.insert(k + 1, "      k: 150.0")
+    path = tmp_path / "cal.yaml"
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    with pytest.raises(ConfigError) as info:
+        load_calibration(path)
+    assert str(info.value) == (
+        f"invalid calibration file {path}: surfaces.wood.calibration.k: duplicate key on line {k + 2} "
+        f"(first on line {k + 1})"
+    )
+    path.write_text(OLD.read_text() + "robot: omni3\n", encoding="utf-8")
+    with pytest.raises(ConfigError, match=r": robot: duplicate key on line \d+ \(first on line 9\)$"):
+        load_calibration(path)

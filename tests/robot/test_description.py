@@ -156,6 +156,29 @@ def test_not_a_mapping(tmp_path: Path) -> None:
         load_description(tmp_path / "missing.yaml")
 
 
+def test_a_key_given_twice_is_refused_naming_its_place_and_lines(tmp_path: Path) -> None:
+    """A preset edited by hand: a wheel's radius given again, the mass given again at the end."""
+    text = (PRESET_DIR / "omni4.yaml").read_text()
+    lines = text.splitlines()
+    wheel = next(i for i, line in enumerate(lines) if line.startswith("  - {name: m2,"))
+    lines.insert(wheel + 2, "     radius: 0.03}")
+    lines[wheel + 1] = lines[wheel + 1].removesuffix("}") + ","
+    f = tmp_path / "mine.yaml"
+    f.write_text("\n".join(lines) + "\n")
+    with pytest.raises(ConfigError) as info:
+        load_robot(str(f))
+    assert str(info.value) == (
+        f"invalid robot description {f}: wheels[1].radius: duplicate key on line {wheel + 3} "
+        f"(first on line {wheel + 1})"
+    )
+    mass = lines.index("mass: 1.6") + 1
+    f.write_text(text + "mass: 16\n")
+    with pytest.raises(ConfigError) as info:
+        load_robot(str(f))
+    last = len(text.splitlines()) + 1
+    assert str(info.value).endswith(f": mass: duplicate key on line {last} (first on line {mass})")
+
+
 def test_unknown_preset_suggests() -> None:
     with pytest.raises(ConfigError, match="did you mean 'mecanum4'"):
         load_robot("mecanum")

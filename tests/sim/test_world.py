@@ -12,6 +12,7 @@ import pytest
 from omnibot.errors import ConfigError
 from omnibot.sim.clock import Clock, SimClock, WallClock
 from omnibot.sim.world import (
+    WORLD_DIR,
     World,
     convex_hull,
     is_convex,
@@ -145,6 +146,24 @@ def test_bad_world_files(tmp_path: Path) -> None:
         load_world(listy)
     with pytest.raises(ConfigError, match="cannot read world"):
         load_world(tmp_path / "missing.yaml")
+
+
+def test_a_key_given_twice_in_a_world_is_refused(tmp_path: Path) -> None:
+    text = (WORLD_DIR / "room.yaml").read_text()
+    start = text.splitlines().index("start: {x: 1.0, y: 1.0, theta_deg: 0}") + 1
+    mine = tmp_path / "lab.yaml"
+    mine.write_text(text.replace("theta_deg: 0}", "theta_deg: 0,\n  x: 4.0}"))
+    with pytest.raises(ConfigError) as info:
+        load_world(mine)
+    assert (
+        str(info.value)
+        == f"invalid world {mine}: start.x: duplicate key on line {start + 1} (first on line {start})"
+    )
+    mine.write_text(text + "floor: carpet\n")
+    with pytest.raises(
+        ConfigError, match=r"lab\.yaml: floor: duplicate key on line \d+ \(first on line 5\)$"
+    ):
+        load_world(mine)
 
 
 def test_with_floor_overrides_and_validates() -> None:

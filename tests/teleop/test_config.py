@@ -1,4 +1,5 @@
-"""Teleop config: seed 003's defaults, YAML files (plain and ROS 2 parameter files), clear errors."""
+"""Teleop config: seed 003's defaults, YAML files (plain and ROS 2 parameter files), clear errors;
+seed 003's file as the seed prints it (duplicate keys: refused) and as omnibot ships it."""
 
 from __future__ import annotations
 
@@ -8,8 +9,14 @@ from pathlib import Path
 import pytest
 import yaml
 
+from omnibot.config_errors import load_yaml
 from omnibot.errors import ConfigError
-from omnibot.teleop.config import TeleopConfig, load_teleop_config, parse_teleop_config
+from omnibot.teleop.config import SEED_003_FILE, TeleopConfig, load_teleop_config, parse_teleop_config
+
+ROOT = Path(__file__).resolve().parents[2]
+AS_PRINTED = ROOT / "tests" / "data" / "seed003_teleop_as_printed.yaml"
+"""Seed 003's joy and teleop parameters exactly as its section 4.1 prints them (the two code blocks a
+page break splits them into), with ``axis_linear``, ``scale_linear`` and ``scale_linear_turbo`` twice."""
 
 SEED_003 = """\
 joy_node:
@@ -104,4 +111,79 @@ def test_the_docs_examples_parse() -> None:
     blocks = re.findall(r"```yaml\n(.*?)```", doc.read_text(), re.S)
     assert blocks
     for block in blocks:
-        parse_teleop_config(yaml.safe_load(block), "docs/teleop.md")
+        parse_teleop_config(load_yaml(block), "docs/teleop.md")
+
+
+def test_seed_file_as_printed_is_refused_naming_the_key_and_both_lines() -> None:
+    with pytest.raises(ConfigError) as info:
+        load_teleop_config(AS_PRINTED)
+    lines = AS_PRINTED.read_text().splitlines()
+    first, again = (i + 1 for i, line in enumerate(lines) if line == "    axis_linear:")
+    assert str(info.value) == (
+        f"invalid teleop config {AS_PRINTED}: teleop_node.ros__parameters.axis_linear: "
+        f"duplicate key on line {again} (first on line {first}), and 2 more duplicate keys"
+    )
+    assert (first, again) == (11, 18)
+    # what it was refused for: read as yaml.safe_load reads it, the last map wins and forward is gone
+    lossy = parse_teleop_config(yaml.safe_load(AS_PRINTED.read_text()))
+    assert lossy.axis_linear.x is None and lossy.axis_linear.y == 1
+
+
+class _MergingLoader(yaml.SafeLoader):
+    """Reads a key given twice as the seed means it: its two maps merged into one."""
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[object, object]:
+        out: dict[object, object] = {}
+        for key_node, value_node in node.value:
+            key, value = self.construct_object(key_node, True), self.construct_object(value_node, True)
+            before = out.get(key)
+            out[key] = {**before, **value} if isinstance(before, dict) and isinstance(value, dict) else value
+        return out
+
+
+def test_shipped_seed_file_is_the_printed_one_with_its_pairs_merged() -> None:
+    meant = yaml.load(AS_PRINTED.read_text(), Loader=_MergingLoader)
+    assert meant["teleop_node"]["ros__parameters"]["axis_linear"] == {"x": 3, "y": 1}
+    # the one other change: the teleop node named as teleop_twist_joy's launch file names it
+    meant["teleop_twist_joy_node"] = meant.pop("teleop_node")
+    assert load_yaml(SEED_003_FILE.read_text()) == meant
+    assert load_teleop_config(SEED_003_FILE) == TeleopConfig()
+
+
+def test_the_ros2_docs_show_the_shipped_seed_file() -> None:
+    doc = (ROOT / "docs" / "ros2.md").read_text()
+    section = doc[doc.index("## teleop_twist_joy with seed 003's parameters") :]
+    block = re.search(r"```yaml\n(.*?)```", section, re.S)
+    assert block is not None
+    assert load_yaml(block.group(1)) == load_yaml(SEED_003_FILE.read_text())
+
+
+def test_a_key_two_nodes_give_different_values_is_refused() -> None:
+    ros = {
+        "joy_node": {"ros__parameters": {"deadzone": 0.1}},
+        "teleop_node": {"ros__parameters": {"deadzone": 0.2}},
+    }
+    with pytest.raises(ConfigError) as info:
+        parse_teleop_config(ros, "pad.yaml")
+    assert (
+        str(info.value)
+        == "invalid teleop config pad.yaml: deadzone: given by joy_node (0.1) and by teleop_node (0.2)"
+    )
+    ros["teleop_node"]["ros__parameters"]["deadzone"] = 0.1  # the same value twice says the same thing
+    assert parse_teleop_config(ros).deadzone == 0.1
+
+
+def test_duplicate_keys_in_a_plain_file_are_refused(tmp_path: Path) -> None:
+    pad = tmp_path / "pad.yaml"
+    pad.write_text("enable_button: 5\naxis_linear: {x: 1, y: 0, x: 2}\nenable_button: 4\n")
+    with pytest.raises(ConfigError) as info:
+        load_teleop_config(pad)
+    assert str(info.value) == (
+        f"invalid teleop config {pad}: axis_linear.x: duplicate key on line 2 (first on line 2), "
+        "and 1 more duplicate key"
+    )
+    pad.write_text("enable_button: 5\naxis_linear: {x: 1, y: 0}\nenable_button: 4\n")
+    with pytest.raises(
+        ConfigError, match=r"pad\.yaml: enable_button: duplicate key on line 3 \(first on line 1\)$"
+    ):
+        load_teleop_config(pad)

@@ -118,7 +118,7 @@ def recorded_followers(run: Run) -> list[RecordedFollower]:
 def parse_options(items: list[str] | None) -> dict[str, Any]:
     """``--follower-option KEY=VALUE`` items as options (each value read as YAML: ``45``, ``true``,
     ``[4, 0.5, 0.1]``); ConfigError for an item without ``=``."""
-    import yaml
+    from omnibot.config_errors import load_yaml
 
     out: dict[str, Any] = {}
     for item in items or []:
@@ -126,8 +126,8 @@ def parse_options(items: list[str] | None) -> dict[str, Any]:
         if not sep or not key.strip():
             raise ConfigError(f"expected KEY=VALUE, got {item!r}", key="--follower-option")
         try:
-            parsed = yaml.safe_load(value)
-        except yaml.YAMLError:
+            parsed = load_yaml(value)
+        except ConfigError:
             parsed = None
         if not _option_value(parsed):
             raise ConfigError(

@@ -48,6 +48,7 @@ from mcap.writer import CompressionType, Writer
 from omnibot import __version__
 from omnibot.client.client import RobotClient
 from omnibot.client.events import Event, Telemetry
+from omnibot.config_errors import load_yaml
 from omnibot.errors import ConfigError
 from omnibot.estimation.estimator import Estimator, make_estimator
 from omnibot.estimation.odometry import Pose2D
@@ -153,7 +154,7 @@ def rosbag2_metadata(
                 "name": topic,
                 "type": typename,
                 "serialization_format": "cdr",
-                "offered_qos_profiles": yaml.safe_load(offered_qos(topic)),
+                "offered_qos_profiles": load_yaml(offered_qos(topic)),
                 "type_description_hash": schemas.type_hash(typename),
             },
             "message_count": counts.get(topic, 0),

@@ -10,8 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import yaml
-
+from omnibot.config_errors import load_yaml
 from omnibot.logs.reader import LogFile
 from omnibot.logs.topics import (
     CALIBRATION,
@@ -93,9 +92,10 @@ class Run:
         return self.metadata.get("omnibot", {})
 
     def description(self) -> dict[str, object] | None:
-        """The robot description recorded in the metadata, None when there is none."""
+        """The robot description recorded in the metadata, None when there is none; ConfigError when
+        it is not YAML or gives a key twice."""
         text = self.omnibot_metadata().get("description")
-        loaded = yaml.safe_load(text) if text else None
+        loaded = load_yaml(text, "robot description", f"{self.path} (omnibot metadata)") if text else None
         return loaded if isinstance(loaded, dict) else None
 
 

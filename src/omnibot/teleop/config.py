@@ -26,8 +26,11 @@ omnibot adds the safety timing and optional speed caps::
 
 A file may also be a ROS 2 parameter file (``teleop_node: {ros__parameters: {...}}`` and
 ``joy_node: {ros__parameters: {...}}``, as printed in seed 003); the ``ros__parameters`` of every
-node are merged. A key given in the file replaces that key's default whole (``axis_linear: {x: 1}``
-drives x only). Unknown keys are errors that name the key and suggest the right one.
+node are merged (two nodes giving one key different values is an error). A key given in the file
+replaces that key's default whole (``axis_linear: {x: 1}`` drives x only). Unknown keys are errors
+that name the key and suggest the right one; so is a key given twice in one mapping, as the seed
+prints ``axis_linear`` (:func:`omnibot.config_errors.read_yaml`). :data:`SEED_003_FILE` is seed 003's
+file with those pairs merged.
 """
 
 from __future__ import annotations
@@ -43,6 +46,9 @@ from omnibot.errors import ConfigError
 
 VEL_TIMEOUT_MAX = 1.0
 """s: the longest VEL watchdog the protocol allows."""
+
+SEED_003_FILE = Path(__file__).with_name("seed003.yaml")
+"""Seed 003's ROS 2 parameter file, its duplicate keys merged (the defaults, as a file)."""
 
 
 class _Strict(BaseModel):
@@ -126,16 +132,27 @@ class TeleopConfig(_Strict):
         return None if b is None or b < 0 else b
 
 
-def _flatten_ros(data: Mapping[str, Any]) -> dict[str, Any]:
-    """Merge the ``ros__parameters`` of every node of a ROS 2 parameter file; other files unchanged."""
-    nodes = [v for v in data.values() if isinstance(v, Mapping) and "ros__parameters" in v]
+def _flatten_ros(data: Mapping[str, Any], source: str) -> dict[str, Any]:
+    """Merge the ``ros__parameters`` of every node of a ROS 2 parameter file (ConfigError for a key
+    two nodes give different values); other files unchanged."""
+    nodes = {k: v for k, v in data.items() if isinstance(v, Mapping) and "ros__parameters" in v}
     if not nodes:
         return dict(data)
     merged: dict[str, Any] = {}
-    for node in nodes:
+    given_by: dict[str, str] = {}
+    for name, node in nodes.items():
         params = node["ros__parameters"]
-        if isinstance(params, Mapping):
-            merged.update(params)
+        if not isinstance(params, Mapping):
+            continue
+        for key, value in params.items():
+            if key in merged and merged[key] != value:
+                where = f" {source}" if source else ""
+                raise ConfigError(
+                    f"invalid teleop config{where}: {key}: given by {given_by[key]} ({merged[key]!r}) "
+                    f"and by {name} ({value!r})"
+                )
+            merged[key] = value
+            given_by.setdefault(key, name)
     return merged
 
 
@@ -147,7 +164,7 @@ def parse_teleop_config(data: Any, source: str = "") -> TeleopConfig:
         where = f" {source}" if source else ""
         raise ConfigError(f"a teleop config{where} must be a mapping of keys, got {type(data).__name__}")
     try:
-        return TeleopConfig.model_validate(_flatten_ros(data))
+        return TeleopConfig.model_validate(_flatten_ros(data, source))
     except ValidationError as exc:
         error = explain(exc, TeleopConfig, "teleop config", source)
         # the cross-key checks name their keys themselves
