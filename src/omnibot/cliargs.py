@@ -65,6 +65,33 @@ def add_wheel_loop_option(p: argparse.ArgumentParser) -> None:
     )
 
 
+def add_calibration_option(p: argparse.ArgumentParser) -> None:
+    """``--calibration CAL.yaml`` on the runtime's front ends (``teleop``, ``dashboard``, ``ros2``,
+    ``run``); :func:`use_calibration` applies it."""
+    p.add_argument(
+        "--calibration",
+        metavar="CAL.yaml",
+        help="calibration file from `omnibot calibrate` (of this robot): the floor's (--surface) tables are "
+        "uploaded (CAL), and its wheel slip corrects the odometry and every VEL, so the body goes at the "
+        "speed asked",
+    )
+
+
+def use_calibration(args: argparse.Namespace, client: Any, robot: Any) -> Any:
+    """``--calibration``: upload the floor's tables to ``client``'s controller; the floor's wheel-slip
+    model for ``robot`` (:class:`~omnibot.estimation.slip.SlipModel`), None without the option."""
+    path = getattr(args, "calibration", None)
+    if not path:
+        return None
+    from omnibot.calibration.calfile import floor_calibration
+    from omnibot.estimation.slip import SlipModel
+
+    tables, slip = floor_calibration(path, robot.name, args.surface)
+    if tables is not None:
+        client.upload_calibration(tables)
+    return SlipModel(robot, slip)
+
+
 def add_debug_option(p: argparse.ArgumentParser) -> None:
     """``--debug`` on a (sub)command; SUPPRESS keeps ``omnibot --debug CMD`` working too."""
     p.add_argument(
@@ -139,9 +166,12 @@ def add_log_option(p: argparse.ArgumentParser) -> None:
 
 
 def check_sim_options(args: argparse.Namespace, allowed: Sequence[str] = ()) -> None:
-    """With ``--port``, ``--seed/--world/--surface`` (those not in ``allowed``) are refused."""
+    """With ``--port``, ``--seed/--world/--surface`` (those not in ``allowed``) are refused; with a
+    ``--calibration`` ``--surface`` names the floor whose tables and slip apply."""
     if getattr(args, "port", None) is None:
         return
+    if getattr(args, "calibration", None):
+        allowed = (*allowed, "surface")
     given = [
         f"--{name}" for name in SIM_ONLY if name not in allowed and getattr(args, name, None) is not None
     ]

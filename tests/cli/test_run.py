@@ -76,3 +76,48 @@ def test_the_dashboard_runs_the_follower_in_its_link_thread(
     # the standstill of `omnibot follow`, on the dashboard's runtime too
     assert "run: nobody drives: follower held by the standstill: the gyro's bias is learned (3 s)" in out
     harness.assert_left_as_found()
+
+
+CARPET = Path(__file__).parent.parent / "data" / "omni4_carpet_calibration_before_idle_phase.yaml"
+
+
+def test_a_floors_calibration_and_open_loop_are_taken_as_asked(
+    circle: Path, harness: Harness, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--calibration`` names the floor with ``--surface`` (also with ``--port``); ``--open-loop``
+    is said once; the controller is left as found (its MODE included)."""
+    port = "spy+faults+sim://omni4?world=empty&surface=carpet"
+    argv = [
+        "run",
+        "--follow",
+        str(circle),
+        "--port",
+        port,
+        "--calibration",
+        str(CARPET),
+        "--surface",
+        "carpet",
+    ]
+    assert main([*argv, "--open-loop"]) == 0
+    out = capsys.readouterr().out
+    assert out.count("run: open loop as asked") == 1 and "run: follow completed" in out
+    harness.assert_left_as_found()
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--robot", "mecanum4"], f"--calibration: {CARPET} is a calibration of 'omni4', not of 'mecanum4'"),
+        (
+            ["--surface", "wood"],
+            "--surface: " + str(CARPET) + ": no wheel-slip calibration for surface 'wood'",
+        ),
+    ],
+)
+def test_a_calibration_of_another_robot_or_floor_is_refused(
+    circle: Path, argv: list[str], message: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["run", "--follow", str(circle), "--calibration", str(CARPET), *argv]) == 2
+    err = capsys.readouterr().err
+    assert_one_line_error(err)
+    assert message in err

@@ -9,6 +9,7 @@ import pytest
 
 from omnibot.errors import ConfigError
 from omnibot.estimation.slip import SlipLeg, SlipModel, SlipParameters, fit_slip, leg_error
+from omnibot.motion import Twist
 from omnibot.robot.description import load_robot
 
 
@@ -187,3 +188,22 @@ def test_fit_keeps_scale_1_when_a_radius_error_explains_nothing() -> None:
     fitted = fit_slip(load_robot("omni4"), legs, scale=True)
     assert fitted.scale == 1.0 and fitted.roll == pytest.approx(0.01, rel=0.1)
     assert fitted.combined < 0.002  # noise, not a combined drag: at most a trace of one
+
+
+@pytest.mark.parametrize("robot", ["omni4", "mecanum4", "omni3"])
+def test_commanded_asks_each_wheel_for_its_creep_on_top(robot: str) -> None:
+    """The wheel speeds of the commanded twist are the asked twist's, plus each wheel's creep, over
+    the tyres' scale (exactly where the creep is a rigid motion: omni4 at 45 degrees)."""
+    description = load_robot(robot)
+    params = SlipParameters(roll=0.015, combined=0.03, compliance=0.02, scale=0.98)
+    model = SlipModel(description, params)
+    J = np.asarray(description.wheel_matrix)
+    asked = Twist(0.3 * math.cos(math.pi / 4), 0.3 * math.sin(math.pi / 4), 0.0)
+    q = np.array(asked)
+    want = (J @ q + model.wheel_correction(q)) / params.scale
+    got = J @ np.array(model.commanded(asked))
+    residual = want - J @ np.linalg.pinv(J) @ want  # the part no twist can ask for
+    assert got == pytest.approx(want - residual, abs=1e-9)
+    if robot == "omni4":
+        assert np.abs(residual).max() < 1e-9
+    assert SlipModel(description).commanded(asked) == pytest.approx(asked)  # no slip: as asked

@@ -10,10 +10,12 @@ from hypothesis import strategies as st
 
 from omnibot.client.limits import Limits
 from omnibot.motion import Twist
+from omnibot.robot.description import load_robot
 from omnibot.teleop.config import TeleopConfig
 from omnibot.teleop.mapping import (
     JoyState,
     TwistLimits,
+    TwistRamp,
     deadzone,
     fractions_to_twist,
     joy_to_command,
@@ -105,3 +107,24 @@ def test_fractions_are_of_the_limits() -> None:
     assert fractions_to_twist(1.0, 0.0, 0.0, lim) == Twist(0.5, 0.0, 0.0)
     diag = fractions_to_twist(1.0, 1.0, 0.0, lim)
     assert math.hypot(diag.vx, diag.vy) == pytest.approx(0.5) and diag.vx == pytest.approx(diag.vy)
+
+
+def test_twist_limits_take_the_robots_accelerations() -> None:
+    robot = load_robot("omni3")
+    limits = TwistLimits.from_limits(Limits.from_robot(robot), SEED, robot)
+    assert (limits.accel, limits.angular_accel) == (2.5, 10.0)
+    assert math.isinf(TwistLimits.from_limits(Limits.from_robot(robot), SEED).accel)  # no robot: at once
+
+
+def test_a_ramp_changes_the_twist_by_at_most_the_accelerations() -> None:
+    ramp = TwistRamp(TwistLimits(1.0, 5.0, accel=2.0, angular_accel=10.0))
+    step = ramp.step(Twist(0.3, 0.4, 1.0), 0.05)  # 0.1 m/s along (0.6, 0.8), 0.5 rad/s
+    assert step == pytest.approx(Twist(0.06, 0.08, 0.5))
+    assert ramp.body_accel == pytest.approx((1.2 - 0.5 * 0.08, 1.6 + 0.5 * 0.06, 10.0))
+    for _ in range(4):
+        ramp.step(Twist(0.3, 0.4, 1.0), 0.05)
+    assert ramp.twist == pytest.approx(Twist(0.3, 0.4, 1.0))
+    assert ramp.step(Twist(0.3, 0.4, 1.0), 0.05) == pytest.approx(Twist(0.3, 0.4, 1.0))
+    assert ramp.body_accel == pytest.approx((-0.4, 0.3, 0.0))  # arrived: only the turning axes' part
+    assert ramp.step(Twist(0.0, 0.0, 0.0), 0.0) == ramp.twist  # no time: no change
+    assert not TwistRamp(TwistLimits(1.0, 5.0)).limited

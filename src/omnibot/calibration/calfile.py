@@ -259,6 +259,21 @@ def load_calibration(path: str | Path) -> CalibrationFile:
     return parse_calibration(read_yaml(path, "calibration file"), str(path))
 
 
+def floor_calibration(
+    path: str | Path, robot: str, surface: str | None
+) -> tuple[CalibrationSpec | None, SlipParameters]:
+    """(the floor's calibration tables, its wheel-slip coefficients) from the file at ``path`` for the
+    floor ``surface`` (None: the only floor with wheel slip in the file); the file must be
+    ``robot``'s. A ConfigError names ``--calibration`` or ``--surface``."""
+    cal = load_calibration(path)
+    cal.check_robot(robot, str(path))
+    try:
+        slip = cal.slip_for(surface)
+        return cal.for_surface(surface), slip
+    except ConfigError as exc:
+        raise ConfigError(f"{path}: {exc}", key="--surface") from None
+
+
 def apply_calibration(robot: RobotDescription, spec: CalibrationSpec) -> RobotDescription:
     """The description with its ``calibration`` section replaced."""
     data = robot.model_dump(exclude_none=True)

@@ -38,12 +38,16 @@ from omnibot.robot.description import CalibrationSpec
 
 C = TypeVar("C", bound=Command)
 log = logging.getLogger("omnibot.client")
+UPLOAD_LINE_TIME = 0.02
+"""s a pipelined calibration line may take on the link, at most (a CAL line: 2 ms at 115200 baud, 20
+ms at 9600)."""
 
 
 class TypedCalls:
     """move, rotate, delta, power, vel, stop, mode, sonar, telemetry, cal, status, hello."""
 
     limits: Limits
+    timeout: float
     _mode: int | None
     last_hello: Hello | None
     takes_reach: bool | None = None
@@ -156,7 +160,10 @@ class TypedCalls:
         commands; the commands sent. A controller that does not know the reach (CAL table 8: older
         firmware, the UNO's) takes the rest, and :attr:`takes_reach` says so (False)."""
         sent = commands.calibration(spec, self.limits.motors)
-        for command, pending in [(c, self.submit(c)) for c in sent]:
+        # pipelined: the i-th reply comes after i lines on the link, so each gets that much longer
+        # than the client's own timeout (a person's 0.25 s would time a table's last lines out)
+        pipelined = [(c, self.submit(c, self.timeout + UPLOAD_LINE_TIME * i)) for i, c in enumerate(sent)]
+        for command, pending in pipelined:
             try:
                 pending.result()
                 if command.table == codes.CAL_REACH:

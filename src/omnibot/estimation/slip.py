@@ -46,6 +46,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from omnibot.errors import ConfigError
+from omnibot.motion import Twist
 from omnibot.robot.description import RobotDescription
 from omnibot.robot.kinematics import robot_contact_rows
 
@@ -137,6 +138,8 @@ class SlipModel:
         self._roller_wrench = roller  # wheel k's roller drag, per unit, as a body wrench row
         self.inertia_ratio = robot.yaw_inertia / robot.mass
         self.params = params or SlipParameters()
+        self._wheel_twist = np.linalg.pinv(np.asarray(robot.wheel_matrix, dtype=float))
+        """The least-squares body twist of wheel speeds (rad/s)."""
 
     def patterns(self, twist: ArrayLike, accel: ArrayLike = (0.0, 0.0, 0.0)) -> SlipPatterns:
         """The per-wheel force shares of the roller drag, the combined drag and the acceleration."""
@@ -164,6 +167,16 @@ class SlipModel:
         """Per-wheel over-turn (rad/s) to subtract from measured wheel speeds."""
         turn: FloatArray = self.creep(twist, accel) / self.rim_per_rad
         return turn
+
+    def commanded(self, twist: Twist) -> Twist:
+        """The twist to ask a wheel-speed loop for so that the body goes at ``twist`` on this floor:
+        the loop holds the encoders at the asked twist's wheel speeds, which the creep over-reads, so
+        each wheel is asked for its creep on top and the tyres' scale taken out, ``(q + J^+
+        correction(q)) / scale``, the least-squares twist of those wheel speeds (the creep of most
+        courses is a rigid motion: its least-squares twist is exact)."""
+        q = np.array([twist.vx, twist.vy, twist.w])
+        out = (q + self._wheel_twist @ self.wheel_correction(q)) / self.params.scale
+        return Twist(float(out[0]), float(out[1]), float(out[2]))
 
 
 @dataclass(frozen=True)

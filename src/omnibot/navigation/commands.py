@@ -191,15 +191,9 @@ def _calibration(args: argparse.Namespace, robot: str) -> tuple[Any, Any]:
     floor ``--surface`` names ((None, None) without a file); the file must be ``robot``'s."""
     if not args.calibration:
         return None, None
-    from omnibot.calibration.calfile import load_calibration
+    from omnibot.calibration.calfile import floor_calibration
 
-    cal = load_calibration(args.calibration)
-    cal.check_robot(robot, str(args.calibration))
-    try:
-        slip = cal.slip_for(args.surface)
-        return cal.for_surface(args.surface), slip
-    except ConfigError as exc:
-        raise ConfigError(f"{args.calibration}: {exc}", key="--surface") from None
+    return floor_calibration(args.calibration, robot, args.surface)
 
 
 def _write(target: FsPath, text: str, flag: str) -> None:

@@ -3,8 +3,10 @@ URDF, diagnostics) of the host runtime, with no loop of its own.
 
 * :class:`CmdVelSource` takes what arrived on ``cmd_vel`` (geometry_msgs/TwistStamped, or Twist)
   each cycle without blocking and proposes the newest twist while it is younger than
-  ``cmd_vel_timeout`` (ros2_controllers' name and 0.5 s default); then it is silent, and the VEL
-  watchdog (:data:`WATCHDOG`) stops the robot.
+  ``cmd_vel_timeout`` (ros2_controllers' name and 0.5 s default), ramped at the robot's
+  acceleration limits (as ros2_controllers' drive controllers apply theirs; the ramp's acceleration
+  goes with the VEL); then it is silent, and the VEL watchdog (:data:`WATCHDOG`) stops the robot
+  (on the wheel-speed loop: braking at the same limits).
 * :class:`Ros2Sink` feeds every cycle's telemetry and events to the MCAP recorder's message
   building (:class:`~omnibot.logs.recorder.Recorder` without a file) and publishes what it builds:
   ``odom`` (nav_msgs/Odometry with covariances) and ``/tf`` odom -> base_link from the runtime's
@@ -35,7 +37,8 @@ from omnibot.ros2.dds import DEFAULT, LATCHED, SENSOR_DATA, Node, Profile
 from omnibot.ros2.frames import prefixed, urdf_for_tf
 from omnibot.ros2.types import from_dds, to_dds
 from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.sources import Proposal
+from omnibot.runtime.sources import Proposal, RampedTwist
+from omnibot.teleop.mapping import TwistLimits
 
 log = logging.getLogger("omnibot.ros2")
 
@@ -68,6 +71,8 @@ class CmdVelSource:
         timeout: float = CMD_VEL_TIMEOUT,
         priority: int = CMD_VEL_PRIORITY,
         name: str = "ros2",
+        limits: TwistLimits | None = None,
+        period: float = 0.02,
     ) -> None:
         self.name = name
         self.priority = priority
@@ -80,6 +85,13 @@ class CmdVelSource:
         self.received_at = -math.inf
         self.received = 0
         """Messages taken so far."""
+        self.ramped = RampedTwist(limits, period)
+        """The robot's acceleration limits on the twists (as ros2_control's controllers apply theirs)."""
+
+    @property
+    def body_accel(self) -> tuple[float, float, float] | None:
+        """The ramp's planned acceleration of the last proposal, sent with its VEL."""
+        return self.ramped.body_accel
 
     def propose(self, cycle: Cycle) -> Proposal | None:
         """The newest cmd_vel while younger than the timeout (on ``cycle.now``), else None."""
@@ -94,9 +106,9 @@ class CmdVelSource:
                 self.received_at = cycle.now
             else:
                 log.warning("cmd_vel with a non-finite value ignored: %s", values)
-        if self.twist is None or cycle.now - self.received_at > self.timeout:
-            return None
-        return Proposal(self.twist)
+        fresh = self.twist is not None and cycle.now - self.received_at <= self.timeout
+        twist = self.ramped(cycle, self.twist if fresh else None)
+        return None if twist is None else Proposal(twist)
 
 
 class _Mirror:
@@ -110,6 +122,11 @@ class _Mirror:
 
     def close(self) -> None:
         """Nothing to release (the node is the sink's owner's)."""
+
+
+def _triple(twist: Twist | None) -> str:
+    """A twist as ``vx,vy,w`` (m/s, m/s, rad/s) for a diagnostic value ("" for none)."""
+    return "" if twist is None else f"{twist.vx:.3f},{twist.vy:.3f},{twist.w:.3f}"
 
 
 def _covariance(variances: tuple[float, ...]) -> Any:
@@ -286,7 +303,7 @@ class Ros2Sink:
         text = "; ".join(n.text for n in cycle.notices) or decision.reason
         if cycle.latched:
             text = "emergency stop latched on the controller; " + text
-        sent = cycle.sent
+        sent, asked, achieved = cycle.sent, cycle.decision.twist, cycle.achieved
         statuses = [
             status(
                 level,
@@ -297,7 +314,9 @@ class Ros2Sink:
                     "source": decision.source or "none",
                     "lock": decision.lock or "none",
                     "emergency_stop": cycle.latched or decision.estop,
-                    "sent": "" if sent is None else f"{sent.vx:.3f},{sent.vy:.3f},{sent.w:.3f}",
+                    "sent": _triple(sent),
+                    "asked": _triple(asked),
+                    "achieved": _triple(achieved),
                 },
             ),
             self._battery_status(),

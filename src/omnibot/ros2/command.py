@@ -68,12 +68,13 @@ def add_bridge_options(p: argparse.ArgumentParser, *, several: bool = False) -> 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Declare ``omnibot ros2``'s options."""
-    from omnibot.cliargs import add_robot_options, add_wheel_loop_option
+    from omnibot.cliargs import add_calibration_option, add_robot_options, add_wheel_loop_option
 
     add_robot_options(
         p, world="room", port_help="the simulated --robot, paced to the wall clock", several=True
     )
     add_wheel_loop_option(p)
+    add_calibration_option(p)
     add_bridge_options(p, several=True)
     p.add_argument(
         "--speed",
@@ -177,23 +178,11 @@ def attach(runtime: Any, robot: Any, args: argparse.Namespace, spec: RobotSpec |
         from omnibot.ros2.path import PathSource
     except ImportError:
         raise ConfigError(INSTALL) from None
-    from omnibot.estimation.estimator import make_estimator
     from omnibot.ros2.netns import UnsafeNetwork
+    from omnibot.runtime.sinks import EstimatorWhenMissing
+    from omnibot.teleop.mapping import TwistLimits
 
     spec = spec or robot_specs(args)[0]
-    tried = False
-
-    def estimator_when_missing(cycle: Any) -> None:
-        """At the first cycle, the fused estimator unless another front end installed its own (the
-        dashboard's teach, a --follow's): odom is the estimate the runtime has."""
-        nonlocal tried
-        if runtime.estimator is None and not tried:
-            tried = True
-            try:
-                runtime.estimator = make_estimator("fused", robot)
-            except ConfigError as exc:
-                runtime.notify("warn", f"no odometry: {exc}")
-
     try:
         node = Node(spec.namespace)
     except UnsafeNetwork as exc:
@@ -215,8 +204,17 @@ def attach(runtime: Any, robot: Any, args: argparse.Namespace, spec: RobotSpec |
     reset = OdometryReset(
         node, runtime, odom_frame=odom, notify=notify, on_reset=path.cancel, hardware_id=robot.name
     )
-    runtime.add_sink(estimator_when_missing)
-    runtime.add_source(CmdVelSource(node, stamped=not args.twist, timeout=args.cmd_vel_timeout))
+    runtime.add_sink(EstimatorWhenMissing(runtime, robot))
+    limits = TwistLimits.from_limits(runtime.client.limits, None, robot)
+    runtime.add_source(
+        CmdVelSource(
+            node,
+            stamped=not args.twist,
+            timeout=args.cmd_vel_timeout,
+            limits=limits,
+            period=runtime.period,
+        )
+    )
     runtime.add_source(path)
     runtime.add_sink(reset)
     runtime.add_sink(Ros2Sink(node, robot, prefix=spec.prefix, reporters=[path.status, reset.status]))
@@ -254,10 +252,12 @@ class _Robot:
 
 def _open(args: argparse.Namespace, spec: RobotSpec, session: Any, url: str, label: str) -> _Robot:
     """The robot's runtime with the bridge attached (not yet running)."""
+    from omnibot.cliargs import use_calibration
     from omnibot.runtime.runtime import Runtime
     from omnibot.runtime.sinks import NoticePrinter
 
-    runtime = Runtime(session.client, period=PERIOD, wheel_loop=not args.open_loop)
+    slip = use_calibration(args, session.client, session.robot)
+    runtime = Runtime(session.client, period=PERIOD, wheel_loop=not args.open_loop, slip=slip)
     node = attach(runtime, session.robot, args, spec)
     runtime.add_sink(NoticePrinter(lambda text: _say(f"{label}{text}"), control=True))
     return _Robot(spec, url, session.client, session.robot, runtime, node, label)

@@ -30,7 +30,7 @@ PAD_PRIORITY = 200
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Declare ``omnibot run``'s options (the robot options shared with every command, then its own)."""
-    from omnibot.cliargs import add_robot_options, add_wheel_loop_option
+    from omnibot.cliargs import add_calibration_option, add_robot_options, add_wheel_loop_option
     from omnibot.ros2.command import add_bridge_options
     from omnibot.web.command import add_server_options
 
@@ -67,6 +67,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--config", metavar="FILE.yaml", help="teleop parameters (pad mapping, rate; default seed 003's)"
     )
     add_wheel_loop_option(p)
+    add_calibration_option(p)
     p.add_argument(
         "--duration",
         type=float,
@@ -121,7 +122,7 @@ def compose(runtime: Any, robot: Any, args: argparse.Namespace, config: Any, pat
     from omnibot.motion import Pose2D
     from omnibot.navigation.runner import STANDSTILL
     from omnibot.runtime.following import FOLLOWER_PRIORITY, follower_source
-    from omnibot.runtime.sinks import NoticePrinter
+    from omnibot.runtime.sinks import EstimatorWhenMissing, NoticePrinter, SpeedReport
     from omnibot.runtime.sources import PadSource
     from omnibot.runtime.standstill import Standstill
     from omnibot.teleop.command import open_source
@@ -130,7 +131,8 @@ def compose(runtime: Any, robot: Any, args: argparse.Namespace, config: Any, pat
     parts = Parts()
     period = runtime.period
     if path is not None:
-        runtime.estimator = make_estimator("fused", robot, Pose2D(*path.start))
+        slip = runtime.slip.params if runtime.slip is not None else None
+        runtime.estimator = make_estimator("fused", robot, Pose2D(*path.start), slip)
         parts.follower = follower_source(robot, path, period, args.follower, args.speed)
         runtime.add_source(parts.follower)
         # as `omnibot follow`: the follower waits while the gyro's bias is learned (a person may drive)
@@ -153,6 +155,8 @@ def compose(runtime: Any, robot: Any, args: argparse.Namespace, config: Any, pat
         node = attach(runtime, robot, args)
         parts.closers.append(node.close)
     runtime.add_sink(NoticePrinter(_say, control=True))
+    runtime.add_sink(EstimatorWhenMissing(runtime, robot))  # the achieved twist of the status lines
+    runtime.add_sink(SpeedReport(_say))
     return parts
 
 
@@ -193,6 +197,7 @@ def _result(parts: Parts) -> int:
 
 
 def _in_this_thread(args: argparse.Namespace, url: str, config: Any, path: Any) -> Parts:
+    from omnibot.cliargs import use_calibration
     from omnibot.client.errors import NotSupported
     from omnibot.client.session import robot_session
     from omnibot.protocol import codes
@@ -206,7 +211,11 @@ def _in_this_thread(args: argparse.Namespace, url: str, config: Any, path: Any) 
     with robot_session(url, args.robot, timeout=max(0.2, config.vel_timeout)) as session:
         client, robot = session.client, session.robot
         runtime = Runtime(
-            client, period=period, vel_timeout=config.vel_timeout, wheel_loop=not args.open_loop
+            client,
+            period=period,
+            vel_timeout=config.vel_timeout,
+            wheel_loop=not args.open_loop,
+            slip=use_calibration(args, client, robot),
         )
         parts = compose(runtime, robot, args, config, path)
         try:
@@ -248,6 +257,7 @@ def _stop_pad(runtime: Any, parts: Parts, config: Any) -> None:
 
 
 def _with_dashboard(args: argparse.Namespace, url: str, config: Any, path: Any) -> Parts:
+    from omnibot.cliargs import use_calibration
     from omnibot.navigation.webteach import PathTeacher
     from omnibot.robot.description import RobotDescription
     from omnibot.web.command import server_options
@@ -264,6 +274,7 @@ def _with_dashboard(args: argparse.Namespace, url: str, config: Any, path: Any) 
         config=config,
         make_teach=None if path is not None else make_teach,  # a --follow path owns the estimator's frame
         wheel_loop=not args.open_loop,
+        floor=lambda client, robot: use_calibration(args, client, robot),
         **server,
     )
     parts = Parts()

@@ -61,7 +61,15 @@ class Cycle:
     """Every other event since the last cycle (WARN, ERROR, RANGE, IDLE, RESET...)."""
     decision: Decision = NOBODY
     sent: Twist | None = None
-    """The twist sent with VEL this cycle (clamped to the controller's limits; None: nothing sent)."""
+    """The twist sent with VEL this cycle (clamped to the controller's limits, and with the floor's
+    wheel slip asked on top when the runtime has it; None: nothing sent). What was asked for is
+    :attr:`decision`'s ``twist``."""
     notices: list[Notice] = field(default_factory=list)
     latched: bool = False
     """The controller holds a latched emergency stop (sonar): it refuses motion until STOP."""
+
+    @property
+    def achieved(self) -> Twist | None:
+        """The body twist the robot achieves as estimated (None without an estimate), to set beside
+        the one asked for (:attr:`decision`'s ``twist``)."""
+        return None if self.estimate is None else self.estimate.body_twist

@@ -16,6 +16,7 @@ from omnibot.client.events import ErrorEvent, Event, ResetEvent, Telemetry, Warn
 from omnibot.client.limits import Limits
 from omnibot.errors import ControllerError, LinkError
 from omnibot.estimation.estimator import Estimator
+from omnibot.estimation.slip import SlipModel
 from omnibot.logs.active import attach_runtime
 from omnibot.motion import Estimate, Twist
 from omnibot.protocol import codes
@@ -110,7 +111,10 @@ class Runtime:
     on the motor encoders (True: every VEL, whoever sends it, is then a velocity the wheels hold
     whatever the floor), opened (False: the user asked for open loop) or left as found (None). A
     robot without encoders on every motor stays open loop, and every front end is told so once.
-    :attr:`closed_loop` says what was done.
+    :attr:`closed_loop` says what was done. ``slip``: the floor's calibrated wheel slip; on the closed
+    loop each VEL then asks the wheels for their creep on top (:meth:`SlipModel.commanded
+    <omnibot.estimation.slip.SlipModel.commanded>`), so the body, not only its wheels, goes at the
+    twist asked.
     """
 
     def __init__(
@@ -126,9 +130,11 @@ class Runtime:
         vel_timeout: float = 0.25,
         wait_replies: bool = False,
         wheel_loop: bool | None = True,
+        slip: SlipModel | None = None,
     ) -> None:
         self.client = client
         self.wheel_loop = wheel_loop
+        self.slip = slip
         self.closed_loop: bool | None = None
         """The wheel-speed loop is closed (True), open (False), or was left as found (None)."""
         self.period = period
@@ -359,6 +365,8 @@ class Runtime:
                 self.latched = False
                 self.notify("info", "emergency stop released by a fresh press of the deadman", source)
             sent = clamp_to(client.limits, twist)
+            if self.slip is not None and self.closed_loop and not sent.is_zero:
+                sent = clamp_to(client.limits, self.slip.commanded(sent))
             if getattr(origin, "wait_reply", self.wait_replies):
                 t0 = client.clock.now()
                 client.vel(sent.vx, sent.vy, sent.w, watchdog, accel, body)

@@ -24,11 +24,20 @@ status string); it must not block (hand messages to its executor's queue).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from omnibot.control.paths.path import Path
 from omnibot.control.paths.teach import PathRecorder
+from omnibot.errors import ConfigError
+from omnibot.estimation.estimator import make_estimator
+from omnibot.motion import Twist
+from omnibot.robot.description import RobotDescription
 from omnibot.runtime.cycle import Cycle, Notice
+
+if TYPE_CHECKING:
+    from omnibot.runtime.runtime import Runtime
 
 
 class NoticePrinter:
@@ -46,6 +55,60 @@ class NoticePrinter:
             self.seen.append(notice)
             if notice.kind != "control" or self.control:
                 self.say(notice.text)
+
+
+def describe_twist(twist: Twist) -> str:
+    """A twist for a status line: speed (m/s), direction of travel (deg, body frame) and turn rate."""
+    speed = math.hypot(twist.vx, twist.vy)
+    course = f" at {round(math.degrees(math.atan2(twist.vy, twist.vx))) + 0:+d} deg" if speed >= 0.005 else ""
+    return f"{speed:.2f} m/s{course}, {round(twist.w, 2) + 0.0:+.2f} rad/s"
+
+
+class SpeedReport:
+    """Every ``every`` s of the cycle clock while a source drives the robot at a steady twist: the
+    twist asked and the one achieved (the estimate's), to ``say`` (``omnibot run``'s status line)."""
+
+    def __init__(self, say: Callable[[str], object], every: float = 2.0) -> None:
+        self.say = say
+        self.every = every
+        self._due: float | None = None
+
+    def __call__(self, cycle: Cycle) -> None:
+        """Say asked against achieved when it is due and both are known."""
+        asked, achieved = cycle.decision.twist, cycle.achieved
+        if asked is None or asked.is_zero or achieved is None:
+            self._due = None
+            return
+        if self._due is None:
+            self._due = cycle.now + self.every  # the first report once the drive had time to settle
+        elif cycle.now >= self._due:
+            self._due = cycle.now + self.every
+            self.say(
+                f"{cycle.decision.source}: asked {describe_twist(asked)}; achieved {describe_twist(achieved)}"
+            )
+
+
+class EstimatorWhenMissing:
+    """A sink that gives ``runtime`` the fused estimator of ``robot`` (with the runtime's floor slip)
+    at its first cycle, unless a front end installed its own by then (a teach, a follow): odometry
+    and the achieved twist every front end shows. A robot it cannot estimate is one warning."""
+
+    def __init__(self, runtime: Runtime, robot: RobotDescription) -> None:
+        self.runtime = runtime
+        self.robot = robot
+        self.tried = False
+
+    def __call__(self, cycle: Cycle) -> None:
+        """Install the estimator once, at the first cycle."""
+        runtime = self.runtime
+        if self.tried or runtime.estimator is not None:
+            return
+        self.tried = True
+        slip = runtime.slip.params if runtime.slip is not None else None
+        try:
+            runtime.estimator = make_estimator("fused", self.robot, None, slip)
+        except ConfigError as exc:
+            runtime.notify("warn", f"no odometry: {exc}")
 
 
 class TeachSink:

@@ -63,6 +63,41 @@ class Source(Protocol):
         ...
 
 
+class RampedTwist:
+    """A source's twists ramped at the robot's accelerations (:class:`~omnibot.teleop.mapping.TwistRamp`
+    on the cycle clock; ``limits`` None or without finite accelerations: passed through). A drive
+    starts from the robot's twist as the runtime estimates it (at rest without an estimate) and ends
+    when the source falls silent (None); :attr:`body_accel` is the last step's planned acceleration,
+    which the runtime sends with the VEL so the controller's wheel-speed loop feeds it forward."""
+
+    def __init__(self, limits: TwistLimits | None, period: float) -> None:
+        ramp = TwistRamp(limits) if limits is not None else None
+        self.ramp = ramp if ramp is not None and ramp.limited else None
+        self.period = period
+        self.body_accel: tuple[float, float, float] | None = None
+        self._last: float | None = None  # the cycle time of the last step (None: not driving)
+
+    def __call__(self, cycle: Cycle, twist: Twist | None) -> Twist | None:
+        """This cycle's twist on its way to ``twist`` (None: the source is silent)."""
+        self.body_accel = None
+        ramp = self.ramp
+        if ramp is None or twist is None:
+            self._last = None
+            return twist
+        if self._last is None:
+            ramp.reset(cycle.estimate.body_twist if cycle.estimate is not None else ZERO)
+            self._last = cycle.now - self.period
+        out = ramp.step(twist, cycle.now - self._last)
+        self._last = cycle.now
+        self.body_accel = ramp.body_accel
+        return out
+
+    def reset(self) -> None:
+        """Forget the drive: the next twist starts a new one."""
+        self._last = None
+        self.body_accel = None
+
+
 class DeadmanSource:
     """A person's input through teleop's deadman; set :attr:`sample` (the newest input) from outside,
     or override :meth:`read`. With ``limits`` of finite accelerations (the robot's, through
@@ -96,10 +131,7 @@ class DeadmanSource:
         """Why driving ended on the last cycle it did (None otherwise)."""
         self.twist: Twist | None = None
         """The twist of the last proposal (None when silent)."""
-        self.ramp = TwistRamp(limits) if limits is not None else None
-        self.body_accel: tuple[float, float, float] | None = None
-        """The ramp's planned acceleration of the last proposal (None: a step, or no ramp)."""
-        self._last = 0.0  # cycle time of the last proposal while driving
+        self.ramped = RampedTwist(limits, config.period)
 
     def read(self, now: float) -> Sample | None:
         """The newest input at ``now`` (None: no input device)."""
@@ -115,19 +147,7 @@ class DeadmanSource:
         action = self.deadman.update(cycle.now, self.read(cycle.now))
         self.action = action
         self.ended = action.ended
-        twist = action.twist
-        self.body_accel = None
-        ramp = self.ramp
-        if ramp is not None and ramp.limited:
-            if twist is None:
-                ramp.reset()
-            else:  # driving, or the stop sequence: down to rest at the same limits
-                if action.started:
-                    ramp.reset(cycle.estimate.body_twist if cycle.estimate is not None else ZERO)
-                    self._last = cycle.now - self.config.period
-                twist = ramp.step(twist, cycle.now - self._last)
-                self._last = cycle.now
-                self.body_accel = ramp.body_accel
+        twist = self.ramped(cycle, action.twist)
         self.twist = twist
         if twist is None:
             return None
@@ -138,8 +158,12 @@ class DeadmanSource:
         self.sample = None
         self.deadman.reset()
         self.twist = None
-        if self.ramp is not None:
-            self.ramp.reset()
+        self.ramped.reset()
+
+    @property
+    def body_accel(self) -> tuple[float, float, float] | None:
+        """The ramp's planned acceleration of the last proposal (None: no ramp, or silent)."""
+        return self.ramped.body_accel
 
 
 class JoySource(Protocol):

@@ -17,10 +17,11 @@ from omnibot.errors import ConfigError
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The ``omnibot teleop`` options: robot or port, input device, limits and the teleop config file."""
-    from omnibot.cliargs import add_robot_options, add_wheel_loop_option
+    from omnibot.cliargs import add_calibration_option, add_robot_options, add_wheel_loop_option
 
     add_robot_options(p, world="room", port_help="the simulated --robot, paced to the wall clock")
     add_wheel_loop_option(p)
+    add_calibration_option(p)
     group = p.add_mutually_exclusive_group()
     group.add_argument(
         "--joystick", action="store_true", help="read a pad through pygame (waits for one to be plugged)"
@@ -64,7 +65,7 @@ def open_source(args: argparse.Namespace, config: Any, say: Callable[[str], None
 def run(args: argparse.Namespace) -> int:
     """Run ``omnibot teleop`` for ``--duration`` s or until the user quits, then print what was sent;
     0 (Ctrl-C is raised again after the summary)."""
-    from omnibot.cliargs import check_sim_options, sim_url
+    from omnibot.cliargs import check_sim_options, sim_url, use_calibration
     from omnibot.client.session import robot_session
     from omnibot.teleop.config import load_teleop_config
     from omnibot.teleop.keyboard import HELP
@@ -92,7 +93,13 @@ def run(args: argparse.Namespace) -> int:
         if source.name == "keyboard":
             _say(HELP)
         teleop = Teleop(
-            client, config, source, on_message=_say, robot=session.robot, wheel_loop=not args.open_loop
+            client,
+            config,
+            source,
+            on_message=_say,
+            robot=session.robot,
+            wheel_loop=not args.open_loop,
+            slip=use_calibration(args, client, session.robot),
         )
         _say(f"limits: {teleop.limits.speed:.2f} m/s, {teleop.limits.rate:.2f} rad/s")
         try:

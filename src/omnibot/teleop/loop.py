@@ -24,6 +24,7 @@ from collections.abc import Callable
 from typing import Protocol
 
 from omnibot.client.client import RobotClient
+from omnibot.estimation.slip import SlipModel
 from omnibot.motion import Twist
 from omnibot.robot.description import RobotDescription
 from omnibot.runtime.cycle import Cycle
@@ -58,8 +59,8 @@ class Source(Protocol):
 class Teleop:
     """Drives ``client`` from ``source`` through a runtime; :meth:`step` is one period, :meth:`run`
     loops in real time. ``robot``'s description ramps the twist at its accelerations
-    (:class:`~omnibot.teleop.mapping.TwistRamp`); ``wheel_loop`` is the runtime's (the controller's
-    wheel-speed loop closed by default)."""
+    (:class:`~omnibot.teleop.mapping.TwistRamp`); ``wheel_loop`` and ``slip`` are the runtime's (the
+    controller's wheel-speed loop closed by default; the floor's wheel slip asked on top)."""
 
     def __init__(
         self,
@@ -72,6 +73,7 @@ class Teleop:
         on_message: Callable[[str], None] = print,
         robot: RobotDescription | None = None,
         wheel_loop: bool | None = True,
+        slip: SlipModel | None = None,
     ) -> None:
         self.client = client
         self.config = config
@@ -89,6 +91,7 @@ class Teleop:
             vel_timeout=config.vel_timeout,
             wait_replies=True,
             wheel_loop=wheel_loop,
+            slip=slip,
         )
 
     @property

@@ -64,10 +64,11 @@ def server_options(args: argparse.Namespace) -> ServerOptions:
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The ``omnibot web`` options: robot or port, address, port and access token of the dashboard."""
-    from omnibot.cliargs import add_robot_options, add_wheel_loop_option
+    from omnibot.cliargs import add_calibration_option, add_robot_options, add_wheel_loop_option
 
     add_robot_options(p, world="room", port_help="the simulated --robot, paced to the wall clock")
     add_wheel_loop_option(p)
+    add_calibration_option(p)
     add_server_options(p)
     p.add_argument(
         "--map",
@@ -93,7 +94,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run ``omnibot web``: serve the dashboard for ``--duration`` s or until interrupted; the exit
     status (1 when the robot link ended)."""
-    from omnibot.cliargs import check_sim_options, sim_url
+    from omnibot.cliargs import check_sim_options, sim_url, use_calibration
     from omnibot.navigation.webteach import PathTeacher
     from omnibot.robot.description import RobotDescription
     from omnibot.teleop.config import load_teleop_config
@@ -127,6 +128,7 @@ def run(args: argparse.Namespace) -> int:
         config=config,
         make_teach=make_teach,
         wheel_loop=not args.open_loop,
+        floor=lambda client, robot: use_calibration(args, client, robot),
         **server,
     )
     dash.start()

@@ -40,12 +40,14 @@ from omnibot.client.client import RobotClient
 from omnibot.client.events import ErrorEvent, Event, ResetEvent, WarnEvent
 from omnibot.client.session import leave
 from omnibot.errors import ControllerError, LinkError
+from omnibot.estimation.slip import SlipModel
 from omnibot.motion import Pose2D, Twist
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription
 from omnibot.runtime.arbiter import EStop as EStopLock
 from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.runtime import Runtime
+from omnibot.runtime.sinks import EstimatorWhenMissing
 from omnibot.runtime.sources import DeadmanSource
 from omnibot.teleop.config import TeleopConfig
 from omnibot.teleop.deadman import Deadman, Phase, Sample
@@ -104,6 +106,7 @@ class RobotLink:
         mode: int | None = None,
         runtime: Runtime | None = None,
         wheel_loop: bool = True,
+        slip: SlipModel | None = None,
     ) -> None:
         self.client = client
         self.mode = mode
@@ -128,7 +131,11 @@ class RobotLink:
         """The page's stick, keys and browser gamepad."""
         self.estop_lock = EStopLock()
         self.runtime = runtime or Runtime(
-            client, period=self.config.period, vel_timeout=self.config.vel_timeout, wheel_loop=wheel_loop
+            client,
+            period=self.config.period,
+            vel_timeout=self.config.vel_timeout,
+            wheel_loop=wheel_loop,
+            slip=slip,
         )
         self.runtime.add_source(self.page)
         self.runtime.add_lock(self.estop_lock.lock)
@@ -246,6 +253,7 @@ class RobotLink:
             self.runtime.start()
             if self.teach is not None:
                 self.teach.attach(self.runtime, self._pose())
+            self.runtime.add_sink(EstimatorWhenMissing(self.runtime, self.robot))  # the achieved twist
         self._reset = False
         try:
             client.telemetry(TEL_PERIOD, codes.TEL_MASK)
@@ -305,6 +313,9 @@ class RobotLink:
             "twist": None
             if self._twist is None
             else [round(v, 3) for v in (self._twist.vx, self._twist.vy, self._twist.w)],
+            "achieved": None
+            if cycle.achieved is None
+            else [round(v, 3) for v in (cycle.achieved.vx, cycle.achieved.vy, cycle.achieved.w)],
             "ended": self.deadman.last_end.value if self.deadman.last_end else None,
             "teach": self.teach is not None,
         }
