@@ -19,7 +19,8 @@ at 1 rad/s, and an arc (0.3 m/s forward turning at 0.5 rad/s). Measured from the
 * ratio: the achieved body-frame speed over the asked (the turn rate for the rotation; the arc's
   translation, with its turn rate's ratio alongside), the mean over the last second;
 * drift: the angle between the achieved and the asked direction of travel, degrees;
-* settle: the time from the first VEL until the body-frame twist (averaged over 0.1 s) stays within
+* settle: the time from the first VEL until the body-frame twist (averaged over 0.1 s centred on
+  each sample) stays within
   5 % of the asked (of its size: the translation's, or the turn rate's in place), s.
 
 Goal (issue 24): within 3 % and 3 degrees, settled in 0.3 s, on every cell. ``--open-loop`` measures
@@ -60,8 +61,8 @@ DRIVE = 3.0
 """s of driving per cell; the last second is the steady state."""
 SETTLE_BAND = 0.05
 SMOOTH = 0.1
-"""s: the settling is judged on the truth's twist averaged over this long (a speedometer's reading,
-not the rollers' ripple within a wheel turn)."""
+"""s: the settling is judged on the truth's twist averaged over this long, centred (the body's
+speed, not the rollers' ripple within a wheel turn)."""
 DIRECTIONS: dict[str, Twist] = {
     **{
         str(c): Twist(0.3 * math.cos(math.radians(c)), 0.3 * math.sin(math.radians(c)), 0.0)
@@ -224,10 +225,10 @@ def _judge(asked: Twist, samples: list[tuple[float, Twist]]) -> Cell:
 
 
 def _moving_average(samples: list[tuple[float, Twist]], span: float) -> list[tuple[float, Twist]]:
-    """Each sample's twist averaged with those of the ``span`` s before it."""
+    """Each sample's twist averaged over the ``span`` s centred on it (no lag added)."""
     out = []
-    for i, (t, _) in enumerate(samples):
-        window = [tw for u, tw in samples[: i + 1] if u > t - span]
+    for t, _ in samples:
+        window = [tw for u, tw in samples if abs(u - t) <= span / 2]
         n = len(window)
         out.append(
             (

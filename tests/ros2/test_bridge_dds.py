@@ -77,6 +77,7 @@ from omnibot.ros2.bridge import CmdVelSource, Ros2Sink, WATCHDOG
 from omnibot.ros2.dds import Node
 from omnibot.ros2.types import to_dds
 from omnibot.runtime.runtime import Runtime
+from omnibot.teleop.mapping import TwistLimits
 from omnibot.teleop.pacing import Pacer
 from omnibot.transport.device import find_simulator
 
@@ -89,7 +90,9 @@ with robot_session("sim://omni4?seed=3", "omni4", timeout=0.5) as session:
     teleop = Node("robot1")  # another participant, as teleop_twist_joy's
     writer = teleop.writer("cmd_vel", TS)
     runtime = Runtime(client, period=PERIOD)
-    source = CmdVelSource(bridge)
+    # as omnibot ros2 makes it: ramped at the robot's accelerations
+    limits = TwistLimits.from_limits(client.limits, None, session.robot)
+    source = CmdVelSource(bridge, limits=limits, period=PERIOD)
     runtime.add_source(source)
     runtime.add_sink(Ros2Sink(bridge, session.robot))
     runtime.start()
@@ -149,7 +152,7 @@ def test_cmd_vel_at_20_hz_drives_the_robot_and_silence_stops_it() -> None:
     # it went where it was told: sideways to the left (a holonomic base), not forward
     assert result["left"] > 0.3 and abs(result["forward"]) < 0.03, result
     assert result["stopped_at"] is not None, result
-    # stopped within cmd_vel_timeout plus the watchdog (plus the motors' spin-down) of the last message,
+    # stopped within cmd_vel_timeout plus the watchdog (plus the brake to rest) of the last message,
     # on the simulator's clock: cmd_vel_timeout runs on the runtime's (the wall's), which is ahead of
     # the simulator's when the machine is loaded, the watchdog and the spin-down on the controller's
     assert result["stopped_at"] - result["last_rx"] <= result["bound"] + 0.3, result
