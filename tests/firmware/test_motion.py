@@ -15,7 +15,7 @@ def test_a_vel_that_runs_out_on_the_closed_loop_is_slewed_to_rest() -> None:
     ex = rig.ctrl.executor
     assert rig.cmd("MODE,2") == ["OK"]
     assert rig.cmd("VEL,60,0,90,100") == ["OK"]
-    assert ex._ref == pytest.approx([0.6, 0.0, math.radians(90)])  # a VEL is driven as asked
+    assert ex._twist == pytest.approx([0.6, 0.0, math.radians(90)])  # a VEL is driven as asked
     rig.run(100)  # the watchdog runs out: braking from the twist driven, 0.02 m/s a 10 ms period
     assert ex._braking and ex.moving
     assert ex._ref[0] == pytest.approx(0.58, abs=0.011)

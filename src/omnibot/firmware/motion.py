@@ -113,10 +113,10 @@ class Executor:
         self._counts = [0] * self.n
         self._radius = cfg["radius"]
         self._stop_decel = float(cfg.get("stop_decel_cms2", 0.0)) * 0.01  # m/s^2
-        self._a_max = float(cfg.get("accel_max_cms2", 0.0)) * 0.01  # m/s^2 (0: VEL is not slewed)
+        self._a_max = float(cfg.get("accel_max_cms2", 0.0)) * 0.01  # m/s^2 (0: a brake holds at once)
         self._alpha_max = math.radians(float(cfg.get("angular_accel_max_dps2", 0.0)))  # rad/s^2
-        self._goal = [0.0, 0.0, 0.0]  # the VEL's twist the slew is heading to, m/s, m/s, rad/s
-        self._ref = [0.0, 0.0, 0.0]  # the slewed twist now driven
+        self._goal = [0.0, 0.0, 0.0]  # the twist a slew heads for (rest, when braking), m/s, m/s, rad/s
+        self._ref = [0.0, 0.0, 0.0]  # the slewed twist driven now
         self._slewing = False
         self._slew_due = 0
         self._braking = False
@@ -247,28 +247,17 @@ class Executor:
             acc[0] = g * vx
             acc[1] = g * vy
             acc[2] = 0.0
-        ref = self._ref
         if self.kind != codes.VEL:
             self._warned = 0
-            self._slewing = False
-            last = self._twist  # the twist the last motion drove (none at rest)
-            for i in range(3):
-                ref[i] = last[i] if self.kind != NONE else 0.0
         self.kind = codes.VEL
         self._braking = False
+        self._slewing = False
         self.infinite = False
         self.watchdog.arm(t_ms)
-        goal = self._goal
-        goal[0] = vx * 0.01
-        goal[1] = vy * 0.01
-        goal[2] = math.radians(w)
-        self._slewing = False
-        for i in range(3):
-            ref[i] = goal[i]
-        self._drive(goal[0], goal[1], goal[2], vx == 0 and vy == 0)
+        self._drive(vx * 0.01, vy * 0.01, math.radians(w), vx == 0 and vy == 0)
 
     def _slew(self, dt_us: int) -> None:
-        """Move the driven twist towards the VEL's by at most the acceleration limits over ``dt_us``
+        """Move the slewed twist towards ``_goal`` by at most the acceleration limits over ``dt_us``
         (the translation as a vector) and drive it; the slew ends when it arrives."""
         ref, g = self._ref, self._goal
         dt = dt_us * 1e-6
@@ -379,10 +368,10 @@ class Executor:
         self._rest_due = REST_WINDOW_US
         for i in range(self.n):
             self._rest_ref[i] = self.hal.encoder_count(i)
-        g = self._goal
-        g[0] = 0.0
-        g[1] = 0.0
-        g[2] = 0.0
+        nominal = self._nominal  # the twist the VEL asked for (the sonar guard scales what is driven)
+        for i in range(3):
+            self._ref[i] = nominal[i]
+            self._goal[i] = 0.0
         self._acc_on = False
         if self._a_max > 0.0:
             self._brake_min_us = 0
