@@ -241,16 +241,20 @@ def test_odom_is_the_estimate_and_tracks_the_truth(session: dict[str, Any]) -> N
 def test_imu_is_the_gyro_and_tracks_the_truth(session: dict[str, Any]) -> None:
     """imu's rate is the gyro's, within 0.03 rad/s of the true turn rate (gyro noise and 0.1 deg/s
     steps on the link; observed 0.01); its orientation the controller's heading, within 0.03 rad of
-    the true heading change (1 degree steps on the link, 0.009 rad, and the gyro's drift; observed
-    0.015)."""
+    the true heading change (1 degree steps on the link, 0.009 rad, and the gyro's drift) plus its
+    scale error over the angle turned."""
     got, truth, sent, start = session["peer"]["got"], session["truth"], session["sent"], session["start"]
     imu = got["imu"]
     assert len(imu) > 100, len(imu)
     assert {m["frame"] for m in imu} == {"imu_link"} and {m["accel_cov0"] for m in imu} == {-1.0}
     assert all(sent[m["ns"]]["imu"] == m["rate"] for m in imu)
     assert max(abs(m["rate"] - truth[m["ns"]]["twist"][2]) for m in imu) < 0.03
-    yaw_errors = [abs(_angle(m["yaw"] - _relative(start, truth[m["ns"]]["pose"])[2])) for m in imu]
-    assert max(yaw_errors) < 0.03, max(yaw_errors)
+    turned = [_relative(start, truth[m["ns"]]["pose"])[2] for m in imu]
+    yaw_errors = [abs(_angle(m["yaw"] - t)) for m, t in zip(imu, turned, strict=True)]
+    # plus the gyro's scale error (its uncalibrated spread is 1 %, this seed's about 0.9 %) over the
+    # angle turned: on the wheel-speed loop the robot turns at the 1.5 rad/s asked (open loop it
+    # turned at a third of it, and the error stayed within 0.015)
+    assert max(yaw_errors) < 0.03 + 0.012 * max(abs(t) for t in turned), max(yaw_errors)
     assert max(abs(truth[m["ns"]]["twist"][2]) for m in imu) > 0.05  # it did turn
 
 
