@@ -14,10 +14,14 @@ import math
 import numpy as np
 import pytest
 
+from omnibot.client import commands
+from omnibot.client.client import RobotClient
 from omnibot.estimation.slip import SlipModel, SlipParameters
 from omnibot.firmware.config import LAND_ACCEL, build_config
+from omnibot.firmware.controller import Controller
 from omnibot.firmware.landing import Landing
 from omnibot.protocol import codes
+from omnibot.protocol.messages import Cal
 from omnibot.robot.description import load_robot
 from omnibot.sim.device import SimDevice
 from tests.firmware.conftest import Rig, make_rig
@@ -365,3 +369,34 @@ def test_cal_table_9_sets_the_floors_creep() -> None:
     for command in ("CAL,9,0,0,-1", "CAL,9,2,0,5000", "CAL,9,2,0,20000", "CAL,9,3,0,1", "CAL,9,0,1,5"):
         assert rig.cmd(command) == [bad], command
     assert land.slip == pytest.approx([0.01551, 0.0408, 1.03])
+
+
+def test_the_client_uploads_the_floors_creep(
+    monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture
+) -> None:
+    params = SlipParameters(roll=0.015514, combined=0.040821, scale=1.0)
+    assert commands.slip(params) == [
+        Cal(codes.CAL_SLIP, 0, 0, 1551),
+        Cal(codes.CAL_SLIP, 1, 0, 408),
+        Cal(codes.CAL_SLIP, 2, 0, 10000),
+    ]
+    with RobotClient.open("sim://omni4?seed=1") as client:
+        assert client.upload_slip(params)
+        device = client.link.device  # type: ignore[attr-defined]
+        assert device.controller.executor.landing.slip == pytest.approx([0.01551, 0.0408, 1.0])
+    # older firmware and the UNO's answer ERROR 38: said once, nothing else fails
+    old_cal = Controller._cal
+
+    def older(self: Controller, table: int, index: int, x: int, y: int) -> bool:
+        return table != codes.CAL_SLIP and old_cal(self, table, index, x, y)
+
+    monkeypatch.setattr(Controller, "_cal", older)
+    with (
+        RobotClient.open("sim://omni4?seed=1") as client,
+        caplog.at_level("WARNING", logger="omnibot.client"),
+    ):
+        assert not client.upload_slip(params)
+        assert client.status().state == codes.STATE_IDLE
+    assert [r.getMessage() for r in caplog.records] == [
+        "the controller does not know the floor's creep (CAL table 9): not uploaded"
+    ]
