@@ -254,7 +254,8 @@ def test_a_move_queued_behind_on_the_same_course_is_not_slowed_for() -> None:
     assert ex.landing.plan < 0.1
 
 
-def test_delta_repetitions_each_end_on_their_distance() -> None:
+@pytest.mark.parametrize("poll_us", [1000, 3700])
+def test_delta_repetitions_each_end_on_their_distance(poll_us: int) -> None:
     rig = closed(0.9)
     start = list(rig.hal.enc)
     assert rig.send("MOVE,2,40,0,0;DELTA,0,0,10,0,36\n") == ["OK", "OK"]
@@ -263,7 +264,7 @@ def test_delta_repetitions_each_end_on_their_distance() -> None:
     course = 0
     last = list(start)
     while ex.moving:
-        rig.run(1)
+        rig.run(poll_us // 1000 or 1, step_us=poll_us)
         if ex.remembered[2] != course or not ex.moving:  # a repetition ended
             path += travelled(rig, last, course)
             last = list(rig.hal.enc)

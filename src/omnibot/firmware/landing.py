@@ -30,7 +30,7 @@ period (:meth:`Landing.time_left`).
 
 A driven wheel creeps: its rim turns a little faster than the floor moves under it, in the direction
 it pushes, most on carpet, where every wheel's rollers roll against a large rolling resistance
-(docs/navigation.md's ``slip.py``): the encoders over-read by 1-15 %, and a robot stopped on them
+(docs/navigation.md's ``slip.py``): the encoders over-read by 1-21 %, and a robot stopped on them
 lands short by as much. With the floor's creep coefficients (config ``slip``: ``[roll, combined,
 scale]``, CAL table 9, from ``omnibot calibrate``'s slip runs) the travel is corrected as the host's
 odometry corrects it::
