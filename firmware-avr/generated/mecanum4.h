@@ -27,6 +27,8 @@
 #define P_CAL_ROLLER_COS 4
 #define P_CAL_ROLLER_SIN 5
 #define P_CAL_SCALE 1000
+#define P_CAL_SLIP 9
+#define P_CAL_SLIP_SCALE 10000
 #define P_CAL_SPEED 7
 #define P_E_ANGLE 29
 #define P_E_CALIBRATION 38

@@ -76,6 +76,13 @@ range 0 300
 @ 200
 > MOVE,2,40,0,0;DELTA,0,0,10,0,3
 @ 300
+> STOP;SONAR,1,0,0,0,0;MODE,2;CAL,9,0,0,1551;CAL,9,1,0,408;CAL,9,2,0,10300;CAL,9,2,0,4000
+enc 20
+> MOVE,20,40,30,10;ROTATE,45,90;MOVE,2,40,0,0;DELTA,0,0,10,0,3;STATUS
+@ 1500
+> STATUS
+@ 1500
+> STATUS
 """
 
 
@@ -159,6 +166,10 @@ def test_micropython_matches_cpython(tmp_path: Path, robot: str) -> None:
     assert any("ERROR,22," in line for line in lines)
     # the calibrated reach (CAL table 8): course 30 folds between 30 and 20 cm/s, run at 23 with WARN 18
     assert sum(line.endswith(f"WARN,18,{codes.TEXTS[codes.W_REACH]}") for line in lines) == 1
+    # closed loop (after CAL table 9's bad scale): MOVE, ROTATE and the DELTA land on the encoders
+    last = max(k for k, line in enumerate(lines) if "ERROR,38," in line)
+    statuses = [line.split(" ", 1)[1].split(";")[0] for line in lines[last:] if " STATUS," in line][:3]
+    assert statuses[0] == "STATUS,0,3,16,2" and statuses[2] == "STATUS,1,0,16,2"
     tagged = [line.split(" ", 1)[1] for line in lines if "#" in line or "*" in line]
     assert [t.split("#")[0].split(";")[-1] for t in tagged] == ["OK", "MOVE,30000,60,0,0", "OK"]
     assert tagged[0] == _tagged(b"OK", b"12").decode() and tagged[2] == _tagged(b"OK", b"9999").decode()

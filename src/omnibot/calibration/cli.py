@@ -350,6 +350,8 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> in
         if client is not None and not args.no_upload:
             if keep:  # the board keeps the tables of the floor it stands on (the last one)
                 client.upload_calibration(result.sessions[-1].spec)
+                if result.sessions[-1].slip is not None:  # and its creep, for MOVEs in closed loop
+                    client.upload_slip(result.sessions[-1].slip.params)
             elif robot.calibration is not None:
                 client.upload_calibration(robot.calibration)  # back to the tables it was built with
     truth_name = result.sessions[0].truth if result.sessions else ""

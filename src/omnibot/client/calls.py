@@ -15,6 +15,7 @@ from omnibot.client import commands
 from omnibot.client.errors import CalibrationRejected
 from omnibot.client.limits import Limits
 from omnibot.client.views import Hello, Status
+from omnibot.estimation.slip import SlipParameters
 from omnibot.protocol import codes
 from omnibot.protocol.messages import (
     Cal,
@@ -188,6 +189,20 @@ class TypedCalls:
                     ) from None
                 # a zero speed term is what such a controller already does
         return sent
+
+    def upload_slip(self, params: SlipParameters) -> bool:
+        """Upload the floor's wheel creep (CAL table 9), which a closed-loop MOVE's landing takes out
+        of its encoders (docs/firmware.md); False when the controller does not know the table (older
+        firmware, the UNO's, which lands nothing: its MOVEs are timed)."""
+        for command in commands.slip(params):
+            try:
+                self.execute(command)
+            except CalibrationRejected:
+                if command.index == 0:
+                    log.warning("the controller does not know the floor's creep (CAL table 9): not uploaded")
+                    return False
+                raise
+        return True
 
     def status(self) -> Status:
         """STATUS as a :class:`Status` (SI)."""

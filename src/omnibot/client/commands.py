@@ -28,6 +28,7 @@ import math
 from collections.abc import Callable, Sequence
 
 from omnibot.client.limits import Limits
+from omnibot.estimation.slip import SlipParameters
 from omnibot.protocol import codes, units
 from omnibot.protocol.messages import Cal, Delta, Mode, Move, Power, Rotate, Sonar, Telem, Vel
 from omnibot.robot.description import (
@@ -268,6 +269,20 @@ def _reach(reach: ReachSpec | None) -> list[Cal]:
         Cal(codes.CAL_REACH, i, x, max(1, math.floor(100.0 * v + 1e-6)))
         for i, (x, v) in enumerate(zip(xs, reach.speed, strict=True))
     ]
+
+
+def slip(params: SlipParameters) -> list[Cal]:
+    """CAL table 9: the floor's wheel creep (roll, combined, scale) that a closed-loop MOVE's landing
+    takes out of its encoders (docs/firmware.md, landing)."""
+    values = (
+        ("roll", round(params.roll * 1e5)),
+        ("combined", round(params.combined * codes.CAL_SLIP_SCALE)),
+        ("scale", round(params.scale * codes.CAL_SLIP_SCALE)),
+    )
+    for what, y in values:
+        if not 0 <= y <= codes.INT_MAX:
+            raise ValueError(f"slip {what} {getattr(params, what)} does not fit CAL table 9")
+    return [Cal(codes.CAL_SLIP, i, 0, y) for i, (_, y) in enumerate(values)]
 
 
 def calibration(spec: CalibrationSpec, motors: int | None = None) -> list[Cal]:

@@ -136,6 +136,9 @@ class SlipModel:
         """Each wheel's rim speed r omega over the body twist (rolling without slip)."""
         self._share = np.linalg.pinv(traction.T)  # (m, 3): least-norm wheel forces for a body wrench
         self._roller_wrench = roller  # wheel k's roller drag, per unit, as a body wrench row
+        self.mix = (self._share @ roller.T) / self.rim_per_rad[:, None]
+        """(m, m): wheel k's over-turn (rad/s) per m/s of creep term of roller row j (the firmware's
+        ``creep_mix``: ``creep = roll p + combined c`` in rad/s of each wheel)."""
         self.inertia_ratio = robot.yaw_inertia / robot.mass
         self.params = params or SlipParameters()
         self._wheel_twist = np.linalg.pinv(np.asarray(robot.wheel_matrix, dtype=float))

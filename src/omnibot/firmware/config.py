@@ -40,6 +40,15 @@ mode                        MODE bits at reset (bit 1 when controller.wheel_spee
 encoder_cpr                 counts per wheel revolution of each motor's encoder, 0 = none
 travel                      [x row, y row]: body travel (m, body frame) per encoder count of each wheel,
                             the least-squares forward kinematics (0 for a wheel without an encoder)
+turn                        body rotation (rad) per encoder count of each wheel, the forward
+                            kinematics' third row (a closed-loop ROTATE lands on it; landing.py)
+slip                        the floor's wheel creep [roll m/s, combined, scale] (estimation/slip.py,
+                            from ``omnibot calibrate``'s slip runs; CAL table 9); [0, 0, 1]: none
+creep_roll, creep_rim       per wheel: its roller row's rolling speed and its rim speed per body twist
+creep_mix                   (n, n): wheel k's over-turn (rad/s) per m/s of roller row j's creep term
+                            (a landing's travel, less the creep; landing.py)
+land_accel                  [m/s^2, rad/s^2]: the acceleration a closed-loop MOVE (ROTATE) ramps up and
+                            down at to land on its distance (angle): a share of the description's limits
 progress_tolerance          a MOVE whose encoders measure it short of its distance by more than this
                             share, once the wheels stand still, gets WARN 17 (0: no check; progress.py)
 speed_kp, speed_ki          wheel-speed PI gains, PWM counts per rad/s (and per rad)
@@ -76,6 +85,7 @@ from typing import Any
 import numpy as np
 
 from omnibot.errors import ConfigError, OmnibotError
+from omnibot.estimation.slip import SlipModel, SlipParameters
 from omnibot.robot import kinematics
 from omnibot.robot.description import PiecewiseLinear, RobotDescription, SonarSpec, load_robot
 
@@ -86,6 +96,7 @@ BOARD_MODULES = (
     "calibration",
     "controller",
     "hal",
+    "landing",
     "limits",
     "motion",
     "parser",
@@ -137,14 +148,20 @@ radius a few % off the description's and the encoders' counting, below the 13-16
 a current-limited pair of unequal motors turns the robot (docs/calibration.md, beyond the reach)."""
 
 
-def _travel(robot: RobotDescription, cpr: list[int]) -> list[list[float]]:
-    """Body travel (m) along x and y per encoder count of each wheel: the pseudo-inverse of the
-    inverse kinematics, 0 for a wheel without an encoder (then the firmware has no progress check)."""
+def _travel(robot: RobotDescription, cpr: list[int], rows: tuple[int, ...] = (0, 1)) -> list[list[float]]:
+    """Body travel (m) along x and y (``rows`` 0, 1; row 2: rotation, rad) per encoder count of each
+    wheel: the pseudo-inverse of the inverse kinematics, 0 for a wheel without an encoder (then the
+    firmware has no progress check and no landing)."""
     forward = np.linalg.pinv(np.asarray(robot.wheel_matrix, dtype=float))
     return [
         [round(float(forward[row, i]) * 2.0 * math.pi / c, 12) if c > 0 else 0.0 for i, c in enumerate(cpr)]
-        for row in (0, 1)
+        for row in rows
     ]
+
+
+LAND_ACCEL = 0.5
+"""Share of the description's acceleration limits a closed-loop MOVE (ROTATE) plans its ramp down
+with (``land_accel``, up and down): the loop, lagging the ramp, has the rest to catch up with it."""
 
 
 SPEED_BAND_POWER = 0.05
@@ -207,8 +224,10 @@ def build_config(
     power_min: int | None = None,
     pins: dict[str, Any] | None = None,
     control_period_ms: int = 10,
+    slip: SlipParameters | None = None,
 ) -> dict[str, Any]:
-    """The firmware's config dict for a robot (keys in the module docstring)."""
+    """The firmware's config dict for a robot (keys in the module docstring); ``slip``: the creep of
+    the floor it will drive on (a calibration file's ``surfaces.<floor>.odometry.slip``)."""
     J = robot.wheel_matrix
     radius = [float(w.radius) for w in robot.wheels]
     cal = robot.calibration
@@ -242,6 +261,8 @@ def build_config(
     has_encoders = all(encoder_cpr)
     pwm_max = max(w.motor.pwm_max for w in robot.wheels)
     body_ff, wheel_ff = _accel_ff(robot)
+    creep = SlipModel(robot)
+    slip = slip or SlipParameters()
     return {
         "name": robot.name,
         "motors": robot.n_wheels,
@@ -288,6 +309,15 @@ def build_config(
         "mode": 2 if ctl.wheel_speed_control and has_encoders else 0,
         "encoder_cpr": encoder_cpr,
         "travel": _travel(robot, encoder_cpr),
+        "turn": _travel(robot, encoder_cpr, (2,))[0],
+        "slip": [round(slip.roll, 6), round(slip.combined, 6), round(slip.scale, 5)],
+        "creep_roll": [[round(float(v), 9) for v in row] for row in creep.roll_rows],
+        "creep_rim": [[round(float(v), 9) for v in row] for row in creep.rim_rows],
+        "creep_mix": [[round(float(v), 9) for v in row] for row in creep.mix],
+        "land_accel": [
+            round(LAND_ACCEL * lim.acceleration_max, 6),
+            round(LAND_ACCEL * lim.angular_acceleration_max, 6),
+        ],
         "progress_tolerance": PROGRESS_TOLERANCE if has_encoders else 0.0,
         "speed_kp": round(kp, 6),
         "speed_ki": round(ki, 6),

@@ -426,6 +426,8 @@ class Controller:
             return x >= 0 and self.calibration.set_knot(table, index, x, y / codes.CAL_SCALE)
         if table == codes.CAL_REACH:  # cm/s
             return self.calibration.set_knot(table, index, x, float(y))
+        if table == codes.CAL_SLIP:  # the floor's creep: a closed-loop landing's travel (landing.py)
+            return x == 0 and self.executor.landing.set_slip(index, y)
         if x < 0 or y < 0:
             return False
         if table == codes.CAL_OFFSET:

@@ -18,6 +18,14 @@ still covers its distance; :meth:`Executor.relimit` re-applies the factor after 
 When the guard says the motion must not go on, the executor stops and leaves the reason in ``halt``
 (a protocol code) for the controller to report.
 
+In closed loop (MODE bit 1, an encoder on every wheel, not simulating) a finite MOVE, each DELTA
+repetition and a ROTATE do not run on the timeline: they *land* (:mod:`~omnibot.firmware.landing`),
+ending when the encoders say the body went its distance (angle), with the speed ramped up from rest
+and down to what the command queued behind keeps (0 for none), and a deadline of twice their time
+(and their ramps) and a second after which they end short. The queue's semantics stay: the command
+behind starts when the motion lands, an infinite DELTA finishes the repetition running when a
+command comes. Open loop and simulation keep seed 000's timeline.
+
 A finite MOVE on a robot with encoders is watched through its coast (:mod:`~omnibot.firmware.progress`):
 when the wheels stand still short of its distance beyond the tolerance, WARN 17.
 
@@ -30,6 +38,7 @@ short. The remembered MOVE keeps the speed asked.
 import math
 
 from omnibot.firmware.calibration import fold_course
+from omnibot.firmware.landing import Landing
 from omnibot.firmware.power import DEADBAND, SATURATED, WEAK, PowerModel
 from omnibot.firmware.progress import COASTING, ProgressWatch
 from omnibot.firmware.safety import LIMITED, UNCOVERED
@@ -52,6 +61,7 @@ MODE_CLOSED_LOOP = codes.MODE_CLOSED_LOOP
 NONE = 0  # no motion (kinds are the command ids of protocol/codes.py otherwise)
 BRAKED = 1 << 20  # applied-power marker of a braked motor: any power written next releases it
 LOOP_GUARD = 16  # motions started in one step at most (zero-length moves), keeps a poll short
+CHAIN_GUARD = 64  # DELTA repetitions looked ahead at most when the landing plans its ramp
 REACHED = 32  # warning flag: a MOVE asked beyond the calibrated reach (power.py and safety.py own 1..16)
 BRAKE_MAX_US = 3000000  # braking to rest on the speed loop ends by then, whatever the encoders say
 REST_WINDOW_US = 50000  # the wheels stand still when none turned more than its rest counts in this long
@@ -135,6 +145,13 @@ class Executor:
         self._drag_due = 0
         self.progress = ProgressWatch(cfg)
         self._watch_due = 0
+        self.landing = Landing(cfg)
+        self._land_scale = 1.0  # the landing's ramp: share of the asked speed driven now
+        self._land_us = 0  # us since the landing's last update
+        self._deadline = 0  # us a landing motion may still take before it ends short
+        self._period = period_us
+        self._unit = [0.0, 0.0, 0.0]
+        self._over = [0.0] * self.n
         self.speedctl = SpeedControl(
             [int(c) for c in cfg["encoder_cpr"]],
             float(cfg["speed_kp"]),
@@ -165,6 +182,8 @@ class Executor:
         self.mode = mode
         if mode & MODE_SIMULATION:
             self.progress.cancel()  # no power applied: nothing to measure
+        if self.landing.active and not self._lands():
+            self._land_off()
         if (old ^ mode) & MODE_CLOSED_LOOP:
             if mode & MODE_CLOSED_LOOP:
                 self._start_feedback()
@@ -200,6 +219,8 @@ class Executor:
         self._coast = 0
         self._speed = 0.0
         self.progress.cancel()
+        self.landing.rest()
+        self._land_scale = 1.0
         for i in range(self.n):
             self.powers[i] = 0
         self.apply()
@@ -253,6 +274,7 @@ class Executor:
         self._braking = False
         self._slewing = False
         self.infinite = False
+        self._land_reset()
         self.watchdog.arm(t_ms)
         self._drive(vx * 0.01, vy * 0.01, math.radians(w), vx == 0 and vy == 0)
 
@@ -433,6 +455,7 @@ class Executor:
             self._rotate(slot[1], slot[2], carry)
         else:  # POWER
             self.infinite = False
+            self._land_reset()
             self.remaining = slot[1] * 1000 + carry
             self._feedback = False
             self._drag = False
@@ -468,6 +491,7 @@ class Executor:
         L, V, D, C = self.remembered
         self.infinite = abs(L) == INF
         if L == 0 or V == 0:
+            self._land_reset()
             self.remaining = carry
             self._drive(0.0, 0.0, 0.0, False)
             return
@@ -482,24 +506,36 @@ class Executor:
             gain = max(0.0, gain + self.model.cal.coast(speed) * speed / abs(L))
         s = speed if (L > 0) == (V > 0) else -speed
         a = math.radians(D)
+        u = 1.0 if s > 0 else -1.0
+        ux = u * math.cos(a)
+        uy = u * math.sin(a)
+        if self.infinite:
+            self._land_reset()
+        else:
+            self._land_start(ux, uy, u * C * 0.1, False, abs(L) * 0.01, speed * 0.01)
         self._drive(s * 0.01 * math.cos(a), s * 0.01 * math.sin(a), s * C * 0.001, False, gain)
         if not self.infinite:
-            self.remaining = _duration(abs(L), speed, self._time_scale) + carry
+            self._timed(_duration(abs(L), speed, self._time_scale), carry)
             if self.kind == codes.MOVE and not self.mode & MODE_SIMULATION:
-                u = 1.0 if s > 0 else -1.0
                 self._read_counts()
-                self.progress.start(self._counts, u * math.cos(a), u * math.sin(a), abs(L) * 0.01)
+                self.progress.start(self._counts, ux, uy, abs(L) * 0.01)
 
     def _rotate(self, A: int, F: int, carry: int) -> None:
         self.infinite = abs(A) == INF
         if A == 0:
+            self._land_reset()
             self.remaining = carry
             self._drive(0.0, 0.0, 0.0, True)
             return
         w = math.radians(abs(F))
-        self._drive(0.0, 0.0, w if (A > 0) == (F > 0) else -w, True)
+        u = 1.0 if (A > 0) == (F > 0) else -1.0
+        if self.infinite:
+            self._land_reset()
+        else:
+            self._land_start(0.0, 0.0, u, True, math.radians(abs(A)), w)
+        self._drive(0.0, 0.0, u * w, True)
         if not self.infinite:
-            self.remaining = _duration(abs(A), abs(F), self.model.scale) + carry
+            self._timed(_duration(abs(A), abs(F), self.model.scale), carry)
 
     def _drive(self, vx: float, vy: float, w: float, rotate: bool, gain: float = 1.0) -> None:
         """Compute and apply the powers for a twist (m/s, m/s, rad/s); ``gain`` is the roller drag's
@@ -509,6 +545,18 @@ class Executor:
         n[1] = vy
         n[2] = w
         n[3] = gain
+        ls = self._land_scale
+        if self.landing.active:  # its plan: the share of the twist asked, and its rate of change
+            rate = self.landing.rate / self.landing.nominal  # 1/s
+            acc = self._acc
+            acc[0] = rate * vx
+            acc[1] = rate * vy
+            acc[2] = rate * w
+            self._acc_on = rate != 0.0
+            self._acc_turning = False
+            vx *= ls
+            vy *= ls
+            w *= ls
         k = 1.0
         g = self.guard
         if g is not None and (vx != 0.0 or vy != 0.0):
@@ -544,7 +592,7 @@ class Executor:
         t[1] = vy
         t[2] = w
         self._rot = rotate
-        if flags & DEADBAND:
+        if flags & DEADBAND and ls >= 1.0:  # the loop drives a landing's slow end
             for i in range(self.n):
                 self._ff[i] = 0.0
                 self._target[i] = 0.0
@@ -552,7 +600,12 @@ class Executor:
             for i in range(self.n):
                 self._ff[i] = model.raw[i]
             model.wheel_speeds(vx, vy, w, self._target)
-            if self._acc_on and self.kind == codes.VEL:
+            if self.landing.active:  # the wheels turn faster by their creep, so the body goes as asked
+                over = self._over
+                if self.landing.overturn(vx, vy, w, over):
+                    for i in range(self.n):
+                        self._target[i] += over[i]
+            if self._acc_on and (self.kind == codes.VEL or self.landing.active):
                 self._accel(vx, vy, w, k)
         if self.mode & MODE_CLOSED_LOOP and not self._feedback:
             self._start_feedback()
@@ -606,13 +659,17 @@ class Executor:
         if g is None or not self.travelling:
             return
         n = self._nominal
-        k = g.factor(n[0] * 100.0, n[1] * 100.0)
+        ls = self._land_scale
+        k = g.factor(n[0] * ls * 100.0, n[1] * ls * 100.0)
         if k == self._k:
             return
         old = self._time_scale
         self._drive(n[0], n[1], n[2], self._rot, n[3])
         if self.kind != NONE and not self.infinite and self.kind != codes.VEL:
-            self.remaining = int(self.remaining * old / self._time_scale)
+            if self.landing.active:  # it ends on its distance: only the time it may take stretches
+                self._deadline = int(self._deadline * old / self._time_scale)
+            else:
+                self.remaining = int(self.remaining * old / self._time_scale)
 
     def _warn_once(self, flags: int) -> None:
         new = flags & ~self._warned
@@ -658,8 +715,130 @@ class Executor:
     def _feedback_step(self, dt_us: int) -> None:
         for i in range(self.n):
             self._counts[i] = self.hal.encoder_count(i)
+        if self.landing.active:
+            self._land_us += dt_us
+            self._deadline -= dt_us
         if self.speedctl.update(dt_us, self._counts, self._target, self._ff, self.powers):
+            if self.landing.active:
+                self._land_step()
             self.apply()
+
+    # ------------------------------------------------------------------ landing (closed loop)
+
+    def _lands(self) -> bool:
+        """A finite motion started now ends on its encoders (landing.py): closed loop, not simulating."""
+        return self._closed_loop() and self.landing.available and not self.mode & MODE_SIMULATION
+
+    def _land_reset(self) -> None:
+        """The motion starting is not landed: full speed, on the timeline."""
+        self.landing.active = False
+        self._land_scale = 1.0
+
+    def _land_start(self, ux: float, uy: float, uw: float, rotate: bool, goal: float, nominal: float) -> None:
+        """Land the motion starting now (if :meth:`_lands`): twist (ux, uy, uw) per unit of its speed
+        (:meth:`Landing.start`); its plan set before it is driven."""
+        if not self._lands():
+            self._land_reset()
+            return
+        self._read_counts()
+        wheels = self.speedctl.speed if self._feedback else None  # a motion that was not landed ran
+        t = self._unit
+        t[0] = ux
+        t[1] = uy
+        t[2] = uw
+        self.landing.start(self._counts, t, rotate, goal, nominal, wheels, self._land_us)
+        self._land_us = 0
+        self._land_scale = self._land_profile(0)
+
+    def _timed(self, duration: int, carry: int) -> None:
+        """A finite motion's time: on the timeline, or (landing) a deadline of twice it with its ramps
+        and a second, after which it ends short (WARN 17 for a MOVE), its end left to :meth:`_land_step`."""
+        land = self.landing
+        if land.active:
+            a = land.accel_w if land.rotate else land.accel
+            self._deadline = 2 * (duration + int(2e6 * land.nominal / a)) + 1000000
+            self.remaining = self.landing.time_left(self._period)
+        else:
+            self.remaining = duration + carry
+
+    def _land_step(self) -> None:
+        """One control period of a landing motion: its travel, its end, its ramp."""
+        land = self.landing
+        dt = self._land_us
+        land.update(self._counts, dt)
+        self._land_us = 0
+        self.remaining = 0 if self._deadline <= 0 else land.time_left(self._period)
+        rate = land.rate
+        scale = self._land_profile(dt)
+        if scale != self._land_scale or land.rate != rate:
+            self._land_scale = scale
+            n = self._nominal
+            self._drive(n[0], n[1], n[2], self._rot, n[3])
+
+    def _land_off(self) -> None:
+        """Back to the timeline mid-motion (open loop or simulation now): the rest at the speed asked."""
+        land = self.landing
+        left = land.left
+        self._land_reset()
+        self.remaining = int(left / land.nominal * 1e6) if left > 0.0 else 0
+        if self.kind != NONE:
+            n = self._nominal
+            self._drive(n[0], n[1], n[2], self._rot, n[3])
+
+    def _land_profile(self, dt_us: int) -> float:
+        """Advance the landing motion's plan by ``dt_us`` (:meth:`Landing.replan`): the share of the
+        asked speed to drive now; its rate of change is fed forward as a planned acceleration."""
+        land = self.landing
+        need = land.braking()
+        rest = self._chain_rest(need) if self.kind == codes.DELTA else 0.0
+        v_exit = 0.0 if rest >= need else self._exit_speed()
+        return land.replan(rest, v_exit, dt_us)
+
+    def _chain_rest(self, need: float) -> float:
+        """The path (m) of this DELTA's repetitions still to come, counted up to ``need``."""
+        if self._reps_inf:
+            return need if len(self.queue) == 0 else 0.0
+        m = self.remembered
+        d = self._delta
+        L = m[0]
+        total = 0.0
+        k = self._reps
+        guard = CHAIN_GUARD
+        while k > 0 and total < need:
+            guard -= 1
+            if guard <= 0:
+                return need
+            L = _clamp(L + d[0], self.l_max)
+            total += abs(L) * 0.01
+            k -= 1
+        return total
+
+    def _exit_speed(self) -> float:
+        """The speed the command queued behind keeps along this motion's direction (m/s or rad/s,
+        0 when it goes elsewhere, turns the other way or nothing is queued)."""
+        slot = self.queue.peek()
+        if slot is None:
+            return 0.0
+        land = self.landing
+        kind = slot[0]
+        if land.rotate:
+            if kind != codes.ROTATE or slot[1] == 0:
+                return 0.0
+            sign = 1.0 if (slot[1] > 0) == (slot[2] > 0) else -1.0
+            v = sign * land.uw * math.radians(abs(slot[2]))
+        elif kind in (codes.MOVE, codes.DELTA):
+            L, V, D = slot[1], slot[2], slot[3]
+            if kind == codes.DELTA:
+                m = self.remembered
+                L, V, D = m[0] + L, m[1] + V, m[2] + D
+            if L == 0 or V == 0:
+                return 0.0
+            s = abs(V) * 0.01 if (L > 0) == (V > 0) else -abs(V) * 0.01
+            a = math.radians(D)
+            v = s * (math.cos(a) * land.ux + math.sin(a) * land.uy)
+        else:
+            return 0.0
+        return v if v > 0.0 else 0.0
 
 
 def _clamp(v: int, lim: float) -> int:

@@ -34,6 +34,10 @@ class CommandQueue:
         self._count -= 1
         return slot
 
+    def peek(self) -> "list[int] | None":
+        """The oldest slot without taking it (None when empty); valid until the next push or pop."""
+        return self._slots[self._head] if self._count else None
+
     def clear(self) -> None:
         """Empty the queue."""
         self._head = 0

@@ -119,6 +119,8 @@ def run_follow(args: argparse.Namespace) -> int:
         tables, slip = _calibration(args, robot.name)
         if tables is not None:
             client.upload_calibration(tables)  # the floor's own tables (docs/calibration.md)
+        if slip is not None:
+            client.upload_slip(slip)  # and its creep, which a closed-loop MOVE's landing takes out
         options = FollowOptions(
             follower=args.follower,
             speed=speed,
