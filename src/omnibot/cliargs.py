@@ -78,8 +78,10 @@ def add_calibration_option(p: argparse.ArgumentParser) -> None:
 
 
 def use_calibration(args: argparse.Namespace, client: Any, robot: Any) -> Any:
-    """``--calibration``: upload the floor's tables to ``client``'s controller; the floor's wheel-slip
-    model for ``robot`` (:class:`~omnibot.estimation.slip.SlipModel`), None without the option."""
+    """``--calibration``: upload the floor's (``--surface``) tables and creep to ``client``'s
+    controller (CAL; the creep's table where the controller knows it: a closed-loop MOVE's landing
+    takes it out); the floor's wheel-slip model for ``robot``
+    (:class:`~omnibot.estimation.slip.SlipModel`), None without the option."""
     path = getattr(args, "calibration", None)
     if not path:
         return None
@@ -89,6 +91,7 @@ def use_calibration(args: argparse.Namespace, client: Any, robot: Any) -> Any:
     tables, slip = floor_calibration(path, robot.name, args.surface)
     if tables is not None:
         client.upload_calibration(tables)
+    client.upload_slip(slip)
     return SlipModel(robot, slip)
 
 

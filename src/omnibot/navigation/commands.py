@@ -30,6 +30,7 @@ from omnibot.cliargs import (
     check_writable,
     seed_of,
     sim_robot,
+    use_calibration,
     world_of,
 )
 from omnibot.errors import ConfigError
@@ -116,11 +117,8 @@ def run_follow(args: argparse.Namespace) -> int:
         _robot_client(args, start=Pose2D(*path.start)) as (client, robot),
         progress_bar(f"follow {FsPath(args.path).name}", path.length, bar_format=metres) as bar,
     ):
-        tables, slip = _calibration(args, robot.name)
-        if tables is not None:
-            client.upload_calibration(tables)  # the floor's own tables (docs/calibration.md)
-        if slip is not None:
-            client.upload_slip(slip)  # and its creep, which a closed-loop MOVE's landing takes out
+        floor = use_calibration(args, client, robot)  # the floor's tables and creep, uploaded
+        slip = floor.params if floor is not None else None
         options = FollowOptions(
             follower=args.follower,
             speed=speed,
@@ -186,16 +184,6 @@ def _target(given: str | None, out: FsPath | None, name: str) -> FsPath | None:
     if given:
         return FsPath(given)
     return out / name if out is not None else None
-
-
-def _calibration(args: argparse.Namespace, robot: str) -> tuple[Any, Any]:
-    """(the floor's calibration tables, its wheel-slip coefficients) from ``--calibration`` for the
-    floor ``--surface`` names ((None, None) without a file); the file must be ``robot``'s."""
-    if not args.calibration:
-        return None, None
-    from omnibot.calibration.calfile import floor_calibration
-
-    return floor_calibration(args.calibration, robot, args.surface)
 
 
 def _write(target: FsPath, text: str, flag: str) -> None:
