@@ -50,13 +50,9 @@ def run(
     """Drive one step or ramp on the firmware's closed loop and measure it; ``plan``: a ramp's VELs
     carry its acceleration (A, cm/s^2) until its last."""
     dev = SimDevice(robot, surface=surface, seed=seed)
-    steps = round(CYCLE / dev.tick)
 
     def send(line: str) -> None:
-        dev.receive((line + "\n").encode())
-        for _ in range(steps):
-            dev.step()
-        dev.transmit()
+        dev.command(line, CYCLE)
 
     send("MODE,2")
     c, s = math.cos(math.radians(course)), math.sin(math.radians(course))

@@ -38,23 +38,13 @@ def _let_go(robot: str, speed: float) -> tuple[float, float, float]:
     silent (the watchdog runs out): the distance the truth travelled after the last VEL, the time to
     the IDLE event and the body's largest deceleration (m/s^2, over 50 ms) on the way."""
     dev = SimDevice(robot, surface="wood", seed=1)
-    steps = round(0.05 / dev.tick)
-
-    def send(line: str) -> None:
-        dev.receive((line + "\n").encode())
-        for _ in range(steps):
-            dev.step()
-        dev.transmit()
-
-    send("MODE,2")
+    dev.command("MODE,2", 0.05)
     for _ in range(round(speed / 1.0 / 0.05) + 20):  # up to speed at 1 m/s^2, then held
-        send(f"VEL,{round(speed * 100)},0,0,250")
+        dev.command(f"VEL,{round(speed * 100)},0,0,250", 0.05)
     x0, t0 = dev.sim.pose.x, dev.sim.time
     idle, v, decel = None, dev.sim.twist.vx, 0.0
     while idle is None and dev.sim.time - t0 < 6.0:
-        for _ in range(steps):
-            dev.step()
-        if b"IDLE" in dev.transmit():
+        if b"IDLE" in dev.run(0.05):
             idle = dev.sim.time - t0
         decel, v = max(decel, (v - dev.sim.twist.vx) / 0.05), dev.sim.twist.vx
     assert idle is not None and abs(dev.sim.twist.vx) < 0.01

@@ -180,6 +180,19 @@ class SimDevice:
             self.hal.apply_power()
         self._steps += 1
 
+    def command(self, line: str, seconds: float = 0.0) -> bytes:
+        """Send ``line`` (one protocol line, its terminator added) and :meth:`run` ``seconds``."""
+        self.receive((line + "\n").encode())
+        return self.run(seconds)
+
+    def run(self, seconds: float) -> bytes:
+        """Step ``seconds`` of simulated time (whole steps); everything the firmware sent meanwhile."""
+        out = bytearray()
+        for _ in range(round(seconds / self._tick)):
+            self.step()
+            out += self.transmit()
+        return bytes(out)
+
     def transmit(self) -> bytes:
         """Take everything the firmware has sent (b"" when nothing)."""
         if not self.hal.tx:
