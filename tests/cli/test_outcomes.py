@@ -60,6 +60,7 @@ def report(**values: Any) -> dict[str, Any]:
         ({"final_error_m": 12.0}, False, "final error 1200.0 cm > 15.0 cm"),
         ({"max_cross_track_m": 0.5}, False, "max cross-track error 50.0 cm > 30.0 cm"),
         ({"final_error_m": math.nan}, False, "final error nan cm"),
+        ({"follower_done": False, "failure": "stopped: ..."}, False, "stopped: ..."),
     ],
 )
 def test_follow_verdict(values: dict[str, Any], completed: bool, why: str) -> None:

@@ -26,7 +26,10 @@ def test_follow_alone_runs_in_lockstep_and_leaves_the_controller_as_found(
 ) -> None:
     assert main(["run", "--follow", str(circle), "--port", "spy+faults+sim://omni4?world=empty"]) == 0
     out = capsys.readouterr().out
-    assert "run: in control: follower (priority 10)" in out and "run: follow completed" in out
+    assert "run: in control: follower (priority 10)" in out
+    # the outcome and accuracy as `omnibot follow` gives them, from the simulator's truth
+    assert "run: follow: RMS " in out and "[simulator ground truth]" in out
+    assert "run: follow completed (within 15.0 cm of the path's end, never more than 30.0 cm off it)" in out
     harness.assert_left_as_found()
 
 

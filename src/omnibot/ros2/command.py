@@ -200,6 +200,7 @@ def attach(runtime: Any, robot: Any, args: argparse.Namespace, spec: RobotSpec |
         notify=notify,
         follower=getattr(args, "follower", "tracker"),
         speed=getattr(args, "speed", None),
+        runtime=runtime,
     )
     reset = OdometryReset(
         node, runtime, odom_frame=odom, notify=notify, on_reset=path.cancel, hardware_id=robot.name
