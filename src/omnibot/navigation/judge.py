@@ -24,7 +24,7 @@ class FollowJudge:
     and, where a simulator is behind the link, the truth mapped into the estimate's frame as it is
     when the judge is made) at every cycle the follower drives. ``SETTLE`` s
     (:data:`~omnibot.navigation.runner.SETTLE`) after the follower ended (reached the path's end, or
-    ended early: an emergency stop, a refused command) the run is judged
+    ended early: a stall, an emergency stop, a refused command) the run is judged
     (:func:`~omnibot.navigation.metrics.follow_report`: the final distance to the path's end and the
     largest cross-track error against ``tolerances``, from the truth where there is one),
     :attr:`report` is set and ``on_verdict(report)`` called; the judge then leaves the runtime.

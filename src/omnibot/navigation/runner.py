@@ -7,13 +7,15 @@ follower -> VEL, on the link's clock).
                                                                                         v
     runtime cycle every 1/rate s on link.clock: predict the estimate to now -> FollowerSource
         (follower.update(State)) -> arbiter -> VEL (body frame, watchdog 150 ms; not awaited)
-        -> sinks: the run's trace (:class:`FollowTrace`: estimate, command, truth), the progress bar
+        -> sinks: the run's trace (:class:`FollowTrace`: estimate, command, truth), the progress bar,
+           the stall watch (:mod:`omnibot.runtime.stall`)
 
 Everything waits through :meth:`RobotClient.sleep`, so the same loop runs on a real port (wall
 clock) and in lockstep on ``sim://`` (simulated time, faster than real time and deterministic for
-a seed). Replies to VEL are collected without blocking at the next cycle; an ERROR reply or a
-latched emergency stop ends a follow early (:attr:`FollowRun.failure`: its report says NOT COMPLETED
-and why) and a scripted manoeuvre with :class:`NavigationError`. Scripted manoeuvres (``record
+a seed). Replies to VEL are collected without blocking at the next cycle; an ERROR reply, a
+latched emergency stop or a stall (wheels that turn while the body does not) ends a follow early
+(:attr:`FollowRun.failure`: its report says NOT COMPLETED and why) and a scripted manoeuvre with
+:class:`NavigationError`. Scripted manoeuvres (``record
 --teach drive``, the gyro spin, the slip runs) drive on the same runtime (:meth:`Navigator.drive`, a
 :class:`~omnibot.runtime.sources.ScriptSource`): nothing but the runtime sends a VEL. With a simulated robot the ground
 truth is sampled at every tick (followers never see it), mapped into the path's frame (the
@@ -46,6 +48,7 @@ from omnibot.robot.description import RobotDescription
 from omnibot.runtime.cycle import Cycle, Notice
 from omnibot.runtime.runtime import LinkPacer, Runtime
 from omnibot.runtime.sources import FollowerSource, ScriptSource
+from omnibot.runtime.stall import StallWatch
 from omnibot.transport.device import find_simulator
 
 WATCHDOG = 0.15
@@ -90,7 +93,7 @@ class FollowRun:
     warnings: list[str] = field(default_factory=list)
     """What the runtime warned about up to the run's end (e.g. a silent gyro, a latched stop)."""
     failure: str = ""
-    """Why the run ended early ("" when it did not): an emergency stop, a refused command."""
+    """Why the run ended early ("" when it did not): a stall, an emergency stop, a refused command."""
 
     @property
     def duration(self) -> float:
@@ -433,7 +436,8 @@ class Navigator:
         progress: Progress | None = None,
     ) -> FollowRun:
         """Drive ``path`` with ``follower`` until it is done (or ``timeout`` s, default from the path),
-        or ends early (:attr:`FollowRun.failure`: a refused command, an emergency stop); ``progress`` (a bar in metres) hears the distance the estimator says the
+        or ends early (:attr:`FollowRun.failure`: a stall the stall watch found, a refused command, an
+        emergency stop); ``progress`` (a bar in metres) hears the distance the estimator says the
         robot has covered, up to the path's length."""
         c = self.client
         clock = c.clock
@@ -463,12 +467,14 @@ class Navigator:
         runtime.pacer = LinkPacer(c, follower.dt)
         runtime.add_source(source)
         runtime.add_sink(trace)
+        watch = StallWatch(runtime, self.robot)
         try:
             runtime.run(until=lambda: source.finished or clock.now() - start > timeout)
             run.failure = source.failure
             run.completed = follower.done and not source.failure
             run.end_time = clock.now()
         finally:
+            watch.close()
             runtime.remove_source(source.name)
             runtime.remove_sink(trace)
             runtime.discard_pending()

@@ -16,7 +16,9 @@ a sink of its own records and watches the repeat, and:
 
 The page's driving has a higher priority than the repeat: it takes over, and when it lets go
 the repeat resumes from where the robot is (:mod:`omnibot.runtime.sources`). The emergency stop, a
-command the controller refuses and a latched sonar stop end the repeat, and the page is told why. Every repeat is judged as ``omnibot follow``
+command the controller refuses, a latched sonar stop and a stall (the stall watch,
+:mod:`omnibot.runtime.stall`, watches the robot while it repeats: wheels that turn while the body
+does not) end the repeat, and the page is told why. Every repeat is judged as ``omnibot follow``
 judges a run (:class:`~omnibot.navigation.judge.FollowJudge`): the page's log says ``repeat: RMS
 ..., final error ...`` and ``repeat completed (within ...)`` or ``repeat NOT COMPLETED: why``.
 """
@@ -42,6 +44,7 @@ from omnibot.robot.description import RobotDescription
 from omnibot.runtime.cycle import Cycle, Level
 from omnibot.runtime.runtime import Runtime
 from omnibot.runtime.sources import FollowerSource
+from omnibot.runtime.stall import StallWatch
 
 APPROACH_GAP = 0.02
 """m: farther than this from the path's start, a repeat first drives straight to it."""
@@ -95,6 +98,8 @@ class PathTeacher:
         """The repeat under way (None when not repeating)."""
         self.judge: FollowJudge | None = None
         """The judge of the last repeat (its report once it has given its verdict)."""
+        self.watch: StallWatch | None = None
+        """The stall watch it added for its repeats (None while none runs, or another watches)."""
         self._mode: int | None = None  # the MODE to restore after a repeat
         cpr = {e.wheel for e in robot.encoders.motors}
         self.wheel_loop = all(w.name in cpr for w in robot.wheels)
@@ -169,11 +174,14 @@ class PathTeacher:
                 self.runtime.notify("warn", f"repeat ended: {failure}", "repeat")
 
     def _verdict(self, report: dict[str, Any]) -> None:
-        """The repeat's outcome and accuracy to every front end."""
+        """The repeat's outcome and accuracy to every front end; the stall watch stops watching."""
         assert self.runtime is not None
         level: Level = "info" if report["completed"] else "warn"
         self.runtime.notify(level, f"repeat: {summary(report)}", "repeat")
         self.runtime.notify(level, f"repeat {verdict(report)}", "repeat")
+        if self.watch is not None:
+            self.watch.close()
+            self.watch = None
 
     def _record(self) -> None:
         est = self.estimator
@@ -214,6 +222,8 @@ class PathTeacher:
         if self.judge is not None:
             self.judge.verdict()  # the last repeat's, if it had not given it yet
         self.judge = FollowJudge(runtime, self.robot, self.source, speed=self.speed, on_verdict=self._verdict)
+        if self.watch is None and StallWatch.of(runtime) is None:  # ROS 2's bridge may watch already
+            self.watch = StallWatch(runtime, self.robot)
         runtime.add_source(self.source)
         return f"repeating the taught {self.path.length:.2f} m{note}"
 

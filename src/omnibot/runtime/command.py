@@ -128,6 +128,7 @@ def compose(runtime: Any, robot: Any, args: argparse.Namespace, config: Any, pat
     from omnibot.runtime.following import FOLLOWER_PRIORITY, follower_source
     from omnibot.runtime.sinks import EstimatorWhenMissing, NoticePrinter, SpeedReport
     from omnibot.runtime.sources import PadSource
+    from omnibot.runtime.stall import StallWatch
     from omnibot.runtime.standstill import Standstill
     from omnibot.teleop.command import open_source
     from omnibot.teleop.mapping import TwistLimits
@@ -142,6 +143,7 @@ def compose(runtime: Any, robot: Any, args: argparse.Namespace, config: Any, pat
         parts.judge = FollowJudge(
             runtime, robot, parts.follower, speed=args.speed, on_verdict=lambda r: _tell(runtime, r)
         )
+        StallWatch.on(runtime, robot)  # wheels that turn while the body does not: stop, say so
         # as `omnibot follow`: the follower waits while the gyro's bias is learned (a person may drive)
         Standstill(runtime, STANDSTILL, FOLLOWER_PRIORITY)
         _say(f"the follower stands still {STANDSTILL:g} s first, while the gyro's bias is learned")
@@ -223,6 +225,7 @@ def _in_this_thread(args: argparse.Namespace, url: str, config: Any, path: Any) 
     from omnibot.protocol import codes
     from omnibot.ros2.command import PERIOD as ROS2_PERIOD
     from omnibot.runtime.runtime import LinkPacer, Runtime
+    from omnibot.runtime.stall import start_sonars
     from omnibot.teleop.pacing import Pacer
 
     person = bool(args.teleop)
@@ -237,7 +240,11 @@ def _in_this_thread(args: argparse.Namespace, url: str, config: Any, path: Any) 
             wheel_loop=not args.open_loop,
             slip=use_calibration(args, client, robot),
         )
+        if path is not None:
+            start_sonars(client, robot)  # the stall watch's witnesses of what is ahead
         parts = compose(runtime, robot, args, config, path)
+        if path is not None:
+            parts.closers.append(lambda: start_sonars(client, robot, 0.0))  # left not pinging, as found
         try:
             runtime.start()
             if not person:
