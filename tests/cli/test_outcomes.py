@@ -47,6 +47,16 @@ def test_a_run_outside_its_tolerances_is_not_completed(
     assert "NOT COMPLETED: final error" in out and "> 0.0 cm" in out
 
 
+def test_a_follow_pinned_against_the_cabinet_is_not_completed(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    into = tmp_path / "into.csv"  # from the room's start straight into its cabinet
+    into.write_text("t,x,y,theta\n0,1.0,1.0,0\n5,2.5,1.0,0\n10,4.5,1.0,0\n", encoding="utf-8")
+    assert main(["follow", str(into), "--world", "room"]) == 1
+    out = capsys.readouterr().out
+    assert "omnibot follow: NOT COMPLETED: stalled: the wheels say " in out and "final error 13" in out
+
+
 def report(**values: Any) -> dict[str, Any]:
     base = {"follower_done": True, "final_error_m": 0.01, "max_cross_track_m": 0.02, "duration_s": 5.0}
     return base | values
@@ -60,6 +70,7 @@ def report(**values: Any) -> dict[str, Any]:
         ({"final_error_m": 12.0}, False, "final error 1200.0 cm > 15.0 cm"),
         ({"max_cross_track_m": 0.5}, False, "max cross-track error 50.0 cm > 30.0 cm"),
         ({"final_error_m": math.nan}, False, "final error nan cm"),
+        ({"follower_done": False, "failure": "stalled: ..."}, False, "stalled: ..."),
     ],
 )
 def test_follow_verdict(values: dict[str, Any], completed: bool, why: str) -> None:

@@ -26,7 +26,27 @@ def test_follow_alone_runs_in_lockstep_and_leaves_the_controller_as_found(
 ) -> None:
     assert main(["run", "--follow", str(circle), "--port", "spy+faults+sim://omni4?world=empty"]) == 0
     out = capsys.readouterr().out
-    assert "run: in control: follower (priority 10)" in out and "run: follow completed" in out
+    assert "run: in control: follower (priority 10)" in out
+    # the outcome and accuracy as `omnibot follow` gives them, from the simulator's truth
+    assert "run: follow: RMS " in out and "[simulator ground truth]" in out
+    assert "run: follow completed (within 15.0 cm of the path's end, never more than 30.0 cm off it)" in out
+    assert "stalled" not in out
+    harness.assert_left_as_found()
+
+
+def test_a_follow_pinned_against_the_cabinet_is_stopped_and_status_1(
+    tmp_path: Path, harness: Harness, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # the room's start (1, 1) east to (4.5, 1): the cabinet (3.6, 1.2) stops the robot 1.4 m short,
+    # its wheels spin and the estimate believes them (it used to say "follow completed", status 0)
+    into = tmp_path / "into.csv"
+    into.write_text("t,x,y,theta\n0,1.0,1.0,0\n5,2.5,1.0,0\n10,4.5,1.0,0\n", encoding="utf-8")
+    assert main(["run", "--follow", str(into), "--port", "sim://omni4?seed=1&world=room"]) == 1
+    out = capsys.readouterr().out
+    assert "run: stalled: the wheels say " in out  # every front end is told at once
+    verdict = next(line for line in out.splitlines() if line.startswith("run: follow NOT COMPLETED: "))
+    assert "stalled: the wheels say " in verdict and "final error 13" in verdict and "> 15.0 cm" in verdict
+    assert "run: follow completed" not in out
     harness.assert_left_as_found()
 
 

@@ -81,8 +81,12 @@ def test_a_path_starts_from_the_robot_and_keeps_headings_it_lacks() -> None:
     assert path_from_message(path_message([(math.nan, 0.0, 0.0)]), here) is None
 
 
-@pytest.fixture
-def bench() -> Iterator[tuple[Runtime, PathSource, Reader, Any, list[tuple[str, str]]]]:
+@pytest.fixture(params=[False, True], ids=["own-verdict", "judged"])
+def bench(
+    request: pytest.FixtureRequest,
+) -> Iterator[tuple[Runtime, PathSource, Reader, Any, list[tuple[str, str]]]]:
+    """The path source on the simulated omni4, judged on the runtime's cycles (as ``omnibot ros2``
+    attaches it) or by its follower alone."""
     with robot_session("sim://omni4?seed=3", "omni4", timeout=0.5) as session:
         from omnibot.estimation.estimator import make_estimator
 
@@ -95,6 +99,7 @@ def bench() -> Iterator[tuple[Runtime, PathSource, Reader, Any, list[tuple[str, 
             PERIOD,
             odom_frame="r1/odom",
             notify=lambda level, text: said.append((level, text)),
+            runtime=runtime if request.param else None,
         )
         runtime.add_source(source)
         runtime.start()
@@ -122,8 +127,12 @@ def test_the_tracker_repeats_a_path_and_says_when_it_is_done(bench: Any) -> None
     # 0.6 m along x then 0.3 m to the left, heading held: poses every 5 cm in the robot's odom frame
     points = [(0.05 * i, 0.0, 0.0) for i in range(13)] + [(0.6, 0.05 * i, 0.0) for i in range(1, 7)]
     _send(reader, path_message(points, frame="r1/odom"))
-    _run(runtime, lambda: source.state != "following", 30.0)
+    _run(runtime, lambda: source.state not in ("following", "judging"), 30.0)
     assert source.state == "completed", (source.detail, said)
+    if source.judge is not None:  # judged as `omnibot follow` judges a run, from the truth
+        verdict = "path completed (within 15.0 cm of the path's end, never more than 30.0 cm off it)"
+        assert ("info", verdict) in said, said
+        assert any(t.startswith("path: RMS") and "[simulator ground truth]" in t for _, t in said), said
     dx, dy = sim.pose.x - start.x, sim.pose.y - start.y
     c, s = math.cos(start.theta), math.sin(start.theta)
     forward, left = c * dx + s * dy, -s * dx + c * dy

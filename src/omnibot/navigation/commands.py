@@ -78,7 +78,7 @@ def run_follow(args: argparse.Namespace) -> int:
     from omnibot.estimation.estimator import ESTIMATORS
     from omnibot.motion import Pose2D
     from omnibot.navigation.metrics import Tolerances
-    from omnibot.navigation.session import FollowOptions, follow_path, summary
+    from omnibot.navigation.session import FollowOptions, follow_path, summary, verdict
     from omnibot.progress import progress_bar
 
     check_sim_options(args, allowed=("surface",))
@@ -162,10 +162,8 @@ def run_follow(args: argparse.Namespace) -> int:
                 f"cannot write {targets['plot']}: {exc.strerror or exc}", key="--plot"
             ) from None
         print(f"  plot: {targets['plot']}")
-    if not report["completed"]:
-        print(f"omnibot follow: NOT COMPLETED: {'; '.join(report['failures'])}")
-        return 1
-    return 0
+    print(f"omnibot follow: {verdict(report)}")
+    return 0 if report["completed"] else 1
 
 
 def _out_dir(args: argparse.Namespace) -> FsPath | None:

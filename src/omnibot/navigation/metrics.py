@@ -17,6 +17,7 @@ import numpy as np
 from omnibot.control.followers.base import wrap
 from omnibot.control.paths.profile import MotionLimits, min_traversal_time
 from omnibot.navigation.runner import FollowRun
+from omnibot.robot.description import RobotDescription
 
 
 @dataclass(frozen=True)
@@ -31,10 +32,12 @@ class Tolerances:
 
 
 def judge(report: dict[str, Any], tolerances: Tolerances) -> dict[str, Any]:
-    """Decide ``report["completed"]`` from the follower's own verdict and the errors against
-    ``tolerances``; ``report["failures"]`` says why not (the numbers)."""
+    """Decide ``report["completed"]`` from the follower's own verdict (and why it ended early, if it
+    did) and the errors against ``tolerances``; ``report["failures"]`` says why not (the numbers)."""
     failures = []
-    if not report["follower_done"]:
+    if report.get("failure"):
+        failures.append(report["failure"])
+    elif not report["follower_done"]:
         failures.append(f"the follower did not reach the end in {report['duration_s']:.1f} s")
     final, worst = report["final_error_m"], report["max_cross_track_m"]
     if not final <= tolerances.final:  # NaN fails too
@@ -77,6 +80,7 @@ def tracking_report(run: FollowRun, limits: MotionLimits) -> dict[str, Any]:
         "estimator": run.estimator,
         "follower_done": run.completed,
         "completed": run.completed,
+        "failure": run.failure,
         "rms_cross_track_m": float(np.sqrt(np.mean(dist**2))) if len(dist) else math.nan,
         "max_cross_track_m": float(dist.max()) if len(dist) else math.nan,
         "rms_heading_error_rad": float(np.sqrt(np.mean(heading_err**2))) if len(dist) else math.nan,
@@ -92,6 +96,25 @@ def tracking_report(run: FollowRun, limits: MotionLimits) -> dict[str, Any]:
     if use_truth and run.final_estimate is not None and run.final_truth is not None:
         fe, ft = run.final_estimate, run.final_truth
         report["estimate_error_m"] = math.hypot(fe.x - ft.x, fe.y - ft.y)
+    return report
+
+
+def follow_report(
+    run: FollowRun,
+    robot: RobotDescription,
+    tolerances: Tolerances,
+    *,
+    speed: float | None = None,
+    floor: str | None = None,
+) -> dict[str, Any]:
+    """The judged report of a run (:func:`tracking_report`, then :func:`judge`), as ``omnibot follow``
+    and every follow on the runtime (``run --follow``, the page's Repeat, ROS 2's path) give it:
+    ``speed`` the run's speed cap, ``floor`` the floor its minimum time is measured on."""
+    limits = MotionLimits.from_robot(robot, speed, surface=floor)
+    report = judge(tracking_report(run, limits), tolerances)
+    report["robot"] = robot.name
+    if speed is not None:
+        report["speed_cap_m_s"] = speed
     return report
 
 

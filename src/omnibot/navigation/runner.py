@@ -7,12 +7,15 @@ follower -> VEL, on the link's clock).
                                                                                         v
     runtime cycle every 1/rate s on link.clock: predict the estimate to now -> FollowerSource
         (follower.update(State)) -> arbiter -> VEL (body frame, watchdog 150 ms; not awaited)
-        -> sinks: the run's trace (estimate, command, truth), the progress bar
+        -> sinks: the run's trace (:class:`FollowTrace`: estimate, command, truth), the progress bar,
+           the stall watch (:mod:`omnibot.runtime.stall`)
 
 Everything waits through :meth:`RobotClient.sleep`, so the same loop runs on a real port (wall
 clock) and in lockstep on ``sim://`` (simulated time, faster than real time and deterministic for
-a seed). Replies to VEL are collected without blocking at the next cycle; an ERROR reply or a
-latched emergency stop ends the run (:class:`NavigationError`). Scripted manoeuvres (``record
+a seed). Replies to VEL are collected without blocking at the next cycle; an ERROR reply, a
+latched emergency stop or a stall (wheels that turn while the body does not) ends a follow early
+(:attr:`FollowRun.failure`: its report says NOT COMPLETED and why) and a scripted manoeuvre with
+:class:`NavigationError`. Scripted manoeuvres (``record
 --teach drive``, the gyro spin, the slip runs) drive on the same runtime (:meth:`Navigator.drive`, a
 :class:`~omnibot.runtime.sources.ScriptSource`): nothing but the runtime sends a VEL. With a simulated robot the ground
 truth is sampled at every tick (followers never see it), mapped into the path's frame (the
@@ -45,6 +48,7 @@ from omnibot.robot.description import RobotDescription
 from omnibot.runtime.cycle import Cycle, Notice
 from omnibot.runtime.runtime import LinkPacer, Runtime
 from omnibot.runtime.sources import FollowerSource, ScriptSource
+from omnibot.runtime.stall import StallWatch
 from omnibot.transport.device import find_simulator
 
 WATCHDOG = 0.15
@@ -88,6 +92,8 @@ class FollowRun:
     distance: float = 0.0
     warnings: list[str] = field(default_factory=list)
     """What the runtime warned about up to the run's end (e.g. a silent gyro, a latched stop)."""
+    failure: str = ""
+    """Why the run ended early ("" when it did not): a stall, an emergency stop, a refused command."""
 
     @property
     def duration(self) -> float:
@@ -107,6 +113,45 @@ class FollowRun:
             "command": np.array(self.command).reshape(-1, 3),
             "truth": np.array(self.truth).reshape(-1, 3),
         }
+
+
+class FollowTrace:
+    """A sink: the run of ``source`` into ``run``: the estimate the follower steered by, its command
+    and the truth (``truth()``: in the path's frame, None without one) at every cycle it drove."""
+
+    def __init__(
+        self,
+        run: FollowRun,
+        source: FollowerSource,
+        truth: Callable[[], tuple[float, float, float] | None],
+    ) -> None:
+        self.run = run
+        self.source = source
+        self.truth = truth
+
+    def __call__(self, cycle: Cycle) -> bool:
+        """Record the cycle if the follower drove it; whether it did."""
+        source = self.source
+        if (
+            cycle.sent is None
+            or source.finished
+            or cycle.decision.source != source.name
+            or source.state is None
+            or source.twist is None
+        ):
+            return False
+        self.record(source.state, source.twist)
+        return True
+
+    def record(self, state: State, command: Command) -> None:
+        """Record the state, the command and the truth now."""
+        run = self.run
+        run.t.append(state.t)
+        run.estimate.append((state.x, state.y, state.theta))
+        run.command.append((command.vx, command.vy, command.w))
+        truth = self.truth()
+        if truth is not None:
+            run.truth.append(truth)
 
 
 class FrameMap:
@@ -390,9 +435,10 @@ class Navigator:
         timeout: float | None = None,
         progress: Progress | None = None,
     ) -> FollowRun:
-        """Drive ``path`` with ``follower`` until it is done (or ``timeout`` s, default from the path);
-        ``progress`` (a bar in metres) hears the distance the estimator says the robot has covered,
-        up to the path's length."""
+        """Drive ``path`` with ``follower`` until it is done (or ``timeout`` s, default from the path),
+        or ends early (:attr:`FollowRun.failure`: a stall the stall watch found, a refused command, an
+        emergency stop); ``progress`` (a bar in metres) hears the distance the estimator says the
+        robot has covered, up to the path's length."""
         c = self.client
         clock = c.clock
         run = FollowRun(path, follower.name, self.estimator.name)
@@ -409,18 +455,11 @@ class Navigator:
         run.start_time = start
         distance0 = self.estimator.distance
         shown = 0.0
+        tracer = FollowTrace(run, source, self.truth)
 
         def trace(cycle: Cycle) -> None:
             nonlocal shown
-            if (
-                cycle.sent is None
-                or cycle.decision.source != source.name
-                or source.state is None
-                or source.twist is None
-            ):
-                return
-            self._record(run, source.state, source.twist)
-            if progress is not None:
+            if tracer(cycle) and progress is not None:
                 covered = min(max(self.estimator.distance - distance0, 0.0), path.length)
                 progress.update(covered - shown)
                 shown = covered
@@ -428,19 +467,20 @@ class Navigator:
         runtime.pacer = LinkPacer(c, follower.dt)
         runtime.add_source(source)
         runtime.add_sink(trace)
+        watch = StallWatch(runtime, self.robot)
         try:
             runtime.run(until=lambda: source.finished or clock.now() - start > timeout)
-            if source.failure:
-                raise NavigationError(source.failure)
-            run.completed = follower.done
+            run.failure = source.failure
+            run.completed = follower.done and not source.failure
             run.end_time = clock.now()
         finally:
+            watch.close()
             runtime.remove_source(source.name)
             runtime.remove_sink(trace)
             runtime.discard_pending()
             if not c.link.closed:
                 c.stop()
-        self._record(run, self.state(), STOP)
+        tracer.record(self.state(), STOP)
         c.sleep(SETTLE)
         est = self.estimator.estimate
         run.final_estimate = est.pose
@@ -449,11 +489,3 @@ class Navigator:
         run.distance = self.estimator.distance - distance0
         run.warnings = list(self.warnings)
         return run
-
-    def _record(self, run: FollowRun, state: State, command: Command) -> None:
-        run.t.append(state.t)
-        run.estimate.append((state.x, state.y, state.theta))
-        run.command.append((command.vx, command.vy, command.w))
-        truth = self.truth()
-        if truth is not None:
-            run.truth.append(truth)

@@ -17,7 +17,7 @@ from omnibot.control.paths.path import Path
 from omnibot.control.paths.profile import MotionLimits
 from omnibot.estimation.slip import SlipParameters
 from omnibot.motion import Pose2D
-from omnibot.navigation.metrics import Tolerances, judge, tracking_report
+from omnibot.navigation.metrics import Tolerances, follow_report
 from omnibot.navigation.runner import GYRO_USE, STANDSTILL, FollowRun, Navigator
 from omnibot.progress import Progress
 from omnibot.robot.description import RobotDescription
@@ -114,13 +114,8 @@ def follow_path(
         run = nav.follow(path, follower, progress=opts.progress)
     finally:
         nav.close()
-    report = judge(
-        tracking_report(run, MotionLimits.from_robot(robot, opts.speed, surface=opts.floor)), opts.tolerances
-    )
-    report["robot"] = robot.name
+    report = follow_report(run, robot, opts.tolerances, speed=opts.speed, floor=opts.floor)
     report["rate_hz"] = opts.rate
-    if opts.speed is not None:
-        report["speed_cap_m_s"] = opts.speed
     return run, report, nav
 
 
@@ -149,4 +144,15 @@ def summary(report: dict[str, Any]) -> str:
         f"({report['time_ratio']:.2f}x), final error {100 * report['final_error_m']:.2f} cm"
         + ("" if report.get("completed", True) else ", NOT COMPLETED")
         + (f" [{report['source']}]" if not math.isnan(report["rms_cross_track_m"]) else "")
+    )
+
+
+def verdict(report: dict[str, Any]) -> str:
+    """One line: completed within the tolerances (which), or NOT COMPLETED and why."""
+    if not report["completed"]:
+        return "NOT COMPLETED: " + "; ".join(report["failures"])
+    tol = report["tolerances"]
+    return (
+        f"completed (within {100 * tol['final_m']:.1f} cm of the path's end, never more than "
+        f"{100 * tol['cross_track_m']:.1f} cm off it)"
     )

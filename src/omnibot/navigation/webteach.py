@@ -16,7 +16,11 @@ a sink of its own records and watches the repeat, and:
 
 The page's driving has a higher priority than the repeat: it takes over, and when it lets go
 the repeat resumes from where the robot is (:mod:`omnibot.runtime.sources`). The emergency stop, a
-command the controller refuses and a latched sonar stop end the repeat, and the page is told why.
+command the controller refuses, a latched sonar stop and a stall (the stall watch,
+:mod:`omnibot.runtime.stall`, watches the robot while it repeats: wheels that turn while the body
+does not) end the repeat, and the page is told why. Every repeat is judged as ``omnibot follow``
+judges a run (:class:`~omnibot.navigation.judge.FollowJudge`): the page's log says ``repeat: RMS
+..., final error ...`` and ``repeat completed (within ...)`` or ``repeat NOT COMPLETED: why``.
 """
 
 from __future__ import annotations
@@ -34,11 +38,13 @@ from omnibot.control.paths.teach import PathRecorder
 from omnibot.estimation.estimator import PoseEstimator
 from omnibot.estimation.slip import SlipParameters
 from omnibot.motion import Pose2D
-from omnibot.navigation.session import follower_limits
+from omnibot.navigation.judge import FollowJudge
+from omnibot.navigation.session import follower_limits, summary, verdict
 from omnibot.robot.description import RobotDescription
-from omnibot.runtime.cycle import Cycle
+from omnibot.runtime.cycle import Cycle, Level
 from omnibot.runtime.runtime import Runtime
 from omnibot.runtime.sources import FollowerSource
+from omnibot.runtime.stall import StallWatch
 
 APPROACH_GAP = 0.02
 """m: farther than this from the path's start, a repeat first drives straight to it."""
@@ -90,6 +96,10 @@ class PathTeacher:
         """The last taught path (estimator frame = the page's frame)."""
         self.source: FollowerSource | None = None
         """The repeat under way (None when not repeating)."""
+        self.judge: FollowJudge | None = None
+        """The judge of the last repeat (its report once it has given its verdict)."""
+        self.watch: StallWatch | None = None
+        """The stall watch it added for its repeats (None while none runs, or another watches)."""
         self._mode: int | None = None  # the MODE to restore after a repeat
         cpr = {e.wheel for e in robot.encoders.motors}
         self.wheel_loop = all(w.name in cpr for w in robot.wheels)
@@ -162,8 +172,16 @@ class PathTeacher:
             assert self.runtime is not None
             if failure:
                 self.runtime.notify("warn", f"repeat ended: {failure}", "repeat")
-            else:
-                self.runtime.notify("info", "repeat finished", "repeat")
+
+    def _verdict(self, report: dict[str, Any]) -> None:
+        """The repeat's outcome and accuracy to every front end; the stall watch stops watching."""
+        assert self.runtime is not None
+        level: Level = "info" if report["completed"] else "warn"
+        self.runtime.notify(level, f"repeat: {summary(report)}", "repeat")
+        self.runtime.notify(level, f"repeat {verdict(report)}", "repeat")
+        if self.watch is not None:
+            self.watch.close()
+            self.watch = None
 
     def _record(self) -> None:
         est = self.estimator
@@ -201,12 +219,19 @@ class PathTeacher:
             client.mode(closed_loop=True)
         self.source = FollowerSource(follower, path, name="repeat", priority=self.priority, watchdog=WATCHDOG)
         self.source.start(state.t)
+        if self.judge is not None:
+            self.judge.verdict()  # the last repeat's, if it had not given it yet
+        self.judge = FollowJudge(runtime, self.robot, self.source, speed=self.speed, on_verdict=self._verdict)
+        if self.watch is None and StallWatch.of(runtime) is None:  # ROS 2's bridge may watch already
+            self.watch = StallWatch(runtime, self.robot)
         runtime.add_source(self.source)
         return f"repeating the taught {self.path.length:.2f} m{note}"
 
     def _end_repeat(self) -> None:
         assert self.runtime is not None
         if self.source is not None:
+            if not self.source.finished:
+                self.source.end("stopped from the page")  # its judge judges what was repeated
             self.runtime.remove_source(self.source.name)
             self.source = None
         client = self.runtime.client

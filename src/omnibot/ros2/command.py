@@ -180,6 +180,7 @@ def attach(runtime: Any, robot: Any, args: argparse.Namespace, spec: RobotSpec |
         raise ConfigError(INSTALL) from None
     from omnibot.ros2.netns import UnsafeNetwork
     from omnibot.runtime.sinks import EstimatorWhenMissing
+    from omnibot.runtime.stall import StallWatch, start_sonars
     from omnibot.teleop.mapping import TwistLimits
 
     spec = spec or robot_specs(args)[0]
@@ -200,6 +201,7 @@ def attach(runtime: Any, robot: Any, args: argparse.Namespace, spec: RobotSpec |
         notify=notify,
         follower=getattr(args, "follower", "tracker"),
         speed=getattr(args, "speed", None),
+        runtime=runtime,
     )
     reset = OdometryReset(
         node, runtime, odom_frame=odom, notify=notify, on_reset=path.cancel, hardware_id=robot.name
@@ -218,14 +220,9 @@ def attach(runtime: Any, robot: Any, args: argparse.Namespace, spec: RobotSpec |
     runtime.add_source(path)
     runtime.add_sink(reset)
     runtime.add_sink(Ros2Sink(node, robot, prefix=spec.prefix, reporters=[path.status, reset.status]))
-    start_sonars(runtime.client, robot)
+    StallWatch.on(runtime, robot)  # wheels that turn while the body does not: stop, say so
+    start_sonars(runtime.client, robot, SONAR_PERIOD)  # in TEL: the ranges out, the stall watch's witnesses
     return node
-
-
-def start_sonars(client: Any, robot: Any) -> None:
-    """Have the controller ping every sonar each :data:`SONAR_PERIOD` (their readings ride in TEL)."""
-    for number in range(1, len(robot.sonars) + 1):
-        client.sonar(number, SONAR_PERIOD)
 
 
 _PRINTING = threading.Lock()

@@ -15,7 +15,10 @@ controller. ``path`` is a command: each message is a path for the robot to repea
   it first drives straight to it; a single pose is a straight run to it.
 * Progress and result: a status line (the runtime's notices: received, replaced, cancelled,
   completed, NOT completed and why) and the ``omnibot: path`` diagnostic status (state, poses,
-  length, progress along the path, cross-track error).
+  length, progress along the path, cross-track error). Given the ``runtime``, each path is judged as
+  ``omnibot follow`` judges a run (:class:`~omnibot.navigation.judge.FollowJudge`): a path the
+  follower reached the end of is ``judging`` until the verdict (:data:`~omnibot.navigation.runner.SETTLE`
+  s later), then ``completed`` or ``failed`` against the tolerances, its accuracy in a status line.
 """
 
 from __future__ import annotations
@@ -28,12 +31,15 @@ import numpy as np
 
 from omnibot.control.paths.path import Path
 from omnibot.motion import Estimate
+from omnibot.navigation.judge import FollowJudge
+from omnibot.navigation.session import summary, verdict
 from omnibot.ros2.bridge import status
 from omnibot.ros2.dds import Node
 from omnibot.ros2.odometry import yaw_of
 from omnibot.ros2.types import from_dds
 from omnibot.runtime.cycle import Cycle, Level
 from omnibot.runtime.following import FOLLOWER_PRIORITY, follower_source
+from omnibot.runtime.runtime import Runtime
 from omnibot.runtime.sources import APPROACH_GAP, FollowerSource, Proposal
 
 PATH = "path"
@@ -78,6 +84,7 @@ class PathSource:
         speed: float | None = None,
         name: str = "path",
         priority: int = FOLLOWER_PRIORITY,
+        runtime: Runtime | None = None,
     ) -> None:
         self.name = name
         self.priority = priority
@@ -91,9 +98,13 @@ class PathSource:
         self.watchdog: float | None = None
         self.wait_reply = False
         self.reader = node.reader(PATH, PATH_TYPE)
+        self.runtime = runtime
+        """The runtime whose cycles judge each path (None: the follower's own verdict)."""
         self.current: FollowerSource | None = None
+        self.judge: FollowJudge | None = None
         self.state = "idle"
-        """idle, following, completed, failed (NOT completed) or cancelled."""
+        """idle, following, judging (at the end, until the verdict), completed, failed (NOT
+        completed) or cancelled."""
         self.detail = "no path received"
         self.received = 0
         """Path messages taken so far."""
@@ -154,6 +165,15 @@ class PathSource:
             self.robot, path, self.period, self.follower, self.speed, name=self.name, priority=self.priority
         )
         self.watchdog = self.current.watchdog
+        if self.runtime is not None:
+            current = self.current
+            self.judge = FollowJudge(
+                self.runtime,
+                self.robot,
+                current,
+                speed=self.speed,
+                on_verdict=lambda report: self._judged(current, report),
+            )
         self.progress, self.cross, self.refused = 0.0, 0.0, ""
         self.state = "following"
         self.detail = f"{len(msg.poses)} poses, {path.length:.2f} m"
@@ -166,12 +186,24 @@ class PathSource:
         return False
 
     def _ended(self, current: FollowerSource) -> None:
-        if current.completed:
+        if current.completed and self.judge is not None:
+            self.state, self.detail = "judging", f"reached the end of {self.detail}"
+        elif current.completed:
             self.state, self.detail = "completed", f"completed {self.detail}"
             self.notify("info", f"path completed ({current.path.length:.2f} m)")
         else:
             self.state, self.detail = "failed", current.failure or "not finished"
             self.notify("warn", f"path NOT completed: {self.detail}")
+
+    def _judged(self, current: FollowerSource, report: dict[str, Any]) -> None:
+        """The verdict on ``current`` (a path since replaced or cancelled: its accuracy only)."""
+        level: Level = "info" if report["completed"] else "warn"
+        self.notify(level, f"path: {summary(report)}")
+        if current is not self.current or self.state != "judging":
+            return
+        self.state = "completed" if report["completed"] else "failed"
+        self.detail = verdict(report)
+        self.notify(level, f"path {self.detail}")
 
     def status(self) -> Any:
         """The ``omnibot: path`` diagnostic status."""

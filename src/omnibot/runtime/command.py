@@ -85,6 +85,9 @@ class Parts:
     """What ``run`` added to the runtime, and how to end it."""
 
     follower: Any = None
+    judge: Any = None
+    """The follower's judge (:class:`~omnibot.navigation.judge.FollowJudge`)."""
+    printer: Any = None
     pad: Any = None
     device: Any = None
     lost: str | None = None
@@ -120,10 +123,12 @@ def compose(runtime: Any, robot: Any, args: argparse.Namespace, config: Any, pat
     """Add the pad and the follower to ``runtime`` (any thread: before it runs)."""
     from omnibot.estimation.estimator import make_estimator
     from omnibot.motion import Pose2D
+    from omnibot.navigation.judge import FollowJudge
     from omnibot.navigation.runner import STANDSTILL
     from omnibot.runtime.following import FOLLOWER_PRIORITY, follower_source
     from omnibot.runtime.sinks import EstimatorWhenMissing, NoticePrinter, SpeedReport
     from omnibot.runtime.sources import PadSource
+    from omnibot.runtime.stall import StallWatch
     from omnibot.runtime.standstill import Standstill
     from omnibot.teleop.command import open_source
     from omnibot.teleop.mapping import TwistLimits
@@ -135,6 +140,10 @@ def compose(runtime: Any, robot: Any, args: argparse.Namespace, config: Any, pat
         runtime.estimator = make_estimator("fused", robot, Pose2D(*path.start), slip)
         parts.follower = follower_source(robot, path, period, args.follower, args.speed)
         runtime.add_source(parts.follower)
+        parts.judge = FollowJudge(
+            runtime, robot, parts.follower, speed=args.speed, on_verdict=lambda r: _tell(runtime, r)
+        )
+        StallWatch.on(runtime, robot)  # wheels that turn while the body does not: stop, say so
         # as `omnibot follow`: the follower waits while the gyro's bias is learned (a person may drive)
         Standstill(runtime, STANDSTILL, FOLLOWER_PRIORITY)
         _say(f"the follower stands still {STANDSTILL:g} s first, while the gyro's bias is learned")
@@ -154,10 +163,24 @@ def compose(runtime: Any, robot: Any, args: argparse.Namespace, config: Any, pat
 
         node = attach(runtime, robot, args)
         parts.closers.append(node.close)
-    runtime.add_sink(NoticePrinter(_say, control=True))
+    parts.printer = NoticePrinter(_say, control=True)
+    runtime.add_sink(parts.printer)
     runtime.add_sink(EstimatorWhenMissing(runtime, robot))  # the achieved twist of the status lines
     runtime.add_sink(SpeedReport(_say))
     return parts
+
+
+def outcome(report: dict[str, Any]) -> list[str]:
+    """The follow's outcome and accuracy in ``omnibot follow``'s words: its summary, its verdict."""
+    from omnibot.navigation.session import summary, verdict
+
+    return [f"follow: {summary(report)}", f"follow {verdict(report)}"]
+
+
+def _tell(runtime: Any, report: dict[str, Any]) -> None:
+    """Every front end hears the verdict (the page's log, ROS 2's, the status lines)."""
+    for line in outcome(report):
+        runtime.notify("info" if report["completed"] else "warn", line, "follower")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -185,15 +208,14 @@ def _result(parts: Parts) -> int:
     if parts.lost is not None:
         print(f"omnibot run: the robot link ended: {parts.lost}", file=sys.stderr)
         return 1
-    source = parts.follower
-    if source is None:
+    if parts.judge is None:
         return 0
-    if source.completed:
-        _say("follow completed")
-        return 0
-    why = source.failure or ("not finished" if source.started else "never started")
-    _say(f"follow NOT COMPLETED: {why}")
-    return 1
+    report = parts.judge.verdict()  # given at the follow's end, or now (the run ended first)
+    said = {n.text for n in parts.printer.seen} if parts.printer is not None else set()
+    for line in outcome(report):
+        if line not in said:
+            _say(line)
+    return 0 if report["completed"] else 1
 
 
 def _in_this_thread(args: argparse.Namespace, url: str, config: Any, path: Any) -> Parts:
@@ -203,6 +225,7 @@ def _in_this_thread(args: argparse.Namespace, url: str, config: Any, path: Any) 
     from omnibot.protocol import codes
     from omnibot.ros2.command import PERIOD as ROS2_PERIOD
     from omnibot.runtime.runtime import LinkPacer, Runtime
+    from omnibot.runtime.stall import start_sonars
     from omnibot.teleop.pacing import Pacer
 
     person = bool(args.teleop)
@@ -217,7 +240,11 @@ def _in_this_thread(args: argparse.Namespace, url: str, config: Any, path: Any) 
             wheel_loop=not args.open_loop,
             slip=use_calibration(args, client, robot),
         )
+        if path is not None:
+            start_sonars(client, robot)  # the stall watch's witnesses of what is ahead
         parts = compose(runtime, robot, args, config, path)
+        if path is not None:
+            parts.closers.append(lambda: start_sonars(client, robot, 0.0))  # left not pinging, as found
         try:
             runtime.start()
             if not person:
@@ -227,13 +254,13 @@ def _in_this_thread(args: argparse.Namespace, url: str, config: Any, path: Any) 
             # the schedule starts now (a person's input is paced to the wall clock, a follow alone
             # to the link's: lockstep on sim://)
             runtime.pacer = Pacer(client, period) if wall else LinkPacer(client, period)
-            follower = parts.follower
+            judge = parts.judge
             device = parts.device
 
             def done() -> bool:
                 if device is not None and device.quit:
                     return True
-                return follower is not None and follower.finished and not wall
+                return judge is not None and judge.report is not None and not wall
 
             runtime.run(until=done, duration=args.duration)
         finally:

@@ -14,8 +14,9 @@ VEL timeout for its commands, s) is optional. Sources never touch the client: th
   when the robot comes back to it, it resumes from where the robot now is, driving straight back to
   the path's nearest point ahead of the progress made (if farther than ``APPROACH_GAP``) and then
   along the rest. ``on_override="stop"`` ends the run at the first override instead. An emergency
-  stop (a lock of priority 255), a refused command or a latched emergency stop on the controller end
-  the run (:attr:`FollowerSource.failure`): nothing drives off on its own after one.
+  stop (a lock of priority 255), a refused command, a latched emergency stop on the controller or a
+  stall (:mod:`omnibot.runtime.stall`) end the run (:attr:`FollowerSource.failure`): nothing drives
+  off on its own after one.
 * :class:`ScriptSource`: twists from a function of time (scripts, tests, demos, the navigator's
   scripted manoeuvres: ``record --teach drive``, the gyro spin, the slip runs); like a follower it
   ends at a refused command or an emergency stop.
@@ -322,9 +323,10 @@ class FollowerSource:
 
 
 def must_end(cycle: Cycle, name: str) -> str:
-    """Why a source that drives on its own (a follower, a script) must end now, "" for no reason: a
-    command of its own refused, the controller's latched emergency stop, or an emergency stop lock
-    (nothing drives off on its own after one)."""
+    """Why a source that drives on its own (a follower, a script) must end now, "" for no reason: an
+    error notice concerning it (a command of its own refused, a stall the stall watch found), the
+    controller's latched emergency stop, or an emergency stop lock (nothing drives off on its own
+    after one)."""
     for notice in cycle.notices:
         if notice.source == name and notice.level == "error":
             return notice.text
