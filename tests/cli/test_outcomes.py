@@ -207,6 +207,41 @@ def test_a_calibration_better_than_none_is_written_and_kept(
     assert (tmp_path / "calibration.yaml").read_text().startswith("# omnibot calibrate: mecanum4")
 
 
+def test_a_calibration_that_makes_rotate_worse_says_so_and_is_not_kept(
+    tmp_path: Path, fake_calibration: dict[str, Any], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Better on the whole, but ROTATE worse than before (omni4's default run, issue 24): refused."""
+    made = result([-0.10, 0.05], [-0.01, 0.01])
+    wood = made.sessions[0]
+    assert wood.before is not None and wood.after is not None
+    wood.before.append(row(0.0, -0.016, "rotate"))
+    wood.after.append(row(0.0, -0.036, "rotate"))
+    fake_calibration["result"] = made
+    cal = tmp_path / "cal.yaml"
+    argv = [
+        "calibrate",
+        "--port",
+        "sim://mecanum4",
+        "--yes",
+        "--out",
+        str(tmp_path / "r"),
+        "--calibration",
+        str(cal),
+    ]
+    assert main(argv) == 1
+    out = capsys.readouterr().out
+    assert "wood 5.5 % -> 1.9 %" in out  # better on the whole
+    assert "worse than before: wood: ROTATE: 1.6 % -> 3.6 % (worst ROTATE +1 deg at 0.3 deg/s" in out
+    assert (
+        "not written, not kept on the controller: WORSE THAN BEFORE: wood: ROTATE" in out and not cal.exists()
+    )
+    assert fake_calibration["uploads"] == [load_robot("mecanum4").calibration]  # the tables it was built with
+    assert main([*argv, "--force"]) == 1
+    assert "written anyway, --force" in capsys.readouterr().out
+    assert cal.read_text().startswith("# WORSE THAN BEFORE: wood: ROTATE: 1.6 % -> 3.6 %")
+    assert load_calibration(cal).calibration is not None
+
+
 def test_two_floors_keep_their_own_tables_when_their_average_is_worse_than_none(
     tmp_path: Path, fake_calibration: dict[str, Any], capsys: pytest.CaptureFixture[str]
 ) -> None:

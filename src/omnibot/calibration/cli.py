@@ -66,8 +66,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument(
         "--force",
         action="store_true",
-        help="write (and upload) the calibration even when its own check finds it worse than none; the "
-        "file says so, and the exit status is still 1",
+        help="write (and upload) the calibration even when its own check finds it worse than before (on the "
+        "whole, or on a course or ROTATE); the file says so, and the exit status is still 1",
     )
     p.add_argument(
         "--truth",
@@ -368,18 +368,23 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> in
             print(f"note ({s.surface}): {note}")
     print(f"report: {out_dir} ({', '.join(f.name for f in files)})")
     print(f"check: {verdict.summary}" + (" (each floor's own tables)" if len(result.sessions) > 1 else ""))
+    if verdict.worse:
+        print(
+            f"worse than before: {'; '.join(str(w) for w in verdict.worse)} (mean abs error of a course "
+            "both ways or of ROTATE, grown beyond the check's scatter)"
+        )
     if verdict.average is not None and verdict.average.better is not None:
         average = verdict.average.summary.removeprefix("mean abs error of the accuracy check: ")
         kept = (
             "kept as the file's calibration for any floor"
             if verdict.average.better
-            else f"not kept, worse than none ({verdict.average.worst}): each floor keeps its own tables"
+            else f"not kept, worse than none ({verdict.average.reason}): each floor keeps its own tables"
         )
         print(f"average over the floors: {average}: {kept}")
     if verdict.better is False:
         if verdict.hint:
             print(f"hint: {verdict.hint}")
-        warning = f"WORSE THAN NO CALIBRATION: {verdict.worst}"
+        warning = verdict.warning
         if args.force:
             cal = write_calibration(cal_file, result, truth_name, warning=warning)
             print(f"calibration: {cal} (written anyway, --force: {warning})")
