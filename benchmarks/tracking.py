@@ -17,9 +17,12 @@ Suites:
   omni4 and mecanum4 at up to 0.5 m/s, 3 m for omni3 at up to 2 m/s.
 * ``heading``: the curved shapes with the body turning: ``tangent`` (facing the direction of travel)
   and ``swing`` (90 degrees either side, independently of the course), at each robot's top speed.
-* ``random``: ``--random-count`` smooth random paths per robot and floor
-  (:func:`~omnibot.control.paths.generator.smooth_random_path`, swing heading), at the top speed;
-  the worst path is reported, not only the mean.
+* ``random``: ``--random-count`` paths per robot, floor and family (``--families``) at the top
+  speed: ``random`` smooth random paths (:func:`~omnibot.control.paths.generator.smooth_random_path`,
+  swing heading), ``eight`` figure eights (:func:`~omnibot.control.paths.generator.figure_eight_path`)
+  and ``closed`` closed free-form curves (:func:`~omnibot.control.paths.generator.closed_curve_path`),
+  their heading mode picked by the seed; path K of a family is seeded K and simulated with seed K;
+  the worst path of each family is reported, not only the mean.
 * ``top``: straight runs long enough to cruise at the top speed on the courses 0, 45 and 90
   degrees (heading held), and one with the body swinging; with the speed each robot's motors
   allow (:mod:`omnibot.control.reach`) and the peak each run reached.
@@ -58,20 +61,22 @@ from omnibot.control.paths.path import Path
 
 @dataclass(frozen=True)
 class Bench:
-    """What one preset is asked: the standard suite's speed cap and size, its top speed, and the
-    random paths' length and least radius of curvature."""
+    """What one preset is asked: the standard suite's speed cap and size, its top speed, the random
+    paths' length and least radius of curvature (the closed curves' too), and the figure eights'
+    length (an eight needs 16 radii or more)."""
 
     speed: float
     size: float
     top: float
     random_length: float
     random_radius: float
+    eight_length: float
 
 
 ROBOTS = {
-    "omni4": Bench(speed=0.5, size=1.0, top=1.0, random_length=6.0, random_radius=0.4),
-    "omni3": Bench(speed=2.0, size=3.0, top=5.0, random_length=15.0, random_radius=1.2),
-    "mecanum4": Bench(speed=0.5, size=1.0, top=0.8, random_length=6.0, random_radius=0.4),
+    "omni4": Bench(speed=0.5, size=1.0, top=1.0, random_length=6.0, random_radius=0.4, eight_length=10.0),
+    "omni3": Bench(speed=2.0, size=3.0, top=5.0, random_length=15.0, random_radius=1.2, eight_length=25.0),
+    "mecanum4": Bench(speed=0.5, size=1.0, top=0.8, random_length=6.0, random_radius=0.4, eight_length=10.0),
 }
 FOLLOWERS = ("seed002", "pure_pursuit", "tracker")
 SUITE_FOLLOWERS = ("seed002", "tracker")
@@ -81,6 +86,8 @@ SUITES = ("standard", "heading", "random", "top")
 STANDARD_PATHS = "line,circle,figure_eight,s_curve,square,lemniscate"
 HEADING_PATHS = ("circle", "lemniscate")
 TOP_COURSES = (0, 45, 90)
+FAMILIES = ("random", "eight", "closed")
+"""The random suite's path families (the spec's prefix)."""
 
 
 CALIBRATION_SEED = 1000
@@ -110,9 +117,10 @@ def top_length(preset: str) -> float:
 
 def build_path(preset: str, spec: str) -> Path:
     """The path named ``spec`` for ``preset``: ``shape`` or ``shape/heading`` (a standard path),
-    ``random-SEED`` (a smooth random path, swing heading), ``line-COURSE`` (a straight run at the
+    ``random-SEED`` (a smooth random path, swing heading), ``eight-SEED`` (a figure eight),
+    ``closed-SEED`` (a closed free-form curve), ``line-COURSE`` (a straight run at the
     top speed's length, COURSE degrees from the body's x axis) or ``line-swing``."""
-    from omnibot.control.paths.generator import smooth_random_path
+    from omnibot.control.paths.generator import closed_curve_path, figure_eight_path, smooth_random_path
     from omnibot.control.paths.standard import SWING, standard_path
 
     bench = ROBOTS[preset]
@@ -122,6 +130,14 @@ def build_path(preset: str, spec: str) -> Path:
             length=bench.random_length,
             radius_min=bench.random_radius,
             heading="swing",
+        )
+    if spec.startswith("eight-"):
+        return figure_eight_path(
+            int(spec.split("-", 1)[1]), length=bench.eight_length, radius_min=bench.random_radius
+        )
+    if spec.startswith("closed-"):
+        return closed_curve_path(
+            int(spec.split("-", 1)[1]), length=bench.random_length, radius_min=bench.random_radius
         )
     if spec.startswith("line-"):
         length = top_length(preset)
@@ -220,6 +236,7 @@ def suite_jobs(
     calibrate: bool,
     slip: bool,
     tuning: tuple[tuple[str, float], ...] = (),
+    families: tuple[str, ...] = ("random",),
 ) -> list[Job]:
     """The runs of one suite."""
     work: list[Job] = []
@@ -239,7 +256,7 @@ def suite_jobs(
             if suite == "heading":
                 specs = [(f"{p}/{h}", seeds[0]) for p in HEADING_PATHS for h in ("tangent", "swing")]
             elif suite == "random":
-                specs = [(f"random-{k}", k) for k in range(1, random_count + 1)]
+                specs = [(f"{fam}-{k}", k) for fam in families for k in range(1, random_count + 1)]
             else:
                 specs = [(f"line-{c}", seeds[0]) for c in TOP_COURSES] + [("line-swing", seeds[0])]
             fs = [f for f in followers if f in SUITE_FOLLOWERS] or followers
@@ -414,10 +431,24 @@ def format_pairs(results: list[dict[str, Any]], title: str, followers: list[str]
     return "\n".join(out)
 
 
-def format_random(results: list[dict[str, Any]], followers: list[str]) -> str:
+FAMILY_TITLES = {
+    "random": "Random smooth paths",
+    "eight": "Figure eights",
+    "closed": "Closed free-form curves",
+}
+
+
+def family(spec: str) -> str:
+    """The random suite's family of a path spec (``eight-3`` -> ``eight``)."""
+    return spec.split("-", 1)[0]
+
+
+def format_random(
+    results: list[dict[str, Any]], followers: list[str], title: str = "Random smooth paths"
+) -> str:
     """Per robot and floor and follower: the mean and the worst path of the random suite."""
     out = [
-        "\n### Random smooth paths: the mean and the WORST path (RMS / max cross-track in cm, time vs minimum)\n",
+        f"\n### {title}: the mean and the WORST path (RMS / max cross-track in cm, time vs minimum)\n",
         "| robot | floor | follower | paths | mean RMS | worst RMS | worst max | mean time | worst time | completed "
         "| odometry error, worst max |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
@@ -579,7 +610,14 @@ def main(argv: list[str] | None = None) -> int:
         "--heading", default="fixed", choices=("fixed", "tangent", "swing"), help="the standard suite's"
     )
     p.add_argument("--seeds", default="1,2,3", help="simulator seeds, comma-separated (default 1,2,3)")
-    p.add_argument("--random-count", type=int, default=4, help="random paths per robot and floor (default 4)")
+    p.add_argument(
+        "--random-count", type=int, default=4, help="random paths per robot, floor and family (default 4)"
+    )
+    p.add_argument(
+        "--families",
+        default=",".join(FAMILIES),
+        help=f"the random suite's path families, comma-separated, of {', '.join(FAMILIES)} (default all)",
+    )
     p.add_argument(
         "--tracker-option",
         action="append",
@@ -603,7 +641,12 @@ def main(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     suites = args.suites.split(",")
     robots = args.robots.split(",")
-    for name, given, known in (("suite", suites, SUITES), ("robot", robots, tuple(ROBOTS))):
+    families = args.families.split(",")
+    for name, given, known in (
+        ("suite", suites, SUITES),
+        ("robot", robots, tuple(ROBOTS)),
+        ("family", families, FAMILIES),
+    ):
         bad = [g for g in given if g not in known]
         if bad:
             p.error(f"unknown {name} {', '.join(bad)}; expected some of: {', '.join(known)}")
@@ -633,6 +676,7 @@ def main(argv: list[str] | None = None) -> int:
             calibrate=args.calibrate_gyro,
             slip=args.slip,
             tuning=tuple(tuning),
+            families=tuple(families),
         )
     results = run_jobs(work, args.jobs)
     slip = "floor slip calibrated" if args.slip else "no slip calibration"
@@ -655,10 +699,14 @@ def main(argv: list[str] | None = None) -> int:
     if by_suite.get("random"):
         rs = by_suite["random"]
         print(
-            f"\n## Random smooth paths (swing heading, top speed, gyro calibration spin, {slip}; {len(rs)} runs)"
+            f"\n## Random paths ({', '.join(families)}; top speed, gyro calibration spin, {slip}; {len(rs)} runs)"
         )
-        print(format_random(rs, pair))
-        print(suite_goals(rs, f"{args.random_count} random paths per robot and floor"))
+        for fam in families:
+            if rows := [r for r in rs if family(r["path"]) == fam]:
+                print(format_random(rows, pair, FAMILY_TITLES[fam]))
+        print(
+            suite_goals(rs, f"{args.random_count} paths per robot, floor and family ({', '.join(families)})")
+        )
     if by_suite.get("top"):
         rs = by_suite["top"]
         print(

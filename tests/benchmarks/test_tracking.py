@@ -41,6 +41,35 @@ def test_suites_pair_seed002_with_the_tracker_at_the_top_speed() -> None:
     assert all(j[6] == 5.0 and j[7] for j in jobs)  # omni3's top speed, gyro calibration spin
 
 
+def test_the_random_suite_adds_figure_eights_and_closed_curves_keeping_its_paths() -> None:
+    jobs = tracking.suite_jobs(
+        "random",
+        ["omni4"],
+        ["carpet"],
+        ["tracker"],
+        [1],
+        paths=[],
+        heading="fixed",
+        random_count=2,
+        calibrate=False,
+        slip=True,
+        families=tracking.FAMILIES,
+    )
+    assert [(j[3], j[5]) for j in jobs] == [
+        (f"{fam}-{k}", k) for fam in ("random", "eight", "closed") for k in (1, 2)
+    ]
+    bench = tracking.ROBOTS["omni4"]
+    eight, closed = tracking.build_path("omni4", "eight-2"), tracking.build_path("omni4", "closed-2")
+    assert eight.length == pytest.approx(bench.eight_length, rel=1e-4)
+    assert closed.length == pytest.approx(bench.random_length, rel=1e-4)
+    for path in (eight, closed):
+        assert path.end[:2] == pytest.approx(path.start[:2], abs=1e-12)
+    assert tracking.family("closed-3") == "closed"
+    # the smooth random paths are the suite's earlier ones, unchanged
+    old = tracking.build_path("omni4", "random-2")
+    assert old.length == pytest.approx(bench.random_length) and np.ptp(old.theta) > 0
+
+
 def _run(path: str, follower: str, rms: float, mx: float, ratio: float) -> dict[str, object]:
     return {
         "robot": "omni4",
@@ -63,6 +92,10 @@ def test_random_table_and_goals_name_the_worst_path() -> None:
     goals = tracking.suite_goals(runs, "random")
     assert "| RMS <= 1 cm | 1/2 | 1.20 cm (omni4 wood random-2) |" in goals
     assert "| time <= 1.25x minimum | 1/2 |" in goals
+    eights = tracking.format_random(
+        [_run("eight-1", "tracker", 0.002, 0.01, 1.1)], ["tracker"], "Figure eights"
+    )
+    assert "### Figure eights: the mean" in eights and "(eight-1)" in eights
 
 
 def test_unknown_suite_is_refused(capsys: pytest.CaptureFixture[str]) -> None:
@@ -70,3 +103,6 @@ def test_unknown_suite_is_refused(capsys: pytest.CaptureFixture[str]) -> None:
         tracking.main(["--suites", "fast"])
     assert exit_info.value.code == 2
     assert "unknown suite fast" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        tracking.main(["--families", "spiral"])
+    assert "unknown family spiral" in capsys.readouterr().err

@@ -1,7 +1,7 @@
 """Paths: the :class:`Path` type, CSV files, teaching, geometry, standard paths and speed profiles."""
 
 from omnibot.control.paths.files import PathFileError, format_path, parse_path, read_path, write_path
-from omnibot.control.paths.generator import smooth_random_path
+from omnibot.control.paths.generator import closed_curve_path, figure_eight_path, smooth_random_path
 from omnibot.control.paths.geometry import curvature, douglas_peucker, heading_rate, resample
 from omnibot.control.paths.path import Path, Projection
 from omnibot.control.paths.profile import MotionLimits, Reference, SpeedProfile, time_optimal_profile
@@ -16,8 +16,10 @@ __all__ = [
     "Projection",
     "Reference",
     "SpeedProfile",
+    "closed_curve_path",
     "curvature",
     "douglas_peucker",
+    "figure_eight_path",
     "format_path",
     "heading_rate",
     "parse_path",
