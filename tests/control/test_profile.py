@@ -88,3 +88,54 @@ def test_a_path_too_long_to_profile_is_refused_before_it_is_built() -> None:
     assert len(time_optimal_profile(Path(np.array([0.0, just]), np.zeros(2), np.zeros(2)), limits).t) > 1000
     with pytest.raises(ValueError, match="positive resolution"):
         time_optimal_profile(line, limits, resolution=0.0)
+
+
+def test_course_rate_caps_the_turns_only_and_gives_way_to_the_time_budget() -> None:
+    from dataclasses import replace
+
+    from omnibot.control.paths.generator import figure_eight_path
+    from omnibot.control.paths.profile import profile_within
+
+    eight = figure_eight_path(2, length=10.0, radius_min=0.4, heading="fixed")
+    fast = MotionLimits(v_max=1.0, a_max=2.0, w_max=10.0, alpha_max=20.0)
+    free = time_optimal_profile(eight, fast)
+    assert np.max(free.speed * np.abs(free.kappa)) > 1.0  # the lobes' ends turn the course fast
+    capped = time_optimal_profile(eight, replace(fast, course_rate=0.8))
+    assert np.max(capped.speed * np.abs(capped.kappa)) <= 0.8 * (1 + 1e-6)
+    assert capped.speed.max() == pytest.approx(free.speed.max(), rel=0.02)  # the crossing: no turn
+    assert capped.min_time > 1.05 * free.min_time
+    # within a budget the cap holds; past it the cap is raised until the plan fits
+    assert (
+        profile_within(eight, replace(fast, course_rate=0.8), free.min_time, 2.0).min_time == capped.min_time
+    )
+    tight = profile_within(eight, replace(fast, course_rate=0.8), free.min_time, 1.05)
+    assert free.min_time <= tight.min_time <= 1.05 * free.min_time
+    with pytest.raises(ValueError, match="course_rate must be positive"):
+        replace(fast, course_rate=0.0)
+
+
+def test_followers_on_carpet_slow_the_turns_for_the_odometry_not_on_wood() -> None:
+    from omnibot.control.followers.base import PLAN_TIME_BUDGET, make_follower
+    from omnibot.control.paths.generator import figure_eight_path
+    from omnibot.control.reach import floor_course_rate
+    from omnibot.navigation.session import follower_limits
+
+    assert floor_course_rate("carpet") == pytest.approx(0.736, abs=0.01)
+    assert floor_course_rate("wood") > 5.0
+    robot = load_robot("omni4")
+    eight = figure_eight_path(2, length=10.0, radius_min=0.4, heading="tangent")
+    carpet = follower_limits(robot, 1.0, "carpet")
+    assert carpet.course_rate == pytest.approx(floor_course_rate("carpet"))
+    assert follower_limits(robot, 1.0).course_rate is None
+    plan = make_follower("tracker", carpet).plan(eight)
+    without = make_follower("tracker", replace_rate(carpet)).plan(eight)
+    turn = np.max(plan.speed * np.abs(plan.kappa))
+    assert turn < 0.9 * np.max(without.speed * np.abs(without.kappa))
+    assert plan.min_time <= PLAN_TIME_BUDGET * min_traversal_time(eight, replace_rate(carpet)) * 1.001
+
+
+def replace_rate(limits: MotionLimits) -> MotionLimits:
+    """``limits`` without a course-rate cap."""
+    from dataclasses import replace
+
+    return replace(limits, course_rate=None)

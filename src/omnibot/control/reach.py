@@ -44,6 +44,7 @@ import numpy as np
 
 from omnibot.robot.description import RobotDescription, WheelSpec
 from omnibot.robot.kinematics import FloatArray, contact_rows, wheel_matrix
+from omnibot.sim.physics import GRAVITY
 from omnibot.sim.surfaces import Surface, get_surface
 
 
@@ -297,6 +298,27 @@ def floor_reach(
     ).reshape(-1, 3)
     table = _floor_reach(robot, surface, directions).reshape(shares, courses)
     return FloorReach(radius, tuple(tuple(float(v) for v in row) for row in table))
+
+
+COURSE_DRIFT = 0.02
+"""m per m of path: the sideways drift the wheels' creep may cost the odometry, the budget of
+:func:`floor_course_rate` (set on omni4 and mecanum4 figure eights on carpet, 2026-12-06: their
+odometry drifted sideways by 0.018-0.022 m/s per m/s^2 of lateral acceleration, and 1 cm RMS held
+where the course turned at up to 0.8 rad/s)."""
+
+
+def floor_course_rate(surface: str | Surface) -> float:
+    """rad/s: the fastest the direction of travel may turn on ``surface`` for the wheels' sideways
+    creep to drift the odometry by at most :data:`COURSE_DRIFT` per metre.
+
+    In a turn the wheels carry the lateral acceleration a = v^2 kappa; they creep sideways at about
+    v_s a / (mu g) times the floor's roller drag (its ``rolling_multiplier``: the rollers that
+    should roll sideways drag), which the encoders do not see. Per metre that is v_s m_r v kappa /
+    (mu g): capping the course's turn rate v kappa caps the drift (carpet 0.74 rad/s, wood 5.9).
+    """
+    floor = get_surface(surface) if isinstance(surface, str) else surface
+    creep = floor.slip_velocity * floor.rolling_multiplier / (floor.mu * GRAVITY)
+    return COURSE_DRIFT / creep
 
 
 GRIP_SPEEDS = 12

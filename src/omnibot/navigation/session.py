@@ -34,8 +34,14 @@ def follower_limits(
 ) -> MotionLimits:
     """What followers may plan with: the robot's limits, the speed capped at ``speed`` (and, given a
     ``floor``, at its reach per course), and the turn rate kept inside 90 % of the gyro's range (a
-    saturated gyro loses heading); the floor's reach at :data:`PLAN_FLOOR_USE`."""
+    saturated gyro loses heading); the floor's reach at :data:`PLAN_FLOOR_USE`, and the course's
+    turn rate within what the floor's sideways creep lets the odometry hold
+    (:func:`~omnibot.control.reach.floor_course_rate`)."""
     limits = replace(MotionLimits.from_robot(robot, speed, surface=floor), floor_use=PLAN_FLOOR_USE)
+    if floor is not None:
+        from omnibot.control.reach import floor_course_rate
+
+        limits = replace(limits, course_rate=floor_course_rate(floor))
     if robot.gyro is not None:
         limits = limits.with_turn_rate(GYRO_USE * robot.gyro.range)
     return limits

@@ -12,7 +12,9 @@ is v = u ds/d sigma and its turn rate w = u d theta/d sigma. At each point of a 
   body turning while it goes, or a course the wheels serve badly, slows the profile; and, when
   they carry a floor's reach (``MotionLimits.from_robot(..., surface=...)``), the body twist
   (translation along its body course and the turn together) no larger than ``floor_use`` of what
-  the floor's load leaves the motors;
+  the floor's load leaves the motors; and, when they carry a ``course_rate``, v |kappa| no larger
+  than it (the wheels' sideways creep in a turn, which the odometry does not see;
+  :func:`profile_within` keeps that cap only within a time budget);
 * acceleration: the tangential acceleration may use what the lateral one leaves of the friction
   ellipse, a_t <= a_max sqrt(1 - (v^2 kappa / a_lat)^2), and the angular one alpha_max / 2; on a
   floor (``grip``) all of them, and the lateral and heading caps, times the fraction the wheels'
@@ -77,6 +79,10 @@ class MotionLimits:
     """(speeds, fractions): the fraction of the accelerations (and of the lateral one) the wheels'
     grip leaves beside a floor's drag at each speed (:func:`omnibot.control.reach.floor_grip`),
     interpolated; None: all of them."""
+    course_rate: float | None = None
+    """rad/s: the fastest the direction of travel may turn, v |kappa| (the wheels' sideways creep,
+    which the odometry does not see, grows with v^2 kappa, so the drift per metre with v kappa:
+    :func:`omnibot.control.reach.floor_course_rate`); None: no cap."""
 
     def __post_init__(self) -> None:
         for name in ("v_max", "a_max", "w_max", "alpha_max"):
@@ -89,6 +95,8 @@ class MotionLimits:
             raise ValueError(f"motion limit wheel_use must be in (0, 1], got {self.wheel_use}")
         if not 0 < self.floor_use <= 1:
             raise ValueError(f"motion limit floor_use must be in (0, 1], got {self.floor_use}")
+        if self.course_rate is not None and not self.course_rate > 0:
+            raise ValueError(f"motion limit course_rate must be positive, got {self.course_rate}")
 
     @property
     def lateral(self) -> float:
@@ -370,6 +378,8 @@ def time_optimal_profile(
         cap = np.minimum(cap, np.where(rs_pt > 0, limits.v_max / rs_pt, inf))
         cap = np.minimum(cap, np.where(rt_pt > 0, limits.w_max / rt_pt, inf))
         cap = np.minimum(cap, np.where(rs_pt > 0, VF / rs_pt, inf))
+        if limits.course_rate is not None:
+            cap = np.minimum(cap, np.where((K > 0) & (rs_pt > 0), limits.course_rate / (K * rs_pt), inf))
         if limits.wheels is not None or limits.floor is not None:
             cap = np.minimum(cap, _wheel_cap(limits, np.array(ths), rs, np.array(rt_seg), tx_seg, ty_seg))
         # the grip's caps: lateral v^2 kappa and heading v^2 theta'' within the accelerations the
@@ -439,6 +449,19 @@ def _wheel_cap(
     bx, by = rs * (c * tx_a + s * ty_a), rs * (-s * tx_a + c * ty_a)
     cap = limits.reach(np.stack((bx, by, rt), axis=-1), limits.wheel_use, limits.floor_use)
     return np.minimum(cap, np.concatenate(([cap[0]], cap[:-1])))
+
+
+def profile_within(path: Path, limits: MotionLimits, minimum: float, budget: float) -> SpeedProfile:
+    """The time-optimal profile of ``path`` under ``limits``, their ``course_rate`` raised 1.1x a
+    step (and at last dropped) until the profile takes at most ``budget`` x ``minimum`` s: the
+    course-rate cap slows the turns where the odometry would drift, never past the time budget
+    (a profile beyond it without the cap is returned as it is)."""
+    profile = time_optimal_profile(path, limits)
+    rate = limits.course_rate
+    while rate is not None and profile.min_time > budget * minimum:
+        rate = rate * 1.1 if rate < 20.0 * limits.w_max else None
+        profile = time_optimal_profile(path, replace(limits, course_rate=rate))
+    return profile
 
 
 def min_traversal_time(path: Path, limits: MotionLimits) -> float:
