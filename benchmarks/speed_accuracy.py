@@ -247,8 +247,8 @@ def within_goal(cell: Cell) -> bool:
     return abs(cell.ratio - 1.0) <= 0.03 and abs(cell.drift_deg) <= 3.0 and cell.settle <= 0.3 and turn_ok
 
 
-def main() -> None:
-    """Print one markdown table per robot and floor: a row per source, a column per direction."""
+def main(argv: list[str] | None = None) -> None:
+    """Print one markdown table: a row per robot, floor and source, a column per direction."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--robots", default="omni4,omni3,mecanum4")
     ap.add_argument("--surfaces", default="wood,carpet")
@@ -256,7 +256,7 @@ def main() -> None:
     how = ap.add_mutually_exclusive_group()
     how.add_argument("--open-loop", action="store_true", help="leave the wheel-speed loop open")
     how.add_argument("--slip", action="store_true", help="with the floor's fitted wheel slip")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     loop = "open loop" if args.open_loop else "closed loop"
     loop += ", the floor's slip asked on top" if args.slip else ""
     print(f"achieved / asked, drift (deg), settle (s); * within the goal; {loop}")
