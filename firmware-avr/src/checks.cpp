@@ -1,17 +1,19 @@
 // Parameter checks of every command against the protocol and the robot's limits (firmware/limits.py).
 #include "checks.h"
 
-#include <stdlib.h>
+// |v| as an unsigned 16-bit value: abs(-32768) overflows int16 and stays negative, which passed
+// every "abs(x) > limit" check (a VEL of -32768 drove every motor at -255); 32768 here fails them.
+static uint16_t mag(int16_t v) { return v < 0 ? (uint16_t)(0u - (uint16_t)v) : (uint16_t)v; }
 
 static uint8_t check_move(int16_t L, int16_t V, int16_t D, int16_t C, uint8_t k) {
-    if (abs(L) >= (k == 1 ? L_MAX_EXCL : L2_MAX_EXCL) && !(k == 1 && abs(L) == P_INF)) return P_E_DISTANCE;
+    if (mag(L) >= (k == 1 ? L_MAX_EXCL : L2_MAX_EXCL) && !(k == 1 && mag(L) == P_INF)) return P_E_DISTANCE;
     if (k == 1) {
-        if (abs(V) < V_MIN || abs(V) > V_MAX || V == 0) return P_E_SPEED;
-    } else if (abs(V) > V2_MAX) {
+        if (mag(V) < V_MIN || mag(V) > V_MAX || V == 0) return P_E_SPEED;
+    } else if (mag(V) > V2_MAX) {
         return P_E_SPEED;
     }
-    if (abs(D) >= 360 * k) return P_E_COURSE;
-    if (abs(C) >= (k == 1 ? C_MAX_EXCL : C2_MAX_EXCL)) return P_E_CURVATURE;
+    if (mag(D) >= 360 * k) return P_E_COURSE;
+    if (mag(C) >= (k == 1 ? C_MAX_EXCL : C2_MAX_EXCL)) return P_E_CURVATURE;
     return 0;
 }
 
@@ -24,16 +26,16 @@ uint8_t check(uint8_t kw, const int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
             if (p[4] < 0 || p[4] > P_INF) return P_E_REPEAT;
             return check_move(p[0], p[1], p[2], p[3], 2);
         case K_ROTATE:
-            if (abs(p[0]) > P_INF) return P_E_ANGLE;
-            if (p[1] == 0 || abs(p[1]) >= F_MAX_EXCL) return P_E_SPEED;
+            if (mag(p[0]) > P_INF) return P_E_ANGLE;
+            if (p[1] == 0 || mag(p[1]) >= F_MAX_EXCL) return P_E_SPEED;
             return 0;
         case K_POWER:
             if (p[0] < 1 || p[0] > 30000) return P_E_TIME;
             for (uint8_t i = 1; i < n; i++)
-                if (abs(p[i]) > PWM_MAX) return P_E_SPEED;
+                if (mag(p[i]) > PWM_MAX) return P_E_SPEED;
             return 0;
         case K_VEL:
-            if ((int32_t)p[0] * p[0] + (int32_t)p[1] * p[1] > V_MAX_SQ || abs(p[2]) >= F_MAX_EXCL) return P_E_SPEED;
+            if ((int32_t)p[0] * p[0] + (int32_t)p[1] * p[1] > V_MAX_SQ || mag(p[2]) >= F_MAX_EXCL) return P_E_SPEED;
             if (p[3] < 1 || p[3] > 1000) return P_E_TIME;
             return 0;
         case K_SONAR:

@@ -114,3 +114,39 @@ def test_queue_full(client: RobotClient) -> None:
     client.execute(Stop())
     status = client.status()
     assert (status.state, status.queued) == (codes.STATE_IDLE, 0)
+
+
+# every command's numeric fields, each with valid neighbours (the motors' count from the client)
+EXTREMES = {
+    "MOVE": [10, 40, 0, 0],
+    "DELTA": [0, 0, 10, 0, 1],
+    "ROTATE": [90, 90],
+    "VEL": [0, 0, 0, 200],
+    "SONAR": [1, 60, 0, 0, 0],
+    "TELEM": [100, 1],
+    "MODE": [0],
+}
+
+
+@pytest.mark.parametrize("value", [-32768, 32767])
+def test_the_extreme_16_bit_values_run_nothing_in_any_field(client: RobotClient, value: int) -> None:
+    """-32768 has no positive twin in 16 bits (``abs`` of it stays negative on a 16-bit int): in any
+    field of any command, it and 32767 (INF, where a field takes it) are refused or taken as INF,
+    never wrapped into a speed or a power."""
+    motors = len(client.status().powers)
+    fields = {**EXTREMES, "POWER": [100] + [0] * motors}
+    before = client.status()
+    for keyword, good in fields.items():
+        for i in range(len(good)):
+            params = list(good)
+            params[i] = value
+            line = f"{keyword},{','.join(map(str, params))}"
+            (pending,) = client.submit_text(line)
+            try:
+                pending.result()
+            except ControllerError:
+                continue
+            assert value == 32767 and (keyword, i) in {("MOVE", 0), ("ROTATE", 0), ("DELTA", 4)}, line
+            client.stop()  # an INF motion asked: gone again
+    client.stop()
+    assert client.status().powers == before.powers == tuple([0] * motors)
