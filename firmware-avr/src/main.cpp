@@ -313,7 +313,8 @@ static uint8_t parse(char *cmd, uint8_t len, const Keyword *&e, int16_t *p, uint
         const Keyword *t = &KEYWORDS[k];
         uint8_t i = 0;
         for (; a + i < b; i++)
-            if (i >= sizeof(t->name) || upper(a[i]) != pgm_read_byte(&t->name[i])) break;
+            if (i >= sizeof(t->name) || !a[i] || upper(a[i]) != pgm_read_byte(&t->name[i])) break;  // a NUL
+        // matches no keyword (the names are NUL-padded: "STATUS\0" would have run as STATUS)
         if (a + i == b && (i == sizeof(t->name) || pgm_read_byte(&t->name[i]) == 0)) e = t;
     }
     if (!e) return P_E_UNKNOWN;

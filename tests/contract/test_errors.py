@@ -20,7 +20,10 @@ from omnibot.protocol.messages import Move, Stop
 # code -> (exception class, command lines that must get exactly that code)
 CASES: dict[int, tuple[type[ControllerError], list[str]]] = {
     codes.E_TOO_LONG: (CommandRejected, ["MOVE," + "1" * 70, "STATUS" + " " * 59]),
-    codes.E_UNKNOWN: (CommandRejected, ["FOO", "MOVEX,1,40,0,0", "ACK", "OK", "\x01\x7f"]),
+    codes.E_UNKNOWN: (
+        CommandRejected,
+        ["FOO", "MOVEX,1,40,0,0", "ACK", "OK", "\x01\x7f", "STATUS\x00", "STOP\x00\x00", "MOVE\x00,1,40,0,0"],
+    ),
     codes.E_PARAM_COUNT: (
         CommandRejected,
         [
