@@ -118,6 +118,11 @@ def test_vel() -> None:
     assert c.vel(OMNI4, 0.35, -0.2, math.radians(45), 0.1) == Vel(35, -20, 45, 100)
     with pytest.raises(ValueError, match="exceeds"):
         c.vel(OMNI4, 0.8, 0.8, 0.0, 0.1)
+    # within omni4's 1 m/s as asked, past it only as rounded to whole cm/s (71, 71: 100.4 cm/s)
+    assert c.vel(OMNI4, 0.707, 0.707, 0.0, 0.1) == Vel(70, 70, 0, 100)
+    assert c.vel(OMNI4, -0.707, 0.707, 0.0, 0.1) == Vel(-70, 70, 0, 100)
+    with pytest.raises(ValueError, match="exceeds"):
+        c.vel(OMNI4, 0.7072, 0.7072, 0.0, 0.1)  # 1.00015 m/s: over it as asked
     with pytest.raises(ValueError, match="w"):
         c.vel(OMNI4, 0.0, 0.0, 16.0, 0.1)
     for t in (0.0, 1.001, 2.0):

@@ -185,7 +185,11 @@ def vel(
     T = _convert("VEL timeout", timeout, units.to_ms, "ms")
     if limits.speed_max_cms**2 < (VX * VX + VY * VY):
         speed = math.hypot(vx, vy)
-        raise ValueError(f"VEL speed {speed:g} m/s exceeds the robot's {limits.speed_max_cms:g} cm/s")
+        if speed * 100.0 > limits.speed_max_cms:
+            raise ValueError(f"VEL speed {speed:g} m/s exceeds the robot's {limits.speed_max_cms:g} cm/s")
+        # within the limit as asked, past it only as its parts rounded to whole cm/s (0.707, 0.707 ->
+        # 71, 71 cm/s: 100.4): each part rounded towards zero instead, still within 1 cm/s of it
+        VX, VY = math.trunc(vx * 100.0), math.trunc(vy * 100.0)
     if abs(W) >= limits.rate_max_dps:
         raise _fail("VEL w", w, W, "degrees/s", f"abs(W) < {limits.rate_max_dps:g}")
     if not 1 <= T <= VEL_TIME_MAX_MS:
