@@ -594,11 +594,14 @@ def main(argv: Sequence[str] | None = None) -> int:
                 getattr(args, "log", None),
                 foxglove=getattr(args, "foxglove", None),
                 foxglove_token=getattr(args, "foxglove_token", None),
-            ),
+            ) as rec,
         ):
             status = handler(args)
             sys.stdout.flush()  # a reader that went away shows up here, not at interpreter exit
-            return status
+        if rec is not None and rec.failure is not None and status == EXIT_OK:
+            # the robot did its job, the --log it was asked for is incomplete (warned when it failed)
+            return EXIT_FAILED
+        return status
     except (Exception, KeyboardInterrupt) as exc:
         if isinstance(exc, BrokenPipeError) and _stdout_gone():
             # `omnibot ... | head -1`: stop quietly, as a Unix tool killed by SIGPIPE, and send what is

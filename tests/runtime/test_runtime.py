@@ -98,3 +98,27 @@ def test_a_followers_planned_acceleration_goes_only_to_a_controller_that_takes_i
         assert max(accels) > 50 and min(accels) < -50
     else:
         assert accels == [0] * len(sent) and bodies == [None] * len(sent)
+
+
+def test_a_broken_telemetry_hook_is_dropped_and_the_loop_still_gets_every_sample(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """A hook (the recorder's, on a full disk) that raises never keeps a sample from the cycles."""
+    with RobotClient.open("sim://omni4?seed=1", timeout=0.5) as client:
+        script = ScriptSource(lambda t: Twist(0.3, 0.0, 0.0) if t < 0.5 else ScriptSource.END)
+        runtime = Runtime(client, period=0.01, sources=[script])
+        calls: list[float] = []
+
+        def broken(tel: object) -> None:
+            calls.append(0.0)
+            raise OSError(28, "No space left on device")
+
+        runtime.telemetry_hooks.append(broken)
+        client.telemetry(0.01, codes.TEL_MASK)
+        samples: list[int] = []
+        runtime.add_sink(lambda cycle: samples.append(len(cycle.telemetry)))
+        runtime.run(until=lambda: script.finished)
+        runtime.close()
+        assert len(calls) == 1 and broken not in runtime.telemetry_hooks
+        assert "a telemetry hook failed" in caplog.text
+        assert sum(samples) > 10  # the samples still reached the cycles

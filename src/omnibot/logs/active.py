@@ -113,6 +113,11 @@ class Recording:
             if panel is not None and panel.name not in runtime.sources:
                 runtime.add_source(panel)
 
+    @property
+    def failure(self) -> str | None:
+        """Why the file stopped being written mid-run (a write failed), None while it is whole."""
+        return self.recorder.failure if self.recorder is not None else None
+
     def close(self) -> None:
         """Close the recording's file (nothing when none was made)."""
         for sink in self._sinks:

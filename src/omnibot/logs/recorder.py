@@ -28,6 +28,12 @@ clock of the moment recording started):
 Bounded memory: messages go to the current chunk, which is compressed and written when it reaches
 ``chunk_size`` bytes or is ``flush_period`` s (wall clock) old; only the chunk indexes (one per chunk)
 stay in memory. The file is written unbuffered, so a SIGKILL loses only the open chunk.
+
+A write that fails (a full disk, ``ulimit -f``, a read-only or failing device: any ``OSError``) stops
+the file, never the run: the recorder says so once (a warning on stderr and to every
+:attr:`Recorder.on_failure` callback: a runtime's notice), keeps what it wrote before (``omnibot log
+recover`` rewrites it whole), writes nothing more to it and raises nothing into the client's
+listeners or the runtime's loop; :attr:`Recorder.failure` tells the command its log is incomplete.
 """
 
 from __future__ import annotations
@@ -35,9 +41,11 @@ from __future__ import annotations
 import contextlib
 import logging
 import math
+import sys
+import threading
 import time
 from collections import Counter
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import IO, Any, Protocol, cast
 
@@ -249,7 +257,11 @@ class Recorder:
             self._writer = Writer(
                 cast("IO[Any]", _Direct(self._file)), chunk_size=chunk_size, compression=kinds[compression]
             )
-            self._writer.start(profile="ros2", library=f"omnibot {__version__}")
+            try:
+                self._writer.start(profile="ros2", library=f"omnibot {__version__}")
+            except OSError as exc:  # no room for the header: the command cannot start
+                self._file.close()
+                raise ConfigError(f"cannot write {self.path}: {exc.strerror or exc}", key="--log") from None
         self.compression = compression
         self.estimator_name = estimator
         self.flush_period = flush_period
@@ -275,6 +287,12 @@ class Recorder:
         """Telemetry samples with encoders seen (what an estimator is fed)."""
         self.last_sample: Telemetry | None = None
         self.closed = False
+        self.failure: str | None = None
+        """Why the file stopped being written mid-run (a write failed: a full disk...); None while
+        it is whole."""
+        self.on_failure: list[Callable[[str], None]] = []
+        """Called once with the warning when a write fails (any thread; a runtime's notice)."""
+        self._fail_lock = threading.Lock()
 
     # ------------------------------------------------------------------ time
 
@@ -286,6 +304,35 @@ class Recorder:
         return max(ns, 0)
 
     # ------------------------------------------------------------------ writing
+
+    @contextlib.contextmanager
+    def _writing(self) -> Iterator[None]:
+        """Around every write to the file: an ``OSError`` stops the file (:meth:`_failed`), nothing
+        is raised."""
+        try:
+            yield
+        except OSError as exc:
+            self._failed(exc)
+
+    def _failed(self, exc: OSError) -> None:
+        """A write failed: no more writes to the file, one warning (stderr, :attr:`on_failure`)."""
+        with self._fail_lock:
+            if self.failure is not None:
+                return
+            why = exc.strerror or str(exc) or type(exc).__name__
+            self.failure = (
+                f"--log {self.path}: recording stopped, {why}; the robot goes on, the log keeps what "
+                f"was written before (`omnibot log recover {self.path}` rewrites it whole)"
+            )
+            self._writer = None  # what it still holds (the open chunk) has no room: dropped
+        log.debug("the log's write failed", exc_info=exc)
+        with contextlib.suppress(OSError, ValueError):  # stderr on the same full disk, or closed
+            print(f"omnibot: warning: {self.failure}", file=sys.stderr, flush=True)
+        for callback in list(self.on_failure):
+            try:
+                callback(self.failure)
+            except Exception:
+                log.exception("a log failure callback failed")
 
     def _channel(self, writer: Writer, topic: str, typename: str) -> int:
         known = self._channels.get(topic)
@@ -312,29 +359,33 @@ class Recorder:
             log.exception("cannot serialize a %s for %s", typename, topic)
             return
         self.counts[topic] += 1
-        for mirror in self.mirrors:
+        for mirror in list(self.mirrors):
             try:
                 mirror(topic, typename, data, ns)
             except Exception:
-                log.exception("mirror %r failed on %s", mirror, topic)
-        if self._writer is None:
+                # once, not once per message: the mirror is dropped, the file and the run go on
+                log.exception("mirror %r failed on %s; it is dropped", mirror, topic)
+                self.mirrors = [m for m in self.mirrors if m is not mirror]
+        writer = self._writer
+        if writer is None:
             self._last_ns = max(self._last_ns, ns)
             return
-        channel = self._channel(self._writer, topic, typename)
-        self._writer.add_message(
-            channel, log_time=ns, publish_time=ns, data=data, sequence=self.counts[topic]
-        )
-        self._first_ns = ns if self._first_ns is None else min(self._first_ns, ns)
-        self._last_ns = max(self._last_ns, ns)
-        now = time.monotonic()
-        if now - self._last_flush >= self.flush_period:
-            self.flush()
+        with self._writing():
+            channel = self._channel(writer, topic, typename)
+            writer.add_message(channel, log_time=ns, publish_time=ns, data=data, sequence=self.counts[topic])
+            self._first_ns = ns if self._first_ns is None else min(self._first_ns, ns)
+            self._last_ns = max(self._last_ns, ns)
+            now = time.monotonic()
+            if now - self._last_flush >= self.flush_period:
+                self.flush()
 
     def flush(self) -> None:
         """Write the open chunk now."""
-        if not self.closed and self._writer is not None:
-            self._writer.flush()  # type: ignore[no-untyped-call]
-            self._last_flush = time.monotonic()
+        writer = self._writer
+        if not self.closed and writer is not None:
+            with self._writing():
+                writer.flush()  # type: ignore[no-untyped-call]
+                self._last_flush = time.monotonic()
 
     # ------------------------------------------------------------------ the run's context
 
@@ -366,7 +417,7 @@ class Recorder:
         description = yaml.safe_dump(robot.model_dump(mode="json", exclude_none=True), sort_keys=False)
         if self._writer is None:
             return
-        self._writer.add_metadata(
+        self.add_metadata(
             "omnibot",
             {
                 "version": __version__,
@@ -490,7 +541,7 @@ class Recorder:
         samples = self.samples - (1 if before is not None and before is self.last_sample else 0)
         if self._writer is None or self.closed:
             return
-        self._writer.add_metadata(
+        self.add_metadata(
             ADOPTED,
             {
                 "name": name,
@@ -503,8 +554,10 @@ class Recorder:
 
     def add_metadata(self, name: str, values: dict[str, str]) -> None:
         """An MCAP metadata record ``name`` (nothing without a file, or once closed)."""
-        if self._writer is not None and not self.closed:
-            self._writer.add_metadata(name, values)
+        writer = self._writer
+        if writer is not None and not self.closed:
+            with self._writing():
+                writer.add_metadata(name, values)
 
     def write_pose(
         self, topic: str, ns: int, pose: Pose2D, body: tuple[float, float, float], *, tf: bool = False
@@ -594,13 +647,16 @@ class Recorder:
         for client in list(self._clients):
             self.detach(client)
         try:
-            if self._writer is not None:
-                self._writer.add_metadata("rosbag2", {"serialized_metadata": self._rosbag2_metadata()})
-                self._writer.finish()  # type: ignore[no-untyped-call]
+            writer = self._writer
+            if writer is not None:
+                with self._writing():
+                    writer.add_metadata("rosbag2", {"serialized_metadata": self._rosbag2_metadata()})
+                    writer.finish()  # type: ignore[no-untyped-call]
         finally:
             self.closed = True
             if self._file is not None:
-                self._file.close()
+                with self._writing():
+                    self._file.close()
             for mirror in self.mirrors:
                 with contextlib.suppress(Exception):
                     mirror.close()

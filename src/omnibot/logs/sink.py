@@ -76,6 +76,13 @@ class RuntimeRecorder:
         runtime.telemetry_hooks.append(self._after)
         if runtime.estimator is not None:
             self._adopt(runtime.estimator, None)
+        # a write that fails stops the file, never the run: the runtime's front ends are told once
+        recorder.on_failure.append(self._failed)
+        if recorder.failure is not None:
+            self._failed(recorder.failure)
+
+    def _failed(self, text: str) -> None:
+        self.runtime.notify("warn", text, "log")
 
     def _before(self, tel: Telemetry) -> None:
         estimator = self.runtime.estimator
@@ -125,6 +132,8 @@ class RuntimeRecorder:
     def close(self) -> None:
         """Stop taking the runtime's estimate (the recorder stays open)."""
         self.runtime.client.remove_listener(self._listener)
+        if self._failed in self.recorder.on_failure:
+            self.recorder.on_failure.remove(self._failed)
         if self._after in self.runtime.telemetry_hooks:
             self.runtime.telemetry_hooks.remove(self._after)
 

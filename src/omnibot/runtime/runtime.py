@@ -267,8 +267,13 @@ class Runtime:
             alerts = self.estimator.alerts
             while alerts:
                 self.notify("warn", alerts.pop(0), "estimator")
-        for hook in self.telemetry_hooks:
-            hook(event)
+        for hook in list(self.telemetry_hooks):
+            try:
+                hook(event)
+            except Exception:  # a hook (a recorder's) never keeps a sample from the loop
+                log.exception("a telemetry hook failed; it is removed")
+                if hook in self.telemetry_hooks:
+                    self.telemetry_hooks.remove(hook)
         self._telemetry.append(event)
 
     def _on_event(self, event: Event) -> None:
