@@ -68,23 +68,10 @@ def smooth_random_path(
         raise ConfigError(
             f"unknown heading mode '{heading}'; expected one of: {', '.join(GENERATED_HEADINGS)}"
         )
-    for name, value in (
-        ("length", length),
-        ("radius_min", radius_min),
-        ("spacing", spacing),
-        ("swing_rate", swing_rate),
-    ):
-        if not (math.isfinite(value) and value > 0):
-            raise ConfigError(f"random path {name} must be a positive number, got {value}")
-    if not (math.isfinite(swing) and swing >= 0):
-        raise ConfigError(f"random path swing must be a non-negative number of radians, got {swing}")
+    _check_sizes("random", length, radius_min, spacing, swing, swing_rate)
     wave = 4.0 * radius_min if wavelength is None else wavelength
     if not (math.isfinite(wave) and wave > 0):
         raise ConfigError(f"random path wavelength must be a positive number, got {wavelength}")
-    if length / spacing > 200_000:
-        raise ConfigError(
-            f"random path of {length:g} m at {spacing:g} m spacing is too long; at most 200,000 points"
-        )
     rng = np.random.default_rng(seed)
     n = max(2, math.ceil(length / spacing) + 1)
     s = np.linspace(0.0, length, n)
@@ -120,7 +107,10 @@ TRIES = 40
 """Times a closed shape is smoothed (or a figure eight made rounder) to meet ``radius_min``."""
 
 
-def _check_closed(length: float, radius_min: float, spacing: float, swing: float, swing_rate: float) -> None:
+def _check_sizes(
+    kind: str, length: float, radius_min: float, spacing: float, swing: float, swing_rate: float
+) -> None:
+    """A generated path's sizes, or a ConfigError naming the ``kind`` of path and the bad one."""
     for name, value in (
         ("length", length),
         ("radius_min", radius_min),
@@ -128,13 +118,17 @@ def _check_closed(length: float, radius_min: float, spacing: float, swing: float
         ("swing_rate", swing_rate),
     ):
         if not (math.isfinite(value) and value > 0):
-            raise ConfigError(f"closed path {name} must be a positive number, got {value}")
+            raise ConfigError(f"{kind} path {name} must be a positive number, got {value}")
     if not (math.isfinite(swing) and swing >= 0):
-        raise ConfigError(f"closed path swing must be a non-negative number of radians, got {swing}")
+        raise ConfigError(f"{kind} path swing must be a non-negative number of radians, got {swing}")
     if length / spacing > 200_000:
         raise ConfigError(
-            f"closed path of {length:g} m at {spacing:g} m spacing is too long; at most 200,000 points"
+            f"{kind} path of {length:g} m at {spacing:g} m spacing is too long; at most 200,000 points"
         )
+
+
+def _check_closed(length: float, radius_min: float, spacing: float, swing: float, swing_rate: float) -> None:
+    _check_sizes("closed", length, radius_min, spacing, swing, swing_rate)
     if length < 2.0 * math.pi * radius_min:
         raise ConfigError(
             f"a closed path of {length:g} m cannot keep a radius of curvature of {radius_min:g} m "
