@@ -166,11 +166,9 @@ def fake_calibration(monkeypatch: pytest.MonkeyPatch) -> dict[str, Any]:
     return state
 
 
-def test_a_calibration_worse_than_none_is_neither_written_nor_kept(
-    tmp_path: Path, fake_calibration: dict[str, Any], harness: Harness, capsys: pytest.CaptureFixture[str]
-) -> None:
-    cal = tmp_path / "cal.yaml"
-    argv = [
+def _calibrate_argv(tmp_path: Path, cal: Path) -> list[str]:
+    """``calibrate`` of the simulated mecanum4, unattended, its report and file in ``tmp_path``."""
+    return [
         "calibrate",
         "--port",
         "sim://mecanum4",
@@ -180,6 +178,13 @@ def test_a_calibration_worse_than_none_is_neither_written_nor_kept(
         "--calibration",
         str(cal),
     ]
+
+
+def test_a_calibration_worse_than_none_is_neither_written_nor_kept(
+    tmp_path: Path, fake_calibration: dict[str, Any], harness: Harness, capsys: pytest.CaptureFixture[str]
+) -> None:
+    cal = tmp_path / "cal.yaml"
+    argv = _calibrate_argv(tmp_path, cal)
     assert main(argv) == 1
     out, err = capsys.readouterr()
     assert_one_line_error(err)
@@ -218,16 +223,7 @@ def test_a_calibration_that_makes_rotate_worse_says_so_and_is_not_kept(
     wood.after.append(row(0.0, -0.036, "rotate"))
     fake_calibration["result"] = made
     cal = tmp_path / "cal.yaml"
-    argv = [
-        "calibrate",
-        "--port",
-        "sim://mecanum4",
-        "--yes",
-        "--out",
-        str(tmp_path / "r"),
-        "--calibration",
-        str(cal),
-    ]
+    argv = _calibrate_argv(tmp_path, cal)
     assert main(argv) == 1
     out = capsys.readouterr().out
     assert "wood 5.5 % -> 1.9 %" in out  # better on the whole
