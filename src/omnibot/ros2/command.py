@@ -206,7 +206,7 @@ def attach(runtime: Any, robot: Any, args: argparse.Namespace, spec: RobotSpec |
     reset = OdometryReset(
         node, runtime, odom_frame=odom, notify=notify, on_reset=path.cancel, hardware_id=robot.name
     )
-    runtime.add_sink(EstimatorWhenMissing(runtime, robot))
+    EstimatorWhenMissing.add(runtime, robot)
     limits = TwistLimits.from_limits(runtime.client.limits, None, robot)
     runtime.add_source(
         CmdVelSource(

@@ -165,7 +165,7 @@ def compose(runtime: Any, robot: Any, args: argparse.Namespace, config: Any, pat
         parts.closers.append(node.close)
     parts.printer = NoticePrinter(_say, control=True)
     runtime.add_sink(parts.printer)
-    runtime.add_sink(EstimatorWhenMissing(runtime, robot))  # the achieved twist of the status lines
+    EstimatorWhenMissing.add(runtime, robot)  # the achieved twist of the status lines
     runtime.add_sink(SpeedReport(_say))
     return parts
 

@@ -98,6 +98,13 @@ class EstimatorWhenMissing:
         self.robot = robot
         self.tried = False
 
+    @classmethod
+    def add(cls, runtime: Runtime, robot: RobotDescription) -> None:
+        """Add one to ``runtime`` unless a front end of the same process already did (``run``
+        composes the dashboard's link, ROS 2's bridge and its own status lines on one runtime)."""
+        if not any(isinstance(sink, cls) for sink in runtime.sinks):
+            runtime.add_sink(cls(runtime, robot))
+
     def __call__(self, cycle: Cycle) -> None:
         """Install the estimator once, at the first cycle."""
         runtime = self.runtime

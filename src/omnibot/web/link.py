@@ -253,7 +253,7 @@ class RobotLink:
             self.runtime.start()
             if self.teach is not None:
                 self.teach.attach(self.runtime, self._pose())
-            self.runtime.add_sink(EstimatorWhenMissing(self.runtime, self.robot))  # the achieved twist
+            EstimatorWhenMissing.add(self.runtime, self.robot)  # the achieved twist
         self._reset = False
         try:
             client.telemetry(TEL_PERIOD, codes.TEL_MASK)
