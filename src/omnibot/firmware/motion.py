@@ -381,10 +381,6 @@ class Executor:
         from the wheels' speed at the robot's stop deceleration. Either way the motion ends once every
         wheel stands still (none turned more than its rest counts in :data:`REST_WINDOW_US`), or
         :data:`BRAKE_MAX_US` after the twist reached zero."""
-        fastest = 0.0
-        for i in range(self.n):
-            v = abs(self.speedctl.speed[i]) * self._radius[i]
-            fastest = max(fastest, v)
         self._braking = True
         self._brake_us = 0
         self._rest_due = REST_WINDOW_US
@@ -400,6 +396,9 @@ class Executor:
             self._slewing = True  # down from the twist driven now, at the acceleration limits
             self._slew(self._drag_period)
         else:
+            fastest = 0.0  # the wheels' rim speed now: how long the body may still need to stop
+            for i in range(self.n):
+                fastest = max(fastest, abs(self.speedctl.speed[i]) * self._radius[i])
             self._brake_min_us = int(fastest / self._stop_decel * 1e6) if self._stop_decel > 0.0 else 0
             self._drive(0.0, 0.0, 0.0, False)
 
