@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from benchmarks.mapping_scenes import cast_scan, path_poses
+
 from omnibot.mapping.grid import OccupancyGrid
 from omnibot.mapping.mapper import build_map
 from omnibot.mapping.score import rasterise, score_map
