@@ -39,12 +39,11 @@ def logit(p: float) -> float:
     return math.log(p / (1.0 - p))
 
 
-def scanner_pose(pose: Pose2D, mount: Pose2D) -> Pose2D:
-    """The scanner's pose in the map frame: the robot's ``pose`` composed with the scanner's ``mount``."""
-    c, s = math.cos(pose.theta), math.sin(pose.theta)
-    return Pose2D(
-        pose.x + c * mount.x - s * mount.y, pose.y + s * mount.x + c * mount.y, pose.theta + mount.theta
-    )
+def compose(a: Pose2D, b: Pose2D) -> Pose2D:
+    """``b`` (given in ``a``'s frame) in ``a``'s parent frame, e.g. the scanner's pose in the map
+    frame from the robot's pose and the scanner's mount."""
+    c, s = math.cos(a.theta), math.sin(a.theta)
+    return Pose2D(a.x + c * b.x - s * b.y, a.y + s * b.x + c * b.y, a.theta + b.theta)
 
 
 def ray_ends(
@@ -55,7 +54,7 @@ def ray_ends(
     Returns end at their range; rays without one end at ``min(range_max, max_clear)`` (not hits);
     rays shorter than ``range_min`` are dropped.
     """
-    sp = scanner_pose(pose, scan.mount)
+    sp = compose(pose, scan.mount)
     r = scan.ranges
     hit = scan.valid
     clear = min(scan.range_max, max_clear)
