@@ -125,29 +125,30 @@ def _integrate(
 
 
 def ray_cells_numpy(
-    ox: float, oy: float, ends: FloatArray, res: float, shape: tuple[int, int]
+    ox: float, oy: float, ends: FloatArray, hits: NDArray[np.bool_], res: float, shape: tuple[int, int]
 ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-    """Flat indices of the cells the rays pass (sampled every res/3, end cells excluded) and of the end cells.
+    """Flat indices of the cells the rays pass and of the cells their hits fall in (grid-local
+    coordinates: the grid's lower-left corner at 0, 0).
 
-    The vectorised alternative to the compiled walk (no per-ray Python loop): sample every ray at a
-    third of a cell, dedupe. It may miss a cell a ray only clips at a corner.
+    The vectorised alternative to the compiled walk (no per-ray Python loop): every ray sampled at
+    a third of a cell, cells deduplicated; a hit ray's end cell is not among its free cells. It may
+    miss a cell a ray only clips at a corner.
     """
     rows, cols = shape
     d = ends - (ox, oy)
     length = np.hypot(d[:, 0], d[:, 1])
-    n = np.maximum(np.ceil(length / (res / 3.0)).astype(np.int64), 1)
+    n = np.maximum(np.ceil(length / (res / 3.0)).astype(np.int64), 1) + 1
     ray = np.repeat(np.arange(len(ends)), n)
     start = np.cumsum(n) - n
-    t = (np.arange(int(n.sum())) - np.repeat(start, n)) / np.repeat(n, n)
-    px = ox + d[ray, 0] * t
-    py = oy + d[ray, 1] * t
-    c = np.floor(px / res).astype(np.int64)
-    r = np.floor(py / res).astype(np.int64)
+    t = (np.arange(int(n.sum())) - np.repeat(start, n)) / np.repeat(n - 1, n)
+    c = np.floor((ox + d[ray, 0] * t) / res).astype(np.int64)
+    r = np.floor((oy + d[ray, 1] * t) / res).astype(np.int64)
     ce = np.floor(ends[:, 0] / res).astype(np.int64)
     re = np.floor(ends[:, 1] / res).astype(np.int64)
-    keep = (r >= 0) & (r < rows) & (c >= 0) & (c < cols) & ((r != re[ray]) | (c != ce[ray]))
-    inside = (re >= 0) & (re < rows) & (ce >= 0) & (ce < cols)
-    return np.unique(r[keep] * cols + c[keep]), re[inside] * cols + ce[inside]
+    own_end = hits[ray] & (r == re[ray]) & (c == ce[ray])
+    keep = (r >= 0) & (r < rows) & (c >= 0) & (c < cols) & ~own_end
+    inside = hits & (re >= 0) & (re < rows) & (ce >= 0) & (ce < cols)
+    return np.unique(r[keep] * cols + c[keep]), np.unique(re[inside] * cols + ce[inside])
 
 
 class OccupancyMapper:
