@@ -25,9 +25,16 @@ from omnibot.motion import Pose2D
 from omnibot.sim.world import World, load_world
 
 
-def run(world: World, grid: OccupancyGrid, seed: int, refine: bool, particles: int) -> dict[str, float]:
-    truth = path_poses(step=0.05)
-    odom = drifting_odometry(truth, scale=1.1, heading_drift=0.05)
+def drive(poses: int) -> tuple[list[Pose2D], list[Pose2D]]:
+    """The true poses along the loop (the first ``poses`` of them) and the drifting odometry's."""
+    truth = path_poses(step=0.05)[:poses]
+    return truth, drifting_odometry(truth, scale=1.1, heading_drift=0.05)
+
+
+def run(
+    world: World, grid: OccupancyGrid, seed: int, refine: bool, particles: int, poses: int
+) -> dict[str, float]:
+    truth, odom = drive(poses)
     rng = np.random.default_rng(seed + 10)
     loc = Localiser(grid, seed=seed, refine=refine, particles=particles)
     t0 = truth[0]
@@ -49,7 +56,6 @@ def run(world: World, grid: OccupancyGrid, seed: int, refine: bool, particles: i
         "rms": float(np.sqrt(np.mean(e**2))),
         "deg": math.degrees(max(th)),
         "ms": per * 1e3,
-        "odom": math.hypot(odom[-1].x - truth[-1].x, odom[-1].y - truth[-1].y),
     }
 
 
@@ -57,14 +63,15 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m benchmarks.mapping_localise", description=__doc__)
     ap.add_argument("--seeds", default="1,2,3,4,5")
     ap.add_argument("--particles", type=int, default=500)
+    ap.add_argument("--poses", type=int, default=220, help="poses of the loop driven (default all 220)")
     args = ap.parse_args(argv)
     seeds = [int(s) for s in args.seeds.split(",")]
     world = load_world("room")
     rng = np.random.default_rng(0)
     grid = build_map([(cast_scan(world, p, rng=rng), p) for p in path_poses()[::2]])
-    print(
-        f"{args.particles} particles, 60 beams; odometry's final error {run(world, grid, seeds[0], True, 10)['odom']:.2f} m"
-    )
+    truth, odom = drive(args.poses)
+    drift = math.hypot(odom[-1].x - truth[-1].x, odom[-1].y - truth[-1].y)
+    print(f"{args.particles} particles, 60 beams, {len(truth)} poses; odometry's final error {drift:.2f} m")
     print(
         "| localiser | seed | after convergence (cm) | max (cm) | RMS (cm) | max heading (deg) | per update (ms) |"
     )
@@ -72,7 +79,7 @@ def main(argv: list[str] | None = None) -> int:
     for refine in (False, True):
         name = "filter + refinement" if refine else "particle filter"
         for seed in seeds:
-            m = run(world, grid, seed, refine, args.particles)
+            m = run(world, grid, seed, refine, args.particles, args.poses)
             print(
                 f"| {name} | {seed} | {m['conv'] * 100:.1f} | {m['max'] * 100:.1f} | {m['rms'] * 100:.2f} | "
                 f"{m['deg']:.2f} | {m['ms']:.1f} |"

@@ -35,6 +35,13 @@ def test_rays_without_return_clear_up_to_max_clear_and_mark_nothing() -> None:
     assert (row[:21] == 40).all() and (row[21:] == -1).all()
 
 
+def test_a_scanner_without_a_range_limit_clears_its_inf_rays_to_max_clear() -> None:
+    m = OccupancyMapper(0.1, bounds=(0.0, 0.0, 6.0, 1.0), max_clear=1.0)
+    m.add(one_ray(math.inf, range_max=math.inf), Pose2D(0.05, 0.55, 0.0))
+    row = m.to_grid().data[5]
+    assert (row[:11] == 40).all() and (row[11:] == -1).all()
+
+
 def test_short_rays_are_ignored_and_the_mount_is_applied() -> None:
     m = OccupancyMapper(0.1, bounds=(0.0, 0.0, 2.0, 2.0))
     m.add(one_ray(0.01), Pose2D(0.05, 0.05, 0.0))

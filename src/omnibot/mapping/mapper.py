@@ -58,7 +58,7 @@ def ray_ends(
     r = scan.ranges
     hit = scan.valid
     clear = min(scan.range_max, max_clear)
-    keep = hit | ((r > scan.range_max) & (clear > 0.0))
+    keep = hit | ((~np.isfinite(r) | (r > scan.range_max)) & (clear > 0.0))
     dist = np.where(hit, r, clear)[keep]
     a = scan.angles[keep] + sp.theta
     ends = np.column_stack((sp.x + dist * np.cos(a), sp.y + dist * np.sin(a)))
