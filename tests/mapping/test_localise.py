@@ -10,6 +10,7 @@ from benchmarks.mapping_scenes import cast_scan, drifting_odometry, path_poses
 
 from omnibot.mapping.grid import OccupancyGrid
 from omnibot.mapping.localise import LikelihoodField, Localiser, inverse, refine_pose
+from omnibot.mapping.mapfile import load_map, save_map
 from omnibot.mapping.mapper import build_map, compose
 from omnibot.motion import Pose2D
 from omnibot.scan import Scan
@@ -17,11 +18,14 @@ from omnibot.sim.world import World, load_world
 
 
 @pytest.fixture(scope="module")
-def room() -> tuple[World, OccupancyGrid]:
+def room(tmp_path_factory: pytest.TempPathFactory) -> tuple[World, OccupancyGrid]:
+    """The room, and its map made at the true poses, saved and loaded again (a trinary map file)."""
     world = load_world("room")
     rng = np.random.default_rng(0)
     poses = path_poses()[::2]
-    return world, build_map([(cast_scan(world, p, rng=rng), p) for p in poses])
+    path = tmp_path_factory.mktemp("map") / "room.yaml"
+    save_map(build_map([(cast_scan(world, p, rng=rng), p) for p in poses]), path)
+    return world, load_map(path)
 
 
 def error(a: Pose2D, b: Pose2D) -> tuple[float, float]:
