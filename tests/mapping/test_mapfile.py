@@ -60,6 +60,13 @@ def test_free_thresh_above_205s_shade_reads_unknown_pixels_as_free_as_map_server
     assert load_map(tmp_path / "m.yaml").data.tolist() == [[0, 0, 0, 0], [0, 0, 0, 0], [100, 0, 0, 0]]
 
 
+def test_keys_map_server_does_not_read_are_ignored(tmp_path: Path) -> None:
+    Image.fromarray(image_top_first(), "L").save(tmp_path / "m.pgm")
+    extra = "elevation_image: e.pgm\nmin_height: -1.0\nmax_height: 2.0\nbinary: false\n"
+    (tmp_path / "m.yaml").write_text(CARTOGRAPHER.format(image="m.pgm") + extra)
+    assert load_map(tmp_path / "m.yaml").shape == (3, 4)
+
+
 def test_saved_maps_are_read_by_pillow_as_map_saver_writes_them(tmp_path: Path) -> None:
     data = np.array([[0, 10, 25, 26], [50, 64, 65, 100], [-1, -1, 0, 100]], np.int8)
     image = save_map(OccupancyGrid(data, 0.1, Pose2D(1.0, -2.0, 0.5)), tmp_path / "out.yaml")

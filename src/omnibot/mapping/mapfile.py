@@ -30,6 +30,7 @@ Every bad file is one :class:`~omnibot.errors.ConfigError` naming the file and w
 
 from __future__ import annotations
 
+import difflib
 import math
 import re
 from pathlib import Path
@@ -160,11 +161,11 @@ def read_map_yaml(path: str | Path) -> dict[str, Any]:
     if missing:
         raise ConfigError(f"invalid map {source}: missing key{'s' * (len(missing) > 1)} {', '.join(missing)}")
     for key in doc:
-        if key not in KNOWN:
-            # map_server ignores keys it does not know; so do we, unless it is a near miss of one it needs
-            near = suggest("", str(key), KNOWN)
-            if "did you mean" in near:
-                raise ConfigError(f"invalid map {source}: {key}: unknown key{near}")
+        # map_server ignores keys it does not know (other tools add theirs); so do we, unless one is
+        # a near miss of a key map_server reads
+        near = difflib.get_close_matches(str(key), KNOWN, n=1, cutoff=0.8)
+        if key not in KNOWN and near:
+            raise ConfigError(f"invalid map {source}: {key}: unknown key; did you mean '{near[0]}'?")
     image = doc["image"]
     if not isinstance(image, str) or not image:
         raise ConfigError(f"invalid map {source}: image: expected a file name, got {image!r}")
