@@ -149,6 +149,8 @@ GOOD = (
     [
         ("image: [m.pgm\n", None, "is not valid YAML"),
         ("- a\n- b\n", None, "expected a mapping"),
+        ("# nothing\n", None, "the file is empty"),
+        (GOOD.replace("m.pgm", "."), None, "is not a file"),
         (GOOD.replace("resolution: 0.05\n", ""), None, "missing key resolution"),
         (
             GOOD.replace("negate: 0\n", "").replace("origin: [0, 0, 0]\n", ""),

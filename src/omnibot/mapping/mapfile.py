@@ -115,8 +115,10 @@ def write_pgm(path: Path, pixels: NDArray[np.uint8], comment: str = "") -> None:
 
 def _read_image(path: Path) -> tuple[FloatArray, NDArray[np.bool_], NDArray[np.int64]]:
     """(shade 0..1, opaque, 8-bit value) per pixel, top row first."""
-    if not path.is_file():
+    if not path.exists():
         raise ConfigError(f"map image {path} does not exist")
+    if not path.is_file():
+        raise ConfigError(f"map image {path} is not a file")
     with path.open("rb") as f:
         magic = f.read(2)
     if magic in (b"P5", b"P2"):
@@ -155,6 +157,8 @@ def read_map_yaml(path: str | Path) -> dict[str, Any]:
     negate (bool), occupied_thresh, free_thresh."""
     source = Path(path)
     doc = read_yaml(source, "map")
+    if doc is None:
+        raise ConfigError(f"invalid map {source}: the file is empty")
     if not isinstance(doc, dict):
         raise ConfigError(f"invalid map {source}: expected a mapping of keys, got {type(doc).__name__}")
     missing = [k for k in REQUIRED if k not in doc]
