@@ -4,4 +4,16 @@ Modules (each owns one thing; the plain scan type is :mod:`omnibot.scan`):
 
 * :mod:`omnibot.mapping.grid` - :class:`~omnibot.mapping.grid.OccupancyGrid`, the map every other
   module reads (ROS nav_msgs/OccupancyGrid conventions).
+* :mod:`omnibot.mapping.mapper` - :class:`~omnibot.mapping.mapper.OccupancyMapper`: (scan, pose)
+  pairs -> log-odds grid (compiled ray walk), growing to fit; cheap rebuilds after a loop closure.
+* :mod:`omnibot.mapping.mapfile` - ROS map_server files: ``save_map`` / ``load_map`` (YAML + PGM,
+  PNG...; trinary, scale and raw modes).
+* :mod:`omnibot.mapping.score` - ``score_map``: a map's precision and recall against the world's
+  own geometry.
+* :mod:`omnibot.mapping.trajectory` - TUM trajectory files and ``score_trajectory`` (APE / RPE
+  with evo).
+* :mod:`omnibot.mapping.localise` - :class:`~omnibot.mapping.localise.Localiser`: a likelihood-field
+  particle filter refined by scan-to-map matching, in a saved map.
+
+The user's guide is docs/mapping.md.
 """
