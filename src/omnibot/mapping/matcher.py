@@ -11,7 +11,8 @@ Two stages, chosen on measurements (benchmarks/scan_matching.py, BENCHMARKS.md):
    0.2 m / 10 degrees off.
 2. **Point-to-line ICP** (Gauss-Newton on the distances to the target's local lines, Huber
    weighted) from the best lattice pose, down to sub-centimetre accuracy. Directions the geometry
-   does not constrain (eigenvalues of the normal equations far below the largest) are not moved.
+   does not constrain (eigenvalues of the normal equations far below the largest, rotation scaled
+   to a length by the points' spread) are not moved: there the result keeps the initial guess.
 
 The result's covariance is ``sigma^2 H^-1`` of the point-to-line problem at the solution (``H``
 the normal matrix, ``sigma`` the residual's spread, never below the sensor's), scaled by
@@ -41,9 +42,14 @@ IntArray = NDArray[np.int64]
 
 UNCONSTRAINED_VARIANCE = 1.0e4
 """Variance (m^2 or rad^2) given to a direction the scans do not constrain."""
-DEGENERATE_RATIO = 1.0e-3
-"""An eigenvalue of the normal matrix below this fraction of the largest marks an unconstrained direction."""
-NORMAL_NEIGHBOURS = 7
+DEGENERATE_RATIO = 1.0e-2
+"""An eigenvalue of the normal matrix (its rotation scaled by the points' spread to a length) below
+this fraction of the largest marks an unconstrained direction."""
+NORMAL_NEIGHBOURS = 24
+NORMAL_RADIUS = 0.3
+"""Neighbours (how many, how far, m) whose line gives a target point its normal."""
+LINE_SPREAD = 0.1
+"""Largest ratio of the neighbours' spread across to along their line (variances) that is still a line."""
 
 
 def as_points(data: Scan | ArrayLike, key: str = "points") -> FloatArray:
@@ -74,15 +80,26 @@ def voxel_downsample(points: FloatArray, size: float) -> FloatArray:
 
 
 def _normals(points: FloatArray, tree: cKDTree) -> FloatArray:
-    """Unit normals of the local lines through each point (PCA of its nearest neighbours)."""
+    """Unit normals of the local lines through each point, zero where the neighbourhood is no line.
+
+    The neighbours are the :data:`NORMAL_NEIGHBOURS` nearest within :data:`NORMAL_RADIUS`; a point
+    with fewer than four, or whose neighbours spread across as well as along (a corner, a curve
+    tighter than the radius, two walls), gets no normal and takes no part in ICP.
+    """
     k = min(NORMAL_NEIGHBOURS, len(points))
-    _, idx = tree.query(points, k=k)
-    nb = points[np.asarray(idx).reshape(len(points), k)]
-    d = nb - nb.mean(axis=1, keepdims=True)
+    dist, idx = tree.query(points, k=k, distance_upper_bound=NORMAL_RADIUS)
+    dist, idx = np.asarray(dist).reshape(len(points), k), np.asarray(idx).reshape(len(points), k)
+    ok = np.isfinite(dist)
+    nb = points[np.where(ok, idx, 0)]
+    w = ok.astype(np.float64)[..., None]
+    count = w.sum(axis=1)
+    mean = (nb * w).sum(axis=1) / np.maximum(count, 1.0)
+    d = (nb - mean[:, None, :]) * w
     cov = np.einsum("nki,nkj->nij", d, d)
-    _, vecs = np.linalg.eigh(cov)
-    normals: FloatArray = np.ascontiguousarray(vecs[:, :, 0])
-    return normals
+    vals, vecs = np.linalg.eigh(cov)
+    line = (count[:, 0] >= 4) & (vals[:, 0] <= LINE_SPREAD * vals[:, 1])
+    normals: FloatArray = np.where(line[:, None], vecs[:, :, 0], 0.0)
+    return np.ascontiguousarray(normals)
 
 
 @dataclass(frozen=True)
@@ -92,6 +109,9 @@ class Target:
     points: FloatArray
     tree: cKDTree = field(repr=False)
     normals: FloatArray = field(repr=False)
+    """Unit normal of each point's local line; zero where there is none (see :attr:`lines`)."""
+    lines: NDArray[np.bool_] = field(repr=False)
+    """Which points lie on a line (have a normal)."""
     grid: FloatArray = field(repr=False)
     """Likelihood of a point in each cell, [row = y, col = x]."""
     origin: tuple[float, float]
@@ -104,6 +124,7 @@ class Target:
         pts = voxel_downsample(points, resolution / 2.0)
         tree = cKDTree(pts)
         normals = _normals(pts, tree) if len(pts) >= 2 else np.zeros_like(pts)
+        lines = np.any(normals != 0.0, axis=1)
         if len(pts):
             lo = pts.min(axis=0) - margin
             hi = pts.max(axis=0) + margin
@@ -118,7 +139,9 @@ class Target:
             grid = np.exp(-0.5 * (dist / sigma) ** 2)
         else:
             grid = np.zeros((rows, cols))
-        return cls(pts, tree, normals, np.ascontiguousarray(grid), (float(lo[0]), float(lo[1])), resolution)
+        return cls(
+            pts, tree, normals, lines, np.ascontiguousarray(grid), (float(lo[0]), float(lo[1])), resolution
+        )
 
 
 @dataclass(frozen=True)
@@ -129,7 +152,8 @@ class MatchResult:
     covariance: FloatArray
     """3x3 covariance of (x, y, theta) in the target's frame (m^2, rad^2)."""
     fitness: float
-    """Fraction of the source's (thinned) points lying within ``inlier_distance`` of the target's lines."""
+    """Fraction of the source's (thinned) points within ``inlier_distance`` of the target's lines (or
+    of its points off any line)."""
     rmse: float
     """Root mean square point-to-line distance of those inliers, m."""
     converged: bool
@@ -176,6 +200,21 @@ def _correlate(
                 pen = rot_pen + weight_xy * math.sqrt(float(dx * dx + dy * dy)) * res
                 out[a, i, j] = total / n * math.exp(-pen)
     return out
+
+
+def _eigen(hessian: FloatArray, scale: FloatArray) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
+    """Eigen-decomposition of the normal matrix in scaled units, and which directions are constrained."""
+    vals, vecs = np.linalg.eigh(hessian * np.outer(scale, scale))
+    keep = vals > DEGENERATE_RATIO * max(float(vals[-1]), 1e-12)
+    return vals, vecs, keep
+
+
+def _solve(hessian: FloatArray, grad: FloatArray, scale: FloatArray) -> FloatArray:
+    """The Gauss-Newton step ``H^-1 g`` restricted to the constrained directions."""
+    vals, vecs, keep = _eigen(hessian, scale)
+    inv = np.where(keep, 1.0 / np.where(keep, vals, 1.0), 0.0)
+    step: FloatArray = scale * (vecs @ (inv * (vecs.T @ (scale * grad))))
+    return step
 
 
 class ScanMatcher:
@@ -264,7 +303,7 @@ class ScanMatcher:
         sxy = self.search_xy if search_xy is None else search_xy
         sth = self.search_theta if search_theta is None else search_theta
         start, score = self.search(src, tgt, initial, sxy, sth)
-        return self._refine(src, tgt, start, score)
+        return self._refine(src, tgt, initial, start, score)
 
     def search(
         self, src: FloatArray, tgt: Target, initial: Pose2D, search_xy: float, search_theta: float
@@ -289,18 +328,21 @@ class ScanMatcher:
         best = Pose2D(initial.x + (i - nxy) * res, initial.y + (j - nxy) * res, wrap(float(thetas[a])))
         return best, float(scores[a, i, j])
 
-    def _refine(self, src: FloatArray, tgt: Target, start: Pose2D, score: float) -> MatchResult:
+    def _refine(
+        self, src: FloatArray, tgt: Target, initial: Pose2D, start: Pose2D, score: float
+    ) -> MatchResult:
         """Point-to-line Gauss-Newton from ``start``; covariance from its normal matrix."""
         x, y, th = start.x, start.y, start.theta
+        scale = np.array([1.0, 1.0, 1.0 / max(float(np.sqrt(np.mean(np.sum(src * src, axis=1)))), 0.1)])
         converged = False
         huber = 2.0 * self.range_sigma * 1.5
         hessian = np.zeros((3, 3))
-        r = np.zeros(0)
-        weights = np.zeros(0)
+        previous = np.zeros(3)
         for _ in range(self.max_iterations):
             p = transform(Pose2D(x, y, th), src)
             dist, idx = tgt.tree.query(p, distance_upper_bound=self.max_correspondence)
             ok = np.isfinite(dist)
+            ok[ok] = tgt.lines[idx[ok]]
             if ok.sum() < self.min_points:
                 break
             n = tgt.normals[idx[ok]]
@@ -312,36 +354,49 @@ class ScanMatcher:
             weights = np.where(a <= huber, 1.0, huber / np.maximum(a, 1e-12))
             hessian = jac.T @ (weights[:, None] * jac)
             grad = jac.T @ (weights * r)
-            vals, vecs = np.linalg.eigh(hessian)
-            keep = vals > DEGENERATE_RATIO * max(vals[-1], 1e-12)
-            inv = np.where(keep, 1.0 / np.where(keep, vals, 1.0), 0.0)
-            delta = -(vecs @ (inv * (vecs.T @ grad)))
+            delta = -_solve(hessian, grad, scale)
+            if np.all(np.abs(delta + previous) < 1e-7):  # a point flips in and out: settle between
+                delta = 0.5 * delta
             x, y, th = x + delta[0], y + delta[1], th + delta[2]
-            if math.hypot(delta[0], delta[1]) < 1e-5 and abs(delta[2]) < 1e-6:
+            if math.hypot(delta[0], delta[1]) < 1e-4 and abs(delta[2]) < 1e-4:
                 converged = True
                 break
+            previous = delta
+        else:  # out of iterations: still settled if only a point or two keep flipping, by a hair
+            converged = math.hypot(previous[0], previous[1]) < 1e-3 and abs(previous[2]) < 1e-3
+        # what the geometry leaves unconstrained stays where the caller's guess put it
+        _, vecs, keep = _eigen(hessian, scale)
+        if converged and not keep.all():
+            moved = (
+                np.array([x - initial.x, y - initial.y, math.remainder(th - initial.theta, 2 * math.pi)])
+                / scale
+            )
+            free = vecs[:, ~keep]
+            x, y, th = np.array([x, y, th]) - scale * (free @ (free.T @ moved))
         pose = Pose2D(float(x), float(y), wrap(float(th)))
         p = transform(pose, src)
         dist, idx = tgt.tree.query(p, distance_upper_bound=self.max_correspondence)
         ok = np.isfinite(dist)
         line = np.full(len(src), np.inf)
-        line[ok] = np.abs(np.einsum("ij,ij->i", tgt.normals[idx[ok]], p[ok] - tgt.points[idx[ok]]))
+        gap = p[ok] - tgt.points[idx[ok]]
+        along = np.abs(np.einsum("ij,ij->i", tgt.normals[idx[ok]], gap))
+        line[ok] = np.where(tgt.lines[idx[ok]], along, np.hypot(gap[:, 0], gap[:, 1]))
         inl = line <= self.inlier_distance
         fitness = float(inl.mean())
         rmse = float(math.sqrt(np.mean(line[inl] ** 2))) if inl.any() else math.inf
         converged = converged and int(inl.sum()) >= self.min_points
         sigma2 = max(rmse if math.isfinite(rmse) else 0.0, self.range_sigma) ** 2
-        covariance = self._covariance(hessian, sigma2)
+        covariance = self._covariance(hessian, sigma2, scale)
         return MatchResult(pose, covariance, fitness, rmse, converged, score)
 
-    def _covariance(self, hessian: FloatArray, sigma2: float) -> FloatArray:
-        vals, vecs = np.linalg.eigh(hessian)
-        keep = vals > DEGENERATE_RATIO * max(vals[-1], 1e-12)
+    def _covariance(self, hessian: FloatArray, sigma2: float, scale: FloatArray) -> FloatArray:
+        """``covariance_scale * sigma2 * H^-1``, unconstrained directions at :data:`UNCONSTRAINED_VARIANCE`."""
+        vals, vecs, keep = _eigen(hessian, scale)
         var = np.where(
             keep, self.covariance_scale * sigma2 / np.where(keep, vals, 1.0), UNCONSTRAINED_VARIANCE
         )
-        var = np.minimum(var, UNCONSTRAINED_VARIANCE)
-        cov: FloatArray = (vecs * var) @ vecs.T
+        scaled = (vecs * var) @ vecs.T  # in the scaled coordinates (x, y, theta * length)
+        cov: FloatArray = scaled * np.outer(scale, scale)
         return 0.5 * (cov + cov.T)
 
     def _failed(self, initial: Pose2D) -> MatchResult:

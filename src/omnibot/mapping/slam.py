@@ -16,7 +16,8 @@ of at least ``loop_min_fitness``, and enters the graph through a Cauchy robust k
 covariance floored at ``loop_sigma_floor`` (so one false closure that passed the checks is
 down-weighted, not obeyed). ``optimizer="isam2"`` updates the graph incrementally on every keyframe
 (with extra iterations after a closure); ``"lm"`` runs a batch Levenberg-Marquardt after each
-closure and otherwise takes the matched pose as it is.
+closure and otherwise takes the matched pose as it is. ``scan_to_submap=False`` leaves the front
+end out (odometry and loop closures only: to measure what each part brings).
 
 Poses between keyframes are their keyframe's estimate composed with the odometry since it, so
 :meth:`Slam.trajectory` follows every correction of the graph. The map frame starts at the first
@@ -96,6 +97,7 @@ class Slam:
         loop_sigma_floor: tuple[float, float] = (0.01, math.radians(0.5)),
         loop_kernel_width: float = 3.0,
         optimizer: str = "isam2",
+        scan_to_submap: bool = True,
         matcher: ScanMatcher | None = None,
     ) -> None:
         positive = {
@@ -144,6 +146,7 @@ class Slam:
         self.loop_sigma_floor = loop_sigma_floor
         self.loop_kernel_width = loop_kernel_width
         self.optimizer = optimizer
+        self.scan_to_submap = scan_to_submap
         self.matcher = matcher or ScanMatcher(resolution=resolution)
 
         self._frames: list[Keyframe] = []
@@ -238,18 +241,20 @@ class Slam:
         new = last + 1
         frame = Keyframe(stamp, odom_pose, scan, scan.points("base"))
         predicted = compose(self._estimates[last], delta)
-        result = self.matcher.match(
-            frame.points,
-            self._submap(last),
-            predicted,
-            search_xy=self.search_xy,
-            search_theta=self.search_theta,
-        )
-        self.matches.append(result)
+        result = None
+        if self.scan_to_submap:
+            result = self.matcher.match(
+                frame.points,
+                self._submap(last),
+                predicted,
+                search_xy=self.search_xy,
+                search_theta=self.search_theta,
+            )
+            self.matches.append(result)
         self._frames.append(frame)
         self._add_factor(gtsam.BetweenFactorPose2(last, new, _pose2(delta), self._odometry_noise(delta)))
         estimate = predicted
-        if result.converged and result.fitness >= self.min_fitness:
+        if result is not None and result.converged and result.fitness >= self.min_fitness:
             relative = between(self._estimates[last], result.pose)
             cov = rotate_covariance(result.covariance, -result.pose.theta)
             self._add_factor(
