@@ -316,16 +316,18 @@ class Slam:
             return False
         self._since_loop = 0
         _, older = min(near)
+        return self._verify_and_add(older, new, self._loop_match(older, new, here))
+
+    def _loop_match(self, older: int, newer: int, start: Pose2D) -> MatchResult:
+        """Keyframe ``newer`` matched from ``start`` on the submap around ``older``, with the wide window."""
         half = max(1, self.submap_keyframes // 2)
-        target = self._submap(older, before=half + 1, after=half)
-        result = self.matcher.match(
-            self._frames[new].points,
-            target,
-            here,
+        return self.matcher.match(
+            self._frames[newer].points,
+            self._submap(older, before=half + 1, after=half),
+            start,
             search_xy=self.loop_search_window[0],
             search_theta=self.loop_search_window[1],
         )
-        return self._verify_and_add(older, new, result)
 
     def try_loop_closure(self, older: int, newer: int, guess: Pose2D | None = None) -> LoopClosure:
         """Match keyframe ``newer`` against the submap around ``older`` from ``guess`` (default: its estimate).
@@ -335,17 +337,8 @@ class Slam:
         for key, k in (("older", older), ("newer", newer)):
             if not 0 <= k < len(self._frames):
                 raise ConfigError(f"no keyframe {k} (there are {len(self._frames)})", key)
-        half = max(1, self.submap_keyframes // 2)
-        target = self._submap(older, before=half + 1, after=half)
         start = self._estimates[newer] if guess is None else guess
-        result = self.matcher.match(
-            self._frames[newer].points,
-            target,
-            start,
-            search_xy=self.loop_search_window[0],
-            search_theta=self.loop_search_window[1],
-        )
-        accepted = self._verify_and_add(older, newer, result)
+        accepted = self._verify_and_add(older, newer, self._loop_match(older, newer, start))
         if accepted:
             self._optimise(closed=True)
         return self.loops[-1]
