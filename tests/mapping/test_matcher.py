@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -102,3 +103,17 @@ def test_too_few_points_do_not_converge() -> None:
     assert not result.converged
     assert result.fitness == 0.0
     assert np.all(np.diag(result.covariance) >= 1e3)
+
+
+def test_the_scanner_mount_is_taken_into_account() -> None:
+    """A scanner 0.1 m ahead and turned 30 degrees: matching its scans gives the base's motion."""
+    rng = np.random.default_rng(7)
+    world = load_world("room")
+    mount = Pose2D(0.1, 0.0, math.radians(30.0))
+    a, b = Pose2D(2.0, 2.0, 0.3), Pose2D(2.2, 2.1, 0.45)
+    sa = replace(synthetic_scan(world, compose(a, mount), rng), mount=mount)
+    sb = replace(synthetic_scan(world, compose(b, mount), rng), mount=mount)
+    result = ScanMatcher().match(sb, sa)
+    err = between(between(a, b), result.pose)
+    assert math.hypot(err.x, err.y) < 0.01
+    assert abs(err.theta) < math.radians(0.3)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -164,3 +165,20 @@ def test_bad_input_is_one_clear_error() -> None:
     with pytest.raises(ConfigError, match="older"):
         slam.try_loop_closure(5, 0)
     assert slam.map_to_odom == compose(slam.pose, inverse(Pose2D(0.0, 0.0, 0.0)))
+
+
+def test_scans_without_returns_fall_back_on_odometry(room_loop: tuple[list[Pose2D], list[Pose2D]]) -> None:
+    """A blinded scanner (every ray inf) for a stretch: the SLAM carries on with odometry, then recovers."""
+    truth, odom = room_loop
+    world = load_world("room")
+    rng = np.random.default_rng(17)
+    slam = Slam()
+    blind = range(40, 60)
+    for k, (true_pose, odom_pose) in enumerate(zip(truth, odom, strict=True)):
+        scan = synthetic_scan(world, true_pose, rng, k / RATE)
+        if k in blind:
+            scan = replace(scan, ranges=np.full(len(scan), math.inf))
+        slam.update(odom_pose, scan, k / RATE)
+    assert any(not m.converged for m in slam.matches)
+    estimate = [pose for _, pose in slam.trajectory()]
+    assert rmse(position_errors(estimate, truth)) < 0.03
