@@ -6,7 +6,9 @@ direction of travel), 0.5 m/s, scans at 10 Hz from the true poses (360 rays, 8 m
 2 % dropouts; :func:`synthetic_scan`). The odometry drifts as a wheeled robot's does on a bad floor
 (scale error 3 %, heading bias 2 deg per metre, per-step noise; :func:`drifting_odometry`). APE
 RMSE is of positions against the truth (the map frame starts at the true start, no alignment);
-CPU time is the SLAM's ``update`` per scan (mean, and the worst scan: a loop closure's).
+CPU time is the SLAM's ``update`` per scan (mean, and the worst scan: a loop closure's). Scans are
+"still" (all rays at once) or a spinning scanner's (one turn per 0.1 s, each ray cast from where
+the base is by then), the SLAM deskewing them with the odometry's twist or not.
 
 The helpers here also make the data of tests/mapping and benchmarks/scan_matching.py.
 """
@@ -22,8 +24,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from omnibot.mapping.deskew import motion
 from omnibot.mapping.se2 import between, compose
-from omnibot.motion import Pose2D
+from omnibot.motion import Pose2D, Twist
 from omnibot.scan import Scan
 from omnibot.sim.world import World, load_world, parse_world
 
@@ -43,15 +46,37 @@ def synthetic_scan(
     range_max: float = RANGE_MAX,
     noise: float = 0.01,
     dropout: float = 0.02,
+    twist: Twist | None = None,
+    time_increment: float = 0.0,
 ) -> Scan:
-    """A 360-degree scan from ``pose`` (scanner at the base's origin): Gaussian range noise, dropouts."""
+    """A 360-degree scan from ``pose`` (scanner at the base's origin): Gaussian range noise, dropouts.
+
+    With a body ``twist`` and a ``time_increment``, ray ``i`` is cast ``i * time_increment`` s
+    later, from where the base has moved by then (a spinning scanner's motion distortion).
+    """
     increment = 2.0 * math.pi / rays
     angles = -math.pi + increment * np.arange(rays)
-    ranges = world.raycast((pose.x, pose.y), angles + pose.theta, range_max)
+    origins = np.array([[pose.x, pose.y]])
+    headings = angles + pose.theta
+    if twist is not None and time_increment > 0:
+        x, y, th = motion(twist, time_increment * np.arange(rays, dtype=np.float64))
+        c, s = math.cos(pose.theta), math.sin(pose.theta)
+        origins = np.column_stack((pose.x + c * x - s * y, pose.y + s * x + c * y))
+        headings = headings + th
+    ranges = world.raycast(origins, headings, range_max)
     ranges = ranges + rng.normal(0.0, noise, rays)
     ranges[rng.random(rays) < dropout] = math.inf
     ranges[~(ranges <= range_max)] = math.inf
-    return Scan(stamp, -math.pi, increment, ranges, 0.05, range_max, scan_time=1.0 / RATE)
+    return Scan(
+        stamp,
+        -math.pi,
+        increment,
+        ranges,
+        0.05,
+        range_max,
+        time_increment=time_increment,
+        scan_time=1.0 / RATE,
+    )
 
 
 def corridor_world(length: float = 30.0, width: float = 2.0) -> World:
@@ -141,18 +166,34 @@ class Run:
     closures: int
 
 
-def run(length: float, seed: int, world: World | None = None, optimizer: str = "isam2") -> Run:
-    """Drive ``length`` m around the room, run the SLAM on every scan, score it."""
+def run(
+    length: float,
+    seed: int,
+    world: World | None = None,
+    optimizer: str = "isam2",
+    distorted: bool = False,
+    deskew: bool = True,
+) -> Run:
+    """Drive ``length`` m around the room, run the SLAM on every scan, score it.
+
+    ``distorted``: the scans are a spinning scanner's (one turn per scan period, rays cast along
+    the true motion), which the SLAM corrects unless ``deskew`` is False.
+    """
     from omnibot.mapping.slam import Slam
 
     rng = np.random.default_rng(seed)
     world = world or load_world("room")
     truth = room_path(length)
     odom = drifting_odometry(truth, rng)
-    slam = Slam(optimizer=optimizer)
+    slam = Slam(optimizer=optimizer, deskew=deskew)
     cpu: list[float] = []
     for k, (true_pose, odom_pose) in enumerate(zip(truth, odom, strict=True)):
-        scan = synthetic_scan(world, true_pose, rng, k / RATE)
+        twist = None
+        if distorted and k + 1 < len(truth):
+            step = between(true_pose, truth[k + 1])
+            twist = Twist(step.x * RATE, step.y * RATE, step.theta * RATE)
+        spin = 1.0 / (RATE * RAYS) if distorted else 0.0
+        scan = synthetic_scan(world, true_pose, rng, k / RATE, twist=twist, time_increment=spin)
         t0 = time.process_time()
         slam.update(odom_pose, scan, k / RATE)
         cpu.append(time.process_time() - t0)
@@ -181,15 +222,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--optimizer", default="isam2,lm", help="back ends to compare (isam2, lm)")
     args = parser.parse_args(argv)
     print(
-        "| back end | seed | scans | keyframes | closures | odometry APE RMSE | SLAM APE RMSE | ratio "
+        "| back end | scans | seed | keyframes | closures | odometry APE RMSE | SLAM APE RMSE | ratio "
         "| end error odometry / SLAM | CPU per scan mean / max |"
     )
     print("|---|---|---|---|---|---|---|---|---|---|")
-    for optimizer in args.optimizer.split(","):
+    setups = [(o, "still", False, True) for o in args.optimizer.split(",")]
+    setups += [("isam2", "spinning, deskewed", True, True), ("isam2", "spinning, not deskewed", True, False)]
+    for optimizer, scans, distorted, deskew in setups:
         for seed in (int(s) for s in args.seeds.split(",")):
-            r = run(args.length, seed, optimizer=optimizer)
+            r = run(args.length, seed, optimizer=optimizer, distorted=distorted, deskew=deskew)
             print(
-                f"| {optimizer} | {seed} | {r.scans} | {r.keyframes} | {r.closures} | {r.odometry_ape * 100:.1f} cm "
+                f"| {optimizer} | {scans} | {seed} | {r.keyframes} | {r.closures} | {r.odometry_ape * 100:.1f} cm "
                 f"| {r.slam_ape * 100:.2f} cm | {r.odometry_ape / r.slam_ape:.0f}x "
                 f"| {r.odometry_end * 100:.1f} / {r.slam_end * 100:.2f} cm "
                 f"| {r.cpu_mean_ms:.1f} / {r.cpu_max_ms:.0f} ms |",

@@ -22,7 +22,7 @@ from benchmarks.slam_synthetic import (
 from omnibot.errors import ConfigError
 from omnibot.mapping.se2 import between, compose, inverse
 from omnibot.mapping.slam import Slam
-from omnibot.motion import Pose2D
+from omnibot.motion import Pose2D, Twist
 from omnibot.sim.world import World, load_world
 
 
@@ -182,3 +182,25 @@ def test_scans_without_returns_fall_back_on_odometry(room_loop: tuple[list[Pose2
     assert any(not m.converged for m in slam.matches)
     estimate = [pose for _, pose in slam.trajectory()]
     assert rmse(position_errors(estimate, truth)) < 0.03
+
+
+def test_a_spinning_scanners_motion_distortion_is_undone(
+    room_loop: tuple[list[Pose2D], list[Pose2D]],
+) -> None:
+    """Rays cast along the true motion over each 0.1 s scan: deskewed with the odometry's twist."""
+    truth, odom = room_loop
+    world = load_world("room")
+    apes = {}
+    for deskew in (True, False):
+        rng = np.random.default_rng(18)
+        slam = Slam(deskew=deskew)
+        for k in range(len(truth) - 1):
+            step = between(truth[k], truth[k + 1])
+            twist = Twist(step.x * RATE, step.y * RATE, step.theta * RATE)
+            scan = synthetic_scan(
+                world, truth[k], rng, k / RATE, twist=twist, time_increment=1 / (RATE * 360)
+            )
+            slam.update(odom[k], scan, k / RATE)
+        apes[deskew] = rmse(position_errors([p for _, p in slam.trajectory()], truth[:-1]))
+    assert apes[True] < 0.02
+    assert apes[True] * 3 < apes[False]

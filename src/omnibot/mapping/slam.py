@@ -1,6 +1,8 @@
 """Online 2D SLAM: scan-to-submap matching on keyframes, a gtsam pose graph with verified loop closures.
 
-Front end: each scan's odometry delta since the last keyframe predicts the robot's pose. When the
+Front end: each scan is deskewed (:mod:`omnibot.mapping.deskew`, the odometry's last motion taken
+as the twist over the scan; the first scan of a spinning scanner, with no motion known yet, is
+skipped) and its odometry delta since the last keyframe predicts the robot's pose. When the
 robot has moved ``keyframe_distance`` or turned ``keyframe_angle`` since then, the scan becomes a
 keyframe: it is matched (:class:`~omnibot.mapping.matcher.ScanMatcher`, correlative search then
 ICP) against a local submap (the last ``submap_keyframes`` keyframes' points at their current
@@ -17,7 +19,8 @@ covariance floored at ``loop_sigma_floor`` (so one false closure that passed the
 down-weighted, not obeyed). ``optimizer="isam2"`` updates the graph incrementally on every keyframe
 (with extra iterations after a closure); ``"lm"`` runs a batch Levenberg-Marquardt after each
 closure and otherwise takes the matched pose as it is. ``scan_to_submap=False`` leaves the front
-end out (odometry and loop closures only: to measure what each part brings).
+end out (odometry and loop closures only), ``deskew=False`` the motion-distortion correction: to
+measure what each part brings.
 
 Poses between keyframes are their keyframe's estimate composed with the odometry since it, so
 :meth:`Slam.trajectory` follows every correction of the graph. The map frame starts at the first
@@ -35,9 +38,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from omnibot.errors import ConfigError
+from omnibot.mapping.deskew import scan_points
 from omnibot.mapping.matcher import MatchResult, ScanMatcher, Target
 from omnibot.mapping.se2 import between, compose, distance, inverse, rotate_covariance, transform
-from omnibot.motion import Pose2D
+from omnibot.motion import Pose2D, Twist
 from omnibot.scan import Scan
 
 FloatArray = NDArray[np.float64]
@@ -48,7 +52,7 @@ PRIOR_SIGMA = 1e-4
 
 @dataclass(frozen=True)
 class Keyframe:
-    """A keyframe as the SLAM keeps it: its scan, odometry pose and base-frame points."""
+    """A keyframe as the SLAM keeps it: its scan, odometry pose and base-frame points (deskewed)."""
 
     stamp: float
     odom: Pose2D
@@ -98,6 +102,7 @@ class Slam:
         loop_kernel_width: float = 3.0,
         optimizer: str = "isam2",
         scan_to_submap: bool = True,
+        deskew: bool = True,
         matcher: ScanMatcher | None = None,
     ) -> None:
         positive = {
@@ -147,6 +152,7 @@ class Slam:
         self.loop_kernel_width = loop_kernel_width
         self.optimizer = optimizer
         self.scan_to_submap = scan_to_submap
+        self.deskew = deskew
         self.matcher = matcher or ScanMatcher(resolution=resolution)
 
         self._frames: list[Keyframe] = []
@@ -155,6 +161,8 @@ class Slam:
         self._last_odom: Pose2D | None = None
         self._last_stamp = -math.inf
         self._pose = Pose2D(0.0, 0.0, 0.0)
+        self._twist = Twist()
+        self._waiting: tuple[float, Pose2D] | None = None
         self._since_loop = 0
         self.loops: list[LoopClosure] = []
         """Every loop closure tried, in order."""
@@ -200,7 +208,12 @@ class Slam:
     # ------------------------------------------------------------------ the front end
 
     def update(self, odom_pose: Pose2D, scan: Scan, stamp: float) -> Pose2D:
-        """Take one scan and the odometry pose at its time; return the robot's map-frame pose."""
+        """Take one scan and the odometry pose at its first ray; return the robot's map-frame pose.
+
+        ``stamp`` (s, never decreasing) is the time of ``odom_pose`` and the scan's first ray on the
+        caller's clock; the odometry's motion since the previous call, taken as a constant twist,
+        removes the scan's motion distortion (:mod:`omnibot.mapping.deskew`).
+        """
         if not isinstance(scan, Scan):
             raise ConfigError(f"must be a Scan, not {type(scan).__name__}", "scan")
         if not all(math.isfinite(v) for v in (odom_pose.x, odom_pose.y, odom_pose.theta)):
@@ -209,10 +222,24 @@ class Slam:
             raise ConfigError(
                 f"must be finite and not before the previous one ({self._last_stamp}), not {stamp}", "stamp"
             )
+        first_call = self._last_odom is None
+        twist = Twist()
+        if self.deskew and self._last_odom is not None and stamp > self._last_stamp:
+            step = between(self._last_odom, odom_pose)
+            dt = stamp - self._last_stamp
+            twist = Twist(step.x / dt, step.y / dt, step.theta / dt)
+        self._twist = twist
         self._last_stamp = stamp
         self._last_odom = odom_pose
         if not self._frames:
+            if first_call and self.deskew and scan.time_increment != 0.0:
+                # a distorted scan with no motion known yet to undo it with: the next one starts the map
+                self._waiting = (stamp, odom_pose)
+                self._pose = odom_pose
+                return odom_pose
             self._add_first(odom_pose, scan, stamp)
+            if self._waiting is not None:
+                self._track.insert(0, (self._waiting[0], 0, between(odom_pose, self._waiting[1])))
         else:
             last = len(self._frames) - 1
             delta = between(self._frames[last].odom, odom_pose)
@@ -228,7 +255,7 @@ class Slam:
         return self._pose
 
     def _add_first(self, odom_pose: Pose2D, scan: Scan, stamp: float) -> None:
-        self._frames.append(Keyframe(stamp, odom_pose, scan, scan.points("base")))
+        self._frames.append(Keyframe(stamp, odom_pose, scan, scan_points(scan, self._twist)))
         self._estimates.append(odom_pose)
         noise = gtsam.noiseModel.Isotropic.Sigma(3, PRIOR_SIGMA)
         self._add_factor(gtsam.PriorFactorPose2(0, _pose2(odom_pose), noise))
@@ -239,7 +266,7 @@ class Slam:
     def _add_keyframe(self, odom_pose: Pose2D, scan: Scan, stamp: float, delta: Pose2D) -> None:
         last = len(self._frames) - 1
         new = last + 1
-        frame = Keyframe(stamp, odom_pose, scan, scan.points("base"))
+        frame = Keyframe(stamp, odom_pose, scan, scan_points(scan, self._twist))
         predicted = compose(self._estimates[last], delta)
         result = None
         if self.scan_to_submap:
