@@ -117,3 +117,18 @@ def test_the_scanner_mount_is_taken_into_account() -> None:
     err = between(between(a, b), result.pose)
     assert math.hypot(err.x, err.y) < 0.01
     assert abs(err.theta) < math.radians(0.3)
+
+
+def test_an_end_wall_in_range_constrains_the_axis() -> None:
+    """Near the corridor's end the same matcher pins the axis down: degeneracy is not over-reported."""
+    rng = np.random.default_rng(8)
+    world = corridor_world(40.0)
+    path = corridor_path(3.0, start=34.0)  # the end wall at x = 40 is 3-6 m ahead
+    a, b = path[0], path[8]
+    truth = between(a, b)
+    result = ScanMatcher().match(
+        synthetic_scan(world, b, rng), synthetic_scan(world, a, rng), compose(truth, Pose2D(0.12, -0.1, 0.08))
+    )
+    err = between(truth, result.pose)
+    assert np.sqrt(np.linalg.eigvalsh(result.covariance)).max() < 0.02
+    assert math.hypot(err.x, err.y) < 0.01

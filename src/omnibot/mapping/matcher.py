@@ -224,7 +224,10 @@ class ScanMatcher:
     half-widths of the searched window (m, rad; 0 skips the search), ``inlier_distance`` the
     point-to-line distance that counts a point as matched, ``max_correspondence`` the farthest
     neighbour ICP pairs a point with, ``range_sigma`` the sensor's range noise (the floor of the
-    residual spread), ``covariance_scale`` the factor for correlated rays.
+    residual spread), ``covariance_scale`` the factor for correlated rays. The source is thinned
+    to half a cell and at most ``max_points``; fewer than ``min_points`` matched points is a failed
+    match. ``weight_xy`` (1/m) and ``weight_theta`` (1/rad) discount a lattice pose's score by
+    ``exp(-(weight_xy * distance + weight_theta * turn))`` from the guess (ties go to the guess).
     """
 
     def __init__(
