@@ -42,11 +42,12 @@ def room_loop() -> tuple[list[Pose2D], list[Pose2D]]:
     return truth, drifting_odometry(truth, np.random.default_rng(11))
 
 
+@pytest.mark.parametrize("optimizer", ["isam2", "lm"])
 def test_slam_is_several_times_better_than_odometry_and_within_centimetres(
-    room_loop: tuple[list[Pose2D], list[Pose2D]],
+    room_loop: tuple[list[Pose2D], list[Pose2D]], optimizer: str
 ) -> None:
     truth, odom = room_loop
-    slam = Slam()
+    slam = Slam(optimizer=optimizer)
     estimate = drive(slam, load_world("room"), truth, odom, seed=12)
     odom_ape = rmse(position_errors(odom, truth))
     slam_ape = rmse(position_errors(estimate, truth))
@@ -61,7 +62,8 @@ def test_slam_is_several_times_better_than_odometry_and_within_centimetres(
     # keyframes: corrected poses with their scans, for a mapper
     frames = slam.keyframes()
     assert len(frames) == len(slam.matches) + 1
-    assert all(f[1].stamp == pytest.approx(f[1].stamp) for f in frames)
+    kf_truth = [truth[round(scan.stamp * RATE)] for _, scan in frames]
+    assert max(position_errors([pose for pose, _ in frames], kf_truth)) < 0.03
 
 
 def test_a_loop_closure_fixes_the_end_point(room_loop: tuple[list[Pose2D], list[Pose2D]]) -> None:
