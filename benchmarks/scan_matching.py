@@ -169,6 +169,21 @@ def score(name: str, world: str, count: int, err_xy: float, err_deg: float, seed
     }
 
 
+def covariance_nees(count: int, seed: int) -> float:
+    """Mean normalised estimation error squared of ``csm+icp`` on the room pairs (3 if calibrated)."""
+    rng = np.random.default_rng(seed)
+    matcher = ScanMatcher()
+    nees = []
+    for src, tgt, truth, _ in pairs("room", count, rng):
+        guess = compose(truth, Pose2D(*rng.uniform(-1, 1, 3) * np.array([0.2, 0.2, math.radians(10.0)])))
+        r = matcher.match(src, tgt, guess)
+        d = np.array(
+            [r.pose.x - truth.x, r.pose.y - truth.y, math.remainder(r.pose.theta - truth.theta, 2 * math.pi)]
+        )
+        nees.append(float(d @ np.linalg.solve(r.covariance, d)))
+    return float(np.mean(nees))
+
+
 def main(argv: list[str] | None = None) -> int:
     """Print the BENCHMARKS.md table."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -186,6 +201,9 @@ def main(argv: list[str] | None = None) -> int:
                 f"| {r['median_xy'] * 1000:.1f} mm / {r['median_th']:.2f} deg | {r['cpu_ms']:.1f} ms |",
                 flush=True,
             )
+    print(
+        f"\ncsm+icp covariance: mean NEES {covariance_nees(args.pairs, args.seed):.2f} on the room pairs (3 if calibrated)"
+    )
     return 0
 
 
