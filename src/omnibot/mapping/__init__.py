@@ -14,6 +14,14 @@ Modules (each owns one thing; the plain scan type is :mod:`omnibot.scan`):
   with evo).
 * :mod:`omnibot.mapping.localise` - :class:`~omnibot.mapping.localise.Localiser`: a likelihood-field
   particle filter refined by scan-to-map matching, in a saved map.
+* :mod:`omnibot.mapping.se2` - planar pose algebra on :class:`~omnibot.motion.Pose2D` (compose,
+  inverse, between, points moved by a pose, covariances turned between frames).
+* :mod:`omnibot.mapping.deskew` - motion-distortion correction: a spinning scanner's returns brought
+  to one instant of the base's motion.
+* :mod:`omnibot.mapping.matcher` - :class:`~omnibot.mapping.matcher.ScanMatcher`, 2D scan
+  registration (correlative search then point-to-line ICP) with a covariance that shows degeneracy.
+* :mod:`omnibot.mapping.slam` - :class:`~omnibot.mapping.slam.Slam`, online 2D SLAM: keyframes
+  matched to a local submap, a gtsam pose graph with verified, robust loop closures.
 
 The user's guide is docs/mapping.md.
 """
