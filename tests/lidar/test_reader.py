@@ -208,7 +208,7 @@ class FakeSim:
 
 def test_sim_scan_source_hands_over_the_simulators_scans() -> None:
     sim = FakeSim()
-    source = open_scanner(None, sim, type("Robot", (), {"name": "omni4", "scanner": object()})())  # type: ignore[arg-type]
+    source = open_scanner(None, sim, type("Robot", (), {"name": "omni4", "scanner": object()})())
     assert isinstance(source, SimScanSource)
     assert source.poll() == []
     for i in range(3):
@@ -223,9 +223,9 @@ def test_sim_scan_source_hands_over_the_simulators_scans() -> None:
 def test_open_scanner_errors() -> None:
     bare = type("Robot", (), {"name": "omni3", "scanner": None})()
     with pytest.raises(ConfigError, match="'omni3' has no scanner"):
-        open_scanner(None, FakeSim(), bare)  # type: ignore[arg-type]
+        open_scanner(None, FakeSim(), bare)
     with pytest.raises(ConfigError, match="has no scanner"):
-        SimScanSource(FakeSim(scanner=None))  # type: ignore[arg-type]
+        SimScanSource(FakeSim(scanner=None))
     robot = type("Robot", (), {"name": "omni4", "scanner": object()})()
     with pytest.raises(ConfigError, match="--scanner /dev/ttyUSB1"):
         open_scanner(None, None, robot)

@@ -29,19 +29,23 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import Any, Protocol, cast
 
 import numpy as np
 
 from omnibot.errors import ConfigError, LinkError
 from omnibot.motion import Pose2D
 from omnibot.scan import Scan
+from omnibot.transport.base import Link
 
-if TYPE_CHECKING:
-    from omnibot.sim.simulator import Simulator
-    from omnibot.transport.base import Link
-
-__all__ = ["RplidarScanner", "ScanSource", "SimScanSource", "measures_to_scan", "open_scanner"]
+__all__ = [
+    "RplidarScanner",
+    "ScanSource",
+    "ScanningSim",
+    "SimScanSource",
+    "measures_to_scan",
+    "open_scanner",
+]
 
 MAX_SCANS = 16
 """Scans a source keeps between two polls (the oldest are dropped)."""
@@ -58,6 +62,28 @@ class ScanSource(Protocol):
 
     def close(self) -> None:
         """Stop the scanner and release it."""
+        ...
+
+
+class ScanningSim(Protocol):
+    """What a :class:`SimScanSource` needs of :class:`omnibot.sim.simulator.Simulator`."""
+
+    @property
+    def robot(self) -> Any:
+        """The robot description (its ``name``)."""
+        ...
+
+    @property
+    def scanner(self) -> object | None:
+        """The simulated scanner, None when the robot has none."""
+        ...
+
+    def add_scan_listener(self, fn: Callable[[Scan], None]) -> None:
+        """Call ``fn`` with every revolution completed, in simulated time."""
+        ...
+
+    def remove_scan_listener(self, fn: Callable[[Scan], None]) -> None:
+        """Stop calling ``fn``."""
         ...
 
 
@@ -246,14 +272,14 @@ class RplidarScanner:
 class SimScanSource:
     """The scanner of an in-process Simulator: its scans, in simulated time, as they complete."""
 
-    def __init__(self, sim: Simulator) -> None:
+    def __init__(self, sim: ScanningSim) -> None:
         if getattr(sim, "scanner", None) is None:
             raise ConfigError(f"the simulated robot {sim.robot.name!r} has no scanner", key="scanner")
         self.sim = sim
         self._scans: deque[Scan] = deque(maxlen=MAX_SCANS)
         self._listening = True
-        sim.add_scan_listener(self._scans.append)  # type: ignore[attr-defined]
-        self._listener = self._scans.append
+        self._listener: Callable[[Scan], None] = self._scans.append
+        sim.add_scan_listener(self._listener)
 
     def poll(self) -> list[Scan]:
         """The scans completed since the last call."""
@@ -265,7 +291,7 @@ class SimScanSource:
         """Stop listening (idempotent)."""
         if self._listening:
             self._listening = False
-            self.sim.remove_scan_listener(self._listener)  # type: ignore[attr-defined]
+            self.sim.remove_scan_listener(self._listener)
 
 
 def scanner_baud(model: str) -> int:
@@ -275,35 +301,40 @@ def scanner_baud(model: str) -> int:
     return model_named(model).baud
 
 
-def open_scanner(spec: str | None, link: Link | Simulator | None, robot: Any) -> ScanSource:
+def open_scanner(spec: str | None, link: Link | ScanningSim | None, robot: Any) -> ScanSource:
     """The robot's scanner: ``spec`` a serial device (``/dev/ttyUSB1``, a pty of ``omnibot sim
-    --pty``) -> :class:`RplidarScanner` with the robot description's scanner section (model, frame,
-    mount, range); ``spec`` None on a ``sim://`` link (or a Simulator) -> :class:`SimScanSource`.
-    ConfigError naming ``--scanner`` when the robot has no scanner or a real link gets no ``spec``."""
+    --pty``) -> :class:`RplidarScanner` set from the robot description's scanner section (model,
+    frame, mount x/y/yaw_deg, range); ``spec`` None with a ``sim://`` link (or its Simulator) ->
+    :class:`SimScanSource`. ConfigError naming ``--scanner`` when the robot has no scanner or a
+    real link gets no ``spec``."""
     section = getattr(robot, "scanner", None)
     name = getattr(robot, "name", "the robot")
     if section is None:
         raise ConfigError(f"robot {name!r} has no scanner in its description", key="--scanner")
     if spec is not None:
-        range_min = float(getattr(section, "range_min", A1_RANGE[0]))
-        range_max = float(getattr(section, "range_max", A1_RANGE[1]))
         return RplidarScanner(
             spec,
             baudrate=scanner_baud(str(getattr(section, "model", "a1"))),
             frame=str(getattr(section, "frame", "laser")),
-            mount=getattr(section, "mount", None),
-            range_min=range_min,
-            range_max=range_max,
+            mount=Pose2D(
+                float(getattr(section, "x", 0.0)),
+                float(getattr(section, "y", 0.0)),
+                math.radians(float(getattr(section, "yaw_deg", 0.0))),
+            ),
+            range_min=float(getattr(section, "range_min", A1_RANGE[0])),
+            range_max=float(getattr(section, "range_max", A1_RANGE[1])),
         )
-    sim = link if link is not None and hasattr(link, "add_scan_listener") else None
-    if sim is None and link is not None:
+    sim: ScanningSim | None
+    if isinstance(link, Link):
         from omnibot.transport.device import find_simulator
 
-        sim = find_simulator(link)  # type: ignore[arg-type]
+        sim = cast("ScanningSim | None", find_simulator(link))
+    else:
+        sim = link
     if sim is None:
         raise ConfigError(
             "a real robot's scanner is read from its own port: give --scanner /dev/ttyUSB1 (or the "
             "scanner pty omnibot sim --pty prints)",
             key="--scanner",
         )
-    return SimScanSource(sim)  # type: ignore[arg-type]
+    return SimScanSource(sim)

@@ -1,0 +1,133 @@
+"""``omnibot sim --pty`` with a scanner: a second pty serving the emulated RPLIDAR, read by the
+rplidar driver (through RplidarScanner), the controller's line first as before."""
+
+from __future__ import annotations
+
+import io
+import math
+import threading
+import time
+from collections.abc import Callable
+
+import numpy as np
+import pytest
+
+from omnibot.lidar.reader import RplidarScanner
+from omnibot.lidar.rplidar_device import A1, A2, RplidarDevice
+from omnibot.robot.description import load_robot
+from omnibot.scan import Scan
+from omnibot.sim import emulator
+
+
+class Lines(io.StringIO):
+    """stdout of the emulator, whose lines a test waits for."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.flushed = threading.Event()
+
+    def flush(self) -> None:
+        super().flush()
+        if self.getvalue():
+            self.flushed.set()
+
+
+def start(run: Callable[[], int], out: Lines) -> tuple[threading.Thread, list[object]]:
+    """``run`` in a thread; its status (or what it raised) lands in the list, and ends the wait."""
+    result: list[object] = []
+
+    def main() -> None:
+        try:
+            result.append(run())
+        except BaseException as exc:
+            result.append(exc)
+            out.flushed.set()
+
+    thread = threading.Thread(target=main)
+    thread.start()
+    return thread, result
+
+
+class FakeScanningSim:
+    """A simulator's scanner API (the scanner branch's Simulator has the same members)."""
+
+    def __init__(self, model: str = "rplidar-a1", rays: int = 200, rate_hz: float = 10.0) -> None:
+        spec = type("Spec", (), {"model": model, "rays": rays, "rate_hz": rate_hz})()
+        self.robot = type("Robot", (), {"name": "omni4", "scanner": spec})()
+        self.scanner: object | None = object()
+        self.time = 0.0
+        self.listeners: list[Callable[[Scan], None]] = []
+
+    def add_scan_listener(self, fn: Callable[[Scan], None]) -> None:
+        self.listeners.append(fn)
+
+    def remove_scan_listener(self, fn: Callable[[Scan], None]) -> None:
+        self.listeners.remove(fn)
+
+
+def test_scanner_device_follows_the_description() -> None:
+    sim = FakeScanningSim("rplidar-a2", rays=360, rate_hz=20.0)
+    device = emulator.scanner_device(sim, 0.001)  # type: ignore[arg-type]
+    assert device is not None and device.model is A2 and sim.listeners == [device.feed]
+    assert device.sample_rate == A2.sample_rate  # 7200 rays/s resampled to the A2's 4000 nodes/s
+    a1 = emulator.scanner_device(FakeScanningSim("some-lidar", rays=360, rate_hz=5.5), 0.001)  # type: ignore[arg-type]
+    assert a1 is not None and a1.model is A1 and a1.sample_rate == pytest.approx(1980.0)
+    none = FakeScanningSim()
+    none.scanner = None
+    assert emulator.scanner_device(none, 0.001) is None  # type: ignore[arg-type]
+
+
+def test_sim_pty_serves_the_scanner_on_a_second_pty(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The robot presets have no scanner on this branch: the device is put in through scanner_device,
+    fed a revolution every 0.1 s of device time as the simulator's scanner would."""
+    fed: list[int] = []
+
+    class Fed(RplidarDevice):
+        def step(self) -> None:
+            super().step()
+            if self.time >= len(fed) * 0.1:
+                ranges = np.full(200, 1.0 + len(fed))
+                self.feed(Scan(self.time, 0.0, 2 * math.pi / 200, ranges, 0.1, 12.0, scan_time=0.1))
+                fed.append(len(fed))
+
+    monkeypatch.setattr(emulator, "scanner_device", lambda sim, tick: Fed(A1, tick=tick))
+    out, stop = Lines(), threading.Event()
+    thread, status = start(lambda: emulator.run_pty_emulator(load_robot("omni4"), stop=stop, out=out), out)
+    try:
+        assert out.flushed.wait(120.0)  # a first start compiles the physics
+        first, second = out.getvalue().splitlines()
+        assert first.startswith("/dev/") and second.startswith("scanner /dev/")
+        scanner = RplidarScanner(second.split()[1])
+        try:
+            got: list[Scan] = []
+            deadline = time.monotonic() + 30.0  # a bound for a stuck test, not a timing assertion
+            while len(got) < 2 and time.monotonic() < deadline:
+                got += scanner.poll()
+                time.sleep(0.02)
+        finally:
+            scanner.close()
+        assert len(got) >= 2 and all(len(s) == 200 for s in got)
+        assert [float(s.ranges[0]) for s in got[1:]] == [float(s.ranges[0]) + 1 for s in got[:-1]]
+    finally:
+        stop.set()
+        thread.join(30.0)
+    assert status == [0] and not thread.is_alive()
+
+
+def test_a_fleet_prints_a_scanner_line_per_robot_after_its_own_lines(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(emulator, "scanner_device", lambda sim, tick: RplidarDevice(A1, tick=tick))
+    members = [
+        emulator.parse_member(text, k, 0)
+        for k, text in enumerate(["omni4?name=a&pose=1,1,0", "omni3?name=b&pose=2.6,1.05,0"])
+    ]
+    out, stop = Lines(), threading.Event()
+    thread, status = start(lambda: emulator.run_pty_fleet(members, world="room", stop=stop, out=out), out)
+    try:
+        assert out.flushed.wait(120.0)
+    finally:
+        stop.set()
+        thread.join(30.0)
+    lines = [line.split() for line in out.getvalue().splitlines()]
+    assert [name for name, _ in lines] == ["a", "b", "a/scanner", "b/scanner"]
+    assert all(path.startswith("/dev/") for _, path in lines)
+    assert status == [0] and not thread.is_alive()
