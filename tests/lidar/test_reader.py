@@ -19,6 +19,7 @@ from omnibot.lidar.rplidar_device import A1, A2, RplidarDevice, RplidarModel
 from omnibot.motion import Pose2D
 from omnibot.scan import FloatArray, Scan
 from omnibot.transport.pty_bridge import PtyBridge
+from tests.lidar.fakes import FakeScanningSim
 
 N = 200  # rays per revolution: an A1's 2000 nodes/s at 10 Hz
 PERIOD = 0.1
@@ -191,23 +192,8 @@ def test_measures_to_scan_bins_clockwise_and_keeps_the_nearer_return() -> None:
     assert list(scan.intensities) == [10, 12, 8, 0]  # type: ignore[arg-type]
 
 
-class FakeSim:
-    """The two methods of the simulator's scanner API a SimScanSource uses."""
-
-    def __init__(self, scanner: object = object()) -> None:
-        self.scanner = scanner
-        self.robot = type("R", (), {"name": "omni4"})()
-        self.listeners: list[Callable[[Scan], None]] = []
-
-    def add_scan_listener(self, fn: Callable[[Scan], None]) -> None:
-        self.listeners.append(fn)
-
-    def remove_scan_listener(self, fn: Callable[[Scan], None]) -> None:
-        self.listeners.remove(fn)
-
-
 def test_sim_scan_source_hands_over_the_simulators_scans() -> None:
-    sim = FakeSim()
+    sim = FakeScanningSim()
     source = open_scanner(None, sim, type("Robot", (), {"name": "omni4", "scanner": object()})())
     assert isinstance(source, SimScanSource)
     assert source.poll() == []
@@ -223,9 +209,11 @@ def test_sim_scan_source_hands_over_the_simulators_scans() -> None:
 def test_open_scanner_errors() -> None:
     bare = type("Robot", (), {"name": "omni3", "scanner": None})()
     with pytest.raises(ConfigError, match="'omni3' has no scanner"):
-        open_scanner(None, FakeSim(), bare)
+        open_scanner(None, FakeScanningSim(), bare)
+    silent = FakeScanningSim()
+    silent.scanner = None
     with pytest.raises(ConfigError, match="has no scanner"):
-        SimScanSource(FakeSim(scanner=None))
+        SimScanSource(silent)
     robot = type("Robot", (), {"name": "omni4", "scanner": object()})()
     with pytest.raises(ConfigError, match="--scanner /dev/ttyUSB1"):
         open_scanner(None, None, robot)

@@ -17,6 +17,7 @@ from omnibot.lidar.rplidar_device import A1, A2, RplidarDevice
 from omnibot.robot.description import load_robot
 from omnibot.scan import Scan
 from omnibot.sim import emulator
+from tests.lidar.fakes import FakeScanningSim
 
 
 class Lines(io.StringIO):
@@ -46,23 +47,6 @@ def start(run: Callable[[], int], out: Lines) -> tuple[threading.Thread, list[ob
     thread = threading.Thread(target=main)
     thread.start()
     return thread, result
-
-
-class FakeScanningSim:
-    """A simulator's scanner API (the scanner branch's Simulator has the same members)."""
-
-    def __init__(self, model: str = "rplidar-a1", rays: int = 200, rate_hz: float = 10.0) -> None:
-        spec = type("Spec", (), {"model": model, "rays": rays, "rate_hz": rate_hz})()
-        self.robot = type("Robot", (), {"name": "omni4", "scanner": spec})()
-        self.scanner: object | None = object()
-        self.time = 0.0
-        self.listeners: list[Callable[[Scan], None]] = []
-
-    def add_scan_listener(self, fn: Callable[[Scan], None]) -> None:
-        self.listeners.append(fn)
-
-    def remove_scan_listener(self, fn: Callable[[Scan], None]) -> None:
-        self.listeners.remove(fn)
 
 
 def test_scanner_device_follows_the_description() -> None:
