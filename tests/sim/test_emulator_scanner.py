@@ -13,10 +13,12 @@ import numpy as np
 import pytest
 
 from omnibot.lidar.reader import RplidarScanner
+from omnibot.lidar.rplidar_codec import Command, Request, encode_request
 from omnibot.lidar.rplidar_device import A1, A2, RplidarDevice
 from omnibot.robot.description import load_robot
 from omnibot.scan import Scan
 from omnibot.sim import emulator
+from omnibot.transport.lockstep import LockstepLink
 from tests.lidar.fakes import FakeScanningSim
 
 
@@ -52,7 +54,14 @@ def start(run: Callable[[], int], out: Lines) -> tuple[threading.Thread, list[ob
 def test_scanner_device_follows_the_description() -> None:
     sim = FakeScanningSim("rplidar-a2", rays=360, rate_hz=20.0)
     device = emulator.scanner_device(sim, 0.001)  # type: ignore[arg-type]
-    assert device is not None and device.model is A2 and sim.listeners == [device.feed]
+    assert device is not None and device.model is A2 and sim.listeners == []
+    link = LockstepLink(device, baud=A2.baud)
+    link.write(encode_request(Request(Command.SCAN)))
+    link.advance(0.005)
+    assert sim.listeners == [device.feed]  # measuring only while a host scans
+    link.write(encode_request(Request(Command.STOP)))
+    link.advance(0.005)
+    assert sim.listeners == []
     assert device.sample_rate == A2.sample_rate  # 7200 rays/s resampled to the A2's 4000 nodes/s
     a1 = emulator.scanner_device(FakeScanningSim("some-lidar", rays=360, rate_hz=5.5), 0.001)  # type: ignore[arg-type]
     assert a1 is not None and a1.model is A1 and a1.sample_rate == pytest.approx(1980.0)

@@ -25,7 +25,7 @@ quality 0 where the ray has no return (inf, or outside the scan's [range_min, ra
 the 16.4 m a distance_q2 holds); quality from the scan's intensities (clipped to 0..63), else
 DEFAULT_QUALITY. The first node of each revolution has the start flag. A revolution ends before the
 next begins: with no Scan waiting the stream pauses; of Scans fed faster than they stream only the
-newest MAX_QUEUED wait (the others counted in ``dropped_scans``).
+newest MAX_QUEUED wait (the others counted in ``dropped_scans``); STOP and RESET drop them.
 """
 
 from __future__ import annotations
@@ -137,6 +137,7 @@ class RplidarDevice:
         sample_rate: float | None = None,
         serial_number: bytes = bytes(range(16)),
         start_time: float = 0.0,
+        on_scanning: Callable[[bool], None] | None = None,
     ) -> None:
         if tick <= 0:
             raise ValueError(f"tick must be > 0 s, got {tick}")
@@ -160,6 +161,9 @@ class RplidarDevice:
         """Last SET_MOTOR_PWM duty (an A2's motor turns while > 0)."""
         self.scanning = False
         self.forced = False
+        self.on_scanning = on_scanning
+        """Called with True when a scan starts and False when it ends (e.g. to measure only while
+        a host reads: the simulator's scanner costs nothing while nobody listens)."""
         self.discarded: list[Request] = []
         """Requests discarded (unknown command, wrong checksum, sent while rebooting)."""
         self.dropped_scans = 0
@@ -275,15 +279,22 @@ class RplidarDevice:
             return
         self.pwm = int.from_bytes(payload, "little")
 
+    def _set_scanning(self, on: bool) -> None:
+        if on != self.scanning and self.on_scanning is not None:
+            self.on_scanning(on)
+        self.scanning = on
+
     def _scan(self, request: Request) -> None:
-        self.scanning = True
+        self._set_scanning(True)
         self.forced = request.command == Command.FORCE_SCAN
         self._rev, self._next_node = [], 0
         self._next_node_time = self._time
         self._tx += encode_descriptor(Descriptor(NODE_SIZE, SendMode.MULTIPLE, ResponseType.SCAN))
 
     def _stop(self, request: Request) -> None:
-        self.scanning = self.forced = False
+        self._set_scanning(False)
+        self.forced = False
+        self._scans.clear()  # measured for a scan that is over: the next one measures afresh
         self._rev, self._next_node = [], 0
 
     def _reset(self, request: Request) -> None:

@@ -118,8 +118,9 @@ def run_pty_emulator(
 
 
 def scanner_device(sim: Simulator, tick: float) -> RplidarDevice | None:
-    """An emulated RPLIDAR fed with every scan of ``sim``'s scanner, stepped with ticks of ``tick``
-    s; None when the robot has no scanner. The model is the description's (``rplidar-a1``,
+    """An emulated RPLIDAR fed with every scan of ``sim``'s scanner while a host has a scan running
+    (the simulator measures only then), stepped with ticks of ``tick`` s; None when the robot has
+    no scanner. The model is the description's (``rplidar-a1``,
     ``rplidar-a2``; another model is served as an A1); the nodes per second are the scanner's rays x
     rate, at most the model's standard-scan rate (each revolution is resampled to fit)."""
     spec = getattr(sim.robot, "scanner", None)
@@ -130,8 +131,15 @@ def scanner_device(sim: Simulator, tick: float) -> RplidarDevice | None:
     except ConfigError:
         model = A1
     rate = min(float(spec.rays) * float(spec.rate_hz), model.sample_rate)
-    device = RplidarDevice(model, tick=tick, sample_rate=rate, start_time=sim.time)
-    cast(ScanningSim, sim).add_scan_listener(device.feed)
+    scanning = cast(ScanningSim, sim)
+
+    def listen(on: bool) -> None:  # the simulator measures only while a host has a scan running
+        if on:
+            scanning.add_scan_listener(device.feed)
+        else:
+            scanning.remove_scan_listener(device.feed)
+
+    device = RplidarDevice(model, tick=tick, sample_rate=rate, start_time=sim.time, on_scanning=listen)
     return device
 
 
