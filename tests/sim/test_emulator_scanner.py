@@ -8,17 +8,19 @@ import math
 import threading
 import time
 from collections.abc import Callable
+from typing import Any, cast
 
 import numpy as np
 import pytest
 
-from omnibot.lidar.reader import RplidarScanner
+from omnibot.lidar.reader import RplidarScanner, open_scanner
 from omnibot.lidar.rplidar_codec import Command, Request, encode_request
 from omnibot.lidar.rplidar_device import A1, A2, RplidarDevice
-from omnibot.robot.description import load_robot
+from omnibot.robot.description import RobotDescription, load_robot
 from omnibot.scan import Scan
 from omnibot.sim import emulator
 from omnibot.transport.lockstep import LockstepLink
+from omnibot.transport.url import open_link
 from tests.lidar.fakes import FakeScanningSim
 
 
@@ -124,3 +126,50 @@ def test_a_fleet_prints_a_scanner_line_per_robot_after_its_own_lines(monkeypatch
     assert [name for name, _ in lines] == ["a", "b", "a/scanner", "b/scanner"]
     assert all(path.startswith("/dev/") for _, path in lines)
     assert status == [0] and not thread.is_alive()
+
+
+def robot_with_scanner() -> RobotDescription:
+    """omni4, whose preset has a scanner once the simulated scanner is in (skip before)."""
+    robot = load_robot("omni4")
+    if getattr(robot, "scanner", None) is None:
+        pytest.skip("the omni4 preset has no scanner section yet (the simulated scanner's branch)")
+    return robot
+
+
+def test_the_simulated_scanner_read_through_its_pty() -> None:
+    robot = robot_with_scanner()
+    out, stop = Lines(), threading.Event()
+    thread, status = start(lambda: emulator.run_pty_emulator(robot, world="room", stop=stop, out=out), out)
+    try:
+        assert out.flushed.wait(120.0)
+        scanner_line = out.getvalue().splitlines()[1]
+        got: list[Scan] = []
+        with RplidarScanner(scanner_line.split()[1]) as scanner:
+            deadline = time.monotonic() + 30.0  # a bound for a stuck test, not a timing assertion
+            while len(got) < 2 and time.monotonic() < deadline:
+                got += scanner.poll()
+                time.sleep(0.02)
+    finally:
+        stop.set()
+        thread.join(30.0)
+    assert status == [0] and len(got) >= 2
+    for scan in got:
+        finite = scan.ranges[np.isfinite(scan.ranges)]
+        assert len(finite) > 0.9 * len(scan)  # a closed room: almost every ray returns
+        assert finite.max() < 12.0
+
+
+def test_the_simulated_scanner_in_process_on_a_sim_link() -> None:
+    robot = robot_with_scanner()
+    link = open_link("sim://omni4?world=room")
+    assert isinstance(link, LockstepLink)
+    try:
+        source = open_scanner(None, link, robot)
+        link.advance(0.5)
+        scans = source.poll()
+        source.close()
+    finally:
+        link.close()
+    rays = cast(Any, robot).scanner.rays
+    assert scans and all(len(s) == rays for s in scans)
+    assert [s.stamp for s in scans] == sorted(s.stamp for s in scans)
