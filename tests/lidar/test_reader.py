@@ -13,8 +13,9 @@ import numpy as np
 import pytest
 import rplidar  # type: ignore[import-untyped]
 
-from omnibot.errors import ConfigError
+from omnibot.errors import ConfigError, LinkError
 from omnibot.lidar.reader import RplidarScanner, SimScanSource, measures_to_scan, open_scanner
+from omnibot.lidar.rplidar_codec import Health
 from omnibot.lidar.rplidar_device import A1, A2, RplidarDevice, RplidarModel
 from omnibot.motion import Pose2D
 from omnibot.scan import FloatArray, Scan
@@ -217,3 +218,12 @@ def test_open_scanner_errors() -> None:
     robot = type("Robot", (), {"name": "omni4", "scanner": object()})()
     with pytest.raises(ConfigError, match="--scanner /dev/ttyUSB1"):
         open_scanner(None, None, robot)
+
+
+def test_a_part_in_protection_stop_is_one_clear_error(served: tuple[RplidarDevice, str]) -> None:
+    device, path = served
+    device.health = Health(2, 0x0101)
+    with pytest.raises(LinkError, match=r"reports error 257 \(protection stop\)"):
+        RplidarScanner(path)
+    with pytest.raises(LinkError, match="cannot open the RPLIDAR on /dev/nonexistent"):
+        RplidarScanner("/dev/nonexistent")
