@@ -20,7 +20,7 @@ from omnibot.lidar.rplidar_device import A1, A2, RplidarDevice, RplidarModel
 from omnibot.motion import Pose2D
 from omnibot.scan import FloatArray, Scan
 from omnibot.transport.pty_bridge import PtyBridge
-from tests.lidar.fakes import FakeScanningSim
+from tests.lidar.fakes import FakeScanningSim, read_revolutions
 
 N = 200  # rays per revolution: an A1's 2000 nodes/s at 10 Hz
 PERIOD = 0.1
@@ -117,11 +117,7 @@ def test_revolutions_read_back_equal_to_the_scans_fed(served: tuple[RplidarDevic
     scanner = RplidarScanner(path, frame="laser_link", mount=mount)
     try:
         assert scanner.info["model"] == 0x18
-        got: list[Scan] = []
-        deadline = time.monotonic() + 30.0  # a bound for a stuck test, not a timing assertion
-        while len(got) < 3 and time.monotonic() < deadline:
-            got += scanner.poll()
-            time.sleep(0.02)
+        got = read_revolutions(scanner, 3)
     finally:
         scanner.close()
     assert len(got) >= 3

@@ -6,7 +6,6 @@ from __future__ import annotations
 import io
 import math
 import threading
-import time
 from collections.abc import Callable
 from typing import Any, cast
 
@@ -21,7 +20,7 @@ from omnibot.scan import Scan
 from omnibot.sim import emulator
 from omnibot.transport.lockstep import LockstepLink
 from omnibot.transport.url import open_link
-from tests.lidar.fakes import FakeScanningSim
+from tests.lidar.fakes import FakeScanningSim, read_revolutions
 
 
 class Lines(io.StringIO):
@@ -94,11 +93,7 @@ def test_sim_pty_serves_the_scanner_on_a_second_pty(monkeypatch: pytest.MonkeyPa
         assert first.startswith("/dev/") and second.startswith("scanner /dev/")
         scanner = RplidarScanner(second.split()[1])
         try:
-            got: list[Scan] = []
-            deadline = time.monotonic() + 30.0  # a bound for a stuck test, not a timing assertion
-            while len(got) < 2 and time.monotonic() < deadline:
-                got += scanner.poll()
-                time.sleep(0.02)
+            got = read_revolutions(scanner, 2)
         finally:
             scanner.close()
         assert len(got) >= 2 and all(len(s) == 200 for s in got)
@@ -143,12 +138,8 @@ def test_the_simulated_scanner_read_through_its_pty() -> None:
     try:
         assert out.flushed.wait(120.0)
         scanner_line = out.getvalue().splitlines()[1]
-        got: list[Scan] = []
         with RplidarScanner(scanner_line.split()[1]) as scanner:
-            deadline = time.monotonic() + 30.0  # a bound for a stuck test, not a timing assertion
-            while len(got) < 2 and time.monotonic() < deadline:
-                got += scanner.poll()
-                time.sleep(0.02)
+            got = read_revolutions(scanner, 2)
     finally:
         stop.set()
         thread.join(30.0)
