@@ -223,3 +223,37 @@ def test_a_part_in_protection_stop_is_one_clear_error(served: tuple[RplidarDevic
         RplidarScanner(path)
     with pytest.raises(LinkError, match="cannot open the RPLIDAR on /dev/nonexistent"):
         RplidarScanner("/dev/nonexistent")
+
+
+class Slipping(Fed):
+    """Fed, whose line slips in one stray byte once a revolution has gone whole (line noise)."""
+
+    def __init__(self, device: RplidarDevice) -> None:
+        super().__init__(device)
+        self.slipped = False
+        self.transmit = self._slip
+
+    def _slip(self) -> bytes:
+        out = self.device.transmit()
+        if out and not self.slipped and self.device.revolutions >= 2:
+            self.slipped = True
+            return b"\x00" + out
+        return out
+
+
+def test_a_slipped_byte_restarts_the_scan() -> None:
+    device = RplidarDevice(A1)
+    feeder = Slipping(device)
+    with PtyBridge(feeder, baud=A1.baud) as bridge, RplidarScanner(bridge.path) as scanner:
+        read_revolutions(scanner, 1)
+        deadline = time.monotonic() + 30.0  # a bound for a stuck test, not a timing assertion
+        while scanner.restarts == 0 and time.monotonic() < deadline:
+            scanner.poll()
+            time.sleep(0.02)
+        scanner.poll()  # what was read before the restart (maybe revolutions of misaligned nodes)
+        after = read_revolutions(scanner, 2)
+    assert feeder.slipped and scanner.restarts == 1 and scanner.error is None and len(after) == 2
+    for scan in after:  # whole revolutions read after the restart
+        want = expected(scan_number(round(scan.ranges[0]) - 1), scan)
+        ok = np.isfinite(want)
+        assert np.abs(scan.ranges[ok] - want[ok]).max() <= 0.25e-3 / 2 + 1e-12

@@ -49,6 +49,9 @@ __all__ = [
 
 MAX_SCANS = 16
 """Scans a source keeps between two polls (the oldest are dropped)."""
+MAX_RESTARTS = 3
+"""Scans :class:`RplidarScanner` restarts in a row (without a whole revolution between) before it
+gives up and reports the error."""
 A1_RANGE = (0.15, 12.0)
 """An A1's range, m (A2: 0.15 to 16 m at most)."""
 
@@ -183,6 +186,9 @@ class RplidarScanner:
         self._stopping = threading.Event()
         self.error: BaseException | None = None
         """What ended the reading thread, if anything but close()."""
+        self.restarts = 0
+        """Scans restarted after a node the driver rejected."""
+        self._read_whole = False
         import rplidar
 
         try:
@@ -204,22 +210,51 @@ class RplidarScanner:
         self._thread.start()
 
     def _run(self) -> None:
-        revolution: list[tuple[int, float, float]] = []
-        began: float | None = None
-        try:
-            for new_scan, quality, angle, distance in self._lidar.iter_measures(max_buf_meas=5000):
+        """Read until close(); after a node the driver rejects (a real part's stream can slip a
+        byte: "New scan flags mismatch", "Check bit not equal to 1"), stop the scan, flush the
+        input and start again, at most MAX_RESTARTS times in a row."""
+        import rplidar
+
+        failures = 0
+        while not self._stopping.is_set():
+            try:
+                self._read()
+                return
+            except rplidar.RPLidarException as exc:
                 if self._stopping.is_set():
                     return
-                if new_scan:
-                    now = self._clock()
-                    if revolution and began is not None:
-                        self._publish(revolution, began, now - began)
-                    revolution, began = [], now
-                if began is not None:  # the nodes before the first start flag are half a revolution
-                    revolution.append((quality, angle, distance))
-        except BaseException as exc:
-            if not self._stopping.is_set():
-                self.error = exc
+                failures = 0 if self._read_whole else failures + 1
+                self.restarts += 1
+                if failures > MAX_RESTARTS:
+                    self.error = exc
+                    return
+                try:
+                    self._lidar.stop()  # STOP, wait 0.1 s, drop what came meanwhile
+                except BaseException as stop_exc:
+                    if not self._stopping.is_set():
+                        self.error = stop_exc
+                    return
+            except BaseException as exc:
+                if not self._stopping.is_set():
+                    self.error = exc
+                return
+
+    def _read(self) -> None:
+        """Start a scan and publish every revolution until close()."""
+        revolution: list[tuple[int, float, float]] = []
+        began: float | None = None
+        self._read_whole = False
+        for new_scan, quality, angle, distance in self._lidar.iter_measures(max_buf_meas=5000):
+            if self._stopping.is_set():
+                return
+            if new_scan:
+                now = self._clock()
+                if revolution and began is not None:
+                    self._publish(revolution, began, now - began)
+                    self._read_whole = True
+                revolution, began = [], now
+            if began is not None:  # the nodes before the first start flag are half a revolution
+                revolution.append((quality, angle, distance))
 
     def _publish(self, measures: list[tuple[int, float, float]], stamp: float, scan_time: float) -> None:
         scan = measures_to_scan(
