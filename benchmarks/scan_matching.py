@@ -68,7 +68,7 @@ def ours(search_xy: float, search_theta: float) -> Matcher:
 
 
 def small_gicp_matcher(kind: str, extrude: bool) -> Matcher:
-    import small_gicp  # type: ignore[import-not-found]
+    import small_gicp
 
     lift = _walls if extrude else _xyz
 
@@ -89,8 +89,8 @@ def small_gicp_matcher(kind: str, extrude: bool) -> Matcher:
 
 
 def kiss_icp_matcher() -> Matcher:
-    from kiss_icp.mapping import VoxelHashMap  # type: ignore[import-untyped]
-    from kiss_icp.registration import Registration  # type: ignore[import-untyped]
+    from kiss_icp.mapping import VoxelHashMap
+    from kiss_icp.registration import Registration
 
     registration = Registration(max_num_iterations=500, convergence_criterion=1e-4, max_num_threads=1)
 

@@ -11,7 +11,7 @@ from contextlib import contextmanager
 
 import numpy as np
 import pytest
-import rplidar  # type: ignore[import-untyped]
+import rplidar
 
 from omnibot.errors import ConfigError, LinkError
 from omnibot.lidar.reader import RplidarScanner, SimScanSource, measures_to_scan, open_scanner

@@ -4,7 +4,7 @@ parsing (code we did not write: the independent side)."""
 from __future__ import annotations
 
 import pytest
-import rplidar  # type: ignore[import-untyped]
+import rplidar
 
 from omnibot.errors import ProtocolError
 from omnibot.lidar.rplidar_codec import (

@@ -130,7 +130,7 @@ def measures_to_scan(
 
 
 def _driver() -> Any:
-    import rplidar  # type: ignore[import-untyped]
+    import rplidar
 
     class Driver(rplidar.RPLidar):  # type: ignore[misc]
         """The driver, with DTR optional: a pty (the emulated scanner) has no modem lines, and

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import ndimage  # type: ignore[import-untyped]  # no stubs
+from scipy import ndimage
 
 from omnibot.mapping.grid import OccupancyGrid
 from omnibot.mapping.mapper import compose

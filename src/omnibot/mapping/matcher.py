@@ -29,8 +29,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
-from scipy.ndimage import distance_transform_edt  # type: ignore[import-untyped]
-from scipy.spatial import cKDTree  # type: ignore[import-untyped]
+from scipy.ndimage import distance_transform_edt
+from scipy.spatial import cKDTree
 
 from omnibot.errors import ConfigError
 from omnibot.mapping.se2 import transform, wrap

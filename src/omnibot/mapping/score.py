@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import ndimage  # type: ignore[import-untyped]  # no stubs; see the report
+from scipy import ndimage
 
 from omnibot.mapping.grid import OccupancyGrid
 from omnibot.sim.world import World

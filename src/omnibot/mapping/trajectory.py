@@ -134,7 +134,7 @@ class TrajectoryErrors:
 
 
 def _evo(trajectory: Trajectory):  # type: ignore[no-untyped-def]  # evo is untyped
-    from evo.core.trajectory import PoseTrajectory3D  # type: ignore[import-untyped]
+    from evo.core.trajectory import PoseTrajectory3D
 
     p = trajectory.poses
     xyz = np.column_stack((p[:, 0], p[:, 1], np.zeros(len(p))))
@@ -151,8 +151,8 @@ def score_trajectory(
     align: bool = False,
 ) -> TrajectoryErrors:
     """APE and RPE of ``estimate`` against ``truth`` with evo (see the module docstring)."""
-    from evo.core import filters, metrics, sync  # type: ignore[import-untyped]
-    from evo.core.units import Unit  # type: ignore[import-untyped]
+    from evo.core import filters, metrics, sync
+    from evo.core.units import Unit
 
     try:
         ref, est = sync.associate_trajectories(_evo(truth), _evo(estimate), max_diff=max_diff)
