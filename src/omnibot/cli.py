@@ -494,6 +494,15 @@ _add_follow = _command_in(
     "robot in lockstep, measured against its ground truth. Exit status 1 if the run was not completed "
     "(the follower did not finish, or the run was outside --final-tolerance/--cross-track-tolerance).",
 )
+_add_map = _command_in(
+    "omnibot.apps.mapping",
+    "map",
+    summary="map a room with the robot's scanner (SLAM) while a path or a person drives it",
+    description="Drives the robot along --path (or by --teleop) with the wheel-speed loop closed while the "
+    "SLAM (scan matching and a pose graph with loop closures) corrects the odometry; writes the map "
+    "(map_server's YAML + PGM), the trajectories (TUM) and, on the simulator, a report scored against "
+    "the truth. Exit status 1 if no map was made or the path was not completed.",
+)
 
 
 # --------------------------------------------------------------------------- calibrate
@@ -552,6 +561,7 @@ ADDERS: list[Adder] = [
     _add_dashboard,
     _add_run,
     _add_ros2,
+    _add_map,
     _add_calibrate,
     _add_log,
 ]

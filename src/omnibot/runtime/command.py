@@ -119,8 +119,16 @@ def _check(args: argparse.Namespace) -> None:
         )
 
 
-def compose(runtime: Any, robot: Any, args: argparse.Namespace, config: Any, path: Any) -> Parts:
-    """Add the pad and the follower to ``runtime`` (any thread: before it runs)."""
+def compose(
+    runtime: Any,
+    robot: Any,
+    args: argparse.Namespace,
+    config: Any,
+    path: Any,
+    say: Callable[[str], None] = _say,
+) -> Parts:
+    """Add the pad and the follower to ``runtime`` (any thread: before it runs); ``say`` tells the
+    command's status lines."""
     from omnibot.estimation.estimator import make_estimator
     from omnibot.motion import Pose2D
     from omnibot.navigation.judge import FollowJudge
@@ -146,10 +154,10 @@ def compose(runtime: Any, robot: Any, args: argparse.Namespace, config: Any, pat
         StallWatch.on(runtime, robot)  # wheels that turn while the body does not: stop, say so
         # as `omnibot follow`: the follower waits while the gyro's bias is learned (a person may drive)
         Standstill(runtime, STANDSTILL, FOLLOWER_PRIORITY)
-        _say(f"the follower stands still {STANDSTILL:g} s first, while the gyro's bias is learned")
+        say(f"the follower stands still {STANDSTILL:g} s first, while the gyro's bias is learned")
     if args.teleop:
         flags = argparse.Namespace(keyboard=args.teleop == "keyboard", joystick=args.teleop == "pad")
-        device = open_source(flags, config, _say)
+        device = open_source(flags, config, say)
         parts.closers.append(device.close)
         if hasattr(device, "__enter__"):
             device.__enter__()
@@ -163,10 +171,10 @@ def compose(runtime: Any, robot: Any, args: argparse.Namespace, config: Any, pat
 
         node = attach(runtime, robot, args)
         parts.closers.append(node.close)
-    parts.printer = NoticePrinter(_say, control=True)
+    parts.printer = NoticePrinter(say, control=True)
     runtime.add_sink(parts.printer)
     EstimatorWhenMissing.add(runtime, robot)  # the achieved twist of the status lines
-    runtime.add_sink(SpeedReport(_say))
+    runtime.add_sink(SpeedReport(say))
     return parts
 
 
@@ -218,7 +226,31 @@ def _result(parts: Parts) -> int:
     return 0 if report["completed"] else 1
 
 
-def _in_this_thread(args: argparse.Namespace, url: str, config: Any, path: Any) -> Parts:
+Attach = Callable[[Any, Any], list[Callable[[], object]]]
+"""Adds a command's own sinks to the runtime before the front ends: ``attach(runtime, session)``
+returns what to close when the run ends (``omnibot map`` adds its SLAM this way)."""
+
+
+def run_in_this_thread(
+    args: argparse.Namespace,
+    url: str,
+    config: Any,
+    path: Any,
+    attach: Attach | None = None,
+    say: Callable[[str], None] = _say,
+) -> Parts:
+    """``run``'s front ends (and ``attach``'s sinks) on one runtime in this thread (no dashboard)."""
+    return _in_this_thread(args, url, config, path, attach, say)
+
+
+def _in_this_thread(
+    args: argparse.Namespace,
+    url: str,
+    config: Any,
+    path: Any,
+    attach: Attach | None = None,
+    say: Callable[[str], None] = _say,
+) -> Parts:
     from omnibot.cliargs import use_calibration
     from omnibot.client.errors import NotSupported
     from omnibot.client.session import robot_session
@@ -242,7 +274,13 @@ def _in_this_thread(args: argparse.Namespace, url: str, config: Any, path: Any) 
         )
         if path is not None:
             start_sonars(client, robot)  # the stall watch's witnesses of what is ahead
-        parts = compose(runtime, robot, args, config, path)
+        attached = attach(runtime, session) if attach is not None else []
+        try:
+            parts = compose(runtime, robot, args, config, path, say)
+        except BaseException:
+            Parts(closers=attached).close()
+            raise
+        parts.closers.extend(attached)
         if path is not None:
             parts.closers.append(lambda: start_sonars(client, robot, 0.0))  # left not pinging, as found
         try:

@@ -1,0 +1,223 @@
+"""``omnibot map``: map a room with the robot's scanner while it is driven, and score the result.
+
+::
+
+    omnibot map [ROBOT OPTIONS] (--path PATH.csv | --teleop pad|keyboard) --out DIR
+                [--scanner DEV] [--resolution M] [--duration S] [--speed V] [--follower NAME]
+
+The robot is driven as ``omnibot run`` drives it (a path follower, or a person with the deadman) on
+one runtime, with the wheel-speed loop closed; a :class:`~omnibot.mapping.session.MappingSink` on
+that runtime feeds every scan and the odometry to the SLAM. At the end ``DIR`` holds the map in
+map_server's format (``map.yaml`` + ``map.pgm``), ``estimate.tum`` (the SLAM) and ``odometry.tum``
+(wheels and gyro alone) and, on the simulator, ``truth.tum``, ``report.json`` (APE/RPE of both
+against the truth, the map's precision and recall against the world) and ``map.png``.
+
+On the simulator (no ``--port``, or ``--port sim://...``) the scans come from the simulated scanner
+in lockstep with the physics; on a real robot (``--port /dev/ttyUSB0``, or the pty of ``omnibot sim
+--pty``) from an RPLIDAR on ``--scanner``. Exit status 0 when the map was written (and a path was
+followed to its end), 1 when the run ended without a map or the follow was not completed, 2 for bad
+options.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+from typing import Any
+
+from omnibot.errors import ConfigError
+
+TRUTH_PERIOD = 0.01
+"""Sampling of the simulator's true pose, s (the trajectories are associated within 10 ms)."""
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Declare ``omnibot map``'s options."""
+    from omnibot.cliargs import add_calibration_option, add_robot_options, add_wheel_loop_option
+
+    add_robot_options(p, world="room", port_help="the simulated --robot in lockstep (paced with --teleop)")
+    drive = p.add_mutually_exclusive_group(required=True)
+    drive.add_argument("--path", metavar="PATH.csv", help="follow this path file while mapping")
+    drive.add_argument(
+        "--teleop", choices=("pad", "keyboard"), help="drive with a gamepad or this terminal's keys (deadman)"
+    )
+    p.add_argument(
+        "--out", metavar="DIR", required=True, help="directory for the map, trajectories and report"
+    )
+    p.add_argument(
+        "--scanner",
+        metavar="DEV",
+        help="the RPLIDAR's serial port on a real robot (or the scanner pty of omnibot sim --pty)",
+    )
+    p.add_argument(
+        "--resolution", type=float, default=0.05, metavar="M", help="map cell size, m (default 0.05)"
+    )
+    p.add_argument("--follower", default="tracker", help="--path: seed002, pure_pursuit or tracker (default)")
+    p.add_argument("--speed", type=float, help="--path: speed cap, m/s (default: the robot's limit)")
+    p.add_argument("--config", metavar="FILE.yaml", help="--teleop parameters (default seed 003's)")
+    p.add_argument(
+        "--duration",
+        type=float,
+        metavar="S",
+        help="stop after S seconds (default: the path's end, or Ctrl-C)",
+    )
+    add_wheel_loop_option(p)
+    add_calibration_option(p)
+    p.set_defaults(dashboard=False, ros2=False, follow=None)
+
+
+def _say(text: str) -> None:
+    print(f"map: {text}", flush=True)
+
+
+def _check(args: argparse.Namespace) -> Path:
+    from omnibot.cliargs import output_dir
+
+    if not (math.isfinite(args.resolution) and 0.005 <= args.resolution <= 1.0):
+        raise ConfigError(f"expected a cell size of 0.005 to 1 m, got {args.resolution}", key="--resolution")
+    if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
+        raise ConfigError(f"expected a positive number of seconds, got {args.duration}", key="--duration")
+    if args.speed is not None and not (math.isfinite(args.speed) and args.speed > 0):
+        raise ConfigError(f"expected a positive speed in m/s, got {args.speed}", key="--speed")
+    if args.scanner is not None and (args.port is None or args.port.startswith(("sim:", "spy+sim:"))):
+        raise ConfigError(
+            "the simulated robot's scanner is simulated: --scanner goes with --port", key="--scanner"
+        )
+    return output_dir(args.out)
+
+
+def run(args: argparse.Namespace) -> int:
+    """``omnibot map``: drive, map, write the outputs; the exit status."""
+    try:
+        import gtsam  # noqa: F401  (the pose graph: the slam extra)
+        import scipy  # noqa: F401
+    except ImportError:
+        raise ConfigError("omnibot map needs the slam extra: pip install 'omnibot[slam]'") from None
+    from omnibot.cliargs import check_sim_options, sim_url
+    from omnibot.control.paths.files import read_path
+    from omnibot.runtime.command import Parts, run_in_this_thread
+    from omnibot.teleop.config import load_teleop_config
+
+    out = _check(args)
+    check_sim_options(args)
+    config = load_teleop_config(args.config)
+    try:
+        path = read_path(args.path) if args.path else None
+    except (OSError, ValueError) as exc:
+        raise ConfigError(f"cannot read {args.path}: {exc}", key="--path") from None
+    url = sim_url(args)
+    if path is not None and args.port is None:
+        x, y, theta = path.start
+        url += f"&pose={x:.4f},{y:.4f},{math.degrees(theta):.3f}"  # the robot stands at the path's start
+    args.follow = args.path
+    mapping = _Mapping(args)
+    parts: Parts | None = None
+    try:
+        parts = run_in_this_thread(args, url, config, path, mapping.attach, _say)
+    finally:
+        mapping.close()
+    return mapping.finish(out, parts, args.resolution)
+
+
+class _Mapping:
+    """The mapping sink and the simulator's truth of one run, attached to its runtime."""
+
+    def __init__(self, args: argparse.Namespace) -> None:
+        self.args = args
+        self.sink: Any = None
+        self.truth: Any = None
+        self.world: Any = None
+        self._sim: Any = None
+        self._listener: Any = None
+
+    def attach(self, runtime: Any, session: Any) -> list[Any]:
+        from omnibot.estimation.estimator import make_estimator
+        from omnibot.lidar.reader import open_scanner
+        from omnibot.mapping.session import MappingSink, Track
+        from omnibot.motion import Pose2D
+        from omnibot.transport.device import find_simulator
+
+        client, robot = session.client, session.robot
+        scans = open_scanner(self.args.scanner, client.link, robot)
+        sim = find_simulator(client.link)
+        start = Pose2D(0.0, 0.0, 0.0)
+        if sim is not None:
+            self._sim = sim
+            self.world = sim.world
+            start = sim.pose  # the map frame is the world's: the estimate starts at the true pose
+            self.truth = Track()
+            truth = self.truth
+
+            def record(snap: Any) -> None:
+                truth.add(snap.t, snap.pose)
+
+            self._listener = record
+            sim.add_listener(record, TRUTH_PERIOD)
+        slip = runtime.slip.params if runtime.slip is not None else None
+        runtime.estimator = make_estimator("fused", robot, start, slip)
+        self.sink = MappingSink(scans, threaded=sim is None)
+        runtime.add_sink(self.sink)
+        where = "the simulated scanner" if sim is not None else f"the scanner on {self.args.scanner}"
+        _say(f"mapping with {where}; the SLAM corrects the wheel and gyro odometry")
+        return []
+
+    def close(self) -> None:
+        if self._sim is not None and self._listener is not None:
+            self._sim.remove_listener(self._listener)
+            self._listener = None
+        if self.sink is not None:
+            self.sink.close()
+
+    def finish(self, out: Path, parts: Any, resolution: float) -> int:
+        from omnibot.mapping.session import write_outputs
+        from omnibot.runtime.command import outcome
+
+        sink = self.sink
+        if sink is None:
+            return 1
+        if sink.failure is not None:
+            print(f"omnibot map: the SLAM failed: {sink.failure}", file=sys.stderr)
+            return 1
+        try:
+            result = write_outputs(out, sink, truth=self.truth, world=self.world, resolution=resolution)
+        except ValueError as exc:
+            print(f"omnibot map: {exc} ({sink.received} scans received)", file=sys.stderr)
+            return 1
+        report = result.report
+        _say(
+            f"{report['scans']} scans, {report['keyframes']} keyframes, {report['loop_closures']} loop closures, "
+            f"{report['distance_m']:.1f} m driven"
+        )
+        for name in ("estimate", "odometry"):
+            scores = report.get("trajectory", {}).get(name)
+            if scores is not None:
+                _say(
+                    f"{name}: APE RMSE {_cm(scores['ape_rmse_m'])}, max {_cm(scores['ape_max_m'])} "
+                    "(from the simulator's truth)"
+                )
+        m = report["map"]
+        if "precision" in m:
+            _say(
+                f"map: precision {_pct(m['precision'])}, recall {_pct(m['recall'])} within "
+                f"{m['tolerance_m'] * 100:.0f} cm of the world's walls and furniture"
+            )
+        _say(f"wrote {', '.join(str(f) for f in result.files)}")
+        status = 0
+        if parts is not None and parts.judge is not None:
+            verdict = parts.judge.verdict()  # given at the follow's end (and said then), or now
+            said = {n.text for n in parts.printer.seen} if parts.printer is not None else set()
+            for line in outcome(verdict):
+                if line not in said:
+                    _say(line)
+            status = 0 if verdict["completed"] else 1
+        return status
+
+
+def _cm(v: float | None) -> str:
+    return "n/a" if v is None else f"{v * 100:.1f} cm"
+
+
+def _pct(v: float | None) -> str:
+    return "n/a" if v is None else f"{v * 100:.1f} %"

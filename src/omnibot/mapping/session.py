@@ -1,0 +1,311 @@
+"""A mapping run on the runtime: scans and the runtime's odometry into the SLAM, trajectories kept.
+
+:class:`MappingSink` is a runtime sink (:mod:`omnibot.runtime.sinks`). Every cycle it keeps the
+runtime's estimate (the fused wheel and gyro odometry) as the odometry trajectory, takes the scans
+completed since the last cycle from a :class:`~omnibot.lidar.reader.ScanSource`, gives each to the
+:class:`~omnibot.mapping.slam.Slam` with the odometry pose at the scan's first ray (interpolated
+between the cycles around it; a scan newer than the last estimate waits for the next cycle), and
+keeps the SLAM's pose as the estimate trajectory. Scans and estimates must share a clock: simulated
+time on ``sim://`` (the link's clock and the simulator's scans), the host's monotonic clock on a
+real port (the client's clock and :class:`~omnibot.lidar.reader.RplidarScanner`'s stamps).
+
+On a link in lockstep the SLAM runs in the runtime's thread (simulated time waits for it, and the
+run is deterministic); on a real link ``threaded=True`` hands the scans to a worker thread, so a
+slow loop closure never delays a VEL.
+
+:func:`write_outputs` writes what a mapping run leaves in its directory: ``map.yaml`` + ``map.pgm``
+(map_server's format), ``estimate.tum`` and ``odometry.tum``, and with the simulator's truth
+``truth.tum``, ``report.json`` (APE/RPE of both trajectories, the map's precision and recall against
+the world's own geometry) and ``map.png``.
+"""
+
+from __future__ import annotations
+
+import bisect
+import contextlib
+import itertools
+import json
+import math
+import queue
+import threading
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from omnibot.mapping.se2 import wrap
+from omnibot.mapping.slam import Slam
+from omnibot.motion import Pose2D
+from omnibot.scan import Scan
+
+if TYPE_CHECKING:
+    from omnibot.lidar.reader import ScanSource
+    from omnibot.mapping.grid import OccupancyGrid
+    from omnibot.runtime.cycle import Cycle
+    from omnibot.sim.world import World
+
+HISTORY = 4096
+"""Odometry samples kept for interpolation (40 s at 100 Hz; scans are never that late)."""
+PENDING_MAX = 64
+"""Scans kept while the odometry has not caught up with them (the oldest are dropped)."""
+
+
+@dataclass
+class Track:
+    """A trajectory being recorded: times (s) and poses."""
+
+    stamps: list[float] = field(default_factory=list)
+    poses: list[Pose2D] = field(default_factory=list)
+
+    def add(self, stamp: float, pose: Pose2D) -> None:
+        """Append a pose (times never decrease)."""
+        self.stamps.append(stamp)
+        self.poses.append(pose)
+
+    def __len__(self) -> int:
+        return len(self.stamps)
+
+
+def interpolate(stamps: list[float], poses: list[Pose2D], t: float) -> Pose2D | None:
+    """The pose at ``t`` between the samples around it (linear, heading the short way round); None
+    when ``t`` is outside the samples."""
+    if not stamps or t < stamps[0] or t > stamps[-1]:
+        return None
+    i = bisect.bisect_left(stamps, t)
+    if stamps[i] == t or i == 0:
+        return poses[i]
+    t0, t1 = stamps[i - 1], stamps[i]
+    a, b = poses[i - 1], poses[i]
+    k = (t - t0) / (t1 - t0)
+    return Pose2D(a.x + k * (b.x - a.x), a.y + k * (b.y - a.y), wrap(a.theta + k * wrap(b.theta - a.theta)))
+
+
+class MappingSink:
+    """Feeds the SLAM from a runtime (see the module docstring); ``close()`` when the run ends."""
+
+    def __init__(self, scans: ScanSource, slam: Slam | None = None, *, threaded: bool = False) -> None:
+        self.scans = scans
+        self.slam = slam if slam is not None else Slam()
+        self.odometry = Track()
+        self.estimate = Track()
+        self.received = 0
+        """Scans taken from the source."""
+        self.dropped = 0
+        """Scans dropped: older than the odometry kept, or while too many waited."""
+        self.failure: BaseException | None = None
+        """Why the SLAM worker stopped (a threaded sink), else None."""
+        self._history_t: list[float] = []
+        self._history_p: list[Pose2D] = []
+        self._pending: list[Scan] = []
+        self._lock = threading.Lock()
+        self._queue: queue.Queue[tuple[Scan, Pose2D] | None] | None = None
+        self._worker: threading.Thread | None = None
+        if threaded:
+            self._queue = queue.Queue()
+            self._worker = threading.Thread(target=self._work, name="omnibot-slam", daemon=True)
+            self._worker.start()
+
+    # ------------------------------------------------------------------ the runtime's side
+
+    def __call__(self, cycle: Cycle) -> None:
+        """Keep the cycle's odometry; hand every scan it covers to the SLAM."""
+        est = cycle.estimate
+        if est is not None and (not self._history_t or cycle.t > self._history_t[-1]):
+            pose = Pose2D(est.x, est.y, est.theta)
+            self._history_t.append(cycle.t)
+            self._history_p.append(pose)
+            self.odometry.add(cycle.t, pose)
+            if len(self._history_t) > HISTORY:
+                del self._history_t[: len(self._history_t) - HISTORY]
+                del self._history_p[: len(self._history_p) - HISTORY]
+        fresh = self.scans.poll()
+        self.received += len(fresh)
+        self._pending.extend(fresh)
+        waiting: list[Scan] = []
+        for scan in self._pending:
+            odom = interpolate(self._history_t, self._history_p, scan.stamp)
+            if odom is not None:
+                self._take(scan, odom)
+            elif self._history_t and scan.stamp < self._history_t[0]:
+                self.dropped += 1  # before the odometry began (or long gone)
+            else:
+                waiting.append(scan)
+        if len(waiting) > PENDING_MAX:
+            self.dropped += len(waiting) - PENDING_MAX
+            waiting = waiting[-PENDING_MAX:]
+        self._pending = waiting
+
+    def _take(self, scan: Scan, odom: Pose2D) -> None:
+        if self._queue is not None:
+            self._queue.put((scan, odom))
+        else:
+            self._update(scan, odom)
+
+    def _update(self, scan: Scan, odom: Pose2D) -> None:
+        pose = self.slam.update(odom, scan, scan.stamp)
+        with self._lock:
+            self.estimate.add(scan.stamp, pose)
+
+    def _work(self) -> None:
+        assert self._queue is not None
+        while (item := self._queue.get()) is not None:
+            if self.failure is not None:
+                continue  # drain: the SLAM failed once, it is not asked again
+            try:
+                self._update(*item)
+            except Exception as exc:  # kept, and told by the command: never raised in the loop
+                self.failure = exc
+
+    # ------------------------------------------------------------------ results
+
+    @property
+    def pose(self) -> Pose2D | None:
+        """The SLAM's latest map-frame pose of the robot (None before the first scan)."""
+        with self._lock:
+            return self.estimate.poses[-1] if self.estimate.poses else None
+
+    def close(self) -> None:
+        """Finish the SLAM's work (a threaded sink waits for its queue) and close the scan source."""
+        if self._worker is not None and self._queue is not None:
+            self._queue.put(None)
+            self._worker.join()
+            self._worker = None
+        with contextlib.suppress(Exception):
+            self.scans.close()
+
+    def trajectory(self) -> Track:
+        """The estimate trajectory with every correction of the pose graph so far (re-read from the
+        SLAM: the poses recorded as they came are the ones known then)."""
+        track = Track()
+        for stamp, pose in self.slam.trajectory():
+            track.add(stamp, pose)
+        return track
+
+    def grid(self, resolution: float = 0.05) -> OccupancyGrid:
+        """The map: every keyframe's scan at its corrected pose."""
+        from omnibot.mapping.mapper import build_map
+
+        return build_map([(scan, pose) for pose, scan in self.slam.keyframes()], resolution)
+
+
+# ---------------------------------------------------------------------------------------------------
+# outputs
+
+
+@dataclass(frozen=True)
+class MappingResult:
+    """What :func:`write_outputs` wrote and measured."""
+
+    files: list[Path]
+    report: dict[str, Any]
+
+
+def write_outputs(
+    out: Path,
+    sink: MappingSink,
+    *,
+    truth: Track | None = None,
+    world: World | None = None,
+    resolution: float = 0.05,
+    plot: bool = True,
+) -> MappingResult:
+    """Write the map, the trajectories and (with ``truth`` and ``world``) the scored report to ``out``."""
+    from omnibot.mapping.mapfile import save_map
+    from omnibot.mapping.trajectory import Trajectory, write_tum
+
+    if not sink.slam.keyframes():
+        raise ValueError("no scan reached the SLAM: nothing to map")
+    grid = sink.grid(resolution)
+    files = [save_map(grid, out / "map.yaml")]
+    files.append(out / "map.pgm")
+    estimate = sink.trajectory()
+    tracks = {"estimate": estimate, "odometry": sink.odometry}
+    if truth is not None:
+        tracks["truth"] = truth
+    trajectories: dict[str, Trajectory] = {}
+    for name, track in tracks.items():
+        if len(track) == 0:
+            continue
+        trajectories[name] = Trajectory.from_poses(track.stamps, track.poses)
+        path = out / f"{name}.tum"
+        write_tum(path, trajectories[name])
+        files.append(path)
+    report: dict[str, Any] = {
+        "scans": sink.received,
+        "scans_dropped": sink.dropped,
+        "keyframes": len(sink.slam.keyframes()),
+        "loop_closures": sink.slam.closures,
+        "distance_m": _length(estimate.poses),
+        "map": {
+            "resolution": grid.resolution,
+            "origin": [grid.origin.x, grid.origin.y, grid.origin.theta],
+            "size_cells": list(grid.shape),
+        },
+    }
+    if truth is not None and "truth" in trajectories:
+        report["trajectory"] = _scores(trajectories)
+    if world is not None:
+        from omnibot.mapping.score import score_map
+
+        score = score_map(grid, world)
+        report["map"]["precision"] = _number(score.precision)
+        report["map"]["recall"] = _number(score.recall)
+        report["map"]["tolerance_m"] = score.tolerance
+    path = out / "report.json"
+    path.write_text(json.dumps(report, indent=2) + "\n")
+    files.append(path)
+    if plot:
+        files.append(_plot(out / "map.png", grid, tracks))
+    return MappingResult(files, report)
+
+
+def _length(poses: list[Pose2D]) -> float:
+    return sum(math.hypot(b.x - a.x, b.y - a.y) for a, b in itertools.pairwise(poses))
+
+
+def _scores(trajectories: dict[str, Any]) -> dict[str, Any]:
+    from omnibot.mapping.trajectory import score_trajectory
+
+    truth = trajectories["truth"]
+    scores: dict[str, Any] = {}
+    for name in ("estimate", "odometry"):
+        if name in trajectories:
+            errors = score_trajectory(trajectories[name], truth)
+            scores[name] = {
+                "ape_rmse_m": _number(errors.ape_rmse),
+                "ape_max_m": _number(errors.ape_max),
+                "rpe_rmse_m": _number(errors.rpe_rmse),
+                "rpe_delta_m": errors.rpe_delta,
+                "poses": errors.pairs,
+            }
+    return scores
+
+
+def _number(v: float) -> float | None:
+    """A float for JSON: None where it is not a number (JSON has no NaN)."""
+    return v if math.isfinite(v) else None
+
+
+def _plot(path: Path, grid: OccupancyGrid, tracks: dict[str, Track]) -> Path:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    fig, ax = plt.subplots(figsize=(8, 8 * grid.height / max(grid.width, 1e-9)))
+    shade = np.where(grid.data < 0, 0.8, 1.0 - grid.data / 100.0)
+    x0, y0 = grid.origin.x, grid.origin.y
+    ax.imshow(
+        shade, cmap="gray", vmin=0, vmax=1, origin="lower", extent=(x0, x0 + grid.width, y0, y0 + grid.height)
+    )
+    for name, color in (("truth", "tab:green"), ("odometry", "tab:red"), ("estimate", "tab:blue")):
+        track = tracks.get(name)
+        if track is not None and len(track):
+            ax.plot([p.x for p in track.poses], [p.y for p in track.poses], color=color, lw=1, label=name)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.legend(loc="upper right")
+    fig.savefig(path, dpi=120, bbox_inches="tight")
+    plt.close(fig)
+    return path
