@@ -9,7 +9,8 @@
 
 A robot is a :class:`~omnibot.sim.device.SimDevice` (firmware + :class:`Simulator`) with a name;
 an omni3 and an omni4 may share a room. Each robot's footprint (its convex hull) is a body the
-others collide with and an obstacle their sonar cones see (``Simulator.neighbours``). Contacts
+others collide with and an obstacle their sonar cones and laser scanners see
+(``Simulator.neighbours``). Contacts
 between robots are the walls' contact law with the two bodies' effective mass: a critically damped
 penalty spring along the normal (natural frequency 0.25/dt) plus the walls' friction, and a
 :class:`~omnibot.sim.simulator.CollisionEvent` whose owner is ``robot NAME`` when two robots start
@@ -80,6 +81,10 @@ class Fleet:
         self._bodies: dict[str, _Body] = {}
         self._order: list[_Body] = []
         self._out = np.zeros((2, 6))
+        self._edges = np.zeros((0, 4))
+        self._edges_rows: dict[str, tuple[int, int]] = {}
+        self._edges_tick = -1
+        self._edges_names: list[str] = []
 
     def __repr__(self) -> str:
         return f"Fleet({self.world.name!r}, robots {self.names}, t={self.time:.3f} s)"
@@ -184,9 +189,19 @@ class Fleet:
         self._us += self._dt_us
 
     def _edges_except(self, name: str) -> FloatArray:
-        """The footprint edges (K, 4) of every robot but ``name``, world frame, now."""
-        edges = [closed_edges(b.hull()) for b in self._order if b.name != name]
-        return np.vstack(edges) if edges else np.zeros((0, 4))
+        """The footprint edges (K, 4) of every robot but ``name``, world frame, as they stood when
+        first asked for during this step (the sonars ask before the robots move, the scanners after
+        their own robot moved: at most one step apart); placed once per step for all the askers."""
+        if self._edges_tick != self._us or self._edges_names != self.names:
+            edges = [closed_edges(b.hull()) for b in self._order]
+            bounds = np.cumsum([0] + [len(e) for e in edges])
+            self._edges = np.vstack(edges) if edges else np.zeros((0, 4))
+            self._edges_rows = {
+                b.name: (int(bounds[i]), int(bounds[i + 1])) for i, b in enumerate(self._order)
+            }
+            self._edges_tick, self._edges_names = self._us, self.names
+        lo, hi = self._edges_rows[name]
+        return np.concatenate((self._edges[:lo], self._edges[hi:]))
 
     def _pair_contact(self, a: _Body, b: _Body) -> Contact | None:
         """Where ``a``'s footprint overlaps ``b``'s (normal pushing ``a`` out), None if apart."""

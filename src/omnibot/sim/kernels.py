@@ -1,4 +1,5 @@
-"""Compiled (numba) kernels of the simulator: the physics step and the world's contact geometry.
+"""Compiled (numba) kernels of the simulator: the physics step, the world's contact geometry and the
+laser scanner's ray casting.
 
 The equations live here once; :mod:`omnibot.sim.physics` and :mod:`omnibot.sim.world` hold the
 parameters and state as numpy arrays and call these kernels with them. Every kernel loops over
@@ -495,7 +496,159 @@ def outline_contacts(
     return kept, clearance
 
 
-KERNELS = (physics_step, contact_speeds, surface_probe, outline_contacts)
+# --------------------------------------------------------------------------- laser scanner
+
+SCAN_CHUNK = 16
+"""Rays cast together by :func:`scan_rays`: the edges that cannot meet any ray of a chunk are culled
+once for the chunk (the rays of a chunk come from nearby origins and span a narrow wedge)."""
+_WEDGE_MAX = 2.0
+"""rad: widest wedge of a chunk's rays that is culled by its sides (wider: by distance only)."""
+
+
+@njit(cache=True)
+def _wrap(a: float) -> float:
+    """a wrapped to [-pi, pi)."""
+    return a - 2.0 * math.pi * math.floor((a + math.pi) / (2.0 * math.pi))
+
+
+@njit(cache=True)
+def scan_rays(
+    ray_t: FloatArray,
+    ray_a: FloatArray,
+    hist_t: FloatArray,
+    hist_p: FloatArray,
+    n_hist: int,
+    mount_x: float,
+    mount_y: float,
+    segments: FloatArray,
+    max_range: float,
+    out: FloatArray,
+) -> None:
+    """True range of each ray of a spinning scanner into out (inf: nothing within max_range).
+
+    Ray i is measured at time ray_t[i] (increasing) in direction ray_a[i] of the robot's base frame,
+    from the scanner at (mount_x, mount_y) in that frame. The robot's pose at that time is
+    interpolated linearly in the recorded poses hist_p[:n_hist] (x, y, theta at times
+    hist_t[:n_hist], increasing; held outside them). Edges are ``x0, y0, x1, y1`` rows. Rays are
+    taken SCAN_CHUNK at a time: an edge is tested against a chunk's rays only if it can meet the
+    wedge they span from the disc holding their origins (its three bounding half-planes, widened by
+    the disc's radius) and comes within the square of side 2 max_range around them; the result is
+    the same as testing every edge.
+    """
+    n = ray_t.shape[0]
+    n_seg = segments.shape[0]
+    ox = np.empty(SCAN_CHUNK)
+    oy = np.empty(SCAN_CHUNK)
+    ang = np.empty(SCAN_CHUNK)
+    keep = np.empty(n_seg, dtype=np.int64)
+    k = 0
+    for start in range(0, n, SCAN_CHUNK):
+        stop = min(n, start + SCAN_CHUNK)
+        m = stop - start
+        for i in range(start, stop):
+            t = ray_t[i]
+            while k < n_hist - 2 and hist_t[k + 1] <= t:
+                k += 1
+            if n_hist == 1:
+                x, y, th = hist_p[0, 0], hist_p[0, 1], hist_p[0, 2]
+            else:
+                t0, t1 = hist_t[k], hist_t[k + 1]
+                f = (t - t0) / (t1 - t0) if t1 > t0 else 1.0
+                f = min(max(f, 0.0), 1.0)
+                x = hist_p[k, 0] + f * (hist_p[k + 1, 0] - hist_p[k, 0])
+                y = hist_p[k, 1] + f * (hist_p[k + 1, 1] - hist_p[k, 1])
+                th = hist_p[k, 2] + f * (hist_p[k + 1, 2] - hist_p[k, 2])
+            c, s = math.cos(th), math.sin(th)
+            j = i - start
+            ox[j] = x + c * mount_x - s * mount_y
+            oy[j] = y + s * mount_x + c * mount_y
+            ang[j] = th + ray_a[i]
+        # the chunk's origins (a disc: centre, radius) and directions (a wedge: middle, half width)
+        cx = cy = 0.0
+        for j in range(m):
+            cx += ox[j]
+            cy += oy[j]
+        cx, cy = cx / m, cy / m
+        rho = 0.0
+        lo = hi = 0.0
+        for j in range(m):
+            rho = max(rho, math.hypot(ox[j] - cx, oy[j] - cy))
+            d = _wrap(ang[j] - ang[0])
+            lo, hi = min(lo, d), max(hi, d)
+        rho += 1e-9
+        wedge = hi - lo < _WEDGE_MAX
+        mid, half = ang[0] + 0.5 * (lo + hi), 0.5 * (hi - lo)
+        ux, uy = math.cos(mid + half), math.sin(mid + half)
+        lx, ly = math.cos(mid - half), math.sin(mid - half)
+        mx, my = math.cos(mid), math.sin(mid)
+        reach = max_range + rho
+        count = 0
+        for e in range(n_seg):
+            x0, y0, x1, y1 = segments[e, 0], segments[e, 1], segments[e, 2], segments[e, 3]
+            if min(x0, x1) > cx + reach or max(x0, x1) < cx - reach:
+                continue  # out of range (the box around the origins' reach)
+            if min(y0, y1) > cy + reach or max(y0, y1) < cy - reach:
+                continue
+            if wedge:
+                ax, ay, bx, by = x0 - cx, y0 - cy, x1 - cx, y1 - cy
+                if ux * ay - uy * ax > rho and ux * by - uy * bx > rho:
+                    continue  # beyond the wedge's counter-clockwise side
+                if lx * ay - ly * ax < -rho and lx * by - ly * bx < -rho:
+                    continue  # beyond its clockwise side
+                if mx * ax + my * ay < -rho and mx * bx + my * by < -rho:
+                    continue  # behind it
+            keep[count] = e
+            count += 1
+        for j in range(m):
+            dx, dy = math.cos(ang[j]), math.sin(ang[j])
+            best = np.inf
+            for q in range(count):
+                e = keep[q]
+                x0, y0 = segments[e, 0], segments[e, 1]
+                ex, ey = segments[e, 2] - x0, segments[e, 3] - y0
+                denom = dx * ey - dy * ex
+                if abs(denom) < 1e-12:
+                    continue
+                ax, ay = x0 - ox[j], y0 - oy[j]
+                t = (ax * ey - ay * ex) / denom
+                if t < 0.0 or t >= best:
+                    continue
+                u = (ax * dy - ay * dx) / denom
+                if 0.0 <= u <= 1.0:
+                    best = t
+            out[start + j] = best if best <= max_range else np.inf
+
+
+@njit(cache=True)
+def scan_measure(
+    true: FloatArray,
+    draws: FloatArray,
+    noise_std: float,
+    noise_fraction: float,
+    resolution: float,
+    dropout: float,
+    range_min: float,
+    range_max: float,
+    out: FloatArray,
+) -> None:
+    """What the scanner reports for the true ranges (inf: no return) into out, from 3 uniform draws
+    per ray (draws[i], draws[n + i], draws[2n + i]: a Box-Muller normal from the first two, the
+    dropout from the third): the range plus N(0, noise_std + noise_fraction * range), quantised to
+    resolution (when > 0); inf for a dropout or a value outside [range_min, range_max]."""
+    n = true.shape[0]
+    for i in range(n):
+        r = true[i]
+        if not r < np.inf or draws[2 * n + i] < dropout:
+            out[i] = np.inf
+            continue
+        z = math.sqrt(-2.0 * math.log1p(-draws[i])) * math.cos(2.0 * math.pi * draws[n + i])
+        v = r + (noise_std + noise_fraction * r) * z
+        if resolution > 0.0:
+            v = round(v / resolution) * resolution
+        out[i] = v if range_min <= v <= range_max else np.inf
+
+
+KERNELS = (physics_step, contact_speeds, surface_probe, outline_contacts, scan_rays, scan_measure)
 """The kernels the simulator calls (the helpers they call compile with them)."""
 
 
@@ -519,6 +672,8 @@ def warm_up() -> None:
     surface_probe(f(0, 2), f(0, 2), i(1), i(0), i(0))
     triangle = np.array([[0.1, 0.0], [-0.1, 0.1], [-0.1, -0.1]])
     outline_contacts(triangle, 0.0, 0.0, 0.0, f(0, 2), i(1), f(0, 2), f(0), i(0), f(0, 2), i(0), f(0, 6))
+    scan_rays(f(0), f(0), f(1), f(1, 3), 1, 0.0, 0.0, f(0, 4), 1.0, f(0))
+    scan_measure(f(0), f(0), 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, f(0))
 
 
 __all__ = [
@@ -528,6 +683,8 @@ __all__ = [
     "contact_speeds",
     "outline_contacts",
     "physics_step",
+    "scan_measure",
+    "scan_rays",
     "surface_probe",
     "warm_up",
 ]

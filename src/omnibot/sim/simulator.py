@@ -12,7 +12,8 @@
                    Physics.step(pwm, surface_ids, external_force)
                       v
       tracking wheels, gyro (every step) ; encoders (when read) ; sonars (on ping) ; listeners ;
-      collision events
+      collision events ; laser scanner (pose recorded every step while someone wants scans, rays
+      cast once per revolution, or every 20 ms in a fleet; scan listeners)
 
 A step costs a few microseconds: the physics is one compiled kernel call, the sensors work on
 Python floats, and two exact broad phases skip the world geometry. Each probe of the world returns
@@ -31,6 +32,15 @@ so one bump that bounces is one event).
 
 Listeners get a :class:`Snapshot` once when added and then after every step, or every ``period``
 seconds; :class:`TruthRecorder` is such a listener writing ``t,x,y,theta`` CSV.
+
+A robot with a ``scanner`` has a :class:`~omnibot.sim.scanner.LaserScanner` (:attr:`Simulator.scanner`).
+It measures only while someone wants scans: a scan listener is registered
+(:meth:`Simulator.add_scan_listener`) or :attr:`Simulator.last_scan` has been read once; otherwise it
+costs one comparison per step. Scan listeners are called from :meth:`Simulator.step` (the stepping
+thread, in simulated time) with every revolution completed, as an :class:`omnibot.scan.Scan`. The
+scanner sees the world's walls and obstacles and the bodies :attr:`Simulator.neighbours` gives (a
+fleet's other robots; as they stand when the rays are cast, at most 20 ms after the rays' times),
+never its own robot.
 """
 
 from __future__ import annotations
@@ -48,7 +58,9 @@ from numpy.typing import ArrayLike, NDArray
 from omnibot.errors import SimulationError
 from omnibot.motion import Pose2D, Twist
 from omnibot.robot.description import RobotDescription
+from omnibot.scan import Scan
 from omnibot.sim.clock import SimClock
+from omnibot.sim.scanner import LaserScanner
 from omnibot.sim.sensors import Gyro, MotorEncoders, Sonar, TrackingWheels
 from omnibot.sim.world import Contact, World, convex_hull, load_world
 
@@ -62,7 +74,10 @@ CONTACT_RELEASE = 0.25
 """Seconds without touching after which touching the same wall again is a new collision event."""
 
 # fixed RNG stream keys, so that adding one sensor does not change another's noise
-_RNG_ENCODERS, _RNG_TRACKING, _RNG_GYRO, _RNG_SONAR = 0, 1, 2, 100
+_RNG_ENCODERS, _RNG_TRACKING, _RNG_GYRO, _RNG_SONAR, _RNG_SCANNER = 0, 1, 2, 100, 200
+SCAN_OTHERS_EVERY = 0.02
+"""s: how often a scanner among other moving bodies (a fleet) casts the rays due, so that it sees the
+others at most this long after the rays' times (alone, it casts once per revolution)."""
 
 
 class PwmRangeError(SimulationError, ValueError):
@@ -162,6 +177,7 @@ class CollisionEvent:
 
 Listener = Callable[[Snapshot], None]
 CollisionListener = Callable[[CollisionEvent], None]
+ScanListener = Callable[[Scan], None]
 
 
 class TruthRecorder:
@@ -336,6 +352,13 @@ class Simulator:
         self._tracking_on = len(robot.encoders.tracking) > 0
         self.gyro = Gyro(robot.gyro, _rng(seed, _RNG_GYRO)) if robot.gyro is not None else None
         self.sonars = [Sonar(s, _rng(seed, _RNG_SONAR + i)) for i, s in enumerate(robot.sonars)]
+        self._scanner = (
+            LaserScanner(robot.scanner, seed, _RNG_SCANNER, self.dt) if robot.scanner is not None else None
+        )
+        self._scan_listeners: list[ScanListener] = []
+        self._scan_asked = False
+        self._scan_on = False
+        self._scan_due_us = 0
 
         x, y, th = self._pose_row.tolist()
         touching = self._find_contacts(x, y, th)
@@ -499,6 +522,69 @@ class Simulator:
         others = self.neighbours() if self.neighbours is not None else None
         return self.sonars[index].ping(self.time, self._physics.pose[0], self.world, others)
 
+    @property
+    def scanner(self) -> LaserScanner | None:
+        """The robot's laser scanner, or None if its description has none."""
+        return self._scanner
+
+    @property
+    def last_scan(self) -> Scan | None:
+        """The latest complete revolution of the scanner (None before the first, or without a scanner).
+
+        Reading it switches the scanner on for good (it stays on: someone wants scans), so the first
+        read returns None and a revolution is there one to two revolutions of simulated time later.
+        """
+        if self._scanner is None:
+            return None
+        if not self._scan_asked:
+            self._scan_asked = True
+            self._scan_switch()
+        return self._scanner.last
+
+    def add_scan_listener(self, fn: ScanListener) -> None:
+        """Call ``fn(scan)`` with every revolution the scanner completes from now on (in simulated
+        time, from the thread that steps the simulator). SimulationError if the robot has no scanner."""
+        if self._scanner is None:
+            raise SimulationError(f"robot '{self.robot.name}' has no scanner (add a 'scanner:' section)")
+        self._scan_listeners.append(fn)
+        self._scan_switch()
+
+    def remove_scan_listener(self, fn: ScanListener) -> None:
+        """Stop calling ``fn`` (no error if it was not registered)."""
+        self._scan_listeners = [f for f in self._scan_listeners if f != fn]
+        self._scan_switch()
+
+    def _scan_switch(self) -> None:
+        """Start or stop the scanner as someone wants scans or nobody does."""
+        sc = self._scanner
+        if sc is None:
+            return
+        want = bool(self._scan_listeners) or self._scan_asked
+        if want and not self._scan_on:
+            sc.start(self.clock.ticks_us() / 1e6, self._pose_row.tolist())
+            self._scan_on = True
+            self._scan_due_us = self._due_us(sc.due)
+        elif not want and self._scan_on:
+            sc.stop()
+            self._scan_on = False
+
+    def _due_us(self, due: float) -> int:
+        """A flush time in s as the first step end (whole us) at or after it."""
+        return math.ceil(due * 1e6 - 1e-3)
+
+    def _scan_flush(self, now_us: int) -> None:
+        sc = self._scanner
+        assert sc is not None
+        others = self.neighbours() if self.neighbours is not None else None
+        scans = sc.flush(now_us / 1e6, self.world.segments, others)
+        due = self._due_us(sc.due)
+        if others is not None:
+            due = min(due, now_us + round(SCAN_OTHERS_EVERY * 1e6))
+        self._scan_due_us = due
+        for scan in scans:
+            for fn in list(self._scan_listeners):
+                fn(scan)
+
     # ------------------------------------------------------------------ listeners
 
     def add_listener(self, fn: Listener, period: float | None = None) -> None:
@@ -562,6 +648,10 @@ class Simulator:
                 self.tracking.update((0.5 * (vx0 + vx1), 0.5 * (vy0 + vy1), 0.5 * (w0 + w1)), self.dt)
             if self.gyro is not None:
                 self.gyro.update(self.dt, 0.5 * (w0 + w1))
+        if self._scan_on:
+            self._scanner.history.extend(self._pose_row.tolist())  # type: ignore[union-attr]
+            if now_us + self._dt_us >= self._scan_due_us:
+                self._scan_flush(now_us + self._dt_us)
         if self._listeners and now_us + self._dt_us >= self._next_notify_us:
             self._notify()
 
