@@ -98,10 +98,11 @@ def ray_casting(world: str, repeats: int = 200) -> tuple[float, float, float]:
     hist_p[:, 0], hist_p[:, 1] = start.x, start.y
     hist_p[:, 2] = np.linspace(0.0, 0.5, 101)
     out = np.empty(n)
-    kernels.scan_rays(ray_t, ray_a, hist_t, hist_p, 101, 0.0, 0.0, seg, 14.0, out)
+    no_v, no_off = np.zeros((0, 2)), np.zeros(1, dtype=np.int64)
+    kernels.scan_rays(ray_t, ray_a, 0.0, 0.001, hist_p, 0, 0.0, 0.0, seg, no_v, no_off, 14.0, out)
     t0 = time.perf_counter()
     for _ in range(repeats):
-        kernels.scan_rays(ray_t, ray_a, hist_t, hist_p, 101, 0.0, 0.0, seg, 14.0, out)
+        kernels.scan_rays(ray_t, ray_a, 0.0, 0.001, hist_p, 0, 0.0, 0.0, seg, no_v, no_off, 14.0, out)
     compiled = (time.perf_counter() - t0) / repeats
     origins = np.column_stack((np.full(n, start.x), np.full(n, start.y)))
     angles = ray_a + np.interp(ray_t, hist_t, hist_p[:, 2])

@@ -17,12 +17,13 @@ from omnibot.sim.fleet import Fleet
 from omnibot.sim.simulator import Simulator, Snapshot
 from omnibot.sim.world import load_world, parse_world
 
-EXACT = {"noise_fraction": 0.0, "noise_std": 0.0, "resolution": 0.0, "dropout": 0.0}
+EXACT: dict[str, Any] = {"noise_fraction": 0.0, "noise_std": 0.0, "resolution": 0.0, "dropout": 0.0}
 BOX = parse_world({"name": "box", "walls": [{"shape": "rectangle", "min": [-2, -1.5], "max": [2, 1.5]}]})
 
 
-def robot_with(preset: str = "omni4", **scanner: Any) -> RobotDescription:
-    data = load_robot(preset).model_dump(exclude_none=True)
+def robot_with(**scanner: Any) -> RobotDescription:
+    """omni4 with these scanner settings."""
+    data = load_robot("omni4").model_dump(exclude_none=True)
     data["scanner"] = {**data["scanner"], **scanner}
     return parse_description(data, "test")
 
@@ -224,7 +225,7 @@ def test_the_scanner_changes_no_other_sensor_and_costs_nothing_unwanted() -> Non
             rows.append((sim.gyro_rate(), sim.sonar_ping(0), *sim.encoder_counts(), sim.pose))
         readings.append(rows)
     assert readings[0] == readings[1] == readings[2]
-    assert idle.scanner is not None and not idle.scanner.active and idle.scanner.history == []
+    assert idle.scanner is not None and not idle.scanner.active and idle.scanner.scans == 0
     assert scanning.scanner is not None and scanning.scanner.scans == 4
     # a listener removed: the scanner stops; last_scan read: it runs for good
     fn = scanning._scan_listeners[0]

@@ -6,6 +6,8 @@
                    -> robot-robot contacts (each pair whose bounding circles meet: separating axes,
                       the same kernel as the walls) -> equal and opposite penalty forces
                    -> every robot's physics steps (its walls, its pushes, those forces) -> clock += dt
+                   -> while a scanner is on: every robot's pose into one pose log; the scanners
+                      due cast their rays (each ray sees the others where they were at its time)
 
 A robot is a :class:`~omnibot.sim.device.SimDevice` (firmware + :class:`Simulator`) with a name;
 an omni3 and an omni4 may share a room. Each robot's footprint (its convex hull) is a body the
@@ -38,6 +40,7 @@ from omnibot.robot.description import RobotDescription
 from omnibot.sim import kernels
 from omnibot.sim.clock import SimClock
 from omnibot.sim.device import SimDevice
+from omnibot.sim.scanner import PoseLog
 from omnibot.sim.simulator import CONTACT_DAMPING, CONTACT_OMEGA_DT, WALL_FRICTION, Simulator
 from omnibot.sim.world import Contact, World, closed_edges, placed
 
@@ -85,6 +88,11 @@ class Fleet:
         self._edges_rows: dict[str, tuple[int, int]] = {}
         self._edges_tick = -1
         self._edges_names: list[str] = []
+        self._scan_log = PoseLog(0, dt)
+        self._scanning: list[tuple[int, Simulator]] = []
+        """(index in the step order, simulator) of every robot whose scanner is on."""
+        self._scan_due: list[int] = []
+        self._outlines: tuple[FloatArray, NDArray[np.int64]] = (np.zeros((0, 2)), np.zeros(1, dtype=np.int64))
 
     def __repr__(self) -> str:
         return f"Fleet({self.world.name!r}, robots {self.names}, t={self.time:.3f} s)"
@@ -165,6 +173,8 @@ class Fleet:
         device.sim.neighbours = partial(self._edges_except, name)
         self._bodies[name] = body
         self._order = sorted(self._bodies.values(), key=lambda b: b.name)
+        self._rescan()
+        device.sim.set_scan_driver(self._scan_switched)
         return device
 
     def remove(self, name: str) -> None:
@@ -173,6 +183,8 @@ class Fleet:
         if body is not None:
             body.sim.neighbours = None
             self._order = [b for b in self._order if b is not body]
+            body.sim.set_scan_driver(None)
+            self._rescan()
 
     # ------------------------------------------------------------------ stepping
 
@@ -187,6 +199,48 @@ class Fleet:
         for body in bodies:
             body.sim.step()
         self._us += self._dt_us
+        if self._scanning:
+            self._scan_step()
+
+    # ------------------------------------------------------------------ laser scanners
+
+    def _scan_switched(self, sim: Simulator) -> None:
+        """A robot's scanner started or stopped (its simulator's scan_driver)."""
+        self._rescan()
+
+    def _rescan(self) -> None:
+        """Start the pose log again for the robots now in the fleet (every scanner that is on drops
+        its revolution under way and starts with the next: the log's layout changed)."""
+        sims = [b.sim for b in self._order]
+        self._scanning = [(i, s) for i, s in enumerate(sims) if s.scanner is not None and s.scanner.active]
+        if not self._scanning:
+            self._scan_log = PoseLog(0, self.dt)
+            return
+        now = self._us / 1e6
+        self._scan_log = PoseLog(len(sims), self.dt)
+        self._scan_log.reset(now, [c for s in sims for c in s.pose_array.tolist()])
+        outlines = [b.outline for b in self._order]
+        offsets = np.cumsum([0] + [len(o) for o in outlines]).astype(np.int64)
+        self._outlines = (np.ascontiguousarray(np.vstack(outlines), dtype=np.float64), offsets)
+        for _, s in self._scanning:
+            assert s.scanner is not None
+            s.scanner.start(now)
+        self._scan_due = [
+            Simulator._due_us(s.scanner.due) for _, s in self._scanning if s.scanner is not None
+        ]
+
+    def _scan_step(self) -> None:
+        """Log every robot's pose now and flush the scanners that are due."""
+        rows = self._scan_log.rows
+        for body in self._order:
+            rows.extend(body.sim.pose_array.tolist())
+        now, flushed = self._us, False
+        for k, (index, sim) in enumerate(self._scanning):
+            if now >= self._scan_due[k]:
+                self._scan_due[k] = sim.scan_flush(now, self._scan_log, index, self._outlines)
+                flushed = True
+        if flushed:
+            self._scan_log.trim(min(s.scanner.needs_from for _, s in self._scanning if s.scanner is not None))
 
     def _edges_except(self, name: str) -> FloatArray:
         """The footprint edges (K, 4) of every robot but ``name``, world frame, as they stood when

@@ -512,54 +512,80 @@ def _wrap(a: float) -> float:
 
 
 @njit(cache=True)
+def _hit(ox: float, oy: float, dx: float, dy: float, x0: float, y0: float, x1: float, y1: float) -> float:
+    """Distance along the ray (ox, oy) + t (dx, dy) to the edge (x0, y0)-(x1, y1), inf if it misses."""
+    ex, ey = x1 - x0, y1 - y0
+    denom = dx * ey - dy * ex
+    if abs(denom) < 1e-12:
+        return np.inf
+    ax, ay = x0 - ox, y0 - oy
+    t = (ax * ey - ay * ex) / denom
+    u = (ax * dy - ay * dx) / denom
+    return t if t >= 0.0 and 0.0 <= u <= 1.0 else np.inf
+
+
+@njit(cache=True)
 def scan_rays(
     ray_t: FloatArray,
     ray_a: FloatArray,
-    hist_t: FloatArray,
+    hist_t0: float,
+    hist_dt: float,
     hist_p: FloatArray,
-    n_hist: int,
+    own: int,
     mount_x: float,
     mount_y: float,
     segments: FloatArray,
+    body_v: FloatArray,
+    body_off: IntArray,
     max_range: float,
     out: FloatArray,
 ) -> None:
     """True range of each ray of a spinning scanner into out (inf: nothing within max_range).
 
     Ray i is measured at time ray_t[i] (increasing) in direction ray_a[i] of the robot's base frame,
-    from the scanner at (mount_x, mount_y) in that frame. The robot's pose at that time is
-    interpolated linearly in the recorded poses hist_p[:n_hist] (x, y, theta at times
-    hist_t[:n_hist], increasing; held outside them). Edges are ``x0, y0, x1, y1`` rows. Rays are
-    taken SCAN_CHUNK at a time: an edge is tested against a chunk's rays only if it can meet the
-    wedge they span from the disc holding their origins (its three bounding half-planes, widened by
-    the disc's radius) and comes within the square of side 2 max_range around them; the result is
-    the same as testing every edge.
+    from the scanner at (mount_x, mount_y) in that frame. Poses are recorded every hist_dt seconds
+    from hist_t0: row j of hist_p holds (x, y, theta) of every body b in columns 3b..3b+2; the
+    scanner's robot is body ``own``. Each body's pose at a ray's time is interpolated linearly
+    between rows (held outside them). The rays meet the world's edges (``x0, y0, x1, y1`` rows of
+    segments) and the other bodies' outlines (body b: the closed polygon
+    body_v[body_off[b]:body_off[b+1]] in its own frame) where those bodies were at the ray's time.
+
+    Rays are taken SCAN_CHUNK at a time: a world edge is tested against a chunk's rays only if it can
+    meet the wedge they span from the disc holding their origins (its three bounding half-planes,
+    widened by the disc's radius) and comes within the square of side 2 max_range around them; each
+    ray tests those edges nearest first and stops at the first that lies beyond its hit; a body is
+    tested only if its bounding circle meets the ray. The result is the same as testing everything.
     """
     n = ray_t.shape[0]
     n_seg = segments.shape[0]
+    n_hist = hist_p.shape[0]
+    n_body = body_off.shape[0] - 1
+    body_r = np.zeros(n_body)
+    for b in range(n_body):
+        for v in range(body_off[b], body_off[b + 1]):
+            body_r[b] = max(body_r[b], math.hypot(body_v[v, 0], body_v[v, 1]))
     ox = np.empty(SCAN_CHUNK)
     oy = np.empty(SCAN_CHUNK)
     ang = np.empty(SCAN_CHUNK)
+    row = np.empty(SCAN_CHUNK, dtype=np.int64)
+    frac = np.empty(SCAN_CHUNK)
     keep = np.empty(n_seg, dtype=np.int64)
-    k = 0
+    near = np.empty(n_seg)
+    c0 = 3 * own
     for start in range(0, n, SCAN_CHUNK):
         stop = min(n, start + SCAN_CHUNK)
         m = stop - start
         for i in range(start, stop):
-            t = ray_t[i]
-            while k < n_hist - 2 and hist_t[k + 1] <= t:
-                k += 1
-            if n_hist == 1:
-                x, y, th = hist_p[0, 0], hist_p[0, 1], hist_p[0, 2]
-            else:
-                t0, t1 = hist_t[k], hist_t[k + 1]
-                f = (t - t0) / (t1 - t0) if t1 > t0 else 1.0
-                f = min(max(f, 0.0), 1.0)
-                x = hist_p[k, 0] + f * (hist_p[k + 1, 0] - hist_p[k, 0])
-                y = hist_p[k, 1] + f * (hist_p[k + 1, 1] - hist_p[k, 1])
-                th = hist_p[k, 2] + f * (hist_p[k + 1, 2] - hist_p[k, 2])
-            c, s = math.cos(th), math.sin(th)
             j = i - start
+            pos = (ray_t[i] - hist_t0) / hist_dt
+            k = min(max(math.floor(pos), 0), max(n_hist - 2, 0))
+            f = min(max(pos - k, 0.0), 1.0) if n_hist > 1 else 0.0
+            k1 = k + 1 if n_hist > 1 else k
+            row[j], frac[j] = k, f
+            x = hist_p[k, c0] + f * (hist_p[k1, c0] - hist_p[k, c0])
+            y = hist_p[k, c0 + 1] + f * (hist_p[k1, c0 + 1] - hist_p[k, c0 + 1])
+            th = hist_p[k, c0 + 2] + f * (hist_p[k1, c0 + 2] - hist_p[k, c0 + 2])
+            c, s = math.cos(th), math.sin(th)
             ox[j] = x + c * mount_x - s * mount_y
             oy[j] = y + s * mount_x + c * mount_y
             ang[j] = th + ray_a[i]
@@ -598,24 +624,41 @@ def scan_rays(
                 if mx * ax + my * ay < -rho and mx * bx + my * by < -rho:
                     continue  # behind it
             keep[count] = e
+            near[count] = _segment_distance(cx, cy, x0, y0, x1, y1) - rho
             count += 1
+        order = np.argsort(near[:count])  # nearest first: a ray stops at the first edge beyond its hit
         for j in range(m):
             dx, dy = math.cos(ang[j]), math.sin(ang[j])
             best = np.inf
             for q in range(count):
-                e = keep[q]
-                x0, y0 = segments[e, 0], segments[e, 1]
-                ex, ey = segments[e, 2] - x0, segments[e, 3] - y0
-                denom = dx * ey - dy * ex
-                if abs(denom) < 1e-12:
+                a = order[q]
+                if near[a] > best:
+                    break
+                e = keep[a]
+                t = _hit(ox[j], oy[j], dx, dy, segments[e, 0], segments[e, 1], segments[e, 2], segments[e, 3])
+                best = min(best, t)
+            k, f = row[j], frac[j]
+            k1 = k + 1 if n_hist > 1 else k
+            for b in range(n_body):
+                if b == own:
                     continue
-                ax, ay = x0 - ox[j], y0 - oy[j]
-                t = (ax * ey - ay * ex) / denom
-                if t < 0.0 or t >= best:
-                    continue
-                u = (ax * dy - ay * dx) / denom
-                if 0.0 <= u <= 1.0:
-                    best = t
+                cb = 3 * b
+                bx = hist_p[k, cb] + f * (hist_p[k1, cb] - hist_p[k, cb])
+                by = hist_p[k, cb + 1] + f * (hist_p[k1, cb + 1] - hist_p[k, cb + 1])
+                rx, ry = bx - ox[j], by - oy[j]
+                along = rx * dx + ry * dy
+                r = body_r[b]
+                if along + r < 0.0 or along - r > best or abs(rx * dy - ry * dx) > r:
+                    continue  # its bounding circle is behind, beyond the best hit or beside the ray
+                bt = hist_p[k, cb + 2] + f * (hist_p[k1, cb + 2] - hist_p[k, cb + 2])
+                c, s = math.cos(bt), math.sin(bt)
+                px, py = c * -rx + s * -ry, -s * -rx + c * -ry  # the origin in the body's frame
+                qx, qy = c * dx + s * dy, -s * dx + c * dy  # the direction in the body's frame
+                v0, v1 = body_off[b], body_off[b + 1]
+                for v in range(v0, v1):
+                    w = v + 1 if v + 1 < v1 else v0
+                    t = _hit(px, py, qx, qy, body_v[v, 0], body_v[v, 1], body_v[w, 0], body_v[w, 1])
+                    best = min(best, t)
             out[start + j] = best if best <= max_range else np.inf
 
 
@@ -672,7 +715,7 @@ def warm_up() -> None:
     surface_probe(f(0, 2), f(0, 2), i(1), i(0), i(0))
     triangle = np.array([[0.1, 0.0], [-0.1, 0.1], [-0.1, -0.1]])
     outline_contacts(triangle, 0.0, 0.0, 0.0, f(0, 2), i(1), f(0, 2), f(0), i(0), f(0, 2), i(0), f(0, 6))
-    scan_rays(f(0), f(0), f(1), f(1, 3), 1, 0.0, 0.0, f(0, 4), 1.0, f(0))
+    scan_rays(f(0), f(0), 0.0, 0.001, f(1, 3), 0, 0.0, 0.0, f(0, 4), f(0, 2), i(2), 1.0, f(0))
     scan_measure(f(0), f(0), 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, f(0))
 
 

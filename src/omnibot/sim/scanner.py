@@ -1,10 +1,12 @@
 """A simulated spinning 2D laser scanner (an RPLIDAR by default): rays cast as the revolution turns.
 
-The scanner is fed the robot's true pose after every simulator step (:meth:`LaserScanner.record`)
-and casts the rays that have come due when asked (:meth:`LaserScanner.flush`), each from the pose
-the robot had at that ray's own time (linear between the recorded steps): a robot that moves or
-turns during a revolution gets a distorted scan, as a real spinning scanner's is. Nothing is
-simulated twice: the poses are those the physics already stepped through.
+Whoever steps the robot records its true pose after every step in a :class:`PoseLog` (the
+simulator for a robot alone; a fleet records every robot's pose in one log), and the scanner casts
+the rays that have come due when asked (:meth:`LaserScanner.flush`), each from the pose its robot
+had at that ray's own time and against the other bodies of the log where they were at that time
+(linear between the recorded steps): a robot that moves or turns during a revolution gets a
+distorted scan, as a real spinning scanner's is, and sees the others moving. Nothing is simulated
+twice: the poses are those the physics already stepped through.
 
 Revolution ``k`` starts at simulated time ``k / rate_hz``; its ray ``i`` is measured
 ``i * time_increment`` later (``period / rays``; 0 with ``motion_distortion`` off: every ray at the
@@ -35,16 +37,48 @@ from omnibot.scan import Scan
 from omnibot.sim import kernels
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
 
 _EPS = 1e-9
+_NO_VERTICES = np.zeros((0, 2))
+_NO_BODIES = np.zeros(1, dtype=np.int64)
+
+
+class PoseLog:
+    """Poses of ``bodies`` bodies recorded every ``dt`` seconds from ``start``: row j (time
+    ``start + j * dt``) is x, y, theta of body 0, then of body 1... kept flat in :attr:`rows` (the
+    recorder extends it with each body's pose in turn, one row per step)."""
+
+    def __init__(self, bodies: int, dt: float) -> None:
+        self.width = 3 * bodies
+        self.dt = dt
+        self.start = 0.0
+        self.rows: list[float] = []
+
+    def reset(self, t: float, poses: Sequence[float]) -> None:
+        """Start again at time ``t`` (s) with the poses (flat, every body's x, y, theta) then."""
+        self.start = t
+        self.rows = [float(c) for c in poses]
+
+    def array(self) -> FloatArray:
+        """The rows as an (H, 3 bodies) array."""
+        return np.array(self.rows, dtype=np.float64).reshape(-1, self.width)
+
+    def trim(self, t: float) -> None:
+        """Forget the rows older than the last one at or before time ``t`` (s)."""
+        drop = math.floor((t - self.start) / self.dt + _EPS)
+        drop = min(max(drop, 0), len(self.rows) // self.width - 1)
+        if drop > 0:
+            del self.rows[: self.width * drop]
+            self.start += drop * self.dt
 
 
 class LaserScanner:
-    """One robot's scanner: a :class:`~omnibot.robot.description.ScannerSpec`, a seed, the step dt."""
+    """One robot's scanner: its :class:`~omnibot.robot.description.ScannerSpec`, and the seed and
+    stream key of its random numbers."""
 
-    def __init__(self, spec: ScannerSpec, seed: int, key: int, dt: float) -> None:
+    def __init__(self, spec: ScannerSpec, seed: int, key: int) -> None:
         self.spec = spec
-        self.dt = dt
         n = spec.rays
         self.period = spec.period
         self.time_increment = self.period / n if spec.motion_distortion else 0.0
@@ -53,6 +87,7 @@ class LaserScanner:
         """Direction of every ray in the scanner frame, rad."""
         self._base_angles = np.ascontiguousarray(self.angles + spec.yaw)
         self._offsets = np.arange(n, dtype=np.float64) * self.time_increment
+        self._seed, self._key = seed, key
         self._bitgen = np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(key,)))
         self._gen = np.random.Generator(self._bitgen)
         self._stream_rev = 0
@@ -60,10 +95,6 @@ class LaserScanner:
         stretch = 1.0 + 6.0 * spec.noise_fraction
         self._cast_range = spec.range_max * stretch + 6.0 * spec.noise_std + spec.resolution
         self._true = np.full(n, math.inf)
-        self.history: list[float] = []
-        """Robot poses x, y, theta (flat: 3 numbers a pose) at times ``history_start + j * dt``: those
-        the rays not cast yet need."""
-        self.history_start = 0.0
         self.active = False
         self.revolution = 0
         """Index of the revolution being measured."""
@@ -83,36 +114,45 @@ class LaserScanner:
 
     # ------------------------------------------------------------------ switching
 
-    def start(self, t: float, pose: Sequence[float]) -> None:
-        """Start measuring at simulated time ``t`` (s), the robot at ``pose`` (x, y, theta): the first
-        revolution is the first that starts at or after ``t``."""
+    def start(self, t: float) -> None:
+        """Start measuring at simulated time ``t`` (s): the first revolution is the first that starts
+        at or after ``t``; poses are needed from :attr:`needs_from` on."""
         self.active = True
         self.revolution = math.ceil(t / self.period - _EPS)
         self._next_ray = 0
-        self.history = [float(c) for c in pose[:3]]
-        self.history_start = t
         self.due = self.revolution * self.period + self.period
 
     def stop(self) -> None:
         """Stop measuring; the revolution under way is dropped."""
         self.active = False
-        self.history = []
         self.due = math.inf
 
-    def record(self, pose: Sequence[float]) -> None:
-        """The robot's pose one step of dt after the last recorded one (the simulator extends
-        :attr:`history` itself, the same way)."""
-        self.history.extend(float(c) for c in pose[:3])
+    @property
+    def needs_from(self) -> float:
+        """Time (s) of the next ray to cast: the poses before it are no longer needed."""
+        nxt = self._next_ray
+        return self.revolution * self.period + (self._offsets[nxt] if nxt < self.spec.rays else self.period)
 
     # ------------------------------------------------------------------ measuring
 
-    def flush(self, t: float, segments: FloatArray, others: FloatArray | None = None) -> list[Scan]:
-        """Cast every ray due by simulated time ``t`` (s) against the edges ``segments`` (K, 4) and
-        ``others`` (edges of other bodies now, world frame); returns the revolutions completed."""
+    def flush(
+        self,
+        t: float,
+        segments: FloatArray,
+        poses: PoseLog,
+        own: int = 0,
+        bodies: tuple[FloatArray, IntArray] | None = None,
+    ) -> list[Scan]:
+        """Cast every ray due by simulated time ``t`` (s); returns the revolutions completed.
+
+        The rays meet the world's edges ``segments`` (K, 4) and the other bodies of ``poses``
+        (body ``own`` is the scanner's robot): ``bodies`` gives every body's outline in its own
+        frame, packed (all vertices (V, 2), offsets (bodies + 1,)); None: the log holds only the robot.
+        """
         if not self.active:
             return []
-        if others is not None and len(others):
-            segments = np.concatenate((segments, others))
+        body_v, body_off = bodies if bodies is not None else (_NO_VERTICES, _NO_BODIES)
+        hist = poses.array()
         done: list[Scan] = []
         n = self.spec.rays
         while True:
@@ -123,7 +163,22 @@ class LaserScanner:
             else:
                 last = int(np.searchsorted(self._offsets, t - stamp + _EPS, side="right"))
             if last > self._next_ray:
-                self._cast(stamp, self._next_ray, last, segments)
+                first = self._next_ray
+                kernels.scan_rays(
+                    stamp + self._offsets[first:last],
+                    self._base_angles[first:last],
+                    poses.start,
+                    poses.dt,
+                    hist,
+                    own,
+                    float(self.mount.x),
+                    float(self.mount.y),
+                    segments,
+                    body_v,
+                    body_off,
+                    float(self._cast_range),
+                    self._true[first:last],
+                )
                 self._next_ray = last
             if self._next_ray < n or t < end - _EPS:
                 break
@@ -132,42 +187,18 @@ class LaserScanner:
             self._next_ray = 0
             if t < end + self.period - _EPS:
                 break  # the next revolution's rays due by now are cast with the rest of it
-        nxt = self._next_ray
-        self._trim(self.revolution * self.period + (self._offsets[nxt] if nxt < n else self.period))
         self.due = self.revolution * self.period + self.period
         return done
 
-    def _cast(self, stamp: float, first: int, last: int, segments: FloatArray) -> None:
-        hist = np.array(self.history, dtype=np.float64).reshape(-1, 3)
-        times = self.history_start + np.arange(len(hist), dtype=np.float64) * self.dt
-        kernels.scan_rays(
-            stamp + self._offsets[first:last],
-            self._base_angles[first:last],
-            times,
-            hist,
-            len(hist),
-            float(self.mount.x),
-            float(self.mount.y),
-            np.ascontiguousarray(segments, dtype=np.float64),
-            float(self._cast_range),
-            self._true[first:last],
-        )
-
-    def _trim(self, t_next: float) -> None:
-        """Forget the poses older than the last one at or before ``t_next`` (the next ray's time)."""
-        drop = math.floor((t_next - self.history_start) / self.dt + _EPS)
-        drop = min(max(drop, 0), len(self.history) // 3 - 1)
-        if drop > 0:
-            del self.history[: 3 * drop]
-            self.history_start += drop * self.dt
-
     def _draws(self, revolution: int) -> FloatArray:
-        """The 3 * rays uniform draws of ``revolution`` (the stream jumped ahead to it)."""
+        """The 3 * rays uniform draws of ``revolution`` (the stream jumped to it)."""
         size = 3 * self.spec.rays
+        if revolution < self._stream_rev:  # back in the stream: from its start again
+            self._bitgen = np.random.PCG64(np.random.SeedSequence(self._seed, spawn_key=(self._key,)))
+            self._gen = np.random.Generator(self._bitgen)
+            self._stream_rev = 0
         if revolution > self._stream_rev:
             self._bitgen.advance((revolution - self._stream_rev) * size)
-        elif revolution < self._stream_rev:  # never happens: revolutions only go forward
-            raise ValueError(f"revolution {revolution} already drawn")
         self._stream_rev = revolution + 1
         return self._gen.random(size)
 

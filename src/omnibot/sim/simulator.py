@@ -13,7 +13,7 @@
                       v
       tracking wheels, gyro (every step) ; encoders (when read) ; sonars (on ping) ; listeners ;
       collision events ; laser scanner (pose recorded every step while someone wants scans, rays
-      cast once per revolution, or every 20 ms in a fleet; scan listeners)
+      cast once per revolution; scan listeners)
 
 A step costs a few microseconds: the physics is one compiled kernel call, the sensors work on
 Python floats, and two exact broad phases skip the world geometry. Each probe of the world returns
@@ -38,9 +38,10 @@ It measures only while someone wants scans: a scan listener is registered
 (:meth:`Simulator.add_scan_listener`) or :attr:`Simulator.last_scan` has been read once; otherwise it
 costs one comparison per step. Scan listeners are called from :meth:`Simulator.step` (the stepping
 thread, in simulated time) with every revolution completed, as an :class:`omnibot.scan.Scan`. The
-scanner sees the world's walls and obstacles and the bodies :attr:`Simulator.neighbours` gives (a
-fleet's other robots; as they stand when the rays are cast, at most 20 ms after the rays' times),
-never its own robot.
+scanner sees the world's walls and obstacles, never its own robot. In a fleet it sees the other
+robots where they were at each ray's time: the fleet records every robot's pose and flushes the
+scanners (:attr:`Simulator.scan_driver`). Bodies given by a :attr:`Simulator.neighbours` of another
+kind are seen as they stand when the rays are cast (every 20 ms then).
 """
 
 from __future__ import annotations
@@ -60,7 +61,7 @@ from omnibot.motion import Pose2D, Twist
 from omnibot.robot.description import RobotDescription
 from omnibot.scan import Scan
 from omnibot.sim.clock import SimClock
-from omnibot.sim.scanner import LaserScanner
+from omnibot.sim.scanner import LaserScanner, PoseLog
 from omnibot.sim.sensors import Gyro, MotorEncoders, Sonar, TrackingWheels
 from omnibot.sim.world import Contact, World, convex_hull, load_world
 
@@ -76,8 +77,9 @@ CONTACT_RELEASE = 0.25
 # fixed RNG stream keys, so that adding one sensor does not change another's noise
 _RNG_ENCODERS, _RNG_TRACKING, _RNG_GYRO, _RNG_SONAR, _RNG_SCANNER = 0, 1, 2, 100, 200
 SCAN_OTHERS_EVERY = 0.02
-"""s: how often a scanner among other moving bodies (a fleet) casts the rays due, so that it sees the
-others at most this long after the rays' times (alone, it casts once per revolution)."""
+"""s: how often a scanner with :attr:`Simulator.neighbours` but no :attr:`Simulator.scan_driver` casts
+the rays due, so that it sees those bodies at most this long after the rays' times (a fleet's
+scanners see the others at the rays' times; alone, a scanner casts once per revolution)."""
 
 
 class PwmRangeError(SimulationError, ValueError):
@@ -352,13 +354,16 @@ class Simulator:
         self._tracking_on = len(robot.encoders.tracking) > 0
         self.gyro = Gyro(robot.gyro, _rng(seed, _RNG_GYRO)) if robot.gyro is not None else None
         self.sonars = [Sonar(s, _rng(seed, _RNG_SONAR + i)) for i, s in enumerate(robot.sonars)]
-        self._scanner = (
-            LaserScanner(robot.scanner, seed, _RNG_SCANNER, self.dt) if robot.scanner is not None else None
-        )
+        self._scanner = LaserScanner(robot.scanner, seed, _RNG_SCANNER) if robot.scanner is not None else None
         self._scan_listeners: list[ScanListener] = []
         self._scan_asked = False
         self._scan_on = False
+        self._scan_self = False  # on, and recorded and flushed here (no scan_driver)
         self._scan_due_us = 0
+        self._scan_log = PoseLog(1, self.dt)
+        self.scan_driver: Callable[[Simulator], None] | None = None
+        """Who records the poses and flushes the scanner instead of the simulator (a fleet: see
+        :meth:`set_scan_driver`); called with the simulator when its scanner starts or stops."""
 
         x, y, th = self._pose_row.tolist()
         touching = self._find_contacts(x, y, th)
@@ -560,23 +565,61 @@ class Simulator:
         if sc is None:
             return
         want = bool(self._scan_listeners) or self._scan_asked
-        if want and not self._scan_on:
-            sc.start(self.clock.ticks_us() / 1e6, self._pose_row.tolist())
-            self._scan_on = True
+        if want == self._scan_on:
+            return
+        self._scan_on = want
+        if want:
+            now_us = self.clock.ticks_us()
+            sc.start(now_us / 1e6)
             self._scan_due_us = self._due_us(sc.due)
-        elif not want and self._scan_on:
+            if self.scan_driver is None:
+                self._scan_log.reset(now_us / 1e6, self._pose_row.tolist())
+        else:
             sc.stop()
-            self._scan_on = False
+        self._scan_self = want and self.scan_driver is None
+        if self.scan_driver is not None:
+            self.scan_driver(self)
 
-    def _due_us(self, due: float) -> int:
+    def set_scan_driver(self, driver: Callable[[Simulator], None] | None) -> None:
+        """Let ``driver`` (a fleet) record the poses and call :meth:`scan_flush` (None: the simulator
+        does it). A revolution under way is dropped; the scanner goes on if someone wants scans."""
+        asked, listeners = self._scan_asked, self._scan_listeners
+        self._scan_asked, self._scan_listeners = False, []
+        self._scan_switch()  # off under the old driver
+        self.scan_driver = driver
+        self._scan_asked, self._scan_listeners = asked, listeners
+        self._scan_switch()  # on again under the new one
+
+    @property
+    def pose_array(self) -> FloatArray:
+        """The live true pose (x, y, theta) as a read-only (3,) view (what a fleet records)."""
+        view: FloatArray = self._pose_row.view()
+        view.flags.writeable = False
+        return view
+
+    @staticmethod
+    def _due_us(due: float) -> int:
         """A flush time in s as the first step end (whole us) at or after it."""
         return math.ceil(due * 1e6 - 1e-3)
 
-    def _scan_flush(self, now_us: int) -> None:
+    def scan_flush(
+        self,
+        now_us: int,
+        poses: PoseLog,
+        own: int = 0,
+        bodies: tuple[FloatArray, NDArray[np.int64]] | None = None,
+    ) -> int:
+        """Cast the scanner's rays due by ``now_us`` with the poses of ``poses`` (this robot is body
+        ``own``; ``bodies`` the outlines of all, see :meth:`LaserScanner.flush`), hand the completed
+        revolutions to the scan listeners, and return when (us) the next flush is due."""
         sc = self._scanner
-        assert sc is not None
-        others = self.neighbours() if self.neighbours is not None else None
-        scans = sc.flush(now_us / 1e6, self.world.segments, others)
+        if sc is None or not self._scan_on:
+            return 2**62
+        segments = self.world.segments
+        others = self.neighbours() if self.neighbours is not None and self.scan_driver is None else None
+        if others is not None and len(others):
+            segments = np.concatenate((segments, others))
+        scans = sc.flush(now_us / 1e6, segments, poses, own, bodies)
         due = self._due_us(sc.due)
         if others is not None:
             due = min(due, now_us + round(SCAN_OTHERS_EVERY * 1e6))
@@ -584,6 +627,13 @@ class Simulator:
         for scan in scans:
             for fn in list(self._scan_listeners):
                 fn(scan)
+        return due
+
+    def _scan_flush(self, now_us: int) -> None:
+        """Flush the scanner with the simulator's own pose log (the robot alone)."""
+        assert self._scanner is not None
+        self.scan_flush(now_us, self._scan_log)
+        self._scan_log.trim(self._scanner.needs_from)
 
     # ------------------------------------------------------------------ listeners
 
@@ -648,8 +698,8 @@ class Simulator:
                 self.tracking.update((0.5 * (vx0 + vx1), 0.5 * (vy0 + vy1), 0.5 * (w0 + w1)), self.dt)
             if self.gyro is not None:
                 self.gyro.update(self.dt, 0.5 * (w0 + w1))
-        if self._scan_on:
-            self._scanner.history.extend(self._pose_row.tolist())  # type: ignore[union-attr]
+        if self._scan_self:
+            self._scan_log.rows.extend(self._pose_row.tolist())
             if now_us + self._dt_us >= self._scan_due_us:
                 self._scan_flush(now_us + self._dt_us)
         if self._listeners and now_us + self._dt_us >= self._next_notify_us:
