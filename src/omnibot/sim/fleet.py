@@ -6,8 +6,8 @@
                    -> robot-robot contacts (each pair whose bounding circles meet: separating axes,
                       the same kernel as the walls) -> equal and opposite penalty forces
                    -> every robot's physics steps (its walls, its pushes, those forces) -> clock += dt
-                   -> while a scanner is on: every robot's pose into one pose log; the scanners
-                      due cast their rays (each ray sees the others where they were at its time)
+                   -> while a scanner is on, every 2 ms: every robot's pose into one pose log; the
+                      scanners due cast their rays (each ray sees the others where they were then)
 
 A robot is a :class:`~omnibot.sim.device.SimDevice` (firmware + :class:`Simulator`) with a name;
 an omni3 and an omni4 may share a room. Each robot's footprint (its convex hull) is a body the
@@ -41,7 +41,13 @@ from omnibot.sim import kernels
 from omnibot.sim.clock import SimClock
 from omnibot.sim.device import SimDevice
 from omnibot.sim.scanner import PoseLog
-from omnibot.sim.simulator import CONTACT_DAMPING, CONTACT_OMEGA_DT, WALL_FRICTION, Simulator
+from omnibot.sim.simulator import (
+    CONTACT_DAMPING,
+    CONTACT_OMEGA_DT,
+    SCAN_POSE_PERIOD,
+    WALL_FRICTION,
+    Simulator,
+)
 from omnibot.sim.world import Contact, World, closed_edges, placed
 
 FloatArray = NDArray[np.float64]
@@ -88,7 +94,9 @@ class Fleet:
         self._edges_rows: dict[str, tuple[int, int]] = {}
         self._edges_tick = -1
         self._edges_names: list[str] = []
-        self._scan_log = PoseLog(0, dt)
+        self._scan_stride_us = max(1, round(SCAN_POSE_PERIOD / dt)) * self._dt_us
+        self._scan_next_us = 0
+        self._scan_log = PoseLog(0, self._scan_stride_us / 1e6)
         self._scanning: list[tuple[int, Simulator]] = []
         """(index in the step order, simulator) of every robot whose scanner is on."""
         self._scan_due: list[int] = []
@@ -199,7 +207,7 @@ class Fleet:
         for body in bodies:
             body.sim.step()
         self._us += self._dt_us
-        if self._scanning:
+        if self._scanning and self._us >= self._scan_next_us:
             self._scan_step()
 
     # ------------------------------------------------------------------ laser scanners
@@ -214,10 +222,11 @@ class Fleet:
         sims = [b.sim for b in self._order]
         self._scanning = [(i, s) for i, s in enumerate(sims) if s.scanner is not None and s.scanner.active]
         if not self._scanning:
-            self._scan_log = PoseLog(0, self.dt)
+            self._scan_log = PoseLog(0, self._scan_stride_us / 1e6)
             return
         now = self._us / 1e6
-        self._scan_log = PoseLog(len(sims), self.dt)
+        self._scan_log = PoseLog(len(sims), self._scan_stride_us / 1e6)
+        self._scan_next_us = self._us + self._scan_stride_us
         self._scan_log.reset(now, [c for s in sims for c in s.pose_array.tolist()])
         outlines = [b.outline for b in self._order]
         offsets = np.cumsum([0] + [len(o) for o in outlines]).astype(np.int64)
@@ -230,7 +239,8 @@ class Fleet:
         ]
 
     def _scan_step(self) -> None:
-        """Log every robot's pose now and flush the scanners that are due."""
+        """Log every robot's pose now (every SCAN_POSE_PERIOD) and flush the scanners that are due."""
+        self._scan_next_us += self._scan_stride_us
         rows = self._scan_log.rows
         for body in self._order:
             rows.extend(body.sim.pose_array.tolist())

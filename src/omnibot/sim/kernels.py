@@ -498,7 +498,7 @@ def outline_contacts(
 
 # --------------------------------------------------------------------------- laser scanner
 
-SCAN_CHUNK = 16
+SCAN_CHUNK = 32
 """Rays cast together by :func:`scan_rays`: the edges that cannot meet any ray of a chunk are culled
 once for the chunk (the rays of a chunk come from nearby origins and span a narrow wedge)."""
 _WEDGE_MAX = 2.0

@@ -26,6 +26,7 @@ however often it was flushed, and no other sensor's stream changes.
 from __future__ import annotations
 
 import math
+from array import array
 from collections.abc import Sequence
 
 import numpy as np
@@ -53,16 +54,17 @@ class PoseLog:
         self.width = 3 * bodies
         self.dt = dt
         self.start = 0.0
-        self.rows: list[float] = []
+        self.rows = array("d")
+        """The rows, flat (a C array of doubles: extended from lists, seen by numpy without a copy)."""
 
     def reset(self, t: float, poses: Sequence[float]) -> None:
         """Start again at time ``t`` (s) with the poses (flat, every body's x, y, theta) then."""
         self.start = t
-        self.rows = [float(c) for c in poses]
+        self.rows = array("d", [float(c) for c in poses])
 
     def array(self) -> FloatArray:
-        """The rows as an (H, 3 bodies) array."""
-        return np.array(self.rows, dtype=np.float64).reshape(-1, self.width)
+        """The rows as an (H, 3 bodies) array (a copy)."""
+        return np.frombuffer(self.rows, dtype=np.float64).reshape(-1, self.width).copy()
 
     def trim(self, t: float) -> None:
         """Forget the rows older than the last one at or before time ``t`` (s)."""
@@ -83,7 +85,9 @@ class LaserScanner:
         self.period = spec.period
         self.time_increment = self.period / n if spec.motion_distortion else 0.0
         self.mount = Pose2D(spec.x, spec.y, spec.yaw)
-        self.angles: FloatArray = np.arange(n, dtype=np.float64) * spec.angle_increment
+        self.angle_increment = spec.angle_increment
+        """Angle between consecutive rays, rad (negative: clockwise)."""
+        self.angles: FloatArray = np.arange(n, dtype=np.float64) * self.angle_increment
         """Direction of every ray in the scanner frame, rad."""
         self._base_angles = np.ascontiguousarray(self.angles + spec.yaw)
         self._offsets = np.arange(n, dtype=np.float64) * self.time_increment
@@ -219,7 +223,7 @@ class LaserScanner:
         scan = Scan(
             stamp=stamp,
             angle_min=0.0,
-            angle_increment=spec.angle_increment,
+            angle_increment=self.angle_increment,
             ranges=measured,
             range_min=spec.range_min,
             range_max=spec.range_max,
