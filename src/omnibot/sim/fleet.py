@@ -100,6 +100,7 @@ class Fleet:
         self._scanning: list[tuple[int, Simulator]] = []
         """(index in the step order, simulator) of every robot whose scanner is on."""
         self._scan_due: list[int] = []
+        self._poses: list[FloatArray] = []
         self._outlines: tuple[FloatArray, NDArray[np.int64]] = (np.zeros((0, 2)), np.zeros(1, dtype=np.int64))
 
     def __repr__(self) -> str:
@@ -227,7 +228,8 @@ class Fleet:
         now = self._us / 1e6
         self._scan_log = PoseLog(len(sims), self._scan_stride_us / 1e6)
         self._scan_next_us = self._us + self._scan_stride_us
-        self._scan_log.reset(now, [c for s in sims for c in s.pose_array.tolist()])
+        self._poses = [s.pose_array for s in sims]  # live views: the physics updates them in place
+        self._scan_log.reset(now, [c for p in self._poses for c in p.tolist()])
         outlines = [b.outline for b in self._order]
         offsets = np.cumsum([0] + [len(o) for o in outlines]).astype(np.int64)
         self._outlines = (np.ascontiguousarray(np.vstack(outlines), dtype=np.float64), offsets)
@@ -242,8 +244,8 @@ class Fleet:
         """Log every robot's pose now (every SCAN_POSE_PERIOD) and flush the scanners that are due."""
         self._scan_next_us += self._scan_stride_us
         rows = self._scan_log.rows
-        for body in self._order:
-            rows.extend(body.sim.pose_array.tolist())
+        for pose in self._poses:
+            rows.extend(pose.tolist())
         now, flushed = self._us, False
         for k, (index, sim) in enumerate(self._scanning):
             if now >= self._scan_due[k]:
