@@ -244,3 +244,40 @@ def test_a_robot_without_a_scanner_says_so() -> None:
     assert sim.scanner is None and sim.last_scan is None
     with pytest.raises(SimulationError, match="robot 'omni4' has no scanner"):
         sim.add_scan_listener(lambda scan: None)
+
+
+def test_a_rate_that_is_no_whole_number_of_steps_still_gives_every_revolution_on_time() -> None:
+    robot = robot_with(rate_hz=5.5, **EXACT)
+    sim = Simulator(robot, world=BOX)
+    scans = scans_of(sim, 1.01)
+    assert [round(s.stamp, 9) for s in scans] == [round(k / 5.5, 9) for k in range(5)]
+    assert all(np.isfinite(s.ranges).all() for s in scans)
+
+
+def test_a_robot_leaving_a_fleet_keeps_scanning_alone_and_the_others_drop_it() -> None:
+    robot = robot_with(**EXACT)
+    fleet = Fleet(load_world("empty"))
+    a = fleet.add("a", robot, pose=Pose2D(0.0, 0.0, 0.0))
+    fleet.add("b", robot, pose=Pose2D(1.0, 0.0, 0.0))
+    got: list[Scan] = []
+    a.sim.add_scan_listener(got.append)
+    for _ in range(250):
+        fleet.step()
+    assert np.isfinite(got[-1].ranges).any()  # b is seen
+    fleet.remove("b")
+    count = len(got)
+    for _ in range(250):
+        fleet.step()
+    assert len(got) > count and np.isinf(got[-1].ranges).all()  # alone in an empty world
+
+
+def test_other_bodies_given_by_hand_are_seen_where_they_stand() -> None:
+    sim = Simulator(robot_with(**EXACT), world="empty")
+    sim.neighbours = lambda: np.array([[1.0, -5.0, 1.0, 5.0]])  # a wall 1 m ahead
+    scan = scans_of(sim, 0.15)[-1]
+    ahead = np.abs(np.cos(scan.angles)) > 0.999
+    np.testing.assert_allclose(
+        scan.ranges[ahead & (np.cos(scan.angles) > 0)],
+        1.0 / np.cos(scan.angles[ahead & (np.cos(scan.angles) > 0)]),
+        atol=1e-9,
+    )
