@@ -28,5 +28,5 @@ def test_warm_up_compiles_what_the_simulator_calls() -> None:
     scans: list[Scan] = []
     sim.add_scan_listener(scans.append)
     sim.advance(0.25)
-    assert scans  # scan_rays, scan_measure
-    assert [len(k.signatures) for k in kernels.KERNELS] == [1] * 6
+    assert scans  # scan_index, scan_rays, scan_measure
+    assert [len(k.signatures) for k in kernels.KERNELS] == [1] * 7

@@ -143,7 +143,7 @@ def test_each_ray_is_cast_from_where_the_robot_was_at_its_time(distortion: bool)
     for i, t in enumerate(times):
         ox, oy, directions = world_rays(scan, pose_at(trajectory, t))
         expected[i] = room.raycast([ox, oy], directions[i])[0]
-    # the scanner interpolates poses recorded every 2 ms, the test the true pose of every 1 ms step
+    # the scanner interpolates poses recorded every 5 ms, the test the true pose of every 1 ms step
     np.testing.assert_allclose(scan.ranges, expected, atol=1e-4)
 
 

@@ -6,7 +6,7 @@
                    -> robot-robot contacts (each pair whose bounding circles meet: separating axes,
                       the same kernel as the walls) -> equal and opposite penalty forces
                    -> every robot's physics steps (its walls, its pushes, those forces) -> clock += dt
-                   -> while a scanner is on, every 2 ms: every robot's pose into one pose log; the
+                   -> while a scanner is on, every 5 ms: every robot's pose into one pose log; the
                       scanners due cast their rays (each ray sees the others where they were then)
 
 A robot is a :class:`~omnibot.sim.device.SimDevice` (firmware + :class:`Simulator`) with a name;

@@ -43,6 +43,8 @@ IntArray = NDArray[np.int64]
 _EPS = 1e-9
 _NO_VERTICES = np.zeros((0, 2))
 _NO_BODIES = np.zeros(1, dtype=np.int64)
+INDEX_SLACK = 0.25
+"""m: room the scanner's edge index leaves around the origins it was made for (see _index_for)."""
 
 
 class PoseLog:
@@ -99,6 +101,10 @@ class LaserScanner:
         stretch = 1.0 + 6.0 * spec.noise_fraction
         self._cast_range = spec.range_max * stretch + 6.0 * spec.noise_std + spec.resolution
         self._true = np.full(n, math.inf)
+        self._mount_reach = math.hypot(spec.x, spec.y)
+        self._index: tuple[IntArray, IntArray, FloatArray] | None = None
+        self._index_disc = (0.0, 0.0, 0.0)
+        self._index_segments: FloatArray | None = None
         self.active = False
         self.revolution = 0
         """Index of the revolution being measured."""
@@ -168,6 +174,7 @@ class LaserScanner:
                 last = int(np.searchsorted(self._offsets, t - stamp + _EPS, side="right"))
             if last > self._next_ray:
                 first = self._next_ray
+                starts, entries, near = self._index_for(segments, hist, own)
                 kernels.scan_rays(
                     stamp + self._offsets[first:last],
                     self._base_angles[first:last],
@@ -178,6 +185,9 @@ class LaserScanner:
                     float(self.mount.x),
                     float(self.mount.y),
                     segments,
+                    starts,
+                    entries,
+                    near,
                     body_v,
                     body_off,
                     float(self._cast_range),
@@ -193,6 +203,27 @@ class LaserScanner:
                 break  # the next revolution's rays due by now are cast with the rest of it
         self.due = self.revolution * self.period + self.period
         return done
+
+    def _index_for(
+        self, segments: FloatArray, hist: FloatArray, own: int
+    ) -> tuple[IntArray, IntArray, FloatArray]:
+        """The edges by direction (:func:`~omnibot.sim.kernels.scan_index`) for origins anywhere the
+        scanner was in ``hist``: the last one while it holds them all (and the edges are the same),
+        else a new one around them with INDEX_SLACK to spare, so a robot driving at 1 m/s needs a new
+        one every few revolutions and a standing one never."""
+        xs, ys = hist[:, 3 * own], hist[:, 3 * own + 1]
+        ax, ay, radius = self._index_disc
+        if self._index is not None and segments is self._index_segments:
+            inner = radius - self._mount_reach
+            if inner > 0 and float(np.max((xs - ax) ** 2 + (ys - ay) ** 2)) <= inner * inner:
+                return self._index
+        ax, ay = float(xs.mean()), float(ys.mean())
+        spread = float(np.sqrt(np.max((xs - ax) ** 2 + (ys - ay) ** 2)))
+        radius = spread + self._mount_reach + INDEX_SLACK
+        self._index = kernels.scan_index(segments, ax, ay, radius, float(self._cast_range))
+        self._index_disc = (ax, ay, radius)
+        self._index_segments = segments
+        return self._index
 
     def _draws(self, revolution: int) -> FloatArray:
         """The 3 * rays uniform draws of ``revolution`` (the stream jumped to it)."""

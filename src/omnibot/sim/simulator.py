@@ -12,7 +12,7 @@
                    Physics.step(pwm, surface_ids, external_force)
                       v
       tracking wheels, gyro (every step) ; encoders (when read) ; sonars (on ping) ; listeners ;
-      collision events ; laser scanner (pose recorded every 2 ms while someone wants scans, rays
+      collision events ; laser scanner (pose recorded every 5 ms while someone wants scans, rays
       cast once per revolution; scan listeners)
 
 A step costs a few microseconds: the physics is one compiled kernel call, the sensors work on
@@ -76,10 +76,10 @@ CONTACT_RELEASE = 0.25
 
 # fixed RNG stream keys, so that adding one sensor does not change another's noise
 _RNG_ENCODERS, _RNG_TRACKING, _RNG_GYRO, _RNG_SONAR, _RNG_SCANNER = 0, 1, 2, 100, 200
-SCAN_POSE_PERIOD = 0.002
+SCAN_POSE_PERIOD = 0.005
 """s: how often the pose is recorded for the scanner while it is on (every step if dt is longer).
-The rays' poses are linear between records: off by at most v w T^2 / 8 on a curve (5 um at 1 m/s
-and 10 rad/s), far below any scanner's noise, for a fifth of the cost of recording every step."""
+The rays' poses are linear between records: off by at most v w T^2 / 8 on a curve (31 um at 1 m/s
+and 10 rad/s), far below any scanner's noise (10 mm at 1 m), at a fifth of the cost of recording every step."""
 SCAN_OTHERS_EVERY = 0.02
 """s: how often a scanner with :attr:`Simulator.neighbours` but no :attr:`Simulator.scan_driver` casts
 the rays due, so that it sees those bodies at most this long after the rays' times (a fleet's
