@@ -12,7 +12,7 @@ $(STAMP): pyproject.toml Makefile
 	@$(PYTHON) -c 'import sys; sys.exit(0 if sys.version_info >= (3, 11) else "omnibot needs Python 3.11 or newer")'
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip==25.3
-	$(BIN)/python -m pip install --quiet -e '.[dev,bench,ros2]'
+	$(BIN)/python -m pip install --quiet -e '.[dev,bench,ros2,slam]'
 	$(BIN)/python -m omnibot.sim.kernels  # compile the simulator's kernels into numba's cache once
 	@touch $(STAMP)
 

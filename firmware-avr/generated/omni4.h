@@ -33,6 +33,7 @@
 #define P_E_ANGLE 29
 #define P_E_CALIBRATION 38
 #define P_E_CHECKSUM 26
+#define P_E_CHECK_REQUIRED 42
 #define P_E_COURSE 31
 #define P_E_CURVATURE 30
 #define P_E_DISTANCE 32
@@ -52,8 +53,9 @@
 #define P_E_UNKNOWN 23
 #define P_E_UNSUPPORTED 39
 #define P_MODE_BINARY 4
+#define P_MODE_CHECKED_TEXT 16
 #define P_MODE_CLOSED_LOOP 2
-#define P_MODE_MASK 15
+#define P_MODE_MASK 31
 #define P_MODE_REFUSE_UNCOVERED 8
 #define P_MODE_SIMULATION 1
 #define P_STATE_ESTOP 3
@@ -152,11 +154,12 @@ static const char TEXT_38[] PROGMEM = "calibration table, index or knot order wr
 static const char TEXT_39[] PROGMEM = "mode, mask bit or version not supported";
 static const char TEXT_40[] PROGMEM = "motion blocked: emergency stop latched";
 static const char TEXT_41[] PROGMEM = "motion refused: no sonar covers this direction";
+static const char TEXT_42[] PROGMEM = "check required";
 struct CodeText { uint8_t code; const char *text; };
-static const CodeText CODE_TEXTS[27] PROGMEM = {
-    {11, TEXT_11}, {12, TEXT_12}, {13, TEXT_13}, {14, TEXT_14}, {15, TEXT_15}, {16, TEXT_16}, {21, TEXT_21}, {22, TEXT_22}, {23, TEXT_23}, {24, TEXT_24}, {25, TEXT_25}, {26, TEXT_26}, {27, TEXT_27}, {28, TEXT_28}, {29, TEXT_29}, {30, TEXT_30}, {31, TEXT_31}, {32, TEXT_32}, {33, TEXT_33}, {34, TEXT_34}, {35, TEXT_35}, {36, TEXT_36}, {37, TEXT_37}, {38, TEXT_38}, {39, TEXT_39}, {40, TEXT_40}, {41, TEXT_41}
+static const CodeText CODE_TEXTS[28] PROGMEM = {
+    {11, TEXT_11}, {12, TEXT_12}, {13, TEXT_13}, {14, TEXT_14}, {15, TEXT_15}, {16, TEXT_16}, {21, TEXT_21}, {22, TEXT_22}, {23, TEXT_23}, {24, TEXT_24}, {25, TEXT_25}, {26, TEXT_26}, {27, TEXT_27}, {28, TEXT_28}, {29, TEXT_29}, {30, TEXT_30}, {31, TEXT_31}, {32, TEXT_32}, {33, TEXT_33}, {34, TEXT_34}, {35, TEXT_35}, {36, TEXT_36}, {37, TEXT_37}, {38, TEXT_38}, {39, TEXT_39}, {40, TEXT_40}, {41, TEXT_41}, {42, TEXT_42}
 };
-#define CODE_TEXT_COUNT 27
+#define CODE_TEXT_COUNT 28
 
 /* ---- robot ---- */
 #define ROBOT_NAME "omni4"

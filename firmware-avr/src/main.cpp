@@ -351,6 +351,7 @@ static uint8_t parse(char *cmd, uint8_t len, const Keyword *&e, int16_t *p, uint
 
 // Handles one text command: its "#tag" and "*check" suffix (linecheck.split; a bad check is
 // ERROR 26, untagged, and nothing runs), then the body; the reply carries the command's suffix.
+// With MODE bit 4 (kept in ex.mode) a command without a check is ERROR 42, untagged.
 static void handle(char *cmd, uint8_t len) {
     uint8_t end = len;
     bool checked = false;
@@ -382,6 +383,8 @@ static void handle(char *cmd, uint8_t len) {
     uint8_t n;
     uint8_t code = parse(cmd, end, e, p, n);
     if (code == 255) return;
+    // MODE bit 4: only what a check covers runs (a line cut short by a damaged byte has none)
+    if (!checked && (ex.mode & P_MODE_CHECKED_TEXT)) return error(P_E_CHECK_REQUIRED);
     ReplySuffix &r = reply_suffix;
     for (uint8_t k = 0; k < tag_len; k++) r.tag[k] = cmd[tag_at + k];
     r.tag_len = tag_len;

@@ -258,7 +258,8 @@ def _add_sim(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "sim",
         help="run the simulated robot (firmware + physics) on a pseudo-terminal",
         description="Runs the firmware and the simulator as one process on a pty, in real time, "
-        "pacing bytes to the baud rate. The first stdout line is the device path. Ends on SIGINT/SIGTERM/SIGHUP.",
+        "pacing bytes to the baud rate. The first stdout line is the device path; a robot with a scanner "
+        "gets a second pty serving an emulated RPLIDAR (a line 'scanner PATH'). Ends on SIGINT/SIGTERM/SIGHUP.",
     )
     p.add_argument("--pty", action="store_true", help="serve on a pseudo-terminal (required)")
     p.add_argument(

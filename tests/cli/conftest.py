@@ -191,8 +191,9 @@ def pty_robot() -> Iterator[PtyRobot]:
 
 def controller_state(path: str) -> tuple[int, int]:
     """(state, MODE) of the controller on ``path``, asked through a second connection, in text
-    (a controller left in binary mode does not answer: LinkTimeout)."""
-    with RobotClient.open(path, timeout=10.0) as client:  # the emulator answers late on a loaded machine
+    (a controller left in binary mode does not answer: LinkTimeout). Untagged, so that asking sets no
+    MODE bit 4 (and a controller left with it refuses the question: ControllerError)."""
+    with RobotClient.open(path, timeout=10.0, tags=False) as client:  # the emulator answers late when loaded
         status = client.status()
         client.sleep(0.3)  # still moving after this long means nobody stopped it
         again = client.status()

@@ -254,11 +254,12 @@ def test_values_checked_before_sending() -> None:
 def test_set_mode_keeps_other_bits(sim: RobotClient) -> None:
     assert sim.mode_bits is None
     sim.mode(simulation=True)  # reads STATUS first
-    assert sim.mode_bits == codes.MODE_SIMULATION
+    checked = codes.MODE_CHECKED_TEXT  # set by the client before its first command (tags are on)
+    assert sim.mode_bits == codes.MODE_SIMULATION | checked
     sim.mode(closed_loop=True)
-    assert sim.status().mode == 3
+    assert sim.status().mode == 3 | checked
     sim.mode(simulation=False)
-    assert sim.status().mode == codes.MODE_CLOSED_LOOP
+    assert sim.status().mode == codes.MODE_CLOSED_LOOP | checked
 
 
 def test_submit_text() -> None:
@@ -282,7 +283,7 @@ def test_binary_round_trip_on_sim(sim: RobotClient) -> None:
     sim.mode(simulation=True)
     hello = sim.use_binary()
     assert (hello.version, hello.name, hello.motors) == (codes.VERSIONS[-1], "omni4", 4) and sim.binary
-    assert sim.status().mode == codes.MODE_SIMULATION | codes.MODE_BINARY  # other bits kept
+    assert sim.status().mode == codes.MODE_SIMULATION | codes.MODE_BINARY | codes.MODE_CHECKED_TEXT  # kept
     pendings = [sim.submit(Move(10, 40, 0, 0)) for _ in range(6)]  # more than the window of 4
     for p in pendings:
         assert p.result() == Ok()
@@ -296,7 +297,7 @@ def test_binary_round_trip_on_sim(sim: RobotClient) -> None:
     assert len(sim.submit_text("STATUS;STATUS")) == 2
     sim.drain()
     sim.use_text()
-    assert not sim.binary and sim.status().mode == codes.MODE_SIMULATION
+    assert not sim.binary and sim.status().mode == codes.MODE_SIMULATION | codes.MODE_CHECKED_TEXT
 
 
 def test_binary_survives_a_noisy_line() -> None:
@@ -345,7 +346,7 @@ def test_binary_controller_reset_returns_to_text(sim: RobotClient) -> None:
     device.controller = Controller(device.hal, build_config(device.robot))  # type: ignore[attr-defined]
     sim.sleep(0.05)
     assert not sim.binary and len(rec.events) == 1
-    assert sim.status().mode == 0
+    assert sim.status().mode == codes.MODE_CHECKED_TEXT  # the restart cleared it, the client asked again
 
 
 # ------------------------------------------------------------------ link failures

@@ -143,7 +143,8 @@ def test_mode() -> None:
         c.mode(OMNI4, codes.MODE_BINARY)
     assert c.mode(OMNI4, codes.MODE_REFUSE_UNCOVERED) == Mode(8)
     with pytest.raises(ValueError, match="bits"):
-        c.mode(OMNI4, 16)
+        c.mode(OMNI4, 32)
+    assert c.mode(OMNI4, codes.MODE_CHECKED_TEXT) == Mode(16)
     with pytest.raises(ValueError, match="encoders"):
         c.mode(Limits(has_encoders=False, robot="bare"), codes.MODE_CLOSED_LOOP)
 

@@ -6,6 +6,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from omnibot.client import RobotClient
+from omnibot.protocol import linecheck
 
 from .conftest import Backend, RawLink
 
@@ -86,3 +87,25 @@ def test_garbage_then_valid_command_answered(client: RobotClient, backend: Backe
             break
         assert line == b"OK\r\n" or line.startswith(b"ERROR,"), line
     assert line == STATUS_IDLE
+
+
+def _checked(body: bytes, tag: bytes | None = None) -> bytes:
+    return body + linecheck.suffix(body, tag, True)
+
+
+def test_checked_text_only_runs_nothing_a_damaged_byte_cut_short(raw: RawLink) -> None:
+    """MODE bit 4: a digit turned into ``;`` (or CR, LF) cuts a checked line in two; the piece
+    before the cut has no check and the piece after fails its own, so nothing runs. Without the
+    bit the first piece is an ordinary unchecked command and would run."""
+    raw.write(_checked(b"MODE,16", b"1") + b"\n")
+    assert raw.line() == _checked(b"OK", b"1") + b"\r\n"
+    cut = _checked(b"MOVE,10,40,0,0", b"7").replace(b"40", b"4;", 1)  # MOVE,10,4 ; 0,0#7*....
+    raw.write(cut + b"\n")
+    assert raw.replies(2) == [b"ERROR,42,check required\r\n", b"ERROR,26,checksum mismatch\r\n"]
+    raw.write(b"STATUS\n")  # typed without a check: refused too
+    assert raw.line() == b"ERROR,42,check required\r\n"
+    raw.write(_checked(b"STATUS") + b"\n")
+    assert raw.line() == _checked(b"STATUS,1,0,16,16;POWER,0,0,0,0;MOVE,0,0,0,0") + b"\r\n"  # nothing ran
+    raw.write(_checked(b"MODE,0") + b"\nSTATUS\n")  # a checked MODE ends it
+    assert raw.replies(2) == [_checked(b"OK") + b"\r\n", STATUS_IDLE]
+    raw.nothing_more()

@@ -93,7 +93,7 @@ E = TypeVar("E", bound=Event)
 MOTION = (Move, Rotate, Delta, Power, Vel)
 DEFAULT_TIMEOUT = 1.0
 """Seconds (link clock) to wait for a reply."""
-PROBE_TRIES = 3
+PROBE_TRIES = 5
 """Tagged HELLOs sent at most to learn whether a text controller echoes tags."""
 RESYNC_TRIES = 3
 """Untagged text: STATUS exchanges tried at most to get back in step after a timeout."""
@@ -222,6 +222,10 @@ class RobotClient(TypedCalls):
         """The last HELLO seen (a reply or a reset greeting)."""
         self._tags_auto = tags is None
         self._tags = tags
+        self._tags_seen = bool(tags)  # a tagged reply came (or tags were asked for): never fall back
+        self._checks_asked = not tags and tags is not None  # MODE bit 4 asked for (or never to be)
+        self.added_checked_text = False
+        """This client set MODE bit 4 (checked text only) on the controller, which had it clear."""
         self._resync = False  # untagged text: a command timed out, get in step before the next
         self._preparing = ""  # the step before a text command under way: "probe" (tags?), "resync"
         self._late: dict[int, Pending] = {}  # tag -> tagged command that timed out
@@ -458,6 +462,8 @@ class RobotClient(TypedCalls):
         what = (text.encode(command) if command is not None else raw or b"").decode("latin-1").strip()
         if self._tags is None:
             self._prepare("probe", self._detect_tags, wait, what)
+        if self._tags and not self._checks_asked:
+            self._prepare("checks", self._require_checks, wait, what)
         if self._resync and not self._tags:
             self._prepare("resync", self._resync_now, wait, what)
 
@@ -473,12 +479,16 @@ class RobotClient(TypedCalls):
             self._preparing = ""
 
     def _detect_tags(self, wait: float) -> None:
-        """Send tagged HELLOs until a tagged reply (tags on) or two untagged answers (a controller
-        without tags: ERROR 23). A corrupted question gets ERROR 26 or 23 untagged, so one untagged
-        answer is not enough."""
+        """Send tagged HELLOs until a tagged reply (tags on) or two untagged answers in a row (a
+        controller without tags answers ``ERROR,23``). A damaged question gets ERROR 26, or 23 when
+        its ``*`` was hit, so one untagged answer is not enough, and silence or ERROR 26 in between
+        starts the count again; no verdict after every try is an error, never a fall back. Once this
+        client has had a tagged reply it never falls back to unchecked text: a controller that took
+        tags and now refuses them is an error."""
         wire = self._wire
         assert isinstance(wire, TextWire)
-        untagged = 0
+        unknown = 0
+        answered_once = False
         for _ in range(PROBE_TRIES):
             tag, data = wire.frame(HelloCommand(), 0, tag=True)
             probe = Pending(self, HelloCommand(), data.decode("ascii").strip(), tag, self.clock.now() + wait)
@@ -495,26 +505,55 @@ class RobotClient(TypedCalls):
                 self._outstanding.remove(probe)
                 if not self._heard:  # not a byte from the controller yet: it is not there
                     break
+                unknown = 0
                 continue
             if self._tags is not None:  # a tagged reply (maybe to an earlier probe) came
                 if probe in self._outstanding:
                     self._outstanding.remove(probe)
                 return
+            answered_once = True
             reply = probe.reply
             if not (isinstance(reply, ErrorReply) and reply.code == codes.E_CHECKSUM):
-                untagged += 1
-                if untagged == 2:
-                    break
-        if untagged:
-            self._set_tags(False)
-            return
+                unknown += 1
+                if unknown == 2:
+                    if self._tags_seen:
+                        raise LinkError(
+                            f"the controller on {self.link.url} took tagged, checked commands before "
+                            "and now refuses them (ERROR 23): another firmware? Reconnect to use it"
+                        )
+                    self._set_tags(False)
+                    return
+            else:
+                unknown = 0
+        if answered_once:
+            raise LinkError(
+                f"cannot tell whether the controller on {self.link.url} takes checked text commands: "
+                f"{PROBE_TRIES} tagged HELLOs had no clear answer (a damaged line?)"
+            )
         raise LinkTimeout(
             f"no reply to HELLO, sent to ask whether the controller takes tagged text commands "
             f"(timeout on {self.link.url})"
         )
 
+    def _require_checks(self, wait: float) -> None:
+        """Tags are on: ask the controller to run only checked text commands (MODE bit 4), so that a
+        line a damaged byte cuts short (a digit turned into ``;``) runs nothing. A controller without
+        the bit (ERROR 39) keeps running unchecked lines; nothing else changes."""
+        self._checks_asked = True
+        mask = self._mode if self._mode is not None else self.status().mode
+        if mask & codes.MODE_CHECKED_TEXT:
+            return
+        try:
+            self.execute(Mode(mask | codes.MODE_CHECKED_TEXT), wait)
+        except ControllerError as exc:
+            if exc.code != codes.E_UNSUPPORTED:
+                raise
+        else:
+            self.added_checked_text = True
+
     def _set_tags(self, on: bool | None) -> None:
         self._tags = on
+        self._tags_seen = self._tags_seen or bool(on)
         wire = self._wire
         if isinstance(wire, TextWire):
             wire.tags = bool(on)
@@ -779,6 +818,7 @@ class RobotClient(TypedCalls):
         self._resync = False
         if self._tags_auto and self._preparing != "probe":  # perhaps another firmware now: ask again
             self._set_tags(None)
+        self._checks_asked = self._tags is False  # the restart cleared MODE bit 4: ask again
         if self.binary:
             self._wire = TextWire(bool(self._tags))
         self._listeners.dispatch(event)

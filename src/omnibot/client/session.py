@@ -111,7 +111,8 @@ def robot_on_link(name: str, requested: str | None, where: str) -> RobotDescript
 
 def leave(client: RobotClient, mode: int | None, *, stop: bool = True, telemetry: bool = True) -> None:
     """Put the controller back: STOP (if ``stop``), telemetry off (if ``telemetry``), MODE ``mode``
-    (None: only back to the text protocol), then close the link. Never raises."""
+    (None: only back to the text protocol and without the checked-text bit the client set), then
+    close the link. Never raises."""
     try:
         if client.link.closed:
             return
@@ -124,10 +125,13 @@ def leave(client: RobotClient, mode: int | None, *, stop: bool = True, telemetry
         if telemetry:
             commands.append(telem(client.limits, 0.0))
         if mode is not None:
-            commands.append(Mode(mode & ~codes.MODE_BINARY))
-        elif client.binary:
+            # the mode found, without the checked-text bit if this client set it (found clear)
+            added = codes.MODE_CHECKED_TEXT if client.added_checked_text else 0
+            commands.append(Mode(mode & ~(codes.MODE_BINARY | added)))
+        elif client.binary or client.added_checked_text:
+            # back to text and without the checked-text bit this client set, the other bits kept
             known = client.mode_bits if client.mode_bits is not None else codes.MODE_BINARY
-            commands.append(Mode(known & ~codes.MODE_BINARY))
+            commands.append(Mode(known & ~(codes.MODE_BINARY | codes.MODE_CHECKED_TEXT)))
         for command in commands:
             if client.link.closed:
                 break
@@ -149,7 +153,7 @@ def guarded(
     With ``--log`` the client (the robot ``robot``) is recorded (:mod:`omnibot.logs.recorder`)."""
     try:
         _record(client, robot, guess=True)
-        mode = client.status().mode if restore == "mode" else None
+        mode = client.status().mode if restore == "mode" else None  # leave() drops the bit 4 it set
     except BaseException:
         client.close()
         raise

@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING, Final
 from omnibot.client.views import Hello
 from omnibot.client.wire import BinaryWire, TextWire
 from omnibot.errors import LinkTimeout, ProtocolError
-from omnibot.protocol import codes, text
+from omnibot.protocol import codes, linecheck, text
 from omnibot.protocol.binary import Packet
 from omnibot.protocol.messages import (
     HELLO_WITHOUT_WINDOW,
@@ -164,7 +164,7 @@ def _probe(client: RobotClient, window: float = ANSWER_TIME) -> Hello | bool | N
                 if isinstance(message, HelloReply):
                     client.last_hello = Hello.from_reply(message)
     if text_seen:
-        client._wire = TextWire()
+        client._wire = TextWire(bool(client.tags))
         return False
     return None
 
@@ -199,7 +199,12 @@ def _read_mode(client: RobotClient) -> int:
 def _text_exchange(
     client: RobotClient, line: bytes, kinds: tuple[type, ...], wait: float = ANSWER_TIME
 ) -> object | None:
-    """Write one text command and read until a reply of ``kinds`` (returned) or ``wait`` s."""
+    """Write one text command and read until a reply of ``kinds`` (returned) or ``wait`` s. With
+    tags on the command carries a ``*`` check (no tag: its reply is matched here, not by the
+    client), which a controller that runs only checked text (MODE bit 4) asks for."""
+    if client.tags:
+        body = line.strip(b"\n")
+        line = line[: line.index(body)] + body + linecheck.suffix(body, None, True) + b"\n"
     client._write(line)
     lines = text.TextDecoder()
     clock = client.clock

@@ -54,6 +54,7 @@ class Controller:
         self.telemetry = Telemetry()
         self.link = BinaryLink(hal.uart_write)
         self.binary = False
+        self.checked_only = False  # MODE bit 4: text commands need a matching "*" check
         self.latched = False
         self.now_ms = 0
         self._us = 0
@@ -152,6 +153,7 @@ class Controller:
             ex.mode
             | (codes.MODE_BINARY if self.binary else 0)
             | (codes.MODE_REFUSE_UNCOVERED if self.guard.refuse else 0)
+            | (codes.MODE_CHECKED_TEXT if self.checked_only else 0)
         )
 
     def poll(self) -> None:
@@ -319,6 +321,11 @@ class Controller:
         kw = parser.parse(cmd[:end] if end < len(cmd) else cmd, p)
         if kw == 0:
             return
+        if self.checked_only and checked != linecheck.CHECKED:
+            # MODE bit 4: only what the check covers runs; a line cut short by a damaged byte (a
+            # digit turned into ";" or CR) or a suffix damaged out of recognition has none
+            self._error(codes.E_CHECK_REQUIRED)
+            return
         if tag_start >= 0:
             self._tag = cmd[tag_start:tag_end]
         self._check = checked == linecheck.CHECKED
@@ -382,7 +389,8 @@ class Controller:
         elif kw == codes.MODE:
             self._ok()
             self.guard.refuse = bool(p[0] & codes.MODE_REFUSE_UNCOVERED)
-            ex.set_mode(p[0] & ~(codes.MODE_BINARY | codes.MODE_REFUSE_UNCOVERED))
+            self.checked_only = bool(p[0] & codes.MODE_CHECKED_TEXT)
+            ex.set_mode(p[0] & ~(codes.MODE_BINARY | codes.MODE_REFUSE_UNCOVERED | codes.MODE_CHECKED_TEXT))
             self._relimit()
             binary = bool(p[0] & codes.MODE_BINARY)
             if binary != self.binary:

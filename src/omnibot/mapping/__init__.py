@@ -4,4 +4,24 @@ Modules (each owns one thing; the plain scan type is :mod:`omnibot.scan`):
 
 * :mod:`omnibot.mapping.grid` - :class:`~omnibot.mapping.grid.OccupancyGrid`, the map every other
   module reads (ROS nav_msgs/OccupancyGrid conventions).
+* :mod:`omnibot.mapping.mapper` - :class:`~omnibot.mapping.mapper.OccupancyMapper`: (scan, pose)
+  pairs -> log-odds grid (compiled ray walk), growing to fit; cheap rebuilds after a loop closure.
+* :mod:`omnibot.mapping.mapfile` - ROS map_server files: ``save_map`` / ``load_map`` (YAML + PGM,
+  PNG...; trinary, scale and raw modes).
+* :mod:`omnibot.mapping.score` - ``score_map``: a map's precision and recall against the world's
+  own geometry.
+* :mod:`omnibot.mapping.trajectory` - TUM trajectory files and ``score_trajectory`` (APE / RPE
+  with evo).
+* :mod:`omnibot.mapping.localise` - :class:`~omnibot.mapping.localise.Localiser`: a likelihood-field
+  particle filter refined by scan-to-map matching, in a saved map.
+* :mod:`omnibot.mapping.se2` - planar pose algebra on :class:`~omnibot.motion.Pose2D` (compose,
+  inverse, between, points moved by a pose, covariances turned between frames).
+* :mod:`omnibot.mapping.deskew` - motion-distortion correction: a spinning scanner's returns brought
+  to one instant of the base's motion.
+* :mod:`omnibot.mapping.matcher` - :class:`~omnibot.mapping.matcher.ScanMatcher`, 2D scan
+  registration (correlative search then point-to-line ICP) with a covariance that shows degeneracy.
+* :mod:`omnibot.mapping.slam` - :class:`~omnibot.mapping.slam.Slam`, online 2D SLAM: keyframes
+  matched to a local submap, a gtsam pose graph with verified, robust loop closures.
+
+The user's guide is docs/mapping.md.
 """

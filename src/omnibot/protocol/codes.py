@@ -153,6 +153,7 @@ E_CALIBRATION = 38  # project: CAL table, index or knot order
 E_UNSUPPORTED = 39  # project: MODE bit, TELEM mask bit or protocol version not supported
 E_ESTOP = 40
 E_UNCOVERED = 41  # project: travel where no armed sonar looks, refused (MODE bit 3)
+E_CHECK_REQUIRED = 42  # project: a text command without a "*" check while MODE bit 4 requires one
 
 TEXTS = {
     W_SPEED_REDUCED: "speed reduced to what the motors can give",
@@ -184,6 +185,7 @@ TEXTS = {
     E_ESTOP: "motion blocked: emergency stop latched",
     E_UNCOVERED: "motion refused: no sonar covers this direction",
     E_CHECKSUM: "checksum mismatch",
+    E_CHECK_REQUIRED: "check required",
 }
 
 # --- STATUS states -----------------------------------------------------------------------------------
@@ -196,7 +198,8 @@ MODE_SIMULATION = 1  # bit 0: run every algorithm, apply no power
 MODE_CLOSED_LOOP = 2  # bit 1: closed-loop wheel-speed control (needs motor encoders)
 MODE_BINARY = 4  # bit 2: binary framing in both directions (after the OK of this MODE)
 MODE_REFUSE_UNCOVERED = 8  # bit 3: with the sonar stop armed, refuse travel no armed sonar covers
-MODE_MASK = 15  # every defined bit; others get ERROR 39
+MODE_CHECKED_TEXT = 16  # bit 4: a text command runs only with a matching "*" check (else ERROR 42)
+MODE_MASK = 31  # every defined bit; others get ERROR 39
 
 # --- TEL mask bits; groups follow t_ms and mask in bit order -------------------------------------
 TEL_POWER = 1  # n, p1..pn: applied motor powers

@@ -12,6 +12,13 @@ SIGKILL, the parent could not end it: it would serve nobody for ever).
 With several ``--robot`` options (:func:`run_pty_fleet`) the robots share one world and one clock
 (:class:`~omnibot.sim.fleet.Fleet`), each on its own pty: a line ``NAME PATH`` per robot, so a fleet
 can be driven from separate processes on one machine.
+
+A robot whose description has a ``scanner`` gets a second pty serving an emulated Slamtec RPLIDAR
+(:class:`~omnibot.lidar.rplidar_device.RplidarDevice`) fed by the simulator's scanner, at the
+RPLIDAR's own baud rate (A1 115200, A2 256000) and in the same real-time loop as the controller:
+a line ``scanner PATH`` after the controller's path (``NAME/scanner PATH`` after a fleet's lines),
+so the rplidar driver or Slamtec's tools read the simulated scanner as they read the real one
+(docs/lidar.md). The first line stays the controller's path (or a fleet's ``NAME PATH`` lines).
 """
 
 from __future__ import annotations
@@ -28,14 +35,16 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from types import FrameType
-from typing import Any, TextIO
+from typing import Any, TextIO, cast
 
 from omnibot.errors import ConfigError, LinkError
+from omnibot.lidar.reader import ScanningSim
+from omnibot.lidar.rplidar_device import A1, RplidarDevice, model_named
 from omnibot.motion import Pose2D
 from omnibot.robot.description import RobotDescription
 from omnibot.signals import ending_signals
 from omnibot.sim.device import SimDevice
-from omnibot.sim.simulator import TruthRecorder
+from omnibot.sim.simulator import Simulator, TruthRecorder
 from omnibot.transport.lockstep import DEFAULT_BAUD
 from omnibot.transport.pty_bridge import PtyBridge, serve_together
 
@@ -75,21 +84,29 @@ def run_pty_emulator(
 
     try:
         kernels.warm_up()  # compile before announcing the pty: a first step must not stall the link
-        device: Any = SimDevice(robot, seed=seed, surface=surface, world=world, truth_recorder=recorder)
+        sim_device = SimDevice(robot, seed=seed, surface=surface, world=world, truth_recorder=recorder)
+        device: Any = sim_device
         if log_recorder is not None:
             from omnibot.logs.device import RecordedDevice
 
             device = RecordedDevice(device, log_recorder, robot)
-        bridge = PtyBridge(device, baud=baud)
-        _end_with_parent(stop)
-        if threading.current_thread() is threading.main_thread():
-            for sig in _ending_signals():
-                previous[sig] = signal.signal(sig, _on_signal)
-        print(bridge.path, file=out, flush=True)
+        lidar = scanner_device(sim_device.sim, sim_device.tick)
+        bridges = [PtyBridge(device, baud=baud)]
         try:
-            bridge.run(stop)
+            if lidar is not None:
+                bridges.append(PtyBridge(lidar, baud=lidar.model.baud))
+            _end_with_parent(stop)
+            if threading.current_thread() is threading.main_thread():
+                for sig in _ending_signals():
+                    previous[sig] = signal.signal(sig, _on_signal)
+            print(bridges[0].path, file=out)
+            if lidar is not None:
+                print("scanner", bridges[1].path, file=out)
+            out.flush()
+            serve_together(bridges, _stepping(device.step, [lidar]), stop)
         finally:
-            bridge.close()
+            for bridge in bridges:
+                bridge.close()
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
@@ -98,6 +115,46 @@ def run_pty_emulator(
         if log_recorder is not None:
             log_recorder.close()
     return 0
+
+
+def scanner_device(sim: Simulator, tick: float) -> RplidarDevice | None:
+    """An emulated RPLIDAR fed with every scan of ``sim``'s scanner while a host has a scan running
+    (the simulator measures only then), stepped with ticks of ``tick`` s; None when the robot has
+    no scanner. The model is the description's (``rplidar-a1``,
+    ``rplidar-a2``; another model is served as an A1); the nodes per second are the scanner's rays x
+    rate, at most the model's standard-scan rate (each revolution is resampled to fit)."""
+    spec = getattr(sim.robot, "scanner", None)
+    if spec is None or getattr(sim, "scanner", None) is None:
+        return None
+    try:
+        model = model_named(str(spec.model))
+    except ConfigError:
+        model = A1
+    rate = min(float(spec.rays) * float(spec.rate_hz), model.sample_rate)
+    scanning = cast(ScanningSim, sim)
+
+    def listen(on: bool) -> None:  # the simulator measures only while a host has a scan running
+        if on:
+            scanning.add_scan_listener(device.feed)
+        else:
+            scanning.remove_scan_listener(device.feed)
+
+    device = RplidarDevice(model, tick=tick, sample_rate=rate, start_time=sim.time, on_scanning=listen)
+    return device
+
+
+def _stepping(step: Callable[[], None], lidars: list[RplidarDevice | None]) -> Callable[[], None]:
+    """``step`` and then every scanner device's step: one tick of the whole emulator."""
+    scanners = [lidar for lidar in lidars if lidar is not None]
+    if not scanners:
+        return step
+
+    def both() -> None:
+        step()
+        for lidar in scanners:
+            lidar.step()
+
+    return both
 
 
 PARENT_ENV = "OMNIBOT_SIM_PARENT"
@@ -208,16 +265,24 @@ def run_pty_fleet(
 
     kernels.warm_up()
     bridges: list[PtyBridge] = []
+    lidars: list[tuple[str, RplidarDevice]] = []
     try:
         for name in fleet.names:
             bridges.append(PtyBridge(fleet.device(name), baud=baud))
+        for name in fleet.names:
+            lidar = scanner_device(fleet.device(name).sim, fleet.device(name).tick)
+            if lidar is not None:
+                lidars.append((name, lidar))
+                bridges.append(PtyBridge(lidar, baud=lidar.model.baud))
         if threading.current_thread() is threading.main_thread():
             for sig in _ending_signals():
                 previous[sig] = signal.signal(sig, _on_signal)
-        for name, bridge in zip(fleet.names, bridges, strict=True):
+        for name, bridge in zip(fleet.names, bridges, strict=False):
             print(name, bridge.path, file=out)
+        for (name, _), bridge in zip(lidars, bridges[len(fleet.names) :], strict=True):
+            print(f"{name}/scanner", bridge.path, file=out)
         out.flush()
-        serve_together(bridges, fleet.step, stop)
+        serve_together(bridges, _stepping(fleet.step, [lidar for _, lidar in lidars]), stop)
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)

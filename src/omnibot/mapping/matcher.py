@@ -1,0 +1,416 @@
+"""Planar scan registration: where a scan (the source) lies in another scan or a local submap (the target).
+
+Two stages, chosen on measurements (benchmarks/scan_matching.py, BENCHMARKS.md):
+
+1. **Correlative search** (Olson's CSM, cartographer's real-time CSM): the target is rasterised into
+   a likelihood grid (``exp(-d^2 / 2 sigma^2)`` of the distance ``d`` to the nearest target point);
+   every pose of an x, y, theta lattice around the initial guess (steps of one cell and of the
+   angle that moves the farthest source point by one cell) is scored by the mean likelihood of the
+   moved source points (a compiled loop), with a slight preference for poses near the guess so that
+   a flat score (a featureless corridor) keeps the guess. Finds the basin even from a guess
+   0.2 m / 10 degrees off.
+2. **Point-to-line ICP** (Gauss-Newton on the distances to the target's local lines, Huber
+   weighted) from the best lattice pose, down to sub-centimetre accuracy. Directions the geometry
+   does not constrain (eigenvalues of the normal equations far below the largest, rotation scaled
+   to a length by the points' spread) are not moved: there the result keeps the initial guess.
+
+The result's covariance is ``sigma^2 H^-1`` of the point-to-line problem at the solution (``H``
+the normal matrix, ``sigma`` the residual's spread, never below the sensor's), scaled by
+``covariance_scale`` for the correlation between neighbouring rays; unconstrained directions get
+a variance of :data:`UNCONSTRAINED_VARIANCE`. So a corridor's axis shows up as a huge variance
+along it, and a pose graph weighting the match by this covariance falls back on odometry there.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit
+from numpy.typing import ArrayLike, NDArray
+from scipy.ndimage import distance_transform_edt
+from scipy.spatial import cKDTree
+
+from omnibot.errors import ConfigError
+from omnibot.mapping.se2 import transform, wrap
+from omnibot.motion import Pose2D
+from omnibot.scan import Scan
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+UNCONSTRAINED_VARIANCE = 1.0e4
+"""Variance (m^2 or rad^2) given to a direction the scans do not constrain."""
+DEGENERATE_RATIO = 1.0e-2
+"""An eigenvalue of the normal matrix (its rotation scaled by the points' spread to a length) below
+this fraction of the largest marks an unconstrained direction."""
+NORMAL_NEIGHBOURS = 24
+NORMAL_RADIUS = 0.3
+"""Neighbours (how many, how far, m) whose line gives a target point its normal."""
+LINE_SPREAD = 0.1
+"""Largest ratio of the neighbours' spread across to along their line (variances) that is still a line."""
+
+
+def as_points(data: Scan | ArrayLike, key: str = "points") -> FloatArray:
+    """The (n, 2) base-frame points of a scan, or an (n, 2) array checked and made float."""
+    if isinstance(data, Scan):
+        return data.points("base")
+    pts = np.asarray(data, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[1] != 2:
+        raise ConfigError(f"needs an (n, 2) array of points or a Scan, not shape {pts.shape}", key)
+    if not np.isfinite(pts).all():
+        raise ConfigError("points must be finite", key)
+    return pts
+
+
+def voxel_downsample(points: FloatArray, size: float) -> FloatArray:
+    """One point (the mean) per ``size`` x ``size`` cell, in the order the cells are first met."""
+    if len(points) == 0:
+        return points
+    keys = np.floor(points / size).astype(np.int64)
+    _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    sums = np.zeros((len(first), 2))
+    np.add.at(sums, inverse, points)
+    counts = np.bincount(inverse, minlength=len(first)).astype(np.float64)
+    means = sums / counts[:, None]
+    out: FloatArray = means[np.argsort(first)]
+    return out
+
+
+def _normals(points: FloatArray, tree: cKDTree) -> FloatArray:
+    """Unit normals of the local lines through each point, zero where the neighbourhood is no line.
+
+    The neighbours are the :data:`NORMAL_NEIGHBOURS` nearest within :data:`NORMAL_RADIUS`; a point
+    with fewer than four, or whose neighbours spread across as well as along (a corner, a curve
+    tighter than the radius, two walls), gets no normal and takes no part in ICP.
+    """
+    k = min(NORMAL_NEIGHBOURS, len(points))
+    dist, idx = tree.query(points, k=k, distance_upper_bound=NORMAL_RADIUS)
+    dist, idx = np.asarray(dist).reshape(len(points), k), np.asarray(idx).reshape(len(points), k)
+    ok = np.isfinite(dist)
+    nb = points[np.where(ok, idx, 0)]
+    w = ok.astype(np.float64)[..., None]
+    count = w.sum(axis=1)
+    mean = (nb * w).sum(axis=1) / np.maximum(count, 1.0)
+    d = (nb - mean[:, None, :]) * w
+    cov = np.einsum("nki,nkj->nij", d, d)
+    vals, vecs = np.linalg.eigh(cov)
+    line = (count[:, 0] >= 4) & (vals[:, 0] <= LINE_SPREAD * vals[:, 1])
+    normals: FloatArray = np.where(line[:, None], vecs[:, :, 0], 0.0)
+    return np.ascontiguousarray(normals)
+
+
+@dataclass(frozen=True)
+class Target:
+    """A registration target made once and matched against many times: points, tree, normals, grid."""
+
+    points: FloatArray
+    tree: cKDTree = field(repr=False)
+    normals: FloatArray = field(repr=False)
+    """Unit normal of each point's local line; zero where there is none (see :attr:`lines`)."""
+    lines: NDArray[np.bool_] = field(repr=False)
+    """Which points lie on a line (have a normal)."""
+    grid: FloatArray = field(repr=False)
+    """Likelihood of a point in each cell, [row = y, col = x]."""
+    origin: tuple[float, float]
+    """Map-frame position of cell (0, 0)'s lower-left corner."""
+    resolution: float
+
+    @classmethod
+    def build(cls, points: FloatArray, resolution: float, sigma: float, margin: float) -> Target:
+        """A target from (n, 2) points: thinned to half a cell, gridded ``margin`` beyond them."""
+        pts = voxel_downsample(points, resolution / 2.0)
+        tree = cKDTree(pts)
+        normals = _normals(pts, tree) if len(pts) >= 2 else np.zeros_like(pts)
+        lines = np.any(normals != 0.0, axis=1)
+        if len(pts):
+            lo = pts.min(axis=0) - margin
+            hi = pts.max(axis=0) + margin
+        else:
+            lo, hi = np.zeros(2), np.ones(2)
+        cols, rows = (np.ceil((hi - lo) / resolution).astype(np.int64) + 1).tolist()
+        hit = np.zeros((rows, cols), dtype=bool)
+        cells = np.floor((pts - lo) / resolution).astype(np.int64)
+        hit[cells[:, 1], cells[:, 0]] = True
+        if hit.any():
+            dist = np.asarray(distance_transform_edt(~hit)) * resolution
+            grid = np.exp(-0.5 * (dist / sigma) ** 2)
+        else:
+            grid = np.zeros((rows, cols))
+        return cls(
+            pts, tree, normals, lines, np.ascontiguousarray(grid), (float(lo[0]), float(lo[1])), resolution
+        )
+
+
+@dataclass(frozen=True)
+class MatchResult:
+    """A registration: the source's pose in the target's frame and how far to trust it."""
+
+    pose: Pose2D
+    covariance: FloatArray
+    """3x3 covariance of (x, y, theta) in the target's frame (m^2, rad^2)."""
+    fitness: float
+    """Fraction of the source's (thinned) points within ``inlier_distance`` of the target's lines (or
+    of its points off any line)."""
+    rmse: float
+    """Root mean square point-to-line distance of those inliers, m."""
+    converged: bool
+    """ICP settled with enough inliers."""
+    score: float
+    """Best mean likelihood of the correlative search (0..1; 0 without one)."""
+
+    @property
+    def information(self) -> FloatArray:
+        """The inverse of :attr:`covariance`."""
+        return np.asarray(np.linalg.inv(self.covariance), dtype=np.float64)
+
+
+@njit(cache=True)
+def _correlate(
+    grid: FloatArray,
+    cells: IntArray,
+    nxy: int,
+    dtheta: float,
+    weight_xy: float,
+    weight_theta: float,
+    res: float,
+) -> FloatArray:  # pragma: no cover - compiled
+    """Score of every lattice pose: cells (A, n, 2) are the moved points' (col, row) per angle."""
+    n_a = cells.shape[0]
+    n = cells.shape[1]
+    rows = grid.shape[0]
+    cols = grid.shape[1]
+    side = 2 * nxy + 1
+    out = np.zeros((n_a, side, side))
+    half = n_a // 2
+    for a in range(n_a):
+        rot_pen = weight_theta * abs(a - half) * dtheta
+        for i in range(side):
+            dx = i - nxy
+            for j in range(side):
+                dy = j - nxy
+                total = 0.0
+                for k in range(n):
+                    c = cells[a, k, 0] + dx
+                    r = cells[a, k, 1] + dy
+                    if 0 <= r < rows and 0 <= c < cols:
+                        total += grid[r, c]
+                pen = rot_pen + weight_xy * math.sqrt(float(dx * dx + dy * dy)) * res
+                out[a, i, j] = total / n * math.exp(-pen)
+    return out
+
+
+def _eigen(hessian: FloatArray, scale: FloatArray) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
+    """Eigen-decomposition of the normal matrix in scaled units, and which directions are constrained."""
+    vals, vecs = np.linalg.eigh(hessian * np.outer(scale, scale))
+    keep = vals > DEGENERATE_RATIO * max(float(vals[-1]), 1e-12)
+    return vals, vecs, keep
+
+
+def _solve(hessian: FloatArray, grad: FloatArray, scale: FloatArray) -> FloatArray:
+    """The Gauss-Newton step ``H^-1 g`` restricted to the constrained directions."""
+    vals, vecs, keep = _eigen(hessian, scale)
+    inv = np.where(keep, 1.0 / np.where(keep, vals, 1.0), 0.0)
+    step: FloatArray = scale * (vecs @ (inv * (vecs.T @ (scale * grad))))
+    return step
+
+
+class ScanMatcher:
+    """Correlative search then point-to-line ICP (see the module docstring); one instance, many matches.
+
+    ``resolution`` is the search lattice's cell (m), ``search_xy`` / ``search_theta`` the default
+    half-widths of the searched window (m, rad; 0 skips the search), ``inlier_distance`` the
+    point-to-line distance that counts a point as matched, ``max_correspondence`` the farthest
+    neighbour ICP pairs a point with, ``range_sigma`` the sensor's range noise (the floor of the
+    residual spread), ``covariance_scale`` the factor for correlated rays. The source is thinned
+    to half a cell and at most ``max_points``; fewer than ``min_points`` matched points is a failed
+    match. ``weight_xy`` (1/m) and ``weight_theta`` (1/rad) discount a lattice pose's score by
+    ``exp(-(weight_xy * distance + weight_theta * turn))`` from the guess (ties go to the guess).
+    """
+
+    def __init__(
+        self,
+        *,
+        resolution: float = 0.05,
+        search_xy: float = 0.25,
+        search_theta: float = math.radians(12.0),
+        inlier_distance: float = 0.05,
+        max_correspondence: float = 0.3,
+        range_sigma: float = 0.01,
+        covariance_scale: float = 10.0,
+        max_iterations: int = 30,
+        min_points: int = 20,
+        max_points: int = 400,
+        weight_xy: float = 0.05,
+        weight_theta: float = 0.05,
+    ) -> None:
+        for key, value in (
+            ("resolution", resolution),
+            ("inlier_distance", inlier_distance),
+            ("max_correspondence", max_correspondence),
+            ("range_sigma", range_sigma),
+            ("covariance_scale", covariance_scale),
+        ):
+            if not (math.isfinite(value) and value > 0):
+                raise ConfigError(f"must be a positive number, not {value}", key)
+        for key, value in (("search_xy", search_xy), ("search_theta", search_theta)):
+            if not (math.isfinite(value) and value >= 0):
+                raise ConfigError(f"must be zero or positive, not {value}", key)
+        if max_iterations < 1 or min_points < 3 or max_points < min_points:
+            raise ConfigError(
+                f"needs max_iterations >= 1 and 3 <= min_points <= max_points, not "
+                f"{max_iterations}, {min_points}, {max_points}",
+                "max_iterations",
+            )
+        self.resolution = resolution
+        self.search_xy = search_xy
+        self.search_theta = search_theta
+        self.inlier_distance = inlier_distance
+        self.max_correspondence = max_correspondence
+        self.range_sigma = range_sigma
+        self.covariance_scale = covariance_scale
+        self.max_iterations = max_iterations
+        self.min_points = min_points
+        self.max_points = max_points
+        self.weight_xy = weight_xy
+        self.weight_theta = weight_theta
+
+    def target(self, data: Scan | ArrayLike | Target, margin: float | None = None) -> Target:
+        """A prepared target from a scan or (n, 2) points (a :class:`Target` is returned as it is)."""
+        if isinstance(data, Target):
+            return data
+        pts = as_points(data, "target")
+        grid_margin = self.search_xy + 1.0 if margin is None else margin
+        return Target.build(pts, self.resolution, self.resolution, grid_margin)
+
+    def match(
+        self,
+        source: Scan | ArrayLike,
+        target: Scan | ArrayLike | Target,
+        initial: Pose2D = Pose2D(0.0, 0.0, 0.0),  # noqa: B008 - a frozen dataclass
+        *,
+        search_xy: float | None = None,
+        search_theta: float | None = None,
+    ) -> MatchResult:
+        """The pose of ``source``'s frame in ``target``'s frame, starting from ``initial``."""
+        if not all(math.isfinite(v) for v in (initial.x, initial.y, initial.theta)):
+            raise ConfigError(f"must be finite, not {initial}", "initial")
+        tgt = self.target(target)
+        src = voxel_downsample(as_points(source, "source"), self.resolution / 2.0)
+        if len(src) > self.max_points:
+            src = src[np.linspace(0, len(src) - 1, self.max_points).astype(np.int64)]
+        if len(src) < self.min_points or len(tgt.points) < self.min_points:
+            return self._failed(initial)
+        sxy = self.search_xy if search_xy is None else search_xy
+        sth = self.search_theta if search_theta is None else search_theta
+        start, score = self.search(src, tgt, initial, sxy, sth)
+        return self._refine(src, tgt, initial, start, score)
+
+    def search(
+        self, src: FloatArray, tgt: Target, initial: Pose2D, search_xy: float, search_theta: float
+    ) -> tuple[Pose2D, float]:
+        """The best pose of the correlative search around ``initial`` and its score."""
+        if search_xy <= 0 and search_theta <= 0:
+            return initial, 0.0
+        res = tgt.resolution
+        reach = float(np.max(np.hypot(src[:, 0], src[:, 1])))
+        step = math.acos(max(-1.0, 1.0 - res * res / (2.0 * max(reach, res) ** 2)))
+        n_theta = round(search_theta / step) if search_theta > 0 else 0
+        nxy = round(search_xy / res)
+        thetas = initial.theta + step * np.arange(-n_theta, n_theta + 1)
+        c, s = np.cos(thetas), np.sin(thetas)
+        x = c[:, None] * src[None, :, 0] - s[:, None] * src[None, :, 1] + initial.x
+        y = s[:, None] * src[None, :, 0] + c[:, None] * src[None, :, 1] + initial.y
+        cells = np.empty((len(thetas), len(src), 2), dtype=np.int64)
+        cells[..., 0] = np.floor((x - tgt.origin[0]) / res)
+        cells[..., 1] = np.floor((y - tgt.origin[1]) / res)
+        scores = _correlate(tgt.grid, cells, nxy, step, self.weight_xy, self.weight_theta, res)
+        a, i, j = np.unravel_index(int(np.argmax(scores)), scores.shape)
+        best = Pose2D(initial.x + (i - nxy) * res, initial.y + (j - nxy) * res, wrap(float(thetas[a])))
+        return best, float(scores[a, i, j])
+
+    def _refine(
+        self, src: FloatArray, tgt: Target, initial: Pose2D, start: Pose2D, score: float
+    ) -> MatchResult:
+        """Point-to-line Gauss-Newton from ``start``; covariance from its normal matrix."""
+        x, y, th = start.x, start.y, start.theta
+        scale = np.array([1.0, 1.0, 1.0 / max(float(np.sqrt(np.mean(np.sum(src * src, axis=1)))), 0.1)])
+        converged = False
+        huber = 2.0 * self.range_sigma * 1.5
+        hessian = np.zeros((3, 3))
+        previous = np.zeros(3)
+        for _ in range(self.max_iterations):
+            p = transform(Pose2D(x, y, th), src)
+            dist, idx = tgt.tree.query(p, distance_upper_bound=self.max_correspondence)
+            ok = np.isfinite(dist)
+            ok[ok] = tgt.lines[idx[ok]]
+            if ok.sum() < self.min_points:
+                break
+            n = tgt.normals[idx[ok]]
+            q = tgt.points[idx[ok]]
+            pk = p[ok]
+            r = np.einsum("ij,ij->i", n, pk - q)
+            jac = np.column_stack((n[:, 0], n[:, 1], -n[:, 0] * (pk[:, 1] - y) + n[:, 1] * (pk[:, 0] - x)))
+            a = np.abs(r)
+            weights = np.where(a <= huber, 1.0, huber / np.maximum(a, 1e-12))
+            hessian = jac.T @ (weights[:, None] * jac)
+            grad = jac.T @ (weights * r)
+            delta = -_solve(hessian, grad, scale)
+            if np.all(np.abs(delta + previous) < 1e-7):  # a point flips in and out: settle between
+                delta = 0.5 * delta
+            x, y, th = x + delta[0], y + delta[1], th + delta[2]
+            if math.hypot(delta[0], delta[1]) < 1e-4 and abs(delta[2]) < 1e-4:
+                converged = True
+                break
+            previous = delta
+        else:  # out of iterations: still settled if only a point or two keep flipping, by a hair
+            converged = math.hypot(previous[0], previous[1]) < 1e-3 and abs(previous[2]) < 1e-3
+        # what the geometry leaves unconstrained stays where the caller's guess put it
+        _, vecs, keep = _eigen(hessian, scale)
+        if converged and not keep.all():
+            moved = (
+                np.array([x - initial.x, y - initial.y, math.remainder(th - initial.theta, 2 * math.pi)])
+                / scale
+            )
+            free = vecs[:, ~keep]
+            x, y, th = np.array([x, y, th]) - scale * (free @ (free.T @ moved))
+        pose = Pose2D(float(x), float(y), wrap(float(th)))
+        p = transform(pose, src)
+        dist, idx = tgt.tree.query(p, distance_upper_bound=self.max_correspondence)
+        ok = np.isfinite(dist)
+        line = np.full(len(src), np.inf)
+        gap = p[ok] - tgt.points[idx[ok]]
+        along = np.abs(np.einsum("ij,ij->i", tgt.normals[idx[ok]], gap))
+        line[ok] = np.where(tgt.lines[idx[ok]], along, np.hypot(gap[:, 0], gap[:, 1]))
+        inl = line <= self.inlier_distance
+        fitness = float(inl.mean())
+        rmse = float(math.sqrt(np.mean(line[inl] ** 2))) if inl.any() else math.inf
+        converged = converged and int(inl.sum()) >= self.min_points
+        sigma2 = max(rmse if math.isfinite(rmse) else 0.0, self.range_sigma) ** 2
+        covariance = self._covariance(hessian, sigma2, scale)
+        return MatchResult(pose, covariance, fitness, rmse, converged, score)
+
+    def _covariance(self, hessian: FloatArray, sigma2: float, scale: FloatArray) -> FloatArray:
+        """``covariance_scale * sigma2 * H^-1``, unconstrained directions at :data:`UNCONSTRAINED_VARIANCE`."""
+        vals, vecs, keep = _eigen(hessian, scale)
+        var = np.where(
+            keep, self.covariance_scale * sigma2 / np.where(keep, vals, 1.0), UNCONSTRAINED_VARIANCE
+        )
+        scaled = (vecs * var) @ vecs.T  # in the scaled coordinates (x, y, theta * length)
+        cov: FloatArray = scaled * np.outer(scale, scale)
+        return 0.5 * (cov + cov.T)
+
+    def _failed(self, initial: Pose2D) -> MatchResult:
+        return MatchResult(initial, np.eye(3) * UNCONSTRAINED_VARIANCE, 0.0, math.inf, False, 0.0)
+
+
+def match(
+    source: Scan | ArrayLike,
+    target: Scan | ArrayLike | Target,
+    initial: Pose2D = Pose2D(0.0, 0.0, 0.0),  # noqa: B008 - a frozen dataclass
+    matcher: ScanMatcher | None = None,
+) -> MatchResult:
+    """Register ``source`` on ``target`` with ``matcher`` (a default :class:`ScanMatcher` if None)."""
+    return (matcher or ScanMatcher()).match(source, target, initial)

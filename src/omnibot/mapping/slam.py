@@ -1,0 +1,426 @@
+"""Online 2D SLAM: scan-to-submap matching on keyframes, a gtsam pose graph with verified loop closures.
+
+Front end: each scan is deskewed (:mod:`omnibot.mapping.deskew`, the odometry's last motion taken
+as the twist over the scan; the first scan of a spinning scanner, with no motion known yet, is
+skipped) and its odometry delta since the last keyframe predicts the robot's pose. When the
+robot has moved ``keyframe_distance`` or turned ``keyframe_angle`` since then, the scan becomes a
+keyframe: it is matched (:class:`~omnibot.mapping.matcher.ScanMatcher`, correlative search then
+ICP) against a local submap (the last ``submap_keyframes`` keyframes' points at their current
+estimates), starting from the prediction.
+
+Back end: a pose graph of the keyframes (gtsam ``Pose2`` nodes). Between consecutive keyframes, an
+odometry factor (noise growing with the distance and angle driven, ``odometry_noise``) and the
+match factor (the match's own covariance, so a direction the scans leave unconstrained, such as a
+corridor's axis, is carried by odometry alone). Loop closures: a keyframe at least
+``loop_min_separation`` keyframes back and within ``loop_search_radius`` of the new one is matched
+with a wide search (``loop_search_window``); the match is kept only if it converged with a fitness
+of at least ``loop_min_fitness``, and enters the graph through a Cauchy robust kernel with its
+covariance floored at ``loop_sigma_floor`` (so one false closure that passed the checks is
+down-weighted, not obeyed). ``optimizer="isam2"`` updates the graph incrementally on every keyframe
+(with extra iterations after a closure); ``"lm"`` runs a batch Levenberg-Marquardt after each
+closure and otherwise takes the matched pose as it is. ``scan_to_submap=False`` leaves the front
+end out (odometry and loop closures only), ``deskew=False`` the motion-distortion correction: to
+measure what each part brings.
+
+Poses between keyframes are their keyframe's estimate composed with the odometry since it, so
+:meth:`Slam.trajectory` follows every correction of the graph. The map frame starts at the first
+odometry pose (``map_to_odom`` is the identity until the first correction). Deterministic: no
+randomness anywhere.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import gtsam
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from omnibot.errors import ConfigError
+from omnibot.mapping.deskew import scan_points
+from omnibot.mapping.matcher import MatchResult, ScanMatcher, Target
+from omnibot.mapping.se2 import between, compose, distance, inverse, rotate_covariance, transform
+from omnibot.motion import Pose2D, Twist
+from omnibot.scan import Scan
+
+FloatArray = NDArray[np.float64]
+
+OPTIMIZERS = ("isam2", "lm")
+PRIOR_SIGMA = 1e-4
+
+
+@dataclass(frozen=True)
+class Keyframe:
+    """A keyframe as the SLAM keeps it: its scan, odometry pose and base-frame points (deskewed)."""
+
+    stamp: float
+    odom: Pose2D
+    scan: Scan
+    points: FloatArray
+
+
+@dataclass(frozen=True)
+class LoopClosure:
+    """A loop closure the SLAM tried: between keyframes ``older`` and ``newer``, kept or not and why."""
+
+    older: int
+    newer: int
+    accepted: bool
+    reason: str
+    match: MatchResult | None
+
+
+def _pose2(p: Pose2D) -> gtsam.Pose2:
+    return gtsam.Pose2(p.x, p.y, p.theta)
+
+
+def _pose(p: gtsam.Pose2) -> Pose2D:
+    return Pose2D(float(p.x()), float(p.y()), float(p.theta()))
+
+
+class Slam:
+    """Online 2D SLAM (see the module docstring): feed :meth:`update` odometry poses and scans."""
+
+    def __init__(
+        self,
+        *,
+        resolution: float = 0.05,
+        keyframe_distance: float = 0.25,
+        keyframe_angle: float = math.radians(15.0),
+        submap_keyframes: int = 10,
+        search_xy: float = 0.15,
+        search_theta: float = math.radians(6.0),
+        odometry_noise: tuple[float, float] = (0.05, 0.05),
+        min_fitness: float = 0.5,
+        loop_search_radius: float = 1.0,
+        loop_search_window: tuple[float, float] = (0.4, math.radians(12.0)),
+        loop_min_separation: int = 20,
+        loop_every: int = 5,
+        loop_min_fitness: float = 0.75,
+        loop_sigma_floor: tuple[float, float] = (0.01, math.radians(0.5)),
+        loop_kernel_width: float = 3.0,
+        optimizer: str = "isam2",
+        scan_to_submap: bool = True,
+        deskew: bool = True,
+        matcher: ScanMatcher | None = None,
+    ) -> None:
+        positive = {
+            "resolution": resolution,
+            "keyframe_distance": keyframe_distance,
+            "keyframe_angle": keyframe_angle,
+            "loop_search_radius": loop_search_radius,
+            "loop_kernel_width": loop_kernel_width,
+        }
+        for key, value in positive.items():
+            if not (math.isfinite(value) and value > 0):
+                raise ConfigError(f"must be a positive number, not {value}", key)
+        for key, pair in (
+            ("odometry_noise", odometry_noise),
+            ("loop_search_window", loop_search_window),
+            ("loop_sigma_floor", loop_sigma_floor),
+        ):
+            if len(pair) != 2 or not all(math.isfinite(v) and v > 0 for v in pair):
+                raise ConfigError(f"must be two positive numbers, not {pair}", key)
+        for key, fraction in (("min_fitness", min_fitness), ("loop_min_fitness", loop_min_fitness)):
+            if not 0.0 <= fraction <= 1.0:
+                raise ConfigError(f"must be a fraction in [0, 1], not {fraction}", key)
+        for key, count in (
+            ("submap_keyframes", submap_keyframes),
+            ("loop_min_separation", loop_min_separation),
+            ("loop_every", loop_every),
+        ):
+            if count < 1:
+                raise ConfigError(f"must be at least 1, not {count}", key)
+        if optimizer not in OPTIMIZERS:
+            raise ConfigError(
+                f"unknown optimizer {optimizer!r}; choose one of {', '.join(OPTIMIZERS)}", "optimizer"
+            )
+        self.keyframe_distance = keyframe_distance
+        self.keyframe_angle = keyframe_angle
+        self.submap_keyframes = submap_keyframes
+        self.search_xy = search_xy
+        self.search_theta = search_theta
+        self.odometry_noise = odometry_noise
+        self.min_fitness = min_fitness
+        self.loop_search_radius = loop_search_radius
+        self.loop_search_window = loop_search_window
+        self.loop_min_separation = loop_min_separation
+        self.loop_every = loop_every
+        self.loop_min_fitness = loop_min_fitness
+        self.loop_sigma_floor = loop_sigma_floor
+        self.loop_kernel_width = loop_kernel_width
+        self.optimizer = optimizer
+        self.scan_to_submap = scan_to_submap
+        self.deskew = deskew
+        self.matcher = matcher or ScanMatcher(resolution=resolution)
+
+        self._frames: list[Keyframe] = []
+        self._estimates: list[Pose2D] = []
+        self._track: list[tuple[float, int, Pose2D]] = []  # stamp, keyframe, odometry since it
+        self._last_odom: Pose2D | None = None
+        self._last_stamp = -math.inf
+        self._pose = Pose2D(0.0, 0.0, 0.0)
+        self._twist = Twist()
+        self._waiting: tuple[float, Pose2D] | None = None
+        self._since_loop = 0
+        self.loops: list[LoopClosure] = []
+        """Every loop closure tried, in order."""
+        self.matches: list[MatchResult] = []
+        """The front end's match of every keyframe but the first."""
+
+        self._graph = gtsam.NonlinearFactorGraph()  # every factor (batch optimiser)
+        self._values = gtsam.Values()
+        self._new_factors = gtsam.NonlinearFactorGraph()  # not yet given to iSAM2
+        self._new_values = gtsam.Values()
+        params = gtsam.ISAM2Params()
+        params.setRelinearizeThreshold(0.01)
+        params.relinearizeSkip = 1
+        self._isam = gtsam.ISAM2(params)
+
+    # ------------------------------------------------------------------ queries
+
+    @property
+    def pose(self) -> Pose2D:
+        """The robot's latest pose in the map frame."""
+        return self._pose
+
+    @property
+    def map_to_odom(self) -> Pose2D:
+        """The odometry frame's pose in the map frame (the ``map -> odom`` transform)."""
+        if self._last_odom is None:
+            return Pose2D(0.0, 0.0, 0.0)
+        return compose(self._pose, inverse(self._last_odom))
+
+    @property
+    def closures(self) -> int:
+        """Number of loop closures accepted."""
+        return sum(1 for loop in self.loops if loop.accepted)
+
+    def trajectory(self) -> list[tuple[float, Pose2D]]:
+        """(stamp, map-frame pose) of every scan given to :meth:`update`, with the latest corrections."""
+        return [(stamp, compose(self._estimates[k], delta)) for stamp, k, delta in self._track]
+
+    def keyframes(self) -> list[tuple[Pose2D, Scan]]:
+        """(corrected map-frame pose, scan) of every keyframe: what a mapper rebuilds the map from."""
+        return [(pose, frame.scan) for pose, frame in zip(self._estimates, self._frames, strict=True)]
+
+    # ------------------------------------------------------------------ the front end
+
+    def update(self, odom_pose: Pose2D, scan: Scan, stamp: float) -> Pose2D:
+        """Take one scan and the odometry pose at its first ray; return the robot's map-frame pose.
+
+        ``stamp`` (s, never decreasing) is the time of ``odom_pose`` and the scan's first ray on the
+        caller's clock; the odometry's motion since the previous call, taken as a constant twist,
+        removes the scan's motion distortion (:mod:`omnibot.mapping.deskew`).
+        """
+        if not isinstance(scan, Scan):
+            raise ConfigError(f"must be a Scan, not {type(scan).__name__}", "scan")
+        if not all(math.isfinite(v) for v in (odom_pose.x, odom_pose.y, odom_pose.theta)):
+            raise ConfigError(f"must be finite, not {odom_pose}", "odom_pose")
+        if not math.isfinite(stamp) or stamp < self._last_stamp:
+            raise ConfigError(
+                f"must be finite and not before the previous one ({self._last_stamp}), not {stamp}", "stamp"
+            )
+        first_call = self._last_odom is None
+        twist = Twist()
+        if self.deskew and self._last_odom is not None and stamp > self._last_stamp:
+            step = between(self._last_odom, odom_pose)
+            dt = stamp - self._last_stamp
+            twist = Twist(step.x / dt, step.y / dt, step.theta / dt)
+        self._twist = twist
+        self._last_stamp = stamp
+        self._last_odom = odom_pose
+        if not self._frames:
+            if first_call and self.deskew and scan.time_increment != 0.0:
+                # a distorted scan with no motion known yet to undo it with: the next one starts the map
+                self._waiting = (stamp, odom_pose)
+                self._pose = odom_pose
+                return odom_pose
+            self._add_first(odom_pose, scan, stamp)
+            if self._waiting is not None:
+                self._track.insert(0, (self._waiting[0], 0, between(odom_pose, self._waiting[1])))
+        else:
+            last = len(self._frames) - 1
+            delta = between(self._frames[last].odom, odom_pose)
+            if (
+                math.hypot(delta.x, delta.y) >= self.keyframe_distance
+                or abs(delta.theta) >= self.keyframe_angle
+            ):
+                self._add_keyframe(odom_pose, scan, stamp, delta)
+            else:
+                self._track.append((stamp, last, delta))
+        _, k, delta = self._track[-1]
+        self._pose = compose(self._estimates[k], delta)
+        return self._pose
+
+    def _add_first(self, odom_pose: Pose2D, scan: Scan, stamp: float) -> None:
+        self._frames.append(Keyframe(stamp, odom_pose, scan, scan_points(scan, self._twist)))
+        self._estimates.append(odom_pose)
+        noise = gtsam.noiseModel.Isotropic.Sigma(3, PRIOR_SIGMA)
+        self._add_factor(gtsam.PriorFactorPose2(0, _pose2(odom_pose), noise))
+        self._add_value(0, odom_pose)
+        self._optimise(closed=False)
+        self._track.append((stamp, 0, Pose2D(0.0, 0.0, 0.0)))
+
+    def _add_keyframe(self, odom_pose: Pose2D, scan: Scan, stamp: float, delta: Pose2D) -> None:
+        last = len(self._frames) - 1
+        new = last + 1
+        frame = Keyframe(stamp, odom_pose, scan, scan_points(scan, self._twist))
+        predicted = compose(self._estimates[last], delta)
+        result = None
+        if self.scan_to_submap:
+            result = self.matcher.match(
+                frame.points,
+                self._submap(last),
+                predicted,
+                search_xy=self.search_xy,
+                search_theta=self.search_theta,
+            )
+            self.matches.append(result)
+        self._frames.append(frame)
+        self._add_factor(gtsam.BetweenFactorPose2(last, new, _pose2(delta), self._odometry_noise(delta)))
+        estimate = predicted
+        if result is not None and result.converged and result.fitness >= self.min_fitness:
+            relative = between(self._estimates[last], result.pose)
+            cov = rotate_covariance(result.covariance, -result.pose.theta)
+            self._add_factor(
+                gtsam.BetweenFactorPose2(
+                    last, new, _pose2(relative), gtsam.noiseModel.Gaussian.Covariance(cov)
+                )
+            )
+            estimate = self._fuse(predicted, delta, result)
+        self._estimates.append(estimate)
+        self._add_value(new, estimate)
+        self._track.append((stamp, new, Pose2D(0.0, 0.0, 0.0)))
+        self._since_loop += 1
+        closed = False
+        if self._since_loop >= self.loop_every:
+            closed = self._close_loop(new)
+        self._optimise(closed)
+
+    def _fuse(self, predicted: Pose2D, delta: Pose2D, result: MatchResult) -> Pose2D:
+        """The match where it is constrained, the prediction where it is not (the new node's first guess)."""
+        odo = rotate_covariance(self._odometry_cov(delta), predicted.theta)
+        info_m, info_o = result.information, np.linalg.inv(odo)
+        diff = np.array(
+            [result.pose.x - predicted.x, result.pose.y - predicted.y, result.pose.theta - predicted.theta]
+        )
+        diff[2] = math.remainder(diff[2], 2 * math.pi)
+        step = np.linalg.solve(info_m + info_o, info_m @ diff)
+        return Pose2D(
+            predicted.x + step[0],
+            predicted.y + step[1],
+            math.remainder(predicted.theta + step[2], 2 * math.pi),
+        )
+
+    def _odometry_cov(self, delta: Pose2D) -> FloatArray:
+        d = math.hypot(delta.x, delta.y)
+        sxy = self.odometry_noise[0] * d + 0.005
+        sth = self.odometry_noise[1] * d + 0.05 * abs(delta.theta) + 0.002
+        return np.diag([sxy * sxy, sxy * sxy, sth * sth])
+
+    def _odometry_noise(self, delta: Pose2D) -> gtsam.noiseModel.Base:
+        return gtsam.noiseModel.Diagonal.Sigmas(np.sqrt(np.diag(self._odometry_cov(delta))))
+
+    def _submap(self, last: int, before: int | None = None, after: int = 0) -> Target:
+        """The points of keyframes ``last - before .. last + after`` at their estimates, as a match target."""
+        count = self.submap_keyframes if before is None else before
+        first = max(0, last - count + 1)
+        end = min(len(self._frames), last + after + 1)
+        pts = np.vstack([transform(self._estimates[k], self._frames[k].points) for k in range(first, end)])
+        return self.matcher.target(pts, margin=max(self.search_xy, self.loop_search_window[0]) + 1.0)
+
+    # ------------------------------------------------------------------ loop closures
+
+    def _close_loop(self, new: int) -> bool:
+        """Try the nearest old keyframe as a loop closure of ``new``; True if one was added."""
+        here = self._estimates[new]
+        old = range(new - self.loop_min_separation + 1)
+        near = [(distance(self._estimates[k], here), k) for k in old]
+        near = [(d, k) for d, k in near if d <= self.loop_search_radius]
+        if not near:
+            return False
+        self._since_loop = 0
+        _, older = min(near)
+        return self._verify_and_add(older, new, self._loop_match(older, new, here))
+
+    def _loop_match(self, older: int, newer: int, start: Pose2D) -> MatchResult:
+        """Keyframe ``newer`` matched from ``start`` on the submap around ``older``, with the wide window."""
+        half = max(1, self.submap_keyframes // 2)
+        return self.matcher.match(
+            self._frames[newer].points,
+            self._submap(older, before=half + 1, after=half),
+            start,
+            search_xy=self.loop_search_window[0],
+            search_theta=self.loop_search_window[1],
+        )
+
+    def try_loop_closure(self, older: int, newer: int, guess: Pose2D | None = None) -> LoopClosure:
+        """Match keyframe ``newer`` against the submap around ``older`` from ``guess`` (default: its estimate).
+
+        The closure is verified as an automatic one is and, if accepted, added and optimised.
+        """
+        for key, k in (("older", older), ("newer", newer)):
+            if not 0 <= k < len(self._frames):
+                raise ConfigError(f"no keyframe {k} (there are {len(self._frames)})", key)
+        start = self._estimates[newer] if guess is None else guess
+        accepted = self._verify_and_add(older, newer, self._loop_match(older, newer, start))
+        if accepted:
+            self._optimise(closed=True)
+        return self.loops[-1]
+
+    def _verify_and_add(self, older: int, newer: int, result: MatchResult) -> bool:
+        if not result.converged:
+            self.loops.append(LoopClosure(older, newer, False, "match did not converge", result))
+            return False
+        if result.fitness < self.loop_min_fitness:
+            reason = f"fitness {result.fitness:.2f} below {self.loop_min_fitness:.2f}"
+            self.loops.append(LoopClosure(older, newer, False, reason, result))
+            return False
+        relative = between(self._estimates[older], result.pose)
+        cov = rotate_covariance(result.covariance, -result.pose.theta)
+        self.add_loop_closure(older, newer, relative, cov)
+        self.loops.append(LoopClosure(older, newer, True, "accepted", result))
+        return True
+
+    def add_loop_closure(self, older: int, newer: int, relative: Pose2D, covariance: ArrayLike) -> None:
+        """Add a closure factor: keyframe ``newer``'s pose seen from ``older`` (robust, floored covariance).
+
+        For a place recogniser of one's own; the graph is optimised with the next keyframe.
+        """
+        cov = np.array(covariance, dtype=np.float64)
+        if cov.shape != (3, 3) or not np.isfinite(cov).all():
+            raise ConfigError(f"must be a finite 3x3 matrix, not shape {cov.shape}", "covariance")
+        floor = np.array([self.loop_sigma_floor[0] ** 2] * 2 + [self.loop_sigma_floor[1] ** 2])
+        cov = cov + np.diag(floor)
+        kernel = gtsam.noiseModel.mEstimator.Cauchy.Create(self.loop_kernel_width)
+        noise = gtsam.noiseModel.Robust.Create(kernel, gtsam.noiseModel.Gaussian.Covariance(cov))
+        self._add_factor(gtsam.BetweenFactorPose2(older, newer, _pose2(relative), noise))
+
+    # ------------------------------------------------------------------ the back end
+
+    def _add_factor(self, factor: gtsam.NonlinearFactor) -> None:
+        self._graph.add(factor)
+        self._new_factors.add(factor)
+
+    def _add_value(self, key: int, pose: Pose2D) -> None:
+        self._values.insert(key, _pose2(pose))
+        self._new_values.insert(key, _pose2(pose))
+
+    def _optimise(self, closed: bool) -> None:
+        if self.optimizer == "isam2":
+            self._isam.update(self._new_factors, self._new_values)
+            for _ in range(3 if closed else 0):
+                self._isam.update()
+            result = self._isam.calculateEstimate()
+        elif closed:
+            params = gtsam.LevenbergMarquardtParams()
+            result = gtsam.LevenbergMarquardtOptimizer(self._graph, self._values, params).optimize()
+        else:
+            result = None
+        self._new_factors = gtsam.NonlinearFactorGraph()
+        self._new_values = gtsam.Values()
+        if result is not None:
+            self._estimates = [_pose(result.atPose2(k)) for k in range(len(self._frames))]
+            self._values = result
