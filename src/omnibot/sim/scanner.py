@@ -1,7 +1,7 @@
 """A simulated spinning 2D laser scanner (an RPLIDAR by default): rays cast as the revolution turns.
 
-Whoever steps the robot records its true pose after every step in a :class:`PoseLog` (the
-simulator for a robot alone; a fleet records every robot's pose in one log), and the scanner casts
+Whoever steps the robot records its true pose every few steps in a :class:`PoseLog` (every 5 ms:
+the simulator for a robot alone; a fleet records every robot's pose in one log), and the scanner casts
 the rays that have come due when asked (:meth:`LaserScanner.flush`), each from the pose its robot
 had at that ray's own time and against the other bodies of the log where they were at that time
 (linear between the recorded steps): a robot that moves or turns during a revolution gets a
@@ -50,7 +50,7 @@ INDEX_SLACK = 0.25
 class PoseLog:
     """Poses of ``bodies`` bodies recorded every ``dt`` seconds from ``start``: row j (time
     ``start + j * dt``) is x, y, theta of body 0, then of body 1... kept flat in :attr:`rows` (the
-    recorder extends it with each body's pose in turn, one row per step)."""
+    recorder extends it with each body's pose in turn, one row per record)."""
 
     def __init__(self, bodies: int, dt: float) -> None:
         self.width = 3 * bodies
