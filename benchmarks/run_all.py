@@ -13,6 +13,7 @@ from benchmarks import (
     odometry_drift,
     ros2_latency,
     ros2_rates,
+    scanner_cost,
     sim_speed,
     sonar_stop,
     speed_accuracy,
@@ -25,6 +26,7 @@ from benchmarks import (
 def main() -> int:
     for title, run in (
         ("simulator speed", lambda: sim_speed.main([])),
+        ("laser scanner cost", lambda: scanner_cost.main([])),
         ("firmware time per command", lambda: firmware_command_time.main([])),
         ("UNO firmware cycles per command (simavr)", lambda: uno_command_cycles.main([])),
         (

@@ -232,3 +232,56 @@ def test_no_current_limit_means_none_and_round_trips() -> None:
     robot = parse_description(data)
     assert robot.wheels[0].motor.current_limit is None
     assert parse_description(robot.model_dump(exclude_none=True)) == robot  # as calibration re-validates
+
+
+# --------------------------------------------------------------------------- the laser scanner
+
+
+def test_every_preset_carries_an_rplidar_above_its_body() -> None:
+    for name in ("omni4", "omni3", "mecanum4"):
+        robot = load_robot(name)
+        sc = robot.scanner
+        assert sc is not None and sc.model == "rplidar-a1" and sc.frame == "laser"
+        assert sc.z > robot.body_top and (sc.x, sc.y) == (0.0, 0.0)
+        assert (sc.range_min, sc.range_max, sc.rays, sc.rate_hz) == (0.15, 12.0, 360, 10.0)
+        assert sc.spin == "clockwise" and sc.angle_increment == pytest.approx(-math.pi / 180)
+        assert sc.motion_distortion and sc.resolution == 0.00025
+
+
+def test_a_scanner_section_is_optional_and_its_defaults_are_the_datasheets() -> None:
+    data = preset_data("omni4")
+    del data["scanner"]
+    assert parse_description(data).scanner is None
+    data["scanner"] = {"z": 0.3}
+    sc = parse_description(data).scanner
+    assert sc is not None and (sc.rate_hz, sc.sample_rate_hz, sc.noise_fraction) == (5.5, 8000.0, 0.01)
+
+
+def test_scanner_errors_name_the_key_and_say_what_to_do() -> None:
+    data = preset_data("omni4")
+    data["scanner"]["rang_max"] = data["scanner"].pop("z")
+    msg = error_for(data)
+    assert "scanner.rang_max: unknown key; did you mean 'range_max'?" in msg
+    assert "scanner.z: required key is missing" in msg
+    data = preset_data("omni4")
+    data["scanner"]["z"] = 0.1
+    assert "scanner.z: the scan plane at 0.1 m would cut the robot's own body" in error_for(data)
+    data = preset_data("omni4")
+    data["scanner"].update(rays=1000, rate_hz=10)
+    assert "1000 rays at 10 Hz need 10000 samples/s; the rplidar-a1 measures at most 8000" in error_for(data)
+    data = preset_data("omni4")
+    data["scanner"].update(range_min=3.0, range_max=2.0)
+    assert "range_min (3.0 m) must be below range_max (2.0 m)" in error_for(data)
+    data = preset_data("omni4")
+    data["scanner"]["spin"] = "cw"
+    assert "scanner.spin:" in error_for(data)
+    data = preset_data("omni4")
+    data["scanner"]["frame"] = "imu_link"
+    assert "scanner.frame 'imu_link' is already a link of the robot" in error_for(data)
+
+
+def test_robot_show_lists_the_scanner() -> None:
+    from omnibot.robot.summary import describe
+
+    text = describe(load_robot("omni3"))
+    assert "scanner   rplidar-a1 'laser' at (0, 0, 0.37 m) facing 0 deg, 360 rays at 10 Hz clockwise" in text

@@ -120,3 +120,20 @@ def test_the_omni3_base_obeys_the_triangle_inequality() -> None:
     assert base is not None
     ixx, iyy, izz = (float(base.get(k, "nan")) for k in ("ixx", "iyy", "izz"))
     assert ixx + iyy > izz
+
+
+@pytest.mark.parametrize("preset", PRESETS)
+def test_the_scanner_is_a_fixed_link_named_as_its_scans_frame_at_its_mount(preset: str) -> None:
+    data = load_robot(preset).model_dump(exclude_none=True)
+    data["scanner"].update(x=0.03, y=-0.02, yaw_deg=30.0)
+    robot = parse_description(data)
+    assert robot.scanner is not None
+    urdf = parsed(robot)
+    laser = joint(urdf, "laser_joint")
+    assert laser.type == "fixed" and laser.parent == "base_link" and laser.child == "laser"
+    floor = np.asarray(urdf.get_transform(frame_to="laser", frame_from="base_footprint"))
+    np.testing.assert_allclose(floor[:3, 3], [0.03, -0.02, robot.scanner.z], atol=1e-9)
+    yaw = math.atan2(floor[1, 0], floor[0, 0])
+    assert yaw == pytest.approx(math.radians(30.0)) and floor[2, 2] == pytest.approx(1.0)
+    del data["scanner"]
+    assert "laser" not in parsed(parse_description(data)).link_map

@@ -5,8 +5,10 @@ from __future__ import annotations
 import numpy as np
 
 from omnibot.robot.description import load_robot
+from omnibot.scan import Scan
 from omnibot.sim import kernels
 from omnibot.sim.physics import Physics
+from omnibot.sim.simulator import Simulator
 from omnibot.sim.world import load_world
 
 
@@ -22,4 +24,9 @@ def test_warm_up_compiles_what_the_simulator_calls() -> None:
     (x0, y0, _x1, _y1) = room.segments[0]
     square = np.array([[0.1, 0.1], [-0.1, 0.1], [-0.1, -0.1], [0.1, -0.1]]) + np.array([x0, y0])
     assert room.contacts(square)  # outline_contacts, touching a wall
-    assert [len(k.signatures) for k in kernels.KERNELS] == [1, 1, 1, 1]
+    sim = Simulator(load_robot("omni4"), world="room", seed=1)
+    scans: list[Scan] = []
+    sim.add_scan_listener(scans.append)
+    sim.advance(0.25)
+    assert scans  # scan_index, scan_rays, scan_measure
+    assert [len(k.signatures) for k in kernels.KERNELS] == [1] * 7

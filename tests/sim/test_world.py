@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from omnibot.errors import ConfigError
+from omnibot.robot.description import load_robot
 from omnibot.sim.clock import Clock, SimClock, WallClock
 from omnibot.sim.world import (
     WORLD_DIR,
@@ -59,6 +60,25 @@ def test_wall_clock_is_monotonic() -> None:
 
 
 # --------------------------------------------------------------------------- files
+
+
+def test_the_slam_bench_worlds_are_bundled_at_their_sizes() -> None:
+    assert {"house", "long_corridor"} <= set(world_names())
+    house = load_world("house")
+    assert house.bounds == (0.0, 0.0, 10.0, 8.0)
+    assert len(house.spec.obstacles) >= 15 and {o.shape for o in house.spec.obstacles} == {"box", "circle"}
+    corridor = load_world("long_corridor")
+    assert corridor.bounds == (0.0, -1.0, 30.0, 1.0) and not corridor.spec.obstacles
+
+
+@pytest.mark.parametrize("name", sorted(set(world_names()) - {"empty"}))
+@pytest.mark.parametrize("preset", ["omni4", "omni3", "mecanum4"])
+def test_every_preset_starts_clear_of_everything_in_every_bundled_world(name: str, preset: str) -> None:
+    w = load_world(name)
+    assert w.start is not None
+    outline = convex_hull(load_robot(preset).footprint.outline())
+    count, clearance = w.contacts_at(outline, w.start.x, w.start.y, w.start.theta, w.contact_buffer())
+    assert count == 0 and clearance > 0.1
 
 
 def test_bundled_worlds_load() -> None:

@@ -277,6 +277,81 @@ class SonarSpec(_Spec):
         return math.radians(self.cone_deg)
 
 
+# RPLIDAR A1 (A1M8) datasheet figures (Slamtec, "RPLIDAR A1 Introduction and Datasheet", section
+# Measurement Performance): distance range 0.15-12 m (white objects), distance resolution < 0.5 mm
+# below 1.5 m and < 1 % of the distance over the whole range, angular resolution 1 degree at the
+# typical 5.5 Hz scan rate (360 samples per scan), sample frequency 4000 typical / 8000 max, scan rate
+# 1-10 Hz; the A2 datasheet states accuracy as 1 % of range up to 3 m (2 % to 5 m, 2.5 % beyond).
+# The protocol reports distances in quarter millimetres (distance_q2) and angles clockwise.
+RPLIDAR_A1_RANGE = (0.15, 12.0)
+RPLIDAR_A1_SAMPLE_RATE_HZ = 8000.0
+RPLIDAR_DISTANCE_UNIT = 0.00025
+"""m: one count of the RPLIDAR protocol's distance (q2 fixed point of a millimetre)."""
+
+
+class ScannerSpec(_Spec):
+    """A spinning planar laser scanner (Slamtec RPLIDAR A1 figures by default, see the comment above).
+
+    The mount pose is the scanner frame's in the robot's base frame: ``x``, ``y`` (m), ``yaw_deg``,
+    and ``z``, the height of the scan plane above the floor (m), which must clear the robot's body.
+    One revolution measures ``rays`` ranges evenly spread over 360 degrees, one after the other while
+    the head turns (``motion_distortion``: each ray from where the robot is at its own time), turning
+    ``spin`` (RPLIDARs turn clockwise seen from above). A range is the true distance plus
+    N(0, noise_std + noise_fraction * distance), quantised to ``resolution``; a ray gets no return
+    (inf) with probability ``dropout``, or when the return is outside [range_min, range_max].
+    """
+
+    model: str = "rplidar-a1"
+    frame: str = Field(default="laser", min_length=1, description="name of the scanner frame (URDF link)")
+    x: float = 0.0
+    y: float = 0.0
+    z: float = Field(gt=0, description="height of the scan plane above the floor, m")
+    yaw_deg: float = 0.0
+    range_min: float = Field(default=RPLIDAR_A1_RANGE[0], ge=0, description="m")
+    range_max: float = Field(default=RPLIDAR_A1_RANGE[1], gt=0, description="m")
+    rays: int = Field(default=360, ge=3, description="rays per revolution")
+    rate_hz: float = Field(default=5.5, gt=0, description="revolutions per second")
+    sample_rate_hz: float = Field(
+        default=RPLIDAR_A1_SAMPLE_RATE_HZ, gt=0, description="most rays the scanner measures per second"
+    )
+    noise_std: float = Field(default=0.0, ge=0, description="range noise independent of distance, 1 sigma, m")
+    noise_fraction: float = Field(default=0.01, ge=0, description="range noise per m of distance, 1 sigma")
+    resolution: float = Field(default=RPLIDAR_DISTANCE_UNIT, ge=0, description="range quantum, m (0: none)")
+    dropout: float = Field(
+        default=0.01, ge=0, le=1, description="chance a ray has no return (not in the datasheet: a guess)"
+    )
+    spin: Literal["clockwise", "counterclockwise"] = "clockwise"
+    motion_distortion: bool = True
+
+    @model_validator(mode="after")
+    def _check(self) -> ScannerSpec:
+        if self.range_min >= self.range_max:
+            raise ValueError(f"range_min ({self.range_min} m) must be below range_max ({self.range_max} m)")
+        need = self.rays * self.rate_hz
+        if need > self.sample_rate_hz * (1 + 1e-9):
+            raise ValueError(
+                f"{self.rays} rays at {self.rate_hz:g} Hz need {need:g} samples/s; "
+                f"the {self.model} measures at most {self.sample_rate_hz:g} (sample_rate_hz)"
+            )
+        return self
+
+    @property
+    def yaw(self) -> float:
+        """The mount's yaw in the base frame, rad."""
+        return math.radians(self.yaw_deg)
+
+    @property
+    def period(self) -> float:
+        """Seconds per revolution."""
+        return 1.0 / self.rate_hz
+
+    @property
+    def angle_increment(self) -> float:
+        """Angle between consecutive rays in the scanner frame, rad: negative when spinning clockwise."""
+        step = 2 * math.pi / self.rays
+        return -step if self.spin == "clockwise" else step
+
+
 class LimitsSpec(_Spec):
     """What the robot may be asked to do; the controller's parameter checks come from here."""
 
@@ -467,6 +542,7 @@ class RobotDescription(_Spec):
     encoders: EncoderSpec = EncoderSpec()
     gyro: GyroSpec | None = None
     sonars: tuple[SonarSpec, ...] = ()
+    scanner: ScannerSpec | None = None
     limits: LimitsSpec
     controller: ControllerSpec = ControllerSpec()
     calibration: CalibrationSpec | None = None
@@ -502,7 +578,32 @@ class RobotDescription(_Spec):
         for enc in self.encoders.motors:
             if enc.wheel not in names:
                 raise ValueError(suggest(f"encoders.motors wheel '{enc.wheel}'", enc.wheel, names))
+        if self.scanner is not None:
+            self._check_scanner(self.scanner)
         return self
+
+    def _check_scanner(self, scanner: ScannerSpec) -> None:
+        """The scan plane clears the body (the scanner must not see its own robot) and the frame name
+        is not one the URDF already uses."""
+        top = self.body_top
+        if scanner.z <= top:
+            raise ValueError(
+                f"scanner.z: the scan plane at {scanner.z:g} m would cut the robot's own body (its top is at "
+                f"{top:g} m: wheel axle height + footprint.height); mount it higher, e.g. z: {top + 0.05:.3g}"
+            )
+        taken = {"base_footprint", "base_link", "imu_link"}
+        taken |= {f"{w.name}_wheel" for w in self.wheels} | {f"sonar_{s.name}" for s in self.sonars}
+        taken |= {f"{t.name}_tracking_wheel" for t in self.encoders.tracking}
+        if scanner.frame in taken:
+            raise ValueError(
+                f"scanner.frame '{scanner.frame}' is already a link of the robot; call it 'laser'"
+            )
+
+    @property
+    def body_top(self) -> float:
+        """Height of the top of the body above the floor, m (the URDF's base_link sits at wheel-axle
+        height, and the body's box or cylinder rises footprint.height from there)."""
+        return max(w.radius for w in self.wheels) + self.footprint.height
 
     @property
     def n_wheels(self) -> int:

@@ -51,6 +51,14 @@ def describe(robot: RobotDescription) -> str:
             f"sonar     {s.name} at ({s.x:g}, {s.y:g}) facing {s.angle_deg:g} deg, cone {s.cone_deg:g} deg, "
             f"{s.min_range:g}-{s.max_range:g} m"
         )
+    sc = robot.scanner
+    if sc is not None:
+        lines.append(
+            f"scanner   {sc.model} '{sc.frame}' at ({sc.x:g}, {sc.y:g}, {sc.z:g} m) facing {sc.yaw_deg:g} deg, "
+            f"{sc.rays} rays at {sc.rate_hz:g} Hz {sc.spin}, {sc.range_min:g}-{sc.range_max:g} m, "
+            f"noise {sc.noise_std:g} m + {sc.noise_fraction:.2%}, dropout {sc.dropout:g}"
+            + ("" if sc.motion_distortion else ", no motion distortion")
+        )
     lim = robot.limits
     lines.append("")
     lines.append(

@@ -7,6 +7,9 @@ velocity is a positive wheel speed in omnibot's convention. The hub rolls along 
 direction, except that a Swedish wheel (rollers at gamma) with drive angle d is drawn in its equivalent
 form (d + 2 gamma, -gamma) when that one rolls closer to the body's x axis (:func:`hub_angle`). The
 passive tracking wheels are links on continuous joints the same way; sonars and the gyro fixed links.
+The laser scanner is a fixed link named by its ``frame`` (the frame of its scans, ``laser``) at its
+mount pose: ``z`` in the description is the scan plane's height above the floor, so the joint from
+base_link (at axle height) is at ``z`` less the axle height.
 
 Masses and inertias are physically valid (positive definite, triangle inequality) and add up to the
 description: the driven wheels carry 3 % of the mass, each tracking wheel 0.5 %, the body the rest;
@@ -168,6 +171,15 @@ def to_urdf(robot: RobotDescription) -> str:
         ET.SubElement(j, "parent", link="base_link")
         ET.SubElement(j, "child", link="imu_link")
         ET.SubElement(j, "origin", xyz=_fmt(0, 0, fp.height / 2), rpy="0 0 0")
+
+    scanner = robot.scanner
+    if scanner is not None:
+        ET.SubElement(root, "link", name=scanner.frame)
+        j = ET.SubElement(root, "joint", name=f"{scanner.frame}_joint", type="fixed")
+        ET.SubElement(j, "parent", link="base_link")
+        ET.SubElement(j, "child", link=scanner.frame)
+        xyz = _fmt(scanner.x, scanner.y, scanner.z - axle_height)
+        ET.SubElement(j, "origin", xyz=xyz, rpy=_fmt(0, 0, scanner.yaw))
 
     ET.indent(root, space="  ")
     return '<?xml version="1.0"?>\n' + ET.tostring(root, encoding="unicode") + "\n"

@@ -6,10 +6,13 @@
                    -> robot-robot contacts (each pair whose bounding circles meet: separating axes,
                       the same kernel as the walls) -> equal and opposite penalty forces
                    -> every robot's physics steps (its walls, its pushes, those forces) -> clock += dt
+                   -> while a scanner is on, every 5 ms: every robot's pose into one pose log; the
+                      scanners due cast their rays (each ray sees the others where they were then)
 
 A robot is a :class:`~omnibot.sim.device.SimDevice` (firmware + :class:`Simulator`) with a name;
 an omni3 and an omni4 may share a room. Each robot's footprint (its convex hull) is a body the
-others collide with and an obstacle their sonar cones see (``Simulator.neighbours``). Contacts
+others collide with and an obstacle their sonar cones and laser scanners see
+(``Simulator.neighbours``). Contacts
 between robots are the walls' contact law with the two bodies' effective mass: a critically damped
 penalty spring along the normal (natural frequency 0.25/dt) plus the walls' friction, and a
 :class:`~omnibot.sim.simulator.CollisionEvent` whose owner is ``robot NAME`` when two robots start
@@ -37,7 +40,14 @@ from omnibot.robot.description import RobotDescription
 from omnibot.sim import kernels
 from omnibot.sim.clock import SimClock
 from omnibot.sim.device import SimDevice
-from omnibot.sim.simulator import CONTACT_DAMPING, CONTACT_OMEGA_DT, WALL_FRICTION, Simulator
+from omnibot.sim.scanner import PoseLog
+from omnibot.sim.simulator import (
+    CONTACT_DAMPING,
+    CONTACT_OMEGA_DT,
+    SCAN_POSE_PERIOD,
+    WALL_FRICTION,
+    Simulator,
+)
 from omnibot.sim.world import Contact, World, closed_edges, placed
 
 FloatArray = NDArray[np.float64]
@@ -80,6 +90,18 @@ class Fleet:
         self._bodies: dict[str, _Body] = {}
         self._order: list[_Body] = []
         self._out = np.zeros((2, 6))
+        self._edges = np.zeros((0, 4))
+        self._edges_rows: dict[str, tuple[int, int]] = {}
+        self._edges_tick = -1
+        self._edges_names: list[str] = []
+        self._scan_stride_us = max(1, round(SCAN_POSE_PERIOD / dt)) * self._dt_us
+        self._scan_next_us = 0
+        self._scan_log = PoseLog(0, self._scan_stride_us / 1e6)
+        self._scanning: list[tuple[int, Simulator]] = []
+        """(index in the step order, simulator) of every robot whose scanner is on."""
+        self._scan_due: list[int] = []
+        self._poses: list[FloatArray] = []
+        self._outlines: tuple[FloatArray, NDArray[np.int64]] = (np.zeros((0, 2)), np.zeros(1, dtype=np.int64))
 
     def __repr__(self) -> str:
         return f"Fleet({self.world.name!r}, robots {self.names}, t={self.time:.3f} s)"
@@ -160,6 +182,8 @@ class Fleet:
         device.sim.neighbours = partial(self._edges_except, name)
         self._bodies[name] = body
         self._order = sorted(self._bodies.values(), key=lambda b: b.name)
+        self._rescan()
+        device.sim.set_scan_driver(self._scan_switched)
         return device
 
     def remove(self, name: str) -> None:
@@ -168,6 +192,8 @@ class Fleet:
         if body is not None:
             body.sim.neighbours = None
             self._order = [b for b in self._order if b is not body]
+            body.sim.set_scan_driver(None)
+            self._rescan()
 
     # ------------------------------------------------------------------ stepping
 
@@ -182,11 +208,66 @@ class Fleet:
         for body in bodies:
             body.sim.step()
         self._us += self._dt_us
+        if self._scanning and self._us >= self._scan_next_us:
+            self._scan_step()
+
+    # ------------------------------------------------------------------ laser scanners
+
+    def _scan_switched(self, sim: Simulator) -> None:
+        """A robot's scanner started or stopped (its simulator's scan_driver)."""
+        self._rescan()
+
+    def _rescan(self) -> None:
+        """Start the pose log again for the robots now in the fleet (every scanner that is on drops
+        its revolution under way and starts with the next: the log's layout changed)."""
+        sims = [b.sim for b in self._order]
+        self._scanning = [(i, s) for i, s in enumerate(sims) if s.scanner is not None and s.scanner.active]
+        if not self._scanning:
+            self._scan_log = PoseLog(0, self._scan_stride_us / 1e6)
+            return
+        now = self._us / 1e6
+        self._scan_log = PoseLog(len(sims), self._scan_stride_us / 1e6)
+        self._scan_next_us = self._us + self._scan_stride_us
+        self._poses = [s.pose_array for s in sims]  # live views: the physics updates them in place
+        self._scan_log.reset(now, [c for p in self._poses for c in p.tolist()])
+        outlines = [b.outline for b in self._order]
+        offsets = np.cumsum([0] + [len(o) for o in outlines]).astype(np.int64)
+        self._outlines = (np.ascontiguousarray(np.vstack(outlines), dtype=np.float64), offsets)
+        for _, s in self._scanning:
+            assert s.scanner is not None
+            s.scanner.start(now)
+        self._scan_due = [
+            Simulator._due_us(s.scanner.due) for _, s in self._scanning if s.scanner is not None
+        ]
+
+    def _scan_step(self) -> None:
+        """Log every robot's pose now (every SCAN_POSE_PERIOD) and flush the scanners that are due."""
+        self._scan_next_us += self._scan_stride_us
+        rows = self._scan_log.rows
+        for pose in self._poses:
+            rows.extend(pose.tolist())
+        now, flushed = self._us, False
+        for k, (index, sim) in enumerate(self._scanning):
+            if now >= self._scan_due[k]:
+                self._scan_due[k] = sim.scan_flush(now, self._scan_log, index, self._outlines)
+                flushed = True
+        if flushed:
+            self._scan_log.trim(min(s.scanner.needs_from for _, s in self._scanning if s.scanner is not None))
 
     def _edges_except(self, name: str) -> FloatArray:
-        """The footprint edges (K, 4) of every robot but ``name``, world frame, now."""
-        edges = [closed_edges(b.hull()) for b in self._order if b.name != name]
-        return np.vstack(edges) if edges else np.zeros((0, 4))
+        """The footprint edges (K, 4) of every robot but ``name``, world frame, as they stood when
+        first asked for during this step (the sonars ask before the robots move, the scanners after
+        their own robot moved: at most one step apart); placed once per step for all the askers."""
+        if self._edges_tick != self._us or self._edges_names != self.names:
+            edges = [closed_edges(b.hull()) for b in self._order]
+            bounds = np.cumsum([0] + [len(e) for e in edges])
+            self._edges = np.vstack(edges) if edges else np.zeros((0, 4))
+            self._edges_rows = {
+                b.name: (int(bounds[i]), int(bounds[i + 1])) for i, b in enumerate(self._order)
+            }
+            self._edges_tick, self._edges_names = self._us, self.names
+        lo, hi = self._edges_rows[name]
+        return np.concatenate((self._edges[:lo], self._edges[hi:]))
 
     def _pair_contact(self, a: _Body, b: _Body) -> Contact | None:
         """Where ``a``'s footprint overlaps ``b``'s (normal pushing ``a`` out), None if apart."""

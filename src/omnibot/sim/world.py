@@ -225,7 +225,8 @@ def world_names() -> list[str]:
 
 
 def load_world(name_or_path: str | Path) -> World:
-    """A bundled world by name (``empty``, ``room``, ``corridor``) or a world file by path."""
+    """A bundled world by name (``empty``, ``room``, ``corridor``, ``house``, ``long_corridor``) or a
+    world file by path."""
     text = str(name_or_path)
     if text in world_names():
         path = WORLD_DIR / f"{text}.yaml"

@@ -1,0 +1,269 @@
+"""A simulated spinning 2D laser scanner (an RPLIDAR by default): rays cast as the revolution turns.
+
+Whoever steps the robot records its true pose every few steps in a :class:`PoseLog` (every 5 ms:
+the simulator for a robot alone; a fleet records every robot's pose in one log), and the scanner casts
+the rays that have come due when asked (:meth:`LaserScanner.flush`), each from the pose its robot
+had at that ray's own time and against the other bodies of the log where they were at that time
+(linear between the recorded steps): a robot that moves or turns during a revolution gets a
+distorted scan, as a real spinning scanner's is, and sees the others moving. Nothing is simulated
+twice: the poses are those the physics already stepped through.
+
+Revolution ``k`` starts at simulated time ``k / rate_hz``; its ray ``i`` is measured
+``i * time_increment`` later (``period / rays``; 0 with ``motion_distortion`` off: every ray at the
+revolution's start) and points at ``i * angle_increment`` in the scanner frame, where the increment
+is negative for a clockwise scanner (the RPLIDAR's way): the scan keeps the order the rays were
+measured in and gives angles counter-clockwise positive, as :class:`omnibot.scan.Scan` requires.
+A revolution is delivered as a :class:`~omnibot.scan.Scan` once its last ray's time has passed.
+
+Each range is the true distance to the nearest wall, obstacle or other body plus
+N(0, noise_std + noise_fraction * distance), quantised to ``resolution``; ``inf`` for a dropout or
+a return outside [range_min, range_max]. The noise of revolution ``k`` is a fixed slice of the
+scanner's own random stream (``3 * rays`` uniform draws per revolution, the stream jumped ahead to
+revolution ``k``), so a revolution's ranges are the same whenever the scanner was switched on and
+however often it was flushed, and no other sensor's stream changes.
+"""
+
+from __future__ import annotations
+
+import math
+from array import array
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from omnibot.motion import Pose2D
+from omnibot.robot.description import ScannerSpec
+from omnibot.scan import Scan
+from omnibot.sim import kernels
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+_EPS = 1e-9
+_NO_VERTICES = np.zeros((0, 2))
+_NO_BODIES = np.zeros(1, dtype=np.int64)
+INDEX_SLACK = 0.25
+"""m: room the scanner's edge index leaves around the origins it was made for (see _index_for)."""
+
+
+class PoseLog:
+    """Poses of ``bodies`` bodies recorded every ``dt`` seconds from ``start``: row j (time
+    ``start + j * dt``) is x, y, theta of body 0, then of body 1... kept flat in :attr:`rows` (the
+    recorder extends it with each body's pose in turn, one row per record)."""
+
+    def __init__(self, bodies: int, dt: float) -> None:
+        self.width = 3 * bodies
+        self.dt = dt
+        self.start = 0.0
+        self.rows = array("d")
+        """The rows, flat (a C array of doubles: extended from lists, seen by numpy without a copy)."""
+
+    def reset(self, t: float, poses: Sequence[float]) -> None:
+        """Start again at time ``t`` (s) with the poses (flat, every body's x, y, theta) then."""
+        self.start = t
+        self.rows = array("d", [float(c) for c in poses])
+
+    def array(self) -> FloatArray:
+        """The rows as an (H, 3 bodies) array (a copy)."""
+        return np.frombuffer(self.rows, dtype=np.float64).reshape(-1, self.width).copy()
+
+    def trim(self, t: float) -> None:
+        """Forget the rows older than the last one at or before time ``t`` (s)."""
+        drop = math.floor((t - self.start) / self.dt + _EPS)
+        drop = min(max(drop, 0), len(self.rows) // self.width - 1)
+        if drop > 0:
+            del self.rows[: self.width * drop]
+            self.start += drop * self.dt
+
+
+class LaserScanner:
+    """One robot's scanner: its :class:`~omnibot.robot.description.ScannerSpec`, and the seed and
+    stream key of its random numbers."""
+
+    def __init__(self, spec: ScannerSpec, seed: int, key: int) -> None:
+        self.spec = spec
+        n = spec.rays
+        self.period = spec.period
+        self.time_increment = self.period / n if spec.motion_distortion else 0.0
+        self.mount = Pose2D(spec.x, spec.y, spec.yaw)
+        self.angle_increment = spec.angle_increment
+        """Angle between consecutive rays, rad (negative: clockwise)."""
+        self.angles: FloatArray = np.arange(n, dtype=np.float64) * self.angle_increment
+        """Direction of every ray in the scanner frame, rad."""
+        self._base_angles = np.ascontiguousarray(self.angles + spec.yaw)
+        self._offsets = np.arange(n, dtype=np.float64) * self.time_increment
+        self._seed, self._key = seed, key
+        self._bitgen = np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(key,)))
+        self._gen = np.random.Generator(self._bitgen)
+        self._stream_rev = 0
+        """Revolution whose draws come next from the stream."""
+        stretch = 1.0 + 6.0 * spec.noise_fraction
+        self._cast_range = spec.range_max * stretch + 6.0 * spec.noise_std + spec.resolution
+        self._true = np.full(n, math.inf)
+        self._mount_reach = math.hypot(spec.x, spec.y)
+        self._index: tuple[IntArray, IntArray, FloatArray] | None = None
+        self._index_disc = (0.0, 0.0, 0.0)
+        self._index_segments: FloatArray | None = None
+        self.active = False
+        self.revolution = 0
+        """Index of the revolution being measured."""
+        self._next_ray = 0
+        self.due = math.inf
+        """Simulated time (s) by which :meth:`flush` has a revolution to deliver."""
+        self.last: Scan | None = None
+        """The latest complete revolution."""
+        self.scans = 0
+        """Revolutions delivered since the scanner was made."""
+
+    def __repr__(self) -> str:
+        state = f"revolution {self.revolution}" if self.active else "off"
+        return (
+            f"LaserScanner({self.spec.model!r}, {self.spec.rays} rays at {self.spec.rate_hz:g} Hz, {state})"
+        )
+
+    # ------------------------------------------------------------------ switching
+
+    def start(self, t: float) -> None:
+        """Start measuring at simulated time ``t`` (s): the first revolution is the first that starts
+        at or after ``t``; poses are needed from :attr:`needs_from` on."""
+        self.active = True
+        self.revolution = math.ceil(t / self.period - _EPS)
+        self._next_ray = 0
+        self.due = self.revolution * self.period + self.period
+
+    def stop(self) -> None:
+        """Stop measuring; the revolution under way is dropped."""
+        self.active = False
+        self.due = math.inf
+
+    @property
+    def needs_from(self) -> float:
+        """Time (s) of the next ray to cast: the poses before it are no longer needed."""
+        nxt = self._next_ray
+        return self.revolution * self.period + (self._offsets[nxt] if nxt < self.spec.rays else self.period)
+
+    # ------------------------------------------------------------------ measuring
+
+    def flush(
+        self,
+        t: float,
+        segments: FloatArray,
+        poses: PoseLog,
+        own: int = 0,
+        bodies: tuple[FloatArray, IntArray] | None = None,
+    ) -> list[Scan]:
+        """Cast every ray due by simulated time ``t`` (s); returns the revolutions completed.
+
+        The rays meet the world's edges ``segments`` (K, 4) and the other bodies of ``poses``
+        (body ``own`` is the scanner's robot): ``bodies`` gives every body's outline in its own
+        frame, packed (all vertices (V, 2), offsets (bodies + 1,)); None: the log holds only the robot.
+        """
+        if not self.active:
+            return []
+        body_v, body_off = bodies if bodies is not None else (_NO_VERTICES, _NO_BODIES)
+        hist = poses.array()
+        done: list[Scan] = []
+        n = self.spec.rays
+        while True:
+            stamp = self.revolution * self.period
+            end = stamp + self.period
+            if t >= end - _EPS:  # the whole revolution (the usual call: its end is the due time)
+                last = n
+            else:
+                last = int(np.searchsorted(self._offsets, t - stamp + _EPS, side="right"))
+            if last > self._next_ray:
+                first = self._next_ray
+                starts, entries, near = self._index_for(segments, hist, own)
+                kernels.scan_rays(
+                    stamp + self._offsets[first:last],
+                    self._base_angles[first:last],
+                    poses.start,
+                    poses.dt,
+                    hist,
+                    own,
+                    float(self.mount.x),
+                    float(self.mount.y),
+                    segments,
+                    starts,
+                    entries,
+                    near,
+                    body_v,
+                    body_off,
+                    float(self._cast_range),
+                    self._true[first:last],
+                )
+                self._next_ray = last
+            if self._next_ray < n or t < end - _EPS:
+                break
+            done.append(self._deliver(stamp))
+            self.revolution += 1
+            self._next_ray = 0
+            if t < end + self.period - _EPS:
+                break  # the next revolution's rays due by now are cast with the rest of it
+        self.due = self.revolution * self.period + self.period
+        return done
+
+    def _index_for(
+        self, segments: FloatArray, hist: FloatArray, own: int
+    ) -> tuple[IntArray, IntArray, FloatArray]:
+        """The edges by direction (:func:`~omnibot.sim.kernels.scan_index`) for origins anywhere the
+        scanner was in ``hist``: the last one while it holds them all (and the edges are the same),
+        else a new one around them with INDEX_SLACK to spare, so a robot driving at 1 m/s needs a new
+        one every few revolutions and a standing one never."""
+        xs, ys = hist[:, 3 * own], hist[:, 3 * own + 1]
+        ax, ay, radius = self._index_disc
+        if self._index is not None and segments is self._index_segments:
+            inner = radius - self._mount_reach
+            if inner > 0 and float(np.max((xs - ax) ** 2 + (ys - ay) ** 2)) <= inner * inner:
+                return self._index
+        ax, ay = float(xs.mean()), float(ys.mean())
+        spread = float(np.sqrt(np.max((xs - ax) ** 2 + (ys - ay) ** 2)))
+        radius = spread + self._mount_reach + INDEX_SLACK
+        self._index = kernels.scan_index(segments, ax, ay, radius, float(self._cast_range))
+        self._index_disc = (ax, ay, radius)
+        self._index_segments = segments
+        return self._index
+
+    def _draws(self, revolution: int) -> FloatArray:
+        """The 3 * rays uniform draws of ``revolution`` (the stream jumped to it)."""
+        size = 3 * self.spec.rays
+        if revolution < self._stream_rev:  # back in the stream: from its start again
+            self._bitgen = np.random.PCG64(np.random.SeedSequence(self._seed, spawn_key=(self._key,)))
+            self._gen = np.random.Generator(self._bitgen)
+            self._stream_rev = 0
+        if revolution > self._stream_rev:
+            self._bitgen.advance((revolution - self._stream_rev) * size)
+        self._stream_rev = revolution + 1
+        return self._gen.random(size)
+
+    def _deliver(self, stamp: float) -> Scan:
+        spec, n = self.spec, self.spec.rays
+        measured = np.empty(n)
+        kernels.scan_measure(
+            self._true,
+            self._draws(self.revolution),
+            float(spec.noise_std),
+            float(spec.noise_fraction),
+            float(spec.resolution),
+            float(spec.dropout),
+            float(spec.range_min),
+            float(spec.range_max),
+            measured,
+        )
+        scan = Scan(
+            stamp=stamp,
+            angle_min=0.0,
+            angle_increment=self.angle_increment,
+            ranges=measured,
+            range_min=spec.range_min,
+            range_max=spec.range_max,
+            time_increment=self.time_increment,
+            scan_time=self.period,
+            frame=spec.frame,
+            mount=self.mount,
+        )
+        self._true.fill(math.inf)
+        self.last = scan
+        self.scans += 1
+        return scan
