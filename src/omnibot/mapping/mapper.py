@@ -25,7 +25,7 @@ from collections.abc import Iterable, Sequence
 
 import numba
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from omnibot.mapping.grid import UNKNOWN, OccupancyGrid
 from omnibot.motion import Pose2D
@@ -246,6 +246,22 @@ class OccupancyMapper:
             max(oy, float(ends[:, 1].max())),
         )
         self._integrate(ox, oy, ends, hits)
+
+    def add_points(self, origin: tuple[float, float], points: ArrayLike) -> None:
+        """Integrate returns given as (n, 2) map-frame points seen from ``origin`` (the scanner's
+        position, map frame): free from the origin to each point, occupied at it. For returns already
+        corrected for the scanner's motion (:func:`omnibot.mapping.deskew.scan_points`)."""
+        ends = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        if len(ends) == 0:
+            return
+        ox, oy = float(origin[0]), float(origin[1])
+        self._fit(
+            min(ox, float(ends[:, 0].min())),
+            min(oy, float(ends[:, 1].min())),
+            max(ox, float(ends[:, 0].max())),
+            max(oy, float(ends[:, 1].max())),
+        )
+        self._integrate(ox, oy, ends, np.ones(len(ends), dtype=np.bool_))
 
     def _integrate(self, ox: float, oy: float, ends: FloatArray, hits: NDArray[np.bool_]) -> None:
         self._scans += 1

@@ -32,9 +32,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from omnibot.mapping.se2 import wrap
+import numpy as np
+from numpy.typing import NDArray
+
+from omnibot.mapping.deskew import scan_points
+from omnibot.mapping.se2 import between, transform, wrap
 from omnibot.mapping.slam import Slam
-from omnibot.motion import Pose2D
+from omnibot.motion import Pose2D, Twist
 from omnibot.scan import Scan
 
 if TYPE_CHECKING:
@@ -96,6 +100,7 @@ class MappingSink:
         self._history_t: list[float] = []
         self._history_p: list[Pose2D] = []
         self._pending: list[Scan] = []
+        self._clouds: list[tuple[float, NDArray[np.float32], tuple[float, float]]] = []
         self._lock = threading.Lock()
         self._queue: queue.Queue[tuple[Scan, Pose2D] | None] | None = None
         self._worker: threading.Thread | None = None
@@ -122,8 +127,11 @@ class MappingSink:
         self._pending.extend(fresh)
         waiting: list[Scan] = []
         for scan in self._pending:
+            span = scan.time_increment * max(len(scan) - 1, 0)
             odom = interpolate(self._history_t, self._history_p, scan.stamp)
-            if odom is not None:
+            end = interpolate(self._history_t, self._history_p, scan.stamp + span) if span > 0 else odom
+            if odom is not None and end is not None:
+                self._keep(scan, odom, end, span)
                 self._take(scan, odom)
             elif self._history_t and scan.stamp < self._history_t[0]:
                 self.dropped += 1  # before the odometry began (or long gone)
@@ -133,6 +141,16 @@ class MappingSink:
             self.dropped += len(waiting) - PENDING_MAX
             waiting = waiting[-PENDING_MAX:]
         self._pending = waiting
+
+    def _keep(self, scan: Scan, start: Pose2D, end: Pose2D, span: float) -> None:
+        """Keep the scan's returns for the map, moved to the base frame at its first ray by the
+        odometry's motion over the revolution (a spinning scanner's distortion undone)."""
+        twist = Twist()
+        if span > 0:
+            d = between(start, end)
+            twist = Twist(d.x / span, d.y / span, d.theta / span)
+        points = scan_points(scan, twist).astype(np.float32)
+        self._clouds.append((scan.stamp, points, (scan.mount.x, scan.mount.y)))
 
     def _take(self, scan: Scan, odom: Pose2D) -> None:
         if self._queue is not None:
@@ -181,10 +199,18 @@ class MappingSink:
         return track
 
     def grid(self, resolution: float = 0.05) -> OccupancyGrid:
-        """The map: every keyframe's scan at its corrected pose."""
-        from omnibot.mapping.mapper import build_map
+        """The map: every scan's returns (motion distortion undone) at the SLAM's corrected pose of
+        its first ray. Rays without a return clear nothing: a dropout is no evidence of free space."""
+        from omnibot.mapping.mapper import OccupancyMapper
 
-        return build_map([(scan, pose) for pose, scan in self.slam.keyframes()], resolution)
+        poses = dict(self.slam.trajectory())
+        mapper = OccupancyMapper(resolution, max_clear=0.0)
+        for stamp, points, mount in self._clouds:
+            pose = poses.get(stamp)
+            if pose is not None:
+                origin = transform(pose, [mount])[0]
+                mapper.add_points((float(origin[0]), float(origin[1])), transform(pose, points))
+        return mapper.to_grid()
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -215,8 +241,8 @@ def write_outputs(
     if not sink.slam.keyframes():
         raise ValueError("no scan reached the SLAM: nothing to map")
     grid = sink.grid(resolution)
-    files = [save_map(grid, out / "map.yaml")]
-    files.append(out / "map.pgm")
+    save_map(grid, out / "map.yaml")
+    files = [out / "map.yaml", out / "map.pgm"]
     estimate = sink.trajectory()
     tracks = {"estimate": estimate, "odometry": sink.odometry}
     if truth is not None:
@@ -290,7 +316,6 @@ def _plot(path: Path, grid: OccupancyGrid, tracks: dict[str, Track]) -> Path:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    import numpy as np
 
     fig, ax = plt.subplots(figsize=(8, 8 * grid.height / max(grid.width, 1e-9)))
     shade = np.where(grid.data < 0, 0.8, 1.0 - grid.data / 100.0)
