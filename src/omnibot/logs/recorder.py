@@ -296,6 +296,11 @@ class Recorder:
 
     # ------------------------------------------------------------------ time
 
+    def place(self, t: float, epoch_ns: int) -> None:
+        """Link time ``t`` is ``epoch_ns`` (ns since the epoch): the placing of every later time
+        (another recorder's, to stamp alike; before the first message)."""
+        self._t0, self._epoch_ns = t, epoch_ns
+
     def ns(self, t: float) -> int:
         """Link-clock seconds -> ns since the epoch (the first time seen is when recording started)."""
         if self._t0 is None:

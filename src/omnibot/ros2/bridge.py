@@ -16,7 +16,10 @@ URDF, diagnostics) of the host runtime, with no loop of its own.
   (sensor_msgs/BatteryState, once a second while the controller reports its voltage) and
   ``diagnostics`` (who drives and why, the latched emergency stop, refusals, the battery and what
   the ``reporters`` add: the path follower, odometry resets) once a second and at every notice.
-  Every frame carries the robot's tf frame prefix (:mod:`omnibot.ros2.frames`).
+  Every frame carries the robot's tf frame prefix (:mod:`omnibot.ros2.frames`). Stamps are the
+  link's time placed on the wall clock by the process's :class:`~omnibot.ros2.clock.Timeline`; on
+  a simulator ``/clock`` carries the simulated time each cycle, before what the cycle stamps
+  (:mod:`omnibot.ros2.clock`).
 """
 
 from __future__ import annotations
@@ -29,10 +32,11 @@ from typing import Any
 import numpy as np
 
 from omnibot.logs import schemas
-from omnibot.logs.recorder import Recorder, header, quaternion, vector
+from omnibot.logs.recorder import Recorder, header, quaternion, stamp, vector
 from omnibot.logs.topics import IMU, JOINT_STATES, ODOM, RANGE_PREFIX, ROBOT_DESCRIPTION, TF
 from omnibot.motion import Twist
 from omnibot.robot.description import RobotDescription
+from omnibot.ros2.clock import CLOCK, CLOCK_TYPE, Timeline
 from omnibot.ros2.dds import DEFAULT, LATCHED, SENSOR_DATA, Node, Profile
 from omnibot.ros2.frames import prefixed, urdf_for_tf
 from omnibot.ros2.types import from_dds, to_dds
@@ -183,7 +187,8 @@ def battery_state(robot: RobotDescription, voltage: float, ns: int) -> Any:
 
 class Ros2Sink:
     """Publishes each cycle's state on ROS 2 topics (see the module docstring); ``prefix`` is the tf
-    frame prefix (:func:`omnibot.ros2.frames.frame_prefix`)."""
+    frame prefix (:func:`omnibot.ros2.frames.frame_prefix`); ``timeline`` places the stamps (the
+    process's, shared by its robots); ``sim_time``: the link is a simulator's, publish ``/clock``."""
 
     def __init__(
         self,
@@ -192,13 +197,17 @@ class Ros2Sink:
         *,
         prefix: str = "",
         reporters: Sequence[Reporter] = (),
+        timeline: Timeline | None = None,
+        sim_time: bool = False,
     ) -> None:
         self.node = node
         self.robot = robot
         self.prefix = prefix
         self.reporters = list(reporters)
+        self.timeline = timeline or Timeline()
+        self.sim_time = sim_time
         self._writers: dict[str, Any] = {}
-        for topic, typename, profile in self.topics(robot):
+        for topic, typename, profile in self.topics(robot, sim_time=sim_time):
             self._writers[topic] = (node.writer(topic, typename, profile), typename)
         self.published: dict[str, int] = {}
         """Messages published per topic."""
@@ -211,9 +220,10 @@ class Ros2Sink:
         self._started = False
 
     @staticmethod
-    def topics(robot: RobotDescription) -> list[tuple[str, str, Profile]]:
-        """Every topic published: (name, type, QoS profile)."""
-        topics = [
+    def topics(robot: RobotDescription, *, sim_time: bool = False) -> list[tuple[str, str, Profile]]:
+        """Every topic published: (name, type, QoS profile); ``/clock`` with ``sim_time``."""
+        topics = [(CLOCK, CLOCK_TYPE, Profile(depth=1))] if sim_time else []
+        topics += [
             (ODOM, "nav_msgs/msg/Odometry", DEFAULT),
             (TF, "tf2_msgs/msg/TFMessage", Profile(depth=100)),
             (TF_STATIC, "tf2_msgs/msg/TFMessage", LATCHED),
@@ -250,6 +260,7 @@ class Ros2Sink:
     def start(self, t: float) -> None:
         """The URDF on ``robot_description`` and the sensors' frames on ``/tf_static``."""
         self._started = True
+        self.recorder.place(*self.timeline.origin(t))
         self.recorder.start(self.robot, t=t)
         self.recorder.estimator = None  # the runtime's estimate is published instead
         self.write(TF_STATIC, self.static_transforms(self.recorder.ns(t)))
@@ -278,6 +289,8 @@ class Ros2Sink:
         the battery and diagnostics once a second (diagnostics also when a notice came)."""
         if not self._started:
             self.start(cycle.t)
+        if self.sim_time:
+            self.clock(cycle.t)
         sampled = False
         for event in (*cycle.telemetry, *cycle.events):
             self.recorder.event(event)
@@ -293,6 +306,13 @@ class Ros2Sink:
         if cycle.now - self._last_diagnostics >= 1.0 or cycle.notices:
             self._last_diagnostics = cycle.now
             self.write(DIAGNOSTICS, self.diagnostics(cycle))
+
+    def clock(self, t: float) -> None:
+        """``/clock`` at link time ``t`` (the simulated time), unless the process's ``/clock`` is
+        already there (another robot's cycle)."""
+        ns = self.recorder.ns(t)
+        if self.timeline.advance(ns):
+            self.write(CLOCK, schemas.new(CLOCK_TYPE, clock=stamp(ns)))
 
     def diagnostics(self, cycle: Cycle) -> Any:
         """diagnostic_msgs/DiagnosticArray: control (who drives, why, locks), the battery, and what the

@@ -161,15 +161,16 @@ class Node:
         self._domain = _domain(self.domain_id, self.scope)
         with _ENTITIES:
             self.participant = DomainParticipant(self.domain_id)
-        self._topics: dict[str, Any] = {}
+        self._topics: dict[tuple[str, str], Any] = {}
+        """Topics made, by DDS name and ROS type (one name may carry two types: cmd_vel's)."""
         self._services = 0
 
     def _topic(self, name: str, typename: str) -> Any:
         dds = topic_name(name, self.namespace)
-        topic = self._topics.get(dds)
+        topic = self._topics.get((dds, typename))
         if topic is None:
             topic = Topic(self.participant, dds, dds_type(typename))
-            self._topics[dds] = topic
+            self._topics[dds, typename] = topic
         return topic
 
     def writer(self, name: str, typename: str, profile: Profile = DEFAULT) -> Any:
@@ -205,7 +206,7 @@ class Node:
             typename = srv + part
             dds = topic_name(name, self.namespace, kind, suffix)
             topic = Topic(self.participant, dds, request_type(typename))
-            self._topics[dds] = topic
+            self._topics[dds, typename] = topic
             endpoints.append(make(self.participant, topic, qos=qos(DEFAULT, typename, user)))
         return endpoints
 
