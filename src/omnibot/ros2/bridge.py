@@ -1,12 +1,7 @@
-"""The ROS 2 bridge: a source (``cmd_vel``) and a sink (odom, tf, imu, ranges, joint states, the
-URDF, diagnostics) of the host runtime, with no loop of its own.
+"""The ROS 2 bridge's publishing: a sink (odom, tf, imu, ranges, joint states, the URDF,
+diagnostics) of the host runtime, with no loop of its own (its ``cmd_vel`` source:
+:mod:`omnibot.ros2.cmd_vel`).
 
-* :class:`CmdVelSource` takes what arrived on ``cmd_vel`` (geometry_msgs/TwistStamped, or Twist)
-  each cycle without blocking and proposes the newest twist while it is younger than
-  ``cmd_vel_timeout`` (ros2_controllers' name and 0.5 s default), ramped at the robot's
-  acceleration limits (as ros2_controllers' drive controllers apply theirs; the ramp's acceleration
-  goes with the VEL); then it is silent, and the VEL watchdog (:data:`WATCHDOG`) stops the robot
-  (on the wheel-speed loop: braking at the same limits).
 * :class:`Ros2Sink` feeds every cycle's telemetry and events to the MCAP recorder's message
   building (:class:`~omnibot.logs.recorder.Recorder` without a file) and publishes what it builds:
   ``odom`` (nav_msgs/Odometry with covariances) and ``/tf`` odom -> base_link from the runtime's
@@ -24,7 +19,6 @@ URDF, diagnostics) of the host runtime, with no loop of its own.
 
 from __future__ import annotations
 
-import logging
 import math
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -39,80 +33,17 @@ from omnibot.robot.description import RobotDescription
 from omnibot.ros2.clock import CLOCK, CLOCK_TYPE, Timeline
 from omnibot.ros2.dds import DEFAULT, LATCHED, SENSOR_DATA, Node, Profile
 from omnibot.ros2.frames import prefixed, urdf_for_tf
-from omnibot.ros2.types import from_dds, to_dds
+from omnibot.ros2.types import to_dds
 from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.sources import Proposal, RampedTwist
-from omnibot.teleop.mapping import TwistLimits
 
-log = logging.getLogger("omnibot.ros2")
-
-CMD_VEL_PRIORITY = 90
-"""Below the page's stick (100) and a pad (200): a person overrides Nav2; above scripts (50)."""
-CMD_VEL_TIMEOUT = 0.5
-"""s a cmd_vel stays in force (ros2_controllers' ``cmd_vel_timeout``)."""
-WATCHDOG = 0.2
-"""s: the VEL timeout of cmd_vel's commands (the robot stops this long after they end)."""
 TF_STATIC = "/tf_static"
 DIAGNOSTICS = "/diagnostics"
 BATTERY = "battery_state"
-TWIST = "geometry_msgs/msg/Twist"
-TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
 
 POSE_VARIANCE = (1e-3, 1e-3, 1e6, 1e6, 1e6, 4e-3)
 """Odometry pose variances (x, y, z, roll, pitch, yaw): a planar base's, large for what it cannot
 observe (robot_localization's convention)."""
 TWIST_VARIANCE = (1e-3, 1e-3, 1e6, 1e6, 1e6, 2e-3)
-
-
-class CmdVelSource:
-    """``cmd_vel`` into the runtime's arbitration (see the module docstring)."""
-
-    def __init__(
-        self,
-        node: Node,
-        *,
-        stamped: bool = True,
-        timeout: float = CMD_VEL_TIMEOUT,
-        priority: int = CMD_VEL_PRIORITY,
-        name: str = "ros2",
-        limits: TwistLimits | None = None,
-        period: float = 0.02,
-    ) -> None:
-        self.name = name
-        self.priority = priority
-        self.timeout = timeout
-        self.watchdog = WATCHDOG
-        self.wait_reply = False
-        self.typename = TWIST_STAMPED if stamped else TWIST
-        self.reader = node.reader("cmd_vel", self.typename)
-        self.twist: Twist | None = None
-        self.received_at = -math.inf
-        self.received = 0
-        """Messages taken so far."""
-        self.ramped = RampedTwist(limits, period)
-        """The robot's acceleration limits on the twists (as ros2_control's controllers apply theirs)."""
-
-    @property
-    def body_accel(self) -> tuple[float, float, float] | None:
-        """The ramp's planned acceleration of the last proposal, sent with its VEL."""
-        return self.ramped.body_accel
-
-    def propose(self, cycle: Cycle) -> Proposal | None:
-        """The newest cmd_vel while younger than the timeout (on ``cycle.now``), else None."""
-        samples = [s for s in self.reader.take(N=64) if hasattr(s, "__idl_typename__")]
-        if samples:
-            msg = from_dds(samples[-1], self.typename)
-            body = msg.twist if self.typename == TWIST_STAMPED else msg
-            values = (body.linear.x, body.linear.y, body.angular.z)
-            self.received += len(samples)
-            if all(math.isfinite(v) for v in values):
-                self.twist = Twist(*values)
-                self.received_at = cycle.now
-            else:
-                log.warning("cmd_vel with a non-finite value ignored: %s", values)
-        fresh = self.twist is not None and cycle.now - self.received_at <= self.timeout
-        twist = self.ramped(cycle, self.twist if fresh else None)
-        return None if twist is None else Proposal(twist)
 
 
 class _Mirror:

@@ -55,7 +55,8 @@ def add_bridge_options(p: argparse.ArgumentParser, *, several: bool = False) -> 
     p.add_argument(
         "--twist",
         action="store_true",
-        help="cmd_vel is geometry_msgs/Twist (default: TwistStamped, as Nav2 sends)",
+        help="take cmd_vel as geometry_msgs/Twist only (default: Twist and TwistStamped, by what the "
+        "publishers offer)",
     )
     p.add_argument(
         "--cmd-vel-timeout",
@@ -179,7 +180,8 @@ def attach(
     when the link is a simulator's); gives the runtime the fused estimator at its first cycle when
     it has none. Returns the node (close it)."""
     try:
-        from omnibot.ros2.bridge import CmdVelSource, Ros2Sink
+        from omnibot.ros2.bridge import Ros2Sink
+        from omnibot.ros2.cmd_vel import TWIST, CmdVelSource
         from omnibot.ros2.dds import Node
         from omnibot.ros2.odometry import OdometryReset
         from omnibot.ros2.path import PathSource
@@ -219,10 +221,11 @@ def attach(
     runtime.add_source(
         CmdVelSource(
             node,
-            stamped=not args.twist,
+            forced=TWIST if args.twist else None,
             timeout=args.cmd_vel_timeout,
             limits=limits,
             period=runtime.period,
+            notify=notify,
         )
     )
     runtime.add_source(path)

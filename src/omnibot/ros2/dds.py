@@ -28,6 +28,7 @@ from omnibot.ros2 import netns
 from omnibot.ros2.types import dds_type, request_type
 
 try:
+    from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
     from cyclonedds.core import Qos
     from cyclonedds.domain import Domain, DomainParticipant
     from cyclonedds.pub import DataWriter
@@ -182,6 +183,12 @@ class Node:
         """A DataReader of ``typename`` on the ROS topic ``name``."""
         with _ENTITIES:
             return DataReader(self.participant, self._topic(name, typename), qos=qos(profile, typename))
+
+    def publications(self) -> Any:
+        """A reader of the DCPSPublication builtin topic: every writer discovered (``topic_name``,
+        ``type_name`` as on DDS), each once, as :meth:`take` hands them over."""
+        with _ENTITIES:
+            return BuiltinDataReader(self.participant, BuiltinTopicDcpsPublication)
 
     def service_endpoints(self, name: str, srv: str) -> tuple[Any, Any]:
         """The request reader and reply writer of the ROS service ``name`` of type ``srv``

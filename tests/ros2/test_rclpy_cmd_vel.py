@@ -1,0 +1,132 @@
+"""A genuine rclpy (Jazzy's wheels, Fast DDS) drives ``omnibot ros2`` with Twist, then TwistStamped, on
+one ``cmd_vel``, beside a publisher of a type the bridge cannot take, in a private network namespace.
+How far the robot went is the simulator's truth, read from the bridge's ``--log`` with rosbags."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from tests.logs.test_recorder import read_all
+from tests.ros2.netns_helper import run_in_namespace
+
+DRIVE = r"""
+import json, os, subprocess, sys, time
+os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+bridge = subprocess.Popen(
+    [sys.executable, "-m", "omnibot", "ros2", "--port", "sim://omni4", "--duration", "150", "--log", LOG],
+    stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+)
+import rclpy
+from rclpy.node import Node
+from geometry_msgs.msg import Twist, TwistStamped
+from nav_msgs.msg import Odometry
+from std_msgs.msg import String
+
+rclpy.init()
+node = Node("two_teleops")
+odom = []
+node.create_subscription(Odometry, "odom", lambda m: odom.append(m), 10)
+plain = node.create_publisher(Twist, "cmd_vel", 10)  # teleop_twist_joy's and Jazzy Nav2's default
+
+def other_node(name):  # Fast DDS takes one type per topic name in a participant: one context each
+    context = rclpy.Context()
+    context.init()
+    return Node(name, context=context)
+
+stamped = other_node("nav2_stand_in").create_publisher(TwistStamped, "cmd_vel", 10)
+wrong = other_node("wrong_type").create_publisher(String, "cmd_vel", 10)  # the bridge cannot drive on it
+
+def spin_until(done, seconds, publish=None):
+    end, next_pub = time.monotonic() + seconds, 0.0
+    while time.monotonic() < end and not done():
+        if publish and time.monotonic() >= next_pub:
+            publish()
+            next_pub = time.monotonic() + 0.05  # 20 Hz
+        rclpy.spin_once(node, timeout_sec=0.01)
+
+def send_plain():
+    msg = Twist()
+    msg.linear.x = 0.2
+    plain.publish(msg)
+
+def send_stamped():
+    msg = TwistStamped()
+    msg.header.stamp = node.get_clock().now().to_msg()
+    msg.header.frame_id = "base_link"
+    msg.twist.linear.y = 0.2
+    stamped.publish(msg)
+
+def position():
+    p = odom[-1].pose.pose.position
+    return p.x, p.y
+
+def settled():
+    return len(odom) > 10 and all(abs(m.twist.twist.linear.x) + abs(m.twist.twist.linear.y) < 0.01 for m in odom[-10:])
+
+spin_until(lambda: odom and plain.get_subscription_count() and stamped.get_subscription_count(), 90)
+spin_until(lambda: False, 1.0, lambda: wrong.publish(String(data="forward")))
+x0, y0 = position()
+spin_until(lambda: position()[0] - x0 > 0.3, 20, send_plain)
+spin_until(settled, 20)
+x1, y1 = position()
+spin_until(lambda: position()[1] - y1 > 0.3, 20, send_stamped)
+spin_until(settled, 20)
+x2, y2 = position()
+bridge.terminate()
+out, _ = bridge.communicate(timeout=30)
+print(json.dumps({"odom": [[x0, y0], [x1, y1], [x2, y2]], "bridge": out}))
+node.destroy_node()
+rclpy.shutdown()
+"""
+
+
+def truth(path: Path) -> list[tuple[float, float, float]]:
+    """The simulator's poses in the bridge's log (x, y, heading)."""
+    _, messages = read_all(path)
+    poses = []
+    odometry: list[Any] = messages["/omnibot/truth"]  # nav_msgs/Odometry, of rosbags' making
+    for m in odometry:
+        q = m.pose.pose.orientation
+        poses.append((m.pose.pose.position.x, m.pose.pose.position.y, 2 * math.atan2(q.z, q.w)))
+    return poses
+
+
+@pytest.mark.skipif(
+    importlib.util.find_spec("rclpy") is None,
+    reason="rclpy is not installed (the test-only extra: pip install 'omnibot[ros2-test]')",
+)
+def test_twist_and_twist_stamped_publishers_both_drive_the_robot(tmp_path: Path) -> None:
+    """0.3 m ahead on Twist, then 0.3 m to the left on TwistStamped, each as far as the odometry
+    says; the simulator's truth, in the robot's starting frame, agrees within 5 cm. The String
+    publisher is told of in one line, once."""
+    log = tmp_path / "bridge.mcap"
+    script = f"LOG = {str(log)!r}\n" + DRIVE
+    result = json.loads(run_in_namespace(script, timeout=300).stdout.strip().splitlines()[-1])
+    lines = [line for line in result["bridge"].splitlines() if "cmd_vel: a publisher of" in line]
+    assert lines == [
+        "ros2: cmd_vel: a publisher of std_msgs/msg/String ignored: omnibot drives on "
+        "geometry_msgs/msg/Twist or geometry_msgs/msg/TwistStamped"
+    ], result["bridge"]
+    poses = truth(log)
+    x0, y0, heading = poses[0]
+
+    def moved(pose: tuple[float, float, float]) -> tuple[float, float]:
+        dx, dy = pose[0] - x0, pose[1] - y0
+        c, s = math.cos(heading), math.sin(heading)
+        return c * dx + s * dy, -s * dx + c * dy
+
+    turn = next(i for i, p in enumerate(poses) if moved(p)[1] > 0.05)  # where the sideways drive began
+    ahead, aside = moved(poses[turn]), moved(poses[-1])
+    (ox0, oy0), (ox1, oy1), (ox2, oy2) = result["odom"]
+    print(f"truth: {ahead[0]:.3f} m ahead on Twist, then {aside[1]:.3f} m aside on TwistStamped")
+    assert ox1 - ox0 > 0.3 and oy2 - oy1 > 0.3, result["odom"]  # the odometry saw both drives
+    assert abs(ox2 - ox1) < 0.05, result["odom"]
+    assert ahead[0] == pytest.approx(ox1 - ox0, abs=0.05)
+    assert aside[1] == pytest.approx(oy2 - oy0, abs=0.05)
+    assert abs(aside[0] - ahead[0]) < 0.05  # the sideways drive went sideways
