@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -90,6 +91,29 @@ def status(level: int, name: str, message: str, hardware_id: str, values: dict[s
     )
 
 
+@dataclass(frozen=True)
+class Diagnosed:
+    """Whose diagnostic statuses these are: ``hardware_id`` is the robot's name (its namespace, in a
+    fleet; else the description's), and a robot with a namespace has it in every status name
+    (``omnibot r1: control``), so two robots' statuses on the one ``/diagnostics`` never read alike."""
+
+    hardware_id: str
+    namespace: str = ""
+
+    @classmethod
+    def of(cls, robot: str, namespace: str = "") -> Diagnosed:
+        """The robot named ``robot`` (its description's name) in ``namespace``."""
+        return cls(namespace.strip("/") or robot, namespace.strip("/"))
+
+    def name(self, item: str) -> str:
+        """The status name of ``item`` (``control``, ``battery``, ``path``, ``odometry``)."""
+        return f"omnibot {self.namespace}: {item}" if self.namespace else f"omnibot: {item}"
+
+    def status(self, level: int, item: str, message: str, values: dict[str, object]) -> Any:
+        """The robot's diagnostic_msgs/DiagnosticStatus of ``item``."""
+        return status(level, self.name(item), message, self.hardware_id, values)
+
+
 def battery_state(robot: RobotDescription, voltage: float, ns: int) -> Any:
     """sensor_msgs/BatteryState: the ``voltage`` the controller reports, the description's design
     capacity; what the controller does not measure (current, charge, percentage, temperature) is NaN,
@@ -130,8 +154,10 @@ class Ros2Sink:
         reporters: Sequence[Reporter] = (),
         timeline: Timeline | None = None,
         sim_time: bool = False,
+        diagnosed: Diagnosed | None = None,
     ) -> None:
         self.node = node
+        self.diagnosed = diagnosed or Diagnosed.of(robot.name)
         self.robot = robot
         self.prefix = prefix
         self.reporters = list(reporters)
@@ -256,11 +282,10 @@ class Ros2Sink:
             text = "emergency stop latched on the controller; " + text
         sent, asked, achieved = cycle.sent, cycle.decision.twist, cycle.achieved
         statuses = [
-            status(
+            self.diagnosed.status(
                 level,
-                "omnibot: control",
+                "control",
                 text,
-                self.robot.name,
                 {
                     "source": decision.source or "none",
                     "lock": decision.lock or "none",
@@ -282,18 +307,16 @@ class Ros2Sink:
     def _battery_status(self) -> Any:
         nominal = self.robot.battery.voltage
         if self.voltage is None:
-            return status(
+            return self.diagnosed.status(
                 0,
-                "omnibot: battery",
+                "battery",
                 "not reported by the controller (no battery_state published)",
-                self.robot.name,
                 {"nominal_voltage": nominal},
             )
-        return status(
+        return self.diagnosed.status(
             0,
-            "omnibot: battery",
+            "battery",
             f"{self.voltage:.2f} V",
-            self.robot.name,
             {"voltage": f"{self.voltage:.3f}", "nominal_voltage": nominal},
         )
 

@@ -180,7 +180,7 @@ def attach(
     when the link is a simulator's); gives the runtime the fused estimator at its first cycle when
     it has none. Returns the node (close it)."""
     try:
-        from omnibot.ros2.bridge import Ros2Sink
+        from omnibot.ros2.bridge import Diagnosed, Ros2Sink
         from omnibot.ros2.cmd_vel import TWIST, CmdVelSource
         from omnibot.ros2.dds import Node
         from omnibot.ros2.odometry import OdometryReset
@@ -203,6 +203,7 @@ def attach(
         runtime.notify(level, text)
 
     odom = spec.prefix + "odom"
+    diagnosed = Diagnosed.of(robot.name, spec.namespace)
     path = PathSource(
         node,
         robot,
@@ -212,9 +213,10 @@ def attach(
         follower=getattr(args, "follower", "tracker"),
         speed=getattr(args, "speed", None),
         runtime=runtime,
+        diagnosed=diagnosed,
     )
     reset = OdometryReset(
-        node, runtime, odom_frame=odom, notify=notify, on_reset=path.cancel, hardware_id=robot.name
+        node, runtime, odom_frame=odom, notify=notify, on_reset=path.cancel, diagnosed=diagnosed
     )
     EstimatorWhenMissing.add(runtime, robot)
     limits = TwistLimits.from_limits(runtime.client.limits, None, robot)
@@ -238,6 +240,7 @@ def attach(
             reporters=[path.status, reset.status],
             timeline=timeline,
             sim_time=find_simulator(runtime.client.link) is not None,
+            diagnosed=diagnosed,
         )
     )
     StallWatch.on(runtime, robot)  # wheels that turn while the body does not: stop, say so
