@@ -13,6 +13,7 @@ import pytest
 
 from omnibot.ros2.clock import Timeline
 from tests.ros2.netns_helper import run_in_namespace
+from tests.ros2.rclpy_scripts import beside_bridge
 
 
 def test_timeline_places_every_robot_alike_and_clock_never_goes_back() -> None:
@@ -27,19 +28,10 @@ def test_timeline_places_every_robot_alike_and_clock_never_goes_back() -> None:
 
 
 STALL = r"""
-import json, os, signal, subprocess, sys, time
-os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-bridge = subprocess.Popen(
-    [sys.executable, "-m", "omnibot", "ros2", "--port", "sim://omni4", "--duration", "150"],
-    stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-)
-import rclpy
-from rclpy.node import Node
 from rclpy.parameter import Parameter
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 
-rclpy.init()
 node = Node("sim_time_user", parameter_overrides=[Parameter("use_sim_time", Parameter.Type.BOOL, True)])
 ns = lambda t: t.sec * 1_000_000_000 + t.nanosec
 odom, clocks = [], []  # odom: (stamp, the node's clock, the wall clock) at each message
@@ -47,11 +39,6 @@ node.create_subscription(
     Odometry, "odom", lambda m: odom.append((ns(m.header.stamp), node.get_clock().now().nanoseconds, time.time_ns())), 10
 )
 node.create_subscription(Clock, "/clock", lambda m: clocks.append(ns(m.clock)), 10)
-
-def spin_until(done, seconds):
-    end = time.monotonic() + seconds
-    while time.monotonic() < end and not done():
-        rclpy.spin_once(node, timeout_sec=0.01)
 
 spin_until(lambda: len(odom) >= 60, 90)  # the bridge's start, then about a second of odom
 before = len(odom)
@@ -76,7 +63,8 @@ def test_a_use_sim_time_node_follows_the_simulation_through_a_stall() -> None:
     use_sim_time sees each odom as new after the bridge was stopped for 1 s as before it, while on
     its wall clock the same stamps fell about that second behind (what happened before ``/clock``:
     a permanent offset). Medians, so a loaded machine's late deliveries do not decide."""
-    result = json.loads(run_in_namespace(STALL, timeout=240).stdout.strip().splitlines()[-1])
+    script = beside_bridge(["--port", "sim://omni4", "--duration", "150"], STALL)
+    result = json.loads(run_in_namespace(script, timeout=240).stdout.strip().splitlines()[-1])
     odom, before, clocks = result["odom"], result["before"], result["clocks"]
     assert before >= 60 and len(odom) >= before + 100, result["bridge"]
     assert clocks, "no /clock"

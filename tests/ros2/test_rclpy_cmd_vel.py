@@ -14,21 +14,13 @@ import pytest
 
 from tests.logs.test_recorder import read_all
 from tests.ros2.netns_helper import run_in_namespace
+from tests.ros2.rclpy_scripts import beside_bridge
 
 DRIVE = r"""
-import json, os, subprocess, sys, time
-os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-bridge = subprocess.Popen(
-    [sys.executable, "-m", "omnibot", "ros2", "--port", "sim://omni4", "--duration", "150", "--log", LOG],
-    stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-)
-import rclpy
-from rclpy.node import Node
 from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from std_msgs.msg import String
 
-rclpy.init()
 node = Node("two_teleops")
 odom = []
 node.create_subscription(Odometry, "odom", lambda m: odom.append(m), 10)
@@ -41,14 +33,6 @@ def other_node(name):  # Fast DDS takes one type per topic name in a participant
 
 stamped = other_node("nav2_stand_in").create_publisher(TwistStamped, "cmd_vel", 10)
 wrong = other_node("wrong_type").create_publisher(String, "cmd_vel", 10)  # the bridge cannot drive on it
-
-def spin_until(done, seconds, publish=None):
-    end, next_pub = time.monotonic() + seconds, 0.0
-    while time.monotonic() < end and not done():
-        if publish and time.monotonic() >= next_pub:
-            publish()
-            next_pub = time.monotonic() + 0.05  # 20 Hz
-        rclpy.spin_once(node, timeout_sec=0.01)
 
 def send_plain():
     msg = Twist()
@@ -106,7 +90,7 @@ def test_twist_and_twist_stamped_publishers_both_drive_the_robot(tmp_path: Path)
     says; the simulator's truth, in the robot's starting frame, agrees within 5 cm. The String
     publisher is told of in one line, once."""
     log = tmp_path / "bridge.mcap"
-    script = f"LOG = {str(log)!r}\n" + DRIVE
+    script = beside_bridge(["--port", "sim://omni4", "--duration", "150", "--log", str(log)], DRIVE)
     result = json.loads(run_in_namespace(script, timeout=300).stdout.strip().splitlines()[-1])
     lines = [line for line in result["bridge"].splitlines() if "cmd_vel: a publisher of" in line]
     assert lines == [

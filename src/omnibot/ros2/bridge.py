@@ -41,10 +41,15 @@ TF_STATIC = "/tf_static"
 DIAGNOSTICS = "/diagnostics"
 BATTERY = "battery_state"
 
-POSE_VARIANCE = (1e-3, 1e-3, 1e6, 1e6, 1e6, 4e-3)
-"""Odometry pose variances (x, y, z, roll, pitch, yaw): a planar base's, large for what it cannot
-observe (robot_localization's convention)."""
-TWIST_VARIANCE = (1e-3, 1e-3, 1e6, 1e6, 1e6, 2e-3)
+
+GLOBAL = frozenset({TF, TF_STATIC, DIAGNOSTICS, CLOCK})
+"""The topics all robots share (not in a robot's namespace)."""
+
+
+def ros_topic(topic: str) -> str:
+    """The ROS name the bridge publishes a log topic (``/odom``) on: relative (``odom``, in the robot's
+    namespace) but for the shared ones (:data:`GLOBAL`)."""
+    return topic if topic in GLOBAL else topic.lstrip("/")
 
 
 class _Mirror:
@@ -63,10 +68,6 @@ class _Mirror:
 def _triple(twist: Twist | None) -> str:
     """A twist as ``vx,vy,w`` (m/s, m/s, rad/s) for a diagnostic value ("" for none)."""
     return "" if twist is None else f"{twist.vx:.3f},{twist.vy:.3f},{twist.w:.3f}"
-
-
-def _covariance(variances: tuple[float, ...]) -> Any:
-    return np.diag(np.array(variances, dtype=np.float64)).reshape(36)
 
 
 Reporter = Callable[[], Any]
@@ -165,7 +166,7 @@ class Ros2Sink:
         self.sim_time = sim_time
         self._writers: dict[str, Any] = {}
         for topic, typename, profile in self.topics(robot, sim_time=sim_time):
-            self._writers[topic] = (node.writer(topic, typename, profile), typename)
+            self._writers[topic] = (node.writer(ros_topic(topic), typename, profile), typename)
         self.published: dict[str, int] = {}
         """Messages published per topic."""
         self._last_diagnostics = -math.inf
@@ -201,10 +202,7 @@ class Ros2Sink:
         if known is None or known[1] != typename:
             return
         message = schemas.deserialize(data, typename)
-        if topic == ODOM:
-            message.pose.covariance = _covariance(POSE_VARIANCE)
-            message.twist.covariance = _covariance(TWIST_VARIANCE)
-        elif topic == ROBOT_DESCRIPTION:
+        if topic == ROBOT_DESCRIPTION:
             message.data = urdf_for_tf(message.data, self.prefix)
         self.write(topic, message)
 
