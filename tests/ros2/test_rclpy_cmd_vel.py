@@ -19,11 +19,15 @@ from tests.ros2.rclpy_scripts import beside_bridge
 DRIVE = r"""
 from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
+from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 
 node = Node("two_teleops")
 odom = []
 node.create_subscription(Odometry, "odom", lambda m: odom.append(m), 10)
+joints = []  # (stamp, positions): to find in the log
+stamp = lambda m: m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec
+node.create_subscription(JointState, "joint_states", lambda m: joints.append((stamp(m), list(m.position))), 10)
 plain = node.create_publisher(Twist, "cmd_vel", 10)  # teleop_twist_joy's and Jazzy Nav2's default
 
 def other_node(name):  # Fast DDS takes one type per topic name in a participant: one context each
@@ -64,10 +68,23 @@ spin_until(settled, 20)
 x2, y2 = position()
 bridge.terminate()
 out, _ = bridge.communicate(timeout=30)
-print(json.dumps({"odom": [[x0, y0], [x1, y1], [x2, y2]], "bridge": out}))
+print(json.dumps({"odom": [[x0, y0], [x1, y1], [x2, y2]], "joints": joints, "bridge": out}))
 node.destroy_node()
 rclpy.shutdown()
 """
+
+
+def test_the_log_holds_the_messages_published_live(drive: dict[str, Any]) -> None:
+    """Each joint_states rclpy took is in the bridge's ``--log``, stamp and values alike (the bridge
+    stamps as its command's log does)."""
+    _, messages = read_all(drive["log"])
+    logged: dict[int, list[float]] = {}
+    for m in messages["/joint_states"]:
+        js: Any = m
+        logged[js.header.stamp.sec * 1_000_000_000 + js.header.stamp.nanosec] = list(js.position)
+    live = drive["joints"]
+    assert len(live) > 50
+    assert all(logged.get(ns) == positions for ns, positions in live), "a live message not in the log"
 
 
 def truth(path: Path) -> list[tuple[float, float, float]]:
@@ -81,17 +98,23 @@ def truth(path: Path) -> list[tuple[float, float, float]]:
     return poses
 
 
-@pytest.mark.skipif(
-    importlib.util.find_spec("rclpy") is None,
-    reason="rclpy is not installed (the test-only extra: pip install 'omnibot[ros2-test]')",
-)
-def test_twist_and_twist_stamped_publishers_both_drive_the_robot(tmp_path: Path) -> None:
+@pytest.fixture(scope="module")
+def drive(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
+    """The run: what the rclpy node saw, the bridge's output and its log."""
+    if importlib.util.find_spec("rclpy") is None:
+        pytest.skip("rclpy is not installed (the test-only extra: pip install 'omnibot[ros2-test]')")
+    log = tmp_path_factory.mktemp("cmd_vel") / "bridge.mcap"
+    script = beside_bridge(["--port", "sim://omni4", "--duration", "150", "--log", str(log)], DRIVE)
+    result: dict[str, Any] = json.loads(run_in_namespace(script, timeout=300).stdout.strip().splitlines()[-1])
+    result["log"] = log
+    return result
+
+
+def test_twist_and_twist_stamped_publishers_both_drive_the_robot(drive: dict[str, Any]) -> None:
     """0.3 m ahead on Twist, then 0.3 m to the left on TwistStamped, each as far as the odometry
     says; the simulator's truth, in the robot's starting frame, agrees within 5 cm. The String
     publisher is told of in one line, once."""
-    log = tmp_path / "bridge.mcap"
-    script = beside_bridge(["--port", "sim://omni4", "--duration", "150", "--log", str(log)], DRIVE)
-    result = json.loads(run_in_namespace(script, timeout=300).stdout.strip().splitlines()[-1])
+    result, log = drive, drive["log"]
     lines = [line for line in result["bridge"].splitlines() if "cmd_vel: a publisher of" in line]
     assert lines == [
         "ros2: cmd_vel: a publisher of std_msgs/msg/String ignored: omnibot drives on "

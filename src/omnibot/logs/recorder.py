@@ -322,6 +322,12 @@ class Recorder:
         (another recorder's, to stamp alike; before the first message)."""
         self._t0, self._epoch_ns = t, epoch_ns
 
+    @property
+    def placing(self) -> tuple[float, int] | None:
+        """(link time, ns since the epoch) of one instant, by which every time is placed (None before
+        the first message)."""
+        return None if self._t0 is None else (self._t0, self._epoch_ns)
+
     def ns(self, t: float) -> int:
         """Link-clock seconds -> ns since the epoch (the first time seen is when recording started)."""
         if self._t0 is None:

@@ -44,6 +44,13 @@ class Timeline:
                 self._origin = (t, self._wall_ns())
             return self._origin
 
+    def adopt(self, placing: tuple[float, int] | None) -> None:
+        """Place link time as ``placing`` (link time, ns since the epoch) does: the command's log's,
+        so the bridge's stamps are the log's (unless an origin is already given out)."""
+        with self._lock:
+            if self._origin is None and placing is not None:
+                self._origin = placing
+
     def advance(self, ns: int) -> bool:
         """True when ``ns`` is later than every ``/clock`` so far (it becomes the newest)."""
         with self._lock:

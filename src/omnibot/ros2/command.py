@@ -187,6 +187,8 @@ def attach(
         from omnibot.ros2.path import PathSource
     except ImportError:
         raise ConfigError(INSTALL) from None
+    from omnibot.logs.active import active
+    from omnibot.ros2.clock import Timeline
     from omnibot.ros2.netns import UnsafeNetwork
     from omnibot.runtime.sinks import EstimatorWhenMissing
     from omnibot.runtime.stall import StallWatch, start_sonars
@@ -194,6 +196,10 @@ def attach(
     from omnibot.transport.device import find_simulator
 
     spec = spec or robot_specs(args)[0]
+    timeline = timeline or Timeline()
+    recorder = active()  # the command's --log: the bridge stamps as it does
+    if recorder is not None:
+        timeline.adopt(recorder.placing)
     try:
         node = Node(spec.namespace)
     except UnsafeNetwork as exc:
