@@ -6,7 +6,7 @@
 Each cell: the simulated robot (the MicroPython firmware in lockstep, seed 1, the empty world) driven
 through the host runtime by one source for 3 s at a constant twist, as that front end drives it:
 
-* ``cmd_vel``: ROS 2's cmd_vel (:class:`~omnibot.ros2.bridge.CmdVelSource` as ``omnibot ros2``
+* ``cmd_vel``: ROS 2's cmd_vel (:class:`~omnibot.ros2.cmd_vel.CmdVelSource` as ``omnibot ros2``
   builds it, 50 Hz, its reader a stand-in that hands over a TwistStamped each cycle: no DDS);
 * ``pad``: a gamepad through teleop's mapping and deadman (:class:`~omnibot.runtime.sources.PadSource`,
   seed 003's parameters, 20 Hz, the twist ramped at the robot's accelerations);
@@ -36,6 +36,7 @@ from __future__ import annotations
 import argparse
 import math
 from dataclasses import dataclass
+from types import SimpleNamespace
 from typing import Any
 
 from omnibot.client.client import RobotClient
@@ -47,7 +48,7 @@ from omnibot.logs.recorder import twist as ros_twist
 from omnibot.motion import Twist
 from omnibot.navigation.slipcal import simulate_slip_calibration
 from omnibot.robot.description import RobotDescription, load_robot
-from omnibot.ros2.bridge import TWIST_STAMPED, CmdVelSource
+from omnibot.ros2.cmd_vel import TWIST_STAMPED, CmdVelSource
 from omnibot.ros2.command import PERIOD as ROS2_PERIOD
 from omnibot.ros2.types import to_dds
 from omnibot.runtime.runtime import LinkPacer, Runtime
@@ -87,7 +88,9 @@ class Cell:
 class CmdVelNode:
     """A stand-in for the bridge's DDS node: its ``cmd_vel`` reader hands over one TwistStamped with
     ``twist`` at each take (a publisher at the cycle rate), so :class:`CmdVelSource` runs as it does
-    on ROS 2, without DDS."""
+    on ROS 2, without DDS (and no other publisher in the graph)."""
+
+    namespace = ""
 
     def __init__(self, twist: Twist) -> None:
         self.message = to_dds(
@@ -102,6 +105,10 @@ class CmdVelNode:
     def take(self, N: int = 1) -> list[Any]:
         """The newest message, again."""
         return [self.message]
+
+    def publications(self) -> Any:
+        """The graph's publications: none to tell of."""
+        return SimpleNamespace(take=lambda N=1: [])
 
 
 class HeldPad:

@@ -123,3 +123,28 @@ def test_bad_files_are_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[st
     assert main(["send", "--log", str(tmp_path / "no" / "dir" / "x.mcap"), "STATUS"]) == 0  # made
     assert main(["send", "--log", str(tmp_path), "STATUS"]) == 2
     assert "is a directory" in capsys.readouterr().err
+
+
+def test_plot_of_a_log_without_telemetry_says_no_data(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    log, png = tmp_path / "send.mcap", tmp_path / "send.png"
+    assert main(["send", "--log", str(log), "STATUS"]) == 0  # the protocol only: no TEL asked for
+    capsys.readouterr()
+    assert main(["log", "plot", str(log), "-o", str(png)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no data to plot" in err[0], err
+    assert not png.exists()  # no empty figure
+    assert main(["log", "info", str(log)]) == 0  # info has the protocol to show, and says what is missing
+    assert "telemetry: no data" in capsys.readouterr().out
+
+
+def test_info_of_a_log_without_messages_says_no_data(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from omnibot.logs.recorder import Recorder
+
+    log = tmp_path / "empty.mcap"
+    Recorder(log).close()
+    assert main(["log", "info", str(log)]) == 1
+    assert capsys.readouterr().err.strip() == f"omnibot: error: {log}: no data (no messages)"

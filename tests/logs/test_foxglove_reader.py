@@ -56,8 +56,21 @@ def test_foxglove_values_are_what_was_sent(recorded: RecordedRun) -> None:
         assert (m["pose"]["pose"]["position"]["x"], m["pose"]["pose"]["position"]["y"]) == (x, y)
     tx = b"".join(bytes(m["data"]) for m in by_topic[topics.LINK] if m["kind"] == "TX")
     assert tx == recorded.tx
-    ranges = by_topic["range/front"]
+    ranges = by_topic[topics.range_topic("front")]
     for m, tel in zip(ranges, recorded.telemetry, strict=True):
         assert tel.ranges is not None
         expected = tel.ranges[0]
         assert m["range"] == ("Infinity" if expected is None else pytest.approx(expected))
+
+
+def test_foxglove_sees_absolute_topics_and_odom_covariances(recorded: RecordedRun) -> None:
+    from omnibot.logs.recorder import POSE_VARIANCE, TWIST_VARIANCE
+
+    messages, _ = read_with_foxglove(recorded.path)
+    seen = {m["topic"] for m in messages}
+    assert all(topic.startswith("/") for topic in seen), sorted(seen)
+    assert {topics.ODOM, topics.IMU, topics.JOINT_STATES, topics.CMD_VEL, "/range/front"} <= seen
+    odom = [m["message"] for m in messages if m["topic"] == topics.ODOM]
+    for m in odom:
+        assert [m["pose"]["covariance"][7 * i] for i in range(6)] == list(POSE_VARIANCE)
+        assert [m["twist"]["covariance"][7 * i] for i in range(6)] == list(TWIST_VARIANCE)

@@ -121,3 +121,18 @@ def test_token_of_reads_the_query_of_a_get() -> None:
     assert token_of(b"GET / HTTP/1.1\r\n\r\n") is None
     assert token_of(b"GET /?token=a&token=b HTTP/1.1\r\n\r\n") is None
     assert token_of(b"GARBAGE\r\n\r\n") is None
+
+
+def test_the_old_subprotocol_is_offered_as_the_sdks_and_answered_by_its_old_name() -> None:
+    from omnibot.logs.gate import answer_old, offer_sdk
+
+    old = b"GET / HTTP/1.1\r\nHost: x\r\nsec-websocket-protocol: foxglove.websocket.v1\r\n\r\n"
+    assert offer_sdk(old) == (
+        b"GET / HTTP/1.1\r\nHost: x\r\nsec-websocket-protocol: foxglove.sdk.v1\r\n\r\n",
+        True,
+    )
+    both = b"GET / HTTP/1.1\r\nSec-WebSocket-Protocol: foxglove.sdk.v1, foxglove.websocket.v1\r\n\r\n"
+    assert offer_sdk(both) == (both, False)  # the SDK picks its own
+    assert offer_sdk(b"GET / HTTP/1.1\r\nHost: x\r\n\r\n")[1] is False
+    answer = b"HTTP/1.1 101 Switching Protocols\r\nsec-websocket-protocol: foxglove.sdk.v1\r\n\r\n"
+    assert answer_old(answer) == answer.replace(b"foxglove.sdk.v1", b"foxglove.websocket.v1")

@@ -52,7 +52,7 @@ def test_every_path_in_the_layout_resolves() -> None:
     panels = layout["configById"]
     used = json.dumps(layout["layout"])
     assert all(pid in used for pid in panels)  # every configured panel is placed
-    assert resolve("joint_states.velocity[0]") == "float64"
+    assert resolve("/joint_states.velocity[0]") == "float64"
     for pid, config in panels.items():
         kind = pid.split("!")[0]
         if kind in {"Plot", "StateTransitions"}:

@@ -176,3 +176,46 @@ def test_foxglove_address_and_token_are_checked_before_anything_runs(
         assert main(["send", "--port", "sim://omni4", "STATUS", *extra]) == 2, extra
         err = capsys.readouterr().err
         assert message in err and "Traceback" not in err, err
+
+
+@pytest.mark.allow_leaks(SDK_RUNTIME)
+@pytest.mark.parametrize("token", [None, "live-token-123"], ids=["loopback", "with a token"])
+def test_a_client_speaking_only_the_old_subprotocol_is_served(token: str | None) -> None:
+    """Lichtblick and ws-protocol's clients offer only ``foxglove.websocket.v1`` (the SDK's
+    ``foxglove.sdk.v1`` under its old name): the handshake answers with it, and the client gets
+    the server's info, the channel advertised and its messages."""
+    live = FoxgloveLive(0, token=token)
+    text = schemas.new("std_msgs/msg/String", data="hello")
+    data = schemas.serialize(text, "std_msgs/msg/String")
+
+    async def session() -> tuple[str | None, str, bytes]:
+        async with websockets.connect(live.url, subprotocols=[Subprotocol("foxglove.websocket.v1")]) as ws:
+            info = json.loads(await asyncio.wait_for(ws.recv(), 5))
+            live("/greeting", "std_msgs/msg/String", data, 1)  # advertised once it carries a message
+            channel = None
+            while channel is None:
+                msg = json.loads(await asyncio.wait_for(ws.recv(), 5))
+                if msg["op"] == "advertise":
+                    channel = next((c for c in msg["channels"] if c["topic"] == "/greeting"), None)
+            await ws.send(
+                json.dumps({"op": "subscribe", "subscriptions": [{"id": 7, "channelId": channel["id"]}]})
+            )
+            deadline = time.monotonic() + 10
+            while time.monotonic() < deadline:  # a message logged before the subscription is not sent
+                live("/greeting", "std_msgs/msg/String", data, 2)
+                try:
+                    frame = await asyncio.wait_for(ws.recv(), 0.2)
+                except TimeoutError:
+                    continue
+                if isinstance(frame, bytes) and frame[0] == MESSAGE_DATA:
+                    (sub,) = struct.unpack_from("<I", frame, 1)
+                    assert sub == 7
+                    return ws.subprotocol, str(info["op"]), frame[13:]
+            raise AssertionError("no message on the subscription")
+
+    try:
+        subprotocol, op, payload = asyncio.run(session())
+    finally:
+        live.close()
+    assert (subprotocol, op) == ("foxglove.websocket.v1", "serverInfo")
+    assert schemas.deserialize(payload, "std_msgs/msg/String").data == "hello"

@@ -5,12 +5,16 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
+import numpy as np
 import pytest
+import yaml
 from rosbags.highlevel import AnyReader
 
 from omnibot.client.events import Telemetry
 from omnibot.logs import schemas, topics
+from omnibot.logs.reader import LogFile
 from omnibot.logs.recorder import Recorder
 from omnibot.protocol import text
 from omnibot.protocol.messages import Telemetry as TelMessage
@@ -35,7 +39,7 @@ def test_every_message_decodes_with_rosbags(recorded: RecordedRun) -> None:
     assert types[topics.IMU] == "sensor_msgs/msg/Imu"
     assert types[topics.JOINT_STATES] == "sensor_msgs/msg/JointState"
     assert types[topics.CMD_VEL] == "geometry_msgs/msg/TwistStamped"
-    assert types["range/front"] == "sensor_msgs/msg/Range"
+    assert types[topics.range_topic("front")] == "sensor_msgs/msg/Range"
     assert types[topics.ROBOT_DESCRIPTION] == "std_msgs/msg/String"
     assert types[topics.LINK] == schemas.LINK_BYTES
     assert types[topics.PROTOCOL] == schemas.PROTOCOL_LINE
@@ -150,3 +154,41 @@ def test_a_second_link_goes_on_from_the_last_message(tmp_path: Path) -> None:
     rec.close()
     times = [m.ns for m in LogFile.open(tmp_path / "two.mcap").messages()]
     assert times == sorted(times) and (times[-1] - times[0]) / 1e9 > 0.9
+
+
+STANDARD = {
+    topics.ODOM,
+    topics.TF,
+    topics.IMU,
+    topics.JOINT_STATES,
+    topics.CMD_VEL,
+    topics.ROBOT_DESCRIPTION,
+    topics.CALIBRATION,
+    "/range/front",
+}
+"""The topics a ROS 2 base publishes, as rosbag2 records them from a robot without a namespace."""
+
+
+def test_every_channel_is_absolute_as_rosbag2_writes_it(recorded: RecordedRun) -> None:
+    types, _ = read_all(recorded.path)
+    assert set(types) >= STANDARD, sorted(types)
+    assert all(topic.startswith("/") for topic in types), sorted(types)
+    log = LogFile.open(recorded.path)
+    log.read_all()  # the metadata comes on the way
+    rosbag2 = log.metadata["rosbag2"]["serialized_metadata"]
+    meta = yaml.safe_load(rosbag2)["rosbag2_bagfile_information"]  # what `ros2 bag info` reads
+    named = {t["topic_metadata"]["name"] for t in meta["topics_with_message_count"]}
+    assert named == set(types)
+
+
+def test_odom_in_the_log_has_the_covariances_the_bridge_publishes(recorded: RecordedRun) -> None:
+    from omnibot.logs.recorder import POSE_VARIANCE, TWIST_VARIANCE
+
+    _, messages = read_all(recorded.path)
+    odom: list[Any] = messages[topics.ODOM]
+    assert odom
+    for m in odom:
+        assert list(np.diag(np.reshape(m.pose.covariance, (6, 6)))) == list(POSE_VARIANCE)
+        assert list(np.diag(np.reshape(m.twist.covariance, (6, 6)))) == list(TWIST_VARIANCE)
+    truth: list[Any] = messages[topics.TRUTH]
+    assert not np.any(truth[0].pose.covariance)  # the simulator's truth: exact, no covariance

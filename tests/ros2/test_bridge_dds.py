@@ -73,7 +73,8 @@ from omnibot.client.session import robot_session
 from omnibot.logs import schemas
 from omnibot.logs.recorder import header, twist
 from omnibot.protocol import codes
-from omnibot.ros2.bridge import CmdVelSource, Ros2Sink, WATCHDOG
+from omnibot.ros2.bridge import Ros2Sink
+from omnibot.ros2.cmd_vel import CmdVelSource, WATCHDOG
 from omnibot.ros2.dds import Node
 from omnibot.ros2.types import to_dds
 from omnibot.runtime.runtime import Runtime

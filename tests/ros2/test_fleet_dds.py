@@ -1,5 +1,6 @@
 """Two robots in one ``omnibot ros2`` on DDS: namespaces, prefixed frames, ``initialpose``,
-``reset_odometry`` (a client on rmw_cyclonedds' wire), ``path`` and ``battery_state``; every message
+``reset_odometry`` (a client on rmw_cyclonedds' wire), ``path``, ``battery_state`` and each robot's
+diagnostics under its own name; every message
 received is decoded by rosbags. In a private network namespace (tests/ros2/netns_helper.py)."""
 
 from __future__ import annotations
@@ -108,12 +109,13 @@ poses = [schemas.new("geometry_msgs/msg/PoseStamped", header=header(0, "r1/odom"
                      pose=schemas.new("geometry_msgs/msg/Pose", position=point(0.03 * i, 0.0), orientation=quaternion(0.0)))
          for i in range(11)]
 paths.write(to_dds(schemas.new("nav_msgs/msg/Path", header=header(0, "r1/odom"), poses=poses), "nav_msgs/msg/Path"))
-done = lambda: statuses.get(("omni4", "omnibot: path"), ("", {}))[1].get("state") in ("completed", "failed")
+done = lambda: statuses.get(("r1", "omnibot r1: path"), ("", {}))[1].get("state") in ("completed", "failed")
 result["path_done"] = wait(done, 40)
-result["path"] = statuses.get(("omni4", "omnibot: path"))
+result["path"] = statuses.get(("r1", "omnibot r1: path"))
 result["r1_after_path"] = pose("r1/odom")
 result["r2_after_path"] = pose("r2/odom")
-result["battery"] = statuses.get(("omni4", "omnibot: battery"))
+result["battery"] = statuses.get(("r1", "omnibot r1: battery"))
+result["diagnostics"] = sorted(statuses)
 b = last.get("r1/battery_state")
 result["battery_state"] = b and [b.header.frame_id, b.voltage, math.isnan(b.percentage), b.present]
 result["odom_frames"] = [[last[n].header.frame_id, last[n].child_frame_id] for n in ("r1/odom", "r2/odom")]
@@ -167,6 +169,12 @@ def test_two_robots_in_one_process_each_in_its_namespace(url1: str, url2: str) -
     assert result["battery_state"][0] == "r1/base_link" and 6.0 < result["battery_state"][1] < 13.0, result
     assert result["battery_state"][2:] == [True, True]
     assert result["battery"][0].endswith(" V"), result["battery"]
+    # each robot's diagnostics under its own name: one's "path completed" never reads as the other's
+    names = {tuple(key) for key in result["diagnostics"]}
+    for robot in ("r1", "r2"):
+        items = ("control", "battery", "path", "odometry")
+        assert {(robot, f"omnibot {robot}: {item}") for item in items} <= names, names
+    assert all(name.startswith(f"omnibot {hardware_id}: ") for hardware_id, name in names), names
 
 
 def test_a_robot_that_cannot_be_opened_ends_the_fleet_before_any_moves() -> None:

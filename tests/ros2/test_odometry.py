@@ -36,11 +36,22 @@ class Endpoint:
 
 
 class Node:
+    """A :class:`omnibot.ros2.dds.Node` stand-in: a reader per topic name (``cmd_vel`` per type:
+    ``cmd_vel`` TwistStamped's, ``cmd_vel:Twist``...), the publications discovered to hand over."""
+
+    namespace = ""
+
     def __init__(self) -> None:
         self.endpoints: dict[str, Endpoint] = {}
+        self.discovered = Endpoint()
 
     def reader(self, name: str, typename: str) -> Endpoint:
+        if name == "cmd_vel" and not typename.endswith("TwistStamped"):
+            name += ":" + typename.rsplit("/", 1)[-1]
         return self.endpoints.setdefault(name, Endpoint())
+
+    def publications(self) -> Endpoint:
+        return self.discovered
 
     def service_endpoints(self, name: str, srv: str) -> tuple[Endpoint, Endpoint]:
         assert srv == TRIGGER

@@ -11,22 +11,14 @@ import pytest
 from omnibot.logs.schemas import type_hash
 from omnibot.robot.description import load_robot
 from tests.ros2.netns_helper import run_in_namespace
+from tests.ros2.rclpy_scripts import beside_bridge
 
 INTEROP = r"""
-import json, os, subprocess, sys, time
-os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-bridge = subprocess.Popen(
-    [sys.executable, "-m", "omnibot", "ros2", "--port", "sim://omni4", "--duration", "90"],
-    stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-)
-import rclpy
-from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from geometry_msgs.msg import TwistStamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState, Imu
 
-rclpy.init()
 node = Node("teleop_twist_joy_stand_in")
 got = {"odom": [], "joint_states": [], "imu": []}
 node.create_subscription(Odometry, "odom", lambda m: got["odom"].append((time.monotonic(), m)), 10)
@@ -41,18 +33,6 @@ def publish_sideways():
     msg.twist.linear.y = 0.2
     pub.publish(msg)
 
-def spin_until(done, seconds, publish):
-    # Spin (publishing at 20 Hz, as teleop_twist_joy, if asked) until done() or seconds pass:
-    # judged on what the odometry says, not on wall time, since on a loaded machine the
-    # bridge's messages arrive late and bunched, and a fixed spin would see a shorter drive.
-    end = time.monotonic() + seconds
-    next_pub = 0.0
-    while time.monotonic() < end and not done():
-        if publish and time.monotonic() >= next_pub:
-            publish_sideways()
-            next_pub = time.monotonic() + 0.05
-        rclpy.spin_once(node, timeout_sec=0.01)
-
 def last_odom():
     return got["odom"][-1][1] if got["odom"] else None
 
@@ -65,7 +45,7 @@ for topic in ("/odom", "/cmd_vel", "/joint_states"):
     hashes[topic] = [str(i.topic_type_hash) for i in infos]
 y0 = last_odom().pose.pose.position.y if got["odom"] else None
 moved = lambda: got["odom"] and last_odom().pose.pose.position.y - y0 > 0.3
-spin_until(moved, 20.0, True)  # 0.2 m/s sideways: 1.5 s plus the start, if the bridge follows
+spin_until(moved, 20.0, publish_sideways)  # 0.2 m/s sideways: 1.5 s plus the start, if the bridge follows
 y_moving = last_odom().pose.pose.position.y if got["odom"] else None
 drive = [m.twist.twist.linear.y for _, m in got["odom"][-5:]]
 vy_moving = sum(drive) / len(drive) if drive else None  # the speed it drives at, lately
@@ -74,10 +54,10 @@ settled_from = len(got["odom"])
 def settled():
     recent = [m.twist.twist.linear.y for _, m in got["odom"][settled_from:]][-10:]
     return len(recent) == 10 and max(abs(v) for v in recent) < 0.02
-spin_until(settled, 20.0, False)
+spin_until(settled, 20.0)
 still = [m.twist.twist.linear.y for _, m in got["odom"][settled_from:]][-10:]
 mark = len(got["odom"])
-spin_until(lambda: len(got["odom"]) >= mark + 10, 10.0, False)
+spin_until(lambda: len(got["odom"]) >= mark + 10, 10.0)
 still += [m.twist.twist.linear.y for _, m in got["odom"][mark:]]
 last = last_odom()
 bridge.terminate()
@@ -98,7 +78,8 @@ rclpy.shutdown()
     reason="rclpy is not installed (the test-only extra: pip install 'omnibot[ros2-test]')",
 )
 def test_rclpy_drives_and_watches_the_bridge() -> None:
-    result = json.loads(run_in_namespace(INTEROP, timeout=180).stdout.strip().splitlines()[-1])
+    script = beside_bridge(["--port", "sim://omni4", "--duration", "90"], INTEROP)
+    result = json.loads(run_in_namespace(script, timeout=180).stdout.strip().splitlines()[-1])
     print({k: v for k, v in result.items() if k not in ("bridge", "still")})
     assert result["odom"] > 20 and result["joint_states"] > 20 and result["imu"] > 20, result
     assert result["joints"] == [f"{w.name}_joint" for w in load_robot("omni4").wheels], result

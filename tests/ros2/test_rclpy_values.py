@@ -308,7 +308,7 @@ def test_the_robot_stops_within_cmd_vel_timeout_and_the_watchdog(session: dict[s
     in a stall of the bridge), the robot stopped (true
     speed and turn rate) within cmd_vel_timeout + the watchdog (+ 0.3 s for the motors to spin down)
     of the last one, as tests/ros2/test_rclpy_interop.py checks on odom."""
-    from omnibot.ros2.bridge import CMD_VEL_TIMEOUT, WATCHDOG
+    from omnibot.ros2.cmd_vel import CMD_VEL_TIMEOUT, WATCHDOG
 
     last = session["last_rx"]
     sent, received = session["peer"]["sent"], session["received"]

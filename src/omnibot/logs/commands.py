@@ -70,7 +70,9 @@ def info_lines(run: Run) -> list[str]:
         f"link      {tx} bytes sent, {rx} received ({(tx + rx) / run.duration if run.duration else 0:.0f} B/s); "
         f"{len(link_errors)} link errors; {events.get('MALFORMED', 0)} malformed; "
         f"{max(0, unanswered)} commands without a reply",
-        f"          telemetry {len(tel)} samples at {rate:.1f} Hz, longest gap {gap:.3f} s",
+        f"          telemetry {len(tel)} samples at {rate:.1f} Hz, longest gap {gap:.3f} s"
+        if tel
+        else "          telemetry: no data (no TEL samples: no estimate, wheels or sonar in this log)",
     ]
     if run.control:
         lines.append(f"control   {len(run.control)} changes of the source in control")
@@ -90,7 +92,11 @@ def _counts(counts: dict[str, int]) -> str:
 
 
 def _info(args: argparse.Namespace) -> int:
-    print("\n".join(info_lines(_load(args))))
+    run = _load(args)
+    if not run.topics:
+        print(f"omnibot: error: {args.file}: no data (no messages)", file=sys.stderr)
+        return EXIT_FAILED
+    print("\n".join(info_lines(run)))
     return EXIT_OK
 
 
@@ -215,6 +221,13 @@ def _plot(args: argparse.Namespace) -> int:
     check_plot(args.plot, "-o")
     check_distinct([("-o", args.plot)], [("FILE.mcap", args.file)])
     run = _load(args)
+    if not (run.estimate or run.truth or run.joints):
+        print(
+            f"omnibot: error: {args.file}: no data to plot (no estimate, truth or wheel telemetry: "
+            "the log holds only " + (", ".join(sorted(run.topics)) or "no messages") + ")",
+            file=sys.stderr,
+        )
+        return EXIT_FAILED
     try:
         plot_run(run, args.plot)
     except OSError as exc:

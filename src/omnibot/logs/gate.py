@@ -1,4 +1,5 @@
-"""An access token in front of a WebSocket server that has none: the Foxglove SDK's.
+"""In front of the Foxglove SDK's WebSocket server: an access token, which it has not, and the old
+name of its subprotocol, which it does not accept.
 
 The SDK's server accepts every client that speaks its subprotocol (its handshake checks only
 ``Sec-WebSocket-Protocol``; its listener hears of a client first when it subscribes or publishes,
@@ -7,8 +8,14 @@ robot through the Teleop panel. :class:`TokenGate` listens where the user asked,
 connection's HTTP upgrade request, and relays it to the SDK's server (bound to 127.0.0.1 on a port
 of its own) only when its query carries the access token, ``ws://HOST:PORT/?token=TOKEN``, compared
 in constant time by the dashboard's own :func:`omnibot.web.access.token_ok`. Any other request gets
-``403 Forbidden`` and is closed before a byte reaches the SDK. Once accepted, bytes flow both ways
-unchanged (the WebSocket handshake is the SDK's).
+``403 Forbidden`` and is closed before a byte reaches the SDK. Without a token (on loopback) every
+request is relayed.
+
+The SDK's handshake accepts only ``foxglove.sdk.v1``; Lichtblick and ws-protocol's clients offer
+``foxglove.websocket.v1``, the same protocol under its old name (Foxglove says so: the two are
+identical for now). A request that offers the old name and not the new one is relayed offering the
+new one (:func:`offer_sdk`), and the SDK's answer goes back naming the old one (:func:`answer_old`).
+Past the handshake, bytes flow both ways unchanged (the WebSocket handshake is the SDK's).
 
 The gate runs its own asyncio loop in a thread (``omnibot-foxglove-gate``), started by the
 constructor (which binds the port, so a port in use or a bad address fails at once) and stopped by
@@ -41,6 +48,39 @@ def listen(host: str, port: int, key: str) -> socket.socket:
     return sock
 
 
+SDK_SUBPROTOCOL = "foxglove.sdk.v1"
+OLD_SUBPROTOCOL = "foxglove.websocket.v1"
+_PROTOCOL_HEADER = b"sec-websocket-protocol"
+
+
+def _rename_protocols(head: bytes, old: str, new: str, *, unless: str = "") -> tuple[bytes, bool]:
+    """``head`` with ``old`` named ``new`` in its ``Sec-WebSocket-Protocol`` header (not when it
+    names ``unless`` too); whether it was renamed."""
+    lines = head.split(b"\r\n")
+    for i, line in enumerate(lines):
+        name, sep, value = line.partition(b":")
+        if not sep or name.strip().lower() != _PROTOCOL_HEADER:
+            continue
+        offered = [v.strip() for v in value.decode("latin-1").split(",")]
+        if old not in offered or (unless and unless in offered):
+            return head, False
+        renamed = ", ".join(new if v == old else v for v in offered)
+        lines[i] = name + b": " + renamed.encode("latin-1")
+        return b"\r\n".join(lines), True
+    return head, False
+
+
+def offer_sdk(head: bytes) -> tuple[bytes, bool]:
+    """An upgrade request offering :data:`OLD_SUBPROTOCOL` (and not the SDK's) made to offer
+    :data:`SDK_SUBPROTOCOL`; whether it was."""
+    return _rename_protocols(head, OLD_SUBPROTOCOL, SDK_SUBPROTOCOL, unless=SDK_SUBPROTOCOL)
+
+
+def answer_old(head: bytes) -> bytes:
+    """The SDK's answer to a request :func:`offer_sdk` renamed: the subprotocol by its old name."""
+    return _rename_protocols(head, SDK_SUBPROTOCOL, OLD_SUBPROTOCOL)[0]
+
+
 def token_of(head: bytes) -> str | None:
     """The ``token`` query parameter of an HTTP ``GET`` request head (None: none, or not exactly one)."""
     line = head.split(b"\r\n", 1)[0].decode("latin-1")
@@ -52,11 +92,13 @@ def token_of(head: bytes) -> str | None:
 
 
 class TokenGate:
-    """Listens on ``host:port`` and relays the connections that give ``token`` to
-    127.0.0.1:``upstream`` (see the module docstring); :attr:`port` is the port bound,
-    :attr:`refused` counts the connections turned away."""
+    """Listens on ``host:port`` and relays the connections that give ``token`` (None: every one) to
+    127.0.0.1:``upstream``, the old subprotocol's as the SDK's (see the module docstring);
+    :attr:`port` is the port bound, :attr:`refused` counts the connections turned away."""
 
-    def __init__(self, host: str, port: int, upstream: int, token: str, *, key: str = "--foxglove") -> None:
+    def __init__(
+        self, host: str, port: int, upstream: int, token: str | None, *, key: str = "--foxglove"
+    ) -> None:
         self.host = host
         self.upstream = upstream
         self.token = token
@@ -118,7 +160,7 @@ class TokenGate:
         except (asyncio.IncompleteReadError, asyncio.LimitOverrunError, TimeoutError, ConnectionError):
             self.refused += 1
             return
-        if not token_ok(self.token, token_of(head)):
+        if self.token is not None and not token_ok(self.token, token_of(head)):
             self.refused += 1
             writer.write(
                 b"HTTP/1.1 403 Forbidden\r\nContent-Type: text/plain; charset=utf-8\r\n"
@@ -133,8 +175,20 @@ class TokenGate:
         except OSError:
             return
         self.accepted += 1
+        head, renamed = offer_sdk(head)
         try:
             up_writer.write(head)
+            if renamed:  # the SDK's answer names the subprotocol as the client asked
+                try:
+                    answer = await asyncio.wait_for(up_reader.readuntil(b"\r\n\r\n"), HEAD_TIMEOUT)
+                except (
+                    asyncio.IncompleteReadError,
+                    asyncio.LimitOverrunError,
+                    TimeoutError,
+                    ConnectionError,
+                ):
+                    return
+                writer.write(answer_old(answer))
             await asyncio.gather(_pipe(reader, up_writer), _pipe(up_reader, writer))
         finally:
             up_writer.close()

@@ -7,9 +7,11 @@ Binding: 127.0.0.1 by default, with no token, as the SDK's server is. Bound to a
 an access token, as the dashboard does and with the dashboard's code
 (:func:`omnibot.web.access.access_token`: the one given with ``--foxglove-token`` or
 ``$OMNIBOT_FOXGLOVE_TOKEN``, else a random one, printed in the URL). The SDK's server has no way to
-check one, so it then listens on 127.0.0.1 on a port of its own behind a
-:class:`~omnibot.logs.gate.TokenGate`, which relays only the connections whose URL carries the
-token (``ws://HOST:PORT/?token=TOKEN``). A token given on loopback is required there too.
+check one, nor does it accept the old name of its subprotocol (``foxglove.websocket.v1``, which
+Lichtblick and ws-protocol's clients speak), so it always listens on 127.0.0.1 on a port of its own
+behind a :class:`~omnibot.logs.gate.TokenGate`, which relays only the connections whose URL carries
+the token (``ws://HOST:PORT/?token=TOKEN``; every one without a token) and offers the old name as
+the new. A token given on loopback is required there too.
 
 Client publish: a Foxglove client may advertise ``cmd_vel`` (or ``/cmd_vel``) with a
 ``geometry_msgs/Twist`` schema (``geometry_msgs/msg/Twist`` too) in ``cdr`` or ``json``, as the
@@ -169,12 +171,11 @@ class FoxgloveLive:
         self._foxglove = foxglove
         self._context = foxglove.Context()
         self.panel = PanelSource()
-        inner = (HOST, 0) if self.token is not None else (host, port)
-        try:
+        try:  # on 127.0.0.1, behind the gate (the token, the old subprotocol)
             self._server = foxglove.start_server(
                 name=name,
-                host=inner[0],
-                port=inner[1],
+                host=HOST,
+                port=0,
                 context=self._context,
                 capabilities=[Capability.ClientPublish],
                 supported_encodings=["cdr", "json"],
@@ -182,14 +183,12 @@ class FoxgloveLive:
             )
         except Exception as exc:  # the SDK raises its own error for a port in use
             raise ConfigError(f"cannot serve Foxglove on {host}:{port}: {exc}", key="--foxglove") from None
-        self._gate: TokenGate | None = None
-        if self.token is not None:
-            try:
-                self._gate = TokenGate(host, port, self._server.port, self.token)
-            except BaseException:
-                self._server.stop()
-                raise
-        self.port: int = self._gate.port if self._gate is not None else self._server.port
+        try:
+            self._gate = TokenGate(host, port, self._server.port, self.token)
+        except BaseException:
+            self._server.stop()
+            raise
+        self.port: int = self._gate.port
         self._channels: dict[str, Any] = {}
 
     @property
@@ -218,6 +217,5 @@ class FoxgloveLive:
         for channel in self._channels.values():
             channel.close()
         self._channels.clear()
-        if self._gate is not None:
-            self._gate.close()
+        self._gate.close()
         self._server.stop()

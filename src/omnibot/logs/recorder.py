@@ -124,9 +124,30 @@ def twist(vx: float, vy: float, w: float) -> Any:
     return schemas.new("geometry_msgs/msg/Twist", linear=vector(vx, vy), angular=vector(z=w))
 
 
-def odometry(ns: int, frame: str, child: str, pose: Pose2D, body: tuple[float, float, float]) -> Any:
-    """nav_msgs/Odometry: ``pose`` in ``frame``, ``body`` twist (vx, vy, w) in ``child``."""
-    zeros = np.zeros(36, dtype=np.float64)
+POSE_VARIANCE = (1e-3, 1e-3, 1e6, 1e6, 1e6, 4e-3)
+"""The estimate's pose variances (x, y, z, roll, pitch, yaw): a planar base's, large for what it
+cannot observe (robot_localization's convention)."""
+TWIST_VARIANCE = (1e-3, 1e-3, 1e6, 1e6, 1e6, 2e-3)
+
+
+def covariance(variances: Sequence[float] | None) -> Any:
+    """A 6x6 row-major covariance with ``variances`` on its diagonal (None: all zero, unknown)."""
+    if variances is None:
+        return np.zeros(36, dtype=np.float64)
+    return np.diag(np.array(variances, dtype=np.float64)).reshape(36)
+
+
+def odometry(
+    ns: int,
+    frame: str,
+    child: str,
+    pose: Pose2D,
+    body: tuple[float, float, float],
+    variances: tuple[Sequence[float], Sequence[float]] | None = None,
+) -> Any:
+    """nav_msgs/Odometry: ``pose`` in ``frame``, ``body`` twist (vx, vy, w) in ``child``; ``variances``
+    (the pose's, the twist's) on the covariances' diagonals (None: zero)."""
+    pose_var, twist_var = variances or (None, None)
     position = schemas.new("geometry_msgs/msg/Point", x=pose.x, y=pose.y, z=0.0)
     return schemas.new(
         "nav_msgs/msg/Odometry",
@@ -135,10 +156,10 @@ def odometry(ns: int, frame: str, child: str, pose: Pose2D, body: tuple[float, f
         pose=schemas.new(
             "geometry_msgs/msg/PoseWithCovariance",
             pose=schemas.new("geometry_msgs/msg/Pose", position=position, orientation=quaternion(pose.theta)),
-            covariance=zeros,
+            covariance=covariance(pose_var),
         ),
         twist=schemas.new(
-            "geometry_msgs/msg/TwistWithCovariance", twist=twist(*body), covariance=zeros.copy()
+            "geometry_msgs/msg/TwistWithCovariance", twist=twist(*body), covariance=covariance(twist_var)
         ),
     )
 
@@ -295,6 +316,17 @@ class Recorder:
         self._fail_lock = threading.Lock()
 
     # ------------------------------------------------------------------ time
+
+    def place(self, t: float, epoch_ns: int) -> None:
+        """Link time ``t`` is ``epoch_ns`` (ns since the epoch): the placing of every later time
+        (another recorder's, to stamp alike; before the first message)."""
+        self._t0, self._epoch_ns = t, epoch_ns
+
+    @property
+    def placing(self) -> tuple[float, int] | None:
+        """(link time, ns since the epoch) of one instant, by which every time is placed (None before
+        the first message)."""
+        return None if self._t0 is None else (self._t0, self._epoch_ns)
 
     def ns(self, t: float) -> int:
         """Link-clock seconds -> ns since the epoch (the first time seen is when recording started)."""
@@ -526,7 +558,8 @@ class Recorder:
         ns = self.ns(t)
         body = world_to_body((est.vx, est.vy, est.w), est.theta)
         pose = Pose2D(est.x, est.y, est.theta)
-        self.write_pose(ODOM, ns, pose, (float(body[0]), float(body[1]), est.w), tf=True)
+        body3 = (float(body[0]), float(body[1]), est.w)
+        self.write_pose(ODOM, ns, pose, body3, tf=True, variances=(POSE_VARIANCE, TWIST_VARIANCE))
         pose2d = schemas.new("geometry_msgs/msg/Pose2D", x=est.x, y=est.y, theta=est.theta)
         self.write(ESTIMATE, "geometry_msgs/msg/Pose2D", pose2d, ns)
 
@@ -560,10 +593,19 @@ class Recorder:
                 writer.add_metadata(name, values)
 
     def write_pose(
-        self, topic: str, ns: int, pose: Pose2D, body: tuple[float, float, float], *, tf: bool = False
+        self,
+        topic: str,
+        ns: int,
+        pose: Pose2D,
+        body: tuple[float, float, float],
+        *,
+        tf: bool = False,
+        variances: tuple[Sequence[float], Sequence[float]] | None = None,
     ) -> None:
-        """An Odometry odom -> base_link on ``topic`` (and the transform on ``/tf`` if ``tf``)."""
-        self.write(topic, "nav_msgs/msg/Odometry", odometry(ns, "odom", "base_link", pose, body), ns)
+        """An Odometry odom -> base_link on ``topic`` (with ``variances``, the pose's and the twist's,
+        on its covariances; zero without) and the transform on ``/tf`` if ``tf``."""
+        msg = odometry(ns, "odom", "base_link", pose, body, variances)
+        self.write(topic, "nav_msgs/msg/Odometry", msg, ns)
         if tf:
             transform = schemas.new(
                 "geometry_msgs/msg/TransformStamped",

@@ -26,6 +26,7 @@ from omnibot.logs.topics import (
     RANGE_PREFIX,
     ROBOT_DESCRIPTION,
     TRUTH,
+    absolute,
 )
 
 PoseRow = tuple[float, float, float, float, float, float, float]
@@ -124,20 +125,21 @@ def load_run(path: str | Path) -> Run:
             first = m.ns
         last = max(last, m.ns)
         t = (m.ns - first) / 1e9
-        run.topics.setdefault(m.topic, m.typename)
-        run.times[m.topic].append(t)
-        if m.topic not in _DECODED and not m.topic.startswith(RANGE_PREFIX):
+        topic = absolute(m.topic)
+        run.topics.setdefault(topic, m.typename)
+        run.times[topic].append(t)
+        if topic not in _DECODED and not topic.startswith(RANGE_PREFIX):
             continue
         msg = m.decode()
-        if m.topic == ODOM:
+        if topic == ODOM:
             run.estimate.append(_pose(t, msg))
-        elif m.topic == CONTROL:
+        elif topic == CONTROL:
             run.control.append((t, str(msg.source), str(msg.reason), str(msg.lock)))
-        elif m.topic == ESTIMATE:
+        elif topic == ESTIMATE:
             run.estimate_exact.append((t, float(msg.x), float(msg.y), float(msg.theta)))
-        elif m.topic == TRUTH:
+        elif topic == TRUTH:
             run.truth.append(_pose(t, msg))
-        elif m.topic == JOINT_STATES:
+        elif topic == JOINT_STATES:
             run.joints.append(
                 (
                     t,
@@ -147,22 +149,22 @@ def load_run(path: str | Path) -> Run:
                     [float(v) for v in msg.effort],
                 )
             )
-        elif m.topic == IMU:
+        elif topic == IMU:
             run.imu.append((t, float(msg.angular_velocity.z), yaw_of(msg.orientation)))
-        elif m.topic == CMD_VEL:
+        elif topic == CMD_VEL:
             tw = msg.twist
             run.cmd_vel.append((t, float(tw.linear.x), float(tw.linear.y), float(tw.angular.z)))
-        elif m.topic.startswith(RANGE_PREFIX):
-            run.ranges[m.topic[len(RANGE_PREFIX) :]].append((t, float(msg.range)))
-        elif m.topic == PROTOCOL:
+        elif topic.startswith(RANGE_PREFIX):
+            run.ranges[topic[len(RANGE_PREFIX) :]].append((t, float(msg.range)))
+        elif topic == PROTOCOL:
             run.protocol.append((t, str(msg.direction), str(msg.keyword), str(msg.text)))
-        elif m.topic == LINK:
+        elif topic == LINK:
             run.link.append((t, str(msg.kind), bytes(msg.data), str(msg.note)))
-        elif m.topic == ROBOT_DESCRIPTION:
+        elif topic == ROBOT_DESCRIPTION:
             run.robot_description = str(msg.data)
-        elif m.topic == CALIBRATION:
+        elif topic == CALIBRATION:
             run.calibration = str(msg.data)
-        elif m.topic == CYCLE:
+        elif topic == CYCLE:
             run.cycles.append((t, msg))
     run.start_ns, run.end_ns = first or 0, last
     run.cut_short = log.cut_short

@@ -1,15 +1,18 @@
 """Topic names of an omnibot log: the ROS 2 bridge's names for the standard ones (ros2_controllers
-and robot_state_publisher conventions), ``/omnibot/...`` for omnibot's own records."""
+and robot_state_publisher conventions), ``/omnibot/...`` for omnibot's own records. All absolute, as
+rosbag2 writes them (``/odom``, as a robot without a namespace publishes it); the bridge publishes the
+standard ones relative to the robot's namespace (:func:`omnibot.ros2.bridge.ros_topic`). Logs
+written before had ``odom``, ``imu``...: :func:`absolute` reads them alike."""
 
 from __future__ import annotations
 
-ODOM = "odom"
+ODOM = "/odom"
 TF = "/tf"
-IMU = "imu"
-JOINT_STATES = "joint_states"
-CMD_VEL = "cmd_vel"
-ROBOT_DESCRIPTION = "robot_description"
-CALIBRATION = "calibration"
+IMU = "/imu"
+JOINT_STATES = "/joint_states"
+CMD_VEL = "/cmd_vel"
+ROBOT_DESCRIPTION = "/robot_description"
+CALIBRATION = "/calibration"
 LINK = "/omnibot/link"
 PROTOCOL = "/omnibot/protocol"
 TRUTH = "/omnibot/truth"
@@ -23,9 +26,14 @@ FOLLOWER = "omnibot_follower"
 """MCAP metadata ``omnibot_follower/RUN``: a follower run's follower, options, limits and path."""
 TELEOP = "cmd_vel"
 """What Foxglove's Teleop panel publishes on (geometry_msgs/Twist) to drive through the runtime."""
-RANGE_PREFIX = "range/"
+RANGE_PREFIX = "/range/"
 ADOPTED = "omnibot_estimator"
 """MCAP metadata: the estimate is a runtime's from here on (see ``Recorder.adopt``)."""
+
+
+def absolute(topic: str) -> str:
+    """``topic`` with its leading ``/`` (a log's topic as written before topics were absolute)."""
+    return topic if topic.startswith("/") else "/" + topic
 
 
 def range_topic(sonar: str) -> str:

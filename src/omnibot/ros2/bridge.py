@@ -1,12 +1,7 @@
-"""The ROS 2 bridge: a source (``cmd_vel``) and a sink (odom, tf, imu, ranges, joint states, the
-URDF, diagnostics) of the host runtime, with no loop of its own.
+"""The ROS 2 bridge's publishing: a sink (odom, tf, imu, ranges, joint states, the URDF,
+diagnostics) of the host runtime, with no loop of its own (its ``cmd_vel`` source:
+:mod:`omnibot.ros2.cmd_vel`).
 
-* :class:`CmdVelSource` takes what arrived on ``cmd_vel`` (geometry_msgs/TwistStamped, or Twist)
-  each cycle without blocking and proposes the newest twist while it is younger than
-  ``cmd_vel_timeout`` (ros2_controllers' name and 0.5 s default), ramped at the robot's
-  acceleration limits (as ros2_controllers' drive controllers apply theirs; the ramp's acceleration
-  goes with the VEL); then it is silent, and the VEL watchdog (:data:`WATCHDOG`) stops the robot
-  (on the wheel-speed loop: braking at the same limits).
 * :class:`Ros2Sink` feeds every cycle's telemetry and events to the MCAP recorder's message
   building (:class:`~omnibot.logs.recorder.Recorder` without a file) and publishes what it builds:
   ``odom`` (nav_msgs/Odometry with covariances) and ``/tf`` odom -> base_link from the runtime's
@@ -16,99 +11,45 @@ URDF, diagnostics) of the host runtime, with no loop of its own.
   (sensor_msgs/BatteryState, once a second while the controller reports its voltage) and
   ``diagnostics`` (who drives and why, the latched emergency stop, refusals, the battery and what
   the ``reporters`` add: the path follower, odometry resets) once a second and at every notice.
-  Every frame carries the robot's tf frame prefix (:mod:`omnibot.ros2.frames`).
+  Every frame carries the robot's tf frame prefix (:mod:`omnibot.ros2.frames`). Stamps are the
+  link's time placed on the wall clock by the process's :class:`~omnibot.ros2.clock.Timeline`; on
+  a simulator ``/clock`` carries the simulated time each cycle, before what the cycle stamps
+  (:mod:`omnibot.ros2.clock`).
 """
 
 from __future__ import annotations
 
-import logging
 import math
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from omnibot.logs import schemas
-from omnibot.logs.recorder import Recorder, header, quaternion, vector
+from omnibot.logs.recorder import Recorder, header, quaternion, stamp, vector
 from omnibot.logs.topics import IMU, JOINT_STATES, ODOM, RANGE_PREFIX, ROBOT_DESCRIPTION, TF
 from omnibot.motion import Twist
 from omnibot.robot.description import RobotDescription
+from omnibot.ros2.clock import CLOCK, CLOCK_TYPE, Timeline
 from omnibot.ros2.dds import DEFAULT, LATCHED, SENSOR_DATA, Node, Profile
 from omnibot.ros2.frames import prefixed, urdf_for_tf
-from omnibot.ros2.types import from_dds, to_dds
+from omnibot.ros2.types import to_dds
 from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.sources import Proposal, RampedTwist
-from omnibot.teleop.mapping import TwistLimits
 
-log = logging.getLogger("omnibot.ros2")
-
-CMD_VEL_PRIORITY = 90
-"""Below the page's stick (100) and a pad (200): a person overrides Nav2; above scripts (50)."""
-CMD_VEL_TIMEOUT = 0.5
-"""s a cmd_vel stays in force (ros2_controllers' ``cmd_vel_timeout``)."""
-WATCHDOG = 0.2
-"""s: the VEL timeout of cmd_vel's commands (the robot stops this long after they end)."""
 TF_STATIC = "/tf_static"
 DIAGNOSTICS = "/diagnostics"
 BATTERY = "battery_state"
-TWIST = "geometry_msgs/msg/Twist"
-TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
-
-POSE_VARIANCE = (1e-3, 1e-3, 1e6, 1e6, 1e6, 4e-3)
-"""Odometry pose variances (x, y, z, roll, pitch, yaw): a planar base's, large for what it cannot
-observe (robot_localization's convention)."""
-TWIST_VARIANCE = (1e-3, 1e-3, 1e6, 1e6, 1e6, 2e-3)
 
 
-class CmdVelSource:
-    """``cmd_vel`` into the runtime's arbitration (see the module docstring)."""
+GLOBAL = frozenset({TF, TF_STATIC, DIAGNOSTICS, CLOCK})
+"""The topics all robots share (not in a robot's namespace)."""
 
-    def __init__(
-        self,
-        node: Node,
-        *,
-        stamped: bool = True,
-        timeout: float = CMD_VEL_TIMEOUT,
-        priority: int = CMD_VEL_PRIORITY,
-        name: str = "ros2",
-        limits: TwistLimits | None = None,
-        period: float = 0.02,
-    ) -> None:
-        self.name = name
-        self.priority = priority
-        self.timeout = timeout
-        self.watchdog = WATCHDOG
-        self.wait_reply = False
-        self.typename = TWIST_STAMPED if stamped else TWIST
-        self.reader = node.reader("cmd_vel", self.typename)
-        self.twist: Twist | None = None
-        self.received_at = -math.inf
-        self.received = 0
-        """Messages taken so far."""
-        self.ramped = RampedTwist(limits, period)
-        """The robot's acceleration limits on the twists (as ros2_control's controllers apply theirs)."""
 
-    @property
-    def body_accel(self) -> tuple[float, float, float] | None:
-        """The ramp's planned acceleration of the last proposal, sent with its VEL."""
-        return self.ramped.body_accel
-
-    def propose(self, cycle: Cycle) -> Proposal | None:
-        """The newest cmd_vel while younger than the timeout (on ``cycle.now``), else None."""
-        samples = [s for s in self.reader.take(N=64) if hasattr(s, "__idl_typename__")]
-        if samples:
-            msg = from_dds(samples[-1], self.typename)
-            body = msg.twist if self.typename == TWIST_STAMPED else msg
-            values = (body.linear.x, body.linear.y, body.angular.z)
-            self.received += len(samples)
-            if all(math.isfinite(v) for v in values):
-                self.twist = Twist(*values)
-                self.received_at = cycle.now
-            else:
-                log.warning("cmd_vel with a non-finite value ignored: %s", values)
-        fresh = self.twist is not None and cycle.now - self.received_at <= self.timeout
-        twist = self.ramped(cycle, self.twist if fresh else None)
-        return None if twist is None else Proposal(twist)
+def ros_topic(topic: str) -> str:
+    """The ROS name the bridge publishes a log topic (``/odom``) on: relative (``odom``, in the robot's
+    namespace) but for the shared ones (:data:`GLOBAL`)."""
+    return topic if topic in GLOBAL else topic.lstrip("/")
 
 
 class _Mirror:
@@ -127,10 +68,6 @@ class _Mirror:
 def _triple(twist: Twist | None) -> str:
     """A twist as ``vx,vy,w`` (m/s, m/s, rad/s) for a diagnostic value ("" for none)."""
     return "" if twist is None else f"{twist.vx:.3f},{twist.vy:.3f},{twist.w:.3f}"
-
-
-def _covariance(variances: tuple[float, ...]) -> Any:
-    return np.diag(np.array(variances, dtype=np.float64)).reshape(36)
 
 
 Reporter = Callable[[], Any]
@@ -153,6 +90,29 @@ def status(level: int, name: str, message: str, hardware_id: str, values: dict[s
         hardware_id=hardware_id,
         values=[kv(k, v) for k, v in values.items()],
     )
+
+
+@dataclass(frozen=True)
+class Diagnosed:
+    """Whose diagnostic statuses these are: ``hardware_id`` is the robot's name (its namespace, in a
+    fleet; else the description's), and a robot with a namespace has it in every status name
+    (``omnibot r1: control``), so two robots' statuses on the one ``/diagnostics`` never read alike."""
+
+    hardware_id: str
+    namespace: str = ""
+
+    @classmethod
+    def of(cls, robot: str, namespace: str = "") -> Diagnosed:
+        """The robot named ``robot`` (its description's name) in ``namespace``."""
+        return cls(namespace.strip("/") or robot, namespace.strip("/"))
+
+    def name(self, item: str) -> str:
+        """The status name of ``item`` (``control``, ``battery``, ``path``, ``odometry``)."""
+        return f"omnibot {self.namespace}: {item}" if self.namespace else f"omnibot: {item}"
+
+    def status(self, level: int, item: str, message: str, values: dict[str, object]) -> Any:
+        """The robot's diagnostic_msgs/DiagnosticStatus of ``item``."""
+        return status(level, self.name(item), message, self.hardware_id, values)
 
 
 def battery_state(robot: RobotDescription, voltage: float, ns: int) -> Any:
@@ -183,7 +143,8 @@ def battery_state(robot: RobotDescription, voltage: float, ns: int) -> Any:
 
 class Ros2Sink:
     """Publishes each cycle's state on ROS 2 topics (see the module docstring); ``prefix`` is the tf
-    frame prefix (:func:`omnibot.ros2.frames.frame_prefix`)."""
+    frame prefix (:func:`omnibot.ros2.frames.frame_prefix`); ``timeline`` places the stamps (the
+    process's, shared by its robots); ``sim_time``: the link is a simulator's, publish ``/clock``."""
 
     def __init__(
         self,
@@ -192,14 +153,20 @@ class Ros2Sink:
         *,
         prefix: str = "",
         reporters: Sequence[Reporter] = (),
+        timeline: Timeline | None = None,
+        sim_time: bool = False,
+        diagnosed: Diagnosed | None = None,
     ) -> None:
         self.node = node
+        self.diagnosed = diagnosed or Diagnosed.of(robot.name)
         self.robot = robot
         self.prefix = prefix
         self.reporters = list(reporters)
+        self.timeline = timeline or Timeline()
+        self.sim_time = sim_time
         self._writers: dict[str, Any] = {}
-        for topic, typename, profile in self.topics(robot):
-            self._writers[topic] = (node.writer(topic, typename, profile), typename)
+        for topic, typename, profile in self.topics(robot, sim_time=sim_time):
+            self._writers[topic] = (node.writer(ros_topic(topic), typename, profile), typename)
         self.published: dict[str, int] = {}
         """Messages published per topic."""
         self._last_diagnostics = -math.inf
@@ -211,9 +178,10 @@ class Ros2Sink:
         self._started = False
 
     @staticmethod
-    def topics(robot: RobotDescription) -> list[tuple[str, str, Profile]]:
-        """Every topic published: (name, type, QoS profile)."""
-        topics = [
+    def topics(robot: RobotDescription, *, sim_time: bool = False) -> list[tuple[str, str, Profile]]:
+        """Every topic published: (name, type, QoS profile); ``/clock`` with ``sim_time``."""
+        topics = [(CLOCK, CLOCK_TYPE, Profile(depth=1))] if sim_time else []
+        topics += [
             (ODOM, "nav_msgs/msg/Odometry", DEFAULT),
             (TF, "tf2_msgs/msg/TFMessage", Profile(depth=100)),
             (TF_STATIC, "tf2_msgs/msg/TFMessage", LATCHED),
@@ -234,10 +202,7 @@ class Ros2Sink:
         if known is None or known[1] != typename:
             return
         message = schemas.deserialize(data, typename)
-        if topic == ODOM:
-            message.pose.covariance = _covariance(POSE_VARIANCE)
-            message.twist.covariance = _covariance(TWIST_VARIANCE)
-        elif topic == ROBOT_DESCRIPTION:
+        if topic == ROBOT_DESCRIPTION:
             message.data = urdf_for_tf(message.data, self.prefix)
         self.write(topic, message)
 
@@ -250,6 +215,7 @@ class Ros2Sink:
     def start(self, t: float) -> None:
         """The URDF on ``robot_description`` and the sensors' frames on ``/tf_static``."""
         self._started = True
+        self.recorder.place(*self.timeline.origin(t))
         self.recorder.start(self.robot, t=t)
         self.recorder.estimator = None  # the runtime's estimate is published instead
         self.write(TF_STATIC, self.static_transforms(self.recorder.ns(t)))
@@ -278,6 +244,8 @@ class Ros2Sink:
         the battery and diagnostics once a second (diagnostics also when a notice came)."""
         if not self._started:
             self.start(cycle.t)
+        if self.sim_time:
+            self.clock(cycle.t)
         sampled = False
         for event in (*cycle.telemetry, *cycle.events):
             self.recorder.event(event)
@@ -294,6 +262,13 @@ class Ros2Sink:
             self._last_diagnostics = cycle.now
             self.write(DIAGNOSTICS, self.diagnostics(cycle))
 
+    def clock(self, t: float) -> None:
+        """``/clock`` at link time ``t`` (the simulated time), unless the process's ``/clock`` is
+        already there (another robot's cycle)."""
+        ns = self.recorder.ns(t)
+        if self.timeline.advance(ns):
+            self.write(CLOCK, schemas.new(CLOCK_TYPE, clock=stamp(ns)))
+
     def diagnostics(self, cycle: Cycle) -> Any:
         """diagnostic_msgs/DiagnosticArray: control (who drives, why, locks), the battery, and what the
         reporters add."""
@@ -305,11 +280,10 @@ class Ros2Sink:
             text = "emergency stop latched on the controller; " + text
         sent, asked, achieved = cycle.sent, cycle.decision.twist, cycle.achieved
         statuses = [
-            status(
+            self.diagnosed.status(
                 level,
-                "omnibot: control",
+                "control",
                 text,
-                self.robot.name,
                 {
                     "source": decision.source or "none",
                     "lock": decision.lock or "none",
@@ -331,18 +305,16 @@ class Ros2Sink:
     def _battery_status(self) -> Any:
         nominal = self.robot.battery.voltage
         if self.voltage is None:
-            return status(
+            return self.diagnosed.status(
                 0,
-                "omnibot: battery",
+                "battery",
                 "not reported by the controller (no battery_state published)",
-                self.robot.name,
                 {"nominal_voltage": nominal},
             )
-        return status(
+        return self.diagnosed.status(
             0,
-            "omnibot: battery",
+            "battery",
             f"{self.voltage:.2f} V",
-            self.robot.name,
             {"voltage": f"{self.voltage:.3f}", "nominal_voltage": nominal},
         )
 

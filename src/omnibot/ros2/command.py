@@ -55,7 +55,8 @@ def add_bridge_options(p: argparse.ArgumentParser, *, several: bool = False) -> 
     p.add_argument(
         "--twist",
         action="store_true",
-        help="cmd_vel is geometry_msgs/Twist (default: TwistStamped, as Nav2 sends)",
+        help="take cmd_vel as geometry_msgs/Twist only (default: Twist and TwistStamped, by what the "
+        "publishers offer)",
     )
     p.add_argument(
         "--cmd-vel-timeout",
@@ -167,23 +168,38 @@ def check(args: argparse.Namespace) -> list[RobotSpec]:
     return specs
 
 
-def attach(runtime: Any, robot: Any, args: argparse.Namespace, spec: RobotSpec | None = None) -> Any:
+def attach(
+    runtime: Any,
+    robot: Any,
+    args: argparse.Namespace,
+    spec: RobotSpec | None = None,
+    timeline: Any = None,
+) -> Any:
     """Add the bridge to ``runtime``: the cmd_vel and path sources, the odometry reset and publishing
-    sinks; gives the runtime the fused estimator at its first cycle when it has none. Returns the
-    node (close it)."""
+    sinks (stamping on ``timeline``, the process's :class:`~omnibot.ros2.clock.Timeline`; ``/clock``
+    when the link is a simulator's); gives the runtime the fused estimator at its first cycle when
+    it has none. Returns the node (close it)."""
     try:
-        from omnibot.ros2.bridge import CmdVelSource, Ros2Sink
+        from omnibot.ros2.bridge import Diagnosed, Ros2Sink
+        from omnibot.ros2.cmd_vel import TWIST, CmdVelSource
         from omnibot.ros2.dds import Node
         from omnibot.ros2.odometry import OdometryReset
         from omnibot.ros2.path import PathSource
     except ImportError:
         raise ConfigError(INSTALL) from None
+    from omnibot.logs.active import active
+    from omnibot.ros2.clock import Timeline
     from omnibot.ros2.netns import UnsafeNetwork
     from omnibot.runtime.sinks import EstimatorWhenMissing
     from omnibot.runtime.stall import StallWatch, start_sonars
     from omnibot.teleop.mapping import TwistLimits
+    from omnibot.transport.device import find_simulator
 
     spec = spec or robot_specs(args)[0]
+    timeline = timeline or Timeline()
+    recorder = active()  # the command's --log: the bridge stamps as it does
+    if recorder is not None:
+        timeline.adopt(recorder.placing)
     try:
         node = Node(spec.namespace)
     except UnsafeNetwork as exc:
@@ -193,6 +209,7 @@ def attach(runtime: Any, robot: Any, args: argparse.Namespace, spec: RobotSpec |
         runtime.notify(level, text)
 
     odom = spec.prefix + "odom"
+    diagnosed = Diagnosed.of(robot.name, spec.namespace)
     path = PathSource(
         node,
         robot,
@@ -202,24 +219,36 @@ def attach(runtime: Any, robot: Any, args: argparse.Namespace, spec: RobotSpec |
         follower=getattr(args, "follower", "tracker"),
         speed=getattr(args, "speed", None),
         runtime=runtime,
+        diagnosed=diagnosed,
     )
     reset = OdometryReset(
-        node, runtime, odom_frame=odom, notify=notify, on_reset=path.cancel, hardware_id=robot.name
+        node, runtime, odom_frame=odom, notify=notify, on_reset=path.cancel, diagnosed=diagnosed
     )
     EstimatorWhenMissing.add(runtime, robot)
     limits = TwistLimits.from_limits(runtime.client.limits, None, robot)
     runtime.add_source(
         CmdVelSource(
             node,
-            stamped=not args.twist,
+            forced=TWIST if args.twist else None,
             timeout=args.cmd_vel_timeout,
             limits=limits,
             period=runtime.period,
+            notify=notify,
         )
     )
     runtime.add_source(path)
     runtime.add_sink(reset)
-    runtime.add_sink(Ros2Sink(node, robot, prefix=spec.prefix, reporters=[path.status, reset.status]))
+    runtime.add_sink(
+        Ros2Sink(
+            node,
+            robot,
+            prefix=spec.prefix,
+            reporters=[path.status, reset.status],
+            timeline=timeline,
+            sim_time=find_simulator(runtime.client.link) is not None,
+            diagnosed=diagnosed,
+        )
+    )
     StallWatch.on(runtime, robot)  # wheels that turn while the body does not: stop, say so
     start_sonars(runtime.client, robot, SONAR_PERIOD)  # in TEL: the ranges out, the stall watch's witnesses
     return node
@@ -247,15 +276,17 @@ class _Robot:
     label: str
 
 
-def _open(args: argparse.Namespace, spec: RobotSpec, session: Any, url: str, label: str) -> _Robot:
-    """The robot's runtime with the bridge attached (not yet running)."""
+def _open(
+    args: argparse.Namespace, spec: RobotSpec, session: Any, url: str, label: str, timeline: Any
+) -> _Robot:
+    """The robot's runtime with the bridge attached (not yet running), stamping on ``timeline``."""
     from omnibot.cliargs import use_calibration
     from omnibot.runtime.runtime import Runtime
     from omnibot.runtime.sinks import NoticePrinter
 
     slip = use_calibration(args, session.client, session.robot)
     runtime = Runtime(session.client, period=PERIOD, wheel_loop=not args.open_loop, slip=slip)
-    node = attach(runtime, session.robot, args, spec)
+    node = attach(runtime, session.robot, args, spec, timeline)
     runtime.add_sink(NoticePrinter(lambda text: _say(f"{label}{text}"), control=True))
     return _Robot(spec, url, session.client, session.robot, runtime, node, label)
 
@@ -287,18 +318,20 @@ def run(args: argparse.Namespace) -> int:
     several run a thread each (the first to end, or to fail, ends them all)."""
     from omnibot.cliargs import check_sim_options, sim_url
     from omnibot.client.session import robot_session
+    from omnibot.ros2.clock import Timeline
 
     specs = check(args)
     check_sim_options(args)
     several = len(specs) > 1
     stop = threading.Event()
+    timeline = Timeline()  # the robots' stamps placed alike, one /clock
     with contextlib.ExitStack() as stack:
         robots: list[_Robot] = []
         for spec in specs:
             url = spec.url or sim_url(args)
             session = stack.enter_context(robot_session(url, args.robot, timeout=0.5))
             label = f"ros2 [{spec.namespace}]: " if several else "ros2: "
-            one = _open(args, spec, session, url, label)
+            one = _open(args, spec, session, url, label, timeline)
             stack.callback(one.node.close)
             stack.callback(one.runtime.close)
             robots.append(one)

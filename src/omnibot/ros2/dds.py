@@ -28,6 +28,7 @@ from omnibot.ros2 import netns
 from omnibot.ros2.types import dds_type, request_type
 
 try:
+    from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
     from cyclonedds.core import Qos
     from cyclonedds.domain import Domain, DomainParticipant
     from cyclonedds.pub import DataWriter
@@ -161,15 +162,16 @@ class Node:
         self._domain = _domain(self.domain_id, self.scope)
         with _ENTITIES:
             self.participant = DomainParticipant(self.domain_id)
-        self._topics: dict[str, Any] = {}
+        self._topics: dict[tuple[str, str], Any] = {}
+        """Topics made, by DDS name and ROS type (one name may carry two types: cmd_vel's)."""
         self._services = 0
 
     def _topic(self, name: str, typename: str) -> Any:
         dds = topic_name(name, self.namespace)
-        topic = self._topics.get(dds)
+        topic = self._topics.get((dds, typename))
         if topic is None:
             topic = Topic(self.participant, dds, dds_type(typename))
-            self._topics[dds] = topic
+            self._topics[dds, typename] = topic
         return topic
 
     def writer(self, name: str, typename: str, profile: Profile = DEFAULT) -> Any:
@@ -181,6 +183,12 @@ class Node:
         """A DataReader of ``typename`` on the ROS topic ``name``."""
         with _ENTITIES:
             return DataReader(self.participant, self._topic(name, typename), qos=qos(profile, typename))
+
+    def publications(self) -> Any:
+        """A reader of the DCPSPublication builtin topic: every writer discovered (``topic_name``,
+        ``type_name`` as on DDS), each once, as :meth:`take` hands them over."""
+        with _ENTITIES:
+            return BuiltinDataReader(self.participant, BuiltinTopicDcpsPublication)
 
     def service_endpoints(self, name: str, srv: str) -> tuple[Any, Any]:
         """The request reader and reply writer of the ROS service ``name`` of type ``srv``
@@ -205,7 +213,7 @@ class Node:
             typename = srv + part
             dds = topic_name(name, self.namespace, kind, suffix)
             topic = Topic(self.participant, dds, request_type(typename))
-            self._topics[dds] = topic
+            self._topics[dds, typename] = topic
             endpoints.append(make(self.participant, topic, qos=qos(DEFAULT, typename, user)))
         return endpoints
 

@@ -21,7 +21,7 @@ from collections.abc import Callable
 from typing import Any
 
 from omnibot.motion import Pose2D
-from omnibot.ros2.bridge import status
+from omnibot.ros2.bridge import Diagnosed
 from omnibot.ros2.dds import Node
 from omnibot.ros2.service import TriggerService
 from omnibot.ros2.types import from_dds
@@ -56,13 +56,14 @@ class OdometryReset:
         odom_frame: str,
         notify: Callable[[Level, str], object],
         on_reset: Callable[[str], object] = lambda why: None,
-        hardware_id: str = "",
+        diagnosed: Diagnosed | None = None,
     ) -> None:
         self.runtime = runtime
         self.odom_frame = odom_frame
         self.notify = notify
         self.on_reset = on_reset
-        self.hardware_id = hardware_id
+        self.diagnosed = diagnosed or Diagnosed("")
+        """Whose ``odometry`` status it is."""
         self.reader = node.reader(INITIALPOSE, POSE)
         self.service = TriggerService(node, RESET_SERVICE, self.reset)
         self.resets = 0
@@ -122,6 +123,4 @@ class OdometryReset:
 
     def status(self) -> Any:
         """The ``omnibot: odometry`` diagnostic status: resets so far, the last one."""
-        return status(
-            self.last_level, "omnibot: odometry", self.last, self.hardware_id, {"resets": self.resets}
-        )
+        return self.diagnosed.status(self.last_level, "odometry", self.last, {"resets": self.resets})

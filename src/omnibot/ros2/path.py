@@ -33,7 +33,7 @@ from omnibot.control.paths.path import Path
 from omnibot.motion import Estimate
 from omnibot.navigation.judge import FollowJudge
 from omnibot.navigation.session import summary, verdict
-from omnibot.ros2.bridge import status
+from omnibot.ros2.bridge import Diagnosed
 from omnibot.ros2.dds import Node
 from omnibot.ros2.odometry import yaw_of
 from omnibot.ros2.types import from_dds
@@ -85,8 +85,11 @@ class PathSource:
         name: str = "path",
         priority: int = FOLLOWER_PRIORITY,
         runtime: Runtime | None = None,
+        diagnosed: Diagnosed | None = None,
     ) -> None:
         self.name = name
+        self.diagnosed = diagnosed or Diagnosed.of(robot.name)
+        """Whose ``path`` status it is."""
         self.priority = priority
         self.robot = robot
         self.period = period
@@ -208,11 +211,10 @@ class PathSource:
     def status(self) -> Any:
         """The ``omnibot: path`` diagnostic status."""
         path = self.current.path if self.current is not None else None
-        return status(
+        return self.diagnosed.status(
             1 if self.state == "failed" or self.refused else 0,
-            "omnibot: path",
+            "path",
             f"{self.state}: {self.detail}" + (f" ({self.refused})" if self.refused else ""),
-            self.robot.name,
             {
                 "state": self.state,
                 "poses": 0 if path is None else len(path),

@@ -46,6 +46,14 @@ def dds_name(typename: str) -> str:
     return f"{pkg}::{kind}::dds_::{name}_"
 
 
+def ros_name(dds: str) -> str:
+    """``pkg::msg::dds_::Name_`` -> ``pkg/msg/Name`` (any other name as it is)."""
+    parts = dds.split("::")
+    if len(parts) == 4 and parts[2] == "dds_" and parts[3].endswith("_"):
+        return f"{parts[0]}/{parts[1]}/{parts[3][:-1]}"
+    return dds
+
+
 def _member(desc: tuple[Any, Any]) -> Any:
     node, detail = desc
     kind = int(node)

@@ -1,0 +1,89 @@
+"""The bridge's cmd_vel source without DDS: the newest twist while fresh, ramped at the robot's limits; the
+types taken by what the publishers in the graph offer."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import pytest
+
+from omnibot.logs import schemas
+from omnibot.logs.recorder import header, twist
+from omnibot.motion import Twist
+from omnibot.ros2.cmd_vel import TWIST, TWIST_STAMPED, CmdVelSource
+from omnibot.ros2.types import to_dds
+from omnibot.runtime.cycle import Cycle
+from omnibot.teleop.mapping import TwistLimits
+from tests.ros2.test_odometry import Node
+
+
+def test_cmd_vel_ramps_at_the_robots_acceleration_and_falls_silent_when_stale() -> None:
+    node = Node()
+    source = CmdVelSource(node, limits=TwistLimits(1.0, 5.0, accel=2.0, angular_accel=10.0), period=0.02)  # type: ignore[arg-type]
+    message = to_dds(
+        schemas.new(TWIST_STAMPED, header=header(0, "base_link"), twist=twist(0.3, 0.0, 0.0)), TWIST_STAMPED
+    )
+    node.endpoints["cmd_vel"].samples.append(message)
+    speeds = []
+    for k in range(10):
+        proposal = source.propose(Cycle(k, k * 0.02, k * 0.02, None))
+        assert proposal is not None
+        speeds.append(round(proposal.twist.vx, 3))
+    assert speeds == [0.04, 0.08, 0.12, 0.16, 0.2, 0.24, 0.28, 0.3, 0.3, 0.3]
+    assert source.body_accel == pytest.approx((0.0, 0.0, 0.0))
+    assert source.propose(Cycle(10, 0.2 + source.timeout + 0.01, 0.0, None)) is None  # stale: silent
+    unlimited = CmdVelSource(Node())  # type: ignore[arg-type]
+    unlimited.reader.samples.append(message)
+    proposal = unlimited.propose(Cycle(0, 0.0, 0.0, None))
+    assert proposal is not None and proposal.twist == Twist(0.3, 0.0, 0.0)
+
+
+def publication(typename: str, topic: str = "rt/cmd_vel") -> SimpleNamespace:
+    """A DCPSPublication sample as cyclonedds hands it over (the fields the source reads)."""
+    pkg, kind, name = typename.split("/")
+    return SimpleNamespace(topic_name=topic, type_name=f"{pkg}::{kind}::dds_::{name}_")
+
+
+def test_a_twist_publisher_in_the_graph_is_taken_and_one_of_another_type_told_of_once() -> None:
+    node = Node()
+    told: list[tuple[str, str]] = []
+    source = CmdVelSource(node, notify=lambda level, text: told.append((level, text)))  # type: ignore[arg-type]
+    assert set(source.readers) == {TWIST_STAMPED}
+    node.discovered.samples += [
+        publication(TWIST),
+        publication("std_msgs/msg/String"),
+        publication("std_msgs/msg/String"),  # a second writer of it: not told again
+        publication("nav_msgs/msg/Path", "rt/path"),  # another topic: none of cmd_vel's business
+    ]
+    assert source.propose(Cycle(0, 0.0, 0.0, None)) is None
+    assert set(source.readers) == {TWIST_STAMPED, TWIST}
+    assert told == [
+        (
+            "warn",
+            "cmd_vel: a publisher of std_msgs/msg/String ignored: omnibot drives on "
+            "geometry_msgs/msg/Twist or geometry_msgs/msg/TwistStamped",
+        )
+    ]
+    node.endpoints["cmd_vel:Twist"].samples.append(to_dds(twist(0.0, 0.2, 0.0), TWIST))
+    proposal = source.propose(Cycle(1, 0.02, 0.02, None))
+    assert proposal is not None and proposal.twist == Twist(0.0, 0.2, 0.0)
+    stamped = schemas.new(TWIST_STAMPED, header=header(0, "base_link"), twist=twist(0.1, 0.0, 0.0))
+    node.endpoints["cmd_vel"].samples.append(to_dds(stamped, TWIST_STAMPED))
+    proposal = source.propose(Cycle(2, 0.04, 0.04, None))
+    assert proposal is not None and proposal.twist == Twist(0.1, 0.0, 0.0)
+    assert source.received == 2
+
+
+def test_twist_forced_takes_only_twist_and_says_why_of_a_twist_stamped_publisher() -> None:
+    node = Node()
+    told: list[str] = []
+    source = CmdVelSource(node, forced=TWIST, notify=lambda level, text: told.append(text))  # type: ignore[arg-type]
+    node.discovered.samples += [publication(TWIST_STAMPED), publication(TWIST)]
+    source.propose(Cycle(0, 0.0, 0.0, None))
+    assert set(source.readers) == {TWIST}
+    assert told == [
+        "cmd_vel: a publisher of geometry_msgs/msg/TwistStamped ignored: --twist takes only "
+        "geometry_msgs/msg/Twist (without --twist both are taken)"
+    ]
+    with pytest.raises(ValueError, match="not std_msgs/msg/String"):
+        CmdVelSource(node, forced="std_msgs/msg/String")  # type: ignore[arg-type]
