@@ -54,6 +54,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--resolution", type=float, default=0.05, metavar="M", help="map cell size, m (default 0.05)"
     )
+    p.add_argument(
+        "--hit-range",
+        type=float,
+        metavar="M",
+        help="returns up to this range mark map cells, farther ones only clear (default: where the "
+        "scanner's range noise reaches 2.5 cm, 2.5 m for an RPLIDAR A1)",
+    )
     p.add_argument("--follower", default="tracker", help="--path: seed002, pure_pursuit or tracker (default)")
     p.add_argument("--speed", type=float, help="--path: speed cap, m/s (default: the robot's limit)")
     p.add_argument("--config", metavar="FILE.yaml", help="--teleop parameters (default seed 003's)")
@@ -79,6 +86,8 @@ def _check(args: argparse.Namespace) -> Path:
         raise ConfigError(f"expected a cell size of 0.005 to 1 m, got {args.resolution}", key="--resolution")
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
         raise ConfigError(f"expected a positive number of seconds, got {args.duration}", key="--duration")
+    if args.hit_range is not None and not (math.isfinite(args.hit_range) and args.hit_range > 0):
+        raise ConfigError(f"expected a positive range in m, got {args.hit_range}", key="--hit-range")
     if args.speed is not None and not (math.isfinite(args.speed) and args.speed > 0):
         raise ConfigError(f"expected a positive speed in m/s, got {args.speed}", key="--speed")
     if args.scanner is not None and (args.port is None or args.port.startswith(("sim:", "spy+sim:"))):
@@ -131,16 +140,18 @@ class _Mapping:
         self.world: Any = None
         self._sim: Any = None
         self._listener: Any = None
+        self.noise: Any = None
 
     def attach(self, runtime: Any, session: Any) -> list[Any]:
         from omnibot.estimation.estimator import make_estimator
         from omnibot.lidar.reader import open_scanner
-        from omnibot.mapping.session import MappingSink, Track
+        from omnibot.mapping.session import MappingSink, RangeNoise, Track
         from omnibot.motion import Pose2D
         from omnibot.transport.device import find_simulator
 
         client, robot = session.client, session.robot
         scans = open_scanner(self.args.scanner, client.link, robot)
+        self.noise = RangeNoise.of(robot, self.args.hit_range)
         sim = find_simulator(client.link)
         start = Pose2D(0.0, 0.0, 0.0)
         if sim is not None:
@@ -181,7 +192,9 @@ class _Mapping:
             print(f"omnibot map: the SLAM failed: {sink.failure}", file=sys.stderr)
             return 1
         try:
-            result = write_outputs(out, sink, truth=self.truth, world=self.world, resolution=resolution)
+            result = write_outputs(
+                out, sink, truth=self.truth, world=self.world, resolution=resolution, noise=self.noise
+            )
         except ValueError as exc:
             print(f"omnibot map: {exc} ({sink.received} scans received)", file=sys.stderr)
             return 1

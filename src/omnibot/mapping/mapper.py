@@ -74,6 +74,7 @@ def _integrate(
     oy: float,
     ends: FloatArray,
     hits: NDArray[np.bool_],
+    weights: FloatArray,
     res: float,
     l_free: float,
     l_occ: float,
@@ -91,7 +92,7 @@ def _integrate(
         if 0 <= r < rows and 0 <= c < cols and stamp[r, c] != scan_id:
             stamp[r, c] = scan_id
             seen[r, c] = True
-            v = logodds[r, c] + l_occ
+            v = logodds[r, c] + l_occ * weights[k]
             logodds[r, c] = min(v, l_max)
     fx, fy = ox / res, oy / res
     for k in range(ends.shape[0]):
@@ -247,11 +248,22 @@ class OccupancyMapper:
         )
         self._integrate(ox, oy, ends, hits)
 
-    def add_points(self, origin: tuple[float, float], points: ArrayLike) -> None:
-        """Integrate returns given as (n, 2) map-frame points seen from ``origin`` (the scanner's
-        position, map frame): free from the origin to each point, occupied at it. For returns already
-        corrected for the scanner's motion (:func:`omnibot.mapping.deskew.scan_points`)."""
-        ends = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    def add_points(
+        self,
+        origin: tuple[float, float],
+        points: ArrayLike,
+        clear: ArrayLike | None = None,
+        weights: ArrayLike | None = None,
+    ) -> None:
+        """Integrate returns given as (n, 2) map-frame ``points`` seen from ``origin`` (the scanner's
+        position, map frame): free from the origin to each point, occupied at it; ``clear`` (m, 2)
+        end points of rays that only clear (returns too uncertain to mark a cell, shortened by their
+        uncertainty); ``weights`` (n,) scale each hit's evidence (1: a hit as :meth:`add` counts it),
+        e.g. less for a far, noisier return. For returns already corrected for the scanner's motion
+        (:func:`omnibot.mapping.deskew.scan_points`)."""
+        hit = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        free = np.zeros((0, 2)) if clear is None else np.asarray(clear, dtype=np.float64).reshape(-1, 2)
+        ends = np.concatenate((hit, free))
         if len(ends) == 0:
             return
         ox, oy = float(origin[0]), float(origin[1])
@@ -261,10 +273,24 @@ class OccupancyMapper:
             max(ox, float(ends[:, 0].max())),
             max(oy, float(ends[:, 1].max())),
         )
-        self._integrate(ox, oy, ends, np.ones(len(ends), dtype=np.bool_))
+        hits = np.zeros(len(ends), dtype=np.bool_)
+        hits[: len(hit)] = True
+        w = np.ones(len(ends))
+        if weights is not None:
+            w[: len(hit)] = np.asarray(weights, dtype=np.float64).reshape(-1)
+        self._integrate(ox, oy, ends, hits, w)
 
-    def _integrate(self, ox: float, oy: float, ends: FloatArray, hits: NDArray[np.bool_]) -> None:
+    def _integrate(
+        self,
+        ox: float,
+        oy: float,
+        ends: FloatArray,
+        hits: NDArray[np.bool_],
+        weights: FloatArray | None = None,
+    ) -> None:
         self._scans += 1
+        if weights is None:
+            weights = np.ones(len(ends))
         shift = np.array([self._col0, self._row0], dtype=np.float64) * self.resolution
         _integrate(
             self._logodds,
@@ -274,6 +300,7 @@ class OccupancyMapper:
             oy - shift[1],
             np.ascontiguousarray(ends - shift),
             np.ascontiguousarray(hits),
+            np.ascontiguousarray(weights, dtype=np.float64),
             self.resolution,
             self.l_free,
             self.l_occ,

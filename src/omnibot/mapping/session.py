@@ -51,6 +51,8 @@ HISTORY = 4096
 """Odometry samples kept for interpolation (40 s at 100 Hz; scans are never that late)."""
 PENDING_MAX = 64
 """Scans kept while the odometry has not caught up with them (the oldest are dropped)."""
+P_HIT = 0.6
+"""What one hit within the hit range says of its cell (two hits make it occupied at map_server's 0.65)."""
 
 
 @dataclass
@@ -198,19 +200,65 @@ class MappingSink:
             track.add(stamp, pose)
         return track
 
-    def grid(self, resolution: float = 0.05) -> OccupancyGrid:
+    def grid(self, resolution: float = 0.05, noise: RangeNoise | None = None) -> OccupancyGrid:
         """The map: every scan's returns (motion distortion undone) at the SLAM's corrected pose of
-        its first ray. Rays without a return clear nothing: a dropout is no evidence of free space."""
+        its first ray. A return marks its cell only within the scanner's ``noise.hit_range`` (where its
+        range noise is small against a cell); farther ones clear the cells before them, short of their
+        3-sigma uncertainty, and mark nothing (a far wall's noise would thicken it into the room and
+        behind it). Rays without a return clear nothing: a dropout is no evidence of free space."""
         from omnibot.mapping.mapper import OccupancyMapper
 
+        noise = noise or RangeNoise()
         poses = dict(self.slam.trajectory())
-        mapper = OccupancyMapper(resolution, max_clear=0.0)
+        mapper = OccupancyMapper(resolution, max_clear=0.0, p_occ=P_HIT)
         for stamp, points, mount in self._clouds:
             pose = poses.get(stamp)
-            if pose is not None:
-                origin = transform(pose, [mount])[0]
-                mapper.add_points((float(origin[0]), float(origin[1])), transform(pose, points))
+            if pose is None:
+                continue
+            rays = points - np.asarray(mount, dtype=np.float32)
+            r = np.hypot(rays[:, 0], rays[:, 1])
+            near = r <= noise.hit_range
+            far_r = r[~near]
+            shorter = np.maximum(far_r - 3.0 * noise.sigma(far_r), 0.0) / np.maximum(far_r, 1e-9)
+            cleared = np.asarray(mount) + rays[~near] * shorter[:, None]
+            origin = transform(pose, [mount])[0]
+            mapper.add_points(
+                (float(origin[0]), float(origin[1])), transform(pose, points[near]), transform(pose, cleared)
+            )
         return mapper.to_grid()
+
+
+@dataclass(frozen=True)
+class RangeNoise:
+    """A scanner's range noise, 1 sigma = ``std + fraction * range`` (the robot description's
+    ``scanner.noise_std`` and ``noise_fraction``), and the range within which a return marks its cell:
+    where sigma is at most ``hit_sigma`` (2.5 cm: 2 sigma inside a 5 cm cell), or ``range`` if given."""
+
+    std: float = 0.0
+    fraction: float = 0.01
+    hit_sigma: float = 0.025
+    range: float | None = None
+
+    @classmethod
+    def of(cls, robot: Any, range: float | None = None) -> RangeNoise:
+        """The noise of ``robot``'s scanner section (the defaults without one)."""
+        spec = getattr(robot, "scanner", None)
+        if spec is None:
+            return cls(range=range)
+        return cls(float(spec.noise_std), float(spec.noise_fraction), range=range)
+
+    def sigma(self, r: NDArray[np.floating[Any]]) -> NDArray[np.float64]:
+        """Range noise at ranges ``r``, 1 sigma, m."""
+        return np.asarray(self.std + self.fraction * np.asarray(r, dtype=np.float64), dtype=np.float64)
+
+    @property
+    def hit_range(self) -> float:
+        """Returns up to this range mark their cells, m."""
+        if self.range is not None:
+            return self.range
+        if self.fraction <= 0:
+            return math.inf if self.std <= self.hit_sigma else 0.0
+        return max(0.0, (self.hit_sigma - self.std) / self.fraction)
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -232,6 +280,7 @@ def write_outputs(
     truth: Track | None = None,
     world: World | None = None,
     resolution: float = 0.05,
+    noise: RangeNoise | None = None,
     plot: bool = True,
 ) -> MappingResult:
     """Write the map, the trajectories and (with ``truth`` and ``world``) the scored report to ``out``."""
@@ -240,7 +289,8 @@ def write_outputs(
 
     if not sink.slam.keyframes():
         raise ValueError("no scan reached the SLAM: nothing to map")
-    grid = sink.grid(resolution)
+    noise = noise or RangeNoise()
+    grid = sink.grid(resolution, noise)
     save_map(grid, out / "map.yaml")
     files = [out / "map.yaml", out / "map.pgm"]
     estimate = sink.trajectory()
@@ -263,6 +313,7 @@ def write_outputs(
         "distance_m": _length(estimate.poses),
         "map": {
             "resolution": grid.resolution,
+            "hit_range_m": noise.hit_range,
             "origin": [grid.origin.x, grid.origin.y, grid.origin.theta],
             "size_cells": list(grid.shape),
         },
