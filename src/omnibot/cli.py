@@ -276,7 +276,10 @@ def _add_sim(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help=f"random seed of the sensor noise (default {DEFAULT_SEED}; a fleet's k-th robot: seed + k)",
     )
     p.add_argument("--surface", help="floor surface: wood, carpet, concrete, linoleum (default: the world's)")
-    p.add_argument("--world", help="world name (empty, room, corridor) or world YAML file (default empty)")
+    p.add_argument(
+        "--world",
+        help="world name (empty, room, corridor, house, long_corridor) or world YAML file (default empty)",
+    )
     p.add_argument("--truth", metavar="FILE.csv", help="write the ground-truth trajectory t,x,y,theta")
     p.add_argument("--baud", type=int, default=115200, help="pace bytes to this baud rate (default 115200)")
     add_log_option(p)

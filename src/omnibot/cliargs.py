@@ -131,7 +131,7 @@ def add_robot_options(
     p.add_argument(
         "--world",
         metavar="NAME|FILE",
-        help=f"simulated world: empty, room, corridor or a YAML file (default {world}; not with --port)",
+        help=f"simulated world: empty, room, corridor, house, long_corridor or a YAML file (default {world}; not with --port)",
     )
     p.add_argument(
         "--surface",
