@@ -157,6 +157,8 @@ def test_arduino_build_answers_as_the_bare_build(arduino_build: tuple[str, Path]
     finally:
         port.close()
         emu.close()
+    # the lowest byte the stack wrote (the harness's --heap: an LTO image's main() keeps painted locals)
+    assert emu.stack_bytes is not None and 64 < emu.stack_bytes < 2048 - RAM_LIMIT, emu.stack_bytes
 
 
 def test_without_arduino_mk_the_reason_names_the_packages_and_the_make_target(

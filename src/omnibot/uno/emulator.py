@@ -79,6 +79,17 @@ def build_harness() -> Path:
     return HARNESS
 
 
+def heap_start(elf: Path) -> int | None:
+    """The data address of the ELF's ``__heap_start``, where the firmware's stack paint begins (the
+    harness measures the deepest stack from there up), or None when ``avr-nm`` does not find it."""
+    proc = subprocess.run(["avr-nm", str(elf)], check=False, capture_output=True, text=True)
+    for line in proc.stdout.splitlines():
+        fields = line.split()
+        if len(fields) == 3 and fields[2] == "__heap_start":
+            return int(fields[0], 16) & 0xFFFF  # AVR data addresses are 0x800000 + SRAM address
+    return None
+
+
 class UnoEmulator:
     """One running emulated UNO. ``range_cm``: the sonar's fixed reading (None: no echo);
     ``encoder_cps``: encoder counts/s at full PWM duty (None: the wheels stand still); ``report``:
@@ -105,6 +116,9 @@ class UnoEmulator:
             build_harness()
         board = FIRMWARE_DIR / "generated" / f"{robot}.board"
         argv = [str(HARNESS), "--board", str(board), str(elf)]
+        heap = heap_start(elf) if shutil.which("avr-nm") else None
+        if heap is not None:
+            argv += ["--heap", str(heap)]
         if range_cm is not None:
             argv += ["--range", str(range_cm)]
         if encoder_cps is not None:
