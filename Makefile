@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: setup demo test lint bench clean browser avr-tools uno-sim mcap-readers fuzz ros2-interop ros2-kilted
+.PHONY: setup demo test lint bench clean browser avr-tools uno-sim arduino-sketch mcap-readers fuzz ros2-interop ros2-kilted
 
 setup: $(STAMP)
 
@@ -48,6 +48,26 @@ uno-sim: avr-tools
 	$(MAKE) -C firmware-avr ROBOT=omni4
 	$(MAKE) -C firmware-avr ROBOT=mecanum4
 	$(MAKE) -C firmware-avr/unosim
+
+# The UNO firmware as Arduino sketch folders (python -m omnibot.firmware.avrsketch), built with Debian's
+# arduino-mk and Arduino core (installed only when missing, like avr-tools) into build/arduino/, with
+# the bare build's flash and static RAM limits (firmware-avr's size-of). tests/uno/test_sketch.py does
+# the same and runs the images in simavr.
+ARDUINO_PKGS := arduino-mk arduino-core-avr
+SKETCH_DIR := build/arduino
+arduino-sketch: avr-tools
+	@[ -f /usr/share/arduino/Arduino.mk ] && [ -d /usr/share/arduino/hardware/arduino/avr/cores/arduino ] || { \
+	  echo "make arduino-sketch: installing Debian's arduino-mk and Arduino core"; \
+	  SUDO=$$([ "$$(id -u)" -eq 0 ] || echo sudo); \
+	  $$SUDO apt-get update -qq && \
+	  $$SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $(ARDUINO_PKGS); }
+	@for robot in omni4 mecanum4; do \
+	  PYTHONPATH=src $(BIN)/python -m omnibot.firmware.avrsketch $$robot $(SKETCH_DIR) && \
+	  $(MAKE) -s -C $(SKETCH_DIR)/omnibot_$$robot > $(SKETCH_DIR)/omnibot_$$robot.log 2>&1 || { \
+	    tail -20 $(SKETCH_DIR)/omnibot_$$robot.log; echo "make arduino-sketch: arduino-mk failed for $$robot"; exit 1; }; \
+	  $(MAKE) -s --no-print-directory -C firmware-avr size-of ROBOT=$$robot \
+	    ELF=$(CURDIR)/$(SKETCH_DIR)/omnibot_$$robot/build-uno/omnibot_$$robot.elf || exit 1; \
+	done
 
 # Foxglove's own MCAP libraries (@mcap/core, @mcap/support, @foxglove/rosmsg2-serialization; versions
 # pinned in tests/logs/node/package.json) for the log tests, installed with npm into .cache/ (git-ignored)

@@ -1,7 +1,7 @@
 /*
  * unosim: omnibot's Arduino UNO firmware in simavr, in real time, with its UART on a pty.
  *
- *   unosim --board ROBOT.board [--range CM] [--encoders CPS] [--report] [--lockstep] FIRMWARE.elf
+ *   unosim --board ROBOT.board [--range CM] [--encoders CPS] [--report] [--lockstep] [--heap ADDR] FIRMWARE.elf
  *
  * The ATmega328P runs at 16 MHz, kept in step with the wall clock (never faster; on a busy host it
  * falls behind by at most 20 ms and then slips, so the firmware's time never races). Its USART0 is a pseudo-terminal
@@ -23,7 +23,9 @@
  * and the emulator never runs more than 3 ms ahead of the last `sync T_US` on stdin: the physics
  * that answers with `sync` and `counts` sets the pace, so a busy host slows both alike.
  * On exit, stderr gets `stack BYTES`: the deepest stack the firmware reached (its free RAM is
- * painted with 0xAA at reset).
+ * painted with 0xAA at reset). With --heap ADDR (the ELF's __heap_start, where the paint begins) it is
+ * the lowest byte the stack wrote; without it, the first eight painted bytes in a row from the top,
+ * which an image built with -flto fools (its main() can keep untouched locals of inlined functions).
  */
 #define _GNU_SOURCE
 #include <errno.h>
@@ -335,8 +337,16 @@ static void no_sleep(avr_t *a, avr_cycle_count_t how_long) {
     (void)how_long;  /* the main loop keeps the emulator in step with the wall clock */
 }
 
-/* From the top of RAM down, the first eight painted bytes in a row: the stack never reached them. */
+static int heap_start = -1;  /* --heap: the data address where the firmware's paint begins */
+
+/* From the paint's start up, the first byte the stack wrote; without --heap, from the top of RAM
+ * down, the first eight painted bytes in a row: the stack never reached them. */
 static int stack_depth(void) {
+    if (heap_start >= 0x100 && heap_start <= avr->ramend) {
+        int addr = heap_start;
+        while (addr <= avr->ramend && avr->data[addr] == 0xAA) addr++;
+        return avr->ramend - addr + 1;
+    }
     int run = 0;
     for (int addr = avr->ramend; addr >= 0x100; addr--) {
         run = avr->data[addr] == 0xAA ? run + 1 : 0;
@@ -353,6 +363,7 @@ int main(int argc, char **argv) {
         else if (!strcmp(argv[i], "--encoders") && i + 1 < argc) model_cps = atof(argv[++i]);
         else if (!strcmp(argv[i], "--report")) report = 1;
         else if (!strcmp(argv[i], "--lockstep")) lockstep = report = 1;
+        else if (!strcmp(argv[i], "--heap") && i + 1 < argc) heap_start = (int)strtol(argv[++i], NULL, 0);
         else if (argv[i][0] != '-' && !elf) elf = argv[i];
         else {
             elf = NULL;
@@ -360,7 +371,7 @@ int main(int argc, char **argv) {
         }
     }
     if (!elf || !board) {
-        fprintf(stderr, "usage: unosim --board ROBOT.board [--range CM] [--encoders CPS] [--report] [--lockstep] FIRMWARE.elf\n");
+        fprintf(stderr, "usage: unosim --board ROBOT.board [--range CM] [--encoders CPS] [--report] [--lockstep] [--heap ADDR] FIRMWARE.elf\n");
         return 2;
     }
     if (read_board(board) != 0) {

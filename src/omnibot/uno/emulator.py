@@ -66,8 +66,28 @@ def build(robot: str) -> Path:
             f"no UNO firmware for robot {robot!r}: it is generated for {known} (omnibot.firmware.avrgen)"
         )
     _make("-C", str(FIRMWARE_DIR), f"ROBOT={robot}")
-    _make("-C", str(HARNESS_DIR))
+    build_harness()
     return FIRMWARE_DIR / "build" / robot / "omnibot.elf"
+
+
+def build_harness() -> Path:
+    """Build the simavr harness (incrementally); returns its executable."""
+    reason = missing_tools()
+    if reason:
+        raise UnoError(reason)
+    _make("-C", str(HARNESS_DIR))
+    return HARNESS
+
+
+def heap_start(elf: Path) -> int | None:
+    """The data address of the ELF's ``__heap_start``, where the firmware's stack paint begins (the
+    harness measures the deepest stack from there up), or None when ``avr-nm`` does not find it."""
+    proc = subprocess.run(["avr-nm", str(elf)], check=False, capture_output=True, text=True)
+    for line in proc.stdout.splitlines():
+        fields = line.split()
+        if len(fields) == 3 and fields[2] == "__heap_start":
+            return int(fields[0], 16) & 0xFFFF  # AVR data addresses are 0x800000 + SRAM address
+    return None
 
 
 class UnoEmulator:
@@ -75,7 +95,9 @@ class UnoEmulator:
     ``encoder_cps``: encoder counts/s at full PWM duty (None: the wheels stand still); ``report``:
     the harness writes ``pwm T_US D1 .. Dn`` on its stdout when a motor's duty changes (read them
     with :meth:`duties`); ``lockstep``: also ``t T_US`` every emulated millisecond, and the emulator
-    waits for ``sync T_US`` (hardware in the loop, :mod:`omnibot.uno.hil`)."""
+    waits for ``sync T_US`` (hardware in the loop, :mod:`omnibot.uno.hil`); ``elf``: run this image
+    of the robot's firmware (one the Arduino toolchain built from its sketch folder,
+    :mod:`omnibot.firmware.avrsketch`) instead of building it with ``firmware-avr/Makefile``."""
 
     def __init__(
         self,
@@ -85,11 +107,18 @@ class UnoEmulator:
         encoder_cps: float | None = None,
         report: bool = False,
         lockstep: bool = False,
+        elf: Path | None = None,
     ) -> None:
         self.robot = robot
-        elf = build(robot)
+        if elf is None:
+            elf = build(robot)
+        else:
+            build_harness()
         board = FIRMWARE_DIR / "generated" / f"{robot}.board"
         argv = [str(HARNESS), "--board", str(board), str(elf)]
+        heap = heap_start(elf) if shutil.which("avr-nm") else None
+        if heap is not None:
+            argv += ["--heap", str(heap)]
         if range_cm is not None:
             argv += ["--range", str(range_cm)]
         if encoder_cps is not None:
