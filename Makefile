@@ -105,7 +105,7 @@ $(ROS2_STAMP): pyproject.toml
 	@$(BIN)/python -m pip install --quiet -e '.[ros2-test]' && touch $@ || \
 	  echo "make ros2-interop: Jazzy's rclpy wheels did not install (they exist for CPython 3.11 on x86_64): its interop tests will skip"
 
-test: lint browser avr-tools mcap-readers ros2-interop
+test: lint browser avr-tools arduino-sketch mcap-readers ros2-interop
 	SDL_VIDEODRIVER=dummy MPLBACKEND=Agg $(BIN)/python -m pytest -q
 
 bench: setup
