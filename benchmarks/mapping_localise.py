@@ -22,9 +22,10 @@ import numpy as np
 
 from benchmarks.mapping_scenes import cast_scan, drifting_odometry, path_poses
 from omnibot.mapping.grid import OccupancyGrid
-from omnibot.mapping.localise import Localiser, wrap
+from omnibot.mapping.localise import Localiser
 from omnibot.mapping.mapfile import load_map, save_map
 from omnibot.mapping.mapper import build_map
+from omnibot.mapping.se2 import wrap
 from omnibot.motion import Pose2D
 from omnibot.sim.world import World, load_world
 

@@ -9,9 +9,10 @@ import pytest
 from benchmarks.mapping_scenes import cast_scan, drifting_odometry, path_poses
 
 from omnibot.mapping.grid import OccupancyGrid
-from omnibot.mapping.localise import LikelihoodField, Localiser, inverse, refine_pose
+from omnibot.mapping.localise import LikelihoodField, Localiser, refine_pose
 from omnibot.mapping.mapfile import load_map, save_map
-from omnibot.mapping.mapper import build_map, compose
+from omnibot.mapping.mapper import build_map
+from omnibot.mapping.se2 import compose, inverse
 from omnibot.motion import Pose2D
 from omnibot.scan import Scan
 from omnibot.sim.world import World, load_world

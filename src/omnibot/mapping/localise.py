@@ -38,22 +38,11 @@ from numpy.typing import NDArray
 from scipy import ndimage
 
 from omnibot.mapping.grid import OccupancyGrid
-from omnibot.mapping.mapper import compose
+from omnibot.mapping.se2 import compose, inverse, wrap
 from omnibot.motion import Pose2D
 from omnibot.scan import Scan
 
 FloatArray = NDArray[np.float64]
-
-
-def inverse(p: Pose2D) -> Pose2D:
-    """The pose of the parent frame seen from ``p``."""
-    c, s = math.cos(p.theta), math.sin(p.theta)
-    return Pose2D(-c * p.x - s * p.y, s * p.x - c * p.y, -p.theta)
-
-
-def wrap(angle: float) -> float:
-    """``angle`` in [-pi, pi)."""
-    return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
 @dataclass(frozen=True)

@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from omnibot.mapping.grid import UNKNOWN, OccupancyGrid
+from omnibot.mapping.se2 import compose
 from omnibot.motion import Pose2D
 from omnibot.scan import Scan
 
@@ -37,13 +38,6 @@ FloatArray = NDArray[np.float64]
 def logit(p: float) -> float:
     """log(p / (1 - p))."""
     return math.log(p / (1.0 - p))
-
-
-def compose(a: Pose2D, b: Pose2D) -> Pose2D:
-    """``b`` (given in ``a``'s frame) in ``a``'s parent frame, e.g. the scanner's pose in the map
-    frame from the robot's pose and the scanner's mount."""
-    c, s = math.cos(a.theta), math.sin(a.theta)
-    return Pose2D(a.x + c * b.x - s * b.y, a.y + s * b.x + c * b.y, a.theta + b.theta)
 
 
 def ray_ends(
