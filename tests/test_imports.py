@@ -261,3 +261,17 @@ def test_pure_modules_load_no_client_or_transport(name: str) -> None:
 
 def test_the_pure_list_names_real_modules() -> None:
     assert all(p in MODULES for p in PURE)
+
+
+def test_nothing_imports_the_apps() -> None:
+    """``omnibot.apps`` holds composition roots only: the command line reaches them by name
+    (``cli._command_in``), no library imports them."""
+    assert "omnibot.apps.mapping" in MODULES
+    bad = sorted(
+        f"{name} -> {target}"
+        for name, targets in GRAPH.items()
+        if not _under(name, ("omnibot.apps",))
+        for target in targets
+        if _under(target, ("omnibot.apps",))
+    )
+    assert not bad, "imports of omnibot.apps:\n  " + "\n  ".join(bad)
