@@ -203,7 +203,7 @@ def plan_path(
         cells = astar(~cmap.blocked, cmap.cost, escape[-1], g_cell, weight)
         if cells is None:
             raise NoPathError(f"no path from {_xy(start)} to {_xy(goal)}: {_why_no_path(cmap)}")
-        tail = shortcut(cmap, cells, (float(head[-1, 0]), float(head[-1, 1])), (goal.x, goal.y))
+        tail = shortcut(cmap, cells, (float(head[-1, 0]), float(head[-1, 1])), (goal.x, goal.y), weight)
     else:
         tail = _ompl_plan(
             cmap, (float(head[-1, 0]), float(head[-1, 1])), start, goal, planner, time_limit, seed
@@ -397,33 +397,61 @@ def _line_max(values, r0, c0, r1, c1, step):  # type: ignore[no-untyped-def]  # 
 
 
 def shortcut(
-    cmap: CostMap, cells: NDArray[np.int64], first: tuple[float, float], last: tuple[float, float]
+    cmap: CostMap,
+    cells: NDArray[np.int64],
+    first: tuple[float, float],
+    last: tuple[float, float],
+    weight: float = COST_WEIGHT,
 ) -> FloatArray:
     """Any-angle waypoints (map frame) from an A* chain of unblocked cells, starting at ``first``
     and ending at ``last`` (points in its first and last cells): from each kept point, the farthest
-    later one reachable in a straight run that crosses no blocked cell and no cell of higher cost
-    than the chain's own between them (so the walls' berth the cost gave is kept)."""
+    later one reachable in a straight run that crosses no blocked cell and costs no more than the
+    chain between them, by A*'s own measure (length times ``1 + weight x cost``), so a shortcut
+    never trades the walls' berth for length."""
+    if len(cells) == 1:
+        return np.array([first, last], dtype=np.float64)
     centres = cmap.grid.cell_to_world(cells)
     centres[0] = first
     centres[-1] = last
     local = np.array([cmap._local((float(x), float(y))) for x, y in centres])
-    # the cost a run may meet: blocked cells count as infinitely costly
     field = np.where(cmap.blocked, np.inf, cmap.cost)
-    chain_cost = field[cells[:, 0], cells[:, 1]]
+    c = field[cells[:, 0], cells[:, 1]]
+    steps = np.hypot(*np.diff(local, axis=0).T) * (1.0 + weight * 0.5 * (c[:-1] + c[1:]))
+    along = np.concatenate(([0.0], np.cumsum(steps)))  # the chain's cost to each cell
     kept = [0]
     i, n = 0, len(cells)
     while i < n - 1:
         j_best = i + 1
-        running = np.maximum.accumulate(chain_cost[i:])  # the chain's worst cost from i to each j
         for j in range(n - 1, i + 1, -1):
-            allowed = running[j - i] + 1e-9
-            worst = _line_max(field, local[i, 0], local[i, 1], local[j, 0], local[j, 1], 0.25)
-            if worst <= allowed:
+            run = _line_cost(field, local[i, 0], local[i, 1], local[j, 0], local[j, 1], 0.25, weight)
+            if run <= (along[j] - along[i]) * (1.0 + 1e-9) + 1e-9:
                 j_best = j
                 break
         kept.append(j_best)
         i = j_best
     return np.asarray(centres[kept], dtype=np.float64)
+
+
+@njit(cache=True)
+def _line_cost(values, r0, c0, r1, c1, step, weight):  # type: ignore[no-untyped-def]  # numba kernel
+    """A straight run's cost (cell units): its length times ``1 + weight x`` the ``values`` of the
+    cells it crosses, sampled every ``step`` cells; inf through an infinite value or off the grid."""
+    rows, cols = values.shape
+    length = math.hypot(r1 - r0, c1 - c0)
+    count = max(1, math.ceil(length / step))
+    total = 0.0
+    for i in range(count):
+        f = (i + 0.5) / count
+        ir, ic = math.floor(r0 + f * (r1 - r0)), math.floor(c0 + f * (c1 - c0))
+        if ir < 0 or ir >= rows or ic < 0 or ic >= cols:
+            return np.inf
+        total += 1.0 + weight * values[ir, ic]
+    # the end cells themselves (a run that starts or ends in a blocked cell is blocked)
+    for r, c in ((r0, c0), (r1, c1)):
+        ir, ic = math.floor(r), math.floor(c)
+        if ir < 0 or ir >= rows or ic < 0 or ic >= cols or not math.isfinite(values[ir, ic]):
+            return np.inf
+    return total * length / count
 
 
 def _segment_clearance(cmap: CostMap, a: FloatArray, b: FloatArray) -> float:

@@ -62,6 +62,10 @@ Heading = Literal["auto", "travel", "goal"]
 
 SPACING = 0.05
 """m between the path's points (the tracker's profile interpolates between them)."""
+SHORTEST = 0.01
+"""m: a shorter leg (a turn in place, a last correction) goes this far out along the heading and back."""
+TRAVEL_LEAST = 0.3
+"""m: a shorter leg (a correction) turns towards the goal's heading on the way even in ``travel``."""
 EXPLAINED = 0.10
 """m: a range reading this close to a wall of the map is that wall."""
 ARC_STEP = math.radians(2.5)
@@ -183,13 +187,15 @@ def planned_path(plan: PlannedPath, start_theta: float, heading: Literal["travel
     """The project's path type for a plan: ``goal`` turns the heading from ``start_theta`` to the
     goal's in proportion to the distance covered; ``travel`` faces each straight run (turning in
     place before it) and turns in place to the goal's heading at the end. Resampled every
-    :data:`SPACING` m (corners and turns in place kept)."""
+    :data:`SPACING` m (corners and turns in place kept). A plan shorter than :data:`SHORTEST` (a
+    turn in place) goes that far out along the heading and back, turning on the way."""
     pts = plan.waypoints
     goal_theta = start_theta + wrap(plan.theta - start_theta)
-    if len(pts) < 2:
-        x, y = float(pts[0, 0]), float(pts[0, 1])
-        return Path(np.array([x, x]), np.array([y, y]), np.array([start_theta, goal_theta]))
-    if heading == "goal":
+    if plan.length < SHORTEST:  # the tracker needs a length: out along the heading and back
+        ahead = pts[0] + SHORTEST * np.array([math.cos(start_theta), math.sin(start_theta)])
+        pts = np.vstack([pts[:1], ahead, pts[-1:]])
+        heading = "goal"
+    if heading == "goal" or plan.length < TRAVEL_LEAST:
         s = np.concatenate(([0.0], np.cumsum(np.hypot(*np.diff(pts, axis=0).T))))
         theta = start_theta + (goal_theta - start_theta) * s / s[-1]
         return resample(Path(pts[:, 0].copy(), pts[:, 1].copy(), theta), SPACING)
