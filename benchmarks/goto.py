@@ -29,6 +29,7 @@ import argparse
 import math
 import statistics
 import tempfile
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -77,10 +78,10 @@ def goals(robot_name: str, count: int, world: str = "room", seed: int = 100) -> 
     return free_poses(cmap, count, seed, inside_walls(grid, start.x, start.y))
 
 
-def world_with_obstacle(world: str, obstacle: dict[str, object], folder: Path) -> str:
+def world_with_obstacle(world: str, obstacle: Mapping[str, object], folder: Path) -> str:
     """A copy of a bundled world's file with one more obstacle; its path."""
     spec = load_world(world).spec.model_dump(exclude_none=True)
-    spec["obstacles"] = [*spec.get("obstacles", ()), obstacle]
+    spec["obstacles"] = [*spec.get("obstacles", ()), dict(obstacle)]
     spec["name"] = f"{world}-plus"
     path = folder / f"{world}-plus.yaml"
     path.write_text(yaml.safe_dump(spec))

@@ -96,7 +96,10 @@ class GotoOptions:
     max_replans: int = 5
     """Re-plans after obstacles before giving up (blocked)."""
     corrections: int = 2
-    """Short legs from where the robot stopped when it ended outside the tolerances."""
+    """Short legs from where the robot stopped when it ended farther than ``aim`` of the tolerances."""
+    aim: float = 0.5
+    """The fraction of the tolerances a leg's end must meet not to take a correction leg (arrival
+    itself is judged at the whole tolerances, once the corrections are spent)."""
     timeout: float | None = None
     """s for the whole goto (None: three times each leg's minimum time plus 10 s per leg)."""
     settle: float = SETTLE
@@ -107,6 +110,8 @@ class GotoOptions:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ConfigError(f"goto's {name} must be a positive number, not {value}")
+        if not 0 < self.aim <= 1:
+            raise ConfigError(f"goto's aim must be a fraction in (0, 1], not {self.aim}")
         if self.max_replans < 0 or self.corrections < 0:
             raise ConfigError("goto's max_replans and corrections must be >= 0")
 
@@ -393,7 +398,9 @@ def go_to(
                 result.outcome = ended
                 result.reason = leg.why
                 break
-            if _within(result.final, goal, opts):
+            if _within(result.final, goal, opts, opts.aim) or (
+                corrections >= opts.corrections and _within(result.final, goal, opts)
+            ):
                 result.outcome = "arrived"
                 break
             if corrections >= opts.corrections:
@@ -430,10 +437,11 @@ def _wait_pose(provider: PoseProvider, runtime: Runtime, limit: float = 2.0) -> 
     return pose
 
 
-def _within(pose: Pose2D, goal: Pose2D, opts: GotoOptions) -> bool:
+def _within(pose: Pose2D, goal: Pose2D, opts: GotoOptions, share: float = 1.0) -> bool:
+    """Within ``share`` of the tolerances of ``goal``."""
     return (
-        math.hypot(pose.x - goal.x, pose.y - goal.y) <= opts.tolerance
-        and abs(wrap(pose.theta - goal.theta)) <= opts.heading_tolerance
+        math.hypot(pose.x - goal.x, pose.y - goal.y) <= share * opts.tolerance
+        and abs(wrap(pose.theta - goal.theta)) <= share * opts.heading_tolerance
     )
 
 
@@ -514,12 +522,15 @@ def goto(
     options: GotoOptions | None = None,
     *,
     pose: PoseProvider | None = None,
+    pose_from: Callable[[Runtime], PoseProvider] | None = None,
     scan: ScanSource | None = None,
     standstill: float = STANDSTILL,
 ) -> GotoResult:
-    """``omnibot goto``: the robot standing at ``start`` (map frame; the estimator starts there),
-    telemetry and sonars started, ``standstill`` s still for the gyro's bias, then :func:`go_to`;
-    the controller is left stopped with telemetry and sonars off."""
+    """``omnibot goto``: the robot standing at ``start`` (the estimator starts there: the map frame
+    unless a provider says otherwise), telemetry and sonars started, ``standstill`` s still for the
+    gyro's bias, then :func:`go_to` with the map-frame pose from ``pose``, or from the provider
+    ``pose_from`` makes on goto's runtime (a localiser fed by its telemetry and estimate), else the
+    estimate; the controller is left stopped with telemetry and sonars off."""
     runtime = Runtime(client, estimator=make_estimator("fused", robot, start))
     client.stop()
     period = 0.02
@@ -538,7 +549,8 @@ def goto(
             start_sonars(client, robot)
         client.telemetry(period, mask)
         client.sleep(standstill)
-        return go_to(runtime, robot, grid, goal, options, pose=pose, scan=scan)
+        provider = pose_from(runtime) if pose_from is not None else pose
+        return go_to(runtime, robot, grid, goal, options, pose=provider, scan=scan)
     finally:
         try:
             if not client.link.closed:
