@@ -365,7 +365,7 @@ def go_to(
         while True:
             here = _wait_pose(provider, runtime)
             result.final = here
-            if _within(here, goal, opts):
+            if not result.plans and _within(here, goal, opts):  # there already
                 result.outcome = "arrived"
                 break
             cmap = inflate(
