@@ -7,7 +7,8 @@ Each bundled world with walls is rasterised at ``--resolution`` (:func:`rasteris
 wall where a wall or obstacle edge passes within half a cell diagonal of its centre, or inside an
 obstacle); ``--pairs`` random start/goal pairs (seeded) at which the robot's disc fits (clearance
 >= radius + margin) are planned by each planner on the same inflated grid. Per planner: success,
-path length (and its ratio to the grid planner's on the pairs both solved), the least clearance
+path length (and its ratio to the grid planner's on the pairs both solved; ``grid-nocost`` is the
+grid planner with the walls' cost weighted 0, the shortest way within the inflation), the least clearance
 (m beyond the robot's radius), the mean clearance along the path, and the planning time (wall
 clock, this process, one core).
 """
@@ -24,13 +25,15 @@ import numpy as np
 
 from omnibot.errors import PlanningError
 from omnibot.mapping.grid import OccupancyGrid
-from omnibot.mapping.planner import PLANNERS, CostMap, PlannedPath, inflate, plan_path
+from omnibot.mapping.planner import COST_WEIGHT, PLANNERS, CostMap, PlannedPath, inflate, plan_path
 from omnibot.motion import Pose2D
 from omnibot.robot.description import load_robot
 from omnibot.sim.world import World, load_world, points_in_polygon
 
 RESOLUTION = 0.025
 PAD = 0.1
+NO_COST = "grid-nocost"
+"""The grid planner without the walls' cost (weight 0): the shortest way within the inflated walls."""
 
 
 def rasterise(world: World, resolution: float = RESOLUTION, pad: float = PAD) -> OccupancyGrid:
@@ -139,7 +142,15 @@ def measure(
                     row.tried += 1
                     t0 = time.perf_counter()
                     try:
-                        path = plan_path(cmap, a, b, planner=name, time_limit=time_limit, seed=seed + k)  # type: ignore[arg-type]
+                        path = plan_path(
+                            cmap,
+                            a,
+                            b,
+                            planner="grid" if name == NO_COST else name,  # type: ignore[arg-type]
+                            weight=0.0 if name == NO_COST else COST_WEIGHT,
+                            time_limit=time_limit,
+                            seed=seed + k,
+                        )
                     except PlanningError:
                         assert row.lengths is not None
                         row.lengths.append(math.nan)
@@ -195,7 +206,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--worlds", default="room,corridor")
     parser.add_argument("--robots", default="omni4,omni3")
-    parser.add_argument("--planners", default=",".join(PLANNERS))
+    parser.add_argument("--planners", default=",".join((*PLANNERS[:1], NO_COST, *PLANNERS[1:])))
     parser.add_argument("--pairs", type=int, default=30)
     parser.add_argument("--time-limit", type=float, default=0.5, help="s per OMPL plan")
     parser.add_argument("--seed", type=int, default=1)

@@ -257,13 +257,14 @@ def _escape(cmap: CostMap, cell: tuple[int, int]) -> list[tuple[int, int]]:
     """Cells from ``cell`` up the clearance until one is not blocked (just ``[cell]`` if it is not)."""
     out = [cell]
     rows, cols = cmap.grid.shape
+
+    def clearance(rc: tuple[int, int]) -> float:
+        return float(cmap.clearance[rc]) if 0 <= rc[0] < rows and 0 <= rc[1] < cols else -1.0
+
     while cmap.blocked[out[-1]]:
         r, c = out[-1]
-        best = max(
-            ((r + dr, c + dc) for dr in (-1, 0, 1) for dc in (-1, 0, 1) if dr or dc),
-            key=lambda rc: (cmap.clearance[rc] if 0 <= rc[0] < rows and 0 <= rc[1] < cols else -1.0,),
-        )
-        if not (0 <= best[0] < rows and 0 <= best[1] < cols) or cmap.clearance[best] <= cmap.clearance[r, c]:
+        best = max(((r + dr, c + dc) for dr in (-1, 0, 1) for dc in (-1, 0, 1) if dr or dc), key=clearance)
+        if clearance(best) <= clearance((r, c)):
             raise NoPathError(
                 f"no path: the start is hemmed in {100 * cmap.clearance[cell]:.0f} cm from a wall"
             )
