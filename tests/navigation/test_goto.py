@@ -16,11 +16,23 @@ import pytest
 from benchmarks.goto import goals, run_goal, world_with_obstacle
 from benchmarks.planner import rasterise
 
-from omnibot.mapping.planner import PlannedPath
+from omnibot.client.events import Telemetry
+from omnibot.control.paths.path import Path as Route
+from omnibot.mapping.planner import PlannedPath, inflate
 from omnibot.motion import Pose2D
-from omnibot.navigation.goto import GotoOptions, PoseProvider, compose, goto, inverse, mark, planned_path
+from omnibot.navigation.goto import (
+    GotoOptions,
+    ObstacleWatch,
+    PoseProvider,
+    compose,
+    goto,
+    inverse,
+    mark,
+    planned_path,
+)
 from omnibot.navigation.session import simulated_client
 from omnibot.robot.description import load_robot
+from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.runtime import Runtime
 from omnibot.sim.world import load_world
 from omnibot.transport.device import find_simulator
@@ -188,3 +200,48 @@ def test_marks_and_frames() -> None:
     back = compose(a, inverse(a))
     assert back.x == pytest.approx(0.0, abs=1e-12) and back.y == pytest.approx(0.0, abs=1e-12)
     assert back.theta == pytest.approx(0.0)
+
+
+def _watch(pose: Pose2D, path: np.ndarray, scan: np.ndarray | None = None) -> tuple[ObstacleWatch, list[str]]:
+    robot = load_robot("omni4")
+    grid = rasterise(load_world("room"))
+    cmap = inflate(grid, robot_radius=robot.footprint.bounding_radius)
+    stops: list[str] = []
+    route = Route.from_points(path)
+    watch = ObstacleWatch(robot, cmap, route, lambda: pose, stops.append, lookahead=1.0, scan=(lambda: scan))
+    return watch, stops
+
+
+def _cycle(ranges: tuple[float | None, ...]) -> Cycle:
+    return Cycle(0, 0.0, 0.0, None, telemetry=[Telemetry(time=0.0, controller_time=0.0, ranges=ranges)])
+
+
+def test_the_watch_stops_for_an_echo_ahead_that_no_wall_explains() -> None:
+    # heading east along y = 2 from x = 1: the east wall is 4 m ahead, the front sonar (x 0.10) sees it
+    pose = Pose2D(1.0, 2.0, 0.0)
+    route = np.array([[1.0, 2.0], [4.0, 2.0]])
+    watch, stops = _watch(pose, route)
+    watch(_cycle((3.85,)))  # the wall at x = 5: explained
+    assert watch.points is None and not stops
+    watch(_cycle((2.5,)))  # 2.5 m ahead: beyond the 1 m watched
+    assert watch.points is None
+    watch(_cycle((None,)))  # no echo
+    assert watch.points is None
+    watch(_cycle((0.6,)))  # 0.6 m ahead, in the corridor, nothing on the map there
+    assert watch.points is not None and len(stops) == 1
+    assert "an obstacle the map does not have at (1.70, 2.00)" in stops[0]
+    assert np.allclose(np.hypot(watch.points[:, 0] - 1.1, watch.points[:, 1] - 2.0), 0.6)
+
+
+def test_the_watch_ignores_scan_points_of_walls_and_beside_the_path() -> None:
+    pose = Pose2D(1.0, 2.0, 0.0)
+    route = np.array([[1.0, 2.0], [4.0, 2.0]])
+    walls = np.array([[5.0, 2.0], [1.0, 4.0], [3.0, 0.0]])
+    beside = np.array([[1.5, 2.8]])  # 0.8 m off the path: outside its corridor
+    watch, stops = _watch(pose, route, np.vstack([walls, beside]))
+    watch(_cycle(()))
+    assert watch.points is None and not stops
+    ahead = np.array([[1.6, 2.1], [1.6, 2.15]])
+    watch, stops = _watch(pose, route, np.vstack([walls, ahead]))
+    watch(_cycle(()))
+    assert watch.points is not None and np.allclose(watch.points, ahead)

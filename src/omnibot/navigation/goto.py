@@ -40,6 +40,7 @@ from omnibot.control.paths.path import Path
 from omnibot.control.paths.profile import min_traversal_time
 from omnibot.errors import ConfigError, PlanningError
 from omnibot.estimation.estimator import make_estimator
+from omnibot.estimation.slip import SlipModel
 from omnibot.mapping.grid import OCCUPIED, OccupancyGrid
 from omnibot.mapping.planner import MARGIN, CostMap, PlannedPath, Planner, inflate, plan_path
 from omnibot.motion import Pose2D
@@ -525,13 +526,17 @@ def goto(
     pose_from: Callable[[Runtime], PoseProvider] | None = None,
     scan: ScanSource | None = None,
     standstill: float = STANDSTILL,
+    slip: SlipModel | None = None,
 ) -> GotoResult:
     """``omnibot goto``: the robot standing at ``start`` (the estimator starts there: the map frame
     unless a provider says otherwise), telemetry and sonars started, ``standstill`` s still for the
     gyro's bias, then :func:`go_to` with the map-frame pose from ``pose``, or from the provider
     ``pose_from`` makes on goto's runtime (a localiser fed by its telemetry and estimate), else the
-    estimate; the controller is left stopped with telemetry and sonars off."""
-    runtime = Runtime(client, estimator=make_estimator("fused", robot, start))
+    estimate; ``slip`` is the floor's calibrated wheel slip (``--calibration``: the runtime asks the
+    wheels for the creep, the estimator takes it out); the controller is left stopped with
+    telemetry and sonars off."""
+    estimator = make_estimator("fused", robot, start, slip.params if slip is not None else None)
+    runtime = Runtime(client, estimator=estimator, slip=slip)
     client.stop()
     period = 0.02
     with suppress(NotSupported):
