@@ -245,3 +245,12 @@ def test_the_watch_ignores_scan_points_of_walls_and_beside_the_path() -> None:
     watch, stops = _watch(pose, route, np.vstack([walls, ahead]))
     watch(_cycle(()))
     assert watch.points is not None and np.allclose(watch.points, ahead)
+
+
+def test_a_robot_blind_to_a_box_the_map_lacks_stalls_against_it_and_says_so(tmp_path: Path) -> None:
+    # mecanum4 has no sonar and no scan is given: it drives into the box, the stall watch ends it
+    sim_world = world_with_obstacle("room", BOX, tmp_path)
+    o = run_goal("mecanum4", ACROSS, seed=3, sim_world=sim_world)
+    assert o.result.outcome == "stalled"
+    assert o.result.reason.startswith("stalled: the wheels say")
+    assert not o.result.arrived and o.contacts >= 1

@@ -208,6 +208,8 @@ def planned_path(plan: PlannedPath, start_theta: float, heading: Literal["travel
     xs, ys, th = [float(pts[0, 0])], [float(pts[0, 1])], [start_theta]
     current = start_theta
     for a, b in itertools.pairwise(pts):
+        if math.hypot(float(b[0] - a[0]), float(b[1] - a[1])) < 1e-9:
+            continue
         course = math.atan2(float(b[1] - a[1]), float(b[0] - a[0]))
         current = current + wrap(course - current)
         xs.append(float(a[0]))  # turn in place to face the run
