@@ -11,8 +11,9 @@
      |    +-- LinkTimeout         nothing arrived in time
      +-- ControllerError          the motor controller answered ERROR,<code>,<text>
      +-- PlanningError            no way to a place on a map (mapping.planner)
-          +-- OffMapError         the start or goal lies outside the map
+          +-- OffMapError         the start or goal lies outside the map (also a ConfigError)
           +-- BlockedError        the start or goal is in a wall, unknown space or too near a wall
+          |                       (also a ConfigError: a bad goal is a bad argument)
           +-- NoPathError         the map has no collision-free way between them
 
 The CLI turns any OmnibotError into a one-line message and a non-zero exit status.
@@ -66,12 +67,13 @@ class PlanningError(OmnibotError, ValueError):
     """No collision-free path could be planned on the map (the message says why, in the map frame)."""
 
 
-class OffMapError(PlanningError):
-    """The start or the goal lies outside the map."""
+class OffMapError(PlanningError, ConfigError):
+    """The start or the goal lies outside the map (a bad argument: also a ConfigError)."""
 
 
-class BlockedError(PlanningError):
-    """The start or the goal lies in a wall, in unknown space or closer to a wall than the robot fits."""
+class BlockedError(PlanningError, ConfigError):
+    """The start or the goal lies in a wall, in unknown space or closer to a wall than the robot fits
+    (a bad argument: also a ConfigError)."""
 
 
 class NoPathError(PlanningError):

@@ -187,3 +187,13 @@ def test_ompl_planners_give_clear_paths(planner: str) -> None:
     assert not cmap.blocked[cells[:, 0], cells[:, 1]].any()
     assert path.planner == planner
     assert np.allclose(path.waypoints[-1], (3.5, 0.5))
+
+
+def test_straight_runs_are_checked_exactly_against_the_cells_they_cross() -> None:
+    data = np.zeros((20, 20), dtype=np.int8)
+    data[10, 10] = 100  # the cell spanning x and y 0.50-0.55
+    cmap = inflate(grid_of(data), robot_radius=1e-6, margin=0.0)
+    assert cmap.segment_free((0.545, 0.565), (0.565, 0.545))  # passes 0.7 cm outside the corner (0.55, 0.55)
+    assert not cmap.segment_free((0.535, 0.56), (0.56, 0.535))  # clips 0.6 cm of the cell's corner
+    assert not cmap.segment_free((0.2, 0.2), (0.9, 0.9))  # through the corner (0.5, 0.5) and the cell
+    assert cmap.segment_free((0.2, 0.5), (0.49, 0.9))

@@ -18,6 +18,8 @@ from benchmarks.planner import rasterise
 
 from omnibot.client.events import Telemetry
 from omnibot.control.paths.path import Path as Route
+from omnibot.errors import BlockedError, ConfigError, OffMapError
+from omnibot.mapping.grid import OccupancyGrid
 from omnibot.mapping.planner import PlannedPath, inflate
 from omnibot.motion import Pose2D
 from omnibot.navigation.goto import (
@@ -144,18 +146,31 @@ def test_the_pose_comes_from_the_provider_in_the_map_frame() -> None:
         assert math.hypot(seen[-1].x - goal.x, seen[-1].y - goal.y) > 0.5
 
 
-def test_a_goal_in_a_wall_or_off_the_map_fails_with_a_reason_and_does_not_move() -> None:
+def test_a_goal_in_a_wall_or_off_the_map_is_refused_before_anything_moves() -> None:
     robot = load_robot("omni4")
     grid = rasterise(load_world("room"))
     with simulated_client(robot, world="room", start=ROOM_START, seed=1) as client:
         sim = find_simulator(client.link)
         assert sim is not None
-        result = goto(client, robot, grid, Pose2D(1.2, 3.0, 0.0), ROOM_START, standstill=0.2)  # the bin
-        assert result.outcome == "no path"
-        assert "goal (1.20, 3.00) is inside a wall or obstacle" in result.reason
-        result = goto(client, robot, grid, Pose2D(7.0, 1.0, 0.0), ROOM_START, standstill=0.2)
-        assert result.outcome == "no path" and "off the map" in result.reason
+        with pytest.raises(BlockedError, match=r"goal \(1.20, 3.00\) is inside a wall or obstacle"):
+            goto(client, robot, grid, Pose2D(1.2, 3.0, 0.0), ROOM_START, standstill=0.2)  # the bin
+        with pytest.raises(OffMapError, match=r"goal \(7.00, 1.00\) is off the map"):
+            goto(client, robot, grid, Pose2D(7.0, 1.0, 0.0), ROOM_START, standstill=0.2)
         assert math.hypot(sim.pose.x - 1.0, sim.pose.y - 1.0) < 0.01
+    assert issubclass(BlockedError, ConfigError) and issubclass(OffMapError, ConfigError)  # exit 2
+
+
+def test_a_map_with_no_way_there_says_no_path() -> None:
+    data = rasterise(load_world("room"))
+    walled = data.data.copy()
+    cells = data.world_to_cell([(2.5, y) for y in np.arange(0.0, 4.0, 0.01)])
+    walled[cells[:, 0], cells[:, 1]] = 100  # the room cut in two
+    grid = OccupancyGrid(walled, data.resolution, data.origin)
+    robot = load_robot("omni3")
+    with simulated_client(robot, world="room", start=ROOM_START, seed=1) as client:
+        result = goto(client, robot, grid, Pose2D(4.0, 2.0, 0.0), ROOM_START, standstill=0.2)
+    assert result.outcome == "no path" and not result.arrived
+    assert result.reason.startswith("no path from (1.00, 1.00) to (4.00, 2.00)")
 
 
 def test_a_box_in_the_way_with_no_replans_left_is_blocked(tmp_path: Path) -> None:

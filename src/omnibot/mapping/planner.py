@@ -98,7 +98,7 @@ class CostMap:
     def segment_free(self, a: tuple[float, float], b: tuple[float, float]) -> bool:
         """True when the straight run from ``a`` to ``b`` (map frame) crosses no blocked cell."""
         fa, fb = self._local(a), self._local(b)
-        return bool(_line_max(self.blocked.astype(np.float64), fa[0], fa[1], fb[0], fb[1], 0.25) < 0.5)
+        return _line_max(np.where(self.blocked, np.inf, 0.0), fa[0], fa[1], fb[0], fb[1]) < 0.5
 
     def _local(self, p: tuple[float, float]) -> tuple[float, float]:
         """(row, col) as floats (cell units, cell centres at +0.5) of a map point."""
@@ -217,6 +217,12 @@ def plan_path(
 
 
 # --------------------------------------------------------------------------- ends
+
+
+def check_goal(cmap: CostMap, goal: Pose2D) -> None:
+    """OffMapError or BlockedError when the robot cannot stand at ``goal`` on ``cmap`` (what
+    :func:`plan_path` checks first), so a command can refuse a bad goal before it moves."""
+    _check_end(cmap, goal, "goal")
 
 
 def _xy(p: Pose2D) -> str:
@@ -379,22 +385,63 @@ def _astar(passable, cost, start, goal, weight):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def _line_max(values, r0, c0, r1, c1, step):  # type: ignore[no-untyped-def]  # numba kernel
-    """The largest of ``values`` over the cells a straight run crosses (cell units, sampled every
-    ``step`` cells and at every cell corner it passes near); inf when it leaves the grid."""
+def _traverse(values, r0, c0, r1, c1, weight, cost_mode):  # type: ignore[no-untyped-def]  # numba kernel
+    """Walk the cells a straight run crosses (cell units, cell (i, j) spans [i, i+1) x [j, j+1)),
+    exactly (Amanatides and Woo; where it passes a cell corner, both cells beside it count too).
+    ``cost_mode``: the run's cost, its length in each cell times ``1 + weight x`` the cell's value;
+    else the largest value it meets. inf when it leaves the grid or meets an infinite value."""
     rows, cols = values.shape
-    length = math.hypot(r1 - r0, c1 - c0)
-    count = math.ceil(length / step) + 1
+    dr, dc = r1 - r0, c1 - c0
+    length = math.hypot(dr, dc)
+    r, c = math.floor(r0), math.floor(c0)
+    er, ec = math.floor(r1), math.floor(c1)
+    step_r = 1 if dr > 0 else -1
+    step_c = 1 if dc > 0 else -1
+    t_dr = abs(1.0 / dr) if dr != 0 else np.inf
+    t_dc = abs(1.0 / dc) if dc != 0 else np.inf
+    next_r = ((r + 1 - r0) if dr > 0 else (r0 - r)) * t_dr if dr != 0 else np.inf
+    next_c = ((c + 1 - c0) if dc > 0 else (c0 - c)) * t_dc if dc != 0 else np.inf
+    t = 0.0
+    total = 0.0
     best = -np.inf
-    for i in range(count + 1):
-        f = min(1.0, i / count) if count > 0 else 1.0
-        r = r0 + f * (r1 - r0)
-        c = c0 + f * (c1 - c0)
-        ir, ic = math.floor(r), math.floor(c)
-        if ir < 0 or ir >= rows or ic < 0 or ic >= cols:
+    for _ in range(4 * (rows + cols) + 8):
+        if r < 0 or r >= rows or c < 0 or c >= cols:
             return np.inf
-        best = max(best, values[ir, ic])
-    return best
+        v = values[r, c]
+        if not math.isfinite(v):
+            return np.inf
+        t_next = min(next_r, next_c, 1.0)
+        total += (t_next - t) * length * (1.0 + weight * v)
+        best = max(best, v)
+        if (r == er and c == ec) or t_next >= 1.0:
+            break
+        t = t_next
+        if abs(next_r - next_c) < 1e-12:  # through a corner: the cells beside it count too
+            for rr, cc in ((r + step_r, c), (r, c + step_c)):
+                if rr < 0 or rr >= rows or cc < 0 or cc >= cols or not math.isfinite(values[rr, cc]):
+                    return np.inf
+                best = max(best, values[rr, cc])
+            r += step_r
+            c += step_c
+            next_r += t_dr
+            next_c += t_dc
+        elif next_r < next_c:
+            r += step_r
+            next_r += t_dr
+        else:
+            c += step_c
+            next_c += t_dc
+    return total if cost_mode else best
+
+
+def _line_max(values: FloatArray, r0: float, c0: float, r1: float, c1: float) -> float:
+    """The largest of ``values`` over the cells a straight run crosses (inf off the grid)."""
+    return float(_traverse(values, r0, c0, r1, c1, 0.0, False))
+
+
+def _line_cost(values: FloatArray, r0: float, c0: float, r1: float, c1: float, weight: float) -> float:
+    """A straight run's cost (cell units): its length in each cell times ``1 + weight x`` its value."""
+    return float(_traverse(values, r0, c0, r1, c1, weight, True))
 
 
 def shortcut(
@@ -424,7 +471,7 @@ def shortcut(
     while i < n - 1:
         j_best = i + 1
         for j in range(n - 1, i + 1, -1):
-            run = _line_cost(field, local[i, 0], local[i, 1], local[j, 0], local[j, 1], 0.25, weight)
+            run = _line_cost(field, local[i, 0], local[i, 1], local[j, 0], local[j, 1], weight)
             if run <= (along[j] - along[i]) * (1.0 + 1e-9) + 1e-9:
                 j_best = j
                 break
@@ -433,32 +480,10 @@ def shortcut(
     return np.asarray(centres[kept], dtype=np.float64)
 
 
-@njit(cache=True)
-def _line_cost(values, r0, c0, r1, c1, step, weight):  # type: ignore[no-untyped-def]  # numba kernel
-    """A straight run's cost (cell units): its length times ``1 + weight x`` the ``values`` of the
-    cells it crosses, sampled every ``step`` cells; inf through an infinite value or off the grid."""
-    rows, cols = values.shape
-    length = math.hypot(r1 - r0, c1 - c0)
-    count = max(1, math.ceil(length / step))
-    total = 0.0
-    for i in range(count):
-        f = (i + 0.5) / count
-        ir, ic = math.floor(r0 + f * (r1 - r0)), math.floor(c0 + f * (c1 - c0))
-        if ir < 0 or ir >= rows or ic < 0 or ic >= cols:
-            return np.inf
-        total += 1.0 + weight * values[ir, ic]
-    # the end cells themselves (a run that starts or ends in a blocked cell is blocked)
-    for r, c in ((r0, c0), (r1, c1)):
-        ir, ic = math.floor(r), math.floor(c)
-        if ir < 0 or ir >= rows or ic < 0 or ic >= cols or not math.isfinite(values[ir, ic]):
-            return np.inf
-    return total * length / count
-
-
 def _segment_clearance(cmap: CostMap, a: FloatArray, b: FloatArray) -> float:
     """The least clearance of the cells a straight run crosses, m."""
     la, lb = cmap._local((float(a[0]), float(a[1]))), cmap._local((float(b[0]), float(b[1])))
-    worst = _line_max(-cmap.clearance, la[0], la[1], lb[0], lb[1], 0.25)
+    worst = _line_max(-cmap.clearance, la[0], la[1], lb[0], lb[1])
     return float(-worst) if math.isfinite(worst) else 0.0
 
 
@@ -570,4 +595,21 @@ def _ompl_plan(
     points = [(path.getState(i)[0], path.getState(i)[1]) for i in range(path.getStateCount())]
     out = np.array([first, *points[1:-1], (goal.x, goal.y)], dtype=np.float64)
     keep = np.concatenate(([True], np.hypot(*np.diff(out, axis=0).T) > 1e-9))
-    return np.asarray(out[keep], dtype=np.float64)
+    return _repaired(cmap, np.asarray(out[keep], dtype=np.float64))
+
+
+def _repaired(cmap: CostMap, points: FloatArray) -> FloatArray:
+    """``points`` with every straight run that clips a blocked cell (OMPL checks its motions at a
+    resolution, the cells exactly) replaced by the grid planner's way between its ends."""
+    out = [points[0]]
+    for a, b in itertools.pairwise(points):
+        pa, pb = (float(a[0]), float(a[1])), (float(b[0]), float(b[1]))
+        ca, cb = cmap.cell_of(*pa), cmap.cell_of(*pb)
+        if cmap.segment_free(pa, pb) or ca is None or cb is None:
+            out.append(b)
+            continue
+        cells = astar(~cmap.blocked, cmap.cost, ca, cb, 0.0)
+        if cells is None:
+            raise NoPathError(f"no path: OMPL's run from {pa} to {pb} clips a wall and none goes round")
+        out.extend(shortcut(cmap, cells, pa, pb, 0.0)[1:])
+    return np.asarray(out, dtype=np.float64)

@@ -42,7 +42,7 @@ from omnibot.errors import ConfigError, PlanningError
 from omnibot.estimation.estimator import make_estimator
 from omnibot.estimation.slip import SlipModel
 from omnibot.mapping.grid import OCCUPIED, OccupancyGrid
-from omnibot.mapping.planner import MARGIN, CostMap, PlannedPath, Planner, inflate, plan_path
+from omnibot.mapping.planner import MARGIN, CostMap, PlannedPath, Planner, check_goal, inflate, plan_path
 from omnibot.motion import Pose2D
 from omnibot.navigation.runner import SETTLE, STANDSTILL
 from omnibot.navigation.session import follower_limits
@@ -345,8 +345,10 @@ def go_to(
     """Go to ``goal`` (map frame) on ``grid`` through a running ``runtime`` (it has an estimator
     and telemetry; with the sonars' ranges in it for the sonar watch). ``pose`` gives the map-frame
     pose (default: the runtime's estimate, the map frame being the estimator's); ``scan`` the
-    latest scan's map-frame points. See the module docstring; never raises for a place it cannot
-    reach: the result says why."""
+    latest scan's map-frame points. See the module docstring. A goal off the map or where the robot
+    cannot stand (in a wall, in unknown space, too near a wall) raises OffMapError or BlockedError
+    (both ConfigErrors: bad arguments) before anything moves; every other way of not arriving (no
+    path, blocked on the way, timed out, stalled, stopped, missed) is the result's ``outcome``."""
     opts = options or GotoOptions()
     if runtime.estimator is None:
         raise ConfigError("goto needs a runtime with an estimator (the follower steers by it)")
@@ -358,6 +360,9 @@ def go_to(
         ("travel" if robot.sonars and scan is None else "goal") if opts.heading == "auto" else opts.heading
     )
     radius = robot.footprint.bounding_radius
+    check_goal(
+        inflate(grid, robot_radius=radius, margin=opts.margin, allow_unknown=opts.allow_unknown), goal
+    )  # a goal off the map or in a wall is a bad argument: refused before anything moves
     result = GotoResult(goal, "stopped", grid=grid)
     deadline = math.inf if opts.timeout is None else t0 + opts.timeout
     corrections = 0
