@@ -10,14 +10,17 @@
       -> every cycle an ObstacleWatch: sonar ranges (TEL) and an optional scan (map-frame points)
          that the map does not explain, in the robot's swept corridor ahead -> the leg ends, the
          robot stops, the points are marked in a copy of the grid, and it re-plans (bounded)
-      -> at the path's end, settled: within ``tolerance`` and ``heading_tolerance`` of the goal
-         (by the provider) -> arrived; else a correction leg from where it stands (bounded)
+      -> at the path's end, settled: within ``aim`` (half) of ``tolerance`` and
+         ``heading_tolerance`` of the goal (by the provider) -> arrived; else a correction leg from
+         where it stands (bounded), and at the last the whole tolerances decide
 
 :func:`go_to` drives a runtime that is already running (an estimator, telemetry with the sonars'
 ranges); :func:`goto` is the whole command on a client (the CLI's entry point): it starts
 telemetry and the sonars, stands still while the gyro's bias is learned, goes, and leaves the
-controller stopped. Either returns a :class:`GotoResult`: ``arrived`` or why not (``outcome``: no
-path, blocked, timed out, stalled, stopped, missed) in one line (``reason``).
+controller stopped. A goal off the map or where the robot cannot stand raises (OffMapError,
+BlockedError: bad arguments) before anything moves; otherwise either returns a
+:class:`GotoResult`: ``arrived`` or why not (``outcome``: no path, blocked, timed out, stalled,
+stopped, missed) in one line (``reason``).
 """
 
 from __future__ import annotations
