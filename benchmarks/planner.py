@@ -19,9 +19,11 @@ import argparse
 import math
 import statistics
 import time
+from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from omnibot.errors import PlanningError
 from omnibot.mapping.grid import OccupancyGrid
@@ -63,7 +65,7 @@ def rasterise(world: World, resolution: float = RESOLUTION, pad: float = PAD) ->
     return OccupancyGrid(data, resolution, Pose2D(x0, y0, 0.0))
 
 
-def free_poses(cmap: CostMap, count: int, seed: int, region: BoolRegion | None = None) -> list[Pose2D]:
+def free_poses(cmap: CostMap, count: int, seed: int, region: NDArray[np.bool_] | None = None) -> list[Pose2D]:
     """``count`` random poses (seeded) where the robot's disc fits, inside ``region`` if given."""
     rng = np.random.default_rng(seed)
     grid = cmap.grid
@@ -77,13 +79,8 @@ def free_poses(cmap: CostMap, count: int, seed: int, region: BoolRegion | None =
     return [Pose2D(float(x), float(y), float(t)) for (x, y), t in zip(xy, theta, strict=True)]
 
 
-BoolRegion = np.ndarray
-
-
-def inside_walls(grid: OccupancyGrid, x: float, y: float) -> np.ndarray:
+def inside_walls(grid: OccupancyGrid, x: float, y: float) -> NDArray[np.bool_]:
     """Cells reachable from (x, y) without crossing a wall cell (the room's inside)."""
-    from collections import deque
-
     free = grid.data < 65
     rc = grid.world_to_cell([(x, y)])[0]
     seen = np.zeros(grid.shape, dtype=bool)
