@@ -10,6 +10,11 @@
      +-- LinkError                a byte link failed (port gone, refused, closed)
      |    +-- LinkTimeout         nothing arrived in time
      +-- ControllerError          the motor controller answered ERROR,<code>,<text>
+     +-- PlanningError            no way to a place on a map (mapping.planner)
+          +-- OffMapError         the start or goal lies outside the map (also a ConfigError)
+          +-- BlockedError        the start or goal is in a wall, unknown space or too near a wall
+          |                       (also a ConfigError: a bad goal is a bad argument)
+          +-- NoPathError         the map has no collision-free way between them
 
 The CLI turns any OmnibotError into a one-line message and a non-zero exit status.
 """
@@ -56,3 +61,20 @@ class ControllerError(OmnibotError):
         super().__init__(f"controller error {code}: {text}")
         self.code = code
         self.text = text
+
+
+class PlanningError(OmnibotError, ValueError):
+    """No collision-free path could be planned on the map (the message says why, in the map frame)."""
+
+
+class OffMapError(PlanningError, ConfigError):
+    """The start or the goal lies outside the map (a bad argument: also a ConfigError)."""
+
+
+class BlockedError(PlanningError, ConfigError):
+    """The start or the goal lies in a wall, in unknown space or closer to a wall than the robot fits
+    (a bad argument: also a ConfigError)."""
+
+
+class NoPathError(PlanningError):
+    """The map has no collision-free way from the start to the goal."""

@@ -1,0 +1,174 @@
+"""Going to a place in the room: 20 seeded goals per robot, arrival error from the simulator's truth.
+
+Run: ``python -m benchmarks.goto`` (``--goals N``, ``--robots``, ``--poses odometry,truth``,
+``--world``, ``--obstacle``; a few minutes on one core).
+
+For each robot and goal k (seed k): the room world rasterised at 2.5 cm
+(:func:`benchmarks.planner.rasterise`) is the map; the robot stands at the world's start in a
+fresh lockstep simulator (seed k, firmware and physics, wood floor with the room's carpet patch),
+its estimator started there; the goal is a seeded random pose where the robot fits (clearance >=
+radius + margin) inside the room. :func:`omnibot.navigation.goto.goto` plans, follows with the
+tracker and judges arrival (5 cm, 5 degrees) by its pose provider:
+
+* ``odometry``: the runtime's fused estimate (what ``omnibot goto`` has until a localiser gives
+  the map pose);
+* ``truth``: the simulator's true pose as the provider (standing in for a perfect localiser: the
+  follower still steers by the estimate, the plan is moved into its frame and correction legs
+  take out the drift).
+
+Per robot and provider: goals arrived (by goto's verdict) and arrived by the truth (within 5 cm
+and 5 degrees of the true pose), the truth's final position and heading errors (mean, max),
+contacts (the simulator's collision events), re-plans, and the time (simulated s per goal).
+``--obstacle`` adds a box to the simulated room that the map does not have, in the way of
+every goal's straight line... (see OBSTACLE), so the sonar watch's stop and re-plan are measured.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import statistics
+import tempfile
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import yaml
+
+from benchmarks.planner import free_poses, inside_walls, rasterise
+from omnibot.mapping.planner import inflate
+from omnibot.motion import Pose2D
+from omnibot.navigation.goto import GotoOptions, GotoResult, goto
+from omnibot.navigation.session import simulated_client
+from omnibot.robot.description import load_robot
+from omnibot.sim.world import load_world
+from omnibot.transport.device import find_simulator
+
+OBSTACLE: dict[str, object] = {"shape": "box", "center": [2.3, 2.0], "size": [0.3, 0.3]}
+"""A box in the middle of the room that the map does not have (``--obstacle``)."""
+
+
+@dataclass(frozen=True)
+class Outcome:
+    robot: str
+    provider: str
+    seed: int
+    goal: Pose2D
+    result: GotoResult
+    truth: Pose2D
+    contacts: int
+
+    @property
+    def error(self) -> float:
+        return math.hypot(self.truth.x - self.goal.x, self.truth.y - self.goal.y)
+
+    @property
+    def heading_error(self) -> float:
+        return abs((self.truth.theta - self.goal.theta + math.pi) % (2 * math.pi) - math.pi)
+
+    def within(self, tolerance: float = 0.05, heading: float = math.radians(5)) -> bool:
+        return self.error <= tolerance and self.heading_error <= heading
+
+
+def goals(robot_name: str, count: int, world: str = "room", seed: int = 100) -> list[Pose2D]:
+    """``count`` seeded goals where the robot fits inside the world's walls."""
+    grid = rasterise(load_world(world))
+    cmap = inflate(grid, robot_radius=load_robot(robot_name).footprint.bounding_radius)
+    start = load_world(world).start or Pose2D(0.0, 0.0, 0.0)
+    return free_poses(cmap, count, seed, inside_walls(grid, start.x, start.y))
+
+
+def world_with_obstacle(world: str, obstacle: Mapping[str, object], folder: Path) -> str:
+    """A copy of a bundled world's file with one more obstacle; its path."""
+    spec = load_world(world).spec.model_dump(exclude_none=True)
+    spec["obstacles"] = [*spec.get("obstacles", ()), dict(obstacle)]
+    spec["name"] = f"{world}-plus"
+    path = folder / f"{world}-plus.yaml"
+    path.write_text(yaml.safe_dump(spec))
+    return str(path)
+
+
+def run_goal(
+    robot_name: str,
+    goal: Pose2D,
+    seed: int,
+    provider: str = "odometry",
+    world: str = "room",
+    sim_world: str | None = None,
+    options: GotoOptions | None = None,
+) -> Outcome:
+    """One goto in a fresh simulator; its outcome against the truth."""
+    robot = load_robot(robot_name)
+    w = load_world(world)
+    grid = rasterise(w)
+    start = w.start or Pose2D(0.0, 0.0, 0.0)
+    with simulated_client(robot, world=sim_world or world, start=start, seed=seed) as client:
+        sim = find_simulator(client.link)
+        assert sim is not None
+
+        def truth() -> Pose2D:
+            p = sim.pose
+            return Pose2D(p.x, p.y, p.theta)
+
+        result = goto(client, robot, grid, goal, start, options, pose=truth if provider == "truth" else None)
+        return Outcome(robot_name, provider, seed, goal, result, truth(), len(sim.collisions))
+
+
+def table(outcomes: list[Outcome]) -> str:
+    out = [
+        "| robot | pose provider | arrived (goto's verdict) | within 5 cm, 5 deg by the truth | "
+        "truth error (mean, max) | heading error (mean, max) | contacts | re-plans | time per goal "
+        "(mean, max) |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    keys = sorted({(o.robot, o.provider) for o in outcomes}, key=lambda k: (k[0], k[1] != "odometry"))
+    for robot, provider in keys:
+        rows = [o for o in outcomes if (o.robot, o.provider) == (robot, provider)]
+        n = len(rows)
+        err = [100 * o.error for o in rows]
+        head = [math.degrees(o.heading_error) for o in rows]
+        dur = [o.result.duration for o in rows]
+        out.append(
+            f"| {robot} | {provider} | {sum(o.result.arrived for o in rows)}/{n} | "
+            f"{sum(o.within() for o in rows)}/{n} | {statistics.mean(err):.1f}, {max(err):.1f} cm | "
+            f"{statistics.mean(head):.1f}, {max(head):.1f} | {sum(o.contacts for o in rows)} | "
+            f"{sum(o.result.replans for o in rows)} | {statistics.mean(dur):.1f}, {max(dur):.1f} s |"
+        )
+    return "\n".join(out)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--robots", default="omni4,omni3,mecanum4")
+    parser.add_argument("--poses", default="odometry,truth")
+    parser.add_argument("--goals", type=int, default=20)
+    parser.add_argument("--world", default="room")
+    parser.add_argument("--obstacle", action="store_true", help=f"add {OBSTACLE} to the simulated room")
+    parser.add_argument("--detail", action="store_true", help="one line per goal")
+    args = parser.parse_args(argv)
+    outcomes: list[Outcome] = []
+    with tempfile.TemporaryDirectory() as tmp:
+        sim_world = world_with_obstacle(args.world, OBSTACLE, Path(tmp)) if args.obstacle else None
+        for robot in args.robots.split(","):
+            targets = goals(robot, args.goals, args.world)
+            for provider in args.poses.split(","):
+                for k, goal in enumerate(targets):
+                    o = run_goal(robot, goal, k + 1, provider, args.world, sim_world)
+                    outcomes.append(o)
+                    if args.detail:
+                        print(
+                            f"{robot} {provider} seed {k + 1} goal ({goal.x:.2f}, {goal.y:.2f}, "
+                            f"{math.degrees(goal.theta):.0f}): {o.result.summary()}; truth "
+                            f"{100 * o.error:.1f} cm {math.degrees(o.heading_error):.1f} deg, "
+                            f"{o.contacts} contacts, {o.result.replans} re-plans",
+                            flush=True,
+                        )
+    print(table(outcomes))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
+
+
+__all__ = ["OBSTACLE", "Outcome", "goals", "run_goal", "world_with_obstacle"]
