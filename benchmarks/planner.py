@@ -28,9 +28,10 @@ from numpy.typing import NDArray
 from omnibot.errors import PlanningError
 from omnibot.mapping.grid import OccupancyGrid
 from omnibot.mapping.planner import COST_WEIGHT, PLANNERS, CostMap, PlannedPath, inflate, plan_path
+from omnibot.mapping.score import world_grid
 from omnibot.motion import Pose2D
 from omnibot.robot.description import load_robot
-from omnibot.sim.world import World, load_world, points_in_polygon
+from omnibot.sim.world import World, load_world
 
 RESOLUTION = 0.025
 PAD = 0.1
@@ -39,30 +40,8 @@ NO_COST = "grid-nocost"
 
 
 def rasterise(world: World, resolution: float = RESOLUTION, pad: float = PAD) -> OccupancyGrid:
-    """The world's walls and obstacles as an occupancy grid (0 free, 100 wall) covering its bounds
-    plus ``pad`` m: a cell is a wall where an edge passes within half its diagonal of its centre,
-    or where its centre lies inside an obstacle."""
-    bounds = world.bounds
-    if bounds is None:
-        raise ValueError(f"world {world.name} has no walls or obstacles to rasterise")
-    x0, y0, x1, y1 = bounds[0] - pad, bounds[1] - pad, bounds[2] + pad, bounds[3] + pad
-    cols, rows = math.ceil((x1 - x0) / resolution), math.ceil((y1 - y0) / resolution)
-    cx = x0 + (np.arange(cols) + 0.5) * resolution
-    cy = y0 + (np.arange(rows) + 0.5) * resolution
-    px, py = np.meshgrid(cx, cy)  # (rows, cols)
-    pts = np.column_stack((px.ravel(), py.ravel()))
-    occupied = np.zeros(len(pts), dtype=bool)
-    reach = resolution * math.sqrt(0.5)
-    for seg in world.segments:
-        a, e = seg[:2], seg[2:] - seg[:2]
-        ee = float(e @ e)
-        t = np.clip(((pts - a) @ e) / ee, 0.0, 1.0) if ee > 0 else np.zeros(len(pts))
-        d = np.hypot(*(pts - (a + t[:, None] * e)).T)
-        occupied |= d <= reach
-    for obstacle in world.spec.obstacles:
-        occupied |= points_in_polygon(pts, obstacle.vertices())
-    data = np.where(occupied.reshape(rows, cols), 100, 0).astype(np.int8)
-    return OccupancyGrid(data, resolution, Pose2D(x0, y0, 0.0))
+    """The world as the planner benchmark's map (:func:`omnibot.mapping.score.world_grid`)."""
+    return world_grid(world, resolution, pad)
 
 
 def free_poses(cmap: CostMap, count: int, seed: int, region: NDArray[np.bool_] | None = None) -> list[Pose2D]:

@@ -14,21 +14,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 from benchmarks.goto import goals, run_goal, world_with_obstacle
-from benchmarks.planner import rasterise
 
 from omnibot.client.events import Telemetry
 from omnibot.control.paths.path import Path as Route
 from omnibot.errors import BlockedError, ConfigError, OffMapError
 from omnibot.mapping.grid import OccupancyGrid
 from omnibot.mapping.planner import PlannedPath, inflate
+from omnibot.mapping.score import world_grid as rasterise
+from omnibot.mapping.se2 import compose, inverse
 from omnibot.motion import Pose2D
 from omnibot.navigation.goto import (
     GotoOptions,
     ObstacleWatch,
     PoseProvider,
-    compose,
     goto,
-    inverse,
     mark,
     planned_path,
 )

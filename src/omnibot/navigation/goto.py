@@ -46,6 +46,7 @@ from omnibot.estimation.estimator import make_estimator
 from omnibot.estimation.slip import SlipModel
 from omnibot.mapping.grid import OCCUPIED, OccupancyGrid
 from omnibot.mapping.planner import MARGIN, CostMap, PlannedPath, Planner, check_goal, inflate, plan_path
+from omnibot.mapping.se2 import compose, inverse
 from omnibot.motion import Pose2D
 from omnibot.navigation.runner import SETTLE, STANDSTILL
 from omnibot.navigation.session import follower_limits
@@ -170,18 +171,6 @@ class GotoResult:
 
 
 # --------------------------------------------------------------------------- paths and frames
-
-
-def compose(a: Pose2D, b: Pose2D) -> Pose2D:
-    """The pose ``b`` given in ``a``'s frame, in the frame ``a`` is given in."""
-    c, s = math.cos(a.theta), math.sin(a.theta)
-    return Pose2D(a.x + c * b.x - s * b.y, a.y + s * b.x + c * b.y, a.theta + b.theta)
-
-
-def inverse(a: Pose2D) -> Pose2D:
-    """The inverse transform of ``a``."""
-    c, s = math.cos(a.theta), math.sin(a.theta)
-    return Pose2D(-c * a.x - s * a.y, s * a.x - c * a.y, -a.theta)
 
 
 def transformed(path: Path, t: Pose2D) -> Path:
