@@ -15,7 +15,9 @@ counts; ``--quick`` is the CI smoke size):
    ``tests/protocol/test_frame_errors.py``, through the firmware's and the host's decoders.
 3. ``links``: ``benchmarks/link_faults.py``'s VEL stream through :class:`RobotClient` (default settings:
    text probes tags and so runs checked) and through binary, at 1 % and 5 % per byte of drop,
-   corrupt, duplicate (a byte sent twice) and repeat (a whole write sent twice).
+   corrupt, duplicate (a byte sent twice) and repeat (a whole write or read sent twice). The client's
+   own setup MODE (bit 4) is taken off link_faults' "corrupted"; text lines the controller took while
+   MODE bit 4 was clear after the client's setup are counted as wrong (the client's promise).
 4. ``logs``: ``omnibot follow --log`` on a full tmpfs, under ``ulimit -f``, into a read-only
    directory, against the same follow without a log (simulator truth); ``omnibot send --log`` killed
    with SIGKILL mid-run (``tests/logs/conftest.py``), then ``log recover``.
@@ -572,7 +574,42 @@ LINK_KINDS = ("drop", "corrupt", "duplicate", "repeat")
 _fault_link = link_faults.fault_link
 
 
+@dataclass
+class _Watch:
+    """What the controller of one link-fault scenario was handed: the client's own MODE that set bit 4
+    (answered OK, so link_faults counts it as a command not sent: taken off "corrupted"), and the
+    lines it took while bit 4 was clear after the client's setup (HELLO, STATUS, MODE)."""
+
+    setup_modes: int = 0
+    unguarded: int = 0
+    example: bytes = b""
+
+
+_watches: list[_Watch] = []
+
+
+def _watch(controller: Any) -> _Watch:
+    watch = _Watch()
+    handle = controller.handle
+
+    def watched(cmd: bytes | None) -> None:
+        before = controller.checked_only
+        handle(cmd)
+        if cmd is None:
+            return
+        if not before and controller.checked_only and cmd.startswith(b"MODE"):
+            watch.setup_modes += 1
+        elif not before and not cmd.startswith((b"HELLO", b"STATUS", b"MODE")):
+            watch.unguarded += 1
+            watch.example = watch.example or cmd
+
+    controller.handle = watched
+    _watches.append(watch)
+    return watch
+
+
 def _more_faults(inner: Any, kind: str, rate: float, seed: int) -> FaultLink:
+    _watch(inner.device.controller)
     if kind not in ("duplicate", "repeat"):
         return _fault_link(inner, kind, rate, seed)
     link = FaultLink(inner, seed=seed)
@@ -591,6 +628,8 @@ def links(quick: bool) -> list[Row]:
             for kind in LINK_KINDS:
                 for protocol in ("text", "binary"):
                     o = link_faults.run_one(protocol, kind, rate, n)
+                    watch = _watches.pop()
+                    corrupted = o.corrupted - watch.setup_modes
                     name = f"{'text, checked (client default)' if protocol == 'text' else 'binary'}, {kind} {100 * rate:g} %"
                     rows.append(
                         Row(
@@ -599,13 +638,17 @@ def links(quick: bool) -> list[Row]:
                             {
                                 "commands": n,
                                 "faults": o.faults,
-                                "corrupted executed": o.corrupted,
+                                "corrupted executed": corrupted,
                                 "lost but OK": o.lost_unseen,
                                 "doubled": o.twice,
                                 "wrongly failed": o.false_failures,
                                 "failed, not run": o.true_failures,
+                                "lines taken without MODE bit 4": watch.unguarded
+                                if protocol == "text"
+                                else "-",
                             },
-                            o.corrupted + o.lost_unseen + o.twice + o.false_failures,
+                            corrupted + o.lost_unseen + o.twice + o.false_failures + watch.unguarded,
+                            f"first line taken unchecked: {watch.example!r}" if watch.example else "",
                         )
                     )
     finally:
