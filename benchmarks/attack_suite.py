@@ -1027,12 +1027,12 @@ def report(rows: list[Row]) -> str:
         for r in mine:
             keys += [k for k in r.counts if k not in keys]
         out += ["", f"**{TITLES[family]}**", ""]
-        out.append("| case | " + " | ".join(keys) + " | wrong | note |")
+        out.append("| " + " | ".join(["case", *keys, "wrong", "note"]) + " |")
         out.append("|---" * (len(keys) + 3) + "|")
         for r in mine:
             cells = [str(r.counts.get(k, "")) for k in keys]
             note = r.note.replace("|", "\\|").replace("\n", " ")
-            out.append(f"| {r.name} | " + " | ".join(cells) + f" | **{r.wrong}** | {note} |")
+            out.append("| " + " | ".join([r.name, *cells, f"**{r.wrong}**", note]) + " |")
     return "\n".join(out)
 
 
