@@ -10,10 +10,10 @@ from benchmarks import attack_suite
 
 
 def test_quick_in_process_families(capsys: pytest.CaptureFixture[str]) -> None:
-    attack_suite.main(["--quick", "--only", "fuzz,bits,links,ros2", "--json"])
+    attack_suite.main(["--quick", "--only", "fuzz,bits,links", "--json"])
     rows = [attack_suite.Row(**r) for r in json.loads(capsys.readouterr().out)]
     by_name = {r.name: r for r in rows}
-    assert {r.family for r in rows} == {"fuzz", "bits", "links", "ros2"}
+    assert {r.family for r in rows} == {"fuzz", "bits", "links"}
     for r in rows:
         if r.family == "fuzz" and r.name.startswith("MicroPython"):
             assert r.counts["inputs"] == 300 and r.wrong == 0, r
@@ -24,7 +24,6 @@ def test_quick_in_process_families(capsys: pytest.CaptureFixture[str]) -> None:
     assert by_name["binary frames (28), every single bit"].wrong == 0
     checked = by_name["checked text, every single bit, MODE bit 4 set (client default)"]
     assert checked.counts["ran a command not sent"] == 0
-    assert by_name["cmd_vel floods and malformed messages"].note.startswith("not covered")
     table = attack_suite.report(rows)
     assert "**1. Fuzzing both firmwares**" in table and "| wrong | note |" in table
 
