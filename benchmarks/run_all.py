@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from benchmarks import (
+    attack_suite,
     firmware_command_time,
     goto,
     idle_phase,
@@ -46,6 +47,7 @@ def main() -> int:
             lambda: link_throughput.main(["--pty", "--load", "2"]),
         ),
         ("link faults", lambda: link_faults.main([])),
+        ("attack and fault suite (issue 27; `--quick` for a smoke run)", lambda: attack_suite.main([])),
         (
             "motor model: the acceptance robot on carpet, true motors",
             lambda: motor_model.main(["--map", "model"]),

@@ -506,6 +506,15 @@ _add_map = _command_in(
     "(map_server's YAML + PGM), the trajectories (TUM) and, on the simulator, a report scored against "
     "the truth. Exit status 1 if no map was made or the path was not completed.",
 )
+_add_goto = _command_in(
+    "omnibot.apps.goto",
+    "goto",
+    summary="go to a place on a saved map: localise with the scanner, plan, follow, avoid what the map lacks",
+    description="Loads the map (map_server's YAML + image), localises the robot in it (particle filter "
+    "and scan-to-map matching), plans on the map inflated by the robot's radius and follows the plan, "
+    "stopping and re-planning for obstacles the map does not have. Exit status 0 when it arrived within "
+    "the tolerances, 1 when not (the reason is printed), 2 for a bad map or goal.",
+)
 
 
 # --------------------------------------------------------------------------- calibrate
@@ -565,6 +574,7 @@ ADDERS: list[Adder] = [
     _add_run,
     _add_ros2,
     _add_map,
+    _add_goto,
     _add_calibrate,
     _add_log,
 ]

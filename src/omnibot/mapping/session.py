@@ -36,14 +36,17 @@ import numpy as np
 from numpy.typing import NDArray
 
 from omnibot.mapping.deskew import scan_points
-from omnibot.mapping.se2 import between, transform, wrap
+from omnibot.mapping.se2 import between, compose, transform, wrap
 from omnibot.mapping.slam import Slam
 from omnibot.motion import Pose2D, Twist
 from omnibot.scan import Scan
 
+FloatArray = NDArray[np.float64]
+
 if TYPE_CHECKING:
     from omnibot.lidar.reader import ScanSource
     from omnibot.mapping.grid import OccupancyGrid
+    from omnibot.mapping.localise import Localiser
     from omnibot.runtime.cycle import Cycle
     from omnibot.sim.world import World
 
@@ -85,36 +88,35 @@ def interpolate(stamps: list[float], poses: list[Pose2D], t: float) -> Pose2D | 
     return Pose2D(a.x + k * (b.x - a.x), a.y + k * (b.y - a.y), wrap(a.theta + k * wrap(b.theta - a.theta)))
 
 
-class MappingSink:
-    """Feeds the SLAM from a runtime (see the module docstring); ``close()`` when the run ends."""
+class ScanFeed:
+    """The runtime's side of a scan consumer (see the module docstring): keeps the odometry of every
+    cycle, matches each scan to the odometry of its time and hands it to :meth:`_update` (in the
+    runtime's thread, or a worker's with ``threaded``); ``close()`` when the run ends."""
 
-    def __init__(self, scans: ScanSource, slam: Slam | None = None, *, threaded: bool = False) -> None:
+    def __init__(self, scans: ScanSource, *, threaded: bool = False) -> None:
         self.scans = scans
-        self.slam = slam if slam is not None else Slam()
         self.odometry = Track()
-        self.estimate = Track()
         self.received = 0
         """Scans taken from the source."""
         self.dropped = 0
         """Scans dropped: older than the odometry kept, or while too many waited."""
         self.failure: BaseException | None = None
-        """Why the SLAM worker stopped (a threaded sink), else None."""
+        """Why the worker stopped (a threaded feed), else None."""
         self._history_t: list[float] = []
         self._history_p: list[Pose2D] = []
         self._pending: list[Scan] = []
-        self._clouds: list[tuple[float, NDArray[np.float32], tuple[float, float]]] = []
         self._lock = threading.Lock()
         self._queue: queue.Queue[tuple[Scan, Pose2D] | None] | None = None
         self._worker: threading.Thread | None = None
         if threaded:
             self._queue = queue.Queue()
-            self._worker = threading.Thread(target=self._work, name="omnibot-slam", daemon=True)
+            self._worker = threading.Thread(
+                target=self._work, name=f"omnibot-{type(self).__name__}", daemon=True
+            )
             self._worker.start()
 
-    # ------------------------------------------------------------------ the runtime's side
-
     def __call__(self, cycle: Cycle) -> None:
-        """Keep the cycle's odometry; hand every scan it covers to the SLAM."""
+        """Keep the cycle's odometry; hand every scan it covers on."""
         est = cycle.estimate
         if est is not None and (not self._history_t or cycle.t > self._history_t[-1]):
             pose = Pose2D(est.x, est.y, est.theta)
@@ -144,15 +146,17 @@ class MappingSink:
             waiting = waiting[-PENDING_MAX:]
         self._pending = waiting
 
+    @property
+    def last_odometry(self) -> Pose2D | None:
+        """The latest cycle's odometry pose (None before the first estimate)."""
+        return self._history_p[-1] if self._history_p else None
+
     def _keep(self, scan: Scan, start: Pose2D, end: Pose2D, span: float) -> None:
-        """Keep the scan's returns for the map, moved to the base frame at its first ray by the
-        odometry's motion over the revolution (a spinning scanner's distortion undone)."""
-        twist = Twist()
-        if span > 0:
-            d = between(start, end)
-            twist = Twist(d.x / span, d.y / span, d.theta / span)
-        points = scan_points(scan, twist).astype(np.float32)
-        self._clouds.append((scan.stamp, points, (scan.mount.x, scan.mount.y)))
+        """A scan with the odometry at its first and last rays (``span`` s apart), in the runtime's
+        thread before :meth:`_update` (nothing here)."""
+
+    def _update(self, scan: Scan, odom: Pose2D) -> None:
+        raise NotImplementedError
 
     def _take(self, scan: Scan, odom: Pose2D) -> None:
         if self._queue is not None:
@@ -160,20 +164,54 @@ class MappingSink:
         else:
             self._update(scan, odom)
 
-    def _update(self, scan: Scan, odom: Pose2D) -> None:
-        pose = self.slam.update(odom, scan, scan.stamp)
-        with self._lock:
-            self.estimate.add(scan.stamp, pose)
-
     def _work(self) -> None:
         assert self._queue is not None
         while (item := self._queue.get()) is not None:
             if self.failure is not None:
-                continue  # drain: the SLAM failed once, it is not asked again
+                continue  # drain: it failed once, it is not asked again
             try:
                 self._update(*item)
             except Exception as exc:  # kept, and told by the command: never raised in the loop
                 self.failure = exc
+
+    def close(self) -> None:
+        """Finish the work (a threaded feed waits for its queue) and close the scan source."""
+        if self._worker is not None and self._queue is not None:
+            self._queue.put(None)
+            self._worker.join()
+            self._worker = None
+        with contextlib.suppress(Exception):
+            self.scans.close()
+
+
+def undistorted(scan: Scan, start: Pose2D, end: Pose2D, span: float) -> FloatArray:
+    """The scan's returns in the base frame at its first ray, moved by the odometry's motion from
+    ``start`` to ``end`` over the revolution's ``span`` s (a spinning scanner's distortion undone)."""
+    twist = Twist()
+    if span > 0:
+        d = between(start, end)
+        twist = Twist(d.x / span, d.y / span, d.theta / span)
+    return scan_points(scan, twist)
+
+
+class MappingSink(ScanFeed):
+    """Feeds the SLAM from a runtime (see the module docstring); ``close()`` when the run ends."""
+
+    def __init__(self, scans: ScanSource, slam: Slam | None = None, *, threaded: bool = False) -> None:
+        self.slam = slam if slam is not None else Slam()
+        self.estimate = Track()
+        self._clouds: list[tuple[float, NDArray[np.float32], tuple[float, float]]] = []
+        super().__init__(scans, threaded=threaded)
+
+    def _keep(self, scan: Scan, start: Pose2D, end: Pose2D, span: float) -> None:
+        """Keep the scan's returns (distortion undone) for the map."""
+        points = undistorted(scan, start, end, span).astype(np.float32)
+        self._clouds.append((scan.stamp, points, (scan.mount.x, scan.mount.y)))
+
+    def _update(self, scan: Scan, odom: Pose2D) -> None:
+        pose = self.slam.update(odom, scan, scan.stamp)
+        with self._lock:
+            self.estimate.add(scan.stamp, pose)
 
     # ------------------------------------------------------------------ results
 
@@ -182,15 +220,6 @@ class MappingSink:
         """The SLAM's latest map-frame pose of the robot (None before the first scan)."""
         with self._lock:
             return self.estimate.poses[-1] if self.estimate.poses else None
-
-    def close(self) -> None:
-        """Finish the SLAM's work (a threaded sink waits for its queue) and close the scan source."""
-        if self._worker is not None and self._queue is not None:
-            self._queue.put(None)
-            self._worker.join()
-            self._worker = None
-        with contextlib.suppress(Exception):
-            self.scans.close()
 
     def trajectory(self) -> Track:
         """The estimate trajectory with every correction of the pose graph so far (re-read from the
@@ -226,6 +255,51 @@ class MappingSink:
                 (float(origin[0]), float(origin[1])), transform(pose, points[near]), transform(pose, cleared)
             )
         return mapper.to_grid()
+
+
+class LocalisingSink(ScanFeed):
+    """Localises the robot in a saved map from a runtime: each scan and the odometry of its time go
+    to a :class:`~omnibot.mapping.localise.Localiser`; :meth:`pose` is the map-frame pose now (the
+    localiser's ``map -> odom`` composed with the latest odometry) and :meth:`points` the latest
+    scan's returns in the map frame (for goto's obstacle watch)."""
+
+    def __init__(self, scans: ScanSource, localiser: Localiser, *, threaded: bool = False) -> None:
+        self.localiser = localiser
+        self.updates = 0
+        self._map_to_odom = Pose2D(0.0, 0.0, 0.0)
+        self._points: FloatArray | None = None
+        self._odom_points: dict[float, FloatArray] = {}  # by stamp, until the scan's update
+        super().__init__(scans, threaded=threaded)
+
+    def _keep(self, scan: Scan, start: Pose2D, end: Pose2D, span: float) -> None:
+        points = transform(start, undistorted(scan, start, end, span))  # the odometry frame
+        with self._lock:
+            self._odom_points[scan.stamp] = points
+
+    def _update(self, scan: Scan, odom: Pose2D) -> None:
+        self.localiser.update(odom, scan)
+        with self._lock:
+            self._map_to_odom = self.localiser.map_to_odom
+            self.updates += 1
+            points = self._odom_points.pop(scan.stamp, None)
+            if points is not None:
+                self._points = transform(self._map_to_odom, points)
+
+    @property
+    def map_to_odom(self) -> Pose2D:
+        """The odometry frame's pose in the map, as the last scan placed it."""
+        with self._lock:
+            return self._map_to_odom
+
+    def pose(self) -> Pose2D | None:
+        """The robot's pose in the map now (None before the first odometry)."""
+        odom = self.last_odometry
+        return None if odom is None else compose(self.map_to_odom, odom)
+
+    def points(self) -> FloatArray | None:
+        """The latest scan's returns in the map frame (None before the first)."""
+        with self._lock:
+            return self._points
 
 
 @dataclass(frozen=True)

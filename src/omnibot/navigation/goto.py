@@ -426,12 +426,14 @@ def _estimate_pose(runtime: Runtime) -> PoseProvider:
 
 
 def _wait_pose(provider: PoseProvider, runtime: Runtime, limit: float = 2.0) -> Pose2D:
-    """The provider's pose, cycling the runtime (nothing drives) until it has one."""
+    """The provider's pose, cycling the runtime (nothing drives: its sinks, a localiser among them,
+    see the telemetry) until it has one."""
     pose = provider()
     start = runtime.client.clock.now()
     while pose is None:
         if runtime.client.clock.now() - start > limit:
             raise ConfigError(f"goto: no pose of the robot after {limit:.0f} s (no telemetry?)")
+        runtime.step()
         runtime.client.sleep(runtime.period)
         pose = provider()
     return pose
