@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from omnibot.client.client import RobotClient
+from omnibot.client.client import UNTAGGED_VERDICT, RobotClient
 from omnibot.client.greet import wait_for_controller
 from omnibot.errors import ControllerError, LinkTimeout
 from omnibot.transport.lockstep import LockstepLink
@@ -60,7 +60,8 @@ def test_a_ready_controller_answers_the_first_hello_without_a_notice() -> None:
     with client_of(device) as client:
         hello = wait_for_controller(client, notice=notices.append)
     assert (hello.name, hello.motors) == ("fake", 4)
-    assert device.hellos_heard == 1 and notices == []
+    # its own, and the plain HELLOs of the tag question (a fake without tags: each round asks one)
+    assert device.hellos_heard == 1 + UNTAGGED_VERDICT and notices == []
 
 
 @pytest.mark.parametrize("greets", [False, True])

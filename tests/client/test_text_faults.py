@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import pytest
 
 from omnibot.client import EventRecorder, ResetEvent, RobotClient
+from omnibot.client.client import UNTAGGED_VERDICT
 from omnibot.errors import ControllerError, LinkTimeout, OmnibotError
 from omnibot.firmware.controller import Controller
 from omnibot.protocol import codes, text
@@ -164,8 +165,10 @@ def test_old_controller_gets_untagged_commands() -> None:
     client = RobotClient(link)
     client.status()
     assert client.tags is False
-    probes = [line for line in bytes(link.written).split(b"\n") if line.startswith(b"HELLO#")]
-    assert len(probes) == 2
+    lines = bytes(link.written).split(b"\n")
+    probes = [line for line in lines if line.startswith(b"HELLO#")]
+    # each tagged question answered untagged, and a plain HELLO answered as plainly: the line is clean
+    assert len(probes) == UNTAGGED_VERDICT and lines.count(b"HELLO") == UNTAGGED_VERDICT
     assert bytes(link.written).endswith(b"\nSTATUS\n")
 
 

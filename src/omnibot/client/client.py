@@ -93,8 +93,10 @@ E = TypeVar("E", bound=Event)
 MOTION = (Move, Rotate, Delta, Power, Vel)
 DEFAULT_TIMEOUT = 1.0
 """Seconds (link clock) to wait for a reply."""
-PROBE_TRIES = 5
-"""Tagged HELLOs sent at most to learn whether a text controller echoes tags."""
+PROBE_TRIES = 8
+"""Rounds of tag questions before :meth:`RobotClient._detect_tags` gives up (LinkError)."""
+UNTAGGED_VERDICT = 3
+"""Rounds in a row on a line proven clean that make a controller one without tags."""
 RESYNC_TRIES = 3
 """Untagged text: STATUS exchanges tried at most to get back in step after a timeout."""
 _LATE_MAX = 64  # tagged commands that timed out, kept so that a late reply still lands on them
@@ -222,6 +224,7 @@ class RobotClient(TypedCalls):
         """The last HELLO seen (a reply or a reset greeting)."""
         self._tags_auto = tags is None
         self._tags = tags
+        self._hellos_owed: list[float] = []  # link-clock deadlines of plain HELLOs the tag question sent
         self._tags_seen = bool(tags)  # a tagged reply came (or tags were asked for): never fall back
         self._checks_asked = not tags and tags is not None  # MODE bit 4 asked for (or never to be)
         self.added_checked_text = False
@@ -479,52 +482,53 @@ class RobotClient(TypedCalls):
             self._preparing = ""
 
     def _detect_tags(self, wait: float) -> None:
-        """Send tagged HELLOs until a tagged reply (tags on) or two untagged answers in a row (a
-        controller without tags answers ``ERROR,23``). A damaged question gets ERROR 26, or 23 when
-        its ``*`` was hit, so one untagged answer is not enough, and silence or ERROR 26 in between
-        starts the count again; no verdict after every try is an error, never a fall back. Once this
-        client has had a tagged reply it never falls back to unchecked text: a controller that took
-        tags and now refuses them is an error."""
-        wire = self._wire
-        assert isinstance(wire, TextWire)
-        unknown = 0
+        """Ask with tagged HELLOs whether the controller takes tagged, checked text commands.
+
+        A tagged reply says yes (a damaged line cannot forge its check), and so does ``ERROR,42`` (it
+        runs checked text only). A controller without tags answers ``ERROR,23``, but so does one with
+        them when the question arrived with its suffix damaged; so "no" takes :data:`UNTAGGED_VERDICT`
+        rounds in a row of an untagged answer to the tagged question followed by the same answer to a
+        plain ``HELLO`` (its HELLO reply, or ERROR 23 from a controller of seed 000's protocol) that
+        proves the line clean. Silence, ERROR 26 or a differing answer starts the count again; no
+        verdict after :data:`PROBE_TRIES` rounds is a LinkError, never a fall back. Once this client
+        has had a tagged reply it never falls back: a controller that took tags and now refuses them
+        is an error."""
+        rounds = 0
+        plain_answer: str | None = None
         answered_once = False
         for _ in range(PROBE_TRIES):
-            tag, data = wire.frame(HelloCommand(), 0, tag=True)
-            probe = Pending(self, HelloCommand(), data.decode("ascii").strip(), tag, self.clock.now() + wait)
-            probe.probe = True
-            self._outstanding.append(probe)
-            self._write(data)
-
-            def answered(p: Pending = probe) -> bool:
-                return p.done or self._tags is not None
-
-            try:
-                self._wait(answered, probe.deadline, "")
-            except LinkTimeout:
-                self._outstanding.remove(probe)
+            reply = self._ask_probe(wait, tagged=True)
+            if self._tags is not None:
+                return
+            if reply is None:
                 if not self._heard:  # not a byte from the controller yet: it is not there
                     break
-                unknown = 0
+                rounds = 0
                 continue
-            if self._tags is not None:  # a tagged reply (maybe to an earlier probe) came
-                if probe in self._outstanding:
-                    self._outstanding.remove(probe)
-                return
             answered_once = True
-            reply = probe.reply
-            if not (isinstance(reply, ErrorReply) and reply.code == codes.E_CHECKSUM):
-                unknown += 1
-                if unknown == 2:
-                    if self._tags_seen:
-                        raise LinkError(
-                            f"the controller on {self.link.url} took tagged, checked commands before "
-                            "and now refuses them (ERROR 23): another firmware? Reconnect to use it"
-                        )
-                    self._set_tags(False)
-                    return
-            else:
-                unknown = 0
+            if isinstance(reply, ErrorReply) and reply.code == codes.E_CHECK_REQUIRED:
+                self._set_tags(True)
+                return
+            if isinstance(reply, ErrorReply) and reply.code == codes.E_CHECKSUM:
+                rounds = 0
+                continue
+            plain = self._ask_probe(wait, tagged=False)
+            if self._tags is not None:
+                return
+            answer = None if plain is None else type(plain).__name__ + str(getattr(plain, "code", ""))
+            if answer is None or (plain_answer is not None and answer != plain_answer):
+                rounds, plain_answer = 0, answer
+                continue
+            plain_answer = answer
+            rounds += 1
+            if rounds == UNTAGGED_VERDICT:
+                if self._tags_seen:
+                    raise LinkError(
+                        f"the controller on {self.link.url} took tagged, checked commands before "
+                        "and now refuses them (ERROR 23): another firmware? Reconnect to use it"
+                    )
+                self._set_tags(False)
+                return
         if answered_once:
             raise LinkError(
                 f"cannot tell whether the controller on {self.link.url} takes checked text commands: "
@@ -535,21 +539,48 @@ class RobotClient(TypedCalls):
             f"(timeout on {self.link.url})"
         )
 
+    def _ask_probe(self, wait: float, *, tagged: bool) -> Reply | None:
+        """One question of :meth:`_detect_tags`: a tagged HELLO (its untagged answer returned; a
+        tagged one turns tags on) or a plain one; None when no answer came in ``wait`` s."""
+        if tagged:
+            wire = self._wire
+            assert isinstance(wire, TextWire)
+            tag, data = wire.frame(HelloCommand(), 0, tag=True)
+        else:
+            tag, data = 0, text.encode(HelloCommand())
+        probe = Pending(self, HelloCommand(), data.decode("ascii").strip(), tag, self.clock.now() + wait)
+        probe.probe = tagged
+        self._outstanding.append(probe)
+        if not tagged:
+            self._hellos_owed.append(probe.deadline + wait)
+        self._write(data)
+        try:
+            # a plain HELLO is waited for even when a tagged reply turns tags on meanwhile: its
+            # untagged answer, coming later with nothing waiting for it, would be taken for a reset
+            self._wait(lambda: probe.done or (tagged and self._tags is not None), probe.deadline, "")
+        except LinkTimeout:
+            self._outstanding.remove(probe)
+            return None
+        if probe in self._outstanding:
+            self._outstanding.remove(probe)
+        return probe.reply
+
     def _require_checks(self, wait: float) -> None:
         """Tags are on: ask the controller to run only checked text commands (MODE bit 4), so that a
         line a damaged byte cuts short (a digit turned into ``;``) runs nothing. A controller without
         the bit (ERROR 39) keeps running unchecked lines; nothing else changes."""
-        self._checks_asked = True
         mask = self._mode if self._mode is not None else self.status().mode
-        if mask & codes.MODE_CHECKED_TEXT:
-            return
-        try:
-            self.execute(Mode(mask | codes.MODE_CHECKED_TEXT), wait)
-        except ControllerError as exc:
-            if exc.code != codes.E_UNSUPPORTED:
-                raise
-        else:
+        if not mask & codes.MODE_CHECKED_TEXT:
+            # set before it is sent: if its OK is lost the bit may be set, and the session guard
+            # must clear it on the way out (clearing a bit that was never set changes nothing)
             self.added_checked_text = True
+            try:
+                self.execute(Mode(mask | codes.MODE_CHECKED_TEXT), wait)
+            except ControllerError as exc:
+                if exc.code != codes.E_UNSUPPORTED:
+                    raise
+                self.added_checked_text = False  # a controller without the bit: nothing was set
+        self._checks_asked = True  # only now: a reply lost on the way asks again before the next command
 
     def _set_tags(self, on: bool | None) -> None:
         self._tags = on
@@ -742,11 +773,22 @@ class RobotClient(TypedCalls):
                     lost._fail(ProtocolError(f"no reply to {lost.line}: a later reply came first"))
                 done = waiting[: i + 1]
                 self._outstanding = [q for q in self._outstanding if q not in done]
+                if isinstance(reply, HelloReply) and self._hellos_owed:
+                    self._hellos_owed.pop(0)  # a plain HELLO of the tag question answered
                 self._complete(p, reply)
                 self._hello_answered = isinstance(reply, HelloReply)
                 self._synced = True
                 return
         event = event_from_message(reply, now)
+        owed = [t for t in self._hellos_owed if t >= now]
+        if isinstance(reply, HelloReply) and owed:
+            # the answer to a plain HELLO of the tag question that another line was taken for (a
+            # stale ERROR left on the line): not a reset
+            owed.pop(0)
+            self._hellos_owed = owed
+            self.last_hello = Hello.from_reply(reply)
+            return
+        self._hellos_owed = owed
         if isinstance(event, ResetEvent) and (self._hello_answered or not self._synced):
             # The greeting of a controller that started as we connected (no reply matched yet), or
             # the HELLO line taken as the answer to our HELLO was the greeting and this is the
