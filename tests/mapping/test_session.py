@@ -82,8 +82,8 @@ def test_a_scan_before_the_odometry_is_dropped() -> None:
 
 
 def test_hit_range_from_the_scanner_noise() -> None:
-    assert RangeNoise().hit_range == pytest.approx(2.5)  # 1 % of range: 2.5 cm at 2.5 m
-    assert RangeNoise(std=0.005, fraction=0.01).hit_range == pytest.approx(2.0)
+    assert RangeNoise().hit_range == pytest.approx(2.0)  # 1 % of range: 2 cm at 2 m
+    assert RangeNoise(std=0.005, fraction=0.01).hit_range == pytest.approx(1.5)
     assert RangeNoise(fraction=0.0).hit_range == math.inf
     assert RangeNoise(range=4.0).hit_range == 4.0
     assert RangeNoise(std=0.03, fraction=0.0).hit_range == 0.0

@@ -59,7 +59,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         type=float,
         metavar="M",
         help="returns up to this range mark map cells, farther ones only clear (default: where the "
-        "scanner's range noise reaches 2.5 cm, 2.5 m for an RPLIDAR A1)",
+        "scanner's range noise reaches 2 cm, 2 m for an RPLIDAR A1)",
     )
     p.add_argument("--follower", default="tracker", help="--path: seed002, pure_pursuit or tracker (default)")
     p.add_argument("--speed", type=float, help="--path: speed cap, m/s (default: the robot's limit)")

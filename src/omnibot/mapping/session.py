@@ -306,11 +306,11 @@ class LocalisingSink(ScanFeed):
 class RangeNoise:
     """A scanner's range noise, 1 sigma = ``std + fraction * range`` (the robot description's
     ``scanner.noise_std`` and ``noise_fraction``), and the range within which a return marks its cell:
-    where sigma is at most ``hit_sigma`` (2.5 cm: 2 sigma inside a 5 cm cell), or ``range`` if given."""
+    where sigma is at most ``hit_sigma`` (2 cm: 2.5 sigma inside a 5 cm tolerance), or ``range`` if given."""
 
     std: float = 0.0
     fraction: float = 0.01
-    hit_sigma: float = 0.025
+    hit_sigma: float = 0.02
     range: float | None = None
 
     @classmethod
