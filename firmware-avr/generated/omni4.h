@@ -31,6 +31,7 @@
 #define P_CAL_SLIP_SCALE 10000
 #define P_CAL_SPEED 7
 #define P_E_ANGLE 29
+#define P_E_BATTERY 44
 #define P_E_CALIBRATION 38
 #define P_E_CHECKSUM 26
 #define P_E_CHECK_REQUIRED 42
@@ -58,6 +59,7 @@
 #define P_MODE_MASK 31
 #define P_MODE_REFUSE_UNCOVERED 8
 #define P_MODE_SIMULATION 1
+#define P_STATE_BATTERY 4
 #define P_STATE_ESTOP 3
 #define P_STATE_IDLE 1
 #define P_STATE_MOVING 0
@@ -71,6 +73,9 @@
 #define P_TEL_QUEUE 64
 #define P_TEL_SONAR 128
 #define P_TEL_TRACKING 4
+#define P_W_BATTERY_LIMIT 20
+#define P_W_BATTERY_LOW 19
+#define P_W_BATTERY_STOP 43
 #define P_W_POWER_TOO_LOW 12
 #define P_W_REACH 18
 #define P_W_SHORT 17
@@ -133,6 +138,8 @@ static const char TEXT_13[] PROGMEM = "emergency stop by sonar";
 static const char TEXT_14[] PROGMEM = "speed limited to stop before the sonar's obstacle";
 static const char TEXT_15[] PROGMEM = "no sonar covers this direction, speed limited";
 static const char TEXT_16[] PROGMEM = "no sonar covers this direction, motion stopped";
+static const char TEXT_19[] PROGMEM = "battery low";
+static const char TEXT_20[] PROGMEM = "battery low, power limited";
 static const char TEXT_21[] PROGMEM = "queue full";
 static const char TEXT_22[] PROGMEM = "command too long";
 static const char TEXT_23[] PROGMEM = "unknown command";
@@ -155,11 +162,13 @@ static const char TEXT_39[] PROGMEM = "mode, mask bit or version not supported";
 static const char TEXT_40[] PROGMEM = "motion blocked: emergency stop latched";
 static const char TEXT_41[] PROGMEM = "motion refused: no sonar covers this direction";
 static const char TEXT_42[] PROGMEM = "check required";
+static const char TEXT_43[] PROGMEM = "battery flat, motors stopped";
+static const char TEXT_44[] PROGMEM = "motion blocked: battery flat";
 struct CodeText { uint8_t code; const char *text; };
-static const CodeText CODE_TEXTS[28] PROGMEM = {
-    {11, TEXT_11}, {12, TEXT_12}, {13, TEXT_13}, {14, TEXT_14}, {15, TEXT_15}, {16, TEXT_16}, {21, TEXT_21}, {22, TEXT_22}, {23, TEXT_23}, {24, TEXT_24}, {25, TEXT_25}, {26, TEXT_26}, {27, TEXT_27}, {28, TEXT_28}, {29, TEXT_29}, {30, TEXT_30}, {31, TEXT_31}, {32, TEXT_32}, {33, TEXT_33}, {34, TEXT_34}, {35, TEXT_35}, {36, TEXT_36}, {37, TEXT_37}, {38, TEXT_38}, {39, TEXT_39}, {40, TEXT_40}, {41, TEXT_41}, {42, TEXT_42}
+static const CodeText CODE_TEXTS[32] PROGMEM = {
+    {11, TEXT_11}, {12, TEXT_12}, {13, TEXT_13}, {14, TEXT_14}, {15, TEXT_15}, {16, TEXT_16}, {19, TEXT_19}, {20, TEXT_20}, {21, TEXT_21}, {22, TEXT_22}, {23, TEXT_23}, {24, TEXT_24}, {25, TEXT_25}, {26, TEXT_26}, {27, TEXT_27}, {28, TEXT_28}, {29, TEXT_29}, {30, TEXT_30}, {31, TEXT_31}, {32, TEXT_32}, {33, TEXT_33}, {34, TEXT_34}, {35, TEXT_35}, {36, TEXT_36}, {37, TEXT_37}, {38, TEXT_38}, {39, TEXT_39}, {40, TEXT_40}, {41, TEXT_41}, {42, TEXT_42}, {43, TEXT_43}, {44, TEXT_44}
 };
-#define CODE_TEXT_COUNT 28
+#define CODE_TEXT_COUNT 32
 
 /* ---- robot ---- */
 #define ROBOT_NAME "omni4"
@@ -315,3 +324,11 @@ static const float ROLLER_PITCH[MOTORS] PROGMEM = {55.0f, 55.0f, 55.0f, 55.0f};
 #define SONAR_TRIG_BIT 1
 #define BATTERY_ADC 7
 #define BATTERY_MV_FULL_SCALE 14800UL
+#define BATTERY_DIVIDER 2.960  // pack V per pin V (informative)
+#define BATTERY_PERIOD_MS 16  // one reading per period; filter time constant 64 periods
+#define BATTERY_DELAY 188  // readings below a threshold before its level
+#define BATTERY_WARN 30966U  // 7.000 V
+#define BATTERY_LIMIT 30082U  // 6.800 V
+#define BATTERY_STOP 29197U  // 6.600 V
+#define BATTERY_HYST 442U  // 0.100 V
+#define BATTERY_CAP 127  // largest power below limit

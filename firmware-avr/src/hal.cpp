@@ -298,9 +298,11 @@ void sonar_trigger() {}
 int16_t sonar_result() { return -1; }
 #endif
 
-uint16_t battery_mv() {
+uint16_t battery_mv() { return (uint32_t)battery_adc() * BATTERY_MV_FULL_SCALE / 1023; }
+
+uint16_t battery_adc() {
     ADCSRA |= _BV(ADSC);
     while (ADCSRA & _BV(ADSC)) {
     }
-    return (uint32_t)ADC * BATTERY_MV_FULL_SCALE / 1023;
+    return ADC;
 }

@@ -17,3 +17,4 @@ int32_t encoder_count(uint8_t i);
 void sonar_trigger();           // 10 us trigger pulse; the echo is timed by input capture
 int16_t sonar_result();         // -2 still waiting, else the echo in cm (-1 none yet)
 uint16_t battery_mv();
+uint16_t battery_adc();  // the raw count, 0..1023 at 0..5 V on the pin

@@ -27,6 +27,11 @@ static uint8_t tick_half;
 static int16_t sonar_low, sonar_high, sonar_last = -1;
 static uint32_t sonar_next, sonar_started;
 static bool sonar_pending;
+// battery (battery.py): f is 64 times the filtered ADC count (time constant 64 readings);
+// level 0 ok, 1 warned (WARN 19), 2 limited (WARN 20, motion.cpp caps the power), 3 stopped (WARN 43)
+static uint16_t batt_f;
+static uint8_t batt_below;
+uint8_t batt_level;
 // telemetry
 static uint16_t tel_period;
 static uint8_t tel_mask;
@@ -79,6 +84,7 @@ void on_idle() {
 uint32_t controller_ms() { return now_ms; }
 
 static uint8_t state() {
+    if (batt_level == 3) return P_STATE_BATTERY;
     if (latched) return P_STATE_ESTOP;
     return ex.moving() ? P_STATE_MOVING : P_STATE_IDLE;
 }
@@ -210,7 +216,10 @@ static bool covered(uint8_t kw, const int16_t *p) {
 static void execute(uint8_t kw, int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
     uint8_t code = check(kw, p, n, lo, hi);
     bool motion = kw == K_MOVE || kw == K_ROTATE || kw == K_DELTA || kw == K_POWER || kw == K_VEL;
-    if (!code && latched && motion) code = P_E_ESTOP;
+    if (!code && motion) {
+        if (batt_level == 3) code = P_E_BATTERY;
+        else if (latched) code = P_E_ESTOP;
+    }
     if (!code && guard.refuse && !covered(kw, p)) code = P_E_UNCOVERED;
     if (code) {
         error(code);
@@ -238,6 +247,8 @@ static void execute(uint8_t kw, int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
             bool was = ex.stop();
             ex.reset_move();
             latched = false;
+            if (batt_level == 3 && batt_f >= BATTERY_STOP + BATTERY_HYST)  // a charged pack
+                batt_level = batt_f < BATTERY_LIMIT + BATTERY_HYST ? 2 : 1;
             ok();
             if (was) on_idle();
             break;
@@ -473,6 +484,35 @@ static void sonar_poll() {
     }
 }
 
+// One battery reading: levels entered after BATTERY_DELAY readings below their threshold, left above
+// it plus the hysteresis; the stop latches. A pin below half the stop threshold: no battery measured.
+static void battery_sample() {
+    uint16_t a = battery_adc();
+    if (a < (BATTERY_STOP >> 7)) return;
+    batt_f = batt_f ? batt_f + a - (batt_f >> 6) : a << 6;
+    uint8_t level = batt_level;
+    if (level == 3) return;
+    uint8_t down = batt_f < BATTERY_STOP ? 3 : batt_f < BATTERY_LIMIT ? 2 : batt_f < BATTERY_WARN ? 1 : 0;
+    if (down > level) {
+        if (++batt_below < BATTERY_DELAY) return;
+        batt_below = 0;
+        if (level < 1) on_warn(P_W_BATTERY_LOW);
+        if (level < 2 && down >= 2) on_warn(P_W_BATTERY_LIMIT);
+        batt_level = down;
+        if (down == 3) {
+            ex.stop();
+            ex.brake();
+            on_warn(P_W_BATTERY_STOP);
+            on_idle();
+        }
+    } else {
+        batt_below = 0;
+        if (level == 2 && batt_f >= BATTERY_LIMIT + BATTERY_HYST) batt_level = 1;
+        if (batt_level == 1 && batt_f >= BATTERY_WARN + BATTERY_HYST) batt_level = 0;
+    }
+    if (batt_level < 3) ex.apply();  // the power cap may have changed
+}
+
 static bool tel_due() {
     if (!tel_period || (int32_t)(now_ms - tel_next) < 0) return false;
     tel_next += tel_period;
@@ -501,9 +541,11 @@ int main() {
         tick_half = ticks & 1;
         int32_t dt = ticks >> 1;
         us_part += dt;  // a pass lasts a few ms at most: subtracting beats dividing on the AVR
+        bool batt_due = false;
         while (us_part >= 1000) {
             us_part -= 1000;
             now_ms++;
+            if (!(now_ms % BATTERY_PERIOD_MS)) batt_due = true;
         }
         ex.step(dt);
         check_halt();
@@ -512,6 +554,7 @@ int main() {
             else feed(c);
         }
         sonar_poll();
+        if (batt_due) battery_sample();
         if (tel_due()) telemetry();
         if (binary) bin::poll(now_ms);
         hal_wait_for_event();

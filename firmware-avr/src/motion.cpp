@@ -34,10 +34,17 @@ void Executor::init() {
     model.drag_gain = 1.0f;
 }
 
+extern uint8_t batt_level;  // main.cpp: 2 limits the power (battery low)
+
 void Executor::apply() {
     bool sim = (mode & P_MODE_SIMULATION) || coast_us > 0;
+    int16_t peak = BATTERY_CAP;  // limited: every wheel scaled alike, keeping the course
+    if (batt_level >= 2)
+        for (uint8_t i = 0; i < MOTORS; i++)
+            if (abs(powers[i]) > peak) peak = abs(powers[i]);
     for (uint8_t i = 0; i < MOTORS; i++) {
         int16_t p = sim ? 0 : powers[i];
+        if (peak > BATTERY_CAP) p = (int32_t)p * BATTERY_CAP / peak;
         if (p != applied[i]) {
             applied[i] = p;
             motor_set(i, p);

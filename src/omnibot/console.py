@@ -43,8 +43,9 @@ from omnibot.client import (
     Unexpected,
     WarnEvent,
 )
+from omnibot.client.views import STATE_NAMES
 from omnibot.errors import ControllerError, LinkError, LinkTimeout, ProtocolError
-from omnibot.protocol import codes, text
+from omnibot.protocol import text
 from omnibot.protocol.messages import Malformed, Reply
 
 DEFAULT_PORT = "sim://omni4"
@@ -92,8 +93,7 @@ def format_telemetry(tel: Telemetry) -> str:
     if tel.battery is not None:
         parts.append(f"bat {tel.battery:.2f} V")
     if tel.state is not None:
-        state = {codes.STATE_MOVING: "moving", codes.STATE_IDLE: "idle", codes.STATE_ESTOP: "estop"}
-        parts.append(f"{state.get(tel.state, tel.state)} q{tel.queued}")
+        parts.append(f"{STATE_NAMES.get(tel.state, tel.state)} q{tel.queued}")
     if tel.ranges is not None:
         ranges = ["-" if r is None else f"{round(r * 100)}cm" for r in tel.ranges]
         parts.append(f"sonar {_list(ranges)}")

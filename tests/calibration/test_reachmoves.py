@@ -153,6 +153,8 @@ def test_no_reach_where_not_even_the_slowest_lands(acceptance_wood: Runner) -> N
     """A discharged battery (6.5 V): every MOVE falls far short, so the reach is none, not a guess."""
     sim = acceptance_wood.client.link.device.sim  # type: ignore[attr-defined]
     sim.physics.battery_open_voltage = [6.0]
+    # below the battery's stop threshold (6.6 V), which would stop the robot: its monitor off here
+    acceptance_wood.client.link.device.controller.battery.stop_mv = 0  # type: ignore[attr-defined]
     spec = wood_spec(acceptance_wood.robot)
     got = measure_reach(acceptance_wood, spec, Plan(reach_courses=(0.0,), reach_step=0.5))
     assert got.measured == {0.0: None} and got.table is None

@@ -61,6 +61,8 @@ class Backend:
     """(link, sonar stop distance in m): driving straight ahead on the link reads below it soon."""
     timeout: float
     """Reply timeout for the client, s of the link's clock."""
+    battery: Callable[[Link, float], None] | None = None
+    """Set the pack's voltage the controller reads, V (None: the backend cannot; its pack is nominal)."""
 
     def require_physics(self, why: str) -> None:
         if not self.physics:
@@ -79,7 +81,12 @@ def _sim_backend() -> Backend:
         finally:
             link.close()
 
-    return Backend("sim", False, True, lambda: (open_link(f"sim://{ROBOT}?seed=1"), True), obstacle, 2.0)
+    def battery(link: Link, volts: float) -> None:
+        link.device.sim.physics.battery_open_voltage = [volts]  # type: ignore[attr-defined]
+
+    return Backend(
+        "sim", False, True, lambda: (open_link(f"sim://{ROBOT}?seed=1"), True), obstacle, 2.0, battery
+    )
 
 
 # ------------------------------------------------------------------ pty emulator process
@@ -184,7 +191,10 @@ def _uno_backend(stack: list[Callable[[], None]]) -> Backend:
     def obstacle() -> Iterator[tuple[Link, float]]:
         yield link, MP_SONAR_CM / 100.0 + 0.5
 
-    return Backend("uno", True, False, lambda: (link, False), obstacle, 1.0)
+    def battery(_: Link, volts: float) -> None:  # the divider's pin: 2.96 pack volts per pin volt
+        emulator.command(f"battery {round(volts * 1000 / 2.96)}")
+
+    return Backend("uno", True, False, lambda: (link, False), obstacle, 1.0, battery)
 
 
 # ------------------------------------------------------------------ fixtures

@@ -3,7 +3,7 @@
 Usage: ``<python> mp_driver.py SCRIPT`` with ``robot_config.py``, the staged ``omnibot`` package and
 ``tests.firmware.fakehal`` importable. Script lines: ``> text`` sends text plus LF; ``>> text`` sends it with no
 terminator; ``@ N`` polls for N ms (1 ms steps); ``range S CM`` sets a sonar's echo; ``gyro MDPS``
-sets the gyro rate; ``enc GAIN`` makes the encoders follow the powers (FakeHAL ``enc_gain``); ``hex HEX`` sends raw bytes (binary frames). Every line the controller writes is printed as ``<ms> <line>``, then the final
+sets the gyro rate; ``battery MV`` sets the battery's reading; ``enc GAIN`` makes the encoders follow the powers (FakeHAL ``enc_gain``); ``hex HEX`` sends raw bytes (binary frames). Every line the controller writes is printed as ``<ms> <line>``, then the final
 motor powers as ``powers p1,...``.
 """
 
@@ -50,6 +50,8 @@ def main(path: str) -> None:
                 hal.ranges[int(s)] = int(cm)
         elif line.startswith("gyro"):
             hal.gyro = int(line.split()[1])
+        elif line.startswith("battery"):
+            hal.battery = int(line.split()[1])
         elif line.startswith("enc"):
             hal.enc_gain = float(line.split()[1])
         flush()

@@ -121,3 +121,30 @@ def test_an_unregistered_pose_estimator_is_replayed_by_its_recipe() -> None:
     assert sink.registered_name(teach) == "encoders+gyro"
     raw = PoseEstimator(robot, translation="encoders", heading="gyro", name="mine")
     assert sink.registered_name(raw) == "encoders+raw-gyro"
+
+
+def test_a_flat_battery_is_in_the_log(tmp_path: Path) -> None:
+    """The battery's WARN events (19, 20, 43) and the refused motion (ERROR 44) are in the MCAP log as
+    protocol lines, beside the TEL lines that carry the voltage."""
+    from omnibot.client import RobotClient
+    from omnibot.motion import Twist
+    from omnibot.protocol import codes
+    from omnibot.robot.description import load_robot
+    from omnibot.runtime.sources import ScriptSource
+
+    robot = load_robot("omni4")
+    path = tmp_path / "flat.mcap"
+    with Recorder(path) as rec, RobotClient.open("sim://omni4?seed=4", robot, timeout=0.5) as client:
+        rec.attach(client, robot)
+        runtime = Runtime(client, period=0.01, sources=[ScriptSource(lambda t: Twist(0.2, 0.0, 0.0))])
+        client.telemetry(0.05, codes.TEL_BATTERY | codes.TEL_QUEUE)
+        client.link.device.sim.physics.battery_charge = [0.0]  # type: ignore[attr-defined]
+        runtime.run(duration=5.0)
+        assert runtime.latched and runtime.latch_reason == "battery"
+        runtime.close()
+        client.telemetry(0)
+    lines = [m.decode().text for m in LogFile.open(path).messages({topics.PROTOCOL})]
+    for code in (codes.W_BATTERY_LOW, codes.W_BATTERY_LIMIT, codes.W_BATTERY_STOP):
+        assert f"WARN,{code},{codes.TEXTS[code]}" in lines
+    assert any(line.startswith(f"ERROR,{codes.E_BATTERY},") for line in lines)
+    assert any(line.startswith("TEL,") and line.endswith(",4,0") for line in lines)  # state 4

@@ -22,7 +22,7 @@ from omnibot.estimation.estimator import make_estimator
 from omnibot.motion import Pose2D
 from omnibot.navigation.session import follower_limits
 from omnibot.robot.description import load_robot
-from omnibot.runtime.runtime import LATCHED_TEXT
+from omnibot.runtime.runtime import BATTERY_LATCHED_TEXT, LATCHED_TEXT
 from omnibot.runtime.sinks import NoticePrinter
 from omnibot.runtime.sources import FollowerSource, PadSource
 from omnibot.teleop.config import TeleopConfig
@@ -140,3 +140,27 @@ def test_a_latched_sonar_stop_is_reported_to_every_front_end(rig: Rig) -> None:
     assert state["drive"]["control"] == "pad" and state["drive"]["latched"] is False
     assert "emergency stop released by a fresh press of the deadman" in rig.said
     assert rig.pose[0] - x0 > 0.05
+
+
+def test_a_flat_battery_is_reported_to_every_front_end(rig: Rig) -> None:
+    """The simulated pack run flat (charge 0: 6.54 V open-circuit, below the 6.6 V stop): the
+    controller warns and latches its battery stop; the terminal, the page's log and its state frame
+    say so and why, and the pad cannot release it with a fresh press while the pack stays flat."""
+    sim = rig.link.client.link.device.sim  # type: ignore[attr-defined]
+    state = rig.run(0.5)
+    assert state["battery_level"] == "ok"
+    sim.physics.battery_charge = [0.0]
+    state = rig.run(5.0)
+    assert state["drive"]["latched"] is True and state["drive"]["latch_reason"] == "battery"
+    assert state["robot_state"] == "battery stop" and state["battery_level"] == "flat"
+    assert rig.follower.finished and "battery" in rig.follower.failure
+    low = [line for line in rig.said if line.startswith("battery low")]
+    assert low and " V:" in low[0]  # with the voltage the controller reported
+    assert BATTERY_LATCHED_TEXT in rig.said and BATTERY_LATCHED_TEXT in rig.stepper.logs()
+    logs = rig.stepper.logs()
+    for code in (19, 20, 43):
+        assert any(line.startswith(f"WARN {code}") for line in logs), code
+    rig.stick["reading"] = seed_pad(x=1.0)  # a fresh press sends STOP: the flat pack keeps the stop
+    x0 = rig.pose[0]
+    state = rig.run(0.8)
+    assert state["drive"]["latched"] is True and abs(rig.pose[0] - x0) < 0.01

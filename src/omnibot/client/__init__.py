@@ -17,6 +17,7 @@ binary wire formats), ``errors`` (ControllerError subclasses per code).
 
 from omnibot.client.client import DEFAULT_TIMEOUT, Pending, RobotClient
 from omnibot.client.errors import (
+    BatteryStopLatched,
     CalibrationRejected,
     CommandRejected,
     ControllerReset,
@@ -44,6 +45,7 @@ from omnibot.errors import ControllerError, LinkError, LinkTimeout
 
 __all__ = [
     "DEFAULT_TIMEOUT",
+    "BatteryStopLatched",
     "CalibrationRejected",
     "CommandRejected",
     "ControllerError",

@@ -53,6 +53,11 @@ class EmergencyStopLatched(ControllerError):
     """ERROR 40: the sonar emergency stop is latched; send STOP to release it."""
 
 
+class BatteryStopLatched(ControllerError):
+    """ERROR 44: the battery stop is latched (the pack fell below its stop threshold); STOP releases it
+    only once the voltage is back above the stop threshold plus its hysteresis (a charged pack)."""
+
+
 class ControllerReset(LinkError):
     """The controller restarted (it sent HELLO unasked); commands awaiting a reply were lost."""
 
@@ -63,6 +68,7 @@ _BY_CODE: dict[int, type[ControllerError]] = {
     codes.E_CALIBRATION: CalibrationRejected,
     codes.E_UNSUPPORTED: NotSupported,
     codes.E_ESTOP: EmergencyStopLatched,
+    codes.E_BATTERY: BatteryStopLatched,
 }
 for _code in (codes.E_TOO_LONG, codes.E_UNKNOWN, codes.E_PARAM_COUNT, codes.E_NOT_INTEGER, codes.E_RANGE16):
     _BY_CODE[_code] = CommandRejected

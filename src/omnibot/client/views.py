@@ -45,7 +45,12 @@ class MoveState:
         return cls(_distance(L), units.from_cm(V), units.from_deg(D), units.from_curvature(C))
 
 
-STATE_NAMES = {codes.STATE_MOVING: "moving", codes.STATE_IDLE: "idle", codes.STATE_ESTOP: "estop"}
+STATE_NAMES = {
+    codes.STATE_MOVING: "moving",
+    codes.STATE_IDLE: "idle",
+    codes.STATE_ESTOP: "estop",
+    codes.STATE_BATTERY: "battery stop",
+}
 
 
 @dataclass(frozen=True)
@@ -88,8 +93,14 @@ class Status:
 
     @property
     def estop(self) -> bool:
-        """True while the sonar emergency stop is latched (motion gets ERROR 40 until STOP)."""
-        return self.state == codes.STATE_ESTOP
+        """True while a stop is latched: the sonar's (motion gets ERROR 40 until STOP) or the
+        battery's (ERROR 44 until STOP with the voltage back up; :attr:`battery_stop`)."""
+        return self.state in (codes.STATE_ESTOP, codes.STATE_BATTERY)
+
+    @property
+    def battery_stop(self) -> bool:
+        """True while the battery stop is latched (state 4)."""
+        return self.state == codes.STATE_BATTERY
 
     @property
     def simulation(self) -> bool:

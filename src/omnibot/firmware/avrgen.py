@@ -24,7 +24,7 @@ from omnibot.errors import ConfigError
 from omnibot.firmware import safety
 from omnibot.firmware.config import build_config
 from omnibot.protocol import codes
-from omnibot.robot.description import load_robot
+from omnibot.robot.description import RobotDescription, load_robot
 
 ROOT = Path(__file__).resolve().parents[3]
 OUT_DIR = ROOT / "firmware-avr" / "generated"
@@ -337,10 +337,45 @@ def header_source(robot_name: str) -> str:
         if _pin(pins["sonar_echo"]) != ("B", 0):
             raise ConfigError("the sonar echo must be on D8 (ICP1, timer 1's input capture)", key="pins")
     w(f"#define BATTERY_ADC {pins['battery_adc']}")
-    battery = robot.battery.voltage
-    # full scale (1023 counts at 5 V) is twice the nominal pack voltage: a 1:2 divider per 5 V of pack
-    w(f"#define BATTERY_MV_FULL_SCALE {round(2 * battery * 1000)}UL")
+    _battery(w, robot)
     return "\n".join(out) + "\n"
+
+
+BATTERY_SHIFT = 6
+"""The UNO's battery filter: f += adc - f / 64 every sample, so f is 64 times the filtered ADC count
+(0..65472 in a uint16) and its time constant is 64 sample periods."""
+
+
+def _battery(w: Any, robot: RobotDescription) -> None:
+    """The battery divider and thresholds (firmware/battery.py) in the UNO's filter units."""
+    b = robot.battery
+    # full scale (1023 counts at 5 V) is twice the nominal pack voltage: the divider ratio is 2 V / 5 V
+    # of pack per V of pin (omni4: 14.8 V at 5 V, 2.96:1, e.g. 20 k over 10.2 k)
+    full_mv = round(2 * b.voltage * 1000)
+    w(f"#define BATTERY_MV_FULL_SCALE {full_mv}UL")
+    w(f"#define BATTERY_DIVIDER {full_mv / 5000:.3f}  // pack V per pin V (informative)")
+
+    def units(volts: float) -> int:
+        return round(volts * 1000 * 1023 / full_mv * (1 << BATTERY_SHIFT))
+
+    period_ms = max(1, round(b.filter_s * 1000 / (1 << BATTERY_SHIFT)))
+    samples = round(b.delay * 1000 / period_ms)
+    if samples > 255:
+        raise ConfigError(
+            f"battery.delay {b.delay} s is more than the UNO's 255 samples of {period_ms} ms",
+            key="battery.delay",
+        )
+    w(f"#define BATTERY_PERIOD_MS {period_ms}  // one reading per period; filter time constant 64 periods")
+    w(f"#define BATTERY_DELAY {samples}  // readings below a threshold before its level")
+    for name, volts in (
+        ("WARN", b.warn_v),
+        ("LIMIT", b.limit_v),
+        ("STOP", b.stop_v),
+        ("HYST", b.hysteresis_v),
+    ):
+        w(f"#define BATTERY_{name} {units(volts)}U  // {volts:.3f} V")
+    pwm_max = max(w_.motor.pwm_max for w_ in robot.wheels)
+    w(f"#define BATTERY_CAP {pwm_max * round(100 * b.limit_power) // 100}  // largest power below limit")
 
 
 # ATmega328P data-space addresses of the registers the emulator harness reads.

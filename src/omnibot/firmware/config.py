@@ -69,6 +69,10 @@ uncovered_speed_cms         fastest travel where no armed sonar looks, cm/s
 accel_max_cms2              the robot's acceleration limit, cm/s^2: the closed loop slews a VEL without a
                             planned acceleration at it (and brakes to rest at it)
 angular_accel_max_dps2      the same for the turn rate, deg/s^2
+battery_mv                  [warn, limit, stop, hysteresis], mV: the battery's thresholds (battery.py)
+battery_filter_ms           time constant of the battery reading's low-pass filter
+battery_delay_ms            how long the filtered reading stays below a threshold before its level
+battery_limit_pct           share of full power the motors get below the limit threshold, %
 pins                        board pin map for MachineHAL (see hal.py)
 ==========================  =======================================================================
 """
@@ -92,6 +96,7 @@ from omnibot.robot.description import PiecewiseLinear, RobotDescription, SonarSp
 PACKAGE_DIR = Path(__file__).resolve().parent
 SRC_DIR = PACKAGE_DIR.parent.parent
 BOARD_MODULES = (
+    "battery",
     "binlink",
     "calibration",
     "controller",
@@ -333,6 +338,18 @@ def build_config(
         "uncovered_speed_cms": round(robot.uncovered_speed * 100.0, 6),
         "accel_max_cms2": round(lim.acceleration_max * 100.0, 6),
         "angular_accel_max_dps2": round(math.degrees(lim.angular_acceleration_max), 6),
+        "battery_mv": [
+            round(1000.0 * v)
+            for v in (
+                robot.battery.warn_v,
+                robot.battery.limit_v,
+                robot.battery.stop_v,
+                robot.battery.hysteresis_v,
+            )
+        ],
+        "battery_filter_ms": round(1000.0 * robot.battery.filter_s),
+        "battery_delay_ms": round(1000.0 * robot.battery.delay),
+        "battery_limit_pct": round(100.0 * robot.battery.limit_power),
         "pins": pins if pins is not None else default_pins(robot),
     }
 

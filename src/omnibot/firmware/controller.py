@@ -3,14 +3,14 @@
 Each poll: advance the clock from ``hal.ticks_us()``; advance the motion timeline; read the UART
 and handle every complete command (immediate ones at once, motion commands into the queue, one
 reply each, in order); run the sonars (RANGE events; the guard's speed limit and emergency stop,
-safety.py); integrate the gyro; send a
-TEL line when due. Text replies and events are lines ending in CR LF; after ``MODE`` with bit 2 the
+safety.py); every 10 ms read the battery (battery.py: WARN 19/20, the power limit, the latched
+battery stop); integrate the gyro; send a TEL line when due. Text replies and events are lines ending in CR LF; after ``MODE`` with bit 2 the
 same messages travel as binary frames (docs/protocol.md), until a binary MODE clears the bit.
 """
 
 import math
 
-from omnibot.firmware import parser
+from omnibot.firmware import battery, parser
 from omnibot.firmware.binlink import BinaryLink
 from omnibot.firmware.calibration import Calibration
 from omnibot.firmware.limits import Limits
@@ -55,7 +55,9 @@ class Controller:
         self.link = BinaryLink(hal.uart_write)
         self.binary = False
         self.checked_only = False  # MODE bit 4: text commands need a matching "*" check
-        self.latched = False
+        self.latched = False  # the sonar's emergency stop (the battery's: self.battery.latched)
+        self.battery = battery.BatteryMonitor(config)
+        self._battery_ms = 0
         self.now_ms = 0
         self._us = 0
         self._seq = 0
@@ -141,6 +143,8 @@ class Controller:
     @property
     def state(self) -> int:
         """The STATE code reported by STATUS: emergency stop latched, moving or idle."""
+        if self.battery.latched:
+            return codes.STATE_BATTERY
         if self.latched:
             return codes.STATE_ESTOP
         return codes.STATE_MOVING if self.executor.moving else codes.STATE_IDLE
@@ -179,6 +183,9 @@ class Controller:
             fresh = self.sonars.poll(hal, self.now_ms, self._range)
             if fresh:
                 self._sonar_readings(fresh)
+        if self.now_ms - self._battery_ms >= battery.PERIOD_MS:
+            self._battery_ms = self.now_ms
+            self._battery_sample()
         if self.has_gyro:
             rate = hal.gyro_rate_mdps()
             if rate is not None:
@@ -222,6 +229,20 @@ class Controller:
         else:
             self._warn(codes.W_UNCOVERED_STOP)
             self._idle()
+
+    def _battery_sample(self) -> None:
+        """One battery reading: WARN 19/20 on a crossing, the power cap, the latched battery stop."""
+        mon = self.battery
+        if mon.sample(self.hal.battery_mv(), self.now_ms, self._warn):
+            self.executor.stop()
+            self.executor.brake()
+            self._warn(codes.W_BATTERY_STOP)
+            self._idle()
+        ex = self.executor
+        cap = mon.power_cap(ex.pwm_max)
+        if cap != ex.power_cap:
+            ex.power_cap = cap
+            ex.apply()
 
     def emergency_stop(self) -> None:
         """Sonar emergency stop: motors off (braked where the HAL can), queue cleared, WARN 13,
@@ -341,8 +362,11 @@ class Controller:
     def execute(self, kw: int, p: "list[int]") -> None:
         """Check and run one parsed command; exactly one reply."""
         code = self.limits.check(kw, p)
-        if code == 0 and self.latched and kw in MOTION:
-            code = codes.E_ESTOP
+        if code == 0 and kw in MOTION:
+            if self.battery.latched:
+                code = codes.E_BATTERY
+            elif self.latched:
+                code = codes.E_ESTOP
         if code == 0 and self.guard.refuse and not self._covered(kw, p):
             code = codes.E_UNCOVERED
         if code:
@@ -365,6 +389,7 @@ class Controller:
             was = ex.stop()
             ex.reset_move()
             self.latched = False
+            self.battery.release()  # only with the voltage back above stop + hysteresis
             self._ok()
             if was:
                 self._idle()

@@ -95,6 +95,8 @@ class Executor:
         self.infinite = False
         self.remaining = 0
         self.powers = [0] * self.n
+        self.pwm_max = int(model.pwm_max)
+        self.power_cap = self.pwm_max  # the battery's power limit (controller.py): largest power applied
         self.mode = 0
         self.remembered = [0, 0, 0, 0]
         self.watchdog = Watchdog()
@@ -198,8 +200,15 @@ class Executor:
     def apply(self) -> None:
         """Send the powers to the motors (zeros in simulation mode), only where they changed."""
         sim = self.mode & MODE_SIMULATION or self._coast > 0
+        cap = self.power_cap
+        peak = cap
+        if cap < self.pwm_max:  # the battery limits power: scale every wheel alike, keeping the course
+            for p in self.powers:
+                peak = max(peak, abs(p))
         for i in range(self.n):
             p = 0 if sim else self.powers[i]
+            if peak > cap:
+                p = int(p * cap / peak)
             if p != self._applied[i]:
                 self._applied[i] = p
                 self.hal.set_power(i, p)

@@ -132,6 +132,8 @@ W_UNCOVERED = 15  # project: travel where no armed sonar looks, speed limited
 W_UNCOVERED_STOP = 16  # project: a running motion turned where no armed sonar looks, stopped (MODE bit 3)
 W_SHORT = 17  # project: a MOVE stood still short of its distance, as its wheel encoders measured
 W_REACH = 18  # project: an open-loop MOVE asked beyond the calibrated reach, run at the reach
+W_BATTERY_LOW = 19  # project: the battery fell below its warning threshold
+W_BATTERY_LIMIT = 20  # project: the battery fell below its power-limit threshold, motor power limited
 E_QUEUE_FULL = 21
 E_TOO_LONG = 22
 E_UNKNOWN = 23
@@ -154,6 +156,8 @@ E_UNSUPPORTED = 39  # project: MODE bit, TELEM mask bit or protocol version not 
 E_ESTOP = 40
 E_UNCOVERED = 41  # project: travel where no armed sonar looks, refused (MODE bit 3)
 E_CHECK_REQUIRED = 42  # project: a text command without a "*" check while MODE bit 4 requires one
+W_BATTERY_STOP = 43  # project: WARN: the battery fell below its stop threshold; motors stopped, latched
+E_BATTERY = 44  # project: motion blocked: battery stop latched
 
 TEXTS = {
     W_SPEED_REDUCED: "speed reduced to what the motors can give",
@@ -164,6 +168,10 @@ TEXTS = {
     W_UNCOVERED_STOP: "no sonar covers this direction, motion stopped",
     W_SHORT: "MOVE fell short of its distance (encoders)",
     W_REACH: "speed reduced to the calibrated reach",
+    W_BATTERY_LOW: "battery low",
+    W_BATTERY_LIMIT: "battery low, power limited",
+    W_BATTERY_STOP: "battery flat, motors stopped",
+    E_BATTERY: "motion blocked: battery flat",
     E_QUEUE_FULL: "queue full",
     E_TOO_LONG: "command too long",
     E_UNKNOWN: "unknown command",
@@ -192,6 +200,7 @@ TEXTS = {
 STATE_MOVING = 0
 STATE_IDLE = 1
 STATE_ESTOP = 3
+STATE_BATTERY = 4  # project: the battery stop is latched
 
 # --- MODE bits -----------------------------------------------------------------------------------------
 MODE_SIMULATION = 1  # bit 0: run every algorithm, apply no power

@@ -28,6 +28,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from omnibot.config_errors import explain, read_yaml, suggest
 from omnibot.errors import ConfigError
+from omnibot.robot.battery import CHEMISTRIES
 
 PRESET_DIR = Path(__file__).with_name("presets")
 
@@ -199,11 +200,72 @@ class WheelSpec(_Spec):
 
 
 class BatterySpec(_Spec):
-    """The battery: nominal voltage (V), internal resistance (ohm) and capacity (Ah)."""
+    """The battery: nominal voltage (V), internal resistance (ohm), capacity (Ah) and the firmware's
+    low-voltage thresholds (volts per cell; defaults from the chemistry, robot/battery.py), each
+    crossed when the firmware's reading, low-pass filtered over ``filter_s``, stays below it ``delay`` s.
+
+    Below ``warn`` the firmware sends WARN 19, below ``limit`` it scales the motors' power down to
+    ``limit_power`` of full (WARN 20), and below ``stop`` it stops the motors and latches (WARN 43, motion refused with ERROR 44) until
+    STOP finds the voltage back above ``stop + hysteresis`` (docs/safety.md#battery)."""
 
     voltage: float = Field(gt=0, description="nominal voltage, V")
     internal_resistance: float = Field(default=0.05, ge=0, description="ohm")
     capacity_ah: float = Field(default=2.0, gt=0)
+    chemistry: Literal["lipo", "liion", "life", "nimh"] = "lipo"
+    cells: int | None = Field(
+        default=None, ge=1, description="cells in series; default voltage / nominal cell"
+    )
+    warn: float | None = Field(default=None, gt=0, description="V per cell")
+    limit: float | None = Field(default=None, gt=0, description="V per cell")
+    stop: float | None = Field(default=None, gt=0, description="V per cell")
+    hysteresis: float | None = Field(default=None, ge=0, description="V per cell")
+    filter_s: float = Field(
+        default=1.0, gt=0, description="time constant of the reading's low-pass filter, s"
+    )
+    delay: float = Field(default=3.0, ge=0, description="s the filtered reading stays below a threshold")
+    limit_power: float = Field(default=0.5, gt=0, le=1, description="share of full power below limit")
+    charge: float | None = Field(
+        default=None,
+        ge=0,
+        le=1,
+        description="simulator: state of charge at start (None: an ideal battery held at its nominal voltage)",
+    )
+
+    @model_validator(mode="after")
+    def _check_thresholds(self) -> BatterySpec:
+        if not self.warn_v > self.limit_v > self.stop_v:
+            raise ValueError("battery thresholds must fall: warn > limit > stop")
+        return self
+
+    @property
+    def n_cells(self) -> int:
+        """Cells in series (given, or the nominal voltage over the chemistry's nominal cell)."""
+        if self.cells is not None:
+            return self.cells
+        return max(1, round(self.voltage / CHEMISTRIES[self.chemistry].nominal))
+
+    def _per_cell(self, value: float | None, default: float) -> float:
+        return self.n_cells * (default if value is None else value)
+
+    @property
+    def warn_v(self) -> float:
+        """Pack voltage below which the firmware warns (WARN 19), V."""
+        return self._per_cell(self.warn, CHEMISTRIES[self.chemistry].warn)
+
+    @property
+    def limit_v(self) -> float:
+        """Pack voltage below which the firmware limits power (WARN 20), V."""
+        return self._per_cell(self.limit, CHEMISTRIES[self.chemistry].limit)
+
+    @property
+    def stop_v(self) -> float:
+        """Pack voltage below which the firmware stops and latches (WARN 43), V."""
+        return self._per_cell(self.stop, CHEMISTRIES[self.chemistry].stop)
+
+    @property
+    def hysteresis_v(self) -> float:
+        """How far above a threshold the reading must come back to clear it, V."""
+        return self._per_cell(self.hysteresis, CHEMISTRIES[self.chemistry].hysteresis)
 
 
 class MotorEncoderSpec(_Spec):

@@ -26,10 +26,13 @@ from typing import Any
 
 import numpy as np
 
+from omnibot.client.events import WarnEvent
 from omnibot.logs import schemas
 from omnibot.logs.recorder import Recorder, header, quaternion, stamp, vector
 from omnibot.logs.topics import IMU, JOINT_STATES, ODOM, RANGE_PREFIX, ROBOT_DESCRIPTION, TF
 from omnibot.motion import Twist
+from omnibot.protocol import codes
+from omnibot.robot.battery import battery_level
 from omnibot.robot.description import RobotDescription
 from omnibot.ros2.clock import CLOCK, CLOCK_TYPE, Timeline
 from omnibot.ros2.dds import DEFAULT, LATCHED, SENSOR_DATA, Node, Profile
@@ -115,11 +118,37 @@ class Diagnosed:
         return status(level, self.name(item), message, self.hardware_id, values)
 
 
-def battery_state(robot: RobotDescription, voltage: float, ns: int) -> Any:
+# sensor_msgs/BatteryState constants
+SUPPLY_STATUS_DISCHARGING = 2
+SUPPLY_STATUS_NOT_CHARGING = 3
+SUPPLY_HEALTH_UNKNOWN = 0
+SUPPLY_HEALTH_GOOD = 1
+SUPPLY_HEALTH_DEAD = 3
+TECHNOLOGY = {"nimh": 1, "liion": 2, "lipo": 3, "life": 4}
+BATTERY_MESSAGES = {
+    "ok": "ok",
+    "low": "low (below its warning threshold)",
+    "limited": "very low: the controller limits the motors' power",
+    "flat": "flat: the controller stopped the motors and holds them until charged",
+}
+
+
+def battery_health(robot: RobotDescription, voltage: float | None, stopped: bool = False) -> str:
+    """``ok``, ``low``, ``limited``, ``flat`` or ``unknown``: the reading against the description's
+    thresholds (robot/battery.py); ``stopped``: the controller holds its battery stop."""
+    b = robot.battery
+    return battery_level(voltage, b.warn_v, b.limit_v, b.stop_v, stopped)
+
+
+def battery_state(robot: RobotDescription, voltage: float, ns: int, stopped: bool = False) -> Any:
     """sensor_msgs/BatteryState: the ``voltage`` the controller reports, the description's design
-    capacity; what the controller does not measure (current, charge, percentage, temperature) is NaN,
-    as the message asks."""
+    capacity, chemistry and cell count; health GOOD above the stop threshold and DEAD below it or
+    while the controller holds its battery stop (``stopped``), status DISCHARGING (the robot runs on
+    it) or NOT_CHARGING once stopped; what the controller does not measure (current, charge,
+    percentage, temperature) is NaN, as the message asks."""
     nan = math.nan
+    level = battery_health(robot, voltage, stopped)
+    health = {"unknown": SUPPLY_HEALTH_UNKNOWN, "flat": SUPPLY_HEALTH_DEAD}.get(level, SUPPLY_HEALTH_GOOD)
     return schemas.new(
         "sensor_msgs/msg/BatteryState",
         header=header(ns, "base_link"),
@@ -130,9 +159,9 @@ def battery_state(robot: RobotDescription, voltage: float, ns: int) -> Any:
         capacity=nan,
         design_capacity=float(robot.battery.capacity_ah),
         percentage=nan,
-        power_supply_status=0,  # UNKNOWN: the controller does not say whether it charges
-        power_supply_health=0,  # UNKNOWN
-        power_supply_technology=0,  # UNKNOWN
+        power_supply_status=SUPPLY_STATUS_NOT_CHARGING if level == "flat" else SUPPLY_STATUS_DISCHARGING,
+        power_supply_health=health,
+        power_supply_technology=TECHNOLOGY.get(robot.battery.chemistry, 0),
         present=True,
         cell_voltage=np.array([], dtype=np.float32),
         cell_temperature=np.array([], dtype=np.float32),
@@ -172,6 +201,8 @@ class Ros2Sink:
         self._last_diagnostics = -math.inf
         self._last_battery = -math.inf
         self.voltage: float | None = None
+        self.battery_stopped = False
+        """The controller holds its battery stop (TEL state 4, WARN 43)."""
         """The battery voltage the controller last reported, V (None: it reports none)."""
         # the recorder builds the messages; the estimate is the runtime's (published each cycle)
         self.recorder = Recorder(None, mirrors=[_Mirror(self)])
@@ -253,11 +284,19 @@ class Ros2Sink:
             sampled |= tel.encoders is not None
             if tel.battery is not None:
                 self.voltage = tel.battery
+            if tel.state is not None:
+                self.battery_stopped = tel.state == codes.STATE_BATTERY
+        for event in cycle.events:
+            if isinstance(event, WarnEvent) and event.code == codes.W_BATTERY_STOP:
+                self.battery_stopped = True
         if sampled and cycle.estimate is not None:
             self.recorder.estimate(cycle.t, cycle.estimate)
         if self.voltage is not None and cycle.now - self._last_battery >= 1.0:
             self._last_battery = cycle.now
-            self.write(BATTERY, battery_state(self.robot, self.voltage, self.recorder.ns(cycle.t)))
+            self.write(
+                BATTERY,
+                battery_state(self.robot, self.voltage, self.recorder.ns(cycle.t), self.battery_stopped),
+            )
         if cycle.now - self._last_diagnostics >= 1.0 or cycle.notices:
             self._last_diagnostics = cycle.now
             self.write(DIAGNOSTICS, self.diagnostics(cycle))
@@ -277,7 +316,8 @@ class Ros2Sink:
         level = 2 if cycle.latched or decision.estop or worst == "error" else 1 if worst == "warn" else 0
         text = "; ".join(n.text for n in cycle.notices) or decision.reason
         if cycle.latched:
-            text = "emergency stop latched on the controller; " + text
+            what = "battery stop (battery flat)" if cycle.latch_reason == "battery" else "emergency stop"
+            text = f"{what} latched on the controller; " + text
         sent, asked, achieved = cycle.sent, cycle.decision.twist, cycle.achieved
         statuses = [
             self.diagnosed.status(
@@ -311,11 +351,20 @@ class Ros2Sink:
                 "not reported by the controller (no battery_state published)",
                 {"nominal_voltage": nominal},
             )
+        level = battery_health(self.robot, self.voltage, self.battery_stopped)
+        b = self.robot.battery
         return self.diagnosed.status(
-            0,
+            {"low": 1, "limited": 1, "flat": 2}.get(level, 0),
             "battery",
-            f"{self.voltage:.2f} V",
-            {"voltage": f"{self.voltage:.3f}", "nominal_voltage": nominal},
+            f"{self.voltage:.2f} V: {BATTERY_MESSAGES.get(level, level)}",
+            {
+                "voltage": f"{self.voltage:.3f}",
+                "nominal_voltage": nominal,
+                "level": level,
+                "warn_voltage": round(b.warn_v, 3),
+                "limit_voltage": round(b.limit_v, 3),
+                "stop_voltage": round(b.stop_v, 3),
+            },
         )
 
     def close(self) -> None:

@@ -66,7 +66,10 @@ class Cycle:
     :attr:`decision`'s ``twist``."""
     notices: list[Notice] = field(default_factory=list)
     latched: bool = False
-    """The controller holds a latched emergency stop (sonar): it refuses motion until STOP."""
+    """The controller holds a latched stop: it refuses motion until STOP (:attr:`latch_reason`)."""
+    latch_reason: str = ""
+    """Why: ``sonar`` (the emergency stop, WARN 13) or ``battery`` (the battery stop, WARN 43: STOP
+    releases it only with the voltage back up)."""
 
     @property
     def achieved(self) -> Twist | None:

@@ -11,7 +11,7 @@ from typing import Protocol
 
 from omnibot.client.client import Pending, RobotClient
 from omnibot.client.commands import vel as vel_command
-from omnibot.client.errors import EmergencyStopLatched
+from omnibot.client.errors import BatteryStopLatched, EmergencyStopLatched
 from omnibot.client.events import ErrorEvent, Event, ResetEvent, Telemetry, WarnEvent
 from omnibot.client.limits import Limits
 from omnibot.errors import ControllerError, LinkError
@@ -34,6 +34,14 @@ KEEP = 1000
 """Telemetry samples and events kept for the next cycle: the newest, when nobody cycled for a while
 (a standstill, a scripted manoeuvre)."""
 LATCHED_TEXT = "emergency stop latched by the controller (sonar): let go and press again to release"
+BATTERY_LATCHED_TEXT = (
+    "battery stop latched by the controller: the battery is flat (below its stop threshold); charge or swap "
+    "it: STOP releases the stop only once the voltage is back up"
+)
+BATTERY_TEXTS = {
+    codes.W_BATTERY_LOW: "battery low (below its warning threshold): finish and charge it",
+    codes.W_BATTERY_LIMIT: "battery very low (below its limit threshold): the motors' power is limited",
+}
 OPEN_LOOP_TEXT = (
     "open loop{why}: the wheels get the calibrated powers for a speed, so the robot goes as fast as the "
     "floor lets it, not at the speed asked"
@@ -150,6 +158,9 @@ class Runtime:
         self.decision: Decision = NOBODY
         self.sent = Counters()
         self.latched = False
+        self._battery: float | None = None
+        self.latch_reason = ""
+        """Why the controller latched its stop: ``sonar`` or ``battery`` ("" while not latched)."""
         self.state: int | None = None
         """The controller's state from its telemetry (codes.STATE_*), None until one carries it."""
         self.last_twist: Twist | None = None
@@ -256,12 +267,17 @@ class Runtime:
         # the least-delayed sample gives the clock offset (allowed to creep up 20 us/s for drift)
         self._offset = min(self._offset + 2e-5 * max(0.0, event.time - self._offset_time), lag)
         self._offset_time = event.time
+        if event.battery is not None:
+            self._battery = event.battery
         if event.state is not None:
             self.state = event.state
             if event.state == codes.STATE_ESTOP:
                 self._latch()
+            elif event.state == codes.STATE_BATTERY:
+                self._latch("battery")
             elif self.latched:
                 self.latched = False
+                self.latch_reason = ""
         if self.estimator is not None:
             self.estimator.update(event)
             alerts = self.estimator.alerts
@@ -277,14 +293,27 @@ class Runtime:
         self._telemetry.append(event)
 
     def _on_event(self, event: Event) -> None:
-        if isinstance(event, WarnEvent) and event.code == codes.W_SONAR_STOP:
-            self._latch()
+        if isinstance(event, WarnEvent):
+            if event.code == codes.W_SONAR_STOP:
+                self._latch()
+            elif event.code == codes.W_BATTERY_STOP:
+                self._latch("battery")
+            elif event.code in BATTERY_TEXTS:
+                volts = self.last_battery
+                at = f" at {volts:.2f} V" if volts is not None else ""
+                self.notify("warn", BATTERY_TEXTS[event.code].replace(":", f"{at}:", 1), "controller")
         self._events.append(event)
 
-    def _latch(self) -> None:
-        if not self.latched:
+    @property
+    def last_battery(self) -> float | None:
+        """The battery voltage of the newest telemetry that carried it, V."""
+        return self._battery
+
+    def _latch(self, reason: str = "sonar") -> None:
+        if not self.latched or self.latch_reason != reason:
             self.latched = True
-            self.notify("warn", LATCHED_TEXT)
+            self.latch_reason = reason
+            self.notify("warn", BATTERY_LATCHED_TEXT if reason == "battery" else LATCHED_TEXT)
 
     # ------------------------------------------------------------------ the cycle
 
@@ -312,6 +341,7 @@ class Runtime:
         self._events.clear()
         cycle.notices, self._notices = self._notices, []
         cycle.latched = self.latched
+        cycle.latch_reason = self.latch_reason
         cycle.decision = self.decision  # the previous cycle's, while sources are asked
         proposals: dict[str, Proposal | None] = {}
         for name, source in list(self.sources.items()):
@@ -329,6 +359,7 @@ class Runtime:
             proposal = proposals.get(decision.source)
             cycle.sent = self._send(decision.source, decision.twist, proposal is not None and proposal.fresh)
         cycle.latched = self.latched
+        cycle.latch_reason = self.latch_reason
         cycle.notices.extend(self._notices)
         self._notices = []
         for sink in list(self.sinks):
@@ -365,9 +396,12 @@ class Runtime:
         body = getattr(origin, "body_accel", None) if client.takes_vel_body_accel else None
         accel = getattr(origin, "accel", 0.0) if client.takes_vel_accel and body is None else 0.0
         try:
-            if fresh and self.latched:
+            if fresh and self.latched and self.latch_reason == "battery":
+                client.stop()  # releases the battery stop only with the voltage back up: telemetry tells
+            elif fresh and self.latched:
                 client.stop()  # a person let go and pressed again: release the latched stop
                 self.latched = False
+                self.latch_reason = ""
                 self.notify("info", "emergency stop released by a fresh press of the deadman", source)
             sent = clamp_to(client.limits, twist)
             if self.slip is not None and self.closed_loop and not sent.is_zero:
@@ -405,6 +439,9 @@ class Runtime:
             hook(source, exc)
         if isinstance(exc, EmergencyStopLatched):
             self._latch()  # one notice for everyone; the refused source sees cycle.latched
+            return
+        if isinstance(exc, BatteryStopLatched):
+            self._latch("battery")
             return
         text = f"the controller refused {line}: {exc}" if line else f"command failed: {exc}"
         if self._last_error.get(source) != text:

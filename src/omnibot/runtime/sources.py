@@ -331,6 +331,8 @@ def must_end(cycle: Cycle, name: str) -> str:
         if notice.source == name and notice.level == "error":
             return notice.text
     if cycle.latched:
+        if cycle.latch_reason == "battery":
+            return "battery stop latched on the controller (battery flat)"
         return "emergency stop latched on the controller"
     if cycle.decision.estop:
         return f"stopped: {cycle.decision.reason}"

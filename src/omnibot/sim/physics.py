@@ -35,6 +35,8 @@ Motor and driver (one per wheel), with d = clip(pwm / pwm_max, -1, 1)::
     driver on           |pwm| >= deadband and pwm != 0; off: terminals open, the motor coasts (i = 0)
     battery             V_bus -> V_oc - R_batt * sum(d_i i_i)  (previous step's current; V_bus moves
                         there by 1/(1 + R_batt sum 1/R_i) per step: a few-ms lag, stable for any battery)
+    state of charge     q -= I_batt dt / (3600 capacity_ah), V_oc = cells * curve(q) (robot/battery.py),
+                        for a battery given a ``charge``; without one V_oc stays the nominal voltage
     motor voltage       V_m = d (V_bus - V_drop)               (averaged PWM)
     current             i = clip((V_m - k G omega) / R, -I_max, I_max)
     wheel torque        tau = eta G k i - tau_c tanh(omega / omega_eps) - b omega + tau_floor
@@ -78,6 +80,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from omnibot.errors import SimulationError
+from omnibot.robot.battery import open_voltage
 from omnibot.robot.description import RobotDescription
 from omnibot.robot.kinematics import contact_rows
 from omnibot.sim import kernels
@@ -156,6 +159,12 @@ class Physics:
         self._battery = np.zeros((n, 2))  # bus voltage, battery current of the last step
         self._init_parameters()
         self._v_open = np.array([r.battery.voltage for r in self.robots], dtype=float)
+        # state of charge: a battery with a ``charge`` runs down with its current (coulomb counting)
+        # along its chemistry's open-voltage curve; one without is held at its nominal voltage
+        self._drains = np.array([r.battery.charge is not None for r in self.robots], dtype=bool)
+        self._charge = np.array([1.0 if r.battery.charge is None else r.battery.charge for r in self.robots])
+        self._capacity_as = np.array([r.battery.capacity_ah * 3600.0 for r in self.robots], dtype=float)
+        self._set_open_voltage()
         self._battery[:, 0] = self._v_open
         # input buffers: the kernel always gets C-contiguous float64 / int64 arrays (one compilation)
         self._pwm = np.zeros((n, m))
@@ -303,6 +312,22 @@ class Physics:
         self._v_open[:] = value
 
     @property
+    def battery_charge(self) -> FloatArray:
+        """(n,) state of charge, 0..1 (stays 1 for a battery without ``charge``: never runs down)."""
+        return self._charge.copy()
+
+    @battery_charge.setter
+    def battery_charge(self, value: ArrayLike) -> None:
+        self._charge[:] = np.clip(np.asarray(value, dtype=float), 0.0, 1.0)
+        self._drains[:] = True
+        self._set_open_voltage()
+
+    def _set_open_voltage(self) -> None:
+        for i in np.flatnonzero(self._drains):
+            b = self.robots[i].battery
+            self._v_open[i] = open_voltage(b.chemistry, b.n_cells, float(self._charge[i]))
+
+    @property
     def time(self) -> float:
         """Simulated time since the last reset, s (step count times dt: no drift)."""
         return self._steps * self.dt
@@ -417,6 +442,10 @@ class Physics:
         if failed:
             raise SimulationError(f"surface_ids must index the {len(self.surfaces)} surfaces of this Physics")
         self._steps += 1
+        if self._drains.any():
+            q = self._charge - np.where(self._drains, self._battery[:, 1], 0.0) * self.dt / self._capacity_as
+            self._charge[:] = np.clip(q, 0.0, 1.0)
+            self._set_open_voltage()
 
 
 __all__ = ["GRAVITY", "ROLL_SPEED_EPS", "WHEEL_SPEED_EPS", "Physics", "static_loads"]

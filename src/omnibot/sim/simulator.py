@@ -428,6 +428,12 @@ class Simulator:
         return self._contacts
 
     @property
+    def battery_charge(self) -> float:
+        """The battery's state of charge, 0..1 (1 for an ideal battery: the description gave no ``charge``)."""
+        own = getattr(self._physics, "battery_charge", None)
+        return 1.0 if own is None else float(np.asarray(own, dtype=float).reshape(-1)[0])
+
+    @property
     def battery_voltage(self) -> float:
         """Battery terminal voltage: nominal minus the internal-resistance drop of the drive current."""
         own = getattr(self._physics, "battery_voltage", None)

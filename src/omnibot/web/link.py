@@ -310,6 +310,7 @@ class RobotLink:
             "control": decision.source,
             "reason": decision.reason,
             "latched": cycle.latched,
+            "latch_reason": cycle.latch_reason,
             "twist": None
             if self._twist is None
             else [round(v, 3) for v in (self._twist.vx, self._twist.vy, self._twist.w)],

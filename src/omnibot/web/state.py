@@ -18,9 +18,15 @@ from omnibot.errors import ConfigError
 from omnibot.estimation.odometry import WheelOdometry
 from omnibot.motion import Pose2D
 from omnibot.protocol import codes
+from omnibot.robot.battery import battery_level
 from omnibot.robot.description import RobotDescription
 
-STATES = {codes.STATE_MOVING: "moving", codes.STATE_IDLE: "idle", codes.STATE_ESTOP: "estop"}
+STATES = {
+    codes.STATE_MOVING: "moving",
+    codes.STATE_IDLE: "idle",
+    codes.STATE_ESTOP: "estop",
+    codes.STATE_BATTERY: "battery stop",
+}
 
 
 @dataclass
@@ -77,6 +83,13 @@ class StateTracker:
         if self.odometry is not None and len(tel.encoders) == self.robot.n_wheels:
             self.odometry.update(tel.encoders, tel.heading)
 
+    def _battery_level(self, tel: Telemetry | None) -> str:
+        """ok, low, limited, flat (the thresholds of the description; flat also while the controller
+        holds its battery stop) or unknown."""
+        b = self.robot.battery
+        stopped = tel is not None and tel.state == codes.STATE_BATTERY
+        return battery_level(None if tel is None else tel.battery, b.warn_v, b.limit_v, b.stop_v, stopped)
+
     def frame(
         self, now: float, truth: tuple[float, float, float] | None, drive: dict[str, Any]
     ) -> dict[str, Any]:
@@ -100,6 +113,7 @@ class StateTracker:
             "wheel_speeds": None if self.wheel_speeds is None else [_r(v, 2) for v in self.wheel_speeds],
             "heading": None if tel is None else _r(tel.heading),
             "battery": None if tel is None else _r(tel.battery, 3),
+            "battery_level": self._battery_level(tel),
             "ranges": None if tel is None or tel.ranges is None else [_r(r, 3) for r in tel.ranges],
             "robot_state": None
             if tel is None or tel.state is None

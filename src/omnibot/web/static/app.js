@@ -87,10 +87,17 @@ function onState(s) {
     ? `vx ${fmt(d.twist[0])} m/s, vy ${fmt(d.twist[1])} m/s, w ${fmt(d.twist[2])} rad/s`
     : "none";
   $("control").textContent = d.reason
-    ? d.latched ? `${d.reason}; the controller latched its emergency stop` : d.reason
+    ? d.latched
+      ? d.latch_reason === "battery"
+        ? `${d.reason}; the controller stopped: battery flat (charge it, then STOP)`
+        : `${d.reason}; the controller latched its emergency stop`
+      : d.reason
     : "-";
   $("robot-state").textContent = s.robot_state || "-";
-  $("battery").textContent = s.battery ? `${fmt(s.battery)} V` : "-";
+  $("battery").textContent = s.battery
+    ? `${fmt(s.battery)} V${s.battery_level && s.battery_level !== "ok" ? ` (${s.battery_level})` : ""}`
+    : "-";
+  $("battery").classList.toggle("battery-warn", ["low", "limited", "flat"].includes(s.battery_level));
   $("ranges").textContent = s.ranges
     ? s.ranges.map((r, i) => `${scene?.robot.sonars[i]?.name ?? i + 1}: ${r === null ? "no echo" : `${Math.round(r * 100)} cm`}`).join(", ")
     : "-";
