@@ -55,10 +55,10 @@ def test_a_follow_that_does_not_complete_is_status_1(
 ) -> None:
     real = command.compose
 
-    def latching(runtime: Any, robot: Any, args: Any, config: Any, path: Any) -> command.Parts:
+    def latching(runtime: Any, robot: Any, args: Any, config: Any, path: Any, *rest: Any) -> command.Parts:
         # the front sonar latches its stop on the room's wall as soon as the robot moves towards it
         runtime.client.sonar(1, period=0.06, stop=5.0)
-        return real(runtime, robot, args, config, path)
+        return real(runtime, robot, args, config, path, *rest)
 
     monkeypatch.setattr(command, "compose", latching)
     assert main(["run", "--follow", str(circle), "--port", "sim://omni4?world=room", "--duration", "20"]) == 1

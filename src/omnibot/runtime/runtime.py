@@ -79,9 +79,14 @@ class LinkPacer:
         return self.client.clock.now()
 
     def wait(self) -> None:
-        """Sleep through the client (lockstep on ``sim://``) until the next cycle is due."""
+        """Sleep through the client (lockstep on ``sim://``) until the next cycle is due; after a
+        cycle that ran past its successor's time (a slow start, a stalled link) the schedule starts
+        again from now, rather than running the missed cycles back to back."""
+        now = self.client.clock.now()
         self._next += self.period
-        self.client.sleep(max(0.0, self._next - self.client.clock.now()))
+        if self._next < now:
+            self._next = now + self.period
+        self.client.sleep(max(0.0, self._next - now))
 
 
 @dataclass
