@@ -29,6 +29,8 @@ from typing import Any
 
 from omnibot.errors import ConfigError
 
+EXPLORE_LIMIT = 300.0
+"""s ``--explore`` drives at most without ``--duration``."""
 TRUTH_PERIOD = 0.01
 """Sampling of the simulator's true pose, s (the trajectories are associated within 10 ms)."""
 
@@ -42,6 +44,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     drive.add_argument("--path", metavar="PATH.csv", help="follow this path file while mapping")
     drive.add_argument(
         "--teleop", choices=("pad", "keyboard"), help="drive with a gamepad or this terminal's keys (deadman)"
+    )
+    drive.add_argument(
+        "--explore",
+        action="store_true",
+        help="the robot drives itself to the edges of what it has mapped (frontiers) until the reachable "
+        "space is mapped or --duration passes (default 300 s)",
     )
     p.add_argument(
         "--out", metavar="DIR", required=True, help="directory for the map, trajectories and report"
@@ -117,6 +125,8 @@ def run(args: argparse.Namespace) -> int:
     except (OSError, ValueError) as exc:
         raise ConfigError(f"cannot read {args.path}: {exc}", key="--path") from None
     url = sim_url(args)
+    if args.explore:
+        return _explore(args, url, out)
     if path is not None and args.port is None:
         x, y, theta = path.start
         url += f"&pose={x:.4f},{y:.4f},{math.degrees(theta):.3f}"  # the robot stands at the path's start
@@ -128,6 +138,42 @@ def run(args: argparse.Namespace) -> int:
     finally:
         mapping.close()
     return mapping.finish(out, parts, args.resolution)
+
+
+def _explore(args: argparse.Namespace, url: str, out: Path) -> int:
+    """``--explore``: the robot goes to the map's frontiers by itself (:mod:`omnibot.navigation.explore`)."""
+    from omnibot.cliargs import use_calibration
+    from omnibot.client.session import robot_session
+    from omnibot.motion import Pose2D
+    from omnibot.navigation.explore import explore
+    from omnibot.navigation.goto import navigation_runtime
+    from omnibot.transport.device import find_simulator
+
+    mapping = _Mapping(args)
+    limit = args.duration if args.duration is not None else EXPLORE_LIMIT
+    try:
+        with robot_session(url, args.robot) as session:
+            client, robot = session.client, session.robot
+            sim = find_simulator(client.link)
+            start = sim.pose if sim is not None else Pose2D(0.0, 0.0, 0.0)
+            slip = use_calibration(args, client, robot)
+            with navigation_runtime(client, robot, start, slip=slip) as runtime:
+                mapping.attach(runtime, session, estimator=False)
+                sink = mapping.sink
+                _say(f"exploring for at most {limit:g} s")
+                result = explore(
+                    runtime,
+                    robot,
+                    lambda: sink.grid(args.resolution, mapping.noise),
+                    sink.pose_now,
+                    time_limit=limit,
+                    say=_say,
+                )
+            _say(f"explored: {result.summary()}")
+    finally:
+        mapping.close()
+    status = mapping.finish(out, None, args.resolution)
+    return status if status else (0 if result.outcome == "explored" else 1)
 
 
 class _Mapping:
@@ -142,7 +188,7 @@ class _Mapping:
         self._listener: Any = None
         self.noise: Any = None
 
-    def attach(self, runtime: Any, session: Any) -> list[Any]:
+    def attach(self, runtime: Any, session: Any, *, estimator: bool = True) -> list[Any]:
         from omnibot.estimation.estimator import make_estimator
         from omnibot.lidar.reader import open_scanner
         from omnibot.mapping.session import MappingSink, RangeNoise, Track
@@ -166,8 +212,9 @@ class _Mapping:
 
             self._listener = record
             sim.add_listener(record, TRUTH_PERIOD)
-        slip = runtime.slip.params if runtime.slip is not None else None
-        runtime.estimator = make_estimator("fused", robot, start, slip)
+        if estimator:
+            slip = runtime.slip.params if runtime.slip is not None else None
+            runtime.estimator = make_estimator("fused", robot, start, slip)
         self.sink = MappingSink(scans, threaded=sim is None)
         runtime.add_sink(self.sink)
         where = "the simulated scanner" if sim is not None else f"the scanner on {self.args.scanner}"

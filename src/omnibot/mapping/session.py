@@ -203,6 +203,16 @@ class MappingSink(ScanFeed):
         self._clouds: list[tuple[float, NDArray[np.float32], tuple[float, float]]] = []
         super().__init__(scans, threaded=threaded)
 
+    def pose_now(self) -> Pose2D | None:
+        """The robot's map-frame pose now: the SLAM's ``map -> odom`` composed with the latest
+        odometry (None until the SLAM has its first keyframe: there is no map before)."""
+        odom = self.last_odometry
+        if odom is None or not self.slam.keyframes():
+            return None
+        with self._lock:
+            correction = self.slam.map_to_odom
+        return compose(correction, odom)
+
     def _keep(self, scan: Scan, start: Pose2D, end: Pose2D, span: float) -> None:
         """Keep the scan's returns (distortion undone) for the map."""
         points = undistorted(scan, start, end, span).astype(np.float32)

@@ -27,8 +27,8 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable
-from contextlib import suppress
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -515,29 +515,25 @@ class _Leg:
         return "done"
 
 
-def goto(
+@contextmanager
+def navigation_runtime(
     client: RobotClient,
     robot: RobotDescription,
-    grid: OccupancyGrid,
-    goal: Pose2D,
     start: Pose2D,
-    options: GotoOptions | None = None,
     *,
-    pose: PoseProvider | None = None,
-    pose_from: Callable[[Runtime], PoseProvider] | None = None,
-    scan: ScanSource | None = None,
     standstill: float = STANDSTILL,
     slip: SlipModel | None = None,
-) -> GotoResult:
-    """``omnibot goto``: the robot standing at ``start`` (the estimator starts there: the map frame
-    unless a provider says otherwise), telemetry and sonars started, ``standstill`` s still for the
-    gyro's bias, then :func:`go_to` with the map-frame pose from ``pose``, or from the provider
-    ``pose_from`` makes on goto's runtime (a localiser fed by its telemetry and estimate), else the
-    estimate; ``slip`` is the floor's calibrated wheel slip (``--calibration``: the runtime asks the
-    wheels for the creep, the estimator takes it out); the controller is left stopped with
-    telemetry and sonars off."""
+    sinks: Sequence[Callable[[Cycle], object]] = (),
+) -> Iterator[Runtime]:
+    """A runtime for going places (goto, exploring): the fused estimator starting at ``start``,
+    binary where the controller speaks it, telemetry (encoders, heading, queue; tracking wheels and
+    sonars where the robot has them) and the sonars started, ``sinks`` added, ``standstill`` s still
+    for the gyro's bias; on the way out the controller is left stopped with telemetry and sonars
+    off."""
     estimator = make_estimator("fused", robot, start, slip.params if slip is not None else None)
     runtime = Runtime(client, estimator=estimator, slip=slip)
+    for sink in sinks:
+        runtime.add_sink(sink)
     client.stop()
     period = 0.02
     with suppress(NotSupported):
@@ -555,8 +551,7 @@ def goto(
             start_sonars(client, robot)
         client.telemetry(period, mask)
         client.sleep(standstill)
-        provider = pose_from(runtime) if pose_from is not None else pose
-        return go_to(runtime, robot, grid, goal, options, pose=provider, scan=scan)
+        yield runtime
     finally:
         try:
             if not client.link.closed:
@@ -568,6 +563,31 @@ def goto(
             runtime.close()
 
 
+def goto(
+    client: RobotClient,
+    robot: RobotDescription,
+    grid: OccupancyGrid,
+    goal: Pose2D,
+    start: Pose2D,
+    options: GotoOptions | None = None,
+    *,
+    pose: PoseProvider | None = None,
+    pose_from: Callable[[Runtime], PoseProvider] | None = None,
+    scan: ScanSource | None = None,
+    standstill: float = STANDSTILL,
+    slip: SlipModel | None = None,
+) -> GotoResult:
+    """``omnibot goto``: the robot standing at ``start`` (the estimator starts there: the map frame
+    unless a provider says otherwise), on a :func:`navigation_runtime`, then :func:`go_to` with the
+    map-frame pose from ``pose``, or from the provider ``pose_from`` makes on goto's runtime (a
+    localiser fed by its telemetry and estimate), else the estimate; ``slip`` is the floor's
+    calibrated wheel slip (``--calibration``: the runtime asks the wheels for the creep, the
+    estimator takes it out); the controller is left stopped with telemetry and sonars off."""
+    with navigation_runtime(client, robot, start, standstill=standstill, slip=slip) as runtime:
+        provider = pose_from(runtime) if pose_from is not None else pose
+        return go_to(runtime, robot, grid, goal, options, pose=provider, scan=scan)
+
+
 __all__ = [
     "GotoOptions",
     "GotoResult",
@@ -577,5 +597,6 @@ __all__ = [
     "go_to",
     "goto",
     "mark",
+    "navigation_runtime",
     "planned_path",
 ]
