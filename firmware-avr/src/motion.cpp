@@ -229,7 +229,7 @@ void Executor::drive(float vx, float vy, float w, bool rotate, float gain) {
     nominal[1] = vy;
     nominal[2] = w;
     nominal[3] = gain;
-    float f = 1.0f;
+    float f = 1.0f, v = 0;
     if (vx != 0 || vy != 0) {
         f = guard.factor(vx * 100.0f, vy * 100.0f);
         if (f <= 0) {
@@ -241,7 +241,8 @@ void Executor::drive(float vx, float vy, float w, bool rotate, float gain) {
         vx *= f;
         vy *= f;
         w *= f;
-        slow_down(sqrtf(vx * vx + vy * vy) * 100.0f, f < 1.0f);
+        v = sqrtf(vx * vx + vy * vy);
+        slow_down(v * 100.0f, f < 1.0f);
     } else {
         speed = 0;
         coast_us = 0;
@@ -251,7 +252,7 @@ void Executor::drive(float vx, float vy, float w, bool rotate, float gain) {
     // an open-loop VEL: a wheel below the K_l tables' dead band would not turn (WARN 12)
     bool open_vel = kind == K_VEL && (vx != 0 || vy != 0) && !(HAS_ENCODERS && (mode & P_MODE_CLOSED_LOOP));
     model.weak_floor = open_vel ? cal_start_power() : 0;
-    uint8_t flags = model.compute(vx, vy, w, rotate, powers);
+    uint8_t flags = model.compute(vx, vy, w, rotate, powers, v);
     time_scale = model.scale * f;
     warn_once(flags);
     twist[0] = vx;
