@@ -71,6 +71,7 @@
 #define P_TEL_QUEUE 64
 #define P_TEL_SONAR 128
 #define P_TEL_TRACKING 4
+#define P_W_NO_GYRO 10
 #define P_W_POWER_TOO_LOW 12
 #define P_W_REACH 18
 #define P_W_SHORT 17

@@ -132,6 +132,7 @@ W_UNCOVERED = 15  # project: travel where no armed sonar looks, speed limited
 W_UNCOVERED_STOP = 16  # project: a running motion turned where no armed sonar looks, stopped (MODE bit 3)
 W_SHORT = 17  # project: a MOVE stood still short of its distance, as its wheel encoders measured
 W_REACH = 18  # project: an open-loop MOVE asked beyond the calibrated reach, run at the reach
+W_NO_GYRO = 10  # project: the described gyro did not answer at boot; the board runs without it
 E_QUEUE_FULL = 21
 E_TOO_LONG = 22
 E_UNKNOWN = 23
@@ -164,6 +165,7 @@ TEXTS = {
     W_UNCOVERED_STOP: "no sonar covers this direction, motion stopped",
     W_SHORT: "MOVE fell short of its distance (encoders)",
     W_REACH: "speed reduced to the calibrated reach",
+    W_NO_GYRO: "no gyro: it did not answer at boot",
     E_QUEUE_FULL: "queue full",
     E_TOO_LONG: "command too long",
     E_UNKNOWN: "unknown command",
