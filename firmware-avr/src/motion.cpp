@@ -231,16 +231,18 @@ void Executor::drive(float vx, float vy, float w, bool rotate, float gain) {
     nominal[3] = gain;
     float f = 1.0f, v = 0;
     if (vx != 0 || vy != 0) {
-        f = guard.factor(vx * 100.0f, vy * 100.0f);
+        f = guard.factor(vx, vy);
         if (f <= 0) {
             halt = guard.code;
             stop();
             return;
         }
         warn_once(guard.flags);
-        vx *= f;
-        vy *= f;
-        w *= f;
+        if (f < 1.0f) {  // the multiplications only when the guard lowered the speed
+            vx *= f;
+            vy *= f;
+            w *= f;
+        }
         v = sqrtf(vx * vx + vy * vy);
         slow_down(v * 100.0f, f < 1.0f);
     } else {
@@ -274,14 +276,18 @@ void Executor::drive(float vx, float vy, float w, bool rotate, float gain) {
 // When the guard lowers the speed, coast (powers off) until the robot must have slowed to it:
 // reduced power alone decelerates far less than the stop deceleration the guard counts on.
 void Executor::slow_down(float v, bool limited) {
-    float bound = speed + GUARD_DECEL * coast_us * 1e-6f;  // fastest the robot can be going now
+    int32_t coast = 0;
+    if (limited) {
+        float bound = speed + GUARD_DECEL * coast_us * 1e-6f;  // fastest the robot can be going now
+        if (bound > v) coast = (int32_t)((bound - v) / GUARD_DECEL * 1e6f);
+    }
     speed = v;
-    coast_us = limited && bound > v ? (int32_t)((bound - v) / GUARD_DECEL * 1e6f) : 0;
+    coast_us = coast;
 }
 
 void Executor::relimit() {
     if (!travelling()) return;
-    float f = guard.factor(nominal[0] * 100.0f, nominal[1] * 100.0f);
+    float f = guard.factor(nominal[0], nominal[1]);
     if (f == k) return;
     float old = time_scale;
     drive(nominal[0], nominal[1], nominal[2], rot, nominal[3]);

@@ -60,6 +60,8 @@ float SonarGuard::factor(float vx, float vy) {
     if (vx == 0 && vy == 0) return 1.0f;
     closing = 0;
     if (!armed()) return 1.0f;  // nothing limits the speed: no square root to take
+    vx *= 100.0f;                // cm/s from here on
+    vy *= 100.0f;
     float v = sqrtf(vx * vx + vy * vy);
     float allowed = v;
     bool covered = false;
