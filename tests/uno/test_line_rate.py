@@ -77,3 +77,29 @@ def test_300_vels_back_to_back_all_answered_and_executed() -> None:
     finally:
         port.close()
         emu.close()
+
+
+def test_the_client_text_window_loses_nothing_of_a_long_mixed_stream() -> None:
+    """Streamed for longer than the receive ring can absorb, and with VELs that turn (a pass longer
+    than their time on the line): RobotClient's text window (docs/protocol.md, "Text flow control")
+    holds the host back, so every command is answered, none lost."""
+    from omnibot.client import RobotClient
+    from omnibot.protocol.messages import Ok, Vel
+
+    emu, port = start("omni4")
+    port.close()
+    try:
+        with RobotClient.open(f"serial://{emu.path}") as client:
+            assert client.text_window == codes.TEXT_WINDOW
+            calls = []
+            most = 0
+            for k in range(600):
+                vel = Vel(40, 0, 0, 100) if k % 2 else Vel(20 + k % 7, -30, 45, 1000)
+                calls.append(client.submit(vel))
+                most = max(most, sum(c.size for c in client.outstanding if not c.done))
+            replies = [call.result(timeout=5.0) for call in calls]
+            assert all(isinstance(r, Ok) for r in replies)
+            assert most <= codes.TEXT_WINDOW
+            client.stop()
+    finally:
+        emu.close()

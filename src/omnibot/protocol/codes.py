@@ -245,6 +245,7 @@ SEQ_MAX = 255  # sequence numbers run 1..255 and wrap to 1; 0 = unsequenced (TEL
 # Send windows (docs/protocol.md, "Window"): a controller announces the window it takes in its binary
 # HELLO reply (WINDOW_MIN..WINDOW_LIMIT); the host sends at most min(that, WINDOW) frames unacknowledged
 # (WINDOW_MIN before the reply) and takes the controller's events with a window of WINDOW.
+TEXT_WINDOW = 192  # text flow control: a host keeps at most this many bytes of commands unanswered
 WINDOW_MIN = 8  # the least a controller announces (the UNO's): a line full with a 2 ms loop, no host load
 WINDOW = 32  # this implementation's window: the host's, the MicroPython controller's (a loaded host)
 WINDOW_LIMIT = 127  # the most: W duplicates behind and W - 1 new seqs ahead must not meet in SEQ_MAX
