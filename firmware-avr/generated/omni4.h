@@ -76,6 +76,7 @@
 #define P_W_BATTERY_LIMIT 20
 #define P_W_BATTERY_LOW 19
 #define P_W_BATTERY_STOP 43
+#define P_W_NO_GYRO 10
 #define P_W_POWER_TOO_LOW 12
 #define P_W_REACH 18
 #define P_W_SHORT 17

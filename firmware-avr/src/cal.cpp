@@ -38,11 +38,33 @@ static void load_table(Table *dst, uint8_t &table, const Knot *&src) {
     eeprom_update_block(&t, dst, 1 + t.n * sizeof(Knot));
 }
 
+// The intercept of p K_l(p) through the two lowest knots, x0 x1 (y0 - y1) / (x1 - x0), the smallest
+// over the curves (calibration.py start_power), rounded up: a whole power is below it when below this.
+static int16_t start_power() {
+    float low = 1e30f;  // there is always a curve (CAL,12,-2 keeps one)
+    for (uint8_t c = eeprom_read_byte(EE(curves)); c-- > 0;) {
+        struct {
+            uint8_t n;
+            Knot k[2];
+        } t;
+        eeprom_read_block(&t, EE(kl[c]), sizeof t);
+        if (t.n < 2) return 0;
+        float a = (float)((int32_t)t.k[0].x * t.k[1].x) * (t.k[0].y - t.k[1].y) / (t.k[1].x - t.k[0].x);
+        if (a < low) low = a;
+    }
+    return low > 0 ? (int16_t)ceilf(low * 0.001f) : 0;
+}
+
 // Shortcuts for the tables' reset values, refreshed after every CAL: the motor map is the identity
-// (offsets 0, every gain knot 1.0, speed terms 0) and no roller drag coefficient is set.
+// (offsets 0, every gain knot 1.0, speed terms 0) and no roller drag coefficient is set; and
+// the start power, computed after every CAL rather than on every open-loop VEL
 static bool map_identity, no_roller_drag;
+static int16_t start_power_cached;
+
+int16_t cal_start_power() { return start_power_cached; }
 
 static void refresh_shortcuts() {
+    start_power_cached = start_power();
     map_identity = no_roller_drag = true;
     for (uint8_t i = 0; i < MOTORS; i++) {
         if (eeprom_read_word((const uint16_t *)EE(offset[i])) || eeprom_read_word((const uint16_t *)EE(speed[i])))
@@ -126,23 +148,6 @@ float cal_kl(float power, float folded) {
         }
     }
     return interp(EE(kl[n - 1]), power);
-}
-
-// The intercept of p K_l(p) through the two lowest knots, x0 x1 (y0 - y1) / (x1 - x0), the smallest
-// over the curves (calibration.py start_power), rounded up: a whole power is below it when below this.
-int16_t cal_start_power() {
-    float low = 1e30f;  // there is always a curve (CAL,12,-2 keeps one)
-    for (uint8_t c = eeprom_read_byte(EE(curves)); c-- > 0;) {
-        struct {
-            uint8_t n;
-            Knot k[2];
-        } t;
-        eeprom_read_block(&t, EE(kl[c]), sizeof t);
-        if (t.n < 2) return 0;
-        float a = (float)((int32_t)t.k[0].x * t.k[1].x) * (t.k[0].y - t.k[1].y) / (t.k[1].x - t.k[0].x);
-        if (a < low) low = a;
-    }
-    return low > 0 ? (int16_t)ceilf(low * 0.001f) : 0;
 }
 
 // sign(a) (offset + gain(|a|) |a|) + speed u, never against a (calibration.py motor_power)

@@ -47,6 +47,10 @@ static volatile uint16_t echo_start;
 static volatile uint8_t echo_state;  // 0 idle, 1 waiting for the rising edge, 2 for the falling one, 3 done
 static volatile uint16_t echo_ticks;
 
+// Set when the main loop has work: a command's end arrived, or the 1 ms tick. The bytes before a
+// command's end wait in the ring: a pass woken by each of them cost more than the command itself.
+static volatile bool wake;
+
 ISR(USART_RX_vect) {
     uint8_t c = UDR0;
     uint8_t next = (rx_head + 1) & (RX_SIZE - 1);
@@ -54,6 +58,7 @@ ISR(USART_RX_vect) {
         rx_buf[rx_head] = c;
         rx_head = next;
     }
+    if (c == '\n' || c == '\r' || c == ';') wake = true;
 }
 
 ISR(USART_UDRE_vect) {
@@ -69,6 +74,7 @@ ISR(TIMER1_OVF_vect) { overflows++; }
 
 ISR(TIMER1_COMPB_vect) {  // 1 ms: wakes the main loop, times the encoders' pauses
     OCR1B += 2000;
+    wake = true;
     for (Wheel &w : wheel) {
         if (w.quiet != 255) w.quiet++;
         if (w.age != 255) w.age++;
@@ -192,12 +198,14 @@ bool hal_rx_pending() { return rx_head != rx_tail; }
 
 void hal_wait_for_event() {
     cli();
-    if (rx_head == rx_tail) {
+    while (!wake) {  // other interrupts (a byte inside a command, encoder edges, the UART's sending) sleep on
         sleep_enable();
         sei();
         sleep_cpu();
         sleep_disable();
+        cli();
     }
+    wake = false;
     sei();
 }
 

@@ -4,7 +4,7 @@
 
 void hal_init();
 uint32_t hal_ticks();           // timer 1 ticks of 0.5 us, wrapping at 2^32
-void hal_wait_for_event();      // idle sleep until an interrupt (UART, the 1 ms tick, echo)
+void hal_wait_for_event();      // idle sleep until a command's end arrives or the 1 ms tick
 bool hal_rx_pending();
 
 int16_t uart_read();            // next received byte, -1 when none

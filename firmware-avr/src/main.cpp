@@ -16,9 +16,14 @@
 
 static char line[LINE_MAX + 1];
 static uint8_t line_len;
-static bool overflow;
-static bool latched;
-static bool binary;  // MODE bit 2: frames both ways
+// four flags in one byte (static RAM is at its limit): the line overflowed, the sonar stop is
+// latched, MODE bit 2 (frames both ways), a sonar reading is waiting
+static struct {
+    bool overflow : 1;
+    bool latched : 1;
+    bool binary : 1;
+    bool sonar_pending : 1;
+} st;
 static uint32_t now_ms;
 static uint32_t us_part;
 static uint32_t last_ticks;
@@ -26,7 +31,6 @@ static uint8_t tick_half;
 // sonar (sonar.py, one sonar; its period and STOP are the guard's)
 static int16_t sonar_low, sonar_high, sonar_last = -1;
 static uint32_t sonar_next, sonar_started;
-static bool sonar_pending;
 // battery (battery.py): f is 64 times the filtered ADC count (time constant 64 readings);
 // level 0 ok, 1 warned (WARN 19), 2 limited (WARN 20, motion.cpp caps the power), 3 stopped (WARN 43)
 static uint16_t batt_f;
@@ -52,7 +56,7 @@ static void coded(PGM_P keyword, uint8_t code) {
     out_P(code_text(code));
 }
 static void ok() {
-    if (binary) {
+    if (st.binary) {
         bin::begin(T_OK, bin::seq());
         bin::send_reply();
         return;
@@ -62,7 +66,7 @@ static void ok() {
 }
 // Binary ERROR and WARN frames carry no text: the code table's text applies (docs/protocol.md).
 static void error(uint8_t code) {
-    if (binary) {
+    if (st.binary) {
         bin::begin(T_ERROR, bin::seq());
         bin::put(code);
         bin::send_reply();
@@ -72,12 +76,12 @@ static void error(uint8_t code) {
     end_reply();
 }
 void on_warn(uint8_t code) {
-    if (binary) return bin::event(T_WARN, code, 0, 1);
+    if (st.binary) return bin::event(T_WARN, code, 0, 1);
     coded(PSTR("WARN"), code);
     end_line();
 }
 void on_idle() {
-    if (binary) return bin::event(T_IDLE, 0, 0, 0);
+    if (st.binary) return bin::event(T_IDLE, 0, 0, 0);
     out_P(PSTR("IDLE"));
     end_line();
 }
@@ -85,12 +89,12 @@ uint32_t controller_ms() { return now_ms; }
 
 static uint8_t state() {
     if (batt_level == 3) return P_STATE_BATTERY;
-    if (latched) return P_STATE_ESTOP;
+    if (st.latched) return P_STATE_ESTOP;
     return ex.moving() ? P_STATE_MOVING : P_STATE_IDLE;
 }
 
 static void hello() {
-    if (binary) {
+    if (st.binary) {
         bin::begin(T_HELLO_REPLY, bin::seq());
         bin::put(P_PROTOCOL_VERSION);
         bin::put(MOTORS);
@@ -107,11 +111,11 @@ static void hello() {
 }
 
 static uint8_t mode_bits() {
-    return ex.mode | (binary ? P_MODE_BINARY : 0) | (guard.refuse ? P_MODE_REFUSE_UNCOVERED : 0);
+    return ex.mode | (st.binary ? P_MODE_BINARY : 0) | (guard.refuse ? P_MODE_REFUSE_UNCOVERED : 0);
 }
 
 static void status() {
-    if (binary) {
+    if (st.binary) {
         bin::begin(T_STATUS_REPLY, bin::seq());
         bin::put(state());
         bin::put(ex.queue.count);
@@ -135,12 +139,12 @@ static void status() {
 }
 
 static void field(int32_t v) {
-    if (binary) bin::put(v);
+    if (st.binary) bin::put(v);
     else comma_i(v);
 }
 
 static void telemetry() {
-    if (binary) {
+    if (st.binary) {
         bin::begin(T_TEL, 0);
         bin::put_u32(now_ms);
     } else {
@@ -168,7 +172,7 @@ static void telemetry() {
         field(SONARS);
         if (SONARS) field(sonar_last);
     }
-    if (binary) bin::send_plain();
+    if (st.binary) bin::send_plain();
     else end_line();
 }
 
@@ -178,7 +182,7 @@ static void telemetry() {
 static void emergency_stop() {
     ex.stop();
     ex.brake();
-    latched = true;
+    st.latched = true;
     on_warn(P_W_SONAR_STOP);
     on_idle();
 }
@@ -218,7 +222,7 @@ static void execute(uint8_t kw, int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
     bool motion = kw == K_MOVE || kw == K_ROTATE || kw == K_DELTA || kw == K_POWER || kw == K_VEL;
     if (!code && motion) {
         if (batt_level == 3) code = P_E_BATTERY;
-        else if (latched) code = P_E_ESTOP;
+        else if (st.latched) code = P_E_ESTOP;
     }
     if (!code && guard.refuse && !covered(kw, p)) code = P_E_UNCOVERED;
     if (code) {
@@ -246,7 +250,7 @@ static void execute(uint8_t kw, int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
         case K_STOP: {
             bool was = ex.stop();
             ex.reset_move();
-            latched = false;
+            st.latched = false;
             if (batt_level == 3 && batt_f >= BATTERY_STOP + BATTERY_HYST)  // a charged pack
                 batt_level = batt_f < BATTERY_LIMIT + BATTERY_HYST ? 2 : 1;
             ok();
@@ -265,11 +269,11 @@ static void execute(uint8_t kw, int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
             ex.set_mode(p[0] & ~(P_MODE_BINARY | P_MODE_REFUSE_UNCOVERED));
             relimit();
             bool b = p[0] & P_MODE_BINARY;
-            if (b != binary) {  // from the next byte on, both ways
-                binary = b;
+            if (b != st.binary) {  // from the next byte on, both ways
+                st.binary = b;
                 bin::reset();
                 line_len = 0;
-                overflow = false;
+                st.overflow = false;
             }
             break;
         }
@@ -430,8 +434,8 @@ void on_query_again(uint8_t type) {
 // Splits the byte stream into commands (parser.py LineSplitter).
 static void feed(char c) {
     if (c == ';' || c == '\r' || c == '\n') {
-        if (overflow) {
-            overflow = false;
+        if (st.overflow) {
+            st.overflow = false;
             error(P_E_TOO_LONG);
         } else if (line_len) {
             handle(line, line_len);
@@ -439,9 +443,9 @@ static void feed(char c) {
         line_len = 0;
         return;
     }
-    if (overflow) return;
+    if (st.overflow) return;
     if (line_len == LINE_MAX) {
-        overflow = true;
+        st.overflow = true;
         line_len = 0;
         return;
     }
@@ -452,18 +456,18 @@ static void feed(char c) {
 
 static void sonar_poll() {
     if (!SONARS) return;
-    if (sonar_pending) {
+    if (st.sonar_pending) {
         int16_t cm = sonar_result();
         if (cm == -2) {
             if ((int32_t)(now_ms - sonar_started) < 100) return;
             cm = -1;  // no echo within 100 ms
         }
-        sonar_pending = false;
+        st.sonar_pending = false;
         sonar_last = cm;
         if (guard.period == 0) return;
         if (cm >= 0 && ((sonar_low < sonar_high && sonar_low <= cm && cm <= sonar_high) ||
                         (sonar_low > sonar_high && (cm < sonar_high || cm > sonar_low)))) {
-            if (binary) {
+            if (st.binary) {
                 bin::event(T_RANGE, 1, cm, 2);
             } else {
                 out_P(PSTR("RANGE,1"));
@@ -478,7 +482,7 @@ static void sonar_poll() {
     } else if (guard.period && (int32_t)(now_ms - sonar_next) >= 0) {
         sonar_next += guard.period;
         if ((int32_t)(now_ms - sonar_next) >= 0) sonar_next = now_ms + guard.period;
-        sonar_pending = true;
+        st.sonar_pending = true;
         sonar_started = now_ms;
         sonar_trigger();
     }
@@ -550,13 +554,13 @@ int main() {
         ex.step(dt);
         check_halt();
         for (int16_t c; (c = uart_read()) >= 0;) {
-            if (binary) bin::feed(c);
+            if (st.binary) bin::feed(c);
             else feed(c);
         }
         sonar_poll();
         if (batt_due) battery_sample();
         if (tel_due()) telemetry();
-        if (binary) bin::poll(now_ms);
+        if (st.binary) bin::poll(now_ms);
         hal_wait_for_event();
     }
 }

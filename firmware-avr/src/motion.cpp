@@ -236,19 +236,22 @@ void Executor::drive(float vx, float vy, float w, bool rotate, float gain) {
     nominal[1] = vy;
     nominal[2] = w;
     nominal[3] = gain;
-    float f = 1.0f;
+    float f = 1.0f, v = 0;
     if (vx != 0 || vy != 0) {
-        f = guard.factor(vx * 100.0f, vy * 100.0f);
+        f = guard.factor(vx, vy);
         if (f <= 0) {
             halt = guard.code;
             stop();
             return;
         }
         warn_once(guard.flags);
-        vx *= f;
-        vy *= f;
-        w *= f;
-        slow_down(sqrtf(vx * vx + vy * vy) * 100.0f, f < 1.0f);
+        if (f < 1.0f) {  // the multiplications only when the guard lowered the speed
+            vx *= f;
+            vy *= f;
+            w *= f;
+        }
+        v = sqrtf(vx * vx + vy * vy);
+        slow_down(v * 100.0f, f < 1.0f);
     } else {
         speed = 0;
         coast_us = 0;
@@ -258,7 +261,7 @@ void Executor::drive(float vx, float vy, float w, bool rotate, float gain) {
     // an open-loop VEL: a wheel below the K_l tables' dead band would not turn (WARN 12)
     bool open_vel = kind == K_VEL && (vx != 0 || vy != 0) && !(HAS_ENCODERS && (mode & P_MODE_CLOSED_LOOP));
     model.weak_floor = open_vel ? cal_start_power() : 0;
-    uint8_t flags = model.compute(vx, vy, w, rotate, powers);
+    uint8_t flags = model.compute(vx, vy, w, rotate, powers, v);
     time_scale = model.scale * f;
     warn_once(flags);
     twist[0] = vx;
@@ -280,14 +283,18 @@ void Executor::drive(float vx, float vy, float w, bool rotate, float gain) {
 // When the guard lowers the speed, coast (powers off) until the robot must have slowed to it:
 // reduced power alone decelerates far less than the stop deceleration the guard counts on.
 void Executor::slow_down(float v, bool limited) {
-    float bound = speed + GUARD_DECEL * coast_us * 1e-6f;  // fastest the robot can be going now
+    int32_t coast = 0;
+    if (limited) {
+        float bound = speed + GUARD_DECEL * coast_us * 1e-6f;  // fastest the robot can be going now
+        if (bound > v) coast = (int32_t)((bound - v) / GUARD_DECEL * 1e6f);
+    }
     speed = v;
-    coast_us = limited && bound > v ? (int32_t)((bound - v) / GUARD_DECEL * 1e6f) : 0;
+    coast_us = coast;
 }
 
 void Executor::relimit() {
     if (!travelling()) return;
-    float f = guard.factor(nominal[0] * 100.0f, nominal[1] * 100.0f);
+    float f = guard.factor(nominal[0], nominal[1]);
     if (f == k) return;
     float old = time_scale;
     drive(nominal[0], nominal[1], nominal[2], rot, nominal[3]);

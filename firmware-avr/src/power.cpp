@@ -33,18 +33,20 @@ void PowerModel::wheel_speeds(float vx, float vy, float w, float *out) {
     for (uint8_t i = 0; i < MOTORS; i++) out[i] = (rim(i, 0) * vx + rim(i, 1) * vy + rim(i, 2) * w) / pgm_read_float(&WHEEL_RADIUS_M[i]);
 }
 
-uint8_t PowerModel::compute(float vx, float vy, float w, bool rotate, int16_t *out) {
+uint8_t PowerModel::compute(float vx, float vy, float w, bool rotate, int16_t *out, float v) {
     float k = cal_k();
     float tr_max = 0, rot_max = 0;
+    // each wheel's rim speed of the translation in raw[i], of the rotation in base[i], until the
+    // powers take their place: computed once, not again for the powers
     for (uint8_t i = 0; i < MOTORS; i++) {
-        float a = fabsf(rim(i, 0) * vx + rim(i, 1) * vy), b = fabsf(rim(i, 2) * w);
+        float a = fabsf(raw[i] = rim(i, 0) * vx + rim(i, 1) * vy), b = fabsf(base[i] = rim(i, 2) * w);
         if (a > tr_max) tr_max = a;
         if (b > rot_max) rot_max = b;
     }
     float f_tr = 0, f_rot = 0;
     ux = uy = 0;
     if (tr_max > 0) {
-        float v = sqrtf(vx * vx + vy * vy);
+        if (v < 0) v = sqrtf(vx * vx + vy * vy);
         ux = vx / v;
         uy = vy / v;
         f_tr = k * cal_kl(k * tr_max, fold_course(atan2f(vy, vx) * (180.0f / (float)M_PI)));
@@ -52,7 +54,7 @@ uint8_t PowerModel::compute(float vx, float vy, float w, bool rotate, int16_t *o
     if (rot_max > 0) f_rot = k * (rotate ? cal_kr(k * rot_max) : cal_kt(k * rot_max));
     float peak = 0;
     for (uint8_t i = 0; i < MOTORS; i++) {
-        float t = rim(i, 0) * vx + rim(i, 1) * vy, r = rim(i, 2) * w;
+        float t = raw[i], r = base[i];
         float p = cal_motor_power(i, f_tr * t + f_rot * r, t + r);
         raw[i] = base[i] = p;
         if (fabsf(p) > peak) peak = fabsf(p);

@@ -57,12 +57,15 @@ bool SonarGuard::covers(float vx, float vy) const {
 
 float SonarGuard::factor(float vx, float vy) {
     flags = code = 0;
+    if (vx == 0 && vy == 0) return 1.0f;
+    closing = 0;
+    if (!armed()) return 1.0f;  // nothing limits the speed: no square root to take
+    vx *= 100.0f;                // cm/s from here on
+    vy *= 100.0f;
     float v = sqrtf(vx * vx + vy * vy);
-    if (v <= 0) return 1.0f;
     float allowed = v;
     bool covered = false;
-    closing = 0;
-    if (armed()) {
+    {
         float off = angle(vx / v, vy / v) - GUARD_HALF, c = 0;
         if (off <= 0) {
             covered = true;

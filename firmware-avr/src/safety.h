@@ -19,7 +19,7 @@ struct SonarGuard {
     void clear();              // the sonar was reconfigured
     bool below_stop() const;   // for motions without travel
     bool covers(float vx, float vy) const;
-    float factor(float vx, float vy);  // scale (0..1] for travel at (vx, vy) cm/s; 0: stop (code)
+    float factor(float vx, float vy);  // scale (0..1] for travel at (vx, vy) m/s; 0: stop (code)
 };
 
 extern SonarGuard guard;

@@ -1,7 +1,7 @@
 /*
  * unosim: omnibot's Arduino UNO firmware in simavr, in real time, with its UART on a pty.
  *
- *   unosim --board ROBOT.board [--range CM] [--encoders CPS] [--report] [--lockstep] [--heap ADDR] FIRMWARE.elf
+ *   unosim --board ROBOT.board [--range CM] [--encoders CPS] [--report] [--lockstep] [--heap ADDR] [--profile FILE] FIRMWARE.elf
  *
  * The ATmega328P runs at 16 MHz, kept in step with the wall clock (never faster; on a busy host it
  * falls behind by at most 20 ms and then slips, so the firmware's time never races). Its USART0 is a pseudo-terminal
@@ -19,6 +19,9 @@
  * power cycle that keeps the EEPROM), `stats` (prints `stats LONGEST AWAKE ELAPSED PASSES`: the
  * longest main-loop pass, the cycles awake and elapsed and the passes since the last `stats`), `quit`.
  * With --report, stdout gets `pwm T_US D1 D2 D3 D4` whenever a duty changes.
+ * With --profile FILE, the program counter is sampled every PROFILE_CYCLES cycles the CPU is awake
+ * and FILE gets `BYTE_ADDRESS SAMPLES` lines on exit (benchmarks/uno_profile.py names the functions);
+ * the stdin command `profile` starts the count anew.
  * With --lockstep (hardware in the loop), stdout also gets `t T_US` every 2 emulated milliseconds
  * and the emulator never runs more than 3 ms ahead of the last `sync T_US` on stdin: the physics
  * that answers with `sync` and `counts` sets the pace, so a busy host slows both alike.
@@ -94,6 +97,25 @@ static int range_cm = -1;
 static avr_cycle_count_t awake, stretch, longest, stats_from;
 static unsigned long passes;
 static avr_irq_t *echo_irq;
+
+/* --profile: program-counter samples while awake, by flash word */
+#define PROFILE_CYCLES 17
+static const char *profile_file;
+static uint32_t profile_hits[0x4000];
+
+static avr_cycle_count_t profile_tick(avr_t *a, avr_cycle_count_t when, void *param) {
+    (void)param;
+    if (a->state == cpu_Running) profile_hits[(a->pc >> 1) & 0x3FFF]++;
+    return when + PROFILE_CYCLES;
+}
+
+static void profile_write(void) {
+    FILE *f = profile_file ? fopen(profile_file, "w") : NULL;
+    if (!f) return;
+    for (int i = 0; i < 0x4000; i++)
+        if (profile_hits[i]) fprintf(f, "%d %u\n", 2 * i, profile_hits[i]);
+    fclose(f);
+}
 
 static void on_signal(int sig) {
     (void)sig;
@@ -241,6 +263,8 @@ static void command(char *line) {
         longest = awake = 0;
         passes = 0;
         stats_from = avr->cycle;
+    } else if (strncmp(line, "profile", 7) == 0) {
+        memset(profile_hits, 0, sizeof profile_hits);
     } else if (strncmp(line, "quit", 4) == 0) {
         quit = 1;
     } else {
@@ -363,6 +387,7 @@ int main(int argc, char **argv) {
         else if (!strcmp(argv[i], "--encoders") && i + 1 < argc) model_cps = atof(argv[++i]);
         else if (!strcmp(argv[i], "--report")) report = 1;
         else if (!strcmp(argv[i], "--lockstep")) lockstep = report = 1;
+        else if (!strcmp(argv[i], "--profile") && i + 1 < argc) profile_file = argv[++i];
         else if (!strcmp(argv[i], "--heap") && i + 1 < argc) heap_start = (int)strtol(argv[++i], NULL, 0);
         else if (argv[i][0] != '-' && !elf) elf = argv[i];
         else {
@@ -371,7 +396,7 @@ int main(int argc, char **argv) {
         }
     }
     if (!elf || !board) {
-        fprintf(stderr, "usage: unosim --board ROBOT.board [--range CM] [--encoders CPS] [--report] [--lockstep] [--heap ADDR] FIRMWARE.elf\n");
+        fprintf(stderr, "usage: unosim --board ROBOT.board [--range CM] [--encoders CPS] [--report] [--lockstep] [--heap ADDR] [--profile FILE] FIRMWARE.elf\n");
         return 2;
     }
     if (read_board(board) != 0) {
@@ -424,6 +449,7 @@ int main(int argc, char **argv) {
     if (battery_adc >= 0)
         avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0 + battery_adc), 2500);
     avr_cycle_timer_register_usec(avr, ENCODER_TICK_US, encoder_tick, NULL);
+    if (profile_file) avr_cycle_timer_register(avr, PROFILE_CYCLES, profile_tick, NULL);
 
     int slave;
     if (openpty(&pty_master, &slave, NULL, NULL, NULL) != 0) {
@@ -489,6 +515,7 @@ int main(int argc, char **argv) {
     }
     fprintf(stderr, "time emulated %.0f us, wall %.0f us, slipped %.0f us\n", (double)avr_cycles_to_usec(avr, avr->cycle), wall_us(&start), slip_us);
     fprintf(stderr, "stack %d\n", stack_depth());
+    profile_write();
     close(slave);
     close(pty_master);
     return rc;

@@ -56,7 +56,11 @@ def test_demo_in_lockstep_meets_the_seed_examples(tmp_path: Path, monkeypatch: p
     assert 30 < number(seed_spin, r"path bend \+?([+-]?[\d.]+) deg") < 120  # seed's C=-40 bends left
     straight = achieved(report, 3)
     assert abs(number(straight, r"path bend ([+-][\d.]+) deg")) < 15
-    assert -340 < number(straight, r"body turned ([+-][\d.]+) deg") < -260  # -200 deg/s for 1.5 s
+    turned = number(straight, r"body turned ([+-][\d.]+) deg")
+    assert -340 < turned < -260  # -200 deg/s for 1.5 s
+    # the commanded line gives the same quantity in the same unit: degrees of body turn
+    commanded = re.search(r"commanded: (.*)", report.split("\n3. ", 1)[1]).group(1)  # type: ignore[union-attr]
+    assert abs(number(commanded, r"body turns ([+-][\d.]+) deg ") - turned) < 40
     rotate = achieved(report, 4)
     assert abs(abs(number(rotate, r"heading ([+-]?[\d.]+) deg")) - 180) < 8
     approach = achieved(report, 5)
@@ -95,3 +99,16 @@ def test_the_odometry_trail_starts_at_the_start_pose() -> None:
     trail = recorder.odo_trail
     assert trail[0] == (1.0, 1.0) and (0.0, 0.0) not in trail
     assert trail[-1][0] > 1.0 and abs(trail[-1][1] - 1.0) < 1e-9  # then it moves on from there
+
+
+def test_the_spin_line_commands_degrees_beside_the_achieved_degrees() -> None:
+    """The commanded body turn is the rate times the run's time, in degrees; the rate only in brackets."""
+    line = seed000.spin_commanded(seed000.COMPENSATING_CURVATURE)
+    turn = number(line, r"body turns ([+-][\d.]+) deg \(")
+    rate = number(line, r"\((-?[\d.]+) deg/s for")
+    assert rate == pytest.approx(-200, abs=1)  # 0.6 m/s x -5.8/m = -3.49 rad/s
+    assert turn == pytest.approx(rate * seed000.SPIN_TIME, abs=1)  # -300 deg, not -200
+    assert number(line, r"path bend ([+-][\d.]+) deg") == pytest.approx(0, abs=1)  # compensated: straight
+    seed = seed000.spin_commanded(seed000.SEED_CURVATURE)
+    assert number(seed, r"body turns ([+-][\d.]+) deg \(") == pytest.approx(-206, abs=1)
+    assert number(seed, r"path bend ([+-][\d.]+) deg") == pytest.approx(+94, abs=1)

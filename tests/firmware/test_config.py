@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import ast
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -119,3 +120,65 @@ def test_acceleration_feedforward_pushes_each_wheel_its_way() -> None:
             assert s[2] == pytest.approx(2 * row[2]) and s[:2] == row[:2]
         ff = cfg["wheel_ff"]
         assert len(ff) == robot.n_wheels and all(0 < f < 0.01 * max(map(abs, cfg["body_ff"][0])) for f in ff)
+
+
+def _robot_with_gyro(tmp_path: Path, no_sonar: bool = False, **gyro: Any) -> Path:
+    import yaml
+
+    from omnibot.robot.description import PRESET_DIR
+
+    data = yaml.safe_load((PRESET_DIR / "omni4.yaml").read_text())
+    data["gyro"] = {"model": "MPU6050", **gyro}
+    if no_sonar:
+        data["sonars"] = []
+    path = tmp_path / "robot.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+def test_the_gyro_pins_come_from_the_description(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """omni4's MPU6050 on the defaults: I2C0 on GP1 (SCL) and GP0 (SDA) at 0x68, 400 kHz, FS_SEL 0
+    (+-250 deg/s: the description's range and 1/131 deg/s resolution), DLPF_CFG 3 (42 Hz); those pins
+    were the UART's, so the protocol goes to USB."""
+    pins = fwconfig.build_config(load_robot("omni4"))["pins"]
+    assert pins["gyro"] == [0, 1, 0, 0x68, 400000, 0, 3]
+    assert pins["uart"] is None
+    board = tmp_path / "board"
+    assert fwconfig.main(["omni4", str(board)]) == 0
+    written = (board / "robot_config.py").read_text()
+    assert "'gyro': [0, 1, 0, 104, 400000, 0, 3]" in written and "'gyro': None" not in written
+    assert (board / "omnibot" / "firmware" / "mpu6050.py").exists()
+    capsys.readouterr()
+    robot = load_robot(_robot_with_gyro(tmp_path, i2c_address=0x69, i2c_freq=100000, bandwidth_hz=10))
+    assert fwconfig.build_config(robot)["pins"]["gyro"] == [0, 1, 0, 0x69, 100000, 0, 5]
+    # on I2C1's GP26 and GP27 (free without the sonar) the UART keeps GP0 and GP1
+    robot = load_robot(_robot_with_gyro(tmp_path, no_sonar=True, i2c_bus=1, sda_pin=26, scl_pin=27))
+    pins = fwconfig.build_config(robot)["pins"]
+    assert pins["gyro"] == [1, 27, 26, 0x68, 400000, 0, 3] and pins["uart"] == [0, 0, 1]
+
+
+def test_a_robot_without_an_mpu6050_has_no_gyro_pins(tmp_path: Path) -> None:
+    import yaml
+
+    data = yaml.safe_load(_robot_with_gyro(tmp_path).read_text())
+    data["gyro"] = {"model": "generic"}
+    (tmp_path / "generic.yaml").write_text(yaml.safe_dump(data))
+    pins = fwconfig.build_config(load_robot(tmp_path / "generic.yaml"))["pins"]
+    assert pins["gyro"] is None and pins["uart"] == [0, 0, 1]
+
+
+@pytest.mark.parametrize(
+    ("gyro", "key", "words"),
+    [
+        ({"sda_pin": 26, "scl_pin": 27}, "gyro.sda_pin", "pin 26 is the board's sonars pin already"),
+        ({"sda_pin": 2, "scl_pin": 3}, "gyro.scl_pin", "pin 3 is the board's motors pin already"),
+        ({"sda_pin": 27, "scl_pin": 27}, "gyro.scl_pin", "SCL and SDA are both pin 27"),
+        ({"range": 50.0}, "gyro.range", "beyond an MPU6050's 2000 deg/s"),
+        ({"resolution": 1e-3}, "gyro.resolution", "+-250 deg/s range"),
+        ({"i2c_address": 0x6A}, "i2c_address", ""),
+    ],
+)
+def test_bad_gyro_wiring_names_the_key(tmp_path: Path, gyro: dict[str, Any], key: str, words: str) -> None:
+    with pytest.raises(ConfigError) as info:
+        fwconfig.build_config(load_robot(_robot_with_gyro(tmp_path, **gyro)))
+    assert key in str(info.value) and words in str(info.value)

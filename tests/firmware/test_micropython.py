@@ -229,3 +229,49 @@ def test_board_files_import_under_micropython(tmp_path: Path) -> None:
     )
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.startswith("ok")
+
+
+MPU6050_CHECK = """
+from omnibot.firmware.mpu6050 import MPU6050, GyroError
+from fake_mpu6050 import FakeI2C, FakeMPU6050
+chip = FakeMPU6050()
+bus = FakeI2C({0x68: chip})
+gyro = MPU6050(bus, 0x68, 0, 3)
+print('awake', chip.asleep, chip.regs[0x6B], chip.regs[0x1A], chip.regs[0x1B])
+for dps in (0.0, 1.0, -1.0, 123.4, 300.0, -300.0):
+    chip.rate_dps = dps
+    print('rate', gyro.rate_mdps())
+for devices in ({}, {0x68: FakeMPU6050(0x70)}, {0x68: FakeMPU6050(0x68, False)}):
+    try:
+        MPU6050(FakeI2C(devices), 0x68)
+        print('no error')
+    except GyroError as exc:
+        print('error', exc)
+"""
+
+
+def test_the_gyro_driver_under_micropython(tmp_path: Path) -> None:
+    """The MPU6050 driver as staged for a board, against the register model, in both interpreters."""
+    mp = micropython()
+    stage = tmp_path / "board"
+    stage_board(stage, build_config(load_robot("omni4")))
+    shutil.copyfile(Path(__file__).with_name("fake_mpu6050.py"), stage / "fake_mpu6050.py")
+    outs = []
+    for interpreter in ([mp], [sys.executable, "-S"]):
+        proc = subprocess.run(
+            [*interpreter, "-c", MPU6050_CHECK],
+            check=False,
+            env={**os.environ, "MICROPYPATH": str(stage), "PYTHONPATH": str(stage)},
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+        assert proc.returncode == 0, proc.stderr
+        outs.append(proc.stdout)
+    assert outs[0] == outs[1]
+    lines = outs[0].splitlines()
+    assert lines[0] == "awake False 1 3 0"
+    assert lines[1:7] == [f"rate {v}" for v in (0, 1000, -1000, 123396, 250129, -250137)]
+    assert lines[7].startswith("error no MPU6050 answers at 0x68 on I2C")
+    assert lines[8] == "error the chip at 0x68 says WHO_AM_I 0x70, not an MPU6050's 0x68"
+    assert lines[9].startswith("error the MPU6050 at 0x68 did not take its settings")

@@ -144,6 +144,8 @@ class Pending:
         self.error: BaseException | None = None
         self.timed_out = False
         self.abandoned = False  # binary: pending when a SYNC frame was sent
+        self.size = 0
+        """Text: the bytes it took on the line, counted in the text window until it is answered."""
         self._client = client
 
     @property
@@ -202,6 +204,8 @@ class RobotClient(TypedCalls):
     timeout in seconds of ``link.clock``; ``reconnect`` the seconds ``link.reopen`` may retry after
     a LinkError (None: do not reopen). ``tags``: text commands with ``#tag*check`` (True), without
     (False), or as the controller answers a tagged HELLO before the first command (None).
+    ``text_window``: in text, the most bytes of commands sent and not yet answered (the flow control
+    of docs/protocol.md, "Text flow control"; None or 0: no limit).
     """
 
     def __init__(
@@ -213,8 +217,11 @@ class RobotClient(TypedCalls):
         timeout: float = DEFAULT_TIMEOUT,
         reconnect: float | None = 0.0,
         tags: bool | None = None,
+        text_window: int | None = codes.TEXT_WINDOW,
     ) -> None:
         self.link = link
+        self.text_window = text_window
+        """Text: the most bytes of unanswered commands on the line (None or 0: no limit)."""
         if limits is None:
             limits = Limits.from_robot(robot) if robot is not None else Limits()
         self.limits = limits
@@ -441,6 +448,9 @@ class RobotClient(TypedCalls):
         else:
             assert command is not None
             seq, data = wire.frame(command, round(now * 1000))
+        if isinstance(wire, TextWire) and self.text_window:
+            self._wait(lambda: self._text_room(len(data)), now + wait, "text window full")
+            now = self.clock.now()
         if isinstance(wire, BinaryWire) and sync:
             abandoned = set(wire.take_failed())
             for p in self._outstanding:
@@ -451,11 +461,18 @@ class RobotClient(TypedCalls):
             assert command is not None
             line = text.encode(command).decode("ascii").strip()
         pending = Pending(self, command, line, seq, now + wait, malformed)
+        pending.size = len(data)
         self._outstanding.append(pending)
         if command is not None and self._tracers:
             self._trace_message("command", command)
         self._write(data)
         return pending
+
+    def _text_room(self, size: int) -> bool:
+        """Whether ``size`` more bytes fit in the text window beside the unanswered commands (one
+        command always goes when none is unanswered; a command that timed out no longer counts)."""
+        busy = sum(p.size for p in self._outstanding if not p.done and not p.timed_out)
+        return busy == 0 or busy + size <= (self.text_window or 0)
 
     def _text_ready(self, command: Command | None, raw: bytes | None, wait: float) -> None:
         """Before a text command: learn whether the controller echoes tags (once), and get back in

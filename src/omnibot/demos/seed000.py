@@ -56,6 +56,18 @@ APPROACH_SPEED = 0.60
 ESTOP_DISTANCE = 0.25
 
 
+def spin_commanded(curvature: float) -> str:
+    """What a straight-while-spinning run of ``curvature`` (1/m) asks for over ``SPIN_TIME``: the body's
+    turn and the path's bend, both in degrees like the achieved line they stand beside (the rate is
+    given in brackets, in deg/s)."""
+    rate = SPIN_SPEED * curvature  # rad/s: W = V C
+    bend = SPIN_TIME * (rate + COURSE_STEP * SPIN_SPEED / SPIN_STEP)
+    return (
+        f"body turns {math.degrees(rate * SPIN_TIME):+.0f} deg ({math.degrees(rate):.0f} deg/s for "
+        f"{SPIN_TIME:g} s), path bend {math.degrees(bend):+.0f} deg"
+    )
+
+
 def wrap(angle: float) -> float:
     """``angle`` wrapped into [-pi, pi), rad."""
     return (angle + math.pi) % (2 * math.pi) - math.pi
@@ -232,8 +244,7 @@ class Demo:
             with self.segment(
                 f"straight while spinning, {label}",
                 f"MOVE,3,60,0,{c_int};DELTA,0,0,10,0,INF; {SPIN_TIME:g} s; STOP",
-                f"body turns {math.degrees(SPIN_SPEED * curvature):.0f} deg/s, path bend "
-                f"{math.degrees(SPIN_TIME * (SPIN_SPEED * curvature + COURSE_STEP * SPIN_SPEED / SPIN_STEP)):+.0f} deg",
+                spin_commanded(curvature),
             ) as seg:
                 c.move(SPIN_STEP, SPIN_SPEED, 0.0, curvature)
                 c.delta(course=COURSE_STEP, repeat=math.inf)

@@ -74,6 +74,9 @@ class Controller:
             mode &= ~codes.MODE_CLOSED_LOOP
         self.executor.set_mode(mode & ~codes.MODE_BINARY)
         self.emit(self._hello_text())
+        if self.has_gyro and hal.gyro_fault:  # described, but it did not answer: run on without it
+            self.has_gyro = False
+            self._warn(codes.W_NO_GYRO)
 
     # ------------------------------------------------------------------ output
 

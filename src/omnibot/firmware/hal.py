@@ -31,12 +31,24 @@ FakeHAL subclass it. :class:`MachineHAL` drives a MicroPython board (RP2040, ESP
     "tracking": [[a, b], ...]          tracking-wheel encoders
     "sonars": [[trig, echo], ...]      HC-SR04: 10 us trigger pulse, echo timed by edge interrupts
     "battery": [adc_pin, mv_per_lsb]   ADC pin and millivolts per read_u16() count (divider included)
-    "gyro": [i2c_id, scl, sda] or None MPU6050 at 0x68, +-250 deg/s range
+    "gyro": [i2c_id, scl, sda, address, freq, fs_sel, dlpf_cfg] or None
+                                       MPU6050 (firmware/mpu6050.py) on I2C bus i2c_id at address 0x68
+                                       or 0x69, bus clock freq Hz, range FS_SEL (0: +-250 deg/s), DLPF_CFG
+                                       (3: 42 Hz); [i2c_id, scl, sda] alone: 0x68, 400 kHz, 0, 3
+
+A gyro that does not answer at boot (or is not an MPU6050) leaves the board without one:
+``gyro_fault`` says why, :meth:`HAL.gyro_rate_mdps` answers None, and the controller sends WARN 10
+after its HELLO instead of crashing.
 """
+
+from omnibot.firmware.mpu6050 import MPU6050, GyroError
 
 
 class HAL:
     """Base HAL: a board without sensors. Subclasses override what they have."""
+
+    gyro_fault: "str | None" = None
+    """Why the gyro the board was given does not work (None: it works, or there is none)."""
 
     def ticks_us(self) -> int:
         """A free-running microsecond counter (wraps on a board; use :meth:`ticks_diff`)."""
@@ -176,11 +188,10 @@ class MachineHAL(HAL):
             self._adc = machine.ADC(machine.Pin(battery[0]))
             self._mv_per_lsb = float(battery[1])
         self._i2c = None
+        self._gyro: MPU6050 | None = None
         gyro = pins.get("gyro")
         if gyro:
-            self._i2c = machine.I2C(gyro[0], scl=machine.Pin(gyro[1]), sda=machine.Pin(gyro[2]))
-            self._i2c.writeto_mem(0x68, 0x6B, b"\x00")  # wake the MPU6050
-            self._gbuf = bytearray(2)
+            self._start_gyro(machine, list(gyro) + [0x68, 400000, 0, 3][len(gyro) - 3 :])
         uart = pins.get("uart")
         self._uart = None
         self._poll = None
@@ -195,6 +206,16 @@ class MachineHAL(HAL):
             self._stdout = sys.stdout.buffer
             self._poll = select.poll()
             self._poll.register(sys.stdin, select.POLLIN)
+
+    def _start_gyro(self, machine: "Any", g: "list[int]") -> None:
+        """Open the I2C bus and wake the MPU6050 on it; on any failure keep the reason in
+        ``gyro_fault`` and go on without a gyro."""
+        try:
+            self._i2c = machine.I2C(g[0], scl=machine.Pin(g[1]), sda=machine.Pin(g[2]), freq=g[4])
+            self._gyro = MPU6050(self._i2c, g[3], g[5], g[6])
+        except (GyroError, OSError, ValueError) as exc:
+            self._gyro = None
+            self.gyro_fault = "gyro: " + str(exc)
 
     def ticks_us(self) -> int:
         """``time.ticks_us()``: wraps, compare with :meth:`ticks_diff`."""
@@ -252,14 +273,14 @@ class MachineHAL(HAL):
         return int(self._track[j].count) if j < len(self._track) else 0
 
     def gyro_rate_mdps(self) -> "int | None":
-        """The MPU6050's yaw rate in millidegrees/s (read over I2C), None without a gyro."""
-        if self._i2c is None:
+        """The MPU6050's yaw rate in millidegrees/s (read over I2C), None without a gyro or when
+        this read failed on the bus (the controller then skips the sample)."""
+        if self._gyro is None:
             return None
-        self._i2c.readfrom_mem_into(0x68, 0x47, self._gbuf)  # GYRO_ZOUT_H, GYRO_ZOUT_L
-        raw = (self._gbuf[0] << 8) | self._gbuf[1]
-        if raw >= 32768:
-            raw -= 65536
-        return raw * 1000 // 131  # 131 LSB per deg/s at +-250 deg/s
+        try:
+            return int(self._gyro.rate_mdps())
+        except OSError:
+            return None
 
     def sonar_start(self, s: int) -> None:
         """Send sonar ``s``'s 10 us trigger pulse (nothing for a sonar the board lacks)."""

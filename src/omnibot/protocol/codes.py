@@ -134,6 +134,7 @@ W_SHORT = 17  # project: a MOVE stood still short of its distance, as its wheel 
 W_REACH = 18  # project: an open-loop MOVE asked beyond the calibrated reach, run at the reach
 W_BATTERY_LOW = 19  # project: the battery fell below its warning threshold
 W_BATTERY_LIMIT = 20  # project: the battery fell below its power-limit threshold, motor power limited
+W_NO_GYRO = 10  # project: the described gyro did not answer at boot; the board runs without it
 E_QUEUE_FULL = 21
 E_TOO_LONG = 22
 E_UNKNOWN = 23
@@ -172,6 +173,7 @@ TEXTS = {
     W_BATTERY_LIMIT: "battery low, power limited",
     W_BATTERY_STOP: "battery flat, motors stopped",
     E_BATTERY: "motion blocked: battery flat",
+    W_NO_GYRO: "no gyro: it did not answer at boot",
     E_QUEUE_FULL: "queue full",
     E_TOO_LONG: "command too long",
     E_UNKNOWN: "unknown command",
@@ -252,6 +254,7 @@ SEQ_MAX = 255  # sequence numbers run 1..255 and wrap to 1; 0 = unsequenced (TEL
 # Send windows (docs/protocol.md, "Window"): a controller announces the window it takes in its binary
 # HELLO reply (WINDOW_MIN..WINDOW_LIMIT); the host sends at most min(that, WINDOW) frames unacknowledged
 # (WINDOW_MIN before the reply) and takes the controller's events with a window of WINDOW.
+TEXT_WINDOW = 192  # text flow control: a host keeps at most this many bytes of commands unanswered
 WINDOW_MIN = 8  # the least a controller announces (the UNO's): a line full with a 2 ms loop, no host load
 WINDOW = 32  # this implementation's window: the host's, the MicroPython controller's (a loaded host)
 WINDOW_LIMIT = 127  # the most: W duplicates behind and W - 1 new seqs ahead must not meet in SEQ_MAX

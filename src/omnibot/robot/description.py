@@ -312,6 +312,19 @@ class GyroSpec(_Spec):
     scale_error_std: float = Field(default=0.01, ge=0, description="scale factor error spread, fraction")
     range: float = Field(default=4.363, gt=0, description="saturation, rad/s (MPU6050 +-250 deg/s)")
     resolution: float = Field(default=1.332e-4, ge=0, description="rad/s per LSB (MPU6050: 1/131 deg/s)")
+    # A board's wiring of an MPU6050 (firmware/mpu6050.py; docs/firmware.md, "The gyro on a board"): the
+    # I2C bus and its pins in the generated board config. The defaults are a Raspberry Pi Pico's I2C0 on
+    # GP0 (SDA) and GP1 (SCL); the board's protocol then runs on USB, as those pins were its UART's.
+    i2c_bus: int = Field(default=0, ge=0, description="the board's I2C peripheral (machine.I2C id)")
+    sda_pin: int = Field(default=0, ge=0, description="board pin of SDA")
+    scl_pin: int = Field(default=1, ge=0, description="board pin of SCL")
+    i2c_address: Literal[0x68, 0x69] = Field(default=0x68, description="0x68 with AD0 low, 0x69 high")
+    i2c_freq: int = Field(
+        default=400_000, gt=0, le=400_000, description="bus clock, Hz (the chip's fast mode)"
+    )
+    bandwidth_hz: float = Field(
+        default=42.0, gt=0, description="low-pass bandwidth; the DLPF setting passing it"
+    )
 
 
 class SonarSpec(_Spec):

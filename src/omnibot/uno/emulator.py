@@ -97,7 +97,9 @@ class UnoEmulator:
     with :meth:`duties`); ``lockstep``: also ``t T_US`` every emulated millisecond, and the emulator
     waits for ``sync T_US`` (hardware in the loop, :mod:`omnibot.uno.hil`); ``elf``: run this image
     of the robot's firmware (one the Arduino toolchain built from its sketch folder,
-    :mod:`omnibot.firmware.avrsketch`) instead of building it with ``firmware-avr/Makefile``."""
+    :mod:`omnibot.firmware.avrsketch`) instead of building it with ``firmware-avr/Makefile``;
+    ``profile``: the harness samples the program counter while the CPU is awake and writes the counts
+    to this file when it stops (``command("profile")`` starts them anew; benchmarks/uno_profile.py)."""
 
     def __init__(
         self,
@@ -108,12 +110,14 @@ class UnoEmulator:
         report: bool = False,
         lockstep: bool = False,
         elf: Path | None = None,
+        profile: Path | None = None,
     ) -> None:
         self.robot = robot
         if elf is None:
             elf = build(robot)
         else:
             build_harness()
+        self.elf = elf
         board = FIRMWARE_DIR / "generated" / f"{robot}.board"
         argv = [str(HARNESS), "--board", str(board), str(elf)]
         heap = heap_start(elf) if shutil.which("avr-nm") else None
@@ -127,6 +131,8 @@ class UnoEmulator:
             argv.append("--report")
         if lockstep:
             argv.append("--lockstep")
+        if profile is not None:
+            argv += ["--profile", str(profile)]
         # unbuffered: readline must not read ahead of what select() reports
         self.proc = subprocess.Popen(
             argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, bufsize=0

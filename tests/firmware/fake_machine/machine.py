@@ -5,6 +5,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from tests.firmware.fake_mpu6050 import FakeI2C, FakeMPU6050
+
 pins: dict[Any, Pin] = {}
 
 
@@ -100,13 +102,13 @@ class ADC:
         return self.raw
 
 
-class I2C:
-    def __init__(self, id: int, scl: Pin, sda: Pin) -> None:
-        self.mem: dict[tuple[int, int], bytes] = {}
-        self.writes: list[tuple[int, int, bytes]] = []
+i2c_devices: dict[int, FakeMPU6050] = {}
+"""The chips on every I2C bus the firmware opens (tests set them before building the HAL)."""
 
-    def writeto_mem(self, addr: int, reg: int, data: bytes) -> None:
-        self.writes.append((addr, reg, bytes(data)))
 
-    def readfrom_mem_into(self, addr: int, reg: int, buf: bytearray) -> None:
-        buf[:] = self.mem.get((addr, reg), bytes(len(buf)))
+class I2C(FakeI2C):
+    """An I2C bus with the register-level chips of ``i2c_devices`` on it."""
+
+    def __init__(self, id: int, scl: Pin, sda: Pin, freq: int = 400000) -> None:
+        super().__init__(i2c_devices)
+        self.id, self.scl, self.sda, self.freq = id, scl, sda, freq
