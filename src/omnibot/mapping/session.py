@@ -2,7 +2,8 @@
 
 :class:`MappingSink` is a runtime sink (:mod:`omnibot.runtime.sinks`). Every cycle it keeps the
 runtime's estimate (the fused wheel and gyro odometry) as the odometry trajectory, takes the scans
-completed since the last cycle from a :class:`~omnibot.lidar.reader.ScanSource`, gives each to the
+completed since the last cycle from a :class:`~omnibot.lidar.reader.ScanSource` (None: the
+runtime's scanner, the cycle's ``scans``, which the log, ROS 2 and the page read too), gives each to the
 :class:`~omnibot.mapping.slam.Slam` with the odometry pose at the scan's first ray (interpolated
 between the cycles around it; a scan newer than the last estimate waits for the next cycle), and
 keeps the SLAM's pose as the estimate trajectory. Scans and estimates must share a clock: simulated
@@ -88,7 +89,7 @@ def interpolate(stamps: list[float], poses: list[Pose2D], t: float) -> Pose2D | 
 class MappingSink:
     """Feeds the SLAM from a runtime (see the module docstring); ``close()`` when the run ends."""
 
-    def __init__(self, scans: ScanSource, slam: Slam | None = None, *, threaded: bool = False) -> None:
+    def __init__(self, scans: ScanSource | None, slam: Slam | None = None, *, threaded: bool = False) -> None:
         self.scans = scans
         self.slam = slam if slam is not None else Slam()
         self.odometry = Track()
@@ -124,7 +125,7 @@ class MappingSink:
             if len(self._history_t) > HISTORY:
                 del self._history_t[: len(self._history_t) - HISTORY]
                 del self._history_p[: len(self._history_p) - HISTORY]
-        fresh = self.scans.poll()
+        fresh = self.scans.poll() if self.scans is not None else list(cycle.scans)
         self.received += len(fresh)
         self._pending.extend(fresh)
         waiting: list[Scan] = []
@@ -189,8 +190,9 @@ class MappingSink:
             self._queue.put(None)
             self._worker.join()
             self._worker = None
-        with contextlib.suppress(Exception):
-            self.scans.close()
+        if self.scans is not None:
+            with contextlib.suppress(Exception):
+                self.scans.close()
 
     def trajectory(self) -> Track:
         """The estimate trajectory with every correction of the pose graph so far (re-read from the
@@ -206,13 +208,30 @@ class MappingSink:
         range noise is small against a cell); farther ones clear the cells before them, short of their
         3-sigma uncertainty, and mark nothing (a far wall's noise would thicken it into the room and
         behind it). Rays without a return clear nothing: a dropout is no evidence of free space."""
+        return self.snapshot()(resolution, noise)
+
+    def snapshot(self) -> MapSnapshot:
+        """What :meth:`grid` maps, as it is now (the scans so far at the SLAM's poses now): cheap to
+        take in the runtime's thread, mapped later in another (the ROS 2 ``map`` publisher's)."""
+        return MapSnapshot(list(self._clouds), dict(self.slam.trajectory()))
+
+
+@dataclass(frozen=True)
+class MapSnapshot:
+    """The scans' returns (stamp, points in the base frame, mount x/y) and the SLAM's pose of each
+    stamp at one instant; called, it makes the map (see :meth:`MappingSink.grid`)."""
+
+    clouds: list[tuple[float, NDArray[np.float32], tuple[float, float]]]
+    poses: dict[float, Pose2D]
+
+    def __call__(self, resolution: float = 0.05, noise: RangeNoise | None = None) -> OccupancyGrid:
+        """The map of the snapshot's scans (``resolution`` m cells; ``noise`` as in :meth:`MappingSink.grid`)."""
         from omnibot.mapping.mapper import OccupancyMapper
 
         noise = noise or RangeNoise()
-        poses = dict(self.slam.trajectory())
         mapper = OccupancyMapper(resolution, max_clear=0.0, p_occ=P_HIT)
-        for stamp, points, mount in self._clouds:
-            pose = poses.get(stamp)
+        for stamp, points, mount in self.clouds:
+            pose = self.poses.get(stamp)
             if pose is None:
                 continue
             rays = points - np.asarray(mount, dtype=np.float32)
@@ -271,6 +290,8 @@ class MappingResult:
 
     files: list[Path]
     report: dict[str, Any]
+    grid: OccupancyGrid | None = None
+    """The map written."""
 
 
 def write_outputs(
@@ -332,7 +353,7 @@ def write_outputs(
     files.append(path)
     if plot:
         files.append(_plot(out / "map.png", grid, tracks))
-    return MappingResult(files, report)
+    return MappingResult(files, report, grid)
 
 
 def _length(poses: list[Pose2D]) -> float:

@@ -35,10 +35,18 @@ SONAR_PERIOD = 0.1
 every ``range/<sonar>`` would say +inf, no echo, for a sonar that never pinged)."""
 
 
-def add_bridge_options(p: argparse.ArgumentParser, *, several: bool = False) -> None:
+def add_bridge_options(p: argparse.ArgumentParser, *, several: bool = False, scanner: bool = True) -> None:
     """The bridge's own options (``omnibot ros2``, where ``several`` robots may be given, and ``omnibot
-    run --ros2``)."""
+    run --ros2``; ``omnibot map --ros2`` has its own ``--scanner``, so not ``scanner``)."""
     more = "; one per --port, in the same order" if several else ""
+    if scanner:
+        p.add_argument(
+            "--scanner",
+            action="append" if several else "store",
+            metavar="DEV",
+            help="the RPLIDAR's serial port of a real robot (or the scanner pty of omnibot sim --pty), "
+            f"published on scan (a simulated robot's scanner is published without it){more}",
+        )
     p.add_argument(
         "--namespace",
         action="append" if several else "store",
@@ -94,6 +102,8 @@ class RobotSpec:
     url: str | None
     namespace: str
     prefix: str
+    scanner: str | None = None
+    """The RPLIDAR's device (None: the simulator's scanner on ``sim://``, else none)."""
 
 
 def _listed(value: Any) -> list[str]:
@@ -147,8 +157,19 @@ def robot_specs(args: argparse.Namespace) -> list[RobotSpec]:
             raise ConfigError(
                 f"two robots with the {label} {seen[0] or '(none)'!r}: each robot needs its own", key=key
             )
+    scanners = _listed(getattr(args, "scanner", None))
+    if scanners and len(scanners) != count:
+        raise ConfigError(
+            f"{count} robots (--port) but {len(scanners)} --scanner: give each robot's scanner, in the "
+            "order of --port (or none)",
+            key="--scanner",
+        )
+    devices: list[str | None] = list(scanners) or [None] * count
     urls: list[str | None] = list(ports) or [None]
-    return [RobotSpec(url, ns, prefix) for url, ns, prefix in zip(urls, names, frames, strict=True)]
+    return [
+        RobotSpec(url, ns, prefix, dev)
+        for url, ns, prefix, dev in zip(urls, names, frames, devices, strict=True)
+    ]
 
 
 def check(args: argparse.Namespace) -> list[RobotSpec]:
@@ -178,7 +199,9 @@ def attach(
     """Add the bridge to ``runtime``: the cmd_vel and path sources, the odometry reset and publishing
     sinks (stamping on ``timeline``, the process's :class:`~omnibot.ros2.clock.Timeline`; ``/clock``
     when the link is a simulator's); gives the runtime the fused estimator at its first cycle when
-    it has none. Returns the node (close it)."""
+    it has none; gives it the robot's scanner when it has none (the RPLIDAR on the spec's
+    ``--scanner``, else the simulator's on ``sim://``; closed with the node), whose scans the sink
+    publishes on ``scan``. Returns the node (close it)."""
     try:
         from omnibot.ros2.bridge import Diagnosed, Ros2Sink
         from omnibot.ros2.cmd_vel import TWIST, CmdVelSource
@@ -238,6 +261,11 @@ def attach(
     )
     runtime.add_source(path)
     runtime.add_sink(reset)
+    try:
+        _scanner(runtime, robot, spec, node)
+    except BaseException:
+        node.close()
+        raise
     runtime.add_sink(
         Ros2Sink(
             node,
@@ -252,6 +280,21 @@ def attach(
     StallWatch.on(runtime, robot)  # wheels that turn while the body does not: stop, say so
     start_sonars(runtime.client, robot, SONAR_PERIOD)  # in TEL: the ranges out, the stall watch's witnesses
     return node
+
+
+def _scanner(runtime: Any, robot: Any, spec: RobotSpec, node: Any) -> None:
+    """The robot's scanner on ``runtime`` (see :func:`attach`), closed with ``node``."""
+    from omnibot.lidar.reader import open_scanner
+    from omnibot.transport.device import find_simulator
+
+    if runtime.scanner is not None:
+        return  # the command's own (omnibot map's, the dashboard's)
+    link = runtime.client.link
+    if spec.scanner is None and (robot.scanner is None or find_simulator(link) is None):
+        return  # a real robot without --scanner: no scan
+    scans = open_scanner(spec.scanner, link, robot)
+    runtime.scanner = scans
+    node.closers.append(scans.close)
 
 
 _PRINTING = threading.Lock()

@@ -7,6 +7,7 @@ from typing import Literal
 
 from omnibot.client.events import Event, Telemetry
 from omnibot.motion import Estimate, Twist
+from omnibot.scan import Scan
 
 Level = Literal["info", "warn", "error"]
 
@@ -67,6 +68,9 @@ class Cycle:
     notices: list[Notice] = field(default_factory=list)
     latched: bool = False
     """The controller holds a latched emergency stop (sonar): it refuses motion until STOP."""
+    scans: list[Scan] = field(default_factory=list)
+    """The revolutions the runtime's :attr:`~omnibot.runtime.runtime.Runtime.scanner` completed since
+    the last cycle, oldest first (stamped on the link clock; empty without a scanner)."""
 
     @property
     def achieved(self) -> Twist | None:
