@@ -77,6 +77,10 @@ class MapPublisher:
     def _publish(self, snapshot: Any, ns: int) -> None:
         try:
             grid = snapshot(self.resolution, self.noise)
+        except ValueError:  # no scan placed by the SLAM yet (it waits for its first): try again
+            self._mapped = 0
+            return
+        try:
             self.bridge.write(MAP, occupancy_grid(grid, ns))
             self.maps += 1
         except Exception:  # the next map is tried at the next period; the run goes on
