@@ -223,10 +223,18 @@ def attach(
     recorder = active()  # the command's --log: the bridge stamps as it does
     if recorder is not None:
         timeline.adopt(recorder.placing)
+    scans = _scanner(runtime, robot, spec)  # a bad --scanner is refused before any participant
     try:
         node = Node(spec.namespace)
-    except UnsafeNetwork as exc:
-        raise ConfigError(str(exc)) from None
+    except BaseException as exc:
+        if scans is not None:
+            runtime.scanner = None
+            scans.close()
+        if isinstance(exc, UnsafeNetwork):
+            raise ConfigError(str(exc)) from None
+        raise
+    if scans is not None:
+        node.closers.append(scans.close)
 
     def notify(level: Any, text: str) -> None:
         runtime.notify(level, text)
@@ -261,11 +269,6 @@ def attach(
     )
     runtime.add_source(path)
     runtime.add_sink(reset)
-    try:
-        _scanner(runtime, robot, spec, node)
-    except BaseException:
-        node.close()
-        raise
     runtime.add_sink(
         Ros2Sink(
             node,
@@ -282,19 +285,20 @@ def attach(
     return node
 
 
-def _scanner(runtime: Any, robot: Any, spec: RobotSpec, node: Any) -> None:
-    """The robot's scanner on ``runtime`` (see :func:`attach`), closed with ``node``."""
+def _scanner(runtime: Any, robot: Any, spec: RobotSpec) -> Any:
+    """The robot's scanner, made the runtime's (see :func:`attach`); None when the runtime has one
+    already or the robot gets none (whoever gets it closes it)."""
     from omnibot.lidar.reader import open_scanner
     from omnibot.transport.device import find_simulator
 
     if runtime.scanner is not None:
-        return  # the command's own (omnibot map's, the dashboard's)
+        return None  # the command's own (omnibot map's, the dashboard's)
     link = runtime.client.link
     if spec.scanner is None and (robot.scanner is None or find_simulator(link) is None):
-        return  # a real robot without --scanner: no scan
+        return None  # a real robot without --scanner: no scan
     scans = open_scanner(spec.scanner, link, robot)
     runtime.scanner = scans
-    node.closers.append(scans.close)
+    return scans
 
 
 _PRINTING = threading.Lock()
