@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -137,7 +138,7 @@ def test_rclpy_gets_scan_map_and_map_to_odom(distro: str, tmp_path: Path) -> Non
     assert result["rc"] in (0, 143), result["bridge"]  # its --duration, or SIGTERM: the log is closed
     assert result["count"] >= 30, result["bridge"]
     # the scans are the log's (stamped alike: the bridge adopts the log's placing of time)
-    logged = {}
+    logged: dict[int, Any] = {}
     with AnyReader([log]) as reader:
         conns = [c for c in reader.connections if c.topic == "/scan"]
         for conn, ns, raw in reader.messages(connections=conns):
