@@ -23,6 +23,8 @@ TYPES = {
     topics.PROTOCOL: schemas.PROTOCOL_LINE,
     topics.ROBOT_DESCRIPTION: "std_msgs/msg/String",
     topics.range_topic("front"): "sensor_msgs/msg/Range",
+    topics.SCAN: "sensor_msgs/msg/LaserScan",
+    topics.MAP: "nav_msgs/msg/OccupancyGrid",
 }
 """What the recorder writes on each topic the layout uses (docs/logs.md's table)."""
 

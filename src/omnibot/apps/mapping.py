@@ -4,6 +4,7 @@
 
     omnibot map [ROBOT OPTIONS] (--path PATH.csv | --teleop pad|keyboard) --out DIR
                 [--scanner DEV] [--resolution M] [--duration S] [--speed V] [--follower NAME]
+                [--ros2 [--namespace NS] [--frame-prefix P]]
 
 The robot is driven as ``omnibot run`` drives it (a path follower, or a person with the deadman) on
 one runtime, with the wheel-speed loop closed; a :class:`~omnibot.mapping.session.MappingSink` on
@@ -14,7 +15,10 @@ against the truth, the map's precision and recall against the world) and ``map.p
 
 On the simulator (no ``--port``, or ``--port sim://...``) the scans come from the simulated scanner
 in lockstep with the physics; on a real robot (``--port /dev/ttyUSB0``, or the pty of ``omnibot sim
---pty``) from an RPLIDAR on ``--scanner``. Exit status 0 when the map was written (and a path was
+--pty``) from an RPLIDAR on ``--scanner``. The scanner is the runtime's (``Runtime.scanner``), so a
+``--log`` records its scans on ``/scan`` (and the map and ``map -> odom`` at the end), and ``--ros2``
+adds the ROS 2 bridge (as ``omnibot run --ros2``: paced to the wall clock, ``scan``, ``cmd_vel``...)
+with the SLAM's ``map`` and ``map -> odom`` (:mod:`omnibot.ros2.mapping`). Exit status 0 when the map was written (and a path was
 followed to its end), 1 when the run ended without a map or the follow was not completed, 2 for bad
 options.
 """
@@ -22,6 +26,7 @@ options.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import sys
 from pathlib import Path
@@ -38,6 +43,7 @@ TRUTH_PERIOD = 0.01
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Declare ``omnibot map``'s options."""
     from omnibot.cliargs import add_calibration_option, add_robot_options, add_wheel_loop_option
+    from omnibot.ros2.command import add_bridge_options
 
     add_robot_options(p, world="room", port_help="the simulated --robot in lockstep (paced with --teleop)")
     drive = p.add_mutually_exclusive_group(required=True)
@@ -80,7 +86,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     add_wheel_loop_option(p)
     add_calibration_option(p)
-    p.set_defaults(dashboard=False, ros2=False, follow=None)
+    p.add_argument(
+        "--ros2",
+        action="store_true",
+        help="publish on ROS 2 too (paced to the wall clock): scan, map, map -> odom, odom, tf..., "
+        "and take cmd_vel (priority 90)",
+    )
+    add_bridge_options(p, scanner=False)
+    p.set_defaults(dashboard=False, follow=None)
 
 
 def _say(text: str) -> None:
@@ -89,7 +102,9 @@ def _say(text: str) -> None:
 
 def _check(args: argparse.Namespace) -> Path:
     from omnibot.cliargs import output_dir
+    from omnibot.ros2.command import check as check_ros2
 
+    check_ros2(args)
     if not (math.isfinite(args.resolution) and 0.005 <= args.resolution <= 1.0):
         raise ConfigError(f"expected a cell size of 0.005 to 1 m, got {args.resolution}", key="--resolution")
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
@@ -187,6 +202,8 @@ class _Mapping:
         self._sim: Any = None
         self._listener: Any = None
         self.noise: Any = None
+        self.scans: Any = None
+        self.runtime: Any = None
 
     def attach(self, runtime: Any, session: Any, *, estimator: bool = True) -> list[Any]:
         from omnibot.estimation.estimator import make_estimator
@@ -215,18 +232,39 @@ class _Mapping:
         if estimator:
             slip = runtime.slip.params if runtime.slip is not None else None
             runtime.estimator = make_estimator("fused", robot, start, slip)
-        self.sink = MappingSink(scans, threaded=sim is None)
+        self.scans, self.runtime = scans, runtime
+        runtime.scanner = scans  # one scanner, many readers: the SLAM, the log, ROS 2
+        self.sink = MappingSink(None, threaded=sim is None)
         runtime.add_sink(self.sink)
         where = "the simulated scanner" if sim is not None else f"the scanner on {self.args.scanner}"
         _say(f"mapping with {where}; the SLAM corrects the wheel and gyro odometry")
-        return []
+        return self._ros2(runtime, robot) if self.args.ros2 else []
+
+    def _ros2(self, runtime: Any, robot: Any) -> list[Any]:
+        """The bridge on the runtime (omnibot run --ros2's), and the map publisher beside it."""
+        from omnibot.ros2.bridge import Ros2Sink
+        from omnibot.ros2.command import attach
+        from omnibot.ros2.mapping import MapPublisher
+
+        node = attach(runtime, robot, self.args)
+        self.args.ros2_node = node  # compose attaches no second one
+        bridge = next(s for s in runtime.sinks if isinstance(s, Ros2Sink))
+        publisher = MapPublisher(bridge, self.sink, resolution=self.args.resolution, noise=self.noise)
+        runtime.add_sink(publisher)
+        return [node.close, publisher.close]
 
     def close(self) -> None:
         if self._sim is not None and self._listener is not None:
             self._sim.remove_listener(self._listener)
             self._listener = None
+        if self.runtime is not None:
+            self.runtime.scanner = None
         if self.sink is not None:
             self.sink.close()
+        if self.scans is not None:
+            with contextlib.suppress(Exception):
+                self.scans.close()
+            self.scans = None
 
     def finish(self, out: Path, parts: Any, resolution: float) -> int:
         from omnibot.mapping.session import write_outputs
@@ -245,6 +283,7 @@ class _Mapping:
         except ValueError as exc:
             print(f"omnibot map: {exc} ({sink.received} scans received)", file=sys.stderr)
             return 1
+        self._log_map(result.grid)
         report = result.report
         _say(
             f"{report['scans']} scans, {report['keyframes']} keyframes, {report['loop_closures']} loop closures, "
@@ -273,6 +312,17 @@ class _Mapping:
                     _say(line)
             status = 0 if verdict["completed"] else 1
         return status
+
+    def _log_map(self, grid: Any) -> None:
+        """The map and ``map -> odom`` on ``/map`` and ``/tf`` of the command's ``--log``, if any, at the
+        last odometry time."""
+        from omnibot.logs.active import active
+
+        recorder = active()
+        sink = self.sink
+        if recorder is None or grid is None or not sink.odometry.stamps:
+            return
+        recorder.map(grid, sink.odometry.stamps[-1], sink.slam.map_to_odom)
 
 
 def _cm(v: float | None) -> str:

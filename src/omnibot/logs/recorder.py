@@ -21,6 +21,10 @@ clock of the moment recording started):
   the estimate (the ``estimator`` named, run on each sample) as ``odom`` and ``/tf`` odom ->
   base_link (and exactly, heading unwrapped, as ``/omnibot/estimate`` geometry_msgs/Pose2D, which
   ``omnibot log replay`` compares with), and the simulator's truth as ``/omnibot/truth`` when the link is an in-process one;
+* :meth:`scan` (a runtime's scanner, :mod:`omnibot.logs.sink`): ``/scan`` ``sensor_msgs/msg/LaserScan``
+  (:func:`laser_scan`), stamped at the scan's first ray; ``/map`` ``nav_msgs/msg/OccupancyGrid``
+  (:func:`occupancy_grid`) and ``/tf`` map -> odom (:func:`map_to_odom`) are written by ``omnibot
+  map`` at its end;
 * :meth:`start`: ``robot_description`` (the URDF) and ``calibration`` (the description's calibration
   tables, YAML), both ``std_msgs/msg/String``, and the MCAP metadata ``omnibot`` that ``omnibot log
   replay`` needs (the description, the estimator, the start pose).
@@ -70,9 +74,11 @@ from omnibot.logs.topics import (
     IMU,
     JOINT_STATES,
     LINK,
+    MAP,
     ODOM,
     PROTOCOL,
     ROBOT_DESCRIPTION,
+    SCAN,
     TF,
     TRUTH,
     range_topic,
@@ -82,6 +88,7 @@ from omnibot.protocol import text
 from omnibot.protocol.messages import Malformed, Message, Vel
 from omnibot.robot.description import RobotDescription, load_robot, preset_names
 from omnibot.robot.kinematics import world_to_body
+from omnibot.scan import Scan
 
 log = logging.getLogger("omnibot.logs")
 
@@ -96,7 +103,7 @@ _QOS_VOLATILE = (
     "  liveliness_lease_duration: {sec: 0, nsec: 0}\n  avoid_ros_namespace_conventions: false\n"
 )
 _QOS_LATCHED = _QOS_VOLATILE.replace("depth: 10", "depth: 1").replace("volatile", "transient_local")
-_LATCHED = {ROBOT_DESCRIPTION, CALIBRATION}
+_LATCHED = {ROBOT_DESCRIPTION, CALIBRATION, MAP}
 
 
 def stamp(ns: int) -> Any:
@@ -122,6 +129,65 @@ def vector(x: float = 0.0, y: float = 0.0, z: float = 0.0) -> Any:
 def twist(vx: float, vy: float, w: float) -> Any:
     """A ``geometry_msgs/Twist``: ``vx``, ``vy`` m/s and ``w`` rad/s about z."""
     return schemas.new("geometry_msgs/msg/Twist", linear=vector(vx, vy), angular=vector(z=w))
+
+
+def laser_scan(scan: Scan, ns: int) -> Any:
+    """sensor_msgs/LaserScan of ``scan`` stamped at ``ns`` in its frame, field for field (a clockwise
+    scanner's negative ``angle_increment`` as it is; ``angle_max`` the last ray's direction; ranges
+    float32 with ``inf`` for no return, REP 117)."""
+    n = len(scan)
+    intensities: Any = scan.intensities if scan.intensities is not None else []
+    return schemas.new(
+        "sensor_msgs/msg/LaserScan",
+        header=header(ns, scan.frame),
+        angle_min=float(scan.angle_min),
+        angle_max=float(scan.angle_min + scan.angle_increment * (n - 1)),
+        angle_increment=float(scan.angle_increment),
+        time_increment=float(scan.time_increment),
+        scan_time=float(scan.scan_time),
+        range_min=float(scan.range_min),
+        range_max=float(scan.range_max),
+        ranges=np.asarray(scan.ranges, dtype=np.float32),
+        intensities=np.asarray(intensities, dtype=np.float32),
+    )
+
+
+def occupancy_grid(grid: Any, ns: int, frame: str = "map") -> Any:
+    """nav_msgs/OccupancyGrid of an :class:`omnibot.mapping.grid.OccupancyGrid` (row 0, the bottom row,
+    first; -1 unknown, 0..100 occupancy), stamped at ``ns`` in ``frame``."""
+    rows, cols = grid.shape
+    origin = grid.origin
+    pose = schemas.new(
+        "geometry_msgs/msg/Pose",
+        position=schemas.new("geometry_msgs/msg/Point", x=float(origin.x), y=float(origin.y), z=0.0),
+        orientation=quaternion(float(origin.theta)),
+    )
+    info = schemas.new(
+        "nav_msgs/msg/MapMetaData",
+        map_load_time=stamp(ns),
+        resolution=float(grid.resolution),
+        width=int(cols),
+        height=int(rows),
+        origin=pose,
+    )
+    data = np.ascontiguousarray(grid.data, dtype=np.int8).reshape(-1)
+    return schemas.new("nav_msgs/msg/OccupancyGrid", header=header(ns, frame), info=info, data=data)
+
+
+def map_to_odom(pose: Pose2D, ns: int, parent: str = "map", child: str = "odom") -> Any:
+    """tf2_msgs/TFMessage with the one transform ``parent`` -> ``child`` (the SLAM's ``map -> odom``:
+    the odometry frame's ``pose`` in the map frame)."""
+    transform = schemas.new(
+        "geometry_msgs/msg/TransformStamped",
+        header=header(ns, parent),
+        child_frame_id=child,
+        transform=schemas.new(
+            "geometry_msgs/msg/Transform",
+            translation=vector(float(pose.x), float(pose.y)),
+            rotation=quaternion(float(pose.theta)),
+        ),
+    )
+    return schemas.new("tf2_msgs/msg/TFMessage", transforms=[transform])
 
 
 POSE_VARIANCE = (1e-3, 1e-3, 1e6, 1e6, 1e6, 4e-3)
@@ -562,6 +628,18 @@ class Recorder:
         self.write_pose(ODOM, ns, pose, body3, tf=True, variances=(POSE_VARIANCE, TWIST_VARIANCE))
         pose2d = schemas.new("geometry_msgs/msg/Pose2D", x=est.x, y=est.y, theta=est.theta)
         self.write(ESTIMATE, "geometry_msgs/msg/Pose2D", pose2d, ns)
+
+    def scan(self, scan: Scan) -> None:
+        """A scanner's revolution on ``/scan`` (sensor_msgs/LaserScan), stamped at its first ray."""
+        ns = self.ns(scan.stamp)
+        self.write(SCAN, "sensor_msgs/msg/LaserScan", laser_scan(scan, ns), ns)
+
+    def map(self, grid: Any, t: float, odom: Pose2D) -> None:
+        """A SLAM's result at link time ``t``: the map on ``/map`` and ``odom``, the odometry frame's pose
+        in the map frame, as ``/tf`` map -> odom."""
+        ns = self.ns(t)
+        self.write(MAP, "nav_msgs/msg/OccupancyGrid", occupancy_grid(grid, ns), ns)
+        self.write(TF, "tf2_msgs/msg/TFMessage", map_to_odom(odom, ns), ns)
 
     def adopt(self, name: str, start: Pose2D, *, before: Telemetry | None = None, slip: bool = False) -> None:
         """From now on the estimate is another's (a runtime's: the one a follower steers by), handed

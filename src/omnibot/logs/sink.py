@@ -7,7 +7,7 @@
   (``omnibot_msgs/msg/Control``: source, reason, lock, the twist it asked for) and, when the runtime
   has an estimator, *its* estimate after each sample (``odom``, ``/tf``, ``/omnibot/estimate``: the
   one the follower steers by, not a second estimator); the commands go out as VELs the recorder
-  already writes as ``cmd_vel``;
+  already writes as ``cmd_vel``; the scans of the runtime's scanner (``Cycle.scans``) on ``/scan``;
 * the Foxglove Teleop panel as a source (:class:`omnibot.logs.live.PanelSource`) when the command
   serves Foxglove live.
 
@@ -105,7 +105,9 @@ class RuntimeRecorder:
 
     def __call__(self, cycle: Cycle) -> None:
         """The runtime's cycle: a ``/omnibot/control`` message when who drives, why, the lock or the
-        latched stop changed."""
+        latched stop changed; each scan of the cycle on ``/scan``."""
+        for scan in cycle.scans:
+            self.recorder.scan(scan)
         d = cycle.decision
         key = (d.source, d.reason, d.lock, cycle.latched)
         if key != self._last:

@@ -2,7 +2,8 @@
 
 :class:`MappingSink` is a runtime sink (:mod:`omnibot.runtime.sinks`). Every cycle it keeps the
 runtime's estimate (the fused wheel and gyro odometry) as the odometry trajectory, takes the scans
-completed since the last cycle from a :class:`~omnibot.lidar.reader.ScanSource`, gives each to the
+completed since the last cycle from a :class:`~omnibot.lidar.reader.ScanSource` (None: the
+runtime's scanner, the cycle's ``scans``, which the log, ROS 2 and the page read too), gives each to the
 :class:`~omnibot.mapping.slam.Slam` with the odometry pose at the scan's first ray (interpolated
 between the cycles around it; a scan newer than the last estimate waits for the next cycle), and
 keeps the SLAM's pose as the estimate trajectory. Scans and estimates must share a clock: simulated
@@ -93,7 +94,7 @@ class ScanFeed:
     cycle, matches each scan to the odometry of its time and hands it to :meth:`_update` (in the
     runtime's thread, or a worker's with ``threaded``); ``close()`` when the run ends."""
 
-    def __init__(self, scans: ScanSource, *, threaded: bool = False) -> None:
+    def __init__(self, scans: ScanSource | None, *, threaded: bool = False) -> None:
         self.scans = scans
         self.odometry = Track()
         self.received = 0
@@ -126,7 +127,7 @@ class ScanFeed:
             if len(self._history_t) > HISTORY:
                 del self._history_t[: len(self._history_t) - HISTORY]
                 del self._history_p[: len(self._history_p) - HISTORY]
-        fresh = self.scans.poll()
+        fresh = self.scans.poll() if self.scans is not None else list(cycle.scans)
         self.received += len(fresh)
         self._pending.extend(fresh)
         waiting: list[Scan] = []
@@ -180,8 +181,9 @@ class ScanFeed:
             self._queue.put(None)
             self._worker.join()
             self._worker = None
-        with contextlib.suppress(Exception):
-            self.scans.close()
+        if self.scans is not None:
+            with contextlib.suppress(Exception):
+                self.scans.close()
 
 
 def undistorted(scan: Scan, start: Pose2D, end: Pose2D, span: float) -> FloatArray:
@@ -197,7 +199,7 @@ def undistorted(scan: Scan, start: Pose2D, end: Pose2D, span: float) -> FloatArr
 class MappingSink(ScanFeed):
     """Feeds the SLAM from a runtime (see the module docstring); ``close()`` when the run ends."""
 
-    def __init__(self, scans: ScanSource, slam: Slam | None = None, *, threaded: bool = False) -> None:
+    def __init__(self, scans: ScanSource | None, slam: Slam | None = None, *, threaded: bool = False) -> None:
         self.slam = slam if slam is not None else Slam()
         self.estimate = Track()
         self._clouds: list[tuple[float, NDArray[np.float32], tuple[float, float]]] = []
@@ -245,13 +247,30 @@ class MappingSink(ScanFeed):
         range noise is small against a cell); farther ones clear the cells before them, short of their
         3-sigma uncertainty, and mark nothing (a far wall's noise would thicken it into the room and
         behind it). Rays without a return clear nothing: a dropout is no evidence of free space."""
+        return self.snapshot()(resolution, noise)
+
+    def snapshot(self) -> MapSnapshot:
+        """What :meth:`grid` maps, as it is now (the scans so far at the SLAM's poses now): cheap to
+        take in the runtime's thread, mapped later in another (the ROS 2 ``map`` publisher's)."""
+        return MapSnapshot(list(self._clouds), dict(self.slam.trajectory()))
+
+
+@dataclass(frozen=True)
+class MapSnapshot:
+    """The scans' returns (stamp, points in the base frame, mount x/y) and the SLAM's pose of each
+    stamp at one instant; called, it makes the map (see :meth:`MappingSink.grid`)."""
+
+    clouds: list[tuple[float, NDArray[np.float32], tuple[float, float]]]
+    poses: dict[float, Pose2D]
+
+    def __call__(self, resolution: float = 0.05, noise: RangeNoise | None = None) -> OccupancyGrid:
+        """The map of the snapshot's scans (``resolution`` m cells; ``noise`` as in :meth:`MappingSink.grid`)."""
         from omnibot.mapping.mapper import OccupancyMapper
 
         noise = noise or RangeNoise()
-        poses = dict(self.slam.trajectory())
         mapper = OccupancyMapper(resolution, max_clear=0.0, p_occ=P_HIT)
-        for stamp, points, mount in self._clouds:
-            pose = poses.get(stamp)
+        for stamp, points, mount in self.clouds:
+            pose = self.poses.get(stamp)
             if pose is None:
                 continue
             rays = points - np.asarray(mount, dtype=np.float32)
@@ -273,7 +292,7 @@ class LocalisingSink(ScanFeed):
     localiser's ``map -> odom`` composed with the latest odometry) and :meth:`points` the latest
     scan's returns in the map frame (for goto's obstacle watch)."""
 
-    def __init__(self, scans: ScanSource, localiser: Localiser, *, threaded: bool = False) -> None:
+    def __init__(self, scans: ScanSource | None, localiser: Localiser, *, threaded: bool = False) -> None:
         self.localiser = localiser
         self.updates = 0
         self._map_to_odom = Pose2D(0.0, 0.0, 0.0)
@@ -355,6 +374,8 @@ class MappingResult:
 
     files: list[Path]
     report: dict[str, Any]
+    grid: OccupancyGrid | None = None
+    """The map written."""
 
 
 def write_outputs(
@@ -416,7 +437,7 @@ def write_outputs(
     files.append(path)
     if plot:
         files.append(_plot(out / "map.png", grid, tracks))
-    return MappingResult(files, report)
+    return MappingResult(files, report, grid)
 
 
 def _length(poses: list[Pose2D]) -> float:

@@ -6,8 +6,10 @@ diagnostics) of the host runtime, with no loop of its own (its ``cmd_vel`` sourc
   building (:class:`~omnibot.logs.recorder.Recorder` without a file) and publishes what it builds:
   ``odom`` (nav_msgs/Odometry with covariances) and ``/tf`` odom -> base_link from the runtime's
   estimator (the one a path follower steers by and ``initialpose`` sets), ``imu``,
-  ``range/<sonar>``, ``joint_states`` (the URDF's wheel joints), ``robot_description``
-  (transient-local), plus ``/tf_static`` (the sensors' frames, as in the URDF), ``battery_state``
+  ``range/<sonar>``, ``scan`` (sensor_msgs/LaserScan of each revolution of the runtime's scanner,
+  ``Cycle.scans``: sensor-data QoS, in the URDF's scanner frame), ``joint_states`` (the URDF's wheel
+  joints), ``robot_description`` (transient-local), plus ``/tf_static`` (the sensors' frames, the
+  scanner's among them, as in the URDF), ``battery_state``
   (sensor_msgs/BatteryState, once a second while the controller reports its voltage) and
   ``diagnostics`` (who drives and why, the latched emergency stop, refusals, the battery and what
   the ``reporters`` add: the path follower, odometry resets) once a second and at every notice.
@@ -29,7 +31,7 @@ import numpy as np
 from omnibot.client.events import WarnEvent
 from omnibot.logs import schemas
 from omnibot.logs.recorder import Recorder, header, quaternion, stamp, vector
-from omnibot.logs.topics import IMU, JOINT_STATES, ODOM, RANGE_PREFIX, ROBOT_DESCRIPTION, TF
+from omnibot.logs.topics import IMU, JOINT_STATES, ODOM, RANGE_PREFIX, ROBOT_DESCRIPTION, SCAN, TF
 from omnibot.motion import Twist
 from omnibot.protocol import codes
 from omnibot.robot.battery import battery_level
@@ -224,7 +226,15 @@ class Ros2Sink:
         if robot.gyro is not None:
             topics.append((IMU, "sensor_msgs/msg/Imu", SENSOR_DATA))
         topics += [(RANGE_PREFIX + s.name, "sensor_msgs/msg/Range", SENSOR_DATA) for s in robot.sonars]
+        if robot.scanner is not None:
+            topics.append((SCAN, "sensor_msgs/msg/LaserScan", SENSOR_DATA))
         return topics
+
+    def add_topic(self, topic: str, typename: str, profile: Profile) -> None:
+        """Publish ``topic`` too (a log topic name, as :meth:`topics`'): another sink's, through
+        :meth:`write` (``omnibot map``'s ``map``)."""
+        if topic not in self._writers:
+            self._writers[topic] = (self.node.writer(ros_topic(topic), typename, profile), typename)
 
     def publish(self, topic: str, typename: str, data: bytes, ns: int) -> None:
         """A recorder mirror: publish the message if it is one of ours (odom gets covariances, the URDF
@@ -252,27 +262,32 @@ class Ros2Sink:
         self.write(TF_STATIC, self.static_transforms(self.recorder.ns(t)))
 
     def static_transforms(self, ns: int) -> Any:
-        """base_link -> each sonar and the imu, placed as the URDF places them."""
-        z = self.robot.footprint.height / 2
-        frames = [(f"sonar_{s.name}", s.x, s.y, s.angle) for s in self.robot.sonars]
-        if self.robot.gyro is not None:
-            frames.append(("imu_link", 0.0, 0.0, 0.0))
+        """base_link -> each sonar, the imu and the scanner, placed as the URDF places them."""
+        robot = self.robot
+        z = robot.footprint.height / 2
+        frames = [(f"sonar_{s.name}", s.x, s.y, z, s.angle) for s in robot.sonars]
+        if robot.gyro is not None:
+            frames.append(("imu_link", 0.0, 0.0, z, 0.0))
+        scanner = robot.scanner
+        if scanner is not None:  # the scan plane's height above the floor; base_link is at the axles
+            axle_height = max(w.radius for w in robot.wheels)
+            frames.append((scanner.frame, scanner.x, scanner.y, scanner.z - axle_height, scanner.yaw))
         transforms = [
             schemas.new(
                 "geometry_msgs/msg/TransformStamped",
                 header=header(ns, "base_link"),
                 child_frame_id=name,
                 transform=schemas.new(
-                    "geometry_msgs/msg/Transform", translation=vector(x, y, z), rotation=quaternion(yaw)
+                    "geometry_msgs/msg/Transform", translation=vector(x, y, h), rotation=quaternion(yaw)
                 ),
             )
-            for name, x, y, yaw in frames
+            for name, x, y, h, yaw in frames
         ]
         return schemas.new("tf2_msgs/msg/TFMessage", transforms=transforms)
 
     def __call__(self, cycle: Cycle) -> None:
         """The runtime's cycle: its telemetry and events published, the estimate after new samples,
-        the battery and diagnostics once a second (diagnostics also when a notice came)."""
+        its scans, the battery and diagnostics once a second (diagnostics also when a notice came)."""
         if not self._started:
             self.start(cycle.t)
         if self.sim_time:
@@ -291,6 +306,9 @@ class Ros2Sink:
                 self.battery_stopped = True
         if sampled and cycle.estimate is not None:
             self.recorder.estimate(cycle.t, cycle.estimate)
+        if SCAN in self._writers:
+            for scan in cycle.scans:
+                self.recorder.scan(scan)
         if self.voltage is not None and cycle.now - self._last_battery >= 1.0:
             self._last_battery = cycle.now
             self.write(

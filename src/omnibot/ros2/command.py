@@ -35,10 +35,18 @@ SONAR_PERIOD = 0.1
 every ``range/<sonar>`` would say +inf, no echo, for a sonar that never pinged)."""
 
 
-def add_bridge_options(p: argparse.ArgumentParser, *, several: bool = False) -> None:
+def add_bridge_options(p: argparse.ArgumentParser, *, several: bool = False, scanner: bool = True) -> None:
     """The bridge's own options (``omnibot ros2``, where ``several`` robots may be given, and ``omnibot
-    run --ros2``)."""
+    run --ros2``; ``omnibot map --ros2`` has its own ``--scanner``, so not ``scanner``)."""
     more = "; one per --port, in the same order" if several else ""
+    if scanner:
+        p.add_argument(
+            "--scanner",
+            action="append" if several else "store",
+            metavar="DEV",
+            help="the RPLIDAR's serial port of a real robot (or the scanner pty of omnibot sim --pty), "
+            f"published on scan (a simulated robot's scanner is published without it){more}",
+        )
     p.add_argument(
         "--namespace",
         action="append" if several else "store",
@@ -94,6 +102,8 @@ class RobotSpec:
     url: str | None
     namespace: str
     prefix: str
+    scanner: str | None = None
+    """The RPLIDAR's device (None: the simulator's scanner on ``sim://``, else none)."""
 
 
 def _listed(value: Any) -> list[str]:
@@ -147,8 +157,19 @@ def robot_specs(args: argparse.Namespace) -> list[RobotSpec]:
             raise ConfigError(
                 f"two robots with the {label} {seen[0] or '(none)'!r}: each robot needs its own", key=key
             )
+    scanners = _listed(getattr(args, "scanner", None))
+    if scanners and len(scanners) != count:
+        raise ConfigError(
+            f"{count} robots (--port) but {len(scanners)} --scanner: give each robot's scanner, in the "
+            "order of --port (or none)",
+            key="--scanner",
+        )
+    devices: list[str | None] = list(scanners) or [None] * count
     urls: list[str | None] = list(ports) or [None]
-    return [RobotSpec(url, ns, prefix) for url, ns, prefix in zip(urls, names, frames, strict=True)]
+    return [
+        RobotSpec(url, ns, prefix, dev)
+        for url, ns, prefix, dev in zip(urls, names, frames, devices, strict=True)
+    ]
 
 
 def check(args: argparse.Namespace) -> list[RobotSpec]:
@@ -178,7 +199,9 @@ def attach(
     """Add the bridge to ``runtime``: the cmd_vel and path sources, the odometry reset and publishing
     sinks (stamping on ``timeline``, the process's :class:`~omnibot.ros2.clock.Timeline`; ``/clock``
     when the link is a simulator's); gives the runtime the fused estimator at its first cycle when
-    it has none. Returns the node (close it)."""
+    it has none; gives it the robot's scanner when it has none (the RPLIDAR on the spec's
+    ``--scanner``, else the simulator's on ``sim://``; closed with the node), whose scans the sink
+    publishes on ``scan``. Returns the node (close it)."""
     try:
         from omnibot.ros2.bridge import Diagnosed, Ros2Sink
         from omnibot.ros2.cmd_vel import TWIST, CmdVelSource
@@ -200,10 +223,18 @@ def attach(
     recorder = active()  # the command's --log: the bridge stamps as it does
     if recorder is not None:
         timeline.adopt(recorder.placing)
+    scans = _scanner(runtime, robot, spec)  # a bad --scanner is refused before any participant
     try:
         node = Node(spec.namespace)
-    except UnsafeNetwork as exc:
-        raise ConfigError(str(exc)) from None
+    except BaseException as exc:
+        if scans is not None:
+            runtime.scanner = None
+            scans.close()
+        if isinstance(exc, UnsafeNetwork):
+            raise ConfigError(str(exc)) from None
+        raise
+    if scans is not None:
+        node.closers.append(scans.close)
 
     def notify(level: Any, text: str) -> None:
         runtime.notify(level, text)
@@ -252,6 +283,22 @@ def attach(
     StallWatch.on(runtime, robot)  # wheels that turn while the body does not: stop, say so
     start_sonars(runtime.client, robot, SONAR_PERIOD)  # in TEL: the ranges out, the stall watch's witnesses
     return node
+
+
+def _scanner(runtime: Any, robot: Any, spec: RobotSpec) -> Any:
+    """The robot's scanner, made the runtime's (see :func:`attach`); None when the runtime has one
+    already or the robot gets none (whoever gets it closes it)."""
+    from omnibot.lidar.reader import open_scanner
+    from omnibot.transport.device import find_simulator
+
+    if runtime.scanner is not None:
+        return None  # the command's own (omnibot map's, the dashboard's)
+    link = runtime.client.link
+    if spec.scanner is None and (robot.scanner is None or find_simulator(link) is None):
+        return None  # a real robot without --scanner: no scan
+    scans = open_scanner(spec.scanner, link, robot)
+    runtime.scanner = scans
+    return scans
 
 
 _PRINTING = threading.Lock()

@@ -16,9 +16,10 @@ Under pytest a participant is refused outside a private network namespace
 
 from __future__ import annotations
 
+import logging
 import os
 import threading
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -165,6 +166,8 @@ class Node:
         self._topics: dict[tuple[str, str], Any] = {}
         """Topics made, by DDS name and ROS type (one name may carry two types: cmd_vel's)."""
         self._services = 0
+        self.closers: list[Callable[[], object]] = []
+        """Called by :meth:`close` first, newest first (what the bridge opened with the node: a scanner)."""
 
     def _topic(self, name: str, typename: str) -> Any:
         dds = topic_name(name, self.namespace)
@@ -218,6 +221,13 @@ class Node:
         return endpoints
 
     def close(self) -> None:
-        """Delete the participant (and everything it made)."""
+        """Release what was opened with the node (:attr:`closers`), then delete the participant (and
+        everything it made)."""
+        while self.closers:
+            closer = self.closers.pop()
+            try:
+                closer()
+            except Exception:  # on the way out: the participant is deleted whatever
+                logging.getLogger("omnibot.ros2").exception("closing %r failed", closer)
         self._topics.clear()
         self.participant = None  # type: ignore[assignment]

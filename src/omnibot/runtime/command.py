@@ -166,7 +166,7 @@ def compose(
         limits = TwistLimits.from_limits(runtime.client.limits, config, robot)
         parts.pad = PadSource(device, config, limits, name=args.teleop, priority=PAD_PRIORITY)
         runtime.add_source(parts.pad)
-    if args.ros2:
+    if args.ros2 and getattr(args, "ros2_node", None) is None:  # (omnibot map attaches its own)
         from omnibot.ros2.command import attach
 
         node = attach(runtime, robot, args)

@@ -7,6 +7,7 @@ from typing import Literal
 
 from omnibot.client.events import Event, Telemetry
 from omnibot.motion import Estimate, Twist
+from omnibot.scan import Scan
 
 Level = Literal["info", "warn", "error"]
 
@@ -70,6 +71,9 @@ class Cycle:
     latch_reason: str = ""
     """Why: ``sonar`` (the emergency stop, WARN 13) or ``battery`` (the battery stop, WARN 43: STOP
     releases it only with the voltage back up)."""
+    scans: list[Scan] = field(default_factory=list)
+    """The revolutions the runtime's :attr:`~omnibot.runtime.runtime.Runtime.scanner` completed since
+    the last cycle, oldest first (stamped on the link clock; empty without a scanner)."""
 
     @property
     def achieved(self) -> Twist | None:

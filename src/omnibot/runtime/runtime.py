@@ -23,6 +23,7 @@ from omnibot.protocol import codes
 from omnibot.runtime.arbiter import Arbiter, Lock
 from omnibot.runtime.cycle import NOBODY, Cycle, Decision, Level, Notice
 from omnibot.runtime.sources import Proposal, Source
+from omnibot.scan import Scan
 
 log = logging.getLogger("omnibot.runtime")
 log.addHandler(logging.NullHandler())  # a library's log: shown where the application configures logging
@@ -51,6 +52,14 @@ OPEN_LOOP_TEXT = (
 Sink = Callable[[Cycle], object]
 """Anything called with each completed :class:`Cycle` (a function, a bound method, an object with
 ``__call__``); see :mod:`omnibot.runtime.sinks`."""
+
+
+class Scanner(Protocol):
+    """Where a runtime's scans come from (a :class:`~omnibot.lidar.reader.ScanSource`)."""
+
+    def poll(self) -> list[Scan]:
+        """The scans completed since the last call; an error when the scanner failed."""
+        ...
 
 
 class Pacer(Protocol):
@@ -187,6 +196,10 @@ class Runtime:
         self._pending: list[tuple[Pending, str]] = []
         self._last_error: dict[str, str] = {}
         self._listening = False
+        self.scanner: Scanner | None = None
+        """The robot's range scanner, polled once per cycle: its scans go to every sink on
+        :attr:`Cycle.scans <omnibot.runtime.cycle.Cycle.scans>` (one source, many readers: the SLAM, the
+        log, ROS 2, the page). Whoever sets it closes it; one that fails is dropped, with a notice."""
         for source in sources:
             self.add_source(source)
 
@@ -342,6 +355,7 @@ class Runtime:
         cycle = Cycle(self.cycles, now, self.client.clock.now(), self.estimate_now())
         self.cycles += 1
         cycle.telemetry, cycle.events = list(self._telemetry), list(self._events)
+        cycle.scans = self._scans()
         self._telemetry.clear()
         self._events.clear()
         cycle.notices, self._notices = self._notices, []
@@ -375,6 +389,18 @@ class Runtime:
                 self.remove_sink(sink)
                 self._notices.append(Notice("error", f"a view failed and was removed: {exc}"))
         return cycle
+
+    def _scans(self) -> list[Scan]:
+        """The scanner's new scans (none without one; a scanner that fails is told and dropped)."""
+        scanner = self.scanner
+        if scanner is None:
+            return []
+        try:
+            return list(scanner.poll())
+        except Exception as exc:  # a scanner lost must not stop the robot loop
+            self.scanner = None
+            self._notices.append(Notice("error", f"the scanner failed and is no longer read: {exc}"))
+            return []
 
     def run(self, until: Callable[[], bool] | None = None, duration: float | None = None) -> None:
         """Cycle until ``until()`` is true or ``duration`` s of the cycle clock passed."""

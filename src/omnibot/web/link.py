@@ -11,8 +11,9 @@ web server through queues.
                                                         runtime cycle: sources (page 100, repeat 10,
                                                           any other) -> arbiter -> VEL -> sinks
                                                         pump: TEL -> StateTracker, WARN -> log
-      broadcaster <- outbox (queue.Queue) <-------- state frame (who drives and why), log frames
-                                                    (every runtime notice)
+      broadcaster <- outbox (queue.Queue) <-------- state frame (who drives and why; the latest
+                                                    scan's points, at most every SCAN_PERIOD), log
+                                                    frames (every runtime notice)
 
 The client is not thread-safe, so nothing else touches it once :meth:`RobotLink.start` ran. Driving
 from the page has the teleop deadman (a :class:`~omnibot.runtime.sources.DeadmanSource`): the page
@@ -20,7 +21,10 @@ repeats its input while a key is held or the stick is dragged, and the robot sto
 VEL, then the VEL watchdog) when the input says "let go", when the page goes away, or when no input
 came for ``input_timeout``. The page outranks the repeat: it takes over and hands back. The emergency
 stop is the runtime's top lock: STOP at once, nothing drives (a repeat ends) until the page sends
-``resume``. On shutdown the link leaves the controller as it was found
+``resume``. A robot with a scanner on ``sim://`` has the simulator's scanner as the runtime's
+(:attr:`Runtime.scanner <omnibot.runtime.runtime.Runtime.scanner>`, unless a front end gave it one):
+the state frame carries the latest scan's returns as world points (``scan``, see
+:func:`scan_points`). On shutdown the link leaves the controller as it was found
 (:func:`omnibot.client.session.leave`: STOP, telemetry off, its MODE back) and closes the client.
 """
 
@@ -41,6 +45,7 @@ from omnibot.client.events import ErrorEvent, Event, ResetEvent, WarnEvent
 from omnibot.client.session import leave
 from omnibot.errors import ControllerError, LinkError
 from omnibot.estimation.slip import SlipModel
+from omnibot.lidar.reader import SimScanSource
 from omnibot.motion import Pose2D, Twist
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription
@@ -49,6 +54,7 @@ from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.runtime import Runtime
 from omnibot.runtime.sinks import EstimatorWhenMissing
 from omnibot.runtime.sources import DeadmanSource
+from omnibot.scan import Scan
 from omnibot.teleop.config import TeleopConfig
 from omnibot.teleop.deadman import Deadman, Phase, Sample
 from omnibot.teleop.mapping import (
@@ -77,6 +83,22 @@ DRIVE_RATE_MAX = math.pi
 """rad/s at full turn from the page (keys, slider): half a turn a second, whatever the robot could do."""
 PAGE_PRIORITY = 100
 """The page's driving in arbitration: above the repeat (10), so it takes over and hands back."""
+SCAN_PERIOD = 0.2
+"""s of link time between two scans in the state frames (the page draws the latest)."""
+SCAN_POINTS = 180
+"""Most returns of a scan sent to the page (every k-th, in the scan's order)."""
+
+
+def scan_points(scan: Scan, pose: tuple[float, float, float], most: int = SCAN_POINTS) -> dict[str, Any]:
+    """A scan for the page: its stamp (link time) and its returns in the world frame (m, rounded to mm)
+    as seen from ``pose`` (the pose the page shows), every k-th of them so that at most ``most`` go."""
+    points = scan.points("base")
+    step = max(1, math.ceil(len(points) / most))
+    points = points[::step]
+    x, y, th = pose
+    c, s = math.cos(th), math.sin(th)
+    world = [[round(x + c * px - s * py, 3), round(y + s * px + c * py, 3)] for px, py in points.tolist()]
+    return {"t": round(scan.stamp, 3), "points": world}
 
 
 @dataclass(frozen=True)
@@ -137,6 +159,13 @@ class RobotLink:
             wheel_loop=wheel_loop,
             slip=slip,
         )
+        self.scanner: SimScanSource | None = None
+        """The simulator's scanner when this link gave the runtime one (closed with the link)."""
+        if robot.scanner is not None and self.runtime.scanner is None and self._device is not None:
+            self.scanner = SimScanSource(self._device.sim)
+            self.runtime.scanner = self.scanner
+        self._scan: Scan | None = None
+        self._scan_sent = -math.inf
         self.runtime.add_source(self.page)
         self.runtime.add_lock(self.estop_lock.lock)
         self.runtime.error_hooks.append(self._command_failed)
@@ -195,7 +224,15 @@ class RobotLink:
             self._thread = None
         else:
             self.runtime.close()
+            self._close_scanner()
             self.client.close()
+
+    def _close_scanner(self) -> None:
+        if self.scanner is not None:
+            if self.runtime.scanner is self.scanner:
+                self.runtime.scanner = None
+            self.scanner.close()
+            self.scanner = None
 
     @property
     def pose(self) -> tuple[float, float, float] | None:
@@ -241,6 +278,7 @@ class RobotLink:
             self._emit({"type": "log", "level": "error", "text": f"robot link stopped: {exc}"})
         finally:
             self.runtime.close()
+            self._close_scanner()
             leave(client, self.mode)
 
     def setup(self) -> None:
@@ -321,7 +359,16 @@ class RobotLink:
             "teach": self.teach is not None,
         }
         # truth only when the link is a simulator that gives it; else the tracker shows odometry as such
-        self._emit(self.tracker.frame(self.client.clock.now(), self._truth(), drive))
+        now = self.client.clock.now()
+        frame = self.tracker.frame(now, self._truth(), drive)
+        if cycle.scans:
+            self._scan = cycle.scans[-1]
+        pose = self._pose()
+        if self._scan is not None and pose is not None and now - self._scan_sent >= SCAN_PERIOD:
+            self._scan_sent = now
+            frame["scan"] = scan_points(self._scan, pose)
+            self._scan = None
+        self._emit(frame)
 
     def _handle(self, request: Request, now: float) -> None:
         if isinstance(request, EStop):

@@ -10,10 +10,12 @@ const SEND_PERIOD = 50; // ms
 const CHART_SAMPLES = 200; // 10 s at 20 Hz
 const $ = (id) => document.getElementById(id);
 
+const SCAN_COLOR = "#e11d48";
 let ws = null;
 let scene = null;
 let state = null;
 let trail = [];
+let scan = null; // the latest scan the state frames carried: {t, points: [[x, y], ...]} in the world
 let view = null; // {x0, y0, x1, y1}: the part of the world shown
 let lastPing = 0;
 let pageRtt = null;
@@ -72,6 +74,10 @@ function receive(msg) {
 
 function onState(s) {
   state = s;
+  if (s.scan) {
+    scan = s.scan;
+    $("legend-scan").hidden = false;
+  }
   if (s.pose) {
     const last = trail[trail.length - 1];
     if (!last || Math.abs(s.pose[0] - last[0]) + Math.abs(s.pose[1] - last[1]) >= 0.005) trail.push([s.pose[0], s.pose[1]]);
@@ -240,6 +246,14 @@ function drawMap() {
     ctx.strokeStyle = "#2563eb";
     ctx.lineWidth = 2;
     poly(trail, false); ctx.stroke();
+  }
+  // the latest scan's returns
+  if (scan) {
+    ctx.fillStyle = SCAN_COLOR;
+    for (const [px, py] of scan.points) {
+      const [sx, sy] = P(px, py);
+      ctx.fillRect(sx - 2, sy - 2, 4, 4);
+    }
   }
   // scale bar
   ctx.fillStyle = "#374151";
@@ -532,7 +546,7 @@ function setupTeach(available) {
 }
 
 window.addEventListener("resize", requestDraw);
-window.omnibot = { send, sendRaw, state: () => state, trail: () => trail, scene: () => scene };
+window.omnibot = { send, sendRaw, state: () => state, trail: () => trail, scene: () => scene, scan: () => scan };
 drawStick();
 connect();
 setInterval(driveTick, SEND_PERIOD);
