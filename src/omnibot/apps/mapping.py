@@ -181,14 +181,14 @@ def _explore(args: argparse.Namespace, url: str, out: Path) -> int:
                     robot,
                     lambda: sink.grid(args.resolution, mapping.noise),
                     sink.pose_now,
+                    scan=sink.points_now,
                     time_limit=limit,
                     say=_say,
                 )
             _say(f"explored: {result.summary()}")
     finally:
         mapping.close()
-    status = mapping.finish(out, None, args.resolution)
-    return status if status else (0 if result.outcome == "explored" else 1)
+    return mapping.finish(out, None, args.resolution)  # the map written: 0, however exploring ended
 
 
 class _Mapping:

@@ -203,6 +203,7 @@ class MappingSink(ScanFeed):
         self.slam = slam if slam is not None else Slam()
         self.estimate = Track()
         self._clouds: list[tuple[float, NDArray[np.float32], tuple[float, float]]] = []
+        self._latest: FloatArray | None = None
         super().__init__(scans, threaded=threaded)
 
     def pose_now(self) -> Pose2D | None:
@@ -215,10 +216,19 @@ class MappingSink(ScanFeed):
             correction = self.slam.map_to_odom
         return compose(correction, odom)
 
+    def points_now(self) -> FloatArray | None:
+        """The latest scan's returns in the map frame (None before the first): the SLAM's current
+        ``map -> odom`` applied to them (goto's obstacle watch while exploring)."""
+        with self._lock:
+            latest, correction = self._latest, self.slam.map_to_odom
+        return None if latest is None else transform(correction, latest)
+
     def _keep(self, scan: Scan, start: Pose2D, end: Pose2D, span: float) -> None:
         """Keep the scan's returns (distortion undone) for the map."""
-        points = undistorted(scan, start, end, span).astype(np.float32)
-        self._clouds.append((scan.stamp, points, (scan.mount.x, scan.mount.y)))
+        points = undistorted(scan, start, end, span)
+        self._clouds.append((scan.stamp, points.astype(np.float32), (scan.mount.x, scan.mount.y)))
+        with self._lock:
+            self._latest = transform(start, points)  # the odometry frame
 
     def _update(self, scan: Scan, odom: Pose2D) -> None:
         pose = self.slam.update(odom, scan, scan.stamp)

@@ -40,8 +40,8 @@ Outcome = Literal["explored", "time limit", "unreachable"]
 
 REACH = 0.6
 """m from a frontier's centre within which its goal is sought."""
-MIN_CELLS = 4
-"""Frontier cells a group needs to be worth a visit (smaller ones are noise at a wall's edge)."""
+MIN_CELLS = 6
+"""Frontier cells a group needs to be worth a visit (one unknown cell in the open makes 4)."""
 FREE = 49
 """Known cells below even odds of being occupied count as free here (one pass of a ray leaves a
 cell at 40: map_server's 25 would need several before a frontier appears)."""
@@ -50,9 +50,17 @@ CANDIDATES = 4
 FORGET = 0.3
 """m: a frontier goal this close to one that failed is not tried again."""
 GOTO = GotoOptions(
-    tolerance=0.25, heading_tolerance=math.pi, corrections=0, max_replans=2, heading="goal", aim=1.0
+    tolerance=0.25,
+    heading_tolerance=math.pi,
+    corrections=0,
+    max_replans=3,
+    heading="goal",
+    aim=1.0,
 )
-"""How each frontier is gone to: near enough to see past it; any heading."""
+"""How each frontier is gone to: near enough to see past it, any heading; what the scanner sees
+that the map so far does not have stops the robot and is planned around. When no frontier can be
+reached through known free space, the way is planned through unknown cells as if free (a doorway
+half seen is a way on)."""
 
 
 def frontier_goals(
@@ -104,7 +112,7 @@ class ExploreResult:
         why = {
             "explored": "no frontier left: the reachable space is mapped",
             "time limit": "the time limit passed",
-            "unreachable": "the frontiers left could not be reached",  # kept for callers matching on it
+            "unreachable": "the frontiers left could not be reached",
         }[self.outcome]
         return f"{why} ({self.reached} frontiers reached, {len(self.failed)} given up, {self.duration:.0f} s)"
 
@@ -115,12 +123,14 @@ def explore(
     grid_now: Callable[[], OccupancyGrid],
     pose: PoseProvider,
     *,
+    scan: Callable[[], FloatArray | None] | None = None,
     time_limit: float = 300.0,
     options: GotoOptions = GOTO,
     say: Callable[[str], object] = lambda text: None,
 ) -> ExploreResult:
     """Explore through a running ``runtime`` (see the module docstring): ``grid_now()`` is the map so
-    far and ``pose()`` the robot's pose in it; at most ``time_limit`` s of the link's clock."""
+    far, ``pose()`` the robot's pose in it and ``scan()`` the latest scan's points in it (the
+    obstacle watch); at most ``time_limit`` s of the link's clock."""
     clock = runtime.client.clock
     t0 = clock.now()
     radius = robot.footprint.bounding_radius
@@ -143,17 +153,23 @@ def explore(
             if all(math.hypot(g[0] - fx, g[1] - fy) > FORGET for fx, fy in result.done)
         ]
         if not goals:
-            result.outcome = "explored"
+            result.outcome = "unreachable" if result.failed else "explored"
             break
+        how = options
         target = _nearest_by_path(cmap, here, goals)
+        if target is None:  # no way through known free space: through the unknown, as if free
+            how = replace(options, allow_unknown=True)
+            optimistic = inflate(grid, robot_radius=radius, margin=options.margin, allow_unknown=True)
+            target = _nearest_by_path(optimistic, here, goals)
         if target is None:
             unreachable = [(g[0], g[1]) for g in goals[:CANDIDATES]]
             result.failed.extend(unreachable)
             result.done.extend(unreachable)
             continue
         goal = Pose2D(target[0], target[1], here.theta)
-        say(f"to the frontier at ({goal.x:.2f}, {goal.y:.2f}), {len(goals)} left")
-        visit = go_to(runtime, robot, grid, goal, replace(options, timeout=left), pose=pose)
+        through = " (through unknown space)" if how.allow_unknown else ""
+        say(f"to the frontier at ({goal.x:.2f}, {goal.y:.2f}){through}, {len(goals)} left")
+        visit = go_to(runtime, robot, grid, goal, replace(how, timeout=left), pose=pose, scan=scan)
         result.visits.append(visit)
         # a frontier the robot stood at and still sees as one (behind furniture, past the range) is
         # not gone to again, nor one it could not reach
