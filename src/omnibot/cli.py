@@ -1,7 +1,10 @@
 """The ``omnibot`` command line: ``main(argv=None)`` returns the exit status, so tests call it directly.
 
 Every subcommand lives in its own function pair: ``_add_<name>(subparsers)`` declares its arguments,
-the handler does the work (importing heavy modules lazily so ``omnibot --help`` stays fast). The
+the handler does the work (importing heavy modules lazily so ``omnibot --help`` stays fast). A
+command whose arguments are declared in a heavy module is added with :func:`_command_in` or
+:func:`_lazy`: a placeholder with its summary until the command is chosen (:class:`_Commands`), so
+that no command imports another's modules (``tests/cli/test_startup.py`` checks ``--help``). The
 commands that talk to a robot share one grammar (:mod:`omnibot.cliargs`) and leave the controller as
 they found it (:mod:`omnibot.client.session`).
 
