@@ -6,15 +6,23 @@ STAMP  := $(VENV)/.installed
 
 .PHONY: setup demo test lint bench clean browser avr-tools uno-sim arduino-sketch mcap-readers fuzz ros2-interop ros2-kilted
 
-setup: $(STAMP)
+KERNEL_CACHE := $(VENV)/.kernels
+
+setup: $(STAMP) $(KERNEL_CACHE)
 
 $(STAMP): pyproject.toml Makefile
 	@$(PYTHON) -c 'import sys; sys.exit(0 if sys.version_info >= (3, 11) else "omnibot needs Python 3.11 or newer")'
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip==25.3
 	$(BIN)/python -m pip install --quiet -e '.[dev,bench,ros2,slam]'
-	$(BIN)/python -m omnibot.sim.kernels  # compile the simulator's kernels into numba's cache once
 	@touch $(STAMP)
+
+# The simulator's kernels compiled into numba's cache (next to kernels.py), again whenever kernels.py
+# changes (numba keys its cache on the file's time stamp: a pull or checkout that touches it would
+# otherwise leave the next `omnibot sim --pty` compiling for several seconds before it answers).
+$(KERNEL_CACHE): $(STAMP) src/omnibot/sim/kernels.py
+	$(BIN)/python -m omnibot.sim.kernels
+	@touch $@
 
 demo: setup
 	$(BIN)/omnibot demo

@@ -24,6 +24,7 @@ from benchmarks import (
     slam_synthetic,
     sonar_stop,
     speed_accuracy,
+    startup,
     tracking,
     uno_command_cycles,
     uno_encoder_counts,
@@ -33,6 +34,7 @@ from benchmarks import (
 def main() -> int:
     for title, run in (
         ("simulator speed", lambda: sim_speed.main([])),
+        ("start-up: --help, robot list, first HELLO cold and warm", lambda: startup.main([])),
         ("laser scanner cost", lambda: scanner_cost.main([])),
         ("firmware time per command", lambda: firmware_command_time.main([])),
         ("UNO firmware cycles per command (simavr)", lambda: uno_command_cycles.main([])),

@@ -1,7 +1,10 @@
 """The ``omnibot`` command line: ``main(argv=None)`` returns the exit status, so tests call it directly.
 
 Every subcommand lives in its own function pair: ``_add_<name>(subparsers)`` declares its arguments,
-the handler does the work (importing heavy modules lazily so ``omnibot --help`` stays fast). The
+the handler does the work (importing heavy modules lazily so ``omnibot --help`` stays fast). A
+command whose arguments are declared in a heavy module is added with :func:`_command_in` or
+:func:`_lazy`: a placeholder with its summary until the command is chosen (:class:`_Commands`), so
+that no command imports another's modules (``tests/cli/test_startup.py`` checks ``--help``). The
 commands that talk to a robot share one grammar (:mod:`omnibot.cliargs`) and leave the controller as
 they found it (:mod:`omnibot.client.session`).
 
@@ -432,8 +435,8 @@ def _command_in(
     module: str, name: str, *, add: str = "add_arguments", run: str = "run", summary: str, description: str
 ) -> Adder:
     """The adder of the subcommand ``name`` (``summary``: its line in ``omnibot --help``) whose options
-    (``module.add(p)``) and handler (``module.run(args)``) live in ``module``: imported when the parser
-    is built and when the command runs, so the heavy imports stay in the handler."""
+    (``module.add(p)``) and handler (``module.run(args)``) live in ``module``: imported only when the
+    command is chosen (:class:`_Commands`) and when it runs, so the heavy imports stay in the handler."""
 
     def handler(args: argparse.Namespace) -> int:
         status: int = getattr(importlib.import_module(module), run)(args)
@@ -444,7 +447,66 @@ def _command_in(
         getattr(importlib.import_module(module), add)(p)
         p.set_defaults(handler=handler)
 
-    return adder
+    return _lazy(name, summary, adder)
+
+
+def _lazy(name: str, summary: str, adder: Adder) -> Adder:
+    """``adder`` declared to :class:`_Commands` by its name and summary alone: it runs (importing the
+    module that declares the command's options) only when the command is chosen."""
+
+    def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+        if isinstance(sub, _Commands):
+            sub.add_lazy(name, summary, adder)
+        else:
+            adder(sub)
+
+    return register
+
+
+class _Commands(argparse._SubParsersAction):  # type: ignore[type-arg]
+    """``omnibot``'s subcommands. A command added with :meth:`add_lazy` is a placeholder carrying its
+    name and summary (all ``omnibot --help`` shows) until it is chosen: only then is its adder run, and
+    the module that declares its options imported. So ``omnibot --help`` and ``omnibot robot list``
+    import none of what the other commands need (numpy, numba, pydantic, the client, ...)."""
+
+    def __init__(self, *args: object, **kwargs: object) -> None:
+        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+        self._adders: dict[str, Adder] = {}
+
+    def add_lazy(self, name: str, summary: str, adder: Adder) -> None:
+        self.add_parser(name, help=summary)
+        self._adders[name] = adder
+
+    def fill(self, name: str) -> None:
+        """Run the adder of command ``name`` if it is still a placeholder (its line in the help keeps
+        its place)."""
+        adder = self._adders.pop(name, None)
+        if adder is None:
+            return
+        del self._name_parser_map[name]
+        place = next(k for k, a in enumerate(self._choices_actions) if a.dest == name)
+        placeholder = self._choices_actions.pop(place)
+        adder(self)
+        filled = self._choices_actions.pop()
+        if filled.help != placeholder.help:
+            raise AssertionError(f"omnibot {name}: summary {placeholder.help!r} != {filled.help!r}")
+        self._choices_actions.insert(place, filled)
+        _add_debug_to(self._name_parser_map[name])
+
+    def fill_all(self) -> None:
+        for name in list(self._adders):
+            self.fill(name)
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: str | Sequence[object] | None,
+        option_string: str | None = None,
+    ) -> None:
+        if isinstance(values, Sequence) and values and isinstance(values[0], str):
+            self.fill(values[0])
+        super().__call__(parser, namespace, values, option_string)
 
 
 _add_teleop = _command_in(
@@ -520,43 +582,59 @@ _add_goto = _command_in(
 # --------------------------------------------------------------------------- calibrate
 
 
-def _add_calibrate(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def _add_calibrate_now(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     from omnibot.calibration.cli import add_parser
 
     add_parser(sub)
 
 
+_add_calibrate = _lazy(
+    "calibrate",
+    "seed 000's power calibration (K, K_l, K_t, K_r), gyro and odometry geometry, with a report",
+    _add_calibrate_now,
+)
+
+
 # --------------------------------------------------------------------------- parser
 
 
-def _add_log(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def _add_log_now(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     from omnibot.logs.commands import add_log_command
 
     add_log_command(sub)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The ``omnibot`` argument parser: one subcommand per entry of ``ADDERS``."""
+_add_log = _lazy("log", "inspect, plot, export and replay a run recorded with --log FILE.mcap", _add_log_now)
+
+
+def build_parser(*, full: bool = False) -> argparse.ArgumentParser:
+    """The ``omnibot`` argument parser: one subcommand per entry of ``ADDERS``. The commands whose
+    options live in heavy modules are declared when chosen (:class:`_Commands`); ``full`` declares
+    them all now."""
     parser = argparse.ArgumentParser(
         prog="omnibot", description="Drive omnidirectional mobile robots, real or simulated."
     )
     parser.add_argument("--version", action="version", version=f"omnibot {__version__}")
     parser.add_argument("--debug", action="store_true", help="show the traceback of an error")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", action=_Commands)
     for add in ADDERS:
         add(sub)
-    _add_debug(sub)
+    for p in sub.choices.values():
+        _add_debug_to(p)
+    if full:
+        assert isinstance(sub, _Commands)
+        sub.fill_all()
     return parser
 
 
-def _add_debug(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    """``--debug`` on every (sub)command, so that it can go anywhere on the line."""
-    for p in sub.choices.values():
-        if "--debug" not in p._option_string_actions:
-            add_debug_option(p)
-        for action in p._actions:
-            if isinstance(action, argparse._SubParsersAction):
-                _add_debug(action)
+def _add_debug_to(p: argparse.ArgumentParser) -> None:
+    """``--debug`` on a (sub)command and its own subcommands, so that it can go anywhere on the line."""
+    if "--debug" not in p._option_string_actions:
+        add_debug_option(p)
+    for action in p._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for child in action.choices.values():
+                _add_debug_to(child)
 
 
 ADDERS: list[Adder] = [
@@ -582,7 +660,7 @@ ADDERS: list[Adder] = [
 
 def exit_status(exc: BaseException) -> int:
     """The exit status of a command that ended with ``exc`` (see the module docstring)."""
-    from omnibot.client.session import Terminated
+    from omnibot.signals import Terminated
 
     if isinstance(exc, Terminated):
         return 128 + exc.signum
@@ -599,8 +677,8 @@ def exit_status(exc: BaseException) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``omnibot`` command line; returns the exit status."""
-    from omnibot.client.session import Terminated, terminate_cleanly
     from omnibot.logs.active import recording
+    from omnibot.signals import Terminated, terminate_cleanly
 
     parser = build_parser()
     args = parser.parse_args(argv)

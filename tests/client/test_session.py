@@ -9,10 +9,11 @@ import time
 import pytest
 
 from omnibot.client.client import RobotClient
-from omnibot.client.session import Terminated, guarded, leave, robot_on_link, robot_session, terminate_cleanly
+from omnibot.client.session import guarded, leave, robot_on_link, robot_session
 from omnibot.errors import ConfigError, ControllerError
 from omnibot.protocol import codes
 from omnibot.robot.description import PRESET_DIR
+from omnibot.signals import Terminated, terminate_cleanly
 from omnibot.transport.device import find_device
 
 

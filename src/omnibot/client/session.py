@@ -4,7 +4,7 @@
 
     with robot_session(url, "omni3") as s:     # open, HELLO: the robot on the link is the one asked
         s.client.move(...)                     # for; STATUS: the MODE bits it was found in
-    # on every way out - the end, an error, Ctrl-C, SIGTERM (see :func:`terminate_cleanly`), the link
+    # on every way out - the end, an error, Ctrl-C, SIGTERM (see :func:`omnibot.signals.terminate_cleanly`), the link
     # dropping: STOP, telemetry off, MODE back to what it was (text protocol), the link closed
 
 :func:`robot_on_link` decides which robot a command drives: the one the controller names in its
@@ -20,11 +20,8 @@ is gone is just closed.
 from __future__ import annotations
 
 import contextlib
-import signal
-import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
-from types import FrameType
 from typing import Literal
 
 from omnibot.client.client import DEFAULT_TIMEOUT, RobotClient
@@ -39,7 +36,6 @@ from omnibot.protocol import codes
 from omnibot.protocol.messages import Mode, Stop
 from omnibot.protocol.messages import Telem as TelemCommand
 from omnibot.robot.description import RobotDescription, load_robot, preset_names
-from omnibot.signals import ending_signals
 
 CLEANUP_TIMEOUT = 0.5
 """Seconds (link clock) each cleanup command may wait for its reply."""
@@ -50,34 +46,6 @@ StopPolicy = Literal["always", "on_error"]
 RestorePolicy = Literal["mode", "protocol"]
 """``mode``: the MODE bits found at the start come back; ``protocol``: only the text protocol
 (``omnibot send 'MODE,2'`` sets a mode on purpose)."""
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM or SIGHUP (the terminal or SSH session it ran in went away), turned into an exception
-    so that every ``finally`` (and :func:`guarded`) runs; :attr:`signum` says which."""
-
-    def __init__(self, signum: int = signal.SIGTERM) -> None:
-        self.signum = signal.Signals(signum)
-        super().__init__(self.signum.name)
-
-
-@contextlib.contextmanager
-def terminate_cleanly() -> Iterator[None]:
-    """While inside, SIGTERM and SIGHUP raise :class:`Terminated` in the main thread (no-op
-    elsewhere). A SIGHUP ignored when the command started (``nohup``) stays ignored."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-
-    def _raise(signum: int, frame: FrameType | None) -> None:
-        raise Terminated(signum)
-
-    previous = {signum: signal.signal(signum, _raise) for signum in ending_signals()}
-    try:
-        yield
-    finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
 
 
 def _simulated_robot(client: RobotClient, name: str) -> RobotDescription | None:

@@ -23,7 +23,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from omnibot.client.client import RobotClient
-from omnibot.client.session import Terminated
 from omnibot.control.followers.base import to_body, wrap
 from omnibot.control.paths.path import Path
 from omnibot.control.paths.profile import time_optimal_profile
@@ -34,6 +33,7 @@ from omnibot.navigation.runner import Navigator
 from omnibot.navigation.session import follower_limits
 from omnibot.robot.description import RobotDescription
 from omnibot.runtime.sources import ScriptSource
+from omnibot.signals import Terminated
 
 TEACH_MODES = ("push", "drive", "listen")
 HAND_STIFFNESS = 60.0

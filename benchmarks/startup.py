@@ -1,0 +1,148 @@
+"""Start-up: CPU time of ``omnibot --help``, ``omnibot robot list`` and the first HELLO reply of the
+simulated robot, with an empty numba cache and with a filled one.
+
+Run: ``python -m benchmarks.startup [--src DIR ...] [--repeats N]``. Each ``--src`` is an omnibot
+source tree (``src/`` of a checkout; default this one's); giving two (``git archive`` of an older
+commit unpacked beside) measures before and after side by side in one run. Every case is a fresh
+interpreter; the figure is the process's CPU time (user + system), best of ``--repeats``, because
+wall time on the shared machine moves with its load (wall time is printed too):
+
+* ``--help``, ``robot list``: the whole process (``getrusage`` of the child);
+* ``sim --pty`` first HELLO: ``omnibot sim --pty`` started, its pty opened as soon as it prints the
+  path, ``HELLO`` written; the CPU its process has used when the reply arrives (``/proc/PID/stat``);
+* ``send HELLO`` (``sim://omni4`` in-process, lockstep): the whole ``omnibot send HELLO`` process,
+  whose first reply is its HELLO (it exits right after: an upper bound of the first reply's CPU).
+
+"cold" points ``NUMBA_CACHE_DIR`` at an empty directory (every kernel a run needs is compiled);
+"warm" at the directory the cold run filled.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import select
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+TICK = os.sysconf("SC_CLK_TCK")
+
+
+def _env(src: Path, cache: str | None) -> dict[str, str]:
+    env = dict(os.environ, PYTHONPATH=str(src), MPLBACKEND="Agg", SDL_VIDEODRIVER="dummy")
+    if cache is not None:
+        env["NUMBA_CACHE_DIR"] = cache
+    return env
+
+
+def command_cpu(src: Path, argv: list[str], cache: str | None = None) -> tuple[float, float]:
+    """(CPU s, wall s) of ``omnibot ARGV`` run to its end."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    subprocess.run(
+        [sys.executable, "-m", "omnibot", *argv],
+        env=_env(src, cache),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        check=True,
+    )
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime), wall
+
+
+def _process_cpu(pid: int) -> float:
+    with open(f"/proc/{pid}/stat", encoding="ascii") as f:
+        stat = f.read()
+    fields = stat[stat.rfind(")") + 2 :].split()
+    return sum(int(v) for v in fields[11:15]) / TICK  # utime stime cutime cstime
+
+
+def pty_hello_cpu(src: Path, cache: str | None) -> tuple[float, float]:
+    """(CPU s, wall s) of ``omnibot sim --pty`` from its start to its first HELLO reply."""
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "omnibot", "sim", "--pty"],
+        env=_env(src, cache),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+        text=True,
+    )
+    try:
+        assert proc.stdout is not None
+        path = proc.stdout.readline().strip()
+        fd = os.open(path, os.O_RDWR | os.O_NOCTTY)
+        try:
+            os.write(fd, b"HELLO;\r\n")
+            seen = b""
+            while b"HELLO," not in seen:
+                ready, _, _ = select.select([fd], [], [], 60.0)
+                if not ready:
+                    raise RuntimeError(f"no HELLO reply from {path}: {seen!r}")
+                seen += os.read(fd, 1024)
+            wall = time.perf_counter() - t0
+            cpu = _process_cpu(proc.pid)
+        finally:
+            os.close(fd)
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(timeout=30)
+        if proc.stdout is not None:
+            proc.stdout.close()
+    return cpu, wall
+
+
+def best(runs: list[tuple[float, float]]) -> str:
+    cpu = min(c for c, _ in runs)
+    wall = min(w for _, w in runs)
+    return f"{cpu:6.2f} s CPU ({wall:5.2f} s wall)"
+
+
+def measure(src: Path, repeats: int) -> dict[str, str]:
+    out = {
+        "omnibot --help": best([command_cpu(src, ["--help"]) for _ in range(repeats)]),
+        "omnibot robot list": best([command_cpu(src, ["robot", "list"]) for _ in range(repeats)]),
+    }
+    cold_pty, warm_pty, cold_send, warm_send = [], [], [], []
+    for _ in range(repeats):
+        with tempfile.TemporaryDirectory(prefix="numba-cache-") as cache:
+            cold_pty.append(pty_hello_cpu(src, cache))
+            warm_pty.append(pty_hello_cpu(src, cache))
+        with tempfile.TemporaryDirectory(prefix="numba-cache-") as cache:
+            cold_send.append(command_cpu(src, ["send", "HELLO"], cache))
+            warm_send.append(command_cpu(src, ["send", "HELLO"], cache))
+    out["sim --pty: first HELLO, cold cache"] = best(cold_pty)
+    out["sim --pty: first HELLO, warm cache"] = best(warm_pty)
+    out["send HELLO (sim://), cold cache"] = best(cold_send)
+    out["send HELLO (sim://), warm cache"] = best(warm_send)
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument(
+        "--src",
+        action="append",
+        type=Path,
+        help="an omnibot source tree (repeat it to compare; default ./src)",
+    )
+    parser.add_argument(
+        "--repeats", type=int, default=3, help="fresh processes per case, best taken (default 3)"
+    )
+    args = parser.parse_args(argv)
+    sources = args.src or [ROOT / "src"]
+    results = {str(src): measure(src.resolve(), args.repeats) for src in sources}
+    for case in next(iter(results.values())):
+        print(f"{case:36s} " + " | ".join(r[case] for r in results.values()))
+    print("columns: " + " | ".join(results))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
