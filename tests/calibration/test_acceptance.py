@@ -136,11 +136,13 @@ def test_after_within_3_percent(outcome: tuple[CalibrationResult, Path, float]) 
             v is not None and c is not None and v <= c
             for c, v in zip(moves_.computed.values(), reach.speed, strict=True)
         )
-    # measured: wood 1.0 / 0.76 / 0.63 / 0.76 m/s, carpet 0.62 / 0.57 / 0.43 / 0.48 (computed from the
-    # PWM: wood 1.0 / 0.93 / 0.81 / 0.88, carpet 0.8 / 0.69 / 0.56 / 0.6)
+    # measured with a reach MOVE landing within 3 %: wood 1.0 / 0.76 / 0.63 / 0.76 m/s, carpet 0.74 /
+    # 0.6 / 0.45 / 0.49, where carpet's MOVE at 0.6 m/s on course 75 landed 3.2 % off in the check
+    # after 2.3 % in the reach step; within 2 % (Plan.reach_goal, now) carpet 0.66 / 0.51 / 0.35 /
+    # 0.49 (computed from the PWM: wood 1.0 / 0.93 / 0.81 / 0.88, carpet 0.8 / 0.69 / 0.56 / 0.6)
     assert wood.spec.reach is not None and carpet.spec.reach is not None
     assert wood.spec.reach(0.0) >= 0.9 and 0.55 <= wood.spec.reach(30.0) <= 0.72
-    assert carpet.spec.reach(0.0) < 0.8 and 0.4 <= carpet.spec.reach(30.0) < carpet.spec.reach(0.0)
+    assert carpet.spec.reach(0.0) < 0.8 and 0.3 <= carpet.spec.reach(30.0) < carpet.spec.reach(0.0)
     for session in (wood, carpet):
         surface = session.surface
         after = rows(result, f"after ({surface} calibration), {surface}")
