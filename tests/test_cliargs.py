@@ -74,7 +74,7 @@ def test_simulator_options_are_refused_with_a_port() -> None:
 
 def test_outputs_are_checked_before_anything_runs(tmp_path: Path) -> None:
     check_writable(tmp_path / "x.csv", "--path")
-    with pytest.raises(ConfigError, match="--path: cannot write .*: no directory"):
+    with pytest.raises(ConfigError, match=r"--path: cannot write .*: no directory"):
         check_writable(tmp_path / "new" / "deeper" / "x.csv", "--path")  # a typo is not made
     assert not (tmp_path / "new").exists() and not (tmp_path / "x.csv").exists()
     blocker = tmp_path / "file"
