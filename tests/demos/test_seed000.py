@@ -11,7 +11,7 @@ import pytest
 
 from omnibot.cli import main
 from omnibot.demos import seed000
-from omnibot.demos.seed000 import run_demo
+from omnibot.demos.seed000 import run_demo, with_world
 
 
 def achieved(report: str, example: int) -> str:
@@ -95,3 +95,37 @@ def test_the_odometry_trail_starts_at_the_start_pose() -> None:
     trail = recorder.odo_trail
     assert trail[0] == (1.0, 1.0) and (0.0, 0.0) not in trail
     assert trail[-1][0] > 1.0 and abs(trail[-1][1] - 1.0) < 1e-9  # then it moves on from there
+
+
+def test_demo_on_a_sim_port_without_a_world_has_its_wall_and_turns_the_short_way(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """sim://omni4 names no world: the demo's own (the room) is used, so the rotation faces a wall
+    and the sonar approach ends in its emergency stop; the rotation is never more than half a turn,
+    and the heading it aims at is printed wrapped (the spins before leave it at -500 degrees)."""
+    assert main(["demo", "--port", "sim://omni4", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "sim://omni4?world=room" in out
+    line = next(x for x in out.splitlines() if "rotate to face the wall" in x)
+    turn = float(line.split("ROTATE,")[1].split(",")[0])
+    assert abs(turn) <= 180
+    aim = out.split(line)[1].splitlines()[1]
+    assert "commanded: heading" in aim and -180 <= float(aim.split("heading ")[1].split(" deg")[0]) <= 180
+
+
+def test_a_sim_port_keeps_the_world_it_names() -> None:
+    assert with_world("sim://omni4", "room") == "sim://omni4?world=room"
+    assert with_world("spy+sim://omni4?seed=2", "room") == "spy+sim://omni4?seed=2&world=room"
+    assert with_world("sim://omni4?world=empty", "room") == "sim://omni4?world=empty"
+    assert with_world("sim://omni4?fleet=a", "room") == "sim://omni4?fleet=a"
+    assert with_world("/dev/ttyUSB0", "room") == "/dev/ttyUSB0"
+
+
+def test_demo_in_a_world_without_walls_says_the_example_needs_one(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    main(["demo", "--port", "sim://omni4?world=empty", "--out", str(tmp_path)])
+    out = capsys.readouterr().out
+    assert "no wall known; facing a wall needs a world with walls" in out
+    line = next(x for x in out.splitlines() if "rotate to face the wall" in x)
+    assert abs(float(line.split("ROTATE,")[1].split(",")[0])) <= 180
