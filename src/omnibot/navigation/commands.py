@@ -270,7 +270,11 @@ def add_follow_arguments(p: argparse.ArgumentParser) -> None:
     """The ``omnibot follow`` options: path file, follower, robot or port, estimator and tolerances."""
     from omnibot.navigation.metrics import Tolerances
 
-    p.add_argument("path", help="path file: CSV t,x,y,theta[,v] (s, m, m, rad, m/s)")
+    p.add_argument(
+        "path",
+        help="path file: CSV t,x,y,theta[,v] (s, m, m, rad, m/s); x,y alone: the body faces the path's "
+        "tangent, the times come from the speed profile",
+    )
     p.add_argument(
         "--follower", default="tracker", help="seed002, seed002-plain, pure_pursuit or tracker (default)"
     )
