@@ -261,3 +261,16 @@ def test_a_command_that_could_not_start_exits_2_with_one_line(
     assert main([a.format(**names) for a in argv]) == 2
     err = capsys.readouterr().err
     assert err.startswith("omnibot: error: ") and err.count("\n") == 1, err
+
+
+def test_send_takes_options_among_its_commands_and_keeps_their_order(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    argv = ["send", "STATUS;", "--port", "sim://omni4", "MOVE,2,40,0,0;", "--timeout", "2", "STOP;"]
+    assert main(argv) == 0
+    sent = [line for line in capsys.readouterr().out.splitlines() if line.startswith("-> ")]
+    assert sent == ["-> STATUS", "-> MOVE,2,40,0,0", "-> STOP"]
+    with pytest.raises(SystemExit) as exit_:
+        main(["send", "STATUS;", "--prot", "sim://omni4"])
+    assert exit_.value.code == 2
+    assert "unrecognized arguments: --prot sim://omni4" in capsys.readouterr().err
