@@ -225,3 +225,52 @@ def test_a_full_standard_output_is_a_one_line_error() -> None:
         )
     assert proc.returncode == 2
     assert proc.stderr == "omnibot: error: cannot write the output: No space left on device\n"
+
+
+WALLED = "name: walled\nwalls:\n  - {shape: rectangle, min: [-0.01, -0.01], max: [3.0, 3.0]}\n"
+"""A world without a start of its own whose wall runs through the origin, where the robot would stand."""
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["record", "--path", "{tmp}/r.csv", "--world", "{walled}"],
+        ["follow", "{path}", "--world", "{walled}"],
+        ["run", "--follow", "{path}", "--world", "{walled}", "--duration", "1"],
+        ["calibrate", "--world", "{walled}", "--out", "{tmp}/cal"],
+        ["send", "STATUS;", "--port", "sim://omni4?world={walled}"],
+        ["demo", "--world", "{walled}", "--out", "{tmp}/demo"],
+        ["demo", "--robot", "{tmp}/bad.yaml", "--out", "{tmp}/demo"],
+        ["send", "STATUS;", "--port", "{tmp}/no-such-port"],
+        ["send", "STATUS;", "--port", "sim://omni4", "--robot", "omni3"],
+        ["follow", "{tmp}/missing.csv"],
+    ],
+)
+def test_a_command_that_could_not_start_exits_2_with_one_line(
+    argv: list[str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """README: 2 it could not start (bad arguments or files, the wrong robot, a link that cannot be
+    opened). A start pose in a wall (SimulationError) and an emulator that did not start (LinkError)
+    were failed runs, exit 1."""
+    from omnibot.control.paths import standard_path, write_path
+
+    (tmp_path / "walled.yaml").write_text(WALLED)
+    (tmp_path / "bad.yaml").write_text("name: bad\nwheels: 3\n")
+    write_path(standard_path("line", size=0.5), tmp_path / "path.csv")
+    names = {"tmp": tmp_path, "walled": tmp_path / "walled.yaml", "path": tmp_path / "path.csv"}
+    assert main([a.format(**names) for a in argv]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("omnibot: error: ") and err.count("\n") == 1, err
+
+
+def test_send_takes_options_among_its_commands_and_keeps_their_order(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    argv = ["send", "STATUS;", "--port", "sim://omni4", "MOVE,2,40,0,0;", "--timeout", "2", "STOP;"]
+    assert main(argv) == 0
+    sent = [line for line in capsys.readouterr().out.splitlines() if line.startswith("-> ")]
+    assert sent == ["-> STATUS", "-> MOVE,2,40,0,0", "-> STOP"]
+    with pytest.raises(SystemExit) as exit_:
+        main(["send", "STATUS;", "--prot", "sim://omni4"])
+    assert exit_.value.code == 2
+    assert "unrecognized arguments: --prot sim://omni4" in capsys.readouterr().err

@@ -73,10 +73,45 @@ def test_simulator_options_are_refused_with_a_port() -> None:
 
 
 def test_outputs_are_checked_before_anything_runs(tmp_path: Path) -> None:
-    check_writable(tmp_path / "new" / "deeper" / "x.csv", "--path")  # made later: fine
+    check_writable(tmp_path / "x.csv", "--path")
+    with pytest.raises(ConfigError, match=r"--path: cannot write .*: no directory"):
+        check_writable(tmp_path / "new" / "deeper" / "x.csv", "--path")  # a typo is not made
+    assert not (tmp_path / "new").exists() and not (tmp_path / "x.csv").exists()
     blocker = tmp_path / "file"
     blocker.write_text("")
     with pytest.raises(ConfigError, match="--path: cannot write"):
         check_writable(blocker / "x.csv", "--path")
     with pytest.raises(ConfigError, match="is a directory"):
         check_writable(tmp_path, "--path")
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["record", "--path", "{missing}/taught.csv"],
+        ["record", "--path", "{tmp}/taught.csv", "--log", "{missing}/run.mcap"],
+        ["send", "STATUS;", "--log", "{missing}/run.mcap"],
+        ["follow", "{tmp}/path.csv", "--report", "{missing}/r.json"],
+    ],
+)
+def test_an_output_in_a_missing_directory_is_refused_before_the_robot_moves(
+    argv: list[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """record --path, --log, follow's outputs: one line, status 2, before any robot is opened; no
+    directory made, no (empty) file left behind."""
+    from omnibot.cli import main
+    from omnibot.client import session
+    from omnibot.control.paths import standard_path, write_path
+    from omnibot.navigation import session as nav_session
+
+    def no_robot(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a robot was opened")
+
+    monkeypatch.setattr(nav_session, "simulated_client", no_robot)
+    monkeypatch.setattr(session, "open_robot", no_robot)
+    write_path(standard_path("line", size=0.5), tmp_path / "path.csv")
+    missing = tmp_path / "missing"
+    assert main([a.format(missing=missing, tmp=tmp_path) for a in argv]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("omnibot: error: ") and "no directory" in err and err.count("\n") == 1
+    assert not missing.exists() and not (tmp_path / "taught.csv").exists()

@@ -361,7 +361,8 @@ def _add_send(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         description="Sends each command (text protocol, several per argument with ';') and prints the "
         "replies and events. Exit status 0 if every reply is OK, 1 if any is an ERROR or the link "
         "fails, 2 for bad input. Motion sent is left running when send ends normally (STOP on an "
-        "error or interrupt); the protocol goes back to text.",
+        "error or interrupt); the protocol goes back to text. Options may go anywhere among the "
+        "commands (send STATUS --port URL 'MOVE,2,40,0,0'); the commands are sent in the order given.",
     )
     p.add_argument(
         "commands", nargs="+", metavar="COMMANDS", help="protocol text, e.g. 'MOVE,2,40,0,0;STATUS'"
@@ -371,7 +372,7 @@ def _add_send(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument("--wait-idle", action="store_true", help="after the replies, wait for IDLE")
     p.add_argument("--idle-timeout", type=float, default=60.0, help="seconds --wait-idle waits (default 60)")
     p.add_argument("--binary", action="store_true", help="speak the binary protocol (MODE bit 2)")
-    p.set_defaults(handler=_send)
+    p.set_defaults(handler=_send, intermixed="commands")
 
 
 def _console(args: argparse.Namespace) -> int:
@@ -681,7 +682,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     from omnibot.signals import Terminated, terminate_cleanly
 
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    intermixed = getattr(args, "intermixed", None)
+    if extra and intermixed and not any(e.startswith("-") for e in extra):
+        # `send CMD --port URL CMD2`: options anywhere, the commands kept in the order given
+        getattr(args, intermixed).extend(extra)
+    elif extra:
+        parser.error(f"unrecognized arguments: {' '.join(extra)}")
     handler: Handler = args.handler
     if sys.stdout is None:  # started with its standard output closed (`>&-`): what it says would be lost
         print(

@@ -188,17 +188,19 @@ def check_sim_options(args: argparse.Namespace, allowed: Sequence[str] = ()) -> 
 
 def check_writable(path: str | Path | None, flag: str) -> None:
     """Refuse, before any robot moves, an output file that could not be written: its directory must
-    exist (or be makeable) and be writable, and it must not be a directory."""
+    exist (none is made: a mistyped directory is a mistake to report, not to create) and be writable,
+    it must not be a directory, and an existing file must be writable. Nothing is created here, so a
+    run that fails later leaves no empty file behind."""
     if path is None:
         return
     target = Path(path)
     if target.is_dir():
         raise ConfigError(f"{target} is a directory; give the file to write", key=flag)
     parent = target.parent
-    while not parent.exists() and parent != parent.parent:
-        parent = parent.parent
-    if not parent.is_dir() or not os.access(parent, os.W_OK):
-        raise ConfigError(f"cannot write {target}: {parent} is not a writable directory", key=flag)
+    if not parent.is_dir():
+        raise ConfigError(f"cannot write {target}: no directory {parent}", key=flag)
+    if not os.access(parent, os.W_OK | os.X_OK) or (target.exists() and not os.access(target, os.W_OK)):
+        raise ConfigError(f"cannot write {target}: permission denied", key=flag)
 
 
 def check_distinct(

@@ -6,6 +6,8 @@
      +-- ConfigError              a robot description, world or config file is wrong (names the key)
      +-- KinematicsError          a wheel layout cannot do what was asked (e.g. not holonomic)
      +-- SimulationError          the simulator was given something it cannot simulate
+     |    +-- SimulationSetupError  ... when built: a start pose in a wall, a bad dt (also a
+     |                              ConfigError: the command could not start, exit status 2)
      +-- ProtocolError            bytes or a message that do not follow the protocol
      +-- LinkError                a byte link failed (port gone, refused, closed)
      |    +-- LinkTimeout         nothing arrived in time
@@ -40,6 +42,11 @@ class KinematicsError(OmnibotError, ValueError):
 
 class SimulationError(OmnibotError):
     """The simulator was asked for something it cannot simulate."""
+
+
+class SimulationSetupError(SimulationError, ConfigError):
+    """The simulator cannot be built as asked (its world, start pose, step): what was given is wrong,
+    so the command could not start (a ConfigError: exit status 2, not a run that failed)."""
 
 
 class ProtocolError(OmnibotError, ValueError):

@@ -37,6 +37,14 @@ def test_columns_in_any_order_comments_and_blank_lines() -> None:
     assert p.length == pytest.approx(math.hypot(1.0, 0.2))
 
 
+def test_x_y_alone_is_a_path_facing_its_tangent_timed_by_the_profile() -> None:
+    p = parse_path("x,y\n0,0\n1,0\n1,1\n0,1\n")
+    assert p.t is None and p.v is None
+    np.testing.assert_allclose(p.theta, [0.0, math.pi / 4, 3 * math.pi / 4, math.pi])
+    assert parse_path("t,x,y\n0,0,0\n1,0,1\n").theta.tolist() == pytest.approx([math.pi / 2] * 2)
+    assert parse_path("x,y,theta\n0,0,0.3\n1,0,0.3\n").t is None
+
+
 def test_heading_is_unwrapped() -> None:
     p = parse_path("t,x,y,theta\n0,0,0,3.1\n1,1,0,-3.1\n")
     assert p.theta[1] == pytest.approx(2 * math.pi - 3.1)
@@ -46,7 +54,7 @@ def test_heading_is_unwrapped() -> None:
     ("text", "message"),
     [
         ("", "empty file; expected the header t,x,y,theta[,v]"),
-        ("t,x,y\n0,0,0\n1,1,1\n", "line 1: missing column(s) theta"),
+        ("t,x,theta\n0,0,0\n1,1,1\n", "line 1: missing column(s) y"),
         ("t,x,y,thetta\n", "line 1: unknown column 'thetta'; did you mean 'theta'?"),
         ("t,x,y,theta,x\n", "line 1: column 'x' appears twice"),
         ("t,x,y,theta\n0,0,0,0\n1,1,abc,0\n", "line 3, column y: 'abc' is not a number"),

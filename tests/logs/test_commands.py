@@ -120,9 +120,11 @@ def test_bad_files_are_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[st
     assert main(["log", "info", str(tmp_path / "x.mcap")]) == 2
     err = capsys.readouterr().err
     assert "no log file" in err and "is not an MCAP file" in err and "Traceback" not in err
-    assert main(["send", "--log", str(tmp_path / "no" / "dir" / "x.mcap"), "STATUS"]) == 0  # made
+    assert main(["send", "--log", str(tmp_path / "no" / "dir" / "x.mcap"), "STATUS"]) == 2  # not made
+    assert not (tmp_path / "no").exists()
     assert main(["send", "--log", str(tmp_path), "STATUS"]) == 2
-    assert "is a directory" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "no directory" in err and "is a directory" in err
 
 
 def test_plot_of_a_log_without_telemetry_says_no_data(

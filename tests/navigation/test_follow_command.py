@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path as FsPath
 from typing import Any
 
@@ -178,3 +179,12 @@ def test_calibrate_then_follow_on_carpet(tmp_path: FsPath) -> None:
         assert main([*follow, *extra]) == 0
         rms[label] = json.loads(out.read_text())["rms_cross_track_m"]
     assert rms["raw"] > 0.015 and rms["calibrated"] < 0.3 * rms["raw"]
+
+
+def test_follow_a_csv_of_x_y_only(tmp_path: FsPath, capsys: pytest.CaptureFixture[str]) -> None:
+    """x,y rows, as a spreadsheet or another planner writes them: the body faces the tangent, the
+    times come from the speed profile."""
+    points = tmp_path / "xy.csv"
+    points.write_text("x,y\n" + "".join(f"{0.1 * k:.2f},{0.2 * math.sin(0.5 * k):.4f}\n" for k in range(11)))
+    assert main(["follow", str(points)]) == 0
+    assert "completed" in capsys.readouterr().out

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path as FsPath
+from typing import Any
 
 import pytest
 
@@ -81,3 +82,30 @@ def test_teach_drive_is_a_script_on_the_runtime(monkeypatch: pytest.MonkeyPatch)
     assert len(runtimes) == 1 and drivers.sources == {"drive"}
     assert runtimes[0].sent.vel > 100 and runtimes[0].sent.errors == 0
     assert result.path is not None and result.path.length == pytest.approx(0.6, rel=0.05)
+
+
+@pytest.mark.parametrize("world", ["room", "corridor"])
+def test_record_and_follow_in_a_world_start_at_its_start(
+    world: str, tmp_path: FsPath, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A world with walls has its own start pose: the robot stands there, not at the origin (which
+    is inside the room's wall), and a path is followed in its own frame from there."""
+    from omnibot.sim import device
+    from omnibot.sim.world import load_world
+
+    starts: list[tuple[float, float, float]] = []
+
+    class Spy(device.SimDevice):
+        def __init__(self, *args: Any, **kwargs: Any) -> None:
+            super().__init__(*args, **kwargs)
+            p = self.sim.pose
+            starts.append((p.x, p.y, p.theta))
+
+    monkeypatch.setattr(device, "SimDevice", Spy)
+    taught = tmp_path / "taught.csv"
+    argv = ["record", "--world", world, "--path", str(taught), "--shape", "line", "--size", "0.5"]
+    assert main(argv) == 0
+    assert main(["follow", str(taught), "--world", world]) == 0
+    home = load_world(world).start
+    assert home is not None
+    assert starts == [pytest.approx((home.x, home.y, home.theta))] * 2

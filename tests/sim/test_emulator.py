@@ -17,7 +17,7 @@ import serial
 
 from omnibot.cli import main
 from omnibot.client.client import RobotClient
-from omnibot.errors import LinkError
+from omnibot.errors import ConfigError
 from omnibot.sim.emulator import PARENT_ENV, spawn_pty_emulator
 
 
@@ -252,17 +252,18 @@ def test_a_slow_start_is_announced_and_a_stuck_one_ends_in_a_clear_error(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """With no numba cache the child compiles for seconds: the wait is announced after one second,
-    and a start that takes longer than allowed is a LinkError (the child is ended, not left behind)."""
+    and a start that takes longer than allowed is a ConfigError: the command could not start (exit
+    status 2; the child is ended, not left behind)."""
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))
     notices: list[str] = []
-    stuck = pytest.raises(LinkError, match=r"printed no device path within 1\.5 s")
+    stuck = pytest.raises(ConfigError, match=r"printed no device path within 1\.5 s")
     with stuck, spawn_pty_emulator("omni4", notice=notices.append, start_timeout=1.5):
         pass
     assert len(notices) == 1 and notices[0].startswith("starting the simulated omni4 (omnibot sim --pty;")
 
 
 def test_a_child_that_fails_to_start_reports_its_error() -> None:
-    failed = pytest.raises(LinkError, match="did not start: omnibot: error: unknown robot 'omni7'")
+    failed = pytest.raises(ConfigError, match="did not start: unknown robot 'omni7'")
     with failed, spawn_pty_emulator("omni7"):
         pass
 

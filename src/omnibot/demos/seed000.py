@@ -261,12 +261,11 @@ class Demo:
         here = self.best_pose()
         heading = here.theta if here else 0.0
         target = self._face_nearest_wall(here)
-        turn = wrap(target - heading)
-        with self.segment(
-            "rotate to face the wall",
-            f"ROTATE,{math.degrees(turn):.0f},90",
-            f"heading {math.degrees(target):.0f} deg",
-        ) as seg:
+        turn = wrap(target - heading)  # the short way: the heading is unwrapped after the spins
+        aim = f"heading {math.degrees(wrap(target)):.0f} deg"
+        if not self._walls_known():
+            aim += " (turn around: no wall known; facing a wall needs a world with walls)"
+        with self.segment("rotate to face the wall", f"ROTATE,{math.degrees(turn):.0f},90", aim) as seg:
             c.rotate(turn, math.radians(90))
             c.wait_idle(timeout=10)
         if got := self.best(seg):
@@ -341,6 +340,9 @@ class Demo:
         if isinstance(self.truth, TruthSource):
             return [(x, y) for _, x, y, _ in self.truth.rows()[seg.rows[0] : seg.rows[1]]]
         return []
+
+    def _walls_known(self) -> bool:
+        return isinstance(self.truth, TruthSource) and self.truth.bounds is not None
 
     def _face_nearest_wall(self, here: Pose2D | None) -> float:
         """Heading that points at the nearest wall of the room the truth comes from (else: backwards)."""
@@ -449,13 +451,16 @@ def run_demo(
     """Run the demo; returns the printed report and whether every example did what it should.
 
     ``port`` None: ``omnibot sim --pty`` of ``robot_name`` (default omni4) in ``world``, truth from its
-    CSV. A ``sim://`` port: the in-process simulator, truth from it. Anything else (a real board):
+    CSV. A ``sim://`` port: the in-process simulator, truth from it, in ``world`` unless the URL names
+    its own (:func:`with_world`). Anything else (a real board):
     odometry only. The robot is the one on the link (``robot_name``, if given, must name it); the
     session leaves the controller stopped and in the MODE it was found in, however the demo ends.
     """
     from omnibot.client.session import robot_session
     from omnibot.sim.world import load_world
 
+    if port is not None:
+        port = with_world(port, world)
     out.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
         truth_file = TruthFile(Path(tmp) / "truth.csv") if port is None else None
@@ -508,6 +513,19 @@ def run_demo(
     verdict = f"\nNOT DONE: {'; '.join(failed)}" if failed else ""
     files = "  ".join(written)
     return f"{header}\n\n{format_table(segments)}\n\nwrote: {files}  ({wall:.1f} s){verdict}", not failed
+
+
+def with_world(port: str, world: str) -> str:
+    """A ``sim://`` ``port`` that names no world (and is no fleet's robot) gets the demo's ``world``:
+    its examples face a wall and approach it with the sonar, which the simulator's default empty
+    floor does not have. Any other URL is returned as it is."""
+    base, _, query = port.partition("?")
+    if not base.split("+")[-1].startswith("sim://"):
+        return port
+    names = {option.partition("=")[0].rpartition(".")[2] for option in query.split("&") if option}
+    if names & {"world", "fleet"}:
+        return port
+    return f"{port}{'&' if query else '?'}world={world}"
 
 
 @contextmanager

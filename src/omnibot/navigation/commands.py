@@ -45,7 +45,9 @@ def _positive(value: float, flag: str) -> float:
 @contextlib.contextmanager
 def _robot_client(args: argparse.Namespace, start: Any = None) -> Iterator[tuple[Any, Any]]:
     """(client, robot): ``--port``'s robot (checked against ``--robot``), or the simulated ``--robot``
-    standing at ``start``; the controller is left as it was found on every way out."""
+    in ``--world``: standing at the world's own start where it has one (``room``, ``corridor``), else
+    at ``start`` (``follow``: the path's start), else at the origin; the controller is left as it was
+    found on every way out."""
     from omnibot.client.session import guarded, robot_session
     from omnibot.navigation.session import simulated_client
     from omnibot.robot.description import load_robot
@@ -55,10 +57,13 @@ def _robot_client(args: argparse.Namespace, start: Any = None) -> Iterator[tuple
             yield session.client, session.robot
         return
     from omnibot.cliargs import check_world
+    from omnibot.sim.world import load_world
 
     check_world(args)
     robot = load_robot(sim_robot(args))
     world = world_of(args)
+    if load_world(world).start is not None:
+        start = None  # the world's start: a path is followed in its own frame from where the robot stands
     client = simulated_client(
         robot,
         surface=args.surface,
@@ -265,7 +270,11 @@ def add_follow_arguments(p: argparse.ArgumentParser) -> None:
     """The ``omnibot follow`` options: path file, follower, robot or port, estimator and tolerances."""
     from omnibot.navigation.metrics import Tolerances
 
-    p.add_argument("path", help="path file: CSV t,x,y,theta[,v] (s, m, m, rad, m/s)")
+    p.add_argument(
+        "path",
+        help="path file: CSV t,x,y,theta[,v] (s, m, m, rad, m/s); x,y alone: the body faces the path's "
+        "tangent, the times come from the speed profile",
+    )
     p.add_argument(
         "--follower", default="tracker", help="seed002, seed002-plain, pure_pursuit or tracker (default)"
     )

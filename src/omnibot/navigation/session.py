@@ -55,14 +55,13 @@ def simulated_client(
     start: Pose2D | None = None,
     world: str | None = None,
 ) -> RobotClient:
-    """A client on the lockstep simulator (firmware + physics) with the robot standing at ``start``."""
+    """A client on the lockstep simulator (firmware + physics) with the robot standing at ``start``
+    (None: at the world's own start, the origin in a world without one)."""
     from omnibot.sim.device import SimDevice
     from omnibot.transport.lockstep import LockstepLink
 
-    pose = start or Pose2D(0.0, 0.0, 0.0)
-    device = SimDevice(
-        robot, surface=surface, world=world, seed=seed, start_pose=(pose.x, pose.y, pose.theta)
-    )
+    pose = None if start is None else (start.x, start.y, start.theta)
+    device = SimDevice(robot, surface=surface, world=world, seed=seed, start_pose=pose)
     query = f"seed={seed}" + (f"&surface={surface}" if surface else "") + (f"&world={world}" if world else "")
     link = LockstepLink(device, url=f"sim://{robot.name}?{query}")
     return RobotClient(link, robot)

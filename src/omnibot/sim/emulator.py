@@ -37,7 +37,7 @@ from pathlib import Path
 from types import FrameType
 from typing import Any, TextIO, cast
 
-from omnibot.errors import ConfigError, LinkError
+from omnibot.errors import ConfigError
 from omnibot.lidar.reader import ScanningSim
 from omnibot.lidar.rplidar_device import A1, RplidarDevice, model_named
 from omnibot.motion import Pose2D
@@ -296,6 +296,12 @@ START_TIMEOUT = 120.0
 the physics: seconds on a quiet machine, tens on a loaded one)."""
 
 
+def _one_line(stderr: str) -> str:
+    """What a child ``omnibot`` said on stderr, as one line (its ``omnibot: error:`` prefix dropped)."""
+    lines = [line.strip().removeprefix("omnibot: error: ") for line in stderr.splitlines() if line.strip()]
+    return "; ".join(lines).replace(":; ", ": ") or "it said nothing"
+
+
 @contextmanager
 def spawn_pty_emulator(
     robot: str,
@@ -309,8 +315,8 @@ def spawn_pty_emulator(
     started: Callable[[int], object] | None = None,
 ) -> Iterator[str]:
     """Run ``omnibot sim --pty`` as a child process and yield its device path; on exit SIGINT it,
-    wait for it (killing it if it hangs) and close its files. LinkError if it does not start within
-    ``start_timeout`` s. ``notice`` (e.g. a line on a terminal) hears what is being waited for when
+    wait for it (killing it if it hangs) and close its files. ConfigError (the command could not
+    start) if it does not start within ``start_timeout`` s. ``notice`` (e.g. a line on a terminal) hears what is being waited for when
     the start takes longer than a second; ``started`` hears the child's process id once it runs. The
     child's stderr goes to a temporary file (read for the error when it fails), so that however much
     it writes there it never blocks.
@@ -348,13 +354,14 @@ def spawn_pty_emulator(
                         f"physics, up to {start_timeout:.0f} s)..."
                     )
                 ready, _, _ = select.select([proc.stdout], [], [], max(start_timeout - 1.0, 0.0))
+            # the emulator is the link: if it does not start, the command could not (ConfigError)
             if not ready:
-                raise LinkError(f"the pty emulator printed no device path within {start_timeout:g} s")
+                raise ConfigError(f"the pty emulator printed no device path within {start_timeout:g} s")
             path = proc.stdout.readline().strip()
             if not path:  # its stdout closed: it is ending
                 proc.wait(timeout=10)
                 err.seek(0)
-                raise LinkError(f"the pty emulator did not start: {err.read().strip()}")
+                raise ConfigError(f"the pty emulator did not start: {_one_line(err.read())}")
             yield path
         finally:
             if proc.poll() is None:

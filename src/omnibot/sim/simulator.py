@@ -56,7 +56,7 @@ from typing import IO, Any, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from omnibot.errors import SimulationError
+from omnibot.errors import SimulationError, SimulationSetupError
 from omnibot.motion import Pose2D, Twist
 from omnibot.robot.description import RobotDescription
 from omnibot.scan import Scan
@@ -288,7 +288,7 @@ class Simulator:
         self.seed = seed
         dt_us = round(dt * 1e6)
         if dt_us <= 0 or abs(dt_us - dt * 1e6) > 1e-6:
-            raise SimulationError(f"dt must be a positive whole number of microseconds, got {dt} s")
+            raise SimulationSetupError(f"dt must be a positive whole number of microseconds, got {dt} s")
         self._dt_us = dt_us
         self.dt = dt_us / 1e6
         self.clock = clock or SimClock()
@@ -301,14 +301,16 @@ class Simulator:
         known = [s.name for s in self._physics.surfaces]
         missing = [s for s in self.world.surface_names if s not in known]
         if missing:
-            raise SimulationError(f"world '{self.world.name}' uses surfaces the physics lacks: {missing}")
+            raise SimulationSetupError(
+                f"world '{self.world.name}' uses surfaces the physics lacks: {missing}"
+            )
         self._surface_map = np.array([known.index(s) for s in self.world.surface_names], dtype=np.int64)
         self._floor_ids = np.full((1, robot.n_wheels), self._surface_map[0], dtype=np.int64)
 
         given = start_pose if start_pose is not None else self.world.start or Pose2D(0.0, 0.0, 0.0)
         start = (given.x, given.y, given.theta) if isinstance(given, Pose2D) else tuple(given)
         if len(start) != 3:
-            raise SimulationError(f"start_pose is (x, y, theta), got {start}")
+            raise SimulationSetupError(f"start_pose is (x, y, theta), got {start}")
         self._physics.reset(pose=np.array([start], dtype=float))
         # views of robot 0's state: the physics updates its arrays in place
         self._pose_row = self._physics.pose[0]
@@ -374,7 +376,7 @@ class Simulator:
         x, y, th = self._pose_row.tolist()
         touching = self._find_contacts(x, y, th)
         if touching >= 0:
-            raise SimulationError(
+            raise SimulationSetupError(
                 f"start pose {tuple(float(c) for c in start)} overlaps {self.world.contact_owners[touching]} "
                 f"of world '{self.world.name}'"
             )

@@ -443,15 +443,11 @@ class RobotLink:
             self._reset = True  # set telemetry and sonars up again at the next tick (not inside a pump)
 
     def _pose(self) -> tuple[float, float, float] | None:
-        return self._truth() or (
-            None
-            if self.tracker.odometry is None
-            else (
-                self.tracker.odometry.pose.x,
-                self.tracker.odometry.pose.y,
-                self.tracker.odometry.pose.theta,
-            )
-        )
+        estimator = self.tracker.estimator
+        if (truth := self._truth()) is not None or estimator is None:
+            return truth
+        e = estimator.estimate
+        return (e.x, e.y, e.theta)
 
     def _truth(self) -> tuple[float, float, float] | None:
         if self._device is None:

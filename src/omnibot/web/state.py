@@ -3,7 +3,10 @@
 :class:`StateTracker` is a client listener (it runs in the link thread) plus :meth:`frame`, which
 builds one ``state`` frame (JSON-ready, SI units). Wheel speeds come from encoder count differences
 over the controller's own time stamps; the pose is the simulator's ground truth on ``sim://`` and
-wheel odometry (with the gyro's heading) on a real robot.
+the robot's estimate on a real robot: the ``fused`` estimator the followers use
+(:mod:`omnibot.estimation.estimator`), whose heading filter learns the gyro's bias whenever the wheels
+stand still and takes it out. The ``heading`` chart shows that heading too: the controller's raw gyro
+sum (TEL's heading) drifts by the bias, about 0.6-0.8 degree/s, on a robot standing still.
 """
 
 from __future__ import annotations
@@ -15,7 +18,7 @@ from typing import Any
 
 from omnibot.client.events import Telemetry
 from omnibot.errors import ConfigError
-from omnibot.estimation.odometry import WheelOdometry
+from omnibot.estimation.estimator import Estimator, make_estimator
 from omnibot.motion import Pose2D
 from omnibot.protocol import codes
 from omnibot.robot.battery import battery_level
@@ -61,9 +64,9 @@ class StateTracker:
         cpr = {e.wheel: e.counts_per_rev for e in robot.encoders.motors}
         self._rad_per_count = [2 * math.pi / cpr[w.name] if w.name in cpr else 0.0 for w in robot.wheels]
         try:
-            self.odometry: WheelOdometry | None = WheelOdometry(robot, start)
-        except ConfigError:  # not every wheel has an encoder
-            self.odometry = None
+            self.estimator: Estimator | None = make_estimator("fused", robot, start)
+        except ConfigError:  # no sensors to estimate from
+            self.estimator = None
         self._prev: tuple[float, tuple[int, ...]] | None = None
 
     def __call__(self, tel: Telemetry) -> None:
@@ -80,8 +83,8 @@ class StateTracker:
                     for c, p, k in zip(tel.encoders, self._prev[1], self._rad_per_count, strict=False)
                 ]
         self._prev = (tel.controller_time, tel.encoders)
-        if self.odometry is not None and len(tel.encoders) == self.robot.n_wheels:
-            self.odometry.update(tel.encoders, tel.heading)
+        if self.estimator is not None and len(tel.encoders) == self.robot.n_wheels:
+            self.estimator.update(tel)
 
     def _battery_level(self, tel: Telemetry | None) -> str:
         """ok, low, limited, flat (the thresholds of the description; flat also while the controller
@@ -95,7 +98,7 @@ class StateTracker:
     ) -> dict[str, Any]:
         """One ``state`` frame: ``now`` on the link clock, ``truth`` the simulator's pose if any."""
         tel = self.last
-        odo = self.odometry.pose if self.odometry is not None else None
+        odo = self.estimator.estimate if self.estimator is not None else None
         if truth is not None:
             pose, source = truth, "truth"
         elif odo is not None:
@@ -111,7 +114,7 @@ class StateTracker:
             "odometry": None if odo is None else [_r(odo.x), _r(odo.y), _r(odo.theta)],
             "powers": None if tel is None or tel.powers is None else list(tel.powers),
             "wheel_speeds": None if self.wheel_speeds is None else [_r(v, 2) for v in self.wheel_speeds],
-            "heading": None if tel is None else _r(tel.heading),
+            "heading": None if tel is None else _r(odo.theta if odo is not None else tel.heading),
             "battery": None if tel is None else _r(tel.battery, 3),
             "battery_level": self._battery_level(tel),
             "ranges": None if tel is None or tel.ranges is None else [_r(r, 3) for r in tel.ranges],

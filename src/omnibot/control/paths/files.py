@@ -1,7 +1,10 @@
-"""Path files: CSV with the header ``t,x,y,theta`` and an optional ``v`` column.
+"""Path files: CSV with the header ``t,x,y,theta`` and an optional ``v`` column; ``x,y`` alone is a path too.
 
 Units: t in s, x and y in m, theta in rad (the body heading to hold), v in m/s (the speed to drive
-at that point, e.g. as taught). Columns may come in any order; blank lines and lines starting with
+at that point, e.g. as taught). Only ``x`` and ``y`` are required: without ``theta`` the body faces
+the path's tangent (the direction of travel, :func:`~omnibot.control.paths.path.tangent_headings`),
+without ``t`` the times come from the speed profile the follower plans (as they do anyway: ``t`` is
+kept, not driven by). Columns may come in any order; blank lines and lines starting with
 ``#`` are skipped. Rules: the header names each column once, no unknown columns; every row has one
 field per column, each a finite number within :data:`LIMITS` (a robot's path, not a typo of
 exponent: ``1e300`` would make the speed profile take gigabytes); t never decreases; v is not
@@ -22,11 +25,12 @@ from typing import IO
 
 import numpy as np
 
-from omnibot.control.paths.path import Path
+from omnibot.control.paths.path import Path, tangent_headings
 from omnibot.errors import ConfigError
 
-REQUIRED = ("t", "x", "y", "theta")
-OPTIONAL = ("v",)
+REQUIRED = ("x", "y")
+OPTIONAL = ("t", "theta", "v")
+HEADER = "t,x,y,theta[,v] (or x,y: the heading from the path's tangent)"
 LIMITS = {"t": (1e6, "s"), "x": (1e4, "m"), "y": (1e4, "m"), "theta": (1e4, "rad"), "v": (100.0, "m/s")}
 """Largest magnitude of each column: 10 km, 10,000 rad (1,600 turns), 11 days, 100 m/s."""
 
@@ -96,18 +100,19 @@ def _parse(stream: IO[str], label: str) -> Path:
                 )
             values.append(value)
     if header is None:
-        raise PathFileError(f"{label}: empty file; expected the header {','.join(REQUIRED)}[,v]")
+        raise PathFileError(f"{label}: empty file; expected the header {HEADER}")
     rows = len(columns["x"])
     if rows < 2:
         raise PathFileError(
             f"{label}: a path needs at least two rows after the header (line {header_line}), got {rows}"
         )
     arr = {k: np.array(v, dtype=float) for k, v in columns.items()}
-    return Path(arr["x"], arr["y"], arr["theta"], arr["t"], arr.get("v"))
+    theta = arr["theta"] if "theta" in arr else tangent_headings(arr["x"], arr["y"])
+    return Path(arr["x"], arr["y"], theta, arr.get("t"), arr.get("v"))
 
 
 def _check_header(header: list[str], label: str, line: int) -> None:
-    known = REQUIRED + OPTIONAL
+    known = ("t", "x", "y", "theta", "v")
     for h in header:
         if h not in known:
             close = difflib.get_close_matches(h, known, n=1, cutoff=0.5)
@@ -119,7 +124,7 @@ def _check_header(header: list[str], label: str, line: int) -> None:
     missing = [h for h in REQUIRED if h not in header]
     if missing:
         raise PathFileError(
-            f"{label}: line {line}: missing column(s) {','.join(missing)}; the header must be t,x,y,theta[,v]"
+            f"{label}: line {line}: missing column(s) {','.join(missing)}; the header must be {HEADER}"
         )
 
 
