@@ -283,7 +283,7 @@ def test_the_old_calibrate_spelling_still_works(
 def test_a_demo_whose_sonar_approach_found_no_wall_is_not_done(
     tmp_path: Path, harness: Harness, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    assert main(["demo", "--port", "sim://omni4", "--out", str(tmp_path)]) == 1  # the empty world
+    assert main(["demo", "--port", "sim://omni4?world=empty", "--out", str(tmp_path)]) == 1
     out = capsys.readouterr().out
     assert "NO emergency stop, no echo: nothing ahead of the robot" in out
     assert out.rstrip().endswith("NOT DONE: sonar approach, emergency stop")

@@ -6,6 +6,7 @@ received is decoded by rosbags. In a private network namespace (tests/ros2/netns
 from __future__ import annotations
 
 import json
+import re
 
 import pytest
 
@@ -168,7 +169,7 @@ def test_two_robots_in_one_process_each_in_its_namespace(url1: str, url2: str) -
     # the simulated controller reports its battery: published and in diagnostics
     assert result["battery_state"][0] == "r1/base_link" and 6.0 < result["battery_state"][1] < 13.0, result
     assert result["battery_state"][2:] == [True, True]
-    assert result["battery"][0].endswith(" V"), result["battery"]
+    assert re.fullmatch(r"\d+\.\d\d V: ok", result["battery"][0]), result["battery"]  # voltage, then level
     # each robot's diagnostics under its own name: one's "path completed" never reads as the other's
     names = {tuple(key) for key in result["diagnostics"]}
     for robot in ("r1", "r2"):
