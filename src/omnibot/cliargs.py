@@ -262,6 +262,13 @@ def sim_robot(args: argparse.Namespace) -> str:
     return str(robot) if robot else DEFAULT_ROBOT
 
 
+def simulated(args: argparse.Namespace) -> bool:
+    """The robot is the in-process simulator: no ``--port``, or a ``sim://`` one (behind any
+    ``spy+``/``faults+`` wrappers)."""
+    port = getattr(args, "port", None)
+    return port is None or str(port).split("+")[-1].startswith("sim:")
+
+
 def sim_url(args: argparse.Namespace) -> str:
     """``--port``, or the ``sim://`` URL of the simulated robot the options describe."""
     if getattr(args, "port", None):

@@ -74,7 +74,7 @@ def parse_pose(text: str, flag: str, *, theta: bool) -> tuple[float, float, floa
 
 def run(args: argparse.Namespace) -> int:
     """``omnibot goto``: the exit status."""
-    from omnibot.cliargs import check_sim_options, sim_url
+    from omnibot.cliargs import check_sim_options, sim_url, simulated
     from omnibot.client.session import robot_session
     from omnibot.mapping.mapfile import load_map
     from omnibot.mapping.planner import check_goal, inflate
@@ -89,12 +89,12 @@ def run(args: argparse.Namespace) -> int:
     if args.speed is not None and not (math.isfinite(args.speed) and args.speed > 0):
         raise ConfigError(f"expected a positive speed in m/s, got {args.speed}", key="--speed")
     check_sim_options(args)
-    simulated = args.port is None or args.port.startswith(("sim:", "spy+sim:", "faults+sim:"))
-    if args.scanner is not None and simulated:
+    on_sim = simulated(args)
+    if args.scanner is not None and on_sim:
         raise ConfigError(
             "the simulated robot's scanner is simulated: --scanner goes with --port", key="--scanner"
         )
-    if initial is None and not simulated:
+    if initial is None and not on_sim:
         raise ConfigError(
             "where does the robot stand in the map? give --initial-pose X,Y,THETA", key="--initial-pose"
         )
@@ -184,4 +184,5 @@ def _go(
         err = math.hypot(true.x - goal.x, true.y - goal.y)
         dth = math.degrees(abs(math.remainder(true.theta - goal.theta, math.tau)))
         _say(f"the simulator's truth: {err * 100:.1f} cm, {dth:.1f} degrees from the goal")
-    return 0 if result.arrived else 1
+    # arrival judged by a localiser that stopped is arrival by odometry alone: not what was asked
+    return 0 if result.arrived and (sink is None or sink.failure is None) else 1

@@ -101,7 +101,7 @@ def _say(text: str) -> None:
 
 
 def _check(args: argparse.Namespace) -> Path:
-    from omnibot.cliargs import output_dir
+    from omnibot.cliargs import output_dir, simulated
     from omnibot.ros2.command import check as check_ros2
 
     check_ros2(args)
@@ -113,7 +113,7 @@ def _check(args: argparse.Namespace) -> Path:
         raise ConfigError(f"expected a positive range in m, got {args.hit_range}", key="--hit-range")
     if args.speed is not None and not (math.isfinite(args.speed) and args.speed > 0):
         raise ConfigError(f"expected a positive speed in m/s, got {args.speed}", key="--speed")
-    if args.scanner is not None and (args.port is None or args.port.startswith(("sim:", "spy+sim:"))):
+    if args.scanner is not None and simulated(args):
         raise ConfigError(
             "the simulated robot's scanner is simulated: --scanner goes with --port", key="--scanner"
         )
