@@ -23,10 +23,9 @@ from omnibot.logs.sink import RuntimeRecorder
 from omnibot.protocol import codes
 from omnibot.runtime.runtime import Runtime
 from omnibot.scan import Scan
-from tests.logs.test_live import MESSAGE_DATA, SDK_RUNTIME
+from tests.logs.test_live import MESSAGE_DATA
 
 
-@pytest.mark.allow_leaks(SDK_RUNTIME)
 def test_a_websocket_client_gets_the_live_scans() -> None:
     live = FoxgloveLive(0)
     rec = Recorder(None, mirrors=[live])

@@ -19,7 +19,6 @@ from omnibot.motion import Twist
 from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.runtime import Runtime
 from omnibot.runtime.sources import ScriptSource
-from tests.logs.test_live import SDK_RUNTIME
 from tests.teleop.fakes import truth
 
 CLIENT_MESSAGE_DATA = 0x01
@@ -58,7 +57,6 @@ def test_twists_in_cdr_and_json() -> None:
         decode_twist("ros1", b"")
 
 
-@pytest.mark.allow_leaks(SDK_RUNTIME)
 def test_a_published_twist_drives_the_simulated_robot_and_stops_when_it_stops() -> None:
     live = FoxgloveLive(0)
     try:
@@ -110,3 +108,30 @@ def test_a_published_twist_drives_the_simulated_robot_and_stops_when_it_stops() 
             assert abs(panel[-1]) < 1e-3  # stopped by the panel's own stop, before the source below drives
     finally:
         live.close()
+
+
+@pytest.mark.parametrize(
+    ("text", "error"),
+    [
+        ('{"linear": {"x": "0.3"}}', r"linear\.x: expected a number, got \"0\.3\""),
+        ('{"linear": {"x": 0.1, "y": true}}', r"linear\.y: expected a number, got true"),
+        ('{"angular": {"z": null}}', r"angular\.z: expected a number, got null"),
+        ('{"angular": {"z": NaN}}', r"angular\.z: expected a finite number, got nan"),
+        ('{"linear": [0.3, 0, 0]}', r"linear: expected an object"),
+        ("[0.3]", r"expected a JSON object"),
+    ],
+)
+def test_a_twist_s_numbers_must_be_numbers(text: str, error: str) -> None:
+    with pytest.raises(ValueError, match=error):
+        decode_twist("json", text.encode())
+
+
+def test_a_cdr_twist_that_is_not_finite_is_refused() -> None:
+    vector = "geometry_msgs/msg/Vector3"
+    msg = schemas.new(
+        "geometry_msgs/msg/Twist",
+        linear=schemas.new(vector, x=float("inf"), y=0.0, z=0.0),
+        angular=schemas.new(vector, x=0.0, y=0.0, z=0.0),
+    )
+    with pytest.raises(ValueError, match=r"linear\.x: expected a finite number, got inf"):
+        decode_twist("cdr", schemas.serialize(msg, "geometry_msgs/msg/Twist"))

@@ -1,37 +1,34 @@
-"""``--foxglove [HOST:]PORT``: the recorder's messages served live through the Foxglove SDK's
-WebSocket server (``foxglove-sdk``), the same channels and ROS 2 schemas as the log file, so Foxglove
-shows a running robot as it shows a recorded one; and Foxglove's Teleop panel as a command source.
+"""``--foxglove [HOST:]PORT``: the recorder's messages served live to Foxglove over its WebSocket
+protocol (:mod:`omnibot.logs.foxglove_ws`, both subprotocol names), the same channels and ROS 2
+schemas as the log file, so Foxglove shows a running robot as it shows a recorded one; and
+Foxglove's Teleop panel as a command source.
 
-Binding: 127.0.0.1 by default, with no token, as the SDK's server is. Bound to any other address
-(``--foxglove 0.0.0.0:8765``) it takes commands that move the robot from the network, so it requires
-an access token, as the dashboard does and with the dashboard's code
-(:func:`omnibot.web.access.access_token`: the one given with ``--foxglove-token`` or
-``$OMNIBOT_FOXGLOVE_TOKEN``, else a random one, printed in the URL). The SDK's server has no way to
-check one, nor does it accept the old name of its subprotocol (``foxglove.websocket.v1``, which
-Lichtblick and ws-protocol's clients speak), so it always listens on 127.0.0.1 on a port of its own
-behind a :class:`~omnibot.logs.gate.TokenGate`, which relays only the connections whose URL carries
-the token (``ws://HOST:PORT/?token=TOKEN``; every one without a token) and offers the old name as
-the new. A token given on loopback is required there too.
+Access, as the dashboard's (:mod:`omnibot.web.access`): the ``Host`` must name this server, a
+browser's ``Origin`` must be this server or Foxglove's web app, and bound anywhere but loopback
+(``--foxglove 0.0.0.0:8765``) an access token is required (the one given with
+``--foxglove-token`` or ``$OMNIBOT_FOXGLOVE_TOKEN``, else a random one, printed in the URL:
+``ws://HOST:PORT/?token=TOKEN``); a token given on loopback is required there too. The process
+listens on that one port and no other.
 
 Client publish: a Foxglove client may advertise ``cmd_vel`` (or ``/cmd_vel``) with a
 ``geometry_msgs/Twist`` schema (``geometry_msgs/msg/Twist`` too) in ``cdr`` or ``json``, as the
-Teleop panel does; each message is handed to the :class:`PanelSource`, a source of the runtime's
-arbitration (priority 30: under the page's stick, over the follower) that stops the robot when the
-panel stops publishing for :data:`PANEL_HOLD` s.
+Teleop panel does; each message whose numbers are numbers (JSON numbers, finite; a string, a bool
+or null is refused and the client told why) is handed to the :class:`PanelSource`, a source of the
+runtime's arbitration (priority 30: under the page's stick, over the follower) that stops the
+robot when the panel stops publishing for :data:`PANEL_HOLD` s.
 """
 
 from __future__ import annotations
 
 import json
 import logging
+import math
 import threading
 from typing import Any
 
-from foxglove.websocket import Capability, Client, ClientChannel, ServerListener
-
 from omnibot.errors import ConfigError
 from omnibot.logs import schemas
-from omnibot.logs.gate import TokenGate
+from omnibot.logs.foxglove_ws import FOXGLOVE_APP, ClientChannel, FoxgloveServer
 from omnibot.logs.topics import TELEOP
 from omnibot.motion import Twist
 from omnibot.runtime.cycle import Cycle
@@ -90,44 +87,66 @@ class PanelSource:
         return Proposal(Twist())
 
 
+def _number(value: Any, where: str) -> float:
+    """A twist's field: a JSON number (not a bool), finite; ValueError naming ``where`` if not."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ValueError(f"{where}: expected a number, got {json.dumps(value)[:40]}")
+    if not math.isfinite(value):
+        raise ValueError(f"{where}: expected a finite number, got {value}")
+    return float(value)
+
+
+def _vector(msg: dict[str, Any], name: str) -> tuple[float, float, float]:
+    vector = msg.get(name, {})
+    if not isinstance(vector, dict):
+        raise ValueError(f"{name}: expected an object {{x, y, z}}")
+    x, y, z = (_number(vector.get(k, 0.0), f"{name}.{k}") for k in "xyz")
+    return x, y, z
+
+
 def decode_twist(encoding: str, data: bytes) -> Twist:
-    """A geometry_msgs/Twist as a client sends it (``cdr`` or ``json``); ValueError if it is not one."""
+    """A geometry_msgs/Twist as a client sends it (``cdr`` or ``json``); ValueError, saying what is
+    wrong, if it is not one: not JSON or CDR of a Twist, a field that is no number (``"0.3"``,
+    ``true``, ``null``) or not finite."""
     if encoding == "json":
         msg = json.loads(data)
-        lin, ang = msg.get("linear", {}), msg.get("angular", {})
-        return Twist(float(lin.get("x", 0.0)), float(lin.get("y", 0.0)), float(ang.get("z", 0.0)))
-    if encoding == "cdr":
-        msg = schemas.deserialize(data, "geometry_msgs/msg/Twist")
-        return Twist(float(msg.linear.x), float(msg.linear.y), float(msg.angular.z))
-    raise ValueError(f"encoding {encoding!r} (expected cdr or json)")
+        if not isinstance(msg, dict):
+            raise ValueError("expected a JSON object {linear, angular}")
+        (vx, vy, _), (_, _, w) = _vector(msg, "linear"), _vector(msg, "angular")
+    elif encoding == "cdr":
+        cdr = schemas.deserialize(data, "geometry_msgs/msg/Twist")
+        vx, vy, w = (
+            _number(float(value), where)
+            for value, where in (
+                (cdr.linear.x, "linear.x"),
+                (cdr.linear.y, "linear.y"),
+                (cdr.angular.z, "angular.z"),
+            )
+        )
+    else:
+        raise ValueError(f"encoding {encoding!r} (expected cdr or json)")
+    return Twist(vx, vy, w)
 
 
-class _Listener(ServerListener):
-    """The SDK's server listener: client-published twists on :data:`TELEOP` go to the panel source
-    (the channels a client advertises are remembered by client and channel id)."""
+class _Panel:
+    """What clients publish, for the panel source: twists on :data:`TELEOP`; anything else refused."""
 
     def __init__(self, panel: PanelSource) -> None:
         self.panel = panel
-        self._channels: dict[tuple[int, int], ClientChannel] = {}
 
-    def on_client_advertise(self, client: Client, channel: ClientChannel) -> None:
+    def advertised(self, channel: ClientChannel) -> None:
         if channel.topic.lstrip("/") != TELEOP or channel.schema_name not in TWIST_SCHEMAS:
-            log.warning("Foxglove client publishes %s (%s): ignored", channel.topic, channel.schema_name)
-            return
-        self._channels[(client.id, channel.id)] = channel
+            raise ValueError(f"only {TELEOP} ({' or '.join(sorted(TWIST_SCHEMAS))}) drives the robot")
+        if channel.encoding not in ("cdr", "json"):
+            raise ValueError(f"encoding {channel.encoding!r} (expected cdr or json)")
 
-    def on_client_unadvertise(self, client: Client, client_channel_id: int) -> None:
-        self._channels.pop((client.id, client_channel_id), None)
-
-    def on_message_data(self, client: Client, client_channel_id: int, data: bytes) -> None:
-        channel = self._channels.get((client.id, client_channel_id))
-        if channel is None:
-            return
+    def received(self, channel: ClientChannel, data: bytes) -> None:
         try:
-            twist = decode_twist(channel.encoding, bytes(data))
-        except Exception as exc:  # a client's bad message must not reach the robot loop
-            log.warning("Foxglove client's %s: cannot decode: %s", channel.topic, exc)
-            return
+            twist = decode_twist(channel.encoding, data)
+        except ValueError:
+            raise
+        except Exception as exc:  # a CDR decoder's own error: not a Twist
+            raise ValueError(f"cannot decode a Twist: {exc}") from None
         self.panel.put(twist)
 
 
@@ -154,42 +173,30 @@ def parse_address(text: str | int) -> tuple[str, int]:
 
 
 class FoxgloveLive:
-    """A Foxglove WebSocket server on ``host:port`` (0: a free port, see :attr:`port`; off loopback or
-    with a ``token``, behind a :class:`~omnibot.logs.gate.TokenGate`: see the module docstring); call
-    it as a recorder mirror, ``live(topic, typename, cdr_bytes, ns)``; :attr:`panel` is the Teleop
+    """A Foxglove WebSocket server on ``host:port`` (0: a free port, see :attr:`port`; the access
+    rules of the module docstring, ``origins`` the browser origins allowed besides its own); call it
+    as a recorder mirror, ``live(topic, typename, cdr_bytes, ns)``; :attr:`panel` is the Teleop
     panel's source (a runtime adds it); :attr:`url` is where to connect; :meth:`close` stops it."""
 
     def __init__(
-        self, port: int = DEFAULT_PORT, *, host: str = HOST, token: str | None = None, name: str = "omnibot"
+        self,
+        port: int = DEFAULT_PORT,
+        *,
+        host: str = HOST,
+        token: str | None = None,
+        name: str = "omnibot",
+        origins: tuple[str, ...] = FOXGLOVE_APP,
     ) -> None:
-        import foxglove
-
         from omnibot.web.access import access_token
 
         self.host = host
         self.token = access_token(host, token, key="--foxglove-token")
-        self._foxglove = foxglove
-        self._context = foxglove.Context()
         self.panel = PanelSource()
-        try:  # on 127.0.0.1, behind the gate (the token, the old subprotocol)
-            self._server = foxglove.start_server(
-                name=name,
-                host=HOST,
-                port=0,
-                context=self._context,
-                capabilities=[Capability.ClientPublish],
-                supported_encodings=["cdr", "json"],
-                server_listener=_Listener(self.panel),
-            )
-        except Exception as exc:  # the SDK raises its own error for a port in use
-            raise ConfigError(f"cannot serve Foxglove on {host}:{port}: {exc}", key="--foxglove") from None
-        try:
-            self._gate = TokenGate(host, port, self._server.port, self.token)
-        except BaseException:
-            self._server.stop()
-            raise
-        self.port: int = self._gate.port
-        self._channels: dict[str, Any] = {}
+        self._server = FoxgloveServer(
+            host, port, _Panel(self.panel), token=self.token, name=name, origins=origins
+        )
+        self.port: int = self._server.port
+        self._schemas: dict[str, str] = {}
 
     @property
     def url(self) -> str:
@@ -199,23 +206,13 @@ class FoxgloveLive:
         return f"ws://{host}:{self.port}/{query}"
 
     def __call__(self, topic: str, typename: str, data: bytes, ns: int) -> None:
-        """Publish one recorded message (CDR ``data`` of ``typename``) on ``topic``, its channel made
-        on first use."""
-        channel = self._channels.get(topic)
-        if channel is None:
-            schema = self._foxglove.Schema(
-                name=typename, encoding="ros2msg", data=schemas.schema_text(typename).encode("utf-8")
-            )
-            channel = self._foxglove.Channel(
-                topic, schema=schema, message_encoding="cdr", context=self._context
-            )
-            self._channels[topic] = channel
-        channel.log(data, log_time=ns)
+        """Publish one recorded message (CDR ``data`` of ``typename``) on ``topic``, its channel
+        advertised on first use."""
+        schema = self._schemas.get(typename)
+        if schema is None:
+            schema = self._schemas[typename] = schemas.schema_text(typename)
+        self._server.publish(topic, typename, schema, data, ns)
 
     def close(self) -> None:
-        """Close every channel and stop the server."""
-        for channel in self._channels.values():
-            channel.close()
-        self._channels.clear()
-        self._gate.close()
-        self._server.stop()
+        """Close every connection and stop the server."""
+        self._server.close()
