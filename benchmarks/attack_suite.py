@@ -26,8 +26,12 @@ counts; ``--quick`` is the CI smoke size):
    twists whose numbers are a string, a bool or NaN: the distance the simulated robot moved.
 6. ``ros2``: the bridge as ``omnibot ros2`` runs it (benchmarks/ros2_latency.py's set-up) in a private
    network namespace, a cyclonedds peer publishing TwistStamped on ``cmd_vel`` with NaN and inf, with
-   1e30 and 1e308, and a flood; the simulated robot's displacement and speed. Not covered: samples
-   DDS itself cannot carry to the bridge (truncated CDR, a wrong type name: no raw writer exists).
+   1e30 and 1e308, and a flood; a std_msgs/String publisher on ``cmd_vel``; malformed CDR (a struct
+   named TwistStamped of another layout, with its own type information and with TwistStamped's, and
+   TwistStamped's CDR cut short or garbage): the simulated robot's displacement and speed, and the
+   bridge's exceptions. cyclonedds checks a sample's CDR against its type before it sends it, so
+   malformed CDR never leaves a cyclonedds peer (counted as "refused by DDS"); a raw RTPS writer that
+   sends it anyway is not covered.
 """
 
 from __future__ import annotations
@@ -971,17 +975,86 @@ ROS2_PEER = r"""
 import math, sys, time
 from omnibot.logs import schemas
 from omnibot.logs.recorder import header, twist
-from omnibot.ros2.dds import Node
-from omnibot.ros2.types import to_dds
+from omnibot.ros2.dds import DEFAULT, Node, qos, topic_name
+from omnibot.ros2.types import dds_name, dds_type, to_dds
 
 TS = "geometry_msgs/msg/TwistStamped"
 case, count = sys.argv[1], int(sys.argv[2])
 node = Node()
+
+
+def matched(writer, wait=10.0):
+    end = time.monotonic() + wait
+    while writer.get_publication_matched_status().current_count < 1 and time.monotonic() < end:
+        time.sleep(0.01)
+    time.sleep(0.2)
+    return writer.get_publication_matched_status().current_count
+
+
+def ahead(vx=0.4):
+    return to_dds(schemas.new(TS, header=header(0, "base_link"), twist=twist(vx, 0, 0)), TS)
+
+
+if case == "wrongtype":  # a std_msgs/String on cmd_vel saying "0.4"
+    writer = node.writer("cmd_vel", "std_msgs/msg/String")
+    matched(writer, 3.0)
+    for k in range(count):
+        writer.write(to_dds(schemas.new("std_msgs/msg/String", data="0.4"), "std_msgs/msg/String"))
+        time.sleep(0.02)
+    print(f"{count} written")
+    raise SystemExit
+if case == "malformed":
+    # 1. a type named TwistStamped of another layout (a byte blob), its own type information
+    # 2. the same claiming TwistStamped's type information (a lying peer)
+    # 3. TwistStamped itself, its CDR cut short or replaced by garbage
+    from cyclonedds.idl import make_idl_struct, types as idl
+    from cyclonedds.pub import DataWriter
+    from cyclonedds.topic import Topic
+
+    written = refused = unmatched = 0
+    real = dds_type(TS)
+    real.__idl__.fill_type_data()
+    for lying in (False, True):
+        blob_type = make_idl_struct("Blob_", dds_name(TS), {"blob": idl.sequence[idl.uint8]})
+        blob_type.__idl_annotations__["extensibility"] = "final"
+        blob_type.__idl__.populate()
+        if lying:
+            blob_type.__idl__._xt_data = real.__idl__._xt_data
+            blob_type.__idl__._xt_bytedata = real.__idl__._xt_bytedata
+        peer = Node()  # a participant of its own: one topic name, one type
+        topic = Topic(peer.participant, topic_name("cmd_vel"), blob_type, qos=qos(DEFAULT, TS))
+        writer = DataWriter(peer.participant, topic, qos=qos(DEFAULT, TS))
+        if not matched(writer, 3.0):
+            unmatched += count
+            peer.close()
+            continue
+        good = ahead().serialize()
+        for k in range(count):
+            try:
+                writer.write(blob_type(blob=list(good[4 : 4 + k % len(good)])))
+                written += 1
+            except Exception:
+                refused += 1
+            time.sleep(0.02)
+        peer.close()
+    writer = node.writer("cmd_vel", TS)
+    matched(writer)
+    good = ahead().serialize()
+    cuts = [good[:n] for n in range(4, len(good), 4)] + [good[:4] + bytes(range(200, 256))] * 4
+    serialize = real.serialize
+    for k in range(count):
+        real.serialize = lambda self, _b=cuts[k % len(cuts)], **kw: _b
+        try:
+            writer.write(ahead())
+            written += 1
+        except Exception:
+            refused += 1
+        time.sleep(0.02)
+    real.serialize = serialize
+    print(f"{written} written, {refused} refused by DDS, {unmatched} never matched")
+    raise SystemExit
 writer = node.writer("cmd_vel", TS)
-end = time.monotonic() + 10
-while writer.get_publication_matched_status().current_count < 1 and time.monotonic() < end:
-    time.sleep(0.01)
-time.sleep(0.2)
+matched(writer)
 nan, inf = math.nan, math.inf
 values = {
     "nonfinite": [(nan, 0, 0), (inf, 0, 0), (0, -inf, 0), (0, 0, nan), (nan, nan, nan), (0, 0, inf)],
@@ -1002,6 +1075,12 @@ ROS2_CASES = {
     # case: (messages, what must hold)
     "nonfinite": (120, "NaN and inf in linear.x/y, angular.z at 50 Hz: must not move"),
     "huge": (80, "1e30 and 1e308 at 50 Hz: speed within the robot's limits"),
+    "wrongtype": (100, 'a std_msgs/String publisher on cmd_vel ("0.4") at 50 Hz: must not move'),
+    "malformed": (
+        60,
+        "malformed CDR (a TwistStamped-named blob, with and without TwistStamped's type information; "
+        "TwistStamped's CDR cut short or garbage) at 50 Hz: must not move",
+    ),
     "steady": (100, "0.1 m/s at 50 Hz (control: the top speed a flood is held to)"),
     "flood": (
         20_000,
@@ -1026,6 +1105,8 @@ def _ros2_case(case: str, quick: bool, control_top: float = 0.1) -> Row:
     count, what = ROS2_CASES[case]
     if quick:
         count = min(count, 2000 if case == "flood" else 50 if case == "steady" else 30)
+    if case == "malformed":  # three attempts of count each
+        count = count // 3
     speeds: list[float] = []
     errors: list[str] = []
     with robot_session("sim://omni4", "omni4", timeout=0.5) as session:
@@ -1068,7 +1149,7 @@ def _ros2_case(case: str, quick: bool, control_top: float = 0.1) -> Row:
     moved = math.hypot(p1.x - p0.x, p1.y - p0.y)
     top = max(speeds[:during], default=0.0)
     end_speed = speeds[-1] if speeds else 0.0
-    if case == "nonfinite":
+    if case in ("nonfinite", "wrongtype", "malformed"):
         wrong = int(moved > MOVED)
     elif case == "huge":
         wrong = int(top > 1.05 * limit)
