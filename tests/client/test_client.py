@@ -5,6 +5,7 @@ from __future__ import annotations
 import logging
 import math
 import time
+from collections import deque
 from collections.abc import Iterator
 
 import pytest
@@ -27,6 +28,7 @@ from omnibot.client import (
     WarnEvent,
     controller_error,
 )
+from omnibot.client.client import Pending
 from omnibot.client.views import Status
 from omnibot.errors import ControllerError, LinkError, LinkTimeout, ProtocolError
 from omnibot.firmware.config import build_config
@@ -465,3 +467,34 @@ def test_vel_carries_an_acceleration_only_to_a_controller_that_agreed_on_version
         with pytest.raises(ValueError, match="not both"):
             client.vel(0.3, 0.0, 0.0, 0.2, accel=1.0, body_accel=(1.0, 0.0, 0.0))
         client.stop()
+
+
+def test_a_binary_call_waits_for_the_retransmissions_of_its_frame() -> None:
+    """A frame behind others in the send window gets its own retries only once it is the oldest, so
+    it can outlive the call's first deadline; the call waits for the ARQ's verdict (its reply, or a
+    give-up that says it may have run) and never fails by the clock while its frame may still be
+    answered. At 5 % corrupted bytes both ways (seed 5) 4 of these 100 VELs failed by the clock
+    before, and 24 more were given up behind them; now 1 is given up."""
+    link = FaultLink(open_link("sim://omni4?seed=1"), seed=5)
+    client = RobotClient(link, "omni4")
+    client.use_binary()
+    link.corrupt = 0.05
+    waiting: deque[Pending] = deque()
+    failures: list[str] = []
+
+    def settle(pending: Pending) -> None:
+        try:
+            pending.result()
+        except LinkTimeout as exc:
+            failures.append(str(exc))
+
+    for k in range(100):
+        waiting.append(client.submit(Vel(k % 30 - 15, -20, 0, 100)))
+        while len(waiting) >= 8:
+            settle(waiting.popleft())
+    while waiting:
+        settle(waiting.popleft())
+    link.corrupt = 0.0
+    client.close()
+    assert failures, "the line was meant to lose some frames for good"
+    assert all("retries; it may or may not have run" in f for f in failures), failures

@@ -175,7 +175,12 @@ class Pending:
             client = self._client
             deadline = self.deadline if timeout is None else client.clock.now() + timeout
             try:
-                client._wait(lambda: self.done, deadline, f"no reply to {self.line}")
+                try:
+                    client._wait(lambda: self.done, deadline, f"no reply to {self.line}")
+                except LinkTimeout:
+                    if timeout is not None or not client._in_flight(self):
+                        raise
+                    client._wait_for_verdict(self)  # binary: the retries of its frame decide
             except LinkTimeout as exc:
                 self.timed_out = True
                 client._timed_out(self)
@@ -629,6 +634,25 @@ class RobotClient(TypedCalls):
             f"text replies out of step and no reply to STATUS after {RESYNC_TRIES} tries "
             f"(timeout on {self.link.url})"
         )
+
+    def _in_flight(self, pending: Pending) -> bool:
+        """Binary: ``pending``'s frame is still in the send window (being sent again until its reply
+        comes or the retries give up on it)."""
+        wire = self._wire
+        return isinstance(wire, BinaryWire) and pending.seq in wire.sender.pending()
+
+    def _wait_for_verdict(self, pending: Pending) -> None:
+        """Binary: wait until ``pending``'s frame is answered or given up on. A frame behind others
+        gets its own retries only once it is the oldest, so it may outlive the call's deadline; a
+        call that failed then by the clock would fail a command whose reply is still to come. The
+        ARQ bounds the wait (each frame in the window at most one retry budget after the one
+        before); LinkTimeout past that bound all the same."""
+        wire = self._wire
+        assert isinstance(wire, BinaryWire)
+        bound = self.clock.now() + wire.sender.window * (wire.sender.budget_ms() / 1000.0 + _RETRY_POLL)
+        self._wait(lambda: pending.done or not self._in_flight(pending), bound, f"no reply to {pending.line}")
+        if not pending.done:  # out of the window without a verdict (a SYNC frame abandoned it)
+            raise LinkTimeout(f"no reply to {pending.line}; it may or may not have run")
 
     def _timed_out(self, pending: Pending) -> None:
         """A call gave up on ``pending``: keep a tagged one aside for a late reply; after an
