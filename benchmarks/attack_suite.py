@@ -16,8 +16,11 @@ counts; ``--quick`` is the CI smoke size):
 3. ``links``: ``benchmarks/link_faults.py``'s VEL stream through :class:`RobotClient` (default settings:
    text probes tags and so runs checked) and through binary, at 1 % and 5 % per byte of drop,
    corrupt, duplicate (a byte sent twice) and repeat (a whole write or read sent twice). The client's
-   own setup MODE (bit 4) is taken off link_faults' "corrupted"; text lines the controller took while
-   MODE bit 4 was clear after the client's setup are counted as wrong (the client's promise).
+   own setup MODE (bit 4) is taken off link_faults' "corrupted"; text lines the controller ran
+   without a valid check while MODE bit 4 was clear are counted as wrong (the client's promise: a
+   line cut before its check runs nothing). A call that failed with LinkTimeout for a command that
+   ran is counted apart ("timed out, ran"): the client said it may or may not have run, which is
+   true; "wrongly failed" is a call that said a command did not run (an ERROR) while it did.
 4. ``logs``: ``omnibot follow --log`` on a full tmpfs, under ``ulimit -f``, into a read-only
    directory, against the same follow without a log (simulator truth); ``omnibot send --log`` killed
    with SIGKILL mid-run (``tests/logs/conftest.py``), then ``log recover``.
@@ -579,7 +582,8 @@ _fault_link = link_faults.fault_link
 class _Watch:
     """What the controller of one link-fault scenario was handed: the client's own MODE that set bit 4
     (answered OK, so link_faults counts it as a command not sent: taken off "corrupted"), and the
-    lines it took while bit 4 was clear after the client's setup (HELLO, STATUS, MODE)."""
+    lines it ran (answered OK) without a valid check while bit 4 was clear: what the bit is there to
+    refuse (a line with a check is verified whatever the bit; a refused line ran nothing)."""
 
     setup_modes: int = 0
     unguarded: int = 0
@@ -591,19 +595,25 @@ _watches: list[_Watch] = []
 
 def _watch(controller: Any) -> _Watch:
     watch = _Watch()
-    handle = controller.handle
+    handle, answer_ok = controller.handle, controller._ok
+    oks = [0]
+
+    def ok() -> None:
+        oks[0] += 1
+        answer_ok()
 
     def watched(cmd: bytes | None) -> None:
-        before = controller.checked_only
+        before, ran = controller.checked_only, oks[0]
         handle(cmd)
-        if cmd is None:
+        if cmd is None or oks[0] == ran:
             return
         if not before and controller.checked_only and cmd.startswith(b"MODE"):
             watch.setup_modes += 1
-        elif not before and not cmd.startswith((b"HELLO", b"STATUS", b"MODE")):
+        elif not before and linecheck.split(cmd)[3] != linecheck.CHECKED:
             watch.unguarded += 1
             watch.example = watch.example or cmd
 
+    controller._ok = ok
     controller.handle = watched
     _watches.append(watch)
     return watch
@@ -642,14 +652,22 @@ def links(quick: bool) -> list[Row]:
                                 "corrupted executed": corrupted,
                                 "lost but OK": o.lost_unseen,
                                 "doubled": o.twice,
-                                "wrongly failed": o.false_failures,
+                                "wrongly failed": o.false_failures - o.timed_out_ran,
+                                "timed out, ran": o.timed_out_ran,
                                 "failed, not run": o.true_failures,
                                 "lines taken without MODE bit 4": watch.unguarded
                                 if protocol == "text"
                                 else "-",
                             },
-                            corrupted + o.lost_unseen + o.twice + o.false_failures + watch.unguarded,
-                            f"first line taken unchecked: {watch.example!r}" if watch.example else "",
+                            corrupted
+                            + o.lost_unseen
+                            + o.twice
+                            + o.false_failures
+                            - o.timed_out_ran
+                            + (watch.unguarded if protocol == "text" else 0),
+                            f"first line taken unchecked: {watch.example!r}"
+                            if watch.example and protocol == "text"
+                            else "",
                         )
                     )
     finally:

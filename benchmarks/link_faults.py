@@ -11,7 +11,9 @@ answered OK, taken inside the firmware) tells each command apart. Per 10,000 com
 * **corrupted**: commands executed that were never sent (changed parameters, another command);
 * **lost unseen**: commands never executed whose call reported success;
 * **twice**: commands executed more than once;
-* **false failures**: calls that raised (timeout, protocol error, ERROR) for a command that ran.
+* **false failures**: calls that raised (timeout, protocol error, ERROR) for a command that ran;
+  of them, ``timed_out_ran`` (in ``--json``) raised LinkTimeout, which says the command may or may
+  not have run (no reply came), the rest said it did not.
 
 Faults, each alone, at a rate p of 1 % and 0.1 % per byte, both ways, fixed seeds:
 
@@ -34,7 +36,7 @@ from dataclasses import asdict, dataclass
 
 from omnibot.client import RobotClient
 from omnibot.client.client import Pending
-from omnibot.errors import OmnibotError
+from omnibot.errors import LinkTimeout, OmnibotError
 from omnibot.firmware.controller import Controller
 from omnibot.protocol import codes
 from omnibot.protocol.messages import Vel
@@ -128,6 +130,7 @@ class Outcome:
     lost_unseen: int = 0
     twice: int = 0
     false_failures: int = 0
+    timed_out_ran: int = 0
     true_failures: int = 0
     faults: int = 0
     sim_seconds: float = 0.0
@@ -186,20 +189,25 @@ def run_one(
         log = executed_log(device.controller)
         t0 = client.clock.now()
         ok: dict[int, bool] = {}
+        timed_out: set[int] = set()
         waiting: deque[tuple[int, Pending]] = deque()
 
         def settle(k: int, pending: Pending) -> None:
             try:
                 pending.result()
                 ok[k] = True
-            except OmnibotError:
+            except OmnibotError as exc:
                 ok[k] = False
+                if isinstance(exc, LinkTimeout):
+                    timed_out.add(k)
 
         for k in range(n):
             try:
                 waiting.append((k, client.submit(vel(k))))
-            except OmnibotError:
+            except OmnibotError as exc:
                 ok[k] = False
+                if isinstance(exc, LinkTimeout):
+                    timed_out.add(k)
             while len(waiting) >= waiting_max:
                 settle(*waiting.popleft())
         while waiting:
@@ -213,6 +221,7 @@ def run_one(
         out.lost_unseen += times == 0 and ok[k]
         out.twice += times >= 2
         out.false_failures += times >= 1 and not ok[k]
+        out.timed_out_ran += times >= 1 and not ok[k] and k in timed_out
         out.true_failures += times == 0 and not ok[k]
     s = link.stats
     out.faults = s.tx_dropped + s.tx_corrupted + s.rx_dropped + s.rx_corrupted

@@ -32,3 +32,22 @@ def test_unknown_family_is_named(capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit):
         attack_suite.main(["--only", "bits,disks"])
     assert "unknown family disks" in capsys.readouterr().err
+
+
+def test_the_link_watch_counts_only_lines_run_without_a_check() -> None:
+    """MODE bit 4 clear: a line with a valid check is verified anyway and a refused line ran
+    nothing; only a line that ran without a check is what the bit is there to stop."""
+    from omnibot.protocol import text
+    from omnibot.protocol.messages import Vel
+    from omnibot.sim.device import SimDevice
+
+    controller = SimDevice("omni4", seed=1).controller
+    watch = attack_suite._watch(controller)
+    attack_suite._watches.remove(watch)
+    checked = text.encode(Vel(10, 0, 0, 100), tag=3).strip()
+    controller.handle(checked)  # runs, checked
+    controller.handle(checked[:-1] + (b"0" if checked[-1:] != b"0" else b"1"))  # bad check: refused
+    controller.handle(b"VEX,10,0,0,100")  # unknown: refused
+    assert watch.unguarded == 0
+    controller.handle(b"VEL,10,0,0,100#4")  # tagged, its check cut away: runs unchecked
+    assert (watch.unguarded, watch.example) == (1, b"VEL,10,0,0,100#4")
