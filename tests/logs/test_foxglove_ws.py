@@ -168,3 +168,11 @@ def test_close_ends_every_connection(taken: Taken) -> None:
                 ws.recv(timeout=5)
     with pytest.raises(OSError):
         socket.create_connection(("127.0.0.1", s.port), timeout=1).close()
+
+
+def test_json_nested_too_deeply_is_told_not_a_traceback(server: FoxgloveServer) -> None:
+    with opened(server) as ws:
+        ws.recv(timeout=5)
+        ws.send("[" * 30_000 + "]" * 30_000)
+        assert "expected a JSON object" in str(next_status(ws)["message"])
+        ws.send(json.dumps({"op": "unsubscribe", "subscriptionIds": []}))  # still served

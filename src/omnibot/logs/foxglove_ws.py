@@ -190,6 +190,7 @@ class FoxgloveServer:
         self.origins = frozenset(o.rstrip("/").lower() for o in origins)
         self.publishing = publishing
         self.refused = 0
+        self._told: set[str] = set()
         self._sock = listening_socket(host, port, host_key=key, port_key=key, backlog=16)
         self.port: int = self._sock.getsockname()[1]
         self.policy = HostPolicy.for_bind(host, self.port)
@@ -292,7 +293,11 @@ class FoxgloveServer:
             why = REFUSED_TOKEN
         if why is not None:
             self.refused += 1
-            log.warning("Foxglove live refused a client (Host %r, Origin %r): %s", host, origin, why.strip())
+            level = logging.DEBUG if why in self._told else logging.WARNING  # each reason once
+            self._told.add(why)
+            log.log(
+                level, "Foxglove live refused a client (Host %r, Origin %r): %s", host, origin, why.strip()
+            )
             return connection.respond(HTTPStatus.FORBIDDEN, why)
         if len(self._clients) >= MAX_CLIENTS:
             self.refused += 1
@@ -346,7 +351,7 @@ class FoxgloveServer:
     def _text(self, client: _Client, message: str) -> None:
         try:
             msg = json.loads(message)
-        except ValueError:
+        except (ValueError, RecursionError):  # not JSON, or nested too deeply
             msg = None
         op = msg.get("op") if isinstance(msg, dict) else None
         if op == "subscribe":
