@@ -36,7 +36,8 @@ A client's message that breaks the protocol is answered with a ``status`` and ot
 what a client publishes goes to a :class:`Publishing` (which may refuse it: the client gets its
 reason as an error status). More than :data:`RATE` messages a second (bursts :data:`BURST`) close
 the connection (1008); frames over :data:`MAX_FRAME` bytes too (1009). A client slow to read loses
-the oldest message data beyond :data:`BACKLOG` per connection.
+the oldest message data beyond :data:`BACKLOG` per connection, and is cut off (1008) when as many
+control messages (adverts, statuses) wait for it.
 
 The server runs its own asyncio loop in a thread (``omnibot-foxglove``), started by the constructor
 (which binds the port: a port in use fails at once) and stopped by :meth:`FoxgloveServer.close`.
@@ -144,8 +145,12 @@ class _Client:
         self.ready = asyncio.Event()
         self.refused: set[int] = set()
         """Client channels whose refusal was logged (once each)."""
+        self.overflow = False
 
     def send(self, frame: str) -> None:
+        if len(self.control) >= BACKLOG:  # not reading what it is told: cut off (the SDK's rule)
+            self.overflow = True
+            return
         self.control.append(frame)
         self.ready.set()
 
@@ -339,6 +344,9 @@ class FoxgloveServer:
                     self._text(client, message)
                 else:
                     self._binary(client, message)
+                if client.overflow:
+                    await ws.close(CLOSE_POLICY, "not reading: too many messages waiting for it")
+                    break
         except ConnectionClosed:
             pass
         finally:
