@@ -5,6 +5,7 @@ from __future__ import annotations
 from benchmarks import (
     attack_suite,
     firmware_command_time,
+    foxglove_live,
     goto,
     idle_phase,
     link_faults,
@@ -69,6 +70,7 @@ def main() -> int:
         ("path planning: grid A* against OMPL", lambda: planner.main([])),
         ("goto: 20 seeded goals per robot", lambda: goto.main([])),
         ("recording cost (--log)", lambda: log_cost.main([])),
+        ("Foxglove live: CPU per message", lambda: foxglove_live.main([])),
         ("ROS 2: cmd_vel -> VEL latency (private network namespace)", lambda: ros2_latency.main([])),
         (
             "ROS 2: odom rates, CPU, robots per process (private network namespace)",

@@ -204,6 +204,9 @@ class FoxgloveServer:
         self._subscribed: frozenset[int] = frozenset()
         """Channel ids some client subscribes to (replaced whole, read from any thread)."""
         self._clients: set[_Client] = set()
+        self._queue: deque[tuple[int, int, bytes]] = deque(maxlen=4 * BACKLOG)
+        """Messages published for subscribers, not yet handed to their connections."""
+        self._woken = False
         self._loop: asyncio.AbstractEventLoop | None = None
         self._stop: asyncio.Event | None = None
         self._ready = threading.Event()
@@ -234,7 +237,11 @@ class FoxgloveServer:
                     self._channels[topic] = channel
                     self._call(self._advertise, channel)
         if channel.id in self._subscribed:
-            self._call(self._dispatch, channel.id, ns, data)
+            with self._lock:  # the loop is woken once for what a burst publishes
+                self._queue.append((channel.id, ns, data))
+                wake, self._woken = not self._woken, True
+            if wake:
+                self._call(self._flush)
 
     def _call(self, fn: Any, *args: Any) -> None:
         loop = self._loop
@@ -443,12 +450,17 @@ class FoxgloveServer:
         for client in self._clients:
             client.send(frame)
 
-    def _dispatch(self, channel_id: int, ns: int, data: bytes) -> None:
-        for client in self._clients:
-            for sid, cid in client.subscriptions.items():
-                if cid == channel_id:
-                    client.data.append(struct.pack("<BIQ", MESSAGE_DATA, sid, ns) + data)
-                    client.ready.set()
+    def _flush(self) -> None:
+        with self._lock:
+            queued = list(self._queue)
+            self._queue.clear()
+            self._woken = False
+        for channel_id, ns, data in queued:
+            for client in self._clients:
+                for sid, cid in client.subscriptions.items():
+                    if cid == channel_id:
+                        client.data.append(struct.pack("<BIQ", MESSAGE_DATA, sid, ns) + data)
+                        client.ready.set()
 
 
 def _token(path: str) -> str | None:
