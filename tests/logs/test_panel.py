@@ -117,6 +117,7 @@ def test_a_published_twist_drives_the_simulated_robot_and_stops_when_it_stops() 
         ('{"linear": {"x": 0.1, "y": true}}', r"linear\.y: expected a number, got true"),
         ('{"angular": {"z": null}}', r"angular\.z: expected a number, got null"),
         ('{"angular": {"z": NaN}}', r"angular\.z: expected a finite number, got nan"),
+        ('{"linear": {"x": 1' + "0" * 400 + "}}", r"linear\.x: expected a finite number, got 1000"),
         ('{"linear": [0.3, 0, 0]}', r"linear: expected an object"),
         ("[0.3]", r"expected a JSON object"),
     ],

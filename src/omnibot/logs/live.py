@@ -91,9 +91,13 @@ def _number(value: Any, where: str) -> float:
     """A twist's field: a JSON number (not a bool), finite; ValueError naming ``where`` if not."""
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise ValueError(f"{where}: expected a number, got {json.dumps(value)[:40]}")
-    if not math.isfinite(value):
-        raise ValueError(f"{where}: expected a finite number, got {value}")
-    return float(value)
+    try:
+        number = float(value)
+    except OverflowError:  # an integer beyond every float
+        number = math.inf
+    if not math.isfinite(number):
+        raise ValueError(f"{where}: expected a finite number, got {str(value)[:40]}")
+    return number
 
 
 def _vector(msg: dict[str, Any], name: str) -> tuple[float, float, float]:
