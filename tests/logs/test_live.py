@@ -206,3 +206,12 @@ def test_a_client_speaking_only_the_old_subprotocol_is_served(token: str | None)
         live.close()
     assert (subprotocol, op) == ("foxglove.websocket.v1", "serverInfo")
     assert schemas.deserialize(payload, "std_msgs/msg/String").data == "hello"
+
+
+def test_a_command_with_foxglove_serves_and_closes(capsys: Any) -> None:
+    """``omnibot send --foxglove 0`` serves on a free loopback port while it runs and closes it
+    (the leak check: no thread, fd or port left), without a token on loopback."""
+    assert main(["send", "--port", "sim://omni4", "--foxglove", "0", "STATUS"]) == 0
+    err = capsys.readouterr().err
+    url = next(line for line in err.splitlines() if "Foxglove live on" in line).split()[-1]
+    assert url.startswith("ws://127.0.0.1:") and url.endswith("/") and "token" not in url
