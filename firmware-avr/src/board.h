@@ -3,10 +3,14 @@
 // sonar's echo; the Arduino Mega 2560 (ATmega2560) does not break ICP1 (PD4) out to a header, so
 // there the clock is timer 5, whose ICP5 is D48. Everything else (pins, timers 0 and 2 for the
 // motors' PWM, the pin-change groups of the encoders) comes from the generated header (docs/uno.md).
+// The Mega's 8 KB of SRAM also buy a 1 KB receive ring (the UNO's: 256 B) and the protocol's full
+// binary window of P_WINDOW frames, as the MicroPython firmware takes (the UNO's: P_WINDOW_MIN).
 #pragma once
 #include <avr/io.h>
 
 #if defined(__AVR_ATmega2560__)
+#define BOARD_RX_SIZE 1024  // 32 command frames of at most 25 bytes
+#define BOARD_WINDOW P_WINDOW
 #define CLK_TCCRA TCCR5A
 #define CLK_TCCRB TCCR5B
 #define CLK_TCNT TCNT5
@@ -28,6 +32,8 @@
 #define UART_RX_vect USART0_RX_vect
 #define UART_UDRE_vect USART0_UDRE_vect
 #elif defined(__AVR_ATmega328P__)
+#define BOARD_RX_SIZE 256
+#define BOARD_WINDOW P_WINDOW_MIN
 #define CLK_TCCRA TCCR1A
 #define CLK_TCCRB TCCR1B
 #define CLK_TCNT TCNT1

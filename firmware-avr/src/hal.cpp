@@ -11,11 +11,18 @@
 #include <util/atomic.h>
 #include <util/delay.h>
 
-#define RX_SIZE 256  // powers of two; 256: an index wraps by itself
+#define RX_SIZE BOARD_RX_SIZE  // powers of two; 256 (the UNO's): an 8-bit index wraps by itself
 #define TX_SIZE 128
 
 static volatile uint8_t rx_buf[RX_SIZE];
-static volatile uint8_t rx_head, rx_tail;
+#if RX_SIZE > 256  // 16-bit indices: the main loop reads and writes them with interrupts off
+typedef uint16_t RxIndex;
+#define RX_ATOMIC ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
+#else
+typedef uint8_t RxIndex;
+#define RX_ATOMIC
+#endif
+static volatile RxIndex rx_head, rx_tail;
 static volatile uint8_t tx_buf[TX_SIZE];
 static volatile uint8_t tx_head, tx_tail;
 static volatile uint16_t overflows;
@@ -55,7 +62,7 @@ static volatile bool wake;
 
 ISR(UART_RX_vect) {
     uint8_t c = UDR0;
-    uint8_t next = (rx_head + 1) & (RX_SIZE - 1);
+    RxIndex next = (rx_head + 1) & (RX_SIZE - 1);
     if (next != rx_tail) {
         rx_buf[rx_head] = c;
         rx_head = next;
@@ -196,7 +203,11 @@ uint32_t hal_ticks() {
     return ((uint32_t)hi << 16) | lo;
 }
 
-bool hal_rx_pending() { return rx_head != rx_tail; }
+bool hal_rx_pending() {
+    bool pending;
+    RX_ATOMIC { pending = rx_head != rx_tail; }
+    return pending;
+}
 
 void hal_wait_for_event() {
     cli();
@@ -212,9 +223,11 @@ void hal_wait_for_event() {
 }
 
 int16_t uart_read() {
-    if (rx_head == rx_tail) return -1;
+    RxIndex head;
+    RX_ATOMIC { head = rx_head; }
+    if (head == rx_tail) return -1;
     uint8_t c = rx_buf[rx_tail];
-    rx_tail = (rx_tail + 1) & (RX_SIZE - 1);
+    RX_ATOMIC { rx_tail = (rx_tail + 1) & (RX_SIZE - 1); }
     return c;
 }
 
