@@ -95,6 +95,8 @@ def test_mega_pins_are_checked_against_the_megas_own_map(monkeypatch: pytest.Mon
     monkeypatch.setitem(avrgen.MEGA_WIRING, "omni4", wiring)
     with pytest.raises(ConfigError, match="echo must be on D48"):
         avrgen.header_source("omni4", "mega")
-    monkeypatch.setitem(avrgen.MEGA_WIRING, "omni4", {**wiring, "sonar_echo": "D48", "pwm": ["D2", "D4", "D13", "D10"]})
+    monkeypatch.setitem(
+        avrgen.MEGA_WIRING, "omni4", {**wiring, "sonar_echo": "D48", "pwm": ["D2", "D4", "D13", "D10"]}
+    )
     with pytest.raises(ConfigError, match="D2 is not a PWM pin of timers 0 and 2"):
         avrgen.header_source("omni4", "mega")

@@ -225,7 +225,9 @@ def main(argv: list[str] | None = None) -> int:
         "--range", type=int, default=None, help="the sonar's fixed reading, cm (default: no echo)"
     )
     ap.add_argument("--encoders", type=float, default=None, help="encoder counts/s at full duty")
-    ap.add_argument("--board", choices=list(BOARDS), default="uno", help="uno (default) or mega (Arduino Mega 2560)")
+    ap.add_argument(
+        "--board", choices=list(BOARDS), default="uno", help="uno (default) or mega (Arduino Mega 2560)"
+    )
     args = ap.parse_args(argv)
     try:
         emu = UnoEmulator(args.robot, range_cm=args.range, encoder_cps=args.encoders, board=args.board)
