@@ -91,31 +91,24 @@ UNO_WIRING: dict[str, dict[str, Any]] = {
 # PCINT0..3: one pin-change group, the one simavr 1.6 models on this chip; A8..A15, PCINT16..23,
 # work as well on a board), the clock is timer 5 and times the echo on D48 (ICP5: the Mega's ICP1,
 # PD4, is on no header), the sonar's trigger D47; the battery divider on A7 (every Mega has it).
+_MEGA_PWM = {"D3": "D9", "D5": "D4", "D6": "D13", "D11": "D10"}
+"""The Mega's pin of each UNO PWM pin's timer output (OC2B, OC0B, OC0A, OC2A)."""
 MEGA_WIRING: dict[str, dict[str, Any]] = {
-    "omni4": {
-        "pwm": ["D9", "D4", "D13", "D10"],  # OC2B, OC0B, OC0A, OC2A: the UNO's timer outputs
+    robot: {
+        "pwm": [_MEGA_PWM[pin] for pin in uno["pwm"]],
         "in1": ["D22", "D24", "D26", "D28"],
         "in2": ["D23", "D25", "D27", "D29"],
-        "sonar_trig": "D47",
-        "sonar_echo": "D48",  # ICP5
+        "sonar_trig": "D47" if uno["sonar_trig"] else None,
+        "sonar_echo": "D48" if uno["sonar_echo"] else None,  # ICP5
         "encoders": ["D53", "D52", "D51", "D50"],
         "battery_adc": 7,
-    },
-    "mecanum4": {
-        "pwm": ["D4", "D13", "D10", "D9"],  # OC0B, OC0A, OC2A, OC2B: the UNO's timer outputs
-        "in1": ["D22", "D24", "D26", "D28"],
-        "in2": ["D23", "D25", "D27", "D29"],
-        "sonar_trig": None,
-        "sonar_echo": None,
-        "encoders": ["D53", "D52", "D51", "D50"],
-        "battery_adc": 7,
-    },
+    }
+    for robot, uno in UNO_WIRING.items()
 }
 # Timer/compare register of each PWM pin.
 _PWM_REGS = {"D3": ("OCR2B", "TCCR2A", "COM2B1"), "D5": ("OCR0B", "TCCR0A", "COM0B1")}
 _PWM_REGS.update({"D6": ("OCR0A", "TCCR0A", "COM0A1"), "D11": ("OCR2A", "TCCR2A", "COM2A1")})
-_MEGA_PWM_REGS = {"D9": ("OCR2B", "TCCR2A", "COM2B1"), "D4": ("OCR0B", "TCCR0A", "COM0B1")}
-_MEGA_PWM_REGS.update({"D13": ("OCR0A", "TCCR0A", "COM0A1"), "D10": ("OCR2A", "TCCR2A", "COM2A1")})
+_MEGA_PWM_REGS = {mega: _PWM_REGS[uno] for uno, mega in _MEGA_PWM.items()}
 # Pin-change interrupt group of each port (PCINT0..7 = PB, 8..14 = PC, 16..23 = PD).
 _PCINT = {"B": (0, 0), "C": (1, 8), "D": (2, 16)}
 # The Mega's: PCINT0..7 = PB, 9..15 = PJ0..6 (8 is PE0, the UART's RX), 16..23 = PK (A8..A15).
