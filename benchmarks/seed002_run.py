@@ -181,6 +181,34 @@ def seed_changes(robot: RobotDescription, surface: str = "wood") -> dict[str, fl
     return {"acceleration_max": accel, "gear_ratio": gear, "grip": grip_needed(asked, surface)}
 
 
+def grip_table(robot: RobotDescription, gear: float) -> str:
+    """Per floor of :mod:`omnibot.sim.surfaces`: the preset's grip (rollers' grip times mu), the
+    accelerations it holds (``floor_grip``'s worst fraction of the planned 3 m/s^2 with the turn's),
+    the rollers' grip the seed's run needs there and the mu that is."""
+    from omnibot.control.followers.base import PLAN_MARGIN
+    from omnibot.control.reach import floor_grip
+    from omnibot.sim.surfaces import SURFACES
+
+    asked = with_limits(
+        with_drive(robot, gear, robot.wheels[0].rollers.grip),
+        acceleration_max=BRAKE,
+        angular_acceleration_max=PLAN_MARGIN * robot.limits.angular_acceleration_max,
+    )
+    grip = robot.wheels[0].rollers.grip
+    lines = [
+        "| floor | mu | with the preset's rollers (grip x mu) | of the seed's 3 m/s^2 held | rollers' grip needed | mu needed |",
+        "|---|---|---|---|---|---|",
+    ]
+    for name, surface in SURFACES.items():
+        held = min(floor_grip(asked, name, TOP)[1])
+        need = grip_needed(asked, name)
+        lines.append(
+            f"| {name} | {surface.mu:.2f} | {grip * surface.mu:.2f} | {100 * held:.0f} % "
+            f"({held * BRAKE:.1f} m/s^2) | {need:.2f} | {need * surface.mu:.2f} |"
+        )
+    return "\n".join(lines)
+
+
 def variant(name: str, robot: RobotDescription, changes: dict[str, float]) -> RobotDescription:
     """One of :data:`VARIANTS` of ``robot``."""
     if name == "omni3":
@@ -427,6 +455,7 @@ def main(argv: list[str] | None = None) -> int:
             mu=_wood_mu(),
         )
     )
+    print(grip_table(robot, changes["gear_ratio"]))
     path = taught_path(robot, args.seed)
     shape = s_path()
     gap, _ = shape.nearest(np.column_stack((path.x, path.y)))
