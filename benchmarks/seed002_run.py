@@ -1,7 +1,7 @@
 """Seed 002's headline run: its robot up to 5 m/s on an S path, slowing from 5 to 2 m/s within 1 s
 at each change of direction, taught by sampling and repeated with and without its reduced overshoot.
 
-Run: ``python -m benchmarks.seed002_run`` (about 3 minutes; ``--plot FILE.png`` draws the speed
+Run: ``python -m benchmarks.seed002_run`` (about 1.5 minutes; ``--plot FILE.png`` draws the speed
 profiles, the paths and the path error beside the seed's numbers; ``--quick`` runs only the robot
 description that can make the seed's numbers).
 
