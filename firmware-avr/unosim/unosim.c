@@ -308,14 +308,17 @@ static void read_stdin(void) {
     }
 }
 
+static size_t fifo_room(void) { return (in_tail + FIFO - in_head - 1) % FIFO; }
+
+/* Only as many bytes as the FIFO takes: a host far ahead of the line finds the pty full and waits,
+ * as it would for a real serial port (bytes read and then dropped were lost on the line). */
 static void read_pty(void) {
     uint8_t buf[512];
-    ssize_t n = read(pty_master, buf, sizeof buf);
+    size_t room = fifo_room();
+    ssize_t n = read(pty_master, buf, room < sizeof buf ? room : sizeof buf);
     for (ssize_t i = 0; i < n; i++) {
-        size_t next = (in_head + 1) % FIFO;
-        if (next == in_tail) break;  /* a host far ahead of the line: the kernel keeps the rest */
         in_buf[in_head] = buf[i];
-        in_head = next;
+        in_head = (in_head + 1) % FIFO;
     }
     start_feeding();
 }
@@ -529,7 +532,7 @@ int main(int argc, char **argv) {
         int timeout_ms = ahead_us > 0 ? (int)(ahead_us / 1000) : 0;
         if (lockstep && avr_cycles_to_usec(avr, avr->cycle) >= synced_us + LOCKSTEP_AHEAD_US)
             timeout_ms = 1;  /* waiting for the peer's sync */
-        struct pollfd fds[2] = {{pty_master, POLLIN, 0}, {0, POLLIN, 0}};
+        struct pollfd fds[2] = {{pty_master, fifo_room() ? POLLIN : 0, 0}, {0, POLLIN, 0}};
         if (poll(fds, stdin_open ? 2 : 1, timeout_ms) > 0) {
             if (fds[0].revents & POLLIN) read_pty();
             if (fds[1].revents & (POLLIN | POLLHUP)) read_stdin();

@@ -5,7 +5,10 @@ from __future__ import annotations
 
 import itertools
 import os
+import threading
 import time
+
+import pytest
 
 from omnibot.protocol import codes
 from omnibot.uno.emulator import UnoEmulator, UnoError
@@ -102,4 +105,25 @@ def test_the_client_text_window_loses_nothing_of_a_long_mixed_stream() -> None:
             assert most <= codes.TEXT_WINDOW
             client.stop()
     finally:
+        emu.close()
+
+
+@pytest.mark.parametrize("board", ["uno", "mega"])
+def test_a_host_far_ahead_of_the_line_waits_and_nothing_is_lost(board: str) -> None:
+    """1000 VELs (15 KB, more than the harness holds) written at once: the pty fills and the writer
+    waits, as for a real serial port, and every command is answered (the harness used to read the
+    bytes it had no room for and drop them: 546 of 1000 answered)."""
+    emu, port = start("omni4", board=board)
+    try:
+        port.ask("STOP", skip=("IDLE",))
+        n = 1000
+        writer = threading.Thread(target=os.write, args=(port.fd, (SLOW * n).encode()))
+        writer.start()
+        try:
+            replies = port.lines(n, timeout=30.0, skip=("IDLE",))
+        finally:
+            writer.join(timeout=30.0)
+        assert replies == ["OK"] * n
+    finally:
+        port.close()
         emu.close()
