@@ -137,9 +137,11 @@ def test_single_channel_counts_follow_the_wheels_through_reversals(closed_loop: 
         client.telemetry(0.02, codes.TEL_ENCODERS)
         turned = []
         for vx, vy in ((0.3, 0.0), (-0.3, 0.0), (0.0, 0.3), (0.0, 0.0)):
-            for _ in range(10):  # 0.5 s of each, a VEL every 50 ms
-                client.vel(vx, vy, 0.0, 0.2)
-                client.sleep(0.05)
+            for _ in range(10):  # 0.5 s of each, a VEL every 50 ms, of the simulator's time (a
+                client.vel(vx, vy, 0.0, 0.2)  # loaded host runs the emulation slower than the wall)
+                end = sim.time + 0.05
+                while sim.time < end:
+                    client.sleep(0.01)
             turned.append(sim.encoder_counts())
         client.stop()
         counts, fw = counts_at_rest(client, sim, samples)
