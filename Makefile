@@ -51,13 +51,15 @@ avr-tools:
 	  $$SUDO apt-get update -qq && \
 	  $$SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $(AVR_PKGS); }
 
-# The emulated UNO: the firmware of both robots and the simavr harness that runs it.
+# The emulated UNO: the firmware of both robots (UNO and Mega 2560) and the simavr harness that runs it.
 uno-sim: avr-tools
 	$(MAKE) -C firmware-avr ROBOT=omni4
 	$(MAKE) -C firmware-avr ROBOT=mecanum4
+	$(MAKE) -C firmware-avr ROBOT=omni4 BOARD=mega
+	$(MAKE) -C firmware-avr ROBOT=mecanum4 BOARD=mega
 	$(MAKE) -C firmware-avr/unosim
 
-# The UNO firmware as Arduino sketch folders (python -m omnibot.firmware.avrsketch), built with Debian's
+# The UNO firmware as Arduino sketch folders for the UNO and the Mega 2560 (python -m omnibot.firmware.avrsketch), built with Debian's
 # arduino-mk and Arduino core (installed only when missing, like avr-tools) into build/arduino/, with
 # the bare build's flash and static RAM limits (firmware-avr's size-of). tests/uno/test_sketch.py does
 # the same and runs the images in simavr.
@@ -75,6 +77,11 @@ arduino-sketch: avr-tools
 	    tail -20 $(SKETCH_DIR)/omnibot_$$robot.log; echo "make arduino-sketch: arduino-mk failed for $$robot"; exit 1; }; \
 	  $(MAKE) -s --no-print-directory -C firmware-avr size-of ROBOT=$$robot \
 	    ELF=$(CURDIR)/$(SKETCH_DIR)/omnibot_$$robot/build-uno/omnibot_$$robot.elf || exit 1; \
+	  PYTHONPATH=src $(BIN)/python -m omnibot.firmware.avrsketch $$robot $(SKETCH_DIR) --board mega && \
+	  $(MAKE) -s -C $(SKETCH_DIR)/omnibot_$${robot}_mega > $(SKETCH_DIR)/omnibot_$${robot}_mega.log 2>&1 || { \
+	    tail -20 $(SKETCH_DIR)/omnibot_$${robot}_mega.log; echo "make arduino-sketch: arduino-mk failed for $$robot (mega)"; exit 1; }; \
+	  $(MAKE) -s --no-print-directory -C firmware-avr size-of ROBOT=$$robot BOARD=mega \
+	    ELF=$(CURDIR)/$(SKETCH_DIR)/omnibot_$${robot}_mega/build-mega-atmega2560/omnibot_$${robot}_mega.elf || exit 1; \
 	done
 
 # Foxglove's own MCAP libraries (@mcap/core, @mcap/support, @foxglove/rosmsg2-serialization; versions

@@ -1,6 +1,6 @@
 """Cycles per command of the Arduino UNO firmware, in simavr at 16 MHz, and text throughput.
 
-    python -m benchmarks.uno_command_cycles [--robot omni4] [--reps 20]
+    python -m benchmarks.uno_command_cycles [--robot omni4] [--reps 20] [--board uno|mega]
 
 The firmware sleeps at the end of every main-loop pass; the harness (firmware-avr/unosim) counts the
 cycles the CPU is awake between two sleeps. A command is answered in the pass that reads its
@@ -90,12 +90,15 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--robot", default="omni4")
     ap.add_argument("--reps", type=int, default=20)
+    ap.add_argument(
+        "--board", choices=["uno", "mega"], default="uno", help="uno, or mega: the Arduino Mega 2560 build"
+    )
     args = ap.parse_args(argv)
     reason = missing_tools()
     if reason:
         print(f"skipped: {reason}")
         return 0
-    emu = UnoEmulator(args.robot)
+    emu = UnoEmulator(args.robot, board=args.board)
     port = Port(emu.path)
     try:
         port.drain()
@@ -150,12 +153,12 @@ def main(argv: list[str] | None = None) -> int:
         os.close(port.fd)
         emu.close()
     print(f"deepest stack: {emu.stack_bytes} bytes")
-    client_stream(args.robot)
-    throughput(args.robot)
+    client_stream(args.robot, board=args.board)
+    throughput(args.robot, board=args.board)
     return 0
 
 
-def client_stream(robot: str, n: int = 600) -> None:
+def client_stream(robot: str, n: int = 600, board: str = "uno") -> None:
     """``n`` text VELs submitted back to back through RobotClient, half of them turning (longer to
     run than to arrive), with its text window (docs/protocol.md, "Text flow control") and without."""
     from omnibot.client import RobotClient
@@ -163,7 +166,7 @@ def client_stream(robot: str, n: int = 600) -> None:
     from omnibot.protocol.messages import Ok, Vel
 
     for window in (codes.TEXT_WINDOW, None):
-        emu = UnoEmulator(robot)
+        emu = UnoEmulator(robot, board=board)
         try:
             with RobotClient.open(f"serial://{emu.path}", text_window=window) as client:
                 start = time.monotonic()
@@ -189,12 +192,13 @@ def client_stream(robot: str, n: int = 600) -> None:
         )
 
 
-def throughput(robot: str, n: int = 1000, seconds: float = 5.0) -> None:
-    """Binary VEL stream (with the window the UNO announces: 8) and the 100 Hz closed loop, text
-    and binary, measured as benchmarks.link_throughput measures the MicroPython firmware."""
+def throughput(robot: str, n: int = 1000, seconds: float = 5.0, board: str = "uno") -> None:
+    """Binary VEL stream (with the window the board announces: the UNO 8, the Mega 32) and the 100 Hz
+    closed loop, text and binary, measured as benchmarks.link_throughput measures the MicroPython
+    firmware."""
     bin_len = len(binary.encode(VEL, seq=1))
     limit = LINE_BYTES_PER_S / bin_len
-    emu = UnoEmulator(robot)
+    emu = UnoEmulator(robot, board=board)
     try:
         with open_link(f"serial://{emu.path}") as link:
             drain(link, 0.2)

@@ -1,5 +1,6 @@
 #include "binlink.h"
 
+#include "board.h"
 #include "hal.h"
 
 namespace bin {
@@ -10,13 +11,15 @@ namespace bin {
 #define CHUNK_MAX 48      // command frames are at most 34 bytes (5 varints of 5); longer chunks are dropped
 #define FRAME_MAX 72      // largest frame we send (a TEL of every group, 32-bit extremes)
 
-// The window this controller takes and announces in its HELLO reply: the protocol's least. Each slot
-// costs 20 B of kept reply and 19 B of pending event, and 8 command frames (at most 25 bytes each on
-// the wire: 5 varints of 16 bits) fit in the 256-byte receive ring, so a host streaming commands that
-// run slower than the line (a turning MOVE: 2.2 ms) can never overflow it (docs/uno.md). The host
-// takes our events with its window of P_WINDOW, so 8 events in flight are within it.
-static const uint8_t W = P_WINDOW_MIN;
-static_assert(P_WINDOW_MIN <= P_WINDOW, "the host takes events with a window of P_WINDOW");
+// The window this controller takes and announces in its HELLO reply: on the UNO the protocol's least.
+// Each slot costs 20 B of kept reply and 19 B of pending event, and 8 command frames (at most 25 bytes
+// each on the wire: 5 varints of 16 bits) fit in the 256-byte receive ring, so a host streaming
+// commands that run slower than the line (a turning MOVE: 2.2 ms) can never overflow it (docs/uno.md).
+// The Mega takes P_WINDOW (board.h): 32 frames fit its 1 KB ring. The host takes our events with its
+// window of P_WINDOW, so W events in flight are within it.
+static const uint8_t W = BOARD_WINDOW;
+static_assert(BOARD_WINDOW >= P_WINDOW_MIN && BOARD_WINDOW <= P_WINDOW, "the window is P_WINDOW_MIN..P_WINDOW");
+static_assert(BOARD_WINDOW * 25 <= BOARD_RX_SIZE, "a window of command frames fits the receive ring");
 static const uint16_t RETRY_MS = P_RETRY_TIMEOUT_MS;
 static const uint8_t RETRIES = P_RETRIES;
 

@@ -1,7 +1,9 @@
-// ATmega328P peripherals. Timer 1 (prescaler 8, 0.5 us) is the clock and times the sonar echo by
-// input capture on ICP1 (D8); its compare B wakes the main loop every millisecond. Timers 0 and 2
-// give the motors' PWM (fast PWM, prescaler 64: 976 Hz). USART0 runs at 115200 baud (U2X).
+// The board's peripherals (board.h names them: ATmega328P or ATmega2560). The clock timer (timer 1
+// on the UNO, 5 on the Mega; prescaler 8, 0.5 us) times the sonar echo by input capture (ICP1 on D8,
+// ICP5 on D48); its compare B wakes the main loop every millisecond. Timers 0 and 2 give the motors'
+// PWM (fast PWM, prescaler 64: 976 Hz). USART0 runs at 115200 baud (U2X).
 #include "hal.h"
+#include "board.h"
 
 #include <avr/interrupt.h>
 #include <avr/io.h>
@@ -9,11 +11,18 @@
 #include <util/atomic.h>
 #include <util/delay.h>
 
-#define RX_SIZE 256  // powers of two; 256: an index wraps by itself
+#define RX_SIZE BOARD_RX_SIZE  // powers of two; 256 (the UNO's): an 8-bit index wraps by itself
 #define TX_SIZE 128
 
 static volatile uint8_t rx_buf[RX_SIZE];
-static volatile uint8_t rx_head, rx_tail;
+#if RX_SIZE > 256  // 16-bit indices: the main loop reads and writes them with interrupts off
+typedef uint16_t RxIndex;
+#define RX_ATOMIC ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
+#else
+typedef uint8_t RxIndex;
+#define RX_ATOMIC
+#endif
+static volatile RxIndex rx_head, rx_tail;
 static volatile uint8_t tx_buf[TX_SIZE];
 static volatile uint8_t tx_head, tx_tail;
 static volatile uint16_t overflows;
@@ -51,9 +60,9 @@ static volatile uint16_t echo_ticks;
 // command's end wait in the ring: a pass woken by each of them cost more than the command itself.
 static volatile bool wake;
 
-ISR(USART_RX_vect) {
+ISR(UART_RX_vect) {
     uint8_t c = UDR0;
-    uint8_t next = (rx_head + 1) & (RX_SIZE - 1);
+    RxIndex next = (rx_head + 1) & (RX_SIZE - 1);
     if (next != rx_tail) {
         rx_buf[rx_head] = c;
         rx_head = next;
@@ -61,7 +70,7 @@ ISR(USART_RX_vect) {
     if (c == '\n' || c == '\r' || c == ';') wake = true;
 }
 
-ISR(USART_UDRE_vect) {
+ISR(UART_UDRE_vect) {
     if (tx_head == tx_tail) {
         UCSR0B &= ~_BV(UDRIE0);
         return;
@@ -70,10 +79,10 @@ ISR(USART_UDRE_vect) {
     tx_tail = (tx_tail + 1) & (TX_SIZE - 1);
 }
 
-ISR(TIMER1_OVF_vect) { overflows++; }
+ISR(CLK_OVF_vect) { overflows++; }
 
-ISR(TIMER1_COMPB_vect) {  // 1 ms: wakes the main loop, times the encoders' pauses
-    OCR1B += 2000;
+ISR(CLK_COMPB_vect) {  // 1 ms: wakes the main loop, times the encoders' pauses
+    CLK_OCRB += 2000;
     wake = true;
     for (Wheel &w : wheel) {
         if (w.quiet != 255) w.quiet++;
@@ -81,16 +90,16 @@ ISR(TIMER1_COMPB_vect) {  // 1 ms: wakes the main loop, times the encoders' paus
     }
 }
 
-ISR(TIMER1_CAPT_vect) {
-    uint16_t t = ICR1;
+ISR(CLK_CAPT_vect) {
+    uint16_t t = CLK_ICR;
     if (echo_state == 1) {
         echo_start = t;
-        TCCR1B &= ~_BV(ICES1);  // now the falling edge
+        CLK_TCCRB &= ~_BV(CLK_ICES);  // now the falling edge
         echo_state = 2;
     } else if (echo_state == 2) {
         echo_ticks = t - echo_start;
         echo_state = 3;
-        TIMSK1 &= ~_BV(ICIE1);
+        CLK_TIMSK &= ~_BV(CLK_ICIE);
     }
 }
 
@@ -136,11 +145,11 @@ void hal_init() {
     UBRR0 = (F_CPU / 8 / BAUD) - 1;
     UCSR0B = _BV(RXEN0) | _BV(TXEN0) | _BV(RXCIE0);
     UCSR0C = _BV(UCSZ01) | _BV(UCSZ00);
-    // timer 1: normal mode, prescaler 8, overflow + compare B + (on demand) capture interrupts
-    TCCR1A = 0;
-    TCCR1B = _BV(CS11) | _BV(ICNC1);
-    OCR1B = 2000;
-    TIMSK1 = _BV(TOIE1) | _BV(OCIE1B);
+    // the clock timer: normal mode, prescaler 8, overflow + compare B + (on demand) capture interrupts
+    CLK_TCCRA = 0;
+    CLK_TCCRB = _BV(CLK_CS1) | _BV(CLK_ICNC);
+    CLK_OCRB = 2000;
+    CLK_TIMSK = _BV(CLK_TOIE) | _BV(CLK_OCIEB);
     // timers 0 and 2: fast PWM, prescaler 64; outputs connected per motor when it runs
     TCCR0A = _BV(WGM01) | _BV(WGM00);
     TCCR0B = _BV(CS01) | _BV(CS00);
@@ -188,13 +197,17 @@ uint32_t hal_ticks() {
     uint16_t hi, lo;
     ATOMIC_BLOCK(ATOMIC_RESTORESTATE) {
         hi = overflows;
-        lo = TCNT1;
-        if ((TIFR1 & _BV(TOV1)) && lo < 0x8000) hi++;
+        lo = CLK_TCNT;
+        if ((CLK_TIFR & _BV(CLK_TOV)) && lo < 0x8000) hi++;
     }
     return ((uint32_t)hi << 16) | lo;
 }
 
-bool hal_rx_pending() { return rx_head != rx_tail; }
+bool hal_rx_pending() {
+    bool pending;
+    RX_ATOMIC { pending = rx_head != rx_tail; }
+    return pending;
+}
 
 void hal_wait_for_event() {
     cli();
@@ -210,9 +223,11 @@ void hal_wait_for_event() {
 }
 
 int16_t uart_read() {
-    if (rx_head == rx_tail) return -1;
+    RxIndex head;
+    RX_ATOMIC { head = rx_head; }
+    if (head == rx_tail) return -1;
     uint8_t c = rx_buf[rx_tail];
-    rx_tail = (rx_tail + 1) & (RX_SIZE - 1);
+    RX_ATOMIC { rx_tail = (rx_tail + 1) & (RX_SIZE - 1); }
     return c;
 }
 
@@ -287,9 +302,9 @@ int32_t encoder_count(uint8_t i) {
 void sonar_trigger() {
     ATOMIC_BLOCK(ATOMIC_RESTORESTATE) {
         echo_state = 1;
-        TCCR1B |= _BV(ICES1);  // rising edge first
-        TIFR1 = _BV(ICF1);
-        TIMSK1 |= _BV(ICIE1);
+        CLK_TCCRB |= _BV(CLK_ICES);  // rising edge first
+        CLK_TIFR = _BV(CLK_ICF);
+        CLK_TIMSK |= _BV(CLK_ICIE);
     }
     SONAR_TRIG_PORT |= _BV(SONAR_TRIG_BIT);
     _delay_us(10);

@@ -3,7 +3,7 @@
 #include <stdint.h>
 
 void hal_init();
-uint32_t hal_ticks();           // timer 1 ticks of 0.5 us, wrapping at 2^32
+uint32_t hal_ticks();           // clock timer ticks of 0.5 us, wrapping at 2^32
 void hal_wait_for_event();      // idle sleep until a command's end arrives or the 1 ms tick
 bool hal_rx_pending();
 

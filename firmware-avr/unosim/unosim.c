@@ -3,7 +3,7 @@
  *
  *   unosim --board ROBOT.board [--range CM] [--encoders CPS] [--report] [--lockstep] [--heap ADDR] [--profile FILE] FIRMWARE.elf
  *
- * The ATmega328P runs at 16 MHz, kept in step with the wall clock (never faster; on a busy host it
+ * The ATmega328P (or the board file's `mcu`, the Mega's atmega2560) runs at 16 MHz, kept in step with the wall clock (never faster; on a busy host it
  * falls behind by at most 20 ms and then slips, so the firmware's time never races). Its USART0 is a pseudo-terminal
  * whose path is the first line on stdout; bytes from the host reach the UART paced at 115200 baud
  * (one byte per 10 bit times), the firmware's bytes leave at the pace of simavr's UART model.
@@ -14,6 +14,8 @@
  *   - encoders: single-channel edges at a rate per wheel (counts/s), set on stdin, or from the
  *     duties with --encoders CPS (CPS counts/s at full duty);
  *   - battery: ADC7 at 2500 mV (the pack at its nominal voltage).
+ * The board file may name the chip (`mcu atmega2560`; default atmega328p) and its external interrupts'
+ * pins (`extint PORT BIT`, INT0 first; default the UNO's D2 and D3), which the harness unhooks.
  * stdin lines: `range CM`, `wheels C1 C2 C3 C4` (counts/s), `counts C1 C2 C3 C4` (absolute counts the
  * encoders move to, one edge per 50 us at most: hardware in the loop), `battery MV` (ADC pin mV), `reset` (a
  * power cycle that keeps the EEPROM), `stats` (prints `stats LONGEST AWAKE ELAPSED PASSES`: the
@@ -78,6 +80,10 @@ static unsigned motor_map[MOTORS_MAX][7];
 static int motors, encoders;
 static struct { char port; int bit; } encoder_map[MOTORS_MAX], trigger_pin, echo_pin;
 static int has_sonar, battery_adc = -1;
+static char mcu[32] = "atmega328p";
+#define EXTINT_MAX 8
+static struct { char port; int bit; } extint_map[EXTINT_MAX] = {{'D', 2}, {'D', 3}};
+static int extints = 2, extints_given;
 static avr_irq_t *encoder_irq[MOTORS_MAX];
 static double wheel_cps[MOTORS_MAX];
 static double wheel_pos[MOTORS_MAX];
@@ -100,19 +106,20 @@ static avr_irq_t *echo_irq;
 
 /* --profile: program-counter samples while awake, by flash word */
 #define PROFILE_CYCLES 17
+#define PROFILE_WORDS 0x20000 /* 256 KB of flash (the ATmega2560's) */
 static const char *profile_file;
-static uint32_t profile_hits[0x4000];
+static uint32_t profile_hits[PROFILE_WORDS];
 
 static avr_cycle_count_t profile_tick(avr_t *a, avr_cycle_count_t when, void *param) {
     (void)param;
-    if (a->state == cpu_Running) profile_hits[(a->pc >> 1) & 0x3FFF]++;
+    if (a->state == cpu_Running) profile_hits[(a->pc >> 1) & (PROFILE_WORDS - 1)]++;
     return when + PROFILE_CYCLES;
 }
 
 static void profile_write(void) {
     FILE *f = profile_file ? fopen(profile_file, "w") : NULL;
     if (!f) return;
-    for (int i = 0; i < 0x4000; i++)
+    for (int i = 0; i < PROFILE_WORDS; i++)
         if (profile_hits[i]) fprintf(f, "%d %u\n", 2 * i, profile_hits[i]);
     fclose(f);
 }
@@ -235,6 +242,16 @@ static avr_cycle_count_t encoder_tick(avr_t *a, avr_cycle_count_t when, void *pa
     return when + avr_usec_to_cycles(a, ENCODER_TICK_US);
 }
 
+/* The external interrupts' pins are motor or free pins the firmware never uses as interrupts; simavr
+ * 1.6 polls a low level on them every cycle whatever the mode, which would slow the emulation tenfold. */
+static void unhook_extints(void) {
+    for (int i = 0; i < extints; i++) {
+        avr_irq_t *pin = avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ(extint_map[i].port), extint_map[i].bit);
+        avr_irq_t *ext = avr_io_getirq(avr, AVR_IOCTL_EXTINT_GETIRQ(), EXTINT_IRQ_OUT_INT0 + i);
+        if (pin && ext) avr_unconnect_irq(pin, ext);
+    }
+}
+
 /* ---------------------------------------------------------------- host side */
 
 static void command(char *line) {
@@ -252,9 +269,7 @@ static void command(char *line) {
         avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0 + battery_adc), a[0]);
     } else if (strncmp(line, "reset", 5) == 0) {
         avr_reset(avr);  /* a power cycle: RAM and registers start over, the EEPROM keeps its bytes */
-        for (int i = 0; i < 2; i++)
-            avr_unconnect_irq(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 2 + i),
-                              avr_io_getirq(avr, AVR_IOCTL_EXTINT_GETIRQ(), EXTINT_IRQ_OUT_INT0 + i));
+        unhook_extints();
     } else if (strncmp(line, "stats", 5) == 0) {
         /* cycles: longest pass, awake in all, elapsed; then the passes; and start counting anew */
         printf("stats %llu %llu %llu %lu\n", (unsigned long long)longest, (unsigned long long)awake,
@@ -293,14 +308,17 @@ static void read_stdin(void) {
     }
 }
 
+static size_t fifo_room(void) { return (in_tail + FIFO - in_head - 1) % FIFO; }
+
+/* Only as many bytes as the FIFO takes: a host far ahead of the line finds the pty full and waits,
+ * as it would for a real serial port (bytes read and then dropped were lost on the line). */
 static void read_pty(void) {
     uint8_t buf[512];
-    ssize_t n = read(pty_master, buf, sizeof buf);
+    size_t room = fifo_room();
+    ssize_t n = read(pty_master, buf, room < sizeof buf ? room : sizeof buf);
     for (ssize_t i = 0; i < n; i++) {
-        size_t next = (in_head + 1) % FIFO;
-        if (next == in_tail) break;  /* a host far ahead of the line: the kernel keeps the rest */
         in_buf[in_head] = buf[i];
-        in_head = next;
+        in_head = (in_head + 1) % FIFO;
     }
     start_feeding();
 }
@@ -341,6 +359,14 @@ static int read_board(const char *path) {
             echo_pin.port = port;
             echo_pin.bit = bit;
             has_sonar |= 2;
+        } else if (sscanf(line, "mcu %31s", mcu) == 1) {
+        } else if (sscanf(line, "extint %c %d", &port, &bit) == 2) {
+            if (!extints_given) extints = 0;
+            extints_given = 1;
+            if (extints < EXTINT_MAX) {
+                extint_map[extints].port = port;
+                extint_map[extints++].bit = bit;
+            }
         } else if (sscanf(line, "battery %d", &battery_adc) != 1) {
             fprintf(stderr, "unosim: %s: cannot read: %s", path, line);
             ok = 0;
@@ -412,8 +438,11 @@ int main(int argc, char **argv) {
         fprintf(stderr, "unosim: cannot read %s\n", elf);
         return 1;
     }
-    avr = avr_make_mcu_by_name("atmega328p");
-    if (!avr) return 1;
+    avr = avr_make_mcu_by_name(mcu);
+    if (!avr) {
+        fprintf(stderr, "unosim: simavr has no mcu %s\n", mcu);
+        return 1;
+    }
     avr_init(avr);
     avr->frequency = F_CPU;
     avr->avcc = avr->vcc = avr->aref = 5000;
@@ -424,11 +453,7 @@ int main(int argc, char **argv) {
     close(saved_stdout);
     close(devnull);
     avr->sleep = no_sleep;
-    /* INT0/INT1 (PD2, PD3) are motor pins the firmware never uses as interrupts; simavr 1.6 polls a
-     * low level on them every cycle whatever the mode, which would slow the emulation tenfold */
-    for (int i = 0; i < 2; i++)
-        avr_unconnect_irq(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 2 + i),
-                          avr_io_getirq(avr, AVR_IOCTL_EXTINT_GETIRQ(), EXTINT_IRQ_OUT_INT0 + i));
+    unhook_extints();
 
     uint32_t flags = 0;
     avr_ioctl(avr, AVR_IOCTL_UART_GET_FLAGS('0'), &flags);
@@ -507,7 +532,7 @@ int main(int argc, char **argv) {
         int timeout_ms = ahead_us > 0 ? (int)(ahead_us / 1000) : 0;
         if (lockstep && avr_cycles_to_usec(avr, avr->cycle) >= synced_us + LOCKSTEP_AHEAD_US)
             timeout_ms = 1;  /* waiting for the peer's sync */
-        struct pollfd fds[2] = {{pty_master, POLLIN, 0}, {0, POLLIN, 0}};
+        struct pollfd fds[2] = {{pty_master, fifo_room() ? POLLIN : 0, 0}, {0, POLLIN, 0}};
         if (poll(fds, stdin_open ? 2 : 1, timeout_ms) > 0) {
             if (fds[0].revents & POLLIN) read_pty();
             if (fds[1].revents & (POLLIN | POLLHUP)) read_stdin();

@@ -7,13 +7,14 @@ sim            ``sim://omni4?seed=1``: in-process lockstep simulator            
 pty            ``omnibot sim --pty`` child process, opened as ``serial://PATH``  wall clock  yes
 micropython    ``micropython run_unix.py omni4`` on pipes (firmware/unixhal.py)  wall clock  no
 uno            the Arduino UNO firmware (firmware-avr/) in simavr, pty at 115200  wall clock  no
+mega           the same firmware built for the Arduino Mega 2560, in simavr      wall clock  no
 =============  ================================================================  ==========  =======
 
 Each test gets ``client``: a :class:`RobotClient` in text mode with the controller reset to a known
 state (STOP, MODE 0, TELEM and sonar off). The processes live for the session; the sim backend
 makes a fresh simulator per test. ``obstacle`` gives a link on which driving straight ahead meets
 something (the ``room`` world, or the fixed sonar range of MicroPython and the UNO), for the
-emergency stop. The uno backend is skipped, with the reason, where Debian's AVR toolchain or simavr
+emergency stop. The uno and mega backends are skipped, with the reason, where Debian's AVR toolchain or simavr
 is missing (``make avr-tools``).
 """
 
@@ -175,14 +176,14 @@ def _micropython_backend(stack: list[Callable[[], None]]) -> Backend:
 # ------------------------------------------------------------------ Arduino UNO in simavr
 
 
-def _uno_backend(stack: list[Callable[[], None]]) -> Backend:
+def _uno_backend(stack: list[Callable[[], None]], board: str = "uno") -> Backend:
     from omnibot.uno.emulator import UnoEmulator, missing_tools
 
     reason = missing_tools()
     if reason:
-        pytest.skip(f"uno backend: {reason}")
+        pytest.skip(f"{board} backend: {reason}")
     # encoders turn with the PWM duty (440 counts per wheel turn, about 6 turns/s at full duty)
-    emulator = UnoEmulator(ROBOT, range_cm=MP_SONAR_CM, encoder_cps=2600.0)
+    emulator = UnoEmulator(ROBOT, range_cm=MP_SONAR_CM, encoder_cps=2600.0, board=board)
     stack.append(emulator.close)
     link = open_link(f"serial://{emulator.path}")
     stack.append(link.close)
@@ -194,12 +195,14 @@ def _uno_backend(stack: list[Callable[[], None]]) -> Backend:
     def battery(_: Link, volts: float) -> None:  # the divider's pin: 2.96 pack volts per pin volt
         emulator.command(f"battery {round(volts * 1000 / 2.96)}")
 
-    return Backend("uno", True, False, lambda: (link, False), obstacle, 1.0, battery)
+    return Backend(board, True, False, lambda: (link, False), obstacle, 1.0, battery)
 
 
 # ------------------------------------------------------------------ fixtures
 
-BACKENDS = ["sim", "pty", "micropython", "uno"]
+BACKENDS = ["sim", "pty", "micropython", "uno", "mega"]
+AVR_BACKENDS = ("uno", "mega")
+"""The backends that run the AVR firmware (protocol version 2 only, docs/uno.md)."""
 
 
 @pytest.fixture(scope="session", params=BACKENDS)
@@ -210,8 +213,8 @@ def backend(request: pytest.FixtureRequest) -> Iterator[Backend]:
             yield _sim_backend()
         elif request.param == "pty":
             yield _pty_backend(cleanup)
-        elif request.param == "uno":
-            yield _uno_backend(cleanup)
+        elif request.param in AVR_BACKENDS:
+            yield _uno_backend(cleanup, request.param)
         else:
             yield _micropython_backend(cleanup)
     finally:

@@ -21,12 +21,12 @@ from omnibot.client import (
 from omnibot.protocol import codes, units
 from omnibot.protocol.messages import Cal, Hello, Mode, Move, Status
 
-from .conftest import ROBOT, Backend, ControllerClock, RawLink
+from .conftest import AVR_BACKENDS, ROBOT, Backend, ControllerClock, RawLink
 
 
 def latest(backend: Backend) -> int:
-    """The highest protocol version the backend's controller speaks (the UNO's: 2, docs/uno.md)."""
-    return 2 if backend.name == "uno" else codes.VERSIONS[-1]
+    """The highest protocol version the backend's controller speaks (the AVR firmware's: 2, docs/uno.md)."""
+    return 2 if backend.name in AVR_BACKENDS else codes.VERSIONS[-1]
 
 
 def test_hello_format(raw: RawLink, backend: Backend) -> None:

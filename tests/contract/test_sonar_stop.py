@@ -1,7 +1,8 @@
 """The sonar stop in the room world (fixed seeds): the robot stops before the wall at every speed and
 angle it allows for, travel no sonar covers is limited or refused, and with the stop off nothing
 changes. On the lockstep simulator (``sim``) and on the Arduino UNO firmware in simavr with the same
-physics in the loop (``uno``, docs/uno.md; skipped with the reason without the AVR tools), timed by
+physics in the loop (``uno``, and ``mega``: its Arduino Mega 2560 build; docs/uno.md; skipped with
+the reason without the AVR tools), timed by
 the simulator's clock. benchmarks/sonar_stop.py runs the full grid."""
 
 from __future__ import annotations
@@ -41,14 +42,14 @@ class Device(Protocol):
     robot: RobotDescription
 
 
-@pytest.fixture(params=["sim", "uno"])
+@pytest.fixture(params=["sim", "uno", "mega"])
 def backend(request: pytest.FixtureRequest) -> str:
-    if request.param == "uno":
+    if request.param in ("uno", "mega"):
         from omnibot.uno.emulator import missing_tools
 
         reason = missing_tools()
         if reason:
-            pytest.skip(f"uno backend: {reason}")
+            pytest.skip(f"{request.param} backend: {reason}")
     return str(request.param)
 
 
@@ -57,11 +58,11 @@ def room(
     backend: str, angle_deg: float, course_deg: float = 0.0, seed: int = 1
 ) -> Iterator[tuple[RobotClient, Device]]:
     pose = start_pose(angle_deg, course_deg)
-    if backend == "uno":
+    if backend in ("uno", "mega"):
         from omnibot.uno.hil import UnoHil, UnoLink
 
-        hil = UnoHil("omni4", world="room", seed=seed, start_pose=pose)
-        with RobotClient(UnoLink(hil, "uno://omni4"), "omni4", timeout=2.0) as client:
+        hil = UnoHil("omni4", world="room", seed=seed, start_pose=pose, board=backend)
+        with RobotClient(UnoLink(hil, f"uno://omni4?board={backend}"), "omni4", timeout=2.0) as client:
             yield client, hil
         return
     device = SimDevice("omni4", world="room", seed=seed, start_pose=pose)

@@ -71,3 +71,32 @@ def test_the_uno_takes_vel_without_its_acceleration(robot: str) -> None:
     text = avrgen.header_source(robot)
     assert '{"VEL", 6, 4, 4, 0},' in text
     assert _define(text, "P_PROTOCOL_VERSION") == "2"
+
+
+def test_the_mega_header_differs_from_the_unos_only_in_its_pin_map() -> None:
+    uno, mega = avrgen.header_source("omni4"), avrgen.header_source("omni4", "mega")
+    cut = "pin map (docs/uno.md) ---- */"
+    assert uno.split(cut)[0].replace("Arduino UNO", "") == mega.split(cut)[0].replace("Arduino Mega 2560", "")
+    # the Mega's pins: D9 (OC2B, PH6) for motor 1, the encoders on PB0..PB3 (PCINT0..3), echo ICP5 (D48)
+    assert _define(mega, "M0_PWM_PORT") == "PORTH" and _define(mega, "M0_PWM_BIT") == "6"
+    assert [_define(mega, f"M{i}_ENC_PCINT") for i in range(4)] == ["0", "1", "2", "3"]
+    assert _define(mega, "SONAR_TRIG_PORT") == "PORTL" and _define(mega, "SONAR_TRIG_BIT") == "2"
+    assert "mcu atmega2560" in avrgen.board_source("omni4", "mega")
+    assert "mcu" not in avrgen.board_source("omni4")  # the harness's default chip
+
+
+def test_mega_pins_are_checked_against_the_megas_own_map(monkeypatch: pytest.MonkeyPatch) -> None:
+    assert avrgen._pin("D53", avrgen.board("mega")) == ("B", 0)
+    with pytest.raises(ConfigError, match="not an Arduino Mega 2560 pin"):
+        avrgen._pin("D54", avrgen.board("mega"))
+    with pytest.raises(ConfigError, match="no board 'due'"):
+        avrgen.board("due")
+    wiring = {**avrgen.MEGA_WIRING["omni4"], "sonar_echo": "D8"}
+    monkeypatch.setitem(avrgen.MEGA_WIRING, "omni4", wiring)
+    with pytest.raises(ConfigError, match="echo must be on D48"):
+        avrgen.header_source("omni4", "mega")
+    monkeypatch.setitem(
+        avrgen.MEGA_WIRING, "omni4", {**wiring, "sonar_echo": "D48", "pwm": ["D2", "D4", "D13", "D10"]}
+    )
+    with pytest.raises(ConfigError, match="D2 is not a PWM pin of timers 0 and 2"):
+        avrgen.header_source("omni4", "mega")

@@ -1,4 +1,5 @@
-"""Fixtures: the UNO firmware running in simavr (skipped, with the reason, without the AVR tools)."""
+"""Fixtures: the UNO firmware running in simavr (skipped, with the reason, without the AVR tools);
+the same firmware built for the Arduino Mega 2560 (``board="mega"``) runs in simavr too."""
 
 from __future__ import annotations
 
@@ -50,19 +51,27 @@ class Port:
         os.close(self.fd)
 
 
-def start(robot: str, range_cm: int | None = None, report: bool = False) -> tuple[UnoEmulator, Port]:
+BUILDS = [("omni4", "uno"), ("mecanum4", "uno"), ("omni4", "mega"), ("mecanum4", "mega")]
+"""Every (robot, board) the firmware is built for."""
+BUILD_IDS = [robot if board == "uno" else f"{robot}-{board}" for robot, board in BUILDS]
+
+
+def start(
+    robot: str, range_cm: int | None = None, report: bool = False, board: str = "uno"
+) -> tuple[UnoEmulator, Port]:
     reason = missing_tools()
     if reason:
         pytest.skip(f"emulated UNO: {reason}")
-    emu = UnoEmulator(robot, range_cm=range_cm, report=report)
+    emu = UnoEmulator(robot, range_cm=range_cm, report=report, board=board)
     port = Port(emu.path)
     assert port.lines(1) == [f"HELLO,{codes.PROTOCOL_VERSION},{robot},4"]
     return emu, port
 
 
-@pytest.fixture(params=["omni4", "mecanum4"])
+@pytest.fixture(params=BUILDS, ids=BUILD_IDS)
 def uno(request: pytest.FixtureRequest) -> Iterator[tuple[UnoEmulator, Port]]:
-    emu, port = start(request.param, range_cm=100)
+    robot, board = request.param
+    emu, port = start(robot, range_cm=100, board=board)
     try:
         yield emu, port
     finally:

@@ -8,6 +8,8 @@ import os
 import select
 import time
 
+import pytest
+
 from omnibot.client import RobotClient
 from omnibot.client.wire import BinaryWire
 from omnibot.firmware.config import build_config
@@ -111,10 +113,16 @@ def windows(items: list[tuple[object, ...] | bytes]) -> tuple[list[tuple[object,
     return out, found
 
 
-def test_same_frames_as_the_micropython_firmware() -> None:
+WINDOWS = {"uno": codes.WINDOW_MIN, "mega": codes.WINDOW}
+"""The window each board announces: the UNO the protocol's least (its RAM and receive ring), the Mega
+the protocol's full window, as the MicroPython firmware (docs/uno.md)."""
+
+
+@pytest.mark.parametrize("board", list(WINDOWS))
+def test_same_frames_as_the_micropython_firmware(board: str) -> None:
     """The same frames, but for the window each announces in its HELLO reply: the MicroPython
-    firmware takes codes.WINDOW, the UNO the protocol's least (its RAM and receive ring)."""
-    emu, port = start("omni4")
+    firmware takes codes.WINDOW, the UNO the protocol's least, the Mega codes.WINDOW too."""
+    emu, port = start("omni4", board=board)
     announced: list[object] = []
     try:
         for data, expected in zip(STEPS, reference("omni4"), strict=True):
@@ -135,26 +143,28 @@ def test_same_frames_as_the_micropython_firmware() -> None:
     finally:
         port.close()
         emu.close()
-    assert announced == [codes.WINDOW_MIN] * 2  # the session's HELLO and the last probe's
+    assert announced == [WINDOWS[board]] * 2  # the session's HELLO and the last probe's
 
 
-def test_a_client_keeps_to_the_window_the_uno_announces() -> None:
-    """The UNO announces the protocol's least window; RobotClient keeps to it and every command of a
-    stream three windows long is answered."""
-    emu, port = start("omni4")
+@pytest.mark.parametrize("board", list(WINDOWS))
+def test_a_client_keeps_to_the_window_the_uno_announces(board: str) -> None:
+    """The UNO announces the protocol's least window (the Mega the full one); RobotClient keeps to it
+    and every command of a stream three windows long is answered."""
+    window = WINDOWS[board]
+    emu, port = start("omni4", board=board)
     port.close()
     try:
         with RobotClient.open(f"serial://{emu.path}") as client:
             hello = client.use_binary()
-            assert hello.window == codes.WINDOW_MIN
+            assert hello.window == window
             wire = client._wire
-            assert isinstance(wire, BinaryWire) and wire.sender.window == codes.WINDOW_MIN
+            assert isinstance(wire, BinaryWire) and wire.sender.window == window
             flying = []
             calls = []
-            for k in range(3 * codes.WINDOW_MIN):
-                calls.append(client.submit(Vel(30 + k, 0, 0, 100)))
+            for k in range(3 * window):
+                calls.append(client.submit(Vel(30 + k % 60, 0, 0, 100)))
                 flying.append(len(wire.sender.pending()))
-            assert max(flying) == codes.WINDOW_MIN
+            assert max(flying) == window
             assert all(isinstance(call.result(timeout=2.0), Ok) for call in calls)
             client.use_text()
     finally:

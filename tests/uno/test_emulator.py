@@ -13,10 +13,10 @@ from omnibot.firmware.controller import Controller
 from omnibot.protocol import codes, linecheck
 from omnibot.protocol.frame import encode_message
 from omnibot.robot.description import load_robot
-from omnibot.uno.emulator import FIRMWARE_DIR, UnoEmulator
+from omnibot.uno.emulator import UnoEmulator
 from tests.firmware.fakehal import FakeHAL
 
-from .conftest import Port, start
+from .conftest import BUILD_IDS, BUILDS, Port, start
 
 
 def checked(command: str, tag: str | None = None) -> str:
@@ -115,8 +115,9 @@ def test_same_replies_and_powers_as_the_micropython_firmware(uno: tuple[UnoEmula
         assert all(abs(a - b) <= 1 for a, b in zip(g_powers, e_powers, strict=True)), (g, e)
 
 
-def test_calibration_survives_a_power_cycle() -> None:
-    emu, port = start("omni4")
+@pytest.mark.parametrize("board", ["uno", "mega"])
+def test_calibration_survives_a_power_cycle(board: str) -> None:
+    emu, port = start("omni4", board=board)
     try:
         before = port.ask("MOVE,30000,40,30,0;STATUS;STOP", 4)[1]
         assert port.ask("CAL,0,0,0,2000;MOVE,30000,40,30,0;STATUS;STOP", 5)[2] != before
@@ -130,8 +131,9 @@ def test_calibration_survives_a_power_cycle() -> None:
         emu.close()
 
 
-def test_static_ram_and_measured_stack_fit() -> None:
-    emu, port = start("omni4", range_cm=100)
+@pytest.mark.parametrize(("board", "ram"), [("uno", 2048), ("mega", 8192)])
+def test_static_ram_and_measured_stack_fit(board: str, ram: int) -> None:
+    emu, port = start("omni4", range_cm=100, board=board)
     try:
         port.ask("SONAR,1,60,0,500,20;TELEM,10,255", 2)  # the sonar stop armed: the guard runs
         port.write("MOVE,2,40,0,0;DELTA,0,0,10,0,10;VEL,30,30,100,200\n")
@@ -154,15 +156,15 @@ def test_static_ram_and_measured_stack_fit() -> None:
     finally:
         port.close()
         emu.close()
-    report = (FIRMWARE_DIR / "build" / "omni4" / "size.txt").read_text()
-    static = int(re.search(r"static RAM (\d+) of 2048", report).group(1))  # type: ignore[union-attr]
-    assert static <= 0.75 * 2048
-    assert emu.stack_bytes is not None and 0 < emu.stack_bytes < 2048 - static - 64, (static, emu.stack_bytes)
+    report = (emu.elf.parent / "size.txt").read_text()
+    static = int(re.search(rf"static RAM (\d+) of {ram}", report).group(1))  # type: ignore[union-attr]
+    assert static <= 0.75 * ram
+    assert emu.stack_bytes is not None and 0 < emu.stack_bytes < ram - static - 64, (static, emu.stack_bytes)
 
 
-@pytest.mark.parametrize("robot", ["omni4", "mecanum4"])
-def test_hello_names_the_robot(robot: str) -> None:
-    emu, port = start(robot)
+@pytest.mark.parametrize(("robot", "board"), BUILDS, ids=BUILD_IDS)
+def test_hello_names_the_robot(robot: str, board: str) -> None:
+    emu, port = start(robot, board=board)
     try:
         assert port.ask("HELLO") == [f"HELLO,{codes.PROTOCOL_VERSION},{robot},4"]
     finally:
@@ -183,10 +185,10 @@ def test_the_uno_speaks_version_2_only_and_refuses_vels_acceleration(
     assert port.ask("STOP", 2) == ["OK", "IDLE"]
 
 
-@pytest.mark.parametrize("robot", ["omni4", "mecanum4"])
-def test_each_motor_drives_its_own_pins(robot: str) -> None:
+@pytest.mark.parametrize(("robot", "board"), BUILDS, ids=BUILD_IDS)
+def test_each_motor_drives_its_own_pins(robot: str, board: str) -> None:
     """POWER reaches every motor's EN (PWM duty) and IN1/IN2 (direction) pins of the robot's wiring."""
-    emu, port = start(robot, report=True)
+    emu, port = start(robot, report=True, board=board)
     try:
         powers = [100, -50, 30, -255]
         assert port.ask("POWER,200," + ",".join(str(p) for p in powers)) == ["OK"]
@@ -200,3 +202,25 @@ def test_each_motor_drives_its_own_pins(robot: str) -> None:
     finally:
         port.close()
         emu.close()
+
+
+@pytest.mark.parametrize(("robot", "board"), BUILDS, ids=BUILD_IDS)
+def test_each_encoder_counts_its_own_wheel(robot: str, board: str) -> None:
+    """Each wheel's encoder pin reaches its own count (TEL's encoder group), in the direction of its
+    motor's power: the wheels turn at 100, 200, 300 and 400 counts/s."""
+    emu, port = start(robot, board=board)
+    try:
+        emu.command("wheels 100 200 300 400")
+        assert port.ask("POWER,1000,100,-100,100,-100") == ["OK"]
+        time.sleep(0.5)
+        port.ask(f"TELEM,100,{codes.TEL_ENCODERS}")
+        tel = port.lines(1)[0].split(",")
+        port.ask("TELEM,0,0;STOP", 2, skip=("IDLE",))
+    finally:
+        port.close()
+        emu.close()
+    assert tel[0] == "TEL" and tel[3] == "4"  # time, mask, then the four encoder counts
+    counts = [int(v) for v in tel[4:8]]
+    assert [c > 0 for c in counts] == [True, False, True, False], counts
+    magnitudes = [abs(c) for c in counts]
+    assert 0 < magnitudes[0] < magnitudes[1] < magnitudes[2] < magnitudes[3], counts

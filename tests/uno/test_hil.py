@@ -13,11 +13,12 @@ from omnibot.uno.hil import UnoHil, counts_at_rest
 from .conftest import Port
 
 
-def test_move_turns_the_simulated_wheels_and_the_sonar_sees_the_room() -> None:
+@pytest.mark.parametrize("board", ["uno", "mega"])
+def test_move_turns_the_simulated_wheels_and_the_sonar_sees_the_room(board: str) -> None:
     reason = missing_tools()
     if reason:
         pytest.skip(f"emulated UNO: {reason}")
-    hil = UnoHil("omni4", world="room", seed=1)
+    hil = UnoHil("omni4", world="room", seed=1, board=board)
     runner = threading.Thread(target=hil.run)
     runner.start()
     port = Port(hil.path)
@@ -42,9 +43,11 @@ def test_move_turns_the_simulated_wheels_and_the_sonar_sees_the_room() -> None:
         hil.close()
 
 
-def test_circle_lands_where_the_micropython_firmware_lands() -> None:
-    """Seed 000's circle (37 moves of 2 cm) on the UNO with physics ends where the same firmware
-    logic in MicroPython ends on the same simulator (the sim:// link), within 3 cm and 5 degrees."""
+@pytest.mark.parametrize("board", ["uno", "mega"])
+def test_circle_lands_where_the_micropython_firmware_lands(board: str) -> None:
+    """Seed 000's circle (37 moves of 2 cm) on the UNO (and the Mega build) with physics ends where
+    the same firmware logic in MicroPython ends on the same simulator (the sim:// link), within 3 cm
+    and 5 degrees."""
     from omnibot.client import RobotClient
     from omnibot.robot.description import load_robot
 
@@ -53,7 +56,7 @@ def test_circle_lands_where_the_micropython_firmware_lands() -> None:
         pytest.skip(f"emulated UNO: {reason}")
     robot = load_robot("omni4")
     ends = []
-    for url in ("sim://omni4?seed=1&world=room", "uno://omni4?world=room&seed=1"):
+    for url in ("sim://omni4?seed=1&world=room", f"uno://omni4?world=room&seed=1&board={board}"):
         with RobotClient.open(url, robot) as client:
             sim = client.link.device.sim  # type: ignore[attr-defined]
             start = sim.pose
@@ -66,6 +69,14 @@ def test_circle_lands_where_the_micropython_firmware_lands() -> None:
     (x0, y0, t0), (x1, y1, t1) = ends
     assert ((x1 - x0) ** 2 + (y1 - y0) ** 2) ** 0.5 < 0.03, ends
     assert abs(t1 - t0) < 0.09, ends
+
+
+def test_an_unknown_board_is_named() -> None:
+    from omnibot.errors import ConfigError
+    from omnibot.transport import open_link
+
+    with pytest.raises(ConfigError, match="uno:// board 'due': the firmware is built for uno, mega"):
+        open_link("uno://omni4?board=due")
 
 
 def test_closed_loop_rotation_turns_the_simulated_robot() -> None:
@@ -126,9 +137,11 @@ def test_single_channel_counts_follow_the_wheels_through_reversals(closed_loop: 
         client.telemetry(0.02, codes.TEL_ENCODERS)
         turned = []
         for vx, vy in ((0.3, 0.0), (-0.3, 0.0), (0.0, 0.3), (0.0, 0.0)):
-            for _ in range(10):  # 0.5 s of each, a VEL every 50 ms
-                client.vel(vx, vy, 0.0, 0.2)
-                client.sleep(0.05)
+            for _ in range(10):  # 0.5 s of each, a VEL every 50 ms, of the simulator's time (a
+                client.vel(vx, vy, 0.0, 0.2)  # loaded host runs the emulation slower than the wall)
+                end = sim.time + 0.05
+                while sim.time < end:
+                    client.sleep(0.01)
             turned.append(sim.encoder_counts())
         client.stop()
         counts, fw = counts_at_rest(client, sim, samples)

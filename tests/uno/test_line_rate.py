@@ -5,7 +5,10 @@ from __future__ import annotations
 
 import itertools
 import os
+import threading
 import time
+
+import pytest
 
 from omnibot.protocol import codes
 from omnibot.uno.emulator import UnoEmulator, UnoError
@@ -19,16 +22,18 @@ BYTE_CYCLES = F_CPU * 10 // 115200  # one byte on the line, 8N1
 FAST, SLOW = "VEL,60,0,0,100\n", "VEL,40,0,0,100\n"
 
 
-def longest_pass(emu: UnoEmulator, port: Port, command: str, reps: int = 3) -> int:
-    """The longest main-loop pass that answers ``command`` (cycles), the worst of ``reps`` sends."""
-    worst = 0
+def longest_pass(emu: UnoEmulator, port: Port, command: str, reps: int = 5) -> int:
+    """The longest main-loop pass that answers ``command`` (cycles), the median of ``reps`` sends: a
+    pass that the battery's reading (every 16 ms, its ADC conversion about 1,700 cycles) happens to
+    share is that reading's cost, not the command's."""
+    passes = []
     for _ in range(reps):
         port.ask("STOP", skip=("IDLE",))
         emu.stats()
         assert port.ask(command.strip(), skip=("IDLE",)) == ["OK"]
-        worst = max(worst, emu.stats()[0])
+        passes.append(emu.stats()[0])
     port.ask("STOP", skip=("IDLE",))
-    return worst
+    return sorted(passes)[reps // 2]
 
 
 def duties_until_quiet(emu: UnoEmulator, quiet: float = 1.0) -> list[list[int]]:
@@ -102,4 +107,25 @@ def test_the_client_text_window_loses_nothing_of_a_long_mixed_stream() -> None:
             assert most <= codes.TEXT_WINDOW
             client.stop()
     finally:
+        emu.close()
+
+
+@pytest.mark.parametrize("board", ["uno", "mega"])
+def test_a_host_far_ahead_of_the_line_waits_and_nothing_is_lost(board: str) -> None:
+    """1000 VELs (15 KB, more than the harness holds) written at once: the pty fills and the writer
+    waits, as for a real serial port, and every command is answered (the harness used to read the
+    bytes it had no room for and drop them: 546 of 1000 answered)."""
+    emu, port = start("omni4", board=board)
+    try:
+        port.ask("STOP", skip=("IDLE",))
+        n = 1000
+        writer = threading.Thread(target=os.write, args=(port.fd, (SLOW * n).encode()))
+        writer.start()
+        try:
+            replies = port.lines(n, timeout=30.0, skip=("IDLE",))
+        finally:
+            writer.join(timeout=30.0)
+        assert replies == ["OK"] * n
+    finally:
+        port.close()
         emu.close()

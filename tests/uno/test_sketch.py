@@ -17,12 +17,17 @@ from omnibot.firmware import avrsketch
 from omnibot.protocol import codes
 from omnibot.uno.emulator import FIRMWARE_DIR, UnoEmulator, missing_tools
 
-from .conftest import Port
+from .conftest import BUILD_IDS, BUILDS, Port
 from .test_emulator import SCRIPT, reference, split_powers
 
 ROBOTS = ("omni4", "mecanum4")
 FLASH_LIMIT = 32256  # 32 KB less optiboot's 512 bytes
 RAM_LIMIT = 1536  # 75 % of the 2,048 bytes of SRAM for static data (docs/uno.md)
+# per board: flash and SRAM in all, the limits (the bootloader's room off; 75 % of the SRAM for static
+# data) and the vectors the firmware owns (its UART's two, its clock timer's capture, compare B and
+# overflow) and timer 0's overflow (the core's millis(): not linked)
+SIZES = {"uno": (32768, 2048, FLASH_LIMIT, RAM_LIMIT), "mega": (262144, 8192, 253952, 6144)}
+VECTORS = {"uno": ((18, 19, 10, 12, 13), 16), "mega": ((25, 26, 46, 48, 50), 23)}
 CORE_PATH = Path("/usr/share/arduino/hardware/arduino/avr/cores/arduino")
 # what the Arduino core would bring if any of it were linked: its main() calls these
 CORE_SYMBOLS = {"init", "initVariant", "setup", "loop", "millis", "micros", "delay", "serialEventRun"}
@@ -81,28 +86,42 @@ def test_cli_writes_the_folder_and_replaces_only_its_own(
     assert err.startswith("error: no UNO firmware for robot 'omni3'") and err.count("\n") == 1
 
 
-@pytest.fixture(scope="module", params=ROBOTS)
+def test_the_megas_sketch_has_its_header_board_and_name(tmp_path: Path) -> None:
+    files = avrsketch.sketch_files("omni4", "mega")
+    assert files[avrsketch.HEADER] == (FIRMWARE_DIR / "generated" / "mega" / "omni4.h").read_text()
+    assert "BOARD_TAG    = mega\nBOARD_SUB    = atmega2560\n" in files["Makefile"]
+    assert "Arduino Mega 2560 (arduino:avr:mega:cpu=atmega2560)" in files["omnibot_omni4_mega.ino"]
+    assert avrsketch.main(["omni4", str(tmp_path), "--board", "mega"]) == 0
+    assert (tmp_path / "omnibot_omni4_mega" / "omnibot_omni4_mega.ino").exists()
+    with pytest.raises(ConfigError, match=r"no Mega 2560 firmware for robot 'omni3'"):
+        avrsketch.sketch_files("omni3", "mega")
+
+
+@pytest.fixture(scope="module", params=BUILDS, ids=BUILD_IDS)
 def arduino_build(
     request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
-) -> Iterator[tuple[str, Path]]:
-    """(robot, the ELF arduino-mk built from the robot's sketch folder)."""
+) -> Iterator[tuple[str, str, Path]]:
+    """(robot, board, the ELF arduino-mk built from the robot's sketch folder for the board)."""
     reason = arduino_mk_missing()
     if reason:
         pytest.skip(f"Arduino sketch build: {reason}")
-    robot: str = request.param
-    folder = avrsketch.write_sketch(robot, tmp_path_factory.mktemp("sketch"))
+    robot, board = request.param
+    folder = avrsketch.write_sketch(robot, tmp_path_factory.mktemp("sketch"), board)
     proc = subprocess.run(
         ["nice", "make", "-s", "-C", str(folder)], capture_output=True, text=True, check=False
     )
     assert proc.returncode == 0, (proc.stdout + proc.stderr)[-3000:]
-    elf = folder / "build-uno" / f"omnibot_{robot}.elf"
-    assert elf.exists() and (folder / "build-uno" / f"omnibot_{robot}.hex").exists()
-    yield robot, elf
+    out = folder / avrsketch.build_dir(board)
+    name = avrsketch.sketch_name(robot, board)
+    elf = out / f"{name}.elf"
+    assert elf.exists() and (out / f"{name}.hex").exists()
+    yield robot, board, elf
     shutil.rmtree(folder, ignore_errors=True)
 
 
-def test_arduino_build_fits_flash_and_static_ram(arduino_build: tuple[str, Path]) -> None:
-    robot, elf = arduino_build
+def test_arduino_build_fits_flash_and_static_ram(arduino_build: tuple[str, str, Path]) -> None:
+    robot, board, elf = arduino_build
+    flash_size, ram_size, flash_limit, ram_limit = SIZES[board]
     proc = subprocess.run(
         [
             "make",
@@ -112,6 +131,7 @@ def test_arduino_build_fits_flash_and_static_ram(arduino_build: tuple[str, Path]
             str(FIRMWARE_DIR),
             "size-of",
             f"ROBOT={robot}",
+            f"BOARD={board}",
             f"ELF={elf}",
         ],
         capture_output=True,
@@ -120,29 +140,31 @@ def test_arduino_build_fits_flash_and_static_ram(arduino_build: tuple[str, Path]
     )
     report = proc.stdout.strip()
     assert proc.returncode == 0, report + proc.stderr
-    m = re.search(r"flash (\d+) of 32768 .* static RAM (\d+) of 2048", report)
+    m = re.search(rf"flash (\d+) of {flash_size} .* static RAM (\d+) of {ram_size}", report)
     assert m, report
     flash, static = int(m.group(1)), int(m.group(2))
-    assert flash <= FLASH_LIMIT and static <= RAM_LIMIT, report
+    assert flash <= flash_limit and static <= ram_limit, report
 
 
-def test_arduino_build_links_nothing_of_the_arduino_core(arduino_build: tuple[str, Path]) -> None:
-    _, elf = arduino_build
+def test_arduino_build_links_nothing_of_the_arduino_core(arduino_build: tuple[str, str, Path]) -> None:
+    _, board, elf = arduino_build
     nm = subprocess.run(["avr-nm", str(elf)], capture_output=True, text=True, check=True).stdout
     symbols = {line.split()[-1]: line.split()[-2] for line in nm.splitlines() if len(line.split()) >= 2}
     assert not CORE_SYMBOLS & set(symbols), CORE_SYMBOLS & set(symbols)
     assert not [s for s in symbols if "HardwareSerial" in s or s == "Serial"]
     assert symbols["main"] == "T"
-    assert symbols["__vector_16"] == "W"  # TIMER0_OVF: the core's millis() tick is not there
-    for vector in ("__vector_18", "__vector_19", "__vector_10", "__vector_13"):  # UART, timer 1: ours
-        assert symbols[vector] == "T", vector
+    ours, timer0_ovf = VECTORS[board]
+    assert symbols[f"__vector_{timer0_ovf}"] == "W"  # TIMER0_OVF: the core's millis() tick is not there
+    for vector in ours:  # the UART's and the clock timer's: the firmware's
+        assert symbols[f"__vector_{vector}"] == "T", vector
 
 
-def test_arduino_build_answers_as_the_bare_build(arduino_build: tuple[str, Path]) -> None:
+def test_arduino_build_answers_as_the_bare_build(arduino_build: tuple[str, str, Path]) -> None:
     """The image arduino-mk built, in simavr: the HELLO at reset and the whole script of
     test_emulator.py (every command, error and odd input) answered as by the MicroPython firmware."""
-    robot, elf = arduino_build
-    emu = UnoEmulator(robot, range_cm=100, elf=elf)
+    robot, board, elf = arduino_build
+    _, ram_size, _, ram_limit = SIZES[board]
+    emu = UnoEmulator(robot, range_cm=100, elf=elf, board=board)
     port = Port(emu.path)
     try:
         assert port.lines(1) == [f"HELLO,{codes.PROTOCOL_VERSION},{robot},4"]
@@ -158,7 +180,7 @@ def test_arduino_build_answers_as_the_bare_build(arduino_build: tuple[str, Path]
         port.close()
         emu.close()
     # the lowest byte the stack wrote (the harness's --heap: an LTO image's main() keeps painted locals)
-    assert emu.stack_bytes is not None and 64 < emu.stack_bytes < 2048 - RAM_LIMIT, emu.stack_bytes
+    assert emu.stack_bytes is not None and 64 < emu.stack_bytes < ram_size - ram_limit, emu.stack_bytes
 
 
 def test_without_arduino_mk_the_reason_names_the_packages_and_the_make_target(

@@ -33,6 +33,10 @@ def test_robot_without_uno_firmware_is_named(monkeypatch: pytest.MonkeyPatch) ->
         UnoError, match=r"no UNO firmware for robot 'omni3': it is generated for mecanum4, omni4"
     ):
         emulator.build("omni3")
+    with pytest.raises(UnoError, match=r"no Mega firmware for robot 'omni3'"):
+        emulator.build("omni3", "mega")
+    with pytest.raises(UnoError, match=r"no board 'due': the firmware is built for uno, mega"):
+        emulator.build("omni4", "due")
 
 
 def test_failed_build_reports_makes_last_lines(monkeypatch: pytest.MonkeyPatch) -> None:

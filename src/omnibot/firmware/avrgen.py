@@ -1,22 +1,25 @@
-"""The Arduino UNO firmware's header, generated from the protocol and the robot description (CPython).
+"""The AVR firmware's headers, generated from the protocol and the robot description (CPython).
 
 One source of truth: ``firmware-avr/generated/<robot>.h`` holds the protocol codes and texts
 (:mod:`omnibot.protocol.codes`), the robot's limits, the rim-speed matrix in fixed point, the
 default calibration tables (all from :func:`omnibot.firmware.config.build_config`, as the
 MicroPython firmware gets them) and the UNO pin map of the robot's wiring (:data:`UNO_WIRING`);
-``<robot>.board`` gives the same wiring to the emulator harness.
+``<robot>.board`` gives the same wiring to the emulator harness. The Arduino Mega 2560's are in
+``generated/mega/``, with its pin map (:data:`MEGA_WIRING`).
 ``tests/firmware/test_avrgen.py`` fails when a checked-in header is stale.
 
 ::
 
-    python -m omnibot.firmware.avrgen           # rewrite every generated header
-    python -m omnibot.firmware.avrgen omni4     # print one robot's header
+    python -m omnibot.firmware.avrgen                       # rewrite every generated file
+    python -m omnibot.firmware.avrgen omni4                 # print one robot's UNO header
+    python -m omnibot.firmware.avrgen omni4 --board mega    # ... its Mega header
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -35,11 +38,24 @@ NOT_SENT = frozenset({codes.W_SHORT, codes.W_REACH, codes.W_NO_GYRO})
 MicroPython firmware's only (omni4's image has no room for them); WARN 10 is a board's gyro (the UNO
 wiring has none)."""
 INT16_MAX = 32767
-EEPROM_BYTES = 1024  # ATmega328P
+EEPROM_BYTES = 1024  # ATmega328P (the ATmega2560 has 4 KB; the calibration store takes the first 1 KB)
+BOARDS = ("uno", "mega")
+"""The boards the firmware is built for: the Arduino UNO (ATmega328P) and the Arduino Mega 2560
+(ATmega2560, ``make -C firmware-avr BOARD=mega``): the same firmware, each with its own pin map."""
 
 # Arduino UNO pins (D0..D13, A0..A5) -> (port letter, bit).
 _PORTS = {**{f"D{i}": ("D", i) for i in range(8)}, **{f"D{i}": ("B", i - 8) for i in range(8, 14)}}
 _PORTS.update({f"A{i}": ("C", i) for i in range(6)})
+# Arduino Mega 2560 pins (D0..D53, A0..A15) -> (port letter, bit), from its schematic.
+_MEGA_LOW = "E0 E1 E4 E5 G5 E3 H3 H4 H5 H6 B4 B5 B6 B7 J1 J0 H1 H0 D3 D2 D1 D0"  # D0..D21
+_MEGA_PORTS = {f"D{i}": (p[0], int(p[1])) for i, p in enumerate(_MEGA_LOW.split(" "))}
+_MEGA_PORTS.update({f"D{22 + i}": ("A", i) for i in range(8)})
+_MEGA_PORTS.update({f"D{30 + i}": ("C", 7 - i) for i in range(8)})
+_MEGA_PORTS.update({"D38": ("D", 7), "D39": ("G", 2), "D40": ("G", 1), "D41": ("G", 0)})
+_MEGA_PORTS.update({f"D{42 + i}": ("L", 7 - i) for i in range(8)})
+_MEGA_PORTS.update({f"D{50 + i}": ("B", 3 - i) for i in range(4)})
+_MEGA_PORTS.update({f"A{i}": ("F", i) for i in range(8)})
+_MEGA_PORTS.update({f"A{8 + i}": ("K", i) for i in range(8)})
 
 # The wiring of an UNO with two L298 boards (EN = PWM, IN1/IN2 = direction) and, on seed 000's robot,
 # an HC-SR04 sonar. Motors in the robot description's wheel order. The PWM pins are the four of
@@ -70,11 +86,96 @@ UNO_WIRING: dict[str, dict[str, Any]] = {
         "battery_adc": 7,
     },
 }
+# The Mega's wiring (ours; docs/uno.md): each motor keeps its UNO timer output (timers 0 and 2 on
+# D4, D13, D10, D9), the direction pins are D22..D29 (port A), the encoders D53..D50 (PB0..PB3,
+# PCINT0..3: one pin-change group, the one simavr 1.6 models on this chip; A8..A15, PCINT16..23,
+# work as well on a board), the clock is timer 5 and times the echo on D48 (ICP5: the Mega's ICP1,
+# PD4, is on no header), the sonar's trigger D47; the battery divider on A7 (every Mega has it).
+_MEGA_PWM = {"D3": "D9", "D5": "D4", "D6": "D13", "D11": "D10"}
+"""The Mega's pin of each UNO PWM pin's timer output (OC2B, OC0B, OC0A, OC2A)."""
+MEGA_WIRING: dict[str, dict[str, Any]] = {
+    robot: {
+        "pwm": [_MEGA_PWM[pin] for pin in uno["pwm"]],
+        "in1": ["D22", "D24", "D26", "D28"],
+        "in2": ["D23", "D25", "D27", "D29"],
+        "sonar_trig": "D47" if uno["sonar_trig"] else None,
+        "sonar_echo": "D48" if uno["sonar_echo"] else None,  # ICP5
+        "encoders": ["D53", "D52", "D51", "D50"],
+        "battery_adc": 7,
+    }
+    for robot, uno in UNO_WIRING.items()
+}
 # Timer/compare register of each PWM pin.
 _PWM_REGS = {"D3": ("OCR2B", "TCCR2A", "COM2B1"), "D5": ("OCR0B", "TCCR0A", "COM0B1")}
 _PWM_REGS.update({"D6": ("OCR0A", "TCCR0A", "COM0A1"), "D11": ("OCR2A", "TCCR2A", "COM2A1")})
+_MEGA_PWM_REGS = {mega: _PWM_REGS[uno] for uno, mega in _MEGA_PWM.items()}
 # Pin-change interrupt group of each port (PCINT0..7 = PB, 8..14 = PC, 16..23 = PD).
 _PCINT = {"B": (0, 0), "C": (1, 8), "D": (2, 16)}
+# The Mega's: PCINT0..7 = PB, 9..15 = PJ0..6 (8 is PE0, the UART's RX), 16..23 = PK (A8..A15).
+_MEGA_PCINT = {"B": (0, 0), "J": (1, 9), "K": (2, 16)}
+# Data-space addresses of the registers the emulator harness reads: the same on both chips for
+# ports B, C, D and timers 0 and 2; the ATmega2560's ports H..L are above the I/O space.
+_ADDR = {"PORTB": 0x25, "PORTC": 0x28, "PORTD": 0x2B, "TCCR0A": 0x44, "OCR0A": 0x47, "OCR0B": 0x48}
+_ADDR.update({"TCCR2A": 0xB0, "OCR2A": 0xB3, "OCR2B": 0xB4})
+_MEGA_ADDR = {**_ADDR, "PORTA": 0x22, "PORTE": 0x2E, "PORTF": 0x31, "PORTG": 0x34, "PORTH": 0x102}
+_MEGA_ADDR.update({"PORTJ": 0x105, "PORTK": 0x108, "PORTL": 0x10B})
+_COM_BITS = {"COM0A1": 7, "COM0B1": 5, "COM2A1": 7, "COM2B1": 5}
+
+
+@dataclass(frozen=True)
+class Board:
+    """One Arduino board: its chip, pins, timers and what the harness must know of it."""
+
+    name: str
+    title: str
+    mcu: str
+    ports: dict[str, tuple[str, int]]
+    wiring: dict[str, dict[str, Any]]
+    pwm_regs: dict[str, tuple[str, str, str]]
+    pcint: dict[str, tuple[int, int]]
+    addr: dict[str, int]
+    echo: str  # the clock timer's input-capture pin: the sonar's echo must be there
+    extint: tuple[
+        tuple[str, int], ...
+    ]  # the external interrupts' pins, INT0 first (the harness unhooks them)
+    pin_names: str
+
+
+_BOARDS = {
+    "uno": Board(
+        "uno",
+        "Arduino UNO",
+        "atmega328p",
+        _PORTS,
+        UNO_WIRING,
+        _PWM_REGS,
+        _PCINT,
+        _ADDR,
+        "D8",
+        (("D", 2), ("D", 3)),
+        "D0..D13, A0..A5",
+    ),
+    "mega": Board(
+        "mega",
+        "Arduino Mega 2560",
+        "atmega2560",
+        _MEGA_PORTS,
+        MEGA_WIRING,
+        _MEGA_PWM_REGS,
+        _MEGA_PCINT,
+        _MEGA_ADDR,
+        "D48",
+        (("D", 0), ("D", 1), ("D", 2), ("D", 3), ("E", 4), ("E", 5), ("E", 6), ("E", 7)),
+        "D0..D53, A0..A15",
+    ),
+}
+
+
+def board(name: str) -> Board:
+    """The board called ``name`` (``uno`` or ``mega``)."""
+    if name not in _BOARDS:
+        raise ConfigError(f"no board {name!r}: the firmware is built for {', '.join(BOARDS)}", key="board")
+    return _BOARDS[name]
 
 
 def _guard(w: Any, cfg: dict[str, Any]) -> None:
@@ -112,10 +213,10 @@ def _c_string(text: str) -> str:
     return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
 
 
-def _pin(name: str) -> tuple[str, int]:
-    if name not in _PORTS:
-        raise ConfigError(f"{name!r} is not an Arduino UNO pin (D0..D13, A0..A5)", key="pins")
-    return _PORTS[name]
+def _pin(name: str, b: Board = _BOARDS["uno"]) -> tuple[str, int]:
+    if name not in b.ports:
+        raise ConfigError(f"{name!r} is not an {b.title} pin ({b.pin_names})", key="pins")
+    return b.ports[name]
 
 
 def _table_rows(t: list[list[float]], xscale: float, yscale: float) -> tuple[int, list[str]]:
@@ -133,8 +234,9 @@ def _fixed_shift(rows: list[list[float]]) -> int:
     return max(0, min(14, math.floor(math.log2(INT16_MAX / peak))))
 
 
-def header_source(robot_name: str) -> str:
-    """The text of ``firmware-avr/generated/<robot>.h``."""
+def header_source(robot_name: str, board_name: str = "uno") -> str:
+    """The text of ``firmware-avr/generated/<robot>.h`` (the Mega's: ``generated/mega/<robot>.h``)."""
+    b = board(board_name)
     robot = load_robot(robot_name)
     cfg = build_config(robot)
     n = int(cfg["motors"])
@@ -310,33 +412,40 @@ def header_source(robot_name: str) -> str:
         + "};"
     )
     w("")
-    pins = UNO_WIRING.get(robot_name)
+    pins = b.wiring.get(robot_name)
     if pins is None:
-        raise ConfigError(f"no UNO wiring for {robot_name!r} (avrgen.UNO_WIRING has {', '.join(UNO_WIRING)})")
+        raise ConfigError(f"no {b.title} wiring for {robot_name!r} (it has {', '.join(b.wiring)})")
     if sonars and pins["sonar_trig"] is None:
-        raise ConfigError(f"{robot_name} has a sonar but its UNO wiring none", key="sonars")
-    w("/* ---- Arduino UNO pin map (docs/uno.md) ---- */")
+        raise ConfigError(f"{robot_name} has a sonar but its {b.title} wiring none", key="sonars")
+    w(f"/* ---- {b.title} pin map (docs/uno.md) ---- */")
     for i in range(n):
         pwm = pins["pwm"][i]
-        ocr, tccr, com = _PWM_REGS[pwm]
-        port, bit = _pin(pwm)
+        if pwm not in b.pwm_regs:
+            raise ConfigError(f"{pwm} is not a PWM pin of timers 0 and 2 on the {b.title}", key="pins")
+        ocr, tccr, com = b.pwm_regs[pwm]
+        port, bit = _pin(pwm, b)
         w(f"#define M{i}_PWM_PORT PORT{port}\n#define M{i}_PWM_DDR DDR{port}\n#define M{i}_PWM_BIT {bit}")
         w(f"#define M{i}_OCR {ocr}\n#define M{i}_TCCR {tccr}\n#define M{i}_COM {com}")
         for side in ("in1", "in2"):
-            port, bit = _pin(pins[side][i])
+            port, bit = _pin(pins[side][i], b)
             s = side.upper()
             w(f"#define M{i}_{s}_PORT PORT{port}\n#define M{i}_{s}_DDR DDR{port}\n#define M{i}_{s}_BIT {bit}")
-        port, bit = _pin(pins["encoders"][i])
-        group, base = _PCINT[port]
+        port, bit = _pin(pins["encoders"][i], b)
+        if port not in b.pcint:
+            raise ConfigError(f"encoder pin {pins['encoders'][i]} has no pin-change interrupt", key="pins")
+        group, base = b.pcint[port]
         w(f"#define M{i}_ENC_PIN PIN{port}\n#define M{i}_ENC_BIT {bit}\n#define M{i}_ENC_PCIE {group}")
         w(f"#define M{i}_ENC_PCMSK PCMSK{group}\n#define M{i}_ENC_PCINT {base + bit}")
     if sonars:
-        port, bit = _pin(pins["sonar_trig"])
+        port, bit = _pin(pins["sonar_trig"], b)
         w(
             f"#define SONAR_TRIG_PORT PORT{port}\n#define SONAR_TRIG_DDR DDR{port}\n#define SONAR_TRIG_BIT {bit}"
         )
-        if _pin(pins["sonar_echo"]) != ("B", 0):
-            raise ConfigError("the sonar echo must be on D8 (ICP1, timer 1's input capture)", key="pins")
+        if pins["sonar_echo"] != b.echo:
+            raise ConfigError(
+                f"the sonar echo must be on {b.echo} (the clock timer's input capture on the {b.title})",
+                key="pins",
+            )
     w(f"#define BATTERY_ADC {pins['battery_adc']}")
     _battery(w, robot)
     return "\n".join(out) + "\n"
@@ -379,51 +488,61 @@ def _battery(w: Any, robot: RobotDescription) -> None:
     w(f"#define BATTERY_CAP {pwm_max * round(100 * b.limit_power) // 100}  // largest power below limit")
 
 
-# ATmega328P data-space addresses of the registers the emulator harness reads.
-_ADDR = {"PORTB": 0x25, "PORTC": 0x28, "PORTD": 0x2B, "TCCR0A": 0x44, "OCR0A": 0x47, "OCR0B": 0x48}
-_ADDR.update({"TCCR2A": 0xB0, "OCR2A": 0xB3, "OCR2B": 0xB4})
-_COM_BITS = {"COM0A1": 7, "COM0B1": 5, "COM2A1": 7, "COM2B1": 5}
-
-
-def board_source(robot_name: str) -> str:
-    """The text of ``firmware-avr/generated/<robot>.board``: the robot's UNO wiring for the emulator
+def board_source(robot_name: str, board_name: str = "uno") -> str:
+    """The text of ``firmware-avr/generated/<robot>.board``: the robot's wiring for the emulator
     harness (firmware-avr/unosim ``--board``), as data-space register addresses and port bits."""
-    pins = UNO_WIRING[robot_name]
+    b = board(board_name)
+    pins = b.wiring[robot_name]
+    short = b.title.removeprefix("Arduino ")
     out = [
-        f"# UNO wiring of {robot_name} for firmware-avr/unosim, generated by python -m omnibot.firmware.avrgen"
+        f"# {short} wiring of {robot_name} for firmware-avr/unosim, generated by python -m omnibot.firmware.avrgen"
     ]
+    if b.name != "uno":  # the harness's defaults are the UNO's: its chip, INT0 and INT1 on D2 and D3
+        out.append(f"mcu {b.mcu}")
     out.append("# motor OCR TCCR COM-bit IN1-PORT IN1-bit IN2-PORT IN2-bit (addresses in hex)")
     for i, pwm in enumerate(pins["pwm"]):
-        ocr, tccr, com = _PWM_REGS[pwm]
-        p1, b1 = _pin(pins["in1"][i])
-        p2, b2 = _pin(pins["in2"][i])
-        regs = (_ADDR[ocr], _ADDR[tccr], _COM_BITS[com], _ADDR[f"PORT{p1}"], b1, _ADDR[f"PORT{p2}"], b2)
+        ocr, tccr, com = b.pwm_regs[pwm]
+        p1, b1 = _pin(pins["in1"][i], b)
+        p2, b2 = _pin(pins["in2"][i], b)
+        a = b.addr
+        regs = (a[ocr], a[tccr], _COM_BITS[com], a[f"PORT{p1}"], b1, a[f"PORT{p2}"], b2)
         out.append("motor {:x} {:x} {} {:x} {} {:x} {}".format(*regs))
     for enc in pins["encoders"]:
-        out.append("encoder {} {}".format(*_pin(enc)))
+        out.append("encoder {} {}".format(*_pin(enc, b)))
     if pins["sonar_trig"] is not None:
-        out.append("trigger {} {}".format(*_pin(pins["sonar_trig"])))
-        out.append("echo {} {}".format(*_pin(pins["sonar_echo"])))
+        out.append("trigger {} {}".format(*_pin(pins["sonar_trig"], b)))
+        out.append("echo {} {}".format(*_pin(pins["sonar_echo"], b)))
     out.append(f"battery {pins['battery_adc']}")
+    if b.name != "uno":
+        out.append(
+            "# the external interrupts' pins, INT0 first: unused here, unhooked (simavr polls their level)"
+        )
+        out += [f"extint {port} {bit}" for port, bit in b.extint]
     return "\n".join(out) + "\n"
 
 
-def header_path(robot_name: str) -> Path:
-    """Where the generated header for ``robot_name`` goes."""
-    return OUT_DIR / f"{robot_name}.h"
+def board_dir(board_name: str = "uno") -> Path:
+    """The folder of a board's generated files: ``generated/`` for the UNO, ``generated/mega/``."""
+    return OUT_DIR if board(board_name).name == "uno" else OUT_DIR / board_name
 
 
-def board_path(robot_name: str) -> Path:
-    """Where the generated board wiring for ``robot_name`` goes."""
-    return OUT_DIR / f"{robot_name}.board"
+def header_path(robot_name: str, board_name: str = "uno") -> Path:
+    """Where the generated header for ``robot_name`` on ``board_name`` goes."""
+    return board_dir(board_name) / f"{robot_name}.h"
+
+
+def board_path(robot_name: str, board_name: str = "uno") -> Path:
+    """Where the generated board wiring for ``robot_name`` on ``board_name`` goes."""
+    return board_dir(board_name) / f"{robot_name}.board"
 
 
 def generated_files() -> dict[Path, str]:
-    """Every generated file and its text: one header per robot and the board's wiring."""
+    """Every generated file and its text: one header and one wiring per robot and board."""
     files = {}
-    for name in ROBOTS:
-        files[header_path(name)] = header_source(name)
-        files[board_path(name)] = board_source(name)
+    for board_name in BOARDS:
+        for name in ROBOTS:
+            files[header_path(name, board_name)] = header_source(name, board_name)
+            files[board_path(name, board_name)] = board_source(name, board_name)
     return files
 
 
@@ -431,9 +550,10 @@ def main(argv: list[str] | None = None) -> int:
     """Write every generated file (or print one robot's header); the exit status."""
     ap = argparse.ArgumentParser(prog="python -m omnibot.firmware.avrgen", description=__doc__.split("\n")[0])
     ap.add_argument("robot", nargs="?", help="print this robot's header instead of writing every file")
+    ap.add_argument("--board", choices=BOARDS, default="uno", help="with a robot: the board (default uno)")
     args = ap.parse_args(argv)
     if args.robot:
-        print(header_source(args.robot), end="")
+        print(header_source(args.robot, args.board), end="")
         return 0
     for path, text in generated_files().items():
         path.parent.mkdir(parents=True, exist_ok=True)

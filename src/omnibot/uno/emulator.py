@@ -1,6 +1,7 @@
 """The emulated Arduino UNO: omnibot's AVR firmware in simavr, its UART on a pty at 115200 baud.
 
-:func:`build` compiles the firmware of a robot (``make -C firmware-avr ROBOT=...``) and the harness
+:func:`build` compiles the firmware of a robot (``make -C firmware-avr ROBOT=... [BOARD=mega]``: the
+UNO's ATmega328P, or the Arduino Mega 2560's ATmega2560, which simavr emulates too) and the harness
 (``make -C firmware-avr/unosim``); :class:`UnoEmulator` starts the harness and gives the pty's path, which
 any serial client opens (``serial://PATH``). Both need a source checkout and Debian's AVR toolchain
 and simavr (``make avr-tools``); :func:`missing_tools` says what is absent.
@@ -8,6 +9,7 @@ and simavr (``make avr-tools``); :func:`missing_tools` says what is absent.
 ::
 
     python -m omnibot.uno.emulator omni4 --range 100    # prints the pty path, runs until Ctrl-C
+    python -m omnibot.uno.emulator omni4 --board mega   # the Mega build
 """
 
 from __future__ import annotations
@@ -55,19 +57,33 @@ def _make(*args: str) -> None:
         raise UnoError(f"make {' '.join(args)} failed: " + " | ".join(tail))
 
 
-def build(robot: str) -> Path:
-    """Build the robot's firmware and the harness (incrementally); returns the firmware's ELF."""
+BOARDS = {"uno": "UNO", "mega": "Mega"}
+"""The boards the firmware is built for, with their names in messages: the Arduino UNO and the
+Arduino Mega 2560 (docs/uno.md)."""
+
+
+def generated_dir(board: str = "uno") -> Path:
+    """The folder of a board's generated headers and wiring (``firmware-avr/generated[/mega]``)."""
+    if board not in BOARDS:
+        raise UnoError(f"no board {board!r}: the firmware is built for {', '.join(BOARDS)}")
+    return FIRMWARE_DIR / "generated" / ("" if board == "uno" else board)
+
+
+def build(robot: str, board: str = "uno") -> Path:
+    """Build the robot's firmware for ``board`` and the harness (incrementally); returns the ELF."""
     reason = missing_tools()
     if reason:
         raise UnoError(reason)
-    if not (FIRMWARE_DIR / "generated" / f"{robot}.h").exists():
-        known = ", ".join(sorted(p.stem for p in (FIRMWARE_DIR / "generated").glob("*.h")))
+    gen = generated_dir(board)
+    if not (gen / f"{robot}.h").exists():
+        known = ", ".join(sorted(p.stem for p in gen.glob("*.h")))
         raise UnoError(
-            f"no UNO firmware for robot {robot!r}: it is generated for {known} (omnibot.firmware.avrgen)"
+            f"no {BOARDS[board]} firmware for robot {robot!r}: it is generated for {known}"
+            " (omnibot.firmware.avrgen)"
         )
-    _make("-C", str(FIRMWARE_DIR), f"ROBOT={robot}")
+    _make("-C", str(FIRMWARE_DIR), f"ROBOT={robot}", f"BOARD={board}")
     build_harness()
-    return FIRMWARE_DIR / "build" / robot / "omnibot.elf"
+    return FIRMWARE_DIR / "build" / ("" if board == "uno" else board) / robot / "omnibot.elf"
 
 
 def build_harness() -> Path:
@@ -99,7 +115,8 @@ class UnoEmulator:
     of the robot's firmware (one the Arduino toolchain built from its sketch folder,
     :mod:`omnibot.firmware.avrsketch`) instead of building it with ``firmware-avr/Makefile``;
     ``profile``: the harness samples the program counter while the CPU is awake and writes the counts
-    to this file when it stops (``command("profile")`` starts them anew; benchmarks/uno_profile.py)."""
+    to this file when it stops (``command("profile")`` starts them anew; benchmarks/uno_profile.py);
+    ``board``: ``uno`` (ATmega328P) or ``mega`` (the Arduino Mega 2560's ATmega2560, its own pins)."""
 
     def __init__(
         self,
@@ -111,15 +128,17 @@ class UnoEmulator:
         lockstep: bool = False,
         elf: Path | None = None,
         profile: Path | None = None,
+        board: str = "uno",
     ) -> None:
         self.robot = robot
+        self.board = board
+        wiring = generated_dir(board) / f"{robot}.board"
         if elf is None:
-            elf = build(robot)
+            elf = build(robot, board)
         else:
             build_harness()
         self.elf = elf
-        board = FIRMWARE_DIR / "generated" / f"{robot}.board"
-        argv = [str(HARNESS), "--board", str(board), str(elf)]
+        argv = [str(HARNESS), "--board", str(wiring), str(elf)]
         heap = heap_start(elf) if shutil.which("avr-nm") else None
         if heap is not None:
             argv += ["--heap", str(heap)]
@@ -206,9 +225,12 @@ def main(argv: list[str] | None = None) -> int:
         "--range", type=int, default=None, help="the sonar's fixed reading, cm (default: no echo)"
     )
     ap.add_argument("--encoders", type=float, default=None, help="encoder counts/s at full duty")
+    ap.add_argument(
+        "--board", choices=list(BOARDS), default="uno", help="uno (default) or mega (Arduino Mega 2560)"
+    )
     args = ap.parse_args(argv)
     try:
-        emu = UnoEmulator(args.robot, range_cm=args.range, encoder_cps=args.encoders)
+        emu = UnoEmulator(args.robot, range_cm=args.range, encoder_cps=args.encoders, board=args.board)
     except UnoError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1

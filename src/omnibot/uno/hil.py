@@ -4,10 +4,11 @@ drives the UNO's encoder edges, sonar echo and battery voltage back.
 ::
 
     omnibot demo --port uno://omni4                 # seed 000's examples on the emulated UNO
+    omnibot demo --port "uno://omni4?board=mega"    # ... on the Arduino Mega 2560 build
     python -m omnibot.uno.hil omni4 --world room    # or: print the UNO's pty path, run until Ctrl-C,
     omnibot demo --port serial://THAT_PATH          #     and drive it as any serial board
 
-Importing this module registers the ``uno`` URL scheme, ``uno://ROBOT?world=room&seed=1``: the
+Importing this module registers the ``uno`` URL scheme, ``uno://ROBOT?world=room&seed=1&board=uno``: the
 emulated UNO with the physics running in a thread, opened as a serial link whose ``device.sim`` is
 the simulator (so the demo takes its ground truth from it, as for ``sim://``).
 
@@ -39,7 +40,7 @@ from omnibot.robot.description import load_robot
 from omnibot.sim.simulator import Simulator
 from omnibot.transport.serial_link import SerialLink
 from omnibot.transport.url import LinkUrl, register_scheme
-from omnibot.uno.emulator import UnoEmulator, UnoError
+from omnibot.uno.emulator import BOARDS, UnoEmulator, UnoError
 
 if TYPE_CHECKING:
     from omnibot.client.client import RobotClient
@@ -50,7 +51,8 @@ BATTERY_PERIOD = 0.1  # s between battery updates
 
 
 class UnoHil:
-    """The emulated UNO of ``robot`` with omnibot's physics of the same robot in ``world``."""
+    """The emulated UNO of ``robot`` with omnibot's physics of the same robot in ``world``;
+    ``board="mega"``: the Arduino Mega 2560 build of the firmware."""
 
     def __init__(
         self,
@@ -59,10 +61,11 @@ class UnoHil:
         world: str | None = "room",
         seed: int = 1,
         start_pose: tuple[float, float, float] | None = None,
+        board: str = "uno",
     ) -> None:
         self.robot = load_robot(robot)
         self.sim = Simulator(self.robot, world=world, seed=seed, start_pose=start_pose)
-        self.emu = UnoEmulator(robot, lockstep=True)
+        self.emu = UnoEmulator(robot, lockstep=True, board=board)
         self.path = self.emu.path
         encoder_index = {e.wheel: k for k, e in enumerate(self.robot.encoders.motors)}
         self._encoder_of_wheel = [encoder_index.get(w.name) for w in self.robot.wheels]
@@ -168,15 +171,21 @@ def counts_at_rest(
 def _open_uno(u: LinkUrl) -> UnoLink:
     if not u.target:
         raise ConfigError("uno:// needs a robot: uno://omni4 or uno://mecanum4")
-    hil = UnoHil(u.target, world=u.get_str("world", "room") or None, seed=u.get_int("seed", 1, minimum=0))
+    board = u.get_str("board", "uno")
+    if board not in BOARDS:
+        raise ConfigError(f"uno:// board {board!r}: the firmware is built for {', '.join(BOARDS)}")
+    hil = UnoHil(
+        u.target, world=u.get_str("world", "room") or None, seed=u.get_int("seed", 1, minimum=0), board=board
+    )
     return UnoLink(hil, u.url)
 
 
 register_scheme(
     "uno",
     _open_uno,
-    options=("world", "seed"),
-    help="uno://ROBOT?world=room&seed=1: the Arduino UNO firmware in simavr, hardware in the loop",
+    options=("world", "seed", "board"),
+    help="uno://ROBOT?world=room&seed=1&board=uno: the Arduino UNO (board=mega: Mega 2560) firmware in simavr, "
+    "hardware in the loop",
 )
 
 
@@ -186,9 +195,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("robot", nargs="?", default="omni4", help="omni4 (seed 000) or mecanum4 (seed 003)")
     ap.add_argument("--world", default="room", help="simulator world (default room)")
     ap.add_argument("--seed", type=int, default=1, help="simulator seed (default 1)")
+    ap.add_argument(
+        "--board", choices=list(BOARDS), default="uno", help="uno (default) or mega (Arduino Mega 2560)"
+    )
     args = ap.parse_args(argv)
     try:
-        hil = UnoHil(args.robot, world=args.world, seed=args.seed)
+        hil = UnoHil(args.robot, world=args.world, seed=args.seed, board=args.board)
     except UnoError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
