@@ -30,8 +30,9 @@ bridge = subprocess.Popen(
     stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
 )
 env = dict(os.environ)
-if PEER:  # another distribution's interpreter: its own bootstrapper sets its library path
-    env = {k: v for k, v in env.items() if k not in BOOTSTRAP}
+if PEER:  # another distribution's interpreter: its own bootstrapper sets its library path, and it
+    # imports nothing of omnibot (nor of this interpreter's paths)
+    env = {k: v for k, v in env.items() if k not in (*BOOTSTRAP, "PYTHONPATH")}
 plan = json.dumps({"pid": bridge.pid, "backend": BACKEND, "stall": STALL})
 try:
     peer = subprocess.run([PYTHON, OPERATOR, plan], capture_output=True, text=True, env=env, timeout=400)
@@ -71,11 +72,23 @@ def run(request: pytest.FixtureRequest) -> dict[str, Any]:
 
 
 def test_the_node_is_in_the_graph_by_its_name(run: dict[str, Any]) -> None:
-    """``ros2 node list`` shows ``/omnibot``; ``ros2 topic info -v /odom`` names it as the publisher."""
+    """``ros2 node list`` shows ``/omnibot``; the first status line names node and backend."""
     assert run["odom_seen"], run["bridge"]
     assert ["omnibot", "/"] in run["nodes"], run["nodes"]
-    assert run["odom_publishers"] == [["omnibot", "/"]], run["odom_publishers"]
     assert f"node /omnibot on the {run['backend']} backend" in run["bridge"], run["bridge"]
+
+
+def test_topic_info_names_the_node_as_odoms_publisher(
+    run: dict[str, Any], request: pytest.FixtureRequest
+) -> None:
+    """``ros2 topic info -v /odom`` names ``omnibot`` as the publisher. Kilted's rmw_fastrtps lists the
+    dds backend's node (its ros_discovery_info is taken) but does not pair the node's writer GIDs with
+    the writers it discovered (Jazzy's does): a known gap, docs/ros2.md."""
+    if run["backend"] == "dds" and run["distro"] == "kilted":
+        request.applymarker(
+            pytest.mark.xfail(strict=True, reason="Kilted pairs no endpoint with the dds node")
+        )
+    assert run["odom_publishers"] == [["omnibot", "/"]], run["odom_publishers"]
 
 
 def test_parameters_through_rclpys_parameter_client(run: dict[str, Any]) -> None:

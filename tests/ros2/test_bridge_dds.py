@@ -14,7 +14,7 @@ from omnibot.ros2.dds import LATCHED, Node
 from omnibot.ros2.types import from_dds
 
 bridge = subprocess.Popen(
-    [sys.executable, "-m", "omnibot", *COMMAND, "--port", "sim://omni4", "--duration", "40"],
+    [sys.executable, "-m", "omnibot", *COMMAND, "--ros-backend", "dds", "--port", "sim://omni4", "--duration", "40"],
     stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
 )
 node = Node()

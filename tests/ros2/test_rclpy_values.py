@@ -187,7 +187,8 @@ EXPECTED = {  # topic: (type, reliability, durability) of the bridge's endpoint
     "/range/front": ("sensor_msgs/msg/Range", "BEST_EFFORT", "VOLATILE"),
     "/cmd_vel": ("geometry_msgs/msg/TwistStamped", "RELIABLE", "VOLATILE"),
 }
-OURS = "_CREATED_BY_BARE_DDS_APP_"
+OURS = "omnibot"
+"""The bridge's node, as its ros_discovery_info names it (rmw's graph once said _CREATED_BY_BARE_DDS_APP_)."""
 """The node name rclpy's graph gives a participant that is not a ROS node (no ros_discovery_info)."""
 
 
