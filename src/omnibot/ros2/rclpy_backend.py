@@ -2,9 +2,10 @@
 parameters and services (:mod:`omnibot.ros2.backend` for the interface).
 
 * one rclpy context per process (robots of one process are nodes of it, ``/r1/omnibot``...), spun
-  by a multi-threaded executor in a thread of its own: subscriptions queue what arrives for the
-  runtime's :meth:`take`; services hand their requests to the runtime's :meth:`poll` and wait for
-  its answer (a callback group of their own, so topics and parameters go on meanwhile);
+  by a single-threaded executor in a thread of its own: subscriptions queue what arrives for the
+  runtime's :meth:`take`; a service's callback is a coroutine that hands its request to the
+  runtime's :meth:`poll` and awaits the answer (the executor goes on with topics and parameters
+  meanwhile);
 * publishing is serialized: a writer publishes CDR bytes (``Publisher.publish(bytes)``, rclpy's
   ``publish_raw``), the recorder's as they are or a sample's ``serialize()``; subscriptions are
   ``raw`` and their bytes become the same cyclonedds samples the ``dds`` backend hands over;
@@ -49,7 +50,7 @@ _executors: Any = _load("rclpy.executors")
 _node: Any = _load("rclpy.node")
 _parameter: Any = _load("rclpy.parameter")
 _qos: Any = _load("rclpy.qos")
-_groups: Any = _load("rclpy.callback_groups")
+_task: Any = _load("rclpy.task")
 _interfaces: Any = _load("rcl_interfaces.msg")
 
 
@@ -58,8 +59,6 @@ log = logging.getLogger("omnibot.ros2")
 TRIGGER = "std_srvs/srv/Trigger"
 GRAPH_PERIOD = 0.5
 """s between two readings of the graph by :meth:`RclpyNode.publications`."""
-ANSWER_WAIT = 10.0
-"""s a service request waits for the runtime's answer (a stopped runtime answers none)."""
 
 
 def message_class(typename: str) -> Any:
@@ -95,7 +94,7 @@ class _Spinner:
         self.users = 0
         self.context = _context.Context()
         self.context.init()
-        self.executor = _executors.MultiThreadedExecutor(num_threads=2, context=self.context)
+        self.executor = _executors.SingleThreadedExecutor(context=self.context)
         self.thread = threading.Thread(target=self._spin, name="omnibot-rclpy", daemon=True)
         self.thread.start()
 
@@ -218,37 +217,40 @@ class GraphPublications:
 
 
 class TriggerAnswers:
-    """A std_srvs/srv/Trigger service: rclpy's callback hands each request to :meth:`poll` (the
-    runtime's thread) and waits for its answer."""
+    """A std_srvs/srv/Trigger service: rclpy's callback (a coroutine) hands each request to
+    :meth:`poll` (the runtime's thread) and awaits its answer."""
 
-    def __init__(self, node: Any, srv: Any, name: str, handler: Handler) -> None:
+    def __init__(self, node: Any, executor: Any, srv: Any, name: str, handler: Handler) -> None:
         self.handler = handler
-        self.waiting: collections.deque[tuple[threading.Event, list[tuple[bool, str]]]] = collections.deque()
+        self.executor = executor
+        self.waiting: collections.deque[Any] = collections.deque()
         self.answered = 0
-        self.service = node.create_service(
-            srv, name, self._call, callback_group=_groups.MutuallyExclusiveCallbackGroup()
-        )
+        self.service = node.create_service(srv, name, self._call)
 
-    def _call(self, request: Any, response: Any) -> Any:
-        done = threading.Event()
-        slot: list[tuple[bool, str]] = []
-        self.waiting.append((done, slot))
-        if not done.wait(ANSWER_WAIT) or not slot:
-            response.success, response.message = False, "the robot's runtime did not answer (stopped?)"
-            return response
-        response.success, response.message = slot[0]
+    async def _call(self, request: Any, response: Any) -> Any:
+        answer = _task.Future(executor=self.executor)
+        answer.add_done_callback(_wake)  # its result then wakes the executor, which resumes this
+        self.waiting.append(answer)
+        response.success, response.message = await answer
         return response
 
     def poll(self) -> int:
         """Answer the requests that arrived (without blocking); how many were answered."""
         count = 0
         while self.waiting:
-            done, slot = self.waiting.popleft()
-            slot.append(self.handler())
-            done.set()
+            self.waiting.popleft().set_result(self.handler())
             count += 1
         self.answered += count
         return count
+
+    def close(self) -> None:
+        """Answer what waits: no (the bridge is closing)."""
+        while self.waiting:
+            self.waiting.popleft().set_result((False, "the bridge is closing"))
+
+
+def _wake(future: Any) -> None:
+    """A done callback: scheduled on the executor, it wakes it."""
 
 
 class RclpyNode:
@@ -364,7 +366,9 @@ class RclpyNode:
         srv = message_class(TRIGGER)
         if srv is None:
             return self.wire(TRIGGER).trigger_service(name, handler)
-        return TriggerAnswers(self.node, srv, name, handler)
+        service = TriggerAnswers(self.node, self.node.executor, srv, name, handler)
+        self.closers.insert(0, service.close)
+        return service
 
     def declare(self, parameters: Sequence[Parameter]) -> None:
         """Declare ``parameters`` as ROS parameters (read-only ones with ``read_only`` set)."""
