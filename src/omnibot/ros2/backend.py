@@ -19,6 +19,7 @@ puts on the wire (and, with :attr:`RosNode.serialized`, takes the recorder's CDR
 from __future__ import annotations
 
 import importlib.util
+import logging
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
@@ -132,6 +133,17 @@ class RosNode(Protocol):
     def close(self) -> None:
         """Release what the node opened."""
         ...
+
+
+def run_closers(closers: list[Callable[[], object]]) -> None:
+    """Call ``closers``, newest first, each whatever the others did (a failure is logged: on the way
+    out, the node is released anyway)."""
+    while closers:
+        closer = closers.pop()
+        try:
+            closer()
+        except Exception:
+            logging.getLogger("omnibot.ros2").exception("closing %r failed", closer)
 
 
 def rclpy_importable() -> bool:

@@ -24,7 +24,6 @@ Under pytest a participant is refused outside a private network namespace
 
 from __future__ import annotations
 
-import logging
 import os
 import threading
 from collections.abc import Callable, Mapping, Sequence
@@ -33,7 +32,16 @@ from typing import Any
 from omnibot.errors import ConfigError
 from omnibot.logs.schemas import type_hash
 from omnibot.ros2 import netns
-from omnibot.ros2.backend import DEFAULT, LATCHED, NODE_NAME, SENSOR_DATA, Handler, Parameter, Profile
+from omnibot.ros2.backend import (
+    DEFAULT,
+    LATCHED,
+    NODE_NAME,
+    SENSOR_DATA,
+    Handler,
+    Parameter,
+    Profile,
+    run_closers,
+)
 from omnibot.ros2.types import dds_type, request_type
 
 try:
@@ -285,12 +293,7 @@ class Node:
     def close(self) -> None:
         """Release what was opened with the node (:attr:`closers`), then delete the participant (and
         everything it made)."""
-        while self.closers:
-            closer = self.closers.pop()
-            try:
-                closer()
-            except Exception:  # on the way out: the participant is deleted whatever
-                logging.getLogger("omnibot.ros2").exception("closing %r failed", closer)
+        run_closers(self.closers)
         self._topics.clear()
         self._graph = None
         self.participant = None  # type: ignore[assignment]

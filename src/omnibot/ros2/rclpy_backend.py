@@ -35,7 +35,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from omnibot.ros2 import netns
-from omnibot.ros2.backend import DEFAULT, NODE_NAME, Handler, Parameter, Profile
+from omnibot.ros2.backend import DEFAULT, NODE_NAME, Handler, Parameter, Profile, run_closers
 from omnibot.ros2.dds import discovery_range, topic_name
 from omnibot.ros2.types import dds_name, dds_type
 
@@ -393,12 +393,7 @@ class RclpyNode:
         if self._closed:
             return
         self._closed = True
-        while self.closers:
-            closer = self.closers.pop()
-            try:
-                closer()
-            except Exception:  # on the way out: the node is destroyed whatever
-                log.exception("closing %r failed", closer)
+        run_closers(self.closers)
         if self._wire is not None:
             self._wire.close()
             self._wire = None
