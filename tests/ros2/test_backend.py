@@ -30,12 +30,12 @@ def test_an_unknown_backend_is_named() -> None:
         choose("zenoh")
 
 
-def test_a_parameter_without_apply_is_read_only() -> None:
+def test_a_parameter_without_check_is_read_only() -> None:
     assert Parameter("robot", "omni4", "the robot").read_only
     assert not Parameter("cmd_vel_timeout", 0.5, "s", lambda value: None).read_only
 
 
-def test_the_bridges_parameters_set_the_cmd_vel_timeout_or_say_why_not() -> None:
+def test_the_bridges_parameters_check_then_set_the_cmd_vel_timeout() -> None:
     from omnibot.ros2.command import RobotSpec, parameters
 
     source = SimpleNamespace(timeout=0.5, forced=None)
@@ -56,9 +56,12 @@ def test_the_bridges_parameters_set_the_cmd_vel_timeout_or_say_why_not() -> None
         "cmd_vel_timeout": 0.5,
     }
     assert [p.name for p in made if not p.read_only] == ["cmd_vel_timeout"]
-    apply = by_name["cmd_vel_timeout"].apply
-    assert apply is not None
-    assert apply(0.8) is None and source.timeout == 0.8
-    assert apply(-1.0) == "expected a positive number of seconds, got -1.0" and source.timeout == 0.8
-    assert apply(float("nan")) is not None and apply("1") is not None and apply(True) is not None
+    timeout = by_name["cmd_vel_timeout"]
+    assert timeout.check is not None
+    assert timeout.check(0.8) is None and timeout.check(2) is None
+    assert timeout.check(-1.0) == "expected a positive number of seconds, got -1.0"
+    assert timeout.check(float("nan")) is not None and timeout.check("1") is not None
+    assert timeout.check(True) is not None
+    assert source.timeout == 0.5  # checking sets nothing
+    timeout.assign(0.8)
     assert source.timeout == 0.8

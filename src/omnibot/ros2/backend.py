@@ -44,23 +44,29 @@ DEFAULT = Profile()
 SENSOR_DATA = Profile(reliable=False, depth=5)
 LATCHED = Profile(depth=1, transient_local=True)
 
-Apply = Callable[[Any], str | None]
-"""Takes a parameter's new value: None when applied, else why it was refused."""
+Check = Callable[[Any], str | None]
+"""A parameter's new value: None when it may be set, else why not."""
+
+
+def _keep(value: Any) -> None:
+    """A read-only parameter's assign: nothing to do."""
 
 
 @dataclass(frozen=True)
 class Parameter:
-    """One of the bridge's options as a ROS parameter: read-only unless ``apply`` takes new values."""
+    """One of the bridge's options as a ROS parameter: read-only unless ``check`` admits new values,
+    which ``assign`` then puts in force (once every parameter of the request was admitted)."""
 
     name: str
     value: bool | int | float | str
     description: str
-    apply: Apply | None = None
+    check: Check | None = None
+    assign: Callable[[Any], None] = _keep
 
     @property
     def read_only(self) -> bool:
         """Set once, at start (the option it comes from)."""
-        return self.apply is None
+        return self.check is None
 
 
 class Reader(Protocol):

@@ -314,11 +314,8 @@ def parameters(robot: Any, runtime: Any, spec: RobotSpec, cmd_vel: Any, backend:
     then given to the cmd_vel source); the others say how it was started (read-only)."""
     from omnibot.ros2.backend import Parameter
 
-    def set_timeout(value: Any) -> str | None:
-        why = positive_seconds(value)
-        if why is None:
-            cmd_vel.timeout = float(value)
-        return why
+    def set_timeout(value: Any) -> None:
+        cmd_vel.timeout = float(value)
 
     return [
         Parameter("robot", robot.name, "the robot's description (its HELLO's name)"),
@@ -330,6 +327,7 @@ def parameters(robot: Any, runtime: Any, spec: RobotSpec, cmd_vel: Any, backend:
             "cmd_vel_timeout",
             float(cmd_vel.timeout),
             "s a cmd_vel stays in force (--cmd-vel-timeout); settable while running",
+            positive_seconds,
             set_timeout,
         ),
     ]

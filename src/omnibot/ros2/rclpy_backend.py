@@ -285,6 +285,7 @@ class RclpyNode:
         self.node = self._node(0, name, sim_time)
         self.domain_id = int(self.node.context.get_domain_id())
         self.node.add_on_set_parameters_callback(self._on_set)
+        self.node.add_post_set_parameters_callback(self._on_done)
 
     def _node(self, level: int, name: str, sim_time: bool = False) -> Any:
         """A node at ``level`` (its spinner's), spun from now on."""
@@ -378,15 +379,22 @@ class RclpyNode:
             self.node.declare_parameter(p.name, p.value, descriptor)
 
     def _on_set(self, changes: list[Any]) -> Any:
-        """rclpy's check of new values: the writable parameters' ``apply`` says yes or why not."""
+        """rclpy's check of new values: the writable parameters' ``check`` says yes or why not."""
         for change in changes:
             known = self.parameters.get(change.name)
-            if known is None or known.apply is None:
+            if known is None or known.check is None:
                 continue  # rclpy's own (use_sim_time) or refused by rclpy as read-only
-            why = known.apply(change.value)
+            why = known.check(change.value)
             if why is not None:
                 return _interfaces.SetParametersResult(successful=False, reason=f"{change.name}: {why}")
         return _interfaces.SetParametersResult(successful=True)
+
+    def _on_done(self, changes: list[Any]) -> None:
+        """rclpy set the new values (all admitted): put them in force."""
+        for change in changes:
+            known = self.parameters.get(change.name)
+            if known is not None:
+                known.assign(change.value)
 
     def close(self) -> None:
         """Release what was opened with the node, then the node (and the context with the last)."""
