@@ -206,6 +206,8 @@ def attach(
     args: argparse.Namespace,
     spec: RobotSpec | None = None,
     timeline: Any = None,
+    *,
+    announce: bool = True,
 ) -> Any:
     """Add the bridge to ``runtime``: the cmd_vel and path sources, the odometry reset and publishing
     sinks (stamping on ``timeline``, the process's :class:`~omnibot.ros2.clock.Timeline`; ``/clock``
@@ -214,7 +216,8 @@ def attach(
     ``--scanner``, else the simulator's on ``sim://``; closed with the node), whose scans the sink
     publishes on ``scan``. The node is ``args.ros_backend``'s (``rclpy`` or ``dds``, as :func:`check`
     resolved it; ``dds`` when ``args`` has none), and the bridge's options are its parameters
-    (:func:`parameters`). Returns the node (close it)."""
+    (:func:`parameters`); ``announce``: a notice names the node and its backend (``omnibot ros2``
+    names them in its own first line). Returns the node (close it)."""
     try:
         from omnibot.ros2.backend import choose, open_node
         from omnibot.ros2.bridge import Diagnosed, Ros2Sink
@@ -295,9 +298,16 @@ def attach(
         )
     )
     node.declare(parameters(robot, runtime, spec, cmd_vel, node.backend))
+    if announce:
+        notify("info", f"ros2: node {fqn(node)} on the {node.backend} backend")
     StallWatch.on(runtime, robot)  # wheels that turn while the body does not: stop, say so
     start_sonars(runtime.client, robot, SONAR_PERIOD)  # in TEL: the ranges out, the stall watch's witnesses
     return node
+
+
+def fqn(node: Any) -> str:
+    """The node's fully qualified name (``/r1/omnibot``)."""
+    return f"/{node.namespace}/{node.name}" if node.namespace else f"/{node.name}"
 
 
 def positive_seconds(value: Any) -> str | None:
@@ -381,7 +391,7 @@ def _open(
 
     slip = use_calibration(args, session.client, session.robot)
     runtime = Runtime(session.client, period=PERIOD, wheel_loop=not args.open_loop, slip=slip)
-    node = attach(runtime, session.robot, args, spec, timeline)
+    node = attach(runtime, session.robot, args, spec, timeline, announce=False)
     runtime.add_sink(NoticePrinter(lambda text: _say(f"{label}{text}"), control=True))
     return _Robot(spec, url, session.client, session.robot, runtime, node, label)
 
@@ -395,10 +405,9 @@ def _serve(one: _Robot, args: argparse.Namespace, stop: threading.Event) -> None
     runtime.start()
     client.telemetry(PERIOD, codes.TEL_MASK)
     runtime.pacer = Pacer(client, PERIOD)
-    fqn = f"/{node.namespace}/{node.name}" if node.namespace else f"/{node.name}"
     frames = f", frames {spec.prefix}odom" if spec.prefix else ""
     _say(
-        f"{one.label}{one.robot.name} on {one.url}: node {fqn} on the {node.backend} backend, domain "
+        f"{one.label}{one.robot.name} on {one.url}: node {fqn(node)} on the {node.backend} backend, domain "
         f"{node.domain_id}{frames}, discovery {node.scope.lower()}"
     )
     runtime.run(until=stop.is_set, duration=args.duration)
