@@ -1,11 +1,12 @@
 """odom at 50 and 100 Hz: is the rate held, what it costs per robot, and how many robots one process
 bridges before a rate is missed.
 
-Run: ``python -m benchmarks.ros2_rates [--duration S] [--max-robots N]``; it runs itself in a
+Run: ``python -m benchmarks.ros2_rates [--duration S] [--max-robots N] [--backend rclpy|dds]``
+(default: both, side by side in one run; rclpy where it can be imported); it runs itself in a
 private network namespace (``unshare -n``, ``lo`` up: DDS never reaches a real network) and skips,
 saying why, where none can be made.
 
-Each robot is ``omnibot ros2 --port sim://omni4`` as the command composes it (a runtime at the
+Each robot is ``omnibot ros2 --ros-backend B --port sim://omni4`` as the command composes it (a runtime at the
 odom rate, telemetry at that rate, the cmd_vel source and the publishing sink with its own
 namespace ``robotK``), all in this process, stepped by one loop paced to the wall clock. A subscriber
 in another process (a cyclonedds participant) counts each robot's ``odom``. Measured over
@@ -107,8 +108,9 @@ class _Window:
         """Nothing to release."""
 
 
-def run(robots: int, rate: float, duration: float, *, bridge: bool = True) -> Result:
-    """``robots`` bridges at ``rate`` Hz for ``duration`` s (``bridge`` False: without the bridge)."""
+def run(robots: int, rate: float, duration: float, *, bridge: bool = True, backend: str = "dds") -> Result:
+    """``robots`` bridges on ``backend`` at ``rate`` Hz for ``duration`` s (``bridge`` False: without
+    the bridge)."""
     from omnibot.client.session import robot_session
     from omnibot.protocol import codes
     from omnibot.ros2.bridge import Ros2Sink
@@ -132,7 +134,9 @@ def run(robots: int, rate: float, duration: float, *, bridge: bool = True) -> Re
             session = stack.enter_context(robot_session(f"sim://omni4?seed={k + 1}", "omni4", timeout=0.5))
             runtime = Runtime(session.client, period=period)
             if bridge:
-                options = Namespace(namespace=name, frame_prefix=None, twist=False, cmd_vel_timeout=0.5)
+                options = Namespace(
+                    namespace=name, frame_prefix=None, twist=False, cmd_vel_timeout=0.5, ros_backend=backend
+                )
                 stack.callback(attach(runtime, session.robot, options).close)
                 sink = next(s for s in runtime.sinks if isinstance(s, Ros2Sink))
                 sink.recorder.mirrors.append(windows[k])
@@ -194,10 +198,10 @@ def _loop(
     return ticks, late, time.process_time() - cpu0
 
 
-def describe(result: Result, baseline: Result | None = None) -> str:
+def describe(result: Result, baseline: Result | None = None, backend: str = "dds") -> str:
     """One line of the report."""
     text = (
-        f"{result.robots} robot(s) at {result.rate:.0f} Hz: odom published {min(result.published):.1f}/s, "
+        f"{backend}: {result.robots} robot(s) at {result.rate:.0f} Hz: odom published {min(result.published):.1f}/s, "
         f"{min(result.delivered) * 100:.1f} % delivered per robot (worst), late ticks {result.late * 100:.1f} %, "
         f"CPU {result.cpu:.1f} % of a core per robot"
     )
@@ -212,25 +216,33 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--duration", type=float, default=5.0, help="s measured per run (default 5)")
     parser.add_argument("--max-robots", type=int, default=12, help="robots per process at most (default 12)")
+    parser.add_argument("--backend", choices=("rclpy", "dds"), action="append", help="default: both")
     args = parser.parse_args(argv)
     status = ensure_private("benchmarks.ros2_rates", argv)
     if status is not None:
         return status
+    from omnibot.ros2.backend import rclpy_importable
+
+    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")  # lo is the namespace's one link
+    backends = args.backend or (["rclpy", "dds"] if rclpy_importable() else ["dds"])
     for rate in (50.0, 100.0):
         baseline = run(1, rate, args.duration, bridge=False)
-        print(describe(run(1, rate, args.duration), baseline), flush=True)
-    robots, best = 1, 0
-    while robots <= args.max_robots:
-        result = run(robots, 50.0, args.duration)
-        print(describe(result), flush=True)
-        if not result.held:
-            break
-        best = robots
-        robots = 2 if robots == 1 else robots + 2
-    print(
-        f"robots per process at 50 Hz: {best} held"
-        + ("" if robots <= args.max_robots else " (the most tried)")
-    )
+        for backend in backends:
+            print(describe(run(1, rate, args.duration, backend=backend), baseline, backend), flush=True)
+    for backend in backends:
+        robots, best = 1, 0
+        while robots <= args.max_robots:
+            result = run(robots, 50.0, args.duration, backend=backend)
+            print(describe(result, backend=backend), flush=True)
+            if not result.held:
+                break
+            best = robots
+            robots = 2 if robots == 1 else robots + 2
+        print(
+            f"{backend}: robots per process at 50 Hz: {best} held"
+            + ("" if robots <= args.max_robots else " (the most tried)"),
+            flush=True,
+        )
     return 0
 
 

@@ -1,5 +1,6 @@
 """How the scripts that put a genuine rclpy beside ``omnibot ros2`` begin (each run in a private network
-namespace by :func:`~tests.ros2.netns_helper.run_in_namespace`)."""
+namespace by :func:`~tests.ros2.netns_helper.run_in_namespace`): the bridge on the ``dds`` backend,
+the contract these tests have held it to (tests/ros2/test_backends.py runs both backends)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ PRELUDE = r"""
 import json, os, signal, subprocess, sys, time
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 bridge = subprocess.Popen(
-    [sys.executable, "-m", "omnibot", "ros2", *BRIDGE_ARGS], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True
+    [sys.executable, "-m", "omnibot", "ros2", "--ros-backend", "dds", *BRIDGE_ARGS], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True
 )
 import rclpy
 from rclpy.node import Node

@@ -14,7 +14,7 @@ from omnibot.ros2.dds import LATCHED, Node
 from omnibot.ros2.types import from_dds
 
 bridge = subprocess.Popen(
-    [sys.executable, "-m", "omnibot", *COMMAND, "--port", "sim://omni4", "--duration", "40"],
+    [sys.executable, "-m", "omnibot", *COMMAND, "--ros-backend", "dds", "--port", "sim://omni4", "--duration", "40"],
     stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
 )
 node = Node()
@@ -63,6 +63,8 @@ def test_a_subscriber_receives_odom_and_joint_states(command: list[str]) -> None
     assert result["tf"] == ["odom", "base_link"]
     assert result["joints"] == [f"{w.name}_joint" for w in load_robot("omni4").wheels]
     assert "<robot" in result["urdf"]
+    assert "node /omnibot on the dds backend" in result["bridge"], result["bridge"]  # named once
+    assert result["bridge"].count("node /omnibot") == 1, result["bridge"]
     if command == ["ros2"]:
         assert "domain 0" in result["bridge"] and "discovery localhost" in result["bridge"]
 

@@ -23,7 +23,7 @@ from omnibot.ros2.dds import DEFAULT, LATCHED, Node, qos
 from omnibot.ros2.types import request_type, to_dds
 
 bridge = subprocess.Popen(
-    [sys.executable, "-m", "omnibot", "ros2", "--port", URL1, "--namespace", "r1",
+    [sys.executable, "-m", "omnibot", "ros2", "--ros-backend", "dds", "--port", URL1, "--namespace", "r1",
      "--port", URL2, "--namespace", "r2", "--duration", "120"],
     stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
 )
@@ -164,7 +164,10 @@ def test_two_robots_in_one_process_each_in_its_namespace(url1: str, url2: str) -
     assert max(abs(v) for v in result["r2_after_path"][:2]) < 0.02, result
     assert "ros2 [r1]: path received: following 11 poses" in result["bridge"]
     assert "ros2 [r1]: path completed" in result["bridge"]
-    assert f"ros2 [r2]: omni3 on {url2}: domain 0 namespace /r2, frames r2/odom" in result["bridge"]
+    assert (
+        f"ros2 [r2]: omni3 on {url2}: node /r2/omnibot on the dds backend, domain 0, frames r2/odom"
+        in result["bridge"]
+    )
     assert "has not waited" not in result["bridge"]  # a shared world's clock never held up
     # the simulated controller reports its battery: published and in diagnostics
     assert result["battery_state"][0] == "r1/base_link" and 6.0 < result["battery_state"][1] < 13.0, result
@@ -181,7 +184,8 @@ def test_two_robots_in_one_process_each_in_its_namespace(url1: str, url2: str) -
 def test_a_robot_that_cannot_be_opened_ends_the_fleet_before_any_moves() -> None:
     script = (
         "import json, subprocess, sys\n"
-        "r = subprocess.run([sys.executable, '-m', 'omnibot', 'ros2', '--port', 'sim://omni4?seed=1',"
+        "r = subprocess.run([sys.executable, '-m', 'omnibot', 'ros2', '--ros-backend', 'dds',"
+        " '--port', 'sim://omni4?seed=1',"
         " '--namespace', 'r1', '--port', 'sim://nosuch', '--namespace', 'r2', '--duration', '30'],"
         " capture_output=True, text=True, timeout=120)\n"
         "print(json.dumps([r.returncode, r.stdout, r.stderr]))\n"

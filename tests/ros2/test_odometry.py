@@ -16,7 +16,7 @@ from omnibot.logs.recorder import header, quaternion
 from omnibot.motion import Estimate
 from omnibot.robot.description import load_robot
 from omnibot.ros2.odometry import POSE, OdometryReset
-from omnibot.ros2.service import TRIGGER
+from omnibot.ros2.service import TRIGGER, TriggerService
 from omnibot.ros2.types import request_type, to_dds
 from omnibot.runtime.cycle import Cycle
 
@@ -52,6 +52,9 @@ class Node:
 
     def publications(self) -> Endpoint:
         return self.discovered
+
+    def trigger_service(self, name: str, handler: Any) -> TriggerService:
+        return TriggerService(self, name, handler)
 
     def service_endpoints(self, name: str, srv: str) -> tuple[Endpoint, Endpoint]:
         assert srv == TRIGGER

@@ -126,7 +126,7 @@ def test_rclpy_gets_scan_map_and_map_to_odom(distro: str, tmp_path: Path) -> Non
     write_path(resample(RobotPath.from_points(pts, theta=0.0), 0.01), path)
     log = tmp_path / "map.mcap"
     args = ["--path", str(path), "--world", "room", "--seed", "3", "--out", str(tmp_path / "out")]
-    args += ["--ros2", "--namespace", "r1", "--duration", "120", "--log", str(log)]
+    args += ["--ros2", "--ros-backend", "dds", "--namespace", "r1", "--duration", "120", "--log", str(log)]
     script = (
         f"ARGS = {json.dumps(args)}\nPYTHON = {python!r}\nBOOTSTRAP = {list(BOOTSTRAP)!r}\n"
         f"PEER_OUT = {str(tmp_path / 'peer.out')!r}\n"

@@ -23,7 +23,8 @@ from collections.abc import Callable
 from typing import Any
 
 from omnibot.motion import Twist
-from omnibot.ros2.dds import Node, topic_name
+from omnibot.ros2.backend import RosNode
+from omnibot.ros2.dds import topic_name
 from omnibot.ros2.types import from_dds, ros_name
 from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.sources import Proposal, RampedTwist
@@ -55,7 +56,7 @@ class CmdVelSource:
 
     def __init__(
         self,
-        node: Node,
+        node: RosNode,
         *,
         forced: str | None = None,
         timeout: float = CMD_VEL_TIMEOUT,

@@ -1,13 +1,14 @@
-"""``omnibot ros2``: robots on ROS 2 (DDS) without a ROS installation.
+"""``omnibot ros2``: robots on ROS 2, as rclpy nodes or on the DDS wire without a ROS installation.
 
 ::
 
-    omnibot ros2 [ROBOT OPTIONS] [--namespace NS] [--frame-prefix P] [--twist] [--cmd-vel-timeout S]
-                 [--speed M/S] [--duration S]
+    omnibot ros2 [ROBOT OPTIONS] [--ros-backend auto|rclpy|dds] [--namespace NS] [--frame-prefix P]
+                 [--twist] [--cmd-vel-timeout S] [--speed M/S] [--duration S]
     omnibot ros2 --port URL1 --namespace r1 --port URL2 --namespace r2 ...   # several robots
 
 Each robot has its own runtime (wall-clock paced at :data:`PERIOD`), participant, namespace and tf
-frame prefix; the bridge is its ``cmd_vel`` and ``path`` sources, its ``initialpose`` /
+frame prefix, and one ROS node ``omnibot`` in that namespace (on the backend ``--ros-backend`` names,
+:mod:`omnibot.ros2.backend`; the bridge's options are its parameters); the bridge is its ``cmd_vel`` and ``path`` sources, its ``initialpose`` /
 ``reset_odometry`` sink and its publishing sink (:mod:`omnibot.ros2.bridge`). With several robots
 the i-th ``--namespace`` (and ``--frame-prefix``, when given) goes with the i-th ``--port``; every
 robot's link is opened first (one that cannot be opened ends the command before any robot moves),
@@ -39,6 +40,13 @@ def add_bridge_options(p: argparse.ArgumentParser, *, several: bool = False, sca
     """The bridge's own options (``omnibot ros2``, where ``several`` robots may be given, and ``omnibot
     run --ros2``; ``omnibot map --ros2`` has its own ``--scanner``, so not ``scanner``)."""
     more = "; one per --port, in the same order" if several else ""
+    p.add_argument(
+        "--ros-backend",
+        choices=("auto", "rclpy", "dds"),
+        default="auto",
+        help="rclpy: a ROS node on your rmw (parameters, services for every rmw); dds: the DDS wire "
+        "with cyclonedds only, no ROS install needed; auto (default): rclpy when it can be imported",
+    )
     if scanner:
         p.add_argument(
             "--scanner",
@@ -183,6 +191,9 @@ def check(args: argparse.Namespace) -> list[RobotSpec]:
     speed = getattr(args, "speed", None)
     if speed is not None and not (math.isfinite(speed) and speed > 0):
         raise ConfigError(f"expected a positive speed in m/s, got {speed}", key="--speed")
+    from omnibot.ros2.backend import choose
+
+    args.ros_backend = choose(getattr(args, "ros_backend", "auto"))
     specs = robot_specs(args)
     if len(specs) > 1 and (getattr(args, "log", None) or getattr(args, "foxglove", None)):
         raise ConfigError("--log and --foxglove record one robot: not with several --port", key="--log")
@@ -195,17 +206,22 @@ def attach(
     args: argparse.Namespace,
     spec: RobotSpec | None = None,
     timeline: Any = None,
+    *,
+    announce: bool = True,
 ) -> Any:
     """Add the bridge to ``runtime``: the cmd_vel and path sources, the odometry reset and publishing
     sinks (stamping on ``timeline``, the process's :class:`~omnibot.ros2.clock.Timeline`; ``/clock``
     when the link is a simulator's); gives the runtime the fused estimator at its first cycle when
     it has none; gives it the robot's scanner when it has none (the RPLIDAR on the spec's
     ``--scanner``, else the simulator's on ``sim://``; closed with the node), whose scans the sink
-    publishes on ``scan``. Returns the node (close it)."""
+    publishes on ``scan``. The node is ``args.ros_backend``'s (``rclpy`` or ``dds``, as :func:`check`
+    resolved it; ``dds`` when ``args`` has none), and the bridge's options are its parameters
+    (:func:`parameters`); ``announce``: a notice names the node and its backend (``omnibot ros2``
+    names them in its own first line). Returns the node (close it)."""
     try:
+        from omnibot.ros2.backend import choose, open_node
         from omnibot.ros2.bridge import Diagnosed, Ros2Sink
         from omnibot.ros2.cmd_vel import TWIST, CmdVelSource
-        from omnibot.ros2.dds import Node
         from omnibot.ros2.odometry import OdometryReset
         from omnibot.ros2.path import PathSource
     except ImportError:
@@ -223,9 +239,11 @@ def attach(
     recorder = active()  # the command's --log: the bridge stamps as it does
     if recorder is not None:
         timeline.adopt(recorder.placing)
+    backend = choose(getattr(args, "ros_backend", "dds"))
+    simulated = find_simulator(runtime.client.link) is not None
     scans = _scanner(runtime, robot, spec)  # a bad --scanner is refused before any participant
     try:
-        node = Node(spec.namespace)
+        node = open_node(backend, spec.namespace, sim_time=simulated)
     except BaseException as exc:
         if scans is not None:
             runtime.scanner = None
@@ -257,16 +275,15 @@ def attach(
     )
     EstimatorWhenMissing.add(runtime, robot)
     limits = TwistLimits.from_limits(runtime.client.limits, None, robot)
-    runtime.add_source(
-        CmdVelSource(
-            node,
-            forced=TWIST if args.twist else None,
-            timeout=args.cmd_vel_timeout,
-            limits=limits,
-            period=runtime.period,
-            notify=notify,
-        )
+    cmd_vel = CmdVelSource(
+        node,
+        forced=TWIST if args.twist else None,
+        timeout=args.cmd_vel_timeout,
+        limits=limits,
+        period=runtime.period,
+        notify=notify,
     )
+    runtime.add_source(cmd_vel)
     runtime.add_source(path)
     runtime.add_sink(reset)
     runtime.add_sink(
@@ -276,13 +293,54 @@ def attach(
             prefix=spec.prefix,
             reporters=[path.status, reset.status],
             timeline=timeline,
-            sim_time=find_simulator(runtime.client.link) is not None,
+            sim_time=simulated,
             diagnosed=diagnosed,
         )
     )
+    node.declare(parameters(robot, runtime, spec, cmd_vel, node.backend))
+    if announce:
+        notify("info", f"ros2: node {fqn(node)} on the {node.backend} backend")
     StallWatch.on(runtime, robot)  # wheels that turn while the body does not: stop, say so
     start_sonars(runtime.client, robot, SONAR_PERIOD)  # in TEL: the ranges out, the stall watch's witnesses
     return node
+
+
+def fqn(node: Any) -> str:
+    """The node's fully qualified name (``/r1/omnibot``)."""
+    return f"/{node.namespace}/{node.name}" if node.namespace else f"/{node.name}"
+
+
+def positive_seconds(value: Any) -> str | None:
+    """None for a positive finite number of seconds, else why not."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return f"expected seconds as a number, got {value!r}"
+    if not (math.isfinite(value) and value > 0):
+        return f"expected a positive number of seconds, got {value}"
+    return None
+
+
+def parameters(robot: Any, runtime: Any, spec: RobotSpec, cmd_vel: Any, backend: str) -> list[Any]:
+    """The bridge's options as ROS parameters: ``cmd_vel_timeout`` may be set while it runs (checked,
+    then given to the cmd_vel source); the others say how it was started (read-only)."""
+    from omnibot.ros2.backend import Parameter
+
+    def set_timeout(value: Any) -> None:
+        cmd_vel.timeout = float(value)
+
+    return [
+        Parameter("robot", robot.name, "the robot's description (its HELLO's name)"),
+        Parameter("frame_prefix", spec.prefix, "tf frame prefix of the robot's frames (--frame-prefix)"),
+        Parameter("twist_only", cmd_vel.forced is not None, "cmd_vel taken as Twist only (--twist)"),
+        Parameter("cycle_period", float(runtime.period), "s between two runtime cycles (and odom messages)"),
+        Parameter("ros_backend", backend, "rclpy or dds (--ros-backend)"),
+        Parameter(
+            "cmd_vel_timeout",
+            float(cmd_vel.timeout),
+            "s a cmd_vel stays in force (--cmd-vel-timeout); settable while running",
+            positive_seconds,
+            set_timeout,
+        ),
+    ]
 
 
 def _scanner(runtime: Any, robot: Any, spec: RobotSpec) -> Any:
@@ -333,7 +391,7 @@ def _open(
 
     slip = use_calibration(args, session.client, session.robot)
     runtime = Runtime(session.client, period=PERIOD, wheel_loop=not args.open_loop, slip=slip)
-    node = attach(runtime, session.robot, args, spec, timeline)
+    node = attach(runtime, session.robot, args, spec, timeline, announce=False)
     runtime.add_sink(NoticePrinter(lambda text: _say(f"{label}{text}"), control=True))
     return _Robot(spec, url, session.client, session.robot, runtime, node, label)
 
@@ -347,11 +405,10 @@ def _serve(one: _Robot, args: argparse.Namespace, stop: threading.Event) -> None
     runtime.start()
     client.telemetry(PERIOD, codes.TEL_MASK)
     runtime.pacer = Pacer(client, PERIOD)
-    ns = f" namespace /{node.namespace}" if node.namespace else ""
     frames = f", frames {spec.prefix}odom" if spec.prefix else ""
     _say(
-        f"{one.label}{one.robot.name} on {one.url}: domain {node.domain_id}{ns}{frames}, "
-        f"discovery {node.scope.lower()}"
+        f"{one.label}{one.robot.name} on {one.url}: node {fqn(node)} on the {node.backend} backend, domain "
+        f"{node.domain_id}{frames}, discovery {node.scope.lower()}"
     )
     runtime.run(until=stop.is_set, duration=args.duration)
 

@@ -6,6 +6,14 @@
 * each reader and writer carries ``typehash=RIHS01_<hex>;`` in its USER_DATA, as rmw puts it;
 * Fast DDS's XTypes type information is ignored (:data:`COMPATIBILITY`): endpoints match on type
   names, as between rmw implementations;
+* the node in the ROS graph as rmw announces it (rmw_dds_common's ``GraphCache``): the participant's
+  USER_DATA says ``enclave=/;`` and ``ros_discovery_info`` (rmw_dds_common/msg/ParticipantEntitiesInfo,
+  reliable, transient-local, keep-last 1, without the ``rt/`` prefix) names the participant's GID,
+  the node's name and namespace and the GIDs of its readers and writers (a GID is the entity's
+  16-byte DDS GUID, as rmw_cyclonedds' ``convert_guid_to_gid``), published again whenever the node
+  makes an endpoint: ``ros2 node list`` and ``ros2 topic info -v`` name the node. Its USER_DATA
+  carries no type hash (rosbags' description of ``Gid`` is not rosidl's, so its hash would be wrong);
+  the graph matches on type names;
 * ``ROS_DOMAIN_ID``, ``ROS_AUTOMATIC_DISCOVERY_RANGE`` (``LOCALHOST``, ``OFF``, ``SUBNET``) and the
   older ``ROS_LOCALHOST_ONLY=1`` mean what they mean to rmw: localhost-only discovery is unicast to
   127.0.0.1 with multicast off.
@@ -16,16 +24,24 @@ Under pytest a participant is refused outside a private network namespace
 
 from __future__ import annotations
 
-import logging
 import os
 import threading
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from omnibot.errors import ConfigError
 from omnibot.logs.schemas import type_hash
 from omnibot.ros2 import netns
+from omnibot.ros2.backend import (
+    DEFAULT,
+    LATCHED,
+    NODE_NAME,
+    SENSOR_DATA,
+    Handler,
+    Parameter,
+    Profile,
+    run_closers,
+)
 from omnibot.ros2.types import dds_type, request_type
 
 try:
@@ -43,27 +59,18 @@ except ImportError as exc:  # pragma: no cover - the message says how to get it
 _RELIABLE = Policy.Reliability.Reliable(max_blocking_time=duration(milliseconds=100))
 
 
-@dataclass(frozen=True)
-class Profile:
-    """A QoS profile of rclpy's."""
-
-    reliable: bool = True
-    depth: int = 10
-    transient_local: bool = False
-
-
-DEFAULT = Profile()
-SENSOR_DATA = Profile(reliable=False, depth=5)
-LATCHED = Profile(depth=1, transient_local=True)
+__all__ = ["DEFAULT", "LATCHED", "SENSOR_DATA", "Node", "Profile", "qos", "topic_name"]
 
 
 def qos(profile: Profile, typename: str, user_data: str = "") -> Qos:
-    """The DDS QoS of ``profile`` with ``user_data`` and ``typename``'s RIHS01 hash in USER_DATA."""
+    """The DDS QoS of ``profile`` with ``user_data`` and ``typename``'s RIHS01 hash in USER_DATA (none
+    for an empty ``typename``)."""
+    hashed = f"typehash={type_hash(typename)};" if typename else ""
     return Qos(
         _RELIABLE if profile.reliable else Policy.Reliability.BestEffort,
         Policy.History.KeepLast(profile.depth),
         Policy.Durability.TransientLocal if profile.transient_local else Policy.Durability.Volatile,
-        Policy.Userdata(f"{user_data}typehash={type_hash(typename)};".encode()),
+        Policy.Userdata(f"{user_data}{hashed}".encode()),
     )
 
 
@@ -151,23 +158,65 @@ def _domain(domain: int, scope: str) -> Any:
         return made
 
 
-class Node:
-    """A participant with ROS 2 naming and QoS: :meth:`writer` and :meth:`reader` of ROS types."""
+GRAPH_TOPIC = "ros_discovery_info"
+GRAPH_TYPE = "rmw_dds_common/msg/ParticipantEntitiesInfo"
+ENCLAVE = b"enclave=/;"
+"""The participant's USER_DATA, as rmw's (the default security enclave)."""
 
-    def __init__(self, namespace: str = "", env: Mapping[str, str] | None = None) -> None:
+
+def gid(entity: Any) -> bytes:
+    """The 16-byte GUID of a cyclonedds entity, as rmw_cyclonedds makes an ``rmw_gid_t`` of it."""
+    return bytes(entity.guid.bytes)
+
+
+class Node:
+    """A participant with ROS 2 naming and QoS: :meth:`writer` and :meth:`reader` of ROS types, the
+    node ``name`` in ``namespace`` announced on :data:`GRAPH_TOPIC`."""
+
+    backend = "dds"
+    serialized = False
+
+    def __init__(
+        self, namespace: str = "", env: Mapping[str, str] | None = None, name: str = NODE_NAME
+    ) -> None:
         env = os.environ if env is None else env
         netns.check_participant_allowed()
+        self.name = name
         self.namespace = namespace.strip("/")
         self.domain_id = domain_id(env)
         self.scope = discovery_range(env)
         self._domain = _domain(self.domain_id, self.scope)
         with _ENTITIES:
-            self.participant = DomainParticipant(self.domain_id)
+            self.participant = DomainParticipant(self.domain_id, qos=Qos(Policy.Userdata(ENCLAVE)))
         self._topics: dict[tuple[str, str], Any] = {}
         """Topics made, by DDS name and ROS type (one name may carry two types: cmd_vel's)."""
         self._services = 0
         self.closers: list[Callable[[], object]] = []
         """Called by :meth:`close` first, newest first (what the bridge opened with the node: a scanner)."""
+        self.parameters: dict[str, Parameter] = {}
+        """The bridge's options (no parameter services on this backend)."""
+        self.readers: list[bytes] = []
+        self.writers: list[bytes] = []
+        """The GIDs of the node's endpoints, as announced."""
+        with _ENTITIES:
+            topic = Topic(self.participant, GRAPH_TOPIC, dds_type(GRAPH_TYPE))
+            self._graph: Any = DataWriter(self.participant, topic, qos=qos(LATCHED, ""))
+        self._announce()
+
+    def _announce(self) -> None:
+        """Publish the node's entities on :data:`GRAPH_TOPIC` (rmw_dds_common's ParticipantEntitiesInfo)."""
+        make: Any = dds_type("rmw_dds_common/msg/Gid")
+        entities: Any = dds_type("rmw_dds_common/msg/NodeEntitiesInfo")
+        participant: Any = dds_type(GRAPH_TYPE)
+        info = entities(
+            node_namespace="/" + self.namespace,
+            node_name=self.name,
+            reader_gid_seq=[make(data=list(g)) for g in self.readers],
+            writer_gid_seq=[make(data=list(g)) for g in self.writers],
+        )
+        self._graph.write(
+            participant(gid=make(data=list(gid(self.participant))), node_entities_info_seq=[info])
+        )
 
     def _topic(self, name: str, typename: str) -> Any:
         dds = topic_name(name, self.namespace)
@@ -180,18 +229,36 @@ class Node:
     def writer(self, name: str, typename: str, profile: Profile = DEFAULT) -> Any:
         """A DataWriter of ``typename`` on the ROS topic ``name``."""
         with _ENTITIES:
-            return DataWriter(self.participant, self._topic(name, typename), qos=qos(profile, typename))
+            made = DataWriter(self.participant, self._topic(name, typename), qos=qos(profile, typename))
+            self.writers.append(gid(made))
+            self._announce()
+        return made
 
     def reader(self, name: str, typename: str, profile: Profile = DEFAULT) -> Any:
         """A DataReader of ``typename`` on the ROS topic ``name``."""
         with _ENTITIES:
-            return DataReader(self.participant, self._topic(name, typename), qos=qos(profile, typename))
+            made = DataReader(self.participant, self._topic(name, typename), qos=qos(profile, typename))
+            self.readers.append(gid(made))
+            self._announce()
+        return made
 
     def publications(self) -> Any:
         """A reader of the DCPSPublication builtin topic: every writer discovered (``topic_name``,
         ``type_name`` as on DDS), each once, as :meth:`take` hands them over."""
         with _ENTITIES:
             return BuiltinDataReader(self.participant, BuiltinTopicDcpsPublication)
+
+    def trigger_service(self, name: str, handler: Handler) -> Any:
+        """The std_srvs/srv/Trigger service ``name`` on rmw_cyclonedds' wire
+        (:class:`~omnibot.ros2.service.TriggerService`)."""
+        from omnibot.ros2.service import TriggerService
+
+        return TriggerService(self, name, handler)
+
+    def declare(self, parameters: Sequence[Parameter]) -> None:
+        """Keep ``parameters`` (this backend serves no parameter services: ``ros2 param`` cannot reach
+        them)."""
+        self.parameters.update({p.name: p for p in parameters})
 
     def service_endpoints(self, name: str, srv: str) -> tuple[Any, Any]:
         """The request reader and reply writer of the ROS service ``name`` of type ``srv``
@@ -205,6 +272,9 @@ class Node:
         user = f"serviceid={csid};"
         with _ENTITIES:
             requests, replies = self._service_endpoints(name, srv, user)
+            self.readers.append(gid(requests))
+            self.writers.append(gid(replies))
+            self._announce()
         return requests, replies
 
     def _service_endpoints(self, name: str, srv: str, user: str) -> list[Any]:
@@ -223,11 +293,7 @@ class Node:
     def close(self) -> None:
         """Release what was opened with the node (:attr:`closers`), then delete the participant (and
         everything it made)."""
-        while self.closers:
-            closer = self.closers.pop()
-            try:
-                closer()
-            except Exception:  # on the way out: the participant is deleted whatever
-                logging.getLogger("omnibot.ros2").exception("closing %r failed", closer)
+        run_closers(self.closers)
         self._topics.clear()
+        self._graph = None
         self.participant = None  # type: ignore[assignment]

@@ -5,7 +5,8 @@
   covariance is not used: the estimator keeps no pose covariance). The pose must be in the robot's
   odom frame (``<prefix>odom``) or carry no frame: omnibot has no map and no transform from another
   frame, so a pose in ``map`` is refused with a warning rather than applied in the wrong frame.
-* ``reset_odometry`` (std_srvs/srv/Trigger, :mod:`omnibot.ros2.service`): the estimate goes back to
+* ``reset_odometry`` (std_srvs/srv/Trigger, the node's: over the user's rmw on the rclpy backend,
+  rmw_cyclonedds' wire on the dds one, :mod:`omnibot.ros2.service`): the estimate goes back to
   (0, 0, 0); the reply says so, or why not.
 
 A reset moves the odom frame under a path being followed (a path is in that frame), so it cancels
@@ -21,9 +22,8 @@ from collections.abc import Callable
 from typing import Any
 
 from omnibot.motion import Pose2D
+from omnibot.ros2.backend import RosNode
 from omnibot.ros2.bridge import Diagnosed
-from omnibot.ros2.dds import Node
-from omnibot.ros2.service import TriggerService
 from omnibot.ros2.types import from_dds
 from omnibot.runtime.cycle import Cycle, Level
 
@@ -50,7 +50,7 @@ class OdometryReset:
 
     def __init__(
         self,
-        node: Node,
+        node: RosNode,
         runtime: Any,
         *,
         odom_frame: str,
@@ -65,7 +65,7 @@ class OdometryReset:
         self.diagnosed = diagnosed or Diagnosed("")
         """Whose ``odometry`` status it is."""
         self.reader = node.reader(INITIALPOSE, POSE)
-        self.service = TriggerService(node, RESET_SERVICE, self.reset)
+        self.service = node.trigger_service(RESET_SERVICE, self.reset)
         self.resets = 0
         self.last = "none yet"
         """What the last request did, in words."""

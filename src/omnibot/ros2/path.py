@@ -33,8 +33,8 @@ from omnibot.control.paths.path import Path
 from omnibot.motion import Estimate
 from omnibot.navigation.judge import FollowJudge
 from omnibot.navigation.session import summary, verdict
+from omnibot.ros2.backend import RosNode
 from omnibot.ros2.bridge import Diagnosed
-from omnibot.ros2.dds import Node
 from omnibot.ros2.odometry import yaw_of
 from omnibot.ros2.types import from_dds
 from omnibot.runtime.cycle import Cycle, Level
@@ -74,7 +74,7 @@ class PathSource:
 
     def __init__(
         self,
-        node: Node,
+        node: RosNode,
         robot: Any,
         period: float,
         *,

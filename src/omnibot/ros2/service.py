@@ -16,20 +16,27 @@ ROS 2 does not carry services across rmw vendors, so these services answer rmw_c
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Protocol
 
 from omnibot.logs import schemas
-from omnibot.ros2.dds import Node
 from omnibot.ros2.types import dds_fields, request_type
 
 TRIGGER = "std_srvs/srv/Trigger"
+
+
+class Endpoints(Protocol):
+    """What makes a service's endpoints (:meth:`omnibot.ros2.dds.Node.service_endpoints`)."""
+
+    def service_endpoints(self, name: str, srv: str) -> tuple[Any, Any]:
+        """The request reader and the reply writer of the service ``name`` of type ``srv``."""
+        ...
 
 
 class TriggerService:
     """A std_srvs/srv/Trigger service ``name``: :meth:`poll` answers every waiting request with
     ``handler()`` -> (success, message)."""
 
-    def __init__(self, node: Node, name: str, handler: Callable[[], tuple[bool, str]]) -> None:
+    def __init__(self, node: Endpoints, name: str, handler: Callable[[], tuple[bool, str]]) -> None:
         self.name = name
         self.handler = handler
         self.requests, self.replies = node.service_endpoints(name, TRIGGER)
