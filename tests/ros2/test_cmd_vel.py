@@ -3,7 +3,9 @@ types taken by what the publishers in the graph offer."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from types import SimpleNamespace
+from typing import Any
 
 import pytest
 
@@ -87,3 +89,33 @@ def test_twist_forced_takes_only_twist_and_says_why_of_a_twist_stamped_publisher
     ]
     with pytest.raises(ValueError, match="not std_msgs/msg/String"):
         CmdVelSource(node, forced="std_msgs/msg/String")  # type: ignore[arg-type]
+
+
+def test_every_reader_wakes_the_runtime_when_a_command_arrives() -> None:
+    """The source hands the runtime's wake function to each reader, the Twist reader made later too;
+    a reader that cannot tell of arrivals leaves the source polled by the cycles."""
+
+    class Telling(Node):
+        def __init__(self) -> None:
+            super().__init__()
+            self.callbacks: dict[str, Callable[[], None]] = {}
+
+        def reader(self, name: str, typename: str) -> Any:
+            endpoint = super().reader(name, typename)
+            endpoint.on_data = lambda callback: self.callbacks.setdefault(typename, callback)  # type: ignore[attr-defined]
+            return endpoint
+
+    node = Telling()
+    woken: list[str] = []
+    source = CmdVelSource(node)  # type: ignore[arg-type]
+    assert not source.event_driven  # no runtime yet
+    source.wake_with(lambda: woken.append("ros2"))
+    node.discovered.samples.append(publication(TWIST))
+    source.discover()
+    assert set(node.callbacks) == {TWIST_STAMPED, TWIST} and source.event_driven
+    for callback in node.callbacks.values():
+        callback()
+    assert woken == ["ros2", "ros2"]
+    polled = CmdVelSource(Node())
+    polled.wake_with(lambda: woken.append("never"))
+    assert not polled.event_driven and woken == ["ros2", "ros2"]
