@@ -104,7 +104,10 @@ class LinkPacer:
         if wakeup is None:
             self.client.sleep(max(0.0, self._next - now))
             return True
-        self._resuming = not wakeup.pump_until(self.client, self._next, self.now)
+        wall = isinstance(self.client.clock, WallClock)  # lockstep: whole reads, as without a wakeup
+        self._resuming = not wakeup.pump_until(
+            self.client, self._next, self.now, wakeup.slice if wall else math.inf
+        )
         return not self._resuming
 
 
@@ -184,7 +187,7 @@ class Runtime:
         self.telemetry_hooks: list[Callable[[Telemetry], object]] = []
         """More consumers of each telemetry sample, called right after the estimator (observers)."""
         self.decision: Decision = NOBODY
-        self.wakeup = Wakeup() if isinstance(client.clock, WallClock) else Wakeup(math.inf)
+        self.wakeup = Wakeup()
         """Raised by sources between cycles (any thread): the wait ends, :meth:`react` runs."""
         self._wakers: set[str] = set()
         self.reactions = 0

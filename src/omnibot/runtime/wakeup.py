@@ -13,9 +13,10 @@ the cycle that was due, whose schedule is unchanged::
     DDS thread:   sample arrives -> listener -> wake("ros2")      (sets a flag; nothing else)
     loop thread:  ... wait(wakeup) -- woken --> react(): propose, arbitrate, send ... wait(wakeup)
 
-The wait looks at the flag between reads of the link: on a link on the wall clock in slices of at
-most :data:`SLICE` (a serial port's read returns with its telemetry anyway), and while the pacer
-sleeps off wall time, at once (an :class:`threading.Event`). Reactions are at least :data:`GAP`
+The wait looks at the flag between reads of the link, each at most :data:`SLICE` of the link's
+clock long when the loop keeps to the wall clock (a real link, or teleop's pacer on ``sim://``, which
+steps the simulator ahead to the tick), and while the pacer sleeps off wall time at once (a
+:class:`threading.Event`). Reactions are at least :data:`GAP`
 apart on the pacer's clock (a flood of commands cannot crowd the link): a wake sooner is taken by
 the reaction at the end of the gap, or by the cycle when that comes first, so no command is lost
 that a newer one has not replaced.
@@ -26,9 +27,9 @@ the link, whatever it returned (a reply, telemetry, the read's timeout), and nev
 an event is taken at the simulated instant of the read that followed it. A wake raised by what the
 simulation itself delivers (a telemetry listener, a scripted feed on the link clock) is taken at the
 same simulated instant on every run: the run stays deterministic for its seed. A wake raised from
-another thread (DDS) is taken at the next read, as on a real link: such a run is as reproducible as
-the arrival of its commands. The slices are not used in lockstep (the reads are those the loop made
-before: without any wake, a run is the one it was before, bit for bit).
+another thread (DDS) is taken at the next read: such a run is as reproducible as the arrival of its
+commands. Lockstep reads are not sliced (they are those the loop made before: without any wake, a
+run is the one it was before, bit for bit).
 """
 
 from __future__ import annotations
@@ -64,15 +65,12 @@ class _Clock(Protocol):
 class Wakeup:
     """The flag sources raise (any thread) and the loop waits on (its own thread).
 
-    ``slice``: the longest read of the link between two looks at the flag (:data:`SLICE`; use
-    ``math.inf`` in lockstep, where every read returns on the simulator's next message or timeout).
     :attr:`hold_until` is the pacer-clock time before which a raised flag does not end a wait
     (:data:`GAP` after a reaction)."""
 
-    def __init__(self, slice: float = SLICE) -> None:
-        if not slice > 0:
-            raise ValueError(f"slice must be > 0 s, got {slice}")
-        self.slice = slice
+    def __init__(self) -> None:
+        self.slice = SLICE
+        """s: the longest read of the link on a loop kept to the wall clock."""
         self.hold_until = -math.inf
         self._lock = threading.Lock()
         self._event = threading.Event()
@@ -111,13 +109,15 @@ class Wakeup:
         """The flag is raised and its hold is over (``now`` on the pacer's clock)."""
         return self._event.is_set() and now >= self.hold_until
 
-    def pump_until(self, client: _Pumped, deadline: float, now: Callable[[], float]) -> bool:
+    def pump_until(
+        self, client: _Pumped, deadline: float, now: Callable[[], float], slice: float = math.inf
+    ) -> bool:
         """Read ``client``'s link until its clock reaches ``deadline`` (True) or the flag is
-        :meth:`ready` on the pacer's clock ``now`` (False)."""
+        :meth:`ready` on the pacer's clock ``now`` (False), each read at most ``slice`` s long."""
         while (remaining := deadline - client.clock.now()) > 0:
             if self.ready(now()):
                 return False
-            client.pump(min(remaining, self.slice))
+            client.pump(min(remaining, slice))
         return True
 
     def sleep(self, seconds: float, now: Callable[[], float]) -> bool:

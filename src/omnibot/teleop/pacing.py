@@ -90,7 +90,7 @@ class Pacer:
                 self._sleep(rest)
         else:
             self._resuming = True
-            if not wakeup.pump_until(self.client, self._link0 + step, self._wall):
+            if not wakeup.pump_until(self.client, self._link0 + step, self._wall, wakeup.slice):
                 return False
             rest = self._wall0 + step - self._wall()
             if rest > 0 and wakeup.sleep(rest, self._wall):
