@@ -349,9 +349,11 @@ def _serve(one: _Robot, args: argparse.Namespace, stop: threading.Event) -> None
     runtime.pacer = Pacer(client, PERIOD)
     ns = f" namespace /{node.namespace}" if node.namespace else ""
     frames = f", frames {spec.prefix}odom" if spec.prefix else ""
+    static = getattr(node, "static_peers", ())
+    peers = f", static peers {';'.join(static)}" if static and node.scope != "OFF" else ""
     _say(
         f"{one.label}{one.robot.name} on {one.url}: domain {node.domain_id}{ns}{frames}, "
-        f"discovery {node.scope.lower()}"
+        f"discovery {node.scope.lower()}{peers}"
     )
     runtime.run(until=stop.is_set, duration=args.duration)
 
