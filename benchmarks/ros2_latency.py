@@ -18,7 +18,13 @@ from its publication to the VEL that carries it being written (the bridge: submi
 the runtime; the relay: written). The bridge takes each command as it arrives (a DDS listener wakes
 the runtime, which arbitrates and sends: :mod:`omnibot.runtime.wakeup`); a command a newer one
 replaced before the bridge could send it is counted as such, and one neither carried nor replaced
-as lost.
+as lost. Where rclpy runs, an rclpy subscriber beside the publisher times each ``odom`` the bridge
+publishes: rmw's received minus source timestamp.
+
+``--hosts``: the same again across a network link (:class:`~omnibot.ros2.netns.TwoHosts`: two
+namespaces joined by a veth pair, 192.0.2.1 and 192.0.2.2, made inside the private one): the bridge
+and the relay on one host, the publisher and the odom subscriber on the other, discovery by
+multicast over the link.
 """
 
 from __future__ import annotations
@@ -104,6 +110,26 @@ rclpy.shutdown()
 """
 
 
+ODOM = r"""
+import json, signal
+import rclpy
+from nav_msgs.msg import Odometry
+from rclpy.node import Node
+
+rclpy.init()
+node = Node("odom_latency")
+latency = []
+node.create_subscription(
+    Odometry, "odom", lambda m, info: latency.append(info["received_timestamp"] - info["source_timestamp"]), 10
+)
+stop = []
+signal.signal(signal.SIGTERM, lambda *_: stop.append(1))
+while not stop:
+    rclpy.spin_once(node, timeout_sec=0.1)
+print(json.dumps(latency), flush=True)
+"""
+
+
 def _env() -> dict[str, str]:
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join([p for p in sys.path if p])
@@ -117,8 +143,12 @@ def relay_unavailable() -> str:
     return ""
 
 
-def measure(duration: float, rate: float, period: float, relay: bool = True) -> dict[str, Any]:
-    """Run the bridge, the relay (``relay``) and the publisher at ``rate`` Hz for ``duration`` s."""
+def measure(
+    duration: float, rate: float, period: float, relay: bool = True, remote: list[str] | None = None
+) -> dict[str, Any]:
+    """Run the bridge, the relay and the odom subscriber (``relay``: rclpy runs) and the publisher at
+    ``rate`` Hz for ``duration`` s; ``remote``: the command prefix that runs the publisher and the
+    odom subscriber on the other host."""
     from omnibot.client.client import Pending
     from omnibot.client.session import robot_session
     from omnibot.protocol import codes
@@ -152,15 +182,19 @@ def measure(duration: float, rate: float, period: float, relay: bool = True) -> 
             return pending
 
         client.submit = on_link  # type: ignore[method-assign]
-        relayed = None
+        relayed = odom = None
+        there = remote or []
         if relay:
             relayed = subprocess.Popen(
                 [sys.executable, "-c", RELAY], stdout=subprocess.PIPE, text=True, env=_env()
             )
             assert relayed.stdout is not None
             relayed.stdout.readline()  # ready
+            odom = subprocess.Popen(
+                [*there, sys.executable, "-c", ODOM], stdout=subprocess.PIPE, text=True, env=_env()
+            )
         peer = subprocess.Popen(
-            [sys.executable, "-c", PEER, str(duration), str(rate), "2" if relay else "1", str(MATCH)],
+            [*there, sys.executable, "-c", PEER, str(duration), str(rate), "2" if relay else "1", str(MATCH)],
             stdout=out,
             env=_env(),
         )
@@ -172,11 +206,12 @@ def measure(duration: float, rate: float, period: float, relay: bool = True) -> 
         finally:
             runtime.close()
             node.close()
-            for process in (peer, relayed):
+            for process in (peer, relayed, odom):
                 if process is not None and process.poll() is None:
                     process.terminate()
             peer.wait()
             relay_out = relayed.communicate(timeout=30)[0] if relayed is not None else ""
+            odom_out = odom.communicate(timeout=30)[0] if odom is not None else ""
         out.seek(0)
         sent = [float(t) for t in json.loads(out.read() or "[]")]
     written = (
@@ -191,6 +226,9 @@ def measure(duration: float, rate: float, period: float, relay: bool = True) -> 
         "reactions": runtime.reactions,
         "cycles": runtime.cycles,
         "event_driven": source.event_driven,
+        "odom": [int(v) / 1e9 for v in json.loads(odom_out.strip().splitlines()[-1])]
+        if odom_out.strip()
+        else [],
     }
 
 
@@ -208,11 +246,19 @@ def _latencies(sent: list[float], carried: dict[int, float], vels: list[tuple[fl
     return {"latencies": latencies, "replaced": replaced, "lost": lost}
 
 
-def report(rate: float, period: float, result: dict[str, Any]) -> None:
-    """One line each for the bridge and the relay: commands carried, p50, p99 and max in ms."""
+def _percentiles(values: list[float]) -> str:
+    """p50, p99 and max of ``values`` (s) in ms."""
+    lat = sorted(values)
+    p99 = lat[min(len(lat) - 1, round(0.99 * (len(lat) - 1)))]
+    return f"p50 {statistics.median(lat) * 1000:.2f} ms, p99 {p99 * 1000:.2f} ms, max {lat[-1] * 1000:.2f} ms"
+
+
+def report(rate: float, period: float, result: dict[str, Any], where: str = "one host") -> None:
+    """One line each for the bridge and the relay (commands carried, p50, p99 and max in ms), one for
+    odom's delivery."""
     published = result["published"]
     print(
-        f"cmd_vel at {rate:.0f} Hz, cycle {period * 1000:.0f} ms: {published} published; the bridge "
+        f"{where}: cmd_vel at {rate:.0f} Hz, cycle {period * 1000:.0f} ms: {published} published; the bridge "
         f"reacted {result['reactions']} times in {result['cycles']} cycles (listener: {result['event_driven']})"
     )
     for who in ("bridge", "relay"):
@@ -220,16 +266,16 @@ def report(rate: float, period: float, result: dict[str, Any]) -> None:
         if r is None:
             print(f"  {who}: not run ({relay_unavailable()})")
             continue
-        lat = sorted(r["latencies"])
+        lat = r["latencies"]
         if not lat:
             print(f"  {who}: no command reached the link")
             continue
-        p99 = lat[min(len(lat) - 1, round(0.99 * (len(lat) - 1)))]
         print(
             f"  {who}: {len(lat)}/{published} on the link ({r['replaced']} replaced, {r['lost']} lost); "
-            f"cmd_vel -> VEL p50 {statistics.median(lat) * 1000:.2f} ms, p99 {p99 * 1000:.2f} ms, "
-            f"max {lat[-1] * 1000:.2f} ms"
+            f"cmd_vel -> VEL {_percentiles(lat)}"
         )
+    if result["odom"]:
+        print(f"  odom to rclpy: {len(result['odom'])} delivered, {_percentiles(result['odom'])}")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -241,13 +287,36 @@ def main(argv: list[str] | None = None) -> int:
         "--rate", type=float, action="append", help="Hz of cmd_vel (repeatable; default 50 and 100)"
     )
     parser.add_argument("--period", type=float, default=0.02, help="the runtime's cycle, s (default 0.02)")
+    parser.add_argument(
+        "--hosts", action="store_true", help="again across a veth link between two namespaces"
+    )
+    parser.add_argument("--remote", help=argparse.SUPPRESS)  # --hosts' run on the robot's host
     args = parser.parse_args(argv)
+    rates = args.rate or RATES
+    relay = not relay_unavailable()
+    if args.remote is not None:  # on the robot's host of --hosts: the other is the prefix's
+        os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "SUBNET"
+        for rate in rates:
+            report(
+                rate,
+                args.period,
+                measure(args.duration, rate, args.period, relay, args.remote.split()),
+                "two hosts",
+            )
+        return 0
     status = ensure_private("benchmarks.ros2_latency", argv)
     if status is not None:
         return status
-    relay = not relay_unavailable()
-    for rate in args.rate or RATES:
+    for rate in rates:
         report(rate, args.period, measure(args.duration, rate, args.period, relay))
+    if args.hosts:
+        from omnibot.ros2.netns import TwoHosts
+
+        with TwoHosts() as hosts:
+            inner = [sys.executable, "-m", "benchmarks.ros2_latency", "--remote", " ".join(hosts.prefix(1))]
+            inner += ["--duration", str(args.duration), "--period", str(args.period)]
+            inner += [a for rate in rates for a in ("--rate", str(rate))]
+            hosts.run(0, inner, env=_env()).wait()
     return 0
 
 

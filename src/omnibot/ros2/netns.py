@@ -163,11 +163,14 @@ class TwoHosts:
         self, host: int, argv: Sequence[str], env: Mapping[str, str] | None = None, **popen: Any
     ) -> subprocess.Popen[Any]:
         """Start ``argv`` on ``host`` (0 or 1); ended, if still running, when the hosts are."""
-        process = subprocess.Popen(
-            ["nsenter", "-t", str(self._holders[host].pid), "-n", *argv], env=env, **popen
-        )
+        process = subprocess.Popen([*self.prefix(host), *argv], env=env, **popen)
         self._started.append(process)
         return process
+
+    def prefix(self, host: int) -> list[str]:
+        """The command line prefix that runs a program on ``host`` (for a process on the other
+        host to start one there: it ends it itself)."""
+        return ["nsenter", "-t", str(self._holders[host].pid), "-n"]
 
     def close(self) -> None:
         """End every process started on the hosts, then the hosts."""

@@ -378,6 +378,8 @@ class Runtime:
         """One cycle: collect, estimate, ask the sources, arbitrate, send, fan out (``now``: the cycle
         clock's time, default the pacer's)."""
         self.start()
+        if self._wakers:
+            self.wakeup.take()  # what woke the loop until now, the sources' proposals below take
         self._collect()
         now = self.pacer.now() if now is None else now
         cycle = Cycle(self.cycles, now, self.client.clock.now(), self.estimate_now())
