@@ -21,6 +21,11 @@ replaced before the bridge could send it is counted as such, and one neither car
 as lost. Where rclpy runs, an rclpy subscriber beside the publisher times each ``odom`` the bridge
 publishes: rmw's received minus source timestamp.
 
+``--robots N`` (repeatable): robots per process instead, as ``omnibot ros2`` runs several (each its
+simulator, runtime in a thread of its own, participant and namespace ``robotK``), each sent cmd_vel
+at 50 Hz: the worst robot's cycles a second (held at >= 95 % of the cycle rate), the latencies over
+all robots, the process's CPU.
+
 ``--hosts``: the same again across a network link (:class:`~omnibot.ros2.netns.TwoHosts`: two
 namespaces joined by a veth pair, 192.0.2.1 and 192.0.2.2, made inside the private one): the bridge
 and the relay on one host, the publisher and the odom subscriber on the other, discovery by
@@ -30,8 +35,10 @@ multicast over the link.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib.util
 import json
+import math
 import os
 import statistics
 import subprocess
@@ -39,6 +46,7 @@ import sys
 import tempfile
 import time
 from argparse import Namespace
+from collections.abc import Callable
 from typing import Any
 
 from benchmarks.netns import ensure_private
@@ -58,10 +66,11 @@ from omnibot.ros2.types import to_dds
 TS = "geometry_msgs/msg/TwistStamped"
 duration, rate, readers = float(sys.argv[1]), float(sys.argv[2]), int(sys.argv[3])
 node = Node()
-writer = node.writer("cmd_vel", TS)
+names = sys.argv[5].split(",") if len(sys.argv) > 5 else [""]  # the robots' namespaces
+writers = [node.writer(f"/{ns}/cmd_vel" if ns else "cmd_vel", TS) for ns in names]
 end = time.monotonic() + float(sys.argv[4])
-while writer.get_publication_matched_status().current_count < readers and time.monotonic() < end:
-    time.sleep(0.01)  # discovery: the bridge's cmd_vel reader (and the relay's) matched
+while time.monotonic() < end and any(w.get_publication_matched_status().current_count < readers for w in writers):
+    time.sleep(0.01)  # discovery: each bridge's cmd_vel reader (and the relay's) matched
 time.sleep(0.5)
 sent = []
 jitter = random.Random(1)
@@ -74,7 +83,8 @@ for k in range(int(duration * rate)):
     target = start + k / rate + jitter.uniform(0.0, 0.5 / rate)  # every phase of the bridge's cycle
     time.sleep(max(0.0, target - time.monotonic()))
     sent.append(time.monotonic())
-    writer.write(message)
+    for writer in writers:
+        writer.write(message)
 time.sleep(0.5)
 print(json.dumps(sent))
 """
@@ -246,6 +256,101 @@ def _latencies(sent: list[float], carried: dict[int, float], vels: list[tuple[fl
     return {"latencies": latencies, "replaced": replaced, "lost": lost}
 
 
+def per_process(robots: int, duration: float, rate: float, period: float) -> dict[str, Any]:
+    """``robots`` bridges in this process as ``omnibot ros2`` runs several (each its simulator,
+    runtime, participant and namespace ``robotK``, its runtime in a thread of its own, wall-clock
+    paced at ``period``), each sent cmd_vel at ``rate`` Hz: per robot the latencies, the cycles a
+    second while commands came, and this process's CPU (% of a core) over that window."""
+    import threading
+
+    from omnibot.client.client import Pending
+    from omnibot.client.session import robot_session
+    from omnibot.protocol import codes
+    from omnibot.protocol.messages import Command, Vel
+    from omnibot.ros2.cmd_vel import CmdVelSource
+    from omnibot.ros2.command import attach
+    from omnibot.runtime.cycle import Cycle
+    from omnibot.runtime.runtime import Runtime
+    from omnibot.teleop.pacing import Pacer
+
+    names = [f"robot{k}" for k in range(robots)]
+    carried: list[dict[int, float]] = [{} for _ in names]
+    vels: list[list[tuple[float, int]]] = [[] for _ in names]
+    ticks: list[list[float]] = [[] for _ in names]
+    cpu: list[tuple[float, float]] = []
+    stop = threading.Event()
+    with contextlib.ExitStack() as stack, tempfile.TemporaryFile("w+") as out:
+        runtimes = []
+        for k, name in enumerate(names):
+            session = stack.enter_context(robot_session(f"sim://omni4?seed={k + 1}", "omni4", timeout=0.5))
+            client = session.client
+            runtime = Runtime(client, period=period)
+            options = Namespace(namespace=name, frame_prefix=None, twist=False, cmd_vel_timeout=0.5)
+            stack.callback(attach(runtime, session.robot, options).close)
+            stack.callback(runtime.close)
+            source = runtime.sources["ros2"]
+            assert isinstance(source, CmdVelSource)
+
+            def on_link(
+                command: Command,
+                timeout: float | None = None,
+                k: int = k,
+                submit: Callable[[Command, float | None], Pending] = client.submit,
+                source: CmdVelSource = source,
+            ) -> Pending:
+                pending = submit(command, timeout)
+                if isinstance(command, Vel) and source.message is not None:
+                    now, index = time.monotonic(), int(source.message.header.stamp.sec)
+                    carried[k].setdefault(index, now)
+                    vels[k].append((now, index))
+                return pending
+
+            client.submit = on_link  # type: ignore[method-assign]
+
+            def tick(cycle: Cycle, k: int = k) -> None:
+                ticks[k].append(time.monotonic())
+                if k == 0:
+                    cpu.append((ticks[0][-1], time.process_time()))
+
+            runtime.add_sink(tick)
+            runtimes.append(runtime)
+
+        def serve(runtime: Runtime) -> None:
+            runtime.start()
+            runtime.client.telemetry(period, codes.TEL_MASK)
+            runtime.pacer = Pacer(runtime.client, period)
+            runtime.run(until=stop.is_set)
+
+        threads = [threading.Thread(target=serve, args=(r,)) for r in runtimes]
+        for thread in threads:
+            thread.start()
+        peer = subprocess.Popen(
+            [sys.executable, "-c", PEER, str(duration), str(rate), "1", str(MATCH), ",".join(names)],
+            stdout=out,
+            env=_env(),
+        )
+        try:
+            peer.wait(timeout=duration + MATCH + 30)
+        finally:
+            stop.set()
+            for thread in threads:
+                thread.join()
+            if peer.poll() is None:
+                peer.kill()
+            peer.wait()
+        out.seek(0)
+        sent = [float(t) for t in json.loads(out.read() or "[]")]
+    first, last = (sent[0], sent[-1]) if sent else (0.0, 0.0)
+    window = [(t, c) for t, c in cpu if first <= t <= last]
+    busy = (window[-1][1] - window[0][1]) / (window[-1][0] - window[0][0]) if len(window) > 1 else math.nan
+    return {
+        "published": len(sent),
+        "robots": [_latencies(sent, carried[k], vels[k]) for k in range(robots)],
+        "rates": [sum(first <= t <= last for t in ts) / max(last - first, 1e-9) for ts in ticks],
+        "cpu": busy * 100,
+    }
+
+
 def _percentiles(values: list[float]) -> str:
     """p50, p99 and max of ``values`` (s) in ms."""
     lat = sorted(values)
@@ -278,6 +383,20 @@ def report(rate: float, period: float, result: dict[str, Any], where: str = "one
         print(f"  odom to rclpy: {len(result['odom'])} delivered, {_percentiles(result['odom'])}")
 
 
+def report_robots(robots: int, period: float, result: dict[str, Any]) -> None:
+    """One line: the worst robot's cycles a second, p50 and p99 over all robots, losses, CPU."""
+    lat = [v for r in result["robots"] for v in r["latencies"]]
+    lost = sum(r["lost"] for r in result["robots"])
+    replaced = sum(r["replaced"] for r in result["robots"])
+    held = min(result["rates"]) >= 0.95 / period
+    print(
+        f"{robots} robot(s), cmd_vel at 50 Hz each: cycles {min(result['rates']):.1f}/s (worst robot), "
+        f"{len(lat)}/{result['published'] * robots} commands on the links ({replaced} replaced, {lost} lost), "
+        f"cmd_vel -> VEL {_percentiles(lat) if lat else 'none'}; CPU {result['cpu']:.0f} % of a core"
+        + ("" if held else "  <- cycle rate missed")
+    )
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the benchmark (in a private network namespace)."""
     argv = sys.argv[1:] if argv is None else argv
@@ -289,6 +408,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--period", type=float, default=0.02, help="the runtime's cycle, s (default 0.02)")
     parser.add_argument(
         "--hosts", action="store_true", help="again across a veth link between two namespaces"
+    )
+    parser.add_argument(
+        "--robots",
+        type=int,
+        action="append",
+        help="robots per process at 50 Hz cmd_vel instead (repeatable, e.g. 1 2 4 6 8)",
     )
     parser.add_argument("--remote", help=argparse.SUPPRESS)  # --hosts' run on the robot's host
     args = parser.parse_args(argv)
@@ -307,6 +432,10 @@ def main(argv: list[str] | None = None) -> int:
     status = ensure_private("benchmarks.ros2_latency", argv)
     if status is not None:
         return status
+    if args.robots:
+        for robots in args.robots:
+            report_robots(robots, args.period, per_process(robots, args.duration, 50.0, args.period))
+        return 0
     for rate in rates:
         report(rate, args.period, measure(args.duration, rate, args.period, relay))
     if args.hosts:
