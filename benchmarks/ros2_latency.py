@@ -24,7 +24,8 @@ publishes: rmw's received minus source timestamp.
 ``--robots N`` (repeatable): robots per process instead, as ``omnibot ros2`` runs several (each its
 simulator, runtime in a thread of its own, participant and namespace ``robotK``), each sent cmd_vel
 at 50 Hz: the worst robot's cycles a second (held at >= 95 % of the cycle rate), the latencies over
-all robots, the process's CPU.
+all robots, the process's CPU (after a 2 s run of one robot that is not reported: the first run in a
+process pays its imports).
 
 ``--hosts``: the same again across a network link (:class:`~omnibot.ros2.netns.TwoHosts`: two
 namespaces joined by a veth pair, 192.0.2.1 and 192.0.2.2, made inside the private one): the bridge
@@ -433,6 +434,7 @@ def main(argv: list[str] | None = None) -> int:
     if status is not None:
         return status
     if args.robots:
+        per_process(1, 2.0, 50.0, args.period)  # warm-up, not reported: the first run pays the imports
         for robots in args.robots:
             report_robots(robots, args.period, per_process(robots, args.duration, 50.0, args.period))
         return 0
