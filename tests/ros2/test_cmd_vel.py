@@ -119,3 +119,28 @@ def test_every_reader_wakes_the_runtime_when_a_command_arrives() -> None:
     polled = CmdVelSource(Node())
     polled.wake_with(lambda: woken.append("never"))
     assert not polled.event_driven and woken == ["ros2", "ros2"]
+
+
+def test_the_listeners_go_when_the_node_closes() -> None:
+    """A reader that takes cyclonedds' listeners has it set by the source and removed (set to None)
+    by the node's closers, before the participant goes."""
+
+    class Listening(Node):
+        def __init__(self) -> None:
+            super().__init__()
+            self.closers: list[Callable[[], object]] = []
+            self.set: list[Any] = []
+
+        def reader(self, name: str, typename: str) -> Any:
+            endpoint = super().reader(name, typename)
+            endpoint.set_listener = self.set.append  # type: ignore[attr-defined]
+            return endpoint
+
+    node = Listening()
+    source = CmdVelSource(node)  # type: ignore[arg-type]
+    source.wake_with(lambda: None)
+    assert len(node.set) == 1 and node.set[0] is not None and source.event_driven
+    assert node.closers == [source.unlisten]
+    for closer in node.closers:
+        closer()
+    assert node.set[-1] is None and not source.listeners and source.wake is None

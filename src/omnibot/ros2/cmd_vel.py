@@ -128,10 +128,25 @@ class CmdVelSource:
 
     def wake_with(self, wake: Wake) -> None:
         """Wake the runtime (``wake``, from the readers' thread) when a command arrives (the runtime
-        hands it over when the source is added)."""
+        hands it over when the source is added); the listeners go when the node closes, before its
+        participant (:meth:`unlisten`)."""
+        if self.wake is None:
+            closers = getattr(self.node, "closers", None)
+            if closers is not None:
+                closers.append(self.unlisten)
         self.wake = wake
         for typename, reader in self.readers.items():
             self.listeners[typename] = listen(reader, wake)
+
+    def unlisten(self) -> None:
+        """Take the listeners off the readers: no call into Python from DDS's threads once the
+        runtime is gone (nor into a listener the garbage collector may free first)."""
+        self.wake = None
+        for typename, listener in self.listeners.items():
+            reader = self.readers[typename]
+            if listener is not None and callable(getattr(reader, "set_listener", None)):
+                reader.set_listener(None)
+        self.listeners.clear()
 
     @property
     def event_driven(self) -> bool:
