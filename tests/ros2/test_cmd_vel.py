@@ -3,6 +3,7 @@ types taken by what the publishers in the graph offer."""
 
 from __future__ import annotations
 
+import json
 from collections.abc import Callable
 from types import SimpleNamespace
 from typing import Any
@@ -16,6 +17,7 @@ from omnibot.ros2.cmd_vel import TWIST, TWIST_STAMPED, CmdVelSource
 from omnibot.ros2.types import to_dds
 from omnibot.runtime.cycle import Cycle
 from omnibot.teleop.mapping import TwistLimits
+from tests.ros2.netns_helper import run_in_namespace
 from tests.ros2.test_odometry import Node
 
 
@@ -144,3 +146,69 @@ def test_the_listeners_go_when_the_node_closes() -> None:
     for closer in node.closers:
         closer()
     assert node.set[-1] is None and not source.listeners and source.wake is None
+
+
+EACH = r"""
+import json, threading, time
+from omnibot.client.session import robot_session
+from omnibot.logs import schemas
+from omnibot.logs.recorder import header, twist
+from omnibot.protocol.messages import Vel
+from omnibot.ros2.cmd_vel import CmdVelSource
+from omnibot.ros2.dds import Node
+from omnibot.ros2.types import to_dds
+from omnibot.runtime.runtime import Runtime
+from omnibot.teleop.pacing import Pacer
+
+TS = "geometry_msgs/msg/TwistStamped"
+PERIOD = 1.0  # a cycle a second: commands 0.1 s apart go out only if each is sent as it arrives
+with robot_session("sim://omni4?seed=2&world=empty", "omni4", timeout=0.5) as session:
+    client = session.client
+    bridge, teleop = Node(), Node()
+    writer = teleop.writer("cmd_vel", TS)
+    source = CmdVelSource(bridge, timeout=2.0)  # no limits: no ramp, each VEL carries its command
+    runtime = Runtime(client, period=PERIOD, sources=[source])
+    sent = []
+    submit = client.submit
+    def record(command, timeout=None):
+        if isinstance(command, Vel):
+            sent.append(command.vx)
+        return submit(command, timeout)
+    client.submit = record
+    end = time.monotonic() + 30
+    while not (writer.get_matched_subscriptions() and source.reader.get_matched_publications()):
+        assert time.monotonic() < end, "never matched"
+        time.sleep(0.02)
+    published = []
+
+    def drive():  # teleop_twist_joy's thread: five speeds 0.1 s apart
+        for k in range(5):
+            speed = 0.05 * (k + 1)
+            writer.write(to_dds(schemas.new(TS, header=header(0, "base_link"), twist=twist(speed, 0.0, 0.0)), TS))
+            published.append(round(speed * 100))
+            time.sleep(0.1)
+
+    runtime.start()
+    runtime.pacer = Pacer(client, PERIOD)
+    thread = threading.Thread(target=drive)
+    thread.start()
+    runtime.run(duration=0.9)  # the first cycle, then the wait for the second: a second
+    thread.join()
+    event_driven = source.event_driven
+    runtime.close()
+    bridge.close(); teleop.close()
+print(json.dumps({"published": published, "sent": sent, "cycles": runtime.cycles, "reactions": runtime.reactions,
+                  "event_driven": event_driven}))
+"""
+
+
+def test_each_command_goes_out_as_it_arrives_not_at_the_next_cycle() -> None:
+    """A teleop stand-in on DDS sends five speeds 0.1 s apart to a runtime whose cycle is a second:
+    every one reaches the link, in order, though one cycle ran meanwhile: the others each by a
+    reaction of the runtime, woken by the reader's listener."""
+    result = json.loads(run_in_namespace(EACH).stdout.strip().splitlines()[-1])
+    assert result["event_driven"], result
+    assert result["cycles"] == 1, result
+    carried = [v for v in result["sent"] if v]
+    assert [v for i, v in enumerate(carried) if i == 0 or v != carried[i - 1]] == result["published"], result
+    assert result["reactions"] >= len(result["published"]) - result["cycles"], result  # the rest: reactions
