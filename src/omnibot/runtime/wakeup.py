@@ -16,10 +16,10 @@ the cycle that was due, whose schedule is unchanged::
 The wait looks at the flag between reads of the link, each at most :data:`SLICE` of the link's
 clock long when the loop keeps to the wall clock (a real link, or teleop's pacer on ``sim://``, which
 steps the simulator ahead to the tick), and while the pacer sleeps off wall time at once (a
-:class:`threading.Event`). Reactions are at least :data:`GAP`
-apart on the pacer's clock (a flood of commands cannot crowd the link): a wake sooner is taken by
-the reaction at the end of the gap, or by the cycle when that comes first, so no command is lost
-that a newer one has not replaced.
+:class:`threading.Event`). Reactions are at least :data:`GAP` apart on the pacer's clock (a flood
+of commands cannot crowd the link): a wake sooner is taken by the reaction at the end of the gap, or
+by the cycle when that comes first, so no command is lost that a newer one has not replaced. A cycle
+takes the wakes raised before it (its sources' proposals take what had arrived).
 
 **Lockstep** (``sim://`` under :class:`~omnibot.runtime.runtime.LinkPacer`): time is the simulator's
 and moves only while the loop waits on the link. There the flag is looked at after every read of
