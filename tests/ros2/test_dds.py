@@ -59,3 +59,25 @@ def test_qos_carries_the_type_hash_and_rclpy_profiles() -> None:
     assert "TransientLocal" in latched and "Reliable" in latched and "KeepLast(depth=1)" in latched
     default = repr(dds.qos(dds.DEFAULT, "nav_msgs/msg/Odometry"))
     assert "Volatile" in default and "Reliable" in default and "KeepLast(depth=10)" in default
+
+
+def test_static_peers_are_read_as_rmw_reads_them_and_a_bad_one_is_refused() -> None:
+    assert dds.static_peers({}) == ()
+    env = {"ROS_STATIC_PEERS": " 192.0.2.2; robot-2.local;;"}
+    assert dds.static_peers(env) == ("192.0.2.2", "robot-2.local")
+    for bad in ('192.0.2.2"/><Peer address="x', "a b"):
+        with pytest.raises(ConfigError, match="ROS_STATIC_PEERS holds addresses or host names"):
+            dds.static_peers({"ROS_STATIC_PEERS": bad})
+
+
+def test_static_peers_go_into_the_configuration_as_rmw_cyclonedds_puts_them() -> None:
+    """SUBNET: multicast stays, the peers are added with automatic participant indexes (the ports a
+    peer's unicast discovery tries); LOCALHOST: after 127.0.0.1; OFF: ignored."""
+    peers = ("192.0.2.2", "192.0.2.3")
+    subnet = dds.config_xml(0, "SUBNET", peers)
+    assert '<Peers><Peer address="192.0.2.2"/><Peer address="192.0.2.3"/></Peers>' in subnet
+    assert "<ParticipantIndex>auto</ParticipantIndex>" in subnet and "AllowMulticast" not in subnet
+    assert "<Peers>" not in dds.config_xml(0, "SUBNET")
+    local = dds.config_xml(0, "LOCALHOST", peers)
+    assert '<Peers><Peer address="127.0.0.1"/><Peer address="192.0.2.2"/><Peer address="192.0.2.3"/>' in local
+    assert "<Peer " not in dds.config_xml(0, "OFF", peers)

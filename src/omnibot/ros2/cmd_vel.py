@@ -1,7 +1,10 @@
 """``cmd_vel`` into the runtime's arbitration, as geometry_msgs/Twist or TwistStamped.
 
-:class:`CmdVelSource` takes what arrived each cycle without blocking and proposes the newest twist
-while it is younger than ``cmd_vel_timeout`` (ros2_controllers' name and 0.5 s default), ramped at the
+:class:`CmdVelSource` takes each command as it arrives: a listener on its readers (in the DDS
+receive thread) wakes the runtime (:mod:`omnibot.runtime.wakeup`) and does nothing else (the client
+is the runtime loop's); the runtime's reaction asks the source, arbitrates and sends the VEL then,
+not at the next cycle. Every cycle asks it as well (and takes what arrived where no listener could
+be set). It proposes the newest twist while it is younger than ``cmd_vel_timeout`` (ros2_controllers' name and 0.5 s default), ramped at the
 robot's acceleration limits (as ros2_controllers' drive controllers apply theirs; the ramp's
 acceleration goes with the VEL); then it is silent, and the VEL watchdog (:data:`WATCHDOG`) stops the
 robot (on the wheel-speed loop: braking at the same limits).
@@ -28,6 +31,7 @@ from omnibot.ros2.dds import topic_name
 from omnibot.ros2.types import from_dds, ros_name
 from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.sources import Proposal, RampedTwist
+from omnibot.runtime.wakeup import Wake
 from omnibot.teleop.mapping import TwistLimits
 
 log = logging.getLogger("omnibot.ros2")
@@ -49,6 +53,26 @@ Notify = Callable[[str, str], None]
 
 def _warn(level: str, text: str) -> None:
     log.warning("%s", text)
+
+
+def listen(reader: Any, wake: Wake) -> Any:
+    """Have ``reader`` call ``wake()`` (in its middleware's thread) whenever data arrives: through
+    its own ``on_data(callback)`` where it has one (another backend's reader), else a cyclonedds
+    listener. Returns what keeps the listener alive (None: ``reader`` cannot tell, and is polled)."""
+    on_data = getattr(reader, "on_data", None)
+    if callable(on_data):
+        on_data(wake)
+        return on_data
+    if not callable(getattr(reader, "set_listener", None)):
+        return None
+    from cyclonedds.core import Listener
+
+    def available(_reader: Any) -> None:
+        wake()
+
+    listener = Listener(on_data_available=available)  # type: ignore[no-untyped-call]
+    reader.set_listener(listener)
+    return listener
 
 
 class CmdVelSource:
@@ -78,6 +102,9 @@ class CmdVelSource:
         self.notify = notify
         self.readers: dict[str, Any] = {}
         """The readers made so far, by ROS type."""
+        self.wake: Wake | None = None
+        self.listeners: dict[str, Any] = {}
+        """Each reader's listener, by ROS type (while the runtime wakes on the source's commands)."""
         self.reader = self._read(forced or TWIST_STAMPED)
         self.publications = node.publications()
         self._dds_topic = topic_name(CMD_VEL, node.namespace)
@@ -87,6 +114,8 @@ class CmdVelSource:
         self.received_at = -math.inf
         self.received = 0
         """Messages taken so far."""
+        self.message: Any = None
+        """The newest message taken (a rosbags Twist or TwistStamped: its header says which it was)."""
         self.ramped = RampedTwist(limits, period)
         """The robot's acceleration limits on the twists (as ros2_control's controllers apply theirs)."""
 
@@ -94,7 +123,41 @@ class CmdVelSource:
         reader = self.readers.get(typename)
         if reader is None:
             reader = self.readers[typename] = self.node.reader(CMD_VEL, typename)
+            if self.wake is not None:
+                self.listeners[typename] = listen(reader, self.wake)
         return reader
+
+    def wake_with(self, wake: Wake) -> None:
+        """Wake the runtime (``wake``, from the readers' thread) when a command arrives (the runtime
+        hands it over when the source is added); the listeners go when the node closes, before its
+        participant (:meth:`unlisten`)."""
+        if self.wake is None:
+            closers = getattr(self.node, "closers", None)
+            if closers is not None:
+                closers.append(self.unlisten)
+        self.wake = wake
+        for typename, reader in self.readers.items():
+            self.listeners[typename] = listen(reader, wake)
+
+    def unlisten(self) -> None:
+        """Take the listeners off the readers: no call into Python from DDS's threads once the
+        runtime is gone (nor into a listener the garbage collector may free first)."""
+        self.wake = None
+        for typename, listener in self.listeners.items():
+            reader = self.readers[typename]
+            if listener is None:
+                continue
+            on_data = getattr(reader, "on_data", None)
+            if callable(on_data):
+                on_data(None)
+            elif callable(getattr(reader, "set_listener", None)):
+                reader.set_listener(None)
+        self.listeners.clear()
+
+    @property
+    def event_driven(self) -> bool:
+        """Every reader wakes the runtime when a command arrives (else the cycles take them)."""
+        return bool(self.listeners) and all(self.listeners.get(t) is not None for t in self.readers)
 
     @property
     def body_accel(self) -> tuple[float, float, float] | None:
@@ -134,7 +197,8 @@ class CmdVelSource:
         return None if newest is None else (newest[1], newest[2])
 
     def propose(self, cycle: Cycle) -> Proposal | None:
-        """The newest cmd_vel while younger than the timeout (on ``cycle.now``), else None."""
+        """The newest cmd_vel while younger than the timeout (on ``cycle.now``), else None (asked by
+        every cycle, and by the runtime's reaction to a wake)."""
         self.discover()
         newest = self._newest()
         if newest is not None:
@@ -144,6 +208,7 @@ class CmdVelSource:
             values = (body.linear.x, body.linear.y, body.angular.z)
             if all(math.isfinite(v) for v in values):
                 self.twist = Twist(*values)
+                self.message = msg
                 self.received_at = cycle.now
             else:
                 log.warning("cmd_vel with a non-finite value ignored: %s", values)

@@ -406,9 +406,11 @@ def _serve(one: _Robot, args: argparse.Namespace, stop: threading.Event) -> None
     client.telemetry(PERIOD, codes.TEL_MASK)
     runtime.pacer = Pacer(client, PERIOD)
     frames = f", frames {spec.prefix}odom" if spec.prefix else ""
+    static = getattr(node, "static_peers", ())
+    peers = f", static peers {';'.join(static)}" if static and node.scope != "OFF" else ""
     _say(
         f"{one.label}{one.robot.name} on {one.url}: node {fqn(node)} on the {node.backend} backend, domain "
-        f"{node.domain_id}{frames}, discovery {node.scope.lower()}"
+        f"{node.domain_id}{frames}, discovery {node.scope.lower()}{peers}"
     )
     runtime.run(until=stop.is_set, duration=args.duration)
 

@@ -24,7 +24,9 @@ Under pytest a participant is refused outside a private network namespace
 
 from __future__ import annotations
 
+import logging
 import os
+import re
 import threading
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
@@ -96,8 +98,9 @@ def domain_id(env: Mapping[str, str]) -> int:
 
 def discovery_range(env: Mapping[str, str]) -> str:
     """``LOCALHOST``, ``OFF`` or ``SUBNET`` as rmw reads the environment (``SUBNET`` by default; the
-    old ``ROS_LOCALHOST_ONLY=1`` means ``LOCALHOST``); always ``LOCALHOST`` under pytest."""
-    if netns.under_pytest():
+    old ``ROS_LOCALHOST_ONLY=1`` means ``LOCALHOST``); always ``LOCALHOST`` under pytest but on a
+    test network's host (:func:`~omnibot.ros2.netns.in_test_network`)."""
+    if netns.under_pytest() and not netns.in_test_network():
         return "LOCALHOST"
     value = env.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "").strip().upper()
     if value in ("", "SYSTEM_DEFAULT"):
@@ -110,6 +113,21 @@ def discovery_range(env: Mapping[str, str]) -> str:
     return value
 
 
+_PEER = re.compile(r"[A-Za-z0-9_.:\-\[\]]+")
+
+
+def static_peers(env: Mapping[str, str]) -> tuple[str, ...]:
+    """``ROS_STATIC_PEERS``: the addresses or host names between its ``;`` (none when unset)."""
+    peers = tuple(p.strip() for p in env.get("ROS_STATIC_PEERS", "").split(";") if p.strip())
+    for peer in peers:
+        if not _PEER.fullmatch(peer):
+            raise ConfigError(
+                f"ROS_STATIC_PEERS holds addresses or host names separated by ';', not {peer!r}",
+                key="ROS_STATIC_PEERS",
+            )
+    return peers
+
+
 FAST_DDS = "1.15"
 """eProsima Fast DDS's RTPS vendor id (ROS 2's default rmw)."""
 COMPATIBILITY = f"<Compatibility><IgnoreTypeInformation>{FAST_DDS}</IgnoreTypeInformation></Compatibility>"
@@ -119,42 +137,57 @@ of a message with arrays or sequences (Odometry, Imu, JointState) with the compl
 never resolves and the endpoints never match (Range and Twist, without collections, did)."""
 
 
-def config_xml(domain: int, scope: str) -> str:
-    """cyclonedds' configuration for ``scope`` (rmw_cyclonedds' for that discovery range)."""
+def config_xml(domain: int, scope: str, static: tuple[str, ...] = ()) -> str:
+    """cyclonedds' configuration for ``scope`` and the ``static`` peers (``ROS_STATIC_PEERS``), as
+    rmw_cyclonedds makes it for that discovery range: ``LOCALHOST`` unicast to 127.0.0.1 and the
+    static peers, multicast off; ``SUBNET`` multicast and the static peers, participant indexes
+    (whose ports a peer's unicast discovery tries) given out automatically; ``OFF`` no discovery,
+    static peers ignored (rmw warns)."""
     general = ""
     peers = ""
+    listed = "".join(f'<Peer address="{peer}"/>' for peer in static)
     if scope == "LOCALHOST":
         general = (
             '<General><Interfaces><NetworkInterface address="127.0.0.1"/></Interfaces>'
             "<AllowMulticast>false</AllowMulticast></General>"
         )
-        peers = '<Peers><Peer address="127.0.0.1"/></Peers><ParticipantIndex>auto</ParticipantIndex>'
+        peers = f'<Peers><Peer address="127.0.0.1"/>{listed}</Peers><ParticipantIndex>auto</ParticipantIndex>'
         peers += "<MaxAutoParticipantIndex>100</MaxAutoParticipantIndex>"
     elif scope == "OFF":
         general = "<General><AllowMulticast>false</AllowMulticast></General>"
         peers = "<ParticipantIndex>none</ParticipantIndex>"
+        if static:
+            logging.getLogger("omnibot.ros2").warning(
+                "ROS_AUTOMATIC_DISCOVERY_RANGE is OFF: ROS_STATIC_PEERS (%s) ignored", ";".join(static)
+            )
+    elif static:
+        peers = f"<Peers>{listed}</Peers><ParticipantIndex>auto</ParticipantIndex>"
+        peers += "<MaxAutoParticipantIndex>32</MaxAutoParticipantIndex>"
     discovery = f"<Discovery>{peers}</Discovery>" if peers else ""
     return f'<CycloneDDS><Domain Id="{domain}">{general}{COMPATIBILITY}{discovery}</Domain></CycloneDDS>'
 
 
-_DOMAINS: dict[int, tuple[Any, str]] = {}
+_DOMAINS: dict[int, tuple[Any, tuple[str, tuple[str, ...]]]] = {}
 _DOMAINS_LOCK = threading.Lock()
 _ENTITIES = threading.RLock()
 """Entities are made one at a time in a process: cyclonedds fails to make the topics of one type from
 two threads at once (several robots open their nodes in threads of their own)."""
 
 
-def _domain(domain: int, scope: str) -> Any:
+def _domain(domain: int, scope: str, static: tuple[str, ...] = ()) -> Any:
     """The process's one configured domain ``domain`` (cyclonedds allows one configuration each; the
     robots of one process open their nodes in threads of their own)."""
     with _DOMAINS_LOCK:
         known = _DOMAINS.get(domain)
         if known is not None:
-            if known[1] != scope:
-                raise ConfigError(f"DDS domain {domain} is already open with discovery range {known[1]}")
+            if known[1] != (scope, static):
+                raise ConfigError(
+                    f"DDS domain {domain} is already open with discovery range {known[1][0]}, "
+                    f"static peers {';'.join(known[1][1]) or 'none'}"
+                )
             return known[0]
-        made = Domain(domain, config_xml(domain, scope))
-        _DOMAINS[domain] = (made, scope)
+        made = Domain(domain, config_xml(domain, scope, static))
+        _DOMAINS[domain] = (made, (scope, static))
         return made
 
 
@@ -185,7 +218,8 @@ class Node:
         self.namespace = namespace.strip("/")
         self.domain_id = domain_id(env)
         self.scope = discovery_range(env)
-        self._domain = _domain(self.domain_id, self.scope)
+        self.static_peers = static_peers(env)
+        self._domain = _domain(self.domain_id, self.scope, self.static_peers)
         with _ENTITIES:
             self.participant = DomainParticipant(self.domain_id, qos=Qos(Policy.Userdata(ENCLAVE)))
         self._topics: dict[tuple[str, str], Any] = {}

@@ -169,10 +169,18 @@ class RclpyReader:
     def __init__(self, typename: str, depth: int) -> None:
         self.type = dds_type(typename)
         self.queue: collections.deque[bytes] = collections.deque(maxlen=max(depth, 64))
+        self._on_data: Callable[[], object] | None = None
 
     def __call__(self, data: bytes) -> None:
-        """rclpy's callback: keep the message's bytes."""
+        """rclpy's callback: keep the message's bytes, then tell :meth:`on_data`'s callback."""
         self.queue.append(data)
+        on_data = self._on_data
+        if on_data is not None:
+            on_data()
+
+    def on_data(self, callback: Callable[[], object] | None) -> None:
+        """Call ``callback()`` (in the executor's thread) after each message arrives; None: stop."""
+        self._on_data = callback
 
     def take(self, N: int = 1) -> list[Any]:
         """At most ``N`` samples (cyclonedds', decoded from the CDR rclpy handed over), oldest first."""

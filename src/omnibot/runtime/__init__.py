@@ -18,11 +18,14 @@ repeat), ``omnibot follow`` and ``omnibot run`` are sources, locks and sinks of 
                        deadman sends STOP first when the controller latched its emergency stop
       6. sinks         sink(cycle): dashboard state, traces for plots and reports, teach, logs
                        (the MCAP recorder; later ROS 2 publishers)
-      7. wait          pacer.wait(): the client pumps replies and events meanwhile
+      7. wait          pacer.wait(): the client pumps replies and events meanwhile; a source that
+                       wakes the loop (a DDS listener's cmd_vel) is asked at once: arbitrate, send
+                       (Runtime.react; omnibot.runtime.wakeup), then the wait goes on
 
 The pieces: :mod:`~omnibot.runtime.cycle` (what a cycle carries), :mod:`~omnibot.runtime.arbiter`
 (priorities, timeouts, locks), :mod:`~omnibot.runtime.sources` (pad, page, follower, script),
-:mod:`~omnibot.runtime.sinks` (the sink protocol, teach, traces, notices), :mod:`~omnibot.runtime.runtime`
+:mod:`~omnibot.runtime.sinks` (the sink protocol, teach, traces, notices), :mod:`~omnibot.runtime.wakeup`
+(sources that push a proposal between cycles), :mod:`~omnibot.runtime.runtime`
 (the cycle). docs/architecture.md has the whole picture and how a new front end plugs in.
 """
 

@@ -318,7 +318,7 @@ def _stop_pad(runtime: Any, parts: Parts, config: Any) -> None:
         runtime.step()
         if pad.action.twist is None:
             break
-        runtime.pacer.wait()
+        runtime.wait()
 
 
 def _with_dashboard(args: argparse.Namespace, url: str, config: Any, path: Any) -> Parts:

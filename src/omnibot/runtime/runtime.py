@@ -23,7 +23,9 @@ from omnibot.protocol import codes
 from omnibot.runtime.arbiter import Arbiter, Lock
 from omnibot.runtime.cycle import NOBODY, Cycle, Decision, Level, Notice
 from omnibot.runtime.sources import Proposal, Source
+from omnibot.runtime.wakeup import GAP, Wakeup
 from omnibot.scan import Scan
+from omnibot.transport.base import WallClock
 
 log = logging.getLogger("omnibot.runtime")
 log.addHandler(logging.NullHandler())  # a library's log: shown where the application configures logging
@@ -68,8 +70,9 @@ class Pacer(Protocol):
     def now(self) -> float:
         """The cycle clock, s."""
 
-    def wait(self) -> None:
-        """Wait for the next cycle, pumping the client meanwhile."""
+    def wait(self, wakeup: Wakeup | None = None) -> bool | None:
+        """Wait for the next cycle, pumping the client meanwhile; with ``wakeup``, False when it
+        was raised before the cycle was due (call again to wait on for the same cycle)."""
 
 
 class LinkPacer:
@@ -82,20 +85,30 @@ class LinkPacer:
         self.client = client
         self.period = period
         self._next = client.clock.now()
+        self._resuming = False
 
     def now(self) -> float:
         """The link clock, s."""
         return self.client.clock.now()
 
-    def wait(self) -> None:
+    def wait(self, wakeup: Wakeup | None = None) -> bool:
         """Sleep through the client (lockstep on ``sim://``) until the next cycle is due; after a
         cycle that ran past its successor's time (a slow start, a stalled link) the schedule starts
-        again from now, rather than running the missed cycles back to back."""
+        again from now, rather than running the missed cycles back to back. With ``wakeup``: False
+        when it was raised first (the cycle is still due: the next call waits on for it)."""
         now = self.client.clock.now()
-        self._next += self.period
-        if self._next < now:
-            self._next = now + self.period
-        self.client.sleep(max(0.0, self._next - now))
+        if not self._resuming:
+            self._next += self.period
+            if self._next < now:
+                self._next = now + self.period
+        if wakeup is None:
+            self.client.sleep(max(0.0, self._next - now))
+            return True
+        wall = isinstance(self.client.clock, WallClock)  # lockstep: whole reads, as without a wakeup
+        self._resuming = not wakeup.pump_until(
+            self.client, self._next, self.now, wakeup.slice if wall else math.inf
+        )
+        return not self._resuming
 
 
 @dataclass
@@ -128,6 +141,10 @@ class Runtime:
     loops of 20 Hz); otherwise VEL is submitted and its reply collected at the next cycle (100 Hz
     loops: no round trip inside the cycle). A source's own ``wait_reply`` attribute overrides it. Either way a refused command or a latched emergency stop
     becomes a :class:`Notice` every sink (every front end) and the refused source are handed.
+
+    Between cycles a source may push a fresh proposal in (a DDS listener's ``cmd_vel``): it wakes
+    the loop, whose :meth:`wait` then reacts (:meth:`react`: asks it, arbitrates, sends) and waits for
+    the cycle that was due (:mod:`omnibot.runtime.wakeup`: also what such an event means in lockstep).
 
     ``wheel_loop``: when the runtime starts, the controller's wheel-speed loop (MODE bit 1) is closed
     on the motor encoders (True: every VEL, whoever sends it, is then a velocity the wheels hold
@@ -170,6 +187,11 @@ class Runtime:
         self.telemetry_hooks: list[Callable[[Telemetry], object]] = []
         """More consumers of each telemetry sample, called right after the estimator (observers)."""
         self.decision: Decision = NOBODY
+        self.wakeup = Wakeup()
+        """Raised by sources between cycles (any thread): the wait ends, :meth:`react` runs."""
+        self._wakers: set[str] = set()
+        self.reactions = 0
+        """Reactions to a woken source so far (:meth:`react`)."""
         self.sent = Counters()
         self.latched = False
         self._battery: float | None = None
@@ -206,14 +228,20 @@ class Runtime:
     # ------------------------------------------------------------------ composition
 
     def add_source(self, source: Source) -> None:
-        """Add a command source (arbitrated from the next cycle on)."""
+        """Add a command source (arbitrated from the next cycle on); a source with a
+        ``wake_with(wake)`` method is handed its wake function (:mod:`omnibot.runtime.wakeup`)."""
         self.arbiter.add(source.name, source.priority, source.timeout)
         self.sources[source.name] = source
+        wake_with = getattr(source, "wake_with", None)
+        if callable(wake_with):
+            wake_with(self.wakeup.waker(source.name))
+            self._wakers.add(source.name)
 
     def remove_source(self, name: str) -> None:
-        """Remove the source ``name`` (no-op if unknown)."""
+        """Remove the source ``name`` (no-op if unknown; its wakes are ignored from now on)."""
         self.arbiter.remove(name)
         self.sources.pop(name, None)
+        self._wakers.discard(name)
 
     def add_sink(self, sink: Sink) -> None:
         """Add a sink: called with every completed cycle."""
@@ -350,6 +378,8 @@ class Runtime:
         """One cycle: collect, estimate, ask the sources, arbitrate, send, fan out (``now``: the cycle
         clock's time, default the pacer's)."""
         self.start()
+        if self._wakers:
+            self.wakeup.take()  # what woke the loop until now, the sources' proposals below take
         self._collect()
         now = self.pacer.now() if now is None else now
         cycle = Cycle(self.cycles, now, self.client.clock.now(), self.estimate_now())
@@ -366,13 +396,7 @@ class Runtime:
         for name, source in list(self.sources.items()):
             proposals[name] = source.propose(cycle)
         decision = self.arbiter.decide(now, {n: p.twist if p else None for n, p in proposals.items()})
-        if (decision.source, decision.lock) != (self.decision.source, self.decision.lock):
-            level: Level = "warn" if decision.lock else "info"
-            text = (
-                f"in control: {decision.reason}" if decision.source else f"nobody drives: {decision.reason}"
-            )
-            cycle.notices.append(Notice(level, text, kind="control"))
-            log.log(logging.WARNING if decision.lock else logging.INFO, "%s", text)
+        cycle.notices.extend(self._control_changed(decision))
         self.decision = cycle.decision = decision
         if decision.twist is not None:
             proposal = proposals.get(decision.source)
@@ -389,6 +413,54 @@ class Runtime:
                 self.remove_sink(sink)
                 self._notices.append(Notice("error", f"a view failed and was removed: {exc}"))
         return cycle
+
+    def _control_changed(self, decision: Decision) -> list[Notice]:
+        """The notice of a change of who is in control (none when ``decision`` changes nothing)."""
+        if (decision.source, decision.lock) == (self.decision.source, self.decision.lock):
+            return []
+        level: Level = "warn" if decision.lock else "info"
+        text = f"in control: {decision.reason}" if decision.source else f"nobody drives: {decision.reason}"
+        log.log(logging.WARNING if decision.lock else logging.INFO, "%s", text)
+        return [Notice(level, text, kind="control")]
+
+    def react(self) -> Decision | None:
+        """Take what woke the loop (:mod:`omnibot.runtime.wakeup`): ask the woken sources, and only
+        them, for a proposal, arbitrate among every source, and send when a woken source drives.
+
+        The woken sources are handed a cycle record of the moment (``now`` the pacer's clock, the
+        estimate predicted to it, the previous decision; the index of the cycle to come, no
+        telemetry, events or notices: those go with that cycle, as does the notice of a change of
+        who is in control). A source that is not woken keeps its last proposal in arbitration, so a
+        person's pad or the page's stick above the woken source still holds the robot (nothing is
+        sent: the winner sends on its own cycle), and a lock still masks it. Sinks see the cycles
+        only. Returns the decision (None when no source of the runtime's had woken it)."""
+        names = [name for name in sorted(self.wakeup.take()) if name in self.sources]
+        now = self.pacer.now()
+        self.wakeup.hold_until = now + GAP
+        if not names:
+            return None
+        self.reactions += 1
+        self._collect()
+        cycle = Cycle(self.cycles, now, self.client.clock.now(), self.estimate_now())
+        cycle.decision = self.decision
+        cycle.latched, cycle.latch_reason = self.latched, self.latch_reason
+        proposals = {name: self.sources[name].propose(cycle) for name in names}
+        decision = self.arbiter.decide(now, {n: p.twist if p else None for n, p in proposals.items()})
+        self._notices.extend(self._control_changed(decision))
+        self.decision = decision
+        if decision.twist is not None and decision.source in proposals:
+            proposal = proposals[decision.source]
+            self._send(decision.source, decision.twist, proposal is not None and proposal.fresh)
+        return decision
+
+    def wait(self) -> None:
+        """Wait for the next cycle on the pacer; meanwhile react to every wake of a source
+        (:meth:`react`). Without a source that wakes, the pacer's plain wait."""
+        if not self._wakers:
+            self.pacer.wait()
+            return
+        while self.pacer.wait(self.wakeup) is False:
+            self.react()
 
     def _scans(self) -> list[Scan]:
         """The scanner's new scans (none without one; a scanner that fails is told and dropped)."""
@@ -411,7 +483,7 @@ class Runtime:
             self.step()
             if until is not None and until():
                 break
-            self.pacer.wait()
+            self.wait()
 
     def discard_pending(self) -> None:
         """Forget the replies still awaited (a run that ended: its STOP follows)."""

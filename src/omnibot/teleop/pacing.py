@@ -11,14 +11,18 @@ web page needs the robot to live in real time, so a real-time loop waits with :m
 
 So simulated time follows the wall clock tick by tick, with no thread of its own. If a tick is
 late by more than ``max_lag`` (a stalled process), the schedule restarts from now rather than
-running a burst of ticks to catch up.
+running a burst of ticks to catch up. Given the runtime's :class:`~omnibot.runtime.wakeup.Wakeup`,
+both waits end early when a source raises it (the tick stays due: the next call waits on for it).
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
+
+if TYPE_CHECKING:
+    from omnibot.runtime.wakeup import Wakeup
 
 
 class _Pumped(Protocol):
@@ -28,6 +32,8 @@ class _Pumped(Protocol):
     def clock(self) -> _Clock: ...
 
     def sleep(self, seconds: float) -> None: ...
+
+    def pump(self, timeout: float = 0.0) -> int: ...
 
 
 class _Clock(Protocol):
@@ -56,6 +62,7 @@ class Pacer:
         self.ticks = 0
         self.resyncs = 0
         """How often the schedule restarted because a tick was too late."""
+        self._resuming = False
         self._restart()
 
     def _restart(self) -> None:
@@ -67,17 +74,29 @@ class Pacer:
         """The wall clock the pacer keeps (input samples use it)."""
         return self._wall()
 
-    def wait(self) -> None:
-        """Wait for the next tick, pumping the client meanwhile."""
-        self._k += 1
-        self.ticks += 1
+    def wait(self, wakeup: Wakeup | None = None) -> bool:
+        """Wait for the next tick, pumping the client meanwhile; False when ``wakeup`` was raised
+        first (the tick is still due: call again to wait on for it), True once it is due."""
+        if not self._resuming:
+            self._k += 1
+            self.ticks += 1
         step = self._k * self.period
-        lag = self._link0 + step - self.client.clock.now()
-        if lag > 0:
-            self.client.sleep(lag)
-        rest = self._wall0 + step - self._wall()
-        if rest > 0:
-            self._sleep(rest)
-        elif rest < -self.max_lag:
+        if wakeup is None:
+            lag = self._link0 + step - self.client.clock.now()
+            if lag > 0:
+                self.client.sleep(lag)
+            rest = self._wall0 + step - self._wall()
+            if rest > 0:
+                self._sleep(rest)
+        else:
+            self._resuming = True
+            if not wakeup.pump_until(self.client, self._link0 + step, self._wall, wakeup.slice):
+                return False
+            rest = self._wall0 + step - self._wall()
+            if rest > 0 and wakeup.sleep(rest, self._wall):
+                return False
+            self._resuming = False
+        if rest < -self.max_lag:
             self.resyncs += 1
             self._restart()
+        return True
