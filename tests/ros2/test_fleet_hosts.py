@@ -63,7 +63,7 @@ with TwoHosts(multicast=MULTICAST) as hosts:
         return e
 
     bridge = hosts.run(0, [sys.executable, "-m", "omnibot", "ros2", "--port", "sim://omni4?seed=1&world=empty",
-                           "--namespace", "r1", "--duration", "200", "--log", LOG],
+                           "--ros-backend", BACKEND, "--namespace", "r1", "--duration", "200", "--log", LOG],
                        env=env(b), stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     listener = hosts.run(1, [sys.executable, "-c", LISTENER], env=env(a), stdout=subprocess.PIPE, text=True)
     listener.stdout.readline()
@@ -87,20 +87,26 @@ def truth(path: Path) -> list[tuple[float, float]]:
     return [(m.pose.pose.position.x, m.pose.pose.position.y) for m in odometry]
 
 
+@pytest.mark.parametrize("backend", ["dds", "rclpy"])
 @pytest.mark.parametrize("multicast", [True, False], ids=["multicast", "static peers"])
-def test_an_operator_on_another_host_drives_the_robot_and_reads_it(multicast: bool, tmp_path: Path) -> None:
+def test_an_operator_on_another_host_drives_the_robot_and_reads_it(
+    multicast: bool, backend: str, tmp_path: Path
+) -> None:
     if importlib.util.find_spec("rclpy") is None:
         pytest.skip("rclpy is not installed (the test-only extra: pip install 'omnibot[ros2-test]')")
     log = tmp_path / "bridge.mcap"
     script = (
-        f"MULTICAST, LOG, OPERATOR = {multicast!r}, {str(log)!r}, {str(OPERATOR)!r}\n"
+        f"MULTICAST, BACKEND, LOG, OPERATOR = {multicast!r}, {backend!r}, {str(log)!r}, {str(OPERATOR)!r}\n"
         f"LISTENER = {LISTENER!r}\n" + SCRIPT
     )
     result = json.loads(run_in_namespace(script, timeout=400).stdout.strip().splitlines()[-1])
     operator, heard, out = result["operator"], result["listener"], result["bridge"]
     assert operator.get("found"), (operator, out)
-    how = "subnet" if multicast else "subnet, static peers 192.0.2.2"
-    assert f"domain 0 namespace /r1, frames r1/odom, discovery {how}" in out, out
+    # the dds wire names its static peers; rclpy's rmw reads ROS_STATIC_PEERS itself
+    how = "subnet" if multicast or backend == "rclpy" else "subnet, static peers 192.0.2.2"
+    assert f"node /r1/omnibot on the {backend} backend, domain 0, frames r1/odom, discovery {how}\n" in out, (
+        out
+    )
     # discovered across the link: the bridge's endpoints in rclpy's graph, with their ROS types
     graph = {topic: {t for _, t in entries} for topic, entries in operator["graph"].items()}
     assert "nav_msgs/msg/Odometry" in graph["/r1/odom"] and "tf2_msgs/msg/TFMessage" in graph["/tf"]
