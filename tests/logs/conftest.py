@@ -84,10 +84,17 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> RecordedRun:
 
 
 def node_reader() -> Path:
-    """The Foxglove reader script, next to the npm packages ``make mcap-readers`` installed."""
+    """The Foxglove reader script, next to the npm packages ``make mcap-readers`` installed (again
+    when tests/logs/node/package.json changed since, as ``make mcap-readers`` does)."""
     if shutil.which("node") is None or shutil.which("npm") is None:
         pytest.skip("node/npm are not installed: Foxglove's MCAP libraries cannot run")
-    if not (READERS / "node_modules" / "@mcap" / "core").is_dir():
+    wanted = (REPO / "tests" / "logs" / "node" / "package.json").read_bytes()
+    installed = READERS / "package.json"
+    if (
+        not (READERS / "node_modules" / "@mcap" / "core").is_dir()
+        or not installed.is_file()
+        or installed.read_bytes() != wanted
+    ):
         subprocess.run(["make", "-s", "mcap-readers"], cwd=REPO, check=True, timeout=600)
     script = READERS / "read_mcap.mjs"
     shutil.copyfile(REPO / "tests" / "logs" / "node" / "read_mcap.mjs", script)
