@@ -51,6 +51,7 @@ from omnibot.cliargs import (
     seed_of,
 )
 from omnibot.errors import ConfigError, KinematicsError, OmnibotError, ProtocolError
+from omnibot.extras import missing_extra
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_BUG = 0, 1, 2, 70
 EXIT_SIGINT, EXIT_SIGPIPE = 130, 141
@@ -669,6 +670,8 @@ def exit_status(exc: BaseException) -> int:
         return EXIT_SIGINT
     if isinstance(exc, ConfigError | KinematicsError | ProtocolError | UnicodeDecodeError):
         return EXIT_USAGE
+    if missing_extra(exc) is not None:
+        return EXIT_USAGE  # a part of omnibot that is not installed (pip install 'omnibot[...]')
     if isinstance(exc, OSError) and (exc.filename is not None or _output_full(exc)):
         return EXIT_USAGE  # a file it cannot read or write, or no room for its output
     if isinstance(exc, OmnibotError):
@@ -682,7 +685,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     from omnibot.signals import Terminated, terminate_cleanly
 
     parser = build_parser()
-    args, extra = parser.parse_known_args(argv)
+    try:
+        args, extra = parser.parse_known_args(argv)  # a chosen command's module is imported here
+    except ModuleNotFoundError as exc:
+        if (line := missing_extra(exc)) is None:
+            raise
+        print(f"omnibot: error: {line}", file=sys.stderr)
+        return EXIT_USAGE
     intermixed = getattr(args, "intermixed", None)
     if extra and intermixed and not any(e.startswith("-") for e in extra):
         # `send CMD --port URL CMD2`: options anywhere, the commands kept in the order given
@@ -738,6 +747,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _message(exc: BaseException) -> str:
     """The one line an error is told in."""
+    if (line := missing_extra(exc)) is not None:
+        return line
     if isinstance(exc, UnicodeDecodeError):  # text where the reader checked for none (it names no file)
         return f"not UTF-8 text: {exc}"
     if isinstance(exc, OSError) and exc.filename is not None:

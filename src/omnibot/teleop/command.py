@@ -13,6 +13,7 @@ from collections.abc import Callable
 from typing import Any
 
 from omnibot.errors import ConfigError
+from omnibot.extras import missing_extra
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -48,8 +49,10 @@ def open_source(args: argparse.Namespace, config: Any, say: Callable[[str], None
         from omnibot.teleop.joystick import JoystickSource
 
         pad = JoystickSource(config, on_message=say)
-    except ImportError as exc:  # pragma: no cover - pygame is a dependency
-        raise ConfigError(f"joystick input needs pygame: {exc}", key="--joystick") from None
+    except ImportError as exc:  # pygame is the teleop extra
+        raise ConfigError(
+            missing_extra(exc) or f"joystick input needs pygame: {exc}", key="--joystick"
+        ) from None
     if args.joystick or pad.attached:
         if not pad.attached:
             say("no joystick attached yet: plug one in (the robot stays still until then)")
