@@ -147,7 +147,7 @@ def recording(
     if path is None and foxglove is None:
         yield None
         return
-    from omnibot.cliargs import check_writable
+    from omnibot.outputs import check_writable
 
     check_writable(path, "--log")
     bind = FoxgloveBind.parse(foxglove, foxglove_token) if foxglove is not None else None
