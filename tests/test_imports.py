@@ -315,10 +315,6 @@ ALLOWED_UPWARD: dict[str, str] = {
         "the simulator's kernels settle",
     ),
     **dict.fromkeys(
-        ["omnibot.client.session -> omnibot.logs.active", "omnibot.runtime.runtime -> omnibot.logs.active"],
-        "the command's --log/--foxglove recording is found by every client and runtime, not handed to them",
-    ),
-    **dict.fromkeys(
         ["omnibot.runtime.sources -> omnibot.teleop." + m for m in ("config", "deadman", "mapping")],
         "the people's sources and RampedTwist (ROS 2's cmd_vel's too) use teleop's pure mapping and deadman",
     ),
