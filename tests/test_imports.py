@@ -314,10 +314,6 @@ ALLOWED_UPWARD: dict[str, str] = {
         "the floor model the planner's reach and the simulator share: its own package below both once "
         "the simulator's kernels settle",
     ),
-    **dict.fromkeys(
-        ["omnibot.runtime.sources -> omnibot.teleop." + m for m in ("config", "deadman", "mapping")],
-        "the people's sources and RampedTwist (ROS 2's cmd_vel's too) use teleop's pure mapping and deadman",
-    ),
     "omnibot.ros2.command -> omnibot.cliargs": "omnibot ros2's options still live in the bridge's package",
 }
 """Imports that go up a storey (docs/architecture.md lists them): take entries out as they are

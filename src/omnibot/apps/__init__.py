@@ -6,7 +6,8 @@ libraries below (teleop, web, navigation, calibration, logs, ros2 ...) export so
 functions, and never parse a command line.
 
 * :mod:`omnibot.apps.run` - ``omnibot run``: several front ends on one runtime;
-* :mod:`omnibot.apps.teleop` - ``omnibot teleop``: a pad or the keyboard, with a deadman;
+* :mod:`omnibot.apps.teleop` - ``omnibot teleop``: a pad or the keyboard, with a deadman
+  (:mod:`omnibot.apps.teleop_loop`: the pad driving a runtime);
 * :mod:`omnibot.apps.dashboard` - ``omnibot dashboard``: the web page;
 * :mod:`omnibot.apps.teach` - ``omnibot record`` and ``omnibot follow``: teach and repeat a path;
 * :mod:`omnibot.apps.calibrate` - ``omnibot calibrate``: power, gyro and odometry calibration;

@@ -68,11 +68,11 @@ def open_source(args: argparse.Namespace, config: Any, say: Callable[[str], None
 def run(args: argparse.Namespace) -> int:
     """Run ``omnibot teleop`` for ``--duration`` s or until the user quits, then print what was sent;
     0 (Ctrl-C is raised again after the summary)."""
+    from omnibot.apps.teleop_loop import Teleop
     from omnibot.cliargs import check_sim_options, sim_url, use_calibration
     from omnibot.client.session import robot_session
     from omnibot.teleop.config import load_teleop_config
     from omnibot.teleop.keyboard import HELP
-    from omnibot.teleop.loop import Teleop
     from omnibot.transport.device import find_device
 
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
