@@ -366,7 +366,7 @@ def _add_tour(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def _send(args: argparse.Namespace) -> int:
-    from omnibot.console import run_send
+    from omnibot.apps.console import run_send
 
     positive(args.timeout, "--timeout")
     positive(args.idle_timeout, "--idle-timeout")
@@ -395,7 +395,7 @@ def _add_send(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def _console(args: argparse.Namespace) -> int:
-    from omnibot.console import run_console
+    from omnibot.apps.console import run_console
 
     positive(args.timeout, "--timeout")
     return run_console(args)

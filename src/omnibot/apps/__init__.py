@@ -1,8 +1,8 @@
 """The composition roots: the ``omnibot`` subcommands that parse their options and wire libraries and
 front ends into a runtime (:mod:`omnibot.cli` dispatches to them by name).
 
-Nothing imports this package from outside it (``tests/test_imports.py`` holds it to that): the
-libraries below (teleop, web, navigation, calibration, logs, ros2 ...) export sources, sinks and
+Nothing but the command line (:mod:`omnibot.cli`) imports this package from outside it
+(``tests/test_imports.py`` holds it to that): the libraries below (teleop, web, navigation, calibration, logs, ros2 ...) export sources, sinks and
 functions, and never parse a command line.
 
 * :mod:`omnibot.apps.run` - ``omnibot run``: several front ends on one runtime;
@@ -14,5 +14,6 @@ functions, and never parse a command line.
 * :mod:`omnibot.apps.log` - ``omnibot log``: inspect, plot, export and replay a recording;
 * :mod:`omnibot.apps.mapping` - ``omnibot map``: drive the robot (a path, a pad or the keyboard)
   while the SLAM maps the room; the map, the trajectories and, on the simulator, their scores;
-* :mod:`omnibot.apps.goto` - ``omnibot goto``: localise on a saved map, plan and go.
+* :mod:`omnibot.apps.goto` - ``omnibot goto``: localise on a saved map, plan and go;
+* :mod:`omnibot.apps.console` - ``omnibot send`` and ``omnibot console``: the protocol by hand.
 """
