@@ -3,8 +3,8 @@ omnibot``, no extra) in a fresh venv; its size on disk, its packages and its imp
 
 ``python -m benchmarks.core_install [--extras all] [--repeats N] [--keep DIR]``
 
-The wheel is built from this checkout (``pip wheel --no-deps``, the build backend fetched by pip's
-build isolation) and installed at constraints.txt's versions, so the figures are those of the tested
+The wheel is built from a copy of this checkout's sources (``pip wheel --no-deps``, the build
+backend fetched by pip's build isolation) and installed at constraints.txt's versions, so the figures are those of the tested
 set. ``tests/test_packaging.py`` builds the same venv and checks what it can do.
 """
 
@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import shutil
 import statistics
 import subprocess
 import sys
@@ -39,8 +40,14 @@ def _run(cmd: list[str | Path]) -> subprocess.CompletedProcess[str]:
 
 
 def build_wheel(dest: Path) -> Path:
-    """omnibot's wheel, built from this checkout into ``dest``."""
-    _run([sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps", "--wheel-dir", dest, ROOT])
+    """omnibot's wheel, built into ``dest`` from a copy of this checkout's sources (the build's
+    ``build/`` and ``*.egg-info`` land in the copy, not in the checkout)."""
+    source = dest / "source"
+    ignore = shutil.ignore_patterns("__pycache__", "*.egg-info", "*.nbi", "*.nbc")
+    shutil.copytree(ROOT / "src", source / "src", ignore=ignore)
+    for name in ("pyproject.toml", "README.md"):
+        shutil.copy2(ROOT / name, source / name)
+    _run([sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps", "--wheel-dir", dest, source])
     (wheel,) = dest.glob("omnibot-*.whl")
     return wheel
 
