@@ -10,11 +10,13 @@ KERNEL_CACHE := $(VENV)/.kernels
 
 setup: $(STAMP) $(KERNEL_CACHE)
 
-$(STAMP): pyproject.toml Makefile
+# Every extra (all), the tests' tools (dev) and the benchmarks' (bench), at the exact versions of
+# constraints.txt; pyproject.toml states the ranges a user's `pip install omnibot[...]` accepts.
+$(STAMP): pyproject.toml constraints.txt Makefile
 	@$(PYTHON) -c 'import sys; sys.exit(0 if sys.version_info >= (3, 11) else "omnibot needs Python 3.11 or newer")'
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip==25.3
-	$(BIN)/python -m pip install --quiet -e '.[dev,bench,ros2,slam]'
+	$(BIN)/python -m pip install --quiet -c constraints.txt -e '.[all,dev,bench]'
 	@touch $(STAMP)
 
 # The simulator's kernels compiled into numba's cache (next to kernels.py), again whenever kernels.py
@@ -116,8 +118,8 @@ ros2-kilted:
 ROS2_STAMP := $(VENV)/.ros2-test
 ros2-interop: setup ros2-kilted $(ROS2_STAMP)
 
-$(ROS2_STAMP): pyproject.toml
-	@$(BIN)/python -m pip install --quiet -e '.[ros2-test]' && touch $@ || \
+$(ROS2_STAMP): pyproject.toml constraints.txt
+	@$(BIN)/python -m pip install --quiet -c constraints.txt -e '.[ros2-test]' && touch $@ || \
 	  echo "make ros2-interop: Jazzy's rclpy wheels did not install (they exist for CPython 3.11 on x86_64): its interop tests will skip"
 
 test: lint browser avr-tools arduino-sketch mcap-readers ros2-interop
@@ -131,7 +133,7 @@ bench: setup
 # runs the same targets on a bounded hypothesis budget (tests/fuzz/). Crashes land in fuzz/crash-*.
 FUZZ_SECONDS ?= 600
 fuzz: setup
-	$(BIN)/python -m pip install --quiet -e '.[fuzz]'
+	$(BIN)/python -m pip install --quiet -c constraints.txt -e '.[fuzz]'
 	@mkdir -p fuzz
 	cd fuzz && PYTHONPATH=.. SDL_VIDEODRIVER=dummy $(BIN)/python -m tests.fuzz.run text --seconds $(FUZZ_SECONDS) --corpus corpus-text
 	cd fuzz && PYTHONPATH=.. SDL_VIDEODRIVER=dummy $(BIN)/python -m tests.fuzz.run binary --seconds $(FUZZ_SECONDS) --corpus corpus-binary

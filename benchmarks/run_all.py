@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from benchmarks import (
     attack_suite,
+    core_install,
     firmware_command_time,
     foxglove_live,
     goto,
@@ -37,6 +38,7 @@ def main() -> int:
     for title, run in (
         ("simulator speed", lambda: sim_speed.main([])),
         ("start-up: --help, robot list, first HELLO cold and warm", lambda: startup.main([])),
+        ("core install: size and import time of `pip install omnibot`", lambda: core_install.main([])),
         ("laser scanner cost", lambda: scanner_cost.main([])),
         ("firmware time per command", lambda: firmware_command_time.main([])),
         ("UNO firmware cycles per command (simavr)", lambda: uno_command_cycles.main([])),

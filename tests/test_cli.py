@@ -249,7 +249,7 @@ WALLED = "name: walled\nwalls:\n  - {shape: rectangle, min: [-0.01, -0.01], max:
 def test_a_command_that_could_not_start_exits_2_with_one_line(
     argv: list[str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """README: 2 it could not start (bad arguments or files, the wrong robot, a link that cannot be
+    """docs/cli.md: 2 it could not start (bad arguments or files, the wrong robot, a link that cannot be
     opened). A start pose in a wall (SimulationError) and an emulator that did not start (LinkError)
     were failed runs, exit 1."""
     from omnibot.control.paths import standard_path, write_path

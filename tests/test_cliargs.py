@@ -13,11 +13,11 @@ from omnibot.cliargs import (
     check_distinct,
     check_plot,
     check_sim_options,
-    check_writable,
     seed_of,
     sim_url,
 )
 from omnibot.errors import ConfigError
+from omnibot.outputs import check_writable
 
 
 def parse(*argv: str, world: str = "empty") -> argparse.Namespace:

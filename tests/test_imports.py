@@ -1,5 +1,7 @@
-"""The import graph of src/omnibot, read from the modules' syntax trees: no cycles, and the pure
-modules (fits, kinematics, codecs, the firmware...) never load the client or a transport.
+"""The import graph of src/omnibot, read from the modules' syntax trees: no cycles between modules,
+the packages in the storeys docs/architecture.md draws (each imports only from its own storey and
+below, with no cycle between packages), and the pure modules (fits, kinematics, codecs, the
+firmware...) never load the client or a transport.
 
 Edges: every ``import`` and ``from ... import`` of an omnibot module, at module level and inside
 functions alike (a lazy import still runs when its function does, so it closes a cycle as surely as
@@ -16,12 +18,14 @@ which loads the client.
 from __future__ import annotations
 
 import ast
-from collections.abc import Iterator
+import re
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 import pytest
 
 SRC = Path(__file__).resolve().parents[1] / "src"
+ARCHITECTURE = SRC.parent / "docs" / "architecture.md"
 ROOT = "omnibot"
 
 ALLOWED_CYCLES: dict[frozenset[str], str] = {
@@ -37,13 +41,8 @@ ALLOWED_CYCLES: dict[frozenset[str], str] = {
             "omnibot.control.followers.tracker",
         }
     ): "followers registry <-> its package (lazy import in base.py)",
-    # estimation: estimator.py imports SlipModel from slip.py; slip.py's fit helper builds a
-    # PoseEstimator with a lazy import of estimator.py.
-    frozenset({"omnibot.estimation.estimator", "omnibot.estimation.slip"}): (
-        "estimator <-> slip (lazy import in slip.py)"
-    ),
 }
-"""Cycles outside calibration/ found when this test was written (owned by other work in progress:
+"""Module cycles found when this test was written (owned by other work in progress:
 do not add to this list, take entries out as they are untangled). Each is the exact set of modules
 of one strongly connected component, so a new module or import joining one fails the test too."""
 
@@ -232,7 +231,7 @@ def _under(module: str, prefixes: tuple[str, ...]) -> bool:
 def test_the_graph_is_read() -> None:
     """The reader sees top-level, lazy, relative and ``from pkg import module`` imports, and skips
     TYPE_CHECKING ones (checked on modules whose imports are known)."""
-    assert "omnibot.calibration.session" in GRAPH["omnibot.calibration.cli"]  # lazy, in run()
+    assert "omnibot.calibration.session" in GRAPH["omnibot.apps.calibrate"]  # lazy, in run()
     assert "omnibot.client.client" in GRAPH["omnibot.calibration.session"]
     assert "omnibot.control.followers" in GRAPH["omnibot.control.followers.base"]  # from pkg import mod
     assert "omnibot.client.events" not in GRAPH["omnibot.calibration.umbmark"]  # TYPE_CHECKING only
@@ -264,14 +263,116 @@ def test_the_pure_list_names_real_modules() -> None:
 
 
 def test_nothing_imports_the_apps() -> None:
-    """``omnibot.apps`` holds composition roots only: the command line reaches them by name
-    (``cli._command_in``), no library imports them."""
+    """``omnibot.apps`` holds composition roots only: the command line (the apps storey: ``cli``)
+    reaches them, no library below imports them."""
     assert "omnibot.apps.mapping" in MODULES
+    top = STOREYS[-1][1]
     bad = sorted(
         f"{name} -> {target}"
         for name, targets in GRAPH.items()
-        if not _under(name, ("omnibot.apps",))
+        if package_of(name) not in top
         for target in targets
         if _under(target, ("omnibot.apps",))
     )
     assert not bad, "imports of omnibot.apps:\n  " + "\n  ".join(bad)
+
+
+# --------------------------------------------------------------------------- packages and storeys
+
+
+def read_storeys(text: str) -> list[tuple[str, list[str]]]:
+    """docs/architecture.md's storeys, bottom first: (name, packages) from the picture between the
+    ``<!-- storeys`` and ``<!-- /storeys -->`` markers (``omnibot`` is the package's own
+    ``__init__``, the others are ``omnibot.<name>``)."""
+    start = text.index("<!-- storeys")
+    block = text[start : text.index("<!-- /storeys -->", start)]
+    rows: dict[int, tuple[str, list[str]]] = {}
+    for line in block.splitlines():
+        match = re.fullmatch(r"\s*(\d+)\s+(\S+(?: \S+)*)\s{2,}(\S.*)", line)
+        if match:
+            names = match[3].split()
+            rows[int(match[1])] = (match[2], [ROOT if n == ROOT else f"{ROOT}.{n}" for n in names])
+    assert sorted(rows) == list(range(len(rows))), "storeys numbered 0, 1, 2 ... from the bottom"
+    return [rows[k] for k in sorted(rows)]
+
+
+STOREYS = read_storeys(ARCHITECTURE.read_text(encoding="utf-8"))
+LEVEL = {package: level for level, (_, packages) in enumerate(STOREYS) for package in packages}
+
+
+def package_of(module: str) -> str:
+    """The storey's package ``module`` belongs to (the longest one that holds it)."""
+    parts = module.split(".")
+    for k in range(len(parts), 0, -1):
+        if ".".join(parts[:k]) in LEVEL:
+            return ".".join(parts[:k])
+    raise KeyError(f"{module} is in no storey of docs/architecture.md: add its package to the picture")
+
+
+ALLOWED_UPWARD: dict[str, str] = {
+    **dict.fromkeys(
+        ["omnibot.control.reach -> omnibot.sim." + m for m in ("kernels", "physics", "surfaces")],
+        "the floor model the planner's reach and the simulator share: its own package below both once "
+        "the simulator's kernels settle",
+    ),
+    "omnibot.ros2.command -> omnibot.cliargs": "omnibot ros2's options still live in the bridge's package",
+}
+"""Imports that go up a storey (docs/architecture.md lists them): take entries out as they are
+untangled, never add one."""
+
+
+def upward(graph: dict[str, set[str]]) -> list[str]:
+    """Every import ``a -> b`` of a package from a higher storey than its own."""
+    return sorted(
+        f"{name} -> {target}"
+        for name, targets in graph.items()
+        for target in targets
+        if LEVEL[package_of(target)] > LEVEL[package_of(name)]
+    )
+
+
+def package_graph(graph: dict[str, set[str]], leave_out: Iterable[str] = ()) -> dict[str, set[str]]:
+    """The storeys' packages and the imports between them (without the module imports ``leave_out``)."""
+    skip = set(leave_out)
+    out: dict[str, set[str]] = {p: set() for p in LEVEL}
+    for name, targets in graph.items():
+        for target in targets:
+            a, b = package_of(name), package_of(target)
+            if a != b and f"{name} -> {target}" not in skip:
+                out[a].add(b)
+    return out
+
+
+def test_the_storeys_are_read() -> None:
+    assert STOREYS[0][0] == "foundation" and ROOT in STOREYS[0][1]
+    assert STOREYS[-1][0] == "apps" and "omnibot.apps" in STOREYS[-1][1]
+    assert package_of("omnibot.control.followers.base") == "omnibot.control"
+    assert package_of("omnibot.cli") == "omnibot.cli" and package_of("omnibot") == ROOT
+    assert upward({"omnibot.motion": {"omnibot.apps.run"}, "omnibot.apps.run": {"omnibot.motion"}}) == [
+        "omnibot.motion -> omnibot.apps.run"
+    ]
+    assert cycles(
+        package_graph({"omnibot.sim.x": {"omnibot.client.y"}, "omnibot.client.y": {"omnibot.sim.x"}})
+    )
+
+
+def test_every_package_is_in_a_storey() -> None:
+    loose = sorted({m for m in MODULES if not any(_under(m, (p,)) for p in LEVEL)})
+    assert not loose, "modules in no storey of docs/architecture.md: " + ", ".join(loose)
+    ghosts = sorted(p for p in LEVEL if p not in MODULES)
+    assert not ghosts, "storeys name packages that do not exist: " + ", ".join(ghosts)
+
+
+def test_packages_import_only_downward() -> None:
+    found = upward(GRAPH)
+    new = [edge for edge in found if edge not in ALLOWED_UPWARD]
+    assert not new, "imports from a higher storey (docs/architecture.md):\n  " + "\n  ".join(new)
+    gone = [edge for edge in ALLOWED_UPWARD if edge not in found]
+    assert not gone, "no longer upward (take it out of ALLOWED_UPWARD): " + "; ".join(gone)
+
+
+def test_no_package_cycle() -> None:
+    """Besides the known upward imports, no cycle between packages, within a storey either."""
+    graph = package_graph(GRAPH, ALLOWED_UPWARD)
+    found = [" -> ".join(loop_through(c, graph)) for c in cycles(graph)]
+    assert not found, "package cycles:\n  " + "\n  ".join(found)

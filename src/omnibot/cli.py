@@ -8,7 +8,7 @@ that no command imports another's modules (``tests/cli/test_startup.py`` checks 
 commands that talk to a robot share one grammar (:mod:`omnibot.cliargs`) and leave the controller as
 they found it (:mod:`omnibot.client.session`).
 
-Exit status, the same for every command (README's command table):
+Exit status, the same for every command (docs/cli.md's command table):
 
 * 0: the command did its job;
 * 1: it ran but did not do its job (a path not followed within tolerance, a recording too short, a
@@ -51,6 +51,7 @@ from omnibot.cliargs import (
     seed_of,
 )
 from omnibot.errors import ConfigError, KinematicsError, OmnibotError, ProtocolError
+from omnibot.extras import missing_extra
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_BUG = 0, 1, 2, 70
 EXIT_SIGINT, EXIT_SIGPIPE = 130, 141
@@ -234,14 +235,32 @@ def _sim(args: argparse.Namespace) -> int:
     truth = Path(args.truth) if args.truth else None
     log = Path(args.log) if args.log else None
     if log is not None:
-        from omnibot.cliargs import check_distinct, check_writable
+        from omnibot.cliargs import check_distinct
+        from omnibot.outputs import check_writable
 
         check_writable(log, "--log")
         check_distinct([("--truth", truth), ("--log", log)])
     seed = seed_of(args)
-    return run_pty_emulator(
-        robot, seed=seed, surface=args.surface, world=args.world, truth=truth, baud=args.baud, log=log
-    )
+    if log is None:
+        return run_pty_emulator(
+            robot, seed=seed, surface=args.surface, world=args.world, truth=truth, baud=args.baud
+        )
+    from omnibot.logs.device import RecordedDevice
+    from omnibot.logs.recorder import Recorder
+
+    log_recorder = Recorder(log)  # the bytes both ways and the truth
+    try:
+        return run_pty_emulator(
+            robot,
+            seed=seed,
+            surface=args.surface,
+            world=args.world,
+            truth=truth,
+            baud=args.baud,
+            wrap=lambda device: RecordedDevice(device, log_recorder, robot),
+        )
+    finally:
+        log_recorder.close()
 
 
 def _sim_fleet(args: argparse.Namespace, robots: list[str]) -> int:
@@ -347,7 +366,7 @@ def _add_tour(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def _send(args: argparse.Namespace) -> int:
-    from omnibot.console import run_send
+    from omnibot.apps.console import run_send
 
     positive(args.timeout, "--timeout")
     positive(args.idle_timeout, "--idle-timeout")
@@ -376,7 +395,7 @@ def _add_send(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def _console(args: argparse.Namespace) -> int:
-    from omnibot.console import run_console
+    from omnibot.apps.console import run_console
 
     positive(args.timeout, "--timeout")
     return run_console(args)
@@ -511,21 +530,21 @@ class _Commands(argparse._SubParsersAction):  # type: ignore[type-arg]
 
 
 _add_teleop = _command_in(
-    "omnibot.teleop.command",
+    "omnibot.apps.teleop",
     "teleop",
     summary="drive the robot from a joystick (pygame) or the keyboard, with a deadman",
     description="Sends VEL with its watchdog at autorepeat_rate; letting go of the enable button, "
     "losing the pad or going quiet stops the robot. On sim:// simulated time follows the wall clock.",
 )
 _add_dashboard = _command_in(
-    "omnibot.web.command",
+    "omnibot.apps.dashboard",
     "dashboard",
     summary="a web page showing the robot live (map, trail, sonars, charts) and driving it",
     description="Serves the dashboard over HTTP and a websocket; bound to 127.0.0.1 unless --host "
     "says otherwise, and then an access token is required.",
 )
 _add_run = _command_in(
-    "omnibot.runtime.command",
+    "omnibot.apps.run",
     "run",
     summary="several front ends on one runtime: --teleop pad|keyboard, --dashboard, --follow PATH",
     description="One runtime owns the robot; each front end is a source (pad/keyboard 200, the page 100, "
@@ -541,7 +560,7 @@ _add_ros2 = _command_in(
     "ROS_AUTOMATIC_DISCOVERY_RANGE apply.",
 )
 _add_record = _command_in(
-    "omnibot.navigation.commands",
+    "omnibot.apps.teach",
     "record",
     add="add_record_arguments",
     run="run_record",
@@ -551,7 +570,7 @@ _add_record = _command_in(
     "the motors off (seed 002's teaching), or VEL commands drive it; with --port it listens.",
 )
 _add_follow = _command_in(
-    "omnibot.navigation.commands",
+    "omnibot.apps.teach",
     "follow",
     add="add_follow_arguments",
     run="run_follow",
@@ -584,9 +603,7 @@ _add_goto = _command_in(
 
 
 def _add_calibrate_now(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    from omnibot.calibration.cli import add_parser
-
-    add_parser(sub)
+    importlib.import_module("omnibot.apps.calibrate").add_parser(sub)
 
 
 _add_calibrate = _lazy(
@@ -600,9 +617,7 @@ _add_calibrate = _lazy(
 
 
 def _add_log_now(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    from omnibot.logs.commands import add_log_command
-
-    add_log_command(sub)
+    importlib.import_module("omnibot.apps.log").add_log_command(sub)
 
 
 _add_log = _lazy("log", "inspect, plot, export and replay a run recorded with --log FILE.mcap", _add_log_now)
@@ -669,6 +684,8 @@ def exit_status(exc: BaseException) -> int:
         return EXIT_SIGINT
     if isinstance(exc, ConfigError | KinematicsError | ProtocolError | UnicodeDecodeError):
         return EXIT_USAGE
+    if missing_extra(exc) is not None:
+        return EXIT_USAGE  # a part of omnibot that is not installed (pip install 'omnibot[...]')
     if isinstance(exc, OSError) and (exc.filename is not None or _output_full(exc)):
         return EXIT_USAGE  # a file it cannot read or write, or no room for its output
     if isinstance(exc, OmnibotError):
@@ -682,7 +699,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     from omnibot.signals import Terminated, terminate_cleanly
 
     parser = build_parser()
-    args, extra = parser.parse_known_args(argv)
+    try:
+        args, extra = parser.parse_known_args(argv)  # a chosen command's module is imported here
+    except ModuleNotFoundError as exc:
+        if (line := missing_extra(exc)) is None:
+            raise
+        print(f"omnibot: error: {line}", file=sys.stderr)
+        return EXIT_USAGE
     intermixed = getattr(args, "intermixed", None)
     if extra and intermixed and not any(e.startswith("-") for e in extra):
         # `send CMD --port URL CMD2`: options anywhere, the commands kept in the order given
@@ -738,6 +761,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _message(exc: BaseException) -> str:
     """The one line an error is told in."""
+    if (line := missing_extra(exc)) is not None:
+        return line
     if isinstance(exc, UnicodeDecodeError):  # text where the reader checked for none (it names no file)
         return f"not UTF-8 text: {exc}"
     if isinstance(exc, OSError) and exc.filename is not None:

@@ -21,13 +21,13 @@ old spellings working with a warning. ``--debug`` (every command) shows the trac
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from omnibot.errors import ConfigError
+from omnibot.outputs import check_writable
 
 DEFAULT_ROBOT = "omni4"
 DEFAULT_SEED = 1
@@ -184,23 +184,6 @@ def check_sim_options(args: argparse.Namespace, allowed: Sequence[str] = ()) -> 
             "(sim://omni4?seed=1&world=room&surface=wood)",
             key=given[0],
         )
-
-
-def check_writable(path: str | Path | None, flag: str) -> None:
-    """Refuse, before any robot moves, an output file that could not be written: its directory must
-    exist (none is made: a mistyped directory is a mistake to report, not to create) and be writable,
-    it must not be a directory, and an existing file must be writable. Nothing is created here, so a
-    run that fails later leaves no empty file behind."""
-    if path is None:
-        return
-    target = Path(path)
-    if target.is_dir():
-        raise ConfigError(f"{target} is a directory; give the file to write", key=flag)
-    parent = target.parent
-    if not parent.is_dir():
-        raise ConfigError(f"cannot write {target}: no directory {parent}", key=flag)
-    if not os.access(parent, os.W_OK | os.X_OK) or (target.exists() and not os.access(target, os.W_OK)):
-        raise ConfigError(f"cannot write {target}: permission denied", key=flag)
 
 
 def check_distinct(

@@ -16,6 +16,8 @@ import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
+from omnibot.errors import ConfigError
+
 
 @dataclass(frozen=True)
 class Pose2D:
@@ -91,3 +93,20 @@ class Estimate:
             self.slipping,
             self.standstill,
         )
+
+
+def parse_pose(
+    text: str, key: str, *, optional_heading: bool = False, prefix: str = "", where: str = ""
+) -> tuple[float, float, float | None]:
+    """``X,Y,THETA`` (m, m, degrees, as a world file's ``start``; ``X,Y`` too with
+    ``optional_heading``) -> (x, y, theta in radians or None). Anything else, a non-finite number
+    included, is a ConfigError naming ``key``: ``expected {prefix}X,Y,THETA (m, m, degrees), got
+    'text'{where}``."""
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) not in ((2, 3) if optional_heading else (3,)) or not all(math.isfinite(v) for v in values):
+        want = "X,Y[,THETA]" if optional_heading else "X,Y,THETA"
+        raise ConfigError(f"expected {prefix}{want} (m, m, degrees), got {text!r}{where}", key=key)
+    return values[0], values[1], math.radians(values[2]) if len(values) == 3 else None

@@ -42,7 +42,7 @@ ENDINGS = ("normal", "error", "sigint", "sigterm", "link", "unplug")
 FALLBACK_PUMPS = 400
 """Waits after which a command that never moves the robot is ended anyway."""
 EXIT = {"normal": 0, "error": 1, "sigint": 130, "sigterm": 143, "link": 1, "unplug": 1}
-"""The exit status each way of ending must give (README's command table)."""
+"""The exit status each way of ending must give (docs/cli.md's command table)."""
 ROOT = Path(__file__).resolve().parents[2]
 
 

@@ -10,7 +10,7 @@ from typing import Any, cast
 
 import pytest
 
-from omnibot.calibration import cli as calibration_cli
+from omnibot.apps import calibrate as calibration_cli
 from omnibot.calibration.accuracy import AccuracyRow
 from omnibot.calibration.calfile import load_calibration
 from omnibot.calibration.results import CalibrationResult, SurfaceSession

@@ -1,7 +1,7 @@
 """Every command that talks to a robot, on every preset, over ``sim://`` (in-process, ``main(argv)``).
 
 Each is ended normally, by an error, by SIGINT, by SIGTERM, by its link closing and by its cable
-pulled; the exit status must match the ending (README's command table), no traceback, and the
+pulled; the exit status must match the ending (docs/cli.md's command table), no traceback, and the
 simulated controller must be left stopped, with telemetry off, in MODE 0 and the text protocol
 (what it started with), except when the link is gone (nobody can reach it then).
 """

@@ -8,6 +8,7 @@ import time
 
 import pytest
 
+from omnibot.client import session as session_module
 from omnibot.client.client import RobotClient
 from omnibot.client.session import guarded, leave, robot_on_link, robot_session
 from omnibot.errors import ConfigError, ControllerError
@@ -39,6 +40,19 @@ def test_robot_session_takes_the_robot_from_hello_and_leaves_mode_and_protocol()
     ctl = device.controller
     assert client.link.closed
     assert ctl.state == codes.STATE_IDLE and ctl.mode == 0 and not ctl.binary and ctl.telemetry.period == 0
+
+
+def test_every_client_a_session_opens_goes_to_the_open_hooks(monkeypatch: pytest.MonkeyPatch) -> None:
+    """What the command's --log recorder listens on (omnibot.logs.active installs itself)."""
+    seen: list[tuple[RobotClient, str | None, bool]] = []
+
+    def hook(client: RobotClient, robot: object, *, guess: bool = False) -> None:
+        seen.append((client, getattr(robot, "name", None), guess))
+
+    monkeypatch.setattr(session_module, "ON_OPEN", [hook])
+    with robot_session("sim://omni3", "omni3") as session:
+        assert seen and all(client is session.client for client, _, _ in seen)
+        assert (session.client, "omni3", False) in seen  # with its description once the HELLO named it
 
 
 def test_guarded_stops_on_error_only_when_asked() -> None:

@@ -9,7 +9,8 @@ import pytest
 
 from omnibot.control.paths import standard_path
 from omnibot.errors import ConfigError
-from omnibot.estimation.slip import SlipLeg, SlipProbe, fit_slip, leg_error
+from omnibot.estimation.slip import SlipLeg, fit_slip, leg_error
+from omnibot.estimation.slipprobe import SlipProbe
 from omnibot.motion import Twist
 from omnibot.navigation.runner import Navigator, ramp_fraction
 from omnibot.navigation.session import FollowOptions, simulate_follow, simulated_client

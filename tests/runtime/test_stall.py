@@ -10,10 +10,10 @@ from omnibot.client import RobotClient
 from omnibot.control.paths import standard_path
 from omnibot.estimation.estimator import make_estimator
 from omnibot.motion import Pose2D, Twist
+from omnibot.navigation.following import follower_source
 from omnibot.protocol import codes
 from omnibot.robot.description import load_robot
 from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.following import follower_source
 from omnibot.runtime.runtime import Runtime
 from omnibot.runtime.sources import ScriptSource
 from omnibot.runtime.stall import StallWatch, start_sonars

@@ -1,9 +1,19 @@
-"""The composition roots: ``omnibot`` subcommands that wire libraries and front ends into a runtime.
+"""The composition roots: the ``omnibot`` subcommands that parse their options and wire libraries and
+front ends into a runtime (:mod:`omnibot.cli` dispatches to them by name).
 
-Nothing imports this package (``tests/test_imports.py`` holds it to that). Today it holds the newest
-commands; the others still live beside the libraries they drive (``runtime/command.py``,
-``navigation/commands.py`` ...) and move here as the command line is reorganised.
+Nothing but the command line (:mod:`omnibot.cli`) imports this package from outside it
+(``tests/test_imports.py`` holds it to that): the libraries below (teleop, web, navigation, calibration, logs, ros2 ...) export sources, sinks and
+functions, and never parse a command line.
 
+* :mod:`omnibot.apps.run` - ``omnibot run``: several front ends on one runtime;
+* :mod:`omnibot.apps.teleop` - ``omnibot teleop``: a pad or the keyboard, with a deadman
+  (:mod:`omnibot.apps.teleop_loop`: the pad driving a runtime);
+* :mod:`omnibot.apps.dashboard` - ``omnibot dashboard``: the web page;
+* :mod:`omnibot.apps.teach` - ``omnibot record`` and ``omnibot follow``: teach and repeat a path;
+* :mod:`omnibot.apps.calibrate` - ``omnibot calibrate``: power, gyro and odometry calibration;
+* :mod:`omnibot.apps.log` - ``omnibot log``: inspect, plot, export and replay a recording;
 * :mod:`omnibot.apps.mapping` - ``omnibot map``: drive the robot (a path, a pad or the keyboard)
-  while the SLAM maps the room; the map, the trajectories and, on the simulator, their scores.
+  while the SLAM maps the room; the map, the trajectories and, on the simulator, their scores;
+* :mod:`omnibot.apps.goto` - ``omnibot goto``: localise on a saved map, plan and go;
+* :mod:`omnibot.apps.console` - ``omnibot send`` and ``omnibot console``: the protocol by hand.
 """

@@ -59,30 +59,17 @@ def _say(text: str) -> None:
     print(f"goto: {text}", flush=True)
 
 
-def parse_pose(text: str, flag: str, *, theta: bool) -> tuple[float, float, float | None]:
-    """``X,Y`` or ``X,Y,THETA`` (m, m, degrees) -> (x, y, theta in rad or None); one line if bad."""
-    parts = text.split(",")
-    try:
-        values = [float(v) for v in parts]
-    except ValueError:
-        values = []
-    if len(values) not in ((2, 3) if theta else (3,)) or not all(math.isfinite(v) for v in values):
-        want = "X,Y[,THETA]" if theta else "X,Y,THETA"
-        raise ConfigError(f"expected {want} (m, m, degrees), got {text!r}", key=flag)
-    return values[0], values[1], math.radians(values[2]) if len(values) == 3 else None
-
-
 def run(args: argparse.Namespace) -> int:
     """``omnibot goto``: the exit status."""
     from omnibot.cliargs import check_sim_options, sim_url, simulated
     from omnibot.client.session import robot_session
     from omnibot.mapping.mapfile import load_map
     from omnibot.mapping.planner import check_goal, inflate
-    from omnibot.motion import Pose2D
+    from omnibot.motion import Pose2D, parse_pose
     from omnibot.navigation.goto import GotoOptions
 
-    gx, gy, gtheta = parse_pose(args.goal, "goal", theta=True)
-    initial = parse_pose(args.initial_pose, "--initial-pose", theta=False) if args.initial_pose else None
+    gx, gy, gtheta = parse_pose(args.goal, "goal", optional_heading=True)
+    initial = parse_pose(args.initial_pose, "--initial-pose") if args.initial_pose else None
     for name, value in (("--tolerance", args.tolerance), ("--heading-tolerance", args.heading_tolerance)):
         if not (math.isfinite(value) and value > 0):
             raise ConfigError(f"expected a positive number, got {value}", key=name)
@@ -154,7 +141,7 @@ def _go(
     def provider(runtime: Any) -> Any:
         assert sink is not None
         runtime.add_sink(sink)
-        return sink.pose
+        return sink.pose_now
 
     _say(
         f"from ({start.x:.2f}, {start.y:.2f}, {math.degrees(start.theta):.0f} deg) to ({goal.x:.2f}, {goal.y:.2f}, {math.degrees(goal.theta):.0f} deg)"

@@ -127,9 +127,9 @@ def run(args: argparse.Namespace) -> int:
         import scipy  # noqa: F401
     except ImportError:
         raise ConfigError("omnibot map needs the slam extra: pip install 'omnibot[slam]'") from None
+    from omnibot.apps.run import Parts, run_in_this_thread
     from omnibot.cliargs import check_sim_options, sim_url
     from omnibot.control.paths.files import read_path
-    from omnibot.runtime.command import Parts, run_in_this_thread
     from omnibot.teleop.config import load_teleop_config
 
     out = _check(args)
@@ -267,8 +267,8 @@ class _Mapping:
             self.scans = None
 
     def finish(self, out: Path, parts: Any, resolution: float) -> int:
+        from omnibot.apps.run import outcome
         from omnibot.mapping.session import write_outputs
-        from omnibot.runtime.command import outcome
 
         sink = self.sink
         if sink is None:

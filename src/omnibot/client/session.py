@@ -22,7 +22,7 @@ from __future__ import annotations
 import contextlib
 from collections.abc import Iterator
 from dataclasses import dataclass
-from typing import Literal
+from typing import Literal, Protocol
 
 from omnibot.client.client import DEFAULT_TIMEOUT, RobotClient
 from omnibot.client.commands import telem
@@ -140,11 +140,23 @@ def guarded(
         leave(client, mode, stop=stop == "always" or not ended, telemetry=seen["tel"])
 
 
-def _record(client: RobotClient, robot: RobotDescription | None, *, guess: bool = False) -> None:
-    """Hand the client to the command's ``--log`` recorder, if it has one."""
-    from omnibot.logs.active import attach_active
+class OpenHook(Protocol):
+    """Told of every client a session opens (see :data:`ON_OPEN`)."""
 
-    attach_active(client, robot, guess=guess)
+    def __call__(self, client: RobotClient, robot: RobotDescription | None, *, guess: bool = False) -> None:
+        """Take ``client`` (its ``robot``, ``guess``: named by its HELLO rather than given)."""
+
+
+ON_OPEN: list[OpenHook] = []
+"""Called with every client a session opens, its robot and whether the robot was guessed: the
+command's ``--log`` / ``--foxglove`` recording adds itself while it records
+(:func:`omnibot.logs.active.recording`), so the client knows nothing of logs."""
+
+
+def _record(client: RobotClient, robot: RobotDescription | None, *, guess: bool = False) -> None:
+    """Hand the client to whoever listens for new sessions (the command's ``--log`` recorder)."""
+    for hook in list(ON_OPEN):
+        hook(client, robot, guess=guess)
 
 
 @dataclass(frozen=True)

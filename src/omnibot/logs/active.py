@@ -1,8 +1,9 @@
 """The running command's ``--log`` / ``--foxglove``: which recorder the clients a command opens go to.
 
 Light on purpose (the recorder, MCAP and rosbags are imported only when a command records):
-:func:`recording` wraps a command, :func:`attach_active` is what :mod:`omnibot.client.session` calls
-for every client it opens.
+:func:`recording` wraps a command; while it records, :func:`attach_active` is told of every client
+:mod:`omnibot.client.session` opens and :func:`attach_runtime` of every runtime that starts
+(``session.ON_OPEN``, ``runtime.ON_START``).
 """
 
 from __future__ import annotations
@@ -139,7 +140,7 @@ def recording(
     foxglove_token: str | None = None,
 ) -> Iterator[Recording | None]:
     """``--log FILE`` / ``--foxglove [HOST:]PORT`` (``--foxglove-token``): while inside, every client
-    a command opens (:func:`attach_active`, called by :mod:`omnibot.client.session`) is recorded
+    a command opens (:func:`attach_active`, through :data:`omnibot.client.session.ON_OPEN`) is recorded
     into ``path`` and served live to Foxglove at ``foxglove``; None and None record nothing. The file
     must be writable and the address and token valid (checked at once, before any robot moves)."""
     if foxglove is None and foxglove_token is not None:
@@ -147,11 +148,12 @@ def recording(
     if path is None and foxglove is None:
         yield None
         return
-    from omnibot.cliargs import check_writable
+    from omnibot.outputs import check_writable
 
     check_writable(path, "--log")
     bind = FoxgloveBind.parse(foxglove, foxglove_token) if foxglove is not None else None
     rec = Recording(path, estimator, bind)
+    _listen()
     _ACTIVE.append(rec)
     try:
         yield rec
@@ -173,6 +175,18 @@ def attach_active(client: RobotClient, robot: RobotDescription | None = None, *,
 
 def attach_runtime(runtime: Runtime) -> None:
     """Plug the running command's recording into ``runtime`` (see Recording.attach_runtime); called
-    by :meth:`Runtime.start <omnibot.runtime.runtime.Runtime.start>`."""
+    by :meth:`Runtime.start <omnibot.runtime.runtime.Runtime.start>` (:data:`omnibot.runtime.runtime.ON_START`)."""
     if _ACTIVE:
         _ACTIVE[-1].attach_runtime(runtime)
+
+
+def _listen() -> None:
+    """Have every client a session opens and every runtime that starts come to :func:`attach_active`
+    and :func:`attach_runtime` (once; they record only while a recording runs)."""
+    from omnibot.client import session
+    from omnibot.runtime import runtime
+
+    if attach_active not in session.ON_OPEN:
+        session.ON_OPEN.append(attach_active)
+    if attach_runtime not in runtime.ON_START:
+        runtime.ON_START.append(attach_runtime)

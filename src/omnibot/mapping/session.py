@@ -152,6 +152,17 @@ class ScanFeed:
         """The latest cycle's odometry pose (None before the first estimate)."""
         return self._history_p[-1] if self._history_p else None
 
+    def map_to_odom_now(self) -> Pose2D | None:
+        """The odometry frame's pose in the map now (None while there is no map to place it in)."""
+        raise NotImplementedError
+
+    def pose_now(self) -> Pose2D | None:
+        """The robot's map-frame pose now: :meth:`map_to_odom_now` composed with the latest
+        odometry (None before the first odometry, or while there is no map)."""
+        odom = self.last_odometry
+        correction = None if odom is None else self.map_to_odom_now()
+        return None if odom is None or correction is None else compose(correction, odom)
+
     def _keep(self, scan: Scan, start: Pose2D, end: Pose2D, span: float) -> None:
         """A scan with the odometry at its first and last rays (``span`` s apart), in the runtime's
         thread before :meth:`_update` (nothing here)."""
@@ -206,15 +217,12 @@ class MappingSink(ScanFeed):
         self._latest: FloatArray | None = None
         super().__init__(scans, threaded=threaded)
 
-    def pose_now(self) -> Pose2D | None:
-        """The robot's map-frame pose now: the SLAM's ``map -> odom`` composed with the latest
-        odometry (None until the SLAM has its first keyframe: there is no map before)."""
-        odom = self.last_odometry
-        if odom is None or not self.slam.keyframes():
+    def map_to_odom_now(self) -> Pose2D | None:
+        """The SLAM's ``map -> odom`` (None until its first keyframe: there is no map before)."""
+        if not self.slam.keyframes():
             return None
         with self._lock:
-            correction = self.slam.map_to_odom
-        return compose(correction, odom)
+            return self.slam.map_to_odom
 
     def points_now(self) -> FloatArray | None:
         """The latest scan's returns in the map frame (None before the first): the SLAM's current
@@ -298,7 +306,7 @@ class MapSnapshot:
 
 class LocalisingSink(ScanFeed):
     """Localises the robot in a saved map from a runtime: each scan and the odometry of its time go
-    to a :class:`~omnibot.mapping.localise.Localiser`; :meth:`pose` is the map-frame pose now (the
+    to a :class:`~omnibot.mapping.localise.Localiser`; :meth:`pose_now` is the map-frame pose now (the
     localiser's ``map -> odom`` composed with the latest odometry) and :meth:`points` the latest
     scan's returns in the map frame (for goto's obstacle watch)."""
 
@@ -324,16 +332,10 @@ class LocalisingSink(ScanFeed):
             if points is not None:
                 self._points = transform(self._map_to_odom, points)
 
-    @property
-    def map_to_odom(self) -> Pose2D:
-        """The odometry frame's pose in the map, as the last scan placed it."""
+    def map_to_odom_now(self) -> Pose2D:
+        """The odometry frame's pose in the map, as the last scan placed it (the start's guess before)."""
         with self._lock:
             return self._map_to_odom
-
-    def pose(self) -> Pose2D | None:
-        """The robot's pose in the map now (None before the first odometry)."""
-        odom = self.last_odometry
-        return None if odom is None else compose(self.map_to_odom, odom)
 
     def points(self) -> FloatArray | None:
         """The latest scan's returns in the map frame (None before the first)."""

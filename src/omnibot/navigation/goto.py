@@ -48,12 +48,12 @@ from omnibot.mapping.grid import OCCUPIED, OccupancyGrid
 from omnibot.mapping.planner import MARGIN, CostMap, PlannedPath, Planner, check_goal, inflate, plan_path
 from omnibot.mapping.se2 import compose, inverse
 from omnibot.motion import Pose2D
+from omnibot.navigation.following import follower_source
 from omnibot.navigation.runner import SETTLE, STANDSTILL
 from omnibot.navigation.session import follower_limits
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription
 from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.following import follower_source
 from omnibot.runtime.runtime import LinkPacer, Runtime
 from omnibot.runtime.stall import StallWatch, start_sonars
 

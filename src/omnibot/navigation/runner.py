@@ -31,7 +31,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from omnibot.calibration.gyro import Spin, SpinFit, Standstill, fit_spins
 from omnibot.client.client import RobotClient
 from omnibot.client.errors import NotSupported
 from omnibot.client.events import Telemetry
@@ -41,6 +40,7 @@ from omnibot.errors import ConfigError, OmnibotError
 from omnibot.estimation.estimator import Estimator, PoseEstimator, make_estimator
 from omnibot.estimation.silence import GyroSilence
 from omnibot.estimation.slip import SlipParameters
+from omnibot.estimation.spins import Spin, SpinFit, Standstill, fit_spins
 from omnibot.motion import Pose2D, Twist
 from omnibot.progress import Progress
 from omnibot.protocol import codes
@@ -199,7 +199,7 @@ class _GyroProbe:
         return len(self.rows) - 1
 
     def fit(self, marks: list[int], moving: list[float]) -> SpinFit | None:
-        """The spins' fit (:func:`~omnibot.calibration.gyro.fit_spins`) from ``marks``: the start and
+        """The spins' fit (:func:`~omnibot.estimation.spins.fit_spins`) from ``marks``: the start and
         end of a standstill, then of each spin's standstill after it (the spin between the two, its
         wheels turning ``moving`` s); None without enough telemetry."""
         if len(self.rows) < 10 or min(marks) < 0 or len(marks) != 2 * len(moving) + 2:
@@ -312,7 +312,7 @@ class Navigator:
         the ramps cause comes back when braking, and on a floor where the wheels creep all the time
         the body turns (mecanum rollers on carpet) the creep is a near-constant rate, told apart from
         the gyro's scale by the two spin rates: ``d_psi - bias T = (1 + scale) (d_enc + creep
-        T_moving)`` for each spin (:func:`~omnibot.calibration.gyro.fit_spins`). Every fused
+        T_moving)`` for each spin (:func:`~omnibot.estimation.spins.fit_spins`). Every fused
         estimator's heading filter takes bias and scale, as known to 5e-5 rad/s (a 3 s standstill's
         mean; looser, the driven wheels' creep in rotation at speed read as bias: omni3 at 4 m/s on
         carpet) and 0.05 %, and its heading is set from the body's rotation over the manoeuvre by

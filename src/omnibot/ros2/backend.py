@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import importlib.util
 import logging
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -171,24 +171,3 @@ def choose(name: str) -> str:
             key="--ros-backend",
         )
     return name
-
-
-def open_node(
-    backend: str,
-    namespace: str = "",
-    *,
-    name: str = NODE_NAME,
-    sim_time: bool = False,
-    env: Mapping[str, str] | None = None,
-) -> RosNode:
-    """A node on ``backend`` (``rclpy`` or ``dds``, as :func:`choose` gives): ``sim_time``, the robot is
-    a simulator's (the rclpy node's ``use_sim_time`` follows the bridge's own ``/clock``)."""
-    if backend == "rclpy":
-        from omnibot.ros2.rclpy_backend import RclpyNode
-
-        return RclpyNode(namespace, name=name, sim_time=sim_time, env=env)
-    if backend == "dds":
-        from omnibot.ros2.dds import Node
-
-        return Node(namespace, env, name=name)
-    raise ConfigError(f"no ROS 2 backend {backend!r} (rclpy or dds)", key="--ros-backend")

@@ -219,10 +219,11 @@ def attach(
     (:func:`parameters`); ``announce``: a notice names the node and its backend (``omnibot ros2``
     names them in its own first line). Returns the node (close it)."""
     try:
-        from omnibot.ros2.backend import choose, open_node
+        from omnibot.ros2.backend import choose
         from omnibot.ros2.bridge import Diagnosed, Ros2Sink
         from omnibot.ros2.cmd_vel import TWIST, CmdVelSource
         from omnibot.ros2.odometry import OdometryReset
+        from omnibot.ros2.opening import open_node
         from omnibot.ros2.path import PathSource
     except ImportError:
         raise ConfigError(INSTALL) from None

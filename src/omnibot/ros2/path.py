@@ -5,7 +5,7 @@ The topic is ``path``, not ``plan``: Nav2's planner server publishes every globa
 controller. ``path`` is a command: each message is a path for the robot to repeat.
 
 * The path is driven by the follower ``omnibot follow`` uses (the tracker, through
-  :func:`omnibot.runtime.following.follower_source`) at the follower's priority (10, below ``cmd_vel``:
+  :func:`omnibot.navigation.following.follower_source`) at the follower's priority (10, below ``cmd_vel``:
   teleop or Nav2 take the robot over, and the follower stands by and resumes where the robot is).
 * A new path replaces the one being followed; an empty path cancels it.
 * The poses must be in the robot's odom frame (``<prefix>odom``) or carry no frame (omnibot has no
@@ -31,6 +31,7 @@ import numpy as np
 
 from omnibot.control.paths.path import Path
 from omnibot.motion import Estimate
+from omnibot.navigation.following import FOLLOWER_PRIORITY, follower_source
 from omnibot.navigation.judge import FollowJudge
 from omnibot.navigation.session import summary, verdict
 from omnibot.ros2.backend import RosNode
@@ -38,7 +39,6 @@ from omnibot.ros2.bridge import Diagnosed
 from omnibot.ros2.odometry import yaw_of
 from omnibot.ros2.types import from_dds
 from omnibot.runtime.cycle import Cycle, Level
-from omnibot.runtime.following import FOLLOWER_PRIORITY, follower_source
 from omnibot.runtime.runtime import Runtime
 from omnibot.runtime.sources import APPROACH_GAP, FollowerSource, Proposal
 

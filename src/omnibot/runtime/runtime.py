@@ -17,7 +17,6 @@ from omnibot.client.limits import Limits
 from omnibot.errors import ControllerError, LinkError
 from omnibot.estimation.estimator import Estimator
 from omnibot.estimation.slip import SlipModel
-from omnibot.logs.active import attach_runtime
 from omnibot.motion import Estimate, Twist
 from omnibot.protocol import codes
 from omnibot.runtime.arbiter import Arbiter, Lock
@@ -30,6 +29,11 @@ from omnibot.transport.base import WallClock
 log = logging.getLogger("omnibot.runtime")
 log.addHandler(logging.NullHandler())  # a library's log: shown where the application configures logging
 # (front ends get every notice themselves; without this Python would print warnings twice on stderr)
+
+ON_START: list[Callable[[Runtime], None]] = []
+"""Called with every runtime that starts listening: the command's ``--log`` / ``--foxglove``
+recording adds itself while it records (:func:`omnibot.logs.active.recording`: the recorder's sink,
+the Foxglove panel's source), so the runtime knows nothing of logs."""
 
 PREDICT_MAX = 0.1
 """s: the estimate is extrapolated to the cycle's time by at most this much (older: held)."""
@@ -271,7 +275,8 @@ class Runtime:
         if self._listening:
             return
         self._listening = True
-        attach_runtime(self)  # a command's --log / --foxglove: the recorder's sink, the panel's source
+        for hook in list(ON_START):
+            hook(self)  # a command's --log / --foxglove: the recorder's sink, the panel's source
         self.client.on_telemetry(self._on_telemetry)
         self.client.add_listener(self._on_event, WarnEvent, ErrorEvent, ResetEvent)
         self._set_wheel_loop()

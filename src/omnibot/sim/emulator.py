@@ -59,10 +59,12 @@ def run_pty_emulator(
     baud: int = DEFAULT_BAUD,
     stop: threading.Event | None = None,
     out: TextIO = sys.stdout,
-    log: Path | None = None,
+    wrap: Callable[[Any], Any] | None = None,
 ) -> int:
     """Serve the simulated robot on a new pty until ``stop`` is set or SIGINT/SIGTERM/SIGHUP; its status.
-    ConfigError (before the pty exists) for a bad baud rate or a truth file that cannot be written."""
+    ConfigError (before the pty exists) for a bad baud rate or a truth file that cannot be written.
+    ``wrap(device)``: what the pty serves instead of the simulated device (``omnibot sim --log``'s
+    recorder, :class:`omnibot.logs.device.RecordedDevice`: the bytes both ways and the truth)."""
     from omnibot.sim import kernels
 
     if baud < 0:
@@ -72,11 +74,6 @@ def run_pty_emulator(
         recorder = TruthRecorder(truth) if truth is not None else None
     except OSError as exc:
         raise ConfigError(f"cannot write {truth}: {exc.strerror}", key="--truth") from None
-    log_recorder = None
-    if log is not None:
-        from omnibot.logs.recorder import Recorder
-
-        log_recorder = Recorder(log)  # --log: the bytes both ways and the truth (omnibot.logs.device)
     previous: dict[signal.Signals, Any] = {}
 
     def _on_signal(signum: int, frame: FrameType | None) -> None:
@@ -85,11 +82,7 @@ def run_pty_emulator(
     try:
         kernels.warm_up()  # compile before announcing the pty: a first step must not stall the link
         sim_device = SimDevice(robot, seed=seed, surface=surface, world=world, truth_recorder=recorder)
-        device: Any = sim_device
-        if log_recorder is not None:
-            from omnibot.logs.device import RecordedDevice
-
-            device = RecordedDevice(device, log_recorder, robot)
+        device: Any = sim_device if wrap is None else wrap(sim_device)
         lidar = scanner_device(sim_device.sim, sim_device.tick)
         bridges = [PtyBridge(device, baud=baud)]
         try:
@@ -112,8 +105,6 @@ def run_pty_emulator(
             signal.signal(sig, handler)
         if recorder is not None:
             recorder.close()
-        if log_recorder is not None:
-            log_recorder.close()
     return 0
 
 

@@ -32,11 +32,11 @@ may be used again with other options.
 from __future__ import annotations
 
 import logging
-import math
 import threading
 import time
 from dataclasses import dataclass
 
+from omnibot import motion
 from omnibot.errors import ConfigError
 from omnibot.motion import Pose2D
 from omnibot.robot.description import RobotDescription
@@ -288,15 +288,8 @@ def _free_name(fleet: Fleet) -> str:
 
 def parse_pose(text: str, source: str = "") -> Pose2D:
     """``X,Y,THETA`` (m, m, degrees, as a world file's ``start``) as a :class:`Pose2D` (radians)."""
-    parts = text.split(",")
-    try:
-        x, y, theta = (float(p) for p in parts)
-    except ValueError:
-        raise ConfigError(
-            f"expected pose=X,Y,THETA (m, m, degrees), got {text!r}"
-            + (f" in URL {source!r}" if source else ""),
-            key="pose",
-        ) from None
-    if not all(math.isfinite(v) for v in (x, y, theta)):
-        raise ConfigError(f"expected a finite pose=X,Y,THETA, got {text!r}", key="pose")
-    return Pose2D(x, y, math.radians(theta))
+    x, y, theta = motion.parse_pose(
+        text, "pose", prefix="pose=", where=f" in URL {source!r}" if source else ""
+    )
+    assert theta is not None  # the heading is required
+    return Pose2D(x, y, theta)

@@ -6,13 +6,16 @@
       -> JoyState (ROS joy convention)            mapping.py    pure
       -> joy_to_command(config) -> limit_twist()  mapping.py    pure, seed 003's parameters (config.py)
       -> Deadman.update()                         deadman.py    pure: drive / repeated zero / silent
-      -> runtime: arbitrate, client.vel(..., vel_timeout)   loop.py  (a PadSource of omnibot.runtime),
-                                                                 paced in real time (pacing.py)
+      -> runtime: arbitrate, client.vel(..., vel_timeout)   (a PadSource of omnibot.runtime,
+                                                             omnibot.apps.teleop_loop), paced in
+                                                             real time (pacing.py)
 
 Modules: ``config`` (TeleopConfig, YAML), ``mapping`` (JoyState, deadzone, limits; ``Twist`` is
 :mod:`omnibot.motion`'s), ``deadman`` (when to stop), ``pacing`` (real time on sim:// and real
-links), ``loop`` (Teleop), ``joystick`` (pygame), ``keyboard`` (terminal), ``command``
-(``omnibot teleop``).
+links), ``joystick`` (pygame), ``keyboard`` (terminal). The loop that drives a runtime with them
+(Teleop) and the command (``omnibot teleop``) are :mod:`omnibot.apps.teleop_loop` and
+:mod:`omnibot.apps.teleop`: this package imports nothing of the runtime, which uses its mapping and
+deadman for the people's sources.
 """
 
 from importlib import import_module

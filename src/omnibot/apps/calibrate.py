@@ -21,12 +21,12 @@ from omnibot.cliargs import (
     add_robot_options,
     check_distinct,
     check_sim_options,
-    check_writable,
     seed_of,
     sim_robot,
     world_of,
 )
 from omnibot.errors import ConfigError
+from omnibot.outputs import check_writable
 
 if TYPE_CHECKING:
     from omnibot.client.client import RobotClient

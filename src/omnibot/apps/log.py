@@ -248,7 +248,7 @@ def _replay(args: argparse.Namespace, run: Run | None = None) -> int:
         print(f"omnibot: error: {args.file} has no telemetry with encoders to replay", file=sys.stderr)
         return EXIT_FAILED
     if args.csv:
-        from omnibot.cliargs import check_writable
+        from omnibot.outputs import check_writable
 
         check_writable(args.csv, "--csv")
         rows = [[t, e.t, e.x, e.y, e.theta, e.vx, e.vy, e.w] for t, e in result.estimates]
@@ -307,7 +307,7 @@ def _replay_all(args: argparse.Namespace) -> int:
 
     check_distinct([("--csv", args.csv), ("--commands-csv", args.commands_csv)], [("FILE.mcap", args.file)])
     if args.commands_csv:
-        from omnibot.cliargs import check_writable
+        from omnibot.outputs import check_writable
 
         check_writable(args.commands_csv, "--commands-csv")
     status = _replay(args, run)
@@ -370,8 +370,8 @@ def _xyw(twist: Twist | None) -> list[object]:
 
 
 def _recover(args: argparse.Namespace) -> int:
-    from omnibot.cliargs import check_writable
     from omnibot.logs.recover import recover
+    from omnibot.outputs import check_writable
 
     check_writable(args.out, "-o")
     result = recover(args.file, args.out, force=args.force)

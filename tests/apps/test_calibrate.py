@@ -12,7 +12,7 @@ from typing import Any
 
 import pytest
 
-from omnibot.calibration import cli as calibration_cli
+from omnibot.apps import calibrate as calibration_cli
 from omnibot.calibration.calfile import load_calibration, merge_calibration, parse_calibration
 from omnibot.calibration.perturb import ACCEPTANCE, parse_perturbation, perturbed_robot
 from omnibot.cli import main
@@ -188,7 +188,7 @@ def test_a_real_robot_is_asked_onto_the_stand_and_back() -> None:
 
 @pytest.mark.timeout(600)  # CPU-bound, deterministic: 87 s beside two busy loops
 def test_a_port_with_two_floors_asks_between_them(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    from omnibot.calibration.cli import run
+    from omnibot.apps.calibrate import run
     from omnibot.cli import build_parser
 
     prompts: list[str] = []
@@ -278,7 +278,7 @@ def test_yes_runs_unattended_on_a_port(
 
 
 def test_the_terminal_ending_is_a_clear_error(monkeypatch: pytest.MonkeyPatch) -> None:
-    from omnibot.calibration.cli import terminal_ask
+    from omnibot.apps.calibrate import terminal_ask
 
     monkeypatch.setattr(sys, "stdin", NotATerminal())
     with pytest.raises(ConfigError, match="standard input ended while asking: 'Put the robot on lab'"):

@@ -27,13 +27,13 @@ from omnibot.cliargs import (
     check_distinct,
     check_plot,
     check_sim_options,
-    check_writable,
     seed_of,
     sim_robot,
     use_calibration,
     world_of,
 )
 from omnibot.errors import ConfigError
+from omnibot.outputs import check_writable
 
 
 def _positive(value: float, flag: str) -> float:

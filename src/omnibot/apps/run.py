@@ -30,9 +30,9 @@ PAD_PRIORITY = 200
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Declare ``omnibot run``'s options (the robot options shared with every command, then its own)."""
+    from omnibot.apps.dashboard import add_server_options
     from omnibot.cliargs import add_calibration_option, add_robot_options, add_wheel_loop_option
     from omnibot.ros2.command import add_bridge_options
-    from omnibot.web.command import add_server_options
 
     add_robot_options(
         p,
@@ -129,16 +129,16 @@ def compose(
 ) -> Parts:
     """Add the pad and the follower to ``runtime`` (any thread: before it runs); ``say`` tells the
     command's status lines."""
+    from omnibot.apps.teleop import open_source
     from omnibot.estimation.estimator import make_estimator
     from omnibot.motion import Pose2D
+    from omnibot.navigation.following import FOLLOWER_PRIORITY, follower_source
     from omnibot.navigation.judge import FollowJudge
     from omnibot.navigation.runner import STANDSTILL
-    from omnibot.runtime.following import FOLLOWER_PRIORITY, follower_source
     from omnibot.runtime.sinks import EstimatorWhenMissing, NoticePrinter, SpeedReport
     from omnibot.runtime.sources import PadSource
     from omnibot.runtime.stall import StallWatch
     from omnibot.runtime.standstill import Standstill
-    from omnibot.teleop.command import open_source
     from omnibot.teleop.mapping import TwistLimits
 
     parts = Parts()
@@ -322,10 +322,10 @@ def _stop_pad(runtime: Any, parts: Parts, config: Any) -> None:
 
 
 def _with_dashboard(args: argparse.Namespace, url: str, config: Any, path: Any) -> Parts:
+    from omnibot.apps.dashboard import server_options
     from omnibot.cliargs import use_calibration
     from omnibot.navigation.webteach import PathTeacher
     from omnibot.robot.description import RobotDescription
-    from omnibot.web.command import server_options
     from omnibot.web.dashboard import Dashboard
 
     server = server_options(args)

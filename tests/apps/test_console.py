@@ -9,16 +9,15 @@ from pathlib import Path
 
 import pytest
 
+from omnibot.apps.console import format_event, run_console
 from omnibot.cli import main
 from omnibot.client import ErrorEvent, RangeEvent, ResetEvent, Telemetry, Unexpected, WarnEvent
 from omnibot.client.views import Hello
-from omnibot.console import format_event, run_console
 from omnibot.protocol import codes
 from omnibot.protocol.messages import Malformed
 from omnibot.protocol.messages import Telemetry as TelMessage
 from omnibot.transport import LockstepLink, register_scheme, unregister_scheme
-
-from .fakes import Silent
+from tests.client.fakes import Silent
 
 
 def test_send_prints_replies_and_events(capsys: pytest.CaptureFixture[str]) -> None:

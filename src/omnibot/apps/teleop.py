@@ -13,6 +13,7 @@ from collections.abc import Callable
 from typing import Any
 
 from omnibot.errors import ConfigError
+from omnibot.extras import missing_extra
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -48,8 +49,10 @@ def open_source(args: argparse.Namespace, config: Any, say: Callable[[str], None
         from omnibot.teleop.joystick import JoystickSource
 
         pad = JoystickSource(config, on_message=say)
-    except ImportError as exc:  # pragma: no cover - pygame is a dependency
-        raise ConfigError(f"joystick input needs pygame: {exc}", key="--joystick") from None
+    except ImportError as exc:  # pygame is the teleop extra
+        raise ConfigError(
+            missing_extra(exc) or f"joystick input needs pygame: {exc}", key="--joystick"
+        ) from None
     if args.joystick or pad.attached:
         if not pad.attached:
             say("no joystick attached yet: plug one in (the robot stays still until then)")
@@ -65,11 +68,11 @@ def open_source(args: argparse.Namespace, config: Any, say: Callable[[str], None
 def run(args: argparse.Namespace) -> int:
     """Run ``omnibot teleop`` for ``--duration`` s or until the user quits, then print what was sent;
     0 (Ctrl-C is raised again after the summary)."""
+    from omnibot.apps.teleop_loop import Teleop
     from omnibot.cliargs import check_sim_options, sim_url, use_calibration
     from omnibot.client.session import robot_session
     from omnibot.teleop.config import load_teleop_config
     from omnibot.teleop.keyboard import HELP
-    from omnibot.teleop.loop import Teleop
     from omnibot.transport.device import find_device
 
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):

@@ -11,10 +11,10 @@ from collections.abc import Iterator
 
 import pytest
 
+from omnibot.apps.teleop_loop import Teleop
 from omnibot.client import EventRecorder, IdleEvent, RobotClient
 from omnibot.teleop.config import TeleopConfig
 from omnibot.teleop.deadman import Why
-from omnibot.teleop.loop import Teleop
 from omnibot.teleop.pacing import Pacer
 from tests.teleop.fakes import FakeWall, ScriptedSource, seed_pad, truth
 

@@ -1,0 +1,237 @@
+"""Packaging as users install it: the core alone (``pip install omnibot``) does what the core promises,
+and a command whose extra is missing says which ``pip install 'omnibot[...]'`` to run (exit 2).
+
+The wheel test builds omnibot's wheel and installs it with the core dependencies only into a fresh
+venv (benchmarks/core_install.py, at constraints.txt's versions: pip's cache or the network); it is
+marked ``install`` (``-m 'not install'`` leaves it out) and runs in ``make test``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+from benchmarks.core_install import CONSTRAINTS, CORE_IMPORT, ROOT, build_wheel, clean_env, install_venv
+
+from omnibot.extras import EXTRA_OF, WHAT, missing_extra
+
+PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+EXTRAS: dict[str, list[str]] = PYPROJECT["project"]["optional-dependencies"]
+CORE_DISTRIBUTIONS = {"numpy", "pydantic", "pyyaml", "pyserial", "tqdm"}
+"""The core's own dependencies (pydantic brings a few more of its own)."""
+
+USER_EXTRAS = ("sim", "plots", "web", "teleop", "logs", "ros2", "slam")
+
+
+def _name(requirement: str) -> str:
+    """The distribution of a requirement string (``"numba>=0.68,<1"`` -> ``"numba"``), lower case."""
+    for stop in "<>=!~[;@ ":
+        requirement = requirement.split(stop, maxsplit=1)[0]
+    return requirement.strip().lower().replace("_", "-")
+
+
+def _pins() -> dict[str, str]:
+    lines = CONSTRAINTS.read_text(encoding="utf-8").splitlines()
+    pairs = (line.split("==") for line in lines if line and not line.startswith("#"))
+    return {_name(name): version for name, version in pairs}
+
+
+# --------------------------------------------------------------------------- pyproject and constraints
+
+
+def test_the_core_depends_on_the_core_only() -> None:
+    assert {_name(r) for r in PYPROJECT["project"]["dependencies"]} == CORE_DISTRIBUTIONS
+
+
+def test_every_user_extra_exists_and_all_gathers_them() -> None:
+    assert set(USER_EXTRAS) <= set(EXTRAS)
+    (everything,) = EXTRAS["all"]
+    assert everything.startswith("omnibot[") and everything.endswith("]")
+    assert sorted(everything[len("omnibot[") : -1].split(",")) == sorted(USER_EXTRAS)
+    assert set(WHAT) == set(USER_EXTRAS)
+
+
+@pytest.mark.parametrize(
+    "requirement", [*PYPROJECT["project"]["dependencies"], *(r for extra in EXTRAS.values() for r in extra)]
+)
+def test_requirements_are_ranges_and_constraints_pin_them(requirement: str) -> None:
+    """``>=x.y,<next`` in pyproject; the exact version in constraints.txt, inside the range."""
+    if requirement.startswith("omnibot["):
+        return
+    assert "==" not in requirement and ">=" in requirement and "<" in requirement, requirement
+    name = _name(requirement)
+    pinned = _pins().get(name)
+    assert pinned is not None, f"{name} is not pinned in constraints.txt"
+    spec = requirement[requirement.index(">=") :]
+    low, high = (part.strip().lstrip(">=<").strip() for part in spec.split(","))
+    assert _version(low) <= _version(pinned) < _version(high), f"{name}=={pinned} outside {spec}"
+
+
+def _version(text: str) -> tuple[int, ...]:
+    return tuple(int("".join(c for c in part if c.isdigit()) or 0) for part in text.split("."))
+
+
+def test_every_optional_module_has_an_extra_that_installs_it() -> None:
+    """omnibot.extras.EXTRA_OF names an extra whose requirements hold that module's distribution."""
+    distribution = {
+        "PIL": "pillow",
+        "yaml": "pyyaml",
+        "rplidar": "rplidar-roboticia",
+    }
+    for module, extra in EXTRA_OF.items():
+        if module in ("llvmlite", "starlette"):  # numba's and fastapi's own dependencies
+            continue
+        assert distribution.get(module, module.lower()) in {_name(r) for r in EXTRAS[extra]}, module
+
+
+# --------------------------------------------------------------------------- the missing-extra error
+
+
+def test_missing_extra_names_the_extra() -> None:
+    line = missing_extra(ModuleNotFoundError("No module named 'numba'", name="numba"))
+    assert line is not None and "pip install 'omnibot[sim]'" in line
+    line = missing_extra(ModuleNotFoundError("No module named 'PIL.Image'", name="PIL.Image"))
+    assert line is not None and "pip install 'omnibot[slam]'" in line
+
+
+def test_other_import_errors_are_not_a_missing_extra() -> None:
+    assert missing_extra(ModuleNotFoundError("No module named 'omnibot.nope'", name="omnibot.nope")) is None
+    assert missing_extra(ImportError("cannot import name 'x' from 'numba'", name="numba")) is None
+    assert missing_extra(ValueError("numba")) is None
+
+
+HIDE = """
+import importlib.abc, json, sys
+HIDDEN = set(sys.argv[1].split(","))
+class Hide(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, path, target=None):
+        if name.split(".")[0] in HIDDEN:
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+        return None
+sys.meta_path.insert(0, Hide())
+for module in HIDDEN:
+    sys.modules.pop(module, None)
+from omnibot.cli import main
+results = []
+for line in json.loads(sys.argv[2]):
+    try:
+        status = main(line)
+    except SystemExit as exc:
+        status = exc.code
+    results.append(status)
+print(json.dumps(results))
+"""
+"""A child that cannot import the HIDDEN modules runs ``omnibot`` command lines in turn."""
+
+
+def _hidden(modules: list[str], lines: list[list[str]], tmp_path: Path) -> tuple[list[int], str]:
+    done = subprocess.run(
+        [sys.executable, "-c", HIDE, ",".join(modules), json.dumps(lines)],
+        capture_output=True,
+        text=True,
+        check=False,
+        cwd=tmp_path,
+        env={**clean_env(), "PYTHONPATH": f"{ROOT / 'src'}", "SDL_VIDEODRIVER": "dummy", "MPLBACKEND": "Agg"},
+        timeout=120,
+    )
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout.splitlines()[-1]), done.stderr
+
+
+def test_a_command_without_its_extra_says_what_to_install(tmp_path: Path) -> None:
+    """Declared (``log``), started (``demo``, ``sim``) or deep in a run (``dashboard`` on sim://): one
+    line naming the extra, status 2, no traceback."""
+    lines = [
+        ["log", "--help"],
+        ["demo", "--out", str(tmp_path)],
+        ["sim", "--pty"],
+        ["dashboard", "--port", "sim://", "--duration", "0.1"],
+        ["teleop", "--port", "sim://", "--joystick", "--duration", "0.1"],
+    ]
+    statuses, stderr = _hidden(sorted(EXTRA_OF), lines, tmp_path)
+    assert statuses == [2] * len(lines), stderr
+    assert "Traceback" not in stderr
+    said = [line for line in stderr.splitlines() if "pip install 'omnibot[" in line]
+    assert len(said) == len(lines), stderr
+    for extra, line in zip(("logs", "sim", "sim", "sim", "teleop"), said, strict=True):
+        assert f"pip install 'omnibot[{extra}]'" in line, line
+
+
+def test_every_command_declares_its_options_without_any_extra(tmp_path: Path) -> None:
+    """``omnibot CMD --help`` needs at most CMD's own extra: with all hidden, each prints its help
+    (0) or the missing-extra line (2), never a traceback."""
+    from omnibot.cli import build_parser
+
+    (sub,) = (a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    commands = sorted(sub.choices)
+    statuses, stderr = _hidden(sorted(EXTRA_OF), [[c, "--help"] for c in commands], tmp_path)
+    assert "Traceback" not in stderr
+    needs = {c for c, status in zip(commands, statuses, strict=True) if status != 0}
+    assert needs == {"log", "record", "follow"}, stderr  # logs; the simulator (their options' defaults)
+    assert statuses.count(2) == stderr.count("pip install 'omnibot[") == len(needs), stderr
+
+
+# --------------------------------------------------------------------------- the core install
+
+
+@pytest.fixture(scope="module")
+def core_python(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    work = tmp_path_factory.mktemp("core")
+    return install_venv(build_wheel(work / "dist"), work / "venv")
+
+
+def _in_core(python: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [str(a) for a in args],
+        capture_output=True,
+        text=True,
+        check=False,
+        cwd=python.parent,
+        env={**clean_env(), "SDL_VIDEODRIVER": "dummy"},
+        timeout=120,
+    )
+
+
+@pytest.mark.install
+@pytest.mark.timeout(600)
+def test_the_core_install_holds_the_core_dependencies_only(core_python: Path) -> None:
+    code = (
+        "import importlib.metadata as m; print(sorted(d.metadata['Name'].lower() for d in m.distributions()))"
+    )
+    done = _in_core(core_python, str(core_python), "-c", code)
+    names = {n.replace("_", "-") for n in json.loads(done.stdout.replace("'", '"'))}
+    assert CORE_DISTRIBUTIONS | {"omnibot"} <= names
+    assert not names & {_name(r) for extra in USER_EXTRAS for r in EXTRAS[extra]}
+
+
+@pytest.mark.install
+@pytest.mark.timeout(600)
+def test_the_core_imports_the_client_and_loads_no_extra(core_python: Path) -> None:
+    code = f"{CORE_IMPORT}; import omnibot, sys; print(omnibot.__file__); print(sorted(sys.modules))"
+    done = _in_core(core_python, str(core_python), "-c", code)
+    assert done.returncode == 0, done.stderr
+    where, loaded = done.stdout.splitlines()
+    assert str(core_python.parents[1]) in where  # the installed wheel, not this checkout
+    assert not {m.split(".")[0] for m in json.loads(loaded.replace("'", '"'))} & set(EXTRA_OF)
+
+
+@pytest.mark.install
+@pytest.mark.timeout(600)
+def test_the_core_command_line(core_python: Path) -> None:
+    omnibot = core_python.parent / "omnibot"
+    done = _in_core(core_python, str(omnibot), "--help")
+    assert done.returncode == 0 and "COMMAND" in done.stdout, done.stderr
+    done = _in_core(core_python, str(omnibot), "robot", "list")
+    assert done.returncode == 0 and "omni4" in done.stdout, done.stderr
+    done = _in_core(core_python, str(omnibot), "robot", "urdf", "mecanum4")
+    assert done.returncode == 0 and "<robot" in done.stdout, done.stderr
+    done = _in_core(core_python, str(omnibot), "demo")
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip().splitlines() == [
+        "omnibot: error: " + str(missing_extra(ModuleNotFoundError(name="numba")))
+    ]
