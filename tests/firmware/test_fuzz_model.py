@@ -137,7 +137,7 @@ def limits(keyword: str, p: list[int]) -> int:
     if keyword == "TELEM":
         return 27 if p[0] != 0 and not 10 <= p[0] <= 30000 else 39 if p[1] & ~255 else 0
     if keyword == "MODE":
-        return 39 if p[0] & ~15 or (p[0] & 2 and not ENCODERS) else 0
+        return 39 if p[0] & ~codes.MODE_MASK or (p[0] & 2 and not ENCODERS) else 0
     if keyword == "HELLO":
         return 39 if p and not set(p) & set(codes.VERSIONS) else 0
     return 0
