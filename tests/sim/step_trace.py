@@ -62,7 +62,7 @@ def single_robot() -> dict[str, Any]:
             rows.append(
                 _bits([*sim.pose_array, *sim._twist_row, *sim.wheel_speeds, sim.gyro_rate(), *sonars])
                 + [str(c) for c in sim.encoder_counts()]
-                + [sim.physics.surfaces[i].name for i in sim._ids[0]]
+                + sim.wheel_surfaces
             )
     events = [_event(e) for e in sim.collisions]
     return {"rows": rows, "events": events, "scans": scans}
