@@ -224,18 +224,22 @@ class Fleet:
         bodies = self._order
         if len(bodies) < 2:
             return []
-        poses = [b.pose_row.tolist() for b in bodies]
-        widest = max(b.reach for b in bodies)
-        order = sorted(range(len(bodies)), key=lambda k: poses[k][0])
+        rows = [b.pose_row.tolist() for b in bodies]
+        reach = [b.reach for b in bodies]
+        widest = max(reach)
+        keyed = sorted((row[0], k) for k, row in enumerate(rows))
         pairs = []
-        for a, i in enumerate(order):
-            xi, yi = poses[i][0], poses[i][1]
-            limit = bodies[i].reach + widest
-            for j in order[a + 1 :]:
-                dx = poses[j][0] - xi
+        for a in range(len(keyed) - 1):
+            xi, i = keyed[a]
+            limit = reach[i] + widest
+            if keyed[a + 1][0] - xi > limit:
+                continue
+            yi = rows[i][1]
+            for xj, j in keyed[a + 1 :]:
+                dx = xj - xi
                 if dx > limit:
                     break
-                dy, r = poses[j][1] - yi, bodies[i].reach + bodies[j].reach + 1e-9
+                dy, r = rows[j][1] - yi, reach[i] + reach[j] + 1e-9
                 if dx * dx + dy * dy < r * r:
                     pairs.append((i, j) if i < j else (j, i))
         pairs.sort()
