@@ -99,7 +99,7 @@ def _secant(fmax: float, inv_eps: float, x: float) -> tuple[float, float]:
     return fmax * th, fmax * inv_eps * ratio
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _robot_physics(
     i: int,
     pose: FloatArray,
