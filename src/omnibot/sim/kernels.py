@@ -1,10 +1,23 @@
-"""Compiled (numba) kernels of the simulator: the physics step, the world's contact geometry and the
-laser scanner's ray casting.
+"""Compiled (numba) kernels of the simulator: the physics step, the world's contact geometry, the
+sensors, one robot's whole step, and the laser scanner's ray casting.
 
-The equations live here once; :mod:`omnibot.sim.physics` and :mod:`omnibot.sim.world` hold the
-parameters and state as numpy arrays and call these kernels with them. Every kernel loops over
-plain scalars and writes into arrays its caller preallocated, so one call costs about a
-microsecond for one robot and scales linearly with the number of robots.
+The equations live here once; :mod:`omnibot.sim.physics`, :mod:`omnibot.sim.world`,
+:mod:`omnibot.sim.sensors` and :mod:`omnibot.sim.simulator` hold the parameters and state as numpy
+arrays and call these kernels with them. Every kernel loops over plain scalars and writes into
+arrays its caller preallocated, so one call costs about a microsecond for one robot and scales
+linearly with the number of robots.
+
+* :func:`physics_step` advances n robots; :func:`physics_step_parallel` (``Physics.run``, the batch
+  API) does the same for many steps with the robots shared out among numba's threads;
+* :func:`robot_step` is one :class:`~omnibot.sim.simulator.Simulator` step whole: surfaces,
+  contacts and their forces, extra forces, the physics, the gyro and tracking wheels. Its state
+  comes packed, as numba's dispatch costs about 0.1 us per array argument: the physics' arrays are
+  views of one buffer (:func:`physics_offsets`), the world's geometry two (:func:`world_offsets`),
+  the simulator's state two (the ``F_`` and ``I_`` headers, :func:`sim_offsets`), the gyro's and
+  the tracking wheels' state one each (``G_`` and ``T_`` columns) and their normal draws one each;
+  :func:`robot_before` and :func:`robot_after` are its parts around a physics of another kind;
+* :func:`cone_distance` is a sonar's range, :func:`outline_contacts` the contact test,
+  :func:`surface_probe` the floor lookup, ``scan_*`` the laser scanner.
 
 Kernels compile lazily on their first call and are cached on disk (``cache=True``, next to this
 file or in ``NUMBA_CACHE_DIR``), so a new process loads them instead of compiling. Callers always
@@ -1274,14 +1287,17 @@ def warm_up_calls() -> list[tuple[Any, Callable[[], object]]]:
 
 
 def warm_up(every: bool = True) -> None:
-    """Compile every kernel of :data:`KERNELS` now (only the :data:`SIMULATOR_KERNELS` with
-    ``every`` False), or load it from the disk cache, with the argument types the simulator passes.
-    About a second per kernel on the first run of a fresh install (:func:`robot_step`, which
-    compiles the physics, contacts and sensors with it, takes most), milliseconds once the cache is
-    filled."""
+    """Compile every kernel of :data:`KERNELS` and :func:`physics_step_parallel` now (only the
+    :data:`SIMULATOR_KERNELS` with ``every`` False), or load it from the disk cache, with the
+    argument types the simulator passes. About a second per kernel on the first run of a fresh
+    install (:func:`robot_step`, which compiles the physics, contacts and sensors with it, takes
+    most), milliseconds once the cache is filled."""
     for kernel, call in warm_up_calls():
         if every or kernel in SIMULATOR_KERNELS:
             call()
+    if every:  # the batch's kernel too (no surface: it returns before it moves anything)
+        buf = np.zeros(physics_offsets.py_func(1, 1, 0)[-1])
+        physics_step_parallel(buf, np.zeros((1, 1), dtype=np.int64), 1, 1, 0, False, 0.001, 0)
 
 
 __all__ = [
