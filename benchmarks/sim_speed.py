@@ -9,7 +9,12 @@ numbers are not. Results go in BENCHMARKS.md.
   collisions, encoders, gyro and a sonar pinged every 60 ms. The robot drives into the cabinet
   after about 3 s and keeps pushing against it, so most steps run the full contact test.
 * IR-SIM: one kinematic omni robot, headless, no obstacles (:mod:`benchmarks.irsim_baseline`).
-* omnibot batch: :class:`~omnibot.sim.physics.Physics` with N = 1000 robots (robot-steps/s).
+* omnibot batch: :class:`~omnibot.sim.physics.Physics` with N = 1000 robots: :meth:`Physics.run`
+  (the batch API, every core: robot-steps/s with 1 thread and with all) and, for comparison,
+  :meth:`Physics.step` called once per step (one core).
+* fleet: a :class:`~omnibot.sim.fleet.Fleet` of k = 1, 2, 4, 8 omni4 robots in the room, each with
+  its firmware driving a MOVE and pinging its sonar every 60 ms; CPU time (of the stepping thread)
+  per fleet step, best of 5; measured before the batch, whose threads may stay busy after it.
 * kernel start-up (skip with ``--no-startup``): seconds from a fresh interpreter's first import of
   the simulator to the end of its first step, with an empty numba cache (every kernel compiled) and
   with the cache this run filled (kernels loaded from disk); numba's import is included.
@@ -19,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import subprocess
 import sys
@@ -51,18 +57,56 @@ def omnibot_single_steps_per_second(steps: int = 20000, repeats: int = 3) -> flo
     return best
 
 
-def omnibot_batch_robot_steps_per_second(n: int = 1000, steps: int = 500, repeats: int = 3) -> float:
+def omnibot_batch_robot_steps_per_second(
+    n: int = 1000, steps: int = 500, repeats: int = 3, threads: int | None = None
+) -> float:
+    """Robot-steps/s of a batch of ``n`` omni4: :meth:`Physics.run` on ``threads`` threads (all
+    cores when None), or :meth:`Physics.step` once per step with ``threads`` 0."""
+    import numba
+
     robot = load_robot("omni4")
     physics = Physics(robot, n=n)
     rng = np.random.default_rng(0)
     pwm = rng.integers(-255, 256, size=(n, robot.n_wheels))
     physics.step(pwm)
+    physics.run(pwm, 1)  # compile (or load) both kernels outside the timing
+    cores = numba.get_num_threads()
+    numba.set_num_threads(threads or cores)
     best = 0.0
+    try:
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            if threads == 0:
+                for _ in range(steps):
+                    physics.step(pwm)
+            else:
+                physics.run(pwm, steps)
+            best = max(best, n * steps / (time.perf_counter() - t0))
+    finally:
+        numba.set_num_threads(cores)
+    return best
+
+
+def fleet_step_seconds(k: int, steps: int = 1500, repeats: int = 5) -> float:
+    """CPU s per step of a fleet of ``k`` omni4 in the room (firmware, MOVE, sonar every 60 ms)."""
+    from omnibot.motion import Pose2D
+    from omnibot.sim.fleet import Fleet
+    from omnibot.sim.world import load_world
+
+    fleet = Fleet(load_world("room"))
+    for i in range(k):
+        pose = Pose2D(0.6 + 1.2 * (i % 4), 0.5 if i < 4 else 3.5, 0.0)
+        device = fleet.add(f"r{i}", "omni4", seed=i, pose=pose)
+        device.command("SONAR,1,60,1,500,0;")  # RANGE every 60 ms while something is within 5 m
+        device.command("MOVE,100,40,0,0;")
+    for _ in range(100):
+        fleet.step()
+    best = math.inf
     for _ in range(repeats):
-        t0 = time.perf_counter()
-        for _ in range(steps):
-            physics.step(pwm)
-        best = max(best, n * steps / (time.perf_counter() - t0))
+        t0 = time.thread_time()  # this thread's CPU: not the batch's numba threads, should they spin
+        for _ in range(steps // repeats):
+            fleet.step()
+        best = min(best, (time.thread_time() - t0) / (steps // repeats))
     return best
 
 
@@ -95,12 +139,19 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     ours = omnibot_single_steps_per_second()
     theirs = irsim_steps_per_second()
+    fleet = {k: fleet_step_seconds(k) for k in (1, 2, 4, 8)}
+    batch_step = omnibot_batch_robot_steps_per_second(threads=0)
+    batch_one = omnibot_batch_robot_steps_per_second(threads=1)
     batch = omnibot_batch_robot_steps_per_second()
     result: dict[str, float | None] = {
         "omnibot_single_steps_per_s": round(ours),
         "irsim_steps_per_s": round(theirs) if theirs else None,
         "ratio": round(ours / theirs, 2) if theirs else None,
+        "omnibot_batch_1000_step_robot_steps_per_s": round(batch_step),
+        "omnibot_batch_1000_run_1_thread_robot_steps_per_s": round(batch_one),
         "omnibot_batch_1000_robot_steps_per_s": round(batch),
+        **{f"fleet_{k}_step_us": round(t * 1e6, 1) for k, t in fleet.items()},
+        "fleet_8_over_1": round(fleet[8] / fleet[1], 2),
     }
     if not args.no_startup:
         result["startup_cold_s"] = round(kernel_startup_seconds(cold=True), 2)
@@ -111,10 +162,16 @@ def main(argv: list[str] | None = None) -> int:
         print(f"omnibot, one robot, full dynamics + sensors: {ours:12,.0f} steps/s")
         if theirs:
             print(f"IR-SIM 2.12, one kinematic omni robot:       {theirs:12,.0f} steps/s")
-            print(f"ratio omnibot / IR-SIM:                      {ours / theirs:12.2f}  (goal >= 3)")
+            print(f"ratio omnibot / IR-SIM:                      {ours / theirs:12.2f}  (goal >= 10)")
         else:
             print("IR-SIM is not installed (make setup installs it); no ratio")
-        print(f"omnibot, batch of 1000 robots:               {batch:12,.0f} robot-steps/s")
+        print(f"omnibot, batch of 1000, Physics.step:        {batch_step:12,.0f} robot-steps/s")
+        print(f"omnibot, batch of 1000, Physics.run, 1 core: {batch_one:12,.0f} robot-steps/s")
+        print(f"omnibot, batch of 1000, Physics.run, all:    {batch:12,.0f} robot-steps/s")
+        for k, t in fleet.items():
+            print(
+                f"fleet of {k} with sonars, per step:           {t * 1e6:12.1f} us  ({t / fleet[1]:.2f} x one)"
+            )
         if not args.no_startup:
             print(
                 f"start-up to the first step (import + kernels): {result['startup_cold_s']:.2f} s with an "

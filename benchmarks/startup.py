@@ -15,11 +15,16 @@ wall time on the shared machine moves with its load (wall time is printed too):
 
 "cold" points ``NUMBA_CACHE_DIR`` at an empty directory (every kernel a run needs is compiled);
 "warm" at the directory the cold run filled.
+
+``--kernels`` instead prints where a cold start's time goes: each kernel of
+:data:`omnibot.sim.kernels.KERNELS` compiled in turn (in that order: the helpers a kernel shares
+with one before it are compiled already) in a fresh interpreter with an empty cache, CPU s each.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import resource
 import select
@@ -124,6 +129,31 @@ def measure(src: Path, repeats: int) -> dict[str, str]:
     return out
 
 
+_KERNEL_TIMES = """
+import json, time
+from omnibot.sim import kernels
+times = []
+for kernel, call in kernels.warm_up_calls():
+    t0 = time.process_time()
+    call()
+    times.append((kernel.__name__, time.process_time() - t0))
+print(json.dumps(times))
+"""
+
+
+def kernel_compile_cpu(src: Path) -> list[tuple[str, float]]:
+    """(kernel, CPU s) of compiling each kernel in turn with an empty cache, in a fresh interpreter."""
+    with tempfile.TemporaryDirectory(prefix="numba-cache-") as cache:
+        out = subprocess.run(
+            [sys.executable, "-c", _KERNEL_TIMES],
+            env=_env(src, cache),
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+    return [(str(name), float(t)) for name, t in json.loads(out.stdout.splitlines()[-1])]
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
@@ -135,8 +165,18 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--repeats", type=int, default=3, help="fresh processes per case, best taken (default 3)"
     )
+    parser.add_argument("--kernels", action="store_true", help="CPU s to compile each kernel, cold")
     args = parser.parse_args(argv)
     sources = args.src or [ROOT / "src"]
+    if args.kernels:
+        for src in sources:
+            times = kernel_compile_cpu(src.resolve())
+            print(
+                f"{src}: "
+                + ", ".join(f"{name} {t:.2f}" for name, t in times)
+                + f"; total {sum(t for _, t in times):.2f} s"
+            )
+        return 0
     results = {str(src): measure(src.resolve(), args.repeats) for src in sources}
     for case in next(iter(results.values())):
         print(f"{case:36s} " + " | ".join(r[case] for r in results.values()))

@@ -222,7 +222,7 @@ def test_a_first_start_with_no_numba_cache_answers_the_first_hello(tmp_path: Pat
             path = proc.stdout.readline().strip()
             assert path.startswith("/dev/"), proc.stderr.read() if proc.stderr else ""
             compiled = {p.name.split("-")[0] for p in cache.rglob("*.nbi")}
-            assert {"kernels.physics_step", "kernels.outline_contacts"} <= compiled
+            assert {"kernels.robot_step", "kernels.outline_contacts"} <= compiled
             # in time: compiling once the path is out took the kernels' 30 s; a loaded machine may
             # take a second or two to answer
             with RobotClient.open(path, timeout=10.0) as client:

@@ -4,20 +4,24 @@ its own thread, runs in lockstep and deterministically."""
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import math
 import threading
 from collections.abc import Iterator
 
+import numpy as np
 import pytest
 
 from omnibot.client import RobotClient
 from omnibot.errors import ConfigError
-from omnibot.motion import Twist
+from omnibot.motion import Pose2D, Twist
 from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.runtime import Runtime
 from omnibot.runtime.sources import ScriptSource
+from omnibot.sim.fleet import Fleet
 from omnibot.sim.fleet_link import FleetLink, open_fleets
+from omnibot.sim.world import load_world
 from omnibot.transport.url import open_link
 
 from .linkio import read_until
@@ -214,3 +218,29 @@ def test_a_driver_that_stops_waiting_is_let_go_and_time_moves_on(
         assert b.driver is None and a.driver is not None
         b.clock.sleep(0.01)  # it drives b again when it waits again
         assert b.driver is threading.current_thread()
+
+
+def test_the_contact_sweep_finds_every_pair_whose_bounding_circles_meet() -> None:
+    """Sweep and prune along x gives the pairs a test of every pair gives, in step order."""
+    fleet = Fleet(load_world("empty"))
+    rng = np.random.default_rng(8)
+    while len(fleet) < 14:
+        x, y, th = rng.uniform(-1.2, 1.2), rng.uniform(-0.8, 0.8), rng.uniform(-3, 3)
+        with contextlib.suppress(ConfigError):  # overlaps one already there
+            fleet.add(
+                f"r{len(fleet):02d}", "omni3" if len(fleet) % 3 == 0 else "omni4", pose=Pose2D(x, y, th)
+            )
+    bodies = fleet._order
+
+    def every_pair() -> list[tuple[int, int]]:
+        return [
+            (i, j)
+            for i, j in itertools.combinations(range(len(bodies)), 2)
+            if math.dist(bodies[i].pose_row[:2], bodies[j].pose_row[:2]) < bodies[i].reach + bodies[j].reach
+        ]
+
+    before = every_pair()
+    assert fleet._near_pairs() == before and len(before) >= 3
+    for body in bodies[::2]:
+        body.sim.physics.pose[0, :2] += 0.3  # some robots moved (not stepped: only the sweep is tested)
+    assert fleet._near_pairs() == every_pair() != before

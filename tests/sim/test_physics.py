@@ -472,3 +472,50 @@ def test_the_step_kernel_compiles_once_whatever_the_inputs() -> None:
         ph.step(np.full((n, 4), 100, dtype=np.int64), surface_ids=[1, 0, 1, 0], external_force=(1, 0, 0))
         ph.step(np.float32(50.0), surface_ids=np.ones((n, 4)), external_force=np.zeros((n, 3)))
     assert len(kernels.physics_step.signatures) == 1
+
+
+# --------------------------------------------------------------------------- batch
+
+
+def _batch(n: int, **battery: Any) -> Physics:
+    robots = [load_robot("omni4"), load_robot("omni4").model_copy(update={"mass": 2.3})]
+    if battery:
+        robots = [r.model_copy(update={"battery": r.battery.model_copy(update=battery)}) for r in robots]
+    return Physics([robots[i % 2] for i in range(n)], surfaces=("wood", "carpet"))
+
+
+def test_run_is_step_repeated_bit_for_bit_on_every_core() -> None:
+    rng = np.random.default_rng(4)
+    n = 37  # not a whole number of the kernel's chunks of robots
+    pwm = rng.integers(-255, 256, size=(n, 4))
+    ids = rng.integers(0, 2, size=(n, 4))
+    force = rng.normal(0.0, 2.0, size=(n, 3))
+    batch, single = _batch(n), _batch(n)
+    batch.run(pwm, 150, surface_ids=ids, external_force=force)
+    for _ in range(150):
+        single.step(pwm, ids, force)
+    for name in ("pose", "twist", "wheel_angle", "wheel_speed", "motor_current", "battery_voltage"):
+        assert np.array_equal(getattr(batch, name), getattr(single, name)), name
+    assert batch.time == single.time == pytest.approx(0.15)
+    assert len(np.unique(batch.pose[:, 0])) > n // 2  # the robots went their own ways
+    batch.run(pwm, 0)
+    assert batch.time == pytest.approx(0.15)
+
+
+def test_run_drains_a_battery_with_a_charge_step_by_step() -> None:
+    pwm = np.full((3, 4), 200)
+    batch, single = _batch(3, charge=0.5, capacity_ah=0.001), _batch(3, charge=0.5, capacity_ah=0.001)
+    batch.run(pwm, 200)
+    for _ in range(200):
+        single.step(pwm)
+    assert np.array_equal(batch.battery_charge, single.battery_charge)
+    assert (batch.battery_charge < 0.5).all() and np.array_equal(batch.pose, single.pose)
+
+
+def test_run_refuses_bad_input() -> None:
+    batch = _batch(2)
+    with pytest.raises(SimulationError, match="steps must be >= 0"):
+        batch.run(np.zeros((2, 4)), -1)
+    with pytest.raises(SimulationError, match="must index the 2 surfaces"):
+        batch.run(np.zeros((2, 4)), 3, surface_ids=np.full((2, 4), 2))
+    assert batch.time == 0.0 and not batch.pose.any()

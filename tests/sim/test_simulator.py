@@ -98,6 +98,18 @@ def test_start_pose_from_world_and_argument(omni4) -> None:
 
 def test_surface_ids_follow_the_patches(omni4, backend) -> None:
     sim = Simulator(omni4, world="room", start_pose=(2.5, 3.0, 0.0), physics_factory=backend)
+    sim.step()
+    # m1 at +x (2.596) is on the carpet (x >= 2.5), m3 at -x (2.404) is on wood, m2/m4 on the edge x=2.5
+    assert sim.wheel_surfaces[0] == "carpet" and sim.wheel_surfaces[2] == "wood"
+    sim.physics.reset(pose=(4.0, 3.0, 0.0))
+    sim.step()
+    assert sim.wheel_surfaces == ["carpet"] * 4
+
+
+def test_the_physics_gets_the_surfaces_under_the_wheels() -> None:
+    """A physics of another kind is stepped with the surface ids the compiled part found."""
+    omni4 = load_robot("omni4")
+    sim = Simulator(omni4, world="room", start_pose=(2.5, 3.0, 0.0), physics_factory=FakePhysics)
     names = [s.name for s in sim.physics.surfaces]
     seen: list[list[str]] = []
     original = sim.physics.step
@@ -108,11 +120,7 @@ def test_surface_ids_follow_the_patches(omni4, backend) -> None:
 
     sim.physics.step = spy  # type: ignore[method-assign]
     sim.step()
-    # m1 at +x (2.596) is on the carpet (x >= 2.5), m3 at -x (2.404) is on wood, m2/m4 on the edge x=2.5
-    assert seen[-1][0] == "carpet" and seen[-1][2] == "wood"
-    sim.physics.reset(pose=(4.0, 3.0, 0.0))
-    sim.step()
-    assert seen[-1] == ["carpet"] * 4
+    assert seen == [sim.wheel_surfaces] and seen[0][0] == "carpet" and seen[0][2] == "wood"
 
 
 def test_floor_override(omni4) -> None:
@@ -330,27 +338,20 @@ def test_cached_surfaces_and_contacts_equal_a_full_test_every_step(omni4) -> Non
     sim = Simulator(omni4, world="room", start_pose=(2.0, 2.5, 0.3))
     world, ph = sim.world, sim.physics
     outline = convex_hull(omni4.footprint.outline())
-    names = [s.name for s in ph.surfaces]
-    original = ph.step
     surfaces_seen: set[tuple[str, ...]] = set()
     steps_touching = []
-
-    def spy(pwm, surface_ids=None, external_force=None):
-        x, y, th = ph.pose[0]
-        expect = world.surface_ids(ph.contact_points_world()[0])
-        got = [names[i] for i in np.asarray(surface_ids).reshape(-1)]
-        assert got == [world.surface_names[i] for i in expect]
-        c, s = math.cos(th), math.sin(th)
-        contacts = world.contacts(outline @ np.array([[c, s], [-s, c]]) + (x, y))
-        assert [k.owner for k in sim.contacts] == [k.owner for k in contacts]
-        assert [k.depth for k in sim.contacts] == pytest.approx([k.depth for k in contacts], abs=1e-12)
-        surfaces_seen.add(tuple(got))
-        steps_touching.append(bool(contacts))
-        original(pwm, surface_ids, external_force)
-
-    ph.step = spy  # type: ignore[method-assign]
     for twist in [(0.6, 0.3, 0.5), (0.2, -0.8, -1.0), (-0.7, 0.2, 2.0)]:
         sim.set_pwm(pwm_for(omni4, twist, peak=220))
-        sim.advance(2.0)
+        for _ in range(2000):
+            x, y, th = ph.pose[0]
+            expect = world.surface_ids(ph.contact_points_world()[0])
+            c, s = math.cos(th), math.sin(th)
+            contacts = world.contacts(outline @ np.array([[c, s], [-s, c]]) + (x, y))
+            sim.step()  # tests the pose it started from
+            assert sim.wheel_surfaces == [world.surface_names[i] for i in expect]
+            assert [k.owner for k in sim.contacts] == [k.owner for k in contacts]
+            assert [k.depth for k in sim.contacts] == pytest.approx([k.depth for k in contacts], abs=1e-12)
+            surfaces_seen.add(tuple(sim.wheel_surfaces))
+            steps_touching.append(bool(contacts))
     assert len(surfaces_seen) > 2  # wood, carpet and wheels on both
     assert sum(steps_touching) > 100 and sim.collisions

@@ -80,7 +80,9 @@ def run_pty_emulator(
         stop.set()
 
     try:
-        kernels.warm_up()  # compile before announcing the pty: a first step must not stall the link
+        kernels.warm_up(
+            every=False
+        )  # compile before announcing the pty: a first step must not stall the link
         sim_device = SimDevice(robot, seed=seed, surface=surface, world=world, truth_recorder=recorder)
         device: Any = sim_device if wrap is None else wrap(sim_device)
         lidar = scanner_device(sim_device.sim, sim_device.tick)
@@ -254,7 +256,7 @@ def run_pty_fleet(
     def _on_signal(signum: int, frame: FrameType | None) -> None:
         stop.set()
 
-    kernels.warm_up()
+    kernels.warm_up(every=False)
     bridges: list[PtyBridge] = []
     lidars: list[tuple[str, RplidarDevice]] = []
     try:

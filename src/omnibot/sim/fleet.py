@@ -3,8 +3,9 @@
 ::
 
     Fleet.step():  every robot's firmware polls (sonar pings see the others where they stand now)
-                   -> robot-robot contacts (each pair whose bounding circles meet: separating axes,
-                      the same kernel as the walls) -> equal and opposite penalty forces
+                   -> robot-robot contacts (the pairs whose bounding circles meet, found by sweep
+                      and prune along x: about one comparison per robot; then separating axes, the
+                      same kernel as the walls) -> equal and opposite penalty forces
                    -> every robot's physics steps (its walls, its pushes, those forces) -> clock += dt
                    -> while a scanner is on, every 5 ms: every robot's pose into one pose log; the
                       scanners due cast their rays (each ray sees the others where they were then)
@@ -68,6 +69,8 @@ class _Body:
     reach: float
     """Largest distance from the robot's origin to its footprint, m (the bounding circle)."""
     offsets: NDArray[np.int64]
+    pose_row: FloatArray
+    """The live true pose (x, y, theta), a read-only view."""
 
     @property
     def sim(self) -> Simulator:
@@ -170,6 +173,7 @@ class Fleet:
             outline,
             float(np.max(np.hypot(outline[:, 0], outline[:, 1]))),
             np.array([0, len(outline)]),
+            device.sim.pose_array,
         )
         for other in self._order:
             if self._pair_contact(body, other) is not None:
@@ -202,14 +206,44 @@ class Fleet:
         bodies = self._order
         for body in bodies:
             body.device.control()
-        for i, a in enumerate(bodies):
-            for b in bodies[i + 1 :]:
-                self._push_apart(a, b)
+        for i, j in self._near_pairs():
+            self._push_apart(bodies[i], bodies[j])
         for body in bodies:
             body.sim.step()
         self._us += self._dt_us
         if self._scanning and self._us >= self._scan_next_us:
             self._scan_step()
+
+    def _near_pairs(self) -> list[tuple[int, int]]:
+        """The pairs (i < j, in step order) of robots whose bounding circles may meet, sorted.
+
+        Sweep and prune along x: robots sorted by x, each compared only with those after it within
+        its reach plus the largest reach, so a fleet spread over a room costs about one comparison
+        per robot instead of one per pair. Conservative: :meth:`_pair_contact` makes the exact test.
+        """
+        bodies = self._order
+        if len(bodies) < 2:
+            return []
+        rows = [b.pose_row.tolist() for b in bodies]
+        reach = [b.reach for b in bodies]
+        widest = max(reach)
+        keyed = sorted((row[0], k) for k, row in enumerate(rows))
+        pairs = []
+        for a in range(len(keyed) - 1):
+            xi, i = keyed[a]
+            limit = reach[i] + widest
+            if keyed[a + 1][0] - xi > limit:
+                continue
+            yi = rows[i][1]
+            for xj, j in keyed[a + 1 :]:
+                dx = xj - xi
+                if dx > limit:
+                    break
+                dy, r = rows[j][1] - yi, reach[i] + reach[j] + 1e-9
+                if dx * dx + dy * dy < r * r:
+                    pairs.append((i, j) if i < j else (j, i))
+        pairs.sort()
+        return pairs
 
     # ------------------------------------------------------------------ laser scanners
 

@@ -1,10 +1,23 @@
-"""Compiled (numba) kernels of the simulator: the physics step, the world's contact geometry and the
-laser scanner's ray casting.
+"""Compiled (numba) kernels of the simulator: the physics step, the world's contact geometry, the
+sensors, one robot's whole step, and the laser scanner's ray casting.
 
-The equations live here once; :mod:`omnibot.sim.physics` and :mod:`omnibot.sim.world` hold the
-parameters and state as numpy arrays and call these kernels with them. Every kernel loops over
-plain scalars and writes into arrays its caller preallocated, so one call costs about a
-microsecond for one robot and scales linearly with the number of robots.
+The equations live here once; :mod:`omnibot.sim.physics`, :mod:`omnibot.sim.world`,
+:mod:`omnibot.sim.sensors` and :mod:`omnibot.sim.simulator` hold the parameters and state as numpy
+arrays and call these kernels with them. Every kernel loops over plain scalars and writes into
+arrays its caller preallocated, so one call costs about a microsecond for one robot and scales
+linearly with the number of robots.
+
+* :func:`physics_step` advances n robots; :func:`physics_step_parallel` (``Physics.run``, the batch
+  API) does the same for many steps with the robots shared out among numba's threads;
+* :func:`robot_step` is one :class:`~omnibot.sim.simulator.Simulator` step whole: surfaces,
+  contacts and their forces, extra forces, the physics, the gyro and tracking wheels. Its state
+  comes packed, as numba's dispatch costs about 0.1 us per array argument: the physics' arrays are
+  views of one buffer (:func:`physics_offsets`), the world's geometry two (:func:`world_offsets`),
+  the simulator's state two (the ``F_`` and ``I_`` headers, :func:`sim_offsets`), the gyro's and
+  the tracking wheels' state one each (``G_`` and ``T_`` columns) and their normal draws one each;
+  :func:`robot_before` and :func:`robot_after` are its parts around a physics of another kind;
+* :func:`cone_distance` is a sonar's range, :func:`outline_contacts` the contact test,
+  :func:`surface_probe` the floor lookup, ``scan_*`` the laser scanner.
 
 Kernels compile lazily on their first call and are cached on disk (``cache=True``, next to this
 file or in ``NUMBA_CACHE_DIR``), so a new process loads them instead of compiling. Callers always
@@ -25,9 +38,11 @@ Parameter layouts (column indices below are compile-time constants):
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
@@ -97,6 +112,148 @@ def _secant(fmax: float, inv_eps: float, x: float) -> tuple[float, float]:
     return fmax * th, fmax * inv_eps * ratio
 
 
+@njit(cache=True, inline="always")
+def _robot_physics(
+    i: int,
+    pose: FloatArray,
+    q: FloatArray,
+    wheel_angle: FloatArray,
+    current: FloatArray,
+    traction: FloatArray,
+    battery: FloatArray,
+    v_open: FloatArray,
+    pwm: FloatArray,
+    ids: IntArray,
+    ext: FloatArray,
+    has_ext: bool,
+    wp: FloatArray,
+    rp: FloatArray,
+    surf: FloatArray,
+    dt: float,
+    scratch: FloatArray,
+) -> None:
+    """Advance robot i by dt in place (the body of :func:`physics_step`)."""
+    m = wheel_angle.shape[1]
+    vx, vy, w = q[i, 0], q[i, 1], q[i, 2]
+    r = rp[i]
+    v_bus = battery[i, 0]
+    v_bus = v_bus + r[R_BATT_RELAX] * (v_open[i] - r[R_BATT_RES] * battery[i, 1] - v_bus)
+    v_bus = max(v_bus, 0.0)
+    s00, s11, s22 = r[R_M_DT], r[R_M_DT], r[R_I_DT]
+    s01 = s02 = s12 = 0.0
+    r0 = r1 = r2 = 0.0
+    i_batt = 0.0
+    for j in range(m):
+        p = wp[i, j]
+        omega = q[i, 3 + j]
+        # driver and motor: current, and whether it follows the back-EMF (not limited)
+        command = pwm[i, j]
+        duty = min(max(command * p[W_INV_PWM_MAX], -1.0), 1.0)
+        i_free = duty * (max(v_bus - p[W_DROP], 0.0) * p[W_INV_RES]) - p[W_KE_RES] * omega
+        i_max = p[W_I_MAX]
+        if abs(command) >= p[W_ON_THRESHOLD]:
+            amps = min(max(i_free, -i_max), i_max)
+            emf = p[W_EMF_DAMPING] if abs(i_free) < i_max else 0.0
+        else:
+            amps, emf = 0.0, 0.0
+        # friction on the three contact rows: traction slip, roller rolling, axle
+        sid = ids[i, j]
+        inv_veps = surf[sid, S_INV_VEPS]
+        roll_max = (p[W_RR_TOP] - p[W_RR_VAR] * math.cos(p[W_ROLLER_COUNT] * wheel_angle[i, j])) * (
+            surf[sid, S_ROLL] * p[W_LOAD]
+        )
+        slip, roll = _contact_speeds(wp, i, j, vx, vy, w, omega)
+        ft, kt = _secant(surf[sid, S_MU] * p[W_GRIP_LOAD], inv_veps, slip * inv_veps)
+        fn, kn = _secant(roll_max, _INV_ROLL_EPS, roll * _INV_ROLL_EPS)
+        fa, ka = _secant(p[W_STATIC], _INV_WHEEL_EPS, omega * _INV_WHEEL_EPS)
+        # combined rolling and driving: viscous scrub on both rolling directions, weighted by
+        # sin(2 beta) of the contact's direction (0 when the wheel or its rollers stand still)
+        rim = p[W_RADIUS] * omega
+        both = rim * rim + roll * roll
+        if p[W_SCRUB_LOAD] > 0.0 and both > 1e-12:
+            scrub = p[W_SCRUB_LOAD] * 2.0 * abs(rim) * abs(roll) / both
+            fn += scrub * roll
+            kn += scrub
+            fa += scrub * p[W_RADIUS] * rim
+            ka += scrub * p[W_RADIUS] * p[W_RADIUS]
+        fa -= p[W_KT] * amps - p[W_VISC] * omega  # the motor drives the axle row
+        ka += emf + p[W_VISC]
+        traction[i, j] = -ft
+        current[i, j] = amps
+        i_batt += duty * amps
+        # (M/dt + H^T K H) dq = -H^T f: accumulate, then eliminate this wheel's speed
+        tx, ty, tw, ta = p[W_TX], p[W_TY], p[W_TW], p[W_TA]
+        nx, ny, nw, na = p[W_NX], p[W_NY], p[W_NW], p[W_NA]
+        r0 -= ft * tx + fn * nx
+        r1 -= ft * ty + fn * ny
+        r2 -= ft * tw + fn * nw
+        rw = -(ft * ta + fn * na + fa)
+        s00 += kt * tx * tx + kn * nx * nx
+        s11 += kt * ty * ty + kn * ny * ny
+        s22 += kt * tw * tw + kn * nw * nw
+        s01 += kt * tx * ty + kn * nx * ny
+        s02 += kt * tx * tw + kn * nx * nw
+        s12 += kt * ty * tw + kn * ny * nw
+        c0 = kt * ta * tx + kn * na * nx
+        c1 = kt * ta * ty + kn * na * ny
+        c2 = kt * ta * tw + kn * na * nw
+        inv_d = 1.0 / (p[W_J_DT] + kt * ta * ta + kn * na * na + ka)
+        e0, e1, e2 = c0 * inv_d, c1 * inv_d, c2 * inv_d
+        s00 -= c0 * e0
+        s11 -= c1 * e1
+        s22 -= c2 * e2
+        s01 -= c0 * e1
+        s02 -= c0 * e2
+        s12 -= c1 * e2
+        r0 -= e0 * rw
+        r1 -= e1 * rw
+        r2 -= e2 * rw
+        scratch[j, 0], scratch[j, 1], scratch[j, 2], scratch[j, 3], scratch[j, 4] = e0, e1, e2, inv_d, rw
+    if has_ext:  # world force and torque, into the body frame
+        c, s = math.cos(pose[i, 2]), math.sin(pose[i, 2])
+        r0 += c * ext[i, 0] + s * ext[i, 1]
+        r1 += c * ext[i, 1] - s * ext[i, 0]
+        r2 += ext[i, 2]
+    # 3x3 body system by Cholesky (the Schur complement of an SPD matrix is SPD)
+    l00 = math.sqrt(s00)
+    l10, l20 = s01 / l00, s02 / l00
+    l11 = math.sqrt(s11 - l10 * l10)
+    l21 = (s12 - l20 * l10) / l11
+    l22 = math.sqrt(s22 - l20 * l20 - l21 * l21)
+    y0 = r0 / l00
+    y1 = (r1 - l10 * y0) / l11
+    y2 = (r2 - l20 * y0 - l21 * y1) / l22
+    dw = y2 / l22
+    dvy = (y1 - l21 * dw) / l11
+    dvx = (y0 - l10 * dvy - l20 * dw) / l00
+    for j in range(m):
+        sc = scratch[j]
+        q[i, 3 + j] += sc[4] * sc[3] - sc[0] * dvx - sc[1] * dvy - sc[2] * dw
+    vx, vy, w = vx + dvx, vy + dvy, w + dw
+    # body-frame rotation of the velocity by -w dt, pose at the mid-step heading, wheel angles
+    c, s = math.cos(w * dt), math.sin(w * dt)
+    vx, vy = vx * c + vy * s, vy * c - vx * s
+    q[i, 0], q[i, 1], q[i, 2] = vx, vy, w
+    heading = pose[i, 2] + 0.5 * dt * w
+    c, s = math.cos(heading), math.sin(heading)
+    pose[i, 0] += (c * vx - s * vy) * dt
+    pose[i, 1] += (s * vx + c * vy) * dt
+    pose[i, 2] += dt * w
+    for j in range(m):
+        wheel_angle[i, j] += dt * q[i, 3 + j]
+    battery[i, 0] = v_bus
+    battery[i, 1] = i_batt
+
+
+@njit(cache=True)
+def _ids_valid(ids: IntArray, n_surf: int) -> bool:
+    for i in range(ids.shape[0]):
+        for j in range(ids.shape[1]):
+            if ids[i, j] < 0 or ids[i, j] >= n_surf:
+                return False
+    return True
+
+
 @njit(cache=True)
 def physics_step(
     pose: FloatArray,
@@ -123,124 +280,90 @@ def physics_step(
     Cholesky, then the wheel speeds are substituted back; exact, in O(m) per robot.
     Returns 0, or 1 (state untouched) if a surface id is out of range.
     """
-    n, m = wheel_angle.shape
-    n_surf = surf.shape[0]
-    for i in range(n):
-        for j in range(m):
-            if ids[i, j] < 0 or ids[i, j] >= n_surf:
-                return 1
-    scratch = np.empty((m, 5))  # per wheel: coupling c / d (3), 1 / d, right-hand side
-    for i in range(n):
-        vx, vy, w = q[i, 0], q[i, 1], q[i, 2]
-        r = rp[i]
-        v_bus = battery[i, 0]
-        v_bus = v_bus + r[R_BATT_RELAX] * (v_open[i] - r[R_BATT_RES] * battery[i, 1] - v_bus)
-        v_bus = max(v_bus, 0.0)
-        s00, s11, s22 = r[R_M_DT], r[R_M_DT], r[R_I_DT]
-        s01 = s02 = s12 = 0.0
-        r0 = r1 = r2 = 0.0
-        i_batt = 0.0
-        for j in range(m):
-            p = wp[i, j]
-            omega = q[i, 3 + j]
-            # driver and motor: current, and whether it follows the back-EMF (not limited)
-            command = pwm[i, j]
-            duty = min(max(command * p[W_INV_PWM_MAX], -1.0), 1.0)
-            i_free = duty * (max(v_bus - p[W_DROP], 0.0) * p[W_INV_RES]) - p[W_KE_RES] * omega
-            i_max = p[W_I_MAX]
-            if abs(command) >= p[W_ON_THRESHOLD]:
-                amps = min(max(i_free, -i_max), i_max)
-                emf = p[W_EMF_DAMPING] if abs(i_free) < i_max else 0.0
-            else:
-                amps, emf = 0.0, 0.0
-            # friction on the three contact rows: traction slip, roller rolling, axle
-            sid = ids[i, j]
-            inv_veps = surf[sid, S_INV_VEPS]
-            roll_max = (p[W_RR_TOP] - p[W_RR_VAR] * math.cos(p[W_ROLLER_COUNT] * wheel_angle[i, j])) * (
-                surf[sid, S_ROLL] * p[W_LOAD]
-            )
-            slip, roll = _contact_speeds(wp, i, j, vx, vy, w, omega)
-            ft, kt = _secant(surf[sid, S_MU] * p[W_GRIP_LOAD], inv_veps, slip * inv_veps)
-            fn, kn = _secant(roll_max, _INV_ROLL_EPS, roll * _INV_ROLL_EPS)
-            fa, ka = _secant(p[W_STATIC], _INV_WHEEL_EPS, omega * _INV_WHEEL_EPS)
-            # combined rolling and driving: viscous scrub on both rolling directions, weighted by
-            # sin(2 beta) of the contact's direction (0 when the wheel or its rollers stand still)
-            rim = p[W_RADIUS] * omega
-            both = rim * rim + roll * roll
-            if p[W_SCRUB_LOAD] > 0.0 and both > 1e-12:
-                scrub = p[W_SCRUB_LOAD] * 2.0 * abs(rim) * abs(roll) / both
-                fn += scrub * roll
-                kn += scrub
-                fa += scrub * p[W_RADIUS] * rim
-                ka += scrub * p[W_RADIUS] * p[W_RADIUS]
-            fa -= p[W_KT] * amps - p[W_VISC] * omega  # the motor drives the axle row
-            ka += emf + p[W_VISC]
-            traction[i, j] = -ft
-            current[i, j] = amps
-            i_batt += duty * amps
-            # (M/dt + H^T K H) dq = -H^T f: accumulate, then eliminate this wheel's speed
-            tx, ty, tw, ta = p[W_TX], p[W_TY], p[W_TW], p[W_TA]
-            nx, ny, nw, na = p[W_NX], p[W_NY], p[W_NW], p[W_NA]
-            r0 -= ft * tx + fn * nx
-            r1 -= ft * ty + fn * ny
-            r2 -= ft * tw + fn * nw
-            rw = -(ft * ta + fn * na + fa)
-            s00 += kt * tx * tx + kn * nx * nx
-            s11 += kt * ty * ty + kn * ny * ny
-            s22 += kt * tw * tw + kn * nw * nw
-            s01 += kt * tx * ty + kn * nx * ny
-            s02 += kt * tx * tw + kn * nx * nw
-            s12 += kt * ty * tw + kn * ny * nw
-            c0 = kt * ta * tx + kn * na * nx
-            c1 = kt * ta * ty + kn * na * ny
-            c2 = kt * ta * tw + kn * na * nw
-            inv_d = 1.0 / (p[W_J_DT] + kt * ta * ta + kn * na * na + ka)
-            e0, e1, e2 = c0 * inv_d, c1 * inv_d, c2 * inv_d
-            s00 -= c0 * e0
-            s11 -= c1 * e1
-            s22 -= c2 * e2
-            s01 -= c0 * e1
-            s02 -= c0 * e2
-            s12 -= c1 * e2
-            r0 -= e0 * rw
-            r1 -= e1 * rw
-            r2 -= e2 * rw
-            scratch[j, 0], scratch[j, 1], scratch[j, 2], scratch[j, 3], scratch[j, 4] = e0, e1, e2, inv_d, rw
-        if has_ext:  # world force and torque, into the body frame
-            c, s = math.cos(pose[i, 2]), math.sin(pose[i, 2])
-            r0 += c * ext[i, 0] + s * ext[i, 1]
-            r1 += c * ext[i, 1] - s * ext[i, 0]
-            r2 += ext[i, 2]
-        # 3x3 body system by Cholesky (the Schur complement of an SPD matrix is SPD)
-        l00 = math.sqrt(s00)
-        l10, l20 = s01 / l00, s02 / l00
-        l11 = math.sqrt(s11 - l10 * l10)
-        l21 = (s12 - l20 * l10) / l11
-        l22 = math.sqrt(s22 - l20 * l20 - l21 * l21)
-        y0 = r0 / l00
-        y1 = (r1 - l10 * y0) / l11
-        y2 = (r2 - l20 * y0 - l21 * y1) / l22
-        dw = y2 / l22
-        dvy = (y1 - l21 * dw) / l11
-        dvx = (y0 - l10 * dvy - l20 * dw) / l00
-        for j in range(m):
-            sc = scratch[j]
-            q[i, 3 + j] += sc[4] * sc[3] - sc[0] * dvx - sc[1] * dvy - sc[2] * dw
-        vx, vy, w = vx + dvx, vy + dvy, w + dw
-        # body-frame rotation of the velocity by -w dt, pose at the mid-step heading, wheel angles
-        c, s = math.cos(w * dt), math.sin(w * dt)
-        vx, vy = vx * c + vy * s, vy * c - vx * s
-        q[i, 0], q[i, 1], q[i, 2] = vx, vy, w
-        heading = pose[i, 2] + 0.5 * dt * w
-        c, s = math.cos(heading), math.sin(heading)
-        pose[i, 0] += (c * vx - s * vy) * dt
-        pose[i, 1] += (s * vx + c * vy) * dt
-        pose[i, 2] += dt * w
-        for j in range(m):
-            wheel_angle[i, j] += dt * q[i, 3 + j]
-        battery[i, 0] = v_bus
-        battery[i, 1] = i_batt
+    if not _ids_valid(ids, surf.shape[0]):
+        return 1
+    scratch = np.empty((wheel_angle.shape[1], 5))  # per wheel: coupling c / d (3), 1 / d, right-hand side
+    for i in range(wheel_angle.shape[0]):
+        _robot_physics(
+            i, pose, q, wheel_angle, current, traction, battery, v_open, pwm, ids, ext, has_ext, wp, rp, surf, dt,
+            scratch,
+        )  # fmt: skip
     return 0
+
+
+@njit(cache=True, parallel=True)
+def physics_step_parallel(
+    buf: FloatArray, ids: IntArray, n: int, m: int, n_surf: int, has_ext: bool, dt: float, steps: int
+) -> int:
+    """:func:`physics_step` ``steps`` times on a physics state packed in ``buf``
+    (:func:`physics_views`), the robots shared out among numba's threads.
+
+    Each robot is advanced ``steps`` steps in a row by one thread (its state stays in that core's
+    cache); robots are independent, so the result is the same as ``steps`` calls of
+    :func:`physics_step`, bit for bit, whatever the number of threads.
+    """
+    pose, q, wheel_angle, current, traction, battery, v_open, pwm, ext, wp, rp, surf = physics_views(
+        buf, n, m, n_surf
+    )
+    if not _ids_valid(ids, n_surf):
+        return 1
+    chunk = 16  # robots per task: few enough tasks to keep the threads' overhead small
+    for c in prange((n + chunk - 1) // chunk):
+        scratch = np.empty((m, 5))
+        for i in range(c * chunk, min(n, (c + 1) * chunk)):
+            for _ in range(steps):
+                _robot_physics(
+                    i, pose, q, wheel_angle, current, traction, battery, v_open, pwm, ids, ext, has_ext, wp, rp,
+                    surf, dt, scratch,
+                )  # fmt: skip
+    return 0
+
+
+@njit(cache=True)
+def physics_offsets(
+    n: int, m: int, n_surf: int
+) -> tuple[int, int, int, int, int, int, int, int, int, int, int, int, int]:
+    """Where each array of a physics state packed in one float64 buffer starts (and its size, last):
+    pose (n, 3), q (n, 3 + m), wheel_angle, current, traction (n, m), battery (n, 2), v_open (n,),
+    pwm (n, m), ext (n, 3), wp (n, m, W_COLUMNS), rp (n, R_COLUMNS), surf (n_surf, S_COLUMNS)."""
+    o0 = 0
+    o1 = o0 + 3 * n
+    o2 = o1 + (3 + m) * n
+    o3 = o2 + n * m
+    o4 = o3 + n * m
+    o5 = o4 + n * m
+    o6 = o5 + 2 * n
+    o7 = o6 + n
+    o8 = o7 + n * m
+    o9 = o8 + 3 * n
+    o10 = o9 + n * m * W_COLUMNS
+    o11 = o10 + n * R_COLUMNS
+    return o0, o1, o2, o3, o4, o5, o6, o7, o8, o9, o10, o11, o11 + n_surf * S_COLUMNS
+
+
+@njit(cache=True)
+def physics_views(
+    buf: FloatArray, n: int, m: int, n_surf: int
+) -> tuple[
+    FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray,
+    FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray,
+]:  # fmt: skip
+    """The arrays of a packed physics state (:func:`physics_offsets`) as views of ``buf``."""
+    o = physics_offsets(n, m, n_surf)
+    return (
+        buf[o[0] : o[1]].reshape((n, 3)),
+        buf[o[1] : o[2]].reshape((n, 3 + m)),
+        buf[o[2] : o[3]].reshape((n, m)),
+        buf[o[3] : o[4]].reshape((n, m)),
+        buf[o[4] : o[5]].reshape((n, m)),
+        buf[o[5] : o[6]].reshape((n, 2)),
+        buf[o[6] : o[7]],
+        buf[o[7] : o[8]].reshape((n, m)),
+        buf[o[8] : o[9]].reshape((n, 3)),
+        buf[o[9] : o[10]].reshape((n, m, W_COLUMNS)),
+        buf[o[10] : o[11]].reshape((n, R_COLUMNS)),
+        buf[o[11] : o[12]].reshape((n_surf, S_COLUMNS)),
+    )
 
 
 @njit(cache=True)
@@ -496,6 +619,379 @@ def outline_contacts(
     return kept, clearance
 
 
+@njit(cache=True)
+def cone_distance(
+    segments: FloatArray, x: float, y: float, heading: float, cone: float, max_range: float
+) -> float:
+    """Distance from (x, y) to the nearest point of any edge ``(K, 4)`` within ``heading +- cone/2``
+    (inf if none within max_range; cone in (0, pi)): each edge clipped to the cone, then its point
+    nearest the apex taken (:func:`omnibot.sim.world.cone_range`)."""
+    half = cone / 2
+    r0, r1 = math.cos(heading - half), math.sin(heading - half)
+    l0, l1 = math.cos(heading + half), math.sin(heading + half)
+    best = np.inf
+    for k in range(segments.shape[0]):
+        ax, ay = segments[k, 0] - x, segments[k, 1] - y
+        ex, ey = segments[k, 2] - segments[k, 0], segments[k, 3] - segments[k, 1]
+        lo, hi = 0.0, 1.0
+        # inside the cone: cross(r, p) >= 0 and cross(p, left) >= 0, each linear in t along the edge
+        for side in range(2):
+            if side == 0:
+                f0, f1 = r0 * ay - r1 * ax, r0 * ey - r1 * ex
+            else:
+                f0, f1 = ax * l1 - ay * l0, ex * l1 - ey * l0
+            if f1 > 1e-15:
+                lo = max(lo, -f0 / f1)
+            elif f1 < -1e-15:
+                hi = min(hi, -f0 / f1)
+            elif f0 < 0:
+                hi = -1.0
+        if not lo <= hi:
+            continue
+        ee = ex * ex + ey * ey
+        t = -(ax * ex + ay * ey) / ee if ee > 0 else 0.0
+        t = min(max(t, lo), max(lo, hi))
+        best = min(best, math.hypot(ax + t * ex, ay + t * ey))
+    return best if best <= max_range else np.inf
+
+
+# --------------------------------------------------------------------------- sensors
+
+# gyro state columns (one float64 array per gyro)
+G_BIAS, G_SCALE, G_SIGMA, G_WALK, G_DUE, G_PERIOD, G_RANGE, G_RESOLUTION = 0, 1, 2, 3, 4, 5, 6, 7
+G_ACC_TIME, G_ACC_ANGLE, G_RATE, G_ANGLE, G_SAMPLES, G_NEXT = 8, 9, 10, 11, 12, 13
+G_COLUMNS = 14
+"""G_NEXT: index of the next unused normal draw in the gyro's block."""
+
+# tracking wheels state: T_SLIP, T_NEXT, then per wheel (ux, uy, px, py, distance)
+T_SLIP, T_NEXT, T_HEADER, T_WHEEL = 0, 1, 2, 5
+
+
+@njit(cache=True)
+def gyro_measure(g: FloatArray, normals: FloatArray, true_rate: float) -> float:
+    """One sample of a (period-averaged) true rate into g (see :class:`omnibot.sim.sensors.Gyro`);
+    normal draws from ``normals`` at g[G_NEXT] on."""
+    k = int(g[G_NEXT])
+    if g[G_WALK] > 0:
+        g[G_BIAS] += g[G_WALK] * normals[k]
+        k += 1
+    noise = 0.0
+    if g[G_SIGMA] > 0:
+        noise = g[G_SIGMA] * normals[k]
+        k += 1
+    g[G_NEXT] = k
+    limit, resolution = g[G_RANGE], g[G_RESOLUTION]
+    value = (1.0 + g[G_SCALE]) * true_rate + g[G_BIAS] + noise
+    value = min(max(value, -limit), limit)
+    if resolution > 0:
+        value = round(value / resolution) * resolution
+        value = min(max(value, -limit), limit)
+    g[G_RATE] = value
+    g[G_ANGLE] += value * g[G_PERIOD]
+    g[G_SAMPLES] += 1.0
+    return float(value)
+
+
+@njit(cache=True)
+def gyro_update(g: FloatArray, normals: FloatArray, dt: float, true_rate: float) -> bool:
+    """Advance the gyro g by dt at true_rate; True if it took at least one sample."""
+    g[G_ACC_TIME] += dt
+    g[G_ACC_ANGLE] += true_rate * dt
+    if g[G_ACC_TIME] < g[G_DUE]:
+        return False
+    while g[G_ACC_TIME] >= g[G_DUE]:
+        mean = g[G_ACC_ANGLE] / g[G_ACC_TIME]
+        g[G_ACC_TIME] -= g[G_PERIOD]
+        g[G_ACC_ANGLE] = mean * g[G_ACC_TIME]
+        gyro_measure(g, normals, mean)
+    return True
+
+
+@njit(cache=True)
+def tracking_update(t: FloatArray, normals: FloatArray, vx: float, vy: float, w: float, dt: float) -> None:
+    """Roll the tracking wheels t for dt at the body twist (see :class:`omnibot.sim.sensors.TrackingWheels`)."""
+    slip_std = t[T_SLIP]
+    k = int(t[T_NEXT])
+    for a in range(T_HEADER, t.shape[0], T_WHEEL):
+        ux, uy, px, py = t[a], t[a + 1], t[a + 2], t[a + 3]
+        step = ((vx - w * py) * ux + (vy + w * px) * uy) * dt
+        if slip_std > 0:
+            step = step * (1.0 + slip_std * normals[k])
+            k += 1
+        t[a + 4] = t[a + 4] + step
+    t[T_NEXT] = k
+
+
+# --------------------------------------------------------------------------- one robot's whole step
+
+# the simulator's float state (sf): header, then outline (V, 2), contact rows (C, 6), contact
+# speeds (C,), wheel positions (m, 2)
+F_MASS, F_INERTIA, F_OMEGA, F_DAMPING, F_WALL_FRICTION = 0, 1, 2, 3, 4
+F_CLEAR_X, F_CLEAR_Y, F_CLEAR = 5, 6, 7
+F_SURF_X, F_SURF_Y, F_SURF_TH, F_SURF_CLEAR, F_REACH = 8, 9, 10, 11, 12
+F_AT_X, F_AT_Y, F_AT_TH = 13, 14, 15
+F_HEADER = 16
+# its int state (si): header, then last touch (us) per world owner, new-collision flags (C,),
+# world surface id -> physics surface id, surface ids of the last probe (m,)
+I_V, I_C, I_M, I_OWNERS, I_SURFACES, I_COUNT, I_WALLS, I_PATCHY, I_RELEASE = 0, 1, 2, 3, 4, 5, 6, 7, 8
+I_HEADER = 9
+NEVER = -(2**62)
+"""A last-touch time meaning 'never touched'."""
+# the world's packed geometry: wf floats solid_v (V, 2), solid_c (K, 2), solid_r (K,), thin_v (2E, 2),
+# patch_v (P, 2); wi ints: the sizes V, K, E, P, Q, then solid_off (K + 1), solid_owner (K),
+# thin_owner (E), patch_off (Q + 1), patch_sid (Q)
+WORLD_HEADER = 5
+
+# robot_step status bits
+STEP_BAD_SURFACE, STEP_COLLISION, STEP_REFILL, STEP_FORCE = 1, 2, 4, 8
+
+
+@njit(cache=True)
+def world_offsets(wi: IntArray) -> tuple[int, int, int, int, int, int, int, int, int, int, int]:
+    """Where each array of a packed world starts: (solid_v, solid_c, solid_r, thin_v, patch_v, end
+    of wf; solid_off, solid_owner, thin_owner, patch_off, patch_sid in wi)."""
+    nv, nk, ne, npv, nq = wi[0], wi[1], wi[2], wi[3], wi[4]
+    f0 = 0
+    f1 = f0 + 2 * nv
+    f2 = f1 + 2 * nk
+    f3 = f2 + nk
+    f4 = f3 + 4 * ne
+    f5 = f4 + 2 * npv
+    i0 = WORLD_HEADER
+    i1 = i0 + nk + 1
+    i2 = i1 + nk
+    i3 = i2 + ne
+    i4 = i3 + nq + 1
+    return f0, f1, f2, f3, f4, f5, i0, i1, i2, i3, i4
+
+
+@njit(cache=True)
+def sim_offsets(si: IntArray) -> tuple[int, int, int, int, int, int, int, int, int, int]:
+    """Where each array of the simulator's state starts: (outline, contact rows, contact speeds,
+    wheel positions, end of sf; last touch, new flags, surface map, probed ids, end of si)."""
+    nv, nc, m = si[I_V], si[I_C], si[I_M]
+    f0 = F_HEADER
+    f1 = f0 + 2 * nv
+    f2 = f1 + 6 * nc
+    f3 = f2 + nc
+    f4 = f3 + 2 * m
+    i0 = I_HEADER
+    i1 = i0 + si[I_OWNERS]
+    i2 = i1 + nc
+    i3 = i2 + si[I_SURFACES]
+    i4 = i3 + m
+    return f0, f1, f2, f3, f4, i0, i1, i2, i3, i4
+
+
+@njit(cache=True)
+def _world_contacts(
+    wf: FloatArray, wi: IntArray, body: FloatArray, x: float, y: float, th: float, out: FloatArray
+) -> tuple[int, float]:
+    f0, f1, f2, f3, f4, _, i0, i1, i2, _, _ = world_offsets(wi)
+    nv, nk, ne = wi[0], wi[1], wi[2]
+    return outline_contacts(
+        body, x, y, th,
+        wf[f0:f1].reshape((nv, 2)), wi[i0:i1], wf[f1:f2].reshape((nk, 2)), wf[f2:f3], wi[i1:i2],
+        wf[f3:f4].reshape((2 * ne, 2)), wi[i2 : i2 + ne], out,
+    )  # fmt: skip
+
+
+@njit(cache=True)
+def _before_physics(
+    x: float,
+    y: float,
+    th: float,
+    vx: float,
+    vy: float,
+    w: float,
+    ids: IntArray,
+    wf: FloatArray,
+    wi: IntArray,
+    sf: FloatArray,
+    si: IntArray,
+    extra: FloatArray,
+    n_extra: int,
+    ext: FloatArray,
+    now_us: int,
+) -> int:
+    """The floor under the wheels into ids (when a wheel may have changed patch) and the world's
+    push-back plus the extra forces into ext[0] (STEP_FORCE set when it is not zero)."""
+    of0, of1, of2, of3, _, oi0, oi1, oi2, oi3, _ = sim_offsets(si)
+    m = si[I_M]
+    status = 0
+    if si[I_PATCHY]:
+        moved = math.hypot(x - sf[F_SURF_X], y - sf[F_SURF_Y]) + abs(th - sf[F_SURF_TH]) * sf[F_REACH]
+        if moved >= sf[F_SURF_CLEAR] - 1e-9:
+            c, s = math.cos(th), math.sin(th)
+            points = np.empty((m, 2))
+            for j in range(m):
+                wx, wy = sf[of3 + 2 * j], sf[of3 + 2 * j + 1]
+                points[j, 0] = x + c * wx - s * wy
+                points[j, 1] = y + s * wx + c * wy
+            _, _, _, _, fp, _, _, _, _, ip, isid = world_offsets(wi)
+            nq = wi[4]
+            local = si[oi3 : oi3 + m]
+            if nq:
+                clearance = surface_probe(
+                    points, wf[fp : fp + 2 * wi[3]].reshape((wi[3], 2)), wi[ip : ip + nq + 1],
+                    wi[isid : isid + nq], local,
+                )  # fmt: skip
+            else:
+                clearance = np.inf
+                local[:] = 0
+            for j in range(m):
+                ids[0, j] = si[oi2 + local[j]]
+            sf[F_SURF_X], sf[F_SURF_Y], sf[F_SURF_TH], sf[F_SURF_CLEAR] = x, y, th, clearance
+    fx = fy = tz = 0.0
+    if si[I_WALLS]:
+        dx, dy = x - sf[F_CLEAR_X], y - sf[F_CLEAR_Y]
+        clear = sf[F_CLEAR]
+        if clear <= 0.0 or dx * dx + dy * dy >= clear * clear:
+            nc = si[I_C]
+            out = sf[of1:of2].reshape((nc, 6))
+            count, clearance = _world_contacts(wf, wi, sf[of0:of1].reshape((si[I_V], 2)), x, y, th, out)
+            sf[F_CLEAR_X], sf[F_CLEAR_Y], sf[F_CLEAR] = x, y, clearance
+            sf[F_AT_X], sf[F_AT_Y], sf[F_AT_TH] = x, y, th
+            si[I_COUNT] = count
+            if count:
+                c, s = math.cos(th), math.sin(th)
+                vwx, vwy = c * vx - s * vy, s * vx + c * vy
+                m_body, inertia, omega = sf[F_MASS], sf[F_INERTIA], sf[F_OMEGA]
+                damping, wall_friction = sf[F_DAMPING], sf[F_WALL_FRICTION]
+                for a in range(count):
+                    px, py, nx, ny, depth = out[a, 0], out[a, 1], out[a, 2], out[a, 3], out[a, 4]
+                    rx, ry = px - x, py - y
+                    pvx, pvy = vwx - w * ry, vwy + w * rx
+                    vn, vt = pvx * nx + pvy * ny, -pvx * ny + pvy * nx
+                    rn = rx * ny - ry * nx
+                    m_eff = 1.0 / (1.0 / m_body + rn * rn / inertia)
+                    fn = max(0.0, m_eff * omega * omega * depth - 2 * damping * m_eff * omega * vn)
+                    ft = -wall_friction * fn * math.tanh(vt / 0.05)
+                    fxa, fya = fn * nx - ft * ny, fn * ny + ft * nx
+                    fx, fy, tz = fx + fxa, fy + fya, tz + (rx * fya - ry * fxa)
+                    sf[of2 + a] = -vn
+                    owner = oi0 + int(out[a, 5])
+                    last = si[owner]
+                    si[owner] = now_us
+                    fresh = last == NEVER or now_us - last > si[I_RELEASE]
+                    si[oi1 + a] = 1 if fresh else 0
+                    if fresh:
+                        status |= STEP_COLLISION
+    for k in range(n_extra):
+        fx, fy, tz = fx + extra[k, 0], fy + extra[k, 1], tz + extra[k, 2]
+    if fx or fy or tz:
+        ext[0, 0], ext[0, 1], ext[0, 2] = fx, fy, tz
+        status |= STEP_FORCE
+    return status
+
+
+@njit(cache=True)
+def _after_physics(
+    vx0: float,
+    vy0: float,
+    w0: float,
+    vx1: float,
+    vy1: float,
+    w1: float,
+    dt: float,
+    gyro: FloatArray,
+    gyro_normals: FloatArray,
+    tracking: FloatArray,
+    tracking_normals: FloatArray,
+) -> int:
+    """The gyro and tracking wheels over a step whose twist went from 0 to 1 (STEP_REFILL when
+    either has fewer normal draws left than two steps may take)."""
+    status = 0
+    if tracking.shape[0] > T_HEADER:
+        tracking_update(tracking, tracking_normals, 0.5 * (vx0 + vx1), 0.5 * (vy0 + vy1), 0.5 * (w0 + w1), dt)
+        if tracking_normals.shape[0] - int(tracking[T_NEXT]) < 2 * (tracking.shape[0] - T_HEADER):
+            status |= STEP_REFILL
+    if gyro.shape[0]:
+        gyro_update(gyro, gyro_normals, dt, 0.5 * (w0 + w1))
+        if gyro_normals.shape[0] - int(gyro[G_NEXT]) < 4 * (int(dt / gyro[G_PERIOD]) + 2):
+            status |= STEP_REFILL
+    return status
+
+
+@njit(cache=True)
+def robot_step(
+    pbuf: FloatArray,
+    ids: IntArray,
+    m: int,
+    n_surf: int,
+    wf: FloatArray,
+    wi: IntArray,
+    sf: FloatArray,
+    si: IntArray,
+    extra: FloatArray,
+    n_extra: int,
+    gyro: FloatArray,
+    gyro_normals: FloatArray,
+    tracking: FloatArray,
+    tracking_normals: FloatArray,
+    now_us: int,
+    dt: float,
+) -> int:
+    """One whole step of one robot alone (a :class:`omnibot.sim.simulator.Simulator`): the floor
+    under its wheels, the push-back of the walls and obstacles it touches plus ``extra`` forces
+    (rows added in order), the physics (state packed in ``pbuf``: :func:`physics_views`), and the
+    gyro and tracking wheels. Returns the STEP_ status bits (STEP_BAD_SURFACE: nothing moved)."""
+    pose, q, wheel_angle, current, traction, battery, v_open, pwm, ext, wp, rp, surf = physics_views(
+        pbuf, 1, m, n_surf
+    )
+    x, y, th = pose[0, 0], pose[0, 1], pose[0, 2]
+    vx0, vy0, w0 = q[0, 0], q[0, 1], q[0, 2]
+    status = _before_physics(x, y, th, vx0, vy0, w0, ids, wf, wi, sf, si, extra, n_extra, ext, now_us)
+    if not _ids_valid(ids, n_surf):
+        return status | STEP_BAD_SURFACE
+    scratch = np.empty((m, 5))
+    has_ext = status & STEP_FORCE != 0
+    _robot_physics(
+        0, pose, q, wheel_angle, current, traction, battery, v_open, pwm, ids, ext, has_ext, wp, rp, surf, dt,
+        scratch,
+    )  # fmt: skip
+    return status | _after_physics(
+        vx0, vy0, w0, q[0, 0], q[0, 1], q[0, 2], dt, gyro, gyro_normals, tracking, tracking_normals
+    )
+
+
+@njit(cache=True)
+def robot_before(
+    state: FloatArray,
+    ids: IntArray,
+    wf: FloatArray,
+    wi: IntArray,
+    sf: FloatArray,
+    si: IntArray,
+    extra: FloatArray,
+    n_extra: int,
+    ext: FloatArray,
+    now_us: int,
+) -> int:
+    """The part of :func:`robot_step` before the physics, for a physics of another kind: ``state``
+    holds the pose and twist (x, y, theta, vx, vy, w) now; the force goes into ext[0]."""
+    return _before_physics(
+        state[0], state[1], state[2], state[3], state[4], state[5], ids, wf, wi, sf, si, extra, n_extra, ext,
+        now_us,
+    )  # fmt: skip
+
+
+@njit(cache=True)
+def robot_after(
+    state: FloatArray,
+    dt: float,
+    gyro: FloatArray,
+    gyro_normals: FloatArray,
+    tracking: FloatArray,
+    tracking_normals: FloatArray,
+) -> int:
+    """The part of :func:`robot_step` after the physics: ``state`` holds the twist before and after."""
+    return _after_physics(
+        state[0], state[1], state[2], state[3], state[4], state[5], dt, gyro, gyro_normals, tracking,
+        tracking_normals,
+    )  # fmt: skip
+
+
 # --------------------------------------------------------------------------- laser scanner
 
 SCAN_BINS = 256
@@ -697,14 +1193,26 @@ def scan_measure(
         out[i] = v if range_min <= v <= range_max else np.inf
 
 
-KERNELS = (physics_step, contact_speeds, surface_probe, outline_contacts, scan_index, scan_rays, scan_measure)
-"""The kernels the simulator calls (the helpers they call compile with them)."""
+SIMULATOR_KERNELS = (
+    outline_contacts,
+    robot_step,
+    cone_distance,
+    scan_index,
+    scan_rays,
+    scan_measure,
+)
+"""The kernels a simulator of one robot calls (the helpers they call compile with them; Python
+calls :func:`physics_offsets` and :func:`sim_offsets` as plain Python, their ``py_func``)."""
+KERNELS = (
+    *SIMULATOR_KERNELS, physics_step, contact_speeds, surface_probe, robot_before, robot_after, gyro_update,
+    gyro_measure, tracking_update,
+)  # fmt: skip
+"""Every serial kernel (:func:`physics_step_parallel`, for batches, compiles on its first call)."""
 
 
-def warm_up() -> None:
-    """Compile every kernel now, or load it from the disk cache, with the argument types the
-    simulator passes (empty or trivial arrays: nothing is computed). About a second per kernel on
-    the first run of a fresh install, milliseconds once the cache is filled."""
+def warm_up_calls() -> list[tuple[Any, Callable[[], object]]]:
+    """(kernel, call) for every kernel in :data:`KERNELS` order: the call compiles (or loads) it with
+    the argument types the simulator passes (empty or trivial arrays: nothing is computed)."""
 
     def f(*shape: int) -> FloatArray:
         return np.zeros(shape)
@@ -712,34 +1220,112 @@ def warm_up() -> None:
     def i(*shape: int) -> IntArray:
         return np.zeros(shape, dtype=np.int64)
 
-    # no surface: the step returns 1 before it touches anything
-    physics_step(
-        f(1, 3), f(1, 4), f(1, 1), f(1, 1), f(1, 1), f(1, 2), f(1), f(1, 1), i(1, 1),
-        f(1, 3), False, f(1, 1, W_COLUMNS), f(1, R_COLUMNS), f(0, S_COLUMNS), 0.001,
-    )  # fmt: skip
-    contact_speeds(f(0, 3), f(0, 0, W_COLUMNS), f(0, 0, 2))
-    surface_probe(f(0, 2), f(0, 2), i(1), i(0), i(0))
     triangle = np.array([[0.1, 0.0], [-0.1, 0.1], [-0.1, -0.1]])
-    outline_contacts(triangle, 0.0, 0.0, 0.0, f(0, 2), i(1), f(0, 2), f(0), i(0), f(0, 2), i(0), f(0, 6))
-    starts, entries, near = scan_index(f(0, 4), 0.0, 0.0, 1.0, 1.0)
-    scan_rays(
-        f(0), f(0), 0.0, 0.001, f(1, 3), 0, 0.0, 0.0, f(0, 4), starts, entries, near, f(0, 2), i(2), 1.0, f(0)
-    )
-    scan_measure(f(0), f(0), 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, f(0))
+    si = i(I_HEADER)
+    si_full = i(int(sim_offsets.py_func(si)[-1]))
+    no_world = i(WORLD_HEADER + 2)
+    index = (i(SCAN_BINS + 1), i(0), f(0))
+    gyro = f(G_COLUMNS)
+    gyro[G_DUE] = gyro[G_PERIOD] = 1.0
+    calls: dict[Any, Callable[[], object]] = {
+        outline_contacts: lambda: outline_contacts(
+            triangle, 0.0, 0.0, 0.0, f(0, 2), i(1), f(0, 2), f(0), i(0), f(0, 2), i(0), f(0, 6)
+        ),
+        # no surface: the step returns STEP_BAD_SURFACE before it moves anything
+        robot_step: lambda: robot_step(
+            f(int(physics_offsets.py_func(1, 1, 0)[-1])),
+            i(1, 1),
+            1,
+            0,
+            f(0),
+            no_world,
+            f(F_HEADER),
+            si_full,
+            f(1, 3),
+            0,
+            f(0),
+            f(0),
+            f(2),
+            f(0),
+            0,
+            0.001,
+        ),
+        cone_distance: lambda: cone_distance(f(0, 4), 0.0, 0.0, 0.0, 0.5, 1.0),
+        scan_index: lambda: scan_index(f(0, 4), 0.0, 0.0, 1.0, 1.0),
+        scan_rays: lambda: scan_rays(
+            f(0), f(0), 0.0, 0.001, f(1, 3), 0, 0.0, 0.0, f(0, 4), *index, f(0, 2), i(2), 1.0, f(0)
+        ),
+        scan_measure: lambda: scan_measure(f(0), f(0), 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, f(0)),
+        physics_step: lambda: physics_step(
+            f(1, 3),
+            f(1, 4),
+            f(1, 1),
+            f(1, 1),
+            f(1, 1),
+            f(1, 2),
+            f(1),
+            f(1, 1),
+            i(1, 1),
+            f(1, 3),
+            False,
+            f(1, 1, W_COLUMNS),
+            f(1, R_COLUMNS),
+            f(0, S_COLUMNS),
+            0.001,
+        ),
+        contact_speeds: lambda: contact_speeds(f(0, 3), f(0, 0, W_COLUMNS), f(0, 0, 2)),
+        surface_probe: lambda: surface_probe(f(0, 2), f(0, 2), i(1), i(0), i(0)),
+        robot_before: lambda: robot_before(
+            f(6), i(1, 1), f(0), no_world, f(F_HEADER), si_full, f(1, 3), 0, f(1, 3), 0
+        ),
+        robot_after: lambda: robot_after(f(6), 0.001, f(0), f(0), f(2), f(0)),
+        gyro_update: lambda: gyro_update(gyro, f(0), 0.0, 0.0),
+        gyro_measure: lambda: gyro_measure(f(G_COLUMNS), f(0), 0.0),
+        tracking_update: lambda: tracking_update(f(T_HEADER), f(0), 0.0, 0.0, 0.0, 0.001),
+    }
+    return [(kernel, calls[kernel]) for kernel in KERNELS]
+
+
+def warm_up(every: bool = True) -> None:
+    """Compile every kernel of :data:`KERNELS` and :func:`physics_step_parallel` now (only the
+    :data:`SIMULATOR_KERNELS` with ``every`` False), or load it from the disk cache, with the
+    argument types the simulator passes. About a second per kernel on the first run of a fresh
+    install (:func:`robot_step`, which compiles the physics, contacts and sensors with it, takes
+    most), milliseconds once the cache is filled."""
+    for kernel, call in warm_up_calls():
+        if every or kernel in SIMULATOR_KERNELS:
+            call()
+    if every:  # the batch's kernel too (no surface: it returns before it moves anything)
+        buf = np.zeros(physics_offsets.py_func(1, 1, 0)[-1])
+        physics_step_parallel(buf, np.zeros((1, 1), dtype=np.int64), 1, 1, 0, False, 0.001, 0)
 
 
 __all__ = [
     "KERNELS",
     "ROLL_SPEED_EPS",
+    "SIMULATOR_KERNELS",
     "WHEEL_SPEED_EPS",
+    "cone_distance",
     "contact_speeds",
+    "gyro_measure",
+    "gyro_update",
     "outline_contacts",
+    "physics_offsets",
     "physics_step",
+    "physics_step_parallel",
+    "physics_views",
+    "robot_after",
+    "robot_before",
+    "robot_step",
     "scan_index",
     "scan_measure",
     "scan_rays",
+    "sim_offsets",
     "surface_probe",
+    "tracking_update",
     "warm_up",
+    "warm_up_calls",
+    "world_offsets",
 ]
 
 

@@ -68,7 +68,10 @@ equals n single runs.
 Implementation: this class holds parameters and state in numpy arrays; one compiled kernel,
 :func:`omnibot.sim.kernels.physics_step`, advances them in place (the matrix above has an arrow
 structure, a dense body block and a diagonal wheel block, so the kernel eliminates the wheels and
-solves a 3x3 system: O(m) per robot, about a microsecond per step for one robot).
+solves a 3x3 system: O(m) per robot, about a microsecond per step for one robot). Its state,
+inputs and parameters are views of one buffer (:attr:`Physics.buffer`), so the simulator's compiled
+step of one robot takes them as one argument. :meth:`Physics.run` is the batch API: many steps of
+many independent robots in one call, the robots shared out among all cores (numba's threads).
 """
 
 from __future__ import annotations
@@ -151,26 +154,27 @@ class Physics:
         self.n, self.m, self.dt = n, m, float(dt)
         self.surfaces: tuple[Surface, ...] = tuple(get_surface(s) for s in surfaces)
 
-        self._pose = np.zeros((n, 3))
-        self._q = np.zeros((n, 3 + m))
-        self._wheel_angle = np.zeros((n, m))
-        self._current = np.zeros((n, m))
-        self._traction = np.zeros((n, m))
-        self._battery = np.zeros((n, 2))  # bus voltage, battery current of the last step
+        # state, inputs and parameters are views of one buffer, so a compiled step of the whole
+        # simulator takes them as one argument (kernels.physics_views)
+        self._buffer = np.zeros(kernels.physics_offsets.py_func(n, m, len(self.surfaces))[-1])
+        (
+            self._pose, self._q, self._wheel_angle, self._current, self._traction, self._battery,
+            self._v_open, self._pwm, self._ext, self._wp, self._rp, self._surf,
+        ) = self._views()  # fmt: skip
+        # self._battery: bus voltage, battery current of the last step
         self._init_parameters()
-        self._v_open = np.array([r.battery.voltage for r in self.robots], dtype=float)
+        self._v_open[:] = [r.battery.voltage for r in self.robots]
         # state of charge: a battery with a ``charge`` runs down with its current (coulomb counting)
         # along its chemistry's open-voltage curve; one without is held at its nominal voltage
         self._drains = np.array([r.battery.charge is not None for r in self.robots], dtype=bool)
         self._charge = np.array([1.0 if r.battery.charge is None else r.battery.charge for r in self.robots])
+        self._draining = bool(self._drains.any())
         self._capacity_as = np.array([r.battery.capacity_ah * 3600.0 for r in self.robots], dtype=float)
         self._set_open_voltage()
         self._battery[:, 0] = self._v_open
         # input buffers: the kernel always gets C-contiguous float64 / int64 arrays (one compilation)
-        self._pwm = np.zeros((n, m))
         self._ids = np.zeros((n, m), dtype=np.int64)
         self._floor = np.zeros((n, m), dtype=np.int64)
-        self._ext = np.zeros((n, 3))
         self._steps = 0
         self._lifted = np.zeros((n, m), dtype=bool)
         self._set_loads()
@@ -221,7 +225,7 @@ class Physics:
         W[..., kernels.W_ROLLER_COUNT] = wp(lambda w: w.rollers.count)
         W[..., kernels.W_RADIUS] = r
         self._scrub = wp(lambda w: w.rollers.combined_drag)
-        self._wp = W
+        self._wp[:] = W
 
         self._mass = rp(lambda rb: rb.mass)
         r_batt = rp(lambda rb: rb.battery.internal_resistance)
@@ -231,13 +235,42 @@ class Physics:
         R[:, kernels.R_BATT_RES] = r_batt
         # relaxing V_bus by 1/(1 + R_batt sum(1/R)) per step keeps the lagged coupling stable for any battery
         R[:, kernels.R_BATT_RELAX] = 1.0 / (1.0 + r_batt * inv_res.sum(axis=1))
-        self._rp = R
+        self._rp[:] = R
 
         S = np.zeros((len(self.surfaces), kernels.S_COLUMNS))
         S[:, kernels.S_MU] = [s.mu for s in self.surfaces]
         S[:, kernels.S_INV_VEPS] = [1.0 / s.slip_velocity for s in self.surfaces]
         S[:, kernels.S_ROLL] = [s.rolling_multiplier for s in self.surfaces]
-        self._surf = S
+        self._surf[:] = S
+
+    def _views(self) -> tuple[FloatArray, ...]:
+        """Numpy views of the packed buffer, in :func:`~omnibot.sim.kernels.physics_offsets` order."""
+        o = kernels.physics_offsets.py_func(self.n, self.m, len(self.surfaces))
+        shapes = [
+            (self.n, 3), (self.n, 3 + self.m), (self.n, self.m), (self.n, self.m), (self.n, self.m), (self.n, 2),
+            (self.n,), (self.n, self.m), (self.n, 3), (self.n, self.m, kernels.W_COLUMNS),
+            (self.n, kernels.R_COLUMNS), (len(self.surfaces), kernels.S_COLUMNS),
+        ]  # fmt: skip
+        return tuple(self._buffer[o[k] : o[k + 1]].reshape(shape) for k, shape in enumerate(shapes))
+
+    @property
+    def pwm(self) -> FloatArray:
+        """(n,m) PWM counts of the next step (what :meth:`step` copies its ``pwm`` into); writable in place."""
+        return self._pwm
+
+    @property
+    def buffer(self) -> FloatArray:
+        """The packed state, inputs and parameters (:func:`~omnibot.sim.kernels.physics_views`)."""
+        return self._buffer
+
+    def count_step(self) -> None:
+        """Account for a step the compiled simulator step made on :attr:`buffer` (time, battery charge)."""
+        self._stepped(0, 1)
+
+    def _drain(self) -> None:
+        q = self._charge - np.where(self._drains, self._battery[:, 1], 0.0) * self.dt / self._capacity_as
+        self._charge[:] = np.clip(q, 0.0, 1.0)
+        self._set_open_voltage()
 
     def _set_loads(self) -> None:
         self._load = static_loads(self._x, self._y, self._mass, self._lifted)
@@ -320,6 +353,7 @@ class Physics:
     def battery_charge(self, value: ArrayLike) -> None:
         self._charge[:] = np.clip(np.asarray(value, dtype=float), 0.0, 1.0)
         self._drains[:] = True
+        self._draining = True
         self._set_open_voltage()
 
     def _set_open_voltage(self) -> None:
@@ -402,6 +436,18 @@ class Physics:
 
     # ------------------------------------------------------------------ dynamics
 
+    def _inputs(
+        self, pwm: ArrayLike, surface_ids: ArrayLike | None, external_force: ArrayLike | None
+    ) -> NDArray[np.int64]:
+        """Copy a step's inputs into the input arrays; the surface ids to step with."""
+        self._pwm[...] = pwm
+        if external_force is not None:
+            self._ext[...] = external_force
+        if surface_ids is None:
+            return self._floor
+        self._ids[...] = surface_ids
+        return self._ids
+
     def step(
         self,
         pwm: ArrayLike,
@@ -414,14 +460,7 @@ class Physics:
         ``surfaces`` for the floor under each wheel (default 0); ``external_force``: (n,3) world
         Fx, Fy (N) and torque about the body origin (N m), e.g. from collisions or a push by hand.
         """
-        self._pwm[...] = pwm
-        if surface_ids is None:
-            ids = self._floor
-        else:
-            ids = self._ids
-            ids[...] = surface_ids
-        if external_force is not None:
-            self._ext[...] = external_force
+        ids = self._inputs(pwm, surface_ids, external_force)
         failed = kernels.physics_step(
             self._pose,
             self._q,
@@ -439,13 +478,47 @@ class Physics:
             self._surf,
             self.dt,
         )
+        self._stepped(failed, 1)
+
+    def run(
+        self,
+        pwm: ArrayLike,
+        steps: int = 1,
+        surface_ids: ArrayLike | None = None,
+        external_force: ArrayLike | None = None,
+    ) -> None:
+        """Advance all robots ``steps`` steps with the same inputs, on every core: the batch API.
+
+        The same as ``steps`` calls of :meth:`step` (bit for bit: each robot's arithmetic is the
+        same, only shared out among numba's threads, each robot stepped ``steps`` times in a row by
+        one thread; ``numba.set_num_threads`` chooses how many). A battery with a ``charge`` is
+        stepped one step per call so its charge follows. The kernel compiles on the first call of a
+        process (numba's threading layer; cached on disk after).
+        """
+        if steps < 0:
+            raise SimulationError(f"steps must be >= 0, got {steps}")
+        ids = self._inputs(pwm, surface_ids, external_force)
+        chunks = [1] * steps if self._draining else [steps] if steps else []
+        for chunk in chunks:
+            failed = kernels.physics_step_parallel(
+                self._buffer,
+                ids,
+                self.n,
+                self.m,
+                len(self.surfaces),
+                external_force is not None,
+                self.dt,
+                chunk,
+            )
+            self._stepped(failed, chunk)
+
+    def _stepped(self, failed: int, steps: int) -> None:
+        """Account for ``steps`` steps a kernel made (time, battery charge), or raise if it failed."""
         if failed:
             raise SimulationError(f"surface_ids must index the {len(self.surfaces)} surfaces of this Physics")
-        self._steps += 1
-        if self._drains.any():
-            q = self._charge - np.where(self._drains, self._battery[:, 1], 0.0) * self.dt / self._capacity_as
-            self._charge[:] = np.clip(q, 0.0, 1.0)
-            self._set_open_voltage()
+        self._steps += steps
+        if self._draining:
+            self._drain()
 
 
 __all__ = ["GRAVITY", "ROLL_SPEED_EPS", "WHEEL_SPEED_EPS", "Physics", "static_loads"]

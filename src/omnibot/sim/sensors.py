@@ -8,9 +8,11 @@ Counters are quantised with ``floor`` like a real counter (a count happens when 
 crossed), with a 1e-9 count allowance so that exactly one revolution gives exactly
 ``counts_per_rev`` despite rounding in 2 pi.
 
-Cost per simulator step: the gyro and tracking wheels work on Python floats and take their normal
-draws from blocks generated ahead (:class:`NormalBlock`, the same numbers as drawing one at a time),
-and motor encoders given a ``source`` count only when read.
+Cost per simulator step: the gyro and tracking wheels keep their state in float arrays that the
+simulator's compiled step updates (:func:`omnibot.sim.kernels.robot_step`), taking their normal
+draws from blocks generated ahead (:class:`NormalDraws`, the same numbers as drawing one at a time);
+motor encoders given a ``source`` count only when read; a sonar ping is one compiled pass over the
+world's edges (:func:`omnibot.sim.kernels.cone_distance`).
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from omnibot.motion import Pose2D
 from omnibot.robot.description import GyroSpec, SonarSpec, TrackingWheelSpec
+from omnibot.sim import kernels
 from omnibot.sim.world import World, cone_range
 
 IntArray = NDArray[np.int64]
@@ -113,51 +116,82 @@ class MotorEncoders:
         return np.asarray(self._edges - self._origin - self._lost, dtype=np.int64)
 
 
+class NormalDraws:
+    """Standard normal draws from a Generator kept in an array for a compiled sensor update, which
+    takes them from index ``state[cursor]`` on and moves that index.
+
+    :meth:`refill` keeps the draws not yet used and appends a block of new ones, so the sequence is
+    the Generator's own (as :class:`NormalBlock`'s); the Generator must not be used for anything
+    else once the first block is drawn.
+    """
+
+    def __init__(self, rng: np.random.Generator, block: int = 1024) -> None:
+        self._rng = rng
+        self._block = block
+        self.values: FloatArray = np.zeros(0)
+        """The draws; the sensor's state says which is next."""
+
+    def refill(self, state: FloatArray, cursor: int, least: int) -> None:
+        """Make sure at least ``least`` unused draws are there (``state[cursor]``: the next one)."""
+        k = int(state[cursor])
+        if len(self.values) - k < least:
+            self.values = np.concatenate(
+                (self.values[k:], self._rng.standard_normal(max(self._block, least)))
+            )
+            state[cursor] = 0.0
+
+
 class TrackingWheels:
     """Passive measuring wheels: each rolls with the body velocity at its mount, along its direction.
 
     The rolled distance per step is ``u . (v + w x p) * dt * (1 + slip)`` with ``slip`` drawn from
-    N(0, ``slip_std``) every step (a wheel that skids a little on the floor).
+    N(0, ``slip_std``) every step (a wheel that skids a little on the floor). The state is one
+    float array (:attr:`state`, :data:`omnibot.sim.kernels.T_HEADER` layout) that the simulator's
+    compiled step updates.
     """
 
     def __init__(
         self, specs: Sequence[TrackingWheelSpec], rng: np.random.Generator, *, slip_std: float = 0.01
     ) -> None:
         self.specs = tuple(specs)
-        self._normal = NormalBlock(rng)
+        self.normals = NormalDraws(rng)
         self.slip_std = slip_std
         self._pos = np.array([(s.x, s.y) for s in specs], dtype=float).reshape(-1, 2)
         self._dir = np.array([(math.cos(s.direction), math.sin(s.direction)) for s in specs]).reshape(-1, 2)
         self._circ = np.array([2 * math.pi * s.radius for s in specs], dtype=float)
         self._cpr = np.array([s.counts_per_rev for s in specs], dtype=float)
-        # per wheel (ux, uy, px, py) as floats for the per-step update
-        self._geometry = [
-            (float(u[0]), float(u[1]), float(p[0]), float(p[1]))
-            for u, p in zip(self._dir, self._pos, strict=True)
-        ]
-        self._distance = [0.0] * len(self.specs)
+        self.state = np.zeros(kernels.T_HEADER + kernels.T_WHEEL * len(self.specs))
+        self.state[kernels.T_SLIP] = slip_std
+        wheels = self.state[kernels.T_HEADER :].reshape(-1, kernels.T_WHEEL)
+        wheels[:, 0:2], wheels[:, 2:4] = self._dir, self._pos
+        self.refill()
+
+    def refill(self) -> None:
+        """Make sure the normal draws of the next two updates are there."""
+        if self.specs and self.slip_std > 0:
+            self.normals.refill(self.state, kernels.T_NEXT, 2 * len(self.specs))
 
     @property
     def distance(self) -> FloatArray:
         """Distance each wheel has rolled (m), slip included."""
-        return np.array(self._distance, dtype=float)
+        return np.array(self.state[kernels.T_HEADER + 4 :: kernels.T_WHEEL], dtype=float)
 
     def velocities(self, twist: ArrayLike) -> FloatArray:
         """Rim speed of each wheel (m/s) for a body twist (vx, vy, w): u . (v + w x p)."""
         vx, vy, w = (float(c) for c in np.asarray(twist, dtype=float))
-        return np.array([(vx - w * py) * ux + (vy + w * px) * uy for ux, uy, px, py in self._geometry])
+        return np.array(
+            [
+                (vx - w * py) * ux + (vy + w * px) * uy
+                for (ux, uy), (px, py) in zip(self._dir, self._pos, strict=True)
+            ]
+        )
 
     def update(self, twist: Sequence[float], dt: float) -> IntArray:
         """Roll the wheels for ``dt`` seconds at the body twist (vx, vy, w); return the counts."""
-        if not self._geometry:
-            return self.counts
-        vx, vy, w = twist
-        slip_std, normal, distance = self.slip_std, self._normal, self._distance
-        for k, (ux, uy, px, py) in enumerate(self._geometry):
-            step = ((vx - w * py) * ux + (vy + w * px) * uy) * dt
-            if slip_std > 0:
-                step = step * (1.0 + slip_std * normal())
-            distance[k] = distance[k] + step
+        if self.specs:
+            vx, vy, w = (float(c) for c in twist)
+            kernels.tracking_update(self.state, self.normals.values, vx, vy, w, float(dt))
+            self.refill()
         return self.counts
 
     @property
@@ -177,54 +211,63 @@ class Gyro:
     N(0, bias_std) and the scale error from N(0, scale_error_std) at construction; the bias walks by
     N(0, bias_walk * sqrt(period)) per sample. With this convention the mean of one second of
     samples at rest has a standard deviation of ``noise_density`` (the angle random walk).
+
+    The state is one float array (:attr:`state`, the ``G_`` columns of :mod:`omnibot.sim.kernels`)
+    that the simulator's compiled step updates; :meth:`update` and :meth:`measure` run the same
+    compiled code.
     """
 
     def __init__(self, spec: GyroSpec, rng: np.random.Generator) -> None:
         self.spec = spec
         self.period = 1.0 / spec.rate_hz
-        self.bias = float(rng.normal(0.0, spec.bias_std)) if spec.bias_std > 0 else 0.0
-        self.scale_error = float(rng.normal(0.0, spec.scale_error_std)) if spec.scale_error_std > 0 else 0.0
-        self._normal = NormalBlock(rng)  # after the turn-on draws: the same stream as before
-        self._sigma = spec.noise_density * math.sqrt(spec.rate_hz)
-        self._walk = spec.bias_walk * math.sqrt(self.period)
-        self._due = self.period - 1e-12
-        self._range, self._resolution = float(spec.range), float(spec.resolution)
-        self._acc_time = 0.0
-        self._acc_angle = 0.0
-        self.rate = 0.0
+        g = self.state = np.zeros(kernels.G_COLUMNS)
+        g[kernels.G_BIAS] = float(rng.normal(0.0, spec.bias_std)) if spec.bias_std > 0 else 0.0
+        g[kernels.G_SCALE] = float(rng.normal(0.0, spec.scale_error_std)) if spec.scale_error_std > 0 else 0.0
+        self.normals = NormalDraws(rng)  # after the turn-on draws: the same stream as before
+        g[kernels.G_SIGMA] = spec.noise_density * math.sqrt(spec.rate_hz)
+        g[kernels.G_WALK] = spec.bias_walk * math.sqrt(self.period)
+        g[kernels.G_DUE] = self.period - 1e-12
+        g[kernels.G_PERIOD] = self.period
+        g[kernels.G_RANGE], g[kernels.G_RESOLUTION] = float(spec.range), float(spec.resolution)
+
+    def refill(self, dt: float = 0.0) -> None:
+        """Make sure the normal draws of two updates of ``dt`` are there."""
+        self.normals.refill(self.state, kernels.G_NEXT, 4 * (int(dt / self.period) + 2))
+
+    @property
+    def bias(self) -> float:
+        """The bias now, rad/s (drawn at turn-on, then walking)."""
+        return float(self.state[kernels.G_BIAS])
+
+    @property
+    def scale_error(self) -> float:
+        """The scale factor's error (drawn at turn-on)."""
+        return float(self.state[kernels.G_SCALE])
+
+    @property
+    def rate(self) -> float:
         """Latest sample, rad/s (0 before the first)."""
-        self.angle = 0.0
+        return float(self.state[kernels.G_RATE])
+
+    @property
+    def angle(self) -> float:
         """Sum of samples times the period: the heading a firmware integrating this gyro would have."""
-        self.samples = 0
+        return float(self.state[kernels.G_ANGLE])
+
+    @property
+    def samples(self) -> int:
+        """Samples taken."""
+        return int(self.state[kernels.G_SAMPLES])
 
     def update(self, dt: float, true_rate: float) -> bool:
         """Advance ``dt`` seconds at ``true_rate``; True if at least one new sample was taken."""
-        self._acc_time += dt
-        self._acc_angle += true_rate * dt
-        if self._acc_time < self._due:
-            return False
-        while self._acc_time >= self._due:
-            mean = self._acc_angle / self._acc_time
-            self._acc_time -= self.period
-            self._acc_angle = mean * self._acc_time
-            self.measure(mean)
-        return True
+        self.refill(dt)
+        return bool(kernels.gyro_update(self.state, self.normals.values, float(dt), float(true_rate)))
 
     def measure(self, true_rate: float) -> float:
         """Take one sample of a (period-averaged) true rate; returns it and stores it in :attr:`rate`."""
-        if self._walk > 0:
-            self.bias += self._walk * self._normal()
-        noise = self._sigma * self._normal() if self._sigma > 0 else 0.0
-        limit, resolution = self._range, self._resolution
-        value = (1.0 + self.scale_error) * true_rate + self.bias + noise
-        value = min(max(value, -limit), limit)
-        if resolution > 0:
-            value = round(value / resolution) * resolution
-            value = min(max(value, -limit), limit)
-        self.rate = value
-        self.angle += value * self.period
-        self.samples += 1
-        return value
+        self.refill()
+        return float(kernels.gyro_measure(self.state, self.normals.values, float(true_rate)))
 
 
 class Sonar:

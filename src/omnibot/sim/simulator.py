@@ -2,26 +2,29 @@
 
 ::
 
-    set_pwm(...) -> step()/advance() ----------------------------------------------> clock += dt
-                      |  surface ids under each wheel   <- World.surface_probe (when a wheel may
-                      |                                    have crossed a patch edge)
-                      |  wall/obstacle push-back force  <- World.contacts_at   (when the robot may
-                      |                                    touch something)
-                      |  hand pushes (push())
+    set_pwm(...) -> step()/advance() ------------------------------------------------> clock += dt
+                      |  one compiled call (kernels.robot_step) per step:
+                      |    surface ids under each wheel   (when a wheel may have crossed a patch edge)
+                      |    wall/obstacle push-back force  (when the robot may touch something)
+                      |    + hand pushes (push()) and applied forces (a fleet's contacts), in order
+                      |    physics step
+                      |    tracking wheels, gyro (every step)
                       v
-                   Physics.step(pwm, surface_ids, external_force)
-                      v
-      tracking wheels, gyro (every step) ; encoders (when read) ; sonars (on ping) ; listeners ;
+      encoders (when read) ; sonars (on ping, one compiled pass over the edges) ; listeners ;
       collision events ; laser scanner (pose recorded every 5 ms while someone wants scans, rays
       cast once per revolution; scan listeners)
 
-A step costs a few microseconds: the physics is one compiled kernel call, the sensors work on
-Python floats, and two exact broad phases skip the world geometry. Each probe of the world returns
-a clearance: the contact test tells how far the robot's origin may move (any rotation) before its
+A step costs a few microseconds: everything above the line is one compiled kernel call on arrays
+(the physics' packed buffer, the world's packed geometry, the simulator's and the sensors' state
+arrays), with Python only at the edges (commands in; readings, events and listeners out). A
+physics of another kind (``physics_factory``) gets the same compiled parts before and after its
+own step. Two exact broad phases skip the world geometry. Each probe of the world returns a
+clearance: the contact test tells how far the robot's origin may move (any rotation) before its
 outline could touch a wall or obstacle, the surface lookup how far the wheel contact points may
 move before one could cross a patch edge (a contact point moves at most |dx, dy| + |d theta| r).
 Until the robot has moved that far the previous answer (no contact; the same surfaces) stands, so
 the result is the same as testing every step. Near a wall or a patch edge the test runs every step.
+The numbers are those of the step it replaced, bit for bit (``tests/sim/test_step_trace.py``).
 
 Collisions use a penalty force: each contact pushes along its normal with a spring-damper whose
 stiffness is set from the simulation step (natural frequency 0.25/dt for the effective mass at the
@@ -60,7 +63,9 @@ from omnibot.errors import SimulationError, SimulationSetupError
 from omnibot.motion import Pose2D, Twist
 from omnibot.robot.description import RobotDescription
 from omnibot.scan import Scan
+from omnibot.sim import kernels
 from omnibot.sim.clock import SimClock
+from omnibot.sim.physics import Physics
 from omnibot.sim.scanner import LaserScanner, PoseLog
 from omnibot.sim.sensors import Gyro, MotorEncoders, Sonar, TrackingWheels
 from omnibot.sim.world import Contact, World, convex_hull, load_world
@@ -317,35 +322,59 @@ class Simulator:
         self._twist_row = self._physics.twist[0]
 
         n_wheels = robot.n_wheels
-        self._pwm = np.zeros((1, n_wheels))
+        # a Physics: one compiled call per step, on its own input arrays; another kind: compiled
+        # parts before and after its step
+        self._packed = self._physics if isinstance(self._physics, Physics) else None
+        self._pwm = self._packed.pwm if self._packed is not None else np.zeros((1, n_wheels))
         self._pwm_max = [wh.motor.pwm_max for wh in robot.wheels]
         self._wheel_names = [wh.name for wh in robot.wheels]
         self._outline = np.ascontiguousarray(convex_hull(robot.footprint.outline()), dtype=float)
         self._pushes: list[tuple[int, float, float, float]] = []
-        self._force = np.zeros((1, 3))
         self._applied = [0.0, 0.0, 0.0]
         self.neighbours: Callable[[], FloatArray] | None = None
         """Edges ``(K, 4)`` of other bodies in the world frame now (a fleet's other robots), which the
         sonars see as they see walls; None: nothing but the world."""
-        self._touching: dict[str, int] = {}
         self.collisions: list[CollisionEvent] = []
         self._collision_listeners: list[CollisionListener] = []
         self._listeners: list[_ListenerSlot] = []
         self._next_notify_us = 0
 
-        # contact broad phase: no contact while the origin stays within _clear of (_clear_x, _clear_y)
+        # the compiled step's own state (kernels.robot_step): contact broad phase (no contact while
+        # the origin stays within F_CLEAR of F_CLEAR_X/Y), the surface cache (the same ids while the
+        # wheels move less than F_SURF_CLEAR from the anchor pose), contact rows, last touches
         self._walls = len(self.world.segments) > 0
-        self._contact_out = self.world.contact_buffer()
-        self._contact_rows: list[list[float]] = []
-        self._contacts: list[Contact] | None = []
-        self._clear_x = self._clear_y = 0.0
-        self._clear = -1.0
-        # surface cache: the same ids while the wheels move less than _surf_clear from the anchor pose
         self._patchy = len(self.world.surface_names) > 1
         self._ids = self._floor_ids.copy()
-        self._surf_anchor = (0.0, 0.0, 0.0)
-        self._surf_clear = -1.0
-        self._wheel_reach = max(math.hypot(*wh.position) for wh in robot.wheels)
+        n_rows = len(self.world.contact_buffer())
+        si = np.zeros(kernels.I_HEADER, dtype=np.int64)
+        si[kernels.I_V], si[kernels.I_C], si[kernels.I_M] = len(self._outline), n_rows, n_wheels
+        si[kernels.I_OWNERS], si[kernels.I_SURFACES] = len(self.world.contact_owners), len(self._surface_map)
+        si[kernels.I_WALLS], si[kernels.I_PATCHY] = self._walls, self._patchy
+        si[kernels.I_RELEASE] = round(CONTACT_RELEASE * 1e6)
+        of0, of1, of2, of3, of_end, oi0, oi1, oi2, oi3, oi_end = kernels.sim_offsets.py_func(si)
+        self._si = np.zeros(oi_end, dtype=np.int64)
+        self._si[: kernels.I_HEADER] = si
+        self._si[oi0:oi1] = kernels.NEVER
+        self._si[oi2:oi3] = self._surface_map
+        self._sf = sf = np.zeros(of_end)
+        sf[kernels.F_MASS], sf[kernels.F_INERTIA] = robot.mass, robot.yaw_inertia
+        sf[kernels.F_OMEGA] = CONTACT_OMEGA_DT / self.dt
+        sf[kernels.F_DAMPING], sf[kernels.F_WALL_FRICTION] = CONTACT_DAMPING, WALL_FRICTION
+        sf[kernels.F_CLEAR], sf[kernels.F_SURF_CLEAR] = -1.0, -1.0
+        sf[kernels.F_REACH] = max(math.hypot(*wh.position) for wh in robot.wheels)
+        sf[of0:of1] = self._outline.ravel()
+        sf[of3:of_end] = np.array([wh.position for wh in robot.wheels], dtype=float).ravel()
+        self._contact_out = sf[of1:of2].reshape(n_rows, 6)
+        self._contact_speed = sf[of2:of3]
+        self._new_contact = self._si[oi1:oi2]
+        self._world_packed = self.world.packed
+        self._extra = np.zeros((4, 3))
+        self._step_ids = self._ids if self._patchy else self._floor_ids
+        self._n_surfaces = len(self._physics.surfaces)
+        self._state6 = np.zeros(6)
+        self._force = np.zeros((1, 3))
+        self._touching: dict[str, int] = {}
+        """Last touch (us) of each body outside the world (a fleet's other robots) by name."""
 
         names = self._wheel_names
         enc_index = np.array([names.index(e.wheel) for e in robot.encoders.motors], dtype=np.int64)
@@ -357,8 +386,11 @@ class Simulator:
             source=lambda: self._physics.wheel_angle[0, enc_index],
         )
         self.tracking = TrackingWheels(robot.encoders.tracking, _rng(seed, _RNG_TRACKING))
-        self._tracking_on = len(robot.encoders.tracking) > 0
         self.gyro = Gyro(robot.gyro, _rng(seed, _RNG_GYRO)) if robot.gyro is not None else None
+        if self.gyro is not None:
+            self.gyro.refill(self.dt)
+        self._no_gyro = np.zeros(0)
+        self._sensors = self._sensor_arrays()
         self.sonars = [Sonar(s, _rng(seed, _RNG_SONAR + i)) for i, s in enumerate(robot.sonars)]
         self._scanner = LaserScanner(robot.scanner, seed, _RNG_SCANNER) if robot.scanner is not None else None
         self._scan_listeners: list[ScanListener] = []
@@ -418,6 +450,11 @@ class Simulator:
         return [float(v) for v in self._physics.wheel_speed[0]]
 
     @property
+    def wheel_surfaces(self) -> list[str]:
+        """The floor surface under each wheel at the last step, in robot.wheels order."""
+        return [self._physics.surfaces[int(i)].name for i in self._step_ids[0]]
+
+    @property
     def pwm(self) -> list[int]:
         """The PWM values applied to the motors now."""
         return [int(v) for v in self._pwm[0]]
@@ -425,9 +462,7 @@ class Simulator:
     @property
     def contacts(self) -> list[Contact]:
         """Contacts found at the start of the last step."""
-        if self._contacts is None:
-            self._contacts = self.world.contact_list(self._contact_rows)
-        return self._contacts
+        return self.world.contact_list(self._contact_out[: self._si[kernels.I_COUNT]])
 
     @property
     def battery_charge(self) -> float:
@@ -685,51 +720,85 @@ class Simulator:
         for _ in range(n):
             self._step_once()
 
+    def _sensor_arrays(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """The gyro's and tracking wheels' state and normal draws, as the compiled step takes them."""
+        gyro, tracking = self.gyro, self.tracking
+        g_state, g_normals = (gyro.state, gyro.normals.values) if gyro is not None else (self._no_gyro,) * 2
+        return g_state, g_normals, tracking.state, tracking.normals.values
+
     def _step_once(self) -> None:
         now_us = self.clock.ticks_us()
-        x, y, th = self._pose_row.tolist()
-        vx0, vy0, w0 = self._twist_row.tolist()
-        ids = self._surface_ids(x, y, th) if self._patchy else self._floor_ids
-        fx = fy = tz = 0.0
-        if self._walls:
-            dx, dy = x - self._clear_x, y - self._clear_y
-            if self._clear <= 0.0 or dx * dx + dy * dy >= self._clear * self._clear:
-                fx, fy, tz = self._contact_force(now_us, x, y, th, vx0, vy0, w0)
-        if self._applied[0] or self._applied[1] or self._applied[2]:
-            fx, fy, tz = fx + self._applied[0], fy + self._applied[1], tz + self._applied[2]
-            self._applied = [0.0, 0.0, 0.0]
-        if self._pushes:
-            self._pushes = [p for p in self._pushes if p[0] > now_us]
-            for _, px, py, pz in self._pushes:
-                fx, fy, tz = fx + px, fy + py, tz + pz
-        if fx or fy or tz:
-            force = self._force
-            force[0, 0], force[0, 1], force[0, 2] = fx, fy, tz
-            self._physics.step(self._pwm, ids, force)
+        n_extra = self._extra_forces(now_us) if self._pushes or any(self._applied) else 0
+        physics = self._packed
+        if physics is not None:
+            status = kernels.robot_step(
+                physics.buffer, self._step_ids, physics.m, self._n_surfaces, *self._world_packed, self._sf, self._si,
+                self._extra, n_extra, *self._sensors, now_us, self.dt,
+            )  # fmt: skip
+            if status & kernels.STEP_BAD_SURFACE:
+                raise SimulationError(
+                    f"surface_ids must index the {self._n_surfaces} surfaces of this Physics"
+                )
+            physics.count_step()
         else:
-            self._physics.step(self._pwm, ids, None)
+            status = self._step_other(now_us, n_extra)
+        if status & kernels.STEP_COLLISION:
+            self._collisions_found()
         self.clock.advance_us(self._dt_us)
-
-        if self._tracking_on or self.gyro is not None:
-            vx1, vy1, w1 = self._twist_row.tolist()
-            if self._tracking_on:
-                self.tracking.update((0.5 * (vx0 + vx1), 0.5 * (vy0 + vy1), 0.5 * (w0 + w1)), self.dt)
+        if status & kernels.STEP_REFILL:
+            self.tracking.refill()
             if self.gyro is not None:
-                self.gyro.update(self.dt, 0.5 * (w0 + w1))
+                self.gyro.refill(self.dt)
+            self._sensors = self._sensor_arrays()
         if self._scan_self and now_us + self._dt_us >= self._scan_next_us:
             self._scan_tick(now_us + self._dt_us)
         if self._listeners and now_us + self._dt_us >= self._next_notify_us:
             self._notify()
 
-    def _surface_ids(self, x: float, y: float, th: float) -> NDArray[np.int64]:
-        """Surface ids under the wheels, looked up again only when a wheel may have changed patch."""
-        x0, y0, th0 = self._surf_anchor
-        moved = math.hypot(x - x0, y - y0) + abs(th - th0) * self._wheel_reach
-        if moved >= self._surf_clear - 1e-9:
-            local, clearance = self.world.surface_probe(self._physics.contact_points_world()[0])
-            self._ids[0] = self._surface_map[local]
-            self._surf_anchor, self._surf_clear = (x, y, th), clearance
-        return self._ids
+    def _step_other(self, now_us: int, n_extra: int) -> int:
+        """A step with a physics of another kind: the compiled step's parts before and after its step."""
+        state = self._state6
+        state[:3], state[3:] = self._pose_row, self._twist_row
+        status = kernels.robot_before(
+            state,
+            self._step_ids,
+            *self._world_packed,
+            self._sf,
+            self._si,
+            self._extra,
+            n_extra,
+            self._force,
+            now_us,
+        )
+        force = self._force if status & kernels.STEP_FORCE else None
+        self._physics.step(self._pwm, self._step_ids, force)
+        state[:3], state[3:] = state[3:], self._twist_row
+        return status | kernels.robot_after(state, self.dt, *self._sensors)
+
+    def _extra_forces(self, now_us: int) -> int:
+        """Put the applied force and the hand pushes still acting into the extra-force rows; their count."""
+        rows: list[Sequence[float]] = []
+        if any(self._applied):
+            rows.append(self._applied)
+            self._applied = [0.0, 0.0, 0.0]
+        if self._pushes:
+            self._pushes = [p for p in self._pushes if p[0] > now_us]
+            rows += [p[1:] for p in self._pushes]
+        if len(rows) > len(self._extra):
+            self._extra = np.zeros((2 * len(rows), 3))
+        if rows:
+            self._extra[: len(rows)] = rows
+        return len(rows)
+
+    def _collisions_found(self) -> None:
+        """Collision events for the contacts the last step's test flagged as new (in row order)."""
+        count = int(self._si[kernels.I_COUNT])
+        rows = self._contact_out[:count]
+        sf = self._sf
+        pose = Pose2D(float(sf[kernels.F_AT_X]), float(sf[kernels.F_AT_Y]), float(sf[kernels.F_AT_TH]))
+        for a, contact in enumerate(self.world.contact_list(rows)):
+            if self._new_contact[a]:
+                self._collide(contact, float(self._contact_speed[a]), pose)
 
     def _notify(self) -> None:
         now = self.clock.ticks_us()
@@ -745,45 +814,13 @@ class Simulator:
     def _find_contacts(self, x: float, y: float, th: float) -> int:
         """Test the outline at (x, y, th) against the world; returns the owner id of the first contact or -1.
 
-        Fills the contact rows and the broad-phase clearance.
+        Fills the contact rows and the broad-phase clearance (as the compiled step does).
         """
         count, clearance = self.world.contacts_at(self._outline, x, y, th, self._contact_out)
-        self._clear_x, self._clear_y, self._clear = x, y, clearance
-        self._contact_rows = self._contact_out[:count].tolist() if count else []
-        self._contacts = None if count else []
+        sf = self._sf
+        sf[kernels.F_CLEAR_X], sf[kernels.F_CLEAR_Y], sf[kernels.F_CLEAR] = x, y, clearance
+        self._si[kernels.I_COUNT] = count
         return int(self._contact_out[0, 5]) if count else -1
-
-    def _contact_force(
-        self, now_us: int, x: float, y: float, th: float, vx: float, vy: float, w: float
-    ) -> tuple[float, float, float]:
-        """Penalty force (world Fx, Fy, torque) of every contact; records collision events."""
-        self._find_contacts(x, y, th)
-        fx_sum = fy_sum = tz_sum = 0.0
-        if not self._contact_rows:
-            return fx_sum, fy_sum, tz_sum
-        c, s = math.cos(th), math.sin(th)
-        vwx, vwy = c * vx - s * vy, s * vx + c * vy
-        m, inertia = self.robot.mass, self.robot.yaw_inertia
-        omega = CONTACT_OMEGA_DT / self.dt
-        for row in self._contact_rows:
-            px, py, nx, ny, depth, _ = row
-            rx, ry = px - x, py - y
-            pvx, pvy = vwx - w * ry, vwy + w * rx
-            vn, vt = pvx * nx + pvy * ny, -pvx * ny + pvy * nx
-            rn = rx * ny - ry * nx
-            m_eff = 1.0 / (1.0 / m + rn * rn / inertia)
-            fn = max(0.0, m_eff * omega * omega * depth - 2 * CONTACT_DAMPING * m_eff * omega * vn)
-            ft = -WALL_FRICTION * fn * math.tanh(vt / 0.05)
-            fx, fy = fn * nx - ft * ny, fn * ny + ft * nx
-            fx_sum, fy_sum, tz_sum = fx_sum + fx, fy_sum + fy, tz_sum + (rx * fy - ry * fx)
-            self._touch(now_us, row, -vn)
-        return fx_sum, fy_sum, tz_sum
-
-    def _touch(self, now_us: int, row: list[float], speed: float) -> None:
-        if self._still_touching(self.world.contact_owners[int(row[5])], now_us):
-            return
-        (contact,) = self.world.contact_list([row])
-        self._collide(contact, speed)
 
     def touch(self, contact: Contact, speed: float) -> None:
         """A contact with something outside the world (a fleet's other robot) at this step: a
@@ -796,7 +833,7 @@ class Simulator:
         self._touching[owner] = now_us
         return last is not None and now_us - last <= CONTACT_RELEASE * 1e6
 
-    def _collide(self, contact: Contact, speed: float) -> None:
+    def _collide(self, contact: Contact, speed: float, pose: Pose2D | None = None) -> None:
         event = CollisionEvent(
             self.time,
             contact.point[0],
@@ -805,7 +842,7 @@ class Simulator:
             contact.depth,
             speed,
             contact.owner,
-            self.pose,
+            self.pose if pose is None else pose,
         )
         self.collisions.append(event)
         for fn in self._collision_listeners:

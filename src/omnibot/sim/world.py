@@ -325,6 +325,27 @@ class World:
         self._patch_sid = np.array(
             [self.surface_names.index(p.surface) for p in spec.patches], dtype=np.int64
         )
+        self.packed: tuple[FloatArray, IntArray] = (
+            np.concatenate(
+                [
+                    a.ravel()
+                    for a in (self._solid_v, self._solid_c, self._solid_r, self._thin_v, self._patch_v)
+                ]
+            ),
+            np.concatenate(
+                [
+                    [len(self._solid_v), len(self._solid_owner), len(self._thin_owner), len(self._patch_v)],
+                    [len(self._patch_sid)],
+                    self._solid_off,
+                    self._solid_owner,
+                    self._thin_owner,
+                    self._patch_off,
+                    self._patch_sid,
+                ]
+            ).astype(np.int64),
+        )
+        """The contact geometry and the patches packed for the simulator's compiled step (floats,
+        ints; layout: :func:`omnibot.sim.kernels.world_offsets`)."""
 
     def __repr__(self) -> str:
         return f"World({self.name!r}, {len(self.segments)} edges, surfaces {list(self.surface_names)})"
@@ -465,38 +486,14 @@ def cone_range(
     """Distance from (x, y) to the nearest point of any edge ``(K, 4)`` within ``heading +- cone/2``.
 
     inf if none within ``max_range``; ``cone`` (rad) must be below pi. Exact: each edge is clipped
-    to the cone, then its point nearest the apex is taken.
+    to the cone, then its point nearest the apex is taken (:func:`omnibot.sim.kernels.cone_distance`).
     """
     if not 0 < cone < math.pi:
         raise ValueError(f"cone must be in (0, pi), got {cone}")
-    if len(segments) == 0:
-        return math.inf
-    A = segments[:, :2] - np.array([x, y])
-    E = segments[:, 2:] - segments[:, :2]
-    r = np.array([math.cos(heading - cone / 2), math.sin(heading - cone / 2)])
-    left = np.array([math.cos(heading + cone / 2), math.sin(heading + cone / 2)])
-    lo = np.zeros(len(A))
-    hi = np.ones(len(A))
-    # inside the cone: cross(r, p) >= 0 and cross(p, left) >= 0, each linear in t along the edge
-    for f0, f1 in (
-        (r[0] * A[:, 1] - r[1] * A[:, 0], r[0] * E[:, 1] - r[1] * E[:, 0]),
-        (A[:, 0] * left[1] - A[:, 1] * left[0], E[:, 0] * left[1] - E[:, 1] * left[0]),
-    ):
-        with np.errstate(divide="ignore", invalid="ignore"):
-            tc = -f0 / f1
-        lo = np.where(f1 > 1e-15, np.maximum(lo, tc), lo)
-        hi = np.where(f1 < -1e-15, np.minimum(hi, tc), hi)
-        hi = np.where((np.abs(f1) <= 1e-15) & (f0 < 0), -1.0, hi)
-    ok = lo <= hi
-    if not ok.any():
-        return math.inf
-    ee = np.einsum("ij,ij->i", E, E)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t_near = np.where(ee > 0, -np.einsum("ij,ij->i", A, E) / ee, 0.0)
-    t = np.clip(t_near, lo, np.maximum(lo, hi))
-    dist = np.hypot(A[:, 0] + t * E[:, 0], A[:, 1] + t * E[:, 1])
-    best = float(np.where(ok, dist, math.inf).min())
-    return best if best <= max_range else math.inf
+    edges = np.ascontiguousarray(segments, dtype=np.float64).reshape(-1, 4)
+    return float(
+        kernels.cone_distance(edges, float(x), float(y), float(heading), float(cone), float(max_range))
+    )
 
 
 def placed(outline: FloatArray, x: float, y: float, theta: float) -> FloatArray:
