@@ -198,7 +198,7 @@ static const CodeText CODE_TEXTS[32] PROGMEM = {
 static const uint16_t ENCODER_CPR[MOTORS] PROGMEM = {440, 440, 440, 440};
 #define CONTROL_PERIOD_MS 10
 #define SPEED_KP 3.861f
-#define SPEED_KI 115.83f
+#define SPEED_KI 77.22f
 /* 1 / speed_band (rad/s): the integral grows at 1 / (1 + (err * inv)^2) of its rate; 0: plain PI */
 #define SPEED_BAND_INV 0.30282355712902675f
 #define MODE_AT_RESET 0

@@ -241,8 +241,8 @@ SPEED_KI_PER_K = 10.0
 """The wheel-speed PI's gains for a description that gives none, in the feedforward's PWM counts per
 rad/s of wheel speed (K r): kp = 0.5 K r, ki = 10 K r per s. Safe where a wheel answers its power
 within a control period (kp 1.0 K r rings there); the presets, whose motors' inertia the simulator
-models, set their own (``controller.speed_kp``/``speed_ki``, twice and three times these: a ramped
-VEL stream settles within 0.3 s in 60 of the speed-accuracy benchmark's 126 cells, 27 with these;
+models, set their own (``controller.speed_kp``/``speed_ki``, twice these: a ramped VEL stream
+settles within 0.3 s in 64 of the speed-accuracy benchmark's 126 cells, 27 with these;
 docs/firmware.md, BENCHMARKS.md)."""
 
 SPEED_BAND_POWER = 0.05
