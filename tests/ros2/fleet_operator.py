@@ -37,7 +37,8 @@ def main() -> None:
         odom.append((p.x, p.y, v.x, v.y))
         latency.append(int(info["received_timestamp"]) - int(info["source_timestamp"]))
 
-    node.create_subscription(Odometry, f"{ns}/odom", on_odom, 10)  # type: ignore[arg-type]  # rclpy passes the info too
+    callback: Any = on_odom  # rclpy hands the message info over too (typed as one argument)
+    node.create_subscription(Odometry, f"{ns}/odom", callback, 10)
     publisher = node.create_publisher(Twist, f"{ns}/cmd_vel", 10)
 
     def spin_until(done: Any, seconds: float, publish: Any = None) -> bool:
