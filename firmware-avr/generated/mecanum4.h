@@ -197,10 +197,10 @@ static const CodeText CODE_TEXTS[32] PROGMEM = {
 #define HAS_ENCODERS 1
 static const uint16_t ENCODER_CPR[MOTORS] PROGMEM = {440, 440, 440, 440};
 #define CONTROL_PERIOD_MS 10
-#define SPEED_KP 3.861f
-#define SPEED_KI 77.22f
+#define SPEED_KP 1.9305f
+#define SPEED_KI 38.61f
 /* 1 / speed_band (rad/s): the integral grows at 1 / (1 + (err * inv)^2) of its rate; 0: plain PI */
-#define SPEED_BAND_INV 0.30282355712902675f
+#define SPEED_BAND_INV 0.15141175563899018f
 #define MODE_AT_RESET 0
 /* sonar stop (safety.py): sonar 1's axis, half cone (rad), footprint lead and half width (cm); */
 /* the stop deceleration (cm/s^2), slowest and uncovered speeds (cm/s), a loop pass + latency (ms) */

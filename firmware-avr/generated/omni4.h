@@ -197,10 +197,10 @@ static const CodeText CODE_TEXTS[32] PROGMEM = {
 #define HAS_ENCODERS 1
 static const uint16_t ENCODER_CPR[MOTORS] PROGMEM = {440, 440, 440, 440};
 #define CONTROL_PERIOD_MS 10
-#define SPEED_KP 3.6225f
-#define SPEED_KI 72.45f
+#define SPEED_KP 1.81125f
+#define SPEED_KI 36.225f
 /* 1 / speed_band (rad/s): the integral grows at 1 / (1 + (err * inv)^2) of its rate; 0: plain PI */
-#define SPEED_BAND_INV 0.2841176258335656f
+#define SPEED_BAND_INV 0.142058833097492f
 #define MODE_AT_RESET 0
 /* sonar stop (safety.py): sonar 1's axis, half cone (rad), footprint lead and half width (cm); */
 /* the stop deceleration (cm/s^2), slowest and uncovered speeds (cm/s), a loop pass + latency (ms) */

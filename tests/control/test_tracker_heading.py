@@ -113,14 +113,8 @@ def test_the_body_acceleration_in_vel_shares_the_turning_start_among_the_wheels(
     with the profile's whole acceleration fed forward (protocol version 4) each wheel pushes its
     share of the body's force and torque from the start of every change, and the robot keeps closer
     to the path (1.15 -> 1.02 cm RMS, 3.25 -> 2.71 max) than with version 3, whose A goes only with
-    straight runs (none here), so the wheel loops learn every acceleration in their integrals.
-    Measured with the firmware's default wheel-speed gains (kp 0.5 K r, ki 10 K r): with the
-    preset's own since 2026-12-06 (kp 1.0 K r, ki 20 K r) the integrals learn the accelerations
-    fast enough that both versions track this path alike and worse than here, 1.43 / 3.27 (version
-    4) and 1.34 / 3.15 cm (version 3; docs/firmware.md, "Modes")."""
-    preset = load_robot("mecanum4")
-    gains = preset.controller.model_copy(update={"speed_kp": 0.0, "speed_ki": 0.0})
-    robot = preset.model_copy(update={"controller": gains})
+    straight runs (none here), so the wheel loops learn every acceleration in their integrals."""
+    robot = load_robot("mecanum4")
     path = standard_path("circle", size=1.0, heading="swing")
     options = FollowOptions(follower="tracker", speed=0.8, standstill=1.0, floor="carpet")
     _, v4 = simulate_follow(robot, path, options, surface="carpet", seed=1)

@@ -13,7 +13,7 @@ import pytest
 
 from omnibot.firmware.config import build_config
 from omnibot.firmware.controller import Controller
-from omnibot.robot.description import CalibrationSpec, RobotDescription, load_robot
+from omnibot.robot.description import CalibrationSpec, load_robot
 from tests.firmware.fakehal import FakeHAL, advance
 
 
@@ -49,17 +49,8 @@ class Rig:
 FORMULA_CALIBRATION = CalibrationSpec(k=220.0)
 
 
-def untuned(description: RobotDescription) -> RobotDescription:
-    """``description`` without its wheel-speed gains: the firmware's defaults for a plant faster than
-    the description's motors. The presets' gains are tuned on the inertia of their motors and wheels
-    (the simulator's); FakeHAL's wheels follow their power within a control period and the unix
-    HAL's within 50 ms, where those gains ring (config.SPEED_KP_PER_K)."""
-    controller = description.controller.model_copy(update={"speed_kp": 0.0, "speed_ki": 0.0})
-    return description.model_copy(update={"controller": controller})
-
-
 def make_rig(robot: str = "omni4", **overrides: Any) -> Rig:
-    description = untuned(load_robot(robot)).model_copy(update={"calibration": FORMULA_CALIBRATION})
+    description = load_robot(robot).model_copy(update={"calibration": FORMULA_CALIBRATION})
     config = build_config(description)
     config.update(overrides)
     return Rig(config)

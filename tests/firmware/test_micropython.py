@@ -13,7 +13,6 @@ import pytest
 from omnibot.firmware.config import build_config, stage_board
 from omnibot.protocol import codes, frame, linecheck
 from omnibot.robot.description import load_robot
-from tests.firmware.conftest import untuned
 
 ROOT = Path(__file__).resolve().parents[2]
 DRIVER = Path(__file__).with_name("mp_driver.py")
@@ -163,7 +162,7 @@ def run(interpreter: list[str], stage: Path, script: Path) -> str:
 def test_micropython_matches_cpython(tmp_path: Path, robot: str) -> None:
     mp = micropython()
     stage = tmp_path / "board"
-    stage_board(stage, build_config(untuned(load_robot(robot))))
+    stage_board(stage, build_config(load_robot(robot)))
     script = tmp_path / "script.txt"
     script.write_text(SCRIPT)
     out_mp = run([mp], stage, script)
@@ -192,7 +191,7 @@ def test_micropython_matches_cpython(tmp_path: Path, robot: str) -> None:
 def test_binary_mode_matches_cpython(tmp_path: Path) -> None:
     mp = micropython()
     stage = tmp_path / "board"
-    stage_board(stage, build_config(untuned(load_robot("omni4"))))
+    stage_board(stage, build_config(load_robot("omni4")))
     script = tmp_path / "script.txt"
     script.write_text(BINARY_SCRIPT)
     out_mp = run([mp], stage, script)
@@ -209,7 +208,7 @@ def test_board_files_import_under_micropython(tmp_path: Path) -> None:
     """Every module copied to a board compiles and imports under MicroPython (main.py excepted)."""
     mp = micropython()
     stage = tmp_path / "board"
-    stage_board(stage, build_config(untuned(load_robot("omni3"))))
+    stage_board(stage, build_config(load_robot("omni3")))
     mods = [
         "omnibot.firmware." + p.stem
         for p in (stage / "omnibot" / "firmware").glob("*.py")
@@ -255,7 +254,7 @@ def test_the_gyro_driver_under_micropython(tmp_path: Path) -> None:
     """The MPU6050 driver as staged for a board, against the register model, in both interpreters."""
     mp = micropython()
     stage = tmp_path / "board"
-    stage_board(stage, build_config(untuned(load_robot("omni4"))))
+    stage_board(stage, build_config(load_robot("omni4")))
     shutil.copyfile(Path(__file__).with_name("fake_mpu6050.py"), stage / "fake_mpu6050.py")
     outs = []
     for interpreter in ([mp], [sys.executable, "-S"]):

@@ -236,15 +236,6 @@ LAND_ACCEL = 0.5
 with (``land_accel``, up and down): the loop, lagging the ramp, has the rest to catch up with it."""
 
 
-SPEED_KP_PER_K = 0.5
-SPEED_KI_PER_K = 10.0
-"""The wheel-speed PI's gains for a description that gives none, in the feedforward's PWM counts per
-rad/s of wheel speed (K r): kp = 0.5 K r, ki = 10 K r per s. Safe where a wheel answers its power
-within a control period (kp 1.0 K r rings there); the presets, whose motors' inertia the simulator
-models, set their own (``controller.speed_kp``/``speed_ki``, twice these: a ramped VEL stream
-settles within 0.3 s in 64 of the speed-accuracy benchmark's 126 cells, 27 with these;
-docs/firmware.md, BENCHMARKS.md)."""
-
 SPEED_BAND_POWER = 0.05
 """``speed_band`` is the wheel-speed error the loop's P term answers with this share of full power:
 after a step the integral grows at half its rate there (larger errors are the rise's lag)."""
@@ -337,7 +328,7 @@ def build_config(
     kp, ki = ctl.speed_kp, ctl.speed_ki
     if kp == 0.0 and ki == 0.0:
         kr = k * sum(radius) / len(radius)  # the feedforward's PWM counts per rad/s of wheel speed
-        kp, ki = SPEED_KP_PER_K * kr, SPEED_KI_PER_K * kr
+        kp, ki = 0.5 * kr, 10.0 * kr
     lim = robot.limits
     has_encoders = all(encoder_cpr)
     pwm_max = max(w.motor.pwm_max for w in robot.wheels)
