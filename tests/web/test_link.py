@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterator
 from typing import Any
 
@@ -9,10 +10,12 @@ import pytest
 
 from omnibot.client import RobotClient
 from omnibot.errors import LinkError
+from omnibot.motion import Twist
 from omnibot.robot.description import load_robot
 from omnibot.teleop.pacing import Pacer
 from omnibot.web.link import PageGone, RobotLink
 from omnibot.web.messages import Drive, EStop, Joy, Resume, Teach
+from tests.runtime.test_wakeup import Pushed
 from tests.teleop.fakes import FakeWall, truth
 
 
@@ -178,3 +181,22 @@ def test_a_link_lost_for_good_ends_the_link_thread(monkeypatch: pytest.MonkeyPat
         frame = link.outbox.get_nowait()
         texts += [frame["text"]] if frame["type"] == "log" else []
     assert "robot link ended: unplugged by the test" in texts
+
+
+def test_a_source_that_wakes_is_answered_between_the_pages_cycles() -> None:
+    """ROS 2's cmd_vel beside the page (``run --ros2 --dashboard``): a source that wakes the runtime has
+    its command sent as it arrives, by the link thread's wait, not at the next cycle."""
+    client = RobotClient.open("sim://omni4?world=room&seed=1", timeout=0.5)
+    link = RobotLink(client, load_robot("omni4"))
+    source = Pushed()
+    link.runtime.add_source(source)
+    link.start()
+    try:
+        deadline = time.monotonic() + 20
+        while link.runtime.reactions == 0 and time.monotonic() < deadline:
+            source.push(Twist(0.1, 0.0, 0.0))
+            time.sleep(0.05)
+        assert link.runtime.reactions > 0 and link.runtime.wakeup.wakes > 0
+    finally:
+        link.stop()
+    assert client.link.closed

@@ -264,7 +264,7 @@ class RobotLink:
             while not self._stop.is_set():
                 self.tick(pacer.now())
                 try:
-                    pacer.wait()
+                    self.runtime.wait()  # the pacer's wait, reacting to sources that wake (cmd_vel)
                 except LinkError as exc:
                     self._link_error(exc)
                     if client.broken or client.link.closed:  # the port is gone and did not come back
