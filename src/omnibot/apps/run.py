@@ -208,7 +208,7 @@ def run(args: argparse.Namespace) -> int:
     if args.dashboard:
         parts = _with_dashboard(args, url, config, path)
     else:
-        parts = _in_this_thread(args, url, config, path)
+        parts = run_in_this_thread(args, url, config, path)
     return _result(parts)
 
 
@@ -240,17 +240,6 @@ def run_in_this_thread(
     say: Callable[[str], None] = _say,
 ) -> Parts:
     """``run``'s front ends (and ``attach``'s sinks) on one runtime in this thread (no dashboard)."""
-    return _in_this_thread(args, url, config, path, attach, say)
-
-
-def _in_this_thread(
-    args: argparse.Namespace,
-    url: str,
-    config: Any,
-    path: Any,
-    attach: Attach | None = None,
-    say: Callable[[str], None] = _say,
-) -> Parts:
     from omnibot.cliargs import use_calibration
     from omnibot.client.errors import NotSupported
     from omnibot.client.session import robot_session
