@@ -14,7 +14,7 @@ pytest.importorskip("cyclonedds", reason="cyclonedds is not installed (pip insta
 
 from omnibot.cli import main
 from omnibot.logs import schemas
-from omnibot.logs.recorder import header, quaternion
+from omnibot.logs.recorder import header
 from omnibot.mapping.mapfile import save_map
 from omnibot.mapping.score import world_grid
 from omnibot.motion import Pose2D
@@ -22,21 +22,12 @@ from omnibot.robot.description import load_robot
 from omnibot.ros2.goal import GOAL_TYPE, GoalPoseSource
 from omnibot.sim.world import load_world
 from tests.cli.conftest import assert_one_line_error
-from tests.ros2.test_path import Node
+from tests.ros2.test_path import Node, pose_message
 
 
 def goal(x: float, y: float, yaw: float | None, frame: str = "map") -> Any:
-    q = (
-        quaternion(yaw)
-        if yaw is not None
-        else schemas.new("geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=0.0, w=0.0)
-    )
-    pose = schemas.new(
-        "geometry_msgs/msg/Pose",
-        position=schemas.new("geometry_msgs/msg/Point", x=x, y=y, z=0.0),
-        orientation=q,
-    )
-    return schemas.new(GOAL_TYPE, header=header(0, frame), pose=pose)
+    """A geometry_msgs/PoseStamped in ``frame`` (yaw None: an all-zero quaternion)."""
+    return schemas.new(GOAL_TYPE, header=header(0, frame), pose=pose_message(x, y, yaw))
 
 
 @pytest.fixture
