@@ -18,7 +18,7 @@ from omnibot.errors import BlockedError, OffMapError
 from omnibot.mapping.score import world_grid
 from omnibot.motion import Pose2D, Twist
 from omnibot.navigation.goto import GotoResult, navigation_runtime
-from omnibot.navigation.goto_source import GotoSource
+from omnibot.navigation.goto_source import POSE_WAIT, GotoSource
 from omnibot.navigation.session import simulated_client
 from omnibot.robot.description import load_robot
 from omnibot.runtime.runtime import Runtime
@@ -124,3 +124,16 @@ def test_bad_goals_are_refused_and_change_nothing() -> None:
             source.go(Pose2D(30.0, 1.0, 0.0))
         assert not source.active and results == []
         assert source.cancel("nothing to cancel") is False
+
+
+def test_a_goal_without_a_pose_of_the_robot_fails_saying_so() -> None:
+    with bench() as (runtime, source, _sim, _results):
+        runtime.remove_source(source.name)
+        results: list[GotoResult] = []
+        blind = GotoSource(source.robot, source.grid, runtime.period, lambda: None, on_result=results.append)
+        runtime.add_source(blind)
+        blind.go(Pose2D(2.8, 2.2, 0.0))
+        runtime.run(until=lambda: not blind.active, duration=POSE_WAIT + 2.0)
+        assert [(r.outcome, r.reason) for r in results] == [
+            ("stopped", f"no pose of the robot in the map after {POSE_WAIT:.0f} s")
+        ]

@@ -1,5 +1,6 @@
-"""A genuine rclpy (Jazzy's wheels, Fast DDS) sends Nav2's ``goal_pose`` to ``omnibot ros2 --map MAP.yaml``
-on the simulated room, on both backends, in a private network namespace.
+"""A genuine rclpy (Jazzy's and Kilted's wheels, Fast DDS) sends Nav2's ``goal_pose`` to ``omnibot ros2
+--map MAP.yaml`` on the simulated room, on both backends (Kilted's peer beside the dds one), in a private
+network namespace.
 
 The node gets the map (nav_msgs/OccupancyGrid, transient local, frame ``map``) and publishes
 geometry_msgs/PoseStamped on ``/goal_pose``: a goal in ``odom`` and one inside the cabinet are each
@@ -11,7 +12,6 @@ goal`` diagnostic status (read with omnibot's DDS reader: diagnostic_msgs has no
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
 from pathlib import Path
@@ -23,14 +23,52 @@ from omnibot.mapping.mapfile import load_map, save_map
 from omnibot.mapping.score import world_grid
 from omnibot.sim.world import load_world
 from tests.ros2.netns_helper import run_in_namespace
+from tests.ros2.rclpy_distros import BOOTSTRAP, interpreter
 from tests.ros2.test_rclpy_cmd_vel import truth
 
 pytest.importorskip("cyclonedds", reason="cyclonedds is not installed (pip install 'omnibot[ros2]')")
 
 GOAL = (2.5, 1.8, math.pi / 2)
 
-SCRIPT = r"""
-import json, math, os, subprocess, sys, threading, time
+PEER = r"""
+import json, math, sys, time
+import rclpy
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy, DurabilityPolicy, HistoryPolicy
+from geometry_msgs.msg import PoseStamped
+from nav_msgs.msg import OccupancyGrid
+rclpy.init()
+node = Node("goal_sender")
+pub = node.create_publisher(PoseStamped, "/goal_pose", 10)
+latched = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+maps = []
+node.create_subscription(OccupancyGrid, "/map", maps.append, latched)
+end = time.monotonic() + 240
+while time.monotonic() < end and not (maps and pub.get_subscription_count() > 0):
+    rclpy.spin_once(node, timeout_sec=0.02)
+m = maps[-1] if maps else None
+print(json.dumps(None if m is None else {"frame": m.header.frame_id, "width": m.info.width,
+                                         "resolution": m.info.resolution}), flush=True)
+for line in sys.stdin:  # "x y yaw frame" per goal, from the watcher
+    if line.strip() == "quit":
+        break
+    x, y, yaw, frame = line.split()
+    msg = PoseStamped()
+    msg.header.frame_id = frame
+    msg.pose.position.x, msg.pose.position.y = float(x), float(y)
+    msg.pose.orientation.z, msg.pose.orientation.w = math.sin(float(yaw) / 2), math.cos(float(yaw) / 2)
+    pub.publish(msg)
+    print("sent", flush=True)
+time.sleep(0.5)
+node.destroy_node()
+rclpy.shutdown()
+"""
+"""The genuine rclpy node (Jazzy's or Kilted's interpreter): gets the map, then publishes each goal
+the watcher writes on its stdin."""
+
+WATCH = r"""
+import json, os, subprocess, sys, threading, time
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 bridge = subprocess.Popen([sys.executable, "-m", "omnibot", "ros2", "--ros-backend", BACKEND, *ARGS],
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
@@ -39,28 +77,20 @@ def pump():
     for line in bridge.stdout:
         lines.append(line.rstrip())
 threading.Thread(target=pump, daemon=True).start()
-import rclpy
-from rclpy.node import Node
-from rclpy.qos import QoSProfile, ReliabilityPolicy, DurabilityPolicy, HistoryPolicy
-from geometry_msgs.msg import PoseStamped
-from nav_msgs.msg import OccupancyGrid
+env = {k: v for k, v in os.environ.items() if k not in BOOTSTRAP}  # the peer's own wheels' bootstrap
+peer = subprocess.Popen([PYTHON, "-c", PEER], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                        stderr=subprocess.STDOUT, text=True, env=env)
+# diagnostic_msgs has no rclpy wheel here: /diagnostics is read with omnibot's own DDS reader
 from omnibot.ros2.dds import Node as DdsNode, Profile
 from omnibot.ros2.types import from_dds
-rclpy.init()
-node = Node("goal_sender")
-pub = node.create_publisher(PoseStamped, "/goal_pose", 10)
-latched = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
-                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
-maps = []
-node.create_subscription(OccupancyGrid, "/map", maps.append, latched)
 dds = DdsNode()
 diagnostics = dds.reader("/diagnostics", "diagnostic_msgs/msg/DiagnosticArray", Profile())
 statuses = []
 
-def spin_until(done, seconds):
+def wait(done, seconds):
     end = time.monotonic() + seconds
     while time.monotonic() < end and not done() and bridge.poll() is None:
-        rclpy.spin_once(node, timeout_sec=0.02)
+        time.sleep(0.02)
         for sample in diagnostics.take(N=100):
             if hasattr(sample, "__idl_typename__"):
                 for s in from_dds(sample, "diagnostic_msgs/msg/DiagnosticArray").status:
@@ -71,24 +101,27 @@ def said(text):
     return sum(text in line for line in lines)
 
 def goal(x, y, yaw, frame="map"):
-    m = PoseStamped()
-    m.header.frame_id = frame
-    m.pose.position.x, m.pose.position.y = x, y
-    m.pose.orientation.z, m.pose.orientation.w = math.sin(yaw / 2), math.cos(yaw / 2)
-    pub.publish(m)
+    peer.stdin.write(f"{x} {y} {yaw} {frame}\n")
+    peer.stdin.flush()
+    return peer.stdout.readline().strip() == "sent"
 
-spin_until(lambda: maps and pub.get_subscription_count() > 0 and said("localising in"), 240)
+got_map = json.loads(peer.stdout.readline() or "null")  # once the peer has the map and a match
+wait(lambda: said("localising in"), 60)
 goal(2.0, 2.0, 0.0, "odom")
-spin_until(lambda: said("goal_pose in frame 'odom' refused"), 30)
+wait(lambda: said("goal_pose in frame 'odom' refused"), 30)
 goal(3.6, 1.2, 0.0)  # the cabinet
-spin_until(lambda: said("goal_pose refused"), 30)
+wait(lambda: said("goal_pose refused"), 30)
 goal(3.0, 2.6, 0.5)
-spin_until(lambda: said("goal_pose received"), 30)
-spin_until(lambda: False, 3.0)  # on its way
+wait(lambda: said("goal_pose received"), 30)
+wait(lambda: False, 3.0)  # on its way
 goal(*GOAL)
-spin_until(lambda: said("goal_pose: arrived") or said("goal_pose: did not arrive") >= 2, 240)
-spin_until(lambda: statuses and statuses[-1]["state"] != "leg" and statuses[-1]["state"] != "settling", 10)
-m = maps[-1] if maps else None
+wait(lambda: said("goal_pose: arrived") or said("goal_pose: did not arrive") >= 2, 240)
+wait(lambda: statuses and statuses[-1]["state"] not in ("leg", "settling"), 10)
+try:
+    peer.communicate("quit\n", timeout=30)
+except subprocess.TimeoutExpired:
+    peer.kill()
+    peer.communicate()
 bridge.terminate()
 try:
     bridge.wait(timeout=60)
@@ -97,14 +130,11 @@ except subprocess.TimeoutExpired:
     bridge.wait()
 time.sleep(0.2)
 dds.close()
-node.destroy_node()
-rclpy.shutdown()
-print(json.dumps({
-    "lines": lines[-60:], "rc": bridge.returncode, "status": statuses[-1] if statuses else None,
-    "map": None if m is None else {"frame": m.header.frame_id, "width": m.info.width,
-                                  "resolution": m.info.resolution},
-}))
+print(json.dumps({"lines": lines[-60:], "rc": bridge.returncode, "status": statuses[-1] if statuses else None,
+                  "map": got_map}))
 """
+"""Runs in the private namespace: ``omnibot ros2 --map ARGS``, the rclpy peer (PEER) fed goals on its
+stdin as the bridge's status lines come, and the diagnostics reader."""
 
 
 @pytest.fixture(scope="module")
@@ -115,13 +145,17 @@ def room_map(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @pytest.mark.timeout(600)
-@pytest.mark.parametrize("backend", ["rclpy", "dds"])
-def test_goal_pose_is_gone_to_in_the_map(backend: str, room_map: Path, tmp_path: Path) -> None:
-    if importlib.util.find_spec("rclpy") is None:
-        pytest.skip("rclpy is not installed (the test-only extra: pip install 'omnibot[ros2-test]')")
+@pytest.mark.parametrize(
+    ("backend", "distro"), [("rclpy", "jazzy"), ("dds", "jazzy"), ("dds", "kilted")], ids="-".join
+)
+def test_goal_pose_is_gone_to_in_the_map(backend: str, distro: str, room_map: Path, tmp_path: Path) -> None:
+    python = interpreter(distro)
     log = tmp_path / "bridge.mcap"
     args = ["--world", "room", "--seed", "3", "--map", str(room_map), "--duration", "300", "--log", str(log)]
-    script = f"ARGS = {json.dumps(args)}\nBACKEND = {backend!r}\nGOAL = {GOAL!r}\n" + SCRIPT
+    script = (
+        f"ARGS = {json.dumps(args)}\nBACKEND = {backend!r}\nGOAL = {GOAL!r}\nPYTHON = {python!r}\n"
+        f"BOOTSTRAP = {list(BOOTSTRAP)!r}\nPEER = {PEER!r}\n" + WATCH
+    )
     result: dict[str, Any] = json.loads(run_in_namespace(script, timeout=580).stdout.strip().splitlines()[-1])
     out = "\n".join(result["lines"])
     print(out)

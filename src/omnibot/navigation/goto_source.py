@@ -208,7 +208,8 @@ class GotoSource:
         here = self.pose()
         estimate = cycle.estimate
         assert result is not None
-        if here is None or estimate is None:
+        if here is None or estimate is None:  # the pose lost (a localiser that stopped): wait again
+            self._enter("waiting", cycle.t)
             return False
         result.final = here
         if not result.plans and self._there(here, 1.0):
