@@ -179,5 +179,7 @@ def test_goal_pose_is_gone_to_in_the_map(backend: str, distro: str, room_map: Pa
     x, y, theta = truth(log)[-1]  # the simulator's, in the world's frame: the map's
     error = math.hypot(x - GOAL[0], y - GOAL[1])
     heading = abs(math.remainder(theta - GOAL[2], math.tau))
-    print(f"{backend}: the truth {100 * error:.1f} cm and {math.degrees(heading):.1f} degrees from the goal")
+    print(
+        f"{backend}-{distro}: the truth {100 * error:.1f} cm and {math.degrees(heading):.1f} degrees from the goal"
+    )
     assert error <= 0.05 and heading <= math.radians(5), (error, math.degrees(heading))
