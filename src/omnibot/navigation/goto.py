@@ -15,7 +15,9 @@
          where it stands (bounded), and at the last the whole tolerances decide
 
 :func:`go_to` drives a runtime that is already running (an estimator, telemetry with the sonars'
-ranges); :func:`goto` is the whole command on a client (the CLI's entry point): it starts
+ranges), the same steps as :class:`~omnibot.navigation.goto_source.GotoSource` takes cycle by cycle
+on a runtime a front end runs (:class:`Leg`, :func:`plan_leg`, :func:`obstacle_met`,
+:func:`judge_leg`); :func:`goto` is the whole command on a client (the CLI's entry point): it starts
 telemetry and the sonars, stands still while the gyro's bias is learned, goes, and leaves the
 controller stopped. A goal off the map or where the robot cannot stand raises (OffMapError,
 BlockedError: bad arguments) before anything moves; otherwise either returns a
@@ -363,7 +365,7 @@ def go_to(
         while True:
             here = _wait_pose(provider, runtime)
             result.final = here
-            if not result.plans and _within(here, goal, opts):  # there already
+            if not result.plans and within(here, goal, opts):  # there already
                 result.outcome = "arrived"
                 break
             planned = plan_leg(result, here, radius, opts)
@@ -466,7 +468,7 @@ def judge_leg(result: GotoResult, opts: GotoOptions, corrections: int) -> bool:
     final = result.final
     assert final is not None
     spent = corrections >= opts.corrections
-    if _within(final, result.goal, opts, opts.aim) or (spent and _within(final, result.goal, opts)):
+    if within(final, result.goal, opts, opts.aim) or (spent and within(final, result.goal, opts)):
         result.outcome = "arrived"
         return True
     if spent:
@@ -478,8 +480,8 @@ def judge_leg(result: GotoResult, opts: GotoOptions, corrections: int) -> bool:
     return False
 
 
-def _within(pose: Pose2D, goal: Pose2D, opts: GotoOptions, share: float = 1.0) -> bool:
-    """Within ``share`` of the tolerances of ``goal``."""
+def within(pose: Pose2D, goal: Pose2D, opts: GotoOptions, share: float = 1.0) -> bool:
+    """``pose`` is within ``share`` of the tolerances of ``goal``."""
     return (
         math.hypot(pose.x - goal.x, pose.y - goal.y) <= share * opts.tolerance
         and abs(wrap(pose.theta - goal.theta)) <= share * opts.heading_tolerance
@@ -655,4 +657,5 @@ __all__ = [
     "obstacle_met",
     "plan_leg",
     "planned_path",
+    "within",
 ]

@@ -42,6 +42,7 @@ from omnibot.navigation.goto import (
     leg_heading,
     obstacle_met,
     plan_leg,
+    within,
 )
 from omnibot.navigation.runner import WATCHDOG
 from omnibot.robot.description import RobotDescription
@@ -212,7 +213,7 @@ class GotoSource:
             self._enter("waiting", cycle.t)
             return False
         result.final = here
-        if not result.plans and self._there(here, 1.0):
+        if not result.plans and within(here, result.goal, self.options):
             self._finish("arrived", "")
             return False
         planned = plan_leg(result, here, self.radius, self.options)
@@ -290,15 +291,6 @@ class GotoSource:
         return Proposal(Twist())
 
     # ------------------------------------------------------------------ helpers
-
-    def _there(self, pose: Pose2D, share: float) -> bool:
-        result = self.result
-        assert result is not None
-        goal, opts = result.goal, self.options
-        return (
-            math.hypot(pose.x - goal.x, pose.y - goal.y) <= share * opts.tolerance
-            and abs(math.remainder(pose.theta - goal.theta, math.tau)) <= share * opts.heading_tolerance
-        )
 
     def _enter(self, state: State, t: float = math.nan) -> None:
         self.state = state
