@@ -234,3 +234,47 @@ def test_logs_without_the_slam_or_the_odometry_are_one_line_and_exit_2(
     err = capsys.readouterr().err
     assert text in err, err
     assert_one_line_error(err)
+
+
+def test_omnibots_own_log_beside_a_slam_bag(tmp_path: Path) -> None:
+    """The robot's side is a log of omnibot's recorder (the simulated omni4 driven round a curve);
+    the SLAM's bag, written by rosbags from that log's own /odom and truth (read with rosbags), puts
+    its estimate 1 cm left of the truth. The scores match what is computed here from the same
+    messages."""
+    from rosbags.highlevel import AnyReader
+
+    from tests.logs.conftest import drive
+
+    run = tmp_path / "run.mcap"
+    drive(run, seconds=4.0)
+    odom: dict[int, Pose2D] = {}
+    truth: dict[int, Pose2D] = {}
+    with AnyReader([run]) as reader:
+        conns = [c for c in reader.connections if c.topic in ("/odom", "/omnibot/truth")]
+        for conn, _, raw in reader.messages(connections=conns):
+            msg: Any = reader.deserialize(raw, conn.msgtype)
+            ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+            p, q = msg.pose.pose.position, msg.pose.pose.orientation
+            (odom if conn.topic == "/odom" else truth)[ns] = Pose2D(p.x, p.y, 2 * math.atan2(q.z, q.w))
+    both = sorted(set(odom) & set(truth))
+    assert len(both) > 300
+    start = compose(truth[both[0]], inverse(odom[both[0]]))  # the odometry frame in the world
+    slam: list[tuple[str, str, float, Any]] = []
+    for ns in both[::10]:
+        t = ns / 1e9
+        estimate = compose(compose(inverse(start), truth[ns]), OFFSET)
+        m2o = compose(estimate, inverse(odom[ns]))
+        slam.append(("/tf", "tf2_msgs/msg/TFMessage", t, transform(t, "map", "odom", m2o)))
+    slam.append(("/map", "nav_msgs/msg/OccupancyGrid", both[-1] / 1e9, occupancy(both[-1] / 1e9, start)))
+    write(tmp_path / "slam", slam)
+    result = score_slam_logs([run, tmp_path / "slam"], tmp_path / "out", plot=False)
+    report = result.report
+    assert report["map_frame_in_world"] == pytest.approx([start.x, start.y, start.theta], abs=1e-6)
+    placed = [compose(start, odom[ns]) for ns in both]
+    expected = math.sqrt(
+        sum((p.x - truth[ns].x) ** 2 + (p.y - truth[ns].y) ** 2 for p, ns in zip(placed, both, strict=True))
+        / len(both)
+    )
+    assert report["trajectory"]["odometry"]["ape_rmse_m"] == pytest.approx(expected, rel=1e-3, abs=1e-6)
+    assert report["trajectory"]["estimate"]["ape_rmse_m"] == pytest.approx(0.01, abs=1e-3)
+    assert report["scans"] == 0 and report["corrections"] == len(both[::10])
