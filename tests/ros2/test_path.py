@@ -44,20 +44,25 @@ class Node:
         return self.readers.setdefault(name, Reader())
 
 
+def pose_message(x: float, y: float, yaw: float | None) -> Any:
+    """A geometry_msgs/Pose at (x, y) facing ``yaw`` (None: an all-zero quaternion)."""
+    q = (
+        quaternion(yaw)
+        if yaw is not None
+        else schemas.new("geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=0.0, w=0.0)
+    )
+    return schemas.new(
+        "geometry_msgs/msg/Pose",
+        position=schemas.new("geometry_msgs/msg/Point", x=x, y=y, z=0.0),
+        orientation=q,
+    )
+
+
 def path_message(points: Sequence[tuple[float, float, float | None]], frame: str = "odom") -> Any:
     """A nav_msgs/Path through (x, y, yaw) points (yaw None: an all-zero quaternion)."""
     poses = []
     for x, y, yaw in points:
-        q = (
-            quaternion(yaw)
-            if yaw is not None
-            else schemas.new("geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=0.0, w=0.0)
-        )
-        pose = schemas.new(
-            "geometry_msgs/msg/Pose",
-            position=schemas.new("geometry_msgs/msg/Point", x=x, y=y, z=0.0),
-            orientation=q,
-        )
+        pose = pose_message(x, y, yaw)
         poses.append(schemas.new("geometry_msgs/msg/PoseStamped", header=header(0, frame), pose=pose))
     return schemas.new(PATH_TYPE, header=header(0, frame), poses=poses)
 

@@ -385,15 +385,60 @@ def _recover(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+# --------------------------------------------------------------------------- score
+
+
+def _score(args: argparse.Namespace) -> int:
+    """``omnibot log score``: a SLAM run scored from its logs (see :mod:`omnibot.logs.slamscore`)."""
+    from omnibot.cliargs import output_dir
+    from omnibot.logs.slamscore import Frames, score_slam_logs
+    from omnibot.mapping.session import score_lines
+    from omnibot.motion import Pose2D, parse_pose
+
+    world = None
+    if args.world is not None:
+        from omnibot.sim.world import load_world
+
+        world = load_world(args.world)
+    grid = None
+    if args.map is not None:
+        from omnibot.mapping.mapfile import load_map
+
+        grid = load_map(args.map)
+    map_pose = None
+    if args.map_pose is not None:
+        x, y, theta = parse_pose(args.map_pose, "--map-pose")
+        map_pose = Pose2D(x, y, theta or 0.0)
+    out = output_dir(args.out)
+    frames = Frames.prefixed(args.frame_prefix)
+    result = score_slam_logs(args.file, out, world=world, grid=grid, map_pose=map_pose, frames=frames)
+    report = result.report
+    where = report["map_frame_in_world"]
+    print(
+        f"score: {report['corrections']} {frames.map} -> {frames.odom} corrections, {report['scans']} scans, "
+        f"{report['distance_m']:.1f} m along the estimate"
+        + (
+            ""
+            if where is None
+            else f"; the map frame at ({where[0]:.3f}, {where[1]:.3f}, "
+            f"{math.degrees(where[2]):.1f} deg) in the world"
+        )
+    )
+    for line in score_lines(report):
+        print(f"score: {line}")
+    print(f"score: wrote {', '.join(str(f) for f in result.files)}")
+    return EXIT_OK
+
+
 # --------------------------------------------------------------------------- parser
 
 
 def add_log_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    """Add ``omnibot log`` and its subcommands (info, plot, export, protocol, replay, recover) to
+    """Add ``omnibot log`` and its subcommands (info, plot, export, protocol, replay, recover, score) to
     ``sub``."""
     p = sub.add_parser("log", help="inspect, plot, export and replay a run recorded with --log FILE.mcap")
     lsub = p.add_subparsers(
-        dest="log_command", required=True, metavar="{info,plot,export,protocol,replay,recover}"
+        dest="log_command", required=True, metavar="{info,plot,export,protocol,replay,recover,score}"
     )
     info = lsub.add_parser("info", help="duration, channels, rates, gaps, errors and warnings, link health")
     info.set_defaults(handler=_info)
@@ -439,3 +484,37 @@ def add_log_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     rec.set_defaults(handler=_recover)
     for q in (info, plot, export, proto, replay, rec):
         q.add_argument("file", metavar="FILE.mcap", help="a log written with --log")
+    score = lsub.add_parser(
+        "score",
+        help="score a SLAM run (slam_toolbox's...) from its logs: APE/RPE against the truth, the map "
+        "against the world",
+    )
+    score.add_argument(
+        "file",
+        nargs="+",
+        metavar="FILE.mcap",
+        help="the logs (omnibot's --log with the truth, a ros2 bag of /tf and /map: MCAP files or rosbag2 "
+        "directories), read together",
+    )
+    score.add_argument(
+        "--out", required=True, metavar="DIR", help="where the map, trajectories and report go"
+    )
+    score.add_argument(
+        "--world", metavar="NAME|FILE", help="the simulated world, for the map's precision and recall"
+    )
+    score.add_argument(
+        "--map", metavar="MAP.yaml", help="the SLAM's saved map (default: the logs' last /map)"
+    )
+    score.add_argument(
+        "--map-pose",
+        metavar="X,Y,THETA",
+        help="the map frame's pose in the world, m, m, degrees (default: where the truth puts the odometry "
+        "frame at the start)",
+    )
+    score.add_argument(
+        "--frame-prefix",
+        default="",
+        metavar="P",
+        help="the frames' prefix on /tf (r1/: r1/map, r1/odom, r1/base_link)",
+    )
+    score.set_defaults(handler=_score)

@@ -268,7 +268,7 @@ class _Mapping:
 
     def finish(self, out: Path, parts: Any, resolution: float) -> int:
         from omnibot.apps.run import outcome
-        from omnibot.mapping.session import write_outputs
+        from omnibot.mapping.session import score_lines, write_outputs
 
         sink = self.sink
         if sink is None:
@@ -289,19 +289,8 @@ class _Mapping:
             f"{report['scans']} scans, {report['keyframes']} keyframes, {report['loop_closures']} loop closures, "
             f"{report['distance_m']:.1f} m driven"
         )
-        for name in ("estimate", "odometry"):
-            scores = report.get("trajectory", {}).get(name)
-            if scores is not None:
-                _say(
-                    f"{name}: APE RMSE {_cm(scores['ape_rmse_m'])}, max {_cm(scores['ape_max_m'])} "
-                    "(from the simulator's truth)"
-                )
-        m = report["map"]
-        if "precision" in m:
-            _say(
-                f"map: precision {_pct(m['precision'])}, recall {_pct(m['recall'])} within "
-                f"{m['tolerance_m'] * 100:.0f} cm of the world's walls and furniture"
-            )
+        for line in score_lines(report):
+            _say(line)
         _say(f"wrote {', '.join(str(f) for f in result.files)}")
         status = 0
         if parts is not None and parts.judge is not None:
@@ -323,11 +312,3 @@ class _Mapping:
         if recorder is None or grid is None or not sink.odometry.stamps:
             return
         recorder.map(grid, sink.odometry.stamps[-1], sink.slam.map_to_odom)
-
-
-def _cm(v: float | None) -> str:
-    return "n/a" if v is None else f"{v * 100:.1f} cm"
-
-
-def _pct(v: float | None) -> str:
-    return "n/a" if v is None else f"{v * 100:.1f} %"

@@ -401,19 +401,43 @@ def write_outputs(
     plot: bool = True,
 ) -> MappingResult:
     """Write the map, the trajectories and (with ``truth`` and ``world``) the scored report to ``out``."""
-    from omnibot.mapping.mapfile import save_map
-    from omnibot.mapping.trajectory import Trajectory, write_tum
-
     if not sink.slam.keyframes():
         raise ValueError("no scan reached the SLAM: nothing to map")
     noise = noise or RangeNoise()
     grid = sink.grid(resolution, noise)
-    save_map(grid, out / "map.yaml")
-    files = [out / "map.yaml", out / "map.pgm"]
     estimate = sink.trajectory()
+    report: dict[str, Any] = {
+        "scans": sink.received,
+        "scans_dropped": sink.dropped,
+        "keyframes": len(sink.slam.keyframes()),
+        "loop_closures": sink.slam.closures,
+        "distance_m": path_length(estimate.poses),
+        "map": {"hit_range_m": noise.hit_range},
+    }
     tracks = {"estimate": estimate, "odometry": sink.odometry}
     if truth is not None:
         tracks["truth"] = truth
+    return write_report(out, grid, tracks, report, world=world, plot=plot)
+
+
+def write_report(
+    out: Path,
+    grid: OccupancyGrid,
+    tracks: dict[str, Track],
+    report: dict[str, Any],
+    *,
+    world: World | None = None,
+    plot: bool = True,
+) -> MappingResult:
+    """What a scored run leaves in ``out``: ``grid`` as map.yaml + map.pgm, each of ``tracks``
+    (``estimate``, ``odometry``, ``truth``) as NAME.tum, ``report`` (what the run adds) completed with
+    the map's size, the trajectories' APE/RPE against ``truth`` and the map's precision and recall
+    against ``world`` in report.json, and map.png."""
+    from omnibot.mapping.mapfile import save_map
+    from omnibot.mapping.trajectory import Trajectory, write_tum
+
+    save_map(grid, out / "map.yaml")
+    files = [out / "map.yaml", out / "map.pgm"]
     trajectories: dict[str, Trajectory] = {}
     for name, track in tracks.items():
         if len(track) == 0:
@@ -422,20 +446,13 @@ def write_outputs(
         path = out / f"{name}.tum"
         write_tum(path, trajectories[name])
         files.append(path)
-    report: dict[str, Any] = {
-        "scans": sink.received,
-        "scans_dropped": sink.dropped,
-        "keyframes": len(sink.slam.keyframes()),
-        "loop_closures": sink.slam.closures,
-        "distance_m": _length(estimate.poses),
-        "map": {
-            "resolution": grid.resolution,
-            "hit_range_m": noise.hit_range,
-            "origin": [grid.origin.x, grid.origin.y, grid.origin.theta],
-            "size_cells": list(grid.shape),
-        },
+    report["map"] = {
+        "resolution": grid.resolution,
+        **report.get("map", {}),
+        "origin": [grid.origin.x, grid.origin.y, grid.origin.theta],
+        "size_cells": list(grid.shape),
     }
-    if truth is not None and "truth" in trajectories:
+    if "truth" in trajectories:
         report["trajectory"] = _scores(trajectories)
     if world is not None:
         from omnibot.mapping.score import score_map
@@ -452,7 +469,36 @@ def write_outputs(
     return MappingResult(files, report, grid)
 
 
-def _length(poses: list[Pose2D]) -> float:
+def score_lines(report: dict[str, Any]) -> list[str]:
+    """A report's scores in words, one line each: the trajectories' APE, the map's precision and
+    recall (what the report has of them)."""
+    lines = []
+    for name in ("estimate", "odometry"):
+        scores = report.get("trajectory", {}).get(name)
+        if scores is not None:
+            lines.append(
+                f"{name}: APE RMSE {_cm(scores['ape_rmse_m'])}, max {_cm(scores['ape_max_m'])} "
+                "(from the simulator's truth)"
+            )
+    m = report["map"]
+    if "precision" in m:
+        lines.append(
+            f"map: precision {_pct(m['precision'])}, recall {_pct(m['recall'])} within "
+            f"{m['tolerance_m'] * 100:.0f} cm of the world's walls and furniture"
+        )
+    return lines
+
+
+def _cm(v: float | None) -> str:
+    return "n/a" if v is None else f"{v * 100:.1f} cm"
+
+
+def _pct(v: float | None) -> str:
+    return "n/a" if v is None else f"{v * 100:.1f} %"
+
+
+def path_length(poses: list[Pose2D]) -> float:
+    """m along ``poses``."""
     return sum(math.hypot(b.x - a.x, b.y - a.y) for a, b in itertools.pairwise(poses))
 
 

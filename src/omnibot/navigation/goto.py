@@ -15,7 +15,9 @@
          where it stands (bounded), and at the last the whole tolerances decide
 
 :func:`go_to` drives a runtime that is already running (an estimator, telemetry with the sonars'
-ranges); :func:`goto` is the whole command on a client (the CLI's entry point): it starts
+ranges), the same steps as :class:`~omnibot.navigation.goto_source.GotoSource` takes cycle by cycle
+on a runtime a front end runs (:class:`Leg`, :func:`plan_leg`, :func:`obstacle_met`,
+:func:`judge_leg`); :func:`goto` is the whole command on a client (the CLI's entry point): it starts
 telemetry and the sonars, stands still while the gyro's bias is learned, goes, and leaves the
 controller stopped. A goal off the map or where the robot cannot stand raises (OffMapError,
 BlockedError: bad arguments) before anything moves; otherwise either returns a
@@ -48,7 +50,7 @@ from omnibot.mapping.grid import OCCUPIED, OccupancyGrid
 from omnibot.mapping.planner import MARGIN, CostMap, PlannedPath, Planner, check_goal, inflate, plan_path
 from omnibot.mapping.se2 import compose, inverse
 from omnibot.motion import Pose2D
-from omnibot.navigation.following import follower_source
+from omnibot.navigation.following import FOLLOWER_PRIORITY, follower_source
 from omnibot.navigation.runner import SETTLE, STANDSTILL
 from omnibot.navigation.session import follower_limits
 from omnibot.protocol import codes
@@ -62,7 +64,7 @@ PoseProvider = Callable[[], Pose2D | None]
 """The robot's pose in the map frame now (None: not known yet)."""
 ScanSource = Callable[[], FloatArray | None]
 """The latest scan's points (n, 2) in the map frame (None: no scan yet)."""
-Outcome = Literal["arrived", "no path", "blocked", "timed out", "stalled", "stopped", "missed"]
+Outcome = Literal["arrived", "no path", "blocked", "timed out", "stalled", "stopped", "missed", "cancelled"]
 Heading = Literal["auto", "travel", "goal"]
 
 SPACING = 0.05
@@ -348,9 +350,7 @@ def go_to(
     client = runtime.client
     clock = client.clock
     t0 = clock.now()
-    heading: Literal["travel", "goal"] = (
-        ("travel" if robot.sonars and scan is None else "goal") if opts.heading == "auto" else opts.heading
-    )
+    heading = leg_heading(robot, opts, scan)
     radius = robot.footprint.bounding_radius
     check_goal(
         inflate(grid, robot_radius=radius, margin=opts.margin, allow_unknown=opts.allow_unknown), goal
@@ -365,49 +365,27 @@ def go_to(
         while True:
             here = _wait_pose(provider, runtime)
             result.final = here
-            if not result.plans and _within(here, goal, opts):  # there already
+            if not result.plans and within(here, goal, opts):  # there already
                 result.outcome = "arrived"
                 break
-            cmap = inflate(
-                result.grid or grid, robot_radius=radius, margin=opts.margin, allow_unknown=opts.allow_unknown
-            )
-            try:
-                plan = plan_path(cmap, here, goal, planner=opts.planner)
-            except PlanningError as exc:
-                result.outcome = "blocked" if result.replans else "no path"
-                result.reason = str(exc) + (
-                    f" (after {result.replans} obstacle(s) the map did not have)" if result.replans else ""
-                )
+            planned = plan_leg(result, here, radius, opts)
+            if planned is None:
                 break
-            result.plans.append(plan)
-            leg = _Leg(runtime, robot, cmap, plan, here, heading, opts, provider, scan)
-            ended = leg.run(deadline, stalls)
+            est = runtime.estimate_now()
+            assert est is not None
+            leg = Leg(robot, *planned, here, est.pose, runtime.period, heading, opts, provider, scan)
+            ended = leg.run(runtime, deadline, stalls)
             result.final = _wait_pose(provider, runtime)
             if ended == "obstacle":
                 assert leg.watch.points is not None
-                points = leg.watch.points
-                result.obstacles.extend((float(x), float(y)) for x, y in points)
-                result.grid = mark(result.grid or grid, points)
-                if result.replans >= opts.max_replans:
-                    result.outcome = "blocked"
-                    result.reason = f"blocked: {leg.why}, still after {result.replans} re-plans"
+                if obstacle_met(result, leg.watch.points, leg.why, opts):
                     break
-                result.replans += 1
                 continue
             if ended != "done":
                 result.outcome = ended
                 result.reason = leg.why
                 break
-            if _within(result.final, goal, opts, opts.aim) or (
-                corrections >= opts.corrections and _within(result.final, goal, opts)
-            ):
-                result.outcome = "arrived"
-                break
-            if corrections >= opts.corrections:
-                result.outcome = "missed"
-                result.reason = "ended outside the tolerances" + (
-                    f" ({100 * opts.tolerance:.0f} cm, {math.degrees(opts.heading_tolerance):.0f} degrees)"
-                )
+            if judge_leg(result, opts, corrections):
                 break
             corrections += 1
     finally:
@@ -415,6 +393,15 @@ def go_to(
             stalls.close()
     result.duration = clock.now() - t0
     return result
+
+
+def leg_heading(
+    robot: RobotDescription, opts: GotoOptions, scan: ScanSource | None
+) -> Literal["travel", "goal"]:
+    """The options' heading, ``auto`` resolved: travel when the robot has a sonar and no scan watches."""
+    if opts.heading != "auto":
+        return opts.heading
+    return "travel" if robot.sonars and scan is None else "goal"
 
 
 def _estimate_pose(runtime: Runtime) -> PoseProvider:
@@ -439,38 +426,102 @@ def _wait_pose(provider: PoseProvider, runtime: Runtime, limit: float = 2.0) -> 
     return pose
 
 
-def _within(pose: Pose2D, goal: Pose2D, opts: GotoOptions, share: float = 1.0) -> bool:
-    """Within ``share`` of the tolerances of ``goal``."""
+def plan_leg(
+    result: GotoResult, here: Pose2D, radius: float, opts: GotoOptions
+) -> tuple[CostMap, PlannedPath] | None:
+    """A plan from ``here`` to the goal on the result's grid (the map with what was met marked),
+    inflated by ``radius`` + the margin, kept in ``result.plans``; None when there is none (the
+    goto is over: ``no path``, or ``blocked`` after obstacles the map did not have)."""
+    assert result.grid is not None
+    cmap = inflate(result.grid, robot_radius=radius, margin=opts.margin, allow_unknown=opts.allow_unknown)
+    try:
+        plan = plan_path(cmap, here, result.goal, planner=opts.planner)
+    except PlanningError as exc:
+        result.outcome = "blocked" if result.replans else "no path"
+        result.reason = str(exc) + (
+            f" (after {result.replans} obstacle(s) the map did not have)" if result.replans else ""
+        )
+        return None
+    result.plans.append(plan)
+    return cmap, plan
+
+
+def obstacle_met(result: GotoResult, points: FloatArray, why: str, opts: GotoOptions) -> bool:
+    """A leg ended by ``points`` the map does not have: they are marked in the result's grid; True
+    when the goto is over (``blocked``: no re-plan left), else a re-plan is due (counted)."""
+    assert result.grid is not None
+    result.obstacles.extend((float(x), float(y)) for x, y in points)
+    result.grid = mark(result.grid, points)
+    if result.replans >= opts.max_replans:
+        result.outcome = "blocked"
+        result.reason = f"blocked: {why}, still after {result.replans} re-plans"
+        return True
+    result.replans += 1
+    return False
+
+
+def judge_leg(result: GotoResult, opts: GotoOptions, corrections: int) -> bool:
+    """After a leg that reached its end, with ``result.final`` where the robot settled: True when the
+    goto is over (``arrived``, or ``missed`` once the ``corrections`` made are all it may make),
+    False when a correction leg is due. Arrival is within ``aim`` of the tolerances, or within them
+    once the corrections are spent."""
+    final = result.final
+    assert final is not None
+    spent = corrections >= opts.corrections
+    if within(final, result.goal, opts, opts.aim) or (spent and within(final, result.goal, opts)):
+        result.outcome = "arrived"
+        return True
+    if spent:
+        result.outcome = "missed"
+        result.reason = "ended outside the tolerances" + (
+            f" ({100 * opts.tolerance:.0f} cm, {math.degrees(opts.heading_tolerance):.0f} degrees)"
+        )
+        return True
+    return False
+
+
+def within(pose: Pose2D, goal: Pose2D, opts: GotoOptions, share: float = 1.0) -> bool:
+    """``pose`` is within ``share`` of the tolerances of ``goal``."""
     return (
         math.hypot(pose.x - goal.x, pose.y - goal.y) <= share * opts.tolerance
         and abs(wrap(pose.theta - goal.theta)) <= share * opts.heading_tolerance
     )
 
 
-class _Leg:
-    """One follow of one plan on the runtime, watched for obstacles, stalls and the deadline."""
+class Leg:
+    """One follow of one plan (map frame), started ``here`` (map frame) while the estimate the
+    follower steers by is ``estimate``: the follower source (``name``, ``priority``) on the path moved
+    into the estimate's frame, its obstacle watch, its time budget; :meth:`run` drives it on a
+    runtime (:func:`go_to`), a :class:`~omnibot.navigation.goto_source.GotoSource` asks it cycle by
+    cycle."""
 
     def __init__(
         self,
-        runtime: Runtime,
         robot: RobotDescription,
         cmap: CostMap,
         plan: PlannedPath,
         here: Pose2D,
+        estimate: Pose2D,
+        period: float,
         heading: Literal["travel", "goal"],
         opts: GotoOptions,
         provider: PoseProvider,
         scan: ScanSource | None,
+        *,
+        name: str = "goto",
+        priority: int = FOLLOWER_PRIORITY,
     ) -> None:
-        self.runtime = runtime
         self.opts = opts
         self.path = planned_path(plan, here.theta, heading)
-        est = runtime.estimate_now()
-        assert est is not None
         # the map -> estimate transform now: the follower steers by the estimate
-        self.to_estimate = compose(est.pose, inverse(here))
+        self.to_estimate = compose(estimate, inverse(here))
         self.source = follower_source(
-            robot, transformed(self.path, self.to_estimate), runtime.period, speed=opts.speed, name="goto"
+            robot,
+            transformed(self.path, self.to_estimate),
+            period,
+            speed=opts.speed,
+            name=name,
+            priority=priority,
         )
         self.why = ""
         self.watch = ObstacleWatch(
@@ -483,9 +534,11 @@ class _Leg:
         self.why = why
         self.source.end(why)
 
-    def run(self, deadline: float, stalls: StallWatch) -> Outcome | Literal["obstacle", "done"]:
+    def run(
+        self, runtime: Runtime, deadline: float, stalls: StallWatch
+    ) -> Outcome | Literal["obstacle", "done"]:
         """Follow until the end, an obstacle, a failure or the time is up; then stop and settle."""
-        runtime, client, source = self.runtime, self.runtime.client, self.source
+        client, source = runtime.client, self.source
         began = client.clock.now()
         end = min(deadline, began + (self.budget if self.opts.timeout is None else math.inf))
         found = len(stalls.stalls)
@@ -591,12 +644,18 @@ def goto(
 __all__ = [
     "GotoOptions",
     "GotoResult",
+    "Leg",
     "ObstacleWatch",
     "PoseProvider",
     "ScanSource",
     "go_to",
     "goto",
+    "judge_leg",
+    "leg_heading",
     "mark",
     "navigation_runtime",
+    "obstacle_met",
+    "plan_leg",
     "planned_path",
+    "within",
 ]

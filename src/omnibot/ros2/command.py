@@ -100,6 +100,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="speed cap of the path follower (default: the robot's limit)",
     )
     p.add_argument("--duration", type=float, metavar="S", help="run for S seconds (default: until Ctrl-C)")
+    p.add_argument(
+        "--map",
+        metavar="MAP.yaml",
+        help="a saved map (map_server's YAML + image): localise in it with the scanner, publish map and "
+        "map -> odom, and go to each goal_pose (geometry_msgs/PoseStamped in map); one robot",
+    )
+    p.add_argument(
+        "--initial-pose",
+        metavar="X,Y,THETA",
+        help="with --map: where the robot stands in the map, m, m, degrees (default on the simulator: the "
+        "world's start; the simulated robot is put there)",
+    )
 
 
 @dataclass(frozen=True)
@@ -197,7 +209,36 @@ def check(args: argparse.Namespace) -> list[RobotSpec]:
     specs = robot_specs(args)
     if len(specs) > 1 and (getattr(args, "log", None) or getattr(args, "foxglove", None)):
         raise ConfigError("--log and --foxglove record one robot: not with several --port", key="--log")
+    check_map(args, specs)
     return specs
+
+
+def check_map(args: argparse.Namespace, specs: list[RobotSpec]) -> None:
+    """``--map`` and ``--initial-pose`` checked (one line each); the map loaded into ``args.map_grid``
+    (None without ``--map``) and the pose parsed into ``args.map_start``."""
+    path = getattr(args, "map", None)
+    initial = getattr(args, "initial_pose", None)
+    args.map_grid = args.map_start = None
+    if path is None:
+        if initial is not None:
+            raise ConfigError(
+                "--initial-pose places the robot in a --map: give the map", key="--initial-pose"
+            )
+        return
+    from omnibot.mapping.mapfile import load_map
+    from omnibot.motion import parse_pose
+
+    if len(specs) > 1:
+        raise ConfigError("--map localises one robot: not with several --port", key="--map")
+    url = specs[0].url
+    if initial is not None:
+        x, y, theta = parse_pose(initial, "--initial-pose")
+        args.map_start = (x, y, theta or 0.0)
+    elif url is not None and not url.split("+")[-1].startswith("sim:"):
+        raise ConfigError(
+            "where does the robot stand in the map? give --initial-pose X,Y,THETA", key="--initial-pose"
+        )
+    args.map_grid = load_map(path)
 
 
 def attach(
@@ -243,6 +284,10 @@ def attach(
     backend = choose(getattr(args, "ros_backend", "dds"))
     simulated = find_simulator(runtime.client.link) is not None
     scans = _scanner(runtime, robot, spec)  # a bad --scanner is refused before any participant
+    if getattr(args, "map_grid", None) is not None and runtime.scanner is None:
+        raise ConfigError(
+            f"robot {robot.name!r} has no scanner to localise in --map with (give --scanner DEV)", key="--map"
+        )
     try:
         node = open_node(backend, spec.namespace, sim_time=simulated)
     except BaseException as exc:
@@ -271,9 +316,13 @@ def attach(
         runtime=runtime,
         diagnosed=diagnosed,
     )
-    reset = OdometryReset(
-        node, runtime, odom_frame=odom, notify=notify, on_reset=path.cancel, diagnosed=diagnosed
-    )
+    cancels = [path.cancel]  # an odometry reset moves the frame under what is being driven
+
+    def cancel(why: str) -> None:
+        for one in cancels:
+            one(why)
+
+    reset = OdometryReset(node, runtime, odom_frame=odom, notify=notify, on_reset=cancel, diagnosed=diagnosed)
     EstimatorWhenMissing.add(runtime, robot)
     limits = TwistLimits.from_limits(runtime.client.limits, None, robot)
     cmd_vel = CmdVelSource(
@@ -287,23 +336,75 @@ def attach(
     runtime.add_source(cmd_vel)
     runtime.add_source(path)
     runtime.add_sink(reset)
-    runtime.add_sink(
-        Ros2Sink(
-            node,
-            robot,
-            prefix=spec.prefix,
-            reporters=[path.status, reset.status],
-            timeline=timeline,
-            sim_time=simulated,
-            diagnosed=diagnosed,
-        )
+    bridge = Ros2Sink(
+        node,
+        robot,
+        prefix=spec.prefix,
+        reporters=[path.status, reset.status],
+        timeline=timeline,
+        sim_time=simulated,
+        diagnosed=diagnosed,
     )
+    runtime.add_sink(bridge)
+    if getattr(args, "map_grid", None) is not None:
+        cancels.append(_goal_pose(runtime, robot, args, node, bridge, spec, notify, diagnosed).cancel)
     node.declare(parameters(robot, runtime, spec, cmd_vel, node.backend))
     if announce:
         notify("info", f"ros2: node {fqn(node)} on the {node.backend} backend")
     StallWatch.on(runtime, robot)  # wheels that turn while the body does not: stop, say so
     start_sonars(runtime.client, robot, SONAR_PERIOD)  # in TEL: the ranges out, the stall watch's witnesses
     return node
+
+
+def _goal_pose(
+    runtime: Any,
+    robot: Any,
+    args: argparse.Namespace,
+    node: Any,
+    bridge: Any,
+    spec: RobotSpec,
+    notify: Any,
+    diagnosed: Any,
+) -> Any:
+    """``--map``: the localiser (started at ``--initial-pose`` or the simulator's pose) publishing the map
+    and ``map -> odom``, and the ``goal_pose`` source on it (:mod:`omnibot.ros2.goal`)."""
+    from omnibot.mapping.localise import Localiser
+    from omnibot.mapping.session import LocalisingSink
+    from omnibot.motion import Pose2D
+    from omnibot.ros2.goal import GoalPoseSource, Localisation
+    from omnibot.transport.device import find_simulator
+
+    grid = args.map_grid
+    if args.map_start is not None:
+        start = Pose2D(*args.map_start)
+    else:
+        sim = find_simulator(runtime.client.link)
+        assert sim is not None  # check_map: a real robot needs --initial-pose
+        start = Pose2D(sim.pose.x, sim.pose.y, sim.pose.theta)
+    localiser = Localiser(grid, seed=getattr(args, "seed", None) or 0)
+    localiser.reset(start, spread=(0.05, 0.05))
+    localisation = Localisation(bridge, grid, LocalisingSink(None, localiser, threaded=True))
+    node.closers.append(localisation.close)
+    runtime.add_sink(localisation)
+    goal = GoalPoseSource(
+        node,
+        robot,
+        grid,
+        runtime.period,
+        localisation.pose,
+        map_frame=spec.prefix + "map",
+        notify=notify,
+        scan=localisation.sink.points,
+        diagnosed=diagnosed,
+    )
+    runtime.add_source(goal)
+    bridge.reporters.append(goal.status)
+    notify(
+        "info",
+        f"localising in {args.map} from ({start.x:.2f}, {start.y:.2f}, {math.degrees(start.theta):.0f} deg); "
+        "goal_pose in the map frame is gone to",
+    )
+    return goal
 
 
 def fqn(node: Any) -> str:
@@ -436,6 +537,9 @@ def run(args: argparse.Namespace) -> int:
         robots: list[_Robot] = []
         for spec in specs:
             url = spec.url or sim_url(args)
+            start = getattr(args, "map_start", None)
+            if start is not None and spec.url is None:  # the simulated robot put where the map has it
+                url += f"&pose={start[0]:.4f},{start[1]:.4f},{math.degrees(start[2]):.3f}"
             session = stack.enter_context(robot_session(url, args.robot, timeout=0.5))
             label = f"ros2 [{spec.namespace}]: " if several else "ros2: "
             one = _open(args, spec, session, url, label, timeline)
