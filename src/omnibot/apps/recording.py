@@ -2,11 +2,11 @@
 
 :func:`omnibot.cli.main` opens it around the command from ``--log FILE`` / ``--foxglove [HOST:]PORT``
 and puts it on the command's arguments (``args.recording``, read with
-:func:`omnibot.cliargs.recording_of`); the
-command passes it on as the ``recording`` of :func:`~omnibot.client.session.robot_session` (and
-``open_robot``, ``guarded``) and of :class:`~omnibot.runtime.runtime.Runtime` (through the libraries
-that build one: the navigator, the dashboard, ``goto``). Nothing else records: a session or a
-runtime given no recording is not recorded.
+:func:`omnibot.cliargs.recording_of`); the command passes it on as the ``recording`` of
+:func:`~omnibot.client.session.robot_session` (and ``open_robot``, ``guarded``) and of
+:class:`~omnibot.runtime.runtime.Runtime` (through the libraries that build one: the navigator, the
+dashboard, ``goto``, ``calibrate``). Nothing else records: a session or a runtime given no recording
+is not recorded.
 
 With ``--foxglove`` the user asked to drive from Foxglove too: Foxglove's Teleop panel
 (:class:`omnibot.logs.live.PanelSource`, priority 30: over a follower, under a person) becomes a
