@@ -73,8 +73,8 @@ class RuntimeRecording(Protocol):
 
 
 class Recording(ClientRecording, RuntimeRecording, Protocol):
-    """A command's recording of the clients it opens and the runtimes it runs (for a library that
-    does both: the dashboard, the navigator's sessions, ``goto``)."""
+    """A command's recording of the clients it opens and the runtimes it runs, for a library that
+    does both (the dashboard opens its robot and runs its runtime)."""
 
 
 class Pacer(Protocol):
