@@ -3,9 +3,11 @@ omnibot``, no extra) in a fresh venv; its size on disk, its packages and its imp
 
 ``python -m benchmarks.core_install [--extras all] [--repeats N] [--keep DIR]``
 
-The wheel is built from a copy of this checkout's sources (``pip wheel --no-deps``, the build
-backend fetched by pip's build isolation) and installed at constraints.txt's versions, so the figures are those of the tested
-set. ``tests/test_packaging.py`` builds the same venv and checks what it can do.
+The sdist and the wheel are built as a release builds them, ``python -m build`` (the sdist from a copy
+of this checkout's sources, caches and all, then the wheel from the sdist; the build backend fetched
+by build's isolation), and the wheel is installed at constraints.txt's versions, so the figures are
+those of the tested set. ``tests/test_packaging.py`` builds the same venv, one from the sdist too, and
+checks what they can do.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -39,25 +42,36 @@ def _run(cmd: list[str | Path]) -> subprocess.CompletedProcess[str]:
     return done
 
 
-def build_wheel(dest: Path) -> Path:
-    """omnibot's wheel, built into ``dest`` from a copy of this checkout's sources (the build's
-    ``build/`` and ``*.egg-info`` land in the copy, not in the checkout)."""
+@dataclass(frozen=True)
+class Dists:
+    """What ``python -m build`` made: the source distribution and the wheel built from it."""
+
+    sdist: Path
+    wheel: Path
+
+
+def build_dists(dest: Path) -> Dists:
+    """omnibot's sdist and wheel, built into ``dest`` by ``python -m build`` from a copy of this
+    checkout's sources with their caches (``__pycache__``, the simulator's compiled kernels), which
+    the sdist must leave out; the build's ``build/`` and ``*.egg-info`` land in the copy, not in the
+    checkout (a stale ``*.egg-info`` of an editable install is not copied: setuptools would read its
+    file list)."""
     source = dest / "source"
-    ignore = shutil.ignore_patterns("__pycache__", "*.egg-info", "*.nbi", "*.nbc")
-    shutil.copytree(ROOT / "src", source / "src", ignore=ignore)
+    shutil.copytree(ROOT / "src", source / "src", ignore=shutil.ignore_patterns("*.egg-info"))
     for name in ("pyproject.toml", "README.md"):
         shutil.copy2(ROOT / name, source / name)
-    _run([sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps", "--wheel-dir", dest, source])
+    _run([sys.executable, "-m", "build", "--outdir", dest, source])
+    (sdist,) = dest.glob("omnibot-*.tar.gz")
     (wheel,) = dest.glob("omnibot-*.whl")
-    return wheel
+    return Dists(sdist, wheel)
 
 
-def install_venv(wheel: Path, dest: Path, extras: str = "") -> Path:
-    """A fresh venv in ``dest`` (no pip of its own) with ``wheel`` (and ``extras``, e.g. ``"all"``)
-    installed at constraints.txt's versions; its python."""
+def install_venv(dist: Path, dest: Path, extras: str = "") -> Path:
+    """A fresh venv in ``dest`` (no pip of its own) with ``dist``, the wheel or the sdist (and
+    ``extras``, e.g. ``"all"``), installed at constraints.txt's versions; its python."""
     _run([sys.executable, "-m", "venv", "--without-pip", dest])
     python = dest / "bin" / "python"
-    target = f"omnibot[{extras}] @ {wheel.as_uri()}" if extras else str(wheel)
+    target = f"omnibot[{extras}] @ {dist.as_uri()}" if extras else str(dist)
     _run([sys.executable, "-m", "pip", "--python", python, "install", "--quiet", "-c", CONSTRAINTS, target])
     return python
 
@@ -102,7 +116,7 @@ def main(argv: list[str] | None = None) -> int:
         work = args.keep or Path(tmp)
         work.mkdir(parents=True, exist_ok=True)
         start = time.perf_counter()
-        wheel = build_wheel(work / "dist")
+        wheel = build_dists(work / "dist").wheel
         python = install_venv(wheel, work / "venv", args.extras)
         took = time.perf_counter() - start
         dists = installed(python)

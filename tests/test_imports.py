@@ -1,7 +1,9 @@
 """The import graph of src/omnibot, read from the modules' syntax trees: no cycles between modules,
 the packages in the storeys docs/architecture.md draws (each imports only from its own storey and
 below, with no cycle between packages), and the pure modules (fits, kinematics, codecs, the
-firmware...) never load the client or a transport.
+firmware...) never load the client or a transport. Each package has a face (``__all__`` in its
+``__init__``: the names it re-exports and the submodules other packages use): every name in it
+exists, and another package imports only the submodules it names.
 
 Edges: every ``import`` and ``from ... import`` of an omnibot module, at module level and inside
 functions alike (a lazy import still runs when its function does, so it closes a cycle as surely as
@@ -18,6 +20,7 @@ which loads the client.
 from __future__ import annotations
 
 import ast
+import importlib
 import re
 from collections.abc import Iterable, Iterator
 from pathlib import Path
@@ -376,3 +379,71 @@ def test_no_package_cycle() -> None:
     graph = package_graph(GRAPH, ALLOWED_UPWARD)
     found = [" -> ".join(loop_through(c, graph)) for c in cycles(graph)]
     assert not found, "package cycles:\n  " + "\n  ".join(found)
+
+
+# --------------------------------------------------------------------------- package faces
+
+
+PACKAGES = sorted(m for m, p in MODULES.items() if p.name == "__init__.py")
+
+
+def face_of(package: str) -> list[str] | None:
+    """The names of ``package``'s ``__all__`` (a literal list of strings in its ``__init__``), None
+    without one."""
+    tree = ast.parse(MODULES[package].read_text(encoding="utf-8"))
+    for node in tree.body:
+        if not isinstance(node, ast.Assign | ast.AnnAssign):
+            continue
+        targets = [node.target] if isinstance(node, ast.AnnAssign) else node.targets
+        if any(isinstance(t, ast.Name) and t.id == "__all__" for t in targets):
+            value = node.value
+            assert isinstance(value, ast.List | ast.Tuple), f"{package}.__all__ is not a literal list"
+            names = [e.value for e in value.elts if isinstance(e, ast.Constant) and isinstance(e.value, str)]
+            assert len(names) == len(value.elts), f"{package}.__all__ holds something else than names"
+            return names
+    return None
+
+
+def face_crossings(graph: dict[str, set[str]]) -> list[str]:
+    """Every import ``a -> p.x...`` from outside the package ``p`` into its submodule ``x`` that
+    ``p.__all__`` does not name (the root package ``omnibot`` aside: the storeys rule it)."""
+    out = []
+    for name, targets in graph.items():
+        for target in targets:
+            for package in PACKAGES:
+                if package == ROOT or not _under(target, (package,)) or target == package:
+                    continue
+                if _under(name, (package,)):
+                    continue
+                first = target[len(package) + 1 :].split(".")[0]
+                if first not in (face_of(package) or []):
+                    out.append(f"{name} -> {target} ({package}.__all__ lacks {first!r})")
+    return sorted(out)
+
+
+def test_every_package_has_a_face() -> None:
+    """Each package's ``__init__`` has ``__all__``: the names it re-exports and the submodules other
+    packages use."""
+    missing = [p for p in PACKAGES if face_of(p) is None]
+    assert not missing, "packages without __all__ in their __init__: " + ", ".join(missing)
+
+
+@pytest.mark.parametrize("package", PACKAGES)
+def test_every_name_of_a_face_exists(package: str) -> None:
+    """A name of ``__all__`` is a submodule of the package or an attribute of it once imported (the
+    ``__init__``'s own names, lazy ones included)."""
+    module = importlib.import_module(package)
+    ghosts = [n for n in face_of(package) or [] if f"{package}.{n}" not in MODULES and not hasattr(module, n)]
+    assert not ghosts, f"{package}.__all__ names what does not exist: {', '.join(ghosts)}"
+
+
+def test_packages_import_each_other_through_their_faces() -> None:
+    """Another package imports a package's submodule only when its ``__all__`` names it (a module
+    left out of ``__all__`` is the package's own business)."""
+    assert face_crossings({"omnibot.motion": {"omnibot.sim.hidden"}}) == [
+        "omnibot.motion -> omnibot.sim.hidden (omnibot.sim.__all__ lacks 'hidden')"
+    ]
+    bad = face_crossings(GRAPH)
+    assert not bad, (
+        "imports of modules outside their package's face (add them to __all__):\n  " + "\n  ".join(bad)
+    )

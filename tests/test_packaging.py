@@ -1,9 +1,10 @@
 """Packaging as users install it: the core alone (``pip install omnibot``) does what the core promises,
 and a command whose extra is missing says which ``pip install 'omnibot[...]'`` to run (exit 2).
 
-The wheel test builds omnibot's wheel and installs it with the core dependencies only into a fresh
-venv (benchmarks/core_install.py, at constraints.txt's versions: pip's cache or the network); it is
-marked ``install`` (``-m 'not install'`` leaves it out) and runs in ``make test``.
+The install tests build omnibot's sdist and wheel as a release does (``python -m build``: the wheel
+from the sdist) and install each with the core dependencies only into a fresh venv
+(benchmarks/core_install.py, at constraints.txt's versions: pip's cache or the network); they are
+marked ``install`` (``-m 'not install'`` leaves them out) and run in ``make test``.
 """
 
 from __future__ import annotations
@@ -12,11 +13,20 @@ import argparse
 import json
 import subprocess
 import sys
+import tarfile
 import tomllib
 from pathlib import Path
 
 import pytest
-from benchmarks.core_install import CONSTRAINTS, CORE_IMPORT, ROOT, build_wheel, clean_env, install_venv
+from benchmarks.core_install import (
+    CONSTRAINTS,
+    CORE_IMPORT,
+    ROOT,
+    Dists,
+    build_dists,
+    clean_env,
+    install_venv,
+)
 
 from omnibot.extras import EXTRA_OF, WHAT, missing_extra
 
@@ -180,9 +190,43 @@ def test_every_command_declares_its_options_without_any_extra(tmp_path: Path) ->
 
 
 @pytest.fixture(scope="module")
-def core_python(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    work = tmp_path_factory.mktemp("core")
-    return install_venv(build_wheel(work / "dist"), work / "venv")
+def dists(tmp_path_factory: pytest.TempPathFactory) -> Dists:
+    return build_dists(tmp_path_factory.mktemp("dist"))
+
+
+@pytest.fixture(scope="module")
+def core_python(dists: Dists, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return install_venv(dists.wheel, tmp_path_factory.mktemp("core") / "venv")
+
+
+@pytest.fixture(scope="module")
+def sdist_python(dists: Dists, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return install_venv(dists.sdist, tmp_path_factory.mktemp("sdist") / "venv")
+
+
+CACHES = ("__pycache__", ".pyc", ".nbi", ".nbc", ".cache/", ".mypy_cache", ".pytest_cache", ".ruff_cache")
+"""What a checkout holds that no distribution may: byte code, the simulator's compiled kernels, tool caches."""
+
+
+def _package_files() -> set[str]:
+    """The files of src/omnibot a build needs (its modules and package data), relative to src/."""
+    src = ROOT / "src"
+    files = {p.relative_to(src).as_posix() for p in (src / "omnibot").rglob("*") if p.is_file()}
+    return {f for f in files if not any(c in f for c in CACHES)}
+
+
+@pytest.mark.install
+@pytest.mark.timeout(600)
+def test_the_sdist_carries_what_a_build_needs_and_no_cache(dists: Dists) -> None:
+    with tarfile.open(dists.sdist) as tar:
+        top = f"{dists.sdist.name.removesuffix('.tar.gz')}/"
+        names = {n.removeprefix(top) for n in tar.getnames()}
+    assert {"pyproject.toml", "README.md", "PKG-INFO"} <= names
+    shipped = {n.removeprefix("src/") for n in names if n.startswith("src/omnibot/")}
+    needed = _package_files()
+    assert {"omnibot/py.typed", "omnibot/robot/presets/omni4.yaml", "omnibot/web/static/app.js"} <= needed
+    assert needed <= shipped, sorted(needed - shipped)  # presets, worlds, teleop, web assets, modules
+    assert not [n for n in names if any(c in n for c in CACHES)]
 
 
 def _in_core(python: Path, *args: str) -> subprocess.CompletedProcess[str]:
@@ -211,7 +255,10 @@ def test_the_core_install_holds_the_core_dependencies_only(core_python: Path) ->
 
 @pytest.mark.install
 @pytest.mark.timeout(600)
-def test_the_core_imports_the_client_and_loads_no_extra(core_python: Path) -> None:
+@pytest.mark.parametrize("venv", ["core_python", "sdist_python"])
+def test_the_core_imports_the_client_and_loads_no_extra(venv: str, request: pytest.FixtureRequest) -> None:
+    """From the wheel and from the sdist alike."""
+    core_python: Path = request.getfixturevalue(venv)
     code = f"{CORE_IMPORT}; import omnibot, sys; print(omnibot.__file__); print(sorted(sys.modules))"
     done = _in_core(core_python, str(core_python), "-c", code)
     assert done.returncode == 0, done.stderr

@@ -418,7 +418,7 @@ def _add_console(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> No
 
 
 def _demo(args: argparse.Namespace) -> int:
-    from omnibot.cliargs import check_sim_options, check_world, world_of
+    from omnibot.cliargs import check_sim_options, check_world, recording_of, world_of
     from omnibot.demos.seed000 import run_demo
 
     check_sim_options(args)
@@ -426,7 +426,13 @@ def _demo(args: argparse.Namespace) -> int:
         check_world(args)
     out = output_dir(args.out)
     report, ok = run_demo(
-        args.port, args.robot, out, seed=seed_of(args), world=world_of(args), surface=args.surface
+        args.port,
+        args.robot,
+        out,
+        seed=seed_of(args),
+        world=world_of(args),
+        surface=args.surface,
+        recording=recording_of(args),
     )
     print(report)
     return EXIT_OK if ok else EXIT_FAILED
@@ -695,7 +701,7 @@ def exit_status(exc: BaseException) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``omnibot`` command line; returns the exit status."""
-    from omnibot.logs.active import recording
+    from omnibot.apps.recording import command_recording
     from omnibot.signals import Terminated, terminate_cleanly
 
     parser = build_parser()
@@ -720,14 +726,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         )
         return EXIT_USAGE
     try:
-        with (
-            terminate_cleanly(),
-            recording(
-                getattr(args, "log", None),
-                foxglove=getattr(args, "foxglove", None),
-                foxglove_token=getattr(args, "foxglove_token", None),
-            ) as rec,
-        ):
+        with terminate_cleanly(), command_recording(args) as rec:
+            args.recording = rec  # handed by the command to the sessions it opens and its runtimes
             status = handler(args)
             sys.stdout.flush()  # a reader that went away shows up here, not at interpreter exit
         if rec is not None and rec.failure is not None and status == EXIT_OK:

@@ -24,10 +24,13 @@ import argparse
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 from omnibot.errors import ConfigError
 from omnibot.outputs import check_writable
+
+if TYPE_CHECKING:
+    from omnibot.apps.recording import CommandRecording
 
 DEFAULT_ROBOT = "omni4"
 DEFAULT_SEED = 1
@@ -166,6 +169,13 @@ def add_log_option(p: argparse.ArgumentParser) -> None:
         help="--foxglove: access token (default $OMNIBOT_FOXGLOVE_TOKEN; required, and made up if not "
         "given, off loopback)",
     )
+
+
+def recording_of(args: argparse.Namespace) -> CommandRecording | None:
+    """The command's ``--log`` / ``--foxglove`` recording, which :func:`omnibot.cli.main` opened for
+    it (:mod:`omnibot.apps.recording`): the command hands it to its sessions and runtimes. None: it
+    records nothing (or it was called without ``main``)."""
+    return cast("CommandRecording | None", getattr(args, "recording", None))
 
 
 def check_sim_options(args: argparse.Namespace, allowed: Sequence[str] = ()) -> None:

@@ -8,7 +8,6 @@ import time
 
 import pytest
 
-from omnibot.client import session as session_module
 from omnibot.client.client import RobotClient
 from omnibot.client.session import guarded, leave, robot_on_link, robot_session
 from omnibot.errors import ConfigError, ControllerError
@@ -42,17 +41,34 @@ def test_robot_session_takes_the_robot_from_hello_and_leaves_mode_and_protocol()
     assert ctl.state == codes.STATE_IDLE and ctl.mode == 0 and not ctl.binary and ctl.telemetry.period == 0
 
 
-def test_every_client_a_session_opens_goes_to_the_open_hooks(monkeypatch: pytest.MonkeyPatch) -> None:
-    """What the command's --log recorder listens on (omnibot.logs.active installs itself)."""
-    seen: list[tuple[RobotClient, str | None, bool]] = []
+class Seen:
+    """A recording that notes what it is handed."""
 
-    def hook(client: RobotClient, robot: object, *, guess: bool = False) -> None:
-        seen.append((client, getattr(robot, "name", None), guess))
+    def __init__(self) -> None:
+        self.seen: list[tuple[RobotClient, str | None, bool]] = []
 
-    monkeypatch.setattr(session_module, "ON_OPEN", [hook])
-    with robot_session("sim://omni3", "omni3") as session:
+    def attach(self, client: RobotClient, robot: object, guess: bool) -> None:
+        self.seen.append((client, getattr(robot, "name", None), guess))
+
+
+def test_every_client_a_session_opens_goes_to_its_recording() -> None:
+    """What the command's --log recorder is handed (omnibot.apps.recording)."""
+    rec = Seen()
+    seen = rec.seen
+    with robot_session("sim://omni3", "omni3", recording=rec) as session:
         assert seen and all(client is session.client for client, _, _ in seen)
         assert (session.client, "omni3", False) in seen  # with its description once the HELLO named it
+    with robot_session("sim://omni3", "omni3"):  # a session given no recording is recorded nowhere
+        pass
+    assert all(client is session.client for client, _, _ in seen)
+
+
+def test_a_guarded_client_goes_to_its_recording_with_its_robot_guessed() -> None:
+    rec = Seen()
+    client = RobotClient.open("sim://omni4")
+    with guarded(client, recording=rec):
+        pass
+    assert rec.seen == [(client, None, True)]
 
 
 def test_guarded_stops_on_error_only_when_asked() -> None:

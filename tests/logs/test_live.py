@@ -138,8 +138,8 @@ def test_a_token_guards_the_live_server() -> None:
 def test_foxglove_address_and_token_are_checked_before_anything_runs(
     capsys: Any, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    from omnibot.logs.active import FoxgloveBind
     from omnibot.logs.live import parse_address
+    from omnibot.logs.recording import FoxgloveBind
 
     assert parse_address("8765") == ("127.0.0.1", 8765)
     assert parse_address("0.0.0.0:0") == ("0.0.0.0", 0)

@@ -22,7 +22,7 @@ from omnibot.control.paths.geometry import resample
 from omnibot.control.paths.path import Path as RobotPath
 from omnibot.lidar.reader import open_scanner
 from omnibot.logs import topics
-from omnibot.logs.active import recording
+from omnibot.logs.recording import open_recording
 from omnibot.mapping.mapfile import load_map
 from omnibot.protocol import codes
 from omnibot.runtime.runtime import Runtime
@@ -45,8 +45,11 @@ def scanned(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, list[Scan]]
     """1.5 s of simulated time on sim://omni4 with its scanner the runtime's, under ``--log``."""
     path = tmp_path_factory.mktemp("scanlog") / "scan.mcap"
     seen: list[Scan] = []
-    with recording(path), robot_session("sim://omni4?seed=4&world=room", "omni4", timeout=0.5) as session:
-        runtime = Runtime(session.client, period=0.01)
+    with (
+        open_recording(path) as rec,
+        robot_session("sim://omni4?seed=4&world=room", "omni4", timeout=0.5, recording=rec) as session,
+    ):
+        runtime = Runtime(session.client, period=0.01, recording=rec)
         scans = open_scanner(None, session.client.link, session.robot)
         runtime.scanner = scans
         runtime.add_sink(lambda cycle: seen.extend(cycle.scans))

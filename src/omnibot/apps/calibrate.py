@@ -21,6 +21,7 @@ from omnibot.cliargs import (
     add_robot_options,
     check_distinct,
     check_sim_options,
+    recording_of,
     seed_of,
     sim_robot,
     world_of,
@@ -30,6 +31,7 @@ from omnibot.outputs import check_writable
 
 if TYPE_CHECKING:
     from omnibot.client.client import RobotClient
+    from omnibot.client.session import ClientRecording
     from omnibot.progress import Progress
     from omnibot.robot.description import RobotDescription
 
@@ -163,9 +165,10 @@ def sim_opener(
     seed: int,
     true_robot: RobotDescription | None,
     world: str | None = None,
+    recording: ClientRecording | None = None,
 ) -> Callable[[str], AbstractContextManager[RobotClient]]:
     """surface -> a lockstep client on a fresh simulated robot standing on it (in ``world``, default
-    empty), left stopped and in its MODE on the way out."""
+    empty), left stopped and in its MODE on the way out, recorded in ``recording`` (``--log``)."""
 
     @contextmanager
     def open_client(surface: str) -> Iterator[RobotClient]:
@@ -180,7 +183,7 @@ def sim_opener(
         else:
             device = SimDevice(robot, true_robot=true_robot, surface=surface, seed=seed, world=world)
             client = RobotClient(LockstepLink(device, url=url), robot)
-        with guarded(client):
+        with guarded(client, recording=recording):
             yield client
 
     return open_client
@@ -307,7 +310,7 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> in
 
                 load_world(world)
         else:
-            session = stack.enter_context(robot_session(args.port, args.robot))
+            session = stack.enter_context(robot_session(args.port, args.robot, recording=recording_of(args)))
             client, robot = session.client, session.robot
         if robot.n_wheels > 4:
             raise ConfigError(
@@ -329,7 +332,12 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> in
         truth: str | Callable[[RobotClient], str] = args.truth or chosen_truth
         if client is None:
             opener = sim_opener(
-                robot, sim_robot(args), seed_of(args), true_robot, None if world == "empty" else world
+                robot,
+                sim_robot(args),
+                seed_of(args),
+                true_robot,
+                None if world == "empty" else world,
+                recording=recording_of(args),
             )
         else:
             opener = port_opener(client, ask, placed=args.yes)
@@ -344,6 +352,7 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> in
             progress=tqdm_progress,
             upload=not args.no_upload,
             stand=None if args.yes else asked_stand(ask),
+            recording=recording_of(args),
         )
         verdict = judge_calibration(result)
         keep = verdict.better is not False or args.force

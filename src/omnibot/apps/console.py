@@ -128,7 +128,7 @@ def format_event(event: Event) -> str:
 
 def run_send(args: argparse.Namespace, out: TextIO | None = None) -> int:
     """``omnibot send``: exit status 0 all OK, 1 an ERROR reply or link trouble, 2 bad input."""
-    from omnibot.cliargs import check_sim_options, sim_url
+    from omnibot.cliargs import check_sim_options, recording_of, sim_url
     from omnibot.client.session import robot_session
 
     out = out or sys.stdout
@@ -142,7 +142,13 @@ def run_send(args: argparse.Namespace, out: TextIO | None = None) -> int:
     check_sim_options(args)
     status = 0
     with robot_session(
-        sim_url(args), args.robot, stop="on_error", restore="protocol", timeout=args.timeout, reconnect=None
+        sim_url(args),
+        args.robot,
+        stop="on_error",
+        restore="protocol",
+        timeout=args.timeout,
+        reconnect=None,
+        recording=recording_of(args),
     ) as session:
         client = session.client
 
@@ -280,7 +286,7 @@ def run_console(
     input_fn: Callable[[str], str] = input,
 ) -> int:
     """``omnibot console``; ``interactive`` defaults to whether ``stdin`` is a terminal."""
-    from omnibot.cliargs import check_sim_options, sim_url
+    from omnibot.cliargs import check_sim_options, recording_of, sim_url
     from omnibot.client.session import robot_session
 
     stdin = stdin or sys.stdin
@@ -288,7 +294,9 @@ def run_console(
     if interactive is None:
         interactive = stdin.isatty()
     check_sim_options(args)
-    with robot_session(sim_url(args), getattr(args, "robot", None), timeout=args.timeout) as session:
+    with robot_session(
+        sim_url(args), getattr(args, "robot", None), timeout=args.timeout, recording=recording_of(args)
+    ) as session:
         client = session.client
         console = Console(client, out, echo=not interactive)
         if interactive:

@@ -94,7 +94,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run ``omnibot web``: serve the dashboard for ``--duration`` s or until interrupted; the exit
     status (1 when the robot link ended)."""
-    from omnibot.cliargs import check_sim_options, sim_url, use_calibration
+    from omnibot.cliargs import check_sim_options, recording_of, sim_url, use_calibration
     from omnibot.navigation.webteach import PathTeacher
     from omnibot.robot.description import RobotDescription
     from omnibot.teleop.config import load_teleop_config
@@ -129,6 +129,7 @@ def run(args: argparse.Namespace) -> int:
         make_teach=make_teach,
         wheel_loop=not args.open_loop,
         floor=lambda client, robot: use_calibration(args, client, robot),
+        recording=recording_of(args),
         **server,
     )
     dash.start()

@@ -61,7 +61,7 @@ def _say(text: str) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """``omnibot goto``: the exit status."""
-    from omnibot.cliargs import check_sim_options, sim_url, simulated
+    from omnibot.cliargs import check_sim_options, recording_of, sim_url, simulated
     from omnibot.client.session import robot_session
     from omnibot.mapping.mapfile import load_map
     from omnibot.mapping.planner import check_goal, inflate
@@ -95,7 +95,7 @@ def run(args: argparse.Namespace) -> int:
         planner=args.planner,
         speed=args.speed,
     )
-    with robot_session(url, args.robot) as session:
+    with robot_session(url, args.robot, recording=recording_of(args)) as session:
         client, robot = session.client, session.robot
         start = _start(client, initial)
         goal = Pose2D(gx, gy, start.theta if gtheta is None else gtheta)
@@ -119,7 +119,7 @@ def _start(client: Any, initial: tuple[float, float, float | None] | None) -> An
 def _go(
     args: argparse.Namespace, client: Any, robot: Any, grid: Any, goal: Any, start: Any, options: Any
 ) -> int:
-    from omnibot.cliargs import use_calibration
+    from omnibot.cliargs import recording_of, use_calibration
     from omnibot.lidar.reader import open_scanner
     from omnibot.mapping.localise import Localiser
     from omnibot.mapping.session import LocalisingSink
@@ -157,6 +157,7 @@ def _go(
             pose_from=provider if sink is not None else None,
             scan=sink.points if sink is not None else None,
             slip=slip,
+            recording=recording_of(args),
         )
     finally:
         if sink is not None:

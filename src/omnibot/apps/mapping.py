@@ -157,7 +157,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _explore(args: argparse.Namespace, url: str, out: Path) -> int:
     """``--explore``: the robot goes to the map's frontiers by itself (:mod:`omnibot.navigation.explore`)."""
-    from omnibot.cliargs import use_calibration
+    from omnibot.cliargs import recording_of, use_calibration
     from omnibot.client.session import robot_session
     from omnibot.motion import Pose2D
     from omnibot.navigation.explore import explore
@@ -167,12 +167,12 @@ def _explore(args: argparse.Namespace, url: str, out: Path) -> int:
     mapping = _Mapping(args)
     limit = args.duration if args.duration is not None else EXPLORE_LIMIT
     try:
-        with robot_session(url, args.robot) as session:
+        with robot_session(url, args.robot, recording=recording_of(args)) as session:
             client, robot = session.client, session.robot
             sim = find_simulator(client.link)
             start = sim.pose if sim is not None else Pose2D(0.0, 0.0, 0.0)
             slip = use_calibration(args, client, robot)
-            with navigation_runtime(client, robot, start, slip=slip) as runtime:
+            with navigation_runtime(client, robot, start, slip=slip, recording=recording_of(args)) as runtime:
                 mapping.attach(runtime, session, estimator=False)
                 sink = mapping.sink
                 _say(f"exploring for at most {limit:g} s")
@@ -305,9 +305,10 @@ class _Mapping:
     def _log_map(self, grid: Any) -> None:
         """The map and ``map -> odom`` on ``/map`` and ``/tf`` of the command's ``--log``, if any, at the
         last odometry time."""
-        from omnibot.logs.active import active
+        from omnibot.cliargs import recording_of
 
-        recorder = active()
+        recording = recording_of(self.args)
+        recorder = recording.recorder if recording is not None else None
         sink = self.sink
         if recorder is None or grid is None or not sink.odometry.stamps:
             return

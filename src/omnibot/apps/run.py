@@ -240,7 +240,7 @@ def run_in_this_thread(
     say: Callable[[str], None] = _say,
 ) -> Parts:
     """``run``'s front ends (and ``attach``'s sinks) on one runtime in this thread (no dashboard)."""
-    from omnibot.cliargs import use_calibration
+    from omnibot.cliargs import recording_of, use_calibration
     from omnibot.client.errors import NotSupported
     from omnibot.client.session import robot_session
     from omnibot.protocol import codes
@@ -252,7 +252,8 @@ def run_in_this_thread(
     person = bool(args.teleop)
     wall = person or args.ros2  # a person or ROS 2 nodes: paced to the wall clock
     period = config.period if person else ROS2_PERIOD if args.ros2 else 0.01
-    with robot_session(url, args.robot, timeout=max(0.2, config.vel_timeout)) as session:
+    recording = recording_of(args)
+    with robot_session(url, args.robot, timeout=max(0.2, config.vel_timeout), recording=recording) as session:
         client, robot = session.client, session.robot
         runtime = Runtime(
             client,
@@ -260,6 +261,7 @@ def run_in_this_thread(
             vel_timeout=config.vel_timeout,
             wheel_loop=not args.open_loop,
             slip=use_calibration(args, client, robot),
+            recording=recording,
         )
         if path is not None:
             start_sonars(client, robot)  # the stall watch's witnesses of what is ahead
@@ -312,7 +314,7 @@ def _stop_pad(runtime: Any, parts: Parts, config: Any) -> None:
 
 def _with_dashboard(args: argparse.Namespace, url: str, config: Any, path: Any) -> Parts:
     from omnibot.apps.dashboard import server_options
-    from omnibot.cliargs import use_calibration
+    from omnibot.cliargs import recording_of, use_calibration
     from omnibot.navigation.webteach import PathTeacher
     from omnibot.robot.description import RobotDescription
     from omnibot.web.dashboard import Dashboard
@@ -329,6 +331,7 @@ def _with_dashboard(args: argparse.Namespace, url: str, config: Any, path: Any) 
         make_teach=None if path is not None else make_teach,  # a --follow path owns the estimator's frame
         wheel_loop=not args.open_loop,
         floor=lambda client, robot: use_calibration(args, client, robot),
+        recording=recording_of(args),
         **server,
     )
     parts = Parts()

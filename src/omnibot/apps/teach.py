@@ -27,6 +27,7 @@ from omnibot.cliargs import (
     check_distinct,
     check_plot,
     check_sim_options,
+    recording_of,
     seed_of,
     sim_robot,
     use_calibration,
@@ -52,8 +53,9 @@ def _robot_client(args: argparse.Namespace, start: Any = None) -> Iterator[tuple
     from omnibot.navigation.session import simulated_client
     from omnibot.robot.description import load_robot
 
+    recording = recording_of(args)
     if args.port:
-        with robot_session(args.port, args.robot) as session:
+        with robot_session(args.port, args.robot, recording=recording) as session:
             yield session.client, session.robot
         return
     from omnibot.cliargs import check_world
@@ -71,7 +73,7 @@ def _robot_client(args: argparse.Namespace, start: Any = None) -> Iterator[tuple
         start=start,
         world=None if world == "empty" else world,
     )
-    with guarded(client, robot=robot):
+    with guarded(client, robot=robot, recording=recording):
         yield client, robot
 
 
@@ -135,6 +137,7 @@ def run_follow(args: argparse.Namespace) -> int:
             floor=args.surface,  # plan within what this floor lets the motors give
             tolerances=tolerances,
             progress=bar,
+            recording=recording_of(args),
         )
         run, report, _ = follow_path(client, robot, path, options)
     surface = args.surface or "the world's floor"
@@ -240,7 +243,16 @@ def run_record(args: argparse.Namespace) -> int:
     check_writable(out, "--path")
     check_distinct([("--path", out), ("--log", args.log)])
     with _robot_client(args) as (client, robot):
-        result = teach(client, robot, recorder, mode=mode, shape=shape, speed=speed, duration=duration)
+        result = teach(
+            client,
+            robot,
+            recorder,
+            mode=mode,
+            shape=shape,
+            speed=speed,
+            duration=duration,
+            recording=recording_of(args),
+        )
     problem = check_recording(result)
     for text in result.warnings:
         print(f"omnibot record: warning: {text}")

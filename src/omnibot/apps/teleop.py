@@ -69,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
     """Run ``omnibot teleop`` for ``--duration`` s or until the user quits, then print what was sent;
     0 (Ctrl-C is raised again after the summary)."""
     from omnibot.apps.teleop_loop import Teleop
-    from omnibot.cliargs import check_sim_options, sim_url, use_calibration
+    from omnibot.cliargs import check_sim_options, recording_of, sim_url, use_calibration
     from omnibot.client.session import robot_session
     from omnibot.teleop.config import load_teleop_config
     from omnibot.teleop.keyboard import HELP
@@ -81,10 +81,13 @@ def run(args: argparse.Namespace) -> int:
     config = load_teleop_config(args.config)
     url = sim_url(args)
     source = open_source(args, config, _say)
+    recording = recording_of(args)
     interrupted: KeyboardInterrupt | None = None
     with contextlib.ExitStack() as stack:
         stack.callback(source.close)
-        session = stack.enter_context(robot_session(url, args.robot, timeout=max(0.2, config.vel_timeout)))
+        session = stack.enter_context(
+            robot_session(url, args.robot, timeout=max(0.2, config.vel_timeout), recording=recording)
+        )
         client = session.client
         if hasattr(source, "__enter__"):
             stack.enter_context(source)
@@ -103,6 +106,7 @@ def run(args: argparse.Namespace) -> int:
             robot=session.robot,
             wheel_loop=not args.open_loop,
             slip=use_calibration(args, client, session.robot),
+            recording=recording,
         )
         _say(f"limits: {teleop.limits.speed:.2f} m/s, {teleop.limits.rate:.2f} rad/s")
         try:

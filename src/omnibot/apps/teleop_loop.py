@@ -28,7 +28,7 @@ from omnibot.estimation.slip import SlipModel
 from omnibot.motion import Twist
 from omnibot.robot.description import RobotDescription
 from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.runtime import Counters, Runtime
+from omnibot.runtime.runtime import Counters, Runtime, RuntimeRecording
 from omnibot.runtime.sinks import NoticePrinter
 from omnibot.runtime.sources import PadSource
 from omnibot.teleop.config import TeleopConfig
@@ -60,7 +60,8 @@ class Teleop:
     """Drives ``client`` from ``source`` through a runtime; :meth:`step` is one period, :meth:`run`
     loops in real time. ``robot``'s description ramps the twist at its accelerations
     (:class:`~omnibot.teleop.mapping.TwistRamp`); ``wheel_loop`` and ``slip`` are the runtime's (the
-    controller's wheel-speed loop closed by default; the floor's wheel slip asked on top)."""
+    controller's wheel-speed loop closed by default; the floor's wheel slip asked on top); so is
+    ``recording`` (the command's ``--log``)."""
 
     def __init__(
         self,
@@ -74,6 +75,7 @@ class Teleop:
         robot: RobotDescription | None = None,
         wheel_loop: bool | None = True,
         slip: SlipModel | None = None,
+        recording: RuntimeRecording | None = None,
     ) -> None:
         self.client = client
         self.config = config
@@ -92,6 +94,7 @@ class Teleop:
             wait_replies=True,
             wheel_loop=wheel_loop,
             slip=slip,
+            recording=recording,
         )
 
     @property

@@ -14,3 +14,5 @@ by a truth strategy into a runs.RunResult) -> the pure fits (fits: rate curves -
 curved MOVEs -> K_t; motorfit, rollerfit, gyro, umbmark) -> CAL upload -> results -> calfile, report,
 verdict. The fits, plans, results and file format import no client (tests/test_imports.py).
 """
+
+__all__ = ["accuracy", "calfile", "perturb", "plan", "report", "session", "tables", "truth", "verdict"]

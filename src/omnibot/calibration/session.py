@@ -80,6 +80,7 @@ from omnibot.navigation.slipcal import SLIP_COURSES, SlipCalibration
 from omnibot.progress import Progress
 from omnibot.protocol import codes
 from omnibot.robot.description import CalibrationSpec, MotorMapSpec, RobotDescription
+from omnibot.runtime.runtime import RuntimeRecording
 
 ProgressFactory = Callable[[str, int], AbstractContextManager[Progress | None]]
 """(description, expected runs) -> a context giving a progress bar (or None)."""
@@ -240,6 +241,8 @@ class SurfaceRun:
     odometry: OdometryCalibration | None = None
     after: list[AccuracyRow] | None = None
     slip: SlipCalibration | None = None
+    recording: RuntimeRecording | None = None
+    """The command's ``--log``: records the slip runs' runtime."""
 
     @property
     def client(self) -> RobotClient:
@@ -544,9 +547,10 @@ def calibrate_surface(
     progress: ProgressFactory = no_progress,
     upload: bool = True,
     stand: Lift | None = None,
+    recording: RuntimeRecording | None = None,
 ) -> SurfaceSession:
     """Measure, fit and (``upload``) apply the calibration of ``robot`` on one surface: :data:`STEPS`,
-    then the wheel slip."""
+    then the wheel slip (its runtime recorded in ``recording``)."""
     plan = plan or Plan()
     phases = expected_runs(plan, Geometry.of(robot), accuracy, robot, upload)  # checks the courses
     client.stop()
@@ -557,7 +561,7 @@ def calibrate_surface(
     with progress(f"calibrate {robot.name} on {surface}", sum(phases.values())) as bar:
         tally = Tally(bar, phases)
         runner = Runner(client, robot, source, tap, settle=plan.settle, progress=tally)
-        state = SurfaceRun(surface, plan, accuracy, upload, runner, stand)
+        state = SurfaceRun(surface, plan, accuracy, upload, runner, stand, recording=recording)
         try:
             for step in STEPS:
                 step.run(state)
@@ -581,7 +585,7 @@ def _wheel_slip(s: SurfaceRun, progress: ProgressFactory) -> None:
         return
     with progress(f"wheel slip on {s.surface}", SLIP_COURSES) as slip_bar:
         try:
-            s.slip = slip_step(client, s.robot, s.source, slip_bar)
+            s.slip = slip_step(client, s.robot, s.source, slip_bar, recording=s.recording)
         except ConfigError as exc:
             s.notes.append(f"wheel slip not calibrated: {exc}")
         finally:  # back to what the rest of the calibration expects (the runs end stopped)
@@ -742,9 +746,10 @@ def calibrate(
     progress: ProgressFactory = no_progress,
     upload: bool = True,
     stand: Lift | None = None,
+    recording: RuntimeRecording | None = None,
 ) -> CalibrationResult:
     """Calibrate on every surface (``stand``: how to lift a robot that is not simulated, for the motor
-    map's stand test), then average and check the average on every surface (it is kept
+    map's stand test; ``recording``: the command's ``--log``, for the runtimes it runs), then average and check the average on every surface (it is kept
     only when it is better than none on every one: :attr:`CalibrationResult.average_better`)."""
     plan = plan or Plan()
     sessions = []
@@ -766,6 +771,7 @@ def calibrate(
                     progress=progress,
                     upload=upload,
                     stand=stand,
+                    recording=recording,
                 )
             )
     result = CalibrationResult(robot, sessions)

@@ -19,6 +19,7 @@ from omnibot.client.client import RobotClient
 from omnibot.navigation.runner import Navigator
 from omnibot.navigation.slipcal import SlipCalibration, calibrate_slip
 from omnibot.robot.description import RobotDescription
+from omnibot.runtime.runtime import RuntimeRecording
 
 SLIP_SPEED_MAX = 0.8
 """m/s: the slip runs' speed cap (creep hardly depends on speed; the runs must fit a room)."""
@@ -62,9 +63,11 @@ def slip_step(
     robot: RobotDescription,
     source: TruthSource,
     bar: Any = None,
+    recording: RuntimeRecording | None = None,
 ) -> SlipCalibration:
-    """Drive the slip runs on the floor the robot stands on and fit its wheel slip."""
-    nav = Navigator(client, robot)
+    """Drive the slip runs on the floor the robot stands on and fit its wheel slip (the runs'
+    runtime recorded in ``recording``, the command's ``--log``)."""
+    nav = Navigator(client, robot, recording=recording)
     update: Callable[[int, int], object] | None = None
     if bar is not None:
         update = lambda done, total: bar.update(1)  # noqa: E731

@@ -72,5 +72,12 @@ __all__ = [
     "Telemetry",
     "Unexpected",
     "WarnEvent",
+    "client",
+    "commands",
     "controller_error",
+    "errors",
+    "events",
+    "limits",
+    "session",
+    "views",
 ]

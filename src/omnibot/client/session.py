@@ -109,6 +109,14 @@ def leave(client: RobotClient, mode: int | None, *, stop: bool = True, telemetry
         client.close()
 
 
+class ClientRecording(Protocol):
+    """Where a command records the clients its sessions open (its ``--log`` / ``--foxglove``
+    recording, :class:`omnibot.logs.recording.Recording`): handed in, so the client knows nothing of logs."""
+
+    def attach(self, client: RobotClient, robot: RobotDescription | None, guess: bool) -> None:
+        """Record ``client`` (its ``robot``; ``guess``: the robot its HELLO names rather than one given)."""
+
+
 @contextlib.contextmanager
 def guarded(
     client: RobotClient,
@@ -116,11 +124,13 @@ def guarded(
     stop: StopPolicy = "always",
     restore: RestorePolicy = "mode",
     robot: RobotDescription | None = None,
+    recording: ClientRecording | None = None,
 ) -> Iterator[RobotClient]:
     """Run the body with ``client``; on every way out :func:`leave` the controller as it was found.
-    With ``--log`` the client (the robot ``robot``) is recorded (:mod:`omnibot.logs.recorder`)."""
+    With a ``recording`` (``--log``) the client (the robot ``robot``) is recorded in it."""
     try:
-        _record(client, robot, guess=True)
+        if recording is not None:
+            recording.attach(client, robot, True)
         mode = client.status().mode if restore == "mode" else None  # leave() drops the bit 4 it set
     except BaseException:
         client.close()
@@ -140,25 +150,6 @@ def guarded(
         leave(client, mode, stop=stop == "always" or not ended, telemetry=seen["tel"])
 
 
-class OpenHook(Protocol):
-    """Told of every client a session opens (see :data:`ON_OPEN`)."""
-
-    def __call__(self, client: RobotClient, robot: RobotDescription | None, *, guess: bool = False) -> None:
-        """Take ``client`` (its ``robot``, ``guess``: named by its HELLO rather than given)."""
-
-
-ON_OPEN: list[OpenHook] = []
-"""Called with every client a session opens, its robot and whether the robot was guessed: the
-command's ``--log`` / ``--foxglove`` recording adds itself while it records
-(:func:`omnibot.logs.active.recording`), so the client knows nothing of logs."""
-
-
-def _record(client: RobotClient, robot: RobotDescription | None, *, guess: bool = False) -> None:
-    """Hand the client to whoever listens for new sessions (the command's ``--log`` recorder)."""
-    for hook in list(ON_OPEN):
-        hook(client, robot, guess=guess)
-
-
 @dataclass(frozen=True)
 class RobotSession:
     """A command's robot: the client, the robot's description and the controller's HELLO."""
@@ -174,10 +165,12 @@ def open_robot(
     *,
     timeout: float | None = None,
     reconnect: float | None = 0.0,
+    recording: ClientRecording | None = None,
 ) -> RobotSession:
     """Open ``url`` and check that the robot on it is ``robot`` (None: take it from the link). A
     link that cannot be opened, or no HELLO reply, is a ConfigError naming ``--port`` (the command
-    could not start: exit status 2). The caller closes the client (or :func:`guarded` does)."""
+    could not start: exit status 2). The caller closes the client (or :func:`guarded` does). With a
+    ``recording`` (``--log``) the client is recorded from its first byte, with its robot once known."""
     try:
         client = RobotClient.open(
             url, None, timeout=DEFAULT_TIMEOUT if timeout is None else timeout, reconnect=reconnect
@@ -185,7 +178,8 @@ def open_robot(
     except LinkError as exc:
         raise ConfigError(f"cannot open {url}: {exc}", key="--port") from exc
     try:
-        _record(client, None)
+        if recording is not None:
+            recording.attach(client, None, False)
         try:
             # the versions listed: the reply says whether VEL may carry the planned acceleration
             hello = wait_for_controller(client, codes.VERSIONS, notice=notice)
@@ -209,7 +203,8 @@ def open_robot(
                 key="--robot",
             )
         client.limits = Limits.from_robot(description)
-        _record(client, description)
+        if recording is not None:
+            recording.attach(client, description, False)
     except BaseException:
         client.close()
         raise
@@ -225,8 +220,10 @@ def robot_session(
     restore: RestorePolicy = "mode",
     timeout: float | None = None,
     reconnect: float | None = 0.0,
+    recording: ClientRecording | None = None,
 ) -> Iterator[RobotSession]:
-    """:func:`open_robot`, then :func:`guarded`: the controller is left as it was found."""
-    session = open_robot(url, robot, timeout=timeout, reconnect=reconnect)
-    with guarded(session.client, stop=stop, restore=restore):
+    """:func:`open_robot`, then :func:`guarded`: the controller is left as it was found (the client
+    recorded in ``recording``, if given)."""
+    session = open_robot(url, robot, timeout=timeout, reconnect=reconnect, recording=recording)
+    with guarded(session.client, stop=stop, restore=restore, recording=recording):
         yield session

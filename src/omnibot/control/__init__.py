@@ -3,3 +3,5 @@
 Depends on the robot description and plain data only (no client, no simulator): the navigation
 glue (:mod:`omnibot.navigation`) feeds followers estimates and sends their commands.
 """
+
+__all__ = ["followers", "paths", "reach"]

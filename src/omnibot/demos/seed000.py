@@ -36,6 +36,7 @@ from typing import Any
 
 from omnibot.client.client import RobotClient
 from omnibot.client.events import Event, RangeEvent, Telemetry, WarnEvent
+from omnibot.client.session import ClientRecording
 from omnibot.errors import ConfigError
 from omnibot.estimation.odometry import WheelOdometry
 from omnibot.motion import Pose2D
@@ -447,6 +448,7 @@ def run_demo(
     seed: int = 1,
     world: str = "room",
     surface: str | None = None,
+    recording: ClientRecording | None = None,
 ) -> tuple[str, bool]:
     """Run the demo; returns the printed report and whether every example did what it should.
 
@@ -454,7 +456,8 @@ def run_demo(
     CSV. A ``sim://`` port: the in-process simulator, truth from it, in ``world`` unless the URL names
     its own (:func:`with_world`). Anything else (a real board):
     odometry only. The robot is the one on the link (``robot_name``, if given, must name it); the
-    session leaves the controller stopped and in the MODE it was found in, however the demo ends.
+    session leaves the controller stopped and in the MODE it was found in, however the demo ends;
+    ``recording`` (``--log``) records it.
     """
     from omnibot.client.session import robot_session
     from omnibot.sim.world import load_world
@@ -478,7 +481,7 @@ def run_demo(
             else _given(port or "")
         )
         started = time.monotonic()
-        with context as url, robot_session(url, robot_name) as session:
+        with context as url, robot_session(url, robot_name, recording=recording) as session:
             client, robot, hello = session.client, session.robot, session.hello
             sim = find_simulator(client.link)
             if sim is not None:

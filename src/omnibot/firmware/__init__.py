@@ -8,3 +8,5 @@ Board modules import nothing outside this package but ``omnibot.protocol`` (``co
 board. Entry points: ``controller.Controller(hal, config)`` and its ``poll()``; ``hal.HAL``;
 ``config.build_config(robot)``.
 """
+
+__all__ = ["calibration", "config", "controller", "hal", "power"]

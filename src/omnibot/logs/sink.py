@@ -1,15 +1,15 @@
 """The recorder (and its Foxglove live server) plugged into a host runtime.
 
-``--log`` / ``--foxglove`` on a command that runs on the runtime: :func:`omnibot.logs.active.attach_runtime`
-(called by :meth:`Runtime.start <omnibot.runtime.runtime.Runtime.start>`) adds
-
-* :class:`RuntimeRecorder`, a sink: the arbitration at each change on ``/omnibot/control``
-  (``omnibot_msgs/msg/Control``: source, reason, lock, the twist it asked for) and, when the runtime
-  has an estimator, *its* estimate after each sample (``odom``, ``/tf``, ``/omnibot/estimate``: the
-  one the follower steers by, not a second estimator); the commands go out as VELs the recorder
-  already writes as ``cmd_vel``; the scans of the runtime's scanner (``Cycle.scans``) on ``/scan``;
-* the Foxglove Teleop panel as a source (:class:`omnibot.logs.live.PanelSource`) when the command
-  serves Foxglove live.
+``--log`` / ``--foxglove`` on a command that runs on the runtime: the command's recording,
+:meth:`omnibot.logs.recording.Recording.attach_runtime`, called by
+:meth:`Runtime.start <omnibot.runtime.runtime.Runtime.start>` of a runtime the command handed it to,
+adds :class:`RuntimeRecorder`, a sink: the arbitration at each change on ``/omnibot/control``
+(``omnibot_msgs/msg/Control``: source, reason, lock, the twist it asked for) and, when the runtime
+has an estimator, *its* estimate after each sample (``odom``, ``/tf``, ``/omnibot/estimate``: the
+one the follower steers by, not a second estimator); the commands go out as VELs the recorder
+already writes as ``cmd_vel``; the scans of the runtime's scanner (``Cycle.scans``) on ``/scan``. A
+command that serves Foxglove live adds the Foxglove Teleop panel as a source itself
+(:class:`omnibot.logs.live.PanelSource`; :mod:`omnibot.apps.recording`).
 
 While a path follower (:class:`~omnibot.runtime.sources.FollowerSource`) is among the runtime's
 sources, :class:`FollowerLog` also writes each cycle on ``/omnibot/cycle`` (``omnibot_msgs/msg/Cycle``:

@@ -25,3 +25,5 @@ Modules (each owns one thing; the plain scan type is :mod:`omnibot.scan`):
 
 The user's guide is docs/mapping.md.
 """
+
+__all__ = ["grid", "localise", "mapfile", "planner", "se2", "session"]

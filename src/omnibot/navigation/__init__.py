@@ -3,3 +3,17 @@
 The glue between :mod:`omnibot.client` (VEL out, TEL in), :mod:`omnibot.estimation` and
 :mod:`omnibot.control`; see docs/navigation.md.
 """
+
+__all__ = [
+    "explore",
+    "following",
+    "goto",
+    "judge",
+    "metrics",
+    "plot",
+    "record",
+    "runner",
+    "session",
+    "slipcal",
+    "webteach",
+]

@@ -56,7 +56,7 @@ from omnibot.navigation.session import follower_limits
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription
 from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.runtime import LinkPacer, Runtime
+from omnibot.runtime.runtime import LinkPacer, Runtime, RuntimeRecording
 from omnibot.runtime.stall import StallWatch, start_sonars
 
 FloatArray = NDArray[np.float64]
@@ -577,14 +577,15 @@ def navigation_runtime(
     standstill: float = STANDSTILL,
     slip: SlipModel | None = None,
     sinks: Sequence[Callable[[Cycle], object]] = (),
+    recording: RuntimeRecording | None = None,
 ) -> Iterator[Runtime]:
     """A runtime for going places (goto, exploring): the fused estimator starting at ``start``,
     binary where the controller speaks it, telemetry (encoders, heading, queue; tracking wheels and
     sonars where the robot has them) and the sonars started, ``sinks`` added, ``standstill`` s still
-    for the gyro's bias; on the way out the controller is left stopped with telemetry and sonars
-    off."""
+    for the gyro's bias, recorded in ``recording`` (``--log``); on the way out the controller is left
+    stopped with telemetry and sonars off."""
     estimator = make_estimator("fused", robot, start, slip.params if slip is not None else None)
-    runtime = Runtime(client, estimator=estimator, slip=slip)
+    runtime = Runtime(client, estimator=estimator, slip=slip, recording=recording)
     for sink in sinks:
         runtime.add_sink(sink)
     client.stop()
@@ -629,14 +630,18 @@ def goto(
     scan: ScanSource | None = None,
     standstill: float = STANDSTILL,
     slip: SlipModel | None = None,
+    recording: RuntimeRecording | None = None,
 ) -> GotoResult:
     """``omnibot goto``: the robot standing at ``start`` (the estimator starts there: the map frame
     unless a provider says otherwise), on a :func:`navigation_runtime`, then :func:`go_to` with the
     map-frame pose from ``pose``, or from the provider ``pose_from`` makes on goto's runtime (a
     localiser fed by its telemetry and estimate), else the estimate; ``slip`` is the floor's
     calibrated wheel slip (``--calibration``: the runtime asks the wheels for the creep, the
-    estimator takes it out); the controller is left stopped with telemetry and sonars off."""
-    with navigation_runtime(client, robot, start, standstill=standstill, slip=slip) as runtime:
+    estimator takes it out); ``recording`` records the runtime (``--log``); the controller is left
+    stopped with telemetry and sonars off."""
+    with navigation_runtime(
+        client, robot, start, standstill=standstill, slip=slip, recording=recording
+    ) as runtime:
         provider = pose_from(runtime) if pose_from is not None else pose
         return go_to(runtime, robot, grid, goal, options, pose=provider, scan=scan)
 

@@ -32,6 +32,7 @@ from omnibot.motion import Twist
 from omnibot.navigation.runner import Navigator
 from omnibot.navigation.session import follower_limits
 from omnibot.robot.description import RobotDescription
+from omnibot.runtime.runtime import RuntimeRecording
 from omnibot.runtime.sources import ScriptSource
 from omnibot.signals import Terminated
 
@@ -72,11 +73,19 @@ def teach(
     speed: float = 0.3,
     duration: float = 30.0,
     estimator: str = "fused",
+    recording: RuntimeRecording | None = None,
 ) -> TeachResult:
-    """Record a path (see the module docstring for ``mode``); ``shape`` is what push/drive follow."""
+    """Record a path (see the module docstring for ``mode``); ``shape`` is what push/drive follow;
+    ``recording`` (the command's ``--log``) records the navigator's runtime."""
     if mode not in TEACH_MODES:
         raise ConfigError(f"unknown teach mode '{mode}'; expected one of: {', '.join(TEACH_MODES)}")
-    nav = Navigator(client, robot, estimator=estimator, wheel_loop=True if mode == "drive" else None)
+    nav = Navigator(
+        client,
+        robot,
+        estimator=estimator,
+        wheel_loop=True if mode == "drive" else None,
+        recording=recording,
+    )
     if mode == "push" and nav.sim is None:
         raise ConfigError(
             "teach mode 'push' needs the simulator (sim://); on a real robot push it yourself with 'listen'"

@@ -46,7 +46,7 @@ from omnibot.progress import Progress
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription
 from omnibot.runtime.cycle import Cycle, Notice
-from omnibot.runtime.runtime import LinkPacer, Runtime
+from omnibot.runtime.runtime import LinkPacer, Runtime, RuntimeRecording
 from omnibot.runtime.sources import FollowerSource, ScriptSource
 from omnibot.runtime.stall import StallWatch
 from omnibot.transport.device import find_simulator
@@ -238,7 +238,7 @@ class Navigator:
     controller's wheel-speed loop (MODE bit 1) when every wheel has an encoder (True), open it (False),
     or leave the MODE as found (None: the motors are off, the robot is pushed by hand).
     ``slip`` is the floor's wheel-slip calibration (creep and distance scale) for the driven-wheel
-    encoders (every estimator).
+    encoders (every estimator). ``recording`` (the command's ``--log``) records the runtime.
     """
 
     def __init__(
@@ -252,6 +252,7 @@ class Navigator:
         binary: bool = True,
         start: Pose2D | None = None,
         slip: SlipParameters | None = None,
+        recording: RuntimeRecording | None = None,
     ) -> None:
         self.client = client
         self.robot = robot
@@ -264,7 +265,7 @@ class Navigator:
         self.binary = binary
         self.sim = find_simulator(client.link)
         self.frame: FrameMap | None = None
-        self.runtime = Runtime(client, estimator=self.estimator, wheel_loop=wheel_loop)
+        self.runtime = Runtime(client, estimator=self.estimator, wheel_loop=wheel_loop, recording=recording)
         """The one loop that owns the client; it feeds the estimator and the observers."""
         self.runtime.telemetry_hooks.extend(obs.update for obs in self.observers.values())
         self.warnings: list[str] = []

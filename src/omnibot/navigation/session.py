@@ -21,6 +21,7 @@ from omnibot.navigation.metrics import Tolerances, follow_report
 from omnibot.navigation.runner import GYRO_USE, STANDSTILL, FollowRun, Navigator
 from omnibot.progress import Progress
 from omnibot.robot.description import RobotDescription
+from omnibot.runtime.runtime import RuntimeRecording
 
 DEFAULT_RATE = 100.0
 """Control rate of the follower loop, Hz."""
@@ -93,6 +94,8 @@ class FollowOptions:
     """What the run must achieve for its report to say ``completed``."""
     progress: Progress | None = None
     """A bar in metres that hears the distance covered (a terminal's, see :mod:`omnibot.progress`)."""
+    recording: RuntimeRecording | None = None
+    """The command's ``--log`` / ``--foxglove``: records the navigator's runtime."""
 
 
 def follow_path(
@@ -111,6 +114,7 @@ def follow_path(
         wheel_loop=opts.wheel_loop,
         start=Pose2D(*path.start),
         slip=opts.slip,
+        recording=opts.recording,
     )
     try:
         nav.prepare(opts.standstill)

@@ -1,1 +1,3 @@
 """Plotting helpers (matplotlib, Agg backend); models never import this package."""
+
+__all__ = ["figure"]

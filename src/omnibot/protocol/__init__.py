@@ -5,3 +5,5 @@ Pure codecs: no I/O, no threads. ``codes``, ``crc``, ``frame`` and ``arq`` run u
 
     from omnibot.protocol import messages, text, binary
 """
+
+__all__ = ["arq", "binary", "codes", "frame", "linecheck", "messages", "text", "units"]

@@ -1,1 +1,3 @@
 """Robot descriptions: the YAML model, presets, kinematics and the physical specs they hold."""
+
+__all__ = ["battery", "description", "kinematics", "summary", "urdf"]

@@ -268,7 +268,7 @@ def attach(
         from omnibot.ros2.path import PathSource
     except ImportError:
         raise ConfigError(INSTALL) from None
-    from omnibot.logs.active import active
+    from omnibot.cliargs import recording_of
     from omnibot.ros2.clock import Timeline
     from omnibot.ros2.netns import UnsafeNetwork
     from omnibot.runtime.sinks import EstimatorWhenMissing
@@ -278,7 +278,8 @@ def attach(
 
     spec = spec or robot_specs(args)[0]
     timeline = timeline or Timeline()
-    recorder = active()  # the command's --log: the bridge stamps as it does
+    recording = recording_of(args)
+    recorder = recording.recorder if recording is not None else None  # --log: the bridge stamps as it does
     if recorder is not None:
         timeline.adopt(recorder.placing)
     backend = choose(getattr(args, "ros_backend", "dds"))
@@ -487,12 +488,14 @@ def _open(
     args: argparse.Namespace, spec: RobotSpec, session: Any, url: str, label: str, timeline: Any
 ) -> _Robot:
     """The robot's runtime with the bridge attached (not yet running), stamping on ``timeline``."""
-    from omnibot.cliargs import use_calibration
+    from omnibot.cliargs import recording_of, use_calibration
     from omnibot.runtime.runtime import Runtime
     from omnibot.runtime.sinks import NoticePrinter
 
     slip = use_calibration(args, session.client, session.robot)
-    runtime = Runtime(session.client, period=PERIOD, wheel_loop=not args.open_loop, slip=slip)
+    runtime = Runtime(
+        session.client, period=PERIOD, wheel_loop=not args.open_loop, slip=slip, recording=recording_of(args)
+    )
     node = attach(runtime, session.robot, args, spec, timeline, announce=False)
     runtime.add_sink(NoticePrinter(lambda text: _say(f"{label}{text}"), control=True))
     return _Robot(spec, url, session.client, session.robot, runtime, node, label)
@@ -524,7 +527,7 @@ def run(args: argparse.Namespace) -> int:
     other: a robot that cannot be opened ends the command before any robot moves, and the links of a
     shared simulated world are all open before any runtime waits on one. Then one robot runs here;
     several run a thread each (the first to end, or to fail, ends them all)."""
-    from omnibot.cliargs import check_sim_options, sim_url
+    from omnibot.cliargs import check_sim_options, recording_of, sim_url
     from omnibot.client.session import robot_session
     from omnibot.ros2.clock import Timeline
 
@@ -540,7 +543,9 @@ def run(args: argparse.Namespace) -> int:
             start = getattr(args, "map_start", None)
             if start is not None and spec.url is None:  # the simulated robot put where the map has it
                 url += f"&pose={start[0]:.4f},{start[1]:.4f},{math.degrees(start[2]):.3f}"
-            session = stack.enter_context(robot_session(url, args.robot, timeout=0.5))
+            session = stack.enter_context(
+                robot_session(url, args.robot, timeout=0.5, recording=recording_of(args))
+            )
             label = f"ros2 [{spec.namespace}]: " if several else "ros2: "
             one = _open(args, spec, session, url, label, timeline)
             stack.callback(one.node.close)

@@ -14,6 +14,7 @@ from omnibot.client.commands import vel as vel_command
 from omnibot.client.errors import BatteryStopLatched, EmergencyStopLatched
 from omnibot.client.events import ErrorEvent, Event, ResetEvent, Telemetry, WarnEvent
 from omnibot.client.limits import Limits
+from omnibot.client.session import ClientRecording
 from omnibot.errors import ControllerError, LinkError
 from omnibot.estimation.estimator import Estimator
 from omnibot.estimation.slip import SlipModel
@@ -29,11 +30,6 @@ from omnibot.transport.base import WallClock
 log = logging.getLogger("omnibot.runtime")
 log.addHandler(logging.NullHandler())  # a library's log: shown where the application configures logging
 # (front ends get every notice themselves; without this Python would print warnings twice on stderr)
-
-ON_START: list[Callable[[Runtime], None]] = []
-"""Called with every runtime that starts listening: the command's ``--log`` / ``--foxglove``
-recording adds itself while it records (:func:`omnibot.logs.active.recording`: the recorder's sink,
-the Foxglove panel's source), so the runtime knows nothing of logs."""
 
 PREDICT_MAX = 0.1
 """s: the estimate is extrapolated to the cycle's time by at most this much (older: held)."""
@@ -66,6 +62,19 @@ class Scanner(Protocol):
     def poll(self) -> list[Scan]:
         """The scans completed since the last call; an error when the scanner failed."""
         ...
+
+
+class RuntimeRecording(Protocol):
+    """Where a command records its runtimes (its ``--log`` / ``--foxglove`` recording,
+    :class:`omnibot.logs.recording.Recording`): handed in, so the runtime knows nothing of logs."""
+
+    def attach_runtime(self, runtime: Runtime) -> None:
+        """Record ``runtime`` (called by :meth:`Runtime.start`, before it listens to the client)."""
+
+
+class Recording(ClientRecording, RuntimeRecording, Protocol):
+    """A command's recording of the clients it opens and the runtimes it runs, for a library that
+    does both (the dashboard opens its robot and runs its runtime)."""
 
 
 class Pacer(Protocol):
@@ -157,7 +166,8 @@ class Runtime:
     :attr:`closed_loop` says what was done. ``slip``: the floor's calibrated wheel slip; on the closed
     loop each VEL then asks the wheels for their creep on top (:meth:`SlipModel.commanded
     <omnibot.estimation.slip.SlipModel.commanded>`), so the body, not only its wheels, goes at the
-    twist asked.
+    twist asked. ``recording``: the command's ``--log`` / ``--foxglove`` recording, which records the
+    runtime from its start (:class:`RuntimeRecording`); None records nothing.
     """
 
     def __init__(
@@ -174,8 +184,10 @@ class Runtime:
         wait_replies: bool = False,
         wheel_loop: bool | None = True,
         slip: SlipModel | None = None,
+        recording: RuntimeRecording | None = None,
     ) -> None:
         self.client = client
+        self.recording = recording
         self.wheel_loop = wheel_loop
         self.slip = slip
         self.closed_loop: bool | None = None
@@ -275,8 +287,8 @@ class Runtime:
         if self._listening:
             return
         self._listening = True
-        for hook in list(ON_START):
-            hook(self)  # a command's --log / --foxglove: the recorder's sink, the panel's source
+        if self.recording is not None:
+            self.recording.attach_runtime(self)  # the command's --log / --foxglove: the recorder's sink
         self.client.on_telemetry(self._on_telemetry)
         self.client.add_listener(self._on_event, WarnEvent, ErrorEvent, ResetEvent)
         self._set_wheel_loop()

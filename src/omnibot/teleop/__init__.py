@@ -51,11 +51,17 @@ __all__ = [
     "Twist",
     "TwistLimits",
     "Why",
+    "config",
+    "deadman",
     "deadzone",
     "fractions_to_twist",
     "joy_to_command",
+    "joystick",
+    "keyboard",
     "limit_twist",
     "load_teleop_config",
+    "mapping",
+    "pacing",
     "parse_teleop_config",
 ]
 

@@ -12,3 +12,5 @@ Hub), ``link`` (RobotLink, the thread that owns the client), ``messages`` (brows
 ``state`` (telemetry -> state frames), ``scene`` (map, robot outline, path), ``teach`` (the teach
 and repeat hook), ``command`` (``omnibot dashboard``), ``static/`` (the page).
 """
+
+__all__ = ["access", "dashboard", "scene"]

@@ -39,6 +39,7 @@ from omnibot.client.session import open_robot
 from omnibot.errors import ConfigError, OmnibotError
 from omnibot.estimation.slip import SlipModel
 from omnibot.robot.description import RobotDescription
+from omnibot.runtime.runtime import Recording
 from omnibot.sim.world import World, load_world
 from omnibot.teleop.config import TeleopConfig
 from omnibot.transport.device import find_device
@@ -76,16 +77,18 @@ class Dashboard:
         make_teach: Callable[[RobotDescription], TeachRepeat] | None = None,
         wheel_loop: bool = True,
         floor: Callable[[RobotClient, RobotDescription], SlipModel | None] | None = None,
+        recording: Recording | None = None,
     ) -> None:
         """``robot`` (a description, preset or file; None: the one the controller names) must be the
         robot on the link; ``make_teach`` builds ``teach`` once the robot is known; ``wheel_loop``:
         the runtime closes the controller's wheel-speed loop (False: open loop); ``floor`` applies a
         floor's calibration once the robot is known (uploads its tables) and gives its wheel slip,
-        which the runtime asks the wheels for on top of each twist."""
+        which the runtime asks the wheels for on top of each twist; ``recording`` (``--log``) records
+        the client and the runtime."""
         self.token = token = access_token(host, token)
         self.host = host
         HostPolicy.for_bind(host, 1, allow_hosts)  # a bad name fails here, before anything opens
-        session = open_robot(port_url, robot, timeout=0.5)
+        session = open_robot(port_url, robot, timeout=0.5, recording=recording)
         client, description = session.client, session.robot
         try:
             mode = client.status().mode
@@ -107,6 +110,7 @@ class Dashboard:
                 mode=mode,
                 wheel_loop=wheel_loop,
                 slip=floor(client, description) if floor is not None else None,
+                recording=recording,
             )
             # a path file is drawn where following it from here would drive it; points as given
             points = path.placed(self.link.pose) if isinstance(path, PlannedPath) else path

@@ -51,7 +51,7 @@ from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription
 from omnibot.runtime.arbiter import EStop as EStopLock
 from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.runtime import Runtime
+from omnibot.runtime.runtime import Runtime, RuntimeRecording
 from omnibot.runtime.sinks import EstimatorWhenMissing
 from omnibot.runtime.sources import DeadmanSource
 from omnibot.scan import Scan
@@ -129,6 +129,7 @@ class RobotLink:
         runtime: Runtime | None = None,
         wheel_loop: bool = True,
         slip: SlipModel | None = None,
+        recording: RuntimeRecording | None = None,
     ) -> None:
         self.client = client
         self.mode = mode
@@ -158,6 +159,7 @@ class RobotLink:
             vel_timeout=self.config.vel_timeout,
             wheel_loop=wheel_loop,
             slip=slip,
+            recording=recording,
         )
         self.scanner: SimScanSource | None = None
         """The simulator's scanner when this link gave the runtime one (closed with the link)."""

@@ -21,6 +21,7 @@ __all__ = [
     "Command",
     "Follower",
     "State",
+    "base",
     "follower_names",
     "make_follower",
     "pure_pursuit",

@@ -1,9 +1,12 @@
-"""The running command's ``--log`` / ``--foxglove``: which recorder the clients a command opens go to.
+"""A command's ``--log`` / ``--foxglove``: the recording its composition root opens and hands on.
 
 Light on purpose (the recorder, MCAP and rosbags are imported only when a command records):
-:func:`recording` wraps a command; while it records, :func:`attach_active` is told of every client
-:mod:`omnibot.client.session` opens and :func:`attach_runtime` of every runtime that starts
-(``session.ON_OPEN``, ``runtime.ON_START``).
+:func:`open_recording` makes a :class:`Recording`, which the command passes to each session it opens
+(``recording=`` of :func:`omnibot.client.session.open_robot`, :func:`~omnibot.client.session.guarded`,
+:func:`~omnibot.client.session.robot_session`: :meth:`Recording.attach`) and each runtime it runs
+(``Runtime(recording=...)``: :meth:`Recording.attach_runtime` when it starts). Nothing here is
+global: two recordings in one process record separately. Foxglove's Teleop panel
+(:attr:`Recording.panel`) drives only a runtime its command adds it to.
 """
 
 from __future__ import annotations
@@ -14,13 +17,14 @@ import sys
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 from omnibot.errors import ConfigError
 from omnibot.logs.topics import DEFAULT_ESTIMATOR
 
 if TYPE_CHECKING:
     from omnibot.client.client import RobotClient
+    from omnibot.logs.live import PanelSource
     from omnibot.logs.recorder import Mirror, Recorder
     from omnibot.logs.sink import RuntimeRecorder
     from omnibot.robot.description import RobotDescription
@@ -55,8 +59,8 @@ class FoxgloveBind:
 
 
 class Recording:
-    """A command's ``--log``: the file is made when the first client is attached (a command that
-    fails before it talks to a robot leaves no file)."""
+    """A command's ``--log`` / ``--foxglove``: the file (and the live server) is made when the first
+    client is attached (a command that fails before it talks to a robot leaves no file)."""
 
     def __init__(
         self,
@@ -99,8 +103,8 @@ class Recording:
         self.recorder.attach(client, robot, guess=guess)
 
     def attach_runtime(self, runtime: Runtime) -> None:
-        """Record ``runtime``'s arbitration and estimate; the Teleop panel of a Foxglove live server
-        becomes one of its sources (once per runtime; nothing before a client was recorded)."""
+        """Record ``runtime``'s arbitration and estimate (once per runtime; nothing before a client
+        was recorded)."""
         if self.recorder is None or any(r is runtime for r in self._runtimes):
             return
         from omnibot.logs.sink import RuntimeRecorder
@@ -109,10 +113,18 @@ class Recording:
         sink = RuntimeRecorder(self.recorder, runtime)
         self._sinks.append(sink)
         runtime.add_sink(sink)
+
+    @property
+    def panel(self) -> PanelSource | None:
+        """Foxglove's Teleop panel as a runtime source, with ``--foxglove`` once a client was recorded
+        (the live server is made with the file); None otherwise."""
+        if self.recorder is None:
+            return None
         for mirror in self.recorder.mirrors:
             panel = getattr(mirror, "panel", None)  # a FoxgloveLive's Teleop panel
-            if panel is not None and panel.name not in runtime.sources:
-                runtime.add_source(panel)
+            if panel is not None:
+                return cast("PanelSource", panel)
+        return None
 
     @property
     def failure(self) -> str | None:
@@ -127,22 +139,18 @@ class Recording:
             self.recorder.close()
 
 
-_ACTIVE: list[Recording] = []
-"""The running command's recording (at most one; a list so that no ``global`` is needed)."""
-
-
 @contextlib.contextmanager
-def recording(
+def open_recording(
     path: str | Path | None,
     *,
     estimator: str = DEFAULT_ESTIMATOR,
     foxglove: str | int | None = None,
     foxglove_token: str | None = None,
 ) -> Iterator[Recording | None]:
-    """``--log FILE`` / ``--foxglove [HOST:]PORT`` (``--foxglove-token``): while inside, every client
-    a command opens (:func:`attach_active`, through :data:`omnibot.client.session.ON_OPEN`) is recorded
-    into ``path`` and served live to Foxglove at ``foxglove``; None and None record nothing. The file
-    must be writable and the address and token valid (checked at once, before any robot moves)."""
+    """``--log FILE`` / ``--foxglove [HOST:]PORT`` (``--foxglove-token``): the command's recording,
+    closed on the way out; None and None record nothing (None). The file must be writable and the
+    address and token valid (checked at once, before any robot moves). The command hands it to the
+    sessions it opens and the runtimes it runs (their ``recording`` parameter)."""
     if foxglove is None and foxglove_token is not None:
         raise ConfigError("--foxglove-token goes with --foxglove [HOST:]PORT", key="--foxglove-token")
     if path is None and foxglove is None:
@@ -153,40 +161,7 @@ def recording(
     check_writable(path, "--log")
     bind = FoxgloveBind.parse(foxglove, foxglove_token) if foxglove is not None else None
     rec = Recording(path, estimator, bind)
-    _listen()
-    _ACTIVE.append(rec)
     try:
         yield rec
     finally:
-        _ACTIVE.remove(rec)
         rec.close()
-
-
-def active() -> Recorder | None:
-    """The recorder of the running command (None when it records nothing or has not started)."""
-    return _ACTIVE[-1].recorder if _ACTIVE else None
-
-
-def attach_active(client: RobotClient, robot: RobotDescription | None = None, *, guess: bool = False) -> None:
-    """Record ``client`` into the running command's log, if there is one (see Recorder.attach)."""
-    if _ACTIVE:
-        _ACTIVE[-1].attach(client, robot, guess)
-
-
-def attach_runtime(runtime: Runtime) -> None:
-    """Plug the running command's recording into ``runtime`` (see Recording.attach_runtime); called
-    by :meth:`Runtime.start <omnibot.runtime.runtime.Runtime.start>` (:data:`omnibot.runtime.runtime.ON_START`)."""
-    if _ACTIVE:
-        _ACTIVE[-1].attach_runtime(runtime)
-
-
-def _listen() -> None:
-    """Have every client a session opens and every runtime that starts come to :func:`attach_active`
-    and :func:`attach_runtime` (once; they record only while a recording runs)."""
-    from omnibot.client import session
-    from omnibot.runtime import runtime
-
-    if attach_active not in session.ON_OPEN:
-        session.ON_OPEN.append(attach_active)
-    if attach_runtime not in runtime.ON_START:
-        runtime.ON_START.append(attach_runtime)
