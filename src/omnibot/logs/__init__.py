@@ -13,5 +13,6 @@ __all__ = [
     "replay",
     "run",
     "schemas",
+    "slamscore",
     "topics",
 ]

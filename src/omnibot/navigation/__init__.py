@@ -8,6 +8,7 @@ __all__ = [
     "explore",
     "following",
     "goto",
+    "goto_source",
     "judge",
     "metrics",
     "plot",
