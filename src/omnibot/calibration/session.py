@@ -332,10 +332,7 @@ def _roller_drag(s: SurfaceRun) -> None:
         plan.roller_rounds > 0 and all(geometry.roller_pitch) and s.source.can(RunInfo(STRAIGHT, "", 0.0))
     ):
         return
-    # the dead band of the course along an idle axis (folded 0 on omni wheels, 45 on a mecanum base)
-    raw = geometry.idle_axes[0] if geometry.idle_axes else 0.0
-    folded = geometry.fold(raw)
-    axis = s.deadbands.get(f"course:{folded:g}") or find_deadband(s.runner, raw, plan.deadband_step).power
+    axis = s.deadbands.get("course:0") or find_deadband(s.runner, 0.0, plan.deadband_step).power
     s.rollers = fit_rollers(geometry, roller_runs(s.runner, plan, axis, plan.roller_rounds))
     if s.rollers is None:
         s.notes.append("roller drag: the runs could not tell it (no drag term uploaded)")
