@@ -55,7 +55,7 @@ def test_mecanum_raw_courses_and_plan() -> None:
     assert geo.idle_axes == (45.0, 135.0) and geo.fold_axes == (0.0,) and geo.fold_marker == (0.0,)
     assert geo.raw_courses(30.0, 4) == [30.0, 210.0, 330.0, 150.0]
     assert geo.raw_courses(30.0, 2) == [30.0, 210.0]  # out and back
-    assert Plan().calibrated_courses(geo) == [0.0, 30.0, 60.0, 90.0]
+    assert Plan().calibrated_courses(geo) == [0.0, 15.0, 30.0, 45.0, 60.0, 75.0, 90.0]
     assert Plan.quick().calibrated_courses(geo) == [0.0, 45.0, 90.0]  # the diagonal is a course of its own
     assert Plan.quick().reach_folds(geo) == [0.0, 30.0, 45.0, 60.0, 90.0]
     omni4 = Geometry.of(load_robot("omni4"))

@@ -141,6 +141,10 @@ class Plan:
                 )
             return [float(c) for c in self.courses_deg]
         n = max(1, self.course_count)
-        if top > DIAGONAL:  # forward, the diagonals and sideways differ: one course every 45 at least
-            n = max(n, math.ceil(top / DIAGONAL) + 1)
+        if top > DIAGONAL:
+            # no mirror at the diagonal (a mecanum base, 0..90): each half spread from both ends, so the
+            # diagonal, where two wheels stand idle and K_l turns, is a course of its own
+            half = top / 2.0
+            ends = [round(half * k / max(n - 1, 1), 3) for k in range(max(n, 2))]
+            return sorted({*ends, *(round(top - c, 3) for c in ends)})
         return [0.0] if n == 1 else [round(top * k / (n - 1), 3) for k in range(n)]
