@@ -3,9 +3,10 @@
 across where the commands ask for 23).
 
     python -m benchmarks.move_landing [--robots omni4,omni3,mecanum4] [--surfaces wood,carpet]
-                                      [--modes 0,2,2s] [--detail]
+                                      [--modes 0,2,2s] [--detail] [--calibration CAL.yaml]
 
-Each run: a fresh simulator with the firmware in lockstep (seed 1, the preset's calibration), the
+Each run: a fresh simulator with the firmware in lockstep (seed 1, the preset's calibration, or with
+``--calibration`` the file's tables of the floor, as ``omnibot calibrate`` wrote them), the
 MODE (0: open loop, seed 000's timeline; 2: the wheel-speed loop; ``2s``: 2 with the floor's creep
 coefficients, CAL table 9, fitted by ``omnibot calibrate``'s slip runs on the simulator, seed 1000),
 then one command line, until IDLE and 1 s after it (the coast). Runs:
@@ -34,8 +35,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from omnibot.calibration.calfile import apply_calibration, floor_calibration
 from omnibot.navigation.slipcal import simulate_slip_calibration
-from omnibot.robot.description import load_robot
+from omnibot.robot.description import RobotDescription, load_robot
 from omnibot.sim.device import SimDevice
 
 SPEEDS = {"omni4": (30, 60, 90), "omni3": (10, 30, 100), "mecanum4": (10, 30, 60)}
@@ -74,14 +76,27 @@ def floor_slip(robot: str, surface: str) -> list[float]:
     return [p.roll, p.combined, p.scale]
 
 
+@functools.cache
+def firmware_robot(robot: str, surface: str, calibration: str | None) -> RobotDescription:
+    """The description the firmware is built for: the preset, with ``calibration``'s tables of the
+    floor (a calibration file) when given."""
+    description = load_robot(robot)
+    if calibration is None:
+        return description
+    tables, _ = floor_calibration(calibration, description, surface)
+    return apply_calibration(description, tables) if tables is not None else description
+
+
 def drive(
-    robot: str, surface: str, mode: str, command: str, seed: int = 1
+    robot: str, surface: str, mode: str, command: str, seed: int = 1, calibration: str | None = None
 ) -> tuple[SimDevice, list[tuple[float, float, float]], float]:
     """Run ``command`` in MODE ``mode`` (``2s``: 2 with the floor's creep coefficients) until IDLE and
     :data:`SETTLE` after; the truth trail (x, y, theta every 10 ms, the first the start) and the
     time to IDLE."""
     overrides = {"slip": floor_slip(robot, surface)} if mode.endswith("s") else None
-    dev = SimDevice(robot, surface=surface, seed=seed, firmware_overrides=overrides)
+    built = firmware_robot(robot, surface, calibration)
+    true = load_robot(robot) if calibration is not None else None
+    dev = SimDevice(built, surface=surface, seed=seed, firmware_overrides=overrides, true_robot=true)
     dev.receive(f"MODE,{mode.rstrip('s')}\n".encode())
     for _ in range(5):
         dev.step()
@@ -108,10 +123,12 @@ def drive(
     return dev, trail, idle
 
 
-def move(robot: str, surface: str, mode: str, length: int, speed: int, course: int) -> Run:
+def move(
+    robot: str, surface: str, mode: str, length: int, speed: int, course: int, calibration: str | None = None
+) -> Run:
     """A MOVE's error along its course (the body's start heading)."""
     command = f"MOVE,{length},{speed},{course},0"
-    _, trail, idle = drive(robot, surface, mode, command)
+    _, trail, idle = drive(robot, surface, mode, command, calibration=calibration)
     x0, y0, th0 = trail[0]
     x1, y1, _ = trail[-1]
     a = th0 + math.radians(course)
@@ -122,20 +139,20 @@ def move(robot: str, surface: str, mode: str, length: int, speed: int, course: i
     )
 
 
-def rotate(robot: str, surface: str, mode: str, angle: int, rate: int) -> Run:
+def rotate(robot: str, surface: str, mode: str, angle: int, rate: int, calibration: str | None = None) -> Run:
     """A ROTATE's error in angle."""
     command = f"ROTATE,{angle},{rate}"
-    _, trail, idle = drive(robot, surface, mode, command)
+    _, trail, idle = drive(robot, surface, mode, command, calibration=calibration)
     turned = 0.0
     for (_, _, a), (_, _, b) in itertools.pairwise(trail):
         turned += (b - a + math.pi) % (2.0 * math.pi) - math.pi
     return Run("ROTATE", command, math.degrees(turned) / angle - 1.0, idle)
 
 
-def circle(robot: str, surface: str, mode: str) -> Run:
+def circle(robot: str, surface: str, mode: str, calibration: str | None = None) -> Run:
     """Seed 000's circle: the diameter of the circle that fits the truth's trail best (least squares,
     until IDLE) against the 36-gon's, its roundness (largest less smallest radius) and its path."""
-    _, trail, idle = drive(robot, surface, mode, CIRCLE)
+    _, trail, idle = drive(robot, surface, mode, CIRCLE, calibration=calibration)
     moving = trail[: max(3, round(idle / 0.01) + 1)] if not math.isnan(idle) else trail
     xy = np.array([(x, y) for x, y, _ in moving])
     a = np.column_stack((2.0 * xy, np.ones(len(xy))))
@@ -157,16 +174,16 @@ def circle(robot: str, surface: str, mode: str) -> Run:
     )
 
 
-def runs(robot: str, surface: str, mode: str) -> list[Run]:
-    """Every run of one robot, floor and mode."""
+def runs(robot: str, surface: str, mode: str, calibration: str | None = None) -> list[Run]:
+    """Every run of one robot, floor and mode (the firmware with ``calibration``'s tables of the floor)."""
     out = [
-        move(robot, surface, mode, length, speed, course)
+        move(robot, surface, mode, length, speed, course, calibration)
         for length in LENGTHS
         for speed in SPEEDS[robot]
         for course in COURSES
     ]
-    out += [rotate(robot, surface, mode, a, f) for a, f in ROTATES]
-    out.append(circle(robot, surface, mode))
+    out += [rotate(robot, surface, mode, a, f, calibration) for a, f in ROTATES]
+    out.append(circle(robot, surface, mode, calibration))
     return out
 
 
@@ -184,6 +201,7 @@ def main(argv: list[str] | None = None) -> None:
         "--modes", default="0,2,2s", help="MODEs: 0 open loop, 2 closed, 2s closed with the floor's creep"
     )
     ap.add_argument("--detail", action="store_true", help="every run, not only the summary")
+    ap.add_argument("--calibration", help="a calibration file: the firmware gets its tables of each floor")
     args = ap.parse_args(argv)
     print(
         "| robot | floor | MODE | MOVE mean abs | MOVE worst | within 2 % | off course at most | ROTATE 90 / 360 "
@@ -194,7 +212,7 @@ def main(argv: list[str] | None = None) -> None:
     for robot in args.robots.split(","):
         for surface in args.surfaces.split(","):
             for mode in args.modes.split(","):
-                rs = runs(robot, surface, mode)
+                rs = runs(robot, surface, mode, args.calibration)
                 moves = [r for r in rs if r.kind == "MOVE"]
                 worst = max(moves, key=lambda r: abs(r.error))
                 mean = sum(abs(r.error) for r in moves) / len(moves)

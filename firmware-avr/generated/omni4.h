@@ -228,9 +228,9 @@ static const int16_t RIM_Q[MOTORS][3] PROGMEM = {
     {0, -16384, 1573},
     {-16384, 0, 1573},
 };
-#define IDLE_AXES 2
-/* directions of travel (0.01 degree) along which some wheel stands still: K_l's course folding */
-static const int16_t IDLE_AXES_CDEG[IDLE_AXES] PROGMEM = {0, 9000};
+#define KL_AXES 2
+/* the axes (0.01 degree) K_l's courses fold from: the idle axes on omni wheels, x on mecanum */
+static const int16_t KL_AXES_CDEG[KL_AXES] PROGMEM = {0, 9000};
 
 /* ---- default calibration, in CAL units (docs/protocol.md): knots {X, Y} ---- */
 #define CAL_KNOTS 16

@@ -15,12 +15,13 @@ void rim_init() {
 
 float rim(uint8_t i, uint8_t j) { return rim_f[i][j]; }
 
-// Angle (0..90 degrees) between a course and the nearest idle axis (calibration.py fold_course).
+// Angle (0..90 degrees) between a course and the nearest of K_l's fold axes (calibration.py fold_course):
+// the idle axes on omni wheels, the body's x axis on a mecanum base.
 static float fold_course(float course) {
     float best = 90.0f;
-    for (uint8_t a = 0; a < IDLE_AXES; a++) {
+    for (uint8_t a = 0; a < KL_AXES; a++) {
         // course in [-180, 180], axis in [0, 180): (course - axis) mod 180 without fmodf
-        float d = course - (int16_t)pgm_read_word(&IDLE_AXES_CDEG[a]) * 0.01f;
+        float d = course - (int16_t)pgm_read_word(&KL_AXES_CDEG[a]) * 0.01f;
         while (d < 0) d += 180.0f;
         while (d >= 180.0f) d -= 180.0f;
         if (d > 90.0f) d = 180.0f - d;

@@ -91,7 +91,7 @@ def use_calibration(args: argparse.Namespace, client: Any, robot: Any) -> Any:
     from omnibot.calibration.calfile import floor_calibration
     from omnibot.estimation.slip import SlipModel
 
-    tables, slip = floor_calibration(path, robot.name, args.surface)
+    tables, slip = floor_calibration(path, robot, args.surface)
     if tables is not None:
         client.upload_calibration(tables)
     client.upload_slip(slip)

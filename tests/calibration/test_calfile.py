@@ -1,5 +1,6 @@
 """The calibration file's reach: written, read back, and a file from before it (no reach); a file
-edited by hand that gives a key twice is refused."""
+edited by hand that gives a key twice is refused; the fold marker of a mecanum file, and older mecanum
+files moved onto the x axis or refused."""
 
 from __future__ import annotations
 
@@ -8,7 +9,14 @@ from pathlib import Path
 import pytest
 import yaml
 
-from omnibot.calibration.calfile import describe_spec, dumps, load_calibration, parse_calibration
+from omnibot.calibration.calfile import (
+    describe_spec,
+    dumps,
+    floor_calibration,
+    load_calibration,
+    merge_calibration,
+    parse_calibration,
+)
 from omnibot.errors import ConfigError
 from omnibot.robot.description import ReachSpec, load_robot
 from tests.calibration.conftest import sim_client
@@ -83,3 +91,62 @@ def test_a_key_given_twice_is_refused_naming_its_place_and_lines(tmp_path: Path)
     path.write_text(OLD.read_text() + "robot: omni3\n", encoding="utf-8")
     with pytest.raises(ConfigError, match=r": robot: duplicate key on line \d+ \(first on line 9\)$"):
         load_calibration(path)
+
+
+OLD_MECANUM = """\
+robot: mecanum4
+surfaces:
+  carpet:
+    calibration:
+      k: 118.8
+      k_l:
+        courses_deg: [0.0, 45.0]
+        curves:
+        - {x: [10, 100, 255], y: [3.0, 1.5, 1.2]}
+        - {x: [10, 100, 255], y: [4.0, 2.0, 1.6]}
+      reach: {courses_deg: [0.0, 45.0], speed: [0.4, 0.6]}
+    odometry: {slip: {roll: 0.01, compliance: 0.0}}
+"""
+"""A mecanum4 file from before the fold marker: courses from the diagonals (0: a diagonal, 45:
+forward and sideways on one curve)."""
+
+
+def test_an_old_mecanum_file_is_moved_onto_the_x_axis(tmp_path: Path) -> None:
+    path = tmp_path / "old.yaml"
+    path.write_text(OLD_MECANUM, encoding="utf-8")
+    robot = load_robot("mecanum4")
+    raw = load_calibration(path).for_surface("carpet")
+    assert raw.fold_axes_deg is None  # as written: the idle axes
+    tables, _ = floor_calibration(path, robot, "carpet")
+    assert tables is not None and tables.k_l is not None and tables.reach is not None
+    assert tables.fold_axes_deg == (0.0,)
+    assert tables.k_l.courses_deg == (0.0, 45.0, 90.0)
+    assert [c.y[0] for c in tables.k_l.curves] == [4.0, 3.0, 4.0]  # forward, diagonal, sideways
+    assert tables.reach.speed == (0.6, 0.4, 0.6)
+    merged = yaml.safe_load(merge_calibration("mecanum4", path, "carpet"))
+    assert merged["calibration"]["fold_axes_deg"] == [0.0]
+    assert merged["calibration"]["k_l"]["courses_deg"] == [0.0, 45.0, 90.0]
+
+
+def test_a_mecanum_file_that_cannot_be_moved_is_refused(tmp_path: Path) -> None:
+    curves = "".join(f"        - {{x: [10, 255], y: [{2 + i / 10:.1f}, 1.0]}}\n" for i in range(8))
+    text = OLD_MECANUM.replace("courses_deg: [0.0, 45.0]\n", "courses_deg: [0, 5, 10, 15, 20, 30, 40, 45]\n")
+    text = text.replace(
+        "        - {x: [10, 100, 255], y: [3.0, 1.5, 1.2]}\n        - {x: [10, 100, 255], y: [4.0, 2.0, 1.6]}\n",
+        curves,
+    )
+    path = tmp_path / "old.yaml"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(
+        ConfigError, match=r"old.yaml: fold_axes_deg: .*\[45, 135\].*\[0\].*calibrate the robot again"
+    ):
+        floor_calibration(path, load_robot("mecanum4"), "carpet")
+
+
+def test_a_mecanum_section_writes_its_fold_marker(tmp_path: Path) -> None:
+    spec = load_robot("mecanum4").calibration
+    assert spec is not None
+    path = tmp_path / "cal.yaml"
+    path.write_text(dumps({"robot": "mecanum4", "calibration": describe_spec(spec)}), encoding="utf-8")
+    assert "fold_axes_deg: [0.0]" in path.read_text()
+    assert load_calibration(path).for_surface(None) == spec

@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from omnibot.calibration.patterns import Geometry, course_pattern, rotation_pattern, scaled_pattern
+from omnibot.calibration.plan import Plan
 from omnibot.robot.description import RobotDescription, load_robot
 
 
@@ -34,14 +35,32 @@ def test_busiest_motor_gets_the_power(geo: Geometry) -> None:
         scaled_pattern([0.0, 0.0], 100)
 
 
-@pytest.mark.parametrize(("preset", "fold_max"), [("omni4", 45.0), ("omni3", 30.0), ("mecanum4", 45.0)])
-def test_fold_range_and_raw_courses(preset: str, fold_max: float) -> None:
+@pytest.mark.parametrize(
+    ("preset", "fold_max", "counts"),
+    [("omni4", 45.0, (4, 4, 4)), ("omni3", 30.0, (4, 4, 4)), ("mecanum4", 90.0, (2, 4, 2))],
+)
+def test_fold_range_and_raw_courses(preset: str, fold_max: float, counts: tuple[int, int, int]) -> None:
+    """mecanum4 folds from its x axis alone (0..90): forward and sideways are only themselves and
+    their opposites, a diagonal its mirror images too."""
     geo = Geometry.of(load_robot(preset))
     assert geo.fold_max == pytest.approx(fold_max)
-    for folded in (0.0, 0.5 * fold_max, fold_max):
+    for folded, count in zip((0.0, 0.5 * fold_max, fold_max), counts, strict=True):
         raws = geo.raw_courses(folded, 4)
-        assert len(raws) == 4
+        assert len(raws) == len(set(raws)) == count
         assert all(geo.fold(c) == pytest.approx(folded, abs=1e-6) for c in raws)
+
+
+def test_mecanum_raw_courses_and_plan() -> None:
+    geo = Geometry.of(load_robot("mecanum4"))
+    assert geo.idle_axes == (45.0, 135.0) and geo.fold_axes == (0.0,) and geo.fold_marker == (0.0,)
+    assert geo.raw_courses(30.0, 4) == [30.0, 210.0, 330.0, 150.0]
+    assert geo.raw_courses(30.0, 2) == [30.0, 210.0]  # out and back
+    assert Plan().calibrated_courses(geo) == [0.0, 15.0, 30.0, 45.0, 60.0, 75.0, 90.0]
+    assert Plan.quick().calibrated_courses(geo) == [0.0, 45.0, 90.0]  # the diagonal is a course of its own
+    assert Plan.quick().reach_folds(geo) == [0.0, 30.0, 45.0, 60.0, 90.0]
+    omni4 = Geometry.of(load_robot("omni4"))
+    assert omni4.fold_marker is None and Plan.quick().calibrated_courses(omni4) == [0.0, 45.0]
+    assert Plan.quick().reach_folds(omni4) == [0.0, 30.0, 45.0]
 
 
 def test_raw_courses_alternate_directions(geo: Geometry) -> None:
@@ -56,7 +75,9 @@ def test_power_arguments(geo: Geometry) -> None:
     assert geo.rotation_factor() == pytest.approx(0.096)
 
 
-@pytest.mark.parametrize(("preset", "counts"), [("omni4", (4, 8, 4)), ("omni3", (6, 12, 6))])
+@pytest.mark.parametrize(
+    ("preset", "counts"), [("omni4", (4, 8, 4)), ("omni3", (6, 12, 6)), ("mecanum4", (2, 4, 2))]
+)
 def test_every_raw_course_of_a_folded_course(preset: str, counts: tuple[int, int, int]) -> None:
     """The reach MOVEs' courses: every raw course that folds onto it, mirror images too (a
     current-limited pair of unequal motors loses one way only), each half returning to its start."""

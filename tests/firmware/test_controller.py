@@ -722,3 +722,24 @@ def test_vel_acceleration_leaves_the_open_loop_powers_alone() -> None:
     plain = rig.status()
     assert rig.cmd("VEL,30,40,0,200,150") == ["OK"]
     assert rig.status() == plain
+
+
+def test_mecanum_k_l_looks_forward_diagonal_and_sideways_up_apart() -> None:
+    """A mecanum base folds its courses from the x axis (config ``kl_axes``): forward, the diagonals
+    and sideways each use their own K_l curve, and 135 degrees is 45 mirrored."""
+    rig = make_rig("mecanum4")
+    assert rig.cmd("CAL,0,0,0,1000") == ["OK"]  # K = 100 per m/s of rim speed
+    uploads = "CAL,10,-1,0,0;CAL,10,0,0,500;CAL,11,-1,45,0;CAL,11,0,0,1000;CAL,12,-1,90,0;CAL,12,0,0,1500"
+    assert rig.send(uploads + ";CAL,13,-2,0,0\n") == ["OK"] * 7
+    powers = {}
+    for course in (0, 45, 90, 135, 180, 270, 315):
+        rig.cmd(f"STOP;MOVE,30000,40,{course},0")
+        powers[course] = list(rig.hal.powers)
+    rim = max(abs(v) for v in rig.config["rim"][0][:2])
+    assert [abs(p) for p in powers[0]] == [round(100 * 0.5 * 0.4 * rim)] * 4
+    assert [abs(p) for p in powers[90]] == [round(100 * 1.5 * 0.4 * rim)] * 4  # three times forward's
+    assert powers[180] == [-p for p in powers[0]] and powers[270] == [-p for p in powers[90]]
+    diagonal = round(100 * 1.0 * 0.4 * rim * 2**0.5)
+    assert sorted(abs(p) for p in powers[45]) == [0, 0, diagonal, diagonal]
+    assert sorted(abs(p) for p in powers[135]) == sorted(abs(p) for p in powers[45])
+    assert sorted(abs(p) for p in powers[315]) == sorted(abs(p) for p in powers[45])

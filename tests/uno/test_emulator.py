@@ -44,6 +44,9 @@ SCRIPT = [
     "CAL,11,0,40,1100;CAL,11,1,255,1000;CAL,12,-2,0,0;CAL,3,0,0,385;CAL,20,0,60,1050;CAL,20,1,200,980",
     "MOVE,30000,40,20,0;STATUS;STOP",
     "MOVE,30000,80,70,10;STATUS;STOP",
+    # a third K_l curve at 90 (a mecanum base folds from its x axis: sideways and 135 = 45 mirrored)
+    "CAL,12,-1,90,0;CAL,12,0,40,1600;MOVE,30000,40,90,0;STATUS;STOP;MOVE,30000,40,135,0;STATUS;STOP",
+    "MOVE,30000,40,-60,0;STATUS;STOP;CAL,12,-2,0,0",
     "VEL,30,4,0,500;STATUS;VEL,30,1,0,500;STATUS;STOP",  # the dead band of the tables just written
     "CAL,12,-1,40,0;CAL,11,-1,50,0;CAL,10,5,3,4;CAL,21,0,0,0;CAL,6,0,-1,0",
     # roller drag (at the encoders' origin: phase 0) with its coast table

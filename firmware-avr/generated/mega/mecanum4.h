@@ -228,20 +228,20 @@ static const int16_t RIM_Q[MOTORS][3] PROGMEM = {
     {16384, -16384, 2143},
     {16384, 16384, -2143},
 };
-#define IDLE_AXES 2
-/* directions of travel (0.01 degree) along which some wheel stands still: K_l's course folding */
-static const int16_t IDLE_AXES_CDEG[IDLE_AXES] PROGMEM = {4500, 13500};
+#define KL_AXES 1
+/* the axes (0.01 degree) K_l's courses fold from: the idle axes on omni wheels, x on mecanum */
+static const int16_t KL_AXES_CDEG[KL_AXES] PROGMEM = {0};
 
 /* ---- default calibration, in CAL units (docs/protocol.md): knots {X, Y} ---- */
 #define CAL_KNOTS 16
 #define CAL_CURVES 8
 #define DEFAULT_K 1188
 struct Knot { int16_t x, y; };
-#define DEFAULT_KL_CURVES 2
-static const uint8_t DEFAULT_KL_COURSE[2] PROGMEM = {0, 45};
+#define DEFAULT_KL_CURVES 3
+static const uint8_t DEFAULT_KL_COURSE[3] PROGMEM = {0, 45, 90};
 /* knots of K_t, K_r, the coast, each K_l curve and each motor's gain, one after the other */
-static const Knot DEFAULT_KNOTS[40] PROGMEM = {{0, 1250}, {255, 1250}, {10, 5250}, {20, 3080}, {30, 2359}, {45, 1881}, {60, 1645}, {80, 1472}, {100, 1371}, {130, 1284}, {160, 1237}, {200, 1207}, {255, 1203}, {0, 0}, {10, 5803}, {20, 3361}, {30, 2549}, {45, 2011}, {60, 1745}, {80, 1549}, {100, 1435}, {130, 1338}, {160, 1283}, {200, 1249}, {255, 1247}, {10, 5719}, {20, 3311}, {30, 2509}, {45, 1976}, {60, 1710}, {80, 1513}, {100, 1396}, {130, 1292}, {160, 1229}, {200, 1180}, {255, 1165}, {0, 1000}, {0, 1000}, {0, 1000}, {0, 1000}};
-static const uint8_t DEFAULT_N[9] PROGMEM = {2, 11, 1, 11, 11, 1, 1, 1, 1};
+static const Knot DEFAULT_KNOTS[51] PROGMEM = {{0, 1250}, {255, 1250}, {10, 5250}, {20, 3080}, {30, 2359}, {45, 1881}, {60, 1645}, {80, 1472}, {100, 1371}, {130, 1284}, {160, 1237}, {200, 1207}, {255, 1203}, {0, 0}, {10, 5719}, {20, 3311}, {30, 2509}, {45, 1976}, {60, 1710}, {80, 1513}, {100, 1396}, {130, 1292}, {160, 1229}, {200, 1180}, {255, 1165}, {10, 5803}, {20, 3361}, {30, 2549}, {45, 2011}, {60, 1745}, {80, 1549}, {100, 1435}, {130, 1338}, {160, 1283}, {200, 1249}, {255, 1247}, {10, 5719}, {20, 3311}, {30, 2509}, {45, 1976}, {60, 1710}, {80, 1513}, {100, 1396}, {130, 1292}, {160, 1229}, {200, 1180}, {255, 1165}, {0, 1000}, {0, 1000}, {0, 1000}, {0, 1000}};
+static const uint8_t DEFAULT_N[10] PROGMEM = {2, 11, 1, 11, 11, 11, 1, 1, 1, 1};
 static const int16_t DEFAULT_OFFSET[MOTORS] PROGMEM = {0, 0, 0, 0};
 static const int16_t DEFAULT_ROLLER_COS[MOTORS] PROGMEM = {0, 0, 0, 0};
 static const int16_t DEFAULT_ROLLER_SIN[MOTORS] PROGMEM = {0, 0, 0, 0};

@@ -23,6 +23,7 @@ corrections (:func:`omnibot.calibration.umbmark.corrected_robot`).
 from __future__ import annotations
 
 import datetime
+import logging
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -34,7 +35,15 @@ from omnibot.calibration.results import CalibrationResult
 from omnibot.config_errors import read_yaml
 from omnibot.errors import ConfigError
 from omnibot.estimation.slip import SlipParameters
-from omnibot.robot.description import CalibrationSpec, RobotDescription, load_robot, parse_description
+from omnibot.robot.description import (
+    CalibrationSpec,
+    RobotDescription,
+    calibration_for,
+    load_robot,
+    parse_description,
+)
+
+log = logging.getLogger(__name__)
 
 TOP_KEYS = ("robot", "calibration", "surfaces", "gyro", "odometry", "info")
 
@@ -101,6 +110,8 @@ class CalibrationFile:
 def describe_spec(spec: CalibrationSpec) -> dict[str, Any]:
     """A calibration section as plain data (the YAML layout of a description's ``calibration:``)."""
     out: dict[str, Any] = {"k": spec.k}
+    if spec.fold_axes_deg is not None:
+        out["fold_axes_deg"] = list(spec.fold_axes_deg)
     if spec.k_l is not None:
         out["k_l"] = {
             "courses_deg": list(spec.k_l.courses_deg),
@@ -260,18 +271,41 @@ def load_calibration(path: str | Path) -> CalibrationFile:
 
 
 def floor_calibration(
-    path: str | Path, robot: str, surface: str | None
+    path: str | Path, robot: str | RobotDescription, surface: str | None
 ) -> tuple[CalibrationSpec | None, SlipParameters]:
     """(the floor's calibration tables, its wheel-slip coefficients) from the file at ``path`` for the
     floor ``surface`` (None: the only floor with wheel slip in the file); the file must be
-    ``robot``'s. A ConfigError names ``--calibration`` or ``--surface``."""
+    ``robot``'s (a description: the tables on its course axes, :func:`spec_for_robot`). A ConfigError
+    names ``--calibration`` or ``--surface``."""
     cal = load_calibration(path)
-    cal.check_robot(robot, str(path))
+    cal.check_robot(robot if isinstance(robot, str) else robot.name, str(path))
     try:
         slip = cal.slip_for(surface)
-        return cal.for_surface(surface), slip
+        tables = cal.for_surface(surface)
     except ConfigError as exc:
         raise ConfigError(f"{path}: {exc}", key="--surface") from None
+    if not isinstance(robot, str):
+        tables = spec_for_robot(tables, robot, str(path))
+    return tables, slip
+
+
+def spec_for_robot(spec: CalibrationSpec, robot: RobotDescription, source: str = "") -> CalibrationSpec:
+    """A calibration section with its K_l and reach courses on ``robot``'s course axes: as it is when
+    made on them, moved there exactly when made on others (a mecanum file written before the fold
+    marker: its courses count from the diagonals), else a ConfigError naming ``source``."""
+    try:
+        moved = calibration_for(spec, robot.wheels)
+    except ValueError as exc:
+        raise ConfigError(f"{source or 'the calibration'}: {exc}", key="--calibration") from None
+    if moved.k_l != spec.k_l:
+        log.info(
+            "%s: K_l courses %s moved onto %s's course axes (%s)",
+            source or "calibration",
+            list(spec.k_l.courses_deg) if spec.k_l else [],
+            robot.name,
+            list(moved.k_l.courses_deg) if moved.k_l else [],
+        )
+    return moved
 
 
 def apply_calibration(robot: RobotDescription, spec: CalibrationSpec) -> RobotDescription:
@@ -288,7 +322,7 @@ def merge_calibration(robot: str | Path, calibration: str | Path, surface: str |
     cal = load_calibration(calibration)
     cal.check_robot(desc.name, str(calibration))
     spec = cal.for_surface(surface)
-    merged = apply_calibration(desc, spec)
+    merged = apply_calibration(desc, spec_for_robot(spec, desc, str(calibration)))
     data = merged.model_dump(exclude_none=True, mode="json")
-    data["calibration"] = describe_spec(spec)
+    data["calibration"] = describe_spec(merged.calibration or spec)
     return yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=200)

@@ -560,6 +560,7 @@ def build_spec(
         k_r=k_r,
         motors=motors,
         rollers=rollers,
+        fold_axes_deg=geometry.fold_marker,
     )
 
 

@@ -70,12 +70,12 @@ def offsets_from_deadbands(single: Sequence[int], rotation: int, pwm_max: int) -
 
 
 def balance_courses(geometry: Geometry, folded: Sequence[float] | None = None) -> list[float]:
-    """Raw courses (degrees) of the balance runs: each folded course (default: 0 and the largest)
-    from every idle axis, both ways."""
+    """Raw courses (degrees) of the balance runs: each ``folded`` course from every idle axis, both
+    ways (default: the idle axes and halfway between two)."""
     axes = sorted(a % 180.0 for a in geometry.idle_axes)
     out: list[float] = []
     for a in axes:
-        for f in folded if folded is not None else (0.0, geometry.fold_max):
+        for f in folded if folded is not None else (0.0, geometry.idle_fold_max):
             c = a + f
             out += [round(c % 360.0, 6), round((c + 180.0) % 360.0, 6)]
     return sorted(set(out))

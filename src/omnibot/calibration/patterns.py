@@ -6,13 +6,13 @@ the pattern of a course is the rim speed each wheel needs for a unit translation
 firmware's ``rim`` matrix, inverse kinematics times wheel radius), scaled so that the busiest motor
 gets P. For omni4 this is exactly the seed's patterns.
 
-The firmware looks K_l up at the course *folded* onto 0..fold_max (the angle to the nearest idle
-axis, :func:`omnibot.firmware.calibration.fold_course`); every raw course ``axis + c`` folds to ``c``.
+The firmware looks K_l up at the course *folded* onto 0..fold_max (the angle to the nearest of its
+course axes, :func:`omnibot.firmware.calibration.fold_course`: the idle axes on omni wheels, the body's
+x axis on a mecanum base, :mod:`omnibot.robot.courses`); every raw course ``axis +- c`` folds to ``c``.
 """
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from omnibot.firmware.calibration import fold_course, map_motor
 from omnibot.firmware.config import build_config
 from omnibot.firmware.power import roller_terms
+from omnibot.robot import courses
 from omnibot.robot.description import MotorMapSpec, RobotDescription
 
 
@@ -36,6 +37,8 @@ class Geometry:
     """Each wheel's rollers' rolling direction (body frame)."""
     roller_pitch: tuple[float, ...] = ()
     """Encoder counts per roller pitch of each wheel (0: no encoder)."""
+    course_axes: tuple[float, ...] = ()
+    """The axes (degrees) K_l's and the reach's courses fold from (none given: the idle axes)."""
 
     @classmethod
     def of(cls, robot: RobotDescription) -> Geometry:
@@ -48,6 +51,7 @@ class Geometry:
             pwm_max=int(cfg["pwm_max"]),
             roller_dir=tuple((float(d[0]), float(d[1])) for d in cfg["roller_dir"]),
             roller_pitch=tuple(float(p) for p in cfg["roller_pitch"]),
+            course_axes=tuple(float(a) for a in cfg["kl_axes"]),
         )
 
     @property
@@ -56,26 +60,44 @@ class Geometry:
         return len(self.rim)
 
     @property
+    def fold_axes(self) -> tuple[float, ...]:
+        """The axes the firmware folds K_l's courses from: :attr:`course_axes`, else the idle axes."""
+        return self.course_axes or self.idle_axes
+
+    @property
+    def fold_marker(self) -> tuple[float, ...] | None:
+        """A calibration section's ``fold_axes_deg`` on this robot: its fold axes where they are not
+        the idle axes (a mecanum base), else None (absent: the idle axes)."""
+        if courses.same_axes(self.fold_axes, self.idle_axes):
+            return None
+        return self.fold_axes
+
+    @property
     def fold_max(self) -> float:
-        """Largest folded course (degrees): half the widest gap between neighbouring idle axes."""
-        axes = sorted(a % 180.0 for a in self.idle_axes)
-        if not axes:
-            return 90.0
-        gaps = [b - a for a, b in itertools.pairwise(axes)] + [axes[0] + 180.0 - axes[-1]]
-        return max(gaps) / 2.0
+        """Largest folded course (degrees): half the widest gap between neighbouring fold axes."""
+        return courses.fold_max(self.fold_axes)
+
+    @property
+    def idle_fold_max(self) -> float:
+        """Half the widest gap between neighbouring idle axes (degrees): halfway between two."""
+        return courses.fold_max(self.idle_axes)
 
     def fold(self, course_deg: float) -> float:
         """The course (degrees) folded as the firmware folds it for K_l."""
-        return fold_course(course_deg, list(self.idle_axes))
+        return fold_course(course_deg, list(self.fold_axes))
 
     def raw_courses(self, folded_deg: float, count: int) -> list[float]:
         """``count`` raw courses (degrees, 0..360) that fold to ``folded_deg``, spread round the circle.
 
-        The candidates are ``axis + folded`` for every idle axis and its opposite, so they alternate
-        between wheel groups and directions (and runs on them roughly return the robot to its start).
+        The candidates are ``axis + folded`` for every fold axis and its opposite, so they alternate
+        between wheel groups and directions (and runs on them roughly return the robot to its start);
+        when those are fewer than ``count`` (one fold axis: a mecanum base), their mirror images too
+        (:meth:`every_raw_course`).
         """
-        bases = sorted({round((a + s) % 360.0, 6) for a in self.idle_axes for s in (0.0, 180.0)})
+        bases = self._bases()
         candidates = [round((b + folded_deg) % 360.0, 6) for b in bases]
+        if count > len(candidates):
+            candidates = self.every_raw_course(folded_deg)
         if count >= len(candidates):
             return candidates
         step = len(candidates) / count
@@ -83,9 +105,9 @@ class Geometry:
 
     def every_raw_course(self, folded_deg: float) -> list[float]:
         """Every raw course (degrees, 0..360) that folds to ``folded_deg``: ``axis + folded`` for each
-        idle axis and its opposite, then ``axis - folded`` (its mirror image), so each half returns
+        fold axis and its opposite, then ``axis - folded`` (its mirror image), so each half returns
         the robot to its start and a course's opposite is in the same half."""
-        bases = sorted({round((a + s) % 360.0, 6) for a in self.idle_axes for s in (0.0, 180.0)})
+        bases = self._bases()
         out: list[float] = []
         for sign in (1.0, -1.0):
             for b in bases:
@@ -93,6 +115,10 @@ class Geometry:
                 if c not in out:
                     out.append(c)
         return out
+
+    def _bases(self) -> list[float]:
+        """Every fold axis and its opposite (degrees, 0..360), round the circle."""
+        return sorted({round((a + s) % 360.0, 6) for a in self.fold_axes for s in (0.0, 180.0)})
 
     def translation_rim(self, course_deg: float) -> list[float]:
         """Rim speed of each wheel for 1 m/s along ``course_deg``."""

@@ -10,6 +10,9 @@ from omnibot.calibration.patterns import Geometry
 from omnibot.errors import ConfigError
 from omnibot.robot.description import RobotDescription
 
+DIAGONAL = 45.0
+"""degrees: a fold range wider than this has no mirror at the diagonal (a mecanum base folds onto
+0..90: forward, the diagonals and sideways are three courses, not two)."""
 SHORTEST_MOVE = 1.0
 """s: the calibration covers speeds at which a MOVE of the reference length lasts at least this."""
 
@@ -100,7 +103,7 @@ class Plan:
 
     @classmethod
     def quick(cls) -> Plan:
-        """Seed 000's own scope: courses 0 and 45 (fold range ends), two directions, fewer powers, one
+        """Seed 000's own scope: courses 0 and 45 (fold range ends; on a mecanum base 0, 45 and 90), two directions, fewer powers, one
         search per dead band, no extra coast MOVEs, one round of slow-end MOVEs, the reach driven on the
         axes, next to the diagonals and on them only (a person with a tape measures every run)."""
         return cls(
@@ -117,7 +120,12 @@ class Plan:
 
     def reach_folds(self, geometry: Geometry) -> list[float]:
         """The folded courses (whole degrees) the reach MOVEs are driven on (:attr:`reach_courses`)."""
-        return sorted({float(round(share * geometry.fold_max)) for share in self.reach_courses})
+        top = geometry.fold_max
+        if top <= DIAGONAL:
+            return sorted({float(round(share * top)) for share in self.reach_courses})
+        # no mirror at the diagonal (a mecanum base, 0..90): the shares of each half, from both ends
+        half = top / 2.0
+        return sorted({float(round(end)) for s in self.reach_courses for end in (s * half, top - s * half)})
 
     def calibrated_courses(self, geometry: Geometry) -> list[float]:
         """The courses to calibrate, degrees: the plan's (checked to increase within 0..fold_max), else
@@ -133,4 +141,10 @@ class Plan:
                 )
             return [float(c) for c in self.courses_deg]
         n = max(1, self.course_count)
+        if top > DIAGONAL:
+            # no mirror at the diagonal (a mecanum base, 0..90): each half spread from both ends, so the
+            # diagonal, where two wheels stand idle and K_l turns, is a course of its own
+            half = top / 2.0
+            ends = [round(half * k / max(n - 1, 1), 3) for k in range(max(n, 2))]
+            return sorted({*ends, *(round(top - c, 3) for c in ends)})
         return [0.0] if n == 1 else [round(top * k / (n - 1), 3) for k in range(n)]

@@ -353,11 +353,11 @@ def header_source(robot_name: str, board_name: str = "uno") -> str:
     for row in cfg["rim"]:
         w("    {" + ", ".join(str(round(v * (1 << shift))) for v in row) + "},")
     w("};")
-    axes = [float(a) for a in cfg["idle_axes"]]
-    w(f"#define IDLE_AXES {len(axes)}")
-    w("/* directions of travel (0.01 degree) along which some wheel stands still: K_l's course folding */")
+    axes = [float(a) for a in cfg["kl_axes"]]
+    w(f"#define KL_AXES {len(axes)}")
+    w("/* the axes (0.01 degree) K_l's courses fold from: the idle axes on omni wheels, x on mecanum */")
     w(
-        "static const int16_t IDLE_AXES_CDEG[IDLE_AXES] PROGMEM = {"
+        "static const int16_t KL_AXES_CDEG[KL_AXES] PROGMEM = {"
         + ", ".join(str(round(a * 100)) for a in axes)
         + "};"
     )

@@ -67,10 +67,12 @@ def interp(xs: list[float], ys: list[float], x: float) -> float:
 
 
 def fold_course(course_deg: float, axes: list[float]) -> float:
-    """Angle (0..90 degrees) between a course and the nearest "idle axis" (seed 000: motor spindles).
+    """Angle (0..90 degrees) between a course and the nearest of ``axes`` (mod 180 degrees).
 
-    An idle axis is a direction of travel along which some wheel does not turn; for seed 000's four
-    wheels the axes are 0 and 90 degrees, so every course folds into 0..45.
+    The axes are the config's ``kl_axes``: on omni wheels the "idle axes" (seed 000: motor spindles),
+    directions of travel along which some wheel does not turn; for seed 000's four wheels 0 and 90
+    degrees, so every course folds into 0..45. A mecanum base folds from its x axis alone (0..90:
+    forward, diagonals and sideways apart; omnibot.robot.courses).
     """
     best = 90.0
     for a in axes:

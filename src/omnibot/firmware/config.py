@@ -20,6 +20,9 @@ radius                      wheel radii, m
 J                           inverse kinematics, rad/s of each wheel per (vx, vy, w) in m/s, rad/s
 rim                         J times the wheel radius: rim speed (m/s) per unit twist
 idle_axes                   directions (deg, 0..180) of travel along which some wheel stands still
+                            (the roller drag's)
+kl_axes                     the axes (deg) K_l's and the reach's courses fold from: the idle axes on
+                            omni wheels, [0] on a mecanum base (courses 0..90; robot/courses.py)
 k                           calibration K, PWM counts per m/s of rim speed
 kl_courses, kl_tables       K_l: courses (deg) and one [powers, factors] table per course
 kt, kr                      K_t and K_r as [powers, factors]
@@ -91,8 +94,8 @@ import numpy as np
 from omnibot.errors import ConfigError, OmnibotError
 from omnibot.estimation.slip import SlipModel, SlipParameters
 from omnibot.firmware import mpu6050
-from omnibot.robot import kinematics
-from omnibot.robot.description import PiecewiseLinear, RobotDescription, SonarSpec, load_robot
+from omnibot.robot import courses, kinematics
+from omnibot.robot.description import PiecewiseLinear, RobotDescription, SonarSpec, course_axes, load_robot
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 SRC_DIR = PACKAGE_DIR.parent.parent
@@ -206,12 +209,7 @@ def _table(t: PiecewiseLinear | None) -> list[list[float]]:
 
 
 def _idle_axes(robot: RobotDescription) -> list[float]:
-    axes: list[float] = []
-    for w in robot.wheels:
-        a = round((math.degrees(w.traction_angle) + 90.0) % 180.0, 6) % 180.0
-        if all(min(abs(a - b), 180.0 - abs(a - b)) > 1e-6 for b in axes):
-            axes.append(a)
-    return sorted(axes)
+    return courses.idle_axes([w.traction_angle for w in robot.wheels])
 
 
 PROGRESS_TOLERANCE = 0.10
@@ -345,6 +343,7 @@ def build_config(
         "J": [[float(v) for v in row] for row in J],
         "rim": [[float(v) * r for v in row] for row, r in zip(J, radius, strict=True)],
         "idle_axes": _idle_axes(robot),
+        "kl_axes": course_axes(robot.wheels),
         "k": k,
         "kl_courses": courses,
         "kl_tables": kl_tables,

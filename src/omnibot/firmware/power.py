@@ -8,7 +8,8 @@ precomputed by config.py). The translation part and the rotation part get their 
     P_i = K * K_r(p_r) * rim_i2 w                                                    (ROTATE)
 
 where each factor's power argument is the largest uncalibrated power of its part (K |s|) and the
-course is folded onto the calibrated range (:func:`calibration.fold_course`). Each motor's power then
+course is folded onto the calibrated range (:func:`calibration.fold_course`, from the config's
+``kl_axes``). Each motor's power then
 goes through the motor map (:meth:`calibration.Calibration.motor_power`: its dead-band offset, gain
 and speed term at the wheel's rim speed ``s_i``, identity by default), and a translation gets the rollers' drag on top (:meth:`PowerModel.drag`,
 zero by default). Then, keeping the
@@ -67,7 +68,9 @@ class PowerModel:
         self.n = int(cfg["motors"])
         self.rim = [[float(v) for v in row] for row in cfg["rim"]]
         self.radius = [float(r) for r in cfg["radius"]]
-        self.axes = [float(a) for a in cfg["idle_axes"]]
+        self.axes = [float(a) for a in cfg.get("kl_axes", cfg["idle_axes"])]
+        """The axes K_l's and the reach's courses fold from (a board config older than ``kl_axes``:
+        the idle axes, as it was calibrated on)."""
         self.pwm_max = int(cfg["pwm_max"])
         self.power_min = int(cfg["power_min"])
         self.cal = cal

@@ -24,10 +24,19 @@ from functools import cached_property
 from pathlib import Path
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationError,
+    ValidationInfo,
+    field_validator,
+    model_validator,
+)
 
 from omnibot.config_errors import explain, read_yaml, suggest
 from omnibot.errors import ConfigError
+from omnibot.robot import courses as fold_axes
 from omnibot.robot.battery import CHEMISTRIES
 
 PRESET_DIR = Path(__file__).with_name("presets")
@@ -477,7 +486,8 @@ class PiecewiseLinear(_Spec):
 
 
 class CourseTable(_Spec):
-    """K_l(power, course): one power curve per course in 0..45 degrees (seed 000, Fig. 7)."""
+    """K_l(power, course): one power curve per folded course (seed 000, Fig. 7: 0..45 degrees on omni4;
+    0..90 on a mecanum base, :mod:`omnibot.robot.courses`)."""
 
     courses_deg: tuple[float, ...]
     curves: tuple[PiecewiseLinear, ...]
@@ -590,6 +600,14 @@ class CalibrationSpec(_Spec):
     rollers: RollerDragSpec | None = None
     reach: ReachSpec | None = None
     """The calibrated reach (none: the controller knows none and runs every MOVE as asked)."""
+    fold_axes_deg: tuple[float, ...] | None = Field(
+        default=None,
+        min_length=1,
+        description="the axes (degrees) K_l's and the reach's courses fold from; absent: the idle axes",
+    )
+    """Which lookup the K_l and reach courses were made for (:mod:`omnibot.robot.courses`): absent in
+    every section written before the marker, whose courses fold from the idle axes; written where a
+    robot's course axes are not its idle axes (a mecanum base: ``[0.0]``)."""
 
 
 class ControllerSpec(_Spec):
@@ -621,6 +639,15 @@ class RobotDescription(_Spec):
     limits: LimitsSpec
     controller: ControllerSpec = ControllerSpec()
     calibration: CalibrationSpec | None = None
+
+    @field_validator("calibration")
+    @classmethod
+    def _fold_calibration(cls, spec: CalibrationSpec | None, info: ValidationInfo) -> CalibrationSpec | None:
+        """The section's K_l and reach on the robot's course axes (moved there when made on others)."""
+        wheels = info.data.get("wheels")
+        if spec is None or not wheels:
+            return spec
+        return calibration_for(spec, wheels)
 
     @model_validator(mode="before")
     @classmethod
@@ -743,6 +770,49 @@ class RobotDescription(_Spec):
 
 
 # --------------------------------------------------------------------------- loading
+
+
+def course_axes(wheels: tuple[WheelSpec, ...] | list[WheelSpec]) -> list[float]:
+    """The axes (degrees) K_l's and the reach's courses fold from on a robot with these wheels."""
+    return fold_axes.course_axes([w.traction_angle for w in wheels], [w.gamma_deg for w in wheels])
+
+
+def calibration_for(
+    spec: CalibrationSpec, wheels: tuple[WheelSpec, ...] | list[WheelSpec]
+) -> CalibrationSpec:
+    """``spec`` with its K_l and reach on the course axes of a robot with these ``wheels``.
+
+    A section made on them is returned as it is (its ``fold_axes_deg`` set where they are not the
+    idle axes); one made on other axes (a mecanum section written before the marker: courses from the
+    diagonals, 0..45) is moved onto them exactly, or refused (ValueError) when it cannot be."""
+    target = course_axes(wheels)
+    idle = fold_axes.idle_axes([w.traction_angle for w in wheels])
+    source = list(spec.fold_axes_deg) if spec.fold_axes_deg is not None else idle
+    marker = None if fold_axes.same_axes(target, idle) else tuple(target)
+    if fold_axes.same_axes(source, target):
+        return spec if spec.fold_axes_deg == marker else spec.model_copy(update={"fold_axes_deg": marker})
+    update: dict[str, Any] = {"fold_axes_deg": marker}
+    try:
+        if spec.k_l is not None:
+            curves = [(c.x, c.y) for c in spec.k_l.curves]
+            new, moved = fold_axes.move_curves(spec.k_l.courses_deg, curves, source, target)
+            update["k_l"] = CourseTable(
+                courses_deg=tuple(new), curves=tuple(PiecewiseLinear(x=x, y=y) for x, y in moved)
+            )
+        if spec.reach is not None:
+            new, speeds = fold_axes.move_reach(spec.reach.courses_deg, spec.reach.speed, source, target)
+            update["reach"] = ReachSpec(courses_deg=tuple(new), speed=tuple(speeds))
+    except ValueError as exc:
+        raise ValueError(
+            f"fold_axes_deg: the K_l courses count from the axes {_degrees(source)}, this robot's from "
+            f"{_degrees(target)} (docs/calibration.md, Courses), and the tables cannot be moved there "
+            f"exactly ({exc}): calibrate the robot again"
+        ) from None
+    return spec.model_copy(update=update)
+
+
+def _degrees(axes: list[float]) -> str:
+    return "[" + ", ".join(f"{a:g}" for a in axes) + "] degrees"
 
 
 def parse_description(data: Any, source: str = "") -> RobotDescription:
