@@ -1,3 +1,3 @@
 """Robot descriptions: the YAML model, presets, kinematics and the physical specs they hold."""
 
-__all__ = ["battery", "description", "kinematics", "summary", "urdf"]
+__all__ = ["battery", "courses", "description", "kinematics", "summary", "urdf"]
