@@ -92,6 +92,7 @@ def test_only_a_frontier_with_no_way_even_through_the_unknown_is_unreachable() -
     assert choice is not None and choice[0] == closet and [(x, y) for x, y, _ in unreachable] == [doorway]
 
 
+@pytest.mark.timeout(600)  # about 40 s of one core: 43 s simulated at the exploring speed
 def test_explore_maps_the_room_by_itself(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "out"
     assert (
