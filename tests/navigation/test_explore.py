@@ -12,7 +12,8 @@ from omnibot.cli import main
 from omnibot.mapping.grid import OccupancyGrid
 from omnibot.mapping.planner import inflate
 from omnibot.motion import Pose2D
-from omnibot.navigation.explore import choose_frontier, frontier_goals, frontiers
+from omnibot.navigation.explore import choose_frontier, exploring_speed, frontier_goals, frontiers
+from omnibot.robot.description import load_robot
 
 
 def half_known_room() -> OccupancyGrid:
@@ -90,6 +91,11 @@ def test_only_a_frontier_with_no_way_even_through_the_unknown_is_unreachable() -
     # from inside the closet, the doorway is the one without a way
     choice, unreachable = choose_frontier(cmap, optimistic, Pose2D(2.5, 0.5, 0.0), goals)
     assert choice is not None and choice[0] == closet and [(x, y) for x, y, _ in unreachable] == [doorway]
+
+
+def test_the_robot_explores_at_4_cm_per_scan() -> None:
+    assert exploring_speed(load_robot("omni4")) == pytest.approx(0.4)  # its A1 turns at 10 Hz
+    assert exploring_speed(load_robot("omni3")) == pytest.approx(0.4)
 
 
 @pytest.mark.timeout(600)  # about 40 s of one core: 43 s simulated at the exploring speed
