@@ -2,7 +2,7 @@
 
 ::
 
-    omnibot map [ROBOT OPTIONS] (--path PATH.csv | --teleop pad|keyboard) --out DIR
+    omnibot map [ROBOT OPTIONS] (--path PATH.csv | --teleop pad|keyboard | --explore) --out DIR
                 [--scanner DEV] [--resolution M] [--duration S] [--speed V] [--follower NAME]
                 [--ros2 [--namespace NS] [--frame-prefix P]]
 
