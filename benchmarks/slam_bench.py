@@ -9,7 +9,8 @@ route is driven out and back until ``--distance`` m. ``omnibot map`` follows it 
 wheel-speed loop, the simulated scanner in lockstep, the robot's seed) and its report gives the
 APE RMSE of the SLAM's estimate and of the odometry alone (evo, from the simulator's truth, no
 alignment) and the map's precision and recall within 5 cm of the world's walls and furniture.
-Goals (issue 25): precision and recall >= 95 %, SLAM APE <= 3 cm and >= 5x lower than odometry's
+``--explore`` runs ``omnibot map --explore`` instead (the robot maps each world by itself, frontier
+exploration, :mod:`omnibot.navigation.explore`) for at most ``--duration`` s. Goals (issue 25): precision and recall >= 95 %, SLAM APE <= 3 cm and >= 5x lower than odometry's
 after 100 m.
 """
 
@@ -85,23 +86,41 @@ def route(world_name: str, robot_name: str, spacing: float, distance: float) -> 
 
 
 def run_one(
-    world: str, robot: str, seed: int, spacing: float, distance: float, speed: float
+    world: str,
+    robot: str,
+    seed: int,
+    spacing: float,
+    distance: float,
+    speed: float,
+    explore: float | None = None,
 ) -> dict[str, object]:
-    """Drive the route with ``omnibot map``; the report and the wall time."""
+    """Drive the route with ``omnibot map`` (or explore for at most ``explore`` s); the report and
+    the wall time."""
     with tempfile.TemporaryDirectory(prefix="omnibot-slam-bench-") as tmp:
-        pts = route(world, robot, spacing, distance)
-        path = Path(tmp) / "route.csv"
-        write_path(resample(RobotPath.from_points(pts, theta=0.0), 0.01), path)
         out = Path(tmp) / "out"
+        common = [
+            "--world",
+            world,
+            "--robot",
+            robot,
+            "--seed",
+            str(seed),
+            "--speed",
+            str(speed),
+            "--out",
+            str(out),
+        ]
+        if explore is not None:
+            how = ["--explore", "--duration", str(explore)]
+        else:
+            pts = route(world, robot, spacing, distance)
+            path = Path(tmp) / "route.csv"
+            write_path(resample(RobotPath.from_points(pts, theta=0.0), 0.01), path)
+            how = ["--path", str(path)]
         t0 = time.perf_counter()
         said = io.StringIO()
         with contextlib.redirect_stdout(said):
-            status = omnibot(
-                [
-                    "map", "--path", str(path), "--world", world, "--robot", robot, "--seed", str(seed),
-                    "--speed", str(speed), "--out", str(out),
-                ]
-            )  # fmt: skip
+            status = omnibot(["map", *how, *common])
         wall = time.perf_counter() - t0
         report = json.loads((out / "report.json").read_text()) if (out / "report.json").exists() else {}
     return {"world": world, "robot": robot, "status": status, "wall_s": wall, "report": report}
@@ -141,6 +160,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--spacing", type=float, default=1.5, help="m between the route's stops (default 1.5)")
     p.add_argument("--speed", type=float, default=0.4, help="speed cap, m/s (default 0.4)")
     p.add_argument("--seed", type=int, default=1)
+    p.add_argument(
+        "--explore",
+        type=float,
+        metavar="S",
+        help="explore each world by itself (omnibot map --explore) for at most S s instead of a route",
+    )
     p.add_argument("--json", metavar="FILE", help="also write the results as JSON")
     args = p.parse_args(argv)
     worlds, robots, distance = args.worlds, args.robots, args.distance
@@ -153,7 +178,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     results = []
     for world in worlds:
         for robot in robots:
-            r = run_one(world, robot, args.seed, args.spacing, distance, args.speed)
+            r = run_one(world, robot, args.seed, args.spacing, distance, args.speed, args.explore)
             results.append(r)
             print(_row(r), flush=True)
     if args.json:

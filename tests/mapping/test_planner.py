@@ -12,7 +12,7 @@ from benchmarks.planner import free_poses, inside_walls, rasterise
 
 from omnibot.errors import BlockedError, ConfigError, NoPathError, OffMapError, PlanningError
 from omnibot.mapping.grid import OccupancyGrid
-from omnibot.mapping.planner import distance_squared, inflate, plan_path
+from omnibot.mapping.planner import check_start, distance_squared, inflate, plan_path
 from omnibot.motion import Pose2D
 from omnibot.sim.world import load_world
 
@@ -144,6 +144,19 @@ def test_a_start_in_the_margin_climbs_out_first() -> None:
     assert not cmap.blocked[cells[:, 0], cells[:, 1]].any()
     with pytest.raises(BlockedError, match=r"start \(0.15, 1.50\) overlaps a wall"):
         plan_path(grid, Pose2D(0.15, 1.5, 0.0), Pose2D(3.0, 1.5, 0.0), robot_radius=0.2)
+
+
+def test_check_start_refuses_only_a_start_no_path_can_leave() -> None:
+    cmap = inflate(grid_of(box_room()), robot_radius=0.2, margin=0.05)
+    check_start(cmap, Pose2D(0.28, 1.5, 0.0))  # inside the margin: the path climbs out
+    with pytest.raises(BlockedError, match=r"start \(0.15, 1.50\) overlaps a wall"):
+        check_start(cmap, Pose2D(0.15, 1.5, 0.0))
+    with pytest.raises(OffMapError):
+        check_start(cmap, Pose2D(5.0, 1.5, 0.0))
+    data = box_room()
+    data[:, 10] = 100  # a slot 0.45 m wide along the west wall: clearance 0.2 m at most, below 0.25 m
+    with pytest.raises(NoPathError, match="hemmed in"):
+        check_start(inflate(grid_of(data), robot_radius=0.15, margin=0.1), Pose2D(0.25, 1.5, 0.0))
 
 
 def test_a_rotated_and_shifted_map_plans_in_the_map_frame() -> None:

@@ -12,7 +12,8 @@ from omnibot.cli import main
 from omnibot.mapping.grid import OccupancyGrid
 from omnibot.mapping.planner import inflate
 from omnibot.motion import Pose2D
-from omnibot.navigation.explore import frontier_goals
+from omnibot.navigation.explore import choose_frontier, exploring_speed, frontier_goals, frontiers
+from omnibot.robot.description import load_robot
 
 
 def half_known_room() -> OccupancyGrid:
@@ -43,6 +44,61 @@ def test_tiny_frontiers_are_noise() -> None:
     assert frontier_goals(grid, inflate(grid, robot_radius=0.1)) == []
 
 
+def half_seen_doorway() -> OccupancyGrid:
+    """A 3 m x 2 m room (south) seen whole, a wall at y = 2 with a 0.8 m doorway (x 1.1-1.9), and
+    beyond it the north room unknown but for a strip 0.25 m wide seen through the doorway (x 1.4 to
+    1.65, y 2.0 to 3.5): the robot cannot stand in the strip clear of the unknown."""
+    data = np.full((80, 60), -1, dtype=np.int8)  # 3 m x 4 m
+    data[:40, :] = 0  # the south room
+    data[0, :] = data[:40, 0] = data[:40, -1] = 100
+    data[40, :] = 100
+    data[40, 22:38] = 0  # the doorway
+    data[41:70, 28:33] = 0  # the strip seen through it
+    return OccupancyGrid(data, 0.05, Pose2D(0.0, 0.0, 0.0))
+
+
+def test_a_room_half_seen_through_a_doorway_is_gone_to_through_the_unknown() -> None:
+    grid = half_seen_doorway()
+    cmap = inflate(grid, robot_radius=0.15, margin=0.05)
+    optimistic = inflate(grid, robot_radius=0.15, margin=0.05, allow_unknown=True)
+    # clear of the unknown, nowhere within reach of the strip: its frontier had no goal
+    assert frontier_goals(grid, cmap) == []
+    found = frontiers(grid, cmap, optimistic)
+    assert len(found) == 1 and found[0].goal is not None and not found[0].in_known
+    gx, gy = found[0].goal
+    assert 1.3 <= gx <= 1.75 and 2.3 <= gy <= 3.5  # in the strip, beyond the doorway
+    choice, unreachable = choose_frontier(cmap, optimistic, Pose2D(0.5, 0.5, 0.0), [found[0].goal])
+    assert unreachable == []
+    assert choice == (found[0].goal, True)  # a way through the unknown
+
+
+def test_only_a_frontier_with_no_way_even_through_the_unknown_is_unreachable() -> None:
+    grid = half_seen_doorway()
+    data = grid.data.copy()
+    data[:40, 40] = 100  # a closet in the south room's east end, walled off from the rest ...
+    data[10:30, 50:59] = -1  # ... and not seen inside
+    grid = OccupancyGrid(data, grid.resolution, grid.origin)
+    cmap = inflate(grid, robot_radius=0.15, margin=0.05)
+    optimistic = inflate(grid, robot_radius=0.15, margin=0.05, allow_unknown=True)
+    goals = [f.goal for f in frontiers(grid, cmap, optimistic) if f.goal is not None]
+    assert len(goals) == 2
+    closet = next(g for g in goals if g[0] > 2.0)
+    doorway = next(g for g in goals if g[0] < 2.0)
+    choice, unreachable = choose_frontier(cmap, optimistic, Pose2D(1.5, 1.0, 0.0), goals)
+    assert choice == (doorway, True)
+    assert [(x, y) for x, y, _ in unreachable] == [closet]
+    assert "no path" in unreachable[0][2]
+    # from inside the closet, the doorway is the one without a way
+    choice, unreachable = choose_frontier(cmap, optimistic, Pose2D(2.5, 0.5, 0.0), goals)
+    assert choice is not None and choice[0] == closet and [(x, y) for x, y, _ in unreachable] == [doorway]
+
+
+def test_the_robot_explores_at_4_cm_per_scan() -> None:
+    assert exploring_speed(load_robot("omni4")) == pytest.approx(0.4)  # its A1 turns at 10 Hz
+    assert exploring_speed(load_robot("omni3")) == pytest.approx(0.4)
+
+
+@pytest.mark.timeout(600)  # about 40 s of one core: 43 s simulated at the exploring speed
 def test_explore_maps_the_room_by_itself(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "out"
     assert (

@@ -2,7 +2,7 @@
 
 ::
 
-    omnibot map [ROBOT OPTIONS] (--path PATH.csv | --teleop pad|keyboard) --out DIR
+    omnibot map [ROBOT OPTIONS] (--path PATH.csv | --teleop pad|keyboard | --explore) --out DIR
                 [--scanner DEV] [--resolution M] [--duration S] [--speed V] [--follower NAME]
                 [--ros2 [--namespace NS] [--frame-prefix P]]
 
@@ -29,6 +29,7 @@ import argparse
 import contextlib
 import math
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -76,7 +77,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "scanner's range noise reaches 2 cm, 2 m for an RPLIDAR A1)",
     )
     p.add_argument("--follower", default="tracker", help="--path: seed002, pure_pursuit or tracker (default)")
-    p.add_argument("--speed", type=float, help="--path: speed cap, m/s (default: the robot's limit)")
+    p.add_argument(
+        "--speed",
+        type=float,
+        help="speed cap, m/s (default: --path the robot's limit; --explore 4 cm per scanner revolution, "
+        "0.4 m/s at 10 Hz)",
+    )
     p.add_argument("--config", metavar="FILE.yaml", help="--teleop parameters (default seed 003's)")
     p.add_argument(
         "--duration",
@@ -160,7 +166,7 @@ def _explore(args: argparse.Namespace, url: str, out: Path) -> int:
     from omnibot.cliargs import recording_of, use_calibration
     from omnibot.client.session import robot_session
     from omnibot.motion import Pose2D
-    from omnibot.navigation.explore import explore
+    from omnibot.navigation.explore import GOTO, explore
     from omnibot.navigation.goto import navigation_runtime
     from omnibot.transport.device import find_simulator
 
@@ -183,6 +189,7 @@ def _explore(args: argparse.Namespace, url: str, out: Path) -> int:
                     sink.pose_now,
                     scan=sink.points_now,
                     time_limit=limit,
+                    options=replace(GOTO, speed=args.speed),
                     say=_say,
                 )
             _say(f"explored: {result.summary()}")

@@ -225,6 +225,13 @@ def check_goal(cmap: CostMap, goal: Pose2D) -> None:
     _check_end(cmap, goal, "goal")
 
 
+def check_start(cmap: CostMap, start: Pose2D) -> None:
+    """OffMapError, BlockedError or NoPathError when no path can leave ``start`` on ``cmap`` whatever
+    the goal (what :func:`plan_path` checks of the start: on the map, not overlapping a wall, not
+    hemmed in where the clearance cannot climb)."""
+    _escape(cmap, _check_end(cmap, start, "start"))
+
+
 def _xy(p: Pose2D) -> str:
     return f"({p.x:.2f}, {p.y:.2f})"
 

@@ -2,18 +2,27 @@
 
 ::
 
-    the SLAM's map so far (unknown cells are walls to the planner)
+    the SLAM's map so far, made afresh before every choice
       -> frontiers: free cells next to unknown ones, grouped (8-connected), groups of at least
          ``min_cells``; each group's goal is the cell where the robot can stand nearest its centre,
-         within ``reach`` of it
-      -> the goal with the shortest planned path (grid planner, a few nearest tried)
-      -> goto's go_to on that map (loose tolerances: it only has to get there to see more)
-      -> the map grows; again, until no frontier is left (explored), the time limit passes, or
-         every frontier left has failed (unreachable)
+         within ``reach`` of it: clear of the walls and of the unknown if there is one, else clear
+         of the walls alone (a room seen through a doorway: the unknown beyond may be floor)
+      -> the nearest goals by straight line, each planned to: through known free space, else
+         through unknown cells as if free (optimistic; such a way counts 1.5 times its length);
+         a goal with no way even so is unreachable on the map as it is (re-checked on every map)
+      -> goto's go_to to the goal with the shortest way (loose tolerances: it only has to get there
+         to see more); the scanner watches the way and an obstacle the map did not have ends the
+         leg, so the next choice is made on the map that now has it (re-planning as the map fills)
+      -> again, until no frontier is left (explored), the time limit passes, or no frontier left
+         has a way to it (unreachable, each one's reason said)
 
-A goal is gone to once: one the robot could not reach (no path, blocked, stalled) is given up, and
-one it reached that is still a frontier (behind furniture, beyond the scanner's range) is left. The map and the
-pose come from the caller: a :class:`~omnibot.mapping.session.MappingSink` on the same runtime.
+A goal reached is not gone to again, even if it is still a frontier (behind furniture, beyond the
+scanner's range). One the robot set out for and did not reach (stalled, blocked, timed out) is tried
+again on the next map, and given up after :data:`ATTEMPTS` tries, the last reason said. Where the
+map has the robot overlapping a wall (noise, or a pose a little off), no path can leave it: the
+robot first backs off to the nearest spot clear by its radius and margin (the cells it stands on
+count as free: it is there). The map and the pose come from the caller: a
+:class:`~omnibot.mapping.session.MappingSink` on the same runtime.
 """
 
 from __future__ import annotations
@@ -29,14 +38,14 @@ from scipy import ndimage
 
 from omnibot.errors import PlanningError
 from omnibot.mapping.grid import OccupancyGrid
-from omnibot.mapping.planner import CostMap, inflate, plan_path
+from omnibot.mapping.planner import CostMap, check_start, inflate, plan_path
 from omnibot.motion import Pose2D
 from omnibot.navigation.goto import GotoOptions, GotoResult, PoseProvider, go_to
 from omnibot.robot.description import RobotDescription
 from omnibot.runtime.runtime import Runtime
 
 FloatArray = NDArray[np.float64]
-Outcome = Literal["explored", "time limit", "unreachable"]
+Outcome = Literal["explored", "time limit", "unreachable", "stuck"]
 
 REACH = 0.6
 """m from a frontier's centre within which its goal is sought."""
@@ -46,49 +55,108 @@ FREE = 49
 """Known cells below even odds of being occupied count as free here (one pass of a ray leaves a
 cell at 40: map_server's 25 would need several before a frontier appears)."""
 CANDIDATES = 4
-"""Nearest frontier goals planned to before choosing the shortest way."""
+"""Nearest frontier goals with a way to them among which the shortest way is chosen."""
 FORGET = 0.3
-"""m: a frontier goal this close to one that failed is not tried again."""
+"""m: a frontier goal this close to one reached or given up is not chosen again."""
+ATTEMPTS = 3
+"""Tries at a frontier goal that end without reaching it before it is given up."""
+UNKNOWN_PENALTY = 1.5
+"""A way through unknown cells counts this many times its length when choosing (it may be walled)."""
+STANDOFF = 0.1
+"""m of clearance beyond the robot's radius and margin a frontier's goal keeps where there is room
+(the map grows after the goal is chosen: a wall nearer than it seemed, thickened by noise)."""
+SCAN_STEP = 0.04
+"""m the robot moves at most per revolution of its scanner while exploring (0.4 m/s at 10 Hz):
+scans close together match well and a revolution's motion distortion stays small."""
+BACK_OFF = 1.0
+"""m within which the robot looks for a clear spot when the map has it overlapping a wall."""
+BACK_OFFS = 2
+"""Back-offs in a row that leave the robot still overlapping a wall before exploring ends (stuck)."""
 GOTO = GotoOptions(
     tolerance=0.25,
     heading_tolerance=math.pi,
     corrections=0,
-    max_replans=3,
+    max_replans=0,
     heading="goal",
     aim=1.0,
 )
 """How each frontier is gone to: near enough to see past it, any heading; what the scanner sees
-that the map so far does not have stops the robot and is planned around. When no frontier can be
-reached through known free space, the way is planned through unknown cells as if free (a doorway
-half seen is a way on)."""
+that the map so far does not have ends the leg (no re-plan on a marked copy of the map: the next
+choice is made on the SLAM's map, which has it)."""
 
 
-def frontier_goals(
-    grid: OccupancyGrid, cmap: CostMap, *, min_cells: int = MIN_CELLS, reach: float = REACH
-) -> list[tuple[float, float, int]]:
-    """(x, y, size) of each frontier group's goal (map frame, m) and its size in cells, largest first."""
+@dataclass(frozen=True)
+class Frontier:
+    """A group of frontier cells: its centre and size, and where the robot can stand to see it."""
+
+    centre: tuple[float, float]
+    size: int
+    """Cells in the group."""
+    goal: tuple[float, float] | None
+    """The standing cell nearest the centre within ``reach`` (None: none)."""
+    in_known: bool
+    """The goal is clear of the unknown too (else only of the walls)."""
+
+
+def frontiers(
+    grid: OccupancyGrid,
+    cmap: CostMap,
+    optimistic: CostMap | None = None,
+    *,
+    min_cells: int = MIN_CELLS,
+    reach: float = REACH,
+    standoff: float = STANDOFF,
+) -> list[Frontier]:
+    """The frontier groups of ``grid`` (largest first) with their goals: known free cells that
+    ``cmap`` does not block (clear of walls and unknown), else that ``optimistic`` (the same map
+    planned with unknown cells as free) does not block; with ``standoff`` m of clearance more if
+    there is such a cell within ``reach``."""
     known_free = grid.free(FREE)
     unknown = grid.data < 0
     near_unknown = ndimage.binary_dilation(unknown, structure=np.array([[0, 1, 0], [1, 1, 1], [0, 1, 0]]))
-    frontier = known_free & near_unknown
-    labels, count = ndimage.label(frontier, structure=np.ones((3, 3), dtype=int))
-    standable = ~cmap.blocked & known_free
-    stand_rc = np.argwhere(standable)
-    if count == 0 or len(stand_rc) == 0:
-        return []
-    stand_xy = grid.cell_to_world(stand_rc)
-    goals: list[tuple[float, float, int]] = []
+    labels, count = ndimage.label(known_free & near_unknown, structure=np.ones((3, 3), dtype=int))
+    maps = [(cmap, True)] if optimistic is None else [(cmap, True), (optimistic, False)]
+    stands = [
+        (grid.cell_to_world(np.argwhere(known_free & (m.clearance >= m.inflated + extra))), known)
+        for extra in (standoff, 0.0)
+        for m, known in maps
+    ]
+    out: list[Frontier] = []
     for k in range(1, count + 1):
         cells = np.argwhere(labels == k)
         if len(cells) < min_cells:
             continue
-        centre = grid.cell_to_world(cells).mean(axis=0)
-        d = np.hypot(*(stand_xy - centre).T)
-        best = int(np.argmin(d))
-        if d[best] <= reach:
-            goals.append((float(stand_xy[best, 0]), float(stand_xy[best, 1]), len(cells)))
-    goals.sort(key=lambda g: -g[2])
-    return goals
+        cx, cy = grid.cell_to_world(cells).mean(axis=0)
+        goal: tuple[float, float] | None = None
+        in_known = False
+        for stand_xy, known in stands:
+            if len(stand_xy) == 0:
+                continue
+            d = np.hypot(stand_xy[:, 0] - cx, stand_xy[:, 1] - cy)
+            best = int(np.argmin(d))
+            if d[best] <= reach:
+                goal, in_known = (float(stand_xy[best, 0]), float(stand_xy[best, 1])), known
+                break
+        out.append(Frontier((float(cx), float(cy)), len(cells), goal, in_known))
+    out.sort(key=lambda f: -f.size)
+    return out
+
+
+def frontier_goals(
+    grid: OccupancyGrid,
+    cmap: CostMap,
+    optimistic: CostMap | None = None,
+    *,
+    min_cells: int = MIN_CELLS,
+    reach: float = REACH,
+) -> list[tuple[float, float, int]]:
+    """(x, y, size) of each frontier group's goal (map frame, m) and its size in cells, largest
+    first; groups with nowhere to stand within ``reach`` are left out (see :func:`frontiers`)."""
+    return [
+        (f.goal[0], f.goal[1], f.size)
+        for f in frontiers(grid, cmap, optimistic, min_cells=min_cells, reach=reach)
+        if f.goal is not None
+    ]
 
 
 @dataclass
@@ -98,8 +166,13 @@ class ExploreResult:
     outcome: Outcome
     visits: list[GotoResult] = field(default_factory=list)
     done: list[tuple[float, float]] = field(default_factory=list)
-    """Frontier goals gone to or given up: not chosen again."""
+    """Frontier goals reached or given up: not chosen again."""
     failed: list[tuple[float, float]] = field(default_factory=list)
+    """Frontier goals given up after :data:`ATTEMPTS` tries."""
+    unreachable: list[tuple[float, float, str]] = field(default_factory=list)
+    """Frontier goals left with no way to them at the end, and why (the planner's line)."""
+    reason: str = ""
+    """Why exploring ended ``stuck``."""
     duration: float = 0.0
 
     @property
@@ -112,7 +185,8 @@ class ExploreResult:
         why = {
             "explored": "no frontier left: the reachable space is mapped",
             "time limit": "the time limit passed",
-            "unreachable": "the frontiers left could not be reached",
+            "unreachable": f"the {len(self.unreachable)} frontier(s) left have no way to them",
+            "stuck": f"stuck: {self.reason}",
         }[self.outcome]
         return f"{why} ({self.reached} frontiers reached, {len(self.failed)} given up, {self.duration:.0f} s)"
 
@@ -130,11 +204,17 @@ def explore(
 ) -> ExploreResult:
     """Explore through a running ``runtime`` (see the module docstring): ``grid_now()`` is the map so
     far, ``pose()`` the robot's pose in it and ``scan()`` the latest scan's points in it (the
-    obstacle watch); at most ``time_limit`` s of the link's clock."""
+    obstacle watch); at most ``time_limit`` s of the link's clock. ``options.speed`` None: the
+    :func:`exploring_speed` of the robot."""
+    if options.speed is None:
+        options = replace(options, speed=exploring_speed(robot))
     clock = runtime.client.clock
     t0 = clock.now()
     radius = robot.footprint.bounding_radius
     result = ExploreResult("explored")
+    tries: list[list[float]] = []  # [x, y, tries] of goals set out for and not reached
+    told: list[tuple[float, float]] = []  # unreachable goals already said
+    backed_off = 0
     while True:
         left = time_limit - (clock.now() - t0)
         if left <= 0:
@@ -147,51 +227,139 @@ def explore(
             continue
         grid = grid_now()
         cmap = inflate(grid, robot_radius=radius, margin=options.margin)
+        optimistic = inflate(grid, robot_radius=radius, margin=options.margin, allow_unknown=True)
+        try:
+            check_start(optimistic, here)
+            backed_off = 0
+        except PlanningError as exc:
+            if backed_off >= BACK_OFFS:
+                result.outcome, result.reason = "stuck", str(exc)
+                break
+            backed_off += 1
+            say(f"no way leaves where the robot stands ({exc}): backing off to clear space")
+            _back_off(runtime, robot, grid, optimistic, here, options, left, pose)
+            continue
         goals = [
-            g
-            for g in frontier_goals(grid, cmap)
-            if all(math.hypot(g[0] - fx, g[1] - fy) > FORGET for fx, fy in result.done)
+            f.goal
+            for f in frontiers(grid, cmap, optimistic)
+            if f.goal is not None and not _near(f.goal, result.done)
         ]
         if not goals:
-            result.outcome = "unreachable" if result.failed else "explored"
+            result.outcome = "explored"
             break
-        how = options
-        target = _nearest_by_path(cmap, here, goals)
-        if target is None:  # no way through known free space: through the unknown, as if free
-            how = replace(options, allow_unknown=True)
-            optimistic = inflate(grid, robot_radius=radius, margin=options.margin, allow_unknown=True)
-            target = _nearest_by_path(optimistic, here, goals)
-        if target is None:
-            unreachable = [(g[0], g[1]) for g in goals[:CANDIDATES]]
-            result.failed.extend(unreachable)
-            result.done.extend(unreachable)
-            continue
-        goal = Pose2D(target[0], target[1], here.theta)
-        through = " (through unknown space)" if how.allow_unknown else ""
-        say(f"to the frontier at ({goal.x:.2f}, {goal.y:.2f}){through}, {len(goals)} left")
-        visit = go_to(runtime, robot, grid, goal, replace(how, timeout=left), pose=pose, scan=scan)
+        choice, unreachable = choose_frontier(cmap, optimistic, here, goals)
+        for x, y, why in unreachable:
+            if not _near((x, y), told):
+                told.append((x, y))
+                say(f"frontier at ({x:.2f}, {y:.2f}) has no way to it now: {why}")
+        if choice is None:
+            result.outcome, result.unreachable = "unreachable", unreachable
+            break
+        (gx, gy), through = choice
+        goal = Pose2D(gx, gy, here.theta)
+        how = replace(options, allow_unknown=through, timeout=left)
+        way = " (through unknown space)" if through else ""
+        say(f"to the frontier at ({gx:.2f}, {gy:.2f}){way}, {len(goals)} left")
+        visit = go_to(runtime, robot, grid, goal, how, pose=pose, scan=scan)
         result.visits.append(visit)
-        # a frontier the robot stood at and still sees as one (behind furniture, past the range) is
-        # not gone to again, nor one it could not reach
-        result.done.append((goal.x, goal.y))
-        if not visit.arrived:
-            result.failed.append((goal.x, goal.y))
-            say(f"frontier at ({goal.x:.2f}, {goal.y:.2f}) given up: {visit.reason or visit.outcome}")
+        if visit.arrived:
+            result.done.append((gx, gy))
+            continue
+        n = _count_try(tries, (gx, gy))
+        if n < ATTEMPTS:
+            say(f"frontier at ({gx:.2f}, {gy:.2f}) not reached ({visit.reason}): tried {n} of {ATTEMPTS}")
+            continue
+        result.failed.append((gx, gy))
+        result.done.append((gx, gy))
+        say(f"frontier at ({gx:.2f}, {gy:.2f}) given up after {n} tries: {visit.reason or visit.outcome}")
     result.duration = clock.now() - t0
     return result
 
 
-def _nearest_by_path(
-    cmap: CostMap, here: Pose2D, goals: list[tuple[float, float, int]]
-) -> tuple[float, float] | None:
-    """The goal with the shortest planned way among the :data:`CANDIDATES` nearest (None: no way)."""
-    near = sorted(goals, key=lambda g: math.hypot(g[0] - here.x, g[1] - here.y))[:CANDIDATES]
-    best: tuple[float, tuple[float, float]] | None = None
-    for gx, gy, _ in near:
+def exploring_speed(robot: RobotDescription) -> float:
+    """The speed cap for exploring, m/s: :data:`SCAN_STEP` per revolution of the robot's scanner
+    (its rate; 10 Hz without one), within the robot's own limit."""
+    rate = robot.scanner.rate_hz if robot.scanner is not None else 10.0
+    return min(robot.limits.speed_max, SCAN_STEP * rate)
+
+
+def _near(p: tuple[float, float], places: list[tuple[float, float]]) -> bool:
+    return any(math.hypot(p[0] - x, p[1] - y) <= FORGET for x, y in places)
+
+
+def _count_try(tries: list[list[float]], p: tuple[float, float]) -> int:
+    """One more try at the goal ``p`` (or one within :data:`FORGET` of it); the tries so far."""
+    for t in tries:
+        if math.hypot(p[0] - t[0], p[1] - t[1]) <= FORGET:
+            t[2] += 1
+            return int(t[2])
+    tries.append([p[0], p[1], 1.0])
+    return 1
+
+
+def choose_frontier(
+    cmap: CostMap, optimistic: CostMap, here: Pose2D, goals: list[tuple[float, float]]
+) -> tuple[tuple[tuple[float, float], bool] | None, list[tuple[float, float, str]]]:
+    """The goal with the shortest way from ``here`` among the :data:`CANDIDATES` nearest that have
+    one (on ``cmap``, else on ``optimistic``: the same map with unknown cells free), and whether the
+    way goes through unknown space; and the goals nearer than the last candidate that have no way
+    even through the unknown (unreachable on this map), each with the planner's reason."""
+    best: tuple[float, tuple[float, float], bool] | None = None
+    unreachable: list[tuple[float, float, str]] = []
+    found = 0
+    for gx, gy in sorted(goals, key=lambda g: math.hypot(g[0] - here.x, g[1] - here.y)):
+        target = Pose2D(gx, gy, here.theta)
         try:
-            plan = plan_path(cmap, here, Pose2D(gx, gy, here.theta))
+            length, through = plan_path(cmap, here, target).length, False
         except PlanningError:
-            continue
-        if best is None or plan.length < best[0]:
-            best = (plan.length, (gx, gy))
-    return None if best is None else best[1]
+            try:
+                length, through = UNKNOWN_PENALTY * plan_path(optimistic, here, target).length, True
+            except PlanningError as exc:
+                unreachable.append((gx, gy, str(exc)))
+                continue
+        if best is None or length < best[0]:
+            best = (length, (gx, gy), through)
+        found += 1
+        if found >= CANDIDATES:
+            break
+    return (None if best is None else (best[1], best[2])), unreachable
+
+
+def _back_off(
+    runtime: Runtime,
+    robot: RobotDescription,
+    grid: OccupancyGrid,
+    optimistic: CostMap,
+    here: Pose2D,
+    options: GotoOptions,
+    left: float,
+    pose: PoseProvider,
+) -> GotoResult | None:
+    """Go to the nearest spot within :data:`BACK_OFF` clear of the walls by the robot's radius and
+    margin, on the map with the cells the robot stands on free, the way planned clear by the radius
+    alone (it may lead out of a gap narrower than the margin allows); None: no such spot."""
+    known_free = grid.free(FREE)
+    cells = np.argwhere(~optimistic.blocked & known_free)
+    if len(cells) == 0:
+        return None
+    xy = grid.cell_to_world(cells)
+    d = np.hypot(xy[:, 0] - here.x, xy[:, 1] - here.y)
+    best = int(np.argmin(d))
+    if d[best] > BACK_OFF:
+        return None
+    res = grid.resolution
+    rc = np.argwhere(np.ones(grid.shape, dtype=bool))
+    centres = grid.cell_to_world(rc)
+    under = np.hypot(centres[:, 0] - here.x, centres[:, 1] - here.y) <= optimistic.robot_radius + 2 * res
+    data = grid.data.copy()
+    data[rc[under, 0], rc[under, 1]] = 0
+    cleared = OccupancyGrid(data, grid.resolution, grid.origin, grid.frame)
+    target = Pose2D(float(xy[best, 0]), float(xy[best, 1]), here.theta)
+    how = replace(
+        options,
+        tolerance=min(options.tolerance, 0.03),
+        margin=0.0,
+        allow_unknown=True,
+        timeout=min(left, 10.0),
+    )
+    return go_to(runtime, robot, cleared, target, how, pose=pose)
