@@ -44,9 +44,7 @@ def test_follow_writes_report_plot_and_truth(tmp_path: FsPath, capsys: pytest.Ca
 
 def test_follow_on_a_floor_plans_within_its_reach(tmp_path: FsPath) -> None:
     """Carpet cannot give omni4 1 m/s on a 45 degree course: --surface carpet plans (and times the
-    run against the minimum) within what the floor lets the motors give. Carpet as seed 000 measured
-    it costs up to 20 % of a powered motion (the 45 degree course's top 9 % below wood's: minimum
-    times 2.03 against 1.93 s, 2026-12-06; 4x wood's roller resistance made it more than 1.2x)."""
+    run against the minimum) within what the floor lets the motors give."""
     path_file = tmp_path / "diagonal.csv"
     path_file.write_text("t,x,y,theta\n0,0,0,0\n1,0.5,0.5,0\n2,1,1,0\n")
     minimum = {}
@@ -57,7 +55,7 @@ def test_follow_on_a_floor_plans_within_its_reach(tmp_path: FsPath) -> None:
         data = json.loads(report.read_text())
         assert data["time_ratio"] <= 1.25, data
         minimum[surface] = data["min_time_s"]
-    assert minimum["carpet"] > 1.03 * minimum["wood"], minimum
+    assert minimum["carpet"] > 1.2 * minimum["wood"], minimum
 
 
 @pytest.mark.parametrize(
@@ -180,9 +178,7 @@ def test_calibrate_then_follow_on_carpet(tmp_path: FsPath) -> None:
         follow = ["follow", str(path_file), "--speed", "0.4", "--surface", "carpet", "--report", str(out)]
         assert main([*follow, *extra]) == 0
         rms[label] = json.loads(out.read_text())["rms_cross_track_m"]
-    # carpet as seed 000 measured it ("up to 20 %" from wood): its creep costs the raw run 1.5 cm RMS
-    # (2026-12-06; over 1.5 cm when carpet rolled with 4x wood's roller resistance)
-    assert rms["raw"] > 0.01 and rms["calibrated"] < 0.3 * rms["raw"], rms
+    assert rms["raw"] > 0.015 and rms["calibrated"] < 0.3 * rms["raw"]
 
 
 def test_follow_a_csv_of_x_y_only(tmp_path: FsPath, capsys: pytest.CaptureFixture[str]) -> None:
