@@ -9,11 +9,9 @@ Each surface gives, for the contact of an omni/mecanum wheel with the floor:
 * ``rolling_multiplier``: factor on the wheel's own ``RollerSpec.rolling_resistance`` (measured or
   assumed on a hard, smooth floor), so that the same wheel loses more on a soft floor.
 
-Seed 000 reports that the floor changes the distance and curvature of the same powered motion by
-"up to 20 %" (it calibrated on wood and carpet); in the simulator that comes out of the carpet's
-rolling multiplier (the rollers that roll across the path) rather than from a lookup, sized so that
-seed 000's experiments (its axis series from 70 and its 45 degree series from 80 PWM counts, 1 s
-from rest) go at most 20 % less far on carpet than on wood (docs/simulator.md).
+Seed 000 reports up to 20 % less distance on carpet than on wood for the same motor power; in the
+simulator that comes out of the carpet's rolling multiplier (the unpowered wheels' rollers roll
+across the path) rather than from a lookup.
 """
 
 from __future__ import annotations
@@ -72,10 +70,10 @@ SURFACES: dict[str, Surface] = {
             "carpet",
             mu=0.60,
             slip_velocity=0.04,
-            rolling_multiplier=1.8,
-            source="seed 000: the floor changes the same powered motion by up to 20 %; 1.8x wood's "
-            "roller resistance puts its axis and 45 degree series 4-18 % short of wood's (the most "
-            "at their lowest powers); the pile is compliant, so a larger slip velocity",
+            rolling_multiplier=4.0,
+            source="small hard wheels on low-pile carpet roll with 3-6x the resistance of a hard floor "
+            "(castor and wheelchair rolling-resistance measurements); the pile is compliant, so a "
+            "larger slip velocity",
         ),
     )
 }
