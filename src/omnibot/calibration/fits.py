@@ -201,7 +201,12 @@ class RateCurve:
         powers = [float(p) for p, _ in pts]
         rims = isotonic([max(r, 0.0) for _, r in pts])
         if deadband is not None and rims[0] > 0.0 and deadband < powers[0]:
-            powers.insert(0, float(deadband))
+            # The dead band is where a short run from rest turns the robot visibly. Where the line
+            # through the first two levels reaches zero lower (rotation through a motor map, whose
+            # offsets already make up the friction, runs steadily at no power above them), the curve
+            # starts there: anchored at the dead band its first segment would be steeper than the
+            # levels above and the cubic would bulge over them, under-powering slow ROTATEs.
+            powers.insert(0, min(float(deadband), _zero_crossing(powers, rims)))
             rims.insert(0, 0.0)
         elif rims[0] > 0.0:
             # no standstill measured: extend the first segment down to zero rim speed

@@ -1,0 +1,219 @@
+"""Seed 000's Fig. 5 and Fig. 6 beside the simulator's and the calibration's (omni4, wood and carpet).
+
+Run: ``python -m benchmarks.seed000_figures [--calibration CAL.yaml] [--plot DIR]`` (about 20 s;
+``--calibration`` takes the file of a default ``omnibot calibrate`` for Fig. 6, ``--plot DIR`` writes
+``seed000_fig5.png`` and, with a calibration, ``seed000_fig6.png``).
+
+The seed's numbers: the paper prints its figures as images only; their data are in its authors'
+workbook (OSLL omnibot, ``docs/Calibration_test.xlsx``, commit 31c0ff0, sheets ``Data`` and
+``Figure2``), whose axis series is ``shared/data``'s ``omni4_straight_power_sweep.csv``. Each series
+is the seed's experiment: from rest, the distance in 1000 ms with two opposite motors at +-P (course
+0) or all four at +-P (45 degrees), and the time to complete one and two full turns with all four
+at +P (rotation; the rate is the wheel path along R_c = 96 mm over that time, as the seed plots it).
+The seed does not say on which floor; it says the floors differ by "up to 20 %".
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from omnibot.robot import kinematics as kin
+from omnibot.robot.description import load_robot
+from omnibot.sim.physics import Physics
+
+R_C = 0.096
+"""m: seed 000's robot radius (the wheel path of a rotation)."""
+AXIS_MM = {70: 120, 80: 190, 90: 280, 100: 350, 110: 420, 120: 480, 130: 530, 140: 570, 150: 620, 160: 660,
+           170: 710, 180: 750, 190: 790, 200: 850, 210: 880, 220: 930, 230: 970, 240: 1020, 250: 1060, 255: 1090}  # fmt: skip
+"""Course 0, mm in 1000 ms (workbook column ``0° (mm)``)."""
+DIAGONAL_MM = {80: (None, None, 100), 90: (130, None, 110), 100: (210, 250, 220), 110: (280, 320, 310),
+               120: (360, 370, 380), 130: (400, 410, 420), 140: (460, 470, 460), 150: (490, 530, 500),
+               160: (550, 570, 520), 170: (590, 650, 560), 180: (630, 670, 620), 190: (700, 670, 730),
+               200: (760, 790, 730), 210: (810, 830, 760), 220: (830, 880, 790), 255: (990, 1000, 990)}  # fmt: skip
+"""45 degrees: mm in 1000 ms, runs ``45° #1``, ``45° #2`` and ``225°`` (None: not measured)."""
+ROTATION_MS = {60: (2650, 5050), 70: (2000, 3800), 80: (1675, 3200), 90: (1440, 2800), 100: (1300, 2450),
+               110: (1145, 2250), 120: (1165, 2040), 130: (975, 1850), 140: (905, 1720), 150: (845, 1600),
+               160: (800, 1500), 170: (750, 1430), 180: (720, 1340), 190: (680, 1280), 200: (650, 1210),
+               210: (625, 1155), 220: (605, 1105), 255: (521, 945)}  # fmt: skip
+"""Rotation: ms to complete one and two full turns (``1 rnd (mS)``, ``2 rnd (mS)``)."""
+FIG6_X = (*(k / 25.5 for k in range(26)), 1.0)
+"""Power as a PWM ratio, the abscissa of the seed's Fig. 6."""
+FIG6_KT = (0.2745, 0.298, 0.3216, 0.3451, 0.3686, 0.3922, 0.4706, 0.549, 0.6275, 0.7059, 0.7843, 0.8627,
+           0.9412, 1.0196, 1.098, 1.1765, 1.2549, 1.3333, 1.4118, 1.4902, 1.5686, 1.6471, 1.7255, 1.8039,
+           1.8824, 1.9608, 2.0)  # fmt: skip
+"""The seed's K_t (``Turning (Kt)``)."""
+FIG6_KR = (0.3012, 0.3702, 0.4392, 0.5082, 0.5772, 0.6463, 0.7153, 0.7974, 0.8927, 0.988, 1.0833, 1.1785,
+           1.2738, 1.3691, 1.4643, 1.5596, 1.6549, 1.7502, 1.8454, 1.9407, 2.036, 2.1313, 2.2265, 2.3218,
+           2.4171, 2.5124, 2.56)  # fmt: skip
+"""The seed's K_r (``Rotation (Kr)``): above K_t at every power, 1.10-1.45 times it."""
+SURFACES = ("wood", "carpet")
+
+
+def _pattern(twist: tuple[float, float, float]) -> np.ndarray:
+    robot = load_robot("omni4")
+    rim = kin.inverse(robot.wheel_matrix, twist)
+    pattern = rim / np.abs(rim).max()
+    pattern[np.abs(pattern) < 1e-9] = 0.0
+    return np.asarray(pattern)
+
+
+def distances(course_deg: float, powers: list[int], surface: str) -> np.ndarray:
+    """m travelled in 1000 ms from rest, the busiest motors at each power (the seed's patterns)."""
+    a = math.radians(course_deg)
+    pwm = np.outer(powers, _pattern((math.cos(a), math.sin(a), 0.0)))
+    ph = Physics(load_robot("omni4"), n=len(powers), surfaces=(surface,))
+    for _ in range(1000):
+        ph.step(pwm)
+    return np.asarray(np.hypot(ph.pose[:, 0], ph.pose[:, 1]))
+
+
+def turn_times(powers: list[int], surface: str, turns: int = 2, limit: float = 10.0) -> np.ndarray:
+    """s to complete 1..``turns`` full turns from rest (rows), all four motors at each power; nan if
+    not within ``limit``."""
+    pwm = np.outer(powers, _pattern((0.0, 0.0, 1.0)))
+    ph = Physics(load_robot("omni4"), n=len(powers), surfaces=(surface,))
+    out = np.full((turns, len(powers)), np.nan)
+    while ph.time < limit and np.isnan(out).any():
+        ph.step(pwm)
+        angle = np.abs(ph.pose[:, 2])
+        for k in range(turns):
+            done = np.isnan(out[k]) & (angle >= math.tau * (k + 1))
+            out[k][done] = ph.time
+    return out
+
+
+def measure() -> dict[str, Any]:
+    """The three series, simulated on each floor, beside the seed's."""
+    out: dict[str, Any] = {"axis": {}, "diagonal": {}, "rotation": {}}
+    for surface in SURFACES:
+        p = sorted(AXIS_MM)
+        out["axis"][surface] = dict(zip(p, (1000 * distances(0.0, p, surface)).tolist(), strict=True))
+        p = sorted(DIAGONAL_MM)
+        out["diagonal"][surface] = dict(zip(p, (1000 * distances(45.0, p, surface)).tolist(), strict=True))
+        p = sorted(ROTATION_MS)
+        times = turn_times(p, surface)
+        out["rotation"][surface] = {q: (1000 * times[0, i], 1000 * times[1, i]) for i, q in enumerate(p)}
+    return out
+
+
+def rotation_rate(ms: float, turns: int) -> float:
+    """cm/s of wheel path along R_c for ``turns`` full turns in ``ms``."""
+    return 100 * turns * math.tau * R_C / (ms / 1000.0)
+
+
+def _seed_mean(row: tuple[int | None, ...]) -> float:
+    return float(np.mean([v for v in row if v is not None]))
+
+
+def table(result: dict[str, Any]) -> str:
+    """Markdown: per series and power, the seed's value, ours on wood and on carpet, carpet / wood."""
+    lines = [
+        "| series | power | seed 000 | wood | carpet | carpet / wood |",
+        "|---|---|---|---|---|---|",
+    ]
+    for p in (70, 80, 100, 130, 160, 190, 220, 255):
+        w, c = result["axis"]["wood"][p], result["axis"]["carpet"][p]
+        lines.append(f"| course 0, mm in 1 s | {p} | {AXIS_MM[p]} | {w:.0f} | {c:.0f} | {c / w:.2f} |")
+    for p in (80, 90, 100, 130, 160, 190, 220, 255):
+        w, c = result["diagonal"]["wood"][p], result["diagonal"]["carpet"][p]
+        lines.append(
+            f"| 45 degrees, mm in 1 s | {p} | {_seed_mean(DIAGONAL_MM[p]):.0f} | {w:.0f} | {c:.0f} | {c / w:.2f} |"
+        )
+    for p in (60, 70, 80, 100, 130, 160, 190, 220, 255):
+        w, c = result["rotation"]["wood"][p][0], result["rotation"]["carpet"][p][0]
+        lines.append(
+            f"| rotation, ms for one turn | {p} | {ROTATION_MS[p][0]} | {w:.0f} | {c:.0f} | {w / c:.2f} |"
+        )
+    return "\n".join(lines)
+
+
+def calibration_tables(path: Path) -> dict[str, dict[str, tuple[list[float], list[float]]]]:
+    """{floor: {"k_t": (x, y), "k_r": (x, y)}} of a calibration file's floors."""
+    import yaml
+
+    data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    out = {}
+    for floor, section in (data.get("surfaces") or {}).items():
+        cal = section["calibration"]
+        out[floor] = {name: (list(cal[name]["x"]), list(cal[name]["y"])) for name in ("k_t", "k_r")}
+    return out
+
+
+def plot(result: dict[str, Any], target: Path, tables: dict[str, Any] | None) -> None:
+    """Fig. 5 (the three series, cm/s against the PWM ratio) and, with a calibration, Fig. 6."""
+    from omnibot.plots.figure import new_figure, save
+
+    fig, axes = new_figure(1, 3, size=(16.0, 4.6))
+    specs: list[tuple[str, dict[int, Any], Callable[[Any], list[float]], str]] = [
+        ("course 0 (two motors)", AXIS_MM, lambda v: [v / 10], "axis"),
+        ("45 degrees (four motors)", DIAGONAL_MM, lambda v: [x / 10 for x in v if x is not None], "diagonal"),
+        (
+            "rotation (four motors, wheel path along R_c)",
+            ROTATION_MS,
+            lambda v: [rotation_rate(v[0], 1), rotation_rate(v[1], 2)],
+            "rotation",
+        ),
+    ]
+    for ax, (title, seed, seed_values, key) in zip(axes[0], specs, strict=True):
+        for p, v in sorted(seed.items()):
+            ys = seed_values(v)
+            ax.plot([p / 255] * len(ys), ys, "ko", ms=3.5, label="seed 000" if p == min(seed) else None)
+        for k, surface in enumerate(SURFACES):
+            sim = result[key][surface]
+            ps = sorted(sim)
+            if key == "rotation":
+                ys = [rotation_rate(sim[p][0], 1) if math.isfinite(sim[p][0]) else math.nan for p in ps]
+            else:
+                ys = [sim[p] / 10 for p in ps]
+            ax.plot([p / 255 for p in ps], ys, color=f"C{k}", lw=1.5, label=f"simulator, {surface}")
+        ax.set_title(title)
+        ax.set_xlabel("power (PWM ratio)")
+        ax.set_ylabel("cm/s (cm in the first second; rotation: over the turn)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    save(fig, str(target / "seed000_fig5.png"))
+    if not tables:
+        return
+    fig, axes = new_figure(1, 1, size=(7.0, 4.8))
+    ax = axes[0][0]
+    ax.plot(FIG6_X, FIG6_KT, "k--", label="seed 000: K_t")
+    ax.plot(FIG6_X, FIG6_KR, "k-", label="seed 000: K_r")
+    for k, (floor, t) in enumerate(sorted(tables.items())):
+        for name, style in (("k_t", "--"), ("k_r", "-")):
+            x, y = t[name]
+            ax.plot(np.array(x) / 255, y, style, color=f"C{k}", marker=".", label=f"{floor}: {name}")
+    ax.set_xlabel("uncalibrated power (PWM ratio)")
+    ax.set_ylabel("factor")
+    ax.set_title("K_t and K_r (seed 000's Fig. 6; ours: omnibot calibrate, default)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    save(fig, str(target / "seed000_fig6.png"))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--calibration", type=Path, help="a default `omnibot calibrate`'s file, for Fig. 6")
+    parser.add_argument("--plot", type=Path, help="directory for seed000_fig5.png (and seed000_fig6.png)")
+    args = parser.parse_args(argv)
+    result = measure()
+    print(table(result))
+    tables = calibration_tables(args.calibration) if args.calibration else None
+    if tables:
+        for floor, t in sorted(tables.items()):
+            kt_x, kt_y = t["k_t"]
+            kr = np.interp(kt_x, *t["k_r"])
+            pairs = ", ".join(f"{x:g}: {r:.3f} / {y:.3f}" for x, r, y in zip(kt_x, kr, kt_y, strict=True))
+            print(f"{floor}: K_r / K_t at K_t's powers: {pairs}")
+    if args.plot:
+        plot(result, args.plot, tables)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
