@@ -114,7 +114,7 @@ def test_status_format(rig: Rig) -> None:
         ("CAL,10,-2,0,0", codes.E_CALIBRATION),
         ("CAL,1,5,0,1000", codes.E_CALIBRATION),
         ("CAL,0,0,0,0", codes.E_CALIBRATION),
-        ("MODE,32", codes.E_UNSUPPORTED),
+        ("MODE,64", codes.E_UNSUPPORTED),
         ("TELEM,100,256", codes.E_UNSUPPORTED),
     ],
 )
