@@ -95,7 +95,7 @@ def check_honest(tally: Tally, n: int) -> None:
 
 
 def without_sequence_numbers(ctrl: Controller) -> None:
-    """Make ``ctrl`` a controller without MODE bit 5, as the UNO's: ERROR 39."""
+    """Make ``ctrl`` a controller without MODE bit 5 (firmware from before it): ERROR 39."""
     check = ctrl.limits.check
 
     def refuse_bit_5(kw: int, p: list[int]) -> int:
@@ -148,7 +148,7 @@ def test_drop_and_corrupt_both_ways(clients: list[RobotClient]) -> None:
 def test_checked_text_without_sequence_numbers_fails_only_the_call_whose_reply_is_lost(
     clients: list[RobotClient],
 ) -> None:
-    """A controller without MODE bit 5 (the UNO): tagged and checked, never sent twice, so a lost
+    """A controller without MODE bit 5 (an older firmware): tagged and checked, never sent twice, so a lost
     reply fails its own call (it may or may not have run) and the calls after it work."""
     link = faulty(drop=0.01, direction="rx", seed=3)
     without_sequence_numbers(link.inner.device.controller)  # type: ignore[attr-defined]

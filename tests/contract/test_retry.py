@@ -1,22 +1,16 @@
 """Sequenced text (MODE bit 5): a command whose reply is lost is sent again and runs once.
 
-The client's link is wrapped so that the reply to one tagged command is lost on its way back. A
-controller that takes bit 5 answers the copy the client sends again from the reply it kept (the
-call succeeds); one without it (the AVR firmware: ERROR 39) gets no copy (the call fails saying the
-command may or may not have run). Either way the DELTA, which adds to the remembered MOVE, ran once.
+The client's link is wrapped so that the reply to one tagged command is lost on its way back. The
+controller answers the copy the client sends again from the reply it kept: the call succeeds, and
+the DELTA, which adds to the remembered MOVE, ran once (twice, the MOVE would be 8 cm at 80 cm/s).
 """
 
 from __future__ import annotations
 
-import pytest
-
-from omnibot.client import NotSupported, RobotClient
-from omnibot.errors import LinkTimeout
+from omnibot.client import RobotClient
 from omnibot.protocol import codes
 from omnibot.protocol.messages import Delta, Mode, Ok
 from omnibot.transport import Link
-
-from .conftest import AVR_BACKENDS, Backend
 
 
 class LosesAReply(Link):
@@ -53,32 +47,25 @@ class LosesAReply(Link):
         pass
 
 
-def test_a_lost_reply_sent_again_runs_a_delta_once(client: RobotClient, backend: Backend) -> None:
-    try:
-        client.execute(Mode(codes.MODE_CHECKED_TEXT | codes.MODE_SEQUENCED_TEXT))
-    except NotSupported:
-        assert backend.name in AVR_BACKENDS  # no flash left for it on the UNO (docs/uno.md)
-        client.execute(Mode(codes.MODE_CHECKED_TEXT))
-    sequenced = backend.name not in AVR_BACKENDS
-    assert client.sequenced == sequenced and client.tags
+def test_a_lost_reply_sent_again_runs_a_delta_once(client: RobotClient) -> None:
+    client.execute(
+        Mode(codes.MODE_CHECKED_TEXT | codes.MODE_SEQUENCED_TEXT)
+    )  # the contract's reset cleared them
+    assert client.sequenced and client.tags
     inner = client.link
     lossy = LosesAReply(inner)
     client.link = lossy
     try:
         pending = client.submit(Delta(4, 40, 0, 0, 0))  # the remembered MOVE (zeros) + 4 cm at 40 cm/s
         lossy.tag = pending.seq
-        if sequenced:
-            assert pending.result() == Ok()
-        else:
-            with pytest.raises(LinkTimeout) as info:
-                pending.result()
-            assert "may or may not have run" in str(info.value.__notes__)
+        assert pending.result() == Ok()
         status = client.status()
     finally:
         client.link = inner
     assert lossy.lost == 1
-    copies = sum(b"DELTA," in data for data in lossy.written)
-    assert copies >= 2 if sequenced else copies == 1  # more than 2 when a copy went before a reply came
+    assert (
+        sum(b"DELTA," in data for data in lossy.written) >= 2
+    )  # sent again (more: sent before a reply came)
     move = status.move
     assert (round(move.distance, 3), round(move.speed, 3)) == (0.04, 0.4)  # once: twice is 8 cm at 80 cm/s
     client.wait_idle(timeout=5)

@@ -117,6 +117,8 @@
 #define P_WINDOW 32
 #define P_RETRY_TIMEOUT_MS 50
 #define P_RETRIES 10
+#define P_TEXT_SEQ_WINDOW 8
+#define P_TEXT_SEQ_MAX 9999
 /* keyword, id, fewest and most parameters (POWER: T and one power per motor), the number (1..) of
    the parameter that may be INF (0: none; codes.INF_PARAMS) */
 struct Keyword { char name[7]; uint8_t id, lo, hi, inf; };

@@ -612,8 +612,8 @@ class RobotClient(TypedCalls):
         tags as sequence numbers (bit 5), so that a command sent again when its reply was lost is
         answered from the reply kept and not run twice; the client then sends again every tagged
         command whose reply does not come (as binary frames). A controller without bit 5 (ERROR 39:
-        the UNO) gets bit 4 alone and no command sent twice; one without bit 4 neither bit and
-        keeps running unchecked lines; nothing else changes.
+        a firmware from before it) gets bit 4 alone and no command sent twice; one without bit 4
+        neither bit and keeps running unchecked lines; nothing else changes.
 
         A tagged HELLO goes first, as the sequence's first command: a controller left in sequenced
         text by a client that was killed starts its sequence afresh, so the STATUS after it is not
