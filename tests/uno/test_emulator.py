@@ -73,6 +73,11 @@ SCRIPT = [
     "STATUS*0000;STATUS#1*0000;FOO#6;MOVE,1#7;STATUS#12345;STATUS#;STATUS*12G4;#5;" + checked("", "8"),
     checked("MOVE,99999,40,0,0", "33") + ";" + checked("VEL,1,1,1,0") + ";" + checked("DELTA,1,1") + ";",
     "STOP;STATUS",
+    # sequenced text (MODE bit 5): a duplicate answered from the kept reply (DELTA once, ERROR 35
+    # again), one out of order (STATUS#8 before #7) dropped unanswered, STOP and MODE taken anyway
+    ";".join([checked("MODE,48", "5"), *[checked("DELTA,400,40,0,0,0", "6")] * 2]),
+    ";".join([checked("STATUS", "8"), checked("STATUS", "7"), *[checked("DELTA,0,0,0,0,-1", "8")] * 2]),
+    ";".join([checked("STOP", "20"), checked("MODE,0", "21")]),
 ]
 POWERS = re.compile(r"POWER((?:,-?\d+)+);")
 

@@ -842,7 +842,8 @@ class RobotClient(TypedCalls):
     def _reply_by_tag(self, tag: int, reply: Reply, now: float) -> None:
         """A tagged text reply answers the command with that tag, wherever it is in the line."""
         sender = self._wire.sender
-        if sender is not None and not sender.ack(tag) and not any(p.seq == tag for p in self._outstanding):
+        waited = tag in self._late or any(p.seq == tag for p in self._outstanding)
+        if sender is not None and not sender.ack(tag) and not waited:
             return  # sequenced: the kept reply sent again for a command sent again, answered already
         for p in self._outstanding:
             if p.seq == tag:
