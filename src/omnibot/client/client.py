@@ -18,10 +18,13 @@ the link fails the call (and every command awaiting a reply); the client then tr
 Text replies, tagged (docs/protocol.md, "Tags and checks"): before its first text command the client
 asks the controller with a tagged ``HELLO#n*check`` whether it echoes tags (``tags=None``; True or
 False skip the question). If it does, every command carries ``#tag*check`` and a reply is matched
-by its tag alone, so a lost or late reply affects only its own command: that call raises
-LinkTimeout ("may or may not have run") and later calls work. A reply whose check fails is dropped
-(an Unexpected event), so no corrupted OK is ever taken for an answer. A controller that does not
-know tags (ERROR 23 to the question, twice) gets today's untagged commands.
+by its tag alone, so a lost or late reply affects only its own command. With MODE bit 5 (sequenced
+text, set with bit 4 before the first command) the tags are sequence numbers: a command whose reply
+does not come is sent again (arq.Sender, as binary frames) and the controller answers the copy from
+the reply it kept, so it runs once; without it (ERROR 39) the call raises LinkTimeout ("may or may
+not have run") and later calls work. A reply whose check fails is dropped (an Unexpected event), so
+no corrupted OK is ever taken for an answer. A controller that does not know tags (ERROR 23 to the
+question, twice) gets today's untagged commands.
 
 Untagged replies carry no sequence number: ``OK``/``ERROR`` answer the oldest untagged command
 waiting, a ``STATUS`` or ``HELLO`` reply the oldest STATUS or HELLO (commands before it whose reply
