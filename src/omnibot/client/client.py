@@ -499,13 +499,14 @@ class RobotClient(TypedCalls):
         if self._preparing:
             return
         what = (text.encode(command) if command is not None else raw or b"").decode("latin-1").strip()
-        if self._tags is None:
+        probed = self._tags is None
+        if probed:
             self._prepare("probe", self._detect_tags, wait, what)
         if self._tags and not self._checks_asked:
             # a lost reply of the bits' setup leaves them to be asked again before the next command;
             # this one goes on (tagged and checked, as every command: only a cut line is not covered)
             with contextlib.suppress(LinkTimeout):
-                self._prepare("checks", self._require_checks, wait, what)
+                self._prepare("checks", lambda w: self._require_checks(w, probed), wait, what)
         sender = self._wire.sender
         if sender is not None and sender.needs_sync and not isinstance(command, SYNC_TEXT):
             # sequenced text after a give-up: the controller may still expect the tag given up on,
@@ -609,7 +610,7 @@ class RobotClient(TypedCalls):
             self._outstanding.remove(probe)
         return probe.reply
 
-    def _require_checks(self, wait: float) -> None:
+    def _require_checks(self, wait: float, probed: bool = False) -> None:
         """Tags are on: ask the controller to run only checked text commands (MODE bit 4), so that a
         line a damaged byte cuts short (a digit turned into ``;``) runs nothing, and to take their
         tags as sequence numbers (bit 5), so that a command sent again when its reply was lost is
@@ -618,15 +619,16 @@ class RobotClient(TypedCalls):
         a firmware from before it) gets bit 4 alone and no command sent twice; one without bit 4
         neither bit and keeps running unchecked lines; nothing else changes.
 
-        A tagged HELLO goes first, as the sequence's first command: a controller left in sequenced
-        text by a client that was killed starts its sequence afresh, so the STATUS after it is not
-        taken for one out of order. HELLO and STATUS run nothing, so they are sent again as the
+        A tagged HELLO goes first (the tag question's, when it was just asked), as the sequence's
+        first command: a controller left in sequenced text by a client that was killed starts its
+        sequence afresh, so the STATUS after it is not taken for one out of order. HELLO and STATUS run nothing, so they are sent again as the
         sequence's commands are whether the controller keeps the sequence yet or not."""
         wire = self._wire
         assert isinstance(wire, TextWire)
         wire.sequence(True)
         try:
-            self.execute(self._hello_again(), wait)
+            if not probed:
+                self.execute(self._hello_again(), wait)
             mask = self._mode if self._mode is not None else self.status().mode
             for bits in (codes.MODE_CHECKED_TEXT | codes.MODE_SEQUENCED_TEXT, codes.MODE_CHECKED_TEXT):
                 # set before it is sent: if its OK is lost the bits may be set, and the session guard
