@@ -638,7 +638,7 @@ def links(quick: bool) -> list[Row]:
         for rate in rates:
             for kind in LINK_KINDS:
                 for protocol in ("text", "binary"):
-                    o = link_faults.run_one(protocol, kind, rate, n)
+                    o = link_faults.run_one(protocol, kind, rate, n, clean_setup=False)
                     watch = _watches.pop()
                     corrupted = o.corrupted - watch.setup_modes
                     name = f"{'text, checked (client default)' if protocol == 'text' else 'binary'}, {kind} {100 * rate:g} %"

@@ -6,7 +6,10 @@ lockstep link (115200 baud, simulated time) to a fresh simulated omni4, puts a f
 :class:`~omnibot.client.RobotClient` (``submit``, at most W waiting, 8 by default; 32 fills the
 binary window the simulated controller announces; every reply awaited). Every
 ``VEL`` has its own parameters, so the controller's log of what it executed (every command it
-answered OK, taken inside the firmware) tells each command apart. Per 10,000 commands:
+answered OK, taken inside the firmware) tells each command apart. Text is the client's default:
+tagged, checked and sequenced (MODE bits 4 and 5, set up on the clean line before the stream), so a
+command whose reply is lost is sent again and answered from the controller's kept reply. Per 10,000
+commands:
 
 * **corrupted**: commands executed that were never sent (changed parameters, another command);
 * **lost unseen**: commands never executed whose call reported success;
@@ -172,9 +175,29 @@ def executed_log(ctrl: Controller) -> list[tuple[int, tuple[int, ...]]]:
 
 
 def run_one(
-    protocol: str, kind: str, rate: float, n: int, seed: int = 1, waiting_max: int = WAITING
+    protocol: str,
+    kind: str,
+    rate: float,
+    n: int,
+    seed: int = 1,
+    waiting_max: int = WAITING,
+    clean_setup: bool = True,
+    sequenced: bool = True,
 ) -> Outcome:
+    """One scenario. ``clean_setup``: the client sets up its protocol on a clean line (text: the tag
+    question and MODE bits 4 and 5) and only the stream meets the faults; else text sets up under
+    them. ``sequenced=False``: the controller refuses MODE bit 5 (ERROR 39), as a firmware before it."""
     device = SimDevice("omni4", seed=seed)
+    if not sequenced:
+        limits = device.controller.limits
+        check = limits.check
+
+        def no_bit_5(kw: int, p: list[int]) -> int:
+            return (
+                codes.E_UNSUPPORTED if kw == codes.MODE and p[0] & codes.MODE_SEQUENCED_TEXT else check(kw, p)
+            )
+
+        limits.check = no_bit_5  # type: ignore[method-assign]
     inner = LockstepLink(device)
     link = fault_link(inner, kind, rate, seed)
     out = Outcome(protocol, kind, rate, n)
@@ -185,6 +208,8 @@ def run_one(
         link.tx, link.rx = _Channel("tx", seed, link, False), _Channel("rx", seed, link, False)
         if protocol == "binary":
             client.use_binary()
+        elif clean_setup:
+            client.status()  # the tag question, then MODE bits 4 and 5 (checked, sequenced text)
         link.drop, link.corrupt, link.tx, link.rx = saved
         log = executed_log(device.controller)
         t0 = client.clock.now()
@@ -282,12 +307,8 @@ def main(argv: list[str] | None = None) -> int:
     else:
         print(report(outcomes))
         print(f"({len(outcomes)} scenarios in {time.monotonic() - start:.0f} s wall)")
-    binary_bad = [
-        o
-        for o in outcomes
-        if o.protocol == "binary" and (o.corrupted or o.lost_unseen or o.twice or o.false_failures)
-    ]
-    return 1 if binary_bad else 0
+    bad = [o for o in outcomes if o.corrupted or o.lost_unseen or o.twice or o.false_failures]
+    return 1 if bad else 0
 
 
 if __name__ == "__main__":

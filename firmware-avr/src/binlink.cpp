@@ -23,7 +23,22 @@ static_assert(BOARD_WINDOW * 25 <= BOARD_RX_SIZE, "a window of command frames fi
 static const uint16_t RETRY_MS = P_RETRY_TIMEOUT_MS;
 static const uint8_t RETRIES = P_RETRIES;
 
-static uint8_t chunk[CHUNK_MAX];
+// Sequenced text (MODE bit 5; controller.py `_in_sequence`, arq.Receiver with tags 1..9999): the
+// receiver of tagged, checked text commands. It lives in the frame buffer, which text mode leaves
+// idle (the UNO has no RAM to spare); every switch of protocol resets both (text_reset, reset).
+struct TextSeq {
+    uint16_t expected;             // 0: the next tag is taken whatever it is
+    uint16_t tag[P_TEXT_SEQ_WINDOW];
+    uint8_t code[P_TEXT_SEQ_WINDOW];  // the reply kept: 0 OK, an ERROR code, 255 a query to run again
+    uint8_t next, result;             // the slot to fill next; the reply of the command being answered
+};
+static_assert(sizeof(TextSeq) <= CHUNK_MAX, "the text sequence fits the frame buffer");
+static union {
+    uint8_t chunk[CHUNK_MAX];
+    TextSeq text;
+} buf;
+static uint8_t *const chunk = buf.chunk;
+static TextSeq &text = buf.text;
 static uint8_t chunk_len;
 static bool chunk_overflow;
 static uint8_t out[FRAME_MAX];
@@ -334,6 +349,42 @@ void feed(uint8_t c) {
     } else {
         chunk_overflow = true;  // longer than any command frame: dropped up to the next 00
     }
+}
+
+// ------------------------------------------------------------------ sequenced text
+
+void text_reset() {
+    text.expected = 0;
+    for (uint8_t i = 0; i < P_TEXT_SEQ_WINDOW; i++) text.tag[i] = 0;
+}
+
+static uint16_t text_back(uint16_t tag) { return (text.expected + P_TEXT_SEQ_MAX - tag) % P_TEXT_SEQ_MAX; }
+
+uint8_t text_classify(uint16_t tag, bool sync) {
+    if (tag == 0) return 2;
+    if (text.expected) {
+        uint16_t back = text_back(tag);
+        if (back > 0 && back <= P_TEXT_SEQ_WINDOW) return 1;
+        if (back && !sync) return 2;
+    }
+    text.expected = tag % P_TEXT_SEQ_MAX + 1;
+    return 0;
+}
+
+void text_result(uint8_t code) { text.result = code; }
+
+void text_remember(uint16_t tag) {
+    text.tag[text.next] = tag;
+    text.code[text.next] = text.result;
+    text.next = (text.next + 1) % P_TEXT_SEQ_WINDOW;
+}
+
+int16_t text_kept(uint16_t tag) {
+    for (uint8_t i = 0; i < P_TEXT_SEQ_WINDOW; i++) {
+        uint16_t back = text_back(text.tag[i]);
+        if (text.tag[i] == tag && back > 0 && back <= P_TEXT_SEQ_WINDOW) return text.code[i];
+    }
+    return -1;
 }
 
 }  // namespace bin

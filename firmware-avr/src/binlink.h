@@ -23,6 +23,13 @@ void poll(uint32_t now_ms);  // retransmissions and backlog, every main-loop pas
 uint8_t seq();               // seq of the command being handled
 uint8_t window();            // the send window we take (announced in the HELLO reply)
 
+// Sequenced text (MODE bit 5): the tags of checked text commands as sequence numbers 1..9999.
+void text_reset();                                  // the next tag is taken whatever it is
+uint8_t text_classify(uint16_t tag, bool sync);     // NEW 0, DUPLICATE 1, OUT_OF_ORDER 2
+void text_result(uint8_t code);                     // the reply sent: 0 OK, an ERROR code, 255 a query
+void text_remember(uint16_t tag);                   // keep that reply for a duplicate of `tag`
+int16_t text_kept(uint16_t tag);                    // the reply kept for `tag`, -1 if none
+
 }  // namespace bin
 
 // Provided by the controller: a received command frame, classified NEW (`type` is the command's

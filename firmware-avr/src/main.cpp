@@ -61,6 +61,7 @@ static void ok() {
         bin::send_reply();
         return;
     }
+    bin::text_result(0);
     out_P(PSTR("OK"));
     end_reply();
 }
@@ -72,6 +73,7 @@ static void error(uint8_t code) {
         bin::send_reply();
         return;
     }
+    bin::text_result(code);
     coded(PSTR("ERROR"), code);
     end_reply();
 }
@@ -272,6 +274,7 @@ static void execute(uint8_t kw, int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
             if (b != st.binary) {  // from the next byte on, both ways
                 st.binary = b;
                 bin::reset();
+                bin::text_reset();
                 line_len = 0;
                 st.overflow = false;
             }
@@ -389,9 +392,11 @@ static void handle(char *cmd, uint8_t len) {
     uint8_t i = end;
     while (i > 0 && end - i <= 4 && digit(cmd[i - 1])) i--;
     uint8_t tag_at = i, tag_len = 0;
+    uint16_t tag = 0;
     if (i > 0 && cmd[i - 1] == '#' && end - i >= 1 && end - i <= 4) {
         tag_len = end - i;
         end = i - 1;
+        for (uint8_t k = 0; k < tag_len; k++) tag = tag * 10 + cmd[tag_at + k] - '0';
     }
     const Keyword *e;
     int16_t p[P_PARAMS_MAX];
@@ -404,8 +409,34 @@ static void handle(char *cmd, uint8_t len) {
     for (uint8_t k = 0; k < tag_len; k++) r.tag[k] = cmd[tag_at + k];
     r.tag_len = tag_len;
     r.check = checked;
-    if (code) error(code);
-    else execute(pgm_read_byte(&e->id), p, n, pgm_read_byte(&e->lo), pgm_read_byte(&e->hi));
+    // MODE bit 5: a checked tag is a sequence number (controller.py `_in_sequence`): a duplicate
+    // gets its kept reply (a query runs again), one out of order nothing; STOP, HELLO, MODE are
+    // taken whatever tag was expected, HELLO starts afresh
+    uint8_t id = code ? 0 : pgm_read_byte(&e->id);
+    bool sequenced = checked && tag_len && (ex.mode & P_MODE_SEQUENCED_TEXT);
+    uint8_t kind = 0;
+    if (sequenced) {
+        if (id == K_HELLO) bin::text_reset();
+        kind = bin::text_classify(tag, id == K_STOP || id == K_HELLO || id == K_MODE);
+    }
+    int16_t kept = kind == 1 ? bin::text_kept(tag) : 255;
+    bin::text_result(255);
+    if (kind == 2 || kept < 0) {
+    } else if (kept != 255) {
+        if (kept) error(kept);
+        else ok();
+    } else if (code) {
+        error(code);
+    } else {
+        execute(id, p, n, pgm_read_byte(&e->lo), pgm_read_byte(&e->hi));
+    }
+    if (!kind && checked && tag_len && (ex.mode & P_MODE_SEQUENCED_TEXT)) {
+        if (!sequenced) {  // the MODE that set bit 5 starts the sequence with its own tag
+            bin::text_reset();
+            bin::text_classify(tag, true);
+        }
+        bin::text_remember(tag);
+    }
     r.tag_len = 0;
     r.check = false;
 }

@@ -39,7 +39,7 @@ def test_send_error_reply_exits_1(capsys: pytest.CaptureFixture[str]) -> None:
 def test_send_binary(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["send", "--binary", "MOVE,5,40,0,0", "STATUS", "--wait-idle"]) == 0
     out = capsys.readouterr().out
-    assert "<- STATUS,0,0,16,20;" in out and "<- IDLE" in out
+    assert "<- STATUS,0,0,16,52;" in out and "<- IDLE" in out
 
 
 @pytest.mark.parametrize(
@@ -102,14 +102,14 @@ def test_console_piped(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFi
     out = capsys.readouterr().out
     lines = out.splitlines()
     # the power-up greeting is read while the link settles, so the first reply is STATUS's own
-    assert lines[:2] == ["-> STATUS", "<- STATUS,1,0,16,16;POWER,0,0,0,0;MOVE,0,0,0,0"]
+    assert lines[:2] == ["-> STATUS", "<- STATUS,1,0,16,48;POWER,0,0,0,0;MOVE,0,0,0,0"]
     assert not any(line.startswith("<- TEL") for line in lines[: lines.index("-> :tel on")])
     assert any(line.startswith("<- RANGE sonar 1: ") and line.endswith(" cm") for line in lines)
     assert "<- IDLE" in lines and "idle" in lines
     assert "<- ERROR,23,unknown command" in lines
-    assert any(line.startswith("idle, 0/16 queued, mode 16") for line in lines)  # checked text only
+    assert any(line.startswith("idle, 0/16 queued, mode 48") for line in lines)  # checked, sequenced text
     assert f"binary protocol, version {codes.VERSIONS[-1]}" in lines and "text protocol" in lines
-    assert any(line.startswith("<- STATUS,1,0,16,20;") for line in lines)
+    assert any(line.startswith("<- STATUS,1,0,16,52;") for line in lines)
     assert "!! expected seconds, got 'x'" in lines
     assert any(line.startswith("?? unknown console command") for line in lines)
     assert ":quit" in out and lines[-1] == "-> :quit"
@@ -131,7 +131,7 @@ def test_console_interactive(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) ->
     assert run_console(args, out=out, interactive=True, input_fn=fake_input) == 0
     lines = out.getvalue().splitlines()
     assert lines[0].startswith("omnibot console on sim://omni4")
-    assert "<- STATUS,1,0,16,16;POWER,0,0,0,0;MOVE,0,0,0,0" in lines
+    assert "<- STATUS,1,0,16,48;POWER,0,0,0,0;MOVE,0,0,0,0" in lines
     assert any(line.startswith("<- TEL ") and line.endswith("idle q0") for line in lines)
     assert lines[-1] == "<- OK"
     assert (tmp_path / ".omnibot_history").exists()
@@ -164,5 +164,5 @@ def _no_history_leak(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> Iterato
 def test_send_through_a_spy_link(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     trace = tmp_path / "trace.txt"
     assert main(["send", "STATUS", "--port", f"spy+sim://omni4?file={trace}"]) == 0
-    assert "<- STATUS,1,0,16,16;" in capsys.readouterr().out
+    assert "<- STATUS,1,0,16,48;" in capsys.readouterr().out
     assert "STATUS" in trace.read_text()

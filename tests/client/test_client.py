@@ -42,6 +42,7 @@ from omnibot.transport import FaultLink, LockstepLink, open_link
 from .fakes import ScriptedLink, Silent, controller
 
 STATUS_LINE = b"STATUS,1,0,16,0;POWER,0,0,0,0;MOVE,0,0,0,0\r\n"
+TEXT_BITS = codes.MODE_CHECKED_TEXT | codes.MODE_SEQUENCED_TEXT  # the client sets them (tags are on)
 
 
 @pytest.fixture
@@ -256,7 +257,7 @@ def test_values_checked_before_sending() -> None:
 def test_set_mode_keeps_other_bits(sim: RobotClient) -> None:
     assert sim.mode_bits is None
     sim.mode(simulation=True)  # reads STATUS first
-    checked = codes.MODE_CHECKED_TEXT  # set by the client before its first command (tags are on)
+    checked = codes.MODE_CHECKED_TEXT | codes.MODE_SEQUENCED_TEXT  # set before the first command (tags)
     assert sim.mode_bits == codes.MODE_SIMULATION | checked
     sim.mode(closed_loop=True)
     assert sim.status().mode == 3 | checked
@@ -285,7 +286,7 @@ def test_binary_round_trip_on_sim(sim: RobotClient) -> None:
     sim.mode(simulation=True)
     hello = sim.use_binary()
     assert (hello.version, hello.name, hello.motors) == (codes.VERSIONS[-1], "omni4", 4) and sim.binary
-    assert sim.status().mode == codes.MODE_SIMULATION | codes.MODE_BINARY | codes.MODE_CHECKED_TEXT  # kept
+    assert sim.status().mode == codes.MODE_SIMULATION | codes.MODE_BINARY | TEXT_BITS  # kept
     pendings = [sim.submit(Move(10, 40, 0, 0)) for _ in range(6)]  # more than the window of 4
     for p in pendings:
         assert p.result() == Ok()
@@ -299,7 +300,7 @@ def test_binary_round_trip_on_sim(sim: RobotClient) -> None:
     assert len(sim.submit_text("STATUS;STATUS")) == 2
     sim.drain()
     sim.use_text()
-    assert not sim.binary and sim.status().mode == codes.MODE_SIMULATION | codes.MODE_CHECKED_TEXT
+    assert not sim.binary and sim.status().mode == codes.MODE_SIMULATION | TEXT_BITS
 
 
 def test_binary_survives_a_noisy_line() -> None:
@@ -348,7 +349,7 @@ def test_binary_controller_reset_returns_to_text(sim: RobotClient) -> None:
     device.controller = Controller(device.hal, build_config(device.robot))  # type: ignore[attr-defined]
     sim.sleep(0.05)
     assert not sim.binary and len(rec.events) == 1
-    assert sim.status().mode == codes.MODE_CHECKED_TEXT  # the restart cleared it, the client asked again
+    assert sim.status().mode == TEXT_BITS  # the restart cleared them, the client asked again
 
 
 # ------------------------------------------------------------------ link failures

@@ -143,8 +143,9 @@ def test_mode() -> None:
         c.mode(OMNI4, codes.MODE_BINARY)
     assert c.mode(OMNI4, codes.MODE_REFUSE_UNCOVERED) == Mode(8)
     with pytest.raises(ValueError, match="bits"):
-        c.mode(OMNI4, 32)
+        c.mode(OMNI4, 64)
     assert c.mode(OMNI4, codes.MODE_CHECKED_TEXT) == Mode(16)
+    assert c.mode(OMNI4, codes.MODE_SEQUENCED_TEXT) == Mode(32)
     with pytest.raises(ValueError, match="encoders"):
         c.mode(Limits(has_encoders=False, robot="bare"), codes.MODE_CLOSED_LOOP)
 

@@ -77,7 +77,7 @@ CASES: dict[int, tuple[type[ControllerError], list[str]]] = {
         CalibrationRejected,
         ["CAL,0,1,0,2200", "CAL,0,0,0,0", "CAL,18,0,0,0", "CAL,1,0,-5,1000"],
     ),
-    codes.E_UNSUPPORTED: (NotSupported, ["MODE,32", "MODE,64", "TELEM,100,256", "HELLO,1", "HELLO,0,1,5"]),
+    codes.E_UNSUPPORTED: (NotSupported, ["MODE,64", "MODE,128", "TELEM,100,256", "HELLO,1", "HELLO,0,1,5"]),
 }
 
 

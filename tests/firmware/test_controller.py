@@ -114,7 +114,7 @@ def test_status_format(rig: Rig) -> None:
         ("CAL,10,-2,0,0", codes.E_CALIBRATION),
         ("CAL,1,5,0,1000", codes.E_CALIBRATION),
         ("CAL,0,0,0,0", codes.E_CALIBRATION),
-        ("MODE,32", codes.E_UNSUPPORTED),
+        ("MODE,64", codes.E_UNSUPPORTED),
         ("TELEM,100,256", codes.E_UNSUPPORTED),
     ],
 )
@@ -610,6 +610,43 @@ def test_bad_check_refuses_the_command_untagged(rig: Rig) -> None:
     assert rig.cmd(good[:-1] + "G") == [err(codes.E_NOT_INTEGER)]  # not a check: left in the body
     assert rig.cmd("STATUS#12345") == [err(codes.E_UNKNOWN)]  # five digits are no tag
     assert rig.cmd(good) == [_tagged("OK", "5", True)]
+
+
+def test_sequenced_text_runs_each_tag_once_and_in_order(rig: Rig) -> None:
+    """MODE bit 5: a checked tag is a sequence number. A duplicate gets the reply kept and runs
+    nothing; one out of order gets nothing; STOP, HELLO and MODE are taken whatever was expected."""
+
+    def seq(body: str, tag: int) -> list[str]:
+        return rig.cmd(_tagged(body, str(tag), True))
+
+    def remembered() -> int:  # the remembered MOVE's distance once the queue ran: each DELTA adds 4 cm
+        rig.run(1000)
+        return int(rig.status().split(";MOVE,")[1].split(",")[0])
+
+    delta = "DELTA,4,40,0,0,0"
+    twice = ";".join([_tagged(delta, "3", True)] * 2)
+    assert rig.cmd(twice) == [_tagged("OK", "3", True)] * 2  # bit 5 clear: a copy runs again
+    assert remembered() == 8
+    assert seq("STOP", 4)[0] == _tagged("OK", "4", True)
+    assert seq("MODE,32", 5) == [_tagged("OK", "5", True)]  # bit 5 alone: starts the sequence at its tag
+    assert seq(delta, 6) == [_tagged("OK", "6", True)]
+    assert seq(delta, 6) == [_tagged("OK", "6", True)]  # the copy: answered, not run
+    assert remembered() == 4 and rig.status().startswith("STATUS,1,0,16,32;")
+    assert seq(delta, 8) == []  # 7 never came: out of order, dropped
+    assert seq(delta, 7) == [_tagged("OK", "7", True)]
+    assert seq("DELTA,0,0,0,0,-1", 8) == [_tagged(err(codes.E_REPEAT), "8", True)]
+    assert seq("DELTA,0,0,0,0,-1", 8) == [_tagged(err(codes.E_REPEAT), "8", True)]
+    assert rig.cmd(delta) == ["OK"]  # untagged: not sequenced
+    assert remembered() == 12
+    assert seq("STOP", 40) == [_tagged("OK", "40", True)]  # sync: taken whatever was expected
+    assert seq(delta, 41) == [_tagged("OK", "41", True)]
+    assert seq("HELLO", 3) == [_tagged("HELLO,2,omni4,4", "3", True)]  # starts afresh
+    assert seq(delta, 4) == [_tagged("OK", "4", True)]  # 4 was kept before the HELLO: new now
+    assert remembered() == 8
+    assert seq("MODE,0", 9999) == []  # 5 before the expected 5 (tags wrap 9999 -> 1): a duplicate
+    assert seq("MODE,0", 5) == [_tagged("OK", "5", True)]
+    assert seq(delta, 4)[0] == _tagged("OK", "4", True)  # bit 5 clear again (then WARN 11: 120 cm/s)
+    assert remembered() == 12
 
 
 def test_vel_feeds_its_planned_acceleration_forward_in_the_closed_loop() -> None:

@@ -352,3 +352,15 @@ def test_duplicate_event_is_re_acked_and_delivered_once() -> None:
     assert delivered == [m.Range(1, 35)] and acks[0] == acks[1]
     ack = binary.decode(acks[1])[1]
     assert isinstance(ack, binary.Packet) and ctl_tx.ack(ack.seq) and ctl_tx.pending() == []
+
+
+def test_text_tags_wrap_at_their_own_top() -> None:
+    """Sequenced text's tags run 1..9999: the same rules in that space (window 8)."""
+    top = codes.TEXT_SEQ_MAX
+    assert arq.seq_next(top, top) == 1 and arq.seq_back(1, top, top) == 1
+    rx = arq.Receiver(codes.TEXT_SEQ_WINDOW, top)
+    assert rx.classify(9998) == arq.NEW and rx.classify(9999) == arq.NEW and rx.classify(1) == arq.NEW
+    assert rx.classify(9999) == arq.DUPLICATE and rx.classify(3) == arq.OUT_OF_ORDER
+    assert rx.classify(2) == arq.NEW and rx.expected == 3
+    tx = arq.Sender(window=codes.TEXT_SEQ_WINDOW, first_seq=top, top=top)
+    assert [tx.allocate()[0] for _ in range(3)] == [top, 1, 2]

@@ -58,7 +58,7 @@ SCRIPT = [
     "CAL,7,1,0,1000;CAL,7,3,0,-500;MOVE,30000,40,0,0;STATUS;STOP;VEL,-30,20,0,1000;STATUS;STOP",
     "CAL,7,4,0,1;CAL,7,0,2,1;CAL,11,-1,91,0;CAL,7,1,0,0;CAL,7,3,0,0;MOVE,30000,40,0,0;STATUS;STOP",
     "MOVE,500,40,0,0;MOVE,1,29,0,0;DELTA,1000,0,0,0,0;ROTATE,90,0;POWER,0,1,1,1,1;VEL,0,0,0,0",
-    "SONAR,2,60,0,0,0;SONAR,1,59,0,0,0;TELEM,5,1;TELEM,100,256;MODE,32;HELLO,2;HELLO,5,1",
+    "SONAR,2,60,0,0,0;SONAR,1,59,0,0,0;TELEM,5,1;TELEM,100,256;MODE,64;HELLO,2;HELLO,5,1",
     "FOO;MOVE,x,1,1,1;move , 1 , +40 , 0 , -0;STATUS,1;MOVE,40000,1,1,1;" + "9" * 70,
     "STOP;STATUS",
     # the sonar stop's guard: uncovered travel refused with MODE bit 3 (ERROR 41), or limited (WARN 15)
@@ -76,6 +76,11 @@ SCRIPT = [
     "STATUS*0000;STATUS#1*0000;FOO#6;MOVE,1#7;STATUS#12345;STATUS#;STATUS*12G4;#5;" + checked("", "8"),
     checked("MOVE,99999,40,0,0", "33") + ";" + checked("VEL,1,1,1,0") + ";" + checked("DELTA,1,1") + ";",
     "STOP;STATUS",
+    # sequenced text (MODE bit 5): a duplicate answered from the kept reply (DELTA once, ERROR 35
+    # again), one out of order (STATUS#8 before #7) dropped unanswered, STOP and MODE taken anyway
+    ";".join([checked("MODE,48", "5"), *[checked("DELTA,400,40,0,0,0", "6")] * 2]),
+    ";".join([checked("STATUS", "8"), checked("STATUS", "7"), *[checked("DELTA,0,0,0,0,-1", "8")] * 2]),
+    ";".join([checked("STOP", "20"), checked("MODE,0", "21")]),
 ]
 POWERS = re.compile(r"POWER((?:,-?\d+)+);")
 

@@ -56,8 +56,9 @@
 #define P_MODE_BINARY 4
 #define P_MODE_CHECKED_TEXT 16
 #define P_MODE_CLOSED_LOOP 2
-#define P_MODE_MASK 31
+#define P_MODE_MASK 63
 #define P_MODE_REFUSE_UNCOVERED 8
+#define P_MODE_SEQUENCED_TEXT 32
 #define P_MODE_SIMULATION 1
 #define P_STATE_BATTERY 4
 #define P_STATE_ESTOP 3
@@ -116,6 +117,8 @@
 #define P_WINDOW 32
 #define P_RETRY_TIMEOUT_MS 50
 #define P_RETRIES 10
+#define P_TEXT_SEQ_WINDOW 8
+#define P_TEXT_SEQ_MAX 9999
 /* keyword, id, fewest and most parameters (POWER: T and one power per motor), the number (1..) of
    the parameter that may be INF (0: none; codes.INF_PARAMS) */
 struct Keyword { char name[7]; uint8_t id, lo, hi, inf; };

@@ -18,10 +18,13 @@ the link fails the call (and every command awaiting a reply); the client then tr
 Text replies, tagged (docs/protocol.md, "Tags and checks"): before its first text command the client
 asks the controller with a tagged ``HELLO#n*check`` whether it echoes tags (``tags=None``; True or
 False skip the question). If it does, every command carries ``#tag*check`` and a reply is matched
-by its tag alone, so a lost or late reply affects only its own command: that call raises
-LinkTimeout ("may or may not have run") and later calls work. A reply whose check fails is dropped
-(an Unexpected event), so no corrupted OK is ever taken for an answer. A controller that does not
-know tags (ERROR 23 to the question, twice) gets today's untagged commands.
+by its tag alone, so a lost or late reply affects only its own command. With MODE bit 5 (sequenced
+text, set with bit 4 before the first command) the tags are sequence numbers: a command whose reply
+does not come is sent again (arq.Sender, as binary frames) and the controller answers the copy from
+the reply it kept, so it runs once; without it (ERROR 39) the call raises LinkTimeout ("may or may
+not have run") and later calls work. A reply whose check fails is dropped (an Unexpected event), so
+no corrupted OK is ever taken for an answer. A controller that does not know tags (ERROR 23 to the
+question, twice) gets today's untagged commands.
 
 Untagged replies carry no sequence number: ``OK``/``ERROR`` answer the oldest untagged command
 waiting, a ``STATUS`` or ``HELLO`` reply the oldest STATUS or HELLO (commands before it whose reply
@@ -60,6 +63,7 @@ from omnibot.client.events import (
 )
 from omnibot.client.limits import Limits
 from omnibot.client.views import Hello
+from omnibot.client.wire import SYNC as SYNC_TEXT
 from omnibot.client.wire import BinaryWire, TextWire, Wire
 from omnibot.errors import ControllerError, LinkError, LinkTimeout, ProtocolError
 from omnibot.protocol import arq, codes, text
@@ -100,7 +104,9 @@ UNTAGGED_VERDICT = 3
 RESYNC_TRIES = 3
 """Untagged text: STATUS exchanges tried at most to get back in step after a timeout."""
 _LATE_MAX = 64  # tagged commands that timed out, kept so that a late reply still lands on them
-_RETRY_POLL = codes.RETRY_TIMEOUT_MS / 2000.0  # binary: look at retransmissions this often (s)
+# binary and sequenced text: look at retransmissions this often (s)
+_RETRY_POLL = codes.RETRY_TIMEOUT_MS / 2000.0
+_SUFFIX_MAX = len(b"#9999*ABCD\n")  # a tag, a check and the terminator
 _FOREVER_STEP = 1.0
 
 
@@ -238,9 +244,9 @@ class RobotClient(TypedCalls):
         self._tags = tags
         self._hellos_owed: list[float] = []  # link-clock deadlines of plain HELLOs the tag question sent
         self._tags_seen = bool(tags)  # a tagged reply came (or tags were asked for): never fall back
-        self._checks_asked = not tags and tags is not None  # MODE bit 4 asked for (or never to be)
-        self.added_checked_text = False
-        """This client set MODE bit 4 (checked text only) on the controller, which had it clear."""
+        self._checks_asked = not tags and tags is not None  # MODE bits 4, 5 asked for (or never to be)
+        self.added_text_bits = 0
+        """MODE bits 4 and 5 (checked, sequenced text) this client set on the controller, which had them clear."""
         self._resync = False  # untagged text: a command timed out, get in step before the next
         self._preparing = ""  # the step before a text command under way: "probe" (tags?), "resync"
         self._late: dict[int, Pending] = {}  # tag -> tagged command that timed out
@@ -440,23 +446,31 @@ class RobotClient(TypedCalls):
         if not self.binary:
             self._text_ready(command, raw, wait)
         wire = self._wire
-        if isinstance(wire, BinaryWire):  # the retransmissions answer or fail the call: wait for them
-            wait = max(wait, wire.sender.budget_ms() / 1000.0 + _RETRY_POLL)
-        sync = isinstance(command, Stop | HelloCommand)
-        if isinstance(wire, BinaryWire) and not sync and not wire.ready():
-            self._wait(wire.ready, self.clock.now() + wait, "binary send window full")
-        if isinstance(wire, BinaryWire) and sync:
+        sender = wire.sender  # binary, or sequenced text (MODE bit 5): commands sent again until answered
+        if sender is not None:  # the retransmissions answer or fail the call: wait for them
+            wait = max(wait, sender.budget_ms() / 1000.0 + _RETRY_POLL)
+        sync = isinstance(command, Stop | HelloCommand) or (
+            isinstance(wire, TextWire) and isinstance(command, SYNC_TEXT)
+        )
+        if sender is not None and not sync and not wire.ready():
+            self._wait(wire.ready, self.clock.now() + wait, "send window full")
+        if sender is not None and sync:
             self._give_up(wire.take_failed())
+        if isinstance(wire, TextWire) and self.text_window and sender is not None:
+            # a sequenced command is tracked for retransmission once framed: room first, for its
+            # longest form (a tag of 4 digits)
+            most = len(raw) + _SUFFIX_MAX if raw is not None else len(text.encode(command, tag=text.TAG_MAX))  # type: ignore[arg-type]
+            self._wait(lambda: self._text_room(most), self.clock.now() + wait, "text window full")
         now = self.clock.now()
         if raw is not None and isinstance(wire, TextWire):
-            seq, data = wire.frame_raw(raw)
+            seq, data = wire.frame_raw(raw, round(now * 1000), isinstance(command, SYNC_TEXT))
         else:
             assert command is not None
             seq, data = wire.frame(command, round(now * 1000))
-        if isinstance(wire, TextWire) and self.text_window:
+        if isinstance(wire, TextWire) and self.text_window and sender is None:
             self._wait(lambda: self._text_room(len(data)), now + wait, "text window full")
             now = self.clock.now()
-        if isinstance(wire, BinaryWire) and sync:
+        if sender is not None and sync:
             abandoned = set(wire.take_failed())
             for p in self._outstanding:
                 p.abandoned = p.abandoned or p.seq in abandoned
@@ -485,17 +499,23 @@ class RobotClient(TypedCalls):
         if self._preparing:
             return
         what = (text.encode(command) if command is not None else raw or b"").decode("latin-1").strip()
-        if self._tags is None:
+        probed = self._tags is None
+        if probed:
             self._prepare("probe", self._detect_tags, wait, what)
         if self._tags and not self._checks_asked:
-            # a lost reply of the bit's setup leaves it to be asked again before the next command;
+            # a lost reply of the bits' setup leaves them to be asked again before the next command;
             # this one goes on (tagged and checked, as every command: only a cut line is not covered)
             with contextlib.suppress(LinkTimeout):
-                self._prepare("checks", self._require_checks, wait, what)
+                self._prepare("checks", lambda w: self._require_checks(w, probed), wait, what)
+        sender = self._wire.sender
+        if sender is not None and sender.needs_sync and not isinstance(command, SYNC_TEXT):
+            # sequenced text after a give-up: the controller may still expect the tag given up on,
+            # and only STOP, HELLO or MODE is taken whatever it expects (binary's SYNC flag)
+            self._prepare("sync", lambda w: self.execute(self._hello_again(), w), wait, what)
         if self._resync and not self._tags:
             self._prepare("resync", self._resync_now, wait, what)
 
-    def _prepare(self, step: str, run: Callable[[float], None], wait: float, what: str) -> None:
+    def _prepare(self, step: str, run: Callable[[float], object], wait: float, what: str) -> None:
         """Run a step before the text command ``what``: ``step`` names it while it runs (its own
         commands skip :meth:`_text_ready`); a timeout says that ``what`` was not sent."""
         self._preparing = step
@@ -590,22 +610,64 @@ class RobotClient(TypedCalls):
             self._outstanding.remove(probe)
         return probe.reply
 
-    def _require_checks(self, wait: float) -> None:
+    def _require_checks(self, wait: float, probed: bool = False) -> None:
         """Tags are on: ask the controller to run only checked text commands (MODE bit 4), so that a
-        line a damaged byte cuts short (a digit turned into ``;``) runs nothing. A controller without
-        the bit (ERROR 39) keeps running unchecked lines; nothing else changes."""
-        mask = self._mode if self._mode is not None else self.status().mode
-        if not mask & codes.MODE_CHECKED_TEXT:
-            # set before it is sent: if its OK is lost the bit may be set, and the session guard
-            # must clear it on the way out (clearing a bit that was never set changes nothing)
-            self.added_checked_text = True
-            try:
-                self.execute(Mode(mask | codes.MODE_CHECKED_TEXT), wait)
-            except ControllerError as exc:
-                if exc.code != codes.E_UNSUPPORTED:
-                    raise
-                self.added_checked_text = False  # a controller without the bit: nothing was set
+        line a damaged byte cuts short (a digit turned into ``;``) runs nothing, and to take their
+        tags as sequence numbers (bit 5), so that a command sent again when its reply was lost is
+        answered from the reply kept and not run twice; the client then sends again every tagged
+        command whose reply does not come (as binary frames). A controller without bit 5 (ERROR 39:
+        a firmware from before it) gets bit 4 alone and no command sent twice; one without bit 4
+        neither bit and keeps running unchecked lines; nothing else changes.
+
+        A tagged HELLO goes first (the tag question's, when it was just asked), as the sequence's
+        first command: a controller left in sequenced text by a client that was killed starts its
+        sequence afresh, so the STATUS after it is not taken for one out of order. HELLO and STATUS run nothing, so they are sent again as the
+        sequence's commands are whether the controller keeps the sequence yet or not."""
+        wire = self._wire
+        assert isinstance(wire, TextWire)
+        wire.sequence(True)
+        try:
+            if not probed:
+                self.execute(self._hello_again(), wait)
+            mask = self._mode if self._mode is not None else self.status().mode
+            for bits in (codes.MODE_CHECKED_TEXT | codes.MODE_SEQUENCED_TEXT, codes.MODE_CHECKED_TEXT):
+                # set before it is sent: if its OK is lost the bits may be set, and the session guard
+                # must clear them on the way out (clearing a bit that was never set changes nothing)
+                self.added_text_bits = bits & ~mask
+                if not bits & codes.MODE_SEQUENCED_TEXT:  # bit 4 alone: a command sent twice runs twice
+                    wire.sequence(False)
+                    if mask & bits == bits:
+                        break
+                try:
+                    self.execute(Mode(mask | bits), wait)
+                except ControllerError as exc:
+                    if exc.code != codes.E_UNSUPPORTED:
+                        raise
+                    self.added_text_bits = 0  # a controller without the bit: nothing was set
+                    continue
+                break
+        except BaseException:
+            wire.sequence(False)
+            raise
         self._checks_asked = True  # only now: a reply lost on the way asks again before the next command
+
+    @property
+    def added_checked_text(self) -> bool:
+        """This client set MODE bit 4 (checked text only) on the controller, which had it clear."""
+        return bool(self.added_text_bits & codes.MODE_CHECKED_TEXT)
+
+    @property
+    def sequenced(self) -> bool:
+        """True while tagged text commands are sequence numbers the controller keeps (MODE bit 5):
+        a command whose reply is lost is sent again and not run twice."""
+        wire = self._wire
+        return isinstance(wire, TextWire) and wire.sender is not None
+
+    def _hello_again(self) -> HelloCommand:
+        """A HELLO that agrees on the protocol version agreed last (a bare one would say 2)."""
+        version = self.last_hello.version if self.last_hello is not None else codes.PROTOCOL_VERSION
+        listed = tuple(v for v in codes.VERSIONS if v <= version)
+        return HelloCommand(listed if version > codes.PROTOCOL_VERSION else ())
 
     def _set_tags(self, on: bool | None) -> None:
         self._tags = on
@@ -636,10 +698,10 @@ class RobotClient(TypedCalls):
         )
 
     def _in_flight(self, pending: Pending) -> bool:
-        """Binary: ``pending``'s frame is still in the send window (being sent again until its reply
-        comes or the retries give up on it)."""
-        wire = self._wire
-        return isinstance(wire, BinaryWire) and pending.seq in wire.sender.pending()
+        """Binary or sequenced text: ``pending``'s frame is still in the send window (being sent
+        again until its reply comes or the retries give up on it)."""
+        sender = self._wire.sender
+        return sender is not None and pending.seq in sender.pending()
 
     def _wait_for_verdict(self, pending: Pending) -> None:
         """Binary: wait until ``pending``'s frame is answered or given up on. A frame behind others
@@ -647,9 +709,9 @@ class RobotClient(TypedCalls):
         call that failed then by the clock would fail a command whose reply is still to come. The
         ARQ bounds the wait (each frame in the window at most one retry budget after the one
         before); LinkTimeout past that bound all the same."""
-        wire = self._wire
-        assert isinstance(wire, BinaryWire)
-        bound = self.clock.now() + wire.sender.window * (wire.sender.budget_ms() / 1000.0 + _RETRY_POLL)
+        sender = self._wire.sender
+        assert sender is not None
+        bound = self.clock.now() + sender.window * (sender.budget_ms() / 1000.0 + _RETRY_POLL)
         self._wait(lambda: pending.done or not self._in_flight(pending), bound, f"no reply to {pending.line}")
         if not pending.done:  # out of the window without a verdict (a SYNC frame abandoned it)
             raise LinkTimeout(f"no reply to {pending.line}; it may or may not have run")
@@ -713,7 +775,7 @@ class RobotClient(TypedCalls):
 
     def _pump_once(self, timeout: float) -> int:
         self._service()
-        if self.binary and self._outstanding:
+        if self._wire.sender is not None and self._outstanding:
             timeout = min(timeout, _RETRY_POLL)
         data = self._read(timeout)
         return self._process(data) if data else 0
@@ -784,6 +846,10 @@ class RobotClient(TypedCalls):
 
     def _reply_by_tag(self, tag: int, reply: Reply, now: float) -> None:
         """A tagged text reply answers the command with that tag, wherever it is in the line."""
+        sender = self._wire.sender
+        waited = tag in self._late or any(p.seq == tag for p in self._outstanding)
+        if sender is not None and not sender.ack(tag) and not waited:
+            return  # sequenced: the kept reply sent again for a command sent again, answered already
         for p in self._outstanding:
             if p.seq == tag:
                 self._outstanding.remove(p)
@@ -881,8 +947,14 @@ class RobotClient(TypedCalls):
         elif isinstance(command, Mode):
             self._mode = command.mask
             binary = bool(command.mask & codes.MODE_BINARY)
+            wire = self._wire
+            sequenced = bool(command.mask & codes.MODE_SEQUENCED_TEXT and self._tags)
+            if isinstance(wire, TextWire) and not binary and sequenced != (wire.sender is not None):
+                wire.sequence(sequenced)  # set by hand: the next command a sync one (a HELLO)
             if binary != self.binary:
-                self._wire = BinaryWire() if binary else TextWire(bool(self._tags))
+                # back in text the controller starts its sequence afresh (it reset it when it
+                # switched): the sender's first command is a sync one
+                self._wire = BinaryWire() if binary else self._text_wire(sequenced)
 
     def _event(self, event: Event) -> None:
         if isinstance(event, IdleEvent):
@@ -904,16 +976,18 @@ class RobotClient(TypedCalls):
         self._resync = False
         if self._tags_auto and self._preparing != "probe":  # perhaps another firmware now: ask again
             self._set_tags(None)
-        self._checks_asked = self._tags is False  # the restart cleared MODE bit 4: ask again
-        if self.binary:
-            self._wire = TextWire(bool(self._tags))
+        self._checks_asked = self._tags is False  # the restart cleared MODE bits 4, 5: ask again
+        if isinstance(self._wire, TextWire):
+            self._wire.sequence(False)
+        else:
+            self._wire = self._text_wire(False)
         self._listeners.dispatch(event)
 
     # ------------------------------------------------------------------ link
 
     def _service(self) -> None:
         wire = self._wire
-        if isinstance(wire, BinaryWire):
+        if wire.sender is not None:
             for frame in wire.service(round(self.clock.now() * 1000)):
                 self._write(frame)
             self._give_up(wire.take_failed())
@@ -951,11 +1025,19 @@ class RobotClient(TypedCalls):
             self._trace_bytes("RX", data)
         return data
 
+    def _text_wire(self, sequenced: bool) -> TextWire:
+        """A new text wire, its tags going on from the last one's (sequenced: MODE bit 5 is set)."""
+        wire = self._wire
+        text_wire = TextWire(bool(self._tags), wire.last_tag if isinstance(wire, TextWire) else 0)
+        text_wire.sequence(sequenced and bool(self._tags))  # its first command: a sync one (a HELLO)
+        return text_wire
+
     def _link_failed(self, exc: LinkError) -> None:
         for p in self._outstanding:
             p._fail(exc)
         self._outstanding.clear()
-        self._wire = BinaryWire() if self.binary else TextWire(bool(self._tags))
+        self._wire = BinaryWire() if self.binary else self._text_wire(False)
+        self._checks_asked = self._tags is False  # perhaps a restarted controller: set the bits again
         self._moving = False
         self._broken = True
         self._failure = exc

@@ -204,7 +204,7 @@ def mode(limits: Limits, mask: int) -> Mode:
     if mask & codes.MODE_BINARY:
         raise ValueError("MODE bit 2 (binary) is switched with use_binary() / use_text()")
     if mask & ~codes.MODE_MASK or mask < 0:
-        raise ValueError(f"MODE mask {mask}: only bits 0 (simulation) and 1 (closed loop) exist")
+        raise ValueError(f"MODE mask {mask}: only bits 0..5 exist (docs/protocol.md, MODE bits)")
     if mask & codes.MODE_CLOSED_LOOP and limits.has_encoders is False:
         raise ValueError(f"MODE closed loop needs motor encoders, which robot {limits.robot} lacks")
     return Mode(mask)

@@ -93,13 +93,12 @@ def leave(client: RobotClient, mode: int | None, *, stop: bool = True, telemetry
         if telemetry:
             commands.append(telem(client.limits, 0.0))
         if mode is not None:
-            # the mode found, without the checked-text bit if this client set it (found clear)
-            added = codes.MODE_CHECKED_TEXT if client.added_checked_text else 0
-            commands.append(Mode(mode & ~(codes.MODE_BINARY | added)))
-        elif client.binary or client.added_checked_text:
-            # back to text and without the checked-text bit this client set, the other bits kept
+            # the mode found, without the checked- and sequenced-text bits this client set (found clear)
+            commands.append(Mode(mode & ~(codes.MODE_BINARY | client.added_text_bits)))
+        elif client.binary or client.added_text_bits:
+            # back to text and without the text bits this client set, the other bits kept
             known = client.mode_bits if client.mode_bits is not None else codes.MODE_BINARY
-            commands.append(Mode(known & ~(codes.MODE_BINARY | codes.MODE_CHECKED_TEXT)))
+            commands.append(Mode(known & ~(codes.MODE_BINARY | client.added_text_bits)))
         for command in commands:
             if client.link.closed:
                 break

@@ -31,7 +31,7 @@ import contextlib
 from typing import TYPE_CHECKING, Final
 
 from omnibot.client.views import Hello
-from omnibot.client.wire import BinaryWire, TextWire
+from omnibot.client.wire import BinaryWire
 from omnibot.errors import LinkTimeout, ProtocolError
 from omnibot.protocol import codes, linecheck, text
 from omnibot.protocol.binary import Packet
@@ -164,7 +164,7 @@ def _probe(client: RobotClient, window: float = ANSWER_TIME) -> Hello | bool | N
                 if isinstance(message, HelloReply):
                     client.last_hello = Hello.from_reply(message)
     if text_seen:
-        client._wire = TextWire(bool(client.tags))
+        client._wire = client._text_wire(bool((client.mode_bits or 0) & codes.MODE_SEQUENCED_TEXT))
         return False
     return None
 

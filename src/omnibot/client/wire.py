@@ -5,6 +5,7 @@ the client can stop at the reply that switches protocols and hand the rest over 
 
     TextWire:    command -> "MOVE,2,40,0,0\n"        bytes -> Packet(message, seq=0) | Malformed
                  tagged:  "MOVE,2,40,0,0#17*C3A1\n"  bytes -> Packet(message, seq=tag)  (0: untagged)
+                 sequenced (MODE bit 5): the tag is a seq with retries, as binary's (arq.Sender)
     BinaryWire:  command -> frame (seq, SYNC, retry)  bytes -> Packet(message, seq, event) | Malformed
                  + ack(seq) for events, service(now_ms) for retransmissions (arq.Sender)
 
@@ -21,27 +22,53 @@ from typing import Final
 
 from omnibot.protocol import arq, binary, codes, text
 from omnibot.protocol.binary import Packet
-from omnibot.protocol.messages import Ack, Command, HelloReply, Malformed, Stop
+from omnibot.protocol.messages import Ack, Command, HelloReply, Malformed, Mode, Stop
 from omnibot.protocol.messages import Hello as HelloCommand
 
 _RESET_RE: Final = re.compile(rb"HELLO,(\d+),([^,\r\n\x00]+),(\d+)\r\n")
 _TAIL_MAX = 300
+SYNC = (Stop, HelloCommand, Mode)
+"""Sequenced text: the commands a controller takes whatever tag it expected (binary: STOP and HELLO)."""
 
 
 class TextWire:
     """The line protocol: commands end with LF. With ``tags`` each command carries ``#tag*check``
-    (tags 1..9999 in turn) and the client matches replies by tag; untagged ones in order."""
+    (tags 1..9999 in turn) and the client matches replies by tag; untagged ones in order. With
+    :meth:`sequence` on (MODE bit 5) the tags are sequence numbers with retries (arq.Sender; the
+    controller answers a duplicate from its kept reply), as binary frames' seqs."""
 
     binary = False
 
-    def __init__(self, tags: bool = False) -> None:
+    def __init__(self, tags: bool = False, last_tag: int = 0) -> None:
         self.tags = tags
         self._decoder = text.TextDecoder(require_check=True)  # every tagged command has a check
-        self._last_tag = 0
+        self._last_tag = last_tag
+        self.sender: arq.Sender | None = None
+        """Sequenced text (MODE bit 5): tagged commands awaiting their reply, sent again until it comes."""
+
+    @property
+    def last_tag(self) -> int:
+        """The tag given last (0: none yet): a wire that replaces this one goes on from it."""
+        return self._last_tag
+
+    def sequence(self, on: bool) -> None:
+        """Start sequenced tags (a fresh sender from the next tag: its first command must be a
+        sync one, STOP, HELLO or MODE) or stop them (what was pending is no longer sent again)."""
+        self.sender = (
+            arq.Sender(
+                window=codes.TEXT_SEQ_WINDOW,
+                retries=codes.HOST_RETRIES,
+                max_timeout_ms=codes.HOST_RETRY_TIMEOUT_MAX_MS,
+                first_seq=self._last_tag % codes.TEXT_SEQ_MAX + 1,
+                top=codes.TEXT_SEQ_MAX,
+            )
+            if on
+            else None
+        )
 
     def ready(self) -> bool:
-        """Always True: the line protocol has no send window."""
-        return True
+        """True if another command may be sent now (sequenced: the sender's window has room)."""
+        return self.sender is None or self.sender.ready()
 
     def next_tag(self) -> int:
         """The next tag, 1..TAG_MAX in turn."""
@@ -52,18 +79,32 @@ class TextWire:
         """(tag, bytes) of a command; tag 0: untagged. ``tag`` overrides :attr:`tags`."""
         if not (self.tags if tag is None else tag):
             return 0, text.encode(command)
-        n = self.next_tag()
-        return n, text.encode(command, tag=n)
-
-    def frame_raw(self, chunk: bytes) -> tuple[int, bytes]:
-        """(tag, bytes) of a command typed by hand (without its terminator): tagged if tags are on
-        and it still fits in a command, else as it is."""
-        if self.tags:
+        if self.sender is None:
             n = self.next_tag()
-            tagged = text.with_suffix(chunk, n)
-            if len(tagged) <= codes.LINE_MAX:
-                return n, tagged + codes.COMMAND_END
+            return n, text.encode(command, tag=n)
+        n = self._allocate(isinstance(command, SYNC))
+        return self._track(n, text.encode(command, tag=n), now_ms)
+
+    def frame_raw(self, chunk: bytes, now_ms: int = 0, sync: bool = False) -> tuple[int, bytes]:
+        """(tag, bytes) of a command typed by hand (without its terminator): tagged if tags are on
+        and it still fits in a command, else as it is (``sync``: it is STOP, HELLO or MODE)."""
+        if self.tags and len(text.with_suffix(chunk, text.TAG_MAX)) <= codes.LINE_MAX:
+            if self.sender is None:
+                n = self.next_tag()
+                return n, text.with_suffix(chunk, n) + codes.COMMAND_END
+            n = self._allocate(sync)
+            return self._track(n, text.with_suffix(chunk, n) + codes.COMMAND_END, now_ms)
         return 0, chunk + codes.COMMAND_END
+
+    def _allocate(self, sync: bool) -> int:
+        assert self.sender is not None
+        self._last_tag, _ = self.sender.allocate(sync=sync)
+        return self._last_tag
+
+    def _track(self, tag: int, data: bytes, now_ms: int) -> tuple[int, bytes]:
+        assert self.sender is not None
+        self.sender.track(tag, data, now_ms)
+        return tag, data
 
     def feed(self, data: bytes) -> Iterator[Packet | Malformed]:
         """Decode received bytes into tagged packets (tag 0: untagged) or Malformed lines."""
@@ -75,12 +116,12 @@ class TextWire:
         return self._decoder.rest()
 
     def service(self, now_ms: int) -> list[bytes]:
-        """Nothing to retransmit: the line protocol has no retries."""
-        return []
+        """Commands to send again now (sequenced text only)."""
+        return [] if self.sender is None else self.sender.poll(now_ms)
 
     def take_failed(self) -> list[int]:
-        """Nothing fails here: the line protocol has no retries."""
-        return []
+        """Tags given up on or abandoned (sequenced text only)."""
+        return [] if self.sender is None else self.sender.take_failed()
 
 
 class BinaryWire:

@@ -285,7 +285,8 @@ def header_source(robot_name: str, board_name: str = "uno") -> str:
         "TEL",
     ):
         w(f"#define T_{key} {getattr(codes, key)}")
-    for key in ("FRAME_SYNC", "FRAME_MAX", "SEQ_MAX", "WINDOW_MIN", "WINDOW", "RETRY_TIMEOUT_MS", "RETRIES"):
+    binary = ("FRAME_SYNC", "FRAME_MAX", "SEQ_MAX", "WINDOW_MIN", "WINDOW", "RETRY_TIMEOUT_MS", "RETRIES")
+    for key in (*binary, "TEXT_SEQ_WINDOW", "TEXT_SEQ_MAX"):
         w(f"#define P_{key} {getattr(codes, key)}")
     w("/* keyword, id, fewest and most parameters (POWER: T and one power per motor), the number (1..) of")
     w("   the parameter that may be INF (0: none; codes.INF_PARAMS) */")

@@ -31,6 +31,7 @@ if TYPE_CHECKING:
 
 MOTION = (codes.MOVE, codes.ROTATE, codes.DELTA, codes.POWER, codes.VEL)
 QUEUED = (codes.MOVE, codes.ROTATE, codes.DELTA, codes.POWER)
+SYNC = (codes.STOP, codes.HELLO, codes.MODE)  # sequenced text: taken whatever tag was expected
 
 
 class Controller:
@@ -55,6 +56,9 @@ class Controller:
         self.link = BinaryLink(hal.uart_write)
         self.binary = False
         self.checked_only = False  # MODE bit 4: text commands need a matching "*" check
+        self.sequenced = False  # MODE bit 5: the tags of checked text commands are sequence numbers
+        self.text_rx = arq.Receiver(codes.TEXT_SEQ_WINDOW, codes.TEXT_SEQ_MAX)  # their duplicates
+        self._kept: bytes | None = None  # sequenced text: the reply being sent, kept for a duplicate
         self.latched = False  # the sonar's emergency stop (the battery's: self.battery.latched)
         self.battery = battery.BatteryMonitor(config)
         self._battery_ms = 0
@@ -90,7 +94,10 @@ class Controller:
             self.emit(line)
             return
         data = line.encode()
-        self.hal.uart_write(data + linecheck.suffix(data, self._tag, self._check) + b"\r\n")
+        data += linecheck.suffix(data, self._tag, self._check) + b"\r\n"
+        if self._kept is not None:
+            self._kept = data
+        self.hal.uart_write(data)
 
     def _ok(self) -> None:
         if self.binary:
@@ -161,6 +168,7 @@ class Controller:
             | (codes.MODE_BINARY if self.binary else 0)
             | (codes.MODE_REFUSE_UNCOVERED if self.guard.refuse else 0)
             | (codes.MODE_CHECKED_TEXT if self.checked_only else 0)
+            | (codes.MODE_SEQUENCED_TEXT if self.sequenced else 0)
         )
 
     def poll(self) -> None:
@@ -350,15 +358,50 @@ class Controller:
             # digit turned into ";" or CR) or a suffix damaged out of recognition has none
             self._error(codes.E_CHECK_REQUIRED)
             return
+        seq = 0
         if tag_start >= 0:
             self._tag = cmd[tag_start:tag_end]
+            if checked == linecheck.CHECKED:
+                for i in range(tag_start, tag_end):
+                    seq = seq * 10 + cmd[i] - 48
         self._check = checked == linecheck.CHECKED
+        sequenced = self.sequenced and self._check and self._tag is not None
+        if sequenced and not self._in_sequence(kw, seq):
+            self._tag = None
+            self._check = False
+            return
+        self._kept = b"" if sequenced or (self._check and kw == codes.MODE) else None
         if kw < 0:
             self._error(-kw)
         else:
             self.execute(kw, p)
+        if self._kept is not None and self._check and self._tag is not None:
+            if not sequenced and self.sequenced:  # the MODE that set bit 5 starts the sequence
+                self.text_rx.reset()
+                self.text_rx.classify(seq, True)
+            if self.sequenced:
+                self.text_rx.remember(seq, self._kept)
+        self._kept = None
         self._tag = None
         self._check = False
+
+    def _in_sequence(self, kw: int, seq: int) -> bool:
+        """Sequenced text (MODE bit 5): whether the checked command tagged ``seq`` is new and runs.
+        A duplicate (one of the last TEXT_SEQ_WINDOW tags) gets its kept reply again and does not
+        run; one out of order (after a lost line) is dropped unanswered: the host's retransmission
+        restores the order (arq.Receiver, as binary frames). STOP, HELLO and MODE are new whatever
+        tag was expected, and HELLO starts the sequence afresh (a new session)."""
+        rx = self.text_rx
+        if kw == codes.HELLO:
+            rx.reset()
+        kind = rx.classify(seq, kw in SYNC)
+        if kind == arq.NEW:
+            return True
+        if kind == arq.DUPLICATE:
+            reply = rx.reply_for(seq)
+            if reply is not None:
+                self.hal.uart_write(reply)
+        return False
 
     # ------------------------------------------------------------------ commands
 
@@ -418,13 +461,15 @@ class Controller:
             self._ok()
             self.guard.refuse = bool(p[0] & codes.MODE_REFUSE_UNCOVERED)
             self.checked_only = bool(p[0] & codes.MODE_CHECKED_TEXT)
-            ex.set_mode(p[0] & ~(codes.MODE_BINARY | codes.MODE_REFUSE_UNCOVERED | codes.MODE_CHECKED_TEXT))
+            self.sequenced = bool(p[0] & codes.MODE_SEQUENCED_TEXT)
+            ex.set_mode(p[0] & (codes.MODE_SIMULATION | codes.MODE_CLOSED_LOOP))
             self._relimit()
             binary = bool(p[0] & codes.MODE_BINARY)
             if binary != self.binary:
                 self.binary = binary
                 self.link.reset()
                 self._split.reset()
+                self.text_rx.reset()
         elif kw == codes.SONAR:
             self.sonars.configure(p[0] - 1, p[1], p[2], p[3], p[4], self.now_ms)
             self.guard.clear(p[0] - 1)

@@ -35,14 +35,14 @@ DUPLICATE = 1
 OUT_OF_ORDER = 2
 
 
-def seq_next(seq: int) -> int:
-    """The sequence number after ``seq`` (1..255, 255 wraps to 1)."""
-    return seq % codes.SEQ_MAX + 1
+def seq_next(seq: int, top: int = codes.SEQ_MAX) -> int:
+    """The sequence number after ``seq`` (1..top, ``top`` wraps to 1: binary 255, text tags 9999)."""
+    return seq % top + 1
 
 
-def seq_back(expected: int, seq: int) -> int:
+def seq_back(expected: int, seq: int, top: int = codes.SEQ_MAX) -> int:
     """How many frames before ``expected`` the frame ``seq`` is (0 = it is the expected one)."""
-    return (expected - seq) % codes.SEQ_MAX
+    return (expected - seq) % top
 
 
 class _Out:
@@ -70,8 +70,10 @@ class Sender:
         retries: int = codes.RETRIES,
         first_seq: int = 1,
         max_timeout_ms: int = 0,
+        top: int = codes.SEQ_MAX,
     ) -> None:
         self.window = window
+        self.top = top  # the largest seq (binary 255; sequenced text's tags 9999)
         self.timeout_ms = timeout_ms
         self.retries = retries
         # above timeout_ms: the retransmissions after the first codes.RETRIES wait twice the last
@@ -92,7 +94,12 @@ class Sender:
         if not self._pending:
             return True
         oldest = self._pending[0]
-        return not oldest.sync and seq_back(self._next, oldest.seq) < self.window
+        return not oldest.sync and seq_back(self._next, oldest.seq, self.top) < self.window
+
+    @property
+    def needs_sync(self) -> bool:
+        """True if the next frame will be SYNC: the first one, or the first after a give-up."""
+        return self._sync
 
     def pending(self) -> "list[int]":
         """Seqs sent and not yet acknowledged, oldest first."""
@@ -110,7 +117,7 @@ class Sender:
         elif not self.ready():
             raise ValueError("send window full")
         seq = self._next
-        self._next = seq_next(seq)
+        self._next = seq_next(seq, self.top)
         flag = sync or self._sync
         self._sync = False
         self._sync_seq = seq if flag else 0
@@ -187,8 +194,9 @@ class Sender:
 class Receiver:
     """Incoming sequenced frames: in-order acceptance, duplicate detection, cached replies."""
 
-    def __init__(self, window: int = codes.WINDOW) -> None:
+    def __init__(self, window: int = codes.WINDOW, top: int = codes.SEQ_MAX) -> None:
         self.window = window
+        self.top = top  # the largest seq (binary 255; sequenced text's tags 9999)
         self.expected = 0  # 0: nothing received yet, the first frame is accepted whatever its seq
         self._replies: dict[int, bytes] = {}
 
@@ -205,14 +213,14 @@ class Receiver:
         if seq == 0:
             return OUT_OF_ORDER
         if self.expected:
-            back = seq_back(self.expected, seq)
+            back = seq_back(self.expected, seq, self.top)
             if 0 < back <= self.window:
                 return DUPLICATE
             if back and not sync:
                 return OUT_OF_ORDER
-        self.expected = seq_next(seq)
+        self.expected = seq_next(seq, self.top)
         for old in list(self._replies):
-            if not 0 < seq_back(self.expected, old) <= self.window:
+            if not 0 < seq_back(self.expected, old, self.top) <= self.window:
                 del self._replies[old]
         return NEW
 

@@ -210,7 +210,8 @@ MODE_CLOSED_LOOP = 2  # bit 1: closed-loop wheel-speed control (needs motor enco
 MODE_BINARY = 4  # bit 2: binary framing in both directions (after the OK of this MODE)
 MODE_REFUSE_UNCOVERED = 8  # bit 3: with the sonar stop armed, refuse travel no armed sonar covers
 MODE_CHECKED_TEXT = 16  # bit 4: a text command runs only with a matching "*" check (else ERROR 42)
-MODE_MASK = 31  # every defined bit; others get ERROR 39
+MODE_SEQUENCED_TEXT = 32  # bit 5: tags of checked text are sequence numbers; a duplicate is not run again
+MODE_MASK = 63  # every defined bit; others get ERROR 39 (the UNO's own mask: firmware-avr/src/checks.h)
 
 # --- TEL mask bits; groups follow t_ms and mask in bit order -------------------------------------
 TEL_POWER = 1  # n, p1..pn: applied motor powers
@@ -255,6 +256,8 @@ SEQ_MAX = 255  # sequence numbers run 1..255 and wrap to 1; 0 = unsequenced (TEL
 # HELLO reply (WINDOW_MIN..WINDOW_LIMIT); the host sends at most min(that, WINDOW) frames unacknowledged
 # (WINDOW_MIN before the reply) and takes the controller's events with a window of WINDOW.
 TEXT_WINDOW = 192  # text flow control: a host keeps at most this many bytes of commands unanswered
+TEXT_SEQ_WINDOW = 8  # MODE bit 5: tags a host sends past its oldest unanswered one; kept replies
+TEXT_SEQ_MAX = 9999  # MODE bit 5: tags run 1..9999 and wrap to 1 (linecheck.TAG_DIGITS digits)
 WINDOW_MIN = 8  # the least a controller announces (the UNO's): a line full with a 2 ms loop, no host load
 WINDOW = 32  # this implementation's window: the host's, the MicroPython controller's (a loaded host)
 WINDOW_LIMIT = 127  # the most: W duplicates behind and W - 1 new seqs ahead must not meet in SEQ_MAX
