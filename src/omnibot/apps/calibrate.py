@@ -44,8 +44,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p = sub.add_parser(
         "calibrate",
         help="seed 000's power calibration (K, K_l, K_t, K_r), gyro and odometry geometry, with a report",
-        description="Drives calibration runs over the protocol (POWER sweeps on courses 0..45 and in "
-        "rotation, curved MOVEs, a rotation test, UMBmark squares), measures each by the chosen ground "
+        description="Drives calibration runs over the protocol (POWER sweeps on the courses the robot's "
+        "symmetry leaves distinct: 0..45 on omni4, 0..30 on omni3, 0..90 on mecanum4; and in rotation, curved MOVEs, a rotation test, UMBmark squares), measures each by the chosen ground "
         "truth, fits the piecewise-linear factors per surface and averaged over the surfaces, uploads them "
         "(CAL) and checks open-loop accuracy before and after. Default: the simulated robot in lockstep "
         "(sim://ROBOT?surface=S), surfaces wood and carpet.",
