@@ -131,7 +131,7 @@ TEST_JOBS ?= 2
 PYTEST := SDL_VIDEODRIVER=dummy MPLBACKEND=Agg $(BIN)/python -m pytest
 test: lint browser avr-tools uno-sim arduino-sketch mcap-readers ros2-interop
 	@$(PYTEST) -q -n $(TEST_JOBS) -m "not serial"; parallel=$$?; \
-	$(PYTEST) -q -m serial; serial=$$?; \
+	$(PYTEST) -q -m serial $$($(BIN)/python -m tests.parallel); serial=$$?; \
 	echo "make test: pytest exited $$parallel (parallel pass) and $$serial (serial pass)"; \
 	[ $$parallel -eq 0 ] && [ $$serial -eq 0 ]
 

@@ -87,3 +87,7 @@ def scheduler(config: pytest.Config, log: Any) -> Any:
             super().add_node_collection(node, ordered)
 
     return UnitScheduling(config, log)
+
+
+if __name__ == "__main__":  # the Makefile's serial pass collects only these (not the whole suite again)
+    print(" ".join(sorted(SERIAL)))
