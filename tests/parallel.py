@@ -30,6 +30,8 @@ import pytest
 
 SERIAL: dict[str, str] = {
     "tests/uno/test_line_rate.py": "streams VELs at 115200 baud of wall-clock time: whether the emulated UNO keeps up",
+    "tests/ros2/test_bridge_dds.py": "cmd_vel at 20 Hz of wall-clock time, judged by the robot's top speed and stop"
+    " (0.23 m/s for 0.2 beside another worker at load 15)",
 }
 """Modules (path prefixes) run in the serial pass, and why they need the machine to themselves."""
 
@@ -42,11 +44,21 @@ GROUPS: dict[str, str] = {
 chromium at a time; one private network namespace with DDS at a time)."""
 
 FIRST: tuple[str, ...] = (
-    "tests/calibration/test_acceptance.py",  # one calibration of two floors, 60-140 s of CPU
-    "ros2",  # bridges, peers and namespaces that wait on the wall clock: minutes of waiting
-    "tests/apps/test_calibrate.py",  # three quick calibrations
-    "browser",
-    "tests/cli/test_pty.py",
+    # measured 2026-12-06 under pytest -n 2 (CPU s, and wall s at load 12-17: how long a worker is busy)
+    "ros2",  # 104 s, 442 s: bridges, peers and namespaces that wait on the wall clock
+    "tests/calibration/test_acceptance.py",  # 81 s, 313 s: one calibration of two floors
+    "tests/apps/test_calibrate.py",  # 49 s, 305 s: three quick calibrations
+    "tests/cli/test_pty.py",  # 24 s, 165 s
+    "tests/navigation/test_runner.py",  # 26 s, 159 s
+    "tests/navigation/test_explore.py",  # 20 s, 123 s
+    "tests/uno/test_sketch.py",  # 16 s, 118 s: arduino-mk builds
+    "tests/contract/test_sonar_stop.py",  # 21 s, 111 s
+    "tests/navigation/test_slipcal.py",  # 17 s, 94 s
+    "tests/navigation/test_goto.py",  # 16 s, 90 s
+    "tests/apps/test_follow.py",  # 24 s, 79 s
+    "tests/logs/test_bounded.py",  # 12 s, 73 s
+    "tests/sim/test_emulator.py",  # 25 s, 61 s
+    "browser",  # 13 s, 52 s
 )
 """The costliest units (CPU or waiting, measured), dealt out first in this order."""
 
