@@ -6,6 +6,10 @@ threads and children a short grace period to finish (a stopped helper may still 
 A test that leaks on purpose (e.g. a process-wide cache opened on first use) can opt out with
 ``@pytest.mark.allow_leaks("why")``.
 
+``pytest -n N`` (pytest-xdist, as ``make test`` runs the suite) hands whole modules to the workers,
+the costliest first, and leaves the tests marked ``serial`` to a pass of their own: ``tests/parallel.py``
+says which and why.
+
 Hypothesis runs derandomized (the same examples every run, no example database), so a property test
 passes or fails the same way on every machine; a test's own ``@settings`` adds to this profile.
 """
@@ -21,6 +25,8 @@ from collections.abc import Iterator
 import pytest
 from hypothesis import settings
 
+from tests import parallel
+
 settings.register_profile("omnibot", derandomize=True, database=None)
 settings.load_profile("omnibot")
 
@@ -31,11 +37,24 @@ are gone), generous because a loaded machine may not run a thread that is unwind
 
 def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line("markers", "allow_leaks(reason): skip the thread/process/fd leak check")
+    config.addinivalue_line(
+        "markers", "serial: needs the machine to itself; make test runs it after the parallel pass"
+    )
     # A shell's background job (``pytest ... &``) starts with SIGINT ignored, and children inherit an
     # ignored signal: the commands under test would then never see the Ctrl-C the tests send them.
     # A handler here is reset to the default in every child, as a terminal's foreground job has it.
     if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
         signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+@pytest.hookimpl(tryfirst=True)  # before -m selects on the marks
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    parallel.mark_serial(items)
+
+
+@pytest.hookimpl(tryfirst=True, optionalhook=True)  # before xdist's own choice; none without xdist
+def pytest_xdist_make_scheduler(config: pytest.Config, log: object) -> object | None:
+    return parallel.scheduler(config, log) if config.getvalue("dist") == "load" else None
 
 
 PROCESS_CACHES = ("/matplotlib/mpl-data/fonts/",)

@@ -3,6 +3,7 @@ telemetry at 100 Hz, recorded by :class:`omnibot.logs.recorder.Recorder` fed by 
 
 from __future__ import annotations
 
+import fcntl
 import math
 import os
 import shutil
@@ -90,14 +91,23 @@ def node_reader() -> Path:
         pytest.skip("node/npm are not installed: Foxglove's MCAP libraries cannot run")
     wanted = (REPO / "tests" / "logs" / "node" / "package.json").read_bytes()
     installed = READERS / "package.json"
-    if (
-        not (READERS / "node_modules" / "@mcap" / "core").is_dir()
-        or not installed.is_file()
-        or installed.read_bytes() != wanted
-    ):
-        subprocess.run(["make", "-s", "mcap-readers"], cwd=REPO, check=True, timeout=600)
-    script = READERS / "read_mcap.mjs"
-    shutil.copyfile(REPO / "tests" / "logs" / "node" / "read_mcap.mjs", script)
+    READERS.mkdir(parents=True, exist_ok=True)
+    # one test worker at a time installs the packages or writes the script (pytest -n: the others
+    # wait, then find them in place); the script is replaced whole, never seen half written
+    with (READERS / ".lock").open("a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if (
+            not (READERS / "node_modules" / "@mcap" / "core").is_dir()
+            or not installed.is_file()
+            or installed.read_bytes() != wanted
+        ):
+            subprocess.run(["make", "-s", "mcap-readers"], cwd=REPO, check=True, timeout=600)
+        script = READERS / "read_mcap.mjs"
+        source = (REPO / "tests" / "logs" / "node" / "read_mcap.mjs").read_bytes()
+        if not script.is_file() or script.read_bytes() != source:
+            staged = script.with_name(f".{script.name}.{os.getpid()}")
+            staged.write_bytes(source)
+            os.replace(staged, script)
     return script
 
 

@@ -15,6 +15,7 @@ and simavr (``make avr-tools``); :func:`missing_tools` says what is absent.
 from __future__ import annotations
 
 import argparse
+import fcntl
 import select
 import shutil
 import signal
@@ -48,10 +49,18 @@ def missing_tools() -> str | None:
     return None
 
 
+BUILD_LOCK = FIRMWARE_DIR / "build" / ".lock"
+"""Held while ``make`` runs in the firmware tree: two processes building at once (two test workers,
+two emulators started together) would write the same objects."""
+
+
 def _make(*args: str) -> None:
-    proc = subprocess.run(
-        ["make", "--no-print-directory", "-s", *args], check=False, capture_output=True, text=True
-    )
+    BUILD_LOCK.parent.mkdir(parents=True, exist_ok=True)
+    with BUILD_LOCK.open("a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        proc = subprocess.run(
+            ["make", "--no-print-directory", "-s", *args], check=False, capture_output=True, text=True
+        )
     if proc.returncode != 0:
         tail = (proc.stdout + proc.stderr).strip().splitlines()[-5:]
         raise UnoError(f"make {' '.join(args)} failed: " + " | ".join(tail))
