@@ -158,6 +158,7 @@ def test_reset_and_a_bad_request_as_the_real_part_answers(served: tuple[RplidarD
         lidar.stop()
         assert eventually(lambda: not device.scanning)
         lidar.start()
+        assert eventually(lambda: lidar._serial.in_waiting >= 5)  # a node on its way before the reset
         lidar.reset()  # waits 2 s; it does not clear its own scanning flag, so the input stays
         assert not device.scanning
         before_reset, banner = lidar._serial.read(lidar._serial.in_waiting).split(b"RP LIDAR")
