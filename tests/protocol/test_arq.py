@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from omnibot.protocol import arq, binary, codes
+from omnibot.protocol import arq, binary, codes, text
 from omnibot.protocol import messages as m
 
 
@@ -357,6 +357,7 @@ def test_duplicate_event_is_re_acked_and_delivered_once() -> None:
 def test_text_tags_wrap_at_their_own_top() -> None:
     """Sequenced text's tags run 1..9999: the same rules in that space (window 8)."""
     top = codes.TEXT_SEQ_MAX
+    assert top == text.TAG_MAX  # the sequence space is the tags' own (codes stands alone for the boards)
     assert arq.seq_next(top, top) == 1 and arq.seq_back(1, top, top) == 1
     rx = arq.Receiver(codes.TEXT_SEQ_WINDOW, top)
     assert rx.classify(9998) == arq.NEW and rx.classify(9999) == arq.NEW and rx.classify(1) == arq.NEW

@@ -66,7 +66,7 @@ from omnibot.client.views import Hello
 from omnibot.client.wire import SYNC as SYNC_TEXT
 from omnibot.client.wire import BinaryWire, TextWire, Wire
 from omnibot.errors import ControllerError, LinkError, LinkTimeout, ProtocolError
-from omnibot.protocol import arq, codes, text
+from omnibot.protocol import arq, codes, linecheck, text
 from omnibot.protocol.binary import Packet
 from omnibot.protocol.messages import (
     Command,
@@ -106,7 +106,7 @@ RESYNC_TRIES = 3
 _LATE_MAX = 64  # tagged commands that timed out, kept so that a late reply still lands on them
 # binary and sequenced text: look at retransmissions this often (s)
 _RETRY_POLL = codes.RETRY_TIMEOUT_MS / 2000.0
-_SUFFIX_MAX = len(b"#9999*ABCD\n")  # a tag, a check and the terminator
+_SUFFIX_MAX = 1 + linecheck.TAG_DIGITS + 1 + linecheck.CHECK_DIGITS + 1  # "#tag", "*check" and "\n"
 _FOREVER_STEP = 1.0
 
 
