@@ -220,6 +220,21 @@ def test_timeouts_count_simulated_time() -> None:
     client.close()
 
 
+def test_a_long_line_is_waited_for_while_it_is_on_the_line(sim: RobotClient) -> None:
+    """A reply cannot come before its command has arrived: 20 kB take 1.7 s at 115200 baud, more than
+    the client's 1 s timeout, and the controller's "too long" is still the answer (it was "no reply")."""
+    line = b"VEL," + b"1" * 20_000
+    assert sim.link.line_time(len(line) + 2) == pytest.approx(20_006 * 10 / 115200)
+    start = sim.clock.now()
+    with pytest.raises(ControllerError, match="too long") as caught:
+        sim.submit_raw(line + b"\r\n")[0].result()
+    assert caught.value.code == 22
+    assert sim.clock.now() - start > 1.7
+    with pytest.raises(ControllerError, match="too long"):
+        sim.submit_text(line.decode())[0].result()
+    assert LockstepLink(Silent(), baud=0).line_time(1000) == 0.0
+
+
 def test_wait_idle_and_sleep_on_sim(sim: RobotClient) -> None:
     idle = EventRecorder()
     sim.on_idle(idle)

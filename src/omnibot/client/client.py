@@ -430,7 +430,8 @@ class RobotClient(TypedCalls):
         self._ensure_open()
         self._wait_for_switch()
         line = data.decode("latin-1").strip()
-        deadline = self.clock.now() + (self.timeout if timeout is None else timeout)
+        wait = self.timeout if timeout is None else timeout
+        deadline = self.clock.now() + wait + self.link.line_time(len(data))
         out = [Pending(self, None, line, 0, deadline) for _ in range(replies)]
         self._outstanding.extend(out)
         self._write(data)
@@ -479,7 +480,7 @@ class RobotClient(TypedCalls):
         else:
             assert command is not None
             line = text.encode(command).decode("ascii").strip()
-        pending = Pending(self, command, line, seq, now + wait, malformed)
+        pending = Pending(self, command, line, seq, now + wait + self.link.line_time(len(data)), malformed)
         pending.size = len(data)
         self._outstanding.append(pending)
         if command is not None and self._tracers:

@@ -75,6 +75,10 @@ class Link(abc.ABC):
     arguments.
     """
 
+    baud: int = 0
+    """The line's rate in bits per second (8N1) where it is paced by one (a serial port, the
+    emulated line of a lockstep link); 0 where nothing paces it (TCP)."""
+
     def __init__(self, url: str, clock: Clock | None = None) -> None:
         self._url = url
         self._clock: Clock = clock if clock is not None else WallClock()
@@ -96,6 +100,12 @@ class Link(abc.ABC):
     def closed(self) -> bool:
         """True once :meth:`close` has been called."""
         return self._closed
+
+    def line_time(self, size: int) -> float:
+        """Seconds the line needs to carry ``size`` bytes one way (0.0 when it is not paced by a baud
+        rate). A reply cannot start before its command has arrived, so a caller waiting for one
+        adds this to its wait: a long line is not given up on while it is still being sent."""
+        return size * bit_time(self.baud)
 
     def write(self, data: bytes) -> None:
         """Send all of ``data``. Raises LinkError if the link is closed or broken."""

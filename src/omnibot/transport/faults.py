@@ -164,6 +164,10 @@ class FaultLink(Link):
         if due:
             self.inner.write(due)
 
+    def line_time(self, size: int) -> float:
+        """The wrapped link's (see :meth:`Link.line_time`)."""
+        return self.inner.line_time(size)
+
     def reopen(self, retry: float | None = None) -> None:
         """Reopen the wrapped link (LinkError if this one was closed)."""
         self._check_open()

@@ -97,6 +97,10 @@ class SpyLink(Link):
         """The wrapped link's clock."""
         return self.inner.clock
 
+    def line_time(self, size: int) -> float:
+        """The wrapped link's (see :meth:`Link.line_time`)."""
+        return self.inner.line_time(size)
+
     def reopen(self, retry: float | None = None) -> None:
         """Reopen the wrapped link (LinkError if this one was closed)."""
         self._check_open()
