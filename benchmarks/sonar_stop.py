@@ -1,6 +1,7 @@
 """The sonar stop against a wall: collisions and clearance at every speed, angle and threshold.
 
-Run: ``python -m benchmarks.sonar_stop`` (``--help`` for options; a few minutes on one core).
+Run: ``python -m benchmarks.sonar_stop [--closed-loop]`` (``--help`` for options; a few minutes on one
+core). ``--closed-loop`` drives the MOVEs on the wheel-speed loop (MODE bit 1), as every front end does.
 
 The simulated omni4 robot (firmware and physics in lockstep, fixed seeds) starts 1.4 m from a
 point of the room world's west wall, its path meeting the wall at an angle (90 degrees: head-on,
@@ -48,6 +49,7 @@ class Run:
     course: int  # degrees from the head (0: where the sonar looks)
     seed: int
     refuse: bool = False
+    closed_loop: bool = False  # MODE bit 1: the wheel-speed loop (every front end's default)
 
 
 @dataclass(frozen=True)
@@ -85,7 +87,10 @@ def drive(run: Run) -> Outcome:
     sim = device.sim
     outline = device.robot.footprint.outline()
     v = round(run.speed * 100)
-    mode = f"MODE,{codes.MODE_REFUSE_UNCOVERED};" if run.refuse else ""
+    bits = (codes.MODE_REFUSE_UNCOVERED if run.refuse else 0) | (
+        codes.MODE_CLOSED_LOOP if run.closed_loop else 0
+    )
+    mode = f"MODE,{bits};" if bits else ""
     device.receive(f"{mode}SONAR,1,60,0,0,{run.stop_cm};MOVE,30000,{v},{run.course},0;".encode())
     out = b""
     clearance = math.inf
@@ -116,12 +121,24 @@ def drive(run: Run) -> Outcome:
 
 
 def runs(
-    speeds: Iterable[float], angles: Iterable[int], stops: Iterable[int], seeds: Iterable[int]
+    speeds: Iterable[float],
+    angles: Iterable[int],
+    stops: Iterable[int],
+    seeds: Iterable[int],
+    closed_loop: bool = False,
 ) -> list[Run]:
-    out = [Run(v, a, st, 0, seed) for v in speeds for a in angles for st in stops for seed in seeds]
+    speeds, stops, seeds = list(speeds), list(stops), list(seeds)
+    cl = closed_loop
+    out = [
+        Run(v, a, st, 0, seed, closed_loop=cl)
+        for v in speeds
+        for a in angles
+        for st in stops
+        for seed in seeds
+    ]
     # sideways, where no sonar looks: limited (default) and refused (MODE bit 3), head-on only
-    out += [Run(v, 90, st, 90, seed) for v in speeds for st in stops for seed in seeds]
-    out += [Run(max(speeds), 90, max(stops), 90, min(seeds), refuse=True)]
+    out += [Run(v, 90, st, 90, seed, closed_loop=cl) for v in speeds for st in stops for seed in seeds]
+    out += [Run(max(speeds), 90, max(stops), 90, min(seeds), refuse=True, closed_loop=cl)]
     return out
 
 
@@ -183,8 +200,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--stops", type=int, nargs="+", default=list(STOPS), help="STOP thresholds, cm")
     ap.add_argument("--seeds", type=int, nargs="+", default=list(SEEDS))
     ap.add_argument("--jobs", type=int, default=1, help="worker processes")
+    ap.add_argument(
+        "--closed-loop",
+        action="store_true",
+        help="MOVEs on the wheel-speed loop (MODE bit 1), as every front end drives",
+    )
     args = ap.parse_args(argv)
-    todo = runs(args.speeds, args.angles, args.stops, args.seeds)
+    todo = runs(args.speeds, args.angles, args.stops, args.seeds, args.closed_loop)
     started = time.perf_counter()
     if args.jobs > 1:
         with ProcessPoolExecutor(max_workers=args.jobs) as pool:
