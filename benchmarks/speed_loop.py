@@ -17,6 +17,12 @@ protocol version 3: the firmware feeds its torque forward), or a step to it, hel
 * rise: the time the body first reaches 98 % of its settled speed.
 
 A few seconds of CPU per robot and floor; deterministic (seed 1).
+
+``--feedforward`` prints instead what the loop's integral holds once the speed is steady: VEL at
+0.3 m/s on courses 0, 45 and 90 degrees and a rotation at 1 rad/s (as the speed-accuracy benchmark
+asks), refreshed every 50 ms for 2 s, then ``ki * integral / feedforward`` of the wheel driven
+hardest: the share of the power the feedforward gets wrong on that floor, which the integral has to
+learn after every start.
 """
 
 from __future__ import annotations
@@ -83,12 +89,41 @@ def run(
     return Result(wheel - 1.0, peak / settled - 1.0, peak / speed - 1.0, rise)
 
 
+def feedforward_error(robot: str, surface: str, course: float | None, seed: int = 1) -> float:
+    """The integral's share of the feedforward power (``ki * integral / ff``) of the wheel driven
+    hardest after 2 s at 0.3 m/s on ``course`` (None: turning at 1 rad/s in place)."""
+    dev = SimDevice(robot, surface=surface, seed=seed)
+    dev.command("MODE,2", CYCLE)
+    if course is None:
+        line = "VEL,0,0,57,200"
+    else:
+        c, s = math.cos(math.radians(course)), math.sin(math.radians(course))
+        line = f"VEL,{round(30 * c)},{round(30 * s)},0,200"
+    for _ in range(40):
+        dev.command(line, 0.05)
+    ex = dev.controller.executor
+    loop = ex.speedctl
+    target = ex._target
+    k = max(range(len(target)), key=lambda i: abs(target[i]))
+    return float(loop.ki * loop._integ[k] / ex._ff[k])
+
+
 def main() -> None:
-    """Print one markdown table: every robot, floor, course, ramp and step."""
+    """Print one markdown table: every robot, floor, course, ramp and step (``--feedforward``: the
+    feedforward's error at a steady speed)."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--robots", default="mecanum4")
     ap.add_argument("--surfaces", default="carpet,wood")
+    ap.add_argument("--feedforward", action="store_true", help="the integral's share at a steady speed")
     args = ap.parse_args()
+    if args.feedforward:
+        print("| robot | floor | 0 deg | 45 deg | 90 deg | rotation |")
+        print("|---|---|---|---|---|---|")
+        for robot in args.robots.split(","):
+            for surface in args.surfaces.split(","):
+                shares = [feedforward_error(robot, surface, c) for c in (0.0, 45.0, 90.0, None)]
+                print(f"| {robot} | {surface} | " + " | ".join(f"{100 * x:+.0f} %" for x in shares) + " |")
+        return
     print(
         "| robot | floor | course (deg) | input | wheel overshoot | body over settled | body over asked | rise (s) |"
     )
