@@ -141,6 +141,7 @@ class Executor:
             for c in cfg["encoder_cpr"]
         ]
         self._feedback = False
+        self._learns = False  # the closed loop's steady periods teach the floor's gains (_drive)
         self._drag = False
         period_us = int(cfg["control_period_ms"]) * 1000
         self._drag_period = period_us
@@ -182,6 +183,8 @@ class Executor:
         """Change the mode bits; switching the closed loop re-plans the current motion's powers."""
         old = self.mode
         self.mode = mode
+        if old != mode:
+            self.speedctl.floor.reset()
         if mode & MODE_SIMULATION:
             self.progress.cancel()  # no power applied: nothing to measure
         if self.landing.active and not self._lands():
@@ -592,7 +595,10 @@ class Executor:
             and not self._closed_loop()
         ):
             model.floor = model.cal.start_power()  # open loop: a wheel below it stalls (WARN 12)
+        closed = self._closed_loop()
+        model.learned = self.speedctl.floor if closed else None
         flags = model.compute(vx, vy, w, rotate, self.powers)
+        model.learned = None
         self._time_scale = model.scale * k
         self._warn_once(flags)
         t = self._twist
@@ -615,6 +621,19 @@ class Executor:
                         self._target[i] += over[i]
             if self._acc_on and (self.kind == codes.VEL or self.landing.active):
                 self._accel(vx, vy, w, k)
+        # the floor's gains learn on a VEL held at a speed the power curves give unscaled; a planned
+        # acceleration on gains already learned holds the integral (it would store only the lag
+        # of the ramp's steps and the speed's measurement, and carry the wheels past the speed)
+        a = self._acc
+        learned = self.speedctl.floor
+        self._learns = closed and self.kind == codes.VEL and not self._braking and not flags
+        self.speedctl.planned = (
+            closed
+            and self._acc_on
+            and (a[0] != 0.0 or a[1] != 0.0 or a[2] != 0.0)
+            and (self.kind == codes.VEL or self.landing.active)
+            and learned.knows(vx != 0.0 or vy != 0.0, w != 0.0)
+        )
         if self.mode & MODE_CLOSED_LOOP and not self._feedback:
             self._start_feedback()
         elif self._feedback:
@@ -727,6 +746,9 @@ class Executor:
             self._land_us += dt_us
             self._deadline -= dt_us
         if self.speedctl.update(dt_us, self._counts, self._target, self._ff, self.powers):
+            if self._learns and self.speedctl.steady:
+                m = self.model
+                self.speedctl.learn(m.part_tr, m.part_rot, self._ff, self._period * 1e-6)
             if self.landing.active:
                 self._land_step()
             self.apply()
