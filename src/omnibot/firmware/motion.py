@@ -63,6 +63,7 @@ BRAKED = 1 << 20  # applied-power marker of a braked motor: any power written ne
 LOOP_GUARD = 16  # motions started in one step at most (zero-length moves), keeps a poll short
 CHAIN_GUARD = 64  # DELTA repetitions looked ahead at most when the landing plans its ramp
 REACHED = 32  # warning flag: a MOVE asked beyond the calibrated reach (power.py and safety.py own 1..16)
+RAMP_MIN = 0.05  # m/s^2, rad/s^2: a planned acceleration below it does not ramp the wheels
 BRAKE_MAX_US = 3000000  # braking to rest on the speed loop ends by then, whatever the encoders say
 REST_WINDOW_US = 50000  # the wheels stand still when none turned more than its rest counts in this long
 REST_RAD = 0.2  # rad/s: a wheel turning slower than this (and at least 1 count a window) is at rest
@@ -624,15 +625,13 @@ class Executor:
         # the floor's gains learn on a VEL held at a speed the power curves give unscaled; a planned
         # acceleration on gains already learned holds the integral (it would store only the lag
         # of the ramp's steps and the speed's measurement, and carry the wheels past the speed)
-        a = self._acc
-        learned = self.speedctl.floor
         self._learns = closed and self.kind == codes.VEL and not self._braking and not flags
         self.speedctl.planned = (
             closed
             and self._acc_on
-            and (a[0] != 0.0 or a[1] != 0.0 or a[2] != 0.0)
             and (self.kind == codes.VEL or self.landing.active)
-            and learned.knows(vx != 0.0 or vy != 0.0, w != 0.0)
+            and self._ramping(vx, vy, w, k)
+            and self.speedctl.floor.knows(vx != 0.0 or vy != 0.0, w != 0.0)
         )
         if self.mode & MODE_CLOSED_LOOP and not self._feedback:
             self._start_feedback()
@@ -664,6 +663,18 @@ class Executor:
             self._ff[i] += (
                 b[0] * ax + b[1] * ay + b[2] * aw + self._wheel_ff[i] * (j[0] * rx + j[1] * ry + j[2] * aw)
             )
+
+    def _ramping(self, vx: float, vy: float, w: float, k: float) -> bool:
+        """The planned acceleration changes the wheels' speeds: the body-frame twist's rate, as
+        :meth:`_accel` takes it, above :data:`RAMP_MIN` (a steady turning body's acceleration only
+        turns its axes)."""
+        a = self._acc
+        rx = a[0] * k
+        ry = a[1] * k
+        if self._acc_turning:
+            rx += w * vy
+            ry -= w * vx
+        return rx * rx + ry * ry > RAMP_MIN * RAMP_MIN or abs(a[2] * k) > RAMP_MIN
 
     def _closed_loop(self) -> bool:
         """The wheel-speed loop drives the motion (MODE bit 1 and encoders on every wheel)."""

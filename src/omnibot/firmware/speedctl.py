@@ -30,11 +30,13 @@ class FloorGain:
     speed on the floor it was made on; the loop holds the *wheels'* speed, and on another floor (or
     where the rollers creep) the power that takes differs by -12 % to +35 % with the course
     (BENCHMARKS.md). The integral learns that share after every start; here it is kept: whenever the
-    wheels' targets have stood still :data:`STEADY_TIME`, the integral's share is split by least
-    squares into a translation part (``ki integ_i ~ a T_i + b R_i``, T_i and R_i each wheel's
-    translation and rotation feedforward) and folded, at :data:`FOLD_TIME`, into a translation gain
-    per folded course (knots every :data:`COURSE_STEP` degrees, interpolated) and one rotation gain,
-    the integral giving up what the feedforward takes over (the output does not move). The gains
+    wheels' targets have stood still :data:`STEADY_TIME` on a translation or a rotation in place,
+    the integral's share is fitted by least squares (``ki integ_i ~ a T_i``, T_i each wheel's
+    translation feedforward; likewise the rotation's) and folded, at :data:`FOLD_TIME`, into a
+    translation gain per folded course (knots every :data:`COURSE_STEP` degrees, interpolated) or
+    the rotation gain, the integral giving up what the feedforward takes over (the output does not
+    move). A turning translation applies both and learns neither: its slow wheels' share is their
+    dead band, which a split between the two parts would take for the floor. The gains
     persist from one drive to the next (:meth:`reset` on CAL, MODE and at boot), so every start
     after the first on a course of this floor has a feedforward that knows the floor.
     """
@@ -77,24 +79,20 @@ class FloorGain:
         each wheel's translation and rotation feedforward ``tr``, ``rot`` (counts, at the present
         gains, moved to the new ones); ``out`` gets each wheel's feedforward change (counts), which
         the integral gives up."""
-        stt = srr = s_tr = sct = scr = 0.0
+        stt = srr = sct = scr = 0.0
         for i in range(len(share)):
             t = tr[i]
             r = rot[i]
             stt += t * t
             srr += r * r
-            s_tr += t * r
             sct += share[i] * t
             scr += share[i] * r
-        a = b = 0.0
-        det = stt * srr - s_tr * s_tr
-        if srr == 0.0 and stt > 0.0:
-            a = sct / stt
-        elif stt == 0.0 and srr > 0.0:
-            b = scr / srr
-        elif det > 1e-6 * stt * srr:
-            a = (sct * srr - scr * s_tr) / det
-            b = (scr * stt - sct * s_tr) / det
+        for i in range(len(share)):
+            out[i] = 0.0
+        if (stt > 0.0) == (srr > 0.0):
+            return  # a turning translation: the split is the slow wheels' dead band, not the floor
+        a = sct / stt if stt > 0.0 else 0.0
+        b = scr / srr if srr > 0.0 else 0.0
         f = min(dt / FOLD_TIME, 1.0)
         ga = gb = 1.0
         if stt > 0.0:
