@@ -44,9 +44,9 @@ from dataclasses import dataclass
 from types import SimpleNamespace
 from typing import Any
 
+from omnibot.cliargs import use_calibration
 from omnibot.client.client import RobotClient
 from omnibot.client.session import open_robot
-from omnibot.cliargs import use_calibration
 from omnibot.estimation.slip import SlipModel
 from omnibot.logs import schemas
 from omnibot.logs.recorder import header
@@ -206,6 +206,8 @@ def measure(
             slip = slip or cal_slip
         sim = find_simulator(client.link)
         assert sim is not None
+        samples: list[tuple[float, Twist]] = []
+        start = [0.0]
         for drive in range(1 + again):
             if drive:  # stopped and at rest before the drive judged
                 client.stop()
@@ -214,9 +216,9 @@ def measure(
             runtime = Runtime(client, period=period, wheel_loop=wheel_loop, slip=slip)
             runtime.add_source(src)
             runtime.pacer = LinkPacer(client, period)
-            samples: list[tuple[float, Twist]] = []
-            t0 = client.clock.now()
-            runtime.add_sink(lambda cycle: samples.append((cycle.t - t0, sim.twist)))
+            samples.clear()
+            start[0] = client.clock.now()
+            runtime.add_sink(lambda cycle: samples.append((cycle.t - start[0], sim.twist)))
             runtime.run(duration=DRIVE)
             runtime.close()
     finally:

@@ -74,7 +74,9 @@ class FloorGain:
                 return False
         return not rotating or self.rot_known >= KNOWN_TIME
 
-    def fold(self, share: list[float], tr: list[float], rot: list[float], dt: float, out: list[float]) -> None:
+    def fold(
+        self, share: list[float], tr: list[float], rot: list[float], dt: float, out: list[float]
+    ) -> None:
         """Fold ``share`` (each wheel's ``ki integ``, PWM counts) into the gains over ``dt`` s, given
         each wheel's translation and rotation feedforward ``tr``, ``rot`` (counts, at the present
         gains, moved to the new ones); ``out`` gets each wheel's feedforward change (counts), which
