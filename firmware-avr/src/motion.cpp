@@ -8,6 +8,10 @@
 #include "safety.h"
 
 #define BRAKED 0x7FFF  // applied[i] of a braked motor: the next power is written whatever it is
+#define REACHED 32     // warning flag: a MOVE asked beyond the calibrated reach (power.h, safety.h own 1..16)
+#define WATCH_OFF 0    // the progress check's states (progress.py)
+#define WATCH_MOVING 1
+#define WATCH_COASTING 2
 
 Executor ex;
 
@@ -55,6 +59,9 @@ void Executor::apply() {
 void Executor::set_mode(uint8_t m) {
     uint8_t old = mode;
     mode = m;
+#if FEATURE_PROGRESS
+    if (m & P_MODE_SIMULATION) watch = WATCH_OFF;  // no power applied: nothing to measure
+#endif
     if ((old ^ m) & P_MODE_CLOSED_LOOP) {
         if (m & P_MODE_CLOSED_LOOP) {
             start_feedback();
@@ -74,6 +81,9 @@ bool Executor::stop() {
     feedback = dragging = false;
     coast_us = 0;
     speed = 0;
+#if FEATURE_PROGRESS
+    watch = WATCH_OFF;
+#endif
     for (uint8_t i = 0; i < MOTORS; i++) powers[i] = 0;
     apply();
     return was;
@@ -90,7 +100,28 @@ void Executor::reset_move() {
     for (uint8_t i = 0; i < 4; i++) remembered[i] = 0;
 }
 
+#if FEATURE_VEL_ACCEL
+void Executor::vel(int16_t vx, int16_t vy, int16_t w, int16_t t_ms, int16_t a, const int16_t *body) {
+    acc_turning = body != 0;
+    if (body) {
+        acc[0] = body[0] * 0.01f;
+        acc[1] = body[1] * 0.01f;
+        acc[2] = body[2] * (float)(M_PI / 180);
+        acc_on = true;
+    } else {
+        float v = sqrtf((float)vx * vx + (float)vy * vy);
+        acc_on = a != 0 && v > 0;
+        float g = acc_on ? a * 0.01f / v : 0.0f;  // 1/s
+        acc[0] = g * vx;
+        acc[1] = g * vy;
+        acc[2] = 0;
+    }
+#else
 void Executor::vel(int16_t vx, int16_t vy, int16_t w, int16_t t_ms) {
+#endif
+#if FEATURE_PROGRESS
+    watch = WATCH_OFF;
+#endif
     queue.clear();
     if (kind != K_VEL) warned = 0;
     kind = K_VEL;
@@ -132,6 +163,9 @@ void Executor::step(int32_t dt_us) {
             finish();
         }
     }
+#if FEATURE_PROGRESS
+    if (watch == WATCH_COASTING) watch_step(dt_us);
+#endif
     if (kind == NONE) return;
     if (feedback) {
         feedback_step(dt_us);
@@ -142,14 +176,62 @@ void Executor::step(int32_t dt_us) {
 }
 
 void Executor::finish() {
+#if FEATURE_PROGRESS
+    bool watched = watch == WATCH_MOVING;
     stop();
+    if (watched) {  // the MOVE ended the queue: its coast is watched
+        for (uint8_t i = 0; i < MOTORS; i++) watch_last[i] = encoder_count(i);
+        watch_coast_us = 0;
+        watch_due = (int32_t)CONTROL_PERIOD_MS * 1000;
+        watch = WATCH_COASTING;
+    }
+#else
+    stop();
+#endif
     on_idle();
 }
+
+#if FEATURE_PROGRESS
+// Watch a MOVE of `distance_m` along the body-frame unit vector (ux, uy) from the counts now.
+void Executor::watch_start_move(float ux, float uy, float distance_m) {
+    for (uint8_t i = 0; i < MOTORS; i++) {
+        share[i] = pgm_read_float(&TRAVEL[0][i]) * ux + pgm_read_float(&TRAVEL[1][i]) * uy;
+        watch_start[i] = encoder_count(i);
+    }
+    watch_distance = distance_m;
+    watch = WATCH_MOVING;
+}
+
+// One step of the coast: every control period, once no count moved for one (the wheels stand
+// still) or the coast lasted PROGRESS_COAST_MAX_MS, WARN 17 if the travel fell short beyond the
+// tolerance (progress.py `step`).
+void Executor::watch_step(int32_t dt_us) {
+    watch_due -= dt_us;
+    if (watch_due > 0) return;
+    int32_t elapsed = (int32_t)CONTROL_PERIOD_MS * 1000 - watch_due;  // a slow pass's checks are further apart
+    watch_due = (int32_t)CONTROL_PERIOD_MS * 1000;
+    watch_coast_us += elapsed;
+    bool still = true;
+    for (uint8_t i = 0; i < MOTORS; i++) {
+        int32_t c = encoder_count(i);
+        if (c != watch_last[i]) still = false;
+        watch_last[i] = c;
+    }
+    if (!still && watch_coast_us < PROGRESS_COAST_MAX_MS * 1000L) return;
+    watch = WATCH_OFF;
+    float s = 0;
+    for (uint8_t i = 0; i < MOTORS; i++) s += share[i] * (watch_last[i] - watch_start[i]);
+    if (s < (1.0f - PROGRESS_TOLERANCE) * watch_distance) on_warn(P_W_SHORT);
+}
+#endif
 
 void Executor::start_next(int64_t carry) {
     const Slot &s = queue.pop();
     kind = s.kind;
     warned = 0;
+#if FEATURE_PROGRESS
+    watch = WATCH_OFF;  // a MOVE starts its own watch (move)
+#endif
     if (kind == K_MOVE) {
         for (uint8_t i = 0; i < 4; i++) remembered[i] = s.p[i];
         move(carry);
@@ -208,15 +290,32 @@ void Executor::move(int64_t carry) {
         drive(0, 0, 0, false);
         return;
     }
+#if FEATURE_REACH
+    int16_t v = abs(V);
+    if (!(HAS_ENCODERS && (mode & P_MODE_CLOSED_LOOP))) {
+        int16_t reach = cal_reach(fold_course(D));
+        if (reach > 0 && reach < v) {  // the calibration saw faster MOVEs fall short: the distance first
+            v = reach;
+            warn_once(REACHED);
+        }
+    }
+#else
+#define v abs(V)  // the UNO's image as it was before the reach (an int16_t here costs it 6 B less, not more)
+#endif
     float gain = 1.0f;
     if (!infinite) {
-        gain += cal_coast(abs(V)) * abs(V) / abs(L);
+        gain += cal_coast(v) * v / abs(L);
         if (gain < 0) gain = 0;
     }
-    float s = (L > 0) == (V > 0) ? abs(V) : -abs(V);
+    float s = (L > 0) == (V > 0) ? v : -v;
     float a = D * (float)(M_PI / 180);
     drive(s * 0.01f * cosf(a), s * 0.01f * sinf(a), s * C * 0.001f, false, gain);
-    if (!infinite) remaining = duration(abs(L), abs(V), time_scale) + carry;
+    if (!infinite) remaining = duration(abs(L), v, time_scale) + carry;
+#if FEATURE_PROGRESS
+    if (!infinite && kind == K_MOVE && !(mode & P_MODE_SIMULATION))  // not when the guard stopped it
+        watch_start_move(s > 0 ? cosf(a) : -cosf(a), s > 0 ? sinf(a) : -sinf(a), abs(L) * 0.01f);
+#endif
+#undef v
 }
 
 void Executor::rotate(int16_t A, int16_t F, int64_t carry) {
@@ -270,6 +369,9 @@ void Executor::drive(float vx, float vy, float w, bool rotate, float gain) {
     rot = rotate;
     dead = flags & DEADBAND;
     for (uint8_t i = 0; i < MOTORS; i++) ff[i] = dead ? 0 : model.raw[i];
+#if FEATURE_VEL_ACCEL
+    if (acc_on && kind == K_VEL && !dead) accel(vx, vy, w, f);
+#endif
     if (mode & P_MODE_CLOSED_LOOP) update_targets();  // only the speed loop needs them
     if ((mode & P_MODE_CLOSED_LOOP) && !feedback) {
         start_feedback();
@@ -308,6 +410,9 @@ void Executor::warn_once(uint8_t flags) {
     if (fresh & (DEADBAND | WEAK)) on_warn(P_W_POWER_TOO_LOW);
     if (fresh & LIMITED) on_warn(P_W_SONAR_LIMIT);
     if (fresh & UNCOVERED) on_warn(P_W_UNCOVERED);
+#if FEATURE_REACH
+    if (fresh & REACHED) on_warn(P_W_REACH);
+#endif
 }
 
 void Executor::start_drag(uint8_t flags) {
@@ -343,6 +448,24 @@ void Executor::start_feedback() {
     acc_us = 0;
     feedback = HAS_ENCODERS && (mode & P_MODE_CLOSED_LOOP) && kind != NONE && kind != K_POWER;
 }
+
+#if FEATURE_VEL_ACCEL
+// The planned acceleration's power added to each wheel's feedforward (the speed loop's), for the
+// twist (vx, vy, w) as driven, k the guard's scale of it and of its acceleration (motion.py _accel):
+// the body's share of force and torque (ACCEL_BODY_FF) and the wheel's own inertia, through the
+// rate of the body-frame twist (ax + w vy, ay - w vx, alpha) with version 4's body acceleration.
+void Executor::accel(float vx, float vy, float w, float k) {
+    float a[3] = {acc[0] * k, acc[1] * k, acc[2] * k};
+    float r[3] = {a[0], a[1], a[2]};
+    if (acc_turning) {
+        r[0] += w * vy;
+        r[1] -= w * vx;
+    }
+    for (uint8_t i = 0; i < MOTORS; i++)
+        for (uint8_t j = 0; j < 3; j++)
+            ff[i] += pgm_read_float(&ACCEL_BODY_FF[i][j]) * a[j] + pgm_read_float(&ACCEL_WHEEL_FF[i][j]) * r[j];
+}
+#endif
 
 int16_t Executor::limit(float p) {
     if (p >= PWM_MAX) return PWM_MAX;

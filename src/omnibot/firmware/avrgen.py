@@ -449,6 +449,8 @@ def header_source(robot_name: str, board_name: str = "uno") -> str:
             )
     w(f"#define BATTERY_ADC {pins['battery_adc']}")
     _battery(w, robot)
+    if b.name != "uno":
+        _features(w, cfg)
     return "\n".join(out) + "\n"
 
 
@@ -487,6 +489,49 @@ def _battery(w: Any, robot: RobotDescription) -> None:
         w(f"#define BATTERY_{name} {units(volts)}U  // {volts:.3f} V")
     pwm_max = max(w_.motor.pwm_max for w_ in robot.wheels)
     w(f"#define BATTERY_CAP {pwm_max * round(100 * b.limit_power) // 100}  // largest power below limit")
+
+
+FEATURE_TEXTS = (codes.W_SHORT, codes.W_REACH)
+"""The codes of :data:`NOT_SENT` that the Mega sends: their texts are in its :func:`_features`."""
+
+
+def _features(w: Any, cfg: dict[str, Any]) -> None:
+    """What the Mega runs beyond the UNO (docs/uno.md, "The Arduino Mega 2560"): the compile-time
+    switches of firmware-avr/src/ (each ``FEATURE_*`` is 0 on the UNO, board.h) and their constants,
+    from the same config as the MicroPython firmware's."""
+    n = int(cfg["motors"])
+
+    def floats(rows: list[list[float]]) -> str:
+        return ", ".join("{" + ", ".join(f"{float(v)!r}f" for v in row) + "}" for row in rows)
+
+    w("")
+    w("/* ---- the Mega's features beyond the UNO's flash (docs/uno.md) ---- */")
+    w("/* protocol versions 3 and 4: VEL's planned acceleration A, the body's AX, AY, AW (motion.py) */")
+    w("#define FEATURE_VEL_ACCEL 1")
+    w(f"#define P_VERSION_MAX {codes.VERSIONS[-1]}")
+    w(f"#define P_VEL_PARAMS_MAX {codes.VEL_PARAMS_MAX}")
+    w("/* PWM counts per m/s^2 (x, y) and rad/s^2 of the body's acceleration (body_ff); per unit of the */")
+    w("/* body-frame twist's rate through the wheel's own inertia (wheel_ff times the wheel's row of J) */")
+    w(f"static const float ACCEL_BODY_FF[MOTORS][3] PROGMEM = {{{floats(cfg['body_ff'])}}};")
+    wheel = [[float(cfg["wheel_ff"][i]) * float(j) for j in cfg["J"][i]] for i in range(n)]
+    w(f"static const float ACCEL_WHEEL_FF[MOTORS][3] PROGMEM = {{{floats(wheel)}}};")
+    tolerance = float(cfg.get("progress_tolerance", 0.0))
+    w("/* the MOVE progress check (progress.py, WARN 17): body travel (m) along x and y per count */")
+    w(f"#define FEATURE_PROGRESS {1 if tolerance > 0 and all(int(c) for c in cfg['encoder_cpr']) else 0}")
+    w(f"#define PROGRESS_TOLERANCE {tolerance!r}f")
+    w("#define PROGRESS_COAST_MAX_MS 3000")
+    w(f"static const float TRAVEL[2][MOTORS] PROGMEM = {{{floats(cfg['travel'])}}};")
+    w("/* the calibrated reach (CAL table 8, WARN 18): knots {folded course deg, cm/s}; 0: none */")
+    w("#define FEATURE_REACH 1")
+    count, rows = _table_rows(cfg["reach"], 1, 1)
+    w(f"#define DEFAULT_REACH_N {count}")
+    w(f"static const Knot DEFAULT_REACH[DEFAULT_REACH_N] PROGMEM = {{{', '.join(rows[:count])}}};")
+    for code in FEATURE_TEXTS:
+        w(f"static const char TEXT_{code}[] PROGMEM = {_c_string(codes.TEXTS[code])};")
+    w(f"static const CodeText FEATURE_CODE_TEXTS[{len(FEATURE_TEXTS)}] PROGMEM = {{")
+    w("    " + ", ".join(f"{{{c}, TEXT_{c}}}" for c in FEATURE_TEXTS))
+    w("};")
+    w(f"#define FEATURE_CODE_TEXT_COUNT {len(FEATURE_TEXTS)}")
 
 
 def board_source(robot_name: str, board_name: str = "uno") -> str:
