@@ -169,3 +169,31 @@ def test_a_client_keeps_to_the_window_the_uno_announces(board: str) -> None:
             client.use_text()
     finally:
         emu.close()
+
+
+@pytest.mark.parametrize("board", list(WINDOWS))
+def test_a_duplicate_status_gets_its_kept_reply_on_the_mega(board: str) -> None:
+    """The Mega keeps replies of up to 32 frame bytes, a STATUS's included, so a duplicate STATUS is
+    answered with the state of then (moving, before a STOP), as the MicroPython firmware answers it;
+    the UNO keeps 16 bytes (OK, ERROR, HELLO) and runs that STATUS again: the state of now (idle)."""
+    emu, port = start("omni4", board=board)
+    try:
+        assert port.ask("MODE,4") == ["OK"]
+        os.write(port.fd, encode_message(codes.HELLO, 1, [VERSION], sync=True))
+        os.write(port.fd, encode_message(MOVE, 2, [30000, 40, 0, 0]))
+        os.write(port.fd, encode_message(codes.STATUS, 3))  # moving: its reply is over 16 bytes
+        os.write(port.fd, encode_message(codes.STOP, 4))
+        os.write(port.fd, encode_message(codes.STATUS, 3))  # the host did not hear the first reply
+        got = b""
+        deadline = time.monotonic() + 3.0
+        replies: list[tuple[object, ...]] = []
+        while time.monotonic() < deadline and len(replies) < 2:
+            if select.select([port.fd], [], [], 0.05)[0]:
+                got += os.read(port.fd, 4096)
+            replies = [f for f in decode_all(got) if isinstance(f, tuple) and f[0] == codes.STATUS_REPLY]
+    finally:
+        port.close()
+        emu.close()
+    states = [f[3][0] for f in replies]  # type: ignore[index]
+    again = codes.STATE_MOVING if board == "mega" else codes.STATE_IDLE
+    assert states == [codes.STATE_MOVING, again], replies
