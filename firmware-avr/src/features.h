@@ -15,5 +15,11 @@
 #ifndef FEATURE_REACH  // the calibrated reach, CAL table 8 and WARN 18 (motion.py _move)
 #define FEATURE_REACH 0
 #endif
+#ifndef FEATURE_BRAKE  // a VEL's watchdog on the closed loop brakes to rest (motion.py brake_to_rest)
+#define FEATURE_BRAKE 0
+#endif
+#if FEATURE_BRAKE && !FEATURE_VEL_ACCEL
+#error "braking to rest feeds its slew forward as a planned acceleration: it needs FEATURE_VEL_ACCEL"
+#endif
 // the most parameters one command may carry: VEL's 7 with version 4, else P_PARAMS_MAX
 #define CMD_PARAMS_MAX (P_VEL_PARAMS_MAX > P_PARAMS_MAX ? P_VEL_PARAMS_MAX : P_PARAMS_MAX)

@@ -78,6 +78,9 @@ bool Executor::stop() {
     queue.clear();
     kind = NONE;
     watchdog = false;
+#if FEATURE_BRAKE
+    braking = slewing = false;
+#endif
     feedback = dragging = false;
     coast_us = 0;
     speed = 0;
@@ -122,6 +125,9 @@ void Executor::vel(int16_t vx, int16_t vy, int16_t w, int16_t t_ms) {
 #if FEATURE_PROGRESS
     watch = WATCH_OFF;
 #endif
+#if FEATURE_BRAKE
+    braking = slewing = false;
+#endif
     queue.clear();
     if (kind != K_VEL) warned = 0;
     kind = K_VEL;
@@ -144,10 +150,24 @@ void Executor::step(int32_t dt_us) {
         } else if (kind == K_VEL) {
             if (queue.count) {
                 watchdog = false;
+#if FEATURE_BRAKE
+                braking = false;
+#endif
                 start_next(0);
+#if FEATURE_BRAKE
+            } else if (braking) {
+                if (!slewing && at_rest(dt_us)) finish();
+            } else if (watchdog) {
+                watchdog_us -= dt_us;
+                if (watchdog_us <= 0) {
+                    if (feedback) brake_to_rest();
+                    else finish();
+                }
+#else
             } else if (watchdog) {
                 watchdog_us -= dt_us;
                 if (watchdog_us <= 0) finish();
+#endif
             }
             break;
         } else if (infinite) {
@@ -167,6 +187,13 @@ void Executor::step(int32_t dt_us) {
     if (watch == WATCH_COASTING) watch_step(dt_us);
 #endif
     if (kind == NONE) return;
+#if FEATURE_BRAKE
+    if (slewing && kind == K_VEL) {
+        slew_due -= dt_us;
+        if (slew_due <= 0) slew((int32_t)CONTROL_PERIOD_MS * 1000 - slew_due);
+        if (kind == NONE) return;
+    }
+#endif
     if (feedback) {
         feedback_step(dt_us);
     } else if (dragging) {
@@ -190,6 +217,81 @@ void Executor::finish() {
 #endif
     on_idle();
 }
+
+#if FEATURE_BRAKE
+// Brings the robot to rest on the speed loop, then ends the VEL (IDLE) (motion.py brake_to_rest):
+// with acceleration limits the twist it drove is slewed down to zero at them; without, the wheels
+// are held at rest at once, for at least the body's stopping time from the wheels' speed at the stop
+// deceleration. Either way it ends once every wheel stands still (none turned more than its rest
+// counts in REST_WINDOW_US), or BRAKE_MAX_US after the twist reached zero.
+void Executor::brake_to_rest() {
+    braking = true;
+    watchdog = false;
+    brake_us = 0;
+    rest_due = REST_WINDOW_US;
+    for (uint8_t i = 0; i < MOTORS; i++) rest_ref[i] = encoder_count(i);
+    for (uint8_t i = 0; i < 3; i++) ref[i] = nominal[i];  // the twist asked (the guard scales the driven)
+    acc_on = false;
+    if (BRAKE_ACCEL_MAX > 0) {
+        brake_min_us = 0;
+        slewing = true;
+        slew((int32_t)CONTROL_PERIOD_MS * 1000);
+    } else {
+        float fastest = 0;  // the wheels' rim speed now: how long the body may still need to stop
+        for (uint8_t i = 0; i < MOTORS; i++) {
+            float u = fabsf(wheel_speed[i]) * pgm_read_float(&WHEEL_RADIUS_M[i]);
+            if (u > fastest) fastest = u;
+        }
+        brake_min_us = GUARD_DECEL > 0 ? (int32_t)(fastest / (GUARD_DECEL * 0.01f) * 1e6f) : 0;
+        drive(0, 0, 0, false);
+    }
+}
+
+// Moves the slewed twist towards rest by at most the acceleration limits over dt_us (the translation
+// as a vector) and drives it, its rate fed forward as a planned acceleration (motion.py _slew).
+void Executor::slew(int32_t dt_us) {
+    float dt = dt_us * 1e-6f;
+    float dx = -ref[0], dy = -ref[1];
+    float dv = sqrtf(dx * dx + dy * dy);
+    float most = BRAKE_ACCEL_MAX * dt;
+    if (dv > most) {
+        dx *= most / dv;
+        dy *= most / dv;
+    }
+    float dw = -ref[2];
+    most = BRAKE_ALPHA_MAX > 0 ? BRAKE_ALPHA_MAX * dt : fabsf(dw);
+    dw = dw > most ? most : (dw < -most ? -most : dw);
+    ref[0] += dx;
+    ref[1] += dy;
+    ref[2] += dw;
+    slewing = ref[0] != 0 || ref[1] != 0 || ref[2] != 0;
+    slew_due = (int32_t)CONTROL_PERIOD_MS * 1000;
+    // the body's acceleration along its axes: the rate of the body-frame twist less the turning axes'
+    acc_on = slewing;
+    acc_turning = true;
+    acc[0] = slewing ? dx / dt - ref[2] * ref[1] : 0;
+    acc[1] = slewing ? dy / dt + ref[2] * ref[0] : 0;
+    acc[2] = slewing ? dw / dt : 0;
+    if (slewing && SPEED_BAND_INV > 0) rising = (1 << MOTORS) - 1;  // every wheel as after a step
+    drive(ref[0], ref[1], ref[2], ref[0] == 0 && ref[1] == 0);
+}
+
+// While braking: true once the wheels stand still (see brake_to_rest).
+bool Executor::at_rest(int32_t dt_us) {
+    brake_us += dt_us;
+    if (brake_us >= BRAKE_MAX_US) return true;
+    rest_due -= dt_us;
+    if (rest_due > 0) return false;
+    rest_due = REST_WINDOW_US;
+    bool still = true;
+    for (uint8_t i = 0; i < MOTORS; i++) {
+        int32_t c = encoder_count(i);
+        if (labs(c - rest_ref[i]) > pgm_read_byte(&REST_COUNTS[i])) still = false;
+        rest_ref[i] = c;
+    }
+    return still && brake_us >= brake_min_us;
+}
+#endif
 
 #if FEATURE_PROGRESS
 // Watch a MOVE of `distance_m` along the body-frame unit vector (ux, uy) from the counts now.
@@ -485,6 +587,9 @@ void Executor::feedback_step(int32_t dt_us) {
         int32_t c = encoder_count(i);
         float speed = (c - last_counts[i]) * (6.2831853f / pgm_read_word(&ENCODER_CPR[i])) / dt;
         last_counts[i] = c;
+#if FEATURE_BRAKE
+        wheel_speed[i] = speed;
+#endif
         float err = target[i] - speed;
         correction[i] = SPEED_KP * err + SPEED_KI * integ[i];
         float p = ff[i] + correction[i];

@@ -61,6 +61,13 @@ struct Executor {
     bool acc_on;        // the VEL carries one
     bool acc_turning;   // version 4's: the wheels' part takes the turning axes' term (accel)
 #endif
+#if FEATURE_BRAKE
+    bool braking, slewing;       // a VEL's watchdog ran out on the closed loop: down to rest
+    float ref[3];                // the slewed twist driven now, m/s, m/s, rad/s
+    float wheel_speed[MOTORS];   // rad/s, the speed loop's last measure
+    int32_t slew_due, brake_us, brake_min_us, rest_due;
+    int32_t rest_ref[MOTORS];
+#endif
 #if FEATURE_PROGRESS
     // the MOVE progress check (progress.py): off, a MOVE running, its coast watched
     uint8_t watch;
@@ -106,6 +113,11 @@ struct Executor {
     int16_t limit(float p);
 #if FEATURE_VEL_ACCEL
     void accel(float vx, float vy, float w, float k);
+#endif
+#if FEATURE_BRAKE
+    void brake_to_rest();
+    void slew(int32_t dt_us);
+    bool at_rest(int32_t dt_us);
 #endif
 #if FEATURE_PROGRESS
     void watch_start_move(float ux, float uy, float distance_m);

@@ -291,3 +291,30 @@ def test_each_encoder_counts_its_own_wheel(robot: str, board: str) -> None:
     assert [c > 0 for c in counts] == [True, False, True, False], counts
     magnitudes = [abs(c) for c in counts]
     assert 0 < magnitudes[0] < magnitudes[1] < magnitudes[2] < magnitudes[3], counts
+
+
+@pytest.mark.parametrize("board", ["uno", "mega"])
+def test_a_vels_watchdog_on_the_closed_loop_brakes_to_rest_on_the_mega(board: str) -> None:
+    """A VEL not refreshed on the closed loop (MODE 2): the UNO cuts the motors when its watchdog
+    runs out (100 ms); the Mega, as the MicroPython firmware (motion.py brake_to_rest), slews the
+    twist down at omni4's acceleration limit (0.4 m/s at 2 m/s^2: 0.2 s, the powers falling step by
+    step) and ends the VEL (IDLE) once the wheels stand still. The emulated wheels turn with the duty."""
+    emu, port = start("omni4", report=True, board=board, encoder_cps=2600)
+    try:
+        assert port.ask("MODE,2") == ["OK"]
+        port.write("VEL,40,0,0,100\n")
+        t0, duties = emu.duties()
+        driven: list[int] = []
+        while any(duties):
+            t, duties = emu.duties()
+            driven.append(abs(duties[1]))
+        assert port.lines(2) == ["OK", "IDLE"]
+    finally:
+        port.close()
+        emu.close()
+    seconds = (t - t0) / 1e6  # emulated
+    if board == "uno":
+        assert 0.09 <= seconds <= 0.12, seconds
+    else:
+        assert 0.28 <= seconds <= 1.0, seconds
+        assert len(set(driven)) >= 10, driven  # stepped down, not cut

@@ -348,6 +348,14 @@ static const float ACCEL_WHEEL_FF[MOTORS][3] PROGMEM = {{1.2108307692307692f, -1
 #define PROGRESS_TOLERANCE 0.1f
 #define PROGRESS_COAST_MAX_MS 3000
 static const float TRAVEL[2][MOTORS] PROGMEM = {{0.000116024729f, 0.000116024729f, 0.000116024729f, 0.000116024729f}, {-0.000116024729f, 0.000116024729f, -0.000116024729f, 0.000116024729f}};
+/* a VEL's watchdog on the closed loop brakes to rest (motion.py brake_to_rest): the twist slewed */
+/* down at the acceleration limits (m/s^2, rad/s^2), the wheels at rest below REST_COUNTS a window */
+#define FEATURE_BRAKE 1
+#define BRAKE_ACCEL_MAX 2.0f
+#define BRAKE_ALPHA_MAX 19.99999999543341f
+#define BRAKE_MAX_US 3000000L
+#define REST_WINDOW_US 50000L
+static const uint8_t REST_COUNTS[MOTORS] PROGMEM = {1, 1, 1, 1};
 /* the calibrated reach (CAL table 8, WARN 18): knots {folded course deg, cm/s}; 0: none */
 #define FEATURE_REACH 1
 #define DEFAULT_REACH_N 1

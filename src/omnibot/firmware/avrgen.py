@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from omnibot.errors import ConfigError
-from omnibot.firmware import safety
+from omnibot.firmware import motion, safety
 from omnibot.firmware.config import build_config
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription, load_robot
@@ -521,6 +521,18 @@ def _features(w: Any, cfg: dict[str, Any]) -> None:
     w(f"#define PROGRESS_TOLERANCE {tolerance!r}f")
     w("#define PROGRESS_COAST_MAX_MS 3000")
     w(f"static const float TRAVEL[2][MOTORS] PROGMEM = {{{floats(cfg['travel'])}}};")
+    w("/* a VEL's watchdog on the closed loop brakes to rest (motion.py brake_to_rest): the twist slewed */")
+    w("/* down at the acceleration limits (m/s^2, rad/s^2), the wheels at rest below REST_COUNTS a window */")
+    w("#define FEATURE_BRAKE 1")
+    w(f"#define BRAKE_ACCEL_MAX {float(cfg.get('accel_max_cms2', 0.0)) * 0.01!r}f")
+    w(f"#define BRAKE_ALPHA_MAX {math.radians(float(cfg.get('angular_accel_max_dps2', 0.0)))!r}f")
+    w(f"#define BRAKE_MAX_US {motion.BRAKE_MAX_US}L")
+    w(f"#define REST_WINDOW_US {motion.REST_WINDOW_US}L")
+    rest = [
+        max(1, int(int(c) * motion.REST_RAD * motion.REST_WINDOW_US * 1e-6 / (2.0 * math.pi)))
+        for c in cfg["encoder_cpr"]
+    ]
+    w(f"static const uint8_t REST_COUNTS[MOTORS] PROGMEM = {{{', '.join(str(c) for c in rest)}}};")
     w("/* the calibrated reach (CAL table 8, WARN 18): knots {folded course deg, cm/s}; 0: none */")
     w("#define FEATURE_REACH 1")
     count, rows = _table_rows(cfg["reach"], 1, 1)
