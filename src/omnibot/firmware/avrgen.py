@@ -35,8 +35,8 @@ ROBOTS = ("omni4", "mecanum4")  # seed 000's robot and seed 003's
 NOT_SENT = frozenset({codes.W_SHORT, codes.W_REACH, codes.W_NO_GYRO})
 """Codes the UNO never sends, so their texts stay out of its flash: WARN 17's encoder progress check
 (firmware/progress.py) and WARN 18's calibrated reach (CAL table 8, firmware/motion.py) are the
-MicroPython firmware's only (omni4's image has no room for them); WARN 10 is a board's gyro (the UNO
-wiring has none)."""
+MicroPython firmware's and the Mega's only (omni4's UNO image has no room for them: the Mega's header
+adds their texts, :data:`FEATURE_TEXTS`); WARN 10 is a board's gyro (neither wiring has one)."""
 INT16_MAX = 32767
 EEPROM_BYTES = 1024  # ATmega328P (the ATmega2560 has 4 KB; the calibration store takes the first 1 KB)
 BOARDS = ("uno", "mega")
