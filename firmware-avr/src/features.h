@@ -18,6 +18,12 @@
 #ifndef FEATURE_BRAKE  // a VEL's watchdog on the closed loop brakes to rest (motion.py brake_to_rest)
 #define FEATURE_BRAKE 0
 #endif
+#ifndef FEATURE_LANDING  // MODE 2's finite motions end on the encoders, CAL table 9 (landing.py)
+#define FEATURE_LANDING 0
+#endif
+#if FEATURE_LANDING && !FEATURE_BRAKE
+#error "the landing starts its plan from the speed loop's wheel speeds (FEATURE_BRAKE keeps them)"
+#endif
 #if FEATURE_BRAKE && !FEATURE_VEL_ACCEL
 #error "braking to rest feeds its slew forward as a planned acceleration: it needs FEATURE_VEL_ACCEL"
 #endif

@@ -317,6 +317,13 @@ static void execute(uint8_t kw, int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
             ok();
             break;
         case K_CAL:
+#if FEATURE_LANDING
+            if (p[0] == P_CAL_SLIP) {  // the floor's creep: a landing's travel (RAM, as on MicroPython)
+                if (p[2] == 0 && ex.landing.set_slip(p[1], p[3])) ok();
+                else error(P_E_CALIBRATION);
+                break;
+            }
+#endif
             if (cal_write(p[0], p[1], p[2], p[3])) ok();
             else error(P_E_CALIBRATION);
             break;

@@ -36,6 +36,10 @@ void Executor::init() {
     for (uint8_t i = 0; i < MOTORS; i++) motor_set(i, 0);
     model.scale = 1.0f;
     model.drag_gain = 1.0f;
+#if FEATURE_LANDING
+    land_scale = 1.0f;
+    landing.init();
+#endif
 }
 
 extern uint8_t batt_level;  // main.cpp: 2 limits the power (battery low)
@@ -62,6 +66,9 @@ void Executor::set_mode(uint8_t m) {
 #if FEATURE_PROGRESS
     if (m & P_MODE_SIMULATION) watch = WATCH_OFF;  // no power applied: nothing to measure
 #endif
+#if FEATURE_LANDING
+    if (landing.active && !lands()) land_off();
+#endif
     if ((old ^ m) & P_MODE_CLOSED_LOOP) {
         if (m & P_MODE_CLOSED_LOOP) {
             start_feedback();
@@ -86,6 +93,10 @@ bool Executor::stop() {
     speed = 0;
 #if FEATURE_PROGRESS
     watch = WATCH_OFF;
+#endif
+#if FEATURE_LANDING
+    landing.rest();
+    land_scale = 1.0f;
 #endif
     for (uint8_t i = 0; i < MOTORS; i++) powers[i] = 0;
     apply();
@@ -127,6 +138,9 @@ void Executor::vel(int16_t vx, int16_t vy, int16_t w, int16_t t_ms) {
 #endif
 #if FEATURE_BRAKE
     braking = slewing = false;
+#endif
+#if FEATURE_LANDING
+    land_reset();
 #endif
     queue.clear();
     if (kind != K_VEL) warned = 0;
@@ -346,6 +360,9 @@ void Executor::start_next(int64_t carry) {
         rotate(s.p[0], s.p[1], carry);
     } else {  // POWER
         infinite = false;
+#if FEATURE_LANDING
+        land_reset();
+#endif
         remaining = (int64_t)s.p[0] * 1000 + carry;
         feedback = dragging = false;
         for (uint8_t i = 0; i < MOTORS; i++) powers[i] = s.p[i + 1];
@@ -388,6 +405,9 @@ void Executor::move(int64_t carry) {
     int16_t L = remembered[0], V = remembered[1], D = remembered[2], C = remembered[3];
     infinite = abs(L) == P_INF;
     if (L == 0 || V == 0) {
+#if FEATURE_LANDING
+        land_reset();
+#endif
         remaining = carry;
         drive(0, 0, 0, false);
         return;
@@ -411,8 +431,16 @@ void Executor::move(int64_t carry) {
     }
     float s = (L > 0) == (V > 0) ? v : -v;
     float a = D * (float)(M_PI / 180);
+#if FEATURE_LANDING
+    float u = s > 0 ? 1.0f : -1.0f;
+    if (infinite) land_reset();
+    else land_start(u * cosf(a), u * sinf(a), u * C * 0.1f, false, abs(L) * 0.01f, v * 0.01f);
+    drive(s * 0.01f * cosf(a), s * 0.01f * sinf(a), s * C * 0.001f, false, gain);
+    if (!infinite) timed(duration(abs(L), v, time_scale), carry);
+#else
     drive(s * 0.01f * cosf(a), s * 0.01f * sinf(a), s * C * 0.001f, false, gain);
     if (!infinite) remaining = duration(abs(L), v, time_scale) + carry;
+#endif
 #if FEATURE_PROGRESS
     if (!infinite && kind == K_MOVE && !(mode & P_MODE_SIMULATION))  // not when the guard stopped it
         watch_start_move(s > 0 ? cosf(a) : -cosf(a), s > 0 ? sinf(a) : -sinf(a), abs(L) * 0.01f);
@@ -423,13 +451,24 @@ void Executor::move(int64_t carry) {
 void Executor::rotate(int16_t A, int16_t F, int64_t carry) {
     infinite = abs(A) == P_INF;
     if (A == 0) {
+#if FEATURE_LANDING
+        land_reset();
+#endif
         remaining = carry;
         drive(0, 0, 0, true);
         return;
     }
     float w = abs(F) * (float)(M_PI / 180);
+#if FEATURE_LANDING
+    float u = (A > 0) == (F > 0) ? 1.0f : -1.0f;
+    if (infinite) land_reset();
+    else land_start(0, 0, u, true, abs(A) * (float)(M_PI / 180), w);
+    drive(0, 0, u * w, true);
+    if (!infinite) timed(duration(abs(A), abs(F), model.scale), carry);
+#else
     drive(0, 0, (A > 0) == (F > 0) ? w : -w, true);
     if (!infinite) remaining = duration(abs(A), abs(F), model.scale) + carry;
+#endif
 }
 
 void Executor::drive(float vx, float vy, float w, bool rotate, float gain) {
@@ -437,6 +476,20 @@ void Executor::drive(float vx, float vy, float w, bool rotate, float gain) {
     nominal[1] = vy;
     nominal[2] = w;
     nominal[3] = gain;
+#if FEATURE_LANDING
+    float ls = land_scale;
+    if (landing.active) {  // its plan: the share of the twist asked, and its rate of change
+        float rate = landing.rate / landing.nominal;  // 1/s
+        acc[0] = rate * vx;
+        acc[1] = rate * vy;
+        acc[2] = rate * w;
+        acc_on = rate != 0;
+        acc_turning = false;
+        vx *= ls;
+        vy *= ls;
+        w *= ls;
+    }
+#endif
     float f = 1.0f, v = 0;
     if (vx != 0 || vy != 0) {
         f = guard.factor(vx, vy);
@@ -469,9 +522,15 @@ void Executor::drive(float vx, float vy, float w, bool rotate, float gain) {
     twist[1] = vy;
     twist[2] = w;
     rot = rotate;
+#if FEATURE_LANDING
+    dead = (flags & DEADBAND) && ls >= 1.0f;  // the loop drives a landing's slow end
+#else
     dead = flags & DEADBAND;
+#endif
     for (uint8_t i = 0; i < MOTORS; i++) ff[i] = dead ? 0 : model.raw[i];
-#if FEATURE_VEL_ACCEL
+#if FEATURE_LANDING
+    if (acc_on && (kind == K_VEL || landing.active) && !dead) accel(vx, vy, w, f);
+#elif FEATURE_VEL_ACCEL
     if (acc_on && kind == K_VEL && !dead) accel(vx, vy, w, f);
 #endif
     if (mode & P_MODE_CLOSED_LOOP) update_targets();  // only the speed loop needs them
@@ -498,11 +557,22 @@ void Executor::slow_down(float v, bool limited) {
 
 void Executor::relimit() {
     if (!travelling()) return;
+#if FEATURE_LANDING
+    float f = guard.factor(nominal[0] * land_scale, nominal[1] * land_scale);
+#else
     float f = guard.factor(nominal[0], nominal[1]);
+#endif
     if (f == k) return;
     float old = time_scale;
     drive(nominal[0], nominal[1], nominal[2], rot, nominal[3]);
+#if FEATURE_LANDING
+    if (kind != NONE && !infinite && kind != K_VEL) {
+        if (landing.active) deadline = (int64_t)(deadline * old / time_scale);  // it ends on its distance
+        else remaining = (int64_t)(remaining * old / time_scale);
+    }
+#else
     if (kind != NONE && !infinite && kind != K_VEL) remaining = (int64_t)(remaining * old / time_scale);
+#endif
 }
 
 void Executor::warn_once(uint8_t flags) {
@@ -536,6 +606,11 @@ void Executor::update_targets() {
         for (uint8_t i = 0; i < MOTORS; i++) target[i] = 0;
     } else {
         model.wheel_speeds(twist[0], twist[1], twist[2], target);
+#if FEATURE_LANDING
+        float over[MOTORS];  // the wheels turn faster by their creep, so the body goes as asked
+        if (landing.active && landing.overturn(twist[0], twist[1], twist[2], over))
+            for (uint8_t i = 0; i < MOTORS; i++) target[i] += over[i];
+#endif
     }
 }
 
@@ -579,6 +654,12 @@ int16_t Executor::limit(float p) {
 // after a step in a wheel's target it grows slower the larger the error, until the wheel is within
 // the band (speedctl.py).
 void Executor::feedback_step(int32_t dt_us) {
+#if FEATURE_LANDING
+    if (landing.active) {
+        land_us += dt_us;
+        deadline -= dt_us;
+    }
+#endif
     acc_us += dt_us;
     if (acc_us < (int32_t)CONTROL_PERIOD_MS * 1000) return;
     float dt = acc_us * 1e-6f;
@@ -606,5 +687,117 @@ void Executor::feedback_step(int32_t dt_us) {
         }
         powers[i] = limit(p);
     }
+#if FEATURE_LANDING
+    if (landing.active) land_step();
+#endif
     apply();
 }
+
+#if FEATURE_LANDING
+// A finite motion started now ends on its encoders: closed loop, not simulating (motion.py _lands).
+bool Executor::lands() const { return HAS_ENCODERS && (mode & P_MODE_CLOSED_LOOP) && !(mode & P_MODE_SIMULATION); }
+
+// The motion starting is not landed: full speed, on the timeline.
+void Executor::land_reset() {
+    landing.active = false;
+    land_scale = 1.0f;
+}
+
+// Lands the motion starting now (if it lands): twist (ux, uy, uw) per unit of its speed, `goal` m
+// (rad) asked at `nominal` m/s (rad/s); its plan set before it is driven.
+void Executor::land_start(float ux, float uy, float uw, bool rotate, float goal, float nominal_speed) {
+    if (!lands()) return land_reset();
+    int32_t counts[MOTORS];
+    for (uint8_t i = 0; i < MOTORS; i++) counts[i] = encoder_count(i);
+    unit[0] = ux;
+    unit[1] = uy;
+    unit[2] = uw;
+    landing.start(counts, unit, rotate, goal, nominal_speed, feedback ? wheel_speed : 0, land_us);
+    land_us = 0;
+    land_scale = land_profile(0);
+}
+
+// A finite motion's time: on the timeline, or (landing) a deadline of twice it with its ramps and a
+// second, after which it ends short, its end left to land_step.
+void Executor::timed(int64_t d, int64_t carry) {
+    if (landing.active) {
+        float a = landing.rotate ? LAND_ACCEL_W : LAND_ACCEL;
+        deadline = 2 * (d + (int64_t)(2e6f * landing.nominal / a)) + 1000000;
+        remaining = landing.time_left((int32_t)CONTROL_PERIOD_MS * 1000);
+    } else {
+        remaining = d + carry;
+    }
+}
+
+// One control period of a landing motion: its travel, its end, its ramp (last_counts: the loop's).
+void Executor::land_step() {
+    int32_t dt = land_us;
+    landing.update(last_counts, dt);
+    land_us = 0;
+    remaining = deadline <= 0 ? 0 : landing.time_left((int32_t)CONTROL_PERIOD_MS * 1000);
+    float rate = landing.rate;
+    float scale = land_profile(dt);
+    if (scale != land_scale || landing.rate != rate) {
+        land_scale = scale;
+        drive(nominal[0], nominal[1], nominal[2], rot, nominal[3]);
+    }
+}
+
+// Back to the timeline mid-motion (open loop or simulation now): the rest at the speed asked.
+void Executor::land_off() {
+    float left = landing.left();
+    land_reset();
+    remaining = left > 0 ? (int64_t)(left / landing.nominal * 1e6f) : 0;
+    if (kind != NONE) drive(nominal[0], nominal[1], nominal[2], rot, nominal[3]);
+}
+
+// Advances the landing motion's plan by dt_us: the share of the asked speed to drive now.
+float Executor::land_profile(int32_t dt_us) {
+    float need = landing.braking();
+    float rest = kind == K_DELTA ? chain_rest(need) : 0;
+    float v_exit = rest >= need ? 0 : exit_speed();
+    return landing.replan(rest, v_exit, dt_us);
+}
+
+// The path (m) of this DELTA's repetitions still to come, counted up to `need`.
+float Executor::chain_rest(float need) {
+    if (reps_inf) return queue.count == 0 ? need : 0;
+    int16_t L = remembered[0];
+    float total = 0;
+    uint16_t k = reps;
+    for (uint8_t guard_n = LAND_CHAIN_GUARD; k > 0 && total < need; k--) {
+        if (--guard_n == 0) return need;
+        L = clamp((int32_t)L + delta[0], L_CLAMP);
+        total += abs(L) * 0.01f;
+    }
+    return total;
+}
+
+// The speed the command queued behind keeps along this motion's direction (m/s or rad/s; 0 when it
+// goes elsewhere, turns the other way or nothing is queued).
+float Executor::exit_speed() {
+    if (!queue.count) return 0;
+    const Slot &s = queue.slots[queue.head];
+    float v;
+    if (landing.rotate) {
+        if (s.kind != K_ROTATE || s.p[0] == 0) return 0;
+        float sign = (s.p[0] > 0) == (s.p[1] > 0) ? 1.0f : -1.0f;
+        v = sign * landing.uw * abs(s.p[1]) * (float)(M_PI / 180);
+    } else if (s.kind == K_MOVE || s.kind == K_DELTA) {
+        int32_t L = s.p[0], V = s.p[1], D = s.p[2];
+        if (s.kind == K_DELTA) {
+            L += remembered[0];
+            V += remembered[1];
+            D += remembered[2];
+        }
+        if (L == 0 || V == 0) return 0;
+        float sp = labs(V) * 0.01f;
+        if ((L > 0) != (V > 0)) sp = -sp;
+        float a = D * (float)(M_PI / 180);
+        v = sp * (cosf(a) * landing.ux + sinf(a) * landing.uy);
+    } else {
+        return 0;
+    }
+    return v > 0 ? v : 0;
+}
+#endif

@@ -5,6 +5,7 @@
 #include <stdint.h>
 
 #include "features.h"
+#include "landing.h"
 #include "power.h"
 
 #define NONE 0
@@ -68,6 +69,13 @@ struct Executor {
     int32_t slew_due, brake_us, brake_min_us, rest_due;
     int32_t rest_ref[MOTORS];
 #endif
+#if FEATURE_LANDING
+    Landing landing;
+    float land_scale;    // the landing's ramp: share of the asked speed driven now
+    int32_t land_us;     // since the landing's last update
+    int64_t deadline;    // us a landing motion may still take before it ends short
+    float unit[3];       // the landing motion's twist per unit of its speed
+#endif
 #if FEATURE_PROGRESS
     // the MOVE progress check (progress.py): off, a MOVE running, its coast watched
     uint8_t watch;
@@ -118,6 +126,17 @@ struct Executor {
     void brake_to_rest();
     void slew(int32_t dt_us);
     bool at_rest(int32_t dt_us);
+#endif
+#if FEATURE_LANDING
+    bool lands() const;
+    void land_reset();
+    void land_start(float ux, float uy, float uw, bool rotate, float goal, float nominal);
+    void timed(int64_t duration, int64_t carry);
+    void land_step();
+    void land_off();
+    float land_profile(int32_t dt_us);
+    float chain_rest(float need);
+    float exit_speed();
 #endif
 #if FEATURE_PROGRESS
     void watch_start_move(float ux, float uy, float distance_m);

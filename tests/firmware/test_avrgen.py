@@ -93,11 +93,18 @@ def _floats(text: str, name: str) -> list[float]:
 
 @pytest.mark.parametrize("robot", avrgen.ROBOTS)
 def test_the_mega_header_switches_on_what_the_unos_flash_cannot_hold(robot: str) -> None:
-    """Versions 3 and 4's VEL acceleration, the MOVE progress check, the calibrated reach: 1 on the
-    Mega with the config's tables and the two codes' texts, absent on the UNO (features.h: 0)."""
+    """Versions 3 and 4's VEL acceleration, the MOVE progress check, the calibrated reach, braking to
+    rest, the closed-loop landing: 1 on the Mega with the config's tables and the two codes' texts,
+    absent on the UNO (features.h: 0)."""
     uno, mega = avrgen.header_source(robot), avrgen.header_source(robot, "mega")
     assert "FEATURE_" not in uno and "TEXT_17" not in uno and "TEXT_18" not in uno
-    for name in ("FEATURE_VEL_ACCEL", "FEATURE_PROGRESS", "FEATURE_REACH"):
+    for name in (
+        "FEATURE_VEL_ACCEL",
+        "FEATURE_PROGRESS",
+        "FEATURE_REACH",
+        "FEATURE_BRAKE",
+        "FEATURE_LANDING",
+    ):
         assert _define(mega, name) == "1"
     assert _define(mega, "P_VERSION_MAX") == str(codes.VERSIONS[-1])
     assert _define(mega, "P_VEL_PARAMS_MAX") == str(codes.VEL_PARAMS_MAX)
@@ -110,6 +117,9 @@ def test_the_mega_header_switches_on_what_the_unos_flash_cannot_hold(robot: str)
     assert _floats(mega, "TRAVEL") == pytest.approx([v for row in cfg["travel"] for v in row])
     assert float(_define(mega, "PROGRESS_TOLERANCE").rstrip("f")) == cfg["progress_tolerance"]
     assert _define(mega, "DEFAULT_REACH_N") == str(len(cfg["reach"][0]))
+    assert _floats(mega, "TURN") == pytest.approx(cfg["turn"])
+    assert _floats(mega, "CREEP_MIX") == pytest.approx([v for row in cfg["creep_mix"] for v in row])
+    assert float(_define(mega, "LAND_ACCEL").rstrip("f")) == cfg["land_accel"][0]
 
 
 def test_mega_pins_are_checked_against_the_megas_own_map(monkeypatch: pytest.MonkeyPatch) -> None:

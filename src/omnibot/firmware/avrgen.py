@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from omnibot.errors import ConfigError
-from omnibot.firmware import motion, safety
+from omnibot.firmware import landing, motion, safety
 from omnibot.firmware.config import build_config
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription, load_robot
@@ -533,6 +533,7 @@ def _features(w: Any, cfg: dict[str, Any]) -> None:
         for c in cfg["encoder_cpr"]
     ]
     w(f"static const uint8_t REST_COUNTS[MOTORS] PROGMEM = {{{', '.join(str(c) for c in rest)}}};")
+    _landing(w, cfg, floats)
     w("/* the calibrated reach (CAL table 8, WARN 18): knots {folded course deg, cm/s}; 0: none */")
     w("#define FEATURE_REACH 1")
     count, rows = _table_rows(cfg["reach"], 1, 1)
@@ -544,6 +545,35 @@ def _features(w: Any, cfg: dict[str, Any]) -> None:
     w("    " + ", ".join(f"{{{c}, TEXT_{c}}}" for c in FEATURE_TEXTS))
     w("};")
     w(f"#define FEATURE_CODE_TEXT_COUNT {len(FEATURE_TEXTS)}")
+
+
+def _landing(w: Any, cfg: dict[str, Any], floats: Any) -> None:
+    """The closed-loop landing's constants (firmware/landing.py) for the Mega's ``_features``."""
+    n = int(cfg["motors"])
+    turn = [float(v) for v in cfg.get("turn") or [0.0] * n]
+    accel = [float(v) for v in cfg.get("land_accel") or [0.0, 0.0]]
+    on = all(int(c) > 0 for c in cfg["encoder_cpr"]) and any(turn) and min(accel) > 0.0
+    zero = [[0.0, 0.0, 0.0]] * n
+    w(
+        "/* the closed-loop landing (landing.py, CAL table 9): the body's turn (rad) per count of each wheel, */"
+    )
+    w(
+        "/* the plan's accelerations (m/s^2, rad/s^2), the floor's creep (roll, combined, scale) and its rows */"
+    )
+    w(f"#define FEATURE_LANDING {1 if on else 0}")
+    w(f"static const float TURN[MOTORS] PROGMEM = {{{', '.join(f'{v!r}f' for v in turn)}}};")
+    w(f"#define LAND_ACCEL {accel[0]!r}f")
+    w(f"#define LAND_ACCEL_W {accel[1]!r}f")
+    for name in ("LAG_S", "CRAWL", "CRAWL_W", "TOLERANCE", "TOLERANCE_W", "ROLL_EPS"):
+        w(f"#define LAND_{name} {float(getattr(landing, name))!r}f")
+    w(f"#define LAND_FAR_US {landing.FAR_US}L")
+    w(f"#define LAND_CHAIN_GUARD {motion.CHAIN_GUARD}")
+    slip = [float(v) for v in cfg.get("slip") or [0.0, 0.0, 1.0]]
+    w(f"static const float DEFAULT_SLIP[3] PROGMEM = {{{', '.join(f'{v!r}f' for v in slip)}}};")
+    w(f"static const float CREEP_ROLL[MOTORS][3] PROGMEM = {{{floats(cfg.get('creep_roll') or zero)}}};")
+    w(f"static const float CREEP_RIM[MOTORS][3] PROGMEM = {{{floats(cfg.get('creep_rim') or zero)}}};")
+    mix = cfg.get("creep_mix") or [[0.0] * n] * n
+    w(f"static const float CREEP_MIX[MOTORS][MOTORS] PROGMEM = {{{floats(mix)}}};")
 
 
 def board_source(robot_name: str, board_name: str = "uno") -> str:
