@@ -8,7 +8,7 @@ namespace bin {
 #define KEPT_BYTES BOARD_KEPT_BYTES  // replies up to this many frame bytes are kept; longer ones run again
 #define EVENT_BYTES 12
 #define BACKLOG BOARD_BACKLOG  // events waiting for the send window; more are dropped
-#define CHUNK_MAX 48      // command frames are at most 34 bytes (5 varints of 5); longer chunks are dropped
+#define CHUNK_MAX BOARD_CHUNK_MAX  // longer chunks are dropped unanswered (board.h)
 #define FRAME_MAX 72      // largest frame we send (a TEL of every group, 32-bit extremes)
 
 // The window this controller takes and announces in its HELLO reply: on the UNO the protocol's least.

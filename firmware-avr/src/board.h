@@ -6,8 +6,9 @@
 // The Mega's 8 KB of SRAM also buy a 1 KB receive ring (the UNO's: 256 B) and the protocol's full
 // binary window of P_WINDOW frames, as the MicroPython firmware takes (the UNO's: P_WINDOW_MIN);
 // kept replies of up to 32 frame bytes, so a duplicate STATUS gets its kept reply as on the
-// MicroPython firmware (the UNO keeps 16: OK, ERROR, HELLO, and runs a STATUS again), and 16 events
-// waiting for the send window (binlink.py's; the UNO's: 8).
+// MicroPython firmware (the UNO keeps 16: OK, ERROR, HELLO, and runs a STATUS again), 16 events
+// waiting for the send window (binlink.py's; the UNO's: 8), and frames of any length received (a
+// command with too many integers is ERROR 24; the UNO drops chunks over 48 bytes unanswered).
 #pragma once
 #include <avr/io.h>
 
@@ -16,6 +17,7 @@
 #define BOARD_WINDOW P_WINDOW
 #define BOARD_KEPT_BYTES 32  // a STATUS reply: at most 26 bytes (4 powers of 2, 4 MOVE fields of 3)
 #define BOARD_BACKLOG 16
+#define BOARD_CHUNK_MAX 255  // any frame (its length byte says at most 255): too many integers is ERROR 24
 #define CLK_TCCRA TCCR5A
 #define CLK_TCCRB TCCR5B
 #define CLK_TCNT TCNT5
@@ -41,6 +43,7 @@
 #define BOARD_WINDOW P_WINDOW_MIN
 #define BOARD_KEPT_BYTES 16
 #define BOARD_BACKLOG 8
+#define BOARD_CHUNK_MAX 48  // command frames are at most 34 bytes (5 varints of 5, VEL's 7 of 3)
 #define CLK_TCCRA TCCR1A
 #define CLK_TCCRB TCCR1B
 #define CLK_TCNT TCNT1
