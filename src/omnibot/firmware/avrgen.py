@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from omnibot.errors import ConfigError
-from omnibot.firmware import safety
+from omnibot.firmware import landing, motion, safety
 from omnibot.firmware.config import build_config
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription, load_robot
@@ -35,8 +35,8 @@ ROBOTS = ("omni4", "mecanum4")  # seed 000's robot and seed 003's
 NOT_SENT = frozenset({codes.W_SHORT, codes.W_REACH, codes.W_NO_GYRO})
 """Codes the UNO never sends, so their texts stay out of its flash: WARN 17's encoder progress check
 (firmware/progress.py) and WARN 18's calibrated reach (CAL table 8, firmware/motion.py) are the
-MicroPython firmware's only (omni4's image has no room for them); WARN 10 is a board's gyro (the UNO
-wiring has none)."""
+MicroPython firmware's and the Mega's only (omni4's UNO image has no room for them: the Mega's header
+adds their texts, :data:`FEATURE_TEXTS`); WARN 10 is a board's gyro (neither wiring has one)."""
 INT16_MAX = 32767
 EEPROM_BYTES = 1024  # ATmega328P (the ATmega2560 has 4 KB; the calibration store takes the first 1 KB)
 BOARDS = ("uno", "mega")
@@ -449,6 +449,8 @@ def header_source(robot_name: str, board_name: str = "uno") -> str:
             )
     w(f"#define BATTERY_ADC {pins['battery_adc']}")
     _battery(w, robot)
+    if b.name != "uno":
+        _features(w, cfg)
     return "\n".join(out) + "\n"
 
 
@@ -487,6 +489,91 @@ def _battery(w: Any, robot: RobotDescription) -> None:
         w(f"#define BATTERY_{name} {units(volts)}U  // {volts:.3f} V")
     pwm_max = max(w_.motor.pwm_max for w_ in robot.wheels)
     w(f"#define BATTERY_CAP {pwm_max * round(100 * b.limit_power) // 100}  // largest power below limit")
+
+
+FEATURE_TEXTS = (codes.W_SHORT, codes.W_REACH)
+"""The codes of :data:`NOT_SENT` that the Mega sends: their texts are in its :func:`_features`."""
+
+
+def _features(w: Any, cfg: dict[str, Any]) -> None:
+    """What the Mega runs beyond the UNO (docs/uno.md, "The Arduino Mega 2560"): the compile-time
+    switches of firmware-avr/src/ (each ``FEATURE_*`` is 0 on the UNO, board.h) and their constants,
+    from the same config as the MicroPython firmware's."""
+    n = int(cfg["motors"])
+
+    def floats(rows: list[list[float]]) -> str:
+        return ", ".join("{" + ", ".join(f"{float(v)!r}f" for v in row) + "}" for row in rows)
+
+    w("")
+    w("/* ---- the Mega's features beyond the UNO's flash (docs/uno.md) ---- */")
+    w("/* protocol versions 3 and 4: VEL's planned acceleration A, the body's AX, AY, AW (motion.py) */")
+    w("#define FEATURE_VEL_ACCEL 1")
+    w(f"#define P_VERSION_MAX {codes.VERSIONS[-1]}")
+    w(f"#define P_VEL_PARAMS_MAX {codes.VEL_PARAMS_MAX}")
+    w("/* PWM counts per m/s^2 (x, y) and rad/s^2 of the body's acceleration (body_ff); per unit of the */")
+    w("/* body-frame twist's rate through the wheel's own inertia (wheel_ff times the wheel's row of J) */")
+    w(f"static const float ACCEL_BODY_FF[MOTORS][3] PROGMEM = {{{floats(cfg['body_ff'])}}};")
+    wheel = [[float(cfg["wheel_ff"][i]) * float(j) for j in cfg["J"][i]] for i in range(n)]
+    w(f"static const float ACCEL_WHEEL_FF[MOTORS][3] PROGMEM = {{{floats(wheel)}}};")
+    tolerance = float(cfg.get("progress_tolerance", 0.0))
+    w("/* the MOVE progress check (progress.py, WARN 17): body travel (m) along x and y per count */")
+    w(f"#define FEATURE_PROGRESS {1 if tolerance > 0 and all(int(c) for c in cfg['encoder_cpr']) else 0}")
+    w(f"#define PROGRESS_TOLERANCE {tolerance!r}f")
+    w("#define PROGRESS_COAST_MAX_MS 3000")
+    w(f"static const float TRAVEL[2][MOTORS] PROGMEM = {{{floats(cfg['travel'])}}};")
+    w("/* a VEL's watchdog on the closed loop brakes to rest (motion.py brake_to_rest): the twist slewed */")
+    w("/* down at the acceleration limits (m/s^2, rad/s^2), the wheels at rest below REST_COUNTS a window */")
+    w("#define FEATURE_BRAKE 1")
+    w(f"#define BRAKE_ACCEL_MAX {float(cfg.get('accel_max_cms2', 0.0)) * 0.01!r}f")
+    w(f"#define BRAKE_ALPHA_MAX {math.radians(float(cfg.get('angular_accel_max_dps2', 0.0)))!r}f")
+    w(f"#define BRAKE_MAX_US {motion.BRAKE_MAX_US}L")
+    w(f"#define REST_WINDOW_US {motion.REST_WINDOW_US}L")
+    rest = [
+        max(1, int(int(c) * motion.REST_RAD * motion.REST_WINDOW_US * 1e-6 / (2.0 * math.pi)))
+        for c in cfg["encoder_cpr"]
+    ]
+    w(f"static const uint8_t REST_COUNTS[MOTORS] PROGMEM = {{{', '.join(str(c) for c in rest)}}};")
+    _landing(w, cfg, floats)
+    w("/* the calibrated reach (CAL table 8, WARN 18): knots {folded course deg, cm/s}; 0: none */")
+    w("#define FEATURE_REACH 1")
+    count, rows = _table_rows(cfg["reach"], 1, 1)
+    w(f"#define DEFAULT_REACH_N {count}")
+    w(f"static const Knot DEFAULT_REACH[DEFAULT_REACH_N] PROGMEM = {{{', '.join(rows[:count])}}};")
+    for code in FEATURE_TEXTS:
+        w(f"static const char TEXT_{code}[] PROGMEM = {_c_string(codes.TEXTS[code])};")
+    w(f"static const CodeText FEATURE_CODE_TEXTS[{len(FEATURE_TEXTS)}] PROGMEM = {{")
+    w("    " + ", ".join(f"{{{c}, TEXT_{c}}}" for c in FEATURE_TEXTS))
+    w("};")
+    w(f"#define FEATURE_CODE_TEXT_COUNT {len(FEATURE_TEXTS)}")
+
+
+def _landing(w: Any, cfg: dict[str, Any], floats: Any) -> None:
+    """The closed-loop landing's constants (firmware/landing.py) for the Mega's ``_features``."""
+    n = int(cfg["motors"])
+    turn = [float(v) for v in cfg.get("turn") or [0.0] * n]
+    accel = [float(v) for v in cfg.get("land_accel") or [0.0, 0.0]]
+    on = all(int(c) > 0 for c in cfg["encoder_cpr"]) and any(turn) and min(accel) > 0.0
+    zero = [[0.0, 0.0, 0.0]] * n
+    w(
+        "/* the closed-loop landing (landing.py, CAL table 9): the body's turn (rad) per count of each wheel, */"
+    )
+    w(
+        "/* the plan's accelerations (m/s^2, rad/s^2), the floor's creep (roll, combined, scale) and its rows */"
+    )
+    w(f"#define FEATURE_LANDING {1 if on else 0}")
+    w(f"static const float TURN[MOTORS] PROGMEM = {{{', '.join(f'{v!r}f' for v in turn)}}};")
+    w(f"#define LAND_ACCEL {accel[0]!r}f")
+    w(f"#define LAND_ACCEL_W {accel[1]!r}f")
+    for name in ("LAG_S", "CRAWL", "CRAWL_W", "TOLERANCE", "TOLERANCE_W", "ROLL_EPS"):
+        w(f"#define LAND_{name} {float(getattr(landing, name))!r}f")
+    w(f"#define LAND_FAR_US {landing.FAR_US}L")
+    w(f"#define LAND_CHAIN_GUARD {motion.CHAIN_GUARD}")
+    slip = [float(v) for v in cfg.get("slip") or [0.0, 0.0, 1.0]]
+    w(f"static const float DEFAULT_SLIP[3] PROGMEM = {{{', '.join(f'{v!r}f' for v in slip)}}};")
+    w(f"static const float CREEP_ROLL[MOTORS][3] PROGMEM = {{{floats(cfg.get('creep_roll') or zero)}}};")
+    w(f"static const float CREEP_RIM[MOTORS][3] PROGMEM = {{{floats(cfg.get('creep_rim') or zero)}}};")
+    mix = cfg.get("creep_mix") or [[0.0] * n] * n
+    w(f"static const float CREEP_MIX[MOTORS][MOTORS] PROGMEM = {{{floats(mix)}}};")
 
 
 def board_source(robot_name: str, board_name: str = "uno") -> str:
