@@ -6,6 +6,7 @@ import pytest
 
 from omnibot.client import ErrorEvent, EventRecorder, RobotClient
 from omnibot.client.greet import wait_for_controller
+from omnibot.client.switch import ProtocolSwitch
 from omnibot.client.wire import BinaryWire
 from omnibot.errors import LinkTimeout, ProtocolError
 from omnibot.firmware.controller import Controller
@@ -194,3 +195,34 @@ def test_binary_sends_up_to_the_window_the_controller_announces(
         assert max(flying) == window
         assert all(isinstance(call.result(), Ok) for call in calls)
         assert ran == [k % 90 for k in range(3 * window)]
+
+
+def test_the_switch_follows_what_the_client_tells_it() -> None:
+    """ProtocolSwitch on its own: the MODE bits answered pick the wire (bit 2 binary, bit 5 sequenced
+    text with tags), a reset or a failed link puts it back, and only it writes its state."""
+    written: list[bytes] = []
+    forgotten: list[str] = []
+    with RobotClient(LockstepLink(Silent()), "omni4") as host:
+        switch = ProtocolSwitch(host, True, write=written.append, read=lambda t: b"", forget=forgotten.append)
+        assert switch.tags is True and switch.checks_wanted and not switch.binary and switch.mode is None
+        switch.mode_set(codes.MODE_CHECKED_TEXT | codes.MODE_SEQUENCED_TEXT)
+        assert (
+            switch.sequenced
+            and not switch.binary
+            and switch.mode == codes.MODE_CHECKED_TEXT | codes.MODE_SEQUENCED_TEXT
+        )
+        switch.mode_set(codes.MODE_BINARY)
+        assert isinstance(switch.wire, BinaryWire) and switch.binary and not switch.sequenced
+        switch.link_failed()
+        assert switch.binary and switch.mode == codes.MODE_BINARY
+        switch.controller_reset(ask_tags=True)
+        assert not switch.binary and switch.mode is None and switch.tags is True  # tags given, not asked
+        switch.mode_reported(codes.MODE_CLOSED_LOOP)
+        assert switch.mode == codes.MODE_CLOSED_LOOP and not switch.sequenced
+        asking = ProtocolSwitch(host, None, write=written.append, read=lambda t: b"", forget=forgotten.append)
+        asking.set_tags(True)
+        asking.controller_reset(ask_tags=False)  # a reset while the tags are being asked about
+        assert asking.tags is True and asking.tags_seen
+        asking.controller_reset(ask_tags=True)
+        assert asking.tags is None and asking.tags_seen and not asking.checks_wanted
+    assert written == [] and forgotten == []  # none of it talks to the controller
