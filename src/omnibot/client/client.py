@@ -97,10 +97,6 @@ E = TypeVar("E", bound=Event)
 MOTION = (Move, Rotate, Delta, Power, Vel)
 DEFAULT_TIMEOUT = 1.0
 """Seconds (link clock) to wait for a reply."""
-PROBE_TRIES = 8
-"""Rounds of tag questions before :meth:`RobotClient._detect_tags` gives up (LinkError)."""
-UNTAGGED_VERDICT = 3
-"""Rounds in a row on a line proven clean that make a controller one without tags."""
 RESYNC_TRIES = 3
 """Untagged text: STATUS exchanges tried at most to get back in step after a timeout."""
 _LATE_MAX = 64  # tagged commands that timed out, kept so that a late reply still lands on them
@@ -258,6 +254,8 @@ class RobotClient(TypedCalls):
             tags,
             write=self._write,
             read=self._read,
+            ask=self._ask_probe,
+            heard=lambda: self._heard,
             forget=lambda why: self._fail_all(lambda p: LinkTimeout(f"no reply to {p.line}: {why}")),
         )
         """The protocol spoken, the MODE bits, text's tags and checks; switching (client/switch.py)."""
@@ -523,7 +521,7 @@ class RobotClient(TypedCalls):
         what = (text.encode(command) if command is not None else raw or b"").decode("latin-1").strip()
         probed = self.tags is None
         if probed:
-            self._prepare("probe", self._detect_tags, wait, what)
+            self._prepare("probe", self._switch.detect_tags, wait, what)
         if self._switch.checks_wanted:
             # a lost reply of the bits' setup leaves them to be asked again before the next command;
             # this one goes on (tagged and checked, as every command: only a cut line is not covered)
@@ -548,66 +546,8 @@ class RobotClient(TypedCalls):
         finally:
             self._preparing = ""
 
-    def _detect_tags(self, wait: float) -> None:
-        """Ask with tagged HELLOs whether the controller takes tagged, checked text commands.
-
-        A tagged reply says yes (a damaged line cannot forge its check), and so does ``ERROR,42`` (it
-        runs checked text only). A controller without tags answers ``ERROR,23``, but so does one with
-        them when the question arrived with its suffix damaged; so "no" takes :data:`UNTAGGED_VERDICT`
-        rounds in a row of an untagged answer to the tagged question followed by the same answer to a
-        plain ``HELLO`` (its HELLO reply, or ERROR 23 from a controller of seed 000's protocol) that
-        proves the line clean. Silence, ERROR 26 or a differing answer starts the count again; no
-        verdict after :data:`PROBE_TRIES` rounds is a LinkError, never a fall back. Once this client
-        has had a tagged reply it never falls back: a controller that took tags and now refuses them
-        is an error."""
-        rounds = 0
-        plain_answer: str | None = None
-        answered_once = False
-        for _ in range(PROBE_TRIES):
-            reply = self._ask_probe(wait, tagged=True)
-            if self.tags is not None:
-                return
-            if reply is None:
-                if not self._heard:  # not a byte from the controller yet: it is not there
-                    break
-                rounds = 0
-                continue
-            answered_once = True
-            if isinstance(reply, ErrorReply) and reply.code == codes.E_CHECK_REQUIRED:
-                self._switch.set_tags(True)
-                return
-            if isinstance(reply, ErrorReply) and reply.code == codes.E_CHECKSUM:
-                rounds = 0
-                continue
-            plain = self._ask_probe(wait, tagged=False)
-            if self.tags is not None:
-                return
-            answer = None if plain is None else type(plain).__name__ + str(getattr(plain, "code", ""))
-            if answer is None or (plain_answer is not None and answer != plain_answer):
-                rounds, plain_answer = 0, answer
-                continue
-            plain_answer = answer
-            rounds += 1
-            if rounds == UNTAGGED_VERDICT:
-                if self._switch.tags_seen:
-                    raise LinkError(
-                        f"the controller on {self.link.url} took tagged, checked commands before "
-                        "and now refuses them (ERROR 23): another firmware? Reconnect to use it"
-                    )
-                self._switch.set_tags(False)
-                return
-        if answered_once:
-            raise LinkError(
-                f"cannot tell whether the controller on {self.link.url} takes checked text commands: "
-                f"{PROBE_TRIES} tagged HELLOs had no clear answer (a damaged line?)"
-            )
-        raise LinkTimeout(
-            f"no reply to HELLO, sent to ask whether the controller takes tagged text commands "
-            f"(timeout on {self.link.url})"
-        )
-
-    def _ask_probe(self, wait: float, *, tagged: bool) -> Reply | None:
-        """One question of :meth:`_detect_tags`: a tagged HELLO (its untagged answer returned; a
+    def _ask_probe(self, wait: float, tagged: bool) -> Reply | None:
+        """One question of the switch's :meth:`~omnibot.client.switch.ProtocolSwitch.detect_tags`: a tagged HELLO (its untagged answer returned; a
         tagged one turns tags on) or a plain one; None when no answer came in ``wait`` s."""
         if tagged:
             wire = self._wire

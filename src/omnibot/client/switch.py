@@ -2,8 +2,8 @@ r"""The protocol the client speaks: finding and switching it, also over a noisy 
 
 :class:`ProtocolSwitch` is the object a :class:`~omnibot.client.client.RobotClient` owns for it: the
 wire in use (text or binary), the controller's MODE bits as the client knows them, and text's tags
-and checks (whether commands carry ``#tag*check``, MODE bits 4 and 5 set by this client, sequenced
-text). The client tells it what happened (a MODE or STATUS answered, a reset, a failed link) and
+and checks (whether commands carry ``#tag*check``: the tag question's verdict, MODE bits 4 and 5 set
+by this client, sequenced text). The client tells it what happened (a MODE or STATUS answered, a reset, a failed link) and
 asks it to switch; the switch talks to the controller through the client's calls and the bytes
 functions the client hands it, and writes none of the client's fields.
 
@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING, Final, Protocol
 
 from omnibot.client.views import Hello
 from omnibot.client.wire import BinaryWire, TextWire, Wire
-from omnibot.errors import ControllerError, LinkTimeout, ProtocolError
+from omnibot.errors import ControllerError, LinkError, LinkTimeout, ProtocolError
 from omnibot.protocol import codes, linecheck, text
 from omnibot.protocol.binary import Packet
 from omnibot.protocol.messages import (
@@ -70,6 +70,10 @@ ANSWER_TIME: Final = 0.1
 ANSWER_TIME_MAX: Final = 0.8
 """Seconds (link clock) a later probe waits at most: each waits twice as long as the one before."""
 _QUIET: Final = 0.02
+PROBE_TRIES: Final = 8
+"""Rounds of tag questions before :meth:`ProtocolSwitch.detect_tags` gives up (LinkError)."""
+UNTAGGED_VERDICT: Final = 3
+"""Rounds in a row on a line proven clean that make a controller one without tags."""
 
 
 class Host(Protocol):
@@ -101,9 +105,12 @@ class ProtocolSwitch:
     """The protocol a client speaks and the controller's MODE bits as far as the client knows them.
 
     ``host`` is the client; ``write`` and ``read`` its link's bytes (traced, a failure handled as
-    the client handles it); ``forget(why)`` fails the commands still waiting for a reply. ``tags``
-    as :class:`~omnibot.client.client.RobotClient`'s: text commands with ``#tag*check`` (True),
-    without (False), or as the controller answers (None: the client asks it).
+    the client handles it); ``ask(wait, tagged)`` sends a HELLO, tagged or not, and returns the
+    untagged answer matched to it (None: none in ``wait`` s; a tagged answer turns tags on);
+    ``heard()`` whether a byte has come from the link; ``forget(why)`` fails the commands still
+    waiting for a reply. ``tags`` as :class:`~omnibot.client.client.RobotClient`'s: text commands
+    with ``#tag*check`` (True), without (False), or as the controller answers (None: asked with
+    :meth:`detect_tags` before the first text command).
     """
 
     def __init__(
@@ -113,22 +120,23 @@ class ProtocolSwitch:
         *,
         write: Callable[[bytes], None],
         read: Callable[[float], bytes],
+        ask: Callable[[float, bool], Reply | None],
+        heard: Callable[[], bool],
         forget: Callable[[str], None],
     ) -> None:
         self._host = host
         self._write = write
         self._read = read
+        self._ask = ask
+        self._heard = heard
         self._forget = forget
         self._wire: Wire = TextWire(bool(tags))
         self._mode: int | None = None
-        self.auto_tags = tags is None
-        """Whether the client asks the controller if it takes tags (``tags=None``)."""
+        self._auto_tags = tags is None
         self._tags = tags
-        self.tags_seen = bool(tags)
-        """A tagged reply came (or tags were asked for): the client never falls back to untagged text."""
+        self._tags_seen = bool(tags)  # a tagged reply came (or tags were asked for): never fall back
         self._checks_asked = not tags and tags is not None  # MODE bits 4, 5 asked for (or never to be)
-        self.added_text_bits = 0
-        """MODE bits 4 and 5 (checked, sequenced text) set on the controller, which had them clear."""
+        self._added_text_bits = 0  # MODE bits 4 and 5 set on the controller, which had them clear
 
     # ------------------------------------------------------------------ state
 
@@ -153,6 +161,11 @@ class ProtocolSwitch:
         return self._tags
 
     @property
+    def auto_tags(self) -> bool:
+        """Whether the client asks the controller if it takes tags (``tags=None``)."""
+        return self._auto_tags
+
+    @property
     def checks_wanted(self) -> bool:
         """Tags are on and MODE bits 4 and 5 still to be asked for (:meth:`require_checks`)."""
         return bool(self._tags) and not self._checks_asked
@@ -163,14 +176,19 @@ class ProtocolSwitch:
         return isinstance(self._wire, TextWire) and self._wire.sender is not None
 
     @property
+    def added_text_bits(self) -> int:
+        """MODE bits 4 and 5 (checked, sequenced text) set on the controller, which had them clear."""
+        return self._added_text_bits
+
+    @property
     def added_checked_text(self) -> bool:
         """MODE bit 4 (checked text only) was set on the controller, which had it clear."""
-        return bool(self.added_text_bits & codes.MODE_CHECKED_TEXT)
+        return bool(self._added_text_bits & codes.MODE_CHECKED_TEXT)
 
     def set_tags(self, on: bool | None) -> None:
         """Text commands with tags (True), without (False), or not known (None: ask again)."""
         self._tags = on
-        self.tags_seen = self.tags_seen or bool(on)
+        self._tags_seen = self._tags_seen or bool(on)
         wire = self._wire
         if isinstance(wire, TextWire):
             wire.tags = bool(on)
@@ -205,7 +223,7 @@ class ProtocolSwitch:
         """The controller restarted: its MODE bits are cleared (text, no checks) and, when
         ``ask_tags`` and the client asks, the tags are to be asked for again (another firmware?)."""
         self._mode = None
-        if self.auto_tags and ask_tags:
+        if self._auto_tags and ask_tags:
             self.set_tags(None)
         self._checks_asked = self._tags is False  # the restart cleared MODE bits 4, 5: ask again
         if isinstance(self._wire, TextWire):
@@ -227,6 +245,64 @@ class ProtocolSwitch:
         return text_wire
 
     # ------------------------------------------------------------------ checked and sequenced text
+
+    def detect_tags(self, wait: float) -> None:
+        """Ask with tagged HELLOs whether the controller takes tagged, checked text commands.
+
+        A tagged reply says yes (a damaged line cannot forge its check), and so does ``ERROR,42`` (it
+        runs checked text only). A controller without tags answers ``ERROR,23``, but so does one with
+        them when the question arrived with its suffix damaged; so "no" takes :data:`UNTAGGED_VERDICT`
+        rounds in a row of an untagged answer to the tagged question followed by the same answer to a
+        plain ``HELLO`` (its HELLO reply, or ERROR 23 from a controller of seed 000's protocol) that
+        proves the line clean. Silence, ERROR 26 or a differing answer starts the count again; no
+        verdict after :data:`PROBE_TRIES` rounds is a LinkError, never a fall back. Once the client
+        has had a tagged reply it never falls back: a controller that took tags and now refuses them
+        is an error."""
+        rounds = 0
+        plain_answer: str | None = None
+        answered_once = False
+        for _ in range(PROBE_TRIES):
+            reply = self._ask(wait, True)
+            if self._tags is not None:
+                return
+            if reply is None:
+                if not self._heard():  # not a byte from the controller yet: it is not there
+                    break
+                rounds = 0
+                continue
+            answered_once = True
+            if isinstance(reply, ErrorReply) and reply.code == codes.E_CHECK_REQUIRED:
+                self.set_tags(True)
+                return
+            if isinstance(reply, ErrorReply) and reply.code == codes.E_CHECKSUM:
+                rounds = 0
+                continue
+            plain = self._ask(wait, False)
+            if self._tags is not None:
+                return
+            answer = None if plain is None else type(plain).__name__ + str(getattr(plain, "code", ""))
+            if answer is None or (plain_answer is not None and answer != plain_answer):
+                rounds, plain_answer = 0, answer
+                continue
+            plain_answer = answer
+            rounds += 1
+            if rounds == UNTAGGED_VERDICT:
+                if self._tags_seen:
+                    raise LinkError(
+                        f"the controller on {self._host.link.url} took tagged, checked commands before "
+                        "and now refuses them (ERROR 23): another firmware? Reconnect to use it"
+                    )
+                self.set_tags(False)
+                return
+        if answered_once:
+            raise LinkError(
+                f"cannot tell whether the controller on {self._host.link.url} takes checked text commands: "
+                f"{PROBE_TRIES} tagged HELLOs had no clear answer (a damaged line?)"
+            )
+        raise LinkTimeout(
+            f"no reply to HELLO, sent to ask whether the controller takes tagged text commands "
+            f"(timeout on {self._host.link.url})"
+        )
 
     def require_checks(self, wait: float, probed: bool = False) -> None:
         """Tags are on: ask the controller to run only checked text commands (MODE bit 4), so that a
@@ -253,7 +329,7 @@ class ProtocolSwitch:
             for bits in (codes.MODE_CHECKED_TEXT | codes.MODE_SEQUENCED_TEXT, codes.MODE_CHECKED_TEXT):
                 # set before it is sent: if its OK is lost the bits may be set, and the session guard
                 # must clear them on the way out (clearing a bit that was never set changes nothing)
-                self.added_text_bits = bits & ~mask
+                self._added_text_bits = bits & ~mask
                 if not bits & codes.MODE_SEQUENCED_TEXT:  # bit 4 alone: a command sent twice runs twice
                     wire.sequence(False)
                     if mask & bits == bits:
@@ -263,7 +339,7 @@ class ProtocolSwitch:
                 except ControllerError as exc:
                     if exc.code != codes.E_UNSUPPORTED:
                         raise
-                    self.added_text_bits = 0  # a controller without the bit: nothing was set
+                    self._added_text_bits = 0  # a controller without the bit: nothing was set
                     continue
                 break
         except BaseException:
