@@ -248,7 +248,11 @@ def test_a_goal_pose_pre_empts_an_action_goal_and_cancel_all(bench: Bench) -> No
     bench.cycle()
     assert bench.statuses() == {5: ABORTED}
     bench.send(6, 2.5, 1.8)
+    bench.cycle()  # goal 6 accepted at 100.06 s
+    bench.cancel(0, stamp_ns=100_040_000_000)  # the goals accepted by 100.04 s: none (goal 5 is over)
     bench.cycle()
+    ((cancel,),) = [bench.replies("cancel_goal")]
+    assert cancel.return_code == 0 and len(cancel.goals_canceling) == 0  # ERROR_NONE, as rcl_action
     bench.cancel(0)  # zero id, zero stamp: every goal
     bench.cycle()
     ((cancel,),) = [bench.replies("cancel_goal")]
@@ -256,12 +260,16 @@ def test_a_goal_pose_pre_empts_an_action_goal_and_cancel_all(bench: Bench) -> No
     assert bench.statuses() == {5: ABORTED, 6: CANCELED}
 
 
-def test_distance_remaining_is_along_the_plan_from_its_nearest_waypoint() -> None:
+def test_distance_remaining_is_along_the_plan_from_the_nearest_point_of_it() -> None:
     plan = PlannedPath(
         np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 2.0]]), Pose2D(1.0, 2.0, 0.0), "grid", 0.3, 0.0
     )
-    assert distance_remaining(plan, Pose2D(0.9, 0.1, 0.0)) == pytest.approx(2.0)
-    assert distance_remaining(plan, Pose2D(0.1, 0.0, 0.0)) == pytest.approx(3.0)
+    assert distance_remaining(plan, Pose2D(0.8, 0.1, 0.0)) == pytest.approx(2.2)  # from (0.8, 0)
+    assert distance_remaining(plan, Pose2D(0.1, 0.0, 0.0)) == pytest.approx(2.9)
+    assert distance_remaining(plan, Pose2D(1.2, 1.5, 0.0)) == pytest.approx(0.5)  # from (1, 1.5)
+    assert distance_remaining(plan, Pose2D(-1.0, 0.0, 0.0)) == pytest.approx(3.0)  # before its start
+    straight = PlannedPath(np.array([[0.0, 0.0], [1.0, 0.0]]), Pose2D(1.0, 0.0, 0.0), "grid", 0.3, 0.0)
+    assert distance_remaining(straight, Pose2D(0.7, 0.05, 0.0)) == pytest.approx(0.3)  # no waypoint near
     assert math.isnan(distance_remaining(None, Pose2D(0.0, 0.0, 0.0)))
 
 

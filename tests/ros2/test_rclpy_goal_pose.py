@@ -163,7 +163,7 @@ goal(*GOAL)
 """
 """The goal_pose scenario: two refusals, a goal pre-empted by GOAL."""
 
-TRUTH = (1.6, 1.4, math.radians(30.0))
+TRUTH = (4.0, 3.0, math.radians(150.0))
 """Where the robot really stands in the initialpose scenario (the localiser starts at the map's start)."""
 
 PLACE = r"""
@@ -251,8 +251,9 @@ def test_initialpose_re_places_the_localiser_then_a_goal_is_reached(
 ) -> None:
     """The robot stands at TRUTH, the localiser starts at the map's start (1, 1, 0): an initialpose in
     ``odom`` is refused (one line), one in ``map`` at the truth re-places the localiser, and the robot
-    then arrives at GOAL by the simulator's truth (without the re-placing it would go by a pose 72 cm and
-    30 degrees off: the scan-to-map matching does not jump that far)."""
+    then arrives at GOAL by the simulator's truth. Without the re-placing it goes by a pose 3.6 m and 150
+    degrees off, which the localiser does not recover from (a first try with 72 cm and 30 degrees did:
+    the test then passed with the re-placing taken out, so the offset was made one it cannot cross)."""
     log = tmp_path / "bridge.mcap"
     x, y, theta = TRUTH
     port = f"sim://omni4?world=room&seed=3&pose={x},{y},{math.degrees(theta):g}"
@@ -265,7 +266,7 @@ def test_initialpose_re_places_the_localiser_then_a_goal_is_reached(
         "initialpose in frame 'odom' refused: the localiser is placed in the map frame 'map'" in refusals[0]
     )
     assert any(
-        "localiser re-placed by initialpose at (1.60, 1.40, 30 deg), spread 5 cm, 5 deg" in line
+        "localiser re-placed by initialpose at (4.00, 3.00, 150 deg), spread 5 cm, 5 deg" in line
         for line in result["lines"]
     ), out
     start = truth(log)[0]

@@ -126,7 +126,8 @@ def collect():
         if hasattr(f, "feedback"):
             feedbacks.setdefault(int(f.goal_id.uuid[0]), []).append(
                 [time.monotonic(), f.feedback.distance_remaining, f.feedback.navigation_time.sec + 1e-9 * f.feedback.navigation_time.nanosec,
-                 f.feedback.current_pose.header.frame_id])
+                 f.feedback.current_pose.header.frame_id, f.feedback.current_pose.pose.position.x,
+                 f.feedback.current_pose.pose.position.y])
     for o in odom.take(N=256):
         if hasattr(o, "pose"):
             poses.append([time.monotonic(), o.pose.pose.position.x, o.pose.pose.position.y])
@@ -222,7 +223,10 @@ def test_navigate_to_pose_goes_pre_empts_and_cancels(
     )
     assert 4.0 <= rate <= 5.5, rate
     assert all(f[3] == "map" for f in fb)
-    assert fb[0][1] > 0.5 and fb[-1][1] < 0.1, (fb[0], fb[-1])
+    for _, left, _, _, x, y in fb:  # along the plan: at least the straight way there, at most twice it
+        straight = math.hypot(GOAL[0] - x, GOAL[1] - y)
+        assert straight - 0.1 <= left <= 2 * straight + 0.1, (left, straight)
+    assert fb[0][1] > fb[-1][1] and fb[-1][1] < 0.1, (fb[0], fb[-1])
     assert all(b[2] >= a[2] for a, b in itertools.pairwise(fb)), "navigation_time went back"
     # the genuine rclpy: the action in its graph, every goal's states in the status array
     peer = result["peer"]

@@ -20,7 +20,7 @@ goto goes to the goals, one at a time, as Nav2's BT navigator does:
 * a new goal (or a ``goal_pose``, an ``initialpose``, an odometry reset) pre-empts the one being gone
   to: it is ABORTED, as Nav2's simple action server aborts the goal a new one replaces;
 * feedback every :data:`FEEDBACK_PERIOD` s: the map-frame pose, the time since the goal came, the
-  distance along the plan from its waypoint nearest the robot, the time remaining at the current
+  distance along the plan from its point nearest the robot, the time remaining at the current
   speed (0 below 1 cm/s or within 10 cm, as Nav2), the re-plans as recoveries;
 * the result when over: SUCCEEDED with ``error_code`` 0 when arrived, else ABORTED with the code of
   :data:`ERROR_CODES` and the reason; a cancel (action_msgs' rules: by id, by stamp, all) stops the
@@ -29,7 +29,6 @@ goto goes to the goals, one at a time, as Nav2's BT navigator does:
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -110,14 +109,22 @@ def uuid_of(message: Any) -> bytes:
 
 
 def distance_remaining(plan: PlannedPath | None, here: Pose2D) -> float:
-    """m along ``plan`` from its waypoint nearest ``here`` to its end (as Nav2's feedback measures it);
-    the straight distance to the goal without a plan."""
+    """m along ``plan`` from the point of it nearest ``here`` to its end (Nav2's feedback measures from
+    the nearest pose of its dense path; a plan here is a polyline of corners, so the robot is projected
+    on its nearest segment); NaN without a plan."""
     if plan is None:
         return math.nan
-    points = plan.waypoints
-    nearest = min(range(len(points)), key=lambda i: math.hypot(points[i][0] - here.x, points[i][1] - here.y))
-    rest = points[nearest:]
-    return sum(math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in itertools.pairwise(rest))
+    points = np.asarray(plan.waypoints, dtype=float)
+    if len(points) < 2:
+        return math.hypot(points[0][0] - here.x, points[0][1] - here.y) if len(points) else math.nan
+    a, b = points[:-1], points[1:]
+    ab = b - a
+    length = np.hypot(ab[:, 0], ab[:, 1])
+    p = np.array([here.x, here.y])
+    t = np.clip(((p - a) * ab).sum(axis=1) / np.maximum(length**2, 1e-12), 0.0, 1.0)
+    nearest = a + t[:, None] * ab
+    i = int(np.argmin(np.hypot(*(nearest - p).T)))
+    return float((1.0 - t[i]) * length[i] + length[i + 1 :].sum())
 
 
 def duration(seconds: float) -> Any:
@@ -221,26 +228,24 @@ class NavigateToPose:
         self._changed = True
 
     def _cancel(self, request: Any) -> None:
-        """action_msgs' rules: a zero id and zero stamp cancel every goal; a zero id and a stamp, the goals
-        accepted at or before it; an id, that goal (and with a stamp, those before it too)."""
+        """action_msgs' rules, as rcl_action applies them: an id and a zero stamp cancel that goal
+        (ERROR_UNKNOWN_GOAL_ID, ERROR_GOAL_TERMINATED when it cannot); otherwise every goal not over
+        that was accepted at or before the stamp (a zero id and zero stamp: every goal) or has the id,
+        ERROR_NONE even when there is none."""
         info = request.goal_info
         uuid = uuid_of(info.goal_id)
         before = int(info.stamp.sec) * 1_000_000_000 + int(info.stamp.nanosec)
-        everything = not any(uuid) and before == 0
-        chosen = [
-            g
-            for g in self.goals_kept
-            if everything or (any(uuid) and g.uuid == uuid) or (before and g.stamp <= before)
-        ]
-        canceling = [g for g in chosen if not g.over]
-        if canceling:
-            code = ERROR_NONE
-        elif any(uuid) and not chosen:
-            code = ERROR_UNKNOWN_GOAL_ID
-        elif chosen:
-            code = ERROR_GOAL_TERMINATED
+        canceling: list[Goal] = []
+        if any(uuid) and before == 0:
+            goal = self.find(uuid)
+            code = (
+                ERROR_UNKNOWN_GOAL_ID if goal is None else ERROR_GOAL_TERMINATED if goal.over else ERROR_NONE
+            )
+            canceling = [goal] if goal is not None and code == ERROR_NONE else []
         else:
-            code = ERROR_NONE  # nothing to cancel: none canceling
+            code = ERROR_NONE
+            limit = before if any(uuid) or before else math.inf
+            canceling = [g for g in self.goals_kept if not g.over and (g.stamp <= limit or g.uuid == uuid)]
         infos = [self._info(g) for g in canceling]
         for goal in canceling:
             self._canceling = goal.result
