@@ -16,6 +16,10 @@
       -> again, until no frontier is left (explored), the time limit passes, or no frontier left
          has a way to it (unreachable, each one's reason said)
 
+Walls the scans saw that the map does not mark (returns beyond the hit range, or a wall seen
+edge-on: :func:`unmarked_walls`) are gone to as frontiers are, to a place within the hit range
+that sees them (:func:`wall_goals`); each is gone to once.
+
 A goal reached is not gone to again, even if it is still a frontier (behind furniture, beyond the
 scanner's range). One the robot set out for and did not reach (stalled, blocked, timed out) is tried
 again on the next map, and given up after :data:`ATTEMPTS` tries, the last reason said. Where the
