@@ -2,12 +2,15 @@
 
 Two passes (the Makefile's ``test``):
 
-1. ``pytest -n 2 -m "not serial"``: the workers take whole **work units**, a unit being a test module
+1. ``pytest -n 4 -m "not serial"``: the workers take whole **work units**, a unit being a test module
    or one of :data:`GROUPS` (modules that must not run beside each other: one worker runs the unit's
    tests one after another, in their usual order). A module is one unit because its module- and
    session-scoped fixtures (a calibration, a recorded run, a ROS 2 session, a browser) are then made
    once, as in a serial run, not once per worker. The costliest units are handed out first
-   (:data:`FIRST`), so that no long one starts last while the other worker idles.
+   (:data:`FIRST`), so that no long one starts last while the other workers idle. Four workers on
+   two cores: the two ROS 2 units (:data:`ROS2_HALF`) keep two of them for most of the pass, waiting
+   on the wall clock (discovery, real-time bridges) at a sixth of a core each; the other two keep
+   both cores busy with everything else meanwhile.
 2. ``pytest -m serial``: the modules of :data:`SERIAL`, alone on the machine, in one process.
 
 A test that must not share the machine (it measures wall-clock time that a busy neighbour would
@@ -35,30 +38,48 @@ SERIAL: dict[str, str] = {
 }
 """Modules (path prefixes) run in the serial pass, and why they need the machine to themselves."""
 
+ROS2_HALF: tuple[str, ...] = (
+    # the ROS 2 modules' wall time, measured 2026-12-06 with pytest --durations at load 10-13: these
+    "test_backends.py",  # 205 s: four operators, each a Python with rclpy in its namespace
+    "test_fleet_hosts.py",  # 112 s: two hosts joined by a veth pair
+    "test_rclpy_values.py",  # 48 s
+    "test_rclpy_interop.py",  # 27 s
+    "test_goal.py",  # 23 s
+    # and the rest: test_rclpy_goal_pose 180 s (three runs to a goal in the map), test_rclpy_scan_map
+    # 70 s, test_fleet_dds 69 s, test_rclpy_cmd_vel 44 s, test_clock 15 s, the others 9 s or less each
+)
+"""The modules of the first ROS 2 unit, ``ros2/1``; the other modules of tests/ros2 are ``ros2/2``, of
+about the same wall time. The two may run side by side: each test's DDS participants live in a private
+network namespace with a private ``/dev/shm`` (tests/ros2/netns_helper.py), so the two cannot meet.
+No more than two at once: their bridges and peers keep the wall clock's pace (and their waiting is what
+the extra workers of ``make test`` fill with other units)."""
+
 GROUPS: dict[str, str] = {
-    "tests/ros2/": "ros2",
+    **{f"tests/ros2/{module}": "ros2/1" for module in ROS2_HALF},
+    "tests/ros2/": "ros2/2",
     "tests/web/test_page.py": "browser",
     "tests/web/test_scan_page.py": "browser",
 }
-"""Path prefix -> work unit: the modules of one unit run on one worker, one after another (one
-chromium at a time; one private network namespace with DDS at a time)."""
+"""Path prefix -> work unit (the first prefix that matches): the modules of one unit run on one worker,
+one after another (one chromium at a time; two ROS 2 modules at a time at most)."""
 
 FIRST: tuple[str, ...] = (
-    # measured 2026-12-06 under pytest -n 2 (CPU s, and wall s at load 12-17: how long a worker is busy)
-    "ros2",  # 104 s, 442 s: bridges, peers and namespaces that wait on the wall clock
+    # CPU s (pytest and its children), and wall s at load 10-17 (how long a unit keeps a worker), 2026-12-06
+    "ros2/1",  # the two ROS 2 units first, on workers of their own: 145 s and 846 s together, mostly
+    "ros2/2",  # waiting (bridges, peers and namespaces that keep the wall clock's pace)
+    "tests/apps/test_calibrate.py",  # 152 s, 966 s: the default run of two floors (108 s) and three quick runs
     "tests/calibration/test_acceptance.py",  # 81 s, 313 s: one calibration of two floors
-    "tests/apps/test_calibrate.py",  # 49 s, 305 s: three quick calibrations
     "tests/cli/test_pty.py",  # 24 s, 165 s
     "tests/navigation/test_runner.py",  # 26 s, 159 s
-    "tests/navigation/test_explore.py",  # 20 s, 123 s
-    "tests/uno/test_sketch.py",  # 16 s, 118 s: arduino-mk builds
-    "tests/contract/test_sonar_stop.py",  # 21 s, 111 s
-    "tests/navigation/test_slipcal.py",  # 17 s, 94 s
-    "tests/navigation/test_goto.py",  # 16 s, 90 s
     "tests/apps/test_follow.py",  # 24 s, 79 s
-    "tests/logs/test_bounded.py",  # 12 s, 73 s
     "tests/sim/test_emulator.py",  # 25 s, 61 s
+    "tests/contract/test_sonar_stop.py",  # 21 s, 111 s
+    "tests/navigation/test_explore.py",  # 20 s, 123 s
+    "tests/navigation/test_slipcal.py",  # 17 s, 94 s
+    "tests/uno/test_sketch.py",  # 16 s, 118 s: arduino-mk builds
+    "tests/navigation/test_goto.py",  # 16 s, 90 s
     "browser",  # 13 s, 52 s
+    "tests/logs/test_bounded.py",  # 12 s, 73 s
 )
 """The costliest units (CPU or waiting, measured), dealt out first in this order."""
 
