@@ -86,7 +86,7 @@ def _children() -> set[int]:
             with open(f"/proc/{me}/task/{tid}/children", encoding="ascii") as f:
                 found.update(int(pid) for pid in f.read().split())
         return found
-    except FileNotFoundError:  # a thread gone between the listing and the read, or no children files
+    except OSError:  # a thread gone between the listing and the read, or no children files
         return _children_by_scan(me)
 
 
