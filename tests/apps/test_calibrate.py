@@ -53,14 +53,15 @@ def test_quick_run_writes_the_file_and_the_report(
     out, report = tmp_path / "cal.yaml", tmp_path / "report"
     # the acceptance robot (tyres +5 %, motors +-10 %) gives the calibration something to correct; with
     # the tyres alone the quick plan's tables were no better than the nominal ones, and were refused.
-    # Better on the whole (2.7 -> 0.8 %), these make ROTATE worse (2.0 -> 3.1 %, issue 24): refused,
-    # so --force writes them, marked
+    # Better on the whole (2.6 -> 0.4 %) and ROTATE within the verdict's margin (1.0 -> 1.9 %; before
+    # the firmware dithered its fractional powers 2.0 -> 3.1 %, refused, issue 24): written, unmarked
+    # (tests/cli/test_outcomes.py checks what --force writes when the verdict refuses)
     argv = ["calibrate", "--quick", "--surface", "wood", "--perturb", "acceptance", "--out", str(out)]
-    assert main([*argv, "--report", str(report), "--force"]) == 1
+    assert main([*argv, "--report", str(report)]) == 0
     text = capsys.readouterr().out
     assert "before, wood" in text and "after (wood calibration), wood" in text
-    assert "worse than before: wood: ROTATE: " in text and "written anyway, --force" in text
-    assert out.read_text().startswith("# WORSE THAN BEFORE: wood: ROTATE: ")
+    assert "worse than before" not in text and "calibration: " + str(out) in text
+    assert not out.read_text().startswith("# WORSE")
     cal = load_calibration(out)
     assert cal.robot == "omni4" and list(cal.surfaces) == ["wood"]
     assert cal.calibration == cal.for_surface("wood")  # one floor: its tables are the file's
@@ -308,7 +309,8 @@ def test_the_default_run_on_omni4_improves_every_part_and_exits_0(
     say, issue 24's verdict refused them: ROTATE 1.6 -> 3.6 % (90 degrees at 90 degrees/s -0.6 ->
     -5.2 %: 61 counts where it needs 62). Measured now: ROTATE 1.6 -> 1.3 % on wood, 1.8 -> 2.5 % on
     carpet (at 90 degrees/s one PWM count is 4.7 % of the rate; carpet's offsets, 41.9 and 42.1,
-    give two motors 61 counts and two 62: -3.1 %)."""
+    give two motors 61 counts and two 62: -3.1 %). With the firmware's dithering and the rate curve's
+    first count (2026-12-06): ROTATE 2.4 -> 1.5 % on wood, 2.5 -> 1.5 % on carpet (90 at 90 -1.6 %)."""
     out = tmp_path / "out"
     assert main(["calibrate", "--out", str(out)]) == 0
     text = capsys.readouterr().out
