@@ -122,12 +122,13 @@ $(ROS2_STAMP): pyproject.toml constraints.txt
 	@$(BIN)/python -m pip install --quiet -c constraints.txt -e '.[ros2-test]' && touch $@ || \
 	  echo "make ros2-interop: Jazzy's rclpy wheels did not install (they exist for CPython 3.11 on x86_64): its interop tests will skip"
 
-# The tests on TEST_JOBS cores (pytest-xdist): the workers take whole modules, the costliest first;
-# then the tests marked `serial` (they time themselves against the wall clock) run alone, in one
-# process (tests/parallel.py says which and why). Both passes run; either failing fails `make test`.
+# The tests on TEST_JOBS workers (pytest-xdist; 4 on two cores: two of them mostly wait on the ROS 2
+# tests' wall clock): the workers take whole modules, the costliest first; then the tests marked
+# `serial` (they time themselves against the wall clock) run alone, in one process (tests/parallel.py
+# says which and why). Both passes run; either failing fails `make test`.
 # `make test TEST_JOBS=0` runs the first pass in one process too; to debug a test, run pytest on it:
 # `.venv/bin/python -m pytest tests/...` (one process, collection order).
-TEST_JOBS ?= 2
+TEST_JOBS ?= 4
 PYTEST := SDL_VIDEODRIVER=dummy MPLBACKEND=Agg $(BIN)/python -m pytest
 test: lint browser avr-tools uno-sim arduino-sketch mcap-readers ros2-interop
 	@$(PYTEST) -q -n $(TEST_JOBS) -m "not serial"; parallel=$$?; \

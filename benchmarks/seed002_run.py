@@ -182,12 +182,12 @@ def seed_changes(robot: RobotDescription, surface: str = "wood") -> dict[str, fl
 
 
 def grip_table(robot: RobotDescription, gear: float) -> str:
-    """Per floor of :mod:`omnibot.sim.surfaces`: the preset's grip (rollers' grip times mu), the
+    """Per floor of :mod:`omnibot.floor.surfaces`: the preset's grip (rollers' grip times mu), the
     accelerations it holds (``floor_grip``'s worst fraction of the planned 3 m/s^2 with the turn's),
     the rollers' grip the seed's run needs there and the mu that is."""
     from omnibot.control.followers.base import PLAN_MARGIN
     from omnibot.control.reach import floor_grip
-    from omnibot.sim.surfaces import SURFACES
+    from omnibot.floor.surfaces import SURFACES
 
     asked = with_limits(
         with_drive(robot, gear, robot.wheels[0].rollers.grip),
@@ -486,7 +486,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _wood_mu() -> float:
-    from omnibot.sim.surfaces import get_surface
+    from omnibot.floor.surfaces import get_surface
 
     return get_surface("wood").mu
 

@@ -74,8 +74,24 @@ def _open_fds() -> dict[int, str]:
 
 
 def _children() -> set[int]:
-    """Pids whose parent is this process (zombies included: not reaped is a leak too)."""
-    me, found = os.getpid(), set()
+    """Pids whose parent is this process (zombies included: not reaped is a leak too).
+
+    Read from each of this process's threads' ``children`` list (Linux 3.5+): a few files, where a
+    scan of every process's ``stat`` costs milliseconds per test on a busy machine (twice per test)."""
+    me = os.getpid()
+    try:
+        tids = os.listdir(f"/proc/{me}/task")
+        found: set[int] = set()
+        for tid in tids:
+            with open(f"/proc/{me}/task/{tid}/children", encoding="ascii") as f:
+                found.update(int(pid) for pid in f.read().split())
+        return found
+    except OSError:  # a thread gone between the listing and the read, or no children files
+        return _children_by_scan(me)
+
+
+def _children_by_scan(me: int) -> set[int]:
+    found = set()
     for entry in os.listdir("/proc"):
         if not entry.isdigit():
             continue

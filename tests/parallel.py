@@ -2,12 +2,15 @@
 
 Two passes (the Makefile's ``test``):
 
-1. ``pytest -n 2 -m "not serial"``: the workers take whole **work units**, a unit being a test module
+1. ``pytest -n 4 -m "not serial"``: the workers take whole **work units**, a unit being a test module
    or one of :data:`GROUPS` (modules that must not run beside each other: one worker runs the unit's
    tests one after another, in their usual order). A module is one unit because its module- and
    session-scoped fixtures (a calibration, a recorded run, a ROS 2 session, a browser) are then made
    once, as in a serial run, not once per worker. The costliest units are handed out first
-   (:data:`FIRST`), so that no long one starts last while the other worker idles.
+   (:data:`FIRST`), so that no long one starts last while the other workers idle. Four workers on
+   two cores: the two ROS 2 units (:data:`ROS2_HALF`) keep two of them for most of the pass, waiting
+   on the wall clock (discovery, real-time bridges) at a sixth of a core each; the other two keep
+   both cores busy with everything else meanwhile.
 2. ``pytest -m serial``: the modules of :data:`SERIAL`, alone on the machine, in one process.
 
 A test that must not share the machine (it measures wall-clock time that a busy neighbour would
@@ -32,33 +35,64 @@ SERIAL: dict[str, str] = {
     "tests/uno/test_line_rate.py": "streams VELs at 115200 baud of wall-clock time: whether the emulated UNO keeps up",
     "tests/ros2/test_bridge_dds.py": "cmd_vel at 20 Hz of wall-clock time, judged by the robot's top speed and stop"
     " (0.23 m/s for 0.2 beside another worker at load 15)",
+    "tests/mapping/test_planner.py::test_ompl_planners_give_clear_paths": "OMPL's planners search for 0.2 s of"
+    " wall-clock time (found no path in it beside three workers at load 25)",
 }
-"""Modules (path prefixes) run in the serial pass, and why they need the machine to themselves."""
+"""Modules or tests (node id prefixes) run in the serial pass, and why they need the machine to themselves."""
+
+ROS2_HALF: tuple[str, ...] = (
+    # the ROS 2 modules' wall time (pytest --durations) in one run of the whole first pass on 4 workers,
+    # the machine at load 10-28 (2026-12-06): these
+    "test_backends.py",  # 299 s: four operators, each a Python with rclpy in its namespace
+    "test_fleet_hosts.py",  # 122 s: two hosts joined by a veth pair
+    "test_goal.py",  # 12-23 s
+    # and the rest: test_rclpy_goal_pose 134 s (three runs to a goal in the map), test_rclpy_scan_map
+    # 70 s, test_rclpy_values 56 s, test_clock 37 s, test_fleet_dds 27 s, test_rclpy_cmd_vel 22 s,
+    # test_rclpy_interop 22 s, test_cmd_vel 13 s, the others a few s each
+)
+"""The modules of the first ROS 2 unit, ``ros2/1``; the other modules of tests/ros2 are ``ros2/2``, of
+about the same wall time. The two may run side by side: each test's DDS participants live in a private
+network namespace with a private ``/dev/shm`` (tests/ros2/netns_helper.py), so the two cannot meet.
+No more than two at once: their bridges and peers keep the wall clock's pace (and their waiting is what
+the extra workers of ``make test`` fill with other units)."""
 
 GROUPS: dict[str, str] = {
-    "tests/ros2/": "ros2",
+    **{f"tests/ros2/{module}": "ros2/1" for module in ROS2_HALF},
+    "tests/ros2/": "ros2/2",
     "tests/web/test_page.py": "browser",
     "tests/web/test_scan_page.py": "browser",
 }
-"""Path prefix -> work unit: the modules of one unit run on one worker, one after another (one
-chromium at a time; one private network namespace with DDS at a time)."""
+"""Path prefix -> work unit (the first prefix that matches): the modules of one unit run on one worker,
+one after another (one chromium at a time; two ROS 2 modules at a time at most)."""
 
 FIRST: tuple[str, ...] = (
-    # measured 2026-12-06 under pytest -n 2 (CPU s, and wall s at load 12-17: how long a worker is busy)
-    "ros2",  # 104 s, 442 s: bridges, peers and namespaces that wait on the wall clock
-    "tests/calibration/test_acceptance.py",  # 81 s, 313 s: one calibration of two floors
-    "tests/apps/test_calibrate.py",  # 49 s, 305 s: three quick calibrations
-    "tests/cli/test_pty.py",  # 24 s, 165 s
-    "tests/navigation/test_runner.py",  # 26 s, 159 s
-    "tests/navigation/test_explore.py",  # 20 s, 123 s
-    "tests/uno/test_sketch.py",  # 16 s, 118 s: arduino-mk builds
-    "tests/contract/test_sonar_stop.py",  # 21 s, 111 s
-    "tests/navigation/test_slipcal.py",  # 17 s, 94 s
-    "tests/navigation/test_goto.py",  # 16 s, 90 s
-    "tests/apps/test_follow.py",  # 24 s, 79 s
-    "tests/logs/test_bounded.py",  # 12 s, 73 s
-    "tests/sim/test_emulator.py",  # 25 s, 61 s
-    "browser",  # 13 s, 52 s
+    # how long each unit kept its worker (pytest --durations, summed) in one run of the first pass on 4
+    # workers at load 10-28 (2026-12-06: CPU times were a third to a tenth of these), and CPU s where
+    # measured alone
+    "ros2/1",  # 440 s; the two ROS 2 units first, on workers of their own: 145 s of CPU together,
+    "ros2/2",  # 390 s; mostly waiting (bridges, peers and namespaces that keep the wall clock's pace)
+    "tests/apps/test_calibrate.py",  # 991 s, 152 s CPU: the default run of two floors (108 s), three quick runs
+    "tests/calibration/test_acceptance.py",  # 81 s CPU: one calibration of two floors (600 s guard hit at load 25)
+    "tests/navigation/test_explore.py",  # 189 s
+    "tests/uno/test_sketch.py",  # 186 s: arduino-mk builds
+    "tests/apps/test_follow.py",  # 166 s
+    "tests/sim/test_emulator.py",  # 160 s: one start compiles the kernels with no numba cache
+    "tests/navigation/test_runner.py",  # 156 s
+    "tests/test_packaging.py",  # 135 s: builds the wheel and sdist, installs into fresh venvs
+    "tests/apps/test_goto.py",  # 130 s
+    "tests/cli/test_pty.py",  # 125 s
+    "tests/navigation/test_slipcal.py",  # 117 s
+    "tests/calibration/test_motors.py",  # 104 s
+    "tests/cli/test_sim_link.py",  # 82 s
+    "tests/benchmarks/test_sim_speed.py",  # 61 s
+    "tests/control/test_tracker_heading.py",  # 61 s
+    "tests/navigation/test_goto.py",  # 59 s
+    "tests/calibration/test_rollers.py",  # 37 s
+    "tests/benchmarks/test_attack_suite.py",  # 34 s
+    "browser",  # 31 s
+    "tests/calibration/test_reachmoves.py",  # 29 s
+    "tests/navigation/test_goto_source.py",  # 29 s
+    "tests/apps/test_mapping.py",  # 27 s
 )
 """The costliest units (CPU or waiting, measured), dealt out first in this order."""
 

@@ -5,10 +5,10 @@
 
 namespace bin {
 
-#define KEPT_BYTES 16     // replies up to this many frame bytes are kept; longer ones (STATUS) run again
+#define KEPT_BYTES BOARD_KEPT_BYTES  // replies up to this many frame bytes are kept; longer ones run again
 #define EVENT_BYTES 12
-#define BACKLOG 8         // events waiting for the send window (binlink.py keeps 16); more are dropped
-#define CHUNK_MAX 48      // command frames are at most 34 bytes (5 varints of 5); longer chunks are dropped
+#define BACKLOG BOARD_BACKLOG  // events waiting for the send window; more are dropped
+#define CHUNK_MAX BOARD_CHUNK_MAX  // longer chunks are dropped unanswered (board.h)
 #define FRAME_MAX 72      // largest frame we send (a TEL of every group, 32-bit extremes)
 
 // The window this controller takes and announces in its HELLO reply: on the UNO the protocol's least.
@@ -320,7 +320,7 @@ static void frame(uint8_t *f, uint8_t n) {
     if (kind == 1) return duplicate(s);
     if (kind == 2) return;
     cur_seq = s;
-    int32_t ints[P_PARAMS_MAX + 1];
+    int32_t ints[CMD_PARAMS_MAX + 1];
     uint8_t count = 0;
     end = o;
     for (uint8_t k = 2; k < end;) {
@@ -333,7 +333,7 @@ static void frame(uint8_t *f, uint8_t n) {
             shift += 7;
             if (b < 0x80) break;
         }
-        if (count <= P_PARAMS_MAX) ints[count] = z & 1 ? -(int32_t)((z + 1) >> 1) : (int32_t)(z >> 1);
+        if (count <= CMD_PARAMS_MAX) ints[count] = z & 1 ? -(int32_t)((z + 1) >> 1) : (int32_t)(z >> 1);
         if (count < 255) count++;
     }
     on_frame(type, ints, count);

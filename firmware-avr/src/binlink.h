@@ -4,6 +4,8 @@
 #pragma once
 #include <stdint.h>
 
+#include "features.h"
+
 namespace bin {
 
 // A new session (entering binary mode): forget frames, sequence state and waiting events.

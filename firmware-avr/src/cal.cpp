@@ -18,13 +18,17 @@ struct Store {
     Table kl[CAL_CURVES];
     int16_t offset[MOTORS], rcos[MOTORS], rsin[MOTORS], speed[MOTORS];
     Table gain[MOTORS];
+#if FEATURE_REACH
+    Table reach;  // knots {folded course degrees, cm/s}
+#endif
 };
-static_assert(sizeof(Store) <= 1024, "calibration tables exceed the EEPROM");
+static_assert(sizeof(Store) <= E2END + 1, "calibration tables exceed the EEPROM");
 
 static Store EEMEM ee;
 // tells this robot's defaults apart from another build's tables, and this layout (0xCA11: speed terms,
 // byte courses) from an older one
-static const uint16_t MAGIC = 0xCA11 ^ (MOTORS << 8) ^ DEFAULT_K;
+// (and, on the Mega, the layout with the reach from the one without)
+static const uint16_t MAGIC = 0xCA11 ^ (MOTORS << 8) ^ DEFAULT_K ^ (FEATURE_REACH << 15);
 
 #define EE(field) (&ee.field)
 
@@ -105,6 +109,12 @@ static void load_defaults() {
         eeprom_update_word((uint16_t *)EE(speed[i]), pgm_read_word(&DEFAULT_SPEED[i]));
         load_table(EE(gain[i]), table, src);
     }
+#if FEATURE_REACH
+    Table t;
+    t.n = DEFAULT_REACH_N;
+    memcpy_P(t.k, DEFAULT_REACH, sizeof DEFAULT_REACH);
+    eeprom_update_block(&t, EE(reach), 1 + sizeof DEFAULT_REACH);
+#endif
     eeprom_update_word(EE(magic), MAGIC);
 }
 
@@ -134,6 +144,9 @@ float cal_k() { return rd16(EE(k)) * 0.1f; }
 float cal_kt(float p) { return interp(EE(kt), p); }
 float cal_kr(float p) { return interp(EE(kr), p); }
 float cal_coast(float v) { return interp(EE(coast), v); }
+#if FEATURE_REACH
+int16_t cal_reach(float folded) { return interp(EE(reach), folded) * 1000.0f; }  // knots in cm/s, not x 1000
+#endif
 float cal_roller(uint8_t which, uint8_t i) { return rd16(which ? EE(rsin[i]) : EE(rcos[i])) * 0.1f; }
 
 float cal_kl(float power, float folded) {
@@ -199,6 +212,9 @@ static bool write(int16_t table, int16_t index, int16_t x, int16_t y) {
         return true;
     }
     if (table == P_CAL_ROLLER_COAST) return x >= 0 && write_knot(EE(coast), index, x, y);
+#if FEATURE_REACH
+    if (table == P_CAL_REACH) return x >= 0 && x <= P_CAL_COURSE_MAX && y >= 0 && write_knot(EE(reach), index, x, y);
+#endif
     if (x < 0 || y < 0) return false;
     if (table == P_CAL_OFFSET) {
         if (index < 0 || index >= MOTORS || x != 0) return false;

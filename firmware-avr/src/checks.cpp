@@ -18,6 +18,9 @@ static uint8_t check_move(int16_t L, int16_t V, int16_t D, int16_t C, uint8_t k)
 }
 
 uint8_t check(uint8_t kw, const int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
+#if FEATURE_VEL_ACCEL
+    if (kw == K_VEL) hi = n == 6 ? 4 : P_VEL_PARAMS_MAX;  // 4, 5 (A) or 7 (AX, AY, AW)
+#endif
     if (n < lo || n > hi) return P_E_PARAM_COUNT;
     switch (kw) {
         case K_MOVE:
@@ -54,7 +57,11 @@ uint8_t check(uint8_t kw, const int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
             return 0;
         case K_HELLO:
             for (uint8_t i = 0; i < n; i++)
+#if FEATURE_VEL_ACCEL
+                if (p[i] >= P_PROTOCOL_VERSION && p[i] <= P_VERSION_MAX) return 0;
+#else
                 if (p[i] == P_PROTOCOL_VERSION) return 0;
+#endif
             return n ? P_E_UNSUPPORTED : 0;
     }
     return 0;

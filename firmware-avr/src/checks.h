@@ -2,6 +2,8 @@
 #pragma once
 #include <stdint.h>
 
+#include "features.h"
+
 #define UNO_MODE_MASK                                                                                \
     (P_MODE_SIMULATION | P_MODE_CLOSED_LOOP | P_MODE_BINARY | P_MODE_REFUSE_UNCOVERED | P_MODE_CHECKED_TEXT | \
      P_MODE_SEQUENCED_TEXT)

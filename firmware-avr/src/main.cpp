@@ -46,6 +46,11 @@ static uint32_t tel_next;
 static PGM_P code_text(uint8_t code) {
     for (uint8_t i = 0; i < CODE_TEXT_COUNT; i++)
         if (pgm_read_byte(&CODE_TEXTS[i].code) == code) return (PGM_P)pgm_read_ptr(&CODE_TEXTS[i].text);
+#if FEATURE_PROGRESS || FEATURE_REACH
+    for (uint8_t i = 0; i < FEATURE_CODE_TEXT_COUNT; i++)
+        if (pgm_read_byte(&FEATURE_CODE_TEXTS[i].code) == code)
+            return (PGM_P)pgm_read_ptr(&FEATURE_CODE_TEXTS[i].text);
+#endif
     return PSTR("");
 }
 
@@ -95,10 +100,16 @@ static uint8_t state() {
     return ex.moving() ? P_STATE_MOVING : P_STATE_IDLE;
 }
 
+#if FEATURE_VEL_ACCEL
+static uint8_t hello_version = P_PROTOCOL_VERSION;  // the last HELLO's: the highest version both speak
+#else
+#define hello_version P_PROTOCOL_VERSION
+#endif
+
 static void hello() {
     if (st.binary) {
         bin::begin(T_HELLO_REPLY, bin::seq());
-        bin::put(P_PROTOCOL_VERSION);
+        bin::put(hello_version);
         bin::put(MOTORS);
         bin::put(bin::window());
         bin::text_P(PSTR(ROBOT_NAME));
@@ -106,7 +117,7 @@ static void hello() {
         return;
     }
     out_P(PSTR("HELLO,"));
-    out_i(P_PROTOCOL_VERSION);
+    out_i(hello_version);
     out_P(PSTR("," ROBOT_NAME));
     comma_i(MOTORS);
     end_reply();
@@ -246,7 +257,11 @@ static void execute(uint8_t kw, int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
             break;
         case K_VEL:
             ok();
+#if FEATURE_VEL_ACCEL
+            ex.vel(p[0], p[1], p[2], p[3], n == 5 ? p[4] : 0, n == 7 ? p + 4 : 0);
+#else
             ex.vel(p[0], p[1], p[2], p[3]);
+#endif
             check_halt();
             break;
         case K_STOP: {
@@ -263,6 +278,11 @@ static void execute(uint8_t kw, int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
             status();
             break;
         case K_HELLO:
+#if FEATURE_VEL_ACCEL
+            hello_version = P_PROTOCOL_VERSION;  // a bare HELLO: the version every host speaks
+            for (uint8_t i = 0; i < n; i++)
+                if (p[i] > hello_version && p[i] <= P_VERSION_MAX) hello_version = p[i];
+#endif
             hello();
             break;
         case K_MODE: {
@@ -297,6 +317,13 @@ static void execute(uint8_t kw, int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
             ok();
             break;
         case K_CAL:
+#if FEATURE_LANDING
+            if (p[0] == P_CAL_SLIP) {  // the floor's creep: a landing's travel (RAM, as on MicroPython)
+                if (p[2] == 0 && ex.landing.set_slip(p[1], p[3])) ok();
+                else error(P_E_CALIBRATION);
+                break;
+            }
+#endif
             if (cal_write(p[0], p[1], p[2], p[3])) ok();
             else error(P_E_CALIBRATION);
             break;
@@ -339,7 +366,11 @@ static uint8_t parse(char *cmd, uint8_t len, const Keyword *&e, int16_t *p, uint
     uint8_t fields = 0;
     for (char *c = field_end; c < end; c++)
         if (*c == ',') fields++;
+#if FEATURE_VEL_ACCEL
+    if (fields > (pgm_read_byte(&e->id) == K_VEL ? P_VEL_PARAMS_MAX : P_PARAMS_MAX)) return P_E_PARAM_COUNT;
+#else
     if (fields > P_PARAMS_MAX) return P_E_PARAM_COUNT;
+#endif
     uint8_t inf_at = pgm_read_byte(&e->inf);
     bool wide = false;
     n = 0;
@@ -399,7 +430,7 @@ static void handle(char *cmd, uint8_t len) {
         for (uint8_t k = 0; k < tag_len; k++) tag = tag * 10 + cmd[tag_at + k] - '0';
     }
     const Keyword *e;
-    int16_t p[P_PARAMS_MAX];
+    int16_t p[CMD_PARAMS_MAX];
     uint8_t n;
     uint8_t code = parse(cmd, end, e, p, n);
     if (code == 255) return;
@@ -448,8 +479,12 @@ void on_frame(uint8_t type, int32_t *ints, uint8_t n) {
         if (pgm_read_byte(&KEYWORDS[k].id) == type) e = &KEYWORDS[k];
     if (!e) return error(P_E_UNKNOWN);
     if (n == 255) return error(P_E_NOT_INTEGER);
+#if FEATURE_VEL_ACCEL
+    if (n > (type == K_VEL ? P_VEL_PARAMS_MAX : P_PARAMS_MAX)) return error(P_E_PARAM_COUNT);
+#else
     if (n > P_PARAMS_MAX) return error(P_E_PARAM_COUNT);
-    int16_t p[P_PARAMS_MAX];
+#endif
+    int16_t p[CMD_PARAMS_MAX];
     for (uint8_t i = 0; i < n; i++) {
         if (ints[i] < -32768 || ints[i] > 32767) return error(P_E_RANGE16);
         p[i] = ints[i];

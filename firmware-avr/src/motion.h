@@ -4,6 +4,8 @@
 #pragma once
 #include <stdint.h>
 
+#include "features.h"
+#include "landing.h"
 #include "power.h"
 
 #define NONE 0
@@ -55,6 +57,33 @@ struct Executor {
     uint8_t rising;             // bit i: wheel i's target stepped and it is not yet within the band
     int32_t last_counts[MOTORS];
     int32_t acc_us;
+#if FEATURE_VEL_ACCEL
+    float acc[3];       // a VEL's planned body acceleration, m/s^2, m/s^2, rad/s^2
+    bool acc_on;        // the VEL carries one
+    bool acc_turning;   // version 4's: the wheels' part takes the turning axes' term (accel)
+#endif
+#if FEATURE_BRAKE
+    bool braking, slewing;       // a VEL's watchdog ran out on the closed loop: down to rest
+    float ref[3];                // the slewed twist driven now, m/s, m/s, rad/s
+    float wheel_speed[MOTORS];   // rad/s, the speed loop's last measure
+    int32_t slew_due, brake_us, brake_min_us, rest_due;
+    int32_t rest_ref[MOTORS];
+#endif
+#if FEATURE_LANDING
+    Landing landing;
+    float land_scale;    // the landing's ramp: share of the asked speed driven now
+    int32_t land_us;     // since the landing's last update
+    int64_t deadline;    // us a landing motion may still take before it ends short
+    float unit[3];       // the landing motion's twist per unit of its speed
+#endif
+#if FEATURE_PROGRESS
+    // the MOVE progress check (progress.py): off, a MOVE running, its coast watched
+    uint8_t watch;
+    float share[MOTORS];  // m of travel along the MOVE's course per count of each wheel
+    int32_t watch_start[MOTORS], watch_last[MOTORS];
+    float watch_distance;  // m
+    int32_t watch_coast_us, watch_due;
+#endif
 
     void init();
     bool moving() const { return kind != NONE; }
@@ -67,7 +96,12 @@ struct Executor {
     void brake();    // after stop(): every motor braked (L298: EN high, IN1 = IN2 = 0) until the next power
     void relimit();  // the guard's inputs changed: re-drive the travel with its new factor
     void reset_move();
+#if FEATURE_VEL_ACCEL
+    // accel: version 3's A (cm/s^2 along the travel); body: version 4's AX, AY, AW (cm/s^2, deg/s^2)
+    void vel(int16_t vx, int16_t vy, int16_t w, int16_t t_ms, int16_t accel, const int16_t *body);
+#else
     void vel(int16_t vx, int16_t vy, int16_t w, int16_t t_ms);
+#endif
     void step(int32_t dt_us);
 
   private:
@@ -85,6 +119,29 @@ struct Executor {
     void update_targets();
     void feedback_step(int32_t dt_us);
     int16_t limit(float p);
+#if FEATURE_VEL_ACCEL
+    void accel(float vx, float vy, float w, float k);
+#endif
+#if FEATURE_BRAKE
+    void brake_to_rest();
+    void slew(int32_t dt_us);
+    bool at_rest(int32_t dt_us);
+#endif
+#if FEATURE_LANDING
+    bool lands() const;
+    void land_reset();
+    void land_start(float ux, float uy, float uw, bool rotate, float goal, float nominal);
+    void timed(int64_t duration, int64_t carry);
+    void land_step();
+    void land_off();
+    float land_profile(int32_t dt_us);
+    float chain_rest(float need);
+    float exit_speed();
+#endif
+#if FEATURE_PROGRESS
+    void watch_start_move(float ux, float uy, float distance_m);
+    void watch_step(int32_t dt_us);
+#endif
 };
 
 extern Executor ex;

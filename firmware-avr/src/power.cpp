@@ -17,7 +17,11 @@ float rim(uint8_t i, uint8_t j) { return rim_f[i][j]; }
 
 // Angle (0..90 degrees) between a course and the nearest of K_l's fold axes (calibration.py fold_course):
 // the idle axes on omni wheels, the body's x axis on a mecanum base.
-static float fold_course(float course) {
+#if !FEATURE_REACH
+static
+#endif
+    float
+    fold_course(float course) {
     float best = 90.0f;
     for (uint8_t a = 0; a < KL_AXES; a++) {
         // course in [-180, 180], axis in [0, 180): (course - axis) mod 180 without fmodf

@@ -2,6 +2,8 @@
 #pragma once
 #include <stdint.h>
 
+#include "features.h"
+
 #define SATURATED 1
 #define DEADBAND 2
 #define WEAK 16  // safety.h owns 4 and 8
@@ -23,4 +25,7 @@ struct PowerModel {
 };
 
 void rim_init();  // at start-up
+#if FEATURE_REACH
+float fold_course(float course);  // degrees: 0..90 from the nearest of K_l's (and the reach's) fold axes
+#endif
 float rim(uint8_t i, uint8_t j);

@@ -93,7 +93,8 @@ def test_a_curve_that_runs_below_its_dead_band_starts_where_its_levels_say() -> 
 
     levels = (11, 28, 50, 77)
     curve = RateCurve.fit([RatePoint(p, 0.0, 0.0, 0.0, rotation(p), 4) for p in levels], deadband=2)
-    assert curve.powers[0] == 0.0 and curve.rims[0] == 0.0  # the line's crossing (-2.4) clipped
+    assert curve.powers[:2] == (0.0, 1.0) and curve.rims[0] == 0.0  # the line's crossing (-2.4) is
+    assert curve.rims[1] == pytest.approx(rotation(1.0))  # below the first count: it carries the robot
     at_dead_band = RateCurve((2.0, *levels), (0.0, *(rotation(p) for p in levels)))
     for rim in (0.12, 0.151, 0.2, 0.3, 0.45):
         needed = (rim - 0.0168) / 0.00713
@@ -104,6 +105,27 @@ def test_a_curve_that_runs_below_its_dead_band_starts_where_its_levels_say() -> 
     assert RateCurve.fit(convex, deadband=int(DEADBAND)).powers[0] == DEADBAND
     late = [RatePoint(p, 0.0, 0.0, 0.0, SLOPE * (p - 60.0), 4) for p in (70, 90, 110)]
     assert RateCurve.fit(late, deadband=int(DEADBAND)).powers[0] == DEADBAND
+
+
+def test_a_slow_anchor_below_the_levels_keeps_the_first_counts_speed() -> None:
+    """mecanum4 forward on the simulated carpet: through the motor map's offsets (47 counts) the first
+    nominal count already carries the robot at 0.078 m/s (rim 0.0696 + 0.0088 p). The slow end's MOVEs
+    at 0.1 m/s, given 6.29 counts, went 0.125 m/s; the curve through them and (0, 0) asked 4.8 counts
+    for 0.1 m/s (+12 %, the check's +11.5 %). From the first count it asks the 3.5 it needs."""
+
+    def forward(p: float) -> float:
+        return 0.0696 + 0.0088 * p
+
+    levels = (11, 28, 49, 75)
+    curve = RateCurve.fit([RatePoint(p, 0.0, 0.0, 0.0, forward(p), 4) for p in levels], deadband=2)
+    anchored = curve.with_point(6.29, forward(6.29))
+    assert anchored.powers[:3] == (0.0, 1.0, 6.29) and anchored.rims[1] == pytest.approx(forward(1.0))
+    for rim in (0.1, 0.12, 0.15, 0.3):
+        assert anchored.power_for(rim) == pytest.approx((rim - 0.0696) / 0.0088, abs=0.25), rim
+    through_zero = RateCurve((0.0, 6.29, *levels), (0.0, *(forward(p) for p in (6.29, *levels))))
+    assert through_zero.power_for(0.1) > 1.3 * anchored.power_for(0.1)  # what it asked before: too much
+    late = RateCurve.fit([RatePoint(p, 0.0, 0.0, 0.0, 0.01 * (p - 20), 4) for p in (30, 50)], deadband=22)
+    assert late.with_point(25.0, 0.05).powers[:2] == (20.0, 25.0)  # a start above the first count stays
 
 
 def test_factor_table_reproduces_the_needed_power() -> None:

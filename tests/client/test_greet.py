@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from omnibot.client.client import UNTAGGED_VERDICT, RobotClient
+from omnibot.client.client import RobotClient
 from omnibot.client.greet import wait_for_controller
+from omnibot.client.switch import UNTAGGED_VERDICT
 from omnibot.errors import ControllerError, LinkTimeout
 from omnibot.transport.lockstep import LockstepLink
 

@@ -2,15 +2,19 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import NoReturn
+
 import pytest
 
 from omnibot.client import ErrorEvent, EventRecorder, RobotClient
 from omnibot.client.greet import wait_for_controller
+from omnibot.client.switch import UNTAGGED_VERDICT, ProtocolSwitch
 from omnibot.client.wire import BinaryWire
-from omnibot.errors import LinkTimeout, ProtocolError
+from omnibot.errors import LinkError, LinkTimeout, ProtocolError
 from omnibot.firmware.controller import Controller
 from omnibot.protocol import codes
-from omnibot.protocol.messages import Ok, Vel
+from omnibot.protocol.messages import ErrorReply, Ok, Reply, Vel
 from omnibot.sim.device import SimDevice
 from omnibot.transport import FaultLink, LockstepLink
 from omnibot.transport.base import Link
@@ -194,3 +198,74 @@ def test_binary_sends_up_to_the_window_the_controller_announces(
         assert max(flying) == window
         assert all(isinstance(call.result(), Ok) for call in calls)
         assert ran == [k % 90 for k in range(3 * window)]
+
+
+def _switch(
+    host: RobotClient,
+    tags: bool | None,
+    answers: Sequence[Reply | None] = (),
+    asked: list[bool] | None = None,
+) -> ProtocolSwitch:
+    """A ProtocolSwitch of ``host`` whose link fails the test and whose tag questions get ``answers``
+    in turn (each question's ``tagged`` appended to ``asked``)."""
+    replies = iter(answers)
+
+    def nothing(*_: object) -> NoReturn:
+        raise AssertionError("the switch talked to the controller")
+
+    def ask(wait: float, tagged: bool) -> Reply | None:
+        if asked is not None:
+            asked.append(tagged)
+        return next(replies)
+
+    return ProtocolSwitch(
+        host, tags, write=nothing, read=nothing, ask=ask, heard=lambda: True, forget=nothing
+    )
+
+
+def test_the_switch_follows_what_the_client_tells_it() -> None:
+    """ProtocolSwitch on its own: the MODE bits answered pick the wire (bit 2 binary, bit 5 sequenced
+    text with tags), a reset or a failed link puts it back; none of it talks to the controller."""
+    with RobotClient(LockstepLink(Silent()), "omni4") as host:
+        switch = _switch(host, True)
+        assert switch.tags is True and switch.checks_wanted and not switch.binary and switch.mode is None
+        switch.mode_set(codes.MODE_CHECKED_TEXT | codes.MODE_SEQUENCED_TEXT)
+        assert (
+            switch.sequenced
+            and not switch.binary
+            and switch.mode == codes.MODE_CHECKED_TEXT | codes.MODE_SEQUENCED_TEXT
+        )
+        switch.mode_set(codes.MODE_BINARY)
+        assert isinstance(switch.wire, BinaryWire) and switch.binary and not switch.sequenced
+        switch.link_failed()
+        assert switch.binary and switch.mode == codes.MODE_BINARY
+        switch.controller_reset(ask_tags=True)
+        assert not switch.binary and switch.mode is None and switch.tags is True  # tags given, not asked
+        switch.mode_reported(codes.MODE_CLOSED_LOOP)
+        assert switch.mode == codes.MODE_CLOSED_LOOP and not switch.sequenced
+        asking = _switch(host, None)
+        asking.set_tags(True)
+        asking.controller_reset(ask_tags=False)  # a reset while the tags are being asked about
+        assert asking.tags is True
+        asking.controller_reset(ask_tags=True)
+        assert asking.tags is None and asking.auto_tags and not asking.checks_wanted
+
+
+def test_the_switch_decides_on_tags_from_the_answers_alone() -> None:
+    """The tag question's verdict: ERROR 23 to the tagged HELLO and the same to a plain one, on
+    UNTAGGED_VERDICT rounds in a row, is a controller without tags; ERROR 42 one that runs checked
+    text only; a controller that took tags before and now refuses them is an error."""
+    refused = ErrorReply(codes.E_UNKNOWN)
+    with RobotClient(LockstepLink(Silent()), "omni4") as host:
+        asked: list[bool] = []
+        untagged = _switch(host, None, [refused] * (2 * UNTAGGED_VERDICT), asked)
+        untagged.detect_tags(0.1)
+        assert untagged.tags is False and asked == [True, False] * UNTAGGED_VERDICT
+        checked = _switch(host, None, [ErrorReply(codes.E_CHECK_REQUIRED)])
+        checked.detect_tags(0.1)
+        assert checked.tags is True and checked.checks_wanted
+        again = _switch(host, None, [refused] * (2 * UNTAGGED_VERDICT))
+        again.set_tags(True)
+        again.controller_reset(ask_tags=True)
+        with pytest.raises(LinkError, match="now refuses them"):
+            again.detect_tags(0.1)

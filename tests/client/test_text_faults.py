@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import pytest
 
 from omnibot.client import EventRecorder, ResetEvent, RobotClient
-from omnibot.client.client import UNTAGGED_VERDICT
+from omnibot.client.switch import UNTAGGED_VERDICT
 from omnibot.errors import ControllerError, LinkTimeout, OmnibotError
 from omnibot.firmware.controller import Controller
 from omnibot.protocol import codes, text

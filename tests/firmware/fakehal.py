@@ -7,6 +7,9 @@ and collected with :meth:`FakeHAL.lines`. Encoders follow the applied powers whe
 
 from omnibot.firmware.hal import HAL
 
+POWER_LOG = 256
+"""The latest set_power calls the fake keeps (at least; MicroPython's heap is small)."""
+
 
 class FakeHAL(HAL):
     def __init__(self, motors: int = 4, sonars: int = 1, gyro: "int | None" = None) -> None:
@@ -44,6 +47,8 @@ class FakeHAL(HAL):
         self.powers[i] = pwm
         self.braked[i] = False
         self.power_log.append((self.t, i, pwm))
+        if len(self.power_log) > 2 * POWER_LOG:  # an open-loop motion's dithered powers change each period
+            del self.power_log[:POWER_LOG]
 
     def brake(self, i: int) -> bool:
         self.braked[i] = self.can_brake

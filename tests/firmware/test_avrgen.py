@@ -73,7 +73,7 @@ def test_the_uno_takes_vel_without_its_acceleration(robot: str) -> None:
     assert _define(text, "P_PROTOCOL_VERSION") == "2"
 
 
-def test_the_mega_header_differs_from_the_unos_only_in_its_pin_map() -> None:
+def test_the_mega_header_differs_from_the_unos_only_in_its_pin_map_and_features() -> None:
     uno, mega = avrgen.header_source("omni4"), avrgen.header_source("omni4", "mega")
     cut = "pin map (docs/uno.md) ---- */"
     assert uno.split(cut)[0].replace("Arduino UNO", "") == mega.split(cut)[0].replace("Arduino Mega 2560", "")
@@ -83,6 +83,43 @@ def test_the_mega_header_differs_from_the_unos_only_in_its_pin_map() -> None:
     assert _define(mega, "SONAR_TRIG_PORT") == "PORTL" and _define(mega, "SONAR_TRIG_BIT") == "2"
     assert "mcu atmega2560" in avrgen.board_source("omni4", "mega")
     assert "mcu" not in avrgen.board_source("omni4")  # the harness's default chip
+
+
+def _floats(text: str, name: str) -> list[float]:
+    m = re.search(rf"{name}\[.*?PROGMEM = \{{(.*?)\}};", text)
+    assert m, name
+    return [float(v.strip(" {}f")) for v in m.group(1).split(",")]
+
+
+@pytest.mark.parametrize("robot", avrgen.ROBOTS)
+def test_the_mega_header_switches_on_what_the_unos_flash_cannot_hold(robot: str) -> None:
+    """Versions 3 and 4's VEL acceleration, the MOVE progress check, the calibrated reach, braking to
+    rest, the closed-loop landing: 1 on the Mega with the config's tables and the two codes' texts,
+    absent on the UNO (features.h: 0)."""
+    uno, mega = avrgen.header_source(robot), avrgen.header_source(robot, "mega")
+    assert "FEATURE_" not in uno and "TEXT_17" not in uno and "TEXT_18" not in uno
+    for name in (
+        "FEATURE_VEL_ACCEL",
+        "FEATURE_PROGRESS",
+        "FEATURE_REACH",
+        "FEATURE_BRAKE",
+        "FEATURE_LANDING",
+    ):
+        assert _define(mega, name) == "1"
+    assert _define(mega, "P_VERSION_MAX") == str(codes.VERSIONS[-1])
+    assert _define(mega, "P_VEL_PARAMS_MAX") == str(codes.VEL_PARAMS_MAX)
+    for code in avrgen.FEATURE_TEXTS:
+        assert f'TEXT_{code}[] PROGMEM = "{codes.TEXTS[code]}";' in mega
+    cfg = build_config(load_robot(robot))
+    assert _floats(mega, "ACCEL_BODY_FF") == pytest.approx([v for row in cfg["body_ff"] for v in row])
+    wheel = [cfg["wheel_ff"][i] * j for i, row in enumerate(cfg["J"]) for j in row]
+    assert _floats(mega, "ACCEL_WHEEL_FF") == pytest.approx(wheel)
+    assert _floats(mega, "TRAVEL") == pytest.approx([v for row in cfg["travel"] for v in row])
+    assert float(_define(mega, "PROGRESS_TOLERANCE").rstrip("f")) == cfg["progress_tolerance"]
+    assert _define(mega, "DEFAULT_REACH_N") == str(len(cfg["reach"][0]))
+    assert _floats(mega, "TURN") == pytest.approx(cfg["turn"])
+    assert _floats(mega, "CREEP_MIX") == pytest.approx([v for row in cfg["creep_mix"] for v in row])
+    assert float(_define(mega, "LAND_ACCEL").rstrip("f")) == cfg["land_accel"][0]
 
 
 def test_mega_pins_are_checked_against_the_megas_own_map(monkeypatch: pytest.MonkeyPatch) -> None:

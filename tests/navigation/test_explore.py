@@ -12,7 +12,14 @@ from omnibot.cli import main
 from omnibot.mapping.grid import OccupancyGrid
 from omnibot.mapping.planner import inflate
 from omnibot.motion import Pose2D
-from omnibot.navigation.explore import choose_frontier, exploring_speed, frontier_goals, frontiers
+from omnibot.navigation.explore import (
+    choose_frontier,
+    exploring_speed,
+    frontier_goals,
+    frontiers,
+    unmarked_walls,
+    wall_goals,
+)
 from omnibot.robot.description import load_robot
 
 
@@ -91,6 +98,43 @@ def test_only_a_frontier_with_no_way_even_through_the_unknown_is_unreachable() -
     # from inside the closet, the doorway is the one without a way
     choice, unreachable = choose_frontier(cmap, optimistic, Pose2D(2.5, 0.5, 0.0), goals)
     assert choice is not None and choice[0] == closet and [(x, y) for x, y, _ in unreachable] == [doorway]
+
+
+def room_with_an_unmarked_wall() -> tuple[OccupancyGrid, np.ndarray]:
+    """A 4 m x 3 m room seen whole and walled round, but its east wall (x 3.95-4.0) only seen from
+    afar: returns fell there (3 each) and the map does not mark it (its cells unknown)."""
+    data = np.zeros((60, 80), dtype=np.int8)
+    data[0, :] = data[-1, :] = data[:, 0] = 100
+    data[1:-1, -1] = -1
+    returns = np.zeros(data.shape, dtype=np.int32)
+    returns[data == 100] = 5
+    returns[10:50, -1] = 3
+    return OccupancyGrid(data, 0.05, Pose2D(0.0, 0.0, 0.0)), returns
+
+
+def test_a_wall_the_scans_saw_but_the_map_does_not_mark_is_gone_to_within_the_hit_range() -> None:
+    grid, returns = room_with_an_unmarked_wall()
+    cmap = inflate(grid, robot_radius=0.15, margin=0.05)
+    unmarked = unmarked_walls(grid, returns)
+    assert unmarked[10:50, -1].all() and unmarked.sum() == 40  # the marked walls are not
+    goals = wall_goals(grid, cmap, returns)
+    assert len(goals) == 1
+    (gx, gy), (cx, cy) = goals[0]
+    assert cx == pytest.approx(3.975) and cy == pytest.approx(1.5)
+    assert 0.4 <= np.hypot(gx - cx, gy - cy) <= 1.2  # within the hit range
+    assert abs(gy - cy) < 0.2  # square on to the wall
+    # a wall hidden behind another (no line of sight from anywhere within reach): no goal
+    hidden = grid.data.copy()
+    hidden[:, 70] = 100
+    assert (
+        wall_goals(
+            OccupancyGrid(hidden, 0.05), inflate(OccupancyGrid(hidden, 0.05), robot_radius=0.15), returns
+        )
+        == []
+    )
+    # marked, or a stray return or two: nothing to see
+    returns[10:50, -1] = 1
+    assert wall_goals(grid, cmap, returns) == []
 
 
 def test_the_robot_explores_at_4_cm_per_scan() -> None:

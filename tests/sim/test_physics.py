@@ -10,9 +10,10 @@ import pytest
 import yaml
 
 from omnibot.errors import ConfigError, SimulationError
+from omnibot.floor.contact import GRAVITY
 from omnibot.robot import kinematics as kin
 from omnibot.robot.description import PRESET_DIR, RobotDescription, load_robot, parse_description
-from omnibot.sim.physics import GRAVITY, Physics, static_loads
+from omnibot.sim.physics import Physics
 
 PRESETS = ("omni4", "omni3", "mecanum4")
 
@@ -309,14 +310,6 @@ def test_lifted_wheel_carries_no_load_and_the_rest_carry_the_weight() -> None:
         ph.lifted[0, 1] = True  # read-only: assign a whole mask instead
     ph.lifted = np.zeros((1, 4), dtype=bool)
     np.testing.assert_allclose(ph.normal_load, robot.mass * GRAVITY / 4)
-
-
-def test_static_loads_clip_tipping_solutions() -> None:
-    x = np.array([[0.1, -0.1, 0.0]])
-    y = np.array([[0.0, 0.1, -0.1]])
-    loads = static_loads(x, y, np.array([2.0]), np.array([[False, False, True]]))
-    assert (loads >= 0).all()
-    np.testing.assert_allclose(loads.sum(), 2.0 * GRAVITY)
 
 
 def test_a_lifted_wheel_changes_the_motion() -> None:

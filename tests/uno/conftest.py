@@ -57,12 +57,16 @@ BUILD_IDS = [robot if board == "uno" else f"{robot}-{board}" for robot, board in
 
 
 def start(
-    robot: str, range_cm: int | None = None, report: bool = False, board: str = "uno"
+    robot: str,
+    range_cm: int | None = None,
+    report: bool = False,
+    board: str = "uno",
+    encoder_cps: float | None = None,
 ) -> tuple[UnoEmulator, Port]:
     reason = missing_tools()
     if reason:
         pytest.skip(f"emulated UNO: {reason}")
-    emu = UnoEmulator(robot, range_cm=range_cm, report=report, board=board)
+    emu = UnoEmulator(robot, range_cm=range_cm, report=report, board=board, encoder_cps=encoder_cps)
     port = Port(emu.path)
     assert port.lines(1) == [f"HELLO,{codes.PROTOCOL_VERSION},{robot},4"]
     return emu, port

@@ -169,3 +169,62 @@ def test_a_client_keeps_to_the_window_the_uno_announces(board: str) -> None:
             client.use_text()
     finally:
         emu.close()
+
+
+@pytest.mark.parametrize("board", list(WINDOWS))
+def test_a_duplicate_status_gets_its_kept_reply_on_the_mega(board: str) -> None:
+    """The Mega keeps replies of up to 32 frame bytes, a STATUS's included, so a duplicate STATUS is
+    answered with the state of then (moving, before a STOP), as the MicroPython firmware answers it;
+    the UNO keeps 16 bytes (OK, ERROR, HELLO) and runs that STATUS again: the state of now (idle)."""
+    emu, port = start("omni4", board=board)
+    try:
+        assert port.ask("MODE,4") == ["OK"]
+        os.write(port.fd, encode_message(codes.HELLO, 1, [VERSION], sync=True))
+        os.write(port.fd, encode_message(MOVE, 2, [30000, 40, 0, 0]))
+        os.write(port.fd, encode_message(codes.STATUS, 3))  # moving: its reply is over 16 bytes
+        os.write(port.fd, encode_message(codes.STOP, 4))
+        os.write(port.fd, encode_message(codes.STATUS, 3))  # the host did not hear the first reply
+        got = b""
+        deadline = time.monotonic() + 3.0
+        replies: list[tuple[object, ...]] = []
+        while time.monotonic() < deadline and len(replies) < 2:
+            if select.select([port.fd], [], [], 0.05)[0]:
+                got += os.read(port.fd, 4096)
+            replies = [f for f in decode_all(got) if isinstance(f, tuple) and f[0] == codes.STATUS_REPLY]
+    finally:
+        port.close()
+        emu.close()
+    states = [f[3][0] for f in replies]  # type: ignore[index]
+    again = codes.STATE_MOVING if board == "mega" else codes.STATE_IDLE
+    assert states == [codes.STATE_MOVING, again], replies
+
+
+@pytest.mark.parametrize("board", list(WINDOWS))
+def test_a_frame_with_too_many_integers_is_error_24_on_the_mega(board: str) -> None:
+    """A command frame longer than the UNO's 48-byte chunk (30 integers) is dropped unanswered there;
+    the Mega reads frames of any length and answers it as the MicroPython firmware does: ERROR 24."""
+    frames = [encode_message(codes.HELLO, 1, [VERSION], sync=True), encode_message(MOVE, 2, [1000] * 30)]
+    config = build_config(load_robot("omni4"))
+    hal = FakeHAL(config["motors"], len(config["sonar_period_min_ms"]))
+    ctrl = Controller(hal, config)
+    hal.rx += b"MODE,4\n"
+    ctrl.poll()
+    hal.take()
+    hal.rx += b"".join(frames)
+    ctrl.poll()
+    expected, _ = windows(decode_all(hal.take()))
+    assert expected[-1] == (codes.ERROR, 2, False, (codes.E_PARAM_COUNT,), b"")
+    emu, port = start("omni4", board=board)
+    try:
+        assert port.ask("MODE,4") == ["OK"]
+        os.write(port.fd, b"".join(frames))
+        got = b""
+        deadline = time.monotonic() + 1.0
+        while time.monotonic() < deadline:
+            if select.select([port.fd], [], [], 0.05)[0]:
+                got += os.read(port.fd, 4096)
+    finally:
+        port.close()
+        emu.close()
+    ours, _ = windows(decode_all(got))
+    assert ours == (expected if board == "mega" else expected[:-1]), ours

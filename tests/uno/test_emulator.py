@@ -82,18 +82,43 @@ SCRIPT = [
     ";".join([checked("STATUS", "8"), checked("STATUS", "7"), *[checked("DELTA,0,0,0,0,-1", "8")] * 2]),
     ";".join([checked("STOP", "20"), checked("MODE,0", "21")]),
 ]
+# What the Mega runs beyond the UNO (docs/uno.md, "The Arduino Mega 2560"), against the same firmware.
+MEGA_SCRIPT = [
+    # protocol versions 3 and 4: the highest shared one answers; VEL takes 4, 5 or 7 parameters
+    "HELLO,2,3;HELLO,2,3,4;HELLO,4,5;HELLO;HELLO,3",
+    "VEL,30,0,45,100,140,-20,300;STOP;VEL,10,0,0,100,140;STOP;VEL,10,0,0,100,1,2;VEL,1,2,3,4,5,6,7,8",
+    # the closed loop feeds a VEL's planned acceleration forward: the second VEL's powers hold it
+    # (the speed loop's correction is still 0 then, a control period is 10 ms)
+    "MODE,2;VEL,30,40,0,200;VEL,30,40,0,200,150;STATUS;STOP;MODE,0",
+    "MODE,2;VEL,30,40,0,200;VEL,30,40,0,200,-150;STATUS;STOP;MODE,0",
+    "MODE,2;VEL,30,0,45,200;VEL,30,0,45,200,140,-20,300;STATUS;STOP;MODE,0",
+    "MODE,2;VEL,0,0,90,200;VEL,0,0,90,200,0,0,-400;STATUS;STOP;MODE,0",
+    "VEL,30,40,0,200;VEL,30,40,0,200,150;STATUS;STOP",  # open loop: A changes nothing
+    # the calibrated reach (CAL table 8): an open-loop MOVE asked faster runs at it, WARN 18
+    "CAL,8,0,0,60;CAL,8,1,45,40;MOVE,30000,80,0,0;STATUS;STOP;MOVE,30000,80,30,0;STATUS;STOP",
+    "MOVE,30000,50,-170,0;STATUS;STOP;MOVE,30000,80,0,0;DELTA,0,0,30,0,1;STATUS;STOP",
+    "MOVE,30000,30,45,0;STATUS;STOP;CAL,8,0,91,50;CAL,8,0,-1,50;CAL,8,0,0,-5;CAL,8,2,0,50;CAL,8,1,0,50",
+    "MODE,2;MOVE,30000,80,30,0;STATUS;STOP;MODE,0;CAL,8,0,0,0;MOVE,30000,80,30,0;STATUS;STOP",
+    # the floor's creep for the closed-loop landing (CAL table 9): roll, combined, scale; bad ones
+    "CAL,9,0,0,500;CAL,9,1,0,3300;CAL,9,2,0,10500;CAL,9,2,0,4000;CAL,9,3,0,1;CAL,9,0,1,5;CAL,9,1,0,-1",
+    # MODE 2: a MOVE lands, its plan starting at the crawl (2 cm/s of the 60 asked): its first powers
+    "MODE,2;MOVE,100,60,0,0;MOVE,100,60,0,0;STATUS;STOP;CAL,9,0,0,0;CAL,9,1,0,0;CAL,9,2,0,10000;MODE,0",
+]
+AFTER_IDLE = ("IDLE", f"WARN,{codes.W_SHORT},{codes.TEXTS[codes.W_SHORT]}")
+"""What follows a motion's end, which the reference (time standing still) never reaches: IDLE, and on
+the Mega a MOVE's progress check (WARN 17: the emulated wheels stand still)."""
 POWERS = re.compile(r"POWER((?:,-?\d+)+);")
 
 
-def reference(robot: str) -> list[list[str]]:
-    """The MicroPython firmware's replies to each line of SCRIPT (time stands still), without the
-    IDLE events: on the UNO time runs, and a short MOVE may end between two replies."""
+def reference(robot: str, script: list[str] = SCRIPT) -> list[list[str]]:
+    """The MicroPython firmware's replies to each line of ``script`` (time stands still), without the
+    IDLE events: on the UNO time runs, and a short MOVE may end between two replies (AFTER_IDLE)."""
     config = build_config(load_robot(robot))
     hal = FakeHAL(config["motors"], len(config["sonar_period_min_ms"]))
     ctrl = Controller(hal, config)
     hal.lines()
     out: list[list[str]] = []
-    for text in SCRIPT:
+    for text in script:
         hal.send(text + "\n")
         ctrl.poll()
         out.append([line for line in hal.lines() if line != "IDLE"])
@@ -108,13 +133,26 @@ def split_powers(line: str) -> tuple[str, list[int]]:
 
 
 def test_same_replies_and_powers_as_the_micropython_firmware(uno: tuple[UnoEmulator, Port]) -> None:
-    emu, port = uno
-    robot = emu.robot
+    same_as_micropython(*uno, SCRIPT)
+
+
+@pytest.mark.parametrize("robot", ["omni4", "mecanum4"])
+def test_the_mega_runs_versions_3_and_4_and_the_reach_as_the_micropython_firmware(robot: str) -> None:
+    emu, port = start(robot, range_cm=100, board="mega")
+    try:
+        same_as_micropython(emu, port, MEGA_SCRIPT)
+    finally:
+        port.close()
+        emu.close()
+
+
+def same_as_micropython(emu: UnoEmulator, port: Port, script: list[str]) -> None:
+    """Each line of ``script`` gets the MicroPython firmware's replies, powers within one count."""
     expected: list[str] = []
     got: list[str] = []
-    for text, replies in zip(SCRIPT, reference(robot), strict=True):
+    for text, replies in zip(script, reference(emu.robot, script), strict=True):
         expected += replies
-        got += port.ask(text, len(replies), skip=("IDLE",))
+        got += port.ask(text, len(replies), skip=AFTER_IDLE)
     for g, e in zip(got, expected, strict=True):
         g_text, g_powers = split_powers(g)
         e_text, e_powers = split_powers(e)
@@ -180,17 +218,44 @@ def test_hello_names_the_robot(robot: str, board: str) -> None:
         emu.close()
 
 
-def test_the_uno_speaks_version_2_only_and_refuses_vels_acceleration(
-    uno: tuple[UnoEmulator, Port],
-) -> None:
+@pytest.mark.parametrize("robot", ["omni4", "mecanum4"])
+def test_the_uno_speaks_version_2_only_and_refuses_vels_acceleration(robot: str) -> None:
     """It has no room for VEL's planned acceleration (docs/uno.md): asked for 2 and 3 it agrees on
-    2, so a host sends no A, and a VEL with A typed by hand is refused, never half read."""
-    _, port = uno
-    name = port.ask("HELLO")[0].split(",")[2]
-    assert port.ask("HELLO,2,3") == [f"HELLO,2,{name},4"]
-    assert port.ask("VEL,10,0,0,100,140") == ["ERROR,24,wrong number of parameters"]
-    assert port.ask("VEL,10,0,0,100") == ["OK"]
-    assert port.ask("STOP", 2) == ["OK", "IDLE"]
+    2, so a host sends no A, and a VEL with A typed by hand is refused, never half read; nor for
+    the reach: CAL table 8 is ERROR 38 (the Mega takes both, MEGA_SCRIPT)."""
+    emu, port = start(robot)
+    try:
+        assert port.ask("HELLO,2,3") == [f"HELLO,2,{robot},4"]
+        assert port.ask("VEL,10,0,0,100,140") == ["ERROR,24,wrong number of parameters"]
+        # held for 1 s (VEL's longest): a STOP later than a 100 ms hold's end (a loaded host) found it
+        # already stopped by the watchdog and answered IDLE before OK
+        assert port.ask("VEL,10,0,0,1000") == ["OK"]
+        assert port.ask("STOP", 2) == ["OK", "IDLE"]
+        assert port.ask("CAL,8,0,0,60") == [f"ERROR,38,{codes.TEXTS[codes.E_CALIBRATION]}"]
+    finally:
+        port.close()
+        emu.close()
+
+
+@pytest.mark.parametrize(
+    ("board", "cps", "short"),
+    [("mega", 0, True), ("mega", 300, True), ("mega", 4000, False), ("uno", 0, False)],
+)
+def test_a_move_short_on_its_encoders_warns_on_the_mega(board: str, cps: float, short: bool) -> None:
+    """The MOVE progress check (progress.py, WARN 17 after IDLE): once the wheels stand still after
+    a MOVE, a travel on the encoders short of its distance by more than 10 % is said. Encoders that
+    do not turn or turn slowly (``cps`` counts/s at full power) fall short; turning fast, they do
+    not. The UNO has no room for the check: it says nothing."""
+    emu, port = start("omni4", board=board, encoder_cps=cps or None)
+    try:
+        assert port.ask("MOVE,20,40,0,0", 2) == ["OK", "IDLE"]
+        time.sleep(0.2)  # the coast: judged once no count moved for 10 ms
+        got = port.ask("STATUS", 2 if short else 1)
+    finally:
+        port.close()
+        emu.close()
+    warn = f"WARN,{codes.W_SHORT},{codes.TEXTS[codes.W_SHORT]}"
+    assert got[0] == warn if short else got[0].startswith("STATUS,1,"), got
 
 
 @pytest.mark.parametrize(("robot", "board"), BUILDS, ids=BUILD_IDS)
@@ -232,3 +297,30 @@ def test_each_encoder_counts_its_own_wheel(robot: str, board: str) -> None:
     assert [c > 0 for c in counts] == [True, False, True, False], counts
     magnitudes = [abs(c) for c in counts]
     assert 0 < magnitudes[0] < magnitudes[1] < magnitudes[2] < magnitudes[3], counts
+
+
+@pytest.mark.parametrize("board", ["uno", "mega"])
+def test_a_vels_watchdog_on_the_closed_loop_brakes_to_rest_on_the_mega(board: str) -> None:
+    """A VEL not refreshed on the closed loop (MODE 2): the UNO cuts the motors when its watchdog
+    runs out (100 ms); the Mega, as the MicroPython firmware (motion.py brake_to_rest), slews the
+    twist down at omni4's acceleration limit (0.4 m/s at 2 m/s^2: 0.2 s, the powers falling step by
+    step) and ends the VEL (IDLE) once the wheels stand still. The emulated wheels turn with the duty."""
+    emu, port = start("omni4", report=True, board=board, encoder_cps=2600)
+    try:
+        assert port.ask("MODE,2") == ["OK"]
+        port.write("VEL,40,0,0,100\n")
+        t0, duties = emu.duties()
+        driven: list[int] = []
+        while any(duties):
+            t, duties = emu.duties()
+            driven.append(abs(duties[1]))
+        assert port.lines(2) == ["OK", "IDLE"]
+    finally:
+        port.close()
+        emu.close()
+    seconds = (t - t0) / 1e6  # emulated
+    if board == "uno":
+        assert 0.09 <= seconds <= 0.12, seconds
+    else:
+        assert 0.28 <= seconds <= 1.0, seconds
+        assert len(set(driven)) >= 10, driven  # stepped down, not cut

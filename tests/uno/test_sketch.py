@@ -18,7 +18,7 @@ from omnibot.protocol import codes
 from omnibot.uno.emulator import FIRMWARE_DIR, UnoEmulator, missing_tools
 
 from .conftest import BUILD_IDS, BUILDS, Port
-from .test_emulator import SCRIPT, reference, split_powers
+from .test_emulator import AFTER_IDLE, SCRIPT, reference, split_powers
 
 ROBOTS = ("omni4", "mecanum4")
 FLASH_LIMIT = 32256  # 32 KB less optiboot's 512 bytes
@@ -170,7 +170,7 @@ def test_arduino_build_answers_as_the_bare_build(arduino_build: tuple[str, str, 
         assert port.lines(1) == [f"HELLO,{codes.PROTOCOL_VERSION},{robot},4"]
         assert port.ask("HELLO") == [f"HELLO,{codes.PROTOCOL_VERSION},{robot},4"]
         for text, replies in zip(SCRIPT, reference(robot), strict=True):
-            got = port.ask(text, len(replies), skip=("IDLE",))
+            got = port.ask(text, len(replies), skip=AFTER_IDLE)
             for g, e in zip(got, replies, strict=True):
                 g_text, g_powers = split_powers(g)
                 e_text, e_powers = split_powers(e)

@@ -336,3 +336,54 @@ static const float ROLLER_PITCH[MOTORS] PROGMEM = {55.0f, 55.0f, 55.0f, 55.0f};
 #define BATTERY_STOP 29197U  // 6.600 V
 #define BATTERY_HYST 442U  // 0.100 V
 #define BATTERY_CAP 127  // largest power below limit
+
+/* ---- the Mega's features beyond the UNO's flash (docs/uno.md) ---- */
+/* protocol versions 3 and 4: VEL's planned acceleration A, the body's AX, AY, AW (motion.py) */
+#define FEATURE_VEL_ACCEL 1
+#define P_VERSION_MAX 4
+#define P_VEL_PARAMS_MAX 7
+/* PWM counts per m/s^2 (x, y) and rad/s^2 of the body's acceleration (body_ff); per unit of the */
+/* body-frame twist's rate through the wheel's own inertia (wheel_ff times the wheel's row of J) */
+static const float ACCEL_BODY_FF[MOTORS][3] PROGMEM = {{0.0f, 19.675926f, 0.685327f}, {19.675926f, 0.0f, 0.685327f}, {0.0f, -19.675926f, 0.685327f}, {-19.675926f, 0.0f, 0.685327f}};
+static const float ACCEL_WHEEL_FF[MOTORS][3] PROGMEM = {{7.228845126006995e-17f, 1.1805599999999998f, 0.11333375999999999f}, {1.1805599999999998f, 0.0f, 0.11333375999999999f}, {7.228845126006995e-17f, -1.1805599999999998f, 0.11333375999999999f}, {-1.1805599999999998f, 1.445769025201399e-16f, 0.11333375999999999f}};
+/* the MOVE progress check (progress.py, WARN 17): body travel (m) along x and y per count */
+#define FEATURE_PROGRESS 1
+#define PROGRESS_TOLERANCE 0.1f
+#define PROGRESS_COAST_MAX_MS 3000
+static const float TRAVEL[2][MOTORS] PROGMEM = {{0.0f, 0.000178499583f, 0.0f, -0.000178499583f}, {0.000178499583f, -0.0f, -0.000178499583f, 0.0f}};
+/* a VEL's watchdog on the closed loop brakes to rest (motion.py brake_to_rest): the twist slewed */
+/* down at the acceleration limits (m/s^2, rad/s^2), the wheels at rest below REST_COUNTS a window */
+#define FEATURE_BRAKE 1
+#define BRAKE_ACCEL_MAX 2.0f
+#define BRAKE_ALPHA_MAX 19.99999999543341f
+#define BRAKE_MAX_US 3000000L
+#define REST_WINDOW_US 50000L
+static const uint8_t REST_COUNTS[MOTORS] PROGMEM = {1, 1, 1, 1};
+/* the closed-loop landing (landing.py, CAL table 9): the body's turn (rad) per count of each wheel, */
+/* the plan's accelerations (m/s^2, rad/s^2), the floor's creep (roll, combined, scale) and its rows */
+#define FEATURE_LANDING 1
+static const float TURN[MOTORS] PROGMEM = {0.000929685326f, 0.000929685326f, 0.000929685326f, 0.000929685326f};
+#define LAND_ACCEL 1.0f
+#define LAND_ACCEL_W 10.0f
+#define LAND_LAG_S 0.03f
+#define LAND_CRAWL 0.02f
+#define LAND_CRAWL_W 0.2f
+#define LAND_TOLERANCE 0.001f
+#define LAND_TOLERANCE_W 0.005f
+#define LAND_ROLL_EPS 0.01f
+#define LAND_FAR_US 1000000L
+#define LAND_CHAIN_GUARD 64
+static const float DEFAULT_SLIP[3] PROGMEM = {0.0f, 0.0f, 1.0f};
+static const float CREEP_ROLL[MOTORS][3] PROGMEM = {{-1.0f, 0.0f, 0.0f}, {0.0f, 1.0f, 0.0f}, {1.0f, 0.0f, -0.0f}, {-0.0f, -1.0f, 0.0f}};
+static const float CREEP_RIM[MOTORS][3] PROGMEM = {{0.0f, 1.0f, 0.096f}, {1.0f, 0.0f, 0.096f}, {0.0f, -1.0f, 0.096f}, {-1.0f, 0.0f, 0.096f}};
+static const float CREEP_MIX[MOTORS][MOTORS] PROGMEM = {{-0.0f, 20.0f, 0.0f, -20.0f}, {-20.0f, 0.0f, 20.0f, -0.0f}, {-0.0f, -20.0f, -0.0f, 20.0f}, {20.0f, 0.0f, -20.0f, -0.0f}};
+/* the calibrated reach (CAL table 8, WARN 18): knots {folded course deg, cm/s}; 0: none */
+#define FEATURE_REACH 1
+#define DEFAULT_REACH_N 1
+static const Knot DEFAULT_REACH[DEFAULT_REACH_N] PROGMEM = {{0, 0}};
+static const char TEXT_17[] PROGMEM = "MOVE fell short of its distance (encoders)";
+static const char TEXT_18[] PROGMEM = "speed reduced to the calibrated reach";
+static const CodeText FEATURE_CODE_TEXTS[2] PROGMEM = {
+    {17, TEXT_17}, {18, TEXT_18}
+};
+#define FEATURE_CODE_TEXT_COUNT 2

@@ -128,7 +128,7 @@ def _surfaces(text: str | None, simulated: bool) -> list[str]:
     if not names or len(set(names)) != len(names):
         raise ConfigError(f"expected distinct comma-separated surface names, got {text!r}", key="--surface")
     if simulated:
-        from omnibot.sim.surfaces import get_surface
+        from omnibot.floor.surfaces import get_surface
 
         for name in names:
             try:

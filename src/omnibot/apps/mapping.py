@@ -155,7 +155,7 @@ def run(args: argparse.Namespace) -> int:
     mapping = _Mapping(args)
     parts: Parts | None = None
     try:
-        parts = run_in_this_thread(args, url, config, path, mapping.attach, _say)
+        parts = run_in_this_thread(args, url, config, path, mapping.attach, _say, frame=mapping.map_to_odom)
     finally:
         mapping.close()
     return mapping.finish(out, parts, args.resolution)
@@ -182,12 +182,22 @@ def _explore(args: argparse.Namespace, url: str, out: Path) -> int:
                 mapping.attach(runtime, session, estimator=False)
                 sink = mapping.sink
                 _say(f"exploring for at most {limit:g} s")
+                snapshots: list[Any] = []
+
+                def grid_now() -> Any:
+                    snapshots[:] = [sink.snapshot()]
+                    return snapshots[0](args.resolution, mapping.noise)
+
+                def returns_now(grid: Any) -> Any:  # the returns of the snapshot that map was made of
+                    return snapshots[0].returns(grid)
+
                 result = explore(
                     runtime,
                     robot,
-                    lambda: sink.grid(args.resolution, mapping.noise),
+                    grid_now,
                     sink.pose_now,
                     scan=sink.points_now,
+                    returns=returns_now,
                     time_limit=limit,
                     options=replace(GOTO, speed=args.speed),
                     say=_say,
@@ -211,6 +221,11 @@ class _Mapping:
         self.noise: Any = None
         self.scans: Any = None
         self.runtime: Any = None
+
+    def map_to_odom(self) -> Any:
+        """The SLAM's ``map -> odom`` now (None before its first keyframe, or before the sink): a
+        path is followed in the map's frame, on the SLAM's pose, not on the drifting odometry."""
+        return None if self.sink is None else self.sink.map_to_odom_now()
 
     def attach(self, runtime: Any, session: Any, *, estimator: bool = True) -> list[Any]:
         from omnibot.estimation.estimator import make_estimator

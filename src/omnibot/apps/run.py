@@ -238,8 +238,11 @@ def run_in_this_thread(
     path: Any,
     attach: Attach | None = None,
     say: Callable[[str], None] = _say,
+    frame: Callable[[], Any] | None = None,
 ) -> Parts:
-    """``run``'s front ends (and ``attach``'s sinks) on one runtime in this thread (no dashboard)."""
+    """``run``'s front ends (and ``attach``'s sinks) on one runtime in this thread (no dashboard);
+    ``frame``: the follower steers in it (:class:`~omnibot.runtime.sources.FollowerSource`'s, a
+    SLAM's ``map -> odom``)."""
     from omnibot.cliargs import recording_of, use_calibration
     from omnibot.client.errors import NotSupported
     from omnibot.client.session import robot_session
@@ -272,6 +275,8 @@ def run_in_this_thread(
             Parts(closers=attached).close()
             raise
         parts.closers.extend(attached)
+        if parts.follower is not None:
+            parts.follower.frame = frame
         if path is not None:
             parts.closers.append(lambda: start_sonars(client, robot, 0.0))  # left not pinging, as found
         try:

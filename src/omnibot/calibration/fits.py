@@ -200,18 +200,7 @@ class RateCurve:
             )
         powers = [float(p) for p, _ in pts]
         rims = isotonic([max(r, 0.0) for _, r in pts])
-        if deadband is not None and rims[0] > 0.0 and deadband < powers[0]:
-            # The dead band is where a short run from rest turns the robot visibly. Where the line
-            # through the first two levels reaches zero lower (rotation through a motor map, whose
-            # offsets already make up the friction, runs steadily at no power above them), the curve
-            # starts there: anchored at the dead band its first segment would be steeper than the
-            # levels above and the cubic would bulge over them, under-powering slow ROTATEs.
-            powers.insert(0, min(float(deadband), _zero_crossing(powers, rims)))
-            rims.insert(0, 0.0)
-        elif rims[0] > 0.0:
-            # no standstill measured: extend the first segment down to zero rim speed
-            powers.insert(0, _zero_crossing(powers, rims))
-            rims.insert(0, 0.0)
+        _start(powers, rims, deadband)
         return cls(tuple(powers), tuple(rims))
 
     @property
@@ -237,6 +226,8 @@ class RateCurve:
             + [0.0 if d[i - 1] * d[i] <= 0 else 0.5 * (d[i - 1] + d[i]) for i in range(1, n - 1)]
             + [d[-1]]
         )
+        if n > 2 and ps[0] == 0.0 and ps[1] == 1.0 and rs[0] == 0.0 < rs[1]:
+            m[1] = d[1]  # the first count's jump (:func:`_start`): the line of the levels goes on from it
         for i in range(n - 1):
             if d[i] == 0.0:
                 m[i] = m[i + 1] = 0.0
@@ -295,10 +286,15 @@ class RateCurve:
     def with_point(self, power: float, rim: float) -> RateCurve:
         """The curve with (``power``, ``rim``) measured as well: the point added (replacing a level
         at the same power) and the curve made monotone again."""
+        deadband = self.deadband
         pts = sorted(
-            [(p, r) for p, r in zip(self.powers, self.rims, strict=True) if p != power] + [(power, rim)]
-        )
-        return RateCurve(tuple(p for p, _ in pts), tuple(isotonic([r for _, r in pts])))
+            [(p, r) for p, r in zip(self.powers, self.rims, strict=True) if p != power and p > 1.0]
+            + [(power, rim)]
+        )  # the start (at most the first count, :func:`_start`) drawn again through the new point
+        powers = [p for p, _ in pts]
+        rims = isotonic([r for _, r in pts])
+        _start(powers, rims, deadband)
+        return RateCurve(tuple(powers), tuple(rims))
 
     def slope_k(self) -> float:
         """PWM counts per m/s of rim speed over the upper half of the curve: the motor's K."""
@@ -317,12 +313,35 @@ class RateCurve:
         return {"powers": list(self.powers), "rims": list(self.rims)}
 
 
-def _zero_crossing(powers: list[float], rims: list[float]) -> float:
-    for i in range(1, len(powers)):
-        if rims[i] > rims[0]:
-            slope = (rims[i] - rims[0]) / (powers[i] - powers[0])
-            return max(0.0, powers[0] - rims[0] / slope)
-    return max(0.0, powers[0] - 1.0)
+def _start(powers: list[float], rims: list[float], deadband: float | None) -> None:
+    """Where the curve through the levels ``powers``, ``rims`` (sorted, made monotone) starts: the
+    points below its first level inserted in place.
+
+    The dead band is where a short run from rest turns the robot visibly. Where the line through the
+    first two levels reaches zero lower (through a motor map, whose offsets already make up the
+    friction, the robot runs steadily at no power above them), the curve starts there: anchored at
+    the dead band its first segment would be steeper than the levels above and the cubic would bulge
+    over them, under-powering slow ROTATEs. Where that line reaches zero below the first count, the
+    first count already carries the robot at the line's speed there (the firmware ramps a motor's
+    offset in over its first count, so the power jumps from 0 to the offset and one count): the curve
+    jumps from (0, 0) to that point, where it went to (0, 0) in a line before and so gave slow MOVEs
+    too much power (mecanum4 forward on carpet at 0.1 m/s: +12 %, its first count 0.078 m/s)."""
+    if not powers or rims[0] <= 0.0:
+        return
+    slope = next(
+        ((rims[i] - rims[0]) / (powers[i] - powers[0]) for i in range(1, len(powers)) if rims[i] > rims[0]),
+        None,
+    )
+    zero = powers[0] - rims[0] / slope if slope is not None else powers[0] - 1.0
+    if slope is not None and zero < 1.0 < powers[0] and (deadband is None or deadband < powers[0]):
+        first = rims[0] - slope * (powers[0] - 1.0)
+        powers[:0] = [0.0, 1.0]
+        rims[:0] = [0.0, first]
+        return
+    if deadband is not None and deadband < powers[0]:
+        zero = min(float(deadband), zero)
+    powers.insert(0, max(0.0, zero))
+    rims.insert(0, 0.0)
 
 
 # --------------------------------------------------------------------------- factor tables

@@ -12,7 +12,8 @@
 Modules: ``client`` (RobotClient, Pending: sending, matching, pumping), ``calls`` (the typed calls),
 ``commands`` (SI -> checked commands), ``limits``,
 ``events`` (Event types, listeners, EventRecorder), ``views`` (Hello, Status), ``wire`` (text and
-binary wire formats), ``errors`` (ControllerError subclasses per code).
+binary wire formats), ``switch`` (ProtocolSwitch: the protocol a client speaks, switching it),
+``errors`` (ControllerError subclasses per code).
 """
 
 from omnibot.client.client import DEFAULT_TIMEOUT, Pending, RobotClient

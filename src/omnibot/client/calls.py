@@ -49,10 +49,14 @@ class TypedCalls:
 
     limits: Limits
     timeout: float
-    _mode: int | None
     last_hello: Hello | None
     takes_reach: bool | None = None
     """Whether the controller took the calibrated reach at the last upload (None: none uploaded yet)."""
+
+    @property
+    def mode_bits(self) -> int | None:
+        """The MODE bits last set or reported by STATUS, None if not known (the client implements it)."""
+        raise NotImplementedError
 
     def execute(self, command: Command, timeout: float | None = None) -> Reply:
         """Send ``command`` and wait for its reply (the client implements it)."""
@@ -134,7 +138,7 @@ class TypedCalls:
     ) -> Mode:
         """MODE: a whole mask, or change single bits of the current one (read by STATUS if not known)."""
         if mask is None:
-            mask = self._mode if self._mode is not None else self.status().mode
+            mask = self.mode_bits if self.mode_bits is not None else self.status().mode
             for bit, on in ((codes.MODE_SIMULATION, simulation), (codes.MODE_CLOSED_LOOP, closed_loop)):
                 if on is not None:
                     mask = mask | bit if on else mask & ~bit

@@ -97,10 +97,6 @@ E = TypeVar("E", bound=Event)
 MOTION = (Move, Rotate, Delta, Power, Vel)
 DEFAULT_TIMEOUT = 1.0
 """Seconds (link clock) to wait for a reply."""
-PROBE_TRIES = 8
-"""Rounds of tag questions before :meth:`RobotClient._detect_tags` gives up (LinkError)."""
-UNTAGGED_VERDICT = 3
-"""Rounds in a row on a line proven clean that make a controller one without tags."""
 RESYNC_TRIES = 3
 """Untagged text: STATUS exchanges tried at most to get back in step after a timeout."""
 _LATE_MAX = 64  # tagged commands that timed out, kept so that a late reply still lands on them
@@ -190,7 +186,7 @@ class Pending:
             except LinkTimeout as exc:
                 self.timed_out = True
                 client._timed_out(self)
-                if client._tags and self.seq:
+                if client.tags and self.seq:
                     exc.add_note("it may or may not have run (a tagged text command)")
                 raise
         if self.error is not None:
@@ -240,27 +236,29 @@ class RobotClient(TypedCalls):
         self.reconnect = reconnect
         self.last_hello: Hello | None = None
         """The last HELLO seen (a reply or a reset greeting)."""
-        self._tags_auto = tags is None
-        self._tags = tags
         self._hellos_owed: list[float] = []  # link-clock deadlines of plain HELLOs the tag question sent
-        self._tags_seen = bool(tags)  # a tagged reply came (or tags were asked for): never fall back
-        self._checks_asked = not tags and tags is not None  # MODE bits 4, 5 asked for (or never to be)
-        self.added_text_bits = 0
-        """MODE bits 4 and 5 (checked, sequenced text) this client set on the controller, which had them clear."""
         self._resync = False  # untagged text: a command timed out, get in step before the next
         self._preparing = ""  # the step before a text command under way: "probe" (tags?), "resync"
         self._late: dict[int, Pending] = {}  # tag -> tagged command that timed out
         self._heard = False  # a byte has come from the link
-        self._wire: Wire = TextWire(bool(tags))
         self._outstanding: list[Pending] = []
         self._listeners = Listeners()
         self._moving = False
-        self._mode: int | None = None
         self._broken = False
         self._failure: LinkError | None = None  # why the link broke (told again if it stays broken)
         self._hello_answered = False  # text: the last reply matched was a HELLO reply
         self._synced = False  # text: a reply has been matched since the client started
         self._tracers: list[Tracer] = []
+        self._switch = switch.ProtocolSwitch(
+            self,
+            tags,
+            write=self._write,
+            read=self._read,
+            ask=self._ask_probe,
+            heard=lambda: self._heard,
+            forget=lambda why: self._fail_all(lambda p: LinkTimeout(f"no reply to {p.line}: {why}")),
+        )
+        """The protocol spoken, the MODE bits, text's tags and checks; switching (client/switch.py)."""
 
     @classmethod
     def open(
@@ -302,12 +300,17 @@ class RobotClient(TypedCalls):
     @property
     def binary(self) -> bool:
         """True while the client speaks the binary protocol."""
-        return self._wire.binary
+        return self._switch.binary
 
     @property
     def tags(self) -> bool | None:
         """True if text commands carry ``#tag*check``; None until the controller was asked."""
-        return self._tags
+        return self._switch.tags
+
+    @property
+    def _wire(self) -> Wire:
+        """The wire format in use (the switch's)."""
+        return self._switch.wire
 
     @property
     def moving(self) -> bool:
@@ -323,7 +326,24 @@ class RobotClient(TypedCalls):
     @property
     def mode_bits(self) -> int | None:
         """The MODE bits last set or reported by STATUS; None if not known yet."""
-        return self._mode
+        return self._switch.mode
+
+    @property
+    def added_text_bits(self) -> int:
+        """MODE bits 4 and 5 (checked, sequenced text) this client set on the controller, which had
+        them clear."""
+        return self._switch.added_text_bits
+
+    @property
+    def added_checked_text(self) -> bool:
+        """This client set MODE bit 4 (checked text only) on the controller, which had it clear."""
+        return self._switch.added_checked_text
+
+    @property
+    def sequenced(self) -> bool:
+        """True while tagged text commands are sequence numbers the controller keeps (MODE bit 5):
+        a command whose reply is lost is sent again and not run twice."""
+        return self._switch.sequenced
 
     @property
     def outstanding(self) -> list[Pending]:
@@ -500,20 +520,20 @@ class RobotClient(TypedCalls):
         if self._preparing:
             return
         what = (text.encode(command) if command is not None else raw or b"").decode("latin-1").strip()
-        probed = self._tags is None
+        probed = self.tags is None
         if probed:
-            self._prepare("probe", self._detect_tags, wait, what)
-        if self._tags and not self._checks_asked:
+            self._prepare("probe", self._switch.detect_tags, wait, what)
+        if self._switch.checks_wanted:
             # a lost reply of the bits' setup leaves them to be asked again before the next command;
             # this one goes on (tagged and checked, as every command: only a cut line is not covered)
             with contextlib.suppress(LinkTimeout):
-                self._prepare("checks", lambda w: self._require_checks(w, probed), wait, what)
+                self._prepare("checks", lambda w: self._switch.require_checks(w, probed), wait, what)
         sender = self._wire.sender
         if sender is not None and sender.needs_sync and not isinstance(command, SYNC_TEXT):
             # sequenced text after a give-up: the controller may still expect the tag given up on,
             # and only STOP, HELLO or MODE is taken whatever it expects (binary's SYNC flag)
-            self._prepare("sync", lambda w: self.execute(self._hello_again(), w), wait, what)
-        if self._resync and not self._tags:
+            self._prepare("sync", lambda w: self.execute(self._switch.hello_again(), w), wait, what)
+        if self._resync and not self.tags:
             self._prepare("resync", self._resync_now, wait, what)
 
     def _prepare(self, step: str, run: Callable[[float], object], wait: float, what: str) -> None:
@@ -527,66 +547,8 @@ class RobotClient(TypedCalls):
         finally:
             self._preparing = ""
 
-    def _detect_tags(self, wait: float) -> None:
-        """Ask with tagged HELLOs whether the controller takes tagged, checked text commands.
-
-        A tagged reply says yes (a damaged line cannot forge its check), and so does ``ERROR,42`` (it
-        runs checked text only). A controller without tags answers ``ERROR,23``, but so does one with
-        them when the question arrived with its suffix damaged; so "no" takes :data:`UNTAGGED_VERDICT`
-        rounds in a row of an untagged answer to the tagged question followed by the same answer to a
-        plain ``HELLO`` (its HELLO reply, or ERROR 23 from a controller of seed 000's protocol) that
-        proves the line clean. Silence, ERROR 26 or a differing answer starts the count again; no
-        verdict after :data:`PROBE_TRIES` rounds is a LinkError, never a fall back. Once this client
-        has had a tagged reply it never falls back: a controller that took tags and now refuses them
-        is an error."""
-        rounds = 0
-        plain_answer: str | None = None
-        answered_once = False
-        for _ in range(PROBE_TRIES):
-            reply = self._ask_probe(wait, tagged=True)
-            if self._tags is not None:
-                return
-            if reply is None:
-                if not self._heard:  # not a byte from the controller yet: it is not there
-                    break
-                rounds = 0
-                continue
-            answered_once = True
-            if isinstance(reply, ErrorReply) and reply.code == codes.E_CHECK_REQUIRED:
-                self._set_tags(True)
-                return
-            if isinstance(reply, ErrorReply) and reply.code == codes.E_CHECKSUM:
-                rounds = 0
-                continue
-            plain = self._ask_probe(wait, tagged=False)
-            if self._tags is not None:
-                return
-            answer = None if plain is None else type(plain).__name__ + str(getattr(plain, "code", ""))
-            if answer is None or (plain_answer is not None and answer != plain_answer):
-                rounds, plain_answer = 0, answer
-                continue
-            plain_answer = answer
-            rounds += 1
-            if rounds == UNTAGGED_VERDICT:
-                if self._tags_seen:
-                    raise LinkError(
-                        f"the controller on {self.link.url} took tagged, checked commands before "
-                        "and now refuses them (ERROR 23): another firmware? Reconnect to use it"
-                    )
-                self._set_tags(False)
-                return
-        if answered_once:
-            raise LinkError(
-                f"cannot tell whether the controller on {self.link.url} takes checked text commands: "
-                f"{PROBE_TRIES} tagged HELLOs had no clear answer (a damaged line?)"
-            )
-        raise LinkTimeout(
-            f"no reply to HELLO, sent to ask whether the controller takes tagged text commands "
-            f"(timeout on {self.link.url})"
-        )
-
-    def _ask_probe(self, wait: float, *, tagged: bool) -> Reply | None:
-        """One question of :meth:`_detect_tags`: a tagged HELLO (its untagged answer returned; a
+    def _ask_probe(self, wait: float, tagged: bool) -> Reply | None:
+        """One question of the switch's :meth:`~omnibot.client.switch.ProtocolSwitch.detect_tags`: a tagged HELLO (its untagged answer returned; a
         tagged one turns tags on) or a plain one; None when no answer came in ``wait`` s."""
         if tagged:
             wire = self._wire
@@ -603,79 +565,13 @@ class RobotClient(TypedCalls):
         try:
             # a plain HELLO is waited for even when a tagged reply turns tags on meanwhile: its
             # untagged answer, coming later with nothing waiting for it, would be taken for a reset
-            self._wait(lambda: probe.done or (tagged and self._tags is not None), probe.deadline, "")
+            self._wait(lambda: probe.done or (tagged and self.tags is not None), probe.deadline, "")
         except LinkTimeout:
             self._outstanding.remove(probe)
             return None
         if probe in self._outstanding:
             self._outstanding.remove(probe)
         return probe.reply
-
-    def _require_checks(self, wait: float, probed: bool = False) -> None:
-        """Tags are on: ask the controller to run only checked text commands (MODE bit 4), so that a
-        line a damaged byte cuts short (a digit turned into ``;``) runs nothing, and to take their
-        tags as sequence numbers (bit 5), so that a command sent again when its reply was lost is
-        answered from the reply kept and not run twice; the client then sends again every tagged
-        command whose reply does not come (as binary frames). A controller without bit 5 (ERROR 39:
-        a firmware from before it) gets bit 4 alone and no command sent twice; one without bit 4
-        neither bit and keeps running unchecked lines; nothing else changes.
-
-        A tagged HELLO goes first (the tag question's, when it was just asked), as the sequence's
-        first command: a controller left in sequenced text by a client that was killed starts its
-        sequence afresh, so the STATUS after it is not taken for one out of order. HELLO and STATUS run nothing, so they are sent again as the
-        sequence's commands are whether the controller keeps the sequence yet or not."""
-        wire = self._wire
-        assert isinstance(wire, TextWire)
-        wire.sequence(True)
-        try:
-            if not probed:
-                self.execute(self._hello_again(), wait)
-            mask = self._mode if self._mode is not None else self.status().mode
-            for bits in (codes.MODE_CHECKED_TEXT | codes.MODE_SEQUENCED_TEXT, codes.MODE_CHECKED_TEXT):
-                # set before it is sent: if its OK is lost the bits may be set, and the session guard
-                # must clear them on the way out (clearing a bit that was never set changes nothing)
-                self.added_text_bits = bits & ~mask
-                if not bits & codes.MODE_SEQUENCED_TEXT:  # bit 4 alone: a command sent twice runs twice
-                    wire.sequence(False)
-                    if mask & bits == bits:
-                        break
-                try:
-                    self.execute(Mode(mask | bits), wait)
-                except ControllerError as exc:
-                    if exc.code != codes.E_UNSUPPORTED:
-                        raise
-                    self.added_text_bits = 0  # a controller without the bit: nothing was set
-                    continue
-                break
-        except BaseException:
-            wire.sequence(False)
-            raise
-        self._checks_asked = True  # only now: a reply lost on the way asks again before the next command
-
-    @property
-    def added_checked_text(self) -> bool:
-        """This client set MODE bit 4 (checked text only) on the controller, which had it clear."""
-        return bool(self.added_text_bits & codes.MODE_CHECKED_TEXT)
-
-    @property
-    def sequenced(self) -> bool:
-        """True while tagged text commands are sequence numbers the controller keeps (MODE bit 5):
-        a command whose reply is lost is sent again and not run twice."""
-        wire = self._wire
-        return isinstance(wire, TextWire) and wire.sender is not None
-
-    def _hello_again(self) -> HelloCommand:
-        """A HELLO that agrees on the protocol version agreed last (a bare one would say 2)."""
-        version = self.last_hello.version if self.last_hello is not None else codes.PROTOCOL_VERSION
-        listed = tuple(v for v in codes.VERSIONS if v <= version)
-        return HelloCommand(listed if version > codes.PROTOCOL_VERSION else ())
-
-    def _set_tags(self, on: bool | None) -> None:
-        self._tags = on
-        self._tags_seen = self._tags_seen or bool(on)
-        wire = self._wire
-        if isinstance(wire, TextWire):
-            wire.tags = bool(on)
 
     def _resync_now(self, wait: float) -> None:
         """Untagged text: give up the commands still waiting (their replies can no longer be told
@@ -738,6 +634,12 @@ class RobotClient(TypedCalls):
             if isinstance(cmd, Mode) and bool(cmd.mask & codes.MODE_BINARY) != self.binary and not p.done:
                 p.result()
 
+    def _fail_all(self, error: Callable[[Pending], BaseException]) -> None:
+        """Fail every command still waiting for a reply with ``error(pending)``."""
+        for p in self._outstanding:
+            p._fail(error(p))
+        self._outstanding.clear()
+
     # ------------------------------------------------------------------ waiting
 
     def pump(self, timeout: float = 0.0) -> int:
@@ -787,19 +689,19 @@ class RobotClient(TypedCalls):
         """Switch to the binary protocol (MODE with bit 2, keeping the other bits), start the
         session with HELLO and return its reply (the protocol version in use). Works over a noisy
         line: each try is confirmed by a binary HELLO exchange (:mod:`omnibot.client.switch`)."""
-        return switch.to_binary(self)
+        return self._switch.to_binary()
 
     def use_text(self) -> None:
         """Switch back to the text protocol (MODE with bit 2 clear, other bits kept); if the OK
         is lost, a probe tells which protocol the controller speaks."""
-        switch.to_text(self)
+        self._switch.to_text()
 
     def find_protocol(self) -> None:
         """Ask the controller which protocol it speaks (a probe both protocols answer) and speak
         it; a controller found in binary mode (left there by a client that was killed) is
         switched back to text. Raises LinkTimeout if it never answers."""
-        if switch.find_protocol(self) is not None:
-            switch.to_text(self)
+        if self._switch.find_protocol() is not None:
+            self._switch.to_text()
 
     # ------------------------------------------------------------------ input
 
@@ -857,7 +759,7 @@ class RobotClient(TypedCalls):
                 self._synced = True  # a reply matched: an untagged HELLO from now on is a reset
                 self._hello_answered = False
                 if p.probe:
-                    self._set_tags(True)
+                    self._switch.set_tags(True)
                 if isinstance(reply, ErrorReply) or p.accepts(reply):
                     self._complete(p, reply)
                 else:
@@ -871,8 +773,8 @@ class RobotClient(TypedCalls):
             # The late answer to a tagged HELLO given up (a probe): never a reset, whose greeting is
             # untagged; it does say that the controller echoes tags (a stale untagged line may have
             # answered the probes before it: taken for a reset, it made the client ask again forever).
-            if self._tags_auto:
-                self._set_tags(True)
+            if self._switch.auto_tags:
+                self._switch.set_tags(True)
             return
         self._event(event_from_message(reply, now))
 
@@ -935,7 +837,7 @@ class RobotClient(TypedCalls):
             return
         command = pending.command
         if isinstance(reply, StatusReply):
-            self._mode = reply.mode
+            self._switch.mode_reported(reply.mode)
             self._moving = reply.state == codes.STATE_MOVING
         elif isinstance(reply, HelloReply):
             self.last_hello = Hello.from_reply(reply)
@@ -946,16 +848,7 @@ class RobotClient(TypedCalls):
         elif isinstance(command, Stop):
             self._moving = False
         elif isinstance(command, Mode):
-            self._mode = command.mask
-            binary = bool(command.mask & codes.MODE_BINARY)
-            wire = self._wire
-            sequenced = bool(command.mask & codes.MODE_SEQUENCED_TEXT and self._tags)
-            if isinstance(wire, TextWire) and not binary and sequenced != (wire.sender is not None):
-                wire.sequence(sequenced)  # set by hand: the next command a sync one (a HELLO)
-            if binary != self.binary:
-                # back in text the controller starts its sequence afresh (it reset it when it
-                # switched): the sender's first command is a sync one
-                self._wire = BinaryWire() if binary else self._text_wire(sequenced)
+            self._switch.mode_set(command.mask)
 
     def _event(self, event: Event) -> None:
         if isinstance(event, IdleEvent):
@@ -968,20 +861,12 @@ class RobotClient(TypedCalls):
     def _reset(self, event: Event) -> None:
         assert isinstance(event, ResetEvent)
         self.last_hello = event.hello
-        for p in self._outstanding:
-            p._fail(ControllerReset(f"the controller restarted before answering {p.line}"))
-        self._outstanding.clear()
+        self._fail_all(lambda p: ControllerReset(f"the controller restarted before answering {p.line}"))
         self._moving = False
-        self._mode = None
         self._late.clear()
         self._resync = False
-        if self._tags_auto and self._preparing != "probe":  # perhaps another firmware now: ask again
-            self._set_tags(None)
-        self._checks_asked = self._tags is False  # the restart cleared MODE bits 4, 5: ask again
-        if isinstance(self._wire, TextWire):
-            self._wire.sequence(False)
-        else:
-            self._wire = self._text_wire(False)
+        # perhaps another firmware now: ask for tags again (not while asking)
+        self._switch.controller_reset(ask_tags=self._preparing != "probe")
         self._listeners.dispatch(event)
 
     # ------------------------------------------------------------------ link
@@ -1026,19 +911,9 @@ class RobotClient(TypedCalls):
             self._trace_bytes("RX", data)
         return data
 
-    def _text_wire(self, sequenced: bool) -> TextWire:
-        """A new text wire, its tags going on from the last one's (sequenced: MODE bit 5 is set)."""
-        wire = self._wire
-        text_wire = TextWire(bool(self._tags), wire.last_tag if isinstance(wire, TextWire) else 0)
-        text_wire.sequence(sequenced and bool(self._tags))  # its first command: a sync one (a HELLO)
-        return text_wire
-
     def _link_failed(self, exc: LinkError) -> None:
-        for p in self._outstanding:
-            p._fail(exc)
-        self._outstanding.clear()
-        self._wire = BinaryWire() if self.binary else self._text_wire(False)
-        self._checks_asked = self._tags is False  # perhaps a restarted controller: set the bits again
+        self._fail_all(lambda p: exc)
+        self._switch.link_failed()
         self._moving = False
         self._broken = True
         self._failure = exc

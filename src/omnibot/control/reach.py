@@ -14,8 +14,9 @@ the map as rows of fractions of each wheel's free speed, what
 :class:`~omnibot.control.paths.profile.MotionLimits` carries to cap the time-optimal profile.
 
 On a floor (:func:`floor_course_speed`) the bound is where the wheels' torque-speed lines meet the
-floor's load. To hold speed v along a course (no turn) the floor's forces of
-:mod:`omnibot.sim.physics` at that speed must be balanced: every roller's rolling resistance
+floor's load. To hold speed v along a course (no turn) the floor's forces of the simulator's
+physics (:mod:`omnibot.sim.physics`, on the floor model of :mod:`omnibot.floor`) at that speed
+must be balanced: every roller's rolling resistance
 (``c N`` times the surface's multiplier, its phase-mean) and the combined rolling-and-driving drag
 ``b N sin(2 beta)`` on the roller, held by the wheels' traction (the least-norm forces that keep
 the body on its course; they set each wheel's slip, so its speed), and at each axle that drag, the
@@ -42,10 +43,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from omnibot.floor.contact import GRAVITY, ROLL_SPEED_EPS, WHEEL_SPEED_EPS, static_loads
+from omnibot.floor.surfaces import Surface, get_surface
 from omnibot.robot.description import RobotDescription, WheelSpec
 from omnibot.robot.kinematics import FloatArray, contact_rows, wheel_matrix
-from omnibot.sim.physics import GRAVITY
-from omnibot.sim.surfaces import Surface, get_surface
 
 
 def free_wheel_speeds(robot: RobotDescription) -> FloatArray:
@@ -116,9 +117,6 @@ def _floor_load(
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Each wheel's PWM fraction, current (A) and traction force as a fraction of its grip, each
     (k, m), holding the body ``twist`` (k, 3) while giving it ``wrench`` (:func:`_floor_spare`)."""
-    from omnibot.sim.kernels import ROLL_SPEED_EPS, WHEEL_SPEED_EPS
-    from omnibot.sim.physics import static_loads
-
     wheels = robot.wheels
 
     def each(fn: Callable[[WheelSpec], float]) -> FloatArray:
@@ -197,7 +195,7 @@ def _floor_speeds(robot: RobotDescription, surface: str | Surface, courses: Floa
 
 def floor_course_speed(robot: RobotDescription, course: float, surface: str | Surface) -> float:
     """m/s: the fastest steady speed along ``course`` (rad, body frame) on ``surface`` (a name or
-    :class:`~omnibot.sim.surfaces.Surface`): where the busiest wheel needs full PWM against the
+    :class:`~omnibot.floor.surfaces.Surface`): where the busiest wheel needs full PWM against the
     floor's load (module docstring); 0 when the motors cannot move the robot on that course."""
     return float(_floor_speeds(robot, surface, np.array([float(course)]))[0])
 
@@ -341,8 +339,6 @@ def floor_grip(
     asks at once), for which no wheel's traction (the body's force and torque shared least-norm
     over the wheels, with the rollers' drag at that speed) exceeds its grip, on the worst course
     and either turn. Returns (speeds, fractions)."""
-    from omnibot.sim.kernels import ROLL_SPEED_EPS
-
     floor = get_surface(surface)
     limits = robot.limits
     v = np.linspace(0.0, top, speeds)

@@ -6,7 +6,9 @@ default calibration tables (all from :func:`omnibot.firmware.config.build_config
 MicroPython firmware gets them) and the UNO pin map of the robot's wiring (:data:`UNO_WIRING`);
 ``<robot>.board`` gives the same wiring to the emulator harness. The Arduino Mega 2560's are in
 ``generated/mega/``, with its pin map (:data:`MEGA_WIRING`).
-``tests/firmware/test_avrgen.py`` fails when a checked-in header is stale.
+The header's text is the template ``avrgen_header.h.in`` beside this module (:data:`HEADER_TEMPLATE`),
+filled in by the short functions below. ``tests/firmware/test_avrgen.py`` fails when a checked-in
+header is stale.
 
 ::
 
@@ -19,12 +21,15 @@ from __future__ import annotations
 
 import argparse
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
+from functools import cache
 from pathlib import Path
+from string import Template
 from typing import Any
 
 from omnibot.errors import ConfigError
-from omnibot.firmware import safety
+from omnibot.firmware import landing, motion, safety
 from omnibot.firmware.config import build_config
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription, load_robot
@@ -35,8 +40,8 @@ ROBOTS = ("omni4", "mecanum4")  # seed 000's robot and seed 003's
 NOT_SENT = frozenset({codes.W_SHORT, codes.W_REACH, codes.W_NO_GYRO})
 """Codes the UNO never sends, so their texts stay out of its flash: WARN 17's encoder progress check
 (firmware/progress.py) and WARN 18's calibrated reach (CAL table 8, firmware/motion.py) are the
-MicroPython firmware's only (omni4's image has no room for them); WARN 10 is a board's gyro (the UNO
-wiring has none)."""
+MicroPython firmware's and the Mega's only (omni4's UNO image has no room for them: the Mega's header
+adds their texts, :data:`FEATURE_TEXTS`); WARN 10 is a board's gyro (neither wiring has one)."""
 INT16_MAX = 32767
 EEPROM_BYTES = 1024  # ATmega328P (the ATmega2560 has 4 KB; the calibration store takes the first 1 KB)
 BOARDS = ("uno", "mega")
@@ -178,37 +183,6 @@ def board(name: str) -> Board:
     return _BOARDS[name]
 
 
-def _guard(w: Any, cfg: dict[str, Any]) -> None:
-    """The sonar stop's constants (firmware/safety.py) for the UNO's one sonar (zeros without one)."""
-    axis = (cfg["sonar_axes"] or [[0.0, safety.HALF_CONE_DEG, 0.0, 0.0]])[0]
-    w("/* sonar stop (safety.py): sonar 1's axis, half cone (rad), footprint lead and half width (cm); */")
-    w("/* the stop deceleration (cm/s^2), slowest and uncovered speeds (cm/s), a loop pass + latency (ms) */")
-    w(f"#define GUARD_AX {math.cos(math.radians(float(axis[0])))!r}f")
-    w(f"#define GUARD_AY {math.sin(math.radians(float(axis[0])))!r}f")
-    w(f"#define GUARD_HALF {math.radians(float(axis[1]))!r}f")
-    w(f"#define GUARD_LEAD {float(axis[2])!r}f")
-    w(f"#define GUARD_WIDTH {float(axis[3])!r}f")
-    w(f"#define GUARD_DECEL {float(cfg.get('stop_decel_cms2', 100.0))!r}f")
-    w(f"#define GUARD_V_MIN {float(cfg['speed_min_cms'])!r}f")
-    w(f"#define GUARD_UNCOVERED {float(cfg.get('uncovered_speed_cms', 25.0))!r}f")
-    w(f"#define GUARD_LOOP_MS {1000.0 / float(cfg.get('loop_hz', 500)) + safety.LATENCY_MS!r}f")
-    w(f"#define GUARD_SOUND_CMS {safety.SOUND_CMS!r}f")
-    steps = [safety.INCIDENCE_MAX * k / safety.INCIDENCE_STEPS for k in range(1, safety.INCIDENCE_STEPS + 1)]
-    w(f"#define GUARD_STEPS {safety.INCIDENCE_STEPS}")
-    w(f"#define GUARD_STEP {safety.INCIDENCE_MAX / safety.INCIDENCE_STEPS!r}f")
-    w("/* the wall incidences the room allows for (travel_room): cos and sin of each */")
-    w(
-        "static const float GUARD_COS[GUARD_STEPS] PROGMEM = {"
-        + ", ".join(f"{math.cos(a)!r}f" for a in steps)
-        + "};"
-    )
-    w(
-        "static const float GUARD_SIN[GUARD_STEPS] PROGMEM = {"
-        + ", ".join(f"{math.sin(a)!r}f" for a in steps)
-        + "};"
-    )
-
-
 def _c_string(text: str) -> str:
     return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
 
@@ -234,11 +208,32 @@ def _fixed_shift(rows: list[list[float]]) -> int:
     return max(0, min(14, math.floor(math.log2(INT16_MAX / peak))))
 
 
-def header_source(robot_name: str, board_name: str = "uno") -> str:
-    """The text of ``firmware-avr/generated/<robot>.h`` (the Mega's: ``generated/mega/<robot>.h``)."""
-    b = board(board_name)
-    robot = load_robot(robot_name)
-    cfg = build_config(robot)
+HEADER_TEMPLATE = Path(__file__).with_name("avrgen_header.h.in")
+"""The generated header's text with ``${field}`` for what the robot and the protocol fill in
+(:class:`string.Template`; shipped beside this module as package data)."""
+
+
+@cache
+def _header_template() -> Template:
+    return Template(HEADER_TEMPLATE.read_text(encoding="utf-8"))
+
+
+def _f(value: float) -> str:
+    """A C float literal that reads back as ``value`` exactly."""
+    return f"{float(value)!r}f"
+
+
+def _list(values: Iterable[object]) -> str:
+    return ", ".join(str(v) for v in values)
+
+
+def _defines(prefix: str, keys: Iterable[str]) -> str:
+    """``#define <prefix><KEY> <codes.KEY>`` for each key."""
+    return "\n".join(f"#define {prefix}{key} {getattr(codes, key)}" for key in keys)
+
+
+def _checked_counts(cfg: dict[str, Any]) -> tuple[int, int]:
+    """The robot's motors and sonars, refused when the UNO firmware cannot hold them or its K_l."""
     n = int(cfg["motors"])
     if n > codes.MOTORS_MAX:
         raise ConfigError(f"{n} motors, the UNO firmware drives {codes.MOTORS_MAX}", key="wheels")
@@ -251,205 +246,222 @@ def header_source(robot_name: str, board_name: str = "uno") -> str:
         raise ConfigError(
             f"{len(cfg['kl_courses'])} K_l curves, at most {codes.CAL_KL_CURVES}", key="calibration"
         )
-    out: list[str] = []
-    w = out.append
-    w(f"/* Generated by `python -m omnibot.firmware.avrgen` for robot {robot.name!r}: do not edit. */")
-    w(
-        f"/* Sources: omnibot/protocol/codes.py, the robot description {robot_name!r}, omnibot/firmware/avrgen.py. */"
-    )
-    w("#pragma once")
-    w("#include <stdint.h>")
-    w("#include <avr/pgmspace.h>")
-    w("")
-    w("/* ---- protocol (codes.py) ---- */")
-    for key in ("PROTOCOL_VERSION", "INF", "PARAMS_MAX", "LINE_MAX", "EVENT_LINE_MAX", "POWER_MAX"):
-        w(f"#define P_{key} {getattr(codes, key)}")
-    for key in sorted(
-        k for k in vars(codes) if k.startswith(("W_", "E_", "STATE_", "MODE_", "TEL_", "CAL_"))
-    ):
-        w(f"#define P_{key} {getattr(codes, key)}")
-    for name, kid in codes.COMMANDS.items():
-        w(f"#define K_{name} {kid}")
-    w(f"#define K_COUNT {len(codes.COMMANDS)}")
-    w("/* binary message types and framing */")
-    for key in (
-        "ACK",
-        "OK",
-        "ERROR",
-        "HELLO_REPLY",
-        "STATUS_REPLY",
-        "RANGE",
-        "WARN",
-        "ERROR_EVENT",
-        "IDLE",
-        "TEL",
-    ):
-        w(f"#define T_{key} {getattr(codes, key)}")
-    binary = ("FRAME_SYNC", "FRAME_MAX", "SEQ_MAX", "WINDOW_MIN", "WINDOW", "RETRY_TIMEOUT_MS", "RETRIES")
-    for key in (*binary, "TEXT_SEQ_WINDOW", "TEXT_SEQ_MAX"):
-        w(f"#define P_{key} {getattr(codes, key)}")
-    w("/* keyword, id, fewest and most parameters (POWER: T and one power per motor), the number (1..) of")
-    w("   the parameter that may be INF (0: none; codes.INF_PARAMS) */")
-    w("struct Keyword { char name[7]; uint8_t id, lo, hi, inf; };")
-    w("static const Keyword KEYWORDS[K_COUNT] PROGMEM = {")
-    for name, kid in codes.COMMANDS.items():
-        lo, hi = codes.PARAM_COUNTS[kid]
-        if kid == codes.POWER:
-            lo = hi = n + 1
-        elif kid == codes.VEL:
-            hi = 4  # protocol version 2 only: no room for VEL's acceleration (docs/uno.md)
-        inf = codes.INF_PARAMS.get(kid, -1) + 1
-        w(f"    {{{_c_string(name)}, {kid}, {lo}, {hi}, {inf}}},")
-    w("};")
-    texts = {c: t for c, t in codes.TEXTS.items() if c not in NOT_SENT}
-    for code, text in sorted(texts.items()):
-        w(f"static const char TEXT_{code}[] PROGMEM = {_c_string(text)};")
-    w("struct CodeText { uint8_t code; const char *text; };")
-    w(f"static const CodeText CODE_TEXTS[{len(texts)}] PROGMEM = {{")
-    w("    " + ", ".join(f"{{{c}, TEXT_{c}}}" for c in sorted(texts)))
-    w("};")
-    w(f"#define CODE_TEXT_COUNT {len(texts)}")
-    w("")
-    w("/* ---- robot ---- */")
-    w(f"#define ROBOT_NAME {_c_string(robot.name)}")
-    w(f"#define MOTORS {n}")
-    w(f"#define SONARS {sonars}")
-    w(f"#define SONAR_PERIOD_MIN {max(60, *cfg['sonar_period_min_ms']) if sonars else 60}")
-    w(f"#define QUEUE_CAPACITY {int(cfg['queue_capacity'])}")
-    w(f"#define LINE_MAX {int(cfg['line_max'])}")
-    w(f"#define BAUD {int(cfg['baud'])}UL")
-    w(f"#define PWM_MAX {int(cfg['pwm_max'])}")
-    w(f"#define POWER_MIN {int(cfg['power_min'])}")
+    return n, sonars
+
+
+_BINARY_TYPES = (
+    "ACK",
+    "OK",
+    "ERROR",
+    "HELLO_REPLY",
+    "STATUS_REPLY",
+    "RANGE",
+    "WARN",
+    "ERROR_EVENT",
+    "IDLE",
+    "TEL",
+)
+_FRAMING = ("FRAME_SYNC", "FRAME_MAX", "SEQ_MAX", "WINDOW_MIN", "WINDOW", "RETRY_TIMEOUT_MS", "RETRIES")
+
+
+def _protocol_fields(n: int) -> dict[str, object]:
+    """The protocol's codes, keywords and texts (codes.py) for a robot of ``n`` motors."""
+    prefixed = sorted(k for k in vars(codes) if k.startswith(("W_", "E_", "STATE_", "MODE_", "TEL_", "CAL_")))
+    first = ("PROTOCOL_VERSION", "INF", "PARAMS_MAX", "LINE_MAX", "EVENT_LINE_MAX", "POWER_MAX")
+    texts = {c: t for c, t in sorted(codes.TEXTS.items()) if c not in NOT_SENT}
+    return {
+        "protocol": _defines("P_", (*first, *prefixed)),
+        "commands": "\n".join(f"#define K_{name} {kid}" for name, kid in codes.COMMANDS.items()),
+        "command_count": len(codes.COMMANDS),
+        "binary": _defines("T_", _BINARY_TYPES)
+        + "\n"
+        + _defines("P_", (*_FRAMING, "TEXT_SEQ_WINDOW", "TEXT_SEQ_MAX")),
+        "keywords": "\n".join(_keyword(name, kid, n) for name, kid in codes.COMMANDS.items()),
+        "texts": "\n".join(
+            f"static const char TEXT_{c}[] PROGMEM = {_c_string(t)};" for c, t in texts.items()
+        ),
+        "text_count": len(texts),
+        "code_texts": ", ".join(f"{{{c}, TEXT_{c}}}" for c in texts),
+    }
+
+
+def _keyword(name: str, kid: int, n: int) -> str:
+    """One row of KEYWORDS: the keyword, its id, fewest and most parameters, its INF parameter."""
+    lo, hi = codes.PARAM_COUNTS[kid]
+    if kid == codes.POWER:
+        lo = hi = n + 1
+    elif kid == codes.VEL:
+        hi = 4  # protocol version 2 only: no room for VEL's acceleration (docs/uno.md)
+    inf = codes.INF_PARAMS.get(kid, -1) + 1
+    return f"    {{{_c_string(name)}, {kid}, {lo}, {hi}, {inf}}},"
+
+
+def _robot_fields(name: str, cfg: dict[str, Any], n: int, sonars: int) -> dict[str, object]:
+    """The robot's sizes, link, limits (as the integer checks of motion.py) and wheel-speed loop."""
     lmax, vmin, vmax = float(cfg["distance_max_cm"]), float(cfg["speed_min_cms"]), float(cfg["speed_max_cms"])
     cmax, fmax = float(cfg["curvature_max"]), float(cfg["rate_max_dps"])
-    w("/* limits: an integer x is out when x >= *_EXCL (exclusive bounds) or outside [V_MIN, V_MAX] */")
-    w(f"#define L_MAX_EXCL {math.ceil(lmax)}")
-    w(f"#define L2_MAX_EXCL {math.ceil(2 * lmax)}")
-    w(f"#define V_MIN {math.ceil(vmin)}")
-    w(f"#define V_MAX {math.floor(vmax)}")
-    w(f"#define V2_MAX {math.floor(2 * vmax)}")
-    w(f"#define V_MAX_SQ {math.floor(vmax * vmax)}L")
-    w(f"#define C_MAX_EXCL {math.ceil(cmax)}")
-    w(f"#define C2_MAX_EXCL {math.ceil(2 * cmax)}")
-    w(f"#define F_MAX_EXCL {math.ceil(fmax)}")
-    w("/* DELTA keeps its results inside the limits (motion.py _clamp): |v| <= ceil(lim) - 1 */")
-    w(f"#define L_CLAMP {math.ceil(lmax) - 1}")
-    w(f"#define C_CLAMP {math.ceil(cmax) - 1}")
     cpr = [int(c) for c in cfg["encoder_cpr"]]
-    w(f"#define HAS_ENCODERS {1 if all(cpr) else 0}")
-    w("static const uint16_t ENCODER_CPR[MOTORS] PROGMEM = {" + ", ".join(str(c) for c in cpr) + "};")
-    w(f"#define CONTROL_PERIOD_MS {int(cfg['control_period_ms'])}")
-    w(f"#define SPEED_KP {float(cfg['speed_kp'])!r}f")
-    w(f"#define SPEED_KI {float(cfg['speed_ki'])!r}f")
     band = float(cfg["speed_band"])
-    w("/* 1 / speed_band (rad/s): the integral grows at 1 / (1 + (err * inv)^2) of its rate; 0: plain PI */")
-    w(f"#define SPEED_BAND_INV {1.0 / band if band > 0 else 0.0!r}f")
-    w(f"#define MODE_AT_RESET {int(cfg['mode'])}")
-    _guard(w, cfg)
-    w("")
-    w("/* ---- kinematics: rim speed (m/s) per unit twist, fixed point: RIM_Q[i][j] / 2^RIM_SHIFT ---- */")
+    return {
+        "robot_name": _c_string(name),
+        "motors": n,
+        "sonars": sonars,
+        "sonar_period_min": max(60, *cfg["sonar_period_min_ms"]) if sonars else 60,
+        **{key: int(cfg[key]) for key in ("queue_capacity", "line_max", "baud", "pwm_max", "power_min")},
+        "l_max_excl": math.ceil(lmax),
+        "l2_max_excl": math.ceil(2 * lmax),
+        "v_min": math.ceil(vmin),
+        "v_max": math.floor(vmax),
+        "v2_max": math.floor(2 * vmax),
+        "v_max_sq": math.floor(vmax * vmax),
+        "c_max_excl": math.ceil(cmax),
+        "c2_max_excl": math.ceil(2 * cmax),
+        "f_max_excl": math.ceil(fmax),
+        "l_clamp": math.ceil(lmax) - 1,
+        "c_clamp": math.ceil(cmax) - 1,
+        "has_encoders": 1 if all(cpr) else 0,
+        "encoder_cpr": _list(cpr),
+        "control_period_ms": int(cfg["control_period_ms"]),
+        "speed_kp": _f(cfg["speed_kp"]),
+        "speed_ki": _f(cfg["speed_ki"]),
+        "speed_band_inv": _f(1.0 / band if band > 0 else 0.0),
+        "mode_at_reset": int(cfg["mode"]),
+    }
+
+
+def _guard_fields(cfg: dict[str, Any]) -> dict[str, object]:
+    """The sonar stop's constants (firmware/safety.py) for the UNO's one sonar (zeros without one)."""
+    axis = (cfg["sonar_axes"] or [[0.0, safety.HALF_CONE_DEG, 0.0, 0.0]])[0]
+    heading = math.radians(float(axis[0]))
+    steps = [safety.INCIDENCE_MAX * k / safety.INCIDENCE_STEPS for k in range(1, safety.INCIDENCE_STEPS + 1)]
+    return {
+        "guard_ax": _f(math.cos(heading)),
+        "guard_ay": _f(math.sin(heading)),
+        "guard_half": _f(math.radians(float(axis[1]))),
+        "guard_lead": _f(axis[2]),
+        "guard_width": _f(axis[3]),
+        "guard_decel": _f(cfg.get("stop_decel_cms2", 100.0)),
+        "guard_v_min": _f(cfg["speed_min_cms"]),
+        "guard_uncovered": _f(cfg.get("uncovered_speed_cms", 25.0)),
+        "guard_loop_ms": _f(1000.0 / float(cfg.get("loop_hz", 500)) + safety.LATENCY_MS),
+        "guard_sound_cms": _f(safety.SOUND_CMS),
+        "guard_steps": safety.INCIDENCE_STEPS,
+        "guard_step": _f(safety.INCIDENCE_MAX / safety.INCIDENCE_STEPS),
+        "guard_cos": _list(_f(math.cos(a)) for a in steps),
+        "guard_sin": _list(_f(math.sin(a)) for a in steps),
+    }
+
+
+def _kinematics_fields(cfg: dict[str, Any]) -> dict[str, object]:
+    """The rim-speed matrix in fixed point and the axes K_l's courses fold from."""
     shift = _fixed_shift(cfg["rim"])
-    w(f"#define RIM_SHIFT {shift}")
-    w("static const int16_t RIM_Q[MOTORS][3] PROGMEM = {")
-    for row in cfg["rim"]:
-        w("    {" + ", ".join(str(round(v * (1 << shift))) for v in row) + "},")
-    w("};")
     axes = [float(a) for a in cfg["kl_axes"]]
-    w(f"#define KL_AXES {len(axes)}")
-    w("/* the axes (0.01 degree) K_l's courses fold from: the idle axes on omni wheels, x on mecanum */")
-    w(
-        "static const int16_t KL_AXES_CDEG[KL_AXES] PROGMEM = {"
-        + ", ".join(str(round(a * 100)) for a in axes)
-        + "};"
-    )
-    w("")
-    w("/* ---- default calibration, in CAL units (docs/protocol.md): knots {X, Y} ---- */")
-    w(f"#define CAL_KNOTS {codes.CAL_KNOTS_MAX}")
-    w(f"#define CAL_CURVES {codes.CAL_KL_CURVES}")
-    w(f"#define DEFAULT_K {round(float(cfg['k']) * 10)}")
-    w("struct Knot { int16_t x, y; };")
-    # the tables' knots one after the other, only those used (cal.cpp loads them in this order)
+    return {
+        "rim_shift": shift,
+        "rim_rows": "\n".join(
+            "    {" + _list(round(v * (1 << shift)) for v in row) + "}," for row in cfg["rim"]
+        ),
+        "kl_axes": len(axes),
+        "kl_axes_cdeg": _list(round(a * 100) for a in axes),
+    }
+
+
+def _calibration_fields(cfg: dict[str, Any]) -> dict[str, object]:
+    """The default calibration in CAL units: the tables' used knots one after the other (cal.cpp loads
+    them in this order), their counts, K_l's courses and the per-motor values."""
     tables = [cfg["kt"], cfg["kr"], cfg["roller_coast"], *cfg["kl_tables"], *cfg["motor_gain"]]
     counts, knots = [], []
     for table in tables:
         count, rows = _table_rows(table, 1, codes.CAL_SCALE)
         counts.append(count)
         knots += rows[:count]
-    w(f"#define DEFAULT_KL_CURVES {len(cfg['kl_courses'])}")
-    w(
-        f"static const uint8_t DEFAULT_KL_COURSE[{len(cfg['kl_courses'])}] PROGMEM = {{"
-        + ", ".join(str(round(c)) for c in cfg["kl_courses"])
-        + "};"
-    )
-    w("/* knots of K_t, K_r, the coast, each K_l curve and each motor's gain, one after the other */")
-    w(f"static const Knot DEFAULT_KNOTS[{len(knots)}] PROGMEM = {{" + ", ".join(knots) + "};")
-    w(
-        f"static const uint8_t DEFAULT_N[{len(counts)}] PROGMEM = {{"
-        + ", ".join(str(c) for c in counts)
-        + "};"
-    )
-    for name, key in (
-        ("OFFSET", "motor_offset"),
-        ("ROLLER_COS", "roller_cos"),
-        ("ROLLER_SIN", "roller_sin"),
-        ("SPEED", "motor_speed"),
-    ):
-        w(
-            f"static const int16_t DEFAULT_{name}[MOTORS] PROGMEM = {{"
-            + ", ".join(str(round(float(v) * 10)) for v in cfg[key])
-            + "};"
-        )
-    radii = ", ".join(f"{float(r)!r}f" for r in cfg["radius"])
-    w(f"static const float WHEEL_RADIUS_M[MOTORS] PROGMEM = {{{radii}}};")
-    w("/* each wheel's rollers' rolling direction and encoder counts per roller pitch (roller drag) */")
-    w(
-        "static const float ROLLER_DIR[MOTORS][2] PROGMEM = {"
-        + ", ".join("{" + ", ".join(f"{float(v)!r}f" for v in row) + "}" for row in cfg["roller_dir"])
-        + "};"
-    )
-    w(
-        "static const float ROLLER_PITCH[MOTORS] PROGMEM = {"
-        + ", ".join(f"{float(p)!r}f" for p in cfg["roller_pitch"])
-        + "};"
-    )
-    w("")
+    per_motor = {key: _list(round(float(v) * 10) for v in cfg[key]) for key in _PER_MOTOR}
+    return {
+        "cal_knots": codes.CAL_KNOTS_MAX,
+        "cal_curves": codes.CAL_KL_CURVES,
+        "default_k": round(float(cfg["k"]) * 10),
+        "kl_curves": len(cfg["kl_courses"]),
+        "kl_courses": _list(round(c) for c in cfg["kl_courses"]),
+        "knot_count": len(knots),
+        "knots": ", ".join(knots),
+        "table_count": len(counts),
+        "knot_counts": _list(counts),
+        **per_motor,
+        "wheel_radius": _list(_f(r) for r in cfg["radius"]),
+        "roller_dir": _list("{" + _list(_f(v) for v in row) + "}" for row in cfg["roller_dir"]),
+        "roller_pitch": _list(_f(p) for p in cfg["roller_pitch"]),
+    }
+
+
+_PER_MOTOR = ("motor_offset", "roller_cos", "roller_sin", "motor_speed")
+"""The calibration's per-motor values in tenths (DEFAULT_OFFSET, _ROLLER_COS, _ROLLER_SIN, _SPEED)."""
+
+
+def _port_bit(name: str, port: str, bit: int) -> str:
+    """``<name>_PORT``, ``_DDR`` and ``_BIT`` of an output pin."""
+    return f"#define {name}_PORT PORT{port}\n#define {name}_DDR DDR{port}\n#define {name}_BIT {bit}"
+
+
+def _motor_pins(b: Board, pins: dict[str, Any], i: int) -> str:
+    """Motor ``i``'s PWM pin and timer, direction pins and encoder pin-change interrupt."""
+    pwm = pins["pwm"][i]
+    if pwm not in b.pwm_regs:
+        raise ConfigError(f"{pwm} is not a PWM pin of timers 0 and 2 on the {b.title}", key="pins")
+    ocr, tccr, com = b.pwm_regs[pwm]
+    lines = [
+        _port_bit(f"M{i}_PWM", *_pin(pwm, b)),
+        f"#define M{i}_OCR {ocr}\n#define M{i}_TCCR {tccr}\n#define M{i}_COM {com}",
+    ]
+    lines += [_port_bit(f"M{i}_{side.upper()}", *_pin(pins[side][i], b)) for side in ("in1", "in2")]
+    port, bit = _pin(pins["encoders"][i], b)
+    if port not in b.pcint:
+        raise ConfigError(f"encoder pin {pins['encoders'][i]} has no pin-change interrupt", key="pins")
+    group, base = b.pcint[port]
+    lines.append(f"#define M{i}_ENC_PIN PIN{port}\n#define M{i}_ENC_BIT {bit}\n#define M{i}_ENC_PCIE {group}")
+    lines.append(f"#define M{i}_ENC_PCMSK PCMSK{group}\n#define M{i}_ENC_PCINT {base + bit}")
+    return "\n".join(lines)
+
+
+def _pin_fields(b: Board, robot_name: str, n: int, sonars: int) -> dict[str, object]:
+    """The board's pin map of the robot's wiring, checked against the board's pins and timers."""
     pins = b.wiring.get(robot_name)
     if pins is None:
         raise ConfigError(f"no {b.title} wiring for {robot_name!r} (it has {', '.join(b.wiring)})")
     if sonars and pins["sonar_trig"] is None:
         raise ConfigError(f"{robot_name} has a sonar but its {b.title} wiring none", key="sonars")
-    w(f"/* ---- {b.title} pin map (docs/uno.md) ---- */")
-    for i in range(n):
-        pwm = pins["pwm"][i]
-        if pwm not in b.pwm_regs:
-            raise ConfigError(f"{pwm} is not a PWM pin of timers 0 and 2 on the {b.title}", key="pins")
-        ocr, tccr, com = b.pwm_regs[pwm]
-        port, bit = _pin(pwm, b)
-        w(f"#define M{i}_PWM_PORT PORT{port}\n#define M{i}_PWM_DDR DDR{port}\n#define M{i}_PWM_BIT {bit}")
-        w(f"#define M{i}_OCR {ocr}\n#define M{i}_TCCR {tccr}\n#define M{i}_COM {com}")
-        for side in ("in1", "in2"):
-            port, bit = _pin(pins[side][i], b)
-            s = side.upper()
-            w(f"#define M{i}_{s}_PORT PORT{port}\n#define M{i}_{s}_DDR DDR{port}\n#define M{i}_{s}_BIT {bit}")
-        port, bit = _pin(pins["encoders"][i], b)
-        if port not in b.pcint:
-            raise ConfigError(f"encoder pin {pins['encoders'][i]} has no pin-change interrupt", key="pins")
-        group, base = b.pcint[port]
-        w(f"#define M{i}_ENC_PIN PIN{port}\n#define M{i}_ENC_BIT {bit}\n#define M{i}_ENC_PCIE {group}")
-        w(f"#define M{i}_ENC_PCMSK PCMSK{group}\n#define M{i}_ENC_PCINT {base + bit}")
+    lines = [_motor_pins(b, pins, i) for i in range(n)]
     if sonars:
-        port, bit = _pin(pins["sonar_trig"], b)
-        w(
-            f"#define SONAR_TRIG_PORT PORT{port}\n#define SONAR_TRIG_DDR DDR{port}\n#define SONAR_TRIG_BIT {bit}"
-        )
+        lines.append(_port_bit("SONAR_TRIG", *_pin(pins["sonar_trig"], b)))
         if pins["sonar_echo"] != b.echo:
             raise ConfigError(
                 f"the sonar echo must be on {b.echo} (the clock timer's input capture on the {b.title})",
                 key="pins",
             )
-    w(f"#define BATTERY_ADC {pins['battery_adc']}")
-    _battery(w, robot)
-    return "\n".join(out) + "\n"
+    return {"board_title": b.title, "pin_map": "\n".join(lines), "battery_adc": pins["battery_adc"]}
+
+
+def header_source(robot_name: str, board_name: str = "uno") -> str:
+    """The text of ``firmware-avr/generated/<robot>.h`` (the Mega's: ``generated/mega/<robot>.h``):
+    :data:`HEADER_TEMPLATE` filled in."""
+    b = board(board_name)
+    robot = load_robot(robot_name)
+    cfg = build_config(robot)
+    n, sonars = _checked_counts(cfg)
+    fields = {
+        "robot": repr(robot.name),
+        "description": repr(robot_name),
+        **_protocol_fields(n),
+        **_robot_fields(robot.name, cfg, n, sonars),
+        **_guard_fields(cfg),
+        **_kinematics_fields(cfg),
+        **_calibration_fields(cfg),
+        **_pin_fields(b, robot_name, n, sonars),
+        **_battery_fields(robot),
+    }
+    text = _header_template().substitute(fields)
+    if b.name != "uno":
+        text += _features_text(cfg)
+    return text
 
 
 BATTERY_SHIFT = 6
@@ -457,14 +469,12 @@ BATTERY_SHIFT = 6
 (0..65472 in a uint16) and its time constant is 64 sample periods."""
 
 
-def _battery(w: Any, robot: RobotDescription) -> None:
+def _battery_fields(robot: RobotDescription) -> dict[str, object]:
     """The battery divider and thresholds (firmware/battery.py) in the UNO's filter units."""
     b = robot.battery
     # full scale (1023 counts at 5 V) is twice the nominal pack voltage: the divider ratio is 2 V / 5 V
     # of pack per V of pin (omni4: 14.8 V at 5 V, 2.96:1, e.g. 20 k over 10.2 k)
     full_mv = round(2 * b.voltage * 1000)
-    w(f"#define BATTERY_MV_FULL_SCALE {full_mv}UL")
-    w(f"#define BATTERY_DIVIDER {full_mv / 5000:.3f}  // pack V per pin V (informative)")
 
     def units(volts: float) -> int:
         return round(volts * 1000 * 1023 / full_mv * (1 << BATTERY_SHIFT))
@@ -476,17 +486,110 @@ def _battery(w: Any, robot: RobotDescription) -> None:
             f"battery.delay {b.delay} s is more than the UNO's 255 samples of {period_ms} ms",
             key="battery.delay",
         )
-    w(f"#define BATTERY_PERIOD_MS {period_ms}  // one reading per period; filter time constant 64 periods")
-    w(f"#define BATTERY_DELAY {samples}  // readings below a threshold before its level")
-    for name, volts in (
-        ("WARN", b.warn_v),
-        ("LIMIT", b.limit_v),
-        ("STOP", b.stop_v),
-        ("HYST", b.hysteresis_v),
-    ):
-        w(f"#define BATTERY_{name} {units(volts)}U  // {volts:.3f} V")
-    pwm_max = max(w_.motor.pwm_max for w_ in robot.wheels)
-    w(f"#define BATTERY_CAP {pwm_max * round(100 * b.limit_power) // 100}  // largest power below limit")
+    levels = (("WARN", b.warn_v), ("LIMIT", b.limit_v), ("STOP", b.stop_v), ("HYST", b.hysteresis_v))
+    pwm_max = max(w.motor.pwm_max for w in robot.wheels)
+    return {
+        "battery_full_mv": full_mv,
+        "battery_divider": f"{full_mv / 5000:.3f}",
+        "battery_period_ms": period_ms,
+        "battery_delay": samples,
+        "battery_levels": "\n".join(
+            f"#define BATTERY_{name} {units(v)}U  // {v:.3f} V" for name, v in levels
+        ),
+        "battery_cap": pwm_max * round(100 * b.limit_power) // 100,
+    }
+
+
+FEATURE_TEXTS = (codes.W_SHORT, codes.W_REACH)
+"""The codes of :data:`NOT_SENT` that the Mega sends: their texts are in its :func:`_features`."""
+
+
+def _features_text(cfg: dict[str, Any]) -> str:
+    """:func:`_features`' lines, the end of the Mega's header."""
+    out: list[str] = []
+    _features(out.append, cfg)
+    return "\n".join(out) + "\n"
+
+
+def _features(w: Any, cfg: dict[str, Any]) -> None:
+    """What the Mega runs beyond the UNO (docs/uno.md, "The Arduino Mega 2560"): the compile-time
+    switches of firmware-avr/src/ (each ``FEATURE_*`` is 0 on the UNO, board.h) and their constants,
+    from the same config as the MicroPython firmware's."""
+    n = int(cfg["motors"])
+
+    def floats(rows: list[list[float]]) -> str:
+        return ", ".join("{" + ", ".join(f"{float(v)!r}f" for v in row) + "}" for row in rows)
+
+    w("")
+    w("/* ---- the Mega's features beyond the UNO's flash (docs/uno.md) ---- */")
+    w("/* protocol versions 3 and 4: VEL's planned acceleration A, the body's AX, AY, AW (motion.py) */")
+    w("#define FEATURE_VEL_ACCEL 1")
+    w(f"#define P_VERSION_MAX {codes.VERSIONS[-1]}")
+    w(f"#define P_VEL_PARAMS_MAX {codes.VEL_PARAMS_MAX}")
+    w("/* PWM counts per m/s^2 (x, y) and rad/s^2 of the body's acceleration (body_ff); per unit of the */")
+    w("/* body-frame twist's rate through the wheel's own inertia (wheel_ff times the wheel's row of J) */")
+    w(f"static const float ACCEL_BODY_FF[MOTORS][3] PROGMEM = {{{floats(cfg['body_ff'])}}};")
+    wheel = [[float(cfg["wheel_ff"][i]) * float(j) for j in cfg["J"][i]] for i in range(n)]
+    w(f"static const float ACCEL_WHEEL_FF[MOTORS][3] PROGMEM = {{{floats(wheel)}}};")
+    tolerance = float(cfg.get("progress_tolerance", 0.0))
+    w("/* the MOVE progress check (progress.py, WARN 17): body travel (m) along x and y per count */")
+    w(f"#define FEATURE_PROGRESS {1 if tolerance > 0 and all(int(c) for c in cfg['encoder_cpr']) else 0}")
+    w(f"#define PROGRESS_TOLERANCE {tolerance!r}f")
+    w("#define PROGRESS_COAST_MAX_MS 3000")
+    w(f"static const float TRAVEL[2][MOTORS] PROGMEM = {{{floats(cfg['travel'])}}};")
+    w("/* a VEL's watchdog on the closed loop brakes to rest (motion.py brake_to_rest): the twist slewed */")
+    w("/* down at the acceleration limits (m/s^2, rad/s^2), the wheels at rest below REST_COUNTS a window */")
+    w("#define FEATURE_BRAKE 1")
+    w(f"#define BRAKE_ACCEL_MAX {float(cfg.get('accel_max_cms2', 0.0)) * 0.01!r}f")
+    w(f"#define BRAKE_ALPHA_MAX {math.radians(float(cfg.get('angular_accel_max_dps2', 0.0)))!r}f")
+    w(f"#define BRAKE_MAX_US {motion.BRAKE_MAX_US}L")
+    w(f"#define REST_WINDOW_US {motion.REST_WINDOW_US}L")
+    rest = [
+        max(1, int(int(c) * motion.REST_RAD * motion.REST_WINDOW_US * 1e-6 / (2.0 * math.pi)))
+        for c in cfg["encoder_cpr"]
+    ]
+    w(f"static const uint8_t REST_COUNTS[MOTORS] PROGMEM = {{{', '.join(str(c) for c in rest)}}};")
+    _landing(w, cfg, floats)
+    w("/* the calibrated reach (CAL table 8, WARN 18): knots {folded course deg, cm/s}; 0: none */")
+    w("#define FEATURE_REACH 1")
+    count, rows = _table_rows(cfg["reach"], 1, 1)
+    w(f"#define DEFAULT_REACH_N {count}")
+    w(f"static const Knot DEFAULT_REACH[DEFAULT_REACH_N] PROGMEM = {{{', '.join(rows[:count])}}};")
+    for code in FEATURE_TEXTS:
+        w(f"static const char TEXT_{code}[] PROGMEM = {_c_string(codes.TEXTS[code])};")
+    w(f"static const CodeText FEATURE_CODE_TEXTS[{len(FEATURE_TEXTS)}] PROGMEM = {{")
+    w("    " + ", ".join(f"{{{c}, TEXT_{c}}}" for c in FEATURE_TEXTS))
+    w("};")
+    w(f"#define FEATURE_CODE_TEXT_COUNT {len(FEATURE_TEXTS)}")
+
+
+def _landing(w: Any, cfg: dict[str, Any], floats: Any) -> None:
+    """The closed-loop landing's constants (firmware/landing.py) for the Mega's ``_features``."""
+    n = int(cfg["motors"])
+    turn = [float(v) for v in cfg.get("turn") or [0.0] * n]
+    accel = [float(v) for v in cfg.get("land_accel") or [0.0, 0.0]]
+    on = all(int(c) > 0 for c in cfg["encoder_cpr"]) and any(turn) and min(accel) > 0.0
+    zero = [[0.0, 0.0, 0.0]] * n
+    w(
+        "/* the closed-loop landing (landing.py, CAL table 9): the body's turn (rad) per count of each wheel, */"
+    )
+    w(
+        "/* the plan's accelerations (m/s^2, rad/s^2), the floor's creep (roll, combined, scale) and its rows */"
+    )
+    w(f"#define FEATURE_LANDING {1 if on else 0}")
+    w(f"static const float TURN[MOTORS] PROGMEM = {{{', '.join(f'{v!r}f' for v in turn)}}};")
+    w(f"#define LAND_ACCEL {accel[0]!r}f")
+    w(f"#define LAND_ACCEL_W {accel[1]!r}f")
+    for name in ("LAG_S", "CRAWL", "CRAWL_W", "TOLERANCE", "TOLERANCE_W", "ROLL_EPS"):
+        w(f"#define LAND_{name} {float(getattr(landing, name))!r}f")
+    w(f"#define LAND_FAR_US {landing.FAR_US}L")
+    w(f"#define LAND_CHAIN_GUARD {motion.CHAIN_GUARD}")
+    slip = [float(v) for v in cfg.get("slip") or [0.0, 0.0, 1.0]]
+    w(f"static const float DEFAULT_SLIP[3] PROGMEM = {{{', '.join(f'{v!r}f' for v in slip)}}};")
+    w(f"static const float CREEP_ROLL[MOTORS][3] PROGMEM = {{{floats(cfg.get('creep_roll') or zero)}}};")
+    w(f"static const float CREEP_RIM[MOTORS][3] PROGMEM = {{{floats(cfg.get('creep_rim') or zero)}}};")
+    mix = cfg.get("creep_mix") or [[0.0] * n] * n
+    w(f"static const float CREEP_MIX[MOTORS][MOTORS] PROGMEM = {{{floats(mix)}}};")
 
 
 def board_source(robot_name: str, board_name: str = "uno") -> str:

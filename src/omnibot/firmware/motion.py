@@ -726,16 +726,25 @@ class Executor:
     # ------------------------------------------------------------------ roller drag (open loop)
 
     def _start_drag(self, flags: int) -> None:
-        """Add the rollers' drag to an open-loop translation, and keep it up to date each step."""
-        self._drag = not self._feedback and not flags & DEADBAND and self.model.drags()
-        if self._drag:
+        """Add the rollers' drag to an open-loop translation, and keep it up to date each step; an
+        open-loop motion without it whose powers are not whole counts is refreshed each step too
+        (dithered: :meth:`PowerModel.refinish`)."""
+        model = self.model
+        self._drag = not self._feedback and not flags & DEADBAND and (model.drags() or model.fractional())
+        if self._drag and model.drags():
             self._drag_step()
+        self._drag_due = self._drag_period
 
     def _drag_step(self) -> None:
-        """Recompute the drag from the encoders now; the next time one control period on."""
+        """Recompute the drag from the encoders now (or dither the powers again); the next time one
+        control period on."""
         self._drag_due = self._drag_period
-        self._read_counts()
-        self._warn_once(self.model.drag(self._counts, self.powers) & SATURATED)
+        model = self.model
+        if model.drags():
+            self._read_counts()
+            self._warn_once(model.drag(self._counts, self.powers) & SATURATED)
+        else:
+            model.refinish(self.powers)
         self.apply()
 
     # ------------------------------------------------------------------ closed loop

@@ -17,6 +17,13 @@ direction, all powers are scaled by one factor if any exceeds ``pwm_max`` (SATUR
 non-zero power is below ``power_min`` (the dead band: too little to move the robot), all are set to 0
 (DEADBAND). With ``floor`` set (an open-loop VEL: :meth:`Executor.vel`), each wheel whose power is
 below it is set to 0 on its own (WEAK): it would not turn, and the robot goes off the course asked.
+
+The PWM output has whole counts only. With ``dither`` on (the config's ``pwm_dither``, on by default)
+:meth:`PowerModel.finish` carries each wheel's rounding error over to its next output (error diffusion:
+``p = round(raw + e)``, ``e += raw - p``), and an open-loop motion refreshes its powers every control
+period (motion.py), so a wheel's power averages its fractional value over a few periods where rounding
+would lose up to half a count (at 10 cm/s one count is 13 % of mecanum4's forward speed). The dead band
+and the weak-wheel check are decided on the rounded powers, as without it.
 """
 
 import math
@@ -83,6 +90,9 @@ class PowerModel:
         self.drag_gain = 1.0
         self.floor = 0.0
         """PWM counts: a wheel given less (not 0) is set to 0 (WEAK); 0 for no such check."""
+        self.dither = bool(cfg.get("pwm_dither", True))
+        self.carry = [0.0] * n
+        """Each wheel's rounding error carried to its next output (``dither``), PWM counts."""
         self._fc = [0.0] * n
         self._fs = [0.0] * n
         self._ux = 0.0
@@ -140,7 +150,9 @@ class PowerModel:
         peak = 0.0
         part_tr = self.part_tr
         part_rot = self.part_rot
+        carry = self.carry
         for i in range(n):
+            carry[i] = 0.0  # a new twist starts from its rounded powers
             row = rim[i]
             t = row[0] * vx + row[1] * vy
             part_tr[i] = f_tr * t
@@ -229,4 +241,40 @@ class PowerModel:
                 if out[i] != 0 and abs(out[i]) < floor:
                     out[i] = 0
                     flags |= WEAK
+        if self.dither:
+            self._dither(out)
         return flags
+
+    def fractional(self) -> bool:
+        """True when dithering would change the last powers over time: some wheel's power is not a
+        whole count (what :meth:`refinish` is for)."""
+        if not self.dither:
+            return False
+        raw = self.raw
+        return any(raw[i] != round(raw[i]) for i in range(self.n))
+
+    def refinish(self, out: list[int]) -> None:
+        """The last powers again, for the next control period (each wheel's carried error added)."""
+        self._dither(out)
+
+    def _dither(self, out: list[int]) -> None:
+        """Add each wheel's carried rounding error to its power ``out`` (a wheel at 0 starts afresh)
+        and carry the new one."""
+        raw = self.raw
+        carry = self.carry
+        top = self.pwm_max
+        for i in range(self.n):
+            r = raw[i]
+            if out[i] == 0:
+                carry[i] = 0.0
+                continue
+            v = r + carry[i]
+            p = round(v)
+            if p > top:
+                p = top
+            elif p < -top:
+                p = -top
+            if p == 0 or (p > 0) != (r > 0):
+                p = out[i]  # never off, never against the power asked: rounded as without dithering
+            out[i] = p
+            carry[i] = v - p

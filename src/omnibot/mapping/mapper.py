@@ -63,12 +63,13 @@ def ray_ends(
 def _integrate(
     logodds: NDArray[np.float32],
     stamp: NDArray[np.int32],
-    seen: NDArray[np.bool_],
+    counts: NDArray[np.int32],
     ox: float,
     oy: float,
     ends: FloatArray,
     hits: NDArray[np.bool_],
     weights: FloatArray,
+    walks: FloatArray,
     res: float,
     l_free: float,
     l_occ: float,
@@ -85,12 +86,12 @@ def _integrate(
         r = math.floor(ends[k, 1] / res)
         if 0 <= r < rows and 0 <= c < cols and stamp[r, c] != scan_id:
             stamp[r, c] = scan_id
-            seen[r, c] = True
+            counts[r, c, 0] += 1
             v = logodds[r, c] + l_occ * weights[k]
             logodds[r, c] = min(v, l_max)
     fx, fy = ox / res, oy / res
     for k in range(ends.shape[0]):
-        tx, ty = ends[k, 0] / res, ends[k, 1] / res
+        tx, ty = walks[k, 0] / res, walks[k, 1] / res
         c, r = math.floor(fx), math.floor(fy)
         ce, re = math.floor(tx), math.floor(ty)
         dx, dy = tx - fx, ty - fy
@@ -102,13 +103,13 @@ def _integrate(
         tmx = ((c + 1 - fx) if dx > 0 else (fx - c)) * tdx if dx != 0 else inf
         tmy = ((r + 1 - fy) if dy > 0 else (fy - r)) * tdy if dy != 0 else inf
         steps = abs(ce - c) + abs(re - r)
-        last = hits[k]  # a miss ray clears its last cell too
+        last = hits[k]  # a miss ray clears its last cell too; a hit ray stops short of its walk's end
         for i in range(steps + 1):
             if i == steps and last:
                 break
             if 0 <= r < rows and 0 <= c < cols and stamp[r, c] != scan_id:
                 stamp[r, c] = scan_id
-                seen[r, c] = True
+                counts[r, c, 1] += 1
                 v = logodds[r, c] + l_free
                 logodds[r, c] = max(v, l_min)
             if tmx < tmy:
@@ -151,7 +152,12 @@ class OccupancyMapper:
 
     ``bounds`` ``(x_min, y_min, x_max, y_max)`` fixes the grid; without it the grid grows to fit.
     ``p_occ``/``p_free`` are the probabilities one hit / one free pass stand for, ``p_min``/``p_max``
-    the clamps; ``max_clear`` (m) how far a ray without a return clears.
+    the clamps; ``max_clear`` (m) how far a ray without a return clears. ``reflect``: a cell that
+    at least ``reflect_hits`` scans hit, and that was hit by at least this share of the scans that
+    reached it (hit or passed through it), is at least ``reflect_level`` whatever its log-odds (a
+    counting, "reflection" model beside the log-odds: a wall on a cell boundary, which the rays
+    grazing past it along its face pass through far more often than they end in it, stays
+    marked); None: the log-odds alone.
     """
 
     def __init__(
@@ -166,6 +172,9 @@ class OccupancyMapper:
         max_clear: float = 4.0,
         grow: float = 2.0,
         frame: str = "map",
+        reflect: float | None = None,
+        reflect_hits: int = 2,
+        reflect_level: int = 65,
     ) -> None:
         if not (math.isfinite(resolution) and resolution > 0):
             raise ValueError(f"resolution must be a positive length, not {resolution}")
@@ -174,6 +183,9 @@ class OccupancyMapper:
                 raise ValueError(f"{name} must lie in (0, 1), not {p}")
         if not (p_free < 0.5 < p_occ and p_min < 0.5 < p_max):
             raise ValueError("need p_free < 0.5 < p_occ and p_min < 0.5 < p_max")
+        if reflect is not None and not 0.0 < reflect <= 1.0:
+            raise ValueError(f"reflect must lie in (0, 1], not {reflect}")
+        self.reflect, self.reflect_hits, self.reflect_level = reflect, int(reflect_hits), int(reflect_level)
         self.resolution = float(resolution)
         self.l_occ, self.l_free = logit(p_occ), logit(p_free)
         self.l_min, self.l_max = logit(p_min), logit(p_max)
@@ -184,7 +196,7 @@ class OccupancyMapper:
         self._col0 = self._row0 = 0  # grid cell (0, 0) is world cell (row0, col0) of the resolution lattice
         self._logodds = np.zeros((0, 0), dtype=np.float32)
         self._stamp = np.zeros((0, 0), dtype=np.int32)
-        self._seen = np.zeros((0, 0), dtype=bool)
+        self._counts = np.zeros((0, 0, 2), dtype=np.int32)  # per cell: scans that hit it, that passed it
         self._scans = 0
         if bounds is not None:
             x0, y0, x1, y1 = bounds
@@ -206,14 +218,14 @@ class OccupancyMapper:
             c1 = max(c1, self._col0 + self._logodds.shape[1])
             r1 = max(r1, self._row0 + self._logodds.shape[0])
         shape = (r1 - r0, c1 - c0)
-        lo, st, se = np.zeros(shape, np.float32), np.zeros(shape, np.int32), np.zeros(shape, bool)
+        lo, st, se = np.zeros(shape, np.float32), np.zeros(shape, np.int32), np.zeros((*shape, 2), np.int32)
         if self._logodds.size:
             dr, dc = self._row0 - r0, self._col0 - c0
             h, w = self._logodds.shape
             lo[dr : dr + h, dc : dc + w] = self._logodds
             st[dr : dr + h, dc : dc + w] = self._stamp
-            se[dr : dr + h, dc : dc + w] = self._seen
-        self._logodds, self._stamp, self._seen = lo, st, se
+            se[dr : dr + h, dc : dc + w] = self._counts
+        self._logodds, self._stamp, self._counts = lo, st, se
         self._row0, self._col0 = r0, c0
 
     def _fit(self, x0: float, y0: float, x1: float, y1: float) -> None:
@@ -248,13 +260,17 @@ class OccupancyMapper:
         points: ArrayLike,
         clear: ArrayLike | None = None,
         weights: ArrayLike | None = None,
+        short: ArrayLike | float = 0.0,
     ) -> None:
         """Integrate returns given as (n, 2) map-frame ``points`` seen from ``origin`` (the scanner's
         position, map frame): free from the origin to each point, occupied at it; ``clear`` (m, 2)
         end points of rays that only clear (returns too uncertain to mark a cell, shortened by their
         uncertainty); ``weights`` (n,) scale each hit's evidence (1: a hit as :meth:`add` counts it),
-        e.g. less for a far, noisier return. For returns already corrected for the scanner's motion
-        (:func:`omnibot.mapping.deskew.scan_points`)."""
+        e.g. less for a far, noisier return; ``short`` (m, one for all or (n,)) how far short of
+        its return each hit ray stops clearing: the cell of a point ``short`` before the return and
+        those beyond it are not cleared by that ray (a return an uncertain distance behind a wall's
+        face, or a wall seen from both sides, must not clear the wall's own cells). For returns
+        already corrected for the scanner's motion (:func:`omnibot.mapping.deskew.scan_points`)."""
         hit = np.asarray(points, dtype=np.float64).reshape(-1, 2)
         free = np.zeros((0, 2)) if clear is None else np.asarray(clear, dtype=np.float64).reshape(-1, 2)
         ends = np.concatenate((hit, free))
@@ -272,7 +288,14 @@ class OccupancyMapper:
         w = np.ones(len(ends))
         if weights is not None:
             w[: len(hit)] = np.asarray(weights, dtype=np.float64).reshape(-1)
-        self._integrate(ox, oy, ends, hits, w)
+        walks = ends.copy()
+        cut = np.broadcast_to(np.asarray(short, dtype=np.float64), (len(hit),))
+        if len(hit) and np.any(cut > 0):
+            rays = hit - (ox, oy)
+            length = np.hypot(rays[:, 0], rays[:, 1])
+            keep = np.maximum(length - cut, 0.0) / np.maximum(length, 1e-12)
+            walks[: len(hit)] = (ox, oy) + rays * keep[:, None]
+        self._integrate(ox, oy, ends, hits, w, walks)
 
     def _integrate(
         self,
@@ -281,20 +304,25 @@ class OccupancyMapper:
         ends: FloatArray,
         hits: NDArray[np.bool_],
         weights: FloatArray | None = None,
+        walks: FloatArray | None = None,
     ) -> None:
+        """Each ray marks its ``ends`` (hits) and clears up to its ``walks`` point (None: its end)."""
         self._scans += 1
         if weights is None:
             weights = np.ones(len(ends))
+        if walks is None:
+            walks = ends
         shift = np.array([self._col0, self._row0], dtype=np.float64) * self.resolution
         _integrate(
             self._logodds,
             self._stamp,
-            self._seen,
+            self._counts,
             ox - shift[0],
             oy - shift[1],
             np.ascontiguousarray(ends - shift),
             np.ascontiguousarray(hits),
             np.ascontiguousarray(weights, dtype=np.float64),
+            np.ascontiguousarray(walks - shift),
             self.resolution,
             self.l_free,
             self.l_occ,
@@ -324,7 +352,7 @@ class OccupancyMapper:
         """Forget every scan (the grid's extent is kept)."""
         self._logodds[:] = 0.0
         self._stamp[:] = 0
-        self._seen[:] = False
+        self._counts[:] = 0
         self._scans = 0
 
     @property
@@ -347,7 +375,11 @@ class OccupancyMapper:
         if not self._logodds.size:
             raise ValueError("the mapper has no grid yet: add a scan or give bounds")
         p = 1.0 / (1.0 + np.exp(-self._logodds.astype(np.float64)))
-        data = np.where(self._seen, np.rint(100.0 * p), UNKNOWN).astype(np.int8)
+        data = np.where(self._counts.any(axis=2), np.rint(100.0 * p), UNKNOWN).astype(np.int8)
+        if self.reflect is not None:
+            hits, passes = self._counts[..., 0], self._counts[..., 1]
+            struck = (hits >= self.reflect_hits) & (hits >= self.reflect * (hits + passes))
+            data[struck] = np.maximum(data[struck], self.reflect_level)
         return OccupancyGrid(data, self.resolution, self.origin, self.frame)
 
 

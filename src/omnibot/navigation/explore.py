@@ -16,6 +16,10 @@
       -> again, until no frontier is left (explored), the time limit passes, or no frontier left
          has a way to it (unreachable, each one's reason said)
 
+Walls the scans saw that the map does not mark (returns beyond the hit range, or a wall seen
+edge-on: :func:`unmarked_walls`) are gone to as frontiers are, to a place within the hit range
+that sees them (:func:`wall_goals`); each is gone to once.
+
 A goal reached is not gone to again, even if it is still a frontier (behind furniture, beyond the
 scanner's range). One the robot set out for and did not reach (stalled, blocked, timed out) is tried
 again on the next map, and given up after :data:`ATTEMPTS` tries, the last reason said. Where the
@@ -72,6 +76,15 @@ BACK_OFF = 1.0
 """m within which the robot looks for a clear spot when the map has it overlapping a wall."""
 BACK_OFFS = 2
 """Back-offs in a row that leave the robot still overlapping a wall before exploring ends (stuck)."""
+OCCUPIED = 65
+"""Cells at or above this are walls the map has marked (map_server's occupied threshold)."""
+WALL_RETURNS = 2
+"""Returns in a cell the map does not mark (nor a neighbour) that make it a wall to see closer."""
+WALL_CELLS = 4
+"""Such cells a group needs to be worth a visit."""
+WALL_VIEW = (0.4, 1.2)
+"""m from an unmarked wall's middle within which the robot stands to see it (within an RPLIDAR
+A1's 2 m hit range, with room for the SLAM's error and a slanted view)."""
 GOTO = GotoOptions(
     tolerance=0.25,
     heading_tolerance=math.pi,
@@ -159,6 +172,89 @@ def frontier_goals(
     ]
 
 
+def unmarked_walls(
+    grid: OccupancyGrid, returns: NDArray[np.integer], *, min_returns: int = WALL_RETURNS
+) -> NDArray[np.bool_]:
+    """Cells where the scanner saw something (``returns``: returns per cell, at every range) that
+    the map does not mark, nor any neighbour: walls seen only from beyond the hit range or edge-on
+    (single hits cleared by the rays grazing past). Cells the map holds free with confidence are
+    left out (a stray return in the open)."""
+    marked: NDArray[np.bool_] = ndimage.binary_dilation(
+        grid.occupied(OCCUPIED), structure=np.ones((3, 3), dtype=bool)
+    )
+    seen: NDArray[np.bool_] = np.asarray(returns) >= min_returns
+    return seen & ~marked & ~grid.free(25)
+
+
+def wall_goals(
+    grid: OccupancyGrid,
+    cmap: CostMap,
+    returns: NDArray[np.integer],
+    *,
+    min_cells: int = WALL_CELLS,
+    view: tuple[float, float] = WALL_VIEW,
+) -> list[tuple[tuple[float, float], tuple[float, float]]]:
+    """(where to stand, the group's middle) for each group of :func:`unmarked_walls` (8-connected, at least
+    ``min_cells``) within the hit range: a cell clear of the walls and the unknown (``cmap``) between
+    ``view`` m of the group's middle with a line of sight to it through known free cells, facing the
+    group square on where it can (a long group's axis across the view) and about a metre away;
+    groups with no such place are left out."""
+    labels, count = ndimage.label(unmarked_walls(grid, returns), structure=np.ones((3, 3), dtype=int))
+    if count == 0:
+        return []
+    stand_cells = np.argwhere(grid.free(FREE) & ~cmap.blocked)
+    if len(stand_cells) == 0:
+        return []
+    stands = grid.cell_to_world(stand_cells)
+    see_through = grid.free(FREE)
+    res = grid.resolution
+    goals: list[tuple[tuple[float, float], tuple[float, float]]] = []
+    for k in range(1, count + 1):
+        cells = np.argwhere(labels == k)
+        if len(cells) < min_cells:
+            continue
+        xy = grid.cell_to_world(cells)
+        centre = xy.mean(axis=0)
+        d = np.hypot(*(stands - centre).T)
+        near = (d >= view[0]) & (d <= view[1])
+        if not near.any():
+            continue
+        cand, dist = stands[near], d[near]
+        seen = _line_of_sight(grid, see_through, cand, centre, stop=2.0 * res)
+        if not seen.any():
+            continue
+        cand, dist = cand[seen], dist[seen]
+        across = np.zeros(len(cand))
+        if len(cells) >= 3:
+            _, vectors = np.linalg.eigh(np.cov((xy - centre).T))
+            axis = vectors[:, -1]  # the group's long direction
+            across = np.abs(((cand - centre) @ axis) / np.maximum(dist, 1e-9))  # |cos|: 0 square on
+        best = int(np.argmin(across + np.abs(dist - 1.0)))
+        goals.append(((float(cand[best, 0]), float(cand[best, 1])), (float(centre[0]), float(centre[1]))))
+    return goals
+
+
+def _line_of_sight(
+    grid: OccupancyGrid, clear: NDArray[np.bool_], starts: FloatArray, end: FloatArray, stop: float
+) -> NDArray[np.bool_]:
+    """Which of ``starts`` see ``end`` through ``clear`` cells: the segment sampled every half cell,
+    up to ``stop`` m before ``end``."""
+    step = grid.resolution / 2.0
+    span = np.hypot(*(end - starts).T)
+    n = int(np.ceil(float(span.max()) / step)) + 1
+    t = np.linspace(0.0, 1.0, n)
+    ok = np.ones(len(starts), dtype=bool)
+    for f in t:
+        pts = starts + (end - starts) * f
+        upto = f * span <= span - stop
+        cells = grid.world_to_cell(pts)
+        inside = grid.inside(cells)
+        free = np.zeros(len(starts), dtype=bool)
+        free[inside] = clear[cells[inside, 0], cells[inside, 1]]
+        ok &= free | ~upto
+    return ok
+
+
 @dataclass
 class ExploreResult:
     """What exploring did: why it ended, the frontiers visited and those given up."""
@@ -198,13 +294,16 @@ def explore(
     pose: PoseProvider,
     *,
     scan: Callable[[], FloatArray | None] | None = None,
+    returns: Callable[[OccupancyGrid], NDArray[np.integer]] | None = None,
     time_limit: float = 300.0,
     options: GotoOptions = GOTO,
     say: Callable[[str], object] = lambda text: None,
 ) -> ExploreResult:
     """Explore through a running ``runtime`` (see the module docstring): ``grid_now()`` is the map so
     far, ``pose()`` the robot's pose in it and ``scan()`` the latest scan's points in it (the
-    obstacle watch); at most ``time_limit`` s of the link's clock. ``options.speed`` None: the
+    obstacle watch); ``returns(grid)`` the scans' returns per cell of that map (at every range):
+    walls they saw that the map does not mark are gone to as frontiers are (:func:`wall_goals`);
+    at most ``time_limit`` s of the link's clock. ``options.speed`` None: the
     :func:`exploring_speed` of the robot."""
     if options.speed is None:
         options = replace(options, speed=exploring_speed(robot))
@@ -214,6 +313,7 @@ def explore(
     result = ExploreResult("explored")
     tries: list[list[float]] = []  # [x, y, tries] of goals set out for and not reached
     told: list[tuple[float, float]] = []  # unreachable goals already said
+    walls_seen: list[tuple[float, float]] = []  # the middles of unmarked walls gone to
     backed_off = 0
     while True:
         left = time_limit - (clock.now() - t0)
@@ -244,6 +344,14 @@ def explore(
             for f in frontiers(grid, cmap, optimistic)
             if f.goal is not None and not _near(f.goal, result.done)
         ]
+        walls = {}  # a wall's goal -> its middle: a wall gone to once is not gone to again
+        if returns is not None:
+            walls = {
+                g: c
+                for g, c in wall_goals(grid, cmap, returns(grid))
+                if not _near(g, result.done) and not _near(c, walls_seen)
+            }
+            goals += list(walls)
         if not goals:
             result.outcome = "explored"
             break
@@ -259,9 +367,12 @@ def explore(
         goal = Pose2D(gx, gy, here.theta)
         how = replace(options, allow_unknown=through, timeout=left)
         way = " (through unknown space)" if through else ""
-        say(f"to the frontier at ({gx:.2f}, {gy:.2f}){way}, {len(goals)} left")
+        what = "a wall the map does not mark, from" if (gx, gy) in walls else "the frontier at"
+        say(f"to {what} ({gx:.2f}, {gy:.2f}){way}, {len(goals)} left")
         visit = go_to(runtime, robot, grid, goal, how, pose=pose, scan=scan)
         result.visits.append(visit)
+        if (gx, gy) in walls:
+            walls_seen.append(walls[(gx, gy)])  # reached or not: another place may not see it either
         if visit.arrived:
             result.done.append((gx, gy))
             continue

@@ -29,7 +29,7 @@ from collections.abc import Callable
 from typing import Literal
 
 from omnibot.mapping.grid import OccupancyGrid
-from omnibot.mapping.planner import check_goal, inflate
+from omnibot.mapping.planner import check_goal, check_start, inflate
 from omnibot.motion import Pose2D, Twist
 from omnibot.navigation.goto import (
     GotoOptions,
@@ -134,6 +134,11 @@ class GotoSource:
     def check(self, goal: Pose2D) -> None:
         """Raise OffMapError or BlockedError when the robot cannot stand at ``goal`` on the map."""
         check_goal(self._cmap, goal)
+
+    def check_pose(self, pose: Pose2D) -> None:
+        """Raise OffMapError, BlockedError or NoPathError when the robot cannot stand at ``pose`` on the
+        map (off it, overlapping a wall) or could not leave it (what a plan checks of its start)."""
+        check_start(self._cmap, pose)
 
     def go(self, goal: Pose2D) -> bool:
         """Go to ``goal`` (map frame) from the next cycle on; a goal being gone to is pre-empted

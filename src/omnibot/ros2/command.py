@@ -348,7 +348,9 @@ def attach(
     )
     runtime.add_sink(bridge)
     if getattr(args, "map_grid", None) is not None:
-        cancels.append(_goal_pose(runtime, robot, args, node, bridge, spec, notify, diagnosed).cancel)
+        goal = _goal_pose(runtime, robot, args, node, bridge, spec, notify, diagnosed)
+        cancels.append(goal.cancel)
+        reset.placer = goal.initial_pose
     node.declare(parameters(robot, runtime, spec, cmd_vel, node.backend))
     if announce:
         notify("info", f"ros2: node {fqn(node)} on the {node.backend} backend")
@@ -370,9 +372,9 @@ def _goal_pose(
     """``--map``: the localiser (started at ``--initial-pose`` or the simulator's pose) publishing the map
     and ``map -> odom``, and the ``goal_pose`` source on it (:mod:`omnibot.ros2.goal`)."""
     from omnibot.mapping.localise import Localiser
-    from omnibot.mapping.session import LocalisingSink
     from omnibot.motion import Pose2D
-    from omnibot.ros2.goal import GoalPoseSource, Localisation
+    from omnibot.ros2.goal import GoalPoseSource, Localisation, PlaceableSink
+    from omnibot.ros2.navigate import NavigateToPose
     from omnibot.transport.device import find_simulator
 
     grid = args.map_grid
@@ -384,7 +386,7 @@ def _goal_pose(
         start = Pose2D(sim.pose.x, sim.pose.y, sim.pose.theta)
     localiser = Localiser(grid, seed=getattr(args, "seed", None) or 0)
     localiser.reset(start, spread=(0.05, 0.05))
-    localisation = Localisation(bridge, grid, LocalisingSink(None, localiser, threaded=True))
+    localisation = Localisation(bridge, grid, PlaceableSink(None, localiser, threaded=True))
     node.closers.append(localisation.close)
     runtime.add_sink(localisation)
     goal = GoalPoseSource(
@@ -397,15 +399,23 @@ def _goal_pose(
         notify=notify,
         scan=localisation.sink.points,
         diagnosed=diagnosed,
+        place=localisation.place,
     )
     runtime.add_source(goal)
+    runtime.add_sink(NavigateToPose(node, goal, stamp=bridge.recorder.ns, notify=notify, speed=_speed))
     bridge.reporters.append(goal.status)
     notify(
         "info",
         f"localising in {args.map} from ({start.x:.2f}, {start.y:.2f}, {math.degrees(start.theta):.0f} deg); "
-        "goal_pose in the map frame is gone to",
+        "goal_pose and navigate_to_pose in the map frame are gone to, initialpose there re-places the robot",
     )
     return goal
+
+
+def _speed(cycle: Any) -> float:
+    """The robot's speed in the cycle's estimate (0 without one)."""
+    e = cycle.estimate
+    return 0.0 if e is None else math.hypot(e.vx, e.vy)
 
 
 def fqn(node: Any) -> str:

@@ -16,18 +16,26 @@ and ``map -> odom``, go to each goal.
   too near one, or not a finite pose is refused with one warning and changes nothing. A new goal
   pre-empts the one being gone to. The outcome (arrived, or why not: no path, blocked, timed out,
   stalled, stopped, missed, cancelled) is a status line and the ``omnibot: goal`` diagnostic status.
+* ``initialpose`` (geometry_msgs/PoseWithCovarianceStamped, rviz2's "2D Pose Estimate", Nav2's
+  initial pose) in the map frame re-places the localiser there (:meth:`GoalPoseSource.initial_pose`,
+  read by the bridge's :class:`~omnibot.ros2.odometry.OdometryReset`): its particles are drawn
+  with the message's x/y and yaw standard deviations (:func:`spread_of`), the goal being gone to
+  is cancelled. A pose in another frame, off the map, overlapping a wall or not finite is refused
+  with one warning and changes nothing, as AMCL ignores a pose outside its global frame.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Literal
 
-from omnibot.errors import ConfigError
+from omnibot.errors import ConfigError, OffMapError, PlanningError
 from omnibot.logs.recorder import map_to_odom, occupancy_grid
 from omnibot.logs.topics import MAP, TF
 from omnibot.mapping.grid import OccupancyGrid
+from omnibot.mapping.se2 import compose, inverse
 from omnibot.mapping.session import LocalisingSink
 from omnibot.motion import Pose2D
 from omnibot.navigation.goto import GotoOptions, GotoResult
@@ -41,15 +49,74 @@ from omnibot.ros2.types import from_dds
 from omnibot.runtime.cycle import Cycle, Level
 from omnibot.runtime.sources import Proposal
 
+if TYPE_CHECKING:
+    from omnibot.lidar.reader import ScanSource
+    from omnibot.mapping.localise import Localiser
+    from omnibot.scan import Scan
+
 GOAL_POSE = "goal_pose"
 GOAL_TYPE = "geometry_msgs/msg/PoseStamped"
+SPREAD_MIN = (0.01, 0.01)
+"""The least spread (m, rad) the particles are drawn with when re-placed (a zero covariance)."""
+
+Spread = tuple[float, float]
+RefusalKind = Literal["frame", "pose", "off map", "blocked"]
+
+
+@dataclass(frozen=True)
+class Refusal:
+    """Why a goal was refused: the warning's ``text``, and what was wrong with it (``frame``: not the map
+    frame; ``pose``: not finite; ``off map``; ``blocked``: in or too near a wall)."""
+
+    text: str
+    kind: RefusalKind
+
+
+Placer = Callable[[Pose2D, Spread], object]
+
+
+def spread_of(covariance: Any) -> Spread | None:
+    """(xy, theta) standard deviations of a PoseWithCovariance's 6x6 row-major covariance: the larger of
+    x's and y's, and yaw's, each at least :data:`SPREAD_MIN`; None when a variance is negative or not
+    finite."""
+    variances = [float(covariance[i]) for i in (0, 7, 35)]
+    if not all(math.isfinite(v) and v >= 0.0 for v in variances):
+        return None
+    vx, vy, vt = variances
+    return max(math.sqrt(max(vx, vy)), SPREAD_MIN[0]), max(math.sqrt(vt), SPREAD_MIN[1])
+
+
+class PlaceableSink(LocalisingSink):
+    """A LocalisingSink that can be re-placed from the runtime's thread while its worker localises:
+    :meth:`place` takes effect at once on :meth:`pose_now` and on the localiser before its next scan
+    (the localiser is reset in the thread that updates it)."""
+
+    def __init__(self, scans: ScanSource | None, localiser: Localiser, *, threaded: bool = False) -> None:
+        self._placing: tuple[Pose2D, Spread] | None = None
+        super().__init__(scans, localiser, threaded=threaded)
+
+    def place(self, pose: Pose2D, spread: Spread) -> None:
+        """The robot stands at ``pose`` in the map (particles drawn ``spread`` around it)."""
+        odom = self.last_odometry
+        with self._lock:
+            self._placing = (pose, spread)
+            self._points = None
+            if odom is not None:
+                self._map_to_odom = compose(pose, inverse(odom))
+
+    def _update(self, scan: Scan, odom: Pose2D) -> None:
+        with self._lock:
+            placing, self._placing = self._placing, None
+        if placing is not None:
+            self.localiser.reset(*placing)
+        super()._update(scan, odom)
 
 
 class Localisation:
     """A sink: ``sink`` (a LocalisingSink) fed every cycle; the map and ``map -> odom`` published
     through ``bridge`` (see the module docstring). :meth:`close` when the run ends."""
 
-    def __init__(self, bridge: Ros2Sink, grid: OccupancyGrid, sink: LocalisingSink) -> None:
+    def __init__(self, bridge: Ros2Sink, grid: OccupancyGrid, sink: PlaceableSink) -> None:
         self.bridge = bridge
         self.grid = grid
         self.sink = sink
@@ -72,6 +139,10 @@ class Localisation:
             self._last_tf = cycle.now
             self.bridge.write(TF, map_to_odom(self.sink.map_to_odom_now(), ns))
 
+    def place(self, pose: Pose2D, spread: Spread) -> None:
+        """Re-place the localiser at ``pose`` (:meth:`PlaceableSink.place`)."""
+        self.sink.place(pose, spread)
+
     def close(self) -> None:
         """Finish the localiser's work and close it."""
         self.sink.close()
@@ -93,8 +164,11 @@ class GoalPoseSource:
         scan: Callable[[], Any] | None = None,
         options: GotoOptions | None = None,
         diagnosed: Diagnosed | None = None,
+        place: Placer | None = None,
     ) -> None:
         self.map_frame = map_frame
+        self.place = place
+        """Re-places the localiser (None: ``initialpose`` is refused)."""
         self.notify = notify
         self.diagnosed = diagnosed or Diagnosed.of(robot.name)
         self.reader = node.reader(GOAL_POSE, GOAL_TYPE)
@@ -109,6 +183,10 @@ class GoalPoseSource:
         self.refused = ""
         """Why the last goal was refused ("" once one is taken)."""
         self.detail = "no goal received"
+        self.via = GOAL_POSE
+        """What the goal being gone to (or the last) came by."""
+        self.listeners: list[Callable[[GotoResult], object]] = []
+        """Called with each goal's result after it is told (the navigate_to_pose action's)."""
 
     @property
     def watchdog(self) -> float:
@@ -137,36 +215,73 @@ class GoalPoseSource:
         """End the goal being gone to (if any), ``why`` in its result."""
         self.goto.cancel(why)
 
-    def receive(self, msg: Any) -> bool:
-        """Go to a geometry_msgs/PoseStamped, or refuse it (one warning)."""
+    def receive(self, msg: Any, via: str = GOAL_POSE) -> GotoResult | Refusal:
+        """Go to a geometry_msgs/PoseStamped that came by ``via`` (``goal_pose``, or Nav2's action
+        ``navigate_to_pose``): the goal's result (filled in as it is gone to), or why it was refused
+        (one warning; nothing changes)."""
         frame = msg.header.frame_id.lstrip("/")
         if frame != self.map_frame:
             return self._refuse(
-                f"goal_pose in frame {frame!r} refused: goals are taken in the map frame {self.map_frame!r}"
+                f"{via} in frame {frame!r} refused: goals are taken in the map frame {self.map_frame!r}",
+                "frame",
             )
         p = msg.pose
         yaw = yaw_of(p.orientation)
         if yaw is None or not (math.isfinite(p.position.x) and math.isfinite(p.position.y)):
-            return self._refuse("goal_pose refused: not a finite position and rotation")
+            return self._refuse(f"{via} refused: not a finite position and rotation", "pose")
         goal = Pose2D(float(p.position.x), float(p.position.y), yaw)
         try:
             replaced = self.goto.go(goal)
         except ConfigError as exc:  # OffMapError, BlockedError: the robot cannot stand there
-            return self._refuse(f"goal_pose refused: {exc}")
+            return self._refuse(
+                f"{via} refused: {exc}", "off map" if isinstance(exc, OffMapError) else "blocked"
+            )
+        self.via = via
         self.refused = ""
         self.detail = f"going to ({goal.x:.2f}, {goal.y:.2f}, {math.degrees(goal.theta):.0f} deg)"
-        self.notify("info", f"goal_pose {'replaced' if replaced else 'received'}: {self.detail}")
-        return True
+        self.notify("info", f"{via} {'replaced' if replaced else 'received'}: {self.detail}")
+        result = self.goto.result
+        assert result is not None
+        return result
 
-    def _refuse(self, text: str) -> bool:
+    def initial_pose(self, msg: Any) -> tuple[bool, str]:
+        """Re-place the localiser at a geometry_msgs/PoseWithCovarianceStamped in the map frame, or say
+        why not (nothing changes): (done, what happened)."""
+        frame = msg.header.frame_id.lstrip("/")
+        if frame != self.map_frame or self.place is None:
+            return False, (
+                f"initialpose in frame {frame!r} refused: the localiser is placed in the map frame "
+                f"{self.map_frame!r}"
+            )
+        p = msg.pose.pose
+        yaw = yaw_of(p.orientation)
+        spread = spread_of(msg.pose.covariance)
+        if yaw is None or spread is None or not (math.isfinite(p.position.x) and math.isfinite(p.position.y)):
+            return False, "initialpose refused: not a finite position, rotation and covariance"
+        pose = Pose2D(float(p.position.x), float(p.position.y), yaw)
+        try:
+            self.goto.check_pose(pose)
+        except (ConfigError, PlanningError) as exc:
+            return False, f"initialpose refused: {exc}"
+        self.goto.cancel("the robot was re-placed by initialpose")
+        self.place(pose, spread)
+        return True, (
+            f"localiser re-placed by initialpose at ({pose.x:.2f}, {pose.y:.2f}, "
+            f"{math.degrees(pose.theta):.0f} deg), spread {100 * spread[0]:.0f} cm, "
+            f"{math.degrees(spread[1]):.0f} deg"
+        )
+
+    def _refuse(self, text: str, kind: RefusalKind) -> Refusal:
         self.refused = text
         self.notify("warn", text)
-        return False
+        return Refusal(text, kind)
 
     def _result(self, result: GotoResult) -> None:
         self.detail = result.summary()
         level: Level = "info" if result.arrived else "warn"
-        self.notify(level, f"goal_pose: {self.detail}")
+        self.notify(level, f"{self.via}: {self.detail}")
+        for listener in self.listeners:
+            listener(result)
 
     def status(self) -> Any:
         """The ``omnibot: goal`` diagnostic status."""

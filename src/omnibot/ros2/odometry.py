@@ -10,7 +10,9 @@
   (0, 0, 0); the reply says so, or why not.
 
 A reset moves the odom frame under a path being followed (a path is in that frame), so it cancels
-the path first (``on_reset``). It is a sink of the runtime: requests are taken once per cycle, and the
+the path first (``on_reset``). With a map (``omnibot ros2 --map``) ``initialpose`` is the localiser's
+instead (:attr:`OdometryReset.placer`: :meth:`omnibot.ros2.goal.GoalPoseSource.initial_pose`), as
+AMCL's: a pose in the map frame re-places it, any other is refused. It is a sink of the runtime: requests are taken once per cycle, and the
 next cycle's estimate is the new pose.
 """
 
@@ -70,6 +72,8 @@ class OdometryReset:
         self.last = "none yet"
         """What the last request did, in words."""
         self.last_level = 0
+        self.placer: Callable[[Any], tuple[bool, str]] | None = None
+        """With a map: takes ``initialpose`` messages instead (done, what happened)."""
 
     def set_pose(self, pose: Pose2D, why: str) -> tuple[bool, str]:
         """Put the estimate at ``pose``; (done, what happened)."""
@@ -103,7 +107,11 @@ class OdometryReset:
 
     def initial_pose(self, msg: Any) -> bool:
         """Apply an ``initialpose`` message (refused, with a warning, when not in the odom frame or not
-        a pose)."""
+        a pose); with :attr:`placer`, the placer's (its outcome reported the same way)."""
+        if self.placer is not None:
+            done, text = self.placer(msg)
+            self._report(0 if done else 1, "info" if done else "warn", text)
+            return done
         frame = msg.header.frame_id.lstrip("/")
         if frame not in ("", self.odom_frame):
             self._report(

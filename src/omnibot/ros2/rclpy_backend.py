@@ -331,16 +331,17 @@ class RclpyNode:
         """``/r1/omnibot``."""
         return str(self.node.get_fully_qualified_name())
 
-    def wire(self, typename: str) -> Any:
-        """The companion ``dds`` node, for ``typename`` that rclpy cannot carry here (said once)."""
+    def wire(self, typename: str, why: str = "") -> Any:
+        """The companion ``dds`` node, for ``typename`` that rclpy cannot carry here, or ``why`` it goes on
+        the wire anyway (said once)."""
         from omnibot.ros2.dds import Node as WireNode
 
         if typename not in self.wired:
             self.wired.append(typename)
             log.warning(
-                "%s: no rclpy package for %s here: it goes on the DDS wire (node %s_wire)",
+                "%s: %s: it goes on the DDS wire (node %s_wire)",
                 self.fully_qualified_name,
-                typename,
+                why or f"no rclpy package for {typename} here",
                 self.name,
             )
         if self._wire is None:

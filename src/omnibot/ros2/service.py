@@ -32,6 +32,15 @@ class Endpoints(Protocol):
         ...
 
 
+def answer(replies: Any, request: Any, typename: str, **fields: Any) -> None:
+    """Write the reply of ``typename`` (``pkg/srv/Name_Response``) with ``fields`` (rosbags' message
+    values) to the request ``request`` on ``replies``, its header the request's, as rmw_cyclonedds
+    answers."""
+    reply: Any = request_type(typename)
+    response = schemas.new(typename, **fields)
+    replies.write(reply(guid=request.guid, seq=request.seq, **dds_fields(response, typename)))
+
+
 class TriggerService:
     """A std_srvs/srv/Trigger service ``name``: :meth:`poll` answers every waiting request with
     ``handler()`` -> (success, message)."""
@@ -40,7 +49,6 @@ class TriggerService:
         self.name = name
         self.handler = handler
         self.requests, self.replies = node.service_endpoints(name, TRIGGER)
-        self._reply: Any = request_type(TRIGGER + "_Response")
         self.answered = 0
 
     def poll(self) -> int:
@@ -50,9 +58,7 @@ class TriggerService:
             if not hasattr(request, "guid"):
                 continue  # a dispose or unregister: no data
             success, message = self.handler()
-            response = schemas.new(TRIGGER + "_Response", success=success, message=message)
-            fields: dict[str, Any] = dds_fields(response, TRIGGER + "_Response")
-            self.replies.write(self._reply(guid=request.guid, seq=request.seq, **fields))
+            answer(self.replies, request, TRIGGER + "_Response", success=success, message=message)
             count += 1
         self.answered += count
         return count

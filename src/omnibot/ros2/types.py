@@ -155,12 +155,32 @@ SERVICE_TYPES = {
 }
 """Service request and response types (rosbags' store has messages only): std_srvs' definitions."""
 
+NAVIGATE = "nav2_msgs/action/NavigateToPose"
+ACTION_TYPES = {
+    "action_msgs/srv/CancelGoal_Request": "action_msgs/GoalInfo goal_info\n",
+    "action_msgs/srv/CancelGoal_Response": "int8 ERROR_NONE=0\nint8 ERROR_REJECTED=1\nint8 ERROR_UNKNOWN_GOAL_ID=2\n"
+    "int8 ERROR_GOAL_TERMINATED=3\nint8 return_code\naction_msgs/GoalInfo[] goals_canceling\n",
+    f"{NAVIGATE}_Goal": "geometry_msgs/PoseStamped pose\nstring behavior_tree\n",
+    f"{NAVIGATE}_Result": "uint16 NONE=0\nuint16 error_code\nstring error_msg\n",
+    f"{NAVIGATE}_Feedback": "geometry_msgs/PoseStamped current_pose\nbuiltin_interfaces/Duration navigation_time\n"
+    "builtin_interfaces/Duration estimated_time_remaining\nint16 number_of_recoveries\nfloat32 distance_remaining\n",
+    f"{NAVIGATE}_SendGoal_Request": f"unique_identifier_msgs/UUID goal_id\n{NAVIGATE}_Goal goal\n",
+    f"{NAVIGATE}_SendGoal_Response": "bool accepted\nbuiltin_interfaces/Time stamp\n",
+    f"{NAVIGATE}_GetResult_Request": "unique_identifier_msgs/UUID goal_id\n",
+    f"{NAVIGATE}_GetResult_Response": f"int8 status\n{NAVIGATE}_Result result\n",
+    f"{NAVIGATE}_FeedbackMessage": f"unique_identifier_msgs/UUID goal_id\n{NAVIGATE}_Feedback feedback\n",
+}
+"""Nav2's NavigateToPose action as ROS 2 Jazzy defines it (nav2_msgs/action/NavigateToPose.action: the
+goal, result and feedback; Kilted's result adds error code constants, not fields), the parts rosidl
+makes of an action (``_SendGoal``, ``_GetResult`` services, ``_FeedbackMessage``) and action_msgs'
+CancelGoal service, in dependency order."""
+
 
 def register_service_types() -> None:
-    """Put :data:`SERVICE_TYPES` in the type store (once); rosbags gives an empty request the one
-    ``uint8`` member rosidl gives it, so the RIHS01 hashes are ROS 2's."""
+    """Put :data:`SERVICE_TYPES` and :data:`ACTION_TYPES` in the type store (once); rosbags gives an empty
+    request the one ``uint8`` member rosidl gives it, so the RIHS01 hashes are ROS 2's."""
     store = typestore()
-    for name, text in SERVICE_TYPES.items():
+    for name, text in (SERVICE_TYPES | ACTION_TYPES).items():
         if name not in store.fielddefs:
             # rosbags names what it parses pkg/msg/Name; the definition is registered under the srv name
             ((_, definition),) = get_types_from_msg(text, "omnibot_srv/msg/Parsed").items()

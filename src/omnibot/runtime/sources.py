@@ -16,7 +16,8 @@ VEL timeout for its commands, s) is optional. Sources never touch the client: th
   along the rest. ``on_override="stop"`` ends the run at the first override instead. An emergency
   stop (a lock of priority 255), a refused command, a latched emergency stop on the controller or a
   stall (:mod:`omnibot.runtime.stall`) end the run (:attr:`FollowerSource.failure`): nothing drives
-  off on its own after one.
+  off on its own after one. Its ``frame`` (the ``map -> odom`` correction of a SLAM or a localiser)
+  has it steer by the estimate moved into the map frame, the path's, instead of the odometry's.
 * :class:`ScriptSource`: twists from a function of time (scripts, tests, demos, the navigator's
   scripted manoeuvres: ``record --teach drive``, the gyro spin, the slip runs); like a follower it
   ends at a refused command or an emergency stop.
@@ -33,7 +34,7 @@ import numpy as np
 
 from omnibot.control.followers.base import Follower
 from omnibot.control.paths.path import Path
-from omnibot.motion import ZERO, Estimate, Twist
+from omnibot.motion import ZERO, Estimate, Pose2D, Twist
 from omnibot.runtime.cycle import Cycle
 from omnibot.teleop.config import TeleopConfig
 from omnibot.teleop.deadman import Action, Deadman, Phase, Sample, Why
@@ -226,8 +227,12 @@ class FollowerSource:
         priority: int = 10,
         watchdog: float = 0.15,
         on_override: Literal["resume", "stop"] = "resume",
+        frame: Callable[[], Pose2D | None] | None = None,
     ) -> None:
         self.name = name
+        self.frame = frame
+        """The path's frame in the odometry's, ``map -> odom`` now (None, or a call giving None: the
+        estimate as it is)."""
         self.priority = priority
         self.wait_reply = False  # 100 Hz: replies are collected at the next cycle
         self.follower = follower
@@ -280,6 +285,9 @@ class FollowerSource:
         state = cycle.estimate
         if state is None:
             return None
+        correction = self.frame() if self.frame is not None else None
+        if correction is not None:
+            state = moved(state, correction)
         if not self.started:
             self.start(state.t)
         previous = cycle.decision
@@ -320,6 +328,22 @@ class FollowerSource:
             self.end()
             return
         self.follower.start(rest, state.t)
+
+
+def moved(state: Estimate, t: Pose2D) -> Estimate:
+    """``state`` (pose and world-frame velocity) in the frame where the estimate's frame is at ``t``."""
+    c, s = math.cos(t.theta), math.sin(t.theta)
+    return Estimate(
+        state.t,
+        t.x + c * state.x - s * state.y,
+        t.y + s * state.x + c * state.y,
+        state.theta + t.theta,
+        c * state.vx - s * state.vy,
+        s * state.vx + c * state.vy,
+        state.w,
+        state.slipping,
+        state.standstill,
+    )
 
 
 def must_end(cycle: Cycle, name: str) -> str:

@@ -45,6 +45,8 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import NDArray
 
+from omnibot.floor.contact import ROLL_SPEED_EPS, WHEEL_SPEED_EPS
+
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
@@ -79,10 +81,6 @@ R_COLUMNS = 4
 S_MU, S_INV_VEPS, S_ROLL = 0, 1, 2
 S_COLUMNS = 3
 
-WHEEL_SPEED_EPS = 0.01
-"""rad/s: regularisation speed of the Coulomb friction at the wheel axle."""
-ROLL_SPEED_EPS = 0.005
-"""m/s: regularisation speed of the roller rolling resistance."""
 _INV_WHEEL_EPS = 1.0 / WHEEL_SPEED_EPS
 _INV_ROLL_EPS = 1.0 / ROLL_SPEED_EPS
 
@@ -1302,9 +1300,7 @@ def warm_up(every: bool = True) -> None:
 
 __all__ = [
     "KERNELS",
-    "ROLL_SPEED_EPS",
     "SIMULATOR_KERNELS",
-    "WHEEL_SPEED_EPS",
     "cone_distance",
     "contact_speeds",
     "gyro_measure",

@@ -21,7 +21,7 @@ by +90 degrees. With v_c = v + w x p_i the body velocity at the contact point::
 
 with g = RollerSpec.grip (the roller material's friction relative to soft rubber), c0 its
 rolling_resistance, f its friction_variation, phi the wheel angle (0 = least friction), and mu,
-v_eps, k_surf from the :class:`~omnibot.sim.surfaces.Surface` under the wheel. For a plain omni
+v_eps, k_surf from the :class:`~omnibot.floor.surfaces.Surface` under the wheel. For a plain omni
 wheel (gamma = 0) the reaction is -r F_t; the sin term keeps the mecanum model energy-consistent:
 the floor forces only ever dissipate (power F_t s + F_n q <= 0). The combined drag (b =
 RollerSpec.combined_drag, per unit load and m/s) is the rollers' extra loss while the wheel drives
@@ -83,34 +83,15 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from omnibot.errors import SimulationError
+from omnibot.floor.contact import static_loads
+from omnibot.floor.surfaces import Surface, get_surface
 from omnibot.robot.battery import open_voltage
 from omnibot.robot.description import RobotDescription
 from omnibot.robot.kinematics import contact_rows
 from omnibot.sim import kernels
-from omnibot.sim.kernels import ROLL_SPEED_EPS, WHEEL_SPEED_EPS
-from omnibot.sim.surfaces import Surface, get_surface
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
-
-GRAVITY = 9.81
-
-
-def static_loads(x: FloatArray, y: FloatArray, mass: FloatArray, lifted: BoolArray) -> FloatArray:
-    """Static normal loads (n,m) in N: least-norm loads on the wheels in contact, none on lifted ones.
-
-    Solves sum N = m g, sum N x = 0, sum N y = 0 over the wheels in contact (least norm when more
-    than three touch), clips negative loads (the robot would tip) and rescales the rest to m g.
-    """
-    support = (~lifted).astype(float)
-    A = np.stack([support, x * support, y * support], axis=1)
-    b = np.zeros((x.shape[0], 3, 1))
-    b[:, 0, 0] = mass * GRAVITY
-    loads = (np.linalg.pinv(A) @ b)[:, :, 0]
-    loads = np.clip(loads, 0.0, None) * support
-    total = loads.sum(axis=1)
-    scale = np.divide(mass * GRAVITY, total, out=np.zeros_like(total), where=total > 1e-12)
-    return np.asarray(loads * scale[:, None], dtype=float)
 
 
 class Physics:
@@ -521,4 +502,4 @@ class Physics:
             self._drain()
 
 
-__all__ = ["GRAVITY", "ROLL_SPEED_EPS", "WHEEL_SPEED_EPS", "Physics", "static_loads"]
+__all__ = ["Physics"]

@@ -48,9 +48,9 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationErr
 
 from omnibot.config_errors import explain, read_yaml, suggest
 from omnibot.errors import ConfigError
+from omnibot.floor.surfaces import SURFACES
 from omnibot.motion import Pose2D
 from omnibot.sim import kernels
-from omnibot.sim.surfaces import SURFACES
 
 WORLD_DIR = Path(__file__).with_name("worlds")
 CIRCLE_SEGMENTS = 64

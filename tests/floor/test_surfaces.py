@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from omnibot.errors import ConfigError
-from omnibot.sim.surfaces import SURFACES, Surface, get_surface
+from omnibot.floor.surfaces import SURFACES, Surface, get_surface
 
 
 def test_the_four_surfaces_exist_with_a_justification() -> None:

@@ -1,4 +1,4 @@
-"""Floor surfaces for the simulator: friction of the rubber rollers and their rolling losses.
+"""Floor surfaces for the simulator and the planner: friction of the rubber rollers and their rolling losses.
 
 Each surface gives, for the contact of an omni/mecanum wheel with the floor:
 
