@@ -120,7 +120,7 @@ def feedforward_error(
     target = ex._target
     k = max(range(len(target)), key=lambda i: abs(target[i]))
     # the floor's gain the loop learned meanwhile (firmware/speedctl.py) holds the rest of the share
-    gain = loop.floor.rot if course is None else loop.floor.translation(fold_course(course, ex.model.axes))
+    gain = 1.0 if course is None else loop.floor.translation(fold_course(course, ex.model.axes))
     return float(gain * (1.0 + loop.ki * loop._integ[k] / ex._ff[k]) - 1.0)
 
 

@@ -136,9 +136,11 @@ def test_a_turning_translation_learns_nothing() -> None:
     sc.floor.translation(0.0)
     sc.learn([100.0, 0.0], [10.0, 40.0], ff, 0.01)
     assert ff == [110.0, 40.0] and sc._integ == [0.4, 0.1]
-    assert sc.floor.tr[0] == 1.0 and sc.floor.rot == 1.0
-    sc.learn([0.0, 0.0], [10.0, 40.0], ff, 0.01)  # a rotation in place does
-    assert sc.floor.rot != 1.0 and sc.floor.rot_known == 0.01
+    assert sc.floor.tr == [1.0] * sc.floor.n
+    sc.learn([0.0, 0.0], [10.0, 40.0], ff, 0.01)  # nor a rotation in place
+    assert ff == [110.0, 40.0] and sc.floor.tr == [1.0] * sc.floor.n and sc.floor.known[0] == 0.0
+    sc.learn([100.0, 0.0], [0.0, 0.0], ff, 0.01)  # a translation does
+    assert sc.floor.tr[0] == pytest.approx(1.0 + 0.4 * 50.0 / 100.0 * 0.01 / FOLD_TIME)
 
 
 def _hold(dev: SimDevice, line: str, seconds: float) -> None:

@@ -99,7 +99,7 @@ class PowerModel:
         self._uy = 0.0
         self.learned: Any = None
         """The closed loop's learned floor gains (:class:`~omnibot.firmware.speedctl.FloorGain`):
-        :meth:`compute` scales the translation and rotation factors by them; None: as calibrated."""
+        :meth:`compute` scales the translation factor by them; None: as calibrated."""
         self.part_tr = [0.0] * n
         """Each wheel's translation power of the last :meth:`compute`, before the motor map."""
         self.part_rot = [0.0] * n
@@ -145,8 +145,6 @@ class PowerModel:
         f_rot = 0.0
         if rot_max > 0.0:
             f_rot = k * (cal.k_r(k * rot_max) if rotate else cal.k_t(k * rot_max))
-            if learned is not None:
-                f_rot *= learned.rot
         peak = 0.0
         part_tr = self.part_tr
         part_rot = self.part_rot

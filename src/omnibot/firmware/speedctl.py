@@ -30,13 +30,14 @@ class FloorGain:
     speed on the floor it was made on; the loop holds the *wheels'* speed, and on another floor (or
     where the rollers creep) the power that takes differs by -12 % to +35 % with the course
     (BENCHMARKS.md). The integral learns that share after every start; here it is kept: whenever the
-    wheels' targets have stood still :data:`STEADY_TIME` on a translation or a rotation in place,
-    the integral's share is fitted by least squares (``ki integ_i ~ a T_i``, T_i each wheel's
-    translation feedforward; likewise the rotation's) and folded, at :data:`FOLD_TIME`, into a
-    translation gain per folded course (knots every :data:`COURSE_STEP` degrees, interpolated) or
-    the rotation gain, the integral giving up what the feedforward takes over (the output does not
-    move). A turning translation applies both and learns neither: its slow wheels' share is their
-    dead band, which a split between the two parts would take for the floor. The gains
+    wheels' targets have stood still :data:`STEADY_TIME` on a translation that does not turn, the
+    integral's share is fitted by least squares (``ki integ_i ~ a T_i``, T_i each wheel's
+    translation feedforward) and folded, at :data:`FOLD_TIME`, into a translation gain per folded
+    course (knots every :data:`COURSE_STEP` degrees, interpolated), the integral giving up what the
+    feedforward takes over (the output does not move). A turning translation applies the gain and
+    learns nothing (its slow wheels' share is their dead band, which a split between translation
+    and rotation would take for the floor); rotation is not learned (the gyro calibration's spins
+    and omni3's clipped-gyro spin changed with it: tests/navigation/test_runner.py). The gains
     persist from one drive to the next (:meth:`reset` on CAL, MODE and at boot), so every start
     after the first on a course of this floor has a feedforward that knows the floor.
     """
@@ -45,8 +46,6 @@ class FloorGain:
         self.n = int(90.0 / COURSE_STEP) + 1
         self.tr = [1.0] * self.n
         self.known = [0.0] * self.n  # s folded into each course's gain
-        self.rot = 1.0
-        self.rot_known = 0.0
         self.k = 0  # the last course's knot below and the weight of the knot above
         self.w = 0.0
 
@@ -55,8 +54,6 @@ class FloorGain:
         for i in range(self.n):
             self.tr[i] = 1.0
             self.known[i] = 0.0
-        self.rot = 1.0
-        self.rot_known = 0.0
 
     def translation(self, folded: float) -> float:
         """The translation gain on the folded course (degrees, 0..90), remembered for :meth:`fold`."""
@@ -67,53 +64,41 @@ class FloorGain:
         return self.tr[k] + self.w * (self.tr[k + 1] - self.tr[k])
 
     def knows(self, translating: bool, rotating: bool) -> bool:
-        """True when the gains of the last course (and the rotation) have been learned."""
-        if translating:
-            k = self.k if self.w < 0.5 else self.k + 1
-            if self.known[k] < KNOWN_TIME:
-                return False
-        return not rotating or self.rot_known >= KNOWN_TIME
+        """True when the gain of the last course has been learned on a translation that does not turn."""
+        if rotating or not translating:
+            return False
+        return self.known[self.k if self.w < 0.5 else self.k + 1] >= KNOWN_TIME
 
     def fold(
         self, share: list[float], tr: list[float], rot: list[float], dt: float, out: list[float]
     ) -> None:
-        """Fold ``share`` (each wheel's ``ki integ``, PWM counts) into the gains over ``dt`` s, given
-        each wheel's translation and rotation feedforward ``tr``, ``rot`` (counts, at the present
-        gains, moved to the new ones); ``out`` gets each wheel's feedforward change (counts), which
-        the integral gives up."""
-        stt = srr = sct = scr = 0.0
-        for i in range(len(share)):
-            t = tr[i]
-            r = rot[i]
-            stt += t * t
-            srr += r * r
-            sct += share[i] * t
-            scr += share[i] * r
+        """Fold ``share`` (each wheel's ``ki integ``, PWM counts) into the last course's gain over
+        ``dt`` s, given each wheel's translation and rotation feedforward ``tr``, ``rot`` (counts, at
+        the present gain; ``tr`` moved to the new one); ``out`` gets each wheel's feedforward change
+        (counts), which the integral gives up. Nothing is learned while the body turns."""
+        stt = sct = 0.0
+        turning = False
         for i in range(len(share)):
             out[i] = 0.0
-        if (stt > 0.0) == (srr > 0.0):
-            return  # a turning translation: the split is the slow wheels' dead band, not the floor
-        a = sct / stt if stt > 0.0 else 0.0
-        b = scr / srr if srr > 0.0 else 0.0
+            stt += tr[i] * tr[i]
+            sct += share[i] * tr[i]
+            if rot[i] != 0.0:
+                turning = True
+        if turning or stt == 0.0:
+            return
         f = min(dt / FOLD_TIME, 1.0)
-        ga = gb = 1.0
-        if stt > 0.0:
-            k = self.k
-            w = self.w
-            old = self.tr[k] + w * (self.tr[k + 1] - self.tr[k])
-            self.tr[k] *= 1.0 + f * (1.0 - w) * a
-            self.tr[k + 1] *= 1.0 + f * w * a
-            self.known[k] += (1.0 - w) * dt
-            self.known[k + 1] += w * dt
-            ga = (self.tr[k] + w * (self.tr[k + 1] - self.tr[k])) / old
-        if srr > 0.0:
-            self.rot *= 1.0 + f * b
-            self.rot_known += dt
-            gb = 1.0 + f * b
+        a = sct / stt
+        k = self.k
+        w = self.w
+        old = self.tr[k] + w * (self.tr[k + 1] - self.tr[k])
+        self.tr[k] *= 1.0 + f * (1.0 - w) * a
+        self.tr[k + 1] *= 1.0 + f * w * a
+        self.known[k] += (1.0 - w) * dt
+        self.known[k + 1] += w * dt
+        g = (self.tr[k] + w * (self.tr[k + 1] - self.tr[k])) / old
         for i in range(len(share)):
-            out[i] = tr[i] * (ga - 1.0) + rot[i] * (gb - 1.0)
-            tr[i] *= ga
-            rot[i] *= gb
+            out[i] = tr[i] * (g - 1.0)
+            tr[i] *= g
 
 
 class SpeedControl:
