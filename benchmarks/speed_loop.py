@@ -22,8 +22,7 @@ A few seconds of CPU per robot and floor; deterministic (seed 1).
 0.3 m/s on courses 0, 45 and 90 degrees and a rotation at 1 rad/s (as the speed-accuracy benchmark
 asks), refreshed every 50 ms for 2 s, then ``ki * integral / feedforward`` of the wheel driven
 hardest: the share of the power the feedforward gets wrong on that floor, which the integral has to
-learn after every start (with the floor's gain the loop learns meanwhile on top, which takes it
-over: ``gain (1 + ki integral / feedforward) - 1``). ``--calibration CAL.yaml`` (one robot's file from ``omnibot calibrate``)
+learn after every start. ``--calibration CAL.yaml`` (one robot's file from ``omnibot calibrate``)
 uploads its floor's tables first, as the front ends' ``--calibration`` does.
 """
 
@@ -35,7 +34,6 @@ from dataclasses import dataclass
 
 from omnibot.calibration.calfile import floor_calibration
 from omnibot.client import commands
-from omnibot.firmware.calibration import fold_course
 from omnibot.protocol import text
 from omnibot.sim.device import SimDevice
 
@@ -98,10 +96,9 @@ def run(
 def feedforward_error(
     robot: str, surface: str, course: float | None, seed: int = 1, calibration: str | None = None
 ) -> float:
-    """The share of the power calibration's feedforward the floor wants on top, ``ki * integral / ff``
-    of the wheel driven hardest with the loop's learned floor gain folded back in, after 2 s at
-    0.3 m/s on ``course`` (None: turning at 1 rad/s in place); ``calibration``: a calibration file
-    whose floor's tables are uploaded first (CAL)."""
+    """The integral's share of the feedforward power (``ki * integral / ff``) of the wheel driven
+    hardest after 2 s at 0.3 m/s on ``course`` (None: turning at 1 rad/s in place); ``calibration``:
+    a calibration file whose floor's tables are uploaded first (CAL)."""
     dev = SimDevice(robot, surface=surface, seed=seed)
     if calibration is not None:
         tables, _ = floor_calibration(calibration, dev.robot, surface)
@@ -119,9 +116,7 @@ def feedforward_error(
     loop = ex.speedctl
     target = ex._target
     k = max(range(len(target)), key=lambda i: abs(target[i]))
-    # the floor's gain the loop learned meanwhile (firmware/speedctl.py) holds the rest of the share
-    gain = 1.0 if course is None else loop.floor.translation(fold_course(course, ex.model.axes))
-    return float(gain * (1.0 + loop.ki * loop._integ[k] / ex._ff[k]) - 1.0)
+    return float(loop.ki * loop._integ[k] / ex._ff[k])
 
 
 def main() -> None:

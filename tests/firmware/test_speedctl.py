@@ -15,9 +15,8 @@ import pytest
 from benchmarks.speed_loop import run
 
 from omnibot.firmware.config import SPEED_BAND_POWER, build_config
-from omnibot.firmware.speedctl import FOLD_TIME, KNOWN_TIME, SpeedControl
+from omnibot.firmware.speedctl import SpeedControl
 from omnibot.robot.description import load_robot
-from omnibot.sim.device import SimDevice
 
 CPR = 440
 PWM_MAX = 255
@@ -107,97 +106,3 @@ def test_the_band_is_where_the_p_term_gives_5_percent_of_full_power() -> None:
     for robot in ("omni4", "omni3", "mecanum4"):
         cfg = build_config(load_robot(robot))
         assert cfg["speed_kp"] * cfg["speed_band"] == pytest.approx(0.05 * cfg["pwm_max"], rel=1e-5)
-
-
-def test_the_floors_share_folds_into_the_feedforward_without_moving_the_output() -> None:
-    """At a steady speed the integral's share moves into the learned gain at 1 / FOLD_TIME: the
-    feedforward takes what the integral gives up (the output stays), on the course driven."""
-    sc = SpeedControl([CPR, CPR], 0.0, 50.0, PERIOD, PWM_MAX, 5.0)
-    sc.reset([0, 0])
-    sc._integ[:] = [0.4, -0.4]  # ki integ = +-20 counts: the floor wants 20 % more than the 100 given
-    tr, rot, ff = [100.0, -100.0], [0.0, 0.0], [100.0, -100.0]
-    before = [ff[i] + sc.ki * sc._integ[i] for i in range(2)]
-    sc.floor.translation(90.0)  # the knot at 90 degrees alone
-    sc.learn(tr, rot, ff, 0.01)
-    assert sc.floor.tr[-1] == pytest.approx(1.0 + 0.2 * 0.01 / FOLD_TIME)
-    assert sc.floor.tr[:-1] == [1.0] * (sc.floor.n - 1)
-    assert ff[0] == pytest.approx(100.0 * sc.floor.tr[-1])
-    assert tr[0] == pytest.approx(ff[0])  # the parts move with the gain
-    assert [ff[i] + sc.ki * sc._integ[i] for i in range(2)] == pytest.approx(before)
-    sc.floor.reset()
-    assert sc.floor.tr == [1.0] * sc.floor.n and sc.floor.known == [0.0] * sc.floor.n
-
-
-def test_a_turning_translation_learns_nothing() -> None:
-    sc = SpeedControl([CPR, CPR], 0.0, 50.0, PERIOD, PWM_MAX, 5.0)
-    sc.reset([0, 0])
-    sc._integ[:] = [0.4, 0.1]
-    ff = [110.0, 40.0]
-    sc.floor.translation(0.0)
-    sc.learn([100.0, 0.0], [10.0, 40.0], ff, 0.01)
-    assert ff == [110.0, 40.0] and sc._integ == [0.4, 0.1]
-    assert sc.floor.tr == [1.0] * sc.floor.n
-    sc.learn([0.0, 0.0], [10.0, 40.0], ff, 0.01)  # nor a rotation in place
-    assert ff == [110.0, 40.0] and sc.floor.tr == [1.0] * sc.floor.n and sc.floor.known[0] == 0.0
-    sc.learn([100.0, 0.0], [0.0, 0.0], ff, 0.01)  # a translation does
-    assert sc.floor.tr[0] == pytest.approx(1.0 + 0.4 * 50.0 / 100.0 * 0.01 / FOLD_TIME)
-
-
-def _hold(dev: SimDevice, line: str, seconds: float) -> None:
-    for _ in range(round(seconds / 0.05)):
-        dev.command(line, 0.05)
-
-
-def _share(dev: SimDevice) -> float:
-    """``ki integ / ff`` of the wheel driven hardest (benchmarks/speed_loop.py --feedforward)."""
-    ex = dev.controller.executor
-    k = max(range(ex.n), key=lambda i: abs(ex._target[i]))
-    return float(ex.speedctl.ki * ex.speedctl._integ[k] / ex._ff[k])
-
-
-def test_the_second_start_on_a_floor_has_the_floors_feedforward() -> None:
-    """mecanum4 sideways on carpet: the feedforward gives a quarter too little (the integral holds
-    +35 % of it at 0.3 m/s); after one drive the next start's feedforward has it, and a CAL or a
-    MODE change forgets it."""
-    dev = SimDevice("mecanum4", surface="carpet", seed=1)
-    dev.command("MODE,2", 0.02)
-    _hold(dev, "VEL,0,30,0,200", 0.5)
-    assert _share(dev) > 0.15  # still learning the carpet
-    _hold(dev, "VEL,0,30,0,200", 1.5)
-    floor = dev.controller.executor.speedctl.floor
-    assert floor.tr[-1] == pytest.approx(1.35, abs=0.03) and floor.known[-1] > KNOWN_TIME
-    assert floor.tr[:-1] == [1.0] * (floor.n - 1)
-    dev.command("STOP", 1.0)
-    _hold(dev, "VEL,0,30,0,200", 0.5)
-    assert abs(_share(dev)) < 0.05  # the feedforward has it
-    dev.command("STOP", 0.5)
-    dev.command("CAL,0,0,0,1188", 0.02)  # the preset's K written again
-    assert floor.tr == [1.0] * floor.n
-    _hold(dev, "VEL,0,30,0,200", 2.0)
-    dev.command("STOP", 0.5)
-    dev.command("MODE,0", 0.02)
-    dev.command("MODE,2", 0.02)
-    assert floor.tr == [1.0] * floor.n
-
-
-def test_a_ramp_on_a_learned_floor_ends_near_the_asked_speed() -> None:
-    """mecanum4 forward on wood (the feedforward a tenth too strong): the pad's ramp (20 Hz, its
-    planned acceleration sent) on the floor's gains holds the integral while the wheels ramp, so the
-    lag of the ramp's steps is not stored to carry the body past the speed."""
-    dev = SimDevice("mecanum4", surface="wood", seed=1)
-    dev.command("MODE,2", 0.02)
-
-    def ramp() -> float:
-        peak = 0.0
-        for step in range(40):
-            v = min(30, 6 * (step + 1))
-            a = 120 if v < 30 else 0
-            dev.command(f"VEL,{v},0,0,200,{a},0,0", 0.05)
-            peak = max(peak, dev.sim.twist.vx)
-        dev.command("STOP", 1.0)
-        return peak / 0.3 - 1.0
-
-    first = ramp()  # as before the floor's gains: 11 % over
-    second = ramp()
-    assert first > 0.08
-    assert second < 0.06  # 4.4 %

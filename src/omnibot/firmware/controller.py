@@ -480,7 +480,6 @@ class Controller:
             self._ok()
         elif kw == codes.CAL:
             if self._cal(p[0], p[1], p[2], p[3]):
-                ex.speedctl.floor.reset()  # new tables: the loop's learned floor gains start afresh
                 self._ok()
             else:
                 self._error(codes.E_CALIBRATION)

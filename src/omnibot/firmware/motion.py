@@ -63,7 +63,6 @@ BRAKED = 1 << 20  # applied-power marker of a braked motor: any power written ne
 LOOP_GUARD = 16  # motions started in one step at most (zero-length moves), keeps a poll short
 CHAIN_GUARD = 64  # DELTA repetitions looked ahead at most when the landing plans its ramp
 REACHED = 32  # warning flag: a MOVE asked beyond the calibrated reach (power.py and safety.py own 1..16)
-RAMP_MIN = 0.05  # m/s^2, rad/s^2: a planned acceleration below it does not ramp the wheels
 BRAKE_MAX_US = 3000000  # braking to rest on the speed loop ends by then, whatever the encoders say
 REST_WINDOW_US = 50000  # the wheels stand still when none turned more than its rest counts in this long
 REST_RAD = 0.2  # rad/s: a wheel turning slower than this (and at least 1 count a window) is at rest
@@ -142,7 +141,6 @@ class Executor:
             for c in cfg["encoder_cpr"]
         ]
         self._feedback = False
-        self._learns = False  # the closed loop's steady periods teach the floor's gains (_drive)
         self._drag = False
         period_us = int(cfg["control_period_ms"]) * 1000
         self._drag_period = period_us
@@ -184,8 +182,6 @@ class Executor:
         """Change the mode bits; switching the closed loop re-plans the current motion's powers."""
         old = self.mode
         self.mode = mode
-        if old != mode:
-            self.speedctl.floor.reset()
         if mode & MODE_SIMULATION:
             self.progress.cancel()  # no power applied: nothing to measure
         if self.landing.active and not self._lands():
@@ -596,10 +592,7 @@ class Executor:
             and not self._closed_loop()
         ):
             model.floor = model.cal.start_power()  # open loop: a wheel below it stalls (WARN 12)
-        closed = self._closed_loop()
-        model.learned = self.speedctl.floor if closed else None
         flags = model.compute(vx, vy, w, rotate, self.powers)
-        model.learned = None
         self._time_scale = model.scale * k
         self._warn_once(flags)
         t = self._twist
@@ -622,17 +615,6 @@ class Executor:
                         self._target[i] += over[i]
             if self._acc_on and (self.kind == codes.VEL or self.landing.active):
                 self._accel(vx, vy, w, k)
-        # the floor's gains learn on a VEL held at a speed the power curves give unscaled; a planned
-        # acceleration on gains already learned holds the integral (it would store only the lag
-        # of the ramp's steps and the speed's measurement, and carry the wheels past the speed)
-        self._learns = closed and self.kind == codes.VEL and not self._braking and not flags
-        self.speedctl.planned = (
-            closed
-            and self._acc_on
-            and (self.kind == codes.VEL or self.landing.active)
-            and self._ramping(vx, vy, w, k)
-            and self.speedctl.floor.knows(vx != 0.0 or vy != 0.0, w != 0.0)
-        )
         if self.mode & MODE_CLOSED_LOOP and not self._feedback:
             self._start_feedback()
         elif self._feedback:
@@ -663,18 +645,6 @@ class Executor:
             self._ff[i] += (
                 b[0] * ax + b[1] * ay + b[2] * aw + self._wheel_ff[i] * (j[0] * rx + j[1] * ry + j[2] * aw)
             )
-
-    def _ramping(self, vx: float, vy: float, w: float, k: float) -> bool:
-        """The planned acceleration changes the wheels' speeds: the body-frame twist's rate, as
-        :meth:`_accel` takes it, above :data:`RAMP_MIN` (a steady turning body's acceleration only
-        turns its axes)."""
-        a = self._acc
-        rx = a[0] * k
-        ry = a[1] * k
-        if self._acc_turning:
-            rx += w * vy
-            ry -= w * vx
-        return rx * rx + ry * ry > RAMP_MIN * RAMP_MIN or abs(a[2] * k) > RAMP_MIN
 
     def _closed_loop(self) -> bool:
         """The wheel-speed loop drives the motion (MODE bit 1 and encoders on every wheel)."""
@@ -766,9 +736,6 @@ class Executor:
             self._land_us += dt_us
             self._deadline -= dt_us
         if self.speedctl.update(dt_us, self._counts, self._target, self._ff, self.powers):
-            if self._learns and self.speedctl.steady:
-                m = self.model
-                self.speedctl.learn(m.part_tr, m.part_rot, self._ff, self._period * 1e-6)
             if self.landing.active:
                 self._land_step()
             self.apply()

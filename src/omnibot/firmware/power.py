@@ -97,13 +97,6 @@ class PowerModel:
         self._fs = [0.0] * n
         self._ux = 0.0
         self._uy = 0.0
-        self.learned: Any = None
-        """The closed loop's learned floor gains (:class:`~omnibot.firmware.speedctl.FloorGain`):
-        :meth:`compute` scales the translation factor by them; None: as calibrated."""
-        self.part_tr = [0.0] * n
-        """Each wheel's translation power of the last :meth:`compute`, before the motor map."""
-        self.part_rot = [0.0] * n
-        """Each wheel's rotation power likewise."""
 
     def wheel_speeds(self, vx: float, vy: float, w: float, out: list[float]) -> None:
         """Wheel angular speeds (rad/s) for a twist."""
@@ -133,29 +126,22 @@ class PowerModel:
         f_tr = 0.0
         self._ux = 0.0
         self._uy = 0.0
-        learned = self.learned
         if tr_max > 0.0:
             v = math.sqrt(vx * vx + vy * vy)
             self._ux = vx / v
             self._uy = vy / v
-            folded = fold_course(math.degrees(math.atan2(vy, vx)), self.axes)
-            f_tr = k * cal.k_l(k * tr_max, folded)
-            if learned is not None:
-                f_tr *= learned.translation(folded)
+            course = math.degrees(math.atan2(vy, vx))
+            f_tr = k * cal.k_l(k * tr_max, fold_course(course, self.axes))
         f_rot = 0.0
         if rot_max > 0.0:
             f_rot = k * (cal.k_r(k * rot_max) if rotate else cal.k_t(k * rot_max))
         peak = 0.0
-        part_tr = self.part_tr
-        part_rot = self.part_rot
         carry = self.carry
         for i in range(n):
             carry[i] = 0.0  # a new twist starts from its rounded powers
             row = rim[i]
             t = row[0] * vx + row[1] * vy
-            part_tr[i] = f_tr * t
-            part_rot[i] = f_rot * row[2] * w
-            p = cal.motor_power(i, part_tr[i] + part_rot[i], t + row[2] * w)
+            p = cal.motor_power(i, f_tr * t + f_rot * row[2] * w, t + row[2] * w)
             raw[i] = p
             self.base[i] = p
             peak = max(peak, abs(p))
