@@ -2,6 +2,7 @@
 
     python -m benchmarks.speed_accuracy [--robots omni4,omni3,mecanum4] [--surfaces wood,carpet]
                                         [--sources cmd_vel,pad,page] [--open-loop | --slip]
+                                        [--calibration CAL.yaml] [--again N]
 
 Each cell: the simulated robot (the MicroPython firmware in lockstep, seed 1, the empty world) driven
 through the host runtime by one source for 3 s at a constant twist, as that front end drives it:
@@ -27,7 +28,11 @@ Goal (issue 24): within 3 % and 3 degrees, settled in 0.3 s, on every cell. ``--
 the runtime with the wheel-speed loop left open (what every front end but ``follow`` did before).
 ``--slip``: the runtime has the floor's wheel slip (``--calibration``), fitted first by omnibot's
 slip calibration drive on the same robot and floor with another seed (3), and asks the wheels for
-their creep on top of each twist. About a minute of CPU for the default cells (``--slip``: 4-5 s
+their creep on top of each twist. ``--calibration CAL.yaml`` (a file of ``omnibot calibrate`` for the
+robot: one robot) uploads each floor's tables and its wheel slip before each cell, as the front
+ends' ``--calibration`` does, and the runtime asks for the file's slip (the file's floors only).
+``--again N`` judges the drive after N drives the same way, each stopped and followed by 1 s at
+rest on the same controller (what the wheel-speed loop learned of the floor persists). About a minute of CPU for the default cells (``--slip``: 4-5 s
 more per robot and floor for the fit).
 """
 
@@ -39,6 +44,7 @@ from dataclasses import dataclass
 from types import SimpleNamespace
 from typing import Any
 
+from omnibot.cliargs import use_calibration
 from omnibot.client.client import RobotClient
 from omnibot.client.session import open_robot
 from omnibot.estimation.slip import SlipModel
@@ -60,6 +66,8 @@ from omnibot.transport.device import find_simulator
 
 DRIVE = 3.0
 """s of driving per cell; the last second is the steady state."""
+REST = 1.0
+"""s at rest between the drives of ``--again``."""
 SETTLE_BAND = 0.05
 SMOOTH = 0.1
 """s: the settling is judged on the truth's twist averaged over this long, centred (the body's
@@ -180,24 +188,39 @@ def measure(
     *,
     wheel_loop: bool = True,
     slip: SlipModel | None = None,
+    calibration: str | None = None,
+    again: int = 0,
 ) -> Cell:
     """One cell: ``robot`` on ``surface`` driven along ``direction`` by ``source`` (``slip``: the
-    runtime's floor slip)."""
+    runtime's floor slip; ``calibration``: a calibration file whose floor's tables and slip are
+    uploaded first, and whose slip the runtime asks for unless ``slip`` is given; ``again``: so many
+    drives the same way first, each stopped and :data:`REST` s at rest, the last drive judged)."""
     twist = DIRECTIONS[direction]
     session = open_robot(f"sim://{robot}?surface={surface}&seed=1")
     client = session.client
     try:
+        if calibration is not None:
+            cal_slip = use_calibration(
+                argparse.Namespace(calibration=calibration, surface=surface), client, session.robot
+            )
+            slip = slip or cal_slip
         sim = find_simulator(client.link)
         assert sim is not None
-        src, period = _source(source, twist, client, session.robot)
-        runtime = Runtime(client, period=period, wheel_loop=wheel_loop, slip=slip)
-        runtime.add_source(src)
-        runtime.pacer = LinkPacer(client, period)
         samples: list[tuple[float, Twist]] = []
-        t0 = client.clock.now()
-        runtime.add_sink(lambda cycle: samples.append((cycle.t - t0, sim.twist)))
-        runtime.run(duration=DRIVE)
-        runtime.close()
+        start = [0.0]
+        for drive in range(1 + again):
+            if drive:  # stopped and at rest before the drive judged
+                client.stop()
+                client.sleep(REST)
+            src, period = _source(source, twist, client, session.robot)
+            runtime = Runtime(client, period=period, wheel_loop=wheel_loop, slip=slip)
+            runtime.add_source(src)
+            runtime.pacer = LinkPacer(client, period)
+            samples.clear()
+            start[0] = client.clock.now()
+            runtime.add_sink(lambda cycle: samples.append((cycle.t - start[0], sim.twist)))
+            runtime.run(duration=DRIVE)
+            runtime.close()
     finally:
         client.close()
     return _judge(twist, samples)
@@ -263,9 +286,15 @@ def main(argv: list[str] | None = None) -> None:
     how = ap.add_mutually_exclusive_group()
     how.add_argument("--open-loop", action="store_true", help="leave the wheel-speed loop open")
     how.add_argument("--slip", action="store_true", help="with the floor's fitted wheel slip")
+    ap.add_argument("--calibration", metavar="CAL.yaml", help="upload this calibration file's floor first")
+    ap.add_argument(
+        "--again", type=int, default=0, metavar="N", help="judge the drive after N drives the same way"
+    )
     args = ap.parse_args(argv)
     loop = "open loop" if args.open_loop else "closed loop"
     loop += ", the floor's slip asked on top" if args.slip else ""
+    loop += f", the floor's calibration of {args.calibration}" if args.calibration else ""
+    loop += f", the drive after {args.again} the same way" if args.again else ""
     print(f"achieved / asked, drift (deg), settle (s); * within the goal; {loop}")
     print()
     print("| robot | floor | source | " + " | ".join(DIRECTIONS) + " |")
@@ -277,7 +306,16 @@ def main(argv: list[str] | None = None) -> None:
             for source in args.sources.split(","):
                 cells = []
                 for direction in DIRECTIONS:
-                    c = measure(robot, surface, direction, source, wheel_loop=not args.open_loop, slip=slip)
+                    c = measure(
+                        robot,
+                        surface,
+                        direction,
+                        source,
+                        wheel_loop=not args.open_loop,
+                        slip=slip,
+                        calibration=args.calibration,
+                        again=args.again,
+                    )
                     ok = within_goal(c)
                     met += ok
                     total += 1

@@ -22,7 +22,8 @@ A few seconds of CPU per robot and floor; deterministic (seed 1).
 0.3 m/s on courses 0, 45 and 90 degrees and a rotation at 1 rad/s (as the speed-accuracy benchmark
 asks), refreshed every 50 ms for 2 s, then ``ki * integral / feedforward`` of the wheel driven
 hardest: the share of the power the feedforward gets wrong on that floor, which the integral has to
-learn after every start.
+learn after every start. ``--calibration CAL.yaml`` (one robot's file from ``omnibot calibrate``)
+uploads its floor's tables first, as the front ends' ``--calibration`` does.
 """
 
 from __future__ import annotations
@@ -31,6 +32,9 @@ import argparse
 import math
 from dataclasses import dataclass
 
+from omnibot.calibration.calfile import floor_calibration
+from omnibot.client import commands
+from omnibot.protocol import text
 from omnibot.sim.device import SimDevice
 
 CYCLE = 0.02  # s between VEL commands
@@ -89,10 +93,17 @@ def run(
     return Result(wheel - 1.0, peak / settled - 1.0, peak / speed - 1.0, rise)
 
 
-def feedforward_error(robot: str, surface: str, course: float | None, seed: int = 1) -> float:
+def feedforward_error(
+    robot: str, surface: str, course: float | None, seed: int = 1, calibration: str | None = None
+) -> float:
     """The integral's share of the feedforward power (``ki * integral / ff``) of the wheel driven
-    hardest after 2 s at 0.3 m/s on ``course`` (None: turning at 1 rad/s in place)."""
+    hardest after 2 s at 0.3 m/s on ``course`` (None: turning at 1 rad/s in place); ``calibration``:
+    a calibration file whose floor's tables are uploaded first (CAL)."""
     dev = SimDevice(robot, surface=surface, seed=seed)
+    if calibration is not None:
+        tables, _ = floor_calibration(calibration, dev.robot, surface)
+        for cal in commands.calibration(tables, len(dev.robot.wheels)) if tables is not None else []:
+            dev.command(text.encode(cal).decode().strip(), 0.001)
     dev.command("MODE,2", CYCLE)
     if course is None:
         line = "VEL,0,0,57,200"
@@ -115,13 +126,17 @@ def main() -> None:
     ap.add_argument("--robots", default="mecanum4")
     ap.add_argument("--surfaces", default="carpet,wood")
     ap.add_argument("--feedforward", action="store_true", help="the integral's share at a steady speed")
+    ap.add_argument("--calibration", metavar="CAL.yaml", help="--feedforward: upload this file's floor first")
     args = ap.parse_args()
     if args.feedforward:
         print("| robot | floor | 0 deg | 45 deg | 90 deg | rotation |")
         print("|---|---|---|---|---|---|")
         for robot in args.robots.split(","):
             for surface in args.surfaces.split(","):
-                shares = [feedforward_error(robot, surface, c) for c in (0.0, 45.0, 90.0, None)]
+                shares = [
+                    feedforward_error(robot, surface, c, calibration=args.calibration)
+                    for c in (0.0, 45.0, 90.0, None)
+                ]
                 print(f"| {robot} | {surface} | " + " | ".join(f"{100 * x:+.0f} %" for x in shares) + " |")
         return
     print(
