@@ -14,8 +14,8 @@ Keys of the config dict (all plain ints, floats, strings, lists, dicts):
 ==========================  =======================================================================
 name, motors                robot name (HELLO) and motor count
 pwm_max, power_min          PWM full scale; dead band (largest ``motor.deadband`` unless given)
-pwm_dither                  optional (absent: on): an open-loop motion's fractional powers dithered over
-                            control periods (power.py); False rounds them once, as the UNO does
+pwm_dither                  optional (absent: off): True dithers an open-loop motion's fractional powers over
+                            control periods (power.py); off, each is rounded once, as the UNO does
 vel_dead_band               True: an open-loop VEL sets a wheel below the K_l tables' dead band to 0
                             (WARN 12; the UNO firmware always does)
 radius                      wheel radii, m

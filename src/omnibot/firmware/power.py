@@ -18,12 +18,15 @@ non-zero power is below ``power_min`` (the dead band: too little to move the rob
 (DEADBAND). With ``floor`` set (an open-loop VEL: :meth:`Executor.vel`), each wheel whose power is
 below it is set to 0 on its own (WEAK): it would not turn, and the robot goes off the course asked.
 
-The PWM output has whole counts only. With ``dither`` on (the config's ``pwm_dither``, on by default)
+The PWM output has whole counts only. With ``dither`` on (the config's ``pwm_dither``; off by default, below)
 :meth:`PowerModel.finish` carries each wheel's rounding error over to its next output (error diffusion:
 ``p = round(raw + e)``, ``e += raw - p``), and an open-loop motion refreshes its powers every control
 period (motion.py), so a wheel's power averages its fractional value over a few periods where rounding
 would lose up to half a count (at 10 cm/s one count is 13 % of mecanum4's forward speed). The dead band
-and the weak-wheel check are decided on the rounded powers, as without it.
+and the weak-wheel check are decided on the rounded powers, as without it. It is off unless the config
+asks for it: on the acceptance robot's default calibration (unequal motors) the dithering firmware
+fitted a motor map 0.06 off and a ROTATE at 180 degrees/s that the calibration made worse (+0.3 ->
++2.2 %), which rounding does not (docs/firmware.md, *Fractional powers*).
 """
 
 import math
@@ -90,7 +93,7 @@ class PowerModel:
         self.drag_gain = 1.0
         self.floor = 0.0
         """PWM counts: a wheel given less (not 0) is set to 0 (WEAK); 0 for no such check."""
-        self.dither = bool(cfg.get("pwm_dither", True))
+        self.dither = bool(cfg.get("pwm_dither", False))
         self.carry = [0.0] * n
         """Each wheel's rounding error carried to its next output (``dither``), PWM counts."""
         self._fc = [0.0] * n
