@@ -107,6 +107,9 @@ def test_missing_extra_names_the_extra() -> None:
     assert line is not None and "pip install 'omnibot[sim]'" in line
     line = missing_extra(ModuleNotFoundError("No module named 'PIL.Image'", name="PIL.Image"))
     assert line is not None and "pip install 'omnibot[slam]'" in line
+    # `goto --planner rrtstar` imports OMPL's bindings on first use: it was an "internal error", exit 70
+    line = missing_extra(ModuleNotFoundError("No module named 'ompl'", name="ompl"))
+    assert line is not None and "pip install 'omnibot[slam]'" in line
 
 
 def test_other_import_errors_are_not_a_missing_extra() -> None:

@@ -27,6 +27,7 @@ EXTRA_OF: dict[str, str] = {
     "evo": "slam",
     "PIL": "slam",
     "rplidar": "slam",
+    "ompl": "slam",
 }
 """The extra that installs each optional top-level module omnibot imports (by its import name)."""
 
