@@ -44,7 +44,7 @@ from omnibot.robot.description import RobotDescription
 from omnibot.ros2.backend import LATCHED, RosNode
 from omnibot.ros2.bridge import Diagnosed, Ros2Sink
 from omnibot.ros2.mapping import MAP_TYPE, TF_PERIOD
-from omnibot.ros2.odometry import yaw_of
+from omnibot.ros2.odometry import pose_of
 from omnibot.ros2.types import from_dds
 from omnibot.runtime.cycle import Cycle, Level
 from omnibot.runtime.sources import Proposal
@@ -225,11 +225,9 @@ class GoalPoseSource:
                 f"{via} in frame {frame!r} refused: goals are taken in the map frame {self.map_frame!r}",
                 "frame",
             )
-        p = msg.pose
-        yaw = yaw_of(p.orientation)
-        if yaw is None or not (math.isfinite(p.position.x) and math.isfinite(p.position.y)):
+        goal = pose_of(msg.pose)
+        if goal is None:
             return self._refuse(f"{via} refused: not a finite position and rotation", "pose")
-        goal = Pose2D(float(p.position.x), float(p.position.y), yaw)
         try:
             replaced = self.goto.go(goal)
         except ConfigError as exc:  # OffMapError, BlockedError: the robot cannot stand there
@@ -253,12 +251,10 @@ class GoalPoseSource:
                 f"initialpose in frame {frame!r} refused: the localiser is placed in the map frame "
                 f"{self.map_frame!r}"
             )
-        p = msg.pose.pose
-        yaw = yaw_of(p.orientation)
+        pose = pose_of(msg.pose.pose)
         spread = spread_of(msg.pose.covariance)
-        if yaw is None or spread is None or not (math.isfinite(p.position.x) and math.isfinite(p.position.y)):
+        if pose is None or spread is None:
             return False, "initialpose refused: not a finite position, rotation and covariance"
-        pose = Pose2D(float(p.position.x), float(p.position.y), yaw)
         try:
             self.goto.check_pose(pose)
         except (ConfigError, PlanningError) as exc:

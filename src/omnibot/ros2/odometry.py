@@ -47,6 +47,15 @@ def yaw_of(q: Any) -> float | None:
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
+def pose_of(p: Any) -> Pose2D | None:
+    """The planar pose of a geometry_msgs/Pose (None when its position is not finite or its
+    orientation not a rotation)."""
+    yaw = yaw_of(p.orientation)
+    if yaw is None or not (math.isfinite(p.position.x) and math.isfinite(p.position.y)):
+        return None
+    return Pose2D(float(p.position.x), float(p.position.y), yaw)
+
+
 class OdometryReset:
     """``initialpose`` and ``reset_odometry`` applied to ``runtime``'s estimator (module docstring)."""
 
@@ -121,12 +130,11 @@ class OdometryReset:
                 "(no map; set rviz2's fixed frame to it)",
             )
             return False
-        p = msg.pose.pose
-        yaw = yaw_of(p.orientation)
-        if yaw is None or not (math.isfinite(p.position.x) and math.isfinite(p.position.y)):
+        pose = pose_of(msg.pose.pose)
+        if pose is None:
             self._report(1, "warn", "initialpose ignored: not a finite position and rotation")
             return False
-        done, _ = self.set_pose(Pose2D(p.position.x, p.position.y, yaw), f"set by {INITIALPOSE}")
+        done, _ = self.set_pose(pose, f"set by {INITIALPOSE}")
         return done
 
     def status(self) -> Any:
