@@ -4,6 +4,7 @@ values are the ones sent and received."""
 from __future__ import annotations
 
 import math
+import threading
 from pathlib import Path
 from typing import Any
 
@@ -192,3 +193,31 @@ def test_odom_in_the_log_has_the_covariances_the_bridge_publishes(recorded: Reco
         assert list(np.diag(np.reshape(m.twist.covariance, (6, 6)))) == list(TWIST_VARIANCE)
     truth: list[Any] = messages[topics.TRUTH]
     assert not np.any(truth[0].pose.covariance)  # the simulator's truth: exact, no covariance
+
+
+def test_writes_from_several_threads_make_a_whole_file(tmp_path: Path) -> None:
+    """The link's thread, the runtime's and a localiser's write into one recorder: each record whole
+    (an MCAP record is several writes; unguarded, rosbags found chunks it could not decompress)."""
+    path = tmp_path / "threads.mcap"
+    recorder = Recorder(path, chunk_size=4096, flush_period=0.001)
+    start = threading.Barrier(4)
+
+    def write(k: int) -> None:
+        start.wait()
+        for i in range(1500):
+            message = schemas.new("std_msgs/msg/String", data=f"{k}:{i}," * (1 + i % 7))
+            recorder.write(f"/thread{k}", "std_msgs/msg/String", message, 1_000_000 + i)
+
+    threads = [threading.Thread(target=write, args=(k,)) for k in range(4)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    recorder.close()
+    recorder.write("/thread0", "std_msgs/msg/String", schemas.new("std_msgs/msg/String", data="late"), 0)
+    _, messages = read_all(path)
+    assert {topic: len(msgs) for topic, msgs in messages.items()} == {f"/thread{k}": 1500 for k in range(4)}
+    for k in range(4):
+        assert [m.data for m in messages[f"/thread{k}"]] == [  # type: ignore[attr-defined]
+            f"{k}:{i}," * (1 + i % 7) for i in range(1500)
+        ]

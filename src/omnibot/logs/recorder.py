@@ -380,6 +380,9 @@ class Recorder:
         self.on_failure: list[Callable[[str], None]] = []
         """Called once with the warning when a write fails (any thread; a runtime's notice)."""
         self._fail_lock = threading.Lock()
+        self._lock = threading.RLock()
+        """Held around every use of the MCAP writer: its records are several writes each, and a
+        recorder is not bound to one thread (front ends' callbacks, a close at a signal)."""
 
     # ------------------------------------------------------------------ time
 
@@ -405,12 +408,13 @@ class Recorder:
 
     @contextlib.contextmanager
     def _writing(self) -> Iterator[None]:
-        """Around every write to the file: an ``OSError`` stops the file (:meth:`_failed`), nothing
-        is raised."""
-        try:
-            yield
-        except OSError as exc:
-            self._failed(exc)
+        """Around every write to the file, one thread at a time: an ``OSError`` stops the file
+        (:meth:`_failed`), nothing is raised."""
+        with self._lock:
+            try:
+                yield
+            except OSError as exc:
+                self._failed(exc)
 
     def _failed(self, exc: OSError) -> None:
         """A write failed: no more writes to the file, one warning (stderr, :attr:`on_failure`)."""
@@ -456,7 +460,9 @@ class Recorder:
             self.lost += 1
             log.exception("cannot serialize a %s for %s", typename, topic)
             return
-        self.counts[topic] += 1
+        with self._lock:
+            self.counts[topic] += 1
+            sequence = self.counts[topic]
         for mirror in list(self.mirrors):
             try:
                 mirror(topic, typename, data, ns)
@@ -464,13 +470,13 @@ class Recorder:
                 # once, not once per message: the mirror is dropped, the file and the run go on
                 log.exception("mirror %r failed on %s; it is dropped", mirror, topic)
                 self.mirrors = [m for m in self.mirrors if m is not mirror]
-        writer = self._writer
-        if writer is None:
-            self._last_ns = max(self._last_ns, ns)
-            return
         with self._writing():
+            writer = self._writer
+            if writer is None or self.closed:
+                self._last_ns = max(self._last_ns, ns)
+                return
             channel = self._channel(writer, topic, typename)
-            writer.add_message(channel, log_time=ns, publish_time=ns, data=data, sequence=self.counts[topic])
+            writer.add_message(channel, log_time=ns, publish_time=ns, data=data, sequence=sequence)
             self._first_ns = ns if self._first_ns is None else min(self._first_ns, ns)
             self._last_ns = max(self._last_ns, ns)
             now = time.monotonic()
@@ -479,9 +485,9 @@ class Recorder:
 
     def flush(self) -> None:
         """Write the open chunk now."""
-        writer = self._writer
-        if not self.closed and writer is not None:
-            with self._writing():
+        with self._writing():
+            writer = self._writer
+            if not self.closed and writer is not None:
                 writer.flush()  # type: ignore[no-untyped-call]
                 self._last_flush = time.monotonic()
 
@@ -665,9 +671,9 @@ class Recorder:
 
     def add_metadata(self, name: str, values: dict[str, str]) -> None:
         """An MCAP metadata record ``name`` (nothing without a file, or once closed)."""
-        writer = self._writer
-        if writer is not None and not self.closed:
-            with self._writing():
+        with self._writing():
+            writer = self._writer
+            if writer is not None and not self.closed:
                 writer.add_metadata(name, values)
 
     def write_pose(
@@ -766,17 +772,20 @@ class Recorder:
             return
         for client in list(self._clients):
             self.detach(client)
-        try:
-            writer = self._writer
-            if writer is not None:
-                with self._writing():
-                    writer.add_metadata("rosbag2", {"serialized_metadata": self._rosbag2_metadata()})
-                    writer.finish()  # type: ignore[no-untyped-call]
-        finally:
-            self.closed = True
-            if self._file is not None:
-                with self._writing():
-                    self._file.close()
+        with self._lock:  # a write from another thread waits, then finds the file closed
+            if self.closed:  # closed by another thread meanwhile
+                return
+            try:
+                writer = self._writer
+                if writer is not None:
+                    with self._writing():
+                        writer.add_metadata("rosbag2", {"serialized_metadata": self._rosbag2_metadata()})
+                        writer.finish()  # type: ignore[no-untyped-call]
+            finally:
+                self.closed = True
+                if self._file is not None:
+                    with self._writing():
+                        self._file.close()
             for mirror in self.mirrors:
                 with contextlib.suppress(Exception):
                     mirror.close()
