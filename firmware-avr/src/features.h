@@ -1,6 +1,6 @@
 // Compile-time switches of what the Arduino Mega 2560 runs beyond the UNO, whose flash cannot hold it
 // (docs/uno.md, "The Arduino Mega 2560"). The Mega's generated header sets each FEATURE_* to 1 with
-// its constants (avrgen.py `_features`); the UNO's sets none, and every one is 0 here, so the UNO's
+// its constants (avrgen_features.h.in); the UNO's sets none, and every one is 0 here, so the UNO's
 // image is the one it was without them.
 #pragma once
 

@@ -30,6 +30,10 @@ from omnibot.errors import ConfigError
 from omnibot.outputs import check_writable
 
 if TYPE_CHECKING:
+    from omnibot.calibration.accuracy import AccuracyPlan
+    from omnibot.calibration.plan import Plan
+    from omnibot.calibration.results import CalibrationResult
+    from omnibot.calibration.verdict import Verdict
     from omnibot.client.client import RobotClient
     from omnibot.client.session import ClientRecording
     from omnibot.progress import Progress
@@ -247,17 +251,85 @@ def asked_stand(ask: Callable[[str], str]) -> Callable[[RobotClient, bool], None
 def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> int:
     """The ``omnibot calibrate`` handler; returns the exit status. ``ask`` (default: the terminal,
     checked to be one before the robot moves) asks the operator."""
-    from omnibot.calibration.accuracy import AccuracyPlan
-    from omnibot.calibration.calfile import write_calibration
-    from omnibot.calibration.perturb import ACCEPTANCE, perturbed_robot
-    from omnibot.calibration.plan import Plan
-    from omnibot.calibration.report import accuracy_entries, slip_summary, write_report
+    from omnibot.calibration.report import write_report
     from omnibot.calibration.session import calibrate
-    from omnibot.calibration.tables import summary_table
-    from omnibot.calibration.truth import default_truth, parse_truth_spec
     from omnibot.calibration.verdict import judge_calibration
+
+    cal_file, out_dir, surfaces = _checked_options(args)
+    simulated = args.port is None
+    interactive = ask is None
+    ask = ask or terminal_ask
+    if interactive:
+        check_operator(_operator_tasks(args, surfaces, simulated))
+    plan, accuracy = _plans(args)
+    world = world_of(args)
+    with contextlib.ExitStack() as stack:
+        robot, client = _robot_and_client(args, stack, world)
+        if client is None:
+            opener = sim_opener(
+                robot,
+                sim_robot(args),
+                seed_of(args),
+                _true_robot(args, robot),
+                None if world == "empty" else world,
+                recording=recording_of(args),
+            )
+        else:
+            opener = port_opener(client, ask, placed=args.yes)
+        result = calibrate(
+            robot,
+            surfaces,
+            opener,
+            truth=args.truth or _truth_chooser(robot, interactive),
+            plan=plan,
+            accuracy=accuracy,
+            ask=ask,
+            progress=tqdm_progress,
+            upload=not args.no_upload,
+            stand=None if args.yes else asked_stand(ask),
+            recording=recording_of(args),
+        )
+        verdict = judge_calibration(result)
+        if client is not None and not args.no_upload:
+            _upload_verdict(client, robot, result, keep=verdict.better is not False or args.force)
+    truth_name = result.sessions[0].truth if result.sessions else ""
+    files = write_report(result, out_dir)
+    print(f"omnibot calibrate: {robot.name} on {', '.join(surfaces)} (truth {truth_name})")
+    _print_findings(result)
+    print(f"report: {out_dir} ({', '.join(f.name for f in files)})")
+    _print_verdict(verdict, several=len(result.sessions) > 1)
+    return _write_file(args, cal_file, result, verdict, truth_name, uploaded=client is not None)
+
+
+def _robot_and_client(
+    args: argparse.Namespace, stack: contextlib.ExitStack[bool | None], world: str
+) -> tuple[RobotDescription, RobotClient | None]:
+    """The robot to calibrate and, on ``--port``, the client of its session (entered on ``stack``);
+    in the simulator its description alone (``world`` loaded, so a bad one fails before any run)."""
     from omnibot.client.session import robot_session
     from omnibot.robot.description import load_robot
+
+    client: RobotClient | None = None
+    if args.port is None:
+        robot = load_robot(sim_robot(args))
+        if world != "empty":
+            from omnibot.sim.world import load_world
+
+            load_world(world)
+    else:
+        session = stack.enter_context(robot_session(args.port, args.robot, recording=recording_of(args)))
+        client, robot = session.client, session.robot
+    if robot.n_wheels > 4:
+        raise ConfigError(
+            f"{robot.name} has {robot.n_wheels} motors; POWER (the calibration runs) carries at most 4"
+        )
+    return robot, client
+
+
+def _checked_options(args: argparse.Namespace) -> tuple[Path, Path, list[str]]:
+    """The calibration file, the report's directory and the surfaces, once the options that go
+    together have been checked (ConfigError otherwise)."""
+    from omnibot.calibration.truth import parse_truth_spec
 
     check_sim_options(args, allowed=("surface",))
     cal_file, out_dir = _outputs(args)
@@ -275,97 +347,87 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> in
         raise ConfigError("only for a robot on --port (the simulator asks nothing)", key="--yes")
     if args.yes and len(surfaces) > 1:
         raise ConfigError("several surfaces need someone to move the robot between them", key="--yes")
-    operator = []
+    return cal_file, out_dir, surfaces
+
+
+def _operator_tasks(args: argparse.Namespace, surfaces: list[str], simulated: bool) -> list[str]:
+    """What the run will ask a person at the terminal to do (none: it runs unattended)."""
+    from omnibot.calibration.truth import parse_truth_spec
+
+    tasks = []
     if not simulated and not args.yes:
         stand = "" if args.no_motor_map else " (and on a stand, wheels in the air, for the motors)"
-        operator.append("put the robot on " + " then on ".join(surfaces) + stand)
+        tasks.append("put the robot on " + " then on ".join(surfaces) + stand)
     if args.truth is not None and parse_truth_spec(args.truth)[0] in OPERATOR_TRUTHS:
-        operator.append(f"measure every run ({args.truth} truth)")
-    interactive = ask is None
-    ask = ask or terminal_ask
-    if interactive:
-        check_operator(operator)
+        tasks.append(f"measure every run ({args.truth} truth)")
+    return tasks
+
+
+def _plans(args: argparse.Namespace) -> tuple[Plan, AccuracyPlan | None]:
+    """The calibration's plan and the accuracy check's (None: ``--no-check``) from the options."""
+    from omnibot.calibration.accuracy import AccuracyPlan
+    from omnibot.calibration.plan import Plan
+
     if not args.move_length > 0:
         raise ConfigError(f"expected a positive length in m, got {args.move_length}", key="--move-length")
     base = Plan.quick() if args.quick else Plan()
-    courses = _courses(args.courses)
     plan = replace(
         base,
-        courses_deg=courses,
+        courses_deg=_courses(args.courses),
         move_length=args.move_length,
         motor_map=not args.no_motor_map,
         roller_rounds=0 if args.no_rollers else base.roller_rounds,
         slip=not args.no_slip,
     )
     check = AccuracyPlan.quick() if args.quick else AccuracyPlan()
-    accuracy = None if args.no_check else replace(check, length=args.move_length)
+    return plan, None if args.no_check else replace(check, length=args.move_length)
 
-    world = world_of(args)
-    with contextlib.ExitStack() as stack:
-        client: RobotClient | None = None
-        if simulated:
-            robot = load_robot(sim_robot(args))
-            if world != "empty":
-                from omnibot.sim.world import load_world
 
-                load_world(world)
-        else:
-            session = stack.enter_context(robot_session(args.port, args.robot, recording=recording_of(args)))
-            client, robot = session.client, session.robot
-        if robot.n_wheels > 4:
-            raise ConfigError(
-                f"{robot.name} has {robot.n_wheels} motors; POWER (the calibration runs) carries at most 4"
-            )
-        true_robot = None
-        if args.perturb:
-            true_robot = perturbed_robot(robot, ACCEPTANCE if args.perturb == "acceptance" else args.perturb)
-        elif args.true_robot:
-            true_robot = load_robot(args.true_robot)
+def _true_robot(args: argparse.Namespace, robot: RobotDescription) -> RobotDescription | None:
+    """The robot the simulator runs when it differs from the description (``--perturb``,
+    ``--true-robot``); None: the description itself."""
+    from omnibot.calibration.perturb import ACCEPTANCE, perturbed_robot
+    from omnibot.robot.description import load_robot
 
-        def chosen_truth(client: RobotClient) -> str:
-            """The link's default truth (checked for an operator at the terminal if it needs one)."""
-            name = default_truth(client, robot)
-            if interactive and name in OPERATOR_TRUTHS:
-                check_operator([f"measure every run ({name} truth: the robot has no wheel encoders)"])
-            return name
+    if args.perturb:
+        return perturbed_robot(robot, ACCEPTANCE if args.perturb == "acceptance" else args.perturb)
+    if args.true_robot:
+        return load_robot(args.true_robot)
+    return None
 
-        truth: str | Callable[[RobotClient], str] = args.truth or chosen_truth
-        if client is None:
-            opener = sim_opener(
-                robot,
-                sim_robot(args),
-                seed_of(args),
-                true_robot,
-                None if world == "empty" else world,
-                recording=recording_of(args),
-            )
-        else:
-            opener = port_opener(client, ask, placed=args.yes)
-        result = calibrate(
-            robot,
-            surfaces,
-            opener,
-            truth=truth,
-            plan=plan,
-            accuracy=accuracy,
-            ask=ask,
-            progress=tqdm_progress,
-            upload=not args.no_upload,
-            stand=None if args.yes else asked_stand(ask),
-            recording=recording_of(args),
-        )
-        verdict = judge_calibration(result)
-        keep = verdict.better is not False or args.force
-        if client is not None and not args.no_upload:
-            if keep:  # the board keeps the tables of the floor it stands on (the last one)
-                client.upload_calibration(result.sessions[-1].spec)
-                if result.sessions[-1].slip is not None:  # and its creep, for MOVEs in closed loop
-                    client.upload_slip(result.sessions[-1].slip.params)
-            elif robot.calibration is not None:
-                client.upload_calibration(robot.calibration)  # back to the tables it was built with
-    truth_name = result.sessions[0].truth if result.sessions else ""
-    files = write_report(result, out_dir)
-    print(f"omnibot calibrate: {robot.name} on {', '.join(surfaces)} (truth {truth_name})")
+
+def _truth_chooser(robot: RobotDescription, interactive: bool) -> Callable[[RobotClient], str]:
+    """Without ``--truth``: the link's default truth (checked for an operator at the terminal if it
+    needs one)."""
+    from omnibot.calibration.truth import default_truth
+
+    def chosen_truth(client: RobotClient) -> str:
+        name = default_truth(client, robot)
+        if interactive and name in OPERATOR_TRUTHS:
+            check_operator([f"measure every run ({name} truth: the robot has no wheel encoders)"])
+        return name
+
+    return chosen_truth
+
+
+def _upload_verdict(
+    client: RobotClient, robot: RobotDescription, result: CalibrationResult, keep: bool
+) -> None:
+    """Leave the board with the new tables of the floor it stands on (the last one) and its creep, or,
+    when they are not kept, with the tables it was built with."""
+    if keep:
+        client.upload_calibration(result.sessions[-1].spec)
+        if result.sessions[-1].slip is not None:  # its creep, for MOVEs in closed loop
+            client.upload_slip(result.sessions[-1].slip.params)
+    elif robot.calibration is not None:
+        client.upload_calibration(robot.calibration)
+
+
+def _print_findings(result: CalibrationResult) -> None:
+    """The accuracy table, each floor's wheel slip and the sessions' notes."""
+    from omnibot.calibration.report import accuracy_entries, slip_summary
+    from omnibot.calibration.tables import summary_table
+
     entries = accuracy_entries(result)
     if entries:
         print(summary_table(entries))
@@ -375,8 +437,11 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> in
     for s in result.sessions:
         for note in s.notes:
             print(f"note ({s.surface}): {note}")
-    print(f"report: {out_dir} ({', '.join(f.name for f in files)})")
-    print(f"check: {verdict.summary}" + (" (each floor's own tables)" if len(result.sessions) > 1 else ""))
+
+
+def _print_verdict(verdict: Verdict, several: bool) -> None:
+    """The check's verdict: better or worse than before, and over ``several`` floors their average."""
+    print(f"check: {verdict.summary}" + (" (each floor's own tables)" if several else ""))
     if verdict.worse:
         print(
             f"worse than before: {'; '.join(str(w) for w in verdict.worse)} (mean abs error of a course "
@@ -390,6 +455,20 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> in
             else f"not kept, worse than none ({verdict.average.reason}): each floor keeps its own tables"
         )
         print(f"average over the floors: {average}: {kept}")
+
+
+def _write_file(
+    args: argparse.Namespace,
+    cal_file: Path,
+    result: CalibrationResult,
+    verdict: Verdict,
+    truth_name: str,
+    uploaded: bool,
+) -> int:
+    """Write the calibration file unless the check found it worse (``--force`` writes it anyway) and
+    say where; the exit status (1: worse than before)."""
+    from omnibot.calibration.calfile import write_calibration
+
     if verdict.better is False:
         if verdict.hint:
             print(f"hint: {verdict.hint}")
@@ -410,7 +489,7 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> in
             f"e.g. omnibot follow --calibration {cal} --surface {result.sessions[0].surface})"
         )
     print(f"calibration: {cal}{floors}")
-    if client is not None and not args.no_upload:
+    if uploaded and not args.no_upload:
         print(f"controller: {result.sessions[-1].surface}'s tables uploaded (CAL)")
     return 0
 

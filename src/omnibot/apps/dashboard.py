@@ -10,9 +10,12 @@ import math
 import os
 import sys
 import time
-from typing import TypedDict
+from typing import TYPE_CHECKING, TypedDict
 
 from omnibot.errors import ConfigError
+
+if TYPE_CHECKING:
+    from omnibot.web.dashboard import Dashboard
 
 TOKEN_ENV = "OMNIBOT_DASHBOARD_TOKEN"
 
@@ -105,12 +108,7 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"expected a positive number of seconds, got {args.duration}", key="--duration")
     if not (math.isfinite(args.repeat_speed) and args.repeat_speed > 0):
         raise ConfigError(f"expected a positive speed in m/s, got {args.repeat_speed}", key="--repeat-speed")
-    room_map = args.map
-    if args.port and args.world is not None and room_map is None:  # --world was the map's old name
-        print(
-            "omnibot: warning: --world with --port is deprecated; use --map for the room map", file=sys.stderr
-        )
-        room_map, args.world = args.world, None
+    room_map = _room_map(args)
     check_sim_options(args)
     config = load_teleop_config(args.config)
     url = sim_url(args)
@@ -141,10 +139,7 @@ def run(args: argparse.Namespace) -> int:
                 flush=True,
             )
         print("  Ctrl-C stops it (and the robot)", flush=True)
-        end = math.inf if args.duration is None else time.monotonic() + args.duration
-        while time.monotonic() < end and dash.link.alive:
-            time.sleep(min(0.2, max(0.0, end - time.monotonic())))
-        lost = dash.link.lost
+        lost = _serve(dash, args.duration)
     except KeyboardInterrupt:
         print("omnibot dashboard: stopping", flush=True)
         raise
@@ -154,3 +149,24 @@ def run(args: argparse.Namespace) -> int:
         print(f"omnibot dashboard: the robot link ended: {lost}", file=sys.stderr)
         return 1
     return 0
+
+
+def _room_map(args: argparse.Namespace) -> str | None:
+    """``--map``; with ``--port``, ``--world`` as its deprecated old name (a warning, and ``--world``
+    then taken out of ``args``)."""
+    room_map: str | None = args.map
+    if args.port and args.world is not None and room_map is None:
+        print(
+            "omnibot: warning: --world with --port is deprecated; use --map for the room map", file=sys.stderr
+        )
+        room_map, args.world = args.world, None
+    return room_map
+
+
+def _serve(dash: Dashboard, duration: float | None) -> str | None:
+    """Wait while ``dash`` serves, ``duration`` s (None: until interrupted) or until its robot link
+    ends; why that link ended (None: it did not)."""
+    end = math.inf if duration is None else time.monotonic() + duration
+    while time.monotonic() < end and dash.link.alive:
+        time.sleep(min(0.2, max(0.0, end - time.monotonic())))
+    return dash.link.lost

@@ -244,13 +244,10 @@ def run_in_this_thread(
     ``frame``: the follower steers in it (:class:`~omnibot.runtime.sources.FollowerSource`'s, a
     SLAM's ``map -> odom``)."""
     from omnibot.cliargs import recording_of, use_calibration
-    from omnibot.client.errors import NotSupported
     from omnibot.client.session import robot_session
-    from omnibot.protocol import codes
     from omnibot.ros2.command import PERIOD as ROS2_PERIOD
-    from omnibot.runtime.runtime import LinkPacer, Runtime
+    from omnibot.runtime.runtime import Runtime
     from omnibot.runtime.stall import start_sonars
-    from omnibot.teleop.pacing import Pacer
 
     person = bool(args.teleop)
     wall = person or args.ros2  # a person or ROS 2 nodes: paced to the wall clock
@@ -280,28 +277,43 @@ def run_in_this_thread(
         if path is not None:
             parts.closers.append(lambda: start_sonars(client, robot, 0.0))  # left not pinging, as found
         try:
-            runtime.start()
-            if not person:
-                with contextlib.suppress(NotSupported):
-                    client.use_binary()
-            client.telemetry(period if period >= 0.01 else 0.01, codes.TEL_MASK)
-            # the schedule starts now (a person's input is paced to the wall clock, a follow alone
-            # to the link's: lockstep on sim://)
-            runtime.pacer = Pacer(client, period) if wall else LinkPacer(client, period)
-            judge = parts.judge
-            device = parts.device
-
-            def done() -> bool:
-                if device is not None and device.quit:
-                    return True
-                return judge is not None and judge.report is not None and not wall
-
-            runtime.run(until=done, duration=args.duration)
+            _drive(runtime, parts, period, person=person, wall=wall, duration=args.duration)
         finally:
             _stop_pad(runtime, parts, config)
             runtime.close()
             parts.close()
     return parts
+
+
+def _drive(
+    runtime: Any, parts: Parts, period: float, *, person: bool, wall: bool, duration: float | None
+) -> None:
+    """Start ``runtime`` and run it until the pad quits, the follow is judged (not when ``wall``:
+    a person or ROS 2 nodes end it) or ``duration`` s pass. Binary unless a ``person`` drives, TEL
+    every ``period`` (at least 10 ms); paced to the wall clock when ``wall``, else to the link's."""
+    from omnibot.client.errors import NotSupported
+    from omnibot.protocol import codes
+    from omnibot.runtime.runtime import LinkPacer
+    from omnibot.teleop.pacing import Pacer
+
+    client = runtime.client
+    runtime.start()
+    if not person:
+        with contextlib.suppress(NotSupported):
+            client.use_binary()
+    client.telemetry(period if period >= 0.01 else 0.01, codes.TEL_MASK)
+    # the schedule starts now (a person's input is paced to the wall clock, a follow alone
+    # to the link's: lockstep on sim://)
+    runtime.pacer = Pacer(client, period) if wall else LinkPacer(client, period)
+    judge = parts.judge
+    device = parts.device
+
+    def done() -> bool:
+        if device is not None and device.quit:
+            return True
+        return judge is not None and judge.report is not None and not wall
+
+    runtime.run(until=done, duration=duration)
 
 
 def _stop_pad(runtime: Any, parts: Parts, config: Any) -> None:

@@ -18,7 +18,7 @@ import json
 import math
 from collections.abc import Iterator
 from pathlib import Path as FsPath
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from omnibot.cliargs import (
     DeprecatedAlias,
@@ -35,6 +35,11 @@ from omnibot.cliargs import (
 )
 from omnibot.errors import ConfigError
 from omnibot.outputs import check_writable
+
+if TYPE_CHECKING:
+    from omnibot.control.paths.path import Path
+    from omnibot.control.paths.teach import PathRecorder
+    from omnibot.navigation.metrics import Tolerances
 
 
 def _positive(value: float, flag: str) -> float:
@@ -80,45 +85,18 @@ def _robot_client(args: argparse.Namespace, start: Any = None) -> Iterator[tuple
 def run_follow(args: argparse.Namespace) -> int:
     """Run ``omnibot follow``: follow a path file and report tracking; the exit status (1 when the run
     did not complete, its failures printed)."""
-    from omnibot.control.followers.base import follower_names
     from omnibot.control.paths.files import read_path
-    from omnibot.estimation.estimator import ESTIMATORS
     from omnibot.motion import Pose2D
-    from omnibot.navigation.metrics import Tolerances
     from omnibot.navigation.session import FollowOptions, follow_path, summary, verdict
     from omnibot.progress import progress_bar
 
     check_sim_options(args, allowed=("surface",))
     path = read_path(args.path)
-    names = follower_names()
-    if args.follower not in names:
-        raise ConfigError(
-            f"unknown follower '{args.follower}'; expected one of: {', '.join(names)}", key="--follower"
-        )
-    if args.estimator not in ESTIMATORS:
-        raise ConfigError(
-            f"unknown estimator '{args.estimator}'; expected one of: {', '.join(ESTIMATORS)}",
-            key="--estimator",
-        )
+    _check_follower_and_estimator(args)
     rate = _positive(args.rate, "--rate")
     speed = _positive(args.speed, "--speed") if args.speed is not None else None
-    tolerances = Tolerances(
-        final=_positive(args.final_tolerance, "--final-tolerance"),
-        cross_track=_positive(args.cross_track_tolerance, "--cross-track-tolerance"),
-    )
-    out = _out_dir(args)
-    for flag in ("truth", "report"):
-        check_writable(getattr(args, flag), f"--{flag}")
-    check_plot(args.plot, "--plot")
-    targets = {
-        "truth": _target(args.truth, out, "follow_truth.csv"),
-        "report": _target(args.report, out, "follow_report.json"),
-        "plot": _target(args.plot, out, "follow_plot.png"),
-    }
-    check_distinct(
-        [*((f"--{k}" if getattr(args, k) else "--out", v) for k, v in targets.items()), ("--log", args.log)],
-        [("PATH", args.path), ("--calibration", args.calibration)],
-    )
+    tolerances = _tolerances(args)
+    targets = _follow_targets(args)
     metres = "{l_bar}{bar}| {n:.2f}/{total:.2f} m [{elapsed}<{remaining}]"
     with (
         _robot_client(args, start=Pose2D(*path.start)) as (client, robot),
@@ -149,6 +127,61 @@ def run_follow(args: argparse.Namespace) -> int:
     print(f"  {summary(report)}")
     for text in report["warnings"]:
         print(f"  warning: {text}")
+    _write_follow_outputs(args, targets, run, report, robot.name)
+    print(f"omnibot follow: {verdict(report)}")
+    return 0 if report["completed"] else 1
+
+
+def _check_follower_and_estimator(args: argparse.Namespace) -> None:
+    """ConfigError unless ``--follower`` and ``--estimator`` name ones that exist."""
+    from omnibot.control.followers.base import follower_names
+    from omnibot.estimation.estimator import ESTIMATORS
+
+    names = follower_names()
+    if args.follower not in names:
+        raise ConfigError(
+            f"unknown follower '{args.follower}'; expected one of: {', '.join(names)}", key="--follower"
+        )
+    if args.estimator not in ESTIMATORS:
+        raise ConfigError(
+            f"unknown estimator '{args.estimator}'; expected one of: {', '.join(ESTIMATORS)}",
+            key="--estimator",
+        )
+
+
+def _tolerances(args: argparse.Namespace) -> Tolerances:
+    """The run's tolerances from ``--final-tolerance`` and ``--cross-track-tolerance``."""
+    from omnibot.navigation.metrics import Tolerances
+
+    return Tolerances(
+        final=_positive(args.final_tolerance, "--final-tolerance"),
+        cross_track=_positive(args.cross_track_tolerance, "--cross-track-tolerance"),
+    )
+
+
+def _follow_targets(args: argparse.Namespace) -> dict[str, FsPath | None]:
+    """The files ``omnibot follow`` writes (``truth``, ``report``, ``plot``; None: not written): each
+    given, else in ``--out DIR``; checked writable and distinct from the inputs and ``--log``."""
+    out = _out_dir(args)
+    for flag in ("truth", "report"):
+        check_writable(getattr(args, flag), f"--{flag}")
+    check_plot(args.plot, "--plot")
+    targets = {
+        "truth": _target(args.truth, out, "follow_truth.csv"),
+        "report": _target(args.report, out, "follow_report.json"),
+        "plot": _target(args.plot, out, "follow_plot.png"),
+    }
+    check_distinct(
+        [*((f"--{k}" if getattr(args, k) else "--out", v) for k, v in targets.items()), ("--log", args.log)],
+        [("PATH", args.path), ("--calibration", args.calibration)],
+    )
+    return targets
+
+
+def _write_follow_outputs(
+    args: argparse.Namespace, targets: dict[str, FsPath | None], run: Any, report: dict[str, Any], robot: str
+) -> None:
+    """Write the ground truth, the report and the plot where :func:`_follow_targets` put them."""
     if targets["truth"] is not None:
         if run.has_truth:
             _write_truth(run, targets["truth"])
@@ -162,16 +195,12 @@ def run_follow(args: argparse.Namespace) -> int:
         from omnibot.navigation.plot import plot_run
 
         try:
-            plot_run(
-                run, str(targets["plot"]), title=f"{robot.name}: {args.follower} on {FsPath(args.path).name}"
-            )
+            plot_run(run, str(targets["plot"]), title=f"{robot}: {args.follower} on {FsPath(args.path).name}")
         except OSError as exc:
             raise ConfigError(
                 f"cannot write {targets['plot']}: {exc.strerror or exc}", key="--plot"
             ) from None
         print(f"  plot: {targets['plot']}")
-    print(f"omnibot follow: {verdict(report)}")
-    return 0 if report["completed"] else 1
 
 
 def _out_dir(args: argparse.Namespace) -> FsPath | None:
@@ -211,34 +240,13 @@ def run_record(args: argparse.Namespace) -> int:
     """Run ``omnibot record``: record a taught or standard path to ``--path``; the exit status (1 when
     the recording is no path to follow, and nothing is written)."""
     from omnibot.control.paths.files import write_path
-    from omnibot.control.paths.standard import standard_path
-    from omnibot.control.paths.teach import PathRecorder
     from omnibot.navigation.record import check_recording, teach
 
     check_sim_options(args)
     if not args.path:
         raise ConfigError("say where to write the path: --path FILE.csv", key="--path")
     mode = args.teach or ("listen" if args.port else "push")
-    every = args.sample_time if args.sample_time is not None else args.sample_distance
-    _positive(every, "--sample-time" if args.sample_time is not None else "--sample-distance")
-    speed = _positive(args.speed, "--speed")
-    duration = _positive(args.duration, "--duration")
-    heading = args.heading or "measured"
-    recorder = PathRecorder(
-        "time" if args.sample_time is not None else "distance",
-        every,
-        store_heading=heading != "fixed",
-        store_speed=args.store_speed,
-    )
-    shape = (
-        standard_path(
-            args.shape,
-            size=_positive(args.size, "--size"),
-            heading="tangent" if heading == "tangent" else "fixed",
-        )
-        if mode != "listen"
-        else None
-    )
+    recorder, speed, duration, shape = _teaching(args, mode)
     out = FsPath(args.path)
     check_writable(out, "--path")
     check_distinct([("--path", out), ("--log", args.log)])
@@ -276,6 +284,36 @@ def run_record(args: argparse.Namespace) -> int:
     if result.truth_error is not None:
         print(f"  recorded end is {100 * result.truth_error:.2f} cm from the true end (odometry drift)")
     return 0
+
+
+def _teaching(args: argparse.Namespace, mode: str) -> tuple[PathRecorder, float, float, Path | None]:
+    """How ``omnibot record`` teaches: the recorder (sampling every ``--sample-time`` s or
+    ``--sample-distance`` m, storing the heading unless it is fixed), the speed, the duration and,
+    unless it listens to another driver, the standard shape driven or pushed along."""
+    from omnibot.control.paths.standard import standard_path
+    from omnibot.control.paths.teach import PathRecorder
+
+    every = args.sample_time if args.sample_time is not None else args.sample_distance
+    _positive(every, "--sample-time" if args.sample_time is not None else "--sample-distance")
+    speed = _positive(args.speed, "--speed")
+    duration = _positive(args.duration, "--duration")
+    heading = args.heading or "measured"
+    recorder = PathRecorder(
+        "time" if args.sample_time is not None else "distance",
+        every,
+        store_heading=heading != "fixed",
+        store_speed=args.store_speed,
+    )
+    shape = (
+        standard_path(
+            args.shape,
+            size=_positive(args.size, "--size"),
+            heading="tangent" if heading == "tangent" else "fixed",
+        )
+        if mode != "listen"
+        else None
+    )
+    return recorder, speed, duration, shape
 
 
 def add_follow_arguments(p: argparse.ArgumentParser) -> None:

@@ -9,11 +9,11 @@
         robot.wait_idle(timeout=5)
         print(robot.status())
 
-Modules: ``client`` (RobotClient, Pending: sending, matching, pumping), ``calls`` (the typed calls),
-``commands`` (SI -> checked commands), ``limits``,
-``events`` (Event types, listeners, EventRecorder), ``views`` (Hello, Status), ``wire`` (text and
-binary wire formats), ``switch`` (ProtocolSwitch: the protocol a client speaks, switching it),
-``errors`` (ControllerError subclasses per code).
+Modules: ``client`` (RobotClient, Pending: sending, pumping), ``replies`` (Replies: which command a
+reply answers), ``calls`` (the typed calls), ``commands`` (SI -> checked commands), ``limits``,
+``events`` (Event types, listeners, EventRecorder), ``tracing`` (Tracer: what a recorder hears),
+``views`` (Hello, Status), ``wire`` (text and binary wire formats), ``switch`` (ProtocolSwitch: the
+protocol a client speaks, switching it), ``errors`` (ControllerError subclasses per code).
 """
 
 from omnibot.client.client import DEFAULT_TIMEOUT, Pending, RobotClient

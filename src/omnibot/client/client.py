@@ -35,6 +35,11 @@ not run); a ``HELLO`` line nobody asked for is a controller reset
 untagged command timed out, the next call first resynchronises: it sends ``STATUS`` and waits for
 that reply, which tells every earlier reply from the later ones.
 
+The client owns two collaborators for these rules: :class:`~omnibot.client.replies.Replies` (the
+commands waiting and which one a reply answers) and :class:`~omnibot.client.switch.ProtocolSwitch`
+(the protocol spoken, the MODE bits, text's tags and checks); its tracers (a recorder) are
+:class:`~omnibot.client.tracing.Tracers`.
+
 Not thread-safe: use a client from one thread (listeners run in that thread, during the waits).
 """
 
@@ -44,7 +49,7 @@ import contextlib
 import math
 from collections.abc import Callable
 from types import TracebackType
-from typing import Protocol, Self, TypeVar
+from typing import Self, TypeVar
 
 from omnibot.client import switch
 from omnibot.client.calls import TypedCalls
@@ -59,9 +64,10 @@ from omnibot.client.events import (
     Telemetry,
     WarnEvent,
     event_from_message,
-    log,
 )
 from omnibot.client.limits import Limits
+from omnibot.client.replies import Replies
+from omnibot.client.tracing import Tracer, Tracers
 from omnibot.client.views import Hello
 from omnibot.client.wire import SYNC as SYNC_TEXT
 from omnibot.client.wire import BinaryWire, TextWire, Wire
@@ -74,7 +80,6 @@ from omnibot.protocol.messages import (
     ErrorReply,
     HelloReply,
     Malformed,
-    Message,
     Mode,
     Move,
     Ok,
@@ -99,23 +104,10 @@ DEFAULT_TIMEOUT = 1.0
 """Seconds (link clock) to wait for a reply."""
 RESYNC_TRIES = 3
 """Untagged text: STATUS exchanges tried at most to get back in step after a timeout."""
-_LATE_MAX = 64  # tagged commands that timed out, kept so that a late reply still lands on them
 # binary and sequenced text: look at retransmissions this often (s)
 _RETRY_POLL = codes.RETRY_TIMEOUT_MS / 2000.0
 _SUFFIX_MAX = 1 + linecheck.TAG_DIGITS + 1 + linecheck.CHECK_DIGITS + 1  # "#tag", "*check" and "\n"
 _FOREVER_STEP = 1.0
-
-
-class Tracer(Protocol):
-    """What a recorder hears from the client (:meth:`RobotClient.add_tracer`): every byte on the link
-    as the ``spy+`` wrapper sees it, and every command sent and reply matched, decoded (events go to
-    listeners). Times are the link clock's."""
-
-    def link_bytes(self, t: float, kind: str, data: bytes = b"", note: str = "") -> None:
-        """``TX`` written, ``RX`` read, ``ERR`` the link failed (``note``), ``CLOSE``."""
-
-    def message(self, t: float, direction: str, message: Message | Malformed) -> None:
-        """``command`` sent or ``reply`` matched."""
 
 
 class Pending:
@@ -185,7 +177,7 @@ class Pending:
                     client._wait_for_verdict(self)  # binary: the retries of its frame decide
             except LinkTimeout as exc:
                 self.timed_out = True
-                client._timed_out(self)
+                client._replies.timed_out(self)
                 if client.tags and self.seq:
                     exc.add_note("it may or may not have run (a tagged text command)")
                 raise
@@ -236,19 +228,13 @@ class RobotClient(TypedCalls):
         self.reconnect = reconnect
         self.last_hello: Hello | None = None
         """The last HELLO seen (a reply or a reset greeting)."""
-        self._hellos_owed: list[float] = []  # link-clock deadlines of plain HELLOs the tag question sent
-        self._resync = False  # untagged text: a command timed out, get in step before the next
         self._preparing = ""  # the step before a text command under way: "probe" (tags?), "resync"
-        self._late: dict[int, Pending] = {}  # tag -> tagged command that timed out
         self._heard = False  # a byte has come from the link
-        self._outstanding: list[Pending] = []
         self._listeners = Listeners()
         self._moving = False
         self._broken = False
         self._failure: LinkError | None = None  # why the link broke (told again if it stays broken)
-        self._hello_answered = False  # text: the last reply matched was a HELLO reply
-        self._synced = False  # text: a reply has been matched since the client started
-        self._tracers: list[Tracer] = []
+        self._tracers = Tracers(self)
         self._switch = switch.ProtocolSwitch(
             self,
             tags,
@@ -256,9 +242,13 @@ class RobotClient(TypedCalls):
             read=self._read,
             ask=self._ask_probe,
             heard=lambda: self._heard,
-            forget=lambda why: self._fail_all(lambda p: LinkTimeout(f"no reply to {p.line}: {why}")),
+            forget=lambda why: self._replies.fail_all(lambda p: LinkTimeout(f"no reply to {p.line}: {why}")),
         )
         """The protocol spoken, the MODE bits, text's tags and checks; switching (client/switch.py)."""
+        self._replies = Replies(
+            self, self._switch, self._listeners, complete=self._complete, event=self._event
+        )
+        """The commands waiting for a reply and which one a reply answers (client/replies.py)."""
 
     @classmethod
     def open(
@@ -348,7 +338,7 @@ class RobotClient(TypedCalls):
     @property
     def outstanding(self) -> list[Pending]:
         """Commands sent whose reply has not come yet, oldest first."""
-        return list(self._outstanding)
+        return list(self._replies.waiting)
 
     # ------------------------------------------------------------------ listeners
 
@@ -362,25 +352,11 @@ class RobotClient(TypedCalls):
 
     def add_tracer(self, tracer: Tracer) -> None:
         """Hand ``tracer`` the link's bytes and the commands and replies (a recorder)."""
-        self._tracers.append(tracer)
+        self._tracers.add(tracer)
 
     def remove_tracer(self, tracer: Tracer) -> None:
         """Stop handing ``tracer`` anything."""
-        self._tracers = [t for t in self._tracers if t is not tracer]
-
-    def _trace_bytes(self, kind: str, data: bytes = b"", note: str = "") -> None:
-        for tracer in self._tracers:
-            try:
-                tracer.link_bytes(self.clock.now(), kind, data, note)
-            except Exception:
-                log.exception("tracer %r failed", tracer)
-
-    def _trace_message(self, direction: str, message: Message | Malformed) -> None:
-        for tracer in self._tracers:
-            try:
-                tracer.message(self.clock.now(), direction, message)
-            except Exception:
-                log.exception("tracer %r failed", tracer)
+        self._tracers.remove(tracer)
 
     def on_telemetry(self, callback: Callable[[Telemetry], object]) -> None:
         """Call ``callback`` with every TEL sample."""
@@ -453,7 +429,7 @@ class RobotClient(TypedCalls):
         wait = self.timeout if timeout is None else timeout
         deadline = self.clock.now() + wait + self.link.line_time(len(data))
         out = [Pending(self, None, line, 0, deadline) for _ in range(replies)]
-        self._outstanding.extend(out)
+        self._replies.waiting.extend(out)
         self._write(data)
         return out
 
@@ -476,24 +452,25 @@ class RobotClient(TypedCalls):
         if sender is not None and not sync and not wire.ready():
             self._wait(wire.ready, self.clock.now() + wait, "send window full")
         if sender is not None and sync:
-            self._give_up(wire.take_failed())
-        if isinstance(wire, TextWire) and self.text_window and sender is not None:
+            self._replies.give_up(wire.take_failed())
+        window = self.text_window or 0
+        if isinstance(wire, TextWire) and window and sender is not None:
             # a sequenced command is tracked for retransmission once framed: room first, for its
             # longest form (a tag of 4 digits)
             most = len(raw) + _SUFFIX_MAX if raw is not None else len(text.encode(command, tag=text.TAG_MAX))  # type: ignore[arg-type]
-            self._wait(lambda: self._text_room(most), self.clock.now() + wait, "text window full")
+            self._wait(lambda: self._replies.room(most, window), self.clock.now() + wait, "text window full")
         now = self.clock.now()
         if raw is not None and isinstance(wire, TextWire):
             seq, data = wire.frame_raw(raw, round(now * 1000), isinstance(command, SYNC_TEXT))
         else:
             assert command is not None
             seq, data = wire.frame(command, round(now * 1000))
-        if isinstance(wire, TextWire) and self.text_window and sender is None:
-            self._wait(lambda: self._text_room(len(data)), now + wait, "text window full")
+        if isinstance(wire, TextWire) and window and sender is None:
+            self._wait(lambda: self._replies.room(len(data), window), now + wait, "text window full")
             now = self.clock.now()
         if sender is not None and sync:
             abandoned = set(wire.take_failed())
-            for p in self._outstanding:
+            for p in self._replies.waiting:
                 p.abandoned = p.abandoned or p.seq in abandoned
         if raw is not None:
             line = raw.decode("latin-1").strip()
@@ -502,17 +479,11 @@ class RobotClient(TypedCalls):
             line = text.encode(command).decode("ascii").strip()
         pending = Pending(self, command, line, seq, now + wait + self.link.line_time(len(data)), malformed)
         pending.size = len(data)
-        self._outstanding.append(pending)
+        self._replies.waiting.append(pending)
         if command is not None and self._tracers:
-            self._trace_message("command", command)
+            self._tracers.message("command", command)
         self._write(data)
         return pending
-
-    def _text_room(self, size: int) -> bool:
-        """Whether ``size`` more bytes fit in the text window beside the unanswered commands (one
-        command always goes when none is unanswered; a command that timed out no longer counts)."""
-        busy = sum(p.size for p in self._outstanding if not p.done and not p.timed_out)
-        return busy == 0 or busy + size <= (self.text_window or 0)
 
     def _text_ready(self, command: Command | None, raw: bytes | None, wait: float) -> None:
         """Before a text command: learn whether the controller echoes tags (once), and get back in
@@ -533,7 +504,7 @@ class RobotClient(TypedCalls):
             # sequenced text after a give-up: the controller may still expect the tag given up on,
             # and only STOP, HELLO or MODE is taken whatever it expects (binary's SYNC flag)
             self._prepare("sync", lambda w: self.execute(self._switch.hello_again(), w), wait, what)
-        if self._resync and not self.tags:
+        if self._replies.out_of_step and not self.tags:
             self._prepare("resync", self._resync_now, wait, what)
 
     def _prepare(self, step: str, run: Callable[[float], object], wait: float, what: str) -> None:
@@ -558,19 +529,19 @@ class RobotClient(TypedCalls):
             tag, data = 0, text.encode(HelloCommand())
         probe = Pending(self, HelloCommand(), data.decode("ascii").strip(), tag, self.clock.now() + wait)
         probe.probe = tagged
-        self._outstanding.append(probe)
+        self._replies.waiting.append(probe)
         if not tagged:
-            self._hellos_owed.append(probe.deadline + wait)
+            self._replies.owe_hello(probe.deadline + wait)
         self._write(data)
         try:
             # a plain HELLO is waited for even when a tagged reply turns tags on meanwhile: its
             # untagged answer, coming later with nothing waiting for it, would be taken for a reset
             self._wait(lambda: probe.done or (tagged and self.tags is not None), probe.deadline, "")
         except LinkTimeout:
-            self._outstanding.remove(probe)
+            self._replies.waiting.remove(probe)
             return None
-        if probe in self._outstanding:
-            self._outstanding.remove(probe)
+        if probe in self._replies.waiting:
+            self._replies.waiting.remove(probe)
         return probe.reply
 
     def _resync_now(self, wait: float) -> None:
@@ -578,16 +549,16 @@ class RobotClient(TypedCalls):
         from later ones), then STATUS and its reply."""
         for _ in range(RESYNC_TRIES):
             self._pump_once(0.0)  # replies already here still land on their commands
-            for p in self._outstanding:
-                p._fail(
-                    LinkTimeout(f"no reply to {p.line}: text replies out of step; it may or may not have run")
+            self._replies.fail_all(
+                lambda p: LinkTimeout(
+                    f"no reply to {p.line}: text replies out of step; it may or may not have run"
                 )
-            self._outstanding.clear()
+            )
             try:
                 self.submit(StatusCommand(), wait).result()
             except (LinkTimeout, ControllerError):
                 continue
-            self._resync = False
+            self._replies.out_of_step = False
             return
         raise LinkTimeout(
             f"text replies out of step and no reply to STATUS after {RESYNC_TRIES} tries "
@@ -613,32 +584,12 @@ class RobotClient(TypedCalls):
         if not pending.done:  # out of the window without a verdict (a SYNC frame abandoned it)
             raise LinkTimeout(f"no reply to {pending.line}; it may or may not have run")
 
-    def _timed_out(self, pending: Pending) -> None:
-        """A call gave up on ``pending``: keep a tagged one aside for a late reply; after an
-        untagged one, resynchronise before the next text command."""
-        if self.binary:
-            return
-        if pending.seq and not pending.probe:
-            if pending in self._outstanding:
-                self._outstanding.remove(pending)
-            self._late[pending.seq] = pending
-            while len(self._late) > _LATE_MAX:
-                del self._late[next(iter(self._late))]
-        elif not pending.seq:
-            self._resync = True
-
     def _wait_for_switch(self) -> None:
         """Wait for a MODE that switches protocols: nothing may be sent until its OK is in."""
-        for p in list(self._outstanding):
+        for p in list(self._replies.waiting):
             cmd = p.command
             if isinstance(cmd, Mode) and bool(cmd.mask & codes.MODE_BINARY) != self.binary and not p.done:
                 p.result()
-
-    def _fail_all(self, error: Callable[[Pending], BaseException]) -> None:
-        """Fail every command still waiting for a reply with ``error(pending)``."""
-        for p in self._outstanding:
-            p._fail(error(p))
-        self._outstanding.clear()
 
     # ------------------------------------------------------------------ waiting
 
@@ -655,7 +606,7 @@ class RobotClient(TypedCalls):
 
     def drain(self, timeout: float | None = None) -> None:
         """Wait until every command sent has its reply (those that timed out excepted)."""
-        waiting = [p for p in self._outstanding if not p.timed_out]
+        waiting = [p for p in self._replies.waiting if not p.timed_out]
         if not waiting:
             return
         deadline = max(p.deadline for p in waiting) if timeout is None else self.clock.now() + timeout
@@ -665,7 +616,7 @@ class RobotClient(TypedCalls):
         """Wait until the robot is idle: the replies of the commands sent are in and IDLE came
         (returns at once if it already did). ``timeout`` s on the link clock, None: no limit."""
         deadline = math.inf if timeout is None else self.clock.now() + timeout
-        waiting = [p for p in self._outstanding if not p.timed_out]
+        waiting = [p for p in self._replies.waiting if not p.timed_out]
         self._wait(lambda: all(p.done for p in waiting), deadline, "replies outstanding")
         self._wait(lambda: not self._moving, deadline, "robot still moving (no IDLE)")
 
@@ -678,7 +629,7 @@ class RobotClient(TypedCalls):
 
     def _pump_once(self, timeout: float) -> int:
         self._service()
-        if self._wire.sender is not None and self._outstanding:
+        if self._wire.sender is not None and self._replies.waiting:
             timeout = min(timeout, _RETRY_POLL)
         data = self._read(timeout)
         return self._process(data) if data else 0
@@ -732,11 +683,11 @@ class RobotClient(TypedCalls):
             isinstance(message, ErrorReply) and not item.event
         ):
             if isinstance(self._wire, BinaryWire):
-                self._reply_by_seq(item.seq, message)
+                self._replies.by_seq(item.seq, message)
             elif item.seq:
-                self._reply_by_tag(item.seq, message, now)
+                self._replies.by_tag(item.seq, message, now)
             else:
-                self._reply_in_order(message, now)
+                self._replies.in_order(message, now)
         else:
             wire = self._wire
             if isinstance(wire, BinaryWire) and not isinstance(message, TelemetryMessage):
@@ -747,91 +698,10 @@ class RobotClient(TypedCalls):
                     return
             self._event(event_from_message(message, now))
 
-    def _reply_by_tag(self, tag: int, reply: Reply, now: float) -> None:
-        """A tagged text reply answers the command with that tag, wherever it is in the line."""
-        sender = self._wire.sender
-        waited = tag in self._late or any(p.seq == tag for p in self._outstanding)
-        if sender is not None and not sender.ack(tag) and not waited:
-            return  # sequenced: the kept reply sent again for a command sent again, answered already
-        for p in self._outstanding:
-            if p.seq == tag:
-                self._outstanding.remove(p)
-                self._synced = True  # a reply matched: an untagged HELLO from now on is a reset
-                self._hello_answered = False
-                if p.probe:
-                    self._switch.set_tags(True)
-                if isinstance(reply, ErrorReply) or p.accepts(reply):
-                    self._complete(p, reply)
-                else:
-                    p._fail(ProtocolError(f"{reply.keyword} is no reply to {p.line}"))
-                return
-        late = self._late.pop(tag, None)
-        if late is not None and not late.done:  # its caller has had LinkTimeout: record what came
-            self._complete(late, reply)
-            return
-        if isinstance(reply, HelloReply):
-            # The late answer to a tagged HELLO given up (a probe): never a reset, whose greeting is
-            # untagged; it does say that the controller echoes tags (a stale untagged line may have
-            # answered the probes before it: taken for a reset, it made the client ask again forever).
-            if self._switch.auto_tags:
-                self._switch.set_tags(True)
-            return
-        self._event(event_from_message(reply, now))
-
-    def _reply_in_order(self, reply: Reply, now: float) -> None:
-        waiting = [p for p in self._outstanding if not p.seq or p.probe]  # the untagged ones
-        for i, p in enumerate(waiting):
-            if p.accepts(reply):
-                for lost in waiting[:i]:
-                    lost._fail(ProtocolError(f"no reply to {lost.line}: a later reply came first"))
-                done = waiting[: i + 1]
-                self._outstanding = [q for q in self._outstanding if q not in done]
-                if isinstance(reply, HelloReply) and self._hellos_owed:
-                    self._hellos_owed.pop(0)  # a plain HELLO of the tag question answered
-                self._complete(p, reply)
-                self._hello_answered = isinstance(reply, HelloReply)
-                self._synced = True
-                return
-        event = event_from_message(reply, now)
-        owed = [t for t in self._hellos_owed if t >= now]
-        if isinstance(reply, HelloReply) and owed:
-            # the answer to a plain HELLO of the tag question that another line was taken for (a
-            # stale ERROR left on the line): not a reset
-            owed.pop(0)
-            self._hellos_owed = owed
-            self.last_hello = Hello.from_reply(reply)
-            return
-        self._hellos_owed = owed
-        if isinstance(event, ResetEvent) and (self._hello_answered or not self._synced):
-            # The greeting of a controller that started as we connected (no reply matched yet), or
-            # the HELLO line taken as the answer to our HELLO was the greeting and this is the
-            # answer: report the reset, but the commands waiting may still be answered.
-            self._hello_answered = False
-            self.last_hello = event.hello
-            self._listeners.dispatch(event)
-            return
-        self._event(event)
-
-    def _reply_by_seq(self, seq: int, reply: Reply) -> None:
-        wire = self._wire
-        assert isinstance(wire, BinaryWire)
-        wire.sender.ack(seq)
-        for i, p in enumerate(self._outstanding):
-            if p.seq == seq:
-                for lost in self._outstanding[:i]:
-                    if lost.abandoned:
-                        lost._fail(LinkTimeout(f"no reply to {lost.line}: abandoned by a SYNC frame"))
-                self._outstanding = [q for q in self._outstanding[:i] if not q.done] + self._outstanding[
-                    i + 1 :
-                ]
-                self._complete(p, reply)
-                return
-        # a duplicate reply to a retransmitted command, or a late one: nothing waits for it
-
     def _complete(self, pending: Pending, reply: Reply) -> None:
         pending.reply = reply
         if self._tracers:
-            self._trace_message("reply", reply)
+            self._tracers.message("reply", reply)
         if isinstance(reply, ErrorReply):
             pending.error = controller_error(reply.code, reply.description, pending.line)
             return
@@ -861,10 +731,11 @@ class RobotClient(TypedCalls):
     def _reset(self, event: Event) -> None:
         assert isinstance(event, ResetEvent)
         self.last_hello = event.hello
-        self._fail_all(lambda p: ControllerReset(f"the controller restarted before answering {p.line}"))
+        self._replies.fail_all(
+            lambda p: ControllerReset(f"the controller restarted before answering {p.line}")
+        )
         self._moving = False
-        self._late.clear()
-        self._resync = False
+        self._replies.controller_reset()
         # perhaps another firmware now: ask for tags again (not while asking)
         self._switch.controller_reset(ask_tags=self._preparing != "probe")
         self._listeners.dispatch(event)
@@ -876,27 +747,15 @@ class RobotClient(TypedCalls):
         if wire.sender is not None:
             for frame in wire.service(round(self.clock.now() * 1000)):
                 self._write(frame)
-            self._give_up(wire.take_failed())
-
-    def _give_up(self, seqs: list[int]) -> None:
-        if not seqs:
-            return
-        for p in self._outstanding:
-            if p.seq in seqs:
-                p._fail(
-                    LinkTimeout(
-                        f"no reply to {p.line} after {codes.HOST_RETRIES} retries; it may or may not have run"
-                    )
-                )
-        self._outstanding = [p for p in self._outstanding if not p.done]
+            self._replies.give_up(wire.take_failed())
 
     def _write(self, data: bytes) -> None:
         if self._tracers:
-            self._trace_bytes("TX", data)
+            self._tracers.link_bytes("TX", data)
         try:
             self.link.write(data)
         except LinkError as exc:
-            self._trace_bytes("ERR", note=str(exc))
+            self._tracers.link_bytes("ERR", note=str(exc))
             self._link_failed(exc)
             raise
 
@@ -904,20 +763,20 @@ class RobotClient(TypedCalls):
         try:
             data = self.link.read(4096, timeout)
         except LinkError as exc:
-            self._trace_bytes("ERR", note=str(exc))
+            self._tracers.link_bytes("ERR", note=str(exc))
             self._link_failed(exc)
             raise
         if data and self._tracers:
-            self._trace_bytes("RX", data)
+            self._tracers.link_bytes("RX", data)
         return data
 
     def _link_failed(self, exc: LinkError) -> None:
-        self._fail_all(lambda p: exc)
+        self._replies.fail_all(lambda p: exc)
         self._switch.link_failed()
         self._moving = False
         self._broken = True
         self._failure = exc
-        self._synced = False
+        self._replies.link_failed()
         if self.reconnect is not None and not self.link.closed:
             try:
                 self.link.reopen(retry=self.reconnect)
@@ -942,7 +801,7 @@ class RobotClient(TypedCalls):
     def close(self) -> None:
         """Close the link (idempotent). The controller stays in its mode (see use_text)."""
         if self._tracers and not self.link.closed:
-            self._trace_bytes("CLOSE")
+            self._tracers.link_bytes("CLOSE")
         self.link.close()
 
     def __enter__(self) -> Self:
@@ -955,4 +814,4 @@ class RobotClient(TypedCalls):
 
     def __repr__(self) -> str:
         proto = "binary" if self.binary else "text"
-        return f"<RobotClient {self.link.url!r} {proto} outstanding={len(self._outstanding)}>"
+        return f"<RobotClient {self.link.url!r} {proto} outstanding={len(self._replies.waiting)}>"

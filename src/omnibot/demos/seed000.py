@@ -37,6 +37,7 @@ from typing import Any
 from omnibot.client.client import RobotClient
 from omnibot.client.events import Event, RangeEvent, Telemetry, WarnEvent
 from omnibot.client.session import ClientRecording
+from omnibot.client.views import Hello
 from omnibot.errors import ConfigError
 from omnibot.estimation.odometry import WheelOdometry
 from omnibot.motion import Pose2D
@@ -220,6 +221,26 @@ class Demo:
         if start is not None:
             self.recorder.start_at(start)
 
+        self._circle()
+        self._spins()
+        self._face_wall()
+        if not self.robot.sonars:
+            self.segments.append(
+                Segment(
+                    "sonar approach, emergency stop",
+                    "SONAR,1,60,0,100,25;MOVE,INF,60,0,0",
+                    f"RANGE inside 1 m, WARN 13 below {100 * ESTOP_DISTANCE:.0f} cm",
+                    achieved=f"skipped: {self.robot.name} has no sonar",
+                )
+            )
+        else:
+            self._sonar_approach()
+        c.telemetry(0.0)
+        return self.segments
+
+    def _circle(self) -> None:
+        """MOVE and DELTA 36 times: a circle of 2 cm steps, heading held."""
+        c = self.client
         with self.segment(
             "circle, heading held",
             "MOVE,2,40,0,0;DELTA,0,0,10,0,36",
@@ -237,6 +258,9 @@ class Demo:
                 f"heading {math.degrees(wrap(b.theta - a.theta)):+.1f} deg ({src})"
             )
 
+    def _spins(self) -> None:
+        """Straight while spinning, at the seed's curvature and at the one that compensates."""
+        c = self.client
         for label, curvature in (
             ("seed's C=-40", SEED_CURVATURE),
             ("compensated C=-58", COMPENSATING_CURVATURE),
@@ -259,6 +283,9 @@ class Demo:
                     f"{math.degrees(b.theta - a.theta):+.0f} deg, path bend {self._bend(seg):+.0f} deg ({src})"
                 )
 
+    def _face_wall(self) -> None:
+        """ROTATE the short way to face the nearest wall (turn around when no wall is known)."""
+        c = self.client
         here = self.best_pose()
         heading = here.theta if here else 0.0
         target = self._face_nearest_wall(here)
@@ -270,22 +297,8 @@ class Demo:
             c.rotate(turn, math.radians(90))
             c.wait_idle(timeout=10)
         if got := self.best(seg):
-            a, b, src = got
+            _, b, src = got
             seg.achieved = f"heading {math.degrees(wrap(b.theta)):.1f} deg ({src})"
-
-        if not self.robot.sonars:
-            self.segments.append(
-                Segment(
-                    "sonar approach, emergency stop",
-                    "SONAR,1,60,0,100,25;MOVE,INF,60,0,0",
-                    f"RANGE inside 1 m, WARN 13 below {100 * ESTOP_DISTANCE:.0f} cm",
-                    achieved=f"skipped: {self.robot.name} has no sonar",
-                )
-            )
-        else:
-            self._sonar_approach()
-        c.telemetry(0.0)
-        return self.segments
 
     def _sonar_approach(self) -> None:
         c = self.client
@@ -495,17 +508,15 @@ def run_demo(
                 demo = Demo(client, robot, truth if truth is not None else (lambda: None), bar)
                 segments = demo.run()
         wall = time.monotonic() - started
-        png = out / "demo_trajectory.png"
-        written = [str(png)]
-        try:
-            plot(truth, demo.recorder.odo_trail, world_map, png)
-            if truth is not None:
-                with (out / "demo_truth.csv").open("w") as f:
-                    f.write("t,x,y,theta\n")
-                    f.writelines(f"{t:.3f},{x:.4f},{y:.4f},{th:.4f}\n" for t, x, y, th in truth.rows())
-                written.append(str(out / "demo_truth.csv"))
-        except OSError as exc:
-            raise ConfigError(f"cannot write in {out}: {exc.strerror or exc}", key="--out") from None
+        written = _write_outputs(out, truth, demo.recorder.odo_trail, world_map)
+    return _report(hello, port, segments, written, wall)
+
+
+def _report(
+    hello: Hello, port: str | None, segments: list[Segment], written: list[str], wall: float
+) -> tuple[str, bool]:
+    """The printed report (the controller, the link, the table, the files, the wall time and what was
+    not done) and whether every example did what it should."""
     link = (
         "client -> text protocol -> pty (115200 baud) -> firmware -> simulator"
         if port is None
@@ -516,6 +527,24 @@ def run_demo(
     verdict = f"\nNOT DONE: {'; '.join(failed)}" if failed else ""
     files = "  ".join(written)
     return f"{header}\n\n{format_table(segments)}\n\nwrote: {files}  ({wall:.1f} s){verdict}", not failed
+
+
+def _write_outputs(
+    out: Path, truth: TruthSource | None, odo_trail: list[tuple[float, float]], world_map: Any
+) -> list[str]:
+    """The trajectory plot and, with a truth, its CSV in ``out``; the files written."""
+    png = out / "demo_trajectory.png"
+    written = [str(png)]
+    try:
+        plot(truth, odo_trail, world_map, png)
+        if truth is not None:
+            with (out / "demo_truth.csv").open("w") as f:
+                f.write("t,x,y,theta\n")
+                f.writelines(f"{t:.3f},{x:.4f},{y:.4f},{th:.4f}\n" for t, x, y, th in truth.rows())
+            written.append(str(out / "demo_truth.csv"))
+    except OSError as exc:
+        raise ConfigError(f"cannot write in {out}: {exc.strerror or exc}", key="--out") from None
+    return written
 
 
 def with_world(port: str, world: str) -> str:

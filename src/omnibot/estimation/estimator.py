@@ -191,22 +191,7 @@ class PoseEstimator:
         if dt <= 0:
             return self.estimate
 
-        moved = False
-        wheel = None  # (dx, dy, dtheta) from the driven wheels
-        slip = False
-        if self.has_encoders and sample.encoders is not None and last.encoders is not None:
-            counts = count_delta(np.asarray(sample.encoders, float), np.asarray(last.encoders, float))
-            moved |= bool(np.any(counts != 0))
-            angles = counts * self._rad_per_count
-            if self.slip_model is not None:
-                q, acc = self.body_velocity, self.body_acceleration
-                model = self.slip_model
-                angles = angles * model.params.scale - model.wheel_correction(q, acc) * dt
-            disp = self._pinv @ angles
-            self.residual = angles - self._J @ disp
-            if self.redundant:
-                slip |= float(np.abs(self.residual).max()) > self.residual_threshold
-            wheel = (float(disp[0]), float(disp[1]), float(disp[2]))
+        wheel, moved, slip = self._driven(sample, last, dt)
         rolled = None
         if self.tracking is not None and sample.tracking is not None and last.tracking is not None:
             delta = count_delta(np.asarray(sample.tracking, float), np.asarray(last.tracking, float))
@@ -214,15 +199,8 @@ class PoseEstimator:
             rolled = delta * self.tracking.m_per_count
         self._still_for = 0.0 if moved else self._still_for + dt
         standstill = self._still_for >= STILL_TIME
-
-        # tracking wheels against driven wheels: a translation slip the gyro cannot see
-        if rolled is not None and wheel is not None and self.tracking is not None:
-            tx, ty = self.tracking.displacement(rolled, wheel[2])
-            gap = math.hypot(tx - wheel[0], ty - wheel[1])
-            window = TRACK_SLIP_WINDOW
-            self._track_mismatch = self._track_mismatch * math.exp(-dt / window) + gap
-            travelled = math.hypot(tx, ty) / dt * window
-            slip |= self._track_mismatch > TRACK_SLIP_GAP + TRACK_SLIP_FRACTION * travelled
+        if rolled is not None and wheel is not None:
+            slip |= self._tracking_slip(rolled, wheel, dt)
 
         d_theta = self._rotation(dt, sample, last, wheel, standstill, slip, self._accel)
         if self.translation == "tracking":
@@ -239,18 +217,7 @@ class PoseEstimator:
         before = self._pose
         self._pose = compose_arc(before, dx, dy, d_theta)
         self.distance += math.hypot(dx, dy)
-        a = 1.0 - math.exp(-dt / VELOCITY_TAU)
-        vx0, vy0, w0 = self._vel
-        self._vel = (
-            vx0 + a * ((self._pose.x - before.x) / dt - vx0),
-            vy0 + a * ((self._pose.y - before.y) / dt - vy0),
-            w0 + a * (d_theta / dt - w0),
-        )
-        b = 1.0 - math.exp(-dt / ACCEL_TAU)
-        self._acc_world = tuple(
-            acc + b * ((new - old) / dt - acc)
-            for acc, new, old in zip(self._acc_world, self._vel, (vx0, vy0, w0), strict=True)
-        )
+        self._low_pass(before, d_theta, dt)
         self._body_rates()
         self._accel = self._acceleration()
         slipping = slip or self.filter.slipping
@@ -267,6 +234,53 @@ class PoseEstimator:
             standstill,
         )
         return self.estimate
+
+    def _driven(
+        self, sample: SensorSample, last: SensorSample, dt: float
+    ) -> tuple[tuple[float, float, float] | None, bool, bool]:
+        """The body's motion (dx, dy, dtheta) by the driven wheels' counts since ``last`` (corrected by
+        the slip model; None without encoders), whether a wheel turned, and whether their residual
+        says a wheel slipped (four wheels or more)."""
+        if not (self.has_encoders and sample.encoders is not None and last.encoders is not None):
+            return None, False, False
+        counts = count_delta(np.asarray(sample.encoders, float), np.asarray(last.encoders, float))
+        moved = bool(np.any(counts != 0))
+        angles = counts * self._rad_per_count
+        if self.slip_model is not None:
+            q, acc = self.body_velocity, self.body_acceleration
+            model = self.slip_model
+            angles = angles * model.params.scale - model.wheel_correction(q, acc) * dt
+        disp = self._pinv @ angles
+        self.residual = angles - self._J @ disp
+        slip = self.redundant and float(np.abs(self.residual).max()) > self.residual_threshold
+        return (float(disp[0]), float(disp[1]), float(disp[2])), moved, slip
+
+    def _tracking_slip(self, rolled: np.ndarray, wheel: tuple[float, float, float], dt: float) -> bool:
+        """Tracking wheels against driven wheels: a translation slip the gyro cannot see (their gap,
+        decaying over :data:`TRACK_SLIP_WINDOW`, beyond a floor plus a share of the travel)."""
+        assert self.tracking is not None
+        tx, ty = self.tracking.displacement(rolled, wheel[2])
+        gap = math.hypot(tx - wheel[0], ty - wheel[1])
+        window = TRACK_SLIP_WINDOW
+        self._track_mismatch = self._track_mismatch * math.exp(-dt / window) + gap
+        travelled = math.hypot(tx, ty) / dt * window
+        return self._track_mismatch > TRACK_SLIP_GAP + TRACK_SLIP_FRACTION * travelled
+
+    def _low_pass(self, before: Pose2D, d_theta: float, dt: float) -> None:
+        """The world velocity low-passed over :data:`VELOCITY_TAU` from the step ``before`` -> the pose,
+        and its acceleration over :data:`ACCEL_TAU`."""
+        a = 1.0 - math.exp(-dt / VELOCITY_TAU)
+        vx0, vy0, w0 = self._vel
+        self._vel = (
+            vx0 + a * ((self._pose.x - before.x) / dt - vx0),
+            vy0 + a * ((self._pose.y - before.y) / dt - vy0),
+            w0 + a * (d_theta / dt - w0),
+        )
+        b = 1.0 - math.exp(-dt / ACCEL_TAU)
+        self._acc_world = tuple(
+            acc + b * ((new - old) / dt - acc)
+            for acc, new, old in zip(self._acc_world, self._vel, (vx0, vy0, w0), strict=True)
+        )
 
     def _body_rates(self) -> None:
         """The low-passed world velocity and acceleration in the body frame (the acceleration is the

@@ -167,15 +167,7 @@ class HeadingFilter:
         saturated = abs(d_psi) > 0.97 * c.gyro_range * dt
         clip_var = 0.0
         if saturated:
-            # a clipped reading is the least the body turned: the encoders' rotation replaces it
-            # only where they are trusted and say more, in the same direction (a body spinning past
-            # the range usually has a wheel skidding, and skidding wheels read less)
-            bridged = None if d_ref is None else d_ref * (1.0 + scale) + bias * dt
-            held = slip or self._skid > 0.0
-            if bridged is not None and not held and bridged * d_psi > 0 and abs(bridged) > abs(d_psi):
-                d_psi = bridged
-            else:
-                clip_var = (c.clip_excess * c.gyro_range * dt) ** 2
+            d_psi, clip_var = self._clipped(dt, d_psi, d_ref, slip, bias, scale)
         k = 1.0 + scale
         inc = 0.0 if standstill else (d_psi - bias * dt) / k  # standing: the body does not turn
         F = np.eye(4)
@@ -192,19 +184,7 @@ class HeadingFilter:
         )
         self.P = F @ self.P @ F.T + Q
 
-        trusted = False
-        if d_ref is not None:
-            decay = math.exp(-dt / c.slip_window)
-            self._mismatch = self._mismatch * decay + (d_ref - inc)
-            limit = c.slip_threshold + 3.0 * ref_resolution
-            skid = slip or abs(self._mismatch) > limit
-            self._skid = c.slip_hold if skid else max(0.0, self._skid - dt)  # a clip alone is no skid
-            if skid or saturated:
-                self._distrust = c.slip_hold
-                self._mismatch = 0.0
-            else:
-                self._distrust = max(0.0, self._distrust - dt)
-            trusted = self._distrust <= 0.0
+        trusted = d_ref is not None and self._trusts(dt, d_ref - inc, slip, saturated, ref_resolution)
         self.slipping = d_ref is not None and not trusted
 
         if standstill:
@@ -219,6 +199,38 @@ class HeadingFilter:
         else:
             self._ref += float(self.x[0]) - theta  # follow the filter: no information
         return float(self.x[0]) - before
+
+    def _clipped(
+        self, dt: float, d_psi: float, d_ref: float | None, slip: bool, bias: float, scale: float
+    ) -> tuple[float, float]:
+        """A clipped gyro reading ``d_psi`` and the variance its clipping adds. It is the least the body
+        turned: the encoders' rotation replaces it (no variance added) only where they are trusted
+        and say more, in the same direction (a body spinning past the range usually has a wheel
+        skidding, and skidding wheels read less)."""
+        c = self.config
+        bridged = None if d_ref is None else d_ref * (1.0 + scale) + bias * dt
+        held = slip or self._skid > 0.0
+        if bridged is not None and not held and bridged * d_psi > 0 and abs(bridged) > abs(d_psi):
+            return bridged, 0.0
+        return d_psi, (c.clip_excess * c.gyro_range * dt) ** 2
+
+    def _trusts(self, dt: float, gap: float, slip: bool, saturated: bool, ref_resolution: float) -> bool:
+        """Whether the encoders' rotation is trusted this interval: not while their ``gap`` to the
+        gyro's, summed over the slip window, exceeds the slip threshold (widened by three counts of
+        ``ref_resolution``), nor for :attr:`~HeadingFilterConfig.slip_hold` s after such a skid, an
+        outside ``slip`` flag or a ``saturated`` gyro."""
+        c = self.config
+        decay = math.exp(-dt / c.slip_window)
+        self._mismatch = self._mismatch * decay + gap
+        limit = c.slip_threshold + 3.0 * ref_resolution
+        skid = slip or abs(self._mismatch) > limit
+        self._skid = c.slip_hold if skid else max(0.0, self._skid - dt)  # a clip alone is no skid
+        if skid or saturated:
+            self._distrust = c.slip_hold
+            self._mismatch = 0.0
+        else:
+            self._distrust = max(0.0, self._distrust - dt)
+        return self._distrust <= 0.0
 
     def _z_update(self, z: float, r: float) -> None:
         P = self.P

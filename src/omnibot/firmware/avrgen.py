@@ -6,8 +6,9 @@ default calibration tables (all from :func:`omnibot.firmware.config.build_config
 MicroPython firmware gets them) and the UNO pin map of the robot's wiring (:data:`UNO_WIRING`);
 ``<robot>.board`` gives the same wiring to the emulator harness. The Arduino Mega 2560's are in
 ``generated/mega/``, with its pin map (:data:`MEGA_WIRING`).
-The header's text is the template ``avrgen_header.h.in`` beside this module (:data:`HEADER_TEMPLATE`),
-filled in by the short functions below. ``tests/firmware/test_avrgen.py`` fails when a checked-in
+The header's text is the template ``avrgen_header.h.in`` beside this module (:data:`HEADER_TEMPLATE`);
+the Mega's ends with ``avrgen_features.h.in`` (:data:`FEATURES_TEMPLATE`), what it runs beyond the
+UNO; both are filled in by the short functions below. ``tests/firmware/test_avrgen.py`` fails when a checked-in
 header is stale.
 
 ::
@@ -277,12 +278,20 @@ def _protocol_fields(n: int) -> dict[str, object]:
         + "\n"
         + _defines("P_", (*_FRAMING, "TEXT_SEQ_WINDOW", "TEXT_SEQ_MAX")),
         "keywords": "\n".join(_keyword(name, kid, n) for name, kid in codes.COMMANDS.items()),
-        "texts": "\n".join(
-            f"static const char TEXT_{c}[] PROGMEM = {_c_string(t)};" for c, t in texts.items()
-        ),
+        "texts": _text_defines(texts),
         "text_count": len(texts),
-        "code_texts": ", ".join(f"{{{c}, TEXT_{c}}}" for c in texts),
+        "code_texts": _code_texts(texts),
     }
+
+
+def _text_defines(texts: Iterable[int]) -> str:
+    """``TEXT_<code>``, the PROGMEM string of each code's text (codes.TEXTS)."""
+    return "\n".join(f"static const char TEXT_{c}[] PROGMEM = {_c_string(codes.TEXTS[c])};" for c in texts)
+
+
+def _code_texts(texts: Iterable[int]) -> str:
+    """The rows of a CodeText table: ``{code, TEXT_<code>}`` for each code."""
+    return ", ".join(f"{{{c}, TEXT_{c}}}" for c in texts)
 
 
 def _keyword(name: str, kid: int, n: int) -> str:
@@ -442,7 +451,7 @@ def _pin_fields(b: Board, robot_name: str, n: int, sonars: int) -> dict[str, obj
 
 def header_source(robot_name: str, board_name: str = "uno") -> str:
     """The text of ``firmware-avr/generated/<robot>.h`` (the Mega's: ``generated/mega/<robot>.h``):
-    :data:`HEADER_TEMPLATE` filled in."""
+    :data:`HEADER_TEMPLATE` filled in, then on the Mega :data:`FEATURES_TEMPLATE`."""
     b = board(board_name)
     robot = load_robot(robot_name)
     cfg = build_config(robot)
@@ -460,7 +469,7 @@ def header_source(robot_name: str, board_name: str = "uno") -> str:
     }
     text = _header_template().substitute(fields)
     if b.name != "uno":
-        text += _features_text(cfg)
+        text += _features_template().substitute(_feature_fields(cfg))
     return text
 
 
@@ -501,95 +510,81 @@ def _battery_fields(robot: RobotDescription) -> dict[str, object]:
 
 
 FEATURE_TEXTS = (codes.W_SHORT, codes.W_REACH)
-"""The codes of :data:`NOT_SENT` that the Mega sends: their texts are in its :func:`_features`."""
+"""The codes of :data:`NOT_SENT` that the Mega sends: their texts are in its :data:`FEATURES_TEMPLATE`."""
+
+FEATURES_TEMPLATE = Path(__file__).with_name("avrgen_features.h.in")
+"""What the Mega runs beyond the UNO (docs/uno.md, "The Arduino Mega 2560"), the end of its header:
+the compile-time switches of firmware-avr/src/ (each ``FEATURE_*`` is 0 on the UNO, board.h) and
+their constants, ``${field}`` filled in by :func:`_feature_fields` (package data, as
+:data:`HEADER_TEMPLATE`)."""
 
 
-def _features_text(cfg: dict[str, Any]) -> str:
-    """:func:`_features`' lines, the end of the Mega's header."""
-    out: list[str] = []
-    _features(out.append, cfg)
-    return "\n".join(out) + "\n"
+@cache
+def _features_template() -> Template:
+    return Template(FEATURES_TEMPLATE.read_text(encoding="utf-8"))
 
 
-def _features(w: Any, cfg: dict[str, Any]) -> None:
-    """What the Mega runs beyond the UNO (docs/uno.md, "The Arduino Mega 2560"): the compile-time
-    switches of firmware-avr/src/ (each ``FEATURE_*`` is 0 on the UNO, board.h) and their constants,
-    from the same config as the MicroPython firmware's."""
+def _floats(rows: Iterable[Iterable[float]]) -> str:
+    """Rows of C float literals: ``{a, b}, {c, d}``."""
+    return _list("{" + _list(_f(v) for v in row) + "}" for row in rows)
+
+
+def _feature_fields(cfg: dict[str, Any]) -> dict[str, object]:
+    """The Mega's features from the same config as the MicroPython firmware's: VEL's acceleration
+    (motion.py), the MOVE progress check (progress.py), the brake to rest, the calibrated reach."""
     n = int(cfg["motors"])
-
-    def floats(rows: list[list[float]]) -> str:
-        return ", ".join("{" + ", ".join(f"{float(v)!r}f" for v in row) + "}" for row in rows)
-
-    w("")
-    w("/* ---- the Mega's features beyond the UNO's flash (docs/uno.md) ---- */")
-    w("/* protocol versions 3 and 4: VEL's planned acceleration A, the body's AX, AY, AW (motion.py) */")
-    w("#define FEATURE_VEL_ACCEL 1")
-    w(f"#define P_VERSION_MAX {codes.VERSIONS[-1]}")
-    w(f"#define P_VEL_PARAMS_MAX {codes.VEL_PARAMS_MAX}")
-    w("/* PWM counts per m/s^2 (x, y) and rad/s^2 of the body's acceleration (body_ff); per unit of the */")
-    w("/* body-frame twist's rate through the wheel's own inertia (wheel_ff times the wheel's row of J) */")
-    w(f"static const float ACCEL_BODY_FF[MOTORS][3] PROGMEM = {{{floats(cfg['body_ff'])}}};")
-    wheel = [[float(cfg["wheel_ff"][i]) * float(j) for j in cfg["J"][i]] for i in range(n)]
-    w(f"static const float ACCEL_WHEEL_FF[MOTORS][3] PROGMEM = {{{floats(wheel)}}};")
     tolerance = float(cfg.get("progress_tolerance", 0.0))
-    w("/* the MOVE progress check (progress.py, WARN 17): body travel (m) along x and y per count */")
-    w(f"#define FEATURE_PROGRESS {1 if tolerance > 0 and all(int(c) for c in cfg['encoder_cpr']) else 0}")
-    w(f"#define PROGRESS_TOLERANCE {tolerance!r}f")
-    w("#define PROGRESS_COAST_MAX_MS 3000")
-    w(f"static const float TRAVEL[2][MOTORS] PROGMEM = {{{floats(cfg['travel'])}}};")
-    w("/* a VEL's watchdog on the closed loop brakes to rest (motion.py brake_to_rest): the twist slewed */")
-    w("/* down at the acceleration limits (m/s^2, rad/s^2), the wheels at rest below REST_COUNTS a window */")
-    w("#define FEATURE_BRAKE 1")
-    w(f"#define BRAKE_ACCEL_MAX {float(cfg.get('accel_max_cms2', 0.0)) * 0.01!r}f")
-    w(f"#define BRAKE_ALPHA_MAX {math.radians(float(cfg.get('angular_accel_max_dps2', 0.0)))!r}f")
-    w(f"#define BRAKE_MAX_US {motion.BRAKE_MAX_US}L")
-    w(f"#define REST_WINDOW_US {motion.REST_WINDOW_US}L")
     rest = [
         max(1, int(int(c) * motion.REST_RAD * motion.REST_WINDOW_US * 1e-6 / (2.0 * math.pi)))
         for c in cfg["encoder_cpr"]
     ]
-    w(f"static const uint8_t REST_COUNTS[MOTORS] PROGMEM = {{{', '.join(str(c) for c in rest)}}};")
-    _landing(w, cfg, floats)
-    w("/* the calibrated reach (CAL table 8, WARN 18): knots {folded course deg, cm/s}; 0: none */")
-    w("#define FEATURE_REACH 1")
     count, rows = _table_rows(cfg["reach"], 1, 1)
-    w(f"#define DEFAULT_REACH_N {count}")
-    w(f"static const Knot DEFAULT_REACH[DEFAULT_REACH_N] PROGMEM = {{{', '.join(rows[:count])}}};")
-    for code in FEATURE_TEXTS:
-        w(f"static const char TEXT_{code}[] PROGMEM = {_c_string(codes.TEXTS[code])};")
-    w(f"static const CodeText FEATURE_CODE_TEXTS[{len(FEATURE_TEXTS)}] PROGMEM = {{")
-    w("    " + ", ".join(f"{{{c}, TEXT_{c}}}" for c in FEATURE_TEXTS))
-    w("};")
-    w(f"#define FEATURE_CODE_TEXT_COUNT {len(FEATURE_TEXTS)}")
+    return {
+        "version_max": codes.VERSIONS[-1],
+        "vel_params_max": codes.VEL_PARAMS_MAX,
+        "body_ff": _floats(cfg["body_ff"]),
+        "wheel_ff": _floats([float(cfg["wheel_ff"][i]) * float(j) for j in cfg["J"][i]] for i in range(n)),
+        "progress_on": 1 if tolerance > 0 and all(int(c) for c in cfg["encoder_cpr"]) else 0,
+        "progress_tolerance": _f(tolerance),
+        "travel": _floats(cfg["travel"]),
+        "brake_accel_max": _f(float(cfg.get("accel_max_cms2", 0.0)) * 0.01),
+        "brake_alpha_max": _f(math.radians(float(cfg.get("angular_accel_max_dps2", 0.0)))),
+        "brake_max_us": motion.BRAKE_MAX_US,
+        "rest_window_us": motion.REST_WINDOW_US,
+        "rest_counts": _list(rest),
+        **_landing_fields(cfg),
+        "reach_n": count,
+        "reach": ", ".join(rows[:count]),
+        "feature_texts": _text_defines(FEATURE_TEXTS),
+        "feature_text_count": len(FEATURE_TEXTS),
+        "feature_code_texts": _code_texts(FEATURE_TEXTS),
+    }
 
 
-def _landing(w: Any, cfg: dict[str, Any], floats: Any) -> None:
-    """The closed-loop landing's constants (firmware/landing.py) for the Mega's ``_features``."""
+_LANDING_FLOATS = ("LAG_S", "CRAWL", "CRAWL_W", "TOLERANCE", "TOLERANCE_W", "ROLL_EPS")
+"""The closed-loop landing's float constants (firmware/landing.py), ``LAND_<name>`` in C."""
+
+
+def _landing_fields(cfg: dict[str, Any]) -> dict[str, object]:
+    """The closed-loop landing's constants (firmware/landing.py) and the floor's creep."""
     n = int(cfg["motors"])
     turn = [float(v) for v in cfg.get("turn") or [0.0] * n]
     accel = [float(v) for v in cfg.get("land_accel") or [0.0, 0.0]]
-    on = all(int(c) > 0 for c in cfg["encoder_cpr"]) and any(turn) and min(accel) > 0.0
     zero = [[0.0, 0.0, 0.0]] * n
-    w(
-        "/* the closed-loop landing (landing.py, CAL table 9): the body's turn (rad) per count of each wheel, */"
-    )
-    w(
-        "/* the plan's accelerations (m/s^2, rad/s^2), the floor's creep (roll, combined, scale) and its rows */"
-    )
-    w(f"#define FEATURE_LANDING {1 if on else 0}")
-    w(f"static const float TURN[MOTORS] PROGMEM = {{{', '.join(f'{v!r}f' for v in turn)}}};")
-    w(f"#define LAND_ACCEL {accel[0]!r}f")
-    w(f"#define LAND_ACCEL_W {accel[1]!r}f")
-    for name in ("LAG_S", "CRAWL", "CRAWL_W", "TOLERANCE", "TOLERANCE_W", "ROLL_EPS"):
-        w(f"#define LAND_{name} {float(getattr(landing, name))!r}f")
-    w(f"#define LAND_FAR_US {landing.FAR_US}L")
-    w(f"#define LAND_CHAIN_GUARD {motion.CHAIN_GUARD}")
-    slip = [float(v) for v in cfg.get("slip") or [0.0, 0.0, 1.0]]
-    w(f"static const float DEFAULT_SLIP[3] PROGMEM = {{{', '.join(f'{v!r}f' for v in slip)}}};")
-    w(f"static const float CREEP_ROLL[MOTORS][3] PROGMEM = {{{floats(cfg.get('creep_roll') or zero)}}};")
-    w(f"static const float CREEP_RIM[MOTORS][3] PROGMEM = {{{floats(cfg.get('creep_rim') or zero)}}};")
-    mix = cfg.get("creep_mix") or [[0.0] * n] * n
-    w(f"static const float CREEP_MIX[MOTORS][MOTORS] PROGMEM = {{{floats(mix)}}};")
+    on = all(int(c) > 0 for c in cfg["encoder_cpr"]) and any(turn) and min(accel) > 0.0
+    return {
+        "landing_on": 1 if on else 0,
+        "turn": _list(_f(v) for v in turn),
+        "land_accel": _f(accel[0]),
+        "land_accel_w": _f(accel[1]),
+        **{f"land_{name.lower()}": _f(getattr(landing, name)) for name in _LANDING_FLOATS},
+        "land_far_us": landing.FAR_US,
+        "land_chain_guard": motion.CHAIN_GUARD,
+        "default_slip": _list(_f(v) for v in cfg.get("slip") or [0.0, 0.0, 1.0]),
+        "creep_roll": _floats(cfg.get("creep_roll") or zero),
+        "creep_rim": _floats(cfg.get("creep_rim") or zero),
+        "creep_mix": _floats(cfg.get("creep_mix") or [[0.0] * n] * n),
+    }
 
 
 def board_source(robot_name: str, board_name: str = "uno") -> str:

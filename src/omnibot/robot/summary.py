@@ -34,6 +34,23 @@ def describe(robot: RobotDescription) -> str:
     )
     if not same:
         lines.append("          (motors differ per wheel)")
+    lines += _sensor_lines(robot)
+    lim = robot.limits
+    lines.append("")
+    lines.append(
+        f"limits    speed {lim.speed_min:g}..{lim.speed_max:g} m/s, turn {lim.angular_speed_max:g} rad/s, "
+        f"curvature {lim.curvature_max:g} 1/m, accel {lim.acceleration_max:g} m/s^2"
+    )
+    lines.append("")
+    lines.append("inverse kinematics: wheel rad/s = J (vx, vy, w)")
+    for w, row in zip(robot.wheels, robot.wheel_matrix, strict=True):
+        lines.append(f"  {w.name:12s} " + " ".join(f"{v:9.4f}" for v in row))
+    return "\n".join(lines)
+
+
+def _sensor_lines(robot: RobotDescription) -> list[str]:
+    """The encoders (motor and tracking), the gyro, each sonar and the laser scanner."""
+    lines = []
     enc = robot.encoders
     if enc.motors:
         lines.append(
@@ -59,14 +76,4 @@ def describe(robot: RobotDescription) -> str:
             f"noise {sc.noise_std:g} m + {sc.noise_fraction:.2%}, dropout {sc.dropout:g}"
             + ("" if sc.motion_distortion else ", no motion distortion")
         )
-    lim = robot.limits
-    lines.append("")
-    lines.append(
-        f"limits    speed {lim.speed_min:g}..{lim.speed_max:g} m/s, turn {lim.angular_speed_max:g} rad/s, "
-        f"curvature {lim.curvature_max:g} 1/m, accel {lim.acceleration_max:g} m/s^2"
-    )
-    lines.append("")
-    lines.append("inverse kinematics: wheel rad/s = J (vx, vy, w)")
-    for w, row in zip(robot.wheels, robot.wheel_matrix, strict=True):
-        lines.append(f"  {w.name:12s} " + " ".join(f"{v:9.4f}" for v in row))
-    return "\n".join(lines)
+    return lines

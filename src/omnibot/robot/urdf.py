@@ -95,11 +95,23 @@ def _wheel(
         ET.SubElement(geom, "cylinder", radius=_fmt(radius), length=_fmt(width))
     diameter, axle = inertia
     _inertial(link, mass, diameter, axle, diameter)
-    j = ET.SubElement(root, "joint", name=joint_name, type="continuous")
-    ET.SubElement(j, "parent", link="base_link")
-    ET.SubElement(j, "child", link=name)
-    ET.SubElement(j, "origin", xyz=_fmt(x, y, z), rpy=_fmt(0, 0, yaw))
+    j = _joint(root, joint_name, "continuous", "base_link", name, _fmt(x, y, z), _fmt(0, 0, yaw))
     ET.SubElement(j, "axis", xyz="0 1 0")
+
+
+def _joint(root: ET.Element, name: str, kind: str, parent: str, child: str, xyz: str, rpy: str) -> ET.Element:
+    """A joint of ``kind`` from ``parent`` to ``child`` at ``xyz``, ``rpy``."""
+    j = ET.SubElement(root, "joint", name=name, type=kind)
+    ET.SubElement(j, "parent", link=parent)
+    ET.SubElement(j, "child", link=child)
+    ET.SubElement(j, "origin", xyz=xyz, rpy=rpy)
+    return j
+
+
+def _fixed_link(root: ET.Element, name: str, joint_name: str, xyz: str, rpy: str = "0 0 0") -> None:
+    """A sensor's link, fixed to base_link at ``xyz``, ``rpy``."""
+    ET.SubElement(root, "link", name=name)
+    _joint(root, joint_name, "fixed", "base_link", name, xyz, rpy)
 
 
 def to_urdf(robot: RobotDescription) -> str:
@@ -113,14 +125,25 @@ def to_urdf(robot: RobotDescription) -> str:
         el = ET.SubElement(base, tag)
         ET.SubElement(el, "origin", xyz=_fmt(0, 0, fp.height / 2), rpy="0 0 0")
         _geometry(el, robot)
-    joint = ET.SubElement(root, "joint", name="base_footprint_joint", type="fixed")
-    ET.SubElement(joint, "parent", link="base_footprint")
-    ET.SubElement(joint, "child", link="base_link")
-    ET.SubElement(joint, "origin", xyz=_fmt(0, 0, axle_height), rpy="0 0 0")
-
+    _joint(
+        root, "base_footprint_joint", "fixed", "base_footprint", "base_link", _fmt(0, 0, axle_height), "0 0 0"
+    )
     wheel_mass = WHEEL_MASS_SHARE * robot.mass / robot.n_wheels
     tracking_mass = TRACKING_MASS_SHARE * robot.mass
-    yaw_of_wheels = 0.0  # their share of the robot's yaw inertia about the centre
+    yaw_of_wheels = _wheels(root, robot, axle_height, wheel_mass, tracking_mass)
+    body_mass = robot.mass - wheel_mass * robot.n_wheels - tracking_mass * len(robot.encoders.tracking)
+    _body_inertial(base, robot, body_mass, yaw_of_wheels)
+    _sensors(root, robot, axle_height)
+    ET.indent(root, space="  ")
+    return '<?xml version="1.0"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def _wheels(
+    root: ET.Element, robot: RobotDescription, axle_height: float, wheel_mass: float, tracking_mass: float
+) -> float:
+    """The driven wheels' links and joints, then the tracking wheels'; their share of the robot's yaw
+    inertia about its centre."""
+    yaw_of_wheels = 0.0
     for wheel in robot.wheels:
         x, y = wheel.position
         inertia = disc_inertia(wheel_mass, wheel.radius, wheel.width, wheel.inertia)
@@ -147,10 +170,13 @@ def to_urdf(robot: RobotDescription) -> str:
             tracking_mass,
             inertia,
         )
+    return yaw_of_wheels
 
-    body_mass = robot.mass - wheel_mass * robot.n_wheels - tracking_mass * len(robot.encoders.tracking)
-    # The body's yaw inertia is what the wheels leave of the robot's (a tenth of it at least); its
-    # spread in x and in y follows the footprint's extent, its spread in z a uniform slab's.
+
+def _body_inertial(base: ET.Element, robot: RobotDescription, body_mass: float, yaw_of_wheels: float) -> None:
+    """The body's inertial: its yaw inertia is what the wheels leave of the robot's (a tenth of it at
+    least); its spread in x and in y follows the footprint's extent, its spread in z a uniform slab's."""
+    fp = robot.footprint
     izz = max(robot.yaw_inertia - yaw_of_wheels, 0.1 * robot.yaw_inertia)
     outline = fp.outline()
     ex = max(p[0] for p in outline) - min(p[0] for p in outline)
@@ -159,27 +185,16 @@ def to_urdf(robot: RobotDescription) -> str:
     sum_z2 = body_mass * fp.height**2 / 12
     _inertial(base, body_mass, izz - sum_x2 + sum_z2, sum_x2 + sum_z2, izz, fp.height / 2)
 
-    for sonar in robot.sonars:
-        ET.SubElement(root, "link", name=f"sonar_{sonar.name}")
-        j = ET.SubElement(root, "joint", name=f"sonar_{sonar.name}_joint", type="fixed")
-        ET.SubElement(j, "parent", link="base_link")
-        ET.SubElement(j, "child", link=f"sonar_{sonar.name}")
-        ET.SubElement(j, "origin", xyz=_fmt(sonar.x, sonar.y, fp.height / 2), rpy=_fmt(0, 0, sonar.angle))
-    if robot.gyro is not None:
-        ET.SubElement(root, "link", name="imu_link")
-        j = ET.SubElement(root, "joint", name="imu_joint", type="fixed")
-        ET.SubElement(j, "parent", link="base_link")
-        ET.SubElement(j, "child", link="imu_link")
-        ET.SubElement(j, "origin", xyz=_fmt(0, 0, fp.height / 2), rpy="0 0 0")
 
+def _sensors(root: ET.Element, robot: RobotDescription, axle_height: float) -> None:
+    """The sonars', the gyro's and the laser scanner's fixed links."""
+    height = robot.footprint.height / 2
+    for sonar in robot.sonars:
+        xyz = _fmt(sonar.x, sonar.y, height)
+        _fixed_link(root, f"sonar_{sonar.name}", f"sonar_{sonar.name}_joint", xyz, _fmt(0, 0, sonar.angle))
+    if robot.gyro is not None:
+        _fixed_link(root, "imu_link", "imu_joint", _fmt(0, 0, height))
     scanner = robot.scanner
     if scanner is not None:
-        ET.SubElement(root, "link", name=scanner.frame)
-        j = ET.SubElement(root, "joint", name=f"{scanner.frame}_joint", type="fixed")
-        ET.SubElement(j, "parent", link="base_link")
-        ET.SubElement(j, "child", link=scanner.frame)
         xyz = _fmt(scanner.x, scanner.y, scanner.z - axle_height)
-        ET.SubElement(j, "origin", xyz=xyz, rpy=_fmt(0, 0, scanner.yaw))
-
-    ET.indent(root, space="  ")
-    return '<?xml version="1.0"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+        _fixed_link(root, scanner.frame, f"{scanner.frame}_joint", xyz, _fmt(0, 0, scanner.yaw))

@@ -262,44 +262,19 @@ def attach(
     try:
         from omnibot.ros2.backend import choose
         from omnibot.ros2.bridge import Diagnosed, Ros2Sink
-        from omnibot.ros2.cmd_vel import TWIST, CmdVelSource
         from omnibot.ros2.odometry import OdometryReset
-        from omnibot.ros2.opening import open_node
         from omnibot.ros2.path import PathSource
-    except ImportError:
+    except ImportError:  # the bridge's message types need cyclonedds (the helpers' imports too)
         raise ConfigError(INSTALL) from None
-    from omnibot.cliargs import recording_of
-    from omnibot.ros2.clock import Timeline
-    from omnibot.ros2.netns import UnsafeNetwork
     from omnibot.runtime.sinks import EstimatorWhenMissing
     from omnibot.runtime.stall import StallWatch, start_sonars
-    from omnibot.teleop.mapping import TwistLimits
     from omnibot.transport.device import find_simulator
 
     spec = spec or robot_specs(args)[0]
-    timeline = timeline or Timeline()
-    recording = recording_of(args)
-    recorder = recording.recorder if recording is not None else None  # --log: the bridge stamps as it does
-    if recorder is not None:
-        timeline.adopt(recorder.placing)
+    timeline = _timeline_of(args, timeline)
     backend = choose(getattr(args, "ros_backend", "dds"))
     simulated = find_simulator(runtime.client.link) is not None
-    scans = _scanner(runtime, robot, spec)  # a bad --scanner is refused before any participant
-    if getattr(args, "map_grid", None) is not None and runtime.scanner is None:
-        raise ConfigError(
-            f"robot {robot.name!r} has no scanner to localise in --map with (give --scanner DEV)", key="--map"
-        )
-    try:
-        node = open_node(backend, spec.namespace, sim_time=simulated)
-    except BaseException as exc:
-        if scans is not None:
-            runtime.scanner = None
-            scans.close()
-        if isinstance(exc, UnsafeNetwork):
-            raise ConfigError(str(exc)) from None
-        raise
-    if scans is not None:
-        node.closers.append(scans.close)
+    node = _open_with_scanner(runtime, robot, args, spec, backend, simulated)
 
     def notify(level: Any, text: str) -> None:
         runtime.notify(level, text)
@@ -325,16 +300,7 @@ def attach(
 
     reset = OdometryReset(node, runtime, odom_frame=odom, notify=notify, on_reset=cancel, diagnosed=diagnosed)
     EstimatorWhenMissing.add(runtime, robot)
-    limits = TwistLimits.from_limits(runtime.client.limits, None, robot)
-    cmd_vel = CmdVelSource(
-        node,
-        forced=TWIST if args.twist else None,
-        timeout=args.cmd_vel_timeout,
-        limits=limits,
-        period=runtime.period,
-        notify=notify,
-    )
-    runtime.add_source(cmd_vel)
+    cmd_vel = _add_cmd_vel(runtime, robot, node, args, notify)
     runtime.add_source(path)
     runtime.add_sink(reset)
     bridge = Ros2Sink(
@@ -357,6 +323,66 @@ def attach(
     StallWatch.on(runtime, robot)  # wheels that turn while the body does not: stop, say so
     start_sonars(runtime.client, robot, SONAR_PERIOD)  # in TEL: the ranges out, the stall watch's witnesses
     return node
+
+
+def _timeline_of(args: argparse.Namespace, timeline: Any) -> Any:
+    """``timeline``, else a new :class:`~omnibot.ros2.clock.Timeline`; with ``--log`` placed as the
+    recorder places its messages (the bridge stamps as it does)."""
+    from omnibot.cliargs import recording_of
+    from omnibot.ros2.clock import Timeline
+
+    timeline = timeline or Timeline()
+    recording = recording_of(args)
+    recorder = recording.recorder if recording is not None else None
+    if recorder is not None:
+        timeline.adopt(recorder.placing)
+    return timeline
+
+
+def _open_with_scanner(
+    runtime: Any, robot: Any, args: argparse.Namespace, spec: RobotSpec, backend: str, simulated: bool
+) -> Any:
+    """The bridge's node on ``backend``, the robot's scanner given to ``runtime`` (when it has none)
+    and closed with the node. A bad ``--scanner``, or a ``--map`` without a scanner, is refused
+    before any participant starts; the scanner is closed again when the node does not open."""
+    from omnibot.ros2.netns import UnsafeNetwork
+    from omnibot.ros2.opening import open_node
+
+    scans = _scanner(runtime, robot, spec)
+    if getattr(args, "map_grid", None) is not None and runtime.scanner is None:
+        raise ConfigError(
+            f"robot {robot.name!r} has no scanner to localise in --map with (give --scanner DEV)", key="--map"
+        )
+    try:
+        node = open_node(backend, spec.namespace, sim_time=simulated)
+    except BaseException as exc:
+        if scans is not None:
+            runtime.scanner = None
+            scans.close()
+        if isinstance(exc, UnsafeNetwork):
+            raise ConfigError(str(exc)) from None
+        raise
+    if scans is not None:
+        node.closers.append(scans.close)
+    return node
+
+
+def _add_cmd_vel(runtime: Any, robot: Any, node: Any, args: argparse.Namespace, notify: Any) -> Any:
+    """The ``cmd_vel`` source (``--twist`` forces its message type), limited to what the robot and
+    its controller allow, added to ``runtime``."""
+    from omnibot.ros2.cmd_vel import TWIST, CmdVelSource
+    from omnibot.teleop.mapping import TwistLimits
+
+    cmd_vel = CmdVelSource(
+        node,
+        forced=TWIST if args.twist else None,
+        timeout=args.cmd_vel_timeout,
+        limits=TwistLimits.from_limits(runtime.client.limits, None, robot),
+        period=runtime.period,
+        notify=notify,
+    )
+    runtime.add_source(cmd_vel)
+    return cmd_vel
 
 
 def _goal_pose(

@@ -30,7 +30,7 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from types import TracebackType
-from typing import Self
+from typing import TYPE_CHECKING, Self
 
 import uvicorn
 
@@ -50,12 +50,38 @@ from omnibot.web.scene import PlannedPath, Point, build_scene
 from omnibot.web.server import Hub, create_app
 from omnibot.web.teach import TeachRepeat
 
+if TYPE_CHECKING:
+    from omnibot.sim.device import SimDevice
+
 
 def bind(host: str, port: int) -> socket.socket:
     """A listening TCP socket on ``host:port`` (0: any free port), or a ConfigError saying why not."""
     if not 0 <= port <= 65535:
         raise ConfigError(f"expected a port 0..65535, got {port}", key="--http-port")
     return listening_socket(host, port, host_key="--host", port_key="--http-port", backlog=64)
+
+
+def _world_of(world: World | str | Path | None, device: SimDevice | None) -> World | None:
+    """The room drawn: ``world`` (a world or the file or name of one), else the simulator's own."""
+    if world is not None:
+        return world if isinstance(world, World) else load_world(world)
+    return device.sim.world if device is not None else None
+
+
+def _server(app: HostCheck) -> uvicorn.Server:
+    """The HTTP and WebSocket server of ``app``: quiet (warnings only, no access log, the
+    application's logging left alone), frames up to 4 of the hub's, 2 s to shut down gracefully."""
+    return uvicorn.Server(
+        uvicorn.Config(
+            app,
+            log_level="warning",
+            log_config=None,  # leave the application's logging alone
+            access_log=False,
+            lifespan="on",
+            ws_max_size=MAX_FRAME * 4,
+            timeout_graceful_shutdown=2,
+        )
+    )
 
 
 class Dashboard:
@@ -95,10 +121,7 @@ class Dashboard:
             if make_teach is not None:
                 teach = make_teach(description)
             device = find_device(client.link)
-            if world is not None:
-                the_world: World | None = world if isinstance(world, World) else load_world(world)
-            else:
-                the_world = device.sim.world if device is not None else None
+            the_world = _world_of(world, device)
             # on a link without truth, odometry starts at the map's start pose (where the robot is put)
             start = the_world.start if device is None and the_world is not None else None
             self.link = RobotLink(
@@ -125,17 +148,7 @@ class Dashboard:
         self.app = create_app(self.hub, token)
         bound = str(self._sock.getsockname()[0])  # the address a name given to --host resolved to
         self.host_check = HostCheck(self.app, HostPolicy.for_bind(host, self.port, [*allow_hosts, bound]))
-        self._server = uvicorn.Server(
-            uvicorn.Config(
-                self.host_check,
-                log_level="warning",
-                log_config=None,  # leave the application's logging alone
-                access_log=False,
-                lifespan="on",
-                ws_max_size=MAX_FRAME * 4,
-                timeout_graceful_shutdown=2,
-            )
-        )
+        self._server = _server(self.host_check)
         self._thread: threading.Thread | None = None
 
     @property

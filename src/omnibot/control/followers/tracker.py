@@ -46,7 +46,7 @@ from omnibot.control.followers.base import (
     wrap,
 )
 from omnibot.control.followers.response import VelocityResponse
-from omnibot.control.paths.path import Path
+from omnibot.control.paths.path import FloatArray, Path
 from omnibot.control.paths.profile import MotionLimits, SpeedProfile
 
 STEADY_ACCEL = 0.5
@@ -165,20 +165,10 @@ class ProfileTracker(Follower):
         dt = self.dt if self._last_t is None else max(0.0, state.t - self._last_t)
         self._last_t = state.t
 
-        # 1. reference time with the lag governor
-        now = prof.at(self.tau)
-        tx, ty = _direction(now.vx, now.vy, prof, self.tau)
-        lag = (now.x - state.x) * tx + (now.y - state.y) * ty
-        pace = 1.0 if lag <= self.lag_start else max(0.2, 1.0 - (lag - self.lag_start) / self.lag_span)
-        self.tau += dt * pace
+        pace = self._advance(state, dt)  # 1. reference time with the lag governor
+        if pace is None:
+            return STOP
         end = prof.min_time
-        if self.tau >= end:
-            self.tau = end
-            if self._ended_at is None:
-                self._ended_at = state.t
-            if self.at_end(state) or state.t - self._ended_at >= self.settle:
-                self.done = True
-                return STOP
 
         # 2. prediction: robot and reference at the instant the command takes effect
         lead = self.lead
@@ -209,14 +199,7 @@ class ProfileTracker(Follower):
         e_th = wrap(ref.theta - turn * e_t - pth)
         self.errors = (e_t, e_n, e_th)
         limits = self.limits
-        integral = self._integral
-        integral += np.array([e_t, e_n, e_th]) * dt
-        caps = (
-            0.1
-            * np.array([limits.v_max, limits.v_max, limits.w_max])
-            / np.maximum([self.i_along, self.i_cross, self.i_heading], 1e-9)
-        )
-        np.clip(integral, -caps, caps, out=integral)
+        integral = self._integrate(e_t, e_n, e_th, dt)
         u_t = self.k_along * e_t + self.i_along * integral[0]
         u_n = self.k_cross * e_n + self.i_cross * integral[1]
         vx = ref.vx + u_t * tx + u_n * nx
@@ -230,11 +213,52 @@ class ProfileTracker(Follower):
         command = to_body(vx, vy, w, heading, self.dt)
         body = to_body(acc_x, acc_y, alpha, heading + 0.5 * w * self.dt)  # the same axes
         self.planned_body_accel = (body.vx, body.vy, body.w)
+        steady = math.hypot(ref.ax, ref.ay) < STEADY_ACCEL and abs(ref.ax * tx + ref.ay * ty) < STEADY_SPEEDUP
+        return self._through_response(state, command, steady, dt)
+
+    def _integrate(self, e_t: float, e_n: float, e_th: float, dt: float) -> FloatArray:
+        """The errors' integrals (along, across, heading) with this interval's added, each held
+        within what gives a tenth of the speed or turn-rate limit."""
+        limits = self.limits
+        integral = self._integral
+        integral += np.array([e_t, e_n, e_th]) * dt
+        caps = (
+            0.1
+            * np.array([limits.v_max, limits.v_max, limits.w_max])
+            / np.maximum([self.i_along, self.i_cross, self.i_heading], 1e-9)
+        )
+        np.clip(integral, -caps, caps, out=integral)
+        return integral
+
+    def _advance(self, state: State, dt: float) -> float | None:
+        """Advance the reference time by ``dt`` at the lag governor's pace (1 on time, down to 0.2 as
+        the robot lags behind the reference) and return the pace; None once the run is done (the
+        reference at its end and the robot there, or settled for :attr:`settle` s)."""
+        prof = self.profile
+        assert prof is not None
+        now = prof.at(self.tau)
+        tx, ty = _direction(now.vx, now.vy, prof, self.tau)
+        lag = (now.x - state.x) * tx + (now.y - state.y) * ty
+        pace = 1.0 if lag <= self.lag_start else max(0.2, 1.0 - (lag - self.lag_start) / self.lag_span)
+        self.tau += dt * pace
+        end = prof.min_time
+        if self.tau >= end:
+            self.tau = end
+            if self._ended_at is None:
+                self._ended_at = state.t
+            if self.at_end(state) or state.t - self._ended_at >= self.settle:
+                self.done = True
+                return None
+        return pace
+
+    def _through_response(self, state: State, command: Command, steady: bool, dt: float) -> Command:
+        """``command`` through the learned response model, when there is one (it observes the body's
+        twist while the reference is ``steady`` and nothing slips), then within the robot's reach."""
+        limits = self.limits
         model = self.response
         if model is None:
             return within_reach(limits, command) if self.reach else command
         c, s = math.cos(state.theta), math.sin(state.theta)
-        steady = math.hypot(ref.ax, ref.ay) < STEADY_ACCEL and abs(ref.ax * tx + ref.ay * ty) < STEADY_SPEEDUP
         if not state.slipping and steady:
             model.observe(state.t, c * state.vx + s * state.vy, -s * state.vx + c * state.vy, state.w, dt)
         ux, uy = clamp_speed(*model.compensate(command.vx, command.vy, command.w)[:2], 1.3 * limits.v_max)

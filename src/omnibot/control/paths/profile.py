@@ -31,6 +31,7 @@ authority for feedback.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -304,22 +305,77 @@ def time_optimal_profile(
     if len(path) < 2:
         raise ValueError("a speed profile needs a path of at least two points")
     _check_size(path, resolution)
-    # per original point: curvature of travel, heading curvature, file speed
-    kappa0 = curvature(path)  # signed, left positive
+    grid = _refine(path, resolution, use_path_speed)
+    S = np.array(grid.sigma)
+    rs = np.array(grid.rs)
+    rt = np.abs(np.array(grid.rt))
+    rs_pt = np.maximum(rs, np.concatenate(([rs[0]], rs[:-1])))
+    rt_pt = np.maximum(rt, np.concatenate(([rt[0]], rt[:-1])))
+    K = np.abs(np.array(grid.kappa))
+    cap = _speed_cap(limits, grid, rs, rs_pt, rt_pt, K)
+    accel = _accel_limit(limits, rs_pt, rt_pt, K)
+    dsig = np.diff(S)
+    u = _forward_backward(cap, dsig, accel)
+    return SpeedProfile(
+        t=_times(u, dsig, accel),
+        s=np.array(grid.s),
+        sigma=S,
+        x=np.array(grid.x),
+        y=np.array(grid.y),
+        theta=np.array(grid.theta),
+        u=u,
+        rs=rs,
+        rt=np.array(grid.rt),
+        tx=np.array(grid.tx),
+        ty=np.array(grid.ty),
+        kappa=np.array(grid.kappa),
+    )
+
+
+@dataclass
+class _Grid:
+    """The path refined into steps of at most the resolution in sigma: one entry per grid point."""
+
+    x: list[float]
+    y: list[float]
+    theta: list[float]
+    """The pose, interpolated along each segment."""
+    s: list[float]
+    sigma: list[float]
+    """Arc length and generalised arc length (m)."""
+    kappa: list[float]
+    hcurv: list[float]
+    vfile: list[float]
+    """The curvature of travel, the heading's curvature and the file's speed (inf: none), interpolated."""
+    rs: list[float]
+    rt: list[float]
+    """ds/dsigma and dtheta/dsigma of the step from the point (the last point repeats the last step's)."""
+    tx: list[float]
+    ty: list[float]
+    """The direction of travel of that step (of the last one that moved when it only turns)."""
+
+
+def _point_curvatures(path: Path) -> tuple[FloatArray, FloatArray]:
+    """Per original point: the curvature of travel (signed, left positive) and the heading's
+    curvature |d^2 theta/ds^2| (central differences; 0 at the ends)."""
     hr = heading_rate(path)
     hr_f = np.where(np.isfinite(hr), hr, 0.0)
-    ds0 = np.diff(path.s)
-    dth0 = np.diff(path.theta)
     hcurv0 = np.zeros(len(path))
     if len(path) > 2:
         span = path.s[2:] - path.s[:-2]
         ok = span > 1e-9
         hcurv0[1:-1] = np.where(ok, np.abs(hr_f[2:] - hr_f[:-2]) / np.where(ok, span, 1.0), 0.0)
-    vfile0 = path.v if (use_path_speed and path.v is not None) else None
+    return curvature(path), hcurv0
 
-    # refine every segment into steps of at most `resolution` in sigma
-    xs, ys, ths, ss, sig, kap, hcv, vf = [], [], [], [], [], [], [], []
-    rs_seg, rt_seg, tx_seg, ty_seg = [], [], [], []
+
+def _refine(path: Path, resolution: float, use_path_speed: bool) -> _Grid:
+    """Every segment of ``path`` refined into steps of at most ``resolution`` in sigma (a segment
+    that does not move is skipped; ValueError when none moves)."""
+    kappa0, hcurv0 = _point_curvatures(path)
+    vfile0 = path.v if (use_path_speed and path.v is not None) else None
+    ds0 = np.diff(path.s)
+    dth0 = np.diff(path.theta)
+    rows: list[tuple[float, ...]] = []  # one per grid point, in _Grid's order
     sigma = 0.0
     last_dir = (math.cos(path.theta[0]), math.sin(path.theta[0]))
     for i in range(len(path) - 1):
@@ -334,54 +390,60 @@ def time_optimal_profile(
         last_dir = direction
         for j in range(k):
             f = j / k
-            xs.append(path.x[i] + f * (path.x[i + 1] - path.x[i]))
-            ys.append(path.y[i] + f * (path.y[i + 1] - path.y[i]))
-            ths.append(path.theta[i] + f * dth)
-            ss.append(path.s[i] + f * ds)
-            sig.append(sigma + f * seg_sigma)
-            kap.append(kappa0[i] + f * (kappa0[i + 1] - kappa0[i]))
-            hcv.append(hcurv0[i] + f * (hcurv0[i + 1] - hcurv0[i]))
-            vf.append(math.inf if vfile0 is None else vfile0[i] + f * (vfile0[i + 1] - vfile0[i]))
-            rs_seg.append(ds / seg_sigma)
-            rt_seg.append(dth / seg_sigma)
-            tx_seg.append(direction[0])
-            ty_seg.append(direction[1])
+            rows.append(
+                (
+                    path.x[i] + f * (path.x[i + 1] - path.x[i]),
+                    path.y[i] + f * (path.y[i + 1] - path.y[i]),
+                    path.theta[i] + f * dth,
+                    path.s[i] + f * ds,
+                    sigma + f * seg_sigma,
+                    kappa0[i] + f * (kappa0[i + 1] - kappa0[i]),
+                    hcurv0[i] + f * (hcurv0[i + 1] - hcurv0[i]),
+                    math.inf if vfile0 is None else vfile0[i] + f * (vfile0[i + 1] - vfile0[i]),
+                    ds / seg_sigma,
+                    dth / seg_sigma,
+                    *direction,
+                )
+            )
         sigma += seg_sigma
-    if not xs:
+    if not rows:
         raise ValueError("the path does not move: every point is at the same pose")
-    xs.append(path.x[-1])
-    ys.append(path.y[-1])
-    ths.append(path.theta[-1])
-    ss.append(path.s[-1])
-    sig.append(sigma)
-    kap.append(kappa0[-1])
-    hcv.append(hcurv0[-1])
-    vf.append(math.inf if vfile0 is None else vfile0[-1])
-    rs_seg.append(rs_seg[-1])
-    rt_seg.append(rt_seg[-1])
-    tx_seg.append(tx_seg[-1])
-    ty_seg.append(ty_seg[-1])
+    end = math.inf if vfile0 is None else vfile0[-1]
+    rows.append(
+        (
+            path.x[-1],
+            path.y[-1],
+            path.theta[-1],
+            path.s[-1],
+            sigma,
+            kappa0[-1],
+            hcurv0[-1],
+            end,
+            *rows[-1][8:],
+        )
+    )
+    return _Grid(*(list(column) for column in zip(*rows, strict=True)))
 
-    n = len(xs)
-    S = np.array(sig)
-    rs = np.array(rs_seg)
-    rt = np.abs(np.array(rt_seg))
-    rs_pt = np.maximum(rs, np.concatenate(([rs[0]], rs[:-1])))
-    rt_pt = np.maximum(rt, np.concatenate(([rt[0]], rt[:-1])))
-    K = np.abs(np.array(kap))
-    HC = np.array(hcv)
-    VF = np.array(vf)
 
+def _speed_cap(
+    limits: MotionLimits, grid: _Grid, rs: FloatArray, rs_pt: FloatArray, rt_pt: FloatArray, K: FloatArray
+) -> FloatArray:
+    """The speed caps in u = dsigma/dt at each grid point (0 at both ends): v_max, w_max, the file's
+    speed, the course rate, the wheels' and the floor's reach, then the grip's lateral and heading
+    caps. ``rs_pt``/``rt_pt``: the larger |ds/dsigma|, |dtheta/dsigma| of the steps either side."""
     inf = math.inf
+    HC = np.array(grid.hcurv)
+    VF = np.array(grid.vfile)
     with np.errstate(divide="ignore", invalid="ignore"):
-        cap = np.full(n, inf)
+        cap: FloatArray = np.full(len(grid.x), inf)
         cap = np.minimum(cap, np.where(rs_pt > 0, limits.v_max / rs_pt, inf))
         cap = np.minimum(cap, np.where(rt_pt > 0, limits.w_max / rt_pt, inf))
         cap = np.minimum(cap, np.where(rs_pt > 0, VF / rs_pt, inf))
         if limits.course_rate is not None:
             cap = np.minimum(cap, np.where((K > 0) & (rs_pt > 0), limits.course_rate / (K * rs_pt), inf))
         if limits.wheels is not None or limits.floor is not None:
-            cap = np.minimum(cap, _wheel_cap(limits, np.array(ths), rs, np.array(rt_seg), tx_seg, ty_seg))
+            thetas = np.array(grid.theta)
+            cap = np.minimum(cap, _wheel_cap(limits, thetas, rs, np.array(grid.rt), grid.tx, grid.ty))
         # the grip's caps: lateral v^2 kappa and heading v^2 theta'' within the accelerations the
         # grip leaves at that speed (found from above: the fraction only grows as the speed falls)
         speed_cap = cap
@@ -392,9 +454,17 @@ def time_optimal_profile(
             speed_cap = np.minimum(cap, np.where(rs_pt > 0, np.minimum(lat, head) / rs_pt, inf))
         cap = speed_cap
     cap[0] = cap[-1] = 0.0
+    return cap
+
+
+def _accel_limit(
+    limits: MotionLimits, rs_pt: FloatArray, rt_pt: FloatArray, K: FloatArray
+) -> Callable[[int, float], float]:
+    """``accel(j, u)``: the largest du/dt at grid point ``j`` at speed ``u``: what the lateral
+    acceleration leaves of the friction ellipse, and alpha_max / 2, times the grip's fraction."""
 
     def accel(j: int, u: float) -> float:
-        a = inf
+        a = math.inf
         k = 1.0 if limits.grip is None else float(limits.grip_at(np.array([u * rs_pt[j]]))[0])
         if rs_pt[j] > 0:
             v = u * rs_pt[j]
@@ -404,8 +474,14 @@ def time_optimal_profile(
             a = min(a, 0.5 * k * limits.alpha_max / rt_pt[j])
         return a if math.isfinite(a) else k * limits.a_max
 
+    return accel
+
+
+def _forward_backward(cap: FloatArray, dsig: FloatArray, accel: Callable[[int, float], float]) -> FloatArray:
+    """The speeds u: accelerating as hard as allowed from rest, braking as late as allowed to rest
+    at the end, within ``cap``."""
+    n = len(cap)
     u = cap.copy()
-    dsig = np.diff(S)
     u[0] = 0.0
     for j in range(n - 1):
         reach = math.sqrt(u[j] * u[j] + 2.0 * accel(j, u[j]) * dsig[j])
@@ -414,27 +490,18 @@ def time_optimal_profile(
     for j in range(n - 2, -1, -1):
         reach = math.sqrt(u[j + 1] * u[j + 1] + 2.0 * accel(j + 1, u[j + 1]) * dsig[j])
         u[j] = min(u[j], reach)
+    return u
 
-    t = np.zeros(n)
-    for j in range(n - 1):
+
+def _times(u: FloatArray, dsig: FloatArray, accel: Callable[[int, float], float]) -> FloatArray:
+    """The time at each grid point, at constant acceleration over each step; from rest to rest in
+    one step: accelerate, then brake."""
+    t = np.zeros(len(u))
+    for j in range(len(u) - 1):
         total = u[j] + u[j + 1]
-        # constant acceleration over the step; from rest to rest in one step: accelerate, then brake
         step = 2.0 * dsig[j] / total if total > 1e-12 else 2.0 * math.sqrt(dsig[j] / max(accel(j, 0.0), 1e-9))
         t[j + 1] = t[j] + step
-    return SpeedProfile(
-        t=t,
-        s=np.array(ss),
-        sigma=S,
-        x=np.array(xs),
-        y=np.array(ys),
-        theta=np.array(ths),
-        u=u,
-        rs=rs,
-        rt=np.array(rt_seg),
-        tx=np.array(tx_seg),
-        ty=np.array(ty_seg),
-        kappa=np.array(kap),
-    )
+    return t
 
 
 def _wheel_cap(
