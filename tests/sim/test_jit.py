@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from numba.extending import is_jitted
 
 from omnibot.robot.description import load_robot
 from omnibot.sim import jit, kernels
@@ -26,6 +27,55 @@ def test_with_the_kernels_cached_the_simulator_calls_the_compiled_ones() -> None
 def test_a_kernel_that_does_not_exist_is_an_attribute_error() -> None:
     with pytest.raises(AttributeError, match="no kernel 'robot_stpe'"):
         jit.active.robot_stpe  # noqa: B018
+
+
+def _cold(monkeypatch: pytest.MonkeyPatch, compiling: tuple[int, str] | OSError) -> jit.ActiveKernels:
+    """A fresh choice that finds the cache empty, with what its compiling process does stubbed."""
+
+    def compile_in_own_process() -> tuple[int, str]:
+        if isinstance(compiling, OSError):
+            raise compiling
+        return compiling
+
+    monkeypatch.setattr(jit, "load_cached", lambda: False)
+    monkeypatch.setattr(jit, "_compile_in_own_process", compile_in_own_process)
+    return jit.ActiveKernels()
+
+
+@pytest.mark.parametrize(
+    ("compiling", "said"),
+    [
+        ((1, "MemoryError"), "(exit status 1: MemoryError)"),
+        (OSError("no python"), "(not started: no python)"),
+    ],
+)
+def test_when_the_compiling_process_fails_the_kernels_compile_in_the_process(
+    monkeypatch: pytest.MonkeyPatch,
+    caplog: pytest.LogCaptureFixture,
+    compiling: tuple[int, str] | OSError,
+    said: str,
+) -> None:
+    active = _cold(monkeypatch, compiling)
+    assert active.choose() == jit.PYTHON  # (the switch may follow at once: the test's cache is warm)
+    assert active.wait(600)
+    assert active.kind == jit.COMPILED and active.robot_step is kernels.robot_step
+    assert said in caplog.text and "compiling them here" in caplog.text
+
+
+def test_kernels_that_do_not_compile_leave_the_twins_running_and_wait_says_why(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    active = _cold(monkeypatch, (0, ""))
+    broken = RuntimeError("LLVM ERROR")
+
+    def fail() -> None:
+        raise broken
+
+    monkeypatch.setattr(jit, "_load_simulator_kernels", fail)
+    active.choose()
+    with pytest.raises(RuntimeError, match="LLVM ERROR"):
+        active.wait(600)
+    assert active.kind == jit.PYTHON and not is_jitted(active.robot_step)
 
 
 _COLD_START = """

@@ -130,18 +130,18 @@ class ActiveKernels:
 
     def choose(self) -> str:
         """The compiled kernels when numba's cache holds them (loaded now), else their twins and a
-        process compiling them (:mod:`omnibot.sim.jit`); the kind chosen. Once per process."""
+        process compiling them (:mod:`omnibot.sim.jit`); the kind chosen (the first call chooses; a
+        later one gives the kind in use)."""
         with self._choosing:
-            if not self.kind:
-                if load_cached():
-                    self._use(COMPILED, _compiled())
-                    self._settled.set()
-                else:
-                    self._use(PYTHON, python_twins(kernels))
-                    threading.Thread(
-                        target=self._compile_meanwhile, name="omnibot-kernels", daemon=True
-                    ).start()
-        return self.kind
+            if self.kind:
+                return self.kind
+            if load_cached():
+                self._use(COMPILED, _compiled())
+                self._settled.set()
+                return COMPILED
+            self._use(PYTHON, python_twins(kernels))
+            threading.Thread(target=self._compile_meanwhile, name="omnibot-kernels", daemon=True).start()
+            return PYTHON
 
     def wait(self, timeout: float | None = None) -> bool:
         """Whether the compiled kernels are in use, waiting up to ``timeout`` s (None: for ever) for
@@ -159,13 +159,16 @@ class ActiveKernels:
     def _compile_meanwhile(self) -> None:
         """The thread of a cold start: the compiling process, then the switch to what it compiled."""
         try:
-            status, said = _compile_in_own_process()
-            if status != 0:
+            try:
+                status, said = _compile_in_own_process()
+                failure = f"exit status {status}: {said or 'it said nothing'}" if status else ""
+            except OSError as exc:
+                failure = f"not started: {exc}"
+            if failure:
                 logger.warning(
-                    "compiling the simulator's kernels in a process of their own failed (exit status "
-                    "%s: %s); compiling them here",
-                    status,
-                    said or "it said nothing",
+                    "compiling the simulator's kernels in a process of their own failed (%s); compiling "
+                    "them here",
+                    failure,
                 )
             _load_simulator_kernels()
             self._use(COMPILED, _compiled())

@@ -11,12 +11,12 @@ Bit for bit: the kernels do IEEE double arithmetic in the order written (numba c
 without ``fastmath``, so nothing is reassociated or fused), and numba calls the C library's
 ``sin``, ``cos``, ``tanh``, ``atan2``, ``asin``, ``sqrt``, ``log1p``, ``floor`` as CPython's
 ``math`` does, with the same results. The one exception is ``math.hypot``: CPython (3.10 and later)
-computes it with its own correctly rounded algorithm, numba calls the C library's ``hypot``; they
+computes it with its own, more accurate algorithm, numba calls the C library's ``hypot``; they
 differ in the last bit for about one argument pair in 600. :data:`LIBM` is ``math`` with the C
 library's ``hypot`` (numpy's, which calls it). ``np.argsort`` may order equal keys differently
-(numba's quicksort is not numpy's); the only kernel that sorts (:func:`~omnibot.sim.kernels.
-scan_index`) sorts edges by distance for a search whose result does not depend on the order of equal
-distances. ``tests/sim/test_twins.py`` runs the seeded scenes of ``tests/sim/step_trace.py`` on the
+(numba's quicksort is not numpy's); the only kernel that sorts,
+:func:`~omnibot.sim.kernels.scan_index`, sorts edges by distance for a search whose result does not
+depend on the order of equal distances. ``tests/sim/test_twins.py`` runs the seeded scenes of ``tests/sim/step_trace.py`` on the
 twins against the same recorded floats as the compiled step.
 
 Where the arithmetic fails the two may differ: a float division by zero raises ZeroDivisionError
