@@ -20,10 +20,11 @@ $(STAMP): pyproject.toml constraints.txt Makefile
 	@touch $(STAMP)
 
 # The simulator's kernels compiled into numba's cache (next to kernels.py), again whenever kernels.py
-# changes (numba keys its cache on the file's time stamp: a pull or checkout that touches it would
-# otherwise leave the next `omnibot sim --pty` compiling for several seconds before it answers).
+# changes (numba keys its cache on the file's contents: a pull that changes it would otherwise leave
+# the next simulator running the kernels as Python, 10-50 times slower, for the 20 s of CPU they
+# take to compile in the background, omnibot.sim.jit; an unchanged cache only loads, in a second).
 $(KERNEL_CACHE): $(STAMP) src/omnibot/sim/kernels.py
-	$(BIN)/python -m omnibot.sim.kernels
+	$(BIN)/python -m omnibot.sim.jit
 	@touch $@
 
 demo: setup

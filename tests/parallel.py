@@ -76,7 +76,7 @@ FIRST: tuple[str, ...] = (
     "tests/navigation/test_explore.py",  # 189 s
     "tests/uno/test_sketch.py",  # 186 s: arduino-mk builds
     "tests/apps/test_follow.py",  # 166 s
-    "tests/sim/test_emulator.py",  # 160 s: one start compiles the kernels with no numba cache
+    "tests/sim/test_jit.py",  # 123-133 s at load 19, about 30 s CPU: a cold start followed through one whole compile
     "tests/navigation/test_runner.py",  # 156 s
     "tests/test_packaging.py",  # 135 s: builds the wheel and sdist, installs into fresh venvs
     "tests/apps/test_goto.py",  # 130 s
@@ -88,6 +88,7 @@ FIRST: tuple[str, ...] = (
     "tests/control/test_tracker_heading.py",  # 61 s
     "tests/navigation/test_goto.py",  # 59 s
     "tests/calibration/test_rollers.py",  # 37 s
+    "tests/sim/test_emulator.py",  # 36 s at load 13 (its cold start no longer compiles: tests/sim/test_jit.py does)
     "tests/benchmarks/test_attack_suite.py",  # 34 s
     "browser",  # 31 s
     "tests/calibration/test_reachmoves.py",  # 29 s

@@ -110,6 +110,19 @@ def fleet() -> dict[str, Any]:
 SCENES = {"single_robot": single_robot, "tracking_robot": tracking_robot, "fleet": fleet}
 
 
+def assert_as_recorded(scene: str) -> None:
+    """Run ``scene`` and compare everything it gives with the recorded trace, float by float."""
+    expected = json.loads(GOLDEN.read_text(encoding="utf-8"))[scene]
+    got = json.loads(json.dumps(SCENES[scene]()))
+    for key, rows in expected.items():
+        if isinstance(rows, list):
+            assert len(got[key]) == len(rows), key
+            for k, (row, want) in enumerate(zip(got[key], rows, strict=True)):
+                assert row == want, f"{scene} {key}[{k}]"
+        else:
+            assert got[key] == rows, key
+
+
 def main(argv: list[str] | None = None) -> int:
     """Print the trace's digest, or write it as the reference with ``--write``."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])

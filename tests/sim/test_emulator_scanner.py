@@ -88,7 +88,7 @@ def test_sim_pty_serves_the_scanner_on_a_second_pty(monkeypatch: pytest.MonkeyPa
     out, stop = Lines(), threading.Event()
     thread, status = start(lambda: emulator.run_pty_emulator(load_robot("omni4"), stop=stop, out=out), out)
     try:
-        assert out.flushed.wait(120.0)  # a first start compiles the physics
+        assert out.flushed.wait(120.0)  # a start takes seconds on a loaded machine
         first, second = out.getvalue().splitlines()
         assert first.startswith("/dev/") and second.startswith("scanner /dev/")
         scanner = RplidarScanner(second.split()[1])

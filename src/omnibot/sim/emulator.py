@@ -3,8 +3,8 @@
 The first line on stdout is the pty's device path, so any serial program (pyserial, minicom, the
 omnibot client with ``--port /dev/pts/N``) can open it. The path is printed only once the emulator can
 answer in real time: the arguments are checked, the truth file is open and the physics kernels are
-compiled (or loaded from numba's cache), so a first start on a fresh install does not leave a HELLO
-unanswered. Bytes are paced to the baud rate in both directions. SIGINT, SIGTERM or SIGHUP (not
+loaded from numba's cache, or, on a first start with no cache, their Python twins chosen while a
+process of its own compiles them (:mod:`omnibot.sim.jit`), so the first HELLO is answered at once. Bytes are paced to the baud rate in both directions. SIGINT, SIGTERM or SIGHUP (not
 under ``nohup``) end it cleanly: the pty is closed, the truth file flushed and closed. Started by
 :func:`spawn_pty_emulator` (``omnibot demo``), it also ends when that parent is gone (killed by
 SIGKILL, the parent could not end it: it would serve nobody for ever).
@@ -65,7 +65,7 @@ def run_pty_emulator(
     ConfigError (before the pty exists) for a bad baud rate or a truth file that cannot be written.
     ``wrap(device)``: what the pty serves instead of the simulated device (``omnibot sim --log``'s
     recorder, :class:`omnibot.logs.device.RecordedDevice`: the bytes both ways and the truth)."""
-    from omnibot.sim import kernels
+    from omnibot.sim import jit
 
     if baud < 0:
         raise ConfigError(f"expected a baud rate >= 0 (0: unpaced), got {baud}", key="--baud")
@@ -80,9 +80,7 @@ def run_pty_emulator(
         stop.set()
 
     try:
-        kernels.warm_up(
-            every=False
-        )  # compile before announcing the pty: a first step must not stall the link
+        jit.active.choose()  # loaded (or their twins chosen) before the pty: no first step stalls
         sim_device = SimDevice(robot, seed=seed, surface=surface, world=world, truth_recorder=recorder)
         device: Any = sim_device if wrap is None else wrap(sim_device)
         lidar = scanner_device(sim_device.sim, sim_device.tick)
@@ -236,7 +234,7 @@ def run_pty_fleet(
     ``stop`` or SIGINT/SIGTERM/SIGHUP; exit status. Prints ``NAME PATH`` per robot once all can answer.
     ConfigError (before any pty exists) for a bad baud rate, a name taken twice or a pose that
     overlaps a wall, an obstacle or another robot."""
-    from omnibot.sim import kernels
+    from omnibot.sim import jit
     from omnibot.sim.fleet import Fleet
     from omnibot.sim.world import load_world
 
@@ -256,7 +254,7 @@ def run_pty_fleet(
     def _on_signal(signum: int, frame: FrameType | None) -> None:
         stop.set()
 
-    kernels.warm_up(every=False)
+    jit.active.choose()
     bridges: list[PtyBridge] = []
     lidars: list[tuple[str, RplidarDevice]] = []
     try:
@@ -285,8 +283,8 @@ def run_pty_fleet(
 
 
 START_TIMEOUT = 120.0
-"""s :func:`spawn_pty_emulator` waits for the device path (a first start on a fresh install compiles
-the physics: seconds on a quiet machine, tens on a loaded one)."""
+"""s :func:`spawn_pty_emulator` waits for the device path (about a second of CPU, with or without
+numba's cache: :mod:`omnibot.sim.jit`; on a loaded machine the wall time can be many times that)."""
 
 
 def _one_line(stderr: str) -> str:
@@ -343,8 +341,7 @@ def spawn_pty_emulator(
             if not ready:
                 if notice is not None:
                     notice(
-                        f"starting the simulated {robot} (omnibot sim --pty; a first start compiles the "
-                        f"physics, up to {start_timeout:.0f} s)..."
+                        f"starting the simulated {robot} (omnibot sim --pty, up to {start_timeout:g} s)..."
                     )
                 ready, _, _ = select.select([proc.stdout], [], [], max(start_timeout - 1.0, 0.0))
             # the emulator is the link: if it does not start, the command could not (ConfigError)

@@ -38,7 +38,7 @@ from numpy.typing import NDArray
 from omnibot.errors import ConfigError, SimulationError
 from omnibot.motion import Pose2D
 from omnibot.robot.description import RobotDescription
-from omnibot.sim import kernels
+from omnibot.sim import jit
 from omnibot.sim.clock import SimClock
 from omnibot.sim.device import SimDevice
 from omnibot.sim.scanner import PoseLog
@@ -310,7 +310,7 @@ class Fleet:
             return None
         hull = b.hull()
         centre = hull.mean(axis=0)
-        count, _ = kernels.outline_contacts(
+        count, _ = jit.active.outline_contacts(
             a.outline,
             pa.x,
             pa.y,

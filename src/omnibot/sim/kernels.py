@@ -23,8 +23,9 @@ Kernels compile lazily on their first call and are cached on disk (``cache=True`
 file or in ``NUMBA_CACHE_DIR``), so a new process loads them instead of compiling. Callers always
 pass the same argument types (C-contiguous float64 arrays, int64 id arrays, Python floats and
 bools), so each kernel compiles exactly once. :func:`warm_up` compiles (or loads) every kernel with
-those types at once: a real-time process (``omnibot sim --pty``) calls it before it serves anyone,
-and ``make setup`` runs it (``python -m omnibot.sim.kernels``) to fill the cache at install time.
+those types at once; ``make setup`` runs it (``python -m omnibot.sim.jit``) to fill the cache at
+install time. The simulator calls the kernels through :data:`omnibot.sim.jit.active`, which runs
+their plain-Python twins while a first start compiles them in another process.
 
 Parameter layouts (column indices below are compile-time constants):
 
@@ -1323,7 +1324,3 @@ __all__ = [
     "warm_up_calls",
     "world_offsets",
 ]
-
-
-if __name__ == "__main__":  # ``make setup``: fill the cache once, at install time
-    warm_up()

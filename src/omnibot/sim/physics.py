@@ -88,7 +88,7 @@ from omnibot.floor.surfaces import Surface, get_surface
 from omnibot.robot.battery import open_voltage
 from omnibot.robot.description import RobotDescription
 from omnibot.robot.kinematics import contact_rows
-from omnibot.sim import kernels
+from omnibot.sim import jit, kernels
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -371,7 +371,7 @@ class Physics:
 
     def _contact_speeds(self) -> FloatArray:
         out = np.empty((self.n, self.m, 2))
-        kernels.contact_speeds(self._q, self._wp, out)
+        jit.active.contact_speeds(self._q, self._wp, out)
         return out
 
     @property
@@ -442,7 +442,7 @@ class Physics:
         Fx, Fy (N) and torque about the body origin (N m), e.g. from collisions or a push by hand.
         """
         ids = self._inputs(pwm, surface_ids, external_force)
-        failed = kernels.physics_step(
+        failed = jit.active.physics_step(
             self._pose,
             self._q,
             self._wheel_angle,
@@ -481,7 +481,7 @@ class Physics:
         ids = self._inputs(pwm, surface_ids, external_force)
         chunks = [1] * steps if self._draining else [steps] if steps else []
         for chunk in chunks:
-            failed = kernels.physics_step_parallel(
+            failed = jit.active.physics_step_parallel(
                 self._buffer,
                 ids,
                 self.n,

@@ -35,7 +35,7 @@ from numpy.typing import NDArray
 from omnibot.motion import Pose2D
 from omnibot.robot.description import ScannerSpec
 from omnibot.scan import Scan
-from omnibot.sim import kernels
+from omnibot.sim import jit
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -175,7 +175,7 @@ class LaserScanner:
             if last > self._next_ray:
                 first = self._next_ray
                 starts, entries, near = self._index_for(segments, hist, own)
-                kernels.scan_rays(
+                jit.active.scan_rays(
                     stamp + self._offsets[first:last],
                     self._base_angles[first:last],
                     poses.start,
@@ -220,7 +220,7 @@ class LaserScanner:
         ax, ay = float(xs.mean()), float(ys.mean())
         spread = float(np.sqrt(np.max((xs - ax) ** 2 + (ys - ay) ** 2)))
         radius = spread + self._mount_reach + INDEX_SLACK
-        self._index = kernels.scan_index(segments, ax, ay, radius, float(self._cast_range))
+        self._index = jit.active.scan_index(segments, ax, ay, radius, float(self._cast_range))
         self._index_disc = (ax, ay, radius)
         self._index_segments = segments
         return self._index
@@ -240,7 +240,7 @@ class LaserScanner:
     def _deliver(self, stamp: float) -> Scan:
         spec, n = self.spec, self.spec.rays
         measured = np.empty(n)
-        kernels.scan_measure(
+        jit.active.scan_measure(
             self._true,
             self._draws(self.revolution),
             float(spec.noise_std),

@@ -25,7 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from omnibot.motion import Pose2D
 from omnibot.robot.description import GyroSpec, SonarSpec, TrackingWheelSpec
-from omnibot.sim import kernels
+from omnibot.sim import jit, kernels
 from omnibot.sim.world import World, cone_range
 
 IntArray = NDArray[np.int64]
@@ -190,7 +190,7 @@ class TrackingWheels:
         """Roll the wheels for ``dt`` seconds at the body twist (vx, vy, w); return the counts."""
         if self.specs:
             vx, vy, w = (float(c) for c in twist)
-            kernels.tracking_update(self.state, self.normals.values, vx, vy, w, float(dt))
+            jit.active.tracking_update(self.state, self.normals.values, vx, vy, w, float(dt))
             self.refill()
         return self.counts
 
@@ -262,12 +262,12 @@ class Gyro:
     def update(self, dt: float, true_rate: float) -> bool:
         """Advance ``dt`` seconds at ``true_rate``; True if at least one new sample was taken."""
         self.refill(dt)
-        return bool(kernels.gyro_update(self.state, self.normals.values, float(dt), float(true_rate)))
+        return bool(jit.active.gyro_update(self.state, self.normals.values, float(dt), float(true_rate)))
 
     def measure(self, true_rate: float) -> float:
         """Take one sample of a (period-averaged) true rate; returns it and stores it in :attr:`rate`."""
         self.refill()
-        return float(kernels.gyro_measure(self.state, self.normals.values, float(true_rate)))
+        return float(jit.active.gyro_measure(self.state, self.normals.values, float(true_rate)))
 
 
 class Sonar:

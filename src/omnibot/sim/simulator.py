@@ -63,7 +63,7 @@ from omnibot.errors import SimulationError, SimulationSetupError
 from omnibot.motion import Pose2D, Twist
 from omnibot.robot.description import RobotDescription
 from omnibot.scan import Scan
-from omnibot.sim import kernels
+from omnibot.sim import jit, kernels
 from omnibot.sim.clock import SimClock
 from omnibot.sim.physics import Physics
 from omnibot.sim.scanner import LaserScanner, PoseLog
@@ -731,7 +731,7 @@ class Simulator:
         n_extra = self._extra_forces(now_us) if self._pushes or any(self._applied) else 0
         physics = self._packed
         if physics is not None:
-            status = kernels.robot_step(
+            status = jit.active.robot_step(
                 physics.buffer, self._step_ids, physics.m, self._n_surfaces, *self._world_packed, self._sf, self._si,
                 self._extra, n_extra, *self._sensors, now_us, self.dt,
             )  # fmt: skip
@@ -759,7 +759,7 @@ class Simulator:
         """A step with a physics of another kind: the compiled step's parts before and after its step."""
         state = self._state6
         state[:3], state[3:] = self._pose_row, self._twist_row
-        status = kernels.robot_before(
+        status = jit.active.robot_before(
             state,
             self._step_ids,
             *self._world_packed,
@@ -773,7 +773,7 @@ class Simulator:
         force = self._force if status & kernels.STEP_FORCE else None
         self._physics.step(self._pwm, self._step_ids, force)
         state[:3], state[3:] = state[3:], self._twist_row
-        return status | kernels.robot_after(state, self.dt, *self._sensors)
+        return status | jit.active.robot_after(state, self.dt, *self._sensors)
 
     def _extra_forces(self, now_us: int) -> int:
         """Put the applied force and the hand pushes still acting into the extra-force rows; their count."""

@@ -50,7 +50,7 @@ from omnibot.config_errors import explain, read_yaml, suggest
 from omnibot.errors import ConfigError
 from omnibot.floor.surfaces import SURFACES
 from omnibot.motion import Pose2D
-from omnibot.sim import kernels
+from omnibot.sim import jit
 
 WORLD_DIR = Path(__file__).with_name("worlds")
 CIRCLE_SEGMENTS = 64
@@ -417,7 +417,7 @@ class World:
         ids = np.zeros(len(flat), dtype=np.int64)
         if not len(self._patch_sid):
             return ids.reshape(p.shape[:-1]), math.inf
-        clearance = kernels.surface_probe(flat, self._patch_v, self._patch_off, self._patch_sid, ids)
+        clearance = jit.active.surface_probe(flat, self._patch_v, self._patch_off, self._patch_sid, ids)
         return ids.reshape(p.shape[:-1]), float(clearance)
 
     def surface_at(self, x: float, y: float) -> str:
@@ -452,7 +452,7 @@ class World:
         whatever its rotation, it touches nothing (0 when it touches, or sits inside a solid).
         """
         body = np.ascontiguousarray(outline, dtype=float)
-        count, clearance = kernels.outline_contacts(
+        count, clearance = jit.active.outline_contacts(
             body,
             float(x),
             float(y),
@@ -492,7 +492,7 @@ def cone_range(
         raise ValueError(f"cone must be in (0, pi), got {cone}")
     edges = np.ascontiguousarray(segments, dtype=np.float64).reshape(-1, 4)
     return float(
-        kernels.cone_distance(edges, float(x), float(y), float(heading), float(cone), float(max_range))
+        jit.active.cone_distance(edges, float(x), float(y), float(heading), float(cone), float(max_range))
     )
 
 
@@ -548,5 +548,5 @@ def points_in_polygon(points: ArrayLike, polygon: ArrayLike) -> NDArray[np.bool_
     flat = np.ascontiguousarray(np.asarray(points, dtype=float).reshape(-1, 2))
     verts, offsets = _polygons([np.asarray(polygon, dtype=float)])
     ids = np.zeros(len(flat), dtype=np.int64)
-    kernels.surface_probe(flat, verts, offsets, np.ones(1, dtype=np.int64), ids)
+    jit.active.surface_probe(flat, verts, offsets, np.ones(1, dtype=np.int64), ids)
     return np.asarray(ids == 1, dtype=bool)
