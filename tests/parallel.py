@@ -81,12 +81,14 @@ FIRST: tuple[str, ...] = (
     # measured alone
     "ros2/1",  # 440 s; the two ROS 2 units first, on workers of their own: 145 s of CPU together,
     "ros2/2",  # 390 s; mostly waiting (bridges, peers and namespaces that keep the wall clock's pace)
-    # CPU s alone (nice'd, at load 15-20, 2026-12-06 21:00): SPLIT's module's default runs, each a unit
+    # CPU s in one process (nice'd, load 15-20, 2026-12-06 21:00; mecanum4's from its timeout's comment):
+    # SPLIT's module's costliest tests, each a unit of its own
     "tests/apps/test_calibrate.py::test_the_default_run_on_mecanum4_improves_every_course_and_exits_0",  # 160 s
     "tests/apps/test_calibrate.py::test_the_default_run_on_omni4_improves_every_part_and_exits_0",  # 116 s
     "tests/calibration/test_acceptance.py",  # 81 s CPU: one calibration of two floors (600 s guard hit at load 25)
     "tests/apps/test_calibrate.py::test_quick_run_writes_the_file_and_the_report",  # 37 s
     "tests/apps/test_calibrate.py::test_a_port_with_two_floors_asks_between_them",  # 23 s
+    # the rest: wall on a worker, as above
     "tests/navigation/test_explore.py",  # 189 s
     "tests/uno/test_sketch.py",  # 186 s: arduino-mk builds
     "tests/apps/test_follow.py",  # 166 s
