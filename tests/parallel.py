@@ -6,7 +6,8 @@ Two passes (the Makefile's ``test``):
    or one of :data:`GROUPS` (modules that must not run beside each other: one worker runs the unit's
    tests one after another, in their usual order). A module is one unit because its module- and
    session-scoped fixtures (a calibration, a recorded run, a ROS 2 session, a browser) are then made
-   once, as in a serial run, not once per worker. The costliest units are handed out first
+   once, as in a serial run, not once per worker. A module of :data:`SPLIT` (no such fixtures, and
+   tests too costly to run one after another) is a unit per test function instead. The costliest units are handed out first
    (:data:`FIRST`), so that no long one starts last while the other workers idle. Four workers on
    two cores: the two ROS 2 units (:data:`ROS2_HALF`) keep two of them for most of the pass, waiting
    on the wall clock (discovery, real-time bridges) at a sixth of a core each; the other two keep
@@ -40,6 +41,15 @@ SERIAL: dict[str, str] = {
 }
 """Modules or tests (node id prefixes) run in the serial pass, and why they need the machine to themselves."""
 
+SPLIT: dict[str, str] = {
+    "tests/apps/test_calibrate.py": "each test its own command, no module-scoped fixture; its default runs"
+    " of two floors (mecanum4 about 160 s of CPU, omni4 116 s) and quick runs (37, 23 and 7 s) kept one"
+    " worker for 343 s of CPU, the longest unit of the pass by far (the rest of it about 500 s on two cores)",
+}
+"""Modules whose test functions are each a unit of their own (their parametrized cases together), and
+why: a test module of more CPU than the pass can spare on one worker, with nothing made once for all
+its tests."""
+
 ROS2_HALF: tuple[str, ...] = (
     # the ROS 2 modules' wall time (pytest --durations) in one run of the whole first pass on 4 workers,
     # the machine at load 10-28 (2026-12-06): these
@@ -71,8 +81,14 @@ FIRST: tuple[str, ...] = (
     # measured alone
     "ros2/1",  # 440 s; the two ROS 2 units first, on workers of their own: 145 s of CPU together,
     "ros2/2",  # 390 s; mostly waiting (bridges, peers and namespaces that keep the wall clock's pace)
-    "tests/apps/test_calibrate.py",  # 991 s, 152 s CPU: the default run of two floors (108 s), three quick runs
+    # CPU s in one process (nice'd, load 15-20, 2026-12-06 21:00; mecanum4's from its timeout's comment):
+    # SPLIT's module's costliest tests, each a unit of its own
+    "tests/apps/test_calibrate.py::test_the_default_run_on_mecanum4_improves_every_course_and_exits_0",  # 160 s
+    "tests/apps/test_calibrate.py::test_the_default_run_on_omni4_improves_every_part_and_exits_0",  # 116 s
     "tests/calibration/test_acceptance.py",  # 81 s CPU: one calibration of two floors (600 s guard hit at load 25)
+    "tests/apps/test_calibrate.py::test_quick_run_writes_the_file_and_the_report",  # 37 s
+    "tests/apps/test_calibrate.py::test_a_port_with_two_floors_asks_between_them",  # 23 s
+    # the rest: wall on a worker, as above
     "tests/navigation/test_explore.py",  # 189 s
     "tests/uno/test_sketch.py",  # 186 s: arduino-mk builds
     "tests/apps/test_follow.py",  # 166 s
@@ -99,8 +115,11 @@ FIRST: tuple[str, ...] = (
 
 
 def unit_of(nodeid: str) -> str:
-    """The work unit of a test: its group (:data:`GROUPS`), else its module."""
+    """The work unit of a test: its group (:data:`GROUPS`), its function in a module of :data:`SPLIT`
+    (``path::name``, without the parameters), else its module."""
     path = nodeid.split("::", 1)[0]
+    if path in SPLIT:
+        return nodeid.split("[", 1)[0]
     return next((group for prefix, group in GROUPS.items() if path.startswith(prefix)), path)
 
 

@@ -183,6 +183,8 @@ class LockstepLink(Link):
 
     def _feed(self) -> None:
         """Before a tick: hand the device the bytes whose last bit has reached it."""
+        if not self._to_device:  # the line is idle on most ticks: no clock to read
+            return
         due = self._to_device.pop_due(self.device.time)
         if due:
             self.device.receive(due)
@@ -195,6 +197,8 @@ class LockstepLink(Link):
         self._collect()
 
     def _collect(self) -> None:
+        if not self._to_host:
+            return
         arrived = self._to_host.pop_due(self.device.time)
         if arrived:
             self._inbox += arrived
