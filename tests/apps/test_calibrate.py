@@ -335,7 +335,8 @@ def test_the_default_run_on_mecanum4_improves_every_course_and_exits_0(
     command exits 0. Before the rate curve started at its first count's speed it exited 1: wood's
     ROTATE 1.4 -> 3.0 % (90 degrees at 90 degrees/s +0.4 -> -4.0 %: 66.45 counts asked, 66 sent).
     Measured (2026-12-06 19:30, the firmware rounding its powers): wood 15.5 -> 0.4 %, ROTATE 1.4 ->
-    1.2 %; carpet 48.3 -> 1.4 %, ROTATE 38.2 -> 1.9 %; every course better on both floors."""
+    1.2 %; carpet 48.3 -> 1.4 %, ROTATE 38.2 -> 1.9 %; every course better on both floors. With carpet
+    at 1.8x wood's roller drag (f88055f): wood the same, carpet 20.3 -> 0.6 %, ROTATE 11.0 -> 2.3 %."""
     out = tmp_path / "out"
     assert main(["calibrate", "--robot", "mecanum4", "--out", str(out)]) == 0
     text = capsys.readouterr().out

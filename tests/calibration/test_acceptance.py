@@ -11,15 +11,15 @@ idle wheels' roller drag, then seed 000's factor tables through them.
 What the simulator makes of the floor, stated once (docs/calibration.md has the numbers):
 
 * on courses 0 and 90 two wheels do not turn at all, and their rollers' resistance depends on where
-  each wheel stands (seed 000: "can vary K_l as much as twice"): up to 30 % of a MOVE either way on
-  carpet. The controller reads those wheels' positions from their encoders and makes up for the
+  each wheel stands (seed 000: "can vary K_l as much as twice"): 20 % of a MOVE between the least and
+  the most resistant position on carpet. The controller reads those wheels' positions from their encoders and makes up for the
   drag (:func:`test_roller_drag_term_takes_out_the_wheel_position`);
 * this robot's weak motors cannot power 1 m MOVEs at 0.9 m/s on every course (the 45 degree course
   needs 1 + 45/80 times an axis course's power, as seed 000's firmware says), and before that the
-  drivers' current limit turns the body next to the diagonals and the carpet's grip gives out on the
-  axes: the calibration drives MOVEs at what the tables can power and slows them until they land,
-  per folded course (its reach: wood 1.0 / 0.76 / 0.63 / 0.76 m/s on courses 0 / 15 / 30 / 45, carpet
-  0.62 / 0.57 / 0.43 / 0.48), and the controller runs a MOVE asked faster at the reach (warning 18).
+  drivers' current limit turns the body next to the diagonals: the calibration drives MOVEs at what
+  the tables can power and slows them until they land, per folded course (its reach: wood 1.0 / 0.76
+  / 0.6 / 0.76 m/s on courses 0 / 15 / 30 / 45, carpet 1.0 / 0.72 / 0.54 / 0.66), and the controller
+  runs a MOVE asked faster at the reach (warning 18).
 """
 
 from __future__ import annotations
@@ -114,17 +114,18 @@ def in_reach(session: SurfaceSession, rs: list[AccuracyRow], within: bool = True
 def test_the_robot_really_differs(outcome: tuple[CalibrationResult, Path, float]) -> None:
     result, _, _ = outcome
     before = summarize(rows(result, "before, carpet"))
-    assert before.distance_mean is not None and before.distance_mean > 0.3  # the wood-fitted preset on carpet
+    # the wood-fitted preset on carpet (measured 11.5 %; 4x wood's roller drag made it 30 % and more)
+    assert before.distance_mean is not None and before.distance_mean > 0.08
     assert summarize(rows(result, "before, wood")).distance_mean > 0.04  # type: ignore[operator]
 
 
 def test_after_within_3_percent(outcome: tuple[CalibrationResult, Path, float]) -> None:
     """Within each floor's reach the calibrated MOVEs land within 3 % on every course and speed in
-    reach (measured wood 1.1 %, mean 0.4 %; carpet 1.3 %, mean 0.5 %, and
+    reach (measured wood 1.1 %, mean 0.4 %; carpet 2.2 %, mean 0.7 %, and
     :func:`test_carpet_goal_within_3_percent`). The reach per folded course is what MOVEs at it
     really achieve (docs/calibration.md, the reach): below what the tables can power where the
-    drivers' current limit turns the body (wood and carpet, courses next to 45 degrees) or the
-    carpet's grip gives out (its axes). Beyond it the controller runs the MOVE at the reach."""
+    drivers' current limit turns the body (wood and carpet, courses next to 45 degrees). Beyond it the
+    controller runs the MOVE at the reach."""
     result, _, _ = outcome
     wood, carpet = result.sessions
     for session in (wood, carpet):
@@ -136,13 +137,12 @@ def test_after_within_3_percent(outcome: tuple[CalibrationResult, Path, float]) 
             v is not None and c is not None and v <= c
             for c, v in zip(moves_.computed.values(), reach.speed, strict=True)
         )
-    # measured with a reach MOVE landing within 3 %: wood 1.0 / 0.76 / 0.63 / 0.76 m/s, carpet 0.74 /
-    # 0.6 / 0.45 / 0.49, where carpet's MOVE at 0.6 m/s on course 75 landed 3.2 % off in the check
-    # after 2.3 % in the reach step; within 2 % (Plan.reach_goal, now) carpet 0.66 / 0.51 / 0.35 /
-    # 0.49 (computed from the PWM: wood 1.0 / 0.93 / 0.81 / 0.88, carpet 0.8 / 0.69 / 0.56 / 0.6)
+    # measured within 2 % (Plan.reach_goal): wood 1.0 / 0.76 / 0.6 / 0.76 m/s, carpet 1.0 / 0.72 /
+    # 0.54 / 0.66 (computed from the PWM: wood 1.0 / 0.93 / 0.81 / 0.88, carpet 1.0 / 0.84 / 0.73 /
+    # 0.81; on the carpet of 4x wood's roller drag 0.66 / 0.51 / 0.35 / 0.49, its axes short of grip)
     assert wood.spec.reach is not None and carpet.spec.reach is not None
     assert wood.spec.reach(0.0) >= 0.9 and 0.55 <= wood.spec.reach(30.0) <= 0.72
-    assert carpet.spec.reach(0.0) < 0.8 and 0.3 <= carpet.spec.reach(30.0) < carpet.spec.reach(0.0)
+    assert carpet.spec.reach(0.0) >= 0.9 and 0.3 <= carpet.spec.reach(30.0) < carpet.spec.reach(0.0)
     for session in (wood, carpet):
         surface = session.surface
         after = rows(result, f"after ({surface} calibration), {surface}")
@@ -150,11 +150,10 @@ def test_after_within_3_percent(outcome: tuple[CalibrationResult, Path, float]) 
         summary = summarize(after)
         assert summary.moves == 42
         assert summary.distance_mean is not None and before.distance_mean is not None
-        assert summary.distance_mean < before.distance_mean / 5  # measured / 14 (wood), / 25 (carpet)
+        assert summary.distance_mean < before.distance_mean / 5  # measured / 17 (wood), / 14 (carpet)
         # every MOVE within the floor's reach on its course, on every course 0..90 and back
         within = in_reach(session, moves(after))
-        # measured 32 on wood, 18 on carpet (its 0.6 m/s MOVEs on the axes; on courses 15 and 75 too
-        # with the wheels started elsewhere, whose reach there is 0.60-0.63 m/s)
+        # measured 32 on wood, 28 on carpet
         assert len(within) >= 18
         assert max(abs(r.error or 0.0) for r in within) < 0.03
         if surface == "wood":
@@ -162,21 +161,20 @@ def test_after_within_3_percent(outcome: tuple[CalibrationResult, Path, float]) 
         assert not any(r.warned or r.clamped for r in within)
         # beyond it the controller runs the MOVE at the reach (warning 18) and it lands: no MOVE falls
         # short any more, warned or not (before the reach step: wood's 15 and 75 out at 0.9 m/s 16 %
-        # short with warning 17, carpet's axes 7.5-8 % short unwarned). Measured within 2.5 % on wood;
-        # carpet 3.9 %, course 75 out at 0.9 m/s run at 0.57 (the axes within 1.1 %: docs/calibration.md,
-        # courses 0 and 90)
+        # short with warning 17, carpet's axes 7.5-8 % short unwarned). Measured within 1.5 % on wood,
+        # 1.9 % on carpet
         beyond = in_reach(session, moves(after), within=False)
-        assert beyond and all(r.clamped for r in beyond)  # measured 10 on wood, 24 on carpet
+        assert beyond and all(r.clamped for r in beyond)  # measured 10 on wood, 14 on carpet
         assert max(abs(r.error or 0.0) for r in beyond) < (0.03 if surface == "wood" else 0.05)
 
 
 def test_carpet_goal_within_3_percent(outcome: tuple[CalibrationResult, Path, float]) -> None:
-    """Issue 17's goal: carpet's MOVEs within its reach land within 3 % (measured 1.3 %, mean 0.5 %;
-    with the wheels started at five other angles 2.2-3.5 %, ``benchmarks.motor_model --wheels N``:
-    courses 15 and 75 at 0.6 m/s, at the edge of their reach, miss it on one start, docs/calibration.md),
-    and keep their course better than before calibrating on the same MOVEs (measured 10.7 -> 5.8
-    degrees mean). The motor map's speed terms come from the stand test's torque constants, K_l's
-    slow end from MOVEs at 0.3 m/s (docs/calibration.md)."""
+    """Issue 17's goal: carpet's MOVEs within its reach land within 3 % (measured 2.2 %, mean 0.7 %;
+    on the carpet of 4x wood's roller drag, with the wheels started at five other angles 2.2-3.5 %,
+    ``benchmarks.motor_model --wheels N``, docs/calibration.md), and keep their course better than
+    before calibrating on the same MOVEs (measured 8.5 -> 3.5 degrees mean). The motor map's speed
+    terms come from the stand test's torque constants, K_l's slow end from MOVEs at 0.3 m/s
+    (docs/calibration.md)."""
     result, _, _ = outcome
     carpet = result.sessions[1]
     after = rows(result, "after (carpet calibration), carpet")
@@ -229,8 +227,8 @@ def test_roller_drag_term_takes_out_the_wheel_position(
     outcome: tuple[CalibrationResult, Path, float], nominal: RobotDescription, true_robot: RobotDescription
 ) -> None:
     """The same MOVE on course 90 (wheels m2 and m4 idle) with the idle wheels at their least and
-    most resistant positions (half a roller pitch apart): 30 % apart without the controller's drag
-    term, within 6 % with it (measured 1.0 % on 2026-12-02, the drag from the drag runs and from
+    most resistant positions (half a roller pitch apart): 20 % apart without the controller's drag
+    term, within 6 % with it (measured 1.2 %; 1.0 % on 2026-12-02, the drag from the drag runs and from
     MOVEs at chosen idle phases alike: on this robot the drag runs' fit was right, on the nominal
     one it was not, tests/calibration/test_rollers.py)."""
     result, _, _ = outcome
@@ -257,12 +255,14 @@ def test_roller_drag_term_takes_out_the_wheel_position(
         low, high = got[0::2], got[1::2]
         assert low[0] == pytest.approx(low[1], abs=0.01) and high[0] == pytest.approx(high[1], abs=0.01)
         spread[label] = low[0] - high[0]
-    assert spread["without"] > 0.3  # more than 30 % of the distance from the wheels' position alone
+    # more than 15 % of the distance from the wheels' position alone (measured 20.4 %; 30 % and more
+    # on the carpet of 4x wood's roller drag)
+    assert spread["without"] > 0.15
     assert abs(spread["with"]) < 0.06
     # the MOVEs' coast: the faster the MOVE, the more the drag outlasts it and the more power it needs
     tuning = result.sessions[1].fit.coast
     assert tuning is not None and len(tuning.speeds) == 4
-    # up to 90 % of the axes' computed reach (carpet 0.80 m/s: measured 0.79), where the axis MOVEs run
+    # up to 90 % of the axes' computed reach (carpet 1.0 m/s: measured 0.9), where the axis MOVEs run
     # up to their driven reach, not of the slowest course's (0.56: 0.50, and held beyond)
     assert tuning.speeds[-1] > 0.7
     # mu falls with speed overall; neighbouring speeds' least-squares fits may cross by a few %
@@ -278,8 +278,9 @@ def test_averaged_calibration_shows_the_surfaces_apart(
     carpet = statistics.fmean(
         r.error or 0.0 for r in moves(rows(result, "after (average calibration), carpet"))
     )
-    # one table for both floors: too far on wood, too short on carpet (seed 000: up to 20 % apart)
-    assert wood > 0.1 and carpet < -0.05
+    # one table for both floors: too far on wood, too short on carpet (seed 000: up to 20 % apart;
+    # measured +4.9 % and -3.7 %)
+    assert wood > 0.03 and carpet < -0.02
 
 
 def test_gyro_and_odometry(outcome: tuple[CalibrationResult, Path, float]) -> None:
@@ -317,18 +318,19 @@ def test_the_file_uploads_and_applies(
         client.wait_idle(timeout=10)
         client.sleep(0.5)
         after = math.hypot(sim.pose.x - x0, sim.pose.y - y0)
-    assert before < 0.85
+    assert before < 0.9  # measured 0.867 m: the preset's tables on the weak carpet robot at 45 degrees
     assert after == pytest.approx(1.0, abs=0.03)
 
 
-def test_the_verdict_keeps_each_floors_tables_not_the_average(
+def test_the_verdict_keeps_each_floors_tables_and_the_average(
     outcome: tuple[CalibrationResult, Path, float],
 ) -> None:
-    """Each floor's own tables are better than before on every course and ROTATE (measured ROTATE 1.5
-    -> 1.9 % on wood, 1.7 -> 2.5 % on carpet: within the check's scatter); the average makes every
-    wood course but 15 and 75 worse (wood 7.7 -> 16.9 % on the whole), so it is not kept."""
+    """Each floor's own tables are better than before on every course and ROTATE; with the floors as
+    far apart as seed 000's ("up to 20 %") the average is better than none on both too (measured wood
+    7.7 -> 4.6 %, carpet 10.7 -> 3.5 % on the whole; each floor's own 0.6 and 0.9 %), so it is kept as
+    seed 000 kept it. (On the carpet of 4x wood's roller drag it made every wood course but 15 and 75
+    worse, wood 7.7 -> 16.9 %, and was not kept.)"""
     result, _, _ = outcome
     verdict = judge_calibration(result)
     assert verdict.better is True and verdict.worse == ()
-    assert verdict.average is not None and verdict.average.better is False
-    assert {w.surface for w in verdict.average.worse} == {"wood"} and len(verdict.average.worse) >= 3
+    assert verdict.average is not None and verdict.average.better is True and verdict.average.worse == ()

@@ -120,10 +120,12 @@ def test_followers_on_carpet_slow_the_turns_for_the_odometry_not_on_wood() -> No
     from omnibot.control.reach import floor_course_rate
     from omnibot.navigation.session import follower_limits
 
-    assert floor_course_rate("carpet") == pytest.approx(0.736, abs=0.01)
+    assert floor_course_rate("carpet") == pytest.approx(1.635, abs=0.01)
     assert floor_course_rate("wood") > 5.0
     robot = load_robot("omni4")
-    eight = figure_eight_path(2, length=10.0, radius_min=0.4, heading="tangent")
+    # a tight eight (turning at up to 1.9 rad/s uncapped: a 10 m eight of radius 0.4 turns at 1.4, within
+    # carpet's cap); the cap holds it to 1.6 at 1.19x the minimum time, within the plan's budget
+    eight = figure_eight_path(2, length=5.0, radius_min=0.3, heading="tangent")
     carpet = follower_limits(robot, 1.0, "carpet")
     assert carpet.course_rate == pytest.approx(floor_course_rate("carpet"))
     assert follower_limits(robot, 1.0).course_rate is None

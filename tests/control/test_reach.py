@@ -136,7 +136,7 @@ def test_carpet_forbids_omni4_its_1_m_s_at_45_degrees_and_wood_does_not() -> Non
     robot = load_robot("omni4")
     carpet, wood = floor_speed_table(robot, "carpet"), floor_speed_table(robot, "wood")
     assert len(carpet) == 72 and all(c < w for c, w in zip(carpet, wood, strict=True))
-    assert carpet[9] == pytest.approx(0.72, abs=0.01)  # 45 degrees: seed 000's 1 m/s is out of reach
+    assert carpet[9] == pytest.approx(0.93, abs=0.01)  # 45 degrees: seed 000's 1 m/s is out of reach
     assert min(wood) > 0.85 and carpet[0] > 1.0  # on wood, and on carpet's axes, 1 m/s at 85 %
     assert carpet[0] == pytest.approx(carpet[18], rel=1e-6)  # the square's symmetry: 0 and 90 degrees
     # the table is solved for all courses at once: each entry is that course's own bound
@@ -180,11 +180,11 @@ def test_the_floor_reach_with_a_turn_is_each_wheels_translation_and_rotation_tog
     reach = floor_reach(robot, "carpet")
     assert reach.courses == floor_speed_table(robot, "carpet")  # no turn: the course table
     assert reach.radius == pytest.approx(turn_radius(robot)) == pytest.approx(0.096)
-    # issue 17: at 45 degrees carpet gives 0.72 m/s; turning at 2 rad/s the wheels have less left
+    # issue 17: at 45 degrees carpet gives 0.93 m/s; turning at 2 rad/s the wheels have less left
     diagonal = math.pi / 4
-    assert reach.at(diagonal, 0.0) == pytest.approx(0.72, abs=0.01)
+    assert reach.at(diagonal, 0.0) == pytest.approx(0.93, abs=0.01)
     turning = reach.at(diagonal, 2.0)
-    assert 0.5 < turning < 0.67 and turning < course_speed_bound(robot, diagonal, 2.0)
+    assert 0.7 < turning < 0.87 and turning < course_speed_bound(robot, diagonal, 2.0)
     assert reach.at(diagonal, -2.0) == pytest.approx(turning, rel=1e-3)  # the square's symmetry
     assert reach.at(diagonal, 50.0) == 0.0  # the spin alone is beyond the motors
     # between the table's courses and turn shares the interpolation is the solved reach within 2 %
@@ -245,10 +245,11 @@ def test_the_grip_leaves_less_acceleration_on_carpet_as_the_floors_drag_grows_wi
     speeds, carpet = floor_grip(robot, "carpet", 1.0)
     _, wood = floor_grip(robot, "wood", 1.0)
     assert speeds[0] == 0.0 and speeds[-1] == pytest.approx(1.0) and len(speeds) == len(carpet)
-    # issue 17: a turning body's start on carpet asked more than the grip beside the rollers' drag
-    assert carpet[0] == pytest.approx(0.75, abs=0.03) and wood[0] == 1.0
-    assert all(b <= a for a, b in itertools.pairwise(carpet)) and carpet[-1] < 0.3
-    assert all(c < w for c, w in zip(carpet, wood, strict=True))
+    # issue 17: a turning body asks more than the grip leaves beside the rollers' drag, on carpet
+    # from 0.2 m/s (the whole grip at a creep), on wood from 0.5 m/s
+    assert carpet[:2] == (1.0, 1.0) and carpet[2] < 1.0 and wood[:5] == (1.0,) * 5 and wood[5] < 1.0
+    assert all(b <= a for a, b in itertools.pairwise(carpet)) and carpet[-1] == pytest.approx(0.56, abs=0.02)
+    assert all(c < w for c, w in zip(carpet[2:], wood[2:], strict=True))
     # at the fraction found the busiest wheel pushes at its grip, on its worst course
     k, v = carpet[3], speeds[3]
     limits = robot.limits
@@ -282,6 +283,8 @@ def test_the_profile_accelerates_within_what_the_grip_leaves() -> None:
     # each step within the fraction at its slower end (where the passes take it from)
     allowed = np.maximum(carpet.grip_at(v[:-1]), carpet.grip_at(v[1:])) * carpet.a_max
     assert np.all(np.abs(accel) <= allowed * 1.01 + 1e-9)
-    assert np.abs(accel).max() < 0.8 * carpet.a_max  # the carpet's drag takes a quarter at a creep
+    assert (
+        np.abs(accel[v[1:] > 0.5]).max() < 0.9 * carpet.a_max
+    )  # the carpet's drag takes a tenth from 0.5 m/s
     assert plan.min_time > time_optimal_profile(diagonal, replace(carpet, grip=None)).min_time
     np.testing.assert_allclose(free.grip_at(np.array([0.0, 3.0])), 1.0)

@@ -20,7 +20,7 @@ from omnibot.runtime.sinks import EstimatorWhenMissing, SpeedReport, describe_tw
 from omnibot.runtime.sources import ScriptSource
 from tests.teleop.fakes import truth
 
-CARPET = SlipParameters(roll=0.0156, combined=0.0346, compliance=0.0243)
+CARPET = SlipParameters(roll=0.0071, combined=0.0240, compliance=0.0162)
 """omni4 on carpet as omnibot's slip calibration fits it (the speed-accuracy benchmark's)."""
 
 
@@ -42,10 +42,10 @@ def _speed_over_last_second(client: RobotClient, runtime: Runtime, twist: Twist)
     return sum(tail) / len(tail)
 
 
-@pytest.mark.parametrize(("wheel_loop", "asked"), [(True, 0.94), (False, 0.15)])
+@pytest.mark.parametrize(("wheel_loop", "asked"), [(True, 0.94), (False, 0.85)])
 def test_every_source_drives_on_the_wheel_speed_loop(wheel_loop: bool, asked: float) -> None:
-    """mecanum4 sideways on carpet: open loop the calibrated powers move it at 0.09 of the speed asked
-    (forward and sideways share one curve); on the loop its wheels turn at their targets."""
+    """mecanum4 sideways on carpet: open loop the calibrated powers move it at 0.76 of the speed asked
+    (forward and sideways share one curve); on the loop its wheels turn at their targets (0.97)."""
     with RobotClient.open("sim://mecanum4?seed=1&surface=carpet", timeout=0.5) as client:
         runtime = Runtime(client, wheel_loop=wheel_loop)
         speed = _speed_over_last_second(client, runtime, Twist(0.0, 0.3, 0.0))
@@ -97,8 +97,8 @@ def test_a_robot_without_encoders_or_a_refusing_controller_drives_open_loop_and_
 
 
 def test_the_floors_slip_is_asked_on_top_so_the_body_goes_at_the_speed_asked() -> None:
-    """omni4 at 45 degrees on carpet: its wheels held at their targets, the body goes 0.89 of the
-    speed asked (the rollers' drag makes the driven wheels creep); with the slip asked on top, 0.98-1.03."""
+    """omni4 at 45 degrees on carpet: its wheels held at their targets, the body goes 0.93 of the
+    speed asked (the rollers' drag makes the driven wheels creep); with the slip asked on top, 0.98."""
     robot = load_robot("omni4")
     twist = Twist(0.3 * math.cos(math.pi / 4), 0.3 * math.sin(math.pi / 4), 0.0)
     ratios = []
@@ -106,7 +106,7 @@ def test_the_floors_slip_is_asked_on_top_so_the_body_goes_at_the_speed_asked() -
         with RobotClient.open("sim://omni4?seed=1&surface=carpet", timeout=0.5) as client:
             runtime = Runtime(client, slip=slip)
             ratios.append(_speed_over_last_second(client, runtime, twist) / 0.3)
-    assert ratios[0] < 0.91
+    assert ratios[0] < 0.95
     assert 0.97 < ratios[1] < 1.03
 
 

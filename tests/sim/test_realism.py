@@ -47,7 +47,11 @@ def load_sweep() -> dict[int, dict[int, float]]:
 
 
 def seed000_pwm(course: int, power: float) -> np.ndarray:
-    """Seed 000's motor pattern for a course of 0/90/180/270 degrees at power P."""
+    """Seed 000's motor pattern at power P: on a course of 0/90/180/270 degrees two opposite motors at
+    +-P, on course 45 all four at +-P."""
+    if course == 45:
+        rim = kin.inverse(load_robot("omni4").wheel_matrix, (1.0, 1.0, 0.0))
+        return np.asarray(power * rim / np.abs(rim).max())
     pwm = np.zeros(4)
     sign = 1.0 if course in (0, 90) else -1.0
     a, b = (1, 3) if course in (0, 180) else (0, 2)
@@ -116,13 +120,18 @@ def test_dead_band_at_low_power(simulated: dict[int, dict[int, float]]) -> None:
     assert still.max() < 1e-3
 
 
-def test_carpet_is_clearly_shorter_than_wood() -> None:
-    """Seed 000: up to 20 % less distance on carpet for the same power."""
-    powers = [130, 160, 190, 220, 255]
-    wood = seed000_distances(0, powers, "wood")
-    carpet = seed000_distances(0, powers, "carpet")
-    loss = 1.0 - carpet / wood
-    assert ((loss > 0.10) & (loss < 0.25)).all(), loss
+@pytest.mark.parametrize(
+    ("course", "powers"), [(0, [70, 100, 130, 160, 190, 220, 255]), (45, [80, 100, 130, 160, 190, 220, 255])]
+)
+def test_carpet_is_shorter_than_wood_by_at_most_the_seeds_20_percent(
+    course: int, powers: list[float]
+) -> None:
+    """Seed 000: the floor makes "a difference up to 20 % for the motion distance" at the same power,
+    over its series' powers (the axis from 70 counts, 45 degrees from 80). Carpet loses most near the
+    start, where its rollers' drag is the larger share (14.6 % at 70 on the axis, 18.2 % at 80 at 45
+    degrees), and 4-9 % from 130 counts up."""
+    loss = 1.0 - seed000_distances(course, powers, "carpet") / seed000_distances(course, powers, "wood")
+    assert ((loss > 0.03) & (loss < 0.20)).all(), loss
 
 
 def test_omni3_reaches_5_m_per_s_in_about_2_s_with_wheel_slip() -> None:

@@ -312,7 +312,7 @@ def floor_course_rate(surface: str | Surface) -> float:
     In a turn the wheels carry the lateral acceleration a = v^2 kappa; they creep sideways at about
     v_s a / (mu g) times the floor's roller drag (its ``rolling_multiplier``: the rollers that
     should roll sideways drag), which the encoders do not see. Per metre that is v_s m_r v kappa /
-    (mu g): capping the course's turn rate v kappa caps the drift (carpet 0.74 rad/s, wood 5.9).
+    (mu g): capping the course's turn rate v kappa caps the drift (carpet 1.6 rad/s, wood 5.9).
     """
     floor = get_surface(surface) if isinstance(surface, str) else surface
     creep = floor.slip_velocity * floor.rolling_multiplier / (floor.mu * GRAVITY)

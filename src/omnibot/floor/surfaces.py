@@ -9,9 +9,16 @@ Each surface gives, for the contact of an omni/mecanum wheel with the floor:
 * ``rolling_multiplier``: factor on the wheel's own ``RollerSpec.rolling_resistance`` (measured or
   assumed on a hard, smooth floor), so that the same wheel loses more on a soft floor.
 
-Seed 000 reports up to 20 % less distance on carpet than on wood for the same motor power; in the
-simulator that comes out of the carpet's rolling multiplier (the unpowered wheels' rollers roll
-across the path) rather than from a lookup.
+Seed 000 found that the floor makes "a difference up to 20 %" in the distance of the same powered
+motion (its two reference floors, wood and carpet). In the simulator that comes out of the carpet's
+rolling multiplier (the unpowered wheels' rollers roll across the path, and every roller of a
+diagonal course) rather than from a lookup, and the multiplier is fitted to that statement: at 1.8x
+wood's roller resistance seed 000's series (1000 ms from rest) go 4-15 % less far on carpet on a
+motor axis from 70 counts and 7-18 % at 45 degrees from 80 counts (most near the start, where the
+drag is the larger share of the motors' torque; ``benchmarks/seed000_figures.py``,
+``tests/sim/test_realism.py``). Castor and wheelchair measurements give small hard wheels on low
+pile 3-6x a hard floor's rolling resistance; seed 000's rubber rollers, wider and softer than a
+castor, lose less, and a multiplier of 4 made its carpet 2-3x shorter than wood near the start.
 """
 
 from __future__ import annotations
@@ -70,10 +77,10 @@ SURFACES: dict[str, Surface] = {
             "carpet",
             mu=0.60,
             slip_velocity=0.04,
-            rolling_multiplier=4.0,
-            source="small hard wheels on low-pile carpet roll with 3-6x the resistance of a hard floor "
-            "(castor and wheelchair rolling-resistance measurements); the pile is compliant, so a "
-            "larger slip velocity",
+            rolling_multiplier=1.8,
+            source="the roller resistance fitted to seed 000's 'up to 20 %' between its wood and carpet "
+            "(small hard castors on low pile roll with 3-6x a hard floor's resistance; the seed's "
+            "rubber rollers lose less); the pile is compliant, so a larger slip velocity",
         ),
     )
 }
