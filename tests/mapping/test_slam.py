@@ -164,6 +164,8 @@ def test_bad_input_is_one_clear_error() -> None:
         slam.update(Pose2D(math.inf, 0.0, 0.0), scan, 2.0)
     with pytest.raises(ConfigError, match="scan"):
         slam.update(Pose2D(0.0, 0.0, 0.0), "scan", 2.0)  # type: ignore[arg-type]
+    with pytest.raises(ConfigError, match="twist"):
+        slam.update(Pose2D(0.0, 0.0, 0.0), scan, 2.0, Twist(0.0, math.nan, 0.0))
     with pytest.raises(ConfigError, match="older"):
         slam.try_loop_closure(5, 0)
     assert slam.map_to_odom == compose(slam.pose, inverse(Pose2D(0.0, 0.0, 0.0)))
@@ -206,3 +208,35 @@ def test_a_spinning_scanners_motion_distortion_is_undone(
         apes[deskew] = rmse(position_errors([p for _, p in slam.trajectory()], truth[:-1]))
     assert apes[True] < 0.02
     assert apes[True] * 3 < apes[False]
+
+
+def test_a_turn_starting_or_stopping_during_a_scan_is_deskewed_with_the_scans_own_twist() -> None:
+    """Turns in bursts (1.5 rad/s on and off, as goto's legs turn the base) while creeping along x:
+    the previous revolution's motion leaves a scan whose turn rate changed distorted by the change,
+    which the match turns into a heading error; the scan's own twist does not."""
+    world = load_world("room")
+    truth = [Pose2D(1.0, 1.5, 0.0)]
+    for k in range(200):
+        w = (1.5, 0.0, -1.5, 0.0)[(k // 5) % 4]
+        vx = 0.15 if (k // 40) % 2 == 0 else -0.15
+        p = truth[-1]
+        truth.append(
+            compose(p, Pose2D(vx / RATE * math.cos(p.theta), -vx / RATE * math.sin(p.theta), w / RATE))
+        )
+    worst = {}
+    for own in (True, False):
+        rng = np.random.default_rng(3)
+        slam = Slam()
+        for k in range(len(truth) - 1):
+            step = between(truth[k], truth[k + 1])
+            twist = Twist(step.x * RATE, step.y * RATE, step.theta * RATE)
+            scan = synthetic_scan(
+                world, truth[k], rng, k / RATE, twist=twist, time_increment=1 / (RATE * 360)
+            )
+            slam.update(truth[k], scan, k / RATE, twist if own else None)
+        worst[own] = max(
+            abs(math.remainder(p.theta - t.theta, 2 * math.pi))
+            for (_, p), t in zip(slam.trajectory(), truth, strict=False)
+        )
+    assert worst[True] < math.radians(0.2)
+    assert worst[False] > math.radians(1.0)

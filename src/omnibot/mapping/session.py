@@ -4,8 +4,9 @@
 runtime's estimate (the fused wheel and gyro odometry) as the odometry trajectory, takes the scans
 completed since the last cycle from a :class:`~omnibot.lidar.reader.ScanSource` (None: the
 runtime's scanner, the cycle's ``scans``, which the log, ROS 2 and the page read too), gives each to the
-:class:`~omnibot.mapping.slam.Slam` with the odometry pose at the scan's first ray (interpolated
-between the cycles around it; a scan newer than the last estimate waits for the next cycle), and
+:class:`~omnibot.mapping.slam.Slam` with the odometry pose at the scan's first ray and the
+odometry's twist from its first ray to its last (interpolated between the cycles around them; a
+scan newer than the last estimate waits for the next cycle), and
 keeps the SLAM's pose as the estimate trajectory. Scans and estimates must share a clock: simulated
 time on ``sim://`` (the link's clock and the simulator's scans), the host's monotonic clock on a
 real port (the client's clock and :class:`~omnibot.lidar.reader.RplidarScanner`'s stamps).
@@ -202,14 +203,18 @@ class ScanFeed:
                 self.scans.close()
 
 
+def span_twist(start: Pose2D, end: Pose2D, span: float) -> Twist:
+    """The body twist that goes from ``start`` to ``end`` in ``span`` s (zero for no span)."""
+    if span <= 0:
+        return Twist()
+    d = between(start, end)
+    return Twist(d.x / span, d.y / span, d.theta / span)
+
+
 def undistorted(scan: Scan, start: Pose2D, end: Pose2D, span: float) -> FloatArray:
     """The scan's returns in the base frame at its first ray, moved by the odometry's motion from
     ``start`` to ``end`` over the revolution's ``span`` s (a spinning scanner's distortion undone)."""
-    twist = Twist()
-    if span > 0:
-        d = between(start, end)
-        twist = Twist(d.x / span, d.y / span, d.theta / span)
-    return scan_points(scan, twist)
+    return scan_points(scan, span_twist(start, end, span))
 
 
 class MappingSink(ScanFeed):
@@ -220,6 +225,7 @@ class MappingSink(ScanFeed):
         self.estimate = Track()
         self._clouds: list[tuple[float, NDArray[np.float32], tuple[float, float]]] = []
         self._latest: FloatArray | None = None
+        self._twists: dict[float, Twist] = {}  # each scan's own, by stamp, until its update
         super().__init__(scans, threaded=threaded)
 
     def map_to_odom_now(self) -> Pose2D | None:
@@ -237,14 +243,18 @@ class MappingSink(ScanFeed):
         return None if latest is None else transform(correction, latest)
 
     def _keep(self, scan: Scan, start: Pose2D, end: Pose2D, span: float) -> None:
-        """Keep the scan's returns (distortion undone) for the map."""
-        points = undistorted(scan, start, end, span)
+        """Keep the scan's returns (distortion undone) for the map, and its twist for the SLAM."""
+        twist = span_twist(start, end, span)
+        points = scan_points(scan, twist)
         self._clouds.append((scan.stamp, points.astype(np.float32), (scan.mount.x, scan.mount.y)))
         with self._lock:
             self._latest = transform(start, points)  # the odometry frame
+            self._twists[scan.stamp] = twist
 
     def _update(self, scan: Scan, odom: Pose2D) -> None:
-        pose = self.slam.update(odom, scan, scan.stamp)
+        with self._lock:
+            twist = self._twists.pop(scan.stamp, None)
+        pose = self.slam.update(odom, scan, scan.stamp, twist)
         with self._lock:
             self.estimate.add(scan.stamp, pose)
 

@@ -1,8 +1,11 @@
 """Online 2D SLAM: scan-to-submap matching on keyframes, a gtsam pose graph with verified loop closures.
 
-Front end: each scan is deskewed (:mod:`omnibot.mapping.deskew`, the odometry's last motion taken
-as the twist over the scan; the first scan of a spinning scanner, with no motion known yet, is
-skipped) and its odometry delta since the last keyframe predicts the robot's pose. When the
+Front end: each scan is deskewed (:mod:`omnibot.mapping.deskew`) with the base's twist over the
+scan: the caller's (the odometry's motion across the scan's own revolution, what
+:class:`~omnibot.mapping.session.MappingSink` gives), else the odometry's motion since the
+previous scan (a revolution late: a turn that starts or stops during the scan is left in it; the
+first scan of a spinning scanner, with no motion known yet, is skipped). Its odometry delta since
+the last keyframe predicts the robot's pose. When the
 robot has moved ``keyframe_distance`` or turned ``keyframe_angle`` since then, the scan becomes a
 keyframe: it is matched (:class:`~omnibot.mapping.matcher.ScanMatcher`, correlative search then
 ICP) against a local submap (the last ``submap_keyframes`` keyframes' points at their current
@@ -207,12 +210,15 @@ class Slam:
 
     # ------------------------------------------------------------------ the front end
 
-    def update(self, odom_pose: Pose2D, scan: Scan, stamp: float) -> Pose2D:
+    def update(self, odom_pose: Pose2D, scan: Scan, stamp: float, twist: Twist | None = None) -> Pose2D:
         """Take one scan and the odometry pose at its first ray; return the robot's map-frame pose.
 
         ``stamp`` (s, never decreasing) is the time of ``odom_pose`` and the scan's first ray on the
-        caller's clock; the odometry's motion since the previous call, taken as a constant twist,
-        removes the scan's motion distortion (:mod:`omnibot.mapping.deskew`).
+        caller's clock. ``twist`` is the base's body twist over the scan (the odometry's motion from
+        its first ray to its last); it removes the scan's motion distortion
+        (:mod:`omnibot.mapping.deskew`). None: the odometry's motion since the previous call, a
+        revolution late (a turn starting or stopping during the scan leaves it distorted by the
+        change of rate).
         """
         if not isinstance(scan, Scan):
             raise ConfigError(f"must be a Scan, not {type(scan).__name__}", "scan")
@@ -222,12 +228,19 @@ class Slam:
             raise ConfigError(
                 f"must be finite and not before the previous one ({self._last_stamp}), not {stamp}", "stamp"
             )
+        if twist is not None and not all(math.isfinite(v) for v in (twist.vx, twist.vy, twist.w)):
+            raise ConfigError(f"must be finite, not {twist}", "twist")
         first_call = self._last_odom is None
-        twist = Twist()
-        if self.deskew and self._last_odom is not None and stamp > self._last_stamp:
-            step = between(self._last_odom, odom_pose)
-            dt = stamp - self._last_stamp
-            twist = Twist(step.x / dt, step.y / dt, step.theta / dt)
+        if not self.deskew:
+            twist = Twist()
+        elif twist is None:
+            twist = Twist()
+            if self._last_odom is not None and stamp > self._last_stamp:
+                step = between(self._last_odom, odom_pose)
+                dt = stamp - self._last_stamp
+                twist = Twist(step.x / dt, step.y / dt, step.theta / dt)
+        else:
+            first_call = False  # the scan's own motion is known: it can start the map
         self._twist = twist
         self._last_stamp = stamp
         self._last_odom = odom_pose
