@@ -59,7 +59,7 @@ progress_tolerance          a MOVE whose encoders measure it short of its distan
 speed_kp, speed_ki          wheel-speed PI gains, PWM counts per rad/s (and per rad)
 speed_band                  rad/s (where kp gives 5 % of full power): a target jump larger than it is
                             a step, after which the integral grows at 1 / (1 + (err / band)^2)
-speed_ki_steady             the integral's gain once a wheel's target has held still 3 control periods
+speed_ki_steady             the integral's gain once a wheel's target has held still 5 control periods
                             (the correction stays speed_ki times the integral; speedctl.py)
 body_ff                     per wheel [x, y, w]: PWM counts per m/s^2 of the body's acceleration along
                             its x and y axes and per rad/s^2 of its angular acceleration (the wheel's
