@@ -15,7 +15,7 @@ import pytest
 from benchmarks.speed_loop import run
 
 from omnibot.firmware.config import SPEED_BAND_POWER, build_config
-from omnibot.firmware.speedctl import SpeedControl
+from omnibot.firmware.speedctl import STEADY_PERIODS, SpeedControl
 from omnibot.robot.description import load_robot
 
 CPR = 440
@@ -30,17 +30,18 @@ def test_mecanum4_on_carpet_stays_near_the_asked_speed_after_a_step() -> None:
     assert result.rise < 0.6  # and still gets there (0.48 s before, 0.50 now)
 
 
-@pytest.mark.parametrize(("course", "before"), [(0.0, 0.11), (44.5, 0.11), (90.0, 0.10)])
+@pytest.mark.parametrize(("course", "before"), [(0.0, 0.10), (44.5, 0.10), (90.0, 0.09)])
 def test_a_ramp_with_its_planned_acceleration_ends_near_the_asked_speed(course: float, before: float) -> None:
     """mecanum4 on carpet, 1.4 m/s^2 to 0.8 m/s: without the acceleration the integral stores the
-    torque of the ramp and carries the body past the speed asked (``before``, over the speed asked);
+    torque of the ramp and carries the body past the speed asked (``before``, over the speed asked;
+    0.11, 0.11 and 0.10 before the held target's faster integral unlearned it sooner);
     with it fed forward the body ends within 2 % (issue 17), reaching 98 % of its speed within 50 ms of
     the ramp's end (0.57 s; 0.60-0.62 s measured, 0.58 without the feed-forward, which overshoots)."""
     old = run("mecanum4", "carpet", course, 0.8, ramp=True)
     new = run("mecanum4", "carpet", course, 0.8, ramp=True, plan=True)
     assert old.body_asked == pytest.approx(before, abs=0.01)
     assert new.body_asked < 0.03
-    assert new.body_asked < old.body_asked - 0.08
+    assert new.body_asked < old.body_asked / 4  # 0.009-0.013 against 0.088-0.098
     assert new.rise <= 0.8 / 1.4 + 0.05
 
 
@@ -107,3 +108,44 @@ def test_the_band_is_where_the_p_term_gives_5_percent_of_full_power() -> None:
     for robot in ("omni4", "omni3", "mecanum4"):
         cfg = build_config(load_robot(robot))
         assert cfg["speed_kp"] * cfg["speed_band"] == pytest.approx(0.05 * cfg["pwm_max"], rel=1e-5)
+
+
+def test_a_held_target_integrates_at_the_steady_rate() -> None:
+    """Once the target has not changed for STEADY_PERIODS periods the integral grows at
+    ki_steady / ki of its rate; the correction stays ki times the integral (no jump when the rate
+    changes); a target that moves, or is 0, integrates at the plain rate."""
+    sc = SpeedControl([CPR], 0.0, 1.0, PERIOD, PWM_MAX, 0.0, ki_steady=2.0)
+    out = [0]
+    sc.reset([0])
+    for _ in range(STEADY_PERIODS):  # the first period is the step from 0; then it holds
+        sc.update(PERIOD, [0], [3.0], [0.0], out)
+    assert sc._integ[0] == pytest.approx(STEADY_PERIODS * 3.0 * 0.01)
+    assert sc.correction[0] == pytest.approx((STEADY_PERIODS - 1) * 3.0 * 0.01)  # ki x the integral before
+    before = sc._integ[0]
+    sc.update(PERIOD, [0], [3.0], [0.0], out)  # held STEADY_PERIODS periods: twice the rate
+    assert sc._integ[0] - before == pytest.approx(2 * 3.0 * 0.01)
+    assert sc.correction[0] == pytest.approx(before)
+    before = sc._integ[0]
+    sc.update(PERIOD, [0], [3.1], [0.0], out)  # the target moved: the plain rate again
+    assert sc._integ[0] - before == pytest.approx(3.1 * 0.01)
+    sc.reset([0])
+    for k in range(1, 2 * STEADY_PERIODS + 1):  # a wheel asked to stand still creeps: the plain rate
+        sc.update(PERIOD, [k], [0.0], [0.0], out)
+    assert sc._integ[0] == pytest.approx(-2 * STEADY_PERIODS * 2 * math.pi / CPR)
+    band = 5.0
+    sc = SpeedControl([CPR], 0.0, 1.0, PERIOD, PWM_MAX, band, ki_steady=2.0)
+    sc.reset([0])
+    for _ in range(2 * STEADY_PERIODS):  # a step held, the wheel still far below: the rise's rate
+        sc.update(PERIOD, [0], [4 * band], [0.0], out)
+    assert sc._integ[0] == pytest.approx(2 * STEADY_PERIODS * 4 * band * 0.01 / 17)
+    plain = SpeedControl([CPR], 0.0, 1.0, PERIOD, PWM_MAX)  # no ki_steady: the plain rate throughout
+    plain.reset([0])
+    for _ in range(2 * STEADY_PERIODS):
+        plain.update(PERIOD, [0], [3.0], [0.0], out)
+    assert plain._integ[0] == pytest.approx(2 * STEADY_PERIODS * 3.0 * 0.01)
+
+
+def test_the_steady_integral_is_twice_the_loop_s() -> None:
+    for robot in ("omni4", "omni3", "mecanum4"):
+        cfg = build_config(load_robot(robot))
+        assert cfg["speed_ki_steady"] == pytest.approx(2.0 * cfg["speed_ki"], rel=1e-5)

@@ -59,6 +59,8 @@ progress_tolerance          a MOVE whose encoders measure it short of its distan
 speed_kp, speed_ki          wheel-speed PI gains, PWM counts per rad/s (and per rad)
 speed_band                  rad/s (where kp gives 5 % of full power): a target jump larger than it is
                             a step, after which the integral grows at 1 / (1 + (err / band)^2)
+speed_ki_steady             the integral's gain once a wheel's target has held still 5 control periods
+                            (the correction stays speed_ki times the integral; speedctl.py)
 body_ff                     per wheel [x, y, w]: PWM counts per m/s^2 of the body's acceleration along
                             its x and y axes and per rad/s^2 of its angular acceleration (the wheel's
                             least-norm share of the force and torque; a VEL's planned acceleration,
@@ -241,6 +243,12 @@ SPEED_BAND_POWER = 0.05
 after a step the integral grows at half its rate there (larger errors are the rise's lag)."""
 
 
+STEADY_KI = 2.0
+"""``speed_ki_steady`` in ``speed_ki``: the integral learns the floor's steady error twice as fast once
+a wheel's target holds still (issue 24: settling within 0.3 s; twice the gains everywhere made the
+wheels follow the swings of a host's commands)."""
+
+
 def _default_k(robot: RobotDescription) -> float:
     """PWM counts per m/s of rim speed from the motor model, when the description gives no K."""
     w = robot.wheels[0]
@@ -395,6 +403,7 @@ def build_config(
         "speed_kp": round(kp, 6),
         "speed_ki": round(ki, 6),
         "speed_band": round(SPEED_BAND_POWER * pwm_max / kp, 6) if kp > 0 else 0.0,
+        "speed_ki_steady": round(STEADY_KI * ki, 6),
         "body_ff": body_ff,
         "wheel_ff": wheel_ff,
         "control_period_ms": control_period_ms,

@@ -161,6 +161,7 @@ class Executor:
             period_us,
             model.pwm_max,
             float(cfg.get("speed_band", 0.0)),
+            float(cfg.get("speed_ki_steady", 0.0)),
         )
         for i in range(self.n):
             hal.set_power(i, 0)
