@@ -1121,8 +1121,8 @@ def _ros2_case(case: str, quick: bool, control_top: float = 0.1) -> Row:
     from omnibot.teleop.pacing import Pacer
 
     count, what = ROS2_CASES[case]
-    if quick:
-        count = min(count, 2000 if case == "flood" else 50 if case == "steady" else 30)
+    if quick:  # the control keeps its 2 s: the top speed it sets comes after the first second
+        count = min(count, 2000 if case == "flood" else 100 if case == "steady" else 30)
     if case == "malformed":  # three attempts of count each
         count = count // 3
     speeds: list[float] = []
