@@ -309,7 +309,9 @@ def test_a_byte_turned_into_a_terminator_runs_nothing(clients: list[RobotClient]
     ctrl.execute = spy
     write = link.write
     link.write = lambda data: write(data.replace(b"TELEM,0,249", b"TELEM,0,2" + into + b"9", 1))  # type: ignore[method-assign]
-    with pytest.raises(LinkTimeout, match="after 17 retries"):  # no piece is answered with its tag
+    with pytest.raises(
+        LinkTimeout, match=f"after {codes.HOST_RETRIES + codes.TEXT_HOST_EXTRA_RETRIES} retries"
+    ):  # no piece is answered with its tag
         client.execute(Telem(0, 249))
     assert ran == []
     link.write = write  # type: ignore[method-assign]
