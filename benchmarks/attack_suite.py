@@ -43,6 +43,7 @@ import argparse
 import asyncio
 import contextlib
 import io
+import itertools
 import json
 import math
 import os
@@ -230,13 +231,20 @@ NOMINAL = {
 
 
 def _boundary_lines() -> list[str]:
-    """Every field of every command with a parameter at an extreme of 16 bits, and NUL-ended keywords."""
+    """Every field of every command with a parameter at an extreme of 16 bits, every two fields at
+    -32768 or 32767 in each combination (two -32768s squared overflow a 32-bit sum), and NUL-ended
+    keywords."""
     out = []
     for word, params in NOMINAL.items():
         for i in range(len(params)):
             for v in (-32768, -32767, 32767):
                 p = list(params)
                 p[i] = v
+                out.append(",".join([word, *map(str, p)]))
+        for i, j in itertools.combinations(range(len(params)), 2):
+            for a, b in itertools.product((-32768, 32767), repeat=2):
+                p = list(params)
+                p[i], p[j] = a, b
                 out.append(",".join([word, *map(str, p)]))
     return [*out, "STATUS\x00", "STOP\x00", "HELLO\x00,2"]
 
