@@ -43,7 +43,9 @@ import argparse
 import asyncio
 import contextlib
 import io
+import itertools
 import json
+import math
 import os
 import random
 import shutil
@@ -73,6 +75,7 @@ from omnibot.protocol.messages import (
     StatusReply,
     Stop,
     Telem,
+    Vel,
 )
 from omnibot.transport.faults import FaultLink, _Channel
 
@@ -228,13 +231,20 @@ NOMINAL = {
 
 
 def _boundary_lines() -> list[str]:
-    """Every field of every command with a parameter at an extreme of 16 bits, and NUL-ended keywords."""
+    """Every field of every command with a parameter at an extreme of 16 bits, every two fields at
+    -32768 or 32767 in each combination (two -32768s squared overflow a 32-bit sum), and NUL-ended
+    keywords."""
     out = []
     for word, params in NOMINAL.items():
         for i in range(len(params)):
             for v in (-32768, -32767, 32767):
                 p = list(params)
                 p[i] = v
+                out.append(",".join([word, *map(str, p)]))
+        for i, j in itertools.combinations(range(len(params)), 2):
+            for a, b in itertools.product((-32768, 32767), repeat=2):
+                p = list(params)
+                p[i], p[j] = a, b
                 out.append(",".join([word, *map(str, p)]))
     return [*out, "STATUS\x00", "STOP\x00", "HELLO\x00,2"]
 
@@ -856,7 +866,6 @@ async def _dashboard_attempt(port: int, host: str, origin: str | None, query: st
 def _dashboard_case(
     name: str, token: str | None, host: str, origin: str | None, query: str, expect_drive: bool
 ) -> Row:
-    import math
 
     from tests.web.conftest import ROOM
     from tests.web.test_security import pose, sim_time, wait_for_state
@@ -1099,16 +1108,31 @@ ROS2_CASES = {
         "malformed CDR (a TwistStamped-named blob, with and without TwistStamped's type information; "
         "TwistStamped's CDR cut short or garbage) at 50 Hz: must not move",
     ),
-    "steady": (100, "0.1 m/s at 50 Hz (control: the top speed a flood is held to)"),
+    "steady": (100, "0.1 m/s at 50 Hz (control: the robot's top speed beside a flood's)"),
     "flood": (
         20_000,
-        "20,000 TwistStamped (0.1 m/s) as fast as one peer writes: no faster than the control, stopped 1 s after",
+        "20,000 TwistStamped (0.1 m/s) as fast as one peer writes: no VEL faster than published, stopped 1 s after",
     ),
 }
+FLOOD_SPEED = 0.1  # m/s, what the flood and its control publish
+VEL_ROUNDING = 0.005  # m/s: a VEL's parts are whole cm/s
 
 
-def _ros2_case(case: str, quick: bool, control_top: float = 0.1) -> Row:
-    import math
+class _SentVels:
+    """A client tracer: the fastest translation any VEL sent asked for, m/s."""
+
+    def __init__(self) -> None:
+        self.top = 0.0
+
+    def link_bytes(self, t: float, kind: str, data: bytes = b"", note: str = "") -> None:
+        pass
+
+    def message(self, t: float, direction: str, message: Any) -> None:
+        if direction == "command" and isinstance(message, Vel):
+            self.top = max(self.top, 0.01 * math.hypot(message.vx, message.vy))
+
+
+def _ros2_case(case: str, quick: bool, control_top: float | None = None) -> Row:
     from argparse import Namespace
 
     from tests.teleop.fakes import truth
@@ -1127,8 +1151,10 @@ def _ros2_case(case: str, quick: bool, control_top: float = 0.1) -> Row:
         count = count // 3
     speeds: list[float] = []
     errors: list[str] = []
+    vels = _SentVels()
     with robot_session("sim://omni4", "omni4", timeout=0.5) as session:
         client, robot = session.client, session.robot
+        client.add_tracer(vels)
         sim = truth(client)
 
         def watch(cycle: Cycle) -> None:
@@ -1174,7 +1200,11 @@ def _ros2_case(case: str, quick: bool, control_top: float = 0.1) -> Row:
     elif case == "steady":
         wrong = int(end_speed > 0.01)
     else:
-        wrong = int(top > control_top + 0.005) + int(end_speed > 0.01)
+        # the robot's top speed overshoots 0.1 m/s by 16-29 % on the wheel-speed loop and varies by
+        # 0.01 m/s between runs of the control alone (wall-clock paced): what a flood could add is
+        # in the VELs the bridge sends, so those are judged; the robot's top speed is shown beside
+        # the control's
+        wrong = int(vels.top > FLOOD_SPEED + VEL_ROUNDING) + int(end_speed > 0.01)
     wrong += len(errors)
     return Row(
         "ros2",
@@ -1182,7 +1212,9 @@ def _ros2_case(case: str, quick: bool, control_top: float = 0.1) -> Row:
         {
             "published": sent or "?",
             "robot moved": f"{1000 * moved:.1f} mm",
-            "top speed": f"{top:.3f} m/s",
+            "top speed": f"{top:.3f} m/s"
+            + (f" (control {control_top:.3f})" if control_top is not None else ""),
+            "fastest VEL sent": f"{vels.top:.3f} m/s",
             "speed 1 s after": f"{end_speed:.3f} m/s",
         },
         wrong,

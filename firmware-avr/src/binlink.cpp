@@ -330,10 +330,11 @@ static void frame(uint8_t *f, uint8_t n) {
             if (k >= end || shift >= 35) return on_frame(type, ints, 255);  // bad varint
             uint8_t b = f[k++];
             z |= (uint32_t)(b & 0x7F) << shift;
+            if (shift == 28 && (b & 0x70)) z = 0xFFFFFFFF;  // past 32 bits: -2^31, beyond every field (34)
             shift += 7;
             if (b < 0x80) break;
         }
-        if (count <= CMD_PARAMS_MAX) ints[count] = z & 1 ? -(int32_t)((z + 1) >> 1) : (int32_t)(z >> 1);
+        if (count <= CMD_PARAMS_MAX) ints[count] = z & 1 ? -1 - (int32_t)(z >> 1) : (int32_t)(z >> 1);  // (z + 1) >> 1 wraps at 2^32 - 1
         if (count < 255) count++;
     }
     on_frame(type, ints, count);

@@ -5,6 +5,13 @@
 // every "abs(x) > limit" check (a VEL of -32768 drove every motor at -255); 32768 here fails them.
 static uint16_t mag(int16_t v) { return v < 0 ? (uint16_t)(0u - (uint16_t)v) : (uint16_t)v; }
 
+// vx^2 + vy^2 unsigned: two -32768s make 2^31, one past int32's range (their int32 sum wrapped
+// negative and passed V_MAX_SQ: VEL,-32768,-32768,0,1000 drove every motor at full power).
+static uint32_t speed_sq(int16_t vx, int16_t vy) {
+    uint32_t x = mag(vx), y = mag(vy);
+    return x * x + y * y;
+}
+
 static uint8_t check_move(int16_t L, int16_t V, int16_t D, int16_t C, uint8_t k) {
     if (mag(L) >= (k == 1 ? L_MAX_EXCL : L2_MAX_EXCL) && !(k == 1 && mag(L) == P_INF)) return P_E_DISTANCE;
     if (k == 1) {
@@ -38,7 +45,7 @@ uint8_t check(uint8_t kw, const int16_t *p, uint8_t n, uint8_t lo, uint8_t hi) {
                 if (mag(p[i]) > PWM_MAX) return P_E_SPEED;
             return 0;
         case K_VEL:
-            if ((int32_t)p[0] * p[0] + (int32_t)p[1] * p[1] > V_MAX_SQ || mag(p[2]) >= F_MAX_EXCL) return P_E_SPEED;
+            if (speed_sq(p[0], p[1]) > V_MAX_SQ || mag(p[2]) >= F_MAX_EXCL) return P_E_SPEED;
             if (p[3] < 1 || p[3] > 1000) return P_E_TIME;
             return 0;
         case K_SONAR:

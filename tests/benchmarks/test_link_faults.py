@@ -36,6 +36,16 @@ def test_text_without_sequence_numbers_is_seen_to_fail_calls_that_ran() -> None:
     assert o.false_failures > 0 and o.twice == 0 and o.corrupted == 0, o
 
 
+@pytest.mark.parametrize("kind", ["drop", "corrupt"])
+def test_sequenced_text_carries_commands_through_5_percent_of_damaged_bytes(kind: str) -> None:
+    """At 5 % of the bytes lost or damaged a text try (a VEL and its reply, about 42 bytes) gets
+    through 12 % of the time: with binary's 18 tries 7 % of the commands were given up on, each
+    abandoning the window behind it (692 of 1,000 calls failed). With text's own extra tries every
+    command set up on a clean line gets through, as binary's do."""
+    o = link_faults.run_one("text", kind, 0.05, 200)
+    assert (o.corrupted, o.lost_unseen, o.twice, o.false_failures, o.true_failures) == (0, 0, 0, 0, 0), o
+
+
 def test_bad_arguments(capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit):
         link_faults.main(["--commands", "0"])

@@ -149,6 +149,36 @@ def test_greeting_taken_for_the_hello_reply() -> None:
 # ------------------------------------------------------------------ events
 
 
+class _Bytes:
+    """A tracer that counts what it is handed, and raises from the ``fail``-th call on."""
+
+    def __init__(self, fail: int = 0) -> None:
+        self.calls = 0
+        self.fail = fail
+
+    def link_bytes(self, t: float, kind: str, data: bytes = b"", note: str = "") -> None:
+        self.calls += 1
+        if self.fail and self.calls >= self.fail:
+            raise OSError(28, "No space left on device")
+
+    def message(self, t: float, direction: str, message: object) -> None:
+        self.link_bytes(t, direction)
+
+
+def test_a_failing_tracer_is_dropped_with_one_traceback(caplog: pytest.LogCaptureFixture) -> None:
+    """A tracer (a recorder on a full disk) that raises on every call is logged once and handed
+    nothing more; the commands and the other tracers go on (issue 27: 6,456-17,239 tracebacks)."""
+    with RobotClient.open("sim://omni4?seed=1") as client:
+        broken, good = _Bytes(fail=3), _Bytes()
+        client.add_tracer(broken)
+        client.add_tracer(good)
+        with caplog.at_level(logging.ERROR, "omnibot.client"):
+            for _ in range(20):
+                client.status()
+    assert broken.calls == 3 and good.calls > 80
+    assert len(caplog.records) == 1 and "failed; it is removed" in caplog.records[0].getMessage()
+
+
 def test_listeners_filter_remove_and_survive_errors(caplog: pytest.LogCaptureFixture) -> None:
     link = ScriptedLink()
     client = RobotClient(link)

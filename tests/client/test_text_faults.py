@@ -9,6 +9,7 @@ the controller answers the copy from the reply it kept.
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
@@ -16,6 +17,7 @@ import pytest
 
 from omnibot.client import EventRecorder, ResetEvent, RobotClient
 from omnibot.client.switch import UNTAGGED_VERDICT
+from omnibot.client.wire import TextWire
 from omnibot.errors import ControllerError, LinkTimeout, OmnibotError
 from omnibot.firmware.controller import Controller
 from omnibot.protocol import codes, text
@@ -309,9 +311,28 @@ def test_a_byte_turned_into_a_terminator_runs_nothing(clients: list[RobotClient]
     ctrl.execute = spy
     write = link.write
     link.write = lambda data: write(data.replace(b"TELEM,0,249", b"TELEM,0,2" + into + b"9", 1))  # type: ignore[method-assign]
-    with pytest.raises(LinkTimeout, match="after 17 retries"):  # no piece is answered with its tag
+    with pytest.raises(
+        LinkTimeout, match=f"after {codes.HOST_RETRIES + codes.TEXT_HOST_EXTRA_RETRIES} retries"
+    ):  # no piece is answered with its tag
         client.execute(Telem(0, 249))
     assert ran == []
     link.write = write  # type: ignore[method-assign]
     client.execute(Telem(0, 0))  # the next call works, after a HELLO that starts the sequence again
     assert ran == [(codes.HELLO, []), (codes.TELEM, [0, 0])]
+
+
+def test_sequenced_texts_sender_has_more_fast_retransmissions() -> None:
+    """Sequenced text's host sender (client/wire.py): binary's schedule with
+    codes.TEXT_HOST_EXTRA_RETRIES more retransmissions 50 ms apart before the patient ones (its
+    lines are longer, so a try fails more often on a lossy line)."""
+    wire = TextWire(tags=True)
+    wire.sequence(True)
+    tx = wire.sender
+    assert tx is not None
+    first, _ = tx.allocate()
+    tx.track(first, b"a", 0)
+    sent = [now for now in range(0, 8000) if tx.poll(now)]
+    fast = codes.RETRIES + codes.TEXT_HOST_EXTRA_RETRIES
+    assert sent[:fast] == list(range(50, 50 * (fast + 1), 50))
+    assert [b - a for a, b in itertools.pairwise(sent)][fast - 1 :] == [100, 200, 400, 400, 400, 400, 400]
+    assert tx.take_failed() == [first] and tx.budget_ms() == 3200 + 50 * codes.TEXT_HOST_EXTRA_RETRIES

@@ -3,6 +3,9 @@ changes nothing. 36 (internal fault) cannot be triggered from outside; 40 is in 
 
 from __future__ import annotations
 
+import itertools
+from collections.abc import Iterator
+
 import pytest
 
 from omnibot.client import (
@@ -131,25 +134,41 @@ EXTREMES = {
 }
 
 
-@pytest.mark.parametrize("value", [-32768, 32767])
-def test_the_extreme_16_bit_values_run_nothing_in_any_field(client: RobotClient, value: int) -> None:
-    """-32768 has no positive twin in 16 bits (``abs`` of it stays negative on a 16-bit int): in any
-    field of any command, it and 32767 (INF, where a field takes it) are refused or taken as INF,
-    never wrapped into a speed or a power."""
-    motors = len(client.status().powers)
+INF_FIELDS = {("MOVE", 0), ("ROTATE", 0), ("DELTA", 4)}
+"""Fields that take 32767 as INF (an endless MOVE or turn, a DELTA repeated for ever)."""
+
+
+def _extreme_lines(motors: int) -> Iterator[tuple[str, bool]]:
+    """Every command with one or two of its fields at -32768 or 32767 (each combination), the rest
+    valid; with whether it may run (be taken as INF): only 32767 in fields that take INF."""
     fields = {**EXTREMES, "POWER": [100] + [0] * motors}
-    before = client.status()
     for keyword, good in fields.items():
-        for i in range(len(good)):
-            params = list(good)
-            params[i] = value
-            line = f"{keyword},{','.join(map(str, params))}"
-            (pending,) = client.submit_text(line)
-            try:
-                pending.result()
-            except ControllerError:
-                continue
-            assert value == 32767 and (keyword, i) in {("MOVE", 0), ("ROTATE", 0), ("DELTA", 4)}, line
-            client.stop()  # an INF motion asked: gone again
+        for k in (1, 2):
+            for where in itertools.combinations(range(len(good)), k):
+                for values in itertools.product((-32768, 32767), repeat=k):
+                    params = list(good)
+                    for i, value in zip(where, values, strict=True):
+                        params[i] = value
+                    may_run = all(
+                        v == 32767 and (keyword, i) in INF_FIELDS for i, v in zip(where, values, strict=True)
+                    )
+                    yield f"{keyword},{','.join(map(str, params))}", may_run
+
+
+def test_the_extreme_16_bit_values_run_nothing_in_any_field(client: RobotClient) -> None:
+    """-32768 has no positive twin in 16 bits (``abs`` of it stays negative on a 16-bit int), and two
+    of them squared overflow a 32-bit sum (VEL's speed, 2^31): in any one or two fields of any
+    command, they and 32767 (INF, where a field takes it) are refused or taken as INF, never wrapped
+    into a speed or a power."""
+    motors = len(client.status().powers)
+    before = client.status()
+    for line, may_run in _extreme_lines(motors):
+        (pending,) = client.submit_text(line)
+        try:
+            pending.result()
+        except ControllerError:
+            continue
+        assert may_run, line
+        client.stop()  # an INF motion asked: gone again
     client.stop()
     assert client.status().powers == before.powers == tuple([0] * motors)

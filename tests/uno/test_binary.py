@@ -65,7 +65,12 @@ STEPS: list[bytes] = [
     b"STATUS\n",
     b"MODE,4\n",
     PROBE,  # binary: the HELLO reply, the text terminators dropped as garbage
-    encode_message(codes.MODE, 2, [0]),
+    # ERROR 34: varints past 32 bits (the zigzag of 2^32 + 50, 5 bytes) and at 32 bits' end (-2^31's
+    # zigzag is 0xFFFFFFFF: one more wraps to 0), not read as 50 and 0
+    encode_message(codes.VEL, 2, [(1 << 32) + 50, 0, 0, 100]),
+    encode_message(codes.VEL, 3, [-(1 << 31), 0, 0, 100]),
+    encode_message(codes.VEL, 4, [0, 0, 0, -(1 << 34)]),
+    encode_message(codes.MODE, 5, [0]),
 ]
 
 

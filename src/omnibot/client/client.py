@@ -450,9 +450,10 @@ class RobotClient(TypedCalls):
             isinstance(wire, TextWire) and isinstance(command, SYNC_TEXT)
         )
         if sender is not None and not sync and not wire.ready():
-            self._wait(wire.ready, self.clock.now() + wait, "send window full")
+            # room comes when the oldest frame is answered or given up on: the ARQ's bound
+            self._wait(wire.ready, self._arq_bound(sender), "send window full")
         if sender is not None and sync:
-            self._replies.give_up(wire.take_failed())
+            self._replies.give_up(wire.take_failed(), sender.retries)
         window = self.text_window or 0
         if isinstance(wire, TextWire) and window and sender is not None:
             # a sequenced command is tracked for retransmission once framed: room first, for its
@@ -579,10 +580,15 @@ class RobotClient(TypedCalls):
         before); LinkTimeout past that bound all the same."""
         sender = self._wire.sender
         assert sender is not None
-        bound = self.clock.now() + sender.window * (sender.budget_ms() / 1000.0 + _RETRY_POLL)
+        bound = self._arq_bound(sender)
         self._wait(lambda: pending.done or not self._in_flight(pending), bound, f"no reply to {pending.line}")
         if not pending.done:  # out of the window without a verdict (a SYNC frame abandoned it)
             raise LinkTimeout(f"no reply to {pending.line}; it may or may not have run")
+
+    def _arq_bound(self, sender: arq.Sender) -> float:
+        """When every frame now in ``sender``'s window is answered or given up on at the latest
+        (each at most one retry budget after the one before it), on the link's clock."""
+        return self.clock.now() + sender.window * (sender.budget_ms() / 1000.0 + _RETRY_POLL)
 
     def _wait_for_switch(self) -> None:
         """Wait for a MODE that switches protocols: nothing may be sent until its OK is in."""
@@ -747,7 +753,7 @@ class RobotClient(TypedCalls):
         if wire.sender is not None:
             for frame in wire.service(round(self.clock.now() * 1000)):
                 self._write(frame)
-            self._replies.give_up(wire.take_failed())
+            self._replies.give_up(wire.take_failed(), wire.sender.retries)
 
     def _write(self, data: bytes) -> None:
         if self._tracers:

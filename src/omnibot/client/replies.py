@@ -25,7 +25,6 @@ from typing import TYPE_CHECKING, Protocol
 from omnibot.client.events import Event, Listeners, ResetEvent, event_from_message
 from omnibot.client.views import Hello
 from omnibot.errors import LinkTimeout, ProtocolError
-from omnibot.protocol import codes
 from omnibot.protocol.messages import ErrorReply, HelloReply, Reply
 
 if TYPE_CHECKING:
@@ -103,16 +102,15 @@ class Replies:
             p._fail(error(p))
         self.waiting.clear()
 
-    def give_up(self, seqs: list[int]) -> None:
-        """Fail the commands whose frames the retries gave up on (sequence numbers ``seqs``)."""
+    def give_up(self, seqs: list[int], retries: int) -> None:
+        """Fail the commands whose frames the ``retries`` retransmissions gave up on (sequence
+        numbers ``seqs``)."""
         if not seqs:
             return
         for p in self.waiting:
             if p.seq in seqs:
                 p._fail(
-                    LinkTimeout(
-                        f"no reply to {p.line} after {codes.HOST_RETRIES} retries; it may or may not have run"
-                    )
+                    LinkTimeout(f"no reply to {p.line} after {retries} retries; it may or may not have run")
                 )
         self.waiting = [p for p in self.waiting if not p.done]
 

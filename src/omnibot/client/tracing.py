@@ -38,7 +38,8 @@ class Host(Protocol):
 
 class Tracers:
     """The tracers of ``host`` (a client), each told in turn at the time of its link's clock; one that
-    raises is logged and the others still hear. False while there is none (nothing to encode)."""
+    raises is logged once and dropped (a recorder that fails on every byte would otherwise log a
+    traceback per byte), and the others still hear. False while there is none (nothing to encode)."""
 
     def __init__(self, host: Host) -> None:
         self._host = host
@@ -61,7 +62,7 @@ class Tracers:
             try:
                 tracer.link_bytes(self._host.clock.now(), kind, data, note)
             except Exception:
-                log.exception("tracer %r failed", tracer)
+                self._drop(tracer)
 
     def message(self, direction: str, message: Message | Malformed) -> None:
         """A ``command`` sent or a ``reply`` matched."""
@@ -69,4 +70,9 @@ class Tracers:
             try:
                 tracer.message(self._host.clock.now(), direction, message)
             except Exception:
-                log.exception("tracer %r failed", tracer)
+                self._drop(tracer)
+
+    def _drop(self, tracer: Tracer) -> None:
+        """``tracer`` raised (the exception being handled): log it and hand it nothing more."""
+        log.exception("tracer %r failed; it is removed (the link goes on)", tracer)
+        self.remove(tracer)

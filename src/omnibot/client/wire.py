@@ -57,7 +57,8 @@ class TextWire:
         self.sender = (
             arq.Sender(
                 window=codes.TEXT_SEQ_WINDOW,
-                retries=codes.HOST_RETRIES,
+                retries=codes.HOST_RETRIES + codes.TEXT_HOST_EXTRA_RETRIES,
+                fast=codes.RETRIES + codes.TEXT_HOST_EXTRA_RETRIES,
                 max_timeout_ms=codes.HOST_RETRY_TIMEOUT_MAX_MS,
                 first_seq=self._last_tag % codes.TEXT_SEQ_MAX + 1,
                 top=codes.TEXT_SEQ_MAX,

@@ -71,13 +71,15 @@ class Sender:
         first_seq: int = 1,
         max_timeout_ms: int = 0,
         top: int = codes.SEQ_MAX,
+        fast: int = codes.RETRIES,
     ) -> None:
         self.window = window
         self.top = top  # the largest seq (binary 255; sequenced text's tags 9999)
         self.timeout_ms = timeout_ms
         self.retries = retries
-        # above timeout_ms: the retransmissions after the first codes.RETRIES wait twice the last
+        # above timeout_ms: the retransmissions after the first ``fast`` wait twice the last
         self.max_timeout_ms = max_timeout_ms
+        self.fast = fast
         self._next = first_seq
         self._sync = True
         self._sync_seq = 0  # the seq just allocated with SYNC (0: the last one had none)
@@ -161,10 +163,10 @@ class Sender:
 
     def _wait(self, resent: int) -> int:
         """ms to wait for progress after the ``resent``-th retransmission of the oldest frame:
-        ``timeout_ms`` for the first :data:`codes.RETRIES` (a lossy line's lost byte costs one
-        such wait), then, with ``max_timeout_ms`` above it, twice the wait before, up to that (a
-        line, controller or host stalled for seconds costs no call)."""
-        late = resent - codes.RETRIES
+        ``timeout_ms`` for the first ``fast`` (a lossy line's lost byte costs one such wait), then,
+        with ``max_timeout_ms`` above it, twice the wait before, up to that (a line, controller or
+        host stalled for seconds costs no call)."""
+        late = resent - self.fast
         if late < 0 or self.max_timeout_ms <= self.timeout_ms:
             return self.timeout_ms
         wait = self.timeout_ms << (late + 1)
