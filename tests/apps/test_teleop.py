@@ -23,6 +23,21 @@ def test_joystick_waits_for_a_pad_and_keeps_the_robot_still(capsys: pytest.Captu
     assert "robot at x=1.00 m y=1.00 m" in out  # the room's start pose: it never moved
 
 
+def test_a_log_holds_the_robots_telemetry_estimate_and_truth(tmp_path: Path) -> None:
+    """``--log``: teleop asks for telemetry, so the log has what the robot did (here: stood still at
+    the room's start), not only the commands."""
+    from omnibot.logs import topics
+    from omnibot.logs.reader import LogFile
+
+    path = tmp_path / "teleop.mcap"
+    assert main(["teleop", "--joystick", "--duration", "0.5", "--log", str(path)]) == 0
+    messages = LogFile.open(path).read_all()
+    counts = {t: sum(m.topic == t for m in messages) for t in (topics.ODOM, topics.ESTIMATE, topics.TRUTH)}
+    assert min(counts.values()) >= 5, counts  # telemetry every teleop period (20 Hz) for 0.5 s
+    truth = [m for m in messages if m.topic == topics.TRUTH][-1].decode().pose.pose.position
+    assert (truth.x, truth.y) == pytest.approx((1.0, 1.0), abs=1e-3)
+
+
 @pytest.mark.parametrize(
     ("argv", "message"),
     [

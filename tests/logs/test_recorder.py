@@ -221,3 +221,31 @@ def test_writes_from_several_threads_make_a_whole_file(tmp_path: Path) -> None:
         assert [m.data for m in messages[f"/thread{k}"]] == [  # type: ignore[attr-defined]
             f"{k}:{i}," * (1 + i % 7) for i in range(1500)
         ]
+
+
+def test_range_events_are_recorded_as_the_sonars_ranges(tmp_path: Path) -> None:
+    """A sonar pinged by ``SONAR`` reports in ``RANGE`` events (no TEL sonar field): each is a
+    sensor_msgs/Range on the sonar's topic, its distance (m) as the event's."""
+    from omnibot.client.client import RobotClient
+    from omnibot.client.events import RangeEvent
+    from omnibot.client.session import guarded
+    from omnibot.robot.description import load_robot
+
+    robot = load_robot("omni4")
+    client = RobotClient.open("sim://omni4?seed=3&world=room", robot)
+    rec = Recorder(tmp_path / "run.mcap")
+    events: list[RangeEvent] = []
+    with guarded(client, robot=robot):
+        rec.attach(client, robot)
+        client.on_range(events.append)
+        for reply in client.submit_text("SONAR,1,60,0,500,0"):  # every reading inside 0..500 cm
+            reply.result(1.0)
+        client.sleep(1.0)
+        rec.close()
+    _, messages = read_all(tmp_path / "run.mcap")
+    ranges = messages[topics.range_topic("front")]
+    assert len(events) >= 10 and len(ranges) == len(events)
+    for m, event in zip(ranges, events, strict=True):
+        assert m.header.frame_id == "sonar_front"  # type: ignore[attr-defined]
+        expected = math.inf if event.distance is None else event.distance
+        assert m.range == pytest.approx(expected, rel=1e-6)  # type: ignore[attr-defined]

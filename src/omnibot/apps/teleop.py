@@ -71,6 +71,7 @@ def run(args: argparse.Namespace) -> int:
     from omnibot.apps.teleop_loop import Teleop
     from omnibot.cliargs import check_sim_options, recording_of, sim_url, use_calibration
     from omnibot.client.session import robot_session
+    from omnibot.protocol import codes
     from omnibot.teleop.config import load_teleop_config
     from omnibot.teleop.keyboard import HELP
     from omnibot.transport.device import find_device
@@ -109,6 +110,8 @@ def run(args: argparse.Namespace) -> int:
             recording=recording,
         )
         _say(f"limits: {teleop.limits.speed:.2f} m/s, {teleop.limits.rate:.2f} rad/s")
+        if recording is not None:  # the log holds what the robot did, not only what it was sent
+            client.telemetry(max(config.period, 0.01), codes.TEL_MASK)
         try:
             teleop.run(args.duration)  # stops the robot on the way out, Ctrl-C included
         except KeyboardInterrupt as exc:  # the summary first, then the exit status says interrupted

@@ -21,6 +21,7 @@ clock of the moment recording started):
   the estimate (the ``estimator`` named, run on each sample) as ``odom`` and ``/tf`` odom ->
   base_link (and exactly, heading unwrapped, as ``/omnibot/estimate`` geometry_msgs/Pose2D, which
   ``omnibot log replay`` compares with), and the simulator's truth as ``/omnibot/truth`` when the link is an in-process one;
+* a ``RANGE`` event (a sonar pinged by ``SONAR``): ``range/<sonar>``, as a TEL sample's ranges;
 * :meth:`scan` (a runtime's scanner, :mod:`omnibot.logs.sink`): ``/scan`` ``sensor_msgs/msg/LaserScan``
   (:func:`laser_scan`), stamped at the scan's first ray; ``/map`` ``nav_msgs/msg/OccupancyGrid``
   (:func:`occupancy_grid`) and ``/tf`` map -> odom (:func:`map_to_odom`) are written by ``omnibot
@@ -59,7 +60,7 @@ from mcap.writer import CompressionType, Writer
 
 from omnibot import __version__
 from omnibot.client.client import RobotClient
-from omnibot.client.events import Event, Telemetry
+from omnibot.client.events import Event, RangeEvent, Telemetry
 from omnibot.config_errors import load_yaml
 from omnibot.errors import ConfigError
 from omnibot.estimation.estimator import Estimator, make_estimator
@@ -597,11 +598,22 @@ class Recorder:
             self.write(CMD_VEL, "geometry_msgs/msg/TwistStamped", stamped, ns)
 
     def event(self, event: Event) -> None:
-        """A client listener: every event as a protocol line, telemetry as ROS messages too."""
+        """A client listener: every event as a protocol line, telemetry and ranges as ROS messages too."""
         if event.message is not None:
             self.message(event.time, "event", event.message)
         if isinstance(event, Telemetry):
             self.telemetry(event)
+        elif isinstance(event, RangeEvent) and self.robot is not None:
+            sonars = self.robot.sonars
+            if 1 <= event.sonar <= len(sonars):  # numbered 1..k as in the protocol
+                ns = self.ns(event.time)
+                sonar = sonars[event.sonar - 1]
+                self.write(
+                    range_topic(sonar.name),
+                    "sensor_msgs/msg/Range",
+                    self._range(ns, sonar, event.distance),
+                    ns,
+                )
 
     def telemetry(self, tel: Telemetry) -> None:
         """Record a TEL sample: joint states, IMU, sonar ranges, the estimator's odometry and pose, and

@@ -13,7 +13,8 @@ Two backends, chosen once at start by ``--ros-backend`` (:func:`choose`):
 
 Both hand over and take the same samples: cyclonedds' :class:`~cyclonedds.idl.IdlStruct` of a ROS
 type (:mod:`omnibot.ros2.types`); the rclpy backend carries them as serialized CDR, which is what rmw
-puts on the wire (and, with :attr:`RosNode.serialized`, takes the recorder's CDR bytes as they are).
+puts on the wire. Both backends' writers also take CDR bytes as they are (:meth:`Writer.write_cdr`):
+the recorder's messages go out without being built again as samples.
 """
 
 from __future__ import annotations
@@ -84,6 +85,11 @@ class Writer(Protocol):
         """Publish ``sample`` (an IdlStruct of the writer's type)."""
         ...
 
+    def write_cdr(self, data: bytes) -> None:
+        """Publish ``data``, a message of the writer's type as CDR with its encapsulation header (as
+        :func:`omnibot.logs.schemas.serialize` makes it), as it is."""
+        ...
+
 
 class Service(Protocol):
     """A service whose requests the runtime answers: :meth:`poll` once a cycle."""
@@ -111,8 +117,6 @@ class RosNode(Protocol):
     domain_id: int
     scope: str
     """Discovery range: ``LOCALHOST``, ``OFF`` or ``SUBNET``."""
-    serialized: bool
-    """Its writers also take CDR bytes (``write_cdr(data)``), as rmw publishes them."""
     closers: list[Callable[[], object]]
     """Called by :meth:`close` first, newest first."""
 

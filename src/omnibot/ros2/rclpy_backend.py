@@ -147,22 +147,6 @@ class RclpyWriter:
         self.publisher.publish(bytes(data))
 
 
-class WireWriter:
-    """A writer of the companion DDS node that takes CDR bytes too."""
-
-    def __init__(self, writer: Any, typename: str) -> None:
-        self.writer = writer
-        self.type = dds_type(typename)
-
-    def write(self, sample: Any) -> None:
-        """Publish a cyclonedds sample."""
-        self.writer.write(sample)
-
-    def write_cdr(self, data: bytes) -> None:
-        """Publish CDR bytes (decoded to the sample cyclonedds writes)."""
-        self.writer.write(self.type.deserialize(bytes(data)))
-
-
 class RclpyReader:
     """A raw subscription whose messages wait for :meth:`take` (keep-last: at most ``depth`` and 64)."""
 
@@ -265,7 +249,6 @@ class RclpyNode:
     """The bridge's rclpy node ``name`` in ``namespace`` (see the module docstring)."""
 
     backend = "rclpy"
-    serialized = True
 
     def __init__(
         self,
@@ -352,7 +335,7 @@ class RclpyNode:
         """A publisher of ``typename`` on ``name`` (serialized)."""
         cls = message_class(typename)
         if cls is None:
-            return WireWriter(self.wire(typename).writer(name, typename, profile), typename)
+            return self.wire(typename).writer(name, typename, profile)
         holder = self._holder(name, typename)
         return RclpyWriter(holder.create_publisher(cls, name, qos_profile(profile)))
 
