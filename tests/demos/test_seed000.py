@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import re
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -146,3 +146,27 @@ def test_demo_in_a_world_without_walls_says_the_example_needs_one(
     assert "no wall known; facing a wall needs a world with walls" in out
     line = next(x for x in out.splitlines() if "rotate to face the wall" in x)
     assert abs(float(line.split("ROTATE,")[1].split(",")[0])) <= 180
+
+
+def test_the_pty_demos_log_holds_the_emulators_truth_on_the_links_clock(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``demo --log`` on the pty emulator: the truth of the emulator's file goes into the log (it had
+    none: the truth was only in demo_truth.csv), each row at the link time the telemetry places the
+    controller's clock at, so the truth starts moving when the estimate does."""
+    from omnibot.logs.run import load_run
+
+    log = tmp_path / "demo.mcap"
+    assert main(["demo", "--out", str(tmp_path), "--log", str(log)]) == 0
+    capsys.readouterr()
+    run = load_run(log)
+    rows = (tmp_path / "demo_truth.csv").read_text().splitlines()[1:]
+    assert len(run.truth) == len(rows) > 500  # 10 ms apart
+    assert [round(r[1], 4) for r in run.truth[::100]] == [float(r.split(",")[1]) for r in rows[::100]]
+
+    def moved(track: Sequence[tuple[float, ...]], metres: float) -> float:
+        x0, y0 = track[0][1:3]
+        return next(t for t, x, y, *_ in track if (x - x0) ** 2 + (y - y0) ** 2 > metres**2)
+
+    # the odometry has not drifted yet when the robot first moves 5 cm: the two agree on when
+    assert abs(moved(run.truth, 0.05) - moved(run.estimate, 0.05)) < 0.05

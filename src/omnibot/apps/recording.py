@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from typing import TYPE_CHECKING
 
 from omnibot.logs.recording import Recording, open_recording
@@ -50,6 +50,11 @@ class CommandRecording:
     def attach(self, client: RobotClient, robot: RobotDescription | None, guess: bool) -> None:
         """Record ``client`` (see :meth:`Recording.attach <omnibot.logs.recording.Recording.attach>`)."""
         self.recording.attach(client, robot, guess)
+
+    def controller_truth(self, rows: Sequence[tuple[float, float, float, float]]) -> int:
+        """Truth timed by the controller's clock into the log (see :meth:`Recording.controller_truth
+        <omnibot.logs.recording.Recording.controller_truth>`)."""
+        return self.recording.controller_truth(rows)
 
     def attach_runtime(self, runtime: Runtime) -> None:
         """Record ``runtime`` and, with ``--foxglove``, let Foxglove's Teleop panel drive it."""

@@ -28,11 +28,11 @@ import csv
 import math
 import tempfile
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 from omnibot.client.client import RobotClient
 from omnibot.client.events import Event, RangeEvent, Telemetry, WarnEvent
@@ -382,6 +382,14 @@ class Demo:
 Bounds = tuple[tuple[float, float], tuple[float, float]]
 
 
+class DemoRecording(ClientRecording, Protocol):
+    """``--log``'s recording as the demo uses it (:class:`omnibot.logs.recording.Recording`): the
+    clients it opens and, on the pty emulator, the truth of the emulator's file."""
+
+    def controller_truth(self, rows: Sequence[tuple[float, float, float, float]]) -> int:
+        """Ground truth rows ``t, x, y, theta`` timed by the controller's clock into the log."""
+
+
 class TruthSource:
     """Ground truth: the emulator's CSV file, or the in-process simulator of a ``sim://`` link."""
 
@@ -461,7 +469,7 @@ def run_demo(
     seed: int = 1,
     world: str = "room",
     surface: str | None = None,
-    recording: ClientRecording | None = None,
+    recording: DemoRecording | None = None,
 ) -> tuple[str, bool]:
     """Run the demo; returns the printed report and whether every example did what it should.
 
@@ -470,7 +478,8 @@ def run_demo(
     its own (:func:`with_world`). Anything else (a real board):
     odometry only. The robot is the one on the link (``robot_name``, if given, must name it); the
     session leaves the controller stopped and in the MODE it was found in, however the demo ends;
-    ``recording`` (``--log``) records it.
+    ``recording`` (``--log``) records it, with the truth (the emulator's file's, placed on the link's
+    clock by the telemetry, once the emulator has closed it).
     """
     from omnibot.client.session import robot_session
     from omnibot.sim.world import load_world
@@ -508,6 +517,8 @@ def run_demo(
                 demo = Demo(client, robot, truth if truth is not None else (lambda: None), bar)
                 segments = demo.run()
         wall = time.monotonic() - started
+        if recording is not None and truth_file is not None:
+            recording.controller_truth(truth_file.rows())  # whole: the emulator has ended
         written = _write_outputs(out, truth, demo.recorder.odo_trail, world_map)
     return _report(hello, port, segments, written, wall)
 

@@ -370,6 +370,9 @@ class Recorder:
         self._joints: list[str] = []
         self._cpr: list[float] = []
         self._last_tel: tuple[float, tuple[int, ...]] | None = None
+        self._clock_offset: float | None = None
+        """The smallest link time minus controller time of the TELs seen (the one that arrived
+        soonest): places a time on the controller's clock on the link's (:meth:`controller_truth`)."""
         self._clients: list[RobotClient] = []
         self.samples = 0
         """Telemetry samples with encoders seen (what an estimator is fed)."""
@@ -619,6 +622,9 @@ class Recorder:
         """Record a TEL sample: joint states, IMU, sonar ranges, the estimator's odometry and pose, and
         the simulator's truth when there is one."""
         ns = self.ns(tel.time)
+        offset = tel.time - tel.controller_time
+        if self._clock_offset is None or offset < self._clock_offset:
+            self._clock_offset = offset
         if tel.encoders is not None and self._joints and len(tel.encoders) == len(self._joints):
             self._joint_states(ns, tel)
         if tel.gyro_rate is not None or tel.heading is not None:
@@ -636,6 +642,27 @@ class Recorder:
         if self._simulator is not None:
             pose, vel = self._simulator.pose, self._simulator.twist
             self.write_pose(TRUTH, ns, Pose2D(pose.x, pose.y, pose.theta), (vel.vx, vel.vy, vel.w))
+
+    def controller_truth(self, rows: Sequence[tuple[float, float, float, float]]) -> int:
+        """Ground truth timed by the controller's clock, as ``omnibot sim --pty --truth`` writes it
+        (rows ``t, x, y, theta``: the emulator's simulated time is its firmware's clock), on
+        ``/omnibot/truth``: each row at the link time the soonest TEL puts it at (a TEL's delay on the
+        line, a few ms, is the error), its body twist from the poses either side. Returns the rows
+        written: none before a TEL was recorded, as nothing places them then."""
+        offset = self._clock_offset
+        if offset is None or self.robot is None:
+            return 0
+        for k, (t, x, y, theta) in enumerate(rows):
+            before, after = rows[max(k - 1, 0)], rows[min(k + 1, len(rows) - 1)]
+            dt = after[0] - before[0]
+            world = (
+                ((after[1] - before[1]) / dt, (after[2] - before[2]) / dt, (after[3] - before[3]) / dt)
+                if dt > 0
+                else (0.0, 0.0, 0.0)
+            )
+            vx, vy, w = (float(v) for v in world_to_body(world, theta))
+            self.write_pose(TRUTH, self.ns(t + offset), Pose2D(x, y, theta), (vx, vy, w))
+        return len(rows)
 
     def estimate(self, t: float, est: Estimate) -> None:
         """An estimate at link time ``t``: ``odom``, ``/tf`` odom -> base_link, ``/omnibot/estimate``."""

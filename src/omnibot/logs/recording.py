@@ -14,7 +14,7 @@ from __future__ import annotations
 import contextlib
 import os
 import sys
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, cast
@@ -125,6 +125,11 @@ class Recording:
             if panel is not None:
                 return cast("PanelSource", panel)
         return None
+
+    def controller_truth(self, rows: Sequence[tuple[float, float, float, float]]) -> int:
+        """Ground truth timed by the controller's clock (the pty emulator's ``--truth`` rows) into the
+        log (:meth:`Recorder.controller_truth`); the rows written, 0 before a client was recorded."""
+        return self.recorder.controller_truth(rows) if self.recorder is not None else 0
 
     @property
     def failure(self) -> str | None:

@@ -164,7 +164,7 @@ class Snapshot:
 
     @property
     def twist(self) -> Twist:
-        """The world-frame velocity (m/s, m/s, rad/s)."""
+        """The body-frame velocity (m/s, m/s, rad/s), as the class says."""
         return Twist(self.vx, self.vy, self.w)
 
 
