@@ -210,6 +210,12 @@ _INV_ROLL_EPS = 1.0 / ROLL_SPEED_EPS
 
 
 @njit(cache=True, inline="always", error_model="numpy")
+def _far(a: float) -> int:
+    """1 if :func:`sincos` cannot reduce ``a`` (past :data:`REDUCE_LIMIT`, or not finite), else 0."""
+    return 0 if abs(a) <= REDUCE_LIMIT else 1
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def _fix_range(b: FloatArray, arg: int, sin: int, cos: int) -> None:
     """The C library's sin and cos of the arguments past :data:`REDUCE_LIMIT` (or not finite)."""
     for i in range(BLOCK):
@@ -276,8 +282,9 @@ def _store(rb: FloatArray, wb: FloatArray, first: int, n: int, m: int, views: tu
 
 @njit(cache=True, inline="always", error_model="numpy")
 def _step(rb: FloatArray, wb: FloatArray, m: int, has_ext: bool, dt: float) -> None:
-    """Advance the robots of a block (``rb`` per robot, ``wb`` per wheel) by dt: :func:`omnibot.sim.kernels._robot_physics`, the
-    same operations in the same order, over the block's lanes (each loop over lanes vectorises)."""
+    """Advance the robots of a block (``rb`` per robot, ``wb`` per wheel) by dt: the operations of
+    :func:`omnibot.sim.kernels._robot_physics` in the same order, over the block's lanes (each loop
+    over lanes vectorises; the C library's sin and cos only where a loop met an angle too large)."""
     for i in range(BLOCK):
         v_bus = rb[V_BUS, i]
         v_bus = v_bus + rb[B_RELAX, i] * (rb[V_OPEN, i] - rb[B_RES, i] * rb[I_BATT, i] - v_bus)
@@ -286,15 +293,23 @@ def _step(rb: FloatArray, wb: FloatArray, m: int, has_ext: bool, dt: float) -> N
         rb[S01, i] = rb[S02, i] = rb[S12, i] = 0.0
         rb[R0, i] = rb[R1, i] = rb[R2, i] = 0.0
         rb[I_SUM, i] = 0.0
-        rb[ARG, i] = rb[TH, i]
-        rb[SIN, i], rb[COS, i] = sincos(rb[TH, i])
-    _fix_range(rb, ARG, SIN, COS)
+    if has_ext:  # the heading's sine and cosine turn the world force into the body frame
+        far = 0
+        for i in range(BLOCK):
+            rb[ARG, i] = rb[TH, i]
+            rb[SIN, i], rb[COS, i] = sincos(rb[TH, i])
+            far += _far(rb[TH, i])
+        if far:
+            _fix_range(rb, ARG, SIN, COS)
     for j in range(m):
         o = j * WHEEL_ROWS
+        far = 0
         for i in range(BLOCK):
             wb[o + WARG, i] = wb[o + COUNT, i] * wb[o + ANGLE, i]
             wb[o + WCOS, i] = cos(wb[o + WARG, i])
-        _fix_range(wb, o + WARG, -1, o + WCOS)
+            far += _far(wb[o + WARG, i])
+        if far:
+            _fix_range(wb, o + WARG, -1, o + WCOS)
         for i in range(BLOCK):
             vx, vy, w, v_bus = rb[VX, i], rb[VY, i], rb[W, i], rb[V_BUS, i]
             omega = wb[o + OMEGA, i]
@@ -355,6 +370,7 @@ def _step(rb: FloatArray, wb: FloatArray, m: int, has_ext: bool, dt: float) -> N
             rb[R2, i] -= e2 * rw
             wb[o + E0, i], wb[o + E1, i], wb[o + E2, i] = e0, e1, e2
             wb[o + INV_D, i], wb[o + RW, i] = inv_d, rw
+    far = 0
     for i in range(BLOCK):
         r0, r1, r2 = rb[R0, i], rb[R1, i], rb[R2, i]
         if has_ext:  # world force and torque, into the body frame
@@ -372,6 +388,7 @@ def _step(rb: FloatArray, wb: FloatArray, m: int, has_ext: bool, dt: float) -> N
         rb[SIN, i], rb[COS, i] = sincos(w * dt)
         rb[ARG2, i] = rb[TH, i] + 0.5 * dt * w
         rb[SIN2, i], rb[COS2, i] = sincos(rb[ARG2, i])
+        far += _far(rb[ARG, i]) + _far(rb[ARG2, i])
     for j in range(m):
         o = j * WHEEL_ROWS
         for i in range(BLOCK):
@@ -380,8 +397,9 @@ def _step(rb: FloatArray, wb: FloatArray, m: int, has_ext: bool, dt: float) -> N
                 - wb[o + E2, i] * rb[R2, i]
             )  # fmt: skip
             wb[o + ANGLE, i] += dt * wb[o + OMEGA, i]
-    _fix_range(rb, ARG, SIN, COS)
-    _fix_range(rb, ARG2, SIN2, COS2)
+    if far:
+        _fix_range(rb, ARG, SIN, COS)
+        _fix_range(rb, ARG2, SIN2, COS2)
     for i in range(BLOCK):
         # body-frame rotation of the velocity by -w dt, pose at the mid-step heading
         c, s = rb[COS, i], rb[SIN, i]
