@@ -73,20 +73,18 @@ with localcontext() as _ctx:
     TWO_OVER_PI = float(1 / _PI_2)
 
 # Taylor coefficients 1/n! (the reduced arguments are small enough for them to reach a double's precision)
-_F = [1.0 / math.factorial(n) for n in range(22)]
-EX2, EX3, EX4, EX5, EX6, EX7, EX8, EX9, EX10, EX11, EX12, EX13, EX14, EX15, EX16 = _F[2:17]
-_SIN: tuple[float, ...] = tuple(_F[n] * (-1) ** (n // 2) for n in range(3, 22, 2))  # of x^3 .. x^21
-_COS: tuple[float, ...] = tuple(_F[n] * (-1) ** (n // 2) for n in range(4, 21, 2))  # of x^4 .. x^20
-SN3, SN5, SN7, SN9, SN11, SN13, SN15, SN17, SN19, SN21 = _SIN
-CS4, CS6, CS8, CS10, CS12, CS14, CS16, CS18, CS20 = _COS
+_F = [1.0 / math.factorial(n) for n in range(19)]
+EX2, EX3, EX4, EX5, EX6, EX7, EX8, EX9, EX10, EX11, EX12, EX13, EX14 = _F[2:15]
+_SIN: tuple[float, ...] = tuple(_F[n] * (-1) ** (n // 2) for n in range(3, 18, 2))  # of x^3 .. x^17
+_COS: tuple[float, ...] = tuple(_F[n] * (-1) ** (n // 2) for n in range(4, 19, 2))  # of x^4 .. x^18
+SN3, SN5, SN7, SN9, SN11, SN13, SN15, SN17 = _SIN
+CS4, CS6, CS8, CS10, CS12, CS14, CS16, CS18 = _COS
 
 
 @njit(cache=True, inline="always", error_model="numpy")
 def _expm1_reduced(r: float) -> float:
     """exp(r) - 1 for |r| <= ln 2 / 2."""
-    e = EX16
-    e = EX15 + r * e
-    e = EX14 + r * e
+    e = EX14
     e = EX13 + r * e
     e = EX12 + r * e
     e = EX11 + r * e
@@ -143,9 +141,7 @@ def _reduce(x: float) -> tuple[float, float, int]:
 @njit(cache=True, inline="always", error_model="numpy")
 def _sin_reduced(r: float, t: float) -> float:
     z = r * r
-    s = SN21
-    s = SN19 + z * s
-    s = SN17 + z * s
+    s = SN17
     s = SN15 + z * s
     s = SN13 + z * s
     s = SN11 + z * s
@@ -159,8 +155,7 @@ def _sin_reduced(r: float, t: float) -> float:
 @njit(cache=True, inline="always", error_model="numpy")
 def _cos_reduced(r: float, t: float) -> float:
     z = r * r
-    c = CS20
-    c = CS18 + z * c
+    c = CS18
     c = CS16 + z * c
     c = CS14 + z * c
     c = CS12 + z * c
