@@ -477,9 +477,9 @@ class Physics:
         arithmetic is the same, only shared out among numba's threads, each robot stepped ``steps``
         times in a row by one thread; ``numba.set_num_threads`` chooses how many). ``exact=False``:
         the robots in vector lanes with the kernel's own tanh, sin and cos
-        (:func:`omnibot.sim.lanes.physics_run`), 2-4 times faster; its results are within a few
-        units in the last place of the exact step's per step, and within 1e-9 (relative to the
-        state's scale) of them after thousands of steps (``tests/sim/test_lanes.py``), not bit for bit.
+        (:func:`omnibot.sim.lanes.physics_run`), about 4 times faster (BENCHMARKS.md); not bit for
+        bit: every state within 1e-12 of its largest value of the exact step's over 2 s
+        (``tests/sim/test_lanes.py``; 7e-13 measured after 10 s).
         A battery with a ``charge`` is stepped one step per call so its charge follows. Each kernel
         compiles on its first call in a process (numba's threading layer; cached on disk after).
         """
