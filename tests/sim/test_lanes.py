@@ -70,6 +70,16 @@ def test_a_lanes_run_keeps_within_its_tolerance_of_the_exact_step() -> None:
     assert len(np.unique(fast.pose[:, 0])) > n // 2 and fast.time == exact.time
 
 
+@pytest.mark.parametrize("preset", ["omni3", "mecanum4"])
+def test_every_wheel_layout_keeps_within_the_tolerance(preset: str) -> None:
+    robot = load_robot(preset)
+    pwm = np.random.default_rng(5).integers(-255, 256, size=(5, robot.n_wheels))
+    fast, exact = Physics(robot, n=5), Physics(robot, n=5)
+    fast.run(pwm, 1000, exact=False)
+    exact.run(pwm, 1000)
+    _assert_close(exact, fast, RTOL)
+
+
 def test_angles_past_the_reduction_go_to_the_c_library() -> None:
     fast, exact = _batch(2), _batch(2)
     for ph in (fast, exact):
