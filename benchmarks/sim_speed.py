@@ -10,7 +10,8 @@ numbers are not. Results go in BENCHMARKS.md.
   after about 3 s and keeps pushing against it, so most steps run the full contact test.
 * IR-SIM: one kinematic omni robot, headless, no obstacles (:mod:`benchmarks.irsim_baseline`).
 * omnibot batch: :class:`~omnibot.sim.physics.Physics` with N = 1000 robots: :meth:`Physics.run`
-  (the batch API, every core: robot-steps/s with 1 thread and with all) and, for comparison,
+  (the batch API, every core: robot-steps/s with 1 thread and with all; exact, and with
+  ``exact=False``, the robots in vector lanes: :mod:`omnibot.sim.lanes`) and, for comparison,
   :meth:`Physics.step` called once per step (one core).
 * fleet: a :class:`~omnibot.sim.fleet.Fleet` of k = 1, 2, 4, 8 omni4 robots in the room, each with
   its firmware driving a MOVE and pinging its sonar every 60 ms; CPU time (of the stepping thread)
@@ -60,10 +61,17 @@ def omnibot_single_steps_per_second(steps: int = 20000, repeats: int = 3) -> flo
 
 
 def omnibot_batch_robot_steps_per_second(
-    n: int = 1000, steps: int = 500, repeats: int = 3, threads: int | None = None
+    n: int = 1000,
+    steps: int = 500,
+    repeats: int = 3,
+    threads: int | None = None,
+    exact: bool = True,
+    cpu: bool = False,
 ) -> float:
     """Robot-steps/s of a batch of ``n`` omni4: :meth:`Physics.run` on ``threads`` threads (all
-    cores when None), or :meth:`Physics.step` once per step with ``threads`` 0."""
+    cores when None; ``exact`` False: its vector lanes), or :meth:`Physics.step` once per step with
+    ``threads`` 0; per second of the wall clock, or with ``cpu`` of the process's CPU time (with
+    one thread: what one core does, however busy the machine)."""
     import numba
 
     robot = load_robot("omni4")
@@ -71,19 +79,20 @@ def omnibot_batch_robot_steps_per_second(
     rng = np.random.default_rng(0)
     pwm = rng.integers(-255, 256, size=(n, robot.n_wheels))
     physics.step(pwm)
-    physics.run(pwm, 1)  # compile (or load) both kernels outside the timing
+    physics.run(pwm, 1, exact=exact)  # compile (or load) both kernels outside the timing
     cores = numba.get_num_threads()
     numba.set_num_threads(threads or cores)
+    clock = time.process_time if cpu else time.perf_counter
     best = 0.0
     try:
         for _ in range(repeats):
-            t0 = time.perf_counter()
+            t0 = clock()
             if threads == 0:
                 for _ in range(steps):
                     physics.step(pwm)
             else:
-                physics.run(pwm, steps)
-            best = max(best, n * steps / (time.perf_counter() - t0))
+                physics.run(pwm, steps, exact=exact)
+            best = max(best, n * steps / (clock() - t0))
     finally:
         numba.set_num_threads(cores)
     return best
@@ -147,6 +156,10 @@ def main(argv: list[str] | None = None) -> int:
     batch_step = omnibot_batch_robot_steps_per_second(threads=0)
     batch_one = omnibot_batch_robot_steps_per_second(threads=1)
     batch = omnibot_batch_robot_steps_per_second()
+    lanes_one = omnibot_batch_robot_steps_per_second(threads=1, exact=False)
+    exact_cpu = omnibot_batch_robot_steps_per_second(threads=1, cpu=True)
+    lanes_cpu = omnibot_batch_robot_steps_per_second(threads=1, exact=False, cpu=True)
+    lanes = omnibot_batch_robot_steps_per_second(exact=False)
     result: dict[str, float | None] = {
         "omnibot_single_steps_per_s": round(ours),
         "irsim_steps_per_s": round(theirs) if theirs else None,
@@ -154,6 +167,10 @@ def main(argv: list[str] | None = None) -> int:
         "omnibot_batch_1000_step_robot_steps_per_s": round(batch_step),
         "omnibot_batch_1000_run_1_thread_robot_steps_per_s": round(batch_one),
         "omnibot_batch_1000_robot_steps_per_s": round(batch),
+        "omnibot_batch_1000_lanes_1_thread_robot_steps_per_s": round(lanes_one),
+        "omnibot_batch_1000_lanes_robot_steps_per_s": round(lanes),
+        "omnibot_batch_1000_run_robot_steps_per_cpu_s": round(exact_cpu),
+        "omnibot_batch_1000_lanes_robot_steps_per_cpu_s": round(lanes_cpu),
         **{f"fleet_{k}_step_us": round(t * 1e6, 1) for k, t in fleet.items()},
         "fleet_8_over_1": round(fleet[8] / fleet[1], 2),
     }
@@ -172,6 +189,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"omnibot, batch of 1000, Physics.step:        {batch_step:12,.0f} robot-steps/s")
         print(f"omnibot, batch of 1000, Physics.run, 1 core: {batch_one:12,.0f} robot-steps/s")
         print(f"omnibot, batch of 1000, Physics.run, all:    {batch:12,.0f} robot-steps/s")
+        print(f"  the same, exact=False (lanes), 1 core:     {lanes_one:12,.0f} robot-steps/s")
+        print(f"  the same, exact=False (lanes), all:        {lanes:12,.0f} robot-steps/s")
+        print(f"batch of 1000, 1 thread, per CPU-second: exact {exact_cpu:12,.0f}, lanes {lanes_cpu:12,.0f}")
         for k, t in fleet.items():
             print(
                 f"fleet of {k} with sonars, per step:           {t * 1e6:12.1f} us  ({t / fleet[1]:.2f} x one)"

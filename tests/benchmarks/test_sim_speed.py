@@ -6,10 +6,13 @@ import numba
 from benchmarks.sim_speed import fleet_step_seconds, omnibot_batch_robot_steps_per_second
 
 
-def test_the_batch_measures_step_and_run_and_restores_the_threads() -> None:
+def test_the_batch_measures_step_run_and_lanes_and_restores_the_threads() -> None:
     threads = numba.get_num_threads()
     for how in (0, 1, None):
         assert omnibot_batch_robot_steps_per_second(n=20, steps=5, repeats=1, threads=how) > 0
+    for how in (1, None):  # the lanes, per second of the wall clock and of the CPU
+        assert omnibot_batch_robot_steps_per_second(n=20, steps=5, repeats=1, threads=how, exact=False) > 0
+    assert omnibot_batch_robot_steps_per_second(n=20, steps=5, repeats=1, threads=1, cpu=True) > 0
     assert numba.get_num_threads() == threads
 
 

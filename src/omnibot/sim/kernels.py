@@ -8,7 +8,8 @@ arrays its caller preallocated, so one call costs about a microsecond for one ro
 linearly with the number of robots.
 
 * :func:`physics_step` advances n robots; :func:`physics_step_parallel` (``Physics.run``, the batch
-  API) does the same for many steps with the robots shared out among numba's threads;
+  API) does the same for many steps with the robots shared out among numba's threads
+  (:mod:`omnibot.sim.lanes` has its vectorised variant, not bit for bit);
 * :func:`robot_step` is one :class:`~omnibot.sim.simulator.Simulator` step whole: surfaces,
   contacts and their forces, extra forces, the physics, the gyro and tracking wheels. Its state
   comes packed, as numba's dispatch costs about 0.1 us per array argument: the physics' arrays are
@@ -109,6 +110,26 @@ def _secant(fmax: float, inv_eps: float, x: float) -> tuple[float, float]:
     th = math.tanh(x)
     ratio = th / x if x != 0.0 else 1.0
     return fmax * th, fmax * inv_eps * ratio
+
+
+@njit(cache=True, inline="always")
+def solve_body(
+    s00: float, s11: float, s22: float, s01: float, s02: float, s12: float, r0: float, r1: float, r2: float
+) -> tuple[float, float, float]:
+    """The 3x3 body system s dq = r (s symmetric positive definite: the Schur complement of an SPD
+    matrix) by Cholesky: dvx, dvy, dw."""
+    l00 = math.sqrt(s00)
+    l10, l20 = s01 / l00, s02 / l00
+    l11 = math.sqrt(s11 - l10 * l10)
+    l21 = (s12 - l20 * l10) / l11
+    l22 = math.sqrt(s22 - l20 * l20 - l21 * l21)
+    y0 = r0 / l00
+    y1 = (r1 - l10 * y0) / l11
+    y2 = (r2 - l20 * y0 - l21 * y1) / l22
+    dw = y2 / l22
+    dvy = (y1 - l21 * dw) / l11
+    dvx = (y0 - l10 * dvy - l20 * dw) / l00
+    return dvx, dvy, dw
 
 
 @njit(cache=True, inline="always")
@@ -213,18 +234,7 @@ def _robot_physics(
         r0 += c * ext[i, 0] + s * ext[i, 1]
         r1 += c * ext[i, 1] - s * ext[i, 0]
         r2 += ext[i, 2]
-    # 3x3 body system by Cholesky (the Schur complement of an SPD matrix is SPD)
-    l00 = math.sqrt(s00)
-    l10, l20 = s01 / l00, s02 / l00
-    l11 = math.sqrt(s11 - l10 * l10)
-    l21 = (s12 - l20 * l10) / l11
-    l22 = math.sqrt(s22 - l20 * l20 - l21 * l21)
-    y0 = r0 / l00
-    y1 = (r1 - l10 * y0) / l11
-    y2 = (r2 - l20 * y0 - l21 * y1) / l22
-    dw = y2 / l22
-    dvy = (y1 - l21 * dw) / l11
-    dvx = (y0 - l10 * dvy - l20 * dw) / l00
+    dvx, dvy, dw = solve_body(s00, s11, s22, s01, s02, s12, r0, r1, r2)
     for j in range(m):
         sc = scratch[j]
         q[i, 3 + j] += sc[4] * sc[3] - sc[0] * dvx - sc[1] * dvy - sc[2] * dw
@@ -1318,6 +1328,7 @@ __all__ = [
     "scan_measure",
     "scan_rays",
     "sim_offsets",
+    "solve_body",
     "surface_probe",
     "tracking_update",
     "warm_up",

@@ -71,7 +71,9 @@ structure, a dense body block and a diagonal wheel block, so the kernel eliminat
 solves a 3x3 system: O(m) per robot, about a microsecond per step for one robot). Its state,
 inputs and parameters are views of one buffer (:attr:`Physics.buffer`), so the simulator's compiled
 step of one robot takes them as one argument. :meth:`Physics.run` is the batch API: many steps of
-many independent robots in one call, the robots shared out among all cores (numba's threads).
+many independent robots in one call, the robots shared out among all cores (numba's threads);
+with ``exact=False`` the robots are stepped side by side in vector lanes (:mod:`omnibot.sim.lanes`:
+faster, within a stated tolerance of the exact step rather than bit for bit).
 """
 
 from __future__ import annotations
@@ -88,7 +90,7 @@ from omnibot.floor.surfaces import Surface, get_surface
 from omnibot.robot.battery import open_voltage
 from omnibot.robot.description import RobotDescription
 from omnibot.robot.kinematics import contact_rows
-from omnibot.sim import jit, kernels
+from omnibot.sim import jit, kernels, lanes
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -467,21 +469,27 @@ class Physics:
         steps: int = 1,
         surface_ids: ArrayLike | None = None,
         external_force: ArrayLike | None = None,
+        exact: bool = True,
     ) -> None:
         """Advance all robots ``steps`` steps with the same inputs, on every core: the batch API.
 
-        The same as ``steps`` calls of :meth:`step` (bit for bit: each robot's arithmetic is the
-        same, only shared out among numba's threads, each robot stepped ``steps`` times in a row by
-        one thread; ``numba.set_num_threads`` chooses how many). A battery with a ``charge`` is
-        stepped one step per call so its charge follows. The kernel compiles on the first call of a
-        process (numba's threading layer; cached on disk after).
+        ``exact`` (default): the same as ``steps`` calls of :meth:`step`, bit for bit (each robot's
+        arithmetic is the same, only shared out among numba's threads, each robot stepped ``steps``
+        times in a row by one thread; ``numba.set_num_threads`` chooses how many). ``exact=False``:
+        the robots in vector lanes with the kernel's own tanh, sin and cos
+        (:func:`omnibot.sim.lanes.physics_run`), about 4 times faster (BENCHMARKS.md); not bit for
+        bit: every state within 1e-12 of its largest value of the exact step's over 2 s
+        (``tests/sim/test_lanes.py``; 7e-13 measured after 10 s).
+        A battery with a ``charge`` is stepped one step per call so its charge follows. Each kernel
+        compiles on its first call in a process (numba's threading layer; cached on disk after).
         """
         if steps < 0:
             raise SimulationError(f"steps must be >= 0, got {steps}")
         ids = self._inputs(pwm, surface_ids, external_force)
         chunks = [1] * steps if self._draining else [steps] if steps else []
+        kernel = jit.active.physics_step_parallel if exact else lanes.physics_run
         for chunk in chunks:
-            failed = jit.active.physics_step_parallel(
+            failed = kernel(
                 self._buffer,
                 ids,
                 self.n,
