@@ -23,8 +23,10 @@ $(STAMP): pyproject.toml constraints.txt Makefile
 # changes (numba keys its cache on the file's contents: a pull that changes it would otherwise leave
 # the next simulator running the kernels as Python, 10-50 times slower, for the 20 s of CPU they
 # take to compile in the background, omnibot.sim.jit; an unchanged cache only loads, in a second).
-$(KERNEL_CACHE): $(STAMP) src/omnibot/sim/kernels.py
+# The batch API's lanes kernel (Physics.run(exact=False)) too: its tests would compile it otherwise.
+$(KERNEL_CACHE): $(STAMP) src/omnibot/sim/kernels.py src/omnibot/sim/lanes.py
 	$(BIN)/python -m omnibot.sim.jit
+	$(BIN)/python -m omnibot.sim.lanes
 	@touch $@
 
 demo: setup

@@ -437,3 +437,17 @@ def physics_run(
             _step(rb, wb, m, has_ext, dt)
         _store(rb, wb, block * BLOCK, n, m, views)
     return 0
+
+
+def fill_cache() -> None:
+    """Compile :func:`physics_run` into numba's disk cache (``make setup``), so a batch's first
+    ``exact=False`` run, and the tests', only load it."""
+    from omnibot.robot.description import load_robot
+    from omnibot.sim.physics import Physics
+
+    physics = Physics(load_robot("omni4"), n=1)
+    physics.run(np.zeros((physics.n, physics.m)), 1, exact=False)
+
+
+if __name__ == "__main__":  # make setup
+    fill_cache()
