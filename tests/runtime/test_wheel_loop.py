@@ -4,6 +4,7 @@ floor's slip on top, and reports the twist achieved next to the one asked."""
 from __future__ import annotations
 
 import math
+import re
 
 import pytest
 
@@ -132,9 +133,12 @@ def test_run_reports_the_twist_asked_and_the_one_achieved() -> None:
         cycles = _drive(client, runtime, Twist(0.3, 0.0, 0.0), 2.5)
     assert runtime.estimator is not None
     assert len(said) == 2  # every second of the 2.5 s, from the first on
-    assert (
-        said[-1] == "script: asked 0.30 m/s at +0 deg, +0.00 rad/s; achieved 0.30 m/s at +0 deg, +0.00 rad/s"
-    )
+    # the estimate over one TEL period flickers 0.293-0.308 m/s with the encoders' whole counts (the
+    # truth 0.299): which of them the report's second shows is the counts' phase
+    assert re.fullmatch(
+        r"script: asked 0\.30 m/s at \+0 deg, \+0\.00 rad/s; achieved 0\.(29|30|31) m/s at \+0 deg, \+0\.00 rad/s",
+        said[-1],
+    ), said[-1]
     achieved = cycles[-2].achieved
     assert achieved is not None and achieved.vx == pytest.approx(0.3, abs=0.02)
     assert describe_twist(Twist(0.0, 0.0, 1.0)) == "0.00 m/s, +1.00 rad/s"
