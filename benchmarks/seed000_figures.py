@@ -11,6 +11,12 @@ is the seed's experiment: from rest, the distance in 1000 ms with two opposite m
 0) or all four at +-P (45 degrees), and the time to complete one and two full turns with all four
 at +P (rotation; the rate is the wheel path along R_c = 96 mm over that time, as the seed plots it).
 The seed does not say on which floor; it says the floors differ by "up to 20 %".
+
+Fig. 6 (K_t and K_r) is about power, and its statement, "rotation without movement requires more
+power than turning adjustment", is checked twice: on the simulated robot itself (the same power as
+rotation in place from rest and as a turn added to a robot already moving, :func:`turn_against_rotation`)
+and on a calibration's tables read in the seed's terms (its firmware has no motor map, so its K_r
+carries the motors' start, which ours keeps in the map's offsets: :mod:`omnibot.calibration.seedterms`).
 """
 
 from __future__ import annotations
@@ -51,8 +57,17 @@ FIG6_KT = (0.2745, 0.298, 0.3216, 0.3451, 0.3686, 0.3922, 0.4706, 0.549, 0.6275,
 FIG6_KR = (0.3012, 0.3702, 0.4392, 0.5082, 0.5772, 0.6463, 0.7153, 0.7974, 0.8927, 0.988, 1.0833, 1.1785,
            1.2738, 1.3691, 1.4643, 1.5596, 1.6549, 1.7502, 1.8454, 1.9407, 2.036, 2.1313, 2.2265, 2.3218,
            2.4171, 2.5124, 2.56)  # fmt: skip
-"""The seed's K_r (``Rotation (Kr)``): above K_t at every power, 1.10-1.45 times it."""
+"""The seed's K_r (``Rotation (Kr)``): above K_t at every power, 1.10-1.65 times it."""
 SURFACES = ("wood", "carpet")
+MOVING = 100
+"""PWM counts of the busiest motors of the motion a turn is added to (0.34 m/s on the axis)."""
+TURN_POWERS = (30, 45, 60, 85, 120)
+"""Powers of the rotation and of the turn added to it: K_t's knots of the default calibration (12-85)
+and one above the motion's own power."""
+STILL = 1e-3
+"""m/s: a rim speed below this is the friction law's creep (a robot that does not turn)."""
+SETTLE_STEPS, AVERAGE_STEPS = 3000, 1000
+"""ms to the steady state, and the span whose ends' rates are averaged."""
 
 
 def _pattern(twist: tuple[float, float, float]) -> np.ndarray:
@@ -68,8 +83,7 @@ def distances(course_deg: float, powers: list[int], surface: str) -> np.ndarray:
     a = math.radians(course_deg)
     pwm = np.outer(powers, _pattern((math.cos(a), math.sin(a), 0.0)))
     ph = Physics(load_robot("omni4"), n=len(powers), surfaces=(surface,))
-    for _ in range(1000):
-        ph.step(pwm)
+    ph.run(pwm, 1000)
     return np.asarray(np.hypot(ph.pose[:, 0], ph.pose[:, 1]))
 
 
@@ -88,10 +102,39 @@ def turn_times(powers: list[int], surface: str, turns: int = 2, limit: float = 1
     return out
 
 
+def turn_against_rotation(
+    surface: str, moving: int = MOVING, powers: tuple[int, ...] = TURN_POWERS
+) -> dict[str, Any]:
+    """Seed 000's Fig. 6 statement on the simulated robot itself, no firmware: the steady rim speed
+    along R_c (m/s) that each power gives as rotation in place from rest (``rotation``) and as a turn
+    added to a robot already moving on course 0 and 45 with its busiest motors at ``moving``
+    (``course 0``, ``course 45``: the turn rate it adds, times R_c). Where a power turns the moving
+    robot faster than the robot at rest, the seed's K_r lies above its K_t there."""
+    rot = _pattern((0.0, 0.0, 1.0))
+    ph = Physics(load_robot("omni4"), n=3 * len(powers) + 2, surfaces=(surface,))
+    rows = [p * rot for p in powers]
+    for course in (0.0, 45.0):
+        a = math.radians(course)
+        base = moving * _pattern((math.cos(a), math.sin(a), 0.0))
+        rows += [base + p * rot for p in powers] + [base]
+    pwm = np.array(rows)
+    ph.run(pwm, SETTLE_STEPS)
+    w = ph.twist[:, 2].copy()
+    ph.run(pwm, AVERAGE_STEPS)
+    w = (w + ph.twist[:, 2]) / 2  # the rate averaged over the ends of a roller's swing
+    n = len(powers)
+    out: dict[str, Any] = {"rotation": dict(zip(powers, (R_C * np.abs(w[:n])).tolist(), strict=True))}
+    for k, name in enumerate(("course 0", "course 45")):
+        block = w[n + k * (n + 1) : n + (k + 1) * (n + 1)]
+        out[name] = dict(zip(powers, (R_C * np.abs(block[:n] - block[n])).tolist(), strict=True))
+    return out
+
+
 def measure() -> dict[str, Any]:
     """The three series, simulated on each floor, beside the seed's."""
-    out: dict[str, Any] = {"axis": {}, "diagonal": {}, "rotation": {}}
+    out: dict[str, Any] = {"axis": {}, "diagonal": {}, "rotation": {}, "turns": {}}
     for surface in SURFACES:
+        out["turns"][surface] = turn_against_rotation(surface)
         p = sorted(AXIS_MM)
         out["axis"][surface] = dict(zip(p, (1000 * distances(0.0, p, surface)).tolist(), strict=True))
         p = sorted(DIAGONAL_MM)
@@ -133,15 +176,41 @@ def table(result: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def calibration_tables(path: Path) -> dict[str, dict[str, tuple[list[float], list[float]]]]:
-    """{floor: {"k_t": (x, y), "k_r": (x, y)}} of a calibration file's floors."""
-    import yaml
+def turn_table(result: dict[str, Any]) -> str:
+    """Markdown: per floor and power, the rim speed (cm/s along R_c) of rotation in place and of the
+    same power added as a turn to a moving robot, and their ratio (K_r / K_t in the seed's terms; "at
+    rest": the robot at rest does not turn at that power)."""
+    lines = [
+        f"| floor | power | rotation from rest | turn added on course 0 / 45 (moving at {MOVING}) | K_r / K_t |",
+        "|---|---|---|---|---|",
+    ]
+    for surface in SURFACES:
+        turns = result["turns"][surface]
+        for p in TURN_POWERS:
+            r, t0, t45 = turns["rotation"][p], turns["course 0"][p], turns["course 45"][p]
+            ratio = " / ".join("at rest" if r < STILL else f"{t / r:.2f}" for t in (t0, t45))
+            lines.append(f"| {surface} | {p} | {100 * r:.1f} | {100 * t0:.1f} / {100 * t45:.1f} | {ratio} |")
+    return "\n".join(lines)
 
-    data = yaml.safe_load(path.read_text(encoding="utf-8"))
+
+def calibration_tables(path: Path) -> dict[str, dict[str, tuple[list[float], list[float]]]]:
+    """{floor: {name: (x, y)}} of a calibration file's floors: its ``k_t`` and ``k_r`` and both in seed
+    000's terms (``seed k_t``, ``seed k_r``: the motor map counted in, :mod:`omnibot.calibration.seedterms`;
+    K_t at its own powers, for a turn added to a motion at :data:`MOVING`; K_r at both tables')."""
+    from omnibot.calibration.calfile import load_calibration
+    from omnibot.calibration.seedterms import seed_kr, seed_kt
+
     out = {}
-    for floor, section in (data.get("surfaces") or {}).items():
-        cal = section["calibration"]
-        out[floor] = {name: (list(cal[name]["x"]), list(cal[name]["y"])) for name in ("k_t", "k_r")}
+    for floor, spec in load_calibration(path).surfaces.items():
+        assert spec.k_t is not None and spec.k_r is not None
+        xs = list(spec.k_t.x)
+        both = sorted({*xs, *spec.k_r.x})
+        out[floor] = {
+            "k_t": (xs, list(spec.k_t.y)),
+            "k_r": (list(spec.k_r.x), list(spec.k_r.y)),
+            "seed k_t": (xs, seed_kt(spec, xs, MOVING)),
+            "seed k_r": (both, seed_kr(spec, both)),
+        }
     return out
 
 
@@ -185,12 +254,18 @@ def plot(result: dict[str, Any], target: Path, tables: dict[str, Any] | None) ->
     ax.plot(FIG6_X, FIG6_KT, "k--", label="seed 000: K_t")
     ax.plot(FIG6_X, FIG6_KR, "k-", label="seed 000: K_r")
     for k, (floor, t) in enumerate(sorted(tables.items())):
-        for name, style in (("k_t", "--"), ("k_r", "-")):
+        for name, style in (("seed k_t", "--"), ("seed k_r", "-"), ("k_r", ":")):
             x, y = t[name]
-            ax.plot(np.array(x) / 255, y, style, color=f"C{k}", marker=".", label=f"{floor}: {name}")
+            label = (
+                f"{floor}: " + {"seed k_t": "K_t", "seed k_r": "K_r, offsets in", "k_r": "K_r, table"}[name]
+            )
+            ax.plot(np.array(x) / 255, y, style, color=f"C{k}", marker=".", label=label)
     ax.set_xlabel("uncalibrated power (PWM ratio)")
     ax.set_ylabel("factor")
-    ax.set_title("K_t and K_r (seed 000's Fig. 6; ours: omnibot calibrate, default)")
+    ax.set_ylim(0, 4)
+    ax.set_title(
+        "K_t and K_r in seed 000's terms (its Fig. 6; ours: omnibot calibrate, default)", fontsize=10
+    )
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     save(fig, str(target / "seed000_fig6.png"))
@@ -203,13 +278,19 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     result = measure()
     print(table(result))
+    print()
+    print(turn_table(result))
     tables = calibration_tables(args.calibration) if args.calibration else None
     if tables:
         for floor, t in sorted(tables.items()):
             kt_x, kt_y = t["k_t"]
             kr = np.interp(kt_x, *t["k_r"])
             pairs = ", ".join(f"{x:g}: {r:.3f} / {y:.3f}" for x, r, y in zip(kt_x, kr, kt_y, strict=True))
-            print(f"{floor}: K_r / K_t at K_t's powers: {pairs}")
+            print(f"{floor}: the tables' K_r / K_t at K_t's powers: {pairs}")
+            skr = np.interp(kt_x, *t["seed k_r"])  # K_t's powers are among its knots
+            skt = t["seed k_t"][1]
+            pairs = ", ".join(f"{x:g}: {r:.3f} / {y:.3f}" for x, r, y in zip(kt_x, skr, skt, strict=True))
+            print(f"{floor}: in seed 000's terms (motor map counted in): {pairs}")
     if args.plot:
         plot(result, args.plot, tables)
     return 0

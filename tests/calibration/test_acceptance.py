@@ -327,7 +327,7 @@ def test_the_verdict_keeps_each_floors_tables_and_the_average(
 ) -> None:
     """Each floor's own tables are better than before on every course and ROTATE; with the floors as
     far apart as seed 000's ("up to 20 %") the average is better than none on both too (measured wood
-    7.7 -> 4.6 %, carpet 10.7 -> 3.5 % on the whole; each floor's own 0.6 and 0.9 %), so it is kept as
+    7.7 -> 4.4 %, carpet 10.7 -> 3.5 % on the whole; each floor's own 0.6 and 0.8 %), so it is kept as
     seed 000 kept it. (On the carpet of 4x wood's roller drag it made every wood course but 15 and 75
     worse, wood 7.7 -> 16.9 %, and was not kept.)"""
     result, _, _ = outcome

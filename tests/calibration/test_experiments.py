@@ -83,9 +83,10 @@ def test_rotation_sweep_and_turns(runner: Runner) -> None:
     assert all(r.amount is not None and r.amount > 0 for r in runs)  # signed by the command: positive
     turns = turning_runs(runner, Plan(turn_curvatures=(3.0,), turn_courses_deg=(45.0,)), k=144.9)
     assert len(turns) == 2 and {t.sign for t in turns} == {1, -1}
+    assert [t.duration for t in turns] == pytest.approx([1.0 / 0.65] * 2)  # each MOVE of K_l's length
     speed = 0.65  # the middle of omni4's 0.30..1.00 m/s
     for t in turns:
-        assert t.commanded == pytest.approx(0.7 * 3.0, rel=0.01)  # 120 degrees -> 0.70 m at 3/m
+        assert t.commanded == pytest.approx(1.0 * 3.0, rel=0.01)  # the reference 1 m at 3/m: 172 degrees
         assert t.p_arg == pytest.approx(144.9 * Geometry.of(runner.robot).rotation_factor() * speed * 3.0)
         assert t.amount is not None and t.amount > 0.5 * (t.commanded or 0)
 

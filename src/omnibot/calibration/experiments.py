@@ -473,17 +473,24 @@ def turn_speed(plan: Plan, robot: RobotDescription) -> float:
 
 
 def turning_runs(runner: Runner, plan: Plan, k: float) -> list[RunResult]:
-    """Curved MOVEs at each curvature and sign on the turn courses; ``p_arg`` is the firmware's K_t
-    power argument K * max|rim_w| * |V C| for the K in the controller."""
+    """Curved MOVEs at each curvature and sign on the turn courses, each of the reference length
+    (``plan.move_length``, K_l's); ``p_arg`` is the firmware's K_t power argument K * max|rim_w| *
+    |V C| for the K in the controller.
+
+    One length for every curvature, as K_l and K_r are fitted for one reference amount: a MOVE's turn
+    starts from rest with it, and the share of the turn that start loses grows as the MOVE shortens
+    (a fixed turn of 120 degrees made the MOVEs at 7/m 0.3 m long, 0.46 s, where omni4 on course 45
+    turned 0.78 of what a 1.2 m MOVE of the same tables turned, 1.15), so K_t at high power carried
+    the start of the shortest MOVEs."""
     robot = runner.robot
     speed = turn_speed(plan, robot)
     c_max = robot.limits.curvature_max
     out: list[RunResult] = []
     rot = runner.geometry.rotation_factor()
     speed = round(speed, 2)  # the protocol's resolution: cm/s, cm, 0.1/m
+    length = round(min(plan.move_length, 0.95 * robot.limits.distance_max), 2)
     for curvature in plan.turn_curvatures:
         c = round(min(curvature, 0.95 * c_max), 1)
-        length = round(min(max(plan.turn_angle / c, 0.3), 1.5, 0.95 * robot.limits.distance_max), 2)
         for course in plan.turn_courses_deg:
             for sign in (1, -1):
                 cc = sign * c

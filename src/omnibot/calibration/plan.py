@@ -61,8 +61,6 @@ class Plan:
     """1/m, each run with both signs (clipped to the robot's curvature limit)."""
     turn_speed: float | None = None
     """m/s of the curved MOVEs (default: the middle of the robot's speed range)."""
-    turn_angle: float = math.radians(120.0)
-    """rad the body should turn in one curved MOVE (its length follows, 0.3..1.5 m)."""
     turn_rounds: int = 2
     gyro_still: float = 3.0
     """s of standstill for the gyro bias."""

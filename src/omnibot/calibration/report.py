@@ -2,7 +2,7 @@
 
 =====================  ===========================================================================
 fig5_rates.png         rate (cm/s of the busiest wheel's rim) against power: each course, rotation
-fig6_kt_kr.png         K_t and K_r against power, per surface and averaged
+fig6_kt_kr.png         K_t and K_r against power, per surface and averaged (K_r also in seed 000's terms)
 fig7_kl.png            K_l against power for each calibrated course
 accuracy.png           MOVE distance error against course, before and after
 accuracy.md            the before/after tables (markdown)
@@ -24,6 +24,7 @@ from typing import Any
 from omnibot.calibration.accuracy import AccuracyRow, describe_reach, reach_speed, summarize
 from omnibot.calibration.calfile import describe_spec
 from omnibot.calibration.results import CalibrationResult, SurfaceSession
+from omnibot.calibration.seedterms import seed_kr
 from omnibot.calibration.tables import move_grid, rotate_lines, summary_table
 from omnibot.errors import ConfigError
 from omnibot.navigation.slipcal import SlipCalibration
@@ -242,6 +243,11 @@ def plot_kt_kr(result: CalibrationResult, path: Path) -> None:
     for label, spec, style in _specs(result):
         _factor_lines(ax, spec.k_t, f"K_t, {label}", style, "C0")
         _factor_lines(ax, spec.k_r, f"K_r, {label}", style, "C3")
+        if spec.motors is not None and spec.k_t is not None and spec.k_r is not None:
+            # seed 000's K_r carries the motors' start, which the motor map's offsets hold here
+            xs = list(spec.k_r.x)
+            seed = PiecewiseLinear(x=tuple(xs), y=tuple(seed_kr(spec, xs)))
+            _factor_lines(ax, seed, f"K_r with the offsets (seed 000's), {label}", style, "C1")
     ax.set_xlabel("uncalibrated power p = K |rim speed| [PWM counts]")
     ax.set_ylabel("factor")
     ax.set_ylim(0, 4)

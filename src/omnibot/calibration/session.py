@@ -4,10 +4,10 @@ Per surface (:func:`calibrate_surface`), on one client, the named steps of :data
 each reading and filling in one :class:`SurfaceRun`::
 
     gyro bias (standstill) -> accuracy before -> motor map -> dead bands -> straight sweeps
-    -> roller drag -> rotation sweep -> fit K, K_l, K_r -> turns: upload, curved MOVEs, fit K_t
+    -> roller drag -> rotation sweep -> fit K, K_l, K_r, upload
     -> roller gains: the drag's coast from MOVEs, upload -> slow end: K_l from MOVEs, upload
     -> reach: MOVEs at the computed reach per course, slowed until they land, upload
-    -> rotation test -> gyro scale -> squares CCW and CW (UMBmark) -> odometry corrections -> accuracy after
+    -> turns: curved MOVEs, fit K_t, upload -> rotation test -> gyro scale -> squares CCW and CW (UMBmark) -> odometry corrections -> accuracy after
     then the wheel slip (its own progress bar)
 
 Over surfaces (:func:`calibrate`): each surface as above, then the averaged calibration (seed 000
@@ -133,9 +133,6 @@ def expected_runs(
         "sweeps": courses * plan.levels * plan.directions * 2,
         "roller drag": len(SHARES) * (1 + plan.roller_rounds * axes) if rollers else 0,
         "rotation sweep": plan.levels * 2 * 2,
-        "turns": plan.turn_rounds * len(plan.turn_curvatures) * len(plan.turn_courses_deg) * 2
-        if upload
-        else 0,
         # each MOVE and the ROTATE before it that sets the idle wheels' phase (most MOVEs need one)
         "roller gains": 2 * (3 * plan.roller_rounds + plan.coast_slow_rounds) * axes
         if rollers and upload
@@ -145,6 +142,9 @@ def expected_runs(
             (len(geometry.every_raw_course(f)) + 1) * phase_count(geometry, f, plan) - 1
             for f in plan.reach_folds(geometry)
         )
+        if upload
+        else 0,
+        "turns": plan.turn_rounds * len(plan.turn_curvatures) * len(plan.turn_courses_deg) * 2
         if upload
         else 0,
         "rotation test": 2,
@@ -348,7 +348,7 @@ def _rotation_sweep(s: SurfaceRun) -> None:
 
 
 def _fit(s: SurfaceRun) -> None:
-    """K, K_l and K_r from the sweeps; the section with the description's K_t."""
+    """K, K_l and K_r from the sweeps; the section with the description's K_t, uploaded."""
     robot = s.robot
     fit = fit_surface(
         s.surface,
@@ -369,10 +369,14 @@ def _fit(s: SurfaceRun) -> None:
         )
     s.fitted = fit
     s.section = build_spec([fit], robot, s.geometry, robot_table(robot, "k_t"))
+    if s.upload:  # the steps after drive MOVEs through it
+        s.client.upload_calibration(s.section)
 
 
 def _turns(s: SurfaceRun) -> None:
-    """Upload, then K_t from curved MOVEs (``plan.turn_rounds`` rounds, each uploaded)."""
+    """Upload, then K_t from curved MOVEs (``plan.turn_rounds`` rounds, each uploaded): the last of the
+    tables, after the reach, since nothing else the calibration drives uses K_t and so no other step
+    starts from where the curved MOVEs leave the wheels (the idle wheels' drag depends on it)."""
     fit, spec = s.fit, s.spec
     if s.upload:
         s.client.upload_calibration(spec)
@@ -382,7 +386,7 @@ def _turns(s: SurfaceRun) -> None:
             if new_kt is None:
                 s.notes.append("no curved MOVE turned measurably: K_t kept")
                 break
-            spec = build_spec([fit], s.robot, s.geometry, new_kt)
+            spec = spec.model_copy(update={"k_t": new_kt})
             s.client.upload_calibration(spec)
     else:
         s.notes.append("not uploaded: K_t (measured with curved MOVEs) kept from the description")
@@ -521,10 +525,10 @@ STEPS: tuple[Step, ...] = (
     Step("roller drag", _roller_drag, "roller drag"),
     Step("rotation sweep", _rotation_sweep, "rotation sweep"),
     Step("fit K, K_l, K_r", _fit),
-    Step("turns (K_t)", _turns, "turns"),
     Step("roller gains", _roller_gains, "roller gains"),
     Step("slow end (K_l)", _slow_end, "slow end"),
     Step("reach", _reach, "reach"),
+    Step("turns (K_t)", _turns, "turns"),
     Step("rotation test", _rotation_test, "rotation test"),
     Step("gyro scale", _gyro_scale),
     Step("squares", _squares, "squares"),
