@@ -441,12 +441,11 @@ def physics_run(
 
 def fill_cache() -> None:
     """Compile :func:`physics_run` into numba's disk cache (``make setup``), so a batch's first
-    ``exact=False`` run, and the tests', only load it."""
-    from omnibot.robot.description import load_robot
-    from omnibot.sim.physics import Physics
-
-    physics = Physics(load_robot("omni4"), n=1)
-    physics.run(np.zeros((physics.n, physics.m)), 1, exact=False)
+    ``exact=False`` run, and the tests', only load it (the call steps no robot: types alone decide
+    what is compiled)."""
+    n, m, n_surf = 1, 4, 1
+    buf = np.zeros(k.physics_offsets.py_func(n, m, n_surf)[-1])
+    physics_run(buf, np.zeros((n, m), dtype=np.int64), n, m, n_surf, False, 0.001, 0)
 
 
 if __name__ == "__main__":  # make setup
