@@ -11,6 +11,18 @@ keyframe: it is matched (:class:`~omnibot.mapping.matcher.ScanMatcher`, correlat
 ICP) against a local submap (the last ``submap_keyframes`` keyframes' points at their current
 estimates), starting from the prediction.
 
+Degeneracy: where that match leaves a direction unconstrained (a corridor's axis, whose far end
+wall the submap holds only as a blur of its own distant, noisy views), the keyframe is matched
+again, each return weighed by its own range noise (``weighted``, :class:`ScanMatcher`), against
+an *anchor* submap: the returns every keyframe within ``anchor_reach`` of the prediction saw
+within ``anchor_range`` (sharp: 2 cm at 2 m for an A1). So the end wall seen up close fixes the
+axis, as well as its returns from 10 m can (a few centimetres); the second match replaces the
+first only if it converged, fits as well as ``min_fitness`` asks and constrains more directions.
+What stays unconstrained is the odometry's alone: the match keeps the prediction there and its
+covariance leaves it free (Zhang et al.'s solution remapping, the information matrix as the
+factor's weight). A direction no return constrains at all (mid-corridor, no end wall in range)
+cannot be recovered by any scan matching: there the SLAM is the odometry.
+
 Back end: a pose graph of the keyframes (gtsam ``Pose2`` nodes). Between consecutive keyframes, an
 odometry factor (noise growing with the distance and angle driven, ``odometry_noise``) and the
 match factor (the match's own covariance, so a direction the scans leave unconstrained, such as a
@@ -42,7 +54,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from omnibot.errors import ConfigError
 from omnibot.mapping.deskew import scan_points
-from omnibot.mapping.matcher import MatchResult, ScanMatcher, Target
+from omnibot.mapping.matcher import MatchResult, ScanMatcher, Target, voxel_downsample
 from omnibot.mapping.se2 import between, compose, distance, inverse, rotate_covariance, transform
 from omnibot.motion import Pose2D, Twist
 from omnibot.scan import Scan
@@ -61,6 +73,8 @@ class Keyframe:
     odom: Pose2D
     scan: Scan
     points: FloatArray
+    anchor: FloatArray
+    """Its points measured within the SLAM's ``anchor_range`` (sharp), thinned to half a cell, base frame."""
 
 
 @dataclass(frozen=True)
@@ -103,6 +117,8 @@ class Slam:
         loop_min_fitness: float = 0.75,
         loop_sigma_floor: tuple[float, float] = (0.01, math.radians(0.5)),
         loop_kernel_width: float = 3.0,
+        anchor_range: float = 2.0,
+        anchor_reach: float = 12.0,
         optimizer: str = "isam2",
         scan_to_submap: bool = True,
         deskew: bool = True,
@@ -114,6 +130,8 @@ class Slam:
             "keyframe_angle": keyframe_angle,
             "loop_search_radius": loop_search_radius,
             "loop_kernel_width": loop_kernel_width,
+            "anchor_range": anchor_range,
+            "anchor_reach": anchor_reach,
         }
         for key, value in positive.items():
             if not (math.isfinite(value) and value > 0):
@@ -153,6 +171,8 @@ class Slam:
         self.loop_min_fitness = loop_min_fitness
         self.loop_sigma_floor = loop_sigma_floor
         self.loop_kernel_width = loop_kernel_width
+        self.anchor_range = anchor_range
+        self.anchor_reach = anchor_reach
         self.optimizer = optimizer
         self.scan_to_submap = scan_to_submap
         self.deskew = deskew
@@ -170,7 +190,9 @@ class Slam:
         self.loops: list[LoopClosure] = []
         """Every loop closure tried, in order."""
         self.matches: list[MatchResult] = []
-        """The front end's match of every keyframe but the first."""
+        """The front end's match of every keyframe but the first (the anchor match where it was used)."""
+        self.anchored = 0
+        """Keyframes whose degenerate match the anchor submap's replaced."""
 
         self._graph = gtsam.NonlinearFactorGraph()  # every factor (batch optimiser)
         self._values = gtsam.Values()
@@ -267,8 +289,14 @@ class Slam:
         self._pose = compose(self._estimates[k], delta)
         return self._pose
 
+    def _keyframe(self, odom_pose: Pose2D, scan: Scan, stamp: float) -> Keyframe:
+        points = scan_points(scan, self._twist)
+        near = np.hypot(points[:, 0] - scan.mount.x, points[:, 1] - scan.mount.y) <= self.anchor_range
+        anchor = voxel_downsample(points[near], self.matcher.resolution / 2.0)  # as a target thins them
+        return Keyframe(stamp, odom_pose, scan, points, anchor)
+
     def _add_first(self, odom_pose: Pose2D, scan: Scan, stamp: float) -> None:
-        self._frames.append(Keyframe(stamp, odom_pose, scan, scan_points(scan, self._twist)))
+        self._frames.append(self._keyframe(odom_pose, scan, stamp))
         self._estimates.append(odom_pose)
         noise = gtsam.noiseModel.Isotropic.Sigma(3, PRIOR_SIGMA)
         self._add_factor(gtsam.PriorFactorPose2(0, _pose2(odom_pose), noise))
@@ -279,9 +307,10 @@ class Slam:
     def _add_keyframe(self, odom_pose: Pose2D, scan: Scan, stamp: float, delta: Pose2D) -> None:
         last = len(self._frames) - 1
         new = last + 1
-        frame = Keyframe(stamp, odom_pose, scan, scan_points(scan, self._twist))
+        frame = self._keyframe(odom_pose, scan, stamp)
         predicted = compose(self._estimates[last], delta)
         result = None
+        reference = last  # the keyframe the match's factor is from
         if self.scan_to_submap:
             result = self.matcher.match(
                 frame.points,
@@ -290,16 +319,18 @@ class Slam:
                 search_xy=self.search_xy,
                 search_theta=self.search_theta,
             )
+            if result.unconstrained:
+                result, reference = self._anchor_match(frame, predicted, result, last)
             self.matches.append(result)
         self._frames.append(frame)
         self._add_factor(gtsam.BetweenFactorPose2(last, new, _pose2(delta), self._odometry_noise(delta)))
         estimate = predicted
         if result is not None and result.converged and result.fitness >= self.min_fitness:
-            relative = between(self._estimates[last], result.pose)
+            relative = between(self._estimates[reference], result.pose)
             cov = rotate_covariance(result.covariance, -result.pose.theta)
             self._add_factor(
                 gtsam.BetweenFactorPose2(
-                    last, new, _pose2(relative), gtsam.noiseModel.Gaussian.Covariance(cov)
+                    reference, new, _pose2(relative), gtsam.noiseModel.Gaussian.Covariance(cov)
                 )
             )
             estimate = self._fuse(predicted, delta, result)
@@ -311,6 +342,37 @@ class Slam:
         if self._since_loop >= self.loop_every:
             closed = self._close_loop(new)
         self._optimise(closed)
+
+    def _anchor_match(
+        self, frame: Keyframe, predicted: Pose2D, result: MatchResult, last: int
+    ) -> tuple[MatchResult, int]:
+        """A degenerate match redone, weighted, on the anchor submap: the better of the two and the
+        keyframe its factor is from (the anchor submap's oldest: it holds what was seen first)."""
+        near = [
+            k
+            for k in range(len(self._estimates))
+            if distance(self._estimates[k], predicted) <= self.anchor_reach
+        ]
+        pts = [transform(self._estimates[k], self._frames[k].anchor) for k in near]
+        if not pts:
+            return result, last
+        target = self.matcher.target(np.vstack(pts), margin=self.search_xy + 1.0)
+        again = self.matcher.match(
+            frame.points,
+            target,
+            predicted,
+            search_xy=self.search_xy,
+            search_theta=self.search_theta,
+            weighted=True,
+        )
+        if (
+            again.converged
+            and again.fitness >= self.min_fitness
+            and again.unconstrained < result.unconstrained
+        ):
+            self.anchored += 1
+            return again, near[0]
+        return result, last
 
     def _fuse(self, predicted: Pose2D, delta: Pose2D, result: MatchResult) -> Pose2D:
         """The match where it is constrained, the prediction where it is not (the new node's first guess)."""
