@@ -180,6 +180,8 @@ class MatchResult:
     """Best mean likelihood of the correlative search (0..1; 0 without one)."""
     unconstrained: int = 0
     """How many directions the geometry left unconstrained (degenerate; kept at the guess)."""
+    free: FloatArray = field(default_factory=lambda: np.zeros((3, 0)), repr=False)
+    """(3, unconstrained) unit vectors of those directions in (x, y, theta), the target's frame."""
 
     @property
     def information(self) -> FloatArray:
@@ -470,7 +472,9 @@ class ScanMatcher:
         else:  # the inliers' spread in sigmas, never below the noise model's
             sigma2 = max(float(np.mean((line[inl] / sigma[inl]) ** 2)) if inl.any() else 0.0, 1.0)
         covariance = self._covariance(hessian, sigma2, scale, support)
-        return MatchResult(pose, covariance, fitness, rmse, converged, score, int((~keep).sum()))
+        free = scale[:, None] * vecs[:, ~keep]
+        free = free / np.linalg.norm(free, axis=0)
+        return MatchResult(pose, covariance, fitness, rmse, converged, score, int((~keep).sum()), free)
 
     def _covariance(
         self, hessian: FloatArray, sigma2: float, scale: FloatArray, support: _Support | None = None
@@ -485,7 +489,9 @@ class ScanMatcher:
         return 0.5 * (cov + cov.T)
 
     def _failed(self, initial: Pose2D) -> MatchResult:
-        return MatchResult(initial, np.eye(3) * UNCONSTRAINED_VARIANCE, 0.0, math.inf, False, 0.0, 3)
+        return MatchResult(
+            initial, np.eye(3) * UNCONSTRAINED_VARIANCE, 0.0, math.inf, False, 0.0, 3, np.eye(3)
+        )
 
 
 def match(

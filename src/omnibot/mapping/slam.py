@@ -54,7 +54,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from omnibot.errors import ConfigError
 from omnibot.mapping.deskew import scan_points
-from omnibot.mapping.matcher import MatchResult, ScanMatcher, Target, voxel_downsample
+from omnibot.mapping.matcher import (
+    UNCONSTRAINED_VARIANCE,
+    MatchResult,
+    ScanMatcher,
+    Target,
+    voxel_downsample,
+)
 from omnibot.mapping.se2 import between, compose, distance, inverse, rotate_covariance, transform
 from omnibot.motion import Pose2D, Twist
 from omnibot.scan import Scan
@@ -310,7 +316,7 @@ class Slam:
         frame = self._keyframe(odom_pose, scan, stamp)
         predicted = compose(self._estimates[last], delta)
         result = None
-        reference = last  # the keyframe the match's factor is from
+        anchor: tuple[int, Pose2D, FloatArray] | None = None
         if self.scan_to_submap:
             result = self.matcher.match(
                 frame.points,
@@ -319,21 +325,25 @@ class Slam:
                 search_xy=self.search_xy,
                 search_theta=self.search_theta,
             )
-            if result.unconstrained:
-                result, reference = self._anchor_match(frame, predicted, result, last)
             self.matches.append(result)
         self._frames.append(frame)
         self._add_factor(gtsam.BetweenFactorPose2(last, new, _pose2(delta), self._odometry_noise(delta)))
-        estimate = predicted
+        seen: list[tuple[int, Pose2D, FloatArray]] = []  # (from keyframe, map-frame pose, covariance)
         if result is not None and result.converged and result.fitness >= self.min_fitness:
-            relative = between(self._estimates[reference], result.pose)
-            cov = rotate_covariance(result.covariance, -result.pose.theta)
+            seen.append((last, result.pose, result.covariance))
+            if result.unconstrained:
+                anchor = self._anchor_match(frame, predicted, result)
+                if anchor is not None:
+                    seen.append(anchor)
+        for reference, pose, covariance in seen:
+            relative = between(self._estimates[reference], pose)
+            cov = rotate_covariance(covariance, -pose.theta)
             self._add_factor(
                 gtsam.BetweenFactorPose2(
                     reference, new, _pose2(relative), gtsam.noiseModel.Gaussian.Covariance(cov)
                 )
             )
-            estimate = self._fuse(predicted, delta, result)
+        estimate = self._fuse(predicted, delta, [(pose, cov) for _, pose, cov in seen])
         self._estimates.append(estimate)
         self._add_value(new, estimate)
         self._track.append((stamp, new, Pose2D(0.0, 0.0, 0.0)))
@@ -344,10 +354,13 @@ class Slam:
         self._optimise(closed)
 
     def _anchor_match(
-        self, frame: Keyframe, predicted: Pose2D, result: MatchResult, last: int
-    ) -> tuple[MatchResult, int]:
-        """A degenerate match redone, weighted, on the anchor submap: the better of the two and the
-        keyframe its factor is from (the anchor submap's oldest: it holds what was seen first)."""
+        self, frame: Keyframe, predicted: Pose2D, result: MatchResult
+    ) -> tuple[int, Pose2D, FloatArray] | None:
+        """A degenerate match redone, weighted, on the anchor submap: where it constrains what ``result``
+        left free, the keyframe its factor is from (the anchor submap's oldest, which holds what was
+        seen first), its pose and a covariance that keeps only those directions (the others are
+        ``result``'s, from the previous keyframe: an old keyframe's heading would swing them by the
+        lever of the metres between)."""
         near = [
             k
             for k in range(len(self._estimates))
@@ -355,7 +368,7 @@ class Slam:
         ]
         pts = [transform(self._estimates[k], self._frames[k].anchor) for k in near]
         if not pts:
-            return result, last
+            return None
         target = self.matcher.target(np.vstack(pts), margin=self.search_xy + 1.0)
         again = self.matcher.match(
             frame.points,
@@ -365,24 +378,29 @@ class Slam:
             search_theta=self.search_theta,
             weighted=True,
         )
-        if (
+        if not (
             again.converged
             and again.fitness >= self.min_fitness
             and again.unconstrained < result.unconstrained
         ):
-            self.anchored += 1
-            return again, near[0]
-        return result, last
+            return None
+        free, _ = np.linalg.qr(result.free)
+        cov = free @ (free.T @ again.covariance @ free) @ free.T
+        cov += UNCONSTRAINED_VARIANCE * (np.eye(3) - free @ free.T)
+        self.anchored += 1
+        return near[0], again.pose, 0.5 * (cov + cov.T)
 
-    def _fuse(self, predicted: Pose2D, delta: Pose2D, result: MatchResult) -> Pose2D:
-        """The match where it is constrained, the prediction where it is not (the new node's first guess)."""
+    def _fuse(self, predicted: Pose2D, delta: Pose2D, seen: list[tuple[Pose2D, FloatArray]]) -> Pose2D:
+        """The matches where they constrain, the prediction where they do not (the new node's first guess)."""
         odo = rotate_covariance(self._odometry_cov(delta), predicted.theta)
-        info_m, info_o = result.information, np.linalg.inv(odo)
-        diff = np.array(
-            [result.pose.x - predicted.x, result.pose.y - predicted.y, result.pose.theta - predicted.theta]
-        )
-        diff[2] = math.remainder(diff[2], 2 * math.pi)
-        step = np.linalg.solve(info_m + info_o, info_m @ diff)
+        info = np.linalg.inv(odo)
+        pull = np.zeros(3)
+        for pose, covariance in seen:
+            info_m = np.linalg.inv(covariance)
+            diff = np.array([pose.x - predicted.x, pose.y - predicted.y, pose.theta - predicted.theta])
+            diff[2] = math.remainder(diff[2], 2 * math.pi)
+            info, pull = info + info_m, pull + info_m @ diff
+        step = np.linalg.solve(info, pull)
         return Pose2D(
             predicted.x + step[0],
             predicted.y + step[1],
