@@ -16,12 +16,15 @@ wall the submap holds only as a blur of its own distant, noisy views), the keyfr
 again, each return weighed by its own range noise (``weighted``, :class:`ScanMatcher`), against
 an *anchor* submap: the returns every keyframe within ``anchor_reach`` of the prediction saw
 within ``anchor_range`` (sharp: 2 cm at 2 m for an A1). So the end wall seen up close fixes the
-axis, as well as its returns from 10 m can (a few centimetres); the second match replaces the
-first only if it converged, fits as well as ``min_fitness`` asks and constrains more directions.
-What stays unconstrained is the odometry's alone: the match keeps the prediction there and its
-covariance leaves it free (Zhang et al.'s solution remapping, the information matrix as the
-factor's weight). A direction no return constrains at all (mid-corridor, no end wall in range)
-cannot be recovered by any scan matching: there the SLAM is the odometry.
+axis, as well as its returns from 10 m can (a few centimetres). If that match converged, fits as
+well as ``min_fitness`` asks and constrains directions the first left free, it adds a factor from
+the anchor submap's oldest keyframe (what was seen first) whose covariance keeps only those
+directions: the others stay the first match's, from the previous keyframe, since an old
+keyframe's heading would swing them by the lever of the metres between. What stays unconstrained
+is the odometry's alone: the match keeps the prediction there and its covariance leaves it free
+(Zhang et al.'s solution remapping, the information matrix as the factor's weight). A direction
+no return constrains at all (mid-corridor, no end wall in range) cannot be recovered by any scan
+matching: there the SLAM is the odometry.
 
 Back end: a pose graph of the keyframes (gtsam ``Pose2`` nodes). Between consecutive keyframes, an
 odometry factor (noise growing with the distance and angle driven, ``odometry_noise``) and the
