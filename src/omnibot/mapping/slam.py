@@ -199,9 +199,9 @@ class Slam:
         self.loops: list[LoopClosure] = []
         """Every loop closure tried, in order."""
         self.matches: list[MatchResult] = []
-        """The front end's match of every keyframe but the first (the anchor match where it was used)."""
+        """The front end's match of every keyframe but the first."""
         self.anchored = 0
-        """Keyframes whose degenerate match the anchor submap's replaced."""
+        """Keyframes whose degenerate match the anchor submap's completed (a factor along what it left free)."""
 
         self._graph = gtsam.NonlinearFactorGraph()  # every factor (batch optimiser)
         self._values = gtsam.Values()
@@ -319,7 +319,6 @@ class Slam:
         frame = self._keyframe(odom_pose, scan, stamp)
         predicted = compose(self._estimates[last], delta)
         result = None
-        anchor: tuple[int, Pose2D, FloatArray] | None = None
         if self.scan_to_submap:
             result = self.matcher.match(
                 frame.points,
@@ -334,10 +333,9 @@ class Slam:
         seen: list[tuple[int, Pose2D, FloatArray]] = []  # (from keyframe, map-frame pose, covariance)
         if result is not None and result.converged and result.fitness >= self.min_fitness:
             seen.append((last, result.pose, result.covariance))
-            if result.unconstrained:
-                anchor = self._anchor_match(frame, predicted, result)
-                if anchor is not None:
-                    seen.append(anchor)
+            anchor = self._anchor_match(frame, predicted, result) if result.unconstrained else None
+            if anchor is not None:
+                seen.append(anchor)
         for reference, pose, covariance in seen:
             relative = between(self._estimates[reference], pose)
             cov = rotate_covariance(covariance, -pose.theta)
