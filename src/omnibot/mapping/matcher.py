@@ -423,11 +423,11 @@ class ScanMatcher:
             pk = p[ok]
             r = np.einsum("ij,ij->i", n, pk - q)
             jac = np.column_stack((n[:, 0], n[:, 1], -n[:, 0] * (pk[:, 1] - y) + n[:, 1] * (pk[:, 0] - x)))
-            s = spread[ok]
-            z = np.abs(r) / s
-            weights = np.where(z <= HUBER_SIGMAS, 1.0, HUBER_SIGMAS / np.maximum(z, 1e-12))
+            a = np.abs(r)
+            huber = HUBER_SIGMAS * spread[ok]
+            weights = np.where(a <= huber, 1.0, huber / np.maximum(a, 1e-12))
             if sigma is not None:
-                weights = weights / (s * s)
+                weights = weights / (spread[ok] * spread[ok])
             hessian = jac.T @ (weights[:, None] * jac)
             grad = jac.T @ (weights * r)
             if sigma is not None:

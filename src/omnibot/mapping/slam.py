@@ -12,19 +12,22 @@ ICP) against a local submap (the last ``submap_keyframes`` keyframes' points at 
 estimates), starting from the prediction.
 
 Degeneracy: where that match leaves a direction unconstrained (a corridor's axis, whose far end
-wall the submap holds only as a blur of its own distant, noisy views), the keyframe is matched
-again, each return weighed by its own range noise (``weighted``, :class:`ScanMatcher`), against
-an *anchor* submap: the returns every keyframe within ``anchor_reach`` of the prediction saw
-within ``anchor_range`` (sharp: 2 cm at 2 m for an A1). So the end wall seen up close fixes the
-axis, as well as its returns from 10 m can (a few centimetres). If that match converged, fits as
-well as ``min_fitness`` asks and constrains directions the first left free, it adds a factor from
-the anchor submap's oldest keyframe (what was seen first) whose covariance keeps only those
-directions: the others stay the first match's, from the previous keyframe, since an old
-keyframe's heading would swing them by the lever of the metres between. What stays unconstrained
-is the odometry's alone: the match keeps the prediction there and its covariance leaves it free
-(Zhang et al.'s solution remapping, the information matrix as the factor's weight). A direction
-no return constrains at all (mid-corridor, no end wall in range) cannot be recovered by any scan
-matching: there the SLAM is the odometry.
+wall the submap holds only as a blur of its own distant, noisy views), with ``anchor_reach`` set
+(off by default, see below) the keyframe is matched again, each return weighed by its own range
+noise (``weighted``, :class:`ScanMatcher`), against an *anchor* submap: the returns every keyframe
+within ``anchor_reach`` of the prediction saw within ``anchor_range`` (sharp: 2 cm at 2 m for an
+A1). So the end wall seen up close fixes the axis, as well as its returns from 10 m can (a few
+centimetres). If that match converged, fits as well as ``min_fitness`` asks and constrains
+directions the first left free, it adds a factor from the anchor submap's oldest keyframe (what was
+seen first) whose covariance keeps only those directions: the others stay the first match's, from
+the previous keyframe, since an old keyframe's heading would swing them by the lever of the metres
+between. What stays unconstrained is the odometry's alone: the match keeps the prediction there and
+its covariance leaves it free (Zhang et al.'s solution remapping, the information matrix as the
+factor's weight). A direction no return constrains at all (mid-corridor, no end wall in range)
+cannot be recovered by any scan matching: there the SLAM is the odometry. Off by default: in the
+simulated long corridor the anchor matches hold the axis where the odometry drifts (omni4,
+mecanum4) but put a bias of about 5 cm into omni3's, whose odometry hardly drifts along it, not yet
+explained (docs/mapping.md).
 
 Back end: a pose graph of the keyframes (gtsam ``Pose2`` nodes). Between consecutive keyframes, an
 odometry factor (noise growing with the distance and angle driven, ``odometry_noise``) and the
@@ -127,7 +130,7 @@ class Slam:
         loop_sigma_floor: tuple[float, float] = (0.01, math.radians(0.5)),
         loop_kernel_width: float = 3.0,
         anchor_range: float = 2.0,
-        anchor_reach: float = 12.0,
+        anchor_reach: float | None = None,
         optimizer: str = "isam2",
         scan_to_submap: bool = True,
         deskew: bool = True,
@@ -140,8 +143,9 @@ class Slam:
             "loop_search_radius": loop_search_radius,
             "loop_kernel_width": loop_kernel_width,
             "anchor_range": anchor_range,
-            "anchor_reach": anchor_reach,
         }
+        if anchor_reach is not None:
+            positive["anchor_reach"] = anchor_reach
         for key, value in positive.items():
             if not (math.isfinite(value) and value > 0):
                 raise ConfigError(f"must be a positive number, not {value}", key)
@@ -301,6 +305,8 @@ class Slam:
     def _keyframe(self, odom_pose: Pose2D, scan: Scan, stamp: float) -> Keyframe:
         points = scan_points(scan, self._twist)
         near = np.hypot(points[:, 0] - scan.mount.x, points[:, 1] - scan.mount.y) <= self.anchor_range
+        if self.anchor_reach is None:
+            near[:] = False  # no anchor submap: nothing to keep
         anchor = voxel_downsample(points[near], self.matcher.resolution / 2.0)  # as a target thins them
         return Keyframe(stamp, odom_pose, scan, points, anchor)
 
@@ -333,7 +339,8 @@ class Slam:
         seen: list[tuple[int, Pose2D, FloatArray]] = []  # (from keyframe, map-frame pose, covariance)
         if result is not None and result.converged and result.fitness >= self.min_fitness:
             seen.append((last, result.pose, result.covariance))
-            anchor = self._anchor_match(frame, predicted, result) if result.unconstrained else None
+            anchored = result.unconstrained and self.anchor_reach is not None
+            anchor = self._anchor_match(frame, predicted, result) if anchored else None
             if anchor is not None:
                 seen.append(anchor)
         for reference, pose, covariance in seen:
@@ -362,11 +369,8 @@ class Slam:
         seen first), its pose and a covariance that keeps only those directions (the others are
         ``result``'s, from the previous keyframe: an old keyframe's heading would swing them by the
         lever of the metres between)."""
-        near = [
-            k
-            for k in range(len(self._estimates))
-            if distance(self._estimates[k], predicted) <= self.anchor_reach
-        ]
+        reach = self.anchor_reach if self.anchor_reach is not None else math.inf
+        near = [k for k in range(len(self._estimates)) if distance(self._estimates[k], predicted) <= reach]
         pts = [transform(self._estimates[k], self._frames[k].anchor) for k in near]
         if not pts:
             return None
