@@ -189,3 +189,21 @@ def test_a_weighted_match_mid_corridor_still_leaves_the_axis_free() -> None:
     assert abs(axis[0]) > 0.99
     assert abs(result.pose.x - guess.x) < 0.01  # kept, not wandered off
     assert abs(result.pose.y - true.y) < 0.01
+
+
+def test_a_wall_at_the_scanners_cut_off_is_left_out_of_a_weighted_match() -> None:
+    """The scanner drops returns beyond its range_max: of a wall 11.8 m away (1 % noise, a 12 m
+    cut-off) only the returns whose noise fell short are left, biased short. Given range_max, the
+    weighted match leaves such pairs out, and with them the axis they alone constrained."""
+    world = corridor_world(30.0)
+    true = Pose2D(11.8, 0.1, 0.02)
+    guess = compose(true, Pose2D(0.05, -0.03, 0.01))
+    rng = np.random.default_rng(3)
+    target = ScanMatcher().target(_sharp_corridor(30.0, 14.0, rng))
+    source = synthetic_scan(world, true, rng, range_max=12.0, noise=0.0, noise_fraction=0.01)
+    kept = ScanMatcher().match(source, target, guess, weighted=True)
+    cut = ScanMatcher().match(source, target, guess, weighted=True, range_max=12.0)
+    assert kept.unconstrained == 0
+    assert cut.converged and cut.unconstrained == 1
+    assert abs(cut.pose.x - guess.x) < 0.002  # kept where the guess put it (the free direction: x, nearly)
+    assert abs(cut.pose.y - true.y) < 0.01

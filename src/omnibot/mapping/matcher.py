@@ -346,10 +346,14 @@ class ScanMatcher:
         search_xy: float | None = None,
         search_theta: float | None = None,
         weighted: bool = False,
+        range_max: float = math.inf,
     ) -> MatchResult:
         """The pose of ``source``'s frame in ``target``'s frame, starting from ``initial``.
 
-        ``weighted``: each source point weighed by its range noise (see the module docstring)."""
+        ``weighted``: each source point weighed by its range noise (see the module docstring);
+        then with the scanner's ``range_max`` a pair whose target point lies farther than 3 sigma
+        short of it is left out: the scanner drops returns beyond ``range_max``, so of a wall near
+        it only the returns whose noise fell short are left, biased short."""
         if not all(math.isfinite(v) for v in (initial.x, initial.y, initial.theta)):
             raise ConfigError(f"must be finite, not {initial}", "initial")
         tgt = self.target(target)
@@ -362,10 +366,12 @@ class ScanMatcher:
         sth = self.search_theta if search_theta is None else search_theta
         start, score = self.search(src, tgt, initial, sxy, sth)
         sigma = None
+        reach = math.inf
         if weighted:
             spread = self.range_noise[0] + self.range_noise[1] * np.hypot(src[:, 0], src[:, 1])
             sigma = np.maximum(spread, self.range_sigma)
-        return self._refine(src, tgt, initial, start, score, sigma)
+            reach = range_max - 3.0 * (self.range_noise[0] + self.range_noise[1] * range_max)
+        return self._refine(src, tgt, initial, start, score, sigma, reach)
 
     def search(
         self, src: FloatArray, tgt: Target, initial: Pose2D, search_xy: float, search_theta: float
@@ -398,6 +404,7 @@ class ScanMatcher:
         start: Pose2D,
         score: float,
         sigma: FloatArray | None = None,
+        reach: float = math.inf,
     ) -> MatchResult:
         """Point-to-line Gauss-Newton from ``start``; covariance from its normal matrix.
 
@@ -416,6 +423,9 @@ class ScanMatcher:
             dist, idx = tgt.tree.query(p, distance_upper_bound=self.max_correspondence)
             ok = np.isfinite(dist)
             ok[ok] = tgt.lines[idx[ok]]
+            if reach < math.inf:  # pairs the scanner's cut-off would have biased
+                far = tgt.points[idx[ok]] - np.array([x, y])
+                ok[ok] = np.hypot(far[:, 0], far[:, 1]) <= reach
             if ok.sum() < self.min_points:
                 break
             n = tgt.normals[idx[ok]]

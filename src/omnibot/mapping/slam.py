@@ -382,6 +382,7 @@ class Slam:
             search_xy=self.search_xy,
             search_theta=self.search_theta,
             weighted=True,
+            range_max=frame.scan.range_max,
         )
         if not (
             again.converged
