@@ -45,11 +45,13 @@ def synthetic_scan(
     rays: int = RAYS,
     range_max: float = RANGE_MAX,
     noise: float = 0.01,
+    noise_fraction: float = 0.0,
     dropout: float = 0.02,
     twist: Twist | None = None,
     time_increment: float = 0.0,
 ) -> Scan:
-    """A 360-degree scan from ``pose`` (scanner at the base's origin): Gaussian range noise, dropouts.
+    """A 360-degree scan from ``pose`` (scanner at the base's origin): Gaussian range noise (1 sigma
+    ``noise + noise_fraction * range``, m), dropouts.
 
     With a body ``twist`` and a ``time_increment``, ray ``i`` is cast ``i * time_increment`` s
     later, from where the base has moved by then (a spinning scanner's motion distortion).
@@ -64,7 +66,9 @@ def synthetic_scan(
         origins = np.column_stack((pose.x + c * x - s * y, pose.y + s * x + c * y))
         headings = headings + th
     ranges = world.raycast(origins, headings, range_max)
-    ranges = ranges + rng.normal(0.0, noise, rays)
+    ranges = ranges + rng.normal(0.0, 1.0, rays) * (
+        noise + noise_fraction * np.where(ranges < math.inf, ranges, 0.0)
+    )
     ranges[rng.random(rays) < dropout] = math.inf
     ranges[~(ranges <= range_max)] = math.inf
     return Scan(

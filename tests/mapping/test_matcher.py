@@ -132,3 +132,78 @@ def test_an_end_wall_in_range_constrains_the_axis() -> None:
     err = between(truth, result.pose)
     assert np.sqrt(np.linalg.eigvalsh(result.covariance)).max() < 0.02
     assert math.hypot(err.x, err.y) < 0.01
+
+
+def _sharp_corridor(world_length: float, upto: float, rng: np.random.Generator) -> np.ndarray:
+    """The corridor's returns within 2 m of poses every 0.25 m from x = 1 to ``upto`` (map frame): what
+    an anchor submap holds, the end wall at x = 0 seen from 1 m."""
+    world = corridor_world(world_length)
+    clouds = []
+    for x in np.arange(1.0, upto, 0.25):
+        pose = Pose2D(float(x), 0.0, 0.0)
+        pts = synthetic_scan(world, pose, rng, range_max=12.0, noise=0.0, noise_fraction=0.01).points()
+        clouds.append(transform(pose, pts[np.hypot(pts[:, 0], pts[:, 1]) <= 2.0]))
+    return np.vstack(clouds)
+
+
+def test_a_far_end_wall_constrains_the_axis_as_far_as_its_noise_allows() -> None:
+    """An A1 (1 % range noise) 10 m from the end wall it saw up close: the wall's dozen returns fix the
+    axis to a few centimetres. One spread for all (the sharp side walls') claims about a centimetre;
+    weighing each return by its own noise gives a standard deviation the errors stay within."""
+    world = corridor_world(30.0)
+    true = Pose2D(10.0, 0.1, 0.05)
+    guess = compose(true, Pose2D(0.08, -0.05, 0.02))
+    errors: dict[bool, list[float]] = {False: [], True: []}
+    claimed: dict[bool, list[float]] = {False: [], True: []}
+    for seed in range(8):
+        rng = np.random.default_rng(seed)
+        target = ScanMatcher().target(_sharp_corridor(30.0, 11.0, rng))
+        source = synthetic_scan(world, true, rng, range_max=12.0, noise=0.0, noise_fraction=0.01)
+        for weighted in (False, True):
+            result = ScanMatcher().match(source, target, guess, weighted=weighted)
+            assert result.unconstrained == 0
+            assert result.converged or not weighted  # the unweighted one may wobble on the far returns
+            assert abs(result.pose.y - true.y) < 0.01
+            assert abs(result.pose.theta - true.theta) < math.radians(0.3)
+            errors[weighted].append(result.pose.x - true.x)
+            claimed[weighted].append(math.sqrt(result.covariance[0, 0]))
+    spread = {w: math.sqrt(float(np.mean(np.square(e)))) for w, e in errors.items()}
+    assert 0.02 < spread[True] < 0.08  # a few centimetres: the wall constrains the axis
+    assert float(np.median(claimed[False])) < spread[False] / 2  # overconfident
+    assert spread[True] <= float(np.median(claimed[True])) < 0.15  # honest
+
+
+def test_a_weighted_match_mid_corridor_still_leaves_the_axis_free() -> None:
+    """No end wall in range: the lines' slightly tilted normals add up to information along the axis
+    that no return measured; the localisability check does not count it."""
+    rng = np.random.default_rng(10)
+    world = corridor_world(60.0)
+    target = _sharp_corridor(60.0, 40.0, rng)
+    true = Pose2D(26.0, -0.1, -0.03)
+    guess = compose(true, Pose2D(0.1, 0.04, 0.02))
+    source = synthetic_scan(world, true, rng, range_max=12.0, noise=0.0, noise_fraction=0.01)
+    result = ScanMatcher().match(source, target, guess, weighted=True)
+    assert result.converged
+    assert result.unconstrained == 1
+    axis = np.linalg.eigh(result.covariance)[1][:, -1]
+    assert abs(axis[0]) > 0.99
+    assert abs(result.pose.x - guess.x) < 0.01  # kept, not wandered off
+    assert abs(result.pose.y - true.y) < 0.01
+
+
+def test_a_wall_at_the_scanners_cut_off_is_left_out_of_a_weighted_match() -> None:
+    """The scanner drops returns beyond its range_max: of a wall 11.8 m away (1 % noise, a 12 m
+    cut-off) only the returns whose noise fell short are left, biased short. Given range_max, the
+    weighted match leaves such pairs out, and with them the axis they alone constrained."""
+    world = corridor_world(30.0)
+    true = Pose2D(11.8, 0.1, 0.02)
+    guess = compose(true, Pose2D(0.05, -0.03, 0.01))
+    rng = np.random.default_rng(3)
+    target = ScanMatcher().target(_sharp_corridor(30.0, 14.0, rng))
+    source = synthetic_scan(world, true, rng, range_max=12.0, noise=0.0, noise_fraction=0.01)
+    kept = ScanMatcher().match(source, target, guess, weighted=True)
+    cut = ScanMatcher().match(source, target, guess, weighted=True, range_max=12.0)
+    assert kept.unconstrained == 0
+    assert cut.converged and cut.unconstrained == 1
+    assert abs(cut.pose.x - guess.x) < 0.002  # kept where the guess put it (the free direction: x, nearly)
+    assert abs(cut.pose.y - true.y) < 0.01

@@ -19,6 +19,15 @@ the normal matrix, ``sigma`` the residual's spread, never below the sensor's), s
 ``covariance_scale`` for the correlation between neighbouring rays; unconstrained directions get
 a variance of :data:`UNCONSTRAINED_VARIANCE`. So a corridor's axis shows up as a huge variance
 along it, and a pose graph weighting the match by this covariance falls back on odometry there.
+
+``weighted=True`` weighs each source point by its own range noise (``range_noise``: ``std +
+fraction * range``, the scanner's 1 sigma; the A1's 1 % by default) instead of one spread for all:
+the normal matrix is then an information matrix (1/m^2) and the covariance its inverse (scaled as
+above), and a direction is unconstrained when it is fixed no better than :data:`DEGENERATE_SIGMA`
+rather than relative to the best one. A wall 10 m away (10 cm noise per return) then constrains
+what it can (a few centimetres from a dozen returns) with its honest weight, where the relative
+test (and one spread for all: Censi's Hessian covariance assumes equal noise) would either drop
+it or trust it as if it were 1 m away.
 """
 
 from __future__ import annotations
@@ -45,6 +54,15 @@ UNCONSTRAINED_VARIANCE = 1.0e4
 DEGENERATE_RATIO = 1.0e-2
 """An eigenvalue of the normal matrix (its rotation scaled by the points' spread to a length) below
 this fraction of the largest marks an unconstrained direction."""
+DEGENERATE_SIGMA = 0.3
+"""A weighted match (``weighted=True``) leaves a direction unconstrained when it fixes it no better
+than this, 1 sigma (m; rotation scaled by the points' spread to a length)."""
+ALIGNED = math.cos(math.radians(45.0))
+"""A correspondence supports a direction when its Jacobian lies within this angle's cosine of it."""
+SETTLED = 0.1
+"""A weighted match has settled when its step is below this many sigmas (its information's)."""
+HUBER_SIGMAS = 3.0
+"""Residuals beyond this many sigmas of the range noise are down-weighted (Huber)."""
 NORMAL_NEIGHBOURS = 24
 NORMAL_RADIUS = 0.3
 """Neighbours (how many, how far, m) whose line gives a target point its normal."""
@@ -160,6 +178,10 @@ class MatchResult:
     """ICP settled with enough inliers."""
     score: float
     """Best mean likelihood of the correlative search (0..1; 0 without one)."""
+    unconstrained: int = 0
+    """How many directions the geometry left unconstrained (degenerate; kept at the guess)."""
+    free: FloatArray = field(default_factory=lambda: np.zeros((3, 0)), repr=False)
+    """(3, unconstrained) unit vectors of those directions in (x, y, theta), the target's frame."""
 
     @property
     def information(self) -> FloatArray:
@@ -202,16 +224,40 @@ def _correlate(
     return out
 
 
-def _eigen(hessian: FloatArray, scale: FloatArray) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
-    """Eigen-decomposition of the normal matrix in scaled units, and which directions are constrained."""
+@dataclass(frozen=True)
+class _Support:
+    """A weighted match's correspondences (Jacobian rows, weights) and the information a direction needs."""
+
+    jac: FloatArray
+    weights: FloatArray
+    floor: float
+
+
+def _eigen(
+    hessian: FloatArray, scale: FloatArray, support: _Support | None = None
+) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
+    """Eigen-decomposition of the normal matrix in scaled units, and which directions are constrained.
+
+    Without ``support``: eigenvalues above :data:`DEGENERATE_RATIO` of the largest. With it
+    (localisability, as X-ICP's): the information a direction gets from the correspondences aligned
+    with it (their Jacobian within 45 degrees of it) must exceed ``support.floor``; the slight tilt
+    of many lines' estimated normals along a corridor adds up to information along its axis that
+    no return measured, and is not counted."""
     vals, vecs = np.linalg.eigh(hessian * np.outer(scale, scale))
-    keep = vals > DEGENERATE_RATIO * max(float(vals[-1]), 1e-12)
+    if support is None:
+        keep = vals > DEGENERATE_RATIO * max(float(vals[-1]), 1e-12)
+    else:
+        js = support.jac * scale
+        proj = js @ vecs
+        aligned = np.abs(proj) >= ALIGNED * np.linalg.norm(js, axis=1)[:, None]
+        info = (support.weights[:, None] * proj * proj * aligned).sum(axis=0)
+        keep = info > support.floor
     return vals, vecs, keep
 
 
-def _solve(hessian: FloatArray, grad: FloatArray, scale: FloatArray) -> FloatArray:
+def _solve(hessian: FloatArray, grad: FloatArray, scale: FloatArray, support: _Support | None) -> FloatArray:
     """The Gauss-Newton step ``H^-1 g`` restricted to the constrained directions."""
-    vals, vecs, keep = _eigen(hessian, scale)
+    vals, vecs, keep = _eigen(hessian, scale, support)
     inv = np.where(keep, 1.0 / np.where(keep, vals, 1.0), 0.0)
     step: FloatArray = scale * (vecs @ (inv * (vecs.T @ (scale * grad))))
     return step
@@ -228,6 +274,8 @@ class ScanMatcher:
     to half a cell and at most ``max_points``; fewer than ``min_points`` matched points is a failed
     match. ``weight_xy`` (1/m) and ``weight_theta`` (1/rad) discount a lattice pose's score by
     ``exp(-(weight_xy * distance + weight_theta * turn))`` from the guess (ties go to the guess).
+    ``range_noise`` (std m, fraction of the range) is the scanner's range noise, 1 sigma, that a
+    ``weighted`` match weighs each source point by (its range: its distance from the base).
     """
 
     def __init__(
@@ -245,6 +293,7 @@ class ScanMatcher:
         max_points: int = 400,
         weight_xy: float = 0.05,
         weight_theta: float = 0.05,
+        range_noise: tuple[float, float] = (0.0, 0.01),
     ) -> None:
         for key, value in (
             ("resolution", resolution),
@@ -258,6 +307,8 @@ class ScanMatcher:
         for key, value in (("search_xy", search_xy), ("search_theta", search_theta)):
             if not (math.isfinite(value) and value >= 0):
                 raise ConfigError(f"must be zero or positive, not {value}", key)
+        if len(range_noise) != 2 or not all(math.isfinite(v) and v >= 0 for v in range_noise):
+            raise ConfigError(f"must be two numbers >= 0 (std m, fraction), not {range_noise}", "range_noise")
         if max_iterations < 1 or min_points < 3 or max_points < min_points:
             raise ConfigError(
                 f"needs max_iterations >= 1 and 3 <= min_points <= max_points, not "
@@ -276,6 +327,7 @@ class ScanMatcher:
         self.max_points = max_points
         self.weight_xy = weight_xy
         self.weight_theta = weight_theta
+        self.range_noise = (float(range_noise[0]), float(range_noise[1]))
 
     def target(self, data: Scan | ArrayLike | Target, margin: float | None = None) -> Target:
         """A prepared target from a scan or (n, 2) points (a :class:`Target` is returned as it is)."""
@@ -293,8 +345,15 @@ class ScanMatcher:
         *,
         search_xy: float | None = None,
         search_theta: float | None = None,
+        weighted: bool = False,
+        range_max: float = math.inf,
     ) -> MatchResult:
-        """The pose of ``source``'s frame in ``target``'s frame, starting from ``initial``."""
+        """The pose of ``source``'s frame in ``target``'s frame, starting from ``initial``.
+
+        ``weighted``: each source point weighed by its range noise (see the module docstring);
+        then with the scanner's ``range_max`` a pair whose target point lies farther than 3 sigma
+        short of it is left out: the scanner drops returns beyond ``range_max``, so of a wall near
+        it only the returns whose noise fell short are left, biased short."""
         if not all(math.isfinite(v) for v in (initial.x, initial.y, initial.theta)):
             raise ConfigError(f"must be finite, not {initial}", "initial")
         tgt = self.target(target)
@@ -306,7 +365,13 @@ class ScanMatcher:
         sxy = self.search_xy if search_xy is None else search_xy
         sth = self.search_theta if search_theta is None else search_theta
         start, score = self.search(src, tgt, initial, sxy, sth)
-        return self._refine(src, tgt, initial, start, score)
+        sigma = None
+        reach = math.inf
+        if weighted:
+            spread = self.range_noise[0] + self.range_noise[1] * np.hypot(src[:, 0], src[:, 1])
+            sigma = np.maximum(spread, self.range_sigma)
+            reach = range_max - 3.0 * (self.range_noise[0] + self.range_noise[1] * range_max)
+        return self._refine(src, tgt, initial, start, score, sigma, reach)
 
     def search(
         self, src: FloatArray, tgt: Target, initial: Pose2D, search_xy: float, search_theta: float
@@ -332,13 +397,25 @@ class ScanMatcher:
         return best, float(scores[a, i, j])
 
     def _refine(
-        self, src: FloatArray, tgt: Target, initial: Pose2D, start: Pose2D, score: float
+        self,
+        src: FloatArray,
+        tgt: Target,
+        initial: Pose2D,
+        start: Pose2D,
+        score: float,
+        sigma: FloatArray | None = None,
+        reach: float = math.inf,
     ) -> MatchResult:
-        """Point-to-line Gauss-Newton from ``start``; covariance from its normal matrix."""
+        """Point-to-line Gauss-Newton from ``start``; covariance from its normal matrix.
+
+        ``sigma``: each source point's range noise (m), which weighs it (None: one spread for all)."""
         x, y, th = start.x, start.y, start.theta
         scale = np.array([1.0, 1.0, 1.0 / max(float(np.sqrt(np.mean(np.sum(src * src, axis=1)))), 0.1)])
         converged = False
-        huber = 2.0 * self.range_sigma * 1.5
+        # unweighted: residuals in m against the sensor's floor; weighted: in sigmas of each point
+        spread = np.full(len(src), self.range_sigma) if sigma is None else sigma
+        floor = self.covariance_scale / DEGENERATE_SIGMA**2
+        support: _Support | None = None
         hessian = np.zeros((3, 3))
         previous = np.zeros(3)
         for _ in range(self.max_iterations):
@@ -346,6 +423,9 @@ class ScanMatcher:
             dist, idx = tgt.tree.query(p, distance_upper_bound=self.max_correspondence)
             ok = np.isfinite(dist)
             ok[ok] = tgt.lines[idx[ok]]
+            if reach < math.inf:  # pairs the scanner's cut-off would have biased
+                far = tgt.points[idx[ok]] - np.array([x, y])
+                ok[ok] = np.hypot(far[:, 0], far[:, 1]) <= reach
             if ok.sum() < self.min_points:
                 break
             n = tgt.normals[idx[ok]]
@@ -354,21 +434,30 @@ class ScanMatcher:
             r = np.einsum("ij,ij->i", n, pk - q)
             jac = np.column_stack((n[:, 0], n[:, 1], -n[:, 0] * (pk[:, 1] - y) + n[:, 1] * (pk[:, 0] - x)))
             a = np.abs(r)
+            huber = HUBER_SIGMAS * spread[ok]
             weights = np.where(a <= huber, 1.0, huber / np.maximum(a, 1e-12))
+            if sigma is not None:
+                weights = weights / (spread[ok] * spread[ok])
             hessian = jac.T @ (weights[:, None] * jac)
             grad = jac.T @ (weights * r)
-            delta = -_solve(hessian, grad, scale)
+            if sigma is not None:
+                support = _Support(jac, weights, floor)
+            delta = -_solve(hessian, grad, scale, support)
             if np.all(np.abs(delta + previous) < 1e-7):  # a point flips in and out: settle between
                 delta = 0.5 * delta
+            elif sigma is not None and float(delta @ hessian @ previous) < 0:
+                delta = 0.5 * delta  # far returns change partners back and forth: damp the swing
             x, y, th = x + delta[0], y + delta[1], th + delta[2]
-            if math.hypot(delta[0], delta[1]) < 1e-4 and abs(delta[2]) < 1e-4:
+            small = math.hypot(delta[0], delta[1]) < 1e-4 and abs(delta[2]) < 1e-4
+            # weighted, H is an information matrix: a step a tenth of its direction's sigma is settled
+            if small or (sigma is not None and float(delta @ hessian @ delta) < SETTLED**2):
                 converged = True
                 break
             previous = delta
         else:  # out of iterations: still settled if only a point or two keep flipping, by a hair
             converged = math.hypot(previous[0], previous[1]) < 1e-3 and abs(previous[2]) < 1e-3
         # what the geometry leaves unconstrained stays where the caller's guess put it
-        _, vecs, keep = _eigen(hessian, scale)
+        _, vecs, keep = _eigen(hessian, scale, support)
         if converged and not keep.all():
             moved = (
                 np.array([x - initial.x, y - initial.y, math.remainder(th - initial.theta, 2 * math.pi)])
@@ -388,13 +477,20 @@ class ScanMatcher:
         fitness = float(inl.mean())
         rmse = float(math.sqrt(np.mean(line[inl] ** 2))) if inl.any() else math.inf
         converged = converged and int(inl.sum()) >= self.min_points
-        sigma2 = max(rmse if math.isfinite(rmse) else 0.0, self.range_sigma) ** 2
-        covariance = self._covariance(hessian, sigma2, scale)
-        return MatchResult(pose, covariance, fitness, rmse, converged, score)
+        if sigma is None:
+            sigma2 = max(rmse if math.isfinite(rmse) else 0.0, self.range_sigma) ** 2
+        else:  # the inliers' spread in sigmas, never below the noise model's
+            sigma2 = max(float(np.mean((line[inl] / sigma[inl]) ** 2)) if inl.any() else 0.0, 1.0)
+        covariance = self._covariance(hessian, sigma2, scale, support)
+        free = scale[:, None] * vecs[:, ~keep]
+        free = free / np.linalg.norm(free, axis=0)
+        return MatchResult(pose, covariance, fitness, rmse, converged, score, int((~keep).sum()), free)
 
-    def _covariance(self, hessian: FloatArray, sigma2: float, scale: FloatArray) -> FloatArray:
+    def _covariance(
+        self, hessian: FloatArray, sigma2: float, scale: FloatArray, support: _Support | None = None
+    ) -> FloatArray:
         """``covariance_scale * sigma2 * H^-1``, unconstrained directions at :data:`UNCONSTRAINED_VARIANCE`."""
-        vals, vecs, keep = _eigen(hessian, scale)
+        vals, vecs, keep = _eigen(hessian, scale, support)
         var = np.where(
             keep, self.covariance_scale * sigma2 / np.where(keep, vals, 1.0), UNCONSTRAINED_VARIANCE
         )
@@ -403,7 +499,9 @@ class ScanMatcher:
         return 0.5 * (cov + cov.T)
 
     def _failed(self, initial: Pose2D) -> MatchResult:
-        return MatchResult(initial, np.eye(3) * UNCONSTRAINED_VARIANCE, 0.0, math.inf, False, 0.0)
+        return MatchResult(
+            initial, np.eye(3) * UNCONSTRAINED_VARIANCE, 0.0, math.inf, False, 0.0, 3, np.eye(3)
+        )
 
 
 def match(

@@ -443,6 +443,8 @@ def write_outputs(
         "scans_dropped": sink.dropped,
         "keyframes": len(sink.slam.keyframes()),
         "loop_closures": sink.slam.closures,
+        "keyframes_degenerate": sum(1 for m in sink.slam.matches if m.unconstrained),
+        "keyframes_anchored": sink.slam.anchored,
         "distance_m": path_length(estimate.poses),
         "map": {"hit_range_m": noise.hit_range},
     }

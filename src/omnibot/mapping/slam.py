@@ -11,6 +11,24 @@ keyframe: it is matched (:class:`~omnibot.mapping.matcher.ScanMatcher`, correlat
 ICP) against a local submap (the last ``submap_keyframes`` keyframes' points at their current
 estimates), starting from the prediction.
 
+Degeneracy: where that match leaves a direction unconstrained (a corridor's axis, whose far end
+wall the submap holds only as a blur of its own distant, noisy views), with ``anchor_reach`` set
+(off by default, see below) the keyframe is matched again, each return weighed by its own range
+noise (``weighted``, :class:`ScanMatcher`), against an *anchor* submap: the returns every keyframe
+within ``anchor_reach`` of the prediction saw within ``anchor_range`` (sharp: 2 cm at 2 m for an
+A1). So the end wall seen up close fixes the axis, as well as its returns from 10 m can (a few
+centimetres). If that match converged, fits as well as ``min_fitness`` asks and constrains
+directions the first left free, it adds a factor from the anchor submap's oldest keyframe (what was
+seen first) whose covariance keeps only those directions: the others stay the first match's, from
+the previous keyframe, since an old keyframe's heading would swing them by the lever of the metres
+between. What stays unconstrained is the odometry's alone: the match keeps the prediction there and
+its covariance leaves it free (Zhang et al.'s solution remapping, the information matrix as the
+factor's weight). A direction no return constrains at all (mid-corridor, no end wall in range)
+cannot be recovered by any scan matching: there the SLAM is the odometry. Off by default: in the
+simulated long corridor the anchor matches hold the axis where the odometry drifts (omni4,
+mecanum4) but put a bias of about 5 cm into omni3's, whose odometry hardly drifts along it, not yet
+explained (docs/mapping.md).
+
 Back end: a pose graph of the keyframes (gtsam ``Pose2`` nodes). Between consecutive keyframes, an
 odometry factor (noise growing with the distance and angle driven, ``odometry_noise``) and the
 match factor (the match's own covariance, so a direction the scans leave unconstrained, such as a
@@ -42,7 +60,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from omnibot.errors import ConfigError
 from omnibot.mapping.deskew import scan_points
-from omnibot.mapping.matcher import MatchResult, ScanMatcher, Target
+from omnibot.mapping.matcher import (
+    UNCONSTRAINED_VARIANCE,
+    MatchResult,
+    ScanMatcher,
+    Target,
+    voxel_downsample,
+)
 from omnibot.mapping.se2 import between, compose, distance, inverse, rotate_covariance, transform
 from omnibot.motion import Pose2D, Twist
 from omnibot.scan import Scan
@@ -61,6 +85,8 @@ class Keyframe:
     odom: Pose2D
     scan: Scan
     points: FloatArray
+    anchor: FloatArray
+    """Its points measured within the SLAM's ``anchor_range`` (sharp), thinned to half a cell, base frame."""
 
 
 @dataclass(frozen=True)
@@ -103,6 +129,8 @@ class Slam:
         loop_min_fitness: float = 0.75,
         loop_sigma_floor: tuple[float, float] = (0.01, math.radians(0.5)),
         loop_kernel_width: float = 3.0,
+        anchor_range: float = 2.0,
+        anchor_reach: float | None = None,
         optimizer: str = "isam2",
         scan_to_submap: bool = True,
         deskew: bool = True,
@@ -114,7 +142,10 @@ class Slam:
             "keyframe_angle": keyframe_angle,
             "loop_search_radius": loop_search_radius,
             "loop_kernel_width": loop_kernel_width,
+            "anchor_range": anchor_range,
         }
+        if anchor_reach is not None:
+            positive["anchor_reach"] = anchor_reach
         for key, value in positive.items():
             if not (math.isfinite(value) and value > 0):
                 raise ConfigError(f"must be a positive number, not {value}", key)
@@ -153,6 +184,8 @@ class Slam:
         self.loop_min_fitness = loop_min_fitness
         self.loop_sigma_floor = loop_sigma_floor
         self.loop_kernel_width = loop_kernel_width
+        self.anchor_range = anchor_range
+        self.anchor_reach = anchor_reach
         self.optimizer = optimizer
         self.scan_to_submap = scan_to_submap
         self.deskew = deskew
@@ -171,6 +204,8 @@ class Slam:
         """Every loop closure tried, in order."""
         self.matches: list[MatchResult] = []
         """The front end's match of every keyframe but the first."""
+        self.anchored = 0
+        """Keyframes whose degenerate match the anchor submap's completed (a factor along what it left free)."""
 
         self._graph = gtsam.NonlinearFactorGraph()  # every factor (batch optimiser)
         self._values = gtsam.Values()
@@ -267,8 +302,16 @@ class Slam:
         self._pose = compose(self._estimates[k], delta)
         return self._pose
 
+    def _keyframe(self, odom_pose: Pose2D, scan: Scan, stamp: float) -> Keyframe:
+        points = scan_points(scan, self._twist)
+        near = np.hypot(points[:, 0] - scan.mount.x, points[:, 1] - scan.mount.y) <= self.anchor_range
+        if self.anchor_reach is None:
+            near[:] = False  # no anchor submap: nothing to keep
+        anchor = voxel_downsample(points[near], self.matcher.resolution / 2.0)  # as a target thins them
+        return Keyframe(stamp, odom_pose, scan, points, anchor)
+
     def _add_first(self, odom_pose: Pose2D, scan: Scan, stamp: float) -> None:
-        self._frames.append(Keyframe(stamp, odom_pose, scan, scan_points(scan, self._twist)))
+        self._frames.append(self._keyframe(odom_pose, scan, stamp))
         self._estimates.append(odom_pose)
         noise = gtsam.noiseModel.Isotropic.Sigma(3, PRIOR_SIGMA)
         self._add_factor(gtsam.PriorFactorPose2(0, _pose2(odom_pose), noise))
@@ -279,7 +322,7 @@ class Slam:
     def _add_keyframe(self, odom_pose: Pose2D, scan: Scan, stamp: float, delta: Pose2D) -> None:
         last = len(self._frames) - 1
         new = last + 1
-        frame = Keyframe(stamp, odom_pose, scan, scan_points(scan, self._twist))
+        frame = self._keyframe(odom_pose, scan, stamp)
         predicted = compose(self._estimates[last], delta)
         result = None
         if self.scan_to_submap:
@@ -293,16 +336,22 @@ class Slam:
             self.matches.append(result)
         self._frames.append(frame)
         self._add_factor(gtsam.BetweenFactorPose2(last, new, _pose2(delta), self._odometry_noise(delta)))
-        estimate = predicted
+        seen: list[tuple[int, Pose2D, FloatArray]] = []  # (from keyframe, map-frame pose, covariance)
         if result is not None and result.converged and result.fitness >= self.min_fitness:
-            relative = between(self._estimates[last], result.pose)
-            cov = rotate_covariance(result.covariance, -result.pose.theta)
+            seen.append((last, result.pose, result.covariance))
+            anchored = result.unconstrained and self.anchor_reach is not None
+            anchor = self._anchor_match(frame, predicted, result) if anchored else None
+            if anchor is not None:
+                seen.append(anchor)
+        for reference, pose, covariance in seen:
+            relative = between(self._estimates[reference], pose)
+            cov = rotate_covariance(covariance, -pose.theta)
             self._add_factor(
                 gtsam.BetweenFactorPose2(
-                    last, new, _pose2(relative), gtsam.noiseModel.Gaussian.Covariance(cov)
+                    reference, new, _pose2(relative), gtsam.noiseModel.Gaussian.Covariance(cov)
                 )
             )
-            estimate = self._fuse(predicted, delta, result)
+        estimate = self._fuse(predicted, delta, [(pose, cov) for _, pose, cov in seen])
         self._estimates.append(estimate)
         self._add_value(new, estimate)
         self._track.append((stamp, new, Pose2D(0.0, 0.0, 0.0)))
@@ -312,15 +361,52 @@ class Slam:
             closed = self._close_loop(new)
         self._optimise(closed)
 
-    def _fuse(self, predicted: Pose2D, delta: Pose2D, result: MatchResult) -> Pose2D:
-        """The match where it is constrained, the prediction where it is not (the new node's first guess)."""
-        odo = rotate_covariance(self._odometry_cov(delta), predicted.theta)
-        info_m, info_o = result.information, np.linalg.inv(odo)
-        diff = np.array(
-            [result.pose.x - predicted.x, result.pose.y - predicted.y, result.pose.theta - predicted.theta]
+    def _anchor_match(
+        self, frame: Keyframe, predicted: Pose2D, result: MatchResult
+    ) -> tuple[int, Pose2D, FloatArray] | None:
+        """A degenerate match redone, weighted, on the anchor submap: where it constrains what ``result``
+        left free, the keyframe its factor is from (the anchor submap's oldest, which holds what was
+        seen first), its pose and a covariance that keeps only those directions (the others are
+        ``result``'s, from the previous keyframe: an old keyframe's heading would swing them by the
+        lever of the metres between)."""
+        reach = self.anchor_reach if self.anchor_reach is not None else math.inf
+        near = [k for k in range(len(self._estimates)) if distance(self._estimates[k], predicted) <= reach]
+        pts = [transform(self._estimates[k], self._frames[k].anchor) for k in near]
+        if not pts:
+            return None
+        target = self.matcher.target(np.vstack(pts), margin=self.search_xy + 1.0)
+        again = self.matcher.match(
+            frame.points,
+            target,
+            predicted,
+            search_xy=self.search_xy,
+            search_theta=self.search_theta,
+            weighted=True,
+            range_max=frame.scan.range_max,
         )
-        diff[2] = math.remainder(diff[2], 2 * math.pi)
-        step = np.linalg.solve(info_m + info_o, info_m @ diff)
+        if not (
+            again.converged
+            and again.fitness >= self.min_fitness
+            and again.unconstrained < result.unconstrained
+        ):
+            return None
+        free, _ = np.linalg.qr(result.free)
+        cov = free @ (free.T @ again.covariance @ free) @ free.T
+        cov += UNCONSTRAINED_VARIANCE * (np.eye(3) - free @ free.T)
+        self.anchored += 1
+        return near[0], again.pose, 0.5 * (cov + cov.T)
+
+    def _fuse(self, predicted: Pose2D, delta: Pose2D, seen: list[tuple[Pose2D, FloatArray]]) -> Pose2D:
+        """The matches where they constrain, the prediction where they do not (the new node's first guess)."""
+        odo = rotate_covariance(self._odometry_cov(delta), predicted.theta)
+        info = np.linalg.inv(odo)
+        pull = np.zeros(3)
+        for pose, covariance in seen:
+            info_m = np.linalg.inv(covariance)
+            diff = np.array([pose.x - predicted.x, pose.y - predicted.y, pose.theta - predicted.theta])
+            diff[2] = math.remainder(diff[2], 2 * math.pi)
+            info, pull = info + info_m, pull + info_m @ diff
+        step = np.linalg.solve(info, pull)
         return Pose2D(
             predicted.x + step[0],
             predicted.y + step[1],
