@@ -51,10 +51,10 @@ class CommandRecording:
         """Record ``client`` (see :meth:`Recording.attach <omnibot.logs.recording.Recording.attach>`)."""
         self.recording.attach(client, robot, guess)
 
-    def controller_truth(self, rows: Sequence[tuple[float, float, float, float]]) -> int:
-        """Truth timed by the controller's clock into the log (see :meth:`Recording.controller_truth
-        <omnibot.logs.recording.Recording.controller_truth>`)."""
-        return self.recording.controller_truth(rows)
+    def truth_rows(self, rows: Sequence[tuple[float, float, float, float]]) -> int:
+        """Ground truth rows on the link's clock into the log (see :meth:`Recording.truth_rows
+        <omnibot.logs.recording.Recording.truth_rows>`)."""
+        return self.recording.truth_rows(rows)
 
     def attach_runtime(self, runtime: Runtime) -> None:
         """Record ``runtime`` and, with ``--foxglove``, let Foxglove's Teleop panel drive it."""

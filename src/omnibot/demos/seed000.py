@@ -24,6 +24,7 @@ The examples (seed 000, sections III and VI.C):
 
 from __future__ import annotations
 
+import bisect
 import csv
 import math
 import tempfile
@@ -386,8 +387,46 @@ class DemoRecording(ClientRecording, Protocol):
     """``--log``'s recording as the demo uses it (:class:`omnibot.logs.recording.Recording`): the
     clients it opens and, on the pty emulator, the truth of the emulator's file."""
 
-    def controller_truth(self, rows: Sequence[tuple[float, float, float, float]]) -> int:
-        """Ground truth rows ``t, x, y, theta`` timed by the controller's clock into the log."""
+    def truth_rows(self, rows: Sequence[tuple[float, float, float, float]]) -> int:
+        """Ground truth rows ``t, x, y, theta`` on the link's clock into the log."""
+
+
+class ControllerClock:
+    """The controller's clock placed on the link's by its TELs (the pty emulator's truth file is timed
+    by the emulator's simulated time, which is its firmware's clock)."""
+
+    def __init__(self) -> None:
+        self.pairs: list[tuple[float, float]] = []
+        """(controller time, link time minus controller time) of each TEL (a demo's few thousand)."""
+
+    def __call__(self, event: Event) -> None:
+        """A client listener: each TEL's pair of times (a clock that went back is a restart: anew)."""
+        if isinstance(event, Telemetry):
+            if self.pairs and event.controller_time < self.pairs[-1][0]:
+                self.pairs.clear()
+            self.pairs.append((event.controller_time, event.time - event.controller_time))
+
+    def link_time(self, controller_time: float) -> float | None:
+        """The link time of an instant on the controller's clock, by the TELs sent either side of it:
+        their offsets interpolated (a TEL's delay on the line, a few ms, is the error; an emulator
+        that falls behind the wall clock, as a loaded one does, moves the offset, so it is taken at
+        each instant, not once); before the first or after the last TEL, that TEL's; None without."""
+        pairs = self.pairs
+        if not pairs:
+            return None
+        i = bisect.bisect_left(pairs, (controller_time,))
+        if i == 0 or i == len(pairs):
+            return controller_time + pairs[min(i, len(pairs) - 1)][1]
+        (c0, o0), (c1, o1) = pairs[i - 1], pairs[i]
+        share = (controller_time - c0) / (c1 - c0) if c1 > c0 else 0.0
+        return controller_time + o0 + share * (o1 - o0)
+
+    def place(
+        self, rows: Sequence[tuple[float, float, float, float]]
+    ) -> list[tuple[float, float, float, float]]:
+        """``rows`` (t, x, y, theta) with ``t`` on the link's clock (none without a TEL)."""
+        placed = [(self.link_time(t), x, y, th) for t, x, y, th in rows]
+        return [(t, x, y, th) for t, x, y, th in placed if t is not None]
 
 
 class TruthSource:
@@ -503,8 +542,10 @@ def run_demo(
             else _given(port or "")
         )
         started = time.monotonic()
+        clock = ControllerClock()
         with context as url, robot_session(url, robot_name, recording=recording) as session:
             client, robot, hello = session.client, session.robot, session.hello
+            client.add_listener(clock)
             sim = find_simulator(client.link)
             if sim is not None:
                 world_map = sim.world
@@ -517,8 +558,8 @@ def run_demo(
                 demo = Demo(client, robot, truth if truth is not None else (lambda: None), bar)
                 segments = demo.run()
         wall = time.monotonic() - started
-        if recording is not None and truth_file is not None:
-            recording.controller_truth(truth_file.rows())  # whole: the emulator has ended
+        if recording is not None and truth_file is not None:  # whole: the emulator has ended
+            recording.truth_rows(clock.place(truth_file.rows()))
         written = _write_outputs(out, truth, demo.recorder.odo_trail, world_map)
     return _report(hello, port, segments, written, wall)
 

@@ -43,7 +43,6 @@ listeners or the runtime's loop; :attr:`Recorder.failure` tells the command its 
 
 from __future__ import annotations
 
-import bisect
 import contextlib
 import logging
 import math
@@ -371,9 +370,6 @@ class Recorder:
         self._joints: list[str] = []
         self._cpr: list[float] = []
         self._last_tel: tuple[float, tuple[int, ...]] | None = None
-        self._clock_pairs: list[tuple[float, float]] = []
-        """(controller time, link time minus controller time) of each TEL seen: places a time on the
-        controller's clock on the link's (:meth:`controller_truth`)."""
         self._clients: list[RobotClient] = []
         self.samples = 0
         """Telemetry samples with encoders seen (what an estimator is fed)."""
@@ -623,9 +619,6 @@ class Recorder:
         """Record a TEL sample: joint states, IMU, sonar ranges, the estimator's odometry and pose, and
         the simulator's truth when there is one."""
         ns = self.ns(tel.time)
-        if self._clock_pairs and tel.controller_time < self._clock_pairs[-1][0]:
-            self._clock_pairs.clear()  # the controller restarted its clock: a new boot
-        self._clock_pairs.append((tel.controller_time, tel.time - tel.controller_time))
         if tel.encoders is not None and self._joints and len(tel.encoders) == len(self._joints):
             self._joint_states(ns, tel)
         if tel.gyro_rate is not None or tel.heading is not None:
@@ -644,13 +637,12 @@ class Recorder:
             pose, vel = self._simulator.pose, self._simulator.twist
             self.write_pose(TRUTH, ns, Pose2D(pose.x, pose.y, pose.theta), (vel.vx, vel.vy, vel.w))
 
-    def controller_truth(self, rows: Sequence[tuple[float, float, float, float]]) -> int:
-        """Ground truth timed by the controller's clock, as ``omnibot sim --pty --truth`` writes it
-        (rows ``t, x, y, theta``: the emulator's simulated time is its firmware's clock), on
-        ``/omnibot/truth``, each row at the link time :meth:`link_time` puts it at, its body twist
-        from the poses either side. Returns the rows written: none before a TEL was recorded, as
-        nothing places them then."""
-        if not self._clock_pairs or self.robot is None:
+    def truth_rows(self, rows: Sequence[tuple[float, float, float, float]]) -> int:
+        """Ground truth recorded elsewhere (rows ``t, x, y, theta``, ``t`` on the link's clock: the pty
+        emulator's ``--truth`` file placed by :class:`omnibot.demos.seed000.ControllerClock`) on
+        ``/omnibot/truth``, the body twist from the poses either side. Returns the rows written (none
+        before the recording has its robot)."""
+        if self.robot is None:
             return 0
         for k, (t, x, y, theta) in enumerate(rows):
             before, after = rows[max(k - 1, 0)], rows[min(k + 1, len(rows) - 1)]
@@ -661,21 +653,8 @@ class Recorder:
                 else (0.0, 0.0, 0.0)
             )
             vx, vy, w = (float(v) for v in world_to_body(world, theta))
-            self.write_pose(TRUTH, self.ns(self.link_time(t)), Pose2D(x, y, theta), (vx, vy, w))
+            self.write_pose(TRUTH, self.ns(t), Pose2D(x, y, theta), (vx, vy, w))
         return len(rows)
-
-    def link_time(self, controller_time: float) -> float:
-        """The link time of an instant on the controller's clock, by the TELs sent either side of it:
-        their offsets between the two clocks interpolated (a TEL's delay on the line, a few ms, is the
-        error; an emulator that falls behind the wall clock, as a loaded one does, moves the offset, so
-        it is taken at each instant, not once); before the first or after the last TEL, that TEL's."""
-        pairs = self._clock_pairs
-        i = bisect.bisect_left(pairs, (controller_time,))
-        if i == 0 or i == len(pairs):
-            return controller_time + pairs[min(i, len(pairs) - 1)][1]
-        (c0, o0), (c1, o1) = pairs[i - 1], pairs[i]
-        share = (controller_time - c0) / (c1 - c0) if c1 > c0 else 0.0
-        return controller_time + o0 + share * (o1 - o0)
 
     def estimate(self, t: float, est: Estimate) -> None:
         """An estimate at link time ``t``: ``odom``, ``/tf`` odom -> base_link, ``/omnibot/estimate``."""

@@ -126,10 +126,10 @@ class Recording:
                 return cast("PanelSource", panel)
         return None
 
-    def controller_truth(self, rows: Sequence[tuple[float, float, float, float]]) -> int:
-        """Ground truth timed by the controller's clock (the pty emulator's ``--truth`` rows) into the
-        log (:meth:`Recorder.controller_truth`); the rows written, 0 before a client was recorded."""
-        return self.recorder.controller_truth(rows) if self.recorder is not None else 0
+    def truth_rows(self, rows: Sequence[tuple[float, float, float, float]]) -> int:
+        """Ground truth rows ``t, x, y, theta`` on the link's clock into the log
+        (:meth:`Recorder.truth_rows`); the rows written, 0 before a client was recorded."""
+        return self.recorder.truth_rows(rows) if self.recorder is not None else 0
 
     @property
     def failure(self) -> str | None:
