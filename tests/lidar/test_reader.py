@@ -256,7 +256,9 @@ def test_a_slipped_byte_restarts_the_scan() -> None:
             time.sleep(0.02)
         scanner.poll()  # what was read before the restart (maybe revolutions of misaligned nodes)
         after = read_revolutions(scanner, 2)
-    assert feeder.slipped and scanner.restarts == 1 and scanner.error is None and len(after) == 2
+    # at least the two asked for: a poll hands over every revolution the line has delivered (a loaded
+    # CI worker's poll got 4 at once), and each of them must be whole
+    assert feeder.slipped and scanner.restarts == 1 and scanner.error is None and len(after) >= 2
     for scan in after:  # whole revolutions read after the restart
         want = expected(scan_number(round(scan.ranges[0]) - 1), scan)
         ok = np.isfinite(want)
