@@ -90,6 +90,7 @@ from omnibot.protocol.messages import Malformed, Message, Vel
 from omnibot.robot.description import RobotDescription, load_robot, preset_names
 from omnibot.robot.kinematics import world_to_body
 from omnibot.scan import Scan
+from omnibot.signals import held
 
 log = logging.getLogger("omnibot.logs")
 
@@ -409,9 +410,10 @@ class Recorder:
 
     @contextlib.contextmanager
     def _writing(self) -> Iterator[None]:
-        """Around every write to the file, one thread at a time: an ``OSError`` stops the file
-        (:meth:`_failed`), nothing is raised."""
-        with self._lock:
+        """Around every write to the file, one thread at a time and never cut in two by a signal's
+        exception (:func:`omnibot.signals.held`: a record half written leaves its chunk unreadable):
+        an ``OSError`` stops the file (:meth:`_failed`), nothing is raised."""
+        with self._lock, held():
             try:
                 yield
             except OSError as exc:
