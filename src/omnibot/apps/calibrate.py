@@ -59,6 +59,14 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         surface_help="surface name(s), comma-separated (default: wood,carpet in the simulator, 'floor' on "
         "--port; with several on a real robot you are asked to move it between them)",
     )
+    _add_output_options(p)
+    _add_truth_options(p)
+    _add_scope_options(p)
+    p.set_defaults(handler=run)
+
+
+def _add_output_options(p: argparse.ArgumentParser) -> None:
+    """Where the report and the calibration file go, and whether a worse calibration is kept."""
     p.add_argument(
         "--out",
         metavar="DIR",
@@ -75,6 +83,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         help="write (and upload) the calibration even when its own check finds it worse than before (on the "
         "whole, or on a course or ROTATE); the file says so, and the exit status is still 1",
     )
+
+
+def _add_truth_options(p: argparse.ArgumentParser) -> None:
+    """What measures the runs, and the simulated robot's difference from its description."""
     p.add_argument(
         "--truth",
         help="ground truth: sim | csv:FILE | encoders | sonar[:NAME] | tape (default: sim on the simulator, "
@@ -90,6 +102,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     sim.add_argument(
         "--true-robot", metavar="FILE", help="simulate this description while the firmware uses --robot"
     )
+
+
+def _add_scope_options(p: argparse.ArgumentParser) -> None:
+    """Which runs, fits and checks the calibration makes."""
     p.add_argument(
         "--quick", action="store_true", help="seed 000's scope: courses 0 and 45, fewer runs and checks"
     )
@@ -122,7 +138,6 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument(
         "--no-upload", action="store_true", help="fit only: do not upload (no K_t runs, no after-check)"
     )
-    p.set_defaults(handler=run)
 
 
 def _surfaces(text: str | None, simulated: bool) -> list[str]:

@@ -459,6 +459,20 @@ def add_log_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     export.set_defaults(handler=_export)
     proto = lsub.add_parser("protocol", help="the byte trace both ways, as spy+ prints it")
     proto.set_defaults(handler=_protocol)
+    replay = _add_replay_command(lsub)
+    rec = lsub.add_parser("recover", help="rewrite a log cut short (SIGKILL) whole, for rosbags and ros2 bag")
+    rec.add_argument(
+        "-o", "--out", metavar="OUT.mcap", help="the file to write (default FILE-recovered.mcap beside it)"
+    )
+    rec.add_argument("--force", action="store_true", help="rewrite a whole log too")
+    rec.set_defaults(handler=_recover)
+    for q in (info, plot, export, proto, replay, rec):
+        q.add_argument("file", metavar="FILE.mcap", help="a log written with --log")
+    _add_score_command(lsub)
+
+
+def _add_replay_command(lsub: argparse._SubParsersAction[argparse.ArgumentParser]) -> argparse.ArgumentParser:
+    """``omnibot log replay``'s options (its log file aside)."""
     replay = lsub.add_parser(
         "replay", help="re-run an estimator, and a follower, on the recorded telemetry and cycles"
     )
@@ -476,14 +490,11 @@ def add_log_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "--commands-csv", metavar="FILE.csv", help="write the live and the replayed follower's commands"
     )
     replay.set_defaults(handler=_replay_all)
-    rec = lsub.add_parser("recover", help="rewrite a log cut short (SIGKILL) whole, for rosbags and ros2 bag")
-    rec.add_argument(
-        "-o", "--out", metavar="OUT.mcap", help="the file to write (default FILE-recovered.mcap beside it)"
-    )
-    rec.add_argument("--force", action="store_true", help="rewrite a whole log too")
-    rec.set_defaults(handler=_recover)
-    for q in (info, plot, export, proto, replay, rec):
-        q.add_argument("file", metavar="FILE.mcap", help="a log written with --log")
+    return replay
+
+
+def _add_score_command(lsub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """``omnibot log score``: a SLAM run's logs against the truth and the world."""
     score = lsub.add_parser(
         "score",
         help="score a SLAM run (slam_toolbox's...) from its logs: APE/RPE against the truth, the map "

@@ -318,8 +318,6 @@ def _teaching(args: argparse.Namespace, mode: str) -> tuple[PathRecorder, float,
 
 def add_follow_arguments(p: argparse.ArgumentParser) -> None:
     """The ``omnibot follow`` options: path file, follower, robot or port, estimator and tolerances."""
-    from omnibot.navigation.metrics import Tolerances
-
     p.add_argument(
         "path",
         help="path file: CSV t,x,y,theta[,v] (s, m, m, rad, m/s); x,y alone: the body faces the path's "
@@ -358,6 +356,13 @@ def add_follow_arguments(p: argparse.ArgumentParser) -> None:
         help="calibration file from `omnibot calibrate` (of this robot): its tables for --surface are "
         "uploaded (CAL) and its wheel slip there corrects the encoders",
     )
+    _add_follow_outcome_arguments(p)
+
+
+def _add_follow_outcome_arguments(p: argparse.ArgumentParser) -> None:
+    """The ``omnibot follow`` options that judge and keep a run: its tolerances and its outputs."""
+    from omnibot.navigation.metrics import Tolerances
+
     tol = Tolerances()
     p.add_argument(
         "--final-tolerance",

@@ -30,7 +30,7 @@ import math
 import tempfile
 import time
 from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
@@ -501,6 +501,18 @@ def plot(truth: TruthSource | None, odo_trail: list[tuple[float, float]], world:
     save(fig, str(path))
 
 
+def _link(
+    port: str | None, truth_file: TruthFile | None, robot: str, world: str, seed: int, surface: str | None
+) -> AbstractContextManager[str]:
+    """The link's URL for the time of the demo: a spawned ``omnibot sim --pty`` of ``robot`` writing
+    its truth to ``truth_file`` when there is one, else ``port``."""
+    if truth_file is None:
+        return _given(port or "")
+    return spawn_pty_emulator(
+        robot, world=world, seed=seed, surface=surface, truth=truth_file.path, notice=notice
+    )
+
+
 def run_demo(
     port: str | None,
     robot_name: str | None,
@@ -529,18 +541,7 @@ def run_demo(
     with tempfile.TemporaryDirectory() as tmp:
         truth_file = TruthFile(Path(tmp) / "truth.csv") if port is None else None
         world_map = load_world(world) if port is None else None
-        context = (
-            spawn_pty_emulator(
-                robot_name or "omni4",
-                world=world,
-                seed=seed,
-                surface=surface,
-                truth=truth_file.path,
-                notice=notice,
-            )
-            if truth_file
-            else _given(port or "")
-        )
+        context = _link(port, truth_file, robot_name or "omni4", world, seed, surface)
         started = time.monotonic()
         clock = ControllerClock()
         with context as url, robot_session(url, robot_name, recording=recording) as session:

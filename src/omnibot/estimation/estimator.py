@@ -86,6 +86,30 @@ class Estimator(Protocol):
         """Fold in one sample; the new estimate."""
 
 
+def _every_wheel_counted(robot: RobotDescription) -> bool:
+    """Whether every driven wheel has a motor encoder."""
+    counted = {e.wheel for e in robot.encoders.motors}
+    return all(w.name in counted for w in robot.wheels)
+
+
+def _sources(robot: RobotDescription, translation: str, heading: str) -> tuple[str, str]:
+    """:class:`PoseEstimator`'s translation and heading sources, ``auto`` resolved for ``robot``;
+    ConfigError for an unknown one or one whose sensors the robot lacks."""
+    if translation == "auto":
+        translation = "tracking" if len(robot.encoders.tracking) >= 2 else "encoders"
+    if heading == "auto":
+        heading = "fused" if robot.gyro is not None else "encoders"
+    if translation not in ("tracking", "encoders"):
+        raise ConfigError(f"unknown translation source {translation!r}; expected tracking or encoders")
+    if heading not in ("fused", "gyro", "encoders"):
+        raise ConfigError(f"unknown heading source {heading!r}; expected fused, gyro, encoders or auto")
+    if heading in ("fused", "gyro") and robot.gyro is None:
+        raise ConfigError(f"robot {robot.name} has no gyro for heading '{heading}'")
+    if (translation == "encoders" or heading == "encoders") and not _every_wheel_counted(robot):
+        raise ConfigError(f"robot {robot.name} lacks an encoder on every driven wheel")
+    return translation, heading
+
+
 class PoseEstimator:
     """Dead reckoning with a choice of translation and heading sources.
 
@@ -110,20 +134,8 @@ class PoseEstimator:
         filter_config: HeadingFilterConfig | None = None,
         slip: SlipParameters | None = None,
     ) -> None:
-        if translation == "auto":
-            translation = "tracking" if len(robot.encoders.tracking) >= 2 else "encoders"
-        if heading == "auto":
-            heading = "fused" if robot.gyro is not None else "encoders"
-        if translation not in ("tracking", "encoders"):
-            raise ConfigError(f"unknown translation source {translation!r}; expected tracking or encoders")
-        if heading not in ("fused", "gyro", "encoders"):
-            raise ConfigError(f"unknown heading source {heading!r}; expected fused, gyro, encoders or auto")
-        cpr = {e.wheel: e.counts_per_rev for e in robot.encoders.motors}
-        self.has_encoders = all(w.name in cpr for w in robot.wheels)
-        if heading in ("fused", "gyro") and robot.gyro is None:
-            raise ConfigError(f"robot {robot.name} has no gyro for heading '{heading}'")
-        if (translation == "encoders" or heading == "encoders") and not self.has_encoders:
-            raise ConfigError(f"robot {robot.name} lacks an encoder on every driven wheel")
+        translation, heading = _sources(robot, translation, heading)
+        self.has_encoders = _every_wheel_counted(robot)
         self.name = name or f"{translation}+{heading}"
         self.robot_name = robot.name
         self.alerts: list[str] = []
@@ -135,18 +147,7 @@ class PoseEstimator:
         self.tracking = (
             TrackingGeometry(robot.encoders.tracking, robot.name) if translation == "tracking" else None
         )
-        if self.has_encoders:
-            self._rad_per_count = np.array([2.0 * math.pi / cpr[w.name] for w in robot.wheels])
-            self._J = robot.wheel_matrix
-            self._pinv = np.linalg.pinv(self._J)
-            per_count = np.abs(self._pinv[2]) * self._rad_per_count
-            self.rotation_resolution = float(per_count.max())
-            self.residual_threshold = 3.0 * float(self._rad_per_count.max())
-            self.redundant = robot.n_wheels > 3
-            self.slip_model = SlipModel(robot, slip) if slip is not None else None
-        else:
-            self.slip_model = None
-            self.rotation_resolution = 0.0
+        self._init_wheel_odometry(robot, slip)
         config = filter_config
         if config is None and robot.gyro is not None:
             config = HeadingFilterConfig.from_gyro(robot.gyro)
@@ -168,6 +169,23 @@ class PoseEstimator:
         self._accel = 0.0
         self._history: deque[tuple[float, float, float, float]] = deque()
         self._track_mismatch = 0.0
+
+    def _init_wheel_odometry(self, robot: RobotDescription, slip: SlipParameters | None) -> None:
+        """The driven wheels' forward kinematics, resolution and slip model (none without an encoder
+        on every wheel)."""
+        if not self.has_encoders:
+            self.slip_model = None
+            self.rotation_resolution = 0.0
+            return
+        cpr = {e.wheel: e.counts_per_rev for e in robot.encoders.motors}
+        self._rad_per_count = np.array([2.0 * math.pi / cpr[w.name] for w in robot.wheels])
+        self._J = robot.wheel_matrix
+        self._pinv = np.linalg.pinv(self._J)
+        per_count = np.abs(self._pinv[2]) * self._rad_per_count
+        self.rotation_resolution = float(per_count.max())
+        self.residual_threshold = 3.0 * float(self._rad_per_count.max())
+        self.redundant = robot.n_wheels > 3
+        self.slip_model = SlipModel(robot, slip) if slip is not None else None
 
     def reset(self, pose: Pose2D) -> None:
         """Put the estimate at ``pose`` (keeps the gyro's learned bias and scale)."""

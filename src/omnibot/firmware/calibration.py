@@ -185,13 +185,10 @@ class Calibration:
             return _write(self.kr, index, power, value)
         if table in (TABLE_ROLLER_COS, TABLE_ROLLER_SIN, TABLE_SPEED):
             if table == TABLE_SPEED:
-                coeffs = self.speed
-            else:
-                coeffs = self.roller_cos if table == TABLE_ROLLER_COS else self.roller_sin
-            if index < 0 or index >= len(coeffs) or power != 0:
-                return False
-            coeffs[index] = value
-            return True
+                return _set_entry(self.speed, index, power, value)
+            return _set_entry(
+                self.roller_cos if table == TABLE_ROLLER_COS else self.roller_sin, index, power, value
+            )
         if table == TABLE_ROLLER_COAST:
             return _write(self.roller_coast, index, power, value)
         if table == TABLE_REACH:
@@ -199,16 +196,17 @@ class Calibration:
                 return False
             return _write(self.reach, index, power, value)
         if table == TABLE_OFFSET:
-            if index < 0 or index >= len(self.offset) or power != 0:
-                return False
-            self.offset[index] = value
-            return True
+            return _set_entry(self.offset, index, power, value)
         if table >= TABLE_GAIN:
             i = table - TABLE_GAIN
             if i >= len(self.gain) or value <= 0:
                 return False
             return _write(self.gain[i], index, power, value)
-        k = table - TABLE_KL
+        return self._set_kl(table - TABLE_KL, index, power, value)
+
+    def _set_kl(self, k: int, index: int, power: int, value: float) -> bool:
+        """:meth:`set_knot` on K_l's curve ``k``: drop curves (index -2), set or add a course (-1) or
+        write a knot."""
         if index == KL_DROP:
             if k < 1 or k > len(self.kl) or power != 0:
                 return False
@@ -234,6 +232,14 @@ class Calibration:
 
 def _table(t: "list[Any]") -> "list[list[float]]":
     return [[float(x) for x in t[0]], [float(y) for y in t[1]]]
+
+
+def _set_entry(coeffs: list[float], index: int, power: int, value: float) -> bool:
+    """Set ``coeffs[index]`` (one per motor or wheel; ``power`` must be 0); False if out of range."""
+    if index < 0 or index >= len(coeffs) or power != 0:
+        return False
+    coeffs[index] = value
+    return True
 
 
 def _write(t: "list[list[float]]", index: int, power: int, value: float) -> bool:

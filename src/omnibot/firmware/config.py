@@ -308,45 +308,28 @@ def build_config(
 ) -> dict[str, Any]:
     """The firmware's config dict for a robot (keys in the module docstring); ``slip``: the creep of
     the floor it will drive on (a calibration file's ``surfaces.<floor>.odometry.slip``)."""
-    J = robot.wheel_matrix
-    radius = [float(w.radius) for w in robot.wheels]
-    cal = robot.calibration
-    k = float(cal.k) if cal else _default_k(robot)
-    if cal and cal.k_l:
-        courses = [float(c) for c in cal.k_l.courses_deg]
-        kl_tables = [_table(c) for c in cal.k_l.curves]
-    else:
-        courses, kl_tables = [0.0], [_table(None)]
-    motors = cal.motors if cal else None
-    if motors is not None and len(motors.offset) != robot.n_wheels:
-        raise ConfigError(
-            f"{len(motors.offset)} motors for a robot with {robot.n_wheels}",
-            key="calibration.motors",
-        )
-    rollers = cal.rollers if cal else None
-    if rollers is not None and len(rollers.cos) != robot.n_wheels:
-        raise ConfigError(
-            f"roller drag for {len(rollers.cos)} wheels on a robot with {robot.n_wheels}",
-            key="calibration.rollers",
-        )
-    _, roller_rows = kinematics.robot_contact_rows(robot)
     cpr = {e.wheel: e.counts_per_rev for e in robot.encoders.motors}
     encoder_cpr = [int(cpr.get(w.name, 0)) for w in robot.wheels]
-    ctl = robot.controller
-    kp, ki = ctl.speed_kp, ctl.speed_ki
-    if kp == 0.0 and ki == 0.0:
-        kr = k * sum(radius) / len(radius)  # the feedforward's PWM counts per rad/s of wheel speed
-        kp, ki = 0.5 * kr, 10.0 * kr
-    lim = robot.limits
-    has_encoders = all(encoder_cpr)
-    pwm_max = max(w.motor.pwm_max for w in robot.wheels)
-    body_ff, wheel_ff = _accel_ff(robot)
-    creep = SlipModel(robot)
-    slip = slip or SlipParameters()
+    return {
+        **_geometry_keys(robot, power_min),
+        **_calibration_keys(robot),
+        **_limit_keys(robot, encoder_cpr),
+        **_landing_keys(robot, encoder_cpr, slip or SlipParameters()),
+        **_speed_loop_keys(robot, control_period_ms),
+        **_sensor_keys(robot),
+        **_battery_keys(robot),
+        "pins": pins if pins is not None else default_pins(robot),
+    }
+
+
+def _geometry_keys(robot: RobotDescription, power_min: int | None) -> dict[str, Any]:
+    """name ... kl_axes: the robot, its motors' power range and its kinematics."""
+    J = robot.wheel_matrix
+    radius = [float(w.radius) for w in robot.wheels]
     return {
         "name": robot.name,
         "motors": robot.n_wheels,
-        "pwm_max": pwm_max,
+        "pwm_max": max(w.motor.pwm_max for w in robot.wheels),
         "power_min": int(power_min if power_min is not None else max(w.motor.deadband for w in robot.wheels)),
         "vel_dead_band": True,
         "radius": radius,
@@ -354,16 +337,38 @@ def build_config(
         "rim": [[float(v) * r for v in row] for row, r in zip(J, radius, strict=True)],
         "idle_axes": _idle_axes(robot),
         "kl_axes": course_axes(robot.wheels),
-        "k": k,
+    }
+
+
+def _calibration_keys(robot: RobotDescription) -> dict[str, Any]:
+    """k ... reach: the description's calibration as tables (neutral ones without it)."""
+    cal = robot.calibration
+    n = robot.n_wheels
+    if cal and cal.k_l:
+        courses = [float(c) for c in cal.k_l.courses_deg]
+        kl_tables = [_table(c) for c in cal.k_l.curves]
+    else:
+        courses, kl_tables = [0.0], [_table(None)]
+    motors = cal.motors if cal else None
+    if motors is not None and len(motors.offset) != n:
+        raise ConfigError(f"{len(motors.offset)} motors for a robot with {n}", key="calibration.motors")
+    rollers = cal.rollers if cal else None
+    if rollers is not None and len(rollers.cos) != n:
+        raise ConfigError(
+            f"roller drag for {len(rollers.cos)} wheels on a robot with {n}",
+            key="calibration.rollers",
+        )
+    return {
+        "k": _calibration_k(robot),
         "kl_courses": courses,
         "kl_tables": kl_tables,
         "kt": _table(cal.k_t if cal else None),
         "kr": _table(cal.k_r if cal else None),
-        "motor_offset": [float(o) for o in motors.offset] if motors else [0.0] * robot.n_wheels,
-        "motor_gain": [_table(g) for g in motors.gain] if motors else [_table(None)] * robot.n_wheels,
-        "motor_speed": list(motors.speed) if motors and motors.speed else [0.0] * robot.n_wheels,
-        "roller_cos": list(rollers.cos) if rollers else [0.0] * robot.n_wheels,
-        "roller_sin": list(rollers.sin) if rollers else [0.0] * robot.n_wheels,
+        "motor_offset": [float(o) for o in motors.offset] if motors else [0.0] * n,
+        "motor_gain": [_table(g) for g in motors.gain] if motors else [_table(None)] * n,
+        "motor_speed": list(motors.speed) if motors and motors.speed else [0.0] * n,
+        "roller_cos": list(rollers.cos) if rollers else [0.0] * n,
+        "roller_sin": list(rollers.sin) if rollers else [0.0] * n,
         "roller_coast": (
             [[round(100.0 * x, 6) for x in rollers.coast.x], list(rollers.coast.y)]
             if rollers and rollers.coast
@@ -374,6 +379,20 @@ def build_config(
             if cal and cal.reach
             else [[0.0], [0.0]]
         ),
+    }
+
+
+def _calibration_k(robot: RobotDescription) -> float:
+    """Calibration K: the description's, else the motors' nominal one."""
+    return float(robot.calibration.k) if robot.calibration else _default_k(robot)
+
+
+def _limit_keys(robot: RobotDescription, encoder_cpr: list[int]) -> dict[str, Any]:
+    """roller_dir ... turn: the rollers, the protocol's bounds, the controller and the encoders."""
+    _, roller_rows = kinematics.robot_contact_rows(robot)
+    lim = robot.limits
+    ctl = robot.controller
+    return {
         "roller_dir": [[round(float(v), 9) for v in row[:2]] for row in roller_rows],
         "roller_pitch": [
             round(c / w.rollers.count, 9) for c, w in zip(encoder_cpr, robot.wheels, strict=True)
@@ -387,10 +406,18 @@ def build_config(
         "line_max": ctl.line_max,
         "baud": ctl.baud,
         "loop_hz": ctl.loop_hz,
-        "mode": 2 if ctl.wheel_speed_control and has_encoders else 0,
+        "mode": 2 if ctl.wheel_speed_control and all(encoder_cpr) else 0,
         "encoder_cpr": encoder_cpr,
         "travel": _travel(robot, encoder_cpr),
         "turn": _travel(robot, encoder_cpr, (2,))[0],
+    }
+
+
+def _landing_keys(robot: RobotDescription, encoder_cpr: list[int], slip: SlipParameters) -> dict[str, Any]:
+    """slip ... progress_tolerance: the floor's creep and how a closed-loop motion lands."""
+    creep = SlipModel(robot)
+    lim = robot.limits
+    return {
         "slip": [round(slip.roll, 6), round(slip.combined, 6), round(slip.scale, 5)],
         "creep_roll": [[round(float(v), 9) for v in row] for row in creep.roll_rows],
         "creep_rim": [[round(float(v), 9) for v in row] for row in creep.rim_rows],
@@ -399,7 +426,21 @@ def build_config(
             round(LAND_ACCEL * lim.acceleration_max, 6),
             round(LAND_ACCEL * lim.angular_acceleration_max, 6),
         ],
-        "progress_tolerance": PROGRESS_TOLERANCE if has_encoders else 0.0,
+        "progress_tolerance": PROGRESS_TOLERANCE if all(encoder_cpr) else 0.0,
+    }
+
+
+def _speed_loop_keys(robot: RobotDescription, control_period_ms: int) -> dict[str, Any]:
+    """speed_kp ... control_period_ms: the wheel-speed loop's gains and feedforward (default gains
+    from calibration K when the description gives none)."""
+    kp, ki = robot.controller.speed_kp, robot.controller.speed_ki
+    if kp == 0.0 and ki == 0.0:
+        radius = [float(w.radius) for w in robot.wheels]
+        kr = _calibration_k(robot) * sum(radius) / len(radius)  # feedforward PWM counts per rad/s
+        kp, ki = 0.5 * kr, 10.0 * kr
+    pwm_max = max(w.motor.pwm_max for w in robot.wheels)
+    body_ff, wheel_ff = _accel_ff(robot)
+    return {
         "speed_kp": round(kp, 6),
         "speed_ki": round(ki, 6),
         "speed_band": round(SPEED_BAND_POWER * pwm_max / kp, 6) if kp > 0 else 0.0,
@@ -407,6 +448,13 @@ def build_config(
         "body_ff": body_ff,
         "wheel_ff": wheel_ff,
         "control_period_ms": control_period_ms,
+    }
+
+
+def _sensor_keys(robot: RobotDescription) -> dict[str, Any]:
+    """tracking ... angular_accel_max_dps2: the sensors and the sonar stop's and braking's limits."""
+    lim = robot.limits
+    return {
         "tracking": len(robot.encoders.tracking),
         "gyro": robot.gyro is not None,
         "sonar_period_min_ms": [max(60, math.ceil(s.period_min * 1000 - 1e-9)) for s in robot.sonars],
@@ -415,19 +463,19 @@ def build_config(
         "uncovered_speed_cms": round(robot.uncovered_speed * 100.0, 6),
         "accel_max_cms2": round(lim.acceleration_max * 100.0, 6),
         "angular_accel_max_dps2": round(math.degrees(lim.angular_acceleration_max), 6),
+    }
+
+
+def _battery_keys(robot: RobotDescription) -> dict[str, Any]:
+    """battery_mv ... battery_limit_pct: the battery's thresholds and timing in mV, ms and %."""
+    battery = robot.battery
+    return {
         "battery_mv": [
-            round(1000.0 * v)
-            for v in (
-                robot.battery.warn_v,
-                robot.battery.limit_v,
-                robot.battery.stop_v,
-                robot.battery.hysteresis_v,
-            )
+            round(1000.0 * v) for v in (battery.warn_v, battery.limit_v, battery.stop_v, battery.hysteresis_v)
         ],
-        "battery_filter_ms": round(1000.0 * robot.battery.filter_s),
-        "battery_delay_ms": round(1000.0 * robot.battery.delay),
-        "battery_limit_pct": round(100.0 * robot.battery.limit_power),
-        "pins": pins if pins is not None else default_pins(robot),
+        "battery_filter_ms": round(1000.0 * battery.filter_s),
+        "battery_delay_ms": round(1000.0 * battery.delay),
+        "battery_limit_pct": round(100.0 * battery.limit_power),
     }
 
 

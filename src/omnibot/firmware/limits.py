@@ -56,29 +56,11 @@ class Limits:
                 return codes.E_SPEED
             return 0
         if kw == codes.POWER:
-            if not 1 <= p[0] <= TIME_MAX:
-                return codes.E_TIME
-            for i in range(1, n):
-                if abs(p[i]) > self.pwm_max:
-                    return codes.E_SPEED
-            return 0
+            return self._power(p)
         if kw == codes.VEL:
-            vx, vy, w, t = p[0], p[1], p[2], p[3]
-            if vx * vx + vy * vy > self.v_max * self.v_max or abs(w) >= self.f_max:
-                return codes.E_SPEED
-            if not 1 <= t <= VEL_TIME_MAX:
-                return codes.E_TIME
-            return 0
+            return self._vel(p[0], p[1], p[2], p[3])
         if kw == codes.SONAR:
-            s = p[0] - 1
-            if not 0 <= s < self.sonars:
-                return codes.E_SONAR
-            if p[1] != 0 and not self.sonar_period_min[s] <= p[1] <= TIME_MAX:
-                return codes.E_SONAR_PERIOD
-            for i in range(2, 5):
-                if not 0 <= p[i] <= CM_MAX:
-                    return codes.E_SONAR
-            return 0
+            return self._sonar(p)
         if kw == codes.TELEM:
             if p[0] != 0 and not codes.TEL_PERIOD_MIN <= p[0] <= TIME_MAX:
                 return codes.E_TIME
@@ -96,6 +78,35 @@ class Limits:
                 if v in codes.VERSIONS:
                     return 0
             return codes.E_UNSUPPORTED if n else 0
+        return 0
+
+    def _power(self, p: list[int]) -> int:
+        """POWER,T,P1..Pn: a time and a power within full scale for every motor."""
+        if not 1 <= p[0] <= TIME_MAX:
+            return codes.E_TIME
+        for i in range(1, len(p)):
+            if abs(p[i]) > self.pwm_max:
+                return codes.E_SPEED
+        return 0
+
+    def _vel(self, vx: int, vy: int, w: int, t: int) -> int:
+        """VEL's speed (within the speed limit), turn rate and watchdog time."""
+        if vx * vx + vy * vy > self.v_max * self.v_max or abs(w) >= self.f_max:
+            return codes.E_SPEED
+        if not 1 <= t <= VEL_TIME_MAX:
+            return codes.E_TIME
+        return 0
+
+    def _sonar(self, p: list[int]) -> int:
+        """SONAR,S,P,LOW,HIGH,STOP: a sonar the robot has, its period and distances."""
+        s = p[0] - 1
+        if not 0 <= s < self.sonars:
+            return codes.E_SONAR
+        if p[1] != 0 and not self.sonar_period_min[s] <= p[1] <= TIME_MAX:
+            return codes.E_SONAR_PERIOD
+        for i in range(2, 5):
+            if not 0 <= p[i] <= CM_MAX:
+                return codes.E_SONAR
         return 0
 
     def _move(self, L: int, V: int, D: int, Cv: int, k: int) -> int:

@@ -307,84 +307,150 @@ def explore(
     :func:`exploring_speed` of the robot."""
     if options.speed is None:
         options = replace(options, speed=exploring_speed(robot))
-    clock = runtime.client.clock
-    t0 = clock.now()
-    radius = robot.footprint.bounding_radius
-    result = ExploreResult("explored")
-    tries: list[list[float]] = []  # [x, y, tries] of goals set out for and not reached
-    told: list[tuple[float, float]] = []  # unreachable goals already said
-    walls_seen: list[tuple[float, float]] = []  # the middles of unmarked walls gone to
-    backed_off = 0
-    while True:
-        left = time_limit - (clock.now() - t0)
+    return _Exploration(runtime, robot, grid_now, pose, scan, returns, options, say).run(time_limit)
+
+
+class _Exploration:
+    """One run of :func:`explore`: its result so far and what it tried, said and went to."""
+
+    def __init__(
+        self,
+        runtime: Runtime,
+        robot: RobotDescription,
+        grid_now: Callable[[], OccupancyGrid],
+        pose: PoseProvider,
+        scan: Callable[[], FloatArray | None] | None,
+        returns: Callable[[OccupancyGrid], NDArray[np.integer]] | None,
+        options: GotoOptions,
+        say: Callable[[str], object],
+    ) -> None:
+        self.runtime, self.robot, self.options, self.say = runtime, robot, options, say
+        self.grid_now, self.pose, self.scan, self.returns = grid_now, pose, scan, returns
+        self.radius = robot.footprint.bounding_radius
+        self.result = ExploreResult("explored")
+        self.tries: list[list[float]] = []  # [x, y, tries] of goals set out for and not reached
+        self.told: list[tuple[float, float]] = []  # unreachable goals already said
+        self.walls_seen: list[tuple[float, float]] = []  # the middles of unmarked walls gone to
+        self.backed_off = 0
+
+    def run(self, time_limit: float) -> ExploreResult:
+        """Leg after leg until exploring ends, within ``time_limit`` s of the link's clock."""
+        clock = self.runtime.client.clock
+        t0 = clock.now()
+        while not self._leg(time_limit - (clock.now() - t0)):
+            pass
+        self.result.duration = clock.now() - t0
+        return self.result
+
+    def _leg(self, left: float) -> bool:
+        """Choose a goal and go to it (or wait for a pose, or back off); True when exploring is over
+        (``result.outcome`` says why). ``left``: the time left, s."""
         if left <= 0:
-            result.outcome = "time limit"
-            break
-        here = pose()
+            self.result.outcome = "time limit"
+            return True
+        here = self.pose()
         if here is None:
-            runtime.step()
-            runtime.client.sleep(runtime.period)
-            continue
-        grid = grid_now()
-        cmap = inflate(grid, robot_radius=radius, margin=options.margin)
-        optimistic = inflate(grid, robot_radius=radius, margin=options.margin, allow_unknown=True)
+            self.runtime.step()
+            self.runtime.client.sleep(self.runtime.period)
+            return False
+        grid = self.grid_now()
+        margin = self.options.margin
+        cmap = inflate(grid, robot_radius=self.radius, margin=margin)
+        optimistic = inflate(grid, robot_radius=self.radius, margin=margin, allow_unknown=True)
+        hemmed = self._hemmed_in(grid, optimistic, here, left)
+        if hemmed is not None:
+            return hemmed
+        goals, walls = self._goals(grid, cmap, optimistic)
+        if not goals:
+            self.result.outcome = "explored"
+            return True
+        choice, unreachable = choose_frontier(cmap, optimistic, here, goals)
+        self._tell_unreachable(unreachable)
+        if choice is None:
+            self.result.outcome, self.result.unreachable = "unreachable", unreachable
+            return True
+        self._visit(grid, here, choice, walls, len(goals), left)
+        return False
+
+    def _hemmed_in(self, grid: OccupancyGrid, optimistic: CostMap, here: Pose2D, left: float) -> bool | None:
+        """None when a way leaves where the robot stands; else it backs off (False: go on) up to
+        :data:`BACK_OFFS` times in a row, then gives up (True: ``stuck``)."""
         try:
             check_start(optimistic, here)
-            backed_off = 0
         except PlanningError as exc:
-            if backed_off >= BACK_OFFS:
-                result.outcome, result.reason = "stuck", str(exc)
-                break
-            backed_off += 1
-            say(f"no way leaves where the robot stands ({exc}): backing off to clear space")
-            _back_off(runtime, robot, grid, optimistic, here, options, left, pose)
-            continue
+            if self.backed_off >= BACK_OFFS:
+                self.result.outcome, self.result.reason = "stuck", str(exc)
+                return True
+            self.backed_off += 1
+            self.say(f"no way leaves where the robot stands ({exc}): backing off to clear space")
+            _back_off(self.runtime, self.robot, grid, optimistic, here, self.options, left, self.pose)
+            return False
+        self.backed_off = 0
+        return None
+
+    def _goals(
+        self, grid: OccupancyGrid, cmap: CostMap, optimistic: CostMap
+    ) -> tuple[list[tuple[float, float]], dict[tuple[float, float], tuple[float, float]]]:
+        """The goals not yet done: the frontiers' and the unmarked walls' not yet gone to (each of
+        those by its middle: a wall gone to once is not gone to again)."""
+        done = self.result.done
         goals = [
             f.goal
             for f in frontiers(grid, cmap, optimistic)
-            if f.goal is not None and not _near(f.goal, result.done)
+            if f.goal is not None and not _near(f.goal, done)
         ]
-        walls = {}  # a wall's goal -> its middle: a wall gone to once is not gone to again
-        if returns is not None:
+        walls = {}
+        if self.returns is not None:
             walls = {
                 g: c
-                for g, c in wall_goals(grid, cmap, returns(grid))
-                if not _near(g, result.done) and not _near(c, walls_seen)
+                for g, c in wall_goals(grid, cmap, self.returns(grid))
+                if not _near(g, done) and not _near(c, self.walls_seen)
             }
             goals += list(walls)
-        if not goals:
-            result.outcome = "explored"
-            break
-        choice, unreachable = choose_frontier(cmap, optimistic, here, goals)
+        return goals, walls
+
+    def _tell_unreachable(self, unreachable: list[tuple[float, float, str]]) -> None:
+        """Say each unreachable goal once."""
         for x, y, why in unreachable:
-            if not _near((x, y), told):
-                told.append((x, y))
-                say(f"frontier at ({x:.2f}, {y:.2f}) has no way to it now: {why}")
-        if choice is None:
-            result.outcome, result.unreachable = "unreachable", unreachable
-            break
+            if not _near((x, y), self.told):
+                self.told.append((x, y))
+                self.say(f"frontier at ({x:.2f}, {y:.2f}) has no way to it now: {why}")
+
+    def _visit(
+        self,
+        grid: OccupancyGrid,
+        here: Pose2D,
+        choice: tuple[tuple[float, float], bool],
+        walls: dict[tuple[float, float], tuple[float, float]],
+        n_goals: int,
+        left: float,
+    ) -> None:
+        """Go to the chosen goal and keep the score: done when reached, else one more try of
+        :data:`ATTEMPTS` before it is given up."""
         (gx, gy), through = choice
         goal = Pose2D(gx, gy, here.theta)
-        how = replace(options, allow_unknown=through, timeout=left)
+        how = replace(self.options, allow_unknown=through, timeout=left)
         way = " (through unknown space)" if through else ""
         what = "a wall the map does not mark, from" if (gx, gy) in walls else "the frontier at"
-        say(f"to {what} ({gx:.2f}, {gy:.2f}){way}, {len(goals)} left")
-        visit = go_to(runtime, robot, grid, goal, how, pose=pose, scan=scan)
-        result.visits.append(visit)
+        self.say(f"to {what} ({gx:.2f}, {gy:.2f}){way}, {n_goals} left")
+        visit = go_to(self.runtime, self.robot, grid, goal, how, pose=self.pose, scan=self.scan)
+        self.result.visits.append(visit)
         if (gx, gy) in walls:
-            walls_seen.append(walls[(gx, gy)])  # reached or not: another place may not see it either
+            self.walls_seen.append(walls[(gx, gy)])  # reached or not: another place may not see it either
         if visit.arrived:
-            result.done.append((gx, gy))
-            continue
-        n = _count_try(tries, (gx, gy))
+            self.result.done.append((gx, gy))
+            return
+        n = _count_try(self.tries, (gx, gy))
         if n < ATTEMPTS:
-            say(f"frontier at ({gx:.2f}, {gy:.2f}) not reached ({visit.reason}): tried {n} of {ATTEMPTS}")
-            continue
-        result.failed.append((gx, gy))
-        result.done.append((gx, gy))
-        say(f"frontier at ({gx:.2f}, {gy:.2f}) given up after {n} tries: {visit.reason or visit.outcome}")
-    result.duration = clock.now() - t0
-    return result
+            self.say(
+                f"frontier at ({gx:.2f}, {gy:.2f}) not reached ({visit.reason}): tried {n} of {ATTEMPTS}"
+            )
+            return
+        self.result.failed.append((gx, gy))
+        self.result.done.append((gx, gy))
+        self.say(
+            f"frontier at ({gx:.2f}, {gy:.2f}) given up after {n} tries: {visit.reason or visit.outcome}"
+        )
 
 
 def exploring_speed(robot: RobotDescription) -> float:

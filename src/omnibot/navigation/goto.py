@@ -352,16 +352,11 @@ def go_to(
     t0 = clock.now()
     heading = leg_heading(robot, opts, scan)
     radius = robot.footprint.bounding_radius
-    check_goal(
-        inflate(grid, robot_radius=radius, margin=opts.margin, allow_unknown=opts.allow_unknown), goal
-    )  # a goal off the map or in a wall is a bad argument: refused before anything moves
+    _refuse_bad_goal(grid, goal, radius, opts)
     result = GotoResult(goal, "stopped", grid=grid)
     deadline = math.inf if opts.timeout is None else t0 + opts.timeout
     corrections = 0
-    watch_stalls = StallWatch.of(runtime)
-    own_watch = watch_stalls is None
-    stalls = watch_stalls or StallWatch(runtime, robot)
-    try:
+    with _stall_watch(runtime, robot) as stalls:
         while True:
             here = _wait_pose(provider, runtime)
             result.final = here
@@ -388,11 +383,28 @@ def go_to(
             if judge_leg(result, opts, corrections):
                 break
             corrections += 1
-    finally:
-        if own_watch:
-            stalls.close()
     result.duration = clock.now() - t0
     return result
+
+
+def _refuse_bad_goal(grid: OccupancyGrid, goal: Pose2D, radius: float, opts: GotoOptions) -> None:
+    """OffMapError or BlockedError for a goal off the map or where the robot cannot stand: a bad
+    argument, refused before anything moves."""
+    check_goal(inflate(grid, robot_radius=radius, margin=opts.margin, allow_unknown=opts.allow_unknown), goal)
+
+
+@contextmanager
+def _stall_watch(runtime: Runtime, robot: RobotDescription) -> Iterator[StallWatch]:
+    """The runtime's stall watch, else one of the trip's own (closed after it)."""
+    watch = StallWatch.of(runtime)
+    if watch is not None:
+        yield watch
+        return
+    own = StallWatch(runtime, robot)
+    try:
+        yield own
+    finally:
+        own.close()
 
 
 def leg_heading(

@@ -104,11 +104,7 @@ def teach(
         start = clock.now()
         d0 = nav.estimator.distance
         if mode == "listen":
-            try:
-                client.sleep(duration)
-            except KeyboardInterrupt as exc:  # Ctrl-C ends the recording and keeps it; SIGTERM does not
-                if isinstance(exc, Terminated):
-                    raise
+            _listen(client, duration)
         else:
             assert shape is not None
             _move(client, robot, nav, shape, speed, mode)
@@ -124,6 +120,16 @@ def teach(
     if truth is not None and path is not None:
         truth_error = math.hypot(path.x[-1] - truth[0], path.y[-1] - truth[1])
     return TeachResult(path, mode, elapsed, distance, truth_error, list(nav.warnings))
+
+
+def _listen(client: RobotClient, duration: float) -> None:
+    """Let ``duration`` s of the link clock pass while the robot is moved by hand: Ctrl-C ends them
+    early (the recording is kept), SIGTERM does not (it ends the command)."""
+    try:
+        client.sleep(duration)
+    except KeyboardInterrupt as exc:
+        if isinstance(exc, Terminated):
+            raise
 
 
 def check_recording(result: TeachResult) -> str | None:

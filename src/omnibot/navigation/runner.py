@@ -179,6 +179,26 @@ def ramp_fraction(t: float, total: float, ramp: float) -> float:
     return max(0.0, min(1.0, t / ramp, (total - t) / ramp))
 
 
+def _spin(rate: float, total: float, ramp: float) -> Callable[[float], Twist | str]:
+    """A spin in place at ``rate`` (rad/s, signed) for ``total`` s, ramped up and down over ``ramp`` s
+    (a :meth:`Navigator.drive` script)."""
+
+    def spin(t: float) -> Twist | str:
+        if t >= total:
+            return ScriptSource.END
+        return Twist(0.0, 0.0, rate * ramp_fraction(t, total, ramp))
+
+    return spin
+
+
+def _follow_timeout(follower: Follower, path: Path) -> float:
+    """How long a follow may take by default: three times the path's time at the follower's speed
+    (its profile's, else the path at ``v_max``) and 10 s."""
+    profile = getattr(follower, "profile", None)
+    nominal = profile.min_time if profile is not None else path.length / max(follower.limits.v_max, 1e-3)
+    return 3.0 * nominal + 10.0
+
+
 class _GyroProbe:
     """The gyro's heading and the encoders' rotation at every telemetry sample (gyro calibration)."""
 
@@ -324,38 +344,12 @@ class Navigator:
         """
         if self.robot.gyro is None:
             raise ConfigError(f"robot {self.robot.name} has no gyro to calibrate")
-        c = self.client
         probe = _GyroProbe(self.robot)
+        estimators = [self.estimator, *self.observers.values()]
         hooks = self.runtime.telemetry_hooks
         hooks.append(probe.update)
-        moving: list[float] = []
         try:
-            marks = [0]  # the first standstill runs from the probe's first sample
-            c.sleep(STANDSTILL)
-            marks.append(probe.mark())
-            estimators = [self.estimator, *self.observers.values()]
-            start = [e.estimate.theta for e in estimators]
-            ramp = 0.5
-            cap = self.robot.limits.angular_speed_max
-            if self.robot.gyro is not None:
-                cap = min(cap, SPIN_GYRO_USE * self.robot.gyro.range)
-            for rate in (min(r, cap) for r in rates):
-                total = 2.0 * math.pi * turns / rate + 2.0 * ramp
-                for sign in (1.0, -1.0):
-
-                    def spin(
-                        t: float, sign: float = sign, rate: float = rate, total: float = total
-                    ) -> Twist | str:
-                        if t >= total:
-                            return ScriptSource.END
-                        return Twist(0.0, 0.0, sign * rate * ramp_fraction(t, total, ramp))
-
-                    self.drive(spin, name="gyro-spin")
-                    c.sleep(SETTLE)  # the body comes to rest: the standstill after is the gyro's bias alone
-                    marks.append(probe.mark())
-                    c.sleep(STANDSTILL)
-                    marks.append(probe.mark())
-                    moving.append(total)
+            marks, moving, start = self._gyro_spins(probe, estimators, turns, rates)
         finally:
             hooks.remove(probe.update)
         if probe.silence.silent:
@@ -372,6 +366,33 @@ class Navigator:
                 p = est.estimate
                 est.reset(Pose2D(p.x, p.y, theta + fit.turned))
         return fit.bias, fit.scale_error
+
+    def _gyro_spins(
+        self, probe: _GyroProbe, estimators: list[Estimator], turns: float, rates: tuple[float, ...]
+    ) -> tuple[list[int], list[float], list[float]]:
+        """:meth:`calibrate_gyro`'s manoeuvre: a standstill, then at each rate a spin each way, each
+        followed by a standstill. Returns the probe's marks (each standstill's start and end), each
+        spin's time and the estimators' headings after the first standstill."""
+        c = self.client
+        marks = [0]  # the first standstill runs from the probe's first sample
+        moving: list[float] = []
+        c.sleep(STANDSTILL)
+        marks.append(probe.mark())
+        start = [e.estimate.theta for e in estimators]
+        ramp = 0.5
+        cap = self.robot.limits.angular_speed_max
+        if self.robot.gyro is not None:
+            cap = min(cap, SPIN_GYRO_USE * self.robot.gyro.range)
+        for rate in (min(r, cap) for r in rates):
+            total = 2.0 * math.pi * turns / rate + 2.0 * ramp
+            for sign in (1.0, -1.0):
+                self.drive(_spin(sign * rate, total, ramp), name="gyro-spin")
+                c.sleep(SETTLE)  # the body comes to rest: the standstill after is the gyro's bias alone
+                marks.append(probe.mark())
+                c.sleep(STANDSTILL)
+                marks.append(probe.mark())
+                moving.append(total)
+        return marks, moving, start
 
     def close(self) -> None:
         """Stop the robot and the telemetry, detach the listener (idempotent)."""
@@ -448,11 +469,7 @@ class Navigator:
         source = FollowerSource(follower, path, watchdog=WATCHDOG)
         source.start(self.state().t)
         if timeout is None:
-            profile = getattr(follower, "profile", None)
-            nominal = (
-                profile.min_time if profile is not None else path.length / max(follower.limits.v_max, 1e-3)
-            )
-            timeout = 3.0 * nominal + 10.0
+            timeout = _follow_timeout(follower, path)
         run.start_time = start
         distance0 = self.estimator.distance
         shown = 0.0

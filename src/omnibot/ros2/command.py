@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import importlib
 import math
 import threading
 from dataclasses import dataclass
@@ -259,14 +260,8 @@ def attach(
     resolved it; ``dds`` when ``args`` has none), and the bridge's options are its parameters
     (:func:`parameters`); ``announce``: a notice names the node and its backend (``omnibot ros2``
     names them in its own first line). Returns the node (close it)."""
-    try:
-        from omnibot.ros2.backend import choose
-        from omnibot.ros2.bridge import Diagnosed, Ros2Sink
-        from omnibot.ros2.odometry import OdometryReset
-        from omnibot.ros2.path import PathSource
-    except ImportError:  # the bridge's message types need cyclonedds (the helpers' imports too)
-        raise ConfigError(INSTALL) from None
-    from omnibot.runtime.sinks import EstimatorWhenMissing
+    _require_bridge()
+    from omnibot.ros2.backend import choose
     from omnibot.runtime.stall import StallWatch, start_sonars
     from omnibot.transport.device import find_simulator
 
@@ -278,6 +273,42 @@ def attach(
 
     def notify(level: Any, text: str) -> None:
         runtime.notify(level, text)
+
+    cmd_vel = _add_bridge(runtime, robot, args, spec, node, timeline, simulated, notify)
+    node.declare(parameters(robot, runtime, spec, cmd_vel, node.backend))
+    if announce:
+        notify("info", f"ros2: node {fqn(node)} on the {node.backend} backend")
+    StallWatch.on(runtime, robot)  # wheels that turn while the body does not: stop, say so
+    start_sonars(runtime.client, robot, SONAR_PERIOD)  # in TEL: the ranges out, the stall watch's witnesses
+    return node
+
+
+def _require_bridge() -> None:
+    """A :class:`ConfigError` naming the extra to install unless the bridge's modules import (their
+    message types need cyclonedds, the helpers' imports too)."""
+    try:
+        for name in ("backend", "bridge", "odometry", "path"):
+            importlib.import_module(f"omnibot.ros2.{name}")
+    except ImportError:
+        raise ConfigError(INSTALL) from None
+
+
+def _add_bridge(
+    runtime: Any,
+    robot: Any,
+    args: argparse.Namespace,
+    spec: RobotSpec,
+    node: Any,
+    timeline: Any,
+    simulated: bool,
+    notify: Any,
+) -> Any:
+    """Add :func:`attach`'s sources and sinks on ``node`` to ``runtime`` (the goal pose's too with
+    ``--map``); returns the cmd_vel source."""
+    from omnibot.ros2.bridge import Diagnosed, Ros2Sink
+    from omnibot.ros2.odometry import OdometryReset
+    from omnibot.ros2.path import PathSource
+    from omnibot.runtime.sinks import EstimatorWhenMissing
 
     odom = spec.prefix + "odom"
     diagnosed = Diagnosed.of(robot.name, spec.namespace)
@@ -317,12 +348,7 @@ def attach(
         goal = _goal_pose(runtime, robot, args, node, bridge, spec, notify, diagnosed)
         cancels.append(goal.cancel)
         reset.placer = goal.initial_pose
-    node.declare(parameters(robot, runtime, spec, cmd_vel, node.backend))
-    if announce:
-        notify("info", f"ros2: node {fqn(node)} on the {node.backend} backend")
-    StallWatch.on(runtime, robot)  # wheels that turn while the body does not: stop, say so
-    start_sonars(runtime.client, robot, SONAR_PERIOD)  # in TEL: the ranges out, the stall watch's witnesses
-    return node
+    return cmd_vel
 
 
 def _timeline_of(args: argparse.Namespace, timeline: Any) -> Any:

@@ -200,11 +200,28 @@ class Runtime:
         self.pacer: Pacer = pacer or LinkPacer(client, period)
         self.vel_timeout = vel_timeout
         self.wait_replies = wait_replies
-        self.telemetry_hooks: list[Callable[[Telemetry], object]] = []
-        """More consumers of each telemetry sample, called right after the estimator (observers)."""
         self.decision: Decision = NOBODY
         self.wakeup = Wakeup()
         """Raised by sources between cycles (any thread): the wait ends, :meth:`react` runs."""
+        self._init_counts()
+        self._init_hooks()
+        self._offset = math.inf
+        self._offset_time = 0.0
+        self._telemetry: deque[Telemetry] = deque(maxlen=KEEP)
+        self._events: deque[Event] = deque(maxlen=KEEP)
+        self._notices: list[Notice] = []
+        self._pending: list[tuple[Pending, str]] = []
+        self._last_error: dict[str, str] = {}
+        self._listening = False
+        self.scanner: Scanner | None = None
+        """The robot's range scanner, polled once per cycle: its scans go to every sink on
+        :attr:`Cycle.scans <omnibot.runtime.cycle.Cycle.scans>` (one source, many readers: the SLAM, the
+        log, ROS 2, the page). Whoever sets it closes it; one that fails is dropped, with a notice."""
+        for source in sources:
+            self.add_source(source)
+
+    def _init_counts(self) -> None:
+        """What the runtime did and the controller said so far: nothing yet."""
         self._wakers: set[str] = set()
         self.reactions = 0
         """Reactions to a woken source so far (:meth:`react`)."""
@@ -221,25 +238,16 @@ class Runtime:
         """Telemetry samples received so far."""
         self.rtt: float | None = None
         """Round trip of the last VEL whose reply was awaited, s (link clock)."""
+
+    def _init_hooks(self) -> None:
+        """The observers of telemetry, failed commands and notices: none yet."""
+        self.telemetry_hooks: list[Callable[[Telemetry], object]] = []
+        """More consumers of each telemetry sample, called right after the estimator (observers)."""
         self.error_hooks: list[Callable[[str, BaseException], object]] = []
         """Called with (source, exception) when a command fails (after the notice)."""
         self.notice_hooks: list[Callable[[Notice], object]] = []
         """Called at once with every notice, in the thread that gives it (a command's own report:
         sinks get notices only with a cycle, and a robot pushed by hand runs none)."""
-        self._offset = math.inf
-        self._offset_time = 0.0
-        self._telemetry: deque[Telemetry] = deque(maxlen=KEEP)
-        self._events: deque[Event] = deque(maxlen=KEEP)
-        self._notices: list[Notice] = []
-        self._pending: list[tuple[Pending, str]] = []
-        self._last_error: dict[str, str] = {}
-        self._listening = False
-        self.scanner: Scanner | None = None
-        """The robot's range scanner, polled once per cycle: its scans go to every sink on
-        :attr:`Cycle.scans <omnibot.runtime.cycle.Cycle.scans>` (one source, many readers: the SLAM, the
-        log, ROS 2, the page). Whoever sets it closes it; one that fails is dropped, with a notice."""
-        for source in sources:
-            self.add_source(source)
 
     # ------------------------------------------------------------------ composition
 

@@ -35,7 +35,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from types import FrameType
-from typing import Any, TextIO, cast
+from typing import IO, Any, TextIO, cast
 
 from omnibot.errors import ConfigError
 from omnibot.lidar.reader import ScanningSim
@@ -336,30 +336,45 @@ def spawn_pty_emulator(
         try:
             if started is not None:
                 started(proc.pid)
-            assert proc.stdout is not None
-            ready, _, _ = select.select([proc.stdout], [], [], 1.0)
-            if not ready:
-                if notice is not None:
-                    notice(
-                        f"starting the simulated {robot} (omnibot sim --pty, up to {start_timeout:g} s)..."
-                    )
-                ready, _, _ = select.select([proc.stdout], [], [], max(start_timeout - 1.0, 0.0))
-            # the emulator is the link: if it does not start, the command could not (ConfigError)
-            if not ready:
-                raise ConfigError(f"the pty emulator printed no device path within {start_timeout:g} s")
-            path = proc.stdout.readline().strip()
-            if not path:  # its stdout closed: it is ending
-                proc.wait(timeout=10)
-                err.seek(0)
-                raise ConfigError(f"the pty emulator did not start: {_one_line(err.read())}")
-            yield path
+            yield _device_path(proc, err, robot, notice, start_timeout)
         finally:
-            if proc.poll() is None:
-                proc.send_signal(signal.SIGINT)
-            try:
-                proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
-            if proc.stdout is not None:
-                proc.stdout.close()
+            _end_child(proc)
+
+
+def _device_path(
+    proc: subprocess.Popen[str],
+    err: IO[str],
+    robot: str,
+    notice: Callable[[str], object] | None,
+    start_timeout: float,
+) -> str:
+    """The device path the child ``omnibot sim --pty`` prints first (``notice`` hears it is awaited
+    after a second); ConfigError when it prints none within ``start_timeout`` s or ends."""
+    assert proc.stdout is not None
+    ready, _, _ = select.select([proc.stdout], [], [], 1.0)
+    if not ready:
+        if notice is not None:
+            notice(f"starting the simulated {robot} (omnibot sim --pty, up to {start_timeout:g} s)...")
+        ready, _, _ = select.select([proc.stdout], [], [], max(start_timeout - 1.0, 0.0))
+    # the emulator is the link: if it does not start, the command could not (ConfigError)
+    if not ready:
+        raise ConfigError(f"the pty emulator printed no device path within {start_timeout:g} s")
+    path = proc.stdout.readline().strip()
+    if not path:  # its stdout closed: it is ending
+        proc.wait(timeout=10)
+        err.seek(0)
+        raise ConfigError(f"the pty emulator did not start: {_one_line(err.read())}")
+    return path
+
+
+def _end_child(proc: subprocess.Popen[str]) -> None:
+    """SIGINT the child if it still runs, wait for it (killing it if it hangs) and close its stdout."""
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGINT)
+    try:
+        proc.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+    if proc.stdout is not None:
+        proc.stdout.close()

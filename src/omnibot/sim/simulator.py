@@ -300,26 +300,8 @@ class Simulator:
 
         w = load_world("empty") if world is None else world if isinstance(world, World) else load_world(world)
         self.world = w.with_floor(surface) if surface is not None and surface != w.floor else w
-
-        factory = physics_factory or _default_physics
-        self._physics = factory(robot, n=1, surfaces=self.world.surface_names, dt=self.dt, seed=seed)
-        known = [s.name for s in self._physics.surfaces]
-        missing = [s for s in self.world.surface_names if s not in known]
-        if missing:
-            raise SimulationSetupError(
-                f"world '{self.world.name}' uses surfaces the physics lacks: {missing}"
-            )
-        self._surface_map = np.array([known.index(s) for s in self.world.surface_names], dtype=np.int64)
-        self._floor_ids = np.full((1, robot.n_wheels), self._surface_map[0], dtype=np.int64)
-
-        given = start_pose if start_pose is not None else self.world.start or Pose2D(0.0, 0.0, 0.0)
-        start = (given.x, given.y, given.theta) if isinstance(given, Pose2D) else tuple(given)
-        if len(start) != 3:
-            raise SimulationSetupError(f"start_pose is (x, y, theta), got {start}")
-        self._physics.reset(pose=np.array([start], dtype=float))
-        # views of robot 0's state: the physics updates its arrays in place
-        self._pose_row = self._physics.pose[0]
-        self._twist_row = self._physics.twist[0]
+        self._physics = self._make_physics(physics_factory or _default_physics)
+        start = self._place(start_pose)
 
         n_wheels = robot.n_wheels
         # a Physics: one compiled call per step, on its own input arrays; another kind: compiled
@@ -338,16 +320,67 @@ class Simulator:
         self._collision_listeners: list[CollisionListener] = []
         self._listeners: list[_ListenerSlot] = []
         self._next_notify_us = 0
+        self._pack_step_state()
+        self._touching: dict[str, int] = {}
+        """Last touch (us) of each body outside the world (a fleet's other robots) by name."""
 
-        # the compiled step's own state (kernels.robot_step): contact broad phase (no contact while
-        # the origin stays within F_CLEAR of F_CLEAR_X/Y), the surface cache (the same ids while the
-        # wheels move less than F_SURF_CLEAR from the anchor pose), contact rows, last touches
+        self._make_sensors()
+        self.scan_driver: Callable[[Simulator], None] | None = None
+        """Who records the poses and flushes the scanner instead of the simulator (a fleet: see
+        :meth:`set_scan_driver`); called with the simulator when its scanner starts or stops."""
+
+        self._check_clear(start)
+        if truth_recorder is not None:
+            self.add_listener(truth_recorder, period=truth_recorder.period)
+
+    def _check_clear(self, start: tuple[float, ...]) -> None:
+        """Refuse a start pose whose outline overlaps the world."""
+        x, y, th = self._pose_row.tolist()
+        touching = self._find_contacts(x, y, th)
+        if touching >= 0:
+            raise SimulationSetupError(
+                f"start pose {tuple(float(c) for c in start)} overlaps {self.world.contact_owners[touching]} "
+                f"of world '{self.world.name}'"
+            )
+
+    def _make_physics(self, factory: PhysicsFactory) -> PhysicsLike:
+        """The physics of one robot on the world's surfaces, and the map from the world's surface
+        indices to the physics' (every surface the world uses must be one the physics knows)."""
+        physics = factory(self.robot, n=1, surfaces=self.world.surface_names, dt=self.dt, seed=self.seed)
+        known = [s.name for s in physics.surfaces]
+        missing = [s for s in self.world.surface_names if s not in known]
+        if missing:
+            raise SimulationSetupError(
+                f"world '{self.world.name}' uses surfaces the physics lacks: {missing}"
+            )
+        self._surface_map = np.array([known.index(s) for s in self.world.surface_names], dtype=np.int64)
+        self._floor_ids = np.full((1, self.robot.n_wheels), self._surface_map[0], dtype=np.int64)
+        return physics
+
+    def _place(self, start_pose: Pose2D | Sequence[float] | None) -> tuple[float, ...]:
+        """Put the robot at ``start_pose`` (else the world's start, else the origin) and keep views of
+        its state rows; returns the start as given."""
+        given = start_pose if start_pose is not None else self.world.start or Pose2D(0.0, 0.0, 0.0)
+        start = (given.x, given.y, given.theta) if isinstance(given, Pose2D) else tuple(given)
+        if len(start) != 3:
+            raise SimulationSetupError(f"start_pose is (x, y, theta), got {start}")
+        self._physics.reset(pose=np.array([start], dtype=float))
+        # views of robot 0's state: the physics updates its arrays in place
+        self._pose_row = self._physics.pose[0]
+        self._twist_row = self._physics.twist[0]
+        return start
+
+    def _pack_step_state(self) -> None:
+        """The compiled step's own state (kernels.robot_step): contact broad phase (no contact while
+        the origin stays within F_CLEAR of F_CLEAR_X/Y), the surface cache (the same ids while the
+        wheels move less than F_SURF_CLEAR from the anchor pose), contact rows, last touches."""
+        robot = self.robot
         self._walls = len(self.world.segments) > 0
         self._patchy = len(self.world.surface_names) > 1
         self._ids = self._floor_ids.copy()
         n_rows = len(self.world.contact_buffer())
         si = np.zeros(kernels.I_HEADER, dtype=np.int64)
-        si[kernels.I_V], si[kernels.I_C], si[kernels.I_M] = len(self._outline), n_rows, n_wheels
+        si[kernels.I_V], si[kernels.I_C], si[kernels.I_M] = len(self._outline), n_rows, robot.n_wheels
         si[kernels.I_OWNERS], si[kernels.I_SURFACES] = len(self.world.contact_owners), len(self._surface_map)
         si[kernels.I_WALLS], si[kernels.I_PATCHY] = self._walls, self._patchy
         si[kernels.I_RELEASE] = round(CONTACT_RELEASE * 1e6)
@@ -373,11 +406,14 @@ class Simulator:
         self._n_surfaces = len(self._physics.surfaces)
         self._state6 = np.zeros(6)
         self._force = np.zeros((1, 3))
-        self._touching: dict[str, int] = {}
-        """Last touch (us) of each body outside the world (a fleet's other robots) by name."""
 
-        names = self._wheel_names
-        enc_index = np.array([names.index(e.wheel) for e in robot.encoders.motors], dtype=np.int64)
+    def _make_sensors(self) -> None:
+        """The encoders, tracking wheels, gyro, sonars and laser scanner, each on its own random
+        stream of the seed."""
+        robot, seed = self.robot, self.seed
+        enc_index = np.array(
+            [self._wheel_names.index(e.wheel) for e in robot.encoders.motors], dtype=np.int64
+        )
         angles = self._physics.wheel_angle
         self.encoders = MotorEncoders(
             [e.counts_per_rev for e in robot.encoders.motors],
@@ -398,22 +434,9 @@ class Simulator:
         self._scan_on = False
         self._scan_self = False  # on, and recorded and flushed here (no scan_driver)
         self._scan_due_us = 0
-        self._scan_stride_us = max(1, round(SCAN_POSE_PERIOD / self.dt)) * dt_us
+        self._scan_stride_us = max(1, round(SCAN_POSE_PERIOD / self.dt)) * self._dt_us
         self._scan_next_us = 0
         self._scan_log = PoseLog(1, self._scan_stride_us / 1e6)
-        self.scan_driver: Callable[[Simulator], None] | None = None
-        """Who records the poses and flushes the scanner instead of the simulator (a fleet: see
-        :meth:`set_scan_driver`); called with the simulator when its scanner starts or stops."""
-
-        x, y, th = self._pose_row.tolist()
-        touching = self._find_contacts(x, y, th)
-        if touching >= 0:
-            raise SimulationSetupError(
-                f"start pose {tuple(float(c) for c in start)} overlaps {self.world.contact_owners[touching]} "
-                f"of world '{self.world.name}'"
-            )
-        if truth_recorder is not None:
-            self.add_listener(truth_recorder, period=truth_recorder.period)
 
     # ------------------------------------------------------------------ state
 

@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
@@ -263,6 +263,44 @@ def _polygons(polygons: list[FloatArray]) -> tuple[FloatArray, IntArray]:
     return np.ascontiguousarray(verts, dtype=float), offsets
 
 
+@dataclass
+class _Edges:
+    """A world's wall and obstacle edges, each with its owner, and sorted for the contact tests."""
+
+    segments: list[FloatArray] = field(default_factory=list)
+    owners: list[str] = field(default_factory=list)
+    thin: list[FloatArray] = field(default_factory=list)
+    """Walls and non-convex obstacles, checked edge by edge."""
+    thin_owner: list[int] = field(default_factory=list)
+    solids: list[FloatArray] = field(default_factory=list)
+    """Convex obstacles (counter-clockwise), tested whole."""
+    solid_owner: list[int] = field(default_factory=list)
+
+    @classmethod
+    def of(cls, spec: WorldSpec) -> _Edges:
+        """The edges of ``spec``'s walls, then its obstacles (owner ids in that order)."""
+        out = cls()
+        for i, wall in enumerate(spec.walls):
+            s = wall.segments()
+            out.segments.append(s)
+            out.owners += [f"walls[{i}]"] * len(s)
+            out.thin.append(s)
+            out.thin_owner += [i] * len(s)
+        for i, obstacle in enumerate(spec.obstacles):
+            s = obstacle.segments()
+            out.segments.append(s)
+            out.owners += [f"obstacles[{i}]"] * len(s)
+            v = obstacle.vertices()
+            owner = len(spec.walls) + i
+            if is_convex(v):
+                out.solids.append(v)
+                out.solid_owner.append(owner)
+            else:
+                out.thin.append(s)
+                out.thin_owner += [owner] * len(s)
+        return out
+
+
 class World:
     """A validated world, with its geometry as numpy arrays."""
 
@@ -280,43 +318,21 @@ class World:
             Pose2D(spec.start.x, spec.start.y, math.radians(spec.start.theta_deg)) if spec.start else None
         )
 
-        segs: list[FloatArray] = []
-        owners: list[str] = []
-        thin: list[FloatArray] = []  # walls and non-convex obstacles, checked edge by edge
-        thin_owner: list[int] = []
-        solids: list[FloatArray] = []  # convex obstacles (counter-clockwise), tested whole
-        solid_owner: list[int] = []
         self.contact_owners: tuple[str, ...] = tuple(
             [f"walls[{i}]" for i in range(len(spec.walls))]
             + [f"obstacles[{i}]" for i in range(len(spec.obstacles))]
         )
         """Owner id (column 5 of a :meth:`contacts_at` row) -> world item name."""
-        for i, wall in enumerate(spec.walls):
-            s = wall.segments()
-            segs.append(s)
-            owners += [f"walls[{i}]"] * len(s)
-            thin.append(s)
-            thin_owner += [i] * len(s)
-        for i, obstacle in enumerate(spec.obstacles):
-            s = obstacle.segments()
-            segs.append(s)
-            owners += [f"obstacles[{i}]"] * len(s)
-            v = obstacle.vertices()
-            owner = len(spec.walls) + i
-            if is_convex(v):
-                solids.append(v)
-                solid_owner.append(owner)
-            else:
-                thin.append(s)
-                thin_owner += [owner] * len(s)
-        self.segments: FloatArray = np.vstack(segs) if segs else np.zeros((0, 4))
+        edges = _Edges.of(spec)
+        self.segments: FloatArray = np.vstack(edges.segments) if edges.segments else np.zeros((0, 4))
         """(K, 4) every wall and obstacle edge, ``x0, y0, x1, y1``."""
-        self.segment_owner: tuple[str, ...] = tuple(owners)
-        thin_edges = np.vstack(thin) if thin else np.zeros((0, 4))
+        self.segment_owner: tuple[str, ...] = tuple(edges.owners)
+        thin_edges = np.vstack(edges.thin) if edges.thin else np.zeros((0, 4))
         self._thin_v = np.ascontiguousarray(thin_edges.reshape(-1, 2), dtype=float)  # edge k: rows 2k, 2k+1
-        self._thin_owner = np.array(thin_owner, dtype=np.int64)
+        self._thin_owner = np.array(edges.thin_owner, dtype=np.int64)
+        solids = edges.solids
         self._solid_v, self._solid_off = _polygons(solids)
-        self._solid_owner = np.array(solid_owner, dtype=np.int64)
+        self._solid_owner = np.array(edges.solid_owner, dtype=np.int64)
         centers = [v.mean(axis=0) for v in solids]
         self._solid_c = np.array(centers, dtype=float).reshape(-1, 2)
         self._solid_r = np.array([np.max(np.hypot(*(v - c).T)) for v, c in zip(solids, centers, strict=True)])
@@ -325,13 +341,15 @@ class World:
         self._patch_sid = np.array(
             [self.surface_names.index(p.surface) for p in spec.patches], dtype=np.int64
         )
-        self.packed: tuple[FloatArray, IntArray] = (
-            np.concatenate(
-                [
-                    a.ravel()
-                    for a in (self._solid_v, self._solid_c, self._solid_r, self._thin_v, self._patch_v)
-                ]
-            ),
+        self.packed: tuple[FloatArray, IntArray] = self._pack()
+        """The contact geometry and the patches packed for the simulator's compiled step (floats,
+        ints; layout: :func:`omnibot.sim.kernels.world_offsets`)."""
+
+    def _pack(self) -> tuple[FloatArray, IntArray]:
+        """The solids, thin edges and patches as one float and one int array."""
+        floats = [self._solid_v, self._solid_c, self._solid_r, self._thin_v, self._patch_v]
+        return (
+            np.concatenate([a.ravel() for a in floats]),
             np.concatenate(
                 [
                     [len(self._solid_v), len(self._solid_owner), len(self._thin_owner), len(self._patch_v)],
@@ -344,8 +362,6 @@ class World:
                 ]
             ).astype(np.int64),
         )
-        """The contact geometry and the patches packed for the simulator's compiled step (floats,
-        ints; layout: :func:`omnibot.sim.kernels.world_offsets`)."""
 
     def __repr__(self) -> str:
         return f"World({self.name!r}, {len(self.segments)} edges, surfaces {list(self.surface_names)})"

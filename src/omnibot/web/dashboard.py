@@ -143,9 +143,14 @@ class Dashboard:
         except BaseException:
             client.close()
             raise
+        self._make_app(host, allow_hosts)
+
+    def _make_app(self, host: str, allow_hosts: Sequence[str]) -> None:
+        """The page's hub and app, served on the bound socket behind the host check (``allow_hosts``
+        and the address ``host`` resolved to)."""
         self.port = int(self._sock.getsockname()[1])
         self.hub = Hub(self.scene, self.link.outbox, self.link.submit)
-        self.app = create_app(self.hub, token)
+        self.app = create_app(self.hub, self.token)
         bound = str(self._sock.getsockname()[0])  # the address a name given to --host resolved to
         self.host_check = HostCheck(self.app, HostPolicy.for_bind(host, self.port, [*allow_hosts, bound]))
         self._server = _server(self.host_check)

@@ -161,11 +161,8 @@ class RobotLink:
             slip=slip,
             recording=recording,
         )
-        self.scanner: SimScanSource | None = None
+        self.scanner: SimScanSource | None = self._lend_scanner()
         """The simulator's scanner when this link gave the runtime one (closed with the link)."""
-        if robot.scanner is not None and self.runtime.scanner is None and self._device is not None:
-            self.scanner = SimScanSource(self._device.sim)
-            self.runtime.scanner = self.scanner
         self._scan: Scan | None = None
         self._scan_sent = -math.inf
         self.runtime.add_source(self.page)
@@ -177,6 +174,13 @@ class RobotLink:
         self._reset = False
         self.ended: str | None = None
         """Why the link thread ended by itself (the link lost and not reopened); None otherwise."""
+
+    def _lend_scanner(self) -> SimScanSource | None:
+        """The simulator's scanner, given to the runtime, when the robot has one and the runtime none."""
+        if self.robot.scanner is None or self.runtime.scanner is not None or self._device is None:
+            return None
+        self.runtime.scanner = scanner = SimScanSource(self._device.sim)
+        return scanner
 
     @property
     def deadman(self) -> Deadman:
