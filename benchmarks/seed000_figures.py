@@ -10,7 +10,8 @@ workbook (OSLL omnibot, ``docs/Calibration_test.xlsx``, commit 31c0ff0, sheets `
 is the seed's experiment: from rest, the distance in 1000 ms with two opposite motors at +-P (course
 0) or all four at +-P (45 degrees), and the time to complete one and two full turns with all four
 at +P (rotation; the rate is the wheel path along R_c = 96 mm over that time, as the seed plots it).
-The seed does not say on which floor; it says the floors differ by "up to 20 %".
+The seed does not say on which floor; it says the floors differ by "up to 20 %". Each series' fit is
+summed up as its mean abs error over the seed's powers on each floor (:func:`series_errors`).
 
 Fig. 6 (K_t and K_r) is about power, and its statement, "rotation without movement requires more
 power than turning adjustment", is checked twice: on the simulated robot itself (the same power as
@@ -38,6 +39,13 @@ R_C = 0.096
 AXIS_MM = {70: 120, 80: 190, 90: 280, 100: 350, 110: 420, 120: 480, 130: 530, 140: 570, 150: 620, 160: 660,
            170: 710, 180: 750, 190: 790, 200: 850, 210: 880, 220: 930, 230: 970, 240: 1020, 250: 1060, 255: 1090}  # fmt: skip
 """Course 0, mm in 1000 ms (workbook column ``0° (mm)``)."""
+AXIS_OTHER_MM = {
+    90: {70: 150, 80: 240, 100: 380, 130: 550, 160: 710, 190: 840, 220: 950, 250: 1110, 255: 1120},
+    180: {80: 150, 100: 330, 130: 480, 160: 610, 190: 720, 220: 880, 250: 1000, 255: 1060},
+    270: {80: 140, 100: 310, 130: 480, 160: 620, 190: 730, 220: 870, 250: 1000, 255: 1070},
+}
+"""The other axis courses, mm in 1000 ms (``shared/data``'s sweep; the simulated robot is symmetric, so
+course 0's simulated series stands for them)."""
 DIAGONAL_MM = {80: (None, None, 100), 90: (130, None, 110), 100: (210, 250, 220), 110: (280, 320, 310),
                120: (360, 370, 380), 130: (400, 410, 420), 140: (460, 470, 460), 150: (490, 530, 500),
                160: (550, 570, 520), 170: (590, 650, 560), 180: (630, 670, 620), 190: (700, 670, 730),
@@ -152,6 +160,39 @@ def rotation_rate(ms: float, turns: int) -> float:
 
 def _seed_mean(row: tuple[int | None, ...]) -> float:
     return float(np.mean([v for v in row if v is not None]))
+
+
+def _mean_error(pairs: list[tuple[float, float]]) -> float:
+    """Mean of |simulated / seed - 1| over (simulated, seed) pairs."""
+    return float(np.mean([abs(sim / seed - 1.0) for sim, seed in pairs]))
+
+
+def series_errors(result: dict[str, Any], surface: str) -> dict[str, float]:
+    """Mean abs error (a fraction) of each of the seed's series on ``surface``, over all its powers:
+    the four axis courses (mm in 1 s), 45 degrees (against the mean of its runs) and rotation's first
+    and second full turns (their times)."""
+    axis = result["axis"][surface]
+    out = {"course 0": _mean_error([(axis[p], mm) for p, mm in AXIS_MM.items()])}
+    for course, seed in AXIS_OTHER_MM.items():
+        out[f"course {course}"] = _mean_error([(axis[p], mm) for p, mm in seed.items()])
+    diagonal = result["diagonal"][surface]
+    out["45 degrees"] = _mean_error([(diagonal[p], _seed_mean(runs)) for p, runs in DIAGONAL_MM.items()])
+    rotation = result["rotation"][surface]
+    for k, name in enumerate(("rotation, 1st turn", "rotation, 2nd turn")):
+        out[name] = _mean_error([(rotation[p][k], ms[k]) for p, ms in ROTATION_MS.items()])
+    return out
+
+
+def error_table(result: dict[str, Any]) -> str:
+    """Markdown: each series' mean abs error against the seed on each floor (:func:`series_errors`)."""
+    errors = {surface: series_errors(result, surface) for surface in SURFACES}
+    lines = [
+        "| series: mean abs error over the seed's powers | " + " | ".join(SURFACES) + " |",
+        "|---|" + "---|" * len(SURFACES),
+    ]
+    for name in errors[SURFACES[0]]:
+        lines.append(f"| {name} | " + " | ".join(f"{100 * errors[s][name]:.1f} %" for s in SURFACES) + " |")
+    return "\n".join(lines)
 
 
 def table(result: dict[str, Any]) -> str:
@@ -278,6 +319,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     result = measure()
     print(table(result))
+    print()
+    print(error_table(result))
     print()
     print(turn_table(result))
     tables = calibration_tables(args.calibration) if args.calibration else None

@@ -1,10 +1,19 @@
 """Seed 000's Fig. 6 statement on the simulated robot: rotation in place needs more power than a turn
-added to a robot already moving (``benchmarks.seed000_figures.turn_against_rotation``)."""
+added to a robot already moving (``benchmarks.seed000_figures.turn_against_rotation``); each series'
+mean error against the seed (``series_errors``)."""
 
 from __future__ import annotations
 
 import pytest
-from benchmarks.seed000_figures import STILL, turn_against_rotation
+from benchmarks.seed000_figures import (
+    AXIS_MM,
+    AXIS_OTHER_MM,
+    DIAGONAL_MM,
+    ROTATION_MS,
+    STILL,
+    series_errors,
+    turn_against_rotation,
+)
 
 
 @pytest.mark.parametrize("surface", ["wood", "carpet"])
@@ -23,3 +32,33 @@ def test_a_turn_added_to_a_motion_needs_less_power_than_rotation_in_place(surfac
         added = turns[course]
         assert all(added[p] > rotation[p] for p in rotation), (course, added, rotation)
     assert turns["course 45"][85] > 1.2 * rotation[85]
+
+
+def test_series_errors_are_each_series_mean_abs_error_over_the_seeds_powers() -> None:
+    """Each axis course against its own data with the one simulated axis series: 10 % longer than course
+    90's data is 10 % off there and more on course 0, whose data lie below course 90's. 45 degrees
+    against the mean of its runs, rotation against both turns' times (20 % quick: 20 %)."""
+    axis = {p: 1.1 * mm for p, mm in AXIS_MM.items()} | {p: 1.1 * mm for p, mm in AXIS_OTHER_MM[90].items()}
+    diagonal = {
+        p: sum(v for v in runs if v is not None) / sum(v is not None for v in runs)
+        for p, runs in DIAGONAL_MM.items()
+    }
+    rotation = {p: (0.8 * a, 0.8 * b) for p, (a, b) in ROTATION_MS.items()}
+    result = {"axis": {"wood": axis}, "diagonal": {"wood": diagonal}, "rotation": {"wood": rotation}}
+    errors = series_errors(result, "wood")
+    assert list(errors) == [
+        "course 0",
+        "course 90",
+        "course 180",
+        "course 270",
+        "45 degrees",
+        "rotation, 1st turn",
+        "rotation, 2nd turn",
+    ]
+    assert errors["course 90"] == pytest.approx(0.1)
+    assert errors["course 0"] > 0.1  # course 90's data, 5-26 % above course 0's, at nine of its powers
+    assert errors["45 degrees"] == pytest.approx(0.0)
+    assert errors["rotation, 1st turn"] == pytest.approx(0.2)
+    assert errors["rotation, 2nd turn"] == pytest.approx(0.2)
+    diagonal[80] = 150.0  # the seed's one run at 80 counts: 100 mm
+    assert series_errors(result, "wood")["45 degrees"] == pytest.approx(0.5 / len(DIAGONAL_MM))
