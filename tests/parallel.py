@@ -136,23 +136,34 @@ def mark_serial(items: Sequence[pytest.Item]) -> None:
             item.add_marker(pytest.mark.serial)
 
 
-def scheduler(config: pytest.Config, log: Any) -> Any:
-    """xdist's scheduler for ``pytest -n N`` (``--dist load``, the default): whole units, costliest first."""
+def scheduler(config: pytest.Config, log: Any, first: Sequence[str] = FIRST) -> Any:
+    """xdist's scheduler for ``pytest -n N`` (``--dist load``, the default): whole units, those of
+    ``first`` (default :data:`FIRST`) first in its order, the rest in collection order.
+
+    Only the queue of units is reordered, never a collection: a worker runs the tests at the indices
+    it is sent in its own collection, in collection order (an earlier version sorted the collection
+    the scheduler kept, so every worker ran other tests than the unit dealt to it: chunks of the
+    collection order, units split across workers and groups side by side)."""
     from xdist.scheduler import LoadScopeScheduling
 
-    rank = {unit: i for i, unit in enumerate(FIRST)}
+    rank = {unit: i for i, unit in enumerate(first)}
 
     class UnitScheduling(LoadScopeScheduling):  # type: ignore[misc]
         def __init__(self, config: pytest.Config, log: Any) -> None:
             super().__init__(config, log)
             config.option.loadscopereorder = False  # keep the order given here, not by test count
+            self.ranked = False
 
         def _split_scope(self, nodeid: str) -> str:
             return unit_of(nodeid)
 
-        def add_node_collection(self, node: Any, collection: Sequence[str]) -> None:
-            ordered = sorted(collection, key=lambda nodeid: rank.get(unit_of(nodeid), len(rank)))
-            super().add_node_collection(node, ordered)
+        def _assign_work_unit(self, node: Any) -> None:
+            if not self.ranked:  # the queue is complete at the first unit dealt
+                units = sorted(self.workqueue.items(), key=lambda unit: rank.get(unit[0], len(rank)))
+                self.workqueue.clear()
+                self.workqueue.update(units)
+                self.ranked = True
+            super()._assign_work_unit(node)
 
     return UnitScheduling(config, log)
 
