@@ -53,14 +53,16 @@ why: a test module of more CPU than the pass can spare on one worker, with nothi
 its tests."""
 
 ROS2_HALF: tuple[str, ...] = (
-    # the ROS 2 modules' wall time (pytest --durations) in one run of the whole first pass on 4 workers,
-    # the machine at load 10-28 (2026-12-06): these
-    "test_backends.py",  # 299 s: four operators, each a Python with rclpy in its namespace
-    "test_fleet_hosts.py",  # 122 s: two hosts joined by a veth pair
-    "test_goal.py",  # 12-23 s
-    # and the rest: test_rclpy_goal_pose 134 s (three runs to a goal in the map), test_rclpy_scan_map
-    # 70 s, test_rclpy_values 56 s, test_clock 37 s, test_fleet_dds 27 s, test_rclpy_cmd_vel 22 s,
-    # test_rclpy_interop 22 s, test_cmd_vel 13 s, the others a few s each
+    # the ROS 2 modules' wall time (summed per test, the CPU plugin of BENCHMARKS.md) in one run of the
+    # whole first pass on 4 workers, the machine at load 12-21 (2026-12-07, c6303ac): these 590 s
+    "test_backends.py",  # 227 s: four operators, each a Python with rclpy in its namespace
+    "test_fleet_dds.py",  # 138 s: two robots in one process, each in its namespace
+    "test_fleet_hosts.py",  # 130 s: two hosts joined by a veth pair
+    "test_rclpy_navigate.py",  # 94 s: navigate_to_pose goes, is pre-empted and cancelled
+    "test_goal.py",  # 1 s
+    # and the rest 507 s: test_rclpy_goal_pose 294 s (three runs to a goal in the map), test_rclpy_values
+    # 56 s, test_rclpy_scan_map 34 s, test_rclpy_interop 30 s, test_rclpy_cmd_vel 27 s, test_clock 25 s,
+    # test_cmd_vel 14 s, test_dds 11 s, the others a few s each
 )
 """The modules of the first ROS 2 unit, ``ros2/1``; the other modules of tests/ros2 are ``ros2/2``, of
 about the same wall time. The two may run side by side: each test's DDS participants live in a private
@@ -81,13 +83,16 @@ FIRST: tuple[str, ...] = (
     # how long each unit kept its worker (pytest --durations, summed) in one run of the first pass on 4
     # workers at load 10-28 (2026-12-06: CPU times were a third to a tenth of these), and CPU s where
     # measured alone
-    "ros2/1",  # 440 s; the two ROS 2 units first, on workers of their own: 145 s of CPU together,
-    "ros2/2",  # 390 s; mostly waiting (bridges, peers and namespaces that keep the wall clock's pace)
+    "ros2/1",  # 590 s, 80 s CPU (2026-12-07, load 12-21); the two ROS 2 units first, on workers of their
+    "ros2/2",  # 507 s, 112 s CPU; own, mostly waiting (bridges, peers, namespaces at the wall clock's pace)
     # CPU s in one process (nice'd, load 15-20, 2026-12-06 21:00; mecanum4's from its timeout's comment):
     # SPLIT's module's costliest tests, each a unit of its own
+    # (2026-12-07, load 12-21: mecanum4 153 s, omni4 86 s, the quick run 27 s, two floors 17 s)
     "tests/apps/test_calibrate.py::test_the_default_run_on_mecanum4_improves_every_course_and_exits_0",  # 160 s
     "tests/apps/test_calibrate.py::test_the_default_run_on_omni4_improves_every_part_and_exits_0",  # 116 s
-    "tests/calibration/test_acceptance.py",  # 81 s CPU: one calibration of two floors (600 s guard hit at load 25)
+    # 81-86 s CPU: one calibration of two floors (its 600 s guard hit at load 25 when the scheduler
+    # split the module: three workers made the calibration at once, 254 s of CPU on 2026-12-07)
+    "tests/calibration/test_acceptance.py",
     "tests/apps/test_calibrate.py::test_quick_run_writes_the_file_and_the_report",  # 37 s
     "tests/apps/test_calibrate.py::test_a_port_with_two_floors_asks_between_them",  # 23 s
     # the rest: wall on a worker, as above
