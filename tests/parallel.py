@@ -53,14 +53,16 @@ why: a test module of more CPU than the pass can spare on one worker, with nothi
 its tests."""
 
 ROS2_HALF: tuple[str, ...] = (
-    # the ROS 2 modules' wall time (pytest --durations) in one run of the whole first pass on 4 workers,
-    # the machine at load 10-28 (2026-12-06): these
-    "test_backends.py",  # 299 s: four operators, each a Python with rclpy in its namespace
-    "test_fleet_hosts.py",  # 122 s: two hosts joined by a veth pair
-    "test_goal.py",  # 12-23 s
-    # and the rest: test_rclpy_goal_pose 134 s (three runs to a goal in the map), test_rclpy_scan_map
-    # 70 s, test_rclpy_values 56 s, test_clock 37 s, test_fleet_dds 27 s, test_rclpy_cmd_vel 22 s,
-    # test_rclpy_interop 22 s, test_cmd_vel 13 s, the others a few s each
+    # the ROS 2 modules' wall time (summed per test, the CPU plugin of BENCHMARKS.md) in one run of the
+    # whole first pass on 4 workers, the machine at load 12-21 (2026-12-07, c6303ac): these 590 s
+    "test_backends.py",  # 227 s: four operators, each a Python with rclpy in its namespace
+    "test_fleet_dds.py",  # 138 s: two robots in one process, each in its namespace
+    "test_fleet_hosts.py",  # 130 s: two hosts joined by a veth pair
+    "test_rclpy_navigate.py",  # 94 s: navigate_to_pose goes, is pre-empted and cancelled
+    "test_goal.py",  # 1 s
+    # and the rest 507 s: test_rclpy_goal_pose 294 s (three runs to a goal in the map), test_rclpy_values
+    # 56 s, test_rclpy_scan_map 34 s, test_rclpy_interop 30 s, test_rclpy_cmd_vel 27 s, test_clock 25 s,
+    # test_cmd_vel 14 s, test_dds 11 s, the others a few s each
 )
 """The modules of the first ROS 2 unit, ``ros2/1``; the other modules of tests/ros2 are ``ros2/2``, of
 about the same wall time. The two may run side by side: each test's DDS participants live in a private
@@ -81,13 +83,16 @@ FIRST: tuple[str, ...] = (
     # how long each unit kept its worker (pytest --durations, summed) in one run of the first pass on 4
     # workers at load 10-28 (2026-12-06: CPU times were a third to a tenth of these), and CPU s where
     # measured alone
-    "ros2/1",  # 440 s; the two ROS 2 units first, on workers of their own: 145 s of CPU together,
-    "ros2/2",  # 390 s; mostly waiting (bridges, peers and namespaces that keep the wall clock's pace)
+    "ros2/1",  # 590 s, 80 s CPU (2026-12-07, load 12-21); the two ROS 2 units first, on workers of their
+    "ros2/2",  # 507 s, 112 s CPU; own, mostly waiting (bridges, peers, namespaces at the wall clock's pace)
     # CPU s in one process (nice'd, load 15-20, 2026-12-06 21:00; mecanum4's from its timeout's comment):
     # SPLIT's module's costliest tests, each a unit of its own
+    # (2026-12-07, load 12-21: mecanum4 153 s, omni4 86 s, the quick run 27 s, two floors 17 s)
     "tests/apps/test_calibrate.py::test_the_default_run_on_mecanum4_improves_every_course_and_exits_0",  # 160 s
     "tests/apps/test_calibrate.py::test_the_default_run_on_omni4_improves_every_part_and_exits_0",  # 116 s
-    "tests/calibration/test_acceptance.py",  # 81 s CPU: one calibration of two floors (600 s guard hit at load 25)
+    # 81-86 s CPU: one calibration of two floors (its 600 s guard hit at load 25 when the scheduler
+    # split the module: three workers made the calibration at once, 254 s of CPU on 2026-12-07)
+    "tests/calibration/test_acceptance.py",
     "tests/apps/test_calibrate.py::test_quick_run_writes_the_file_and_the_report",  # 37 s
     "tests/apps/test_calibrate.py::test_a_port_with_two_floors_asks_between_them",  # 23 s
     # the rest: wall on a worker, as above
@@ -136,23 +141,34 @@ def mark_serial(items: Sequence[pytest.Item]) -> None:
             item.add_marker(pytest.mark.serial)
 
 
-def scheduler(config: pytest.Config, log: Any) -> Any:
-    """xdist's scheduler for ``pytest -n N`` (``--dist load``, the default): whole units, costliest first."""
+def scheduler(config: pytest.Config, log: Any, first: Sequence[str] = FIRST) -> Any:
+    """xdist's scheduler for ``pytest -n N`` (``--dist load``, the default): whole units, those of
+    ``first`` (default :data:`FIRST`) first in its order, the rest in collection order.
+
+    Only the queue of units is reordered, never a collection: a worker runs the tests at the indices
+    it is sent in its own collection, in collection order (an earlier version sorted the collection
+    the scheduler kept, so every worker ran other tests than the unit dealt to it: chunks of the
+    collection order, units split across workers and groups side by side)."""
     from xdist.scheduler import LoadScopeScheduling
 
-    rank = {unit: i for i, unit in enumerate(FIRST)}
+    rank = {unit: i for i, unit in enumerate(first)}
 
     class UnitScheduling(LoadScopeScheduling):  # type: ignore[misc]
         def __init__(self, config: pytest.Config, log: Any) -> None:
             super().__init__(config, log)
             config.option.loadscopereorder = False  # keep the order given here, not by test count
+            self.ranked = False
 
         def _split_scope(self, nodeid: str) -> str:
             return unit_of(nodeid)
 
-        def add_node_collection(self, node: Any, collection: Sequence[str]) -> None:
-            ordered = sorted(collection, key=lambda nodeid: rank.get(unit_of(nodeid), len(rank)))
-            super().add_node_collection(node, ordered)
+        def _assign_work_unit(self, node: Any) -> None:
+            if not self.ranked:  # the queue is complete at the first unit dealt
+                units = sorted(self.workqueue.items(), key=lambda unit: rank.get(unit[0], len(rank)))
+                self.workqueue.clear()
+                self.workqueue.update(units)
+                self.ranked = True
+            super()._assign_work_unit(node)
 
     return UnitScheduling(config, log)
 

@@ -3,6 +3,9 @@ group, of the units dealt first or of the serial pass. Every name must still be 
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 from tests import parallel
@@ -40,3 +43,44 @@ def test_the_ros2_modules_are_in_two_units_and_others_are_their_own() -> None:
     assert set(parallel.FIRST) >= {"ros2/1", "ros2/2", "browser"} and len(set(parallel.FIRST)) == len(
         parallel.FIRST
     )
+
+
+CONFTEST = """
+from tests import parallel
+
+def pytest_xdist_make_scheduler(config, log):
+    return parallel.scheduler(config, log, first=("test_c.py", "test_b.py"))
+"""
+
+MODULE = """
+import os
+import pytest
+
+@pytest.mark.parametrize("k", range({n}))
+def test_{name}(k):
+    with open("ran.txt", "a") as f:
+        f.write(os.environ["PYTEST_XDIST_WORKER"] + " {name}\\n")
+"""
+
+
+def test_the_workers_run_the_units_dealt_first_whole(tmp_path: Path) -> None:
+    """Two workers, modules of 2, 3 and 4 tests (their units), c and b dealt first: each worker's first
+    tests are c's or b's, and every module runs on one worker. (The scheduler once sorted its copy of
+    the collection: the workers ran the tests at those indices of their own, unsorted, collection: a's
+    and b's where c's were dealt, b split over both workers.)"""
+    (tmp_path / "conftest.py").write_text(CONFTEST)
+    for name, n in (("a", 2), ("b", 3), ("c", 4)):
+        (tmp_path / f"test_{name}.py").write_text(MODULE.format(name=name, n=n))
+    env = {k: v for k, v in os.environ.items() if not k.startswith("PYTEST_")}  # not this worker's
+    env["PYTHONPATH"] = str(ROOT)
+    command = [sys.executable, "-m", "pytest", "-q", "-n", "2", "-p", "no:cacheprovider"]
+    done = subprocess.run(
+        command, check=False, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == 0, done.stdout + done.stderr
+    ran = [line.split() for line in (tmp_path / "ran.txt").read_text().splitlines()]
+    assert sorted(name for _, name in ran) == ["a"] * 2 + ["b"] * 3 + ["c"] * 4
+    workers = {name: {w for w, m in ran if m == name} for name in "abc"}
+    assert all(len(w) == 1 for w in workers.values()), ran
+    first = {w: next(m for v, m in ran if v == w) for w, _ in ran}
+    assert sorted(first.values()) == ["b", "c"], ran
