@@ -124,7 +124,7 @@ def test_the_page_takes_over_from_a_repeat_and_hands_back(taught: tuple[Stepper,
 
 
 def test_gains_scale_with_the_control_period() -> None:
-    assert gains_for(0.01)["cross"] == 45.0
+    assert gains_for(0.01)["cross"] == 30.0
     assert gains_for(0.05, follower_limits(load_robot("omni3"), 1.0))["heading"] == pytest.approx(0.2 * 4.0)
     assert gains_for(0.05, follower_limits(load_robot("omni4"), 1.0))["heading"] == pytest.approx(0.2 * 8.0)
     slow = gains_for(0.05)

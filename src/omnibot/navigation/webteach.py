@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from omnibot.control.followers.base import make_follower
-from omnibot.control.followers.tracker import HEADING_GAIN, heading_gain
+from omnibot.control.followers.tracker import CROSS_GAIN, HEADING_GAIN, heading_gain
 from omnibot.control.paths.path import Path
 from omnibot.control.paths.profile import MotionLimits
 from omnibot.control.paths.teach import PathRecorder
@@ -61,7 +61,7 @@ def gains_for(period: float, limits: MotionLimits | None = None) -> dict[str, fl
     scale = min(1.0, 0.01 / period)
     heading = HEADING_GAIN if limits is None else heading_gain(limits, 0.04)
     return {
-        "cross": 45.0 * scale,
+        "cross": CROSS_GAIN * scale,
         "cross_i": 100.0 * scale * scale,
         "along": 10.0 * scale,
         "along_i": 20.0 * scale * scale,

@@ -70,6 +70,14 @@ it the path's heading at the robot's progress."""
 HEADING_GAIN = 8.0
 """1/s: the heading loop's gain on a robot whose angular acceleration can deliver it (see
 :func:`heading_gain`)."""
+CROSS_GAIN = 30.0
+"""1/s: the cross-track loop's gain. With the prediction's lead it also feeds back ``CROSS_GAIN *
+lead`` of the estimate's velocity across the path, and that velocity is the wheels' (encoders): a
+wheel that slips moves it at once. At 45/s (1.8 of it) mecanum4's top-speed line with the body
+swinging rang at 6-8 Hz, the commands swinging 0.4-0.6 m/s each way (wheel targets reversing 20
+rad/s in 40 ms, the wheels slipping 0.2-0.4 m/s) whenever a slip moved the estimate, and the
+odometry came out up to 3.1 cm off (seeds 1-5: 0.4-3.1 cm max with mecanum4's own forward power
+curve, 0.4-0.8 with the sideways one); at 30/s 0.5-0.7 cm (docs/navigation.md)."""
 HEADING_STEP = 0.1
 """rad: a heading error whose correction (gain x error, rad/s) the robot must be able to add within
 the tracker's lead at its angular acceleration limit (:func:`heading_gain`)."""
@@ -99,7 +107,7 @@ class ProfileTracker(Follower):
         rate: float = 100.0,
         margin: float = PLAN_MARGIN,
         lead: float = 0.04,
-        cross: float = 45.0,
+        cross: float = CROSS_GAIN,
         cross_i: float = 100.0,
         along: float = 10.0,
         along_i: float = 20.0,
