@@ -132,7 +132,7 @@ def test_an_end_wall_in_range_holds_the_axis_where_the_odometry_drifts() -> None
     ]
     along = {}
     for anchored in (True, False):
-        slam = Slam(anchor_reach=12.0) if anchored else Slam()  # the anchor submap is opt-in
+        slam = Slam() if anchored else Slam(anchor_reach=None)  # the anchor submap is on by default
         for k, (scan, odom_pose) in enumerate(zip(scans, odom, strict=True)):
             slam.update(odom_pose, scan, k / RATE)
         estimate = [pose for _, pose in slam.trajectory()]
