@@ -132,7 +132,7 @@ def test_an_end_wall_in_range_holds_the_axis_where_the_odometry_drifts() -> None
     ]
     along = {}
     for anchored in (True, False):
-        slam = Slam(anchor_reach=12.0) if anchored else Slam()  # the anchor submap is opt-in
+        slam = Slam() if anchored else Slam(anchor_reach=None)  # the anchor submap is on by default
         for k, (scan, odom_pose) in enumerate(zip(scans, odom, strict=True)):
             slam.update(odom_pose, scan, k / RATE)
         estimate = [pose for _, pose in slam.trajectory()]
@@ -143,7 +143,9 @@ def test_an_end_wall_in_range_holds_the_axis_where_the_odometry_drifts() -> None
     along_odom = max(abs(o.x - t.x) for o, t in zip(odom, truth, strict=True))
     assert along_odom > 0.15
     assert along[False] > 0.1
-    assert along[True] < 0.03
+    # 3.5 cm: the anchor matches are unbiased here (mean -0.15 cm over 25; before the side walls'
+    # pull was taken out of the axis, -0.9 cm, which leant against this odometry's drift: 1.6 cm)
+    assert along[True] < 0.035
     assert along[True] * 5 < along_odom
 
 

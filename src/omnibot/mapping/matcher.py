@@ -27,7 +27,9 @@ above), and a direction is unconstrained when it is fixed no better than :data:`
 rather than relative to the best one. A wall 10 m away (10 cm noise per return) then constrains
 what it can (a few centimetres from a dozen returns) with its honest weight, where the relative
 test (and one spread for all: Censi's Hessian covariance assumes equal noise) would either drop
-it or trust it as if it were 1 m away.
+it or trust it as if it were 1 m away. Each correspondence then informs only the direction its
+Jacobian lies along (localisability, as X-ICP's): along a corridor the side walls' slightly tilted
+normals neither count as information on the axis nor pull it, the end wall's returns alone do.
 """
 
 from __future__ import annotations
@@ -226,11 +228,52 @@ def _correlate(
 
 @dataclass(frozen=True)
 class _Support:
-    """A weighted match's correspondences (Jacobian rows, weights) and the information a direction needs."""
+    """A weighted match's normal equations as its correspondences support them (localisability, as
+    X-ICP's): each correspondence informs only the eigen-direction of the full normal matrix its
+    Jacobian lies within 45 degrees of, in the information it gives that direction and in the pull.
 
-    jac: FloatArray
-    weights: FloatArray
-    floor: float
+    Along a corridor the slight tilt of many lines' estimated normals adds up to information along
+    its axis that no return measured, and their residuals across the walls to a pull along it: a
+    far end wall's dozen returns would share the axis with side walls' metres of noise. Here the
+    axis is decided and estimated by the end wall's returns alone."""
+
+    vecs: FloatArray
+    """Eigen-directions of the full normal matrix (scaled units), as columns."""
+    info: FloatArray
+    """The information each direction gets from the correspondences aligned with it."""
+    pull: FloatArray
+    """Their gradient along it."""
+    keep: NDArray[np.bool_]
+    """Directions whose information exceeds the floor: constrained."""
+
+    @classmethod
+    def of(
+        cls,
+        jac: FloatArray,
+        weights: FloatArray,
+        residuals: FloatArray,
+        hessian: FloatArray,
+        scale: FloatArray,
+        floor: float,
+    ) -> _Support:
+        """From the correspondences' Jacobian rows, weights and residuals and their full normal matrix."""
+        _, vecs = np.linalg.eigh(hessian * np.outer(scale, scale))
+        js = jac * scale
+        proj = js @ vecs
+        aligned = proj * (np.abs(proj) >= ALIGNED * np.linalg.norm(js, axis=1)[:, None])
+        info = (weights[:, None] * aligned * aligned).sum(axis=0)
+        return cls(vecs, info, aligned.T @ (weights * residuals), info > floor)
+
+    def normal(self, scale: FloatArray) -> FloatArray:
+        """The supported normal matrix in (x, y, theta) units."""
+        out: FloatArray = (self.vecs * self.info) @ self.vecs.T / np.outer(scale, scale)
+        return out
+
+    def step(self, scale: FloatArray) -> FloatArray:
+        """The Gauss-Newton step along the constrained directions, each from its own correspondences."""
+        inv = np.where(self.keep, 1.0 / np.where(self.keep, self.info, 1.0), 0.0)
+        out: FloatArray = scale * (self.vecs @ (inv * self.pull))
+        return out
 
 
 def _eigen(
@@ -238,26 +281,18 @@ def _eigen(
 ) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
     """Eigen-decomposition of the normal matrix in scaled units, and which directions are constrained.
 
-    Without ``support``: eigenvalues above :data:`DEGENERATE_RATIO` of the largest. With it
-    (localisability, as X-ICP's): the information a direction gets from the correspondences aligned
-    with it (their Jacobian within 45 degrees of it) must exceed ``support.floor``; the slight tilt
-    of many lines' estimated normals along a corridor adds up to information along its axis that
-    no return measured, and is not counted."""
+    Without ``support``: eigenvalues above :data:`DEGENERATE_RATIO` of the largest. With it: the
+    supported information of each direction, above the weighted match's floor (:class:`_Support`)."""
+    if support is not None:
+        return support.info, support.vecs, support.keep
     vals, vecs = np.linalg.eigh(hessian * np.outer(scale, scale))
-    if support is None:
-        keep = vals > DEGENERATE_RATIO * max(float(vals[-1]), 1e-12)
-    else:
-        js = support.jac * scale
-        proj = js @ vecs
-        aligned = np.abs(proj) >= ALIGNED * np.linalg.norm(js, axis=1)[:, None]
-        info = (support.weights[:, None] * proj * proj * aligned).sum(axis=0)
-        keep = info > support.floor
+    keep = vals > DEGENERATE_RATIO * max(float(vals[-1]), 1e-12)
     return vals, vecs, keep
 
 
-def _solve(hessian: FloatArray, grad: FloatArray, scale: FloatArray, support: _Support | None) -> FloatArray:
+def _solve(hessian: FloatArray, grad: FloatArray, scale: FloatArray) -> FloatArray:
     """The Gauss-Newton step ``H^-1 g`` restricted to the constrained directions."""
-    vals, vecs, keep = _eigen(hessian, scale, support)
+    vals, vecs, keep = _eigen(hessian, scale)
     inv = np.where(keep, 1.0 / np.where(keep, vals, 1.0), 0.0)
     step: FloatArray = scale * (vecs @ (inv * (vecs.T @ (scale * grad))))
     return step
@@ -439,10 +474,12 @@ class ScanMatcher:
             if sigma is not None:
                 weights = weights / (spread[ok] * spread[ok])
             hessian = jac.T @ (weights[:, None] * jac)
-            grad = jac.T @ (weights * r)
-            if sigma is not None:
-                support = _Support(jac, weights, floor)
-            delta = -_solve(hessian, grad, scale, support)
+            if sigma is None:
+                delta = -_solve(hessian, jac.T @ (weights * r), scale)
+            else:
+                support = _Support.of(jac, weights, r, hessian, scale, floor)
+                hessian = support.normal(scale)
+                delta = -support.step(scale)
             if np.all(np.abs(delta + previous) < 1e-7):  # a point flips in and out: settle between
                 delta = 0.5 * delta
             elif sigma is not None and float(delta @ hessian @ previous) < 0:

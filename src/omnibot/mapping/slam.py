@@ -12,11 +12,11 @@ ICP) against a local submap (the last ``submap_keyframes`` keyframes' points at 
 estimates), starting from the prediction.
 
 Degeneracy: where that match leaves a direction unconstrained (a corridor's axis, whose far end
-wall the submap holds only as a blur of its own distant, noisy views), with ``anchor_reach`` set
-(off by default, see below) the keyframe is matched again, each return weighed by its own range
+wall the submap holds only as a blur of its own distant, noisy views), the keyframe is matched
+again (``anchor_reach=None`` turns this off), each return weighed by its own range
 noise (``weighted``, :class:`ScanMatcher`), against an *anchor* submap: the returns every keyframe
-within ``anchor_reach`` of the prediction saw within ``anchor_range`` (sharp: 2 cm at 2 m for an
-A1). So the end wall seen up close fixes the axis, as well as its returns from 10 m can (a few
+within ``anchor_reach`` of the prediction (12 m by default: an A1's reach) saw within
+``anchor_range`` (sharp: 2 cm at 2 m for an A1). So the end wall seen up close fixes the axis, as well as its returns from 10 m can (a few
 centimetres). If that match converged, fits as well as ``min_fitness`` asks and constrains
 directions the first left free, it adds a factor from the anchor submap's oldest keyframe (what was
 seen first) whose covariance keeps only those directions: the others stay the first match's, from
@@ -24,10 +24,10 @@ the previous keyframe, since an old keyframe's heading would swing them by the l
 between. What stays unconstrained is the odometry's alone: the match keeps the prediction there and
 its covariance leaves it free (Zhang et al.'s solution remapping, the information matrix as the
 factor's weight). A direction no return constrains at all (mid-corridor, no end wall in range)
-cannot be recovered by any scan matching: there the SLAM is the odometry. Off by default: in the
-simulated long corridor the anchor matches hold the axis where the odometry drifts (omni4,
-mecanum4) but put a bias of about 5 cm into omni3's, whose odometry hardly drifts along it, not yet
-explained (docs/mapping.md).
+cannot be recovered by any scan matching: there the SLAM is the odometry. The anchor match takes
+the axis from the returns aligned with it alone (the end wall's; :class:`ScanMatcher`'s weighted
+match): with the side walls' pull in it, it had biased omni3's corridor by centimetres
+(docs/mapping.md).
 
 Back end: a pose graph of the keyframes (gtsam ``Pose2`` nodes). Between consecutive keyframes, an
 odometry factor (noise growing with the distance and angle driven, ``odometry_noise``) and the
@@ -130,7 +130,7 @@ class Slam:
         loop_sigma_floor: tuple[float, float] = (0.01, math.radians(0.5)),
         loop_kernel_width: float = 3.0,
         anchor_range: float = 2.0,
-        anchor_reach: float | None = None,
+        anchor_reach: float | None = 12.0,
         optimizer: str = "isam2",
         scan_to_submap: bool = True,
         deskew: bool = True,
