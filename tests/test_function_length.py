@@ -29,7 +29,7 @@ LONG: dict[str, int] = {
     "omnibot.firmware.motion:Executor.__init__": 94,
     "omnibot.firmware.motion:Executor._drive": 76,
     "omnibot.logs.recorder:Recorder.__init__": 63,
-    "omnibot.mapping.matcher:ScanMatcher._refine": 89,
+    "omnibot.mapping.matcher:ScanMatcher._refine": 78,
     "omnibot.mapping.planner:_astar": 68,
     "omnibot.mapping.slam:Slam.__init__": 104,
     "omnibot.sim.kernels:_before_physics": 86,

@@ -64,6 +64,8 @@ class NodeClient:
             text=True,
         )
         self.lines: queue.Queue[str | None] = queue.Queue()
+        self.last: dict[str, Any] = {}
+        """The last line read (without a message's body)."""
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
 
@@ -78,9 +80,12 @@ class NodeClient:
         if line is None:
             self.proc.wait(timeout=10)
             assert self.proc.stderr is not None
-            raise AssertionError(f"the client ended ({self.proc.returncode}): {self.proc.stderr.read()}")
+            raise AssertionError(
+                f"the client ended ({self.proc.returncode}) after {self.last}: {self.proc.stderr.read()}"
+            )
         record: dict[str, Any] = json.loads(line)
         assert record["event"] != "error", record
+        self.last = {k: v for k, v in record.items() if k != "message"}  # a "close" says the code
         return record
 
     def send(self, record: dict[str, Any]) -> None:

@@ -503,6 +503,19 @@ class ScanMatcher:
             free = vecs[:, ~keep]
             x, y, th = np.array([x, y, th]) - scale * (free @ (free.T @ moved))
         pose = Pose2D(float(x), float(y), wrap(float(th)))
+        fitness, rmse, sigma2, inliers = self._fit(pose, src, tgt, sigma)
+        converged = converged and inliers >= self.min_points
+        covariance = self._covariance(hessian, sigma2, scale, support)
+        free = scale[:, None] * vecs[:, ~keep]
+        free = free / np.linalg.norm(free, axis=0)
+        return MatchResult(pose, covariance, fitness, rmse, converged, score, int((~keep).sum()), free)
+
+    def _fit(
+        self, pose: Pose2D, src: FloatArray, tgt: Target, sigma: FloatArray | None
+    ) -> tuple[float, float, float, int]:
+        """How ``src`` at ``pose`` lies on ``tgt``: (fitness: the share of inliers, their RMSE in m,
+        the residuals' variance the covariance scales by, the inliers). A point's distance is to its
+        partner's line where it has one, else to the point."""
         p = transform(pose, src)
         dist, idx = tgt.tree.query(p, distance_upper_bound=self.max_correspondence)
         ok = np.isfinite(dist)
@@ -511,17 +524,12 @@ class ScanMatcher:
         along = np.abs(np.einsum("ij,ij->i", tgt.normals[idx[ok]], gap))
         line[ok] = np.where(tgt.lines[idx[ok]], along, np.hypot(gap[:, 0], gap[:, 1]))
         inl = line <= self.inlier_distance
-        fitness = float(inl.mean())
         rmse = float(math.sqrt(np.mean(line[inl] ** 2))) if inl.any() else math.inf
-        converged = converged and int(inl.sum()) >= self.min_points
         if sigma is None:
             sigma2 = max(rmse if math.isfinite(rmse) else 0.0, self.range_sigma) ** 2
         else:  # the inliers' spread in sigmas, never below the noise model's
             sigma2 = max(float(np.mean((line[inl] / sigma[inl]) ** 2)) if inl.any() else 0.0, 1.0)
-        covariance = self._covariance(hessian, sigma2, scale, support)
-        free = scale[:, None] * vecs[:, ~keep]
-        free = free / np.linalg.norm(free, axis=0)
-        return MatchResult(pose, covariance, fitness, rmse, converged, score, int((~keep).sum()), free)
+        return float(inl.mean()), rmse, sigma2, int(inl.sum())
 
     def _covariance(
         self, hessian: FloatArray, sigma2: float, scale: FloatArray, support: _Support | None = None

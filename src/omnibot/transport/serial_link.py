@@ -39,6 +39,8 @@ class SerialLink(Link):
         self.retry_interval = retry_interval
         super().__init__(url or f"serial://{port}?baud={baud}", clock or WallClock())
         self._serial: serial.Serial | None = None
+        self._failure: str | None = None
+        """Why the port broke (None: it did not, or it was reopened since)."""
         self._open(open_retry)
 
     @property
@@ -64,6 +66,7 @@ class SerialLink(Link):
         while True:
             try:
                 self._serial = self._open_once()
+                self._failure = None
                 return
             except ValueError as exc:  # bad settings: retrying will not help
                 raise ConfigError(f"cannot open serial port {self.port}: {exc}") from exc
@@ -74,12 +77,15 @@ class SerialLink(Link):
 
     def _port(self) -> serial.Serial:
         if self._serial is None:
-            raise LinkError(f"serial port {self.port} is not open (call reopen())")
+            # a broken port says why it broke in every thread that uses it next (the reader's error
+            # and the writer's then read alike, whichever a front end reports)
+            raise LinkError(self._failure or f"serial port {self.port} is not open (call reopen())")
         return self._serial
 
     def _broken(self, exc: Exception) -> LinkError:
+        self._failure = f"serial port {self.port} failed: {exc}"
         self._release()
-        return LinkError(f"serial port {self.port} failed: {exc}")
+        return LinkError(self._failure)
 
     def _release(self) -> None:
         ser, self._serial = self._serial, None
