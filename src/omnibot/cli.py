@@ -210,7 +210,7 @@ def _add_kinematics(sub: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 
 
 def _sim(args: argparse.Namespace) -> int:
-    from omnibot.floor.surfaces import SURFACES
+    from omnibot.floor import SURFACES
     from omnibot.robot.description import load_robot
     from omnibot.sim.emulator import run_pty_emulator
     from omnibot.sim.world import load_world
@@ -313,7 +313,7 @@ def _add_sim(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 def _tour(args: argparse.Namespace) -> int:
     from omnibot.demos.directions import DIRECTIONS, format_table, plot_tour, run_tour
-    from omnibot.floor.surfaces import get_surface
+    from omnibot.floor import get_surface
     from omnibot.progress import progress_bar
     from omnibot.robot.description import load_robot, preset_names
 

@@ -34,7 +34,7 @@ if TYPE_CHECKING:
     from omnibot.calibration.plan import Plan
     from omnibot.calibration.results import CalibrationResult
     from omnibot.calibration.verdict import Verdict
-    from omnibot.client.client import RobotClient
+    from omnibot.client import RobotClient
     from omnibot.client.session import ClientRecording
     from omnibot.progress import Progress
     from omnibot.robot.description import RobotDescription
@@ -147,7 +147,7 @@ def _surfaces(text: str | None, simulated: bool) -> list[str]:
     if not names or len(set(names)) != len(names):
         raise ConfigError(f"expected distinct comma-separated surface names, got {text!r}", key="--surface")
     if simulated:
-        from omnibot.floor.surfaces import get_surface
+        from omnibot.floor import get_surface
 
         for name in names:
             try:
@@ -191,10 +191,10 @@ def sim_opener(
 
     @contextmanager
     def open_client(surface: str) -> Iterator[RobotClient]:
-        from omnibot.client.client import RobotClient
+        from omnibot.client import RobotClient
         from omnibot.client.session import guarded
         from omnibot.sim.device import SimDevice
-        from omnibot.transport.lockstep import LockstepLink
+        from omnibot.transport import LockstepLink
 
         url = f"sim://{name}?surface={surface}&seed={seed}" + (f"&world={world}" if world else "")
         if true_robot is None:

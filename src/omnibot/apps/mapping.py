@@ -136,7 +136,7 @@ def run(args: argparse.Namespace) -> int:
     from omnibot.apps.run import Parts, run_in_this_thread
     from omnibot.cliargs import check_sim_options, sim_url
     from omnibot.control.paths.files import read_path
-    from omnibot.teleop.config import load_teleop_config
+    from omnibot.teleop import load_teleop_config
 
     out = _check(args)
     check_sim_options(args)

@@ -135,11 +135,11 @@ def compose(
     from omnibot.navigation.following import FOLLOWER_PRIORITY, follower_source
     from omnibot.navigation.judge import FollowJudge
     from omnibot.navigation.runner import STANDSTILL
+    from omnibot.runtime import PadSource
     from omnibot.runtime.sinks import EstimatorWhenMissing, NoticePrinter, SpeedReport
-    from omnibot.runtime.sources import PadSource
     from omnibot.runtime.stall import StallWatch
     from omnibot.runtime.standstill import Standstill
-    from omnibot.teleop.mapping import TwistLimits
+    from omnibot.teleop import TwistLimits
 
     parts = Parts()
     period = runtime.period
@@ -195,7 +195,7 @@ def run(args: argparse.Namespace) -> int:
     """``omnibot run``: compose the front ends, run them, return the exit status."""
     from omnibot.cliargs import check_sim_options, sim_url
     from omnibot.control.paths.files import read_path
-    from omnibot.teleop.config import load_teleop_config
+    from omnibot.teleop import load_teleop_config
 
     _check(args)
     check_sim_options(args)
@@ -246,7 +246,7 @@ def run_in_this_thread(
     from omnibot.cliargs import recording_of, use_calibration
     from omnibot.client.session import robot_session
     from omnibot.ros2.command import PERIOD as ROS2_PERIOD
-    from omnibot.runtime.runtime import Runtime
+    from omnibot.runtime import Runtime
     from omnibot.runtime.stall import start_sonars
 
     person = bool(args.teleop)
@@ -291,10 +291,10 @@ def _drive(
     """Start ``runtime`` and run it until the pad quits, the follow is judged (not when ``wall``:
     a person or ROS 2 nodes end it) or ``duration`` s pass. Binary unless a ``person`` drives, TEL
     every ``period`` (at least 10 ms); paced to the wall clock when ``wall``, else to the link's."""
-    from omnibot.client.errors import NotSupported
+    from omnibot.client import NotSupported
     from omnibot.protocol import codes
-    from omnibot.runtime.runtime import LinkPacer
-    from omnibot.teleop.pacing import Pacer
+    from omnibot.runtime import LinkPacer
+    from omnibot.teleop import Pacer
 
     client = runtime.client
     runtime.start()

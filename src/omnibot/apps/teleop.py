@@ -72,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
     from omnibot.cliargs import check_sim_options, recording_of, sim_url, use_calibration
     from omnibot.client.session import robot_session
     from omnibot.protocol import codes
-    from omnibot.teleop.config import load_teleop_config
+    from omnibot.teleop import load_teleop_config
     from omnibot.teleop.keyboard import HELP
     from omnibot.transport.device import find_device
 

@@ -35,10 +35,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
-from omnibot.client.client import RobotClient
-from omnibot.client.events import Event, RangeEvent, Telemetry, WarnEvent
+from omnibot.client import Event, Hello, RangeEvent, RobotClient, Telemetry, WarnEvent
 from omnibot.client.session import ClientRecording
-from omnibot.client.views import Hello
 from omnibot.errors import ConfigError
 from omnibot.estimation.odometry import WheelOdometry
 from omnibot.motion import Pose2D

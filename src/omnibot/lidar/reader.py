@@ -36,7 +36,7 @@ import numpy as np
 from omnibot.errors import ConfigError, LinkError
 from omnibot.motion import Pose2D
 from omnibot.scan import Scan
-from omnibot.transport.base import Link
+from omnibot.transport import Link
 
 __all__ = [
     "RplidarScanner",

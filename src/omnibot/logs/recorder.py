@@ -59,8 +59,7 @@ import yaml
 from mcap.writer import CompressionType, Writer
 
 from omnibot import __version__
-from omnibot.client.client import RobotClient
-from omnibot.client.events import Event, RangeEvent, Telemetry
+from omnibot.client import Event, RangeEvent, RobotClient, Telemetry
 from omnibot.config_errors import load_yaml
 from omnibot.errors import ConfigError
 from omnibot.estimation.estimator import Estimator, make_estimator

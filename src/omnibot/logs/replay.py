@@ -18,7 +18,7 @@ import bisect
 import math
 from dataclasses import dataclass, field
 
-from omnibot.client.events import Telemetry
+from omnibot.client import Telemetry
 from omnibot.errors import ConfigError
 from omnibot.estimation.estimator import make_estimator
 from omnibot.logs.run import PoseRow, Run

@@ -10,7 +10,7 @@ from omnibot.navigation.session import follower_limits
 from omnibot.navigation.webteach import WATCHDOG as SLOW_WATCHDOG
 from omnibot.navigation.webteach import gains_for
 from omnibot.robot.description import RobotDescription
-from omnibot.runtime.sources import FollowerSource
+from omnibot.runtime import FollowerSource
 
 FOLLOWER_PRIORITY = 10
 """The follower's priority: below every person and ROS 2's cmd_vel."""

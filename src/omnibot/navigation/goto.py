@@ -37,8 +37,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from omnibot.client.client import RobotClient
-from omnibot.client.errors import NotSupported
+from omnibot.client import NotSupported, RobotClient
 from omnibot.control.followers.base import wrap
 from omnibot.control.paths.geometry import resample
 from omnibot.control.paths.path import Path
@@ -55,8 +54,8 @@ from omnibot.navigation.runner import SETTLE, STANDSTILL
 from omnibot.navigation.session import follower_limits
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription
-from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.runtime import LinkPacer, Runtime, RuntimeRecording
+from omnibot.runtime import Cycle, LinkPacer, Runtime
+from omnibot.runtime.runtime import RuntimeRecording
 from omnibot.runtime.stall import StallWatch, start_sonars
 
 FloatArray = NDArray[np.float64]

@@ -31,9 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from omnibot.client.client import RobotClient
-from omnibot.client.errors import NotSupported
-from omnibot.client.events import Telemetry
+from omnibot.client import NotSupported, RobotClient, Telemetry
 from omnibot.control.followers.base import STOP, Command, Follower, State
 from omnibot.control.paths.path import Path
 from omnibot.errors import ConfigError, OmnibotError
@@ -45,9 +43,8 @@ from omnibot.motion import Pose2D, Twist
 from omnibot.progress import Progress
 from omnibot.protocol import codes
 from omnibot.robot.description import RobotDescription
-from omnibot.runtime.cycle import Cycle, Notice
-from omnibot.runtime.runtime import LinkPacer, Runtime, RuntimeRecording
-from omnibot.runtime.sources import FollowerSource, ScriptSource
+from omnibot.runtime import Cycle, FollowerSource, LinkPacer, Notice, Runtime, ScriptSource
+from omnibot.runtime.runtime import RuntimeRecording
 from omnibot.runtime.stall import StallWatch
 from omnibot.transport.device import find_simulator
 

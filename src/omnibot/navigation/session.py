@@ -11,7 +11,7 @@ import math
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from omnibot.client.client import RobotClient
+from omnibot.client import RobotClient
 from omnibot.control.followers.base import make_follower
 from omnibot.control.paths.path import Path
 from omnibot.control.paths.profile import MotionLimits
@@ -59,7 +59,7 @@ def simulated_client(
     """A client on the lockstep simulator (firmware + physics) with the robot standing at ``start``
     (None: at the world's own start, the origin in a world without one)."""
     from omnibot.sim.device import SimDevice
-    from omnibot.transport.lockstep import LockstepLink
+    from omnibot.transport import LockstepLink
 
     pose = None if start is None else (start.x, start.y, start.theta)
     device = SimDevice(robot, surface=surface, world=world, seed=seed, start_pose=pose)

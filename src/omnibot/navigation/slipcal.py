@@ -23,7 +23,7 @@ from omnibot.motion import Twist
 from omnibot.navigation.runner import Navigator, ramp_fraction
 from omnibot.robot.description import RobotDescription
 from omnibot.robot.kinematics import body_to_world, world_to_body
-from omnibot.runtime.sources import ScriptSource
+from omnibot.runtime import ScriptSource
 
 
 class RunTruth(Protocol):

@@ -41,9 +41,8 @@ from omnibot.motion import Pose2D
 from omnibot.navigation.judge import FollowJudge
 from omnibot.navigation.session import follower_limits, summary, verdict
 from omnibot.robot.description import RobotDescription
-from omnibot.runtime.cycle import Cycle, Level
-from omnibot.runtime.runtime import Runtime
-from omnibot.runtime.sources import FollowerSource
+from omnibot.runtime import Cycle, FollowerSource, Runtime
+from omnibot.runtime.cycle import Level
 from omnibot.runtime.stall import StallWatch
 
 APPROACH_GAP = 0.02

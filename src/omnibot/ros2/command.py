@@ -397,7 +397,7 @@ def _add_cmd_vel(runtime: Any, robot: Any, node: Any, args: argparse.Namespace, 
     """The ``cmd_vel`` source (``--twist`` forces its message type), limited to what the robot and
     its controller allow, added to ``runtime``."""
     from omnibot.ros2.cmd_vel import TWIST, CmdVelSource
-    from omnibot.teleop.mapping import TwistLimits
+    from omnibot.teleop import TwistLimits
 
     cmd_vel = CmdVelSource(
         node,
@@ -551,7 +551,7 @@ def _open(
 ) -> _Robot:
     """The robot's runtime with the bridge attached (not yet running), stamping on ``timeline``."""
     from omnibot.cliargs import recording_of, use_calibration
-    from omnibot.runtime.runtime import Runtime
+    from omnibot.runtime import Runtime
     from omnibot.runtime.sinks import NoticePrinter
 
     slip = use_calibration(args, session.client, session.robot)
@@ -566,7 +566,7 @@ def _open(
 def _serve(one: _Robot, args: argparse.Namespace, stop: threading.Event) -> None:
     """Run one robot's runtime, wall-clock paced, until ``stop`` or ``--duration``."""
     from omnibot.protocol import codes
-    from omnibot.teleop.pacing import Pacer
+    from omnibot.teleop import Pacer
 
     runtime, client, node, spec = one.runtime, one.client, one.node, one.spec
     runtime.start()

@@ -38,9 +38,9 @@ from omnibot.ros2.backend import RosNode
 from omnibot.ros2.bridge import Diagnosed
 from omnibot.ros2.odometry import yaw_of
 from omnibot.ros2.types import from_dds
-from omnibot.runtime.cycle import Cycle, Level
-from omnibot.runtime.runtime import Runtime
-from omnibot.runtime.sources import APPROACH_GAP, FollowerSource, Proposal
+from omnibot.runtime import Cycle, FollowerSource, Proposal, Runtime
+from omnibot.runtime.cycle import Level
+from omnibot.runtime.sources import APPROACH_GAP
 
 PATH = "path"
 PATH_TYPE = "nav_msgs/msg/Path"

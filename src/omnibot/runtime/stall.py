@@ -17,8 +17,7 @@ they measure: :func:`start_sonars` (``run``, the dashboard and ROS 2 start them)
 
 from __future__ import annotations
 
-from omnibot.client.client import RobotClient
-from omnibot.client.events import Telemetry
+from omnibot.client import RobotClient, Telemetry
 from omnibot.errors import ControllerError, LinkError
 from omnibot.estimation.stall import Stall, StallDetector
 from omnibot.robot.description import RobotDescription

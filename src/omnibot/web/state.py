@@ -16,7 +16,7 @@ from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
 
-from omnibot.client.events import Telemetry
+from omnibot.client import Telemetry
 from omnibot.errors import ConfigError
 from omnibot.estimation.estimator import Estimator, make_estimator
 from omnibot.motion import Pose2D
