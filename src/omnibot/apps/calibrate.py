@@ -37,7 +37,7 @@ if TYPE_CHECKING:
     from omnibot.client import RobotClient
     from omnibot.client.session import ClientRecording
     from omnibot.progress import Progress
-    from omnibot.robot.description import RobotDescription
+    from omnibot.robot import RobotDescription
 
 SIM_SURFACES = ("wood", "carpet")
 """Seed 000 calibrated on wood and carpet and averaged them."""
@@ -322,7 +322,7 @@ def _robot_and_client(
     """The robot to calibrate and, on ``--port``, the client of its session (entered on ``stack``);
     in the simulator its description alone (``world`` loaded, so a bad one fails before any run)."""
     from omnibot.client.session import robot_session
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     client: RobotClient | None = None
     if args.port is None:
@@ -402,7 +402,7 @@ def _true_robot(args: argparse.Namespace, robot: RobotDescription) -> RobotDescr
     """The robot the simulator runs when it differs from the description (``--perturb``,
     ``--true-robot``); None: the description itself."""
     from omnibot.calibration.perturb import ACCEPTANCE, perturbed_robot
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     if args.perturb:
         return perturbed_robot(robot, ACCEPTANCE if args.perturb == "acceptance" else args.perturb)

@@ -25,7 +25,7 @@ from omnibot.logs.recording import Recording, open_recording
 if TYPE_CHECKING:
     from omnibot.client import RobotClient
     from omnibot.logs.recorder import Recorder
-    from omnibot.robot.description import RobotDescription
+    from omnibot.robot import RobotDescription
     from omnibot.runtime import Runtime
 
 

@@ -333,7 +333,7 @@ def _with_dashboard(args: argparse.Namespace, url: str, config: Any, path: Any) 
     from omnibot.apps.dashboard import server_options
     from omnibot.cliargs import recording_of, use_calibration
     from omnibot.navigation.webteach import PathTeacher
-    from omnibot.robot.description import RobotDescription
+    from omnibot.robot import RobotDescription
     from omnibot.web.dashboard import Dashboard
 
     server = server_options(args)

@@ -56,7 +56,7 @@ def _robot_client(args: argparse.Namespace, start: Any = None) -> Iterator[tuple
     found on every way out."""
     from omnibot.client.session import guarded, robot_session
     from omnibot.navigation.session import simulated_client
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     recording = recording_of(args)
     if args.port:

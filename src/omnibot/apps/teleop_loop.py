@@ -26,7 +26,7 @@ from typing import Protocol
 from omnibot.client import RobotClient
 from omnibot.estimation.slip import SlipModel
 from omnibot.motion import Twist
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.runtime import Cycle, PadSource, Runtime
 from omnibot.runtime.runtime import Counters, RuntimeRecording
 from omnibot.runtime.sinks import NoticePrinter

@@ -35,7 +35,7 @@ from omnibot.protocol.messages import (
 )
 from omnibot.protocol.messages import Hello as HelloCommand
 from omnibot.protocol.messages import Status as StatusCommand
-from omnibot.robot.description import CalibrationSpec
+from omnibot.robot import CalibrationSpec
 
 C = TypeVar("C", bound=Command)
 log = logging.getLogger("omnibot.client")

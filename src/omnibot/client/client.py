@@ -94,7 +94,7 @@ from omnibot.protocol.messages import (
 from omnibot.protocol.messages import Hello as HelloCommand
 from omnibot.protocol.messages import Status as StatusCommand
 from omnibot.protocol.messages import Telemetry as TelemetryMessage
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.transport import Clock, Link
 
 E = TypeVar("E", bound=Event)

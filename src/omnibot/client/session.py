@@ -35,7 +35,7 @@ from omnibot.progress import notice
 from omnibot.protocol import codes
 from omnibot.protocol.messages import Mode, Stop
 from omnibot.protocol.messages import Telem as TelemCommand
-from omnibot.robot.description import RobotDescription, load_robot, preset_names
+from omnibot.robot import RobotDescription, load_robot, preset_names
 
 CLEANUP_TIMEOUT = 0.5
 """Seconds (link clock) each cleanup command may wait for its reply."""

@@ -42,7 +42,7 @@ from omnibot.estimation.odometry import WheelOdometry
 from omnibot.motion import Pose2D
 from omnibot.progress import Progress, notice, progress_bar
 from omnibot.protocol import codes
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.sim.emulator import spawn_pty_emulator
 from omnibot.transport.device import find_simulator
 

@@ -13,7 +13,7 @@ from typing import Any
 from omnibot.estimation.odometry import Pose2D
 from omnibot.logs.recorder import Recorder
 from omnibot.logs.topics import TRUTH
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.sim.simulator import Snapshot
 
 TRUTH_PERIOD = 0.01

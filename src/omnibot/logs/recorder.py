@@ -86,7 +86,7 @@ from omnibot.logs.topics import (
 from omnibot.motion import Estimate
 from omnibot.protocol import text
 from omnibot.protocol.messages import Malformed, Message, Vel
-from omnibot.robot.description import RobotDescription, load_robot, preset_names
+from omnibot.robot import RobotDescription, load_robot, preset_names
 from omnibot.robot.kinematics import world_to_body
 from omnibot.scan import Scan
 from omnibot.signals import held
@@ -497,7 +497,7 @@ class Recorder:
 
     def start(self, robot: RobotDescription, *, simulator: Any = None, url: str = "", t: float = 0.0) -> None:
         """The robot (URDF, calibration, estimator) and, on an in-process link, its simulator."""
-        from omnibot.robot.urdf import to_urdf
+        from omnibot.robot import to_urdf
 
         self.robot = robot
         self._simulator = simulator

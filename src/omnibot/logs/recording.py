@@ -27,7 +27,7 @@ if TYPE_CHECKING:
     from omnibot.logs.live import PanelSource
     from omnibot.logs.recorder import Mirror, Recorder
     from omnibot.logs.sink import RuntimeRecorder
-    from omnibot.robot.description import RobotDescription
+    from omnibot.robot import RobotDescription
     from omnibot.runtime import Runtime
 
 

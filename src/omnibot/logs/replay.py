@@ -26,7 +26,7 @@ from omnibot.logs.topics import ADOPTED
 from omnibot.motion import Estimate, Pose2D
 from omnibot.protocol import text
 from omnibot.protocol.messages import Telemetry as TelMessage
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 
 
 @dataclass(frozen=True)

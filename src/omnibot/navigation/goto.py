@@ -53,7 +53,7 @@ from omnibot.navigation.following import FOLLOWER_PRIORITY, follower_source
 from omnibot.navigation.runner import SETTLE, STANDSTILL
 from omnibot.navigation.session import follower_limits
 from omnibot.protocol import codes
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.runtime import Cycle, LinkPacer, Runtime
 from omnibot.runtime.runtime import RuntimeRecording
 from omnibot.runtime.stall import StallWatch, start_sonars

@@ -45,7 +45,7 @@ from omnibot.navigation.goto import (
     within,
 )
 from omnibot.navigation.runner import WATCHDOG
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.runtime import Cycle, Proposal
 from omnibot.runtime.sources import must_end
 

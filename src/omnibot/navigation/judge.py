@@ -10,7 +10,7 @@ from typing import Any
 from omnibot.motion import Pose2D
 from omnibot.navigation.metrics import Tolerances, follow_report
 from omnibot.navigation.runner import SETTLE, FollowRun, FollowTrace, FrameMap
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.runtime import Cycle, FollowerSource, Runtime
 from omnibot.transport.device import find_simulator
 

@@ -31,7 +31,7 @@ from omnibot.errors import ConfigError
 from omnibot.motion import Twist
 from omnibot.navigation.runner import Navigator
 from omnibot.navigation.session import follower_limits
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.runtime import ScriptSource
 from omnibot.runtime.runtime import RuntimeRecording
 from omnibot.signals import Terminated

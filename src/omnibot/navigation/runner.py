@@ -42,7 +42,7 @@ from omnibot.estimation.spins import Spin, SpinFit, Standstill, fit_spins
 from omnibot.motion import Pose2D, Twist
 from omnibot.progress import Progress
 from omnibot.protocol import codes
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.runtime import Cycle, FollowerSource, LinkPacer, Notice, Runtime, ScriptSource
 from omnibot.runtime.runtime import RuntimeRecording
 from omnibot.runtime.stall import StallWatch

@@ -20,7 +20,7 @@ from omnibot.motion import Pose2D
 from omnibot.navigation.metrics import Tolerances, follow_report
 from omnibot.navigation.runner import GYRO_USE, STANDSTILL, FollowRun, Navigator
 from omnibot.progress import Progress
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.runtime.runtime import RuntimeRecording
 
 DEFAULT_RATE = 100.0

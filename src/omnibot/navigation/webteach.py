@@ -40,7 +40,7 @@ from omnibot.estimation.slip import SlipParameters
 from omnibot.motion import Pose2D
 from omnibot.navigation.judge import FollowJudge
 from omnibot.navigation.session import follower_limits, summary, verdict
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.runtime import Cycle, FollowerSource, Runtime
 from omnibot.runtime.cycle import Level
 from omnibot.runtime.stall import StallWatch

@@ -33,7 +33,7 @@ from omnibot.control.paths.teach import PathRecorder
 from omnibot.errors import ConfigError
 from omnibot.estimation.estimator import make_estimator
 from omnibot.motion import Twist
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.runtime.cycle import Cycle, Notice
 
 if TYPE_CHECKING:

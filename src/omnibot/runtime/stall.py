@@ -20,7 +20,7 @@ from __future__ import annotations
 from omnibot.client import RobotClient, Telemetry
 from omnibot.errors import ControllerError, LinkError
 from omnibot.estimation.stall import Stall, StallDetector
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.runtime import Runtime
 from omnibot.transport.device import find_simulator

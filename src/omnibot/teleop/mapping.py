@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 from omnibot.client import Limits
 from omnibot.motion import ZERO, Twist
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.teleop.config import TeleopConfig
 
 

@@ -47,7 +47,7 @@ from omnibot.estimation.slip import SlipModel
 from omnibot.lidar.reader import SimScanSource
 from omnibot.motion import Pose2D, Twist
 from omnibot.protocol import codes
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.runtime import Cycle, DeadmanSource, Runtime
 from omnibot.runtime import EStop as EStopLock
 from omnibot.runtime.runtime import RuntimeRecording
