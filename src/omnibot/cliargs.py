@@ -89,7 +89,7 @@ def use_calibration(args: argparse.Namespace, client: Any, robot: Any) -> Any:
     if not path:
         return None
     from omnibot.calibration.calfile import floor_calibration
-    from omnibot.estimation.slip import SlipModel
+    from omnibot.estimation import SlipModel
 
     tables, slip = floor_calibration(path, robot, args.surface)
     if tables is not None:

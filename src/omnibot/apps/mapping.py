@@ -228,7 +228,7 @@ class _Mapping:
         return None if self.sink is None else self.sink.map_to_odom_now()
 
     def attach(self, runtime: Any, session: Any, *, estimator: bool = True) -> list[Any]:
-        from omnibot.estimation.estimator import make_estimator
+        from omnibot.estimation import make_estimator
         from omnibot.lidar.reader import open_scanner
         from omnibot.mapping.session import MappingSink, RangeNoise, Track
         from omnibot.motion import Pose2D

@@ -130,7 +130,7 @@ def compose(
     """Add the pad and the follower to ``runtime`` (any thread: before it runs); ``say`` tells the
     command's status lines."""
     from omnibot.apps.teleop import open_source
-    from omnibot.estimation.estimator import make_estimator
+    from omnibot.estimation import make_estimator
     from omnibot.motion import Pose2D
     from omnibot.navigation.following import FOLLOWER_PRIORITY, follower_source
     from omnibot.navigation.judge import FollowJudge

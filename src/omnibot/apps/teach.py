@@ -135,7 +135,7 @@ def run_follow(args: argparse.Namespace) -> int:
 def _check_follower_and_estimator(args: argparse.Namespace) -> None:
     """ConfigError unless ``--follower`` and ``--estimator`` name ones that exist."""
     from omnibot.control.followers.base import follower_names
-    from omnibot.estimation.estimator import ESTIMATORS
+    from omnibot.estimation import ESTIMATORS
 
     names = follower_names()
     if args.follower not in names:

@@ -24,7 +24,7 @@ from collections.abc import Callable
 from typing import Protocol
 
 from omnibot.client import RobotClient
-from omnibot.estimation.slip import SlipModel
+from omnibot.estimation import SlipModel
 from omnibot.motion import Twist
 from omnibot.robot import RobotDescription
 from omnibot.runtime import Cycle, PadSource, Runtime

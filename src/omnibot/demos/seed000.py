@@ -38,7 +38,7 @@ from typing import Any, Protocol
 from omnibot.client import Event, Hello, RangeEvent, RobotClient, Telemetry, WarnEvent
 from omnibot.client.session import ClientRecording
 from omnibot.errors import ConfigError
-from omnibot.estimation.odometry import WheelOdometry
+from omnibot.estimation import WheelOdometry
 from omnibot.motion import Pose2D
 from omnibot.progress import Progress, notice, progress_bar
 from omnibot.protocol import codes

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from omnibot.estimation.odometry import Pose2D
 from omnibot.logs.recorder import Recorder
 from omnibot.logs.topics import TRUTH
+from omnibot.motion import Pose2D
 from omnibot.robot import RobotDescription
 from omnibot.sim.simulator import Snapshot
 

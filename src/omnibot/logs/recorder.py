@@ -62,8 +62,7 @@ from omnibot import __version__
 from omnibot.client import Event, RangeEvent, RobotClient, Telemetry
 from omnibot.config_errors import load_yaml
 from omnibot.errors import ConfigError
-from omnibot.estimation.estimator import Estimator, make_estimator
-from omnibot.estimation.odometry import Pose2D
+from omnibot.estimation import Estimator, make_estimator
 from omnibot.logs import schemas
 from omnibot.logs.topics import (
     ADOPTED,
@@ -83,7 +82,7 @@ from omnibot.logs.topics import (
     TRUTH,
     range_topic,
 )
-from omnibot.motion import Estimate
+from omnibot.motion import Estimate, Pose2D
 from omnibot.protocol import text
 from omnibot.protocol.messages import Malformed, Message, Vel
 from omnibot.robot import RobotDescription, load_robot, preset_names

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 from omnibot.client import Telemetry
 from omnibot.errors import ConfigError
-from omnibot.estimation.estimator import make_estimator
+from omnibot.estimation import make_estimator
 from omnibot.logs.run import PoseRow, Run
 from omnibot.logs.topics import ADOPTED
 from omnibot.motion import Estimate, Pose2D

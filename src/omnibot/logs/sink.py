@@ -27,7 +27,7 @@ from collections.abc import Iterable
 from typing import TYPE_CHECKING
 
 from omnibot.client import Telemetry
-from omnibot.estimation.estimator import ESTIMATORS
+from omnibot.estimation import ESTIMATORS
 from omnibot.logs import schemas
 from omnibot.logs.recorder import Recorder, stamp, twist
 from omnibot.logs.topics import CONTROL, CYCLE, FOLLOWER
@@ -35,7 +35,7 @@ from omnibot.motion import Pose2D
 from omnibot.runtime import Cycle, Decision, FollowerSource
 
 if TYPE_CHECKING:
-    from omnibot.estimation.estimator import Estimator
+    from omnibot.estimation import Estimator
     from omnibot.runtime import Runtime
 
 

@@ -43,8 +43,7 @@ from omnibot.control.paths.geometry import resample
 from omnibot.control.paths.path import Path
 from omnibot.control.paths.profile import min_traversal_time
 from omnibot.errors import ConfigError, PlanningError
-from omnibot.estimation.estimator import make_estimator
-from omnibot.estimation.slip import SlipModel
+from omnibot.estimation import SlipModel, make_estimator
 from omnibot.mapping.grid import OCCUPIED, OccupancyGrid
 from omnibot.mapping.planner import MARGIN, CostMap, PlannedPath, Planner, check_goal, inflate, plan_path
 from omnibot.mapping.se2 import compose, inverse

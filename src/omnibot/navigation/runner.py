@@ -35,10 +35,17 @@ from omnibot.client import NotSupported, RobotClient, Telemetry
 from omnibot.control.followers.base import STOP, Command, Follower, State
 from omnibot.control.paths.path import Path
 from omnibot.errors import ConfigError, OmnibotError
-from omnibot.estimation.estimator import Estimator, PoseEstimator, make_estimator
-from omnibot.estimation.silence import GyroSilence
-from omnibot.estimation.slip import SlipParameters
-from omnibot.estimation.spins import Spin, SpinFit, Standstill, fit_spins
+from omnibot.estimation import (
+    Estimator,
+    GyroSilence,
+    PoseEstimator,
+    SlipParameters,
+    Spin,
+    SpinFit,
+    Standstill,
+    fit_spins,
+    make_estimator,
+)
 from omnibot.motion import Pose2D, Twist
 from omnibot.progress import Progress
 from omnibot.protocol import codes

@@ -15,7 +15,7 @@ from omnibot.client import RobotClient
 from omnibot.control.followers.base import make_follower
 from omnibot.control.paths.path import Path
 from omnibot.control.paths.profile import MotionLimits
-from omnibot.estimation.slip import SlipParameters
+from omnibot.estimation import SlipParameters
 from omnibot.motion import Pose2D
 from omnibot.navigation.metrics import Tolerances, follow_report
 from omnibot.navigation.runner import GYRO_USE, STANDSTILL, FollowRun, Navigator

@@ -35,8 +35,7 @@ from omnibot.control.followers.tracker import HEADING_GAIN, heading_gain
 from omnibot.control.paths.path import Path
 from omnibot.control.paths.profile import MotionLimits
 from omnibot.control.paths.teach import PathRecorder
-from omnibot.estimation.estimator import PoseEstimator
-from omnibot.estimation.slip import SlipParameters
+from omnibot.estimation import PoseEstimator, SlipParameters
 from omnibot.motion import Pose2D
 from omnibot.navigation.judge import FollowJudge
 from omnibot.navigation.session import follower_limits, summary, verdict

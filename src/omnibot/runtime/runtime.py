@@ -24,8 +24,7 @@ from omnibot.client import (
 from omnibot.client.commands import vel as vel_command
 from omnibot.client.session import ClientRecording
 from omnibot.errors import ControllerError, LinkError
-from omnibot.estimation.estimator import Estimator
-from omnibot.estimation.slip import SlipModel
+from omnibot.estimation import Estimator, SlipModel
 from omnibot.motion import Estimate, Twist
 from omnibot.protocol import codes
 from omnibot.runtime.arbiter import Arbiter, Lock

@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING
 from omnibot.control.paths.path import Path
 from omnibot.control.paths.teach import PathRecorder
 from omnibot.errors import ConfigError
-from omnibot.estimation.estimator import make_estimator
+from omnibot.estimation import make_estimator
 from omnibot.motion import Twist
 from omnibot.robot import RobotDescription
 from omnibot.runtime.cycle import Cycle, Notice

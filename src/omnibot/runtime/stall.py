@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from omnibot.client import RobotClient, Telemetry
 from omnibot.errors import ControllerError, LinkError
-from omnibot.estimation.stall import Stall, StallDetector
+from omnibot.estimation import Stall, StallDetector
 from omnibot.robot import RobotDescription
 from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.runtime import Runtime

@@ -37,7 +37,7 @@ import uvicorn
 from omnibot.client import RobotClient
 from omnibot.client.session import open_robot
 from omnibot.errors import ConfigError, OmnibotError
-from omnibot.estimation.slip import SlipModel
+from omnibot.estimation import SlipModel
 from omnibot.robot import RobotDescription
 from omnibot.runtime.runtime import Recording
 from omnibot.sim.world import World, load_world

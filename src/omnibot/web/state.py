@@ -18,7 +18,7 @@ from typing import Any
 
 from omnibot.client import Telemetry
 from omnibot.errors import ConfigError
-from omnibot.estimation.estimator import Estimator, make_estimator
+from omnibot.estimation import Estimator, make_estimator
 from omnibot.motion import Pose2D
 from omnibot.protocol import codes
 from omnibot.robot import RobotDescription, battery_level
