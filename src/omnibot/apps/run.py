@@ -135,18 +135,21 @@ def compose(
     from omnibot.navigation.following import FOLLOWER_PRIORITY, follower_source
     from omnibot.navigation.judge import FollowJudge
     from omnibot.navigation.runner import STANDSTILL
-    from omnibot.runtime import PadSource
-    from omnibot.runtime.sinks import EstimatorWhenMissing, NoticePrinter, SpeedReport
-    from omnibot.runtime.stall import StallWatch
-    from omnibot.runtime.standstill import Standstill
+    from omnibot.runtime import (
+        EstimatorWhenMissing,
+        NoticePrinter,
+        PadSource,
+        SpeedReport,
+        StallWatch,
+        Standstill,
+    )
     from omnibot.teleop import TwistLimits
 
     parts = Parts()
-    period = runtime.period
     if path is not None:
         slip = runtime.slip.params if runtime.slip is not None else None
         runtime.estimator = make_estimator("fused", robot, Pose2D(*path.start), slip)
-        parts.follower = follower_source(robot, path, period, args.follower, args.speed)
+        parts.follower = follower_source(robot, path, runtime.period, args.follower, args.speed)
         runtime.add_source(parts.follower)
         parts.judge = FollowJudge(
             runtime, robot, parts.follower, speed=args.speed, on_verdict=lambda r: _tell(runtime, r)
@@ -246,8 +249,7 @@ def run_in_this_thread(
     from omnibot.cliargs import recording_of, use_calibration
     from omnibot.client.session import robot_session
     from omnibot.ros2.command import PERIOD as ROS2_PERIOD
-    from omnibot.runtime import Runtime
-    from omnibot.runtime.stall import start_sonars
+    from omnibot.runtime import Runtime, start_sonars
 
     person = bool(args.teleop)
     wall = person or args.ros2  # a person or ROS 2 nodes: paced to the wall clock

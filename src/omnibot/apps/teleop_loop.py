@@ -27,9 +27,7 @@ from omnibot.client import RobotClient
 from omnibot.estimation import SlipModel
 from omnibot.motion import Twist
 from omnibot.robot import RobotDescription
-from omnibot.runtime import Cycle, PadSource, Runtime
-from omnibot.runtime.runtime import Counters, RuntimeRecording
-from omnibot.runtime.sinks import NoticePrinter
+from omnibot.runtime import Counters, Cycle, NoticePrinter, PadSource, Runtime, RuntimeRecording
 from omnibot.teleop import Action, Deadman, JoyState, Pacer, Sample, TeleopConfig, TwistLimits
 
 log = logging.getLogger("omnibot.teleop")

@@ -53,9 +53,7 @@ from omnibot.navigation.runner import SETTLE, STANDSTILL
 from omnibot.navigation.session import follower_limits
 from omnibot.protocol import codes
 from omnibot.robot import RobotDescription
-from omnibot.runtime import Cycle, LinkPacer, Runtime
-from omnibot.runtime.runtime import RuntimeRecording
-from omnibot.runtime.stall import StallWatch, start_sonars
+from omnibot.runtime import Cycle, LinkPacer, Runtime, RuntimeRecording, StallWatch, start_sonars
 
 FloatArray = NDArray[np.float64]
 PoseProvider = Callable[[], Pose2D | None]

@@ -46,8 +46,7 @@ from omnibot.navigation.goto import (
 )
 from omnibot.navigation.runner import WATCHDOG
 from omnibot.robot import RobotDescription
-from omnibot.runtime import Cycle, Proposal
-from omnibot.runtime.sources import must_end
+from omnibot.runtime import Cycle, Proposal, must_end
 
 GOTO_PRIORITY = 20
 """goto's priority: above the ``path`` follower (10), below scripts (50), ROS 2's cmd_vel (90) and

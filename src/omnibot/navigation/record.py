@@ -32,8 +32,7 @@ from omnibot.motion import Twist
 from omnibot.navigation.runner import Navigator
 from omnibot.navigation.session import follower_limits
 from omnibot.robot import RobotDescription
-from omnibot.runtime import ScriptSource
-from omnibot.runtime.runtime import RuntimeRecording
+from omnibot.runtime import RuntimeRecording, ScriptSource
 from omnibot.signals import Terminated
 
 TEACH_MODES = ("push", "drive", "listen")

@@ -50,9 +50,16 @@ from omnibot.motion import Pose2D, Twist
 from omnibot.progress import Progress
 from omnibot.protocol import codes
 from omnibot.robot import RobotDescription
-from omnibot.runtime import Cycle, FollowerSource, LinkPacer, Notice, Runtime, ScriptSource
-from omnibot.runtime.runtime import RuntimeRecording
-from omnibot.runtime.stall import StallWatch
+from omnibot.runtime import (
+    Cycle,
+    FollowerSource,
+    LinkPacer,
+    Notice,
+    Runtime,
+    RuntimeRecording,
+    ScriptSource,
+    StallWatch,
+)
 from omnibot.transport.device import find_simulator
 
 WATCHDOG = 0.15

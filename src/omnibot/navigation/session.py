@@ -21,7 +21,7 @@ from omnibot.navigation.metrics import Tolerances, follow_report
 from omnibot.navigation.runner import GYRO_USE, STANDSTILL, FollowRun, Navigator
 from omnibot.progress import Progress
 from omnibot.robot import RobotDescription
-from omnibot.runtime.runtime import RuntimeRecording
+from omnibot.runtime import RuntimeRecording
 
 DEFAULT_RATE = 100.0
 """Control rate of the follower loop, Hz."""

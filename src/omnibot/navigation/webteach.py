@@ -40,9 +40,7 @@ from omnibot.motion import Pose2D
 from omnibot.navigation.judge import FollowJudge
 from omnibot.navigation.session import follower_limits, summary, verdict
 from omnibot.robot import RobotDescription
-from omnibot.runtime import Cycle, FollowerSource, Runtime
-from omnibot.runtime.cycle import Level
-from omnibot.runtime.stall import StallWatch
+from omnibot.runtime import Cycle, FollowerSource, Level, Runtime, StallWatch
 
 APPROACH_GAP = 0.02
 """m: farther than this from the path's start, a repeat first drives straight to it."""

@@ -29,9 +29,7 @@ from omnibot.motion import Twist
 from omnibot.ros2.backend import RosNode
 from omnibot.ros2.dds import topic_name
 from omnibot.ros2.types import from_dds, ros_name
-from omnibot.runtime import Cycle, Proposal
-from omnibot.runtime.sources import RampedTwist
-from omnibot.runtime.wakeup import Wake
+from omnibot.runtime import Cycle, Proposal, RampedTwist, Wake
 from omnibot.teleop import TwistLimits
 
 log = logging.getLogger("omnibot.ros2")

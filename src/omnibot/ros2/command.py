@@ -262,7 +262,7 @@ def attach(
     names them in its own first line). Returns the node (close it)."""
     _require_bridge()
     from omnibot.ros2.backend import choose
-    from omnibot.runtime.stall import StallWatch, start_sonars
+    from omnibot.runtime import StallWatch, start_sonars
     from omnibot.transport.device import find_simulator
 
     spec = spec or robot_specs(args)[0]
@@ -308,7 +308,7 @@ def _add_bridge(
     from omnibot.ros2.bridge import Diagnosed, Ros2Sink
     from omnibot.ros2.odometry import OdometryReset
     from omnibot.ros2.path import PathSource
-    from omnibot.runtime.sinks import EstimatorWhenMissing
+    from omnibot.runtime import EstimatorWhenMissing
 
     odom = spec.prefix + "odom"
     diagnosed = Diagnosed.of(robot.name, spec.namespace)
@@ -551,8 +551,7 @@ def _open(
 ) -> _Robot:
     """The robot's runtime with the bridge attached (not yet running), stamping on ``timeline``."""
     from omnibot.cliargs import recording_of, use_calibration
-    from omnibot.runtime import Runtime
-    from omnibot.runtime.sinks import NoticePrinter
+    from omnibot.runtime import NoticePrinter, Runtime
 
     slip = use_calibration(args, session.client, session.robot)
     runtime = Runtime(

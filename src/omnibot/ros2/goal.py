@@ -46,8 +46,7 @@ from omnibot.ros2.bridge import Diagnosed, Ros2Sink
 from omnibot.ros2.mapping import MAP_TYPE, TF_PERIOD
 from omnibot.ros2.odometry import pose_of
 from omnibot.ros2.types import from_dds
-from omnibot.runtime import Cycle, Proposal
-from omnibot.runtime.cycle import Level
+from omnibot.runtime import Cycle, Level, Proposal
 
 if TYPE_CHECKING:
     from omnibot.lidar.reader import ScanSource

@@ -27,8 +27,7 @@ from omnibot.motion import Pose2D
 from omnibot.ros2.backend import RosNode
 from omnibot.ros2.bridge import Diagnosed
 from omnibot.ros2.types import from_dds
-from omnibot.runtime import Cycle
-from omnibot.runtime.cycle import Level
+from omnibot.runtime import Cycle, Level
 
 log = logging.getLogger("omnibot.ros2")
 

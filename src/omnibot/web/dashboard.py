@@ -39,7 +39,7 @@ from omnibot.client.session import open_robot
 from omnibot.errors import ConfigError, OmnibotError
 from omnibot.estimation import SlipModel
 from omnibot.robot import RobotDescription
-from omnibot.runtime.runtime import Recording
+from omnibot.runtime import Recording
 from omnibot.sim.world import World, load_world
 from omnibot.teleop import TeleopConfig
 from omnibot.transport.device import find_device

@@ -48,10 +48,8 @@ from omnibot.lidar.reader import SimScanSource
 from omnibot.motion import Pose2D, Twist
 from omnibot.protocol import codes
 from omnibot.robot import RobotDescription
-from omnibot.runtime import Cycle, DeadmanSource, Runtime
+from omnibot.runtime import Cycle, DeadmanSource, EstimatorWhenMissing, Runtime, RuntimeRecording
 from omnibot.runtime import EStop as EStopLock
-from omnibot.runtime.runtime import RuntimeRecording
-from omnibot.runtime.sinks import EstimatorWhenMissing
 from omnibot.scan import Scan
 from omnibot.teleop import (
     Deadman,
