@@ -34,8 +34,7 @@ if TYPE_CHECKING:
     from omnibot.calibration.plan import Plan
     from omnibot.calibration.results import CalibrationResult
     from omnibot.calibration.verdict import Verdict
-    from omnibot.client import RobotClient
-    from omnibot.client.session import ClientRecording
+    from omnibot.client import ClientRecording, RobotClient
     from omnibot.progress import Progress
     from omnibot.robot import RobotDescription
 
@@ -191,8 +190,7 @@ def sim_opener(
 
     @contextmanager
     def open_client(surface: str) -> Iterator[RobotClient]:
-        from omnibot.client import RobotClient
-        from omnibot.client.session import guarded
+        from omnibot.client import RobotClient, guarded
         from omnibot.sim.device import SimDevice
         from omnibot.transport import LockstepLink
 
@@ -321,7 +319,7 @@ def _robot_and_client(
 ) -> tuple[RobotDescription, RobotClient | None]:
     """The robot to calibrate and, on ``--port``, the client of its session (entered on ``stack``);
     in the simulator its description alone (``world`` loaded, so a bad one fails before any run)."""
-    from omnibot.client.session import robot_session
+    from omnibot.client import robot_session
     from omnibot.robot import load_robot
 
     client: RobotClient | None = None

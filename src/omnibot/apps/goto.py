@@ -62,7 +62,7 @@ def _say(text: str) -> None:
 def run(args: argparse.Namespace) -> int:
     """``omnibot goto``: the exit status."""
     from omnibot.cliargs import check_sim_options, recording_of, sim_url, simulated
-    from omnibot.client.session import robot_session
+    from omnibot.client import robot_session
     from omnibot.mapping.mapfile import load_map
     from omnibot.mapping.planner import check_goal, inflate
     from omnibot.motion import Pose2D, parse_pose

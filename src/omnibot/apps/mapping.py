@@ -164,7 +164,7 @@ def run(args: argparse.Namespace) -> int:
 def _explore(args: argparse.Namespace, url: str, out: Path) -> int:
     """``--explore``: the robot goes to the map's frontiers by itself (:mod:`omnibot.navigation.explore`)."""
     from omnibot.cliargs import recording_of, use_calibration
-    from omnibot.client.session import robot_session
+    from omnibot.client import robot_session
     from omnibot.motion import Pose2D
     from omnibot.navigation.explore import GOTO, explore
     from omnibot.navigation.goto import navigation_runtime

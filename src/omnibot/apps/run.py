@@ -247,7 +247,7 @@ def run_in_this_thread(
     ``frame``: the follower steers in it (:class:`~omnibot.runtime.sources.FollowerSource`'s, a
     SLAM's ``map -> odom``)."""
     from omnibot.cliargs import recording_of, use_calibration
-    from omnibot.client.session import robot_session
+    from omnibot.client import robot_session
     from omnibot.ros2.command import PERIOD as ROS2_PERIOD
     from omnibot.runtime import Runtime, start_sonars
 

@@ -54,7 +54,7 @@ def _robot_client(args: argparse.Namespace, start: Any = None) -> Iterator[tuple
     in ``--world``: standing at the world's own start where it has one (``room``, ``corridor``), else
     at ``start`` (``follow``: the path's start), else at the origin; the controller is left as it was
     found on every way out."""
-    from omnibot.client.session import guarded, robot_session
+    from omnibot.client import guarded, robot_session
     from omnibot.navigation.session import simulated_client
     from omnibot.robot import load_robot
 

@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     0 (Ctrl-C is raised again after the summary)."""
     from omnibot.apps.teleop_loop import Teleop
     from omnibot.cliargs import check_sim_options, recording_of, sim_url, use_calibration
-    from omnibot.client.session import robot_session
+    from omnibot.client import robot_session
     from omnibot.protocol import codes
     from omnibot.teleop import load_teleop_config
     from omnibot.teleop.keyboard import HELP

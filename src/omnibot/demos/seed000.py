@@ -35,8 +35,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
-from omnibot.client import Event, Hello, RangeEvent, RobotClient, Telemetry, WarnEvent
-from omnibot.client.session import ClientRecording
+from omnibot.client import ClientRecording, Event, Hello, RangeEvent, RobotClient, Telemetry, WarnEvent
 from omnibot.errors import ConfigError
 from omnibot.estimation import WheelOdometry
 from omnibot.motion import Pose2D
@@ -530,7 +529,7 @@ def run_demo(
     ``recording`` (``--log``) records it, with the truth (the emulator's file's, placed on the link's
     clock by the telemetry, once the emulator has closed it).
     """
-    from omnibot.client.session import robot_session
+    from omnibot.client import robot_session
     from omnibot.sim.world import load_world
 
     if port is not None:

@@ -589,7 +589,7 @@ def run(args: argparse.Namespace) -> int:
     shared simulated world are all open before any runtime waits on one. Then one robot runs here;
     several run a thread each (the first to end, or to fail, ends them all)."""
     from omnibot.cliargs import check_sim_options, recording_of, sim_url
-    from omnibot.client.session import robot_session
+    from omnibot.client import robot_session
     from omnibot.ros2.clock import Timeline
 
     specs = check(args)

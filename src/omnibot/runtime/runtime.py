@@ -11,6 +11,7 @@ from typing import Protocol
 
 from omnibot.client import (
     BatteryStopLatched,
+    ClientRecording,
     EmergencyStopLatched,
     ErrorEvent,
     Event,
@@ -22,7 +23,6 @@ from omnibot.client import (
     WarnEvent,
 )
 from omnibot.client.commands import vel as vel_command
-from omnibot.client.session import ClientRecording
 from omnibot.errors import ControllerError, LinkError
 from omnibot.estimation import Estimator, SlipModel
 from omnibot.motion import Estimate, Twist

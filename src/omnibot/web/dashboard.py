@@ -34,8 +34,7 @@ from typing import TYPE_CHECKING, Self
 
 import uvicorn
 
-from omnibot.client import RobotClient
-from omnibot.client.session import open_robot
+from omnibot.client import RobotClient, open_robot
 from omnibot.errors import ConfigError, OmnibotError
 from omnibot.estimation import SlipModel
 from omnibot.robot import RobotDescription

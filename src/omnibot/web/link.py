@@ -40,8 +40,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from omnibot.client import ErrorEvent, Event, ResetEvent, RobotClient, WarnEvent
-from omnibot.client.session import leave
+from omnibot.client import ErrorEvent, Event, ResetEvent, RobotClient, WarnEvent, leave
 from omnibot.errors import ControllerError, LinkError
 from omnibot.estimation import SlipModel
 from omnibot.lidar.reader import SimScanSource
