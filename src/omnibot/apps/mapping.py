@@ -168,7 +168,7 @@ def _explore(args: argparse.Namespace, url: str, out: Path) -> int:
     from omnibot.motion import Pose2D
     from omnibot.navigation.explore import GOTO, explore
     from omnibot.navigation.goto import navigation_runtime
-    from omnibot.transport.device import find_simulator
+    from omnibot.transport import find_simulator
 
     mapping = _Mapping(args)
     limit = args.duration if args.duration is not None else EXPLORE_LIMIT
@@ -232,7 +232,7 @@ class _Mapping:
         from omnibot.lidar.reader import open_scanner
         from omnibot.mapping.session import MappingSink, RangeNoise, Track
         from omnibot.motion import Pose2D
-        from omnibot.transport.device import find_simulator
+        from omnibot.transport import find_simulator
 
         client, robot = session.client, session.robot
         scans = open_scanner(self.args.scanner, client.link, robot)

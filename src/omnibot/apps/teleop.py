@@ -74,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
     from omnibot.protocol import codes
     from omnibot.teleop import load_teleop_config
     from omnibot.teleop.keyboard import HELP
-    from omnibot.transport.device import find_device
+    from omnibot.transport import find_device
 
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
         raise ConfigError(f"expected a positive number of seconds, got {args.duration}", key="--duration")

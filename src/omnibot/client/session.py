@@ -51,7 +51,7 @@ RestorePolicy = Literal["mode", "protocol"]
 def _simulated_robot(client: RobotClient, name: str) -> RobotDescription | None:
     """The description a simulated controller on the link runs (``sim://PRESET|FILE``), when it is
     the robot ``name`` its HELLO gave; None on a real link."""
-    from omnibot.transport.device import find_device
+    from omnibot.transport import find_device
 
     device = find_device(client.link)
     robot = getattr(device, "robot", None)

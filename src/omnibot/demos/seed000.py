@@ -43,7 +43,7 @@ from omnibot.progress import Progress, notice, progress_bar
 from omnibot.protocol import codes
 from omnibot.robot import RobotDescription
 from omnibot.sim.emulator import spawn_pty_emulator
-from omnibot.transport.device import find_simulator
+from omnibot.transport import find_simulator
 
 CIRCLE_STEP = 0.02
 SPIN_STEP = 0.03

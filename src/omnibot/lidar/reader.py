@@ -361,7 +361,7 @@ def open_scanner(spec: str | None, link: Link | ScanningSim | None, robot: Any) 
         )
     sim: ScanningSim | None
     if isinstance(link, Link):
-        from omnibot.transport.device import find_simulator
+        from omnibot.transport import find_simulator
 
         sim = cast("ScanningSim | None", find_simulator(link))
     else:

@@ -539,7 +539,7 @@ class Recorder:
         """Record what ``client`` sends, receives and decodes (once per client); ``robot`` starts the
         recording's context (:meth:`start`) if it has none yet. ``guess``: without ``robot``, take
         the preset the controller's HELLO names (else no URDF, no estimate)."""
-        from omnibot.transport.device import find_simulator
+        from omnibot.transport import find_simulator
 
         if not any(c is client for c in self._clients):
             self._clients.append(client)

@@ -12,7 +12,7 @@ from omnibot.navigation.metrics import Tolerances, follow_report
 from omnibot.navigation.runner import SETTLE, FollowRun, FollowTrace, FrameMap
 from omnibot.robot import RobotDescription
 from omnibot.runtime import Cycle, FollowerSource, Runtime
-from omnibot.transport.device import find_simulator
+from omnibot.transport import find_simulator
 
 
 class FollowJudge:

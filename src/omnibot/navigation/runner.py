@@ -60,7 +60,7 @@ from omnibot.runtime import (
     ScriptSource,
     StallWatch,
 )
-from omnibot.transport.device import find_simulator
+from omnibot.transport import find_simulator
 
 WATCHDOG = 0.15
 """VEL watchdog, s: the motors stop this long after the last command if the host goes quiet."""

@@ -263,7 +263,7 @@ def attach(
     _require_bridge()
     from omnibot.ros2.backend import choose
     from omnibot.runtime import StallWatch, start_sonars
-    from omnibot.transport.device import find_simulator
+    from omnibot.transport import find_simulator
 
     spec = spec or robot_specs(args)[0]
     timeline = _timeline_of(args, timeline)
@@ -427,7 +427,7 @@ def _goal_pose(
     from omnibot.motion import Pose2D
     from omnibot.ros2.goal import GoalPoseSource, Localisation, PlaceableSink
     from omnibot.ros2.navigate import NavigateToPose
-    from omnibot.transport.device import find_simulator
+    from omnibot.transport import find_simulator
 
     grid = args.map_grid
     if args.map_start is not None:
@@ -512,7 +512,7 @@ def _scanner(runtime: Any, robot: Any, spec: RobotSpec) -> Any:
     """The robot's scanner, made the runtime's (see :func:`attach`); None when the runtime has one
     already or the robot gets none (whoever gets it closes it)."""
     from omnibot.lidar.reader import open_scanner
-    from omnibot.transport.device import find_simulator
+    from omnibot.transport import find_simulator
 
     if runtime.scanner is not None:
         return None  # the command's own (omnibot map's, the dashboard's)

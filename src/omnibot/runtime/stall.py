@@ -23,7 +23,7 @@ from omnibot.estimation import Stall, StallDetector
 from omnibot.robot import RobotDescription
 from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.runtime import Runtime
-from omnibot.transport.device import find_simulator
+from omnibot.transport import find_simulator
 
 SONAR_PERIOD = 0.1
 """s between a sonar's pings (their readings ride in TEL)."""

@@ -41,7 +41,7 @@ from omnibot.robot import RobotDescription
 from omnibot.runtime import Recording
 from omnibot.sim.world import World, load_world
 from omnibot.teleop import TeleopConfig
-from omnibot.transport.device import find_device
+from omnibot.transport import find_device
 from omnibot.web.access import HostCheck, HostPolicy, access_token, listening_socket
 from omnibot.web.link import RobotLink
 from omnibot.web.messages import MAX_FRAME

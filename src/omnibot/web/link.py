@@ -63,7 +63,7 @@ from omnibot.teleop import (
 )
 from omnibot.teleop.deadman import Phase
 from omnibot.teleop.mapping import axes_tuple
-from omnibot.transport.device import find_device
+from omnibot.transport import find_device
 from omnibot.web.messages import Drive, EStop, Joy, Resume, Teach
 from omnibot.web.state import StateTracker
 from omnibot.web.teach import NOT_AVAILABLE, TeachRepeat
