@@ -40,15 +40,15 @@ from omnibot.teleop import (
     Action,
     Deadman,
     JoyState,
+    Phase,
     Sample,
     TeleopConfig,
     TwistLimits,
+    TwistRamp,
     Why,
     joy_to_command,
     limit_twist,
 )
-from omnibot.teleop.deadman import Phase
-from omnibot.teleop.mapping import TwistRamp
 
 APPROACH_GAP = 0.02
 """m: farther than this from the path, a follower that gets the robot back first drives straight to it."""

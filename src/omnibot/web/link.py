@@ -54,15 +54,15 @@ from omnibot.teleop import (
     Deadman,
     JoyState,
     Pacer,
+    Phase,
     Sample,
     TeleopConfig,
     TwistLimits,
+    axes_tuple,
     fractions_to_twist,
     joy_to_command,
     limit_twist,
 )
-from omnibot.teleop.deadman import Phase
-from omnibot.teleop.mapping import axes_tuple
 from omnibot.transport import find_device
 from omnibot.web.messages import Drive, EStop, Joy, Resume, Teach
 from omnibot.web.state import StateTracker
