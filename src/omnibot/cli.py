@@ -95,7 +95,7 @@ def accept_negative_numbers(parser: argparse.ArgumentParser) -> None:
 
 
 def _robot_list(args: argparse.Namespace) -> int:
-    from omnibot.robot.description import load_robot, preset_names
+    from omnibot.robot import load_robot, preset_names
 
     for name in preset_names():
         print(f"{name:10s} {load_robot(name).summary}")
@@ -103,16 +103,14 @@ def _robot_list(args: argparse.Namespace) -> int:
 
 
 def _robot_show(args: argparse.Namespace) -> int:
-    from omnibot.robot.description import load_robot
-    from omnibot.robot.summary import describe
+    from omnibot.robot import describe, load_robot
 
     print(describe(load_robot(args.robot)))
     return 0
 
 
 def _robot_urdf(args: argparse.Namespace) -> int:
-    from omnibot.robot.description import load_robot
-    from omnibot.robot.urdf import to_urdf
+    from omnibot.robot import load_robot, to_urdf
 
     if args.out:
         from omnibot.cliargs import check_distinct
@@ -150,7 +148,7 @@ def _kinematics(args: argparse.Namespace) -> int:
     import numpy as np
 
     from omnibot.robot import kinematics as kin
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     robot = load_robot(args.robot)
     J = robot.wheel_matrix
@@ -210,8 +208,8 @@ def _add_kinematics(sub: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 
 
 def _sim(args: argparse.Namespace) -> int:
-    from omnibot.floor.surfaces import SURFACES
-    from omnibot.robot.description import load_robot
+    from omnibot.floor import SURFACES
+    from omnibot.robot import load_robot
     from omnibot.sim.emulator import run_pty_emulator
     from omnibot.sim.world import load_world
 
@@ -313,9 +311,9 @@ def _add_sim(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 def _tour(args: argparse.Namespace) -> int:
     from omnibot.demos.directions import DIRECTIONS, format_table, plot_tour, run_tour
-    from omnibot.floor.surfaces import get_surface
+    from omnibot.floor import get_surface
     from omnibot.progress import progress_bar
-    from omnibot.robot.description import load_robot, preset_names
+    from omnibot.robot import load_robot, preset_names
 
     surface = args.surface or "wood"
     get_surface(surface)

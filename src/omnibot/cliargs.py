@@ -89,7 +89,7 @@ def use_calibration(args: argparse.Namespace, client: Any, robot: Any) -> Any:
     if not path:
         return None
     from omnibot.calibration.calfile import floor_calibration
-    from omnibot.estimation.slip import SlipModel
+    from omnibot.estimation import SlipModel
 
     tables, slip = floor_calibration(path, robot, args.surface)
     if tables is not None:
@@ -275,7 +275,7 @@ def sim_url(args: argparse.Namespace) -> str:
 
 def check_world(args: argparse.Namespace) -> None:
     """A bad ``--world`` or ``--surface`` is reported before anything starts."""
-    from omnibot.floor.surfaces import SURFACES
+    from omnibot.floor import SURFACES
     from omnibot.sim.world import load_world
 
     surface = getattr(args, "surface", None)

@@ -34,10 +34,9 @@ if TYPE_CHECKING:
     from omnibot.calibration.plan import Plan
     from omnibot.calibration.results import CalibrationResult
     from omnibot.calibration.verdict import Verdict
-    from omnibot.client.client import RobotClient
-    from omnibot.client.session import ClientRecording
+    from omnibot.client import ClientRecording, RobotClient
     from omnibot.progress import Progress
-    from omnibot.robot.description import RobotDescription
+    from omnibot.robot import RobotDescription
 
 SIM_SURFACES = ("wood", "carpet")
 """Seed 000 calibrated on wood and carpet and averaged them."""
@@ -147,7 +146,7 @@ def _surfaces(text: str | None, simulated: bool) -> list[str]:
     if not names or len(set(names)) != len(names):
         raise ConfigError(f"expected distinct comma-separated surface names, got {text!r}", key="--surface")
     if simulated:
-        from omnibot.floor.surfaces import get_surface
+        from omnibot.floor import get_surface
 
         for name in names:
             try:
@@ -191,10 +190,9 @@ def sim_opener(
 
     @contextmanager
     def open_client(surface: str) -> Iterator[RobotClient]:
-        from omnibot.client.client import RobotClient
-        from omnibot.client.session import guarded
+        from omnibot.client import RobotClient, guarded
         from omnibot.sim.device import SimDevice
-        from omnibot.transport.lockstep import LockstepLink
+        from omnibot.transport import LockstepLink
 
         url = f"sim://{name}?surface={surface}&seed={seed}" + (f"&world={world}" if world else "")
         if true_robot is None:
@@ -321,8 +319,8 @@ def _robot_and_client(
 ) -> tuple[RobotDescription, RobotClient | None]:
     """The robot to calibrate and, on ``--port``, the client of its session (entered on ``stack``);
     in the simulator its description alone (``world`` loaded, so a bad one fails before any run)."""
-    from omnibot.client.session import robot_session
-    from omnibot.robot.description import load_robot
+    from omnibot.client import robot_session
+    from omnibot.robot import load_robot
 
     client: RobotClient | None = None
     if args.port is None:
@@ -402,7 +400,7 @@ def _true_robot(args: argparse.Namespace, robot: RobotDescription) -> RobotDescr
     """The robot the simulator runs when it differs from the description (``--perturb``,
     ``--true-robot``); None: the description itself."""
     from omnibot.calibration.perturb import ACCEPTANCE, perturbed_robot
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     if args.perturb:
         return perturbed_robot(robot, ACCEPTANCE if args.perturb == "acceptance" else args.perturb)

@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import TextIO
 
 from omnibot.client import (
+    STATE_NAMES,
     ErrorEvent,
     Event,
     IdleEvent,
@@ -43,7 +44,6 @@ from omnibot.client import (
     Unexpected,
     WarnEvent,
 )
-from omnibot.client.views import STATE_NAMES
 from omnibot.errors import ControllerError, LinkError, LinkTimeout, ProtocolError
 from omnibot.protocol import text
 from omnibot.protocol.messages import Malformed, Reply
@@ -129,7 +129,7 @@ def format_event(event: Event) -> str:
 def run_send(args: argparse.Namespace, out: TextIO | None = None) -> int:
     """``omnibot send``: exit status 0 all OK, 1 an ERROR reply or link trouble, 2 bad input."""
     from omnibot.cliargs import check_sim_options, recording_of, sim_url
-    from omnibot.client.session import robot_session
+    from omnibot.client import robot_session
 
     out = out or sys.stdout
     for line in args.commands:
@@ -287,7 +287,7 @@ def run_console(
 ) -> int:
     """``omnibot console``; ``interactive`` defaults to whether ``stdin`` is a terminal."""
     from omnibot.cliargs import check_sim_options, recording_of, sim_url
-    from omnibot.client.session import robot_session
+    from omnibot.client import robot_session
 
     stdin = stdin or sys.stdin
     out = out or sys.stdout

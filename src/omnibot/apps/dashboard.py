@@ -99,8 +99,8 @@ def run(args: argparse.Namespace) -> int:
     status (1 when the robot link ended)."""
     from omnibot.cliargs import check_sim_options, recording_of, sim_url, use_calibration
     from omnibot.navigation.webteach import PathTeacher
-    from omnibot.robot.description import RobotDescription
-    from omnibot.teleop.config import load_teleop_config
+    from omnibot.robot import RobotDescription
+    from omnibot.teleop import load_teleop_config
     from omnibot.web.dashboard import Dashboard
     from omnibot.web.scene import load_path
 

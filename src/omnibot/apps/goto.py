@@ -62,7 +62,7 @@ def _say(text: str) -> None:
 def run(args: argparse.Namespace) -> int:
     """``omnibot goto``: the exit status."""
     from omnibot.cliargs import check_sim_options, recording_of, sim_url, simulated
-    from omnibot.client.session import robot_session
+    from omnibot.client import robot_session
     from omnibot.mapping.mapfile import load_map
     from omnibot.mapping.planner import check_goal, inflate
     from omnibot.motion import Pose2D, parse_pose
@@ -107,7 +107,7 @@ def run(args: argparse.Namespace) -> int:
 def _start(client: Any, initial: tuple[float, float, float | None] | None) -> Any:
     """The robot's pose in the map at the start: ``--initial-pose``, else the simulator's."""
     from omnibot.motion import Pose2D
-    from omnibot.transport.device import find_simulator
+    from omnibot.transport import find_simulator
 
     if initial is not None:
         return Pose2D(initial[0], initial[1], initial[2] or 0.0)
@@ -124,7 +124,7 @@ def _go(
     from omnibot.mapping.localise import Localiser
     from omnibot.mapping.session import LocalisingSink
     from omnibot.navigation.goto import goto
-    from omnibot.transport.device import find_simulator
+    from omnibot.transport import find_simulator
 
     sim = find_simulator(client.link)
     slip = use_calibration(args, client, robot)

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 from omnibot.errors import ConfigError
 from omnibot.logs.run import Run, keyword_counts, load_run, rate_and_gap
 from omnibot.motion import Twist
-from omnibot.transport.spy import SpyEvent, format_event
+from omnibot.transport import SpyEvent, format_event
 
 if TYPE_CHECKING:
     from omnibot.logs.follower_replay import RecordedFollower

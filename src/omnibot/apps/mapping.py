@@ -136,7 +136,7 @@ def run(args: argparse.Namespace) -> int:
     from omnibot.apps.run import Parts, run_in_this_thread
     from omnibot.cliargs import check_sim_options, sim_url
     from omnibot.control.paths.files import read_path
-    from omnibot.teleop.config import load_teleop_config
+    from omnibot.teleop import load_teleop_config
 
     out = _check(args)
     check_sim_options(args)
@@ -164,11 +164,11 @@ def run(args: argparse.Namespace) -> int:
 def _explore(args: argparse.Namespace, url: str, out: Path) -> int:
     """``--explore``: the robot goes to the map's frontiers by itself (:mod:`omnibot.navigation.explore`)."""
     from omnibot.cliargs import recording_of, use_calibration
-    from omnibot.client.session import robot_session
+    from omnibot.client import robot_session
     from omnibot.motion import Pose2D
     from omnibot.navigation.explore import GOTO, explore
     from omnibot.navigation.goto import navigation_runtime
-    from omnibot.transport.device import find_simulator
+    from omnibot.transport import find_simulator
 
     mapping = _Mapping(args)
     limit = args.duration if args.duration is not None else EXPLORE_LIMIT
@@ -228,11 +228,11 @@ class _Mapping:
         return None if self.sink is None else self.sink.map_to_odom_now()
 
     def attach(self, runtime: Any, session: Any, *, estimator: bool = True) -> list[Any]:
-        from omnibot.estimation.estimator import make_estimator
+        from omnibot.estimation import make_estimator
         from omnibot.lidar.reader import open_scanner
         from omnibot.mapping.session import MappingSink, RangeNoise, Track
         from omnibot.motion import Pose2D
-        from omnibot.transport.device import find_simulator
+        from omnibot.transport import find_simulator
 
         client, robot = session.client, session.robot
         scans = open_scanner(self.args.scanner, client.link, robot)

@@ -23,10 +23,10 @@ from typing import TYPE_CHECKING
 from omnibot.logs.recording import Recording, open_recording
 
 if TYPE_CHECKING:
-    from omnibot.client.client import RobotClient
+    from omnibot.client import RobotClient
     from omnibot.logs.recorder import Recorder
-    from omnibot.robot.description import RobotDescription
-    from omnibot.runtime.runtime import Runtime
+    from omnibot.robot import RobotDescription
+    from omnibot.runtime import Runtime
 
 
 class CommandRecording:

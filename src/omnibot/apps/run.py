@@ -130,23 +130,26 @@ def compose(
     """Add the pad and the follower to ``runtime`` (any thread: before it runs); ``say`` tells the
     command's status lines."""
     from omnibot.apps.teleop import open_source
-    from omnibot.estimation.estimator import make_estimator
+    from omnibot.estimation import make_estimator
     from omnibot.motion import Pose2D
     from omnibot.navigation.following import FOLLOWER_PRIORITY, follower_source
     from omnibot.navigation.judge import FollowJudge
     from omnibot.navigation.runner import STANDSTILL
-    from omnibot.runtime.sinks import EstimatorWhenMissing, NoticePrinter, SpeedReport
-    from omnibot.runtime.sources import PadSource
-    from omnibot.runtime.stall import StallWatch
-    from omnibot.runtime.standstill import Standstill
-    from omnibot.teleop.mapping import TwistLimits
+    from omnibot.runtime import (
+        EstimatorWhenMissing,
+        NoticePrinter,
+        PadSource,
+        SpeedReport,
+        StallWatch,
+        Standstill,
+    )
+    from omnibot.teleop import TwistLimits
 
     parts = Parts()
-    period = runtime.period
     if path is not None:
         slip = runtime.slip.params if runtime.slip is not None else None
         runtime.estimator = make_estimator("fused", robot, Pose2D(*path.start), slip)
-        parts.follower = follower_source(robot, path, period, args.follower, args.speed)
+        parts.follower = follower_source(robot, path, runtime.period, args.follower, args.speed)
         runtime.add_source(parts.follower)
         parts.judge = FollowJudge(
             runtime, robot, parts.follower, speed=args.speed, on_verdict=lambda r: _tell(runtime, r)
@@ -195,7 +198,7 @@ def run(args: argparse.Namespace) -> int:
     """``omnibot run``: compose the front ends, run them, return the exit status."""
     from omnibot.cliargs import check_sim_options, sim_url
     from omnibot.control.paths.files import read_path
-    from omnibot.teleop.config import load_teleop_config
+    from omnibot.teleop import load_teleop_config
 
     _check(args)
     check_sim_options(args)
@@ -244,10 +247,9 @@ def run_in_this_thread(
     ``frame``: the follower steers in it (:class:`~omnibot.runtime.sources.FollowerSource`'s, a
     SLAM's ``map -> odom``)."""
     from omnibot.cliargs import recording_of, use_calibration
-    from omnibot.client.session import robot_session
+    from omnibot.client import robot_session
     from omnibot.ros2.command import PERIOD as ROS2_PERIOD
-    from omnibot.runtime.runtime import Runtime
-    from omnibot.runtime.stall import start_sonars
+    from omnibot.runtime import Runtime, start_sonars
 
     person = bool(args.teleop)
     wall = person or args.ros2  # a person or ROS 2 nodes: paced to the wall clock
@@ -291,10 +293,10 @@ def _drive(
     """Start ``runtime`` and run it until the pad quits, the follow is judged (not when ``wall``:
     a person or ROS 2 nodes end it) or ``duration`` s pass. Binary unless a ``person`` drives, TEL
     every ``period`` (at least 10 ms); paced to the wall clock when ``wall``, else to the link's."""
-    from omnibot.client.errors import NotSupported
+    from omnibot.client import NotSupported
     from omnibot.protocol import codes
-    from omnibot.runtime.runtime import LinkPacer
-    from omnibot.teleop.pacing import Pacer
+    from omnibot.runtime import LinkPacer
+    from omnibot.teleop import Pacer
 
     client = runtime.client
     runtime.start()
@@ -333,7 +335,7 @@ def _with_dashboard(args: argparse.Namespace, url: str, config: Any, path: Any) 
     from omnibot.apps.dashboard import server_options
     from omnibot.cliargs import recording_of, use_calibration
     from omnibot.navigation.webteach import PathTeacher
-    from omnibot.robot.description import RobotDescription
+    from omnibot.robot import RobotDescription
     from omnibot.web.dashboard import Dashboard
 
     server = server_options(args)

@@ -54,9 +54,9 @@ def _robot_client(args: argparse.Namespace, start: Any = None) -> Iterator[tuple
     in ``--world``: standing at the world's own start where it has one (``room``, ``corridor``), else
     at ``start`` (``follow``: the path's start), else at the origin; the controller is left as it was
     found on every way out."""
-    from omnibot.client.session import guarded, robot_session
+    from omnibot.client import guarded, robot_session
     from omnibot.navigation.session import simulated_client
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     recording = recording_of(args)
     if args.port:
@@ -135,7 +135,7 @@ def run_follow(args: argparse.Namespace) -> int:
 def _check_follower_and_estimator(args: argparse.Namespace) -> None:
     """ConfigError unless ``--follower`` and ``--estimator`` name ones that exist."""
     from omnibot.control.followers.base import follower_names
-    from omnibot.estimation.estimator import ESTIMATORS
+    from omnibot.estimation import ESTIMATORS
 
     names = follower_names()
     if args.follower not in names:

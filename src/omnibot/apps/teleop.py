@@ -70,11 +70,11 @@ def run(args: argparse.Namespace) -> int:
     0 (Ctrl-C is raised again after the summary)."""
     from omnibot.apps.teleop_loop import Teleop
     from omnibot.cliargs import check_sim_options, recording_of, sim_url, use_calibration
-    from omnibot.client.session import robot_session
+    from omnibot.client import robot_session
     from omnibot.protocol import codes
-    from omnibot.teleop.config import load_teleop_config
+    from omnibot.teleop import load_teleop_config
     from omnibot.teleop.keyboard import HELP
-    from omnibot.transport.device import find_device
+    from omnibot.transport import find_device
 
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
         raise ConfigError(f"expected a positive number of seconds, got {args.duration}", key="--duration")

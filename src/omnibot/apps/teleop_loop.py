@@ -23,18 +23,12 @@ import logging
 from collections.abc import Callable
 from typing import Protocol
 
-from omnibot.client.client import RobotClient
-from omnibot.estimation.slip import SlipModel
+from omnibot.client import RobotClient
+from omnibot.estimation import SlipModel
 from omnibot.motion import Twist
-from omnibot.robot.description import RobotDescription
-from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.runtime import Counters, Runtime, RuntimeRecording
-from omnibot.runtime.sinks import NoticePrinter
-from omnibot.runtime.sources import PadSource
-from omnibot.teleop.config import TeleopConfig
-from omnibot.teleop.deadman import Action, Deadman, Sample
-from omnibot.teleop.mapping import JoyState, TwistLimits
-from omnibot.teleop.pacing import Pacer
+from omnibot.robot import RobotDescription
+from omnibot.runtime import Counters, Cycle, NoticePrinter, PadSource, Runtime, RuntimeRecording
+from omnibot.teleop import Action, Deadman, JoyState, Pacer, Sample, TeleopConfig, TwistLimits
 
 log = logging.getLogger("omnibot.teleop")
 

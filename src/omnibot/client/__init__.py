@@ -12,7 +12,8 @@
 Modules: ``client`` (RobotClient, Pending: sending, pumping), ``replies`` (Replies: which command a
 reply answers), ``calls`` (the typed calls), ``commands`` (SI -> checked commands), ``limits``,
 ``events`` (Event types, listeners, EventRecorder), ``tracing`` (Tracer: what a recorder hears),
-``views`` (Hello, Status), ``wire`` (text and binary wire formats), ``switch`` (ProtocolSwitch: the
+``views`` (Hello, Status), ``session`` (robot_session: the robot on the link, the controller
+left as found), ``wire`` (text and binary wire formats), ``switch`` (ProtocolSwitch: the
 protocol a client speaks, switching it), ``errors`` (ControllerError subclasses per code).
 """
 
@@ -41,13 +42,24 @@ from omnibot.client.events import (
     WarnEvent,
 )
 from omnibot.client.limits import Limits
-from omnibot.client.views import Hello, MoveState, Status
+from omnibot.client.session import (
+    ClientRecording,
+    RobotSession,
+    guarded,
+    leave,
+    open_robot,
+    robot_on_link,
+    robot_session,
+)
+from omnibot.client.views import STATE_NAMES, Hello, MoveState, Status
 from omnibot.errors import ControllerError, LinkError, LinkTimeout
 
 __all__ = [
     "DEFAULT_TIMEOUT",
+    "STATE_NAMES",
     "BatteryStopLatched",
     "CalibrationRejected",
+    "ClientRecording",
     "CommandRejected",
     "ControllerError",
     "ControllerReset",
@@ -69,6 +81,7 @@ __all__ = [
     "RangeEvent",
     "ResetEvent",
     "RobotClient",
+    "RobotSession",
     "Status",
     "Telemetry",
     "Unexpected",
@@ -78,7 +91,12 @@ __all__ = [
     "controller_error",
     "errors",
     "events",
+    "guarded",
+    "leave",
     "limits",
+    "open_robot",
+    "robot_on_link",
+    "robot_session",
     "session",
     "views",
 ]

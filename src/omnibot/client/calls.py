@@ -15,7 +15,7 @@ from omnibot.client import commands
 from omnibot.client.errors import CalibrationRejected
 from omnibot.client.limits import Limits
 from omnibot.client.views import Hello, Status
-from omnibot.estimation.slip import SlipParameters
+from omnibot.estimation import SlipParameters
 from omnibot.protocol import codes
 from omnibot.protocol.messages import (
     Cal,
@@ -35,7 +35,7 @@ from omnibot.protocol.messages import (
 )
 from omnibot.protocol.messages import Hello as HelloCommand
 from omnibot.protocol.messages import Status as StatusCommand
-from omnibot.robot.description import CalibrationSpec
+from omnibot.robot import CalibrationSpec
 
 C = TypeVar("C", bound=Command)
 log = logging.getLogger("omnibot.client")

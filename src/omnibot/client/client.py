@@ -94,8 +94,8 @@ from omnibot.protocol.messages import (
 from omnibot.protocol.messages import Hello as HelloCommand
 from omnibot.protocol.messages import Status as StatusCommand
 from omnibot.protocol.messages import Telemetry as TelemetryMessage
-from omnibot.robot.description import RobotDescription
-from omnibot.transport.base import Clock, Link
+from omnibot.robot import RobotDescription
+from omnibot.transport import Clock, Link
 
 E = TypeVar("E", bound=Event)
 
@@ -261,13 +261,13 @@ class RobotClient(TypedCalls):
         power-up ``HELLO`` (sim:// sends one at time 0) arrives as the greeting it is (a ResetEvent)
         and is not taken for the reply to a ``HELLO`` the caller sends next. Without a greeting,
         :meth:`find_protocol` runs: a controller left in binary mode is switched back to text."""
-        from omnibot.transport.url import open_link, parse_link_url
+        from omnibot.transport import url as links  # its functions read when called (patchable)
 
         if robot is None:
-            base = parse_link_url(url)[-1]
+            base = links.parse_link_url(url)[-1]
             if base.scheme == "sim":
                 robot = base.target
-        link = open_link(url)
+        link = links.open_link(url)
         try:
             client = cls(link, robot, **options)  # type: ignore[arg-type]
             if settle > 0:

@@ -28,16 +28,10 @@ import math
 from collections.abc import Callable, Sequence
 
 from omnibot.client.limits import Limits
-from omnibot.estimation.slip import SlipParameters
+from omnibot.estimation import SlipParameters
 from omnibot.protocol import codes, units
 from omnibot.protocol.messages import Cal, Delta, Mode, Move, Power, Rotate, Sonar, Telem, Vel
-from omnibot.robot.description import (
-    CalibrationSpec,
-    MotorMapSpec,
-    PiecewiseLinear,
-    ReachSpec,
-    RollerDragSpec,
-)
+from omnibot.robot import CalibrationSpec, MotorMapSpec, PiecewiseLinear, ReachSpec, RollerDragSpec
 
 INF = codes.INF
 TIME_MAX_MS = 30000  # POWER T, SONAR and TELEM periods

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from omnibot.protocol import codes
-from omnibot.robot.description import RobotDescription, load_robot
+from omnibot.robot import RobotDescription, load_robot
 
 _NO_LIMIT = float(codes.INT_MAX + 1)
 

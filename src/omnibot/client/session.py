@@ -35,7 +35,7 @@ from omnibot.progress import notice
 from omnibot.protocol import codes
 from omnibot.protocol.messages import Mode, Stop
 from omnibot.protocol.messages import Telem as TelemCommand
-from omnibot.robot.description import RobotDescription, load_robot, preset_names
+from omnibot.robot import RobotDescription, load_robot, preset_names
 
 CLEANUP_TIMEOUT = 0.5
 """Seconds (link clock) each cleanup command may wait for its reply."""
@@ -51,7 +51,7 @@ RestorePolicy = Literal["mode", "protocol"]
 def _simulated_robot(client: RobotClient, name: str) -> RobotDescription | None:
     """The description a simulated controller on the link runs (``sim://PRESET|FILE``), when it is
     the robot ``name`` its HELLO gave; None on a real link."""
-    from omnibot.transport.device import find_device
+    from omnibot.transport import find_device
 
     device = find_device(client.link)
     robot = getattr(device, "robot", None)

@@ -59,7 +59,7 @@ from omnibot.protocol.messages import Hello as HelloCommand
 
 if TYPE_CHECKING:
     from omnibot.client.views import Status
-    from omnibot.transport.base import Clock, Link
+    from omnibot.transport import Clock, Link
 
 ATTEMPTS: Final = 8
 """MODE commands (to_binary, to_text) and probes (find_protocol) tried before giving up."""

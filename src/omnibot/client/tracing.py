@@ -13,7 +13,7 @@ from omnibot.client.events import log
 from omnibot.protocol.messages import Malformed, Message
 
 if TYPE_CHECKING:
-    from omnibot.transport.base import Clock
+    from omnibot.transport import Clock
 
 
 class Tracer(Protocol):

@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 
 from omnibot.progress import Progress
+from omnibot.robot import RobotDescription
 from omnibot.robot import kinematics as kin
-from omnibot.robot.description import RobotDescription
 from omnibot.sim.simulator import Simulator
 
 DIRECTIONS: tuple[tuple[str, float, float, float], ...] = (

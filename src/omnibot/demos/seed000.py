@@ -35,18 +35,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
-from omnibot.client.client import RobotClient
-from omnibot.client.events import Event, RangeEvent, Telemetry, WarnEvent
-from omnibot.client.session import ClientRecording
-from omnibot.client.views import Hello
+from omnibot.client import ClientRecording, Event, Hello, RangeEvent, RobotClient, Telemetry, WarnEvent
 from omnibot.errors import ConfigError
-from omnibot.estimation.odometry import WheelOdometry
+from omnibot.estimation import WheelOdometry
 from omnibot.motion import Pose2D
 from omnibot.progress import Progress, notice, progress_bar
 from omnibot.protocol import codes
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.sim.emulator import spawn_pty_emulator
-from omnibot.transport.device import find_simulator
+from omnibot.transport import find_simulator
 
 CIRCLE_STEP = 0.02
 SPIN_STEP = 0.03
@@ -532,7 +529,7 @@ def run_demo(
     ``recording`` (``--log``) records it, with the truth (the emulator's file's, placed on the link's
     clock by the telemetry, once the emulator has closed it).
     """
-    from omnibot.client.session import robot_session
+    from omnibot.client import robot_session
     from omnibot.sim.world import load_world
 
     if port is not None:

@@ -1,3 +1,75 @@
-"""State estimation from the robot's own sensors (encoders, gyro); depends on robot and plain data only."""
+"""State estimation from the robot's own sensors (encoders, gyro); depends on robot and plain data only.
 
-__all__ = ["estimator", "odometry", "silence", "slip", "slipprobe", "spins", "stall"]
+::
+
+    from omnibot.estimation import make_estimator
+
+    estimator = make_estimator("fused", robot)
+
+Modules: ``estimator`` (the Estimator protocol, PoseEstimator, Seed002Estimator, the registry),
+``odometry`` (wheel odometry, encoder counts), ``tracking`` (tracking wheels), ``heading`` (the gyro
+heading filter), ``silence`` (a gyro gone quiet), ``slip`` (the floor's slip model and its fit),
+``slipprobe``, ``spins`` (gyro bias from spins and standstills), ``stall`` (a stalled robot).
+"""
+
+from omnibot.estimation.estimator import (
+    ESTIMATORS,
+    Estimator,
+    PoseEstimator,
+    Seed002Estimator,
+    SensorSample,
+    estimator_names,
+    make_estimator,
+    replay,
+)
+from omnibot.estimation.heading import HeadingFilter, HeadingFilterConfig
+from omnibot.estimation.odometry import WheelOdometry, compose_arc, forward_twist
+from omnibot.estimation.silence import GyroSilence
+from omnibot.estimation.slip import SlipLeg, SlipModel, SlipParameters, fit_slip, leg_error
+from omnibot.estimation.slipprobe import SlipProbe
+from omnibot.estimation.spins import Spin, SpinFit, Standstill, fit_spins, spin_biases
+from omnibot.estimation.stall import Stall, StallDetector, StallSample
+from omnibot.estimation.tracking import Seed002Odometry, TrackingGeometry, TrackingOdometry
+
+__all__ = [
+    "ESTIMATORS",
+    "Estimator",
+    "GyroSilence",
+    "HeadingFilter",
+    "HeadingFilterConfig",
+    "PoseEstimator",
+    "Seed002Estimator",
+    "Seed002Odometry",
+    "SensorSample",
+    "SlipLeg",
+    "SlipModel",
+    "SlipParameters",
+    "SlipProbe",
+    "Spin",
+    "SpinFit",
+    "Stall",
+    "StallDetector",
+    "StallSample",
+    "Standstill",
+    "TrackingGeometry",
+    "TrackingOdometry",
+    "WheelOdometry",
+    "compose_arc",
+    "estimator",
+    "estimator_names",
+    "fit_slip",
+    "fit_spins",
+    "forward_twist",
+    "heading",
+    "leg_error",
+    "make_estimator",
+    "odometry",
+    "replay",
+    "silence",
+    "slip",
+    "slipprobe",
+    "spin_biases",
+    "spins",
+    "stall",
+    "tracking",
+]

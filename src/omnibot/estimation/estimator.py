@@ -30,7 +30,7 @@ from omnibot.estimation.silence import GyroSilence
 from omnibot.estimation.slip import SlipModel, SlipParameters
 from omnibot.estimation.tracking import Seed002Odometry, TrackingGeometry
 from omnibot.motion import Estimate, Pose2D
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.robot.kinematics import world_to_body
 
 STILL_TIME = 0.2

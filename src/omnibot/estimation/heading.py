@@ -36,7 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from omnibot.robot.description import GyroSpec
+from omnibot.robot import GyroSpec
 
 
 @dataclass(frozen=True)

@@ -22,8 +22,8 @@ import numpy as np
 
 from omnibot import motion
 from omnibot.errors import ConfigError
+from omnibot.robot import RobotDescription
 from omnibot.robot import kinematics as kin
-from omnibot.robot.description import RobotDescription
 
 COUNT_MODULUS = 1 << 32
 

@@ -47,7 +47,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from omnibot.errors import ConfigError
 from omnibot.motion import Twist
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.robot.kinematics import robot_contact_rows
 
 FloatArray = NDArray[np.float64]

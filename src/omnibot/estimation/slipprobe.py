@@ -13,7 +13,7 @@ import numpy as np
 from omnibot.errors import ConfigError
 from omnibot.estimation.estimator import PoseEstimator
 from omnibot.estimation.slip import SlipLeg
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 
 
 class SlipProbe:

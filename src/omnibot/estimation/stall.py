@@ -44,7 +44,7 @@ from omnibot.estimation.odometry import COUNT_MODULUS, count_delta
 from omnibot.estimation.silence import GyroSilence
 from omnibot.estimation.tracking import TrackingGeometry
 from omnibot.motion import Pose2D, Twist
-from omnibot.robot.description import RobotDescription, SonarSpec
+from omnibot.robot import RobotDescription, SonarSpec
 
 WINDOW = 0.4
 """s of telemetry the encoders and a witness are compared over."""

@@ -24,7 +24,7 @@ import numpy as np
 from omnibot.errors import ConfigError
 from omnibot.estimation.odometry import CountTracker, compose_arc
 from omnibot.motion import Pose2D
-from omnibot.robot.description import RobotDescription, TrackingWheelSpec
+from omnibot.robot import RobotDescription, TrackingWheelSpec
 
 
 class TrackingGeometry:

@@ -36,7 +36,7 @@ import numpy as np
 from omnibot.errors import ConfigError, LinkError
 from omnibot.motion import Pose2D
 from omnibot.scan import Scan
-from omnibot.transport.base import Link
+from omnibot.transport import Link
 
 __all__ = [
     "RplidarScanner",
@@ -361,7 +361,7 @@ def open_scanner(spec: str | None, link: Link | ScanningSim | None, robot: Any) 
         )
     sim: ScanningSim | None
     if isinstance(link, Link):
-        from omnibot.transport.device import find_simulator
+        from omnibot.transport import find_simulator
 
         sim = cast("ScanningSim | None", find_simulator(link))
     else:

@@ -10,10 +10,10 @@ from __future__ import annotations
 
 from typing import Any
 
-from omnibot.estimation.odometry import Pose2D
 from omnibot.logs.recorder import Recorder
 from omnibot.logs.topics import TRUTH
-from omnibot.robot.description import RobotDescription
+from omnibot.motion import Pose2D
+from omnibot.robot import RobotDescription
 from omnibot.sim.simulator import Snapshot
 
 TRUTH_PERIOD = 0.01

@@ -31,8 +31,7 @@ from omnibot.errors import ConfigError
 from omnibot.logs.run import Run
 from omnibot.logs.topics import FOLLOWER
 from omnibot.motion import Estimate, Twist
-from omnibot.runtime.cycle import NOBODY, Cycle, Decision, Notice
-from omnibot.runtime.sources import FollowerSource
+from omnibot.runtime import NOBODY, Cycle, Decision, FollowerSource, Notice
 
 
 @dataclass(frozen=True)

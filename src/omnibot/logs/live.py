@@ -31,8 +31,7 @@ from omnibot.logs import schemas
 from omnibot.logs.foxglove_ws import FOXGLOVE_APP, ClientChannel, FoxgloveServer
 from omnibot.logs.topics import TELEOP
 from omnibot.motion import Twist
-from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.sources import Proposal
+from omnibot.runtime import Cycle, Proposal
 
 DEFAULT_PORT = 8765
 HOST = "127.0.0.1"

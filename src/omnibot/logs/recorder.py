@@ -59,12 +59,10 @@ import yaml
 from mcap.writer import CompressionType, Writer
 
 from omnibot import __version__
-from omnibot.client.client import RobotClient
-from omnibot.client.events import Event, RangeEvent, Telemetry
+from omnibot.client import Event, RangeEvent, RobotClient, Telemetry
 from omnibot.config_errors import load_yaml
 from omnibot.errors import ConfigError
-from omnibot.estimation.estimator import Estimator, make_estimator
-from omnibot.estimation.odometry import Pose2D
+from omnibot.estimation import Estimator, make_estimator
 from omnibot.logs import schemas
 from omnibot.logs.topics import (
     ADOPTED,
@@ -84,10 +82,10 @@ from omnibot.logs.topics import (
     TRUTH,
     range_topic,
 )
-from omnibot.motion import Estimate
+from omnibot.motion import Estimate, Pose2D
 from omnibot.protocol import text
 from omnibot.protocol.messages import Malformed, Message, Vel
-from omnibot.robot.description import RobotDescription, load_robot, preset_names
+from omnibot.robot import RobotDescription, load_robot, preset_names
 from omnibot.robot.kinematics import world_to_body
 from omnibot.scan import Scan
 from omnibot.signals import held
@@ -498,7 +496,7 @@ class Recorder:
 
     def start(self, robot: RobotDescription, *, simulator: Any = None, url: str = "", t: float = 0.0) -> None:
         """The robot (URDF, calibration, estimator) and, on an in-process link, its simulator."""
-        from omnibot.robot.urdf import to_urdf
+        from omnibot.robot import to_urdf
 
         self.robot = robot
         self._simulator = simulator
@@ -541,7 +539,7 @@ class Recorder:
         """Record what ``client`` sends, receives and decodes (once per client); ``robot`` starts the
         recording's context (:meth:`start`) if it has none yet. ``guess``: without ``robot``, take
         the preset the controller's HELLO names (else no URDF, no estimate)."""
-        from omnibot.transport.device import find_simulator
+        from omnibot.transport import find_simulator
 
         if not any(c is client for c in self._clients):
             self._clients.append(client)

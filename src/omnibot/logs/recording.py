@@ -23,12 +23,12 @@ from omnibot.errors import ConfigError
 from omnibot.logs.topics import DEFAULT_ESTIMATOR
 
 if TYPE_CHECKING:
-    from omnibot.client.client import RobotClient
+    from omnibot.client import RobotClient
     from omnibot.logs.live import PanelSource
     from omnibot.logs.recorder import Mirror, Recorder
     from omnibot.logs.sink import RuntimeRecorder
-    from omnibot.robot.description import RobotDescription
-    from omnibot.runtime.runtime import Runtime
+    from omnibot.robot import RobotDescription
+    from omnibot.runtime import Runtime
 
 
 FOXGLOVE_TOKEN_ENV = "OMNIBOT_FOXGLOVE_TOKEN"

@@ -18,15 +18,15 @@ import bisect
 import math
 from dataclasses import dataclass, field
 
-from omnibot.client.events import Telemetry
+from omnibot.client import Telemetry
 from omnibot.errors import ConfigError
-from omnibot.estimation.estimator import make_estimator
+from omnibot.estimation import make_estimator
 from omnibot.logs.run import PoseRow, Run
 from omnibot.logs.topics import ADOPTED
 from omnibot.motion import Estimate, Pose2D
 from omnibot.protocol import text
 from omnibot.protocol.messages import Telemetry as TelMessage
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 
 
 @dataclass(frozen=True)

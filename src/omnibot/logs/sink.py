@@ -26,18 +26,17 @@ import json
 from collections.abc import Iterable
 from typing import TYPE_CHECKING
 
-from omnibot.client.events import Telemetry
-from omnibot.estimation.estimator import ESTIMATORS
+from omnibot.client import Telemetry
+from omnibot.estimation import ESTIMATORS
 from omnibot.logs import schemas
 from omnibot.logs.recorder import Recorder, stamp, twist
 from omnibot.logs.topics import CONTROL, CYCLE, FOLLOWER
 from omnibot.motion import Pose2D
-from omnibot.runtime.cycle import Cycle, Decision
-from omnibot.runtime.sources import FollowerSource
+from omnibot.runtime import Cycle, Decision, FollowerSource
 
 if TYPE_CHECKING:
-    from omnibot.estimation.estimator import Estimator
-    from omnibot.runtime.runtime import Runtime
+    from omnibot.estimation import Estimator
+    from omnibot.runtime import Runtime
 
 
 _RECIPES = {

@@ -45,8 +45,8 @@ from omnibot.mapping.grid import OccupancyGrid
 from omnibot.mapping.planner import CostMap, check_start, inflate, plan_path
 from omnibot.motion import Pose2D
 from omnibot.navigation.goto import GotoOptions, GotoResult, PoseProvider, go_to
-from omnibot.robot.description import RobotDescription
-from omnibot.runtime.runtime import Runtime
+from omnibot.robot import RobotDescription
+from omnibot.runtime import Runtime
 
 FloatArray = NDArray[np.float64]
 Outcome = Literal["explored", "time limit", "unreachable", "stuck"]

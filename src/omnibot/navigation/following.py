@@ -9,8 +9,8 @@ from omnibot.navigation.runner import WATCHDOG
 from omnibot.navigation.session import follower_limits
 from omnibot.navigation.webteach import WATCHDOG as SLOW_WATCHDOG
 from omnibot.navigation.webteach import gains_for
-from omnibot.robot.description import RobotDescription
-from omnibot.runtime.sources import FollowerSource
+from omnibot.robot import RobotDescription
+from omnibot.runtime import FollowerSource
 
 FOLLOWER_PRIORITY = 10
 """The follower's priority: below every person and ROS 2's cmd_vel."""

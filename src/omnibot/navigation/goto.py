@@ -37,15 +37,13 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from omnibot.client.client import RobotClient
-from omnibot.client.errors import NotSupported
+from omnibot.client import NotSupported, RobotClient
 from omnibot.control.followers.base import wrap
 from omnibot.control.paths.geometry import resample
 from omnibot.control.paths.path import Path
 from omnibot.control.paths.profile import min_traversal_time
 from omnibot.errors import ConfigError, PlanningError
-from omnibot.estimation.estimator import make_estimator
-from omnibot.estimation.slip import SlipModel
+from omnibot.estimation import SlipModel, make_estimator
 from omnibot.mapping.grid import OCCUPIED, OccupancyGrid
 from omnibot.mapping.planner import MARGIN, CostMap, PlannedPath, Planner, check_goal, inflate, plan_path
 from omnibot.mapping.se2 import compose, inverse
@@ -54,10 +52,8 @@ from omnibot.navigation.following import FOLLOWER_PRIORITY, follower_source
 from omnibot.navigation.runner import SETTLE, STANDSTILL
 from omnibot.navigation.session import follower_limits
 from omnibot.protocol import codes
-from omnibot.robot.description import RobotDescription
-from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.runtime import LinkPacer, Runtime, RuntimeRecording
-from omnibot.runtime.stall import StallWatch, start_sonars
+from omnibot.robot import RobotDescription
+from omnibot.runtime import Cycle, LinkPacer, Runtime, RuntimeRecording, StallWatch, start_sonars
 
 FloatArray = NDArray[np.float64]
 PoseProvider = Callable[[], Pose2D | None]

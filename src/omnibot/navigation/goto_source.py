@@ -45,9 +45,8 @@ from omnibot.navigation.goto import (
     within,
 )
 from omnibot.navigation.runner import WATCHDOG
-from omnibot.robot.description import RobotDescription
-from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.sources import Proposal, must_end
+from omnibot.robot import RobotDescription
+from omnibot.runtime import Cycle, Proposal, must_end
 
 GOTO_PRIORITY = 20
 """goto's priority: above the ``path`` follower (10), below scripts (50), ROS 2's cmd_vel (90) and

@@ -10,11 +10,9 @@ from typing import Any
 from omnibot.motion import Pose2D
 from omnibot.navigation.metrics import Tolerances, follow_report
 from omnibot.navigation.runner import SETTLE, FollowRun, FollowTrace, FrameMap
-from omnibot.robot.description import RobotDescription
-from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.runtime import Runtime
-from omnibot.runtime.sources import FollowerSource
-from omnibot.transport.device import find_simulator
+from omnibot.robot import RobotDescription
+from omnibot.runtime import Cycle, FollowerSource, Runtime
+from omnibot.transport import find_simulator
 
 
 class FollowJudge:

@@ -17,7 +17,7 @@ import numpy as np
 from omnibot.control.followers.base import wrap
 from omnibot.control.paths.profile import MotionLimits, min_traversal_time
 from omnibot.navigation.runner import FollowRun
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 
 
 @dataclass(frozen=True)

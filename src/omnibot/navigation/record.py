@@ -22,7 +22,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from omnibot.client.client import RobotClient
+from omnibot.client import RobotClient
 from omnibot.control.followers.base import to_body, wrap
 from omnibot.control.paths.path import Path
 from omnibot.control.paths.profile import time_optimal_profile
@@ -31,9 +31,8 @@ from omnibot.errors import ConfigError
 from omnibot.motion import Twist
 from omnibot.navigation.runner import Navigator
 from omnibot.navigation.session import follower_limits
-from omnibot.robot.description import RobotDescription
-from omnibot.runtime.runtime import RuntimeRecording
-from omnibot.runtime.sources import ScriptSource
+from omnibot.robot import RobotDescription
+from omnibot.runtime import RuntimeRecording, ScriptSource
 from omnibot.signals import Terminated
 
 TEACH_MODES = ("push", "drive", "listen")

@@ -31,25 +31,36 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from omnibot.client.client import RobotClient
-from omnibot.client.errors import NotSupported
-from omnibot.client.events import Telemetry
+from omnibot.client import NotSupported, RobotClient, Telemetry
 from omnibot.control.followers.base import STOP, Command, Follower, State
 from omnibot.control.paths.path import Path
 from omnibot.errors import ConfigError, OmnibotError
-from omnibot.estimation.estimator import Estimator, PoseEstimator, make_estimator
-from omnibot.estimation.silence import GyroSilence
-from omnibot.estimation.slip import SlipParameters
-from omnibot.estimation.spins import Spin, SpinFit, Standstill, fit_spins
+from omnibot.estimation import (
+    Estimator,
+    GyroSilence,
+    PoseEstimator,
+    SlipParameters,
+    Spin,
+    SpinFit,
+    Standstill,
+    fit_spins,
+    make_estimator,
+)
 from omnibot.motion import Pose2D, Twist
 from omnibot.progress import Progress
 from omnibot.protocol import codes
-from omnibot.robot.description import RobotDescription
-from omnibot.runtime.cycle import Cycle, Notice
-from omnibot.runtime.runtime import LinkPacer, Runtime, RuntimeRecording
-from omnibot.runtime.sources import FollowerSource, ScriptSource
-from omnibot.runtime.stall import StallWatch
-from omnibot.transport.device import find_simulator
+from omnibot.robot import RobotDescription
+from omnibot.runtime import (
+    Cycle,
+    FollowerSource,
+    LinkPacer,
+    Notice,
+    Runtime,
+    RuntimeRecording,
+    ScriptSource,
+    StallWatch,
+)
+from omnibot.transport import find_simulator
 
 WATCHDOG = 0.15
 """VEL watchdog, s: the motors stop this long after the last command if the host goes quiet."""

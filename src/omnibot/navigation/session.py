@@ -11,17 +11,17 @@ import math
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from omnibot.client.client import RobotClient
+from omnibot.client import RobotClient
 from omnibot.control.followers.base import make_follower
 from omnibot.control.paths.path import Path
 from omnibot.control.paths.profile import MotionLimits
-from omnibot.estimation.slip import SlipParameters
+from omnibot.estimation import SlipParameters
 from omnibot.motion import Pose2D
 from omnibot.navigation.metrics import Tolerances, follow_report
 from omnibot.navigation.runner import GYRO_USE, STANDSTILL, FollowRun, Navigator
 from omnibot.progress import Progress
-from omnibot.robot.description import RobotDescription
-from omnibot.runtime.runtime import RuntimeRecording
+from omnibot.robot import RobotDescription
+from omnibot.runtime import RuntimeRecording
 
 DEFAULT_RATE = 100.0
 """Control rate of the follower loop, Hz."""
@@ -59,7 +59,7 @@ def simulated_client(
     """A client on the lockstep simulator (firmware + physics) with the robot standing at ``start``
     (None: at the world's own start, the origin in a world without one)."""
     from omnibot.sim.device import SimDevice
-    from omnibot.transport.lockstep import LockstepLink
+    from omnibot.transport import LockstepLink
 
     pose = None if start is None else (start.x, start.y, start.theta)
     device = SimDevice(robot, surface=surface, world=world, seed=seed, start_pose=pose)

@@ -17,13 +17,12 @@ from dataclasses import dataclass, field
 from typing import Protocol
 
 from omnibot.errors import ConfigError
-from omnibot.estimation.slip import SlipLeg, SlipParameters, fit_slip, leg_error
-from omnibot.estimation.slipprobe import SlipProbe
+from omnibot.estimation import SlipLeg, SlipParameters, SlipProbe, fit_slip, leg_error
 from omnibot.motion import Twist
 from omnibot.navigation.runner import Navigator, ramp_fraction
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.robot.kinematics import body_to_world, world_to_body
-from omnibot.runtime.sources import ScriptSource
+from omnibot.runtime import ScriptSource
 
 
 class RunTruth(Protocol):

@@ -35,16 +35,12 @@ from omnibot.control.followers.tracker import CROSS_GAIN, HEADING_GAIN, heading_
 from omnibot.control.paths.path import Path
 from omnibot.control.paths.profile import MotionLimits
 from omnibot.control.paths.teach import PathRecorder
-from omnibot.estimation.estimator import PoseEstimator
-from omnibot.estimation.slip import SlipParameters
+from omnibot.estimation import PoseEstimator, SlipParameters
 from omnibot.motion import Pose2D
 from omnibot.navigation.judge import FollowJudge
 from omnibot.navigation.session import follower_limits, summary, verdict
-from omnibot.robot.description import RobotDescription
-from omnibot.runtime.cycle import Cycle, Level
-from omnibot.runtime.runtime import Runtime
-from omnibot.runtime.sources import FollowerSource
-from omnibot.runtime.stall import StallWatch
+from omnibot.robot import RobotDescription
+from omnibot.runtime import Cycle, FollowerSource, Level, Runtime, StallWatch
 
 APPROACH_GAP = 0.02
 """m: farther than this from the path's start, a repeat first drives straight to it."""

@@ -33,18 +33,17 @@ from typing import Any
 
 import numpy as np
 
-from omnibot.client.events import WarnEvent
+from omnibot.client import WarnEvent
 from omnibot.logs import schemas
 from omnibot.logs.recorder import Recorder, header, quaternion, stamp, vector
 from omnibot.logs.topics import IMU, JOINT_STATES, ODOM, RANGE_PREFIX, ROBOT_DESCRIPTION, SCAN, TF
 from omnibot.motion import Twist
 from omnibot.protocol import codes
-from omnibot.robot.battery import battery_level
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription, battery_level
 from omnibot.ros2.backend import DEFAULT, LATCHED, SENSOR_DATA, Profile, RosNode
 from omnibot.ros2.clock import CLOCK, CLOCK_TYPE, Timeline
 from omnibot.ros2.frames import prefixed, urdf_for_tf
-from omnibot.runtime.cycle import Cycle
+from omnibot.runtime import Cycle
 
 TF_STATIC = "/tf_static"
 DIAGNOSTICS = "/diagnostics"

@@ -29,10 +29,8 @@ from omnibot.motion import Twist
 from omnibot.ros2.backend import RosNode
 from omnibot.ros2.dds import topic_name
 from omnibot.ros2.types import from_dds, ros_name
-from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.sources import Proposal, RampedTwist
-from omnibot.runtime.wakeup import Wake
-from omnibot.teleop.mapping import TwistLimits
+from omnibot.runtime import Cycle, Proposal, RampedTwist, Wake
+from omnibot.teleop import TwistLimits
 
 log = logging.getLogger("omnibot.ros2")
 

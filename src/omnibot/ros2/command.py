@@ -262,8 +262,8 @@ def attach(
     names them in its own first line). Returns the node (close it)."""
     _require_bridge()
     from omnibot.ros2.backend import choose
-    from omnibot.runtime.stall import StallWatch, start_sonars
-    from omnibot.transport.device import find_simulator
+    from omnibot.runtime import StallWatch, start_sonars
+    from omnibot.transport import find_simulator
 
     spec = spec or robot_specs(args)[0]
     timeline = _timeline_of(args, timeline)
@@ -308,7 +308,7 @@ def _add_bridge(
     from omnibot.ros2.bridge import Diagnosed, Ros2Sink
     from omnibot.ros2.odometry import OdometryReset
     from omnibot.ros2.path import PathSource
-    from omnibot.runtime.sinks import EstimatorWhenMissing
+    from omnibot.runtime import EstimatorWhenMissing
 
     odom = spec.prefix + "odom"
     diagnosed = Diagnosed.of(robot.name, spec.namespace)
@@ -397,7 +397,7 @@ def _add_cmd_vel(runtime: Any, robot: Any, node: Any, args: argparse.Namespace, 
     """The ``cmd_vel`` source (``--twist`` forces its message type), limited to what the robot and
     its controller allow, added to ``runtime``."""
     from omnibot.ros2.cmd_vel import TWIST, CmdVelSource
-    from omnibot.teleop.mapping import TwistLimits
+    from omnibot.teleop import TwistLimits
 
     cmd_vel = CmdVelSource(
         node,
@@ -427,7 +427,7 @@ def _goal_pose(
     from omnibot.motion import Pose2D
     from omnibot.ros2.goal import GoalPoseSource, Localisation, PlaceableSink
     from omnibot.ros2.navigate import NavigateToPose
-    from omnibot.transport.device import find_simulator
+    from omnibot.transport import find_simulator
 
     grid = args.map_grid
     if args.map_start is not None:
@@ -512,7 +512,7 @@ def _scanner(runtime: Any, robot: Any, spec: RobotSpec) -> Any:
     """The robot's scanner, made the runtime's (see :func:`attach`); None when the runtime has one
     already or the robot gets none (whoever gets it closes it)."""
     from omnibot.lidar.reader import open_scanner
-    from omnibot.transport.device import find_simulator
+    from omnibot.transport import find_simulator
 
     if runtime.scanner is not None:
         return None  # the command's own (omnibot map's, the dashboard's)
@@ -551,8 +551,7 @@ def _open(
 ) -> _Robot:
     """The robot's runtime with the bridge attached (not yet running), stamping on ``timeline``."""
     from omnibot.cliargs import recording_of, use_calibration
-    from omnibot.runtime.runtime import Runtime
-    from omnibot.runtime.sinks import NoticePrinter
+    from omnibot.runtime import NoticePrinter, Runtime
 
     slip = use_calibration(args, session.client, session.robot)
     runtime = Runtime(
@@ -566,7 +565,7 @@ def _open(
 def _serve(one: _Robot, args: argparse.Namespace, stop: threading.Event) -> None:
     """Run one robot's runtime, wall-clock paced, until ``stop`` or ``--duration``."""
     from omnibot.protocol import codes
-    from omnibot.teleop.pacing import Pacer
+    from omnibot.teleop import Pacer
 
     runtime, client, node, spec = one.runtime, one.client, one.node, one.spec
     runtime.start()
@@ -590,7 +589,7 @@ def run(args: argparse.Namespace) -> int:
     shared simulated world are all open before any runtime waits on one. Then one robot runs here;
     several run a thread each (the first to end, or to fail, ends them all)."""
     from omnibot.cliargs import check_sim_options, recording_of, sim_url
-    from omnibot.client.session import robot_session
+    from omnibot.client import robot_session
     from omnibot.ros2.clock import Timeline
 
     specs = check(args)

@@ -40,14 +40,13 @@ from omnibot.mapping.session import LocalisingSink
 from omnibot.motion import Pose2D
 from omnibot.navigation.goto import GotoOptions, GotoResult
 from omnibot.navigation.goto_source import GotoSource
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.ros2.backend import LATCHED, RosNode
 from omnibot.ros2.bridge import Diagnosed, Ros2Sink
 from omnibot.ros2.mapping import MAP_TYPE, TF_PERIOD
 from omnibot.ros2.odometry import pose_of
 from omnibot.ros2.types import from_dds
-from omnibot.runtime.cycle import Cycle, Level
-from omnibot.runtime.sources import Proposal
+from omnibot.runtime import Cycle, Level, Proposal
 
 if TYPE_CHECKING:
     from omnibot.lidar.reader import ScanSource

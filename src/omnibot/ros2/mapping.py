@@ -25,7 +25,7 @@ from typing import Any
 from omnibot.logs.recorder import map_to_odom, occupancy_grid
 from omnibot.logs.topics import MAP, TF
 from omnibot.ros2.dds import LATCHED
-from omnibot.runtime.cycle import Cycle
+from omnibot.runtime import Cycle
 
 log = logging.getLogger("omnibot.ros2")
 

@@ -45,7 +45,7 @@ from omnibot.ros2.backend import DEFAULT, Profile, RosNode
 from omnibot.ros2.goal import GoalPoseSource, Refusal
 from omnibot.ros2.service import answer
 from omnibot.ros2.types import NAVIGATE, from_dds, register_service_types, to_dds
-from omnibot.runtime.cycle import Cycle, Level
+from omnibot.runtime import Cycle, Level
 
 ACTION = "navigate_to_pose"
 CANCEL = "action_msgs/srv/CancelGoal"

@@ -27,7 +27,7 @@ from omnibot.motion import Pose2D
 from omnibot.ros2.backend import RosNode
 from omnibot.ros2.bridge import Diagnosed
 from omnibot.ros2.types import from_dds
-from omnibot.runtime.cycle import Cycle, Level
+from omnibot.runtime import Cycle, Level
 
 log = logging.getLogger("omnibot.ros2")
 

@@ -38,9 +38,7 @@ from omnibot.ros2.backend import RosNode
 from omnibot.ros2.bridge import Diagnosed
 from omnibot.ros2.odometry import yaw_of
 from omnibot.ros2.types import from_dds
-from omnibot.runtime.cycle import Cycle, Level
-from omnibot.runtime.runtime import Runtime
-from omnibot.runtime.sources import APPROACH_GAP, FollowerSource, Proposal
+from omnibot.runtime import APPROACH_GAP, Cycle, FollowerSource, Level, Proposal, Runtime
 
 PATH = "path"
 PATH_TYPE = "nav_msgs/msg/Path"

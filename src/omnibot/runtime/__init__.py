@@ -30,35 +30,67 @@ The pieces: :mod:`~omnibot.runtime.cycle` (what a cycle carries), :mod:`~omnibot
 """
 
 from omnibot.runtime.arbiter import PRIORITY_MAX, Arbiter, EStop, Lock, deadman_lock
-from omnibot.runtime.cycle import Cycle, Decision, Notice
-from omnibot.runtime.runtime import LinkPacer, Runtime, Sink, clamp_to
-from omnibot.runtime.sources import DeadmanSource, FollowerSource, PadSource, Proposal, ScriptSource, Source
+from omnibot.runtime.cycle import NOBODY, Cycle, Decision, Level, Notice
+from omnibot.runtime.runtime import Counters, LinkPacer, Recording, Runtime, RuntimeRecording, Sink, clamp_to
+from omnibot.runtime.sinks import EstimatorWhenMissing, NoticePrinter, SpeedReport, TeachSink, Trace
+from omnibot.runtime.sources import (
+    APPROACH_GAP,
+    DeadmanSource,
+    FollowerSource,
+    PadSource,
+    Proposal,
+    RampedTwist,
+    ScriptSource,
+    Source,
+    must_end,
+)
+from omnibot.runtime.stall import StallWatch, start_sonars
+from omnibot.runtime.standstill import Standstill
+from omnibot.runtime.wakeup import Wake, Wakeup
 
 __all__ = [
+    "APPROACH_GAP",
+    "NOBODY",
     "PRIORITY_MAX",
     "Arbiter",
+    "Counters",
     "Cycle",
     "DeadmanSource",
     "Decision",
     "EStop",
+    "EstimatorWhenMissing",
     "FollowerSource",
+    "Level",
     "LinkPacer",
     "Lock",
     "Notice",
+    "NoticePrinter",
     "PadSource",
     "Proposal",
+    "RampedTwist",
+    "Recording",
     "Runtime",
+    "RuntimeRecording",
     "ScriptSource",
     "Sink",
     "Source",
+    "SpeedReport",
+    "StallWatch",
+    "Standstill",
+    "TeachSink",
+    "Trace",
+    "Wake",
+    "Wakeup",
     "arbiter",
     "clamp_to",
     "cycle",
     "deadman_lock",
+    "must_end",
     "runtime",
     "sinks",
     "sources",
     "stall",
     "standstill",
+    "start_sonars",
     "wakeup",
 ]

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Literal
 
-from omnibot.client.events import Event, Telemetry
+from omnibot.client import Event, Telemetry
 from omnibot.motion import Estimate, Twist
 from omnibot.scan import Scan
 

@@ -9,15 +9,22 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Protocol
 
-from omnibot.client.client import Pending, RobotClient
+from omnibot.client import (
+    BatteryStopLatched,
+    ClientRecording,
+    EmergencyStopLatched,
+    ErrorEvent,
+    Event,
+    Limits,
+    Pending,
+    ResetEvent,
+    RobotClient,
+    Telemetry,
+    WarnEvent,
+)
 from omnibot.client.commands import vel as vel_command
-from omnibot.client.errors import BatteryStopLatched, EmergencyStopLatched
-from omnibot.client.events import ErrorEvent, Event, ResetEvent, Telemetry, WarnEvent
-from omnibot.client.limits import Limits
-from omnibot.client.session import ClientRecording
 from omnibot.errors import ControllerError, LinkError
-from omnibot.estimation.estimator import Estimator
-from omnibot.estimation.slip import SlipModel
+from omnibot.estimation import Estimator, SlipModel
 from omnibot.motion import Estimate, Twist
 from omnibot.protocol import codes
 from omnibot.runtime.arbiter import Arbiter, Lock
@@ -25,7 +32,7 @@ from omnibot.runtime.cycle import NOBODY, Cycle, Decision, Level, Notice
 from omnibot.runtime.sources import Proposal, Source
 from omnibot.runtime.wakeup import GAP, Wakeup
 from omnibot.scan import Scan
-from omnibot.transport.base import WallClock
+from omnibot.transport import WallClock
 
 log = logging.getLogger("omnibot.runtime")
 log.addHandler(logging.NullHandler())  # a library's log: shown where the application configures logging

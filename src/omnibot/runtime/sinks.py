@@ -31,9 +31,9 @@ from typing import TYPE_CHECKING
 from omnibot.control.paths.path import Path
 from omnibot.control.paths.teach import PathRecorder
 from omnibot.errors import ConfigError
-from omnibot.estimation.estimator import make_estimator
+from omnibot.estimation import make_estimator
 from omnibot.motion import Twist
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.runtime.cycle import Cycle, Notice
 
 if TYPE_CHECKING:

@@ -36,9 +36,19 @@ from omnibot.control.followers.base import Follower
 from omnibot.control.paths.path import Path
 from omnibot.motion import ZERO, Estimate, Pose2D, Twist
 from omnibot.runtime.cycle import Cycle
-from omnibot.teleop.config import TeleopConfig
-from omnibot.teleop.deadman import Action, Deadman, Phase, Sample, Why
-from omnibot.teleop.mapping import JoyState, TwistLimits, TwistRamp, joy_to_command, limit_twist
+from omnibot.teleop import (
+    Action,
+    Deadman,
+    JoyState,
+    Phase,
+    Sample,
+    TeleopConfig,
+    TwistLimits,
+    TwistRamp,
+    Why,
+    joy_to_command,
+    limit_twist,
+)
 
 APPROACH_GAP = 0.02
 """m: farther than this from the path, a follower that gets the robot back first drives straight to it."""

@@ -17,14 +17,13 @@ they measure: :func:`start_sonars` (``run``, the dashboard and ROS 2 start them)
 
 from __future__ import annotations
 
-from omnibot.client.client import RobotClient
-from omnibot.client.events import Telemetry
+from omnibot.client import RobotClient, Telemetry
 from omnibot.errors import ControllerError, LinkError
-from omnibot.estimation.stall import Stall, StallDetector
-from omnibot.robot.description import RobotDescription
+from omnibot.estimation import Stall, StallDetector
+from omnibot.robot import RobotDescription
 from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.runtime import Runtime
-from omnibot.transport.device import find_simulator
+from omnibot.transport import find_simulator
 
 SONAR_PERIOD = 0.1
 """s between a sonar's pings (their readings ride in TEL)."""

@@ -12,7 +12,7 @@ person may drive meanwhile (and then spoils the standstill, as pushing the robot
 
 from __future__ import annotations
 
-from omnibot.client.events import Telemetry
+from omnibot.client import Telemetry
 from omnibot.runtime.arbiter import Lock
 from omnibot.runtime.runtime import Runtime
 

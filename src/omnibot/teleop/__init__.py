@@ -19,17 +19,36 @@ deadman for the people's sources.
 """
 
 from importlib import import_module
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
+    from omnibot.motion import ZERO, Twist
+    from omnibot.teleop.config import TeleopConfig, load_teleop_config, parse_teleop_config
+    from omnibot.teleop.deadman import Action, Deadman, Phase, Sample, Why
+    from omnibot.teleop.mapping import (
+        JoyState,
+        TeleopCommand,
+        TwistLimits,
+        TwistRamp,
+        axes_tuple,
+        deadzone,
+        fractions_to_twist,
+        joy_to_command,
+        limit_twist,
+    )
+    from omnibot.teleop.pacing import Pacer
 
 _EXPORTS = {
     "config": ("TeleopConfig", "load_teleop_config", "parse_teleop_config"),
-    "deadman": ("Action", "Deadman", "Sample", "Why"),
+    "deadman": ("Action", "Deadman", "Phase", "Sample", "Why"),
     "mapping": (
         "ZERO",
         "JoyState",
         "TeleopCommand",
         "Twist",
         "TwistLimits",
+        "TwistRamp",
+        "axes_tuple",
         "deadzone",
         "fractions_to_twist",
         "joy_to_command",
@@ -45,12 +64,15 @@ __all__ = [
     "Deadman",
     "JoyState",
     "Pacer",
+    "Phase",
     "Sample",
     "TeleopCommand",
     "TeleopConfig",
     "Twist",
     "TwistLimits",
+    "TwistRamp",
     "Why",
+    "axes_tuple",
     "config",
     "deadman",
     "deadzone",

@@ -23,9 +23,9 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from omnibot.client.limits import Limits
+from omnibot.client import Limits
 from omnibot.motion import ZERO, Twist
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.teleop.config import TeleopConfig
 
 

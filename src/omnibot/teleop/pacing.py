@@ -22,7 +22,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Protocol
 
 if TYPE_CHECKING:
-    from omnibot.runtime.wakeup import Wakeup
+    from omnibot.runtime import Wakeup
 
 
 class _Pumped(Protocol):

@@ -5,17 +5,19 @@
 simulated time). Links move bytes only; they know nothing of the protocol or of the simulator.
 
 Modules: ``base`` (Link, Clock), ``url`` (grammar, open_link, register_scheme), ``serial_link``,
-``tcp``, ``lockstep`` (LockstepDevice, LockstepLink), ``spy`` (trace), ``faults`` (fault injection),
+``tcp``, ``lockstep`` (LockstepDevice, LockstepLink), ``device`` (find_device, find_simulator: the
+simulator behind a link, if any), ``spy`` (trace), ``faults`` (fault injection),
 ``pacing`` (baud-rate token bucket), ``pty_bridge`` (serve a device on a pty; POSIX only, import it
 directly).
 """
 
 from omnibot.transport.base import Clock, Link, WallClock
+from omnibot.transport.device import find_device, find_simulator
 from omnibot.transport.faults import FaultLink, FaultStats
-from omnibot.transport.lockstep import LockstepClock, LockstepDevice, LockstepLink
+from omnibot.transport.lockstep import DEFAULT_BAUD, LockstepClock, LockstepDevice, LockstepLink
 from omnibot.transport.pacing import Pacer
 from omnibot.transport.serial_link import SerialLink
-from omnibot.transport.spy import SpyEvent, SpyLink
+from omnibot.transport.spy import SpyEvent, SpyLink, format_event
 from omnibot.transport.tcp import TcpLink
 from omnibot.transport.url import (
     LinkUrl,
@@ -27,6 +29,7 @@ from omnibot.transport.url import (
 )
 
 __all__ = [
+    "DEFAULT_BAUD",
     "Clock",
     "FaultLink",
     "FaultStats",
@@ -43,6 +46,9 @@ __all__ = [
     "WallClock",
     "base",
     "device",
+    "find_device",
+    "find_simulator",
+    "format_event",
     "lockstep",
     "open_link",
     "parse_link_url",

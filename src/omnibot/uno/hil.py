@@ -36,15 +36,13 @@ from types import FrameType
 from typing import TYPE_CHECKING
 
 from omnibot.errors import ConfigError
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from omnibot.sim.simulator import Simulator
-from omnibot.transport.serial_link import SerialLink
-from omnibot.transport.url import LinkUrl, register_scheme
+from omnibot.transport import LinkUrl, SerialLink, register_scheme
 from omnibot.uno.emulator import BOARDS, UnoEmulator, UnoError
 
 if TYPE_CHECKING:
-    from omnibot.client.client import RobotClient
-    from omnibot.client.events import Telemetry
+    from omnibot.client import RobotClient, Telemetry
 
 SONAR_PERIOD = 0.002  # s between sonar range updates (the harness echoes the latest one)
 BATTERY_PERIOD = 0.1  # s between battery updates

@@ -34,15 +34,14 @@ from typing import TYPE_CHECKING, Self
 
 import uvicorn
 
-from omnibot.client.client import RobotClient
-from omnibot.client.session import open_robot
+from omnibot.client import RobotClient, open_robot
 from omnibot.errors import ConfigError, OmnibotError
-from omnibot.estimation.slip import SlipModel
-from omnibot.robot.description import RobotDescription
-from omnibot.runtime.runtime import Recording
+from omnibot.estimation import SlipModel
+from omnibot.robot import RobotDescription
+from omnibot.runtime import Recording
 from omnibot.sim.world import World, load_world
-from omnibot.teleop.config import TeleopConfig
-from omnibot.transport.device import find_device
+from omnibot.teleop import TeleopConfig
+from omnibot.transport import find_device
 from omnibot.web.access import HostCheck, HostPolicy, access_token, listening_socket
 from omnibot.web.link import RobotLink
 from omnibot.web.messages import MAX_FRAME

@@ -40,33 +40,30 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from omnibot.client.client import RobotClient
-from omnibot.client.events import ErrorEvent, Event, ResetEvent, WarnEvent
-from omnibot.client.session import leave
+from omnibot.client import ErrorEvent, Event, ResetEvent, RobotClient, WarnEvent, leave
 from omnibot.errors import ControllerError, LinkError
-from omnibot.estimation.slip import SlipModel
+from omnibot.estimation import SlipModel
 from omnibot.lidar.reader import SimScanSource
 from omnibot.motion import Pose2D, Twist
 from omnibot.protocol import codes
-from omnibot.robot.description import RobotDescription
-from omnibot.runtime.arbiter import EStop as EStopLock
-from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.runtime import Runtime, RuntimeRecording
-from omnibot.runtime.sinks import EstimatorWhenMissing
-from omnibot.runtime.sources import DeadmanSource
+from omnibot.robot import RobotDescription
+from omnibot.runtime import Cycle, DeadmanSource, EstimatorWhenMissing, Runtime, RuntimeRecording
+from omnibot.runtime import EStop as EStopLock
 from omnibot.scan import Scan
-from omnibot.teleop.config import TeleopConfig
-from omnibot.teleop.deadman import Deadman, Phase, Sample
-from omnibot.teleop.mapping import (
+from omnibot.teleop import (
+    Deadman,
     JoyState,
+    Pacer,
+    Phase,
+    Sample,
+    TeleopConfig,
     TwistLimits,
     axes_tuple,
     fractions_to_twist,
     joy_to_command,
     limit_twist,
 )
-from omnibot.teleop.pacing import Pacer
-from omnibot.transport.device import find_device
+from omnibot.transport import find_device
 from omnibot.web.messages import Drive, EStop, Joy, Resume, Teach
 from omnibot.web.state import StateTracker
 from omnibot.web.teach import NOT_AVAILABLE, TeachRepeat

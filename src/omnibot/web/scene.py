@@ -20,7 +20,7 @@ from typing import Any
 
 from omnibot.control.paths.files import LIMITS
 from omnibot.errors import ConfigError
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.sim.world import World
 
 Point = tuple[float, float]

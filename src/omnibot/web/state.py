@@ -16,13 +16,12 @@ from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
 
-from omnibot.client.events import Telemetry
+from omnibot.client import Telemetry
 from omnibot.errors import ConfigError
-from omnibot.estimation.estimator import Estimator, make_estimator
+from omnibot.estimation import Estimator, make_estimator
 from omnibot.motion import Pose2D
 from omnibot.protocol import codes
-from omnibot.robot.battery import battery_level
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription, battery_level
 
 STATES = {
     codes.STATE_MOVING: "moving",

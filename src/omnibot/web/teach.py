@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from typing import Protocol
 
-from omnibot.runtime.runtime import Runtime
+from omnibot.runtime import Runtime
 
 Pose = tuple[float, float, float]
 
