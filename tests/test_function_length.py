@@ -19,11 +19,6 @@ ROOT = "omnibot"
 MAX_LINES = 60
 
 LONG: dict[str, int] = {
-    "omnibot.calibration.motors:balance_model": 81,
-    "omnibot.calibration.report:accuracy_markdown": 83,
-    "omnibot.calibration.rollerfit:fit_rollers": 85,
-    "omnibot.calibration.rollers:tune_coast": 80,
-    "omnibot.calibration.session:calibrate": 66,
     "omnibot.control.followers.tracker:ProfileTracker.update": 61,
     "omnibot.firmware.controller:Controller.execute": 80,
     "omnibot.firmware.motion:Executor.__init__": 94,
