@@ -19,11 +19,9 @@ ROOT = "omnibot"
 MAX_LINES = 60
 
 LONG: dict[str, int] = {
-    "omnibot.control.followers.tracker:ProfileTracker.update": 61,
     "omnibot.firmware.controller:Controller.execute": 80,
     "omnibot.firmware.motion:Executor.__init__": 94,
     "omnibot.firmware.motion:Executor._drive": 76,
-    "omnibot.logs.recorder:Recorder.__init__": 63,
     "omnibot.mapping.matcher:ScanMatcher._refine": 78,
     "omnibot.mapping.planner:_astar": 68,
     "omnibot.mapping.slam:Slam.__init__": 104,
