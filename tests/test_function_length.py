@@ -19,8 +19,6 @@ ROOT = "omnibot"
 MAX_LINES = 60
 
 LONG: dict[str, int] = {
-    "omnibot.firmware.controller:Controller.execute": 80,
-    "omnibot.firmware.motion:Executor.__init__": 94,
     "omnibot.firmware.motion:Executor._drive": 76,
     "omnibot.mapping.matcher:ScanMatcher._refine": 78,
     "omnibot.mapping.planner:_astar": 68,
