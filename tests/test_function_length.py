@@ -20,9 +20,6 @@ MAX_LINES = 60
 
 LONG: dict[str, int] = {
     "omnibot.firmware.motion:Executor._drive": 76,
-    "omnibot.mapping.matcher:ScanMatcher._refine": 78,
-    "omnibot.mapping.planner:_astar": 68,
-    "omnibot.mapping.slam:Slam.__init__": 104,
     "omnibot.sim.kernels:_before_physics": 86,
     "omnibot.sim.kernels:_robot_physics": 119,
     "omnibot.sim.kernels:_sat": 69,
