@@ -19,19 +19,7 @@ ROOT = "omnibot"
 MAX_LINES = 60
 
 LONG: dict[str, int] = {
-    "omnibot.calibration.motors:balance_model": 81,
-    "omnibot.calibration.report:accuracy_markdown": 83,
-    "omnibot.calibration.rollerfit:fit_rollers": 85,
-    "omnibot.calibration.rollers:tune_coast": 80,
-    "omnibot.calibration.session:calibrate": 66,
-    "omnibot.control.followers.tracker:ProfileTracker.update": 61,
-    "omnibot.firmware.controller:Controller.execute": 80,
-    "omnibot.firmware.motion:Executor.__init__": 94,
     "omnibot.firmware.motion:Executor._drive": 76,
-    "omnibot.logs.recorder:Recorder.__init__": 63,
-    "omnibot.mapping.matcher:ScanMatcher._refine": 78,
-    "omnibot.mapping.planner:_astar": 68,
-    "omnibot.mapping.slam:Slam.__init__": 104,
     "omnibot.sim.kernels:_before_physics": 86,
     "omnibot.sim.kernels:_robot_physics": 119,
     "omnibot.sim.kernels:_sat": 69,

@@ -210,31 +210,75 @@ def balance_model(
     courses = balance_courses(geo, folded)
     result = Balance(stand=stand)
     blocks: list[_Power] = []
-    base = constant_gains(offsets, np.zeros(n))
     for j, power in enumerate(powers):
-        duration = durations[j] if durations is not None else 1.0
-        runner.note(f"balance at {power}")
-        e0, moved = _errors(runner, courses, power, base, duration)
-        if np.count_nonzero(np.isfinite(e0)) < e0.size // 2:
+        block = _power_runs(
+            runner, courses, offsets, power, durations[j] if durations is not None else 1.0, k
+        )
+        if block is None:
             continue
-        cols = []
-        for i in range(n):
-            xi = np.zeros(n)
-            xi[i] = GAIN_STEP
-            ei, _ = _errors(runner, courses, power, constant_gains(offsets, xi), duration)
-            cols.append((ei - e0) / GAIN_STEP)
-        # the busiest wheel's rim speed: the run's speed times its rim factor
-        speeds = [v * geo.translation_factor(c) for v, c in zip(moved, courses, strict=True)]
-        ratios = _ratios(geo, courses, speeds, power, k)
-        blocks.append(_Power(power, duration, e0, speeds, np.column_stack(cols), ratios))
+        blocks.append(block)
         result.rates += [
-            (geo.fold(c), power, u) for c, u in zip(courses, speeds, strict=True) if math.isfinite(u)
+            (geo.fold(c), power, u) for c, u in zip(courses, block.speeds, strict=True) if math.isfinite(u)
         ]
     if not blocks:
         return result
     torque = np.asarray(stand.torque if stand is not None else (1.0,) * n, dtype=float)
     emf = np.asarray(emf_counts(runner.robot)) if stand is not None else np.zeros(n)
     rows = np.vstack([gain_rows(b.jac, b.ratios, emf, k) for b in blocks])
+    jac = np.vstack([b.jac for b in blocks])
+    ratios = np.vstack([b.ratios for b in blocks])
+    gains, speed, errors = _fit_gains(runner, courses, offsets, blocks, rows, torque, emf, k)
+    weights = _weights(errors)
+    scatter = rms(weights * np.concatenate(errors))
+    scatter = scatter if math.isfinite(scatter) else 1.0
+    result.information = information(rows, weights, scatter, torque)
+    result.floor_only = floor_information(jac, ratios, weights, scatter)
+    result.powers = [b.power for b in blocks]
+    result.log_gains = [[float(math.log(g)) for g in gains] for _ in blocks]
+    result.before = [rms(b.e0) for b in blocks]
+    result.after = [rms(e) for e in errors]
+    if stand is not None:
+        result.speed = [round(float(c), 1) for c in speed]
+        result.torque = [round(float(t), 3) for t in torque]
+    return result
+
+
+def _power_runs(
+    runner: Runner, courses: Sequence[float], offsets: Sequence[float], power: int, duration: float, k: float
+) -> _Power | None:
+    """The balance runs at one ``power``: the errors through the offsets alone and the
+    finite-difference Jacobian against each motor's gain; None where the robot hardly moves."""
+    geo = runner.geometry
+    n = geo.motors
+    runner.note(f"balance at {power}")
+    e0, moved = _errors(runner, courses, power, constant_gains(offsets, np.zeros(n)), duration)
+    if np.count_nonzero(np.isfinite(e0)) < e0.size // 2:
+        return None
+    cols = []
+    for i in range(n):
+        xi = np.zeros(n)
+        xi[i] = GAIN_STEP
+        ei, _ = _errors(runner, courses, power, constant_gains(offsets, xi), duration)
+        cols.append((ei - e0) / GAIN_STEP)
+    # the busiest wheel's rim speed: the run's speed times its rim factor
+    speeds = [v * geo.translation_factor(c) for v, c in zip(moved, courses, strict=True)]
+    ratios = _ratios(geo, courses, speeds, power, k)
+    return _Power(power, duration, e0, speeds, np.column_stack(cols), ratios)
+
+
+def _fit_gains(
+    runner: Runner,
+    courses: Sequence[float],
+    offsets: Sequence[float],
+    blocks: list[_Power],
+    rows: np.ndarray,
+    torque: np.ndarray,
+    emf: np.ndarray,
+    k: float,
+) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+    """Gauss-Newton on the gains over every power's runs (:func:`balance_model`), each step driven
+    and kept only when it lowers the errors: the gains, the speed terms and the runs' errors."""
+    n = runner.geometry.motors
     jac = np.vstack([b.jac for b in blocks])
     ratios = np.vstack([b.ratios for b in blocks])
     gains = np.ones(n)
@@ -252,19 +296,7 @@ def balance_model(
             gains, speed, errors, step = trial, trial_speed, got, 1.0
         else:
             step *= 0.5  # the linear model overshot: half the step next time
-    weights = _weights(errors)
-    scatter = rms(weights * np.concatenate(errors))
-    scatter = scatter if math.isfinite(scatter) else 1.0
-    result.information = information(rows, weights, scatter, torque)
-    result.floor_only = floor_information(jac, ratios, weights, scatter)
-    result.powers = [b.power for b in blocks]
-    result.log_gains = [[float(math.log(g)) for g in gains] for _ in blocks]
-    result.before = [rms(b.e0) for b in blocks]
-    result.after = [rms(e) for e in errors]
-    if stand is not None:
-        result.speed = [round(float(c), 1) for c in speed]
-        result.torque = [round(float(t), 3) for t in torque]
-    return result
+    return gains, speed, errors
 
 
 WEIGHT_POWER = 2.0

@@ -73,62 +73,76 @@ def accuracy_markdown(result: CalibrationResult) -> str:
         ]
     if result.sessions:
         lines += ["", *reach_lines(result)]
-    drags = [(s.surface, s.fit.rollers, s.fit.coast) for s in result.sessions if s.fit.rollers is not None]
-    if drags:
-        lines += [
-            "",
-            "## Roller drag (wheels standing still on a motor axis)",
-            "",
-            "Each wheel's drag amplitude (PWM counts, over its roller phase; the slowest coast MOVEs' where",
-            "they measured it, else the drag runs'), the drag runs' rms distance scatter without and with",
-            "the term (kept: uploaded), and the coast table the MOVEs gave (s the drag outlasts a MOVE, at",
-            "its speed; the drag runs' own where there were no MOVEs).",
-            "",
-            "| surface | amplitude per wheel | runs | rms before / after, mm | kept | coast s at m/s |",
-            "|---|---|---|---|---|---|",
-        ]
-        for surface, fit, tuned in drags:
-            cos, sin = (tuned.cos, tuned.sin) if tuned and tuned.cos and tuned.sin else (fit.cos, fit.sin)
-            amps = ", ".join(f"{math.hypot(c, s):.1f}" for c, s in zip(cos, sin, strict=True))
-            pts = (
-                zip(tuned.table.x, tuned.table.y, strict=True)
-                if tuned
-                else zip(fit.speeds, fit.coast, strict=True)
-            )
-            coast = ", ".join(f"{k:.2f} at {v:.2f}" for v, k in pts if v > 0)
-            lines.append(
-                f"| {surface} | {amps} | {fit.runs} | {1000 * fit.rms_before:.1f} / {1000 * fit.rms_after:.1f} | "
-                f"{'yes' if fit.kept else 'no'} | {coast} |"
-            )
+    lines += _roller_lines(result)
     for label, rows in entries:
         lines += ["", f"## {label}", "", move_grid(rows), "", move_grid(rows, "heading_error_deg"), ""]
         lines += [move_grid(rows, "course_error_deg"), "", rotate_lines(rows)]
-    slips = [(s.surface, s.slip) for s in result.sessions if s.slip is not None]
-    if slips:
-        lines += [
-            "",
-            "## Wheel slip (driven-wheel odometry)",
-            "",
-            "Straight runs out and back on evenly spaced courses with the wheel-speed loop on; the encoders'",
-            "displacement against the truth's, raw and with the fitted creep taken out",
-            "(`surfaces.<floor>.odometry.slip`, for `omnibot follow --calibration`).",
-            "",
-            "| surface | roll (m/s) | combined | compliance (s) | scale | runs | raw error, mean / max | corrected, mean / max |",
-            "|---|---|---|---|---|---|---|---|",
-        ]
-        for surface, slip in slips:
-            raw, fixed = slip.errors(corrected=False), slip.errors(corrected=True)
-            lines.append(
-                f"| {surface} | {slip.params.roll:.4f} | {slip.params.combined:.4f} | {slip.params.compliance:.4f} | "
-                f"{slip.params.scale:.4f} | "
-                f"{len(raw)} | "
-                f"{100 * statistics.fmean(raw):.1f} % / {100 * max(raw):.1f} % | "
-                f"{100 * statistics.fmean(fixed):.1f} % / {100 * max(fixed):.1f} % |"
-            )
+    lines += _slip_lines(result)
     notes = [f"- {s.surface}: {n}" for s in result.sessions for n in s.notes]
     if notes:
         lines += ["", "## Notes", "", *notes]
     return "\n".join(lines) + "\n"
+
+
+def _roller_lines(result: CalibrationResult) -> list[str]:
+    """The roller drag section: each surface's drag fit and coast table (none without a fit)."""
+    drags = [(s.surface, s.fit.rollers, s.fit.coast) for s in result.sessions if s.fit.rollers is not None]
+    if not drags:
+        return []
+    lines = [
+        "",
+        "## Roller drag (wheels standing still on a motor axis)",
+        "",
+        "Each wheel's drag amplitude (PWM counts, over its roller phase; the slowest coast MOVEs' where",
+        "they measured it, else the drag runs'), the drag runs' rms distance scatter without and with",
+        "the term (kept: uploaded), and the coast table the MOVEs gave (s the drag outlasts a MOVE, at",
+        "its speed; the drag runs' own where there were no MOVEs).",
+        "",
+        "| surface | amplitude per wheel | runs | rms before / after, mm | kept | coast s at m/s |",
+        "|---|---|---|---|---|---|",
+    ]
+    for surface, fit, tuned in drags:
+        cos, sin = (tuned.cos, tuned.sin) if tuned and tuned.cos and tuned.sin else (fit.cos, fit.sin)
+        amps = ", ".join(f"{math.hypot(c, s):.1f}" for c, s in zip(cos, sin, strict=True))
+        pts = (
+            zip(tuned.table.x, tuned.table.y, strict=True)
+            if tuned
+            else zip(fit.speeds, fit.coast, strict=True)
+        )
+        coast = ", ".join(f"{k:.2f} at {v:.2f}" for v, k in pts if v > 0)
+        lines.append(
+            f"| {surface} | {amps} | {fit.runs} | {1000 * fit.rms_before:.1f} / {1000 * fit.rms_after:.1f} | "
+            f"{'yes' if fit.kept else 'no'} | {coast} |"
+        )
+    return lines
+
+
+def _slip_lines(result: CalibrationResult) -> list[str]:
+    """The wheel slip section: each surface's fitted creep and its errors (none without a fit)."""
+    slips = [(s.surface, s.slip) for s in result.sessions if s.slip is not None]
+    if not slips:
+        return []
+    lines = [
+        "",
+        "## Wheel slip (driven-wheel odometry)",
+        "",
+        "Straight runs out and back on evenly spaced courses with the wheel-speed loop on; the encoders'",
+        "displacement against the truth's, raw and with the fitted creep taken out",
+        "(`surfaces.<floor>.odometry.slip`, for `omnibot follow --calibration`).",
+        "",
+        "| surface | roll (m/s) | combined | compliance (s) | scale | runs | raw error, mean / max | corrected, mean / max |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for surface, slip in slips:
+        raw, fixed = slip.errors(corrected=False), slip.errors(corrected=True)
+        lines.append(
+            f"| {surface} | {slip.params.roll:.4f} | {slip.params.combined:.4f} | {slip.params.compliance:.4f} | "
+            f"{slip.params.scale:.4f} | "
+            f"{len(raw)} | "
+            f"{100 * statistics.fmean(raw):.1f} % / {100 * max(raw):.1f} % | "
+            f"{100 * statistics.fmean(fixed):.1f} % / {100 * max(fixed):.1f} % |"
+        )
+    return lines
 
 
 def slip_summary(slip: SlipCalibration) -> str:

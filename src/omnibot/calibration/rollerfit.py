@@ -146,34 +146,12 @@ def fit_rollers(geometry: Geometry, runs: Sequence[RunResult]) -> RollerFit | No
     if len(powers) < 2:
         return None
     n = geometry.motors
-    groups = sorted({(r.course_deg or 0.0, r.power or 0) for r in usable})
-    g_index = {g: i for i, g in enumerate(groups)}
-    p_index = {p: i for i, p in enumerate(powers)}
+    groups, plain, terms, durations, level, b = _drag_system(geometry, usable, powers)
     m, ng = len(usable), len(groups)
-    plain = np.zeros((m, 2 * ng))  # e_g and r_g columns
-    terms = np.zeros((m, 2 * n))  # -c_ij, -s_ij of the wheels standing still
-    durations = np.zeros(m)
-    level = np.zeros(m, dtype=int)
-    b = np.zeros(m)
-    for j, r in enumerate(usable):
-        assert r.counts is not None and r.power is not None and r.amount is not None
-        course = r.course_deg or 0.0
-        g = g_index[(course, r.power)]
-        plain[j, 2 * g] = 1.0
-        plain[j, 2 * g + 1] = r.duration
-        fc, fs = geometry.roller_terms(course, r.counts[:n])
-        for i in geometry.idle_wheels(course):
-            terms[j, i], terms[j, n + i] = -fc[i], -fs[i]
-        durations[j], level[j], b[j] = r.duration, p_index[r.power], r.amount
     active = [c for c in range(2 * n) if np.any(terms[:, c] != 0.0)]
     if not active:
         return None
     _, cost0 = _lstsq(plain, b)
-
-    def solve(coast: Sequence[float]) -> tuple[NDArray[np.float64], float]:
-        weight = durations + np.asarray(coast)[level]
-        return _lstsq(np.hstack((plain, terms[:, active] * weight[:, None])), b)
-
     # wheels whose phases always move together (a mecanum robot's diagonal pair) share their drag:
     # their columns coincide and the minimum-norm solution splits it evenly
     if np.linalg.matrix_rank(plain) < plain.shape[1]:
@@ -181,19 +159,9 @@ def fit_rollers(geometry: Geometry, runs: Sequence[RunResult]) -> RollerFit | No
     rank = int(np.linalg.matrix_rank(np.hstack((plain, terms[:, active])))) - plain.shape[1]
     if rank == 0 or m <= plain.shape[1] + rank + len(powers):
         return None
-    coast = [0.0] * len(powers)
-    for _ in range(3):  # coordinate search over each power's coast time
-        for q in range(len(powers)):
-            trials = [(solve([*coast[:q], k, *coast[q + 1 :]])[1], k) for k in COAST_GRID]
-            coast[q] = min(trials)[1]
-    coef, cost = solve(coast)
+    coast, coef, cost = _coast_fit(plain, terms[:, active], durations, level, b, len(powers))
     rates = coef[1 : 2 * ng : 2]
-    # s: the rate's slope against power, common to the courses (each course its own intercept)
-    courses = sorted({c for c, _ in groups})
-    X = np.zeros((ng, 1 + len(courses)))
-    for g, (c, p) in enumerate(groups):
-        X[g, 0], X[g, 1 + courses.index(c)] = p, 1.0
-    slope = float(np.linalg.lstsq(X, rates, rcond=None)[0][0])
+    slope = _rate_slope(groups, rates)
     if slope <= 0.0:
         return None
     drag = np.zeros(2 * n)
@@ -219,6 +187,75 @@ def fit_rollers(geometry: Geometry, runs: Sequence[RunResult]) -> RollerFit | No
         rms_after=math.sqrt(cost / m),
         kept=bool(kept),
     )
+
+
+def _drag_system(
+    geometry: Geometry, usable: Sequence[RunResult], powers: Sequence[int]
+) -> tuple[
+    list[tuple[float, int]],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.int_],
+    NDArray[np.float64],
+]:
+    """The least-squares system of :func:`fit_rollers`: the (course, power) groups, each run's group
+    offset and rate columns, its idle wheels' roller terms, duration, power's index, and distance."""
+    n = geometry.motors
+    groups = sorted({(r.course_deg or 0.0, r.power or 0) for r in usable})
+    g_index = {g: i for i, g in enumerate(groups)}
+    p_index = {p: i for i, p in enumerate(powers)}
+    m, ng = len(usable), len(groups)
+    plain = np.zeros((m, 2 * ng))  # e_g and r_g columns
+    terms = np.zeros((m, 2 * n))  # -c_ij, -s_ij of the wheels standing still
+    durations = np.zeros(m)
+    level = np.zeros(m, dtype=int)
+    b = np.zeros(m)
+    for j, r in enumerate(usable):
+        assert r.counts is not None and r.power is not None and r.amount is not None
+        course = r.course_deg or 0.0
+        g = g_index[(course, r.power)]
+        plain[j, 2 * g] = 1.0
+        plain[j, 2 * g + 1] = r.duration
+        fc, fs = geometry.roller_terms(course, r.counts[:n])
+        for i in geometry.idle_wheels(course):
+            terms[j, i], terms[j, n + i] = -fc[i], -fs[i]
+        durations[j], level[j], b[j] = r.duration, p_index[r.power], r.amount
+    return groups, plain, terms, durations, level, b
+
+
+def _coast_fit(
+    plain: NDArray[np.float64],
+    terms: NDArray[np.float64],
+    durations: NDArray[np.float64],
+    level: NDArray[np.int_],
+    b: NDArray[np.float64],
+    powers: int,
+) -> tuple[list[float], NDArray[np.float64], float]:
+    """Each power's coast time (from :data:`COAST_GRID`, by coordinate search) that fits the drag
+    ``terms`` best, weighted by each run's duration plus its power's coast: the times, the
+    coefficients and the cost."""
+
+    def solve(coast: Sequence[float]) -> tuple[NDArray[np.float64], float]:
+        weight = durations + np.asarray(coast)[level]
+        return _lstsq(np.hstack((plain, terms * weight[:, None])), b)
+
+    coast = [0.0] * powers
+    for _ in range(3):
+        for q in range(powers):
+            trials = [(solve([*coast[:q], k, *coast[q + 1 :]])[1], k) for k in COAST_GRID]
+            coast[q] = min(trials)[1]
+    coef, cost = solve(coast)
+    return coast, coef, cost
+
+
+def _rate_slope(groups: Sequence[tuple[float, int]], rates: NDArray[np.float64]) -> float:
+    """s: the rate's slope against power, common to the courses (each course its own intercept)."""
+    courses = sorted({c for c, _ in groups})
+    X = np.zeros((len(groups), 1 + len(courses)))
+    for g, (c, p) in enumerate(groups):
+        X[g, 0], X[g, 1 + courses.index(c)] = p, 1.0
+    return float(np.linalg.lstsq(X, rates, rcond=None)[0][0])
 
 
 def _lstsq(A: NDArray[np.float64], b: NDArray[np.float64]) -> tuple[NDArray[np.float64], float]:

@@ -164,7 +164,6 @@ def tune_coast(
     rollers = spec.rollers
     if rollers is None or not fit.kept:
         return None
-    off = spec.model_copy(update={"rollers": None})
     courses = axis_courses(geo)
     found: list[tuple[float, float, float, float]] = []
     ahead: list[tuple[float, float, float]] = []
@@ -174,28 +173,9 @@ def tune_coast(
         for speed in sorted(speeds):
             slowest = not found
             term = probe_drag(rollers) if slowest else rollers
-            table = term.coast or PiecewiseLinear(x=(0.0,), y=(0.0,))
-            gain = 1.0 + table(speed) * speed / length
-            on_spec = spec.model_copy(update={"rollers": term})
-            rows, full, b = [], [], []  # rows: the faster speeds' fit; full: the slowest's
             n = slow_rounds if slow_rounds is not None and slowest else rounds
-            for k in range(n):
-                on = k % 2 == 0
-                runner.client.upload_calibration(on_spec if on else off)
-                for j, course in enumerate(courses):
-                    target = (PHASE_STEP * (k // 2) + 0.5 * (k % 2) + j / 8.0) % 1.0
-                    loss = set_idle_phase(runner, course, target, loss)
-                    runner.note(f"roller gain {speed:g} m/s")
-                    detail = f" ({'with' if on else 'without'} the term)"
-                    r = runner.move("roller drag gain", length, speed, course, f"{GROUP}:gain", detail)
-                    runs += 1
-                    if r.truth is None or r.truth.distance is None or r.counts is None:
-                        continue
-                    counts = r.counts[: geo.motors]
-                    d = spec_drag(geo, term, course, counts)
-                    rows.append(coast_row(courses, course, d, gain if on else 0.0))
-                    full.append(idle_row(geo, courses, course, counts, gain * d if on else 0.0))
-                    b.append(r.truth.distance)
+            rows, full, b, loss = _gain_runs(runner, spec, term, courses, speed, length, n, loss)
+            runs += n * len(courses)
             if slowest:
                 idle = fit_idle_drag(geo, courses, full, b)
                 if idle is None:
@@ -213,3 +193,44 @@ def tune_coast(
     finally:
         runner.client.upload_calibration(spec)
     return coast_tuning(found, ahead, runs, length, idle)
+
+
+def _gain_runs(
+    runner: Runner,
+    spec: CalibrationSpec,
+    term: RollerDragSpec,
+    courses: Sequence[float],
+    speed: float,
+    length: float,
+    rounds: int,
+    loss: float,
+) -> tuple[list[list[float]], list[list[float]], list[float], float]:
+    """One speed's MOVEs of :func:`tune_coast`: ``rounds`` times round the courses, alternately with
+    and without the drag ``term`` in ``spec`` uploaded, each from idle wheels at a chosen roller
+    phase. The faster speeds' fit rows, the slowest's, the distances, and the phase setting's
+    running ``loss``."""
+    geo = runner.geometry
+    table = term.coast or PiecewiseLinear(x=(0.0,), y=(0.0,))
+    gain = 1.0 + table(speed) * speed / length
+    on_spec = spec.model_copy(update={"rollers": term})
+    off = spec.model_copy(update={"rollers": None})
+    rows: list[list[float]] = []  # the faster speeds' fit
+    full: list[list[float]] = []  # the slowest's
+    b: list[float] = []
+    for k in range(rounds):
+        on = k % 2 == 0
+        runner.client.upload_calibration(on_spec if on else off)
+        for j, course in enumerate(courses):
+            target = (PHASE_STEP * (k // 2) + 0.5 * (k % 2) + j / 8.0) % 1.0
+            loss = set_idle_phase(runner, course, target, loss)
+            runner.note(f"roller gain {speed:g} m/s")
+            detail = f" ({'with' if on else 'without'} the term)"
+            r = runner.move("roller drag gain", length, speed, course, f"{GROUP}:gain", detail)
+            if r.truth is None or r.truth.distance is None or r.counts is None:
+                continue
+            counts = r.counts[: geo.motors]
+            d = spec_drag(geo, term, course, counts)
+            rows.append(coast_row(courses, course, d, gain if on else 0.0))
+            full.append(idle_row(geo, courses, course, counts, gain * d if on else 0.0))
+            b.append(r.truth.distance)
+    return rows, full, b, loss

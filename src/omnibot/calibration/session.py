@@ -787,20 +787,34 @@ def calibrate(
         if reach is not None:
             result.average = result.average.model_copy(update={"reach": reach})
         if accuracy is not None and upload:
-            for surface in surfaces:
-                with (
-                    open_client(surface) as client,
-                    progress(f"check the average on {surface}", accuracy_runs(accuracy, robot)) as bar,
-                ):
-                    result.average_checks[surface] = check_average(
-                        client,
-                        robot,
-                        result.average,
-                        truth=truth_for(client),
-                        accuracy=accuracy,
-                        ask=ask,
-                        progress=bar,
-                    )
-            average = judge_average(result)
-            result.average_better = None if average is None else average.better
+            _check_average(result, surfaces, open_client, truth_for, accuracy, ask, progress)
     return result
+
+
+def _check_average(
+    result: CalibrationResult,
+    surfaces: list[str],
+    open_client: ClientOpener,
+    truth_for: Callable[[RobotClient], str],
+    accuracy: AccuracyPlan,
+    ask: Ask,
+    progress: ProgressFactory,
+) -> None:
+    """:func:`calibrate`'s check of ``result.average`` on every surface, and whether it is kept."""
+    assert result.average is not None
+    for surface in surfaces:
+        with (
+            open_client(surface) as client,
+            progress(f"check the average on {surface}", accuracy_runs(accuracy, result.robot)) as bar,
+        ):
+            result.average_checks[surface] = check_average(
+                client,
+                result.robot,
+                result.average,
+                truth=truth_for(client),
+                accuracy=accuracy,
+                ask=ask,
+                progress=bar,
+            )
+    average = judge_average(result)
+    result.average_better = None if average is None else average.better

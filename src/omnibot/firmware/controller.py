@@ -442,34 +442,9 @@ class Controller:
         elif kw == codes.STATUS:
             self._status()
         elif kw == codes.HELLO:
-            version = 0  # the highest one the host's list shares (limits: there is one)
-            for v in p:
-                if v in codes.VERSIONS and v > version:
-                    version = v
-            if version == 0:  # a bare HELLO: the version every host speaks
-                version = codes.PROTOCOL_VERSION
-            if self.binary:
-                self.link.reply(
-                    codes.HELLO_REPLY,
-                    self._seq,
-                    [version, self.motors, self.link.rx.window],
-                    self.name.encode(),
-                )
-            else:
-                self._reply(self._hello_text(version))
+            self._reply_hello(p)
         elif kw == codes.MODE:
-            self._ok()
-            self.guard.refuse = bool(p[0] & codes.MODE_REFUSE_UNCOVERED)
-            self.checked_only = bool(p[0] & codes.MODE_CHECKED_TEXT)
-            self.sequenced = bool(p[0] & codes.MODE_SEQUENCED_TEXT)
-            ex.set_mode(p[0] & (codes.MODE_SIMULATION | codes.MODE_CLOSED_LOOP))
-            self._relimit()
-            binary = bool(p[0] & codes.MODE_BINARY)
-            if binary != self.binary:
-                self.binary = binary
-                self.link.reset()
-                self._split.reset()
-                self.text_rx.reset()
+            self._set_mode(p[0])
         elif kw == codes.SONAR:
             self.sonars.configure(p[0] - 1, p[1], p[2], p[3], p[4], self.now_ms)
             self.guard.clear(p[0] - 1)
@@ -485,6 +460,39 @@ class Controller:
                 self._error(codes.E_CALIBRATION)
         else:
             self._error(codes.E_INTERNAL)
+
+    def _reply_hello(self, p: "list[int]") -> None:
+        """HELLO: the reply with the highest protocol version the host's list ``p`` shares."""
+        version = 0  # the highest one the host's list shares (limits: there is one)
+        for v in p:
+            if v in codes.VERSIONS and v > version:
+                version = v
+        if version == 0:  # a bare HELLO: the version every host speaks
+            version = codes.PROTOCOL_VERSION
+        if self.binary:
+            self.link.reply(
+                codes.HELLO_REPLY,
+                self._seq,
+                [version, self.motors, self.link.rx.window],
+                self.name.encode(),
+            )
+        else:
+            self._reply(self._hello_text(version))
+
+    def _set_mode(self, bits: int) -> None:
+        """MODE: acknowledge, then set the refusal, the text checks, the executor's mode and the link."""
+        self._ok()
+        self.guard.refuse = bool(bits & codes.MODE_REFUSE_UNCOVERED)
+        self.checked_only = bool(bits & codes.MODE_CHECKED_TEXT)
+        self.sequenced = bool(bits & codes.MODE_SEQUENCED_TEXT)
+        self.executor.set_mode(bits & (codes.MODE_SIMULATION | codes.MODE_CLOSED_LOOP))
+        self._relimit()
+        binary = bool(bits & codes.MODE_BINARY)
+        if binary != self.binary:
+            self.binary = binary
+            self.link.reset()
+            self._split.reset()
+            self.text_rx.reset()
 
     def _covered(self, kw: int, p: "list[int]") -> bool:
         """A MOVE or VEL travels where an armed sonar looks (or does not travel); others: True."""

@@ -91,11 +91,19 @@ class Executor:
         self.v_max = float(cfg["speed_max_cms"])
         self.c_max = float(cfg["curvature_max"])
         self.vel_dead_band = bool(cfg.get("vel_dead_band", True))
+        self._init_motion()
+        self._init_ramps(cfg)
+        self._init_loops(cfg)
+        for i in range(self.n):
+            hal.set_power(i, 0)
+
+    def _init_motion(self) -> None:
+        """The state of the current motion, its powers and the remembered MOVE: none yet."""
         self.kind = NONE
         self.infinite = False
         self.remaining = 0
         self.powers = [0] * self.n
-        self.pwm_max = int(model.pwm_max)
+        self.pwm_max = int(self.model.pwm_max)
         self.power_cap = self.pwm_max  # the battery's power limit (controller.py): largest power applied
         self.mode = 0
         self.remembered = [0, 0, 0, 0]
@@ -116,6 +124,9 @@ class Executor:
         self._rot = False
         self._ff = [0.0] * self.n
         self._target = [0.0] * self.n
+
+    def _init_ramps(self, cfg: "dict[str, Any]") -> None:
+        """A VEL's planned acceleration and its feedforward, the slew, the brake to rest."""
         self._acc = [0.0, 0.0, 0.0]  # a VEL's planned body acceleration, m/s^2, m/s^2, rad/s^2
         self._acc_on = False  # the VEL carries one
         self._acc_turning = False  # version 4's: the wheels' part takes the turning axes' term (_accel)
@@ -140,6 +151,9 @@ class Executor:
             max(1, int(int(c) * REST_RAD * REST_WINDOW_US * 1e-6 / (2.0 * math.pi)))
             for c in cfg["encoder_cpr"]
         ]
+
+    def _init_loops(self, cfg: "dict[str, Any]") -> None:
+        """The closed loops: the drag term, the progress watch, the landing and the speed loop."""
         self._feedback = False
         self._drag = False
         period_us = int(cfg["control_period_ms"]) * 1000
@@ -159,12 +173,10 @@ class Executor:
             float(cfg["speed_kp"]),
             float(cfg["speed_ki"]),
             period_us,
-            model.pwm_max,
+            self.model.pwm_max,
             float(cfg.get("speed_band", 0.0)),
             float(cfg.get("speed_ki_steady", 0.0)),
         )
-        for i in range(self.n):
-            hal.set_power(i, 0)
 
     # ------------------------------------------------------------------ state
 

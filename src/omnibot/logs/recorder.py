@@ -315,6 +315,24 @@ class _Direct:
         pass
 
 
+def _start_file(path: Path, chunk_size: int, compression: str) -> tuple[IO[bytes], Writer]:
+    """``path`` opened (its folder made) and an MCAP writer started on it, its header written; a
+    :class:`ConfigError` for ``--log`` when it cannot be."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        file = open(path, "wb", buffering=0)  # noqa: SIM115 (the recorder closes it in close())
+    except OSError as exc:
+        raise ConfigError(f"cannot write {path}: {exc.strerror or exc}", key="--log") from None
+    kinds = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
+    writer = Writer(cast("IO[Any]", _Direct(file)), chunk_size=chunk_size, compression=kinds[compression])
+    try:
+        writer.start(profile="ros2", library=f"omnibot {__version__}")
+    except OSError as exc:  # no room for the header: the command cannot start
+        file.close()
+        raise ConfigError(f"cannot write {path}: {exc.strerror or exc}", key="--log") from None
+    return file, writer
+
+
 class Recorder:
     """Writes one MCAP file (``path``; None: no file) and hands every message to ``mirrors``
     (``mirror(topic, typename, cdr_bytes, ns)``: the Foxglove live server); see the module docstring
@@ -335,20 +353,7 @@ class Recorder:
         self._file: IO[bytes] | None = None
         self._writer: Writer | None = None
         if self.path is not None:
-            try:
-                self.path.parent.mkdir(parents=True, exist_ok=True)
-                self._file = open(self.path, "wb", buffering=0)  # noqa: SIM115 (closed in close())
-            except OSError as exc:
-                raise ConfigError(f"cannot write {self.path}: {exc.strerror or exc}", key="--log") from None
-            kinds = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
-            self._writer = Writer(
-                cast("IO[Any]", _Direct(self._file)), chunk_size=chunk_size, compression=kinds[compression]
-            )
-            try:
-                self._writer.start(profile="ros2", library=f"omnibot {__version__}")
-            except OSError as exc:  # no room for the header: the command cannot start
-                self._file.close()
-                raise ConfigError(f"cannot write {self.path}: {exc.strerror or exc}", key="--log") from None
+            self._file, self._writer = _start_file(self.path, chunk_size, compression)
         self.compression = compression
         self.estimator_name = estimator
         self.flush_period = flush_period

@@ -298,6 +298,36 @@ def _solve(hessian: FloatArray, grad: FloatArray, scale: FloatArray) -> FloatArr
     return step
 
 
+def _linearise(
+    tgt: Target, idx: IntArray, p: FloatArray, x: float, y: float, spread: FloatArray, weighted: bool
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The paired points ``p`` (placed at ``x, y``) against their target points ``idx``: each one's
+    point-to-line residual, its Jacobian against (x, y, theta) and its Huber weight (in ``spread``s;
+    ``weighted``: over its variance too)."""
+    n = tgt.normals[idx]
+    q = tgt.points[idx]
+    r = np.einsum("ij,ij->i", n, p - q)
+    jac = np.column_stack((n[:, 0], n[:, 1], -n[:, 0] * (p[:, 1] - y) + n[:, 1] * (p[:, 0] - x)))
+    a = np.abs(r)
+    huber = HUBER_SIGMAS * spread
+    weights = np.where(a <= huber, 1.0, huber / np.maximum(a, 1e-12))
+    if weighted:
+        weights = weights / (spread * spread)
+    return r, jac, weights
+
+
+def _hold_unconstrained(pose: FloatArray, initial: Pose2D, scale: FloatArray, free: FloatArray) -> FloatArray:
+    """``pose`` (x, y, theta) with its move from ``initial`` along the ``free`` directions (in
+    ``scale``d units) taken back: what the geometry leaves unconstrained stays at the caller's guess."""
+    moved = (
+        np.array(
+            [pose[0] - initial.x, pose[1] - initial.y, math.remainder(pose[2] - initial.theta, 2 * math.pi)]
+        )
+        / scale
+    )
+    return pose - scale * (free @ (free.T @ moved))
+
+
 class ScanMatcher:
     """Correlative search then point-to-line ICP (see the module docstring); one instance, many matches.
 
@@ -455,24 +485,10 @@ class ScanMatcher:
         previous = np.zeros(3)
         for _ in range(self.max_iterations):
             p = transform(Pose2D(x, y, th), src)
-            dist, idx = tgt.tree.query(p, distance_upper_bound=self.max_correspondence)
-            ok = np.isfinite(dist)
-            ok[ok] = tgt.lines[idx[ok]]
-            if reach < math.inf:  # pairs the scanner's cut-off would have biased
-                far = tgt.points[idx[ok]] - np.array([x, y])
-                ok[ok] = np.hypot(far[:, 0], far[:, 1]) <= reach
+            ok, idx = self._pairs(p, tgt, x, y, reach)
             if ok.sum() < self.min_points:
                 break
-            n = tgt.normals[idx[ok]]
-            q = tgt.points[idx[ok]]
-            pk = p[ok]
-            r = np.einsum("ij,ij->i", n, pk - q)
-            jac = np.column_stack((n[:, 0], n[:, 1], -n[:, 0] * (pk[:, 1] - y) + n[:, 1] * (pk[:, 0] - x)))
-            a = np.abs(r)
-            huber = HUBER_SIGMAS * spread[ok]
-            weights = np.where(a <= huber, 1.0, huber / np.maximum(a, 1e-12))
-            if sigma is not None:
-                weights = weights / (spread[ok] * spread[ok])
+            r, jac, weights = _linearise(tgt, idx[ok], p[ok], x, y, spread[ok], sigma is not None)
             hessian = jac.T @ (weights[:, None] * jac)
             if sigma is None:
                 delta = -_solve(hessian, jac.T @ (weights * r), scale)
@@ -496,12 +512,7 @@ class ScanMatcher:
         # what the geometry leaves unconstrained stays where the caller's guess put it
         _, vecs, keep = _eigen(hessian, scale, support)
         if converged and not keep.all():
-            moved = (
-                np.array([x - initial.x, y - initial.y, math.remainder(th - initial.theta, 2 * math.pi)])
-                / scale
-            )
-            free = vecs[:, ~keep]
-            x, y, th = np.array([x, y, th]) - scale * (free @ (free.T @ moved))
+            x, y, th = _hold_unconstrained(np.array([x, y, th]), initial, scale, vecs[:, ~keep])
         pose = Pose2D(float(x), float(y), wrap(float(th)))
         fitness, rmse, sigma2, inliers = self._fit(pose, src, tgt, sigma)
         converged = converged and inliers >= self.min_points
@@ -509,6 +520,20 @@ class ScanMatcher:
         free = scale[:, None] * vecs[:, ~keep]
         free = free / np.linalg.norm(free, axis=0)
         return MatchResult(pose, covariance, fitness, rmse, converged, score, int((~keep).sum()), free)
+
+    def _pairs(
+        self, p: FloatArray, tgt: Target, x: float, y: float, reach: float
+    ) -> tuple[NDArray[np.bool_], IntArray]:
+        """Which points ``p`` (the source placed at ``x, y``) pair with a target line within the
+        correspondence distance (and, with a finite ``reach``, a target point within it), and each
+        one's nearest target point."""
+        dist, idx = tgt.tree.query(p, distance_upper_bound=self.max_correspondence)
+        ok = np.isfinite(dist)
+        ok[ok] = tgt.lines[idx[ok]]
+        if reach < math.inf:  # pairs the scanner's cut-off would have biased
+            far = tgt.points[idx[ok]] - np.array([x, y])
+            ok[ok] = np.hypot(far[:, 0], far[:, 1]) <= reach
+        return ok, idx
 
     def _fit(
         self, pose: Pose2D, src: FloatArray, tgt: Target, sigma: FloatArray | None

@@ -321,6 +321,41 @@ def astar(
 
 
 @njit(cache=True)
+def _heap_pop(heap_f, heap_i, size):  # type: ignore[no-untyped-def]  # numba kernel
+    """The item of least key off the binary heap ``heap_f`` (keys), ``heap_i`` (items) of ``size``
+    entries, which then holds ``size - 1``."""
+    top = heap_i[0]
+    size -= 1
+    lf, li = heap_f[size], heap_i[size]
+    k = 0
+    while True:
+        a = 2 * k + 1
+        if a >= size:
+            break
+        if a + 1 < size and heap_f[a + 1] < heap_f[a]:
+            a += 1
+        if heap_f[a] >= lf:
+            break
+        heap_f[k], heap_i[k] = heap_f[a], heap_i[a]
+        k = a
+    heap_f[k], heap_i[k] = lf, li
+    return top
+
+
+@njit(cache=True)
+def _heap_push(heap_f, heap_i, size, f, item):  # type: ignore[no-untyped-def]  # numba kernel
+    """``item`` with key ``f`` onto the binary heap of ``size`` entries, which then holds ``size + 1``."""
+    k = size
+    while k > 0:
+        p = (k - 1) // 2
+        if heap_f[p] <= f:
+            break
+        heap_f[k], heap_i[k] = heap_f[p], heap_i[p]
+        k = p
+    heap_f[k], heap_i[k] = f, item
+
+
+@njit(cache=True)
 def _astar(passable, cost, start, goal, weight):  # type: ignore[no-untyped-def]  # numba kernel
     rows, cols = passable.shape
     n = rows * cols
@@ -341,22 +376,8 @@ def _astar(passable, cost, start, goal, weight):  # type: ignore[no-untyped-def]
     dc = (-1, 0, 1, -1, 1, -1, 0, 1)
     sq2 = math.sqrt(2.0)
     while size > 0:
-        cur = heap_i[0]
-        # pop
+        cur = _heap_pop(heap_f, heap_i, size)
         size -= 1
-        lf, li = heap_f[size], heap_i[size]
-        k = 0
-        while True:
-            a = 2 * k + 1
-            if a >= size:
-                break
-            if a + 1 < size and heap_f[a + 1] < heap_f[a]:
-                a += 1
-            if heap_f[a] >= lf:
-                break
-            heap_f[k], heap_i[k] = heap_f[a], heap_i[a]
-            k = a
-        heap_f[k], heap_i[k] = lf, li
         if closed[cur]:
             continue
         closed[cur] = 1
@@ -378,16 +399,8 @@ def _astar(passable, cost, start, goal, weight):  # type: ignore[no-untyped-def]
                 gcost[nxt] = g
                 parent[nxt] = cur
                 f = g + math.hypot(nr - gr, nc - gc)
-                # push
-                k = size
+                _heap_push(heap_f, heap_i, size, f, nxt)
                 size += 1
-                while k > 0:
-                    p = (k - 1) // 2
-                    if heap_f[p] <= f:
-                        break
-                    heap_f[k], heap_i[k] = heap_f[p], heap_i[p]
-                    k = p
-                heap_f[k], heap_i[k] = f, nxt
     return parent
 
 

@@ -136,40 +136,6 @@ class Slam:
         deskew: bool = True,
         matcher: ScanMatcher | None = None,
     ) -> None:
-        positive = {
-            "resolution": resolution,
-            "keyframe_distance": keyframe_distance,
-            "keyframe_angle": keyframe_angle,
-            "loop_search_radius": loop_search_radius,
-            "loop_kernel_width": loop_kernel_width,
-            "anchor_range": anchor_range,
-        }
-        if anchor_reach is not None:
-            positive["anchor_reach"] = anchor_reach
-        for key, value in positive.items():
-            if not (math.isfinite(value) and value > 0):
-                raise ConfigError(f"must be a positive number, not {value}", key)
-        for key, pair in (
-            ("odometry_noise", odometry_noise),
-            ("loop_search_window", loop_search_window),
-            ("loop_sigma_floor", loop_sigma_floor),
-        ):
-            if len(pair) != 2 or not all(math.isfinite(v) and v > 0 for v in pair):
-                raise ConfigError(f"must be two positive numbers, not {pair}", key)
-        for key, fraction in (("min_fitness", min_fitness), ("loop_min_fitness", loop_min_fitness)):
-            if not 0.0 <= fraction <= 1.0:
-                raise ConfigError(f"must be a fraction in [0, 1], not {fraction}", key)
-        for key, count in (
-            ("submap_keyframes", submap_keyframes),
-            ("loop_min_separation", loop_min_separation),
-            ("loop_every", loop_every),
-        ):
-            if count < 1:
-                raise ConfigError(f"must be at least 1, not {count}", key)
-        if optimizer not in OPTIMIZERS:
-            raise ConfigError(
-                f"unknown optimizer {optimizer!r}; choose one of {', '.join(OPTIMIZERS)}", "optimizer"
-            )
         self.keyframe_distance = keyframe_distance
         self.keyframe_angle = keyframe_angle
         self.submap_keyframes = submap_keyframes
@@ -189,8 +155,51 @@ class Slam:
         self.optimizer = optimizer
         self.scan_to_submap = scan_to_submap
         self.deskew = deskew
+        self._check_options(resolution)
         self.matcher = matcher or ScanMatcher(resolution=resolution)
 
+        self._init_state()
+
+    def _check_options(self, resolution: float) -> None:
+        """A :class:`ConfigError` naming the first option out of its range (checked in this order:
+        the positive numbers, the pairs of them, the fractions in [0, 1], the counts, the optimizer)."""
+        positive = {
+            "resolution": resolution,
+            "keyframe_distance": self.keyframe_distance,
+            "keyframe_angle": self.keyframe_angle,
+            "loop_search_radius": self.loop_search_radius,
+            "loop_kernel_width": self.loop_kernel_width,
+            "anchor_range": self.anchor_range,
+        }
+        if self.anchor_reach is not None:
+            positive["anchor_reach"] = self.anchor_reach
+        for key, value in positive.items():
+            if not (math.isfinite(value) and value > 0):
+                raise ConfigError(f"must be a positive number, not {value}", key)
+        for key, pair in (
+            ("odometry_noise", self.odometry_noise),
+            ("loop_search_window", self.loop_search_window),
+            ("loop_sigma_floor", self.loop_sigma_floor),
+        ):
+            if len(pair) != 2 or not all(math.isfinite(v) and v > 0 for v in pair):
+                raise ConfigError(f"must be two positive numbers, not {pair}", key)
+        for key, fraction in (("min_fitness", self.min_fitness), ("loop_min_fitness", self.loop_min_fitness)):
+            if not 0.0 <= fraction <= 1.0:
+                raise ConfigError(f"must be a fraction in [0, 1], not {fraction}", key)
+        for key, count in (
+            ("submap_keyframes", self.submap_keyframes),
+            ("loop_min_separation", self.loop_min_separation),
+            ("loop_every", self.loop_every),
+        ):
+            if count < 1:
+                raise ConfigError(f"must be at least 1, not {count}", key)
+        if self.optimizer not in OPTIMIZERS:
+            raise ConfigError(
+                f"unknown optimizer {self.optimizer!r}; choose one of {', '.join(OPTIMIZERS)}", "optimizer"
+            )
+
+    def _init_state(self) -> None:
+        """An empty map: no keyframes, track or loop closures, an empty factor graph and iSAM2."""
         self._frames: list[Keyframe] = []
         self._estimates: list[Pose2D] = []
         self._track: list[tuple[float, int, Pose2D]] = []  # stamp, keyframe, odometry since it

@@ -206,15 +206,7 @@ class ProfileTracker(Follower):
         turn = ref.w / ref.speed if on_path else 0.0  # rad per m of the path
         e_th = wrap(ref.theta - turn * e_t - pth)
         self.errors = (e_t, e_n, e_th)
-        limits = self.limits
-        integral = self._integrate(e_t, e_n, e_th, dt)
-        u_t = self.k_along * e_t + self.i_along * integral[0]
-        u_n = self.k_cross * e_n + self.i_cross * integral[1]
-        vx = ref.vx + u_t * tx + u_n * nx
-        vy = ref.vy + u_t * ty + u_n * ny
-        vx, vy = clamp_speed(vx, vy, limits.v_max)
-        w = ref.w + self.k_heading * e_th + self.i_heading * integral[2]
-        w = max(-limits.w_max, min(limits.w_max, w))
+        vx, vy, w = self._feedback(ref.vx, ref.vy, ref.w, tx, ty, dt)
         # into the body frame at the heading the body will have when the command acts: a body
         # turning at w while it goes would otherwise drive w x turn_lead off the course
         heading = state.theta + state.w * self.turn_lead
@@ -223,6 +215,21 @@ class ProfileTracker(Follower):
         self.planned_body_accel = (body.vx, body.vy, body.w)
         steady = math.hypot(ref.ax, ref.ay) < STEADY_ACCEL and abs(ref.ax * tx + ref.ay * ty) < STEADY_SPEEDUP
         return self._through_response(state, command, steady, dt)
+
+    def _feedback(
+        self, vx: float, vy: float, w: float, tx: float, ty: float, dt: float
+    ) -> tuple[float, float, float]:
+        """The world-frame command: the reference's velocity ``vx, vy, w`` plus PI feedback on
+        :attr:`errors` along the path's tangent ``tx, ty`` and its normal, within the limits."""
+        e_t, e_n, e_th = self.errors
+        nx, ny = -ty, tx
+        limits = self.limits
+        integral = self._integrate(e_t, e_n, e_th, dt)
+        u_t = self.k_along * e_t + self.i_along * integral[0]
+        u_n = self.k_cross * e_n + self.i_cross * integral[1]
+        vx, vy = clamp_speed(vx + u_t * tx + u_n * nx, vy + u_t * ty + u_n * ny, limits.v_max)
+        w = w + self.k_heading * e_th + self.i_heading * integral[2]
+        return vx, vy, max(-limits.w_max, min(limits.w_max, w))
 
     def _integrate(self, e_t: float, e_n: float, e_th: float, dt: float) -> FloatArray:
         """The errors' integrals (along, across, heading) with this interval's added, each held
