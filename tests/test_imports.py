@@ -145,12 +145,21 @@ def _under(module: str, prefixes: tuple[str, ...]) -> bool:
     return any(module == p or module.startswith(p + ".") for p in prefixes)
 
 
+def _defines_getattr(node: ast.stmt) -> bool:
+    """``def __getattr__`` or ``__getattr__ = ...`` (omnibot.faces.lazy_names)."""
+    if isinstance(node, ast.FunctionDef):
+        return node.name == "__getattr__"
+    return isinstance(node, ast.Assign) and any(
+        isinstance(t, ast.Name) and t.id == "__getattr__" for t in node.targets
+    )
+
+
 def lazy_names(package: str) -> dict[str, str]:
     """The names ``package``'s ``__init__`` gives on first use (a module ``__getattr__``, PEP 562),
     each with the package's own module it comes from (read from the ``if TYPE_CHECKING:`` imports
     that type them)."""
     tree = _tree(package)
-    if not any(isinstance(n, ast.FunctionDef) and n.name == "__getattr__" for n in tree.body):
+    if not any(_defines_getattr(n) for n in tree.body):
         return {}
     out: dict[str, str] = {}
     for node in tree.body:

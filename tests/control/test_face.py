@@ -12,10 +12,10 @@ import pytest
 from omnibot import control
 
 
-@pytest.mark.parametrize("name", sorted(control._MODULE_OF))
-def test_a_name_of_the_face_is_the_defining_modules_own(name: str) -> None:
-    module = importlib.import_module(f"omnibot.control.{control._MODULE_OF[name]}")
-    assert getattr(control, name) is getattr(module, name)
+@pytest.mark.parametrize(("module", "name"), [(m, n) for m, names in control._EXPORTS.items() for n in names])
+def test_a_name_of_the_face_is_the_defining_modules_own(module: str, name: str) -> None:
+    defining = importlib.import_module(f"omnibot.control.{module}")
+    assert getattr(control, name) is getattr(defining, name)
     assert name in control.__all__
 
 

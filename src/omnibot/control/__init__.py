@@ -12,8 +12,9 @@ Modules: ``paths`` (Path, files, teach, geometry, the speed profile, the standar
 fast the motors drive the robot on a floor), ``pid``.
 """
 
-from importlib import import_module
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from omnibot.faces import lazy_names
 
 if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
     from omnibot.control.followers.base import (
@@ -53,7 +54,6 @@ _EXPORTS = {
     "paths.teach": ("PathRecorder",),
     "reach": ("floor_course_rate", "free_wheel_speeds"),
 }
-_MODULE_OF = {name: module for module, names in _EXPORTS.items() for name in names}
 
 __all__ = [
     "STOP",
@@ -81,12 +81,5 @@ __all__ = [
     "write_path",
 ]
 
-
-def __getattr__(name: str) -> Any:
-    """The package's names, imported on first use from the module that defines them (a stand-in a
-    test puts there is the one found): importing one of them loads only its own subpackage, not
-    the planner's reach or every follower."""
-    module = _MODULE_OF.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(import_module(f"{__name__}.{module}"), name)
+# a name loads only its own subpackage, not the planner's reach or every follower
+__getattr__ = lazy_names(__name__, _EXPORTS)
