@@ -135,7 +135,7 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError("omnibot map needs the slam extra: pip install 'omnibot[slam]'") from None
     from omnibot.apps.run import Parts, run_in_this_thread
     from omnibot.cliargs import check_sim_options, sim_url
-    from omnibot.control.paths.files import read_path
+    from omnibot.control import read_path
     from omnibot.teleop import load_teleop_config
 
     out = _check(args)

@@ -102,7 +102,7 @@ class Parts:
 
 
 def _check(args: argparse.Namespace) -> None:
-    from omnibot.control.followers.base import follower_names
+    from omnibot.control import follower_names
     from omnibot.ros2.command import check as check_ros2
 
     if not (args.teleop or args.dashboard or args.follow or args.ros2):
@@ -197,7 +197,7 @@ def _tell(runtime: Any, report: dict[str, Any]) -> None:
 def run(args: argparse.Namespace) -> int:
     """``omnibot run``: compose the front ends, run them, return the exit status."""
     from omnibot.cliargs import check_sim_options, sim_url
-    from omnibot.control.paths.files import read_path
+    from omnibot.control import read_path
     from omnibot.teleop import load_teleop_config
 
     _check(args)

@@ -37,8 +37,7 @@ from omnibot.errors import ConfigError
 from omnibot.outputs import check_writable
 
 if TYPE_CHECKING:
-    from omnibot.control.paths.path import Path
-    from omnibot.control.paths.teach import PathRecorder
+    from omnibot.control import Path, PathRecorder
     from omnibot.navigation.metrics import Tolerances
 
 
@@ -85,7 +84,7 @@ def _robot_client(args: argparse.Namespace, start: Any = None) -> Iterator[tuple
 def run_follow(args: argparse.Namespace) -> int:
     """Run ``omnibot follow``: follow a path file and report tracking; the exit status (1 when the run
     did not complete, its failures printed)."""
-    from omnibot.control.paths.files import read_path
+    from omnibot.control import read_path
     from omnibot.motion import Pose2D
     from omnibot.navigation.session import FollowOptions, follow_path, summary, verdict
     from omnibot.progress import progress_bar
@@ -134,7 +133,7 @@ def run_follow(args: argparse.Namespace) -> int:
 
 def _check_follower_and_estimator(args: argparse.Namespace) -> None:
     """ConfigError unless ``--follower`` and ``--estimator`` name ones that exist."""
-    from omnibot.control.followers.base import follower_names
+    from omnibot.control import follower_names
     from omnibot.estimation import ESTIMATORS
 
     names = follower_names()
@@ -239,7 +238,7 @@ def _write_truth(run: Any, target: FsPath) -> None:
 def run_record(args: argparse.Namespace) -> int:
     """Run ``omnibot record``: record a taught or standard path to ``--path``; the exit status (1 when
     the recording is no path to follow, and nothing is written)."""
-    from omnibot.control.paths.files import write_path
+    from omnibot.control import write_path
     from omnibot.navigation.record import check_recording, teach
 
     check_sim_options(args)
@@ -290,8 +289,7 @@ def _teaching(args: argparse.Namespace, mode: str) -> tuple[PathRecorder, float,
     """How ``omnibot record`` teaches: the recorder (sampling every ``--sample-time`` s or
     ``--sample-distance`` m, storing the heading unless it is fixed), the speed, the duration and,
     unless it listens to another driver, the standard shape driven or pushed along."""
-    from omnibot.control.paths.standard import standard_path
-    from omnibot.control.paths.teach import PathRecorder
+    from omnibot.control import PathRecorder, standard_path
 
     every = args.sample_time if args.sample_time is not None else args.sample_distance
     _positive(every, "--sample-time" if args.sample_time is not None else "--sample-distance")

@@ -20,7 +20,7 @@ from omnibot.calibration.plan import speed_range
 from omnibot.firmware.calibration import Calibration
 from omnibot.firmware.config import build_config
 from omnibot.firmware.power import PowerModel
-from omnibot.robot.description import CalibrationSpec, ReachSpec, RobotDescription
+from omnibot.robot import CalibrationSpec, ReachSpec, RobotDescription
 
 REACH_COURSES = tuple(float(c) for c in range(0, 360, 15))
 """Courses (degrees) :func:`reach_speed` checks."""

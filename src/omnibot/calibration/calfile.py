@@ -34,14 +34,8 @@ from pydantic import ValidationError
 from omnibot.calibration.results import CalibrationResult
 from omnibot.config_errors import read_yaml
 from omnibot.errors import ConfigError
-from omnibot.estimation.slip import SlipParameters
-from omnibot.robot.description import (
-    CalibrationSpec,
-    RobotDescription,
-    calibration_for,
-    load_robot,
-    parse_description,
-)
+from omnibot.estimation import SlipParameters
+from omnibot.robot import CalibrationSpec, RobotDescription, calibration_for, load_robot, parse_description
 
 log = logging.getLogger(__name__)
 

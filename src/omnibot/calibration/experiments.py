@@ -33,12 +33,11 @@ from omnibot.calibration.runs import ROTATE, SQUARE, STRAIGHT, TURN, RunInfo, Ru
 from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.truth import TruthSource
 from omnibot.calibration.umbmark import SquareRun
-from omnibot.client.client import RobotClient
-from omnibot.client.events import WarnEvent
+from omnibot.client import RobotClient, WarnEvent
 from omnibot.progress import Progress
 from omnibot.protocol import text
 from omnibot.protocol.messages import Command
-from omnibot.robot.description import MotorMapSpec, RobotDescription
+from omnibot.robot import MotorMapSpec, RobotDescription
 
 MOVED_DISTANCE = 0.005
 """m: a run that goes less than this did not move the robot (dead band search)."""

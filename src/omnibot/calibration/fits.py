@@ -37,7 +37,7 @@ from omnibot.calibration.plan import speed_range
 from omnibot.calibration.rollerfit import CoastTuning, RollerFit
 from omnibot.calibration.runs import RunResult
 from omnibot.errors import ConfigError
-from omnibot.robot.description import (
+from omnibot.robot import (
     CalibrationSpec,
     CourseTable,
     MotorMapSpec,

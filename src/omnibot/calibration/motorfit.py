@@ -42,7 +42,7 @@ import numpy as np
 
 from omnibot.calibration.patterns import Geometry
 from omnibot.calibration.runs import Motion
-from omnibot.robot.description import MotorMapSpec, PiecewiseLinear, RobotDescription
+from omnibot.robot import MotorMapSpec, PiecewiseLinear, RobotDescription
 
 GAIN_STEP = 0.08
 """Log-gain step of the finite-difference Jacobian."""

@@ -58,7 +58,7 @@ from omnibot.calibration.motorfit import (
 )
 from omnibot.calibration.patterns import Geometry, apply_map
 from omnibot.calibration.runs import STRAIGHT, RunInfo
-from omnibot.robot.description import MotorMapSpec
+from omnibot.robot import MotorMapSpec
 
 
 def motor_deadbands(runner: Runner, step: int = 8, duration: float = 0.5, positions: int = 1) -> list[int]:

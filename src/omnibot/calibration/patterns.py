@@ -20,8 +20,7 @@ from dataclasses import dataclass
 from omnibot.firmware.calibration import fold_course, map_motor
 from omnibot.firmware.config import build_config
 from omnibot.firmware.power import roller_terms
-from omnibot.robot import courses
-from omnibot.robot.description import MotorMapSpec, RobotDescription
+from omnibot.robot import MotorMapSpec, RobotDescription, courses
 
 
 @dataclass(frozen=True)

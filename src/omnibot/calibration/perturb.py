@@ -15,7 +15,7 @@ from __future__ import annotations
 import difflib
 
 from omnibot.errors import ConfigError
-from omnibot.robot.description import MotorSpec, RobotDescription, parse_description
+from omnibot.robot import MotorSpec, RobotDescription, parse_description
 
 ACCEPTANCE = "radius=1.05;torque_constant=1.1,0.9,0.9,1.1"
 """Wheel radius +5 %, motors +-10 % apart: on omni4 each opposite pair (the two motors of a

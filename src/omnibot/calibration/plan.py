@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 from omnibot.calibration.patterns import Geometry
 from omnibot.errors import ConfigError
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 
 DIAGONAL = 45.0
 """degrees: a fold range wider than this has no mirror at the diagonal (a mecanum base folds onto

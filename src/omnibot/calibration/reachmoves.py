@@ -26,7 +26,7 @@ from omnibot.calibration.check import move_row
 from omnibot.calibration.experiments import Runner, turn_wheels
 from omnibot.calibration.patterns import Geometry
 from omnibot.calibration.plan import Plan, speed_range
-from omnibot.robot.description import CalibrationSpec
+from omnibot.robot import CalibrationSpec
 
 REACH = "reach"
 """The group of the reach MOVEs."""

@@ -28,7 +28,7 @@ from omnibot.calibration.seedterms import seed_kr
 from omnibot.calibration.tables import move_grid, rotate_lines, summary_table
 from omnibot.errors import ConfigError
 from omnibot.navigation.slipcal import SlipCalibration
-from omnibot.robot.description import CalibrationSpec, PiecewiseLinear
+from omnibot.robot import CalibrationSpec, PiecewiseLinear
 
 STYLES = ("-", "--", ":", "-.")
 

@@ -14,7 +14,7 @@ from omnibot.calibration.fits import SurfaceFit
 from omnibot.calibration.gyro import GyroCalibration
 from omnibot.calibration.runs import RunResult
 from omnibot.calibration.umbmark import OdometryCalibration
-from omnibot.robot.description import CalibrationSpec, RobotDescription
+from omnibot.robot import CalibrationSpec, RobotDescription
 
 if TYPE_CHECKING:  # the slip fit's result type only (navigation.slipcal drives the runs)
     from omnibot.navigation.slipcal import SlipCalibration

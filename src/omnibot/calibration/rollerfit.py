@@ -38,7 +38,7 @@ from numpy.typing import NDArray
 
 from omnibot.calibration.patterns import Geometry
 from omnibot.calibration.runs import STRAIGHT, RunResult
-from omnibot.robot.description import PiecewiseLinear, RollerDragSpec
+from omnibot.robot import PiecewiseLinear, RollerDragSpec
 
 GROUP = "rollers"
 """The drag runs' group (:attr:`RunResult.group`)."""

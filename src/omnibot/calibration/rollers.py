@@ -33,7 +33,7 @@ from omnibot.calibration.rollerfit import (
     spec_drag,
 )
 from omnibot.calibration.runs import STRAIGHT, RunInfo, RunResult
-from omnibot.robot.description import CalibrationSpec, PiecewiseLinear, RollerDragSpec
+from omnibot.robot import CalibrationSpec, PiecewiseLinear, RollerDragSpec
 
 PROBE = 0.6
 """s of each power's first run, which sets the durations of the others."""

@@ -21,7 +21,7 @@ from collections.abc import Sequence
 
 from omnibot.calibration.patterns import map_power
 from omnibot.errors import ConfigError
-from omnibot.robot.description import CalibrationSpec
+from omnibot.robot import CalibrationSpec
 
 
 def _check(spec: CalibrationSpec, powers: Sequence[float]) -> int:

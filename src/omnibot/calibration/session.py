@@ -73,14 +73,14 @@ from omnibot.calibration.tap import TelemetryTap, standstill_bias
 from omnibot.calibration.truth import Ask, TruthContext, TruthSource, make_truth, simulator_of
 from omnibot.calibration.umbmark import OdometryCalibration, SquareRun, calibrate_odometry
 from omnibot.calibration.verdict import judge_average
-from omnibot.client.client import RobotClient
+from omnibot.client import RobotClient
 from omnibot.errors import ConfigError
 from omnibot.firmware.config import build_config
 from omnibot.navigation.slipcal import SLIP_COURSES, SlipCalibration
 from omnibot.progress import Progress
 from omnibot.protocol import codes
-from omnibot.robot.description import CalibrationSpec, MotorMapSpec, RobotDescription
-from omnibot.runtime.runtime import RuntimeRecording
+from omnibot.robot import CalibrationSpec, MotorMapSpec, RobotDescription
+from omnibot.runtime import RuntimeRecording
 
 ProgressFactory = Callable[[str, int], AbstractContextManager[Progress | None]]
 """(description, expected runs) -> a context giving a progress bar (or None)."""

@@ -15,11 +15,11 @@ from typing import Any
 
 from omnibot.calibration.runs import STRAIGHT, RunInfo
 from omnibot.calibration.truth import TruthSource
-from omnibot.client.client import RobotClient
+from omnibot.client import RobotClient
 from omnibot.navigation.runner import Navigator
 from omnibot.navigation.slipcal import SlipCalibration, calibrate_slip
-from omnibot.robot.description import RobotDescription
-from omnibot.runtime.runtime import RuntimeRecording
+from omnibot.robot import RobotDescription
+from omnibot.runtime import RuntimeRecording
 
 SLIP_SPEED_MAX = 0.8
 """m/s: the slip runs' speed cap (creep hardly depends on speed; the runs must fit a room)."""

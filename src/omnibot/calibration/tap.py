@@ -11,11 +11,11 @@ from __future__ import annotations
 import math
 import statistics
 
-from omnibot.client.client import RobotClient
-from omnibot.client.events import Telemetry
-from omnibot.estimation.odometry import Pose2D, WheelOdometry
+from omnibot.client import RobotClient, Telemetry
+from omnibot.estimation import WheelOdometry
+from omnibot.motion import Pose2D
 from omnibot.protocol import codes
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 
 TAP_MASK = (
     codes.TEL_ENCODERS

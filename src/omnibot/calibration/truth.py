@@ -32,10 +32,11 @@ from omnibot.calibration.calfile import load_calibration
 from omnibot.calibration.runs import ROTATE, SQUARE, STRAIGHT, TURN, Motion, RunInfo, relative
 from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.umbmark import corrected_robot
-from omnibot.client.client import RobotClient
+from omnibot.client import RobotClient
 from omnibot.errors import ConfigError
-from omnibot.estimation.odometry import Pose2D, WheelOdometry
-from omnibot.robot.description import RobotDescription
+from omnibot.estimation import WheelOdometry
+from omnibot.motion import Pose2D
+from omnibot.robot import RobotDescription
 
 Ask = Callable[[str], str]
 """A prompt function (``input`` by default; tests pass a fake person)."""
@@ -118,7 +119,7 @@ class SimTruth(TruthSource):
 
 def simulator_of(client: RobotClient) -> Any:
     """The Simulator behind an in-process link, or None."""
-    from omnibot.transport.device import find_simulator
+    from omnibot.transport import find_simulator
 
     return find_simulator(client.link)
 

@@ -32,11 +32,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from omnibot.calibration.runs import STRAIGHT, Motion, RunResult
-from omnibot.estimation.odometry import Pose2D, compose_arc
-from omnibot.robot.description import RobotDescription, parse_description
+from omnibot.estimation import compose_arc
+from omnibot.motion import Pose2D
+from omnibot.robot import RobotDescription, parse_description
 
 if TYPE_CHECKING:  # the samples' type only: the square runs are driven by experiments.drive_square
-    from omnibot.client.events import Telemetry
+    from omnibot.client import Telemetry
 
 
 @dataclass

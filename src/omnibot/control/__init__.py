@@ -2,6 +2,84 @@
 
 Depends on the robot description and plain data only (no client, no simulator): the navigation
 glue (:mod:`omnibot.navigation`) feeds followers estimates and sends their commands.
+
+::
+
+    from omnibot.control import make_follower, read_path
+
+Modules: ``paths`` (Path, files, teach, geometry, the speed profile, the standard paths),
+``followers`` (the Follower interface, its registry and the built-in followers), ``reach`` (how
+fast the motors drive the robot on a floor), ``pid``.
 """
 
-__all__ = ["followers", "paths", "reach"]
+from typing import TYPE_CHECKING
+
+from omnibot.faces import lazy_names
+
+if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
+    from omnibot.control.followers.base import (
+        STOP,
+        Command,
+        Follower,
+        State,
+        follower_names,
+        make_follower,
+        to_body,
+        wrap,
+    )
+    from omnibot.control.paths.files import read_path, write_path
+    from omnibot.control.paths.geometry import resample
+    from omnibot.control.paths.path import Path
+    from omnibot.control.paths.profile import MotionLimits, min_traversal_time, time_optimal_profile
+    from omnibot.control.paths.standard import standard_path
+    from omnibot.control.paths.teach import PathRecorder
+    from omnibot.control.reach import floor_course_rate, free_wheel_speeds
+
+_EXPORTS = {
+    "followers.base": (
+        "STOP",
+        "Command",
+        "Follower",
+        "State",
+        "follower_names",
+        "make_follower",
+        "to_body",
+        "wrap",
+    ),
+    "paths.files": ("read_path", "write_path"),
+    "paths.geometry": ("resample",),
+    "paths.path": ("Path",),
+    "paths.profile": ("MotionLimits", "min_traversal_time", "time_optimal_profile"),
+    "paths.standard": ("standard_path",),
+    "paths.teach": ("PathRecorder",),
+    "reach": ("floor_course_rate", "free_wheel_speeds"),
+}
+
+__all__ = [
+    "STOP",
+    "Command",
+    "Follower",
+    "MotionLimits",
+    "Path",
+    "PathRecorder",
+    "State",
+    "floor_course_rate",
+    "follower_names",
+    "followers",
+    "free_wheel_speeds",
+    "make_follower",
+    "min_traversal_time",
+    "paths",
+    "pid",
+    "reach",
+    "read_path",
+    "resample",
+    "standard_path",
+    "time_optimal_profile",
+    "to_body",
+    "wrap",
+    "write_path",
+]
+
+# a name loads only its own subpackage, not the planner's reach or every follower
+__getattr__ = lazy_names(__name__, _EXPORTS)

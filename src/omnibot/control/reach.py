@@ -43,9 +43,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from omnibot.floor.contact import GRAVITY, ROLL_SPEED_EPS, WHEEL_SPEED_EPS, static_loads
-from omnibot.floor.surfaces import Surface, get_surface
-from omnibot.robot.description import RobotDescription, WheelSpec
+from omnibot.floor import GRAVITY, ROLL_SPEED_EPS, WHEEL_SPEED_EPS, Surface, get_surface, static_loads
+from omnibot.robot import RobotDescription, WheelSpec
 from omnibot.robot.kinematics import FloatArray, contact_rows, wheel_matrix
 
 

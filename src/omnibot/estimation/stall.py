@@ -38,7 +38,7 @@ from typing import Protocol
 
 import numpy as np
 
-from omnibot.control.reach import free_wheel_speeds
+from omnibot.control import free_wheel_speeds
 from omnibot.estimation.estimator import SensorSample
 from omnibot.estimation.odometry import COUNT_MODULUS, count_delta
 from omnibot.estimation.silence import GyroSilence

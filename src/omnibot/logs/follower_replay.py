@@ -24,9 +24,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from omnibot.control.followers.base import Follower, make_follower
-from omnibot.control.paths.path import Path
-from omnibot.control.paths.profile import MotionLimits
+from omnibot.control import Follower, MotionLimits, Path, make_follower
 from omnibot.errors import ConfigError
 from omnibot.logs.run import Run
 from omnibot.logs.topics import FOLLOWER

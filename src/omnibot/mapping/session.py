@@ -49,7 +49,7 @@ if TYPE_CHECKING:
     from omnibot.lidar.reader import ScanSource
     from omnibot.mapping.grid import OccupancyGrid
     from omnibot.mapping.localise import Localiser
-    from omnibot.runtime.cycle import Cycle
+    from omnibot.runtime import Cycle
     from omnibot.sim.world import World
 
 HISTORY = 4096

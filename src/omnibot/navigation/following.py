@@ -3,8 +3,7 @@
 
 from __future__ import annotations
 
-from omnibot.control.followers.base import make_follower
-from omnibot.control.paths.path import Path
+from omnibot.control import Path, make_follower
 from omnibot.navigation.runner import WATCHDOG
 from omnibot.navigation.session import follower_limits
 from omnibot.navigation.webteach import WATCHDOG as SLOW_WATCHDOG

@@ -38,10 +38,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from omnibot.client import NotSupported, RobotClient
-from omnibot.control.followers.base import wrap
-from omnibot.control.paths.geometry import resample
-from omnibot.control.paths.path import Path
-from omnibot.control.paths.profile import min_traversal_time
+from omnibot.control import Path, min_traversal_time, resample, wrap
 from omnibot.errors import ConfigError, PlanningError
 from omnibot.estimation import SlipModel, make_estimator
 from omnibot.mapping.grid import OCCUPIED, OccupancyGrid

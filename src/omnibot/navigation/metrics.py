@@ -14,8 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from omnibot.control.followers.base import wrap
-from omnibot.control.paths.profile import MotionLimits, min_traversal_time
+from omnibot.control import MotionLimits, min_traversal_time, wrap
 from omnibot.navigation.runner import FollowRun
 from omnibot.robot import RobotDescription
 

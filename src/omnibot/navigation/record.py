@@ -23,10 +23,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from omnibot.client import RobotClient
-from omnibot.control.followers.base import to_body, wrap
-from omnibot.control.paths.path import Path
-from omnibot.control.paths.profile import time_optimal_profile
-from omnibot.control.paths.teach import PathRecorder
+from omnibot.control import Path, PathRecorder, time_optimal_profile, to_body, wrap
 from omnibot.errors import ConfigError
 from omnibot.motion import Twist
 from omnibot.navigation.runner import Navigator

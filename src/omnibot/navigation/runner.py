@@ -32,8 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from omnibot.client import NotSupported, RobotClient, Telemetry
-from omnibot.control.followers.base import STOP, Command, Follower, State
-from omnibot.control.paths.path import Path
+from omnibot.control import STOP, Command, Follower, Path, State
 from omnibot.errors import ConfigError, OmnibotError
 from omnibot.estimation import (
     Estimator,

@@ -12,9 +12,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from omnibot.client import RobotClient
-from omnibot.control.followers.base import make_follower
-from omnibot.control.paths.path import Path
-from omnibot.control.paths.profile import MotionLimits
+from omnibot.control import MotionLimits, Path, make_follower
 from omnibot.estimation import SlipParameters
 from omnibot.motion import Pose2D
 from omnibot.navigation.metrics import Tolerances, follow_report
@@ -40,7 +38,7 @@ def follower_limits(
     (:func:`~omnibot.control.reach.floor_course_rate`)."""
     limits = replace(MotionLimits.from_robot(robot, speed, surface=floor), floor_use=PLAN_FLOOR_USE)
     if floor is not None:
-        from omnibot.control.reach import floor_course_rate
+        from omnibot.control import floor_course_rate
 
         limits = replace(limits, course_rate=floor_course_rate(floor))
     if robot.gyro is not None:

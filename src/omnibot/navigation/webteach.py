@@ -30,11 +30,8 @@ from typing import Any
 
 import numpy as np
 
-from omnibot.control.followers.base import make_follower
+from omnibot.control import MotionLimits, Path, PathRecorder, make_follower
 from omnibot.control.followers.tracker import CROSS_GAIN, HEADING_GAIN, heading_gain
-from omnibot.control.paths.path import Path
-from omnibot.control.paths.profile import MotionLimits
-from omnibot.control.paths.teach import PathRecorder
 from omnibot.estimation import PoseEstimator, SlipParameters
 from omnibot.motion import Pose2D
 from omnibot.navigation.judge import FollowJudge

@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from omnibot.control.paths.path import Path
+from omnibot.control import Path
 from omnibot.motion import Estimate
 from omnibot.navigation.following import FOLLOWER_PRIORITY, follower_source
 from omnibot.navigation.judge import FollowJudge

@@ -28,8 +28,7 @@ import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
-from omnibot.control.paths.path import Path
-from omnibot.control.paths.teach import PathRecorder
+from omnibot.control import Path, PathRecorder
 from omnibot.errors import ConfigError
 from omnibot.estimation import make_estimator
 from omnibot.motion import Twist

@@ -32,8 +32,7 @@ from typing import Any, Literal, Protocol
 
 import numpy as np
 
-from omnibot.control.followers.base import Follower
-from omnibot.control.paths.path import Path
+from omnibot.control import Follower, Path
 from omnibot.motion import ZERO, Estimate, Pose2D, Twist
 from omnibot.runtime.cycle import Cycle
 from omnibot.teleop import (

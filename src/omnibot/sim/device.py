@@ -22,7 +22,7 @@ from typing import Any
 from omnibot.firmware.config import build_config
 from omnibot.firmware.controller import Controller
 from omnibot.firmware.hal import HAL
-from omnibot.robot.description import RobotDescription, load_robot
+from omnibot.robot import RobotDescription, load_robot
 from omnibot.sim.clock import SimClock
 from omnibot.sim.simulator import Simulator, TruthRecorder
 from omnibot.sim.world import World

@@ -41,11 +41,11 @@ from omnibot.errors import ConfigError
 from omnibot.lidar.reader import ScanningSim
 from omnibot.lidar.rplidar_device import A1, RplidarDevice, model_named
 from omnibot.motion import Pose2D
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.signals import ending_signals
 from omnibot.sim.device import SimDevice
 from omnibot.sim.simulator import Simulator, TruthRecorder
-from omnibot.transport.lockstep import DEFAULT_BAUD
+from omnibot.transport import DEFAULT_BAUD
 from omnibot.transport.pty_bridge import PtyBridge, serve_together
 
 

@@ -37,7 +37,7 @@ from numpy.typing import NDArray
 
 from omnibot.errors import ConfigError, SimulationError
 from omnibot.motion import Pose2D
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.sim import jit
 from omnibot.sim.clock import SimClock
 from omnibot.sim.device import SimDevice

@@ -39,11 +39,11 @@ from dataclasses import dataclass
 from omnibot import motion
 from omnibot.errors import ConfigError
 from omnibot.motion import Pose2D
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.sim.device import SimDevice
 from omnibot.sim.fleet import Fleet
 from omnibot.sim.world import World, load_world
-from omnibot.transport.lockstep import DEFAULT_BAUD, LockstepLink
+from omnibot.transport import DEFAULT_BAUD, LockstepLink
 
 __all__ = ["GRACE", "FleetLink", "SharedFleet", "join_fleet", "open_fleets", "parse_pose"]
 

@@ -34,7 +34,7 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import NDArray
 
-from omnibot.floor.contact import ROLL_SPEED_EPS, WHEEL_SPEED_EPS
+from omnibot.floor import ROLL_SPEED_EPS, WHEEL_SPEED_EPS
 from omnibot.sim import kernels as k
 from omnibot.sim.kernels import solve_body
 

@@ -85,10 +85,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from omnibot.errors import SimulationError
-from omnibot.floor.contact import static_loads
-from omnibot.floor.surfaces import Surface, get_surface
-from omnibot.robot.battery import open_voltage
-from omnibot.robot.description import RobotDescription
+from omnibot.floor import Surface, get_surface, static_loads
+from omnibot.robot import RobotDescription, open_voltage
 from omnibot.robot.kinematics import contact_rows
 from omnibot.sim import jit, kernels, lanes
 

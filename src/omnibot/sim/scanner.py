@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from omnibot.motion import Pose2D
-from omnibot.robot.description import ScannerSpec
+from omnibot.robot import ScannerSpec
 from omnibot.scan import Scan
 from omnibot.sim import jit
 

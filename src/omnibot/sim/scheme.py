@@ -20,9 +20,7 @@ from __future__ import annotations
 from omnibot.errors import ConfigError, SimulationError
 from omnibot.sim.device import SimDevice
 from omnibot.sim.fleet_link import join_fleet, parse_pose
-from omnibot.transport.base import Link
-from omnibot.transport.lockstep import DEFAULT_BAUD, LockstepLink
-from omnibot.transport.url import LinkUrl, register_scheme
+from omnibot.transport import DEFAULT_BAUD, Link, LinkUrl, LockstepLink, register_scheme
 
 OPTIONS = ("seed", "surface", "world", "baud", "pose", "fleet", "name")
 

@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from omnibot.motion import Pose2D
-from omnibot.robot.description import GyroSpec, SonarSpec, TrackingWheelSpec
+from omnibot.robot import GyroSpec, SonarSpec, TrackingWheelSpec
 from omnibot.sim import jit, kernels
 from omnibot.sim.world import World, cone_range
 

@@ -61,7 +61,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from omnibot.errors import SimulationError, SimulationSetupError
 from omnibot.motion import Pose2D, Twist
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from omnibot.scan import Scan
 from omnibot.sim import jit, kernels
 from omnibot.sim.clock import SimClock

@@ -48,7 +48,7 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationErr
 
 from omnibot.config_errors import explain, read_yaml, suggest
 from omnibot.errors import ConfigError
-from omnibot.floor.surfaces import SURFACES
+from omnibot.floor import SURFACES
 from omnibot.motion import Pose2D
 from omnibot.sim import jit
 

@@ -18,8 +18,9 @@ links), ``joystick`` (pygame), ``keyboard`` (terminal). The loop that drives a r
 deadman for the people's sources.
 """
 
-from importlib import import_module
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from omnibot.faces import lazy_names
 
 if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
     from omnibot.motion import ZERO, Twist
@@ -56,7 +57,6 @@ _EXPORTS = {
     ),
     "pacing": ("Pacer",),
 }
-_MODULE_OF = {name: module for module, names in _EXPORTS.items() for name in names}
 
 __all__ = [
     "ZERO",
@@ -87,11 +87,6 @@ __all__ = [
     "parse_teleop_config",
 ]
 
-
-def __getattr__(name: str) -> Any:
-    """The package's names, imported on first use: ``omnibot teleop``'s argument parser (built for
-    every ``omnibot`` command) imports this package and must not pay for the client and models."""
-    module = _MODULE_OF.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(import_module(f"{__name__}.{module}"), name)
+# on first use: ``omnibot teleop``'s argument parser (built for every ``omnibot`` command) imports
+# this package and must not pay for the client and models
+__getattr__ = lazy_names(__name__, _EXPORTS)

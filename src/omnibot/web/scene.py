@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from omnibot.control.paths.files import LIMITS
+from omnibot.control.paths import files as path_files
 from omnibot.errors import ConfigError
 from omnibot.robot import RobotDescription
 from omnibot.sim.world import World
@@ -132,7 +132,7 @@ def load_path(file: str | Path) -> PlannedPath:
             raise ConfigError(
                 f"{p} line {n}: expected x,y in metres, got {','.join(row)!r}", key="--path"
             ) from None
-        bound = LIMITS["x"][0]
+        bound = path_files.LIMITS["x"][0]
         if not (math.isfinite(x) and math.isfinite(y)):
             raise ConfigError(f"{p} line {n}: x and y must be finite", key="--path")
         if max(abs(x), abs(y)) > bound:

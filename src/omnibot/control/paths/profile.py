@@ -40,7 +40,7 @@ import numpy as np
 from omnibot.control.paths.geometry import curvature, heading_rate
 from omnibot.control.paths.path import FloatArray, Path
 from omnibot.errors import ConfigError
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 
 if TYPE_CHECKING:
     from omnibot.control.reach import FloorReach
