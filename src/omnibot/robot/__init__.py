@@ -10,9 +10,9 @@ levels of each chemistry), ``courses`` (folding courses onto a wheel layout's ax
 ``describe`` and ``to_urdf`` load on first use: ``omnibot robot list`` need not load XML.
 """
 
-from importlib import import_module
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
+from omnibot.faces import lazy_names
 from omnibot.robot.battery import battery_level, open_voltage
 from omnibot.robot.description import (
     BatterySpec,
@@ -46,8 +46,6 @@ from omnibot.robot.description import (
 if TYPE_CHECKING:
     from omnibot.robot.summary import describe
     from omnibot.robot.urdf import to_urdf
-
-_LAZY = {"describe": "summary", "to_urdf": "urdf"}
 
 __all__ = [
     "BatterySpec",
@@ -88,10 +86,5 @@ __all__ = [
     "urdf",
 ]
 
-
-def __getattr__(name: str) -> Any:
-    """``describe`` and ``to_urdf``, imported on first use."""
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(import_module(f"{__name__}.{module}"), name)
+__getattr__ = lazy_names(__name__, {"summary": ("describe",), "urdf": ("to_urdf",)})
+"""``describe`` and ``to_urdf``, imported on first use."""
