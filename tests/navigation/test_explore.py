@@ -150,7 +150,7 @@ def test_explore_maps_the_room_by_itself(tmp_path: Path, capsys: pytest.CaptureF
         == 0
     )
     said = capsys.readouterr().out
-    assert "explored: no frontier left" in said, said
+    assert "exploring ended: no frontier left" in said, said
     report = json.loads((out / "report.json").read_text())
     assert report["map"]["precision"] >= 0.95 and report["map"]["recall"] >= 0.95
     assert report["trajectory"]["estimate"]["ape_rmse_m"] <= 0.03

@@ -202,7 +202,7 @@ def _explore(args: argparse.Namespace, url: str, out: Path) -> int:
                     options=replace(GOTO, speed=args.speed),
                     say=_say,
                 )
-            _say(f"explored: {result.summary()}")
+            _say(f"exploring ended: {result.summary()}")
     finally:
         mapping.close()
     return mapping.finish(out, None, args.resolution)  # the map written: 0, however exploring ended
