@@ -63,8 +63,7 @@ def run(args: argparse.Namespace) -> int:
     """``omnibot goto``: the exit status."""
     from omnibot.cliargs import check_sim_options, recording_of, sim_url, simulated
     from omnibot.client import robot_session
-    from omnibot.mapping.mapfile import load_map
-    from omnibot.mapping.planner import check_goal, inflate
+    from omnibot.mapping import check_goal, inflate, load_map
     from omnibot.motion import Pose2D, parse_pose
     from omnibot.navigation.goto import GotoOptions
 
@@ -121,8 +120,7 @@ def _go(
 ) -> int:
     from omnibot.cliargs import recording_of, use_calibration
     from omnibot.lidar.reader import open_scanner
-    from omnibot.mapping.localise import Localiser
-    from omnibot.mapping.session import LocalisingSink
+    from omnibot.mapping import Localiser, LocalisingSink
     from omnibot.navigation.goto import goto
     from omnibot.transport import find_simulator
 

@@ -392,7 +392,7 @@ def _score(args: argparse.Namespace) -> int:
     """``omnibot log score``: a SLAM run scored from its logs (see :mod:`omnibot.logs.slamscore`)."""
     from omnibot.cliargs import output_dir
     from omnibot.logs.slamscore import Frames, score_slam_logs
-    from omnibot.mapping.session import score_lines
+    from omnibot.mapping import score_lines
     from omnibot.motion import Pose2D, parse_pose
 
     world = None
@@ -402,7 +402,7 @@ def _score(args: argparse.Namespace) -> int:
         world = load_world(args.world)
     grid = None
     if args.map is not None:
-        from omnibot.mapping.mapfile import load_map
+        from omnibot.mapping import load_map
 
         grid = load_map(args.map)
     map_pose = None

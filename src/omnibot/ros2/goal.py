@@ -34,9 +34,7 @@ from typing import TYPE_CHECKING, Any, Literal
 from omnibot.errors import ConfigError, OffMapError, PlanningError
 from omnibot.logs.recorder import map_to_odom, occupancy_grid
 from omnibot.logs.topics import MAP, TF
-from omnibot.mapping.grid import OccupancyGrid
-from omnibot.mapping.se2 import compose, inverse
-from omnibot.mapping.session import LocalisingSink
+from omnibot.mapping import LocalisingSink, OccupancyGrid, compose, inverse
 from omnibot.motion import Pose2D
 from omnibot.navigation.goto import GotoOptions, GotoResult
 from omnibot.navigation.goto_source import GotoSource
@@ -50,7 +48,7 @@ from omnibot.runtime import Cycle, Level, Proposal
 
 if TYPE_CHECKING:
     from omnibot.lidar.reader import ScanSource
-    from omnibot.mapping.localise import Localiser
+    from omnibot.mapping import Localiser
     from omnibot.scan import Scan
 
 GOAL_POSE = "goal_pose"

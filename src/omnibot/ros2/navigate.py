@@ -38,7 +38,7 @@ import numpy as np
 
 from omnibot.logs import schemas
 from omnibot.logs.recorder import header, quaternion
-from omnibot.mapping.planner import PlannedPath
+from omnibot.mapping import PlannedPath
 from omnibot.motion import Pose2D
 from omnibot.navigation.goto import GotoResult
 from omnibot.ros2.backend import DEFAULT, Profile, RosNode
