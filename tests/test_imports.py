@@ -496,7 +496,6 @@ SUBMODULE_FACES: tuple[str, ...] = (
     "omnibot.demos",
     "omnibot.firmware",
     "omnibot.lidar",
-    "omnibot.logs",
     "omnibot.navigation",
     "omnibot.plots",
     "omnibot.protocol",

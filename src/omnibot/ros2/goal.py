@@ -32,8 +32,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
 from omnibot.errors import ConfigError, OffMapError, PlanningError
-from omnibot.logs.recorder import map_to_odom, occupancy_grid
-from omnibot.logs.topics import MAP, TF
+from omnibot.logs import MAP, TF, map_to_odom, occupancy_grid
 from omnibot.mapping import LocalisingSink, OccupancyGrid, compose, inverse
 from omnibot.motion import Pose2D
 from omnibot.navigation.goto import GotoOptions, GotoResult

@@ -36,8 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from omnibot.logs import schemas
-from omnibot.logs.recorder import header, quaternion
+from omnibot.logs import header, quaternion, schemas
 from omnibot.mapping import PlannedPath
 from omnibot.motion import Pose2D
 from omnibot.navigation.goto import GotoResult
