@@ -65,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
     from omnibot.client import robot_session
     from omnibot.mapping import check_goal, inflate, load_map
     from omnibot.motion import Pose2D, parse_pose
-    from omnibot.navigation.goto import GotoOptions
+    from omnibot.navigation import GotoOptions
 
     gx, gy, gtheta = parse_pose(args.goal, "goal", optional_heading=True)
     initial = parse_pose(args.initial_pose, "--initial-pose") if args.initial_pose else None
@@ -121,7 +121,7 @@ def _go(
     from omnibot.cliargs import recording_of, use_calibration
     from omnibot.lidar.reader import open_scanner
     from omnibot.mapping import Localiser, LocalisingSink
-    from omnibot.navigation.goto import goto
+    from omnibot.navigation import goto
     from omnibot.transport import find_simulator
 
     sim = find_simulator(client.link)
@@ -145,7 +145,7 @@ def _go(
         f"from ({start.x:.2f}, {start.y:.2f}, {math.degrees(start.theta):.0f} deg) to ({goal.x:.2f}, {goal.y:.2f}, {math.degrees(goal.theta):.0f} deg)"
     )
     try:
-        result = goto(
+        result = goto.goto(
             client,
             robot,
             grid,

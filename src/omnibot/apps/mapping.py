@@ -166,8 +166,8 @@ def _explore(args: argparse.Namespace, url: str, out: Path) -> int:
     from omnibot.cliargs import recording_of, use_calibration
     from omnibot.client import robot_session
     from omnibot.motion import Pose2D
+    from omnibot.navigation import navigation_runtime
     from omnibot.navigation.explore import GOTO, explore
-    from omnibot.navigation.goto import navigation_runtime
     from omnibot.transport import find_simulator
 
     mapping = _Mapping(args)

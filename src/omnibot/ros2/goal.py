@@ -35,8 +35,7 @@ from omnibot.errors import ConfigError, OffMapError, PlanningError
 from omnibot.logs import MAP, TF, map_to_odom, occupancy_grid
 from omnibot.mapping import LocalisingSink, OccupancyGrid, compose, inverse
 from omnibot.motion import Pose2D
-from omnibot.navigation.goto import GotoOptions, GotoResult
-from omnibot.navigation.goto_source import GotoSource
+from omnibot.navigation import GotoOptions, GotoResult, GotoSource
 from omnibot.robot import RobotDescription
 from omnibot.ros2.backend import LATCHED, RosNode
 from omnibot.ros2.bridge import Diagnosed, Ros2Sink
