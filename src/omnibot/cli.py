@@ -243,8 +243,7 @@ def _sim(args: argparse.Namespace) -> int:
         return run_pty_emulator(
             robot, seed=seed, surface=args.surface, world=args.world, truth=truth, baud=args.baud
         )
-    from omnibot.logs.device import RecordedDevice
-    from omnibot.logs.recorder import Recorder
+    from omnibot.logs import RecordedDevice, Recorder
 
     log_recorder = Recorder(log)  # the bytes both ways and the truth
     try:

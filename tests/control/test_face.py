@@ -1,8 +1,8 @@
-"""omnibot.control's face: its names are the defining modules' own, loaded on first use."""
+"""omnibot.control's face: a name loads its own subpackage only (tests/test_faces.py checks that each
+name is the defining module's own)."""
 
 from __future__ import annotations
 
-import importlib
 import json
 import subprocess
 import sys
@@ -10,13 +10,6 @@ import sys
 import pytest
 
 from omnibot import control
-
-
-@pytest.mark.parametrize(("module", "name"), [(m, n) for m, names in control._EXPORTS.items() for n in names])
-def test_a_name_of_the_face_is_the_defining_modules_own(module: str, name: str) -> None:
-    defining = importlib.import_module(f"omnibot.control.{module}")
-    assert getattr(control, name) is getattr(defining, name)
-    assert name in control.__all__
 
 
 def test_a_name_the_face_lacks_is_an_attribute_error() -> None:

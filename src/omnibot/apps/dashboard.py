@@ -98,7 +98,7 @@ def run(args: argparse.Namespace) -> int:
     """Run ``omnibot web``: serve the dashboard for ``--duration`` s or until interrupted; the exit
     status (1 when the robot link ended)."""
     from omnibot.cliargs import check_sim_options, recording_of, sim_url, use_calibration
-    from omnibot.navigation.webteach import PathTeacher
+    from omnibot.navigation import PathTeacher
     from omnibot.robot import RobotDescription
     from omnibot.teleop import load_teleop_config
     from omnibot.web.dashboard import Dashboard

@@ -63,10 +63,9 @@ def run(args: argparse.Namespace) -> int:
     """``omnibot goto``: the exit status."""
     from omnibot.cliargs import check_sim_options, recording_of, sim_url, simulated
     from omnibot.client import robot_session
-    from omnibot.mapping.mapfile import load_map
-    from omnibot.mapping.planner import check_goal, inflate
+    from omnibot.mapping import check_goal, inflate, load_map
     from omnibot.motion import Pose2D, parse_pose
-    from omnibot.navigation.goto import GotoOptions
+    from omnibot.navigation import GotoOptions
 
     gx, gy, gtheta = parse_pose(args.goal, "goal", optional_heading=True)
     initial = parse_pose(args.initial_pose, "--initial-pose") if args.initial_pose else None
@@ -121,9 +120,8 @@ def _go(
 ) -> int:
     from omnibot.cliargs import recording_of, use_calibration
     from omnibot.lidar.reader import open_scanner
-    from omnibot.mapping.localise import Localiser
-    from omnibot.mapping.session import LocalisingSink
-    from omnibot.navigation.goto import goto
+    from omnibot.mapping import Localiser, LocalisingSink
+    from omnibot.navigation import goto
     from omnibot.transport import find_simulator
 
     sim = find_simulator(client.link)
@@ -147,7 +145,7 @@ def _go(
         f"from ({start.x:.2f}, {start.y:.2f}, {math.degrees(start.theta):.0f} deg) to ({goal.x:.2f}, {goal.y:.2f}, {math.degrees(goal.theta):.0f} deg)"
     )
     try:
-        result = goto(
+        result = goto.goto(
             client,
             robot,
             grid,

@@ -15,12 +15,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from omnibot.errors import ConfigError
-from omnibot.logs.run import Run, keyword_counts, load_run, rate_and_gap
+from omnibot.logs import Run, keyword_counts, load_run, rate_and_gap
 from omnibot.motion import Twist
 from omnibot.transport import SpyEvent, format_event
 
 if TYPE_CHECKING:
-    from omnibot.logs.follower_replay import RecordedFollower
+    from omnibot.logs import RecordedFollower
 
 EXIT_OK, EXIT_FAILED = 0, 1
 
@@ -240,7 +240,7 @@ def _plot(args: argparse.Namespace) -> int:
 
 
 def _replay(args: argparse.Namespace, run: Run | None = None) -> int:
-    from omnibot.logs.replay import replay_log, truth_in_frame
+    from omnibot.logs import replay_log, truth_in_frame
 
     run = _load(args) if run is None else run
     result = replay_log(run, args.estimator)
@@ -282,7 +282,7 @@ def _replay(args: argparse.Namespace, run: Run | None = None) -> int:
 def _replay_all(args: argparse.Namespace) -> int:
     """``omnibot log replay``: the estimator, then the follower (when the log has a follower run or
     one is asked for); the worse of the two statuses."""
-    from omnibot.logs.follower_replay import make_replayed, parse_options, recorded_followers
+    from omnibot.logs import make_replayed, parse_options, recorded_followers
 
     run = _load(args)
     runs = recorded_followers(run)
@@ -321,7 +321,7 @@ def _replay_follower(
 ) -> int:
     """Re-run the recorded follower (or ``--follower`` with ``--follower-option``s) on the recorded
     cycles; 1 when the live follower's own commands are not reproduced exactly."""
-    from omnibot.logs.follower_replay import replay_follower
+    from omnibot.logs import replay_follower
 
     result = replay_follower(chosen, args.follower, options)
     rec = result.recorded
@@ -391,8 +391,8 @@ def _recover(args: argparse.Namespace) -> int:
 def _score(args: argparse.Namespace) -> int:
     """``omnibot log score``: a SLAM run scored from its logs (see :mod:`omnibot.logs.slamscore`)."""
     from omnibot.cliargs import output_dir
-    from omnibot.logs.slamscore import Frames, score_slam_logs
-    from omnibot.mapping.session import score_lines
+    from omnibot.logs import Frames, score_slam_logs
+    from omnibot.mapping import score_lines
     from omnibot.motion import Pose2D, parse_pose
 
     world = None
@@ -402,7 +402,7 @@ def _score(args: argparse.Namespace) -> int:
         world = load_world(args.world)
     grid = None
     if args.map is not None:
-        from omnibot.mapping.mapfile import load_map
+        from omnibot.mapping import load_map
 
         grid = load_map(args.map)
     map_pose = None

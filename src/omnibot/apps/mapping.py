@@ -166,8 +166,8 @@ def _explore(args: argparse.Namespace, url: str, out: Path) -> int:
     from omnibot.cliargs import recording_of, use_calibration
     from omnibot.client import robot_session
     from omnibot.motion import Pose2D
+    from omnibot.navigation import navigation_runtime
     from omnibot.navigation.explore import GOTO, explore
-    from omnibot.navigation.goto import navigation_runtime
     from omnibot.transport import find_simulator
 
     mapping = _Mapping(args)
@@ -230,7 +230,7 @@ class _Mapping:
     def attach(self, runtime: Any, session: Any, *, estimator: bool = True) -> list[Any]:
         from omnibot.estimation import make_estimator
         from omnibot.lidar.reader import open_scanner
-        from omnibot.mapping.session import MappingSink, RangeNoise, Track
+        from omnibot.mapping import MappingSink, RangeNoise, Track
         from omnibot.motion import Pose2D
         from omnibot.transport import find_simulator
 
@@ -290,7 +290,7 @@ class _Mapping:
 
     def finish(self, out: Path, parts: Any, resolution: float) -> int:
         from omnibot.apps.run import outcome
-        from omnibot.mapping.session import score_lines, write_outputs
+        from omnibot.mapping import score_lines, write_outputs
 
         sink = self.sink
         if sink is None:

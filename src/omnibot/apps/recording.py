@@ -20,11 +20,9 @@ import contextlib
 from collections.abc import Iterator, Sequence
 from typing import TYPE_CHECKING
 
-from omnibot.logs.recording import Recording, open_recording
-
 if TYPE_CHECKING:
     from omnibot.client import RobotClient
-    from omnibot.logs.recorder import Recorder
+    from omnibot.logs import Recorder, Recording
     from omnibot.robot import RobotDescription
     from omnibot.runtime import Runtime
 
@@ -68,6 +66,8 @@ class CommandRecording:
 def command_recording(args: argparse.Namespace) -> Iterator[CommandRecording | None]:
     """The recording ``args`` asks for (``--log``, ``--foxglove``, ``--foxglove-token``; None: none),
     closed on the way out."""
+    from omnibot.logs import open_recording  # here: ``omnibot --help`` loads nothing of logs
+
     with open_recording(
         getattr(args, "log", None),
         foxglove=getattr(args, "foxglove", None),

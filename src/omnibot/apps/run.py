@@ -132,9 +132,7 @@ def compose(
     from omnibot.apps.teleop import open_source
     from omnibot.estimation import make_estimator
     from omnibot.motion import Pose2D
-    from omnibot.navigation.following import FOLLOWER_PRIORITY, follower_source
-    from omnibot.navigation.judge import FollowJudge
-    from omnibot.navigation.runner import STANDSTILL
+    from omnibot.navigation import FOLLOWER_PRIORITY, STANDSTILL, FollowJudge, follower_source
     from omnibot.runtime import (
         EstimatorWhenMissing,
         NoticePrinter,
@@ -183,7 +181,7 @@ def compose(
 
 def outcome(report: dict[str, Any]) -> list[str]:
     """The follow's outcome and accuracy in ``omnibot follow``'s words: its summary, its verdict."""
-    from omnibot.navigation.session import summary, verdict
+    from omnibot.navigation import summary, verdict
 
     return [f"follow: {summary(report)}", f"follow {verdict(report)}"]
 
@@ -334,7 +332,7 @@ def _stop_pad(runtime: Any, parts: Parts, config: Any) -> None:
 def _with_dashboard(args: argparse.Namespace, url: str, config: Any, path: Any) -> Parts:
     from omnibot.apps.dashboard import server_options
     from omnibot.cliargs import recording_of, use_calibration
-    from omnibot.navigation.webteach import PathTeacher
+    from omnibot.navigation import PathTeacher
     from omnibot.robot import RobotDescription
     from omnibot.web.dashboard import Dashboard
 

@@ -38,7 +38,7 @@ from omnibot.outputs import check_writable
 
 if TYPE_CHECKING:
     from omnibot.control import Path, PathRecorder
-    from omnibot.navigation.metrics import Tolerances
+    from omnibot.navigation import Tolerances
 
 
 def _positive(value: float, flag: str) -> float:
@@ -54,7 +54,7 @@ def _robot_client(args: argparse.Namespace, start: Any = None) -> Iterator[tuple
     at ``start`` (``follow``: the path's start), else at the origin; the controller is left as it was
     found on every way out."""
     from omnibot.client import guarded, robot_session
-    from omnibot.navigation.session import simulated_client
+    from omnibot.navigation import simulated_client
     from omnibot.robot import load_robot
 
     recording = recording_of(args)
@@ -86,7 +86,7 @@ def run_follow(args: argparse.Namespace) -> int:
     did not complete, its failures printed)."""
     from omnibot.control import read_path
     from omnibot.motion import Pose2D
-    from omnibot.navigation.session import FollowOptions, follow_path, summary, verdict
+    from omnibot.navigation import FollowOptions, follow_path, summary, verdict
     from omnibot.progress import progress_bar
 
     check_sim_options(args, allowed=("surface",))
@@ -150,7 +150,7 @@ def _check_follower_and_estimator(args: argparse.Namespace) -> None:
 
 def _tolerances(args: argparse.Namespace) -> Tolerances:
     """The run's tolerances from ``--final-tolerance`` and ``--cross-track-tolerance``."""
-    from omnibot.navigation.metrics import Tolerances
+    from omnibot.navigation import Tolerances
 
     return Tolerances(
         final=_positive(args.final_tolerance, "--final-tolerance"),
@@ -191,7 +191,7 @@ def _write_follow_outputs(
         _write(targets["report"], json.dumps(report, indent=2) + "\n", "--report")
         print(f"  report: {targets['report']}")
     if targets["plot"] is not None:
-        from omnibot.navigation.plot import plot_run
+        from omnibot.navigation import plot_run
 
         try:
             plot_run(run, str(targets["plot"]), title=f"{robot}: {args.follower} on {FsPath(args.path).name}")
@@ -239,7 +239,7 @@ def run_record(args: argparse.Namespace) -> int:
     """Run ``omnibot record``: record a taught or standard path to ``--path``; the exit status (1 when
     the recording is no path to follow, and nothing is written)."""
     from omnibot.control import write_path
-    from omnibot.navigation.record import check_recording, teach
+    from omnibot.navigation import check_recording, teach
 
     check_sim_options(args)
     if not args.path:
@@ -359,7 +359,7 @@ def add_follow_arguments(p: argparse.ArgumentParser) -> None:
 
 def _add_follow_outcome_arguments(p: argparse.ArgumentParser) -> None:
     """The ``omnibot follow`` options that judge and keep a run: its tolerances and its outputs."""
-    from omnibot.navigation.metrics import Tolerances
+    from omnibot.navigation import Tolerances
 
     tol = Tolerances()
     p.add_argument(
@@ -384,7 +384,7 @@ def _add_follow_outcome_arguments(p: argparse.ArgumentParser) -> None:
 
 def add_record_arguments(p: argparse.ArgumentParser) -> None:
     """The ``omnibot record`` options: the file to write, robot or port, and how the path is taught."""
-    from omnibot.navigation.record import MIN_LENGTH, MIN_POINTS
+    from omnibot.navigation import MIN_LENGTH, MIN_POINTS
 
     p.add_argument("--path", metavar="FILE.csv", help="path file to write (required)")
     p.add_argument("--out", action=DeprecatedAlias, dest="path", use="--path", help=argparse.SUPPRESS)

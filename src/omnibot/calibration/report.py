@@ -27,7 +27,7 @@ from omnibot.calibration.results import CalibrationResult, SurfaceSession
 from omnibot.calibration.seedterms import seed_kr
 from omnibot.calibration.tables import move_grid, rotate_lines, summary_table
 from omnibot.errors import ConfigError
-from omnibot.navigation.slipcal import SlipCalibration
+from omnibot.navigation import SlipCalibration
 from omnibot.robot import CalibrationSpec, PiecewiseLinear
 
 STYLES = ("-", "--", ":", "-.")

@@ -17,7 +17,7 @@ from omnibot.calibration.umbmark import OdometryCalibration
 from omnibot.robot import CalibrationSpec, RobotDescription
 
 if TYPE_CHECKING:  # the slip fit's result type only (navigation.slipcal drives the runs)
-    from omnibot.navigation.slipcal import SlipCalibration
+    from omnibot.navigation import SlipCalibration
 
 
 @dataclass

@@ -76,7 +76,7 @@ from omnibot.calibration.verdict import judge_average
 from omnibot.client import RobotClient
 from omnibot.errors import ConfigError
 from omnibot.firmware.config import build_config
-from omnibot.navigation.slipcal import SLIP_COURSES, SlipCalibration
+from omnibot.navigation import SLIP_COURSES, SlipCalibration
 from omnibot.progress import Progress
 from omnibot.protocol import codes
 from omnibot.robot import CalibrationSpec, MotorMapSpec, RobotDescription

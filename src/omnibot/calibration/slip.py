@@ -16,8 +16,7 @@ from typing import Any
 from omnibot.calibration.runs import STRAIGHT, RunInfo
 from omnibot.calibration.truth import TruthSource
 from omnibot.client import RobotClient
-from omnibot.navigation.runner import Navigator
-from omnibot.navigation.slipcal import SlipCalibration, calibrate_slip
+from omnibot.navigation import Navigator, SlipCalibration, calibrate_slip
 from omnibot.robot import RobotDescription
 from omnibot.runtime import RuntimeRecording
 

@@ -32,9 +32,16 @@ from omnibot.errors import ConfigError
 from omnibot.logs.reader import LogFile
 from omnibot.logs.run import yaw_of
 from omnibot.logs.topics import MAP, ODOM, SCAN, TF, TRUTH
-from omnibot.mapping.grid import OccupancyGrid
-from omnibot.mapping.se2 import compose, inverse
-from omnibot.mapping.session import MappingResult, Track, interpolate, path_length, write_report
+from omnibot.mapping import (
+    MappingResult,
+    OccupancyGrid,
+    Track,
+    compose,
+    interpolate,
+    inverse,
+    path_length,
+    write_report,
+)
 from omnibot.motion import Pose2D
 
 TF_TYPE = "tf2_msgs/msg/TFMessage"

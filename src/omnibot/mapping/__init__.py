@@ -23,7 +23,108 @@ Modules (each owns one thing; the plain scan type is :mod:`omnibot.scan`):
 * :mod:`omnibot.mapping.slam` - :class:`~omnibot.mapping.slam.Slam`, online 2D SLAM: keyframes
   matched to a local submap, a gtsam pose graph with verified, robust loop closures.
 
-The user's guide is docs/mapping.md.
+The user's guide is docs/mapping.md. Other packages take the names below from this face::
+
+    from omnibot.mapping import Localiser, OccupancyGrid, load_map, plan_path
+
+Each loads on first use, with only the module that defines it: a grid or a map file loads no numba,
+only the SLAM session loads gtsam.
 """
 
-__all__ = ["grid", "localise", "mapfile", "planner", "se2", "session"]
+from typing import TYPE_CHECKING
+
+from omnibot.faces import lazy_names
+
+if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
+    from omnibot.mapping.grid import OCCUPIED, OccupancyGrid
+    from omnibot.mapping.localise import Localiser
+    from omnibot.mapping.mapfile import load_map, save_map
+    from omnibot.mapping.planner import (
+        MARGIN,
+        CostMap,
+        PlannedPath,
+        Planner,
+        check_goal,
+        check_start,
+        inflate,
+        plan_path,
+    )
+    from omnibot.mapping.se2 import compose, inverse
+    from omnibot.mapping.session import (
+        LocalisingSink,
+        MappingResult,
+        MappingSink,
+        RangeNoise,
+        Track,
+        interpolate,
+        path_length,
+        score_lines,
+        write_outputs,
+        write_report,
+    )
+
+_EXPORTS = {
+    "grid": ("OCCUPIED", "OccupancyGrid"),
+    "localise": ("Localiser",),
+    "mapfile": ("load_map", "save_map"),
+    "planner": (
+        "MARGIN",
+        "CostMap",
+        "PlannedPath",
+        "Planner",
+        "check_goal",
+        "check_start",
+        "inflate",
+        "plan_path",
+    ),
+    "se2": ("compose", "inverse"),
+    "session": (
+        "LocalisingSink",
+        "MappingResult",
+        "MappingSink",
+        "RangeNoise",
+        "Track",
+        "interpolate",
+        "path_length",
+        "score_lines",
+        "write_outputs",
+        "write_report",
+    ),
+}
+
+__all__ = [
+    "MARGIN",
+    "OCCUPIED",
+    "CostMap",
+    "Localiser",
+    "LocalisingSink",
+    "MappingResult",
+    "MappingSink",
+    "OccupancyGrid",
+    "PlannedPath",
+    "Planner",
+    "RangeNoise",
+    "Track",
+    "check_goal",
+    "check_start",
+    "compose",
+    "grid",
+    "inflate",
+    "interpolate",
+    "inverse",
+    "load_map",
+    "localise",
+    "mapfile",
+    "path_length",
+    "plan_path",
+    "planner",
+    "save_map",
+    "score_lines",
+    "se2",
+    "session",
+    "write_outputs",
+    "write_report",
+]
+
+# a name loads its own module only: OccupancyGrid needs no gtsam, load_map no numba
+__getattr__ = lazy_names(__name__, _EXPORTS)

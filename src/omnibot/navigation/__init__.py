@@ -2,19 +2,86 @@
 
 The glue between :mod:`omnibot.client` (VEL out, TEL in), :mod:`omnibot.estimation` and
 :mod:`omnibot.control`; see docs/navigation.md.
+
+Other packages take the names below from this face::
+
+    from omnibot.navigation import FollowOptions, GotoOptions, follow_path, simulated_client
+
+Each loads on first use, with only the module that defines it (the slip calibration needs no planner,
+teach and repeat no map). A function named as its module cannot be given (the submodule shadows it):
+``goto.goto`` is called on the module (``from omnibot.navigation import goto``), and ``explore`` and
+its ``GOTO`` options are imported from their module, whose names the face leaves alone.
 """
 
+from typing import TYPE_CHECKING
+
+from omnibot.faces import lazy_names
+
+if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
+    from omnibot.navigation.following import FOLLOWER_PRIORITY, follower_source
+    from omnibot.navigation.goto import GotoOptions, GotoResult, navigation_runtime
+    from omnibot.navigation.goto_source import GotoSource
+    from omnibot.navigation.judge import FollowJudge
+    from omnibot.navigation.metrics import Tolerances
+    from omnibot.navigation.plot import plot_run
+    from omnibot.navigation.record import MIN_LENGTH, MIN_POINTS, check_recording, teach
+    from omnibot.navigation.runner import STANDSTILL, Navigator
+    from omnibot.navigation.session import FollowOptions, follow_path, simulated_client, summary, verdict
+    from omnibot.navigation.slipcal import SLIP_COURSES, SlipCalibration, calibrate_slip
+    from omnibot.navigation.webteach import PathTeacher
+
+_EXPORTS = {
+    "following": ("FOLLOWER_PRIORITY", "follower_source"),
+    "goto": ("GotoOptions", "GotoResult", "navigation_runtime"),
+    "goto_source": ("GotoSource",),
+    "judge": ("FollowJudge",),
+    "metrics": ("Tolerances",),
+    "plot": ("plot_run",),
+    "record": ("MIN_LENGTH", "MIN_POINTS", "check_recording", "teach"),
+    "runner": ("STANDSTILL", "Navigator"),
+    "session": ("FollowOptions", "follow_path", "simulated_client", "summary", "verdict"),
+    "slipcal": ("SLIP_COURSES", "SlipCalibration", "calibrate_slip"),
+    "webteach": ("PathTeacher",),
+}
+
 __all__ = [
+    "FOLLOWER_PRIORITY",
+    "MIN_LENGTH",
+    "MIN_POINTS",
+    "SLIP_COURSES",
+    "STANDSTILL",
+    "FollowJudge",
+    "FollowOptions",
+    "GotoOptions",
+    "GotoResult",
+    "GotoSource",
+    "Navigator",
+    "PathTeacher",
+    "SlipCalibration",
+    "Tolerances",
+    "calibrate_slip",
+    "check_recording",
     "explore",
+    "follow_path",
+    "follower_source",
     "following",
     "goto",
     "goto_source",
     "judge",
     "metrics",
+    "navigation_runtime",
     "plot",
+    "plot_run",
     "record",
     "runner",
     "session",
+    "simulated_client",
     "slipcal",
+    "summary",
+    "teach",
+    "verdict",
     "webteach",
 ]
+
+# a name loads its own module only: the slip calibration loads no planner, no dashboard
+__getattr__ = lazy_names(__name__, _EXPORTS)

@@ -41,8 +41,7 @@ from numpy.typing import NDArray
 from scipy import ndimage
 
 from omnibot.errors import PlanningError
-from omnibot.mapping.grid import OccupancyGrid
-from omnibot.mapping.planner import CostMap, check_start, inflate, plan_path
+from omnibot.mapping import CostMap, OccupancyGrid, check_start, inflate, plan_path
 from omnibot.motion import Pose2D
 from omnibot.navigation.goto import GotoOptions, GotoResult, PoseProvider, go_to
 from omnibot.robot import RobotDescription

@@ -41,9 +41,19 @@ from omnibot.client import NotSupported, RobotClient
 from omnibot.control import Path, min_traversal_time, resample, wrap
 from omnibot.errors import ConfigError, PlanningError
 from omnibot.estimation import SlipModel, make_estimator
-from omnibot.mapping.grid import OCCUPIED, OccupancyGrid
-from omnibot.mapping.planner import MARGIN, CostMap, PlannedPath, Planner, check_goal, inflate, plan_path
-from omnibot.mapping.se2 import compose, inverse
+from omnibot.mapping import (
+    MARGIN,
+    OCCUPIED,
+    CostMap,
+    OccupancyGrid,
+    PlannedPath,
+    Planner,
+    check_goal,
+    compose,
+    inflate,
+    inverse,
+    plan_path,
+)
 from omnibot.motion import Pose2D
 from omnibot.navigation.following import FOLLOWER_PRIORITY, follower_source
 from omnibot.navigation.runner import SETTLE, STANDSTILL

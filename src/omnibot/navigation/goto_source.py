@@ -28,8 +28,7 @@ import math
 from collections.abc import Callable
 from typing import Literal
 
-from omnibot.mapping.grid import OccupancyGrid
-from omnibot.mapping.planner import check_goal, check_start, inflate
+from omnibot.mapping import OccupancyGrid, check_goal, check_start, inflate
 from omnibot.motion import Pose2D, Twist
 from omnibot.navigation.goto import (
     GotoOptions,

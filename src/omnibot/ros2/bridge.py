@@ -34,9 +34,21 @@ from typing import Any
 import numpy as np
 
 from omnibot.client import WarnEvent
-from omnibot.logs import schemas
-from omnibot.logs.recorder import Recorder, header, quaternion, stamp, vector
-from omnibot.logs.topics import IMU, JOINT_STATES, ODOM, RANGE_PREFIX, ROBOT_DESCRIPTION, SCAN, TF
+from omnibot.logs import (
+    IMU,
+    JOINT_STATES,
+    ODOM,
+    RANGE_PREFIX,
+    ROBOT_DESCRIPTION,
+    SCAN,
+    TF,
+    Recorder,
+    header,
+    quaternion,
+    schemas,
+    stamp,
+    vector,
+)
 from omnibot.motion import Twist
 from omnibot.protocol import codes
 from omnibot.robot import RobotDescription, battery_level

@@ -226,7 +226,7 @@ def check_map(args: argparse.Namespace, specs: list[RobotSpec]) -> None:
                 "--initial-pose places the robot in a --map: give the map", key="--initial-pose"
             )
         return
-    from omnibot.mapping.mapfile import load_map
+    from omnibot.mapping import load_map
     from omnibot.motion import parse_pose
 
     if len(specs) > 1:
@@ -423,7 +423,7 @@ def _goal_pose(
 ) -> Any:
     """``--map``: the localiser (started at ``--initial-pose`` or the simulator's pose) publishing the map
     and ``map -> odom``, and the ``goal_pose`` source on it (:mod:`omnibot.ros2.goal`)."""
-    from omnibot.mapping.localise import Localiser
+    from omnibot.mapping import Localiser
     from omnibot.motion import Pose2D
     from omnibot.ros2.goal import GoalPoseSource, Localisation, PlaceableSink
     from omnibot.ros2.navigate import NavigateToPose

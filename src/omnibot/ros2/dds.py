@@ -34,7 +34,7 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from omnibot.errors import ConfigError
-from omnibot.logs.schemas import type_hash
+from omnibot.logs import type_hash
 from omnibot.ros2 import netns
 from omnibot.ros2.backend import (
     DEFAULT,

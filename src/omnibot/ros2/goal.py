@@ -32,14 +32,10 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
 from omnibot.errors import ConfigError, OffMapError, PlanningError
-from omnibot.logs.recorder import map_to_odom, occupancy_grid
-from omnibot.logs.topics import MAP, TF
-from omnibot.mapping.grid import OccupancyGrid
-from omnibot.mapping.se2 import compose, inverse
-from omnibot.mapping.session import LocalisingSink
+from omnibot.logs import MAP, TF, map_to_odom, occupancy_grid
+from omnibot.mapping import LocalisingSink, OccupancyGrid, compose, inverse
 from omnibot.motion import Pose2D
-from omnibot.navigation.goto import GotoOptions, GotoResult
-from omnibot.navigation.goto_source import GotoSource
+from omnibot.navigation import GotoOptions, GotoResult, GotoSource
 from omnibot.robot import RobotDescription
 from omnibot.ros2.backend import LATCHED, RosNode
 from omnibot.ros2.bridge import Diagnosed, Ros2Sink
@@ -50,7 +46,7 @@ from omnibot.runtime import Cycle, Level, Proposal
 
 if TYPE_CHECKING:
     from omnibot.lidar.reader import ScanSource
-    from omnibot.mapping.localise import Localiser
+    from omnibot.mapping import Localiser
     from omnibot.scan import Scan
 
 GOAL_POSE = "goal_pose"

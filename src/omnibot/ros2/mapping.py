@@ -22,8 +22,7 @@ import logging
 import threading
 from typing import Any
 
-from omnibot.logs.recorder import map_to_odom, occupancy_grid
-from omnibot.logs.topics import MAP, TF
+from omnibot.logs import MAP, TF, map_to_odom, occupancy_grid
 from omnibot.ros2.dds import LATCHED
 from omnibot.runtime import Cycle
 

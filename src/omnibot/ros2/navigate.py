@@ -36,11 +36,10 @@ from typing import Any
 
 import numpy as np
 
-from omnibot.logs import schemas
-from omnibot.logs.recorder import header, quaternion
-from omnibot.mapping.planner import PlannedPath
+from omnibot.logs import header, quaternion, schemas
+from omnibot.mapping import PlannedPath
 from omnibot.motion import Pose2D
-from omnibot.navigation.goto import GotoResult
+from omnibot.navigation import GotoResult
 from omnibot.ros2.backend import DEFAULT, Profile, RosNode
 from omnibot.ros2.goal import GoalPoseSource, Refusal
 from omnibot.ros2.service import answer

@@ -31,9 +31,7 @@ import numpy as np
 
 from omnibot.control import Path
 from omnibot.motion import Estimate
-from omnibot.navigation.following import FOLLOWER_PRIORITY, follower_source
-from omnibot.navigation.judge import FollowJudge
-from omnibot.navigation.session import summary, verdict
+from omnibot.navigation import FOLLOWER_PRIORITY, FollowJudge, follower_source, summary, verdict
 from omnibot.ros2.backend import RosNode
 from omnibot.ros2.bridge import Diagnosed
 from omnibot.ros2.odometry import yaw_of

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 from rosbags.typesys.msg import get_types_from_msg
 
-from omnibot.logs.schemas import typestore
+from omnibot.logs import typestore
 
 try:
     from cyclonedds.idl import IdlStruct, make_idl_struct
