@@ -97,7 +97,7 @@ FIRST: tuple[str, ...] = (
     "tests/apps/test_calibrate.py::test_a_port_with_two_floors_asks_between_them",  # 23 s
     # the rest: wall on a worker, as above
     "tests/navigation/test_explore.py",  # 189 s
-    "tests/uno/test_sketch.py",  # 186 s: arduino-mk builds
+    "tests/uno/test_sketch.py",  # 186 s building its own 4 sketches; 19 s alone (load 8) with make's (2c197b0)
     "tests/apps/test_follow.py",  # 166 s
     "tests/sim/test_jit.py",  # 123-133 s at load 19, about 30 s CPU: a cold start followed through one whole compile
     "tests/navigation/test_runner.py",  # 156 s
