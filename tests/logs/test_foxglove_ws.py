@@ -154,6 +154,22 @@ def test_a_subscriber_gets_what_is_published_and_others_nothing(server: Foxglove
             idle.recv(timeout=0.2)
 
 
+def test_a_topic_new_while_a_client_connects_is_advertised_to_it_once(
+    server: FoxgloveServer, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The topic's broadcast reaches the loop after the client's greeting already listed it."""
+    held: list[tuple[object, tuple[object, ...]]] = []
+    call = server._call
+    monkeypatch.setattr(server, "_call", lambda fn, *args: held.append((fn, args)))
+    server.publish("/a", "std_msgs/msg/String", "string data", b"one", 1)
+    with opened(server) as ws:
+        assert [json.loads(ws.recv(timeout=5))["op"] for _ in range(2)] == ["serverInfo", "advertise"]
+        for fn, args in held:
+            call(fn, *args)
+        with pytest.raises(TimeoutError):
+            ws.recv(timeout=0.3)
+
+
 def test_a_port_in_use_is_a_clear_error(server: FoxgloveServer, taken: Taken) -> None:
     with pytest.raises(ConfigError, match=r"cannot listen on 127\.0\.0\.1"):
         FoxgloveServer("127.0.0.1", server.port, taken)

@@ -140,6 +140,9 @@ class _Client:
         self.subscriptions: dict[int, int] = {}
         """Subscription id -> channel id."""
         self.channels: dict[int, ClientChannel] = {}
+        self.told: set[int] = set()
+        """Server channels advertised to this client (each once, whichever of the greeting and a new
+        topic's broadcast comes first: a topic new while the client connects is in both)."""
         self.control: deque[str] = deque()
         self.data: deque[bytes] = deque(maxlen=BACKLOG)
         self.ready = asyncio.Event()
@@ -342,6 +345,7 @@ class FoxgloveServer:
             with self._lock:
                 channels = list(self._channels.values())
             if channels:
+                client.told.update(c.id for c in channels)
                 client.send(json.dumps({"op": "advertise", "channels": [c.advert() for c in channels]}))
             async for message in ws:
                 if not budget.take():
@@ -448,7 +452,9 @@ class FoxgloveServer:
     def _advertise(self, channel: _Channel) -> None:
         frame = json.dumps({"op": "advertise", "channels": [channel.advert()]})
         for client in self._clients:
-            client.send(frame)
+            if channel.id not in client.told:
+                client.told.add(channel.id)
+                client.send(frame)
 
     def _flush(self) -> None:
         with self._lock:
