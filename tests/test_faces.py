@@ -11,7 +11,14 @@ from types import ModuleType
 
 import pytest
 
-LAZY_FACES = ("omnibot.control", "omnibot.logs", "omnibot.mapping", "omnibot.navigation", "omnibot.teleop")
+LAZY_FACES = (
+    "omnibot.control",
+    "omnibot.logs",
+    "omnibot.mapping",
+    "omnibot.navigation",
+    "omnibot.sim",
+    "omnibot.teleop",
+)
 """The faces built with an ``_EXPORTS`` table (robot's two lazy names are its summary's and urdf's)."""
 
 

@@ -499,7 +499,6 @@ SUBMODULE_FACES: tuple[str, ...] = (
     "omnibot.plots",
     "omnibot.protocol",
     "omnibot.ros2",
-    "omnibot.sim",
     "omnibot.uno",
     "omnibot.web",
 )

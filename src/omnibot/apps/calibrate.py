@@ -191,7 +191,7 @@ def sim_opener(
     @contextmanager
     def open_client(surface: str) -> Iterator[RobotClient]:
         from omnibot.client import RobotClient, guarded
-        from omnibot.sim.device import SimDevice
+        from omnibot.sim import SimDevice
         from omnibot.transport import LockstepLink
 
         url = f"sim://{name}?surface={surface}&seed={seed}" + (f"&world={world}" if world else "")
@@ -326,7 +326,7 @@ def _robot_and_client(
     if args.port is None:
         robot = load_robot(sim_robot(args))
         if world != "empty":
-            from omnibot.sim.world import load_world
+            from omnibot.sim import load_world
 
             load_world(world)
     else:

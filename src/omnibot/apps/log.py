@@ -397,7 +397,7 @@ def _score(args: argparse.Namespace) -> int:
 
     world = None
     if args.world is not None:
-        from omnibot.sim.world import load_world
+        from omnibot.sim import load_world
 
         world = load_world(args.world)
     grid = None

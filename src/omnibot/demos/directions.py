@@ -17,7 +17,7 @@ import numpy as np
 from omnibot.progress import Progress
 from omnibot.robot import RobotDescription
 from omnibot.robot import kinematics as kin
-from omnibot.sim.simulator import Simulator
+from omnibot.sim import Simulator
 
 DIRECTIONS: tuple[tuple[str, float, float, float], ...] = (
     ("forward", 1, 0, 0),

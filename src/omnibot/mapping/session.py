@@ -50,7 +50,7 @@ if TYPE_CHECKING:
     from omnibot.mapping.grid import OccupancyGrid
     from omnibot.mapping.localise import Localiser
     from omnibot.runtime import Cycle
-    from omnibot.sim.world import World
+    from omnibot.sim import World
 
 HISTORY = 4096
 """Odometry samples kept for interpolation (40 s at 100 Hz; scans are never that late)."""
