@@ -12,6 +12,7 @@ from types import ModuleType
 import pytest
 
 LAZY_FACES = (
+    "omnibot.calibration",
     "omnibot.control",
     "omnibot.logs",
     "omnibot.mapping",

@@ -88,7 +88,7 @@ def use_calibration(args: argparse.Namespace, client: Any, robot: Any) -> Any:
     path = getattr(args, "calibration", None)
     if not path:
         return None
-    from omnibot.calibration.calfile import floor_calibration
+    from omnibot.calibration import floor_calibration
     from omnibot.estimation import SlipModel
 
     tables, slip = floor_calibration(path, robot, args.surface)
