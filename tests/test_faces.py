@@ -17,6 +17,7 @@ LAZY_FACES = (
     "omnibot.logs",
     "omnibot.mapping",
     "omnibot.navigation",
+    "omnibot.plots",
     "omnibot.sim",
     "omnibot.teleop",
 )

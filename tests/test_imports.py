@@ -495,7 +495,6 @@ SUBMODULE_FACES: tuple[str, ...] = (
     "omnibot.demos",
     "omnibot.firmware",
     "omnibot.lidar",
-    "omnibot.plots",
     "omnibot.protocol",
     "omnibot.ros2",
     "omnibot.uno",

@@ -137,7 +137,7 @@ def format_table(robot: RobotDescription, runs: list[DirectionRun]) -> str:
 
 def plot_tour(robot: RobotDescription, runs: list[DirectionRun], path: Path) -> None:
     """One panel: every translation's trail from the origin, with heading ticks; rotations listed."""
-    from omnibot.plots.figure import new_figure, save
+    from omnibot.plots import new_figure, save
 
     fig, axes = new_figure(1, 1, size=(6.5, 6.0))
     ax = axes[0][0]

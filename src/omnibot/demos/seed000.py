@@ -472,7 +472,7 @@ def format_table(segments: list[Segment]) -> str:
 
 def plot(truth: TruthSource | None, odo_trail: list[tuple[float, float]], world: Any, path: Path) -> None:
     """Plot the walls, the true trail and the odometry trail to the image file ``path``."""
-    from omnibot.plots.figure import new_figure, save
+    from omnibot.plots import new_figure, save
 
     fig, axes = new_figure(1, 1, size=(7.5, 6.2))
     ax = axes[0][0]
