@@ -20,6 +20,7 @@ LAZY_FACES = (
     "omnibot.plots",
     "omnibot.sim",
     "omnibot.teleop",
+    "omnibot.web",
 )
 """The faces built with an ``_EXPORTS`` table (robot's two lazy names are its summary's and urdf's)."""
 

@@ -498,7 +498,6 @@ SUBMODULE_FACES: tuple[str, ...] = (
     "omnibot.protocol",
     "omnibot.ros2",
     "omnibot.uno",
-    "omnibot.web",
 )
 """Storey packages whose faces list submodules only, so that other packages still import names from
 those submodules: firmware's and protocol's by design (their ``__init__`` is copied to boards), the

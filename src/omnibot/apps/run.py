@@ -334,7 +334,7 @@ def _with_dashboard(args: argparse.Namespace, url: str, config: Any, path: Any) 
     from omnibot.cliargs import recording_of, use_calibration
     from omnibot.navigation import PathTeacher
     from omnibot.robot import RobotDescription
-    from omnibot.web.dashboard import Dashboard
+    from omnibot.web import Dashboard
 
     server = server_options(args)
 
