@@ -494,7 +494,6 @@ SUBMODULE_FACES: tuple[str, ...] = (
     "omnibot.apps",
     "omnibot.demos",
     "omnibot.firmware",
-    "omnibot.lidar",
     "omnibot.protocol",
     "omnibot.ros2",
     "omnibot.uno",

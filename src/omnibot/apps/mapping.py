@@ -229,7 +229,7 @@ class _Mapping:
 
     def attach(self, runtime: Any, session: Any, *, estimator: bool = True) -> list[Any]:
         from omnibot.estimation import make_estimator
-        from omnibot.lidar.reader import open_scanner
+        from omnibot.lidar import open_scanner
         from omnibot.mapping import MappingSink, RangeNoise, Track
         from omnibot.motion import Pose2D
         from omnibot.transport import find_simulator

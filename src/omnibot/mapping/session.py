@@ -46,7 +46,7 @@ from omnibot.scan import Scan
 FloatArray = NDArray[np.float64]
 
 if TYPE_CHECKING:
-    from omnibot.lidar.reader import ScanSource
+    from omnibot.lidar import ScanSource
     from omnibot.mapping.grid import OccupancyGrid
     from omnibot.mapping.localise import Localiser
     from omnibot.runtime import Cycle
