@@ -19,6 +19,7 @@ LAZY_FACES = (
     "omnibot.mapping",
     "omnibot.navigation",
     "omnibot.plots",
+    "omnibot.ros2",
     "omnibot.sim",
     "omnibot.teleop",
     "omnibot.web",

@@ -495,7 +495,6 @@ SUBMODULE_FACES: tuple[str, ...] = (
     "omnibot.demos",
     "omnibot.firmware",
     "omnibot.protocol",
-    "omnibot.ros2",
     "omnibot.uno",
 )
 """Storey packages whose faces list submodules only, so that other packages still import names from
