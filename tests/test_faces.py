@@ -14,6 +14,7 @@ import pytest
 LAZY_FACES = (
     "omnibot.calibration",
     "omnibot.control",
+    "omnibot.demos",
     "omnibot.lidar",
     "omnibot.logs",
     "omnibot.mapping",

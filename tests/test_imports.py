@@ -492,7 +492,6 @@ def test_packages_import_each_other_through_their_faces() -> None:
 
 SUBMODULE_FACES: tuple[str, ...] = (
     "omnibot.apps",
-    "omnibot.demos",
     "omnibot.firmware",
     "omnibot.protocol",
     "omnibot.uno",

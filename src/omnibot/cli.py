@@ -308,7 +308,7 @@ def _add_sim(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def _tour(args: argparse.Namespace) -> int:
-    from omnibot.demos.directions import DIRECTIONS, format_table, plot_tour, run_tour
+    from omnibot.demos import DIRECTIONS, format_table, plot_tour, run_tour
     from omnibot.floor import get_surface
     from omnibot.progress import progress_bar
     from omnibot.robot import load_robot, preset_names
@@ -415,7 +415,7 @@ def _add_console(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> No
 
 def _demo(args: argparse.Namespace) -> int:
     from omnibot.cliargs import check_sim_options, check_world, recording_of, world_of
-    from omnibot.demos.seed000 import run_demo
+    from omnibot.demos import run_demo
 
     check_sim_options(args)
     if args.port is None:
