@@ -23,6 +23,7 @@ LAZY_FACES = (
     "omnibot.ros2",
     "omnibot.sim",
     "omnibot.teleop",
+    "omnibot.uno",
     "omnibot.web",
 )
 """The faces built with an ``_EXPORTS`` table (robot's two lazy names are its summary's and urdf's)."""

@@ -494,7 +494,6 @@ SUBMODULE_FACES: tuple[str, ...] = (
     "omnibot.apps",
     "omnibot.firmware",
     "omnibot.protocol",
-    "omnibot.uno",
 )
 """Storey packages whose faces list submodules only, so that other packages still import names from
 those submodules: firmware's and protocol's by design (their ``__init__`` is copied to boards), the
