@@ -146,9 +146,13 @@ def _under(module: str, prefixes: tuple[str, ...]) -> bool:
 
 
 def _defines_getattr(node: ast.stmt) -> bool:
-    """``def __getattr__`` or ``__getattr__ = ...`` (omnibot.faces.lazy_names)."""
+    """``def __getattr__`` or ``__getattr__ = ...`` (omnibot.faces.lazy_names), at the top or under
+    ``if not TYPE_CHECKING:`` (so that type checkers see the names' own imports)."""
     if isinstance(node, ast.FunctionDef):
         return node.name == "__getattr__"
+    if isinstance(node, ast.If) and isinstance(node.test, ast.UnaryOp) and isinstance(node.test.op, ast.Not):
+        hidden = ast.If(test=node.test.operand, body=[], orelse=[])
+        return _type_checking(hidden) and any(_defines_getattr(child) for child in node.body)
     return isinstance(node, ast.Assign) and any(
         isinstance(t, ast.Name) and t.id == "__getattr__" for t in node.targets
     )

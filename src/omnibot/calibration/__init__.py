@@ -94,4 +94,5 @@ __all__ = [
 ]
 
 # a name loads the module that defines it: the plan and the file (pure modules) load no client
-__getattr__ = lazy_names(__name__, _EXPORTS)
+if not TYPE_CHECKING:  # type checkers take each name from its import above
+    __getattr__ = lazy_names(__name__, _EXPORTS)

@@ -23,4 +23,5 @@ _EXPORTS = {
 
 __all__ = ["DIRECTIONS", "directions", "format_table", "plot_tour", "run_demo", "run_tour", "seed000"]
 
-__getattr__ = lazy_names(__name__, _EXPORTS)
+if not TYPE_CHECKING:  # type checkers take each name from its import above
+    __getattr__ = lazy_names(__name__, _EXPORTS)

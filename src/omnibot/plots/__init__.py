@@ -15,4 +15,5 @@ _EXPORTS = {"figure": ("new_figure", "save")}
 
 __all__ = ["figure", "new_figure", "save"]
 
-__getattr__ = lazy_names(__name__, _EXPORTS)
+if not TYPE_CHECKING:  # type checkers take each name from its import above
+    __getattr__ = lazy_names(__name__, _EXPORTS)

@@ -41,4 +41,5 @@ __all__ = [
     "mapping",
 ]
 
-__getattr__ = lazy_names(__name__, _EXPORTS)
+if not TYPE_CHECKING:  # type checkers take each name from its import above
+    __getattr__ = lazy_names(__name__, _EXPORTS)

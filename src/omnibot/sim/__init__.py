@@ -54,4 +54,5 @@ __all__ = [
 ]
 
 # a name loads the module that defines it (and what that imports), on first use
-__getattr__ = lazy_names(__name__, _EXPORTS)
+if not TYPE_CHECKING:  # type checkers take each name from its import above
+    __getattr__ = lazy_names(__name__, _EXPORTS)

@@ -21,4 +21,5 @@ _EXPORTS = {
 
 __all__ = ["UnoEmulator", "UnoError", "UnoLink", "counts_at_rest", "emulator", "hil", "missing_tools"]
 
-__getattr__ = lazy_names(__name__, _EXPORTS)
+if not TYPE_CHECKING:  # type checkers take each name from its import above
+    __getattr__ = lazy_names(__name__, _EXPORTS)

@@ -56,4 +56,5 @@ __all__ = [
     "token_ok",
 ]
 
-__getattr__ = lazy_names(__name__, _EXPORTS)
+if not TYPE_CHECKING:  # type checkers take each name from its import above
+    __getattr__ = lazy_names(__name__, _EXPORTS)
