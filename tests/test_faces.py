@@ -7,6 +7,7 @@ import importlib
 import json
 import subprocess
 import sys
+from pathlib import Path
 from types import ModuleType
 
 import pytest
@@ -64,3 +65,15 @@ def test_importing_a_face_loads_none_of_its_modules() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert json.loads(out) == []
+
+
+def test_every_face_with_an_exports_table_is_listed() -> None:
+    """A new lazy face is checked here as soon as it is written: LAZY_FACES names every package whose
+    ``__init__`` has an ``_EXPORTS`` table."""
+    src = Path(__file__).resolve().parents[1] / "src"
+    found = sorted(
+        ".".join(init.parent.relative_to(src).parts)
+        for init in (src / "omnibot").rglob("__init__.py")
+        if "\n_EXPORTS = " in init.read_text(encoding="utf-8")
+    )
+    assert found == sorted(LAZY_FACES)
