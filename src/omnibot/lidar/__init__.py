@@ -2,7 +2,8 @@
 and the host side that reads either one into :class:`~omnibot.scan.Scan` (see docs/lidar.md).
 
 Other packages take the scanner's source (``open_scanner``: an RPLIDAR on a device path, the
-simulator's on ``sim://``) and the emulated RPLIDAR (``RplidarDevice`` and its models) from this face::
+simulator's on ``sim://``; ``RplidarScanner``, the driver) and the emulated RPLIDAR (``RplidarDevice``
+and its models) from this face::
 
     from omnibot.lidar import ScanSource, open_scanner
 
@@ -14,11 +15,11 @@ from typing import TYPE_CHECKING
 from omnibot.faces import lazy_names
 
 if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
-    from omnibot.lidar.reader import ScanningSim, ScanSource, SimScanSource, open_scanner
+    from omnibot.lidar.reader import RplidarScanner, ScanningSim, ScanSource, SimScanSource, open_scanner
     from omnibot.lidar.rplidar_device import A1, A2, RplidarDevice, RplidarModel, model_named
 
 _EXPORTS = {
-    "reader": ("ScanSource", "ScanningSim", "SimScanSource", "open_scanner"),
+    "reader": ("RplidarScanner", "ScanSource", "ScanningSim", "SimScanSource", "open_scanner"),
     "rplidar_device": ("A1", "A2", "RplidarDevice", "RplidarModel", "model_named"),
 }
 
@@ -27,6 +28,7 @@ __all__ = [
     "A2",
     "RplidarDevice",
     "RplidarModel",
+    "RplidarScanner",
     "ScanSource",
     "ScanningSim",
     "SimScanSource",
