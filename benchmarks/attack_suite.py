@@ -275,8 +275,8 @@ def fuzz_uno(n: int) -> list[Row]:
 
     from omnibot.firmware.config import build_config
     from omnibot.firmware.controller import Controller
-    from omnibot.robot.description import load_robot
-    from omnibot.uno.emulator import UnoEmulator, UnoError, missing_tools
+    from omnibot.robot import load_robot
+    from omnibot.uno import UnoEmulator, UnoError, missing_tools
 
     reason = missing_tools()
     if reason:
@@ -870,7 +870,7 @@ def _dashboard_case(
     from tests.web.conftest import ROOM
     from tests.web.test_security import pose, sim_time, wait_for_state
 
-    from omnibot.web.dashboard import Dashboard
+    from omnibot.web import Dashboard
 
     with Dashboard(ROOM, http_port=0, token=token) as dash:
         port = dash.port
@@ -1137,12 +1137,11 @@ def _ros2_case(case: str, quick: bool, control_top: float | None = None) -> Row:
 
     from tests.teleop.fakes import truth
 
-    from omnibot.client.session import robot_session
+    from omnibot.client import robot_session
     from omnibot.protocol import codes
-    from omnibot.ros2.command import attach
-    from omnibot.runtime.cycle import Cycle
-    from omnibot.runtime.runtime import Runtime
-    from omnibot.teleop.pacing import Pacer
+    from omnibot.ros2 import attach
+    from omnibot.runtime import Cycle, Runtime
+    from omnibot.teleop import Pacer
 
     count, what = ROS2_CASES[case]
     if quick:  # the control keeps its 2 s: the top speed it sets comes after the first second

@@ -21,7 +21,7 @@ from pathlib import Path
 
 from benchmarks.firmware_timing import measure
 from omnibot.firmware.config import build_config, stage_board
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 
 HERE = Path(__file__).resolve().parent
 

@@ -36,13 +36,13 @@ from pathlib import Path
 import yaml
 
 from benchmarks.planner import free_poses, inside_walls, rasterise
-from omnibot.mapping.planner import inflate
+from omnibot.mapping import inflate
 from omnibot.motion import Pose2D
+from omnibot.navigation import simulated_client
 from omnibot.navigation.goto import GotoOptions, GotoResult, goto
-from omnibot.navigation.session import simulated_client
-from omnibot.robot.description import load_robot
-from omnibot.sim.world import load_world
-from omnibot.transport.device import find_simulator
+from omnibot.robot import load_robot
+from omnibot.sim import load_world
+from omnibot.transport import find_simulator
 
 OBSTACLE: dict[str, object] = {"shape": "box", "center": [2.3, 2.0], "size": [0.3, 0.3]}
 """A box in the middle of the room that the map does not have (``--obstacle``)."""

@@ -33,21 +33,25 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from benchmarks.motor_model import lockstep_clients
-from omnibot.calibration import session
-from omnibot.calibration.accuracy import AccuracyPlan
-from omnibot.calibration.calfile import load_calibration, write_calibration
+from omnibot.calibration import (
+    ACCEPTANCE,
+    AccuracyPlan,
+    Plan,
+    SimTruth,
+    load_calibration,
+    perturbed_robot,
+    session,
+    write_calibration,
+)
 from omnibot.calibration.experiments import Runner
 from omnibot.calibration.patterns import Geometry
-from omnibot.calibration.perturb import ACCEPTANCE, perturbed_robot
-from omnibot.calibration.plan import Plan
 from omnibot.calibration.tap import TelemetryTap
-from omnibot.calibration.truth import SimTruth
 from omnibot.calibration.verdict import mean_abs_error
-from omnibot.client.client import RobotClient
+from omnibot.client import RobotClient
 from omnibot.errors import ConfigError
-from omnibot.robot.description import CalibrationSpec, RobotDescription, load_robot
-from omnibot.sim.device import SimDevice
-from omnibot.transport.lockstep import LockstepLink
+from omnibot.robot import CalibrationSpec, RobotDescription, load_robot
+from omnibot.sim import SimDevice
+from omnibot.transport import LockstepLink
 
 LENGTH = 1.0
 """m of every MOVE."""

@@ -37,15 +37,14 @@ import time
 from collections import Counter, deque
 from dataclasses import asdict, dataclass
 
-from omnibot.client import RobotClient
-from omnibot.client.client import Pending
+from omnibot.client import Pending, RobotClient
 from omnibot.errors import LinkTimeout, OmnibotError
 from omnibot.firmware.controller import Controller
 from omnibot.protocol import codes
 from omnibot.protocol.messages import Vel
-from omnibot.sim.device import SimDevice
+from omnibot.sim import SimDevice
+from omnibot.transport import LockstepLink
 from omnibot.transport.faults import FaultLink, _Channel
-from omnibot.transport.lockstep import LockstepLink
 
 KINDS = ("drop", "corrupt", "delay", "stall", "reorder")
 RATES = (0.01, 0.001)

@@ -41,11 +41,8 @@ from pathlib import Path
 
 from omnibot.protocol import binary, codes, text
 from omnibot.protocol.messages import Hello, HelloReply, Mode, Ok, Telem, Telemetry, Vel
-from omnibot.sim.device import SimDevice
-from omnibot.sim.emulator import spawn_pty_emulator
-from omnibot.transport.base import Link
-from omnibot.transport.lockstep import LockstepLink
-from omnibot.transport.url import open_link
+from omnibot.sim import SimDevice, spawn_pty_emulator
+from omnibot.transport import Link, LockstepLink, open_link
 
 LINE_BYTES_PER_S = 115200 / 10
 LOAD_LIMIT_S = 600

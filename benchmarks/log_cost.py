@@ -29,18 +29,16 @@ import tempfile
 import time
 from pathlib import Path
 
-from omnibot.client.client import RobotClient
-from omnibot.client.events import Telemetry
-from omnibot.client.session import guarded
+from omnibot.client import RobotClient, Telemetry, guarded
 from omnibot.errors import LinkTimeout
+from omnibot.logs import Recorder
 from omnibot.logs.reader import LogFile
-from omnibot.logs.recorder import Recorder
 from omnibot.logs.topics import CMD_VEL, PROTOCOL
 from omnibot.protocol import text
 from omnibot.protocol.messages import Ok, Vel
 from omnibot.protocol.messages import Telemetry as TelMessage
-from omnibot.robot.description import load_robot
-from omnibot.sim.emulator import spawn_pty_emulator
+from omnibot.robot import load_robot
+from omnibot.sim import spawn_pty_emulator
 
 PERIOD = 0.01
 MAX_OUTSTANDING = 4

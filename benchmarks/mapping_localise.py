@@ -21,13 +21,11 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks.mapping_scenes import cast_scan, drifting_odometry, path_poses
-from omnibot.mapping.grid import OccupancyGrid
-from omnibot.mapping.localise import Localiser
-from omnibot.mapping.mapfile import load_map, save_map
+from omnibot.mapping import Localiser, OccupancyGrid, load_map, save_map
 from omnibot.mapping.mapper import build_map
 from omnibot.mapping.se2 import wrap
 from omnibot.motion import Pose2D
-from omnibot.sim.world import World, load_world
+from omnibot.sim import World, load_world
 
 
 def drive(poses: int) -> tuple[list[Pose2D], list[Pose2D]]:

@@ -30,7 +30,7 @@ from omnibot.mapping.mapper import OccupancyMapper, ray_cells_numpy, ray_ends
 from omnibot.mapping.score import score_map
 from omnibot.motion import Pose2D
 from omnibot.scan import Scan
-from omnibot.sim.world import load_world
+from omnibot.sim import load_world
 
 BOUNDS = (-1.0, -1.0, 6.0, 5.0)
 

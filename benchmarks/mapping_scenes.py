@@ -13,7 +13,7 @@ import numpy as np
 
 from omnibot.motion import Pose2D
 from omnibot.scan import Scan
-from omnibot.sim.world import World
+from omnibot.sim import World
 
 ROOM_LOOP = ((1.0, 1.0), (2.6, 0.6), (4.4, 0.5), (4.4, 2.0), (3.0, 2.3), (2.2, 3.4), (0.6, 2.0))
 """Waypoints of a loop through the bundled ``room`` clear of its cabinet and bin (m)."""

@@ -34,20 +34,24 @@ from contextlib import AbstractContextManager, contextmanager
 
 import numpy as np
 
-from omnibot.calibration import session
+from omnibot.calibration import (
+    ACCEPTANCE,
+    Plan,
+    accuracy_entries,
+    parse_perturbation,
+    perturbed_robot,
+    session,
+    summary_table,
+)
 from omnibot.calibration.accuracy import AccuracyPlan, describe_reach, within_reach
 from omnibot.calibration.experiments import Runner
 from omnibot.calibration.motorfit import Balance, Stand, emf_counts
 from omnibot.calibration.motors import balance_model
 from omnibot.calibration.patterns import Geometry
-from omnibot.calibration.perturb import ACCEPTANCE, parse_perturbation, perturbed_robot
-from omnibot.calibration.plan import Plan
-from omnibot.calibration.report import accuracy_entries
-from omnibot.calibration.tables import summary_table
-from omnibot.client.client import RobotClient
-from omnibot.robot.description import RobotDescription, load_robot
-from omnibot.sim.device import SimDevice
-from omnibot.transport.lockstep import LockstepLink
+from omnibot.client import RobotClient
+from omnibot.robot import RobotDescription, load_robot
+from omnibot.sim import SimDevice
+from omnibot.transport import LockstepLink
 
 SEED = 3
 

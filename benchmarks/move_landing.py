@@ -35,10 +35,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from omnibot.calibration.calfile import apply_calibration, floor_calibration
+from omnibot.calibration import apply_calibration, floor_calibration
 from omnibot.navigation.slipcal import simulate_slip_calibration
-from omnibot.robot.description import RobotDescription, load_robot
-from omnibot.sim.device import SimDevice
+from omnibot.robot import RobotDescription, load_robot
+from omnibot.sim import SimDevice
 
 SPEEDS = {"omni4": (30, 60, 90), "omni3": (10, 30, 100), "mecanum4": (10, 30, 60)}
 """cm/s of the MOVEs per robot: from its slowest (omni4: 30, mecanum4: 10) up the range."""

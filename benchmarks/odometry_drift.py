@@ -40,14 +40,13 @@ SLIP_CORRECTED = ("encoders+gyro", "encoders")
 
 def drive(job: tuple[str, str, float, int, bool, bool]) -> dict[str, Any]:
     from benchmarks.tracking import floor_slip
-    from omnibot.control.followers.base import make_follower, wrap
-    from omnibot.control.paths.path import Path
+    from omnibot.control import Path, make_follower, wrap
     from omnibot.control.paths.standard import random_path
-    from omnibot.estimation.estimator import estimator_names, make_estimator
+    from omnibot.estimation import estimator_names, make_estimator
     from omnibot.motion import Pose2D
-    from omnibot.navigation.runner import Navigator
+    from omnibot.navigation import Navigator
     from omnibot.navigation.session import follower_limits, simulated_client
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     preset, surface, length, seed, calibrate, slip_calibrate = job
     speed, size = ROBOTS[preset]

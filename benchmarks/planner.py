@@ -26,12 +26,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from omnibot.errors import PlanningError
-from omnibot.mapping.grid import OccupancyGrid
+from omnibot.mapping import OccupancyGrid
 from omnibot.mapping.planner import COST_WEIGHT, PLANNERS, CostMap, PlannedPath, inflate, plan_path
 from omnibot.mapping.score import world_grid
 from omnibot.motion import Pose2D
-from omnibot.robot.description import load_robot
-from omnibot.sim.world import World, load_world
+from omnibot.robot import load_robot
+from omnibot.sim import World, load_world
 
 RESOLUTION = 0.025
 PAD = 0.1

@@ -160,14 +160,12 @@ def measure(
     """Run the bridge, the relay and the odom subscriber (``relay``: rclpy runs) and the publisher at
     ``rate`` Hz for ``duration`` s; ``remote``: the command prefix that runs the publisher and the
     odom subscriber on the other host."""
-    from omnibot.client.client import Pending
-    from omnibot.client.session import robot_session
+    from omnibot.client import Pending, robot_session
     from omnibot.protocol import codes
     from omnibot.protocol.messages import Command, Vel
-    from omnibot.ros2.cmd_vel import CmdVelSource
-    from omnibot.ros2.command import attach
-    from omnibot.runtime.runtime import Runtime
-    from omnibot.teleop.pacing import Pacer
+    from omnibot.ros2 import CmdVelSource, attach
+    from omnibot.runtime import Runtime
+    from omnibot.teleop import Pacer
 
     carried: dict[int, float] = {}  # command number -> when its VEL was submitted to the link
     vels: list[tuple[float, int]] = []  # every VEL of cmd_vel's: when, which command's
@@ -264,15 +262,12 @@ def per_process(robots: int, duration: float, rate: float, period: float) -> dic
     second while commands came, and this process's CPU (% of a core) over that window."""
     import threading
 
-    from omnibot.client.client import Pending
-    from omnibot.client.session import robot_session
+    from omnibot.client import Pending, robot_session
     from omnibot.protocol import codes
     from omnibot.protocol.messages import Command, Vel
-    from omnibot.ros2.cmd_vel import CmdVelSource
-    from omnibot.ros2.command import attach
-    from omnibot.runtime.cycle import Cycle
-    from omnibot.runtime.runtime import Runtime
-    from omnibot.teleop.pacing import Pacer
+    from omnibot.ros2 import CmdVelSource, attach
+    from omnibot.runtime import Cycle, Runtime
+    from omnibot.teleop import Pacer
 
     names = [f"robot{k}" for k in range(robots)]
     carried: list[dict[int, float]] = [{} for _ in names]

@@ -99,7 +99,7 @@ class _Window:
         self.stamps: list[int] = []
 
     def __call__(self, topic: str, typename: str, data: bytes, ns: int) -> None:
-        from omnibot.logs.topics import ODOM
+        from omnibot.logs import ODOM
 
         if self.open and topic == ODOM:
             self.stamps.append(ns)
@@ -111,11 +111,10 @@ class _Window:
 def run(robots: int, rate: float, duration: float, *, bridge: bool = True, backend: str = "dds") -> Result:
     """``robots`` bridges on ``backend`` at ``rate`` Hz for ``duration`` s (``bridge`` False: without
     the bridge)."""
-    from omnibot.client.session import robot_session
+    from omnibot.client import robot_session
     from omnibot.protocol import codes
-    from omnibot.ros2.bridge import Ros2Sink
-    from omnibot.ros2.command import attach
-    from omnibot.runtime.runtime import Runtime
+    from omnibot.ros2 import Ros2Sink, attach
+    from omnibot.runtime import Runtime
 
     period = 1.0 / rate
     names = [f"robot{k}" for k in range(robots)]

@@ -30,11 +30,10 @@ WARMUP = 2.0
 
 def sink_cost(backend: str, namespace: str, cycles: int) -> float:
     """The sink's CPU per cycle (s) over ``cycles`` cycles of one robot on ``backend``."""
-    from omnibot.client.session import robot_session
+    from omnibot.client import robot_session
     from omnibot.protocol import codes
-    from omnibot.ros2.bridge import Ros2Sink
-    from omnibot.ros2.command import attach
-    from omnibot.runtime.runtime import Runtime
+    from omnibot.ros2 import Ros2Sink, attach
+    from omnibot.runtime import Runtime
 
     spent = [0.0, 0]
 

@@ -35,7 +35,7 @@ from benchmarks.slam_synthetic import corridor_path, corridor_world, room_path, 
 from omnibot.mapping.matcher import ScanMatcher
 from omnibot.mapping.se2 import between, compose
 from omnibot.motion import Pose2D
-from omnibot.sim.world import load_world
+from omnibot.sim import load_world
 
 Points = np.ndarray
 Matcher = Callable[[Points, Points, Pose2D], Pose2D]

@@ -25,12 +25,9 @@ from collections.abc import Callable
 import numpy as np
 
 from omnibot.motion import Pose2D
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from omnibot.scan import Scan
-from omnibot.sim import kernels
-from omnibot.sim.fleet import Fleet
-from omnibot.sim.simulator import Simulator
-from omnibot.sim.world import load_world
+from omnibot.sim import Fleet, Simulator, kernels, load_world
 
 FLEET_POSES = {
     "room": [(1.0, 1.0), (2.5, 2.0), (4.2, 3.2), (1.0, 2.0)],

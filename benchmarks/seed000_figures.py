@@ -31,8 +31,8 @@ from typing import Any
 import numpy as np
 
 from omnibot.robot import kinematics as kin
-from omnibot.robot.description import load_robot
-from omnibot.sim.physics import Physics
+from omnibot.robot import load_robot
+from omnibot.sim import Physics
 
 R_C = 0.096
 """m: seed 000's robot radius (the wheel path of a rotation)."""
@@ -238,7 +238,7 @@ def calibration_tables(path: Path) -> dict[str, dict[str, tuple[list[float], lis
     """{floor: {name: (x, y)}} of a calibration file's floors: its ``k_t`` and ``k_r`` and both in seed
     000's terms (``seed k_t``, ``seed k_r``: the motor map counted in, :mod:`omnibot.calibration.seedterms`;
     K_t at its own powers, for a turn added to a motion at :data:`MOVING`; K_r at both tables')."""
-    from omnibot.calibration.calfile import load_calibration
+    from omnibot.calibration import load_calibration
     from omnibot.calibration.seedterms import seed_kr, seed_kt
 
     out = {}
@@ -257,7 +257,7 @@ def calibration_tables(path: Path) -> dict[str, dict[str, tuple[list[float], lis
 
 def plot(result: dict[str, Any], target: Path, tables: dict[str, Any] | None) -> None:
     """Fig. 5 (the three series, cm/s against the PWM ratio) and, with a calibration, Fig. 6."""
-    from omnibot.plots.figure import new_figure, save
+    from omnibot.plots import new_figure, save
 
     fig, axes = new_figure(1, 3, size=(16.0, 4.6))
     specs: list[tuple[str, dict[int, Any], Callable[[Any], list[float]], str]] = [

@@ -47,8 +47,8 @@ from typing import Any
 
 import numpy as np
 
-from omnibot.control.paths.path import Path
-from omnibot.robot.description import RobotDescription
+from omnibot.control import Path
+from omnibot.robot import RobotDescription
 
 TOP = 5.0
 """m/s: seed 002's top speed."""
@@ -187,7 +187,7 @@ def grip_table(robot: RobotDescription, gear: float) -> str:
     the rollers' grip the seed's run needs there and the mu that is."""
     from omnibot.control.followers.base import PLAN_MARGIN
     from omnibot.control.reach import floor_grip
-    from omnibot.floor.surfaces import SURFACES
+    from omnibot.floor import SURFACES
 
     asked = with_limits(
         with_drive(robot, gear, robot.wheels[0].rollers.grip),
@@ -305,10 +305,9 @@ def metrics(
 def taught_path(robot: RobotDescription, seed: int = 1) -> Path:
     """The S taught as seed 002 teaches: pushed by hand (motors off) at :data:`TEACH_SPEED`, the
     robot's own estimate sampled every :data:`SAMPLE` m, heading stored."""
-    from omnibot.control.paths.teach import PathRecorder
+    from omnibot.control import PathRecorder
     from omnibot.motion import Pose2D
-    from omnibot.navigation.record import teach
-    from omnibot.navigation.session import simulated_client
+    from omnibot.navigation import simulated_client, teach
 
     shape = s_path()
     with simulated_client(robot, surface="wood", seed=seed, start=Pose2D(*shape.start)) as client:
@@ -379,7 +378,7 @@ def plot(
     """Speed against time (planned and driven) beside the seed's numbers, the driven paths, the error
     along the path; one row per robot description."""
     from omnibot.navigation.metrics import error_along_path
-    from omnibot.plots.figure import new_figure, save
+    from omnibot.plots import new_figure, save
 
     names = list(dict.fromkeys(name for name, _, _ in runs))
     fig, axes = new_figure(len(names), 3, size=(17.0, 4.6 * len(names)))
@@ -433,7 +432,7 @@ def plot(
 
 def main(argv: list[str] | None = None) -> int:
     """Teach the S, repeat it with each follower on each description; print the tables."""
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     p = argparse.ArgumentParser(description=(__doc__ or "").split("\n\n")[0])
     p.add_argument("--seed", type=int, default=1, help="simulator seed (teach and repeat)")
@@ -486,7 +485,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _wood_mu() -> float:
-    from omnibot.floor.surfaces import get_surface
+    from omnibot.floor import get_surface
 
     return get_surface("wood").mu
 

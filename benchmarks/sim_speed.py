@@ -37,9 +37,8 @@ import time
 import numpy as np
 
 from benchmarks.irsim_baseline import irsim_steps_per_second
-from omnibot.robot.description import load_robot
-from omnibot.sim.physics import Physics
-from omnibot.sim.simulator import Simulator
+from omnibot.robot import load_robot
+from omnibot.sim import Physics, Simulator
 
 
 def omnibot_single_steps_per_second(steps: int = 20000, repeats: int = 3) -> float:
@@ -101,8 +100,7 @@ def omnibot_batch_robot_steps_per_second(
 def fleet_step_seconds(k: int, steps: int = 1500, repeats: int = 5) -> float:
     """CPU s per step of a fleet of ``k`` omni4 in the room (firmware, MOVE, sonar every 60 ms)."""
     from omnibot.motion import Pose2D
-    from omnibot.sim.fleet import Fleet
-    from omnibot.sim.world import load_world
+    from omnibot.sim import Fleet, load_world
 
     fleet = Fleet(load_world("room"))
     for i in range(k):

@@ -30,15 +30,14 @@ import numpy as np
 
 from benchmarks.planner import inside_walls
 from omnibot.cli import main as omnibot
-from omnibot.control.paths.files import write_path
-from omnibot.control.paths.geometry import resample
-from omnibot.control.paths.path import Path as RobotPath
+from omnibot.control import Path as RobotPath
+from omnibot.control import resample, write_path
 from omnibot.errors import PlanningError
-from omnibot.mapping.planner import inflate, plan_path
+from omnibot.mapping import inflate, plan_path
 from omnibot.mapping.score import world_grid
 from omnibot.motion import Pose2D
-from omnibot.robot.description import load_robot
-from omnibot.sim.world import load_world
+from omnibot.robot import load_robot
+from omnibot.sim import load_world
 
 WORLDS = ("room", "house", "long_corridor")
 ROBOTS = ("omni4", "omni3", "mecanum4")

@@ -28,7 +28,7 @@ from omnibot.mapping.deskew import motion
 from omnibot.mapping.se2 import between, compose
 from omnibot.motion import Pose2D, Twist
 from omnibot.scan import Scan
-from omnibot.sim.world import World, load_world, parse_world
+from omnibot.sim import World, load_world, parse_world
 
 RAYS = 360
 RANGE_MAX = 8.0

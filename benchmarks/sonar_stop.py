@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from omnibot.sim.simulator import Simulator
+    from omnibot.sim import Simulator
 
 ROBOT = "omni4"
 WALL_X = 0.0  # the room world's west wall
@@ -81,7 +81,7 @@ def wall_gap(sim: Simulator, outline: Sequence[tuple[float, float]]) -> float:
 
 def drive(run: Run) -> Outcome:
     from omnibot.protocol import codes
-    from omnibot.sim.device import SimDevice
+    from omnibot.sim import SimDevice
 
     device = SimDevice(ROBOT, world="room", seed=run.seed, start_pose=start_pose(run.angle, run.course))
     sim = device.sim

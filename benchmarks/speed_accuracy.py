@@ -45,24 +45,19 @@ from types import SimpleNamespace
 from typing import Any
 
 from omnibot.cliargs import use_calibration
-from omnibot.client.client import RobotClient
-from omnibot.client.session import open_robot
-from omnibot.estimation.slip import SlipModel
-from omnibot.logs import schemas
-from omnibot.logs.recorder import header
+from omnibot.client import RobotClient, open_robot
+from omnibot.estimation import SlipModel
+from omnibot.logs import header, schemas
 from omnibot.logs.recorder import twist as ros_twist
 from omnibot.motion import Twist
 from omnibot.navigation.slipcal import simulate_slip_calibration
-from omnibot.robot.description import RobotDescription, load_robot
+from omnibot.robot import RobotDescription, load_robot
+from omnibot.ros2 import PERIOD as ROS2_PERIOD
 from omnibot.ros2.cmd_vel import TWIST_STAMPED, CmdVelSource
-from omnibot.ros2.command import PERIOD as ROS2_PERIOD
 from omnibot.ros2.types import to_dds
-from omnibot.runtime.runtime import LinkPacer, Runtime
-from omnibot.runtime.sources import DeadmanSource, PadSource, Source
-from omnibot.teleop.config import TeleopConfig
-from omnibot.teleop.deadman import Sample
-from omnibot.teleop.mapping import JoyState, TwistLimits
-from omnibot.transport.device import find_simulator
+from omnibot.runtime import DeadmanSource, LinkPacer, PadSource, Runtime, Source
+from omnibot.teleop import JoyState, Sample, TeleopConfig, TwistLimits
+from omnibot.transport import find_simulator
 
 DRIVE = 3.0
 """s of driving per cell; the last second is the steady state."""

@@ -32,10 +32,10 @@ import argparse
 import math
 from dataclasses import dataclass
 
-from omnibot.calibration.calfile import floor_calibration
+from omnibot.calibration import floor_calibration
 from omnibot.client import commands
 from omnibot.protocol import text
-from omnibot.sim.device import SimDevice
+from omnibot.sim import SimDevice
 
 CYCLE = 0.02  # s between VEL commands
 ACCEL = 1.4  # m/s^2, the tracking profile's

@@ -56,7 +56,7 @@ from typing import Any
 
 import numpy as np
 
-from omnibot.control.paths.path import Path
+from omnibot.control import Path
 
 
 @dataclass(frozen=True)
@@ -98,7 +98,7 @@ CALIBRATION_SEED = 1000
 def floor_slip(preset: str, surface: str) -> Any:
     """The floor's slip coefficients from ``omnibot calibrate``'s slip runs (simulator truth)."""
     from omnibot.navigation.slipcal import simulate_slip_calibration
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     speed = min(ROBOTS[preset].speed, 0.8)
     return simulate_slip_calibration(load_robot(preset), surface, seed=CALIBRATION_SEED, speed=speed).params
@@ -108,7 +108,7 @@ def top_length(preset: str) -> float:
     """m: a straight run that cruises at the top speed for about half its length (planned with the
     followers' acceleration margin)."""
     from omnibot.control.followers.base import PLAN_MARGIN
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     top = ROBOTS[preset].top
     accel = PLAN_MARGIN * load_robot(preset).limits.acceleration_max
@@ -191,7 +191,7 @@ the tracker's options)."""
 
 def one_run(job: Job) -> dict[str, Any]:
     from omnibot.navigation.session import FollowOptions, simulate_follow
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     suite, preset, surface, spec, follower, seed, speed, calibrate, slip, tuning = job
     robot = load_robot(preset)
@@ -392,8 +392,8 @@ def profile_peak(preset: str, spec: str, surface: str | None = None) -> float:
     """m/s: the top speed of the path's minimum-time profile at the robot's top speed (100 % of its
     limits, of the wheels' free speed and, given a ``surface``, of that floor's reach): what the
     limits let this path reach at all."""
-    from omnibot.control.paths.profile import MotionLimits, time_optimal_profile
-    from omnibot.robot.description import load_robot
+    from omnibot.control import MotionLimits, time_optimal_profile
+    from omnibot.robot import load_robot
 
     limits = MotionLimits.from_robot(load_robot(preset), ROBOTS[preset].top, surface=surface)
     return float(np.max(time_optimal_profile(build_path(preset, spec), limits, use_path_speed=False).speed))
@@ -476,7 +476,7 @@ def format_bounds(robots: list[str]) -> str:
     """Each robot's top speed against what its motors allow (:mod:`omnibot.control.reach`)."""
     from omnibot.control.followers.base import PLAN_WHEEL_USE
     from omnibot.control.reach import free_wheel_speeds, speed_bound
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     out = [
         "\n### Top speed against the motors (free-running wheel speed at full PWM, nominal battery)\n",
@@ -508,9 +508,9 @@ def format_floor_bounds(robots: list[str], surfaces: list[str]) -> str:
     load at full power (:func:`omnibot.control.reach.floor_reach`), on the top suite's courses and
     the worst one, with no turn and turning at :data:`TOP_TURN` (each wheel's translation and
     rotation parts together)."""
-    from omnibot.control.paths.profile import MotionLimits
+    from omnibot.control import MotionLimits
     from omnibot.navigation.session import PLAN_FLOOR_USE
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     cols = " | ".join(f"{c} deg" for c in TOP_COURSES)
     out = [
@@ -571,10 +571,10 @@ def suite_goals(results: list[dict[str, Any]], title: str) -> str:
 
 def seed002_experiment(target: FsPath, seed: int = 1, slip: bool = True) -> str:
     """Seed 002's S path on omni3 (wood) with and without reduced overshoot; the plot and a summary."""
-    from omnibot.control.paths.standard import standard_path
+    from omnibot.control import standard_path
     from omnibot.navigation.plot import plot_runs
     from omnibot.navigation.session import FollowOptions, simulate_follow, summary
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     robot = load_robot("omni3")
     speed = ROBOTS["omni3"].speed

@@ -29,8 +29,8 @@ from benchmarks.link_throughput import (
     switch_to_binary,
 )
 from omnibot.protocol import binary, codes, linecheck
-from omnibot.transport.url import open_link
-from omnibot.uno.emulator import UnoEmulator, missing_tools
+from omnibot.transport import open_link
+from omnibot.uno import UnoEmulator, missing_tools
 
 F_CPU = 16e6
 LINE_BYTES_PER_S = 11520

@@ -13,12 +13,10 @@ from __future__ import annotations
 
 import argparse
 
-from omnibot.client import RobotClient
-from omnibot.client.events import Telemetry
+from omnibot.client import RobotClient, Telemetry
 from omnibot.protocol import codes
-from omnibot.robot.description import load_robot
-from omnibot.uno.emulator import missing_tools
-from omnibot.uno.hil import UnoLink, counts_at_rest
+from omnibot.robot import load_robot
+from omnibot.uno import UnoLink, counts_at_rest, missing_tools
 
 STEPS = (
     (0.3, 0.0, 0.0),

@@ -18,7 +18,7 @@ import tempfile
 from pathlib import Path
 
 from benchmarks.uno_command_cycles import Port
-from omnibot.uno.emulator import UnoEmulator, missing_tools
+from omnibot.uno import UnoEmulator, missing_tools
 
 PROFILE_CYCLES = 17  # unosim.c
 

@@ -7,11 +7,26 @@ import importlib
 import json
 import subprocess
 import sys
+from pathlib import Path
 from types import ModuleType
 
 import pytest
 
-LAZY_FACES = ("omnibot.control", "omnibot.logs", "omnibot.mapping", "omnibot.navigation", "omnibot.teleop")
+LAZY_FACES = (
+    "omnibot.calibration",
+    "omnibot.control",
+    "omnibot.demos",
+    "omnibot.lidar",
+    "omnibot.logs",
+    "omnibot.mapping",
+    "omnibot.navigation",
+    "omnibot.plots",
+    "omnibot.ros2",
+    "omnibot.sim",
+    "omnibot.teleop",
+    "omnibot.uno",
+    "omnibot.web",
+)
 """The faces built with an ``_EXPORTS`` table (robot's two lazy names are its summary's and urdf's)."""
 
 
@@ -50,3 +65,15 @@ def test_importing_a_face_loads_none_of_its_modules() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert json.loads(out) == []
+
+
+def test_every_face_with_an_exports_table_is_listed() -> None:
+    """A new lazy face is checked here as soon as it is written: LAZY_FACES names every package whose
+    ``__init__`` has an ``_EXPORTS`` table."""
+    src = Path(__file__).resolve().parents[1] / "src"
+    found = sorted(
+        ".".join(init.parent.relative_to(src).parts)
+        for init in (src / "omnibot").rglob("__init__.py")
+        if "\n_EXPORTS = " in init.read_text(encoding="utf-8")
+    )
+    assert found == sorted(LAZY_FACES)

@@ -210,8 +210,7 @@ def _add_kinematics(sub: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 def _sim(args: argparse.Namespace) -> int:
     from omnibot.floor import SURFACES
     from omnibot.robot import load_robot
-    from omnibot.sim.emulator import run_pty_emulator
-    from omnibot.sim.world import load_world
+    from omnibot.sim import load_world, run_pty_emulator
 
     robots = args.robot or ["omni4"]
     if len(robots) > 1 or "?" in robots[0]:  # a fleet (of one, too: a robot's own options)
@@ -261,7 +260,7 @@ def _sim(args: argparse.Namespace) -> int:
 
 
 def _sim_fleet(args: argparse.Namespace, robots: list[str]) -> int:
-    from omnibot.sim.emulator import parse_member, run_pty_fleet
+    from omnibot.sim import parse_member, run_pty_fleet
 
     if not args.pty:
         raise ConfigError("only the pty emulator exists so far: add --pty", key="omnibot sim")
@@ -309,7 +308,7 @@ def _add_sim(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def _tour(args: argparse.Namespace) -> int:
-    from omnibot.demos.directions import DIRECTIONS, format_table, plot_tour, run_tour
+    from omnibot.demos import DIRECTIONS, format_table, plot_tour, run_tour
     from omnibot.floor import get_surface
     from omnibot.progress import progress_bar
     from omnibot.robot import load_robot, preset_names
@@ -416,7 +415,7 @@ def _add_console(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> No
 
 def _demo(args: argparse.Namespace) -> int:
     from omnibot.cliargs import check_sim_options, check_world, recording_of, world_of
-    from omnibot.demos.seed000 import run_demo
+    from omnibot.demos import run_demo
 
     check_sim_options(args)
     if args.port is None:

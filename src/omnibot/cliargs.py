@@ -88,7 +88,7 @@ def use_calibration(args: argparse.Namespace, client: Any, robot: Any) -> Any:
     path = getattr(args, "calibration", None)
     if not path:
         return None
-    from omnibot.calibration.calfile import floor_calibration
+    from omnibot.calibration import floor_calibration
     from omnibot.estimation import SlipModel
 
     tables, slip = floor_calibration(path, robot, args.surface)
@@ -276,7 +276,7 @@ def sim_url(args: argparse.Namespace) -> str:
 def check_world(args: argparse.Namespace) -> None:
     """A bad ``--world`` or ``--surface`` is reported before anything starts."""
     from omnibot.floor import SURFACES
-    from omnibot.sim.world import load_world
+    from omnibot.sim import load_world
 
     surface = getattr(args, "surface", None)
     if surface is not None and surface not in SURFACES:

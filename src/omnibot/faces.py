@@ -1,8 +1,9 @@
 """A package face that gives its names on first use (PEP 562): the package's ``__init__`` sets
-``__getattr__ = lazy_names(__name__, {"module": ("Name", ...), ...})`` and imports the same names
-under ``if TYPE_CHECKING:`` so type checkers see their types. Importing the package then loads
-nothing; a name loads only the module that defines it, looked up there each time (so a stand-in a
-test puts on that module is the one found).
+``__getattr__ = lazy_names(__name__, {"module": ("Name", ...), ...})`` under ``if not
+TYPE_CHECKING:`` and imports the same names under ``if TYPE_CHECKING:``, so type checkers see their
+types and reject a name the face lacks (a module ``__getattr__`` would let them take any name).
+Importing the package then loads nothing; a name loads only the module that defines it, looked up
+there each time (so a stand-in a test puts on that module is the one found).
 """
 
 from __future__ import annotations

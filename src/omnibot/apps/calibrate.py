@@ -30,10 +30,7 @@ from omnibot.errors import ConfigError
 from omnibot.outputs import check_writable
 
 if TYPE_CHECKING:
-    from omnibot.calibration.accuracy import AccuracyPlan
-    from omnibot.calibration.plan import Plan
-    from omnibot.calibration.results import CalibrationResult
-    from omnibot.calibration.verdict import Verdict
+    from omnibot.calibration import AccuracyPlan, CalibrationResult, Plan, Verdict
     from omnibot.client import ClientRecording, RobotClient
     from omnibot.progress import Progress
     from omnibot.robot import RobotDescription
@@ -191,7 +188,7 @@ def sim_opener(
     @contextmanager
     def open_client(surface: str) -> Iterator[RobotClient]:
         from omnibot.client import RobotClient, guarded
-        from omnibot.sim.device import SimDevice
+        from omnibot.sim import SimDevice
         from omnibot.transport import LockstepLink
 
         url = f"sim://{name}?surface={surface}&seed={seed}" + (f"&world={world}" if world else "")
@@ -264,9 +261,7 @@ def asked_stand(ask: Callable[[str], str]) -> Callable[[RobotClient, bool], None
 def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> int:
     """The ``omnibot calibrate`` handler; returns the exit status. ``ask`` (default: the terminal,
     checked to be one before the robot moves) asks the operator."""
-    from omnibot.calibration.report import write_report
-    from omnibot.calibration.session import calibrate
-    from omnibot.calibration.verdict import judge_calibration
+    from omnibot.calibration import calibrate, judge_calibration, write_report
 
     cal_file, out_dir, surfaces = _checked_options(args)
     simulated = args.port is None
@@ -326,7 +321,7 @@ def _robot_and_client(
     if args.port is None:
         robot = load_robot(sim_robot(args))
         if world != "empty":
-            from omnibot.sim.world import load_world
+            from omnibot.sim import load_world
 
             load_world(world)
     else:
@@ -342,7 +337,7 @@ def _robot_and_client(
 def _checked_options(args: argparse.Namespace) -> tuple[Path, Path, list[str]]:
     """The calibration file, the report's directory and the surfaces, once the options that go
     together have been checked (ConfigError otherwise)."""
-    from omnibot.calibration.truth import parse_truth_spec
+    from omnibot.calibration import parse_truth_spec
 
     check_sim_options(args, allowed=("surface",))
     cal_file, out_dir = _outputs(args)
@@ -365,7 +360,7 @@ def _checked_options(args: argparse.Namespace) -> tuple[Path, Path, list[str]]:
 
 def _operator_tasks(args: argparse.Namespace, surfaces: list[str], simulated: bool) -> list[str]:
     """What the run will ask a person at the terminal to do (none: it runs unattended)."""
-    from omnibot.calibration.truth import parse_truth_spec
+    from omnibot.calibration import parse_truth_spec
 
     tasks = []
     if not simulated and not args.yes:
@@ -378,8 +373,7 @@ def _operator_tasks(args: argparse.Namespace, surfaces: list[str], simulated: bo
 
 def _plans(args: argparse.Namespace) -> tuple[Plan, AccuracyPlan | None]:
     """The calibration's plan and the accuracy check's (None: ``--no-check``) from the options."""
-    from omnibot.calibration.accuracy import AccuracyPlan
-    from omnibot.calibration.plan import Plan
+    from omnibot.calibration import AccuracyPlan, Plan
 
     if not args.move_length > 0:
         raise ConfigError(f"expected a positive length in m, got {args.move_length}", key="--move-length")
@@ -399,7 +393,7 @@ def _plans(args: argparse.Namespace) -> tuple[Plan, AccuracyPlan | None]:
 def _true_robot(args: argparse.Namespace, robot: RobotDescription) -> RobotDescription | None:
     """The robot the simulator runs when it differs from the description (``--perturb``,
     ``--true-robot``); None: the description itself."""
-    from omnibot.calibration.perturb import ACCEPTANCE, perturbed_robot
+    from omnibot.calibration import ACCEPTANCE, perturbed_robot
     from omnibot.robot import load_robot
 
     if args.perturb:
@@ -412,7 +406,7 @@ def _true_robot(args: argparse.Namespace, robot: RobotDescription) -> RobotDescr
 def _truth_chooser(robot: RobotDescription, interactive: bool) -> Callable[[RobotClient], str]:
     """Without ``--truth``: the link's default truth (checked for an operator at the terminal if it
     needs one)."""
-    from omnibot.calibration.truth import default_truth
+    from omnibot.calibration import default_truth
 
     def chosen_truth(client: RobotClient) -> str:
         name = default_truth(client, robot)
@@ -438,8 +432,7 @@ def _upload_verdict(
 
 def _print_findings(result: CalibrationResult) -> None:
     """The accuracy table, each floor's wheel slip and the sessions' notes."""
-    from omnibot.calibration.report import accuracy_entries, slip_summary
-    from omnibot.calibration.tables import summary_table
+    from omnibot.calibration import accuracy_entries, slip_summary, summary_table
 
     entries = accuracy_entries(result)
     if entries:
@@ -480,7 +473,7 @@ def _write_file(
 ) -> int:
     """Write the calibration file unless the check found it worse (``--force`` writes it anyway) and
     say where; the exit status (1: worse than before)."""
-    from omnibot.calibration.calfile import write_calibration
+    from omnibot.calibration import write_calibration
 
     if verdict.better is False:
         if verdict.hint:

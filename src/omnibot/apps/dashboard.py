@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, TypedDict
 from omnibot.errors import ConfigError
 
 if TYPE_CHECKING:
-    from omnibot.web.dashboard import Dashboard
+    from omnibot.web import Dashboard
 
 TOKEN_ENV = "OMNIBOT_DASHBOARD_TOKEN"
 
@@ -101,8 +101,7 @@ def run(args: argparse.Namespace) -> int:
     from omnibot.navigation import PathTeacher
     from omnibot.robot import RobotDescription
     from omnibot.teleop import load_teleop_config
-    from omnibot.web.dashboard import Dashboard
-    from omnibot.web.scene import load_path
+    from omnibot.web import Dashboard, load_path
 
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
         raise ConfigError(f"expected a positive number of seconds, got {args.duration}", key="--duration")

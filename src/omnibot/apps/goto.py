@@ -119,7 +119,7 @@ def _go(
     args: argparse.Namespace, client: Any, robot: Any, grid: Any, goal: Any, start: Any, options: Any
 ) -> int:
     from omnibot.cliargs import recording_of, use_calibration
-    from omnibot.lidar.reader import open_scanner
+    from omnibot.lidar import open_scanner
     from omnibot.mapping import Localiser, LocalisingSink
     from omnibot.navigation import goto
     from omnibot.transport import find_simulator

@@ -174,7 +174,7 @@ def _export(args: argparse.Namespace) -> int:
 
 def plot_run(run: Run, path: str) -> None:
     """Estimate against truth, wheel speeds, powers, problems over time: one PNG."""
-    from omnibot.plots.figure import new_figure, save
+    from omnibot.plots import new_figure, save
 
     fig, ax = new_figure(2, 2, size=(12.0, 8.0))
     xy = ax[0][0]
@@ -397,7 +397,7 @@ def _score(args: argparse.Namespace) -> int:
 
     world = None
     if args.world is not None:
-        from omnibot.sim.world import load_world
+        from omnibot.sim import load_world
 
         world = load_world(args.world)
     grid = None

@@ -44,7 +44,7 @@ TRUTH_PERIOD = 0.01
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Declare ``omnibot map``'s options."""
     from omnibot.cliargs import add_calibration_option, add_robot_options, add_wheel_loop_option
-    from omnibot.ros2.command import add_bridge_options
+    from omnibot.ros2 import add_bridge_options
 
     add_robot_options(p, world="room", port_help="the simulated --robot in lockstep (paced with --teleop)")
     drive = p.add_mutually_exclusive_group(required=True)
@@ -108,7 +108,7 @@ def _say(text: str) -> None:
 
 def _check(args: argparse.Namespace) -> Path:
     from omnibot.cliargs import output_dir, simulated
-    from omnibot.ros2.command import check as check_ros2
+    from omnibot.ros2 import check as check_ros2
 
     check_ros2(args)
     if not (math.isfinite(args.resolution) and 0.005 <= args.resolution <= 1.0):
@@ -229,7 +229,7 @@ class _Mapping:
 
     def attach(self, runtime: Any, session: Any, *, estimator: bool = True) -> list[Any]:
         from omnibot.estimation import make_estimator
-        from omnibot.lidar.reader import open_scanner
+        from omnibot.lidar import open_scanner
         from omnibot.mapping import MappingSink, RangeNoise, Track
         from omnibot.motion import Pose2D
         from omnibot.transport import find_simulator
@@ -264,9 +264,7 @@ class _Mapping:
 
     def _ros2(self, runtime: Any, robot: Any) -> list[Any]:
         """The bridge on the runtime (omnibot run --ros2's), and the map publisher beside it."""
-        from omnibot.ros2.bridge import Ros2Sink
-        from omnibot.ros2.command import attach
-        from omnibot.ros2.mapping import MapPublisher
+        from omnibot.ros2 import MapPublisher, Ros2Sink, attach
 
         node = attach(runtime, robot, self.args)
         self.args.ros2_node = node  # compose attaches no second one

@@ -32,7 +32,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """Declare ``omnibot run``'s options (the robot options shared with every command, then its own)."""
     from omnibot.apps.dashboard import add_server_options
     from omnibot.cliargs import add_calibration_option, add_robot_options, add_wheel_loop_option
-    from omnibot.ros2.command import add_bridge_options
+    from omnibot.ros2 import add_bridge_options
 
     add_robot_options(
         p,
@@ -103,7 +103,7 @@ class Parts:
 
 def _check(args: argparse.Namespace) -> None:
     from omnibot.control import follower_names
-    from omnibot.ros2.command import check as check_ros2
+    from omnibot.ros2 import check as check_ros2
 
     if not (args.teleop or args.dashboard or args.follow or args.ros2):
         raise ConfigError("nothing to run: give --teleop, --dashboard, --follow and/or --ros2")
@@ -168,7 +168,7 @@ def compose(
         parts.pad = PadSource(device, config, limits, name=args.teleop, priority=PAD_PRIORITY)
         runtime.add_source(parts.pad)
     if args.ros2 and getattr(args, "ros2_node", None) is None:  # (omnibot map attaches its own)
-        from omnibot.ros2.command import attach
+        from omnibot.ros2 import attach
 
         node = attach(runtime, robot, args)
         parts.closers.append(node.close)
@@ -246,7 +246,7 @@ def run_in_this_thread(
     SLAM's ``map -> odom``)."""
     from omnibot.cliargs import recording_of, use_calibration
     from omnibot.client import robot_session
-    from omnibot.ros2.command import PERIOD as ROS2_PERIOD
+    from omnibot.ros2 import PERIOD as ROS2_PERIOD
     from omnibot.runtime import Runtime, start_sonars
 
     person = bool(args.teleop)
@@ -334,7 +334,7 @@ def _with_dashboard(args: argparse.Namespace, url: str, config: Any, path: Any) 
     from omnibot.cliargs import recording_of, use_calibration
     from omnibot.navigation import PathTeacher
     from omnibot.robot import RobotDescription
-    from omnibot.web.dashboard import Dashboard
+    from omnibot.web import Dashboard
 
     server = server_options(args)
 

@@ -63,7 +63,7 @@ def _robot_client(args: argparse.Namespace, start: Any = None) -> Iterator[tuple
             yield session.client, session.robot
         return
     from omnibot.cliargs import check_world
-    from omnibot.sim.world import load_world
+    from omnibot.sim import load_world
 
     check_world(args)
     robot = load_robot(sim_robot(args))

@@ -212,7 +212,7 @@ def _factor_lines(ax: Any, table: PiecewiseLinear | None, label: str, style: str
 
 def plot_rates(result: CalibrationResult, path: Path) -> None:
     """Seed 000's Fig. 5: rate against power for the straight courses and rotation."""
-    from omnibot.plots.figure import new_figure, save
+    from omnibot.plots import new_figure, save
 
     fig, axes = new_figure(1, 1, size=(7.5, 5.0))
     ax = axes[0][0]
@@ -250,7 +250,7 @@ def _specs(result: CalibrationResult) -> list[tuple[str, CalibrationSpec, str]]:
 
 def plot_kt_kr(result: CalibrationResult, path: Path) -> None:
     """Seed 000's Fig. 6: K_t and K_r against power."""
-    from omnibot.plots.figure import new_figure, save
+    from omnibot.plots import new_figure, save
 
     fig, axes = new_figure(1, 1, size=(7.0, 4.6))
     ax = axes[0][0]
@@ -273,7 +273,7 @@ def plot_kt_kr(result: CalibrationResult, path: Path) -> None:
 
 def plot_kl(result: CalibrationResult, path: Path) -> None:
     """Seed 000's Fig. 7: K_l against power for each course."""
-    from omnibot.plots.figure import new_figure, save
+    from omnibot.plots import new_figure, save
 
     fig, axes = new_figure(1, 1, size=(7.0, 4.6))
     ax = axes[0][0]
@@ -293,7 +293,7 @@ def plot_kl(result: CalibrationResult, path: Path) -> None:
 
 def plot_accuracy(entries: Sequence[tuple[str, Sequence[AccuracyRow]]], path: Path) -> None:
     """MOVE distance error against course for every check (speeds as markers)."""
-    from omnibot.plots.figure import new_figure, save
+    from omnibot.plots import new_figure, save
 
     fig, axes = new_figure(1, 1, size=(7.5, 4.8))
     ax = axes[0][0]

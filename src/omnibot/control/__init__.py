@@ -82,4 +82,5 @@ __all__ = [
 ]
 
 # a name loads only its own subpackage, not the planner's reach or every follower
-__getattr__ = lazy_names(__name__, _EXPORTS)
+if not TYPE_CHECKING:  # type checkers take each name from its import above
+    __getattr__ = lazy_names(__name__, _EXPORTS)

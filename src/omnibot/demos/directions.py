@@ -17,7 +17,7 @@ import numpy as np
 from omnibot.progress import Progress
 from omnibot.robot import RobotDescription
 from omnibot.robot import kinematics as kin
-from omnibot.sim.simulator import Simulator
+from omnibot.sim import Simulator
 
 DIRECTIONS: tuple[tuple[str, float, float, float], ...] = (
     ("forward", 1, 0, 0),
@@ -137,7 +137,7 @@ def format_table(robot: RobotDescription, runs: list[DirectionRun]) -> str:
 
 def plot_tour(robot: RobotDescription, runs: list[DirectionRun], path: Path) -> None:
     """One panel: every translation's trail from the origin, with heading ticks; rotations listed."""
-    from omnibot.plots.figure import new_figure, save
+    from omnibot.plots import new_figure, save
 
     fig, axes = new_figure(1, 1, size=(6.5, 6.0))
     ax = axes[0][0]

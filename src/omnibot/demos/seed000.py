@@ -42,7 +42,7 @@ from omnibot.motion import Pose2D
 from omnibot.progress import Progress, notice, progress_bar
 from omnibot.protocol import codes
 from omnibot.robot import RobotDescription
-from omnibot.sim.emulator import spawn_pty_emulator
+from omnibot.sim import spawn_pty_emulator
 from omnibot.transport import find_simulator
 
 CIRCLE_STEP = 0.02
@@ -472,7 +472,7 @@ def format_table(segments: list[Segment]) -> str:
 
 def plot(truth: TruthSource | None, odo_trail: list[tuple[float, float]], world: Any, path: Path) -> None:
     """Plot the walls, the true trail and the odometry trail to the image file ``path``."""
-    from omnibot.plots.figure import new_figure, save
+    from omnibot.plots import new_figure, save
 
     fig, axes = new_figure(1, 1, size=(7.5, 6.2))
     ax = axes[0][0]
@@ -530,7 +530,7 @@ def run_demo(
     clock by the telemetry, once the emulator has closed it).
     """
     from omnibot.client import robot_session
-    from omnibot.sim.world import load_world
+    from omnibot.sim import load_world
 
     if port is not None:
         port = with_world(port, world)

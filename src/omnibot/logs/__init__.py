@@ -100,4 +100,5 @@ __all__ = [
 ]
 
 # a name loads its own module only: a topic's name or the recording loads no MCAP or rosbags
-__getattr__ = lazy_names(__name__, _EXPORTS)
+if not TYPE_CHECKING:  # type checkers take each name from its import above
+    __getattr__ = lazy_names(__name__, _EXPORTS)

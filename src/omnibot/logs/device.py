@@ -14,7 +14,7 @@ from omnibot.logs.recorder import Recorder
 from omnibot.logs.topics import TRUTH
 from omnibot.motion import Pose2D
 from omnibot.robot import RobotDescription
-from omnibot.sim.simulator import Snapshot
+from omnibot.sim import Snapshot
 
 TRUTH_PERIOD = 0.01
 """s of simulated time between two ground-truth records."""

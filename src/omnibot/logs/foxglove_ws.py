@@ -66,7 +66,7 @@ from websockets.http11 import Request, Response
 from websockets.typing import Subprotocol
 
 from omnibot.errors import ConfigError
-from omnibot.web.access import HostPolicy, RateLimit, listening_socket, same_origin, token_ok
+from omnibot.web import HostPolicy, RateLimit, listening_socket, same_origin, token_ok
 
 SDK_SUBPROTOCOL = "foxglove.sdk.v1"
 OLD_SUBPROTOCOL = "foxglove.websocket.v1"

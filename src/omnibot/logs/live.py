@@ -190,7 +190,7 @@ class FoxgloveLive:
         name: str = "omnibot",
         origins: tuple[str, ...] = FOXGLOVE_APP,
     ) -> None:
-        from omnibot.web.access import access_token
+        from omnibot.web import access_token
 
         self.host = host
         self.token = access_token(host, token, key="--foxglove-token")

@@ -50,7 +50,7 @@ class FoxgloveBind:
         """``--foxglove [HOST:]PORT`` and ``--foxglove-token`` (default ``$OMNIBOT_FOXGLOVE_TOKEN``),
         checked: the dashboard's token rules (:func:`omnibot.web.access.access_token`)."""
         from omnibot.logs.live import parse_address
-        from omnibot.web.access import access_token
+        from omnibot.web import access_token
 
         host, port = parse_address(address)
         given = token or os.environ.get(FOXGLOVE_TOKEN_ENV) or None

@@ -127,4 +127,5 @@ __all__ = [
 ]
 
 # a name loads its own module only: OccupancyGrid needs no gtsam, load_map no numba
-__getattr__ = lazy_names(__name__, _EXPORTS)
+if not TYPE_CHECKING:  # type checkers take each name from its import above
+    __getattr__ = lazy_names(__name__, _EXPORTS)

@@ -28,7 +28,7 @@ from scipy import ndimage
 
 from omnibot.mapping.grid import OccupancyGrid
 from omnibot.motion import Pose2D
-from omnibot.sim.world import World, points_in_polygon
+from omnibot.sim import World, points_in_polygon
 
 
 @dataclass(frozen=True)

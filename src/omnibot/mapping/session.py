@@ -46,11 +46,11 @@ from omnibot.scan import Scan
 FloatArray = NDArray[np.float64]
 
 if TYPE_CHECKING:
-    from omnibot.lidar.reader import ScanSource
+    from omnibot.lidar import ScanSource
     from omnibot.mapping.grid import OccupancyGrid
     from omnibot.mapping.localise import Localiser
     from omnibot.runtime import Cycle
-    from omnibot.sim.world import World
+    from omnibot.sim import World
 
 HISTORY = 4096
 """Odometry samples kept for interpolation (40 s at 100 Hz; scans are never that late)."""

@@ -84,4 +84,5 @@ __all__ = [
 ]
 
 # a name loads its own module only: the slip calibration loads no planner, no dashboard
-__getattr__ = lazy_names(__name__, _EXPORTS)
+if not TYPE_CHECKING:  # type checkers take each name from its import above
+    __getattr__ = lazy_names(__name__, _EXPORTS)

@@ -20,7 +20,7 @@ def plot_runs(
     runs: Sequence[FollowRun], target: str | FsPath, *, title: str = "", labels: Sequence[str] | None = None
 ) -> None:
     """Several runs of the same path on one figure (e.g. with and without a feature)."""
-    from omnibot.plots.figure import new_figure, save
+    from omnibot.plots import new_figure, save
 
     if not runs:
         raise ValueError("nothing to plot")

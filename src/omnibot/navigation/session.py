@@ -56,7 +56,7 @@ def simulated_client(
 ) -> RobotClient:
     """A client on the lockstep simulator (firmware + physics) with the robot standing at ``start``
     (None: at the world's own start, the origin in a world without one)."""
-    from omnibot.sim.device import SimDevice
+    from omnibot.sim import SimDevice
     from omnibot.transport import LockstepLink
 
     pose = None if start is None else (start.x, start.y, start.theta)

@@ -1,3 +1,19 @@
-"""Plotting helpers (matplotlib, Agg backend); models never import this package."""
+"""Plotting helpers (matplotlib, Agg backend); models never import this package.
 
-__all__ = ["figure"]
+Other packages take ``new_figure`` and ``save`` from this face (``from omnibot.plots import
+new_figure, save``); they load matplotlib on first use, not with ``import omnibot.plots``.
+"""
+
+from typing import TYPE_CHECKING
+
+from omnibot.faces import lazy_names
+
+if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
+    from omnibot.plots.figure import new_figure, save
+
+_EXPORTS = {"figure": ("new_figure", "save")}
+
+__all__ = ["figure", "new_figure", "save"]
+
+if not TYPE_CHECKING:  # type checkers take each name from its import above
+    __getattr__ = lazy_names(__name__, _EXPORTS)

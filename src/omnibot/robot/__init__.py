@@ -86,5 +86,6 @@ __all__ = [
     "urdf",
 ]
 
-__getattr__ = lazy_names(__name__, {"summary": ("describe",), "urdf": ("to_urdf",)})
+if not TYPE_CHECKING:  # type checkers take each name from its import above
+    __getattr__ = lazy_names(__name__, {"summary": ("describe",), "urdf": ("to_urdf",)})
 """``describe`` and ``to_urdf``, imported on first use."""

@@ -511,7 +511,7 @@ def parameters(robot: Any, runtime: Any, spec: RobotSpec, cmd_vel: Any, backend:
 def _scanner(runtime: Any, robot: Any, spec: RobotSpec) -> Any:
     """The robot's scanner, made the runtime's (see :func:`attach`); None when the runtime has one
     already or the robot gets none (whoever gets it closes it)."""
-    from omnibot.lidar.reader import open_scanner
+    from omnibot.lidar import open_scanner
     from omnibot.transport import find_simulator
 
     if runtime.scanner is not None:

@@ -45,7 +45,7 @@ from omnibot.ros2.types import from_dds
 from omnibot.runtime import Cycle, Level, Proposal
 
 if TYPE_CHECKING:
-    from omnibot.lidar.reader import ScanSource
+    from omnibot.lidar import ScanSource
     from omnibot.mapping import Localiser
     from omnibot.scan import Scan
 

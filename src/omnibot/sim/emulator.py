@@ -38,8 +38,7 @@ from types import FrameType
 from typing import IO, Any, TextIO, cast
 
 from omnibot.errors import ConfigError
-from omnibot.lidar.reader import ScanningSim
-from omnibot.lidar.rplidar_device import A1, RplidarDevice, model_named
+from omnibot.lidar import A1, RplidarDevice, ScanningSim, model_named
 from omnibot.motion import Pose2D
 from omnibot.robot import RobotDescription
 from omnibot.signals import ending_signals

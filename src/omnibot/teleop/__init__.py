@@ -89,4 +89,5 @@ __all__ = [
 
 # on first use: ``omnibot teleop``'s argument parser (built for every ``omnibot`` command) imports
 # this package and must not pay for the client and models
-__getattr__ = lazy_names(__name__, _EXPORTS)
+if not TYPE_CHECKING:  # type checkers take each name from its import above
+    __getattr__ = lazy_names(__name__, _EXPORTS)

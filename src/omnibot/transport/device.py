@@ -16,8 +16,7 @@ from typing import TYPE_CHECKING
 from omnibot.transport.base import Link
 
 if TYPE_CHECKING:
-    from omnibot.sim.device import SimDevice
-    from omnibot.sim.simulator import Simulator
+    from omnibot.sim import SimDevice, Simulator
 
 MAX_WRAPPERS = 16
 """Wrappers followed before giving up (a cycle of ``inner`` links would otherwise never end)."""

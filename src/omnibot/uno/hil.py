@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING
 
 from omnibot.errors import ConfigError
 from omnibot.robot import load_robot
-from omnibot.sim.simulator import Simulator
+from omnibot.sim import Simulator
 from omnibot.transport import LinkUrl, SerialLink, register_scheme
 from omnibot.uno.emulator import BOARDS, UnoEmulator, UnoError
 

@@ -39,7 +39,7 @@ from omnibot.errors import ConfigError, OmnibotError
 from omnibot.estimation import SlipModel
 from omnibot.robot import RobotDescription
 from omnibot.runtime import Recording
-from omnibot.sim.world import World, load_world
+from omnibot.sim import World, load_world
 from omnibot.teleop import TeleopConfig
 from omnibot.transport import find_device
 from omnibot.web.access import HostCheck, HostPolicy, access_token, listening_socket
@@ -50,7 +50,7 @@ from omnibot.web.server import Hub, create_app
 from omnibot.web.teach import TeachRepeat
 
 if TYPE_CHECKING:
-    from omnibot.sim.device import SimDevice
+    from omnibot.sim import SimDevice
 
 
 def bind(host: str, port: int) -> socket.socket:

@@ -43,7 +43,7 @@ from typing import Any
 from omnibot.client import ErrorEvent, Event, ResetEvent, RobotClient, WarnEvent, leave
 from omnibot.errors import ControllerError, LinkError
 from omnibot.estimation import SlipModel
-from omnibot.lidar.reader import SimScanSource
+from omnibot.lidar import SimScanSource
 from omnibot.motion import Pose2D, Twist
 from omnibot.protocol import codes
 from omnibot.robot import RobotDescription

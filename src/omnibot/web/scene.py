@@ -21,7 +21,7 @@ from typing import Any
 from omnibot.control.paths import files as path_files
 from omnibot.errors import ConfigError
 from omnibot.robot import RobotDescription
-from omnibot.sim.world import World
+from omnibot.sim import World
 
 Point = tuple[float, float]
 Pose = tuple[float, float, float]
