@@ -29,6 +29,7 @@ from omnibot.estimation.odometry import COUNT_MODULUS, compose_arc, count_delta
 from omnibot.estimation.silence import GyroSilence
 from omnibot.estimation.slip import SlipModel, SlipParameters
 from omnibot.estimation.tracking import Seed002Odometry, TrackingGeometry
+from omnibot.estimation.wheelslip import WheelSlipCheck
 from omnibot.motion import Estimate, Pose2D
 from omnibot.robot import RobotDescription
 from omnibot.robot.kinematics import world_to_body
@@ -183,8 +184,8 @@ class PoseEstimator:
         self._pinv = np.linalg.pinv(self._J)
         per_count = np.abs(self._pinv[2]) * self._rad_per_count
         self.rotation_resolution = float(per_count.max())
-        self.residual_threshold = 3.0 * float(self._rad_per_count.max())
-        self.redundant = robot.n_wheels > 3
+        self.wheel_slip = WheelSlipCheck(self._J, self._rad_per_count)
+        """The fit residual's slip check (four wheels or more; :mod:`~omnibot.estimation.wheelslip`)."""
         self.slip_model = SlipModel(robot, slip) if slip is not None else None
 
     def reset(self, pose: Pose2D) -> None:
@@ -257,8 +258,8 @@ class PoseEstimator:
         self, sample: SensorSample, last: SensorSample, dt: float
     ) -> tuple[tuple[float, float, float] | None, bool, bool]:
         """The body's motion (dx, dy, dtheta) by the driven wheels' counts since ``last`` (corrected by
-        the slip model; None without encoders), whether a wheel turned, and whether their residual
-        says a wheel slipped (four wheels or more)."""
+        the slip model; None without encoders), whether a wheel turned, and whether their fit's
+        residual says a wheel slipped over the last window (four wheels or more)."""
         if not (self.has_encoders and sample.encoders is not None and last.encoders is not None):
             return None, False, False
         counts = count_delta(np.asarray(sample.encoders, float), np.asarray(last.encoders, float))
@@ -270,7 +271,7 @@ class PoseEstimator:
             angles = angles * model.params.scale - model.wheel_correction(q, acc) * dt
         disp = self._pinv @ angles
         self.residual = angles - self._J @ disp
-        slip = self.redundant and float(np.abs(self.residual).max()) > self.residual_threshold
+        slip = self.wheel_slip.update(angles, dt)
         return (float(disp[0]), float(disp[1]), float(disp[2])), moved, slip
 
     def _tracking_slip(self, rolled: np.ndarray, wheel: tuple[float, float, float], dt: float) -> bool:
