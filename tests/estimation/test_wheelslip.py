@@ -111,3 +111,26 @@ def test_the_estimate_and_the_odometry_flag_one_slipping_wheel() -> None:
     assert not odo.slipping
     odo.update([20, 28, -20, -20])
     assert odo.slipping
+
+
+def test_the_heading_filter_is_told_only_of_a_skid() -> None:
+    """Wheels 0 and 1 slipping 2 counts per 10 ms each way (no rotation in it: the gyro cannot see
+    it): the estimate says so within the window, but the heading filter, told only of a gross slip in
+    one interval (12 counts studentised, 3 in the plain residual), keeps trusting the wheels' rotation,
+    which this slip does not touch."""
+    robot = load_robot("omni4")
+    resolution = per_count("omni4")
+    assert np.linalg.pinv(robot.wheel_matrix)[2] @ np.array([1.0, -1.0, 0.0, 0.0]) == pytest.approx(0.0)
+    twists = np.tile([0.3, 0.0, 0.0], (100, 1))
+    slip = np.zeros((100, 4))
+    slip[50:, :2] = np.array([2.0, -2.0]) * resolution[:2]
+    counts = counts_of("omni4", twists, slip).astype(int)
+    est = PoseEstimator(robot, translation="encoders")
+    assert est.wheel_skid.threshold == pytest.approx(3.0 * 4.0 * resolution.max())
+    told = []
+    for k, c in enumerate(counts):
+        estimate = est.update(Sample(0.01 * k, tuple(c), heading=0.0))
+        told.append((estimate.slipping, est.filter.slipping))
+    assert not any(s for s, _ in told[:51])
+    assert all(s for s, _ in told[51 + round(WINDOW / 0.01) :])
+    assert not any(f for _, f in told)

@@ -31,6 +31,13 @@ by 0.02 m/s at omni4's 25 mm radius passes the threshold in it."""
 MARGIN = 1.5
 """Threshold over the quantisation bound: what the simulator's quiet stretches reach is the bound
 itself (the sum of four counts each within one of its angle, a whole number of counts)."""
+SKID_MARGIN = 3.0
+"""A skid, for the heading filter: one interval's slip beyond three times the bound (12 counts on
+omni4 and mecanum4, the rule the flag had before 2026-12-07: a quarter of it, 3 counts, in the plain
+residual). The filter's own gyro check judges smaller slips: with one spare wheel the residual
+cannot say how much of a slip turned the body (several wheels slipping at once, as omni4's do
+swinging at 1 m/s, mostly do not), and distrusting the wheels' rotation on every small slip left
+that swing's heading to the uncalibrated gyro (RMS heading error 0.050 -> 0.060 rad)."""
 
 
 class WheelSlipCheck:
@@ -38,10 +45,17 @@ class WheelSlipCheck:
     summed increments beyond the encoders' quantisation (see the module docstring).
 
     ``wheel_matrix`` (m, 3) maps the body twist to wheel speeds, ``rad_per_count`` (m,) is each
-    encoder's resolution; ``window`` 0 checks each increment alone. With three wheels or fewer there
-    is no residual and :meth:`update` is always False."""
+    encoder's resolution; ``window`` 0 checks each increment alone; ``margin`` is the threshold over
+    the quantisation bound. With three wheels or fewer there is no residual and :meth:`update` is
+    always False."""
 
-    def __init__(self, wheel_matrix: ArrayLike, rad_per_count: ArrayLike, window: float = WINDOW) -> None:
+    def __init__(
+        self,
+        wheel_matrix: ArrayLike,
+        rad_per_count: ArrayLike,
+        window: float = WINDOW,
+        margin: float = MARGIN,
+    ) -> None:
         J = np.asarray(wheel_matrix, dtype=float)
         m = J.shape[0]
         self.window = window
@@ -52,7 +66,7 @@ class WheelSlipCheck:
         """Rows: wheel i's whole slip from the increments, were it the one slipping (0 if m <= 3)."""
         resolution = np.asarray(rad_per_count, dtype=float)
         bound = float((np.abs(self.student) * resolution).sum(axis=1).max()) if self.redundant else 0.0
-        self.threshold = MARGIN * bound
+        self.threshold = margin * bound
         """rad: a wheel's studentised slip over the window beyond which it slips."""
         self.slip = np.zeros(m)
         """rad over the window: each wheel's slip, were it the one slipping (all equal in size with
