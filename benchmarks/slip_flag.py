@@ -24,8 +24,8 @@ median delay from its start, and the false alarms: the share of quiet samples fl
 slipping by more than :data:`QUIET` in any way, rigid or not, for 0.1 s around and for as long
 before as the flag may be held). The flags: ``before`` (the rule before 2026-12-07: one interval's
 largest residual over 3 counts), ``residual`` (:mod:`omnibot.estimation.wheelslip`) and
-``estimate`` (the ``fused`` estimate's ``slipping``: that, or the heading filter's gyro check,
-which also sees a slip that turns the body rigidly).
+``estimate`` (the ``fused`` estimate's ``slipping``: that, or the heading filter's, whose gyro
+check also sees a slip that turns the body rigidly).
 """
 
 from __future__ import annotations

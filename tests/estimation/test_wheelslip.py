@@ -49,6 +49,9 @@ def test_the_threshold_is_the_quantisation_bound_and_rigid_motion_never_passes_i
     resolution = per_count(preset)
     check = WheelSlipCheck(load_robot(preset).wheel_matrix, resolution)
     assert check.threshold == pytest.approx(MARGIN * 4.0 * resolution.max())  # 4 counts, then the margin
+    at = np.zeros(4)
+    at[0] = check.threshold  # wheel 0 alone, by exactly the threshold (within rounding): not beyond it
+    assert not WheelSlipCheck(load_robot(preset).wheel_matrix, resolution, window=0.0).update(at, 0.01)
     rng = np.random.default_rng(3)
     twists = rng.uniform(-1.0, 1.0, (3000, 3)) * [0.8, 0.8, 3.0]
     counts = counts_of(preset, twists, np.zeros(4))

@@ -67,7 +67,9 @@ class WheelSlipCheck:
         resolution = np.asarray(rad_per_count, dtype=float)
         bound = float((np.abs(self.student) * resolution).sum(axis=1).max()) if self.redundant else 0.0
         self.threshold = margin * bound
-        """rad: a wheel's studentised slip over the window beyond which it slips."""
+        """rad: a wheel's studentised slip over the window beyond which it slips (whole counts on
+        omni4 and mecanum4: a slip of exactly the threshold, within rounding, is not beyond it)."""
+        self._limit = self.threshold * (1.0 + 1e-9)
         self.slip = np.zeros(m)
         """rad over the window: each wheel's slip, were it the one slipping (all equal in size with
         one spare wheel)."""
@@ -85,4 +87,4 @@ class WheelSlipCheck:
             self._span -= self._steps.popleft()[0]
         total = np.sum([a for _, a in self._steps], axis=0)
         self.slip = self.student @ total
-        return bool(np.abs(self.slip).max() > self.threshold)
+        return bool(np.abs(self.slip).max() > self._limit)
