@@ -184,7 +184,7 @@ def replay_flags(preset: str, rec: Record) -> tuple[np.ndarray, dict[str, np.nda
         if last is not None:
             d = count_delta(np.asarray(sample.encoders, float), np.asarray(last.encoders, float))
             flags["before"].append(old_rule(robot, d * per_count))
-            flags["residual"].append(bool(np.abs(est.wheel_slip.slip).max() > est.wheel_slip.threshold))
+            flags["residual"].append(est.wheel_slip.slipping)
             flags["estimate"].append(e.slipping)
         last = sample
     t = np.array([s.controller_time for s in rec.samples[1:]])

@@ -73,6 +73,8 @@ class WheelSlipCheck:
         self.slip = np.zeros(m)
         """rad over the window: each wheel's slip, were it the one slipping (all equal in size with
         one spare wheel)."""
+        self.slipping = False
+        """What the last :meth:`update` said."""
         self._steps: deque[tuple[float, FloatArray]] = deque()
         self._span = 0.0
 
@@ -87,4 +89,5 @@ class WheelSlipCheck:
             self._span -= self._steps.popleft()[0]
         total = np.sum([a for _, a in self._steps], axis=0)
         self.slip = self.student @ total
-        return bool(np.abs(self.slip).max() > self._limit)
+        self.slipping = bool(np.abs(self.slip).max() > self._limit)
+        return self.slipping
