@@ -27,7 +27,7 @@ FloatArray = NDArray[np.float64]
 
 WINDOW = 0.1
 """s of increments summed before the fit (the heading filter's slip window too): a wheel slipping
-by 0.02 m/s at omni4's 25 mm radius passes the threshold in it."""
+by 0.025 m/s at omni4's 25 mm radius passes the threshold in it (6 counts)."""
 MARGIN = 1.5
 """Threshold over the quantisation bound: what the simulator's quiet stretches reach is the bound
 itself (the sum of four counts each within one of its angle, a whole number of counts)."""
