@@ -62,7 +62,7 @@ class Record:
 
 def slippery(preset: str, wheel: int, grip: float) -> Any:
     """The preset with wheel ``wheel``'s rollers at ``grip`` of their grip."""
-    from omnibot.robot.description import load_robot, parse_description
+    from omnibot.robot import load_robot, parse_description
 
     robot = load_robot(preset)
     data = robot.model_dump(exclude_none=True)
@@ -73,7 +73,7 @@ def slippery(preset: str, wheel: int, grip: float) -> Any:
 
 def _steps(top: float, turn: float) -> Callable[[float], Any]:
     from omnibot.motion import Twist
-    from omnibot.runtime.sources import ScriptSource
+    from omnibot.runtime import ScriptSource
 
     d = top / math.sqrt(2.0)
     moves = [(top, 0, 0), (0, top, 0), (d, d, 0), (-top, 0, 0), (0, 0, turn), (0, -top, 0)]
@@ -96,9 +96,8 @@ def record(job: tuple[str, str, str, float, int]) -> Record:
     from omnibot.navigation.following import follower_source
     from omnibot.navigation.session import follower_limits
     from omnibot.protocol import codes
-    from omnibot.robot.description import load_robot
-    from omnibot.runtime.runtime import Runtime
-    from omnibot.runtime.sources import ScriptSource
+    from omnibot.robot import load_robot
+    from omnibot.runtime import Runtime, ScriptSource
     from omnibot.sim.device import SimDevice
     from omnibot.transport import LockstepLink
 
@@ -148,7 +147,7 @@ def record(job: tuple[str, str, str, float, int]) -> Record:
 def nonrigid_slip(robot: Any, slip: np.ndarray) -> np.ndarray:
     """m/s per sample: the true slip no rigid motion explains, as one wheel's rim slip (the largest
     studentised residual of the true slip speeds)."""
-    from omnibot.estimation.wheelslip import WheelSlipCheck
+    from omnibot.estimation import WheelSlipCheck
 
     rim = np.array([w.radius * math.cos(w.gamma) for w in robot.wheels])
     check = WheelSlipCheck(robot.wheel_matrix, np.zeros(robot.n_wheels), window=0.0)
@@ -168,10 +167,9 @@ def replay_flags(preset: str, rec: Record) -> tuple[np.ndarray, dict[str, np.nda
     """Sample times and each flag on the recorded telemetry: ``before`` (:func:`old_rule`),
     ``residual`` (:class:`~omnibot.estimation.wheelslip.WheelSlipCheck` in the ``fused`` estimator)
     and ``estimate`` (its ``slipping``: the residual or the heading filter's gyro check)."""
-    from omnibot.estimation import make_estimator
-    from omnibot.estimation.estimator import PoseEstimator
+    from omnibot.estimation import PoseEstimator, make_estimator
     from omnibot.estimation.odometry import count_delta
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     robot = load_robot(preset)
     est = make_estimator("fused", robot)
@@ -235,7 +233,7 @@ def score(t: np.ndarray, flag: np.ndarray, truth: np.ndarray, moving: np.ndarray
 def evaluate(job: tuple[str, str, str, float, int]) -> dict[str, Any]:
     """Record one run and score every flag on it."""
     from omnibot.estimation.wheelslip import WINDOW
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     rec = record(job)
     t, flags = replay_flags(job[0], rec)
