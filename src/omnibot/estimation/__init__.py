@@ -9,7 +9,8 @@
 Modules: ``estimator`` (the Estimator protocol, PoseEstimator, Seed002Estimator, the registry),
 ``odometry`` (wheel odometry, encoder counts), ``tracking`` (tracking wheels), ``heading`` (the gyro
 heading filter), ``silence`` (a gyro gone quiet), ``slip`` (the floor's slip model and its fit),
-``slipprobe``, ``spins`` (gyro bias from spins and standstills), ``stall`` (a stalled robot).
+``slipprobe``, ``spins`` (gyro bias from spins and standstills), ``stall`` (a stalled robot),
+``wheelslip`` (one wheel slipping, from the fit residual).
 """
 
 from omnibot.estimation.estimator import (
@@ -30,6 +31,7 @@ from omnibot.estimation.slipprobe import SlipProbe
 from omnibot.estimation.spins import Spin, SpinFit, Standstill, fit_spins, spin_biases
 from omnibot.estimation.stall import Stall, StallDetector, StallSample
 from omnibot.estimation.tracking import Seed002Odometry, TrackingGeometry, TrackingOdometry
+from omnibot.estimation.wheelslip import WheelSlipCheck
 
 __all__ = [
     "ESTIMATORS",
@@ -54,6 +56,7 @@ __all__ = [
     "TrackingGeometry",
     "TrackingOdometry",
     "WheelOdometry",
+    "WheelSlipCheck",
     "compose_arc",
     "estimator",
     "estimator_names",
@@ -72,4 +75,5 @@ __all__ = [
     "spins",
     "stall",
     "tracking",
+    "wheelslip",
 ]

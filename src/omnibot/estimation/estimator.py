@@ -29,6 +29,7 @@ from omnibot.estimation.odometry import COUNT_MODULUS, compose_arc, count_delta
 from omnibot.estimation.silence import GyroSilence
 from omnibot.estimation.slip import SlipModel, SlipParameters
 from omnibot.estimation.tracking import Seed002Odometry, TrackingGeometry
+from omnibot.estimation.wheelslip import SKID_MARGIN, WheelSlipCheck
 from omnibot.motion import Estimate, Pose2D
 from omnibot.robot import RobotDescription
 from omnibot.robot.kinematics import world_to_body
@@ -183,8 +184,10 @@ class PoseEstimator:
         self._pinv = np.linalg.pinv(self._J)
         per_count = np.abs(self._pinv[2]) * self._rad_per_count
         self.rotation_resolution = float(per_count.max())
-        self.residual_threshold = 3.0 * float(self._rad_per_count.max())
-        self.redundant = robot.n_wheels > 3
+        self.wheel_slip = WheelSlipCheck(self._J, self._rad_per_count)
+        """The fit residual's slip check (four wheels or more; :mod:`~omnibot.estimation.wheelslip`)."""
+        self.wheel_skid = WheelSlipCheck(self._J, self._rad_per_count, window=0.0, margin=SKID_MARGIN)
+        """A gross slip in one interval: what the heading filter is told of the residual."""
         self.slip_model = SlipModel(robot, slip) if slip is not None else None
 
     def reset(self, pose: Pose2D) -> None:
@@ -209,7 +212,7 @@ class PoseEstimator:
         if dt <= 0:
             return self.estimate
 
-        wheel, moved, slip = self._driven(sample, last, dt)
+        wheel, moved, slip, skid = self._driven(sample, last, dt)
         rolled = None
         if self.tracking is not None and sample.tracking is not None and last.tracking is not None:
             delta = count_delta(np.asarray(sample.tracking, float), np.asarray(last.tracking, float))
@@ -217,10 +220,10 @@ class PoseEstimator:
             rolled = delta * self.tracking.m_per_count
         self._still_for = 0.0 if moved else self._still_for + dt
         standstill = self._still_for >= STILL_TIME
-        if rolled is not None and wheel is not None:
-            slip |= self._tracking_slip(rolled, wheel, dt)
+        if rolled is not None and wheel is not None and self._tracking_slip(rolled, wheel, dt):
+            slip = skid = True
 
-        d_theta = self._rotation(dt, sample, last, wheel, standstill, slip, self._accel)
+        d_theta = self._rotation(dt, sample, last, wheel, standstill, skid, self._accel)
         if self.translation == "tracking":
             if rolled is None or self.tracking is None:
                 dx = dy = 0.0
@@ -255,12 +258,13 @@ class PoseEstimator:
 
     def _driven(
         self, sample: SensorSample, last: SensorSample, dt: float
-    ) -> tuple[tuple[float, float, float] | None, bool, bool]:
+    ) -> tuple[tuple[float, float, float] | None, bool, bool, bool]:
         """The body's motion (dx, dy, dtheta) by the driven wheels' counts since ``last`` (corrected by
-        the slip model; None without encoders), whether a wheel turned, and whether their residual
-        says a wheel slipped (four wheels or more)."""
+        the slip model; None without encoders), whether a wheel turned, and whether their fit's
+        residual says a wheel slipped over the last window, and skidded over this interval (four
+        wheels or more)."""
         if not (self.has_encoders and sample.encoders is not None and last.encoders is not None):
-            return None, False, False
+            return None, False, False, False
         counts = count_delta(np.asarray(sample.encoders, float), np.asarray(last.encoders, float))
         moved = bool(np.any(counts != 0))
         angles = counts * self._rad_per_count
@@ -270,8 +274,9 @@ class PoseEstimator:
             angles = angles * model.params.scale - model.wheel_correction(q, acc) * dt
         disp = self._pinv @ angles
         self.residual = angles - self._J @ disp
-        slip = self.redundant and float(np.abs(self.residual).max()) > self.residual_threshold
-        return (float(disp[0]), float(disp[1]), float(disp[2])), moved, slip
+        slip = self.wheel_slip.update(angles, dt)
+        skid = self.wheel_skid.update(angles, dt)
+        return (float(disp[0]), float(disp[1]), float(disp[2])), moved, slip, skid
 
     def _tracking_slip(self, rolled: np.ndarray, wheel: tuple[float, float, float], dt: float) -> bool:
         """Tracking wheels against driven wheels: a translation slip the gyro cannot see (their gap,

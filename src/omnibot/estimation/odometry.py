@@ -7,8 +7,9 @@ onto the pose along a constant-curvature arc (exact for a constant twist over th
 estimate does not assume a constant heading as seed 002's equations (11)-(12) do). With a gyro
 heading the rotation comes from the gyro and only the translation from the wheels. The per-wheel
 residual of the fit (what no rigid motion explains) is kept as a slip signal; :attr:`WheelOdometry.slipping`
-says when it is larger than encoder quantisation explains (only robots with more wheels than the three
-planar motions have a residual at all).
+says when its studentised form is larger than encoder quantisation explains
+(:mod:`~omnibot.estimation.wheelslip`; only robots with more wheels than the three planar motions
+have a residual at all).
 
 Counts are signed 32-bit and wrap (docs/protocol.md, TEL); differences are taken modulo 2**32.
 """
@@ -22,6 +23,7 @@ import numpy as np
 
 from omnibot import motion
 from omnibot.errors import ConfigError
+from omnibot.estimation.wheelslip import WheelSlipCheck
 from omnibot.robot import RobotDescription
 from omnibot.robot import kinematics as kin
 
@@ -82,8 +84,9 @@ class WheelOdometry:
         """Path length travelled by the body centre, m."""
         self.residual = np.zeros(robot.n_wheels)
         """Last interval's per-wheel residual, rad (non-zero: the wheels disagree, slip)."""
-        self.slip_threshold = 3.0 * float(self._rad_per_count.max())
-        """Residual (rad, largest wheel) above which :attr:`slipping` is set: a few counts."""
+        self.slip_check = WheelSlipCheck(self._J, self._rad_per_count, window=0.0)
+        """The residual's slip check, one interval at a time (:mod:`~omnibot.estimation.wheelslip`)."""
+        self._slipping = False
         self._counts = CountTracker(robot.n_wheels, "encoder")
         self._heading: float | None = None
 
@@ -96,6 +99,7 @@ class WheelOdometry:
         angles = delta * self._rad_per_count
         disp = self._pinv @ angles  # body displacement: twist times the interval
         self.residual = angles - self._J @ disp
+        self._slipping = self.slip_check.update(angles, 0.0)
         dx, dy, dtheta = (float(v) for v in disp)
         if heading is not None and self._heading is not None:
             dtheta = heading - self._heading
@@ -106,8 +110,9 @@ class WheelOdometry:
 
     @property
     def slipping(self) -> bool:
-        """True when the last interval's residual is more than quantisation explains (wheel slip)."""
-        return float(np.abs(self.residual).max(initial=0.0)) > self.slip_threshold
+        """True when the last interval's studentised residual is more than quantisation explains
+        (a wheel slipped)."""
+        return self._slipping
 
 
 def forward_twist(robot: RobotDescription, wheel_speeds: Sequence[float]) -> kin.ForwardResult:
