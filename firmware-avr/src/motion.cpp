@@ -652,7 +652,8 @@ int16_t Executor::limit(float p) {
 
 // PI on each wheel's encoder-measured speed every control period, integral frozen while saturated;
 // after a step in a wheel's target it grows slower the larger the error, until the wheel is within
-// the band (speedctl.py).
+// the band; the integral learns the error against the target the period was driven for, the P term
+// the new one (speedctl.py).
 void Executor::feedback_step(int32_t dt_us) {
 #if FEATURE_LANDING
     if (landing.active) {
@@ -674,6 +675,7 @@ void Executor::feedback_step(int32_t dt_us) {
         float err = target[i] - speed;
         correction[i] = SPEED_KP * err + SPEED_KI * integ[i];
         float p = ff[i] + correction[i];
+        float late = prev_target[i] - speed;  // against the target the period was driven for
         float x = (target[i] - prev_target[i]) * SPEED_BAND_INV;
         prev_target[i] = target[i];
         if (x > 1 || x < -1) {
@@ -683,7 +685,7 @@ void Executor::feedback_step(int32_t dt_us) {
         }
         if (-PWM_MAX < p && p < PWM_MAX) {
             x = rising & (1 << i) ? err * SPEED_BAND_INV : 0;
-            integ[i] += err * dt / (1 + x * x);
+            integ[i] += late * dt / (1 + x * x);
         }
         powers[i] = limit(p);
     }

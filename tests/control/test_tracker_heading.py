@@ -112,8 +112,10 @@ def test_the_body_acceleration_in_vel_shares_the_turning_start_among_the_wheels(
     """mecanum4 on carpet, a circle with the body swinging at its top speed (no slip calibration):
     with the profile's whole acceleration fed forward (protocol version 4) each wheel pushes its
     share of the body's force and torque from the start of every change, and the robot keeps closer
-    to the path (1.15 -> 1.02 cm RMS, 3.25 -> 2.71 max) than with version 3, whose A goes only with
-    straight runs (none here), so the wheel loops learn every acceleration in their integrals."""
+    to the path (0.61 -> 0.56 cm RMS, 1.32 -> 1.06 max) than with version 3, whose A goes only with
+    straight runs (none here), so the wheel loops learn every acceleration in their integrals. Before
+    the closed loop fed a wheel that mostly turns the body ROTATE's K_r at its own speed (motion.py
+    ``_turning_floor``), the version 3 run lost more at each turning start: 0.93 -> 0.71 cm RMS."""
     robot = load_robot("mecanum4")
     path = standard_path("circle", size=1.0, heading="swing")
     options = FollowOptions(follower="tracker", speed=0.8, standstill=1.0, floor="carpet")
@@ -121,5 +123,5 @@ def test_the_body_acceleration_in_vel_shares_the_turning_start_among_the_wheels(
     monkeypatch.setattr(codes, "VERSIONS", (2, 3))  # host and controller of version 3
     _, v3 = simulate_follow(robot, path, options, surface="carpet", seed=1)
     assert v4["completed"] and v3["completed"]
-    assert v4["rms_cross_track_m"] < 0.92 * v3["rms_cross_track_m"]
+    assert v4["rms_cross_track_m"] < 0.95 * v3["rms_cross_track_m"]
     assert v4["max_cross_track_m"] < 0.9 * v3["max_cross_track_m"]

@@ -31,19 +31,23 @@ def test_mecanum4_on_carpet_stays_near_the_asked_speed_after_a_step() -> None:
     assert result.rise < 0.6  # and still gets there (0.48 s before, 0.34 on the band's end, 0.36 now)
 
 
-@pytest.mark.parametrize(("course", "before"), [(0.0, 0.10), (44.5, 0.10), (90.0, 0.09)])
+@pytest.mark.parametrize(("course", "before"), [(0.0, 0.09), (44.5, 0.09), (90.0, 0.08)])
 def test_a_ramp_with_its_planned_acceleration_ends_near_the_asked_speed(course: float, before: float) -> None:
     """mecanum4 on carpet, 1.4 m/s^2 to 0.8 m/s: without the acceleration the integral stores the
-    torque of the ramp and carries the body past the speed asked (``before``, over the speed asked;
-    0.11, 0.11 and 0.10 before the held target's faster integral unlearned it sooner);
-    with it fed forward the body ends within 2 % (issue 17), reaching 98 % of its speed within 50 ms of
-    the ramp's end (0.57 s; 0.60-0.62 s measured, 0.58 without the feed-forward, which overshoots)."""
+    torque of the ramp and carries the body past the speed asked (``before``, over the speed asked:
+    0.092, 0.086 and 0.076; 0.11, 0.11 and 0.10 before the held target's faster integral unlearned it
+    sooner, 0.10, 0.10 and 0.09 before the integral learned against the target each period was driven
+    for); with it fed forward the body ends within 2 % (issue 17), reaching 98 % of its speed within
+    0.1 s of the ramp's end (0.57 s; 0.64-0.66 s measured, 0.58 without the feed-forward, which
+    overshoots). It was 0.60-0.62 s while the integral also stored the staircase's lag, one VEL step
+    behind every new target all the way up: on carpet that lag stood in for part of the feedforward's
+    shortfall at the ramp's end, which is now learned after it."""
     old = run("mecanum4", "carpet", course, 0.8, ramp=True)
     new = run("mecanum4", "carpet", course, 0.8, ramp=True, plan=True)
     assert old.body_asked == pytest.approx(before, abs=0.01)
     assert new.body_asked < 0.03
     assert new.body_asked < old.body_asked / 4  # 0.009-0.013 against 0.088-0.098
-    assert new.rise <= 0.8 / 1.4 + 0.05
+    assert new.rise <= 0.8 / 1.4 + 0.1
 
 
 def test_large_errors_integrate_less_after_a_step_only() -> None:
@@ -51,16 +55,17 @@ def test_large_errors_integrate_less_after_a_step_only() -> None:
     sc = SpeedControl([CPR], 0.0, 1.0, PERIOD, PWM_MAX, band)
     out = [0]
     sc.reset([0])
-    sc.update(PERIOD, [0], [4 * band], [0.0], out)  # a step from rest, err = 4 bands: 1/17 of the rate
+    sc.update(PERIOD, [0], [4 * band], [0.0], out)  # a step from rest: the period was driven for rest
+    assert sc._integ[0] == 0.0
+    sc.update(PERIOD, [0], [4 * band], [0.0], out)  # still rising, err = 4 bands: 1/17 of the rate
     assert sc._integ[0] == pytest.approx(4 * band * 0.01 / 17)
-    sc.update(PERIOD, [0], [4 * band], [0.0], out)  # still rising
-    assert sc._integ[0] == pytest.approx(2 * 4 * band * 0.01 / 17)
     sc.reset([0])
-    for k in range(1, 5):  # a ramp in steps smaller than the band: the plain PI
+    for k in range(1, 5):  # a ramp in steps smaller than the band: the plain PI, a period late
         sc.update(PERIOD, [0], [0.9 * band * k], [0.0], out)
-    assert sc._integ[0] == pytest.approx(0.9 * band * 0.01 * (1 + 2 + 3 + 4))
+    assert sc._integ[0] == pytest.approx(0.9 * band * 0.01 * (0 + 1 + 2 + 3))
     sc = SpeedControl([CPR], 0.0, 1.0, PERIOD, PWM_MAX)  # no band: the plain PI after a step too
     sc.reset([0])
+    sc.update(PERIOD, [0], [4 * band], [0.0], out)
     sc.update(PERIOD, [0], [4 * band], [0.0], out)
     assert sc._integ[0] == pytest.approx(4 * band * 0.01)
 
@@ -124,6 +129,25 @@ def test_the_band_is_where_the_p_term_gives_5_percent_of_full_power() -> None:
         assert cfg["speed_kp"] * cfg["speed_band"] == pytest.approx(0.05 * cfg["pwm_max"], rel=1e-5)
 
 
+def test_the_integral_learns_against_the_target_each_period_was_driven_for() -> None:
+    """A wheel that follows a host's ramp reads, each period, the target the period began with, one
+    step short of the new one: against the period's own target it integrates nothing (no lag stored
+    to carry it past the ramp's end), where the new target's error stored a step a period; the P
+    term still answers the new target."""
+    cpr, step, periods = 16_000, 2.0, 8  # fine encoders: no rounding in the speeds read
+    rad = 2 * math.pi / cpr
+    sc = SpeedControl([cpr], 0.5, 1.0, PERIOD, PWM_MAX, 5.0)
+    out = [0]
+    sc.reset([0])
+    counts = 0.0
+    for k in range(1, periods + 1):
+        counts += step * (k - 1) * 0.01 / rad  # the last period's target, reached
+        sc.update(PERIOD, [round(counts)], [step * k], [0.0], out)
+    lag = periods * step * 0.01  # what the new targets' errors summed to
+    assert abs(sc._integ[0]) < 0.01 * lag
+    assert sc.correction[0] == pytest.approx(0.5 * step, abs=0.01)
+
+
 def test_a_held_target_integrates_at_the_steady_rate() -> None:
     """Once the target has not changed for STEADY_PERIODS periods the integral grows at
     ki_steady / ki of its rate; the correction stays ki times the integral (no jump when the rate
@@ -131,17 +155,17 @@ def test_a_held_target_integrates_at_the_steady_rate() -> None:
     sc = SpeedControl([CPR], 0.0, 1.0, PERIOD, PWM_MAX, 0.0, ki_steady=2.0)
     out = [0]
     sc.reset([0])
-    for _ in range(STEADY_PERIODS):  # the first period is the step from 0; then it holds
+    for _ in range(STEADY_PERIODS):  # the first period is the step from 0 (driven for rest); then it holds
         sc.update(PERIOD, [0], [3.0], [0.0], out)
-    assert sc._integ[0] == pytest.approx(STEADY_PERIODS * 3.0 * 0.01)
-    assert sc.correction[0] == pytest.approx((STEADY_PERIODS - 1) * 3.0 * 0.01)  # ki x the integral before
+    assert sc._integ[0] == pytest.approx((STEADY_PERIODS - 1) * 3.0 * 0.01)
+    assert sc.correction[0] == pytest.approx((STEADY_PERIODS - 2) * 3.0 * 0.01)  # ki x the integral before
     before = sc._integ[0]
     sc.update(PERIOD, [0], [3.0], [0.0], out)  # held STEADY_PERIODS periods: twice the rate
     assert sc._integ[0] - before == pytest.approx(2 * 3.0 * 0.01)
     assert sc.correction[0] == pytest.approx(before)
     before = sc._integ[0]
-    sc.update(PERIOD, [0], [3.1], [0.0], out)  # the target moved: the plain rate again
-    assert sc._integ[0] - before == pytest.approx(3.1 * 0.01)
+    sc.update(PERIOD, [0], [3.1], [0.0], out)  # the target moved: the plain rate again (the period's 3.0)
+    assert sc._integ[0] - before == pytest.approx(3.0 * 0.01)
     sc.reset([0])
     for k in range(1, 2 * STEADY_PERIODS + 1):  # a wheel asked to stand still creeps: the plain rate
         sc.update(PERIOD, [k], [0.0], [0.0], out)
@@ -151,12 +175,12 @@ def test_a_held_target_integrates_at_the_steady_rate() -> None:
     sc.reset([0])
     for _ in range(2 * STEADY_PERIODS):  # a step held, the wheel still far below: the rise's rate
         sc.update(PERIOD, [0], [4 * band], [0.0], out)
-    assert sc._integ[0] == pytest.approx(2 * STEADY_PERIODS * 4 * band * 0.01 / 17)
+    assert sc._integ[0] == pytest.approx((2 * STEADY_PERIODS - 1) * 4 * band * 0.01 / 17)
     plain = SpeedControl([CPR], 0.0, 1.0, PERIOD, PWM_MAX)  # no ki_steady: the plain rate throughout
     plain.reset([0])
     for _ in range(2 * STEADY_PERIODS):
         plain.update(PERIOD, [0], [3.0], [0.0], out)
-    assert plain._integ[0] == pytest.approx(2 * STEADY_PERIODS * 3.0 * 0.01)
+    assert plain._integ[0] == pytest.approx((2 * STEADY_PERIODS - 1) * 3.0 * 0.01)
 
 
 def test_the_steady_integral_is_twice_the_loop_s() -> None:
