@@ -53,11 +53,6 @@ Outcome = Literal["explored", "time limit", "unreachable", "stuck"]
 
 REACH = 0.6
 """m from a frontier's centre within which its goal is sought."""
-FRONTIER_VIEW = 1.2
-"""m from a frontier's centre within which its goal is sought, with a line of sight to it through
-known free cells, where no standing cell lies within :data:`REACH`: a frontier in a pocket the robot
-does not fit (behind furniture, a gap narrower than it needs) is seen from outside the pocket
-within the scanner's hit range (omni3's 32 cm radius in the house: recall 93.3 -> see BENCHMARKS.md)."""
 MIN_CELLS = 6
 """Frontier cells a group needs to be worth a visit (one unknown cell in the open makes 4)."""
 FREE = 49
@@ -124,13 +119,11 @@ def frontiers(
     min_cells: int = MIN_CELLS,
     reach: float = REACH,
     standoff: float = STANDOFF,
-    view: float = FRONTIER_VIEW,
 ) -> list[Frontier]:
     """The frontier groups of ``grid`` (largest first) with their goals: known free cells that
     ``cmap`` does not block (clear of walls and unknown), else that ``optimistic`` (the same map
     planned with unknown cells as free) does not block; with ``standoff`` m of clearance more if
-    there is such a cell within ``reach``. Where no such cell lies within ``reach``, the nearest
-    within ``view`` that sees the group's centre through known free cells, in the same order."""
+    there is such a cell within ``reach``."""
     known_free = grid.free(FREE)
     unknown = grid.data < 0
     near_unknown = ndimage.binary_dilation(unknown, structure=np.array([[0, 1, 0], [1, 1, 1], [0, 1, 0]]))
@@ -146,41 +139,20 @@ def frontiers(
         cells = np.argwhere(labels == k)
         if len(cells) < min_cells:
             continue
-        xy = grid.cell_to_world(cells)
-        cx, cy = xy.mean(axis=0)
-        middle = xy[int(np.argmin(np.hypot(xy[:, 0] - cx, xy[:, 1] - cy)))]  # a cell of the group
-        goal, in_known = _frontier_goal(grid, known_free, stands, np.array([cx, cy]), middle, reach, view)
-        out.append(Frontier((float(cx), float(cy)), len(cells), goal, in_known))
-    out.sort(key=lambda f: -f.size)
-    return out
-
-
-def _frontier_goal(
-    grid: OccupancyGrid,
-    see_through: NDArray[np.bool_],
-    stands: list[tuple[FloatArray, bool]],
-    centre: FloatArray,
-    middle: FloatArray,
-    reach: float,
-    view: float,
-) -> tuple[tuple[float, float] | None, bool]:
-    """Where to stand to see a frontier group (its ``centre``, and ``middle``: its cell nearest the
-    centre) and whether that is clear of the unknown too (see :func:`frontiers`): the first of
-    ``stands`` with a cell within ``reach`` of the centre, its nearest; else the first with a cell
-    within ``view`` that sees ``middle`` through ``see_through``, its nearest; else None."""
-    for far in (False, True):
+        cx, cy = grid.cell_to_world(cells).mean(axis=0)
+        goal: tuple[float, float] | None = None
+        in_known = False
         for stand_xy, known in stands:
             if len(stand_xy) == 0:
                 continue
-            d = np.hypot(*(stand_xy - centre).T)
-            within = np.flatnonzero(d <= (view if far else reach))
-            if far and len(within):
-                seen = _line_of_sight(grid, see_through, stand_xy[within], middle, stop=0.0)
-                within = within[seen]
-            if len(within):
-                best = within[int(np.argmin(d[within]))]
-                return (float(stand_xy[best, 0]), float(stand_xy[best, 1])), known
-    return None, False
+            d = np.hypot(stand_xy[:, 0] - cx, stand_xy[:, 1] - cy)
+            best = int(np.argmin(d))
+            if d[best] <= reach:
+                goal, in_known = (float(stand_xy[best, 0]), float(stand_xy[best, 1])), known
+                break
+        out.append(Frontier((float(cx), float(cy)), len(cells), goal, in_known))
+    out.sort(key=lambda f: -f.size)
+    return out
 
 
 def frontier_goals(
@@ -190,14 +162,12 @@ def frontier_goals(
     *,
     min_cells: int = MIN_CELLS,
     reach: float = REACH,
-    view: float = FRONTIER_VIEW,
 ) -> list[tuple[float, float, int]]:
     """(x, y, size) of each frontier group's goal (map frame, m) and its size in cells, largest
-    first; groups with nowhere to stand within ``reach``, nor within ``view`` in sight of them, are
-    left out (see :func:`frontiers`)."""
+    first; groups with nowhere to stand within ``reach`` are left out (see :func:`frontiers`)."""
     return [
         (f.goal[0], f.goal[1], f.size)
-        for f in frontiers(grid, cmap, optimistic, min_cells=min_cells, reach=reach, view=view)
+        for f in frontiers(grid, cmap, optimistic, min_cells=min_cells, reach=reach)
         if f.goal is not None
     ]
 
