@@ -21,6 +21,9 @@
 #ifndef FEATURE_LANDING  // MODE 2's finite motions end on the encoders, CAL table 9 (landing.py)
 #define FEATURE_LANDING 0
 #endif
+#ifndef FEATURE_TURN_FF  // on the closed loop a wheel that mostly turns the body fed ROTATE's K_r (motion.py _feedforward)
+#define FEATURE_TURN_FF 0
+#endif
 #if FEATURE_LANDING && !FEATURE_BRAKE
 #error "the landing starts its plan from the speed loop's wheel speeds (FEATURE_BRAKE keeps them)"
 #endif

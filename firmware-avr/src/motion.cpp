@@ -528,6 +528,9 @@ void Executor::drive(float vx, float vy, float w, bool rotate, float gain) {
     dead = flags & DEADBAND;
 #endif
     for (uint8_t i = 0; i < MOTORS; i++) ff[i] = dead ? 0 : model.raw[i];
+#if FEATURE_TURN_FF
+    if (!dead && w != 0 && !rotate && (mode & P_MODE_CLOSED_LOOP)) turn_feedforward(vx, vy, w);
+#endif
 #if FEATURE_LANDING
     if (acc_on && (kind == K_VEL || landing.active) && !dead) accel(vx, vy, w, f);
 #elif FEATURE_VEL_ACCEL
@@ -631,6 +634,21 @@ void Executor::start_feedback() {
 // twist (vx, vy, w) as driven, k the guard's scale of it and of its acceleration (motion.py _accel):
 // the body's share of force and torque (ACCEL_BODY_FF) and the wheel's own inertia, through the
 // rate of the body-frame twist (ax + w vy, ay - w vx, alpha) with version 4's body acceleration.
+#if FEATURE_TURN_FF
+// On the closed loop a wheel whose turn is the larger part of its rim speed u is fed at least ROTATE's
+// factor at its own speed, K K_r(K |u|) |u| (motion.py Executor._feedforward): K_t, one factor for
+// every wheel, leaves the wheels that only turn the body of an arc below what turns them.
+void Executor::turn_feedforward(float vx, float vy, float w) {
+    float k = cal_k();
+    for (uint8_t i = 0; i < MOTORS; i++) {
+        float t = rim(i, 0) * vx + rim(i, 1) * vy;
+        if (fabsf(rim(i, 2) * w) <= fabsf(t)) continue;
+        float u = t + rim(i, 2) * w, least = k * cal_kr(k * fabsf(u)) * fabsf(u);
+        if (fabsf(ff[i]) < least && ff[i] * u >= 0) ff[i] = u > 0 ? least : -least;
+    }
+}
+#endif
+
 void Executor::accel(float vx, float vy, float w, float k) {
     float a[3] = {acc[0] * k, acc[1] * k, acc[2] * k};
     float r[3] = {a[0], a[1], a[2]};

@@ -122,6 +122,9 @@ struct Executor {
 #if FEATURE_VEL_ACCEL
     void accel(float vx, float vy, float w, float k);
 #endif
+#if FEATURE_TURN_FF
+    void turn_feedforward(float vx, float vy, float w);
+#endif
 #if FEATURE_BRAKE
     void brake_to_rest();
     void slew(int32_t dt_us);
