@@ -92,13 +92,14 @@ def test_vel_watchdog_stops_silent_host(client: RobotClient) -> None:
 
 
 def test_vel_refreshed_keeps_running(client: RobotClient) -> None:
-    """VELs of 0.5 s refreshed every 0.1 s for 1 s (twice the duration: one VEL alone would have
-    ended) keep the robot going; then it stops once. The 0.4 s margin lets a loaded host be late (CI:
-    the UNO went idle between two 0.2 s VELs 0.1 s apart)."""
+    """VELs of 1 s refreshed every 0.1 s for 2 s (twice the duration: one VEL alone would have
+    ended) keep the robot going; then it stops once. The 0.9 s margin lets a loaded host be late, its
+    VEL's round trip included (CI: the UNO went idle between two 0.2 s VELs sent 0.1 s apart, the pty
+    emulator between two 0.5 s VELs at load 13)."""
     rec = EventRecorder()
     client.on_idle(rec)
-    for _ in range(10):
-        client.vel(0.0, 0.3, 0.0, 0.5)
+    for _ in range(20):
+        client.vel(0.0, 0.3, 0.0, 1.0)
         client.sleep(0.1)
     assert rec.events == [] and client.status().moving
     deadline = client.clock.now() + 10.0  # (the IDLE may come late on a loaded machine)
