@@ -86,7 +86,6 @@ class WheelOdometry:
         """Last interval's per-wheel residual, rad (non-zero: the wheels disagree, slip)."""
         self.slip_check = WheelSlipCheck(self._J, self._rad_per_count, window=0.0)
         """The residual's slip check, one interval at a time (:mod:`~omnibot.estimation.wheelslip`)."""
-        self._slipping = False
         self._counts = CountTracker(robot.n_wheels, "encoder")
         self._heading: float | None = None
 
@@ -99,7 +98,7 @@ class WheelOdometry:
         angles = delta * self._rad_per_count
         disp = self._pinv @ angles  # body displacement: twist times the interval
         self.residual = angles - self._J @ disp
-        self._slipping = self.slip_check.update(angles, 0.0)
+        self.slip_check.update(angles, 0.0)
         dx, dy, dtheta = (float(v) for v in disp)
         if heading is not None and self._heading is not None:
             dtheta = heading - self._heading
@@ -112,7 +111,7 @@ class WheelOdometry:
     def slipping(self) -> bool:
         """True when the last interval's studentised residual is more than quantisation explains
         (a wheel slipped)."""
-        return self._slipping
+        return self.slip_check.slipping
 
 
 def forward_twist(robot: RobotDescription, wheel_speeds: Sequence[float]) -> kin.ForwardResult:
