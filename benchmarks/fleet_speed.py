@@ -62,23 +62,25 @@ def main(argv: list[str] | None = None) -> int:
                     f"round {r + 1} {src}: {us} us for k = 1 / 2 / 4 / 8, {times[8] / times[1]:.2f} x",
                     flush=True,
                 )
-    summary = {
-        src: {
-            "median_us": {k: round(statistics.median(t[k] for t in runs) * 1e6, 1) for k in SIZES},
-            "ratio_8_over_1": sorted(round(t[8] / t[1], 2) for t in runs),
-        }
-        for src, runs in rounds.items()
-    }
+    medians = {src: {k: statistics.median(t[k] for t in runs) for k in SIZES} for src, runs in rounds.items()}
+    ratios = {src: sorted(round(t[8] / t[1], 2) for t in runs) for src, runs in rounds.items()}
     if args.json:
+        summary = {
+            src: {
+                "median_us": {k: round(m * 1e6, 1) for k, m in medians[src].items()},
+                "ratio_8_over_1": ratios[src],
+            }
+            for src in rounds
+        }
         print(json.dumps({"rounds": rounds, "summary": summary}))
-    else:
-        for src, s in summary.items():
-            ratios = s["ratio_8_over_1"]
-            median = " / ".join(f"{s['median_us'][k]:.1f}" for k in SIZES)
-            print(
-                f"{src}: median {median} us; fleet of 8 over 1: {ratios[0]:.2f}-{ratios[-1]:.2f} "
-                f"(median {statistics.median(ratios):.2f})"
-            )
+        return 0
+    for src in rounds:
+        low, high = ratios[src][0], ratios[src][-1]
+        median = " / ".join(f"{medians[src][k] * 1e6:.1f}" for k in SIZES)
+        print(
+            f"{src}: median {median} us; fleet of 8 over 1: {low:.2f}-{high:.2f} "
+            f"(median {statistics.median(ratios[src]):.2f})"
+        )
     return 0
 
 
