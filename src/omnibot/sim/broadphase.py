@@ -13,13 +13,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from math import hypot
 
 import numpy as np
 from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
 Row = Sequence[float]
-"""A body's pose (x, y, theta, ...)."""
+"""A body's pose (x, y, theta)."""
 
 SKIN = 0.05
 """m: how much farther apart than touching a pair may be and still be kept by a sweep."""
@@ -33,7 +34,7 @@ class NearPairs:
     def __init__(self, reaches: Sequence[float], skin: float = SKIN) -> None:
         self._reach = [float(r) for r in reaches]
         self._skin = skin
-        self._moved = (skin / 2) ** 2
+        self._half = skin / 2
         self._anchors: list[tuple[float, float]] = []
         self._candidates: list[tuple[int, int, float]] = []
         """(i, j, squared distance below which their circles meet) of the pairs the last sweep kept."""
@@ -58,10 +59,10 @@ class NearPairs:
         """True when a body has moved more than half a skin since the last sweep (or none was made)."""
         if len(self._anchors) != len(rows):
             return True
-        limit = self._moved
-        for row, (x0, y0) in zip(rows, self._anchors, strict=True):
-            dx, dy = row[0] - x0, row[1] - y0
-            if dx * dx + dy * dy > limit:
+        half = self._half
+        for (x, y, _), (x0, y0) in zip(rows, self._anchors, strict=True):
+            moved = hypot(x - x0, y - y0)
+            if moved > half:
                 return True
         return False
 
