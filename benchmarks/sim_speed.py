@@ -15,7 +15,8 @@ numbers are not. Results go in BENCHMARKS.md.
   :meth:`Physics.step` called once per step (one core).
 * fleet: a :class:`~omnibot.sim.fleet.Fleet` of k = 1, 2, 4, 8 omni4 robots in the room, each with
   its firmware driving a MOVE and pinging its sonar every 60 ms; CPU time (of the stepping thread)
-  per fleet step, best of 5; measured before the batch, whose threads may stay busy after it.
+  per fleet step, best of 5; measured before the batch, whose threads may stay busy after it. Source trees
+  side by side, in rounds: :mod:`benchmarks.fleet_speed`.
 * kernel start-up (skip with ``--no-startup``): seconds from a fresh interpreter's first import of
   the simulator to the end of its first step, with an empty numba cache (the step runs on the
   kernels' twins while a process of its own compiles them: :mod:`omnibot.sim.jit`; the interpreter

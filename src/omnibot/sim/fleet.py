@@ -3,9 +3,10 @@
 ::
 
     Fleet.step():  every robot's firmware polls (sonar pings see the others where they stand now)
-                   -> robot-robot contacts (the pairs whose bounding circles meet, found by sweep
-                      and prune along x: about one comparison per robot; then separating axes, the
-                      same kernel as the walls) -> equal and opposite penalty forces
+                   -> robot-robot contacts (the pairs whose bounding circles meet, from a sweep and
+                      prune along x made again only when a robot has moved 25 mm since the last:
+                      omnibot.sim.broadphase; then separating axes, the same kernel as the walls)
+                      -> equal and opposite penalty forces
                    -> every robot's physics steps (its walls, its pushes, those forces) -> clock += dt
                    -> while a scanner is on, every 5 ms: every robot's pose into one pose log; the
                       scanners due cast their rays (each ray sees the others where they were then)
@@ -28,6 +29,7 @@ links (``sim://omni4?fleet=NAME&name=r1``) and threads, and ``omnibot sim --pty`
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
 from typing import Any
@@ -39,6 +41,7 @@ from omnibot.errors import ConfigError, SimulationError
 from omnibot.motion import Pose2D
 from omnibot.robot import RobotDescription
 from omnibot.sim import jit
+from omnibot.sim.broadphase import Footprints, NearPairs
 from omnibot.sim.clock import SimClock
 from omnibot.sim.device import SimDevice
 from omnibot.sim.scanner import PoseLog
@@ -49,7 +52,7 @@ from omnibot.sim.simulator import (
     WALL_FRICTION,
     Simulator,
 )
-from omnibot.sim.world import Contact, World, closed_edges, placed
+from omnibot.sim.world import Contact, World, placed
 
 FloatArray = NDArray[np.float64]
 
@@ -93,10 +96,15 @@ class Fleet:
         self._bodies: dict[str, _Body] = {}
         self._order: list[_Body] = []
         self._out = np.zeros((2, 6))
+        self._controls: list[Callable[[], None]] = []
+        self._steps: list[Callable[[], None]] = []
+        self._pose_rows: list[FloatArray] = []
+        """Every robot's firmware poll, physics step and live pose row, in step order."""
+        self._near = NearPairs([])
+        self._footprints = Footprints([])
         self._edges = np.zeros((0, 4))
         self._edges_rows: dict[str, tuple[int, int]] = {}
         self._edges_tick = -1
-        self._edges_names: list[str] = []
         self._scan_stride_us = max(1, round(SCAN_POSE_PERIOD / dt)) * self._dt_us
         self._scan_next_us = 0
         self._scan_log = PoseLog(0, self._scan_stride_us / 1e6)
@@ -186,7 +194,7 @@ class Fleet:
         device.sim.neighbours = partial(self._edges_except, name)
         self._bodies[name] = body
         self._order = sorted(self._bodies.values(), key=lambda b: b.name)
-        self._rescan()
+        self._members_changed()
         device.sim.set_scan_driver(self._scan_switched)
         return device
 
@@ -197,53 +205,39 @@ class Fleet:
             body.sim.neighbours = None
             self._order = [b for b in self._order if b is not body]
             body.sim.set_scan_driver(None)
-            self._rescan()
+            self._members_changed()
+
+    def _members_changed(self) -> None:
+        """A robot joined or left: the broad phase, the footprints and the scanners' log start again."""
+        self._controls = [b.device.control for b in self._order]
+        self._steps = [b.sim.step for b in self._order]
+        self._pose_rows = [b.pose_row for b in self._order]
+        self._near = NearPairs([b.reach for b in self._order])
+        self._footprints = Footprints([b.outline for b in self._order])
+        bounds = self._footprints.bounds
+        self._edges_rows = {b.name: (int(bounds[i]), int(bounds[i + 1])) for i, b in enumerate(self._order)}
+        self._edges_tick = -1
+        self._rescan()
 
     # ------------------------------------------------------------------ stepping
 
     def step(self) -> None:
         """One step of every robot: firmware polls, contacts between robots, physics."""
+        for control in self._controls:
+            control()
         bodies = self._order
-        for body in bodies:
-            body.device.control()
         for i, j in self._near_pairs():
             self._push_apart(bodies[i], bodies[j])
-        for body in bodies:
-            body.sim.step()
+        for step in self._steps:
+            step()
         self._us += self._dt_us
         if self._scanning and self._us >= self._scan_next_us:
             self._scan_step()
 
     def _near_pairs(self) -> list[tuple[int, int]]:
-        """The pairs (i < j, in step order) of robots whose bounding circles may meet, sorted.
-
-        Sweep and prune along x: robots sorted by x, each compared only with those after it within
-        its reach plus the largest reach, so a fleet spread over a room costs about one comparison
-        per robot instead of one per pair. Conservative: :meth:`_pair_contact` makes the exact test.
-        """
-        bodies = self._order
-        if len(bodies) < 2:
-            return []
-        rows = [b.pose_row.tolist() for b in bodies]
-        reach = [b.reach for b in bodies]
-        widest = max(reach)
-        keyed = sorted((row[0], k) for k, row in enumerate(rows))
-        pairs = []
-        for a in range(len(keyed) - 1):
-            xi, i = keyed[a]
-            limit = reach[i] + widest
-            if keyed[a + 1][0] - xi > limit:
-                continue
-            yi = rows[i][1]
-            for xj, j in keyed[a + 1 :]:
-                dx = xj - xi
-                if dx > limit:
-                    break
-                dy, r = rows[j][1] - yi, reach[i] + reach[j] + 1e-9
-                if dx * dx + dy * dy < r * r:
-                    pairs.append((i, j) if i < j else (j, i))
-        pairs.sort()
-        return pairs
+        """The pairs (i < j, in step order) of robots whose bounding circles may meet, sorted
+        (:class:`~omnibot.sim.broadphase.NearPairs`); :meth:`_pair_contact` makes the exact test."""
+        return self._near.pairs([row.tolist() for row in self._pose_rows])
 
     # ------------------------------------------------------------------ laser scanners
 
@@ -292,14 +286,9 @@ class Fleet:
         """The footprint edges (K, 4) of every robot but ``name``, world frame, as they stood when
         first asked for during this step (the sonars ask before the robots move, the scanners after
         their own robot moved: at most one step apart); placed once per step for all the askers."""
-        if self._edges_tick != self._us or self._edges_names != self.names:
-            edges = [closed_edges(b.hull()) for b in self._order]
-            bounds = np.cumsum([0] + [len(e) for e in edges])
-            self._edges = np.vstack(edges) if edges else np.zeros((0, 4))
-            self._edges_rows = {
-                b.name: (int(bounds[i]), int(bounds[i + 1])) for i, b in enumerate(self._order)
-            }
-            self._edges_tick, self._edges_names = self._us, self.names
+        if self._edges_tick != self._us:
+            self._edges = self._footprints.place([row.tolist() for row in self._pose_rows])
+            self._edges_tick = self._us
         lo, hi = self._edges_rows[name]
         return np.concatenate((self._edges[:lo], self._edges[hi:]))
 
