@@ -51,7 +51,7 @@ print(json.dumps({
 
 @pytest.mark.parametrize("command", [["ros2"], ["run", "--ros2"]], ids=["ros2", "run --ros2"])
 def test_a_subscriber_receives_odom_and_joint_states(command: list[str]) -> None:
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     script = f"COMMAND = {command!r}\n" + SUBSCRIBER
     result = json.loads(run_in_namespace(script).stdout.strip().splitlines()[-1])

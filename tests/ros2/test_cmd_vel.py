@@ -10,13 +10,13 @@ from typing import Any
 
 import pytest
 
-from omnibot.logs import schemas
-from omnibot.logs.recorder import header, twist
+from omnibot.logs import header, schemas
+from omnibot.logs.recorder import twist
 from omnibot.motion import Twist
 from omnibot.ros2.cmd_vel import TWIST, TWIST_STAMPED, CmdVelSource
 from omnibot.ros2.types import to_dds
-from omnibot.runtime.cycle import Cycle
-from omnibot.teleop.mapping import TwistLimits
+from omnibot.runtime import Cycle
+from omnibot.teleop import TwistLimits
 from tests.ros2.netns_helper import run_in_namespace
 from tests.ros2.test_odometry import Node
 

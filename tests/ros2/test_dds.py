@@ -8,7 +8,7 @@ import pytest
 pytest.importorskip("cyclonedds", reason="cyclonedds is not installed (pip install 'omnibot[ros2]')")
 
 from omnibot.errors import ConfigError
-from omnibot.logs.schemas import type_hash
+from omnibot.logs import type_hash
 from omnibot.ros2 import dds, netns
 from tests.ros2.netns_helper import run_in_namespace
 

@@ -13,8 +13,8 @@ from typing import Any
 
 import pytest
 
-from omnibot.logs.schemas import type_hash
-from omnibot.robot.description import load_robot
+from omnibot.logs import type_hash
+from omnibot.robot import load_robot
 from tests.ros2.netns_helper import run_in_namespace
 from tests.ros2.rclpy_distros import BOOTSTRAP, DISTROS, NODE, interpreter
 

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 from numba.extending import is_jitted
 
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from omnibot.sim import jit, kernels
 from omnibot.sim.simulator import Simulator
 
