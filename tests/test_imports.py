@@ -8,6 +8,9 @@ exists, and another package imports only the submodules it names.
 A package whose face re-exports names (``from omnibot.client import RobotClient``) is imported
 through it: another package names its module only for a submodule the face lists and takes no
 names from (``omnibot.robot.kinematics``), not ``from omnibot.client.client import RobotClient``.
+tests/ are held to the same rules, each test module as part of the package it tests (tests/sim/...
+as ``omnibot.sim``: its own internals are open to it), the modules no face gives listed in
+``TEST_REACHES``.
 
 Edges: every ``import`` and ``from ... import`` of an omnibot module, at module level and inside
 functions alike (a lazy import still runs when its function does, so it closes a cycle as surely as
@@ -28,7 +31,8 @@ from __future__ import annotations
 import ast
 import importlib
 import re
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
+from functools import cache
 from pathlib import Path
 
 import pytest
@@ -136,6 +140,7 @@ def _from_module(name: str, node: ast.ImportFrom) -> str:
     return ".".join(base + ([node.module] if node.module else []))
 
 
+@cache
 def _tree(name: str) -> ast.Module:
     path = MODULES[name]
     return ast.parse(path.read_text(encoding="utf-8"), str(path))
@@ -176,19 +181,25 @@ def lazy_names(package: str) -> dict[str, str]:
 
 def imports_of(name: str) -> set[str]:
     """The omnibot modules ``name`` imports (see the module docstring)."""
+    return targets_of(_tree(name), lambda node: _from_module(name, node)) - {name}
+
+
+def targets_of(tree: ast.Module, resolve: Callable[[ast.ImportFrom], str]) -> set[str]:
+    """The omnibot modules the imports of ``tree`` name (``resolve``: the module a ``from ...
+    import`` reads)."""
     out: set[str] = set()
-    for node in _walk(_tree(name)):
+    for node in _walk(tree):
         if isinstance(node, ast.Import):
             out.update(alias.name for alias in node.names)
             continue
-        module = _from_module(name, node)
+        module = resolve(node)
         lazy = LAZY.get(module, {})
         for alias in node.names:
             sub = f"{module}.{alias.name}"
             out.add(sub if sub in MODULES else module)
             if alias.name in lazy:
                 out.add(lazy[alias.name])
-    return {m for m in out if m in MODULES and m != name}
+    return {m for m in out if m in MODULES}
 
 
 LAZY = {name: lazy_names(name) for name, path in MODULES.items() if path.name == "__init__.py"}
@@ -435,8 +446,7 @@ PACKAGES = sorted(m for m, p in MODULES.items() if p.name == "__init__.py")
 def face_of(package: str) -> list[str] | None:
     """The names of ``package``'s ``__all__`` (a literal list of strings in its ``__init__``), None
     without one."""
-    tree = ast.parse(MODULES[package].read_text(encoding="utf-8"))
-    for node in tree.body:
+    for node in _tree(package).body:
         if not isinstance(node, ast.Assign | ast.AnnAssign):
             continue
         targets = [node.target] if isinstance(node, ast.AnnAssign) else node.targets
@@ -510,6 +520,7 @@ in (being reworked elsewhere at the time): take each out once it imports through
 add one."""
 
 
+@cache
 def faced_packages() -> dict[str, set[str]]:
     """Each storey package whose face re-exports names, with the submodules its ``__init__`` takes
     names from (under ``if TYPE_CHECKING:`` too: a lazy face names them there)."""
@@ -604,3 +615,191 @@ def test_faces_re_export_names() -> None:
     )
     done = [p for p in SUBMODULE_FACES if p not in bare]
     assert not done, "faces that re-export names now (take them out of SUBMODULE_FACES): " + ", ".join(done)
+
+
+# --------------------------------------------------------------------------- the tests through the faces
+
+
+TESTS = SRC.parent / "tests"
+
+TEST_REACHES: dict[str, tuple[str, tuple[str, ...]]] = {
+    "omnibot.apps.calibrate": (
+        "runs the subcommand's own run() with a scripted prompt",
+        ("cli/test_outcomes.py",),
+    ),
+    "omnibot.apps.run": ("patches compose() in the module that defines it", ("cli/test_run.py",)),
+    "omnibot.calibration.accuracy": (
+        "builds accuracy rows by hand to check what omnibot calibrate reports",
+        ("apps/test_calibrate.py", "cli/test_outcomes.py"),
+    ),
+    "omnibot.calibration.calfile": ("parses a calibration file's text", ("apps/test_calibrate.py",)),
+    "omnibot.calibration.results": ("builds a surface session by hand", ("cli/test_outcomes.py",)),
+    "omnibot.calibration.truth": (
+        "the simulator behind a client, as the truths find it",
+        ("transport/test_device.py",),
+    ),
+    "omnibot.calibration.verdict": (
+        "the verdict's parts and noise floors the expected verdicts are derived from",
+        ("apps/test_calibrate.py", "cli/test_outcomes.py"),
+    ),
+    "omnibot.client.wire": ("encodes binary frames for the UNO's parser", ("uno/test_binary.py",)),
+    "omnibot.control.followers.base": (
+        "the planner's wheel-use bound the expectation is derived from",
+        ("benchmarks/test_seed002_run.py",),
+    ),
+    "omnibot.control.paths.standard": ("the standard paths' swing angle", ("navigation/test_runner.py",)),
+    "omnibot.control.reach": (
+        "the planner's speed bounds the expectations are derived from",
+        ("benchmarks/test_seed002_run.py", "navigation/test_runner.py"),
+    ),
+    "omnibot.firmware.avrsketch": (
+        "the UNO's Arduino sketch, generated from the firmware's sources",
+        ("uno/test_sketch.py",),
+    ),
+    "omnibot.firmware.parser": ("fuzzes the firmware's parser itself", ("fuzz/targets.py",)),
+    "omnibot.firmware.unixhal": (
+        "runs the MicroPython firmware on the host's unix port, as a board would",
+        ("contract/run_unix.py",),
+    ),
+    "omnibot.lidar.rplidar_codec": (
+        "speaks the RPLIDAR protocol to the emulated scanner",
+        ("sim/test_emulator_scanner.py",),
+    ),
+    "omnibot.logs.reader": (
+        "reads back, record by record, the log a command wrote",
+        ("apps/test_log.py", "apps/test_teleop.py"),
+    ),
+    "omnibot.logs.recorder": (
+        "builds the messages the recorder writes (twist, odometry) to compare the bridge's with",
+        ("ros2/test_cmd_vel.py", "ros2/test_frames.py", "ros2/test_types.py"),
+    ),
+    "omnibot.logs.recording": (
+        "binds the Foxglove server of a recording by hand",
+        ("apps/test_recording.py",),
+    ),
+    "omnibot.mapping.score": (
+        "the map scores and the world rasterised (world_grid): the tests' and benchmarks' yardstick",
+        (
+            "apps/test_goto.py",
+            "logs/test_slamscore.py",
+            "navigation/test_goto.py",
+            "navigation/test_goto_source.py",
+            "ros2/test_goal.py",
+            "ros2/test_navigate.py",
+            "ros2/test_rclpy_goal_pose.py",
+        ),
+    ),
+    "omnibot.navigation.metrics": ("judges a run's figures by hand", ("cli/test_outcomes.py",)),
+    "omnibot.navigation.session": (
+        "the limits omnibot follow gives a robot's follower (and its simulated run), to build the same",
+        (
+            "control/test_profile.py",
+            "control/test_tracker_heading.py",
+            "runtime/test_frontends.py",
+            "runtime/test_runtime.py",
+            "runtime/test_sources.py",
+            "runtime/test_standstill.py",
+        ),
+    ),
+    "omnibot.robot.description": (
+        "the presets' directory (PRESET_DIR): the tests go through every preset file",
+        (
+            "apps/test_mapping.py",
+            "cli/test_grammar.py",
+            "client/test_session.py",
+            "firmware/test_config.py",
+            "ros2/test_scan_options.py",
+            "sim/test_physics.py",
+        ),
+    ),
+    "omnibot.runtime.runtime": (
+        "the latched emergency stop's notice, as the page shows it",
+        ("navigation/test_webteach.py",),
+    ),
+    "omnibot.uno.hil": ("the UNO in the loop with the simulator's sonar", ("contract/test_sonar_stop.py",)),
+    "omnibot.web.link": (
+        "drives the dashboard's robot link with the page's messages, without the server",
+        ("navigation/test_webteach.py", "runtime/test_frontends.py"),
+    ),
+    "omnibot.web.messages": (
+        "the page's messages to the dashboard's robot link",
+        ("navigation/test_webteach.py", "runtime/test_frontends.py"),
+    ),
+}
+"""Modules of other packages that tests import names or modules from which no face gives (each with
+why, and the test modules, under tests/, that do): take a test module out once it goes through a
+face, never add one. A name a face re-exports is always taken from the face."""
+
+
+def held_as(path: Path) -> str:
+    """The importer a test module is held as: ``omnibot.<name>`` for tests/<name>/... when that is a
+    storey package (its tests use its internals, its subpackages' too, as its own modules do), else
+    the test module's own dotted name (tests/contract, tests/fuzz, tests/benchmarks, tests/test_*.py:
+    outside every package)."""
+    parts = path.relative_to(TESTS.parent).with_suffix("").parts
+    package = f"{ROOT}.{parts[1]}"
+    return package if len(parts) > 2 and package in LEVEL else ".".join(parts)
+
+
+def reaches(tree: ast.Module, home: str) -> list[tuple[str, str]]:
+    """(module, what is wrong) for each import of a test module (its syntax tree, the importer it is
+    held as) around another package's face: the rules above for src/ (:func:`face_crossings`,
+    :func:`around_faces`)."""
+    targets = targets_of(tree, lambda node: "" if node.level else node.module or "")
+    out = [(t, bad) for t in sorted(targets) if not _under(t, (home,)) for bad in face_crossings({home: {t}})]
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and not node.level and node.module:
+            statement = (home, node.module, [alias.name for alias in node.names])
+            out += [(node.module, bad) for bad in around_faces([statement], skip=())]
+    return out
+
+
+@cache
+def reaches_in_tests() -> tuple[tuple[str, str, str], ...]:
+    """(test module under tests/, module, what is wrong) for every test module's import around a face."""
+    out = []
+    for path in sorted(TESTS.rglob("*.py")):
+        tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+        out += [(str(path.relative_to(TESTS)), module, why) for module, why in reaches(tree, held_as(path))]
+    return tuple(out)
+
+
+def test_the_tests_are_held_as_their_package() -> None:
+    assert held_as(TESTS / "sim" / "test_kernels.py") == "omnibot.sim"
+    assert held_as(TESTS / "contract" / "conftest.py") == "tests.contract.conftest"
+    assert held_as(TESTS / "test_cli.py") == "tests.test_cli"
+    own = ast.parse("from omnibot.control.paths.generator import x\nfrom omnibot.control.reach import y")
+    assert reaches(own, "omnibot.control") == []
+    around = ast.parse("from omnibot.client.client import RobotClient")
+    assert reaches(around, "tests.x") == [
+        (
+            "omnibot.client.client",
+            "tests.x: from omnibot.client.client import RobotClient: import RobotClient from"
+            " omnibot.client (its face)",
+        )
+    ]
+    hidden = ast.parse("from omnibot.mapping import grid, score")
+    assert reaches(hidden, "tests.x") == [
+        ("omnibot.mapping.score", "tests.x -> omnibot.mapping.score (omnibot.mapping.__all__ lacks 'score')")
+    ]
+
+
+def test_tests_take_re_exported_names_from_the_face() -> None:
+    """A test outside a package takes the names its face re-exports from the face, as src/ does."""
+    bad = [f"{test}: {why}" for test, _, why in reaches_in_tests() if why.endswith("(its face)")]
+    assert not bad, "tests import around a package's face:\n  " + "\n  ".join(bad)
+
+
+def test_tests_reach_other_packages_internals_only_where_listed() -> None:
+    """A test outside a package imports what its face does not give only as TEST_REACHES lists (the
+    list only shrinks)."""
+    found = {
+        (test, module): why for test, module, why in reaches_in_tests() if not why.endswith("(its face)")
+    }
+    allowed = {(test, module) for module, (_, tests) in TEST_REACHES.items() for test in tests}
+    new = [
+        f"{test}: {found[test, module]}" for test, module in sorted(found) if (test, module) not in allowed
+    ]
+    assert not new, "tests import another package's internals (use its face):\n  " + "\n  ".join(new)
+    gone = [f"{test} -> {module}" for test, module in sorted(allowed - set(found))]
+    assert not gone, "no longer imported around a face (take them out of TEST_REACHES): " + "; ".join(gone)
