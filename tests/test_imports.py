@@ -10,7 +10,7 @@ through it: another package names its module only for a submodule the face lists
 names from (``omnibot.robot.kinematics``), not ``from omnibot.client.client import RobotClient``.
 tests/ are held to the same rules, each test module as part of the package it tests (tests/sim/...
 as ``omnibot.sim``: its own internals are open to it), the modules no face gives listed in
-``TEST_REACHES``.
+``TEST_REACHES``; benchmarks/ take the names faces re-export from the faces.
 
 Edges: every ``import`` and ``from ... import`` of an omnibot module, at module level and inside
 functions alike (a lazy import still runs when its function does, so it closes a cycle as surely as
@@ -621,6 +621,7 @@ def test_faces_re_export_names() -> None:
 
 
 TESTS = SRC.parent / "tests"
+BENCHMARKS = SRC.parent / "benchmarks"
 
 TEST_REACHES: dict[str, tuple[str, tuple[str, ...]]] = {
     "omnibot.apps.calibrate": (
@@ -734,8 +735,8 @@ face, never add one. A name a face re-exports is always taken from the face."""
 def held_as(path: Path) -> str:
     """The importer a test module is held as: ``omnibot.<name>`` for tests/<name>/... when that is a
     storey package (its tests use its internals, its subpackages' too, as its own modules do), else
-    the test module's own dotted name (tests/contract, tests/fuzz, tests/benchmarks, tests/test_*.py:
-    outside every package)."""
+    the module's own dotted name (tests/contract, tests/fuzz, tests/benchmarks, tests/test_*.py and
+    benchmarks/: outside every package)."""
     parts = path.relative_to(TESTS.parent).with_suffix("").parts
     package = f"{ROOT}.{parts[1]}"
     return package if len(parts) > 2 and package in LEVEL else ".".join(parts)
@@ -755,12 +756,13 @@ def reaches(tree: ast.Module, home: str) -> list[tuple[str, str]]:
 
 
 @cache
-def reaches_in_tests() -> tuple[tuple[str, str, str], ...]:
-    """(test module under tests/, module, what is wrong) for every test module's import around a face."""
+def reaches_in(folder: Path) -> tuple[tuple[str, str, str], ...]:
+    """(module under ``folder``, the module it imports, what is wrong) for every import of tests/ or
+    benchmarks/ around a face."""
     out = []
-    for path in sorted(TESTS.rglob("*.py")):
+    for path in sorted(folder.rglob("*.py")):
         tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
-        out += [(str(path.relative_to(TESTS)), module, why) for module, why in reaches(tree, held_as(path))]
+        out += [(str(path.relative_to(folder)), module, why) for module, why in reaches(tree, held_as(path))]
     return tuple(out)
 
 
@@ -784,18 +786,22 @@ def test_the_tests_are_held_as_their_package() -> None:
     ]
 
 
-def test_tests_take_re_exported_names_from_the_face() -> None:
-    """A test outside a package takes the names its face re-exports from the face, as src/ does."""
-    bad = [f"{test}: {why}" for test, _, why in reaches_in_tests() if why.endswith("(its face)")]
-    assert not bad, "tests import around a package's face:\n  " + "\n  ".join(bad)
+@pytest.mark.parametrize("folder", [TESTS, BENCHMARKS], ids=["tests", "benchmarks"])
+def test_tests_and_benchmarks_take_re_exported_names_from_the_face(folder: Path) -> None:
+    """A test or a benchmark outside a package takes the names its face re-exports from the face, as
+    src/ does (what benchmarks import that no face gives is not listed yet)."""
+    bad = [
+        f"{folder.name}/{module}: {why}"
+        for module, _, why in reaches_in(folder)
+        if why.endswith("(its face)")
+    ]
+    assert not bad, "imports around a package's face:\n  " + "\n  ".join(bad)
 
 
 def test_tests_reach_other_packages_internals_only_where_listed() -> None:
     """A test outside a package imports what its face does not give only as TEST_REACHES lists (the
     list only shrinks)."""
-    found = {
-        (test, module): why for test, module, why in reaches_in_tests() if not why.endswith("(its face)")
-    }
+    found = {(test, module): why for test, module, why in reaches_in(TESTS) if not why.endswith("(its face)")}
     allowed = {(test, module) for module, (_, tests) in TEST_REACHES.items() for test in tests}
     new = [
         f"{test}: {found[test, module]}" for test, module in sorted(found) if (test, module) not in allowed
