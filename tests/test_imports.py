@@ -514,11 +514,6 @@ those submodules: firmware's and protocol's by design (their ``__init__`` is cop
 others until their faces re-export their names. Take each out once its face does, never add one: a
 new package's face re-exports the names other packages use."""
 
-SKIPPED_IMPORTERS: tuple[str, ...] = ("omnibot.firmware",)
-"""Packages whose modules still import names from other packages' modules when the faces were filled
-in (being reworked elsewhere at the time): take each out once it imports through the faces, never
-add one."""
-
 
 @cache
 def faced_packages() -> dict[str, set[str]]:
@@ -544,17 +539,14 @@ def from_imports() -> Iterator[tuple[str, str, list[str]]]:
                 yield name, _from_module(name, node), [alias.name for alias in node.names]
 
 
-def around_faces(
-    statements: Iterable[tuple[str, str, list[str]]], skip: tuple[str, ...] = SKIPPED_IMPORTERS
-) -> list[str]:
-    """Every ``from p.x import names`` from outside the package ``p`` whose face re-exports names
-    (and outside the packages ``skip``), when the face re-exports one of ``names`` or takes names from
-    ``p.x``."""
+def around_faces(statements: Iterable[tuple[str, str, list[str]]]) -> list[str]:
+    """Every ``from p.x import names`` from outside the package ``p`` whose face re-exports names,
+    when the face re-exports one of ``names`` or takes names from ``p.x``."""
     faced = faced_packages()
     out = []
     for name, module, names in statements:
         package = next((p for p in faced if _under(module, (p,)) and module != p), None)
-        if package is None or _under(name, (package,)) or _under(name, skip):
+        if package is None or _under(name, (package,)):
             continue
         face = face_of(package) or []
         listed = [n for n in names if n in face and f"{package}.{n}" not in MODULES]
@@ -591,15 +583,8 @@ def test_packages_import_re_exported_names_from_the_face() -> None:
         "omnibot.runtime",
     }
     assert faced <= set(faced_packages())
-    statements = list(from_imports())
-    bad = around_faces(statements)
+    bad = around_faces(from_imports())
     assert not bad, "imports around a package's face:\n  " + "\n  ".join(bad)
-    done = [
-        p
-        for p in SKIPPED_IMPORTERS
-        if not around_faces(((i, m, n) for i, m, n in statements if _under(i, (p,))), skip=())
-    ]
-    assert not done, "import through the faces now (take them out of SKIPPED_IMPORTERS): " + ", ".join(done)
 
 
 def test_faces_re_export_names() -> None:
@@ -751,7 +736,7 @@ def reaches(tree: ast.Module, home: str) -> list[tuple[str, str]]:
     for node in ast.walk(tree):
         if isinstance(node, ast.ImportFrom) and not node.level and node.module:
             statement = (home, node.module, [alias.name for alias in node.names])
-            out += [(node.module, bad) for bad in around_faces([statement], skip=())]
+            out += [(node.module, bad) for bad in around_faces([statement])]
     return out
 
 
