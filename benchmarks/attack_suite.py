@@ -77,7 +77,8 @@ from omnibot.protocol.messages import (
     Telem,
     Vel,
 )
-from omnibot.transport.faults import FaultLink, _Channel
+from omnibot.transport import FaultLink
+from omnibot.transport.faults import _Channel
 
 REPO = Path(__file__).resolve().parents[1]
 FAMILIES = ("fuzz", "bits", "links", "logs", "web", "ros2")
@@ -696,7 +697,7 @@ def _follow(
     work: Path, name: str, log: str | None, wrap: list[str], preexec: Callable[[], None] | None = None
 ) -> dict[str, Any]:
     """``omnibot follow`` of a 0.5 m circle at 0.4 m/s in a subprocess: its report, status, stderr."""
-    from omnibot.control.paths import standard_path, write_path
+    from omnibot.control import standard_path, write_path
 
     path_file = work / "circle.csv"
     if not path_file.exists():

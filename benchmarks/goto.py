@@ -38,8 +38,8 @@ import yaml
 from benchmarks.planner import free_poses, inside_walls, rasterise
 from omnibot.mapping import inflate
 from omnibot.motion import Pose2D
-from omnibot.navigation import simulated_client
-from omnibot.navigation.goto import GotoOptions, GotoResult, goto
+from omnibot.navigation import GotoOptions, GotoResult, simulated_client
+from omnibot.navigation.goto import goto
 from omnibot.robot import load_robot
 from omnibot.sim import load_world
 from omnibot.transport import find_simulator

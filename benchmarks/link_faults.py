@@ -43,8 +43,8 @@ from omnibot.firmware.controller import Controller
 from omnibot.protocol import codes
 from omnibot.protocol.messages import Vel
 from omnibot.sim import SimDevice
-from omnibot.transport import LockstepLink
-from omnibot.transport.faults import FaultLink, _Channel
+from omnibot.transport import FaultLink, LockstepLink
+from omnibot.transport.faults import _Channel
 
 KINDS = ("drop", "corrupt", "delay", "stall", "reorder")
 RATES = (0.01, 0.001)

@@ -36,6 +36,7 @@ import numpy as np
 
 from omnibot.calibration import (
     ACCEPTANCE,
+    AccuracyPlan,
     Plan,
     accuracy_entries,
     parse_perturbation,
@@ -43,7 +44,7 @@ from omnibot.calibration import (
     session,
     summary_table,
 )
-from omnibot.calibration.accuracy import AccuracyPlan, describe_reach, within_reach
+from omnibot.calibration.accuracy import describe_reach, within_reach
 from omnibot.calibration.experiments import Runner
 from omnibot.calibration.motorfit import Balance, Stand, emf_counts
 from omnibot.calibration.motors import balance_model

@@ -44,8 +44,8 @@ def drive(job: tuple[str, str, float, int, bool, bool]) -> dict[str, Any]:
     from omnibot.control.paths.standard import random_path
     from omnibot.estimation import estimator_names, make_estimator
     from omnibot.motion import Pose2D
-    from omnibot.navigation import Navigator
-    from omnibot.navigation.session import follower_limits, simulated_client
+    from omnibot.navigation import Navigator, simulated_client
+    from omnibot.navigation.session import follower_limits
     from omnibot.robot import load_robot
 
     preset, surface, length, seed, calibrate, slip_calibrate = job

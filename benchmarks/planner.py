@@ -26,8 +26,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from omnibot.errors import PlanningError
-from omnibot.mapping import OccupancyGrid
-from omnibot.mapping.planner import COST_WEIGHT, PLANNERS, CostMap, PlannedPath, inflate, plan_path
+from omnibot.mapping import CostMap, OccupancyGrid, PlannedPath, inflate, plan_path
+from omnibot.mapping.planner import COST_WEIGHT, PLANNERS
 from omnibot.mapping.score import world_grid
 from omnibot.motion import Pose2D
 from omnibot.robot import load_robot

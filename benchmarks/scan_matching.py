@@ -32,8 +32,9 @@ from collections.abc import Callable
 import numpy as np
 
 from benchmarks.slam_synthetic import corridor_path, corridor_world, room_path, synthetic_scan
+from omnibot.mapping import compose
 from omnibot.mapping.matcher import ScanMatcher
-from omnibot.mapping.se2 import between, compose
+from omnibot.mapping.se2 import between
 from omnibot.motion import Pose2D
 from omnibot.sim import load_world
 

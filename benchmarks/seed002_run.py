@@ -323,7 +323,8 @@ def one_run(
     robot: RobotDescription, path: Path, follower: str, seed: int
 ) -> tuple[Any, dict[str, Any], Metrics]:
     """Repeat ``path`` with ``follower`` at up to 5 m/s on wood; the run, its report, its metrics."""
-    from omnibot.navigation.session import FollowOptions, simulate_follow
+    from omnibot.navigation import FollowOptions
+    from omnibot.navigation.session import simulate_follow
 
     run, report = simulate_follow(
         robot, path, FollowOptions(follower=follower, speed=TOP), surface="wood", seed=seed
@@ -334,7 +335,7 @@ def one_run(
 
 def planned(robot: RobotDescription, path: Path, follower: str = "tracker") -> tuple[np.ndarray, np.ndarray]:
     """The followers' time-optimal plan for ``path`` at up to 5 m/s: (times, speeds)."""
-    from omnibot.control.followers import make_follower
+    from omnibot.control import make_follower
     from omnibot.navigation.session import follower_limits
 
     profile = make_follower(follower, follower_limits(robot, TOP)).plan(path)

@@ -24,8 +24,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from omnibot.mapping import compose
 from omnibot.mapping.deskew import motion
-from omnibot.mapping.se2 import between, compose
+from omnibot.mapping.se2 import between
 from omnibot.motion import Pose2D, Twist
 from omnibot.scan import Scan
 from omnibot.sim import World, load_world, parse_world

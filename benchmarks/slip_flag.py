@@ -90,15 +90,15 @@ def _steps(top: float, turn: float) -> Callable[[float], Any]:
 def record(job: tuple[str, str, str, float, int]) -> Record:
     """Drive ``preset`` on ``surface`` (``drive``), its wheel 1 at ``grip`` (1: as described)."""
     from omnibot.client import RobotClient
-    from omnibot.control.paths import standard_path
+    from omnibot.control import standard_path
     from omnibot.estimation import make_estimator
     from omnibot.motion import Pose2D, Twist
-    from omnibot.navigation.following import follower_source
+    from omnibot.navigation import follower_source
     from omnibot.navigation.session import follower_limits
     from omnibot.protocol import codes
     from omnibot.robot import load_robot
     from omnibot.runtime import Runtime, ScriptSource
-    from omnibot.sim.device import SimDevice
+    from omnibot.sim import SimDevice
     from omnibot.transport import LockstepLink
 
     preset, surface, drive, grip, seed = job

@@ -53,7 +53,8 @@ from omnibot.motion import Twist
 from omnibot.navigation.slipcal import simulate_slip_calibration
 from omnibot.robot import RobotDescription, load_robot
 from omnibot.ros2 import PERIOD as ROS2_PERIOD
-from omnibot.ros2.cmd_vel import TWIST_STAMPED, CmdVelSource
+from omnibot.ros2 import CmdVelSource
+from omnibot.ros2.cmd_vel import TWIST_STAMPED
 from omnibot.ros2.types import to_dds
 from omnibot.runtime import DeadmanSource, LinkPacer, PadSource, Runtime, Source
 from omnibot.teleop import JoyState, Sample, TeleopConfig, TwistLimits

@@ -120,8 +120,9 @@ def build_path(preset: str, spec: str) -> Path:
     ``random-SEED`` (a smooth random path, swing heading), ``eight-SEED`` (a figure eight),
     ``closed-SEED`` (a closed free-form curve), ``line-COURSE`` (a straight run at the
     top speed's length, COURSE degrees from the body's x axis) or ``line-swing``."""
+    from omnibot.control import standard_path
     from omnibot.control.paths.generator import closed_curve_path, figure_eight_path, smooth_random_path
-    from omnibot.control.paths.standard import SWING, standard_path
+    from omnibot.control.paths.standard import SWING
 
     bench = ROBOTS[preset]
     if spec.startswith("random-"):
@@ -190,7 +191,8 @@ the tracker's options)."""
 
 
 def one_run(job: Job) -> dict[str, Any]:
-    from omnibot.navigation.session import FollowOptions, simulate_follow
+    from omnibot.navigation import FollowOptions
+    from omnibot.navigation.session import simulate_follow
     from omnibot.robot import load_robot
 
     suite, preset, surface, spec, follower, seed, speed, calibrate, slip, tuning = job
@@ -474,8 +476,9 @@ def format_random(
 
 def format_bounds(robots: list[str]) -> str:
     """Each robot's top speed against what its motors allow (:mod:`omnibot.control.reach`)."""
+    from omnibot.control import free_wheel_speeds
     from omnibot.control.followers.base import PLAN_WHEEL_USE
-    from omnibot.control.reach import free_wheel_speeds, speed_bound
+    from omnibot.control.reach import speed_bound
     from omnibot.robot import load_robot
 
     out = [
@@ -572,8 +575,9 @@ def suite_goals(results: list[dict[str, Any]], title: str) -> str:
 def seed002_experiment(target: FsPath, seed: int = 1, slip: bool = True) -> str:
     """Seed 002's S path on omni3 (wood) with and without reduced overshoot; the plot and a summary."""
     from omnibot.control import standard_path
+    from omnibot.navigation import FollowOptions, summary
     from omnibot.navigation.plot import plot_runs
-    from omnibot.navigation.session import FollowOptions, simulate_follow, summary
+    from omnibot.navigation.session import simulate_follow
     from omnibot.robot import load_robot
 
     robot = load_robot("omni3")

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from omnibot.cli import main
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 
 
 def test_kinematics_json(capsys: pytest.CaptureFixture[str]) -> None:
@@ -252,7 +252,7 @@ def test_a_command_that_could_not_start_exits_2_with_one_line(
     """docs/cli.md: 2 it could not start (bad arguments or files, the wrong robot, a link that cannot be
     opened). A start pose in a wall (SimulationError) and an emulator that did not start (LinkError)
     were failed runs, exit 1."""
-    from omnibot.control.paths import standard_path, write_path
+    from omnibot.control import standard_path, write_path
 
     (tmp_path / "walled.yaml").write_text(WALLED)
     (tmp_path / "bad.yaml").write_text("name: bad\nwheels: 3\n")

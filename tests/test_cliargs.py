@@ -101,7 +101,7 @@ def test_an_output_in_a_missing_directory_is_refused_before_the_robot_moves(
     directory made, no (empty) file left behind."""
     from omnibot.cli import main
     from omnibot.client import session
-    from omnibot.control.paths import standard_path, write_path
+    from omnibot.control import standard_path, write_path
     from omnibot.navigation import session as nav_session
 
     def no_robot(*args: object, **kwargs: object) -> None:

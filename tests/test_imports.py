@@ -8,6 +8,9 @@ exists, and another package imports only the submodules it names.
 A package whose face re-exports names (``from omnibot.client import RobotClient``) is imported
 through it: another package names its module only for a submodule the face lists and takes no
 names from (``omnibot.robot.kinematics``), not ``from omnibot.client.client import RobotClient``.
+tests/ are held to the same rules, each test module as part of the package it tests (tests/sim/...
+as ``omnibot.sim``: its own internals are open to it), the modules no face gives listed in
+``TEST_REACHES``; benchmarks/ too (outside every package: ``BENCHMARK_REACHES``).
 
 Edges: every ``import`` and ``from ... import`` of an omnibot module, at module level and inside
 functions alike (a lazy import still runs when its function does, so it closes a cycle as surely as
@@ -28,7 +31,8 @@ from __future__ import annotations
 import ast
 import importlib
 import re
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
+from functools import cache
 from pathlib import Path
 
 import pytest
@@ -136,6 +140,7 @@ def _from_module(name: str, node: ast.ImportFrom) -> str:
     return ".".join(base + ([node.module] if node.module else []))
 
 
+@cache
 def _tree(name: str) -> ast.Module:
     path = MODULES[name]
     return ast.parse(path.read_text(encoding="utf-8"), str(path))
@@ -176,19 +181,25 @@ def lazy_names(package: str) -> dict[str, str]:
 
 def imports_of(name: str) -> set[str]:
     """The omnibot modules ``name`` imports (see the module docstring)."""
+    return targets_of(_tree(name), lambda node: _from_module(name, node)) - {name}
+
+
+def targets_of(tree: ast.Module, resolve: Callable[[ast.ImportFrom], str]) -> set[str]:
+    """The omnibot modules the imports of ``tree`` name (``resolve``: the module a ``from ...
+    import`` reads)."""
     out: set[str] = set()
-    for node in _walk(_tree(name)):
+    for node in _walk(tree):
         if isinstance(node, ast.Import):
             out.update(alias.name for alias in node.names)
             continue
-        module = _from_module(name, node)
+        module = resolve(node)
         lazy = LAZY.get(module, {})
         for alias in node.names:
             sub = f"{module}.{alias.name}"
             out.add(sub if sub in MODULES else module)
             if alias.name in lazy:
                 out.add(lazy[alias.name])
-    return {m for m in out if m in MODULES and m != name}
+    return {m for m in out if m in MODULES}
 
 
 LAZY = {name: lazy_names(name) for name, path in MODULES.items() if path.name == "__init__.py"}
@@ -435,8 +446,7 @@ PACKAGES = sorted(m for m, p in MODULES.items() if p.name == "__init__.py")
 def face_of(package: str) -> list[str] | None:
     """The names of ``package``'s ``__all__`` (a literal list of strings in its ``__init__``), None
     without one."""
-    tree = ast.parse(MODULES[package].read_text(encoding="utf-8"))
-    for node in tree.body:
+    for node in _tree(package).body:
         if not isinstance(node, ast.Assign | ast.AnnAssign):
             continue
         targets = [node.target] if isinstance(node, ast.AnnAssign) else node.targets
@@ -504,12 +514,8 @@ those submodules: firmware's and protocol's by design (their ``__init__`` is cop
 others until their faces re-export their names. Take each out once its face does, never add one: a
 new package's face re-exports the names other packages use."""
 
-SKIPPED_IMPORTERS: tuple[str, ...] = ("omnibot.firmware",)
-"""Packages whose modules still import names from other packages' modules when the faces were filled
-in (being reworked elsewhere at the time): take each out once it imports through the faces, never
-add one."""
 
-
+@cache
 def faced_packages() -> dict[str, set[str]]:
     """Each storey package whose face re-exports names, with the submodules its ``__init__`` takes
     names from (under ``if TYPE_CHECKING:`` too: a lazy face names them there)."""
@@ -533,17 +539,14 @@ def from_imports() -> Iterator[tuple[str, str, list[str]]]:
                 yield name, _from_module(name, node), [alias.name for alias in node.names]
 
 
-def around_faces(
-    statements: Iterable[tuple[str, str, list[str]]], skip: tuple[str, ...] = SKIPPED_IMPORTERS
-) -> list[str]:
-    """Every ``from p.x import names`` from outside the package ``p`` whose face re-exports names
-    (and outside the packages ``skip``), when the face re-exports one of ``names`` or takes names from
-    ``p.x``."""
+def around_faces(statements: Iterable[tuple[str, str, list[str]]]) -> list[str]:
+    """Every ``from p.x import names`` from outside the package ``p`` whose face re-exports names,
+    when the face re-exports one of ``names`` or takes names from ``p.x``."""
     faced = faced_packages()
     out = []
     for name, module, names in statements:
         package = next((p for p in faced if _under(module, (p,)) and module != p), None)
-        if package is None or _under(name, (package,)) or _under(name, skip):
+        if package is None or _under(name, (package,)):
             continue
         face = face_of(package) or []
         listed = [n for n in names if n in face and f"{package}.{n}" not in MODULES]
@@ -580,15 +583,8 @@ def test_packages_import_re_exported_names_from_the_face() -> None:
         "omnibot.runtime",
     }
     assert faced <= set(faced_packages())
-    statements = list(from_imports())
-    bad = around_faces(statements)
+    bad = around_faces(from_imports())
     assert not bad, "imports around a package's face:\n  " + "\n  ".join(bad)
-    done = [
-        p
-        for p in SKIPPED_IMPORTERS
-        if not around_faces(((i, m, n) for i, m, n in statements if _under(i, (p,))), skip=())
-    ]
-    assert not done, "import through the faces now (take them out of SKIPPED_IMPORTERS): " + ", ".join(done)
 
 
 def test_faces_re_export_names() -> None:
@@ -604,3 +600,289 @@ def test_faces_re_export_names() -> None:
     )
     done = [p for p in SUBMODULE_FACES if p not in bare]
     assert not done, "faces that re-export names now (take them out of SUBMODULE_FACES): " + ", ".join(done)
+
+
+# --------------------------------------------------------------------------- the tests through the faces
+
+
+TESTS = SRC.parent / "tests"
+BENCHMARKS = SRC.parent / "benchmarks"
+
+TEST_REACHES: dict[str, tuple[str, tuple[str, ...]]] = {
+    "omnibot.apps.calibrate": (
+        "runs the subcommand's own run() with a scripted prompt",
+        ("cli/test_outcomes.py",),
+    ),
+    "omnibot.apps.run": ("patches compose() in the module that defines it", ("cli/test_run.py",)),
+    "omnibot.calibration.accuracy": (
+        "builds accuracy rows by hand to check what omnibot calibrate reports",
+        ("apps/test_calibrate.py", "cli/test_outcomes.py"),
+    ),
+    "omnibot.calibration.calfile": ("parses a calibration file's text", ("apps/test_calibrate.py",)),
+    "omnibot.calibration.results": ("builds a surface session by hand", ("cli/test_outcomes.py",)),
+    "omnibot.calibration.truth": (
+        "the simulator behind a client, as the truths find it",
+        ("transport/test_device.py",),
+    ),
+    "omnibot.calibration.verdict": (
+        "the verdict's parts and noise floors the expected verdicts are derived from",
+        ("apps/test_calibrate.py", "cli/test_outcomes.py"),
+    ),
+    "omnibot.client.wire": ("encodes binary frames for the UNO's parser", ("uno/test_binary.py",)),
+    "omnibot.control.followers.base": (
+        "the planner's wheel-use bound the expectation is derived from",
+        ("benchmarks/test_seed002_run.py",),
+    ),
+    "omnibot.control.paths.standard": ("the standard paths' swing angle", ("navigation/test_runner.py",)),
+    "omnibot.control.reach": (
+        "the planner's speed bounds the expectations are derived from",
+        ("benchmarks/test_seed002_run.py", "navigation/test_runner.py"),
+    ),
+    "omnibot.firmware.avrsketch": (
+        "the UNO's Arduino sketch, generated from the firmware's sources",
+        ("uno/test_sketch.py",),
+    ),
+    "omnibot.firmware.parser": ("fuzzes the firmware's parser itself", ("fuzz/targets.py",)),
+    "omnibot.firmware.unixhal": (
+        "runs the MicroPython firmware on the host's unix port, as a board would",
+        ("contract/run_unix.py",),
+    ),
+    "omnibot.lidar.rplidar_codec": (
+        "speaks the RPLIDAR protocol to the emulated scanner",
+        ("sim/test_emulator_scanner.py",),
+    ),
+    "omnibot.logs.reader": (
+        "reads back, record by record, the log a command wrote",
+        ("apps/test_log.py", "apps/test_teleop.py"),
+    ),
+    "omnibot.logs.recorder": (
+        "builds the messages the recorder writes (twist, odometry) to compare the bridge's with",
+        ("ros2/test_cmd_vel.py", "ros2/test_frames.py", "ros2/test_types.py"),
+    ),
+    "omnibot.logs.recording": (
+        "binds the Foxglove server of a recording by hand",
+        ("apps/test_recording.py",),
+    ),
+    "omnibot.mapping.score": (
+        "the map scores and the world rasterised (world_grid): the tests' and benchmarks' yardstick",
+        (
+            "apps/test_goto.py",
+            "logs/test_slamscore.py",
+            "navigation/test_goto.py",
+            "navigation/test_goto_source.py",
+            "ros2/test_goal.py",
+            "ros2/test_navigate.py",
+            "ros2/test_rclpy_goal_pose.py",
+        ),
+    ),
+    "omnibot.navigation.metrics": ("judges a run's figures by hand", ("cli/test_outcomes.py",)),
+    "omnibot.navigation.session": (
+        "the limits omnibot follow gives a robot's follower (and its simulated run), to build the same",
+        (
+            "control/test_profile.py",
+            "control/test_tracker_heading.py",
+            "runtime/test_frontends.py",
+            "runtime/test_runtime.py",
+            "runtime/test_sources.py",
+            "runtime/test_standstill.py",
+        ),
+    ),
+    "omnibot.robot.description": (
+        "the presets' directory (PRESET_DIR): the tests go through every preset file",
+        (
+            "apps/test_mapping.py",
+            "cli/test_grammar.py",
+            "client/test_session.py",
+            "firmware/test_config.py",
+            "ros2/test_scan_options.py",
+            "sim/test_physics.py",
+        ),
+    ),
+    "omnibot.runtime.runtime": (
+        "the latched emergency stop's notice, as the page shows it",
+        ("navigation/test_webteach.py",),
+    ),
+    "omnibot.uno.hil": ("the UNO in the loop with the simulator's sonar", ("contract/test_sonar_stop.py",)),
+    "omnibot.web.link": (
+        "drives the dashboard's robot link with the page's messages, without the server",
+        ("navigation/test_webteach.py", "runtime/test_frontends.py"),
+    ),
+    "omnibot.web.messages": (
+        "the page's messages to the dashboard's robot link",
+        ("navigation/test_webteach.py", "runtime/test_frontends.py"),
+    ),
+}
+"""Modules of other packages that tests import names or modules from which no face gives (each with
+why, and the test modules, under tests/, that do): take a test module out once it goes through a
+face, never add one. A name a face re-exports is always taken from the face."""
+
+BENCHMARK_REACHES: dict[str, tuple[str, tuple[str, ...]]] = {
+    "omnibot.calibration.accuracy": ("the reach the accuracy plan checks", ("motor_model.py",)),
+    "omnibot.calibration.experiments": (
+        "runs the calibration's experiments (its Runner) by hand",
+        ("idle_phase.py", "motor_model.py"),
+    ),
+    "omnibot.calibration.motorfit": ("fits the motor model it measures", ("motor_model.py",)),
+    "omnibot.calibration.motors": ("balances the motors' model as the calibration does", ("motor_model.py",)),
+    "omnibot.calibration.patterns": (
+        "the calibration patterns' geometry",
+        ("idle_phase.py", "motor_model.py"),
+    ),
+    "omnibot.calibration.seedterms": (
+        "seed 000's K_r and K_t read off a calibration",
+        ("seed000_figures.py",),
+    ),
+    "omnibot.calibration.tap": ("the calibration's telemetry tap", ("idle_phase.py",)),
+    "omnibot.calibration.verdict": ("the verdict's error measure", ("idle_phase.py",)),
+    "omnibot.client.wire": ("frames bytes by hand to attack the controller", ("attack_suite.py",)),
+    "omnibot.control.followers.base": (
+        "the planner's margins the figures are judged against",
+        ("seed002_run.py", "tracking.py"),
+    ),
+    "omnibot.control.paths.generator": (
+        "the closed, figure-eight and random paths it tracks",
+        ("tracking.py",),
+    ),
+    "omnibot.control.paths.standard": (
+        "the standard paths' random ones and swing",
+        ("odometry_drift.py", "tracking.py"),
+    ),
+    "omnibot.control.reach": (
+        "the planner's speed bounds and the floor's grip the figures are judged against",
+        ("seed002_run.py", "tracking.py"),
+    ),
+    "omnibot.estimation.odometry": ("the odometry's count deltas", ("slip_flag.py",)),
+    "omnibot.estimation.wheelslip": ("the slip check's window", ("slip_flag.py",)),
+    "omnibot.logs.live": (
+        "the Foxglove live server, measured and attacked",
+        ("attack_suite.py", "foxglove_live.py"),
+    ),
+    "omnibot.logs.reader": ("reads back the log it measures", ("log_cost.py",)),
+    "omnibot.logs.recorder": ("builds the twist messages it sends", ("speed_accuracy.py",)),
+    "omnibot.logs.topics": ("the topics it counts", ("log_cost.py",)),
+    "omnibot.mapping.deskew": ("the SLAM's parts measured alone", ("slam_synthetic.py",)),
+    "omnibot.mapping.mapper": ("the mapper measured alone", ("mapping_localise.py", "mapping_mapper.py")),
+    "omnibot.mapping.matcher": ("the scan matcher measured alone", ("scan_matching.py",)),
+    "omnibot.mapping.planner": ("the planners and their cost weight, compared", ("planner.py",)),
+    "omnibot.mapping.score": (
+        "the map scores and the world rasterised: the benchmarks' yardstick",
+        ("mapping_mapper.py", "planner.py", "slam_bench.py"),
+    ),
+    "omnibot.mapping.se2": (
+        "the pose algebra the errors are measured with",
+        ("mapping_localise.py", "scan_matching.py", "slam_synthetic.py"),
+    ),
+    "omnibot.mapping.slam": ("the SLAM's parts measured alone", ("slam_synthetic.py",)),
+    "omnibot.navigation.goto": ("goto() (its module's name shadows it in the face)", ("goto.py",)),
+    "omnibot.navigation.metrics": ("the error along a path", ("seed002_run.py",)),
+    "omnibot.navigation.plot": ("plots the runs", ("tracking.py",)),
+    "omnibot.navigation.session": (
+        "the follower limits and the simulated follow omnibot follow runs",
+        ("odometry_drift.py", "seed002_run.py", "slip_flag.py", "tracking.py"),
+    ),
+    "omnibot.navigation.slipcal": (
+        "the floor's slip calibration on the simulator",
+        ("move_landing.py", "speed_accuracy.py", "tracking.py"),
+    ),
+    "omnibot.ros2.backend": ("whether rclpy imports", ("ros2_rates.py", "ros2_sink.py")),
+    "omnibot.ros2.cmd_vel": ("the stamped twist's type name", ("speed_accuracy.py",)),
+    "omnibot.ros2.netns": (
+        "the private network namespaces DDS runs in",
+        ("attack_suite.py", "netns.py", "ros2_latency.py"),
+    ),
+    "omnibot.ros2.types": ("builds the DDS samples it sends", ("speed_accuracy.py",)),
+    "omnibot.transport.faults": (
+        "the fault injection's channels, driven directly",
+        ("attack_suite.py", "link_faults.py"),
+    ),
+}
+"""The same for benchmarks/ (the benchmarks under benchmarks/): a benchmark measures a package's parts
+alone, so it reaches further in than a test of another package does."""
+
+
+def held_as(path: Path) -> str:
+    """The importer a test module is held as: ``omnibot.<name>`` for tests/<name>/... when that is a
+    storey package (its tests use its internals, its subpackages' too, as its own modules do), else
+    the module's own dotted name (tests/contract, tests/fuzz, tests/benchmarks, tests/test_*.py and
+    benchmarks/: outside every package)."""
+    parts = path.relative_to(TESTS.parent).with_suffix("").parts
+    package = f"{ROOT}.{parts[1]}"
+    return package if len(parts) > 2 and package in LEVEL else ".".join(parts)
+
+
+def reaches(tree: ast.Module, home: str) -> list[tuple[str, str]]:
+    """(module, what is wrong) for each import of a test module (its syntax tree, the importer it is
+    held as) around another package's face: the rules above for src/ (:func:`face_crossings`,
+    :func:`around_faces`)."""
+    targets = targets_of(tree, lambda node: "" if node.level else node.module or "")
+    out = [(t, bad) for t in sorted(targets) if not _under(t, (home,)) for bad in face_crossings({home: {t}})]
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and not node.level and node.module:
+            statement = (home, node.module, [alias.name for alias in node.names])
+            out += [(node.module, bad) for bad in around_faces([statement])]
+    return out
+
+
+@cache
+def reaches_in(folder: Path) -> tuple[tuple[str, str, str], ...]:
+    """(module under ``folder``, the module it imports, what is wrong) for every import of tests/ or
+    benchmarks/ around a face."""
+    out = []
+    for path in sorted(folder.rglob("*.py")):
+        tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+        out += [(str(path.relative_to(folder)), module, why) for module, why in reaches(tree, held_as(path))]
+    return tuple(out)
+
+
+def test_the_tests_are_held_as_their_package() -> None:
+    assert held_as(TESTS / "sim" / "test_kernels.py") == "omnibot.sim"
+    assert held_as(TESTS / "contract" / "conftest.py") == "tests.contract.conftest"
+    assert held_as(TESTS / "test_cli.py") == "tests.test_cli"
+    own = ast.parse("from omnibot.control.paths.generator import x\nfrom omnibot.control.reach import y")
+    assert reaches(own, "omnibot.control") == []
+    around = ast.parse("from omnibot.client.client import RobotClient")
+    assert reaches(around, "tests.x") == [
+        (
+            "omnibot.client.client",
+            "tests.x: from omnibot.client.client import RobotClient: import RobotClient from"
+            " omnibot.client (its face)",
+        )
+    ]
+    hidden = ast.parse("from omnibot.mapping import grid, score")
+    assert reaches(hidden, "tests.x") == [
+        ("omnibot.mapping.score", "tests.x -> omnibot.mapping.score (omnibot.mapping.__all__ lacks 'score')")
+    ]
+
+
+@pytest.mark.parametrize("folder", [TESTS, BENCHMARKS], ids=["tests", "benchmarks"])
+def test_tests_and_benchmarks_take_re_exported_names_from_the_face(folder: Path) -> None:
+    """A test or a benchmark outside a package takes the names its face re-exports from the face, as
+    src/ does."""
+    bad = [
+        f"{folder.name}/{module}: {why}"
+        for module, _, why in reaches_in(folder)
+        if why.endswith("(its face)")
+    ]
+    assert not bad, "imports around a package's face:\n  " + "\n  ".join(bad)
+
+
+@pytest.mark.parametrize(
+    ("folder", "listed"),
+    [(TESTS, TEST_REACHES), (BENCHMARKS, BENCHMARK_REACHES)],
+    ids=["tests", "benchmarks"],
+)
+def test_tests_and_benchmarks_reach_other_packages_internals_only_where_listed(
+    folder: Path, listed: dict[str, tuple[str, tuple[str, ...]]]
+) -> None:
+    """A test or a benchmark outside a package imports what its face does not give only as
+    TEST_REACHES or BENCHMARK_REACHES lists (the lists only shrink)."""
+    found = {
+        (where, module): why for where, module, why in reaches_in(folder) if not why.endswith("(its face)")
+    }
+    allowed = {(where, module) for module, (_, wheres) in listed.items() for where in wheres}
+    new = [f"{w}: {found[w, m]}" for w, m in sorted(found) if (w, m) not in allowed]
+    assert not new, f"{folder.name}/ imports another package's internals (use its face):\n  " + "\n  ".join(
+        new
+    )
+    gone = [f"{w} -> {m}" for w, m in sorted(allowed - set(found))]
+    assert not gone, "no longer imported around a face (take them out of the list): " + "; ".join(gone)

@@ -13,13 +13,19 @@ from typing import Any
 import pytest
 
 from omnibot.apps import calibrate as calibration_cli
+from omnibot.calibration import (
+    ACCEPTANCE,
+    load_calibration,
+    merge_calibration,
+    parse_perturbation,
+    perturbed_robot,
+)
 from omnibot.calibration.accuracy import AccuracyRow
-from omnibot.calibration.calfile import load_calibration, merge_calibration, parse_calibration
-from omnibot.calibration.perturb import ACCEPTANCE, parse_perturbation, perturbed_robot
+from omnibot.calibration.calfile import parse_calibration
 from omnibot.calibration.verdict import NOISE_ROTATE, ROTATE, part_errors
 from omnibot.cli import main
 from omnibot.errors import ConfigError
-from omnibot.robot.description import RobotDescription, load_robot
+from omnibot.robot import RobotDescription, load_robot
 
 
 class RecordingBar:

@@ -11,8 +11,7 @@ import pytest
 
 from omnibot.apps.console import format_event, run_console
 from omnibot.cli import main
-from omnibot.client import ErrorEvent, RangeEvent, ResetEvent, Telemetry, Unexpected, WarnEvent
-from omnibot.client.views import Hello
+from omnibot.client import ErrorEvent, Hello, RangeEvent, ResetEvent, Telemetry, Unexpected, WarnEvent
 from omnibot.protocol import codes
 from omnibot.protocol.messages import Malformed
 from omnibot.protocol.messages import Telemetry as TelMessage

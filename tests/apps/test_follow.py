@@ -10,8 +10,8 @@ from typing import Any
 import pytest
 
 from omnibot.cli import main
-from omnibot.client.client import RobotClient
-from omnibot.control.paths import standard_path, write_path
+from omnibot.client import RobotClient
+from omnibot.control import standard_path, write_path
 
 
 def test_follow_writes_report_plot_and_truth(tmp_path: FsPath, capsys: pytest.CaptureFixture[str]) -> None:

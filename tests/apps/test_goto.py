@@ -9,9 +9,9 @@ from pathlib import Path
 import pytest
 
 from omnibot.cli import main
-from omnibot.mapping.mapfile import save_map
+from omnibot.mapping import save_map
 from omnibot.mapping.score import world_grid
-from omnibot.sim.world import load_world
+from omnibot.sim import load_world
 from tests.cli.conftest import assert_one_line_error
 
 

@@ -9,10 +9,10 @@ from pathlib import Path
 import pytest
 
 from omnibot.cli import main
-from omnibot.control.paths import standard_path, write_path
+from omnibot.control import standard_path, write_path
 from omnibot.logs import topics
 from omnibot.logs.reader import LogFile
-from omnibot.transport.spy import format_event
+from omnibot.transport import format_event
 from tests.logs.conftest import RecordedRun
 
 
@@ -59,8 +59,8 @@ def test_log_info(followed: Path, capsys: pytest.CaptureFixture[str]) -> None:
 def test_log_protocol_prints_what_spy_prints(
     recorded: RecordedRun, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from omnibot.logs.run import load_run
-    from omnibot.transport.spy import SpyEvent
+    from omnibot.logs import load_run
+    from omnibot.transport import SpyEvent
 
     assert main(["log", "protocol", str(recorded.path)]) == 0
     out = capsys.readouterr().out.splitlines()
@@ -144,7 +144,7 @@ def test_plot_of_a_log_without_telemetry_says_no_data(
 def test_info_of_a_log_without_messages_says_no_data(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from omnibot.logs.recorder import Recorder
+    from omnibot.logs import Recorder
 
     log = tmp_path / "empty.mcap"
     Recorder(log).close()

@@ -12,10 +12,9 @@ from evo.tools import file_interface
 from PIL import Image
 
 from omnibot.cli import main
-from omnibot.control.paths.files import write_path
-from omnibot.control.paths.geometry import resample
-from omnibot.control.paths.path import Path as RobotPath
-from omnibot.mapping.mapfile import load_map
+from omnibot.control import Path as RobotPath
+from omnibot.control import resample, write_path
+from omnibot.mapping import load_map
 from omnibot.robot.description import PRESET_DIR as PRESETS
 from tests.cli.conftest import assert_one_line_error
 

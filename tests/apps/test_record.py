@@ -8,12 +8,10 @@ from typing import Any
 import pytest
 
 from omnibot.cli import main
-from omnibot.control.paths import read_path, standard_path
-from omnibot.control.paths.teach import PathRecorder
-from omnibot.navigation.record import teach
-from omnibot.navigation.session import simulated_client
-from omnibot.robot.description import load_robot
-from omnibot.runtime.runtime import Runtime
+from omnibot.control import PathRecorder, read_path, standard_path
+from omnibot.navigation import simulated_client, teach
+from omnibot.robot import load_robot
+from omnibot.runtime import Runtime
 from tests.navigation.test_runner import Drivers
 
 
@@ -90,8 +88,7 @@ def test_record_and_follow_in_a_world_start_at_its_start(
 ) -> None:
     """A world with walls has its own start pose: the robot stands there, not at the origin (which
     is inside the room's wall), and a path is followed in its own frame from there."""
-    from omnibot.sim import device
-    from omnibot.sim.world import load_world
+    from omnibot.sim import device, load_world
 
     starts: list[tuple[float, float, float]] = []
 

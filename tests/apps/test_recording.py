@@ -8,9 +8,10 @@ from pathlib import Path
 
 from omnibot.apps.recording import CommandRecording, command_recording
 from omnibot.cliargs import recording_of
-from omnibot.client.session import robot_session
-from omnibot.logs.recording import FoxgloveBind, Recording
-from omnibot.runtime.runtime import Runtime
+from omnibot.client import robot_session
+from omnibot.logs import Recording
+from omnibot.logs.recording import FoxgloveBind
+from omnibot.runtime import Runtime
 
 
 def _sources_of_a_recorded_runtime(rec: CommandRecording) -> list[str]:

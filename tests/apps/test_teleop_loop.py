@@ -13,9 +13,7 @@ import pytest
 
 from omnibot.apps.teleop_loop import Teleop
 from omnibot.client import EventRecorder, IdleEvent, RobotClient
-from omnibot.teleop.config import TeleopConfig
-from omnibot.teleop.deadman import Why
-from omnibot.teleop.pacing import Pacer
+from omnibot.teleop import Pacer, TeleopConfig, Why
 from tests.teleop.fakes import FakeWall, ScriptedSource, seed_pad, truth
 
 CONFIG = TeleopConfig(speed_max=0.5)

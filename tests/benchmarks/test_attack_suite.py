@@ -39,7 +39,7 @@ def test_the_link_watch_counts_only_lines_run_without_a_check() -> None:
     nothing; only a line that ran without a check is what the bit is there to stop."""
     from omnibot.protocol import text
     from omnibot.protocol.messages import Vel
-    from omnibot.sim.device import SimDevice
+    from omnibot.sim import SimDevice
 
     controller = SimDevice("omni4", seed=1).controller
     watch = attack_suite._watch(controller)

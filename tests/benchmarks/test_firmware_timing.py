@@ -8,7 +8,7 @@ import pytest
 
 from benchmarks import firmware_timing
 from omnibot.firmware.config import build_config
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 
 
 def test_a_stalled_baseline_round_is_not_subtracted(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from benchmarks import idle_phase
-from omnibot.calibration.calfile import load_calibration
+from omnibot.calibration import load_calibration
 
 CAL = Path(__file__).resolve().parents[1] / "data" / "omni4_carpet_calibration_before_idle_phase.yaml"
 

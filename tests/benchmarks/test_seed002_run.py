@@ -11,7 +11,7 @@ import pytest
 from benchmarks import seed002_run as bench
 from omnibot.control.followers.base import PLAN_WHEEL_USE
 from omnibot.control.reach import course_speed_bound
-from omnibot.robot.description import RobotDescription, load_robot
+from omnibot.robot import RobotDescription, load_robot
 
 
 def test_the_s_is_three_legs_and_two_half_circles_where_2_m_s_takes_3_m_s2() -> None:

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from benchmarks import slip_flag
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 
 
 def test_the_truth_is_one_wheels_nonrigid_slip_and_the_old_rule_needs_twelve_counts() -> None:

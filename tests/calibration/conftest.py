@@ -7,10 +7,10 @@ from contextlib import AbstractContextManager, contextmanager
 
 import pytest
 
-from omnibot.client.client import RobotClient
-from omnibot.robot.description import RobotDescription, load_robot
-from omnibot.sim.device import SimDevice
-from omnibot.transport.lockstep import LockstepLink
+from omnibot.client import RobotClient
+from omnibot.robot import RobotDescription, load_robot
+from omnibot.sim import SimDevice
+from omnibot.transport import LockstepLink
 
 Opener = Callable[..., AbstractContextManager[RobotClient]]
 

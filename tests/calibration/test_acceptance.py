@@ -45,8 +45,8 @@ from omnibot.calibration.results import CalibrationResult, SurfaceSession
 from omnibot.calibration.session import calibrate
 from omnibot.calibration.tables import summary_table
 from omnibot.calibration.verdict import judge_calibration
-from omnibot.client.client import RobotClient
-from omnibot.robot.description import RobotDescription, load_robot
+from omnibot.client import RobotClient
+from omnibot.robot import RobotDescription, load_robot
 from tests.calibration.conftest import sim_client
 
 SEED = 3

@@ -9,7 +9,7 @@ from omnibot.calibration.tables import move_grid
 from omnibot.firmware.calibration import Calibration
 from omnibot.firmware.config import build_config
 from omnibot.firmware.power import SATURATED, PowerModel
-from omnibot.robot.description import CalibrationSpec, PiecewiseLinear, RobotDescription, RollerDragSpec
+from omnibot.robot import CalibrationSpec, PiecewiseLinear, RobotDescription, RollerDragSpec
 
 
 def saturates(robot: RobotDescription, spec: CalibrationSpec, speed: float) -> bool:

@@ -10,7 +10,7 @@ from omnibot.calibration.experiments import Runner
 from omnibot.calibration.tables import move_grid
 from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.truth import TruthContext, make_truth
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from tests.calibration.conftest import sim_client
 
 

@@ -18,7 +18,7 @@ from omnibot.calibration.calfile import (
     parse_calibration,
 )
 from omnibot.errors import ConfigError
-from omnibot.robot.description import ReachSpec, load_robot
+from omnibot.robot import ReachSpec, load_robot
 from tests.calibration.conftest import sim_client
 
 DATA = Path(__file__).resolve().parents[1] / "data"

@@ -24,7 +24,7 @@ from omnibot.calibration.runs import STRAIGHT, RunInfo
 from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.truth import SimTruth
 from omnibot.errors import ConfigError
-from omnibot.robot.description import RobotDescription, load_robot
+from omnibot.robot import RobotDescription, load_robot
 from tests.calibration.conftest import sim_client
 
 

@@ -25,7 +25,7 @@ from omnibot.calibration.patterns import Geometry
 from omnibot.calibration.runs import Motion, RunResult
 from omnibot.client import commands
 from omnibot.protocol import codes
-from omnibot.robot.description import CalibrationSpec, CourseTable, PiecewiseLinear, RobotDescription
+from omnibot.robot import CalibrationSpec, CourseTable, PiecewiseLinear, RobotDescription
 
 DEADBAND = 50.0
 SLOPE = 0.007  # m/s of rim speed per PWM count above the dead band

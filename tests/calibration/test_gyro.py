@@ -12,7 +12,7 @@ from omnibot.calibration.plan import Plan
 from omnibot.calibration.session import rotation_test
 from omnibot.calibration.tap import TelemetryTap, standstill_bias
 from omnibot.calibration.truth import SimTruth
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from tests.calibration.conftest import sim_client
 
 

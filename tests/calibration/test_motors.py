@@ -31,7 +31,7 @@ from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.truth import TruthContext, make_truth
 from omnibot.firmware.calibration import Calibration
 from omnibot.protocol import codes
-from omnibot.robot.description import MotorMapSpec, PiecewiseLinear, RobotDescription, load_robot
+from omnibot.robot import MotorMapSpec, PiecewiseLinear, RobotDescription, load_robot
 from tests.calibration.conftest import sim_client
 
 MAP = MotorMapSpec(

@@ -6,7 +6,7 @@ import pytest
 
 from omnibot.calibration.patterns import Geometry, course_pattern, rotation_pattern, scaled_pattern
 from omnibot.calibration.plan import Plan
-from omnibot.robot.description import RobotDescription, load_robot
+from omnibot.robot import RobotDescription, load_robot
 
 
 @pytest.fixture(scope="module")

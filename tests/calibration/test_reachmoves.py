@@ -23,7 +23,7 @@ from omnibot.calibration.reachmoves import REACH, lands, measure_reach, slower
 from omnibot.calibration.tables import move_grid
 from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.truth import TruthContext, make_truth
-from omnibot.robot.description import CalibrationSpec, ReachSpec, RobotDescription, load_robot
+from omnibot.robot import CalibrationSpec, ReachSpec, RobotDescription, load_robot
 from tests.calibration.conftest import sim_client
 
 DATA = Path(__file__).resolve().parents[1] / "data"

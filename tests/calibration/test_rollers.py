@@ -31,7 +31,7 @@ from omnibot.calibration.runs import Motion, RunResult
 from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.truth import SimTruth
 from omnibot.firmware.power import roller_terms
-from omnibot.robot.description import CalibrationSpec, PiecewiseLinear, RobotDescription, RollerDragSpec
+from omnibot.robot import CalibrationSpec, PiecewiseLinear, RobotDescription, RollerDragSpec
 from tests.calibration.conftest import sim_client
 from tests.calibration.test_fits import run as straight_run
 

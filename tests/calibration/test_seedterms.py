@@ -6,7 +6,7 @@ import pytest
 
 from omnibot.calibration.seedterms import seed_kr, seed_kt
 from omnibot.errors import ConfigError
-from omnibot.robot.description import CalibrationSpec, MotorMapSpec, PiecewiseLinear
+from omnibot.robot import CalibrationSpec, MotorMapSpec, PiecewiseLinear
 
 K = 150.0
 KT = PiecewiseLinear(x=(10.0, 100.0), y=(1.2, 1.4))

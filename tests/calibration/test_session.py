@@ -6,7 +6,7 @@ from omnibot.calibration.accuracy import AccuracyPlan
 from omnibot.calibration.patterns import Geometry
 from omnibot.calibration.plan import Plan
 from omnibot.calibration.session import STEPS, Tally, expected_runs
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 
 
 class Bar:

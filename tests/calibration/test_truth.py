@@ -24,9 +24,9 @@ from omnibot.calibration.truth import (
     make_truth,
     parse_truth_spec,
 )
-from omnibot.client.client import RobotClient
+from omnibot.client import RobotClient
 from omnibot.errors import ConfigError
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 from tests.calibration.conftest import sim_client
 
 

@@ -8,8 +8,8 @@ import pytest
 
 from omnibot.calibration.runs import Motion
 from omnibot.calibration.umbmark import Increment, corrected_robot, fit_squares, integrate, umbmark
-from omnibot.estimation.odometry import WheelOdometry
-from omnibot.robot.description import RobotDescription
+from omnibot.estimation import WheelOdometry
+from omnibot.robot import RobotDescription
 
 SIDE = 1.0
 

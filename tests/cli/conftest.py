@@ -32,11 +32,11 @@ from typing import Any
 
 import pytest
 
-from omnibot.client.client import RobotClient
+from omnibot.client import RobotClient
 from omnibot.errors import ControllerError, LinkError
 from omnibot.protocol import codes
-from omnibot.sim.device import SimDevice
-from omnibot.transport.device import find_device
+from omnibot.sim import SimDevice
+from omnibot.transport import find_device
 
 ENDINGS = ("normal", "error", "sigint", "sigterm", "link", "unplug")
 FALLBACK_PUMPS = 400

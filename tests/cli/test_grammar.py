@@ -7,10 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from omnibot.calibration.calfile import merge_calibration
+from omnibot.calibration import merge_calibration
 from omnibot.cli import main
-from omnibot.control.paths.files import read_path, write_path
-from omnibot.control.paths.standard import standard_path
+from omnibot.control import read_path, standard_path, write_path
 from omnibot.errors import ConfigError
 from omnibot.robot.description import PRESET_DIR
 from tests.cli.conftest import Harness, assert_one_line_error

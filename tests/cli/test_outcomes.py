@@ -11,17 +11,17 @@ from typing import Any, cast
 import pytest
 
 from omnibot.apps import calibrate as calibration_cli
+from omnibot.calibration import CalibrationResult, judge_calibration, load_calibration
 from omnibot.calibration.accuracy import AccuracyRow
-from omnibot.calibration.calfile import load_calibration
-from omnibot.calibration.results import CalibrationResult, SurfaceSession
-from omnibot.calibration.verdict import judge_average, judge_calibration
+from omnibot.calibration.results import SurfaceSession
+from omnibot.calibration.verdict import judge_average
 from omnibot.cli import build_parser, main
-from omnibot.client.client import RobotClient
-from omnibot.control.paths.files import write_path
-from omnibot.control.paths.standard import standard_path
+from omnibot.client import RobotClient
+from omnibot.control import standard_path, write_path
 from omnibot.errors import ConfigError
-from omnibot.navigation.metrics import Tolerances, judge
-from omnibot.robot.description import load_robot
+from omnibot.navigation import Tolerances
+from omnibot.navigation.metrics import judge
+from omnibot.robot import load_robot
 from tests.cli.conftest import Harness, assert_one_line_error
 
 

@@ -11,8 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from omnibot.control.paths.files import write_path
-from omnibot.control.paths.standard import standard_path
+from omnibot.control import standard_path, write_path
 from omnibot.protocol import codes
 from tests.cli.conftest import Command, PtyRobot, assert_one_line_error, controller_state
 

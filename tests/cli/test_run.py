@@ -9,8 +9,7 @@ import pytest
 
 from omnibot.apps import run as command
 from omnibot.cli import main
-from omnibot.control.paths.files import write_path
-from omnibot.control.paths.standard import standard_path
+from omnibot.control import standard_path, write_path
 from tests.cli.conftest import Harness, assert_one_line_error
 
 

@@ -15,10 +15,9 @@ from pathlib import Path
 import pytest
 
 from omnibot.cli import main
-from omnibot.control.paths.files import write_path
-from omnibot.control.paths.standard import standard_path
+from omnibot.control import standard_path, write_path
 from omnibot.protocol import codes
-from omnibot.robot.description import preset_names
+from omnibot.robot import preset_names
 from tests.cli.conftest import EXIT, Harness, assert_one_line_error
 
 PRESETS = preset_names()

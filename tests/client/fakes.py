@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from omnibot.errors import LinkError
-from omnibot.transport.base import Link
+from omnibot.transport import Link
 
 
 class FakeClock:

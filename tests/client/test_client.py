@@ -471,8 +471,8 @@ def test_open_lets_the_power_up_greeting_settle() -> None:
 def test_an_older_controller_takes_a_map_without_speed_terms(monkeypatch: pytest.MonkeyPatch) -> None:
     """A controller from before CAL table 7 (ERROR 38 for it): a map without speed terms uploads (it
     has none anyway), one with them fails in one line naming the firmware."""
-    from omnibot.robot.description import MotorMapSpec, PiecewiseLinear, load_robot
-    from omnibot.sim.device import SimDevice
+    from omnibot.robot import MotorMapSpec, PiecewiseLinear, load_robot
+    from omnibot.sim import SimDevice
 
     old_cal = Controller._cal
 

@@ -10,7 +10,7 @@ from omnibot.client import Limits
 from omnibot.client import commands as c
 from omnibot.protocol import codes
 from omnibot.protocol.messages import Cal, Delta, Mode, Move, Power, Rotate, Sonar, Telem, Vel
-from omnibot.robot.description import (
+from omnibot.robot import (
     CalibrationSpec,
     CourseTable,
     MotorMapSpec,

@@ -8,7 +8,7 @@ from omnibot.client.client import RobotClient
 from omnibot.client.greet import wait_for_controller
 from omnibot.client.switch import UNTAGGED_VERDICT
 from omnibot.errors import ControllerError, LinkTimeout
-from omnibot.transport.lockstep import LockstepLink
+from omnibot.transport import LockstepLink
 
 
 class BootingController:

@@ -14,7 +14,7 @@ from omnibot.errors import ConfigError, ControllerError
 from omnibot.protocol import codes
 from omnibot.robot.description import PRESET_DIR
 from omnibot.signals import Terminated, terminate_cleanly
-from omnibot.transport.device import find_device
+from omnibot.transport import find_device
 
 
 def test_the_robot_is_the_one_on_the_link(tmp_path: object) -> None:

@@ -15,9 +15,8 @@ from omnibot.errors import LinkError, LinkTimeout, ProtocolError
 from omnibot.firmware.controller import Controller
 from omnibot.protocol import codes
 from omnibot.protocol.messages import ErrorReply, Ok, Reply, Vel
-from omnibot.sim.device import SimDevice
-from omnibot.transport import FaultLink, LockstepLink
-from omnibot.transport.base import Link
+from omnibot.sim import SimDevice
+from omnibot.transport import FaultLink, Link, LockstepLink
 from tests.client.fakes import Silent
 from tests.sim.linkio import read_until
 

@@ -22,8 +22,7 @@ from omnibot.errors import ControllerError, LinkTimeout, OmnibotError
 from omnibot.firmware.controller import Controller
 from omnibot.protocol import codes, text
 from omnibot.protocol.messages import Move, Ok, Telem
-from omnibot.transport import FaultLink, open_link
-from omnibot.transport.base import Link
+from omnibot.transport import FaultLink, Link, open_link
 
 from .fakes import ScriptedLink, controller
 

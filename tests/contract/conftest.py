@@ -38,7 +38,7 @@ from omnibot.errors import LinkError
 from omnibot.firmware.config import build_config, write_config_module
 from omnibot.protocol import codes
 from omnibot.protocol.messages import Mode
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from omnibot.transport import Link, open_link
 
 from .processlink import ProcessLink
@@ -177,7 +177,7 @@ def _micropython_backend(stack: list[Callable[[], None]]) -> Backend:
 
 
 def _uno_backend(stack: list[Callable[[], None]], board: str = "uno") -> Backend:
-    from omnibot.uno.emulator import UnoEmulator, missing_tools
+    from omnibot.uno import UnoEmulator, missing_tools
 
     reason = missing_tools()
     if reason:

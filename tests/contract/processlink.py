@@ -9,7 +9,7 @@ import tempfile
 from collections.abc import Mapping, Sequence
 
 from omnibot.errors import LinkError
-from omnibot.transport.base import Link
+from omnibot.transport import Link
 
 
 class ProcessLink(Link):

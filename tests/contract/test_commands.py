@@ -181,7 +181,7 @@ def test_sonar_and_telem_settings(client: RobotClient) -> None:
 
 
 def test_cal_upload(client: RobotClient) -> None:
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     spec = load_robot(ROBOT).calibration
     assert spec is not None
@@ -194,7 +194,7 @@ def test_cal_motor_speed_terms(client: RobotClient) -> None:
     """The motor map's speed terms (CAL table 7): motor i gets ``speed_i u_i`` more at rim speed
     ``u_i`` (m/s), never against its direction; a course beyond 90 degrees and a motor that does not
     exist are refused (ERROR 38)."""
-    from omnibot.robot.description import MotorMapSpec, PiecewiseLinear, load_robot
+    from omnibot.robot import MotorMapSpec, PiecewiseLinear, load_robot
 
     spec = load_robot(ROBOT).calibration
     assert spec is not None

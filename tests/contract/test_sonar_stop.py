@@ -16,10 +16,9 @@ import pytest
 
 from omnibot.client import ControllerError, EventRecorder, RobotClient, WarnEvent
 from omnibot.protocol import codes
-from omnibot.robot.description import RobotDescription
-from omnibot.sim.device import SimDevice
-from omnibot.sim.simulator import Simulator
-from omnibot.transport.lockstep import LockstepLink
+from omnibot.robot import RobotDescription
+from omnibot.sim import SimDevice, Simulator
+from omnibot.transport import LockstepLink
 
 WALL = 0.0  # the room's west wall, x = 0
 AIM = 1.6  # where on it the path aims, y
@@ -45,7 +44,7 @@ class Device(Protocol):
 @pytest.fixture(params=["sim", "uno", "mega"])
 def backend(request: pytest.FixtureRequest) -> str:
     if request.param in ("uno", "mega"):
-        from omnibot.uno.emulator import missing_tools
+        from omnibot.uno import missing_tools
 
         reason = missing_tools()
         if reason:
@@ -59,7 +58,8 @@ def room(
 ) -> Iterator[tuple[RobotClient, Device]]:
     pose = start_pose(angle_deg, course_deg)
     if backend in ("uno", "mega"):
-        from omnibot.uno.hil import UnoHil, UnoLink
+        from omnibot.uno import UnoLink
+        from omnibot.uno.hil import UnoHil
 
         hil = UnoHil("omni4", world="room", seed=seed, start_pose=pose, board=backend)
         with RobotClient(UnoLink(hil, f"uno://omni4?board={backend}"), "omni4", timeout=2.0) as client:

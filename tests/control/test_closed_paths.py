@@ -12,7 +12,7 @@ import pytest
 from omnibot.control.paths import MotionLimits, Path, curvature, time_optimal_profile
 from omnibot.control.paths.generator import closed_curve_path, figure_eight_path
 from omnibot.errors import ConfigError
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 
 Generator = Callable[..., Path]
 CASES = [(figure_eight_path, 10.0), (closed_curve_path, 6.0)]

@@ -10,7 +10,7 @@ import pytest
 
 from omnibot.control.paths import MotionLimits, curvature, smooth_random_path, time_optimal_profile
 from omnibot.errors import ConfigError
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 
 SEEDS = range(1, 9)
 

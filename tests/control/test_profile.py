@@ -10,7 +10,7 @@ import pytest
 from omnibot.control.paths import MotionLimits, Path, standard_path, time_optimal_profile
 from omnibot.control.paths.profile import MAX_SAMPLES, min_traversal_time
 from omnibot.errors import ConfigError
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 
 LIM = MotionLimits(v_max=0.5, a_max=2.0, w_max=10.0, alpha_max=20.0)
 

@@ -20,9 +20,9 @@ from omnibot.control.reach import (
     wheel_rows,
 )
 from omnibot.errors import ConfigError
-from omnibot.robot.description import RobotDescription, load_robot
+from omnibot.robot import RobotDescription, load_robot
 from omnibot.robot.kinematics import inverse, wheel_matrix
-from omnibot.sim.physics import Physics
+from omnibot.sim import Physics
 
 
 def test_free_speed_is_where_the_motor_torque_meets_its_friction() -> None:
@@ -211,7 +211,7 @@ def test_omni3_turning_while_it_goes_the_turn_helps_the_wheel_it_runs_against() 
 
 def test_the_profile_keeps_a_turning_body_within_the_floors_reach() -> None:
     from omnibot.control.reach import _floor_spare
-    from omnibot.floor.surfaces import get_surface
+    from omnibot.floor import get_surface
 
     robot = load_robot("omni4")
     n = 4001
@@ -239,7 +239,7 @@ def test_the_profile_keeps_a_turning_body_within_the_floors_reach() -> None:
 
 def test_the_grip_leaves_less_acceleration_on_carpet_as_the_floors_drag_grows_with_speed() -> None:
     from omnibot.control.reach import _floor_load, floor_grip
-    from omnibot.floor.surfaces import get_surface
+    from omnibot.floor import get_surface
 
     robot = load_robot("omni4")
     speeds, carpet = floor_grip(robot, "carpet", 1.0)

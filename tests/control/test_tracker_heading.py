@@ -9,9 +9,10 @@ import pytest
 from omnibot.control.followers.base import make_follower
 from omnibot.control.followers.tracker import HEADING_GAIN, ProfileTracker, heading_gain
 from omnibot.control.paths import smooth_random_path, standard_path
-from omnibot.navigation.session import FollowOptions, follower_limits, simulate_follow
+from omnibot.navigation import FollowOptions
+from omnibot.navigation.session import follower_limits, simulate_follow
 from omnibot.protocol import codes
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 
 
 @pytest.mark.parametrize(

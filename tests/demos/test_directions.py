@@ -8,7 +8,7 @@ import pytest
 
 from omnibot.cli import main
 from omnibot.demos.directions import run_direction, wheel_pattern
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 
 
 def test_mecanum4_wheel_patterns_are_seed003s() -> None:

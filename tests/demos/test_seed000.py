@@ -85,10 +85,10 @@ def test_demo_bad_port_is_a_clear_error(tmp_path: Path, capsys: pytest.CaptureFi
 
 
 def test_the_odometry_trail_starts_at_the_start_pose() -> None:
-    from omnibot.client.events import Telemetry
+    from omnibot.client import Telemetry
     from omnibot.demos.seed000 import Recorder
     from omnibot.motion import Pose2D
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     recorder = Recorder(load_robot("omni4"))
     for k in range(5):  # standing at the odometry's origin before the start is known
@@ -154,7 +154,7 @@ def test_the_pty_demos_log_holds_the_emulators_truth_on_the_links_clock(
     """``demo --log`` on the pty emulator: the truth of the emulator's file goes into the log (it had
     none: the truth was only in demo_truth.csv), each row at the link time the telemetry places the
     controller's clock at, so the truth starts moving when the estimate does."""
-    from omnibot.logs.run import load_run
+    from omnibot.logs import load_run
 
     log = tmp_path / "demo.mcap"
     assert main(["demo", "--out", str(tmp_path), "--log", str(log)]) == 0
@@ -178,7 +178,7 @@ def test_the_controllers_clock_is_placed_by_the_tels_either_side() -> None:
     side of it (the demo's truth in CI was put 1.3 s early by one offset, the soonest TEL's, for all)."""
     import numpy as np
 
-    from omnibot.client.events import Telemetry
+    from omnibot.client import Telemetry
 
     clock = seed000.ControllerClock()
     assert clock.link_time(0.0) is None and clock.place([(0.0, 1.0, 1.0, 0.0)]) == []

@@ -10,8 +10,8 @@ import pytest
 from omnibot.errors import ConfigError
 from omnibot.estimation.estimator import ESTIMATORS, PoseEstimator, estimator_names, make_estimator, replay
 from omnibot.motion import Estimate, Pose2D
-from omnibot.robot.description import load_robot
-from omnibot.sim.simulator import Simulator
+from omnibot.robot import load_robot
+from omnibot.sim import Simulator
 
 
 @dataclass(frozen=True)

@@ -9,8 +9,8 @@ import pytest
 from omnibot.errors import ConfigError
 from omnibot.estimation.odometry import WheelOdometry, compose_arc
 from omnibot.motion import Pose2D
-from omnibot.robot.description import load_robot
-from omnibot.sim.simulator import Simulator
+from omnibot.robot import load_robot
+from omnibot.sim import Simulator
 
 
 def test_compose_arc_follows_a_circle() -> None:
@@ -72,7 +72,7 @@ def test_gyro_heading_is_used_for_rotation() -> None:
 def test_needs_encoders_and_the_right_count() -> None:
     data = load_robot("omni4").model_dump()
     data["encoders"]["motors"] = data["encoders"]["motors"][:3]
-    from omnibot.robot.description import parse_description
+    from omnibot.robot import parse_description
 
     with pytest.raises(ConfigError, match="none on m4"):
         WheelOdometry(parse_description(data))

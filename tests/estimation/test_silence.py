@@ -9,7 +9,7 @@ import pytest
 from omnibot.errors import ConfigError
 from omnibot.estimation.estimator import PoseEstimator, make_estimator
 from omnibot.estimation.silence import SILENT_TURN, GyroSilence
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from tests.estimation.test_estimator import Sample, telemetry
 
 

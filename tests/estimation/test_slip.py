@@ -10,7 +10,7 @@ import pytest
 from omnibot.errors import ConfigError
 from omnibot.estimation.slip import SlipLeg, SlipModel, SlipParameters, fit_slip, leg_error
 from omnibot.motion import Twist
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 
 
 def _course(deg: float, speed: float = 0.4) -> tuple[float, float, float]:

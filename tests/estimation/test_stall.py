@@ -13,7 +13,7 @@ import pytest
 
 from omnibot.estimation.stall import EFFORT_WINDOW, HOLD, SONAR_NEAR, WINDOW, Stall, StallDetector
 from omnibot.motion import Pose2D, Twist
-from omnibot.robot.description import RobotDescription, load_robot
+from omnibot.robot import RobotDescription, load_robot
 
 DT = 0.01
 

@@ -10,8 +10,8 @@ import pytest
 from omnibot.errors import ConfigError
 from omnibot.estimation.tracking import Seed002Odometry, TrackingGeometry, TrackingOdometry
 from omnibot.motion import Pose2D
-from omnibot.robot.description import load_robot, parse_description
-from omnibot.sim.simulator import Simulator
+from omnibot.robot import load_robot, parse_description
+from omnibot.sim import Simulator
 
 
 def test_geometry_removes_the_rotation_term() -> None:

@@ -12,7 +12,7 @@ import pytest
 from omnibot.estimation.estimator import PoseEstimator
 from omnibot.estimation.odometry import WheelOdometry
 from omnibot.estimation.wheelslip import MARGIN, WINDOW, WheelSlipCheck
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 
 PRESETS = ["omni4", "mecanum4"]
 

@@ -13,7 +13,7 @@ import pytest
 
 from omnibot.firmware.config import build_config
 from omnibot.firmware.controller import Controller
-from omnibot.robot.description import CalibrationSpec, load_robot
+from omnibot.robot import CalibrationSpec, load_robot
 from tests.firmware.fakehal import FakeHAL, advance
 
 

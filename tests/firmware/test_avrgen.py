@@ -10,7 +10,7 @@ from omnibot.errors import ConfigError
 from omnibot.firmware import avrgen
 from omnibot.firmware.config import build_config
 from omnibot.protocol import codes
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 
 
 def test_checked_in_headers_are_up_to_date() -> None:

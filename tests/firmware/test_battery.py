@@ -7,7 +7,7 @@ from __future__ import annotations
 from omnibot.firmware.battery import LIMITED, OK, WARNED, BatteryMonitor
 from omnibot.firmware.config import build_config
 from omnibot.protocol import codes
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from tests.firmware.conftest import Rig, make_rig
 
 

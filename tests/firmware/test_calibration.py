@@ -10,7 +10,7 @@ from omnibot.errors import ConfigError
 from omnibot.firmware.calibration import Calibration, fold_course, interp
 from omnibot.firmware.config import build_config
 from omnibot.firmware.power import DEADBAND, SATURATED, PowerModel
-from omnibot.robot.description import MotorMapSpec, PiecewiseLinear, load_robot
+from omnibot.robot import MotorMapSpec, PiecewiseLinear, load_robot
 from tests.firmware.conftest import FORMULA_CALIBRATION
 
 

@@ -10,7 +10,7 @@ import pytest
 
 from omnibot.errors import ConfigError
 from omnibot.firmware import config as fwconfig
-from omnibot.robot.description import PiecewiseLinear, RollerDragSpec, load_robot, preset_names
+from omnibot.robot import PiecewiseLinear, RollerDragSpec, load_robot, preset_names
 
 
 @pytest.mark.parametrize("name", preset_names())

@@ -8,8 +8,7 @@ import re
 import pytest
 
 from omnibot.protocol import codes, linecheck
-from omnibot.robot import kinematics
-from omnibot.robot.description import load_robot
+from omnibot.robot import kinematics, load_robot
 from tests.firmware.conftest import Rig, make_rig
 
 STATUS_RE = re.compile(r"^STATUS,(\d),(\d+),(\d+),(\d+);POWER(,-?\d+)+;MOVE,-?\d+,-?\d+,-?\d+,-?\d+$")

@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 
 from omnibot.firmware.config import build_config
 from omnibot.protocol import codes
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from tests.firmware.conftest import Rig
 
 CONFIG = build_config(load_robot("omni4"))

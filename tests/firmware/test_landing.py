@@ -14,16 +14,15 @@ import math
 import numpy as np
 import pytest
 
-from omnibot.client import commands
-from omnibot.client.client import RobotClient
-from omnibot.estimation.slip import SlipModel, SlipParameters
+from omnibot.client import RobotClient, commands
+from omnibot.estimation import SlipModel, SlipParameters
 from omnibot.firmware.config import LAND_ACCEL, build_config
 from omnibot.firmware.controller import Controller
 from omnibot.firmware.landing import Landing
 from omnibot.protocol import codes
 from omnibot.protocol.messages import Cal
-from omnibot.robot.description import load_robot
-from omnibot.sim.device import SimDevice
+from omnibot.robot import load_robot
+from omnibot.sim import SimDevice
 from tests.firmware.conftest import Rig, make_rig
 
 SLIP = {

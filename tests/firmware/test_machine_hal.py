@@ -15,7 +15,7 @@ from omnibot.firmware.config import build_config
 from omnibot.firmware.controller import Controller
 from omnibot.firmware.hal import MachineHAL
 from omnibot.protocol import codes
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from tests.firmware.fake_mpu6050 import FakeMPU6050
 
 FAKE = str(Path(__file__).with_name("fake_machine"))

@@ -12,7 +12,7 @@ import pytest
 
 from omnibot.firmware.config import build_config, stage_board
 from omnibot.protocol import codes, frame, linecheck
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 
 ROOT = Path(__file__).resolve().parents[2]
 DRIVER = Path(__file__).with_name("mp_driver.py")

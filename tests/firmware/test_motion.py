@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from omnibot.sim.device import SimDevice
+from omnibot.sim import SimDevice
 from tests.firmware.conftest import make_rig
 
 

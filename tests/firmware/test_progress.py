@@ -13,13 +13,12 @@ from pathlib import Path
 
 import pytest
 
-from omnibot.calibration.calfile import load_calibration
-from omnibot.calibration.perturb import ACCEPTANCE, perturbed_robot
-from omnibot.client.client import RobotClient
+from omnibot.calibration import ACCEPTANCE, load_calibration, perturbed_robot
+from omnibot.client import RobotClient
 from omnibot.firmware.config import PROGRESS_TOLERANCE, build_config
 from omnibot.firmware.progress import COAST_MAX_US, ProgressWatch
 from omnibot.protocol import codes
-from omnibot.robot.description import CalibrationSpec, load_robot
+from omnibot.robot import CalibrationSpec, load_robot
 from tests.calibration.conftest import sim_client
 from tests.firmware.conftest import Rig, make_rig
 

@@ -11,12 +11,11 @@ import math
 
 import pytest
 
-from omnibot.calibration.calfile import load_calibration
-from omnibot.calibration.perturb import ACCEPTANCE, perturbed_robot
+from omnibot.calibration import ACCEPTANCE, load_calibration, perturbed_robot
 from omnibot.firmware.config import build_config
 from omnibot.firmware.controller import Controller
 from omnibot.protocol import codes
-from omnibot.robot.description import ReachSpec, load_robot
+from omnibot.robot import ReachSpec, load_robot
 from tests.calibration.conftest import sim_client
 from tests.firmware.conftest import Rig, make_rig
 from tests.firmware.test_progress import DATA, sim_move

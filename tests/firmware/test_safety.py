@@ -11,7 +11,7 @@ from omnibot.firmware.config import build_config
 from omnibot.firmware.safety import LATENCY_MS, LIMITED, UNCOVERED, SonarGuard
 from omnibot.firmware.sonar import Sonars
 from omnibot.protocol import codes
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from tests.firmware.conftest import Rig, make_rig
 
 STOP = 25

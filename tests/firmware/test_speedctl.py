@@ -17,7 +17,7 @@ from benchmarks.speed_loop import run
 
 from omnibot.firmware.config import SPEED_BAND_POWER, build_config
 from omnibot.firmware.speedctl import STEADY_PERIODS, SpeedControl
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 
 CPR = 440
 PWM_MAX = 255

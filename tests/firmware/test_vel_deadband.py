@@ -13,7 +13,7 @@ from omnibot.firmware.calibration import Calibration
 from omnibot.firmware.config import build_config
 from omnibot.firmware.power import WEAK, PowerModel
 from omnibot.protocol import codes
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from tests.firmware.conftest import Rig
 
 WARN_12 = f"WARN,12,{codes.TEXTS[codes.W_POWER_TOO_LOW]}"

@@ -12,7 +12,7 @@ from omnibot.firmware.config import build_config
 from omnibot.firmware.controller import Controller
 from omnibot.protocol import binary, codes, linecheck, text
 from omnibot.protocol.messages import Malformed
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from tests.firmware.fakehal import FakeHAL
 
 CONFIG = build_config(load_robot("omni4"))

@@ -23,7 +23,7 @@ from omnibot.lidar.rplidar_codec import (
 )
 from omnibot.lidar.rplidar_device import A1, A2, RESET_TIME, RplidarDevice, model_named, revolution_nodes
 from omnibot.scan import Scan
-from omnibot.transport.lockstep import LockstepLink
+from omnibot.transport import LockstepLink
 
 
 def ring(n: int, base: float = 1.0, scan_time: float = 0.1) -> Scan:

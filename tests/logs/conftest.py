@@ -16,13 +16,11 @@ from pathlib import Path
 
 import pytest
 
-from omnibot.client import EventRecorder, RobotClient
-from omnibot.client.events import Telemetry
-from omnibot.client.session import guarded
+from omnibot.client import EventRecorder, RobotClient, Telemetry, guarded
 from omnibot.logs.recorder import Recorder
 from omnibot.protocol.messages import Vel
-from omnibot.robot.description import load_robot
-from omnibot.transport.device import find_simulator
+from omnibot.robot import load_robot
+from omnibot.transport import find_simulator
 
 REPO = Path(__file__).resolve().parents[2]
 READERS = REPO / ".cache" / "mcap-readers"

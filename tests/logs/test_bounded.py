@@ -16,7 +16,7 @@ from benchmarks.log_cost import RATE, feed
 
 from omnibot.logs.reader import LogFile
 from omnibot.logs.recorder import Recorder
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 
 
 # Deterministic (no wall clock in it) but CPU-bound, and slower still under tracemalloc: 96 s

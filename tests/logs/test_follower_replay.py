@@ -16,8 +16,7 @@ import pytest
 from rosbags.highlevel import AnyReader
 
 from omnibot.cli import main
-from omnibot.control.paths.files import write_path
-from omnibot.control.paths.standard import standard_path
+from omnibot.control import standard_path, write_path
 from omnibot.logs import topics
 from omnibot.logs.follower_replay import parse_options, recorded_followers, replay_follower
 from omnibot.logs.run import load_run

@@ -19,16 +19,14 @@ from typing import Any
 
 import pytest
 
-from omnibot.client import RobotClient
-from omnibot.client.session import guarded
+from omnibot.client import RobotClient, guarded
 from omnibot.logs import schemas, topics
 from omnibot.logs.foxglove_ws import FOXGLOVE_APP, REFUSED_ORIGIN
 from omnibot.logs.live import PANEL_HOLD, FoxgloveLive
 from omnibot.logs.recorder import POSE_VARIANCE, Recorder
 from omnibot.motion import Twist
-from omnibot.robot.description import load_robot
-from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.runtime import Runtime
+from omnibot.robot import load_robot
+from omnibot.runtime import Cycle, Runtime
 from tests.logs.conftest import node_script
 from tests.teleop.fakes import truth
 

@@ -16,13 +16,12 @@ import websockets
 from websockets.typing import Subprotocol
 
 from omnibot.cli import main
-from omnibot.client import RobotClient
-from omnibot.client.session import guarded
+from omnibot.client import RobotClient, guarded
 from omnibot.logs import schemas, topics
 from omnibot.logs.live import FoxgloveLive
 from omnibot.logs.recorder import Recorder
 from omnibot.protocol.messages import Vel
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 
 MESSAGE_DATA = 0x01
 

@@ -21,7 +21,7 @@ from websockets.typing import Subprotocol
 
 from omnibot.client import RobotClient
 from omnibot.logs.live import FoxgloveLive
-from omnibot.runtime.runtime import Runtime
+from omnibot.runtime import Runtime
 from tests.teleop.fakes import truth
 
 CLIENT_MESSAGE_DATA = 0x01

@@ -14,14 +14,14 @@ import pytest
 import websockets
 from websockets.typing import Subprotocol
 
-from omnibot.client.session import robot_session
-from omnibot.lidar.reader import open_scanner
+from omnibot.client import robot_session
+from omnibot.lidar import open_scanner
 from omnibot.logs import schemas, topics
 from omnibot.logs.live import FoxgloveLive
 from omnibot.logs.recorder import Recorder
 from omnibot.logs.sink import RuntimeRecorder
 from omnibot.protocol import codes
-from omnibot.runtime.runtime import Runtime
+from omnibot.runtime import Runtime
 from omnibot.scan import Scan
 from tests.logs.test_live import MESSAGE_DATA
 

@@ -16,9 +16,7 @@ from omnibot.client import RobotClient
 from omnibot.logs import schemas
 from omnibot.logs.live import PANEL_HOLD, FoxgloveLive, PanelSource, decode_twist
 from omnibot.motion import Twist
-from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.runtime import Runtime
-from omnibot.runtime.sources import ScriptSource
+from omnibot.runtime import Cycle, Runtime, ScriptSource
 from tests.teleop.fakes import truth
 
 CLIENT_MESSAGE_DATA = 0x01

@@ -15,7 +15,7 @@ import yaml
 from mcap.data_stream import RecordBuilder
 from rosbags.highlevel import AnyReader
 
-from omnibot.client.events import Telemetry
+from omnibot.client import Telemetry
 from omnibot.logs import schemas, topics
 from omnibot.logs.reader import LogFile
 from omnibot.logs.recorder import Recorder
@@ -91,8 +91,7 @@ def test_link_bytes_are_the_bytes_written(recorded: RecordedRun) -> None:
 
 
 def test_robot_description_is_the_urdf(recorded: RecordedRun) -> None:
-    from omnibot.robot.description import load_robot
-    from omnibot.robot.urdf import to_urdf
+    from omnibot.robot import load_robot, to_urdf
 
     _, messages = read_all(recorded.path)
     assert messages[topics.ROBOT_DESCRIPTION][0].data == to_urdf(load_robot("omni4"))  # type: ignore[attr-defined]
@@ -142,10 +141,9 @@ def test_telemetry_round_trips_through_the_protocol_line() -> None:
 
 def test_a_second_link_goes_on_from_the_last_message(tmp_path: Path) -> None:
     """calibrate opens a fresh simulated robot per floor, each clock starting at 0 again."""
-    from omnibot.client import RobotClient
-    from omnibot.client.session import guarded
+    from omnibot.client import RobotClient, guarded
     from omnibot.logs.reader import LogFile
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     robot = load_robot("omni4")
     rec = Recorder(tmp_path / "two.mcap")
@@ -264,10 +262,8 @@ def test_a_signal_mid_record_ends_the_run_after_the_record(
 def test_range_events_are_recorded_as_the_sonars_ranges(tmp_path: Path) -> None:
     """A sonar pinged by ``SONAR`` reports in ``RANGE`` events (no TEL sonar field): each is a
     sensor_msgs/Range on the sonar's topic, its distance (m) as the event's."""
-    from omnibot.client.client import RobotClient
-    from omnibot.client.events import RangeEvent
-    from omnibot.client.session import guarded
-    from omnibot.robot.description import load_robot
+    from omnibot.client import RangeEvent, RobotClient, guarded
+    from omnibot.robot import load_robot
 
     robot = load_robot("omni4")
     client = RobotClient.open("sim://omni4?seed=3&world=room", robot)

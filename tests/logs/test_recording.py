@@ -7,14 +7,13 @@ import sys
 from collections.abc import Iterator
 from pathlib import Path
 
-from omnibot.client.session import robot_session
+from omnibot.client import robot_session
 from omnibot.logs import topics
 from omnibot.logs.reader import LogFile
 from omnibot.logs.recording import Recording, open_recording
 from omnibot.motion import Twist
 from omnibot.protocol import codes
-from omnibot.runtime.runtime import Runtime
-from omnibot.runtime.sources import ScriptSource
+from omnibot.runtime import Runtime, ScriptSource
 
 
 def _held(value: object) -> Iterator[object]:

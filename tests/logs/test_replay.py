@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from omnibot.cli import main
-from omnibot.control.paths import standard_path, write_path
+from omnibot.control import standard_path, write_path
 from omnibot.logs.replay import Replay, replay_log, telemetry_of, truth_in_frame
 from omnibot.logs.run import Run, load_run
 from omnibot.motion import Estimate, Pose2D

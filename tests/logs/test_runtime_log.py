@@ -9,13 +9,13 @@ from pathlib import Path
 import pytest
 
 from omnibot.cli import main
-from omnibot.client.events import Telemetry
-from omnibot.control.paths import standard_path, write_path
+from omnibot.client import Telemetry
+from omnibot.control import standard_path, write_path
 from omnibot.logs import schemas, sink, topics
 from omnibot.logs.reader import LogFile
 from omnibot.logs.recorder import Recorder
 from omnibot.logs.run import load_run
-from omnibot.runtime.runtime import Runtime
+from omnibot.runtime import Runtime
 
 START = (1.0, 0.5)
 """The path starts here: the recorder's own estimator would start at (0, 0)."""
@@ -83,11 +83,11 @@ def test_the_control_schema_is_declared() -> None:
 def test_an_estimator_installed_mid_run_is_adopted_and_replayed_exactly(tmp_path: Path) -> None:
     """The dashboard's teach installs its estimator after the runtime started, telemetry flowing."""
     from omnibot.client import RobotClient
-    from omnibot.estimation.estimator import make_estimator
+    from omnibot.estimation import make_estimator
     from omnibot.logs.replay import replay_log
     from omnibot.motion import Pose2D, Twist
-    from omnibot.robot.description import load_robot
-    from omnibot.runtime.sources import ScriptSource
+    from omnibot.robot import load_robot
+    from omnibot.runtime import ScriptSource
 
     robot = load_robot("omni4")
     path = tmp_path / "mid.mcap"
@@ -113,8 +113,8 @@ def test_an_estimator_installed_mid_run_is_adopted_and_replayed_exactly(tmp_path
 
 
 def test_an_unregistered_pose_estimator_is_replayed_by_its_recipe() -> None:
-    from omnibot.estimation.estimator import PoseEstimator
-    from omnibot.robot.description import load_robot
+    from omnibot.estimation import PoseEstimator
+    from omnibot.robot import load_robot
 
     robot = load_robot("omni4")
     teach = PoseEstimator(robot, translation="encoders", name="teach")  # as the dashboard's teach makes it
@@ -129,8 +129,8 @@ def test_a_flat_battery_is_in_the_log(tmp_path: Path) -> None:
     from omnibot.client import RobotClient
     from omnibot.motion import Twist
     from omnibot.protocol import codes
-    from omnibot.robot.description import load_robot
-    from omnibot.runtime.sources import ScriptSource
+    from omnibot.robot import load_robot
+    from omnibot.runtime import ScriptSource
 
     robot = load_robot("omni4")
     path = tmp_path / "flat.mcap"

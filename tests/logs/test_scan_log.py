@@ -16,16 +16,15 @@ import pytest
 from rosbags.highlevel import AnyReader
 
 from omnibot.cli import main
-from omnibot.client.session import robot_session
-from omnibot.control.paths.files import write_path
-from omnibot.control.paths.geometry import resample
-from omnibot.control.paths.path import Path as RobotPath
-from omnibot.lidar.reader import open_scanner
+from omnibot.client import robot_session
+from omnibot.control import Path as RobotPath
+from omnibot.control import resample, write_path
+from omnibot.lidar import open_scanner
 from omnibot.logs import topics
 from omnibot.logs.recording import open_recording
-from omnibot.mapping.mapfile import load_map
+from omnibot.mapping import load_map
 from omnibot.protocol import codes
-from omnibot.runtime.runtime import Runtime
+from omnibot.runtime import Runtime
 from omnibot.scan import Scan
 from tests.logs.test_foxglove_reader import read_with_foxglove
 

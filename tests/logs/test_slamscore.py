@@ -29,11 +29,10 @@ from rosbags.typesys import Stores, get_typestore
 
 from omnibot.cli import main
 from omnibot.logs.slamscore import read_slam_logs, score_slam_logs
-from omnibot.mapping.grid import OccupancyGrid
+from omnibot.mapping import OccupancyGrid, compose, inverse
 from omnibot.mapping.score import score_map, world_grid
-from omnibot.mapping.se2 import compose, inverse
 from omnibot.motion import Pose2D
-from omnibot.sim.world import load_world
+from omnibot.sim import load_world
 from tests.cli.conftest import assert_one_line_error
 
 STORE = get_typestore(Stores.ROS2_JAZZY)

@@ -10,7 +10,7 @@ from benchmarks.slam_synthetic import synthetic_scan
 from omnibot.mapping.deskew import motion, scan_points
 from omnibot.mapping.se2 import transform
 from omnibot.motion import Pose2D, Twist
-from omnibot.sim.world import World, load_world
+from omnibot.sim import World, load_world
 
 
 def wall_distance(world: World, points: np.ndarray) -> np.ndarray:

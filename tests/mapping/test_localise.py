@@ -15,7 +15,7 @@ from omnibot.mapping.mapper import build_map
 from omnibot.mapping.se2 import compose, inverse
 from omnibot.motion import Pose2D
 from omnibot.scan import Scan
-from omnibot.sim.world import World, load_world
+from omnibot.sim import World, load_world
 
 
 @pytest.fixture(scope="module")

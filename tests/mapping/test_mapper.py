@@ -11,7 +11,7 @@ from benchmarks.mapping_scenes import cast_scan, path_poses
 from omnibot.mapping.mapper import OccupancyMapper, build_map, ray_cells_numpy, ray_ends
 from omnibot.motion import Pose2D
 from omnibot.scan import Scan
-from omnibot.sim.world import load_world
+from omnibot.sim import load_world
 
 
 def one_ray(r: float, angle: float = 0.0, range_max: float = 10.0) -> Scan:

@@ -13,7 +13,7 @@ from omnibot.errors import ConfigError
 from omnibot.mapping.matcher import ScanMatcher, match
 from omnibot.mapping.se2 import between, compose, transform
 from omnibot.motion import Pose2D
-from omnibot.sim.world import load_world
+from omnibot.sim import load_world
 
 
 @pytest.fixture(scope="module")

@@ -14,8 +14,8 @@ from omnibot.errors import BlockedError, ConfigError, NoPathError, OffMapError, 
 from omnibot.mapping.grid import OccupancyGrid
 from omnibot.mapping.planner import MARGIN, check_start, distance_squared, inflate, plan_path
 from omnibot.motion import Pose2D
-from omnibot.robot.description import load_robot
-from omnibot.sim.world import load_world
+from omnibot.robot import load_robot
+from omnibot.sim import load_world
 
 RES = 0.05
 

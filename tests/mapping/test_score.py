@@ -10,7 +10,7 @@ from omnibot.mapping.grid import OccupancyGrid
 from omnibot.mapping.mapper import build_map
 from omnibot.mapping.score import rasterise, score_map
 from omnibot.motion import Pose2D
-from omnibot.sim.world import load_world, parse_world
+from omnibot.sim import load_world, parse_world
 
 BOX = parse_world(
     {"name": "box", "walls": [{"shape": "rectangle", "min": [0.0, 0.0], "max": [1.0, 1.0]}]}, "box"

@@ -12,7 +12,7 @@ import pytest
 from omnibot.mapping.session import MappingSink, RangeNoise, interpolate
 from omnibot.motion import Estimate, Pose2D
 from omnibot.scan import Scan
-from omnibot.sim.world import load_world
+from omnibot.sim import load_world
 
 
 def test_interpolate_between_samples_the_short_way_round() -> None:

@@ -23,7 +23,7 @@ from omnibot.errors import ConfigError
 from omnibot.mapping.se2 import between, compose, inverse
 from omnibot.mapping.slam import Slam
 from omnibot.motion import Pose2D, Twist
-from omnibot.sim.world import World, load_world
+from omnibot.sim import World, load_world
 
 
 def drive(

@@ -9,8 +9,7 @@ import numpy as np
 import pytest
 
 from omnibot.cli import main
-from omnibot.mapping.grid import OccupancyGrid
-from omnibot.mapping.planner import inflate
+from omnibot.mapping import OccupancyGrid, inflate
 from omnibot.motion import Pose2D
 from omnibot.navigation.explore import (
     choose_frontier,
@@ -20,7 +19,7 @@ from omnibot.navigation.explore import (
     unmarked_walls,
     wall_goals,
 )
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 
 
 def half_known_room() -> OccupancyGrid:

@@ -15,13 +15,11 @@ import numpy as np
 import pytest
 from benchmarks.goto import goals, run_goal, world_with_obstacle
 
-from omnibot.client.events import Telemetry
-from omnibot.control.paths.path import Path as Route
+from omnibot.client import Telemetry
+from omnibot.control import Path as Route
 from omnibot.errors import BlockedError, ConfigError, OffMapError
-from omnibot.mapping.grid import OccupancyGrid
-from omnibot.mapping.planner import PlannedPath, inflate
+from omnibot.mapping import OccupancyGrid, PlannedPath, compose, inflate, inverse
 from omnibot.mapping.score import world_grid as rasterise
-from omnibot.mapping.se2 import compose, inverse
 from omnibot.motion import Pose2D
 from omnibot.navigation.goto import (
     GotoOptions,
@@ -32,11 +30,10 @@ from omnibot.navigation.goto import (
     planned_path,
 )
 from omnibot.navigation.session import simulated_client
-from omnibot.robot.description import load_robot
-from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.runtime import Runtime
-from omnibot.sim.world import load_world
-from omnibot.transport.device import find_simulator
+from omnibot.robot import load_robot
+from omnibot.runtime import Cycle, Runtime
+from omnibot.sim import load_world
+from omnibot.transport import find_simulator
 
 ROOM_START = Pose2D(1.0, 1.0, 0.0)
 BOX = {"shape": "box", "center": [2.0, 1.8], "size": [0.3, 0.3]}

@@ -20,12 +20,10 @@ from omnibot.motion import Pose2D, Twist
 from omnibot.navigation.goto import GotoResult, navigation_runtime
 from omnibot.navigation.goto_source import POSE_WAIT, GotoSource
 from omnibot.navigation.session import simulated_client
-from omnibot.robot.description import load_robot
-from omnibot.runtime.runtime import Runtime
-from omnibot.runtime.sources import ScriptSource
-from omnibot.sim.simulator import Simulator
-from omnibot.sim.world import load_world
-from omnibot.transport.device import find_simulator
+from omnibot.robot import load_robot
+from omnibot.runtime import Runtime, ScriptSource
+from omnibot.sim import Simulator, load_world
+from omnibot.transport import find_simulator
 
 START = Pose2D(1.0, 1.0, 0.0)
 

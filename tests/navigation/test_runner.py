@@ -7,12 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from omnibot.client.client import RobotClient
-from omnibot.control.followers import make_follower
-from omnibot.control.paths import Path, standard_path
+from omnibot.client import RobotClient
+from omnibot.control import Path, make_follower, standard_path
 from omnibot.control.paths.standard import SWING
 from omnibot.errors import ConfigError
-from omnibot.estimation.slip import SlipParameters
+from omnibot.estimation import SlipParameters
 from omnibot.motion import Pose2D, Twist
 from omnibot.navigation.metrics import ODOMETRY, TRUTH, tracking_report
 from omnibot.navigation.runner import FrameMap, NavigationError, Navigator
@@ -25,10 +24,8 @@ from omnibot.navigation.session import (
     simulated_client,
 )
 from omnibot.protocol import codes
-from omnibot.robot.description import load_robot
-from omnibot.runtime.arbiter import EStop
-from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.sources import ScriptSource
+from omnibot.robot import load_robot
+from omnibot.runtime import Cycle, EStop, ScriptSource
 
 
 def test_tracker_follows_a_circle_against_ground_truth() -> None:

@@ -7,10 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from omnibot.control.paths import standard_path
+from omnibot.control import standard_path
 from omnibot.errors import ConfigError
-from omnibot.estimation.slip import SlipLeg, fit_slip, leg_error
-from omnibot.estimation.slipprobe import SlipProbe
+from omnibot.estimation import SlipLeg, SlipProbe, fit_slip, leg_error
 from omnibot.motion import Twist
 from omnibot.navigation.runner import Navigator, ramp_fraction
 from omnibot.navigation.session import FollowOptions, simulate_follow, simulated_client
@@ -22,9 +21,9 @@ from omnibot.navigation.slipcal import (
     course_order,
     simulate_slip_calibration,
 )
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from omnibot.robot.kinematics import body_to_world
-from omnibot.runtime.sources import ScriptSource
+from omnibot.runtime import ScriptSource
 from tests.navigation.test_runner import Drivers
 
 

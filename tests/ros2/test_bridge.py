@@ -24,7 +24,7 @@ def test_a_robot_in_a_namespace_has_its_name_in_every_status_and_as_hardware_id(
 def test_battery_state_health_and_status_follow_the_thresholds() -> None:
     """omni4's 2S Li-Po: GOOD and DISCHARGING above the 6.6 V stop, DEAD and NOT_CHARGING below it or
     while the controller holds its battery stop; LIPO; the diagnostics' levels with it."""
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
     from omnibot.ros2.bridge import (
         SUPPLY_HEALTH_DEAD,
         SUPPLY_HEALTH_GOOD,

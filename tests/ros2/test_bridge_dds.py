@@ -51,7 +51,7 @@ print(json.dumps({
 
 @pytest.mark.parametrize("command", [["ros2"], ["run", "--ros2"]], ids=["ros2", "run --ros2"])
 def test_a_subscriber_receives_odom_and_joint_states(command: list[str]) -> None:
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     script = f"COMMAND = {command!r}\n" + SUBSCRIBER
     result = json.loads(run_in_namespace(script).stdout.strip().splitlines()[-1])
@@ -71,18 +71,17 @@ def test_a_subscriber_receives_odom_and_joint_states(command: list[str]) -> None
 
 TELEOP = r"""
 import json, math, time
-from omnibot.client.session import robot_session
-from omnibot.logs import schemas
-from omnibot.logs.recorder import header, twist
+from omnibot.client import robot_session
+from omnibot.logs import header, schemas
+from omnibot.logs.recorder import twist
 from omnibot.protocol import codes
 from omnibot.ros2.bridge import Ros2Sink
 from omnibot.ros2.cmd_vel import CmdVelSource, WATCHDOG
 from omnibot.ros2.dds import Node
 from omnibot.ros2.types import to_dds
-from omnibot.runtime.runtime import Runtime
-from omnibot.teleop.mapping import TwistLimits
-from omnibot.teleop.pacing import Pacer
-from omnibot.transport.device import find_simulator
+from omnibot.runtime import Runtime
+from omnibot.teleop import Pacer, TwistLimits
+from omnibot.transport import find_simulator
 
 PERIOD = 0.02
 TS = "geometry_msgs/msg/TwistStamped"

@@ -10,13 +10,13 @@ from typing import Any
 
 import pytest
 
-from omnibot.logs import schemas
-from omnibot.logs.recorder import header, twist
+from omnibot.logs import header, schemas
+from omnibot.logs.recorder import twist
 from omnibot.motion import Twist
 from omnibot.ros2.cmd_vel import TWIST, TWIST_STAMPED, CmdVelSource
 from omnibot.ros2.types import to_dds
-from omnibot.runtime.cycle import Cycle
-from omnibot.teleop.mapping import TwistLimits
+from omnibot.runtime import Cycle
+from omnibot.teleop import TwistLimits
 from tests.ros2.netns_helper import run_in_namespace
 from tests.ros2.test_odometry import Node
 
@@ -150,15 +150,15 @@ def test_the_listeners_go_when_the_node_closes() -> None:
 
 EACH = r"""
 import json, threading, time
-from omnibot.client.session import robot_session
-from omnibot.logs import schemas
-from omnibot.logs.recorder import header, twist
+from omnibot.client import robot_session
+from omnibot.logs import header, schemas
+from omnibot.logs.recorder import twist
 from omnibot.protocol.messages import Vel
 from omnibot.ros2.cmd_vel import CmdVelSource
 from omnibot.ros2.dds import Node
 from omnibot.ros2.types import to_dds
-from omnibot.runtime.runtime import Runtime
-from omnibot.teleop.pacing import Pacer
+from omnibot.runtime import Runtime
+from omnibot.teleop import Pacer
 
 TS = "geometry_msgs/msg/TwistStamped"
 PERIOD = 1.0  # a cycle a second: commands 0.1 s apart go out only if each is sent as it arrives

@@ -8,7 +8,7 @@ import pytest
 pytest.importorskip("cyclonedds", reason="cyclonedds is not installed (pip install 'omnibot[ros2]')")
 
 from omnibot.errors import ConfigError
-from omnibot.logs.schemas import type_hash
+from omnibot.logs import type_hash
 from omnibot.ros2 import dds, netns
 from tests.ros2.netns_helper import run_in_namespace
 
@@ -87,9 +87,9 @@ def test_static_peers_go_into_the_configuration_as_rmw_cyclonedds_puts_them() ->
 
 CDR = r"""
 import json, time
-from omnibot.estimation.odometry import Pose2D
-from omnibot.logs import schemas
-from omnibot.logs.recorder import header, odometry
+from omnibot.motion import Pose2D
+from omnibot.logs import header, schemas
+from omnibot.logs.recorder import odometry
 from omnibot.ros2.dds import Node
 from omnibot.ros2.types import from_dds
 

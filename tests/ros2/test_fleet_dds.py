@@ -18,7 +18,7 @@ from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
 from omnibot.logs import schemas
-from omnibot.logs.recorder import header, quaternion
+from omnibot.logs import header, quaternion
 from omnibot.ros2.dds import DEFAULT, LATCHED, Node, qos
 from omnibot.ros2.types import request_type, to_dds
 

@@ -7,11 +7,10 @@ import xml.etree.ElementTree as ET
 import pytest
 
 from omnibot.errors import ConfigError
-from omnibot.logs import schemas
-from omnibot.logs.recorder import header, odometry, quaternion, vector
+from omnibot.logs import header, quaternion, schemas, vector
+from omnibot.logs.recorder import odometry
 from omnibot.motion import Pose2D
-from omnibot.robot.description import load_robot
-from omnibot.robot.urdf import to_urdf
+from omnibot.robot import load_robot, to_urdf
 from omnibot.ros2.frames import frame_prefix, prefixed, urdf_for_tf
 
 

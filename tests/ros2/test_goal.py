@@ -15,16 +15,15 @@ import pytest
 pytest.importorskip("cyclonedds", reason="cyclonedds is not installed (pip install 'omnibot[ros2]')")
 
 from omnibot.cli import main
-from omnibot.logs import schemas
-from omnibot.logs.recorder import header
-from omnibot.mapping.mapfile import save_map
+from omnibot.logs import header, schemas
+from omnibot.mapping import save_map
 from omnibot.mapping.score import world_grid
 from omnibot.motion import Estimate, Pose2D
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from omnibot.ros2.goal import GOAL_TYPE, GoalPoseSource, PlaceableSink, Refusal, Spread, spread_of
 from omnibot.ros2.odometry import OdometryReset
-from omnibot.runtime.cycle import Cycle
-from omnibot.sim.world import load_world
+from omnibot.runtime import Cycle
+from omnibot.sim import load_world
 from tests.cli.conftest import assert_one_line_error
 from tests.ros2.test_odometry import Node as ResetNode
 from tests.ros2.test_odometry import Runtime, pose

@@ -14,12 +14,11 @@ import pytest
 
 pytest.importorskip("cyclonedds", reason="cyclonedds is not installed (pip install 'omnibot[ros2]')")
 
-from omnibot.logs import schemas
-from omnibot.logs.recorder import header
-from omnibot.mapping.planner import PlannedPath
+from omnibot.logs import header, schemas
+from omnibot.mapping import PlannedPath
 from omnibot.mapping.score import world_grid
 from omnibot.motion import Estimate, Pose2D
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from omnibot.ros2.backend import DEFAULT, Profile
 from omnibot.ros2.goal import GOAL_TYPE, GoalPoseSource
 from omnibot.ros2.navigate import (
@@ -32,8 +31,8 @@ from omnibot.ros2.navigate import (
     distance_remaining,
 )
 from omnibot.ros2.types import NAVIGATE, dds_fields, request_type, to_dds
-from omnibot.runtime.cycle import Cycle
-from omnibot.sim.world import load_world
+from omnibot.runtime import Cycle
+from omnibot.sim import load_world
 from tests.ros2.test_path import pose_message
 
 ACTION = "navigate_to_pose/_action/"

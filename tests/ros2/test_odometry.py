@@ -10,15 +10,14 @@ import pytest
 
 pytest.importorskip("cyclonedds", reason="cyclonedds is not installed (pip install 'omnibot[ros2]')")
 
-from omnibot.estimation.estimator import make_estimator
-from omnibot.logs import schemas
-from omnibot.logs.recorder import header, quaternion
+from omnibot.estimation import make_estimator
+from omnibot.logs import header, quaternion, schemas
 from omnibot.motion import Estimate
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from omnibot.ros2.odometry import POSE, OdometryReset
 from omnibot.ros2.service import TRIGGER, TriggerService
 from omnibot.ros2.types import request_type, to_dds
-from omnibot.runtime.cycle import Cycle
+from omnibot.runtime import Cycle
 
 
 class Endpoint:
@@ -157,7 +156,7 @@ def test_a_service_whose_estimator_cannot_be_set_says_so() -> None:
 
 
 def test_the_service_types_hash_as_ros_2_jazzy_does() -> None:
-    from omnibot.logs.schemas import type_hash
+    from omnibot.logs import type_hash
     from omnibot.ros2.types import register_service_types
 
     register_service_types()

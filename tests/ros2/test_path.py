@@ -11,16 +11,15 @@ import pytest
 
 pytest.importorskip("cyclonedds", reason="cyclonedds is not installed (pip install 'omnibot[ros2]')")
 
-from omnibot.client.session import robot_session
-from omnibot.logs import schemas
-from omnibot.logs.recorder import header, quaternion
+from omnibot.client import robot_session
+from omnibot.logs import header, quaternion, schemas
 from omnibot.motion import Estimate
 from omnibot.protocol import codes
 from omnibot.ros2.odometry import yaw_of
 from omnibot.ros2.path import PATH_TYPE, PathSource, path_from_message
 from omnibot.ros2.types import to_dds
-from omnibot.runtime.runtime import Runtime
-from omnibot.transport.device import find_simulator
+from omnibot.runtime import Runtime
+from omnibot.transport import find_simulator
 
 PERIOD = 0.02
 
@@ -93,7 +92,7 @@ def bench(
     """The path source on the simulated omni4, judged on the runtime's cycles (as ``omnibot ros2``
     attaches it) or by its follower alone."""
     with robot_session("sim://omni4?seed=3", "omni4", timeout=0.5) as session:
-        from omnibot.estimation.estimator import make_estimator
+        from omnibot.estimation import make_estimator
 
         node = Node()
         said: list[tuple[str, str]] = []

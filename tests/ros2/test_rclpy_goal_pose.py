@@ -19,9 +19,9 @@ from typing import Any
 
 import pytest
 
-from omnibot.mapping.mapfile import load_map, save_map
+from omnibot.mapping import load_map, save_map
 from omnibot.mapping.score import world_grid
-from omnibot.sim.world import load_world
+from omnibot.sim import load_world
 from tests.ros2.netns_helper import run_in_namespace
 from tests.ros2.rclpy_distros import BOOTSTRAP, interpreter
 from tests.ros2.test_rclpy_cmd_vel import truth

@@ -8,8 +8,8 @@ import json
 
 import pytest
 
-from omnibot.logs.schemas import type_hash
-from omnibot.robot.description import load_robot
+from omnibot.logs import type_hash
+from omnibot.robot import load_robot
 from tests.ros2.netns_helper import run_in_namespace
 from tests.ros2.rclpy_scripts import beside_bridge
 

@@ -78,8 +78,7 @@ WATCH = (
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
-from omnibot.logs import schemas
-from omnibot.logs.recorder import header
+from omnibot.logs import header, schemas
 from omnibot.ros2.dds import DEFAULT, Node as DdsNode, qos, topic_name
 from omnibot.ros2.types import NAVIGATE, dds_fields, dds_type, from_dds, register_service_types, request_type
 register_service_types()

@@ -16,11 +16,10 @@ import numpy as np
 import pytest
 from rosbags.highlevel import AnyReader
 
-from omnibot.control.paths.files import write_path
-from omnibot.control.paths.geometry import resample
-from omnibot.control.paths.path import Path as RobotPath
-from omnibot.logs.schemas import type_hash
-from omnibot.robot.description import load_robot
+from omnibot.control import Path as RobotPath
+from omnibot.control import resample, write_path
+from omnibot.logs import type_hash
+from omnibot.robot import load_robot
 from tests.ros2.netns_helper import run_in_namespace
 from tests.ros2.rclpy_distros import BOOTSTRAP, DISTROS, interpreter
 

@@ -13,8 +13,8 @@ from typing import Any
 
 import pytest
 
-from omnibot.logs.schemas import type_hash
-from omnibot.robot.description import load_robot
+from omnibot.logs import type_hash
+from omnibot.robot import load_robot
 from tests.ros2.netns_helper import run_in_namespace
 from tests.ros2.rclpy_distros import BOOTSTRAP, DISTROS, NODE, interpreter
 
@@ -28,16 +28,15 @@ them: the bridge's 50 Hz are of the simulator's time, which a loaded machine giv
 
 BRIDGE = r"""
 import json, os, signal, subprocess, tempfile, time
-from omnibot.client.session import robot_session
-from omnibot.logs import schemas
-from omnibot.logs.topics import IMU, JOINT_STATES, ODOM
+from omnibot.client import robot_session
+from omnibot.logs import IMU, JOINT_STATES, ODOM, schemas
 from omnibot.protocol import codes
 from argparse import Namespace
 from omnibot.ros2.bridge import Ros2Sink
 from omnibot.ros2.command import attach
-from omnibot.runtime.runtime import Runtime
-from omnibot.teleop.pacing import Pacer
-from omnibot.transport.device import find_simulator
+from omnibot.runtime import Runtime
+from omnibot.teleop import Pacer
+from omnibot.transport import find_simulator
 
 PERIOD = 0.02
 env = {k: v for k, v in os.environ.items() if k not in BOOTSTRAP}  # the peer's own wheels' bootstrap

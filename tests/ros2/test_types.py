@@ -10,10 +10,10 @@ import pytest
 
 pytest.importorskip("cyclonedds", reason="cyclonedds is not installed (pip install 'omnibot[ros2]')")
 
-from omnibot.estimation.odometry import Pose2D
-from omnibot.logs import schemas
-from omnibot.logs.recorder import header, odometry, quaternion, twist, vector
-from omnibot.robot.description import load_robot
+from omnibot.logs import header, quaternion, schemas, vector
+from omnibot.logs.recorder import odometry, twist
+from omnibot.motion import Pose2D
+from omnibot.robot import load_robot
 from omnibot.ros2.bridge import battery_state
 from omnibot.ros2.types import dds_name, dds_type, from_dds, to_dds
 

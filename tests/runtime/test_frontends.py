@@ -16,17 +16,15 @@ import numpy as np
 import pytest
 
 from omnibot.client import RobotClient
-from omnibot.control.followers import make_follower
-from omnibot.control.paths.path import Path
-from omnibot.estimation.estimator import make_estimator
+from omnibot.control import Path, make_follower
+from omnibot.estimation import make_estimator
 from omnibot.motion import Pose2D
 from omnibot.navigation.session import follower_limits
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from omnibot.runtime.runtime import BATTERY_LATCHED_TEXT, LATCHED_TEXT
 from omnibot.runtime.sinks import NoticePrinter
 from omnibot.runtime.sources import FollowerSource, PadSource
-from omnibot.teleop.config import TeleopConfig
-from omnibot.teleop.mapping import TwistLimits
+from omnibot.teleop import TeleopConfig, TwistLimits
 from omnibot.web.link import RobotLink
 from omnibot.web.messages import EStop
 from tests.teleop.fakes import ScriptedSource, seed_pad, truth

@@ -9,9 +9,7 @@ import pytest
 from omnibot.motion import ZERO, Estimate, Twist
 from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.sources import DeadmanSource, RampedTwist
-from omnibot.teleop.config import TeleopConfig
-from omnibot.teleop.deadman import Sample
-from omnibot.teleop.mapping import TwistLimits
+from omnibot.teleop import Sample, TeleopConfig, TwistLimits
 
 LIMITS = TwistLimits(1.0, 5.0, accel=2.0, angular_accel=10.0)
 

@@ -7,16 +7,14 @@ import math
 
 import pytest
 
-from omnibot.client import RobotClient
-from omnibot.client.client import Pending
-from omnibot.control.followers import make_follower
-from omnibot.control.paths import standard_path
-from omnibot.estimation.estimator import make_estimator
+from omnibot.client import Pending, RobotClient
+from omnibot.control import make_follower, standard_path
+from omnibot.estimation import make_estimator
 from omnibot.motion import Pose2D, Twist
 from omnibot.navigation.session import follower_limits
 from omnibot.protocol import codes
 from omnibot.protocol.messages import Command, Vel
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.runtime import Runtime, clamp_to
 from omnibot.runtime.sources import FollowerSource, ScriptSource

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from omnibot.client.session import robot_session
+from omnibot.client import robot_session
 from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.runtime import Runtime
 from omnibot.scan import Scan

@@ -7,12 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from omnibot.control.followers.base import make_follower
-from omnibot.control.paths.path import Path
-from omnibot.mapping.se2 import compose
+from omnibot.control import Path, make_follower
+from omnibot.mapping import compose
 from omnibot.motion import Estimate, Pose2D
 from omnibot.navigation.session import follower_limits
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.sources import FollowerSource, moved
 

@@ -7,17 +7,17 @@ from __future__ import annotations
 import pytest
 
 from omnibot.client import RobotClient
-from omnibot.control.paths import standard_path
-from omnibot.estimation.estimator import make_estimator
+from omnibot.control import standard_path
+from omnibot.estimation import make_estimator
 from omnibot.motion import Pose2D, Twist
-from omnibot.navigation.following import follower_source
+from omnibot.navigation import follower_source
 from omnibot.protocol import codes
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.runtime import Runtime
 from omnibot.runtime.sources import ScriptSource
 from omnibot.runtime.stall import StallWatch, start_sonars
-from omnibot.transport.device import find_simulator
+from omnibot.transport import find_simulator
 
 
 @pytest.mark.parametrize(

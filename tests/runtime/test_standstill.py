@@ -5,14 +5,13 @@ follower then starts on the whole path."""
 from __future__ import annotations
 
 from omnibot.client import RobotClient
-from omnibot.control.followers import make_follower
-from omnibot.control.paths import standard_path
-from omnibot.estimation.estimator import make_estimator
+from omnibot.control import make_follower, standard_path
+from omnibot.estimation import make_estimator
 from omnibot.motion import Pose2D, Twist
-from omnibot.navigation.runner import STANDSTILL
+from omnibot.navigation import STANDSTILL
 from omnibot.navigation.session import follower_limits
 from omnibot.protocol import codes
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.runtime import Runtime
 from omnibot.runtime.sources import FollowerSource, ScriptSource

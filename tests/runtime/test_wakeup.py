@@ -10,9 +10,7 @@ import threading
 
 import pytest
 
-from omnibot.client import RobotClient
-from omnibot.client.client import Pending
-from omnibot.client.events import Telemetry
+from omnibot.client import Pending, RobotClient, Telemetry
 from omnibot.motion import Twist
 from omnibot.protocol import codes
 from omnibot.protocol.messages import Command, Vel
@@ -21,7 +19,7 @@ from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.runtime import LinkPacer, Runtime
 from omnibot.runtime.sources import Proposal, ScriptSource
 from omnibot.runtime.wakeup import GAP, Wake, Wakeup
-from omnibot.teleop.pacing import Pacer
+from omnibot.teleop import Pacer
 
 PERIOD = 0.05
 """s: long cycles, so that a command taken by a cycle and one taken by a reaction differ."""

@@ -10,11 +10,10 @@ import pytest
 
 from omnibot.client import RobotClient
 from omnibot.errors import ControllerError
-from omnibot.estimation.estimator import make_estimator
-from omnibot.estimation.slip import SlipModel, SlipParameters
+from omnibot.estimation import SlipModel, SlipParameters, make_estimator
 from omnibot.motion import Twist
 from omnibot.protocol import codes
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.runtime import Runtime
 from omnibot.runtime.sinks import EstimatorWhenMissing, SpeedReport, describe_twist

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from omnibot.robot.description import RobotDescription
+from omnibot.robot import RobotDescription
 
 
 @dataclass(frozen=True)

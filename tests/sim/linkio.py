@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from omnibot.transport.base import Link
+from omnibot.transport import Link
 
 
 def read_until(link: Link, marker: bytes, timeout: float = 5.0) -> bytes:

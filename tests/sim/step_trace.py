@@ -18,9 +18,9 @@ import struct
 from pathlib import Path
 from typing import Any
 
-from omnibot.floor.surfaces import Surface, get_surface
+from omnibot.floor import Surface, get_surface
 from omnibot.motion import Pose2D
-from omnibot.robot.description import RobotDescription, load_robot
+from omnibot.robot import RobotDescription, load_robot
 from omnibot.sim.fleet import Fleet
 from omnibot.sim.physics import Physics
 from omnibot.sim.simulator import CollisionEvent, Simulator

@@ -8,11 +8,10 @@ import pytest
 
 from omnibot.client import BatteryStopLatched, EventRecorder, RobotClient, WarnEvent
 from omnibot.protocol import codes
-from omnibot.robot.battery import open_voltage
-from omnibot.robot.description import RobotDescription, load_robot
+from omnibot.robot import RobotDescription, load_robot, open_voltage
 from omnibot.sim.device import SimDevice
 from omnibot.sim.physics import Physics
-from omnibot.transport.lockstep import LockstepLink
+from omnibot.transport import LockstepLink
 
 
 def small_pack(charge: float, capacity_ah: float) -> RobotDescription:

@@ -8,8 +8,7 @@ import pytest
 
 from omnibot.errors import ConfigError
 from omnibot.sim.device import SimDevice
-from omnibot.transport.lockstep import LockstepLink
-from omnibot.transport.url import open_link
+from omnibot.transport import LockstepLink, open_link
 
 from .linkio import read_until
 

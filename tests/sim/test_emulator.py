@@ -16,7 +16,7 @@ import pytest
 import serial
 
 from omnibot.cli import main
-from omnibot.client.client import RobotClient
+from omnibot.client import RobotClient
 from omnibot.errors import ConfigError
 from omnibot.sim.emulator import PARENT_ENV, spawn_pty_emulator
 

@@ -12,14 +12,12 @@ from typing import Any, cast
 import numpy as np
 import pytest
 
-from omnibot.lidar.reader import RplidarScanner, open_scanner
+from omnibot.lidar import A1, A2, RplidarDevice, RplidarScanner, open_scanner
 from omnibot.lidar.rplidar_codec import Command, Request, encode_request
-from omnibot.lidar.rplidar_device import A1, A2, RplidarDevice
-from omnibot.robot.description import RobotDescription, load_robot
+from omnibot.robot import RobotDescription, load_robot
 from omnibot.scan import Scan
 from omnibot.sim import emulator
-from omnibot.transport.lockstep import LockstepLink
-from omnibot.transport.url import open_link
+from omnibot.transport import LockstepLink, open_link
 from tests.lidar.fakes import FakeScanningSim, read_revolutions
 
 

@@ -16,13 +16,11 @@ import pytest
 from omnibot.client import RobotClient
 from omnibot.errors import ConfigError
 from omnibot.motion import Pose2D, Twist
-from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.runtime import Runtime
-from omnibot.runtime.sources import ScriptSource
+from omnibot.runtime import Cycle, Runtime, ScriptSource
 from omnibot.sim.fleet import Fleet
 from omnibot.sim.fleet_link import FleetLink, open_fleets
 from omnibot.sim.world import load_world
-from omnibot.transport.url import open_link
+from omnibot.transport import open_link
 
 from .linkio import read_until
 

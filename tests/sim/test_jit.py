@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 from numba.extending import is_jitted
 
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from omnibot.sim import jit, kernels
 from omnibot.sim.simulator import Simulator
 
@@ -80,7 +80,7 @@ def test_kernels_that_do_not_compile_leave_the_twins_running_and_wait_says_why(
 
 _COLD_START = """
 import json, time
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from omnibot.sim import jit
 from omnibot.sim.simulator import Simulator
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from omnibot.scan import Scan
 from omnibot.sim import kernels
 from omnibot.sim.physics import Physics

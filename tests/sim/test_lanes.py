@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from omnibot.errors import SimulationError
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from omnibot.sim import lanes
 from omnibot.sim.physics import Physics
 from omnibot.sim.twins import python_twins

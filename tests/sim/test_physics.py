@@ -10,9 +10,10 @@ import pytest
 import yaml
 
 from omnibot.errors import ConfigError, SimulationError
-from omnibot.floor.contact import GRAVITY
+from omnibot.floor import GRAVITY
+from omnibot.robot import RobotDescription, load_robot, parse_description
 from omnibot.robot import kinematics as kin
-from omnibot.robot.description import PRESET_DIR, RobotDescription, load_robot, parse_description
+from omnibot.robot.description import PRESET_DIR
 from omnibot.sim.physics import Physics
 
 PRESETS = ("omni4", "omni3", "mecanum4")

@@ -26,7 +26,7 @@ import numpy as np
 import pytest
 
 from omnibot.robot import kinematics as kin
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from omnibot.sim.physics import Physics
 
 DATA = Path(__file__).parent.parent / "data" / "omni4_straight_power_sweep.csv"

@@ -11,7 +11,7 @@ import pytest
 
 from omnibot.errors import SimulationError
 from omnibot.motion import Pose2D
-from omnibot.robot.description import RobotDescription, load_robot, parse_description
+from omnibot.robot import RobotDescription, load_robot, parse_description
 from omnibot.scan import Scan
 from omnibot.sim.fleet import Fleet
 from omnibot.sim.simulator import Simulator, Snapshot

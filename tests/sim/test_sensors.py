@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from omnibot.robot.description import GyroSpec, SonarSpec, TrackingWheelSpec, load_robot
+from omnibot.robot import GyroSpec, SonarSpec, TrackingWheelSpec, load_robot
 from omnibot.sim.sensors import Gyro, MotorEncoders, NormalBlock, Sonar, TrackingWheels
 from omnibot.sim.world import load_world, parse_world
 

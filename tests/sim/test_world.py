@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from omnibot.errors import ConfigError
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from omnibot.sim.clock import Clock, SimClock, WallClock
 from omnibot.sim.world import (
     WORLD_DIR,

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from omnibot.sim.simulator import Simulator
+from omnibot.sim import Simulator
 from omnibot.teleop.config import TeleopConfig
 from omnibot.teleop.mapping import JoyState
-from omnibot.transport.device import find_device
+from omnibot.transport import find_device
 
 
 class FakeWall:

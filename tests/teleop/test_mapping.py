@@ -8,9 +8,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from omnibot.client.limits import Limits
+from omnibot.client import Limits
 from omnibot.motion import Twist
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from omnibot.teleop.config import TeleopConfig
 from omnibot.teleop.mapping import (
     JoyState,

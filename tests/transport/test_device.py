@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from omnibot.calibration.truth import simulator_of
-from omnibot.client.client import RobotClient
+from omnibot.client import RobotClient
 from omnibot.transport.device import find_device, find_simulator
 from omnibot.transport.url import open_link
 

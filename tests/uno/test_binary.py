@@ -17,7 +17,7 @@ from omnibot.firmware.controller import Controller
 from omnibot.protocol import codes
 from omnibot.protocol.frame import Frame, FrameDecoder, encode_frame, encode_message
 from omnibot.protocol.messages import Ok, Vel
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from tests.firmware.fakehal import FakeHAL
 
 from .conftest import start

@@ -12,7 +12,7 @@ from omnibot.firmware.config import build_config
 from omnibot.firmware.controller import Controller
 from omnibot.protocol import codes, linecheck
 from omnibot.protocol.frame import encode_message
-from omnibot.robot.description import load_robot
+from omnibot.robot import load_robot
 from omnibot.uno.emulator import UnoEmulator
 from tests.firmware.fakehal import FakeHAL
 

@@ -49,7 +49,7 @@ def test_circle_lands_where_the_micropython_firmware_lands(board: str) -> None:
     the same firmware logic in MicroPython ends on the same simulator (the sim:// link), within 3 cm
     and 5 degrees."""
     from omnibot.client import RobotClient
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     reason = missing_tools()
     if reason:
@@ -86,7 +86,7 @@ def test_closed_loop_rotation_turns_the_simulated_robot() -> None:
     import math
 
     from omnibot.client import RobotClient
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     reason = missing_tools()
     if reason:
@@ -122,9 +122,8 @@ def test_single_channel_counts_follow_the_wheels_through_reversals(closed_loop: 
     within a few counts of the simulated wheels'. Counted in the sign of the last power, they
     ended 30-45 counts off in the closed loop; the open loop, which brakes only at the reversal,
     stays within the bound either way and guards against a turnaround held too long."""
-    from omnibot.client import RobotClient
-    from omnibot.client.events import Telemetry
-    from omnibot.robot.description import load_robot
+    from omnibot.client import RobotClient, Telemetry
+    from omnibot.robot import load_robot
 
     reason = missing_tools()
     if reason:
@@ -165,7 +164,7 @@ def test_the_mega_lands_closed_loop_motions_where_the_micropython_firmware_lands
     import math
 
     from omnibot.client import RobotClient
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
 
     reason = missing_tools()
     if reason:

@@ -11,8 +11,8 @@ import pytest
 from omnibot.client import RobotClient
 from omnibot.errors import LinkError
 from omnibot.motion import Twist
-from omnibot.robot.description import load_robot
-from omnibot.teleop.pacing import Pacer
+from omnibot.robot import load_robot
+from omnibot.teleop import Pacer
 from omnibot.web.link import PageGone, RobotLink
 from omnibot.web.messages import Drive, EStop, Joy, Resume, Teach
 from tests.runtime.test_wakeup import Pushed

@@ -179,8 +179,8 @@ def test_screenshot(browser: Browser, tmp_path: Path) -> None:
 
 
 def test_teach_and_repeat_from_the_page(browser: Browser) -> None:
-    from omnibot.navigation.webteach import PathTeacher
-    from omnibot.robot.description import load_robot
+    from omnibot.navigation import PathTeacher
+    from omnibot.robot import load_robot
 
     teacher = PathTeacher(load_robot("omni4"), period=0.05, speed=0.3)
     with Dashboard(ROOM, http_port=0, teach=teacher) as dashboard:
@@ -240,7 +240,7 @@ def test_a_path_file_is_drawn_from_the_robot_not_the_room_corner(browser: Browse
 
 
 def test_on_a_real_link_the_pose_is_labelled_odometry_from_the_maps_start(browser: Browser) -> None:
-    from omnibot.sim.emulator import spawn_pty_emulator
+    from omnibot.sim import spawn_pty_emulator
     from omnibot.web.scene import PlannedPath
 
     path = PlannedPath(((0.0, 0.0), (0.5, 0.0)))

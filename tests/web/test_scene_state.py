@@ -7,10 +7,10 @@ from pathlib import Path
 
 import pytest
 
-from omnibot.client.events import Telemetry
+from omnibot.client import Telemetry
 from omnibot.errors import ConfigError
-from omnibot.robot.description import load_robot
-from omnibot.sim.world import load_world
+from omnibot.robot import load_robot
+from omnibot.sim import load_world
 from omnibot.web.scene import PlannedPath, build_scene, load_path
 from omnibot.web.state import StateTracker
 
@@ -105,10 +105,10 @@ in 30 s, seed 1)."""
 
 @pytest.mark.parametrize("preset", ["omni4", "omni3", "mecanum4"])
 def test_the_heading_of_a_robot_standing_still_does_not_drift(preset: str) -> None:
-    from omnibot.client.client import RobotClient
+    from omnibot.client import RobotClient
     from omnibot.motion import Pose2D
     from omnibot.protocol import codes
-    from omnibot.transport.device import find_simulator
+    from omnibot.transport import find_simulator
     from omnibot.web.link import TEL_PERIOD
 
     with RobotClient.open(f"sim://{preset}?seed=1") as client:

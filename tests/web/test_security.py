@@ -383,7 +383,7 @@ def test_too_many_pages_are_refused(dashboard: Dashboard, no_server_errors: None
 
 def test_a_full_inbox_drops_driving_but_never_the_emergency_stop() -> None:
     from omnibot.client import RobotClient
-    from omnibot.robot.description import load_robot
+    from omnibot.robot import load_robot
     from omnibot.web.link import PageGone, RobotLink
     from omnibot.web.messages import Drive, EStop
 

@@ -33,7 +33,7 @@ from omnibot.errors import ConfigError
 from omnibot.firmware import landing, motion, safety
 from omnibot.firmware.config import build_config
 from omnibot.protocol import codes
-from omnibot.robot.description import RobotDescription, load_robot
+from omnibot.robot import RobotDescription, load_robot
 
 ROOT = Path(__file__).resolve().parents[3]
 OUT_DIR = ROOT / "firmware-avr" / "generated"

@@ -96,10 +96,17 @@ from typing import Any
 import numpy as np
 
 from omnibot.errors import ConfigError, OmnibotError
-from omnibot.estimation.slip import SlipModel, SlipParameters
+from omnibot.estimation import SlipModel, SlipParameters
 from omnibot.firmware import mpu6050
-from omnibot.robot import courses, kinematics
-from omnibot.robot.description import PiecewiseLinear, RobotDescription, SonarSpec, course_axes, load_robot
+from omnibot.robot import (
+    PiecewiseLinear,
+    RobotDescription,
+    SonarSpec,
+    course_axes,
+    courses,
+    kinematics,
+    load_robot,
+)
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 SRC_DIR = PACKAGE_DIR.parent.parent
