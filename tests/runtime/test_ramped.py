@@ -42,3 +42,11 @@ def test_the_deadman_ramps_up_while_held_and_down_in_its_stop_sequence() -> None
     # 0.1 m/s a period up to 0.5, then the stop sequence (5 periods) on the way down, then silence
     assert sent == [0.1, 0.2, 0.3, 0.4, 0.5, 0.5, 0.4, 0.3, 0.2, 0.1, 0.0, None]
     assert page.body_accel is None
+
+
+def test_the_ramp_keeps_the_robots_time_when_the_wall_clock_runs_ahead() -> None:
+    # a simulator paced to the wall clock on a loaded machine: 0.05 s of the robot's time a cycle
+    # while 0.15 s of wall time pass; the robot must still get 2 m/s^2 of its own time
+    ramped = RampedTwist(LIMITS, 0.05)
+    sent = [ramped(Cycle(k, 0.15 * k, 0.05 * k, None), Twist(1.0, 0.0, 0.0)) for k in range(4)]
+    assert [round(t.vx, 3) for t in sent if t is not None] == [0.1, 0.2, 0.3, 0.4]

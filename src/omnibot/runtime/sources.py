@@ -76,7 +76,9 @@ class Source(Protocol):
 
 class RampedTwist:
     """A source's twists ramped at the robot's accelerations (:class:`~omnibot.teleop.mapping.TwistRamp`
-    on the cycle clock; ``limits`` None or without finite accelerations: passed through). A drive
+    on the link clock, the robot's own: a simulator paced to the wall clock falls behind it on a
+    loaded machine, and a ramp timed on the wall would reach the robot steeper than its limits;
+    ``limits`` None or without finite accelerations: passed through). A drive
     starts from the robot's twist as the runtime estimates it (at rest without an estimate) and ends
     when the source falls silent (None); :attr:`body_accel` is the last step's planned acceleration,
     which the runtime sends with the VEL so the controller's wheel-speed loop feeds it forward."""
@@ -97,9 +99,9 @@ class RampedTwist:
             return twist
         if self._last is None:
             ramp.reset(cycle.estimate.body_twist if cycle.estimate is not None else ZERO)
-            self._last = cycle.now - self.period
-        out = ramp.step(twist, cycle.now - self._last)
-        self._last = cycle.now
+            self._last = cycle.t - self.period
+        out = ramp.step(twist, cycle.t - self._last)
+        self._last = cycle.t
         self.body_accel = ramp.body_accel
         return out
 
