@@ -79,7 +79,7 @@ class SimHAL(HAL):
     def encoder_count(self, i: int) -> int:
         """Cumulative encoder count of driven wheel ``i`` (0 when that wheel has no encoder)."""
         k = self._encoder_of_wheel[i]
-        return 0 if k is None else self.sim.encoder_counts()[k]
+        return 0 if k is None else self.sim.encoder_count(k)
 
     def tracking_count(self, j: int) -> int:
         """Cumulative encoder count of tracking wheel ``j``."""
