@@ -11,6 +11,7 @@ from benchmarks import (
     idle_phase,
     link_faults,
     link_throughput,
+    lockstep_tick,
     log_cost,
     mapping_localise,
     mapping_mapper,
@@ -37,6 +38,7 @@ from benchmarks import (
 def main() -> int:
     for title, run in (
         ("simulator speed", lambda: sim_speed.main([])),
+        ("a lockstep tick's CPU (client, link, firmware, simulator)", lambda: lockstep_tick.main([])),
         ("start-up: --help, robot list, first HELLO cold and warm", lambda: startup.main([])),
         ("core install: size and import time of `pip install omnibot`", lambda: core_install.main([])),
         ("laser scanner cost", lambda: scanner_cost.main([])),

@@ -137,3 +137,22 @@ def test_the_heading_filter_is_told_only_of_a_skid() -> None:
     assert not any(s for s, _ in told[:51])
     assert all(s for s, _ in told[51 + round(WINDOW / 0.01) :])
     assert not any(f for _, f in told)
+
+
+@pytest.mark.parametrize("window", [0.0, WINDOW])
+def test_one_interval_sums_as_the_window_of_several_does(window: float) -> None:
+    """A window of one interval (wheel odometry's window 0) skips the list sum and gives its numbers
+    bit for bit, negative zeros among the increments included."""
+    J = load_robot("omni4").wheel_matrix
+    check = WheelSlipCheck(J, per_count("omni4"), window=window)
+    steps = [
+        np.array([-0.0, 0.0, 2e-3, -0.0]),
+        np.full(4, -0.0),
+        np.array([1e-3, -0.0, -2e-3, 5e-4]),
+        np.zeros(4),
+    ]
+    for k, step in enumerate(steps):
+        check.update(step, 0.01 if window else 0.0)
+        summed = steps[: k + 1] if window else steps[k : k + 1]  # 0.1 s holds them all
+        expected = check.student @ np.sum(summed, axis=0)
+        assert check.slip.tobytes() == expected.tobytes()

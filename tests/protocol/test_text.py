@@ -240,6 +240,28 @@ def test_decoder_hands_over_the_rest_after_a_switch() -> None:
     assert list(it) == []
 
 
+def test_decoder_left_mid_stream_still_gives_the_lines_it_holds() -> None:
+    """Bytes without a terminator decode to nothing only when the buffer holds none either: a
+    consumer that stopped early (the switch above, without taking the rest) gets the lines left."""
+    dec = text.TextDecoder()
+    it = dec.feed(b"OK\r\nIDLE\r\nWA")
+    assert next(it) == m.Ok()
+    assert list(dec.feed(b"RN,18,x")) == [m.Idle()]
+    assert list(dec.feed(b"y")) == []
+    assert list(dec.feed(b"\r\n")) == [m.Warn(18, "xy")]
+
+
+def test_a_line_too_long_is_malformed_as_soon_as_it_is_past_the_limit() -> None:
+    dec = text.TextDecoder()
+    out: list[object] = []
+    for k in range(codes.EVENT_LINE_MAX + 1):
+        out.extend(dec.feed(b"A"))
+        assert not out or k == codes.EVENT_LINE_MAX  # the byte past the limit: Malformed, not later
+    assert len(out) == 1 and isinstance(out[0], m.Malformed)
+    assert list(dec.feed(b"BBB")) == []  # the rest of that line is skipped
+    assert list(dec.feed(b"\r\nOK\r\n")) == [m.Ok()]
+
+
 # ------------------------------------------------------------------ tags, checks, INF, separators
 
 

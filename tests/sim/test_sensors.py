@@ -224,3 +224,28 @@ def test_encoders_with_a_source_count_when_read() -> None:
     assert enc.counts.tolist() == [0, 0]
     angles += [TWO_PI, -TWO_PI / 2]  # the wheels turn; nothing is fed
     assert enc.counts.tolist() == [440, -220]
+
+
+def test_one_encoder_counted_alone_matches_counting_them_all() -> None:
+    """``count_at`` (the firmware reads one encoder at a time) gives :attr:`counts`' number bit for bit,
+    on the edges too: the angles that land exactly on an edge, just below and above it, and at random."""
+    cpr = [440, 16000, 7, 1633]
+    start = np.array([0.3, -1.7, 12.0, 1e-12])
+    angles = start.copy()
+    enc = MotorEncoders(cpr, rng(), initial_angles=start, source=lambda: angles)
+    draws = rng(5)
+    edges = np.array([k * TWO_PI / c for c in cpr for k in (-3, -1, 1, 7, 1000)])
+    near = np.concatenate((edges, np.nextafter(edges, np.inf), np.nextafter(edges, -np.inf)))
+    for a in [*near, *draws.uniform(-1e3, 1e3, 400)]:
+        angles[:] = start + a * np.array([1.0, -1.0, 0.5, 3.0])
+        assert [enc.count_at(i, float(angles[i])) for i in range(4)] == enc.counts.tolist()
+
+
+def test_the_simulator_counts_one_encoder_as_it_counts_them_all() -> None:
+    from omnibot.sim.simulator import Simulator
+
+    sim = Simulator(load_robot("omni4"), surface="carpet", seed=2)
+    sim.set_pwm([120, -90, 200, -60])
+    for _ in range(40):
+        sim.step(7)
+        assert [sim.encoder_count(k) for k in range(4)] == sim.encoder_counts()

@@ -634,9 +634,10 @@ class RobotClient(TypedCalls):
             self._pump_once(min(remaining, _FOREVER_STEP))
 
     def _pump_once(self, timeout: float) -> int:
-        self._service()
-        if self._wire.sender is not None and self._replies.waiting:
-            timeout = min(timeout, _RETRY_POLL)
+        if self._wire.sender is not None:  # binary or sequenced text: retransmissions are due in time
+            self._service()
+            if self._replies.waiting:
+                timeout = min(timeout, _RETRY_POLL)
         data = self._read(timeout)
         return self._process(data) if data else 0
 

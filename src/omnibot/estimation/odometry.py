@@ -99,7 +99,7 @@ class WheelOdometry:
         disp = self._pinv @ angles  # body displacement: twist times the interval
         self.residual = angles - self._J @ disp
         self.slip_check.update(angles, 0.0)
-        dx, dy, dtheta = (float(v) for v in disp)
+        dx, dy, dtheta = disp.tolist()
         if heading is not None and self._heading is not None:
             dtheta = heading - self._heading
         self._heading = heading

@@ -87,7 +87,9 @@ class WheelSlipCheck:
         self._span += dt
         while len(self._steps) > 1 and self._span - self._steps[0][0] >= self.window - 1e-9:
             self._span -= self._steps.popleft()[0]
-        total = np.sum([a for _, a in self._steps], axis=0)
+        steps = self._steps
+        # one interval (window 0: wheel odometry's every update): np.sum's one-row sum, 0.0 + each
+        total = steps[0][1] + 0.0 if len(steps) == 1 else np.sum([a for _, a in steps], axis=0)
         self.slip = self.student @ total
         self.slipping = bool(np.abs(self.slip).max() > self._limit)
         return self.slipping

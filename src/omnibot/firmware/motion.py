@@ -767,12 +767,13 @@ class Executor:
         )
 
     def _feedback_step(self, dt_us: int) -> None:
-        for i in range(self.n):
-            self._counts[i] = self.hal.encoder_count(i)
+        ctl = self.speedctl
+        if ctl.due(dt_us):  # the encoders are read once a period, when the loop uses them
+            self._read_counts()
         if self.landing.active:
             self._land_us += dt_us
             self._deadline -= dt_us
-        if self.speedctl.update(dt_us, self._counts, self._target, self._ff, self.powers):
+        if ctl.update(dt_us, self._counts, self._target, self._ff, self.powers):
             if self.landing.active:
                 self._land_step()
             self.apply()

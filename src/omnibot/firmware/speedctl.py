@@ -86,6 +86,10 @@ class SpeedControl:
             self._held[i] = 0
         self._acc_us = 0
 
+    def due(self, dt_us: int) -> bool:
+        """Whether :meth:`update` with ``dt_us`` ends a period (the only time it reads its counts)."""
+        return self._acc_us + dt_us >= self.period_us
+
     def update(
         self, dt_us: int, counts: list[int], target: list[float], ff: list[float], out: list[int]
     ) -> bool:

@@ -312,6 +312,10 @@ class TextDecoder:
         self._buf = bytearray()
         self._skipping = False
         self._ends = _COMMAND_END_RE if commands else _LINE_END_RE
+        self._limit = codes.LINE_MAX if commands else codes.EVENT_LINE_MAX
+        self._open = True
+        """The buffer holds no terminator and no line is being skipped (a drain ran to its end): bytes
+        without one only lengthen its line, and a line no longer than the limit decodes to nothing yet."""
 
     def feed(self, data: bytes) -> Iterator[Decoded]:
         """Append ``data``; iterate over the messages now complete."""
@@ -320,6 +324,9 @@ class TextDecoder:
     def feed_tagged(self, data: bytes) -> Iterator[tuple[Decoded, int | None]]:
         """:meth:`feed` with each message's tag (None: untagged; always None for commands)."""
         self._buf.extend(data)
+        if self._open and len(self._buf) <= self._limit and not self._ends.search(data):
+            return iter(())  # a line still arriving (most reads of a paced link): nothing to decode
+        self._open = False
         return self._drain()
 
     def _drain(self) -> Iterator[tuple[Decoded, int | None]]:
@@ -327,7 +334,7 @@ class TextDecoder:
             if self._skipping:
                 found = self._ends.search(self._buf)
                 if found is None:
-                    self._buf.clear()
+                    self._buf.clear()  # still skipping: not open (bytes without a terminator are dropped)
                     return
                 del self._buf[: found.start()]
                 self._skipping = False
@@ -338,6 +345,7 @@ class TextDecoder:
             else:
                 used, message, tag = decode_tagged(self._buf, self.require_check)
             if used == 0:
+                self._open = True
                 return
             cut = isinstance(message, Malformed) and self._ends.search(self._buf, 0, used) is None
             del self._buf[:used]
@@ -350,4 +358,5 @@ class TextDecoder:
         out = bytes(self._buf)
         self._buf.clear()
         self._skipping = False
+        self._open = True
         return out

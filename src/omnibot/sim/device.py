@@ -79,7 +79,7 @@ class SimHAL(HAL):
     def encoder_count(self, i: int) -> int:
         """Cumulative encoder count of driven wheel ``i`` (0 when that wheel has no encoder)."""
         k = self._encoder_of_wheel[i]
-        return 0 if k is None else self.sim.encoder_counts()[k]
+        return 0 if k is None else self.sim.encoder_count(k)
 
     def tracking_count(self, j: int) -> int:
         """Cumulative encoder count of tracking wheel ``j``."""
@@ -87,9 +87,10 @@ class SimHAL(HAL):
 
     def gyro_rate_mdps(self) -> int | None:
         """The gyro's yaw rate in millidegrees/s, None when the robot has no gyro."""
-        if self.sim.robot.gyro is None:
+        gyro = self.sim.gyro
+        if gyro is None:
             return None
-        return round(math.degrees(self.sim.gyro_rate()) * 1000.0)
+        return round(math.degrees(gyro.rate) * 1000.0)
 
     def sonar_start(self, s: int) -> None:
         """Fire sonar ``s``: its range (cm, -1 for no echo) is ready after the echo's round trip (or the
@@ -155,7 +156,7 @@ class SimDevice:
     @property
     def time(self) -> float:
         """Simulated time, s."""
-        return self.sim.time
+        return self.sim.clock.now()
 
     @property
     def tick(self) -> float:

@@ -92,6 +92,8 @@ class MotorEncoders:
         angles = np.zeros(len(self._cpr)) if initial_angles is None else np.asarray(initial_angles, float)
         self._edges = _count(angles / (2 * math.pi), self._cpr)
         self._origin = self._edges.copy()
+        self._cpr_list: list[float] = self._cpr.tolist()
+        self._origin_list: list[int] = self._origin.tolist()
         self._lost = np.zeros(len(self._cpr), dtype=np.int64)
         self._source = source
 
@@ -114,6 +116,14 @@ class MotorEncoders:
         if self._source is not None:
             self._feed(self._source())
         return np.asarray(self._edges - self._origin - self._lost, dtype=np.int64)
+
+    def count_at(self, i: int, angle: float) -> int:
+        """Encoder ``i``'s count with its wheel at ``angle`` rad (the true angle now): what
+        :attr:`counts` would give for it, without counting the others (the firmware reads one
+        encoder at a time). Only where no edge can be missed (``miss_probability`` 0), since those are
+        drawn for every encoder at once; the same floating-point operations as :func:`_count`."""
+        edges = math.floor(angle / (2 * math.pi) * self._cpr_list[i] + _EDGE_EPS)
+        return edges - self._origin_list[i] - int(self._lost[i])
 
 
 class NormalDraws:

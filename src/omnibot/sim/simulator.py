@@ -415,6 +415,7 @@ class Simulator:
             [self._wheel_names.index(e.wheel) for e in robot.encoders.motors], dtype=np.int64
         )
         angles = self._physics.wheel_angle
+        self._encoder_wheels: list[int] = enc_index.tolist()
         self.encoders = MotorEncoders(
             [e.counts_per_rev for e in robot.encoders.motors],
             _rng(seed, _RNG_ENCODERS),
@@ -570,6 +571,14 @@ class Simulator:
     def encoder_counts(self) -> list[int]:
         """Motor encoder counts in robot.encoders.motors order."""
         return [int(c) for c in self.encoders.counts]
+
+    def encoder_count(self, index: int) -> int:
+        """Motor encoder ``index``'s count: ``encoder_counts()[index]``, the others not counted (unless
+        edges may be missed: those are drawn for all at once)."""
+        encoders = self.encoders
+        if encoders.miss_probability > 0.0:
+            return self.encoder_counts()[index]
+        return encoders.count_at(index, float(self._physics.wheel_angle[0, self._encoder_wheels[index]]))
 
     def tracking_counts(self) -> list[int]:
         """Tracking-wheel encoder counts in robot.encoders.tracking order."""

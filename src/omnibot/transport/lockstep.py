@@ -75,10 +75,11 @@ class PacedFifo:
         self.byte_time = byte_time
         self._chunks: deque[tuple[float, bytes]] = deque()  # (start time of first byte, bytes)
         self._line_free = -math.inf
-        self._pending = 0
+        self.pending = 0
+        """Bytes on the line (``len()`` of the FIFO, as an attribute for the link's every tick)."""
 
     def __len__(self) -> int:
-        return self._pending
+        return self.pending
 
     def push(self, now: float, data: bytes) -> None:
         """Put ``data`` on the line at ``now`` s, after anything still on it."""
@@ -87,32 +88,36 @@ class PacedFifo:
         start = max(now, self._line_free)
         self._chunks.append((start, data))
         self._line_free = start + len(data) * self.byte_time
-        self._pending += len(data)
+        self.pending += len(data)
 
     def pop_due(self, now: float) -> bytes:
         """The bytes whose last bit has arrived by ``now`` s (a chunk may be split)."""
-        out = bytearray()
-        while self._chunks:
-            start, data = self._chunks[0]
-            if self.byte_time == 0.0:
-                n = len(data) if start <= now else 0
+        chunks = self._chunks
+        byte_time = self.byte_time
+        out = b""
+        while chunks:
+            start, data = chunks[0]
+            size = len(data)
+            if byte_time == 0.0:
+                n = size if start <= now else 0
             else:
-                n = min(len(data), math.floor((now - start) / self.byte_time + _EPS))
+                n = min(size, math.floor((now - start) / byte_time + _EPS))
             if n <= 0:
                 break
-            out += data[:n]
-            if n == len(data):
-                self._chunks.popleft()
+            if n == size:
+                out += data
+                chunks.popleft()
             else:
-                self._chunks[0] = (start + n * self.byte_time, data[n:])
+                out += data[:n]
+                chunks[0] = (start + n * byte_time, data[n:])
                 break
-        self._pending -= len(out)
-        return bytes(out)
+        self.pending -= len(out)
+        return out
 
     def clear(self) -> None:
         """Drop everything on the line."""
         self._chunks.clear()
-        self._pending = 0
+        self.pending = 0
 
 
 class LockstepClock:
@@ -183,7 +188,7 @@ class LockstepLink(Link):
 
     def _feed(self) -> None:
         """Before a tick: hand the device the bytes whose last bit has reached it."""
-        if not self._to_device:  # the line is idle on most ticks: no clock to read
+        if not self._to_device.pending:  # the line is idle on most ticks: no clock to read
             return
         due = self._to_device.pop_due(self.device.time)
         if due:
@@ -194,10 +199,11 @@ class LockstepLink(Link):
         out = self.device.transmit()
         if out:
             self._to_host.push(self.device.time, out)
-        self._collect()
+        if self._to_host.pending:
+            self._collect()
 
     def _collect(self) -> None:
-        if not self._to_host:
+        if not self._to_host.pending:
             return
         arrived = self._to_host.pop_due(self.device.time)
         if arrived:
@@ -213,7 +219,7 @@ class LockstepLink(Link):
             if not self._inbox and timeout != 0:
                 ticks = math.inf if timeout is None else self._ticks_for(timeout)
                 taken = 0
-                while not self._inbox and taken < ticks and not self.closed:
+                while not self._inbox and taken < ticks and not self._closed:
                     self._step()
                     taken += 1
             chunk = bytes(self._inbox[:max_bytes])
