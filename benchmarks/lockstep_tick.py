@@ -21,7 +21,7 @@ import math
 import time
 from collections.abc import Callable
 
-from omnibot.calibration.perturb import ACCEPTANCE, perturbed_robot
+from omnibot.calibration import ACCEPTANCE, perturbed_robot
 from omnibot.calibration.tap import TAP_MASK
 from omnibot.client import RobotClient, Telemetry
 from omnibot.estimation import WheelOdometry

@@ -732,7 +732,7 @@ BENCHMARK_REACHES: dict[str, tuple[str, tuple[str, ...]]] = {
         "seed 000's K_r and K_t read off a calibration",
         ("seed000_figures.py",),
     ),
-    "omnibot.calibration.tap": ("the calibration's telemetry tap", ("idle_phase.py",)),
+    "omnibot.calibration.tap": ("the calibration's telemetry tap", ("idle_phase.py", "lockstep_tick.py")),
     "omnibot.calibration.verdict": ("the verdict's error measure", ("idle_phase.py",)),
     "omnibot.client.wire": ("frames bytes by hand to attack the controller", ("attack_suite.py",)),
     "omnibot.control.followers.base": (
