@@ -113,16 +113,23 @@ def test_the_body_acceleration_in_vel_shares_the_turning_start_among_the_wheels(
     """mecanum4 on carpet, a circle with the body swinging at its top speed (no slip calibration):
     with the profile's whole acceleration fed forward (protocol version 4) each wheel pushes its
     share of the body's force and torque from the start of every change, and the robot keeps closer
-    to the path (0.61 -> 0.56 cm RMS, 1.32 -> 1.06 max) than with version 3, whose A goes only with
-    straight runs (none here), so the wheel loops learn every acceleration in their integrals. Before
-    the closed loop fed a wheel that mostly turns the body ROTATE's K_r at its own speed (motion.py
-    ``_turning_floor``), the version 3 run lost more at each turning start: 0.93 -> 0.71 cm RMS."""
+    to the path at the turning starts than with version 3, whose A goes only with straight runs
+    (none here), so the wheel loops learn every acceleration in their integrals. Before the closed
+    loop fed a wheel that mostly turns the body ROTATE's K_r at its own speed (motion.py
+    ``_turning_floor``), the version 3 run lost more at each turning start: 0.93 -> 0.71 cm RMS.
+
+    Seeds 1 and 2 together: one seed's run is a draw (seeds 1-8, 2026-12-07: version 4's max
+    cross-track 10 % lower than version 3's summed, 0.75-1.18 of it seed by seed; its RMS 4 % lower
+    summed, 0.72-1.14 seed by seed, too close to the spread to assert on two)."""
     robot = load_robot("mecanum4")
     path = standard_path("circle", size=1.0, heading="swing")
     options = FollowOptions(follower="tracker", speed=0.8, standstill=1.0, floor="carpet")
-    _, v4 = simulate_follow(robot, path, options, surface="carpet", seed=1)
-    monkeypatch.setattr(codes, "VERSIONS", (2, 3))  # host and controller of version 3
-    _, v3 = simulate_follow(robot, path, options, surface="carpet", seed=1)
-    assert v4["completed"] and v3["completed"]
-    assert v4["rms_cross_track_m"] < 0.95 * v3["rms_cross_track_m"]
-    assert v4["max_cross_track_m"] < 0.9 * v3["max_cross_track_m"]
+    assert codes.VERSIONS[-1] == 4
+    worst = []
+    for versions in (codes.VERSIONS, (2, 3)):  # host and controller of version 4, then of version 3
+        monkeypatch.setattr(codes, "VERSIONS", versions)
+        runs = [simulate_follow(robot, path, options, surface="carpet", seed=seed)[1] for seed in (1, 2)]
+        assert all(run["completed"] for run in runs)
+        worst.append(sum(run["max_cross_track_m"] for run in runs))
+    v4, v3 = worst
+    assert v4 < 0.92 * v3

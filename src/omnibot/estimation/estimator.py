@@ -35,7 +35,10 @@ from omnibot.robot import RobotDescription
 from omnibot.robot.kinematics import world_to_body
 
 STILL_TIME = 0.2
-"""Seconds without a single encoder count after which the robot is taken to stand still."""
+"""Seconds without a single encoder count after which the robot is taken to stand still. An
+estimator starts standing still (as its first :class:`~omnibot.motion.Estimate` says): until a wheel
+first turns, the gyro's rate is its bias, not a turn (its turn-on bias integrated over this window
+would tilt the start heading, and with it a map started there)."""
 VELOCITY_TAU = 0.03
 """Time constant of the velocity low-pass, s."""
 ACCEL_SPAN = 0.1
@@ -160,7 +163,7 @@ class PoseEstimator:
         self._pose = start
         self._last: SensorSample | None = None
         self._t = 0.0
-        self._still_for = 0.0
+        self._still_for = STILL_TIME  # standing until a wheel turns (STILL_TIME)
         self._vel = (0.0, 0.0, 0.0)
         self._acc_world: tuple[float, ...] = (0.0, 0.0, 0.0)
         self.body_velocity = np.zeros(3)
