@@ -122,9 +122,8 @@ static inline int16_t rd16(const int16_t *p) { return (int16_t)eeprom_read_word(
 
 // Piecewise-linear y(x) / 1000, held constant outside the knots. The knots are integers, so the
 // segment is found with integer compares (x <= x1 exactly when ceil(x) <= x1) and only its two
-// knots are converted to float. held: the factor whose power x y is linear between the knots, the
-// power that holds the speed (calibration.py interp; the speed loop's feedforward).
-static float interp(const Table *t, float x, bool held = false) {
+// knots are converted to float.
+static float interp(const Table *t, float x) {
     uint8_t n = eeprom_read_byte(&t->n);
     int16_t x0 = rd16(&t->k[0].x);
     if (n <= 1 || x <= x0) return rd16(&t->k[0].y) * 0.001f;
@@ -134,12 +133,7 @@ static float interp(const Table *t, float x, bool held = false) {
         int16_t x1 = rd16(&t->k[i].x);
         if (cx <= x1) {
             float y0 = rd16(&t->k[i - 1].y), y1 = rd16(&t->k[i].y);
-            if (held) {
-                y0 *= x0;
-                y1 *= x1;
-            }
-            float y = y0 + (x - x0) * (y1 - y0) / (x1 - x0);
-            return (held ? y / x : y) * 0.001f;
+            return (y0 + (x - x0) * (y1 - y0) / (x1 - x0)) * 0.001f;
         }
         x0 = x1;
     }
@@ -147,26 +141,26 @@ static float interp(const Table *t, float x, bool held = false) {
 }
 
 float cal_k() { return rd16(EE(k)) * 0.1f; }
-float cal_kt(float p, bool held) { return interp(EE(kt), p, held); }
-float cal_kr(float p, bool held) { return interp(EE(kr), p, held); }
+float cal_kt(float p) { return interp(EE(kt), p); }
+float cal_kr(float p) { return interp(EE(kr), p); }
 float cal_coast(float v) { return interp(EE(coast), v); }
 #if FEATURE_REACH
 int16_t cal_reach(float folded) { return interp(EE(reach), folded) * 1000.0f; }  // knots in cm/s, not x 1000
 #endif
 float cal_roller(uint8_t which, uint8_t i) { return rd16(which ? EE(rsin[i]) : EE(rcos[i])) * 0.1f; }
 
-float cal_kl(float power, float folded, bool held) {
+float cal_kl(float power, float folded) {
     uint8_t n = eeprom_read_byte(EE(curves));
-    if (n == 1 || folded <= eeprom_read_byte(EE(course[0]))) return interp(EE(kl[0]), power, held);
+    if (n == 1 || folded <= eeprom_read_byte(EE(course[0]))) return interp(EE(kl[0]), power);
     for (uint8_t i = 1; i < n; i++) {
         float c1 = eeprom_read_byte(EE(course[i]));
         if (folded <= c1) {
             float c0 = eeprom_read_byte(EE(course[i - 1]));
-            float a = interp(EE(kl[i - 1]), power, held), b = interp(EE(kl[i]), power, held);
+            float a = interp(EE(kl[i - 1]), power), b = interp(EE(kl[i]), power);
             return a + (folded - c0) * (b - a) / (c1 - c0);
         }
     }
-    return interp(EE(kl[n - 1]), power, held);
+    return interp(EE(kl[n - 1]), power);
 }
 
 // sign(a) (offset + gain(|a|) |a|) + speed u, never against a (calibration.py motor_power)

@@ -8,10 +8,9 @@
 void cal_init();              // loads the generated defaults when the EEPROM holds none for this robot
 bool cal_write(int16_t table, int16_t index, int16_t x, int16_t y);  // CAL,T,I,X,Y; false: ERROR 38
 float cal_k();                // PWM counts per m/s of rim speed
-// held: the power, not the factor, linear between the knots (the speed loop's feedforward)
-float cal_kt(float power, bool held = false);
-float cal_kr(float power, bool held = false);
-float cal_kl(float power, float folded_course, bool held = false);
+float cal_kt(float power);
+float cal_kr(float power);
+float cal_kl(float power, float folded_course);
 int16_t cal_start_power();  // the K_l tables' dead band, whole PWM counts up (0: they do not say)
 float cal_coast(float speed_cms);  // s
 float cal_motor_power(uint8_t i, float a, float u);  // nominal power a, rim speed u (m/s)

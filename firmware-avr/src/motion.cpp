@@ -513,11 +513,9 @@ void Executor::drive(float vx, float vy, float w, bool rotate, float gain) {
     k = f;
     model.drag_gain = gain;
     // an open-loop VEL: a wheel below the K_l tables' dead band would not turn (WARN 12)
-    bool closed = HAS_ENCODERS && (mode & P_MODE_CLOSED_LOOP);
-    bool open_vel = kind == K_VEL && (vx != 0 || vy != 0) && !closed;
+    bool open_vel = kind == K_VEL && (vx != 0 || vy != 0) && !(HAS_ENCODERS && (mode & P_MODE_CLOSED_LOOP));
     model.weak_floor = open_vel ? cal_start_power() : 0;
-    // the loop's feedforward: the power that holds the speed
-    uint8_t flags = model.compute(vx, vy, w, rotate, powers, v, closed);
+    uint8_t flags = model.compute(vx, vy, w, rotate, powers, v);
     time_scale = model.scale * f;
     warn_once(flags);
     twist[0] = vx;
@@ -638,15 +636,14 @@ void Executor::start_feedback() {
 // rate of the body-frame twist (ax + w vy, ay - w vx, alpha) with version 4's body acceleration.
 #if FEATURE_TURN_FF
 // On the closed loop a wheel whose turn is the larger part of its rim speed u is fed at least ROTATE's
-// factor at its own speed, K K_r(K |u|) |u|, its power linear between the knots (motion.py
-// Executor._feedforward): K_t, one factor for every wheel, leaves the wheels that only turn the
-// body of an arc below what turns them.
+// factor at its own speed, K K_r(K |u|) |u| (motion.py Executor._feedforward): K_t, one factor for
+// every wheel, leaves the wheels that only turn the body of an arc below what turns them.
 void Executor::turn_feedforward(float vx, float vy, float w) {
     float k = cal_k();
     for (uint8_t i = 0; i < MOTORS; i++) {
         float t = rim(i, 0) * vx + rim(i, 1) * vy;
         if (fabsf(rim(i, 2) * w) <= fabsf(t)) continue;
-        float u = t + rim(i, 2) * w, least = k * cal_kr(k * fabsf(u), true) * fabsf(u);
+        float u = t + rim(i, 2) * w, least = k * cal_kr(k * fabsf(u)) * fabsf(u);
         if (fabsf(ff[i]) < least && ff[i] * u >= 0) ff[i] = u > 0 ? least : -least;
     }
 }

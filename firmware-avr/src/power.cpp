@@ -38,7 +38,7 @@ void PowerModel::wheel_speeds(float vx, float vy, float w, float *out) {
     for (uint8_t i = 0; i < MOTORS; i++) out[i] = (rim(i, 0) * vx + rim(i, 1) * vy + rim(i, 2) * w) / pgm_read_float(&WHEEL_RADIUS_M[i]);
 }
 
-uint8_t PowerModel::compute(float vx, float vy, float w, bool rotate, int16_t *out, float v, bool held) {
+uint8_t PowerModel::compute(float vx, float vy, float w, bool rotate, int16_t *out, float v) {
     float k = cal_k();
     float tr_max = 0, rot_max = 0;
     // each wheel's rim speed of the translation in raw[i], of the rotation in base[i], until the
@@ -54,9 +54,9 @@ uint8_t PowerModel::compute(float vx, float vy, float w, bool rotate, int16_t *o
         if (v < 0) v = sqrtf(vx * vx + vy * vy);
         ux = vx / v;
         uy = vy / v;
-        f_tr = k * cal_kl(k * tr_max, fold_course(atan2f(vy, vx) * (180.0f / (float)M_PI)), held);
+        f_tr = k * cal_kl(k * tr_max, fold_course(atan2f(vy, vx) * (180.0f / (float)M_PI)));
     }
-    if (rot_max > 0) f_rot = k * (rotate ? cal_kr(k * rot_max, held) : cal_kt(k * rot_max, held));
+    if (rot_max > 0) f_rot = k * (rotate ? cal_kr(k * rot_max) : cal_kt(k * rot_max));
     float peak = 0;
     for (uint8_t i = 0; i < MOTORS; i++) {
         float t = raw[i], r = base[i];

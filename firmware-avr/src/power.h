@@ -16,9 +16,8 @@ struct PowerModel {
     float ux, uy;         // direction of travel of the last twist (0, 0: none)
     int16_t weak_floor;   // a wheel given less (not 0) is set to 0 (WEAK); 0: no such check
 
-    // v: the travel speed sqrt(vx^2 + vy^2) when the caller has it (negative: computed here);
-    // held: the factors' powers linear between the knots, the speed loop's feedforward (power.py)
-    uint8_t compute(float vx, float vy, float w, bool rotate, int16_t *out, float v = -1.0f, bool held = false);
+    // v: the travel speed sqrt(vx^2 + vy^2) when the caller has it (negative: computed here)
+    uint8_t compute(float vx, float vy, float w, bool rotate, int16_t *out, float v = -1.0f);
     void wheel_speeds(float vx, float vy, float w, float *out);  // rad/s
     bool drags();
     uint8_t drag(const int32_t *counts, int16_t *out);

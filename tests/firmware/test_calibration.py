@@ -22,18 +22,6 @@ def test_interp_holds_outside_and_interpolates_inside() -> None:
     assert interp(xs, ys, 999) == 0.5
 
 
-def test_interp_held_puts_the_power_on_the_line_between_the_knots() -> None:
-    """Knot powers x y of 100, 100 and 100 counts: every power between them is 100 (the factor's
-    own line would ask 112.5 at 75 and 112.5 at 150), and the factor is held outside the knots."""
-    xs, ys = [50.0, 100.0, 200.0], [2.0, 1.0, 0.5]
-    for x in xs:
-        assert interp(xs, ys, x, held=True) == pytest.approx(interp(xs, ys, x))
-    assert 75 * interp(xs, ys, 75, held=True) == pytest.approx(100.0)
-    assert 150 * interp(xs, ys, 150, held=True) == pytest.approx(100.0)
-    assert interp(xs, ys, 10, held=True) == 2.0
-    assert interp(xs, ys, 999, held=True) == 0.5
-
-
 @pytest.mark.parametrize(
     ("course", "folded"),
     [(0, 0), (30, 30), (45, 45), (60, 30), (90, 0), (135, 45), (-10, 10), (350, 10), (200, 20)],
@@ -72,15 +60,6 @@ def test_k_l_interpolates_power_and_course() -> None:
     assert cal.k_l(50, 45) == 1.0
     assert cal.k_l(50, 22.5) == pytest.approx(1.25)
     assert cal.k_r(50) == 2.0
-
-
-def test_held_factors_hold_the_power_between_the_knots_on_every_table() -> None:
-    cal = _cal()
-    assert cal.k_l(50, 0, held=True) == pytest.approx(1.0)  # powers 0 and 100: 50 at 50
-    assert cal.k_l(50, 22.5, held=True) == pytest.approx(1.0)  # then between the courses as before
-    assert cal.k_l(100, 0, held=True) == cal.k_l(100, 0)
-    assert cal.k_r(50, held=True) == pytest.approx(3.0)  # powers 0 and 300: 150 at 50
-    assert cal.k_t(50, held=True) == cal.k_t(50)
 
 
 def test_set_knot_rules() -> None:

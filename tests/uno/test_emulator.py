@@ -39,8 +39,6 @@ SCRIPT = [
     # an open-loop VEL: a wheel below the K_l tables' dead band is set to 0, WARN 12 once a VEL stream
     "VEL,20,10,0,500;STATUS;VEL,20,10,0,500;VEL,5,0,0,500;STATUS;VEL,0,10,0,500;STATUS;STOP",
     "MODE,2;VEL,20,10,0,500;STOP;MODE,0",  # the closed loop drives the slow wheels instead
-    # the closed loop's feedforward: K_l's power, not its factor, linear between knots (omni4: 10, 20)
-    "MODE,2;VEL,10,0,0,500;STATUS;STOP;MODE,0",
     "POWER,1000,10,-20,30,-255;STATUS;STOP",
     "CAL,0,0,0,2000;CAL,1,0,0,1100;CAL,10,-1,0,0;CAL,10,0,40,1400;CAL,10,1,255,1050;CAL,11,-1,45,0",
     "CAL,11,0,40,1100;CAL,11,1,255,1000;CAL,12,-2,0,0;CAL,3,0,0,385;CAL,20,0,60,1050;CAL,20,1,200,980",

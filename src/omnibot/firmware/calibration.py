@@ -54,25 +54,14 @@ def map_motor(offset: float, gain: float, speed: float, a: float, u: float) -> f
     return p if a > 0 else -p
 
 
-def interp(xs: list[float], ys: list[float], x: float, held: bool = False) -> float:
-    """Piecewise-linear y(x), held constant outside the knots.
-
-    ``held``: the factor whose power ``x y`` is linear in ``x`` between the knots instead (the
-    factor still held outside them). Each knot of a factor table is a power ``x_j y_j`` that holds
-    the wheel at the speed ``x_j / K``, and the power that holds a speed between two knots lies on
-    the line between theirs; the factor's own line bulges the power where the factor changes fast
-    (omni4's K_l from knot 10 to 20: 62.9 counts at 0.1 m/s where 57.4 hold it). The wheel-speed
-    loop's feedforward (:class:`~omnibot.firmware.power.PowerModel`'s ``held``).
-    """
+def interp(xs: list[float], ys: list[float], x: float) -> float:
+    """Piecewise-linear y(x), held constant outside the knots."""
     n = len(xs)
     if x <= xs[0]:
         return ys[0]
     for i in range(1, n):
         if x <= xs[i]:
             x0 = xs[i - 1]
-            if held:
-                p0 = x0 * ys[i - 1]
-                return (p0 + (x - x0) * (xs[i] * ys[i] - p0) / (xs[i] - x0)) / x
             return ys[i - 1] + (x - x0) * (ys[i] - ys[i - 1]) / (xs[i] - x0)
     return ys[n - 1]
 
@@ -124,20 +113,19 @@ class Calibration:
         t = self.gain[i]
         return map_motor(self.offset[i], interp(t[0], t[1], abs(a)), self.speed[i], a, u)
 
-    def k_l(self, power: float, folded_course: float, held: bool = False) -> float:
-        """K_l(power, course), the course already folded (see :func:`fold_course`); ``held``: the
-        power, not the factor, linear between the knots (:func:`interp`)."""
+    def k_l(self, power: float, folded_course: float) -> float:
+        """K_l(power, course), the course already folded (see :func:`fold_course`)."""
         cs = self.kl_courses
         n = len(cs)
         if n == 1 or folded_course <= cs[0]:
-            return interp(self.kl[0][0], self.kl[0][1], power, held)
+            return interp(self.kl[0][0], self.kl[0][1], power)
         for i in range(1, n):
             if folded_course <= cs[i]:
-                a = interp(self.kl[i - 1][0], self.kl[i - 1][1], power, held)
-                b = interp(self.kl[i][0], self.kl[i][1], power, held)
+                a = interp(self.kl[i - 1][0], self.kl[i - 1][1], power)
+                b = interp(self.kl[i][0], self.kl[i][1], power)
                 return a + (folded_course - cs[i - 1]) * (b - a) / (cs[i] - cs[i - 1])
         last = self.kl[n - 1]
-        return interp(last[0], last[1], power, held)
+        return interp(last[0], last[1], power)
 
     def start_power(self) -> float:
         """The least power that turns a translating wheel, PWM counts (0: the tables do not say).
@@ -165,13 +153,13 @@ class Calibration:
         """The calibrated reach (cm/s) of a MOVE on the folded course; 0: none known."""
         return interp(self.reach[0], self.reach[1], folded_course)
 
-    def k_t(self, power: float, held: bool = False) -> float:
-        """K_t at ``power`` PWM counts (linear between knots, held outside them; ``held``: as K_l's)."""
-        return interp(self.kt[0], self.kt[1], power, held)
+    def k_t(self, power: float) -> float:
+        """K_t at ``power`` PWM counts (linear between knots, held outside them)."""
+        return interp(self.kt[0], self.kt[1], power)
 
-    def k_r(self, power: float, held: bool = False) -> float:
-        """K_r at ``power`` PWM counts (linear between knots, held outside them; ``held``: as K_l's)."""
-        return interp(self.kr[0], self.kr[1], power, held)
+    def k_r(self, power: float) -> float:
+        """K_r at ``power`` PWM counts (linear between knots, held outside them)."""
+        return interp(self.kr[0], self.kr[1], power)
 
     def set_knot(self, table: int, index: int, power: int, value: float) -> bool:
         """Write one knot (the CAL command); False if the table, index or power order is invalid.

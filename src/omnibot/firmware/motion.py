@@ -195,7 +195,6 @@ class Executor:
         """Change the mode bits; switching the closed loop re-plans the current motion's powers."""
         old = self.mode
         self.mode = mode
-        self.model.held = self._closed_loop()  # the loop's feedforward: the power that holds the speed
         if mode & MODE_SIMULATION:
             self.progress.cancel()  # no power applied: nothing to measure
         if self.landing.active and not self._lands():
@@ -638,7 +637,7 @@ class Executor:
     def _feedforward(self, vx: float, vy: float, w: float, rotate: bool) -> None:
         """Each wheel's feedforward: the power model's power; on the closed loop a wheel whose turn is
         the larger part of its rim speed u gets at least ROTATE's factor at its own speed,
-        ``K K_r(K |u|) |u|`` (held: the power linear between K_r's knots, as the power model's).
+        ``K K_r(K |u|) |u|``.
 
         The turning part's K_t is one factor for every wheel at the body's largest turning power,
         made for open-loop curved MOVEs (omni4's flat 1.55): omni4's two wheels that only turn the
@@ -655,7 +654,7 @@ class Executor:
             t = row[0] * vx + row[1] * vy
             if turning and abs(row[2] * w) > abs(t):
                 u = t + row[2] * w
-                least = cal.k * cal.k_r(cal.k * abs(u), True) * abs(u)
+                least = cal.k * cal.k_r(cal.k * abs(u)) * abs(u)
                 if abs(f) < least and f * u >= 0.0:
                     f = least if u > 0.0 else -least
             self._ff[i] = f

@@ -9,9 +9,7 @@ precomputed by config.py). The translation part and the rotation part get their 
 
 where each factor's power argument is the largest uncalibrated power of its part (K |s|) and the
 course is folded onto the calibrated range (:func:`calibration.fold_course`, from the config's
-``kl_axes``). Seed 000's factors are linear in power between the knots; the wheel-speed loop's
-feedforward (``held``) takes their *powers* linear between them instead, the power that holds the
-speed (:func:`calibration.interp`). Each motor's power then
+``kl_axes``). Each motor's power then
 goes through the motor map (:meth:`calibration.Calibration.motor_power`: its dead-band offset, gain
 and speed term at the wheel's rim speed ``s_i``, identity by default), and a translation gets the rollers' drag on top (:meth:`PowerModel.drag`,
 zero by default). Then, keeping the
@@ -95,9 +93,6 @@ class PowerModel:
         self.drag_gain = 1.0
         self.floor = 0.0
         """PWM counts: a wheel given less (not 0) is set to 0 (WEAK); 0 for no such check."""
-        self.held = False
-        """The factors' powers linear between the knots (:func:`calibration.interp`): the power
-        that holds each speed, the wheel-speed loop's feedforward; False: seed 000's factors."""
         self.dither = bool(cfg.get("pwm_dither", False))
         self.carry = [0.0] * n
         """Each wheel's rounding error carried to its next output (``dither``), PWM counts."""
@@ -139,11 +134,10 @@ class PowerModel:
             self._ux = vx / v
             self._uy = vy / v
             course = math.degrees(math.atan2(vy, vx))
-            f_tr = k * cal.k_l(k * tr_max, fold_course(course, self.axes), self.held)
+            f_tr = k * cal.k_l(k * tr_max, fold_course(course, self.axes))
         f_rot = 0.0
         if rot_max > 0.0:
-            held = self.held
-            f_rot = k * (cal.k_r(k * rot_max, held) if rotate else cal.k_t(k * rot_max, held))
+            f_rot = k * (cal.k_r(k * rot_max) if rotate else cal.k_t(k * rot_max))
         peak = 0.0
         carry = self.carry
         for i in range(n):
