@@ -1,13 +1,14 @@
 """The firmware's wheel-speed loop on steps and ramps: how far past the asked speed the wheels and the
 body go (issue 17: mecanum4 drove over the asked speed on carpet).
 
-    python -m benchmarks.speed_loop [--robots mecanum4,omni4,omni3] [--surfaces carpet,wood]
+    python -m benchmarks.speed_loop [--robots mecanum4,omni4,omni3] [--surfaces carpet,wood] [--speed M/S]
 
 Each run: the simulator with the MicroPython firmware in lockstep, MODE 2 (the wheel-speed loop),
 then VEL commands every 20 ms as a host sends them, either a ramp at 1.4 m/s^2 (the tracking
 profile's acceleration) up to the speed asked, without and with its planned acceleration (VEL's A,
 protocol version 3: the firmware feeds its torque forward), or a step to it, held 1.5 s, on courses
-0, 45 (44.5: 0.8 m/s on 45 degrees rounds past speed_max in whole cm/s) and 90 degrees. Reported:
+0, 45 (44.5: 0.8 m/s on 45 degrees rounds past speed_max in whole cm/s) and 90 degrees, at the
+robot's speed (mecanum4 and omni4 0.8 m/s, omni3 3 m/s) or ``--speed``. Reported:
 
 * wheel: the largest ``|wheel speed| / |its final target|`` of the wheels that drive (target at
   least half the largest), after the target reached its final value, minus 1;
@@ -19,8 +20,8 @@ protocol version 3: the firmware feeds its torque forward), or a step to it, hel
 A few seconds of CPU per robot and floor; deterministic (seed 1).
 
 ``--feedforward`` prints instead what the loop's integral holds once the speed is steady: VEL at
-0.3 m/s on courses 0, 45 and 90 degrees and a rotation at 1 rad/s (as the speed-accuracy benchmark
-asks), refreshed every 50 ms for 2 s, then ``ki * integral / feedforward`` of the wheel driven
+0.3 m/s (``--speed``) on courses 0, 45 and 90 degrees and a rotation at 1 rad/s (as the
+speed-accuracy benchmark asks), refreshed every 50 ms for 2 s, then ``ki * integral / feedforward`` of the wheel driven
 hardest: the share of the power the feedforward gets wrong on that floor, which the integral has to
 learn after every start. ``--calibration CAL.yaml`` (one robot's file from ``omnibot calibrate``)
 uploads its floor's tables first, as the front ends' ``--calibration`` does.
@@ -94,11 +95,16 @@ def run(
 
 
 def feedforward_error(
-    robot: str, surface: str, course: float | None, seed: int = 1, calibration: str | None = None
+    robot: str,
+    surface: str,
+    course: float | None,
+    seed: int = 1,
+    calibration: str | None = None,
+    speed: float = 0.3,
 ) -> float:
     """The integral's share of the feedforward power (``ki * integral / ff``) of the wheel driven
-    hardest after 2 s at 0.3 m/s on ``course`` (None: turning at 1 rad/s in place); ``calibration``:
-    a calibration file whose floor's tables are uploaded first (CAL)."""
+    hardest after 2 s at ``speed`` m/s on ``course`` (None: turning at 1 rad/s in place);
+    ``calibration``: a calibration file whose floor's tables are uploaded first (CAL)."""
     dev = SimDevice(robot, surface=surface, seed=seed)
     if calibration is not None:
         tables, _ = floor_calibration(calibration, dev.robot, surface)
@@ -109,7 +115,7 @@ def feedforward_error(
         line = "VEL,0,0,57,200"
     else:
         c, s = math.cos(math.radians(course)), math.sin(math.radians(course))
-        line = f"VEL,{round(30 * c)},{round(30 * s)},0,200"
+        line = f"VEL,{round(100 * speed * c)},{round(100 * speed * s)},0,200"
     for _ in range(40):
         dev.command(line, 0.05)
     ex = dev.controller.executor
@@ -127,6 +133,7 @@ def main() -> None:
     ap.add_argument("--surfaces", default="carpet,wood")
     ap.add_argument("--feedforward", action="store_true", help="the integral's share at a steady speed")
     ap.add_argument("--calibration", metavar="CAL.yaml", help="--feedforward: upload this file's floor first")
+    ap.add_argument("--speed", type=float, help="m/s (default: 0.3 with --feedforward, else the robot's)")
     args = ap.parse_args()
     if args.feedforward:
         print("| robot | floor | 0 deg | 45 deg | 90 deg | rotation |")
@@ -134,7 +141,9 @@ def main() -> None:
         for robot in args.robots.split(","):
             for surface in args.surfaces.split(","):
                 shares = [
-                    feedforward_error(robot, surface, c, calibration=args.calibration)
+                    feedforward_error(
+                        robot, surface, c, calibration=args.calibration, speed=args.speed or 0.3
+                    )
                     for c in (0.0, 45.0, 90.0, None)
                 ]
                 print(f"| {robot} | {surface} | " + " | ".join(f"{100 * x:+.0f} %" for x in shares) + " |")
@@ -144,7 +153,7 @@ def main() -> None:
     )
     print("|---|---|---|---|---|---|---|---|")
     for robot in args.robots.split(","):
-        speed = SPEEDS.get(robot, 0.5)
+        speed = args.speed or SPEEDS.get(robot, 0.5)
         for surface in args.surfaces.split(","):
             for course in COURSES:
                 for ramp, plan in ((True, False), (True, True), (False, False)):
