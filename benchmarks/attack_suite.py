@@ -1134,8 +1134,6 @@ class _SentVels:
 
 
 def _ros2_case(case: str, quick: bool, control_top: float | None = None) -> Row:
-    from argparse import Namespace
-
     from tests.teleop.fakes import truth
 
     from omnibot.client import robot_session
@@ -1163,9 +1161,7 @@ def _ros2_case(case: str, quick: bool, control_top: float | None = None) -> Row:
 
         runtime = Runtime(client, period=0.02)
         runtime.add_sink(watch)
-        node = attach(
-            runtime, robot, Namespace(namespace="", frame_prefix=None, twist=False, cmd_vel_timeout=0.5)
-        )
+        node = attach(runtime, robot)
         env = dict(os.environ, PYTHONPATH=os.pathsep.join([p for p in sys.path if p]))
         with tempfile.TemporaryFile("w+") as out:
             peer = subprocess.Popen([sys.executable, "-c", ROS2_PEER, case, str(count)], stdout=out, env=env)

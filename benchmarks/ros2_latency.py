@@ -46,7 +46,6 @@ import subprocess
 import sys
 import tempfile
 import time
-from argparse import Namespace
 from collections.abc import Callable
 from typing import Any
 
@@ -173,9 +172,7 @@ def measure(
     with robot_session("sim://omni4", "omni4", timeout=0.5) as session, tempfile.TemporaryFile("w+") as out:
         client, robot = session.client, session.robot
         runtime = Runtime(client, period=period)
-        node = attach(
-            runtime, robot, Namespace(namespace="", frame_prefix=None, twist=False, cmd_vel_timeout=0.5)
-        )
+        node = attach(runtime, robot)
         source = runtime.sources["ros2"]
         assert isinstance(source, CmdVelSource)
         submit = client.submit
@@ -265,7 +262,7 @@ def per_process(robots: int, duration: float, rate: float, period: float) -> dic
     from omnibot.client import Pending, robot_session
     from omnibot.protocol import codes
     from omnibot.protocol.messages import Command, Vel
-    from omnibot.ros2 import CmdVelSource, attach
+    from omnibot.ros2 import CmdVelSource, RobotSpec, attach
     from omnibot.runtime import Cycle, Runtime
     from omnibot.teleop import Pacer
 
@@ -281,8 +278,8 @@ def per_process(robots: int, duration: float, rate: float, period: float) -> dic
             session = stack.enter_context(robot_session(f"sim://omni4?seed={k + 1}", "omni4", timeout=0.5))
             client = session.client
             runtime = Runtime(client, period=period)
-            options = Namespace(namespace=name, frame_prefix=None, twist=False, cmd_vel_timeout=0.5)
-            stack.callback(attach(runtime, session.robot, options).close)
+            spec = RobotSpec.named(name)
+            stack.callback(attach(runtime, session.robot, spec=spec).close)
             stack.callback(runtime.close)
             source = runtime.sources["ros2"]
             assert isinstance(source, CmdVelSource)

@@ -33,7 +33,6 @@ import signal
 import subprocess
 import sys
 import time
-from argparse import Namespace
 from dataclasses import dataclass
 from typing import Any
 
@@ -113,7 +112,7 @@ def run(robots: int, rate: float, duration: float, *, bridge: bool = True, backe
     the bridge)."""
     from omnibot.client import robot_session
     from omnibot.protocol import codes
-    from omnibot.ros2 import Ros2Sink, attach
+    from omnibot.ros2 import BridgeSettings, RobotSpec, Ros2Sink, attach
     from omnibot.runtime import Runtime
 
     period = 1.0 / rate
@@ -133,10 +132,8 @@ def run(robots: int, rate: float, duration: float, *, bridge: bool = True, backe
             session = stack.enter_context(robot_session(f"sim://omni4?seed={k + 1}", "omni4", timeout=0.5))
             runtime = Runtime(session.client, period=period)
             if bridge:
-                options = Namespace(
-                    namespace=name, frame_prefix=None, twist=False, cmd_vel_timeout=0.5, ros_backend=backend
-                )
-                stack.callback(attach(runtime, session.robot, options).close)
+                node = attach(runtime, session.robot, BridgeSettings(backend=backend), RobotSpec.named(name))
+                stack.callback(node.close)
                 sink = next(s for s in runtime.sinks if isinstance(s, Ros2Sink))
                 sink.recorder.mirrors.append(windows[k])
             stack.callback(runtime.close)
@@ -220,7 +217,7 @@ def main(argv: list[str] | None = None) -> int:
     status = ensure_private("benchmarks.ros2_rates", argv)
     if status is not None:
         return status
-    from omnibot.ros2.backend import rclpy_importable
+    from omnibot.ros2 import rclpy_importable
 
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")  # lo is the namespace's one link
     backends = args.backend or (["rclpy", "dds"] if rclpy_importable() else ["dds"])

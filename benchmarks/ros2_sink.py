@@ -4,7 +4,7 @@ Run: ``python -m benchmarks.ros2_sink [--cycles N] [--backend dds|rclpy ...]``; 
 private network namespace (``unshare -n``, ``lo`` up: DDS never reaches a real network) and skips,
 saying why, where none can be made.
 
-One robot as ``omnibot ros2 --port sim://omni4`` composes it (:func:`omnibot.ros2.command.attach`),
+One robot as ``omnibot ros2 --port sim://omni4`` composes it (:func:`omnibot.ros2.attach`),
 telemetry every 20 ms, stepped in lockstep with its simulator (no wall-clock pacing: nothing waits
 for a core). Measured: the publishing sink's own CPU (``time.thread_time`` around each call of
 :class:`~omnibot.ros2.bridge.Ros2Sink`: the recorder building the messages, the frame prefix, the
@@ -19,7 +19,6 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from argparse import Namespace
 from typing import Any
 
 from benchmarks.netns import ensure_private
@@ -32,7 +31,7 @@ def sink_cost(backend: str, namespace: str, cycles: int) -> float:
     """The sink's CPU per cycle (s) over ``cycles`` cycles of one robot on ``backend``."""
     from omnibot.client import robot_session
     from omnibot.protocol import codes
-    from omnibot.ros2 import Ros2Sink, attach
+    from omnibot.ros2 import BridgeSettings, RobotSpec, Ros2Sink, attach
     from omnibot.runtime import Runtime
 
     spent = [0.0, 0]
@@ -43,12 +42,10 @@ def sink_cost(backend: str, namespace: str, cycles: int) -> float:
         spent[0] += time.thread_time() - start
         spent[1] += 1
 
-    options = Namespace(
-        namespace=namespace, frame_prefix=None, twist=False, cmd_vel_timeout=0.5, ros_backend=backend
-    )
+    settings, spec = BridgeSettings(backend=backend), RobotSpec.named(namespace)
     with robot_session("sim://omni4?seed=1", "omni4", timeout=0.5) as session:
         runtime = Runtime(session.client, period=0.02)
-        node = attach(runtime, session.robot, options)
+        node = attach(runtime, session.robot, settings, spec)
         try:
             sinks = runtime.sinks
             (sink,) = [s for s in sinks if isinstance(s, Ros2Sink)]
@@ -76,7 +73,7 @@ def main(argv: list[str] | None = None) -> int:
     status = ensure_private("benchmarks.ros2_sink", argv)
     if status is not None:
         return status
-    from omnibot.ros2.backend import rclpy_importable
+    from omnibot.ros2 import rclpy_importable
 
     backends = args.backend or (["dds", "rclpy"] if rclpy_importable() else ["dds"])
     for backend in backends:

@@ -553,7 +553,7 @@ _add_run = _command_in(
     "the follower 10) arbitrated as twist_mux does; the dashboard's emergency stop overrides all.",
 )
 _add_ros2 = _command_in(
-    "omnibot.ros2.command",
+    "omnibot.apps.ros2",
     "ros2",
     summary="robots on ROS 2 (DDS, no ROS install): cmd_vel, path, initialpose in; odom, tf, imu, ranges, "
     "joint_states, battery out",

@@ -36,7 +36,7 @@ def test_a_parameter_without_check_is_read_only() -> None:
 
 
 def test_the_bridges_parameters_check_then_set_the_cmd_vel_timeout() -> None:
-    from omnibot.ros2.command import RobotSpec, parameters
+    from omnibot.ros2.assembly import RobotSpec, parameters
 
     source = SimpleNamespace(timeout=0.5, forced=None)
     made = parameters(

@@ -31,9 +31,7 @@ import json, os, signal, subprocess, tempfile, time
 from omnibot.client import robot_session
 from omnibot.logs import IMU, JOINT_STATES, ODOM, schemas
 from omnibot.protocol import codes
-from argparse import Namespace
-from omnibot.ros2.bridge import Ros2Sink
-from omnibot.ros2.command import attach
+from omnibot.ros2 import Ros2Sink, attach
 from omnibot.runtime import Runtime
 from omnibot.teleop import Pacer
 from omnibot.transport import find_simulator
@@ -45,7 +43,7 @@ with robot_session("sim://omni4?seed=5&world=room", "omni4", timeout=0.5) as ses
     client, robot = session.client, session.robot
     sim = find_simulator(client.link)
     runtime = Runtime(client, period=PERIOD)
-    node = attach(runtime, robot, Namespace(namespace="", frame_prefix=None, twist=False, cmd_vel_timeout=0.5))  # as omnibot ros2
+    node = attach(runtime, robot)  # as omnibot ros2
     source = runtime.sources["ros2"]
     sink = next(s for s in runtime.sinks if isinstance(s, Ros2Sink))
     sent = {}  # what the bridge published (the estimator's values), by stamp
@@ -107,7 +105,7 @@ with robot_session("sim://omni4?seed=5&world=room", "omni4", timeout=0.5) as ses
         return truth
 
     import bisect, math
-    from omnibot.ros2.command import SONAR_PERIOD
+    from omnibot.ros2.assembly import SONAR_PERIOD
     sim.add_listener(snap, 0.002)
     runtime.add_sink(record)
     runtime.start()

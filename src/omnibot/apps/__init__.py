@@ -15,6 +15,8 @@ functions, and never parse a command line.
 * :mod:`omnibot.apps.mapping` - ``omnibot map``: drive the robot (a path, a pad or the keyboard)
   while the SLAM maps the room; the map, the trajectories and, on the simulator, their scores;
 * :mod:`omnibot.apps.goto` - ``omnibot goto``: localise on a saved map, plan and go;
+* :mod:`omnibot.apps.ros2` - ``omnibot ros2``: robots on ROS 2, and the bridge's options of
+  ``omnibot run --ros2`` and ``omnibot map --ros2``;
 * :mod:`omnibot.apps.console` - ``omnibot send`` and ``omnibot console``: the protocol by hand;
 * :mod:`omnibot.apps.recording` - the ``--log`` / ``--foxglove`` recording :func:`omnibot.cli.main`
   opens for a command, which the command hands to its sessions and runtimes.

@@ -43,8 +43,8 @@ TRUTH_PERIOD = 0.01
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Declare ``omnibot map``'s options."""
+    from omnibot.apps.ros2 import add_bridge_options
     from omnibot.cliargs import add_calibration_option, add_robot_options, add_wheel_loop_option
-    from omnibot.ros2 import add_bridge_options
 
     add_robot_options(p, world="room", port_help="the simulated --robot in lockstep (paced with --teleop)")
     drive = p.add_mutually_exclusive_group(required=True)
@@ -107,8 +107,8 @@ def _say(text: str) -> None:
 
 
 def _check(args: argparse.Namespace) -> Path:
+    from omnibot.apps.ros2 import check as check_ros2
     from omnibot.cliargs import output_dir, simulated
-    from omnibot.ros2 import check as check_ros2
 
     check_ros2(args)
     if not (math.isfinite(args.resolution) and 0.005 <= args.resolution <= 1.0):
@@ -264,9 +264,10 @@ class _Mapping:
 
     def _ros2(self, runtime: Any, robot: Any) -> list[Any]:
         """The bridge on the runtime (omnibot run --ros2's), and the map publisher beside it."""
-        from omnibot.ros2 import MapPublisher, Ros2Sink, attach
+        from omnibot.apps.ros2 import attach_bridge
+        from omnibot.ros2 import MapPublisher, Ros2Sink
 
-        node = attach(runtime, robot, self.args)
+        node = attach_bridge(runtime, robot, self.args)
         self.args.ros2_node = node  # compose attaches no second one
         bridge = next(s for s in runtime.sinks if isinstance(s, Ros2Sink))
         publisher = MapPublisher(bridge, self.sink, resolution=self.args.resolution, noise=self.noise)

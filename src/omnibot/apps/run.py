@@ -31,8 +31,8 @@ PAD_PRIORITY = 200
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Declare ``omnibot run``'s options (the robot options shared with every command, then its own)."""
     from omnibot.apps.dashboard import add_server_options
+    from omnibot.apps.ros2 import add_bridge_options
     from omnibot.cliargs import add_calibration_option, add_robot_options, add_wheel_loop_option
-    from omnibot.ros2 import add_bridge_options
 
     add_robot_options(
         p,
@@ -102,8 +102,8 @@ class Parts:
 
 
 def _check(args: argparse.Namespace) -> None:
+    from omnibot.apps.ros2 import check as check_ros2
     from omnibot.control import follower_names
-    from omnibot.ros2 import check as check_ros2
 
     if not (args.teleop or args.dashboard or args.follow or args.ros2):
         raise ConfigError("nothing to run: give --teleop, --dashboard, --follow and/or --ros2")
@@ -168,9 +168,9 @@ def compose(
         parts.pad = PadSource(device, config, limits, name=args.teleop, priority=PAD_PRIORITY)
         runtime.add_source(parts.pad)
     if args.ros2 and getattr(args, "ros2_node", None) is None:  # (omnibot map attaches its own)
-        from omnibot.ros2 import attach
+        from omnibot.apps.ros2 import attach_bridge
 
-        node = attach(runtime, robot, args)
+        node = attach_bridge(runtime, robot, args)
         parts.closers.append(node.close)
     parts.printer = NoticePrinter(say, control=True)
     runtime.add_sink(parts.printer)

@@ -1,4 +1,5 @@
-"""tf frame names of a robot on a shared ``/tf``: a frame prefix, as ros2_controllers' ``tf_frame_prefix``.
+"""tf frame names of a robot on a shared ``/tf``: a frame prefix, as ros2_controllers' ``tf_frame_prefix``
+(and the namespace it defaults to, checked).
 
 Several robots publish on one ``/tf`` (an absolute topic) and tell their frames apart by a prefix:
 ``r1/odom``, ``r1/base_link``, ``r1/sonar_front``. ros2_controllers' rule is followed: the prefix
@@ -18,6 +19,21 @@ from typing import Any
 from omnibot.errors import ConfigError
 
 
+def _names(parts: list[str]) -> bool:
+    """Each part is a ROS name's token: a letter or ``_`` first, then letters, digits and ``_``."""
+    return all(
+        part and (part[0].isalpha() or part[0] == "_") and part.replace("_", "").isalnum() for part in parts
+    )
+
+
+def check_namespace(namespace: str) -> str:
+    """``namespace`` without its slashes, or a one-line error."""
+    text = namespace.strip("/")
+    if not _names(text.split("/") if text else []):
+        raise ConfigError(f"not a valid ROS namespace: {namespace!r}", key="--namespace")
+    return text
+
+
 def frame_prefix(prefix: str | None, namespace: str) -> str:
     """The prefix to put before every frame: ``prefix`` (None: the namespace) ending in ``/``, or ""."""
     text = namespace.strip("/") if prefix is None else prefix.strip()
@@ -26,10 +42,7 @@ def frame_prefix(prefix: str | None, namespace: str) -> str:
     if not text:
         return ""
     parts = text.rstrip("/").split("/")
-    if any(
-        not part or not (part[0].isalpha() or part[0] == "_") or not part.replace("_", "").isalnum()
-        for part in parts
-    ):
+    if not _names(parts):
         raise ConfigError(f"not a valid tf frame prefix: {prefix!r}", key="--frame-prefix")
     return "/".join(parts) + "/"
 

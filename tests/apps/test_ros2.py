@@ -1,4 +1,5 @@
-"""``omnibot ros2``'s bad input: one line, non-zero, before any robot or DDS is touched."""
+"""``omnibot ros2``'s options (:mod:`omnibot.apps.ros2`): bad input is one line, non-zero, before any
+robot or DDS is touched; the robots pair up in the order of ``--port``."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import sys
 import pytest
 
 from omnibot.cli import main
+from tests.cli.conftest import assert_one_line_error
 
 
 @pytest.mark.parametrize(
@@ -69,8 +71,9 @@ def test_robots_that_do_not_pair_up_are_refused(
 
 
 def test_robots_pair_up_in_order() -> None:
+    from omnibot.apps.ros2 import robot_specs
     from omnibot.cli import build_parser
-    from omnibot.ros2.command import RobotSpec, robot_specs
+    from omnibot.ros2 import RobotSpec
 
     args = build_parser().parse_args(
         [
@@ -92,6 +95,14 @@ def test_robots_pair_up_in_order() -> None:
     assert robot_specs(args) == [RobotSpec("sim://a", "r1", ""), RobotSpec("sim://b", "r2", "two/")]
     one = build_parser().parse_args(["ros2", "--namespace", "/fleet/r1/"])
     assert robot_specs(one) == [RobotSpec(None, "fleet/r1", "fleet/r1/")]
+
+
+def test_several_robots_take_one_scanner_each_or_none(capsys: pytest.CaptureFixture[str]) -> None:
+    two = ["--port", "sim://omni4", "--namespace", "r1", "--port", "sim://omni3", "--namespace", "r2"]
+    assert main(["ros2", *two, "--scanner", "/dev/ttyUSB1"]) == 2
+    err = capsys.readouterr().err
+    assert "2 robots (--port) but 1 --scanner" in err
+    assert_one_line_error(err)
 
 
 def test_without_cyclonedds_it_says_how_to_install(

@@ -1,5 +1,5 @@
-"""``--scanner`` on the bridge: one per robot or none, and a robot without a scanner is refused in one
-line before any DDS participant is made."""
+"""The bridge on a runtime (:func:`omnibot.ros2.assembly.attach`): a robot without a scanner given a
+scanner device is refused in one line before any DDS participant is made."""
 
 from __future__ import annotations
 
@@ -11,14 +11,6 @@ import yaml
 from omnibot.cli import main
 from omnibot.robot.description import PRESET_DIR
 from tests.cli.conftest import assert_one_line_error
-
-
-def test_several_robots_take_one_scanner_each_or_none(capsys: pytest.CaptureFixture[str]) -> None:
-    two = ["--port", "sim://omni4", "--namespace", "r1", "--port", "sim://omni3", "--namespace", "r2"]
-    assert main(["ros2", *two, "--scanner", "/dev/ttyUSB1"]) == 2
-    err = capsys.readouterr().err
-    assert "2 robots (--port) but 1 --scanner" in err
-    assert_one_line_error(err)
 
 
 def test_a_robot_without_a_scanner_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
