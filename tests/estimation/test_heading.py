@@ -108,3 +108,34 @@ def test_fast_wheels_creeping_in_rotation_count_for_less() -> None:
     slow, fast = drift(0.0), drift(4.0)
     assert slow > 3e-4  # trusted, the wheels' 4.4 mrad of creep pull the heading 0.4 mrad
     assert fast < 0.1 * slow
+
+
+def test_a_standstill_keeps_the_bias_it_measured_against_the_wheels_creep() -> None:
+    """omni3 on the long corridor: a 3 s standstill measures the bias to ~5e-5 rad/s (its mean rate;
+    the TEL heading's 0.01 degree steps telescope over it), and driving away the wheels creep 2e-4
+    rad/s in rotation below the slip check. Taken one sample at a time (each step as new white
+    noise) the bias was left 4.7e-4 rad/s uncertain, the creep became bias and the heading followed
+    the wheels (3.6 mrad in 20 s; 0.56 degree mean on the route with a constant bias)."""
+    rng = np.random.default_rng(3)
+    step = math.radians(0.01)
+    bias, creep = 0.012, 2e-4
+    flt = HeadingFilter()
+    psi = 0.0
+    for k in range(round(23.0 / DT)):
+        standing = k < round(3.0 / DT)
+        sent = round(psi / step) * step
+        psi += bias * DT + 8.7e-5 * math.sqrt(DT) * rng.standard_normal()
+        flt.update(DT, round(psi / step) * step - sent, None if standing else creep * DT, standstill=standing)
+        if k == round(3.0 / DT) - 1:
+            assert flt.bias == pytest.approx(bias, abs=1e-4)  # the standstill's mean rate
+            assert math.sqrt(flt.P[1, 1]) < 1e-4  # and as known as that: 8.7e-5 / sqrt(3 s) and the steps
+    assert flt.bias == pytest.approx(bias, abs=5e-5)
+    assert abs(flt.theta) < 1.5e-3  # the wheels alone say 4 mrad
+
+
+def test_a_calibration_during_a_standstill_is_kept() -> None:
+    flt = HeadingFilter()
+    run(flt, 1.0, 0.0, bias=0.01, scale=0.0, standstill=True)
+    flt.calibrated(0.002, 0.003, bias_std=5e-5, scale_std=5e-4)
+    run(flt, 0.5, 0.0, bias=0.002, scale=0.0, standstill=True)  # still standing: from the calibration on
+    assert flt.bias == pytest.approx(0.002, abs=1e-4) and flt.scale == pytest.approx(0.003)

@@ -24,15 +24,16 @@ counts for little then, and nothing at all while a slip is seen: a slip check co
 rotation with the gyro's over a short window (plus any slip flag from elsewhere: the wheel-fit
 residual, the tracking wheels), and while it fires the reference follows the filter (no
 information), so a slip never enters the heading. At standstill the rotation is known to be zero:
-the gyro's rate is its bias. A saturated gyro sample is the least the body turned: it is replaced
-by the encoders' rotation only where they are trusted and say more, else kept (the heading's
-variance grown by what the clip may hide).
+the gyro's rate is its bias, measured as the mean rate over the standstill so far (the heading's
+quantisation and the gyro's noise average out over its length). A saturated gyro sample is the
+least the body turned: it is replaced by the encoders' rotation only where they are trusted and
+say more, else kept (the heading's variance grown by what the clip may hide).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -65,7 +66,8 @@ class HeadingFilterConfig:
     """Extra offset random walk per (m/s)^2 of body speed, rad/sqrt(s): fast wheels creep in rotation
     (omni3 at 4 m/s on carpet: 0.26 degree in 11 s without a skid to see)."""
     still_std: float = 2e-4
-    """Heading quantisation at standstill, rad (the TEL heading's 0.01 degree steps)."""
+    """Heading quantisation step, rad (the TEL heading's 0.01 degree steps). Over a standstill of T s
+    its errors telescope: the mean rate is off by two steps over T, not by one per sample."""
     slip_window: float = 0.1
     """Time constant of the leaky sum of gyro-encoder rotation differences, s."""
     slip_threshold: float = 3e-3
@@ -91,6 +93,18 @@ class HeadingFilterConfig:
         return cls(**values)
 
 
+@dataclass
+class _Standstill:
+    """A standstill so far: the filter's state at its start, the gyro's turn and time since, and the
+    process noise added over it."""
+
+    x: np.ndarray
+    P: np.ndarray
+    turned: float = 0.0
+    time: float = 0.0
+    noise: np.ndarray = field(default_factory=lambda: np.zeros((4, 4)))
+
+
 class HeadingFilter:
     """Kalman filter over (heading, gyro bias, gyro scale error, encoder offset); see the module docstring."""
 
@@ -103,6 +117,7 @@ class HeadingFilter:
         self._mismatch = 0.0
         self._distrust = 0.0
         self._skid = 0.0
+        self._stand: _Standstill | None = None
         self.slipping = False
         """The last update did not trust the encoders (slip seen, or held after one)."""
 
@@ -128,6 +143,7 @@ class HeadingFilter:
             self.P[i, :] = 0.0
             self.P[:, i] = 0.0
         self.P[1, 1], self.P[2, 2] = bias_std**2, scale_std**2
+        self._stand = None  # a standstill's mean starts again from the calibration
 
     def reset_heading(self, theta: float) -> None:
         """Set the heading (keeping what was learned about the gyro)."""
@@ -138,6 +154,7 @@ class HeadingFilter:
             self.P[i, :] = 0.0
             self.P[:, i] = 0.0
             self.P[i, i] = 1e-8
+        self._stand = None
 
     def update(
         self,
@@ -188,9 +205,7 @@ class HeadingFilter:
         self.slipping = d_ref is not None and not trusted
 
         if standstill:
-            # the body does not turn, so the gyro's rate is its bias: learned fastest here (the
-            # heading's quantisation steps count as white noise, which overstates them)
-            self._bias_update(d_psi / dt, c.angle_random_walk**2 / dt + (c.still_std / dt) ** 2 / 6.0)
+            self._stand_update(dt, d_psi, Q)
         elif trusted:
             assert d_ref is not None
             self._ref += d_ref
@@ -198,7 +213,24 @@ class HeadingFilter:
             self._z_update(self._ref, r)
         else:
             self._ref += float(self.x[0]) - theta  # follow the filter: no information
+        self._stand = self._stand if standstill else None
         return float(self.x[0]) - before
+
+    def _stand_update(self, dt: float, d_psi: float, q: np.ndarray) -> None:
+        """The body does not turn, so the gyro's rate is its bias: the state before the standstill,
+        predicted over it, corrected once by the gyro's mean rate since it began. (One update per
+        sample, each taking the heading's quantisation as new white noise, would leave the bias as
+        uncertain as a single sample says, and the wheels' first creep would then move it.)"""
+        c = self.config
+        if self._stand is None:  # its start: the state before this interval (standing, P grew by q)
+            self._stand = _Standstill(self.x.copy(), self.P - q)
+        s = self._stand
+        s.turned += d_psi
+        s.time += dt
+        s.noise += q
+        self.x, self.P = s.x.copy(), s.P + s.noise
+        r = c.angle_random_walk**2 / s.time + c.still_std**2 / (6.0 * s.time**2)
+        self._bias_update(s.turned / s.time, r)
 
     def _clipped(
         self, dt: float, d_psi: float, d_ref: float | None, slip: bool, bias: float, scale: float
