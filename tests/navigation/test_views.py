@@ -11,7 +11,15 @@ from omnibot.mapping.grid import OccupancyGrid
 from omnibot.mapping.planner import inflate
 from omnibot.motion import Pose2D
 from omnibot.navigation.explore import choose_view
-from omnibot.navigation.views import Surface, View, line_of_sight, stands, unseen_surface, views
+from omnibot.navigation.views import (
+    INCIDENCE,
+    Surface,
+    View,
+    line_of_sight,
+    stands,
+    unseen_surface,
+    views,
+)
 
 
 def room_without_its_east_wall() -> OccupancyGrid:
@@ -73,12 +81,12 @@ def test_the_best_view_sees_the_unmarked_wall_square_on_within_the_hit_range() -
     surface = unseen_surface(grid)
     normals = surface.normals[[int(np.argmin(np.hypot(*(surface.points - p).T))) for p in seen]]
     way = (np.array([x, y]) - seen) / np.hypot(*(np.array([x, y]) - seen).T)[:, None]
-    assert (np.einsum("ij,ij->i", way, normals) >= math.cos(math.radians(60.0)) - 1e-9).all()  # the incidence
+    assert (np.einsum("ij,ij->i", way, normals) >= math.cos(INCIDENCE) - 1e-9).all()  # the incidence
     assert all(3.975 - v.stand[0] <= 1.8 for v in found)  # none from beyond the range
     # a stand beside the wall sees it edge-on: nothing within the incidence
     beside = np.array([[3.675, 0.275]])
     near = views(grid, unseen_surface(grid), beside, view_range=1.8, min_cells=1)
-    assert near and near[0].seen[:, 1].max() <= 0.275 + (3.975 - 3.675) * math.tan(math.radians(60.0)) + 1e-9
+    assert near and near[0].seen[:, 1].max() <= 0.275 + (3.975 - 3.675) * math.tan(INCIDENCE) + 1e-9
 
 
 def test_a_surface_hidden_behind_a_wall_has_no_view() -> None:
@@ -95,12 +103,38 @@ def test_a_view_is_chosen_by_what_it_sees_against_the_way_to_it() -> None:
     cmap = inflate(grid, robot_radius=0.15, margin=0.05)
     here = Pose2D(0.5, 1.5, 0.0)
     near, far = View((1.0, 1.5), np.zeros((10, 2))), View((3.0, 1.5), np.zeros((12, 2)))
-    assert choose_view(cmap, here, [far, near]) is near  # 12 cells 2.5 m away < 10 cells 0.5 m away
+    assert choose_view(cmap, here, [far, near]) == (near, False)  # 12 cells 2.5 m away < 10 cells 0.5 m away
     rich = View((3.0, 1.5), np.zeros((40, 2)))
-    assert choose_view(cmap, here, [rich, near]) is rich
+    assert choose_view(cmap, here, [rich, near]) == (rich, False)
     walled = View((3.0, 2.975), np.zeros((40, 2)))  # in the north wall: no way to it
     assert choose_view(cmap, here, [walled]) is None
     assert choose_view(cmap, here, []) is None
+
+
+def gap_between_two_rooms() -> OccupancyGrid:
+    """Two 2 m x 2 m rooms side by side, the wall between them (x 1.95-2.0) open for 0.4 m (y 0.8
+    to 1.2): a robot of 15 cm radius passes only without the 5 cm margin."""
+    data = np.zeros((40, 80), dtype=np.int8)
+    data[0, :] = data[-1, :] = data[:, 0] = data[:, -1] = data[:, 39] = 100
+    data[16:24, 39] = 0
+    return OccupancyGrid(data, 0.05)
+
+
+def test_a_view_beyond_a_gap_narrower_than_the_margin_is_gone_to_by_a_tight_way() -> None:
+    grid = gap_between_two_rooms()
+    cmap = inflate(grid, robot_radius=0.15, margin=0.05)
+    tight = inflate(grid, robot_radius=0.15, margin=0.0)
+    here = Pose2D(3.0, 1.0, 0.0)  # in the east room: a way planned before the map filled in led here
+    assert stands(grid, cmap, (here.x, here.y))[:, 0].min() > 2.0  # by the margin, the east room only
+    both = stands(grid, cmap, (here.x, here.y), way=tight)
+    assert both[:, 0].min() < 2.0 and both[:, 0].max() > 2.0  # by the radius alone, both rooms
+    cells = grid.world_to_cell(both)
+    assert not cmap.blocked[cells[:, 0], cells[:, 1]].any()  # the stands themselves keep the margin
+    west = View((1.0, 1.0), np.zeros((10, 2)))
+    assert choose_view(cmap, here, [west]) is None
+    assert choose_view(cmap, here, [west], tight=tight) == (west, True)
+    east = View((3.5, 1.0), np.zeros((10, 2)))
+    assert choose_view(cmap, here, [west, east], tight=tight) == (east, False)
 
 
 def test_line_of_sight_stops_at_walls_and_short_of_its_end() -> None:

@@ -412,22 +412,27 @@ class _Exploration:
             goals += list(walls)
         return goals, walls
 
-    def _view(self, grid: OccupancyGrid, cmap: CostMap, here: Pose2D) -> View | None:
-        """The view goal to go to next (:func:`choose_view`), None: none left (or none wanted)."""
+    def _view(self, grid: OccupancyGrid, cmap: CostMap, here: Pose2D) -> tuple[View, bool] | None:
+        """The view goal to go to next and whether its way needs the radius alone
+        (:func:`choose_view`); None: none left (or none wanted)."""
         if self.view_range is None:
             return None
         res = grid.resolution
         returns = None if self.returns is None else self.returns(grid)
         surface = unseen_surface(grid, returns).without(self.viewed, 0.75 * res)
-        places = stands(grid, cmap, (here.x, here.y))
-        return choose_view(cmap, here, views(grid, surface, places, view_range=self.view_range))
+        tight = inflate(grid, robot_radius=self.radius, margin=0.0)
+        places = stands(grid, cmap, (here.x, here.y), way=tight)
+        return choose_view(cmap, here, views(grid, surface, places, view_range=self.view_range), tight=tight)
 
-    def _look(self, grid: OccupancyGrid, here: Pose2D, view: View, left: float) -> None:
-        """Go to ``view``'s stand; its cells are not chosen for again, whether it got there or not
-        (from the nearest place it could reach they may be as hidden)."""
+    def _look(self, grid: OccupancyGrid, here: Pose2D, choice: tuple[View, bool], left: float) -> None:
+        """Go to the view's stand (by a way clear by the radius alone if ``choice`` says so); its
+        cells are not chosen for again, whether it got there or not (from the nearest place it could
+        reach they may be as hidden); there, it scans for :data:`DWELL` s."""
+        view, narrow = choice
         gx, gy = view.stand
         self.say(f"to a view of {view.size} cells the map lacks, from ({gx:.2f}, {gy:.2f})")
-        how = replace(self.options, tolerance=VIEW_TOLERANCE, timeout=left)
+        margin = 0.0 if narrow else self.options.margin
+        how = replace(self.options, tolerance=VIEW_TOLERANCE, timeout=left, margin=margin)
         visit = go_to(
             self.runtime, self.robot, grid, Pose2D(gx, gy, here.theta), how, pose=self.pose, scan=self.scan
         )
@@ -535,25 +540,41 @@ def choose_frontier(
 
 
 def choose_view(
-    cmap: CostMap, here: Pose2D, candidates: list[View], *, walk: float = VIEW_WALK
-) -> View | None:
+    cmap: CostMap,
+    here: Pose2D,
+    candidates: list[View],
+    *,
+    tight: CostMap | None = None,
+    walk: float = VIEW_WALK,
+) -> tuple[View, bool] | None:
     """Among the :data:`CANDIDATES` ``candidates`` worth most by straight line (cells seen over 1 +
-    distance / ``walk``), the one worth most by the planned way on ``cmap``; None when none has a
-    way (or there are none)."""
+    distance / ``walk``), the one worth most by the way planned on ``cmap``, else on ``tight`` (the
+    same map inflated by the radius alone: a gap narrower than the margin, where a way planned
+    before the map filled in may have led); and whether its way is ``tight``'s. None when none
+    has a way (or there are none)."""
 
     def worth(view: View, length: float) -> float:
         return view.size / (1.0 + length / walk)
 
     ranked = sorted(candidates, key=lambda v: -worth(v, math.hypot(v.stand[0] - here.x, v.stand[1] - here.y)))
-    best: tuple[float, View] | None = None
+    best: tuple[float, View, bool] | None = None
     for view in ranked[:CANDIDATES]:
-        try:
-            length = plan_path(cmap, here, Pose2D(view.stand[0], view.stand[1], here.theta)).length
-        except PlanningError:
-            continue
-        if best is None or worth(view, length) > best[0]:
-            best = (worth(view, length), view)
-    return None if best is None else best[1]
+        goal = Pose2D(view.stand[0], view.stand[1], here.theta)
+        way = _way(cmap, here, goal)
+        narrow = way is None and tight is not None
+        if narrow and tight is not None:
+            way = _way(tight, here, goal)
+        if way is not None and (best is None or worth(view, way) > best[0]):
+            best = (worth(view, way), view, narrow)
+    return None if best is None else (best[1], best[2])
+
+
+def _way(cmap: CostMap, here: Pose2D, goal: Pose2D) -> float | None:
+    """The length of the way planned on ``cmap`` from ``here`` to ``goal``, m (None: no way)."""
+    try:
+        return plan_path(cmap, here, goal).length
+    except PlanningError:
+        return None
 
 
 def _back_off(

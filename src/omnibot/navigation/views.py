@@ -129,12 +129,18 @@ def unseen_surface(grid: OccupancyGrid, returns: NDArray[np.integer] | None = No
 
 
 def stands(
-    grid: OccupancyGrid, cmap: CostMap, here: tuple[float, float], lattice: int = LATTICE
+    grid: OccupancyGrid,
+    cmap: CostMap,
+    here: tuple[float, float],
+    lattice: int = LATTICE,
+    *,
+    way: CostMap | None = None,
 ) -> FloatArray:
     """(n, 2) places the robot can stand (known free, not blocked on ``cmap``) on a lattice of
-    ``lattice`` cells, joined (8-connected) to the free place nearest ``here``: the ones it can
-    reach without crossing unknown space. Empty when there is none."""
-    open_ = grid.free(FREE) & ~cmap.blocked
+    ``lattice`` cells, joined (8-connected, through cells known free and not blocked on ``way``,
+    default ``cmap``) to the free place nearest ``here``: the ones it can reach without crossing
+    unknown space. Empty when there is none."""
+    open_ = grid.free(FREE) & ~(cmap if way is None else way).blocked
     labels, count = ndimage.label(open_, structure=np.ones((3, 3), dtype=int))
     if count == 0:
         return np.zeros((0, 2))
@@ -144,7 +150,7 @@ def stands(
     mine = labels == labels[cells[nearest, 0], cells[nearest, 1]]
     on_lattice = np.zeros(grid.shape, dtype=bool)
     on_lattice[::lattice, ::lattice] = True
-    return grid.cell_to_world(np.argwhere(mine & on_lattice))
+    return grid.cell_to_world(np.argwhere(mine & on_lattice & grid.free(FREE) & ~cmap.blocked))
 
 
 def views(
