@@ -6,11 +6,15 @@ import math
 
 import numpy as np
 import pytest
+from benchmarks.mapping_scenes import cast_scan
+from scipy import ndimage
 
 from omnibot.mapping.grid import OccupancyGrid
 from omnibot.mapping.planner import inflate
+from omnibot.mapping.score import rasterise
+from omnibot.mapping.session import MapSnapshot, RangeNoise
 from omnibot.motion import Pose2D
-from omnibot.navigation.explore import choose_view
+from omnibot.navigation.explore import choose_view, frontiers, wall_goals
 from omnibot.navigation.views import (
     INCIDENCE,
     Surface,
@@ -20,6 +24,7 @@ from omnibot.navigation.views import (
     unseen_surface,
     views,
 )
+from omnibot.sim.world import parse_world
 
 
 def room_without_its_east_wall() -> OccupancyGrid:
@@ -170,3 +175,59 @@ def test_returns_the_map_does_not_mark_are_surface_where_they_edge_the_free_spac
     assert len(surface) == 58 + 40
     assert np.isclose(surface.points[:, 0], 3.975).sum() == 40  # the returns' cells, not the stray's
     assert (surface.normals[:, 0] < -0.9).all()
+
+
+GRAZED = parse_world(
+    {
+        "name": "grazed",
+        "walls": [{"shape": "rectangle", "min": [-2.4, 1.0], "max": [1.3, 2.6]}],
+        "obstacles": [{"shape": "box", "center": [0.65, 2.3], "size": [1.3, 0.6]}],
+    },
+    "grazed",
+)
+"""A 3.7 m x 1.6 m room with a cabinet against its north wall, its south face (y 2.0, x 0-1.3)
+in line with the way the robot came: seen only edge-on."""
+
+
+def test_a_face_seen_only_edge_on_is_marked_once_its_view_goal_is_taken() -> None:
+    rng = np.random.default_rng(1)
+    clouds: list[tuple[float, np.ndarray, tuple[float, float]]] = []
+    poses: dict[float, Pose2D] = {}
+
+    def scan_at(pose: Pose2D, revolutions: int = 1) -> None:
+        for _ in range(revolutions):
+            stamp = float(len(clouds))
+            clouds.append(
+                (stamp, cast_scan(GRAZED, pose, rng=rng).points("base").astype(np.float32), (0.0, 0.0))
+            )
+            poses[stamp] = pose
+
+    def mapped() -> tuple[OccupancyGrid, np.ndarray, int]:
+        snapshot = MapSnapshot(list(clouds), dict(poses))
+        grid = snapshot(0.05, RangeNoise())
+        truth = rasterise(GRAZED, grid)
+        xy = grid.cell_to_world(np.argwhere(truth))
+        face = np.argwhere(truth)[(np.abs(xy[:, 1] - 2.0) < 0.06) & (xy[:, 0] > 0.0) & (xy[:, 0] < 1.3)]
+        marked = ndimage.binary_dilation(grid.occupied(65), structure=ndimage.generate_binary_structure(2, 1))
+        return grid, snapshot.returns(grid), int((~marked[face[:, 0], face[:, 1]]).sum())
+
+    for x in np.arange(-2.0, -0.3, 0.04):  # along the face's line, 15 cm off it
+        scan_at(Pose2D(float(x), 1.85, 0.0))
+    here = Pose2D(-0.34, 1.85, 0.0)
+    grid, returns, unmarked = mapped()
+    cmap = inflate(grid, robot_radius=0.15, margin=0.05)
+    optimistic = inflate(grid, robot_radius=0.15, margin=0.05, allow_unknown=True)
+    # before: no frontier and no unmarked wall left to go to (exploring ended there), the face not whole
+    assert [f for f in frontiers(grid, cmap, optimistic) if f.goal is not None] == []
+    assert wall_goals(grid, cmap, returns) == []
+    assert unmarked >= 5
+    found = views(grid, unseen_surface(grid, returns), stands(grid, cmap, (here.x, here.y)))
+    chosen = choose_view(cmap, here, found)
+    assert chosen is not None and not chosen[1]
+    x, y = chosen[0].stand
+    assert y < 2.0 - 0.2 and 0.0 - 0.5 < x < 1.3  # before the face, not in line with it
+    scan_at(Pose2D(x, y, 0.0), revolutions=10)  # the dwell
+    grid, returns, unmarked = mapped()
+    assert unmarked == 0  # after: the whole face marked
+    cmap = inflate(grid, robot_radius=0.15, margin=0.05)
+    assert views(grid, unseen_surface(grid, returns), stands(grid, cmap, (x, y))) == []  # nothing left
