@@ -9,10 +9,7 @@ import pytest
 from benchmarks.mapping_scenes import cast_scan
 from scipy import ndimage
 
-from omnibot.mapping.grid import OccupancyGrid
-from omnibot.mapping.planner import inflate
-from omnibot.mapping.score import rasterise
-from omnibot.mapping.session import MapSnapshot, RangeNoise
+from omnibot.mapping import MapSnapshot, OccupancyGrid, RangeNoise, inflate
 from omnibot.motion import Pose2D
 from omnibot.navigation.explore import choose_view, frontiers, wall_goals
 from omnibot.navigation.views import (
@@ -24,7 +21,7 @@ from omnibot.navigation.views import (
     unseen_surface,
     views,
 )
-from omnibot.sim.world import parse_world
+from omnibot.sim import parse_world
 
 
 def room_without_its_east_wall() -> OccupancyGrid:
@@ -205,9 +202,7 @@ def test_a_face_seen_only_edge_on_is_marked_once_its_view_goal_is_taken() -> Non
     def mapped() -> tuple[OccupancyGrid, np.ndarray, int]:
         snapshot = MapSnapshot(list(clouds), dict(poses))
         grid = snapshot(0.05, RangeNoise())
-        truth = rasterise(GRAZED, grid)
-        xy = grid.cell_to_world(np.argwhere(truth))
-        face = np.argwhere(truth)[(np.abs(xy[:, 1] - 2.0) < 0.06) & (xy[:, 0] > 0.0) & (xy[:, 0] < 1.3)]
+        face = grid.world_to_cell([(x, 2.0) for x in np.arange(0.025, 1.3, 0.05)])  # its cells (26)
         marked = ndimage.binary_dilation(grid.occupied(65), structure=ndimage.generate_binary_structure(2, 1))
         return grid, snapshot.returns(grid), int((~marked[face[:, 0], face[:, 1]]).sum())
 
