@@ -168,6 +168,7 @@ def _explore(args: argparse.Namespace, url: str, out: Path) -> int:
     from omnibot.motion import Pose2D
     from omnibot.navigation import navigation_runtime
     from omnibot.navigation.explore import GOTO, explore
+    from omnibot.navigation.views import VIEW_SHARE
     from omnibot.transport import find_simulator
 
     mapping = _Mapping(args)
@@ -200,6 +201,7 @@ def _explore(args: argparse.Namespace, url: str, out: Path) -> int:
                     returns=returns_now,
                     time_limit=limit,
                     options=replace(GOTO, speed=args.speed),
+                    view_range=VIEW_SHARE * mapping.noise.hit_range,
                     say=_say,
                 )
             _say(f"exploring ended: {result.summary()}")

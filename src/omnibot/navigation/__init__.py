@@ -10,7 +10,8 @@ Other packages take the names below from this face::
 Each loads on first use, with only the module that defines it (the slip calibration needs no planner,
 teach and repeat no map). A function named as its module cannot be given (the submodule shadows it):
 ``goto.goto`` is called on the module (``from omnibot.navigation import goto``), and ``explore`` and
-its ``GOTO`` options are imported from their module, whose names the face leaves alone.
+its ``GOTO`` options are imported from their module, whose names the face leaves alone (as are
+``views``', exploring's view goals).
 """
 
 from typing import TYPE_CHECKING
@@ -80,6 +81,7 @@ __all__ = [
     "summary",
     "teach",
     "verdict",
+    "views",
     "webteach",
 ]
 

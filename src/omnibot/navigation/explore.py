@@ -18,7 +18,10 @@
 
 Walls the scans saw that the map does not mark (returns beyond the hit range, or a wall seen
 edge-on: :func:`unmarked_walls`) are gone to as frontiers are, to a place within the hit range
-that sees them (:func:`wall_goals`); each is gone to once.
+that sees them (:func:`wall_goals`); each is gone to once. When no frontier is left with a way to
+it, the robot goes where it sees the most of the surface the map still lacks, square on and within
+the hit range (:mod:`omnibot.navigation.views`: a face seen only edge-on or from afar), until no
+place sees enough of it; the cells a view was chosen for are not chosen for again.
 
 A goal reached is not gone to again, even if it is still a frontier (behind furniture, beyond the
 scanner's range). One the robot set out for and did not reach (stalled, blocked, timed out) is tried
@@ -44,6 +47,7 @@ from omnibot.errors import PlanningError
 from omnibot.mapping import CostMap, OccupancyGrid, check_start, inflate, plan_path
 from omnibot.motion import Pose2D
 from omnibot.navigation.goto import GotoOptions, GotoResult, PoseProvider, go_to
+from omnibot.navigation.views import VIEW_RANGE, View, line_of_sight, stands, unseen_surface, views
 from omnibot.robot import RobotDescription
 from omnibot.runtime import Runtime
 
@@ -95,6 +99,14 @@ GOTO = GotoOptions(
 """How each frontier is gone to: near enough to see past it, any heading; what the scanner sees
 that the map so far does not have ends the leg (no re-plan on a marked copy of the map: the next
 choice is made on the SLAM's map, which has it)."""
+VIEW_TOLERANCE = 0.1
+"""m within which a view goal is reached (its line of sight may pass a narrow gap)."""
+DWELL = 1.0
+"""s the robot stays at a view goal it reached, scanning (ten revolutions at 10 Hz: a surface
+grazed by many rays before needs many hits to be marked; :data:`~omnibot.navigation.views.INCIDENCE`)."""
+VIEW_WALK = 2.0
+"""m of way that halve a view's worth when choosing among the best (a view twice as far must see
+twice as much)."""
 
 
 @dataclass(frozen=True)
@@ -219,7 +231,7 @@ def wall_goals(
         if not near.any():
             continue
         cand, dist = stands[near], d[near]
-        seen = _line_of_sight(grid, see_through, cand, centre, stop=2.0 * res)
+        seen = line_of_sight(grid, see_through, cand, centre, stop=2.0 * res)
         if not seen.any():
             continue
         cand, dist = cand[seen], dist[seen]
@@ -231,27 +243,6 @@ def wall_goals(
         best = int(np.argmin(across + np.abs(dist - 1.0)))
         goals.append(((float(cand[best, 0]), float(cand[best, 1])), (float(centre[0]), float(centre[1]))))
     return goals
-
-
-def _line_of_sight(
-    grid: OccupancyGrid, clear: NDArray[np.bool_], starts: FloatArray, end: FloatArray, stop: float
-) -> NDArray[np.bool_]:
-    """Which of ``starts`` see ``end`` through ``clear`` cells: the segment sampled every half cell,
-    up to ``stop`` m before ``end``."""
-    step = grid.resolution / 2.0
-    span = np.hypot(*(end - starts).T)
-    n = int(np.ceil(float(span.max()) / step)) + 1
-    t = np.linspace(0.0, 1.0, n)
-    ok = np.ones(len(starts), dtype=bool)
-    for f in t:
-        pts = starts + (end - starts) * f
-        upto = f * span <= span - stop
-        cells = grid.world_to_cell(pts)
-        inside = grid.inside(cells)
-        free = np.zeros(len(starts), dtype=bool)
-        free[inside] = clear[cells[inside, 0], cells[inside, 1]]
-        ok &= free | ~upto
-    return ok
 
 
 @dataclass
@@ -269,10 +260,12 @@ class ExploreResult:
     reason: str = ""
     """Why exploring ended ``stuck``."""
     duration: float = 0.0
+    views: int = 0
+    """Legs to a view goal (:mod:`omnibot.navigation.views`), reached or not."""
 
     @property
     def reached(self) -> int:
-        """Frontier goals reached."""
+        """Goals reached (frontiers, unmarked walls and views)."""
         return sum(1 for v in self.visits if v.arrived)
 
     def summary(self) -> str:
@@ -283,7 +276,10 @@ class ExploreResult:
             "unreachable": f"the {len(self.unreachable)} frontier(s) left have no way to them",
             "stuck": f"stuck: {self.reason}",
         }[self.outcome]
-        return f"{why} ({self.reached} frontiers reached, {len(self.failed)} given up, {self.duration:.0f} s)"
+        return (
+            f"{why} ({self.reached} goals reached, {self.views} of the legs to views, "
+            f"{len(self.failed)} given up, {self.duration:.0f} s)"
+        )
 
 
 def explore(
@@ -296,6 +292,7 @@ def explore(
     returns: Callable[[OccupancyGrid], NDArray[np.integer]] | None = None,
     time_limit: float = 300.0,
     options: GotoOptions = GOTO,
+    view_range: float | None = VIEW_RANGE,
     say: Callable[[str], object] = lambda text: None,
 ) -> ExploreResult:
     """Explore through a running ``runtime`` (see the module docstring): ``grid_now()`` is the map so
@@ -303,10 +300,13 @@ def explore(
     obstacle watch); ``returns(grid)`` the scans' returns per cell of that map (at every range):
     walls they saw that the map does not mark are gone to as frontiers are (:func:`wall_goals`);
     at most ``time_limit`` s of the link's clock. ``options.speed`` None: the
-    :func:`exploring_speed` of the robot."""
+    :func:`exploring_speed` of the robot. ``view_range``: how far a view goal sees the surface the
+    map lacks (within the scanner's hit range; None: no view goals)."""
     if options.speed is None:
         options = replace(options, speed=exploring_speed(robot))
-    return _Exploration(runtime, robot, grid_now, pose, scan, returns, options, say).run(time_limit)
+    exploration = _Exploration(runtime, robot, grid_now, pose, scan, returns, options, say)
+    exploration.view_range = view_range
+    return exploration.run(time_limit)
 
 
 class _Exploration:
@@ -330,6 +330,8 @@ class _Exploration:
         self.tries: list[list[float]] = []  # [x, y, tries] of goals set out for and not reached
         self.told: list[tuple[float, float]] = []  # unreachable goals already said
         self.walls_seen: list[tuple[float, float]] = []  # the middles of unmarked walls gone to
+        self.viewed = np.zeros((0, 2))  # unseen cells a view was chosen for: not chosen for again
+        self.view_range: float | None = VIEW_RANGE
         self.backed_off = 0
 
     def run(self, time_limit: float) -> ExploreResult:
@@ -360,16 +362,18 @@ class _Exploration:
         if hemmed is not None:
             return hemmed
         goals, walls = self._goals(grid, cmap, optimistic)
-        if not goals:
-            self.result.outcome = "explored"
-            return True
         choice, unreachable = choose_frontier(cmap, optimistic, here, goals)
         self._tell_unreachable(unreachable)
-        if choice is None:
-            self.result.outcome, self.result.unreachable = "unreachable", unreachable
-            return True
-        self._visit(grid, here, choice, walls, len(goals), left)
-        return False
+        if choice is not None:
+            self._visit(grid, here, choice, walls, len(goals), left)
+            return False
+        view = self._view(grid, cmap, here)
+        if view is not None:
+            self._look(grid, here, view, left)
+            return False
+        self.result.outcome = "unreachable" if goals else "explored"
+        self.result.unreachable = unreachable
+        return True
 
     def _hemmed_in(self, grid: OccupancyGrid, optimistic: CostMap, here: Pose2D, left: float) -> bool | None:
         """None when a way leaves where the robot stands; else it backs off (False: go on) up to
@@ -407,6 +411,40 @@ class _Exploration:
             }
             goals += list(walls)
         return goals, walls
+
+    def _view(self, grid: OccupancyGrid, cmap: CostMap, here: Pose2D) -> tuple[View, bool] | None:
+        """The view goal to go to next and whether its way needs the radius alone
+        (:func:`choose_view`); None: none left (or none wanted)."""
+        if self.view_range is None:
+            return None
+        res = grid.resolution
+        returns = None if self.returns is None else self.returns(grid)
+        surface = unseen_surface(grid, returns).without(self.viewed, 0.75 * res)
+        tight = inflate(grid, robot_radius=self.radius, margin=0.0)
+        places = stands(grid, cmap, (here.x, here.y), way=tight)
+        return choose_view(cmap, here, views(grid, surface, places, view_range=self.view_range), tight=tight)
+
+    def _look(self, grid: OccupancyGrid, here: Pose2D, choice: tuple[View, bool], left: float) -> None:
+        """Go to the view's stand (by a way clear by the radius alone if ``choice`` says so); its
+        cells are not chosen for again, whether it got there or not (from the nearest place it could
+        reach they may be as hidden); there, it scans for :data:`DWELL` s."""
+        view, narrow = choice
+        gx, gy = view.stand
+        self.say(f"to a view of {view.size} cells the map lacks, from ({gx:.2f}, {gy:.2f})")
+        margin = 0.0 if narrow else self.options.margin
+        how = replace(self.options, tolerance=VIEW_TOLERANCE, timeout=left, margin=margin)
+        visit = go_to(
+            self.runtime, self.robot, grid, Pose2D(gx, gy, here.theta), how, pose=self.pose, scan=self.scan
+        )
+        self.result.visits.append(visit)
+        self.result.views += 1
+        self.viewed = np.concatenate((self.viewed, view.seen))
+        if not visit.arrived:
+            self.say(f"view at ({gx:.2f}, {gy:.2f}) not reached: {visit.reason or visit.outcome}")
+            return
+        for _ in range(round(DWELL / self.runtime.period)):  # scanning where it stands
+            self.runtime.step()
+            self.runtime.client.sleep(self.runtime.period)
 
     def _tell_unreachable(self, unreachable: list[tuple[float, float, str]]) -> None:
         """Say each unreachable goal once."""
@@ -499,6 +537,44 @@ def choose_frontier(
         if found >= CANDIDATES:
             break
     return (None if best is None else (best[1], best[2])), unreachable
+
+
+def choose_view(
+    cmap: CostMap,
+    here: Pose2D,
+    candidates: list[View],
+    *,
+    tight: CostMap | None = None,
+    walk: float = VIEW_WALK,
+) -> tuple[View, bool] | None:
+    """Among the :data:`CANDIDATES` ``candidates`` worth most by straight line (cells seen over 1 +
+    distance / ``walk``), the one worth most by the way planned on ``cmap``, else on ``tight`` (the
+    same map inflated by the radius alone: a gap narrower than the margin, where a way planned
+    before the map filled in may have led); and whether its way is ``tight``'s. None when none
+    has a way (or there are none)."""
+
+    def worth(view: View, length: float) -> float:
+        return view.size / (1.0 + length / walk)
+
+    ranked = sorted(candidates, key=lambda v: -worth(v, math.hypot(v.stand[0] - here.x, v.stand[1] - here.y)))
+    best: tuple[float, View, bool] | None = None
+    for view in ranked[:CANDIDATES]:
+        goal = Pose2D(view.stand[0], view.stand[1], here.theta)
+        way = _way(cmap, here, goal)
+        narrow = way is None and tight is not None
+        if narrow and tight is not None:
+            way = _way(tight, here, goal)
+        if way is not None and (best is None or worth(view, way) > best[0]):
+            best = (worth(view, way), view, narrow)
+    return None if best is None else (best[1], best[2])
+
+
+def _way(cmap: CostMap, here: Pose2D, goal: Pose2D) -> float | None:
+    """The length of the way planned on ``cmap`` from ``here`` to ``goal``, m (None: no way)."""
+    try:
+        return plan_path(cmap, here, goal).length
+    except PlanningError:
+        return None
 
 
 def _back_off(
