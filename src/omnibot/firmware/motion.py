@@ -757,8 +757,7 @@ class Executor:
     # ------------------------------------------------------------------ closed loop
 
     def _start_feedback(self) -> None:
-        for i in range(self.n):
-            self._counts[i] = self.hal.encoder_count(i)
+        self._read_counts()
         self.speedctl.reset(self._counts)
         self._feedback = (
             bool(self.mode & MODE_CLOSED_LOOP)
