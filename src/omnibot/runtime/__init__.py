@@ -30,8 +30,9 @@ The pieces: :mod:`~omnibot.runtime.cycle` (what a cycle carries), :mod:`~omnibot
 
 A library: it imports the client, the protocol's codes, estimation, control, the robot's description
 and the shared types, nothing of a front end (a person's sources are :mod:`omnibot.teleop`'s, the
-follower's factory and the verdict :mod:`omnibot.navigation`'s), of a link (the client owns it) or of
-a log (a recording is handed in: ``Runtime(recording=...)``).
+follower's factory and the verdict :mod:`omnibot.navigation`'s), of a link (the client owns it; the
+stall watch is handed the simulator's truth: ``StallWatch(..., truth=...)``) or of a log (a recording
+is handed in: ``Runtime(recording=...)``). ``tests/test_imports.py`` holds it to that.
 """
 
 from omnibot.runtime.arbiter import PRIORITY_MAX, Arbiter, EStop, Lock, deadman_lock
