@@ -9,9 +9,9 @@ through the host runtime by one source for 3 s at a constant twist, as that fron
 
 * ``cmd_vel``: ROS 2's cmd_vel (:class:`~omnibot.ros2.cmd_vel.CmdVelSource` as ``omnibot ros2``
   builds it, 50 Hz, its reader a stand-in that hands over a TwistStamped each cycle: no DDS);
-* ``pad``: a gamepad through teleop's mapping and deadman (:class:`~omnibot.runtime.sources.PadSource`,
+* ``pad``: a gamepad through teleop's mapping and deadman (:class:`~omnibot.teleop.PadSource`,
   seed 003's parameters, 20 Hz, the twist ramped at the robot's accelerations);
-* ``page``: the dashboard's stick (:class:`~omnibot.runtime.sources.DeadmanSource` with the page's
+* ``page``: the dashboard's stick (:class:`~omnibot.teleop.DeadmanSource` with the page's
   sample, 20 Hz, ramped likewise).
 
 Directions: translations at 0.3 m/s on courses 0, 45, 90, 135 and 180 degrees, a rotation in place
@@ -56,8 +56,8 @@ from omnibot.ros2 import PERIOD as ROS2_PERIOD
 from omnibot.ros2 import CmdVelSource
 from omnibot.ros2.cmd_vel import TWIST_STAMPED
 from omnibot.ros2.types import to_dds
-from omnibot.runtime import DeadmanSource, LinkPacer, PadSource, Runtime, Source
-from omnibot.teleop import JoyState, Sample, TeleopConfig, TwistLimits
+from omnibot.runtime import LinkPacer, Runtime, Source
+from omnibot.teleop import DeadmanSource, JoyState, PadSource, Sample, TeleopConfig, TwistLimits
 from omnibot.transport import find_simulator
 
 DRIVE = 3.0

@@ -1,6 +1,7 @@
 """The import graph of src/omnibot, read from the modules' syntax trees: no cycles between modules,
 the packages in the storeys docs/architecture.md draws (each imports only from its own storey and
-below, with no cycle between packages), and the pure modules (fits, kinematics, codecs, the
+below, with no cycle between packages; the runtime, a library, only what its row of the narrow table
+lists), and the pure modules (fits, kinematics, codecs, the
 firmware...) never load the client or a transport. Each package has a face (``__all__`` in its
 ``__init__``: the names it re-exports and the submodules other packages use): every name in it
 exists, and another package imports only the submodules it names.
@@ -466,6 +467,52 @@ def test_no_package_cycle() -> None:
     graph = package_graph(GRAPH)
     found = [" -> ".join(loop_through(c, graph)) for c in cycles(graph)]
     assert not found, "package cycles:\n  " + "\n  ".join(found)
+
+
+def read_narrow(text: str) -> dict[str, set[str]]:
+    """docs/architecture.md's packages held narrower than their storey: each with the packages it may
+    import besides the foundation's, from the table between the ``<!-- narrow`` and ``<!-- /narrow
+    -->`` markers (one row per package: its name, then those it may import, without ``omnibot.``)."""
+    start = text.index("<!-- narrow")
+    block = text[start : text.index("<!-- /narrow -->", start)]
+    out: dict[str, set[str]] = {}
+    for line in block.splitlines():
+        match = re.fullmatch(r"\s*([a-z0-9_]+)((?:\s+[a-z0-9_]+)+)\s*", line)
+        if match:
+            out[f"{ROOT}.{match[1]}"] = {f"{ROOT}.{n}" for n in match[2].split()}
+    return out
+
+
+NARROW = read_narrow(ARCHITECTURE.read_text(encoding="utf-8"))
+
+
+def beyond(graph: dict[str, set[str]], narrow: dict[str, set[str]]) -> list[str]:
+    """Every import ``a -> b`` of a package of ``narrow`` from one it may not import (the
+    foundation's packages are open to all)."""
+    foundation = set(STOREYS[0][1])
+    return sorted(
+        f"{name} -> {target}"
+        for name, targets in graph.items()
+        if package_of(name) in narrow
+        for target in targets
+        if package_of(target) != package_of(name)
+        and package_of(target) not in narrow[package_of(name)] | foundation
+    )
+
+
+def test_the_runtime_is_a_library() -> None:
+    """The runtime imports the client, the protocol, estimation, control, the robot's description and
+    the shared types: nothing of a front end (teleop's sources, navigation's following), of a link
+    (transport: the client owns it) or of a log (a recording is handed in)."""
+    assert beyond({"omnibot.runtime.sources": {"omnibot.teleop"}}, NARROW) == [
+        "omnibot.runtime.sources -> omnibot.teleop"
+    ]
+    allowed = NARROW["omnibot.runtime"]
+    assert allowed <= {f"{ROOT}.{n}" for n in ("client", "protocol", "estimation", "control", "robot")}
+    found = beyond(GRAPH, NARROW)
+    assert not found, "imports beyond what docs/architecture.md lets the package import:\n  " + "\n  ".join(
+        found
+    )
 
 
 # --------------------------------------------------------------------------- package faces

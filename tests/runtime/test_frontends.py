@@ -23,8 +23,8 @@ from omnibot.navigation.session import follower_limits
 from omnibot.robot import load_robot
 from omnibot.runtime.runtime import BATTERY_LATCHED_TEXT, LATCHED_TEXT
 from omnibot.runtime.sinks import NoticePrinter
-from omnibot.runtime.sources import FollowerSource, PadSource
-from omnibot.teleop import TeleopConfig, TwistLimits
+from omnibot.runtime.sources import FollowerSource
+from omnibot.teleop import PadSource, TeleopConfig, TwistLimits
 from omnibot.web.link import RobotLink
 from omnibot.web.messages import EStop
 from tests.teleop.fakes import ScriptedSource, seed_pad, truth

@@ -28,7 +28,7 @@ def test_a_robot_pinned_against_a_wall_is_stopped_and_its_source_told(name: str,
     with RobotClient.open(f"sim://{name}?seed=1&world=corridor", robot) as client:
         client.use_binary()
         runtime = Runtime(client, period=0.01)  # the wheel-speed loop: full power against the wall
-        watch = StallWatch(runtime, robot, truth=False)
+        watch = StallWatch(runtime, robot)  # no truth: the robot's own witnesses
         # from (1, 0) along the corridor at 0.6 m/s for 25 s: its end wall is 9 m away
         script = ScriptSource(lambda t: Twist(0.6, 0.0, 0.0) if t < 25.0 else ScriptSource.END)
         runtime.add_source(script)
@@ -63,7 +63,7 @@ def test_normal_follows_raise_no_alarm(name: str, surface: str, closed_loop: boo
     with RobotClient.open(f"sim://{name}?seed=2&world=empty&surface={surface}", robot) as client:
         estimator = make_estimator("fused", robot, Pose2D(*path.start))
         runtime = Runtime(client, period=0.01, estimator=estimator, wheel_loop=closed_loop)
-        watch = StallWatch(runtime, robot, truth=False)
+        watch = StallWatch(runtime, robot)
         follower = follower_source(robot, path, 0.01)
         runtime.add_source(follower)
         client.use_binary()

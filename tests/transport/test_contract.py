@@ -94,6 +94,13 @@ def test_clock_sleep(link: Link) -> None:
     assert link.clock.now() - t0 >= 0.019
 
 
+def test_wall_clock_says_whether_time_runs_on_while_nobody_reads(link: Link) -> None:
+    """The runtime's pacer slices its reads by it (a wake's latency) on the wall clock only."""
+    t0 = link.clock.now()
+    time.sleep(0.01)
+    assert link.wall_clock is (link.clock.now() - t0 >= 0.009)
+
+
 def test_close(link: Link) -> None:
     assert not link.closed
     assert link.url

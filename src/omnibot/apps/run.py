@@ -133,15 +133,9 @@ def compose(
     from omnibot.estimation import make_estimator
     from omnibot.motion import Pose2D
     from omnibot.navigation import FOLLOWER_PRIORITY, STANDSTILL, FollowJudge, follower_source
-    from omnibot.runtime import (
-        EstimatorWhenMissing,
-        NoticePrinter,
-        PadSource,
-        SpeedReport,
-        StallWatch,
-        Standstill,
-    )
-    from omnibot.teleop import TwistLimits
+    from omnibot.runtime import EstimatorWhenMissing, NoticePrinter, SpeedReport, StallWatch, Standstill
+    from omnibot.teleop import PadSource, TwistLimits
+    from omnibot.transport import find_simulator
 
     parts = Parts()
     if path is not None:
@@ -152,7 +146,8 @@ def compose(
         parts.judge = FollowJudge(
             runtime, robot, parts.follower, speed=args.speed, on_verdict=lambda r: _tell(runtime, r)
         )
-        StallWatch.on(runtime, robot)  # wheels that turn while the body does not: stop, say so
+        # wheels that turn while the body does not: stop, say so (the simulator's truth a witness too)
+        StallWatch.on(runtime, robot, truth=find_simulator(runtime.client.link))
         # as `omnibot follow`: the follower waits while the gyro's bias is learned (a person may drive)
         Standstill(runtime, STANDSTILL, FOLLOWER_PRIORITY)
         say(f"the follower stands still {STANDSTILL:g} s first, while the gyro's bias is learned")

@@ -11,7 +11,7 @@
       runtime: arbitrate, client.vel(*twist, timeout=vel_timeout)   # the controller's watchdog
                                                   # stops the robot if teleop goes silent mid-drive
 
-The pad is a :class:`~omnibot.runtime.sources.PadSource` of a
+The pad is a :class:`~omnibot.teleop.PadSource` of a
 :class:`~omnibot.runtime.runtime.Runtime`, which owns the client (in the caller's thread). A
 controller that latched a sonar emergency stop rejects VEL (ERROR 40): teleop says so and releases
 the latch (STOP) only on a fresh press of the deadman, never on its own.
@@ -27,8 +27,8 @@ from omnibot.client import RobotClient
 from omnibot.estimation import SlipModel
 from omnibot.motion import Twist
 from omnibot.robot import RobotDescription
-from omnibot.runtime import Counters, Cycle, NoticePrinter, PadSource, Runtime, RuntimeRecording
-from omnibot.teleop import Action, Deadman, JoyState, Pacer, Sample, TeleopConfig, TwistLimits
+from omnibot.runtime import Counters, Cycle, NoticePrinter, Runtime, RuntimeRecording
+from omnibot.teleop import Action, Deadman, JoyState, Pacer, PadSource, Sample, TeleopConfig, TwistLimits
 
 log = logging.getLogger("omnibot.teleop")
 

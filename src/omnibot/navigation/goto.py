@@ -6,7 +6,7 @@
       -> plan_path on the map inflated by the robot's radius + margin (mapping.planner)
       -> a Path (map frame; the body faces its travel when a sonar looks ahead, else it turns
          towards the goal's heading as it goes) moved into the estimate's frame
-      -> the runtime's follower source (runtime.following: the tracker on its time-optimal profile)
+      -> the runtime's follower source (navigation.following: the tracker on its time-optimal profile)
       -> every cycle an ObstacleWatch: sonar ranges (TEL) and an optional scan (map-frame points)
          that the map does not explain, in the robot's swept corridor ahead -> the leg ends, the
          robot stops, the points are marked in a copy of the grid, and it re-plans (bounded)
@@ -61,6 +61,7 @@ from omnibot.navigation.session import follower_limits
 from omnibot.protocol import codes
 from omnibot.robot import RobotDescription
 from omnibot.runtime import Cycle, LinkPacer, Runtime, RuntimeRecording, StallWatch, start_sonars
+from omnibot.transport import find_simulator
 
 FloatArray = NDArray[np.float64]
 PoseProvider = Callable[[], Pose2D | None]
@@ -403,7 +404,7 @@ def _stall_watch(runtime: Runtime, robot: RobotDescription) -> Iterator[StallWat
     if watch is not None:
         yield watch
         return
-    own = StallWatch(runtime, robot)
+    own = StallWatch(runtime, robot, truth=find_simulator(runtime.client.link))
     try:
         yield own
     finally:

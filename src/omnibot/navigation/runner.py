@@ -495,7 +495,7 @@ class Navigator:
         runtime.pacer = LinkPacer(c, follower.dt)
         runtime.add_source(source)
         runtime.add_sink(trace)
-        watch = StallWatch(runtime, self.robot)
+        watch = StallWatch(runtime, self.robot, truth=self.sim)
         try:
             runtime.run(until=lambda: source.finished or clock.now() - start > timeout)
             run.failure = source.failure

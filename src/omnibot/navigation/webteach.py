@@ -38,6 +38,7 @@ from omnibot.navigation.judge import FollowJudge
 from omnibot.navigation.session import follower_limits, summary, verdict
 from omnibot.robot import RobotDescription
 from omnibot.runtime import Cycle, FollowerSource, Level, Runtime, StallWatch
+from omnibot.transport import find_simulator
 
 APPROACH_GAP = 0.02
 """m: farther than this from the path's start, a repeat first drives straight to it."""
@@ -216,7 +217,7 @@ class PathTeacher:
             self.judge.verdict()  # the last repeat's, if it had not given it yet
         self.judge = FollowJudge(runtime, self.robot, self.source, speed=self.speed, on_verdict=self._verdict)
         if self.watch is None and StallWatch.of(runtime) is None:  # ROS 2's bridge may watch already
-            self.watch = StallWatch(runtime, self.robot)
+            self.watch = StallWatch(runtime, self.robot, truth=find_simulator(runtime.client.link))
         runtime.add_source(self.source)
         return f"repeating the taught {self.path.length:.2f} m{note}"
 

@@ -115,7 +115,8 @@ def attach(
 
     timeline = timeline or Timeline()
     backend = choose(settings.backend)
-    simulated = find_simulator(runtime.client.link) is not None
+    sim = find_simulator(runtime.client.link)
+    simulated = sim is not None
     node = _open_with_scanner(runtime, robot, settings, spec, backend, simulated)
 
     def notify(level: Any, text: str) -> None:
@@ -125,7 +126,7 @@ def attach(
     node.declare(parameters(robot, runtime, spec, cmd_vel, node.backend))
     if announce:
         notify("info", f"ros2: node {fqn(node)} on the {node.backend} backend")
-    StallWatch.on(runtime, robot)  # wheels that turn while the body does not: stop, say so
+    StallWatch.on(runtime, robot, truth=sim)  # wheels that turn while the body does not: stop, say so
     start_sonars(runtime.client, robot, SONAR_PERIOD)  # in TEL: the ranges out, the stall watch's witnesses
     return node
 

@@ -29,8 +29,8 @@ from omnibot.motion import Twist
 from omnibot.ros2.backend import RosNode
 from omnibot.ros2.dds import topic_name
 from omnibot.ros2.types import from_dds, ros_name
-from omnibot.runtime import Cycle, Proposal, RampedTwist, Wake
-from omnibot.teleop import TwistLimits
+from omnibot.runtime import Cycle, Proposal, Wake
+from omnibot.teleop import RampedTwist, TwistLimits
 
 log = logging.getLogger("omnibot.ros2")
 

@@ -23,27 +23,23 @@ repeat), ``omnibot follow`` and ``omnibot run`` are sources, locks and sinks of 
                        (Runtime.react; omnibot.runtime.wakeup), then the wait goes on
 
 The pieces: :mod:`~omnibot.runtime.cycle` (what a cycle carries), :mod:`~omnibot.runtime.arbiter`
-(priorities, timeouts, locks), :mod:`~omnibot.runtime.sources` (pad, page, follower, script),
+(priorities, timeouts, locks), :mod:`~omnibot.runtime.sources` (the source protocol, follower, script),
 :mod:`~omnibot.runtime.sinks` (the sink protocol, teach, traces, notices), :mod:`~omnibot.runtime.wakeup`
 (sources that push a proposal between cycles), :mod:`~omnibot.runtime.runtime`
 (the cycle). docs/architecture.md has the whole picture and how a new front end plugs in.
+
+A library: it imports the client, the protocol's codes, estimation, control, the robot's description
+and the shared types, nothing of a front end (a person's sources are :mod:`omnibot.teleop`'s, the
+follower's factory and the verdict :mod:`omnibot.navigation`'s), of a link (the client owns it; the
+stall watch is handed the simulator's truth: ``StallWatch(..., truth=...)``) or of a log (a recording
+is handed in: ``Runtime(recording=...)``). ``tests/test_imports.py`` holds it to that.
 """
 
 from omnibot.runtime.arbiter import PRIORITY_MAX, Arbiter, EStop, Lock, deadman_lock
 from omnibot.runtime.cycle import NOBODY, Cycle, Decision, Level, Notice
 from omnibot.runtime.runtime import Counters, LinkPacer, Recording, Runtime, RuntimeRecording, Sink, clamp_to
 from omnibot.runtime.sinks import EstimatorWhenMissing, NoticePrinter, SpeedReport, TeachSink, Trace
-from omnibot.runtime.sources import (
-    APPROACH_GAP,
-    DeadmanSource,
-    FollowerSource,
-    PadSource,
-    Proposal,
-    RampedTwist,
-    ScriptSource,
-    Source,
-    must_end,
-)
+from omnibot.runtime.sources import APPROACH_GAP, FollowerSource, Proposal, ScriptSource, Source, must_end
 from omnibot.runtime.stall import StallWatch, start_sonars
 from omnibot.runtime.standstill import Standstill
 from omnibot.runtime.wakeup import Wake, Wakeup
@@ -55,7 +51,6 @@ __all__ = [
     "Arbiter",
     "Counters",
     "Cycle",
-    "DeadmanSource",
     "Decision",
     "EStop",
     "EstimatorWhenMissing",
@@ -65,9 +60,7 @@ __all__ = [
     "Lock",
     "Notice",
     "NoticePrinter",
-    "PadSource",
     "Proposal",
-    "RampedTwist",
     "Recording",
     "Runtime",
     "RuntimeRecording",

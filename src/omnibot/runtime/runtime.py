@@ -32,7 +32,6 @@ from omnibot.runtime.cycle import NOBODY, Cycle, Decision, Level, Notice
 from omnibot.runtime.sources import Proposal, Source
 from omnibot.runtime.wakeup import GAP, Wakeup
 from omnibot.scan import Scan
-from omnibot.transport import WallClock
 
 log = logging.getLogger("omnibot.runtime")
 log.addHandler(logging.NullHandler())  # a library's log: shown where the application configures logging
@@ -124,7 +123,7 @@ class LinkPacer:
         if wakeup is None:
             self.client.sleep(max(0.0, self._next - now))
             return True
-        wall = isinstance(self.client.clock, WallClock)  # lockstep: whole reads, as without a wakeup
+        wall = self.client.link.wall_clock  # lockstep: whole reads, as without a wakeup
         self._resuming = not wakeup.pump_until(
             self.client, self._next, self.now, wakeup.slice if wall else math.inf
         )

@@ -1,8 +1,9 @@
 """The stall watch: the runtime stops the robot when its wheels turn while its body does not.
 
 :class:`StallWatch` feeds every telemetry sample, the twist each cycle sent and, where a simulator
-is behind the link, its truth to a :class:`~omnibot.estimation.stall.StallDetector` (the gyro, the
-tracking wheels, the sonars and the wheels' effort witness the body's motion on a real robot too).
+is behind the link, its truth (``truth``: the front end that knows of a simulator hands it in) to a
+:class:`~omnibot.estimation.stall.StallDetector` (the gyro, the tracking wheels, the sonars and the
+wheels' effort witness the body's motion on a real robot too).
 On a stall, in the cycle's sinks:
 
 * an error :class:`~omnibot.runtime.cycle.Notice` to every front end, concerning the source in
@@ -17,13 +18,15 @@ they measure: :func:`start_sonars` (``run``, the dashboard and ROS 2 start them)
 
 from __future__ import annotations
 
+from typing import Protocol
+
 from omnibot.client import RobotClient, Telemetry
 from omnibot.errors import ControllerError, LinkError
 from omnibot.estimation import Stall, StallDetector
+from omnibot.motion import Pose2D
 from omnibot.robot import RobotDescription
 from omnibot.runtime.cycle import Cycle
 from omnibot.runtime.runtime import Runtime
-from omnibot.transport import find_simulator
 
 SONAR_PERIOD = 0.1
 """s between a sonar's pings (their readings ride in TEL)."""
@@ -35,14 +38,24 @@ def start_sonars(client: RobotClient, robot: RobotDescription, period: float = S
         client.sonar(number, period)
 
 
-class StallWatch:
-    """Watches ``runtime`` for stalls (see the module docstring); ``truth``: use the simulator's
-    truth as one more witness where there is one."""
+class Truth(Protocol):
+    """Where the body truly is: a simulator's ground truth (``omnibot.transport.find_simulator``'s
+    Simulator)."""
 
-    def __init__(self, runtime: Runtime, robot: RobotDescription, *, truth: bool = True) -> None:
+    @property
+    def pose(self) -> Pose2D:
+        """The body's true pose now."""
+        ...
+
+
+class StallWatch:
+    """Watches ``runtime`` for stalls (see the module docstring); ``truth``: the simulator behind the
+    link, one more witness (None: the robot's own witnesses only, as on a real robot)."""
+
+    def __init__(self, runtime: Runtime, robot: RobotDescription, *, truth: Truth | None = None) -> None:
         self.runtime = runtime
         self.detector = StallDetector(robot)
-        self.sim = find_simulator(runtime.client.link) if truth else None
+        self.sim = truth
         self.stalls: list[Stall] = []
         """Every stall found so far."""
         self._found: list[Stall] = []
@@ -55,9 +68,10 @@ class StallWatch:
         return next((sink for sink in runtime.sinks if isinstance(sink, cls)), None)
 
     @classmethod
-    def on(cls, runtime: Runtime, robot: RobotDescription) -> StallWatch:
-        """The watch of ``runtime``: the one a front end already added, else a new one."""
-        return cls.of(runtime) or cls(runtime, robot)
+    def on(cls, runtime: Runtime, robot: RobotDescription, *, truth: Truth | None = None) -> StallWatch:
+        """The watch of ``runtime``: the one a front end already added, else a new one (``truth``:
+        as the class takes it)."""
+        return cls.of(runtime) or cls(runtime, robot, truth=truth)
 
     def close(self) -> None:
         """Stop watching (idempotent)."""

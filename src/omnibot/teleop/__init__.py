@@ -6,16 +6,17 @@
       -> JoyState (ROS joy convention)            mapping.py    pure
       -> joy_to_command(config) -> limit_twist()  mapping.py    pure, seed 003's parameters (config.py)
       -> Deadman.update()                         deadman.py    pure: drive / repeated zero / silent
-      -> runtime: arbitrate, client.vel(..., vel_timeout)   (a PadSource of omnibot.runtime,
-                                                             omnibot.apps.teleop_loop), paced in
-                                                             real time (pacing.py)
+      -> PadSource, DeadmanSource                 sources.py    a person's sources of omnibot.runtime:
+                                                                arbitrated, sent as VEL (vel_timeout),
+                                                                paced in real time (pacing.py)
 
 Modules: ``config`` (TeleopConfig, YAML), ``mapping`` (JoyState, deadzone, limits; ``Twist`` is
-:mod:`omnibot.motion`'s), ``deadman`` (when to stop), ``pacing`` (real time on sim:// and real
-links), ``joystick`` (pygame), ``keyboard`` (terminal). The loop that drives a runtime with them
-(Teleop) and the command (``omnibot teleop``) are :mod:`omnibot.apps.teleop_loop` and
-:mod:`omnibot.apps.teleop`: this package imports nothing of the runtime, which uses its mapping and
-deadman for the people's sources.
+:mod:`omnibot.motion`'s), ``deadman`` (when to stop), ``sources`` (the runtime's sources a person
+drives: the pad, the keyboard, the page's stick; the ramp at the robot's accelerations), ``pacing``
+(real time on sim:// and real links), ``joystick`` (pygame), ``keyboard`` (terminal). The loop that
+drives a runtime with them (Teleop) and the command (``omnibot teleop``) are
+:mod:`omnibot.apps.teleop_loop` and :mod:`omnibot.apps.teleop`. The runtime imports nothing of this
+package: its people's sources are here, on top of it.
 """
 
 from typing import TYPE_CHECKING
@@ -38,6 +39,7 @@ if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
         limit_twist,
     )
     from omnibot.teleop.pacing import Pacer
+    from omnibot.teleop.sources import DeadmanSource, JoySource, PadSource, RampedTwist
 
 _EXPORTS = {
     "config": ("TeleopConfig", "load_teleop_config", "parse_teleop_config"),
@@ -56,15 +58,20 @@ _EXPORTS = {
         "limit_twist",
     ),
     "pacing": ("Pacer",),
+    "sources": ("DeadmanSource", "JoySource", "PadSource", "RampedTwist"),
 }
 
 __all__ = [
     "ZERO",
     "Action",
     "Deadman",
+    "DeadmanSource",
+    "JoySource",
     "JoyState",
     "Pacer",
+    "PadSource",
     "Phase",
+    "RampedTwist",
     "Sample",
     "TeleopCommand",
     "TeleopConfig",
@@ -85,6 +92,7 @@ __all__ = [
     "mapping",
     "pacing",
     "parse_teleop_config",
+    "sources",
 ]
 
 # on first use: ``omnibot teleop``'s argument parser (built for every ``omnibot`` command) imports

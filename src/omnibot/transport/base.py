@@ -97,6 +97,13 @@ class Link(abc.ABC):
         return self._clock
 
     @property
+    def wall_clock(self) -> bool:
+        """Its :attr:`clock` is the host's :class:`WallClock` (a serial port, TCP, a pty): time runs
+        on while nobody reads the link. False for a simulated link's clock (``sim://``: time moves
+        only while the link is read) and for a wrapper's clock of its own (``faults+``'s)."""
+        return isinstance(self.clock, WallClock)
+
+    @property
     def closed(self) -> bool:
         """True once :meth:`close` has been called."""
         return self._closed

@@ -16,7 +16,7 @@ web server through queues.
                                                     frames (every runtime notice)
 
 The client is not thread-safe, so nothing else touches it once :meth:`RobotLink.start` ran. Driving
-from the page has the teleop deadman (a :class:`~omnibot.runtime.sources.DeadmanSource`): the page
+from the page has the teleop deadman (a :class:`~omnibot.teleop.DeadmanSource`): the page
 repeats its input while a key is held or the stick is dragged, and the robot stops (repeated zero
 VEL, then the VEL watchdog) when the input says "let go", when the page goes away, or when no input
 came for ``input_timeout``. The page outranks the repeat: it takes over and hands back. The emergency
@@ -47,11 +47,12 @@ from omnibot.lidar import SimScanSource
 from omnibot.motion import Pose2D, Twist
 from omnibot.protocol import codes
 from omnibot.robot import RobotDescription
-from omnibot.runtime import Cycle, DeadmanSource, EstimatorWhenMissing, Runtime, RuntimeRecording
+from omnibot.runtime import Cycle, EstimatorWhenMissing, Runtime, RuntimeRecording
 from omnibot.runtime import EStop as EStopLock
 from omnibot.scan import Scan
 from omnibot.teleop import (
     Deadman,
+    DeadmanSource,
     JoyState,
     Pacer,
     Phase,

@@ -7,9 +7,9 @@ import math
 import pytest
 
 from omnibot.motion import ZERO, Estimate, Twist
-from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.sources import DeadmanSource, RampedTwist
+from omnibot.runtime import Cycle
 from omnibot.teleop import Sample, TeleopConfig, TwistLimits
+from omnibot.teleop.sources import DeadmanSource, RampedTwist
 
 LIMITS = TwistLimits(1.0, 5.0, accel=2.0, angular_accel=10.0)
 
