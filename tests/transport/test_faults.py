@@ -106,6 +106,17 @@ def test_wall_clock_delay_over_loop() -> None:
         assert link.clock.now() - t0 >= 0.029
 
 
+def test_wall_clock_is_the_wrapped_links() -> None:
+    """The runtime's pacer slices its waits by it: over a wall-clock link a wake from another thread
+    (ROS 2's cmd_vel) must not wait for a whole cycle because the wrapper has a clock of its own."""
+    with (
+        FaultLink(open_link("loop://"), delay=0.001) as wall,
+        FaultLink(LockstepLink(EchoDevice())) as lockstep,
+    ):
+        assert wall.inner.wall_clock and wall.wall_clock
+        assert not lockstep.inner.wall_clock and not lockstep.wall_clock
+
+
 def test_bad_arguments() -> None:
     inner = LockstepLink(EchoDevice())
     with pytest.raises(ValueError, match="drop"):

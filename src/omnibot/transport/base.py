@@ -100,7 +100,7 @@ class Link(abc.ABC):
     def wall_clock(self) -> bool:
         """Its :attr:`clock` is the host's :class:`WallClock` (a serial port, TCP, a pty): time runs
         on while nobody reads the link. False for a simulated link's clock (``sim://``: time moves
-        only while the link is read) and for a wrapper's clock of its own (``faults+``'s)."""
+        only while the link is read); a wrapper (``faults+``) answers for the link it wraps."""
         return isinstance(self.clock, WallClock)
 
     @property

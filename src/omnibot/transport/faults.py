@@ -153,6 +153,12 @@ class FaultLink(Link):
         self.rx = _Channel("rx", seed, self, direction in ("rx", "both"))
 
     @property
+    def wall_clock(self) -> bool:
+        """The wrapped link's answer: this link's clock is the inner one's, which only also sends the
+        delayed writes that fall due while it sleeps (reads send them too)."""
+        return self.inner.wall_clock
+
+    @property
     def stats(self) -> FaultStats:
         """Bytes seen, dropped and corrupted so far in each direction."""
         tx, rx = self.tx, self.rx
