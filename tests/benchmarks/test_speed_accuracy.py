@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 import pytest
-from benchmarks.speed_accuracy import Cell, measure, within_goal
+from benchmarks.speed_accuracy import Cell, fitted_slip, measure, within_goal
 
 
 @pytest.mark.parametrize("source", ["cmd_vel", "pad", "page"])
@@ -50,3 +50,12 @@ def test_a_ramped_start_is_not_carried_past_the_speed_asked() -> None:
     cell = measure("mecanum4", "wood", "0", "cmd_vel")
     assert within_goal(cell), cell
     assert cell.settle <= 0.2
+
+
+def test_a_ramp_on_carpet_with_the_floors_slip_asks_for_its_acceleration_s_creep() -> None:
+    """mecanum4 sideways on carpet by ROS 2's cmd_vel with the floor's fitted slip: the tyres creep
+    under the ramp's force too (the slip's compliance), so the runtime asks for that creep while
+    the body accelerates; the body then follows the ramp instead of lagging its wheels and went
+    5.3 % past the speed asked on the integral that caught it up (settled in 0.46 s; 0.24 s now)."""
+    cell = measure("mecanum4", "carpet", "90", "cmd_vel", slip=fitted_slip("mecanum4", "carpet"))
+    assert within_goal(cell), cell

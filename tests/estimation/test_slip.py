@@ -207,3 +207,8 @@ def test_commanded_asks_each_wheel_for_its_creep_on_top(robot: str) -> None:
     if robot == "omni4":
         assert np.abs(residual).max() < 1e-9
     assert SlipModel(description).commanded(asked) == pytest.approx(asked)  # no slip: as asked
+    accel = np.array([1.5, -0.5, 2.0])  # accelerating: each wheel's creep under its share of the force too
+    want = (J @ q + model.wheel_correction(q, accel)) / params.scale
+    got = J @ np.array(model.commanded(asked, accel))
+    assert got == pytest.approx(J @ np.linalg.pinv(J) @ want, abs=1e-9)  # the least-squares twist's
+    assert not np.allclose(model.commanded(asked, accel), model.commanded(asked))

@@ -171,14 +171,17 @@ class SlipModel:
         turn: FloatArray = self.creep(twist, accel) / self.rim_per_rad
         return turn
 
-    def commanded(self, twist: Twist) -> Twist:
+    def commanded(self, twist: Twist, accel: ArrayLike = (0.0, 0.0, 0.0)) -> Twist:
         """The twist to ask a wheel-speed loop for so that the body goes at ``twist`` on this floor:
         the loop holds the encoders at the asked twist's wheel speeds, which the creep over-reads, so
         each wheel is asked for its creep on top and the tyres' scale taken out, ``(q + J^+
-        correction(q)) / scale``, the least-squares twist of those wheel speeds (the creep of most
-        courses is a rigid motion: its least-squares twist is exact)."""
+        correction(q, a)) / scale``, the least-squares twist of those wheel speeds (the creep of most
+        courses is a rigid motion: its least-squares twist is exact). ``accel``: the body's planned
+        acceleration ``a`` (m/s^2 along its axes, rad/s^2), whose force the tyres creep under too
+        (``compliance``): asked for while the body accelerates, it keeps the body on the plan instead
+        of behind its wheels."""
         q = np.array([twist.vx, twist.vy, twist.w])
-        out = (q + self._wheel_twist @ self.wheel_correction(q)) / self.params.scale
+        out = (q + self._wheel_twist @ self.wheel_correction(q, accel)) / self.params.scale
         return Twist(float(out[0]), float(out[1]), float(out[2]))
 
 

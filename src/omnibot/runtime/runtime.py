@@ -171,8 +171,8 @@ class Runtime:
     robot without encoders on every motor stays open loop, and every front end is told so once.
     :attr:`closed_loop` says what was done. ``slip``: the floor's calibrated wheel slip; on the closed
     loop each VEL then asks the wheels for their creep on top (:meth:`SlipModel.commanded
-    <omnibot.estimation.slip.SlipModel.commanded>`), so the body, not only its wheels, goes at the
-    twist asked. ``recording``: the command's ``--log`` / ``--foxglove`` recording, which records the
+    <omnibot.estimation.slip.SlipModel.commanded>`), that of the source's planned acceleration
+    (``body_accel``) included, so the body, not only its wheels, goes at the twist asked. ``recording``: the command's ``--log`` / ``--foxglove`` recording, which records the
     runtime from its start (:class:`RuntimeRecording`); None records nothing.
     """
 
@@ -539,7 +539,8 @@ class Runtime:
                 self.notify("info", "emergency stop released by a fresh press of the deadman", source)
             sent = clamp_to(client.limits, twist)
             if self.slip is not None and self.closed_loop and not sent.is_zero:
-                sent = clamp_to(client.limits, self.slip.commanded(sent))
+                planned = getattr(origin, "body_accel", None) or (0.0, 0.0, 0.0)
+                sent = clamp_to(client.limits, self.slip.commanded(sent, planned))
             if getattr(origin, "wait_reply", self.wait_replies):
                 t0 = client.clock.now()
                 client.vel(sent.vx, sent.vy, sent.w, watchdog, accel, body)
