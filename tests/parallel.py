@@ -148,7 +148,13 @@ def scheduler(config: pytest.Config, log: Any, first: Sequence[str] = FIRST) -> 
     Only the queue of units is reordered, never a collection: a worker runs the tests at the indices
     it is sent in its own collection, in collection order (an earlier version sorted the collection
     the scheduler kept, so every worker ran other tests than the unit dealt to it: chunks of the
-    collection order, units split across workers and groups side by side)."""
+    collection order, units split across workers and groups side by side).
+
+    A worker runs a test only once it holds the next one, so xdist deals each worker a second unit at
+    the start and another whenever two of its tests are left. Behind a unit of ``first`` that second
+    unit is the first one not in ``first``: it would otherwise be the next costly unit, held back for
+    as long as the one before it runs (the acceptance calibration waited out mecanum4's default run,
+    a single test, on one worker while the others ran cheap modules)."""
     from xdist.scheduler import LoadScopeScheduling
 
     rank = {unit: i for i, unit in enumerate(first)}
@@ -168,7 +174,18 @@ def scheduler(config: pytest.Config, log: Any, first: Sequence[str] = FIRST) -> 
                 self.workqueue.clear()
                 self.workqueue.update(units)
                 self.ranked = True
+            if self.busy_with_a_costly_unit(node):
+                cheap = next((unit for unit in self.workqueue if unit not in rank), None)
+                if cheap is not None:
+                    self.workqueue.move_to_end(cheap, last=False)
             super()._assign_work_unit(node)
+
+        def busy_with_a_costly_unit(self, node: Any) -> bool:
+            """Whether ``node`` has tests of a unit of ``first`` still to finish: the unit it is dealt
+            now only keeps it fed (a worker runs a test once it holds the next one), and waits behind
+            that costly one, so a cheap unit, not the next costly one."""
+            work = self.assigned_work.get(node, {})
+            return any(unit in rank and not all(tests.values()) for unit, tests in work.items())
 
     return UnitScheduling(config, log)
 

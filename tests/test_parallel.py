@@ -49,7 +49,7 @@ CONFTEST = """
 from tests import parallel
 
 def pytest_xdist_make_scheduler(config, log):
-    return parallel.scheduler(config, log, first=("test_c.py", "test_b.py"))
+    return parallel.scheduler(config, log, first={first!r})
 """
 
 MODULE = """
@@ -63,13 +63,11 @@ def test_{name}(k):
 """
 
 
-def test_the_workers_run_the_units_dealt_first_whole(tmp_path: Path) -> None:
-    """Two workers, modules of 2, 3 and 4 tests (their units), c and b dealt first: each worker's first
-    tests are c's or b's, and every module runs on one worker. (The scheduler once sorted its copy of
-    the collection: the workers ran the tests at those indices of their own, unsorted, collection: a's
-    and b's where c's were dealt, b split over both workers.)"""
-    (tmp_path / "conftest.py").write_text(CONFTEST)
-    for name, n in (("a", 2), ("b", 3), ("c", 4)):
+def run_units(tmp_path: Path, tests: dict[str, int], first: tuple[str, ...]) -> list[tuple[str, str]]:
+    """pytest on two workers over modules ``test_NAME.py`` of ``tests[NAME]`` tests each, the modules
+    ``first`` dealt first: (worker, module name) of each test in the order each worker ran them."""
+    (tmp_path / "conftest.py").write_text(CONFTEST.format(first=first))
+    for name, n in tests.items():
         (tmp_path / f"test_{name}.py").write_text(MODULE.format(name=name, n=n))
     env = {k: v for k, v in os.environ.items() if not k.startswith("PYTEST_")}  # not this worker's
     env["PYTHONPATH"] = str(ROOT)
@@ -79,8 +77,31 @@ def test_the_workers_run_the_units_dealt_first_whole(tmp_path: Path) -> None:
     )
     assert done.returncode == 0, done.stdout + done.stderr
     ran = [line.split() for line in (tmp_path / "ran.txt").read_text().splitlines()]
-    assert sorted(name for _, name in ran) == ["a"] * 2 + ["b"] * 3 + ["c"] * 4
+    assert sorted(name for _, name in ran) == sorted(name for name, n in tests.items() for _ in range(n))
+    return [(worker, name) for worker, name in ran]
+
+
+def test_the_workers_run_the_units_dealt_first_whole(tmp_path: Path) -> None:
+    """Two workers, modules of 2, 3 and 4 tests (their units), c and b dealt first: each worker's first
+    tests are c's or b's, and every module runs on one worker. (The scheduler once sorted its copy of
+    the collection: the workers ran the tests at those indices of their own, unsorted, collection: a's
+    and b's where c's were dealt, b split over both workers.)"""
+    ran = run_units(tmp_path, {"a": 2, "b": 3, "c": 4}, first=("test_c.py", "test_b.py"))
     workers = {name: {w for w, m in ran if m == name} for name in "abc"}
     assert all(len(w) == 1 for w in workers.values()), ran
     first = {w: next(m for v, m in ran if v == w) for w, _ in ran}
     assert sorted(first.values()) == ["b", "c"], ran
+
+
+def test_no_costly_unit_waits_behind_another_on_one_worker(tmp_path: Path) -> None:
+    """Costly single tests c, b and e, cheap modules a and d of three tests: each worker starts on c or
+    b and is dealt a cheap module behind it, and e goes to the first worker done with its costly test.
+    (xdist dealt each worker's second unit from the front of the queue: e behind c on one worker, to
+    start only when c ended, as the acceptance calibration waited out mecanum4's default run.)"""
+    ran = run_units(
+        tmp_path, {"a": 3, "b": 1, "c": 1, "d": 3, "e": 1}, first=("test_c.py", "test_b.py", "test_e.py")
+    )
+    for worker in {w for w, _ in ran}:
+        units = [m for w, m in ran if w == worker]
+        order = [m for k, m in enumerate(units) if k == 0 or units[k - 1] != m]
+        assert order[0] in "bc" and order[1] in "ad", ran

@@ -189,16 +189,22 @@ def test_room_world_random_pairs_are_planned_clear_of_the_inflated_walls() -> No
         assert path.clearance >= cmap.inflated
 
 
+@pytest.fixture(scope="module")
+def house() -> OccupancyGrid:
+    """The house world's own map, made once for the doors' nine cases (the planner only reads it)."""
+    return rasterise(load_world("house"))
+
+
 @pytest.mark.parametrize("preset", ["omni4", "omni3", "mecanum4"])
 @pytest.mark.parametrize(
     ("door", "room"), [((1.5, 2.4), (2.0, 5.5)), ((5.0, 5.9), (5.3, 5.5)), ((7.5, 8.4), (8.0, 5.5))]
 )
 def test_every_house_door_lets_every_preset_through_on_the_worlds_own_map(
-    preset: str, door: tuple[float, float], room: tuple[float, float]
+    house: OccupancyGrid, preset: str, door: tuple[float, float], room: tuple[float, float]
 ) -> None:
     # the house's doors are 0.9 m wide (its description): every preset's disc passes each one with
     # the planner's margin (the bedroom's was 0.70 m while the sideboard stood 20 cm into it)
-    grid = rasterise(load_world("house"))
+    grid = house
     radius = load_robot(preset).footprint.bounding_radius
     path = plan_path(grid, Pose2D(sum(door) / 2, 3.6, 0.0), Pose2D(*room, 0.0), robot_radius=radius)
     assert path.clearance >= radius + MARGIN
