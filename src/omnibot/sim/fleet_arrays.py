@@ -63,7 +63,7 @@ class FleetArrays:
             raise ValueError("these simulators cannot be stepped together (see fleet_arrays.batchable)")
         self.sims = list(sims)
         first = sims[0]
-        self._world = first._world_packed
+        self._wf, self._wi = first._world_packed
         self._dt = first.dt
         n = len(self.sims)
         self.layout = np.zeros((n, kernels.L_COLUMNS), dtype=np.int64)
@@ -125,15 +125,21 @@ class FleetArrays:
 
     def step(self, now_us: int) -> None:
         """One step of every robot, the step beginning at ``now_us`` (every robot's clock reads it)."""
-        self._gather_extra(now_us)
+        sims = self.sims
+        if self._with_extra or any([s._pushes or any(s._applied) for s in sims]):
+            self._gather_extra(now_us)
         every = jit.active.fleet_step(
-            self.fbuf, self.ibuf, self.layout, *self._world, self.normals, self.extra, self.status, now_us,
+            self.fbuf, self.ibuf, self.layout, self._wf, self._wi, self.normals, self.extra, self.status, now_us,
             self._dt,
         )  # fmt: skip
-        for sim, status in zip(self.sims, self.status.tolist(), strict=True):
-            sim._finish_step(status, now_us)
-        if every & kernels.STEP_REFILL:
-            self._gather_normals()
+        if every:
+            for sim, status in zip(sims, self.status.tolist(), strict=True):
+                sim._finish_step(status, now_us)
+            if every & kernels.STEP_REFILL:
+                self._gather_normals()
+        else:
+            for sim in sims:
+                sim._finish_step(0, now_us)
 
     def release(self) -> None:
         """Give every robot its step state back in arrays of its own (they leave the fleet's)."""
