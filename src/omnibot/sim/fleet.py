@@ -162,7 +162,10 @@ class Fleet:
 
         ConfigError for a name already taken or a pose whose footprint overlaps a wall, an obstacle
         or another robot. ``device_options`` go to :class:`SimDevice` (``true_robot``,
-        ``firmware_overrides``, ``truth_recorder``).
+        ``firmware_overrides``, ``truth_recorder``). Whenever a robot joins or leaves, every robot's
+        step state moves into new fleet-wide arrays (:mod:`omnibot.sim.fleet_arrays`; a robot leaving
+        gets arrays of its own): read it through the simulator (``sim.pose``, ``sim.physics.pose``),
+        not through arrays taken from it before.
         """
         if not name:
             raise ConfigError("a robot of a fleet needs a name", key="name")

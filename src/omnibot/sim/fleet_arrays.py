@@ -106,15 +106,16 @@ class FleetArrays:
             self.layout[j // 2, col], self.layout[j // 2, col + 1] = start, start + array.size
 
     def _gather_extra(self, now_us: int) -> None:
-        """The extra-force rows acting on each robot this step (:meth:`Simulator._forces_due`) into
-        :attr:`extra`, each robot's first row and count into its layout row."""
+        """The extra-force rows acting on each robot this step (``Simulator._extra_forces``: its
+        applied forces and hand pushes) into :attr:`extra`, each robot's first row and count into its
+        layout row."""
         layout = self.layout
         for k in self._with_extra:
             layout[k, kernels.L_N_EXTRA] = 0
         self._with_extra = []
         rows = 0
         for k, sim in enumerate(self.sims):
-            count = sim._forces_due(now_us)
+            count = sim._extra_forces(now_us)
             if count:
                 if rows + count > len(self.extra):
                     self.extra = np.concatenate((self.extra, np.zeros((rows + count, 3))))

@@ -793,7 +793,7 @@ class Simulator:
 
     def _step_once(self) -> None:
         now_us = self.clock.ticks_us()
-        n_extra = self._forces_due(now_us)
+        n_extra = self._extra_forces(now_us) if self._pushes or any(self._applied) else 0
         physics = self._packed
         if physics is not None:
             status = jit.active.robot_step(
@@ -824,11 +824,6 @@ class Simulator:
             self._scan_tick(now_us + self._dt_us)
         if self._listeners and now_us + self._dt_us >= self._next_notify_us:
             self._notify()
-
-    def _forces_due(self, now_us: int) -> int:
-        """How many extra-force rows (:meth:`apply_force`, :meth:`push`) act on the step beginning
-        at ``now_us``, put into ``_extra``."""
-        return self._extra_forces(now_us) if self._pushes or any(self._applied) else 0
 
     def _step_other(self, now_us: int, n_extra: int) -> int:
         """A step with a physics of another kind: the compiled step's parts before and after its step."""
