@@ -7,7 +7,8 @@
                       prune along x made again only when a robot has moved 25 mm since the last:
                       omnibot.sim.broadphase; then separating axes, the same kernel as the walls)
                       -> equal and opposite penalty forces
-                   -> every robot's physics steps (its walls, its pushes, those forces) -> clock += dt
+                   -> every robot's physics steps (its walls, its pushes, those forces), all in one
+                      compiled call on the fleet's arrays (omnibot.sim.fleet_arrays) -> clock += dt
                    -> while a scanner is on, every 5 ms: every robot's pose into one pose log; the
                       scanners due cast their rays (each ray sees the others where they were then)
 
@@ -44,6 +45,7 @@ from omnibot.sim import jit
 from omnibot.sim.broadphase import Footprints, NearPairs
 from omnibot.sim.clock import SimClock
 from omnibot.sim.device import SimDevice
+from omnibot.sim.fleet_arrays import FleetArrays, batchable
 from omnibot.sim.scanner import PoseLog
 from omnibot.sim.simulator import (
     CONTACT_DAMPING,
@@ -72,12 +74,15 @@ class _Body:
     reach: float
     """Largest distance from the robot's origin to its footprint, m (the bounding circle)."""
     offsets: NDArray[np.int64]
-    pose_row: FloatArray
-    """The live true pose (x, y, theta), a read-only view."""
 
     @property
     def sim(self) -> Simulator:
         return self.device.sim
+
+    @property
+    def pose_row(self) -> FloatArray:
+        """The live true pose (x, y, theta), a read-only view (of the fleet's arrays once it joined)."""
+        return self.sim.pose_array
 
     def hull(self) -> FloatArray:
         """The footprint in the world frame now."""
@@ -100,6 +105,9 @@ class Fleet:
         self._steps: list[Callable[[], None]] = []
         self._pose_rows: list[FloatArray] = []
         """Every robot's firmware poll, physics step and live pose row, in step order."""
+        self._arrays: FleetArrays | None = None
+        """Every robot's step state in fleet-wide arrays, stepped in one call (None: robot by robot,
+        when their physics or worlds differ: :func:`~omnibot.sim.fleet_arrays.batchable`)."""
         self._near = NearPairs([])
         self._footprints = Footprints([])
         self._edges = np.zeros((0, 4))
@@ -154,7 +162,10 @@ class Fleet:
 
         ConfigError for a name already taken or a pose whose footprint overlaps a wall, an obstacle
         or another robot. ``device_options`` go to :class:`SimDevice` (``true_robot``,
-        ``firmware_overrides``, ``truth_recorder``).
+        ``firmware_overrides``, ``truth_recorder``). Whenever a robot joins or leaves, every robot's
+        step state moves into new fleet-wide arrays (:mod:`omnibot.sim.fleet_arrays`; a robot leaving
+        gets arrays of its own): read it through the simulator (``sim.pose``, ``sim.physics.pose``),
+        not through arrays taken from it before.
         """
         if not name:
             raise ConfigError("a robot of a fleet needs a name", key="name")
@@ -181,7 +192,6 @@ class Fleet:
             outline,
             float(np.max(np.hypot(outline[:, 0], outline[:, 1]))),
             np.array([0, len(outline)]),
-            device.sim.pose_array,
         )
         for other in self._order:
             if self._pair_contact(body, other) is not None:
@@ -208,7 +218,12 @@ class Fleet:
             self._members_changed()
 
     def _members_changed(self) -> None:
-        """A robot joined or left: the broad phase, the footprints and the scanners' log start again."""
+        """A robot joined or left: the fleet's arrays, the broad phase, the footprints and the
+        scanners' log start again."""
+        if self._arrays is not None:
+            self._arrays.release()
+        sims = [b.sim for b in self._order]
+        self._arrays = FleetArrays(sims) if batchable(sims) else None
         self._controls = [b.device.control for b in self._order]
         self._steps = [b.sim.step for b in self._order]
         self._pose_rows = [b.pose_row for b in self._order]
@@ -228,8 +243,11 @@ class Fleet:
         bodies = self._order
         for i, j in self._near_pairs():
             self._push_apart(bodies[i], bodies[j])
-        for step in self._steps:
-            step()
+        if self._arrays is not None:
+            self._arrays.step(self._us)
+        else:
+            for step in self._steps:
+                step()
         self._us += self._dt_us
         if self._scanning and self._us >= self._scan_next_us:
             self._scan_step()

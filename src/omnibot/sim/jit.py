@@ -100,6 +100,7 @@ class ActiveKernels:
     if TYPE_CHECKING:  # each kernel's signature, for the type checker (instance attributes at run time)
         outline_contacts = staticmethod(kernels.outline_contacts)
         robot_step = staticmethod(kernels.robot_step)
+        fleet_step = staticmethod(kernels.fleet_step)
         cone_distance = staticmethod(kernels.cone_distance)
         scan_index = staticmethod(kernels.scan_index)
         scan_rays = staticmethod(kernels.scan_rays)

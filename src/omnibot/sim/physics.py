@@ -137,11 +137,7 @@ class Physics:
 
         # state, inputs and parameters are views of one buffer, so a compiled step of the whole
         # simulator takes them as one argument (kernels.physics_views)
-        self._buffer = np.zeros(kernels.physics_offsets.py_func(n, m, len(self.surfaces))[-1])
-        (
-            self._pose, self._q, self._wheel_angle, self._current, self._traction, self._battery,
-            self._v_open, self._pwm, self._ext, self._wp, self._rp, self._surf,
-        ) = self._views()  # fmt: skip
+        self._bind(np.zeros(kernels.physics_offsets.py_func(n, m, len(self.surfaces))[-1]))
         # self._battery: bus voltage, battery current of the last step
         self._init_parameters()
         self._v_open[:] = [r.battery.voltage for r in self.robots]
@@ -224,6 +220,14 @@ class Physics:
         S[:, kernels.S_ROLL] = [s.rolling_multiplier for s in self.surfaces]
         self._surf[:] = S
 
+    def _bind(self, buffer: FloatArray) -> None:
+        """Make ``buffer`` the packed buffer and the state arrays its views."""
+        self._buffer = buffer
+        (
+            self._pose, self._q, self._wheel_angle, self._current, self._traction, self._battery,
+            self._v_open, self._pwm, self._ext, self._wp, self._rp, self._surf,
+        ) = self._views()  # fmt: skip
+
     def _views(self) -> tuple[FloatArray, ...]:
         """Numpy views of the packed buffer, in :func:`~omnibot.sim.kernels.physics_offsets` order."""
         o = kernels.physics_offsets.py_func(self.n, self.m, len(self.surfaces))
@@ -244,9 +248,22 @@ class Physics:
         """The packed state, inputs and parameters (:func:`~omnibot.sim.kernels.physics_views`)."""
         return self._buffer
 
+    def rehome(self, buffer: FloatArray) -> None:
+        """Move the packed state, inputs and parameters into ``buffer`` (1-D float64 of
+        :attr:`buffer`'s size, e.g. a view of a fleet's buffer) and keep them there: the views this
+        object hands out from now on are of ``buffer`` (those handed out before are not)."""
+        if buffer.shape != self._buffer.shape or buffer.dtype != np.float64:
+            raise SimulationError(
+                f"a physics buffer is {self._buffer.shape} float64, got {buffer.shape} {buffer.dtype}"
+            )
+        buffer[...] = self._buffer
+        self._bind(buffer)
+
     def count_step(self) -> None:
         """Account for a step the compiled simulator step made on :attr:`buffer` (time, battery charge)."""
-        self._stepped(0, 1)
+        self._steps += 1  # _stepped(0, 1), a call less: once a robot a step
+        if self._draining:
+            self._drain()
 
     def _drain(self) -> None:
         q = self._charge - np.where(self._drains, self._battery[:, 1], 0.0) * self.dt / self._capacity_as

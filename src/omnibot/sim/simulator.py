@@ -758,6 +758,39 @@ class Simulator:
         g_state, g_normals = (gyro.state, gyro.normals.values) if gyro is not None else (self._no_gyro,) * 2
         return g_state, g_normals, tracking.state, tracking.normals.values
 
+    def _step_state(self) -> tuple[tuple[FloatArray, ...], tuple[NDArray[np.int64], ...]]:
+        """The arrays the compiled step writes: (physics buffer, float state, gyro state, tracking
+        state) and (surface ids, int state); a fleet moves them into its own buffers (:meth:`_rehome`)."""
+        assert self._packed is not None
+        gyro_state = self._sensors[0]
+        return (self._packed.buffer, self._sf, gyro_state, self.tracking.state), (self._step_ids, self._si)
+
+    def _rehome(self, floats: Sequence[FloatArray], ints: Sequence[NDArray[np.int64]]) -> None:
+        """Move the arrays of :meth:`_step_state` into ``floats`` and ``ints`` (arrays of the same
+        shapes, such as views of a fleet's buffers, or fresh ones when the robot leaves it) and keep
+        them there: the numbers do not change, only where they live."""
+        assert self._packed is not None
+        pbuf, sf, gyro_state, tracking_state = floats
+        ids, si = ints
+        (own_f, own_i) = self._step_state()
+        for new, old in zip((*floats, *ints), (*own_f, *own_i), strict=True):
+            new[...] = old
+        self._packed.rehome(pbuf)
+        self._pwm = self._packed.pwm
+        self._pose_row = self._physics.pose[0]
+        self._twist_row = self._physics.twist[0]
+        self._sf, self._si, self._step_ids = sf, si, ids
+        if self._patchy:
+            self._ids = ids
+        _, of1, of2, of3, _, _, oi1, oi2, _, _ = kernels.sim_offsets.py_func(si)
+        self._contact_out = sf[of1:of2].reshape(-1, 6)
+        self._contact_speed = sf[of2:of3]
+        self._new_contact = si[oi1:oi2]
+        if self.gyro is not None:
+            self.gyro.state = gyro_state
+        self.tracking.state = tracking_state
+        self._sensors = self._sensor_arrays()
+
     def _step_once(self) -> None:
         now_us = self.clock.ticks_us()
         n_extra = self._extra_forces(now_us) if self._pushes or any(self._applied) else 0
@@ -767,13 +800,18 @@ class Simulator:
                 physics.buffer, self._step_ids, physics.m, self._n_surfaces, *self._world_packed, self._sf, self._si,
                 self._extra, n_extra, *self._sensors, now_us, self.dt,
             )  # fmt: skip
-            if status & kernels.STEP_BAD_SURFACE:
-                raise SimulationError(
-                    f"surface_ids must index the {self._n_surfaces} surfaces of this Physics"
-                )
-            physics.count_step()
         else:
             status = self._step_other(now_us, n_extra)
+        self._finish_step(status, now_us)
+
+    def _finish_step(self, status: int, now_us: int) -> None:
+        """What follows the compiled step of the step that began at ``now_us`` (its ``status`` bits;
+        a fleet's :func:`~omnibot.sim.kernels.fleet_step` too): the collision events, the clock, the
+        sensors' normal draws, the scanner and the listeners."""
+        if status & kernels.STEP_BAD_SURFACE:
+            raise SimulationError(f"surface_ids must index the {self._n_surfaces} surfaces of this Physics")
+        if self._packed is not None:
+            self._packed.count_step()
         if status & kernels.STEP_COLLISION:
             self._collisions_found()
         self.clock.advance_us(self._dt_us)
