@@ -675,10 +675,6 @@ int16_t Executor::limit(float p) {
     return lroundf(p);
 }
 
-// PI on each wheel's encoder-measured speed every control period, integral frozen while saturated;
-// after a step in a wheel's target it grows slower the larger the error, until the wheel is within
-// the band (FEATURE_SPEEDCTL: integral_rate); the integral learns the error against the target the
-// period was driven for, the P term the new one (speedctl.py).
 #if FEATURE_SPEEDCTL
 // Wheel i's integral rate this period, its target having moved by `jump` rad/s and its error `err`
 // (speedctl.py update): a jump beyond the band starts a rise that lasts until the wheel reaches the
@@ -708,6 +704,10 @@ float Executor::integral_rate(uint8_t i, float err, float jump) {
 }
 #endif
 
+// PI on each wheel's encoder-measured speed every control period, integral frozen while saturated;
+// after a step in a wheel's target it grows slower the larger the error, until the wheel is within
+// the band (FEATURE_SPEEDCTL: integral_rate); the integral learns the error against the target the
+// period was driven for, the P term the new one (speedctl.py).
 void Executor::feedback_step(int32_t dt_us) {
 #if FEATURE_LANDING
     if (landing.active) {

@@ -69,10 +69,10 @@ def test_the_megas_speed_loop_drives_a_loaded_wheel_as_the_micropython_firmware(
     their targets (a loaded wheel), so the integral does the rest. 0.4 m/s from rest is a step (a jump
     beyond the band): the integral grows slower the larger the error until the wheel reaches its
     target, where the UNO's loop ends the rise within the band and then learns the rise's lag at the
-    full rate (7.8 counts from the MicroPython firmware's duties on average, main's Mega image).
-    0.17 m/s from rest is no step: once the target has held STEADY_PERIODS periods the integral
-    grows at ki_steady / ki = 2 of its rate, where the UNO's stays at 1 (8.4 counts). The Mega follows
-    the MicroPython firmware within 3 counts on average (1.6 and 1.0 measured): the encoder's count
+    full rate (7.6-7.8 counts from the MicroPython firmware's duties on average, main's Mega image).
+    0.17 m/s from rest is no step (6.7 rad/s, the band 7.0): once the target has held STEADY_PERIODS periods the integral
+    grows at ki_steady / ki = 2 of its rate, where the UNO's stays at 1 (8.4-8.7 counts). The Mega follows
+    the MicroPython firmware within 3 counts on average (0.9-1.7 and 0.6-1.1 measured): the encoder's count
     quantisation, +-1 count a 10 ms period (1.4 rad/s, 2.6 PWM counts of the P term), and the AVR's
     control periods ending a loop pass later than FakeHAL's 0.1 ms polls."""
     reference = micropython_duties("omni4", cps, command)
