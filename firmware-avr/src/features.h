@@ -21,6 +21,9 @@
 #ifndef FEATURE_LANDING  // MODE 2's finite motions end on the encoders, CAL table 9 (landing.py)
 #define FEATURE_LANDING 0
 #endif
+#ifndef FEATURE_SPEEDCTL  // the speed loop as speedctl.py: a step's rise until the target, a held target's faster integral
+#define FEATURE_SPEEDCTL 0
+#endif
 #ifndef FEATURE_TURN_FF  // on the closed loop a wheel that mostly turns the body fed ROTATE's K_r (motion.py _feedforward)
 #define FEATURE_TURN_FF 0
 #endif

@@ -287,6 +287,9 @@ void Executor::slew(int32_t dt_us) {
     acc[1] = slewing ? dy / dt + ref[2] * ref[0] : 0;
     acc[2] = slewing ? dw / dt : 0;
     if (slewing && SPEED_BAND_INV > 0) rising = (1 << MOTORS) - 1;  // every wheel as after a step
+#if FEATURE_SPEEDCTL
+    if (slewing) rise_up = rise_down = 0;  // no step to take the sign of: the rise ends within the band
+#endif
     drive(ref[0], ref[1], ref[2], ref[0] == 0 && ref[1] == 0);
 }
 
@@ -625,6 +628,10 @@ void Executor::start_feedback() {
         prev_target[i] = 0;  // the wheels taken as at rest: a target that starts them is a step
     }
     rising = 0;
+#if FEATURE_SPEEDCTL
+    rise_up = rise_down = 0;
+    for (uint8_t i = 0; i < MOTORS; i++) held[i] = 0;
+#endif
     acc_us = 0;
     feedback = HAS_ENCODERS && (mode & P_MODE_CLOSED_LOOP) && kind != NONE && kind != K_POWER;
 }
@@ -668,10 +675,39 @@ int16_t Executor::limit(float p) {
     return lroundf(p);
 }
 
+#if FEATURE_SPEEDCTL
+// Wheel i's integral rate this period, its target having moved by `jump` rad/s and its error `err`
+// (speedctl.py update): a jump beyond the band starts a rise that lasts until the wheel reaches the
+// target (its error changes sign; after a slew, with no step to take the sign of, until it is within
+// the band), its rate 1 / (1 + (err / band)^2); a target held STEADY_PERIODS periods, not 0, past
+// its rise, integrates at SPEED_STEADY (ki_steady / ki); any other at the full rate.
+float Executor::integral_rate(uint8_t i, float err, float jump) {
+    uint8_t bit = 1 << i;
+    float x = jump * SPEED_BAND_INV, e = err * SPEED_BAND_INV;
+    if (x > 1 || x < -1) {
+        rising |= bit;
+        rise_up = err > 0 ? rise_up | bit : rise_up & ~bit;
+        rise_down = err > 0 ? rise_down & ~bit : rise_down | bit;
+    } else if ((rise_up | rise_down) & bit) {
+        if (rise_up & bit ? err <= 0 : err >= 0) {  // reached
+            rising &= ~bit;
+            rise_up &= ~bit;
+            rise_down &= ~bit;
+        }
+    } else if (e <= 1 && e >= -1) {
+        rising &= ~bit;
+    }
+    if (jump != 0 || target[i] == 0 || (rising & bit)) held[i] = 0;
+    else if (held[i] < STEADY_PERIODS) held[i]++;
+    if (rising & bit) return 1 / (1 + e * e);
+    return held[i] >= STEADY_PERIODS ? SPEED_STEADY : 1.0f;
+}
+#endif
+
 // PI on each wheel's encoder-measured speed every control period, integral frozen while saturated;
 // after a step in a wheel's target it grows slower the larger the error, until the wheel is within
-// the band; the integral learns the error against the target the period was driven for, the P term
-// the new one (speedctl.py).
+// the band (FEATURE_SPEEDCTL: integral_rate); the integral learns the error against the target the
+// period was driven for, the P term the new one (speedctl.py).
 void Executor::feedback_step(int32_t dt_us) {
 #if FEATURE_LANDING
     if (landing.active) {
@@ -694,6 +730,11 @@ void Executor::feedback_step(int32_t dt_us) {
         correction[i] = SPEED_KP * err + SPEED_KI * integ[i];
         float p = ff[i] + correction[i];
         float late = prev_target[i] - speed;  // against the target the period was driven for
+#if FEATURE_SPEEDCTL
+        float rate = integral_rate(i, err, target[i] - prev_target[i]);
+        prev_target[i] = target[i];
+        if (-PWM_MAX < p && p < PWM_MAX) integ[i] += late * dt * rate;
+#else
         float x = (target[i] - prev_target[i]) * SPEED_BAND_INV;
         prev_target[i] = target[i];
         if (x > 1 || x < -1) {
@@ -705,6 +746,7 @@ void Executor::feedback_step(int32_t dt_us) {
             x = rising & (1 << i) ? err * SPEED_BAND_INV : 0;
             integ[i] += late * dt / (1 + x * x);
         }
+#endif
         powers[i] = limit(p);
     }
 #if FEATURE_LANDING

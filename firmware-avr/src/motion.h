@@ -55,6 +55,10 @@ struct Executor {
     float integ[MOTORS], correction[MOTORS];
     float prev_target[MOTORS];  // the targets of the last period
     uint8_t rising;             // bit i: wheel i's target stepped and it is not yet within the band
+#if FEATURE_SPEEDCTL
+    uint8_t rise_up, rise_down;    // bit i: wheel i rises until it reaches a target above (below) it
+    uint8_t held[MOTORS];          // periods wheel i's target has not changed (up to STEADY_PERIODS)
+#endif
     int32_t last_counts[MOTORS];
     int32_t acc_us;
 #if FEATURE_VEL_ACCEL
@@ -119,6 +123,9 @@ struct Executor {
     void update_targets();
     void feedback_step(int32_t dt_us);
     int16_t limit(float p);
+#if FEATURE_SPEEDCTL
+    float integral_rate(uint8_t i, float err, float jump);
+#endif
 #if FEATURE_VEL_ACCEL
     void accel(float vx, float vy, float w, float k);
 #endif

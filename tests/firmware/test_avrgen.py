@@ -7,7 +7,7 @@ import re
 import pytest
 
 from omnibot.errors import ConfigError
-from omnibot.firmware import avrgen
+from omnibot.firmware import avrgen, speedctl
 from omnibot.firmware.config import build_config
 from omnibot.protocol import codes
 from omnibot.robot import load_robot
@@ -94,8 +94,8 @@ def _floats(text: str, name: str) -> list[float]:
 @pytest.mark.parametrize("robot", avrgen.ROBOTS)
 def test_the_mega_header_switches_on_what_the_unos_flash_cannot_hold(robot: str) -> None:
     """Versions 3 and 4's VEL acceleration, the MOVE progress check, the calibrated reach, braking to
-    rest, the closed-loop landing: 1 on the Mega with the config's tables and the two codes' texts,
-    absent on the UNO (features.h: 0)."""
+    rest, the closed-loop landing, speedctl.py's loop: 1 on the Mega with the config's tables and
+    gains and the two codes' texts, absent on the UNO (features.h: 0)."""
     uno, mega = avrgen.header_source(robot), avrgen.header_source(robot, "mega")
     assert "FEATURE_" not in uno and "TEXT_17" not in uno and "TEXT_18" not in uno
     for name in (
@@ -104,6 +104,7 @@ def test_the_mega_header_switches_on_what_the_unos_flash_cannot_hold(robot: str)
         "FEATURE_REACH",
         "FEATURE_BRAKE",
         "FEATURE_LANDING",
+        "FEATURE_SPEEDCTL",
     ):
         assert _define(mega, name) == "1"
     assert _define(mega, "P_VERSION_MAX") == str(codes.VERSIONS[-1])
@@ -120,6 +121,9 @@ def test_the_mega_header_switches_on_what_the_unos_flash_cannot_hold(robot: str)
     assert _floats(mega, "TURN") == pytest.approx(cfg["turn"])
     assert _floats(mega, "CREEP_MIX") == pytest.approx([v for row in cfg["creep_mix"] for v in row])
     assert float(_define(mega, "LAND_ACCEL").rstrip("f")) == cfg["land_accel"][0]
+    assert _define(mega, "STEADY_PERIODS") == str(speedctl.STEADY_PERIODS)
+    steady = float(_define(mega, "SPEED_STEADY").rstrip("f"))
+    assert steady == pytest.approx(cfg["speed_ki_steady"] / cfg["speed_ki"]) and steady > 1.0
 
 
 def test_mega_pins_are_checked_against_the_megas_own_map(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -343,6 +343,11 @@ static const float ROLLER_PITCH[MOTORS] PROGMEM = {48.888888889f, 48.888888889f,
 /* body-frame twist's rate through the wheel's own inertia (wheel_ff times the wheel's row of J) */
 static const float ACCEL_BODY_FF[MOTORS][3] PROGMEM = {{14.388021f, -14.388021f, -0.580574f}, {14.388021f, 14.388021f, 0.580574f}, {14.388021f, -14.388021f, 0.580574f}, {14.388021f, 14.388021f, -0.580574f}};
 static const float ACCEL_WHEEL_FF[MOTORS][3] PROGMEM = {{1.2108307692307692f, -1.210830769230769f, -0.15837194602651714f}, {1.2108307692307694f, 1.2108307692307687f, 0.15837194602651714f}, {1.2108307692307692f, -1.210830769230769f, 0.15837194602651714f}, {1.2108307692307692f, 1.210830769230769f, -0.15837194602651714f}};
+/* the speed loop as speedctl.py's: a step's rise lasts until the wheel reaches its target, and a */
+/* target held STEADY_PERIODS control periods integrates at SPEED_STEADY (speed_ki_steady / speed_ki) */
+#define FEATURE_SPEEDCTL 1
+#define STEADY_PERIODS 5
+#define SPEED_STEADY 2.0f
 /* on the closed loop a wheel whose turn is most of its rim speed u is fed at least K K_r(K |u|) |u| */
 #define FEATURE_TURN_FF 1
 /* the MOVE progress check (progress.py, WARN 17): body travel (m) along x and y per count */

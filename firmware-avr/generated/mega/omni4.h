@@ -346,6 +346,11 @@ static const float ROLLER_PITCH[MOTORS] PROGMEM = {55.0f, 55.0f, 55.0f, 55.0f};
 /* body-frame twist's rate through the wheel's own inertia (wheel_ff times the wheel's row of J) */
 static const float ACCEL_BODY_FF[MOTORS][3] PROGMEM = {{0.0f, 19.675926f, 0.685327f}, {19.675926f, 0.0f, 0.685327f}, {0.0f, -19.675926f, 0.685327f}, {-19.675926f, 0.0f, 0.685327f}};
 static const float ACCEL_WHEEL_FF[MOTORS][3] PROGMEM = {{7.228845126006995e-17f, 1.1805599999999998f, 0.11333375999999999f}, {1.1805599999999998f, 0.0f, 0.11333375999999999f}, {7.228845126006995e-17f, -1.1805599999999998f, 0.11333375999999999f}, {-1.1805599999999998f, 1.445769025201399e-16f, 0.11333375999999999f}};
+/* the speed loop as speedctl.py's: a step's rise lasts until the wheel reaches its target, and a */
+/* target held STEADY_PERIODS control periods integrates at SPEED_STEADY (speed_ki_steady / speed_ki) */
+#define FEATURE_SPEEDCTL 1
+#define STEADY_PERIODS 5
+#define SPEED_STEADY 2.0f
 /* on the closed loop a wheel whose turn is most of its rim speed u is fed at least K K_r(K |u|) |u| */
 #define FEATURE_TURN_FF 1
 /* the MOVE progress check (progress.py, WARN 17): body travel (m) along x and y per count */

@@ -30,7 +30,7 @@ from string import Template
 from typing import Any
 
 from omnibot.errors import ConfigError
-from omnibot.firmware import landing, motion, safety
+from omnibot.firmware import landing, motion, safety, speedctl
 from omnibot.firmware.config import build_config
 from omnibot.protocol import codes
 from omnibot.robot import RobotDescription, load_robot
@@ -544,6 +544,10 @@ def _feature_fields(cfg: dict[str, Any]) -> dict[str, object]:
         "vel_params_max": codes.VEL_PARAMS_MAX,
         "body_ff": _floats(cfg["body_ff"]),
         "wheel_ff": _floats([float(cfg["wheel_ff"][i]) * float(j) for j in cfg["J"][i]] for i in range(n)),
+        "steady_periods": speedctl.STEADY_PERIODS,
+        "speed_steady": _f(
+            speedctl.steady_rate(float(cfg["speed_ki"]), float(cfg.get("speed_ki_steady", 0.0)))
+        ),
         "progress_on": 1 if tolerance > 0 and all(int(c) for c in cfg["encoder_cpr"]) else 0,
         "progress_tolerance": _f(tolerance),
         "travel": _floats(cfg["travel"]),

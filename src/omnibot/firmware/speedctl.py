@@ -36,6 +36,11 @@ STEADY_PERIODS = 5
 """Periods a wheel's target must hold still before its integral grows at the steady rate."""
 
 
+def steady_rate(ki: float, ki_steady: float) -> float:
+    """A held target's integral rate in the plain one: ``ki_steady / ki`` (1 without either gain)."""
+    return ki_steady / ki if ki > 0.0 and ki_steady > 0.0 else 1.0
+
+
 class SpeedControl:
     """PI correction of the feedforward powers from encoder-measured wheel speeds."""
 
@@ -56,7 +61,7 @@ class SpeedControl:
         self.period_us = period_us
         self.pwm_max = pwm_max
         self.band = band  # rad/s; 0: every error integrates at the full rate
-        self.steady = ki_steady / ki if ki > 0.0 and ki_steady > 0.0 else 1.0
+        self.steady = steady_rate(ki, ki_steady)
         """The integral's rate on a held target, in its rate on a moving one (1: the same)."""
         self.speed = [0.0] * self.n
         self.correction = [0.0] * self.n
