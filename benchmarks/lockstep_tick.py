@@ -92,7 +92,8 @@ def _time_parts(device: SimDevice, parts: dict[str, float]) -> None:
 
         return wrapper
 
-    device.control = timed("firmware", device.control)  # type: ignore[method-assign]
+    firmware = device.controller
+    firmware.poll = timed("firmware", firmware.poll)  # type: ignore[method-assign]
     device.sim.step = timed("simulator", device.sim.step)  # type: ignore[method-assign]
 
 

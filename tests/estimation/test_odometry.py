@@ -90,3 +90,18 @@ def test_slipping_flag_and_counter_wrap() -> None:
     assert not odo.slipping
     odo.update([-(2**31) + 9, 50, 2**31 - 9, 0])  # one wheel turns alone: no rigid motion does that
     assert odo.slipping
+
+
+def test_the_residual_and_slip_check_asked_late_are_the_last_intervals() -> None:
+    """Computed when asked for, they are what checking every interval as it came leaves."""
+    robot = load_robot("omni4")
+    late, eager = WheelOdometry(robot), WheelOdometry(robot)
+    counts = [[0, 0, 0, 0], [40, 0, -40, 0], [80, 0, -80, 0], [80, 50, -80, 0]]  # the last: one wheel alone
+    flags = []
+    for c in counts:
+        late.update(c)
+        eager.update(c)
+        flags.append(eager.slipping)  # asked every time
+    assert flags == [False, False, False, True]
+    assert late.pose == eager.pose and late.slipping and late.residual.tolist() == eager.residual.tolist()
+    assert late.slip_check.slip.tolist() == eager.slip_check.slip.tolist() and any(late.residual)

@@ -361,3 +361,19 @@ def test_vel_takes_the_body_acceleration_as_three_more_fields() -> None:
         m.Vel(35, -20, 45, 100, 140, body=(140, 0, 0))
     with pytest.raises(ProtocolError, match="4, 5 or 7"):
         m.Vel.from_params((35, -20, 45, 100, 140, -60))
+
+
+@pytest.mark.parametrize(
+    ("fields", "expected"),
+    [
+        (["1", " -2 ", "+3", "0004"], [1, -2, 3, 4]),  # spaces and signs: the one-pass check takes them
+        (["\t5", "6\x0b"], [5, 6]),  # other whitespace: the field-by-field path, the same answer
+        (["1_0"], None),  # int() would take it; the protocol does not
+        (["٣"], None),  # a digit int() takes, not ASCII
+        (["5", ""], None),
+        (["+-5"], None),
+        ([], []),
+    ],
+)
+def test_integer_fields(fields: list[str], expected: list[int] | None) -> None:
+    assert text._ints(fields) == expected

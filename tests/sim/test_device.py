@@ -71,3 +71,64 @@ def test_command_runs_the_device_for_a_while_and_returns_what_it_sent() -> None:
     assert device.command("MOVE,10,40,0,0", 0.5).startswith(b"OK\r\nIDLE\r\n")  # 0.25 s of MOVE
     assert device.time - t0 == pytest.approx(0.5)
     assert device.command("STATUS") == b"" and device.run(0.002).startswith(b"STATUS,1,")
+
+
+class EveryTick:
+    """The same device without :meth:`SimDevice.run_quiet`: the link steps it tick by tick."""
+
+    def __init__(self, device: SimDevice) -> None:
+        self.device = device
+        self.tick = device.tick
+
+    @property
+    def time(self) -> float:
+        return self.device.time
+
+    def receive(self, data: bytes) -> None:
+        self.device.receive(data)
+
+    def step(self) -> None:
+        self.device.step()
+
+    def transmit(self) -> bytes:
+        return self.device.transmit()
+
+
+def session(device: SimDevice | EveryTick) -> tuple[list[tuple[float, bytes]], int]:
+    """TEL every 20 ms, a MOVE, a wait and a STATUS: each chunk read with its time, and the steps."""
+    reads: list[tuple[float, bytes]] = []
+    with LockstepLink(device) as link:
+        for line in (b"TELEM,20,255\n", b"MOVE,10,40,30,0\n", b"", b"STATUS\n"):
+            link.write(line)
+            link.clock.sleep(0.003)
+            while (chunk := link.read(timeout=0.5)) and link.clock.now() < 3.0:
+                reads.append((link.clock.now(), chunk))
+        return reads, link.steps
+
+
+def test_quiet_runs_give_the_bytes_at_the_times_of_tick_by_tick_steps() -> None:
+    quiet, ticked = SimDevice("omni4", seed=2), SimDevice("omni4", seed=2)
+    calls: list[int] = []
+    run_quiet = quiet.run_quiet
+
+    def counted(ticks: int) -> int:
+        calls.append(ticks)
+        return run_quiet(ticks)
+
+    quiet.run_quiet = counted  # type: ignore[method-assign]
+    reads, steps = session(quiet)
+    assert (reads, steps) == session(EveryTick(ticked)) and len(reads) > 100
+    assert quiet.sim.pose == ticked.sim.pose and quiet.controller.now_ms == ticked.controller.now_ms
+    assert calls and len(calls) < steps  # quiet stretches of several ticks in one call
+
+
+def test_a_quiet_run_ends_on_the_tick_the_firmware_sends() -> None:
+    device = SimDevice("omni4", seed=1)
+    assert device.run_quiet(100) == 1 and device.transmit().startswith(b"HELLO")
+    device.receive(b"TELEM,10,1\n")
+    # read at the next poll: omni4 polls every other 1 ms step (500 Hz)
+    assert device.run_quiet(100) == 2 and device.transmit().startswith(b"OK\r\nTEL,")
+    assert device.run_quiet(3) == 3 and device.transmit() == b""
+    t0 = device.time
+    taken = device.run_quiet(100)
+    assert device.transmit().startswith(b"TEL,") and device.time == pytest.approx(t0 + taken * device.tick)

@@ -82,10 +82,9 @@ class WheelOdometry:
         self.pose = start or Pose2D(0.0, 0.0, 0.0)
         self.distance = 0.0
         """Path length travelled by the body centre, m."""
-        self.residual = np.zeros(robot.n_wheels)
-        """Last interval's per-wheel residual, rad (non-zero: the wheels disagree, slip)."""
-        self.slip_check = WheelSlipCheck(self._J, self._rad_per_count, window=0.0)
-        """The residual's slip check, one interval at a time (:mod:`~omnibot.estimation.wheelslip`)."""
+        self._residual = np.zeros(robot.n_wheels)
+        self._slip_check = WheelSlipCheck(self._J, self._rad_per_count, window=0.0)
+        self._last: tuple[np.ndarray, np.ndarray] | None = None  # (angles, disp) not yet checked
         self._counts = CountTracker(robot.n_wheels, "encoder")
         self._heading: float | None = None
 
@@ -97,8 +96,7 @@ class WheelOdometry:
             return self.pose
         angles = delta * self._rad_per_count
         disp = self._pinv @ angles  # body displacement: twist times the interval
-        self.residual = angles - self._J @ disp
-        self.slip_check.update(angles, 0.0)
+        self._last = (angles, disp)  # the residual and its check on demand: they see this interval alone
         dx, dy, dtheta = disp.tolist()
         if heading is not None and self._heading is not None:
             dtheta = heading - self._heading
@@ -108,10 +106,31 @@ class WheelOdometry:
         return self.pose
 
     @property
+    def residual(self) -> np.ndarray:
+        """Last interval's per-wheel residual, rad (non-zero: the wheels disagree, slip)."""
+        self._check_last()
+        return self._residual
+
+    @property
+    def slip_check(self) -> WheelSlipCheck:
+        """The residual's slip check, one interval at a time (:mod:`~omnibot.estimation.wheelslip`)."""
+        self._check_last()
+        return self._slip_check
+
+    @property
     def slipping(self) -> bool:
         """True when the last interval's studentised residual is more than quantisation explains
         (a wheel slipped)."""
         return self.slip_check.slipping
+
+    def _check_last(self) -> None:
+        """The residual and slip check of the last interval, when first asked for (a check of
+        window 0 keeps that interval alone, so skipping the ones before changes nothing)."""
+        if self._last is not None:
+            angles, disp = self._last
+            self._last = None
+            self._residual = angles - self._J @ disp
+            self._slip_check.update(angles, 0.0)
 
 
 def forward_twist(robot: RobotDescription, wheel_speeds: Sequence[float]) -> kin.ForwardResult:

@@ -49,6 +49,7 @@ _COMMAND_END_RE: Final = re.compile(rb"[;\r\n]")
 _LINE_END_RE: Final = re.compile(rb"[\r\n]")
 _INT_RE: Final = re.compile(r"[+-]?[0-9]+\Z")
 _INF_RE: Final = re.compile(r"[+-]?inf\Z", re.IGNORECASE)
+_PLAIN_INTS_RE: Final = re.compile(r" *[+-]?[0-9]+ *(?:, *[+-]?[0-9]+ *)*\Z")  # spaces only: the rest slowly
 _SPACES: Final = " \t"  # what may surround a command's keyword or parameter (not VT, FF, ...)
 TAG_MAX: Final = 10**linecheck.TAG_DIGITS - 1
 """The largest tag (tags are 0..9999; the client uses 1..9999, 0 meaning none)."""
@@ -188,6 +189,8 @@ def _next_line(buf: bytes | bytearray, ends: re.Pattern[bytes], limit: int) -> t
 
 def _ints(fields: list[str], spaces: str | None = None, inf_at: int = -1) -> list[int] | None:
     """The fields as integers (``INF`` tokens too at index ``inf_at``), None if one is not."""
+    if spaces is None and inf_at < 0 and _plain_ints(fields):
+        return [int(f) for f in fields]  # a TEL line's twenty fields without a regex each
     out = []
     for i, f in enumerate(fields):
         token = f.strip(spaces)
@@ -198,6 +201,12 @@ def _ints(fields: list[str], spaces: str | None = None, inf_at: int = -1) -> lis
         else:
             return None
     return out
+
+
+def _plain_ints(fields: list[str]) -> bool:
+    """Whether every field is optional whitespace, an optional sign and ASCII digits (what
+    :data:`_INT_RE` takes once stripped), told by one pass over them all."""
+    return _PLAIN_INTS_RE.match(",".join(fields)) is not None
 
 
 def parse_command(line: bytes) -> Command | Malformed | None:

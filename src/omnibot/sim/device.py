@@ -173,6 +173,25 @@ class SimDevice:
         self.control()
         self.sim.step()
 
+    def run_quiet(self, ticks: int) -> int:
+        """Up to ``ticks`` steps, ending after the first in which the firmware sent bytes; the steps
+        taken (the lockstep link's quiet stretches: no bytes on the line either way). Only a poll
+        sends, so the simulator takes the steps from one poll to the next in one call."""
+        tx, sim, every = self.hal.tx, self.sim, self._poll_every
+        taken = 0
+        while taken < ticks:
+            phase = self._steps % every
+            if phase == 0:
+                self.controller.poll()
+                self.hal.apply_power()
+            n = 1 if tx else min(every - phase, ticks - taken)  # to the next poll
+            sim.step(n)
+            self._steps += n
+            taken += n
+            if tx:
+                break
+        return taken
+
     def control(self) -> None:
         """The firmware's half of a step: a poll (and its PWM handed over) at the controller's loop rate.
         A fleet polls every robot's firmware first, then steps their physics together."""

@@ -26,10 +26,11 @@ from typing import Protocol, runtime_checkable
 from omnibot.errors import LinkError
 from omnibot.transport.base import Link, bit_time
 
-__all__ = ["DEFAULT_BAUD", "LockstepClock", "LockstepDevice", "LockstepLink", "PacedFifo"]
+__all__ = ["DEFAULT_BAUD", "LockstepClock", "LockstepDevice", "LockstepLink", "PacedFifo", "QuietSteps"]
 
 DEFAULT_BAUD = 115200
 _EPS = 1e-9  # relative slack when turning a duration into whole ticks
+_FOREVER = 1 << 62  # ticks a read without a timeout may wait (146,000 years of 1 ms ticks)
 
 
 @runtime_checkable
@@ -61,6 +62,17 @@ class LockstepDevice(Protocol):
 
     def transmit(self) -> bytes:
         """Bytes the device has sent since the last call (``b""`` if none)."""
+        ...
+
+
+@runtime_checkable
+class QuietSteps(Protocol):
+    """A :class:`LockstepDevice` that can take several ticks in one call while the line is quiet."""
+
+    def run_quiet(self, ticks: int) -> int:
+        """Step up to ``ticks`` ticks, stopping after the first one in which the device sent bytes
+        (left for :meth:`LockstepDevice.transmit`); the ticks taken. The same as that many
+        :meth:`LockstepDevice.step` calls, without the link's look at both lines between them."""
         ...
 
 
@@ -160,6 +172,7 @@ class LockstepLink(Link):
         self._lock = threading.RLock()
         self.steps = 0
         """Device steps taken through this link."""
+        self._run_quiet = device.run_quiet if isinstance(device, QuietSteps) else None
 
     @property
     def in_waiting(self) -> int:
@@ -172,13 +185,25 @@ class LockstepLink(Link):
         """Step the device for ``seconds`` of simulated time (whole ticks, at least one if > 0)."""
         self._check_open()
         with self._lock:
-            for _ in range(self._ticks_for(seconds)):
-                self._step()
+            ticks = self._ticks_for(seconds)
+            while ticks > 0:
+                ticks -= self._run(ticks)
 
     def _ticks_for(self, seconds: float) -> int:
         if seconds <= 0:
             return 0
         return max(1, math.ceil(seconds / self.device.tick - _EPS))
+
+    def _run(self, ticks: int) -> int:
+        """Step at most ``ticks`` (>= 1) ticks; the ticks taken. While nothing is on either line
+        the device runs until it sends (one call, the same ticks), else one tick at a time."""
+        if self._run_quiet is None or self._to_device.pending or self._to_host.pending:
+            self._step()
+            return 1
+        taken = self._run_quiet(ticks)
+        self.steps += taken
+        self._drain()
+        return taken
 
     def _step(self) -> None:
         self._feed()
@@ -217,11 +242,10 @@ class LockstepLink(Link):
         with self._lock:
             self._collect()
             if not self._inbox and timeout != 0:
-                ticks = math.inf if timeout is None else self._ticks_for(timeout)
+                ticks = _FOREVER if timeout is None else self._ticks_for(timeout)
                 taken = 0
                 while not self._inbox and taken < ticks and not self._closed:
-                    self._step()
-                    taken += 1
+                    taken += self._run(ticks - taken)
             chunk = bytes(self._inbox[:max_bytes])
             del self._inbox[:max_bytes]
             return chunk
