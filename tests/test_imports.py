@@ -800,6 +800,7 @@ BENCHMARK_REACHES: dict[str, tuple[str, tuple[str, ...]]] = {
         "runs the calibration's experiments (its Runner) by hand",
         ("idle_phase.py", "motor_model.py"),
     ),
+    "omnibot.calibration.slip": ("the slip runs' speed", ("slip_courses.py",)),
     "omnibot.calibration.motorfit": ("fits the motor model it measures", ("motor_model.py",)),
     "omnibot.calibration.motors": ("balances the motors' model as the calibration does", ("motor_model.py",)),
     "omnibot.calibration.patterns": (
@@ -860,7 +861,7 @@ BENCHMARK_REACHES: dict[str, tuple[str, tuple[str, ...]]] = {
     ),
     "omnibot.navigation.slipcal": (
         "the floor's slip calibration on the simulator",
-        ("move_landing.py", "speed_accuracy.py", "tracking.py"),
+        ("move_landing.py", "slip_courses.py", "speed_accuracy.py", "tracking.py"),
     ),
     "omnibot.ros2.cmd_vel": ("the stamped twist's type name", ("speed_accuracy.py",)),
     "omnibot.ros2.netns": (

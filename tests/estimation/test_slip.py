@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from omnibot.errors import ConfigError
-from omnibot.estimation.slip import SlipLeg, SlipModel, SlipParameters, fit_slip, leg_error
+from omnibot.estimation.slip import SlipLeg, SlipModel, SlipParameters, fit_slip, leg_error, leg_residual
 from omnibot.motion import Twist
 from omnibot.robot import load_robot
 
@@ -95,6 +95,23 @@ def test_fit_recovers_the_roll_coefficient_of_synthetic_runs(robot: str) -> None
     assert all(leg_error(leg, fitted, load_robot(robot)) < 1e-8 for leg in legs)
 
 
+@pytest.mark.parametrize("deg", [0, 20, 90, 165])
+def test_mecanum_rolling_creep_is_sideways_only(deg: float) -> None:
+    """A mecanum base's roller drag is balanced by a strafe's traction pattern: the encoders
+    over-read the body's y on every course that moves it sideways and nothing along x, so a
+    correction fitted on any courses cannot move the estimate along a heading-held route's x."""
+    robot = load_robot("mecanum4")
+    params = SlipParameters(roll=0.0014)
+    leg = _synthetic_leg("mecanum4", params, math.radians(deg), 0.4)
+    raw = leg_residual(leg)
+    assert abs(raw[0]) < 1e-12
+    assert (raw[1] > 1e-4) == (0 < deg < 180)  # y over-read while strafing, none straight ahead
+    assert np.allclose(leg_residual(leg, params, robot), 0.0, atol=1e-12)
+    assert leg_error(leg, params, robot) == pytest.approx(
+        math.hypot(*leg_residual(leg, params, robot)) / math.hypot(*leg.true_disp)
+    )
+
+
 def test_fit_recovers_rolling_and_combined_creep_of_synthetic_runs() -> None:
     robot = load_robot("omni4")
     truth = SlipParameters(roll=0.015, combined=0.03)
@@ -118,6 +135,8 @@ def test_fit_needs_runs_and_leg_error_needs_the_robot() -> None:
     leg = _synthetic_leg("omni4", SlipParameters(roll=0.01), 0.3, 0.3)
     with pytest.raises(ValueError, match="needs the robot"):
         leg_error(leg, SlipParameters(roll=0.01))
+    with pytest.raises(ValueError, match="needs the robot"):
+        leg_residual(leg, SlipParameters(roll=0.01))
 
 
 @pytest.mark.parametrize(

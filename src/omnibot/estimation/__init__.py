@@ -26,7 +26,14 @@ from omnibot.estimation.estimator import (
 from omnibot.estimation.heading import HeadingFilter, HeadingFilterConfig
 from omnibot.estimation.odometry import WheelOdometry, compose_arc, forward_twist
 from omnibot.estimation.silence import GyroSilence
-from omnibot.estimation.slip import SlipLeg, SlipModel, SlipParameters, fit_slip, leg_error
+from omnibot.estimation.slip import (
+    SlipLeg,
+    SlipModel,
+    SlipParameters,
+    fit_slip,
+    leg_error,
+    leg_residual,
+)
 from omnibot.estimation.slipprobe import SlipProbe
 from omnibot.estimation.spins import Spin, SpinFit, Standstill, fit_spins, spin_biases
 from omnibot.estimation.stall import Stall, StallDetector, StallSample
@@ -65,6 +72,7 @@ __all__ = [
     "forward_twist",
     "heading",
     "leg_error",
+    "leg_residual",
     "make_estimator",
     "odometry",
     "replay",

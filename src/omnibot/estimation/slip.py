@@ -300,19 +300,29 @@ def _fit_creep(
     return best, best_cost
 
 
-def leg_error(
+def leg_residual(
     leg: SlipLeg, params: SlipParameters | None = None, robot: RobotDescription | None = None
-) -> float:
-    """|encoder - true displacement| / true distance of a run, uncorrected or with ``params``
-    (``robot`` is then needed for the geometry)."""
+) -> FloatArray:
+    """(x, y) m: encoder - true displacement of a run (estimator frame), uncorrected or with
+    ``params`` taken out (``robot`` is then needed for the geometry)."""
     err = np.subtract(leg.encoder_disp, leg.true_disp)
     if params is not None:
         if robot is None:
-            raise ValueError("leg_error needs the robot to apply slip parameters")
+            raise ValueError("leg_residual needs the robot to apply slip parameters")
         reg = _regressors(SlipModel(robot), np.linalg.pinv(robot.wheel_matrix), leg)
         err = (
             err
             - reg @ np.array([params.roll, params.combined, params.compliance])
             - (1.0 - params.scale) * np.asarray(leg.encoder_disp)
         )
+    residual: FloatArray = err
+    return residual
+
+
+def leg_error(
+    leg: SlipLeg, params: SlipParameters | None = None, robot: RobotDescription | None = None
+) -> float:
+    """|encoder - true displacement| / true distance of a run, uncorrected or with ``params``
+    (``robot`` is then needed for the geometry)."""
+    err = leg_residual(leg, params, robot)
     return float(np.hypot(*err) / max(float(np.hypot(*leg.true_disp)), 1e-9))
