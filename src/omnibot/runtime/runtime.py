@@ -527,7 +527,8 @@ class Runtime:
         watchdog = getattr(origin, "watchdog", None) or self.vel_timeout
         # a follower's planned acceleration, for a controller whose wheel loop takes it: the body's
         # whole (version 4) or the speed's along the travel (version 3)
-        body = getattr(origin, "body_accel", None) if client.takes_vel_body_accel else None
+        planned = getattr(origin, "body_accel", None)
+        body = planned if client.takes_vel_body_accel else None
         accel = getattr(origin, "accel", 0.0) if client.takes_vel_accel and body is None else 0.0
         try:
             if fresh and self.latched and self.latch_reason == "battery":
@@ -539,8 +540,7 @@ class Runtime:
                 self.notify("info", "emergency stop released by a fresh press of the deadman", source)
             sent = clamp_to(client.limits, twist)
             if self.slip is not None and self.closed_loop and not sent.is_zero:
-                planned = getattr(origin, "body_accel", None) or (0.0, 0.0, 0.0)
-                sent = clamp_to(client.limits, self.slip.commanded(sent, planned))
+                sent = clamp_to(client.limits, self.slip.commanded(sent, planned or (0.0, 0.0, 0.0)))
             if getattr(origin, "wait_reply", self.wait_replies):
                 t0 = client.clock.now()
                 client.vel(sent.vx, sent.vy, sent.w, watchdog, accel, body)

@@ -181,12 +181,10 @@ class SimDevice:
         taken = 0
         while taken < ticks:
             phase = self._steps % every
-            if phase == 0:
-                self.controller.poll()
-                self.hal.apply_power()
+            self.control()  # the poll due at this step, if any (it alone sends); counts one step
             n = 1 if tx else min(every - phase, ticks - taken)  # to the next poll
             sim.step(n)
-            self._steps += n
+            self._steps += n - 1
             taken += n
             if tx:
                 break
