@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import argparse
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -76,6 +76,12 @@ STILL = 1e-3
 """m/s: a rim speed below this is the friction law's creep (a robot that does not turn)."""
 SETTLE_STEPS, AVERAGE_STEPS = 3000, 1000
 """ms to the steady state, and the span whose ends' rates are averaged."""
+MOVE_SHIFT, ROTATE_SHIFT = 40, 10
+"""OSLL omnibot v0.038's ``CALIBRATION_MOVE_SHIFT`` and ``CALIBRATION_ROTATE_SHIFT``: the counts its
+MOVE and its ROTATE add to each driven motor's power, above which each has its own power per mm/s
+(0.24 x (1 - 40/255) and 0.19 x (1 - 10/255): the rotation's is 0.90 of the move's)."""
+RIM_SPEEDS = (0.3, 0.4, 0.5, 0.6)
+"""m/s where both of the seed's from-rest series have data (its slowest full turn is 0.23 m/s)."""
 
 
 def _pattern(twist: tuple[float, float, float]) -> np.ndarray:
@@ -156,6 +162,50 @@ def measure() -> dict[str, Any]:
 def rotation_rate(ms: float, turns: int) -> float:
     """cm/s of wheel path along R_c for ``turns`` full turns in ``ms``."""
     return 100 * turns * math.tau * R_C / (ms / 1000.0)
+
+
+def least_power(rates: Mapping[int, float], speeds: tuple[float, ...] = RIM_SPEEDS) -> np.ndarray:
+    """The least power (counts) of a series of rates (m/s by power) that reaches each speed, linear
+    between its powers; nan where its slowest rate is already faster or its fastest is slower."""
+    powers = sorted(rates)
+    out = np.full(len(speeds), np.nan)
+    for k, speed in enumerate(speeds):
+        above = [i for i in range(1, len(powers)) if rates[powers[i]] >= speed > rates[powers[i - 1]]]
+        if above:
+            lo, hi = powers[above[0] - 1], powers[above[0]]
+            out[k] = lo + (hi - lo) * (speed - rates[lo]) / (rates[hi] - rates[lo])
+    return out
+
+
+def rotation_against_axis(
+    axis_mm: Mapping[int, float], rotation_ms: Mapping[int, tuple[float, float]]
+) -> np.ndarray:
+    """Rotation's power above the firmware's rotate shift over the axis's above its move shift, at
+    each of :data:`RIM_SPEEDS`, read from the seed's experiments from rest as the firmware's tables
+    read them (rim speed: mm in 1000 ms on the axis, a full turn's wheel path over its time): rows
+    for the first turn and for the second (two turns' time less one's)."""
+    axis = least_power({p: mm / 1000.0 for p, mm in axis_mm.items()}) - MOVE_SHIFT
+    turns = [{p: rotation_rate(ms[0], 1) / 100 for p, ms in rotation_ms.items()}]
+    turns.append({p: rotation_rate(ms[1] - ms[0], 1) / 100 for p, ms in rotation_ms.items()})
+    return np.array([(least_power(rates) - ROTATE_SHIFT) / axis for rates in turns])
+
+
+def seed_rotation_against_axis() -> np.ndarray:
+    """:func:`rotation_against_axis` of the seed's workbook, one pair of rows per axis course (0, 90,
+    180, 270): the spread of its robot's asymmetry and of its two readings of a turn."""
+    courses = [AXIS_MM, *AXIS_OTHER_MM.values()]
+    return np.concatenate([rotation_against_axis(mm, ROTATION_MS) for mm in courses])
+
+
+def simulated_rotation_against_axis(surface: str = "wood", limit: float = 6.0) -> np.ndarray:
+    """:func:`rotation_against_axis` of the seed's experiments on the simulated robot (its axis series
+    on course 0: the simulated robot is symmetric), every 5 counts from 40 to 230."""
+    powers = list(range(40, 231, 5))
+    axis = dict(zip(powers, (1000 * distances(0.0, powers, surface)).tolist(), strict=True))
+    times = 1000 * turn_times(powers, surface, limit=limit)
+    done = [i for i, p in enumerate(powers) if not np.isnan(times[:, i]).any()]
+    rotation = {powers[i]: (float(times[0, i]), float(times[1, i])) for i in done}
+    return rotation_against_axis(axis, rotation)
 
 
 def _seed_mean(row: tuple[int | None, ...]) -> float:

@@ -1,9 +1,11 @@
 """Seed 000's Fig. 6 statement on the simulated robot: rotation in place needs more power than a turn
 added to a robot already moving (``benchmarks.seed000_figures.turn_against_rotation``); each series'
-mean error against the seed (``series_errors``)."""
+mean error against the seed (``series_errors``); rotation against the axis in the firmware's terms
+(``rotation_against_axis``)."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from benchmarks.seed000_figures import (
     AXIS_MM,
@@ -11,7 +13,10 @@ from benchmarks.seed000_figures import (
     DIAGONAL_MM,
     ROTATION_MS,
     STILL,
+    least_power,
+    seed_rotation_against_axis,
     series_errors,
+    simulated_rotation_against_axis,
     turn_against_rotation,
 )
 
@@ -62,3 +67,40 @@ def test_series_errors_are_each_series_mean_abs_error_over_the_seeds_powers() ->
     assert errors["rotation, 2nd turn"] == pytest.approx(0.2)
     diagonal[80] = 150.0  # the seed's one run at 80 counts: 100 mm
     assert series_errors(result, "wood")["45 degrees"] == pytest.approx(0.5 / len(DIAGONAL_MM))
+
+
+def test_least_power_reads_the_first_power_that_reaches_a_speed() -> None:
+    """The seed's first turn is slower at 120 counts than at 110 (1165 against 1145 ms): a speed is
+    read where a series first reaches it, and nowhere outside the series."""
+    rates = {50: 0.1, 60: 0.3, 70: 0.25, 80: 0.5}
+    got = least_power(rates, (0.2, 0.28, 0.4, 0.05, 0.6))
+    assert got[:3] == pytest.approx([55.0, 59.0, 76.0])
+    assert np.isnan(got[3:]).all()
+
+
+def test_the_seeds_rotation_needs_about_what_its_firmware_gives_it_against_the_axis() -> None:
+    """OSLL omnibot v0.038 drives a ROTATE with 10 + 0.19 (1 - 10/255) counts per mm/s of wheel path
+    and a MOVE on a motor axis with 40 + 0.24 (1 - 40/255): above each one's shift, rotation needs 0.90
+    of the axis's power per rim speed. The seed's workbook read the same way (from rest, as its tables
+    were taken; its four axis courses, the first and the second turn, 0.3-0.6 m/s) gives 0.88-1.23,
+    mean 1.05, with no trend in speed (per speed 0.95-1.23 at 0.3 m/s, 0.88-1.19 at 0.6)."""
+    ratio = seed_rotation_against_axis()
+    assert ratio.shape == (8, 4) and not np.isnan(ratio).any()
+    assert ratio.min() == pytest.approx(0.882, abs=1e-3) and ratio.max() == pytest.approx(1.231, abs=1e-3)
+    assert ratio.mean() == pytest.approx(1.046, abs=1e-3)
+    firmware = 0.19 * (1 - 10 / 255) / (0.24 * (1 - 40 / 255))
+    assert ratio.min() < firmware < ratio.max()
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="issue 30, the low-power end: the simulated rotation starts at about 45 counts, the seed's "
+    "near 23, so at 0.3 m/s it needs 1.33-1.36 of the axis's power in the firmware's terms (the seed's robot at most 1.23)",
+)
+def test_rotation_against_the_axis_lies_within_the_seeds_spread() -> None:
+    """The seed's experiments on the simulated robot (wood), read as the seed's are: at every rim speed
+    0.3-0.6 m/s both readings of the turn lie within the seed's range over its courses and readings."""
+    seed = seed_rotation_against_axis()
+    ratio = simulated_rotation_against_axis("wood")
+    assert not np.isnan(ratio).any(), ratio
+    assert np.all((ratio >= seed.min()) & (ratio <= seed.max())), ratio
