@@ -16,7 +16,9 @@ Two planners (``planner=``):
   did. Deterministic.
 * ``"rrtstar"``, ``"prmstar"``, ``"bitstar"``: OMPL's sampling planners in R2 (its Python
   bindings, imported on first use) with the blocked cells as the validity checker, for
-  ``time_limit`` s, then OMPL's path simplification; seeded (``seed``) for repeatable runs.
+  ``time_limit`` s (longer only while it has no path yet, up to :data:`FIRST_PATH_WAIT` s: A* has
+  told first that there is one), then OMPL's path simplification; seeded (``seed``) for repeatable
+  runs.
 
 The robot is a disc (its footprint's bounding radius), so any heading fits wherever its centre
 may go. The clearance is measured from a cell's centre to the nearest wall cell's edge; a centre
@@ -58,6 +60,13 @@ COST_WEIGHT = 3.0
 """How much a step at the highest cost counts beyond its length: 1 + weight x cost per metre."""
 OCCUPIED = 65
 """Occupancy at or above which a cell is a wall (map_server's occupied_thresh 0.65)."""
+FIRST_PATH_WAIT = 10.0
+"""s an OMPL planner may run in all (at least its ``time_limit``) while it has no path yet: there is
+one, the grid planner found it first. The time limit is for improving a path; on a loaded machine
+the sampling slows, and a plan that exists is not refused for it."""
+FIRST_PATH_SLICE = 0.02
+"""s of each further solve while an OMPL planner has no path yet (OMPL's planners report a path at the
+end of a solve; each further solve carries on from the tree or roadmap it has)."""
 Planner = Literal["grid", "rrtstar", "prmstar", "bitstar"]
 PLANNERS: tuple[str, ...] = ("grid", "rrtstar", "prmstar", "bitstar")
 
@@ -199,10 +208,10 @@ def plan_path(
     escape = _escape(cmap, s_cell)
     climb = cmap.grid.cell_to_world(escape[1:]) if len(escape) > 1 else np.zeros((0, 2))
     head = np.vstack([[(start.x, start.y)], climb])
+    cells = astar(~cmap.blocked, cmap.cost, escape[-1], g_cell, weight)
+    if cells is None:
+        raise NoPathError(f"no path from {_xy(start)} to {_xy(goal)}: {_why_no_path(cmap)}")
     if planner == "grid":
-        cells = astar(~cmap.blocked, cmap.cost, escape[-1], g_cell, weight)
-        if cells is None:
-            raise NoPathError(f"no path from {_xy(start)} to {_xy(goal)}: {_why_no_path(cmap)}")
         tail = shortcut(cmap, cells, (float(head[-1, 0]), float(head[-1, 1])), (goal.x, goal.y), weight)
     else:
         tail = _ompl_plan(
@@ -605,10 +614,14 @@ def _ompl_plan(
     info.setStateValidityCheckingResolution(0.25 * grid.resolution / space.getMaximumExtent())
     made = {"rrtstar": og.RRTstar, "prmstar": og.PRMstar, "bitstar": og.BITstar}[planner](info)
     setup.setPlanner(made)
+    end = time.monotonic() + max(time_limit, FIRST_PATH_WAIT)
     setup.solve(time_limit)
+    while not setup.haveExactSolutionPath() and (left := end - time.monotonic()) > 0:
+        setup.solve(min(left, max(time_limit, FIRST_PATH_SLICE)))  # the planner goes on where it was
     if not setup.haveExactSolutionPath():
         raise NoPathError(
-            f"no path from {_xy(start)} to {_xy(goal)} found by OMPL's {planner} in {time_limit:.2f} s"
+            f"no path from {_xy(start)} to {_xy(goal)} found by OMPL's {planner} in "
+            f"{max(time_limit, FIRST_PATH_WAIT):.2f} s"
         )
     setup.simplifySolution(min(1.0, time_limit))
     path = setup.getSolutionPath()
