@@ -145,29 +145,23 @@ def _add_robot(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 
 def _kinematics(args: argparse.Namespace) -> int:
-    import numpy as np
-
-    from omnibot.robot import kinematics as kin
-    from omnibot.robot import load_robot
+    from omnibot.robot import load_robot, rows
 
     robot = load_robot(args.robot)
-    J = robot.wheel_matrix
+    J = robot.inverse_rows
     names = [w.name for w in robot.wheels]
     out: dict[str, object] = {"robot": robot.name, "wheel_names": names}
-    with np.errstate(over="ignore", invalid="ignore"):  # an overflow is refused below, not warned of
-        if args.wheels is not None:
-            speeds = parse_floats(args.wheels, robot.n_wheels, "--wheels")
-            result = kin.forward(J, speeds)
-            twist = [float(v) for v in result.twist]
-            residual = [float(v) for v in result.residual]
-            out |= {"wheel_speeds": speeds, "twist": twist, "residual": residual}
-            derived = [*twist, *residual]
-        else:
-            twist = parse_floats(args.twist, 3, "--twist")
-            speeds = [float(v) for v in kin.inverse(J, twist)]
-            rims = [v * w.radius for v, w in zip(speeds, robot.wheels, strict=True)]
-            out |= {"twist": twist, "wheel_speeds": speeds, "rim_speeds": rims}
-            derived = [*speeds, *rims]
+    if args.wheels is not None:
+        speeds = parse_floats(args.wheels, robot.n_wheels, "--wheels")
+        twist, residual = (list(v) for v in rows.forward(J, speeds))
+        out |= {"wheel_speeds": speeds, "twist": twist, "residual": residual}
+        derived = [*twist, *residual]
+    else:
+        twist = parse_floats(args.twist, 3, "--twist")
+        speeds = list(rows.apply(J, twist))
+        rims = [v * w.radius for v, w in zip(speeds, robot.wheels, strict=True)]
+        out |= {"twist": twist, "wheel_speeds": speeds, "rim_speeds": rims}
+        derived = [*speeds, *rims]
     if not all(math.isfinite(v) for v in derived):
         given = "--wheels" if args.wheels is not None else "--twist"
         raise ConfigError("the result overflows (it is not a finite number): give smaller values", key=given)
