@@ -695,10 +695,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     from omnibot.signals import Terminated, terminate_cleanly
 
     parser = build_parser()
+    command = _command(sys.argv[1:] if argv is None else argv)
     try:
         args, extra = parser.parse_known_args(argv)  # a chosen command's module is imported here
     except ModuleNotFoundError as exc:
-        if (line := missing_extra(exc)) is None:
+        if (line := missing_extra(exc, command)) is None:
             raise
         print(f"omnibot: error: {line}", file=sys.stderr)
         return EXIT_USAGE
@@ -743,15 +744,21 @@ def main(argv: Sequence[str] | None = None) -> int:
                 file=sys.stderr,
             )
         else:
-            print(f"omnibot: error: {_message(exc)}", file=sys.stderr)
+            print(f"omnibot: error: {_message(exc, command)}", file=sys.stderr)
         if _output_full(exc):
             _silence_stdout()  # what standard output still holds goes to /dev/null: no second failure
         return status
 
 
-def _message(exc: BaseException) -> str:
-    """The one line an error is told in."""
-    if (line := missing_extra(exc)) is not None:
+def _command(argv: Sequence[str]) -> str | None:
+    """The command of an ``omnibot`` command line (its first word that is not an option: the
+    top-level options take no value)."""
+    return next((word for word in argv if not word.startswith("-")), None)
+
+
+def _message(exc: BaseException, command: str | None = None) -> str:
+    """The one line an error of ``command`` is told in."""
+    if (line := missing_extra(exc, command)) is not None:
         return line
     if isinstance(exc, UnicodeDecodeError):  # text where the reader checked for none (it names no file)
         return f"not UTF-8 text: {exc}"
