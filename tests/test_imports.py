@@ -753,7 +753,6 @@ TEST_REACHES: dict[str, tuple[str, tuple[str, ...]]] = {
             "ros2/test_rclpy_goal_pose.py",
         ),
     ),
-    "omnibot.navigation.metrics": ("judges a run's figures by hand", ("cli/test_outcomes.py",)),
     "omnibot.navigation.session": (
         "the limits omnibot follow gives a robot's follower (and its simulated run), to build the same",
         (
@@ -853,7 +852,6 @@ BENCHMARK_REACHES: dict[str, tuple[str, tuple[str, ...]]] = {
     ),
     "omnibot.mapping.slam": ("the SLAM's parts measured alone", ("slam_synthetic.py",)),
     "omnibot.navigation.goto": ("goto() (its module's name shadows it in the face)", ("goto.py",)),
-    "omnibot.navigation.metrics": ("the error along a path", ("seed002_run.py",)),
     "omnibot.navigation.plot": ("plots the runs", ("tracking.py",)),
     "omnibot.navigation.session": (
         "the follower limits and the simulated follow omnibot follow runs",

@@ -28,14 +28,14 @@ from benchmarks.core_install import (
     install_venv,
 )
 
-from omnibot.extras import EXTRA_OF, WHAT, missing_extra
+from omnibot.extras import COMMAND_EXTRA, EXTRA_OF, SHARED, WHAT, missing_extra
 
 PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
 EXTRAS: dict[str, list[str]] = PYPROJECT["project"]["optional-dependencies"]
-CORE_DISTRIBUTIONS = {"numpy", "pydantic", "pyyaml", "pyserial", "tqdm"}
+CORE_DISTRIBUTIONS = {"pydantic", "pyyaml", "pyserial", "tqdm"}
 """The core's own dependencies (pydantic brings a few more of its own)."""
 
-USER_EXTRAS = ("sim", "plots", "web", "teleop", "logs", "ros2", "slam")
+USER_EXTRAS = ("control", "sim", "plots", "web", "teleop", "logs", "ros2", "slam")
 
 
 def _name(requirement: str) -> str:
@@ -112,6 +112,27 @@ def test_missing_extra_names_the_extra() -> None:
     assert line is not None and "pip install 'omnibot[slam]'" in line
 
 
+def test_a_shared_module_names_the_commands_extra() -> None:
+    """numpy comes with most extras: the line names the one of the command that missed it."""
+    numpy = ModuleNotFoundError("No module named 'numpy'", name="numpy")
+    for command, extra in (("sim", "sim"), ("dashboard", "web"), ("goto", "slam"), ("follow", "control")):
+        line = missing_extra(numpy, command)
+        assert line is not None and f"pip install 'omnibot[{extra}]'" in line, (command, line)
+    assert "pip install 'omnibot[control]'" in str(missing_extra(numpy))
+    # a module of one extra is that extra's whatever the command
+    assert "omnibot[sim]'" in str(missing_extra(ModuleNotFoundError(name="numba"), "dashboard"))
+
+
+def test_every_extra_a_shared_module_names_installs_it() -> None:
+    from omnibot.cli import build_parser
+
+    (sub,) = (a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    assert set(COMMAND_EXTRA) <= set(sub.choices)
+    for module in SHARED:
+        for extra in {EXTRA_OF[module], *COMMAND_EXTRA.values()}:
+            assert module in {_name(r) for r in EXTRAS[extra]}, (module, extra)
+
+
 def test_other_import_errors_are_not_a_missing_extra() -> None:
     assert missing_extra(ModuleNotFoundError("No module named 'omnibot.nope'", name="omnibot.nope")) is None
     assert missing_extra(ImportError("cannot import name 'x' from 'numba'", name="numba")) is None
@@ -175,6 +196,26 @@ def test_a_command_without_its_extra_says_what_to_install(tmp_path: Path) -> Non
     # planner's reach needs only the floor model): the first extra it misses is web's
     for extra, line in zip(("logs", "sim", "sim", "web", "teleop"), said, strict=True):
         assert f"pip install 'omnibot[{extra}]'" in line, line
+
+
+def test_the_core_commands_run_without_numpy(tmp_path: Path) -> None:
+    """With numpy alone hidden: the core's commands run, every other names its own extra."""
+    lines = [
+        ["robot", "list"],
+        ["robot", "show", "omni3"],
+        ["kinematics", "--robot", "mecanum4", "--wheels", "1,2,3,4"],
+        ["follow", "--help"],
+        ["sim", "--pty"],
+        ["dashboard", "--port", "sim://", "--duration", "0.1"],
+        ["map", "--out", str(tmp_path / "map"), "--explore", "--duration", "0.1"],
+    ]
+    statuses, stderr = _hidden(["numpy"], lines, tmp_path)
+    assert statuses == [0, 0, 0, 0, 2, 2, 2], stderr
+    assert "Traceback" not in stderr
+    said = [line for line in stderr.splitlines() if "pip install 'omnibot[" in line]
+    for extra, line in zip(("sim", "web", "slam"), said, strict=True):
+        assert f"pip install 'omnibot[{extra}]'" in line, line
+    assert all("'numpy' is not installed" in line for line in said[:2]), said
 
 
 def test_every_command_declares_its_options_without_any_extra(tmp_path: Path) -> None:
@@ -258,6 +299,7 @@ def test_the_core_install_holds_the_core_dependencies_only(core_python: Path) ->
     names = {n.replace("_", "-") for n in json.loads(done.stdout.replace("'", '"'))}
     assert CORE_DISTRIBUTIONS | {"omnibot"} <= names
     assert not names & {_name(r) for extra in USER_EXTRAS for r in EXTRAS[extra]}
+    assert "numpy" not in names
 
 
 @pytest.mark.install
@@ -284,8 +326,44 @@ def test_the_core_command_line(core_python: Path) -> None:
     assert done.returncode == 0 and "omni4" in done.stdout, done.stderr
     done = _in_core(core_python, str(omnibot), "robot", "urdf", "mecanum4")
     assert done.returncode == 0 and "<robot" in done.stdout, done.stderr
-    done = _in_core(core_python, str(omnibot), "demo")
-    assert done.returncode == 2, done.stderr
-    assert done.stderr.strip().splitlines() == [
-        "omnibot: error: " + str(missing_extra(ModuleNotFoundError(name="numba")))
-    ]
+    done = _in_core(core_python, str(omnibot), "robot", "show", "omni3")
+    assert done.returncode == 0 and "inverse kinematics" in done.stdout, done.stderr
+    done = _in_core(
+        core_python, str(omnibot), "kinematics", "--robot", "omni3", "--twist", "0.2,0,0.5", "--json"
+    )
+    assert done.returncode == 0, done.stderr
+    speeds = json.loads(done.stdout)["wheel_speeds"]
+    done = _in_core(
+        core_python, str(omnibot), "kinematics", "--robot", "omni3", "--wheels", *map(str, speeds)
+    )
+    assert done.returncode == 0 and "vx=0.2 m/s  vy=" in done.stdout, done.stderr
+    for command in (["demo"], ["sim", "--pty"]):
+        done = _in_core(core_python, str(omnibot), *command)
+        assert done.returncode == 2, done.stderr
+        (line,) = done.stderr.strip().splitlines()
+        assert line.startswith("omnibot: error: ") and "pip install 'omnibot[sim]'" in line, line
+
+
+@pytest.mark.install
+@pytest.mark.timeout(600)
+@pytest.mark.parametrize("robot", ["omni4", "omni3", "mecanum4"])
+def test_the_core_generates_the_firmware_config_of_this_checkout(
+    core_python: Path, robot: str, tmp_path: Path
+) -> None:
+    """``python -m omnibot.firmware.config`` without numpy: the same literals as here, with numpy, and
+    the board's files staged."""
+    done = _in_core(core_python, str(core_python), "-m", "omnibot.firmware.config", robot, "--print")
+    assert done.returncode == 0, done.stderr
+    here = subprocess.run(
+        [sys.executable, "-m", "omnibot.firmware.config", robot, "--print"],
+        capture_output=True,
+        text=True,
+        check=True,
+        env={**clean_env(), "PYTHONPATH": str(ROOT / "src")},
+    )
+    assert done.stdout == here.stdout
+    done = _in_core(
+        core_python, str(core_python), "-m", "omnibot.firmware.config", robot, str(tmp_path / "board")
+    )
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "board" / "robot_config.py").is_file()

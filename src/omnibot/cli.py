@@ -145,29 +145,23 @@ def _add_robot(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 
 def _kinematics(args: argparse.Namespace) -> int:
-    import numpy as np
-
-    from omnibot.robot import kinematics as kin
-    from omnibot.robot import load_robot
+    from omnibot.robot import load_robot, rows
 
     robot = load_robot(args.robot)
-    J = robot.wheel_matrix
+    J = robot.inverse_rows
     names = [w.name for w in robot.wheels]
     out: dict[str, object] = {"robot": robot.name, "wheel_names": names}
-    with np.errstate(over="ignore", invalid="ignore"):  # an overflow is refused below, not warned of
-        if args.wheels is not None:
-            speeds = parse_floats(args.wheels, robot.n_wheels, "--wheels")
-            result = kin.forward(J, speeds)
-            twist = [float(v) for v in result.twist]
-            residual = [float(v) for v in result.residual]
-            out |= {"wheel_speeds": speeds, "twist": twist, "residual": residual}
-            derived = [*twist, *residual]
-        else:
-            twist = parse_floats(args.twist, 3, "--twist")
-            speeds = [float(v) for v in kin.inverse(J, twist)]
-            rims = [v * w.radius for v, w in zip(speeds, robot.wheels, strict=True)]
-            out |= {"twist": twist, "wheel_speeds": speeds, "rim_speeds": rims}
-            derived = [*speeds, *rims]
+    if args.wheels is not None:
+        speeds = parse_floats(args.wheels, robot.n_wheels, "--wheels")
+        twist, residual = (list(v) for v in rows.forward(J, speeds))
+        out |= {"wheel_speeds": speeds, "twist": twist, "residual": residual}
+        derived = [*twist, *residual]
+    else:
+        twist = parse_floats(args.twist, 3, "--twist")
+        speeds = list(rows.apply(J, twist))
+        rims = [v * w.radius for v, w in zip(speeds, robot.wheels, strict=True)]
+        out |= {"twist": twist, "wheel_speeds": speeds, "rim_speeds": rims}
+        derived = [*speeds, *rims]
     if not all(math.isfinite(v) for v in derived):
         given = "--wheels" if args.wheels is not None else "--twist"
         raise ConfigError("the result overflows (it is not a finite number): give smaller values", key=given)
@@ -701,10 +695,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     from omnibot.signals import Terminated, terminate_cleanly
 
     parser = build_parser()
+    command = _command(sys.argv[1:] if argv is None else argv)
     try:
         args, extra = parser.parse_known_args(argv)  # a chosen command's module is imported here
     except ModuleNotFoundError as exc:
-        if (line := missing_extra(exc)) is None:
+        if (line := missing_extra(exc, command)) is None:
             raise
         print(f"omnibot: error: {line}", file=sys.stderr)
         return EXIT_USAGE
@@ -749,15 +744,21 @@ def main(argv: Sequence[str] | None = None) -> int:
                 file=sys.stderr,
             )
         else:
-            print(f"omnibot: error: {_message(exc)}", file=sys.stderr)
+            print(f"omnibot: error: {_message(exc, command)}", file=sys.stderr)
         if _output_full(exc):
             _silence_stdout()  # what standard output still holds goes to /dev/null: no second failure
         return status
 
 
-def _message(exc: BaseException) -> str:
-    """The one line an error is told in."""
-    if (line := missing_extra(exc)) is not None:
+def _command(argv: Sequence[str]) -> str | None:
+    """The command of an ``omnibot`` command line (its first word that is not an option: the
+    top-level options take no value)."""
+    return next((word for word in argv if not word.startswith("-")), None)
+
+
+def _message(exc: BaseException, command: str | None = None) -> str:
+    """The one line an error of ``command`` is told in."""
+    if (line := missing_extra(exc, command)) is not None:
         return line
     if isinstance(exc, UnicodeDecodeError):  # text where the reader checked for none (it names no file)
         return f"not UTF-8 text: {exc}"

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from omnibot.errors import ConfigError
-from omnibot.estimation.slip import SlipLeg, SlipModel, SlipParameters, fit_slip, leg_error, leg_residual
+from omnibot.estimation.creep import SlipParameters
+from omnibot.estimation.slip import SlipLeg, SlipModel, fit_slip, leg_error, leg_residual
 from omnibot.motion import Twist
 from omnibot.robot import load_robot
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ast
+import math
 from pathlib import Path
 from typing import Any
 
@@ -21,6 +22,22 @@ def test_config_is_plain_literals_and_round_trips(name: str) -> None:
     value = ast.literal_eval(tree.body[-1].value)  # type: ignore[attr-defined]
     assert value == cfg
     assert cfg["motors"] == len(cfg["rim"]) == len(cfg["J"]) == len(cfg["encoder_cpr"])
+
+
+@pytest.mark.parametrize("name", preset_names())
+def test_the_least_squares_keys_are_the_inverse_rounded_with_no_signed_zero(name: str) -> None:
+    """travel, turn, creep_mix and body_ff come through the least-squares inverse, whose exact zeros
+    are a few rounding errors of either sign: written as 0.0, never -0.0, so the literals do not
+    depend on the SVD that computed them."""
+    robot = load_robot(name)
+    cfg = fwconfig.build_config(robot)
+    flat = [v for key in ("travel", "creep_mix", "body_ff") for row in cfg[key] for v in row] + cfg["turn"]
+    assert not [v for v in flat if v == 0.0 and math.copysign(1.0, v) < 0]
+    cpr = cfg["encoder_cpr"]
+    forward = robot.forward_rows
+    assert cfg["turn"] == [
+        pytest.approx(forward[2][i] * 2 * math.pi / c, abs=1e-12) for i, c in enumerate(cpr)
+    ]
 
 
 def test_omni4_limits_in_protocol_units() -> None:

@@ -357,7 +357,7 @@ static const float ACCEL_WHEEL_FF[MOTORS][3] PROGMEM = {{7.228845126006995e-17f,
 #define FEATURE_PROGRESS 1
 #define PROGRESS_TOLERANCE 0.1f
 #define PROGRESS_COAST_MAX_MS 3000
-static const float TRAVEL[2][MOTORS] PROGMEM = {{0.0f, 0.000178499583f, 0.0f, -0.000178499583f}, {0.000178499583f, -0.0f, -0.000178499583f, 0.0f}};
+static const float TRAVEL[2][MOTORS] PROGMEM = {{0.0f, 0.000178499583f, 0.0f, -0.000178499583f}, {0.000178499583f, 0.0f, -0.000178499583f, 0.0f}};
 /* a VEL's watchdog on the closed loop brakes to rest (motion.py brake_to_rest): the twist slewed */
 /* down at the acceleration limits (m/s^2, rad/s^2), the wheels at rest below REST_COUNTS a window */
 #define FEATURE_BRAKE 1
@@ -383,7 +383,7 @@ static const float TURN[MOTORS] PROGMEM = {0.000929685326f, 0.000929685326f, 0.0
 static const float DEFAULT_SLIP[3] PROGMEM = {0.0f, 0.0f, 1.0f};
 static const float CREEP_ROLL[MOTORS][3] PROGMEM = {{-1.0f, 0.0f, 0.0f}, {0.0f, 1.0f, 0.0f}, {1.0f, 0.0f, -0.0f}, {-0.0f, -1.0f, 0.0f}};
 static const float CREEP_RIM[MOTORS][3] PROGMEM = {{0.0f, 1.0f, 0.096f}, {1.0f, 0.0f, 0.096f}, {0.0f, -1.0f, 0.096f}, {-1.0f, 0.0f, 0.096f}};
-static const float CREEP_MIX[MOTORS][MOTORS] PROGMEM = {{-0.0f, 20.0f, 0.0f, -20.0f}, {-20.0f, 0.0f, 20.0f, -0.0f}, {-0.0f, -20.0f, -0.0f, 20.0f}, {20.0f, 0.0f, -20.0f, -0.0f}};
+static const float CREEP_MIX[MOTORS][MOTORS] PROGMEM = {{0.0f, 20.0f, 0.0f, -20.0f}, {-20.0f, 0.0f, 20.0f, 0.0f}, {0.0f, -20.0f, 0.0f, 20.0f}, {20.0f, 0.0f, -20.0f, 0.0f}};
 /* the calibrated reach (CAL table 8, WARN 18): knots {folded course deg, cm/s}; 0: none */
 #define FEATURE_REACH 1
 #define DEFAULT_REACH_N 1

@@ -6,8 +6,8 @@ the one the controller names (:func:`omnibot.client.session.robot_on_link`). Eit
 leaves the controller stopped and in the MODE it was found in (:mod:`omnibot.client.session`).
 Errors in the input (a malformed path file, an unknown follower, bad numbers) are ConfigErrors: one
 line, exit status 2. A run that did not do its job exits 1 with the reason: a recording shorter than
-:data:`~omnibot.navigation.record.MIN_POINTS` points or :data:`~omnibot.navigation.record.MIN_LENGTH`
-m, a follow run outside its tolerances (:class:`~omnibot.navigation.metrics.Tolerances`).
+:data:`~omnibot.navigation.outcome.MIN_POINTS` points or :data:`~omnibot.navigation.outcome.MIN_LENGTH`
+m, a follow run outside its tolerances (:class:`~omnibot.navigation.outcome.Tolerances`).
 """
 
 from __future__ import annotations

@@ -45,7 +45,7 @@ import numpy as np
 
 from omnibot.floor import GRAVITY, ROLL_SPEED_EPS, WHEEL_SPEED_EPS, Surface, get_surface, static_loads
 from omnibot.robot import RobotDescription, WheelSpec
-from omnibot.robot.kinematics import FloatArray, contact_rows, wheel_matrix
+from omnibot.robot.kinematics import FloatArray, contact_rows, pseudo_inverse, wheel_matrix
 
 
 def free_wheel_speeds(robot: RobotDescription) -> FloatArray:
@@ -124,7 +124,7 @@ def _floor_load(
     x, y = each(lambda w: w.position[0]), each(lambda w: w.position[1])
     gamma, radius = each(lambda w: w.gamma), each(lambda w: w.radius)
     traction, roller = contact_rows(x, y, each(lambda w: w.drive_angle), gamma)
-    share = np.linalg.pinv(traction.T)  # (m, 3): the least-norm traction forces for a body force
+    share = pseudo_inverse(traction.T)  # (m, 3): the least-norm traction forces for a body force
     load = static_loads(x[None], y[None], np.array([robot.mass]), np.zeros((1, len(wheels)), bool))[0]
     ta, na = -radius * np.cos(gamma), radius * np.sin(gamma)
     body_t, body_n = twist @ traction.T, twist @ roller.T  # (k, m)

@@ -1,4 +1,5 @@
 """State estimation from the robot's own sensors (encoders, gyro); depends on robot and plain data only.
+Names load on first use, each with its own module.
 
 ::
 
@@ -8,40 +9,46 @@
 
 Modules: ``estimator`` (the Estimator protocol, PoseEstimator, Seed002Estimator, the registry),
 ``odometry`` (wheel odometry, encoder counts), ``tracking`` (tracking wheels), ``heading`` (the gyro
-heading filter), ``silence`` (a gyro gone quiet), ``slip`` (the floor's slip model and its fit),
-``slipprobe``, ``spins`` (gyro bias from spins and standstills), ``stall`` (a stalled robot),
-``wheelslip`` (one wheel slipping, from the fit residual).
+heading filter), ``silence`` (a gyro gone quiet), ``creep`` (the floor's creep coefficients and the
+wheels' creep rows, without numpy), ``slip`` (the floor's slip model and its fit), ``slipprobe``,
+``spins`` (gyro bias from spins and standstills), ``stall`` (a stalled robot), ``wheelslip`` (one wheel slipping, from the fit residual).
 """
 
-from omnibot.estimation.estimator import (
-    ESTIMATORS,
-    Estimator,
-    PoseEstimator,
-    Seed002Estimator,
-    SensorSample,
-    estimator_names,
-    make_estimator,
-    replay,
-)
-from omnibot.estimation.heading import HeadingFilter, HeadingFilterConfig
-from omnibot.estimation.odometry import WheelOdometry, compose_arc, forward_twist
-from omnibot.estimation.silence import GyroSilence
-from omnibot.estimation.slip import (
-    SlipLeg,
-    SlipModel,
-    SlipParameters,
-    fit_slip,
-    leg_error,
-    leg_residual,
-)
-from omnibot.estimation.slipprobe import SlipProbe
-from omnibot.estimation.spins import Spin, SpinFit, Standstill, fit_spins, spin_biases
-from omnibot.estimation.stall import Stall, StallDetector, StallSample
-from omnibot.estimation.tracking import Seed002Odometry, TrackingGeometry, TrackingOdometry
-from omnibot.estimation.wheelslip import WheelSlipCheck
+from typing import TYPE_CHECKING
+
+from omnibot.faces import lazy_names
+
+if TYPE_CHECKING:
+    from omnibot.estimation.creep import CreepRows, SlipParameters, creep_rows
+    from omnibot.estimation.estimator import (
+        ESTIMATORS,
+        Estimator,
+        PoseEstimator,
+        Seed002Estimator,
+        SensorSample,
+        estimator_names,
+        make_estimator,
+        replay,
+    )
+    from omnibot.estimation.heading import HeadingFilter, HeadingFilterConfig
+    from omnibot.estimation.odometry import WheelOdometry, compose_arc, forward_twist
+    from omnibot.estimation.silence import GyroSilence
+    from omnibot.estimation.slip import (
+        SlipLeg,
+        SlipModel,
+        fit_slip,
+        leg_error,
+        leg_residual,
+    )
+    from omnibot.estimation.slipprobe import SlipProbe
+    from omnibot.estimation.spins import Spin, SpinFit, Standstill, fit_spins, spin_biases
+    from omnibot.estimation.stall import Stall, StallDetector, StallSample
+    from omnibot.estimation.tracking import Seed002Odometry, TrackingGeometry, TrackingOdometry
+    from omnibot.estimation.wheelslip import WheelSlipCheck
 
 __all__ = [
     "ESTIMATORS",
+    "CreepRows",
     "Estimator",
     "GyroSilence",
     "HeadingFilter",
@@ -65,6 +72,8 @@ __all__ = [
     "WheelOdometry",
     "WheelSlipCheck",
     "compose_arc",
+    "creep",
+    "creep_rows",
     "estimator",
     "estimator_names",
     "fit_slip",
@@ -85,3 +94,63 @@ __all__ = [
     "tracking",
     "wheelslip",
 ]
+
+if not TYPE_CHECKING:  # type checkers take each name from its import above
+    __getattr__ = lazy_names(
+        __name__,
+        {
+            "creep": (
+                "CreepRows",
+                "SlipParameters",
+                "creep_rows",
+            ),
+            "estimator": (
+                "ESTIMATORS",
+                "Estimator",
+                "PoseEstimator",
+                "Seed002Estimator",
+                "SensorSample",
+                "estimator_names",
+                "make_estimator",
+                "replay",
+            ),
+            "heading": (
+                "HeadingFilter",
+                "HeadingFilterConfig",
+            ),
+            "odometry": (
+                "WheelOdometry",
+                "compose_arc",
+                "forward_twist",
+            ),
+            "silence": ("GyroSilence",),
+            "slip": (
+                "SlipLeg",
+                "SlipModel",
+                "fit_slip",
+                "leg_error",
+                "leg_residual",
+            ),
+            "slipprobe": ("SlipProbe",),
+            "spins": (
+                "Spin",
+                "SpinFit",
+                "Standstill",
+                "fit_spins",
+                "spin_biases",
+            ),
+            "stall": (
+                "Stall",
+                "StallDetector",
+                "StallSample",
+            ),
+            "tracking": (
+                "Seed002Odometry",
+                "TrackingGeometry",
+                "TrackingOdometry",
+            ),
+            "wheelslip": ("WheelSlipCheck",),
+        },
+    )
+"""Each name loads its own module on first use: the core (the client, the firmware config) takes
+``SlipParameters`` and ``creep_rows`` without numpy."""

@@ -24,15 +24,16 @@ from typing import Protocol
 import numpy as np
 
 from omnibot.errors import ConfigError
+from omnibot.estimation.creep import SlipParameters
 from omnibot.estimation.heading import HeadingFilter, HeadingFilterConfig
 from omnibot.estimation.odometry import COUNT_MODULUS, compose_arc, count_delta
 from omnibot.estimation.silence import GyroSilence
-from omnibot.estimation.slip import SlipModel, SlipParameters
+from omnibot.estimation.slip import SlipModel
 from omnibot.estimation.tracking import Seed002Odometry, TrackingGeometry
 from omnibot.estimation.wheelslip import SKID_MARGIN, WheelSlipCheck
 from omnibot.motion import Estimate, Pose2D
 from omnibot.robot import RobotDescription
-from omnibot.robot.kinematics import world_to_body
+from omnibot.robot.kinematics import forward_matrix, world_to_body
 
 STILL_TIME = 0.2
 """Seconds without a single encoder count after which the robot is taken to stand still. An
@@ -184,7 +185,7 @@ class PoseEstimator:
         cpr = {e.wheel: e.counts_per_rev for e in robot.encoders.motors}
         self._rad_per_count = np.array([2.0 * math.pi / cpr[w.name] for w in robot.wheels])
         self._J = robot.wheel_matrix
-        self._pinv = np.linalg.pinv(self._J)
+        self._pinv = forward_matrix(robot)
         per_count = np.abs(self._pinv[2]) * self._rad_per_count
         self.rotation_resolution = float(per_count.max())
         self.wheel_slip = WheelSlipCheck(self._J, self._rad_per_count)

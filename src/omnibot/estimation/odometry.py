@@ -77,7 +77,7 @@ class WheelOdometry:
         if missing:
             raise ConfigError(f"wheel odometry needs an encoder on every wheel; none on {', '.join(missing)}")
         self._rad_per_count = np.array([2.0 * math.pi / cpr[w.name] for w in robot.wheels])
-        self._pinv = np.linalg.pinv(robot.wheel_matrix)
+        self._pinv = kin.forward_matrix(robot)
         self._J = robot.wheel_matrix
         self.pose = start or Pose2D(0.0, 0.0, 0.0)
         self.distance = 0.0

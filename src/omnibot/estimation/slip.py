@@ -46,70 +46,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from omnibot.errors import ConfigError
+from omnibot.estimation.creep import SlipParameters, creep_rows
 from omnibot.motion import Twist
-from omnibot.robot import RobotDescription
-from omnibot.robot.kinematics import robot_contact_rows
+from omnibot.robot import RobotDescription, kinematics
 
 FloatArray = NDArray[np.float64]
 
 ROLL_EPS = 0.01
 """m/s: rolling speed over which a roller's resistance builds up (the model's sign regularisation)."""
-
-
-KEYS = ("roll", "combined", "compliance", "scale")
-"""A calibration file's ``odometry.slip`` keys (files from before the combined drag lack
-``combined``: it is then 0, the model those files were fitted with)."""
-
-
-@dataclass(frozen=True)
-class SlipParameters:
-    """A floor's creep coefficients, ``roll`` (m/s per roller drag), ``compliance`` (s) and
-    ``combined`` (m/s per m/s of combined-drag roller speed), and the encoders' distance ``scale``
-    (true distance per encoder distance once the creep is out: a tyre whose rolling radius differs
-    from the description's)."""
-
-    roll: float = 0.0
-    compliance: float = 0.0
-    scale: float = 1.0
-    combined: float = 0.0
-
-    def __post_init__(self) -> None:
-        for name in KEYS:
-            value = getattr(self, name)
-            if not math.isfinite(value):
-                raise ConfigError(f"slip {name} must be a finite number, got {value}", key=name)
-        if not 0.5 < self.scale < 2.0:
-            raise ConfigError(f"slip scale must be between 0.5 and 2, got {self.scale}", key="scale")
-
-    @classmethod
-    def from_mapping(cls, data: object, where: str = "slip") -> SlipParameters:
-        """From ``{roll: ..., combined: ..., compliance: ..., scale: ...}`` (a calibration file's
-        ``odometry.slip``; a missing key keeps its default, so files with the older three keys load)."""
-        if not isinstance(data, dict):
-            raise ConfigError(f"{where}: expected a mapping with {', '.join(KEYS)}")
-        unknown = sorted(set(data) - set(KEYS))
-        if unknown:
-            raise ConfigError(f"{where}: unknown key(s) {unknown}; expected {', '.join(KEYS)}")
-        values = {}
-        for key in KEYS:
-            raw = data.get(key, getattr(cls, key))
-            try:
-                values[key] = float(raw)
-            except (TypeError, ValueError):
-                raise ConfigError(f"{where}.{key}: {raw!r} is not a number") from None
-        try:
-            return cls(**values)
-        except ConfigError as exc:
-            raise ConfigError(f"{where}: {exc}") from None
-
-    def as_dict(self) -> dict[str, float]:
-        """The coefficients as a mapping, rounded for a calibration file (``odometry.slip``)."""
-        return {
-            "roll": round(self.roll, 6),
-            "combined": round(self.combined, 6),
-            "compliance": round(self.compliance, 6),
-            "scale": round(self.scale, 5),
-        }
 
 
 class SlipPatterns(NamedTuple):
@@ -125,23 +69,22 @@ class SlipModel:
     """The creep pattern of a robot's wheels (geometry from its description, coefficients per floor)."""
 
     def __init__(self, robot: RobotDescription, params: SlipParameters | None = None) -> None:
-        gamma = np.array([w.gamma for w in robot.wheels])
-        radius = np.array([w.radius for w in robot.wheels])
-        traction, roller = robot_contact_rows(robot)  # the simulator's: rim speed r cos(gamma) omega = T q
-        self.rim_per_rad = radius * np.cos(gamma)
+        rows = creep_rows(robot)
+        self.rim_per_rad = np.array(rows.rim_per_rad)
         """m of rim travel along the traction direction per rad of wheel turn."""
-        # a roller rolls with the body and, on mecanum wheels, with the wheel's own turn
-        self.roll_rows = roller + (radius * np.sin(gamma) / self.rim_per_rad)[:, None] * traction
-        self.rim_rows = traction / np.cos(gamma)[:, None]
+        self.roll_rows = np.array(rows.roll)
+        """Each wheel's roller rolling speed over the body twist (with the body and, on mecanum
+        wheels, with the wheel's own turn)."""
+        self.rim_rows = np.array(rows.rim)
         """Each wheel's rim speed r omega over the body twist (rolling without slip)."""
-        self._share = np.linalg.pinv(traction.T)  # (m, 3): least-norm wheel forces for a body wrench
-        self._roller_wrench = roller  # wheel k's roller drag, per unit, as a body wrench row
-        self.mix = (self._share @ roller.T) / self.rim_per_rad[:, None]
+        self._share = np.array(rows.share)  # (m, 3): least-norm wheel forces for a body wrench
+        self._roller_wrench = kinematics.robot_contact_rows(robot)[1]  # wheel k's roller drag as a wrench row
+        self.mix = np.array(rows.mix)
         """(m, m): wheel k's over-turn (rad/s) per m/s of creep term of roller row j (the firmware's
         ``creep_mix``: ``creep = roll p + combined c`` in rad/s of each wheel)."""
         self.inertia_ratio = robot.yaw_inertia / robot.mass
         self.params = params or SlipParameters()
-        self._wheel_twist = np.linalg.pinv(np.asarray(robot.wheel_matrix, dtype=float))
+        self._wheel_twist = kinematics.forward_matrix(robot)
         """The least-squares body twist of wheel speeds (rad/s)."""
 
     def patterns(self, twist: ArrayLike, accel: ArrayLike = (0.0, 0.0, 0.0)) -> SlipPatterns:
@@ -255,7 +198,7 @@ def fit_slip(
     if not legs:
         raise ConfigError("a slip fit needs at least one run")
     model = SlipModel(robot)
-    J_pinv = np.linalg.pinv(robot.wheel_matrix)
+    J_pinv = kinematics.forward_matrix(robot)
     rows, rhs = [], []
     for leg in legs:
         rows.append(np.column_stack((_regressors(model, J_pinv, leg), leg.encoder_disp)))
@@ -309,7 +252,7 @@ def leg_residual(
     if params is not None:
         if robot is None:
             raise ValueError("leg_residual needs the robot to apply slip parameters")
-        reg = _regressors(SlipModel(robot), np.linalg.pinv(robot.wheel_matrix), leg)
+        reg = _regressors(SlipModel(robot), kinematics.forward_matrix(robot), leg)
         err = (
             err
             - reg @ np.array([params.roll, params.combined, params.compliance])

@@ -44,7 +44,7 @@ from omnibot.estimation.odometry import COUNT_MODULUS, count_delta
 from omnibot.estimation.silence import GyroSilence
 from omnibot.estimation.tracking import TrackingGeometry
 from omnibot.motion import Pose2D, Twist
-from omnibot.robot import RobotDescription, SonarSpec
+from omnibot.robot import RobotDescription, SonarSpec, kinematics
 
 WINDOW = 0.4
 """s of telemetry the encoders and a witness are compared over."""
@@ -179,7 +179,7 @@ class StallDetector:
         """The robot has an encoder on every driven wheel (without, nothing is ever found)."""
         self._rad_per_count = np.array([2.0 * math.pi / cpr.get(w.name, 1) for w in robot.wheels])
         self._J = robot.wheel_matrix
-        self._pinv = np.linalg.pinv(self._J)
+        self._pinv = kinematics.forward_matrix(robot)
         self._power_max = min(w.motor.pwm_max for w in robot.wheels)
         self._free = free_wheel_speeds(robot)
         self._min_speed = MOVING / max(w.radius for w in robot.wheels)  # rad/s a wheel is asked at least

@@ -23,6 +23,8 @@ from collections import deque
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from omnibot.robot.kinematics import pseudo_inverse
+
 FloatArray = NDArray[np.float64]
 
 WINDOW = 0.1
@@ -60,7 +62,7 @@ class WheelSlipCheck:
         m = J.shape[0]
         self.window = window
         self.redundant = m > 3
-        hat = J @ np.linalg.pinv(J)
+        hat = J @ pseudo_inverse(J)
         leverage = np.clip(1.0 - np.diag(hat), 1e-12, None)
         self.student = (np.eye(m) - hat) / leverage[:, None]
         """Rows: wheel i's whole slip from the increments, were it the one slipping (0 if m <= 3)."""

@@ -93,10 +93,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from omnibot.errors import ConfigError, OmnibotError
-from omnibot.estimation import SlipModel, SlipParameters
+from omnibot.estimation import SlipParameters, creep_rows
 from omnibot.firmware import mpu6050
 from omnibot.robot import (
     PiecewiseLinear,
@@ -104,8 +102,8 @@ from omnibot.robot import (
     SonarSpec,
     course_axes,
     courses,
-    kinematics,
     load_robot,
+    rows,
 )
 
 PACKAGE_DIR = Path(__file__).resolve().parent
@@ -233,11 +231,21 @@ def _travel(robot: RobotDescription, cpr: list[int], rows: tuple[int, ...] = (0,
     """Body travel (m) along x and y (``rows`` 0, 1; row 2: rotation, rad) per encoder count of each
     wheel: the pseudo-inverse of the inverse kinematics, 0 for a wheel without an encoder (then the
     firmware has no progress check and no landing)."""
-    forward = np.linalg.pinv(np.asarray(robot.wheel_matrix, dtype=float))
+    forward = robot.forward_rows
     return [
-        [round(float(forward[row, i]) * 2.0 * math.pi / c, 12) if c > 0 else 0.0 for i, c in enumerate(cpr)]
+        [
+            _inverse_literal(forward[row][i] * 2.0 * math.pi / c, 12) if c > 0 else 0.0
+            for i, c in enumerate(cpr)
+        ]
         for row in rows
     ]
+
+
+def _inverse_literal(value: float, digits: int) -> float:
+    """A number computed through a least-squares inverse, rounded to ``digits`` and a zero's sign
+    dropped: an exact zero of the inverse comes out as a few rounding errors of either sign (the
+    SVD's), which the rounding leaves as +-0.0; the literal keeps the number, not that noise."""
+    return round(value, digits) + 0.0
 
 
 LAND_ACCEL = 0.5
@@ -274,15 +282,15 @@ def _accel_ff(robot: RobotDescription) -> tuple[list[list[float]], list[float]]:
     :func:`~omnibot.control.reach.floor_grip` shares them), and ``wheel_ff``, each wheel's PWM counts
     per rad/s^2 of its own angular acceleration (the wheel's and the rotor's inertia)."""
     wheels = robot.wheels
-    traction, _ = kinematics.robot_contact_rows(robot)
-    share = np.linalg.pinv(traction.T) * np.array([robot.mass, robot.mass, robot.yaw_inertia])
+    scale = (robot.mass, robot.mass, robot.yaw_inertia)
+    share = [[v * k for v, k in zip(row, scale, strict=True)] for row in creep_rows(robot).share]
     body, own = [], []
     for i, w in enumerate(wheels):
         m = w.motor
         volts = max(robot.battery.voltage - m.driver_drop, 1e-9)
         counts = m.resistance / (m.torque_constant * m.gear_ratio * m.gear_efficiency) / volts * m.pwm_max
-        torque = w.radius * math.cos(w.gamma) * share[i]  # N m at the wheel per unit acceleration
-        body.append([round(float(v) * counts, 6) for v in torque])
+        rim = w.radius * math.cos(w.gamma)
+        body.append([_inverse_literal(rim * v * counts, 6) for v in share[i]])  # rim * v: N m per unit accel
         own.append(round((w.inertia + m.rotor_inertia * m.gear_ratio**2) * counts, 6))
     return body, own
 
@@ -331,7 +339,7 @@ def build_config(
 
 def _geometry_keys(robot: RobotDescription, power_min: int | None) -> dict[str, Any]:
     """name ... kl_axes: the robot, its motors' power range and its kinematics."""
-    J = robot.wheel_matrix
+    J = robot.inverse_rows
     radius = [float(w.radius) for w in robot.wheels]
     return {
         "name": robot.name,
@@ -396,7 +404,7 @@ def _calibration_k(robot: RobotDescription) -> float:
 
 def _limit_keys(robot: RobotDescription, encoder_cpr: list[int]) -> dict[str, Any]:
     """roller_dir ... turn: the rollers, the protocol's bounds, the controller and the encoders."""
-    _, roller_rows = kinematics.robot_contact_rows(robot)
+    _, roller_rows = rows.robot_contact_rows(robot)
     lim = robot.limits
     ctl = robot.controller
     return {
@@ -422,13 +430,13 @@ def _limit_keys(robot: RobotDescription, encoder_cpr: list[int]) -> dict[str, An
 
 def _landing_keys(robot: RobotDescription, encoder_cpr: list[int], slip: SlipParameters) -> dict[str, Any]:
     """slip ... progress_tolerance: the floor's creep and how a closed-loop motion lands."""
-    creep = SlipModel(robot)
+    creep = creep_rows(robot)
     lim = robot.limits
     return {
         "slip": [round(slip.roll, 6), round(slip.combined, 6), round(slip.scale, 5)],
-        "creep_roll": [[round(float(v), 9) for v in row] for row in creep.roll_rows],
-        "creep_rim": [[round(float(v), 9) for v in row] for row in creep.rim_rows],
-        "creep_mix": [[round(float(v), 9) for v in row] for row in creep.mix],
+        "creep_roll": [[round(float(v), 9) for v in row] for row in creep.roll],
+        "creep_rim": [[round(float(v), 9) for v in row] for row in creep.rim],
+        "creep_mix": [[_inverse_literal(v, 9) for v in row] for row in creep.mix],
         "land_accel": [
             round(LAND_ACCEL * lim.acceleration_max, 6),
             round(LAND_ACCEL * lim.angular_acceleration_max, 6),

@@ -23,9 +23,9 @@ if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
     from omnibot.navigation.goto import GotoOptions, GotoResult, navigation_runtime
     from omnibot.navigation.goto_source import GotoSource
     from omnibot.navigation.judge import FollowJudge
-    from omnibot.navigation.metrics import Tolerances
+    from omnibot.navigation.outcome import MIN_LENGTH, MIN_POINTS, Tolerances
     from omnibot.navigation.plot import plot_run
-    from omnibot.navigation.record import MIN_LENGTH, MIN_POINTS, check_recording, teach
+    from omnibot.navigation.record import check_recording, teach
     from omnibot.navigation.runner import STANDSTILL, Navigator
     from omnibot.navigation.session import FollowOptions, follow_path, simulated_client, summary, verdict
     from omnibot.navigation.slipcal import SLIP_COURSES, SlipCalibration, calibrate_slip
@@ -36,9 +36,9 @@ _EXPORTS = {
     "goto": ("GotoOptions", "GotoResult", "navigation_runtime"),
     "goto_source": ("GotoSource",),
     "judge": ("FollowJudge",),
-    "metrics": ("Tolerances",),
     "plot": ("plot_run",),
-    "record": ("MIN_LENGTH", "MIN_POINTS", "check_recording", "teach"),
+    "outcome": ("MIN_LENGTH", "MIN_POINTS", "Tolerances"),
+    "record": ("check_recording", "teach"),
     "runner": ("STANDSTILL", "Navigator"),
     "session": ("FollowOptions", "follow_path", "simulated_client", "summary", "verdict"),
     "slipcal": ("SLIP_COURSES", "SlipCalibration", "calibrate_slip"),
@@ -71,6 +71,7 @@ __all__ = [
     "judge",
     "metrics",
     "navigation_runtime",
+    "outcome",
     "plot",
     "plot_run",
     "record",

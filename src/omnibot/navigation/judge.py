@@ -8,7 +8,8 @@ from collections.abc import Callable
 from typing import Any
 
 from omnibot.motion import Pose2D
-from omnibot.navigation.metrics import Tolerances, follow_report
+from omnibot.navigation.metrics import follow_report
+from omnibot.navigation.outcome import Tolerances
 from omnibot.navigation.runner import SETTLE, FollowRun, FollowTrace, FrameMap
 from omnibot.robot import RobotDescription
 from omnibot.runtime import Cycle, FollowerSource, Runtime

@@ -9,25 +9,14 @@ report says which (``source``).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from omnibot.control import MotionLimits, min_traversal_time, wrap
+from omnibot.navigation.outcome import Tolerances
 from omnibot.navigation.runner import FollowRun
 from omnibot.robot import RobotDescription
-
-
-@dataclass(frozen=True)
-class Tolerances:
-    """What a follow run must achieve to count as done (``omnibot follow`` exits 1 otherwise): end
-    within ``final`` m of the path's end and never stray more than ``cross_track`` m from the path.
-    The defaults hold with room to spare for the trackers on every preset and floor the simulator has,
-    and catch a run that went astray (a wrong robot, a lost link, a latched emergency stop)."""
-
-    final: float = 0.15
-    cross_track: float = 0.30
 
 
 def judge(report: dict[str, Any], tolerances: Tolerances) -> dict[str, Any]:

@@ -26,6 +26,7 @@ from omnibot.client import RobotClient
 from omnibot.control import Path, PathRecorder, time_optimal_profile, to_body, wrap
 from omnibot.errors import ConfigError
 from omnibot.motion import Twist
+from omnibot.navigation.outcome import MIN_LENGTH, MIN_POINTS
 from omnibot.navigation.runner import Navigator
 from omnibot.navigation.session import follower_limits
 from omnibot.robot import RobotDescription
@@ -38,10 +39,6 @@ HAND_STIFFNESS = 60.0
 HAND_DAMPING = 15.0
 """1/s: the hand's velocity gain."""
 HAND_TURN_STIFFNESS, HAND_TURN_DAMPING = 60.0, 15.0
-MIN_POINTS = 10
-"""A recording with fewer points is no path to follow (``omnibot record`` exits 1)."""
-MIN_LENGTH = 0.10
-"""m: nor is one shorter than this."""
 
 
 @dataclass

@@ -15,7 +15,8 @@ from omnibot.client import RobotClient
 from omnibot.control import MotionLimits, Path, make_follower
 from omnibot.estimation import SlipParameters
 from omnibot.motion import Pose2D
-from omnibot.navigation.metrics import Tolerances, follow_report
+from omnibot.navigation.metrics import follow_report
+from omnibot.navigation.outcome import Tolerances
 from omnibot.navigation.runner import GYRO_USE, STANDSTILL, FollowRun, Navigator
 from omnibot.progress import Progress
 from omnibot.robot import RobotDescription

@@ -6,7 +6,8 @@
 
 Modules: ``description`` (RobotDescription and its specs, loading and presets), ``battery`` (charge
 levels of each chemistry), ``courses`` (folding courses onto a wheel layout's axes), ``summary``
-(describe), ``urdf`` (to_urdf), ``kinematics`` (wheel matrices and frames: import the module).
+(describe), ``urdf`` (to_urdf), ``rows`` (the kinematics in plain Python: wheel rows, rank check,
+least-squares inverse) and ``kinematics`` (the same over numpy arrays, and frames): import the module.
 ``describe`` and ``to_urdf`` load on first use: ``omnibot robot list`` need not load XML.
 """
 
@@ -81,6 +82,7 @@ __all__ = [
     "open_voltage",
     "parse_description",
     "preset_names",
+    "rows",
     "summary",
     "to_urdf",
     "urdf",

@@ -755,8 +755,23 @@ class RobotDescription(_Spec):
         return min(speed, lim.speed_max)
 
     @cached_property
+    def inverse_rows(self) -> tuple[tuple[float, float, float], ...]:
+        """The inverse-kinematics matrix J as plain rows, one per wheel (rad/s per unit body twist;
+        :func:`omnibot.robot.rows.wheel_matrix`, which refuses a layout of rank below 3)."""
+        from omnibot.robot.rows import wheel_matrix
+
+        return wheel_matrix(self)
+
+    @cached_property
+    def forward_rows(self) -> tuple[tuple[float, ...], ...]:
+        """J's least-squares inverse as plain rows (3, n): the body twist per wheel speeds."""
+        from omnibot.robot.rows import pseudo_inverse
+
+        return pseudo_inverse(self.inverse_rows)
+
+    @cached_property
     def wheel_matrix(self) -> Any:
-        """The inverse-kinematics matrix, see :func:`omnibot.robot.kinematics.wheel_matrix`."""
+        """:attr:`inverse_rows` as a numpy array (:func:`omnibot.robot.kinematics.wheel_matrix`)."""
         from omnibot.robot.kinematics import wheel_matrix
 
         return wheel_matrix(self)

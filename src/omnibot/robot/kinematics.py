@@ -1,18 +1,10 @@
-"""Kinematics of any omni/mecanum wheel layout (seed 003's general model), as pure functions.
+"""Kinematics of any omni/mecanum wheel layout (seed 003's general model) over numpy arrays: batches of
+twists and wheel speeds, contact rows of many wheels or robots at once.
 
-Wheel i sits at p_i = (x_i, y_i) in the body frame, its contact point travels along the unit vector
-u_i (``drive_angle``) for a positive wheel speed, and its rollers let it slide freely across the
-direction t_i = u_i turned by the roller angle gamma_i. Only the velocity of the contact point along
-t_i must be produced by the wheel, so for a body twist (vx, vy, w)::
-
-    omega_i = t_i . (v + w x p_i) / (r_i cos gamma_i)
-            = [cos(phi_i), sin(phi_i), x_i sin(phi_i) - y_i cos(phi_i)] . (vx, vy, w) / (r_i cos gamma_i)
-
-with phi_i = drive angle + gamma. In seed 003's notation this row is
-[sin(a+b+g), -cos(a+b+g), -L cos(b+g)] / (r cos g), i.e. omega = J2^-1 J1 xi.
-
-Forward kinematics is the least-squares inverse of that map; its residual is what the wheel speeds
-disagree with any rigid motion, a slip signal.
+The model, its rank check and its least-squares inverse are :mod:`omnibot.robot.rows`' (plain
+Python, the core install's); this module gives the same numbers as arrays (seed 003's omega = J2^-1
+J1 xi row by row). Forward kinematics is the least-squares inverse of the wheel map; its residual is
+what the wheel speeds disagree with any rigid motion, a slip signal.
 """
 
 from __future__ import annotations
@@ -24,6 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from omnibot.errors import KinematicsError
+from omnibot.robot import rows
 
 if TYPE_CHECKING:
     from omnibot.robot.description import RobotDescription
@@ -31,30 +24,27 @@ if TYPE_CHECKING:
 FloatArray = NDArray[np.float64]
 
 
+def _contact_numbers(x: float, y: float, drive_angle: float, gamma: float) -> tuple[float, ...]:
+    traction, roller = rows.contact_row(x, y, drive_angle, gamma)
+    return (*traction, *roller)
+
+
+_CONTACT = np.vectorize(_contact_numbers, otypes=[float] * 6)
+
+
 def contact_rows(
     x: ArrayLike, y: ArrayLike, drive_angles: ArrayLike, gammas: ArrayLike
 ) -> tuple[FloatArray, FloatArray]:
-    """Each wheel's floor contact as rows over the body twist (vx, vy, w), shape (..., 3) for
-    parameter arrays of any shape: the traction row (the speed of the body at the contact along
-    the rim's direction of travel, which a wheel turning at omega matches with ``r cos(gamma)
-    omega``) and the roller row (across it, along the roller's axis of rolling)."""
-    xa, ya = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
-    phi = np.asarray(drive_angles, dtype=float) + np.asarray(gammas, dtype=float)
-    c, s = np.cos(phi), np.sin(phi)
-    traction = np.stack((c, s, xa * s - ya * c), axis=-1)
-    roller = np.stack((-s, c, xa * c + ya * s), axis=-1)
-    return traction, roller
+    """:func:`omnibot.robot.rows.contact_row` over parameter arrays of any (broadcast) shape: the
+    traction and roller rows over the body twist (vx, vy, w), each of shape (..., 3)."""
+    numbers = _CONTACT(x, y, drive_angles, gammas)
+    return np.stack(numbers[:3], axis=-1), np.stack(numbers[3:], axis=-1)
 
 
 def robot_contact_rows(robot: RobotDescription) -> tuple[FloatArray, FloatArray]:
     """:func:`contact_rows` of a robot's wheels, in their order: (traction, roller), each (n, 3)."""
-    wheels = robot.wheels
-    return contact_rows(
-        [w.position[0] for w in wheels],
-        [w.position[1] for w in wheels],
-        [w.drive_angle for w in wheels],
-        [w.gamma for w in wheels],
-    )
+    traction, roller = rows.robot_contact_rows(robot)
+    return np.array(traction, dtype=float), np.array(roller, dtype=float)
 
 
 def wheel_rows(
@@ -62,37 +52,46 @@ def wheel_rows(
 ) -> FloatArray:
     """The (n, 3) matrix J with omega = J @ (vx, vy, w) for the wheel parameters given as arrays."""
     p = np.asarray(positions, dtype=float).reshape(-1, 2)
-    denom = np.asarray(radii, dtype=float) * np.cos(np.asarray(gammas, dtype=float))
-    if np.any(np.abs(denom) < 1e-12):
-        raise KinematicsError("a wheel with gamma of +-90 degrees or zero radius cannot drive")
-    traction, _ = contact_rows(p[:, 0], p[:, 1], drive_angles, gammas)
-    return np.asarray(traction / denom[:, None], dtype=float)
+    drive, gamma, radius = (
+        np.broadcast_to(np.asarray(a, dtype=float), (len(p),)) for a in (drive_angles, gammas, radii)
+    )
+    return np.array(
+        [
+            rows.wheel_row(*wheel)
+            for wheel in zip(p.tolist(), drive.tolist(), gamma.tolist(), radius.tolist(), strict=True)
+        ],
+        dtype=float,
+    ).reshape(-1, 3)
 
 
 def wheel_matrix(robot: RobotDescription) -> FloatArray:
-    """Inverse-kinematics matrix J of a robot (rad/s of each wheel per unit body twist).
+    """Inverse-kinematics matrix J of a robot (rad/s of each wheel per unit body twist): its
+    :attr:`~omnibot.robot.RobotDescription.inverse_rows` as an array.
 
     Raises KinematicsError if the layout cannot produce every planar twist (rank below 3).
     """
-    J = wheel_rows(
-        [w.position for w in robot.wheels],
-        [w.drive_angle for w in robot.wheels],
-        [w.gamma for w in robot.wheels],
-        [w.radius for w in robot.wheels],
-    )
-    check_holonomic(J, robot.name)
-    return J
+    return np.array(robot.inverse_rows, dtype=float)
 
 
-def check_holonomic(J: FloatArray, name: str = "this layout") -> None:
-    """Raise KinematicsError unless J has rank 3 (every planar twist reachable)."""
-    sv = np.linalg.svd(J, compute_uv=False)
-    if sv.size < 3 or sv[2] < 1e-9 * max(sv[0], 1e-12):
-        raise KinematicsError(
-            f"{name} is not holonomic: its wheels constrain only {int(np.sum(sv > 1e-9 * sv[0]))} of the "
-            "3 planar motions (check drive_angle/gamma: wheels pushing along the same lines cannot "
-            "produce every twist)"
-        )
+def forward_matrix(robot: RobotDescription) -> FloatArray:
+    """The least-squares inverse of :func:`wheel_matrix`, (3, n): body twist per wheel speeds (its
+    :attr:`~omnibot.robot.RobotDescription.forward_rows` as an array)."""
+    return np.array(robot.forward_rows, dtype=float)
+
+
+def pseudo_inverse(A: ArrayLike) -> FloatArray:
+    """:func:`omnibot.robot.rows.pseudo_inverse` of a 2-D array."""
+    return np.array(rows.pseudo_inverse(_plain(A)), dtype=float).reshape(np.shape(A)[::-1])
+
+
+def _plain(A: ArrayLike) -> list[list[float]]:
+    plain: list[list[float]] = np.asarray(A, dtype=float).tolist()
+    return plain
+
+
+def check_holonomic(J: ArrayLike, name: str = "this layout") -> None:
+    """Raise KinematicsError unless J has rank 3 (:func:`omnibot.robot.rows.check_holonomic`)."""
+    rows.check_holonomic(_plain(J), name)
 
 
 def inverse(J: FloatArray, twist: ArrayLike) -> FloatArray:
@@ -112,11 +111,12 @@ class ForwardResult(NamedTuple):
 
 
 def forward(J: FloatArray, wheel_speeds: ArrayLike) -> ForwardResult:
-    """Least-squares body twist from wheel speeds, with the per-wheel residual as a slip signal."""
+    """Least-squares body twist from wheel speeds (one set or an (m, n) batch), with the per-wheel
+    residual as a slip signal."""
     w = np.asarray(wheel_speeds, dtype=float)
     if w.shape[-1] != J.shape[0]:
         raise KinematicsError(f"expected {J.shape[0]} wheel speeds, got {w.shape[-1]}")
-    twist = w @ np.linalg.pinv(J).T
+    twist = w @ pseudo_inverse(J).T
     return ForwardResult(np.asarray(twist, dtype=float), np.asarray(w - twist @ J.T, dtype=float))
 
 

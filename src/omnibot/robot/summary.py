@@ -43,7 +43,7 @@ def describe(robot: RobotDescription) -> str:
     )
     lines.append("")
     lines.append("inverse kinematics: wheel rad/s = J (vx, vy, w)")
-    for w, row in zip(robot.wheels, robot.wheel_matrix, strict=True):
+    for w, row in zip(robot.wheels, robot.inverse_rows, strict=True):
         lines.append(f"  {w.name:12s} " + " ".join(f"{v:9.4f}" for v in row))
     return "\n".join(lines)
 
