@@ -285,3 +285,13 @@ def test_robot_show_lists_the_scanner() -> None:
 
     text = describe(load_robot("omni3"))
     assert "scanner   rplidar-a1 'laser' at (0, 0, 0.37 m) facing 0 deg, 360 rays at 10 Hz clockwise" in text
+
+
+def test_robot_show_gives_each_drive_angle_within_a_half_turn() -> None:
+    """Seed 003's angles put mecanum4's right front drive at alpha + beta - 90 = 360 degrees: shown as
+    0 beside its three 0-degree siblings (and omni4's wheel at the back as 180, not -180)."""
+    from omnibot.robot.summary import describe
+
+    rows = {line.split()[0]: line.split()[3] for line in describe(load_robot("mecanum4")).splitlines()[6:10]}
+    assert rows == {"left_front": "0.00", "right_front": "0.00", "right_back": "0.00", "left_back": "0.00"}
+    assert "m4            0.0000   0.0960       180.00" in describe(load_robot("omni4"))

@@ -21,9 +21,8 @@ def describe(robot: RobotDescription) -> str:
     lines.append("wheel          x [m]    y [m]  drive [deg]  gamma [deg]  radius [m]")
     for w in robot.wheels:
         x, y = w.position
-        lines.append(
-            f"{w.name:12s} {x:7.4f}  {y:7.4f}  {math.degrees(w.drive_angle):11.2f}  {w.gamma_deg:11.2f}  {w.radius:10.4f}"
-        )
+        drive = math.degrees(math.remainder(w.drive_angle, math.tau)) + 0.0  # (-180, 180], never -0
+        lines.append(f"{w.name:12s} {x:7.4f}  {y:7.4f}  {drive:11.2f}  {w.gamma_deg:11.2f}  {w.radius:10.4f}")
     m = robot.wheels[0].motor
     same = all(w.motor == m for w in robot.wheels)
     current = "none" if m.current_limit is None else f"{m.current_limit:g} A"
