@@ -101,20 +101,16 @@ _add_ros2 = command_in(
     "ROS_AUTOMATIC_DISCOVERY_RANGE apply.",
 )
 _add_record = command_in(
-    "omnibot.apps.teach",
+    "omnibot.apps.record",
     "record",
-    add="add_record_arguments",
-    run="run_record",
     summary="teach a path: record the robot's odometry while it is pushed by hand or driven",
     description="Samples the robot's own pose estimate (encoders, tracking wheels, gyro) by distance or "
     "time into a path file t,x,y,theta[,v]. In the simulator a hand pushes the robot along a shape with "
     "the motors off (seed 002's teaching), or VEL commands drive it; with --port it listens.",
 )
 _add_follow = command_in(
-    "omnibot.apps.teach",
+    "omnibot.apps.follow",
     "follow",
-    add="add_follow_arguments",
-    run="run_follow",
     summary="repeat a path: a path follower drives it, with a report and a plot",
     description="Runs a path follower at 100 Hz on the host (VEL out, TEL in); by default on the simulated "
     "robot in lockstep, measured against its ground truth. Exit status 1 if the run was not completed "

@@ -9,9 +9,11 @@ functions, and never parse a command line.
 * :mod:`omnibot.apps.teleop` - ``omnibot teleop``: a pad or the keyboard, with a deadman
   (:mod:`omnibot.apps.teleop_loop`: the pad driving a runtime);
 * :mod:`omnibot.apps.dashboard` - ``omnibot dashboard``: the web page;
-* :mod:`omnibot.apps.teach` - ``omnibot record`` and ``omnibot follow``: teach and repeat a path;
+* :mod:`omnibot.apps.record` and :mod:`omnibot.apps.follow` - ``omnibot record`` and ``omnibot follow``:
+  teach and repeat a path (:mod:`omnibot.apps.teach`: the robot both drive);
 * :mod:`omnibot.apps.calibrate` - ``omnibot calibrate``: power, gyro and odometry calibration;
-* :mod:`omnibot.apps.log` - ``omnibot log``: inspect, plot, export and replay a recording;
+* :mod:`omnibot.apps.log` - ``omnibot log``: inspect, plot, export and replay a recording (its options;
+  the subcommands in :mod:`omnibot.apps.log_views`, :mod:`omnibot.apps.log_replay`, :mod:`omnibot.apps.log_score`);
 * :mod:`omnibot.apps.mapping` - ``omnibot map``: drive the robot (a path, a pad or the keyboard)
   while the SLAM maps the room; the map, the trajectories and, on the simulator, their scores;
 * :mod:`omnibot.apps.goto` - ``omnibot goto``: localise on a saved map, plan and go;
