@@ -140,7 +140,7 @@ _add_goto = command_in(
 
 
 def _add_calibrate_now(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    importlib.import_module("omnibot.apps.calibrate").add_parser(sub)
+    importlib.import_module("omnibot.apps.calibrate_options").add_parser(sub)
 
 
 _add_calibrate = lazy(

@@ -11,7 +11,8 @@ functions, and never parse a command line.
 * :mod:`omnibot.apps.dashboard` - ``omnibot dashboard``: the web page;
 * :mod:`omnibot.apps.record` and :mod:`omnibot.apps.follow` - ``omnibot record`` and ``omnibot follow``:
   teach and repeat a path (:mod:`omnibot.apps.teach`: the robot both drive);
-* :mod:`omnibot.apps.calibrate` - ``omnibot calibrate``: power, gyro and odometry calibration;
+* :mod:`omnibot.apps.calibrate` - ``omnibot calibrate``: power, gyro and odometry calibration (its
+  options: :mod:`omnibot.apps.calibrate_options`; the robots it drives: :mod:`omnibot.apps.calibrate_robots`);
 * :mod:`omnibot.apps.log` - ``omnibot log``: inspect, plot, export and replay a recording (its options;
   the subcommands in :mod:`omnibot.apps.log_views`, :mod:`omnibot.apps.log_replay`, :mod:`omnibot.apps.log_score`);
 * :mod:`omnibot.apps.mapping` - ``omnibot map``: drive the robot (a path, a pad or the keyboard)
