@@ -46,7 +46,8 @@ from scipy import ndimage
 from omnibot.errors import PlanningError
 from omnibot.mapping import CostMap, OccupancyGrid, check_start, inflate, plan_path
 from omnibot.motion import Pose2D
-from omnibot.navigation.goto import GotoOptions, GotoResult, PoseProvider, go_to
+from omnibot.navigation.goal import GotoOptions, GotoResult, PoseProvider
+from omnibot.navigation.goto import go_to
 from omnibot.navigation.views import VIEW_RANGE, View, line_of_sight, stands, unseen_surface, views
 from omnibot.robot import RobotDescription
 from omnibot.runtime import Runtime
