@@ -269,7 +269,7 @@ class Recorder(LogWriter):
 
     def truth_rows(self, rows: Sequence[tuple[float, float, float, float]]) -> int:
         """Ground truth recorded elsewhere (rows ``t, x, y, theta``, ``t`` on the link's clock: the pty
-        emulator's ``--truth`` file placed by :class:`omnibot.demos.seed000.ControllerClock`) on
+        emulator's ``--truth`` file placed by :class:`omnibot.demos.truth.ControllerClock`) on
         ``/omnibot/truth``, the body twist from the poses either side. Returns the rows written (none
         before the recording has its robot)."""
         if self.robot is None:
