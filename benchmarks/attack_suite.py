@@ -1002,7 +1002,7 @@ def web(quick: bool) -> list[Row]:
 ROS2_PEER = r"""
 import math, sys, time
 from omnibot.logs import schemas
-from omnibot.logs.recorder import header, twist
+from omnibot.logs.rosmsg import header, twist
 from omnibot.ros2.dds import DEFAULT, Node, qos, topic_name
 from omnibot.ros2.types import dds_name, dds_type, to_dds
 

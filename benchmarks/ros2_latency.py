@@ -59,7 +59,7 @@ MATCH = 30.0
 PEER = r"""
 import json, random, sys, time
 from omnibot.logs import schemas
-from omnibot.logs.recorder import twist
+from omnibot.logs.rosmsg import twist
 from omnibot.ros2.dds import Node
 from omnibot.ros2.types import to_dds
 

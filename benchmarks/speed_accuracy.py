@@ -48,7 +48,7 @@ from omnibot.cliargs import use_calibration
 from omnibot.client import RobotClient, open_robot
 from omnibot.estimation import SlipModel
 from omnibot.logs import header, schemas
-from omnibot.logs.recorder import twist as ros_twist
+from omnibot.logs.rosmsg import twist as ros_twist
 from omnibot.motion import Twist
 from omnibot.navigation.slipcal import simulate_slip_calibration
 from omnibot.robot import RobotDescription, load_robot

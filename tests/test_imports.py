@@ -733,7 +733,7 @@ TEST_REACHES: dict[str, tuple[str, tuple[str, ...]]] = {
         "reads back, record by record, the log a command wrote",
         ("apps/test_log.py", "apps/test_teleop.py"),
     ),
-    "omnibot.logs.recorder": (
+    "omnibot.logs.rosmsg": (
         "builds the messages the recorder writes (twist, odometry) to compare the bridge's with",
         ("ros2/test_cmd_vel.py", "ros2/test_frames.py", "ros2/test_types.py"),
     ),
@@ -836,7 +836,7 @@ BENCHMARK_REACHES: dict[str, tuple[str, tuple[str, ...]]] = {
         ("attack_suite.py", "foxglove_live.py"),
     ),
     "omnibot.logs.reader": ("reads back the log it measures", ("log_cost.py",)),
-    "omnibot.logs.recorder": ("builds the twist messages it sends", ("speed_accuracy.py",)),
+    "omnibot.logs.rosmsg": ("builds the twist messages it sends", ("speed_accuracy.py",)),
     "omnibot.logs.topics": ("the topics it counts", ("log_cost.py",)),
     "omnibot.mapping.deskew": ("the SLAM's parts measured alone", ("slam_synthetic.py",)),
     "omnibot.mapping.mapper": ("the mapper measured alone", ("mapping_localise.py", "mapping_mapper.py")),

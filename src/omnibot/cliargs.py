@@ -21,6 +21,7 @@ old spellings working with a warning. ``--debug`` (every command) shows the trac
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -284,6 +285,13 @@ def check_world(args: argparse.Namespace) -> None:
             f"unknown surface {surface!r}; expected one of: {', '.join(SURFACES)}", key="--surface"
         )
     load_world(world_of(args))
+
+
+def positive(value: float, flag: str) -> float:
+    """``value`` if it is a positive finite number, else a ConfigError naming ``flag``."""
+    if not (math.isfinite(value) and value > 0):
+        raise ConfigError(f"expected a positive number, got {value:g}", key=flag)
+    return value
 
 
 def output_dir(text: str, flag: str = "--out") -> Path:

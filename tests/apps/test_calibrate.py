@@ -13,6 +13,7 @@ from typing import Any
 import pytest
 
 from omnibot.apps import calibrate as calibration_cli
+from omnibot.apps.calibrate_robots import asked_stand
 from omnibot.calibration import (
     ACCEPTANCE,
     load_calibration,
@@ -189,7 +190,7 @@ def test_a_real_robot_is_asked_onto_the_stand_and_back() -> None:
         prompts.append(prompt)
         return ""
 
-    lift = calibration_cli.asked_stand(ask)
+    lift = asked_stand(ask)
     lift(None, True)  # type: ignore[arg-type]
     lift(None, False)  # type: ignore[arg-type]
     assert prompts[0].startswith("Lift the robot onto a stand") and "back on the floor" in prompts[1]
@@ -287,7 +288,7 @@ def test_yes_runs_unattended_on_a_port(
 
 
 def test_the_terminal_ending_is_a_clear_error(monkeypatch: pytest.MonkeyPatch) -> None:
-    from omnibot.apps.calibrate import terminal_ask
+    from omnibot.apps.calibrate_robots import terminal_ask
 
     monkeypatch.setattr(sys, "stdin", NotATerminal())
     with pytest.raises(ConfigError, match="standard input ended while asking: 'Put the robot on lab'"):

@@ -2,7 +2,7 @@
 
 Checked deterministically (the modules a fresh interpreter has loaded), not timed: the times are in
 BENCHMARKS.md (``python -m benchmarks.startup``). A command whose options live in a heavy module is
-declared by name and summary only until it is chosen (``omnibot.cli._Commands``).
+declared by name and summary only until it is chosen (``omnibot.apps.subcommands.Commands``).
 """
 
 from __future__ import annotations

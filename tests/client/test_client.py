@@ -28,7 +28,7 @@ from omnibot.client import (
     WarnEvent,
     controller_error,
 )
-from omnibot.client.client import Pending
+from omnibot.client.pending import Pending
 from omnibot.client.views import Status
 from omnibot.errors import ControllerError, LinkError, LinkTimeout, ProtocolError
 from omnibot.firmware.config import build_config

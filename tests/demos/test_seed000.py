@@ -84,36 +84,6 @@ def test_demo_bad_port_is_a_clear_error(tmp_path: Path, capsys: pytest.CaptureFi
     assert "omnibot: error:" in capsys.readouterr().err
 
 
-def test_the_odometry_trail_starts_at_the_start_pose() -> None:
-    from omnibot.client import Telemetry
-    from omnibot.demos.seed000 import Recorder
-    from omnibot.motion import Pose2D
-    from omnibot.robot import load_robot
-
-    recorder = Recorder(load_robot("omni4"))
-    for k in range(5):  # standing at the odometry's origin before the start is known
-        recorder(Telemetry(time=0.02 * k, controller_time=0.02 * k, encoders=(0, 0, 0, 0), heading=0.0))
-    assert recorder.odo_trail[0] == (0.0, 0.0)
-    recorder.start_at(Pose2D(1.0, 1.0, 0.0))
-    recorder(Telemetry(time=0.2, controller_time=0.2, encoders=(0, 100, 0, -100), heading=0.0))
-    trail = recorder.odo_trail
-    assert trail[0] == (1.0, 1.0) and (0.0, 0.0) not in trail
-    assert trail[-1][0] > 1.0 and abs(trail[-1][1] - 1.0) < 1e-9  # then it moves on from there
-
-
-def test_the_spin_line_commands_degrees_beside_the_achieved_degrees() -> None:
-    """The commanded body turn is the rate times the run's time, in degrees; the rate only in brackets."""
-    line = seed000.spin_commanded(seed000.COMPENSATING_CURVATURE)
-    turn = number(line, r"body turns ([+-][\d.]+) deg \(")
-    rate = number(line, r"\((-?[\d.]+) deg/s for")
-    assert rate == pytest.approx(-200, abs=1)  # 0.6 m/s x -5.8/m = -3.49 rad/s
-    assert turn == pytest.approx(rate * seed000.SPIN_TIME, abs=1)  # -300 deg, not -200
-    assert number(line, r"path bend ([+-][\d.]+) deg") == pytest.approx(0, abs=1)  # compensated: straight
-    seed = seed000.spin_commanded(seed000.SEED_CURVATURE)
-    assert number(seed, r"body turns ([+-][\d.]+) deg \(") == pytest.approx(-206, abs=1)
-    assert number(seed, r"path bend ([+-][\d.]+) deg") == pytest.approx(+94, abs=1)
-
-
 def test_demo_on_a_sim_port_without_a_world_has_its_wall_and_turns_the_short_way(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -170,27 +140,3 @@ def test_the_pty_demos_log_holds_the_emulators_truth_on_the_links_clock(
 
     # the odometry has not drifted yet when the robot first moves 5 cm: the two agree on when
     assert abs(moved(run.truth, 0.05) - moved(run.estimate, 0.05)) < 0.05
-
-
-def test_the_controllers_clock_is_placed_by_the_tels_either_side() -> None:
-    """An emulator that falls behind the wall clock (a loaded, cold one: its first second took three)
-    moves the offset between its clock and the link's; each instant is placed by the TELs sent either
-    side of it (the demo's truth in CI was put 1.3 s early by one offset, the soonest TEL's, for all)."""
-    import numpy as np
-
-    from omnibot.client import Telemetry
-
-    clock = seed000.ControllerClock()
-    assert clock.link_time(0.0) is None and clock.place([(0.0, 1.0, 1.0, 0.0)]) == []
-    rng = np.random.default_rng(1)
-
-    def link(c: float) -> float:  # 3 s of link time for the first controller second, then in step
-        return 3.0 * c if c < 1.0 else 2.0 + c
-
-    for k in range(200):  # TEL every 20 ms, each 2-12 ms on the line
-        c = 0.02 * k
-        clock(Telemetry(time=link(c) + 0.002 + 0.01 * rng.random(), controller_time=c))
-    for c in (0.1, 0.5, 0.9, 1.5, 3.0, 3.98, 5.0):
-        assert abs(clock.link_time(c) - link(c)) < 0.05, c  # type: ignore[operator]
-    clock(Telemetry(time=10.0, controller_time=0.0))  # a restart: its clock from 0 again
-    assert clock.link_time(0.0) == pytest.approx(10.0)

@@ -19,7 +19,7 @@ import pytest
 import omnibot
 from omnibot.cli import main
 from omnibot.control import standard_path, write_path
-from omnibot.logs.recorder import _Direct
+from omnibot.logs.writer import _Direct
 
 KEYS = ("rms_cross_track_m", "max_cross_track_m", "final_error_m", "duration_s")
 LIMIT = 64 * 1024

@@ -23,7 +23,8 @@ from omnibot.client import RobotClient, guarded
 from omnibot.logs import schemas, topics
 from omnibot.logs.foxglove_ws import FOXGLOVE_APP, REFUSED_ORIGIN
 from omnibot.logs.live import PANEL_HOLD, FoxgloveLive
-from omnibot.logs.recorder import POSE_VARIANCE, Recorder
+from omnibot.logs.recorder import Recorder
+from omnibot.logs.rosmsg import POSE_VARIANCE
 from omnibot.motion import Twist
 from omnibot.robot import load_robot
 from omnibot.runtime import Cycle, Runtime

@@ -64,7 +64,7 @@ def test_foxglove_values_are_what_was_sent(recorded: RecordedRun) -> None:
 
 
 def test_foxglove_sees_absolute_topics_and_odom_covariances(recorded: RecordedRun) -> None:
-    from omnibot.logs.recorder import POSE_VARIANCE, TWIST_VARIANCE
+    from omnibot.logs.rosmsg import POSE_VARIANCE, TWIST_VARIANCE
 
     messages, _ = read_with_foxglove(recorded.path)
     seen = {m["topic"] for m in messages}

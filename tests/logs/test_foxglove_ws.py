@@ -14,14 +14,15 @@ from websockets.sync.client import ClientConnection, connect
 from websockets.typing import Subprotocol
 
 from omnibot.errors import ConfigError
-from omnibot.logs.foxglove_ws import BURST, ClientChannel, FoxgloveServer
+from omnibot.logs.foxglove_conn import ClientChannel
+from omnibot.logs.foxglove_ws import BURST, FoxgloveServer
 
 TOKEN = "a-token-of-ours"
 SDK = Subprotocol("foxglove.sdk.v1")
 
 
 class Taken:
-    """A :class:`~omnibot.logs.foxglove_ws.Publishing` that keeps what it is given; refuses the
+    """A :class:`~omnibot.logs.foxglove_conn.Publishing` that keeps what it is given; refuses the
     topic ``no``."""
 
     def __init__(self) -> None:
@@ -192,14 +193,3 @@ def test_json_nested_too_deeply_is_told_not_a_traceback(server: FoxgloveServer) 
         ws.send("[" * 30_000 + "]" * 30_000)
         assert "expected a JSON object" in str(next_status(ws)["message"])
         ws.send(json.dumps({"op": "unsubscribe", "subscriptionIds": []}))  # still served
-
-
-def test_a_client_that_does_not_read_is_flagged_once_its_control_queue_is_full() -> None:
-    from omnibot.logs.foxglove_ws import BACKLOG, _Client
-
-    client = _Client(ws=None)  # type: ignore[arg-type]  # the queue alone: nothing is sent
-    for _ in range(BACKLOG):
-        client.status(2, "bad")
-    assert not client.overflow
-    client.status(2, "one too many")
-    assert client.overflow and len(client.control) == BACKLOG

@@ -184,7 +184,7 @@ def test_every_channel_is_absolute_as_rosbag2_writes_it(recorded: RecordedRun) -
 
 
 def test_odom_in_the_log_has_the_covariances_the_bridge_publishes(recorded: RecordedRun) -> None:
-    from omnibot.logs.recorder import POSE_VARIANCE, TWIST_VARIANCE
+    from omnibot.logs.rosmsg import POSE_VARIANCE, TWIST_VARIANCE
 
     _, messages = read_all(recorded.path)
     odom: list[Any] = messages[topics.ODOM]

@@ -21,14 +21,10 @@ from omnibot.errors import BlockedError, ConfigError, OffMapError
 from omnibot.mapping import OccupancyGrid, PlannedPath, compose, inflate, inverse
 from omnibot.mapping.score import world_grid as rasterise
 from omnibot.motion import Pose2D
-from omnibot.navigation.goto import (
-    GotoOptions,
-    ObstacleWatch,
-    PoseProvider,
-    goto,
-    mark,
-    planned_path,
-)
+from omnibot.navigation.goal import GotoOptions, PoseProvider
+from omnibot.navigation.goto import goto
+from omnibot.navigation.obstacles import ObstacleWatch
+from omnibot.navigation.planned import mark, planned_path
 from omnibot.navigation.session import simulated_client
 from omnibot.robot import load_robot
 from omnibot.runtime import Cycle, Runtime

@@ -17,7 +17,8 @@ import pytest
 from omnibot.errors import BlockedError, OffMapError
 from omnibot.mapping.score import world_grid
 from omnibot.motion import Pose2D, Twist
-from omnibot.navigation.goto import GotoResult, navigation_runtime
+from omnibot.navigation.goal import GotoResult
+from omnibot.navigation.goto import navigation_runtime
 from omnibot.navigation.goto_source import POSE_WAIT, GotoSource
 from omnibot.navigation.session import simulated_client
 from omnibot.robot import load_robot

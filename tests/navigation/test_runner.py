@@ -14,7 +14,7 @@ from omnibot.errors import ConfigError
 from omnibot.estimation import SlipParameters
 from omnibot.motion import Pose2D, Twist
 from omnibot.navigation.metrics import ODOMETRY, TRUTH, tracking_report
-from omnibot.navigation.runner import FrameMap, NavigationError, Navigator
+from omnibot.navigation.runner import NavigationError, Navigator
 from omnibot.navigation.session import (
     PLAN_FLOOR_USE,
     FollowOptions,
@@ -23,6 +23,7 @@ from omnibot.navigation.session import (
     simulate_follow,
     simulated_client,
 )
+from omnibot.navigation.trace import FrameMap
 from omnibot.protocol import codes
 from omnibot.robot import load_robot
 from omnibot.runtime import Cycle, EStop, ScriptSource

@@ -11,7 +11,7 @@ from scipy import ndimage
 
 from omnibot.mapping import MapSnapshot, OccupancyGrid, RangeNoise, inflate
 from omnibot.motion import Pose2D
-from omnibot.navigation.explore import choose_view, frontiers, wall_goals
+from omnibot.navigation.frontiers import choose_view, frontiers, wall_goals
 from omnibot.navigation.views import (
     INCIDENCE,
     Surface,

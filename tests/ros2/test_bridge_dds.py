@@ -73,7 +73,7 @@ TELEOP = r"""
 import json, math, time
 from omnibot.client import robot_session
 from omnibot.logs import header, schemas
-from omnibot.logs.recorder import twist
+from omnibot.logs.rosmsg import twist
 from omnibot.protocol import codes
 from omnibot.ros2.bridge import Ros2Sink
 from omnibot.ros2.cmd_vel import CmdVelSource, WATCHDOG

@@ -11,7 +11,7 @@ from typing import Any
 import pytest
 
 from omnibot.logs import header, schemas
-from omnibot.logs.recorder import twist
+from omnibot.logs.rosmsg import twist
 from omnibot.motion import Twist
 from omnibot.ros2.cmd_vel import TWIST, TWIST_STAMPED, CmdVelSource
 from omnibot.ros2.types import to_dds
@@ -152,7 +152,7 @@ EACH = r"""
 import json, threading, time
 from omnibot.client import robot_session
 from omnibot.logs import header, schemas
-from omnibot.logs.recorder import twist
+from omnibot.logs.rosmsg import twist
 from omnibot.protocol.messages import Vel
 from omnibot.ros2.cmd_vel import CmdVelSource
 from omnibot.ros2.dds import Node

@@ -89,7 +89,7 @@ CDR = r"""
 import json, time
 from omnibot.motion import Pose2D
 from omnibot.logs import header, schemas
-from omnibot.logs.recorder import odometry
+from omnibot.logs.rosmsg import odometry
 from omnibot.ros2.dds import Node
 from omnibot.ros2.types import from_dds
 

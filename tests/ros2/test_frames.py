@@ -8,7 +8,7 @@ import pytest
 
 from omnibot.errors import ConfigError
 from omnibot.logs import header, quaternion, schemas, vector
-from omnibot.logs.recorder import odometry
+from omnibot.logs.rosmsg import odometry
 from omnibot.motion import Pose2D
 from omnibot.robot import load_robot, to_urdf
 from omnibot.ros2.frames import frame_prefix, prefixed, urdf_for_tf

@@ -14,13 +14,8 @@ pytest.importorskip(
 
 from omnibot.logs import schemas
 from omnibot.ros2.backend import LATCHED, SENSOR_DATA
-from omnibot.ros2.rclpy_backend import (
-    GRAPH_PERIOD,
-    GraphPublications,
-    RclpyReader,
-    message_class,
-    qos_profile,
-)
+from omnibot.ros2.rclpy_backend import message_class, qos_profile
+from omnibot.ros2.rclpy_endpoints import GRAPH_PERIOD, GraphPublications, RclpyReader
 from omnibot.ros2.types import from_dds
 
 TWIST = "geometry_msgs/msg/Twist"

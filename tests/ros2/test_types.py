@@ -11,10 +11,10 @@ import pytest
 pytest.importorskip("cyclonedds", reason="cyclonedds is not installed (pip install 'omnibot[ros2]')")
 
 from omnibot.logs import header, quaternion, schemas, vector
-from omnibot.logs.recorder import odometry, twist
+from omnibot.logs.rosmsg import odometry, twist
 from omnibot.motion import Pose2D
 from omnibot.robot import load_robot
-from omnibot.ros2.bridge import battery_state
+from omnibot.ros2.battery import battery_state
 from omnibot.ros2.types import dds_name, dds_type, from_dds, to_dds
 
 

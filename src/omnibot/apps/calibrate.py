@@ -1,4 +1,5 @@
-"""``omnibot calibrate``: argument parsing and the glue between links, the session and the outputs.
+"""``omnibot calibrate``: the glue between links, the session and the outputs (its options:
+:mod:`omnibot.apps.calibrate_options`; the robots it drives: :mod:`omnibot.apps.calibrate_robots`).
 
 Kept light at import time (``omnibot --help`` imports it): everything heavy is imported in
 :func:`run`.
@@ -11,14 +12,20 @@ import contextlib
 import math
 import sys
 from collections.abc import Callable, Iterator
-from contextlib import AbstractContextManager, contextmanager
+from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from omnibot.apps.calibrate_robots import (
+    OPERATOR_TRUTHS,
+    asked_stand,
+    check_operator,
+    port_opener,
+    sim_opener,
+    terminal_ask,
+)
 from omnibot.cliargs import (
-    DeprecatedAlias,
-    add_robot_options,
     check_distinct,
     check_sim_options,
     recording_of,
@@ -31,109 +38,12 @@ from omnibot.outputs import check_writable
 
 if TYPE_CHECKING:
     from omnibot.calibration import AccuracyPlan, CalibrationResult, Plan, Verdict
-    from omnibot.client import ClientRecording, RobotClient
+    from omnibot.client import RobotClient
     from omnibot.progress import Progress
     from omnibot.robot import RobotDescription
 
 SIM_SURFACES = ("wood", "carpet")
 """Seed 000 calibrated on wood and carpet and averaged them."""
-
-
-def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    """Add ``omnibot calibrate`` and its options to ``sub``."""
-    p = sub.add_parser(
-        "calibrate",
-        help="seed 000's power calibration (K, K_l, K_t, K_r), gyro and odometry geometry, with a report",
-        description="Drives calibration runs over the protocol (POWER sweeps on the courses the robot's "
-        "symmetry leaves distinct: 0..45 on omni4, 0..30 on omni3, 0..90 on mecanum4; and in rotation, curved MOVEs, a rotation test, UMBmark squares), measures each by the chosen ground "
-        "truth, fits the piecewise-linear factors per surface and averaged over the surfaces, uploads them "
-        "(CAL) and checks open-loop accuracy before and after. Default: the simulated robot in lockstep "
-        "(sim://ROBOT?surface=S), surfaces wood and carpet.",
-    )
-    add_robot_options(
-        p,
-        surface_help="surface name(s), comma-separated (default: wood,carpet in the simulator, 'floor' on "
-        "--port; with several on a real robot you are asked to move it between them)",
-    )
-    _add_output_options(p)
-    _add_truth_options(p)
-    _add_scope_options(p)
-    p.set_defaults(handler=run)
-
-
-def _add_output_options(p: argparse.ArgumentParser) -> None:
-    """Where the report and the calibration file go, and whether a worse calibration is kept."""
-    p.add_argument(
-        "--out",
-        metavar="DIR",
-        help="directory for the report (figures and tables) and, unless --calibration says otherwise, "
-        "calibration.yaml (default ./out)",
-    )
-    p.add_argument(
-        "--calibration", metavar="FILE.yaml", help="calibration file to write (default DIR/calibration.yaml)"
-    )
-    p.add_argument("--report", action=DeprecatedAlias, use="--out DIR", help=argparse.SUPPRESS)
-    p.add_argument(
-        "--force",
-        action="store_true",
-        help="write (and upload) the calibration even when its own check finds it worse than before (on the "
-        "whole, or on a course or ROTATE); the file says so, and the exit status is still 1",
-    )
-
-
-def _add_truth_options(p: argparse.ArgumentParser) -> None:
-    """What measures the runs, and the simulated robot's difference from its description."""
-    p.add_argument(
-        "--truth",
-        help="ground truth: sim | csv:FILE | encoders | sonar[:NAME] | tape (default: sim on the simulator, "
-        "else encoders when every wheel has one, else tape)",
-    )
-    sim = p.add_mutually_exclusive_group()
-    sim.add_argument(
-        "--perturb",
-        metavar="SPEC",
-        help="simulate a robot that differs from its description, e.g. 'radius=1.05;torque_constant=1.1,0.9,0.9,1.1' "
-        "('acceptance' for that one)",
-    )
-    sim.add_argument(
-        "--true-robot", metavar="FILE", help="simulate this description while the firmware uses --robot"
-    )
-
-
-def _add_scope_options(p: argparse.ArgumentParser) -> None:
-    """Which runs, fits and checks the calibration makes."""
-    p.add_argument(
-        "--quick", action="store_true", help="seed 000's scope: courses 0 and 45, fewer runs and checks"
-    )
-    p.add_argument(
-        "--courses", help="calibrated courses in degrees, comma-separated (default: 4 over the fold range)"
-    )
-    p.add_argument(
-        "--move-length", type=float, default=1.0, help="MOVE length the fit is exact for, m (default 1)"
-    )
-    p.add_argument(
-        "--no-motor-map", action="store_true", help="no per-motor offsets and gains (seed 000's factors only)"
-    )
-    p.add_argument(
-        "--no-rollers",
-        action="store_true",
-        help="no roller drag term for the wheels that stand still on the motor axes (seed 000's factors only)",
-    )
-    p.add_argument(
-        "--no-slip",
-        action="store_true",
-        help="skip the wheel-slip runs (the driven-wheel odometry's creep on each floor)",
-    )
-    p.add_argument(
-        "--yes",
-        action="store_true",
-        help="unattended on --port: the robot already stands on the (one) surface, with room around it, so "
-        "nobody is asked to place it (needs a truth that needs no operator: not tape)",
-    )
-    p.add_argument("--no-check", action="store_true", help="skip the before/after accuracy moves")
-    p.add_argument(
-        "--no-upload", action="store_true", help="fit only: do not upload (no K_t runs, no after-check)"
-    )
 
 
 def _surfaces(text: str | None, simulated: bool) -> list[str]:
@@ -172,90 +82,6 @@ def tqdm_progress(desc: str, total: int) -> Iterator[Progress | None]:
 
     with progress_bar(desc, total, unit="run") as bar:
         yield bar
-
-
-def sim_opener(
-    robot: RobotDescription,
-    name: str,
-    seed: int,
-    true_robot: RobotDescription | None,
-    world: str | None = None,
-    recording: ClientRecording | None = None,
-) -> Callable[[str], AbstractContextManager[RobotClient]]:
-    """surface -> a lockstep client on a fresh simulated robot standing on it (in ``world``, default
-    empty), left stopped and in its MODE on the way out, recorded in ``recording`` (``--log``)."""
-
-    @contextmanager
-    def open_client(surface: str) -> Iterator[RobotClient]:
-        from omnibot.client import RobotClient, guarded
-        from omnibot.sim import SimDevice
-        from omnibot.transport import LockstepLink
-
-        url = f"sim://{name}?surface={surface}&seed={seed}" + (f"&world={world}" if world else "")
-        if true_robot is None:
-            client = RobotClient.open(url, robot)
-        else:
-            device = SimDevice(robot, true_robot=true_robot, surface=surface, seed=seed, world=world)
-            client = RobotClient(LockstepLink(device, url=url), robot)
-        with guarded(client, recording=recording):
-            yield client
-
-    return open_client
-
-
-OPERATOR_TRUTHS = ("tape",)
-"""Truth strategies that ask a person to measure every run."""
-
-
-def terminal_ask(prompt: str) -> str:
-    """``input(prompt)``; ConfigError (not EOFError) when standard input ends."""
-    try:
-        return input(prompt)
-    except EOFError:
-        raise ConfigError(f"standard input ended while asking: {prompt.strip()!r}", key="calibrate") from None
-
-
-def check_operator(reasons: list[str]) -> None:
-    """ConfigError when the run needs someone at a terminal (``reasons``) and stdin is not one."""
-    if reasons and not sys.stdin.isatty():
-        raise ConfigError(
-            f"needs a terminal to ask you to {' and to '.join(reasons)} (standard input is not one); "
-            "run it on a terminal, or unattended with --yes and a truth that needs no operator",
-            key="calibrate",
-        )
-
-
-def port_opener(
-    client: RobotClient, ask: Callable[[str], str], placed: bool = False
-) -> Callable[[str], AbstractContextManager[RobotClient]]:
-    """surface -> the one real controller, after asking the person to put the robot there (except on
-    the first surface when the robot is ``placed`` there already)."""
-    where: dict[str, str | None] = {"surface": None}  # where the robot stands
-
-    @contextmanager
-    def open_client(surface: str) -> Iterator[RobotClient]:
-        if where["surface"] is None and placed:
-            where["surface"] = surface
-        if where["surface"] != surface:
-            ask(f"Put the robot on {surface} with about 2 m of free floor around it, then press Enter: ")
-            where["surface"] = surface
-        yield client
-
-    return open_client
-
-
-def asked_stand(ask: Callable[[str], str]) -> Callable[[RobotClient, bool], None]:
-    """The motor map's stand test on a real robot: ask the person to lift it and to put it back."""
-
-    def lift(client: RobotClient, up: bool) -> None:
-        if up:
-            ask(
-                "Lift the robot onto a stand so that no wheel touches anything (they will spin), then press Enter: "
-            )
-        else:
-            ask("Put the robot back on the floor where it stood, then press Enter: ")
-
-    return lift
 
 
 def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> int:

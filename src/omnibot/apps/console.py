@@ -1,13 +1,7 @@
-"""``omnibot send`` and ``omnibot console``: the protocol by hand, over any link URL.
+"""``omnibot console``: the protocol by hand, an interactive terminal over any link URL.
 
-``send`` is one-shot: it sends the commands given on the command line, prints every reply and the
-events seen until the replies are in (with ``--wait-idle`` until IDLE), and exits 0 if every
-reply was OK, 1 if any was an ERROR (or the link failed), 2 for bad input. A motion it was asked to
-send keeps running when it ends normally; on an error or an interrupt the robot gets STOP. Either
-way the controller is left in the text protocol.
-
-``console`` is an interactive terminal: lines typed are sent as they are; replies and decoded
-events are printed as they come (``<- RANGE sonar 1: 42 cm``), also while the prompt waits.
+Lines typed are sent as they are; replies and decoded events are printed as they come (``<- RANGE
+sonar 1: 42 cm``: :mod:`omnibot.apps.formats`), also while the prompt waits.
 Lines starting with ``:`` are console commands (``:help``). With a terminal, input is read with
 readline (history in ``~/.omnibot_history``) in a helper thread while the main thread keeps the
 link pumped; on ``sim://`` the main thread also advances simulated time with the wall clock, so
@@ -28,25 +22,14 @@ import queue
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable
 from pathlib import Path
 from typing import TextIO
 
-from omnibot.client import (
-    STATE_NAMES,
-    ErrorEvent,
-    Event,
-    IdleEvent,
-    RangeEvent,
-    ResetEvent,
-    RobotClient,
-    Telemetry,
-    Unexpected,
-    WarnEvent,
-)
+from omnibot.apps.formats import commas, format_event, format_reply
+from omnibot.cliargs import add_robot_options, positive
+from omnibot.client import Event, RobotClient, Telemetry
 from omnibot.errors import ControllerError, LinkError, LinkTimeout, ProtocolError
-from omnibot.protocol import text
-from omnibot.protocol.messages import Malformed, Reply
 
 DEFAULT_PORT = "sim://omni4"
 HISTORY = Path("~/.omnibot_history")
@@ -65,117 +48,16 @@ Console commands:
   :binary / :text    switch the protocol (replies and events look the same)"""
 
 
-# ------------------------------------------------------------------ formatting
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """``omnibot console``'s options."""
+    add_robot_options(p)
+    p.add_argument("--timeout", type=float, default=2.0, help="seconds to wait for each reply (default 2)")
 
 
-def format_reply(reply: Reply) -> str:
-    """A reply as its text line: ``<- OK``, ``<- ERROR,23,unknown command``."""
-    return "<- " + text.encode(reply).decode("ascii").rstrip()
-
-
-def _list(values: Iterable[object]) -> str:
-    return ",".join(str(v) for v in values)
-
-
-def format_telemetry(tel: Telemetry) -> str:
-    """A TEL sample on one line, in readable units."""
-    parts = [f"<- TEL {tel.controller_time:.3f} s"]
-    if tel.powers is not None:
-        parts.append(f"pwr {_list(tel.powers)}")
-    if tel.encoders is not None:
-        parts.append(f"enc {_list(tel.encoders)}")
-    if tel.tracking:
-        parts.append(f"trk {_list(tel.tracking)}")
-    if tel.gyro_rate is not None:
-        parts.append(f"gyro {math.degrees(tel.gyro_rate):.1f} deg/s")
-    if tel.heading is not None:
-        parts.append(f"hdg {math.degrees(tel.heading):.1f} deg")
-    if tel.battery is not None:
-        parts.append(f"bat {tel.battery:.2f} V")
-    if tel.state is not None:
-        parts.append(f"{STATE_NAMES.get(tel.state, tel.state)} q{tel.queued}")
-    if tel.ranges is not None:
-        ranges = ["-" if r is None else f"{round(r * 100)}cm" for r in tel.ranges]
-        parts.append(f"sonar {_list(ranges)}")
-    return " ".join(parts)
-
-
-def format_event(event: Event) -> str:
-    """An event on one line: ``<- RANGE sonar 1: 42 cm``, ``<- WARN 13 emergency stop by sonar``."""
-    if isinstance(event, RangeEvent):
-        where = "no echo" if event.distance is None else f"{round(event.distance * 100)} cm"
-        return f"<- RANGE sonar {event.sonar}: {where}"
-    if isinstance(event, WarnEvent):
-        return f"<- WARN {event.code} {event.text}"
-    if isinstance(event, ErrorEvent):
-        return f"<- ERROR {event.code} {event.text} (no command waiting)"
-    if isinstance(event, IdleEvent):
-        return "<- IDLE"
-    if isinstance(event, Telemetry):
-        return format_telemetry(event)
-    if isinstance(event, ResetEvent):
-        h = event.hello
-        return f"<- HELLO,{h.version},{h.name},{h.motors} (controller reset)"
-    if isinstance(event, Unexpected):
-        msg = event.message
-        raw = msg.raw if isinstance(msg, Malformed) else msg
-        return f"<- ?? {event.reason}: {raw!r}"
-    return f"<- {event}"
-
-
-# ------------------------------------------------------------------ send
-
-
-def run_send(args: argparse.Namespace, out: TextIO | None = None) -> int:
-    """``omnibot send``: exit status 0 all OK, 1 an ERROR reply or link trouble, 2 bad input."""
-    from omnibot.cliargs import check_sim_options, recording_of, sim_url
-    from omnibot.client import robot_session
-
-    out = out or sys.stdout
-    for line in args.commands:
-        if not line.isascii():
-            print(f"omnibot: error: commands are ASCII only: {line!r}", file=sys.stderr)
-            return 2
-    if not "".join(args.commands).replace(";", "").strip():  # `send "$EMPTY"`: nothing was sent, no OK
-        print("omnibot: error: no command to send (the arguments are empty)", file=sys.stderr)
-        return 2
-    check_sim_options(args)
-    status = 0
-    with robot_session(
-        sim_url(args),
-        args.robot,
-        stop="on_error",
-        restore="protocol",
-        timeout=args.timeout,
-        reconnect=None,
-        recording=recording_of(args),
-    ) as session:
-        client = session.client
-
-        def show(event: Event) -> None:
-            print(format_event(event), file=out, flush=True)
-
-        client.add_listener(show)
-        if args.binary:
-            client.use_binary()
-        for line in args.commands:
-            pendings = client.submit_text(line)
-            for p in pendings:
-                print(f"-> {p.line}", file=out, flush=True)
-            for p in pendings:
-                try:
-                    p.result()
-                except ControllerError:
-                    status = 1
-                if p.reply is not None:
-                    print(format_reply(p.reply), file=out, flush=True)
-        if args.wait_idle:
-            client.wait_idle(args.idle_timeout)
-        client.pump(0)
-    return status
-
-
-# ------------------------------------------------------------------ console
+def run(args: argparse.Namespace) -> int:
+    """``omnibot console``, its timeout checked first."""
+    positive(args.timeout, "--timeout")
+    return run_console(args)
 
 
 class Console:
@@ -253,7 +135,7 @@ class Console:
             s = client.status()
             m = s.move
             self.say(
-                f"{s.state_name}, {s.queued}/{s.capacity} queued, mode {s.mode}, powers {_list(s.powers)}; "
+                f"{s.state_name}, {s.queued}/{s.capacity} queued, mode {s.mode}, powers {commas(s.powers)}; "
                 f"move {m.distance:g} m at {m.speed:g} m/s, course {math.degrees(m.course):g} deg, "
                 f"curvature {m.curvature:g} 1/m"
             )

@@ -9,15 +9,15 @@
         robot.wait_idle(timeout=5)
         print(robot.status())
 
-Modules: ``client`` (RobotClient, Pending: sending, pumping), ``replies`` (Replies: which command a
-reply answers), ``calls`` (the typed calls), ``commands`` (SI -> checked commands), ``limits``,
+Modules: ``client`` (RobotClient: sending, pumping), ``pending`` (Pending: a command awaiting its
+reply), ``replies`` (Replies: which command a reply answers), ``calls`` (the typed calls), ``commands`` (SI -> checked commands), ``limits``,
 ``events`` (Event types, listeners, EventRecorder), ``tracing`` (Tracer: what a recorder hears),
 ``views`` (Hello, Status), ``session`` (robot_session: the robot on the link, the controller
 left as found), ``wire`` (text and binary wire formats), ``switch`` (ProtocolSwitch: the
 protocol a client speaks, switching it), ``errors`` (ControllerError subclasses per code).
 """
 
-from omnibot.client.client import DEFAULT_TIMEOUT, Pending, RobotClient
+from omnibot.client.client import DEFAULT_TIMEOUT, RobotClient
 from omnibot.client.errors import (
     BatteryStopLatched,
     CalibrationRejected,
@@ -42,6 +42,7 @@ from omnibot.client.events import (
     WarnEvent,
 )
 from omnibot.client.limits import Limits
+from omnibot.client.pending import Pending
 from omnibot.client.session import (
     ClientRecording,
     RobotSession,

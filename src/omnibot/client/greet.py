@@ -13,8 +13,9 @@ from __future__ import annotations
 import contextlib
 from collections.abc import Callable, Sequence
 
-from omnibot.client.client import Pending, RobotClient
+from omnibot.client.client import RobotClient
 from omnibot.client.errors import ControllerReset
+from omnibot.client.pending import Pending
 from omnibot.client.views import Hello
 from omnibot.errors import LinkTimeout
 from omnibot.protocol.messages import Hello as HelloCommand

@@ -28,7 +28,7 @@ from omnibot.errors import LinkTimeout, ProtocolError
 from omnibot.protocol.messages import ErrorReply, HelloReply, Reply
 
 if TYPE_CHECKING:
-    from omnibot.client.client import Pending
+    from omnibot.client.pending import Pending
     from omnibot.client.switch import ProtocolSwitch
 
 LATE_MAX = 64

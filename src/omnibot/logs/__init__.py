@@ -27,9 +27,10 @@ if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
         recorded_followers,
         replay_follower,
     )
-    from omnibot.logs.recorder import Recorder, header, map_to_odom, occupancy_grid, quaternion, stamp, vector
+    from omnibot.logs.recorder import Recorder
     from omnibot.logs.recording import Recording, open_recording
     from omnibot.logs.replay import replay_log, truth_in_frame
+    from omnibot.logs.rosmsg import header, map_to_odom, occupancy_grid, quaternion, stamp, vector
     from omnibot.logs.run import Run, keyword_counts, load_run, rate_and_gap
     from omnibot.logs.schemas import type_hash, typestore
     from omnibot.logs.slamscore import Frames, score_slam_logs
@@ -44,9 +45,10 @@ _EXPORTS = {
         "recorded_followers",
         "replay_follower",
     ),
-    "recorder": ("Recorder", "header", "map_to_odom", "occupancy_grid", "quaternion", "stamp", "vector"),
+    "recorder": ("Recorder",),
     "recording": ("Recording", "open_recording"),
     "replay": ("replay_log", "truth_in_frame"),
+    "rosmsg": ("header", "map_to_odom", "occupancy_grid", "quaternion", "stamp", "vector"),
     "run": ("Run", "keyword_counts", "load_run", "rate_and_gap"),
     "schemas": ("type_hash", "typestore"),
     "slamscore": ("Frames", "score_slam_logs"),
@@ -87,6 +89,7 @@ __all__ = [
     "replay",
     "replay_follower",
     "replay_log",
+    "rosmsg",
     "run",
     "schemas",
     "score_slam_logs",

@@ -33,10 +33,10 @@ The protocol (Foxglove's ws-protocol, spec v1), the part spoken here::
                       binary  0x01 message data     u8 op | u32 client channel id | payload
 
 A client's message that breaks the protocol is answered with a ``status`` and otherwise ignored;
-what a client publishes goes to a :class:`Publishing` (which may refuse it: the client gets its
+what a client publishes goes to a :class:`~omnibot.logs.foxglove_conn.Publishing` (which may refuse it: the client gets its
 reason as an error status). More than :data:`RATE` messages a second (bursts :data:`BURST`) close
 the connection (1008); frames over :data:`MAX_FRAME` bytes too (1009). A client slow to read loses
-the oldest message data beyond :data:`BACKLOG` per connection, and is cut off (1008) when as many
+the oldest message data beyond :data:`~omnibot.logs.foxglove_conn.BACKLOG` per connection, and is cut off (1008) when as many
 control messages (adverts, statuses) wait for it.
 
 The server runs its own asyncio loop in a thread (``omnibot-foxglove``), started by the constructor
@@ -54,9 +54,8 @@ import struct
 import threading
 import time
 from collections import deque
-from dataclasses import dataclass
 from http import HTTPStatus
-from typing import Any, Protocol
+from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
 from websockets.asyncio.server import Server, ServerConnection, serve
@@ -66,6 +65,7 @@ from websockets.http11 import Request, Response
 from websockets.typing import Subprotocol
 
 from omnibot.errors import ConfigError
+from omnibot.logs.foxglove_conn import BACKLOG, ClientChannel, Connection, Publishing, ServerChannel, u32_ids
 from omnibot.web import HostPolicy, RateLimit, listening_socket, same_origin, token_ok
 
 SDK_SUBPROTOCOL = "foxglove.sdk.v1"
@@ -78,8 +78,6 @@ MAX_FRAME = 65536
 RATE = 100.0
 """Messages a second one client may send on average (the Teleop panel sends 10-20)."""
 BURST = 200
-BACKLOG = 1024
-"""Message data frames queued per client before the oldest are dropped (the SDK's default)."""
 HANDSHAKE_TIMEOUT = 5.0
 MESSAGE_DATA = 0x01
 CLOSE_POLICY = 1008
@@ -90,91 +88,6 @@ REFUSED_HOST = "The Host header names a server this is not (DNS rebinding?).\n"
 REFUSED_ORIGIN = "A page of another site may not connect to this server.\n"
 
 log = logging.getLogger("omnibot.logs")
-
-
-@dataclass(frozen=True)
-class ClientChannel:
-    """A channel a client advertised: its ``id`` (the client's), ``topic``, message ``encoding``
-    and ``schema_name``."""
-
-    id: int
-    topic: str
-    encoding: str
-    schema_name: str
-
-
-class Publishing(Protocol):
-    """Where what clients publish goes; each method raises ValueError (its text goes to the client
-    as an error status) to refuse."""
-
-    def advertised(self, channel: ClientChannel) -> None:
-        """A client advertised ``channel``."""
-
-    def received(self, channel: ClientChannel, data: bytes) -> None:
-        """A client published ``data`` on ``channel`` (called in the server's thread)."""
-
-
-@dataclass(frozen=True)
-class _Channel:
-    id: int
-    topic: str
-    schema_name: str
-    schema: str
-
-    def advert(self) -> dict[str, Any]:
-        return {
-            "id": self.id,
-            "topic": self.topic,
-            "encoding": "cdr",
-            "schemaName": self.schema_name,
-            "schema": self.schema,
-            "schemaEncoding": "ros2msg",
-        }
-
-
-class _Client:
-    """One connection: its subscriptions, its advertised channels, its outgoing queues."""
-
-    def __init__(self, ws: ServerConnection) -> None:
-        self.ws = ws
-        self.subscriptions: dict[int, int] = {}
-        """Subscription id -> channel id."""
-        self.channels: dict[int, ClientChannel] = {}
-        self.told: set[int] = set()
-        """Server channels advertised to this client (each once, whichever of the greeting and a new
-        topic's broadcast comes first: a topic new while the client connects is in both)."""
-        self.control: deque[str] = deque()
-        self.data: deque[bytes] = deque(maxlen=BACKLOG)
-        self.ready = asyncio.Event()
-        self.refused: set[int] = set()
-        """Client channels whose refusal was logged (once each)."""
-        self.overflow = False
-
-    def send(self, frame: str) -> None:
-        if len(self.control) >= BACKLOG:  # not reading what it is told: cut off (the SDK's rule)
-            self.overflow = True
-            return
-        self.control.append(frame)
-        self.ready.set()
-
-    def status(self, level: int, message: str) -> None:
-        self.send(json.dumps({"op": "status", "level": level, "message": message}))
-
-    async def write_forever(self) -> None:
-        while True:
-            await self.ready.wait()
-            self.ready.clear()
-            while self.control or self.data:
-                await self.ws.send(self.control.popleft() if self.control else self.data.popleft())
-
-
-def _ints(items: Any, key: str) -> list[int] | None:
-    """``items`` (a list; of objects: their ``key``) as u32 ids; None when any is not one."""
-    if not isinstance(items, list):
-        return None
-    values = [item.get(key) if isinstance(item, dict) else None for item in items] if key else items
-    ids = [v for v in values if isinstance(v, int) and not isinstance(v, bool) and 0 <= v < 2**32]
-    return ids if len(ids) == len(values) else None
 
 
 class FoxgloveServer:
@@ -203,10 +116,10 @@ class FoxgloveServer:
         self.port: int = self._sock.getsockname()[1]
         self.policy = HostPolicy.for_bind(host, self.port)
         self._lock = threading.Lock()
-        self._channels: dict[str, _Channel] = {}
+        self._channels: dict[str, ServerChannel] = {}
         self._subscribed: frozenset[int] = frozenset()
         """Channel ids some client subscribes to (replaced whole, read from any thread)."""
-        self._clients: set[_Client] = set()
+        self._clients: set[Connection] = set()
         self._queue: deque[tuple[int, int, bytes]] = deque(maxlen=4 * BACKLOG)
         """Messages published for subscribers, not yet handed to their connections."""
         self._woken = False
@@ -236,7 +149,7 @@ class FoxgloveServer:
             with self._lock:
                 channel = self._channels.get(topic)
                 if channel is None:
-                    channel = _Channel(len(self._channels) + 1, topic, schema_name, schema)
+                    channel = ServerChannel(len(self._channels) + 1, topic, schema_name, schema)
                     self._channels[topic] = channel
                     self._call(self._advertise, channel)
         if channel.id in self._subscribed:
@@ -325,7 +238,7 @@ class FoxgloveServer:
         return origin.rstrip("/").lower() in self.origins or (origin != "null" and same_origin(origin, host))
 
     async def _serve(self, ws: ServerConnection) -> None:
-        client = _Client(ws)
+        client = Connection(ws)
         self._clients.add(client)
         writer = asyncio.create_task(client.write_forever())
         budget = RateLimit(RATE, BURST)
@@ -367,7 +280,7 @@ class FoxgloveServer:
             self._clients.discard(client)
             self._resubscribed()
 
-    def _text(self, client: _Client, message: str) -> None:
+    def _text(self, client: Connection, message: str) -> None:
         try:
             msg = json.loads(message)
         except (ValueError, RecursionError):  # not JSON, or nested too deeply
@@ -375,7 +288,7 @@ class FoxgloveServer:
         op = msg.get("op") if isinstance(msg, dict) else None
         if op == "subscribe":
             subs = msg.get("subscriptions") if isinstance(msg, dict) else None
-            ids, chans = _ints(subs, "id"), _ints(subs, "channelId")
+            ids, chans = u32_ids(subs, "id"), u32_ids(subs, "channelId")
             with self._lock:
                 known = {c.id for c in self._channels.values()}
             if ids is None or chans is None or not set(chans) <= known:
@@ -383,7 +296,7 @@ class FoxgloveServer:
                 return
             client.subscriptions.update(zip(ids, chans, strict=True))
         elif op == "unsubscribe":
-            ids = _ints(msg.get("subscriptionIds") if isinstance(msg, dict) else None, "")
+            ids = u32_ids(msg.get("subscriptionIds") if isinstance(msg, dict) else None, "")
             if ids is None:
                 client.status(2, "unsubscribe: expected subscriptionIds [id]")
                 return
@@ -392,7 +305,7 @@ class FoxgloveServer:
         elif op == "advertise":
             self._advertised(client, msg.get("channels") if isinstance(msg, dict) else None)
         elif op == "unadvertise":
-            ids = _ints(msg.get("channelIds") if isinstance(msg, dict) else None, "")
+            ids = u32_ids(msg.get("channelIds") if isinstance(msg, dict) else None, "")
             for cid in ids or []:
                 client.channels.pop(cid, None)
         else:
@@ -406,8 +319,8 @@ class FoxgloveServer:
             return
         self._resubscribed()
 
-    def _advertised(self, client: _Client, channels: Any) -> None:
-        ids = _ints(channels, "id")
+    def _advertised(self, client: Connection, channels: Any) -> None:
+        ids = u32_ids(channels, "id")
         if ids is None:
             client.status(2, "advertise: expected channels [{id, topic, encoding, schemaName}]")
             return
@@ -429,7 +342,7 @@ class FoxgloveServer:
                 continue
             client.channels[channel.id] = channel
 
-    def _binary(self, client: _Client, message: bytes) -> None:
+    def _binary(self, client: Connection, message: bytes) -> None:
         if len(message) < 5 or message[0] != MESSAGE_DATA:
             client.status(2, "expected binary message data: 0x01, u32 channel id, payload")
             return
@@ -449,7 +362,7 @@ class FoxgloveServer:
     def _resubscribed(self) -> None:
         self._subscribed = frozenset(c for client in self._clients for c in client.subscriptions.values())
 
-    def _advertise(self, channel: _Channel) -> None:
+    def _advertise(self, channel: ServerChannel) -> None:
         frame = json.dumps({"op": "advertise", "channels": [channel.advert()]})
         for client in self._clients:
             if channel.id not in client.told:

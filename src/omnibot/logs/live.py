@@ -28,7 +28,8 @@ from typing import Any
 
 from omnibot.errors import ConfigError
 from omnibot.logs import schemas
-from omnibot.logs.foxglove_ws import FOXGLOVE_APP, ClientChannel, FoxgloveServer
+from omnibot.logs.foxglove_conn import ClientChannel
+from omnibot.logs.foxglove_ws import FOXGLOVE_APP, FoxgloveServer
 from omnibot.logs.topics import TELEOP
 from omnibot.motion import Twist
 from omnibot.runtime import Cycle, Proposal

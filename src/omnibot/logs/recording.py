@@ -25,8 +25,9 @@ from omnibot.logs.topics import DEFAULT_ESTIMATOR
 if TYPE_CHECKING:
     from omnibot.client import RobotClient
     from omnibot.logs.live import PanelSource
-    from omnibot.logs.recorder import Mirror, Recorder
+    from omnibot.logs.recorder import Recorder
     from omnibot.logs.sink import RuntimeRecorder
+    from omnibot.logs.writer import Mirror
     from omnibot.robot import RobotDescription
     from omnibot.runtime import Runtime
 

@@ -4,7 +4,7 @@ MCAP readers).
 
 A recording writes its summary (chunk indexes, statistics) and rosbag2's metadata when it ends; a
 process killed with SIGKILL never gets there, and its file ends after its last whole chunk (see
-:mod:`omnibot.logs.recorder`). :func:`recover` reads every record up to there and writes them into
+:mod:`omnibot.logs.writer`). :func:`recover` reads every record up to there and writes them into
 a new file with the recorder's own writer settings: the schemas, the channels with their QoS, every
 message with its log and publish time and sequence number, the metadata records (the robot
 description, the adopted estimator...), then rosbag2's metadata for the messages recovered and the
@@ -26,7 +26,7 @@ from mcap.writer import CompressionType, Writer
 from omnibot import __version__
 from omnibot.errors import ConfigError
 from omnibot.logs.reader import LogFile
-from omnibot.logs.recorder import CHUNK_SIZE, rosbag2_metadata
+from omnibot.logs.writer import CHUNK_SIZE, rosbag2_metadata
 
 
 @dataclass(frozen=True)

@@ -29,7 +29,8 @@ from typing import TYPE_CHECKING
 from omnibot.client import Telemetry
 from omnibot.estimation import ESTIMATORS
 from omnibot.logs import schemas
-from omnibot.logs.recorder import Recorder, stamp, twist
+from omnibot.logs.recorder import Recorder
+from omnibot.logs.rosmsg import stamp, twist
 from omnibot.logs.topics import CONTROL, CYCLE, FOLLOWER
 from omnibot.motion import Pose2D
 from omnibot.runtime import Cycle, Decision, FollowerSource

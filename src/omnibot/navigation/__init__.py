@@ -20,7 +20,8 @@ from omnibot.faces import lazy_names
 
 if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
     from omnibot.navigation.following import FOLLOWER_PRIORITY, follower_source
-    from omnibot.navigation.goto import GotoOptions, GotoResult, navigation_runtime
+    from omnibot.navigation.goal import GotoOptions, GotoResult
+    from omnibot.navigation.goto import navigation_runtime
     from omnibot.navigation.goto_source import GotoSource
     from omnibot.navigation.judge import FollowJudge
     from omnibot.navigation.outcome import MIN_LENGTH, MIN_POINTS, Tolerances
@@ -33,7 +34,8 @@ if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
 
 _EXPORTS = {
     "following": ("FOLLOWER_PRIORITY", "follower_source"),
-    "goto": ("GotoOptions", "GotoResult", "navigation_runtime"),
+    "goal": ("GotoOptions", "GotoResult"),
+    "goto": ("navigation_runtime",),
     "goto_source": ("GotoSource",),
     "judge": ("FollowJudge",),
     "plot": ("plot_run",),
@@ -66,6 +68,7 @@ __all__ = [
     "follow_path",
     "follower_source",
     "following",
+    "goal",
     "goto",
     "goto_source",
     "judge",

@@ -8,16 +8,16 @@ runtime's cycles do the rest, each through :meth:`GotoSource.propose`::
     go(goal) -> checked on the map (OffMapError, BlockedError: refused, nothing changes)
     waiting   no pose yet (the localiser's first scan)          -> planning
     planning  plan_leg from the pose (no path: over)            -> leg
-    leg       the tracker on the plan (goto.Leg), its ObstacleWatch asked each cycle;
+    leg       the tracker on the plan (leg.Leg), its ObstacleWatch asked each cycle;
               an obstacle -> marked, re-planned (bounded); the time budget -> timed out;
               a stall, a refused command, an emergency stop -> stalled / stopped
-    settling  a zero twist for ``settle`` s, then the pose judged (goto.judge_leg):
+    settling  a zero twist for ``settle`` s, then the pose judged (leg.judge_leg):
               arrived | a correction leg | missed
     standby   another source (a person's cmd_vel, a pad) or a lock has the robot: the leg ends,
               a zero twist is proposed (ready to take the robot back) and, when the robot comes
               back to it, it plans again from where the robot then is
 
-Every goal ends in one :class:`~omnibot.navigation.goto.GotoResult` handed to ``on_result``:
+Every goal ends in one :class:`~omnibot.navigation.goal.GotoResult` handed to ``on_result``:
 arrived, or why not; a new goal pre-empts the one being gone to (its result: ``cancelled``,
 "pre-empted by a new goal"), as :meth:`GotoSource.cancel` does with its own reason.
 """
@@ -30,19 +30,8 @@ from typing import Literal
 
 from omnibot.mapping import OccupancyGrid, check_goal, check_start, inflate
 from omnibot.motion import Pose2D, Twist
-from omnibot.navigation.goto import (
-    GotoOptions,
-    GotoResult,
-    Leg,
-    Outcome,
-    PoseProvider,
-    ScanSource,
-    judge_leg,
-    leg_heading,
-    obstacle_met,
-    plan_leg,
-    within,
-)
+from omnibot.navigation.goal import GotoOptions, GotoResult, Outcome, PoseProvider, ScanSource, within
+from omnibot.navigation.leg import Leg, judge_leg, leg_heading, obstacle_met, plan_leg
 from omnibot.navigation.runner import WATCHDOG
 from omnibot.robot import RobotDescription
 from omnibot.runtime import Cycle, Proposal, must_end

@@ -10,7 +10,8 @@ from typing import Any
 from omnibot.motion import Pose2D
 from omnibot.navigation.metrics import follow_report
 from omnibot.navigation.outcome import Tolerances
-from omnibot.navigation.runner import SETTLE, FollowRun, FollowTrace, FrameMap
+from omnibot.navigation.runner import SETTLE
+from omnibot.navigation.trace import FollowRun, FollowTrace, FrameMap
 from omnibot.robot import RobotDescription
 from omnibot.runtime import Cycle, FollowerSource, Runtime
 from omnibot.transport import find_simulator
@@ -19,7 +20,7 @@ from omnibot.transport import find_simulator
 class FollowJudge:
     """A sink: judges the run of ``source`` on ``runtime`` as ``omnibot follow`` judges its own.
 
-    It records the run (:class:`~omnibot.navigation.runner.FollowTrace`: the estimate, the command
+    It records the run (:class:`~omnibot.navigation.trace.FollowTrace`: the estimate, the command
     and, where a simulator is behind the link, the truth mapped into the estimate's frame as it is
     when the judge is made) at every cycle the follower drives. ``SETTLE`` s
     (:data:`~omnibot.navigation.runner.SETTLE`) after the follower ended (reached the path's end, or

@@ -15,7 +15,7 @@ import numpy as np
 
 from omnibot.control import MotionLimits, min_traversal_time, wrap
 from omnibot.navigation.outcome import Tolerances
-from omnibot.navigation.runner import FollowRun
+from omnibot.navigation.trace import FollowRun
 from omnibot.robot import RobotDescription
 
 

@@ -8,7 +8,7 @@ from pathlib import Path as FsPath
 import numpy as np
 
 from omnibot.navigation.metrics import error_along_path
-from omnibot.navigation.runner import FollowRun
+from omnibot.navigation.trace import FollowRun
 
 
 def plot_run(run: FollowRun, target: str | FsPath, title: str = "") -> None:

@@ -27,25 +27,19 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 
-import numpy as np
-
-from omnibot.client import NotSupported, RobotClient, Telemetry
-from omnibot.control import STOP, Command, Follower, Path, State
+from omnibot.client import NotSupported, RobotClient
+from omnibot.control import STOP, Follower, Path, State
 from omnibot.errors import ConfigError, OmnibotError
 from omnibot.estimation import (
     Estimator,
-    GyroSilence,
     PoseEstimator,
     SlipParameters,
-    Spin,
-    SpinFit,
-    Standstill,
-    fit_spins,
     make_estimator,
 )
 from omnibot.motion import Pose2D, Twist
+from omnibot.navigation.gyroprobe import GyroProbe
+from omnibot.navigation.trace import FollowRun, FollowTrace, FrameMap
 from omnibot.progress import Progress
 from omnibot.protocol import codes
 from omnibot.robot import RobotDescription
@@ -83,106 +77,6 @@ class NavigationError(OmnibotError):
     """The robot could not follow: the controller refused a command, an emergency stop latched..."""
 
 
-@dataclass
-class FollowRun:
-    """What happened in one follow run (times on the link clock, poses in the path's frame)."""
-
-    path: Path
-    follower: str
-    estimator: str
-    t: list[float] = field(default_factory=list)
-    estimate: list[tuple[float, float, float]] = field(default_factory=list)
-    command: list[tuple[float, float, float]] = field(default_factory=list)
-    truth: list[tuple[float, float, float]] = field(default_factory=list)
-    start_time: float = 0.0
-    end_time: float = 0.0
-    completed: bool = False
-    final_estimate: Pose2D | None = None
-    final_truth: Pose2D | None = None
-    distance: float = 0.0
-    warnings: list[str] = field(default_factory=list)
-    """What the runtime warned about up to the run's end (e.g. a silent gyro, a latched stop)."""
-    failure: str = ""
-    """Why the run ended early ("" when it did not): a stall, an emergency stop, a refused command."""
-
-    @property
-    def duration(self) -> float:
-        """Time from the run's start to its end, s."""
-        return self.end_time - self.start_time
-
-    @property
-    def has_truth(self) -> bool:
-        """Whether ground truth was recorded (simulator runs only)."""
-        return bool(self.truth)
-
-    def arrays(self) -> dict[str, np.ndarray]:
-        """The trace as arrays: t (n,), estimate (n, 3), command (n, 3), truth (n, 3) or empty."""
-        return {
-            "t": np.array(self.t),
-            "estimate": np.array(self.estimate).reshape(-1, 3),
-            "command": np.array(self.command).reshape(-1, 3),
-            "truth": np.array(self.truth).reshape(-1, 3),
-        }
-
-
-class FollowTrace:
-    """A sink: the run of ``source`` into ``run``: the estimate the follower steered by, its command
-    and the truth (``truth()``: in the path's frame, None without one) at every cycle it drove."""
-
-    def __init__(
-        self,
-        run: FollowRun,
-        source: FollowerSource,
-        truth: Callable[[], tuple[float, float, float] | None],
-    ) -> None:
-        self.run = run
-        self.source = source
-        self.truth = truth
-
-    def __call__(self, cycle: Cycle) -> bool:
-        """Record the cycle if the follower drove it; whether it did."""
-        source = self.source
-        if (
-            cycle.sent is None
-            or source.finished
-            or cycle.decision.source != source.name
-            or source.state is None
-            or source.twist is None
-        ):
-            return False
-        self.record(source.state, source.twist)
-        return True
-
-    def record(self, state: State, command: Command) -> None:
-        """Record the state, the command and the truth now."""
-        run = self.run
-        run.t.append(state.t)
-        run.estimate.append((state.x, state.y, state.theta))
-        run.command.append((command.vx, command.vy, command.w))
-        truth = self.truth()
-        if truth is not None:
-            run.truth.append(truth)
-
-
-class FrameMap:
-    """Maps simulator world poses into the path's frame: path_start o sim_start^-1."""
-
-    def __init__(self, sim_start: Pose2D, path_start: Pose2D) -> None:
-        self.dth = path_start.theta - sim_start.theta
-        self.c, self.s = math.cos(self.dth), math.sin(self.dth)
-        self.sim_start = sim_start
-        self.path_start = path_start
-
-    def __call__(self, x: float, y: float, theta: float) -> tuple[float, float, float]:
-        """A simulator world pose ``(x, y, theta)`` in the path's frame (m, m, rad)."""
-        dx, dy = x - self.sim_start.x, y - self.sim_start.y
-        return (
-            self.path_start.x + self.c * dx - self.s * dy,
-            self.path_start.y + self.s * dx + self.c * dy,
-            theta + self.dth,
-        )
-
-
 def ramp_fraction(t: float, total: float, ramp: float) -> float:
     """The fraction of full speed at time ``t`` of a motion ``total`` s long that speeds up over the
     first ``ramp`` s and slows down over the last (a trapezoid; 0 outside it)."""
@@ -207,55 +101,6 @@ def _follow_timeout(follower: Follower, path: Path) -> float:
     profile = getattr(follower, "profile", None)
     nominal = profile.min_time if profile is not None else path.length / max(follower.limits.v_max, 1e-3)
     return 3.0 * nominal + 10.0
-
-
-class _GyroProbe:
-    """The gyro's heading and the encoders' rotation at every telemetry sample (gyro calibration)."""
-
-    def __init__(self, robot: RobotDescription) -> None:
-        self._encoders = PoseEstimator(robot, translation="encoders", heading="encoders", name="gyro-probe")
-        self.rows: list[tuple[float, float, float]] = []  # controller time, gyro heading, encoder heading
-        self.silence = GyroSilence()
-
-    def update(self, event: Telemetry) -> None:
-        if event.heading is None:
-            return
-        before = self._encoders.estimate.theta
-        est = self._encoders.update(event)
-        self.silence.update(event.heading, est.theta - before)
-        self.rows.append((event.controller_time, event.heading, est.theta))
-
-    def mark(self) -> int:
-        return len(self.rows) - 1
-
-    def fit(self, marks: list[int], moving: list[float]) -> SpinFit | None:
-        """The spins' fit (:func:`~omnibot.estimation.spins.fit_spins`) from ``marks``: the start and
-        end of a standstill, then of each spin's standstill after it (the spin between the two, its
-        wheels turning ``moving`` s); None without enough telemetry."""
-        if len(self.rows) < 10 or min(marks) < 0 or len(marks) != 2 * len(moving) + 2:
-            return None
-        rows = np.array(self.rows)
-
-        def still(i: int, j: int) -> Standstill:
-            t, psi = rows[i : j + 1, 0], rows[i : j + 1, 1]
-            slope = float(np.polyfit(t - t[0], psi, 1)[0])
-            duration = float(t[-1] - t[0])
-            return Standstill(slope * duration, duration, float(t[[0, -1]].mean()))
-
-        standstills = [still(i, j) for i, j in zip(marks[::2], marks[1::2], strict=True)]
-        spins = [
-            Spin(
-                gyro=float(rows[j, 1] - rows[i, 1]),
-                encoders=float(rows[j, 2] - rows[i, 2]),
-                duration=float(rows[j, 0] - rows[i, 0]),
-                moving=m,
-                time=float(rows[[i, j], 0].mean()),
-            )
-            for i, j, m in zip(marks[1:-1:2], marks[2::2], moving, strict=True)
-        ]
-        if min(s.duration for s in standstills) <= 0:
-            return None
-        return fit_spins(standstills, spins)
 
 
 class Navigator:
@@ -354,7 +199,7 @@ class Navigator:
         """
         if self.robot.gyro is None:
             raise ConfigError(f"robot {self.robot.name} has no gyro to calibrate")
-        probe = _GyroProbe(self.robot)
+        probe = GyroProbe(self.robot)
         estimators = [self.estimator, *self.observers.values()]
         hooks = self.runtime.telemetry_hooks
         hooks.append(probe.update)
@@ -378,7 +223,7 @@ class Navigator:
         return fit.bias, fit.scale_error
 
     def _gyro_spins(
-        self, probe: _GyroProbe, estimators: list[Estimator], turns: float, rates: tuple[float, ...]
+        self, probe: GyroProbe, estimators: list[Estimator], turns: float, rates: tuple[float, ...]
     ) -> tuple[list[int], list[float], list[float]]:
         """:meth:`calibrate_gyro`'s manoeuvre: a standstill, then at each rate a spin each way, each
         followed by a standstill. Returns the probe's marks (each standstill's start and end), each

@@ -17,7 +17,8 @@ from omnibot.estimation import SlipParameters
 from omnibot.motion import Pose2D
 from omnibot.navigation.metrics import follow_report
 from omnibot.navigation.outcome import Tolerances
-from omnibot.navigation.runner import GYRO_USE, STANDSTILL, FollowRun, Navigator
+from omnibot.navigation.runner import GYRO_USE, STANDSTILL, Navigator
+from omnibot.navigation.trace import FollowRun
 from omnibot.progress import Progress
 from omnibot.robot import RobotDescription
 from omnibot.runtime import RuntimeRecording

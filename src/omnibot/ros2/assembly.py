@@ -153,7 +153,8 @@ def _add_bridge(
 ) -> Any:
     """Add :func:`attach`'s sources and sinks on ``node`` to ``runtime`` (the goal pose's too with
     a map); returns the cmd_vel source."""
-    from omnibot.ros2.bridge import Diagnosed, Ros2Sink
+    from omnibot.ros2.bridge import Ros2Sink
+    from omnibot.ros2.diagnostics import Diagnosed
     from omnibot.ros2.odometry import OdometryReset
     from omnibot.ros2.path import PathSource
     from omnibot.runtime import EstimatorWhenMissing

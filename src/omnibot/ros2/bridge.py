@@ -11,8 +11,8 @@ diagnostics) of the host runtime, with no loop of its own (its ``cmd_vel`` sourc
   joints), ``robot_description`` (transient-local), plus ``/tf_static`` (the sensors' frames, the
   scanner's among them, as in the URDF), ``battery_state``
   (sensor_msgs/BatteryState, once a second while the controller reports its voltage) and
-  ``diagnostics`` (who drives and why, the latched emergency stop, refusals, the battery and what
-  the ``reporters`` add: the path follower, odometry resets) once a second and at every notice.
+  ``diagnostics`` (who drives and why, the latched emergency stop, refusals, the battery
+  (:mod:`omnibot.ros2.battery`) and what the ``reporters`` add (:mod:`omnibot.ros2.diagnostics`): the path follower, odometry resets) once a second and at every notice.
   Every frame carries the robot's tf frame prefix (:mod:`omnibot.ros2.frames`). Stamps are the
   link's time placed on the wall clock by the process's :class:`~omnibot.ros2.clock.Timeline`; on
   a simulator ``/clock`` carries the simulated time each cycle, before what the cycle stamps
@@ -27,11 +27,8 @@ in Python).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from collections.abc import Sequence
 from typing import Any
-
-import numpy as np
 
 from omnibot.client import WarnEvent
 from omnibot.logs import (
@@ -51,9 +48,11 @@ from omnibot.logs import (
 )
 from omnibot.motion import Twist
 from omnibot.protocol import codes
-from omnibot.robot import RobotDescription, battery_level
+from omnibot.robot import RobotDescription
 from omnibot.ros2.backend import DEFAULT, LATCHED, SENSOR_DATA, Profile, RosNode
+from omnibot.ros2.battery import BATTERY_MESSAGES, battery_health, battery_state
 from omnibot.ros2.clock import CLOCK, CLOCK_TYPE, Timeline
+from omnibot.ros2.diagnostics import Diagnosed, Reporter
 from omnibot.ros2.frames import prefixed, urdf_for_tf
 from omnibot.runtime import Cycle
 
@@ -88,103 +87,6 @@ class _Mirror:
 def _triple(twist: Twist | None) -> str:
     """A twist as ``vx,vy,w`` (m/s, m/s, rad/s) for a diagnostic value ("" for none)."""
     return "" if twist is None else f"{twist.vx:.3f},{twist.vy:.3f},{twist.w:.3f}"
-
-
-Reporter = Callable[[], Any]
-"""Something that adds a diagnostic_msgs/DiagnosticStatus to every ``/diagnostics`` message (the path
-follower, odometry resets)."""
-
-
-def kv(key: str, value: object) -> Any:
-    """A diagnostic_msgs/KeyValue."""
-    return schemas.new("diagnostic_msgs/msg/KeyValue", key=key, value=str(value))
-
-
-def status(level: int, name: str, message: str, hardware_id: str, values: dict[str, object]) -> Any:
-    """A diagnostic_msgs/DiagnosticStatus (``level`` 0 OK, 1 WARN, 2 ERROR)."""
-    return schemas.new(
-        "diagnostic_msgs/msg/DiagnosticStatus",
-        level=level,
-        name=name,
-        message=message,
-        hardware_id=hardware_id,
-        values=[kv(k, v) for k, v in values.items()],
-    )
-
-
-@dataclass(frozen=True)
-class Diagnosed:
-    """Whose diagnostic statuses these are: ``hardware_id`` is the robot's name (its namespace, in a
-    fleet; else the description's), and a robot with a namespace has it in every status name
-    (``omnibot r1: control``), so two robots' statuses on the one ``/diagnostics`` never read alike."""
-
-    hardware_id: str
-    namespace: str = ""
-
-    @classmethod
-    def of(cls, robot: str, namespace: str = "") -> Diagnosed:
-        """The robot named ``robot`` (its description's name) in ``namespace``."""
-        return cls(namespace.strip("/") or robot, namespace.strip("/"))
-
-    def name(self, item: str) -> str:
-        """The status name of ``item`` (``control``, ``battery``, ``path``, ``odometry``)."""
-        return f"omnibot {self.namespace}: {item}" if self.namespace else f"omnibot: {item}"
-
-    def status(self, level: int, item: str, message: str, values: dict[str, object]) -> Any:
-        """The robot's diagnostic_msgs/DiagnosticStatus of ``item``."""
-        return status(level, self.name(item), message, self.hardware_id, values)
-
-
-# sensor_msgs/BatteryState constants
-SUPPLY_STATUS_DISCHARGING = 2
-SUPPLY_STATUS_NOT_CHARGING = 3
-SUPPLY_HEALTH_UNKNOWN = 0
-SUPPLY_HEALTH_GOOD = 1
-SUPPLY_HEALTH_DEAD = 3
-TECHNOLOGY = {"nimh": 1, "liion": 2, "lipo": 3, "life": 4}
-BATTERY_MESSAGES = {
-    "ok": "ok",
-    "low": "low (below its warning threshold)",
-    "limited": "very low: the controller limits the motors' power",
-    "flat": "flat: the controller stopped the motors and holds them until charged",
-}
-
-
-def battery_health(robot: RobotDescription, voltage: float | None, stopped: bool = False) -> str:
-    """``ok``, ``low``, ``limited``, ``flat`` or ``unknown``: the reading against the description's
-    thresholds (robot/battery.py); ``stopped``: the controller holds its battery stop."""
-    b = robot.battery
-    return battery_level(voltage, b.warn_v, b.limit_v, b.stop_v, stopped)
-
-
-def battery_state(robot: RobotDescription, voltage: float, ns: int, stopped: bool = False) -> Any:
-    """sensor_msgs/BatteryState: the ``voltage`` the controller reports, the description's design
-    capacity, chemistry and cell count; health GOOD above the stop threshold and DEAD below it or
-    while the controller holds its battery stop (``stopped``), status DISCHARGING (the robot runs on
-    it) or NOT_CHARGING once stopped; what the controller does not measure (current, charge,
-    percentage, temperature) is NaN, as the message asks."""
-    nan = math.nan
-    level = battery_health(robot, voltage, stopped)
-    health = {"unknown": SUPPLY_HEALTH_UNKNOWN, "flat": SUPPLY_HEALTH_DEAD}.get(level, SUPPLY_HEALTH_GOOD)
-    return schemas.new(
-        "sensor_msgs/msg/BatteryState",
-        header=header(ns, "base_link"),
-        voltage=float(voltage),
-        temperature=nan,
-        current=nan,
-        charge=nan,
-        capacity=nan,
-        design_capacity=float(robot.battery.capacity_ah),
-        percentage=nan,
-        power_supply_status=SUPPLY_STATUS_NOT_CHARGING if level == "flat" else SUPPLY_STATUS_DISCHARGING,
-        power_supply_health=health,
-        power_supply_technology=TECHNOLOGY.get(robot.battery.chemistry, 0),
-        present=True,
-        cell_voltage=np.array([], dtype=np.float32),
-        cell_temperature=np.array([], dtype=np.float32),
-        location="",
-        serial_number="",
-    )
 
 
 class Ros2Sink:

@@ -38,7 +38,8 @@ from omnibot.motion import Pose2D
 from omnibot.navigation import GotoOptions, GotoResult, GotoSource
 from omnibot.robot import RobotDescription
 from omnibot.ros2.backend import LATCHED, RosNode
-from omnibot.ros2.bridge import Diagnosed, Ros2Sink
+from omnibot.ros2.bridge import Ros2Sink
+from omnibot.ros2.diagnostics import Diagnosed
 from omnibot.ros2.mapping import MAP_TYPE, TF_PERIOD
 from omnibot.ros2.odometry import pose_of
 from omnibot.ros2.types import from_dds

@@ -25,7 +25,7 @@ from typing import Any
 
 from omnibot.motion import Pose2D
 from omnibot.ros2.backend import RosNode
-from omnibot.ros2.bridge import Diagnosed
+from omnibot.ros2.diagnostics import Diagnosed
 from omnibot.ros2.types import from_dds
 from omnibot.runtime import Cycle, Level
 

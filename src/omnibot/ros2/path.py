@@ -33,7 +33,7 @@ from omnibot.control import Path
 from omnibot.motion import Estimate
 from omnibot.navigation import FOLLOWER_PRIORITY, FollowJudge, follower_source, summary, verdict
 from omnibot.ros2.backend import RosNode
-from omnibot.ros2.bridge import Diagnosed
+from omnibot.ros2.diagnostics import Diagnosed
 from omnibot.ros2.odometry import yaw_of
 from omnibot.ros2.types import from_dds
 from omnibot.runtime import APPROACH_GAP, Cycle, FollowerSource, Level, Proposal, Runtime

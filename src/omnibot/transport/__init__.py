@@ -4,8 +4,8 @@
 ``read(max_bytes, timeout)`` (``b""`` on timeout), ``close``, ``url``, ``closed`` and ``clock`` (wall or
 simulated time). Links move bytes only; they know nothing of the protocol or of the simulator.
 
-Modules: ``base`` (Link, Clock), ``url`` (grammar, open_link, register_scheme), ``serial_link``,
-``tcp``, ``lockstep`` (LockstepDevice, LockstepLink), ``device`` (find_device, find_simulator: the
+Modules: ``base`` (Link, Clock), ``url`` (grammar, open_link, register_scheme), ``linkurl`` (LinkUrl:
+a layer's options), ``serial_link``, ``tcp``, ``lockstep`` (LockstepDevice, LockstepLink), ``device`` (find_device, find_simulator: the
 simulator behind a link, if any), ``spy`` (trace), ``faults`` (fault injection),
 ``pacing`` (baud-rate token bucket), ``pty_bridge`` (serve a device on a pty; POSIX only, import it
 directly).
@@ -14,13 +14,13 @@ directly).
 from omnibot.transport.base import Clock, Link, WallClock
 from omnibot.transport.device import find_device, find_simulator
 from omnibot.transport.faults import FaultLink, FaultStats
+from omnibot.transport.linkurl import LinkUrl
 from omnibot.transport.lockstep import DEFAULT_BAUD, LockstepClock, LockstepDevice, LockstepLink
 from omnibot.transport.pacing import Pacer
 from omnibot.transport.serial_link import SerialLink
 from omnibot.transport.spy import SpyEvent, SpyLink, format_event
 from omnibot.transport.tcp import TcpLink
 from omnibot.transport.url import (
-    LinkUrl,
     open_link,
     parse_link_url,
     register_scheme,

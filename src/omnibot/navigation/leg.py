@@ -1,0 +1,174 @@
+"""One leg of a goto: its plan on the map with what was met marked (:func:`plan_leg`), its heading
+(:func:`leg_heading`), the follow with its obstacle watch (:class:`Leg`), and what ends it: an obstacle
+the map did not have (:func:`obstacle_met`) or where the robot settled (:func:`judge_leg`). The steps
+:func:`~omnibot.navigation.goto.go_to` runs in a loop and
+:class:`~omnibot.navigation.goto_source.GotoSource` takes cycle by cycle.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+from omnibot.control import min_traversal_time
+from omnibot.errors import PlanningError
+from omnibot.mapping import CostMap, PlannedPath, compose, inflate, inverse, plan_path
+from omnibot.motion import Pose2D
+from omnibot.navigation.following import FOLLOWER_PRIORITY, follower_source
+from omnibot.navigation.goal import (
+    FloatArray,
+    GotoOptions,
+    GotoResult,
+    Outcome,
+    PoseProvider,
+    ScanSource,
+    within,
+)
+from omnibot.navigation.obstacles import ObstacleWatch
+from omnibot.navigation.planned import mark, planned_path, transformed
+from omnibot.navigation.session import follower_limits
+from omnibot.robot import RobotDescription
+from omnibot.runtime import LinkPacer, Runtime, StallWatch
+
+
+def leg_heading(
+    robot: RobotDescription, opts: GotoOptions, scan: ScanSource | None
+) -> Literal["travel", "goal"]:
+    """The options' heading, ``auto`` resolved: travel when the robot has a sonar and no scan watches."""
+    if opts.heading != "auto":
+        return opts.heading
+    return "travel" if robot.sonars and scan is None else "goal"
+
+
+def plan_leg(
+    result: GotoResult, here: Pose2D, radius: float, opts: GotoOptions
+) -> tuple[CostMap, PlannedPath] | None:
+    """A plan from ``here`` to the goal on the result's grid (the map with what was met marked),
+    inflated by ``radius`` + the margin, kept in ``result.plans``; None when there is none (the
+    goto is over: ``no path``, or ``blocked`` after obstacles the map did not have)."""
+    assert result.grid is not None
+    cmap = inflate(result.grid, robot_radius=radius, margin=opts.margin, allow_unknown=opts.allow_unknown)
+    try:
+        plan = plan_path(cmap, here, result.goal, planner=opts.planner)
+    except PlanningError as exc:
+        result.outcome = "blocked" if result.replans else "no path"
+        result.reason = str(exc) + (
+            f" (after {result.replans} obstacle(s) the map did not have)" if result.replans else ""
+        )
+        return None
+    result.plans.append(plan)
+    return cmap, plan
+
+
+def obstacle_met(result: GotoResult, points: FloatArray, why: str, opts: GotoOptions) -> bool:
+    """A leg ended by ``points`` the map does not have: they are marked in the result's grid; True
+    when the goto is over (``blocked``: no re-plan left), else a re-plan is due (counted)."""
+    assert result.grid is not None
+    result.obstacles.extend((float(x), float(y)) for x, y in points)
+    result.grid = mark(result.grid, points)
+    if result.replans >= opts.max_replans:
+        result.outcome = "blocked"
+        result.reason = f"blocked: {why}, still after {result.replans} re-plans"
+        return True
+    result.replans += 1
+    return False
+
+
+def judge_leg(result: GotoResult, opts: GotoOptions, corrections: int) -> bool:
+    """After a leg that reached its end, with ``result.final`` where the robot settled: True when the
+    goto is over (``arrived``, or ``missed`` once the ``corrections`` made are all it may make),
+    False when a correction leg is due. Arrival is within ``aim`` of the tolerances, or within them
+    once the corrections are spent."""
+    final = result.final
+    assert final is not None
+    spent = corrections >= opts.corrections
+    if within(final, result.goal, opts, opts.aim) or (spent and within(final, result.goal, opts)):
+        result.outcome = "arrived"
+        return True
+    if spent:
+        result.outcome = "missed"
+        result.reason = "ended outside the tolerances" + (
+            f" ({100 * opts.tolerance:.0f} cm, {math.degrees(opts.heading_tolerance):.0f} degrees)"
+        )
+        return True
+    return False
+
+
+class Leg:
+    """One follow of one plan (map frame), started ``here`` (map frame) while the estimate the
+    follower steers by is ``estimate``: the follower source (``name``, ``priority``) on the path moved
+    into the estimate's frame, its obstacle watch, its time budget; :meth:`run` drives it on a
+    runtime (:func:`go_to`), a :class:`~omnibot.navigation.goto_source.GotoSource` asks it cycle by
+    cycle."""
+
+    def __init__(
+        self,
+        robot: RobotDescription,
+        cmap: CostMap,
+        plan: PlannedPath,
+        here: Pose2D,
+        estimate: Pose2D,
+        period: float,
+        heading: Literal["travel", "goal"],
+        opts: GotoOptions,
+        provider: PoseProvider,
+        scan: ScanSource | None,
+        *,
+        name: str = "goto",
+        priority: int = FOLLOWER_PRIORITY,
+    ) -> None:
+        self.opts = opts
+        self.path = planned_path(plan, here.theta, heading)
+        # the map -> estimate transform now: the follower steers by the estimate
+        self.to_estimate = compose(estimate, inverse(here))
+        self.source = follower_source(
+            robot,
+            transformed(self.path, self.to_estimate),
+            period,
+            speed=opts.speed,
+            name=name,
+            priority=priority,
+        )
+        self.why = ""
+        self.watch = ObstacleWatch(
+            robot, cmap, self.path, provider, self._obstacle, lookahead=opts.lookahead, scan=scan
+        )
+        limits = follower_limits(robot, opts.speed)
+        self.budget = 3.0 * min_traversal_time(self.path, limits) + 10.0
+
+    def _obstacle(self, why: str) -> None:
+        self.why = why
+        self.source.end(why)
+
+    def run(
+        self, runtime: Runtime, deadline: float, stalls: StallWatch
+    ) -> Outcome | Literal["obstacle", "done"]:
+        """Follow until the end, an obstacle, a failure or the time is up; then stop and settle."""
+        client, source = runtime.client, self.source
+        began = client.clock.now()
+        end = min(deadline, began + (self.budget if self.opts.timeout is None else math.inf))
+        found = len(stalls.stalls)
+        runtime.pacer = LinkPacer(client, runtime.period)  # the schedule starts now
+        runtime.add_source(source)
+        runtime.add_sink(self.watch)
+        try:
+            runtime.run(until=lambda: source.finished or client.clock.now() > end)
+        finally:
+            runtime.remove_source(source.name)
+            runtime.remove_sink(self.watch)
+            runtime.discard_pending()
+            if not client.link.closed and not runtime.latched:
+                client.stop()
+        client.sleep(self.opts.settle)
+        if self.watch.points is not None:
+            return "obstacle"
+        if len(stalls.stalls) > found:
+            self.why = stalls.stalls[-1].text
+            return "stalled"
+        if source.failure:
+            self.why = source.failure
+            return "stopped"
+        if not source.finished:
+            self.why = f"timed out: the leg was not done {client.clock.now() - began:.1f} s after it began"
+            return "timed out"
+        return "done"
