@@ -22,11 +22,12 @@ import sys
 import threading
 import time
 from collections.abc import Iterator
+from pathlib import Path
 
 import pytest
 from hypothesis import settings
 
-from tests import parallel
+from tests import cpu_times, parallel
 
 settings.register_profile("omnibot", derandomize=True, database=None)
 settings.load_profile("omnibot")
@@ -36,7 +37,17 @@ GRACE = 10.0
 are gone), generous because a loaded machine may not run a thread that is unwinding for a while."""
 
 
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption(
+        "--cpu-times",
+        metavar="DIR",
+        help="record each test's CPU and wall seconds in DIR (python -m tests.cpu_times DIR sums them per unit)",
+    )
+
+
 def pytest_configure(config: pytest.Config) -> None:
+    if config.getoption("cpu_times"):
+        config.pluginmanager.register(cpu_times.Recorder(Path(config.getoption("cpu_times"))), "cpu_times")
     config.addinivalue_line("markers", "allow_leaks(reason): skip the thread/process/fd leak check")
     config.addinivalue_line(
         "markers", "serial: needs the machine to itself; make test runs it after the parallel pass"
