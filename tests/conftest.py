@@ -16,6 +16,7 @@ passes or fails the same way on every machine; a test's own ``@settings`` adds t
 
 from __future__ import annotations
 
+import gc
 import os
 import signal
 import sys
@@ -62,6 +63,22 @@ def pytest_configure(config: pytest.Config) -> None:
 @pytest.hookimpl(tryfirst=True)  # before -m selects on the marks
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     parallel.mark_serial(items)
+
+
+def pytest_collection() -> None:
+    """No garbage collection while the suite is collected: its imports and items (about a million
+    objects) are what a collection would scan, again and again as they grow (2.1 of the 6.7 s of
+    CPU it took to collect, measured)."""
+    gc.disable()
+
+
+def pytest_collection_finish() -> None:
+    """Collected: the garbage of collecting freed at once, what is left frozen (modules, functions,
+    items: they live for the session) so that no later collection scans it again, each test's own
+    objects collected as before."""
+    gc.collect()
+    gc.freeze()
+    gc.enable()
 
 
 @pytest.hookimpl(tryfirst=True, optionalhook=True)  # before xdist's own choice; none without xdist
