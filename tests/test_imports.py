@@ -83,8 +83,12 @@ PURE: tuple[str, ...] = (
     "omnibot.firmware",
     "omnibot.floor",
     "omnibot.protocol",
+    "omnibot.robot.calibration_spec",
     "omnibot.robot.description",
     "omnibot.robot.kinematics",
+    "omnibot.robot.parts",
+    "omnibot.robot.sensors",
+    "omnibot.robot.spec",
 )
 """Modules (and packages, with every module under them) that compute or encode and do no I/O on a
 link: they must not load the client or a transport, not even through another module."""
