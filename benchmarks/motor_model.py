@@ -45,10 +45,10 @@ from omnibot.calibration import (
     summary_table,
 )
 from omnibot.calibration.accuracy import describe_reach, within_reach
-from omnibot.calibration.experiments import Runner
 from omnibot.calibration.motorfit import Balance, Stand, emf_counts
 from omnibot.calibration.motors import balance_model
 from omnibot.calibration.patterns import Geometry
+from omnibot.calibration.runner import Runner
 from omnibot.client import RobotClient
 from omnibot.robot import RobotDescription, load_robot
 from omnibot.sim import SimDevice

@@ -799,15 +799,15 @@ face, never add one. A name a face re-exports is always taken from the face."""
 
 BENCHMARK_REACHES: dict[str, tuple[str, tuple[str, ...]]] = {
     "omnibot.calibration.accuracy": ("the reach the accuracy plan checks", ("motor_model.py",)),
-    "omnibot.calibration.experiments": (
-        "runs the calibration's experiments (its Runner) by hand",
-        ("idle_phase.py", "motor_model.py"),
-    ),
     "omnibot.calibration.slip": ("the slip runs' speed", ("slip_courses.py",)),
     "omnibot.calibration.motorfit": ("fits the motor model it measures", ("motor_model.py",)),
     "omnibot.calibration.motors": ("balances the motors' model as the calibration does", ("motor_model.py",)),
     "omnibot.calibration.patterns": (
         "the calibration patterns' geometry",
+        ("idle_phase.py", "motor_model.py"),
+    ),
+    "omnibot.calibration.runner": (
+        "runs the calibration's commands (its Runner) by hand",
         ("idle_phase.py", "motor_model.py"),
     ),
     "omnibot.calibration.seedterms": (

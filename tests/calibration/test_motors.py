@@ -9,7 +9,6 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from omnibot.calibration.experiments import Runner
 from omnibot.calibration.motorfit import (
     Balance,
     balance_courses,
@@ -26,6 +25,7 @@ from omnibot.calibration.motorfit import (
 from omnibot.calibration.patterns import Geometry, apply_map, course_pattern, map_power, top_power
 from omnibot.calibration.perturb import parse_perturbation, perturbed_robot
 from omnibot.calibration.plan import Plan
+from omnibot.calibration.runner import Runner
 from omnibot.calibration.session import fit_motor_map
 from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.truth import TruthContext, make_truth

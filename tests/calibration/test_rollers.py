@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 
 from omnibot.calibration.calfile import load_calibration
-from omnibot.calibration.experiments import Runner
 from omnibot.calibration.patterns import Geometry
 from omnibot.calibration.rollerfit import (
     GROUP,
@@ -27,6 +26,7 @@ from omnibot.calibration.rollerfit import (
     spec_drag,
 )
 from omnibot.calibration.rollers import probe_drag, set_idle_phase, tune_coast
+from omnibot.calibration.runner import Runner
 from omnibot.calibration.runs import Motion, RunResult
 from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.truth import SimTruth

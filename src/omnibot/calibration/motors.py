@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from omnibot.calibration.experiments import MOVED_ANGLE, MOVED_DISTANCE, Runner, spread_deadband
+from omnibot.calibration.deadband import MOVED_ANGLE, MOVED_DISTANCE, spread_deadband
 from omnibot.calibration.motorfit import (
     ERROR_FLOOR,
     GAIN_STEP,
@@ -57,6 +57,7 @@ from omnibot.calibration.motorfit import (
     stand_torque,
 )
 from omnibot.calibration.patterns import Geometry, apply_map
+from omnibot.calibration.runner import Runner
 from omnibot.calibration.runs import STRAIGHT, RunInfo
 from omnibot.robot import MotorMapSpec
 
@@ -64,7 +65,7 @@ from omnibot.robot import MotorMapSpec
 def motor_deadbands(runner: Runner, step: int = 8, duration: float = 0.5, positions: int = 1) -> list[int]:
     """Each motor's dead band alone: the lowest POWER on that motor only that moves the robot (the
     other wheels' rollers drag by where they stand: the mean over ``positions`` wheel positions,
-    :func:`~omnibot.calibration.experiments.spread_deadband`)."""
+    :func:`~omnibot.calibration.deadband.spread_deadband`)."""
     geo = runner.geometry
     out = []
     for i in range(geo.motors):

@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from omnibot.calibration.experiments import Runner, turn_wheels
+from omnibot.calibration.deadband import turn_wheels
 from omnibot.calibration.patterns import course_pattern, top_power
 from omnibot.calibration.plan import Plan
 from omnibot.calibration.rollerfit import (
@@ -32,6 +32,7 @@ from omnibot.calibration.rollerfit import (
     idle_row,
     spec_drag,
 )
+from omnibot.calibration.runner import Runner
 from omnibot.calibration.runs import STRAIGHT, RunInfo, RunResult
 from omnibot.robot import CalibrationSpec, PiecewiseLinear, RollerDragSpec
 

@@ -34,10 +34,9 @@ from omnibot.calibration.accuracy import (
     reach_speed,
 )
 from omnibot.calibration.check import run_accuracy
+from omnibot.calibration.deadband import find_deadband
 from omnibot.calibration.experiments import (
-    Runner,
     drive_square,
-    find_deadband,
     rotation_sweep,
     slow_moves,
     straight_sweep,
@@ -67,6 +66,7 @@ from omnibot.calibration.reachmoves import measure_reach, phase_count
 from omnibot.calibration.results import CalibrationResult, SurfaceSession
 from omnibot.calibration.rollerfit import RollerFit, axis_courses, correct_runs, fit_rollers, offset_shift
 from omnibot.calibration.rollers import SHARES, roller_runs, tune_coast
+from omnibot.calibration.runner import Runner
 from omnibot.calibration.runs import ROTATE, SQUARE, STRAIGHT, RunInfo, RunResult
 from omnibot.calibration.slip import slip_step
 from omnibot.calibration.tap import TelemetryTap, standstill_bias
