@@ -63,6 +63,7 @@ of one strongly connected component, so a new module or import joining one fails
 PURE: tuple[str, ...] = (
     "omnibot.calibration.accuracy",
     "omnibot.calibration.calfile",
+    "omnibot.calibration.coastfit",
     "omnibot.calibration.fits",
     "omnibot.calibration.gyro",
     "omnibot.calibration.motorfit",

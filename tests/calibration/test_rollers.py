@@ -13,17 +13,15 @@ import numpy as np
 import pytest
 
 from omnibot.calibration.calfile import load_calibration
+from omnibot.calibration.coastfit import fit_idle_drag, idle_row, spec_drag
 from omnibot.calibration.patterns import Geometry
 from omnibot.calibration.rollerfit import (
     GROUP,
     RollerFit,
     axis_courses,
     correct_runs,
-    fit_idle_drag,
     fit_rollers,
-    idle_row,
     offset_shift,
-    spec_drag,
 )
 from omnibot.calibration.rollers import probe_drag, set_idle_phase, tune_coast
 from omnibot.calibration.runner import Runner

@@ -31,10 +31,11 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
 
+from omnibot.calibration.coastfit import CoastTuning
 from omnibot.calibration.motorfit import Balance
 from omnibot.calibration.patterns import Geometry
 from omnibot.calibration.plan import speed_range
-from omnibot.calibration.rollerfit import CoastTuning, RollerFit
+from omnibot.calibration.rollerfit import RollerFit
 from omnibot.calibration.runs import RunResult
 from omnibot.errors import ConfigError
 from omnibot.robot import (
