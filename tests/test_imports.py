@@ -70,6 +70,7 @@ PURE: tuple[str, ...] = (
     "omnibot.calibration.patterns",
     "omnibot.calibration.perturb",
     "omnibot.calibration.plan",
+    "omnibot.calibration.rates",
     "omnibot.calibration.results",
     "omnibot.calibration.rollerfit",
     "omnibot.calibration.runs",

@@ -31,7 +31,7 @@ from omnibot.calibration.truth import SimTruth
 from omnibot.firmware.power import roller_terms
 from omnibot.robot import CalibrationSpec, PiecewiseLinear, RobotDescription, RollerDragSpec
 from tests.calibration.conftest import sim_client
-from tests.calibration.test_fits import run as straight_run
+from tests.calibration.test_rates import run as straight_run
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 
