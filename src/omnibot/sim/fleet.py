@@ -46,6 +46,7 @@ from omnibot.sim.broadphase import Footprints, NearPairs
 from omnibot.sim.clock import SimClock
 from omnibot.sim.device import SimDevice
 from omnibot.sim.fleet_arrays import FleetArrays, batchable
+from omnibot.sim.geometry import placed
 from omnibot.sim.scanner import PoseLog
 from omnibot.sim.simulator import (
     CONTACT_DAMPING,
@@ -54,7 +55,7 @@ from omnibot.sim.simulator import (
     WALL_FRICTION,
     Simulator,
 )
-from omnibot.sim.world import Contact, World, placed
+from omnibot.sim.world import Contact, World
 
 FloatArray = NDArray[np.float64]
 

@@ -65,10 +65,11 @@ from omnibot.robot import RobotDescription
 from omnibot.scan import Scan
 from omnibot.sim import jit, kernels
 from omnibot.sim.clock import SimClock
+from omnibot.sim.geometry import convex_hull
 from omnibot.sim.physics import Physics
 from omnibot.sim.scanner import LaserScanner, PoseLog
 from omnibot.sim.sensors import Gyro, MotorEncoders, Sonar, TrackingWheels
-from omnibot.sim.world import Contact, World, convex_hull, load_world
+from omnibot.sim.world import Contact, World, load_world
 
 FloatArray = NDArray[np.float64]
 
