@@ -19,7 +19,8 @@ if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
     from omnibot.sim.fleet import Fleet
     from omnibot.sim.geometry import points_in_polygon
     from omnibot.sim.physics import Physics
-    from omnibot.sim.simulator import Simulator, Snapshot
+    from omnibot.sim.simulator import Simulator
+    from omnibot.sim.truth import Snapshot
     from omnibot.sim.world import World, load_world, parse_world
 
 _EXPORTS = {
@@ -28,7 +29,8 @@ _EXPORTS = {
     "fleet": ("Fleet",),
     "geometry": ("points_in_polygon",),
     "physics": ("Physics",),
-    "simulator": ("Simulator", "Snapshot"),
+    "simulator": ("Simulator",),
+    "truth": ("Snapshot",),
     "world": ("World", "load_world", "parse_world"),
 }
 
@@ -53,6 +55,7 @@ __all__ = [
     "run_pty_fleet",
     "simulator",
     "spawn_pty_emulator",
+    "truth",
     "world",
 ]
 

@@ -18,7 +18,7 @@ others collide with and an obstacle their sonar cones and laser scanners see
 (``Simulator.neighbours``). Contacts
 between robots are the walls' contact law with the two bodies' effective mass: a critically damped
 penalty spring along the normal (natural frequency 0.25/dt) plus the walls' friction, and a
-:class:`~omnibot.sim.simulator.CollisionEvent` whose owner is ``robot NAME`` when two robots start
+:class:`~omnibot.sim.truth.CollisionEvent` whose owner is ``robot NAME`` when two robots start
 touching. Robots are stepped in the order of their names, so a run does not depend on the order
 they joined in.
 
