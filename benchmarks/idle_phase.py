@@ -43,8 +43,8 @@ from omnibot.calibration import (
     session,
     write_calibration,
 )
-from omnibot.calibration.experiments import Runner
 from omnibot.calibration.patterns import Geometry
+from omnibot.calibration.runner import Runner
 from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.verdict import mean_abs_error
 from omnibot.client import RobotClient

@@ -39,16 +39,17 @@ from omnibot.calibration import (
     AccuracyPlan,
     Plan,
     accuracy_entries,
+    motors,
     parse_perturbation,
     perturbed_robot,
     session,
     summary_table,
 )
 from omnibot.calibration.accuracy import describe_reach, within_reach
-from omnibot.calibration.experiments import Runner
 from omnibot.calibration.motorfit import Balance, Stand, emf_counts
 from omnibot.calibration.motors import balance_model
 from omnibot.calibration.patterns import Geometry
+from omnibot.calibration.runner import Runner
 from omnibot.client import RobotClient
 from omnibot.robot import RobotDescription, load_robot
 from omnibot.sim import SimDevice
@@ -113,17 +114,17 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     nominal = load_robot("omni4")
     true = perturbed_robot(nominal, ACCEPTANCE)
-    replaced = {"balance_model": balance_model, "simulator_lift": session.simulator_lift}
+    replaced = {"balance_model": balance_model, "simulator_lift": motors.simulator_lift}
     if args.map in ("gain", "model"):
-        session.__dict__["balance_model"] = known_map(args.map)  # the session's fit, replaced
+        motors.__dict__["balance_model"] = known_map(args.map)  # the motor map step's fit, replaced
     elif args.map == "table":
-        session.__dict__["balance_model"] = table_map
+        motors.__dict__["balance_model"] = table_map
     if args.no_stand or args.map == "table":
-        session.__dict__["simulator_lift"] = lambda client: None  # nobody lifts the robot
+        motors.__dict__["simulator_lift"] = lambda client: None  # nobody lifts the robot
     try:
         return run(nominal, true, args.surface, args.map, args.seed, args.wheels)
     finally:
-        session.__dict__.update(replaced)
+        motors.__dict__.update(replaced)
 
 
 def lockstep_clients(

@@ -63,12 +63,14 @@ of one strongly connected component, so a new module or import joining one fails
 PURE: tuple[str, ...] = (
     "omnibot.calibration.accuracy",
     "omnibot.calibration.calfile",
+    "omnibot.calibration.coastfit",
     "omnibot.calibration.fits",
     "omnibot.calibration.gyro",
     "omnibot.calibration.motorfit",
     "omnibot.calibration.patterns",
     "omnibot.calibration.perturb",
     "omnibot.calibration.plan",
+    "omnibot.calibration.rates",
     "omnibot.calibration.results",
     "omnibot.calibration.rollerfit",
     "omnibot.calibration.runs",
@@ -83,8 +85,12 @@ PURE: tuple[str, ...] = (
     "omnibot.firmware",
     "omnibot.floor",
     "omnibot.protocol",
+    "omnibot.robot.calibration_spec",
     "omnibot.robot.description",
     "omnibot.robot.kinematics",
+    "omnibot.robot.parts",
+    "omnibot.robot.sensors",
+    "omnibot.robot.spec",
 )
 """Modules (and packages, with every module under them) that compute or encode and do no I/O on a
 link: they must not load the client or a transport, not even through another module."""
@@ -795,15 +801,15 @@ face, never add one. A name a face re-exports is always taken from the face."""
 
 BENCHMARK_REACHES: dict[str, tuple[str, tuple[str, ...]]] = {
     "omnibot.calibration.accuracy": ("the reach the accuracy plan checks", ("motor_model.py",)),
-    "omnibot.calibration.experiments": (
-        "runs the calibration's experiments (its Runner) by hand",
-        ("idle_phase.py", "motor_model.py"),
-    ),
     "omnibot.calibration.slip": ("the slip runs' speed", ("slip_courses.py",)),
     "omnibot.calibration.motorfit": ("fits the motor model it measures", ("motor_model.py",)),
     "omnibot.calibration.motors": ("balances the motors' model as the calibration does", ("motor_model.py",)),
     "omnibot.calibration.patterns": (
         "the calibration patterns' geometry",
+        ("idle_phase.py", "motor_model.py"),
+    ),
+    "omnibot.calibration.runner": (
+        "runs the calibration's commands (its Runner) by hand",
         ("idle_phase.py", "motor_model.py"),
     ),
     "omnibot.calibration.seedterms": (

@@ -7,6 +7,9 @@ from contextlib import AbstractContextManager, contextmanager
 
 import pytest
 
+from omnibot.calibration.runner import Runner
+from omnibot.calibration.tap import TelemetryTap
+from omnibot.calibration.truth import SimTruth
 from omnibot.client import RobotClient
 from omnibot.robot import RobotDescription, load_robot
 from omnibot.sim import SimDevice
@@ -33,3 +36,14 @@ def sim_client(
     dev = SimDevice(robot, true_robot=true_robot, surface=surface, seed=seed, **device)  # type: ignore[arg-type]
     with RobotClient(LockstepLink(dev), robot) as client:
         yield client
+
+
+@pytest.fixture
+def runner(omni4: RobotDescription) -> Iterator[Runner]:
+    with sim_client(omni4, "wood") as client:
+        tap = TelemetryTap(client, omni4)
+        tap.start()
+        r = Runner(client, omni4, SimTruth(client.link.device.sim), tap, settle=0.3)  # type: ignore[attr-defined]
+        yield r
+        r.close()
+        tap.stop()

@@ -6,7 +6,7 @@ import math
 
 from omnibot.calibration.accuracy import AccuracyPlan, AccuracyRow, checked_reach
 from omnibot.calibration.check import run_accuracy
-from omnibot.calibration.experiments import Runner
+from omnibot.calibration.runner import Runner
 from omnibot.calibration.tables import move_grid
 from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.truth import TruthContext, make_truth

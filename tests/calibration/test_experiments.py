@@ -3,15 +3,11 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
 
 import pytest
 
 from omnibot.calibration.experiments import (
     SLOW,
-    Runner,
-    find_deadband,
-    lowest_moving,
     power_levels,
     rotation_sweep,
     slow_moves,
@@ -20,35 +16,10 @@ from omnibot.calibration.experiments import (
 )
 from omnibot.calibration.patterns import Geometry
 from omnibot.calibration.plan import Plan
-from omnibot.calibration.runs import STRAIGHT, RunInfo
-from omnibot.calibration.tap import TelemetryTap
-from omnibot.calibration.truth import SimTruth
+from omnibot.calibration.runner import Runner
+from omnibot.calibration.runs import STRAIGHT
 from omnibot.errors import ConfigError
-from omnibot.robot import RobotDescription, load_robot
-from tests.calibration.conftest import sim_client
-
-
-@pytest.fixture
-def runner(omni4: RobotDescription) -> Iterator[Runner]:
-    with sim_client(omni4, "wood") as client:
-        tap = TelemetryTap(client, omni4)
-        tap.start()
-        r = Runner(client, omni4, SimTruth(client.link.device.sim), tap, settle=0.3)  # type: ignore[attr-defined]
-        yield r
-        r.close()
-        tap.stop()
-
-
-def test_deadband_is_the_lowest_moving_power(runner: Runner) -> None:
-    db = find_deadband(runner, 0.0, step=8)
-    assert db.group == "course:0"
-    assert 40 <= db.power <= 56  # omni4's gearbox and roller friction: about 45-50 counts on wood
-    below = runner.power_run([0, db.power - 3, 0, -(db.power - 3)], 0.5, RunInfo(STRAIGHT, "x", 0.0), "t")
-    assert below.truth is not None and (below.truth.distance or 0.0) < 0.005
-    rot = find_deadband(runner, None, step=8)
-    assert rot.group == "rotation" and 30 <= rot.power < db.power
-    # every dead-band run is a seed-000 pattern
-    assert all(r.command.startswith("POWER,500,") for r in runner.log if r.group.startswith("deadband"))
+from omnibot.robot import load_robot
 
 
 def test_power_levels() -> None:
@@ -98,23 +69,6 @@ def test_plan_courses() -> None:
     with pytest.raises(ConfigError, match=r"within 0\.\.30"):
         Plan(courses_deg=(0.0, 45.0)).calibrated_courses(geo)
     assert math.isclose(Plan(courses_deg=(0.0, 30.0)).calibrated_courses(geo)[-1], 30.0)
-
-
-def test_a_search_near_an_earlier_result_brackets_it() -> None:
-    tried: list[int] = []
-
-    def attempt(power: int) -> bool:
-        tried.append(power)
-        return power >= 37
-
-    assert lowest_moving(attempt, 8, 255) == 38
-    first = len(tried)
-    tried.clear()
-    assert lowest_moving(attempt, 8, 255, near=38) == 38  # from 30 in steps of 4, then bisection
-    assert tried[0] == 34 and len(tried) < first
-    tried.clear()
-    # a position where it moves far lower: the search ends at the bottom of its bracket (30 + 2)
-    assert lowest_moving(lambda p: p >= 20, 8, 255, near=38) == 32
 
 
 def test_slow_moves_drive_every_raw_course_of_each_calibrated_course(runner: Runner) -> None:

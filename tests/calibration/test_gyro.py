@@ -6,10 +6,10 @@ import math
 
 import pytest
 
-from omnibot.calibration.experiments import Runner
 from omnibot.calibration.gyro import GyroCalibration, calibrate_gyro, fit_scale
 from omnibot.calibration.plan import Plan
-from omnibot.calibration.session import rotation_test
+from omnibot.calibration.runner import Runner
+from omnibot.calibration.steps import rotation_test
 from omnibot.calibration.tap import TelemetryTap, standstill_bias
 from omnibot.calibration.truth import SimTruth
 from omnibot.robot import RobotDescription

@@ -9,7 +9,6 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from omnibot.calibration.experiments import Runner
 from omnibot.calibration.motorfit import (
     Balance,
     balance_courses,
@@ -23,10 +22,11 @@ from omnibot.calibration.motorfit import (
     offsets_from_deadbands,
     stand_torque,
 )
+from omnibot.calibration.motors import fit_motor_map
 from omnibot.calibration.patterns import Geometry, apply_map, course_pattern, map_power, top_power
 from omnibot.calibration.perturb import parse_perturbation, perturbed_robot
 from omnibot.calibration.plan import Plan
-from omnibot.calibration.session import fit_motor_map
+from omnibot.calibration.runner import Runner
 from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.truth import TruthContext, make_truth
 from omnibot.firmware.calibration import Calibration

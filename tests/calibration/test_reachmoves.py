@@ -15,11 +15,11 @@ from omnibot.calibration.accuracy import (
     within_reach,
 )
 from omnibot.calibration.calfile import load_calibration
-from omnibot.calibration.experiments import Runner
 from omnibot.calibration.patterns import Geometry
 from omnibot.calibration.perturb import ACCEPTANCE, perturbed_robot
 from omnibot.calibration.plan import Plan
 from omnibot.calibration.reachmoves import REACH, lands, measure_reach, slower
+from omnibot.calibration.runner import Runner
 from omnibot.calibration.tables import move_grid
 from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.truth import TruthContext, make_truth

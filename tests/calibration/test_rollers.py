@@ -13,27 +13,25 @@ import numpy as np
 import pytest
 
 from omnibot.calibration.calfile import load_calibration
-from omnibot.calibration.experiments import Runner
+from omnibot.calibration.coastfit import fit_idle_drag, idle_row, spec_drag
 from omnibot.calibration.patterns import Geometry
 from omnibot.calibration.rollerfit import (
     GROUP,
     RollerFit,
     axis_courses,
     correct_runs,
-    fit_idle_drag,
     fit_rollers,
-    idle_row,
     offset_shift,
-    spec_drag,
 )
 from omnibot.calibration.rollers import probe_drag, set_idle_phase, tune_coast
+from omnibot.calibration.runner import Runner
 from omnibot.calibration.runs import Motion, RunResult
 from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.truth import SimTruth
 from omnibot.firmware.power import roller_terms
 from omnibot.robot import CalibrationSpec, PiecewiseLinear, RobotDescription, RollerDragSpec
 from tests.calibration.conftest import sim_client
-from tests.calibration.test_fits import run as straight_run
+from tests.calibration.test_rates import run as straight_run
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 

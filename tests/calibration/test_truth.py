@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from omnibot.calibration.experiments import Runner
 from omnibot.calibration.patterns import course_pattern
 from omnibot.calibration.perturb import perturbed_robot
+from omnibot.calibration.runner import Runner
 from omnibot.calibration.runs import ROTATE, SQUARE, STRAIGHT, Motion, RunInfo, relative
 from omnibot.calibration.tap import TelemetryTap
 from omnibot.calibration.truth import (

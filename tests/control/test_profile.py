@@ -65,12 +65,7 @@ def test_reference_is_continuous_and_ends_at_the_end() -> None:
     assert max(abs(r.w) for r in refs) <= 10.0
 
 
-def test_limits_validation_and_scaling() -> None:
-    with pytest.raises(ValueError, match="v_max"):
-        MotionLimits(0.0, 1.0, 1.0, 1.0)
-    scaled = LIM.scaled(0.5)
-    assert (scaled.a_max, scaled.alpha_max, scaled.v_max) == (1.0, 10.0, 0.5)
-    assert LIM.with_turn_rate(3.0).w_max == 3.0
+def test_a_profile_needs_two_points() -> None:
     with pytest.raises(ValueError, match="two points"):
         time_optimal_profile(Path(np.zeros(1), np.zeros(1), np.zeros(1)), LIM)
 

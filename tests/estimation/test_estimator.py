@@ -1,4 +1,4 @@
-"""The fused estimator on simulated telemetry, and the estimator registry."""
+"""The fused estimator on simulated telemetry."""
 
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ from dataclasses import dataclass
 
 import pytest
 
-from omnibot.errors import ConfigError
-from omnibot.estimation.estimator import ESTIMATORS, PoseEstimator, estimator_names, make_estimator, replay
+from omnibot.estimation.estimator import PoseEstimator
+from omnibot.estimation.registry import make_estimator, replay
 from omnibot.motion import Estimate, Pose2D
 from omnibot.robot import load_robot
 from omnibot.sim import Simulator
@@ -41,23 +41,6 @@ def telemetry(
             sim.advance(0.01)
             take()
     return samples, sim
-
-
-def test_registry_lists_what_the_sensors_allow() -> None:
-    assert set(estimator_names(load_robot("omni4"))) == {
-        "fused",
-        "encoders+gyro",
-        "encoders+raw-gyro",
-        "encoders",
-    }
-    assert set(estimator_names(load_robot("omni3"))) == set(ESTIMATORS)
-    assert make_estimator("fused", load_robot("omni3")).translation == "tracking"  # type: ignore[attr-defined]
-    with pytest.raises(ConfigError, match="unknown estimator 'fusd'"):
-        make_estimator("fusd", load_robot("omni4"))
-    with pytest.raises(ConfigError, match="tracking wheels"):
-        make_estimator("tracking+gyro", load_robot("omni4"))
-    with pytest.raises(ConfigError, match="heading source"):
-        PoseEstimator(load_robot("omni4"), heading="compass")
 
 
 @pytest.mark.parametrize("preset", ["omni4", "omni3"])

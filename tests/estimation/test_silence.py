@@ -7,7 +7,8 @@ import math
 import pytest
 
 from omnibot.errors import ConfigError
-from omnibot.estimation.estimator import PoseEstimator, make_estimator
+from omnibot.estimation.estimator import PoseEstimator
+from omnibot.estimation.registry import make_estimator
 from omnibot.estimation.silence import SILENT_TURN, GyroSilence
 from omnibot.robot import load_robot
 from tests.estimation.test_estimator import Sample, telemetry

@@ -12,7 +12,6 @@ import yaml
 from omnibot.errors import ConfigError
 from omnibot.robot.description import (
     PRESET_DIR,
-    PiecewiseLinear,
     load_description,
     load_robot,
     parse_description,
@@ -188,13 +187,6 @@ def test_description_file_round_trip(tmp_path: Path) -> None:
     f = tmp_path / "mine.yaml"
     f.write_text(yaml.safe_dump(preset_data("omni3")))
     assert load_robot(str(f)) == load_robot("omni3")
-
-
-def test_piecewise_linear() -> None:
-    f = PiecewiseLinear(x=(0, 100, 255), y=(2.0, 1.0, 0.5))
-    assert f(-5) == 2.0 and f(50) == pytest.approx(1.5) and f(177.5) == pytest.approx(0.75) and f(999) == 0.5
-    with pytest.raises(ValueError, match="increase strictly"):
-        PiecewiseLinear(x=(0, 0), y=(1, 1))
 
 
 @pytest.mark.parametrize(

@@ -23,7 +23,8 @@ from omnibot.motion import Pose2D
 from omnibot.robot import RobotDescription, load_robot
 from omnibot.sim.fleet import Fleet
 from omnibot.sim.physics import Physics
-from omnibot.sim.simulator import CollisionEvent, Simulator
+from omnibot.sim.simulator import Simulator
+from omnibot.sim.truth import CollisionEvent
 from omnibot.sim.world import load_world
 
 GOLDEN = Path(__file__).with_name("data") / "step_trace.json"

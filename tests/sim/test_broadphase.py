@@ -10,7 +10,7 @@ import numpy as np
 
 from omnibot.robot import load_robot
 from omnibot.sim.broadphase import SKIN, Footprints, NearPairs
-from omnibot.sim.world import closed_edges, convex_hull, placed
+from omnibot.sim.geometry import closed_edges, convex_hull, placed
 
 
 def every_pair(rows: list[list[float]], reach: list[float]) -> list[tuple[int, int]]:

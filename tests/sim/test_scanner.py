@@ -14,7 +14,8 @@ from omnibot.motion import Pose2D
 from omnibot.robot import RobotDescription, load_robot, parse_description
 from omnibot.scan import Scan
 from omnibot.sim.fleet import Fleet
-from omnibot.sim.simulator import Simulator, Snapshot
+from omnibot.sim.simulator import Simulator
+from omnibot.sim.truth import Snapshot
 from omnibot.sim.world import load_world, parse_world
 
 EXACT: dict[str, Any] = {"noise_fraction": 0.0, "noise_std": 0.0, "resolution": 0.0, "dropout": 0.0}

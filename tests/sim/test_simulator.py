@@ -14,8 +14,9 @@ from omnibot.errors import ConfigError, SimulationError
 from omnibot.motion import Pose2D
 from omnibot.robot import RobotDescription, load_robot
 from omnibot.robot import kinematics as kin
-from omnibot.sim.simulator import CollisionEvent, PwmRangeError, Simulator, Snapshot, TruthRecorder
-from omnibot.sim.world import convex_hull
+from omnibot.sim.geometry import convex_hull
+from omnibot.sim.simulator import PwmRangeError, Simulator
+from omnibot.sim.truth import CollisionEvent, Snapshot, TruthRecorder
 from tests.sim.fakes import FakePhysics, ScriptedPhysics
 
 

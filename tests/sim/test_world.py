@@ -12,14 +12,12 @@ import pytest
 from omnibot.errors import ConfigError
 from omnibot.robot import load_robot
 from omnibot.sim.clock import Clock, SimClock, WallClock
+from omnibot.sim.geometry import convex_hull
 from omnibot.sim.world import (
     WORLD_DIR,
     World,
-    convex_hull,
-    is_convex,
     load_world,
     parse_world,
-    points_in_polygon,
     world_names,
 )
 
@@ -286,15 +284,6 @@ def test_surface_lookup_with_patches_later_wins() -> None:
     assert w.surface_at(2.0, 1.5) == "carpet"
     assert load_world("room").surface_at(3.5, 3.0) == "carpet"
     assert load_world("room").surface_at(1.0, 1.0) == "wood"
-
-
-def test_point_in_polygon_and_hulls() -> None:
-    l_shape = np.array([[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]], dtype=float)
-    inside = points_in_polygon(np.array([[0.5, 0.5], [1.5, 1.5], [0.5, 1.5], [3.0, 3.0]]), l_shape)
-    assert inside.tolist() == [True, False, True, False]
-    assert not is_convex(l_shape) and is_convex(square(0, 0, 1))
-    hull = convex_hull(l_shape)
-    assert len(hull) == 5 and is_convex(hull)
 
 
 # --------------------------------------------------------------------------- contacts

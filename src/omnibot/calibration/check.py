@@ -7,7 +7,7 @@ import math
 from functools import partial
 
 from omnibot.calibration.accuracy import AccuracyPlan, AccuracyRow
-from omnibot.calibration.experiments import Runner
+from omnibot.calibration.runner import Runner
 from omnibot.calibration.runs import ROTATE, RunInfo
 from omnibot.protocol import codes
 

@@ -4,8 +4,8 @@ Nothing here knows whether the robot is real or simulated: every run is protocol
 MOVE, ROTATE) and a measurement by the chosen truth strategy, so the same code calibrates a board on
 a serial port and the simulator in lockstep.
 
-* :func:`find_deadband`: the lowest power that moves the robot (a coarse upward sweep, then
-  bisection), per straight course pattern and for rotation.
+* :func:`~omnibot.calibration.deadband.find_deadband`: the lowest power that moves the robot (a
+  coarse upward sweep, then bisection), per straight course pattern and for rotation.
 * :func:`straight_sweep`: straight runs with raw POWER on each calibrated course over a sweep of
   powers, each power for two durations (so the steady speed and the start/stop loss separate),
   chosen so the runs bracket the reference MOVE (a secant step on the first run's distance), on
@@ -22,258 +22,18 @@ What to measure is the :class:`~omnibot.calibration.plan.Plan`; each run's outco
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass
 from functools import partial
 from typing import Any
 
 from omnibot.calibration.patterns import Geometry, Rate, course_pattern, rotation_pattern, top_power
 from omnibot.calibration.plan import Plan, speed_range
-from omnibot.calibration.runs import ROTATE, SQUARE, STRAIGHT, TURN, RunInfo, RunResult, relative
-from omnibot.calibration.tap import TelemetryTap
-from omnibot.calibration.truth import TruthSource
+from omnibot.calibration.runner import Runner
+from omnibot.calibration.runs import ROTATE, SQUARE, STRAIGHT, TURN, RunInfo, RunResult
 from omnibot.calibration.umbmark import SquareRun
-from omnibot.client import RobotClient, WarnEvent
-from omnibot.progress import Progress
-from omnibot.protocol import text
 from omnibot.protocol.messages import Command
 from omnibot.robot import MotorMapSpec, RobotDescription
-
-MOVED_DISTANCE = 0.005
-"""m: a run that goes less than this did not move the robot (dead band search)."""
-MOVED_ANGLE = math.radians(1.0)
-"""rad: the same for rotations."""
-STILL_TIMEOUT = 5.0
-"""s the runner waits at most for the encoders to stop after a run."""
-
-
-@dataclass
-class Runner:
-    """Runs one command at a time and measures it (see the module docstring)."""
-
-    client: RobotClient
-    robot: RobotDescription
-    truth: TruthSource
-    tap: TelemetryTap
-    settle: float = 0.4
-    progress: Progress | None = None
-    motors: MotorMapSpec | None = None
-    """The motor map the sweeps' patterns go through (the firmware's, mirrored; None: raw)."""
-    rate: Rate | None = None
-    """The rim speed a nominal power gives, for the map's speed term (the balance runs' measure)."""
-    log: list[RunResult] = field(default_factory=list)
-    _warns: list[int] = field(default_factory=list)
-
-    def __post_init__(self) -> None:
-        self.geometry = Geometry.of(self.robot)
-        self.client.on_warn(self._warn)
-
-    def _warn(self, event: WarnEvent) -> None:
-        self._warns.append(event.code)
-
-    def close(self) -> None:
-        """Stop listening to the client's warnings."""
-        self.client.remove_listener(self._warn)
-
-    def run(
-        self, info: RunInfo, send: Callable[[], Command | str], duration: float, group: str, **meta: Any
-    ) -> RunResult:
-        """Mark, ``send()`` (the command, or a text naming what was sent), wait for IDLE and the
-        coast-down, measure."""
-        mark = self.truth.mark()
-        latest = self.tap.latest
-        counts = tuple(latest.encoders) if latest is not None and latest.encoders else None
-        odo0 = self.tap.odometry_pose
-        h0, t0 = self.tap.heading, self._ctime()
-        self._warns.clear()
-        command = send()
-        self.client.wait_idle(timeout=4.0 * duration + 10.0)  # saturation stretches a motion
-        self.wait_still()
-        truth = self.truth.measure(mark, info) if self.truth.can(info) else None
-        odo1, h1, t1 = self.tap.odometry_pose, self.tap.heading, self._ctime()
-        odometry = None
-        if odo0 is not None and odo1 is not None:
-            odometry = relative(odo0.x, odo0.y, odo0.theta, odo1.x, odo1.y, odo1.theta, "encoders")
-        result = RunResult(
-            kind=info.kind,
-            group=group,
-            command=command if isinstance(command, str) else text.encode(command).decode("ascii").strip(),
-            duration=duration,
-            truth=truth,
-            odometry=odometry,
-            gyro=None if h0 is None or h1 is None else h1 - h0,
-            gyro_time=None if t0 is None or t1 is None else t1 - t0,
-            warnings=tuple(self._warns),
-            counts=counts,
-            **meta,
-        )
-        self.log.append(result)
-        if self.progress is not None:
-            self.progress.update(1)
-        return result
-
-    def move(
-        self,
-        what: str,
-        length: float,
-        speed: float,
-        course_deg: float,
-        group: str,
-        detail: str = "",
-        **meta: Any,
-    ) -> RunResult:
-        """A straight MOVE of ``length`` m at ``speed`` m/s on ``course_deg``, run as :meth:`run` (its
-        ``course_deg`` in the result); described as ``<what>: move <cm> cm at <speed> m/s on course
-        <course> deg<detail>``."""
-        course = math.radians(course_deg)
-        info = RunInfo(
-            STRAIGHT,
-            f"{what}: move {100 * length:.0f} cm at {speed:g} m/s on course {course_deg:g} deg{detail}",
-            course,
-        )
-        send = partial(self.client.move, length, speed, course)
-        return self.run(info, send, length / speed, group, course_deg=course_deg, **meta)
-
-    def wait_still(self) -> None:
-        """Wait ``settle`` s, then until no encoder count moves (a heavy robot coasts for long)."""
-        self.client.sleep(self.settle)
-        last = self.tap.counts()
-        waited = self.settle
-        while last is not None and waited < STILL_TIMEOUT:
-            self.client.sleep(0.1)
-            waited += 0.1
-            now = self.tap.counts()
-            if now is None or all(abs(a - b) <= 1 for a, b in zip(now, last, strict=True)):
-                break
-            last = now
-
-    def _ctime(self) -> float | None:
-        return self.tap.latest.controller_time if self.tap.latest is not None else None
-
-    def power_run(
-        self, powers: Sequence[int], duration: float, info: RunInfo, group: str, **meta: Any
-    ) -> RunResult:
-        """One POWER run: ``powers`` per motor for ``duration`` s, measured as :meth:`run` does."""
-        return self.run(info, lambda: self.client.power(duration, powers), duration, group, **meta)
-
-    def note(self, message: str) -> None:
-        """Show what is running next to the progress bar."""
-        if self.progress is not None:
-            self.progress.set_postfix_str(message)
-
-
-# --------------------------------------------------------------------------- dead band
-
-
-@dataclass(frozen=True)
-class Deadband:
-    """The lowest power (PWM counts of the busiest motor) that moved the robot, per pattern."""
-
-    group: str
-    power: int
-    """pwm_max + 1 when nothing moved the robot."""
-
-
-def _moved(result: RunResult, rotation: bool) -> bool:
-    m = result.truth
-    if m is None:
-        return False
-    if rotation:
-        return m.theta is not None and abs(m.theta) >= MOVED_ANGLE
-    d = m.distance
-    return d is not None and d >= MOVED_DISTANCE
-
-
-def find_deadband(
-    runner: Runner, course_deg: float | None, step: int = 8, duration: float = 0.5, positions: int = 1
-) -> Deadband:
-    """Lowest moving power for the straight pattern of ``course_deg`` (None: rotation in place), the
-    mean over ``positions`` wheel positions (:func:`spread_deadband`)."""
-    geo = runner.geometry
-    rotation = course_deg is None
-    group = "rotation" if rotation else f"course:{geo.fold(course_deg or 0.0):g}"
-    flip = [0]
-
-    def attempt(power: int) -> bool:
-        flip[0] ^= 1
-        if rotation:
-            pattern = rotation_pattern(geo, power, ccw=bool(flip[0]), motors=runner.motors, rate=runner.rate)
-            info = RunInfo(ROTATE, f"dead band, rotation, power {power}")
-        else:
-            c = (course_deg or 0.0) + (0.0 if flip[0] else 180.0)
-            pattern = course_pattern(geo, c, power, runner.motors, runner.rate)
-            info = RunInfo(STRAIGHT, f"dead band, course {c:g} deg, power {power}", math.radians(c))
-        runner.note(f"dead band {group}: {power}")
-        result = runner.power_run(pattern, duration, info, f"deadband:{group}", power=power)
-        return _moved(result, rotation)
-
-    return Deadband(group, spread_deadband(runner, attempt, step, positions))
-
-
-def spread_deadband(runner: Runner, attempt: Callable[[int], bool], step: int, positions: int) -> int:
-    """The dead band of ``attempt``'s pattern as the mean over ``positions`` wheel positions.
-
-    Near the dead band a run barely turns the wheels, so where they stand decides how hard their
-    rollers drag (seed 000: up to twice) and a single search lands several counts off the power a
-    motion that turns the wheels through every position needs. The first search runs from zero;
-    before each further one a ROTATE (:func:`turn_wheels`) turns every wheel on by ``1 +
-    1 / positions`` roller pitches, and the search brackets the first result (a few runs)."""
-    pwm_max = runner.geometry.pwm_max
-    first = lowest_moving(attempt, step, pwm_max)
-    found = [first]
-    if first <= pwm_max:
-        for _ in range(1, positions):
-            turn_wheels(runner, 1.0 + 1.0 / positions)
-            found.append(lowest_moving(attempt, step, pwm_max, near=first))
-    return round(sum(found) / len(found))
-
-
-TURN_RATE = math.radians(60.0)
-"""rad/s of the ROTATEs that move the wheels on between dead-band searches."""
-
-
-def turn_wheels(
-    runner: Runner, pitches: float, group: str = "deadband:turn", what: str = "dead band"
-) -> RunResult:
-    """ROTATE in place so that every wheel turns by about ``pitches`` of its roller pitch (the
-    described radius and roller count; counter-clockwise for ``pitches`` > 0, the direction in which
-    omni4's wheels count up). The robot stays where it is; only its heading changes."""
-    robot, geo = runner.robot, runner.geometry
-    pitch = max(2.0 * math.pi * w.radius / w.rollers.count for w in robot.wheels)  # m of rim per roller
-    angle = pitches * pitch / min(abs(v) for v in geo.rotation_rim())
-    info = RunInfo(ROTATE, f"wheels on: rotate {math.degrees(angle):.1f} deg")
-    runner.note(f"{what}: wheels on")
-    return runner.run(info, partial(runner.client.rotate, angle, TURN_RATE), abs(angle) / TURN_RATE, group)
-
-
-def lowest_moving(attempt: Callable[[int], bool], step: int, pwm_max: int, near: int | None = None) -> int:
-    """The lowest power for which ``attempt(power)`` (a run) moved the robot: upwards in ``step``
-    counts, then bisection to 2 counts; ``pwm_max + 1`` when not even full power moved it. ``near``:
-    an earlier search's result; the search then starts ``step`` below it in half steps."""
-    low, high = 0, None
-    power = step
-    if near is not None:
-        low = max(0, min(near, pwm_max) - step)
-        step = max(2, step // 2)
-        power = low + step
-    while power <= pwm_max:
-        if attempt(power):
-            high = power
-            break
-        low = power
-        power += step
-    if high is None:
-        if low < pwm_max and attempt(pwm_max):
-            high = pwm_max
-        else:
-            return pwm_max + 1
-    while high - low > 2:
-        mid = (low + high) // 2
-        if attempt(mid):
-            high = mid
-        else:
-            low = mid
-    return high
 
 
 def power_levels(deadband: int, pwm_max: int, levels: int) -> list[int]:

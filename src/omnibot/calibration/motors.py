@@ -32,10 +32,11 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
-from omnibot.calibration.experiments import MOVED_ANGLE, MOVED_DISTANCE, Runner, spread_deadband
+from omnibot.calibration.deadband import MOVED_ANGLE, MOVED_DISTANCE, find_deadband, spread_deadband
 from omnibot.calibration.motorfit import (
     ERROR_FLOOR,
     GAIN_STEP,
@@ -51,20 +52,27 @@ from omnibot.calibration.motorfit import (
     gain_fit_step,
     gain_origin,
     gain_rows,
+    identity,
     information,
     model_map,
+    offsets_from_deadbands,
     rms,
     stand_torque,
 )
-from omnibot.calibration.patterns import Geometry, apply_map
+from omnibot.calibration.patterns import Geometry, apply_map, top_power
+from omnibot.calibration.plan import Plan, speed_range
+from omnibot.calibration.runner import Runner
 from omnibot.calibration.runs import STRAIGHT, RunInfo
+from omnibot.calibration.truth import simulator_of
+from omnibot.client import RobotClient
+from omnibot.firmware.config import build_config
 from omnibot.robot import MotorMapSpec
 
 
 def motor_deadbands(runner: Runner, step: int = 8, duration: float = 0.5, positions: int = 1) -> list[int]:
     """Each motor's dead band alone: the lowest POWER on that motor only that moves the robot (the
     other wheels' rollers drag by where they stand: the mean over ``positions`` wheel positions,
-    :func:`~omnibot.calibration.experiments.spread_deadband`)."""
+    :func:`~omnibot.calibration.deadband.spread_deadband`)."""
     geo = runner.geometry
     out = []
     for i in range(geo.motors):
@@ -317,3 +325,56 @@ def _score(errors: Sequence[np.ndarray], blocks: Sequence[_Power]) -> float:
     """The rms over the powers of each power's rms error relative to its runs through the offsets alone."""
     rel = [rms(e) / max(rms(b.e0), ERROR_FLOOR) for e, b in zip(errors, blocks, strict=True)]
     return float(np.sqrt(np.mean(np.square(rel))))
+
+
+Lift = Callable[[RobotClient, bool], None]
+"""Puts the robot on a stand, every wheel off the floor (True), and back where it stood (False)."""
+
+
+def fit_motor_map(
+    runner: Runner, plan: Plan, notes: list[str], stand: Lift | None = None
+) -> tuple[MotorMapSpec, Balance]:
+    """Offsets from the motors' own dead bands, the torque constants from the stand test (the
+    simulator's wheels lifted, else ``stand``; neither: no speed terms), then the gains from the
+    balance runs (motors.py) at nominal powers spread over what the robot's speed range needs (by the
+    described K)."""
+    geo, robot = runner.geometry, runner.robot
+    runner.motors = None
+    runner.rate = None
+    rotation = find_deadband(runner, None, plan.deadband_step, positions=plan.deadband_positions).power
+    single = motor_deadbands(runner, plan.deadband_step, positions=plan.deadband_positions)
+    offsets = offsets_from_deadbands(single, rotation, geo.pwm_max)
+    if not any(offsets):
+        notes.append(f"motor dead bands {single} (rotation {rotation}): no offsets")
+    top = top_power(MotorMapSpec(offset=offsets, gain=identity(geo.motors).gain), geo.pwm_max)
+    k = float(build_config(robot)["k"])
+    slow, fast = speed_range(robot, plan.move_length)
+    factors = [geo.translation_factor(c) for c in plan.calibrated_courses(geo)]
+    lo, hi = k * slow * min(factors), min(2.0 * k * fast * max(factors), 0.9 * top)
+    n = max(1, plan.balance_levels)
+    powers = sorted({max(1, round(lo * (hi / lo) ** (i / max(n - 1, 1)))) for i in range(n)})
+    # long enough for about half the reference move at the speed each power is meant for
+    durations = [min(max(0.5 * plan.move_length * k * max(factors) / p, 1.0), 3.0) for p in powers]
+    lift = simulator_lift(runner.client) or (partial(stand, runner.client) if stand is not None else None)
+    torque = stand_test(runner, lift) if lift is not None else None
+    if torque is None:
+        notes.append(
+            "motor map: no stand test (nobody to lift the robot, or a wheel without an encoder), so no speed terms"
+        )
+    balance = balance_model(runner, offsets, powers, k, durations, stand=torque)
+    runner.rate = balance.rate if balance.rates else None
+    speed = tuple(balance.speed) if balance.speed else None
+    return MotorMapSpec(offset=offsets, gain=balance.tables(geo.motors), speed=speed), balance
+
+
+def simulator_lift(client: RobotClient) -> Callable[[bool], None] | None:
+    """The stand of a simulated robot: its wheels lifted off the floor; None on another link."""
+    sim = simulator_of(client)
+    if sim is None:
+        return None
+
+    def lift(up: bool) -> None:
+        for wheel in sim.robot.wheels:
+            sim.lift_wheel(wheel.name, up)
+
+    return lift

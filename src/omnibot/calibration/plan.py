@@ -47,7 +47,7 @@ class Plan:
     """Power levels from the dead band to full power (denser near the dead band)."""
     deadband_step: int = 8
     deadband_positions: int = 3
-    """Wheel positions each dead band is the mean over (experiments.spread_deadband; 1: one search)."""
+    """Wheel positions each dead band is the mean over (deadband.spread_deadband; 1: one search)."""
     settle: float = 0.4
     """s to wait after a run for the robot to coast to a stop before measuring."""
     speed_margin: float = 1.2

@@ -23,9 +23,10 @@ from __future__ import annotations
 
 from omnibot.calibration.accuracy import AccuracyRow, ReachMeasure, reach_speed
 from omnibot.calibration.check import move_row
-from omnibot.calibration.experiments import Runner, turn_wheels
+from omnibot.calibration.deadband import turn_wheels
 from omnibot.calibration.patterns import Geometry
 from omnibot.calibration.plan import Plan, speed_range
+from omnibot.calibration.runner import Runner
 from omnibot.robot import CalibrationSpec
 
 REACH = "reach"

@@ -16,15 +16,9 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from omnibot.calibration.experiments import Runner, turn_wheels
-from omnibot.calibration.patterns import course_pattern, top_power
-from omnibot.calibration.plan import Plan
-from omnibot.calibration.rollerfit import (
-    GROUP,
+from omnibot.calibration.coastfit import (
     CoastTuning,
     IdleDrag,
-    RollerFit,
-    axis_courses,
     coast_row,
     coast_tuning,
     fit_coast_speed,
@@ -32,6 +26,11 @@ from omnibot.calibration.rollerfit import (
     idle_row,
     spec_drag,
 )
+from omnibot.calibration.deadband import turn_wheels
+from omnibot.calibration.patterns import course_pattern, top_power
+from omnibot.calibration.plan import Plan
+from omnibot.calibration.rollerfit import GROUP, RollerFit, axis_courses
+from omnibot.calibration.runner import Runner
 from omnibot.calibration.runs import STRAIGHT, RunInfo, RunResult
 from omnibot.robot import CalibrationSpec, PiecewiseLinear, RollerDragSpec
 
@@ -149,7 +148,7 @@ def tune_coast(
 
     At the slowest speed, where a PWM count moves a MOVE the most, the MOVEs (with the term of
     :func:`probe_drag`) measure each idle wheel's drag themselves
-    (:func:`~omnibot.calibration.rollerfit.fit_idle_drag`); those
+    (:func:`~omnibot.calibration.coastfit.fit_idle_drag`); those
     coefficients replace the drag runs' and are uploaded for the faster speeds, which measure only
     how much of them each needs. Per faster speed, with D_j the drag at the run's phases and g_j the
     term's gain (0 when off)::

@@ -7,7 +7,7 @@ glue (:mod:`omnibot.navigation`) feeds followers estimates and sends their comma
 
     from omnibot.control import make_follower, read_path
 
-Modules: ``paths`` (Path, files, teach, geometry, the speed profile, the standard paths),
+Modules: ``paths`` (Path, files, teach, geometry, the speed profile and its limits, the standard paths),
 ``followers`` (the Follower interface, its registry and the built-in followers), ``reach`` (how
 fast the motors drive the robot on a floor), ``pid``.
 """
@@ -29,8 +29,9 @@ if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
     )
     from omnibot.control.paths.files import read_path, write_path
     from omnibot.control.paths.geometry import resample
+    from omnibot.control.paths.limits import MotionLimits
     from omnibot.control.paths.path import Path
-    from omnibot.control.paths.profile import MotionLimits, min_traversal_time, time_optimal_profile
+    from omnibot.control.paths.profile import min_traversal_time, time_optimal_profile
     from omnibot.control.paths.standard import standard_path
     from omnibot.control.paths.teach import PathRecorder
     from omnibot.control.reach import floor_course_rate, free_wheel_speeds
@@ -49,7 +50,8 @@ _EXPORTS = {
     "paths.files": ("read_path", "write_path"),
     "paths.geometry": ("resample",),
     "paths.path": ("Path",),
-    "paths.profile": ("MotionLimits", "min_traversal_time", "time_optimal_profile"),
+    "paths.limits": ("MotionLimits",),
+    "paths.profile": ("min_traversal_time", "time_optimal_profile"),
     "paths.standard": ("standard_path",),
     "paths.teach": ("PathRecorder",),
     "reach": ("floor_course_rate", "free_wheel_speeds"),

@@ -11,7 +11,7 @@ so the fastest a robot can translate along course c (body frame) while turning a
 busiest wheel reaches its free speed. That is an upper bound: the floor's rolling resistance, the
 battery's sag and the wheel-speed loop's headroom all take some of it. :func:`wheel_rows` gives
 the map as rows of fractions of each wheel's free speed, what
-:class:`~omnibot.control.paths.profile.MotionLimits` carries to cap the time-optimal profile.
+:class:`~omnibot.control.paths.limits.MotionLimits` carries to cap the time-optimal profile.
 
 On a floor (:func:`floor_course_speed`) the bound is where the wheels' torque-speed lines meet the
 floor's load. To hold speed v along a course (no turn) the floor's forces of the simulator's
@@ -285,7 +285,7 @@ def floor_reach(
     """The motors' steady reach on ``surface`` for every body twist (:class:`FloorReach`): the
     translation of :func:`floor_course_speed` and a turn together, each wheel's speed the sum of
     its translation and rotation parts, the busiest at full PWM against the floor's load (module
-    docstring). What :class:`~omnibot.control.paths.profile.MotionLimits` carries as its floor."""
+    docstring). What :class:`~omnibot.control.paths.limits.MotionLimits` carries as its floor."""
     radius = turn_radius(robot)
     phi = np.linspace(-0.5 * math.pi, 0.5 * math.pi, shares)[:, None]
     course = 2.0 * math.pi * np.arange(courses)[None, :] / courses

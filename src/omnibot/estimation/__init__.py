@@ -7,7 +7,8 @@ Names load on first use, each with its own module.
 
     estimator = make_estimator("fused", robot)
 
-Modules: ``estimator`` (the Estimator protocol, PoseEstimator, Seed002Estimator, the registry),
+Modules: ``estimator`` (the Estimator protocol, PoseEstimator), ``seed002`` (Seed002Estimator),
+``registry`` (estimators by name, replay),
 ``odometry`` (wheel odometry, encoder counts), ``tracking`` (tracking wheels), ``heading`` (the gyro
 heading filter), ``silence`` (a gyro gone quiet), ``creep`` (the floor's creep coefficients and the
 wheels' creep rows, without numpy), ``slip`` (the floor's slip model and its fit), ``slipprobe``,
@@ -20,18 +21,11 @@ from omnibot.faces import lazy_names
 
 if TYPE_CHECKING:
     from omnibot.estimation.creep import CreepRows, SlipParameters, creep_rows
-    from omnibot.estimation.estimator import (
-        ESTIMATORS,
-        Estimator,
-        PoseEstimator,
-        Seed002Estimator,
-        SensorSample,
-        estimator_names,
-        make_estimator,
-        replay,
-    )
+    from omnibot.estimation.estimator import Estimator, PoseEstimator, SensorSample
     from omnibot.estimation.heading import HeadingFilter, HeadingFilterConfig
     from omnibot.estimation.odometry import WheelOdometry, compose_arc, forward_twist
+    from omnibot.estimation.registry import ESTIMATORS, estimator_names, make_estimator, replay
+    from omnibot.estimation.seed002 import Seed002Estimator
     from omnibot.estimation.silence import GyroSilence
     from omnibot.estimation.slip import (
         SlipLeg,
@@ -84,7 +78,9 @@ __all__ = [
     "leg_residual",
     "make_estimator",
     "odometry",
+    "registry",
     "replay",
+    "seed002",
     "silence",
     "slip",
     "slipprobe",
@@ -105,15 +101,17 @@ if not TYPE_CHECKING:  # type checkers take each name from its import above
                 "creep_rows",
             ),
             "estimator": (
-                "ESTIMATORS",
                 "Estimator",
                 "PoseEstimator",
-                "Seed002Estimator",
                 "SensorSample",
+            ),
+            "registry": (
+                "ESTIMATORS",
                 "estimator_names",
                 "make_estimator",
                 "replay",
             ),
+            "seed002": ("Seed002Estimator",),
             "heading": (
                 "HeadingFilter",
                 "HeadingFilterConfig",

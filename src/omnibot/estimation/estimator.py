@@ -9,8 +9,9 @@ why on the host)::
       translation: tracking wheels with the w x p term removed (TrackingOdometry), else the wheels'
       pose <- arc (compose_arc); velocity <- displacement / dt, low-passed
 
-Estimators are small strategies registered by name (:data:`ESTIMATORS`, :func:`make_estimator`), so
-a benchmark can run several on the same telemetry. Inputs are plain: anything with the attributes
+Estimators are small strategies registered by name (:data:`~omnibot.estimation.registry.ESTIMATORS`,
+:func:`~omnibot.estimation.registry.make_estimator`), so a benchmark can run several on the same
+telemetry. Inputs are plain: anything with the attributes
 of :class:`SensorSample` (the client's ``Telemetry`` event has them).
 """
 
@@ -18,7 +19,6 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from collections.abc import Callable, Sequence
 from typing import Protocol
 
 import numpy as np
@@ -29,7 +29,7 @@ from omnibot.estimation.heading import HeadingFilter, HeadingFilterConfig
 from omnibot.estimation.odometry import COUNT_MODULUS, compose_arc, count_delta
 from omnibot.estimation.silence import GyroSilence
 from omnibot.estimation.slip import SlipModel
-from omnibot.estimation.tracking import Seed002Odometry, TrackingGeometry
+from omnibot.estimation.tracking import TrackingGeometry
 from omnibot.estimation.wheelslip import SKID_MARGIN, WheelSlipCheck
 from omnibot.motion import Estimate, Pose2D
 from omnibot.robot import RobotDescription
@@ -383,104 +383,3 @@ class PoseEstimator:
         if silence.turned == 0.0:  # the gyro's heading changed: the still stretch starts here
             self._still_theta = self._pose.theta + d_theta
         return d_theta
-
-
-class Seed002Estimator:
-    """Seed 002's dead reckoning as written: tracking wheels by (8)-(12), raw gyro heading by (1)."""
-
-    def __init__(self, robot: RobotDescription, start: Pose2D | None = None, name: str = "seed002") -> None:
-        if robot.gyro is None:
-            raise ConfigError(f"robot {robot.name} has no gyro for seed 002's heading")
-        self.name = name
-        self.alerts: list[str] = []
-        self.odometry = Seed002Odometry(robot, start)
-        start = start or Pose2D(0.0, 0.0, 0.0)
-        self.estimate = Estimate(0.0, start.x, start.y, start.theta)
-        self._last: SensorSample | None = None
-        self._vel = (0.0, 0.0, 0.0)
-
-    @property
-    def distance(self) -> float:
-        """Distance travelled by the tracking wheels since the start, m."""
-        return self.odometry.distance
-
-    def update(self, sample: SensorSample) -> Estimate:
-        """Fold in one sample: tracking-wheel increments for position, the raw gyro sum for heading."""
-        last = self._last
-        self._last = sample
-        d_theta = 0.0
-        if last is not None and sample.heading is not None and last.heading is not None:
-            d_theta = sample.heading - last.heading
-        if sample.tracking is None:
-            return self.estimate
-        before = self.odometry.pose
-        pose = self.odometry.update(sample.tracking, d_theta)
-        t = sample.controller_time
-        dt = t - self.estimate.t if last is not None else 0.0
-        if dt > 0:
-            a = 1.0 - math.exp(-dt / VELOCITY_TAU)
-            vx0, vy0, w0 = self._vel
-            self._vel = (
-                vx0 + a * ((pose.x - before.x) / dt - vx0),
-                vy0 + a * ((pose.y - before.y) / dt - vy0),
-                w0 + a * (d_theta / dt - w0),
-            )
-        self.estimate = Estimate(t, pose.x, pose.y, pose.theta, *self._vel, False, False)
-        return self.estimate
-
-
-EstimatorFactory = Callable[[RobotDescription, Pose2D | None, SlipParameters | None], Estimator]
-
-
-def _pose_estimator(name: str, translation: str = "auto", heading: str = "fused") -> EstimatorFactory:
-    def make(robot: RobotDescription, start: Pose2D | None, slip: SlipParameters | None) -> Estimator:
-        return PoseEstimator(
-            robot, translation=translation, heading=heading, start=start, name=name, slip=slip
-        )
-
-    return make
-
-
-ESTIMATORS: dict[str, EstimatorFactory] = {
-    "fused": _pose_estimator("fused", "auto", "auto"),
-    "tracking+gyro": _pose_estimator("tracking+gyro", "tracking"),
-    "tracking+raw-gyro": _pose_estimator("tracking+raw-gyro", "tracking", "gyro"),
-    "encoders+gyro": _pose_estimator("encoders+gyro", "encoders"),
-    "encoders+raw-gyro": _pose_estimator("encoders+raw-gyro", "encoders", "gyro"),
-    "encoders": _pose_estimator("encoders", "encoders", "encoders"),
-    "seed002": lambda r, s, _slip: Seed002Estimator(r, s),
-}
-"""Estimators by name: ``fused`` is the best the robot's sensors allow (tracking wheels if any, gyro
-fused with the encoders if any, else the encoders' rotation); the others isolate one source each, for comparison. Every one but
-``seed002`` (as written) takes the floor's slip coefficients for its driven-wheel encoders."""
-
-
-def make_estimator(
-    name: str, robot: RobotDescription, start: Pose2D | None = None, slip: SlipParameters | None = None
-) -> Estimator:
-    """The estimator registered as ``name`` for ``robot``, starting at ``start``, with the floor's
-    wheel slip ``slip`` (None: uncorrected encoders)."""
-    try:
-        factory = ESTIMATORS[name]
-    except KeyError:
-        raise ConfigError(f"unknown estimator {name!r}; expected one of: {', '.join(ESTIMATORS)}") from None
-    return factory(robot, start, slip)
-
-
-def estimator_names(robot: RobotDescription | None = None) -> list[str]:
-    """Registered names (those ``robot``'s sensors support, when given)."""
-    if robot is None:
-        return list(ESTIMATORS)
-    out = []
-    for name, factory in ESTIMATORS.items():
-        try:
-            factory(robot, None, None)
-        except ConfigError:
-            continue
-        out.append(name)
-    return out
-
-
-def replay(estimator: Estimator, samples: Sequence[SensorSample]) -> list[Estimate]:
-    """Run an estimator over recorded samples; the estimate after each."""
-    return [estimator.update(s) for s in samples]

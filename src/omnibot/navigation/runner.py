@@ -108,7 +108,7 @@ class Navigator:
 
     ``estimator`` names the estimator the followers see (:data:`omnibot.estimation.ESTIMATORS`);
     ``observers`` are more estimators fed the same telemetry (for comparisons): names, or
-    estimators made with :func:`~omnibot.estimation.estimator.make_estimator` (keyed by their
+    estimators made with :func:`~omnibot.estimation.registry.make_estimator` (keyed by their
     name). ``wheel_loop`` is the runtime's (:class:`~omnibot.runtime.runtime.Runtime`): close the
     controller's wheel-speed loop (MODE bit 1) when every wheel has an encoder (True), open it (False),
     or leave the MODE as found (None: the motors are off, the robot is pushed by hand).

@@ -23,7 +23,8 @@ from __future__ import annotations
 import math
 import xml.etree.ElementTree as ET
 
-from omnibot.robot.description import RobotDescription, WheelSpec
+from omnibot.robot.description import RobotDescription
+from omnibot.robot.parts import WheelSpec
 
 WHEEL_MASS_SHARE = 0.03
 """Share of the robot's mass in its driven wheels (all of them)."""

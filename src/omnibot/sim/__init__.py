@@ -17,17 +17,21 @@ if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
     from omnibot.sim.device import SimDevice
     from omnibot.sim.emulator import parse_member, run_pty_emulator, run_pty_fleet, spawn_pty_emulator
     from omnibot.sim.fleet import Fleet
+    from omnibot.sim.geometry import points_in_polygon
     from omnibot.sim.physics import Physics
-    from omnibot.sim.simulator import Simulator, Snapshot
-    from omnibot.sim.world import World, load_world, parse_world, points_in_polygon
+    from omnibot.sim.simulator import Simulator
+    from omnibot.sim.truth import Snapshot
+    from omnibot.sim.world import World, load_world, parse_world
 
 _EXPORTS = {
     "device": ("SimDevice",),
     "emulator": ("parse_member", "run_pty_emulator", "run_pty_fleet", "spawn_pty_emulator"),
     "fleet": ("Fleet",),
+    "geometry": ("points_in_polygon",),
     "physics": ("Physics",),
-    "simulator": ("Simulator", "Snapshot"),
-    "world": ("World", "load_world", "parse_world", "points_in_polygon"),
+    "simulator": ("Simulator",),
+    "truth": ("Snapshot",),
+    "world": ("World", "load_world", "parse_world"),
 }
 
 __all__ = [
@@ -40,6 +44,7 @@ __all__ = [
     "device",
     "emulator",
     "fleet",
+    "geometry",
     "kernels",
     "load_world",
     "parse_member",
@@ -50,6 +55,7 @@ __all__ = [
     "run_pty_fleet",
     "simulator",
     "spawn_pty_emulator",
+    "truth",
     "world",
 ]
 

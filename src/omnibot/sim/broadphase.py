@@ -5,8 +5,8 @@ but sweeps only when a body has moved more than half a skin since the last sweep
 the sweep keeps the pairs within a skin of touching, and between sweeps only those are tested. At
 1 kHz a robot at 1 m/s sweeps every 25 steps, so a fleet spread over a room costs one distance test
 per body and step. :class:`Footprints` places every body's convex outline with one matrix product
-per outline size, the same numbers as :func:`~omnibot.sim.world.placed` and
-:func:`~omnibot.sim.world.closed_edges` body by body.
+per outline size, the same numbers as :func:`~omnibot.sim.geometry.placed` and
+:func:`~omnibot.sim.geometry.closed_edges` body by body.
 """
 
 from __future__ import annotations

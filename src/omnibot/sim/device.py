@@ -24,7 +24,8 @@ from omnibot.firmware.controller import Controller
 from omnibot.firmware.hal import HAL
 from omnibot.robot import RobotDescription, load_robot
 from omnibot.sim.clock import SimClock
-from omnibot.sim.simulator import Simulator, TruthRecorder
+from omnibot.sim.simulator import Simulator
+from omnibot.sim.truth import TruthRecorder
 from omnibot.sim.world import World
 
 SPEED_OF_SOUND = 343.0

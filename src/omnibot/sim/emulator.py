@@ -43,7 +43,8 @@ from omnibot.motion import Pose2D
 from omnibot.robot import RobotDescription
 from omnibot.signals import ending_signals
 from omnibot.sim.device import SimDevice
-from omnibot.sim.simulator import Simulator, TruthRecorder
+from omnibot.sim.simulator import Simulator
+from omnibot.sim.truth import TruthRecorder
 from omnibot.transport import DEFAULT_BAUD
 from omnibot.transport.pty_bridge import PtyBridge, serve_together
 

@@ -18,7 +18,7 @@ others collide with and an obstacle their sonar cones and laser scanners see
 (``Simulator.neighbours``). Contacts
 between robots are the walls' contact law with the two bodies' effective mass: a critically damped
 penalty spring along the normal (natural frequency 0.25/dt) plus the walls' friction, and a
-:class:`~omnibot.sim.simulator.CollisionEvent` whose owner is ``robot NAME`` when two robots start
+:class:`~omnibot.sim.truth.CollisionEvent` whose owner is ``robot NAME`` when two robots start
 touching. Robots are stepped in the order of their names, so a run does not depend on the order
 they joined in.
 
@@ -46,6 +46,7 @@ from omnibot.sim.broadphase import Footprints, NearPairs
 from omnibot.sim.clock import SimClock
 from omnibot.sim.device import SimDevice
 from omnibot.sim.fleet_arrays import FleetArrays, batchable
+from omnibot.sim.geometry import placed
 from omnibot.sim.scanner import PoseLog
 from omnibot.sim.simulator import (
     CONTACT_DAMPING,
@@ -54,7 +55,7 @@ from omnibot.sim.simulator import (
     WALL_FRICTION,
     Simulator,
 )
-from omnibot.sim.world import Contact, World, placed
+from omnibot.sim.world import Contact, World
 
 FloatArray = NDArray[np.float64]
 

@@ -78,7 +78,7 @@ class PoseLog:
 
 
 class LaserScanner:
-    """One robot's scanner: its :class:`~omnibot.robot.description.ScannerSpec`, and the seed and
+    """One robot's scanner: its :class:`~omnibot.robot.sensors.ScannerSpec`, and the seed and
     stream key of its random numbers."""
 
     def __init__(self, spec: ScannerSpec, seed: int, key: int) -> None:

@@ -26,7 +26,8 @@ from numpy.typing import ArrayLike, NDArray
 from omnibot.motion import Pose2D
 from omnibot.robot import GyroSpec, SonarSpec, TrackingWheelSpec
 from omnibot.sim import jit, kernels
-from omnibot.sim.world import World, cone_range
+from omnibot.sim.geometry import cone_range
+from omnibot.sim.world import World
 
 IntArray = NDArray[np.int64]
 FloatArray = NDArray[np.float64]

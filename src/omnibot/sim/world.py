@@ -40,169 +40,20 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import ValidationError
 
 from omnibot.config_errors import explain, read_yaml, suggest
 from omnibot.errors import ConfigError
-from omnibot.floor import SURFACES
 from omnibot.motion import Pose2D
 from omnibot.sim import jit
+from omnibot.sim.geometry import FloatArray, IntArray, Point, cone_range, is_convex, pack_polygons
+from omnibot.sim.world_spec import WorldSpec
 
 WORLD_DIR = Path(__file__).with_name("worlds")
-CIRCLE_SEGMENTS = 64
-"""Edges of the polygon standing in for a circle (radial error 0.12 % of the radius)."""
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-Point = tuple[float, float]
-
-_SHAPE_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
-    # shape: (required keys, optional keys)
-    "polyline": (("points",), ("closed",)),
-    "polygon": (("points",), ()),
-    "rectangle": (("min", "max"), ()),
-    "box": (("center", "size"), ("angle_deg",)),
-    "circle": (("center", "radius"), ()),
-}
-_GEOMETRY_KEYS = ("points", "closed", "min", "max", "center", "size", "angle_deg", "radius")
-
-
-# --------------------------------------------------------------------------- file format
-
-
-class _Spec(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-
-class ShapeSpec(_Spec):
-    """One outline: ``polyline`` (walls only), ``polygon``, ``rectangle``, ``box`` or ``circle``."""
-
-    shape: Literal["polyline", "polygon", "rectangle", "box", "circle"]
-    points: tuple[Point, ...] | None = None
-    closed: bool | None = None
-    min: Point | None = None
-    max: Point | None = None
-    center: Point | None = None
-    size: Point | None = None
-    angle_deg: float | None = None
-    radius: float | None = Field(default=None, gt=0)
-
-    @model_validator(mode="after")
-    def _check_shape(self) -> ShapeSpec:
-        need, optional = _SHAPE_KEYS[self.shape]
-        takes = need + optional
-        for key in need:
-            if getattr(self, key) is None:
-                raise ValueError(f"a {self.shape} needs '{key}'")
-        for key in _GEOMETRY_KEYS:
-            if key not in takes and getattr(self, key) is not None:
-                raise ValueError(f"'{key}' does not apply to a {self.shape} (it takes {', '.join(takes)})")
-        if self.points is not None:
-            least = 2 if self.shape == "polyline" else 3
-            if len(self.points) < least:
-                raise ValueError(f"a {self.shape} needs at least {least} points, got {len(self.points)}")
-        if (
-            self.min is not None
-            and self.max is not None
-            and not (self.min[0] < self.max[0] and self.min[1] < self.max[1])
-        ):
-            raise ValueError(f"a rectangle needs min < max in x and y, got min {self.min}, max {self.max}")
-        if self.size is not None and not (self.size[0] > 0 and self.size[1] > 0):
-            raise ValueError(f"a box needs a positive size, got {self.size}")
-        return self
-
-    @property
-    def is_closed(self) -> bool:
-        """Whether the outline is closed (only a polyline may be open)."""
-        return self.shape != "polyline" or bool(self.closed)
-
-    def vertices(self) -> FloatArray:
-        """(V, 2) vertices in the world frame; closed shapes counter-clockwise (circles as 64-gons)."""
-        if self.shape in ("polyline", "polygon"):
-            assert self.points is not None
-            pts = np.array(self.points, dtype=float)
-            return _ccw(pts) if self.shape == "polygon" else pts
-        if self.shape == "rectangle":
-            assert self.min is not None and self.max is not None
-            (x0, y0), (x1, y1) = self.min, self.max
-            return np.array([(x0, y0), (x1, y0), (x1, y1), (x0, y1)], dtype=float)
-        assert self.center is not None
-        if self.shape == "box":
-            assert self.size is not None
-            hx, hy = self.size[0] / 2, self.size[1] / 2
-            local = np.array([(-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy)])
-            a = math.radians(self.angle_deg or 0.0)
-            rot = np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
-            return np.asarray(local @ rot.T + np.array(self.center), dtype=float)
-        assert self.radius is not None
-        k = np.arange(CIRCLE_SEGMENTS) * (2 * math.pi / CIRCLE_SEGMENTS)
-        return np.asarray(np.column_stack((np.cos(k), np.sin(k))) * self.radius + np.array(self.center))
-
-    def segments(self) -> FloatArray:
-        """(K, 4) edges ``x0, y0, x1, y1`` (zero-length edges of repeated points left out)."""
-        v = self.vertices()
-        end = np.roll(v, -1, axis=0) if self.is_closed else v[1:]
-        seg = np.hstack((v[: len(end)], end))
-        return seg[np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]) > 1e-12]
-
-
-class WallSpec(ShapeSpec):
-    """A wall: a thin line (or closed loop) the robot collides with from either side."""
-
-
-class ObstacleSpec(ShapeSpec):
-    """A solid obstacle: any closed shape."""
-
-    @model_validator(mode="after")
-    def _check_closed(self) -> ObstacleSpec:
-        if self.shape == "polyline":
-            raise ValueError("an obstacle must be a closed shape (polygon, rectangle, box or circle)")
-        return self
-
-
-def _known_surface(name: str) -> str:
-    if name not in SURFACES:
-        raise ValueError(suggest(f"unknown surface '{name}'", name, list(SURFACES)))
-    return name
-
-
-SurfaceName = Annotated[str, AfterValidator(_known_surface)]
-
-
-class PatchSpec(ShapeSpec):
-    """A floor area of another surface; a later patch covers an earlier one."""
-
-    surface: SurfaceName
-
-    @model_validator(mode="after")
-    def _check_closed(self) -> PatchSpec:
-        if self.shape == "polyline":
-            raise ValueError("a patch must be a closed shape (polygon, rectangle, box or circle)")
-        return self
-
-
-class StartSpec(_Spec):
-    """The robot's start pose in the world: x, y (m) and heading (degrees)."""
-
-    x: float
-    y: float
-    theta_deg: float = 0.0
-
-
-class WorldSpec(_Spec):
-    """A whole world file."""
-
-    name: str
-    summary: str = ""
-    floor: SurfaceName = "wood"
-    start: StartSpec | None = None
-    walls: tuple[WallSpec, ...] = ()
-    obstacles: tuple[ObstacleSpec, ...] = ()
-    patches: tuple[PatchSpec, ...] = ()
 
 
 # --------------------------------------------------------------------------- loading
@@ -253,14 +104,6 @@ class Contact:
     normal: Point
     depth: float
     owner: str
-
-
-def _polygons(polygons: list[FloatArray]) -> tuple[FloatArray, IntArray]:
-    """Polygons packed for the kernels: all vertices (V, 2) and offsets (K+1,) of each polygon's first."""
-    sizes = [len(p) for p in polygons]
-    verts = np.vstack(polygons) if polygons else np.zeros((0, 2))
-    offsets = np.concatenate(([0], np.cumsum(sizes))).astype(np.int64)
-    return np.ascontiguousarray(verts, dtype=float), offsets
 
 
 @dataclass
@@ -331,13 +174,13 @@ class World:
         self._thin_v = np.ascontiguousarray(thin_edges.reshape(-1, 2), dtype=float)  # edge k: rows 2k, 2k+1
         self._thin_owner = np.array(edges.thin_owner, dtype=np.int64)
         solids = edges.solids
-        self._solid_v, self._solid_off = _polygons(solids)
+        self._solid_v, self._solid_off = pack_polygons(solids)
         self._solid_owner = np.array(edges.solid_owner, dtype=np.int64)
         centers = [v.mean(axis=0) for v in solids]
         self._solid_c = np.array(centers, dtype=float).reshape(-1, 2)
         self._solid_r = np.array([np.max(np.hypot(*(v - c).T)) for v, c in zip(solids, centers, strict=True)])
         self._patch_vertices = [p.vertices() for p in spec.patches]
-        self._patch_v, self._patch_off = _polygons(self._patch_vertices)
+        self._patch_v, self._patch_off = pack_polygons(self._patch_vertices)
         self._patch_sid = np.array(
             [self.surface_names.index(p.surface) for p in spec.patches], dtype=np.int64
         )
@@ -412,7 +255,7 @@ class World:
         """Distance from (x, y) to the nearest edge point within ``heading +- cone/2`` (inf if none).
 
         ``cone`` (rad) must be below pi. Exact: each edge is clipped to the cone, then its point
-        nearest the apex is taken (:func:`cone_range` on the world's edges).
+        nearest the apex is taken (:func:`~omnibot.sim.geometry.cone_range` on the world's edges).
         """
         return cone_range(self.segments, x, y, heading, cone, max_range)
 
@@ -491,78 +334,3 @@ class World:
             Contact((float(r[0]), float(r[1])), (float(r[2]), float(r[3])), float(r[4]), owners[int(r[5])])
             for r in rows
         ]
-
-
-# --------------------------------------------------------------------------- pure geometry helpers
-
-
-def cone_range(
-    segments: FloatArray, x: float, y: float, heading: float, cone: float, max_range: float = math.inf
-) -> float:
-    """Distance from (x, y) to the nearest point of any edge ``(K, 4)`` within ``heading +- cone/2``.
-
-    inf if none within ``max_range``; ``cone`` (rad) must be below pi. Exact: each edge is clipped
-    to the cone, then its point nearest the apex is taken (:func:`omnibot.sim.kernels.cone_distance`).
-    """
-    if not 0 < cone < math.pi:
-        raise ValueError(f"cone must be in (0, pi), got {cone}")
-    edges = np.ascontiguousarray(segments, dtype=np.float64).reshape(-1, 4)
-    return float(
-        jit.active.cone_distance(edges, float(x), float(y), float(heading), float(cone), float(max_range))
-    )
-
-
-def placed(outline: FloatArray, x: float, y: float, theta: float) -> FloatArray:
-    """A body-frame outline (V, 2) placed at pose (x, y, theta): its world-frame vertices."""
-    c, s = math.cos(theta), math.sin(theta)
-    return np.asarray(outline @ np.array([[c, s], [-s, c]]) + np.array([x, y]), dtype=float)
-
-
-def closed_edges(vertices: FloatArray) -> FloatArray:
-    """The edges ``(V, 4)`` of a closed polygon, ``x0, y0, x1, y1``."""
-    return np.hstack((vertices, np.roll(vertices, -1, axis=0)))
-
-
-def _ccw(v: FloatArray) -> FloatArray:
-    """The polygon in counter-clockwise order."""
-    x, y = v[:, 0], v[:, 1]
-    area2 = float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
-    return v if area2 >= 0 else v[::-1].copy()
-
-
-def is_convex(v: FloatArray) -> bool:
-    """True if the closed polygon (V, 2) is convex."""
-    e = np.roll(v, -1, axis=0) - v
-    cross = e[:, 0] * np.roll(e, -1, axis=0)[:, 1] - e[:, 1] * np.roll(e, -1, axis=0)[:, 0]
-    return bool(np.all(cross >= -1e-12) or np.all(cross <= 1e-12))
-
-
-def convex_hull(points: ArrayLike) -> FloatArray:
-    """Counter-clockwise convex hull (Andrew's monotone chain) of (P, 2) points."""
-    pts = sorted({(float(x), float(y)) for x, y in np.asarray(points, dtype=float).reshape(-1, 2)})
-    if len(pts) < 3:
-        return np.array(pts, dtype=float)
-
-    def half(seq: list[Point]) -> list[Point]:
-        out: list[Point] = []
-        for p in seq:
-            while len(out) >= 2 and (
-                (out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
-                - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])
-                <= 0
-            ):
-                out.pop()
-            out.append(p)
-        return out
-
-    lower, upper = half(pts), half(pts[::-1])
-    return np.array(lower[:-1] + upper[:-1], dtype=float)
-
-
-def points_in_polygon(points: ArrayLike, polygon: ArrayLike) -> NDArray[np.bool_]:
-    """Crossing-number test of (P, 2) points against a closed (V, 2) polygon."""
-    flat = np.ascontiguousarray(np.asarray(points, dtype=float).reshape(-1, 2))
-    verts, offsets = _polygons([np.asarray(polygon, dtype=float)])
-    ids = np.zeros(len(flat), dtype=np.int64)
-    jit.active.surface_probe(flat, verts, offsets, np.ones(1, dtype=np.int64), ids)
-    return np.asarray(ids == 1, dtype=bool)

@@ -20,9 +20,9 @@ from collections.abc import Callable
 from dataclasses import replace
 from typing import Any, ClassVar, TypeVar
 
+from omnibot.control.paths.limits import MotionLimits
 from omnibot.control.paths.path import Path
 from omnibot.control.paths.profile import (
-    MotionLimits,
     SpeedProfile,
     min_traversal_time,
     profile_within,

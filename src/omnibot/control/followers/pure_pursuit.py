@@ -25,8 +25,9 @@ from omnibot.control.followers.base import (
     to_body,
     wrap,
 )
+from omnibot.control.paths.limits import MotionLimits
 from omnibot.control.paths.path import Path
-from omnibot.control.paths.profile import MotionLimits, SpeedProfile
+from omnibot.control.paths.profile import SpeedProfile
 
 CREEP = 0.1
 """m/s: the least speed commanded (from rest, and near the end until within ``end_tolerance``):

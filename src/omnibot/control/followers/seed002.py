@@ -42,8 +42,9 @@ from omnibot.control.followers.base import (
     wrap,
 )
 from omnibot.control.paths.geometry import resample
+from omnibot.control.paths.limits import MotionLimits
 from omnibot.control.paths.path import Path
-from omnibot.control.paths.profile import MotionLimits, SpeedProfile
+from omnibot.control.paths.profile import SpeedProfile
 from omnibot.control.pid import PID
 
 CREEP = 0.1

@@ -46,8 +46,9 @@ from omnibot.control.followers.base import (
     wrap,
 )
 from omnibot.control.followers.response import VelocityResponse
+from omnibot.control.paths.limits import MotionLimits
 from omnibot.control.paths.path import FloatArray, Path
-from omnibot.control.paths.profile import MotionLimits, SpeedProfile
+from omnibot.control.paths.profile import SpeedProfile
 
 STEADY_ACCEL = 0.5
 """m/s^2: the response model learns only while the reference accelerates less than this (and the
@@ -288,7 +289,7 @@ class ProfileTracker(Follower):
 def within_reach(limits: MotionLimits, command: Command) -> Command:
     """``command`` scaled down as a whole, if need be, to the robot's reach: no wheel past its
     free-running speed and, given the limits' floor, the twist within what the floor's load leaves
-    the motors (:meth:`~omnibot.control.paths.profile.MotionLimits.reach`).
+    the motors (:meth:`~omnibot.control.paths.limits.MotionLimits.reach`).
 
     Past it the wheel-speed loops saturate one by one, and the twist the wheels then give is not
     the one asked: at omni3's top speed with the body swinging the translation took the wheels and

@@ -3,8 +3,9 @@
 from omnibot.control.paths.files import PathFileError, format_path, parse_path, read_path, write_path
 from omnibot.control.paths.generator import closed_curve_path, figure_eight_path, smooth_random_path
 from omnibot.control.paths.geometry import curvature, douglas_peucker, heading_rate, resample
+from omnibot.control.paths.limits import MotionLimits
 from omnibot.control.paths.path import Path, Projection
-from omnibot.control.paths.profile import MotionLimits, Reference, SpeedProfile, time_optimal_profile
+from omnibot.control.paths.profile import Reference, SpeedProfile, time_optimal_profile
 from omnibot.control.paths.standard import random_path, standard_names, standard_path
 from omnibot.control.paths.teach import PathRecorder
 
@@ -24,6 +25,7 @@ __all__ = [
     "format_path",
     "geometry",
     "heading_rate",
+    "limits",
     "parse_path",
     "path",
     "profile",

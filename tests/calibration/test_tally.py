@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-from omnibot.calibration.accuracy import AccuracyPlan
 from omnibot.calibration.patterns import Geometry
 from omnibot.calibration.plan import Plan
-from omnibot.calibration.session import STEPS, Tally, expected_runs
+from omnibot.calibration.tally import Tally, expected_runs
 from omnibot.robot import load_robot
 
 
@@ -56,13 +55,3 @@ def test_phases_that_do_not_run_expect_nothing() -> None:
     assert full["reach"] == 24 and expected_runs(Plan.quick(), geometry, None, robot)["reach"] == 16
     assert expected_runs(Plan(reach_phases=3), geometry, None, robot)["reach"] == 34
     assert "reach" not in expected_runs(Plan(reach_courses=()), geometry, None, robot)
-
-
-def test_every_phase_is_one_named_steps() -> None:
-    """calibrate_surface is its STEPS: each progress phase ends with its own step, in the order the
-    phases are expected, so the bar's total ends at the runs driven."""
-    robot = load_robot("omni4")
-    phases = list(expected_runs(Plan(), Geometry.of(robot), AccuracyPlan(), robot))
-    stepped = [step.phase for step in STEPS if step.phase is not None]
-    assert stepped == phases
-    assert len({step.name for step in STEPS}) == len(STEPS)
