@@ -636,7 +636,7 @@ def cone_distance(
 ) -> float:
     """Distance from (x, y) to the nearest point of any edge ``(K, 4)`` within ``heading +- cone/2``
     (inf if none within max_range; cone in (0, pi)): each edge clipped to the cone, then its point
-    nearest the apex taken (:func:`omnibot.sim.world.cone_range`)."""
+    nearest the apex taken (:func:`omnibot.sim.geometry.cone_range`)."""
     half = cone / 2
     r0, r1 = math.cos(heading - half), math.sin(heading - half)
     l0, l1 = math.cos(heading + half), math.sin(heading + half)
