@@ -24,6 +24,7 @@ if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
     from omnibot.calibration.calfile import (
         apply_calibration,
         floor_calibration,
+        floor_slip_error,
         load_calibration,
         merge_calibration,
         write_calibration,
@@ -42,6 +43,7 @@ _EXPORTS = {
     "calfile": (
         "apply_calibration",
         "floor_calibration",
+        "floor_slip_error",
         "load_calibration",
         "merge_calibration",
         "write_calibration",
@@ -72,6 +74,7 @@ __all__ = [
     "calibrate_surface",
     "default_truth",
     "floor_calibration",
+    "floor_slip_error",
     "judge_calibration",
     "load_calibration",
     "merge_calibration",

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 from omnibot.faces import lazy_names
 
 if TYPE_CHECKING:
-    from omnibot.estimation.creep import CreepRows, SlipParameters, creep_rows
+    from omnibot.estimation.creep import CreepRows, SlipError, SlipParameters, creep_rows
     from omnibot.estimation.estimator import (
         ESTIMATORS,
         Estimator,
@@ -57,6 +57,7 @@ __all__ = [
     "Seed002Estimator",
     "Seed002Odometry",
     "SensorSample",
+    "SlipError",
     "SlipLeg",
     "SlipModel",
     "SlipParameters",
@@ -101,6 +102,7 @@ if not TYPE_CHECKING:  # type checkers take each name from its import above
         {
             "creep": (
                 "CreepRows",
+                "SlipError",
                 "SlipParameters",
                 "creep_rows",
             ),
