@@ -18,20 +18,6 @@ from omnibot.mapping import load_map
 from omnibot.robot.description import PRESET_DIR as PRESETS
 from tests.cli.conftest import assert_one_line_error
 
-DATA = Path(__file__).resolve().parents[1] / "data"
-CALIBRATION = DATA / "omni4_acceptance_wood_calibration.yaml"
-"""An omni4 wood calibration written before the slip fit's residual was kept (none in it)."""
-SLIP = "      slip: {roll: 0.00182, combined: 0.013999, compliance: 0.0, scale: 1.05048}\n"
-
-
-def with_error(tmp_path: Path, error: str) -> Path:
-    """:data:`CALIBRATION` with ``error`` as its wood floor's ``odometry.error``."""
-    text = CALIBRATION.read_text()
-    assert SLIP in text
-    path = tmp_path / "cal.yaml"
-    path.write_text(text.replace(SLIP, f"{SLIP}      error: {error}\n"))
-    return path
-
 
 def loop(tmp_path: Path, corners: list[tuple[float, float]]) -> Path:
     """A closed path through ``corners`` (room frame, m), written as a path file."""
@@ -127,28 +113,8 @@ def test_bad_input_is_one_line_and_exit_2(
             "has no scanner",
         ),
     ]
-    route = ["map", "--path", str(path), "--world", "room", "--out", str(tmp_path / "o"), "--calibration"]
-    cases += [
-        ([*route, str(CALIBRATION)], "surfaces.wood.odometry has wheel slip but no 'error'"),
-        (
-            [*route, str(with_error(tmp_path, "{rms: -0.001, max: 0.002, runs: 16}"))],
-            "rms must be a fraction",
-        ),
-    ]
     for argv, text in cases:
         assert main(argv) == 2, argv
         err = capsys.readouterr().err
         assert text in err, err
         assert_one_line_error(err)
-
-
-def test_a_calibrated_odometry_is_trusted_to_its_slip_fits_residual(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    cal = with_error(tmp_path, "{rms: 0.0012, max: 0.0021, runs: 16}")
-    path = loop(tmp_path, [(1.0, 1.0), (1.5, 1.0)])
-    argv = ["map", "--path", str(path), "--world", "room", "--seed", "3", "--out", str(tmp_path / "o")]
-    assert main([*argv, "--calibration", str(cal)]) == 0
-    assert "the SLAM trusts the calibrated odometry to 0.12 % of the distance" in capsys.readouterr().out
-    report = yaml.safe_load((tmp_path / "o" / "report.json").read_text())
-    assert report["odometry_noise"] == [0.0012, 0.05]

@@ -13,7 +13,6 @@ from omnibot.calibration.calfile import (
     describe_spec,
     dumps,
     floor_calibration,
-    floor_slip_error,
     load_calibration,
     merge_calibration,
     parse_calibration,
@@ -162,23 +161,19 @@ def test_the_slip_fits_residual_is_read_for_its_floor(tmp_path: Path) -> None:
             "    odometry: {slip: {roll: 0.01, compliance: 0.0}, error: {rms: 0.0012, max: 0.0021, runs: 16}}",
         )
     )
-    expected = SlipError(0.0012, 0.0021, 16)
-    assert load_calibration(path).slip_error_for("carpet") == expected
-    assert floor_slip_error(path, "mecanum4", None) == expected == floor_slip_error(path, None, "carpet")
-    with pytest.raises(ConfigError, match="is a calibration of 'mecanum4', not of 'omni4'"):
-        floor_slip_error(path, "omni4", None)
-    with pytest.raises(ConfigError, match=r"^--surface: .*no wheel-slip calibration for surface 'wood'"):
-        floor_slip_error(path, "mecanum4", "wood")
+    cal = load_calibration(path)
+    assert cal.slip_error_for("carpet") == SlipError(0.0012, 0.0021, 16) == cal.slip_error_for(None)
+    with pytest.raises(ConfigError, match="no wheel-slip calibration for surface 'wood'"):
+        cal.slip_error_for("wood")
 
 
 def test_a_file_without_the_residual_or_with_a_bad_one_is_refused(tmp_path: Path) -> None:
     path = tmp_path / "old.yaml"
     path.write_text(OLD_MECANUM)  # the slip fit, from before its residual was written
-    assert load_calibration(path).slip_for("carpet").roll == 0.01  # what reads only the fit still loads
-    with pytest.raises(
-        ConfigError, match=r"^--calibration: .*surfaces\.carpet\.odometry has wheel slip but no 'error'"
-    ):
-        floor_slip_error(path, "mecanum4", None)
+    cal = load_calibration(path)
+    assert cal.slip_for("carpet").roll == 0.01  # what reads only the fit loads it as before
+    with pytest.raises(ConfigError, match=r"surfaces\.carpet\.odometry has wheel slip but no 'error'"):
+        cal.slip_error_for(None)
     path.write_text(
         OLD_MECANUM.replace(
             "    odometry: {slip: {roll: 0.01, compliance: 0.0}}",

@@ -1,5 +1,5 @@
 """MappingSink: scans matched to the odometry of their time, in the runtime's thread or a worker;
-the map's hit range from the scanner's noise; the SLAM's odometry model from a calibration."""
+the map's hit range from the scanner's noise."""
 
 from __future__ import annotations
 
@@ -9,9 +9,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from omnibot.estimation import SlipError
 from omnibot.mapping.session import MappingSink, RangeNoise, interpolate
-from omnibot.mapping.slam import ODOMETRY_NOISE, Slam
 from omnibot.motion import Estimate, Pose2D
 from omnibot.scan import Scan
 from omnibot.sim import load_world
@@ -89,15 +87,3 @@ def test_hit_range_from_the_scanner_noise() -> None:
     assert RangeNoise(fraction=0.0).hit_range == math.inf
     assert RangeNoise(range=4.0).hit_range == 4.0
     assert RangeNoise(std=0.03, fraction=0.0).hit_range == 0.0
-
-
-def test_a_sink_given_the_calibrated_slip_error_builds_its_slam_with_it() -> None:
-    error = SlipError(0.0012, 0.0021, 16)
-    calibrated = MappingSink(None, slip_error=error)
-    assert calibrated.slam.odometry_noise == (0.0012, ODOMETRY_NOISE[1])
-    assert MappingSink(None).slam.odometry_noise == ODOMETRY_NOISE == (0.05, 0.05)
-    step = Pose2D(0.25, 0.0, 0.0)  # one keyframe's drive: 0.3 mm + 5 mm of sigma, not 12.5 + 5 mm
-    assert np.sqrt(calibrated.slam._odometry_cov(step)[0, 0]) == pytest.approx(0.0012 * 0.25 + 0.005)
-    assert np.sqrt(MappingSink(None).slam._odometry_cov(step)[0, 0]) == pytest.approx(0.05 * 0.25 + 0.005)
-    with pytest.raises(ValueError, match="not both"):
-        MappingSink(None, Slam(), slip_error=error)

@@ -123,12 +123,6 @@ def _check(args: argparse.Namespace) -> Path:
         raise ConfigError(
             "the simulated robot's scanner is simulated: --scanner goes with --port", key="--scanner"
         )
-    if getattr(
-        args, "calibration", None
-    ):  # the SLAM's odometry model comes from it: refused before the robot moves
-        from omnibot.calibration import floor_slip_error
-
-        floor_slip_error(args.calibration, None, args.surface)
     return output_dir(args.out)
 
 
@@ -264,23 +258,11 @@ class _Mapping:
             runtime.estimator = make_estimator("fused", robot, start, slip)
         self.scans, self.runtime = scans, runtime
         runtime.scanner = scans  # one scanner, many readers: the SLAM, the log, ROS 2
-        self.sink = MappingSink(None, threaded=sim is None, slip_error=self._slip_error(robot))
+        self.sink = MappingSink(None, threaded=sim is None)
         runtime.add_sink(self.sink)
         where = "the simulated scanner" if sim is not None else f"the scanner on {self.args.scanner}"
         _say(f"mapping with {where}; the SLAM corrects the wheel and gyro odometry")
         return self._ros2(runtime, robot) if self.args.ros2 else []
-
-    def _slip_error(self, robot: Any) -> Any:
-        """``--calibration``'s slip-fit residual on ``--surface``, the SLAM's odometry model (None:
-        no calibration, the default model); a file without it is a ConfigError."""
-        path = getattr(self.args, "calibration", None)
-        if not path:
-            return None
-        from omnibot.calibration import floor_slip_error
-
-        error = floor_slip_error(path, robot.name, self.args.surface)
-        _say(f"the SLAM trusts the calibrated odometry to {100 * error.rms:.2f} % of the distance")
-        return error
 
     def _ros2(self, runtime: Any, robot: Any) -> list[Any]:
         """The bridge on the runtime (omnibot run --ros2's), and the map publisher beside it."""

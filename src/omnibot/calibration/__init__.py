@@ -24,7 +24,6 @@ if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
     from omnibot.calibration.calfile import (
         apply_calibration,
         floor_calibration,
-        floor_slip_error,
         load_calibration,
         merge_calibration,
         write_calibration,
@@ -43,7 +42,6 @@ _EXPORTS = {
     "calfile": (
         "apply_calibration",
         "floor_calibration",
-        "floor_slip_error",
         "load_calibration",
         "merge_calibration",
         "write_calibration",
@@ -74,7 +72,6 @@ __all__ = [
     "calibrate_surface",
     "default_truth",
     "floor_calibration",
-    "floor_slip_error",
     "judge_calibration",
     "load_calibration",
     "merge_calibration",

@@ -316,23 +316,6 @@ def floor_calibration(
     return tables, slip
 
 
-def floor_slip_error(path: str | Path, robot: str | None, surface: str | None) -> SlipError:
-    """The slip fit's residual on floor ``surface`` (None: the only floor with wheel slip) from the
-    calibration file at ``path``, which must be ``robot``'s (None: not checked); a ConfigError naming
-    ``--calibration`` (a file without it) or ``--surface``."""
-    cal = load_calibration(path)
-    if robot is not None:
-        cal.check_robot(robot, str(path))
-    try:
-        name = cal.slip_surface(surface)
-    except ConfigError as exc:
-        raise ConfigError(f"{path}: {exc}", key="--surface") from None
-    try:
-        return cal.slip_error_for(name)
-    except ConfigError as exc:
-        raise ConfigError(f"{path}: {exc}", key="--calibration") from None
-
-
 def spec_for_robot(spec: CalibrationSpec, robot: RobotDescription, source: str = "") -> CalibrationSpec:
     """A calibration section with its K_l and reach courses on ``robot``'s course axes: as it is when
     made on them, moved there exactly when made on others (a mecanum file written before the fold

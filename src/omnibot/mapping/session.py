@@ -39,14 +39,13 @@ from numpy.typing import NDArray
 
 from omnibot.mapping.deskew import scan_points
 from omnibot.mapping.se2 import between, compose, transform, wrap
-from omnibot.mapping.slam import Slam, odometry_noise_of
+from omnibot.mapping.slam import Slam
 from omnibot.motion import Pose2D, Twist
 from omnibot.scan import Scan
 
 FloatArray = NDArray[np.float64]
 
 if TYPE_CHECKING:
-    from omnibot.estimation import SlipError
     from omnibot.lidar import ScanSource
     from omnibot.mapping.grid import OccupancyGrid
     from omnibot.mapping.localise import Localiser
@@ -219,21 +218,10 @@ def undistorted(scan: Scan, start: Pose2D, end: Pose2D, span: float) -> FloatArr
 
 
 class MappingSink(ScanFeed):
-    """Feeds the SLAM from a runtime (see the module docstring); ``close()`` when the run ends. Its
-    SLAM is ``slam``, else one whose odometry model is the floor's calibrated slip residual
-    ``slip_error`` (:func:`~omnibot.mapping.slam.odometry_noise_of`; None: the default model)."""
+    """Feeds the SLAM from a runtime (see the module docstring); ``close()`` when the run ends."""
 
-    def __init__(
-        self,
-        scans: ScanSource | None,
-        slam: Slam | None = None,
-        *,
-        threaded: bool = False,
-        slip_error: SlipError | None = None,
-    ) -> None:
-        if slam is not None and slip_error is not None:
-            raise ValueError("give the SLAM or the odometry's calibrated error, not both")
-        self.slam = slam if slam is not None else Slam(odometry_noise=odometry_noise_of(slip_error))
+    def __init__(self, scans: ScanSource | None, slam: Slam | None = None, *, threaded: bool = False) -> None:
+        self.slam = slam if slam is not None else Slam()
         self.estimate = Track()
         self._clouds: list[tuple[float, NDArray[np.float32], tuple[float, float]]] = []
         self._latest: FloatArray | None = None
@@ -457,7 +445,6 @@ def write_outputs(
         "loop_closures": sink.slam.closures,
         "keyframes_degenerate": sum(1 for m in sink.slam.matches if m.unconstrained),
         "keyframes_anchored": sink.slam.anchored,
-        "odometry_noise": list(sink.slam.odometry_noise),
         "distance_m": path_length(estimate.poses),
         "map": {"hit_range_m": noise.hit_range},
     }

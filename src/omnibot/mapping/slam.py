@@ -53,7 +53,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import gtsam
 import numpy as np
@@ -72,16 +71,10 @@ from omnibot.mapping.se2 import between, compose, distance, inverse, rotate_cova
 from omnibot.motion import Pose2D, Twist
 from omnibot.scan import Scan
 
-if TYPE_CHECKING:
-    from omnibot.estimation import SlipError
-
 FloatArray = NDArray[np.float64]
 
 OPTIMIZERS = ("isam2", "lm")
 PRIOR_SIGMA = 1e-4
-ODOMETRY_NOISE = (0.05, 0.05)
-"""The odometry model without a calibration: sigma 5 % of the distance driven (plus 5 mm a keyframe)
-and 0.05 rad a metre (plus 5 % of the turn and 0.002 rad), an uncalibrated floor's creep and more."""
 
 
 @dataclass(frozen=True)
@@ -107,17 +100,6 @@ class LoopClosure:
     match: MatchResult | None
 
 
-def odometry_noise_of(error: SlipError | None) -> tuple[float, float]:
-    """:class:`Slam`'s ``odometry_noise`` for an odometry whose floor's slip is calibrated with
-    residual ``error`` (a calibration file's ``surfaces.<floor>.odometry.error``): the translation
-    share is the slip runs' RMS relative error, the encoders' error per metre once the fitted creep
-    is out (their straight runs say nothing of the heading, which stays the default's); None (no
-    calibration): :data:`ODOMETRY_NOISE`."""
-    if error is None:
-        return ODOMETRY_NOISE
-    return (error.rms, ODOMETRY_NOISE[1])
-
-
 def _pose2(p: Pose2D) -> gtsam.Pose2:
     return gtsam.Pose2(p.x, p.y, p.theta)
 
@@ -138,7 +120,7 @@ class Slam:
         submap_keyframes: int = 10,
         search_xy: float = 0.15,
         search_theta: float = math.radians(6.0),
-        odometry_noise: tuple[float, float] = ODOMETRY_NOISE,
+        odometry_noise: tuple[float, float] = (0.05, 0.05),
         min_fitness: float = 0.5,
         loop_search_radius: float = 1.0,
         loop_search_window: tuple[float, float] = (0.4, math.radians(12.0)),
