@@ -84,6 +84,8 @@ def test_quick_run_writes_the_file_and_the_report(
     slip = cal.slip_for("wood")
     assert 0.0 < slip.roll < 0.01 and cal.slip_for(None) == slip
     assert slip.scale == pytest.approx(1.05, abs=0.01)  # the true wheels are 5 % larger
+    error = cal.slip_error_for("wood")  # the fit's residual over its runs (the SLAM's odometry model)
+    assert 0.0 < error.rms <= error.max < 0.01 and error.runs >= 2
     assert "## Wheel slip (driven-wheel odometry)" in (report / "accuracy.md").read_text()
     for name in ("fig5_rates.png", "fig6_kt_kr.png", "fig7_kl.png", "accuracy.png", "accuracy.md"):
         assert (report / name).stat().st_size > 0

@@ -1,6 +1,6 @@
 """The calibration file's reach: written, read back, and a file from before it (no reach); a file
 edited by hand that gives a key twice is refused; the fold marker of a mecanum file, and older mecanum
-files moved onto the x axis or refused."""
+files moved onto the x axis or refused; the slip fit's residual, read for the SLAM's odometry model."""
 
 from __future__ import annotations
 
@@ -18,6 +18,7 @@ from omnibot.calibration.calfile import (
     parse_calibration,
 )
 from omnibot.errors import ConfigError
+from omnibot.estimation import SlipError
 from omnibot.robot import ReachSpec, load_robot
 from tests.calibration.conftest import sim_client
 
@@ -150,3 +151,36 @@ def test_a_mecanum_section_writes_its_fold_marker(tmp_path: Path) -> None:
     path.write_text(dumps({"robot": "mecanum4", "calibration": describe_spec(spec)}), encoding="utf-8")
     assert "fold_axes_deg: [0.0]" in path.read_text()
     assert load_calibration(path).for_surface(None) == spec
+
+
+def test_the_slip_fits_residual_is_read_for_its_floor(tmp_path: Path) -> None:
+    path = tmp_path / "cal.yaml"
+    path.write_text(
+        OLD_MECANUM.replace(
+            "    odometry: {slip: {roll: 0.01, compliance: 0.0}}",
+            "    odometry: {slip: {roll: 0.01, compliance: 0.0}, error: {rms: 0.0012, max: 0.0021, runs: 16}}",
+        )
+    )
+    cal = load_calibration(path)
+    assert cal.slip_error_for("carpet") == SlipError(0.0012, 0.0021, 16) == cal.slip_error_for(None)
+    with pytest.raises(ConfigError, match="no wheel-slip calibration for surface 'wood'"):
+        cal.slip_error_for("wood")
+
+
+def test_a_file_without_the_residual_or_with_a_bad_one_is_refused(tmp_path: Path) -> None:
+    path = tmp_path / "old.yaml"
+    path.write_text(OLD_MECANUM)  # the slip fit, from before its residual was written
+    cal = load_calibration(path)
+    assert cal.slip_for("carpet").roll == 0.01  # what reads only the fit loads it as before
+    with pytest.raises(ConfigError, match=r"surfaces\.carpet\.odometry has wheel slip but no 'error'"):
+        cal.slip_error_for(None)
+    path.write_text(
+        OLD_MECANUM.replace(
+            "    odometry: {slip: {roll: 0.01, compliance: 0.0}}",
+            "    odometry: {slip: {roll: 0.01, compliance: 0.0}, error: {rms: 0.0012, runs: 16}}",
+        )
+    )
+    with pytest.raises(
+        ConfigError, match=r"surfaces\.carpet\.odometry\.error: expected a mapping with exactly rms"
+    ):
+        load_calibration(path)

@@ -11,7 +11,8 @@
       reach: {courses_deg: [0.0, 15.0, 30.0, 45.0], speed: [0.9, 0.81, 0.68, 0.78]}  # m/s (optional)
     surfaces:             # each surface's own calibration, dead bands and wheel slip
       wood: {calibration: {...}, deadband: {course:0: 48, rotation: 40},
-             odometry: {slip: {roll: 0.0021, compliance: 0.0}}}
+             odometry: {slip: {roll: 0.0021, compliance: 0.0},
+                        error: {rms: 0.0012, max: 0.0021, runs: 16}}}  # the fit's residual
     gyro: {bias: -0.0032, scale: 1.008}                              # true = scale * (rate - bias)
     odometry: {wheel_radius_scale: 1.038, wheel_base_scale: 0.989}  # for wheel odometry
 
@@ -26,7 +27,7 @@ import datetime
 import logging
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import yaml
 from pydantic import ValidationError
@@ -34,8 +35,11 @@ from pydantic import ValidationError
 from omnibot.calibration.results import CalibrationResult
 from omnibot.config_errors import read_yaml
 from omnibot.errors import ConfigError
-from omnibot.estimation import SlipParameters
+from omnibot.estimation import SlipError, SlipParameters
 from omnibot.robot import CalibrationSpec, RobotDescription, calibration_for, load_robot, parse_description
+
+if TYPE_CHECKING:
+    from omnibot.navigation import SlipCalibration
 
 log = logging.getLogger(__name__)
 
@@ -57,6 +61,9 @@ class CalibrationFile:
     robot: str | None = None
     slip: dict[str, SlipParameters] = field(default_factory=dict)
     """Each surface's wheel-slip coefficients for the driven-wheel encoders (host side)."""
+    slip_error: dict[str, SlipError] = field(default_factory=dict)
+    """Each surface's slip runs' encoder error once its fitted creep is out (files from before
+    2026-12-07 have none)."""
 
     def check_robot(self, robot: str, source: str = "the calibration file") -> None:
         """Refuse a calibration made for another robot (a file that names none is taken as is)."""
@@ -83,11 +90,11 @@ class CalibrationFile:
             )
         return self.surfaces[surface]
 
-    def slip_for(self, surface: str | None) -> SlipParameters:
-        """A surface's wheel-slip coefficients; ``None`` picks the only surface that has them."""
+    def slip_surface(self, surface: str | None) -> str:
+        """The floor whose wheel slip applies: ``surface``, or (None) the only one that has it."""
         if surface is None:
             if len(self.slip) == 1:
-                return next(iter(self.slip.values()))
+                return next(iter(self.slip))
             raise ConfigError(
                 "the calibration file has wheel slip for "
                 + (", ".join(self.slip) if self.slip else "no surface")
@@ -98,7 +105,22 @@ class CalibrationFile:
                 f"no wheel-slip calibration for surface '{surface}'; the file has: "
                 f"{', '.join(self.slip) or 'none'}"
             )
-        return self.slip[surface]
+        return surface
+
+    def slip_for(self, surface: str | None) -> SlipParameters:
+        """A surface's wheel-slip coefficients; ``None`` picks the only surface that has them."""
+        return self.slip[self.slip_surface(surface)]
+
+    def slip_error_for(self, surface: str | None) -> SlipError:
+        """A surface's slip-fit residual (:meth:`slip_surface` picks it); a ConfigError when the file
+        has the fit without it (written before the residual was kept)."""
+        name = self.slip_surface(surface)
+        if name not in self.slip_error:
+            raise ConfigError(
+                f"surfaces.{name}.odometry has wheel slip but no 'error' (the slip runs' residual, which "
+                "omnibot calibrate writes since 2026-12-07): calibrate the floor again"
+            )
+        return self.slip_error[name]
 
 
 def describe_spec(spec: CalibrationSpec) -> dict[str, Any]:
@@ -141,7 +163,7 @@ def document(result: CalibrationResult, truth: str = "", warning: str = "") -> d
         s.surface: {
             "calibration": describe_spec(s.spec),
             "deadband": dict(s.fit.deadbands),
-            **({"odometry": {"slip": s.slip.params.as_dict()}} if s.slip is not None else {}),
+            **({"odometry": _slip_odometry(s.slip)} if s.slip is not None else {}),
         }
         for s in result.sessions
     }
@@ -169,6 +191,12 @@ def _average_note(result: CalibrationResult) -> str:
     if result.average_better is None:
         return "kept as calibration, unchecked"
     return "kept as calibration: better than none on every floor"
+
+
+def _slip_odometry(slip: SlipCalibration) -> dict[str, Any]:
+    """A floor's ``odometry``: the slip fit and, when it had runs, their residual error."""
+    errors = slip.errors(corrected=True)
+    return {"slip": slip.params.as_dict(), **({"error": SlipError.of(errors).as_dict()} if errors else {})}
 
 
 def _odometry(values: dict[str, Any]) -> dict[str, Any]:
@@ -232,7 +260,7 @@ def parse_calibration(data: Any, source: str = "") -> CalibrationFile:
         raise ConfigError(f"{source}: unknown key(s) {unknown}; expected {', '.join(TOP_KEYS)}".lstrip(": "))
     if "calibration" not in data and not data.get("surfaces"):
         raise ConfigError(f"{source}: no 'calibration' section".lstrip(": "))
-    surfaces, deadbands, slips = {}, {}, {}
+    surfaces, deadbands, slips, slip_errors = {}, {}, {}, {}
     for name, entry in (data.get("surfaces") or {}).items():
         if not isinstance(entry, dict) or "calibration" not in entry:
             raise ConfigError(f"surfaces.{name}: expected a mapping with 'calibration'")
@@ -244,10 +272,14 @@ def parse_calibration(data: Any, source: str = "") -> CalibrationFile:
         surfaces[str(name)] = _spec(entry["calibration"], f"surfaces.{name}.calibration")
         deadbands[str(name)] = {str(k): int(v) for k, v in (entry.get("deadband") or {}).items()}
         odometry = entry.get("odometry") or {}
-        if not isinstance(odometry, dict) or sorted(set(odometry) - {"slip"}):
-            raise ConfigError(f"surfaces.{name}.odometry: expected a mapping with 'slip'")
+        if not isinstance(odometry, dict) or sorted(set(odometry) - {"slip", "error"}):
+            raise ConfigError(f"surfaces.{name}.odometry: expected a mapping with 'slip' (and its 'error')")
         if "slip" in odometry:
             slips[str(name)] = SlipParameters.from_mapping(odometry["slip"], f"surfaces.{name}.odometry.slip")
+        if "error" in odometry:
+            slip_errors[str(name)] = SlipError.from_mapping(
+                odometry["error"], f"surfaces.{name}.odometry.error"
+            )
     return CalibrationFile(
         calibration=_spec(data["calibration"], "calibration") if "calibration" in data else None,
         surfaces=surfaces,
@@ -256,6 +288,7 @@ def parse_calibration(data: Any, source: str = "") -> CalibrationFile:
         odometry=data.get("odometry"),
         robot=data.get("robot"),
         slip=slips,
+        slip_error=slip_errors,
     )
 
 

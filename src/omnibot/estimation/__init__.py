@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 from omnibot.faces import lazy_names
 
 if TYPE_CHECKING:
-    from omnibot.estimation.creep import CreepRows, SlipParameters, creep_rows
+    from omnibot.estimation.creep import CreepRows, SlipError, SlipParameters, creep_rows
     from omnibot.estimation.estimator import Estimator, PoseEstimator, SensorSample
     from omnibot.estimation.heading import HeadingFilter, HeadingFilterConfig
     from omnibot.estimation.odometry import WheelOdometry, compose_arc, forward_twist
@@ -51,6 +51,7 @@ __all__ = [
     "Seed002Estimator",
     "Seed002Odometry",
     "SensorSample",
+    "SlipError",
     "SlipLeg",
     "SlipModel",
     "SlipParameters",
@@ -97,6 +98,7 @@ if not TYPE_CHECKING:  # type checkers take each name from its import above
         {
             "creep": (
                 "CreepRows",
+                "SlipError",
                 "SlipParameters",
                 "creep_rows",
             ),

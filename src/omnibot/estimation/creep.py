@@ -6,7 +6,7 @@ numpy; :class:`~omnibot.estimation.slip.SlipModel` (numpy) takes the same rows a
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, NamedTuple
 
@@ -70,6 +70,54 @@ class SlipParameters:
             "compliance": round(self.compliance, 6),
             "scale": round(self.scale, 5),
         }
+
+
+@dataclass(frozen=True)
+class SlipError:
+    """How well a floor's slip fit corrects the driven-wheel encoders: over its straight runs, each
+    run's |encoder - true displacement| / true distance with the fitted creep taken out (a fraction
+    of the distance; in-sample, so a lower bound on a route's), as root mean square and maximum.
+    A calibration file's ``surfaces.<floor>.odometry.error``."""
+
+    rms: float
+    max: float
+    runs: int
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.rms) and 0.0 < self.rms < 1.0):
+            raise ConfigError(f"rms must be a fraction in (0, 1), got {self.rms}", key="rms")
+        if not (math.isfinite(self.max) and self.rms <= self.max < 1.0):
+            raise ConfigError(f"max must be a fraction in [rms, 1), got {self.max}", key="max")
+        if self.runs < 1:
+            raise ConfigError(f"runs must be at least 1, got {self.runs}", key="runs")
+
+    @classmethod
+    def of(cls, errors: Sequence[float]) -> SlipError:
+        """From the runs' relative errors (``SlipCalibration.errors(corrected=True)``), rounded for a
+        calibration file."""
+        rms = math.sqrt(math.fsum(e * e for e in errors) / len(errors))
+        return cls(round(rms, 6), round(max(errors), 6), len(errors))
+
+    @classmethod
+    def from_mapping(cls, data: object, where: str = "error") -> SlipError:
+        """From ``{rms: ..., max: ..., runs: ...}``, every key required; a ConfigError naming
+        ``where`` and the key otherwise."""
+        keys = ("rms", "max", "runs")
+        if not isinstance(data, dict) or sorted(data) != sorted(keys):
+            raise ConfigError(f"{where}: expected a mapping with exactly {', '.join(keys)}, got {data!r}")
+        rms, top, runs = data["rms"], data["max"], data["runs"]
+        if not all(isinstance(v, int | float) and not isinstance(v, bool) for v in (rms, top)) or not (
+            isinstance(runs, int) and not isinstance(runs, bool)
+        ):
+            raise ConfigError(f"{where}: rms and max must be numbers and runs a count, got {data!r}")
+        try:
+            return cls(float(rms), float(top), runs)
+        except ConfigError as exc:
+            raise ConfigError(f"{where}: {exc}") from None
+
+    def as_dict(self) -> dict[str, float | int]:
+        """The mapping a calibration file holds."""
+        return {"rms": self.rms, "max": self.max, "runs": self.runs}
 
 
 class CreepRows(NamedTuple):
