@@ -162,7 +162,7 @@ def increments(robot: RobotDescription, log: Sequence[Telemetry]) -> list[Increm
         return []
     cpr = {e.wheel: e.counts_per_rev for e in robot.encoders.motors}
     rad = np.array([2.0 * math.pi / cpr[w.name] for w in robot.wheels])
-    pinv = np.linalg.pinv(robot.wheel_matrix)
+    pinv = np.array(robot.forward_rows)  # the robot's one least-squares inverse of J (3, n)
     out: list[Increment] = []
     last = None
     for tel in log:
