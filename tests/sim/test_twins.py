@@ -71,7 +71,7 @@ def test_libm_hypot_is_the_c_librarys_where_pythons_differs() -> None:
     """Numba's math.hypot is the C library's; CPython's is its own and differs in the last bit."""
     rng = np.random.default_rng(1)
     pairs = rng.normal(0.0, 1.0, (20000, 2)) * 10.0 ** rng.integers(-3, 3, (20000, 1))
-    compiled = kernels._segment_distance  # hypot of the offset from a degenerate segment's point
+    compiled = kernels.contacts.segment_distance  # hypot of the offset from a degenerate segment's point
     ours = [compiled(x, y, 0.0, 0.0, 0.0, 0.0) for x, y in pairs.tolist()]
     assert [LIBM.hypot(x, y) for x, y in pairs.tolist()] == ours
     assert [math.hypot(x, y) for x, y in pairs.tolist()] != ours

@@ -72,7 +72,7 @@ solves a 3x3 system: O(m) per robot, about a microsecond per step for one robot)
 inputs and parameters are views of one buffer (:attr:`Physics.buffer`), so the simulator's compiled
 step of one robot takes them as one argument. :meth:`Physics.run` is the batch API: many steps of
 many independent robots in one call, the robots shared out among all cores (numba's threads);
-with ``exact=False`` the robots are stepped side by side in vector lanes (:mod:`omnibot.sim.lanes`:
+with ``exact=False`` the robots are stepped side by side in vector lanes (:mod:`omnibot.sim.kernels.lanes`:
 faster, within a stated tolerance of the exact step rather than bit for bit).
 """
 
@@ -88,7 +88,8 @@ from omnibot.errors import SimulationError
 from omnibot.floor import Surface, get_surface, static_loads
 from omnibot.robot import RobotDescription, open_voltage
 from omnibot.robot.kinematics import contact_rows
-from omnibot.sim import jit, kernels, lanes
+from omnibot.sim import jit, kernels
+from omnibot.sim.kernels import lanes, layout
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -171,53 +172,53 @@ class Physics:
         gamma = wp(lambda w: w.gamma)
         r = wp(lambda w: w.radius)
         traction, roller = contact_rows(self._x, self._y, wp(lambda w: w.drive_angle), gamma)
-        W = np.zeros((self.n, self.m, kernels.W_COLUMNS))
+        W = np.zeros((self.n, self.m, layout.W_COLUMNS))
         # Rows of H per wheel: traction (slip) speed and roller speed over vx, vy, w and the wheel's omega.
-        W[..., kernels.W_TX : kernels.W_TW + 1] = traction
-        W[..., kernels.W_TA] = -r * np.cos(gamma)
-        W[..., kernels.W_NX : kernels.W_NW + 1] = roller
-        W[..., kernels.W_NA] = r * np.sin(gamma)
-        W[..., kernels.W_J_DT] = wp(lambda w: w.inertia + w.motor.gear_ratio**2 * w.motor.rotor_inertia) / dt
+        W[..., layout.W_TX : layout.W_TW + 1] = traction
+        W[..., layout.W_TA] = -r * np.cos(gamma)
+        W[..., layout.W_NX : layout.W_NW + 1] = roller
+        W[..., layout.W_NA] = r * np.sin(gamma)
+        W[..., layout.W_J_DT] = wp(lambda w: w.inertia + w.motor.gear_ratio**2 * w.motor.rotor_inertia) / dt
         k = wp(lambda w: w.motor.torque_constant)
         gear = wp(lambda w: w.motor.gear_ratio)
         eta = wp(lambda w: w.motor.gear_efficiency)
         inv_res = 1.0 / wp(lambda w: w.motor.resistance)
         ke = k * gear  # back-EMF, V per wheel rad/s
         kt = eta * k * gear  # wheel torque, N m per A
-        W[..., kernels.W_INV_PWM_MAX] = 1.0 / wp(lambda w: w.motor.pwm_max)
-        W[..., kernels.W_ON_THRESHOLD] = np.maximum(wp(lambda w: w.motor.deadband), 1e-9)
-        W[..., kernels.W_DROP] = wp(lambda w: w.motor.driver_drop)
-        W[..., kernels.W_INV_RES] = inv_res
-        W[..., kernels.W_KE_RES] = ke * inv_res
-        W[..., kernels.W_I_MAX] = wp(lambda w: w.motor.current_max)
-        W[..., kernels.W_KT] = kt
-        W[..., kernels.W_EMF_DAMPING] = kt * ke * inv_res
-        W[..., kernels.W_VISC] = wp(lambda w: w.motor.friction_viscous)
-        W[..., kernels.W_STATIC] = wp(lambda w: w.motor.friction_static)
+        W[..., layout.W_INV_PWM_MAX] = 1.0 / wp(lambda w: w.motor.pwm_max)
+        W[..., layout.W_ON_THRESHOLD] = np.maximum(wp(lambda w: w.motor.deadband), 1e-9)
+        W[..., layout.W_DROP] = wp(lambda w: w.motor.driver_drop)
+        W[..., layout.W_INV_RES] = inv_res
+        W[..., layout.W_KE_RES] = ke * inv_res
+        W[..., layout.W_I_MAX] = wp(lambda w: w.motor.current_max)
+        W[..., layout.W_KT] = kt
+        W[..., layout.W_EMF_DAMPING] = kt * ke * inv_res
+        W[..., layout.W_VISC] = wp(lambda w: w.motor.friction_viscous)
+        W[..., layout.W_STATIC] = wp(lambda w: w.motor.friction_static)
         self._grip = wp(lambda w: w.rollers.grip)
         rr0 = wp(lambda w: w.rollers.rolling_resistance)
         rr_var = 0.5 * rr0 * wp(lambda w: w.rollers.friction_variation)
-        W[..., kernels.W_RR_VAR] = rr_var
-        W[..., kernels.W_RR_TOP] = rr0 + rr_var
-        W[..., kernels.W_ROLLER_COUNT] = wp(lambda w: w.rollers.count)
-        W[..., kernels.W_RADIUS] = r
+        W[..., layout.W_RR_VAR] = rr_var
+        W[..., layout.W_RR_TOP] = rr0 + rr_var
+        W[..., layout.W_ROLLER_COUNT] = wp(lambda w: w.rollers.count)
+        W[..., layout.W_RADIUS] = r
         self._scrub = wp(lambda w: w.rollers.combined_drag)
         self._wp[:] = W
 
         self._mass = rp(lambda rb: rb.mass)
         r_batt = rp(lambda rb: rb.battery.internal_resistance)
-        R = np.zeros((self.n, kernels.R_COLUMNS))
-        R[:, kernels.R_M_DT] = self._mass / dt
-        R[:, kernels.R_I_DT] = rp(lambda rb: rb.yaw_inertia) / dt
-        R[:, kernels.R_BATT_RES] = r_batt
+        R = np.zeros((self.n, layout.R_COLUMNS))
+        R[:, layout.R_M_DT] = self._mass / dt
+        R[:, layout.R_I_DT] = rp(lambda rb: rb.yaw_inertia) / dt
+        R[:, layout.R_BATT_RES] = r_batt
         # relaxing V_bus by 1/(1 + R_batt sum(1/R)) per step keeps the lagged coupling stable for any battery
-        R[:, kernels.R_BATT_RELAX] = 1.0 / (1.0 + r_batt * inv_res.sum(axis=1))
+        R[:, layout.R_BATT_RELAX] = 1.0 / (1.0 + r_batt * inv_res.sum(axis=1))
         self._rp[:] = R
 
-        S = np.zeros((len(self.surfaces), kernels.S_COLUMNS))
-        S[:, kernels.S_MU] = [s.mu for s in self.surfaces]
-        S[:, kernels.S_INV_VEPS] = [1.0 / s.slip_velocity for s in self.surfaces]
-        S[:, kernels.S_ROLL] = [s.rolling_multiplier for s in self.surfaces]
+        S = np.zeros((len(self.surfaces), layout.S_COLUMNS))
+        S[:, layout.S_MU] = [s.mu for s in self.surfaces]
+        S[:, layout.S_INV_VEPS] = [1.0 / s.slip_velocity for s in self.surfaces]
+        S[:, layout.S_ROLL] = [s.rolling_multiplier for s in self.surfaces]
         self._surf[:] = S
 
     def _bind(self, buffer: FloatArray) -> None:
@@ -233,8 +234,8 @@ class Physics:
         o = kernels.physics_offsets.py_func(self.n, self.m, len(self.surfaces))
         shapes = [
             (self.n, 3), (self.n, 3 + self.m), (self.n, self.m), (self.n, self.m), (self.n, self.m), (self.n, 2),
-            (self.n,), (self.n, self.m), (self.n, 3), (self.n, self.m, kernels.W_COLUMNS),
-            (self.n, kernels.R_COLUMNS), (len(self.surfaces), kernels.S_COLUMNS),
+            (self.n,), (self.n, self.m), (self.n, 3), (self.n, self.m, layout.W_COLUMNS),
+            (self.n, layout.R_COLUMNS), (len(self.surfaces), layout.S_COLUMNS),
         ]  # fmt: skip
         return tuple(self._buffer[o[k] : o[k + 1]].reshape(shape) for k, shape in enumerate(shapes))
 
@@ -273,9 +274,9 @@ class Physics:
     def _set_loads(self) -> None:
         self._load = static_loads(self._x, self._y, self._mass, self._lifted)
         self._load.flags.writeable = False
-        self._wp[..., kernels.W_LOAD] = self._load
-        self._wp[..., kernels.W_GRIP_LOAD] = self._grip * self._load
-        self._wp[..., kernels.W_SCRUB_LOAD] = self._scrub * self._load
+        self._wp[..., layout.W_LOAD] = self._load
+        self._wp[..., layout.W_GRIP_LOAD] = self._grip * self._load
+        self._wp[..., layout.W_SCRUB_LOAD] = self._scrub * self._load
 
     # ------------------------------------------------------------------ state access
 
@@ -492,7 +493,7 @@ class Physics:
         arithmetic is the same, only shared out among numba's threads, each robot stepped ``steps``
         times in a row by one thread; ``numba.set_num_threads`` chooses how many). ``exact=False``:
         the robots in vector lanes with the kernel's own tanh, sin and cos
-        (:func:`omnibot.sim.lanes.physics_run`), about 4 times faster (BENCHMARKS.md); not bit for
+        (:func:`omnibot.sim.kernels.lanes.physics_run`), about 4 times faster (BENCHMARKS.md); not bit for
         bit: every state within 1e-12 of its largest value of the exact step's over 2 s
         (``tests/sim/test_lanes.py``; 7e-13 measured after 10 s).
         A battery with a ``charge`` is stepped one step per call so its charge follows. Each kernel

@@ -67,6 +67,7 @@ from omnibot.scan import Scan
 from omnibot.sim import jit, kernels
 from omnibot.sim.clock import SimClock
 from omnibot.sim.geometry import convex_hull
+from omnibot.sim.kernels import layout
 from omnibot.sim.physics import Physics
 from omnibot.sim.scanner import LaserScanner, PoseLog
 from omnibot.sim.sensors import Gyro, MotorEncoders, Sonar, TrackingWheels
@@ -289,22 +290,22 @@ class Simulator:
         self._patchy = len(self.world.surface_names) > 1
         self._ids = self._floor_ids.copy()
         n_rows = len(self.world.contact_buffer())
-        si = np.zeros(kernels.I_HEADER, dtype=np.int64)
-        si[kernels.I_V], si[kernels.I_C], si[kernels.I_M] = len(self._outline), n_rows, robot.n_wheels
-        si[kernels.I_OWNERS], si[kernels.I_SURFACES] = len(self.world.contact_owners), len(self._surface_map)
-        si[kernels.I_WALLS], si[kernels.I_PATCHY] = self._walls, self._patchy
-        si[kernels.I_RELEASE] = round(CONTACT_RELEASE * 1e6)
+        si = np.zeros(layout.I_HEADER, dtype=np.int64)
+        si[layout.I_V], si[layout.I_C], si[layout.I_M] = len(self._outline), n_rows, robot.n_wheels
+        si[layout.I_OWNERS], si[layout.I_SURFACES] = len(self.world.contact_owners), len(self._surface_map)
+        si[layout.I_WALLS], si[layout.I_PATCHY] = self._walls, self._patchy
+        si[layout.I_RELEASE] = round(CONTACT_RELEASE * 1e6)
         of0, of1, of2, of3, of_end, oi0, oi1, oi2, oi3, oi_end = kernels.sim_offsets.py_func(si)
         self._si = np.zeros(oi_end, dtype=np.int64)
-        self._si[: kernels.I_HEADER] = si
-        self._si[oi0:oi1] = kernels.NEVER
+        self._si[: layout.I_HEADER] = si
+        self._si[oi0:oi1] = layout.NEVER
         self._si[oi2:oi3] = self._surface_map
         self._sf = sf = np.zeros(of_end)
-        sf[kernels.F_MASS], sf[kernels.F_INERTIA] = robot.mass, robot.yaw_inertia
-        sf[kernels.F_OMEGA] = CONTACT_OMEGA_DT / self.dt
-        sf[kernels.F_DAMPING], sf[kernels.F_WALL_FRICTION] = CONTACT_DAMPING, WALL_FRICTION
-        sf[kernels.F_CLEAR], sf[kernels.F_SURF_CLEAR] = -1.0, -1.0
-        sf[kernels.F_REACH] = max(math.hypot(*wh.position) for wh in robot.wheels)
+        sf[layout.F_MASS], sf[layout.F_INERTIA] = robot.mass, robot.yaw_inertia
+        sf[layout.F_OMEGA] = CONTACT_OMEGA_DT / self.dt
+        sf[layout.F_DAMPING], sf[layout.F_WALL_FRICTION] = CONTACT_DAMPING, WALL_FRICTION
+        sf[layout.F_CLEAR], sf[layout.F_SURF_CLEAR] = -1.0, -1.0
+        sf[layout.F_REACH] = max(math.hypot(*wh.position) for wh in robot.wheels)
         sf[of0:of1] = self._outline.ravel()
         sf[of3:of_end] = np.array([wh.position for wh in robot.wheels], dtype=float).ravel()
         self._contact_out = sf[of1:of2].reshape(n_rows, 6)
@@ -396,7 +397,7 @@ class Simulator:
     @property
     def contacts(self) -> list[Contact]:
         """Contacts found at the start of the last step."""
-        return self.world.contact_list(self._contact_out[: self._si[kernels.I_COUNT]])
+        return self.world.contact_list(self._contact_out[: self._si[layout.I_COUNT]])
 
     @property
     def battery_charge(self) -> float:
@@ -718,14 +719,14 @@ class Simulator:
         """What follows the compiled step of the step that began at ``now_us`` (its ``status`` bits;
         a fleet's :func:`~omnibot.sim.kernels.fleet_step` too): the collision events, the clock, the
         sensors' normal draws, the scanner and the listeners."""
-        if status & kernels.STEP_BAD_SURFACE:
+        if status & layout.STEP_BAD_SURFACE:
             raise SimulationError(f"surface_ids must index the {self._n_surfaces} surfaces of this Physics")
         if self._packed is not None:
             self._packed.count_step()
-        if status & kernels.STEP_COLLISION:
+        if status & layout.STEP_COLLISION:
             self._collisions_found()
         self.clock.advance_us(self._dt_us)
-        if status & kernels.STEP_REFILL:
+        if status & layout.STEP_REFILL:
             self.tracking.refill()
             if self.gyro is not None:
                 self.gyro.refill(self.dt)
@@ -750,7 +751,7 @@ class Simulator:
             self._force,
             now_us,
         )
-        force = self._force if status & kernels.STEP_FORCE else None
+        force = self._force if status & layout.STEP_FORCE else None
         self._physics.step(self._pwm, self._step_ids, force)
         state[:3], state[3:] = state[3:], self._twist_row
         return status | jit.active.robot_after(state, self.dt, *self._sensors)
@@ -772,10 +773,10 @@ class Simulator:
 
     def _collisions_found(self) -> None:
         """Collision events for the contacts the last step's test flagged as new (in row order)."""
-        count = int(self._si[kernels.I_COUNT])
+        count = int(self._si[layout.I_COUNT])
         rows = self._contact_out[:count]
         sf = self._sf
-        pose = Pose2D(float(sf[kernels.F_AT_X]), float(sf[kernels.F_AT_Y]), float(sf[kernels.F_AT_TH]))
+        pose = Pose2D(float(sf[layout.F_AT_X]), float(sf[layout.F_AT_Y]), float(sf[layout.F_AT_TH]))
         for a, contact in enumerate(self.world.contact_list(rows)):
             if self._new_contact[a]:
                 self._collide(contact, float(self._contact_speed[a]), pose)
@@ -798,8 +799,8 @@ class Simulator:
         """
         count, clearance = self.world.contacts_at(self._outline, x, y, th, self._contact_out)
         sf = self._sf
-        sf[kernels.F_CLEAR_X], sf[kernels.F_CLEAR_Y], sf[kernels.F_CLEAR] = x, y, clearance
-        self._si[kernels.I_COUNT] = count
+        sf[layout.F_CLEAR_X], sf[layout.F_CLEAR_Y], sf[layout.F_CLEAR] = x, y, clearance
+        self._si[layout.I_COUNT] = count
         return int(self._contact_out[0, 5]) if count else -1
 
     def touch(self, contact: Contact, speed: float) -> None:
