@@ -358,7 +358,7 @@ class Physics(StateArrays):
         the robots in vector lanes with the kernel's own tanh, sin and cos
         (:func:`omnibot.sim.kernels.lanes.physics_run`), about 4 times faster (BENCHMARKS.md); not bit for
         bit: every state within 1e-12 of its largest value of the exact step's over 2 s
-        (``tests/sim/test_lanes.py``; 7e-13 measured after 10 s).
+        (``tests/sim/kernels/test_lanes.py``; 7e-13 measured after 10 s).
         A battery with a ``charge`` is stepped one step per call so its charge follows. Each kernel
         compiles on its first call in a process (numba's threading layer; cached on disk after).
         """

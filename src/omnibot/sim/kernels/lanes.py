@@ -11,7 +11,7 @@ over half of an exact robot-step; it has its own, in plain arithmetic (:mod:`omn
 :func:`~omnibot.sim.kernels.libm.tanh`, :func:`~omnibot.sim.kernels.libm.sincos`, :func:`~omnibot.sim.kernels.libm.cos`).
 
 They are not the C library's, so the results are not :meth:`Physics.step`'s bit for bit: each
-function is within about one unit in the last place of the exact value (``tests/sim/test_lanes.py``
+function is within about one unit in the last place of the exact value (``tests/sim/kernels/test_libm.py``
 measures it), and a run keeps within a stated tolerance of the exact step's
 (``docs/simulator.md``, "Batches"). Everything else is exact IEEE arithmetic compiled without
 ``fastmath``: the result does not depend on the number of threads, the block's vector width or the

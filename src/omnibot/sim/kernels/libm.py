@@ -2,7 +2,7 @@
 vectorises (numba calls the C library's one value at a time: it finds no SVML here), for the batch
 kernel of :mod:`omnibot.sim.kernels.lanes`.
 
-Each is within about one unit in the last place of the exact value (``tests/sim/test_lanes.py``
+Each is within about one unit in the last place of the exact value (``tests/sim/kernels/test_libm.py``
 measures it): an argument reduced exactly (by ln 2, or by pi/2 in three exact parts, good for
 ``|x| <= REDUCE_LIMIT``), then a Taylor polynomial that reaches a double's precision on the reduced
 range. Larger angles are the caller's to give to the C library.
