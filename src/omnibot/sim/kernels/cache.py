@@ -12,6 +12,7 @@ of the family changed, every kernel of it compiles again, as one ``kernels.py`` 
 
 from __future__ import annotations
 
+import functools
 import hashlib
 from pathlib import Path
 from typing import Any
@@ -33,6 +34,13 @@ def family_stamp(folder: Path = FAMILY) -> str:
     return digest.hexdigest()
 
 
+@functools.cache
+def _stamp_now() -> str:
+    """:func:`family_stamp` of this package, once a process (numba asks for it as each kernel is
+    defined, and takes a kernel's stamp then, as it does its own file's)."""
+    return family_stamp(FAMILY)
+
+
 class FamilyLocator(_CacheLocator):
     """Numba's own locator of a kernel of the family, with the family's stamp added to its own."""
 
@@ -50,7 +58,7 @@ class FamilyLocator(_CacheLocator):
 
     def get_source_stamp(self) -> tuple[Any, str]:
         """The kernel's own file's stamp and the family's."""
-        return self._inner.get_source_stamp(), family_stamp()
+        return self._inner.get_source_stamp(), _stamp_now()
 
     def get_disambiguator(self) -> str:
         """The inner locator's (the kernel's line number)."""
