@@ -22,6 +22,15 @@ Modules (each owns one thing; the plain scan type is :mod:`omnibot.scan`):
   registration (correlative search then point-to-line ICP) with a covariance that shows degeneracy.
 * :mod:`omnibot.mapping.slam` - :class:`~omnibot.mapping.slam.Slam`, online 2D SLAM: keyframes
   matched to a local submap, a gtsam pose graph with verified, robust loop closures.
+* :mod:`omnibot.mapping.planner` - ``plan_path``: a collision-free path for a disc robot on a
+  grid, on the parts below.
+* :mod:`omnibot.mapping.costmap` - :class:`~omnibot.mapping.costmap.CostMap` and ``inflate``: the
+  walls inflated by the robot's radius and margin, a cost beyond.
+* :mod:`omnibot.mapping.distance` - the exact Euclidean distance transform (compiled).
+* :mod:`omnibot.mapping.cellwalk` - the cells a straight run crosses, walked exactly (compiled).
+* :mod:`omnibot.mapping.astar` - the grid planner: A* on the cells (compiled), any-angle shortcuts.
+* :mod:`omnibot.mapping.sampling` - OMPL's sampling planners (RRT*, PRM*, BIT*) on a cost map.
+* :mod:`omnibot.mapping.ends` - a path's ends: ``check_start``, ``check_goal`` and their errors.
 
 The user's guide is docs/mapping.md. Other packages take the names below from this face::
 
@@ -36,19 +45,12 @@ from typing import TYPE_CHECKING
 from omnibot.faces import lazy_names
 
 if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
+    from omnibot.mapping.costmap import MARGIN, CostMap, inflate
+    from omnibot.mapping.ends import check_goal, check_start
     from omnibot.mapping.grid import OCCUPIED, OccupancyGrid
     from omnibot.mapping.localise import Localiser
     from omnibot.mapping.mapfile import load_map, save_map
-    from omnibot.mapping.planner import (
-        MARGIN,
-        CostMap,
-        PlannedPath,
-        Planner,
-        check_goal,
-        check_start,
-        inflate,
-        plan_path,
-    )
+    from omnibot.mapping.planner import PlannedPath, Planner, plan_path
     from omnibot.mapping.se2 import compose, inverse
     from omnibot.mapping.session import (
         LocalisingSink,
@@ -65,19 +67,12 @@ if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
     )
 
 _EXPORTS = {
+    "costmap": ("MARGIN", "CostMap", "inflate"),
+    "ends": ("check_goal", "check_start"),
     "grid": ("OCCUPIED", "OccupancyGrid"),
     "localise": ("Localiser",),
     "mapfile": ("load_map", "save_map"),
-    "planner": (
-        "MARGIN",
-        "CostMap",
-        "PlannedPath",
-        "Planner",
-        "check_goal",
-        "check_start",
-        "inflate",
-        "plan_path",
-    ),
+    "planner": ("PlannedPath", "Planner", "plan_path"),
     "se2": ("compose", "inverse"),
     "session": (
         "LocalisingSink",
@@ -111,6 +106,8 @@ __all__ = [
     "check_goal",
     "check_start",
     "compose",
+    "costmap",
+    "ends",
     "grid",
     "inflate",
     "interpolate",
