@@ -20,6 +20,10 @@ Modules (each owns one thing; the plain scan type is :mod:`omnibot.scan`):
   to one instant of the base's motion.
 * :mod:`omnibot.mapping.matcher` - :class:`~omnibot.mapping.matcher.ScanMatcher`, 2D scan
   registration (correlative search then point-to-line ICP) with a covariance that shows degeneracy.
+  Its parts: :mod:`~omnibot.mapping.target` (a target's points, normals and likelihood grid),
+  :mod:`~omnibot.mapping.correlative` (the correlative search, compiled),
+  :mod:`~omnibot.mapping.icp` (point-to-line ICP, ``MatchResult``) and
+  :mod:`~omnibot.mapping.degeneracy` (the constrained directions, the covariance).
 * :mod:`omnibot.mapping.slam` - :class:`~omnibot.mapping.slam.Slam`, online 2D SLAM: keyframes
   matched to a local submap, a gtsam pose graph with verified, robust loop closures.
 * :mod:`omnibot.mapping.planner` - ``plan_path``: a collision-free path for a disc robot on a

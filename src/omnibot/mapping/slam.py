@@ -59,15 +59,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from omnibot.errors import ConfigError
+from omnibot.mapping.degeneracy import UNCONSTRAINED_VARIANCE
 from omnibot.mapping.deskew import scan_points
-from omnibot.mapping.matcher import (
-    UNCONSTRAINED_VARIANCE,
-    MatchResult,
-    ScanMatcher,
-    Target,
-    voxel_downsample,
-)
+from omnibot.mapping.icp import MatchResult
+from omnibot.mapping.matcher import ScanMatcher
 from omnibot.mapping.se2 import between, compose, distance, inverse, rotate_covariance, transform
+from omnibot.mapping.target import Target, voxel_downsample
 from omnibot.motion import Pose2D, Twist
 from omnibot.scan import Scan
 
