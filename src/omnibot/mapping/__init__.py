@@ -26,6 +26,10 @@ Modules (each owns one thing; the plain scan type is :mod:`omnibot.scan`):
   :mod:`~omnibot.mapping.degeneracy` (the constrained directions, the covariance).
 * :mod:`omnibot.mapping.slam` - :class:`~omnibot.mapping.slam.Slam`, online 2D SLAM: keyframes
   matched to a local submap, a gtsam pose graph with verified, robust loop closures.
+  Its parts: :mod:`~omnibot.mapping.keyframes` (the keyframes, their submaps),
+  :mod:`~omnibot.mapping.anchor` (a degenerate match completed on the anchor submap),
+  :mod:`~omnibot.mapping.loops` (loop closures) and :mod:`~omnibot.mapping.posegraph` (the gtsam
+  pose graph and its optimiser).
 * :mod:`omnibot.mapping.planner` - ``plan_path``: a collision-free path for a disc robot on a
   grid, on the parts below.
 * :mod:`omnibot.mapping.costmap` - :class:`~omnibot.mapping.costmap.CostMap` and ``inflate``: the
