@@ -30,6 +30,12 @@ Modules (each owns one thing; the plain scan type is :mod:`omnibot.scan`):
   :mod:`~omnibot.mapping.anchor` (a degenerate match completed on the anchor submap),
   :mod:`~omnibot.mapping.loops` (loop closures) and :mod:`~omnibot.mapping.posegraph` (the gtsam
   pose graph and its optimiser).
+* :mod:`omnibot.mapping.session` - the runtime's sinks: :class:`~omnibot.mapping.session.MappingSink`
+  (scans and odometry into the SLAM) and :class:`~omnibot.mapping.session.LocalisingSink` (into
+  a localiser). Its parts: :mod:`~omnibot.mapping.feed` (``ScanFeed``: scans meet the odometry of
+  their time; ``Track``), :mod:`~omnibot.mapping.snapshot` (``MapSnapshot``, ``RangeNoise``: the
+  run's map) and :mod:`~omnibot.mapping.report` (``write_outputs``, ``write_report``,
+  ``score_lines``: the run's files and scores).
 * :mod:`omnibot.mapping.planner` - ``plan_path``: a collision-free path for a disc robot on a
   grid, on the parts below.
 * :mod:`omnibot.mapping.costmap` - :class:`~omnibot.mapping.costmap.CostMap` and ``inflate``: the
@@ -55,24 +61,15 @@ from omnibot.faces import lazy_names
 if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
     from omnibot.mapping.costmap import MARGIN, CostMap, inflate
     from omnibot.mapping.ends import check_goal, check_start
+    from omnibot.mapping.feed import Track, interpolate
     from omnibot.mapping.grid import OCCUPIED, OccupancyGrid
     from omnibot.mapping.localise import Localiser
     from omnibot.mapping.mapfile import load_map, save_map
     from omnibot.mapping.planner import PlannedPath, Planner, plan_path
+    from omnibot.mapping.report import MappingResult, path_length, score_lines, write_outputs, write_report
     from omnibot.mapping.se2 import compose, inverse
-    from omnibot.mapping.session import (
-        LocalisingSink,
-        MappingResult,
-        MappingSink,
-        MapSnapshot,
-        RangeNoise,
-        Track,
-        interpolate,
-        path_length,
-        score_lines,
-        write_outputs,
-        write_report,
-    )
+    from omnibot.mapping.session import LocalisingSink, MappingSink
+    from omnibot.mapping.snapshot import MapSnapshot, RangeNoise
 
 _EXPORTS = {
     "costmap": ("MARGIN", "CostMap", "inflate"),
@@ -82,19 +79,10 @@ _EXPORTS = {
     "mapfile": ("load_map", "save_map"),
     "planner": ("PlannedPath", "Planner", "plan_path"),
     "se2": ("compose", "inverse"),
-    "session": (
-        "LocalisingSink",
-        "MappingResult",
-        "MappingSink",
-        "MapSnapshot",
-        "RangeNoise",
-        "Track",
-        "interpolate",
-        "path_length",
-        "score_lines",
-        "write_outputs",
-        "write_report",
-    ),
+    "feed": ("Track", "interpolate"),
+    "report": ("MappingResult", "path_length", "score_lines", "write_outputs", "write_report"),
+    "session": ("LocalisingSink", "MappingSink"),
+    "snapshot": ("MapSnapshot", "RangeNoise"),
 }
 
 __all__ = [
@@ -116,6 +104,7 @@ __all__ = [
     "compose",
     "costmap",
     "ends",
+    "feed",
     "grid",
     "inflate",
     "interpolate",
@@ -126,10 +115,12 @@ __all__ = [
     "path_length",
     "plan_path",
     "planner",
+    "report",
     "save_map",
     "score_lines",
     "se2",
     "session",
+    "snapshot",
     "write_outputs",
     "write_report",
 ]
