@@ -30,7 +30,7 @@ from string import Template
 from typing import Any
 
 from omnibot.errors import ConfigError
-from omnibot.firmware import landing, motion, safety, speedctl
+from omnibot.firmware import landing, motion_brake, motion_landing, safety, speedctl
 from omnibot.firmware.config import build_config
 from omnibot.protocol import codes
 from omnibot.robot import RobotDescription, load_robot
@@ -40,7 +40,7 @@ OUT_DIR = ROOT / "firmware-avr" / "generated"
 ROBOTS = ("omni4", "mecanum4")  # seed 000's robot and seed 003's
 NOT_SENT = frozenset({codes.W_SHORT, codes.W_REACH, codes.W_NO_GYRO})
 """Codes the UNO never sends, so their texts stay out of its flash: WARN 17's encoder progress check
-(firmware/progress.py) and WARN 18's calibrated reach (CAL table 8, firmware/motion.py) are the
+(firmware/progress.py) and WARN 18's calibrated reach (CAL table 8, firmware/motion_commands.py) are the
 MicroPython firmware's and the Mega's only (omni4's UNO image has no room for them: the Mega's header
 adds their texts, :data:`FEATURE_TEXTS`); WARN 10 is a board's gyro (neither wiring has one)."""
 INT16_MAX = 32767
@@ -531,13 +531,10 @@ def _floats(rows: Iterable[Iterable[float]]) -> str:
 
 def _feature_fields(cfg: dict[str, Any]) -> dict[str, object]:
     """The Mega's features from the same config as the MicroPython firmware's: VEL's acceleration
-    (motion.py), the MOVE progress check (progress.py), the brake to rest, the calibrated reach."""
+    (motion_drive.py), the MOVE progress check (progress.py), the brake to rest, the calibrated reach."""
     n = int(cfg["motors"])
     tolerance = float(cfg.get("progress_tolerance", 0.0))
-    rest = [
-        max(1, int(int(c) * motion.REST_RAD * motion.REST_WINDOW_US * 1e-6 / (2.0 * math.pi)))
-        for c in cfg["encoder_cpr"]
-    ]
+    rest = motion_brake.rest_counts(cfg["encoder_cpr"])
     count, rows = _table_rows(cfg["reach"], 1, 1)
     return {
         "version_max": codes.VERSIONS[-1],
@@ -553,8 +550,8 @@ def _feature_fields(cfg: dict[str, Any]) -> dict[str, object]:
         "travel": _floats(cfg["travel"]),
         "brake_accel_max": _f(float(cfg.get("accel_max_cms2", 0.0)) * 0.01),
         "brake_alpha_max": _f(math.radians(float(cfg.get("angular_accel_max_dps2", 0.0)))),
-        "brake_max_us": motion.BRAKE_MAX_US,
-        "rest_window_us": motion.REST_WINDOW_US,
+        "brake_max_us": motion_brake.BRAKE_MAX_US,
+        "rest_window_us": motion_brake.REST_WINDOW_US,
         "rest_counts": _list(rest),
         **_landing_fields(cfg),
         "reach_n": count,
@@ -583,7 +580,7 @@ def _landing_fields(cfg: dict[str, Any]) -> dict[str, object]:
         "land_accel_w": _f(accel[1]),
         **{f"land_{name.lower()}": _f(getattr(landing, name)) for name in _LANDING_FLOATS},
         "land_far_us": landing.FAR_US,
-        "land_chain_guard": motion.CHAIN_GUARD,
+        "land_chain_guard": motion_landing.CHAIN_GUARD,
         "default_slip": _list(_f(v) for v in cfg.get("slip") or [0.0, 0.0, 1.0]),
         "creep_roll": _floats(cfg.get("creep_roll") or zero),
         "creep_rim": _floats(cfg.get("creep_rim") or zero),
