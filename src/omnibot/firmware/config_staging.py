@@ -28,6 +28,7 @@ BOARD_MODULES = (
     "hal",
     "landing",
     "limits",
+    "mixins",
     "motion",
     "motion_brake",
     "motion_commands",

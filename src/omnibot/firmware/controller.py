@@ -8,7 +8,8 @@ battery stop); integrate the gyro; send a TEL line when due. Text replies and ev
 same messages travel as binary frames (docs/protocol.md), until a binary MODE clears the bit.
 
 :class:`Controller` is composed of one part per concern, each a mixin over the shared
-:class:`~omnibot.firmware.controller_state.ControllerState`:
+:class:`~omnibot.firmware.controller_state.ControllerState` (on MicroPython flattened into one class,
+:func:`~omnibot.firmware.mixins.flat`):
 
 ==========================  ==================================================================
 ``controller_input.py``     text lines and binary frames in, tags, checks and sequence numbers
@@ -21,6 +22,7 @@ from omnibot.firmware import battery
 from omnibot.firmware.controller_commands import Commands
 from omnibot.firmware.controller_input import Input
 from omnibot.firmware.controller_replies import Replies
+from omnibot.firmware.mixins import flat
 from omnibot.protocol import codes
 
 TYPE_CHECKING = False
@@ -138,3 +140,7 @@ class Controller(Input, Commands, Replies):
         self.latched = True
         self._warn(codes.W_SONAR_STOP)
         self._idle()
+
+
+if not TYPE_CHECKING:
+    Controller = flat(Controller)  # one class on MicroPython (mixins.py)

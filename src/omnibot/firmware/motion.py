@@ -7,7 +7,8 @@ is queued behind them. Each step also runs the loop that refreshes the powers: t
 (closed loop) or the rollers' drag (open loop), and the progress watch of a MOVE's coast.
 
 :class:`Executor` is composed of one part per concern, each a mixin over the shared
-:class:`~omnibot.firmware.motion_state.MotionState`:
+:class:`~omnibot.firmware.motion_state.MotionState` (on MicroPython flattened into one class,
+:func:`~omnibot.firmware.mixins.flat`):
 
 ================================  ============================================================
 ``motion_commands.py``            VEL; MOVE, ROTATE, DELTA, POWER started from the queue
@@ -17,6 +18,7 @@ is queued behind them. Each step also runs the loop that refreshes the powers: t
 ================================  ============================================================
 """
 
+from omnibot.firmware.mixins import flat
 from omnibot.firmware.motion_brake import Brake
 from omnibot.firmware.motion_commands import Commands
 from omnibot.firmware.motion_drive import Drive
@@ -263,3 +265,7 @@ class Executor(Drive, LandingMotion, Commands, Brake):
             if self.landing.active:
                 self._land_step()
             self.apply()
+
+
+if not TYPE_CHECKING:
+    Executor = flat(Executor)  # one class on MicroPython (mixins.py)
