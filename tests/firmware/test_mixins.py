@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import os
-import subprocess
 from pathlib import Path
 
 import pytest
@@ -11,7 +9,7 @@ import pytest
 from omnibot.firmware import mixins
 from omnibot.firmware.config import build_config, stage_board
 from omnibot.robot import load_robot
-from tests.firmware.test_micropython import micropython
+from tests.firmware.test_micropython import run_code
 
 
 class _State:
@@ -83,13 +81,6 @@ def test_the_board_runs_the_controller_and_executor_as_one_class_each(tmp_path: 
     every method and property is found in the class itself, as before they were split."""
     stage = tmp_path / "board"
     stage_board(stage, build_config(load_robot("omni4")))
-    proc = subprocess.run(
-        [micropython(), "-c", FLAT_CHECK],
-        check=False,
-        env={**os.environ, "MICROPYPATH": str(stage)},
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
+    proc = run_code(stage, FLAT_CHECK)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split("\n")[:2] == ["Controller True True True", "Executor True True True"]
