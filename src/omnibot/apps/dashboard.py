@@ -127,6 +127,7 @@ def run(args: argparse.Namespace) -> int:
         wheel_loop=not args.open_loop,
         floor=lambda client, robot: use_calibration(args, client, robot),
         recording=recording_of(args),
+        surface=args.surface,
         **server,
     )
     dash.start()

@@ -192,6 +192,7 @@ def check(args: argparse.Namespace) -> list[RobotSpec]:
         speed=speed,
         map=check_map(args, specs),
         seed=getattr(args, "seed", None) or 0,
+        surface=getattr(args, "surface", None),
     )
     return specs
 

@@ -159,7 +159,7 @@ def compose(
             device.__enter__()
             parts.closers.append(lambda: device.__exit__(None, None, None))
         parts.device = device
-        limits = TwistLimits.from_limits(runtime.client.limits, config, robot)
+        limits = TwistLimits.from_limits(runtime.client.limits, config, robot, getattr(args, "surface", None))
         parts.pad = PadSource(device, config, limits, name=args.teleop, priority=PAD_PRIORITY)
         runtime.add_source(parts.pad)
     if args.ros2 and getattr(args, "ros2_node", None) is None:  # (omnibot map attaches its own)
@@ -344,6 +344,7 @@ def _with_dashboard(args: argparse.Namespace, url: str, config: Any, path: Any) 
         wheel_loop=not args.open_loop,
         floor=lambda client, robot: use_calibration(args, client, robot),
         recording=recording_of(args),
+        surface=args.surface,
         **server,
     )
     parts = Parts()

@@ -108,6 +108,7 @@ def run(args: argparse.Namespace) -> int:
             wheel_loop=not args.open_loop,
             slip=use_calibration(args, client, session.robot),
             recording=recording,
+            surface=args.surface,
         )
         _say(f"limits: {teleop.limits.speed:.2f} m/s, {teleop.limits.rate:.2f} rad/s")
         if recording is not None:  # the log holds what the robot did, not only what it was sent
