@@ -11,7 +11,8 @@ through the host runtime by one source for 3 s at a constant twist, as that fron
   builds it, 50 Hz, its reader a stand-in that hands over a TwistStamped each cycle: no DDS);
 * ``pad``: a gamepad through teleop's mapping and deadman (:class:`~omnibot.teleop.PadSource`,
   seed 003's parameters, 20 Hz, the twist ramped at the robot's accelerations, times the share the
-  floor's grip leaves at the speed ramped from, as every front end told ``--surface`` ramps);
+  floor's grip leaves at the speed ramped from where the runtime has the floor's slip (``--slip``,
+  ``--calibration``), as the front ends given a floor's calibration ramp);
 * ``page``: the dashboard's stick (:class:`~omnibot.teleop.DeadmanSource` with the page's
   sample, 20 Hz, ramped likewise).
 
@@ -158,10 +159,11 @@ class HeldStick(DeadmanSource):
 
 
 def _source(
-    kind: str, twist: Twist, client: RobotClient, robot: RobotDescription, surface: str
+    kind: str, twist: Twist, client: RobotClient, robot: RobotDescription, surface: str | None
 ) -> tuple[Source, float]:
-    """The source of ``kind`` driving ``twist`` on ``surface`` (the floor named, as the front ends'
-    ``--surface`` names it: the ramp within its grip), and its cycle period."""
+    """The source of ``kind`` driving ``twist``, its ramp within the grip of ``surface`` (the floor
+    whose slip the runtime asks, as the front ends' ``--calibration`` with ``--surface``; None: not
+    known), and its cycle period."""
     config = TeleopConfig()
     if kind == "cmd_vel":
         limits = TwistLimits.from_limits(client.limits, None, robot, surface)  # as omnibot ros2 builds it
@@ -212,7 +214,7 @@ def measure(
             if drive:  # stopped and at rest before the drive judged
                 client.stop()
                 client.sleep(REST)
-            src, period = _source(source, twist, client, session.robot, surface)
+            src, period = _source(source, twist, client, session.robot, surface if slip is not None else None)
             runtime = Runtime(client, period=period, wheel_loop=wheel_loop, slip=slip)
             runtime.add_source(src)
             runtime.pacer = LinkPacer(client, period)
