@@ -73,7 +73,9 @@ class RobotLink:
     """Runs the runtime (the owner of ``client``) in a thread of its own; :meth:`submit` and
     :attr:`outbox` are the only ways in and out. ``start`` is where odometry starts on a link without
     ground truth (None: the origin); ``wall``/``sleep`` are the wall clock (tests may pass fakes).
-    More sources and sinks may join :attr:`runtime` before :meth:`start` (``omnibot run``)."""
+    More sources and sinks may join :attr:`runtime` before :meth:`start` (``omnibot run``).
+    ``surface``, the floor's name when known, keeps the stick's ramp within its grip
+    (:meth:`~omnibot.teleop.TwistLimits.from_limits`)."""
 
     def __init__(
         self,
@@ -90,6 +92,7 @@ class RobotLink:
         wheel_loop: bool = True,
         slip: SlipModel | None = None,
         recording: RuntimeRecording | None = None,
+        surface: str | None = None,
     ) -> None:
         self.client = client
         self.mode = mode
@@ -97,7 +100,7 @@ class RobotLink:
         self.robot = robot
         self.config = config or TeleopConfig()
         self.teach = teach
-        self.limits = TwistLimits.from_limits(client.limits, self.config, robot)
+        self.limits = TwistLimits.from_limits(client.limits, self.config, robot, surface)
         self.drive_limits = drive_limits(self.limits)
         """Full scale of the page's keys, stick and turn slider."""
         self.inbox = Inbox()
