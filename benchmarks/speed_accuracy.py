@@ -10,7 +10,9 @@ through the host runtime by one source for 3 s at a constant twist, as that fron
 * ``cmd_vel``: ROS 2's cmd_vel (:class:`~omnibot.ros2.cmd_vel.CmdVelSource` as ``omnibot ros2``
   builds it, 50 Hz, its reader a stand-in that hands over a TwistStamped each cycle: no DDS);
 * ``pad``: a gamepad through teleop's mapping and deadman (:class:`~omnibot.teleop.PadSource`,
-  seed 003's parameters, 20 Hz, the twist ramped at the robot's accelerations);
+  seed 003's parameters, 20 Hz, the twist ramped at the robot's accelerations, times the share the
+  floor's grip leaves at the speed ramped from where the runtime has the floor's slip (``--slip``,
+  ``--calibration``), as the front ends given a floor's calibration ramp);
 * ``page``: the dashboard's stick (:class:`~omnibot.teleop.DeadmanSource` with the page's
   sample, 20 Hz, ramped likewise).
 
@@ -156,14 +158,18 @@ class HeldStick(DeadmanSource):
         return Sample(self.held_twist, True, now)
 
 
-def _source(kind: str, twist: Twist, client: RobotClient, robot: RobotDescription) -> tuple[Source, float]:
-    """The source of ``kind`` driving ``twist``, and its cycle period."""
+def _source(
+    kind: str, twist: Twist, client: RobotClient, robot: RobotDescription, surface: str | None
+) -> tuple[Source, float]:
+    """The source of ``kind`` driving ``twist``, its ramp within the grip of ``surface`` (the floor
+    whose slip the runtime asks, as the front ends' ``--calibration`` with ``--surface``; None: not
+    known), and its cycle period."""
     config = TeleopConfig()
     if kind == "cmd_vel":
-        limits = TwistLimits.from_limits(client.limits, None, robot)  # as omnibot ros2 builds it
+        limits = TwistLimits.from_limits(client.limits, None, robot, surface)  # as omnibot ros2 builds it
         node = CmdVelNode(twist)
         return CmdVelSource(node, limits=limits, period=ROS2_PERIOD), ROS2_PERIOD  # type: ignore[arg-type]
-    limits = TwistLimits.from_limits(client.limits, config, robot)
+    limits = TwistLimits.from_limits(client.limits, config, robot, surface)
     if kind == "pad":
         return PadSource(HeldPad(twist, config), config, limits, priority=200), config.period
     return HeldStick(twist, config, limits), config.period
@@ -208,7 +214,7 @@ def measure(
             if drive:  # stopped and at rest before the drive judged
                 client.stop()
                 client.sleep(REST)
-            src, period = _source(source, twist, client, session.robot)
+            src, period = _source(source, twist, client, session.robot, surface if slip is not None else None)
             runtime = Runtime(client, period=period, wheel_loop=wheel_loop, slip=slip)
             runtime.add_source(src)
             runtime.pacer = LinkPacer(client, period)

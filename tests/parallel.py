@@ -38,7 +38,7 @@ SERIAL: dict[str, str] = {
     " (0.23 m/s for 0.2 beside another worker at load 15)",
     "tests/ros2/test_interrupt.py": "SIGINT to the bridge's exit in wall-clock time (1.2-2.1 s measured,"
     " bounded at 5 s: a loaded worker's teardown must not count)",
-    "tests/mapping/test_planner.py::test_ompl_planners_give_clear_paths": "OMPL's planners search for 0.2 s of"
+    "tests/mapping/test_sampling.py::test_ompl_planners_give_clear_paths": "OMPL's planners search for 0.2 s of"
     " wall-clock time (found no path in it beside three workers at load 25)",
 }
 """Modules or tests (node id prefixes) run in the serial pass, and why they need the machine to themselves."""

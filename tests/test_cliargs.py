@@ -9,7 +9,9 @@ from pathlib import Path
 import pytest
 
 from omnibot.cliargs import (
+    add_calibration_option,
     add_robot_options,
+    calibrated_floor,
     check_distinct,
     check_plot,
     check_sim_options,
@@ -115,3 +117,13 @@ def test_an_output_in_a_missing_directory_is_refused_before_the_robot_moves(
     err = capsys.readouterr().err
     assert err.startswith("omnibot: error: ") and "no directory" in err and err.count("\n") == 1
     assert not missing.exists() and not (tmp_path / "taught.csv").exists()
+
+
+def test_the_floor_a_ramp_keeps_within_is_a_calibrations() -> None:
+    p = argparse.ArgumentParser()
+    add_robot_options(p, world="empty")
+    add_calibration_option(p)
+    assert calibrated_floor(p.parse_args(["--surface", "carpet", "--calibration", "cal.yaml"])) == "carpet"
+    assert calibrated_floor(p.parse_args(["--surface", "carpet"])) is None  # the floor's slip not asked
+    assert calibrated_floor(p.parse_args(["--calibration", "cal.yaml"])) is None  # no floor named
+    assert calibrated_floor(argparse.Namespace()) is None  # a command without the options

@@ -781,7 +781,7 @@ TEST_REACHES: dict[str, tuple[str, tuple[str, ...]]] = {
             "sim/test_physics.py",
         ),
     ),
-    "omnibot.runtime.runtime": (
+    "omnibot.runtime.core": (
         "the latched emergency stop's notice, as the page shows it",
         ("navigation/test_webteach.py",),
     ),

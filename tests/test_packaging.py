@@ -164,6 +164,13 @@ print(json.dumps(results))
 
 
 def _hidden(modules: list[str], lines: list[list[str]], tmp_path: Path) -> tuple[list[int], str]:
+    """The exit status of each of ``lines`` run without ``modules``, and the child's stderr."""
+    statuses, _, stderr = _hidden_run(modules, lines, tmp_path)
+    return statuses, stderr
+
+
+def _hidden_run(modules: list[str], lines: list[list[str]], tmp_path: Path) -> tuple[list[int], str, str]:
+    """:func:`_hidden` with the commands' stdout too (the statuses' JSON line taken off it)."""
     done = subprocess.run(
         [sys.executable, "-c", HIDE, ",".join(modules), json.dumps(lines)],
         capture_output=True,
@@ -174,7 +181,8 @@ def _hidden(modules: list[str], lines: list[list[str]], tmp_path: Path) -> tuple
         timeout=120,
     )
     assert done.returncode == 0, done.stderr
-    return json.loads(done.stdout.splitlines()[-1]), done.stderr
+    *printed, statuses = done.stdout.splitlines()
+    return json.loads(statuses), "\n".join(printed), done.stderr
 
 
 def test_a_command_without_its_extra_says_what_to_install(tmp_path: Path) -> None:
@@ -216,6 +224,42 @@ def test_the_core_commands_run_without_numpy(tmp_path: Path) -> None:
     for extra, line in zip(("sim", "web", "slam"), said, strict=True):
         assert f"pip install 'omnibot[{extra}]'" in line, line
     assert all("'numpy' is not installed" in line for line in said[:2]), said
+
+
+def test_a_board_driven_with_the_control_extra_alone(tmp_path: Path) -> None:
+    """``pip install 'omnibot[control]'`` (numpy, no other optional module) on a board's serial port
+    (the emulator's pty, itself run with everything): the protocol, a path repeated by ``follow`` and by
+    ``run``, and ``record`` listening, each to its own outcome (nobody pushed the robot: nothing
+    recorded, exit 1), none to a missing extra."""
+    from tests.cli.conftest import PtyRobot
+
+    path = tmp_path / "line.csv"
+    path.write_text("t,x,y,theta\n" + "".join(f"{i * 0.2:.1f},{i * 0.05:.2f},0,0\n" for i in range(11)))
+    board = PtyRobot("omni4")
+    try:
+        lines = [
+            ["send", "STATUS", "--port", board.path],
+            ["follow", str(path), "--port", board.path],
+            ["run", "--port", board.path, "--follow", str(path)],
+            ["record", "--port", board.path, "--path", str(tmp_path / "taught.csv"), "--duration", "0.5"],
+        ]
+        statuses, stdout, stderr = _hidden_run(sorted(set(EXTRA_OF) - {"numpy"}), lines, tmp_path)
+    finally:
+        board.close()
+    assert statuses == [0, 0, 0, 1], stdout + stderr
+    assert "pip install" not in stdout + stderr and "Traceback" not in stderr, stderr
+    assert stdout.count("follow completed") == 1 and "omnibot follow: completed" in stdout, stdout
+    assert "did the robot move?" in stdout and not (tmp_path / "taught.csv").exists()
+
+
+def test_figures_are_left_out_not_the_run_without_the_plots_extra(tmp_path: Path) -> None:
+    """``[sim]`` without ``[plots]``: the tour prints its table and says which extra draws its plot."""
+    hidden = sorted(set(EXTRA_OF) - {"numpy", "numba", "llvmlite"})
+    line = ["tour", "--robot", "omni3", "--out", str(tmp_path / "out"), "--duration", "0.3"]
+    statuses, stdout, stderr = _hidden_run(hidden, [line], tmp_path)
+    assert statuses == [0], stderr
+    assert "rotate ccw" in stdout and "plot left out: 'matplotlib' is not installed" in stdout, stdout
+    assert "pip install 'omnibot[plots]'" in stdout and not list((tmp_path / "out").iterdir())
 
 
 def test_every_command_declares_its_options_without_any_extra(tmp_path: Path) -> None:

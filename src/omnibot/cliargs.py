@@ -99,6 +99,17 @@ def use_calibration(args: argparse.Namespace, client: Any, robot: Any) -> Any:
     return SlipModel(robot, slip)
 
 
+def calibrated_floor(args: argparse.Namespace) -> str | None:
+    """The floor a front end's ramp keeps within the grip of
+    (:meth:`~omnibot.teleop.TwistLimits.from_limits`): ``--surface`` with a ``--calibration``, whose
+    wheel slip the runtime asks on top of each twist; None without one (the simulator's floor alone:
+    without the floor's slip asked the whole accelerations settle sooner, BENCHMARKS.md)."""
+    if not getattr(args, "calibration", None):
+        return None
+    surface: str | None = getattr(args, "surface", None)
+    return surface
+
+
 def add_debug_option(p: argparse.ArgumentParser) -> None:
     """``--debug`` on a (sub)command; SUPPRESS keeps ``omnibot --debug CMD`` working too."""
     p.add_argument(

@@ -119,3 +119,13 @@ def test_without_cyclonedds_it_says_how_to_install(
     assert main(["ros2", "--port", "sim://omni4", "--duration", "1"]) != 0
     err = capsys.readouterr().err
     assert "pip install 'omnibot[ros2]'" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize(("extra", "floor"), [(["--calibration", "cal.yaml"], "carpet"), ([], None)])
+def test_cmd_vel_ramps_within_the_grip_of_a_calibrations_floor(extra: list[str], floor: str | None) -> None:
+    from omnibot.apps.ros2 import check
+    from omnibot.cli import build_parser
+
+    args = build_parser().parse_args(["ros2", "--ros-backend", "dds", "--surface", "carpet", *extra])
+    check(args)
+    assert args.ros2_bridge.surface == floor

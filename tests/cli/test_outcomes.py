@@ -4,6 +4,7 @@ exit status (a recording too short, a run outside its tolerances, a calibration 
 from __future__ import annotations
 
 import math
+import sys
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any, cast
@@ -12,6 +13,7 @@ import pytest
 
 from omnibot.apps import calibrate as calibration_cli
 from omnibot.calibration import CalibrationResult, judge_calibration, load_calibration
+from omnibot.calibration import write_report as real_write_report
 from omnibot.calibration.accuracy import AccuracyRow
 from omnibot.calibration.results import SurfaceSession
 from omnibot.calibration.verdict import judge_average
@@ -288,3 +290,28 @@ def test_a_demo_whose_sonar_approach_found_no_wall_is_not_done(
     assert "NO emergency stop, no echo: nothing ahead of the robot" in out
     assert out.rstrip().endswith("NOT DONE: sonar approach, emergency stop")
     harness.assert_left_as_found()
+
+
+def test_a_calibration_without_matplotlib_keeps_its_report_and_file(
+    tmp_path: Path,
+    fake_calibration: dict[str, Any],
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The figures need the [plots] extra; the tables, the raw runs and the calibration file do not:
+    a run of many minutes on a board with ``[control]`` only is not lost at its end."""
+    monkeypatch.setattr("omnibot.calibration.report.write_report", real_write_report)
+    monkeypatch.setitem(sys.modules, "matplotlib", None)
+    made = result([-0.03, 0.05], [-0.01, 0.01])
+    fit: dict[str, Any] = dict(deadbands={}, balance=None, rollers=None, coast=None, anchors={}, points={})
+    made.sessions[0].fit = cast(
+        Any, SimpleNamespace(**fit, k=150.0, move_length=1.0)
+    )  # what the report reads
+    fake_calibration["result"] = made
+    cal = tmp_path / "cal.yaml"
+    assert main(_calibrate_argv(tmp_path, cal)) == 0
+    out = capsys.readouterr().out
+    assert f"report: {tmp_path / 'r'} (accuracy.md, accuracy.json, runs.json)" in out
+    assert "report: figures left out: 'matplotlib' is not installed" in out and "omnibot[plots]" in out
+    assert sorted(p.name for p in (tmp_path / "r").iterdir()) == ["accuracy.json", "accuracy.md", "runs.json"]
+    assert cal.exists()

@@ -6,7 +6,7 @@ import pytest
 
 from omnibot.client.client import RobotClient
 from omnibot.client.greet import wait_for_controller
-from omnibot.client.switch import UNTAGGED_VERDICT
+from omnibot.client.tagging import UNTAGGED_VERDICT
 from omnibot.errors import ControllerError, LinkTimeout
 from omnibot.transport import LockstepLink
 

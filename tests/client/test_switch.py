@@ -9,7 +9,8 @@ import pytest
 
 from omnibot.client import ErrorEvent, EventRecorder, RobotClient
 from omnibot.client.greet import wait_for_controller
-from omnibot.client.switch import UNTAGGED_VERDICT, ProtocolSwitch
+from omnibot.client.switch import ProtocolSwitch
+from omnibot.client.tagging import UNTAGGED_VERDICT
 from omnibot.client.wire import BinaryWire
 from omnibot.errors import LinkError, LinkTimeout, ProtocolError
 from omnibot.firmware.controller import Controller

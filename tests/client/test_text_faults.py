@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import pytest
 
 from omnibot.client import EventRecorder, ResetEvent, RobotClient
-from omnibot.client.switch import UNTAGGED_VERDICT
+from omnibot.client.tagging import UNTAGGED_VERDICT
 from omnibot.client.wire import TextWire
 from omnibot.errors import ControllerError, LinkTimeout, OmnibotError
 from omnibot.firmware.controller import Controller

@@ -6,8 +6,7 @@ import re
 
 import pytest
 
-from omnibot.errors import ConfigError
-from omnibot.firmware import avrgen, speedctl
+from omnibot.firmware import avrboard, avrfeatures, avrgen, speedctl
 from omnibot.firmware.config import build_config
 from omnibot.protocol import codes
 from omnibot.robot import load_robot
@@ -59,11 +58,6 @@ def test_limits_round_to_the_same_integer_checks() -> None:
     assert _define(text, "V_MIN") == "30" and _define(text, "L_CLAMP") == "499"
 
 
-def test_unknown_pin_is_a_config_error() -> None:
-    with pytest.raises(ConfigError, match="not an Arduino UNO pin"):
-        avrgen._pin("D14")
-
-
 @pytest.mark.parametrize("robot", avrgen.ROBOTS)
 def test_the_uno_takes_vel_without_its_acceleration(robot: str) -> None:
     """The UNO speaks protocol version 2 only (docs/uno.md): its keyword table gives VEL four
@@ -81,8 +75,8 @@ def test_the_mega_header_differs_from_the_unos_only_in_its_pin_map_and_features(
     assert _define(mega, "M0_PWM_PORT") == "PORTH" and _define(mega, "M0_PWM_BIT") == "6"
     assert [_define(mega, f"M{i}_ENC_PCINT") for i in range(4)] == ["0", "1", "2", "3"]
     assert _define(mega, "SONAR_TRIG_PORT") == "PORTL" and _define(mega, "SONAR_TRIG_BIT") == "2"
-    assert "mcu atmega2560" in avrgen.board_source("omni4", "mega")
-    assert "mcu" not in avrgen.board_source("omni4")  # the harness's default chip
+    assert "mcu atmega2560" in avrboard.board_source("omni4", "mega")
+    assert "mcu" not in avrboard.board_source("omni4")  # the harness's default chip
 
 
 def _floats(text: str, name: str) -> list[float]:
@@ -109,7 +103,7 @@ def test_the_mega_header_switches_on_what_the_unos_flash_cannot_hold(robot: str)
         assert _define(mega, name) == "1"
     assert _define(mega, "P_VERSION_MAX") == str(codes.VERSIONS[-1])
     assert _define(mega, "P_VEL_PARAMS_MAX") == str(codes.VEL_PARAMS_MAX)
-    for code in avrgen.FEATURE_TEXTS:
+    for code in avrfeatures.FEATURE_TEXTS:
         assert f'TEXT_{code}[] PROGMEM = "{codes.TEXTS[code]}";' in mega
     cfg = build_config(load_robot(robot))
     assert _floats(mega, "ACCEL_BODY_FF") == pytest.approx([v for row in cfg["body_ff"] for v in row])
@@ -124,20 +118,3 @@ def test_the_mega_header_switches_on_what_the_unos_flash_cannot_hold(robot: str)
     assert _define(mega, "STEADY_PERIODS") == str(speedctl.STEADY_PERIODS)
     steady = float(_define(mega, "SPEED_STEADY").rstrip("f"))
     assert steady == pytest.approx(cfg["speed_ki_steady"] / cfg["speed_ki"]) and steady > 1.0
-
-
-def test_mega_pins_are_checked_against_the_megas_own_map(monkeypatch: pytest.MonkeyPatch) -> None:
-    assert avrgen._pin("D53", avrgen.board("mega")) == ("B", 0)
-    with pytest.raises(ConfigError, match="not an Arduino Mega 2560 pin"):
-        avrgen._pin("D54", avrgen.board("mega"))
-    with pytest.raises(ConfigError, match="no board 'due'"):
-        avrgen.board("due")
-    wiring = {**avrgen.MEGA_WIRING["omni4"], "sonar_echo": "D8"}
-    monkeypatch.setitem(avrgen.MEGA_WIRING, "omni4", wiring)
-    with pytest.raises(ConfigError, match="echo must be on D48"):
-        avrgen.header_source("omni4", "mega")
-    monkeypatch.setitem(
-        avrgen.MEGA_WIRING, "omni4", {**wiring, "sonar_echo": "D48", "pwm": ["D2", "D4", "D13", "D10"]}
-    )
-    with pytest.raises(ConfigError, match="D2 is not a PWM pin of timers 0 and 2"):
-        avrgen.header_source("omni4", "mega")

@@ -11,7 +11,7 @@ import pytest
 
 from omnibot.errors import ConfigError
 from omnibot.firmware import config as fwconfig
-from omnibot.robot import PiecewiseLinear, RollerDragSpec, load_robot, preset_names
+from omnibot.robot import load_robot, preset_names
 
 
 @pytest.mark.parametrize("name", preset_names())
@@ -59,23 +59,6 @@ def test_omni4_limits_in_protocol_units() -> None:
     assert cfg["roller_cos"] == cfg["roller_sin"] == [0.0] * 4 and cfg["roller_coast"] == [[0.0], [0.0]]
 
 
-def test_roller_drag_section_in_the_config() -> None:
-    robot = load_robot("omni4")
-    assert robot.calibration is not None
-    coast = PiecewiseLinear(x=(0.0, 0.64), y=(0.0, 0.34))
-    drag = RollerDragSpec(cos=(-5.0, -4.0, -5.0, -4.0), sin=(0.5, 0.0, 0.0, 0.0), coast=coast)
-    cfg = fwconfig.build_config(
-        robot.model_copy(update={"calibration": robot.calibration.model_copy(update={"rollers": drag})})
-    )
-    assert cfg["roller_cos"] == [-5.0, -4.0, -5.0, -4.0] and cfg["roller_sin"][0] == 0.5
-    assert cfg["roller_coast"] == [[0.0, 64.0], [0.0, 0.34]]  # speeds in cm/s, as the controller's V
-    three = RollerDragSpec(cos=(0.0,) * 3, sin=(0.0,) * 3)
-    with pytest.raises(ConfigError, match="roller drag for 3 wheels on a robot with 4"):
-        fwconfig.build_config(
-            robot.model_copy(update={"calibration": robot.calibration.model_copy(update={"rollers": three})})
-        )
-
-
 def test_stage_board_and_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert fwconfig.main(["omni3", str(tmp_path)]) == 0
     files = {p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob("*.py")}
@@ -89,15 +72,6 @@ def test_stage_board_and_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str])
     assert "mpremote" in capsys.readouterr().out
     assert fwconfig.main(["omni4", "--print"]) == 0
     assert "CONFIG = {" in capsys.readouterr().out
-
-
-def test_a_number_that_is_not_finite_is_never_written() -> None:
-    config = fwconfig.build_config(load_robot("omni4"))
-    assert "inf" not in fwconfig.config_module_source(config)
-    for broken in ({"speed_max_cms": float("inf")}, {"kt": [[0.0, 1.0], [1.0, float("nan")]]}):
-        with pytest.raises(ConfigError, match=r"cannot hold .* every number must be finite") as info:
-            fwconfig.config_module_source({**config, **broken})
-        assert next(iter(broken)) in str(info.value)
 
 
 def test_a_limit_that_overflows_in_protocol_units_stages_nothing(
@@ -116,27 +90,6 @@ def test_a_limit_that_overflows_in_protocol_units_stages_nothing(
     err = capsys.readouterr().err
     assert "cannot hold speed_max_cms = inf" in err and "Traceback" not in err
     assert not board.exists()
-
-
-def test_acceleration_feedforward_pushes_each_wheel_its_way() -> None:
-    """body_ff: a wheel's PWM counts per m/s^2 of the body's acceleration along x and y and per
-    rad/s^2 of its angular acceleration; they drive the wheel the way the body's velocity in the same
-    direction turns it (same signs as J), a heavier robot needs proportionally more of x and y and a
-    larger yaw inertia more of w; wheel_ff (its own and its rotor's inertia) is positive and small."""
-    for name in ("mecanum4", "omni3"):
-        robot = load_robot(name)
-        cfg = fwconfig.build_config(robot)
-        for row, j in zip(cfg["body_ff"], cfg["J"], strict=True):
-            assert len(row) == 3
-            for a, w in zip(row, j, strict=True):
-                assert a * w > 0 or (a == 0 and abs(w) < 1e-9)
-        heavy = fwconfig.build_config(robot.model_copy(update={"mass": 2 * robot.mass}))
-        spun = fwconfig.build_config(robot.model_copy(update={"yaw_inertia": 2 * robot.yaw_inertia}))
-        for row, h, s in zip(cfg["body_ff"], heavy["body_ff"], spun["body_ff"], strict=True):
-            assert h[0] == pytest.approx(2 * row[0]) and h[1] == pytest.approx(2 * row[1]) and h[2] == row[2]
-            assert s[2] == pytest.approx(2 * row[2]) and s[:2] == row[:2]
-        ff = cfg["wheel_ff"]
-        assert len(ff) == robot.n_wheels and all(0 < f < 0.01 * max(map(abs, cfg["body_ff"][0])) for f in ff)
 
 
 def _robot_with_gyro(tmp_path: Path, no_sonar: bool = False, **gyro: Any) -> Path:

@@ -7,8 +7,7 @@ import re
 
 import pytest
 
-from omnibot.protocol import codes, linecheck
-from omnibot.robot import kinematics, load_robot
+from omnibot.protocol import codes
 from tests.firmware.conftest import Rig, make_rig
 
 STATUS_RE = re.compile(r"^STATUS,(\d),(\d+),(\d+),(\d+);POWER(,-?\d+)+;MOVE,-?\d+,-?\d+,-?\d+,-?\d+$")
@@ -140,26 +139,6 @@ def test_accepted_limits(rig: Rig) -> None:
         assert rig.cmd(c)[0] == "OK", c
 
 
-def test_line_too_long_then_next_command(rig: Rig) -> None:
-    assert rig.send("MOVE," + "1" * 70 + ";STATUS;") == [err(codes.E_TOO_LONG), rig.status()]
-
-
-def test_one_reply_per_command_in_order_merged_and_split(rig: Rig) -> None:
-    text = "HELLO;FOO;;\r\nMOVE,2,40,0,0;STATUS;MOVE,1\n"
-    whole = rig.send(text)
-    assert whole[0] == "HELLO,2,omni4,4"
-    assert whole[1] == err(codes.E_UNKNOWN)
-    assert whole[2] == "OK"
-    assert whole[3].startswith("STATUS,0,0")
-    assert whole[4] == err(codes.E_PARAM_COUNT)
-    assert len(whole) == 5
-    other = make_rig()
-    got: list[str] = []
-    for ch in text:
-        got += other.send(ch)
-    assert got == whole
-
-
 def test_queue_full(rig: Rig) -> None:
     replies = rig.send("MOVE,10,40,0,0;" * 17)
     assert replies == ["OK"] * 17  # the first starts at once, 16 wait
@@ -178,7 +157,6 @@ def test_idle_when_queue_runs_empty(rig: Rig) -> None:
 
 def test_move_powers_follow_seed_formula(rig: Rig) -> None:
     """P_n = K V sin(D + D_n) with D_n = 90 (n-1) (seed 000 (1)), K = 220 per m/s."""
-    import math
 
     for d in (0, 30, 45, 90, 135, -60):
         rig.cmd("STOP")
@@ -577,171 +555,6 @@ def test_docs_inf_move_runs(rig: Rig) -> None:
     assert rig.cmd("DELTA,0,0,0,0,-INF") == [err(codes.E_REPEAT)]
 
 
-def _tagged(body: str, tag: str | None, check: bool) -> str:
-    data = body.encode()
-    return (data + linecheck.suffix(data, None if tag is None else tag.encode(), check)).decode()
-
-
-@pytest.mark.parametrize(("tag", "check"), [("7", False), ("0042", True), (None, True), ("9999", True)])
-def test_reply_echoes_tag_and_check(rig: Rig, tag: str | None, check: bool) -> None:
-    for body, reply in (
-        ("MOVE,10,40,0,0", "OK"),
-        ("FOO,1", err(codes.E_UNKNOWN)),
-        ("MOVE,1,x,0,0", err(codes.E_NOT_INTEGER)),
-        ("HELLO", f"HELLO,{codes.PROTOCOL_VERSION},omni4,4"),
-    ):
-        assert rig.cmd(_tagged(body, tag, check)) == [_tagged(reply, tag, check)]
-    status = rig.cmd(_tagged("STATUS", tag, check))[0]
-    end = linecheck.split(status.encode())[0]
-    assert status.startswith("STATUS,0,0,16,0;") and status == _tagged(status[:end], tag, check)
-
-
-def test_untagged_command_gets_todays_reply(rig: Rig) -> None:
-    assert rig.cmd("MOVE,10,40,0,0") == ["OK"]
-    assert rig.cmd("STOP") == ["OK", "IDLE"]  # events are never tagged
-
-
-def test_bad_check_refuses_the_command_untagged(rig: Rig) -> None:
-    good = _tagged("MOVE,10,40,0,0", "5", True)
-    bad = good.replace("10", "90")
-    assert rig.cmd(bad) == [err(codes.E_CHECKSUM)]
-    assert rig.status() == "STATUS,1,0,16,0;POWER,0,0,0,0;MOVE,0,0,0,0"  # nothing ran
-    assert rig.cmd(good[:-1] + "G") == [err(codes.E_NOT_INTEGER)]  # not a check: left in the body
-    assert rig.cmd("STATUS#12345") == [err(codes.E_UNKNOWN)]  # five digits are no tag
-    assert rig.cmd(good) == [_tagged("OK", "5", True)]
-
-
-def test_sequenced_text_runs_each_tag_once_and_in_order(rig: Rig) -> None:
-    """MODE bit 5: a checked tag is a sequence number. A duplicate gets the reply kept and runs
-    nothing; one out of order gets nothing; STOP, HELLO and MODE are taken whatever was expected."""
-
-    def seq(body: str, tag: int) -> list[str]:
-        return rig.cmd(_tagged(body, str(tag), True))
-
-    def remembered() -> int:  # the remembered MOVE's distance once the queue ran: each DELTA adds 4 cm
-        rig.run(1000)
-        return int(rig.status().split(";MOVE,")[1].split(",")[0])
-
-    delta = "DELTA,4,40,0,0,0"
-    twice = ";".join([_tagged(delta, "3", True)] * 2)
-    assert rig.cmd(twice) == [_tagged("OK", "3", True)] * 2  # bit 5 clear: a copy runs again
-    assert remembered() == 8
-    assert seq("STOP", 4)[0] == _tagged("OK", "4", True)
-    assert seq("MODE,32", 5) == [_tagged("OK", "5", True)]  # bit 5 alone: starts the sequence at its tag
-    assert seq(delta, 6) == [_tagged("OK", "6", True)]
-    assert seq(delta, 6) == [_tagged("OK", "6", True)]  # the copy: answered, not run
-    assert remembered() == 4 and rig.status().startswith("STATUS,1,0,16,32;")
-    assert seq(delta, 8) == []  # 7 never came: out of order, dropped
-    assert seq(delta, 7) == [_tagged("OK", "7", True)]
-    assert seq("DELTA,0,0,0,0,-1", 8) == [_tagged(err(codes.E_REPEAT), "8", True)]
-    assert seq("DELTA,0,0,0,0,-1", 8) == [_tagged(err(codes.E_REPEAT), "8", True)]
-    assert rig.cmd(delta) == ["OK"]  # untagged: not sequenced
-    assert remembered() == 12
-    assert seq("STOP", 40) == [_tagged("OK", "40", True)]  # sync: taken whatever was expected
-    assert seq(delta, 41) == [_tagged("OK", "41", True)]
-    assert seq("HELLO", 3) == [_tagged("HELLO,2,omni4,4", "3", True)]  # starts afresh
-    assert seq(delta, 4) == [_tagged("OK", "4", True)]  # 4 was kept before the HELLO: new now
-    assert remembered() == 8
-    assert seq("MODE,0", 9999) == []  # 5 before the expected 5 (tags wrap 9999 -> 1): a duplicate
-    assert seq("MODE,0", 5) == [_tagged("OK", "5", True)]
-    assert seq(delta, 4)[0] == _tagged("OK", "4", True)  # bit 5 clear again (then WARN 11: 120 cm/s)
-    assert remembered() == 12
-
-
-def test_vel_feeds_its_planned_acceleration_forward_in_the_closed_loop() -> None:
-    """VEL's fifth field, A cm/s^2 along (VX, VY), adds to each wheel's feedforward its share of the
-    body's acceleration (body_ff) and its own inertia's (wheel_ff times its angular acceleration),
-    for as long as that VEL holds."""
-    rig = make_rig()
-    ex = rig.ctrl.executor
-    assert rig.cmd("MODE,2") == ["OK"]
-    assert rig.cmd("VEL,30,40,0,200") == ["OK"]
-    plain = list(ex._ff)
-    assert rig.cmd("VEL,30,40,0,200,150") == ["OK"]  # 1.5 m/s^2 along (0.6, 0.8)
-    body, own, J = rig.config["body_ff"], rig.config["wheel_ff"], rig.config["J"]
-    rows = [[b[k] + f * j[k] for k in (0, 1)] for b, f, j in zip(body, own, J, strict=True)]
-    for i in range(4):
-        assert ex._ff[i] - plain[i] == pytest.approx(1.5 * (0.6 * rows[i][0] + 0.8 * rows[i][1]))
-    assert rig.cmd("VEL,30,40,0,200,-150") == ["OK"]  # braking: the other way
-    for i in range(4):
-        assert ex._ff[i] - plain[i] == pytest.approx(-1.5 * (0.6 * rows[i][0] + 0.8 * rows[i][1]))
-    assert rig.cmd("VEL,30,40,0,200") == ["OK"]  # the next VEL without A: none
-    assert ex._ff == pytest.approx(plain)
-    assert rig.cmd("VEL,0,0,90,200,150") == ["OK"]  # turning in place: no translation to speed up
-    turning = list(ex._ff)
-    assert rig.cmd("VEL,0,0,90,200") == ["OK"]
-    assert ex._ff == turning
-
-
-def _added_ff(rig: Rig, vel: str, accel: str) -> list[float]:
-    """Each wheel's feedforward with ``VEL,<vel>,<accel>`` less that of ``VEL,<vel>`` (closed loop)."""
-    assert rig.cmd("MODE,2") == ["OK"]
-    assert rig.cmd(f"VEL,{vel}") == ["OK"]
-    plain = list(rig.ctrl.executor._ff)
-    assert rig.cmd(f"VEL,{vel},{accel}") == ["OK"]
-    return [a - b for a, b in zip(rig.ctrl.executor._ff, plain, strict=True)]
-
-
-def _newtons_per_count(robot: str) -> list[float]:
-    """The traction force (N, along each wheel's drive direction) of one PWM count of current-making
-    voltage: the motor's torque constant, gear, efficiency and winding, the wheel's radius."""
-    description = load_robot(robot)
-    out = []
-    for w in description.wheels:
-        m = w.motor
-        amps = (description.battery.voltage - m.driver_drop) / m.pwm_max / m.resistance
-        out.append(
-            amps * m.torque_constant * m.gear_ratio * m.gear_efficiency / (w.radius * math.cos(w.gamma))
-        )
-    return out
-
-
-@pytest.mark.parametrize("robot", ["omni4", "omni3", "mecanum4"])
-@pytest.mark.parametrize(
-    ("vel", "accel"),
-    [
-        ("30,40,0,200", "100,-50,0"),  # speeding up along x, braking sideways, no turn
-        ("30,0,60,200", "0,31,0"),  # a steady circle to the left: the centripetal 0.3 x 1.047 m/s^2
-        ("-20,25,-45,200", "-80,35,-120"),  # everything at once
-        ("0,0,90,200", "0,0,300"),  # spinning up in place
-    ],
-)
-def test_vel_body_acceleration_gives_the_body_its_force_and_torque(robot: str, vel: str, accel: str) -> None:
-    """Version 4's VEL,VX,VY,W,T,AX,AY,AW: the traction forces the wheels' added feedforward makes
-    (without the wheels' own inertia) sum to the body's mass times (AX, AY) and its yaw inertia times
-    AW: each wheel gets its share with the right sign (a wrong sign or wheel breaks the sums)."""
-    description = load_robot(robot)
-    rig = make_rig(robot, wheel_ff=[0.0] * description.n_wheels)
-    added = _added_ff(rig, vel, accel)
-    forces = [c * n for c, n in zip(added, _newtons_per_count(robot), strict=True)]
-    traction, _ = kinematics.robot_contact_rows(description)
-    ax, ay, aw = (int(v) for v in accel.split(","))
-    want = [
-        description.mass * ax * 0.01,
-        description.mass * ay * 0.01,
-        description.yaw_inertia * math.radians(aw),
-    ]
-    assert list(traction.T @ forces) == pytest.approx(want, abs=1e-3 * max(1.0, *map(abs, want)))
-
-
-def test_vel_body_acceleration_turns_each_wheel_at_the_rate_of_its_target() -> None:
-    """The wheels' own inertia needs their angular acceleration, the rate at which each wheel's
-    target changes: the body's acceleration less the turn's w x v (the body's axes turn with it).
-    Driving straight in the world at a steady speed while spinning (no acceleration of the centre),
-    the body-frame velocity turns the other way: the added power follows the targets' change."""
-    rig = make_rig("omni4", body_ff=[[0.0, 0.0, 0.0]] * 4)
-    ex = rig.ctrl.executor
-    own = rig.config["wheel_ff"]
-    added = _added_ff(rig, "90,0,90,200", "0,0,0")
-    before = list(ex._target)
-    dt = 0.05  # the body turned by 4.5 degrees: the world velocity (0.9, 0) is now at -4.5 in the body
-    turned = math.radians(90) * dt
-    assert rig.cmd(f"VEL,{90 * math.cos(turned):.0f},{-90 * math.sin(turned):.0f},90,200") == ["OK"]
-    rates = [(a - b) / dt for a, b in zip(ex._target, before, strict=True)]  # rad/s^2
-    assert [a / f for a, f in zip(added, own, strict=True)] == pytest.approx(rates, rel=0.05, abs=3.0)
-    assert rates[0] < -50 and rates[2] > 50  # wheels 0 and 2 (driving y) take the turn of the velocity
-
-
 def test_vel_takes_4_5_or_7_parameters(rig: Rig) -> None:
     """Version 4's VEL has 7 parameters (the one command past 5); 6 or 8 are refused, nothing run."""
     assert rig.cmd("VEL,30,40,0,200,10,20") == [err(codes.E_PARAM_COUNT)]
@@ -750,14 +563,6 @@ def test_vel_takes_4_5_or_7_parameters(rig: Rig) -> None:
     assert rig.status() == "STATUS,1,0,16,0;POWER,0,0,0,0;MOVE,0,0,0,0"
     assert rig.cmd("VEL,30,40,0,200,10,20,30") == ["OK"]
     assert rig.cmd("VEL,-32768,-32768,-32768,1000,-32768,-32768,-32768#9999*0000")[0].startswith("ERROR,26")
-
-
-def test_vel_acceleration_leaves_the_open_loop_powers_alone() -> None:
-    rig = make_rig()
-    assert rig.cmd("VEL,30,40,0,200") == ["OK"]
-    plain = rig.status()
-    assert rig.cmd("VEL,30,40,0,200,150") == ["OK"]
-    assert rig.status() == plain
 
 
 def test_mecanum_k_l_looks_forward_diagonal_and_sideways_up_apart() -> None:

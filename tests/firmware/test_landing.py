@@ -16,7 +16,8 @@ import pytest
 
 from omnibot.client import RobotClient, commands
 from omnibot.estimation import SlipModel, SlipParameters
-from omnibot.firmware.config import LAND_ACCEL, build_config
+from omnibot.firmware.config import build_config
+from omnibot.firmware.config_loops import LAND_ACCEL
 from omnibot.firmware.controller import Controller
 from omnibot.firmware.landing import Landing
 from omnibot.protocol import codes

@@ -206,7 +206,6 @@ def test_binary_mode_matches_cpython(tmp_path: Path) -> None:
 
 def test_board_files_import_under_micropython(tmp_path: Path) -> None:
     """Every module copied to a board compiles and imports under MicroPython (main.py excepted)."""
-    mp = micropython()
     stage = tmp_path / "board"
     stage_board(stage, build_config(load_robot("omni3")))
     mods = [
@@ -219,16 +218,21 @@ def test_board_files_import_under_micropython(tmp_path: Path) -> None:
         + "".join(f"import {m}\n" for m in mods)
         + "print('ok', len(robot_config.CONFIG))"
     )
-    proc = subprocess.run(
-        [mp, "-c", code],
+    proc = run_code(stage, code)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.startswith("ok")
+
+
+def run_code(stage: Path, code: str) -> subprocess.CompletedProcess[str]:
+    """``code`` run by MicroPython with a staged board's files on its module path."""
+    return subprocess.run(
+        [micropython(), "-c", code],
         check=False,
         env={**os.environ, "MICROPYPATH": str(stage)},
         capture_output=True,
         text=True,
         timeout=60,
     )
-    assert proc.returncode == 0, proc.stderr
-    assert proc.stdout.startswith("ok")
 
 
 MPU6050_CHECK = """

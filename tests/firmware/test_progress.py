@@ -15,7 +15,8 @@ import pytest
 
 from omnibot.calibration import ACCEPTANCE, load_calibration, perturbed_robot
 from omnibot.client import RobotClient
-from omnibot.firmware.config import PROGRESS_TOLERANCE, build_config
+from omnibot.firmware.config import build_config
+from omnibot.firmware.config_loops import PROGRESS_TOLERANCE
 from omnibot.firmware.progress import COAST_MAX_US, ProgressWatch
 from omnibot.protocol import codes
 from omnibot.robot import CalibrationSpec, load_robot

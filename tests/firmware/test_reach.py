@@ -1,5 +1,5 @@
 """The calibrated reach in the firmware: CAL table 8, and an open-loop MOVE asked faster run at the
-reach with WARN 18 (calibration.py's ``reach_at``, motion.py's ``_move``).
+reach with WARN 18 (calibration.py's ``reach_at``, motion_commands.py's ``_move``).
 
 The rig's calibration is seed 000's plain form (K = 220 PWM counts per m/s, flat factors): a MOVE at
 V cm/s along x gives wheels 2 and 4 ``2.2 V`` counts.

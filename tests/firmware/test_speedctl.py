@@ -15,7 +15,8 @@ import math
 import pytest
 from benchmarks.speed_loop import run
 
-from omnibot.firmware.config import SPEED_BAND_POWER, build_config
+from omnibot.firmware.config import build_config
+from omnibot.firmware.config_loops import SPEED_BAND_POWER
 from omnibot.firmware.speedctl import STEADY_PERIODS, SpeedControl
 from omnibot.robot import load_robot
 

@@ -1,5 +1,4 @@
-"""MappingSink: scans matched to the odometry of their time, in the runtime's thread or a worker;
-the map's hit range from the scanner's noise."""
+"""MappingSink: scans matched to the odometry of their time, in the runtime's thread or a worker."""
 
 from __future__ import annotations
 
@@ -9,20 +8,10 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from omnibot.mapping.session import MappingSink, RangeNoise, interpolate
+from omnibot.mapping.session import MappingSink
 from omnibot.motion import Estimate, Pose2D
 from omnibot.scan import Scan
 from omnibot.sim import load_world
-
-
-def test_interpolate_between_samples_the_short_way_round() -> None:
-    stamps = [0.0, 1.0]
-    poses = [Pose2D(0.0, 0.0, math.radians(170)), Pose2D(2.0, 0.0, math.radians(-170))]
-    mid = interpolate(stamps, poses, 0.5)
-    assert mid is not None
-    assert (mid.x, mid.y) == pytest.approx((1.0, 0.0))
-    assert abs(abs(mid.theta) - math.pi) < 1e-9  # through 180, not through 0
-    assert interpolate(stamps, poses, 1.5) is None and interpolate(stamps, poses, -0.1) is None
 
 
 class Scans:
@@ -79,11 +68,3 @@ def test_a_scan_before_the_odometry_is_dropped() -> None:
     sink = MappingSink(source)
     drive(sink, source, 10)
     assert sink.dropped == 1 and not sink.slam.keyframes()
-
-
-def test_hit_range_from_the_scanner_noise() -> None:
-    assert RangeNoise().hit_range == pytest.approx(2.0)  # 1 % of range: 2 cm at 2 m
-    assert RangeNoise(std=0.005, fraction=0.01).hit_range == pytest.approx(1.5)
-    assert RangeNoise(fraction=0.0).hit_range == math.inf
-    assert RangeNoise(range=4.0).hit_range == 4.0
-    assert RangeNoise(std=0.03, fraction=0.0).hit_range == 0.0

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
@@ -15,7 +14,6 @@ from benchmarks.slam_synthetic import (
     drifting_odometry,
     position_errors,
     rmse,
-    room_path,
     synthetic_scan,
 )
 
@@ -23,23 +21,8 @@ from omnibot.errors import ConfigError
 from omnibot.mapping.se2 import between, compose, inverse
 from omnibot.mapping.slam import Slam
 from omnibot.motion import Pose2D, Twist
-from omnibot.sim import World, load_world
-
-
-def drive(
-    slam: Slam, world: World, truth: Sequence[Pose2D], odom: Sequence[Pose2D], seed: int
-) -> list[Pose2D]:
-    rng = np.random.default_rng(seed)
-    for k, (true_pose, odom_pose) in enumerate(zip(truth, odom, strict=True)):
-        slam.update(odom_pose, synthetic_scan(world, true_pose, rng, k / RATE), k / RATE)
-    return [pose for _, pose in slam.trajectory()]
-
-
-@pytest.fixture(scope="module")
-def room_loop() -> tuple[list[Pose2D], list[Pose2D]]:
-    """A lap and a half around the room (8 m) and its odometry: 3 % scale error, 2 deg/m heading bias."""
-    truth = room_path(8.0)
-    return truth, drifting_odometry(truth, np.random.default_rng(11))
+from omnibot.sim import load_world
+from tests.mapping.laps import drive
 
 
 @pytest.mark.parametrize("optimizer", ["isam2", "lm"])
@@ -64,23 +47,6 @@ def test_slam_is_several_times_better_than_odometry_and_within_centimetres(
     assert len(frames) == len(slam.matches) + 1
     kf_truth = [truth[round(scan.stamp * RATE)] for _, scan in frames]
     assert max(position_errors([pose for pose, _ in frames], kf_truth)) < 0.03
-
-
-def test_a_loop_closure_fixes_the_end_point(room_loop: tuple[list[Pose2D], list[Pose2D]]) -> None:
-    """Odometry and loop closures alone (no scan-to-submap front end): the closure pulls the end back."""
-    truth, odom = room_loop
-    world = load_world("room")
-    options = {"scan_to_submap": False, "loop_search_window": (0.8, math.radians(20.0))}
-    open_loop = Slam(**options, loop_min_separation=10_000)  # type: ignore[arg-type]
-    closed = Slam(**options)  # type: ignore[arg-type]
-    end_open = position_errors(drive(open_loop, world, truth, odom, seed=13), truth)[-1]
-    end_closed = position_errors(drive(closed, world, truth, odom, seed=13), truth)[-1]
-    end_odom = position_errors(odom, truth)[-1]
-    assert open_loop.closures == 0
-    assert end_open == pytest.approx(end_odom, rel=0.05)
-    assert closed.closures >= 1
-    assert end_closed < 0.08
-    assert end_closed * 3 < end_open
 
 
 def test_the_corridor_falls_back_on_odometry_along_its_axis() -> None:
@@ -109,81 +75,6 @@ def test_the_corridor_falls_back_on_odometry_along_its_axis() -> None:
     assert heading * 10 < heading_odom
     # every front-end match reported the axis as unconstrained
     assert all(np.sqrt(m.covariance[0, 0]) > 10.0 for m in slam.matches)
-
-
-def test_an_end_wall_in_range_holds_the_axis_where_the_odometry_drifts() -> None:
-    """An A1's 1 % range noise: the end wall, sharp in the keyframes that saw it up close, fixes the
-    axis from up to 10 m away (the anchor submap); the sliding submap holds it only as a blur of its
-    own far views, which left the SLAM as far off along the axis as the odometry."""
-    world = corridor_world(30.0)
-    truth = corridor_path(8.0, start=1.5)
-    odom = drifting_odometry(truth, np.random.default_rng(21))
-    scans = [
-        synthetic_scan(
-            world,
-            pose,
-            np.random.default_rng(1000 + k),
-            k / RATE,
-            range_max=12.0,
-            noise=0.0,
-            noise_fraction=0.01,
-        )
-        for k, pose in enumerate(truth)
-    ]
-    along = {}
-    for anchored in (True, False):
-        slam = Slam() if anchored else Slam(anchor_reach=None)  # the anchor submap is on by default
-        for k, (scan, odom_pose) in enumerate(zip(scans, odom, strict=True)):
-            slam.update(odom_pose, scan, k / RATE)
-        estimate = [pose for _, pose in slam.trajectory()]
-        along[anchored] = max(abs(e.x - t.x) for e, t in zip(estimate, truth, strict=True))
-        across = max(abs(e.y - t.y) for e, t in zip(estimate, truth, strict=True))
-        assert across < 0.02
-        assert (slam.anchored > 0) == anchored
-    along_odom = max(abs(o.x - t.x) for o, t in zip(odom, truth, strict=True))
-    assert along_odom > 0.15
-    assert along[False] > 0.1
-    # 3.5 cm: the anchor matches are unbiased here (mean -0.15 cm over 25; before the side walls'
-    # pull was taken out of the axis, -0.9 cm, which leant against this odometry's drift: 1.6 cm)
-    assert along[True] < 0.035
-    assert along[True] * 5 < along_odom
-
-
-def test_a_wrong_loop_closure_candidate_is_rejected(room_loop: tuple[list[Pose2D], list[Pose2D]]) -> None:
-    truth, odom = room_loop
-    slam = Slam()
-    drive(slam, load_world("room"), truth, odom, seed=14)
-    before = [pose for pose, _ in slam.keyframes()]
-    newer = len(before) - 1
-    # the right place, but a guess turned by 90 degrees: beyond the search window, nothing fits
-    wrong = compose(before[newer], Pose2D(0.0, 0.0, math.pi / 2))
-    loop = slam.try_loop_closure(0, newer, wrong)
-    assert not loop.accepted
-    assert loop.match is not None
-    assert loop.match.fitness < slam.loop_min_fitness or not loop.match.converged
-    assert [pose for pose, _ in slam.keyframes()] == before
-    # the right guess is accepted
-    assert slam.try_loop_closure(0, newer).accepted
-
-
-def test_a_false_closure_that_got_through_does_not_wreck_the_map(
-    room_loop: tuple[list[Pose2D], list[Pose2D]],
-) -> None:
-    truth, odom = room_loop
-    world = load_world("room")
-    slam = Slam()
-    half = len(truth) // 2
-    drive(slam, world, truth[:half], odom[:half], seed=15)
-    frames = slam.keyframes()
-    # claim keyframe 0 and the latest are 0.5 m and 20 degrees apart from what they are, confidently
-    true_rel = between(frames[0][0], frames[-1][0])
-    lie = compose(true_rel, Pose2D(0.5, -0.3, math.radians(20.0)))
-    slam.add_loop_closure(0, len(frames) - 1, lie, np.diag([1e-4, 1e-4, 1e-4]))
-    rng = np.random.default_rng(16)
-    for k in range(half, len(truth)):
-        slam.update(odom[k], synthetic_scan(world, truth[k], rng, k / RATE), k / RATE)
-    estimate = [pose for _, pose in slam.trajectory()]
-    assert rmse(position_errors(estimate, truth)) < 0.03
 
 
 def test_bad_input_is_one_clear_error() -> None:

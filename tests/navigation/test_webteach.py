@@ -13,7 +13,7 @@ from omnibot.navigation.session import follower_limits
 from omnibot.navigation.webteach import PathTeacher, gains_for
 from omnibot.protocol import codes
 from omnibot.robot import load_robot
-from omnibot.runtime.runtime import LATCHED_TEXT
+from omnibot.runtime.core import LATCHED_TEXT
 from omnibot.web.link import RobotLink
 from omnibot.web.messages import Drive, EStop, Teach
 from tests.teleop.fakes import truth

@@ -8,6 +8,7 @@ the ROS 2 modules on two workers at once (tests/parallel.py)."""
 
 from __future__ import annotations
 
+import functools
 import importlib.util
 import os
 import shutil
@@ -25,7 +26,10 @@ PRIVATE = "mount -t tmpfs -o mode=1777 omnibot-shm /dev/shm && ip link set lo up
 the host's stays as it was) and the loopback interface up."""
 
 
+@functools.cache
 def _unavailable() -> str:
+    """Why no private namespace can be made here ("" when one can): probed once per process (an
+    ``unshare`` run), not once per script."""
     if importlib.util.find_spec("cyclonedds") is None:
         return "cyclonedds is not installed (pip install 'omnibot[ros2]')"
     if shutil.which("unshare") is None or shutil.which("ip") is None:

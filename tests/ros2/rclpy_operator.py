@@ -30,6 +30,9 @@ from rosgraph_msgs.msg import Clock
 
 WAIT = 60.0
 """s to wait for the bridge's first odom (discovery and the simulator's start on a loaded machine)."""
+IDLE = 0.05
+"""s a spin waits at most with nothing due: each message ends it sooner (an idle spin costs rclpy
+0.3-0.6 ms of CPU: 5.6 % of a core at 10 ms timeouts, 1.2 % at 50 ms)."""
 
 
 def ns(stamp: Any) -> int:
@@ -65,7 +68,8 @@ def main() -> None:
             if publish is not None and time.monotonic() >= next_pub:
                 publish()
                 next_pub = time.monotonic() + 0.05
-            rclpy.spin_once(node, timeout_sec=0.01)
+            due = (next_pub if publish is not None else end) - time.monotonic()
+            rclpy.spin_once(node, timeout_sec=min(IDLE, max(due, 0.0)))
         return bool(done())
 
     out: dict[str, Any] = {}

@@ -21,7 +21,7 @@ from omnibot.estimation import make_estimator
 from omnibot.motion import Pose2D
 from omnibot.navigation.session import follower_limits
 from omnibot.robot import load_robot
-from omnibot.runtime.runtime import BATTERY_LATCHED_TEXT, LATCHED_TEXT
+from omnibot.runtime.core import BATTERY_LATCHED_TEXT, LATCHED_TEXT
 from omnibot.runtime.sinks import NoticePrinter
 from omnibot.runtime.sources import FollowerSource
 from omnibot.teleop import PadSource, TeleopConfig, TwistLimits

@@ -3,8 +3,6 @@ is dropped without stopping the robot loop, commands are clamped to what the con
 
 from __future__ import annotations
 
-import math
-
 import pytest
 
 from omnibot.client import Pending, RobotClient
@@ -16,7 +14,7 @@ from omnibot.protocol import codes
 from omnibot.protocol.messages import Command, Vel
 from omnibot.robot import load_robot
 from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.runtime import Runtime, clamp_to
+from omnibot.runtime.runtime import Runtime
 from omnibot.runtime.sources import FollowerSource, ScriptSource
 from tests.teleop.fakes import truth
 
@@ -43,16 +41,6 @@ def test_a_script_drives_and_every_sink_sees_every_cycle(caplog: pytest.LogCaptu
         assert runtime.sent.vel == len(seen) - 1 and runtime.sent.errors == 0
         assert sum(len(c.telemetry) for c in seen) == 0  # nobody asked for telemetry
         assert truth(client).pose.x - x0 > 0.2
-
-
-def test_commands_are_clamped_to_the_controllers_limits() -> None:
-    with RobotClient.open("sim://omni4", timeout=0.5) as client:
-        limits = client.limits
-    vmax = (limits.speed_max_cms - 1.0) / 100.0
-    fast = clamp_to(limits, Twist(10.0, 10.0, 100.0))
-    assert fast.speed == pytest.approx(vmax) and fast.vx == pytest.approx(fast.vy)
-    assert fast.w == pytest.approx(math.radians(limits.rate_max_dps - 1.0))
-    assert clamp_to(limits, Twist(0.1, -0.1, -0.5)) == Twist(0.1, -0.1, -0.5)
 
 
 @pytest.mark.parametrize("versions", [(2,), (2, 3), codes.VERSIONS])

@@ -16,7 +16,8 @@ from omnibot.protocol import codes
 from omnibot.protocol.messages import Command, Vel
 from omnibot.runtime.arbiter import EStop
 from omnibot.runtime.cycle import Cycle
-from omnibot.runtime.runtime import LinkPacer, Runtime
+from omnibot.runtime.pacing import LinkPacer
+from omnibot.runtime.runtime import Runtime
 from omnibot.runtime.sources import Proposal, ScriptSource
 from omnibot.runtime.wakeup import GAP, Wake, Wakeup
 from omnibot.teleop import Pacer

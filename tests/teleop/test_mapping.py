@@ -116,6 +116,36 @@ def test_twist_limits_take_the_robots_accelerations() -> None:
     assert math.isinf(TwistLimits.from_limits(Limits.from_robot(robot), SEED).accel)  # no robot: at once
 
 
+def test_a_floor_with_less_grip_shares_the_accelerations_out() -> None:
+    robot = load_robot("omni3")  # 30 kg: its grip holds 0.72 of its accelerations on wood, 0.68 on carpet
+    bounds = Limits.from_robot(robot)
+    unknown = TwistLimits.from_limits(bounds, SEED, robot)
+    wood = TwistLimits.from_limits(bounds, SEED, robot, "wood")
+    carpet = TwistLimits.from_limits(bounds, SEED, robot, "carpet")
+    assert unknown.grip is None and unknown.grip_at(0.3) == 1.0  # a floor not known: today's limits
+    assert (wood.accel, wood.angular_accel, wood.speed) == (
+        unknown.accel,
+        unknown.angular_accel,
+        unknown.speed,
+    )
+    assert wood.grip is not None and wood.grip[0][-1] == pytest.approx(wood.speed)  # up to the top speed
+    for v in (0.0, 0.3, 1.0):
+        assert 0.0 < carpet.grip_at(v) < wood.grip_at(v) < 1.0
+    ramp = TwistRamp(carpet)
+    ramp.step(Twist(1.0, 0.0, 5.0), 0.05)
+    assert ramp.body_accel[0] == pytest.approx(2.5 * carpet.grip_at(0.0))
+    assert ramp.body_accel[2] == pytest.approx(10.0 * carpet.grip_at(0.0))
+
+
+def test_a_ramp_takes_the_grips_share_at_the_speed_it_ramps_from() -> None:
+    ramp = TwistRamp(TwistLimits(2.0, 5.0, accel=2.0, angular_accel=10.0, grip=((0.0, 1.0), (1.0, 0.5))))
+    assert ramp.step(Twist(2.0, 0.0, 5.0), 0.05) == pytest.approx(Twist(0.1, 0.0, 0.5))  # at rest: all
+    ramp.reset(Twist(0.5, 0.0, 0.0))
+    assert ramp.step(Twist(2.0, 0.0, 5.0), 0.05) == pytest.approx(Twist(0.575, 0.0, 0.375))  # 0.75 at 0.5
+    ramp.reset(Twist(2.0, 0.0, 0.0))  # past the table: its last share
+    assert ramp.step(Twist(0.0, 0.0, 0.0), 0.05) == pytest.approx(Twist(1.95, 0.0, 0.0))
+
+
 def test_a_ramp_changes_the_twist_by_at_most_the_accelerations() -> None:
     ramp = TwistRamp(TwistLimits(1.0, 5.0, accel=2.0, angular_accel=10.0))
     step = ramp.step(Twist(0.3, 0.4, 1.0), 0.05)  # 0.1 m/s along (0.6, 0.8), 0.5 rad/s

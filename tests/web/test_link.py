@@ -13,7 +13,8 @@ from omnibot.errors import LinkError
 from omnibot.motion import Twist
 from omnibot.robot import load_robot
 from omnibot.teleop import Pacer
-from omnibot.web.link import PageGone, RobotLink
+from omnibot.web.inbox import PageGone
+from omnibot.web.link import RobotLink
 from omnibot.web.messages import Drive, EStop, Joy, Resume, Teach
 from tests.runtime.test_wakeup import Pushed
 from tests.teleop.fakes import FakeWall, truth

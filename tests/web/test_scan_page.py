@@ -9,7 +9,7 @@ import math
 from playwright.sync_api import Page
 
 from omnibot.web.dashboard import Dashboard
-from omnibot.web.link import SCAN_POINTS
+from omnibot.web.scanview import SCAN_POINTS
 
 
 def _distance(p: tuple[float, float], a: list[float], b: list[float]) -> float:

@@ -24,7 +24,7 @@ from websockets.asyncio.client import ClientConnection
 from omnibot.errors import ConfigError
 from omnibot.web.access import HostPolicy, RateLimit, check_host_name
 from omnibot.web.dashboard import Dashboard
-from omnibot.web.link import INBOX_MAX
+from omnibot.web.inbox import INBOX_MAX
 from omnibot.web.messages import MAX_DEPTH, MAX_FRAME
 from omnibot.web.server import BURST, MAX_PAGES, RATE
 from tests.web.conftest import ROOM
@@ -384,7 +384,8 @@ def test_too_many_pages_are_refused(dashboard: Dashboard, no_server_errors: None
 def test_a_full_inbox_drops_driving_but_never_the_emergency_stop() -> None:
     from omnibot.client import RobotClient
     from omnibot.robot import load_robot
-    from omnibot.web.link import PageGone, RobotLink
+    from omnibot.web.inbox import PageGone
+    from omnibot.web.link import RobotLink
     from omnibot.web.messages import Drive, EStop
 
     client = RobotClient.open(ROOM, timeout=0.5)

@@ -131,8 +131,18 @@ def run(args: argparse.Namespace, ask: Callable[[str], str] | None = None) -> in
     print(f"omnibot calibrate: {robot.name} on {', '.join(surfaces)} (truth {truth_name})")
     _print_findings(result)
     print(f"report: {out_dir} ({', '.join(f.name for f in files)})")
+    _say_figures_left_out()
     _print_verdict(verdict, several=len(result.sessions) > 1)
     return _write_file(args, cal_file, result, verdict, truth_name, uploaded=client is not None)
+
+
+def _say_figures_left_out() -> None:
+    """The report's figures need matplotlib: where it is missing, say which extra draws them."""
+    from omnibot.plots import unavailable
+
+    why = unavailable()
+    if why is not None:
+        print(f"report: figures left out: {why}")
 
 
 def _robot_and_client(

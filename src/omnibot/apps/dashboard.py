@@ -97,7 +97,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run ``omnibot web``: serve the dashboard for ``--duration`` s or until interrupted; the exit
     status (1 when the robot link ended)."""
-    from omnibot.cliargs import check_sim_options, recording_of, sim_url, use_calibration
+    from omnibot.cliargs import calibrated_floor, check_sim_options, recording_of, sim_url, use_calibration
     from omnibot.navigation import PathTeacher
     from omnibot.robot import RobotDescription
     from omnibot.teleop import load_teleop_config
@@ -127,6 +127,7 @@ def run(args: argparse.Namespace) -> int:
         wheel_loop=not args.open_loop,
         floor=lambda client, robot: use_calibration(args, client, robot),
         recording=recording_of(args),
+        surface=calibrated_floor(args),
         **server,
     )
     dash.start()

@@ -7,9 +7,15 @@ Light to import: the handlers import the demos.
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 from omnibot.cliargs import DEFAULT_SEED, add_robot_options, output_dir, positive, seed_of
 from omnibot.errors import ConfigError
+
+if TYPE_CHECKING:
+    from omnibot.demos import DirectionRun
+    from omnibot.robot import RobotDescription
 
 EXIT_OK, EXIT_FAILED = 0, 1
 
@@ -51,7 +57,7 @@ def add_demo(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def _tour(args: argparse.Namespace) -> int:
-    from omnibot.demos import DIRECTIONS, format_table, plot_tour, run_tour
+    from omnibot.demos import DIRECTIONS, format_table, run_tour
     from omnibot.floor import get_surface
     from omnibot.progress import progress_bar
     from omnibot.robot import load_robot, preset_names
@@ -75,13 +81,23 @@ def _tour(args: argparse.Namespace) -> int:
                 progress=bar,
             )
         print(format_table(robot, runs))
-        png = out / f"directions_{robot.name}.png"
-        try:
-            plot_tour(robot, runs, png)
-        except OSError as exc:
-            raise ConfigError(f"cannot write {png}: {exc.strerror or exc}", key="--out") from None
-        print(f"  plot: {png}\n")
+        print(_plot(robot, runs, out / f"directions_{robot.name}.png"))
     return 0
+
+
+def _plot(robot: RobotDescription, runs: list[DirectionRun], png: Path) -> str:
+    """Draw the tour's plot (where matplotlib is installed); the line saying where, or why not."""
+    from omnibot.demos import plot_tour
+    from omnibot.plots import unavailable
+
+    why = unavailable()
+    if why is not None:
+        return f"  plot left out: {why}\n"
+    try:
+        plot_tour(robot, runs, png)
+    except OSError as exc:
+        raise ConfigError(f"cannot write {png}: {exc.strerror or exc}", key="--out") from None
+    return f"  plot: {png}\n"
 
 
 def add_tour(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:

@@ -169,6 +169,7 @@ def robot_specs(args: argparse.Namespace) -> list[RobotSpec]:
 def check(args: argparse.Namespace) -> list[RobotSpec]:
     """Refuse bad bridge options with one line; the robots they describe. The bridge's settings (the
     backend resolved, a ``--map`` loaded) are left in ``args.ros2_bridge`` for :func:`attach_bridge`."""
+    from omnibot.cliargs import calibrated_floor
     from omnibot.ros2 import BridgeSettings, choose
 
     timeout = args.cmd_vel_timeout
@@ -192,6 +193,7 @@ def check(args: argparse.Namespace) -> list[RobotSpec]:
         speed=speed,
         map=check_map(args, specs),
         seed=getattr(args, "seed", None) or 0,
+        surface=calibrated_floor(args),
     )
     return specs
 

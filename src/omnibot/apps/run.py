@@ -130,6 +130,7 @@ def compose(
     """Add the pad and the follower to ``runtime`` (any thread: before it runs); ``say`` tells the
     command's status lines."""
     from omnibot.apps.teleop import open_source
+    from omnibot.cliargs import calibrated_floor
     from omnibot.estimation import make_estimator
     from omnibot.motion import Pose2D
     from omnibot.navigation import FOLLOWER_PRIORITY, STANDSTILL, FollowJudge, follower_source
@@ -159,7 +160,7 @@ def compose(
             device.__enter__()
             parts.closers.append(lambda: device.__exit__(None, None, None))
         parts.device = device
-        limits = TwistLimits.from_limits(runtime.client.limits, config, robot)
+        limits = TwistLimits.from_limits(runtime.client.limits, config, robot, calibrated_floor(args))
         parts.pad = PadSource(device, config, limits, name=args.teleop, priority=PAD_PRIORITY)
         runtime.add_source(parts.pad)
     if args.ros2 and getattr(args, "ros2_node", None) is None:  # (omnibot map attaches its own)
@@ -326,7 +327,7 @@ def _stop_pad(runtime: Any, parts: Parts, config: Any) -> None:
 
 def _with_dashboard(args: argparse.Namespace, url: str, config: Any, path: Any) -> Parts:
     from omnibot.apps.dashboard import server_options
-    from omnibot.cliargs import recording_of, use_calibration
+    from omnibot.cliargs import calibrated_floor, recording_of, use_calibration
     from omnibot.navigation import PathTeacher
     from omnibot.robot import RobotDescription
     from omnibot.web import Dashboard
@@ -344,6 +345,7 @@ def _with_dashboard(args: argparse.Namespace, url: str, config: Any, path: Any) 
         wheel_loop=not args.open_loop,
         floor=lambda client, robot: use_calibration(args, client, robot),
         recording=recording_of(args),
+        surface=calibrated_floor(args),
         **server,
     )
     parts = Parts()

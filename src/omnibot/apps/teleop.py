@@ -69,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
     """Run ``omnibot teleop`` for ``--duration`` s or until the user quits, then print what was sent;
     0 (Ctrl-C is raised again after the summary)."""
     from omnibot.apps.teleop_loop import Teleop
-    from omnibot.cliargs import check_sim_options, recording_of, sim_url, use_calibration
+    from omnibot.cliargs import calibrated_floor, check_sim_options, recording_of, sim_url, use_calibration
     from omnibot.client import robot_session
     from omnibot.protocol import codes
     from omnibot.teleop import load_teleop_config
@@ -108,6 +108,7 @@ def run(args: argparse.Namespace) -> int:
             wheel_loop=not args.open_loop,
             slip=use_calibration(args, client, session.robot),
             recording=recording,
+            surface=calibrated_floor(args),
         )
         _say(f"limits: {teleop.limits.speed:.2f} m/s, {teleop.limits.rate:.2f} rad/s")
         if recording is not None:  # the log holds what the robot did, not only what it was sent

@@ -55,7 +55,8 @@ class Teleop:
     loops in real time. ``robot``'s description ramps the twist at its accelerations
     (:class:`~omnibot.teleop.mapping.TwistRamp`); ``wheel_loop`` and ``slip`` are the runtime's (the
     controller's wheel-speed loop closed by default; the floor's wheel slip asked on top); so is
-    ``recording`` (the command's ``--log``)."""
+    ``recording`` (the command's ``--log``); ``surface``, the floor's name when known, keeps the ramp
+    within its grip (:meth:`~omnibot.teleop.TwistLimits.from_limits`)."""
 
     def __init__(
         self,
@@ -70,11 +71,12 @@ class Teleop:
         wheel_loop: bool | None = True,
         slip: SlipModel | None = None,
         recording: RuntimeRecording | None = None,
+        surface: str | None = None,
     ) -> None:
         self.client = client
         self.config = config
         self.source = source
-        self.limits = limits or TwistLimits.from_limits(client.limits, config, robot)
+        self.limits = limits or TwistLimits.from_limits(client.limits, config, robot, surface)
         self.pacer = pacer or Pacer(client, config.period)
         self.on_message = on_message
         self.pad = PadSource(source, config, self.limits)

@@ -315,22 +315,14 @@ def plot_accuracy(entries: Sequence[tuple[str, Sequence[AccuracyRow]]], path: Pa
 
 
 def write_report(result: CalibrationResult, out: str | Path) -> list[Path]:
-    """Write the report files (see the module docstring); returns their paths."""
+    """Write the report files (see the module docstring); returns their paths. The tables and raw
+    data first; the figures only where matplotlib is installed (:func:`omnibot.plots.unavailable`
+    says why not), so a calibration's report is never lost to a missing extra."""
+    from omnibot.plots import unavailable
+
     out = Path(out)
     try:
         out.mkdir(parents=True, exist_ok=True)
-        written = []
-        for name, fn in (
-            ("fig5_rates.png", plot_rates),
-            ("fig6_kt_kr.png", plot_kt_kr),
-            ("fig7_kl.png", plot_kl),
-        ):
-            fn(result, out / name)
-            written.append(out / name)
-        entries = accuracy_entries(result)
-        if entries:
-            plot_accuracy(entries, out / "accuracy.png")
-            written.append(out / "accuracy.png")
         (out / "accuracy.md").write_text(accuracy_markdown(result), encoding="utf-8")
         (out / "accuracy.json").write_text(
             json.dumps(accuracy_json(result), indent=1, default=_json), encoding="utf-8"
@@ -338,9 +330,27 @@ def write_report(result: CalibrationResult, out: str | Path) -> list[Path]:
         (out / "runs.json").write_text(
             json.dumps(runs_json(result), indent=1, default=_json), encoding="utf-8"
         )
-        written += [out / "accuracy.md", out / "accuracy.json", out / "runs.json"]
+        tables = [out / "accuracy.md", out / "accuracy.json", out / "runs.json"]
+        figures = _write_figures(result, out) if unavailable() is None else []
     except OSError as exc:
         raise ConfigError(f"cannot write the report to {out}: {exc.strerror}", key="--report") from None
+    return figures + tables
+
+
+def _write_figures(result: CalibrationResult, out: Path) -> list[Path]:
+    """Seed 000's figures 5-7 and, with accuracy checks, the before/after chart; their paths."""
+    written = []
+    for name, fn in (
+        ("fig5_rates.png", plot_rates),
+        ("fig6_kt_kr.png", plot_kt_kr),
+        ("fig7_kl.png", plot_kl),
+    ):
+        fn(result, out / name)
+        written.append(out / name)
+    entries = accuracy_entries(result)
+    if entries:
+        plot_accuracy(entries, out / "accuracy.png")
+        written.append(out / "accuracy.png")
     return written
 
 

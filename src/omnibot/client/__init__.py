@@ -9,12 +9,17 @@
         robot.wait_idle(timeout=5)
         print(robot.status())
 
-Modules: ``client`` (RobotClient: sending, pumping), ``pending`` (Pending: a command awaiting its
-reply), ``replies`` (Replies: which command a reply answers), ``calls`` (the typed calls), ``commands`` (SI -> checked commands), ``limits``,
-``events`` (Event types, listeners, EventRecorder), ``tracing`` (Tracer: what a recorder hears),
-``views`` (Hello, Status), ``session`` (robot_session: the robot on the link, the controller
-left as found), ``wire`` (text and binary wire formats), ``switch`` (ProtocolSwitch: the
-protocol a client speaks, switching it), ``errors`` (ControllerError subclasses per code).
+Modules: ``client`` (RobotClient: opening, state, switching protocols, closing), built in layers
+over ``core`` (the state they share): ``receiving`` (replies to commands, events to listeners),
+``waiting`` (pumping), ``sending`` (commands out, the steps before a text command), ``listening``
+(listeners, tracers), ``calls`` (the typed calls); the objects a client owns: ``connection``
+(Connection: the link's bytes, failures, reopening), ``replies`` (Replies: which command a reply
+answers), ``switch`` (ProtocolSwitch: the protocol a client speaks, switching it) on ``tagging``
+(TextTags: text's tags and checks). Also ``pending`` (Pending: a command awaiting its reply),
+``commands`` (SI -> checked commands), ``limits``, ``events`` (Event types, listeners,
+EventRecorder), ``tracing`` (Tracer: what a recorder hears), ``views`` (Hello, Status),
+``session`` (robot_session: the robot on the link, the controller left as found), ``wire`` (text
+and binary wire formats), ``errors`` (ControllerError subclasses per code).
 """
 
 from omnibot.client.client import DEFAULT_TIMEOUT, RobotClient

@@ -13,7 +13,7 @@ from omnibot.protocol.messages import Hello as HelloCommand
 from omnibot.protocol.messages import Status as StatusCommand
 
 if TYPE_CHECKING:
-    from omnibot.client.client import RobotClient
+    from omnibot.client.waiting import Waiting
 
 
 class Pending:
@@ -21,7 +21,7 @@ class Pending:
 
     def __init__(
         self,
-        client: RobotClient,
+        client: Waiting,
         command: Command | None,
         line: str,
         seq: int,

@@ -3,8 +3,9 @@ r"""The protocol the client speaks: finding and switching it, also over a noisy 
 :class:`ProtocolSwitch` is the object a :class:`~omnibot.client.client.RobotClient` owns for it: the
 wire in use (text or binary), the controller's MODE bits as the client knows them, and text's tags
 and checks (whether commands carry ``#tag*check``: the tag question's verdict, MODE bits 4 and 5 set
-by this client, sequenced text). The client tells it what happened (a MODE or STATUS answered, a reset, a failed link) and
-asks it to switch; the switch talks to the controller through the client's calls and the bytes
+by this client, sequenced text: :class:`~omnibot.client.tagging.TextTags`, which it is built on).
+The client tells it what happened (a MODE or STATUS answered, a reset, a failed link) and asks it to
+switch; the switch talks to the controller through the client's calls and the bytes
 functions the client hands it, and writes none of the client's fields.
 
 Text has no check, so any text exchange may be lost or changed on the way; the binary HELLO
@@ -36,16 +37,16 @@ from __future__ import annotations
 
 import contextlib
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Final, Protocol
+from typing import Final
 
+from omnibot.client.tagging import Host, TextTags
 from omnibot.client.views import Hello
 from omnibot.client.wire import BinaryWire, TextWire, Wire
-from omnibot.errors import ControllerError, LinkError, LinkTimeout, ProtocolError
+from omnibot.errors import LinkTimeout, ProtocolError
 from omnibot.protocol import codes, linecheck, text
 from omnibot.protocol.binary import Packet
 from omnibot.protocol.messages import (
     HELLO_WITHOUT_WINDOW,
-    Command,
     ErrorReply,
     HelloReply,
     Malformed,
@@ -57,10 +58,6 @@ from omnibot.protocol.messages import (
 )
 from omnibot.protocol.messages import Hello as HelloCommand
 
-if TYPE_CHECKING:
-    from omnibot.client.views import Status
-    from omnibot.transport import Clock, Link
-
 ATTEMPTS: Final = 8
 """MODE commands (to_binary, to_text) and probes (find_protocol) tried before giving up."""
 PROBES: Final = 3
@@ -70,38 +67,9 @@ ANSWER_TIME: Final = 0.1
 ANSWER_TIME_MAX: Final = 0.8
 """Seconds (link clock) a later probe waits at most: each waits twice as long as the one before."""
 _QUIET: Final = 0.02
-PROBE_TRIES: Final = 8
-"""Rounds of tag questions before :meth:`ProtocolSwitch.detect_tags` gives up (LinkError)."""
-UNTAGGED_VERDICT: Final = 3
-"""Rounds in a row on a line proven clean that make a controller one without tags."""
 
 
-class Host(Protocol):
-    """What the switch asks of the client that owns it: its link, clock and reply timeout, its calls
-    (matched replies), and the last HELLO it saw, which a probe's answer updates."""
-
-    link: Link
-    timeout: float
-    last_hello: Hello | None
-
-    @property
-    def clock(self) -> Clock:
-        """The link's clock."""
-
-    def execute(self, command: Command, timeout: float | None = None) -> Reply:
-        """Send ``command`` and wait for its reply."""
-
-    def status(self) -> Status:
-        """STATUS and its reply."""
-
-    def hello(self, versions: tuple[int, ...] = ()) -> Hello:
-        """HELLO and its reply."""
-
-    def drain(self, timeout: float | None = None) -> None:
-        """Wait for the replies of the commands sent."""
-
-
-class ProtocolSwitch:
+class ProtocolSwitch(TextTags):
     """The protocol a client speaks and the controller's MODE bits as far as the client knows them.
 
     ``host`` is the client; ``write`` and ``read`` its link's bytes (traced, a failure handled as
@@ -132,11 +100,7 @@ class ProtocolSwitch:
         self._forget = forget
         self._wire: Wire = TextWire(bool(tags))
         self._mode: int | None = None
-        self._auto_tags = tags is None
-        self._tags = tags
-        self._tags_seen = bool(tags)  # a tagged reply came (or tags were asked for): never fall back
-        self._checks_asked = not tags and tags is not None  # MODE bits 4, 5 asked for (or never to be)
-        self._added_text_bits = 0  # MODE bits 4 and 5 set on the controller, which had them clear
+        super().__init__(tags)
 
     # ------------------------------------------------------------------ state
 
@@ -156,49 +120,9 @@ class ProtocolSwitch:
         return self._mode
 
     @property
-    def tags(self) -> bool | None:
-        """True if text commands carry ``#tag*check``; None until the controller was asked."""
-        return self._tags
-
-    @property
-    def auto_tags(self) -> bool:
-        """Whether the client asks the controller if it takes tags (``tags=None``)."""
-        return self._auto_tags
-
-    @property
-    def checks_wanted(self) -> bool:
-        """Tags are on and MODE bits 4 and 5 still to be asked for (:meth:`require_checks`)."""
-        return bool(self._tags) and not self._checks_asked
-
-    @property
     def sequenced(self) -> bool:
         """True while tagged text commands are sequence numbers the controller keeps (MODE bit 5)."""
         return isinstance(self._wire, TextWire) and self._wire.sender is not None
-
-    @property
-    def added_text_bits(self) -> int:
-        """MODE bits 4 and 5 (checked, sequenced text) set on the controller, which had them clear."""
-        return self._added_text_bits
-
-    @property
-    def added_checked_text(self) -> bool:
-        """MODE bit 4 (checked text only) was set on the controller, which had it clear."""
-        return bool(self._added_text_bits & codes.MODE_CHECKED_TEXT)
-
-    def set_tags(self, on: bool | None) -> None:
-        """Text commands with tags (True), without (False), or not known (None: ask again)."""
-        self._tags = on
-        self._tags_seen = self._tags_seen or bool(on)
-        wire = self._wire
-        if isinstance(wire, TextWire):
-            wire.tags = bool(on)
-
-    def hello_again(self) -> HelloCommand:
-        """A HELLO that agrees on the protocol version agreed last (a bare one would say 2)."""
-        hello = self._host.last_hello
-        version = hello.version if hello is not None else codes.PROTOCOL_VERSION
-        listed = tuple(v for v in codes.VERSIONS if v <= version)
-        return HelloCommand(listed if version > codes.PROTOCOL_VERSION else ())
 
     # ------------------------------------------------------------------ what the client saw
 
@@ -243,109 +167,6 @@ class ProtocolSwitch:
         text_wire = TextWire(bool(self._tags), wire.last_tag if isinstance(wire, TextWire) else 0)
         text_wire.sequence(sequenced and bool(self._tags))  # its first command: a sync one (a HELLO)
         return text_wire
-
-    # ------------------------------------------------------------------ checked and sequenced text
-
-    def detect_tags(self, wait: float) -> None:
-        """Ask with tagged HELLOs whether the controller takes tagged, checked text commands.
-
-        A tagged reply says yes (a damaged line cannot forge its check), and so does ``ERROR,42`` (it
-        runs checked text only). A controller without tags answers ``ERROR,23``, but so does one with
-        them when the question arrived with its suffix damaged; so "no" takes :data:`UNTAGGED_VERDICT`
-        rounds in a row of an untagged answer to the tagged question followed by the same answer to a
-        plain ``HELLO`` (its HELLO reply, or ERROR 23 from a controller of seed 000's protocol) that
-        proves the line clean. Silence, ERROR 26 or a differing answer starts the count again; no
-        verdict after :data:`PROBE_TRIES` rounds is a LinkError, never a fall back. Once the client
-        has had a tagged reply it never falls back: a controller that took tags and now refuses them
-        is an error."""
-        rounds = 0
-        plain_answer: str | None = None
-        answered_once = False
-        for _ in range(PROBE_TRIES):
-            reply = self._ask(wait, True)
-            if self._tags is not None:
-                return
-            if reply is None:
-                if not self._heard():  # not a byte from the controller yet: it is not there
-                    break
-                rounds = 0
-                continue
-            answered_once = True
-            if isinstance(reply, ErrorReply) and reply.code == codes.E_CHECK_REQUIRED:
-                self.set_tags(True)
-                return
-            if isinstance(reply, ErrorReply) and reply.code == codes.E_CHECKSUM:
-                rounds = 0
-                continue
-            plain = self._ask(wait, False)
-            if self._tags is not None:
-                return
-            answer = None if plain is None else type(plain).__name__ + str(getattr(plain, "code", ""))
-            if answer is None or (plain_answer is not None and answer != plain_answer):
-                rounds, plain_answer = 0, answer
-                continue
-            plain_answer = answer
-            rounds += 1
-            if rounds == UNTAGGED_VERDICT:
-                if self._tags_seen:
-                    raise LinkError(
-                        f"the controller on {self._host.link.url} took tagged, checked commands before "
-                        "and now refuses them (ERROR 23): another firmware? Reconnect to use it"
-                    )
-                self.set_tags(False)
-                return
-        if answered_once:
-            raise LinkError(
-                f"cannot tell whether the controller on {self._host.link.url} takes checked text commands: "
-                f"{PROBE_TRIES} tagged HELLOs had no clear answer (a damaged line?)"
-            )
-        raise LinkTimeout(
-            f"no reply to HELLO, sent to ask whether the controller takes tagged text commands "
-            f"(timeout on {self._host.link.url})"
-        )
-
-    def require_checks(self, wait: float, probed: bool = False) -> None:
-        """Tags are on: ask the controller to run only checked text commands (MODE bit 4), so that a
-        line a damaged byte cuts short (a digit turned into ``;``) runs nothing, and to take their
-        tags as sequence numbers (bit 5), so that a command sent again when its reply was lost is
-        answered from the reply kept and not run twice; the client then sends again every tagged
-        command whose reply does not come (as binary frames). A controller without bit 5 (ERROR 39:
-        a firmware from before it) gets bit 4 alone and no command sent twice; one without bit 4
-        neither bit and keeps running unchecked lines; nothing else changes.
-
-        A tagged HELLO goes first (the tag question's, when it was just asked), as the sequence's
-        first command: a controller left in sequenced text by a client that was killed starts its
-        sequence afresh, so the STATUS after it is not taken for one out of order. HELLO and STATUS
-        run nothing, so they are sent again as the sequence's commands are whether the controller
-        keeps the sequence yet or not."""
-        host = self._host
-        wire = self._wire
-        assert isinstance(wire, TextWire)
-        wire.sequence(True)
-        try:
-            if not probed:
-                host.execute(self.hello_again(), wait)
-            mask = self._mode if self._mode is not None else host.status().mode
-            for bits in (codes.MODE_CHECKED_TEXT | codes.MODE_SEQUENCED_TEXT, codes.MODE_CHECKED_TEXT):
-                # set before it is sent: if its OK is lost the bits may be set, and the session guard
-                # must clear them on the way out (clearing a bit that was never set changes nothing)
-                self._added_text_bits = bits & ~mask
-                if not bits & codes.MODE_SEQUENCED_TEXT:  # bit 4 alone: a command sent twice runs twice
-                    wire.sequence(False)
-                    if mask & bits == bits:
-                        break
-                try:
-                    host.execute(Mode(mask | bits), wait)
-                except ControllerError as exc:
-                    if exc.code != codes.E_UNSUPPORTED:
-                        raise
-                    self._added_text_bits = 0  # a controller without the bit: nothing was set
-                    continue
-                break
-        except BaseException:
-            wire.sequence(False)
-            raise
-        self._checks_asked = True  # only now: a reply lost on the way asks again before the next command
 
     # ------------------------------------------------------------------ text and binary
 

@@ -13,15 +13,24 @@ from typing import TYPE_CHECKING
 from omnibot.faces import lazy_names
 
 if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
-    from omnibot.demos.directions import DIRECTIONS, format_table, plot_tour, run_tour
+    from omnibot.demos.directions import DIRECTIONS, DirectionRun, format_table, plot_tour, run_tour
     from omnibot.demos.seed000 import run_demo
 
 _EXPORTS = {
-    "directions": ("DIRECTIONS", "format_table", "plot_tour", "run_tour"),
+    "directions": ("DIRECTIONS", "DirectionRun", "format_table", "plot_tour", "run_tour"),
     "seed000": ("run_demo",),
 }
 
-__all__ = ["DIRECTIONS", "directions", "format_table", "plot_tour", "run_demo", "run_tour", "seed000"]
+__all__ = [
+    "DIRECTIONS",
+    "DirectionRun",
+    "directions",
+    "format_table",
+    "plot_tour",
+    "run_demo",
+    "run_tour",
+    "seed000",
+]
 
 if not TYPE_CHECKING:  # type checkers take each name from its import above
     __getattr__ = lazy_names(__name__, _EXPORTS)

@@ -40,7 +40,6 @@ from omnibot.demos.examples import Demo, Segment
 from omnibot.demos.truth import ControllerClock, DemoRecording, TruthFile, TruthSource, world_bounds
 from omnibot.errors import ConfigError
 from omnibot.progress import notice, progress_bar
-from omnibot.sim import spawn_pty_emulator
 from omnibot.transport import find_simulator
 
 
@@ -91,9 +90,18 @@ def _link(
     its truth to ``truth_file`` when there is one, else ``port``."""
     if truth_file is None:
         return _given(port or "")
+    from omnibot.sim import spawn_pty_emulator  # the simulator's modules only when it is driven
+
     return spawn_pty_emulator(
         robot, world=world, seed=seed, surface=surface, truth=truth_file.path, notice=notice
     )
+
+
+def _world_map(world: str) -> Any:
+    """The world the spawned simulator drives in (the simulator's modules only when it is driven)."""
+    from omnibot.sim import load_world
+
+    return load_world(world)
 
 
 def run_demo(
@@ -116,14 +124,14 @@ def run_demo(
     clock by the telemetry, once the emulator has closed it).
     """
     from omnibot.client import robot_session
-    from omnibot.sim import load_world
+    from omnibot.plots import unavailable
 
     if port is not None:
         port = with_world(port, world)
     out.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
         truth_file = TruthFile(Path(tmp) / "truth.csv") if port is None else None
-        world_map = load_world(world) if port is None else None
+        world_map = _world_map(world) if port is None else None
         context = _link(port, truth_file, robot_name or "omni4", world, seed, surface)
         started = time.monotonic()
         clock = ControllerClock()
@@ -144,15 +152,21 @@ def run_demo(
         wall = time.monotonic() - started
         if recording is not None and truth_file is not None:  # whole: the emulator has ended
             recording.truth_rows(clock.place(truth_file.rows()))
-        written = _write_outputs(out, truth, demo.recorder.odo_trail, world_map)
-    return _report(hello, port, segments, written, wall)
+        left_out = unavailable()  # the plot's matplotlib (the [plots] extra): the run kept without it
+        written = _write_outputs(out, truth, demo.recorder.odo_trail, world_map, draw=left_out is None)
+    return _report(hello, port, segments, written, wall, left_out)
 
 
 def _report(
-    hello: Hello, port: str | None, segments: list[Segment], written: list[str], wall: float
+    hello: Hello,
+    port: str | None,
+    segments: list[Segment],
+    written: list[str],
+    wall: float,
+    left_out: str | None = None,
 ) -> tuple[str, bool]:
-    """The printed report (the controller, the link, the table, the files, the wall time and what was
-    not done) and whether every example did what it should."""
+    """The printed report (the controller, the link, the table, the files, the wall time, why the plot
+    was left out and what was not done) and whether every example did what it should."""
     link = (
         "client -> text protocol -> pty (115200 baud) -> firmware -> simulator"
         if port is None
@@ -161,18 +175,21 @@ def _report(
     header = f"omnibot demo: {hello.name} ({hello.motors} motors, protocol {hello.version}) via {link}"
     failed = [seg.name for seg in segments if seg.failed]
     verdict = f"\nNOT DONE: {'; '.join(failed)}" if failed else ""
-    files = "  ".join(written)
-    return f"{header}\n\n{format_table(segments)}\n\nwrote: {files}  ({wall:.1f} s){verdict}", not failed
+    files = "  ".join(written) or "no file"
+    plot = f"\nthe trajectory plot left out: {left_out}" if left_out else ""
+    table = format_table(segments)
+    return f"{header}\n\n{table}\n\nwrote: {files}  ({wall:.1f} s){plot}{verdict}", not failed
 
 
 def _write_outputs(
-    out: Path, truth: TruthSource | None, odo_trail: list[tuple[float, float]], world_map: Any
+    out: Path, truth: TruthSource | None, odo_trail: list[tuple[float, float]], world_map: Any, draw: bool
 ) -> list[str]:
-    """The trajectory plot and, with a truth, its CSV in ``out``; the files written."""
+    """The trajectory plot (with ``draw``) and, with a truth, its CSV in ``out``; the files written."""
     png = out / "demo_trajectory.png"
-    written = [str(png)]
+    written = [str(png)] if draw else []
     try:
-        plot(truth, odo_trail, world_map, png)
+        if draw:
+            plot(truth, odo_trail, world_map, png)
         if truth is not None:
             with (out / "demo_truth.csv").open("w") as f:
                 f.write("t,x,y,theta\n")

@@ -2,7 +2,11 @@
 
 The firmware reads only plain literals (MicroPython has no pydantic or numpy), so everything derived
 from the description is computed here: the rim-speed matrix (inverse kinematics times wheel radius),
-the idle axes for folding the course, calibration tables as lists, limits in protocol units.
+the idle axes for folding the course, calibration tables as lists, limits in protocol units. The
+keys' groups have their modules: ``config_calibration.py`` (``k`` ... ``reach``), ``config_loops.py``
+(``travel``, ``turn``, ``slip`` ... ``control_period_ms``: the encoders, the landing, the speed
+loop) and ``config_pins.py`` (``pins``); ``config_staging.py`` writes ``robot_config.py`` and lays
+out the board's files.
 
 ::
 
@@ -88,211 +92,37 @@ from __future__ import annotations
 
 import argparse
 import math
-import shutil
 import sys
-from pathlib import Path
 from typing import Any
 
-from omnibot.errors import ConfigError, OmnibotError
-from omnibot.estimation import SlipParameters, creep_rows
-from omnibot.firmware import mpu6050
-from omnibot.robot import (
-    PiecewiseLinear,
-    RobotDescription,
-    SonarSpec,
-    course_axes,
-    courses,
-    load_robot,
-    rows,
+from omnibot.errors import OmnibotError
+from omnibot.estimation import SlipParameters
+from omnibot.firmware.config_calibration import calibration_keys
+from omnibot.firmware.config_loops import landing_keys, speed_loop_keys, travel
+from omnibot.firmware.config_pins import default_pins
+from omnibot.firmware.config_staging import (
+    board_files,
+    config_module_source,
+    stage_board,
+    write_config_module,
 )
+from omnibot.robot import RobotDescription, SonarSpec, course_axes, courses, load_robot, rows
 
-PACKAGE_DIR = Path(__file__).resolve().parent
-SRC_DIR = PACKAGE_DIR.parent.parent
-BOARD_MODULES = (
-    "battery",
-    "binlink",
-    "calibration",
-    "controller",
-    "hal",
-    "landing",
-    "limits",
-    "motion",
-    "mpu6050",
-    "parser",
-    "power",
-    "progress",
-    "queue",
-    "safety",
-    "sonar",
-    "speedctl",
-    "telemetry",
-    "watchdog",
-)
-PROTOCOL_MODULES = ("codes", "crc", "frame", "arq", "linecheck")
-
-
-def gyro_pins(robot: RobotDescription) -> list[int] | None:
-    """The pin map's ``gyro`` entry (hal.py) from the description's MPU6050 wiring: ``[i2c_id, scl,
-    sda, address, freq, fs_sel, dlpf_cfg]``; None without a gyro or for another model (no driver)."""
-    g = robot.gyro
-    if g is None or g.model.upper() != "MPU6050":
-        return None
-    range_dps = math.degrees(g.range)
-    try:
-        fs_sel = mpu6050.fs_sel_for(range_dps)
-    except ValueError:
-        raise ConfigError(
-            f"{g.range} rad/s ({range_dps:.0f} deg/s) is beyond an MPU6050's 2000 deg/s",
-            key="gyro.range",
-        ) from None
-    lsb = mpu6050.LSB_PER_DPS_X10[fs_sel] / 10.0  # counts per deg/s
-    if g.resolution > 0 and abs(math.radians(1.0 / lsb) / g.resolution - 1.0) > 0.02:
-        raise ConfigError(
-            f"{g.resolution} rad/s per LSB does not match the MPU6050's "
-            f"+-{mpu6050.FULL_SCALE_DPS[fs_sel]} deg/s range that gyro.range picks "
-            f"({math.radians(1.0 / lsb):.4g} rad/s per LSB, {lsb:g} LSB per deg/s)",
-            key="gyro.resolution",
-        )
-    return [
-        g.i2c_bus,
-        g.scl_pin,
-        g.sda_pin,
-        g.i2c_address,
-        g.i2c_freq,
-        fs_sel,
-        mpu6050.dlpf_cfg_for(g.bandwidth_hz),
-    ]
-
-
-def default_pins(robot: RobotDescription) -> dict[str, Any]:
-    """An example pin map for a Raspberry Pi Pico (RP2040); edit it for your wiring. The gyro's I2C
-    pins come from the description; where they take the UART's (GP0, GP1: the defaults do), the
-    protocol runs on USB (``"uart": None``). A pin used twice is a ConfigError naming the gyro's key."""
-    n = robot.n_wheels
-    gyro = gyro_pins(robot)
-    uart: list[int] | None = [0, 0, 1]
-    if gyro is not None and {gyro[1], gyro[2]} & {0, 1}:
-        uart = None
-    pins: dict[str, Any] = {
-        "uart": uart,
-        "pwm_freq": 1000,
-        "motors": [[2 + 3 * i, 3 + 3 * i, 4 + 3 * i] for i in range(n)],
-        "encoders": [[14 + 2 * i, 15 + 2 * i] for i in range(n)] if robot.encoders.motors else [],
-        "tracking": [],
-        "sonars": [[22, 26]][: len(robot.sonars)],
-        "battery": [28, round(3300.0 * 3 / 65535, 6)],
-        "gyro": gyro,
-    }
-    if gyro is not None:
-        used = _pins_used(pins, but="gyro")
-        for key, pin in (("gyro.scl_pin", gyro[1]), ("gyro.sda_pin", gyro[2])):
-            if pin in used:
-                raise ConfigError(
-                    f"pin {pin} is the board's {used[pin]} pin already (free pins: "
-                    f"{', '.join(str(p) for p in range(29) if p not in used and p not in (23, 24, 25))})",
-                    key=key,
-                )
-        if gyro[1] == gyro[2]:
-            raise ConfigError(f"SCL and SDA are both pin {gyro[1]}", key="gyro.scl_pin")
-    return pins
-
-
-def _pins_used(pins: dict[str, Any], but: str) -> dict[int, str]:
-    """Every pin of the map (its key) except those of ``but``."""
-    used: dict[int, str] = {}
-    uart = pins["uart"]
-    if uart:
-        used.update({uart[1]: "uart", uart[2]: "uart"})
-    for key in ("motors", "encoders", "tracking", "sonars"):
-        if key != but:
-            used.update({p: key for group in pins[key] for p in group if p >= 0})
-    if pins["battery"] and but != "battery":
-        used[pins["battery"][0]] = "battery"
-    return used
-
-
-def _table(t: PiecewiseLinear | None) -> list[list[float]]:
-    if t is None:
-        return [[0.0], [1.0]]
-    return [[float(x) for x in t.x], [float(y) for y in t.y]]
+__all__ = [
+    "board_files",
+    "build_config",
+    "config_module_source",
+    "default_pins",
+    "main",
+    "stage_board",
+    "write_config_module",
+]
+"""The host's face of the firmware: the config dict (here), its pin map (config_pins.py) and the
+board's files (config_staging.py), as the commands, the simulator and the tests take them."""
 
 
 def _idle_axes(robot: RobotDescription) -> list[float]:
     return courses.idle_axes([w.traction_angle for w in robot.wheels])
-
-
-PROGRESS_TOLERANCE = 0.10
-"""A MOVE short by more than this share on its encoders gets WARN 17 (progress.py): above a wheel
-radius a few % off the description's and the encoders' counting, below the 13-16 % a MOVE loses when
-a current-limited pair of unequal motors turns the robot (docs/calibration.md, beyond the reach)."""
-
-
-def _travel(robot: RobotDescription, cpr: list[int], rows: tuple[int, ...] = (0, 1)) -> list[list[float]]:
-    """Body travel (m) along x and y (``rows`` 0, 1; row 2: rotation, rad) per encoder count of each
-    wheel: the pseudo-inverse of the inverse kinematics, 0 for a wheel without an encoder (then the
-    firmware has no progress check and no landing)."""
-    forward = robot.forward_rows
-    return [
-        [
-            _inverse_literal(forward[row][i] * 2.0 * math.pi / c, 12) if c > 0 else 0.0
-            for i, c in enumerate(cpr)
-        ]
-        for row in rows
-    ]
-
-
-def _inverse_literal(value: float, digits: int) -> float:
-    """A number computed through a least-squares inverse, rounded to ``digits`` and a zero's sign
-    dropped: an exact zero of the inverse comes out as a few rounding errors of either sign (the
-    SVD's), which the rounding leaves as +-0.0; the literal keeps the number, not that noise."""
-    return round(value, digits) + 0.0
-
-
-LAND_ACCEL = 0.5
-"""Share of the description's acceleration limits a closed-loop MOVE (ROTATE) plans its ramp down
-with (``land_accel``, up and down): the loop, lagging the ramp, has the rest to catch up with it."""
-
-
-SPEED_BAND_POWER = 0.05
-"""``speed_band`` is the wheel-speed error the loop's P term answers with this share of full power:
-after a step the integral grows at half its rate there (larger errors are the rise's lag)."""
-
-
-STEADY_KI = 2.0
-"""``speed_ki_steady`` in ``speed_ki``: the integral learns the floor's steady error twice as fast once
-a wheel's target holds still (issue 24: settling within 0.3 s; twice the gains everywhere made the
-wheels follow the swings of a host's commands)."""
-
-
-def _default_k(robot: RobotDescription) -> float:
-    """PWM counts per m/s of rim speed from the motor model, when the description gives no K."""
-    w = robot.wheels[0]
-    m = w.motor
-    volts = max(robot.battery.voltage - m.driver_drop, 0.1)
-    v_free = volts / (m.torque_constant * m.gear_ratio) * w.radius
-    return m.pwm_max / v_free
-
-
-def _accel_ff(robot: RobotDescription) -> tuple[list[list[float]], list[float]]:
-    """The power each wheel needs to accelerate the robot, as the motor current that makes the
-    torque and the voltage that drives it through the winding (no back-EMF: the speed's share is
-    the feedforward's): ``body_ff``, each wheel's PWM counts per m/s^2 of the body's acceleration
-    along x and y and per rad/s^2 of its angular acceleration (the least-norm traction forces that
-    give the body its mass times the acceleration and its yaw inertia times the angular one, as
-    :func:`~omnibot.control.reach.floor_grip` shares them), and ``wheel_ff``, each wheel's PWM counts
-    per rad/s^2 of its own angular acceleration (the wheel's and the rotor's inertia)."""
-    wheels = robot.wheels
-    scale = (robot.mass, robot.mass, robot.yaw_inertia)
-    share = [[v * k for v, k in zip(row, scale, strict=True)] for row in creep_rows(robot).share]
-    body, own = [], []
-    for i, w in enumerate(wheels):
-        m = w.motor
-        volts = max(robot.battery.voltage - m.driver_drop, 1e-9)
-        counts = m.resistance / (m.torque_constant * m.gear_ratio * m.gear_efficiency) / volts * m.pwm_max
-        rim = w.radius * math.cos(w.gamma)
-        body.append([_inverse_literal(rim * v * counts, 6) for v in share[i]])  # rim * v: N m per unit accel
-        own.append(round((w.inertia + m.rotor_inertia * m.gear_ratio**2) * counts, 6))
-    return body, own
 
 
 def _sonar_axis(robot: RobotDescription, sonar: SonarSpec) -> list[float]:
@@ -327,10 +157,10 @@ def build_config(
     encoder_cpr = [int(cpr.get(w.name, 0)) for w in robot.wheels]
     return {
         **_geometry_keys(robot, power_min),
-        **_calibration_keys(robot),
+        **calibration_keys(robot),
         **_limit_keys(robot, encoder_cpr),
-        **_landing_keys(robot, encoder_cpr, slip or SlipParameters()),
-        **_speed_loop_keys(robot, control_period_ms),
+        **landing_keys(robot, encoder_cpr, slip or SlipParameters()),
+        **speed_loop_keys(robot, control_period_ms),
         **_sensor_keys(robot),
         **_battery_keys(robot),
         "pins": pins if pins is not None else default_pins(robot),
@@ -355,53 +185,6 @@ def _geometry_keys(robot: RobotDescription, power_min: int | None) -> dict[str, 
     }
 
 
-def _calibration_keys(robot: RobotDescription) -> dict[str, Any]:
-    """k ... reach: the description's calibration as tables (neutral ones without it)."""
-    cal = robot.calibration
-    n = robot.n_wheels
-    if cal and cal.k_l:
-        courses = [float(c) for c in cal.k_l.courses_deg]
-        kl_tables = [_table(c) for c in cal.k_l.curves]
-    else:
-        courses, kl_tables = [0.0], [_table(None)]
-    motors = cal.motors if cal else None
-    if motors is not None and len(motors.offset) != n:
-        raise ConfigError(f"{len(motors.offset)} motors for a robot with {n}", key="calibration.motors")
-    rollers = cal.rollers if cal else None
-    if rollers is not None and len(rollers.cos) != n:
-        raise ConfigError(
-            f"roller drag for {len(rollers.cos)} wheels on a robot with {n}",
-            key="calibration.rollers",
-        )
-    return {
-        "k": _calibration_k(robot),
-        "kl_courses": courses,
-        "kl_tables": kl_tables,
-        "kt": _table(cal.k_t if cal else None),
-        "kr": _table(cal.k_r if cal else None),
-        "motor_offset": [float(o) for o in motors.offset] if motors else [0.0] * n,
-        "motor_gain": [_table(g) for g in motors.gain] if motors else [_table(None)] * n,
-        "motor_speed": list(motors.speed) if motors and motors.speed else [0.0] * n,
-        "roller_cos": list(rollers.cos) if rollers else [0.0] * n,
-        "roller_sin": list(rollers.sin) if rollers else [0.0] * n,
-        "roller_coast": (
-            [[round(100.0 * x, 6) for x in rollers.coast.x], list(rollers.coast.y)]
-            if rollers and rollers.coast
-            else [[0.0], [0.0]]
-        ),
-        "reach": (
-            [list(cal.reach.courses_deg), [round(100.0 * v, 6) for v in cal.reach.speed]]
-            if cal and cal.reach
-            else [[0.0], [0.0]]
-        ),
-    }
-
-
-def _calibration_k(robot: RobotDescription) -> float:
-    """Calibration K: the description's, else the motors' nominal one."""
-    return float(robot.calibration.k) if robot.calibration else _default_k(robot)
-
-
 def _limit_keys(robot: RobotDescription, encoder_cpr: list[int]) -> dict[str, Any]:
     """roller_dir ... turn: the rollers, the protocol's bounds, the controller and the encoders."""
     _, roller_rows = rows.robot_contact_rows(robot)
@@ -423,46 +206,8 @@ def _limit_keys(robot: RobotDescription, encoder_cpr: list[int]) -> dict[str, An
         "loop_hz": ctl.loop_hz,
         "mode": 2 if ctl.wheel_speed_control and all(encoder_cpr) else 0,
         "encoder_cpr": encoder_cpr,
-        "travel": _travel(robot, encoder_cpr),
-        "turn": _travel(robot, encoder_cpr, (2,))[0],
-    }
-
-
-def _landing_keys(robot: RobotDescription, encoder_cpr: list[int], slip: SlipParameters) -> dict[str, Any]:
-    """slip ... progress_tolerance: the floor's creep and how a closed-loop motion lands."""
-    creep = creep_rows(robot)
-    lim = robot.limits
-    return {
-        "slip": [round(slip.roll, 6), round(slip.combined, 6), round(slip.scale, 5)],
-        "creep_roll": [[round(float(v), 9) for v in row] for row in creep.roll],
-        "creep_rim": [[round(float(v), 9) for v in row] for row in creep.rim],
-        "creep_mix": [[_inverse_literal(v, 9) for v in row] for row in creep.mix],
-        "land_accel": [
-            round(LAND_ACCEL * lim.acceleration_max, 6),
-            round(LAND_ACCEL * lim.angular_acceleration_max, 6),
-        ],
-        "progress_tolerance": PROGRESS_TOLERANCE if all(encoder_cpr) else 0.0,
-    }
-
-
-def _speed_loop_keys(robot: RobotDescription, control_period_ms: int) -> dict[str, Any]:
-    """speed_kp ... control_period_ms: the wheel-speed loop's gains and feedforward (default gains
-    from calibration K when the description gives none)."""
-    kp, ki = robot.controller.speed_kp, robot.controller.speed_ki
-    if kp == 0.0 and ki == 0.0:
-        radius = [float(w.radius) for w in robot.wheels]
-        kr = _calibration_k(robot) * sum(radius) / len(radius)  # feedforward PWM counts per rad/s
-        kp, ki = 0.5 * kr, 10.0 * kr
-    pwm_max = max(w.motor.pwm_max for w in robot.wheels)
-    body_ff, wheel_ff = _accel_ff(robot)
-    return {
-        "speed_kp": round(kp, 6),
-        "speed_ki": round(ki, 6),
-        "speed_band": round(SPEED_BAND_POWER * pwm_max / kp, 6) if kp > 0 else 0.0,
-        "speed_ki_steady": round(STEADY_KI * ki, 6),
-        "body_ff": body_ff,
-        "wheel_ff": wheel_ff,
-        "control_period_ms": control_period_ms,
+        "travel": travel(robot, encoder_cpr),
+        "turn": travel(robot, encoder_cpr, (2,))[0],
     }
 
 
@@ -492,74 +237,6 @@ def _battery_keys(robot: RobotDescription) -> dict[str, Any]:
         "battery_delay_ms": round(1000.0 * battery.delay),
         "battery_limit_pct": round(100.0 * battery.limit_power),
     }
-
-
-def _non_finite(value: Any, where: str) -> str | None:
-    """Where in ``value`` (nested lists and dicts) a float is not finite, or None."""
-    if isinstance(value, float) and not math.isfinite(value):
-        return f"{where} = {value!r}"
-    if isinstance(value, list | tuple):
-        items: Any = enumerate(value)
-    elif isinstance(value, dict):
-        items = value.items()
-    else:
-        return None
-    for key, item in items:
-        found = _non_finite(item, f"{where}[{key!r}]")
-        if found:
-            return found
-    return None
-
-
-def config_module_source(config: dict[str, Any]) -> str:
-    """The text of ``robot_config.py``: ``CONFIG = {...}`` with plain literals, one key a line.
-    A number that is not finite is refused (ConfigError naming it): ``inf`` and ``nan`` are not
-    literals, and the board would stop at a NameError."""
-    for key, value in config.items():
-        found = _non_finite(value, str(key))
-        if found:
-            raise ConfigError(f"the firmware config cannot hold {found}: every number must be finite")
-    lines = [f'"""Firmware config of robot {config["name"]!r}, written by omnibot.firmware.config."""', ""]
-    lines.append("CONFIG = {")
-    for key, value in config.items():
-        lines.append(f"    {key!r}: {value!r},")
-    lines.append("}")
-    return "\n".join(lines) + "\n"
-
-
-def write_config_module(config: dict[str, Any], path: str | Path) -> Path:
-    """Write ``robot_config.py``; returns its path."""
-    path = Path(path)
-    path.write_text(config_module_source(config), encoding="utf-8")
-    return path
-
-
-def board_files() -> list[tuple[Path, str]]:
-    """(source file, path on the board) of every module the board needs, main.py at the root."""
-    files = [
-        (SRC_DIR / "omnibot" / "__init__.py", "omnibot/__init__.py"),
-        (SRC_DIR / "omnibot" / "protocol" / "__init__.py", "omnibot/protocol/__init__.py"),
-        (PACKAGE_DIR / "__init__.py", "omnibot/firmware/__init__.py"),
-    ]
-    files += [
-        (SRC_DIR / "omnibot" / "protocol" / f"{m}.py", f"omnibot/protocol/{m}.py") for m in PROTOCOL_MODULES
-    ]
-    files += [(PACKAGE_DIR / f"{m}.py", f"omnibot/firmware/{m}.py") for m in BOARD_MODULES]
-    files.append((PACKAGE_DIR / "main.py", "main.py"))
-    return files
-
-
-def stage_board(dest: str | Path, config: dict[str, Any]) -> list[Path]:
-    """Copy the board's files and ``robot_config.py`` under ``dest``, laid out as on the board."""
-    dest = Path(dest)
-    out = []
-    for src, rel in board_files():
-        target = dest / rel
-        target.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(src, target)
-        out.append(target)
-    out.append(write_config_module(config, dest / "robot_config.py"))
-    return out
 
 
 def main(argv: list[str] | None = None) -> int:

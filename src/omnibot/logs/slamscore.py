@@ -14,7 +14,7 @@ composed with each ``odom -> base_link`` from the first ``map -> odom`` on. The 
 node is its own (slam_toolbox's: the odometry frame where it started), the truth's is the world's: the
 map frame is placed in the world at ``map_pose``, by default where the truth puts the odometry frame
 at the first odometry sample (``truth o odometry^-1``: the odometry has not drifted yet). Then the
-same report as ``omnibot map``'s (:func:`omnibot.mapping.session.write_report`): the trajectories in
+same report as ``omnibot map``'s (:func:`omnibot.mapping.report.write_report`): the trajectories in
 TUM, APE/RPE of the estimate and of the odometry against the truth, the map's precision and recall
 against the world's geometry.
 """

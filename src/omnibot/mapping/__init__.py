@@ -20,8 +20,31 @@ Modules (each owns one thing; the plain scan type is :mod:`omnibot.scan`):
   to one instant of the base's motion.
 * :mod:`omnibot.mapping.matcher` - :class:`~omnibot.mapping.matcher.ScanMatcher`, 2D scan
   registration (correlative search then point-to-line ICP) with a covariance that shows degeneracy.
+  Its parts: :mod:`~omnibot.mapping.target` (a target's points, normals and likelihood grid),
+  :mod:`~omnibot.mapping.correlative` (the correlative search, compiled),
+  :mod:`~omnibot.mapping.icp` (point-to-line ICP, ``MatchResult``) and
+  :mod:`~omnibot.mapping.degeneracy` (the constrained directions, the covariance).
 * :mod:`omnibot.mapping.slam` - :class:`~omnibot.mapping.slam.Slam`, online 2D SLAM: keyframes
   matched to a local submap, a gtsam pose graph with verified, robust loop closures.
+  Its parts: :mod:`~omnibot.mapping.keyframes` (the keyframes, their submaps),
+  :mod:`~omnibot.mapping.anchor` (a degenerate match completed on the anchor submap),
+  :mod:`~omnibot.mapping.loops` (loop closures) and :mod:`~omnibot.mapping.posegraph` (the gtsam
+  pose graph and its optimiser).
+* :mod:`omnibot.mapping.session` - the runtime's sinks: :class:`~omnibot.mapping.session.MappingSink`
+  (scans and odometry into the SLAM) and :class:`~omnibot.mapping.session.LocalisingSink` (into
+  a localiser). Its parts: :mod:`~omnibot.mapping.feed` (``ScanFeed``: scans meet the odometry of
+  their time; ``Track``), :mod:`~omnibot.mapping.snapshot` (``MapSnapshot``, ``RangeNoise``: the
+  run's map) and :mod:`~omnibot.mapping.report` (``write_outputs``, ``write_report``,
+  ``score_lines``: the run's files and scores).
+* :mod:`omnibot.mapping.planner` - ``plan_path``: a collision-free path for a disc robot on a
+  grid, on the parts below.
+* :mod:`omnibot.mapping.costmap` - :class:`~omnibot.mapping.costmap.CostMap` and ``inflate``: the
+  walls inflated by the robot's radius and margin, a cost beyond.
+* :mod:`omnibot.mapping.distance` - the exact Euclidean distance transform (compiled).
+* :mod:`omnibot.mapping.cellwalk` - the cells a straight run crosses, walked exactly (compiled).
+* :mod:`omnibot.mapping.astar` - the grid planner: A* on the cells (compiled), any-angle shortcuts.
+* :mod:`omnibot.mapping.sampling` - OMPL's sampling planners (RRT*, PRM*, BIT*) on a cost map.
+* :mod:`omnibot.mapping.ends` - a path's ends: ``check_start``, ``check_goal`` and their errors.
 
 The user's guide is docs/mapping.md. Other packages take the names below from this face::
 
@@ -36,62 +59,30 @@ from typing import TYPE_CHECKING
 from omnibot.faces import lazy_names
 
 if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
+    from omnibot.mapping.costmap import MARGIN, CostMap, inflate
+    from omnibot.mapping.ends import check_goal, check_start
+    from omnibot.mapping.feed import Track, interpolate
     from omnibot.mapping.grid import OCCUPIED, OccupancyGrid
     from omnibot.mapping.localise import Localiser
     from omnibot.mapping.mapfile import load_map, save_map
-    from omnibot.mapping.planner import (
-        MARGIN,
-        CostMap,
-        PlannedPath,
-        Planner,
-        check_goal,
-        check_start,
-        inflate,
-        plan_path,
-    )
+    from omnibot.mapping.planner import PlannedPath, Planner, plan_path
+    from omnibot.mapping.report import MappingResult, path_length, score_lines, write_outputs, write_report
     from omnibot.mapping.se2 import compose, inverse
-    from omnibot.mapping.session import (
-        LocalisingSink,
-        MappingResult,
-        MappingSink,
-        MapSnapshot,
-        RangeNoise,
-        Track,
-        interpolate,
-        path_length,
-        score_lines,
-        write_outputs,
-        write_report,
-    )
+    from omnibot.mapping.session import LocalisingSink, MappingSink
+    from omnibot.mapping.snapshot import MapSnapshot, RangeNoise
 
 _EXPORTS = {
+    "costmap": ("MARGIN", "CostMap", "inflate"),
+    "ends": ("check_goal", "check_start"),
     "grid": ("OCCUPIED", "OccupancyGrid"),
     "localise": ("Localiser",),
     "mapfile": ("load_map", "save_map"),
-    "planner": (
-        "MARGIN",
-        "CostMap",
-        "PlannedPath",
-        "Planner",
-        "check_goal",
-        "check_start",
-        "inflate",
-        "plan_path",
-    ),
+    "planner": ("PlannedPath", "Planner", "plan_path"),
     "se2": ("compose", "inverse"),
-    "session": (
-        "LocalisingSink",
-        "MappingResult",
-        "MappingSink",
-        "MapSnapshot",
-        "RangeNoise",
-        "Track",
-        "interpolate",
-        "path_length",
-        "score_lines",
-        "write_outputs",
-        "write_report",
-    ),
+    "feed": ("Track", "interpolate"),
+    "report": ("MappingResult", "path_length", "score_lines", "write_outputs", "write_report"),
+    "session": ("LocalisingSink", "MappingSink"),
+    "snapshot": ("MapSnapshot", "RangeNoise"),
 }
 
 __all__ = [
@@ -111,6 +102,9 @@ __all__ = [
     "check_goal",
     "check_start",
     "compose",
+    "costmap",
+    "ends",
+    "feed",
     "grid",
     "inflate",
     "interpolate",
@@ -121,10 +115,12 @@ __all__ = [
     "path_length",
     "plan_path",
     "planner",
+    "report",
     "save_map",
     "score_lines",
     "se2",
     "session",
+    "snapshot",
     "write_outputs",
     "write_report",
 ]

@@ -11,37 +11,16 @@ keyframe: it is matched (:class:`~omnibot.mapping.matcher.ScanMatcher`, correlat
 ICP) against a local submap (the last ``submap_keyframes`` keyframes' points at their current
 estimates), starting from the prediction.
 
-Degeneracy: where that match leaves a direction unconstrained (a corridor's axis, whose far end
-wall the submap holds only as a blur of its own distant, noisy views), the keyframe is matched
-again (``anchor_reach=None`` turns this off), each return weighed by its own range
-noise (``weighted``, :class:`ScanMatcher`), against an *anchor* submap: the returns every keyframe
-within ``anchor_reach`` of the prediction (12 m by default: an A1's reach) saw within
-``anchor_range`` (sharp: 2 cm at 2 m for an A1). So the end wall seen up close fixes the axis, as well as its returns from 10 m can (a few
-centimetres). If that match converged, fits as well as ``min_fitness`` asks and constrains
-directions the first left free, it adds a factor from the anchor submap's oldest keyframe (what was
-seen first) whose covariance keeps only those directions: the others stay the first match's, from
-the previous keyframe, since an old keyframe's heading would swing them by the lever of the metres
-between. What stays unconstrained is the odometry's alone: the match keeps the prediction there and
-its covariance leaves it free (Zhang et al.'s solution remapping, the information matrix as the
-factor's weight). A direction no return constrains at all (mid-corridor, no end wall in range)
-cannot be recovered by any scan matching: there the SLAM is the odometry. The anchor match takes
-the axis from the returns aligned with it alone (the end wall's; :class:`ScanMatcher`'s weighted
-match): with the side walls' pull in it, it had biased omni3's corridor by centimetres
-(docs/mapping.md).
-
-Back end: a pose graph of the keyframes (gtsam ``Pose2`` nodes). Between consecutive keyframes, an
-odometry factor (noise growing with the distance and angle driven, ``odometry_noise``) and the
-match factor (the match's own covariance, so a direction the scans leave unconstrained, such as a
-corridor's axis, is carried by odometry alone). Loop closures: a keyframe at least
-``loop_min_separation`` keyframes back and within ``loop_search_radius`` of the new one is matched
-with a wide search (``loop_search_window``); the match is kept only if it converged with a fitness
-of at least ``loop_min_fitness``, and enters the graph through a Cauchy robust kernel with its
-covariance floored at ``loop_sigma_floor`` (so one false closure that passed the checks is
-down-weighted, not obeyed). ``optimizer="isam2"`` updates the graph incrementally on every keyframe
-(with extra iterations after a closure); ``"lm"`` runs a batch Levenberg-Marquardt after each
-closure and otherwise takes the matched pose as it is. ``scan_to_submap=False`` leaves the front
-end out (odometry and loop closures only), ``deskew=False`` the motion-distortion correction: to
-measure what each part brings.
+The parts, each in its module: the keyframes and the submaps made of them
+(:mod:`~omnibot.mapping.keyframes`); where a match is degenerate (a corridor's axis), the anchor
+submap's match completing it (:mod:`~omnibot.mapping.anchor`); the back end, a pose graph of the
+keyframes (:mod:`~omnibot.mapping.posegraph`, gtsam ``Pose2`` nodes; ``optimizer`` iSAM2 or batch
+Levenberg-Marquardt): between consecutive keyframes an odometry factor (noise growing with the
+distance and angle driven, ``odometry_noise``) and the match factor (the match's own covariance, so
+a direction the scans leave unconstrained, such as a corridor's axis, is carried by odometry
+alone); loop closures, verified and robust (:mod:`~omnibot.mapping.loops`).
+``scan_to_submap=False`` leaves the front end out (odometry and loop closures only),
+``deskew=False`` the motion-distortion correction: to measure what each part brings.
 
 Poses between keyframes are their keyframe's estimate composed with the odometry since it, so
 :meth:`Slam.trajectory` follows every correction of the graph. The map frame starts at the first
@@ -52,63 +31,24 @@ randomness anywhere.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
-import gtsam
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
 from omnibot.errors import ConfigError
-from omnibot.mapping.deskew import scan_points
-from omnibot.mapping.matcher import (
-    UNCONSTRAINED_VARIANCE,
-    MatchResult,
-    ScanMatcher,
-    Target,
-    voxel_downsample,
-)
-from omnibot.mapping.se2 import between, compose, distance, inverse, rotate_covariance, transform
+from omnibot.mapping.anchor import AnchorMatching
+from omnibot.mapping.icp import MatchResult
+from omnibot.mapping.loops import LoopClosing
+from omnibot.mapping.matcher import ScanMatcher
+from omnibot.mapping.posegraph import OPTIMIZERS, PoseGraph
+from omnibot.mapping.se2 import between, compose, inverse, rotate_covariance
 from omnibot.motion import Pose2D, Twist
 from omnibot.scan import Scan
 
 FloatArray = NDArray[np.float64]
 
-OPTIMIZERS = ("isam2", "lm")
-PRIOR_SIGMA = 1e-4
 
-
-@dataclass(frozen=True)
-class Keyframe:
-    """A keyframe as the SLAM keeps it: its scan, odometry pose and base-frame points (deskewed)."""
-
-    stamp: float
-    odom: Pose2D
-    scan: Scan
-    points: FloatArray
-    anchor: FloatArray
-    """Its points measured within the SLAM's ``anchor_range`` (sharp), thinned to half a cell, base frame."""
-
-
-@dataclass(frozen=True)
-class LoopClosure:
-    """A loop closure the SLAM tried: between keyframes ``older`` and ``newer``, kept or not and why."""
-
-    older: int
-    newer: int
-    accepted: bool
-    reason: str
-    match: MatchResult | None
-
-
-def _pose2(p: Pose2D) -> gtsam.Pose2:
-    return gtsam.Pose2(p.x, p.y, p.theta)
-
-
-def _pose(p: gtsam.Pose2) -> Pose2D:
-    return Pose2D(float(p.x()), float(p.y()), float(p.theta()))
-
-
-class Slam:
+class Slam(LoopClosing, AnchorMatching):
     """Online 2D SLAM (see the module docstring): feed :meth:`update` odometry poses and scans."""
 
     def __init__(
@@ -200,8 +140,8 @@ class Slam:
 
     def _init_state(self) -> None:
         """An empty map: no keyframes, track or loop closures, an empty factor graph and iSAM2."""
-        self._frames: list[Keyframe] = []
-        self._estimates: list[Pose2D] = []
+        self._frames = []
+        self._estimates = []
         self._track: list[tuple[float, int, Pose2D]] = []  # stamp, keyframe, odometry since it
         self._last_odom: Pose2D | None = None
         self._last_stamp = -math.inf
@@ -209,21 +149,11 @@ class Slam:
         self._twist = Twist()
         self._waiting: tuple[float, Pose2D] | None = None
         self._since_loop = 0
-        self.loops: list[LoopClosure] = []
-        """Every loop closure tried, in order."""
+        self.loops = []
         self.matches: list[MatchResult] = []
         """The front end's match of every keyframe but the first."""
         self.anchored = 0
-        """Keyframes whose degenerate match the anchor submap's completed (a factor along what it left free)."""
-
-        self._graph = gtsam.NonlinearFactorGraph()  # every factor (batch optimiser)
-        self._values = gtsam.Values()
-        self._new_factors = gtsam.NonlinearFactorGraph()  # not yet given to iSAM2
-        self._new_values = gtsam.Values()
-        params = gtsam.ISAM2Params()
-        params.setRelinearizeThreshold(0.01)
-        params.relinearizeSkip = 1
-        self._isam = gtsam.ISAM2(params)
+        self._graph = PoseGraph(self.optimizer)
 
     # ------------------------------------------------------------------ queries
 
@@ -239,18 +169,9 @@ class Slam:
             return Pose2D(0.0, 0.0, 0.0)
         return compose(self._pose, inverse(self._last_odom))
 
-    @property
-    def closures(self) -> int:
-        """Number of loop closures accepted."""
-        return sum(1 for loop in self.loops if loop.accepted)
-
     def trajectory(self) -> list[tuple[float, Pose2D]]:
         """(stamp, map-frame pose) of every scan given to :meth:`update`, with the latest corrections."""
         return [(stamp, compose(self._estimates[k], delta)) for stamp, k, delta in self._track]
-
-    def keyframes(self) -> list[tuple[Pose2D, Scan]]:
-        """(corrected map-frame pose, scan) of every keyframe: what a mapper rebuilds the map from."""
-        return [(pose, frame.scan) for pose, frame in zip(self._estimates, self._frames, strict=True)]
 
     # ------------------------------------------------------------------ the front end
 
@@ -311,20 +232,11 @@ class Slam:
         self._pose = compose(self._estimates[k], delta)
         return self._pose
 
-    def _keyframe(self, odom_pose: Pose2D, scan: Scan, stamp: float) -> Keyframe:
-        points = scan_points(scan, self._twist)
-        near = np.hypot(points[:, 0] - scan.mount.x, points[:, 1] - scan.mount.y) <= self.anchor_range
-        if self.anchor_reach is None:
-            near[:] = False  # no anchor submap: nothing to keep
-        anchor = voxel_downsample(points[near], self.matcher.resolution / 2.0)  # as a target thins them
-        return Keyframe(stamp, odom_pose, scan, points, anchor)
-
     def _add_first(self, odom_pose: Pose2D, scan: Scan, stamp: float) -> None:
         self._frames.append(self._keyframe(odom_pose, scan, stamp))
         self._estimates.append(odom_pose)
-        noise = gtsam.noiseModel.Isotropic.Sigma(3, PRIOR_SIGMA)
-        self._add_factor(gtsam.PriorFactorPose2(0, _pose2(odom_pose), noise))
-        self._add_value(0, odom_pose)
+        self._graph.add_prior(0, odom_pose)
+        self._graph.add_node(0, odom_pose)
         self._optimise(closed=False)
         self._track.append((stamp, 0, Pose2D(0.0, 0.0, 0.0)))
 
@@ -344,7 +256,7 @@ class Slam:
             )
             self.matches.append(result)
         self._frames.append(frame)
-        self._add_factor(gtsam.BetweenFactorPose2(last, new, _pose2(delta), self._odometry_noise(delta)))
+        self._graph.add_odometry(last, new, delta, np.sqrt(np.diag(self._odometry_cov(delta))))
         seen: list[tuple[int, Pose2D, FloatArray]] = []  # (from keyframe, map-frame pose, covariance)
         if result is not None and result.converged and result.fitness >= self.min_fitness:
             seen.append((last, result.pose, result.covariance))
@@ -355,55 +267,12 @@ class Slam:
         for reference, pose, covariance in seen:
             relative = between(self._estimates[reference], pose)
             cov = rotate_covariance(covariance, -pose.theta)
-            self._add_factor(
-                gtsam.BetweenFactorPose2(
-                    reference, new, _pose2(relative), gtsam.noiseModel.Gaussian.Covariance(cov)
-                )
-            )
+            self._graph.add_match(reference, new, relative, cov)
         estimate = self._fuse(predicted, delta, [(pose, cov) for _, pose, cov in seen])
         self._estimates.append(estimate)
-        self._add_value(new, estimate)
+        self._graph.add_node(new, estimate)
         self._track.append((stamp, new, Pose2D(0.0, 0.0, 0.0)))
-        self._since_loop += 1
-        closed = False
-        if self._since_loop >= self.loop_every:
-            closed = self._close_loop(new)
-        self._optimise(closed)
-
-    def _anchor_match(
-        self, frame: Keyframe, predicted: Pose2D, result: MatchResult
-    ) -> tuple[int, Pose2D, FloatArray] | None:
-        """A degenerate match redone, weighted, on the anchor submap: where it constrains what ``result``
-        left free, the keyframe its factor is from (the anchor submap's oldest, which holds what was
-        seen first), its pose and a covariance that keeps only those directions (the others are
-        ``result``'s, from the previous keyframe: an old keyframe's heading would swing them by the
-        lever of the metres between)."""
-        reach = self.anchor_reach if self.anchor_reach is not None else math.inf
-        near = [k for k in range(len(self._estimates)) if distance(self._estimates[k], predicted) <= reach]
-        pts = [transform(self._estimates[k], self._frames[k].anchor) for k in near]
-        if not pts:
-            return None
-        target = self.matcher.target(np.vstack(pts), margin=self.search_xy + 1.0)
-        again = self.matcher.match(
-            frame.points,
-            target,
-            predicted,
-            search_xy=self.search_xy,
-            search_theta=self.search_theta,
-            weighted=True,
-            range_max=frame.scan.range_max,
-        )
-        if not (
-            again.converged
-            and again.fitness >= self.min_fitness
-            and again.unconstrained < result.unconstrained
-        ):
-            return None
-        free, _ = np.linalg.qr(result.free)
-        cov = free @ (free.T @ again.covariance @ free) @ free.T
-        cov += UNCONSTRAINED_VARIANCE * (np.eye(3) - free @ free.T)
-        self.anchored += 1
-        return near[0], again.pose, 0.5 * (cov + cov.T)
+        self._optimise(self._loop_after(new))
 
     def _fuse(self, predicted: Pose2D, delta: Pose2D, seen: list[tuple[Pose2D, FloatArray]]) -> Pose2D:
         """The matches where they constrain, the prediction where they do not (the new node's first guess)."""
@@ -427,108 +296,3 @@ class Slam:
         sxy = self.odometry_noise[0] * d + 0.005
         sth = self.odometry_noise[1] * d + 0.05 * abs(delta.theta) + 0.002
         return np.diag([sxy * sxy, sxy * sxy, sth * sth])
-
-    def _odometry_noise(self, delta: Pose2D) -> gtsam.noiseModel.Base:
-        return gtsam.noiseModel.Diagonal.Sigmas(np.sqrt(np.diag(self._odometry_cov(delta))))
-
-    def _submap(self, last: int, before: int | None = None, after: int = 0) -> Target:
-        """The points of keyframes ``last - before .. last + after`` at their estimates, as a match target."""
-        count = self.submap_keyframes if before is None else before
-        first = max(0, last - count + 1)
-        end = min(len(self._frames), last + after + 1)
-        pts = np.vstack([transform(self._estimates[k], self._frames[k].points) for k in range(first, end)])
-        return self.matcher.target(pts, margin=max(self.search_xy, self.loop_search_window[0]) + 1.0)
-
-    # ------------------------------------------------------------------ loop closures
-
-    def _close_loop(self, new: int) -> bool:
-        """Try the nearest old keyframe as a loop closure of ``new``; True if one was added."""
-        here = self._estimates[new]
-        old = range(new - self.loop_min_separation + 1)
-        near = [(distance(self._estimates[k], here), k) for k in old]
-        near = [(d, k) for d, k in near if d <= self.loop_search_radius]
-        if not near:
-            return False
-        self._since_loop = 0
-        _, older = min(near)
-        return self._verify_and_add(older, new, self._loop_match(older, new, here))
-
-    def _loop_match(self, older: int, newer: int, start: Pose2D) -> MatchResult:
-        """Keyframe ``newer`` matched from ``start`` on the submap around ``older``, with the wide window."""
-        half = max(1, self.submap_keyframes // 2)
-        return self.matcher.match(
-            self._frames[newer].points,
-            self._submap(older, before=half + 1, after=half),
-            start,
-            search_xy=self.loop_search_window[0],
-            search_theta=self.loop_search_window[1],
-        )
-
-    def try_loop_closure(self, older: int, newer: int, guess: Pose2D | None = None) -> LoopClosure:
-        """Match keyframe ``newer`` against the submap around ``older`` from ``guess`` (default: its estimate).
-
-        The closure is verified as an automatic one is and, if accepted, added and optimised.
-        """
-        for key, k in (("older", older), ("newer", newer)):
-            if not 0 <= k < len(self._frames):
-                raise ConfigError(f"no keyframe {k} (there are {len(self._frames)})", key)
-        start = self._estimates[newer] if guess is None else guess
-        accepted = self._verify_and_add(older, newer, self._loop_match(older, newer, start))
-        if accepted:
-            self._optimise(closed=True)
-        return self.loops[-1]
-
-    def _verify_and_add(self, older: int, newer: int, result: MatchResult) -> bool:
-        if not result.converged:
-            self.loops.append(LoopClosure(older, newer, False, "match did not converge", result))
-            return False
-        if result.fitness < self.loop_min_fitness:
-            reason = f"fitness {result.fitness:.2f} below {self.loop_min_fitness:.2f}"
-            self.loops.append(LoopClosure(older, newer, False, reason, result))
-            return False
-        relative = between(self._estimates[older], result.pose)
-        cov = rotate_covariance(result.covariance, -result.pose.theta)
-        self.add_loop_closure(older, newer, relative, cov)
-        self.loops.append(LoopClosure(older, newer, True, "accepted", result))
-        return True
-
-    def add_loop_closure(self, older: int, newer: int, relative: Pose2D, covariance: ArrayLike) -> None:
-        """Add a closure factor: keyframe ``newer``'s pose seen from ``older`` (robust, floored covariance).
-
-        For a place recogniser of one's own; the graph is optimised with the next keyframe.
-        """
-        cov = np.array(covariance, dtype=np.float64)
-        if cov.shape != (3, 3) or not np.isfinite(cov).all():
-            raise ConfigError(f"must be a finite 3x3 matrix, not shape {cov.shape}", "covariance")
-        floor = np.array([self.loop_sigma_floor[0] ** 2] * 2 + [self.loop_sigma_floor[1] ** 2])
-        cov = cov + np.diag(floor)
-        kernel = gtsam.noiseModel.mEstimator.Cauchy.Create(self.loop_kernel_width)
-        noise = gtsam.noiseModel.Robust.Create(kernel, gtsam.noiseModel.Gaussian.Covariance(cov))
-        self._add_factor(gtsam.BetweenFactorPose2(older, newer, _pose2(relative), noise))
-
-    # ------------------------------------------------------------------ the back end
-
-    def _add_factor(self, factor: gtsam.NonlinearFactor) -> None:
-        self._graph.add(factor)
-        self._new_factors.add(factor)
-
-    def _add_value(self, key: int, pose: Pose2D) -> None:
-        self._values.insert(key, _pose2(pose))
-        self._new_values.insert(key, _pose2(pose))
-
-    def _optimise(self, closed: bool) -> None:
-        if self.optimizer == "isam2":
-            self._isam.update(self._new_factors, self._new_values)
-            for _ in range(3 if closed else 0):
-                self._isam.update()
-            result = self._isam.calculateEstimate()
-        elif closed:
-            params = gtsam.LevenbergMarquardtParams()
-            result = gtsam.LevenbergMarquardtOptimizer(self._graph, self._values, params).optimize()
-        else:
-            result = None
-        self._new_factors = gtsam.NonlinearFactorGraph()
-        self._new_values = gtsam.Values()
-        if result is not None:
-            self._estimates = [_pose(result.atPose2(k)) for k in range(len(self._frames))]
-            self._values = result

@@ -87,6 +87,8 @@ class BridgeSettings:
     """A map to localise in and go to ``goal_pose`` in (None: odometry and ``path`` only)."""
     seed: int = 0
     """The localiser's seed (with :attr:`map`)."""
+    surface: str | None = None
+    """The floor driven on (``--surface``): ``cmd_vel``'s ramp within its grip (None: not known)."""
 
 
 def attach(
@@ -238,7 +240,7 @@ def _add_cmd_vel(runtime: Any, robot: Any, node: Any, settings: BridgeSettings, 
         node,
         forced=TWIST if settings.twist_only else None,
         timeout=settings.cmd_vel_timeout,
-        limits=TwistLimits.from_limits(runtime.client.limits, None, robot),
+        limits=TwistLimits.from_limits(runtime.client.limits, None, robot, settings.surface),
         period=runtime.period,
         notify=notify,
     )

@@ -25,8 +25,11 @@ repeat), ``omnibot follow`` and ``omnibot run`` are sources, locks and sinks of 
 The pieces: :mod:`~omnibot.runtime.cycle` (what a cycle carries), :mod:`~omnibot.runtime.arbiter`
 (priorities, timeouts, locks), :mod:`~omnibot.runtime.sources` (the source protocol, follower, script),
 :mod:`~omnibot.runtime.sinks` (the sink protocol, teach, traces, notices), :mod:`~omnibot.runtime.wakeup`
-(sources that push a proposal between cycles), :mod:`~omnibot.runtime.runtime`
-(the cycle). docs/architecture.md has the whole picture and how a new front end plugs in.
+(sources that push a proposal between cycles), :mod:`~omnibot.runtime.pacing` (when a cycle is due),
+:mod:`~omnibot.runtime.runtime` (the Runtime: composition and the cycle) on
+:mod:`~omnibot.runtime.core` (its counts, hooks, notices, the latched stop),
+:mod:`~omnibot.runtime.listening` (telemetry and events between cycles) and
+:mod:`~omnibot.runtime.sending` (the VELs sent, their replies collected). docs/architecture.md has the whole picture and how a new front end plugs in.
 
 A library: it imports the client, the protocol's codes, estimation, control, the robot's description
 and the shared types, nothing of a front end (a person's sources are :mod:`omnibot.teleop`'s, the
@@ -36,8 +39,11 @@ is handed in: ``Runtime(recording=...)``). ``tests/test_imports.py`` holds it to
 """
 
 from omnibot.runtime.arbiter import PRIORITY_MAX, Arbiter, EStop, Lock, deadman_lock
+from omnibot.runtime.core import Counters
 from omnibot.runtime.cycle import NOBODY, Cycle, Decision, Level, Notice
-from omnibot.runtime.runtime import Counters, LinkPacer, Recording, Runtime, RuntimeRecording, Sink, clamp_to
+from omnibot.runtime.pacing import LinkPacer
+from omnibot.runtime.runtime import Recording, Runtime, RuntimeRecording, Sink
+from omnibot.runtime.sending import clamp_to
 from omnibot.runtime.sinks import EstimatorWhenMissing, NoticePrinter, SpeedReport, TeachSink, Trace
 from omnibot.runtime.sources import APPROACH_GAP, FollowerSource, Proposal, ScriptSource, Source, must_end
 from omnibot.runtime.stall import StallWatch, start_sonars

@@ -6,51 +6,33 @@ import logging
 import math
 from collections import deque
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
 from typing import Protocol
 
 from omnibot.client import (
-    BatteryStopLatched,
     ClientRecording,
-    EmergencyStopLatched,
     ErrorEvent,
     Event,
-    Limits,
     Pending,
     ResetEvent,
     RobotClient,
     Telemetry,
     WarnEvent,
 )
-from omnibot.client.commands import vel as vel_command
 from omnibot.errors import ControllerError, LinkError
 from omnibot.estimation import Estimator, SlipModel
-from omnibot.motion import Estimate, Twist
-from omnibot.protocol import codes
+from omnibot.motion import Estimate
 from omnibot.runtime.arbiter import Arbiter, Lock
+from omnibot.runtime.core import log
 from omnibot.runtime.cycle import NOBODY, Cycle, Decision, Level, Notice
+from omnibot.runtime.listening import KEEP, Listening
+from omnibot.runtime.pacing import LinkPacer, Pacer
+from omnibot.runtime.sending import Sending
 from omnibot.runtime.sources import Proposal, Source
 from omnibot.runtime.wakeup import GAP, Wakeup
 from omnibot.scan import Scan
 
-log = logging.getLogger("omnibot.runtime")
-log.addHandler(logging.NullHandler())  # a library's log: shown where the application configures logging
-# (front ends get every notice themselves; without this Python would print warnings twice on stderr)
-
 PREDICT_MAX = 0.1
 """s: the estimate is extrapolated to the cycle's time by at most this much (older: held)."""
-KEEP = 1000
-"""Telemetry samples and events kept for the next cycle: the newest, when nobody cycled for a while
-(a standstill, a scripted manoeuvre)."""
-LATCHED_TEXT = "emergency stop latched by the controller (sonar): let go and press again to release"
-BATTERY_LATCHED_TEXT = (
-    "battery stop latched by the controller: the battery is flat (below its stop threshold); charge or swap "
-    "it: STOP releases the stop only once the voltage is back up"
-)
-BATTERY_TEXTS = {
-    codes.W_BATTERY_LOW: "battery low (below its warning threshold): finish and charge it",
-    codes.W_BATTERY_LIMIT: "battery very low (below its limit threshold): the motors' power is limited",
-}
 OPEN_LOOP_TEXT = (
     "open loop{why}: the wheels get the calibrated powers for a speed, so the robot goes as fast as the "
     "floor lets it, not at the speed asked"
@@ -83,75 +65,7 @@ class Recording(ClientRecording, RuntimeRecording, Protocol):
     does both (the dashboard opens its robot and runs its runtime)."""
 
 
-class Pacer(Protocol):
-    """When cycles happen: ``now()`` is the cycle clock, ``wait()`` waits (pumping the client)."""
-
-    def now(self) -> float:
-        """The cycle clock, s."""
-
-    def wait(self, wakeup: Wakeup | None = None) -> bool | None:
-        """Wait for the next cycle, pumping the client meanwhile; with ``wakeup``, False when it
-        was raised before the cycle was due (call again to wait on for the same cycle)."""
-
-
-class LinkPacer:
-    """Cycles every ``period`` s of the link clock: real time on a real link, simulated time (lockstep,
-    deterministic) on ``sim://``. A late cycle is not made up for: the next one is due a period later."""
-
-    def __init__(self, client: RobotClient, period: float) -> None:
-        if not period > 0:
-            raise ValueError(f"period must be > 0 s, got {period}")
-        self.client = client
-        self.period = period
-        self._next = client.clock.now()
-        self._resuming = False
-
-    def now(self) -> float:
-        """The link clock, s."""
-        return self.client.clock.now()
-
-    def wait(self, wakeup: Wakeup | None = None) -> bool:
-        """Sleep through the client (lockstep on ``sim://``) until the next cycle is due; after a
-        cycle that ran past its successor's time (a slow start, a stalled link) the schedule starts
-        again from now, rather than running the missed cycles back to back. With ``wakeup``: False
-        when it was raised first (the cycle is still due: the next call waits on for it)."""
-        now = self.client.clock.now()
-        if not self._resuming:
-            self._next += self.period
-            if self._next < now:
-                self._next = now + self.period
-        if wakeup is None:
-            self.client.sleep(max(0.0, self._next - now))
-            return True
-        wall = self.client.link.wall_clock  # lockstep: whole reads, as without a wakeup
-        self._resuming = not wakeup.pump_until(
-            self.client, self._next, self.now, wakeup.slice if wall else math.inf
-        )
-        return not self._resuming
-
-
-@dataclass
-class Counters:
-    """What the runtime sent: VELs with motion, zero VELs, commands that failed."""
-
-    vel: int = 0
-    zero: int = 0
-    errors: int = 0
-
-
-def clamp_to(limits: Limits, twist: Twist) -> Twist:
-    """``twist`` inside what the controller accepts (VEL's bounds just inside, so rounding to 1 cm/s and
-    1 degree/s never crosses them): the translation scaled down, the turn rate clipped."""
-    vmax = max(0.0, (limits.speed_max_cms - 1.0) / 100.0)
-    vx, vy = twist.vx, twist.vy
-    speed = math.hypot(vx, vy)
-    if speed > vmax:
-        vx, vy = vx * vmax / speed, vy * vmax / speed
-    wmax = math.radians(max(0.0, limits.rate_max_dps - 1.0))
-    return Twist(vx, vy, max(-wmax, min(wmax, twist.w)))
-
-
-class Runtime:
+class Runtime(Listening, Sending):
     """Owns ``client``: one cycle per :meth:`step`, :meth:`run` loops them on ``pacer``.
 
     ``estimator`` turns telemetry into the state sources and sinks see (None: no state, e.g. plain
@@ -226,35 +140,6 @@ class Runtime:
         for source in sources:
             self.add_source(source)
 
-    def _init_counts(self) -> None:
-        """What the runtime did and the controller said so far: nothing yet."""
-        self._wakers: set[str] = set()
-        self.reactions = 0
-        """Reactions to a woken source so far (:meth:`react`)."""
-        self.sent = Counters()
-        self.latched = False
-        self._battery: float | None = None
-        self.latch_reason = ""
-        """Why the controller latched its stop: ``sonar`` or ``battery`` ("" while not latched)."""
-        self.state: int | None = None
-        """The controller's state from its telemetry (codes.STATE_*), None until one carries it."""
-        self.last_twist: Twist | None = None
-        self.cycles = 0
-        self.samples = 0
-        """Telemetry samples received so far."""
-        self.rtt: float | None = None
-        """Round trip of the last VEL whose reply was awaited, s (link clock)."""
-
-    def _init_hooks(self) -> None:
-        """The observers of telemetry, failed commands and notices: none yet."""
-        self.telemetry_hooks: list[Callable[[Telemetry], object]] = []
-        """More consumers of each telemetry sample, called right after the estimator (observers)."""
-        self.error_hooks: list[Callable[[str, BaseException], object]] = []
-        """Called with (source, exception) when a command fails (after the notice)."""
-        self.notice_hooks: list[Callable[[Notice], object]] = []
-        """Called at once with every notice, in the thread that gives it (a command's own report:
-        sinks get notices only with a cycle, and a robot pushed by hand runs none)."""
-
     # ------------------------------------------------------------------ composition
 
     def add_source(self, source: Source) -> None:
@@ -285,14 +170,6 @@ class Runtime:
     def add_lock(self, lock: Lock) -> None:
         """Add a lock that masks sources at or below its priority while engaged."""
         self.arbiter.locks.append(lock)
-
-    def notify(self, level: Level, text: str, source: str = "") -> None:
-        """Tell every front end (sinks get it with the next cycle; the log at once)."""
-        notice = Notice(level, text, source)
-        self._notices.append(notice)
-        for hook in self.notice_hooks:
-            hook(notice)
-        log.log({"info": logging.INFO, "warn": logging.WARNING}.get(level, logging.ERROR), "%s", text)
 
     # ------------------------------------------------------------------ listening
 
@@ -337,60 +214,6 @@ class Runtime:
         self.client.remove_listener(self._on_telemetry)
         self.client.remove_listener(self._on_event)
         self._pending.clear()
-
-    def _on_telemetry(self, event: Telemetry) -> None:
-        self.samples += 1
-        lag = event.time - event.controller_time
-        # the least-delayed sample gives the clock offset (allowed to creep up 20 us/s for drift)
-        self._offset = min(self._offset + 2e-5 * max(0.0, event.time - self._offset_time), lag)
-        self._offset_time = event.time
-        if event.battery is not None:
-            self._battery = event.battery
-        if event.state is not None:
-            self.state = event.state
-            if event.state == codes.STATE_ESTOP:
-                self._latch()
-            elif event.state == codes.STATE_BATTERY:
-                self._latch("battery")
-            elif self.latched:
-                self.latched = False
-                self.latch_reason = ""
-        if self.estimator is not None:
-            self.estimator.update(event)
-            alerts = self.estimator.alerts
-            while alerts:
-                self.notify("warn", alerts.pop(0), "estimator")
-        for hook in list(self.telemetry_hooks):
-            try:
-                hook(event)
-            except Exception:  # a hook (a recorder's) never keeps a sample from the loop
-                log.exception("a telemetry hook failed; it is removed")
-                if hook in self.telemetry_hooks:
-                    self.telemetry_hooks.remove(hook)
-        self._telemetry.append(event)
-
-    def _on_event(self, event: Event) -> None:
-        if isinstance(event, WarnEvent):
-            if event.code == codes.W_SONAR_STOP:
-                self._latch()
-            elif event.code == codes.W_BATTERY_STOP:
-                self._latch("battery")
-            elif event.code in BATTERY_TEXTS:
-                volts = self.last_battery
-                at = f" at {volts:.2f} V" if volts is not None else ""
-                self.notify("warn", BATTERY_TEXTS[event.code].replace(":", f"{at}:", 1), "controller")
-        self._events.append(event)
-
-    @property
-    def last_battery(self) -> float | None:
-        """The battery voltage of the newest telemetry that carried it, V."""
-        return self._battery
-
-    def _latch(self, reason: str = "sonar") -> None:
-        if not self.latched or self.latch_reason != reason:
-            self.latched = True
-            self.latch_reason = reason
-            self.notify("warn", BATTERY_LATCHED_TEXT if reason == "battery" else LATCHED_TEXT)
 
     # ------------------------------------------------------------------ the cycle
 
@@ -515,72 +338,3 @@ class Runtime:
             if until is not None and until():
                 break
             self.wait()
-
-    def discard_pending(self) -> None:
-        """Forget the replies still awaited (a run that ended: its STOP follows)."""
-        self._pending.clear()
-
-    # ------------------------------------------------------------------ sending
-
-    def _send(self, source: str, twist: Twist, fresh: bool) -> Twist | None:
-        client, origin = self.client, self.sources.get(source)
-        watchdog = getattr(origin, "watchdog", None) or self.vel_timeout
-        # a follower's planned acceleration, for a controller whose wheel loop takes it: the body's
-        # whole (version 4) or the speed's along the travel (version 3)
-        planned = getattr(origin, "body_accel", None)
-        body = planned if client.takes_vel_body_accel else None
-        accel = getattr(origin, "accel", 0.0) if client.takes_vel_accel and body is None else 0.0
-        try:
-            if fresh and self.latched and self.latch_reason == "battery":
-                client.stop()  # releases the battery stop only with the voltage back up: telemetry tells
-            elif fresh and self.latched:
-                client.stop()  # a person let go and pressed again: release the latched stop
-                self.latched = False
-                self.latch_reason = ""
-                self.notify("info", "emergency stop released by a fresh press of the deadman", source)
-            sent = clamp_to(client.limits, twist)
-            if self.slip is not None and self.closed_loop and not sent.is_zero:
-                sent = clamp_to(client.limits, self.slip.commanded(sent, planned or (0.0, 0.0, 0.0)))
-            if getattr(origin, "wait_reply", self.wait_replies):
-                t0 = client.clock.now()
-                client.vel(sent.vx, sent.vy, sent.w, watchdog, accel, body)
-                self.rtt = client.clock.now() - t0
-            else:
-                command = vel_command(client.limits, *sent, watchdog, accel, body)
-                self._pending.append((client.submit(command), source))
-        except (ControllerError, LinkError, ValueError) as exc:
-            self._failed(source, exc)
-            return None
-        self._last_error.pop(source, None)
-        self.last_twist = twist
-        if twist.is_zero:
-            self.sent.zero += 1
-        else:
-            self.sent.vel += 1
-        return sent
-
-    def _collect(self) -> None:
-        keep = []
-        for pending, source in self._pending:
-            if pending.error is not None:
-                self._failed(source, pending.error, pending.line)
-            elif not pending.done:
-                keep.append((pending, source))
-        self._pending = keep
-
-    def _failed(self, source: str, exc: BaseException, line: str = "") -> None:
-        self.sent.errors += 1
-        for hook in self.error_hooks:
-            hook(source, exc)
-        if isinstance(exc, EmergencyStopLatched):
-            self._latch()  # one notice for everyone; the refused source sees cycle.latched
-            return
-        if isinstance(exc, BatteryStopLatched):
-            self._latch("battery")
-            return
-        text = f"the controller refused {line}: {exc}" if line else f"command failed: {exc}"
-        if self._last_error.get(source) != text:
-            self._last_error[source] = text
-            self.notify("error", text, source)
-        else:
-            self._notices.append(Notice("error", text, source))

@@ -4,7 +4,7 @@ A source that learns of a command in a thread of its own (a DDS listener: ROS 2'
 not touch the client, which the runtime's loop owns. It calls the wake function the runtime handed
 it (:meth:`Runtime.add_source <omnibot.runtime.runtime.Runtime.add_source>` gives one to every
 source with a ``wake_with(wake)`` method). The loop's wait (:meth:`LinkPacer.wait
-<omnibot.runtime.runtime.LinkPacer.wait>`, teleop's :class:`~omnibot.teleop.pacing.Pacer`) then
+<omnibot.runtime.pacing.LinkPacer.wait>`, teleop's :class:`~omnibot.teleop.pacing.Pacer`) then
 ends early and the runtime *reacts* (:meth:`Runtime.react
 <omnibot.runtime.runtime.Runtime.react>`): it asks the woken sources only, arbitrates (a person's pad
 or deadman, an emergency stop still win) and sends through its one send site; then it waits on for
@@ -21,7 +21,7 @@ of commands cannot crowd the link): a wake sooner is taken by the reaction at th
 by the cycle when that comes first, so no command is lost that a newer one has not replaced. A cycle
 takes the wakes raised before it (its sources' proposals take what had arrived).
 
-**Lockstep** (``sim://`` under :class:`~omnibot.runtime.runtime.LinkPacer`): time is the simulator's
+**Lockstep** (``sim://`` under :class:`~omnibot.runtime.pacing.LinkPacer`): time is the simulator's
 and moves only while the loop waits on the link. There the flag is looked at after every read of
 the link, whatever it returned (a reply, telemetry, the read's timeout), and never in between, so
 an event is taken at the simulated instant of the read that followed it. A wake raised by what the

@@ -10,8 +10,9 @@
       -> limit_twist(): one factor s <= 1 for the whole twist, so that |(vx, vy)| <= speed and
            |w| <= rate: the robot goes where the stick points, only slower
       -> TwistRamp: while the deadman is held, the twist sent changes by at most the robot's
-           acceleration_max (translation) and angular_acceleration_max per second: a heavy robot
-           ramps up, and a tap of a key is a short move
+           acceleration_max (translation) and angular_acceleration_max per second, on a known
+           floor times the share its grip leaves at the speed ramped from: a heavy robot ramps
+           up, and a tap of a key is a short move
 
 An axis or button index past what the pad has reads 0 / not pressed (as in teleop_twist_joy). The
 turbo button is an enable button of its own, with the turbo scales.
@@ -22,6 +23,8 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+
+import numpy as np
 
 from omnibot.client import Limits
 from omnibot.motion import ZERO, Twist
@@ -96,21 +99,31 @@ def joy_to_command(config: TeleopConfig, joy: JoyState) -> TeleopCommand:
 @dataclass(frozen=True)
 class TwistLimits:
     """The largest planar speed (m/s) and turn rate (rad/s) a twist may have, and how fast a person's
-    twist may change: ``accel`` (m/s^2, the translation) and ``angular_accel`` (rad/s^2); inf: at once."""
+    twist may change: ``accel`` (m/s^2, the translation) and ``angular_accel`` (rad/s^2); inf: at once.
+    ``grip``: (speeds m/s, fractions), the share of both accelerations the floor's grip leaves at
+    each speed (:func:`~omnibot.control.reach.floor_grip`), interpolated; None: all of them."""
 
     speed: float
     rate: float
     accel: float = math.inf
     angular_accel: float = math.inf
+    grip: tuple[tuple[float, ...], tuple[float, ...]] | None = None
 
     @classmethod
     def from_limits(
-        cls, limits: Limits, config: TeleopConfig | None = None, robot: RobotDescription | None = None
+        cls,
+        limits: Limits,
+        config: TeleopConfig | None = None,
+        robot: RobotDescription | None = None,
+        surface: str | None = None,
     ) -> TwistLimits:
         """The controller's VEL bounds (as the client checks them) just inside, so that rounding
         to 1 cm/s and 1 degree/s never crosses them; capped by the config's speed caps. ``robot``'s
         description gives the accelerations (its ``limits.acceleration_max`` and
-        ``angular_acceleration_max``); without it a twist changes at once."""
+        ``angular_acceleration_max``); without it a twist changes at once. ``surface``: the floor
+        the robot drives on, whose grip shares the accelerations out up to the top speed (as the
+        planner's :meth:`~omnibot.control.paths.MotionLimits.grip_at`); None: a floor not known,
+        the accelerations whole."""
         speed = max(0.0, limits.speed_max_cms - 1.0) / 100.0
         rate = math.radians(max(0.0, limits.rate_max_dps - 1.0))
         if config is not None:
@@ -120,13 +133,25 @@ class TwistLimits:
                 rate = min(rate, config.angular_speed_max)
         if robot is None:
             return cls(speed, rate)
-        return cls(speed, rate, robot.limits.acceleration_max, robot.limits.angular_acceleration_max)
+        grip = None
+        if surface is not None and speed > 0:
+            from omnibot.control import grip_table
+
+            grip = grip_table(robot, surface, speed)
+        return cls(speed, rate, robot.limits.acceleration_max, robot.limits.angular_acceleration_max, grip)
+
+    def grip_at(self, speed: float) -> float:
+        """The share of the accelerations the floor's grip leaves at ``speed`` m/s (1 without a floor)."""
+        if self.grip is None:
+            return 1.0
+        return float(np.interp(speed, *self.grip))
 
 
 class TwistRamp:
     """A twist rate-limited to ``limits``' accelerations: :meth:`step` moves the last twist towards
     the one asked by at most ``accel * dt`` (the translation, as a vector: the robot's velocity
-    turns as fast as it can) and ``angular_accel * dt`` (the turn rate).
+    turns as fast as it can) and ``angular_accel * dt`` (the turn rate), both times the share the
+    floor's grip leaves at the speed it ramps from (:meth:`TwistLimits.grip_at`).
 
     :attr:`body_accel` is the body's acceleration of the last step along its own axes and the
     angular one (m/s^2, m/s^2, rad/s^2): the rate of change of the body-frame twist less the turning
@@ -155,10 +180,11 @@ class TwistRamp:
             return last
         dvx, dvy, dw = target.vx - last.vx, target.vy - last.vy, target.w - last.w
         dv = math.hypot(dvx, dvy)
-        most = self.limits.accel * dt
+        share = self.limits.grip_at(math.hypot(last.vx, last.vy))
+        most = self.limits.accel * share * dt
         if dv > most:
             dvx, dvy = dvx * most / dv, dvy * most / dv
-        most = self.limits.angular_accel * dt
+        most = self.limits.angular_accel * share * dt
         dw = max(-most, min(most, dw))
         twist = Twist(last.vx + dvx, last.vy + dvy, last.w + dw)
         self.body_accel = (dvx / dt - twist.w * twist.vy, dvy / dt + twist.w * twist.vx, dw / dt)

@@ -8,9 +8,12 @@
                          |--> state.py (state frames) --> queue --> server.py broadcaster --> pages
 
 Modules: ``dashboard`` (Dashboard: both threads, binding, token), ``server`` (routes, websocket,
-Hub), ``link`` (RobotLink, the thread that owns the client), ``messages`` (browser messages),
-``state`` (telemetry -> state frames), ``scene`` (map, robot outline, path), ``teach`` (the teach
-and repeat hook), ``command`` (``omnibot dashboard``), ``static/`` (the page).
+Hub), ``link`` (RobotLink, the thread that owns the client), ``inbox`` (the page's requests on their
+way to it), ``driving`` (the page's input as teleop samples, the drive state), ``scanview`` (the
+scans the page draws), ``messages`` (browser messages), ``state`` (telemetry -> state frames),
+``scene`` (map, robot outline, path), ``teach`` (the teach and repeat hook), ``access`` (host,
+origin and token checks), ``static/`` (the page). The command, ``omnibot dashboard``, is
+``omnibot.apps.dashboard``.
 
 Other packages take the dashboard, its scene's path and the access checks (the host and origin
 checks, tokens, rate limits, the listening socket: the Foxglove server's too) from this face::

@@ -103,13 +103,15 @@ class Dashboard:
         wheel_loop: bool = True,
         floor: Callable[[RobotClient, RobotDescription], SlipModel | None] | None = None,
         recording: Recording | None = None,
+        surface: str | None = None,
     ) -> None:
         """``robot`` (a description, preset or file; None: the one the controller names) must be the
         robot on the link; ``make_teach`` builds ``teach`` once the robot is known; ``wheel_loop``:
         the runtime closes the controller's wheel-speed loop (False: open loop); ``floor`` applies a
         floor's calibration once the robot is known (uploads its tables) and gives its wheel slip,
         which the runtime asks the wheels for on top of each twist; ``recording`` (``--log``) records
-        the client and the runtime."""
+        the client and the runtime; ``surface``, the floor's name when known (``--surface``), keeps
+        the stick's ramp within its grip."""
         self.token = token = access_token(host, token)
         self.host = host
         HostPolicy.for_bind(host, 1, allow_hosts)  # a bad name fails here, before anything opens
@@ -133,6 +135,7 @@ class Dashboard:
                 wheel_loop=wheel_loop,
                 slip=floor(client, description) if floor is not None else None,
                 recording=recording,
+                surface=surface,
             )
             # a path file is drawn where following it from here would drive it; points as given
             points = path.placed(self.link.pose) if isinstance(path, PlannedPath) else path

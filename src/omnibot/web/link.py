@@ -24,7 +24,7 @@ stop is the runtime's top lock: STOP at once, nothing drives (a repeat ends) unt
 ``resume``. A robot with a scanner on ``sim://`` has the simulator's scanner as the runtime's
 (:attr:`Runtime.scanner <omnibot.runtime.runtime.Runtime.scanner>`, unless a front end gave it one):
 the state frame carries the latest scan's returns as world points (``scan``, see
-:func:`scan_points`). On shutdown the link leaves the controller as it was found
+:func:`~omnibot.web.scanview.scan_points`). On shutdown the link leaves the controller as it was found
 (:func:`omnibot.client.session.leave`: STOP, telemetry off, its MODE back) and closes the client.
 """
 
@@ -32,12 +32,10 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import math
 import queue
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
 from omnibot.client import ErrorEvent, Event, ResetEvent, RobotClient, WarnEvent, leave
@@ -49,23 +47,19 @@ from omnibot.protocol import codes
 from omnibot.robot import RobotDescription
 from omnibot.runtime import Cycle, EstimatorWhenMissing, Runtime, RuntimeRecording
 from omnibot.runtime import EStop as EStopLock
-from omnibot.scan import Scan
 from omnibot.teleop import (
     Deadman,
     DeadmanSource,
-    JoyState,
     Pacer,
     Phase,
-    Sample,
     TeleopConfig,
     TwistLimits,
-    axes_tuple,
-    fractions_to_twist,
-    joy_to_command,
-    limit_twist,
 )
 from omnibot.transport import find_device
-from omnibot.web.messages import Drive, EStop, Joy, Resume, Teach
+from omnibot.web.driving import PAGE_PRIORITY, drive_limits, drive_state, page_sample
+from omnibot.web.inbox import Inbox, PageGone, Request
+from omnibot.web.messages import EStop, Resume, Teach
+from omnibot.web.scanview import ScanView
 from omnibot.web.state import StateTracker
 from omnibot.web.teach import NOT_AVAILABLE, TeachRepeat
 
@@ -73,45 +67,15 @@ log = logging.getLogger("omnibot.web")
 
 TEL_PERIOD = 0.05
 SONAR_PERIOD = 0.1
-INBOX_MAX = 256
-"""Requests waiting for the link thread; beyond it :meth:`RobotLink.submit` drops them (the server
-answers the page with an error), so a flood cannot grow memory or delay the link thread by more than
-one bounded batch a period."""
-DRIVE_RATE_MAX = math.pi
-"""rad/s at full turn from the page (keys, slider): half a turn a second, whatever the robot could do."""
-PAGE_PRIORITY = 100
-"""The page's driving in arbitration: above the repeat (10), so it takes over and hands back."""
-SCAN_PERIOD = 0.2
-"""s of link time between two scans in the state frames (the page draws the latest)."""
-SCAN_POINTS = 180
-"""Most returns of a scan sent to the page (every k-th, in the scan's order)."""
-
-
-def scan_points(scan: Scan, pose: tuple[float, float, float], most: int = SCAN_POINTS) -> dict[str, Any]:
-    """A scan for the page: its stamp (link time) and its returns in the world frame (m, rounded to mm)
-    as seen from ``pose`` (the pose the page shows), every k-th of them so that at most ``most`` go."""
-    points = scan.points("base")
-    step = max(1, math.ceil(len(points) / most))
-    points = points[::step]
-    x, y, th = pose
-    c, s = math.cos(th), math.sin(th)
-    world = [[round(x + c * px - s * py, 3), round(y + s * px + c * py, 3)] for px, py in points.tolist()]
-    return {"t": round(scan.stamp, 3), "points": world}
-
-
-@dataclass(frozen=True)
-class PageGone:
-    """A page disconnected: whatever it was driving is let go."""
-
-
-Request = Drive | Joy | EStop | Resume | Teach | PageGone
 
 
 class RobotLink:
     """Runs the runtime (the owner of ``client``) in a thread of its own; :meth:`submit` and
     :attr:`outbox` are the only ways in and out. ``start`` is where odometry starts on a link without
     ground truth (None: the origin); ``wall``/``sleep`` are the wall clock (tests may pass fakes).
-    More sources and sinks may join :attr:`runtime` before :meth:`start` (``omnibot run``)."""
+    More sources and sinks may join :attr:`runtime` before :meth:`start` (``omnibot run``).
+    ``surface``, the floor's name when known, keeps the stick's ramp within its grip
+    (:meth:`~omnibot.teleop.TwistLimits.from_limits`)."""
 
     def __init__(
         self,
@@ -128,6 +92,7 @@ class RobotLink:
         wheel_loop: bool = True,
         slip: SlipModel | None = None,
         recording: RuntimeRecording | None = None,
+        surface: str | None = None,
     ) -> None:
         self.client = client
         self.mode = mode
@@ -135,12 +100,11 @@ class RobotLink:
         self.robot = robot
         self.config = config or TeleopConfig()
         self.teach = teach
-        self.limits = TwistLimits.from_limits(client.limits, self.config, robot)
-        self.drive_limits = TwistLimits(self.limits.speed, min(self.limits.rate, DRIVE_RATE_MAX))
+        self.limits = TwistLimits.from_limits(client.limits, self.config, robot, surface)
+        self.drive_limits = drive_limits(self.limits)
         """Full scale of the page's keys, stick and turn slider."""
-        self.inbox: queue.Queue[Request] = queue.Queue(maxsize=INBOX_MAX)
-        self._estop_waiting = threading.Event()
-        self._gone_waiting = threading.Event()
+        self.inbox = Inbox()
+        """The page's requests, waiting for the link thread (web/inbox.py)."""
         self.outbox: queue.Queue[dict[str, Any]] = queue.Queue(maxsize=1000)
         self._wall, self._sleep = wall, sleep
         self._stop = threading.Event()
@@ -161,8 +125,7 @@ class RobotLink:
         )
         self.scanner: SimScanSource | None = self._lend_scanner()
         """The simulator's scanner when this link gave the runtime one (closed with the link)."""
-        self._scan: Scan | None = None
-        self._scan_sent = -math.inf
+        self._scans = ScanView()
         self.runtime.add_source(self.page)
         self.runtime.add_lock(self.estop_lock.lock)
         self.runtime.error_hooks.append(self._command_failed)
@@ -201,17 +164,7 @@ class RobotLink:
         """Hand a validated request to the link thread (thread-safe); False when the inbox is full
         and it was dropped. An emergency stop or a page gone is never dropped: with the inbox full it
         is flagged and acted on after the requests waiting (so nothing queued before it undoes it)."""
-        try:
-            self.inbox.put_nowait(request)
-        except queue.Full:
-            if isinstance(request, EStop):
-                self._estop_waiting.set()
-                return True
-            if isinstance(request, PageGone):
-                self._gone_waiting.set()
-                return True
-            return False
-        return True
+        return self.inbox.offer(request)
 
     def start(self) -> None:
         """Start the link thread."""
@@ -310,18 +263,8 @@ class RobotLink:
         if self._reset:
             self._log("warn", "the controller restarted: telemetry and sonars set up again")
             self.setup()
-        while True:
-            try:
-                request = self.inbox.get_nowait()
-            except queue.Empty:
-                break
+        for request in self.inbox.take():
             self._handle(request, now)
-        if self._gone_waiting.is_set():
-            self._gone_waiting.clear()
-            self.page.sample = None
-        if self._estop_waiting.is_set():
-            self._estop_waiting.clear()
-            self._estop()
         cycle = self.runtime.step(now)
         self._after(cycle)
 
@@ -336,43 +279,26 @@ class RobotLink:
                 health.ok, health.error = True, ""
                 self._log("info", "robot link back")
         decision = cycle.decision
-        page = self.page.deadman.phase
         self._twist = self.page.twist if decision.source == self.page.name else cycle.sent
-        if self.estop:
-            state = "estop"
-        elif page is not Phase.IDLE:
-            state = page.value
-        elif self.following:
-            state = "following"
-        else:
-            state = "idle"
-        drive = {
-            "state": state,
-            "source": self._source,
-            "control": decision.source,
-            "reason": decision.reason,
-            "latched": cycle.latched,
-            "latch_reason": cycle.latch_reason,
-            "twist": None
-            if self._twist is None
-            else [round(v, 3) for v in (self._twist.vx, self._twist.vy, self._twist.w)],
-            "achieved": None
-            if cycle.achieved is None
-            else [round(v, 3) for v in (cycle.achieved.vx, cycle.achieved.vy, cycle.achieved.w)],
-            "ended": self.deadman.last_end.value if self.deadman.last_end else None,
-            "teach": self.teach is not None,
-        }
+        ended = self.deadman.last_end.value if self.deadman.last_end else None
+        drive = drive_state(
+            cycle, self._drive_phase(), self._source, self._twist, ended, self.teach is not None
+        )
         # truth only when the link is a simulator that gives it; else the tracker shows odometry as such
         now = self.client.clock.now()
         frame = self.tracker.frame(now, self._truth(), drive)
-        if cycle.scans:
-            self._scan = cycle.scans[-1]
-        pose = self._pose()
-        if self._scan is not None and pose is not None and now - self._scan_sent >= SCAN_PERIOD:
-            self._scan_sent = now
-            frame["scan"] = scan_points(self._scan, pose)
-            self._scan = None
+        if (scan := self._scans.frame(cycle.scans, now, self._pose())) is not None:
+            frame["scan"] = scan
         self._emit(frame)
+
+    def _drive_phase(self) -> str:
+        """What the page shows of the driving: estop, the page's deadman phase, following, idle."""
+        page = self.page.deadman.phase
+        if self.estop:
+            return "estop"
+        if page is not Phase.IDLE:
+            return str(page.value)
+        return "following" if self.following else "idle"
 
     def _handle(self, request: Request, now: float) -> None:
         if isinstance(request, EStop):
@@ -387,17 +313,10 @@ class RobotLink:
             self.page.sample = None
         elif self.estop:
             return  # driving is ignored until resume
-        elif isinstance(request, Drive):
-            twist = fractions_to_twist(request.vx, request.vy, request.w, self.drive_limits)
-            self.page.sample = Sample(twist, request.enable, now)
-            self._source = request.source
-        else:  # Joy: the Gamepad API's axes are up/left negative, ROS joy's positive
-            joy = JoyState(
-                axes_tuple([-a for a in request.axes]), tuple(int(b > 0.5) for b in request.buttons), now
+        else:
+            self.page.sample, self._source = page_sample(
+                request, self.config, self.limits, self.drive_limits, now
             )
-            cmd = joy_to_command(self.config, joy)
-            self.page.sample = Sample(limit_twist(cmd.twist, self.limits), cmd.enabled, now)
-            self._source = "gamepad"
 
     def _estop(self) -> None:
         self.estop_lock.press("page")

@@ -41,7 +41,7 @@ from fastapi.staticfiles import StaticFiles
 from starlette.websockets import WebSocketState
 
 from omnibot.web.access import RateLimit, same_origin, token_ok
-from omnibot.web.link import PageGone, Request
+from omnibot.web.inbox import PageGone, Request
 from omnibot.web.messages import MAX_FRAME, Ping, parse_message
 
 BROADCAST_PERIOD = 0.05

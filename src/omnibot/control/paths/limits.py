@@ -137,15 +137,24 @@ _REACH_CACHE: dict[tuple[str, str], FloorReach] = {}
 _GRIP_CACHE: dict[tuple[str, str, float], Grip] = {}
 
 
+def grip_table(robot: RobotDescription, surface: str, top: float) -> Grip:
+    """The share of ``robot``'s accelerations the grip on ``surface`` leaves at each speed up to
+    ``top`` m/s (:func:`~omnibot.control.reach.floor_grip`; computed once per description, floor and
+    speed): what the planner's :meth:`MotionLimits.grip_at` and teleop's ramp read."""
+    from omnibot.control.reach import floor_grip
+
+    key = (robot.model_dump_json(), surface, top)
+    if key not in _GRIP_CACHE:
+        _GRIP_CACHE[key] = floor_grip(robot, surface, top)
+    return _GRIP_CACHE[key]
+
+
 def _floor_tables(robot: RobotDescription, surface: str, top: float) -> tuple[FloorReach, Grip]:
     """The robot's reach on ``surface`` (computed once per description and floor) and its grip table
-    up to ``top`` m/s (once per description, floor and speed): :func:`omnibot.control.reach.floor_reach`,
-    :func:`~omnibot.control.reach.floor_grip`."""
-    from omnibot.control.reach import floor_grip, floor_reach
+    up to ``top`` m/s (:func:`grip_table`): :func:`omnibot.control.reach.floor_reach`."""
+    from omnibot.control.reach import floor_reach
 
     key = (robot.model_dump_json(), surface)
     if key not in _REACH_CACHE:
         _REACH_CACHE[key] = floor_reach(robot, surface)
-    if (*key, top) not in _GRIP_CACHE:
-        _GRIP_CACHE[(*key, top)] = floor_grip(robot, surface, top)
-    return _REACH_CACHE[key], _GRIP_CACHE[(*key, top)]
+    return _REACH_CACHE[key], grip_table(robot, surface, top)
