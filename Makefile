@@ -19,14 +19,15 @@ $(STAMP): pyproject.toml constraints.txt Makefile
 	$(BIN)/python -m pip install --quiet -c constraints.txt -e '.[all,dev,bench]'
 	@touch $(STAMP)
 
-# The simulator's kernels compiled into numba's cache (next to kernels.py), again whenever kernels.py
-# changes (numba keys its cache on the file's contents: a pull that changes it would otherwise leave
-# the next simulator running the kernels as Python, 10-50 times slower, for the 20 s of CPU they
-# take to compile in the background, omnibot.sim.jit; an unchanged cache only loads, in a second).
+# The simulator's kernels compiled into numba's cache (next to their files), again whenever a file of
+# src/omnibot/sim/kernels changes (each kernel's cache entry is keyed on all of them, sim/kernels/cache.py:
+# a pull that changes one would otherwise leave the next simulator running the kernels as Python, 10-50
+# times slower, for the 20 s of CPU they take to compile in the background, omnibot.sim.jit; an
+# unchanged cache only loads, in a second).
 # The batch API's lanes kernel (Physics.run(exact=False)) too: its tests would compile it otherwise.
-$(KERNEL_CACHE): $(STAMP) src/omnibot/sim/kernels.py src/omnibot/sim/lanes.py
+$(KERNEL_CACHE): $(STAMP) $(wildcard src/omnibot/sim/kernels/*.py)
 	$(BIN)/python -m omnibot.sim.jit
-	$(BIN)/python -m omnibot.sim.lanes
+	$(BIN)/python -m omnibot.sim.kernels.lanes
 	@touch $@
 
 demo: setup

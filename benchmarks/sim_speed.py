@@ -11,7 +11,7 @@ numbers are not. Results go in BENCHMARKS.md.
 * IR-SIM: one kinematic omni robot, headless, no obstacles (:mod:`benchmarks.irsim_baseline`).
 * omnibot batch: :class:`~omnibot.sim.physics.Physics` with N = 1000 robots: :meth:`Physics.run`
   (the batch API, every core: robot-steps/s with 1 thread and with all; exact, and with
-  ``exact=False``, the robots in vector lanes: :mod:`omnibot.sim.lanes`) and, for comparison,
+  ``exact=False``, the robots in vector lanes: :mod:`omnibot.sim.kernels.lanes`) and, for comparison,
   :meth:`Physics.step` called once per step (one core).
 * fleet: a :class:`~omnibot.sim.fleet.Fleet` of k = 1, 2, 4, 8 omni4 robots in the room, each with
   its firmware driving a MOVE and pinging its sonar every 60 ms; CPU time (of the stepping thread)

@@ -34,7 +34,7 @@ RECORDED_CARPET = Surface("carpet", mu=0.60, slip_velocity=0.04, rolling_multipl
 
 
 def as_recorded(robot: RobotDescription, *, n: int, surfaces: list[str], dt: float, seed: int) -> Physics:
-    """The simulator's physics (a :data:`~omnibot.sim.simulator.PhysicsFactory`; the physics has no
+    """The simulator's physics (a :data:`~omnibot.sim.physics_like.PhysicsFactory`; the physics has no
     randomness, so no seed) on the floors as the trace was recorded (:data:`RECORDED_CARPET`)."""
     floors = [RECORDED_CARPET if get_surface(s).name == "carpet" else get_surface(s) for s in surfaces]
     return Physics(robot, n=n, surfaces=floors, dt=dt)

@@ -48,13 +48,9 @@ from omnibot.sim.device import SimDevice
 from omnibot.sim.fleet_arrays import FleetArrays, batchable
 from omnibot.sim.geometry import placed
 from omnibot.sim.scanner import PoseLog
-from omnibot.sim.simulator import (
-    CONTACT_DAMPING,
-    CONTACT_OMEGA_DT,
-    SCAN_POSE_PERIOD,
-    WALL_FRICTION,
-    Simulator,
-)
+from omnibot.sim.simulator import Simulator
+from omnibot.sim.simulator_contacts import CONTACT_DAMPING, CONTACT_OMEGA_DT, WALL_FRICTION
+from omnibot.sim.simulator_scan import SCAN_POSE_PERIOD
 from omnibot.sim.world import Contact, World
 
 FloatArray = NDArray[np.float64]

@@ -5,7 +5,7 @@
     FleetArrays(sims)   every robot's physics buffer, float and int state, gyro and tracking state
                         copied into two buffers (fbuf, ibuf) and kept there (Simulator._rehome): the
                         robots' arrays are views of them, so everything else reads and writes them
-                        as before; where each lies is one row of ``layout`` (kernels.L_ columns)
+                        as before; where each lies is one row of ``layout`` (kernel_layout.L_ columns)
     step(now_us)        the extra forces due (the fleet's contacts, hand pushes) into one array
                         -> kernels.fleet_step: kernels.robot_step for every robot, in order
                         -> each robot's own after-step (Simulator._finish_step: its clock, events,
@@ -29,7 +29,8 @@ from typing import TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
-from omnibot.sim import jit, kernels
+from omnibot.sim import jit
+from omnibot.sim.kernels import layout as kernel_layout
 from omnibot.sim.simulator import Simulator
 
 FloatArray = NDArray[np.float64]
@@ -66,7 +67,7 @@ class FleetArrays:
         self._wf, self._wi = first._world_packed
         self._dt = first.dt
         n = len(self.sims)
-        self.layout = np.zeros((n, kernels.L_COLUMNS), dtype=np.int64)
+        self.layout = np.zeros((n, kernel_layout.L_COLUMNS), dtype=np.int64)
         self.status = np.zeros(n, dtype=np.int64)
         self.extra = np.zeros((4 * n, 3))
         self._with_extra: list[int] = []
@@ -76,17 +77,17 @@ class FleetArrays:
         istarts, isize = _spans([a.size for arrays in ints for a in arrays])
         self.fbuf = np.zeros(fsize)
         self.ibuf = np.zeros(isize, dtype=np.int64)
-        f_cols = (kernels.L_PBUF, kernels.L_SF, kernels.L_GYRO, kernels.L_TRACKING)
+        f_cols = (kernel_layout.L_PBUF, kernel_layout.L_SF, kernel_layout.L_GYRO, kernel_layout.L_TRACKING)
         for k, (sim, own_f, own_i) in enumerate(zip(self.sims, floats, ints, strict=True)):
             row = self.layout[k]
             new_f = [self._slot(self.fbuf, fstarts[4 * k + a], own_f[a]) for a in range(4)]
             new_i = [self._slot(self.ibuf, istarts[2 * k + a], own_i[a]) for a in range(2)]
             for col, start, arr in zip(f_cols, fstarts[4 * k : 4 * k + 4], own_f, strict=True):
                 row[col], row[col + 1] = start, start + arr.size
-            row[kernels.L_IDS], row[kernels.L_SI] = istarts[2 * k], istarts[2 * k + 1]
-            row[kernels.L_SI_END] = istarts[2 * k + 1] + own_i[1].size
+            row[kernel_layout.L_IDS], row[kernel_layout.L_SI] = istarts[2 * k], istarts[2 * k + 1]
+            row[kernel_layout.L_SI_END] = istarts[2 * k + 1] + own_i[1].size
             assert sim._packed is not None
-            row[kernels.L_M], row[kernels.L_N_SURF] = sim._packed.m, sim._n_surfaces
+            row[kernel_layout.L_M], row[kernel_layout.L_N_SURF] = sim._packed.m, sim._n_surfaces
             sim._rehome(new_f, new_i)
         self.normals = np.zeros(0)
         self._gather_normals()
@@ -102,7 +103,7 @@ class FleetArrays:
         starts, _ = _spans([a.size for a in arrays])
         self.normals = np.concatenate(arrays) if arrays else np.zeros(0)
         for j, (array, start) in enumerate(zip(arrays, starts, strict=True)):
-            col = kernels.L_GYRO_NORMALS if j % 2 == 0 else kernels.L_TRACKING_NORMALS
+            col = kernel_layout.L_GYRO_NORMALS if j % 2 == 0 else kernel_layout.L_TRACKING_NORMALS
             self.layout[j // 2, col], self.layout[j // 2, col + 1] = start, start + array.size
 
     def _gather_extra(self, now_us: int) -> None:
@@ -111,7 +112,7 @@ class FleetArrays:
         layout row."""
         layout = self.layout
         for k in self._with_extra:
-            layout[k, kernels.L_N_EXTRA] = 0
+            layout[k, kernel_layout.L_N_EXTRA] = 0
         self._with_extra = []
         rows = 0
         for k, sim in enumerate(self.sims):
@@ -120,7 +121,7 @@ class FleetArrays:
                 if rows + count > len(self.extra):
                     self.extra = np.concatenate((self.extra, np.zeros((rows + count, 3))))
                 self.extra[rows : rows + count] = sim._extra[:count]
-                layout[k, kernels.L_EXTRA], layout[k, kernels.L_N_EXTRA] = rows, count
+                layout[k, kernel_layout.L_EXTRA], layout[k, kernel_layout.L_N_EXTRA] = rows, count
                 self._with_extra.append(k)
                 rows += count
 
@@ -136,7 +137,7 @@ class FleetArrays:
         if every:
             for sim, status in zip(sims, self.status.tolist(), strict=True):
                 sim._finish_step(status, now_us)
-            if every & kernels.STEP_REFILL:
+            if every & kernel_layout.STEP_REFILL:
                 self._gather_normals()
         else:
             for sim in sims:

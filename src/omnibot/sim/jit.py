@@ -18,8 +18,8 @@ another core. The compiler runs in a process, not a thread, because numba's comp
 GIL: a busy loop beside a compiling thread kept 38 % of its speed, with pauses up to 0.7 s. It runs
 in a session of its own and is left to finish when the command that started it ends, so that the
 cache gets filled and the next start is warm. Processes starting cold together compile once: the
-compiling process holds a lock on ``kernels.py`` (``make setup`` takes it too), the others wait and
-then load what the first compiled. Should the compiling process fail, the thread compiles the
+compiling process holds a lock on the kernels package's ``__init__.py`` (``make setup`` takes it
+too), the others wait and then load what the first compiled. Should the compiling process fail, the thread compiles the
 kernels itself (the twins run meanwhile).
 """
 
@@ -87,7 +87,8 @@ def _load_simulator_kernels() -> None:
 
 def fill_cache() -> None:
     """Compile every kernel into numba's cache (or load those already there) while holding the lock
-    on ``kernels.py``: what ``make setup`` and the compiling process of a cold start run."""
+    on the kernels package's ``__init__.py``: what ``make setup`` and the compiling process of a
+    cold start run."""
     with open(kernels.__file__, "rb") as source:
         fcntl.flock(source, fcntl.LOCK_EX)  # released when the file closes
         kernels.warm_up()
@@ -196,7 +197,7 @@ def _compiled() -> dict[str, Callable[..., Any]]:
 def _compile_in_own_process() -> tuple[int, str]:
     """Run ``python -m omnibot.sim.jit`` (:func:`fill_cache`) on this very omnibot and wait for it;
     its exit status and the last line it wrote on stderr."""
-    package_root = str(Path(kernels.__file__).resolve().parents[2])
+    package_root = str(Path(__file__).resolve().parents[2])
     path = [package_root, *filter(None, os.environ.get("PYTHONPATH", "").split(os.pathsep))]
     with tempfile.TemporaryFile("w+") as err:
         process = subprocess.Popen(

@@ -72,29 +72,31 @@ solves a 3x3 system: O(m) per robot, about a microsecond per step for one robot)
 inputs and parameters are views of one buffer (:attr:`Physics.buffer`), so the simulator's compiled
 step of one robot takes them as one argument. :meth:`Physics.run` is the batch API: many steps of
 many independent robots in one call, the robots shared out among all cores (numba's threads);
-with ``exact=False`` the robots are stepped side by side in vector lanes (:mod:`omnibot.sim.lanes`:
+with ``exact=False`` the robots are stepped side by side in vector lanes (:mod:`omnibot.sim.kernels.lanes`:
 faster, within a stated tolerance of the exact step rather than bit for bit).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from omnibot.errors import SimulationError
 from omnibot.floor import Surface, get_surface, static_loads
-from omnibot.robot import RobotDescription, open_voltage
-from omnibot.robot.kinematics import contact_rows
-from omnibot.sim import jit, kernels, lanes
+from omnibot.robot import RobotDescription
+from omnibot.sim import jit, kernels
+from omnibot.sim.kernels import lanes, layout
+from omnibot.sim.physics_charge import BatteryCharge
+from omnibot.sim.physics_parameters import parameters
+from omnibot.sim.physics_state import StateArrays
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
 
-class Physics:
+class Physics(StateArrays):
     """N robots (identical, or each with its own description) on a floor, advanced by fixed steps.
 
     ``robot`` is one :class:`RobotDescription` (all ``n`` robots alike, n default 1) or a sequence of
@@ -139,15 +141,13 @@ class Physics:
         # simulator takes them as one argument (kernels.physics_views)
         self._bind(np.zeros(kernels.physics_offsets.py_func(n, m, len(self.surfaces))[-1]))
         # self._battery: bus voltage, battery current of the last step
-        self._init_parameters()
+        tables = parameters(self.robots, self.surfaces, self.dt)
+        self._wp[:], self._rp[:], self._surf[:] = tables.wheels, tables.robots, tables.surfaces
+        self._x, self._y, self._mass = tables.x, tables.y, tables.mass
+        self._grip, self._scrub = tables.grip, tables.scrub
         self._v_open[:] = [r.battery.voltage for r in self.robots]
-        # state of charge: a battery with a ``charge`` runs down with its current (coulomb counting)
-        # along its chemistry's open-voltage curve; one without is held at its nominal voltage
-        self._drains = np.array([r.battery.charge is not None for r in self.robots], dtype=bool)
-        self._charge = np.array([1.0 if r.battery.charge is None else r.battery.charge for r in self.robots])
-        self._draining = bool(self._drains.any())
-        self._capacity_as = np.array([r.battery.capacity_ah * 3600.0 for r in self.robots], dtype=float)
-        self._set_open_voltage()
+        self._charge = BatteryCharge(self.robots)
+        self._charge.set_open_voltage(self._v_open)
         self._battery[:, 0] = self._v_open
         # input buffers: the kernel always gets C-contiguous float64 / int64 arrays (one compilation)
         self._ids = np.zeros((n, m), dtype=np.int64)
@@ -155,70 +155,6 @@ class Physics:
         self._steps = 0
         self._lifted = np.zeros((n, m), dtype=bool)
         self._set_loads()
-
-    # ------------------------------------------------------------------ parameters
-
-    def _wheel_param(self, fn: Any) -> FloatArray:
-        return np.array([[float(fn(w)) for w in r.wheels] for r in self.robots])
-
-    def _robot_param(self, fn: Any) -> FloatArray:
-        return np.array([float(fn(r)) for r in self.robots])
-
-    def _init_parameters(self) -> None:
-        wp, rp, dt = self._wheel_param, self._robot_param, self.dt
-        self._x = wp(lambda w: w.position[0])
-        self._y = wp(lambda w: w.position[1])
-        gamma = wp(lambda w: w.gamma)
-        r = wp(lambda w: w.radius)
-        traction, roller = contact_rows(self._x, self._y, wp(lambda w: w.drive_angle), gamma)
-        W = np.zeros((self.n, self.m, kernels.W_COLUMNS))
-        # Rows of H per wheel: traction (slip) speed and roller speed over vx, vy, w and the wheel's omega.
-        W[..., kernels.W_TX : kernels.W_TW + 1] = traction
-        W[..., kernels.W_TA] = -r * np.cos(gamma)
-        W[..., kernels.W_NX : kernels.W_NW + 1] = roller
-        W[..., kernels.W_NA] = r * np.sin(gamma)
-        W[..., kernels.W_J_DT] = wp(lambda w: w.inertia + w.motor.gear_ratio**2 * w.motor.rotor_inertia) / dt
-        k = wp(lambda w: w.motor.torque_constant)
-        gear = wp(lambda w: w.motor.gear_ratio)
-        eta = wp(lambda w: w.motor.gear_efficiency)
-        inv_res = 1.0 / wp(lambda w: w.motor.resistance)
-        ke = k * gear  # back-EMF, V per wheel rad/s
-        kt = eta * k * gear  # wheel torque, N m per A
-        W[..., kernels.W_INV_PWM_MAX] = 1.0 / wp(lambda w: w.motor.pwm_max)
-        W[..., kernels.W_ON_THRESHOLD] = np.maximum(wp(lambda w: w.motor.deadband), 1e-9)
-        W[..., kernels.W_DROP] = wp(lambda w: w.motor.driver_drop)
-        W[..., kernels.W_INV_RES] = inv_res
-        W[..., kernels.W_KE_RES] = ke * inv_res
-        W[..., kernels.W_I_MAX] = wp(lambda w: w.motor.current_max)
-        W[..., kernels.W_KT] = kt
-        W[..., kernels.W_EMF_DAMPING] = kt * ke * inv_res
-        W[..., kernels.W_VISC] = wp(lambda w: w.motor.friction_viscous)
-        W[..., kernels.W_STATIC] = wp(lambda w: w.motor.friction_static)
-        self._grip = wp(lambda w: w.rollers.grip)
-        rr0 = wp(lambda w: w.rollers.rolling_resistance)
-        rr_var = 0.5 * rr0 * wp(lambda w: w.rollers.friction_variation)
-        W[..., kernels.W_RR_VAR] = rr_var
-        W[..., kernels.W_RR_TOP] = rr0 + rr_var
-        W[..., kernels.W_ROLLER_COUNT] = wp(lambda w: w.rollers.count)
-        W[..., kernels.W_RADIUS] = r
-        self._scrub = wp(lambda w: w.rollers.combined_drag)
-        self._wp[:] = W
-
-        self._mass = rp(lambda rb: rb.mass)
-        r_batt = rp(lambda rb: rb.battery.internal_resistance)
-        R = np.zeros((self.n, kernels.R_COLUMNS))
-        R[:, kernels.R_M_DT] = self._mass / dt
-        R[:, kernels.R_I_DT] = rp(lambda rb: rb.yaw_inertia) / dt
-        R[:, kernels.R_BATT_RES] = r_batt
-        # relaxing V_bus by 1/(1 + R_batt sum(1/R)) per step keeps the lagged coupling stable for any battery
-        R[:, kernels.R_BATT_RELAX] = 1.0 / (1.0 + r_batt * inv_res.sum(axis=1))
-        self._rp[:] = R
-
-        S = np.zeros((len(self.surfaces), kernels.S_COLUMNS))
-        S[:, kernels.S_MU] = [s.mu for s in self.surfaces]
-        S[:, kernels.S_INV_VEPS] = [1.0 / s.slip_velocity for s in self.surfaces]
-        S[:, kernels.S_ROLL] = [s.rolling_multiplier for s in self.surfaces]
-        self._surf[:] = S
 
     def _bind(self, buffer: FloatArray) -> None:
         """Make ``buffer`` the packed buffer and the state arrays its views."""
@@ -233,8 +169,8 @@ class Physics:
         o = kernels.physics_offsets.py_func(self.n, self.m, len(self.surfaces))
         shapes = [
             (self.n, 3), (self.n, 3 + self.m), (self.n, self.m), (self.n, self.m), (self.n, self.m), (self.n, 2),
-            (self.n,), (self.n, self.m), (self.n, 3), (self.n, self.m, kernels.W_COLUMNS),
-            (self.n, kernels.R_COLUMNS), (len(self.surfaces), kernels.S_COLUMNS),
+            (self.n,), (self.n, self.m), (self.n, 3), (self.n, self.m, layout.W_COLUMNS),
+            (self.n, layout.R_COLUMNS), (len(self.surfaces), layout.S_COLUMNS),
         ]  # fmt: skip
         return tuple(self._buffer[o[k] : o[k + 1]].reshape(shape) for k, shape in enumerate(shapes))
 
@@ -262,102 +198,30 @@ class Physics:
     def count_step(self) -> None:
         """Account for a step the compiled simulator step made on :attr:`buffer` (time, battery charge)."""
         self._steps += 1  # _stepped(0, 1), a call less: once a robot a step
-        if self._draining:
-            self._drain()
+        self._drain()
 
     def _drain(self) -> None:
-        q = self._charge - np.where(self._drains, self._battery[:, 1], 0.0) * self.dt / self._capacity_as
-        self._charge[:] = np.clip(q, 0.0, 1.0)
-        self._set_open_voltage()
+        """Run the draining batteries down by the last step's current."""
+        if self._charge.draining:
+            self._charge.drain(self._battery[:, 1], self.dt, self._v_open)
 
     def _set_loads(self) -> None:
         self._load = static_loads(self._x, self._y, self._mass, self._lifted)
         self._load.flags.writeable = False
-        self._wp[..., kernels.W_LOAD] = self._load
-        self._wp[..., kernels.W_GRIP_LOAD] = self._grip * self._load
-        self._wp[..., kernels.W_SCRUB_LOAD] = self._scrub * self._load
+        self._wp[..., layout.W_LOAD] = self._load
+        self._wp[..., layout.W_GRIP_LOAD] = self._grip * self._load
+        self._wp[..., layout.W_SCRUB_LOAD] = self._scrub * self._load
 
-    # ------------------------------------------------------------------ state access
-
-    @property
-    def pose(self) -> FloatArray:
-        """(n,3) world x, y (m), theta (rad, continuous); writable in place."""
-        return self._pose
-
-    @pose.setter
-    def pose(self, value: ArrayLike) -> None:
-        self._pose[:] = value
-
-    @property
-    def twist(self) -> FloatArray:
-        """(n,3) body-frame vx, vy (m/s), w (rad/s); writable in place."""
-        return self._q[:, :3]
-
-    @twist.setter
-    def twist(self, value: ArrayLike) -> None:
-        self._q[:, :3] = value
-
-    @property
-    def wheel_speed(self) -> FloatArray:
-        """(n,m) wheel angular speeds, rad/s; writable in place."""
-        return self._q[:, 3:]
-
-    @wheel_speed.setter
-    def wheel_speed(self, value: ArrayLike) -> None:
-        self._q[:, 3:] = value
-
-    @property
-    def wheel_angle(self) -> FloatArray:
-        """(n,m) wheel angles, rad (continuous); writable in place."""
-        return self._wheel_angle
-
-    @wheel_angle.setter
-    def wheel_angle(self, value: ArrayLike) -> None:
-        self._wheel_angle[:] = value
-
-    @property
-    def motor_current(self) -> FloatArray:
-        """(n,m) motor current at the last step, A."""
-        return self._current
-
-    @motor_current.setter
-    def motor_current(self, value: ArrayLike) -> None:
-        self._current[:] = value
-
-    @property
-    def traction_force(self) -> FloatArray:
-        """(n,m) floor force on the robot along each wheel's traction direction at the last step, N."""
-        return self._traction
-
-    @traction_force.setter
-    def traction_force(self, value: ArrayLike) -> None:
-        self._traction[:] = value
-
-    @property
-    def battery_open_voltage(self) -> FloatArray:
-        """(n,) open-circuit battery voltage, V (lower it to simulate a discharged battery)."""
-        return self._v_open
-
-    @battery_open_voltage.setter
-    def battery_open_voltage(self, value: ArrayLike) -> None:
-        self._v_open[:] = value
+    # ------------------------------------------------------------------ state access (and StateArrays')
 
     @property
     def battery_charge(self) -> FloatArray:
         """(n,) state of charge, 0..1 (stays 1 for a battery without ``charge``: never runs down)."""
-        return self._charge.copy()
+        return self._charge.charge.copy()
 
     @battery_charge.setter
     def battery_charge(self, value: ArrayLike) -> None:
-        self._charge[:] = np.clip(np.asarray(value, dtype=float), 0.0, 1.0)
-        self._drains[:] = True
-        self._draining = True
-        self._set_open_voltage()
-
-    def _set_open_voltage(self) -> None:
-        for i in np.flatnonzero(self._drains):
-            b = self.robots[i].battery
-            self._v_open[i] = open_voltage(b.chemistry, b.n_cells, float(self._charge[i]))
+        self._charge.set(value, self._v_open)
 
     @property
     def time(self) -> float:
@@ -492,16 +356,16 @@ class Physics:
         arithmetic is the same, only shared out among numba's threads, each robot stepped ``steps``
         times in a row by one thread; ``numba.set_num_threads`` chooses how many). ``exact=False``:
         the robots in vector lanes with the kernel's own tanh, sin and cos
-        (:func:`omnibot.sim.lanes.physics_run`), about 4 times faster (BENCHMARKS.md); not bit for
+        (:func:`omnibot.sim.kernels.lanes.physics_run`), about 4 times faster (BENCHMARKS.md); not bit for
         bit: every state within 1e-12 of its largest value of the exact step's over 2 s
-        (``tests/sim/test_lanes.py``; 7e-13 measured after 10 s).
+        (``tests/sim/kernels/test_lanes.py``; 7e-13 measured after 10 s).
         A battery with a ``charge`` is stepped one step per call so its charge follows. Each kernel
         compiles on its first call in a process (numba's threading layer; cached on disk after).
         """
         if steps < 0:
             raise SimulationError(f"steps must be >= 0, got {steps}")
         ids = self._inputs(pwm, surface_ids, external_force)
-        chunks = [1] * steps if self._draining else [steps] if steps else []
+        chunks = [1] * steps if self._charge.draining else [steps] if steps else []
         kernel = jit.active.physics_step_parallel if exact else lanes.physics_run
         for chunk in chunks:
             failed = kernel(
@@ -521,8 +385,7 @@ class Physics:
         if failed:
             raise SimulationError(f"surface_ids must index the {len(self.surfaces)} surfaces of this Physics")
         self._steps += steps
-        if self._draining:
-            self._drain()
+        self._drain()
 
 
 __all__ = ["Physics"]

@@ -25,8 +25,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from omnibot.motion import Pose2D
 from omnibot.robot import GyroSpec, SonarSpec, TrackingWheelSpec
-from omnibot.sim import jit, kernels
+from omnibot.sim import jit
 from omnibot.sim.geometry import cone_range
+from omnibot.sim.kernels import layout
 from omnibot.sim.world import World
 
 IntArray = NDArray[np.int64]
@@ -157,7 +158,7 @@ class TrackingWheels:
 
     The rolled distance per step is ``u . (v + w x p) * dt * (1 + slip)`` with ``slip`` drawn from
     N(0, ``slip_std``) every step (a wheel that skids a little on the floor). The state is one
-    float array (:attr:`state`, :data:`omnibot.sim.kernels.T_HEADER` layout) that the simulator's
+    float array (:attr:`state`, :data:`omnibot.sim.layout.T_HEADER` layout) that the simulator's
     compiled step updates.
     """
 
@@ -171,21 +172,21 @@ class TrackingWheels:
         self._dir = np.array([(math.cos(s.direction), math.sin(s.direction)) for s in specs]).reshape(-1, 2)
         self._circ = np.array([2 * math.pi * s.radius for s in specs], dtype=float)
         self._cpr = np.array([s.counts_per_rev for s in specs], dtype=float)
-        self.state = np.zeros(kernels.T_HEADER + kernels.T_WHEEL * len(self.specs))
-        self.state[kernels.T_SLIP] = slip_std
-        wheels = self.state[kernels.T_HEADER :].reshape(-1, kernels.T_WHEEL)
+        self.state = np.zeros(layout.T_HEADER + layout.T_WHEEL * len(self.specs))
+        self.state[layout.T_SLIP] = slip_std
+        wheels = self.state[layout.T_HEADER :].reshape(-1, layout.T_WHEEL)
         wheels[:, 0:2], wheels[:, 2:4] = self._dir, self._pos
         self.refill()
 
     def refill(self) -> None:
         """Make sure the normal draws of the next two updates are there."""
         if self.specs and self.slip_std > 0:
-            self.normals.refill(self.state, kernels.T_NEXT, 2 * len(self.specs))
+            self.normals.refill(self.state, layout.T_NEXT, 2 * len(self.specs))
 
     @property
     def distance(self) -> FloatArray:
         """Distance each wheel has rolled (m), slip included."""
-        return np.array(self.state[kernels.T_HEADER + 4 :: kernels.T_WHEEL], dtype=float)
+        return np.array(self.state[layout.T_HEADER + 4 :: layout.T_WHEEL], dtype=float)
 
     def velocities(self, twist: ArrayLike) -> FloatArray:
         """Rim speed of each wheel (m/s) for a body twist (vx, vy, w): u . (v + w x p)."""
@@ -231,44 +232,44 @@ class Gyro:
     def __init__(self, spec: GyroSpec, rng: np.random.Generator) -> None:
         self.spec = spec
         self.period = 1.0 / spec.rate_hz
-        g = self.state = np.zeros(kernels.G_COLUMNS)
-        g[kernels.G_BIAS] = float(rng.normal(0.0, spec.bias_std)) if spec.bias_std > 0 else 0.0
-        g[kernels.G_SCALE] = float(rng.normal(0.0, spec.scale_error_std)) if spec.scale_error_std > 0 else 0.0
+        g = self.state = np.zeros(layout.G_COLUMNS)
+        g[layout.G_BIAS] = float(rng.normal(0.0, spec.bias_std)) if spec.bias_std > 0 else 0.0
+        g[layout.G_SCALE] = float(rng.normal(0.0, spec.scale_error_std)) if spec.scale_error_std > 0 else 0.0
         self.normals = NormalDraws(rng)  # after the turn-on draws: the same stream as before
-        g[kernels.G_SIGMA] = spec.noise_density * math.sqrt(spec.rate_hz)
-        g[kernels.G_WALK] = spec.bias_walk * math.sqrt(self.period)
-        g[kernels.G_DUE] = self.period - 1e-12
-        g[kernels.G_PERIOD] = self.period
-        g[kernels.G_RANGE], g[kernels.G_RESOLUTION] = float(spec.range), float(spec.resolution)
+        g[layout.G_SIGMA] = spec.noise_density * math.sqrt(spec.rate_hz)
+        g[layout.G_WALK] = spec.bias_walk * math.sqrt(self.period)
+        g[layout.G_DUE] = self.period - 1e-12
+        g[layout.G_PERIOD] = self.period
+        g[layout.G_RANGE], g[layout.G_RESOLUTION] = float(spec.range), float(spec.resolution)
 
     def refill(self, dt: float = 0.0) -> None:
         """Make sure the normal draws of two updates of ``dt`` are there."""
-        self.normals.refill(self.state, kernels.G_NEXT, 4 * (int(dt / self.period) + 2))
+        self.normals.refill(self.state, layout.G_NEXT, 4 * (int(dt / self.period) + 2))
 
     @property
     def bias(self) -> float:
         """The bias now, rad/s (drawn at turn-on, then walking)."""
-        return float(self.state[kernels.G_BIAS])
+        return float(self.state[layout.G_BIAS])
 
     @property
     def scale_error(self) -> float:
         """The scale factor's error (drawn at turn-on)."""
-        return float(self.state[kernels.G_SCALE])
+        return float(self.state[layout.G_SCALE])
 
     @property
     def rate(self) -> float:
         """Latest sample, rad/s (0 before the first)."""
-        return float(self.state[kernels.G_RATE])
+        return float(self.state[layout.G_RATE])
 
     @property
     def angle(self) -> float:
         """Sum of samples times the period: the heading a firmware integrating this gyro would have."""
-        return float(self.state[kernels.G_ANGLE])
+        return float(self.state[layout.G_ANGLE])
 
     @property
     def samples(self) -> int:
         """Samples taken."""
-        return int(self.state[kernels.G_SAMPLES])
+        return int(self.state[layout.G_SAMPLES])
 
     def update(self, dt: float, true_rate: float) -> bool:
         """Advance ``dt`` seconds at ``true_rate``; True if at least one new sample was taken."""

@@ -2,8 +2,8 @@
 
 A numba dispatcher keeps the function it compiles (``py_func``), but that function calls the other
 kernels by their global names, which are dispatchers again (calling one compiles it). A twin is
-that function rebuilt over a copy of its module's globals in which every dispatcher is replaced by
-its own twin, numba's ``prange`` by ``range`` and ``math`` by :data:`LIBM`. It runs 10-50 times
+that function rebuilt over a copy of the globals of the module that defines it, in which every
+dispatcher (its own module's, or one imported from another) is replaced by its own twin, numba's ``prange`` by ``range`` and ``math`` by :data:`LIBM`. It runs 10-50 times
 slower than the compiled kernel, and with no compiling at all: the simulator runs on the twins
 while the compiled kernels are built in a process of their own (:mod:`omnibot.sim.jit`).
 
@@ -47,18 +47,43 @@ LIBM.hypot = _libm_hypot
 
 
 def python_twins(module: ModuleType) -> dict[str, Callable[..., Any]]:
-    """Every numba-compiled function of ``module``, by name, as a plain Python function whose calls
-    of the module's other compiled functions go to their twins."""
-    twin_globals = dict(vars(module))
-    twin_globals.update(math=LIBM, prange=range)
-    twins: dict[str, Callable[..., Any]] = {}
-    for name, value in vars(module).items():
-        if is_jitted(value):
-            code = value.py_func
-            twins[name] = FunctionType(
-                code.__code__, twin_globals, code.__name__, code.__defaults__, code.__closure__
-            )
-    twin_globals.update(twins)
+    """Every numba-compiled function in ``module``'s namespace (its own and those it imported), by
+    name, as a plain Python function whose calls of compiled functions go to their twins.
+
+    A twin runs over a copy of the globals of the module that defines its function, so a kernel
+    imported from another module finds its own names, and the kernels it calls (by the names it
+    imported them under) are twins too, across as many modules as the calls go."""
+    twins = _twins_of(_reachable_kernels(vars(module)))
+    return {name: twins[id(value)] for name, value in vars(module).items() if is_jitted(value)}
+
+
+def _reachable_kernels(namespace: dict[str, Any]) -> list[Any]:
+    """The compiled functions of ``namespace`` and, transitively, of their modules' namespaces."""
+    found: dict[int, Any] = {}
+    pending = [value for value in namespace.values() if is_jitted(value)]
+    while pending:
+        kernel = pending.pop()
+        if id(kernel) not in found:
+            found[id(kernel)] = kernel
+            pending.extend(value for value in kernel.py_func.__globals__.values() if is_jitted(value))
+    return list(found.values())
+
+
+def _twins_of(kernels: list[Any]) -> dict[int, Callable[..., Any]]:
+    """Each kernel's twin by the kernel's id: one copy of globals per defining module, whose
+    compiled functions are then replaced by their twins."""
+    copies: dict[int, dict[str, Any]] = {}
+    twins: dict[int, Callable[..., Any]] = {}
+    for kernel in kernels:
+        code, own = kernel.py_func, kernel.py_func.__globals__
+        twin_globals = copies.setdefault(id(own), {**own, "math": LIBM, "prange": range})
+        twins[id(kernel)] = FunctionType(
+            code.__code__, twin_globals, code.__name__, code.__defaults__, code.__closure__
+        )
+    for twin_globals in copies.values():
+        twin_globals.update(
+            {name: twins[id(value)] for name, value in twin_globals.items() if is_jitted(value)}
+        )
     return twins
 
 

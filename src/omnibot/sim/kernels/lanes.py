@@ -7,11 +7,11 @@ compiler vectorises it: each thread copies a block of :data:`BLOCK` robots into 
 arrays (one row per quantity, one column per robot) and steps them together, every loop over the
 block's robots innermost. Numba calls the C library's ``tanh``, ``cos`` and ``sin`` one value at a
 time (no vector library here: numba finds no SVML), which would keep the loops scalar and took
-over half of an exact robot-step; this module has its own, in plain arithmetic: :func:`tanh`,
-:func:`sincos`, :func:`cos`.
+over half of an exact robot-step; it has its own, in plain arithmetic (:mod:`omnibot.sim.kernels.libm`:
+:func:`~omnibot.sim.kernels.libm.tanh`, :func:`~omnibot.sim.kernels.libm.sincos`, :func:`~omnibot.sim.kernels.libm.cos`).
 
 They are not the C library's, so the results are not :meth:`Physics.step`'s bit for bit: each
-function is within about one unit in the last place of the exact value (``tests/sim/test_lanes.py``
+function is within about one unit in the last place of the exact value (``tests/sim/kernels/test_libm.py``
 measures it), and a run keeps within a stated tolerance of the exact step's
 (``docs/simulator.md``, "Batches"). Everything else is exact IEEE arithmetic compiled without
 ``fastmath``: the result does not depend on the number of threads, the block's vector width or the
@@ -20,7 +20,7 @@ The simulator never calls this module (its steps stay :func:`~omnibot.sim.kernel
 bit for bit); :meth:`Physics.run` does when asked ``exact=False``, compiling it on its first call in
 a process (a few seconds; cached on disk after).
 
-Range: :func:`sincos` and :func:`cos` reduce their argument by pi/2 in three exact parts, good for
+Range: :mod:`~omnibot.sim.kernels.libm`'s sine and cosine reduce their argument by pi/2 in three exact parts, good for
 ``|x| <= REDUCE_LIMIT``; the kernel gives larger angles (a heading or a wheel angle past a million
 radians) to the C library, one value at a time.
 """
@@ -28,167 +28,19 @@ radians) to the C library, one value at a time.
 from __future__ import annotations
 
 import math
-from decimal import Decimal, localcontext
 
 import numpy as np
 from numba import njit, prange
-from numpy.typing import NDArray
 
 from omnibot.floor import ROLL_SPEED_EPS, WHEEL_SPEED_EPS
-from omnibot.sim import kernels as k
-from omnibot.sim.kernels import solve_body
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
+from omnibot.sim.kernels import layout
+from omnibot.sim.kernels.layout import FloatArray, IntArray, physics_offsets, physics_views
+from omnibot.sim.kernels.libm import REDUCE_LIMIT, cos, sincos, tanh
+from omnibot.sim.kernels.wheels import solve_body
 
 BLOCK = 32
 """Robots stepped together by one thread (a multiple of any vector width)."""
 
-REDUCE_LIMIT = 1.0e6
-"""Largest |x| :func:`sincos` and :func:`cos` reduce themselves (k pi/2 splits exactly up to 2^21)."""
-
-_ROUND = 6755399441055744.0  # 1.5 * 2^52: (x + _ROUND) - _ROUND rounds x to an integer, |x| < 2^51
-
-
-def _split(value: Decimal, bits: int) -> tuple[float, float, float]:
-    """``value`` as hi + mid + lo, hi and mid with at most ``bits`` significant bits (so their
-    products with an integer below 2^(53 - bits) are exact)."""
-    parts = []
-    rest = value
-    for _ in range(2):
-        exponent = math.frexp(float(rest))[1]
-        part = math.ldexp(math.floor(math.ldexp(float(rest), bits - exponent)), exponent - bits)
-        parts.append(part)
-        rest -= Decimal(part)
-    return parts[0], parts[1], float(rest)
-
-
-with localcontext() as _ctx:
-    _ctx.prec = 60
-    _LN2 = Decimal(2).ln()
-    _PI_2 = Decimal("3.14159265358979323846264338327950288419716939937510582097494459") / 2
-    LN2_HI, LN2_MID, LN2_LO = _split(_LN2, 32)
-    PIO2_HI, PIO2_MID, PIO2_LO = _split(_PI_2, 32)
-    INV_LN2 = float(1 / _LN2)
-    TWO_OVER_PI = float(1 / _PI_2)
-
-# Taylor coefficients 1/n! (the reduced arguments are small enough for them to reach a double's precision)
-_F = [1.0 / math.factorial(n) for n in range(19)]
-EX2, EX3, EX4, EX5, EX6, EX7, EX8, EX9, EX10, EX11, EX12, EX13, EX14 = _F[2:15]
-_SIN: tuple[float, ...] = tuple(_F[n] * (-1) ** (n // 2) for n in range(3, 18, 2))  # of x^3 .. x^17
-_COS: tuple[float, ...] = tuple(_F[n] * (-1) ** (n // 2) for n in range(4, 19, 2))  # of x^4 .. x^18
-SN3, SN5, SN7, SN9, SN11, SN13, SN15, SN17 = _SIN
-CS4, CS6, CS8, CS10, CS12, CS14, CS16, CS18 = _COS
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def _expm1_reduced(r: float) -> float:
-    """exp(r) - 1 for |r| <= ln 2 / 2."""
-    e = EX14
-    e = EX13 + r * e
-    e = EX12 + r * e
-    e = EX11 + r * e
-    e = EX10 + r * e
-    e = EX9 + r * e
-    e = EX8 + r * e
-    e = EX7 + r * e
-    e = EX6 + r * e
-    e = EX5 + r * e
-    e = EX4 + r * e
-    e = EX3 + r * e
-    e = EX2 + r * e
-    return r + r * r * e
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def tanh(x: float) -> float:
-    """The hyperbolic tangent in plain arithmetic (vectorisable), within 3 ulps of the C library's:
-    -M / (2 + M) with M = expm1(-2 |x|) = 2^k expm1(r) + 2^k - 1 below 0.55, 1 - 2E / (1 + E) with
-    E = exp(-2 |x|) above, ``|x|`` held at 22 (tanh is 1 in double from 19.1)."""
-    a = min(abs(x), 22.0)
-    y = -2.0 * a
-    kf = (y * INV_LN2 + _ROUND) - _ROUND  # -64 <= k <= 0
-    r = ((y - kf * LN2_HI) - kf * LN2_MID) - kf * LN2_LO
-    p = _expm1_reduced(r)
-    n = int(-kf)
-    scale = 0.5 if n & 1 else 1.0  # 2^k, exactly
-    scale *= 0.25 if n & 2 else 1.0
-    scale *= 0.0625 if n & 4 else 1.0
-    scale *= 0.00390625 if n & 8 else 1.0
-    scale *= 1.52587890625e-05 if n & 16 else 1.0
-    scale *= 2.3283064365386963e-10 if n & 32 else 1.0
-    scale *= 5.421010862427522e-20 if n & 64 else 1.0
-    small = a < 0.55
-    big_m = scale * p + (scale - 1.0)  # expm1(y)
-    e = scale * p + scale  # exp(y)
-    ratio = (-big_m if small else 2.0 * e) / (2.0 + big_m if small else 1.0 + e)  # one division
-    t = ratio if small else 1.0 - ratio
-    return t if x > 0.0 else -t if x < 0.0 else x
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def _reduce(x: float) -> tuple[float, float, int]:
-    """x - k pi/2 as r + t, r in [-pi/4, pi/4] (about) and t its tail, and k mod 4, for |x| <=
-    REDUCE_LIMIT (x - k hi is exact, and so are the products k hi and k mid)."""
-    kf = (x * TWO_OVER_PI + _ROUND) - _ROUND
-    a = x - kf * PIO2_HI
-    b = kf * PIO2_MID
-    r = a - b
-    t = ((a - r) - b) - kf * PIO2_LO  # what the subtraction rounded off, less the last part
-    return r + t, (r - (r + t)) + t, int(kf) & 3
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def _sin_reduced(r: float, t: float) -> float:
-    z = r * r
-    s = SN17
-    s = SN15 + z * s
-    s = SN13 + z * s
-    s = SN11 + z * s
-    s = SN9 + z * s
-    s = SN7 + z * s
-    s = SN5 + z * s
-    s = SN3 + z * s
-    return r + (r * z * s + t)
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def _cos_reduced(r: float, t: float) -> float:
-    z = r * r
-    c = CS18
-    c = CS16 + z * c
-    c = CS14 + z * c
-    c = CS12 + z * c
-    c = CS10 + z * c
-    c = CS8 + z * c
-    c = CS6 + z * c
-    c = CS4 + z * c
-    half = 0.5 * z
-    w = 1.0 - half
-    return w + (((1.0 - w) - half) + (z * z * c - r * t))  # (1 - w) - half: what rounding w lost
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def sincos(x: float) -> tuple[float, float]:
-    """(sin x, cos x) in plain arithmetic (vectorisable), within about an ulp, |x| <= REDUCE_LIMIT."""
-    r, t, quadrant = _reduce(x)
-    s, c = _sin_reduced(r, t), _cos_reduced(r, t)
-    sin = c if quadrant & 1 else s
-    cos = s if quadrant & 1 else c
-    sin = -sin if quadrant & 2 else sin
-    cos = -cos if (quadrant + 1) & 2 else cos
-    return sin, cos
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def cos(x: float) -> float:
-    """cos x in plain arithmetic (vectorisable), within about an ulp, |x| <= REDUCE_LIMIT."""
-    r, t, quadrant = _reduce(x)
-    c = _sin_reduced(r, t) if quadrant & 1 else _cos_reduced(r, t)
-    return -c if (quadrant + 1) & 2 else c
-
-
-# --------------------------------------------------------------------------- the batch kernel
 
 # rows of a block's structure of arrays, one column per robot: per robot ...
 (X, Y, TH, VX, VY, W, V_BUS, I_BATT, V_OPEN, EXT_X, EXT_Y, EXT_T, M_DT, I_DT, B_RES, B_RELAX,
@@ -234,28 +86,28 @@ def _load(
         rb[V_BUS, lane], rb[I_BATT, lane], rb[V_OPEN, lane] = battery[i, 0], battery[i, 1], v_open[i]
         rb[EXT_X, lane], rb[EXT_Y, lane], rb[EXT_T, lane] = ext[i, 0], ext[i, 1], ext[i, 2]
         r = rp[i]
-        rb[M_DT, lane], rb[I_DT, lane] = r[k.R_M_DT], r[k.R_I_DT]
-        rb[B_RES, lane], rb[B_RELAX, lane] = r[k.R_BATT_RES], r[k.R_BATT_RELAX]
+        rb[M_DT, lane], rb[I_DT, lane] = r[layout.R_M_DT], r[layout.R_I_DT]
+        rb[B_RES, lane], rb[B_RELAX, lane] = r[layout.R_BATT_RES], r[layout.R_BATT_RELAX]
         for j in range(m):
             o = j * WHEEL_ROWS
             p = wp[i, j]
             for c in range(8):  # the contact rows TX..NA are wp's first 8 columns
                 wb[o + c, lane] = p[c]
             command = pwm[i, j]
-            wb[o + J_DT, lane] = p[k.W_J_DT]
-            wb[o + DUTY, lane] = min(max(command * p[k.W_INV_PWM_MAX], -1.0), 1.0)
-            wb[o + ON, lane] = 1.0 if abs(command) >= p[k.W_ON_THRESHOLD] else 0.0
-            wb[o + DROP, lane], wb[o + INV_RES, lane] = p[k.W_DROP], p[k.W_INV_RES]
-            wb[o + KE_RES, lane], wb[o + I_MAX, lane] = p[k.W_KE_RES], p[k.W_I_MAX]
-            wb[o + EMF, lane], wb[o + KT, lane] = p[k.W_EMF_DAMPING], p[k.W_KT]
-            wb[o + VISC, lane], wb[o + STATIC, lane] = p[k.W_VISC], p[k.W_STATIC]
+            wb[o + J_DT, lane] = p[layout.W_J_DT]
+            wb[o + DUTY, lane] = min(max(command * p[layout.W_INV_PWM_MAX], -1.0), 1.0)
+            wb[o + ON, lane] = 1.0 if abs(command) >= p[layout.W_ON_THRESHOLD] else 0.0
+            wb[o + DROP, lane], wb[o + INV_RES, lane] = p[layout.W_DROP], p[layout.W_INV_RES]
+            wb[o + KE_RES, lane], wb[o + I_MAX, lane] = p[layout.W_KE_RES], p[layout.W_I_MAX]
+            wb[o + EMF, lane], wb[o + KT, lane] = p[layout.W_EMF_DAMPING], p[layout.W_KT]
+            wb[o + VISC, lane], wb[o + STATIC, lane] = p[layout.W_VISC], p[layout.W_STATIC]
             sid = ids[i, j]
-            wb[o + F_TRACTION, lane] = surf[sid, k.S_MU] * p[k.W_GRIP_LOAD]
-            wb[o + INV_VEPS, lane] = surf[sid, k.S_INV_VEPS]
-            wb[o + ROLL_LOAD, lane] = surf[sid, k.S_ROLL] * p[k.W_LOAD]
-            wb[o + RR_TOP, lane], wb[o + RR_VAR, lane] = p[k.W_RR_TOP], p[k.W_RR_VAR]
-            wb[o + COUNT, lane], wb[o + RADIUS, lane] = p[k.W_ROLLER_COUNT], p[k.W_RADIUS]
-            wb[o + SCRUB, lane] = p[k.W_SCRUB_LOAD]
+            wb[o + F_TRACTION, lane] = surf[sid, layout.S_MU] * p[layout.W_GRIP_LOAD]
+            wb[o + INV_VEPS, lane] = surf[sid, layout.S_INV_VEPS]
+            wb[o + ROLL_LOAD, lane] = surf[sid, layout.S_ROLL] * p[layout.W_LOAD]
+            wb[o + RR_TOP, lane], wb[o + RR_VAR, lane] = p[layout.W_RR_TOP], p[layout.W_RR_VAR]
+            wb[o + COUNT, lane], wb[o + RADIUS, lane] = p[layout.W_ROLLER_COUNT], p[layout.W_RADIUS]
+            wb[o + SCRUB, lane] = p[layout.W_SCRUB_LOAD]
             wb[o + OMEGA, lane], wb[o + ANGLE, lane] = q[i, 3 + j], wheel_angle[i, j]
             wb[o + CURRENT, lane], wb[o + TRACTION, lane] = current[i, j], traction[i, j]
 
@@ -278,7 +130,7 @@ def _store(rb: FloatArray, wb: FloatArray, first: int, n: int, m: int, views: tu
 @njit(cache=True, inline="always", error_model="numpy")
 def _step(rb: FloatArray, wb: FloatArray, m: int, has_ext: bool, dt: float) -> None:
     """Advance the robots of a block (``rb`` per robot, ``wb`` per wheel) by dt: the operations of
-    :func:`omnibot.sim.kernels._robot_physics` in the same order, over the block's lanes (each loop
+    :func:`omnibot.sim.kernels.wheels.robot_physics` in the same order, over the block's lanes (each loop
     over lanes vectorises; the C library's sin and cos only where a loop met an angle too large)."""
     for i in range(BLOCK):
         v_bus = rb[V_BUS, i]
@@ -410,7 +262,7 @@ def _step(rb: FloatArray, wb: FloatArray, m: int, has_ext: bool, dt: float) -> N
 
 @njit(cache=True, inline="always", error_model="numpy")
 def _secant(fmax: float, inv_eps: float, x: float) -> tuple[float, float]:
-    """:func:`omnibot.sim.kernels._secant` with :func:`tanh` (x = 0: the slope's limit, no branch)."""
+    """:func:`omnibot.sim.kernels.wheels._secant` with :func:`tanh` (x = 0: the slope's limit, no branch)."""
     th = tanh(x)
     ratio = th / x if x != 0.0 else 1.0
     return fmax * th, fmax * inv_eps * ratio
@@ -424,7 +276,7 @@ def physics_run(
     module's tanh, sin and cos: ``steps`` steps of every robot of the packed state ``buf``, blocks
     of :data:`BLOCK` robots shared out among numba's threads. Returns 0, or 1 (state untouched)
     if a surface id is out of range."""
-    views = k.physics_views(buf, n, m, n_surf)
+    views = physics_views(buf, n, m, n_surf)
     for i in range(n):
         for j in range(m):
             if ids[i, j] < 0 or ids[i, j] >= n_surf:
@@ -444,7 +296,7 @@ def fill_cache() -> None:
     ``exact=False`` run, and the tests', only load it (the call steps no robot: types alone decide
     what is compiled)."""
     n, m, n_surf = 1, 4, 1
-    buf = np.zeros(k.physics_offsets.py_func(n, m, n_surf)[-1])
+    buf = np.zeros(physics_offsets.py_func(n, m, n_surf)[-1])
     physics_run(buf, np.zeros((n, m), dtype=np.int64), n, m, n_surf, False, 0.001, 0)
 
 

@@ -1,8 +1,7 @@
-"""The batch kernel in vector lanes: its tanh, sin and cos, and its runs against the exact step."""
+"""The batch kernel in vector lanes: its runs against the exact step."""
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
@@ -10,33 +9,12 @@ import pytest
 
 from omnibot.errors import SimulationError
 from omnibot.robot import load_robot
-from omnibot.sim import lanes
+from omnibot.sim.kernels import lanes
 from omnibot.sim.physics import Physics
 from omnibot.sim.twins import python_twins
 
 RTOL = 1e-12
 """How far a lanes run may part from the exact step's in 2 s, relative to a state's largest value (measured: 5e-15; 7e-13 after 10 s)."""
-
-
-def _ulps(got: np.ndarray, want: np.ndarray) -> np.ndarray:
-    return np.asarray(np.abs(got - want) / np.spacing(np.abs(want)))
-
-
-@pytest.mark.parametrize("scale", [1e-6, 0.3, 1.0, 4.0, 30.0])
-def test_tanh_is_within_three_ulps_of_the_c_library(scale: float) -> None:
-    x = np.random.default_rng(1).uniform(-scale, scale, 3000)
-    got = np.array([lanes.tanh(v) for v in x])
-    assert _ulps(got, np.array([math.tanh(v) for v in x])).max() <= 3.0
-    assert lanes.tanh(100.0) == 1.0 and lanes.tanh(-1e300) == -1.0
-    assert math.copysign(1.0, lanes.tanh(-0.0)) == -1.0 and lanes.tanh(0.0) == 0.0
-
-
-@pytest.mark.parametrize("scale", [1e-3, 1.0, 100.0, lanes.REDUCE_LIMIT])
-def test_sin_and_cos_are_within_an_ulp_of_the_c_library(scale: float) -> None:
-    x = np.random.default_rng(2).uniform(-scale, scale, 3000)
-    sin, cos = np.array([lanes.sincos(v) for v in x]).T
-    assert _ulps(sin, np.sin(x)).max() <= 1.0 and _ulps(cos, np.cos(x)).max() <= 1.0
-    assert np.array_equal([lanes.cos(v) for v in x], cos)
 
 
 def _batch(n: int) -> Physics:

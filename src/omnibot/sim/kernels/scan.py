@@ -1,0 +1,211 @@
+"""The laser scanner's kernels: an index of the edges by direction, the rays cast through it
+against the world and the other bodies, and the measurement's noise.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from omnibot.sim.kernels.contacts import segment_distance
+from omnibot.sim.kernels.layout import FloatArray, IntArray
+
+SCAN_BINS = 256
+"""Directions of a :func:`scan_index`: the circle is cut into this many equal sectors."""
+
+
+@njit(cache=True)
+def _turn(a: float) -> float:
+    """a wrapped to [0, 2 pi)."""
+    return a - 2.0 * math.pi * math.floor(a / (2.0 * math.pi))
+
+
+@njit(cache=True)
+def _hit(ox: float, oy: float, dx: float, dy: float, x0: float, y0: float, x1: float, y1: float) -> float:
+    """Distance along the ray (ox, oy) + t (dx, dy) to the edge (x0, y0)-(x1, y1), inf if it misses."""
+    ex, ey = x1 - x0, y1 - y0
+    denom = dx * ey - dy * ex
+    if abs(denom) < 1e-12:
+        return np.inf
+    ax, ay = x0 - ox, y0 - oy
+    t = (ax * ey - ay * ex) / denom
+    u = (ax * dy - ay * dx) / denom
+    return t if t >= 0.0 and 0.0 <= u <= 1.0 else np.inf
+
+
+@njit(cache=True)
+def scan_index(
+    segments: FloatArray, ax: float, ay: float, radius: float, max_range: float
+) -> tuple[IntArray, IntArray, FloatArray]:
+    """Which edges a ray from anywhere within ``radius`` of (ax, ay) may meet, by direction.
+
+    Returns (starts, entries, near): the edges a ray pointing into sector b (of SCAN_BINS equal
+    sectors from angle 0) may meet are entries[starts[b]:starts[b+1]], nearest first; near[e] is no
+    more than the distance from any such origin to edge e. An edge seen from (ax, ay) under the angles
+    [a, a + s] is seen from an origin within ``radius`` under angles within asin(radius / d) of them
+    (d: the edge's distance from (ax, ay)), so it goes into the sectors of that widened interval;
+    an edge closer than ``radius`` into every sector; one farther than max_range + radius into none.
+    """
+    n_seg = segments.shape[0]
+    width = 2.0 * math.pi / SCAN_BINS
+    near = np.full(n_seg, np.inf)
+    first = np.zeros(n_seg, dtype=np.int64)
+    count = np.zeros(n_seg, dtype=np.int64)
+    for e in range(n_seg):
+        x0, y0, x1, y1 = segments[e, 0], segments[e, 1], segments[e, 2], segments[e, 3]
+        d = segment_distance(ax, ay, x0, y0, x1, y1)
+        if d - radius > max_range:
+            continue
+        near[e] = d - radius
+        if d <= radius:
+            count[e] = SCAN_BINS
+            continue
+        a0 = math.atan2(y0 - ay, x0 - ax)
+        span = _wrap(math.atan2(y1 - ay, x1 - ax) - a0)
+        if span < 0.0:
+            a0, span = a0 + span, -span
+        widen = math.asin(min(1.0, radius / d)) + 1e-9
+        a0, span = _turn(a0 - widen), span + 2.0 * widen
+        lo = min(int(a0 / width), SCAN_BINS - 1)
+        first[e] = lo
+        count[e] = min(int((a0 + span) / width) - lo + 1, SCAN_BINS)
+    order = np.argsort(near)
+    starts = np.zeros(SCAN_BINS + 1, dtype=np.int64)
+    for e in range(n_seg):
+        for k in range(count[e]):
+            starts[(first[e] + k) % SCAN_BINS + 1] += 1
+    for b in range(SCAN_BINS):
+        starts[b + 1] += starts[b]
+    fill = starts[:-1].copy()
+    entries = np.empty(starts[SCAN_BINS], dtype=np.int64)
+    for q in range(n_seg):
+        e = order[q]
+        for k in range(count[e]):
+            b = (first[e] + k) % SCAN_BINS
+            entries[fill[b]] = e
+            fill[b] += 1
+    return starts, entries, near
+
+
+@njit(cache=True)
+def _wrap(a: float) -> float:
+    """a wrapped to [-pi, pi)."""
+    return a - 2.0 * math.pi * math.floor((a + math.pi) / (2.0 * math.pi))
+
+
+@njit(cache=True)
+def scan_rays(
+    ray_t: FloatArray,
+    ray_a: FloatArray,
+    hist_t0: float,
+    hist_dt: float,
+    hist_p: FloatArray,
+    own: int,
+    mount_x: float,
+    mount_y: float,
+    segments: FloatArray,
+    starts: IntArray,
+    entries: IntArray,
+    near: FloatArray,
+    body_v: FloatArray,
+    body_off: IntArray,
+    max_range: float,
+    out: FloatArray,
+) -> None:
+    """True range of each ray of a spinning scanner into out (inf: nothing within max_range).
+
+    Ray i is measured at time ray_t[i] in direction ray_a[i] of the robot's base frame, from the
+    scanner at (mount_x, mount_y) in that frame. Poses are recorded every hist_dt seconds from
+    hist_t0: row j of hist_p holds (x, y, theta) of every body b in columns 3b..3b+2; the scanner's
+    robot is body ``own``. Each body's pose at a ray's time is interpolated linearly between rows
+    (held outside them). The rays meet the world's edges (``x0, y0, x1, y1`` rows of segments) and
+    the other bodies' outlines (body b: the closed polygon body_v[body_off[b]:body_off[b+1]] in its
+    own frame) where those bodies were at the ray's time.
+
+    A ray tests only the edges (starts, entries, near) of :func:`scan_index` lists for its direction,
+    nearest first, and stops at the first whose ``near`` lies beyond its hit (the index must hold
+    every origin); a body only if its bounding circle meets the ray. The result is the same as
+    testing everything.
+    """
+    n = ray_t.shape[0]
+    n_hist = hist_p.shape[0]
+    n_body = body_off.shape[0] - 1
+    body_r = np.zeros(n_body)
+    for b in range(n_body):
+        for v in range(body_off[b], body_off[b + 1]):
+            body_r[b] = max(body_r[b], math.hypot(body_v[v, 0], body_v[v, 1]))
+    width = 2.0 * math.pi / SCAN_BINS
+    c0 = 3 * own
+    for i in range(n):
+        pos = (ray_t[i] - hist_t0) / hist_dt
+        k = min(max(math.floor(pos), 0), max(n_hist - 2, 0))
+        f = min(max(pos - k, 0.0), 1.0) if n_hist > 1 else 0.0
+        k1 = k + 1 if n_hist > 1 else k
+        x = hist_p[k, c0] + f * (hist_p[k1, c0] - hist_p[k, c0])
+        y = hist_p[k, c0 + 1] + f * (hist_p[k1, c0 + 1] - hist_p[k, c0 + 1])
+        th = hist_p[k, c0 + 2] + f * (hist_p[k1, c0 + 2] - hist_p[k, c0 + 2])
+        c, s = math.cos(th), math.sin(th)
+        ox = x + c * mount_x - s * mount_y
+        oy = y + s * mount_x + c * mount_y
+        ang = th + ray_a[i]
+        dx, dy = math.cos(ang), math.sin(ang)
+        sector = min(int(_turn(ang) / width), SCAN_BINS - 1)
+        best = np.inf
+        for q in range(starts[sector], starts[sector + 1]):
+            e = entries[q]
+            if near[e] > best:
+                break
+            t = _hit(ox, oy, dx, dy, segments[e, 0], segments[e, 1], segments[e, 2], segments[e, 3])
+            best = min(best, t)
+        for b in range(n_body):
+            if b == own:
+                continue
+            cb = 3 * b
+            bx = hist_p[k, cb] + f * (hist_p[k1, cb] - hist_p[k, cb])
+            by = hist_p[k, cb + 1] + f * (hist_p[k1, cb + 1] - hist_p[k, cb + 1])
+            rx, ry = bx - ox, by - oy
+            along = rx * dx + ry * dy
+            r = body_r[b]
+            if along + r < 0.0 or along - r > best or abs(rx * dy - ry * dx) > r:
+                continue  # its bounding circle is behind, beyond the best hit or beside the ray
+            bt = hist_p[k, cb + 2] + f * (hist_p[k1, cb + 2] - hist_p[k, cb + 2])
+            cbt, sbt = math.cos(bt), math.sin(bt)
+            px, py = -cbt * rx - sbt * ry, sbt * rx - cbt * ry  # the origin in the body's frame
+            qx, qy = cbt * dx + sbt * dy, -sbt * dx + cbt * dy  # the direction in the body's frame
+            v0, v1 = body_off[b], body_off[b + 1]
+            for v in range(v0, v1):
+                w = v + 1 if v + 1 < v1 else v0
+                t = _hit(px, py, qx, qy, body_v[v, 0], body_v[v, 1], body_v[w, 0], body_v[w, 1])
+                best = min(best, t)
+        out[i] = best if best <= max_range else np.inf
+
+
+@njit(cache=True)
+def scan_measure(
+    true: FloatArray,
+    draws: FloatArray,
+    noise_std: float,
+    noise_fraction: float,
+    resolution: float,
+    dropout: float,
+    range_min: float,
+    range_max: float,
+    out: FloatArray,
+) -> None:
+    """What the scanner reports for the true ranges (inf: no return) into out, from 3 uniform draws
+    per ray (draws[i], draws[n + i], draws[2n + i]: a Box-Muller normal from the first two, the
+    dropout from the third): the range plus N(0, noise_std + noise_fraction * range), quantised to
+    resolution (when > 0); inf for a dropout or a value outside [range_min, range_max]."""
+    n = true.shape[0]
+    for i in range(n):
+        r = true[i]
+        if not r < np.inf or draws[2 * n + i] < dropout:
+            out[i] = np.inf
+            continue
+        z = math.sqrt(-2.0 * math.log1p(-draws[i])) * math.cos(2.0 * math.pi * draws[n + i])
+        v = r + (noise_std + noise_fraction * r) * z
+        if resolution > 0.0:
+            v = round(v / resolution) * resolution
+        out[i] = v if range_min <= v <= range_max else np.inf
