@@ -1,5 +1,6 @@
 """Numba's disk cache for kernels that call kernels of other files: each kernel's cache entry is
-stamped with the contents of every file of :mod:`omnibot.sim.kernels`, not only its own.
+stamped with the contents of every file of :mod:`omnibot.sim.kernels` (and of the constants they
+import from outside it, :data:`FROZEN`), not only its own.
 
 Numba checks a cached function against its own source file alone, but a kernel compiles the kernels
 it calls into itself: with the family split over several files, an edit of ``wheels.py`` would leave
@@ -25,11 +26,16 @@ _LOCATORS: list[Any] = CacheImpl._locator_classes
 FAMILY = Path(__file__).resolve().parent
 """The folder whose Python files stamp each other's kernels."""
 
+FROZEN = (FAMILY.parents[1] / "floor" / "contact.py",)
+"""Files outside the family whose module-level constants the kernels import (the floor's speed
+thresholds): numba freezes a global's value into the compiled code, so they stamp it too."""
 
-def family_stamp(folder: Path = FAMILY) -> str:
-    """The SHA-256 of the family's Python files, in name order, each with its name."""
+
+def family_stamp(folder: Path = FAMILY, frozen: tuple[Path, ...] = FROZEN) -> str:
+    """The SHA-256 of the family's Python files, in name order, then the ``frozen`` files, each with
+    its name."""
     digest = hashlib.sha256()
-    for path in sorted(folder.glob("*.py")):
+    for path in [*sorted(folder.glob("*.py")), *frozen]:
         digest.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
     return digest.hexdigest()
 
@@ -79,4 +85,4 @@ class FamilyLocator(_CacheLocator):
 if FamilyLocator not in _LOCATORS:
     _LOCATORS.insert(0, FamilyLocator)
 
-__all__ = ["FAMILY", "FamilyLocator", "family_stamp"]
+__all__ = ["FAMILY", "FROZEN", "FamilyLocator", "family_stamp"]
