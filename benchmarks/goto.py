@@ -41,10 +41,8 @@ from benchmarks.planner import free_poses, inside_walls, rasterise
 from omnibot.lidar import open_scanner
 from omnibot.mapping import inflate
 from omnibot.motion import Pose2D
-from omnibot.navigation import GotoOptions, GotoResult, simulated_client
-from omnibot.navigation.goal import PoseProvider
+from omnibot.navigation import GotoOptions, GotoResult, PoseProvider, ScanPoints, simulated_client
 from omnibot.navigation.goto import goto
-from omnibot.navigation.scanwatch import ScanPoints
 from omnibot.robot import load_robot
 from omnibot.runtime import Runtime
 from omnibot.sim import load_world
@@ -126,9 +124,9 @@ def run_goal(
         scans = open_scanner(None, client.link, robot)
         sink = ScanPoints(scans, pose)
 
-        def watching(runtime: Runtime) -> PoseProvider | None:
+        def watching(runtime: Runtime) -> PoseProvider:
             runtime.add_sink(sink)
-            return pose
+            return pose or (lambda: None if (est := runtime.estimate_now()) is None else est.pose)
 
         try:
             result = goto(client, robot, grid, goal, start, options, pose_from=watching, scan=sink.points)

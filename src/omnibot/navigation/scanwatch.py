@@ -16,8 +16,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from omnibot.mapping.feed import ScanFeed, undistorted
-from omnibot.mapping.se2 import compose, inverse, transform
+from omnibot.mapping import ScanFeed, compose, inverse, transform, undistorted
 from omnibot.motion import Pose2D
 from omnibot.navigation.goal import FloatArray, PoseProvider
 from omnibot.scan import Scan
