@@ -1,7 +1,7 @@
 """Going to a place in the room: 20 seeded goals per robot, arrival error from the simulator's truth.
 
 Run: ``python -m benchmarks.goto`` (``--goals N``, ``--robots``, ``--poses odometry,truth``,
-``--world``, ``--obstacle``; a few minutes on one core).
+``--world``, ``--obstacle``, ``--scanner``; a few minutes on one core).
 
 For each robot and goal k (seed k): the room world rasterised at 2.5 cm
 (:func:`benchmarks.planner.rasterise`) is the map; the robot stands at the world's start in a
@@ -20,7 +20,9 @@ Per robot and provider: goals arrived (by goto's verdict) and arrived by the tru
 and 5 degrees of the true pose), the truth's final position and heading errors (mean, max),
 contacts (the simulator's collision events), re-plans, and the time (simulated s per goal).
 ``--obstacle`` adds a box to the simulated room that the map does not have, in the way of
-every goal's straight line... (see OBSTACLE), so the sonar watch's stop and re-plan are measured.
+every goal's straight line... (see OBSTACLE), so the sonar watch's stop and re-plan are measured;
+``--scanner`` gives the watch the robot's scanner too (as ``omnibot goto`` does; without it a robot
+with no sonar, omni3 and mecanum4, is blind to the box).
 """
 
 from __future__ import annotations
@@ -36,11 +38,13 @@ from pathlib import Path
 import yaml
 
 from benchmarks.planner import free_poses, inside_walls, rasterise
+from omnibot.lidar import open_scanner
 from omnibot.mapping import inflate
 from omnibot.motion import Pose2D
-from omnibot.navigation import GotoOptions, GotoResult, simulated_client
+from omnibot.navigation import GotoOptions, GotoResult, PoseProvider, ScanPoints, simulated_client
 from omnibot.navigation.goto import goto
 from omnibot.robot import load_robot
+from omnibot.runtime import Runtime
 from omnibot.sim import load_world
 from omnibot.transport import find_simulator
 
@@ -96,8 +100,11 @@ def run_goal(
     world: str = "room",
     sim_world: str | None = None,
     options: GotoOptions | None = None,
+    scanner: bool = False,
 ) -> Outcome:
-    """One goto in a fresh simulator; its outcome against the truth."""
+    """One goto in a fresh simulator; its outcome against the truth. ``scanner``: the robot's
+    scanner watches for what the map lacks (:class:`~omnibot.navigation.scanwatch.ScanPoints`, placed
+    by the provider), as in ``omnibot goto``; else only its sonars do (none on omni3 and mecanum4)."""
     robot = load_robot(robot_name)
     w = load_world(world)
     grid = rasterise(w)
@@ -110,7 +117,21 @@ def run_goal(
             p = sim.pose
             return Pose2D(p.x, p.y, p.theta)
 
-        result = goto(client, robot, grid, goal, start, options, pose=truth if provider == "truth" else None)
+        pose = truth if provider == "truth" else None
+        if not scanner:
+            result = goto(client, robot, grid, goal, start, options, pose=pose)
+            return Outcome(robot_name, provider, seed, goal, result, truth(), len(sim.collisions))
+        scans = open_scanner(None, client.link, robot)
+        sink = ScanPoints(scans, pose)
+
+        def watching(runtime: Runtime) -> PoseProvider:
+            runtime.add_sink(sink)
+            return pose or (lambda: None if (est := runtime.estimate_now()) is None else est.pose)
+
+        try:
+            result = goto(client, robot, grid, goal, start, options, pose_from=watching, scan=sink.points)
+        finally:
+            scans.close()
         return Outcome(robot_name, provider, seed, goal, result, truth(), len(sim.collisions))
 
 
@@ -144,6 +165,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--goals", type=int, default=20)
     parser.add_argument("--world", default="room")
     parser.add_argument("--obstacle", action="store_true", help=f"add {OBSTACLE} to the simulated room")
+    parser.add_argument(
+        "--scanner", action="store_true", help="the robot's scanner watches too, as in omnibot goto"
+    )
     parser.add_argument("--detail", action="store_true", help="one line per goal")
     args = parser.parse_args(argv)
     outcomes: list[Outcome] = []
@@ -153,7 +177,7 @@ def main(argv: list[str] | None = None) -> int:
             targets = goals(robot, args.goals, args.world)
             for provider in args.poses.split(","):
                 for k, goal in enumerate(targets):
-                    o = run_goal(robot, goal, k + 1, provider, args.world, sim_world)
+                    o = run_goal(robot, goal, k + 1, provider, args.world, sim_world, scanner=args.scanner)
                     outcomes.append(o)
                     if args.detail:
                         print(

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from omnibot.mapping.costmap import inflate
+from omnibot.motion import Pose2D
 from tests.mapping.rooms import RES, box_room, grid_of
 
 
@@ -35,3 +36,14 @@ def test_straight_runs_are_checked_exactly_against_the_cells_they_cross() -> Non
     assert not cmap.segment_free((0.535, 0.56), (0.56, 0.535))  # clips 0.6 cm of the cell's corner
     assert not cmap.segment_free((0.2, 0.2), (0.9, 0.9))  # through the corner (0.5, 0.5) and the cell
     assert cmap.segment_free((0.2, 0.5), (0.49, 0.9))
+
+
+def test_clearances_of_many_points_are_their_cells_and_zero_off_the_map() -> None:
+    # a turned, shifted map: the points' cells come through its origin
+    cmap = inflate(grid_of(box_room(), origin=Pose2D(-1.0, 0.5, 0.4)), robot_radius=0.2)
+    pts = np.random.default_rng(3).uniform(-3.0, 5.0, (400, 2))
+    cells = [cmap.cell_of(float(x), float(y)) for x, y in pts]
+    assert 50 < sum(c is not None for c in cells) < 350  # on the map and off it
+    expect = [0.0 if c is None else float(cmap.clearance[c]) for c in cells]
+    assert cmap.clearances(pts).tolist() == expect
+    assert [cmap.clearance_at(float(x), float(y)) for x, y in pts] == expect

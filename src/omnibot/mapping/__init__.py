@@ -61,13 +61,13 @@ from omnibot.faces import lazy_names
 if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
     from omnibot.mapping.costmap import MARGIN, CostMap, inflate
     from omnibot.mapping.ends import check_goal, check_start
-    from omnibot.mapping.feed import Track, interpolate
+    from omnibot.mapping.feed import ScanFeed, Track, interpolate, undistorted
     from omnibot.mapping.grid import OCCUPIED, OccupancyGrid
     from omnibot.mapping.localise import Localiser
     from omnibot.mapping.mapfile import load_map, save_map
     from omnibot.mapping.planner import PlannedPath, Planner, plan_path
     from omnibot.mapping.report import MappingResult, path_length, score_lines, write_outputs, write_report
-    from omnibot.mapping.se2 import compose, inverse
+    from omnibot.mapping.se2 import compose, inverse, transform
     from omnibot.mapping.session import LocalisingSink, MappingSink
     from omnibot.mapping.snapshot import MapSnapshot, RangeNoise
 
@@ -78,8 +78,8 @@ _EXPORTS = {
     "localise": ("Localiser",),
     "mapfile": ("load_map", "save_map"),
     "planner": ("PlannedPath", "Planner", "plan_path"),
-    "se2": ("compose", "inverse"),
-    "feed": ("Track", "interpolate"),
+    "se2": ("compose", "inverse", "transform"),
+    "feed": ("ScanFeed", "Track", "interpolate", "undistorted"),
     "report": ("MappingResult", "path_length", "score_lines", "write_outputs", "write_report"),
     "session": ("LocalisingSink", "MappingSink"),
     "snapshot": ("MapSnapshot", "RangeNoise"),
@@ -98,6 +98,7 @@ __all__ = [
     "PlannedPath",
     "Planner",
     "RangeNoise",
+    "ScanFeed",
     "Track",
     "check_goal",
     "check_start",
@@ -121,6 +122,8 @@ __all__ = [
     "se2",
     "session",
     "snapshot",
+    "transform",
+    "undistorted",
     "write_outputs",
     "write_report",
 ]

@@ -17,7 +17,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from omnibot.errors import ConfigError
 from omnibot.mapping.cellwalk import line_max
@@ -67,8 +67,15 @@ class CostMap:
 
     def clearance_at(self, x: float, y: float) -> float:
         """The clearance of the cell holding (x, y), m (0 off the map)."""
-        cell = self.cell_of(x, y)
-        return 0.0 if cell is None else float(self.clearance[cell])
+        return float(self.clearances([(x, y)])[0])
+
+    def clearances(self, points: ArrayLike) -> FloatArray:
+        """The clearance of the cells holding (n, 2) map points, m (0 off the map)."""
+        rc = self.grid.world_to_cell(points)
+        inside = self.grid.inside(rc)
+        out = np.zeros(len(rc))
+        out[inside] = self.clearance[rc[inside, 0], rc[inside, 1]]
+        return out
 
     def segment_free(self, a: tuple[float, float], b: tuple[float, float]) -> bool:
         """True when the straight run from ``a`` to ``b`` (map frame) crosses no blocked cell."""

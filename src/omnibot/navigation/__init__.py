@@ -20,7 +20,7 @@ from omnibot.faces import lazy_names
 
 if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
     from omnibot.navigation.following import FOLLOWER_PRIORITY, follower_source
-    from omnibot.navigation.goal import GotoOptions, GotoResult
+    from omnibot.navigation.goal import GotoOptions, GotoResult, PoseProvider, ScanSource
     from omnibot.navigation.goto import navigation_runtime
     from omnibot.navigation.goto_source import GotoSource
     from omnibot.navigation.judge import FollowJudge
@@ -28,13 +28,14 @@ if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
     from omnibot.navigation.plot import plot_run
     from omnibot.navigation.record import check_recording, teach
     from omnibot.navigation.runner import STANDSTILL, Navigator
+    from omnibot.navigation.scanwatch import ScanPoints
     from omnibot.navigation.session import FollowOptions, follow_path, simulated_client, summary, verdict
     from omnibot.navigation.slipcal import SLIP_COURSES, SlipCalibration, calibrate_slip
     from omnibot.navigation.webteach import PathTeacher
 
 _EXPORTS = {
     "following": ("FOLLOWER_PRIORITY", "follower_source"),
-    "goal": ("GotoOptions", "GotoResult"),
+    "goal": ("GotoOptions", "GotoResult", "PoseProvider", "ScanSource"),
     "goto": ("navigation_runtime",),
     "goto_source": ("GotoSource",),
     "judge": ("FollowJudge",),
@@ -42,6 +43,7 @@ _EXPORTS = {
     "outcome": ("MIN_LENGTH", "MIN_POINTS", "Tolerances"),
     "record": ("check_recording", "teach"),
     "runner": ("STANDSTILL", "Navigator"),
+    "scanwatch": ("ScanPoints",),
     "session": ("FollowOptions", "follow_path", "simulated_client", "summary", "verdict"),
     "slipcal": ("SLIP_COURSES", "SlipCalibration", "calibrate_slip"),
     "webteach": ("PathTeacher",),
@@ -60,6 +62,9 @@ __all__ = [
     "GotoSource",
     "Navigator",
     "PathTeacher",
+    "PoseProvider",
+    "ScanPoints",
+    "ScanSource",
     "SlipCalibration",
     "Tolerances",
     "calibrate_slip",
@@ -79,6 +84,7 @@ __all__ = [
     "plot_run",
     "record",
     "runner",
+    "scanwatch",
     "session",
     "simulated_client",
     "slipcal",

@@ -100,7 +100,7 @@ class ObstacleWatch:
         """The points no wall explains: for a sonar's arc, all of it when no point of it lies near
         a wall (the echo came from the nearest thing in the cone), else None; for a scan, each
         point on its own."""
-        near = np.array([self.cmap.clearance_at(float(x), float(y)) < EXPLAINED for x, y in cloud])
+        near = self.cmap.clearances(cloud) < EXPLAINED
         if sonar:
             return None if near.any() else cloud
         out = cloud[~near]
