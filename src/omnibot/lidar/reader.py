@@ -49,6 +49,10 @@ __all__ = [
 
 MAX_SCANS = 16
 """Scans a source keeps between two polls (the oldest are dropped)."""
+ANSWER_WAIT = 3.0
+"""s the driver waits for each answer (its serial timeout): a real RPLIDAR answers within
+milliseconds; the simulated one of ``omnibot sim`` on a loaded machine has taken over 1 s, the
+driver's own default, to send a 7-byte descriptor (CI: 'Descriptor length mismatch')."""
 MAX_RESTARTS = 3
 """Scans :class:`RplidarScanner` restarts in a row (without a whole revolution between) before it
 gives up and reports the error."""
@@ -173,7 +177,7 @@ class RplidarScanner:
         mount: Pose2D | None = None,
         range_min: float = A1_RANGE[0],
         range_max: float = A1_RANGE[1],
-        timeout: float = 1.0,
+        timeout: float = ANSWER_WAIT,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.port = port
