@@ -23,7 +23,7 @@ from omnibot.mapping.score import world_grid as rasterise
 from omnibot.motion import Pose2D
 from omnibot.navigation.goal import GotoOptions, PoseProvider
 from omnibot.navigation.goto import goto
-from omnibot.navigation.obstacles import ObstacleWatch
+from omnibot.navigation.obstacles import ObstacleWatch, stopping_reach
 from omnibot.navigation.planned import mark, planned_path
 from omnibot.navigation.session import simulated_client
 from omnibot.robot import load_robot
@@ -217,6 +217,31 @@ def _watch(pose: Pose2D, path: np.ndarray, scan: np.ndarray | None = None) -> tu
     route = Route.from_points(path)
     watch = ObstacleWatch(robot, cmap, route, lambda: pose, stops.append, lookahead=1.0, scan=(lambda: scan))
     return watch, stops
+
+
+def test_the_watch_looks_as_far_ahead_as_the_planned_speed_needs_to_stop() -> None:
+    """At the leg's planned speed the watched reach grows to the stop distance: an echo 2.5 m ahead is
+    beyond the 1 m watched at a walk, and inside what 3 m/s needs on omni4's stop deceleration (2.2 m/s^2)."""
+    robot = load_robot("omni4")
+    pose, route = Pose2D(1.0, 2.0, 0.0), np.array([[1.0, 2.0], [4.0, 2.0]])
+    cmap = inflate(rasterise(load_world("room")), robot_radius=robot.footprint.bounding_radius)
+    assert stopping_reach(robot, 0.0, cmap.inflated) == cmap.inflated
+    fast = stopping_reach(robot, 3.0, cmap.inflated)
+    assert fast == pytest.approx(cmap.inflated + 3.0 * 0.2 + 3.0**2 / (2 * robot.stop_deceleration))
+    assert fast > 2.5 and stopping_reach(robot, 0.3, cmap.inflated) < 1.0
+    for speed, stopped in ((0.3, False), (3.0, True)):
+        stops: list[str] = []
+        watch = ObstacleWatch(
+            robot,
+            cmap,
+            Route.from_points(route),
+            lambda: pose,
+            stops.append,
+            lookahead=1.0,
+            speed_at=lambda s, v=speed: v,
+        )
+        watch(_cycle((2.5,)))
+        assert (watch.points is not None) is stopped and len(stops) == int(stopped)
 
 
 def _cycle(ranges: tuple[float | None, ...]) -> Cycle:

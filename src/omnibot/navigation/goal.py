@@ -49,7 +49,8 @@ class GotoOptions:
     so a front sonar looks ahead; ``goal``: it turns towards the goal's heading along the way;
     ``auto``: travel when the robot has a sonar and no scan is given, else goal."""
     lookahead: float = 1.0
-    """m of the path ahead watched for obstacles the map does not have."""
+    """m of the path ahead watched for obstacles the map does not have, at least: farther where the
+    leg's planned speed needs more room to stop (:func:`~omnibot.navigation.obstacles.stopping_reach`)."""
     max_replans: int = 5
     """Re-plans after obstacles before giving up (blocked)."""
     corrections: int = 2

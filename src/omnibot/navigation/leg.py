@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from typing import Literal
 
-from omnibot.control import min_traversal_time
+from omnibot.control import time_optimal_profile
 from omnibot.errors import PlanningError
 from omnibot.mapping import CostMap, PlannedPath, compose, inflate, inverse, plan_path
 from omnibot.motion import Pose2D
@@ -130,11 +130,19 @@ class Leg:
             priority=priority,
         )
         self.why = ""
-        self.watch = ObstacleWatch(
-            robot, cmap, self.path, provider, self._obstacle, lookahead=opts.lookahead, scan=scan
-        )
         limits = follower_limits(robot, opts.speed)
-        self.budget = 3.0 * min_traversal_time(self.path, limits) + 10.0
+        profile = time_optimal_profile(self.path, limits, use_path_speed=False)
+        self.watch = ObstacleWatch(
+            robot,
+            cmap,
+            self.path,
+            provider,
+            self._obstacle,
+            lookahead=opts.lookahead,
+            scan=scan,
+            speed_at=profile.speed_at,
+        )
+        self.budget = 3.0 * profile.min_time + 10.0
 
     def _obstacle(self, why: str) -> None:
         self.why = why

@@ -20,12 +20,25 @@ EXPLAINED = 0.10
 """m: a range reading this close to a wall of the map is that wall."""
 ARC_STEP = math.radians(2.5)
 """rad between the points a sonar reading marks across its cone."""
+REACTION = 0.2
+"""s from a scan point or a range reading to the stop acting: a 10 Hz scan's period, the runtime's
+cycle and the link."""
+
+
+def stopping_reach(robot: RobotDescription, speed: float, corridor: float) -> float:
+    """m of path ahead of the robot's centre a watch must see so that the robot, at ``speed``, stops
+    short of what it sees: the footprint and margin ahead of the centre (``corridor``), the travel
+    until the stop acts (:data:`REACTION`) and the braking distance at the description's stop
+    deceleration (the bound the firmware's sonar guard sizes its stop distance with, docs/safety.md)."""
+    return corridor + speed * REACTION + speed * speed / (2.0 * robot.stop_deceleration)
 
 
 class ObstacleWatch:
     """A sink: ends ``leg`` when a sonar reading or a scan point that ``cmap``'s walls do not
     explain (none within :data:`EXPLAINED`) lies in the robot's corridor (radius + margin either
-    side) on the next ``lookahead`` m of ``path`` (map frame); :attr:`points` are then what to mark."""
+    side) on the next ``lookahead`` m of ``path`` (map frame), or farther where the path's planned
+    ``speed_at`` its arc length needs more room to stop (:func:`stopping_reach`); :attr:`points` are
+    then what to mark."""
 
     def __init__(
         self,
@@ -37,6 +50,7 @@ class ObstacleWatch:
         *,
         lookahead: float,
         scan: ScanSource | None = None,
+        speed_at: Callable[[float], float] | None = None,
     ) -> None:
         self.robot = robot
         self.cmap = cmap
@@ -45,6 +59,7 @@ class ObstacleWatch:
         self.stop = stop
         self.lookahead = lookahead
         self.scan = scan
+        self.speed_at = speed_at
         self.points: FloatArray | None = None
         """The unexplained points that ended the leg (None: none did)."""
         self._s = 0.0
@@ -111,5 +126,8 @@ class ObstacleWatch:
         if len(self.path) < 2:
             return False
         dist, s = self.path.nearest(points)
-        ahead = (s >= self._s - 0.05) & (s <= self._s + self.lookahead)
+        reach = self.lookahead
+        if self.speed_at is not None:
+            reach = max(reach, stopping_reach(self.robot, self.speed_at(self._s), self.cmap.inflated))
+        ahead = (s >= self._s - 0.05) & (s <= self._s + reach)
         return bool(np.any(ahead & (dist < self.cmap.inflated)))
