@@ -7,6 +7,7 @@ against the simulator's truth, and contacts are its collision events.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from pathlib import Path
@@ -238,10 +239,14 @@ def test_the_watch_looks_as_far_ahead_as_the_planned_speed_needs_to_stop() -> No
             lambda: pose,
             stops.append,
             lookahead=1.0,
-            speed_at=lambda s, v=speed: v,
+            speed_at=functools.partial(_constant, speed),
         )
         watch(_cycle((2.5,)))
         assert (watch.points is not None) is stopped and len(stops) == int(stopped)
+
+
+def _constant(value: float, _s: float) -> float:
+    return value
 
 
 def _cycle(ranges: tuple[float | None, ...]) -> Cycle:
