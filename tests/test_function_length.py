@@ -19,7 +19,6 @@ ROOT = "omnibot"
 MAX_LINES = 60
 
 LONG: dict[str, int] = {
-    "omnibot.sim.kernels.step:_before_physics": 86,
     "omnibot.sim.kernels.wheels:robot_physics": 119,
     "omnibot.sim.kernels.contacts:_sat": 69,
     "omnibot.sim.kernels.contacts:outline_contacts": 96,
