@@ -19,7 +19,6 @@ ROOT = "omnibot"
 MAX_LINES = 60
 
 LONG: dict[str, int] = {
-    "omnibot.sim.kernels.wheels:robot_physics": 119,
     "omnibot.sim.kernels.warm:warm_up_calls": 64,
     "omnibot.sim.kernels.lanes:_step": 130,
 }
