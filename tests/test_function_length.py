@@ -20,7 +20,6 @@ MAX_LINES = 60
 
 LONG: dict[str, int] = {
     "omnibot.sim.kernels.warm:warm_up_calls": 64,
-    "omnibot.sim.kernels.lanes:_step": 130,
 }
 """``module:qualified name`` -> its length in lines when it was listed (or last shortened)."""
 
