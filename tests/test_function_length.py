@@ -18,9 +18,7 @@ SRC = Path(__file__).resolve().parents[1] / "src"
 ROOT = "omnibot"
 MAX_LINES = 60
 
-LONG: dict[str, int] = {
-    "omnibot.sim.kernels.warm:warm_up_calls": 64,
-}
+LONG: dict[str, int] = {}
 """``module:qualified name`` -> its length in lines when it was listed (or last shortened)."""
 
 
