@@ -86,7 +86,7 @@ def _add_normals(v: FloatArray, lo: int, hi: int, closed: bool, axes: FloatArray
     return count
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _centroid(v: FloatArray, lo: int, hi: int) -> tuple[float, float]:
     """The mean of the vertices v[lo:hi]."""
     cx = cy = 0.0
@@ -96,7 +96,7 @@ def _centroid(v: FloatArray, lo: int, hi: int) -> tuple[float, float]:
     return cx / (hi - lo), cy / (hi - lo)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _overlap(
     robot: FloatArray, other: FloatArray, lo: int, hi: int, ax: float, ay: float
 ) -> tuple[float, float]:
@@ -112,7 +112,7 @@ def _overlap(
     return omax - rmin, rmax - omin
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _shallowest(
     robot: FloatArray, other: FloatArray, lo: int, hi: int, axes: FloatArray, count: int, depth: FloatArray
 ) -> tuple[bool, float]:
@@ -138,7 +138,7 @@ def _shallowest(
     return True, best
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _face_span(
     v: FloatArray, lo: int, hi: int, nx: float, ny: float, limit: float, below: bool
 ) -> tuple[float, float, float, int]:
@@ -155,7 +155,7 @@ def _face_span(
     return f_lo, f_hi, f_sum, f_n
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _contact_point(
     robot: FloatArray, other: FloatArray, lo: int, hi: int, nx: float, ny: float, best: float
 ) -> tuple[float, float]:
@@ -201,7 +201,7 @@ def _sat(
     return True, px, py, nx, ny, best
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _placed(body: FloatArray, x: float, y: float, theta: float) -> tuple[FloatArray, float]:
     """The outline body placed at pose (x, y, theta), and the reach of its vertices from its origin."""
     nv = body.shape[0]
@@ -215,7 +215,7 @@ def _placed(body: FloatArray, x: float, y: float, theta: float) -> tuple[FloatAr
     return v, reach0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _spread(v: FloatArray) -> tuple[float, float, float]:
     """The centre (cx, cy) of the vertices v, and their reach from it."""
     cx, cy = _centroid(v, 0, v.shape[0])
@@ -225,7 +225,7 @@ def _spread(v: FloatArray) -> tuple[float, float, float]:
     return cx, cy, reach
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _nearest_edge(x: float, y: float, verts: FloatArray, lo: int, hi: int, nearest: float) -> float:
     """``nearest``, or the distance from (x, y) to the closed polygon verts[lo:hi] if it is nearer."""
     for e in range(lo, hi):
@@ -235,7 +235,7 @@ def _nearest_edge(x: float, y: float, verts: FloatArray, lo: int, hi: int, neare
     return nearest
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _thin_near(
     x: float, y: float, cx: float, cy: float, reach: float, verts: FloatArray, lo: int, nearest: float
 ) -> tuple[float, bool]:
@@ -249,7 +249,7 @@ def _thin_near(
     return nearest, gx * gx + gy * gy < reach * reach
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _insert(
     out: FloatArray, count: int, first_edge: int, closed: bool,
     px: float, py: float, nx: float, ny: float, dep: float, owner: int,
@@ -266,7 +266,7 @@ def _insert(
     return count + 1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _merge(out: FloatArray, first_edge: int, count: int) -> int:
     """Merge the edge contacts out[first_edge:count] of one owner whose normals are within 30 degrees
     (the first, deepest, kept); the count of rows left."""

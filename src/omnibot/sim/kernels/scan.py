@@ -95,7 +95,7 @@ def _wrap(a: float) -> float:
     return a - 2.0 * math.pi * math.floor((a + math.pi) / (2.0 * math.pi))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _body_radii(body_v: FloatArray, body_off: IntArray) -> FloatArray:
     """Each body's bounding radius about its own origin (body b: body_v[body_off[b]:body_off[b+1]])."""
     n_body = body_off.shape[0] - 1
@@ -106,7 +106,7 @@ def _body_radii(body_v: FloatArray, body_off: IntArray) -> FloatArray:
     return body_r
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _bracket(t: float, hist_t0: float, hist_dt: float, n_hist: int) -> tuple[int, int, float]:
     """(row k, row k1, fraction f): time t lies a fraction f of the way from history row k to k1
     (held outside the history)."""
@@ -117,38 +117,25 @@ def _bracket(t: float, hist_t0: float, hist_dt: float, n_hist: int) -> tuple[int
     return k, k1, f
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _lerp(hist_p: FloatArray, k: int, k1: int, f: float, col: int) -> float:
     """Column col of the history, a fraction f of the way from row k to row k1."""
     value: float = hist_p[k, col] + f * (hist_p[k1, col] - hist_p[k, col])
     return value
 
 
-@njit(cache=True)
-def _edges_hit(
-    ox: float,
-    oy: float,
-    ang: float,
-    segments: FloatArray,
-    starts: IntArray,
-    entries: IntArray,
-    near: FloatArray,
-) -> float:
-    """Distance along the ray from (ox, oy) in direction ang to the first of the world's edges it
-    meets (inf: none), testing only those :func:`scan_index` lists for its direction, nearest first."""
-    dx, dy = math.cos(ang), math.sin(ang)
-    sector = min(int(_turn(ang) / (2.0 * math.pi / SCAN_BINS)), SCAN_BINS - 1)
-    best = np.inf
-    for q in range(starts[sector], starts[sector + 1]):
-        e = entries[q]
-        if near[e] > best:
-            break
-        t = _hit(ox, oy, dx, dy, segments[e, 0], segments[e, 1], segments[e, 2], segments[e, 3])
-        best = min(best, t)
-    return best
+@njit(cache=True, inline="always")
+def _ray_origin(
+    hist_p: FloatArray, k: int, k1: int, f: float, c0: int, mount_x: float, mount_y: float, a: float
+) -> tuple[float, float, float]:
+    """(x, y, world angle) of a ray from the scanner at (mount_x, mount_y) on the robot whose pose
+    is history columns c0..c0+2, a fraction f from row k to k1, in direction a of its base frame."""
+    x, y, th = _lerp(hist_p, k, k1, f, c0), _lerp(hist_p, k, k1, f, c0 + 1), _lerp(hist_p, k, k1, f, c0 + 2)
+    c, s = math.cos(th), math.sin(th)
+    return x + c * mount_x - s * mount_y, y + s * mount_x + c * mount_y, th + a
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _outline_hit(
     rx: float, ry: float, dx: float, dy: float, bt: float, body_v: FloatArray, v0: int, v1: int, best: float
 ) -> float:
@@ -164,7 +151,7 @@ def _outline_hit(
     return best
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _body_hit(
     hist_p: FloatArray, k: int, k1: int, f: float, cb: int, ox: float, oy: float, dx: float, dy: float,
     r: float, body_v: FloatArray, span: IntArray, best: float,
@@ -219,19 +206,19 @@ def scan_rays(
     n_body = body_off.shape[0] - 1
     body_r = _body_radii(body_v, body_off)
     c0 = 3 * own
+    width = 2.0 * math.pi / SCAN_BINS
     for i in range(n):
         k, k1, f = _bracket(ray_t[i], hist_t0, hist_dt, n_hist)
-        x, y, th = (
-            _lerp(hist_p, k, k1, f, c0),
-            _lerp(hist_p, k, k1, f, c0 + 1),
-            _lerp(hist_p, k, k1, f, c0 + 2),
-        )
-        c, s = math.cos(th), math.sin(th)
-        ox = x + c * mount_x - s * mount_y
-        oy = y + s * mount_x + c * mount_y
-        ang = th + ray_a[i]
+        ox, oy, ang = _ray_origin(hist_p, k, k1, f, c0, mount_x, mount_y, ray_a[i])
         dx, dy = math.cos(ang), math.sin(ang)
-        best = _edges_hit(ox, oy, ang, segments, starts, entries, near)
+        sector = min(int(_turn(ang) / width), SCAN_BINS - 1)
+        best = np.inf
+        for q in range(starts[sector], starts[sector + 1]):
+            e = entries[q]
+            if near[e] > best:
+                break
+            t = _hit(ox, oy, dx, dy, segments[e, 0], segments[e, 1], segments[e, 2], segments[e, 3])
+            best = min(best, t)
         for b in range(n_body):
             if b != own:
                 best = _body_hit(

@@ -91,7 +91,7 @@ def _world_contacts(
     )  # fmt: skip
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _floor_ids(
     x: float, y: float, th: float, ids: IntArray, wf: FloatArray, wi: IntArray, sf: FloatArray, si: IntArray
 ) -> None:
@@ -123,7 +123,7 @@ def _floor_ids(
         sf[F_SURF_X], sf[F_SURF_Y], sf[F_SURF_TH], sf[F_SURF_CLEAR] = x, y, th, clearance
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _wall_forces(
     x: float, y: float, th: float, vx: float, vy: float, w: float,
     wf: FloatArray, wi: IntArray, sf: FloatArray, si: IntArray, now_us: int,

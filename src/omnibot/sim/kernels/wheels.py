@@ -97,7 +97,7 @@ def solve_body(
     return dvx, dvy, dw
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _drive(p: FloatArray, command: float, v_bus: float, omega: float) -> tuple[float, float, float]:
     """Driver and motor of a wheel (parameters p) at wheel speed omega: (duty, current, the back-EMF's
     damping when the current follows it, not limited, else 0)."""
@@ -112,7 +112,7 @@ def _drive(p: FloatArray, command: float, v_bus: float, omega: float) -> tuple[f
     return duty, amps, emf
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _friction(
     p: FloatArray, surf: FloatArray, sid: int, angle: float, slip: float, roll: float, omega: float
 ) -> Forces:
@@ -146,7 +146,7 @@ Body = tuple[float, float, float, float, float, float, float, float, float]
 """The body system's upper triangle and right-hand side: s00, s11, s22, s01, s02, s12, r0, r1, r2."""
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _add_wheel(body: Body, p: FloatArray, forces: Forces, sc: FloatArray) -> Body:
     """(M/dt + H^T K H) dq = -H^T f: a wheel's rows added to the body system, its speed eliminated
     (its elimination factors e0, e1, e2, 1/d and right-hand side into sc, for :func:`_advance`)."""
@@ -182,7 +182,7 @@ def _add_wheel(body: Body, p: FloatArray, forces: Forces, sc: FloatArray) -> Bod
     return s00, s11, s22, s01, s02, s12, r0, r1, r2
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _advance(
     i: int,
     pose: FloatArray,
