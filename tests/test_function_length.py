@@ -18,15 +18,7 @@ SRC = Path(__file__).resolve().parents[1] / "src"
 ROOT = "omnibot"
 MAX_LINES = 60
 
-LONG: dict[str, int] = {
-    "omnibot.sim.kernels.step:_before_physics": 86,
-    "omnibot.sim.kernels.wheels:robot_physics": 119,
-    "omnibot.sim.kernels.contacts:_sat": 69,
-    "omnibot.sim.kernels.contacts:outline_contacts": 96,
-    "omnibot.sim.kernels.scan:scan_rays": 84,
-    "omnibot.sim.kernels.warm:warm_up_calls": 64,
-    "omnibot.sim.kernels.lanes:_step": 130,
-}
+LONG: dict[str, int] = {}
 """``module:qualified name`` -> its length in lines when it was listed (or last shortened)."""
 
 

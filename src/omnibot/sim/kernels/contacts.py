@@ -86,6 +86,97 @@ def _add_normals(v: FloatArray, lo: int, hi: int, closed: bool, axes: FloatArray
     return count
 
 
+@njit(cache=True, inline="always")
+def _centroid(v: FloatArray, lo: int, hi: int) -> tuple[float, float]:
+    """The mean of the vertices v[lo:hi]."""
+    cx = cy = 0.0
+    for k in range(lo, hi):
+        cx += v[k, 0]
+        cy += v[k, 1]
+    return cx / (hi - lo), cy / (hi - lo)
+
+
+@njit(cache=True, inline="always")
+def _overlap(
+    robot: FloatArray, other: FloatArray, lo: int, hi: int, ax: float, ay: float
+) -> tuple[float, float]:
+    """How far the robot must move along +axis and along -axis to clear other[lo:hi] on that axis
+    (one of them not positive: the axis separates them)."""
+    rmin, rmax, omin, omax = np.inf, -np.inf, np.inf, -np.inf
+    for k in range(robot.shape[0]):
+        pr = robot[k, 0] * ax + robot[k, 1] * ay
+        rmin, rmax = min(rmin, pr), max(rmax, pr)
+    for k in range(lo, hi):
+        po = other[k, 0] * ax + other[k, 1] * ay
+        omin, omax = min(omin, po), max(omax, po)
+    return omax - rmin, rmax - omin
+
+
+@njit(cache=True, inline="always")
+def _shallowest(
+    robot: FloatArray, other: FloatArray, lo: int, hi: int, axes: FloatArray, count: int, depth: FloatArray
+) -> tuple[bool, float]:
+    """(overlap, shallowest depth): the robot's way out along each of the count axes into depth
+    (depth, sign: toward the robot's side of the axis), unless an axis separates the shapes."""
+    crx, cry = _centroid(robot, 0, robot.shape[0])
+    cox, coy = _centroid(other, lo, hi)
+    best = np.inf
+    for a in range(count):
+        ax, ay = axes[a, 0], axes[a, 1]
+        plus, minus = _overlap(robot, other, lo, hi, ax, ay)  # move the robot along +axis / -axis to clear
+        if plus <= 0.0 or minus <= 0.0:
+            return False, best
+        side = (crx - cox) * ax + (cry - coy) * ay
+        if side > 1e-12:
+            dep, sign = plus, 1.0
+        elif side < -1e-12:
+            dep, sign = minus, -1.0
+        else:
+            dep, sign = min(plus, minus), (1.0 if plus <= minus else -1.0)
+        depth[a, 0], depth[a, 1] = dep, sign
+        best = min(best, dep)
+    return True, best
+
+
+@njit(cache=True, inline="always")
+def _face_span(
+    v: FloatArray, lo: int, hi: int, nx: float, ny: float, limit: float, below: bool
+) -> tuple[float, float, float, int]:
+    """(lowest, highest, sum, count) of the positions along the face (tangent (-ny, nx)) of the
+    vertices of v[lo:hi] at the deepest feature: projected on the normal no higher (``below``) or
+    no lower than limit."""
+    tx, ty = -ny, nx
+    f_lo, f_hi, f_sum, f_n = np.inf, -np.inf, 0.0, 0
+    for j in range(lo, hi):
+        p = v[j, 0] * nx + v[j, 1] * ny
+        if (p <= limit) if below else (p >= limit):
+            f = v[j, 0] * tx + v[j, 1] * ty
+            f_lo, f_hi, f_sum, f_n = min(f_lo, f), max(f_hi, f), f_sum + f, f_n + 1
+    return f_lo, f_hi, f_sum, f_n
+
+
+@njit(cache=True, inline="always")
+def _contact_point(
+    robot: FloatArray, other: FloatArray, lo: int, hi: int, nx: float, ny: float, best: float
+) -> tuple[float, float]:
+    """The contact point along normal (nx, ny): the middle of the overlap, along the face, of the
+    two deepest features."""
+    nr = robot.shape[0]
+    tx, ty = -ny, nx
+    tol = 1e-6 + 1e-3 * best
+    pr_min, po_max = np.inf, -np.inf
+    for j in range(nr):
+        pr_min = min(pr_min, robot[j, 0] * nx + robot[j, 1] * ny)
+    for j in range(lo, hi):
+        po_max = max(po_max, other[j, 0] * nx + other[j, 1] * ny)
+    r_lo, r_hi, r_sum, r_n = _face_span(robot, 0, nr, nx, ny, pr_min + tol, True)
+    o_lo, o_hi, o_sum, o_n = _face_span(other, lo, hi, nx, ny, po_max - tol, False)
+    lo_f, hi_f = max(r_lo, o_lo), min(r_hi, o_hi)
+    along = 0.5 * (lo_f + hi_f) if lo_f <= hi_f else 0.5 * (r_sum / r_n + o_sum / o_n)
+    across = 0.5 * (pr_min + po_max)
+    return along * tx + across * nx, along * ty + across * ny
+
+
 @njit(cache=True)
 def _sat(
     robot: FloatArray, other: FloatArray, lo: int, hi: int, closed: bool, axes: FloatArray, depth: FloatArray
@@ -96,66 +187,101 @@ def _sat(
     point y, normal x, normal y, depth): the normal pushes the robot out along the shallowest axis
     (toward its side of each axis; on a tie the other shape's own face, listed last).
     """
-    nr = robot.shape[0]
-    count = _add_normals(robot, 0, nr, True, axes, 0)
+    count = _add_normals(robot, 0, robot.shape[0], True, axes, 0)
     count = _add_normals(other, lo, hi, closed, axes, count)
-    crx = cry = cox = coy = 0.0
-    for k in range(nr):
-        crx += robot[k, 0]
-        cry += robot[k, 1]
-    for k in range(lo, hi):
-        cox += other[k, 0]
-        coy += other[k, 1]
-    crx, cry, cox, coy = crx / nr, cry / nr, cox / (hi - lo), coy / (hi - lo)
-    best = np.inf
-    for a in range(count):
-        ax, ay = axes[a, 0], axes[a, 1]
-        rmin, rmax, omin, omax = np.inf, -np.inf, np.inf, -np.inf
-        for k in range(nr):
-            pr = robot[k, 0] * ax + robot[k, 1] * ay
-            rmin, rmax = min(rmin, pr), max(rmax, pr)
-        for k in range(lo, hi):
-            po = other[k, 0] * ax + other[k, 1] * ay
-            omin, omax = min(omin, po), max(omax, po)
-        plus, minus = omax - rmin, rmax - omin  # move the robot along +axis / -axis by this to clear
-        if plus <= 0.0 or minus <= 0.0:
-            return False, 0.0, 0.0, 0.0, 0.0, 0.0
-        side = (crx - cox) * ax + (cry - coy) * ay
-        if side > 1e-12:
-            dep, sign = plus, 1.0
-        elif side < -1e-12:
-            dep, sign = minus, -1.0
-        else:
-            dep, sign = min(plus, minus), (1.0 if plus <= minus else -1.0)
-        depth[a, 0], depth[a, 1] = dep, sign
-        best = min(best, dep)
+    overlap, best = _shallowest(robot, other, lo, hi, axes, count, depth)
+    if not overlap:
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0
     k = 0
     for a in range(count):
         if depth[a, 0] <= best + 1e-9 + 1e-6 * best:
             k = a
     nx, ny = axes[k, 0] * depth[k, 1], axes[k, 1] * depth[k, 1]
-    tx, ty = -ny, nx
-    # contact point: middle of the overlap, along the face, of the two deepest features
-    tol = 1e-6 + 1e-3 * best
-    pr_min, po_max = np.inf, -np.inf
-    for j in range(nr):
-        pr_min = min(pr_min, robot[j, 0] * nx + robot[j, 1] * ny)
-    for j in range(lo, hi):
-        po_max = max(po_max, other[j, 0] * nx + other[j, 1] * ny)
-    r_lo, r_hi, r_sum, r_n = np.inf, -np.inf, 0.0, 0
-    for j in range(nr):
-        if robot[j, 0] * nx + robot[j, 1] * ny <= pr_min + tol:
-            f = robot[j, 0] * tx + robot[j, 1] * ty
-            r_lo, r_hi, r_sum, r_n = min(r_lo, f), max(r_hi, f), r_sum + f, r_n + 1
-    o_lo, o_hi, o_sum, o_n = np.inf, -np.inf, 0.0, 0
-    for j in range(lo, hi):
-        if other[j, 0] * nx + other[j, 1] * ny >= po_max - tol:
-            f = other[j, 0] * tx + other[j, 1] * ty
-            o_lo, o_hi, o_sum, o_n = min(o_lo, f), max(o_hi, f), o_sum + f, o_n + 1
-    lo_f, hi_f = max(r_lo, o_lo), min(r_hi, o_hi)
-    along = 0.5 * (lo_f + hi_f) if lo_f <= hi_f else 0.5 * (r_sum / r_n + o_sum / o_n)
-    across = 0.5 * (pr_min + po_max)
-    return True, along * tx + across * nx, along * ty + across * ny, nx, ny, best
+    px, py = _contact_point(robot, other, lo, hi, nx, ny, best)
+    return True, px, py, nx, ny, best
+
+
+@njit(cache=True, inline="always")
+def _placed(body: FloatArray, x: float, y: float, theta: float) -> tuple[FloatArray, float]:
+    """The outline body placed at pose (x, y, theta), and the reach of its vertices from its origin."""
+    nv = body.shape[0]
+    c, s = math.cos(theta), math.sin(theta)
+    v = np.empty((nv, 2))
+    reach0 = 0.0
+    for k in range(nv):
+        bx, by = body[k, 0], body[k, 1]
+        v[k, 0], v[k, 1] = bx * c - by * s + x, bx * s + by * c + y
+        reach0 = max(reach0, math.hypot(bx, by))
+    return v, reach0
+
+
+@njit(cache=True, inline="always")
+def _spread(v: FloatArray) -> tuple[float, float, float]:
+    """The centre (cx, cy) of the vertices v, and their reach from it."""
+    cx, cy = _centroid(v, 0, v.shape[0])
+    reach = 0.0
+    for k in range(v.shape[0]):
+        reach = max(reach, math.hypot(v[k, 0] - cx, v[k, 1] - cy))
+    return cx, cy, reach
+
+
+@njit(cache=True, inline="always")
+def _nearest_edge(x: float, y: float, verts: FloatArray, lo: int, hi: int, nearest: float) -> float:
+    """``nearest``, or the distance from (x, y) to the closed polygon verts[lo:hi] if it is nearer."""
+    for e in range(lo, hi):
+        e1 = e + 1 if e + 1 < hi else lo
+        d = segment_distance(x, y, verts[e, 0], verts[e, 1], verts[e1, 0], verts[e1, 1])
+        nearest = min(nearest, d)
+    return nearest
+
+
+@njit(cache=True, inline="always")
+def _thin_near(
+    x: float, y: float, cx: float, cy: float, reach: float, verts: FloatArray, lo: int, nearest: float
+) -> tuple[float, bool]:
+    """(``nearest`` or the distance from (x, y) to the edge verts[lo:lo+2] if nearer, whether the
+    edge's closest point to the centre (cx, cy) is within reach)."""
+    x0, y0, x1, y1 = verts[lo, 0], verts[lo, 1], verts[lo + 1, 0], verts[lo + 1, 1]
+    nearest = min(nearest, segment_distance(x, y, x0, y0, x1, y1))
+    ex, ey = x1 - x0, y1 - y0
+    t = min(max(((cx - x0) * ex + (cy - y0) * ey) / (ex * ex + ey * ey), 0.0), 1.0)
+    gx, gy = x0 + t * ex - cx, y0 + t * ey - cy
+    return nearest, gx * gx + gy * gy < reach * reach
+
+
+@njit(cache=True, inline="always")
+def _insert(
+    out: FloatArray, count: int, first_edge: int, closed: bool,
+    px: float, py: float, nx: float, ny: float, dep: float, owner: int,
+) -> int:  # fmt: skip
+    """Write a contact row into out after the count rows there, edge contacts (not ``closed``)
+    sorted by depth from first_edge on, deepest first (stable for equal depths); the new count."""
+    a = count
+    if not closed:
+        while a > first_edge and out[a - 1, 4] < dep:
+            for col in range(6):
+                out[a, col] = out[a - 1, col]
+            a -= 1
+    out[a, 0], out[a, 1], out[a, 2], out[a, 3], out[a, 4], out[a, 5] = px, py, nx, ny, dep, owner
+    return count + 1
+
+
+@njit(cache=True, inline="always")
+def _merge(out: FloatArray, first_edge: int, count: int) -> int:
+    """Merge the edge contacts out[first_edge:count] of one owner whose normals are within 30 degrees
+    (the first, deepest, kept); the count of rows left."""
+    kept = first_edge
+    for a in range(first_edge, count):
+        keep = True
+        for b in range(first_edge, kept):
+            if out[b, 5] == out[a, 5] and out[b, 2] * out[a, 2] + out[b, 3] * out[a, 3] >= MERGE_COS:
+                keep = False
+                break
+        if keep:
+            for col in range(6):
+                out[kept, col] = out[a, col]
+            kept += 1
+    return kept
 
 
 @njit(cache=True)
@@ -183,21 +309,8 @@ def outline_contacts(
     without touching anything (0 when touching, or inside a solid).
     """
     nv = body.shape[0]
-    c, s = math.cos(theta), math.sin(theta)
-    v = np.empty((nv, 2))
-    reach0 = 0.0
-    for k in range(nv):
-        bx, by = body[k, 0], body[k, 1]
-        v[k, 0], v[k, 1] = bx * c - by * s + x, bx * s + by * c + y
-        reach0 = max(reach0, math.hypot(bx, by))
-    cx = cy = 0.0
-    for k in range(nv):
-        cx += v[k, 0]
-        cy += v[k, 1]
-    cx, cy = cx / nv, cy / nv
-    reach = 0.0
-    for k in range(nv):
-        reach = max(reach, math.hypot(v[k, 0] - cx, v[k, 1] - cy))
+    v, reach0 = _placed(body, x, y, theta)
+    cx, cy, reach = _spread(v)
     longest = 2
     for k in range(solid_owner.shape[0]):
         longest = max(longest, solid_off[k + 1] - solid_off[k])
@@ -210,47 +323,22 @@ def outline_contacts(
     for k in range(n_solid + thin_owner.shape[0]):
         if k < n_solid:  # a solid: its edges, whether the origin is inside, its bounding circle
             verts, lo, hi, closed, owner = solid_v, solid_off[k], solid_off[k + 1], True, solid_owner[k]
-            for e in range(lo, hi):
-                e1 = e + 1 if e + 1 < hi else lo
-                d = segment_distance(x, y, verts[e, 0], verts[e, 1], verts[e1, 0], verts[e1, 1])
-                nearest = min(nearest, d)
+            nearest = _nearest_edge(x, y, verts, lo, hi, nearest)
             inside_solid = inside_solid or _inside(x, y, verts, lo, hi)
             near = math.hypot(solid_c[k, 0] - cx, solid_c[k, 1] - cy) < reach + solid_r[k]
         else:  # a thin edge: near if its closest point to the centre is within reach
             e = k - n_solid
             verts, lo, hi, closed, owner = thin_v, 2 * e, 2 * e + 2, False, thin_owner[e]
-            x0, y0, x1, y1 = verts[lo, 0], verts[lo, 1], verts[lo + 1, 0], verts[lo + 1, 1]
-            nearest = min(nearest, segment_distance(x, y, x0, y0, x1, y1))
-            ex, ey = x1 - x0, y1 - y0
-            t = min(max(((cx - x0) * ex + (cy - y0) * ey) / (ex * ex + ey * ey), 0.0), 1.0)
-            gx, gy = x0 + t * ex - cx, y0 + t * ey - cy
-            near = gx * gx + gy * gy < reach * reach
+            nearest, near = _thin_near(x, y, cx, cy, reach, verts, lo, nearest)
         if not near:
             continue
         hit, px, py, nx, ny, dep = _sat(v, verts, lo, hi, closed, axes, depth)
         if not hit:
             continue
-        a = count
-        if not closed:  # edge contacts stay sorted by depth, deepest first (stable for equal depths)
-            while a > first_edge and out[a - 1, 4] < dep:
-                for col in range(6):
-                    out[a, col] = out[a - 1, col]
-                a -= 1
-        out[a, 0], out[a, 1], out[a, 2], out[a, 3], out[a, 4], out[a, 5] = px, py, nx, ny, dep, owner
-        count += 1
+        count = _insert(out, count, first_edge, closed, px, py, nx, ny, dep, owner)
         if closed:
             first_edge = count
-    kept = first_edge
-    for a in range(first_edge, count):
-        keep = True
-        for b in range(first_edge, kept):
-            if out[b, 5] == out[a, 5] and out[b, 2] * out[a, 2] + out[b, 3] * out[a, 3] >= MERGE_COS:
-                keep = False
-                break
-        if keep:
-            for col in range(6):
-                out[kept, col] = out[a, col]
-            kept += 1
+    kept = _merge(out, first_edge, count)
     clearance = nearest - reach0 - 1e-9
     if kept > 0 or inside_solid or not clearance > 0.0:
         clearance = 0.0

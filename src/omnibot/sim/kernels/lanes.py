@@ -36,7 +36,7 @@ from omnibot.floor import ROLL_SPEED_EPS, WHEEL_SPEED_EPS
 from omnibot.sim.kernels import layout
 from omnibot.sim.kernels.layout import FloatArray, IntArray, physics_offsets, physics_views
 from omnibot.sim.kernels.libm import REDUCE_LIMIT, cos, sincos, tanh
-from omnibot.sim.kernels.wheels import solve_body
+from omnibot.sim.kernels.wheels import Forces, solve_body
 
 BLOCK = 32
 """Robots stepped together by one thread (a multiple of any vector width)."""
@@ -128,10 +128,9 @@ def _store(rb: FloatArray, wb: FloatArray, first: int, n: int, m: int, views: tu
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _step(rb: FloatArray, wb: FloatArray, m: int, has_ext: bool, dt: float) -> None:
-    """Advance the robots of a block (``rb`` per robot, ``wb`` per wheel) by dt: the operations of
-    :func:`omnibot.sim.kernels.wheels.robot_physics` in the same order, over the block's lanes (each loop
-    over lanes vectorises; the C library's sin and cos only where a loop met an angle too large)."""
+def _begin(rb: FloatArray) -> None:
+    """Each robot's bus voltage after its battery's relaxation, its body system and current sum
+    cleared."""
     for i in range(BLOCK):
         v_bus = rb[V_BUS, i]
         v_bus = v_bus + rb[B_RELAX, i] * (rb[V_OPEN, i] - rb[B_RES, i] * rb[I_BATT, i] - v_bus)
@@ -140,83 +139,127 @@ def _step(rb: FloatArray, wb: FloatArray, m: int, has_ext: bool, dt: float) -> N
         rb[S01, i] = rb[S02, i] = rb[S12, i] = 0.0
         rb[R0, i] = rb[R1, i] = rb[R2, i] = 0.0
         rb[I_SUM, i] = 0.0
-    if has_ext:  # the heading's sine and cosine turn the world force into the body frame
-        far = 0
-        for i in range(BLOCK):
-            rb[ARG, i] = rb[TH, i]
-            rb[SIN, i], rb[COS, i] = sincos(rb[TH, i])
-            far += _far(rb[TH, i])
-        if far:
-            _fix_range(rb, ARG, SIN, COS)
-    for j in range(m):
-        o = j * WHEEL_ROWS
-        far = 0
-        for i in range(BLOCK):
-            wb[o + WARG, i] = wb[o + COUNT, i] * wb[o + ANGLE, i]
-            wb[o + WCOS, i] = cos(wb[o + WARG, i])
-            far += _far(wb[o + WARG, i])
-        if far:
-            _fix_range(wb, o + WARG, -1, o + WCOS)
-        for i in range(BLOCK):
-            vx, vy, w, v_bus = rb[VX, i], rb[VY, i], rb[W, i], rb[V_BUS, i]
-            omega = wb[o + OMEGA, i]
-            duty = wb[o + DUTY, i]
-            i_free = (
-                duty * (max(v_bus - wb[o + DROP, i], 0.0) * wb[o + INV_RES, i]) - wb[o + KE_RES, i] * omega
-            )
-            i_max = wb[o + I_MAX, i]
-            on = wb[o + ON, i] != 0.0
-            amps = min(max(i_free, -i_max), i_max) if on else 0.0
-            emf = wb[o + EMF, i] if on and abs(i_free) < i_max else 0.0
-            inv_veps = wb[o + INV_VEPS, i]
-            roll_max = (wb[o + RR_TOP, i] - wb[o + RR_VAR, i] * wb[o + WCOS, i]) * wb[o + ROLL_LOAD, i]
-            tx, ty, tw, ta = wb[o + TX, i], wb[o + TY, i], wb[o + TW, i], wb[o + TA, i]
-            nx, ny, nw, na = wb[o + NX, i], wb[o + NY, i], wb[o + NW, i], wb[o + NA, i]
-            slip = tx * vx + ty * vy + tw * w + ta * omega
-            roll = nx * vx + ny * vy + nw * w + na * omega
-            ft, kt = _secant(wb[o + F_TRACTION, i], inv_veps, slip * inv_veps)
-            fn, kn = _secant(roll_max, _INV_ROLL_EPS, roll * _INV_ROLL_EPS)
-            fa, ka = _secant(wb[o + STATIC, i], _INV_WHEEL_EPS, omega * _INV_WHEEL_EPS)
-            radius, scrub_load = wb[o + RADIUS, i], wb[o + SCRUB, i]
-            rim = radius * omega
-            both = rim * rim + roll * roll
-            scrubs = scrub_load > 0.0 and both > 1e-12
-            scrub = scrub_load * 2.0 * abs(rim) * abs(roll) / both if scrubs else 0.0
-            fn = fn + scrub * roll if scrubs else fn
-            kn = kn + scrub if scrubs else kn
-            fa = fa + scrub * radius * rim if scrubs else fa
-            ka = ka + scrub * radius * radius if scrubs else ka
-            fa -= wb[o + KT, i] * amps - wb[o + VISC, i] * omega
-            ka += emf + wb[o + VISC, i]
-            wb[o + TRACTION, i] = -ft
-            wb[o + CURRENT, i] = amps
-            rb[I_SUM, i] += duty * amps
-            rb[R0, i] -= ft * tx + fn * nx
-            rb[R1, i] -= ft * ty + fn * ny
-            rb[R2, i] -= ft * tw + fn * nw
-            rw = -(ft * ta + fn * na + fa)
-            rb[S00, i] += kt * tx * tx + kn * nx * nx
-            rb[S11, i] += kt * ty * ty + kn * ny * ny
-            rb[S22, i] += kt * tw * tw + kn * nw * nw
-            rb[S01, i] += kt * tx * ty + kn * nx * ny
-            rb[S02, i] += kt * tx * tw + kn * nx * nw
-            rb[S12, i] += kt * ty * tw + kn * ny * nw
-            c0 = kt * ta * tx + kn * na * nx
-            c1 = kt * ta * ty + kn * na * ny
-            c2 = kt * ta * tw + kn * na * nw
-            inv_d = 1.0 / (wb[o + J_DT, i] + kt * ta * ta + kn * na * na + ka)
-            e0, e1, e2 = c0 * inv_d, c1 * inv_d, c2 * inv_d
-            rb[S00, i] -= c0 * e0
-            rb[S11, i] -= c1 * e1
-            rb[S22, i] -= c2 * e2
-            rb[S01, i] -= c0 * e1
-            rb[S02, i] -= c0 * e2
-            rb[S12, i] -= c1 * e2
-            rb[R0, i] -= e0 * rw
-            rb[R1, i] -= e1 * rw
-            rb[R2, i] -= e2 * rw
-            wb[o + E0, i], wb[o + E1, i], wb[o + E2, i] = e0, e1, e2
-            wb[o + INV_D, i], wb[o + RW, i] = inv_d, rw
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _heading_sincos(rb: FloatArray) -> None:
+    """The sine and cosine of each robot's heading (ARG), which turn the world force into its body
+    frame."""
+    far = 0
+    for i in range(BLOCK):
+        rb[ARG, i] = rb[TH, i]
+        rb[SIN, i], rb[COS, i] = sincos(rb[TH, i])
+        far += _far(rb[TH, i])
+    if far:
+        _fix_range(rb, ARG, SIN, COS)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _roller_cos(wb: FloatArray, o: int) -> None:
+    """The cosine of the roller phase (roller count times wheel angle) of the wheel at row o."""
+    far = 0
+    for i in range(BLOCK):
+        wb[o + WARG, i] = wb[o + COUNT, i] * wb[o + ANGLE, i]
+        wb[o + WCOS, i] = cos(wb[o + WARG, i])
+        far += _far(wb[o + WARG, i])
+    if far:
+        _fix_range(wb, o + WARG, -1, o + WCOS)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _motor(wb: FloatArray, o: int, i: int, v_bus: float, omega: float) -> tuple[float, float, float]:
+    """Driver and motor of the wheel at row o of lane i: (duty, current, the back-EMF's damping when
+    the current follows it, not limited, else 0)."""
+    duty = wb[o + DUTY, i]
+    i_free = duty * (max(v_bus - wb[o + DROP, i], 0.0) * wb[o + INV_RES, i]) - wb[o + KE_RES, i] * omega
+    i_max = wb[o + I_MAX, i]
+    on = wb[o + ON, i] != 0.0
+    amps = min(max(i_free, -i_max), i_max) if on else 0.0
+    emf = wb[o + EMF, i] if on and abs(i_free) < i_max else 0.0
+    return duty, amps, emf
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _friction(wb: FloatArray, o: int, i: int, slip: float, roll: float, omega: float) -> Forces:
+    """Friction forces and secant slopes on the three contact rows of the wheel at row o of lane i
+    (traction ft, kt; rolling fn, kn; axle fa, ka), with the scrub (selected, not branched)."""
+    inv_veps = wb[o + INV_VEPS, i]
+    roll_max = (wb[o + RR_TOP, i] - wb[o + RR_VAR, i] * wb[o + WCOS, i]) * wb[o + ROLL_LOAD, i]
+    ft, kt = _secant(wb[o + F_TRACTION, i], inv_veps, slip * inv_veps)
+    fn, kn = _secant(roll_max, _INV_ROLL_EPS, roll * _INV_ROLL_EPS)
+    fa, ka = _secant(wb[o + STATIC, i], _INV_WHEEL_EPS, omega * _INV_WHEEL_EPS)
+    radius, scrub_load = wb[o + RADIUS, i], wb[o + SCRUB, i]
+    rim = radius * omega
+    both = rim * rim + roll * roll
+    scrubs = scrub_load > 0.0 and both > 1e-12
+    scrub = scrub_load * 2.0 * abs(rim) * abs(roll) / both if scrubs else 0.0
+    fn = fn + scrub * roll if scrubs else fn
+    kn = kn + scrub if scrubs else kn
+    fa = fa + scrub * radius * rim if scrubs else fa
+    ka = ka + scrub * radius * radius if scrubs else ka
+    return ft, kt, fn, kn, fa, ka
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _eliminate(rb: FloatArray, wb: FloatArray, o: int, i: int, forces: Forces) -> None:
+    """The rows of the wheel at row o of lane i added to its robot's body system, the wheel's speed
+    eliminated (its factors into wb's E0, E1, E2, INV_D, RW)."""
+    ft, kt, fn, kn, fa, ka = forces
+    tx, ty, tw, ta = wb[o + TX, i], wb[o + TY, i], wb[o + TW, i], wb[o + TA, i]
+    nx, ny, nw, na = wb[o + NX, i], wb[o + NY, i], wb[o + NW, i], wb[o + NA, i]
+    rb[R0, i] -= ft * tx + fn * nx
+    rb[R1, i] -= ft * ty + fn * ny
+    rb[R2, i] -= ft * tw + fn * nw
+    rw = -(ft * ta + fn * na + fa)
+    rb[S00, i] += kt * tx * tx + kn * nx * nx
+    rb[S11, i] += kt * ty * ty + kn * ny * ny
+    rb[S22, i] += kt * tw * tw + kn * nw * nw
+    rb[S01, i] += kt * tx * ty + kn * nx * ny
+    rb[S02, i] += kt * tx * tw + kn * nx * nw
+    rb[S12, i] += kt * ty * tw + kn * ny * nw
+    c0 = kt * ta * tx + kn * na * nx
+    c1 = kt * ta * ty + kn * na * ny
+    c2 = kt * ta * tw + kn * na * nw
+    inv_d = 1.0 / (wb[o + J_DT, i] + kt * ta * ta + kn * na * na + ka)
+    e0, e1, e2 = c0 * inv_d, c1 * inv_d, c2 * inv_d
+    rb[S00, i] -= c0 * e0
+    rb[S11, i] -= c1 * e1
+    rb[S22, i] -= c2 * e2
+    rb[S01, i] -= c0 * e1
+    rb[S02, i] -= c0 * e2
+    rb[S12, i] -= c1 * e2
+    rb[R0, i] -= e0 * rw
+    rb[R1, i] -= e1 * rw
+    rb[R2, i] -= e2 * rw
+    wb[o + E0, i], wb[o + E1, i], wb[o + E2, i] = e0, e1, e2
+    wb[o + INV_D, i], wb[o + RW, i] = inv_d, rw
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _wheel(rb: FloatArray, wb: FloatArray, o: int) -> None:
+    """The wheel at row o of every lane: its motor's current, its friction, its rows eliminated into
+    the body system."""
+    _roller_cos(wb, o)
+    for i in range(BLOCK):
+        vx, vy, w, v_bus = rb[VX, i], rb[VY, i], rb[W, i], rb[V_BUS, i]
+        omega = wb[o + OMEGA, i]
+        duty, amps, emf = _motor(wb, o, i, v_bus, omega)
+        slip = wb[o + TX, i] * vx + wb[o + TY, i] * vy + wb[o + TW, i] * w + wb[o + TA, i] * omega
+        roll = wb[o + NX, i] * vx + wb[o + NY, i] * vy + wb[o + NW, i] * w + wb[o + NA, i] * omega
+        ft, kt, fn, kn, fa, ka = _friction(wb, o, i, slip, roll, omega)
+        fa -= wb[o + KT, i] * amps - wb[o + VISC, i] * omega
+        ka += emf + wb[o + VISC, i]
+        wb[o + TRACTION, i] = -ft
+        wb[o + CURRENT, i] = amps
+        rb[I_SUM, i] += duty * amps
+        _eliminate(rb, wb, o, i, (ft, kt, fn, kn, fa, ka))
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _solve(rb: FloatArray, has_ext: bool, dt: float) -> int:
+    """Each robot's body system solved, with the world force in the body frame: its speed change
+    into R0, R1, R2, its twist updated, the angles of its rotation (ARG) and mid-step heading (ARG2)
+    with their sines and cosines. Returns how many of those angles are past :func:`sincos`'s range."""
     far = 0
     for i in range(BLOCK):
         r0, r1, r2 = rb[R0, i], rb[R1, i], rb[R2, i]
@@ -236,6 +279,13 @@ def _step(rb: FloatArray, wb: FloatArray, m: int, has_ext: bool, dt: float) -> N
         rb[ARG2, i] = rb[TH, i] + 0.5 * dt * w
         rb[SIN2, i], rb[COS2, i] = sincos(rb[ARG2, i])
         far += _far(rb[ARG, i]) + _far(rb[ARG2, i])
+    return far
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _advance(rb: FloatArray, wb: FloatArray, m: int, dt: float) -> None:
+    """The wheels' speeds and angles after the bodies' speed changes (R0, R1, R2), then each body's
+    velocity rotated by -w dt and its pose moved at the mid-step heading."""
     for j in range(m):
         o = j * WHEEL_ROWS
         for i in range(BLOCK):
@@ -244,9 +294,6 @@ def _step(rb: FloatArray, wb: FloatArray, m: int, has_ext: bool, dt: float) -> N
                 - wb[o + E2, i] * rb[R2, i]
             )  # fmt: skip
             wb[o + ANGLE, i] += dt * wb[o + OMEGA, i]
-    if far:
-        _fix_range(rb, ARG, SIN, COS)
-        _fix_range(rb, ARG2, SIN2, COS2)
     for i in range(BLOCK):
         # body-frame rotation of the velocity by -w dt, pose at the mid-step heading
         c, s = rb[COS, i], rb[SIN, i]
@@ -258,6 +305,22 @@ def _step(rb: FloatArray, wb: FloatArray, m: int, has_ext: bool, dt: float) -> N
         rb[Y, i] += (s * vx + c * vy) * dt
         rb[TH, i] += dt * w
         rb[I_BATT, i] = rb[I_SUM, i]
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _step(rb: FloatArray, wb: FloatArray, m: int, has_ext: bool, dt: float) -> None:
+    """Advance the robots of a block (``rb`` per robot, ``wb`` per wheel) by dt: the operations of
+    :func:`omnibot.sim.kernels.wheels.robot_physics` in the same order, over the block's lanes (each loop
+    over lanes vectorises; the C library's sin and cos only where a loop met an angle too large)."""
+    _begin(rb)
+    if has_ext:
+        _heading_sincos(rb)
+    for j in range(m):
+        _wheel(rb, wb, j * WHEEL_ROWS)
+    if _solve(rb, has_ext, dt):
+        _fix_range(rb, ARG, SIN, COS)
+        _fix_range(rb, ARG2, SIN2, COS2)
+    _advance(rb, wb, m, dt)
 
 
 @njit(cache=True, inline="always", error_model="numpy")

@@ -95,6 +95,78 @@ def _wrap(a: float) -> float:
     return a - 2.0 * math.pi * math.floor((a + math.pi) / (2.0 * math.pi))
 
 
+@njit(cache=True, inline="always")
+def _body_radii(body_v: FloatArray, body_off: IntArray) -> FloatArray:
+    """Each body's bounding radius about its own origin (body b: body_v[body_off[b]:body_off[b+1]])."""
+    n_body = body_off.shape[0] - 1
+    body_r = np.zeros(n_body)
+    for b in range(n_body):
+        for v in range(body_off[b], body_off[b + 1]):
+            body_r[b] = max(body_r[b], math.hypot(body_v[v, 0], body_v[v, 1]))
+    return body_r
+
+
+@njit(cache=True, inline="always")
+def _bracket(t: float, hist_t0: float, hist_dt: float, n_hist: int) -> tuple[int, int, float]:
+    """(row k, row k1, fraction f): time t lies a fraction f of the way from history row k to k1
+    (held outside the history)."""
+    pos = (t - hist_t0) / hist_dt
+    k = min(max(math.floor(pos), 0), max(n_hist - 2, 0))
+    f = min(max(pos - k, 0.0), 1.0) if n_hist > 1 else 0.0
+    k1 = k + 1 if n_hist > 1 else k
+    return k, k1, f
+
+
+@njit(cache=True, inline="always")
+def _lerp(hist_p: FloatArray, k: int, k1: int, f: float, col: int) -> float:
+    """Column col of the history, a fraction f of the way from row k to row k1."""
+    value: float = hist_p[k, col] + f * (hist_p[k1, col] - hist_p[k, col])
+    return value
+
+
+@njit(cache=True, inline="always")
+def _ray_origin(
+    hist_p: FloatArray, k: int, k1: int, f: float, c0: int, mount_x: float, mount_y: float, a: float
+) -> tuple[float, float, float]:
+    """(x, y, world angle) of a ray from the scanner at (mount_x, mount_y) on the robot whose pose
+    is history columns c0..c0+2, a fraction f from row k to k1, in direction a of its base frame."""
+    x, y, th = _lerp(hist_p, k, k1, f, c0), _lerp(hist_p, k, k1, f, c0 + 1), _lerp(hist_p, k, k1, f, c0 + 2)
+    c, s = math.cos(th), math.sin(th)
+    return x + c * mount_x - s * mount_y, y + s * mount_x + c * mount_y, th + a
+
+
+@njit(cache=True, inline="always")
+def _outline_hit(
+    rx: float, ry: float, dx: float, dy: float, bt: float, body_v: FloatArray, v0: int, v1: int, best: float
+) -> float:
+    """``best``, or the distance along the ray (direction dx, dy) to the closed outline
+    body_v[v0:v1] of a body at heading bt whose origin is (rx, ry) from the ray's, if nearer."""
+    cbt, sbt = math.cos(bt), math.sin(bt)
+    px, py = -cbt * rx - sbt * ry, sbt * rx - cbt * ry  # the origin in the body's frame
+    qx, qy = cbt * dx + sbt * dy, -sbt * dx + cbt * dy  # the direction in the body's frame
+    for v in range(v0, v1):
+        w = v + 1 if v + 1 < v1 else v0
+        t = _hit(px, py, qx, qy, body_v[v, 0], body_v[v, 1], body_v[w, 0], body_v[w, 1])
+        best = min(best, t)
+    return best
+
+
+@njit(cache=True, inline="always")
+def _body_hit(
+    hist_p: FloatArray, k: int, k1: int, f: float, cb: int, ox: float, oy: float, dx: float, dy: float,
+    r: float, body_v: FloatArray, span: IntArray, best: float,
+) -> float:  # fmt: skip
+    """``best``, or the distance along the ray from (ox, oy) in direction (dx, dy) to the outline
+    body_v[span[0]:span[1]] (bounding radius r) of the body whose pose is history columns cb..cb+2,
+    a fraction f from row k to k1, if nearer."""
+    rx, ry = _lerp(hist_p, k, k1, f, cb) - ox, _lerp(hist_p, k, k1, f, cb + 1) - oy
+    along = rx * dx + ry * dy
+    if along + r < 0.0 or along - r > best or abs(rx * dy - ry * dx) > r:
+        return best  # its bounding circle is behind, beyond the best hit or beside the ray
+    bt = _lerp(hist_p, k, k1, f, cb + 2)
+    return _outline_hit(rx, ry, dx, dy, bt, body_v, span[0], span[1], best)
+
+
 @njit(cache=True)
 def scan_rays(
     ray_t: FloatArray,
@@ -132,24 +204,12 @@ def scan_rays(
     n = ray_t.shape[0]
     n_hist = hist_p.shape[0]
     n_body = body_off.shape[0] - 1
-    body_r = np.zeros(n_body)
-    for b in range(n_body):
-        for v in range(body_off[b], body_off[b + 1]):
-            body_r[b] = max(body_r[b], math.hypot(body_v[v, 0], body_v[v, 1]))
-    width = 2.0 * math.pi / SCAN_BINS
+    body_r = _body_radii(body_v, body_off)
     c0 = 3 * own
+    width = 2.0 * math.pi / SCAN_BINS
     for i in range(n):
-        pos = (ray_t[i] - hist_t0) / hist_dt
-        k = min(max(math.floor(pos), 0), max(n_hist - 2, 0))
-        f = min(max(pos - k, 0.0), 1.0) if n_hist > 1 else 0.0
-        k1 = k + 1 if n_hist > 1 else k
-        x = hist_p[k, c0] + f * (hist_p[k1, c0] - hist_p[k, c0])
-        y = hist_p[k, c0 + 1] + f * (hist_p[k1, c0 + 1] - hist_p[k, c0 + 1])
-        th = hist_p[k, c0 + 2] + f * (hist_p[k1, c0 + 2] - hist_p[k, c0 + 2])
-        c, s = math.cos(th), math.sin(th)
-        ox = x + c * mount_x - s * mount_y
-        oy = y + s * mount_x + c * mount_y
-        ang = th + ray_a[i]
+        k, k1, f = _bracket(ray_t[i], hist_t0, hist_dt, n_hist)
+        ox, oy, ang = _ray_origin(hist_p, k, k1, f, c0, mount_x, mount_y, ray_a[i])
         dx, dy = math.cos(ang), math.sin(ang)
         sector = min(int(_turn(ang) / width), SCAN_BINS - 1)
         best = np.inf
@@ -160,25 +220,10 @@ def scan_rays(
             t = _hit(ox, oy, dx, dy, segments[e, 0], segments[e, 1], segments[e, 2], segments[e, 3])
             best = min(best, t)
         for b in range(n_body):
-            if b == own:
-                continue
-            cb = 3 * b
-            bx = hist_p[k, cb] + f * (hist_p[k1, cb] - hist_p[k, cb])
-            by = hist_p[k, cb + 1] + f * (hist_p[k1, cb + 1] - hist_p[k, cb + 1])
-            rx, ry = bx - ox, by - oy
-            along = rx * dx + ry * dy
-            r = body_r[b]
-            if along + r < 0.0 or along - r > best or abs(rx * dy - ry * dx) > r:
-                continue  # its bounding circle is behind, beyond the best hit or beside the ray
-            bt = hist_p[k, cb + 2] + f * (hist_p[k1, cb + 2] - hist_p[k, cb + 2])
-            cbt, sbt = math.cos(bt), math.sin(bt)
-            px, py = -cbt * rx - sbt * ry, sbt * rx - cbt * ry  # the origin in the body's frame
-            qx, qy = cbt * dx + sbt * dy, -sbt * dx + cbt * dy  # the direction in the body's frame
-            v0, v1 = body_off[b], body_off[b + 1]
-            for v in range(v0, v1):
-                w = v + 1 if v + 1 < v1 else v0
-                t = _hit(px, py, qx, qy, body_v[v, 0], body_v[v, 1], body_v[w, 0], body_v[w, 1])
-                best = min(best, t)
+            if b != own:
+                best = _body_hit(
+                    hist_p, k, k1, f, 3 * b, ox, oy, dx, dy, body_r[b], body_v, body_off[b : b + 2], best
+                )
         out[i] = best if best <= max_range else np.inf
 
 

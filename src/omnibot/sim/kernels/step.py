@@ -91,6 +91,84 @@ def _world_contacts(
     )  # fmt: skip
 
 
+@njit(cache=True, inline="always")
+def _floor_ids(
+    x: float, y: float, th: float, ids: IntArray, wf: FloatArray, wi: IntArray, sf: FloatArray, si: IntArray
+) -> None:
+    """The floor's surface id under each wheel into ids, when the robot moved far enough since the
+    last lookup that a wheel may have changed patch (and the lookup's pose and clearance into sf)."""
+    _, _, _, of3, _, _, _, oi2, oi3, _ = sim_offsets(si)
+    m = si[I_M]
+    moved = math.hypot(x - sf[F_SURF_X], y - sf[F_SURF_Y]) + abs(th - sf[F_SURF_TH]) * sf[F_REACH]
+    if moved >= sf[F_SURF_CLEAR] - 1e-9:
+        c, s = math.cos(th), math.sin(th)
+        points = np.empty((m, 2))
+        for j in range(m):
+            wx, wy = sf[of3 + 2 * j], sf[of3 + 2 * j + 1]
+            points[j, 0] = x + c * wx - s * wy
+            points[j, 1] = y + s * wx + c * wy
+        _, _, _, _, fp, _, _, _, _, ip, isid = world_offsets(wi)
+        nq = wi[4]
+        local = si[oi3 : oi3 + m]
+        if nq:
+            clearance = surface_probe(
+                points, wf[fp : fp + 2 * wi[3]].reshape((wi[3], 2)), wi[ip : ip + nq + 1],
+                wi[isid : isid + nq], local,
+            )  # fmt: skip
+        else:
+            clearance = np.inf
+            local[:] = 0
+        for j in range(m):
+            ids[0, j] = si[oi2 + local[j]]
+        sf[F_SURF_X], sf[F_SURF_Y], sf[F_SURF_TH], sf[F_SURF_CLEAR] = x, y, th, clearance
+
+
+@njit(cache=True, inline="always")
+def _wall_forces(
+    x: float, y: float, th: float, vx: float, vy: float, w: float,
+    wf: FloatArray, wi: IntArray, sf: FloatArray, si: IntArray, now_us: int,
+) -> tuple[float, float, float, int]:  # fmt: skip
+    """The world's push-back on the body (fx, fy, tz, world frame) and STEP_COLLISION when a contact
+    is fresh; the contacts are looked up again only once the robot left their clearance."""
+    of0, of1, of2, _, _, oi0, oi1, _, _, _ = sim_offsets(si)
+    status = 0
+    fx = fy = tz = 0.0
+    dx, dy = x - sf[F_CLEAR_X], y - sf[F_CLEAR_Y]
+    clear = sf[F_CLEAR]
+    if clear <= 0.0 or dx * dx + dy * dy >= clear * clear:
+        nc = si[I_C]
+        out = sf[of1:of2].reshape((nc, 6))
+        count, clearance = _world_contacts(wf, wi, sf[of0:of1].reshape((si[I_V], 2)), x, y, th, out)
+        sf[F_CLEAR_X], sf[F_CLEAR_Y], sf[F_CLEAR] = x, y, clearance
+        sf[F_AT_X], sf[F_AT_Y], sf[F_AT_TH] = x, y, th
+        si[I_COUNT] = count
+        if count:
+            c, s = math.cos(th), math.sin(th)
+            vwx, vwy = c * vx - s * vy, s * vx + c * vy
+            m_body, inertia, omega = sf[F_MASS], sf[F_INERTIA], sf[F_OMEGA]
+            damping, wall_friction = sf[F_DAMPING], sf[F_WALL_FRICTION]
+            for a in range(count):
+                px, py, nx, ny, depth = out[a, 0], out[a, 1], out[a, 2], out[a, 3], out[a, 4]
+                rx, ry = px - x, py - y
+                pvx, pvy = vwx - w * ry, vwy + w * rx
+                vn, vt = pvx * nx + pvy * ny, -pvx * ny + pvy * nx
+                rn = rx * ny - ry * nx
+                m_eff = 1.0 / (1.0 / m_body + rn * rn / inertia)
+                fn = max(0.0, m_eff * omega * omega * depth - 2 * damping * m_eff * omega * vn)
+                ft = -wall_friction * fn * math.tanh(vt / 0.05)
+                fxa, fya = fn * nx - ft * ny, fn * ny + ft * nx
+                fx, fy, tz = fx + fxa, fy + fya, tz + (rx * fya - ry * fxa)
+                sf[of2 + a] = -vn
+                owner = oi0 + int(out[a, 5])
+                last = si[owner]
+                si[owner] = now_us
+                fresh = last == NEVER or now_us - last > si[I_RELEASE]
+                si[oi1 + a] = 1 if fresh else 0
+                if fresh:
+                    status |= STEP_COLLISION
+    return fx, fy, tz, status
+
+
 @njit(cache=True)
 def _before_physics(
     x: float,
@@ -111,67 +189,12 @@ def _before_physics(
 ) -> int:
     """The floor under the wheels into ids (when a wheel may have changed patch) and the world's
     push-back plus the extra forces into ext[0] (STEP_FORCE set when it is not zero)."""
-    of0, of1, of2, of3, _, oi0, oi1, oi2, oi3, _ = sim_offsets(si)
-    m = si[I_M]
     status = 0
     if si[I_PATCHY]:
-        moved = math.hypot(x - sf[F_SURF_X], y - sf[F_SURF_Y]) + abs(th - sf[F_SURF_TH]) * sf[F_REACH]
-        if moved >= sf[F_SURF_CLEAR] - 1e-9:
-            c, s = math.cos(th), math.sin(th)
-            points = np.empty((m, 2))
-            for j in range(m):
-                wx, wy = sf[of3 + 2 * j], sf[of3 + 2 * j + 1]
-                points[j, 0] = x + c * wx - s * wy
-                points[j, 1] = y + s * wx + c * wy
-            _, _, _, _, fp, _, _, _, _, ip, isid = world_offsets(wi)
-            nq = wi[4]
-            local = si[oi3 : oi3 + m]
-            if nq:
-                clearance = surface_probe(
-                    points, wf[fp : fp + 2 * wi[3]].reshape((wi[3], 2)), wi[ip : ip + nq + 1],
-                    wi[isid : isid + nq], local,
-                )  # fmt: skip
-            else:
-                clearance = np.inf
-                local[:] = 0
-            for j in range(m):
-                ids[0, j] = si[oi2 + local[j]]
-            sf[F_SURF_X], sf[F_SURF_Y], sf[F_SURF_TH], sf[F_SURF_CLEAR] = x, y, th, clearance
+        _floor_ids(x, y, th, ids, wf, wi, sf, si)
     fx = fy = tz = 0.0
     if si[I_WALLS]:
-        dx, dy = x - sf[F_CLEAR_X], y - sf[F_CLEAR_Y]
-        clear = sf[F_CLEAR]
-        if clear <= 0.0 or dx * dx + dy * dy >= clear * clear:
-            nc = si[I_C]
-            out = sf[of1:of2].reshape((nc, 6))
-            count, clearance = _world_contacts(wf, wi, sf[of0:of1].reshape((si[I_V], 2)), x, y, th, out)
-            sf[F_CLEAR_X], sf[F_CLEAR_Y], sf[F_CLEAR] = x, y, clearance
-            sf[F_AT_X], sf[F_AT_Y], sf[F_AT_TH] = x, y, th
-            si[I_COUNT] = count
-            if count:
-                c, s = math.cos(th), math.sin(th)
-                vwx, vwy = c * vx - s * vy, s * vx + c * vy
-                m_body, inertia, omega = sf[F_MASS], sf[F_INERTIA], sf[F_OMEGA]
-                damping, wall_friction = sf[F_DAMPING], sf[F_WALL_FRICTION]
-                for a in range(count):
-                    px, py, nx, ny, depth = out[a, 0], out[a, 1], out[a, 2], out[a, 3], out[a, 4]
-                    rx, ry = px - x, py - y
-                    pvx, pvy = vwx - w * ry, vwy + w * rx
-                    vn, vt = pvx * nx + pvy * ny, -pvx * ny + pvy * nx
-                    rn = rx * ny - ry * nx
-                    m_eff = 1.0 / (1.0 / m_body + rn * rn / inertia)
-                    fn = max(0.0, m_eff * omega * omega * depth - 2 * damping * m_eff * omega * vn)
-                    ft = -wall_friction * fn * math.tanh(vt / 0.05)
-                    fxa, fya = fn * nx - ft * ny, fn * ny + ft * nx
-                    fx, fy, tz = fx + fxa, fy + fya, tz + (rx * fya - ry * fxa)
-                    sf[of2 + a] = -vn
-                    owner = oi0 + int(out[a, 5])
-                    last = si[owner]
-                    si[owner] = now_us
-                    fresh = last == NEVER or now_us - last > si[I_RELEASE]
-                    si[oi1 + a] = 1 if fresh else 0
-                    if fresh:
-                        status |= STEP_COLLISION
+        fx, fy, tz, status = _wall_forces(x, y, th, vx, vy, w, wf, wi, sf, si, now_us)
     for k in range(n_extra):
         fx, fy, tz = fx + extra[k, 0], fy + extra[k, 1], tz + extra[k, 2]
     if fx or fy or tz:

@@ -50,16 +50,29 @@ KERNELS = (
 """Every serial kernel (:func:`physics_step_parallel`, for batches, compiles on its first call)."""
 
 
+def _f(*shape: int) -> FloatArray:
+    """Zeros of ``shape``, float64."""
+    return np.zeros(shape)
+
+
+def _i(*shape: int) -> IntArray:
+    """Zeros of ``shape``, int64."""
+    return np.zeros(shape, dtype=np.int64)
+
+
+def _physics_call() -> object:
+    """:func:`physics_step` on one robot of one wheel, no surface."""
+    f, i = _f, _i
+    return physics_step(
+        f(1, 3), f(1, 4), f(1, 1), f(1, 1), f(1, 1), f(1, 2), f(1), f(1, 1), i(1, 1), f(1, 3), False,
+        f(1, 1, W_COLUMNS), f(1, R_COLUMNS), f(0, S_COLUMNS), 0.001,
+    )  # fmt: skip
+
+
 def warm_up_calls() -> list[tuple[Any, Callable[[], object]]]:
     """(kernel, call) for every kernel in :data:`KERNELS` order: the call compiles (or loads) it with
     the argument types the simulator passes (empty or trivial arrays: nothing is computed)."""
-
-    def f(*shape: int) -> FloatArray:
-        return np.zeros(shape)
-
-    def i(*shape: int) -> IntArray:
-        return np.zeros(shape, dtype=np.int64)
-
+    f, i = _f, _i
     triangle = np.array([[0.1, 0.0], [-0.1, 0.1], [-0.1, -0.1]])
     si = i(I_HEADER)
     si_full = i(int(sim_offsets.py_func(si)[-1]))
@@ -86,23 +99,7 @@ def warm_up_calls() -> list[tuple[Any, Callable[[], object]]]:
             f(0), f(0), 0.0, 0.001, f(1, 3), 0, 0.0, 0.0, f(0, 4), *index, f(0, 2), i(2), 1.0, f(0)
         ),
         scan_measure: lambda: scan_measure(f(0), f(0), 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, f(0)),
-        physics_step: lambda: physics_step(
-            f(1, 3),
-            f(1, 4),
-            f(1, 1),
-            f(1, 1),
-            f(1, 1),
-            f(1, 2),
-            f(1),
-            f(1, 1),
-            i(1, 1),
-            f(1, 3),
-            False,
-            f(1, 1, W_COLUMNS),
-            f(1, R_COLUMNS),
-            f(0, S_COLUMNS),
-            0.001,
-        ),
+        physics_step: _physics_call,
         contact_speeds: lambda: contact_speeds(f(0, 3), f(0, 0, W_COLUMNS), f(0, 0, 2)),
         surface_probe: lambda: surface_probe(f(0, 2), f(0, 2), i(1), i(0), i(0)),
         robot_before: lambda: robot_before(

@@ -98,6 +98,122 @@ def solve_body(
 
 
 @njit(cache=True, inline="always")
+def _drive(p: FloatArray, command: float, v_bus: float, omega: float) -> tuple[float, float, float]:
+    """Driver and motor of a wheel (parameters p) at wheel speed omega: (duty, current, the back-EMF's
+    damping when the current follows it, not limited, else 0)."""
+    duty = min(max(command * p[W_INV_PWM_MAX], -1.0), 1.0)
+    i_free = duty * (max(v_bus - p[W_DROP], 0.0) * p[W_INV_RES]) - p[W_KE_RES] * omega
+    i_max = p[W_I_MAX]
+    if abs(command) >= p[W_ON_THRESHOLD]:
+        amps = min(max(i_free, -i_max), i_max)
+        emf = p[W_EMF_DAMPING] if abs(i_free) < i_max else 0.0
+    else:
+        amps, emf = 0.0, 0.0
+    return duty, amps, emf
+
+
+@njit(cache=True, inline="always")
+def _friction(
+    p: FloatArray, surf: FloatArray, sid: int, angle: float, slip: float, roll: float, omega: float
+) -> Forces:
+    """Friction forces and secant slopes on a wheel's three contact rows on surface sid: traction
+    slip (ft, kt), roller rolling (fn, kn), axle (fa, ka), with the scrub of combined rolling and
+    driving."""
+    inv_veps = surf[sid, S_INV_VEPS]
+    roll_max = (p[W_RR_TOP] - p[W_RR_VAR] * math.cos(p[W_ROLLER_COUNT] * angle)) * (
+        surf[sid, S_ROLL] * p[W_LOAD]
+    )
+    ft, kt = _secant(surf[sid, S_MU] * p[W_GRIP_LOAD], inv_veps, slip * inv_veps)
+    fn, kn = _secant(roll_max, _INV_ROLL_EPS, roll * _INV_ROLL_EPS)
+    fa, ka = _secant(p[W_STATIC], _INV_WHEEL_EPS, omega * _INV_WHEEL_EPS)
+    # combined rolling and driving: viscous scrub on both rolling directions, weighted by
+    # sin(2 beta) of the contact's direction (0 when the wheel or its rollers stand still)
+    rim = p[W_RADIUS] * omega
+    both = rim * rim + roll * roll
+    if p[W_SCRUB_LOAD] > 0.0 and both > 1e-12:
+        scrub = p[W_SCRUB_LOAD] * 2.0 * abs(rim) * abs(roll) / both
+        fn += scrub * roll
+        kn += scrub
+        fa += scrub * p[W_RADIUS] * rim
+        ka += scrub * p[W_RADIUS] * p[W_RADIUS]
+    return ft, kt, fn, kn, fa, ka
+
+
+Forces = tuple[float, float, float, float, float, float]
+"""A wheel's forces and secant slopes on its three contact rows: ft, kt (traction), fn, kn (roller
+rolling), fa, ka (axle)."""
+Body = tuple[float, float, float, float, float, float, float, float, float]
+"""The body system's upper triangle and right-hand side: s00, s11, s22, s01, s02, s12, r0, r1, r2."""
+
+
+@njit(cache=True, inline="always")
+def _add_wheel(body: Body, p: FloatArray, forces: Forces, sc: FloatArray) -> Body:
+    """(M/dt + H^T K H) dq = -H^T f: a wheel's rows added to the body system, its speed eliminated
+    (its elimination factors e0, e1, e2, 1/d and right-hand side into sc, for :func:`_advance`)."""
+    s00, s11, s22, s01, s02, s12, r0, r1, r2 = body
+    ft, kt, fn, kn, fa, ka = forces
+    tx, ty, tw, ta = p[W_TX], p[W_TY], p[W_TW], p[W_TA]
+    nx, ny, nw, na = p[W_NX], p[W_NY], p[W_NW], p[W_NA]
+    r0 -= ft * tx + fn * nx
+    r1 -= ft * ty + fn * ny
+    r2 -= ft * tw + fn * nw
+    rw = -(ft * ta + fn * na + fa)
+    s00 += kt * tx * tx + kn * nx * nx
+    s11 += kt * ty * ty + kn * ny * ny
+    s22 += kt * tw * tw + kn * nw * nw
+    s01 += kt * tx * ty + kn * nx * ny
+    s02 += kt * tx * tw + kn * nx * nw
+    s12 += kt * ty * tw + kn * ny * nw
+    c0 = kt * ta * tx + kn * na * nx
+    c1 = kt * ta * ty + kn * na * ny
+    c2 = kt * ta * tw + kn * na * nw
+    inv_d = 1.0 / (p[W_J_DT] + kt * ta * ta + kn * na * na + ka)
+    e0, e1, e2 = c0 * inv_d, c1 * inv_d, c2 * inv_d
+    s00 -= c0 * e0
+    s11 -= c1 * e1
+    s22 -= c2 * e2
+    s01 -= c0 * e1
+    s02 -= c0 * e2
+    s12 -= c1 * e2
+    r0 -= e0 * rw
+    r1 -= e1 * rw
+    r2 -= e2 * rw
+    sc[0], sc[1], sc[2], sc[3], sc[4] = e0, e1, e2, inv_d, rw
+    return s00, s11, s22, s01, s02, s12, r0, r1, r2
+
+
+@njit(cache=True, inline="always")
+def _advance(
+    i: int,
+    pose: FloatArray,
+    q: FloatArray,
+    wheel_angle: FloatArray,
+    scratch: FloatArray,
+    dv: tuple[float, float, float],
+    dt: float,
+) -> None:
+    """Robot i's wheel speeds, twist, pose and wheel angles after the body's speed change dv (dvx,
+    dvy, dw) of a step of dt."""
+    dvx, dvy, dw = dv
+    m = wheel_angle.shape[1]
+    for j in range(m):
+        sc = scratch[j]
+        q[i, 3 + j] += sc[4] * sc[3] - sc[0] * dvx - sc[1] * dvy - sc[2] * dw
+    vx, vy, w = q[i, 0] + dvx, q[i, 1] + dvy, q[i, 2] + dw
+    # body-frame rotation of the velocity by -w dt, pose at the mid-step heading, wheel angles
+    c, s = math.cos(w * dt), math.sin(w * dt)
+    vx, vy = vx * c + vy * s, vy * c - vx * s
+    q[i, 0], q[i, 1], q[i, 2] = vx, vy, w
+    heading = pose[i, 2] + 0.5 * dt * w
+    c, s = math.cos(heading), math.sin(heading)
+    pose[i, 0] += (c * vx - s * vy) * dt
+    pose[i, 1] += (s * vx + c * vy) * dt
+    pose[i, 2] += dt * w
+    for j in range(m):
+        wheel_angle[i, j] += dt * q[i, 3 + j]
+
+
+@njit(cache=True, inline="always")
 def robot_physics(
     i: int,
     pose: FloatArray,
@@ -118,103 +234,32 @@ def robot_physics(
     scratch: FloatArray,
 ) -> None:
     """Advance robot i by dt in place (the body of :func:`physics_step`)."""
-    m = wheel_angle.shape[1]
     vx, vy, w = q[i, 0], q[i, 1], q[i, 2]
     r = rp[i]
     v_bus = battery[i, 0]
     v_bus = v_bus + r[R_BATT_RELAX] * (v_open[i] - r[R_BATT_RES] * battery[i, 1] - v_bus)
     v_bus = max(v_bus, 0.0)
-    s00, s11, s22 = r[R_M_DT], r[R_M_DT], r[R_I_DT]
-    s01 = s02 = s12 = 0.0
-    r0 = r1 = r2 = 0.0
+    body = (r[R_M_DT], r[R_M_DT], r[R_I_DT], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     i_batt = 0.0
-    for j in range(m):
+    for j in range(wheel_angle.shape[1]):
         p = wp[i, j]
         omega = q[i, 3 + j]
-        # driver and motor: current, and whether it follows the back-EMF (not limited)
-        command = pwm[i, j]
-        duty = min(max(command * p[W_INV_PWM_MAX], -1.0), 1.0)
-        i_free = duty * (max(v_bus - p[W_DROP], 0.0) * p[W_INV_RES]) - p[W_KE_RES] * omega
-        i_max = p[W_I_MAX]
-        if abs(command) >= p[W_ON_THRESHOLD]:
-            amps = min(max(i_free, -i_max), i_max)
-            emf = p[W_EMF_DAMPING] if abs(i_free) < i_max else 0.0
-        else:
-            amps, emf = 0.0, 0.0
-        # friction on the three contact rows: traction slip, roller rolling, axle
-        sid = ids[i, j]
-        inv_veps = surf[sid, S_INV_VEPS]
-        roll_max = (p[W_RR_TOP] - p[W_RR_VAR] * math.cos(p[W_ROLLER_COUNT] * wheel_angle[i, j])) * (
-            surf[sid, S_ROLL] * p[W_LOAD]
-        )
+        duty, amps, emf = _drive(p, pwm[i, j], v_bus, omega)
         slip, roll = _contact_speeds(wp, i, j, vx, vy, w, omega)
-        ft, kt = _secant(surf[sid, S_MU] * p[W_GRIP_LOAD], inv_veps, slip * inv_veps)
-        fn, kn = _secant(roll_max, _INV_ROLL_EPS, roll * _INV_ROLL_EPS)
-        fa, ka = _secant(p[W_STATIC], _INV_WHEEL_EPS, omega * _INV_WHEEL_EPS)
-        # combined rolling and driving: viscous scrub on both rolling directions, weighted by
-        # sin(2 beta) of the contact's direction (0 when the wheel or its rollers stand still)
-        rim = p[W_RADIUS] * omega
-        both = rim * rim + roll * roll
-        if p[W_SCRUB_LOAD] > 0.0 and both > 1e-12:
-            scrub = p[W_SCRUB_LOAD] * 2.0 * abs(rim) * abs(roll) / both
-            fn += scrub * roll
-            kn += scrub
-            fa += scrub * p[W_RADIUS] * rim
-            ka += scrub * p[W_RADIUS] * p[W_RADIUS]
+        ft, kt, fn, kn, fa, ka = _friction(p, surf, ids[i, j], wheel_angle[i, j], slip, roll, omega)
         fa -= p[W_KT] * amps - p[W_VISC] * omega  # the motor drives the axle row
         ka += emf + p[W_VISC]
         traction[i, j] = -ft
         current[i, j] = amps
         i_batt += duty * amps
-        # (M/dt + H^T K H) dq = -H^T f: accumulate, then eliminate this wheel's speed
-        tx, ty, tw, ta = p[W_TX], p[W_TY], p[W_TW], p[W_TA]
-        nx, ny, nw, na = p[W_NX], p[W_NY], p[W_NW], p[W_NA]
-        r0 -= ft * tx + fn * nx
-        r1 -= ft * ty + fn * ny
-        r2 -= ft * tw + fn * nw
-        rw = -(ft * ta + fn * na + fa)
-        s00 += kt * tx * tx + kn * nx * nx
-        s11 += kt * ty * ty + kn * ny * ny
-        s22 += kt * tw * tw + kn * nw * nw
-        s01 += kt * tx * ty + kn * nx * ny
-        s02 += kt * tx * tw + kn * nx * nw
-        s12 += kt * ty * tw + kn * ny * nw
-        c0 = kt * ta * tx + kn * na * nx
-        c1 = kt * ta * ty + kn * na * ny
-        c2 = kt * ta * tw + kn * na * nw
-        inv_d = 1.0 / (p[W_J_DT] + kt * ta * ta + kn * na * na + ka)
-        e0, e1, e2 = c0 * inv_d, c1 * inv_d, c2 * inv_d
-        s00 -= c0 * e0
-        s11 -= c1 * e1
-        s22 -= c2 * e2
-        s01 -= c0 * e1
-        s02 -= c0 * e2
-        s12 -= c1 * e2
-        r0 -= e0 * rw
-        r1 -= e1 * rw
-        r2 -= e2 * rw
-        scratch[j, 0], scratch[j, 1], scratch[j, 2], scratch[j, 3], scratch[j, 4] = e0, e1, e2, inv_d, rw
+        body = _add_wheel(body, p, (ft, kt, fn, kn, fa, ka), scratch[j])
+    s00, s11, s22, s01, s02, s12, r0, r1, r2 = body
     if has_ext:  # world force and torque, into the body frame
         c, s = math.cos(pose[i, 2]), math.sin(pose[i, 2])
         r0 += c * ext[i, 0] + s * ext[i, 1]
         r1 += c * ext[i, 1] - s * ext[i, 0]
         r2 += ext[i, 2]
-    dvx, dvy, dw = solve_body(s00, s11, s22, s01, s02, s12, r0, r1, r2)
-    for j in range(m):
-        sc = scratch[j]
-        q[i, 3 + j] += sc[4] * sc[3] - sc[0] * dvx - sc[1] * dvy - sc[2] * dw
-    vx, vy, w = vx + dvx, vy + dvy, w + dw
-    # body-frame rotation of the velocity by -w dt, pose at the mid-step heading, wheel angles
-    c, s = math.cos(w * dt), math.sin(w * dt)
-    vx, vy = vx * c + vy * s, vy * c - vx * s
-    q[i, 0], q[i, 1], q[i, 2] = vx, vy, w
-    heading = pose[i, 2] + 0.5 * dt * w
-    c, s = math.cos(heading), math.sin(heading)
-    pose[i, 0] += (c * vx - s * vy) * dt
-    pose[i, 1] += (s * vx + c * vy) * dt
-    pose[i, 2] += dt * w
-    for j in range(m):
-        wheel_angle[i, j] += dt * q[i, 3 + j]
+    _advance(i, pose, q, wheel_angle, scratch, solve_body(s00, s11, s22, s01, s02, s12, r0, r1, r2), dt)
     battery[i, 0] = v_bus
     battery[i, 1] = i_batt
 
