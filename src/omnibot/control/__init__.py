@@ -29,7 +29,7 @@ if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
     )
     from omnibot.control.paths.files import read_path, write_path
     from omnibot.control.paths.geometry import resample
-    from omnibot.control.paths.limits import MotionLimits, grip_table
+    from omnibot.control.paths.limits import Grip, MotionLimits, grip_share, grip_table
     from omnibot.control.paths.path import Path
     from omnibot.control.paths.profile import min_traversal_time, time_optimal_profile
     from omnibot.control.paths.standard import standard_path
@@ -50,7 +50,7 @@ _EXPORTS = {
     "paths.files": ("read_path", "write_path"),
     "paths.geometry": ("resample",),
     "paths.path": ("Path",),
-    "paths.limits": ("MotionLimits", "grip_table"),
+    "paths.limits": ("Grip", "MotionLimits", "grip_share", "grip_table"),
     "paths.profile": ("min_traversal_time", "time_optimal_profile"),
     "paths.standard": ("standard_path",),
     "paths.teach": ("PathRecorder",),
@@ -61,6 +61,7 @@ __all__ = [
     "STOP",
     "Command",
     "Follower",
+    "Grip",
     "MotionLimits",
     "Path",
     "PathRecorder",
@@ -69,6 +70,7 @@ __all__ = [
     "follower_names",
     "followers",
     "free_wheel_speeds",
+    "grip_share",
     "grip_table",
     "make_follower",
     "min_traversal_time",

@@ -24,9 +24,8 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-import numpy as np
-
 from omnibot.client import Limits
+from omnibot.control import Grip, grip_share
 from omnibot.motion import ZERO, Twist
 from omnibot.robot import RobotDescription
 from omnibot.teleop.config import TeleopConfig
@@ -107,7 +106,7 @@ class TwistLimits:
     rate: float
     accel: float = math.inf
     angular_accel: float = math.inf
-    grip: tuple[tuple[float, ...], tuple[float, ...]] | None = None
+    grip: Grip | None = None
 
     @classmethod
     def from_limits(
@@ -142,9 +141,7 @@ class TwistLimits:
 
     def grip_at(self, speed: float) -> float:
         """The share of the accelerations the floor's grip leaves at ``speed`` m/s (1 without a floor)."""
-        if self.grip is None:
-            return 1.0
-        return float(np.interp(speed, *self.grip))
+        return float(grip_share(self.grip, speed))
 
 
 class TwistRamp:

@@ -20,6 +20,15 @@ Grip = tuple[tuple[float, ...], tuple[float, ...]]
 """(speeds m/s, fractions): the share of the accelerations a floor's grip leaves at each speed."""
 
 
+def grip_share(grip: Grip | None, speed: FloatArray | float) -> FloatArray:
+    """The share of the accelerations ``grip`` leaves at each ``speed`` (m/s), interpolated; 1
+    without a floor (``grip`` None): the planner's and teleop's ramps read it alike."""
+    if grip is None:
+        return np.ones_like(speed, dtype=np.float64)
+    speeds, fractions = grip
+    return np.asarray(np.interp(speed, speeds, fractions), dtype=np.float64)
+
+
 @dataclass(frozen=True)
 class MotionLimits:
     """Speed and acceleration limits for planning (SI)."""
@@ -110,10 +119,7 @@ class MotionLimits:
     def grip_at(self, speed: FloatArray) -> FloatArray:
         """The fraction of the accelerations the floor's grip leaves at each ``speed`` (m/s; 1
         without a floor)."""
-        if self.grip is None:
-            return np.ones_like(speed)
-        speeds, fractions = self.grip
-        return np.interp(speed, speeds, fractions)
+        return grip_share(self.grip, speed)
 
     def with_turn_rate(self, w_max: float) -> MotionLimits:
         """These limits with the turn rate capped at ``w_max`` rad/s (never raised)."""
