@@ -15,6 +15,7 @@ from omnibot.cliargs import (
     check_distinct,
     check_plot,
     check_sim_options,
+    physics_behind,
     seed_of,
     sim_url,
 )
@@ -72,6 +73,23 @@ def test_simulator_options_are_refused_with_a_port() -> None:
     with pytest.raises(ConfigError, match="--seed, --world shape the simulated robot"):
         check_sim_options(parse("--port", "sim://omni4", "--seed", "2", "--world", "room"))
     check_sim_options(parse("--port", "sim://omni4", "--surface", "wood"), allowed=("surface",))
+
+
+@pytest.mark.parametrize(
+    ("url", "known"),
+    [
+        (None, True),
+        ("sim://omni4?world=room", True),
+        ("spy+faults+sim://omni3", True),
+        ("uno://omni4?world=room&seed=1", True),  # the emulated UNO drives omnibot's physics
+        ("/dev/ttyUSB0", False),
+        ("socket://127.0.0.1:4000", False),
+        ("spy+/dev/ttyACM0", False),
+        ("simulator.local:4000", False),
+    ],
+)
+def test_a_link_ending_in_the_physics_knows_where_the_robot_stands(url: str | None, known: bool) -> None:
+    assert physics_behind(url) is known
 
 
 def test_outputs_are_checked_before_anything_runs(tmp_path: Path) -> None:

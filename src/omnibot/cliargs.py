@@ -274,6 +274,13 @@ def simulated(args: argparse.Namespace) -> bool:
     return port is None or str(port).split("+")[-1].startswith("sim:")
 
 
+def physics_behind(url: str | None) -> bool:
+    """The link ends in omnibot's physics: no URL (the default simulator), ``sim://`` or ``uno://``
+    (the emulated UNO with the physics in the loop), behind any ``spy+``/``faults+`` wrappers. Such a
+    link knows where the robot stands."""
+    return url is None or str(url).split("+")[-1].split(":", 1)[0] in ("sim", "uno")
+
+
 def sim_url(args: argparse.Namespace) -> str:
     """``--port``, or the ``sim://`` URL of the simulated robot the options describe."""
     if getattr(args, "port", None):

@@ -58,6 +58,13 @@ def test_bad_input_is_one_line_and_exit_2(
     assert_one_line_error(err)
 
 
+def test_a_real_robot_is_placed_by_hand(room_map: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["goto", "3,1", "--map", str(room_map), "--port", "/dev/ttyUSB0"]) == 2
+    err = capsys.readouterr().err
+    assert "where does the robot stand in the map? give --initial-pose X,Y,THETA" in err, err
+    assert_one_line_error(err)
+
+
 def test_a_map_that_does_not_load_is_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     bad = tmp_path / "bad.yaml"
     bad.write_text("image: missing.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n")

@@ -38,7 +38,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--initial-pose",
         metavar="X,Y,THETA",
-        help="where the robot stands in the map, m, m, degrees (default on the simulator: the world's start)",
+        help="where the robot stands in the map, m, m, degrees (default on the simulator, uno:// included: where the simulated robot stands)",
     )
     p.add_argument("--scanner", metavar="DEV", help="the RPLIDAR's serial port on a real robot")
     p.add_argument("--tolerance", type=float, default=0.05, metavar="M", help="arrival distance, m (0.05)")
@@ -61,7 +61,7 @@ def _say(text: str) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """``omnibot goto``: the exit status."""
-    from omnibot.cliargs import check_sim_options, recording_of, sim_url, simulated
+    from omnibot.cliargs import check_sim_options, physics_behind, recording_of, sim_url, simulated
     from omnibot.client import robot_session
     from omnibot.mapping import check_goal, inflate, load_map
     from omnibot.motion import Pose2D, parse_pose
@@ -80,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(
             "the simulated robot's scanner is simulated: --scanner goes with --port", key="--scanner"
         )
-    if initial is None and not on_sim:
+    if initial is None and not physics_behind(args.port):
         raise ConfigError(
             "where does the robot stand in the map? give --initial-pose X,Y,THETA", key="--initial-pose"
         )

@@ -209,6 +209,7 @@ def check_map(args: argparse.Namespace, specs: list[RobotSpec]) -> BridgeMap | N
                 "--initial-pose places the robot in a --map: give the map", key="--initial-pose"
             )
         return None
+    from omnibot.cliargs import physics_behind
     from omnibot.mapping import load_map
     from omnibot.motion import parse_pose
     from omnibot.ros2 import BridgeMap
@@ -220,7 +221,7 @@ def check_map(args: argparse.Namespace, specs: list[RobotSpec]) -> BridgeMap | N
     if initial is not None:
         x, y, theta = parse_pose(initial, "--initial-pose")
         start = (x, y, theta or 0.0)
-    elif url is not None and not url.split("+")[-1].startswith("sim:"):
+    elif not physics_behind(url):
         raise ConfigError(
             "where does the robot stand in the map? give --initial-pose X,Y,THETA", key="--initial-pose"
         )

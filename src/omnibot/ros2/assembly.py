@@ -66,7 +66,7 @@ class BridgeMap:
     source: str
     """Where it was read from (named in the notice)."""
     start: tuple[float, float, float] | None = None
-    """Where the robot stands in it (m, m, rad); None: the simulator's pose (a simulated robot only)."""
+    """Where the robot stands in it (m, m, rad); None: the simulator's pose (a simulated robot, or the UNO with the physics in the loop, only)."""
 
 
 @dataclass(frozen=True)
