@@ -62,11 +62,15 @@ def test_bad_config_file_exits_2(tmp_path: Path, capsys: pytest.CaptureFixture[s
 
 
 def test_keyboard_needs_a_terminal(
-    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], tmp_path: Path
 ) -> None:
     monkeypatch.setattr("omnibot.teleop.keyboard.os.isatty", lambda fd: False)
     assert main(["teleop", "--keyboard"]) == 2
     assert "--keyboard: keyboard teleop needs a terminal" in capsys.readouterr().err
+    # `run` and `map` name the option as the user gave it there
+    for argv in (["run", "--teleop", "keyboard"], ["map", "--teleop", "keyboard", "--out", str(tmp_path)]):
+        assert main(argv) == 2
+        assert "--teleop keyboard: keyboard teleop needs a terminal" in capsys.readouterr().err
 
 
 def test_no_pad_and_no_terminal(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:

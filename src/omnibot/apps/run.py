@@ -154,7 +154,7 @@ def compose(
         say(f"the follower stands still {STANDSTILL:g} s first, while the gyro's bias is learned")
     if args.teleop:
         flags = argparse.Namespace(keyboard=args.teleop == "keyboard", joystick=args.teleop == "pad")
-        device = open_source(flags, config, say)
+        device = open_source(flags, config, say, ("--teleop keyboard", "--teleop pad"))
         parts.closers.append(device.close)
         if hasattr(device, "__enter__"):
             device.__enter__()

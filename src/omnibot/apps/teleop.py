@@ -38,20 +38,26 @@ def _say(text: str) -> None:
     print(f"teleop: {text}", flush=True)
 
 
-def open_source(args: argparse.Namespace, config: Any, say: Callable[[str], None]) -> Any:
+def open_source(
+    args: argparse.Namespace,
+    config: Any,
+    say: Callable[[str], None],
+    options: tuple[str, str] = ("--keyboard", "--joystick"),
+) -> Any:
     """The input source the flags ask for; with neither flag a pad if one is attached, else the
-    keyboard if standard input is a terminal."""
+    keyboard if standard input is a terminal. ``options``: how the command spells the keyboard and
+    the pad, named in its errors."""
     from omnibot.teleop.keyboard import KeyboardSource
 
     if args.keyboard:
-        return KeyboardSource(config)
+        return KeyboardSource(config, option=options[0])
     try:
         from omnibot.teleop.joystick import JoystickSource
 
         pad = JoystickSource(config, on_message=say)
     except ImportError as exc:  # pygame is the teleop extra
         raise ConfigError(
-            missing_extra(exc) or f"joystick input needs pygame: {exc}", key="--joystick"
+            missing_extra(exc) or f"joystick input needs pygame: {exc}", key=options[1]
         ) from None
     if args.joystick or pad.attached:
         if not pad.attached:
@@ -60,9 +66,9 @@ def open_source(args: argparse.Namespace, config: Any, say: Callable[[str], None
     pad.close()
     if not sys.stdin.isatty():
         raise ConfigError(
-            "no joystick attached and standard input is not a terminal: plug in a pad (--joystick)"
+            f"no joystick attached and standard input is not a terminal: plug in a pad ({options[1]})"
         )
-    return KeyboardSource(config)
+    return KeyboardSource(config, option=options[0])
 
 
 def run(args: argparse.Namespace) -> int:

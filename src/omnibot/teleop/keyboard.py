@@ -137,12 +137,12 @@ class KeyboardSource:
 
     name = "keyboard"
 
-    def __init__(self, config: TeleopConfig, fd: int | None = None, **hold: float) -> None:
+    def __init__(
+        self, config: TeleopConfig, fd: int | None = None, *, option: str = "--keyboard", **hold: float
+    ) -> None:
         self.fd = 0 if fd is None else fd
-        if not os.isatty(self.fd):
-            raise ConfigError(
-                "keyboard teleop needs a terminal (standard input is not one)", key="--keyboard"
-            )
+        if not os.isatty(self.fd):  # `option`: how the user asked for it, named in the error
+            raise ConfigError("keyboard teleop needs a terminal (standard input is not one)", key=option)
         self.state = KeyState(config, **hold)
         self._saved: list[Any] | None = None
 
