@@ -14,7 +14,7 @@ import math
 import numpy as np
 import pytest
 
-from omnibot.client import RobotClient, commands
+from omnibot.client import CalibrationRejected, RobotClient, commands
 from omnibot.estimation import SlipModel, SlipParameters
 from omnibot.firmware.config import build_config
 from omnibot.firmware.config_loops import LAND_ACCEL
@@ -27,14 +27,14 @@ from omnibot.sim import SimDevice
 from tests.firmware.conftest import Rig, make_rig
 
 SLIP = {
-    ("omni4", "wood"): [0.001598, 0.013683, 1.0],
-    ("omni4", "carpet"): [0.006843, 0.027414, 1.0],
-    ("omni3", "wood"): [0.001123, 0.0, 1.0],
-    ("omni3", "carpet"): [0.004255, 0.0, 1.0],
-    ("mecanum4", "wood"): [0.001437, 0.0, 1.0],
-    ("mecanum4", "carpet"): [0.005282, 0.0, 1.0],
+    ("omni4", "wood"): [0.001731, 0.013454, 1.0, 0.0],
+    ("omni4", "carpet"): [0.006818, 0.027463, 1.0, 0.0],
+    ("omni3", "wood"): [0.001047, 0.0, 1.0, 0.0],
+    ("omni3", "carpet"): [0.003634, 0.0, 1.0, 0.0007676],
+    ("mecanum4", "wood"): [0.001477, 0.0, 1.0, 0.0],
+    ("mecanum4", "carpet"): [0.005314, 0.0, 1.0, 0.0],
 }
-"""Each floor's creep (roll, combined, scale) as the slip runs fit it (``benchmarks.move_landing``'s
+"""Each floor's creep (roll, combined, scale, ramp) as the slip runs fit it (``benchmarks.move_landing``'s
 ``floor_slip``: simulator seed 1000)."""
 EXACT = 440 / (2 * math.pi * 220.0 * 0.025)
 """FakeHAL encoder counts per PWM count per second of a wheel that turns as the rig's calibration
@@ -148,7 +148,7 @@ def test_the_creep_is_the_host_slip_models(robot: str) -> None:
     description = load_robot(robot)
     params = SlipParameters(roll=0.012, combined=0.04)
     cfg = build_config(description, slip=params)
-    assert cfg["slip"] == [0.012, 0.04, 1.0]
+    assert cfg["slip"] == [0.012, 0.04, 1.0, 0.0]
     land = Landing(cfg)
     host = SlipModel(description, params)
     out = [0.0] * description.n_wheels
@@ -156,6 +156,31 @@ def test_the_creep_is_the_host_slip_models(robot: str) -> None:
         assert land.overturn(*twist, out)
         assert out == pytest.approx(list(host.wheel_correction(twist)), abs=1e-6)
     assert not Landing(build_config(description)).overturn(0.3, 0.0, 0.0, out)  # no coefficients: none
+    assert Landing({**cfg, "slip": [0.012, 0.04, 1.0]}).slip == [
+        0.012,
+        0.04,
+        1.0,
+        0.0,
+    ]  # before the ramp term
+
+
+@pytest.mark.parametrize("robot", ["omni4", "omni3", "mecanum4"])
+def test_a_moves_ramp_creeps_as_the_host_models_it(robot: str) -> None:
+    """On a MOVE's ramp the drag creeps more by ``ramp`` times the plan's rate squared (the host's
+    ramp term at the body's acceleration); a ROTATE's rate, an angular one, adds none."""
+    description = load_robot(robot)
+    params = SlipParameters(roll=0.004, combined=0.02, ramp=0.0008)
+    land = Landing(build_config(description, slip=params))
+    host = SlipModel(description, params)
+    out = [0.0] * description.n_wheels
+    land.rate = 1.25  # m/s^2 along the MOVE: (0.6, 0.8) per unit of its speed
+    assert land.overturn(0.18, 0.24, 0.0, out)
+    ramping = host.wheel_correction((0.18, 0.24, 0.0), (0.75, 1.0, 0.0))
+    assert out == pytest.approx(list(ramping), abs=1e-6)
+    assert np.abs(ramping - host.wheel_correction((0.18, 0.24, 0.0))).max() > 0.01 * np.abs(ramping).max()
+    land.rotate = True
+    assert land.overturn(0.18, 0.24, 0.0, out)
+    assert out == pytest.approx(list(host.wheel_correction((0.18, 0.24, 0.0))), abs=1e-6)
 
 
 def test_config_turn_and_ramps() -> None:
@@ -363,28 +388,36 @@ def test_the_sonar_guard_slows_a_landing_move_which_still_lands() -> None:
 def test_cal_table_9_sets_the_floors_creep() -> None:
     rig = make_rig()
     land = rig.ctrl.executor.landing
-    assert land.slip == [0.0, 0.0, 1.0]
-    assert rig.cmd("CAL,9,0,0,1551;CAL,9,1,0,408;CAL,9,2,0,10300") == ["OK", "OK", "OK"]
-    assert land.slip == pytest.approx([0.01551, 0.0408, 1.03])
+    assert land.slip == [0.0, 0.0, 1.0, 0.0]
+    assert rig.cmd("CAL,9,0,0,1551;CAL,9,1,0,408;CAL,9,2,0,10300;CAL,9,3,0,770") == ["OK"] * 4
+    assert land.slip == pytest.approx([0.01551, 0.0408, 1.03, 0.00077])
     bad = f"ERROR,{codes.E_CALIBRATION},{codes.TEXTS[codes.E_CALIBRATION]}"
-    for command in ("CAL,9,0,0,-1", "CAL,9,2,0,5000", "CAL,9,2,0,20000", "CAL,9,3,0,1", "CAL,9,0,1,5"):
+    for command in (
+        "CAL,9,0,0,-1",
+        "CAL,9,2,0,5000",
+        "CAL,9,2,0,20000",
+        "CAL,9,3,0,-1",
+        "CAL,9,4,0,1",
+        "CAL,9,0,1,5",
+    ):
         assert rig.cmd(command) == [bad], command
-    assert land.slip == pytest.approx([0.01551, 0.0408, 1.03])
+    assert land.slip == pytest.approx([0.01551, 0.0408, 1.03, 0.00077])
 
 
 def test_the_client_uploads_the_floors_creep(
     monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture
 ) -> None:
-    params = SlipParameters(roll=0.015514, combined=0.040821, scale=1.0)
+    params = SlipParameters(roll=0.015514, combined=0.040821, scale=1.0, ramp=0.000768)
     assert commands.slip(params) == [
         Cal(codes.CAL_SLIP, 0, 0, 1551),
         Cal(codes.CAL_SLIP, 1, 0, 408),
         Cal(codes.CAL_SLIP, 2, 0, 10000),
+        Cal(codes.CAL_SLIP, 3, 0, 768),
     ]
     with RobotClient.open("sim://omni4?seed=1") as client:
         assert client.upload_slip(params)
         device = client.link.device  # type: ignore[attr-defined]
-        assert device.controller.executor.landing.slip == pytest.approx([0.01551, 0.0408, 1.0])
+        assert device.controller.executor.landing.slip == pytest.approx([0.01551, 0.0408, 1.0, 0.000768])
     # older firmware and the UNO's answer ERROR 38: said once, nothing else fails
     old_cal = Controller._cal
 
@@ -401,3 +434,20 @@ def test_the_client_uploads_the_floors_creep(
     assert [r.getMessage() for r in caplog.records] == [
         "the controller does not know the floor's creep (CAL table 9): not uploaded"
     ]
+
+
+def test_a_controller_older_than_the_ramp_term_takes_none_and_refuses_one(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    old_cal = Controller._cal
+
+    def older(self: Controller, table: int, index: int, x: int, y: int) -> bool:
+        return not (table == codes.CAL_SLIP and index == 3) and old_cal(self, table, index, x, y)
+
+    monkeypatch.setattr(Controller, "_cal", older)
+    with RobotClient.open("sim://omni4?seed=1") as client:
+        assert client.upload_slip(
+            SlipParameters(roll=0.0068, combined=0.027)
+        )  # no ramp: as that controller does
+        with pytest.raises(CalibrationRejected, match=r"creep under a ramp \(CAL table 9, index 3\)"):
+            client.upload_slip(SlipParameters(roll=0.0036, ramp=0.00077))
