@@ -42,9 +42,9 @@ combined-drag and ramp terms; the acceleration term cancels over a motion from r
 left out): each roller row's drag ``(roll + ramp rate^2) tanh(rolling / ROLL_EPS) + combined
 sin(2 beta) rolling`` shared out over the wheels as over-turn (config ``creep_mix``, ``creep_roll``,
 ``creep_rim``), ``rate`` a MOVE's planned acceleration (a tyre creeps faster than the force it
-transmits, so the drag creeps more on a ramp; a ROTATE's rate, an angular one, adds none). The wheels'
-targets get the same over-turn, so that the body, not the rims, goes at the speed and on the course
-asked. Without them (0, 0, 1: the default) the encoders are taken as they read.
+transmits, so the drag creeps more on a ramp; a ROTATE's rate, an angular one, adds none). The
+wheels' targets get the same over-turn, so that the body, not the rims, goes at the speed and on
+the course asked. Without them (0, 0, 1, 0: the default) the encoders are taken as they read.
 """
 
 import math
