@@ -73,7 +73,7 @@ def floor_slip(robot: str, surface: str) -> list[float]:
     description = load_robot(robot)
     speed = min(0.8, 0.5 * (description.limits.speed_min + description.limits.speed_max))
     p = simulate_slip_calibration(description, surface, seed=CALIBRATION_SEED, speed=speed).params
-    return [p.roll, p.combined, p.scale]
+    return [p.roll, p.combined, p.scale, p.ramp]
 
 
 @functools.cache

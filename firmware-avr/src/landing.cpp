@@ -7,7 +7,7 @@
 static float per_rad(uint8_t i) { return pgm_read_word(&ENCODER_CPR[i]) * (1.0f / 6.2831853f); }
 
 void Landing::init() {
-    for (uint8_t k = 0; k < 3; k++) slip[k] = pgm_read_float(&DEFAULT_SLIP[k]);
+    for (uint8_t k = 0; k < 4; k++) slip[k] = pgm_read_float(&DEFAULT_SLIP[k]);
 }
 
 bool Landing::set_slip(int16_t index, int16_t y) {
@@ -17,6 +17,8 @@ bool Landing::set_slip(int16_t index, int16_t y) {
         slip[1] = (float)y / P_CAL_SLIP_SCALE;
     } else if (index == 2 && P_CAL_SLIP_SCALE / 2 < y && y < 2 * P_CAL_SLIP_SCALE) {
         slip[2] = (float)y / P_CAL_SLIP_SCALE;
+    } else if (index == 3 && y >= 0) {
+        slip[3] = y * 1e-6f;
     } else {
         return false;
     }
@@ -86,9 +88,11 @@ float Landing::creep(float v) {
 }
 
 // Each roller row's drag, roll tanh(rolling / ROLL_EPS) + combined sin(2 beta) rolling, shared out
-// over the wheels as over-turn (CREEP_MIX); false without creep coefficients.
+// over the wheels as over-turn (CREEP_MIX); the drag creeps more under a MOVE's ramp (ramp rate^2);
+// false without creep coefficients.
 bool Landing::overturn(float q0, float q1, float q2, float *out) {
     float roll = slip[0], comb = slip[1];
+    if (!rotate) roll += slip[3] * rate * rate;
     if (roll == 0 && comb == 0) return false;
     float term[MOTORS];
     for (uint8_t j = 0; j < MOTORS; j++) {

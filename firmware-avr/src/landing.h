@@ -19,7 +19,7 @@ struct Landing {
     float ux, uy, uw;  // the motion's direction: body-frame unit vector, or the turn's sign
     float share[MOTORS];  // travel along the motion per count of each wheel
     int32_t last[MOTORS];
-    float slip[3];   // roll m/s, combined, scale (CAL table 9)
+    float slip[4];   // roll m/s, combined, scale, ramp s^3/m (CAL table 9)
     float twist[3];  // the motion's twist per unit of its speed
 
     void init();

@@ -86,7 +86,9 @@ def test_quick_run_writes_the_file_and_the_report(
     assert slip.scale == pytest.approx(1.05, abs=0.01)  # the true wheels are 5 % larger
     error = cal.slip_error_for("wood")  # the fit's residual over its runs (the SLAM's odometry model)
     assert 0.0 < error.rms <= error.max < 0.01 and error.runs >= 2
+    assert f"ramp {slip.ramp:.5f} s^3/m, scale {slip.scale:.4f};" in text
     assert "## Wheel slip (driven-wheel odometry)" in (report / "accuracy.md").read_text()
+    assert "| ramp (s^3/m) | scale |" in (report / "accuracy.md").read_text()
     for name in ("fig5_rates.png", "fig6_kt_kr.png", "fig7_kl.png", "accuracy.png", "accuracy.md"):
         assert (report / name).stat().st_size > 0
     data = json.loads((report / "accuracy.json").read_text())

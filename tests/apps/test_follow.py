@@ -114,13 +114,14 @@ def test_follow_applies_the_floors_slip_from_a_calibration_file(tmp_path: FsPath
     argv = ["follow", str(path_file), "--speed", "0.4", "--surface", "carpet", "--calibration", str(cal)]
     assert main([*argv, "--report", str(report)]) == 0
     data = json.loads(report.read_text())
-    # a file with the older keys: the combined drag's coefficient 0, as it was fitted
+    # a file with the older keys: the combined drag's and the ramp's coefficients 0, as it was fitted
     assert data["slip_calibration"] == {
         "file": str(cal),
         "roll": 0.016,
         "combined": 0.0,
         "compliance": 0.0,
         "scale": 1.0,
+        "ramp": 0.0,
     }
     assert data["rms_cross_track_m"] < 0.01
 

@@ -67,12 +67,15 @@ def test_creep_reverses_with_the_motion_and_scales_with_its_coefficient() -> Non
     assert body[0] > 0 and abs(body[1]) < 1e-9 and abs(body[2]) < 1e-9
 
 
-def _synthetic_leg(robot_name: str, params: SlipParameters, course: float, speed: float) -> SlipLeg:
-    """A rest-to-rest run whose encoder displacement carries exactly the model's creep and scale."""
+def _synthetic_leg(
+    robot_name: str, params: SlipParameters, course: float, speed: float, ramp: float = 0.4
+) -> SlipLeg:
+    """A rest-to-rest run whose encoder displacement carries exactly the model's creep and scale
+    (``ramp`` s up from rest and down to it)."""
     robot = load_robot(robot_name)
     model = SlipModel(robot, params)
     pinv = np.linalg.pinv(robot.wheel_matrix)
-    dt, duration, ramp = 0.01, 2.0, 0.4
+    dt, duration = 0.01, 2.0
     t = np.arange(0.0, duration, dt)
     v = speed * np.clip(np.minimum(t / ramp, (duration - t) / ramp), 0.0, 1.0)
     acc = np.gradient(v, dt)
@@ -159,8 +162,34 @@ def test_parameters_from_a_file_give_clear_errors(data: object, message: str) ->
 def test_parameters_round_trip() -> None:
     p = SlipParameters(roll=0.0161, compliance=0.002, combined=0.031)
     assert SlipParameters.from_mapping(p.as_dict()) == p
-    assert list(p.as_dict()) == ["roll", "combined", "compliance", "scale"]
+    assert list(p.as_dict()) == ["roll", "combined", "compliance", "scale", "ramp"]
+    ramped = SlipParameters(roll=0.0036, compliance=0.014, ramp=0.000768)
+    assert SlipParameters.from_mapping(ramped.as_dict()) == ramped
     assert SlipParameters.from_mapping({"roll": 0.01}) == SlipParameters(0.01, 0.0)
+
+
+def test_the_ramp_term_is_the_drags_share_times_the_squared_acceleration() -> None:
+    model = SlipModel(load_robot("omni3"), SlipParameters(roll=0.004, ramp=0.0008))
+    q, accel = _course(30, 0.5), (0.6, -0.8, 3.0)  # |a| 1 m/s^2 along the floor; the turn's adds none
+    p = model.patterns(q, accel)
+    assert np.allclose(p.ramp, p.roll)
+    assert np.allclose(model.creep(q, accel), 0.0048 * p.roll)
+    assert np.allclose(model.creep(q), 0.004 * p.roll)  # steady: the drag's alone
+
+
+def test_fit_tells_a_ramps_extra_creep_from_the_steady_drag() -> None:
+    """Runs on two ramps (0.4 and 1.0 s: 1 and 0.2 m/s^2 at 0.4 and 0.2 m/s) tell them apart; one
+    roll alone fits the same runs too high for a steady speed and too low for a steep ramp."""
+    truth = SlipParameters(roll=0.004, ramp=0.003)
+    legs = [
+        _synthetic_leg("omni3", truth, math.radians(deg), speed, ramp)
+        for deg in (15, 100, 190, 280)
+        for speed, ramp in ((0.4, 0.4), (0.2, 1.0))
+    ]
+    fitted = fit_slip(load_robot("omni3"), legs, ramp=True)
+    assert fitted.roll == pytest.approx(0.004, rel=1e-6) and fitted.ramp == pytest.approx(0.003, rel=1e-6)
+    alone = fit_slip(load_robot("omni3"), legs)
+    assert alone.ramp == 0.0 and 0.0041 < alone.roll < 0.0048
 
 
 def test_files_with_the_older_three_keys_still_load() -> None:

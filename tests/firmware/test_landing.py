@@ -4,7 +4,7 @@ a ROTATE end on the distance (angle) their encoders measure, with the speed ramp
 Two rigs: the simulator in lockstep, where the landing is judged from its ground truth on every
 preset and floor (with the floor's creep as ``omnibot calibrate``'s slip runs fit it), and the
 FakeHAL (scripted time, encoders that follow the powers) for the executor's semantics: the queue,
-DELTA, STOP, the sonar guard, the modes, CAL table 9.
+DELTA, STOP, the sonar guard, the modes (the creep terms and CAL table 9: test_landing_creep.py).
 """
 
 from __future__ import annotations
@@ -14,27 +14,23 @@ import math
 import numpy as np
 import pytest
 
-from omnibot.client import RobotClient, commands
-from omnibot.estimation import SlipModel, SlipParameters
 from omnibot.firmware.config import build_config
 from omnibot.firmware.config_loops import LAND_ACCEL
-from omnibot.firmware.controller import Controller
 from omnibot.firmware.landing import Landing
 from omnibot.protocol import codes
-from omnibot.protocol.messages import Cal
 from omnibot.robot import load_robot
 from omnibot.sim import SimDevice
 from tests.firmware.conftest import Rig, make_rig
 
 SLIP = {
-    ("omni4", "wood"): [0.001598, 0.013683, 1.0],
-    ("omni4", "carpet"): [0.006843, 0.027414, 1.0],
-    ("omni3", "wood"): [0.001123, 0.0, 1.0],
-    ("omni3", "carpet"): [0.004255, 0.0, 1.0],
-    ("mecanum4", "wood"): [0.001437, 0.0, 1.0],
-    ("mecanum4", "carpet"): [0.005282, 0.0, 1.0],
+    ("omni4", "wood"): [0.001731, 0.013454, 1.0, 0.0],
+    ("omni4", "carpet"): [0.006818, 0.027463, 1.0, 0.0],
+    ("omni3", "wood"): [0.001047, 0.0, 1.0, 0.0],
+    ("omni3", "carpet"): [0.003634, 0.0, 1.0, 0.0007676],
+    ("mecanum4", "wood"): [0.001477, 0.0, 1.0, 0.0],
+    ("mecanum4", "carpet"): [0.005314, 0.0, 1.0, 0.0],
 }
-"""Each floor's creep (roll, combined, scale) as the slip runs fit it (``benchmarks.move_landing``'s
+"""Each floor's creep (roll, combined, scale, ramp) as the slip runs fit it (``benchmarks.move_landing``'s
 ``floor_slip``: simulator seed 1000)."""
 EXACT = 440 / (2 * math.pi * 220.0 * 0.025)
 """FakeHAL encoder counts per PWM count per second of a wheel that turns as the rig's calibration
@@ -140,22 +136,7 @@ def test_open_loop_keeps_seed_000s_timeline() -> None:
     assert dev.time - t0 == pytest.approx(1.85, abs=0.003)
 
 
-# ---------------------------------------------------------------------- the creep, the config
-
-
-@pytest.mark.parametrize("robot", ["omni4", "omni3", "mecanum4"])
-def test_the_creep_is_the_host_slip_models(robot: str) -> None:
-    description = load_robot(robot)
-    params = SlipParameters(roll=0.012, combined=0.04)
-    cfg = build_config(description, slip=params)
-    assert cfg["slip"] == [0.012, 0.04, 1.0]
-    land = Landing(cfg)
-    host = SlipModel(description, params)
-    out = [0.0] * description.n_wheels
-    for twist in ((0.3, 0.0, 0.0), (0.2, -0.4, 0.0), (0.0, 0.0, 2.0), (0.1, 0.25, -1.2)):
-        assert land.overturn(*twist, out)
-        assert out == pytest.approx(list(host.wheel_correction(twist)), abs=1e-6)
-    assert not Landing(build_config(description)).overturn(0.3, 0.0, 0.0, out)  # no coefficients: none
+# ---------------------------------------------------------------------- the config
 
 
 def test_config_turn_and_ramps() -> None:
@@ -358,46 +339,3 @@ def test_the_sonar_guard_slows_a_landing_move_which_still_lands() -> None:
     lines = rig.run(200)
     assert lines[-2:] == [warn(codes.W_SONAR_STOP), "IDLE"]
     assert rig.hal.powers == [0, 0, 0, 0] and not ex.landing.active
-
-
-def test_cal_table_9_sets_the_floors_creep() -> None:
-    rig = make_rig()
-    land = rig.ctrl.executor.landing
-    assert land.slip == [0.0, 0.0, 1.0]
-    assert rig.cmd("CAL,9,0,0,1551;CAL,9,1,0,408;CAL,9,2,0,10300") == ["OK", "OK", "OK"]
-    assert land.slip == pytest.approx([0.01551, 0.0408, 1.03])
-    bad = f"ERROR,{codes.E_CALIBRATION},{codes.TEXTS[codes.E_CALIBRATION]}"
-    for command in ("CAL,9,0,0,-1", "CAL,9,2,0,5000", "CAL,9,2,0,20000", "CAL,9,3,0,1", "CAL,9,0,1,5"):
-        assert rig.cmd(command) == [bad], command
-    assert land.slip == pytest.approx([0.01551, 0.0408, 1.03])
-
-
-def test_the_client_uploads_the_floors_creep(
-    monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture
-) -> None:
-    params = SlipParameters(roll=0.015514, combined=0.040821, scale=1.0)
-    assert commands.slip(params) == [
-        Cal(codes.CAL_SLIP, 0, 0, 1551),
-        Cal(codes.CAL_SLIP, 1, 0, 408),
-        Cal(codes.CAL_SLIP, 2, 0, 10000),
-    ]
-    with RobotClient.open("sim://omni4?seed=1") as client:
-        assert client.upload_slip(params)
-        device = client.link.device  # type: ignore[attr-defined]
-        assert device.controller.executor.landing.slip == pytest.approx([0.01551, 0.0408, 1.0])
-    # older firmware and the UNO's answer ERROR 38: said once, nothing else fails
-    old_cal = Controller._cal
-
-    def older(self: Controller, table: int, index: int, x: int, y: int) -> bool:
-        return table != codes.CAL_SLIP and old_cal(self, table, index, x, y)
-
-    monkeypatch.setattr(Controller, "_cal", older)
-    with (
-        RobotClient.open("sim://omni4?seed=1") as client,
-        caplog.at_level("WARNING", logger="omnibot.client"),
-    ):
-        assert not client.upload_slip(params)
-        assert client.status().state == codes.STATE_IDLE
-    assert [r.getMessage() for r in caplog.records] == [
-        "the controller does not know the floor's creep (CAL table 9): not uploaded"
-    ]

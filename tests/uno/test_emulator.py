@@ -99,10 +99,11 @@ MEGA_SCRIPT = [
     "MOVE,30000,50,-170,0;STATUS;STOP;MOVE,30000,80,0,0;DELTA,0,0,30,0,1;STATUS;STOP",
     "MOVE,30000,30,45,0;STATUS;STOP;CAL,8,0,91,50;CAL,8,0,-1,50;CAL,8,0,0,-5;CAL,8,2,0,50;CAL,8,1,0,50",
     "MODE,2;MOVE,30000,80,30,0;STATUS;STOP;MODE,0;CAL,8,0,0,0;MOVE,30000,80,30,0;STATUS;STOP",
-    # the floor's creep for the closed-loop landing (CAL table 9): roll, combined, scale; bad ones
-    "CAL,9,0,0,500;CAL,9,1,0,3300;CAL,9,2,0,10500;CAL,9,2,0,4000;CAL,9,3,0,1;CAL,9,0,1,5;CAL,9,1,0,-1",
+    # the floor's creep for the closed-loop landing (CAL table 9): roll, combined, scale, ramp; bad ones
+    "CAL,9,0,0,500;CAL,9,1,0,3300;CAL,9,2,0,10500;CAL,9,3,0,770;CAL,9,2,0,4000;CAL,9,3,0,-1;CAL,9,4,0,1;"
+    "CAL,9,0,1,5;CAL,9,1,0,-1",
     # MODE 2: a MOVE lands, its plan starting at the crawl (2 cm/s of the 60 asked): its first powers
-    "MODE,2;MOVE,100,60,0,0;MOVE,100,60,0,0;STATUS;STOP;CAL,9,0,0,0;CAL,9,1,0,0;CAL,9,2,0,10000;MODE,0",
+    "MODE,2;MOVE,100,60,0,0;MOVE,100,60,0,0;STATUS;STOP;CAL,9,0,0,0;CAL,9,1,0,0;CAL,9,2,0,10000;CAL,9,3,0,0;MODE,0",
 ]
 AFTER_IDLE = ("IDLE", f"WARN,{codes.W_SHORT},{codes.TEXTS[codes.W_SHORT]}")
 """What follows a motion's end, which the reference (time standing still) never reaches: IDLE, and on

@@ -364,7 +364,7 @@ static const float TRAVEL[2][MOTORS] PROGMEM = {{0.000116024729f, 0.000116024729
 #define REST_WINDOW_US 50000L
 static const uint8_t REST_COUNTS[MOTORS] PROGMEM = {1, 1, 1, 1};
 /* the closed-loop landing (landing.py, CAL table 9): the body's turn (rad) per count of each wheel, */
-/* the plan's accelerations (m/s^2, rad/s^2), the floor's creep (roll, combined, scale) and its rows */
+/* the plan's accelerations (m/s^2, rad/s^2), the floor's creep (roll, combined, scale, ramp) and its rows */
 #define FEATURE_LANDING 1
 static const float TURN[MOTORS] PROGMEM = {-0.000887065639f, 0.000887065639f, 0.000887065639f, -0.000887065639f};
 #define LAND_ACCEL 1.0f
@@ -377,7 +377,7 @@ static const float TURN[MOTORS] PROGMEM = {-0.000887065639f, 0.000887065639f, 0.
 #define LAND_ROLL_EPS 0.01f
 #define LAND_FAR_US 1000000L
 #define LAND_CHAIN_GUARD 64
-static const float DEFAULT_SLIP[3] PROGMEM = {0.0f, 0.0f, 1.0f};
+static const float DEFAULT_SLIP[4] PROGMEM = {0.0f, 0.0f, 1.0f, 0.0f};
 static const float CREEP_ROLL[MOTORS][3] PROGMEM = {{0.0f, 1.414213562f, 0.077457516f}, {0.0f, 1.414213562f, 0.077457516f}, {0.0f, 1.414213562f, -0.077457516f}, {0.0f, 1.414213562f, -0.077457516f}};
 static const float CREEP_RIM[MOTORS][3] PROGMEM = {{1.0f, -1.0f, -0.130796103f}, {1.0f, 1.0f, 0.130796103f}, {1.0f, -1.0f, 0.130796103f}, {1.0f, 1.0f, -0.130796103f}};
 static const float CREEP_MIX[MOTORS][MOTORS] PROGMEM = {{1.767789122f, -19.989342607f, -1.767789122f, -23.524920851f}, {19.989342607f, -1.767789122f, 23.524920851f, 1.767789122f}, {-1.767789122f, -23.524920851f, 1.767789122f, -19.989342607f}, {23.524920851f, 1.767789122f, 19.989342607f, -1.767789122f}};

@@ -130,14 +130,15 @@ def _slip_lines(result: CalibrationResult) -> list[str]:
         "displacement against the truth's, raw and with the fitted creep taken out",
         "(`surfaces.<floor>.odometry.slip`, for `omnibot follow --calibration`).",
         "",
-        "| surface | roll (m/s) | combined | compliance (s) | scale | runs | raw error, mean / max | corrected, mean / max |",
-        "|---|---|---|---|---|---|---|---|",
+        "| surface | roll (m/s) | combined | compliance (s) | ramp (s^3/m) | scale | runs | raw error, mean / max "
+        "| corrected, mean / max |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for surface, slip in slips:
         raw, fixed = slip.errors(corrected=False), slip.errors(corrected=True)
         lines.append(
             f"| {surface} | {slip.params.roll:.4f} | {slip.params.combined:.4f} | {slip.params.compliance:.4f} | "
-            f"{slip.params.scale:.4f} | "
+            f"{slip.params.ramp:.5f} | {slip.params.scale:.4f} | "
             f"{len(raw)} | "
             f"{100 * statistics.fmean(raw):.1f} % / {100 * max(raw):.1f} % | "
             f"{100 * statistics.fmean(fixed):.1f} % / {100 * max(fixed):.1f} % |"
@@ -150,7 +151,7 @@ def slip_summary(slip: SlipCalibration) -> str:
     raw, fixed = slip.errors(corrected=False), slip.errors(corrected=True)
     return (
         f"roll {slip.params.roll:.4f} m/s, combined {slip.params.combined:.4f}, "
-        f"compliance {slip.params.compliance:.4f} s, "
+        f"compliance {slip.params.compliance:.4f} s, ramp {slip.params.ramp:.5f} s^3/m, "
         f"scale {slip.params.scale:.4f}; {len(raw)} runs, "
         f"encoder error {100 * statistics.fmean(raw):.1f} % -> {100 * statistics.fmean(fixed):.1f} % (mean)"
     )

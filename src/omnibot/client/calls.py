@@ -197,15 +197,22 @@ class TypedCalls:
     def upload_slip(self, params: SlipParameters) -> bool:
         """Upload the floor's wheel creep (CAL table 9), which a closed-loop MOVE's landing takes out
         of its encoders (docs/firmware.md); False when the controller does not know the table (older
-        firmware, the UNO's, which lands nothing: its MOVEs are timed)."""
+        firmware, the UNO's, which lands nothing: its MOVEs are timed). A controller older than the
+        ramp term (index 3) takes a zero one as it is and refuses any other, saying so."""
         for command in commands.slip(params):
             try:
                 self.execute(command)
-            except CalibrationRejected:
+            except CalibrationRejected as e:
                 if command.index == 0:
                     log.warning("the controller does not know the floor's creep (CAL table 9): not uploaded")
                     return False
-                raise
+                if command.index != 3 or command.y != 0:
+                    raise CalibrationRejected(
+                        e.code,
+                        "the controller does not know the creep under a ramp (CAL table 9, index 3): "
+                        "update its firmware, or use a calibration without it",
+                    ) from None
+                # no ramp term is what such a controller already does
         return True
 
     def status(self) -> Status:

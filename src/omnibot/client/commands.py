@@ -270,12 +270,13 @@ def _reach(reach: ReachSpec | None) -> list[Cal]:
 
 
 def slip(params: SlipParameters) -> list[Cal]:
-    """CAL table 9: the floor's wheel creep (roll, combined, scale) that a closed-loop MOVE's landing
-    takes out of its encoders (docs/firmware.md, landing)."""
+    """CAL table 9: the floor's wheel creep (roll, combined, scale, ramp) that a closed-loop MOVE's
+    landing takes out of its encoders (docs/firmware.md, landing)."""
     values = (
         ("roll", round(params.roll * 1e5)),
         ("combined", round(params.combined * codes.CAL_SLIP_SCALE)),
         ("scale", round(params.scale * codes.CAL_SLIP_SCALE)),
+        ("ramp", round(params.ramp * 1e6)),
     )
     for what, y in values:
         if not 0 <= y <= codes.INT_MAX:

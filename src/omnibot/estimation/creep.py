@@ -16,22 +16,25 @@ from omnibot.robot import rows
 if TYPE_CHECKING:
     from omnibot.robot import RobotDescription
 
-KEYS = ("roll", "combined", "compliance", "scale")
+KEYS = ("roll", "combined", "compliance", "scale", "ramp")
 """A calibration file's ``odometry.slip`` keys (files from before the combined drag lack
-``combined``: it is then 0, the model those files were fitted with)."""
+``combined``, files from before 2026-12-07 ``ramp``: each is then 0, the model those files were
+fitted with)."""
 
 
 @dataclass(frozen=True)
 class SlipParameters:
-    """A floor's creep coefficients, ``roll`` (m/s per roller drag), ``compliance`` (s) and
-    ``combined`` (m/s per m/s of combined-drag roller speed), and the encoders' distance ``scale``
-    (true distance per encoder distance once the creep is out: a tyre whose rolling radius differs
-    from the description's)."""
+    """A floor's creep coefficients, ``roll`` (m/s per roller drag), ``compliance`` (s),
+    ``combined`` (m/s per m/s of combined-drag roller speed) and ``ramp`` (s^3/m: the drag's extra
+    creep per (m/s^2)^2 of acceleration), and the encoders' distance ``scale`` (true distance per
+    encoder distance once the creep is out: a tyre whose rolling radius differs from the
+    description's)."""
 
     roll: float = 0.0
     compliance: float = 0.0
     scale: float = 1.0
     combined: float = 0.0
+    ramp: float = 0.0
 
     def __post_init__(self) -> None:
         for name in KEYS:
@@ -69,6 +72,7 @@ class SlipParameters:
             "combined": round(self.combined, 6),
             "compliance": round(self.compliance, 6),
             "scale": round(self.scale, 5),
+            "ramp": round(self.ramp, 7),
         }
 
 

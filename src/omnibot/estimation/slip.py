@@ -8,10 +8,10 @@ several percent. The pattern is a rigid motion for most courses (each wheel's ov
 its share of the motion), so the fit residual and the gyro cannot see it: it has to be calibrated
 once per floor and then subtracted.
 
-The model, with four per-floor numbers::
+The model, with five per-floor numbers::
 
     scale * encoder rim speed of wheel k  =  T_k q  +  roll * p_k(q)  +  combined * c_k(q)
-                                                    +  compliance * a_k(q_dot)
+                                                    +  compliance * a_k(q_dot)  +  ramp * p_k(q) |a|^2
 
 * ``q`` the body twist, ``T_k`` the wheel's traction row (rim speed = r cos(gamma) omega);
 * ``p_k``: the traction force wheel k needs, in units of one wheel's roller drag, so that the drive
@@ -23,11 +23,18 @@ The model, with four per-floor numbers::
   stand still, 1 at 45 degrees): a viscous loss while a wheel drives and its rollers roll at once,
   which makes the creep depend on the course (none on an omni4 axis, most at 45 degrees);
 * ``a_k``: the traction force wheel k needs, per unit mass, to accelerate the body (m/s^2);
-* ``roll`` (m/s), ``combined`` (dimensionless: m/s of creep per m/s of weighted roller speed) and
-  ``compliance`` (s) are the floor's: the creep of a wheel carrying one roller drag, per unit of
-  combined drag, and per unit acceleration; ``scale`` is the tyres' rolling radius against the
-  description's. :func:`fit_slip` fits them from straight runs with a known true displacement
-  (the simulator's truth, or a tape measure).
+* ``|a|^2``: the body's squared acceleration along the floor ((m/s^2)^2). A tyre's creep grows
+  faster than the force it transmits (the simulator's friction law: creep = v_eps atanh(F / F_max)),
+  so while the body speeds up or brakes the drag's share creeps more than at a steady speed, by
+  about ``(F_a / F_max)^2`` of it, ``F_a`` the ramp's force on the wheel: over a ramp up and down
+  the odd powers of ``F_a`` cancel and this even one is left (omni3 on carpet, 30 kg on a grip of
+  0.75: +21 % of the drag's creep at 1 m/s^2, fitted);
+* ``roll`` (m/s), ``combined`` (dimensionless: m/s of creep per m/s of weighted roller speed),
+  ``compliance`` (s) and ``ramp`` (s^3/m) are the floor's: the creep of a wheel carrying one roller
+  drag, per unit of combined drag, per unit acceleration, and per roller drag and squared
+  acceleration; ``scale`` is the tyres' rolling radius against the description's. :func:`fit_slip`
+  fits them from straight runs with a known true displacement (the simulator's truth, or a tape
+  measure).
 
 :class:`SlipModel` gives the correction for a twist; :class:`~omnibot.estimation.estimator.PoseEstimator`
 (``slip=``) scales the encoder increments and subtracts it before the least-squares forward
@@ -58,11 +65,13 @@ ROLL_EPS = 0.01
 
 class SlipPatterns(NamedTuple):
     """Per-wheel force shares at one twist: of the roller drag (units of one drag), of the combined
-    rolling-and-driving drag (m/s) and of the acceleration (m/s^2)."""
+    rolling-and-driving drag (m/s), of the acceleration (m/s^2), and of the roller drag while the body
+    accelerates (the drag's share times the squared acceleration, (m/s^2)^2)."""
 
     roll: FloatArray
     combined: FloatArray
     accel: FloatArray
+    ramp: FloatArray
 
 
 class SlipModel:
@@ -100,13 +109,13 @@ class SlipModel:
         c = self._share @ (self._roller_wrench.T @ (sin2beta * rolling))
         acc = np.asarray(accel, dtype=float)
         a = self._share @ np.array([acc[0], acc[1], self.inertia_ratio * acc[2]])
-        return SlipPatterns(p, c, a)
+        return SlipPatterns(p, c, a, p * float(acc[0] * acc[0] + acc[1] * acc[1]))
 
     def creep(self, twist: ArrayLike, accel: ArrayLike = (0.0, 0.0, 0.0)) -> FloatArray:
         """Per-wheel rim over-speed (m/s) at body twist ``twist`` and body acceleration ``accel``."""
-        p, c, a = self.patterns(twist, accel)
+        p, c, a, r = self.patterns(twist, accel)
         par = self.params
-        creep: FloatArray = par.roll * p + par.combined * c + par.compliance * a
+        creep: FloatArray = par.roll * p + par.combined * c + par.compliance * a + par.ramp * r
         return creep
 
     def wheel_correction(self, twist: ArrayLike, accel: ArrayLike = (0.0, 0.0, 0.0)) -> FloatArray:
@@ -152,12 +161,12 @@ leave alone. Measured on omni4 on carpet: a scale of 0.988 that took out 23 % of
 estimate 1.2 % short on every metre (the standard square: 2.4 cm RMS against 0.75 with the scale
 at 1); on synthetic runs with a 4 % radius error the scale takes out all but 1e-28 of it."""
 
-CREEP_COLUMNS = ("roll", "combined", "compliance")
+CREEP_COLUMNS = ("roll", "combined", "compliance", "ramp")
 """The creep coefficients, in the order of :func:`_regressors`' columns."""
 
 
 def _regressors(model: SlipModel, J_pinv: FloatArray, leg: SlipLeg) -> FloatArray:
-    """(2, 3): d(encoder - true displacement, estimator frame) / d(roll, combined, compliance)."""
+    """(2, 4): d(encoder - true displacement, estimator frame) / d(roll, combined, compliance, ramp)."""
     out = np.zeros((2, len(CREEP_COLUMNS)))
     for q, acc, dt, th in zip(leg.twists, leg.accels, leg.dt, leg.headings, strict=True):
         patterns = model.patterns(q, acc)
@@ -175,6 +184,7 @@ def fit_slip(
     compliance: bool = False,
     scale: bool = False,
     combined: bool = True,
+    ramp: bool = False,
 ) -> SlipParameters:
     """Least-squares creep coefficients from runs with known true displacements.
 
@@ -185,12 +195,15 @@ def fit_slip(
     forward while speeding up and back while braking), so it needs runs measured while moving.
     ``combined`` fits the combined-drag term (it needs runs on courses that cross the rollers at
     different angles, as the evenly spaced courses do: on omni4 it is 0 on the axes and largest at
-    45 degrees). ``scale`` also fits the encoders' distance scale: it needs runs at two speeds (a
-    radius error grows with the distance, the rolling creep with the time taken). The combined term
-    and the scale are each kept only when they explain the runs better by more than an extra
-    parameter's worth (the Bayesian information criterion ``n ln(cost) + k ln(n)`` over the n
-    equations, k the extra terms); otherwise they stay 0 and 1, as they would only trade against
-    the rest. The scale must also take out at least half of what the creep terms leave
+    45 degrees). ``ramp`` fits the drag's extra creep under acceleration (it needs runs whose ramps
+    differ: from rest to rest a steady drag's creep grows with the time taken, the ramp's with the
+    time spent accelerating times the acceleration squared). ``scale`` also fits the encoders'
+    distance scale: it needs runs at two speeds (a radius error grows with the distance, the
+    rolling creep with the time taken). The combined term, the ramp term and the scale are each
+    kept only when they explain the runs better by more than an extra parameter's worth (the
+    Bayesian information criterion ``n ln(cost) + k ln(n)`` over the n equations, k the extra
+    terms); otherwise they stay 0 (the scale 1), as they would only trade against the rest. The
+    scale must also take out at least half of what the creep terms leave
     (:data:`SCALE_EXPLAINS`): a real radius error is on every run in proportion to its distance
     and dominates the rest, while a scale that takes out a part only stands in for the creep
     model's mismatch and, unlike it, grows with every metre driven.
@@ -203,19 +216,21 @@ def fit_slip(
     for leg in legs:
         rows.append(np.column_stack((_regressors(model, J_pinv, leg), leg.encoder_disp)))
         rhs.append(np.subtract(leg.encoder_disp, leg.true_disp))
-    A = np.vstack(rows)  # columns: roll, combined, compliance, 1 - scale
+    A = np.vstack(rows)  # columns: roll, combined, compliance, ramp, 1 - scale
     b = np.concatenate(rhs)
     n = len(b)
     best, best_score = SlipParameters(), math.inf
-    for with_combined in (False, True) if combined else (False,):
-        creep = [0] + ([1] if with_combined else []) + ([2] if compliance else [])
+    options = itertools.product((False, True) if combined else (False,), (False, True) if ramp else (False,))
+    for with_combined, with_ramp in options:
+        creep = [col for col, on in enumerate((True, with_combined, compliance, with_ramp)) if on]
         fits = [(*_fit_creep(A, b, creep, free=[]), False)]
         if scale:
-            scaled, scaled_cost = _fit_creep(A, b, creep, free=[3])
+            scaled, scaled_cost = _fit_creep(A, b, creep, free=[4])
             if scaled_cost < SCALE_EXPLAINS * fits[0][1]:
                 fits.append((scaled, scaled_cost, True))
         for params, cost, with_scale in fits:
-            score = n * math.log(max(cost, 1e-30)) + (with_combined + with_scale) * math.log(n)
+            extra = with_combined + with_ramp + with_scale
+            score = n * math.log(max(cost, 1e-30)) + extra * math.log(n)
             if score < best_score:
                 best, best_score = params, score
     return best
@@ -238,8 +253,8 @@ def _fit_creep(
             residual = b - A @ x
             cost = float(residual @ residual)
             if cost < best_cost:
-                roll, comb, compl, shrink = (float(v) for v in x)
-                best, best_cost = SlipParameters(roll, compl, 1.0 - shrink, comb), cost
+                roll, comb, compl, ramp, shrink = (float(v) for v in x)
+                best, best_cost = SlipParameters(roll, compl, 1.0 - shrink, comb, ramp), cost
     return best, best_cost
 
 
@@ -255,7 +270,7 @@ def leg_residual(
         reg = _regressors(SlipModel(robot), kinematics.forward_matrix(robot), leg)
         err = (
             err
-            - reg @ np.array([params.roll, params.combined, params.compliance])
+            - reg @ np.array([params.roll, params.combined, params.compliance, params.ramp])
             - (1.0 - params.scale) * np.asarray(leg.encoder_disp)
         )
     residual: FloatArray = err

@@ -87,7 +87,7 @@ def _landing_fields(cfg: dict[str, Any]) -> dict[str, object]:
         **{f"land_{name.lower()}": c_float(getattr(landing, name)) for name in _LANDING_FLOATS},
         "land_far_us": landing.FAR_US,
         "land_chain_guard": motion_landing.CHAIN_GUARD,
-        "default_slip": c_list(c_float(v) for v in cfg.get("slip") or [0.0, 0.0, 1.0]),
+        "default_slip": c_list(c_float(v) for v in landing.slip_coefficients(cfg)),
         "creep_roll": c_floats(cfg.get("creep_roll") or zero),
         "creep_rim": c_floats(cfg.get("creep_rim") or zero),
         "creep_mix": c_floats(cfg.get("creep_mix") or [[0.0] * n] * n),

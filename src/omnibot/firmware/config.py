@@ -51,8 +51,9 @@ travel                      [x row, y row]: body travel (m, body frame) per enco
                             the least-squares forward kinematics (0 for a wheel without an encoder)
 turn                        body rotation (rad) per encoder count of each wheel, the forward
                             kinematics' third row (a closed-loop ROTATE lands on it; landing.py)
-slip                        the floor's wheel creep [roll m/s, combined, scale] (estimation/slip.py,
-                            from ``omnibot calibrate``'s slip runs; CAL table 9); [0, 0, 1]: none
+slip                        the floor's wheel creep [roll m/s, combined, scale, ramp s^3/m]
+                            (estimation/slip.py, from ``omnibot calibrate``'s slip runs; CAL table 9);
+                            [0, 0, 1, 0]: none (three values: a config from before the ramp, 0)
 creep_roll, creep_rim       per wheel: its roller row's rolling speed and its rim speed per body twist
 creep_mix                   (n, n): wheel k's over-turn (rad/s) per m/s of roller row j's creep term
                             (a landing's travel, less the creep; landing.py)

@@ -85,7 +85,7 @@ def landing_keys(robot: RobotDescription, encoder_cpr: list[int], slip: SlipPara
     creep = creep_rows(robot)
     lim = robot.limits
     return {
-        "slip": [round(slip.roll, 6), round(slip.combined, 6), round(slip.scale, 5)],
+        "slip": [round(slip.roll, 6), round(slip.combined, 6), round(slip.scale, 5), round(slip.ramp, 7)],
         "creep_roll": [[round(float(v), 9) for v in row] for row in creep.roll],
         "creep_rim": [[round(float(v), 9) for v in row] for row in creep.rim],
         "creep_mix": [[_inverse_literal(v, 9) for v in row] for row in creep.mix],

@@ -32,17 +32,19 @@ A driven wheel creeps: its rim turns a little faster than the floor moves under 
 it pushes, most on carpet, where every wheel's rollers roll against a large rolling resistance
 (docs/navigation.md's ``slip.py``): the encoders over-read by 1-21 %, and a robot stopped on them
 lands short by as much. With the floor's creep coefficients (config ``slip``: ``[roll, combined,
-scale]``, CAL table 9, from ``omnibot calibrate``'s slip runs) the travel is corrected as the host's
-odometry corrects it::
+scale, ramp]``, CAL table 9, from ``omnibot calibrate``'s slip runs) the travel is corrected as the
+host's odometry corrects it::
 
     travel = scale * encoder travel - creep(twist) dt
 
-the creep of :class:`~omnibot.estimation.slip.SlipModel` at the twist measured (its rolling and
-combined-drag terms; the acceleration term cancels over a motion from rest to rest and is left out):
-each roller row's drag ``roll tanh(rolling / ROLL_EPS) + combined sin(2 beta) rolling`` shared out
-over the wheels as over-turn (config ``creep_mix``, ``creep_roll``, ``creep_rim``). The wheels'
-targets get the same over-turn, so that the body, not the rims, goes at the speed and on the course
-asked. Without them (0, 0, 1: the default) the encoders are taken as they read.
+the creep of :class:`~omnibot.estimation.slip.SlipModel` at the twist measured (its rolling,
+combined-drag and ramp terms; the acceleration term cancels over a motion from rest to rest and is
+left out): each roller row's drag ``(roll + ramp rate^2) tanh(rolling / ROLL_EPS) + combined
+sin(2 beta) rolling`` shared out over the wheels as over-turn (config ``creep_mix``, ``creep_roll``,
+``creep_rim``), ``rate`` a MOVE's planned acceleration (a tyre creeps faster than the force it
+transmits, so the drag creeps more on a ramp; a ROTATE's rate, an angular one, adds none). The
+wheels' targets get the same over-turn, so that the body, not the rims, goes at the speed and on
+the course asked. Without them (0, 0, 1, 0: the default) the encoders are taken as they read.
 """
 
 import math
@@ -70,6 +72,13 @@ FAR_US = 1000000
 so that only an update ends it)."""
 ROLL_EPS = 0.01
 """m/s: rolling speed over which a roller's resistance builds up (estimation/slip.py's)."""
+
+
+def slip_coefficients(cfg: "dict[str, Any]") -> "list[float]":
+    """The config's ``slip``, ``[roll, combined, scale, ramp]`` (a config from before the ramp term
+    has three: its ramp is 0); no creep, ``[0, 0, 1, 0]``, without one."""
+    slip = [float(v) for v in cfg.get("slip") or [0.0, 0.0, 1.0]]
+    return slip + [0.0] * (4 - len(slip))
 
 
 class Landing:
@@ -104,8 +113,7 @@ class Landing:
         self._share = [0.0] * n
         self._last = [0] * n
         self._per_rad = [int(c) / (2.0 * math.pi) for c in cfg["encoder_cpr"]]
-        slip = cfg.get("slip") or [0.0, 0.0, 1.0]
-        self.slip = [float(v) for v in slip]  # roll m/s, combined, scale (CAL table 9)
+        self.slip = slip_coefficients(cfg)  # roll m/s, combined, scale, ramp (CAL table 9)
         zero = [[0.0, 0.0, 0.0]] * n
         self._roll = [[float(v) for v in row] for row in cfg.get("creep_roll") or zero]
         self._rim = [[float(v) for v in row] for row in cfg.get("creep_rim") or zero]
@@ -116,13 +124,16 @@ class Landing:
 
     def set_slip(self, index: int, y: int) -> bool:
         """CAL table 9: coefficient ``index`` (0 roll in 0.01 mm/s, 1 combined, 2 scale, both
-        x 10000) from its protocol integer ``y``; False when out of range (ERROR 38)."""
+        x 10000, 3 ramp in 1e-6 s^3/m) from its protocol integer ``y``; False when out of range
+        (ERROR 38)."""
         if index == 0 and y >= 0:
             self.slip[0] = y * 1e-5
         elif index == 1 and y >= 0:
             self.slip[1] = y / SLIP_SCALE
         elif index == 2 and SLIP_SCALE // 2 < y < 2 * SLIP_SCALE:
             self.slip[2] = y / SLIP_SCALE
+        elif index == 3 and y >= 0:
+            self.slip[3] = y * 1e-6
         else:
             return False
         return True
@@ -222,10 +233,12 @@ class Landing:
         return c
 
     def overturn(self, q0: float, q1: float, q2: float, out: "list[float]") -> bool:
-        """Each wheel's creep at the body twist (q0, q1, q2) as over-turn, rad/s, into ``out``;
-        False (``out`` untouched) without creep coefficients."""
+        """Each wheel's creep at the body twist (q0, q1, q2) as over-turn, rad/s, into ``out`` (on a
+        MOVE's ramp at its plan's rate); False (``out`` untouched) without creep coefficients."""
         roll = self.slip[0]
         comb = self.slip[1]
+        if not self.rotate:  # the drag creeps more under the ramp's force (estimation/slip.py)
+            roll += self.slip[3] * self.rate * self.rate
         if roll == 0.0 and comb == 0.0:
             return False
         n = len(self._share)

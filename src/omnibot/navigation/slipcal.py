@@ -1,10 +1,10 @@
 """Wheel-slip calibration drive: straight runs in every direction, fitted by :func:`fit_slip`.
 
 The robot drives out and back along evenly spaced courses (11.25, 191.25, 33.75, ... degrees, so it ends
-near where it started), out at full speed and back at half of it, with its wheel-speed loop and its
-heading held by the gyro, each run from rest to rest. For each run the encoders' displacement is
-compared with the truth's (a :class:`RunTruth`: the simulator, or any of ``omnibot calibrate``'s
-truth sources, e.g. a tape measure typed in), and the floor's wheel slip
+near where it started), out at full speed and back at half of it on gentler ramps, with its
+wheel-speed loop and its heading held by the gyro, each run from rest to rest. For each run the
+encoders' displacement is compared with the truth's (a :class:`RunTruth`: the simulator, or any of
+``omnibot calibrate``'s truth sources, e.g. a tape measure typed in), and the floor's wheel slip
 (:class:`~omnibot.estimation.slip.SlipParameters`) comes out of one least-squares fit. Runs the
 truth cannot measure are left out.
 """
@@ -42,6 +42,11 @@ class RunTruth(Protocol):
 
 HEADING_GAIN = 4.0
 """1/s: heading hold while driving a run."""
+
+RETURN_ACCEL = 0.25
+"""The return runs' ramps, a share of the out runs' acceleration. A tyre's creep grows faster than
+the force it transmits, so a ramp's creep is more than its drag's and its acceleration's; runs
+whose ramps differ tell that excess (``ramp``) from the steady drag (``roll``)."""
 
 SLIP_COURSES = 16
 """Runs of the slip calibration: courses every 22.5 degrees, so that on omni4 they cross the rollers
@@ -113,6 +118,12 @@ def drive_run(
     nav.drive(run, name="slip-run")
 
 
+def run_profile(index: int, speed: float, accel: float) -> tuple[float, float]:
+    """The speed (m/s) and ramp acceleration (m/s^2) of the slip calibration's run ``index``: out
+    (even) at ``speed`` and ``accel``, back at half the speed on :data:`RETURN_ACCEL` of the ramp."""
+    return (speed, accel) if index % 2 == 0 else (0.5 * speed, RETURN_ACCEL * accel)
+
+
 def calibrate_slip(
     nav: Navigator,
     truth: RunTruth,
@@ -127,12 +138,12 @@ def calibrate_slip(
 ) -> SlipCalibration:
     """Drive ``courses`` runs of ``distance`` m and fit the floor's slip.
 
-    Each course is driven out at ``speed`` m/s and back at half of it: a wheel radius error grows
-    with the distance, creep with the time taken, so two speeds tell them apart (``fit_scale``
-    fits the encoders' distance scale too). ``nav`` must be prepared (telemetry on). ``truth``
-    measures each run; a ``live`` one also each speed-up, which pins down the acceleration term
-    (``compliance``) as well. ``progress(done, total)`` is called after each run. ConfigError when
-    fewer than two runs could be measured.
+    Each course is driven out at ``speed`` m/s and back at half of it on gentler ramps
+    (:func:`run_profile`): a radius error grows with the distance, creep with the time taken, its
+    excess under a ramp with the acceleration squared, so the runs tell them apart (``fit_scale``:
+    the distance scale too). ``nav`` must be prepared (telemetry on). ``truth`` measures each run;
+    a ``live`` one each speed-up too, which pins down ``compliance``. ``progress(done, total)``
+    after each run. ConfigError when fewer than two runs could be measured.
     """
     probe = SlipProbe(nav.robot)
     nav.runtime.telemetry_hooks.append(probe.update)
@@ -156,8 +167,8 @@ def calibrate_slip(
                 if disp is not None:
                     speed_ups.append(probe.leg(start, world(disp, start)))
 
-            run_speed = speed if i % 2 == 0 else 0.5 * speed
-            drive_run(nav, course, run_speed, distance, accel, speed_up_done if truth.live else None)
+            run_speed, run_accel = run_profile(i, speed, accel)
+            drive_run(nav, course, run_speed, distance, run_accel, speed_up_done if truth.live else None)
             nav.client.sleep(settle)
             disp = truth.displacement(mark, course)
             if disp is not None:
@@ -171,7 +182,7 @@ def calibrate_slip(
         raise ConfigError(
             f"wheel slip needs at least two measured runs; the truth measured {len(legs)} of {len(order)}"
         )
-    params = fit_slip(nav.robot, legs + speed_ups, compliance=bool(speed_ups), scale=fit_scale)
+    params = fit_slip(nav.robot, legs + speed_ups, compliance=bool(speed_ups), scale=fit_scale, ramp=True)
     return SlipCalibration(params, legs, measured, nav.robot, speed_ups)
 
 
@@ -223,5 +234,6 @@ __all__: Sequence[str] = (
     "calibrate_slip",
     "course_order",
     "drive_run",
+    "run_profile",
     "simulate_slip_calibration",
 )

@@ -235,7 +235,7 @@ CAL_ROLLER_SIN = 5  # the same, sine coefficient
 CAL_ROLLER_COAST = 6  # roller drag's coast time: knot I = (X speed cm/s, Y ms)
 CAL_SPEED = 7  # motor I's speed term (X = 0): Y in 0.1 PWM counts per m/s of its rim speed (signed)
 CAL_REACH = 8  # the calibrated reach: knot I = (X folded course degrees, Y speed cm/s; 0: none)
-CAL_SLIP = 9  # the floor's wheel creep (X = 0): I 0 roll in 0.01 mm/s, 1 combined and 2 scale x 10000
+CAL_SLIP = 9  # the floor's wheel creep (X = 0): I 0 roll in 0.01 mm/s, 1 combined and 2 scale x 10000, 3 ramp in 1e-6 s^3/m
 CAL_SLIP_SCALE = 10000  # CAL table 9's combined and scale: Y = value x 10000
 CAL_GAIN = 20  # 20 + i: gain table of motor i: knot I = (X nominal power, Y gain x 1000)
 CAL_MOTORS = 8  # motors with a gain table at most
