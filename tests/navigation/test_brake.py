@@ -6,8 +6,10 @@ from __future__ import annotations
 import itertools
 import math
 
+import pytest
+
 from omnibot.motion import Estimate, Twist
-from omnibot.navigation.brake import STILL_FOR, BrakeSource
+from omnibot.navigation.brake import STILL_FOR, BrakeSource, coast_excess
 from omnibot.robot import load_robot
 from omnibot.runtime import Cycle
 
@@ -58,3 +60,21 @@ def test_the_brake_gives_up_after_the_longest_coast() -> None:
         k += 1
     assert not brake.still
     assert brake.limit < k * PERIOD <= brake.limit + 2 * PERIOD
+
+
+def test_where_the_coast_stops_as_soon_the_motors_are_cut_and_the_brake_only_waits() -> None:
+    # omni4's friction stops it harder than its motors may: nothing to gain by braking on them
+    assert coast_excess(load_robot("omni4"), 1.0) < 0.0
+    # omni3's 30 kg coast from 1 m/s: 1.56 m against 0.2 m on its motors
+    omni3 = load_robot("omni3")
+    assert math.isclose(
+        coast_excess(omni3, 1.0), 0.5 / omni3.stop_deceleration - 0.5 / omni3.limits.acceleration_max
+    )
+    assert coast_excess(omni3, 1.0) > 1.0
+    cut = BrakeSource(load_robot("omni4"), Twist(0.5, 0.0, 0.0), PERIOD, cut=True)
+    assert cut.propose(_cycle(0, 0.3)) is None and not cut.finished  # proposes nothing, still moving
+    k = 1
+    while not cut.finished:
+        assert cut.propose(_cycle(k, 0.0)) is None
+        k += 1
+    assert cut.still and (k - 1) * PERIOD == pytest.approx(STILL_FOR, abs=PERIOD)

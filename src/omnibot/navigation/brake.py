@@ -10,7 +10,12 @@ was, not where it coasted to, the next leg starts on a stale pose with the robot
 the robot's accelerations (:class:`~omnibot.teleop.TwistRamp`, the ramp teleop's twists take; the
 controller's own brake to rest on a VEL let go uses the same limits), then holds a zero twist until
 the estimate says the robot is still; the runtime keeps cycling meanwhile, so the estimate and the
-localiser follow the robot to where it comes to rest.
+localiser follow the robot to where it comes to rest. Where the coast stops the robot nearly as
+soon (:func:`coast_excess` within the planner's margin: omni4, whose friction stops it harder than
+its motors may, and mecanum4 at its speeds) the motors are better cut: the wheels then roll free
+with the body and the encoders count its travel, where braking on them slips (omni4's odometry
+0.3-1.6 cm worse at the end of the legs after a re-plan); ``cut=True`` proposes nothing and only
+waits, the runtime cycling, for the estimate to say still.
 """
 
 from __future__ import annotations
@@ -32,9 +37,17 @@ BRAKE_PRIORITY = 20
 """The brake's priority: goto's own (above a path follower, below every person and ROS 2's cmd_vel)."""
 
 
+def coast_excess(robot: RobotDescription, speed: float) -> float:
+    """m a coast from ``speed`` (the motors cut: the description's ``stop_deceleration``) carries
+    the robot beyond a brake on its motors at its ``acceleration_max`` (<= 0: the coast stops it
+    as soon)."""
+    return 0.5 * speed * speed * (1.0 / robot.stop_deceleration - 1.0 / robot.limits.acceleration_max)
+
+
 class BrakeSource:
     """A source: ``start`` (the twist last asked of the robot) ramped to rest at ``robot``'s
-    accelerations, then zero until the estimate is still for :data:`STILL_FOR` s. :attr:`finished`
+    accelerations, then zero until the estimate is still for :data:`STILL_FOR` s (``cut``: the
+    motors were cut, it proposes nothing and waits for still alone). :attr:`finished`
     once it is, or after the longest the robot may need (coasting from ``start`` at its stop
     deceleration, plus a second); :attr:`failure` says why it ended early (a refused command, an
     emergency stop, a stall: ``must_end``)."""
@@ -48,6 +61,7 @@ class BrakeSource:
         name: str = "brake",
         priority: int = BRAKE_PRIORITY,
         watchdog: float = 0.15,
+        cut: bool = False,
     ) -> None:
         lim = robot.limits
         self._ramp = TwistRamp(
@@ -60,6 +74,7 @@ class BrakeSource:
         self.period = period
         self.timeout = max(2.0 * period, 0.05)
         self.wait_reply = False
+        self.cut = cut
         self.finished = False
         self.failure = ""
         self.still = False
@@ -84,7 +99,7 @@ class BrakeSource:
         if math.isnan(self._t0):
             self._t0 = t
         before = self._ramp.twist
-        twist = self._ramp.step(Twist(), self.period)
+        twist = Twist() if self.cut else self._ramp.step(Twist(), self.period)
         self.accel = (math.hypot(twist.vx, twist.vy) - math.hypot(before.vx, before.vy)) / self.period
         self.body_accel = self._ramp.body_accel
         if twist.is_zero and _still(cycle):
@@ -97,7 +112,7 @@ class BrakeSource:
             self._still_since = math.nan
         if t - self._t0 > self.limit:
             self.finished = True
-        return Proposal(twist)
+        return None if self.cut else Proposal(twist)
 
 
 def _still(cycle: Cycle) -> bool:
@@ -106,4 +121,4 @@ def _still(cycle: Cycle) -> bool:
     return body is not None and math.hypot(body.vx, body.vy) < STILL_SPEED and abs(body.w) < STILL_RATE
 
 
-__all__ = ["BrakeSource"]
+__all__ = ["BrakeSource", "coast_excess"]

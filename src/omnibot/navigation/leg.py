@@ -14,7 +14,7 @@ from omnibot.control import time_optimal_profile
 from omnibot.errors import PlanningError
 from omnibot.mapping import CostMap, PlannedPath, compose, inflate, inverse, plan_path
 from omnibot.motion import Pose2D, Twist
-from omnibot.navigation.brake import BrakeSource
+from omnibot.navigation.brake import BrakeSource, coast_excess
 from omnibot.navigation.following import FOLLOWER_PRIORITY, follower_source
 from omnibot.navigation.goal import (
     FloatArray,
@@ -148,15 +148,22 @@ class Leg:
 
     def _brake(self, runtime: Runtime) -> None:
         """Bring the robot to rest from the twist the follower last asked (:class:`BrakeSource`),
-        the runtime cycling; a leg that an obstacle ended, timed out or completed, not one ended by
-        a failure (a stall, a refused command, an emergency stop: the caller's STOP cuts at once)."""
+        the runtime cycling: braked on the motors where a coast would carry it farther than the
+        margin beyond that, else the motors cut (STOP) and the coast waited out; a leg that an
+        obstacle ended, timed out or completed, not one ended by a failure (a stall, a refused
+        command, an emergency stop: the caller's STOP cuts at once)."""
         source = self.source
+        last = source.twist or Twist()
+        cut = coast_excess(self.robot, math.hypot(last.vx, last.vy)) <= self.opts.margin
+        if cut:
+            runtime.client.stop()
         brake = BrakeSource(
             self.robot,
-            source.twist or Twist(),
+            last,
             runtime.period,
             priority=source.priority,
             watchdog=source.watchdog,
+            cut=cut,
         )
         runtime.add_source(brake)
         try:
