@@ -1,4 +1,5 @@
-"""Braking a goto leg to rest on the wheels' loop, instead of cutting the motors and coasting.
+"""Bringing the robot to rest at a goto leg's end, the runtime cycling: braked on its motors, or
+its motors cut where its coast stops it as soon.
 
 STOP cuts the motors: the robot coasts, slowed only by its wheels' friction (the description's
 ``stop_deceleration``: 0.32 m/s^2 for omni3's 30 kg, where its motors brake it at 2.5 m/s^2). A leg
@@ -98,10 +99,12 @@ class BrakeSource:
         t = cycle.t
         if math.isnan(self._t0):
             self._t0 = t
-        before = self._ramp.twist
-        twist = Twist() if self.cut else self._ramp.step(Twist(), self.period)
-        self.accel = (math.hypot(twist.vx, twist.vy) - math.hypot(before.vx, before.vy)) / self.period
-        self.body_accel = self._ramp.body_accel
+        twist = Twist()
+        if not self.cut:
+            before = self._ramp.twist
+            twist = self._ramp.step(twist, self.period)
+            self.accel = (math.hypot(*twist[:2]) - math.hypot(*before[:2])) / self.period
+            self.body_accel = self._ramp.body_accel
         if twist.is_zero and _still(cycle):
             if math.isnan(self._still_since):
                 self._still_since = t
