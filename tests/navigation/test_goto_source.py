@@ -8,10 +8,13 @@ truth.
 
 from __future__ import annotations
 
+import functools
+import itertools
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
+import numpy as np
 import pytest
 
 from omnibot.errors import BlockedError, OffMapError
@@ -22,7 +25,7 @@ from omnibot.navigation.goto import navigation_runtime
 from omnibot.navigation.goto_source import POSE_WAIT, GotoSource
 from omnibot.navigation.session import simulated_client
 from omnibot.robot import load_robot
-from omnibot.runtime import Runtime, ScriptSource
+from omnibot.runtime import Cycle, Runtime, ScriptSource
 from omnibot.sim import Simulator, load_world
 from omnibot.transport import find_simulator
 
@@ -31,13 +34,18 @@ START = Pose2D(1.0, 1.0, 0.0)
 
 @contextmanager
 def bench(
-    seed: int = 1, *, truth: bool = False
+    seed: int = 1,
+    *,
+    truth: bool = False,
+    robot_name: str = "omni4",
+    start: Pose2D = START,
+    scan: Callable[[Simulator], np.ndarray | None] | None = None,
 ) -> Iterator[tuple[Runtime, GotoSource, Simulator, list[GotoResult]]]:
-    robot = load_robot("omni4")
+    robot = load_robot(robot_name)
     grid = world_grid(load_world("room"))
     with (
-        simulated_client(robot, world="room", start=START, seed=seed) as client,
-        navigation_runtime(client, robot, START) as runtime,
+        simulated_client(robot, world="room", start=start, seed=seed) as client,
+        navigation_runtime(client, robot, start) as runtime,
     ):
         sim = find_simulator(client.link)
         assert sim is not None
@@ -49,7 +57,8 @@ def bench(
             return None if est is None else est.pose
 
         results: list[GotoResult] = []
-        source = GotoSource(robot, grid, runtime.period, pose, on_result=results.append)
+        seen = None if scan is None else functools.partial(scan, sim)
+        source = GotoSource(robot, grid, runtime.period, pose, scan=seen, on_result=results.append)
         runtime.add_source(source)
         yield runtime, source, sim, results
 
@@ -136,3 +145,39 @@ def test_a_goal_without_a_pose_of_the_robot_fails_saying_so() -> None:
         assert [(r.outcome, r.reason) for r in results] == [
             ("stopped", f"no pose of the robot in the map after {POSE_WAIT:.0f} s")
         ]
+
+
+def test_an_obstacle_met_at_speed_is_braked_for_at_the_robots_acceleration_then_planned_round_at_rest() -> (
+    None
+):
+    # omni3 (30 kg) across the room; a box the map lacks comes into view 1.2 m ahead at 1 m/s
+    seen: list[float] = []
+
+    def scan(sim: Simulator) -> np.ndarray | None:
+        if not seen and math.hypot(sim.twist.vx, sim.twist.vy) < 1.0:
+            return None
+        seen.append(seen[0] if seen else sim.pose.x)
+        return np.array([[seen[0] + 1.2, 2.0], [seen[0] + 1.2, 2.05]])
+
+    sent: list[tuple[str, float]] = []
+    replanned_at: list[float] = []  # the truth's speed when the next leg is planned
+    with bench(robot_name="omni3", start=Pose2D(1.0, 2.0, 0.0), scan=scan) as (runtime, source, sim, _):
+
+        def watch(cycle: Cycle) -> None:
+            if cycle.sent is not None:
+                sent.append((source.state, math.hypot(cycle.sent.vx, cycle.sent.vy)))
+            settled = any(st == "settling" for st, _ in sent)
+            if settled and source.state == "leg" and not replanned_at:
+                replanned_at.append(math.hypot(sim.twist.vx, sim.twist.vy))
+
+        runtime.add_sink(watch)
+        source.go(Pose2D(4.3, 2.0, 0.0))
+        runtime.run(until=lambda: bool(replanned_at) or not source.active, duration=20.0)
+        a = load_robot("omni3").limits.acceleration_max
+        first = next(k for k, (st, _) in enumerate(sent) if st == "settling")
+        ramp = [v for _, v in sent[first - 1 :]]
+        assert ramp[0] > 0.9  # the leg was at speed when the box came into view
+        # down at the motors' acceleration, not a step to zero (the body slides on its wheels)
+        assert all(b >= a0 - a * runtime.period - 0.011 for a0, b in itertools.pairwise(ramp))
+        assert replanned_at and replanned_at[0] < 0.02  # the next leg planned from rest
+        assert not sim.collisions

@@ -4,10 +4,15 @@ Errors (:mod:`omnibot.errors`), each one line in the map frame's metres:
 :class:`~omnibot.errors.OffMapError`, :class:`~omnibot.errors.BlockedError` (the goal, or the
 start, in a wall, in unknown space or too near a wall), :class:`~omnibot.errors.NoPathError` (a
 start hemmed in). A start inside the inflated margin (but clear of the walls themselves) is
-allowed: the path first climbs the clearance out of it (:func:`escape`).
+allowed: the path first climbs the clearance out of it (:func:`escape`), or, where the clearance
+does not climb (a slot narrower than the inflation, open at one end, whose middle is a ridge of
+equal clearance), takes the fewest cells the robot fits in (clearance >= its radius) to the
+nearest cell out of the margin.
 """
 
 from __future__ import annotations
+
+from collections import deque
 
 from omnibot.errors import BlockedError, NoPathError, OffMapError
 from omnibot.mapping.costmap import OCCUPIED, CostMap
@@ -63,23 +68,55 @@ def check_end(cmap: CostMap, pose: Pose2D, name: str) -> tuple[int, int]:
     return cell
 
 
-def escape(cmap: CostMap, cell: tuple[int, int]) -> list[tuple[int, int]]:
-    """Cells from ``cell`` up the clearance until one is not blocked (just ``[cell]`` if it is not)."""
+Cell = tuple[int, int]
+
+
+def escape(cmap: CostMap, cell: Cell) -> list[Cell]:
+    """Cells from ``cell`` up the clearance until one is not blocked (just ``[cell]`` if it is not);
+    where the clearance stops climbing, on through the cells the robot fits in (:func:`_fitting_way`);
+    NoPathError when none leads out of the margin."""
     out = [cell]
     rows, cols = cmap.grid.shape
 
-    def clearance(rc: tuple[int, int]) -> float:
+    def clearance(rc: Cell) -> float:
         return float(cmap.clearance[rc]) if 0 <= rc[0] < rows and 0 <= rc[1] < cols else -1.0
 
     while cmap.blocked[out[-1]]:
         r, c = out[-1]
         best = max(((r + dr, c + dc) for dr in (-1, 0, 1) for dc in (-1, 0, 1) if dr or dc), key=clearance)
         if clearance(best) <= clearance((r, c)):
-            raise NoPathError(
-                f"no path: the start is hemmed in {100 * cmap.clearance[cell]:.0f} cm from a wall"
-            )
+            way = _fitting_way(cmap, out[-1])
+            if way is None:
+                raise NoPathError(
+                    f"no path: the start is hemmed in {100 * cmap.clearance[cell]:.0f} cm from a wall"
+                )
+            return out + way
         out.append(best)
     return out
+
+
+def _fitting_way(cmap: CostMap, cell: Cell) -> list[Cell] | None:
+    """The fewest 8-connected steps from ``cell`` through cells the robot fits in (clearance at
+    least its radius, known unless unknown is allowed) to the nearest one out of the margin (not
+    blocked); None when there is none."""
+    rows, cols = cmap.grid.shape
+    fits = cmap.clearance >= cmap.robot_radius
+    came: dict[Cell, Cell] = {cell: cell}
+    todo = deque([cell])
+    while todo:
+        r, c = todo.popleft()
+        if not cmap.blocked[r, c]:
+            way = [(r, c)]
+            while way[-1] != cell:
+                way.append(came[way[-1]])
+            return way[-2::-1]
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                n = (r + dr, c + dc)
+                if 0 <= n[0] < rows and 0 <= n[1] < cols and n not in came and fits[n]:
+                    came[n] = (r, c)
+                    todo.append(n)
+    return None
 
 
 def why_no_path(cmap: CostMap) -> str:

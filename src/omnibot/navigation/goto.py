@@ -9,7 +9,8 @@
       -> the runtime's follower source (navigation.following: the tracker on its time-optimal profile)
       -> every cycle an ObstacleWatch: sonar ranges (TEL) and an optional scan (map-frame points)
          that the map does not explain, in the robot's swept corridor ahead -> the leg ends, the
-         robot stops, the points are marked in a copy of the grid, and it re-plans (bounded)
+         robot is braked to rest (:mod:`omnibot.navigation.brake`, the runtime cycling), the
+         points are marked in a copy of the grid, and it re-plans (bounded)
       -> at the path's end, settled: within ``aim`` (half) of ``tolerance`` and
          ``heading_tolerance`` of the goal (by the provider) -> arrived; else a correction leg from
          where it stands (bounded), and at the last the whole tolerances decide

@@ -11,8 +11,9 @@ runtime's cycles do the rest, each through :meth:`GotoSource.propose`::
     leg       the tracker on the plan (leg.Leg), its ObstacleWatch asked each cycle;
               an obstacle -> marked, re-planned (bounded); the time budget -> timed out;
               a stall, a refused command, an emergency stop -> stalled / stopped
-    settling  a zero twist for ``settle`` s, then the pose judged (leg.judge_leg):
-              arrived | a correction leg | missed
+    settling  braked to rest (navigation.brake: the leg's last twist ramped to zero at the
+              robot's accelerations, then zero until the estimate is still), a zero twist for
+              ``settle`` s, then the pose judged (leg.judge_leg): arrived | a correction leg | missed
     standby   another source (a person's cmd_vel, a pad) or a lock has the robot: the leg ends,
               a zero twist is proposed (ready to take the robot back) and, when the robot comes
               back to it, it plans again from where the robot then is
@@ -30,6 +31,7 @@ from typing import Literal
 
 from omnibot.mapping import OccupancyGrid, check_goal, check_start, inflate
 from omnibot.motion import Pose2D, Twist
+from omnibot.navigation.brake import BrakeSource
 from omnibot.navigation.goal import GotoOptions, GotoResult, Outcome, PoseProvider, ScanSource, within
 from omnibot.navigation.leg import Leg, judge_leg, leg_heading, obstacle_met, plan_leg
 from omnibot.navigation.runner import WATCHDOG
@@ -87,6 +89,7 @@ class GotoSource:
         self.results: list[GotoResult] = []
         """Every goal's result, in order."""
         self._leg: Leg | None = None
+        self._brake: BrakeSource | None = None  # bringing the robot to rest before settling
         self._corrections = 0
         self._replan = False  # settling before a plan (an obstacle, a new goal), not a verdict
         self._t0 = math.nan
@@ -110,13 +113,15 @@ class GotoSource:
 
     @property
     def accel(self) -> float:
-        """The leg's planned acceleration (0 without a leg)."""
-        return self._leg.source.accel if self._leg is not None else 0.0
+        """The leg's planned acceleration, or the brake's (0 with neither)."""
+        driving = self._leg.source if self._leg is not None else self._brake
+        return driving.accel if driving is not None else 0.0
 
     @property
     def body_accel(self) -> tuple[float, float, float] | None:
-        """The leg's planned body acceleration (None without a leg)."""
-        return self._leg.source.body_accel if self._leg is not None else None
+        """The leg's planned body acceleration, or the brake's (None with neither)."""
+        driving = self._leg.source if self._leg is not None else self._brake
+        return driving.body_accel if driving is not None else None
 
     def check(self, goal: Pose2D) -> None:
         """Raise OffMapError or BlockedError when the robot cannot stand at ``goal`` on the map."""
@@ -132,6 +137,7 @@ class GotoSource:
         (True: one was). A goal the robot cannot stand at raises (nothing changes)."""
         self.check(goal)
         moving = self.state in ("leg", "settling")
+        leg, brake = self._leg, self._brake
         replaced = self.cancel("pre-empted by a new goal")
         self.result = GotoResult(goal, "stopped", grid=self.grid)
         self._corrections = 0
@@ -140,6 +146,7 @@ class GotoSource:
         self._enter("waiting")
         if moving:  # stop first, then plan from where the robot stands
             self._enter("settling", self._now)
+            self._brake = brake if leg is None else self._brake_from(leg)
             self._replan = True
         return replaced
 
@@ -177,7 +184,7 @@ class GotoSource:
         if self.state not in ("waiting", "standby") and (
             previous.source not in ("", self.name) or previous.lock
         ):
-            self._leg = None  # someone else has the robot: plan again when it is back
+            self._leg = self._brake = None  # someone else has the robot: plan again when it is back
             self._enter("standby", t)
             return Proposal(Twist())
         if self.state == "standby":
@@ -243,8 +250,9 @@ class GotoSource:
                 self._finish(result.outcome, result.reason)
                 return None
             self._enter("settling", cycle.t)  # stop, then plan round it
+            self._brake = self._brake_from(leg)
             self._replan = True
-            return Proposal(Twist())
+            return self._settle(cycle)
         if source.finished and source.failure:
             self._leg = None
             outcome: Outcome = "stalled" if source.failure.startswith("stalled") else "stopped"
@@ -252,9 +260,9 @@ class GotoSource:
             return None
         if source.finished:
             self._leg = None
-            self._replan = False
             self._enter("settling", cycle.t)
-            return Proposal(Twist())
+            self._brake = self._brake_from(leg)
+            return self._settle(cycle)
         if cycle.t > self._leg_end:
             self._leg = None
             self._finish(
@@ -263,7 +271,20 @@ class GotoSource:
             return None
         return proposal
 
+    def _brake_from(self, leg: Leg) -> BrakeSource:
+        """The brake that brings the robot to rest from ``leg``'s last twist."""
+        source = leg.source
+        return BrakeSource(
+            self.robot, source.twist or Twist(), self.period, name=self.name, watchdog=source.watchdog
+        )
+
     def _settle(self, cycle: Cycle) -> Proposal | None:
+        if self._brake is not None:  # to rest first; the settle's time counts from there
+            proposal = self._brake.propose(cycle)
+            if not self._brake.finished:
+                return proposal
+            self._brake = None
+            self._since = cycle.t
         if cycle.t - self._since < self.options.settle:
             return Proposal(Twist())
         result = self.result
@@ -294,6 +315,7 @@ class GotoSource:
         assert result is not None
         mid_way = self.state in ("leg", "standby", "settling")
         self._leg = None
+        self._brake = None
         self.state = "idle"
         self._stop_once = mid_way and outcome != "arrived"
         result.outcome = outcome

@@ -13,7 +13,8 @@ from typing import Literal
 from omnibot.control import time_optimal_profile
 from omnibot.errors import PlanningError
 from omnibot.mapping import CostMap, PlannedPath, compose, inflate, inverse, plan_path
-from omnibot.motion import Pose2D
+from omnibot.motion import Pose2D, Twist
+from omnibot.navigation.brake import BrakeSource, coast_excess
 from omnibot.navigation.following import FOLLOWER_PRIORITY, follower_source
 from omnibot.navigation.goal import (
     FloatArray,
@@ -118,6 +119,7 @@ class Leg:
         priority: int = FOLLOWER_PRIORITY,
     ) -> None:
         self.opts = opts
+        self.robot = robot
         self.path = planned_path(plan, here.theta, heading)
         # the map -> estimate transform now: the follower steers by the estimate
         self.to_estimate = compose(estimate, inverse(here))
@@ -144,6 +146,31 @@ class Leg:
         )
         self.budget = 3.0 * profile.min_time + 10.0
 
+    def _brake(self, runtime: Runtime) -> None:
+        """Bring the robot to rest from the twist the follower last asked (:class:`BrakeSource`),
+        the runtime cycling: braked on the motors where a coast would carry it farther than the
+        margin beyond that, else the motors cut (STOP) and the coast waited out; a leg that an
+        obstacle ended, timed out or completed, not one ended by a failure (a stall, a refused
+        command, an emergency stop: the caller's STOP cuts at once)."""
+        source = self.source
+        last = source.twist or Twist()
+        cut = coast_excess(self.robot, math.hypot(last.vx, last.vy)) <= self.opts.margin
+        if cut:
+            runtime.client.stop()
+        brake = BrakeSource(
+            self.robot,
+            last,
+            runtime.period,
+            priority=source.priority,
+            watchdog=source.watchdog,
+            cut=cut,
+        )
+        runtime.add_source(brake)
+        try:
+            runtime.run(until=lambda: brake.finished)
+        finally:
+            runtime.remove_source(brake.name)
+
     def _obstacle(self, why: str) -> None:
         self.why = why
         self.source.end(why)
@@ -161,13 +188,17 @@ class Leg:
         runtime.add_sink(self.watch)
         try:
             runtime.run(until=lambda: source.finished or client.clock.now() > end)
+            runtime.remove_source(source.name)
+            runtime.remove_sink(self.watch)
+            if self.watch.points is not None or not source.failure:
+                self._brake(runtime)
         finally:
             runtime.remove_source(source.name)
             runtime.remove_sink(self.watch)
             runtime.discard_pending()
             if not client.link.closed and not runtime.latched:
                 client.stop()
-        client.sleep(self.opts.settle)
+        runtime.run(duration=self.opts.settle)  # cycling: the estimate and the localiser see the rest
         if self.watch.points is not None:
             return "obstacle"
         if len(stalls.stalls) > found:
