@@ -10,10 +10,35 @@ import numpy as np
 from numba import njit
 
 from omnibot.sim.kernels.contacts import segment_distance
-from omnibot.sim.kernels.layout import FloatArray, IntArray
+from omnibot.sim.kernels.layout import (
+    I_LOG_CAP,
+    I_LOG_DT,
+    I_LOG_N,
+    I_LOG_NEXT,
+    I_LOG_STRIDE,
+    FloatArray,
+    IntArray,
+    sim_offsets,
+)
 
 SCAN_BINS = 256
 """Directions of a :func:`scan_index`: the circle is cut into this many equal sectors."""
+
+
+@njit(cache=True)
+def pose_log(sf: FloatArray, si: IntArray, x: float, y: float, th: float, now_us: int) -> None:
+    """Record (x, y, th), the pose at the end of the step that began at ``now_us``, as the next row of
+    the simulator's pose log when that end is at or after I_LOG_NEXT (the ``I_LOG_`` columns of
+    :mod:`~omnibot.sim.kernels.layout`). A row past the log's capacity is counted, not written
+    (whoever reads the log raises)."""
+    if now_us + si[I_LOG_DT] < si[I_LOG_NEXT]:
+        return
+    n = si[I_LOG_N]
+    if n < si[I_LOG_CAP]:
+        o = sim_offsets(si)[4] + 3 * n
+        sf[o], sf[o + 1], sf[o + 2] = x, y, th
+    si[I_LOG_N] = n + 1
+    si[I_LOG_NEXT] += si[I_LOG_STRIDE]
 
 
 @njit(cache=True)
