@@ -106,6 +106,7 @@ class ActiveKernels:
         scan_index = staticmethod(kernels.scan_index)
         scan_rays = staticmethod(kernels.scan_rays)
         scan_measure = staticmethod(kernels.scan_measure)
+        scan_revolution = staticmethod(kernels.scan_revolution)
         pose_log = staticmethod(kernels.pose_log)
         physics_step = staticmethod(kernels.physics_step)
         contact_speeds = staticmethod(kernels.contact_speeds)

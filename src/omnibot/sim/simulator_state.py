@@ -52,8 +52,7 @@ class StepState:
     def pose_log(self) -> tuple[FloatArray, NDArray[np.int64]]:
         """The pose log's rows (capacity, 3), a view of the float state, and the int state whose
         ``I_LOG_`` columns describe it (:func:`~omnibot.sim.kernels.pose_log`)."""
-        lo, hi = self._log_span
-        return self._sf[lo:hi].reshape(-1, 3), self._si
+        return self._log_rows, self._si
 
     def _pose_log_start(self, now_us: int) -> None:
         """Start the pose log at ``now_us`` (the end of a step) with the pose now as its first row."""
@@ -97,7 +96,7 @@ class StepState:
         sf[layout.F_REACH] = max(math.hypot(*wh.position) for wh in robot.wheels)
         sf[of0:of1] = self._outline.ravel()
         sf[of3:of4] = np.array([wh.position for wh in robot.wheels], dtype=float).ravel()
-        self._log_span = (of4, of_end)
+        self._log_rows = sf[of4:of_end].reshape(-1, 3)
         self._contact_out = sf[of1:of2].reshape(n_rows, 6)
         self._contact_speed = sf[of2:of3]
         self._new_contact = self._si[oi1:oi2]
@@ -138,7 +137,8 @@ class StepState:
         self._sf, self._si, self._step_ids = sf, si, ids
         if self._patchy:
             self._ids = ids
-        _, of1, of2, of3, _, _, _, oi1, oi2, _, _ = kernels.sim_offsets.py_func(si)
+        _, of1, of2, of3, of4, of_end, _, oi1, oi2, _, _ = kernels.sim_offsets.py_func(si)
+        self._log_rows = sf[of4:of_end].reshape(-1, 3)
         self._contact_out = sf[of1:of2].reshape(-1, 6)
         self._contact_speed = sf[of2:of3]
         self._new_contact = si[oi1:oi2]

@@ -156,6 +156,8 @@ def _ray_origin(
     """(x, y, world angle) of a ray from the scanner at (mount_x, mount_y) on the robot whose pose
     is history columns c0..c0+2, a fraction f from row k to k1, in direction a of its base frame."""
     x, y, th = _lerp(hist_p, k, k1, f, c0), _lerp(hist_p, k, k1, f, c0 + 1), _lerp(hist_p, k, k1, f, c0 + 2)
+    if mount_x == 0.0 and mount_y == 0.0:  # on the robot's origin: the same numbers, no cos and sin
+        return x, y, th + a
     c, s = math.cos(th), math.sin(th)
     return x + c * mount_x - s * mount_y, y + s * mount_x + c * mount_y, th + a
 
@@ -192,6 +194,32 @@ def _body_hit(
     return _outline_hit(rx, ry, dx, dy, bt, body_v, span[0], span[1], best)
 
 
+@njit(cache=True, inline="always")
+def _cast(
+    t: float, a: float, hist_t0: float, hist_dt: float, hist_p: FloatArray, own: int, mount_x: float,
+    mount_y: float, segments: FloatArray, starts: IntArray, entries: IntArray, near: FloatArray,
+    body_v: FloatArray, body_off: IntArray, body_r: FloatArray, max_range: float,
+) -> float:  # fmt: skip
+    """True range of one ray of :func:`scan_rays` (measured at time t in direction a; body_r: each
+    body's bounding radius, :func:`_body_radii`)."""
+    k, k1, f = _bracket(t, hist_t0, hist_dt, hist_p.shape[0])
+    ox, oy, ang = _ray_origin(hist_p, k, k1, f, 3 * own, mount_x, mount_y, a)
+    dx, dy = math.cos(ang), math.sin(ang)
+    sector = min(int(_turn(ang) / (2.0 * math.pi / SCAN_BINS)), SCAN_BINS - 1)
+    best = np.inf
+    for q in range(starts[sector], starts[sector + 1]):
+        e = entries[q]
+        if near[e] > best:
+            break
+        best = min(best, _hit(ox, oy, dx, dy, segments[e, 0], segments[e, 1], segments[e, 2], segments[e, 3]))
+    for b in range(body_off.shape[0] - 1):
+        if b != own:
+            best = _body_hit(
+                hist_p, k, k1, f, 3 * b, ox, oy, dx, dy, body_r[b], body_v, body_off[b : b + 2], best
+            )
+    return best if best <= max_range else np.inf
+
+
 @njit(cache=True)
 def scan_rays(
     ray_t: FloatArray,
@@ -226,30 +254,12 @@ def scan_rays(
     every origin); a body only if its bounding circle meets the ray. The result is the same as
     testing everything.
     """
-    n = ray_t.shape[0]
-    n_hist = hist_p.shape[0]
-    n_body = body_off.shape[0] - 1
     body_r = _body_radii(body_v, body_off)
-    c0 = 3 * own
-    width = 2.0 * math.pi / SCAN_BINS
-    for i in range(n):
-        k, k1, f = _bracket(ray_t[i], hist_t0, hist_dt, n_hist)
-        ox, oy, ang = _ray_origin(hist_p, k, k1, f, c0, mount_x, mount_y, ray_a[i])
-        dx, dy = math.cos(ang), math.sin(ang)
-        sector = min(int(_turn(ang) / width), SCAN_BINS - 1)
-        best = np.inf
-        for q in range(starts[sector], starts[sector + 1]):
-            e = entries[q]
-            if near[e] > best:
-                break
-            t = _hit(ox, oy, dx, dy, segments[e, 0], segments[e, 1], segments[e, 2], segments[e, 3])
-            best = min(best, t)
-        for b in range(n_body):
-            if b != own:
-                best = _body_hit(
-                    hist_p, k, k1, f, 3 * b, ox, oy, dx, dy, body_r[b], body_v, body_off[b : b + 2], best
-                )
-        out[i] = best if best <= max_range else np.inf
+    for i in range(ray_t.shape[0]):
+        out[i] = _cast(
+            ray_t[i], ray_a[i], hist_t0, hist_dt, hist_p, own, mount_x, mount_y, segments, starts, entries, near,
+            body_v, body_off, body_r, max_range,
+        )  # fmt: skip
 
 
 @njit(cache=True)
@@ -279,3 +289,67 @@ def scan_measure(
         if resolution > 0.0:
             v = round(v / resolution) * resolution
         out[i] = v if range_min <= v <= range_max else np.inf
+
+
+# scan_revolution's parameters (one float64 array): the pose history's start and step, the mount, the
+# cast's reach, the edge index's disc (centre, and how far the origins may lie from it: < 0, no
+# index), the measurement's noise and limits (scan_measure's)
+P_T0, P_DT, P_MOUNT_X, P_MOUNT_Y, P_REACH, P_AX, P_AY, P_INNER = 0, 1, 2, 3, 4, 5, 6, 7
+P_NOISE_STD, P_NOISE_FRACTION, P_RESOLUTION, P_DROPOUT, P_RANGE_MIN, P_RANGE_MAX = 8, 9, 10, 11, 12, 13
+SCAN_PARAMS = 14
+
+
+@njit(cache=True)
+def _index_holds(hist_p: FloatArray, c0: int, ax: float, ay: float, inner: float) -> bool:
+    """Whether every origin of history columns c0, c0 + 1 lies within ``inner`` of (ax, ay)."""
+    if not inner > 0.0:
+        return False
+    for j in range(hist_p.shape[0]):
+        dx, dy = hist_p[j, c0] - ax, hist_p[j, c0 + 1] - ay
+        if dx * dx + dy * dy > inner * inner:
+            return False
+    return True
+
+
+@njit(cache=True)
+def scan_revolution(
+    stamp: float,
+    first: int,
+    last: int,
+    offsets: FloatArray,
+    angles: FloatArray,
+    hist_p: FloatArray,
+    own: int,
+    params: FloatArray,
+    segments: FloatArray,
+    starts: IntArray,
+    entries: IntArray,
+    near: FloatArray,
+    body_v: FloatArray,
+    body_off: IntArray,
+    true: FloatArray,
+    draws: FloatArray,
+    measured: FloatArray,
+) -> bool:
+    """Rays ``first`` to ``last - 1`` of the revolution that began at ``stamp`` (ray i measured at
+    stamp + offsets[i] in direction angles[i] of the robot's base frame) cast as :func:`scan_rays`
+    casts them (the ``P_`` columns of ``params``) into true[first:last]; then, given ``draws`` (3 per
+    ray; none: the revolution goes on), the whole revolution measured from ``true`` into ``measured``
+    (:func:`scan_measure`). The scanner's origins over the rows of ``hist_p`` must lie within
+    params[P_INNER] of (params[P_AX], params[P_AY]), the disc the edge index holds: else nothing is
+    done and False returned (the caller builds an index for them and calls again)."""
+    if not _index_holds(hist_p, 3 * own, params[P_AX], params[P_AY], params[P_INNER]):
+        return False
+    body_r = _body_radii(body_v, body_off)
+    t0, dt, mx, my, reach = params[P_T0], params[P_DT], params[P_MOUNT_X], params[P_MOUNT_Y], params[P_REACH]
+    for i in range(first, last):
+        true[i] = _cast(
+            stamp + offsets[i], angles[i], t0, dt, hist_p, own, mx, my, segments, starts, entries, near, body_v,
+            body_off, body_r, reach,
+        )  # fmt: skip
+    if draws.shape[0]:
+        scan_measure(
+            true, draws, params[P_NOISE_STD], params[P_NOISE_FRACTION], params[P_RESOLUTION], params[P_DROPOUT],
+            params[P_RANGE_MIN], params[P_RANGE_MAX], measured,
+        )  # fmt: skip
+    return True

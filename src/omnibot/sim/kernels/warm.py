@@ -27,7 +27,15 @@ from omnibot.sim.kernels.layout import (
     physics_offsets,
     sim_offsets,
 )
-from omnibot.sim.kernels.scan import SCAN_BINS, pose_log, scan_index, scan_measure, scan_rays
+from omnibot.sim.kernels.scan import (
+    SCAN_BINS,
+    SCAN_PARAMS,
+    pose_log,
+    scan_index,
+    scan_measure,
+    scan_rays,
+    scan_revolution,
+)
 from omnibot.sim.kernels.sensors import gyro_measure, gyro_update, tracking_update
 from omnibot.sim.kernels.step import fleet_step, robot_after, robot_before, robot_step
 from omnibot.sim.kernels.wheels import contact_speeds, physics_step, physics_step_parallel
@@ -40,6 +48,7 @@ SIMULATOR_KERNELS = (
     scan_index,
     scan_rays,
     scan_measure,
+    scan_revolution,
     pose_log,
 )
 """The kernels a simulator of one robot calls (the helpers they call compile with them; Python
@@ -100,6 +109,23 @@ def warm_up_calls() -> list[tuple[Any, Callable[[], object]]]:
             f(0), f(0), 0.0, 0.001, f(1, 3), 0, 0.0, 0.0, f(0, 4), *index, f(0, 2), i(2), 1.0, f(0)
         ),
         scan_measure: lambda: scan_measure(f(0), f(0), 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, f(0)),
+        scan_revolution: lambda: scan_revolution(
+            0.0,
+            0,
+            0,
+            f(0),
+            f(0),
+            f(1, 3),
+            0,
+            f(SCAN_PARAMS),
+            f(0, 4),
+            *index,
+            f(0, 2),
+            i(2),
+            f(0),
+            f(0),
+            f(0),
+        ),
         pose_log: lambda: pose_log(f(F_HEADER), si_full, 0.0, 0.0, 0.0, -(2**40)),
         physics_step: _physics_call,
         contact_speeds: lambda: contact_speeds(f(0, 3), f(0, 0, W_COLUMNS), f(0, 0, 2)),
