@@ -14,6 +14,7 @@ from omnibot.motion import Pose2D
 from omnibot.robot import RobotDescription, load_robot, parse_description
 from omnibot.scan import Scan
 from omnibot.sim.fleet import Fleet
+from omnibot.sim.scanner import PoseLog
 from omnibot.sim.simulator import Simulator
 from omnibot.sim.truth import Snapshot
 from omnibot.sim.world import load_world, parse_world
@@ -282,3 +283,42 @@ def test_other_bodies_given_by_hand_are_seen_where_they_stand() -> None:
         1.0 / np.cos(scan.angles[ahead & (np.cos(scan.angles) > 0)]),
         atol=1e-9,
     )
+
+
+# --------------------------------------------------------------------------- the pose log
+
+
+def test_a_fleet_whose_pose_logs_fill_before_a_slow_scanner_is_due_flushes_it_early_to_the_same_scans() -> (
+    None
+):
+    def slow_scans(partner_rate_hz: float) -> tuple[list[Scan], int]:
+        fleet = Fleet(load_world("room"))
+        slow = fleet.add("a", robot_with(rate_hz=1.0, **EXACT), pose=Pose2D(1.0, 1.0, 0.0))
+        fleet.add("b", robot_with(rate_hz=partner_rate_hz, **EXACT), pose=Pose2D(2.5, 2.0, 0.3))
+        slow.sim.set_pwm([60, 150, -20, -150])
+        got: list[Scan] = []
+        slow.sim.add_scan_listener(got.append)
+        flushes = []
+        flush = slow.sim.scan_flush
+        slow.sim.scan_flush = lambda *args: flushes.append(args[0]) or flush(*args)  # type: ignore[method-assign]
+        for _ in range(2100):
+            fleet.step()
+        return got, len(flushes)
+
+    # b's log holds 0.25 s at 10 Hz (two of its revolutions are less), two of a's revolutions at 1 Hz
+    (early, flushed_early), (late, flushed_late) = slow_scans(10.0), slow_scans(1.0)
+    assert [s.stamp for s in early] == [s.stamp for s in late] == [0.0, 1.0]
+    assert flushed_late == 2 and flushed_early >= 8
+    for a, b in zip(early, late, strict=True):
+        np.testing.assert_allclose(a.ranges, b.ranges, rtol=0, atol=1e-9)
+    assert np.isfinite(early[1].ranges).all()
+
+
+def test_a_pose_log_that_overflowed_says_so() -> None:
+    sim = Simulator(load_robot("omni4"), world="room")
+    sim._pose_log_start(0)
+    log = PoseLog([sim], sim._log_stride_us / 1e6)
+    assert log.array().shape == (1, 3)
+    sim.step(5 * log.capacity)
+    with pytest.raises(SimulationError, match="pose log overflowed"):
+        log.array()
