@@ -298,9 +298,14 @@ def test_a_fleet_whose_pose_logs_fill_before_a_slow_scanner_is_due_flushes_it_ea
         slow.sim.set_pwm([60, 150, -20, -150])
         got: list[Scan] = []
         slow.sim.add_scan_listener(got.append)
-        flushes = []
+        flushes: list[int] = []
         flush = slow.sim.scan_flush
-        slow.sim.scan_flush = lambda *args: flushes.append(args[0]) or flush(*args)  # type: ignore[method-assign]
+
+        def counted(now_us: int, *rest: Any) -> int:
+            flushes.append(now_us)
+            return flush(now_us, *rest)
+
+        slow.sim.scan_flush = counted  # type: ignore[method-assign,assignment]
         for _ in range(2100):
             fleet.step()
         return got, len(flushes)

@@ -47,9 +47,12 @@ def test_the_pose_log_keeps_the_pose_of_every_stride_and_counts_what_overflows()
 def test_a_revolution_in_one_call_is_the_cast_and_the_measurement_and_asks_for_an_index_it_lacks() -> None:
     segments = np.ascontiguousarray(load_world("room").segments)
     n = 360
-    offsets = np.arange(n) * (0.1 / n)
-    angles = np.arange(n) * (-2 * math.pi / n)
-    hist = np.column_stack((np.linspace(1.0, 1.3, 21), np.linspace(1.0, 1.1, 21), np.linspace(0.0, 0.6, 21)))
+    offsets = np.arange(n, dtype=np.float64) * (0.1 / n)
+    angles = np.arange(n, dtype=np.float64) * (-2 * math.pi / n)
+    hist = np.asarray(
+        np.column_stack((np.linspace(1.0, 1.3, 21), np.linspace(1.0, 1.1, 21), np.linspace(0.0, 0.6, 21))),
+        dtype=np.float64,
+    )
     no_v, no_off = np.zeros((0, 2)), np.zeros(1, dtype=np.int64)
     draws = np.random.default_rng(3).random(3 * n)
     params = np.zeros(SCAN_PARAMS)
