@@ -107,6 +107,7 @@ class ActiveKernels:
         scan_rays = staticmethod(kernels.scan_rays)
         scan_measure = staticmethod(kernels.scan_measure)
         scan_revolution = staticmethod(kernels.scan_revolution)
+        scan_index_around = staticmethod(kernels.scan_index_around)
         pose_log = staticmethod(kernels.pose_log)
         physics_step = staticmethod(kernels.physics_step)
         contact_speeds = staticmethod(kernels.contact_speeds)

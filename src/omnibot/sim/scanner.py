@@ -40,8 +40,6 @@ from omnibot.scan import Scan
 from omnibot.sim import jit
 from omnibot.sim.kernels import layout
 from omnibot.sim.kernels.scan import (
-    P_AX,
-    P_AY,
     P_DROPOUT,
     P_DT,
     P_INNER,
@@ -108,18 +106,26 @@ class PoseLog:
         self.start = start_us / 1e6
         self.start_us = start_us
         self.capacity = min((len(b.pose_log()[0]) for b in self.bodies), default=0)
+        self._joined = np.zeros((0, self.width))
+        self._joined_key = (-1, -1)
 
     def array(self) -> FloatArray:
-        """The rows as an (H, 3 bodies) array (a view of the body's log when there is one body)."""
+        """The rows as an (H, 3 bodies) array: a view of the body's log when there is one body, else
+        the bodies' logs side by side (made once per record: the scanners of a fleet flushed
+        together share it)."""
         logs = [b.pose_log() for b in self.bodies]
-        n = int(logs[0][1][layout.I_LOG_N])
+        si = logs[0][1]
+        n, key = int(si[layout.I_LOG_N]), (int(si[layout.I_LOG_N]), int(si[layout.I_LOG_NEXT]))
         if n > self.capacity:
             raise SimulationError(
                 f"the scanners' pose log overflowed ({n} rows in {self.capacity}): a flush came too late"
             )
         if len(logs) == 1:
             return logs[0][0][:n]
-        return np.concatenate([rows[:n] for rows, _ in logs], axis=1)
+        if key != self._joined_key:
+            self._joined = np.concatenate([rows[:n] for rows, _ in logs], axis=1)
+            self._joined_key = key
+        return self._joined
 
     def trim(self, t: float) -> None:
         """Forget the rows older than the last one at or before time ``t`` (s)."""
@@ -281,16 +287,13 @@ class LaserScanner:
         return done
 
     def _index_for(self, segments: FloatArray, hist: FloatArray, own: int) -> None:
-        """A new edge index by direction (:func:`~omnibot.sim.kernels.scan_index`) for origins
-        anywhere the scanner was in ``hist``, with INDEX_SLACK to spare (``scan_revolution`` keeps it
-        while it holds every origin and the edges are the same: a robot driving at 1 m/s needs a new
-        one every few revolutions and a standing one never)."""
-        xs, ys = hist[:, 3 * own], hist[:, 3 * own + 1]
-        ax, ay = float(xs.mean()), float(ys.mean())
-        spread = float(np.sqrt(np.max((xs - ax) ** 2 + (ys - ay) ** 2)))
-        radius = spread + self._mount_reach + INDEX_SLACK
-        self._index = jit.active.scan_index(segments, ax, ay, radius, float(self._cast_range))
-        self._params[P_AX], self._params[P_AY], self._params[P_INNER] = ax, ay, radius - self._mount_reach
+        """A new edge index by direction for origins anywhere the scanner was in ``hist``, with
+        INDEX_SLACK to spare (:func:`~omnibot.sim.kernels.scan_index_around`; ``scan_revolution``
+        keeps it while it holds every origin and the edges are the same: a robot driving at 1 m/s
+        needs a new one every few revolutions and a standing one never)."""
+        self._index = jit.active.scan_index_around(
+            segments, hist, own, self._mount_reach, INDEX_SLACK, self._cast_range, self._params
+        )
         self._index_segments = segments
 
     def _draws(self, revolution: int) -> FloatArray:

@@ -34,7 +34,14 @@ their plain-Python twins while a first start compiles them in another process.
 import omnibot.sim.kernels.cache  # noqa: F401 - before any kernel: each cached with the whole family' stamp
 from omnibot.sim.kernels.contacts import cone_distance, outline_contacts, surface_probe
 from omnibot.sim.kernels.layout import physics_offsets, physics_views, sim_offsets, world_offsets
-from omnibot.sim.kernels.scan import pose_log, scan_index, scan_measure, scan_rays, scan_revolution
+from omnibot.sim.kernels.scan import (
+    pose_log,
+    scan_index,
+    scan_index_around,
+    scan_measure,
+    scan_rays,
+    scan_revolution,
+)
 from omnibot.sim.kernels.sensors import gyro_measure, gyro_update, tracking_update
 from omnibot.sim.kernels.step import fleet_step, robot_after, robot_before, robot_step
 from omnibot.sim.kernels.warm import KERNELS, SIMULATOR_KERNELS, warm_up, warm_up_calls
@@ -64,6 +71,7 @@ __all__ = [
     "robot_step",
     "scan",
     "scan_index",
+    "scan_index_around",
     "scan_measure",
     "scan_rays",
     "scan_revolution",

@@ -24,6 +24,13 @@ from omnibot.sim.kernels.layout import (
 SCAN_BINS = 256
 """Directions of a :func:`scan_index`: the circle is cut into this many equal sectors."""
 
+# scan_revolution's parameters (one float64 array): the pose history's start and step, the mount, the
+# cast's reach, the edge index's disc (centre, and how far the origins may lie from it: < 0, no
+# index), the measurement's noise and limits (scan_measure's)
+P_T0, P_DT, P_MOUNT_X, P_MOUNT_Y, P_REACH, P_AX, P_AY, P_INNER = 0, 1, 2, 3, 4, 5, 6, 7
+P_NOISE_STD, P_NOISE_FRACTION, P_RESOLUTION, P_DROPOUT, P_RANGE_MIN, P_RANGE_MAX = 8, 9, 10, 11, 12, 13
+SCAN_PARAMS = 14
+
 
 @njit(cache=True)
 def pose_log(sf: FloatArray, si: IntArray, x: float, y: float, th: float, now_us: int) -> None:
@@ -49,15 +56,20 @@ def _turn(a: float) -> float:
 
 @njit(cache=True)
 def _hit(ox: float, oy: float, dx: float, dy: float, x0: float, y0: float, x1: float, y1: float) -> float:
-    """Distance along the ray (ox, oy) + t (dx, dy) to the edge (x0, y0)-(x1, y1), inf if it misses."""
+    """Distance along the ray (ox, oy) + t (dx, dy) to the edge (x0, y0)-(x1, y1), inf if it misses.
+
+    The edge's parameter u = un / denom must lie in [0, 1]: tested as un against 0 and denom, which
+    a correctly rounded division orders alike (so no division for an edge the ray passes beside)."""
     ex, ey = x1 - x0, y1 - y0
     denom = dx * ey - dy * ex
     if abs(denom) < 1e-12:
         return np.inf
     ax, ay = x0 - ox, y0 - oy
+    un = ax * dy - ay * dx
+    if (un < 0.0 or un > denom) if denom > 0.0 else (un > 0.0 or un < denom):
+        return np.inf
     t = (ax * ey - ay * ex) / denom
-    u = (ax * dy - ay * dx) / denom
-    return t if t >= 0.0 and 0.0 <= u <= 1.0 else np.inf
+    return t if t >= 0.0 else np.inf
 
 
 @njit(cache=True)
@@ -112,6 +124,29 @@ def scan_index(
             entries[fill[b]] = e
             fill[b] += 1
     return starts, entries, near
+
+
+@njit(cache=True)
+def scan_index_around(
+    segments: FloatArray, hist_p: FloatArray, own: int, reach: float, slack: float, max_range: float,
+    params: FloatArray,
+) -> tuple[IntArray, IntArray, FloatArray]:  # fmt: skip
+    """:func:`scan_index` for a scanner ``reach`` from the origin of body ``own`` anywhere it was over
+    the rows of ``hist_p``, with ``slack`` to spare: the disc about their mean that holds them all,
+    widened by reach and slack; the disc's centre and how far the robot may go from it (its radius
+    less reach) into params[P_AX], params[P_AY], params[P_INNER] (:func:`scan_revolution`'s)."""
+    c0 = 3 * own
+    n = hist_p.shape[0]
+    ax = ay = 0.0
+    for j in range(n):
+        ax, ay = ax + hist_p[j, c0], ay + hist_p[j, c0 + 1]
+    ax, ay = ax / n, ay / n
+    spread = 0.0
+    for j in range(n):
+        spread = max(spread, math.hypot(hist_p[j, c0] - ax, hist_p[j, c0 + 1] - ay))
+    radius = spread + reach + slack
+    params[P_AX], params[P_AY], params[P_INNER] = ax, ay, radius - reach
+    return scan_index(segments, ax, ay, radius, max_range)
 
 
 @njit(cache=True)
@@ -205,7 +240,10 @@ def _cast(
     k, k1, f = _bracket(t, hist_t0, hist_dt, hist_p.shape[0])
     ox, oy, ang = _ray_origin(hist_p, k, k1, f, 3 * own, mount_x, mount_y, a)
     dx, dy = math.cos(ang), math.sin(ang)
-    sector = min(int(_turn(ang) / (2.0 * math.pi / SCAN_BINS)), SCAN_BINS - 1)
+    # its sector by multiplying, not dividing: a ray on a sector's border may be given either one,
+    # and either lists every edge it can meet (scan_index widens each edge's angles by 1e-9 rad)
+    turns = ang * (0.5 / math.pi)
+    sector = min(int((turns - math.floor(turns)) * SCAN_BINS), SCAN_BINS - 1)
     best = np.inf
     for q in range(starts[sector], starts[sector + 1]):
         e = entries[q]
@@ -289,14 +327,6 @@ def scan_measure(
         if resolution > 0.0:
             v = round(v / resolution) * resolution
         out[i] = v if range_min <= v <= range_max else np.inf
-
-
-# scan_revolution's parameters (one float64 array): the pose history's start and step, the mount, the
-# cast's reach, the edge index's disc (centre, and how far the origins may lie from it: < 0, no
-# index), the measurement's noise and limits (scan_measure's)
-P_T0, P_DT, P_MOUNT_X, P_MOUNT_Y, P_REACH, P_AX, P_AY, P_INNER = 0, 1, 2, 3, 4, 5, 6, 7
-P_NOISE_STD, P_NOISE_FRACTION, P_RESOLUTION, P_DROPOUT, P_RANGE_MIN, P_RANGE_MAX = 8, 9, 10, 11, 12, 13
-SCAN_PARAMS = 14
 
 
 @njit(cache=True)

@@ -32,6 +32,7 @@ from omnibot.sim.kernels.scan import (
     SCAN_PARAMS,
     pose_log,
     scan_index,
+    scan_index_around,
     scan_measure,
     scan_rays,
     scan_revolution,
@@ -49,6 +50,7 @@ SIMULATOR_KERNELS = (
     scan_rays,
     scan_measure,
     scan_revolution,
+    scan_index_around,
     pose_log,
 )
 """The kernels a simulator of one robot calls (the helpers they call compile with them; Python
@@ -126,6 +128,7 @@ def warm_up_calls() -> list[tuple[Any, Callable[[], object]]]:
             f(0),
             f(0),
         ),
+        scan_index_around: lambda: scan_index_around(f(0, 4), f(1, 3), 0, 0.0, 1.0, 1.0, f(SCAN_PARAMS)),
         pose_log: lambda: pose_log(f(F_HEADER), si_full, 0.0, 0.0, 0.0, -(2**40)),
         physics_step: _physics_call,
         contact_speeds: lambda: contact_speeds(f(0, 3), f(0, 0, W_COLUMNS), f(0, 0, 2)),
