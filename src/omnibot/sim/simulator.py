@@ -324,7 +324,7 @@ class Simulator(Contacts, SensorReadings, ScanFeed, Listeners, StepState):
             if self.gyro is not None:
                 self.gyro.refill(self.dt)
             self._sensors = self._sensor_arrays()
-        if self._scan_self and now_us + self._dt_us >= self._scan_flush_us:
+        if status & layout.STEP_SCAN:
             self._scan_tick(now_us + self._dt_us)
         if self._listeners and now_us + self._dt_us >= self._next_notify_us:
             self._notify()
@@ -349,7 +349,9 @@ class Simulator(Contacts, SensorReadings, ScanFeed, Listeners, StepState):
         state[:3], state[3:] = state[3:], self._twist_row
         if self._si[layout.I_LOG_ON]:
             pose = self._pose_row
-            jit.active.pose_log(self._sf, self._si, float(pose[0]), float(pose[1]), float(pose[2]), now_us)
+            status |= jit.active.pose_log(
+                self._sf, self._si, float(pose[0]), float(pose[1]), float(pose[2]), now_us
+            )
         return status | jit.active.robot_after(state, self.dt, *self._sensors)
 
     def _extra_forces(self, now_us: int) -> int:

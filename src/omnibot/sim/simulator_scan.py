@@ -25,6 +25,7 @@ from omnibot.errors import SimulationError
 from omnibot.robot import RobotDescription
 from omnibot.scan import Scan
 from omnibot.sim.clock import SimClock
+from omnibot.sim.kernels import layout
 from omnibot.sim.scanner import SCAN_POSE_PERIOD, LaserScanner, PoseLog
 from omnibot.sim.truth import ScanListener
 from omnibot.sim.world import World
@@ -47,6 +48,7 @@ class ScanFeed:
     dt: float
     _dt_us: int
     _pose_row: FloatArray
+    _si: NDArray[np.int64]
     _log_stride_us: int
     pose_log: Callable[[], tuple[FloatArray, NDArray[np.int64]]]
     _pose_log_start: Callable[[int], None]
@@ -63,11 +65,7 @@ class ScanFeed:
         self._scan_listeners: list[ScanListener] = []
         self._scan_asked = False
         self._scan_on = False
-        self._scan_self = False  # on, and recorded and flushed here (no scan_driver)
         self._scan_due_us = 0
-        self._scan_flush_us = 0
-        """When (us) the simulator flushes its scanner next: the first pose record at or after
-        :attr:`_scan_due_us` (:meth:`PoseLog.flush_at`)."""
         self._scan_log = PoseLog([self], self._log_stride_us / 1e6)
 
     @property
@@ -118,12 +116,11 @@ class ScanFeed:
             if self.scan_driver is None:
                 self._pose_log_start(now_us)
                 self._scan_log = PoseLog([self], self._log_stride_us / 1e6, now_us)
-                self._scan_flush_us = self._scan_log.flush_at(self._scan_due_us)
+                self._si[layout.I_LOG_FLUSH] = self._scan_log.flush_at(self._scan_due_us)
         else:
             sc.stop()
             if self.scan_driver is None:
                 self._pose_log_stop()
-        self._scan_self = want and self.scan_driver is None
         if self.scan_driver is not None:
             self.scan_driver(self)
 
@@ -182,7 +179,7 @@ class ScanFeed:
         log = self._scan_log
         self.scan_flush(now_us, log)
         log.trim(self._scanner.needs_from)
-        self._scan_flush_us = log.flush_at(self._scan_due_us)
+        self._si[layout.I_LOG_FLUSH] = log.flush_at(self._scan_due_us)
 
 
 __all__ = ["SCAN_OTHERS_EVERY", "SCAN_POSE_PERIOD", "ScanFeed"]

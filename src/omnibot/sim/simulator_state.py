@@ -60,7 +60,7 @@ class StepState:
         rows[0] = self._pose_row
         si[layout.I_LOG_N], si[layout.I_LOG_NEXT] = 1, now_us + self._log_stride_us
         si[layout.I_LOG_STRIDE], si[layout.I_LOG_DT] = self._log_stride_us, self._dt_us
-        si[layout.I_LOG_ON] = 1
+        si[layout.I_LOG_FLUSH], si[layout.I_LOG_ON] = 2**62, 1
 
     def _pose_log_stop(self) -> None:
         """Stop recording the pose (the compiled step then skips it)."""

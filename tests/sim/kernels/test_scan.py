@@ -34,11 +34,16 @@ def log_state(capacity: int, stride_us: int, dt_us: int) -> tuple[np.ndarray, np
     return np.zeros(offsets[5]), np.resize(si, offsets[-1])
 
 
-def test_the_pose_log_keeps_the_pose_of_every_stride_and_counts_what_overflows() -> None:
+def test_the_pose_log_keeps_the_pose_of_every_stride_says_when_to_flush_and_counts_what_overflows() -> None:
     sf, si = log_state(capacity=3, stride_us=5000, dt_us=1000)
+    si[layout.I_LOG_FLUSH] = 10000
     start = kernels.sim_offsets.py_func(si)[4]
+    said = {}
     for step in range(20):  # steps of 1 ms beginning at step * 1000 us, ending a ms later
-        kernels.pose_log(sf, si, float(step), -float(step), 0.5 * step, step * 1000)
+        said[step + 1] = kernels.pose_log(sf, si, float(step), -float(step), 0.5 * step, step * 1000)
+    # the flush is due with the records at or after 10 ms
+    assert {end for end, status in said.items() if status} == {10, 15, 20}
+    assert set(said.values()) == {0, layout.STEP_SCAN}
     np.testing.assert_array_equal(sf[start:].reshape(3, 3), [[4, -4, 2.0], [9, -9, 4.5], [14, -14, 7.0]])
     assert si[layout.I_LOG_N] == 4  # the fourth row (19 ms) counted, nowhere to go
     assert si[layout.I_LOG_NEXT] == 25000

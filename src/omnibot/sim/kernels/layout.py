@@ -76,9 +76,10 @@ F_HEADER = 16
 I_V, I_C, I_M, I_OWNERS, I_SURFACES, I_COUNT, I_WALLS, I_PATCHY, I_RELEASE = 0, 1, 2, 3, 4, 5, 6, 7, 8
 # the pose log for the laser scanners (sf's last section, I_LOG_CAP rows of x, y, theta): the step
 # records its end pose as row I_LOG_N when it ends at or after I_LOG_NEXT (us), then I_LOG_NEXT
-# moves on by I_LOG_STRIDE; only while I_LOG_ON; I_LOG_DT: the step's length, us
-I_LOG_ON, I_LOG_N, I_LOG_CAP, I_LOG_NEXT, I_LOG_STRIDE, I_LOG_DT = 9, 10, 11, 12, 13, 14
-I_HEADER = 15
+# moves on by I_LOG_STRIDE, and says STEP_SCAN when that end is at or after I_LOG_FLUSH (us); only
+# while I_LOG_ON; I_LOG_DT: the step's length, us
+I_LOG_ON, I_LOG_N, I_LOG_CAP, I_LOG_NEXT, I_LOG_STRIDE, I_LOG_DT, I_LOG_FLUSH = 9, 10, 11, 12, 13, 14, 15
+I_HEADER = 16
 NEVER = -(2**62)
 """A last-touch time meaning 'never touched'."""
 # the world's packed geometry: wf floats solid_v (V, 2), solid_c (K, 2), solid_r (K,), thin_v (2E, 2),
@@ -86,8 +87,8 @@ NEVER = -(2**62)
 # thin_owner (E), patch_off (Q + 1), patch_sid (Q)
 WORLD_HEADER = 5
 
-# robot_step status bits
-STEP_BAD_SURFACE, STEP_COLLISION, STEP_REFILL, STEP_FORCE = 1, 2, 4, 8
+# robot_step status bits (STEP_SCAN: the pose log recorded a row at or after its flush time)
+STEP_BAD_SURFACE, STEP_COLLISION, STEP_REFILL, STEP_FORCE, STEP_SCAN = 1, 2, 4, 8, 16
 
 # a fleet's layout (fleet_step): one row per robot, where its arrays lie in the fleet's buffers
 (

@@ -13,9 +13,11 @@ from omnibot.sim.kernels.contacts import segment_distance
 from omnibot.sim.kernels.layout import (
     I_LOG_CAP,
     I_LOG_DT,
+    I_LOG_FLUSH,
     I_LOG_N,
     I_LOG_NEXT,
     I_LOG_STRIDE,
+    STEP_SCAN,
     FloatArray,
     IntArray,
     sim_offsets,
@@ -33,19 +35,22 @@ SCAN_PARAMS = 14
 
 
 @njit(cache=True)
-def pose_log(sf: FloatArray, si: IntArray, x: float, y: float, th: float, now_us: int) -> None:
+def pose_log(sf: FloatArray, si: IntArray, x: float, y: float, th: float, now_us: int) -> int:
     """Record (x, y, th), the pose at the end of the step that began at ``now_us``, as the next row of
     the simulator's pose log when that end is at or after I_LOG_NEXT (the ``I_LOG_`` columns of
-    :mod:`~omnibot.sim.kernels.layout`). A row past the log's capacity is counted, not written
-    (whoever reads the log raises)."""
-    if now_us + si[I_LOG_DT] < si[I_LOG_NEXT]:
-        return
+    :mod:`~omnibot.sim.kernels.layout`); STEP_SCAN if it did and the end is at or after I_LOG_FLUSH
+    (the scanner is due), else 0. A row past the log's capacity is counted, not written (whoever
+    reads the log raises)."""
+    end = now_us + si[I_LOG_DT]
+    if end < si[I_LOG_NEXT]:
+        return 0
     n = si[I_LOG_N]
     if n < si[I_LOG_CAP]:
         o = sim_offsets(si)[4] + 3 * n
         sf[o], sf[o + 1], sf[o + 2] = x, y, th
     si[I_LOG_N] = n + 1
     si[I_LOG_NEXT] += si[I_LOG_STRIDE]
+    return STEP_SCAN if end >= si[I_LOG_FLUSH] else 0
 
 
 @njit(cache=True)

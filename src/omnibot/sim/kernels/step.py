@@ -272,7 +272,7 @@ def robot_step(
         scratch,
     )  # fmt: skip
     if si[I_LOG_ON]:
-        pose_log(sf, si, pose[0, 0], pose[0, 1], pose[0, 2], now_us)
+        status |= pose_log(sf, si, pose[0, 0], pose[0, 1], pose[0, 2], now_us)
     return status | _after_physics(
         vx0, vy0, w0, q[0, 0], q[0, 1], q[0, 2], dt, gyro, gyro_normals, tracking, tracking_normals
     )
