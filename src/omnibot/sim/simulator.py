@@ -8,11 +8,12 @@
                       |    wall/obstacle push-back force  (when the robot may touch something)
                       |    + hand pushes (push()) and applied forces (a fleet's contacts), in order
                       |    physics step
+                      |    pose log for the laser scanner (every 5 ms while someone wants scans)
                       |    tracking wheels, gyro (every step)
                       v
       encoders (when read) ; sonars (on ping, one compiled pass over the edges) ; listeners ;
-      collision events ; laser scanner (pose recorded every 5 ms while someone wants scans, rays
-      cast once per revolution; scan listeners)
+      collision events ; laser scanner (when the step says a revolution is due: one compiled
+      call casts and measures it; scan listeners)
 
 A step costs a few microseconds: everything above the line is one compiled kernel call on arrays
 (the physics' packed buffer, the world's packed geometry, the simulator's and the sensors' state

@@ -4,11 +4,14 @@ and the revolutions handed to the scan listeners.
 A robot with a ``scanner`` has a :class:`~omnibot.sim.scanner.LaserScanner` (:attr:`ScanFeed.scanner`).
 It measures only while someone wants scans: a scan listener is registered
 (:meth:`ScanFeed.add_scan_listener`) or :attr:`ScanFeed.last_scan` has been read once; otherwise it
-costs one comparison per step. Scan listeners are called from the simulator's step (the stepping
-thread, in simulated time) with every revolution completed, as an :class:`omnibot.scan.Scan`. The
-scanner sees the world's walls and obstacles, never its own robot. In a fleet it sees the other
-robots where they were at each ray's time: the fleet records every robot's pose and flushes the
-scanners (:attr:`ScanFeed.scan_driver`). Bodies given by a simulator's ``neighbours`` of another
+costs one test per step in the compiled step. While it measures, the compiled step records the
+pose every SCAN_POSE_PERIOD in the simulator's own state (:func:`~omnibot.sim.kernels.pose_log`)
+and says (STEP_SCAN) when a revolution is due; the revolution is then cast and measured in one
+compiled call. Scan listeners are called from the simulator's step (the stepping thread, in
+simulated time) with every revolution completed, as an :class:`omnibot.scan.Scan`. The scanner
+sees the world's walls and obstacles, never its own robot. In a fleet it sees the other robots
+where they were at each ray's time: every robot's step records its pose, and the fleet reads the
+logs side by side and flushes the scanners (:attr:`ScanFeed.scan_driver`). Bodies given by a simulator's ``neighbours`` of another
 kind are seen as they stand when the rays are cast (every 20 ms then).
 """
 

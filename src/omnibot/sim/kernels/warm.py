@@ -46,8 +46,6 @@ SIMULATOR_KERNELS = (
     robot_step,
     fleet_step,
     cone_distance,
-    scan_index,
-    scan_rays,
     scan_measure,
     scan_revolution,
     scan_index_around,
@@ -57,7 +55,7 @@ SIMULATOR_KERNELS = (
 calls :func:`physics_offsets` and :func:`sim_offsets` as plain Python, their ``py_func``)."""
 KERNELS = (
     *SIMULATOR_KERNELS, physics_step, contact_speeds, surface_probe, robot_before, robot_after, gyro_update,
-    gyro_measure, tracking_update,
+    gyro_measure, tracking_update, scan_index, scan_rays,
 )  # fmt: skip
 """Every serial kernel (:func:`physics_step_parallel`, for batches, compiles on its first call)."""
 
