@@ -221,17 +221,17 @@ def _outline_hit(
 @njit(cache=True, inline="always")
 def _body_hit(
     hist_p: FloatArray, k: int, k1: int, f: float, cb: int, ox: float, oy: float, dx: float, dy: float,
-    r: float, body_v: FloatArray, span: IntArray, best: float,
+    r: float, body_v: FloatArray, v0: int, v1: int, best: float,
 ) -> float:  # fmt: skip
     """``best``, or the distance along the ray from (ox, oy) in direction (dx, dy) to the outline
-    body_v[span[0]:span[1]] (bounding radius r) of the body whose pose is history columns cb..cb+2,
-    a fraction f from row k to k1, if nearer."""
+    body_v[v0:v1] (bounding radius r) of the body whose pose is history columns cb..cb+2, a
+    fraction f from row k to k1, if nearer."""
     rx, ry = _lerp(hist_p, k, k1, f, cb) - ox, _lerp(hist_p, k, k1, f, cb + 1) - oy
     along = rx * dx + ry * dy
     if along + r < 0.0 or along - r > best or abs(rx * dy - ry * dx) > r:
         return best  # its bounding circle is behind, beyond the best hit or beside the ray
     bt = _lerp(hist_p, k, k1, f, cb + 2)
-    return _outline_hit(rx, ry, dx, dy, bt, body_v, span[0], span[1], best)
+    return _outline_hit(rx, ry, dx, dy, bt, body_v, v0, v1, best)
 
 
 @njit(cache=True, inline="always")
@@ -258,7 +258,7 @@ def _cast(
     for b in range(body_off.shape[0] - 1):
         if b != own:
             best = _body_hit(
-                hist_p, k, k1, f, 3 * b, ox, oy, dx, dy, body_r[b], body_v, body_off[b : b + 2], best
+                hist_p, k, k1, f, 3 * b, ox, oy, dx, dy, body_r[b], body_v, body_off[b], body_off[b + 1], best
             )
     return best if best <= max_range else np.inf
 
