@@ -27,7 +27,7 @@ import numpy as np
 from omnibot.motion import Pose2D
 from omnibot.robot import load_robot
 from omnibot.scan import Scan
-from omnibot.sim import Fleet, Simulator, jit, kernels, load_world
+from omnibot.sim import Fleet, Simulator, kernels, load_world
 
 FLEET_POSES = {
     "room": [(1.0, 1.0), (2.5, 2.0), (4.2, 3.2), (1.0, 2.0)],
@@ -126,8 +126,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--quick", action="store_true", help="0.5 s runs, 2 repeats (a check that it works)")
     args = parser.parse_args(argv)
     seconds, repeats = (0.5, 2) if args.quick else (args.seconds, args.repeats)
-    jit.active.choose()
-    jit.active.wait()  # a cold cache: the compiled kernels, not their Python twins, are measured
+    kernels.warm_up(every=False)  # from a cold cache too, the compiled kernels are measured, not their twins
     print("ray casting, 360 rays of a turning robot (us per revolution):")
     print(
         "| world | edges | edge index (now and then) | compiled cast | numpy World.raycast | largest difference |"
