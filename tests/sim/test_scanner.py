@@ -14,10 +14,12 @@ from omnibot.motion import Pose2D
 from omnibot.robot import RobotDescription, load_robot, parse_description
 from omnibot.scan import Scan
 from omnibot.sim.fleet import Fleet
+from omnibot.sim.kernels import layout
 from omnibot.sim.scanner import PoseLog
 from omnibot.sim.simulator import Simulator
 from omnibot.sim.truth import Snapshot
 from omnibot.sim.world import load_world, parse_world
+from tests.sim.fakes import FakePhysics
 
 EXACT: dict[str, Any] = {"noise_fraction": 0.0, "noise_std": 0.0, "resolution": 0.0, "dropout": 0.0}
 BOX = parse_world({"name": "box", "walls": [{"shape": "rectangle", "min": [-2, -1.5], "max": [2, 1.5]}]})
@@ -327,3 +329,22 @@ def test_a_pose_log_that_overflowed_says_so() -> None:
     sim.step(5 * log.capacity)
     with pytest.raises(SimulationError, match="pose log overflowed"):
         log.array()
+
+
+def test_a_physics_of_another_kind_logs_the_poses_the_rays_are_cast_from_too() -> None:
+    sim = Simulator(robot_with(**EXACT), world=BOX, physics_factory=FakePhysics)
+    sim.set_pwm([120, 150, -60, -150])
+    got: list[Scan] = []
+    sim.add_scan_listener(got.append)
+    poses = {}
+    for _ in range(250):
+        sim.step()
+        p = sim.pose
+        poses[sim.clock.ticks_us()] = [p.x, p.y, p.theta]
+    assert [s.stamp for s in got] == [0.0, 0.1]
+    rows, si = sim.pose_log()
+    start = sim._scan_log.start_us
+    n = int(si[layout.I_LOG_N])
+    assert start == 200_000 and n == 11  # trimmed at the last flush to the rays still to come
+    np.testing.assert_array_equal(rows[:n], [poses[start + 5000 * j] for j in range(n)])
+    assert poses[250_000] != poses[5000]  # it moved
