@@ -348,3 +348,23 @@ def test_a_physics_of_another_kind_logs_the_poses_the_rays_are_cast_from_too() -
     assert start == 200_000 and n == 11  # trimmed at the last flush to the rays still to come
     np.testing.assert_array_equal(rows[:n], [poses[start + 5000 * j] for j in range(n)])
     assert poses[250_000] != poses[5000]  # it moved
+
+
+def test_a_revolution_whose_rays_were_all_cast_before_its_end_is_measured_at_its_end_the_same() -> None:
+    def scans(cast_early: bool) -> list[Scan]:
+        sim = Simulator(robot_with(rays=3), world=BOX, seed=5)
+        sim.set_pwm([120, 150, -60, -150])
+        got: list[Scan] = []
+        sim.add_scan_listener(got.append)
+        sim.step(70)
+        if cast_early:  # the third ray (66.7 ms) is due: every ray of revolution 0 cast, none delivered
+            sim.scan_flush(sim.clock.ticks_us(), sim._scan_log)
+            assert not got
+        sim.step(150)
+        return got
+
+    early, usual = scans(True), scans(False)
+    assert [s.stamp for s in early] == [s.stamp for s in usual] == [0.0, 0.1]
+    for a, b in zip(early, usual, strict=True):
+        np.testing.assert_array_equal(a.ranges, b.ranges)
+    assert np.isfinite(early[0].ranges).all()
