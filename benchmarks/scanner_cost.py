@@ -126,6 +126,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--quick", action="store_true", help="0.5 s runs, 2 repeats (a check that it works)")
     args = parser.parse_args(argv)
     seconds, repeats = (0.5, 2) if args.quick else (args.seconds, args.repeats)
+    kernels.warm_up(every=False)  # from a cold cache too, the compiled kernels are measured, not their twins
     print("ray casting, 360 rays of a turning robot (us per revolution):")
     print(
         "| world | edges | edge index (now and then) | compiled cast | numpy World.raycast | largest difference |"

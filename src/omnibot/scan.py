@@ -71,6 +71,14 @@ class Scan:
             raise ValueError("a scan's intensities must have one value per ray")
         object.__setattr__(self, "ranges", ranges)
 
+    def but(self, stamp: float, ranges: FloatArray) -> Scan:
+        """This scan with another ``stamp`` and ``ranges``, not checked again: for a producer of
+        many scans alike whose ranges are one-dimensional float64 without nan (the simulated
+        scanner's revolutions)."""
+        scan = object.__new__(Scan)
+        scan.__dict__.update(self.__dict__, stamp=stamp, ranges=ranges)
+        return scan
+
     def __len__(self) -> int:
         return int(self.ranges.shape[0])
 

@@ -14,9 +14,12 @@ from omnibot.motion import Pose2D
 from omnibot.robot import RobotDescription, load_robot, parse_description
 from omnibot.scan import Scan
 from omnibot.sim.fleet import Fleet
+from omnibot.sim.kernels import layout
+from omnibot.sim.scanner import PoseLog
 from omnibot.sim.simulator import Simulator
 from omnibot.sim.truth import Snapshot
 from omnibot.sim.world import load_world, parse_world
+from tests.sim.fakes import FakePhysics
 
 EXACT: dict[str, Any] = {"noise_fraction": 0.0, "noise_std": 0.0, "resolution": 0.0, "dropout": 0.0}
 BOX = parse_world({"name": "box", "walls": [{"shape": "rectangle", "min": [-2, -1.5], "max": [2, 1.5]}]})
@@ -282,3 +285,86 @@ def test_other_bodies_given_by_hand_are_seen_where_they_stand() -> None:
         1.0 / np.cos(scan.angles[ahead & (np.cos(scan.angles) > 0)]),
         atol=1e-9,
     )
+
+
+# --------------------------------------------------------------------------- the pose log
+
+
+def test_a_fleet_whose_pose_logs_fill_before_a_slow_scanner_is_due_flushes_it_early_to_the_same_scans() -> (
+    None
+):
+    def slow_scans(partner_rate_hz: float) -> tuple[list[Scan], int]:
+        fleet = Fleet(load_world("room"))
+        slow = fleet.add("a", robot_with(rate_hz=1.0, **EXACT), pose=Pose2D(1.0, 1.0, 0.0))
+        fleet.add("b", robot_with(rate_hz=partner_rate_hz, **EXACT), pose=Pose2D(2.5, 2.0, 0.3))
+        slow.sim.set_pwm([60, 150, -20, -150])
+        got: list[Scan] = []
+        slow.sim.add_scan_listener(got.append)
+        flushes: list[int] = []
+        flush = slow.sim.scan_flush
+
+        def counted(now_us: int, *rest: Any) -> int:
+            flushes.append(now_us)
+            return flush(now_us, *rest)
+
+        slow.sim.scan_flush = counted  # type: ignore[method-assign,assignment]
+        for _ in range(2100):
+            fleet.step()
+        return got, len(flushes)
+
+    # b's log holds 0.25 s at 10 Hz (two of its revolutions are less), two of a's revolutions at 1 Hz
+    (early, flushed_early), (late, flushed_late) = slow_scans(10.0), slow_scans(1.0)
+    assert [s.stamp for s in early] == [s.stamp for s in late] == [0.0, 1.0]
+    assert flushed_late == 2 and flushed_early >= 8
+    for a, b in zip(early, late, strict=True):
+        np.testing.assert_allclose(a.ranges, b.ranges, rtol=0, atol=1e-9)
+    assert np.isfinite(early[1].ranges).all()
+
+
+def test_a_pose_log_that_overflowed_says_so() -> None:
+    sim = Simulator(load_robot("omni4"), world="room")
+    sim._pose_log_start(0)
+    log = PoseLog([sim], sim._log_stride_us / 1e6)
+    assert log.array().shape == (1, 3)
+    sim.step(5 * log.capacity)
+    with pytest.raises(SimulationError, match="pose log overflowed"):
+        log.array()
+
+
+def test_a_physics_of_another_kind_logs_the_poses_the_rays_are_cast_from_too() -> None:
+    sim = Simulator(robot_with(**EXACT), world=BOX, physics_factory=FakePhysics)
+    sim.set_pwm([120, 150, -60, -150])
+    got: list[Scan] = []
+    sim.add_scan_listener(got.append)
+    poses = {}
+    for _ in range(250):
+        sim.step()
+        p = sim.pose
+        poses[sim.clock.ticks_us()] = [p.x, p.y, p.theta]
+    assert [s.stamp for s in got] == [0.0, 0.1]
+    rows, si = sim.pose_log()
+    start = sim._scan_log.start_us
+    n = int(si[layout.I_LOG_N])
+    assert start == 200_000 and n == 11  # trimmed at the last flush to the rays still to come
+    np.testing.assert_array_equal(rows[:n], [poses[start + 5000 * j] for j in range(n)])
+    assert poses[250_000] != poses[5000]  # it moved
+
+
+def test_a_revolution_whose_rays_were_all_cast_before_its_end_is_measured_at_its_end_the_same() -> None:
+    def scans(cast_early: bool) -> list[Scan]:
+        sim = Simulator(robot_with(rays=3), world=BOX, seed=5)
+        sim.set_pwm([120, 150, -60, -150])
+        got: list[Scan] = []
+        sim.add_scan_listener(got.append)
+        sim.step(70)
+        if cast_early:  # the third ray (66.7 ms) is due: every ray of revolution 0 cast, none delivered
+            sim.scan_flush(sim.clock.ticks_us(), sim._scan_log)
+            assert not got
+        sim.step(150)
+        return got
+
+    early, usual = scans(True), scans(False)
+    assert [s.stamp for s in early] == [s.stamp for s in usual] == [0.0, 0.1]
+    for a, b in zip(early, usual, strict=True):
+        np.testing.assert_array_equal(a.ranges, b.ranges)
+    assert np.isfinite(early[0].ranges).all()

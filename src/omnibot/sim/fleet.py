@@ -9,7 +9,7 @@
                       -> equal and opposite penalty forces
                    -> every robot's physics steps (its walls, its pushes, those forces), all in one
                       compiled call on the fleet's arrays (omnibot.sim.fleet_arrays) -> clock += dt
-                   -> while a scanner is on, every 5 ms: every robot's pose into one pose log; the
+                   -> while a scanner is on, every 5 ms: every robot's step logs its pose; the
                       scanners due cast their rays (each ray sees the others where they were then)
 
 A robot is a :class:`~omnibot.sim.device.SimDevice` (firmware + :class:`Simulator`) with a name;
@@ -111,12 +111,11 @@ class Fleet:
         self._edges_rows: dict[str, tuple[int, int]] = {}
         self._edges_tick = -1
         self._scan_stride_us = max(1, round(SCAN_POSE_PERIOD / dt)) * self._dt_us
-        self._scan_next_us = 0
-        self._scan_log = PoseLog(0, self._scan_stride_us / 1e6)
+        self._scan_flush_us = 0
+        self._scan_log = PoseLog([], self._scan_stride_us / 1e6)
         self._scanning: list[tuple[int, Simulator]] = []
         """(index in the step order, simulator) of every robot whose scanner is on."""
         self._scan_due: list[int] = []
-        self._poses: list[FloatArray] = []
         self._outlines: tuple[FloatArray, NDArray[np.int64]] = (np.zeros((0, 2)), np.zeros(1, dtype=np.int64))
 
     def __repr__(self) -> str:
@@ -211,6 +210,7 @@ class Fleet:
         if body is not None:
             body.sim.neighbours = None
             self._order = [b for b in self._order if b is not body]
+            body.sim._pose_log_stop()
             body.sim.set_scan_driver(None)
             self._members_changed()
 
@@ -246,7 +246,7 @@ class Fleet:
             for step in self._steps:
                 step()
         self._us += self._dt_us
-        if self._scanning and self._us >= self._scan_next_us:
+        if self._scanning and self._us >= self._scan_flush_us:
             self._scan_step()
 
     def _near_pairs(self) -> list[tuple[int, int]]:
@@ -266,13 +266,14 @@ class Fleet:
         sims = [b.sim for b in self._order]
         self._scanning = [(i, s) for i, s in enumerate(sims) if s.scanner is not None and s.scanner.active]
         if not self._scanning:
-            self._scan_log = PoseLog(0, self._scan_stride_us / 1e6)
+            for s in sims:
+                s._pose_log_stop()
+            self._scan_log = PoseLog([], self._scan_stride_us / 1e6)
             return
         now = self._us / 1e6
-        self._scan_log = PoseLog(len(sims), self._scan_stride_us / 1e6)
-        self._scan_next_us = self._us + self._scan_stride_us
-        self._poses = [s.pose_array for s in sims]  # live views: the physics updates them in place
-        self._scan_log.reset(now, [c for p in self._poses for c in p.tolist()])
+        for s in sims:  # every robot's step records its pose: the scanners see the others
+            s._pose_log_start(self._us)
+        self._scan_log = PoseLog(sims, self._scan_stride_us / 1e6, self._us)
         outlines = [b.outline for b in self._order]
         offsets = np.cumsum([0] + [len(o) for o in outlines]).astype(np.int64)
         self._outlines = (np.ascontiguousarray(np.vstack(outlines), dtype=np.float64), offsets)
@@ -282,20 +283,18 @@ class Fleet:
         self._scan_due = [
             Simulator._due_us(s.scanner.due) for _, s in self._scanning if s.scanner is not None
         ]
+        self._scan_flush_us = self._scan_log.flush_at(min(self._scan_due))
 
     def _scan_step(self) -> None:
-        """Log every robot's pose now (every SCAN_POSE_PERIOD) and flush the scanners that are due."""
-        self._scan_next_us += self._scan_stride_us
-        rows = self._scan_log.rows
-        for pose in self._poses:
-            rows.extend(pose.tolist())
-        now, flushed = self._us, False
+        """Flush the scanners that are due (the robots' steps have just recorded their poses; all of
+        them when the pose logs are full) and trim the logs."""
+        log, now = self._scan_log, self._us
+        full = now >= log.start_us + (log.capacity - 1) * log.stride_us
         for k, (index, sim) in enumerate(self._scanning):
-            if now >= self._scan_due[k]:
-                self._scan_due[k] = sim.scan_flush(now, self._scan_log, index, self._outlines)
-                flushed = True
-        if flushed:
-            self._scan_log.trim(min(s.scanner.needs_from for _, s in self._scanning if s.scanner is not None))
+            if full or now >= self._scan_due[k]:
+                self._scan_due[k] = sim.scan_flush(now, log, index, self._outlines)
+        log.trim(min(s.scanner.needs_from for _, s in self._scanning if s.scanner is not None))
+        self._scan_flush_us = log.flush_at(min(self._scan_due))
 
     def _edges_except(self, name: str) -> FloatArray:
         """The footprint edges (K, 4) of every robot but ``name``, world frame, as they stood when

@@ -1,7 +1,8 @@
 """A simulated spinning 2D laser scanner (an RPLIDAR by default): rays cast as the revolution turns.
 
-Whoever steps the robot records its true pose every few steps in a :class:`PoseLog` (every 5 ms:
-the simulator for a robot alone; a fleet records every robot's pose in one log), and the scanner casts
+The robot's compiled step records its true pose every few steps (every 5 ms) in a log of its own
+(:func:`~omnibot.sim.kernels.pose_log`), read through a :class:`PoseLog` (a fleet's reads every
+robot's log, side by side), and the scanner casts
 the rays that have come due when asked (:meth:`LaserScanner.flush`), each from the pose its robot
 had at that ray's own time and against the other bodies of the log where they were at that time
 (linear between the recorded steps): a robot that moves or turns during a revolution gets a
@@ -26,16 +27,34 @@ however often it was flushed, and no other sensor's stream changes.
 from __future__ import annotations
 
 import math
-from array import array
 from collections.abc import Sequence
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
+from omnibot.errors import SimulationError
 from omnibot.motion import Pose2D
 from omnibot.robot import ScannerSpec
 from omnibot.scan import Scan
 from omnibot.sim import jit
+from omnibot.sim.kernels import layout
+from omnibot.sim.kernels.scan import (
+    P_DROPOUT,
+    P_DT,
+    P_INNER,
+    P_MOUNT_X,
+    P_MOUNT_Y,
+    P_NOISE_FRACTION,
+    P_NOISE_STD,
+    P_RANGE_MAX,
+    P_RANGE_MIN,
+    P_REACH,
+    P_RESOLUTION,
+    P_T0,
+    SCAN_BINS,
+    SCAN_PARAMS,
+)
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -43,38 +62,90 @@ IntArray = NDArray[np.int64]
 _EPS = 1e-9
 _NO_VERTICES = np.zeros((0, 2))
 _NO_BODIES = np.zeros(1, dtype=np.int64)
+_NO_RAYS = np.zeros(0)
+_NO_INDEX = (np.zeros(SCAN_BINS + 1, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0))
 INDEX_SLACK = 0.25
 """m: room the scanner's edge index leaves around the origins it was made for (see _index_for)."""
 
 
+SCAN_POSE_PERIOD = 0.005
+"""s: how often the compiled step records the pose while a scanner is on (every step if dt is
+longer). The rays' poses are linear between records: off by at most v w T^2 / 8 on a curve (31 um
+at 1 m/s and 10 rad/s), far below any scanner's noise (10 mm at 1 m)."""
+LOG_SPAN = 0.25
+"""s: the least time a pose log holds (:func:`pose_log_rows`); a scanner's log holds two of its
+revolutions if that is more."""
+
+
+def pose_log_rows(period: float, stride: float) -> int:
+    """Rows a pose log recorded every ``stride`` s needs for a scanner whose revolution lasts
+    ``period`` s (0: none; the log then serves the other scanners of a fleet): LOG_SPAN or two
+    revolutions, and a few strides to spare."""
+    return math.ceil(max(LOG_SPAN, 2.0 * period) / stride - _EPS) + 3
+
+
+class PoseSource(Protocol):
+    """A body whose compiled step records its pose (:func:`~omnibot.sim.kernels.pose_log`)."""
+
+    def pose_log(self) -> tuple[FloatArray, IntArray]:
+        """Its log's rows (capacity, 3) and the int state whose ``I_LOG_`` columns describe them."""
+        ...
+
+
 class PoseLog:
-    """Poses of ``bodies`` bodies recorded every ``dt`` seconds from ``start``: row j (time
-    ``start + j * dt``) is x, y, theta of body 0, then of body 1... kept flat in :attr:`rows` (the
-    recorder extends it with each body's pose in turn, one row per record)."""
+    """Poses of ``bodies`` recorded every ``dt`` seconds from ``start`` by their compiled steps, each
+    in its own log: row j (time ``start + j * dt``) is x, y, theta of body 0, then of body 1...
+    (:meth:`array`). The logs start together (each body's ``_pose_log_start``) and are trimmed
+    together (:meth:`trim`); ``start_us`` is ``start`` in whole us, for scheduling."""
 
-    def __init__(self, bodies: int, dt: float) -> None:
-        self.width = 3 * bodies
+    def __init__(self, bodies: Sequence[PoseSource], dt: float, start_us: int = 0) -> None:
+        self.bodies = list(bodies)
+        self.width = 3 * len(self.bodies)
         self.dt = dt
-        self.start = 0.0
-        self.rows = array("d")
-        """The rows, flat (a C array of doubles: extended from lists, seen by numpy without a copy)."""
-
-    def reset(self, t: float, poses: Sequence[float]) -> None:
-        """Start again at time ``t`` (s) with the poses (flat, every body's x, y, theta) then."""
-        self.start = t
-        self.rows = array("d", [float(c) for c in poses])
+        self.stride_us = round(dt * 1e6)
+        self.start = start_us / 1e6
+        self.start_us = start_us
+        self.capacity = min((len(b.pose_log()[0]) for b in self.bodies), default=0)
+        self._joined = np.zeros((0, self.width))
+        self._joined_key = (-1, -1)
 
     def array(self) -> FloatArray:
-        """The rows as an (H, 3 bodies) array (a copy)."""
-        return np.frombuffer(self.rows, dtype=np.float64).reshape(-1, self.width).copy()
+        """The rows as an (H, 3 bodies) array: a view of the body's log when there is one body, else
+        the bodies' logs side by side (made once per record: the scanners of a fleet flushed
+        together share it)."""
+        logs = [b.pose_log() for b in self.bodies]
+        si = logs[0][1]
+        n, key = int(si[layout.I_LOG_N]), (int(si[layout.I_LOG_N]), int(si[layout.I_LOG_NEXT]))
+        if n > self.capacity:
+            raise SimulationError(
+                f"the scanners' pose log overflowed ({n} rows in {self.capacity}): a flush came too late"
+            )
+        if len(logs) == 1:
+            return logs[0][0][:n]
+        if key != self._joined_key:
+            self._joined = np.concatenate([rows[:n] for rows, _ in logs], axis=1)
+            self._joined_key = key
+        return self._joined
 
     def trim(self, t: float) -> None:
         """Forget the rows older than the last one at or before time ``t`` (s)."""
+        logs = [b.pose_log() for b in self.bodies]
+        n = int(logs[0][1][layout.I_LOG_N])
         drop = math.floor((t - self.start) / self.dt + _EPS)
-        drop = min(max(drop, 0), len(self.rows) // self.width - 1)
+        drop = min(max(drop, 0), n - 1)
         if drop > 0:
-            del self.rows[: self.width * drop]
+            for rows, si in logs:
+                rows[: n - drop] = rows[drop:n]
+                si[layout.I_LOG_N] = n - drop
             self.start += drop * self.dt
+            self.start_us += drop * self.stride_us
+
+    def flush_at(self, due_us: int) -> int:
+        """When (us) to flush for a revolution due at ``due_us``: the first record at or after it, or
+        the one that fills the log if that comes first."""
+        stride = self.stride_us
+        tick = self.start_us + -(-(due_us - self.start_us) // stride) * stride
+        return min(tick, self.start_us + (self.capacity - 1) * stride)
 
 
 class LaserScanner:
@@ -102,9 +173,27 @@ class LaserScanner:
         self._cast_range = spec.range_max * stretch + 6.0 * spec.noise_std + spec.resolution
         self._true = np.full(n, math.inf)
         self._mount_reach = math.hypot(spec.x, spec.y)
-        self._index: tuple[IntArray, IntArray, FloatArray] | None = None
-        self._index_disc = (0.0, 0.0, 0.0)
+        self._index: tuple[IntArray, IntArray, FloatArray] = _NO_INDEX
         self._index_segments: FloatArray | None = None
+        self._params = np.zeros(SCAN_PARAMS)
+        """:func:`~omnibot.sim.kernels.scan_revolution`'s parameters (its ``P_`` columns)."""
+        self._params[[P_MOUNT_X, P_MOUNT_Y, P_REACH, P_INNER]] = spec.x, spec.y, self._cast_range, -1.0
+        self._params[P_NOISE_STD : P_RANGE_MAX + 1] = (
+            spec.noise_std, spec.noise_fraction, spec.resolution, spec.dropout, spec.range_min, spec.range_max,
+        )  # fmt: skip
+        self._draw_buffer = np.empty(3 * n)
+        self._template = Scan(
+            stamp=0.0,
+            angle_min=0.0,
+            angle_increment=self.angle_increment,
+            ranges=self._true,
+            range_min=spec.range_min,
+            range_max=spec.range_max,
+            time_increment=self.time_increment,
+            scan_time=self.period,
+            frame=spec.frame,
+            mount=self.mount,
+        )
         self.active = False
         self.revolution = 0
         """Index of the revolution being measured."""
@@ -158,45 +247,38 @@ class LaserScanner:
         The rays meet the world's edges ``segments`` (K, 4) and the other bodies of ``poses``
         (body ``own`` is the scanner's robot): ``bodies`` gives every body's outline in its own
         frame, packed (all vertices (V, 2), offsets (bodies + 1,)); None: the log holds only the robot.
+        A revolution is cast, measured and delivered in one compiled call
+        (:func:`~omnibot.sim.kernels.scan_revolution`) when its rays come due together (the usual flush).
         """
         if not self.active:
             return []
         body_v, body_off = bodies if bodies is not None else (_NO_VERTICES, _NO_BODIES)
         hist = poses.array()
+        params = self._params
+        params[P_T0], params[P_DT] = poses.start, poses.dt
+        if segments is not self._index_segments:
+            params[P_INNER] = -1.0  # the index is of other edges
         done: list[Scan] = []
         n = self.spec.rays
         while True:
             stamp = self.revolution * self.period
             end = stamp + self.period
-            if t >= end - _EPS:  # the whole revolution (the usual call: its end is the due time)
-                last = n
-            else:
-                last = int(np.searchsorted(self._offsets, t - stamp + _EPS, side="right"))
-            if last > self._next_ray:
-                first = self._next_ray
-                starts, entries, near = self._index_for(segments, hist, own)
-                jit.active.scan_rays(
-                    stamp + self._offsets[first:last],
-                    self._base_angles[first:last],
-                    poses.start,
-                    poses.dt,
-                    hist,
-                    own,
-                    float(self.mount.x),
-                    float(self.mount.y),
-                    segments,
-                    starts,
-                    entries,
-                    near,
-                    body_v,
-                    body_off,
-                    float(self._cast_range),
-                    self._true[first:last],
-                )
-                self._next_ray = last
-            if self._next_ray < n or t < end - _EPS:
+            whole = t >= end - _EPS  # the usual call: its end is the due time
+            last = n if whole else int(np.searchsorted(self._offsets, t - stamp + _EPS, side="right"))
+            measured = np.empty(n) if whole else _NO_RAYS
+            draws = self._draws(self.revolution) if whole else _NO_RAYS
+            first, cast = self._next_ray, last > self._next_ray
+            while cast and not jit.active.scan_revolution(
+                stamp, first, last, self._offsets, self._base_angles, hist, own, params, segments, *self._index,
+                body_v, body_off, self._true, draws, measured,
+            ):  # fmt: skip
+                self._index_for(segments, hist, own)
+            self._next_ray = last
+            if not whole:
                 break
-            done.append(self._deliver(stamp))
+            if not cast:  # every ray was cast by earlier flushes: measured here
+                self._measure(draws, measured)
+            done.append(self._deliver(stamp, measured))
             self.revolution += 1
             self._next_ray = 0
             if t < end + self.period - _EPS:
@@ -204,29 +286,19 @@ class LaserScanner:
         self.due = self.revolution * self.period + self.period
         return done
 
-    def _index_for(
-        self, segments: FloatArray, hist: FloatArray, own: int
-    ) -> tuple[IntArray, IntArray, FloatArray]:
-        """The edges by direction (:func:`~omnibot.sim.kernels.scan_index`) for origins anywhere the
-        scanner was in ``hist``: the last one while it holds them all (and the edges are the same),
-        else a new one around them with INDEX_SLACK to spare, so a robot driving at 1 m/s needs a new
-        one every few revolutions and a standing one never."""
-        xs, ys = hist[:, 3 * own], hist[:, 3 * own + 1]
-        ax, ay, radius = self._index_disc
-        if self._index is not None and segments is self._index_segments:
-            inner = radius - self._mount_reach
-            if inner > 0 and float(np.max((xs - ax) ** 2 + (ys - ay) ** 2)) <= inner * inner:
-                return self._index
-        ax, ay = float(xs.mean()), float(ys.mean())
-        spread = float(np.sqrt(np.max((xs - ax) ** 2 + (ys - ay) ** 2)))
-        radius = spread + self._mount_reach + INDEX_SLACK
-        self._index = jit.active.scan_index(segments, ax, ay, radius, float(self._cast_range))
-        self._index_disc = (ax, ay, radius)
+    def _index_for(self, segments: FloatArray, hist: FloatArray, own: int) -> None:
+        """A new edge index by direction for origins anywhere the scanner was in ``hist``, with
+        INDEX_SLACK to spare (:func:`~omnibot.sim.kernels.scan_index_around`; ``scan_revolution``
+        keeps it while it holds every origin and the edges are the same: a robot driving at 1 m/s
+        needs a new one every few revolutions and a standing one never)."""
+        self._index = jit.active.scan_index_around(
+            segments, hist, own, self._mount_reach, INDEX_SLACK, self._cast_range, self._params
+        )
         self._index_segments = segments
-        return self._index
 
     def _draws(self, revolution: int) -> FloatArray:
-        """The 3 * rays uniform draws of ``revolution`` (the stream jumped to it)."""
+        """The 3 * rays uniform draws of ``revolution`` (the stream jumped to it), in a buffer of the
+        scanner's own (overwritten by the next revolution's)."""
         size = 3 * self.spec.rays
         if revolution < self._stream_rev:  # back in the stream: from its start again
             self._bitgen = np.random.PCG64(np.random.SeedSequence(self._seed, spawn_key=(self._key,)))
@@ -235,34 +307,20 @@ class LaserScanner:
         if revolution > self._stream_rev:
             self._bitgen.advance((revolution - self._stream_rev) * size)
         self._stream_rev = revolution + 1
-        return self._gen.random(size)
+        return self._gen.random(size, out=self._draw_buffer)
 
-    def _deliver(self, stamp: float) -> Scan:
-        spec, n = self.spec, self.spec.rays
-        measured = np.empty(n)
+    def _measure(self, draws: FloatArray, measured: FloatArray) -> None:
+        """The revolution's true ranges measured into ``measured`` (:func:`~omnibot.sim.kernels.scan_measure`)."""
+        p = self._params
         jit.active.scan_measure(
-            self._true,
-            self._draws(self.revolution),
-            float(spec.noise_std),
-            float(spec.noise_fraction),
-            float(spec.resolution),
-            float(spec.dropout),
-            float(spec.range_min),
-            float(spec.range_max),
-            measured,
-        )
-        scan = Scan(
-            stamp=stamp,
-            angle_min=0.0,
-            angle_increment=self.angle_increment,
-            ranges=measured,
-            range_min=spec.range_min,
-            range_max=spec.range_max,
-            time_increment=self.time_increment,
-            scan_time=self.period,
-            frame=spec.frame,
-            mount=self.mount,
-        )
+            self._true, draws, p[P_NOISE_STD], p[P_NOISE_FRACTION], p[P_RESOLUTION], p[P_DROPOUT],
+            p[P_RANGE_MIN], p[P_RANGE_MAX], measured,
+        )  # fmt: skip
+
+    def _deliver(self, stamp: float, measured: FloatArray) -> Scan:
+        """The revolution that began at ``stamp``, measured, as a :class:`~omnibot.scan.Scan` (the
+        scanner's own checked once: :meth:`Scan.but <omnibot.scan.Scan.but>`)."""
+        scan = self._template.but(stamp, measured)
         self._true.fill(math.inf)
         self.last = scan
         self.scans += 1

@@ -8,11 +8,12 @@
                       |    wall/obstacle push-back force  (when the robot may touch something)
                       |    + hand pushes (push()) and applied forces (a fleet's contacts), in order
                       |    physics step
+                      |    pose log for the laser scanner (every 5 ms while someone wants scans)
                       |    tracking wheels, gyro (every step)
                       v
       encoders (when read) ; sonars (on ping, one compiled pass over the edges) ; listeners ;
-      collision events ; laser scanner (pose recorded every 5 ms while someone wants scans, rays
-      cast once per revolution; scan listeners)
+      collision events ; laser scanner (when the step says a revolution is due: one compiled
+      call casts and measures it; scan listeners)
 
 A step costs a few microseconds: everything above the line is one compiled kernel call on arrays
 (the physics' packed buffer, the world's packed geometry, the simulator's and the sensors' state
@@ -324,7 +325,7 @@ class Simulator(Contacts, SensorReadings, ScanFeed, Listeners, StepState):
             if self.gyro is not None:
                 self.gyro.refill(self.dt)
             self._sensors = self._sensor_arrays()
-        if self._scan_self and now_us + self._dt_us >= self._scan_next_us:
+        if status & layout.STEP_SCAN:
             self._scan_tick(now_us + self._dt_us)
         if self._listeners and now_us + self._dt_us >= self._next_notify_us:
             self._notify()
@@ -347,6 +348,11 @@ class Simulator(Contacts, SensorReadings, ScanFeed, Listeners, StepState):
         force = self._force if status & layout.STEP_FORCE else None
         self._physics.step(self._pwm, self._step_ids, force)
         state[:3], state[3:] = state[3:], self._twist_row
+        if self._si[layout.I_LOG_ON]:
+            pose = self._pose_row
+            status |= jit.active.pose_log(
+                self._sf, self._si, float(pose[0]), float(pose[1]), float(pose[2]), now_us
+            )
         return status | jit.active.robot_after(state, self.dt, *self._sensors)
 
     def _extra_forces(self, now_us: int) -> int:

@@ -4,11 +4,14 @@ and the revolutions handed to the scan listeners.
 A robot with a ``scanner`` has a :class:`~omnibot.sim.scanner.LaserScanner` (:attr:`ScanFeed.scanner`).
 It measures only while someone wants scans: a scan listener is registered
 (:meth:`ScanFeed.add_scan_listener`) or :attr:`ScanFeed.last_scan` has been read once; otherwise it
-costs one comparison per step. Scan listeners are called from the simulator's step (the stepping
-thread, in simulated time) with every revolution completed, as an :class:`omnibot.scan.Scan`. The
-scanner sees the world's walls and obstacles, never its own robot. In a fleet it sees the other
-robots where they were at each ray's time: the fleet records every robot's pose and flushes the
-scanners (:attr:`ScanFeed.scan_driver`). Bodies given by a simulator's ``neighbours`` of another
+costs one test per step in the compiled step. While it measures, the compiled step records the
+pose every SCAN_POSE_PERIOD in the simulator's own state (:func:`~omnibot.sim.kernels.pose_log`)
+and says (STEP_SCAN) when a revolution is due; the revolution is then cast and measured in one
+compiled call. Scan listeners are called from the simulator's step (the stepping thread, in
+simulated time) with every revolution completed, as an :class:`omnibot.scan.Scan`. The scanner
+sees the world's walls and obstacles, never its own robot. In a fleet it sees the other robots
+where they were at each ray's time: every robot's step records its pose, and the fleet reads the
+logs side by side and flushes the scanners (:attr:`ScanFeed.scan_driver`). Bodies given by a simulator's ``neighbours`` of another
 kind are seen as they stand when the rays are cast (every 20 ms then).
 """
 
@@ -25,16 +28,13 @@ from omnibot.errors import SimulationError
 from omnibot.robot import RobotDescription
 from omnibot.scan import Scan
 from omnibot.sim.clock import SimClock
-from omnibot.sim.scanner import LaserScanner, PoseLog
+from omnibot.sim.kernels import layout
+from omnibot.sim.scanner import SCAN_POSE_PERIOD, LaserScanner, PoseLog
 from omnibot.sim.truth import ScanListener
 from omnibot.sim.world import World
 
 FloatArray = NDArray[np.float64]
 
-SCAN_POSE_PERIOD = 0.005
-"""s: how often the pose is recorded for the scanner while it is on (every step if dt is longer).
-The rays' poses are linear between records: off by at most v w T^2 / 8 on a curve (31 um at 1 m/s
-and 10 rad/s), far below any scanner's noise (10 mm at 1 m), at a fifth of the cost of recording every step."""
 SCAN_OTHERS_EVERY = 0.02
 """s: how often a scanner with a simulator's ``neighbours`` but no :attr:`ScanFeed.scan_driver` casts
 the rays due, so that it sees those bodies at most this long after the rays' times (a fleet's
@@ -51,6 +51,11 @@ class ScanFeed:
     dt: float
     _dt_us: int
     _pose_row: FloatArray
+    _si: NDArray[np.int64]
+    _log_stride_us: int
+    pose_log: Callable[[], tuple[FloatArray, NDArray[np.int64]]]
+    _pose_log_start: Callable[[int], None]
+    _pose_log_stop: Callable[[], None]
     neighbours: Callable[[], FloatArray] | None
     scan_driver: Callable[[Self], None] | None
     """Who records the poses and flushes the scanner instead of the simulator (a fleet: see
@@ -63,11 +68,8 @@ class ScanFeed:
         self._scan_listeners: list[ScanListener] = []
         self._scan_asked = False
         self._scan_on = False
-        self._scan_self = False  # on, and recorded and flushed here (no scan_driver)
         self._scan_due_us = 0
-        self._scan_stride_us = max(1, round(SCAN_POSE_PERIOD / self.dt)) * self._dt_us
-        self._scan_next_us = 0
-        self._scan_log = PoseLog(1, self._scan_stride_us / 1e6)
+        self._scan_log = PoseLog([self], self._log_stride_us / 1e6)
 
     @property
     def scanner(self) -> LaserScanner | None:
@@ -115,11 +117,13 @@ class ScanFeed:
             sc.start(now_us / 1e6)
             self._scan_due_us = self._due_us(sc.due)
             if self.scan_driver is None:
-                self._scan_log.reset(now_us / 1e6, self._pose_row.tolist())
-                self._scan_next_us = now_us + self._scan_stride_us
+                self._pose_log_start(now_us)
+                self._scan_log = PoseLog([self], self._log_stride_us / 1e6, now_us)
+                self._si[layout.I_LOG_FLUSH] = self._scan_log.flush_at(self._scan_due_us)
         else:
             sc.stop()
-        self._scan_self = want and self.scan_driver is None
+            if self.scan_driver is None:
+                self._pose_log_stop()
         if self.scan_driver is not None:
             self.scan_driver(self)
 
@@ -173,13 +177,12 @@ class ScanFeed:
         return due
 
     def _scan_tick(self, now_us: int) -> None:
-        """Record the pose for the scanner (the robot alone) and flush it when due."""
-        self._scan_log.rows.extend(self._pose_row.tolist())
-        self._scan_next_us += self._scan_stride_us
-        if now_us >= self._scan_due_us:
-            assert self._scanner is not None
-            self.scan_flush(now_us, self._scan_log)
-            self._scan_log.trim(self._scanner.needs_from)
+        """Flush the scanner (the robot alone: its step has just recorded the pose) and trim the log."""
+        assert self._scanner is not None
+        log = self._scan_log
+        self.scan_flush(now_us, log)
+        log.trim(self._scanner.needs_from)
+        self._si[layout.I_LOG_FLUSH] = log.flush_at(self._scan_due_us)
 
 
 __all__ = ["SCAN_OTHERS_EVERY", "SCAN_POSE_PERIOD", "ScanFeed"]

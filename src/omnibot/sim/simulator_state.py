@@ -15,6 +15,7 @@ from omnibot.sim import kernels
 from omnibot.sim.kernels import layout
 from omnibot.sim.physics import Physics
 from omnibot.sim.physics_like import PhysicsLike
+from omnibot.sim.scanner import SCAN_POSE_PERIOD, pose_log_rows
 from omnibot.sim.sensors import Gyro, TrackingWheels
 from omnibot.sim.simulator_contacts import CONTACT_DAMPING, CONTACT_OMEGA_DT, CONTACT_RELEASE, WALL_FRICTION
 from omnibot.sim.world import World
@@ -40,6 +41,30 @@ class StepState:
     _pwm: FloatArray
     _pose_row: FloatArray
     _twist_row: FloatArray
+    _dt_us: int
+
+    @property
+    def _log_stride_us(self) -> int:
+        """How often (us) the compiled step records the pose for the laser scanners: every
+        SCAN_POSE_PERIOD, or every step if a step is longer."""
+        return max(1, round(SCAN_POSE_PERIOD / self.dt)) * self._dt_us
+
+    def pose_log(self) -> tuple[FloatArray, NDArray[np.int64]]:
+        """The pose log's rows (capacity, 3), a view of the float state, and the int state whose
+        ``I_LOG_`` columns describe it (:func:`~omnibot.sim.kernels.pose_log`)."""
+        return self._log_rows, self._si
+
+    def _pose_log_start(self, now_us: int) -> None:
+        """Start the pose log at ``now_us`` (the end of a step) with the pose now as its first row."""
+        rows, si = self.pose_log()
+        rows[0] = self._pose_row
+        si[layout.I_LOG_N], si[layout.I_LOG_NEXT] = 1, now_us + self._log_stride_us
+        si[layout.I_LOG_STRIDE], si[layout.I_LOG_DT] = self._log_stride_us, self._dt_us
+        si[layout.I_LOG_FLUSH], si[layout.I_LOG_ON] = 2**62, 1
+
+    def _pose_log_stop(self) -> None:
+        """Stop recording the pose (the compiled step then skips it)."""
+        self._si[layout.I_LOG_ON] = 0
 
     def _pack_step_state(self) -> None:
         """The compiled step's own state (kernels.robot_step): contact broad phase (no contact while
@@ -55,7 +80,10 @@ class StepState:
         si[layout.I_OWNERS], si[layout.I_SURFACES] = len(self.world.contact_owners), len(self._surface_map)
         si[layout.I_WALLS], si[layout.I_PATCHY] = self._walls, self._patchy
         si[layout.I_RELEASE] = round(CONTACT_RELEASE * 1e6)
-        of0, of1, of2, of3, of_end, oi0, oi1, oi2, oi3, oi_end = kernels.sim_offsets.py_func(si)
+        si[layout.I_LOG_CAP] = pose_log_rows(
+            robot.scanner.period if robot.scanner else 0.0, self._log_stride_us / 1e6
+        )
+        of0, of1, of2, of3, of4, of_end, oi0, oi1, oi2, oi3, oi_end = kernels.sim_offsets.py_func(si)
         self._si = np.zeros(oi_end, dtype=np.int64)
         self._si[: layout.I_HEADER] = si
         self._si[oi0:oi1] = layout.NEVER
@@ -67,7 +95,8 @@ class StepState:
         sf[layout.F_CLEAR], sf[layout.F_SURF_CLEAR] = -1.0, -1.0
         sf[layout.F_REACH] = max(math.hypot(*wh.position) for wh in robot.wheels)
         sf[of0:of1] = self._outline.ravel()
-        sf[of3:of_end] = np.array([wh.position for wh in robot.wheels], dtype=float).ravel()
+        sf[of3:of4] = np.array([wh.position for wh in robot.wheels], dtype=float).ravel()
+        self._log_rows = sf[of4:of_end].reshape(-1, 3)
         self._contact_out = sf[of1:of2].reshape(n_rows, 6)
         self._contact_speed = sf[of2:of3]
         self._new_contact = self._si[oi1:oi2]
@@ -108,7 +137,8 @@ class StepState:
         self._sf, self._si, self._step_ids = sf, si, ids
         if self._patchy:
             self._ids = ids
-        _, of1, of2, of3, _, _, oi1, oi2, _, _ = kernels.sim_offsets.py_func(si)
+        _, of1, of2, of3, of4, of_end, _, oi1, oi2, _, _ = kernels.sim_offsets.py_func(si)
+        self._log_rows = sf[of4:of_end].reshape(-1, 3)
         self._contact_out = sf[of1:of2].reshape(-1, 6)
         self._contact_speed = sf[of2:of3]
         self._new_contact = si[oi1:oi2]

@@ -30,5 +30,5 @@ def test_warm_up_compiles_what_the_simulator_calls() -> None:
     scans: list[Scan] = []
     sim.add_scan_listener(scans.append)
     sim.advance(0.25)
-    assert scans  # scan_index, scan_rays, scan_measure
+    assert scans  # scan_revolution, scan_index_around, pose_log
     assert [len(k.signatures) for k in kernels.KERNELS] == [1] * len(kernels.KERNELS)

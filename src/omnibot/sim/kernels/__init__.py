@@ -7,7 +7,7 @@
 * :mod:`~omnibot.sim.kernels.sensors`: the gyro and the tracking wheels;
 * :mod:`~omnibot.sim.kernels.step`: one robot's whole step (:func:`robot_step`, its parts
   :func:`robot_before` and :func:`robot_after`) and a fleet's (:func:`fleet_step`);
-* :mod:`~omnibot.sim.kernels.scan`: the laser scanner (``scan_*``);
+* :mod:`~omnibot.sim.kernels.scan`: the laser scanner (``scan_*``, and :func:`pose_log` its poses);
 * :mod:`~omnibot.sim.kernels.lanes`: the batch physics in vector lanes (``Physics.run(exact=False)``),
   with its own vectorisable ``tanh``, ``sin`` and ``cos`` (:mod:`~omnibot.sim.kernels.libm`);
 * :mod:`~omnibot.sim.kernels.layout`: the column indices and packed-buffer offsets they share;
@@ -34,7 +34,14 @@ their plain-Python twins while a first start compiles them in another process.
 import omnibot.sim.kernels.cache  # noqa: F401 - before any kernel: each cached with the whole family' stamp
 from omnibot.sim.kernels.contacts import cone_distance, outline_contacts, surface_probe
 from omnibot.sim.kernels.layout import physics_offsets, physics_views, sim_offsets, world_offsets
-from omnibot.sim.kernels.scan import scan_index, scan_measure, scan_rays
+from omnibot.sim.kernels.scan import (
+    pose_log,
+    scan_index,
+    scan_index_around,
+    scan_measure,
+    scan_rays,
+    scan_revolution,
+)
 from omnibot.sim.kernels.sensors import gyro_measure, gyro_update, tracking_update
 from omnibot.sim.kernels.step import fleet_step, robot_after, robot_before, robot_step
 from omnibot.sim.kernels.warm import KERNELS, SIMULATOR_KERNELS, warm_up, warm_up_calls
@@ -58,13 +65,16 @@ __all__ = [
     "physics_step",
     "physics_step_parallel",
     "physics_views",
+    "pose_log",
     "robot_after",
     "robot_before",
     "robot_step",
     "scan",
     "scan_index",
+    "scan_index_around",
     "scan_measure",
     "scan_rays",
+    "scan_revolution",
     "sensors",
     "sim_offsets",
     "solve_body",

@@ -65,7 +65,7 @@ G_COLUMNS = 14
 T_SLIP, T_NEXT, T_HEADER, T_WHEEL = 0, 1, 2, 5
 
 # the simulator's float state (sf): header, then outline (V, 2), contact rows (C, 6), contact
-# speeds (C,), wheel positions (m, 2)
+# speeds (C,), wheel positions (m, 2), pose log (I_LOG_CAP, 3)
 F_MASS, F_INERTIA, F_OMEGA, F_DAMPING, F_WALL_FRICTION = 0, 1, 2, 3, 4
 F_CLEAR_X, F_CLEAR_Y, F_CLEAR = 5, 6, 7
 F_SURF_X, F_SURF_Y, F_SURF_TH, F_SURF_CLEAR, F_REACH = 8, 9, 10, 11, 12
@@ -74,7 +74,12 @@ F_HEADER = 16
 # its int state (si): header, then last touch (us) per world owner, new-collision flags (C,),
 # world surface id -> physics surface id, surface ids of the last probe (m,)
 I_V, I_C, I_M, I_OWNERS, I_SURFACES, I_COUNT, I_WALLS, I_PATCHY, I_RELEASE = 0, 1, 2, 3, 4, 5, 6, 7, 8
-I_HEADER = 9
+# the pose log for the laser scanners (sf's last section, I_LOG_CAP rows of x, y, theta): the step
+# records its end pose as row I_LOG_N when it ends at or after I_LOG_NEXT (us), then I_LOG_NEXT
+# moves on by I_LOG_STRIDE, and says STEP_SCAN when that end is at or after I_LOG_FLUSH (us); only
+# while I_LOG_ON; I_LOG_DT: the step's length, us
+I_LOG_ON, I_LOG_N, I_LOG_CAP, I_LOG_NEXT, I_LOG_STRIDE, I_LOG_DT, I_LOG_FLUSH = 9, 10, 11, 12, 13, 14, 15
+I_HEADER = 16
 NEVER = -(2**62)
 """A last-touch time meaning 'never touched'."""
 # the world's packed geometry: wf floats solid_v (V, 2), solid_c (K, 2), solid_r (K,), thin_v (2E, 2),
@@ -82,8 +87,8 @@ NEVER = -(2**62)
 # thin_owner (E), patch_off (Q + 1), patch_sid (Q)
 WORLD_HEADER = 5
 
-# robot_step status bits
-STEP_BAD_SURFACE, STEP_COLLISION, STEP_REFILL, STEP_FORCE = 1, 2, 4, 8
+# robot_step status bits (STEP_SCAN: the pose log recorded a row at or after its flush time)
+STEP_BAD_SURFACE, STEP_COLLISION, STEP_REFILL, STEP_FORCE, STEP_SCAN = 1, 2, 4, 8, 16
 
 # a fleet's layout (fleet_step): one row per robot, where its arrays lie in the fleet's buffers
 (
@@ -161,18 +166,19 @@ def world_offsets(wi: IntArray) -> tuple[int, int, int, int, int, int, int, int,
 
 
 @njit(cache=True)
-def sim_offsets(si: IntArray) -> tuple[int, int, int, int, int, int, int, int, int, int]:
+def sim_offsets(si: IntArray) -> tuple[int, int, int, int, int, int, int, int, int, int, int]:
     """Where each array of the simulator's state starts: (outline, contact rows, contact speeds,
-    wheel positions, end of sf; last touch, new flags, surface map, probed ids, end of si)."""
+    wheel positions, pose log, end of sf; last touch, new flags, surface map, probed ids, end of si)."""
     nv, nc, m = si[I_V], si[I_C], si[I_M]
     f0 = F_HEADER
     f1 = f0 + 2 * nv
     f2 = f1 + 6 * nc
     f3 = f2 + nc
     f4 = f3 + 2 * m
+    f5 = f4 + 3 * si[I_LOG_CAP]
     i0 = I_HEADER
     i1 = i0 + si[I_OWNERS]
     i2 = i1 + nc
     i3 = i2 + si[I_SURFACES]
     i4 = i3 + m
-    return f0, f1, f2, f3, f4, i0, i1, i2, i3, i4
+    return f0, f1, f2, f3, f4, f5, i0, i1, i2, i3, i4

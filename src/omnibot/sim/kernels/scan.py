@@ -10,10 +10,47 @@ import numpy as np
 from numba import njit
 
 from omnibot.sim.kernels.contacts import segment_distance
-from omnibot.sim.kernels.layout import FloatArray, IntArray
+from omnibot.sim.kernels.layout import (
+    I_LOG_CAP,
+    I_LOG_DT,
+    I_LOG_FLUSH,
+    I_LOG_N,
+    I_LOG_NEXT,
+    I_LOG_STRIDE,
+    STEP_SCAN,
+    FloatArray,
+    IntArray,
+    sim_offsets,
+)
 
 SCAN_BINS = 256
 """Directions of a :func:`scan_index`: the circle is cut into this many equal sectors."""
+
+# scan_revolution's parameters (one float64 array): the pose history's start and step, the mount, the
+# cast's reach, the edge index's disc (centre, and how far the origins may lie from it: < 0, no
+# index), the measurement's noise and limits (scan_measure's)
+P_T0, P_DT, P_MOUNT_X, P_MOUNT_Y, P_REACH, P_AX, P_AY, P_INNER = 0, 1, 2, 3, 4, 5, 6, 7
+P_NOISE_STD, P_NOISE_FRACTION, P_RESOLUTION, P_DROPOUT, P_RANGE_MIN, P_RANGE_MAX = 8, 9, 10, 11, 12, 13
+SCAN_PARAMS = 14
+
+
+@njit(cache=True)
+def pose_log(sf: FloatArray, si: IntArray, x: float, y: float, th: float, now_us: int) -> int:
+    """Record (x, y, th), the pose at the end of the step that began at ``now_us``, as the next row of
+    the simulator's pose log when that end is at or after I_LOG_NEXT (the ``I_LOG_`` columns of
+    :mod:`~omnibot.sim.kernels.layout`); STEP_SCAN if it did and the end is at or after I_LOG_FLUSH
+    (the scanner is due), else 0. A row past the log's capacity is counted, not written (whoever
+    reads the log raises)."""
+    end = now_us + si[I_LOG_DT]
+    if end < si[I_LOG_NEXT]:
+        return 0
+    n = si[I_LOG_N]
+    if n < si[I_LOG_CAP]:
+        o = sim_offsets(si)[4] + 3 * n
+        sf[o], sf[o + 1], sf[o + 2] = x, y, th
+    si[I_LOG_N] = n + 1
+    si[I_LOG_NEXT] += si[I_LOG_STRIDE]
+    return STEP_SCAN if end >= si[I_LOG_FLUSH] else 0
 
 
 @njit(cache=True)
@@ -24,15 +61,20 @@ def _turn(a: float) -> float:
 
 @njit(cache=True)
 def _hit(ox: float, oy: float, dx: float, dy: float, x0: float, y0: float, x1: float, y1: float) -> float:
-    """Distance along the ray (ox, oy) + t (dx, dy) to the edge (x0, y0)-(x1, y1), inf if it misses."""
+    """Distance along the ray (ox, oy) + t (dx, dy) to the edge (x0, y0)-(x1, y1), inf if it misses.
+
+    The edge's parameter u = un / denom must lie in [0, 1]: tested as un against 0 and denom, which
+    a correctly rounded division orders alike (so no division for an edge the ray passes beside)."""
     ex, ey = x1 - x0, y1 - y0
     denom = dx * ey - dy * ex
     if abs(denom) < 1e-12:
         return np.inf
     ax, ay = x0 - ox, y0 - oy
+    un = ax * dy - ay * dx
+    if (un < 0.0 or un > denom) if denom > 0.0 else (un > 0.0 or un < denom):
+        return np.inf
     t = (ax * ey - ay * ex) / denom
-    u = (ax * dy - ay * dx) / denom
-    return t if t >= 0.0 and 0.0 <= u <= 1.0 else np.inf
+    return t if t >= 0.0 else np.inf
 
 
 @njit(cache=True)
@@ -90,6 +132,29 @@ def scan_index(
 
 
 @njit(cache=True)
+def scan_index_around(
+    segments: FloatArray, hist_p: FloatArray, own: int, reach: float, slack: float, max_range: float,
+    params: FloatArray,
+) -> tuple[IntArray, IntArray, FloatArray]:  # fmt: skip
+    """:func:`scan_index` for a scanner ``reach`` from the origin of body ``own`` anywhere it was over
+    the rows of ``hist_p``, with ``slack`` to spare: the disc about their mean that holds them all,
+    widened by reach and slack; the disc's centre and how far the robot may go from it (its radius
+    less reach) into params[P_AX], params[P_AY], params[P_INNER] (:func:`scan_revolution`'s)."""
+    c0 = 3 * own
+    n = hist_p.shape[0]
+    ax = ay = 0.0
+    for j in range(n):
+        ax, ay = ax + hist_p[j, c0], ay + hist_p[j, c0 + 1]
+    ax, ay = ax / n, ay / n
+    spread = 0.0
+    for j in range(n):
+        spread = max(spread, math.hypot(hist_p[j, c0] - ax, hist_p[j, c0 + 1] - ay))
+    radius = spread + reach + slack
+    params[P_AX], params[P_AY], params[P_INNER] = ax, ay, radius - reach
+    return scan_index(segments, ax, ay, radius, max_range)
+
+
+@njit(cache=True)
 def _wrap(a: float) -> float:
     """a wrapped to [-pi, pi)."""
     return a - 2.0 * math.pi * math.floor((a + math.pi) / (2.0 * math.pi))
@@ -131,6 +196,8 @@ def _ray_origin(
     """(x, y, world angle) of a ray from the scanner at (mount_x, mount_y) on the robot whose pose
     is history columns c0..c0+2, a fraction f from row k to k1, in direction a of its base frame."""
     x, y, th = _lerp(hist_p, k, k1, f, c0), _lerp(hist_p, k, k1, f, c0 + 1), _lerp(hist_p, k, k1, f, c0 + 2)
+    if mount_x == 0.0 and mount_y == 0.0:  # on the robot's origin: the same numbers, no cos and sin
+        return x, y, th + a
     c, s = math.cos(th), math.sin(th)
     return x + c * mount_x - s * mount_y, y + s * mount_x + c * mount_y, th + a
 
@@ -154,17 +221,46 @@ def _outline_hit(
 @njit(cache=True, inline="always")
 def _body_hit(
     hist_p: FloatArray, k: int, k1: int, f: float, cb: int, ox: float, oy: float, dx: float, dy: float,
-    r: float, body_v: FloatArray, span: IntArray, best: float,
+    r: float, body_v: FloatArray, v0: int, v1: int, best: float,
 ) -> float:  # fmt: skip
     """``best``, or the distance along the ray from (ox, oy) in direction (dx, dy) to the outline
-    body_v[span[0]:span[1]] (bounding radius r) of the body whose pose is history columns cb..cb+2,
-    a fraction f from row k to k1, if nearer."""
+    body_v[v0:v1] (bounding radius r) of the body whose pose is history columns cb..cb+2, a
+    fraction f from row k to k1, if nearer."""
     rx, ry = _lerp(hist_p, k, k1, f, cb) - ox, _lerp(hist_p, k, k1, f, cb + 1) - oy
     along = rx * dx + ry * dy
     if along + r < 0.0 or along - r > best or abs(rx * dy - ry * dx) > r:
         return best  # its bounding circle is behind, beyond the best hit or beside the ray
     bt = _lerp(hist_p, k, k1, f, cb + 2)
-    return _outline_hit(rx, ry, dx, dy, bt, body_v, span[0], span[1], best)
+    return _outline_hit(rx, ry, dx, dy, bt, body_v, v0, v1, best)
+
+
+@njit(cache=True, inline="always")
+def _cast(
+    t: float, a: float, hist_t0: float, hist_dt: float, hist_p: FloatArray, own: int, mount_x: float,
+    mount_y: float, segments: FloatArray, starts: IntArray, entries: IntArray, near: FloatArray,
+    body_v: FloatArray, body_off: IntArray, body_r: FloatArray, max_range: float,
+) -> float:  # fmt: skip
+    """True range of one ray of :func:`scan_rays` (measured at time t in direction a; body_r: each
+    body's bounding radius, :func:`_body_radii`)."""
+    k, k1, f = _bracket(t, hist_t0, hist_dt, hist_p.shape[0])
+    ox, oy, ang = _ray_origin(hist_p, k, k1, f, 3 * own, mount_x, mount_y, a)
+    dx, dy = math.cos(ang), math.sin(ang)
+    # its sector by multiplying, not dividing: a ray on a sector's border may be given either one,
+    # and either lists every edge it can meet (scan_index widens each edge's angles by 1e-9 rad)
+    turns = ang * (0.5 / math.pi)
+    sector = min(int((turns - math.floor(turns)) * SCAN_BINS), SCAN_BINS - 1)
+    best = np.inf
+    for q in range(starts[sector], starts[sector + 1]):
+        e = entries[q]
+        if near[e] > best:
+            break
+        best = min(best, _hit(ox, oy, dx, dy, segments[e, 0], segments[e, 1], segments[e, 2], segments[e, 3]))
+    for b in range(body_off.shape[0] - 1):
+        if b != own:
+            best = _body_hit(
+                hist_p, k, k1, f, 3 * b, ox, oy, dx, dy, body_r[b], body_v, body_off[b], body_off[b + 1], best
+            )
+    return best if best <= max_range else np.inf
 
 
 @njit(cache=True)
@@ -201,30 +297,12 @@ def scan_rays(
     every origin); a body only if its bounding circle meets the ray. The result is the same as
     testing everything.
     """
-    n = ray_t.shape[0]
-    n_hist = hist_p.shape[0]
-    n_body = body_off.shape[0] - 1
     body_r = _body_radii(body_v, body_off)
-    c0 = 3 * own
-    width = 2.0 * math.pi / SCAN_BINS
-    for i in range(n):
-        k, k1, f = _bracket(ray_t[i], hist_t0, hist_dt, n_hist)
-        ox, oy, ang = _ray_origin(hist_p, k, k1, f, c0, mount_x, mount_y, ray_a[i])
-        dx, dy = math.cos(ang), math.sin(ang)
-        sector = min(int(_turn(ang) / width), SCAN_BINS - 1)
-        best = np.inf
-        for q in range(starts[sector], starts[sector + 1]):
-            e = entries[q]
-            if near[e] > best:
-                break
-            t = _hit(ox, oy, dx, dy, segments[e, 0], segments[e, 1], segments[e, 2], segments[e, 3])
-            best = min(best, t)
-        for b in range(n_body):
-            if b != own:
-                best = _body_hit(
-                    hist_p, k, k1, f, 3 * b, ox, oy, dx, dy, body_r[b], body_v, body_off[b : b + 2], best
-                )
-        out[i] = best if best <= max_range else np.inf
+    for i in range(ray_t.shape[0]):
+        out[i] = _cast(
+            ray_t[i], ray_a[i], hist_t0, hist_dt, hist_p, own, mount_x, mount_y, segments, starts, entries, near,
+            body_v, body_off, body_r, max_range,
+        )  # fmt: skip
 
 
 @njit(cache=True)
@@ -254,3 +332,59 @@ def scan_measure(
         if resolution > 0.0:
             v = round(v / resolution) * resolution
         out[i] = v if range_min <= v <= range_max else np.inf
+
+
+@njit(cache=True)
+def _index_holds(hist_p: FloatArray, c0: int, ax: float, ay: float, inner: float) -> bool:
+    """Whether every origin of history columns c0, c0 + 1 lies within ``inner`` of (ax, ay)."""
+    if not inner > 0.0:
+        return False
+    for j in range(hist_p.shape[0]):
+        dx, dy = hist_p[j, c0] - ax, hist_p[j, c0 + 1] - ay
+        if dx * dx + dy * dy > inner * inner:
+            return False
+    return True
+
+
+@njit(cache=True)
+def scan_revolution(
+    stamp: float,
+    first: int,
+    last: int,
+    offsets: FloatArray,
+    angles: FloatArray,
+    hist_p: FloatArray,
+    own: int,
+    params: FloatArray,
+    segments: FloatArray,
+    starts: IntArray,
+    entries: IntArray,
+    near: FloatArray,
+    body_v: FloatArray,
+    body_off: IntArray,
+    true: FloatArray,
+    draws: FloatArray,
+    measured: FloatArray,
+) -> bool:
+    """Rays ``first`` to ``last - 1`` of the revolution that began at ``stamp`` (ray i measured at
+    stamp + offsets[i] in direction angles[i] of the robot's base frame) cast as :func:`scan_rays`
+    casts them (the ``P_`` columns of ``params``) into true[first:last]; then, given ``draws`` (3 per
+    ray; none: the revolution goes on), the whole revolution measured from ``true`` into ``measured``
+    (:func:`scan_measure`). The scanner's origins over the rows of ``hist_p`` must lie within
+    params[P_INNER] of (params[P_AX], params[P_AY]), the disc the edge index holds: else nothing is
+    done and False returned (the caller builds an index for them and calls again)."""
+    if not _index_holds(hist_p, 3 * own, params[P_AX], params[P_AY], params[P_INNER]):
+        return False
+    body_r = _body_radii(body_v, body_off)
+    t0, dt, mx, my, reach = params[P_T0], params[P_DT], params[P_MOUNT_X], params[P_MOUNT_Y], params[P_REACH]
+    for i in range(first, last):
+        true[i] = _cast(
+            stamp + offsets[i], angles[i], t0, dt, hist_p, own, mx, my, segments, starts, entries, near, body_v,
+            body_off, body_r, reach,
+        )  # fmt: skip
+    if draws.shape[0]:
+        scan_measure(
+            true, draws, params[P_NOISE_STD], params[P_NOISE_FRACTION], params[P_RESOLUTION], params[P_DROPOUT],
+            params[P_RANGE_MIN], params[P_RANGE_MAX], measured,
+        )  # fmt: skip
+    return True

@@ -37,6 +37,7 @@ from omnibot.sim.kernels.layout import (
     G_PERIOD,
     I_C,
     I_COUNT,
+    I_LOG_ON,
     I_M,
     I_PATCHY,
     I_RELEASE,
@@ -74,6 +75,7 @@ from omnibot.sim.kernels.layout import (
     sim_offsets,
     world_offsets,
 )
+from omnibot.sim.kernels.scan import pose_log
 from omnibot.sim.kernels.sensors import gyro_update, tracking_update
 from omnibot.sim.kernels.wheels import ids_valid, robot_physics
 
@@ -97,7 +99,7 @@ def _floor_ids(
 ) -> None:
     """The floor's surface id under each wheel into ids, when the robot moved far enough since the
     last lookup that a wheel may have changed patch (and the lookup's pose and clearance into sf)."""
-    _, _, _, of3, _, _, _, oi2, oi3, _ = sim_offsets(si)
+    _, _, _, of3, _, _, _, _, oi2, oi3, _ = sim_offsets(si)
     m = si[I_M]
     moved = math.hypot(x - sf[F_SURF_X], y - sf[F_SURF_Y]) + abs(th - sf[F_SURF_TH]) * sf[F_REACH]
     if moved >= sf[F_SURF_CLEAR] - 1e-9:
@@ -130,7 +132,7 @@ def _wall_forces(
 ) -> tuple[float, float, float, int]:  # fmt: skip
     """The world's push-back on the body (fx, fy, tz, world frame) and STEP_COLLISION when a contact
     is fresh; the contacts are looked up again only once the robot left their clearance."""
-    of0, of1, of2, _, _, oi0, oi1, _, _, _ = sim_offsets(si)
+    of0, of1, of2, _, _, _, oi0, oi1, _, _, _ = sim_offsets(si)
     status = 0
     fx = fy = tz = 0.0
     dx, dy = x - sf[F_CLEAR_X], y - sf[F_CLEAR_Y]
@@ -252,7 +254,8 @@ def robot_step(
 ) -> int:
     """One whole step of one robot alone (a :class:`omnibot.sim.simulator.Simulator`): the floor
     under its wheels, the push-back of the walls and obstacles it touches plus ``extra`` forces
-    (rows added in order), the physics (state packed in ``pbuf``: :func:`physics_views`), and the
+    (rows added in order), the physics (state packed in ``pbuf``: :func:`physics_views`), the pose
+    log of the laser scanners (:func:`~omnibot.sim.kernels.scan.pose_log`, while it is on), and the
     gyro and tracking wheels. Returns the STEP_ status bits (STEP_BAD_SURFACE: nothing moved)."""
     pose, q, wheel_angle, current, traction, battery, v_open, pwm, ext, wp, rp, surf = physics_views(
         pbuf, 1, m, n_surf
@@ -268,6 +271,8 @@ def robot_step(
         0, pose, q, wheel_angle, current, traction, battery, v_open, pwm, ids, ext, has_ext, wp, rp, surf, dt,
         scratch,
     )  # fmt: skip
+    if si[I_LOG_ON]:
+        status |= pose_log(sf, si, pose[0, 0], pose[0, 1], pose[0, 2], now_us)
     return status | _after_physics(
         vx0, vy0, w0, q[0, 0], q[0, 1], q[0, 2], dt, gyro, gyro_normals, tracking, tracking_normals
     )

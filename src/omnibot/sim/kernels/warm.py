@@ -27,7 +27,16 @@ from omnibot.sim.kernels.layout import (
     physics_offsets,
     sim_offsets,
 )
-from omnibot.sim.kernels.scan import SCAN_BINS, scan_index, scan_measure, scan_rays
+from omnibot.sim.kernels.scan import (
+    SCAN_BINS,
+    SCAN_PARAMS,
+    pose_log,
+    scan_index,
+    scan_index_around,
+    scan_measure,
+    scan_rays,
+    scan_revolution,
+)
 from omnibot.sim.kernels.sensors import gyro_measure, gyro_update, tracking_update
 from omnibot.sim.kernels.step import fleet_step, robot_after, robot_before, robot_step
 from omnibot.sim.kernels.wheels import contact_speeds, physics_step, physics_step_parallel
@@ -37,15 +46,16 @@ SIMULATOR_KERNELS = (
     robot_step,
     fleet_step,
     cone_distance,
-    scan_index,
-    scan_rays,
     scan_measure,
+    scan_revolution,
+    scan_index_around,
+    pose_log,
 )
 """The kernels a simulator of one robot calls (the helpers they call compile with them; Python
 calls :func:`physics_offsets` and :func:`sim_offsets` as plain Python, their ``py_func``)."""
 KERNELS = (
     *SIMULATOR_KERNELS, physics_step, contact_speeds, surface_probe, robot_before, robot_after, gyro_update,
-    gyro_measure, tracking_update,
+    gyro_measure, tracking_update, scan_index, scan_rays,
 )  # fmt: skip
 """Every serial kernel (:func:`physics_step_parallel`, for batches, compiles on its first call)."""
 
@@ -85,6 +95,9 @@ def warm_up_calls() -> list[tuple[Any, Callable[[], object]]]:
         f(int(physics_offsets.py_func(1, 1, 0)[-1])), i(1, 1), 1, 0, f(0), no_world, f(F_HEADER), si_full,
         f(1, 3), 0, f(0), f(0), f(2), f(0), 0, 0.001,
     )  # fmt: skip
+    revolution = (
+        0.0, 0, 0, f(0), f(0), f(1, 3), 0, f(SCAN_PARAMS), f(0, 4), *index, f(0, 2), i(2), f(0), f(0), f(0),
+    )  # fmt: skip
     calls: dict[Any, Callable[[], object]] = {
         outline_contacts: lambda: outline_contacts(
             triangle, 0.0, 0.0, 0.0, f(0, 2), i(1), f(0, 2), f(0), i(0), f(0, 2), i(0), f(0, 6)
@@ -99,6 +112,9 @@ def warm_up_calls() -> list[tuple[Any, Callable[[], object]]]:
             f(0), f(0), 0.0, 0.001, f(1, 3), 0, 0.0, 0.0, f(0, 4), *index, f(0, 2), i(2), 1.0, f(0)
         ),
         scan_measure: lambda: scan_measure(f(0), f(0), 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, f(0)),
+        scan_revolution: lambda: scan_revolution(*revolution),
+        scan_index_around: lambda: scan_index_around(f(0, 4), f(1, 3), 0, 0.0, 1.0, 1.0, f(SCAN_PARAMS)),
+        pose_log: lambda: pose_log(f(F_HEADER), si_full, 0.0, 0.0, 0.0, -(2**40)),
         physics_step: _physics_call,
         contact_speeds: lambda: contact_speeds(f(0, 3), f(0, 0, W_COLUMNS), f(0, 0, 2)),
         surface_probe: lambda: surface_probe(f(0, 2), f(0, 2), i(1), i(0), i(0)),
