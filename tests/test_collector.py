@@ -17,11 +17,11 @@ def freezes(monkeypatch: pytest.MonkeyPatch) -> Iterator[list[int]]:
     thresholds as they were afterwards, whatever the test left."""
     calls: list[int] = []
     monkeypatch.setattr(gc, "freeze", lambda: calls.append(1))
+    monkeypatch.setattr(collector, "_HOLD", collector._Hold())
     before = gc.get_threshold()
     try:
         yield calls
     finally:
-        collector._restore(freeze=False)
         gc.set_threshold(*before)
 
 
@@ -43,16 +43,16 @@ def test_a_release_without_a_hold_changes_nothing(freezes: list[int]) -> None:
     assert freezes == [] and gc.get_threshold() == before and not collector.held()
 
 
-def test_a_start_that_no_loop_released_restores_without_freezing(freezes: list[int]) -> None:
+def test_a_start_releases_at_its_end_unless_its_loop_did(freezes: list[int]) -> None:
     before = gc.get_threshold()
     with pytest.raises(RuntimeError), collector.starting():
         assert collector.held()
         raise RuntimeError("the command failed")
-    assert not collector.held() and gc.get_threshold() == before and freezes == []
+    assert not collector.held() and gc.get_threshold() == before and freezes == [1]
     with collector.starting():
         collector.release()  # the command's loop began
-        assert gc.get_threshold() == before
-    assert freezes == [1] and gc.get_threshold() == before
+        assert gc.get_threshold() == before and freezes == [1, 1]
+    assert freezes == [1, 1] and gc.get_threshold() == before
 
 
 def test_only_the_processs_own_command_line_holds(
@@ -66,4 +66,4 @@ def test_only_the_processs_own_command_line_holds(
 
     monkeypatch.setattr(cli, "_main", command)
     assert cli.main() == 0 and cli.main(["robot", "list"]) == 0
-    assert seen == [True, False] and not collector.held() and freezes == []
+    assert seen == [True, False] and not collector.held() and freezes == [1]

@@ -4,17 +4,23 @@ built frozen out of its sight.
 A command's start imports about a thousand modules and builds their classes, numba's registries,
 pydantic's models and the simulator: some 160,000 objects that live as long as the process. With
 CPython's default thresholds (700, 10, 10) the collector runs about 400 times while they are made,
-young objects each time, now and then all of them: 0.25-0.35 s of the 1.5-1.9 s of CPU an
-``omnibot ros2 --port sim://omni4`` start takes (BENCHMARKS.md, "Start-up"). So the process's own
-command line (:func:`omnibot.cli.main` without ``argv``) starts under :func:`starting`: a collection
+young objects each time, now and then all of them: 0.3-0.4 s of the 1.9-2.1 s of CPU an
+``omnibot ros2 --port sim://omni4`` start took (BENCHMARKS.md, "Start-up"). So the process's own
+command line (:func:`omnibot.cli.main` without ``argv``) runs under :func:`starting`: a collection
 only every :data:`START_THRESHOLD` new objects. A command whose work is a loop ends its start with
 :func:`release` as the loop begins (:meth:`omnibot.runtime.Runtime.run`, the pty bridges'
 :func:`~omnibot.transport.pty_bridge.serve_together`): what the start built is frozen (``gc.freeze``:
-never scanned again; the few thousand objects of its cyclic garbage stay with it) and the default
-thresholds come back, so the loop neither rescans the start's objects nor waits on long collections.
-A command that never releases keeps collecting, every :data:`START_THRESHOLD` objects, until it ends.
+not scanned again while the process runs, so any of it that becomes cyclic garbage meanwhile waits,
+at most the start's own size) and the default thresholds come back, so the loop neither rescans the
+start's objects nor waits on long collections. A command that never releases collects every
+:data:`START_THRESHOLD` objects until it ends, then releases.
 
-Collecting is all this changes: when objects are freed, never what a command does.
+The frozen objects stay frozen at the interpreter's exit: its last collection leaves them to the
+operating system instead of taking the start's heap apart (numba's, cyclonedds', pydantic's
+reference cycles: 0.3 s of CPU at the end of every bridge, measured). CPython does not promise to
+finalise what is still alive at exit anyway, and omnibot closes what it opens (links, logs, nodes,
+ptys) itself, so collecting is all this changes: when memory is given back, never what a command
+does or writes.
 """
 
 from __future__ import annotations
@@ -52,7 +58,12 @@ def hold() -> None:
 def release() -> None:
     """The start is over: freeze every object there is now (``gc.freeze``) and restore the thresholds
     :func:`hold` found. Nothing unless held (a loop run by a test or a library is left alone)."""
-    _restore(freeze=True)
+    with _HOLD.lock:
+        if _HOLD.saved is None:
+            return
+        gc.freeze()
+        gc.set_threshold(*_HOLD.saved)
+        _HOLD.saved = None
 
 
 def held() -> bool:
@@ -62,23 +73,13 @@ def held() -> bool:
 
 @contextlib.contextmanager
 def starting() -> Iterator[None]:
-    """:func:`hold` for the block; at its end the thresholds restored if no loop released them (nothing
-    frozen then: the command is over)."""
+    """:func:`hold` for the block, :func:`release` at its end if no loop released it (so that the
+    thresholds restored do not set the collector on every object the command made at once)."""
     hold()
     try:
         yield
     finally:
-        _restore(freeze=False)
-
-
-def _restore(*, freeze: bool) -> None:
-    with _HOLD.lock:
-        if _HOLD.saved is None:
-            return
-        if freeze:
-            gc.freeze()
-        gc.set_threshold(*_HOLD.saved)
-        _HOLD.saved = None
+        release()
 
 
 __all__ = ["START_THRESHOLD", "held", "hold", "release", "starting"]
