@@ -4,10 +4,10 @@ built frozen out of its sight.
 A command's start imports about a thousand modules and builds their classes, numba's registries,
 pydantic's models and the simulator: some 160,000 objects that live as long as the process. With
 CPython's default thresholds (700, 10, 10) the collector runs about 400 times while they are made,
-young objects each time, now and then all of them: 0.3-0.4 s of the 1.9-2.1 s of CPU an
-``omnibot ros2 --port sim://omni4`` start took (BENCHMARKS.md, "Start-up"). So the process's own
-command line (:func:`omnibot.cli.main` without ``argv``) runs under :func:`starting`: a collection
-only every :data:`START_THRESHOLD` new objects. A command whose work is a loop ends its start with
+young objects each time, now and then all of them: 0.14-0.20 s of the 1.35 s of CPU an
+``omnibot ros2 --port sim://omni4`` bridge took until it ended (BENCHMARKS.md, "Start-up"). So
+the process's own command line (:func:`omnibot.cli.main` without ``argv``) runs under
+:func:`starting`: a collection only every :data:`START_THRESHOLD` new objects. A command whose work is a loop ends its start with
 :func:`release` as the loop begins (:meth:`omnibot.runtime.Runtime.run`, the pty bridges'
 :func:`~omnibot.transport.pty_bridge.serve_together`): what the start built is frozen (``gc.freeze``:
 not scanned again while the process runs, so any of it that becomes cyclic garbage meanwhile waits,
