@@ -7,7 +7,8 @@ CPython's default thresholds (700, 10, 10) the collector runs about 400 times wh
 young objects each time, now and then all of them: 0.14-0.20 s of the 1.35 s of CPU an
 ``omnibot ros2 --port sim://omni4`` bridge took until it ended (BENCHMARKS.md, "Start-up"). So
 the process's own command line (:func:`omnibot.cli.main` without ``argv``) runs under
-:func:`starting`: a collection only every :data:`START_THRESHOLD` new objects. A command whose work is a loop ends its start with
+:func:`starting`, and so does the kernels' compiling process (:mod:`omnibot.sim.jit`): a
+collection only every :data:`START_THRESHOLD` new objects. A command whose work is a loop ends its start with
 :func:`release` as the loop begins (:meth:`omnibot.runtime.Runtime.run`, the pty bridges'
 :func:`~omnibot.transport.pty_bridge.serve_together`): what the start built is frozen (``gc.freeze``:
 not scanned again while the process runs, so any of it that becomes cyclic garbage meanwhile waits,
