@@ -37,7 +37,7 @@ import sys
 import traceback
 from collections.abc import Callable, Sequence
 
-from omnibot import __version__
+from omnibot import __version__, collector
 from omnibot.apps.demo import add_demo, add_tour
 from omnibot.apps.robot import add_kinematics, add_robot
 from omnibot.apps.sim import add_sim
@@ -221,7 +221,15 @@ def exit_status(exc: BaseException) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the ``omnibot`` command line; returns the exit status."""
+    """Run the ``omnibot`` command line (``argv``, else the process's own); returns the exit status.
+    The process's own starts with the garbage collector held (:func:`omnibot.collector.starting`)."""
+    if argv is not None:
+        return _main(argv)
+    with collector.starting():
+        return _main(None)
+
+
+def _main(argv: Sequence[str] | None) -> int:
     from omnibot.apps.recording import command_recording
     from omnibot.signals import Terminated, terminate_cleanly
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import pytest
 
+from omnibot import collector
 from omnibot.client import Pending, RobotClient
 from omnibot.control import make_follower, standard_path
 from omnibot.estimation import make_estimator
@@ -41,6 +42,17 @@ def test_a_script_drives_and_every_sink_sees_every_cycle(caplog: pytest.LogCaptu
         assert runtime.sent.vel == len(seen) - 1 and runtime.sent.errors == 0
         assert sum(len(c.telemetry) for c in seen) == 0  # nobody asked for telemetry
         assert truth(client).pose.x - x0 > 0.2
+
+
+def test_running_ends_the_commands_start(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The loop releases the garbage collector a command's start held (:mod:`omnibot.collector`)."""
+    released: list[int] = []
+    monkeypatch.setattr(collector, "release", lambda: released.append(1))
+    with RobotClient.open("sim://omni4?seed=1", timeout=0.5) as client:
+        runtime = Runtime(client, period=0.01)
+        runtime.run(duration=0.0)
+        runtime.close()
+    assert released == [1] and runtime.cycles == 0
 
 
 @pytest.mark.parametrize("versions", [(2,), (2, 3), codes.VERSIONS])

@@ -9,6 +9,7 @@ from collections.abc import Callable
 import pytest
 import serial
 
+from omnibot import collector
 from omnibot.errors import LinkError
 from omnibot.transport import pty_bridge
 from omnibot.transport.pty_bridge import SERVICE_PERIOD, PtyBridge, next_wake
@@ -191,3 +192,15 @@ def test_the_loop_wakes_once_a_period_and_still_steps_every_tick(
 def test_a_negative_period_is_refused() -> None:
     with pytest.raises(ValueError, match="service period must be >= 0 s"):
         PtyBridge(EchoDevice(), period=-0.001)
+
+
+def test_serving_ends_the_commands_start(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The loop releases the garbage collector a command's start held (:mod:`omnibot.collector`)."""
+    released: list[int] = []
+    monkeypatch.setattr(collector, "release", lambda: released.append(1))
+    stop = threading.Event()
+    stop.set()
+    bridge = PtyBridge(EchoDevice())
+    bridge.run(stop)
+    bridge.close()
+    assert released == [1]

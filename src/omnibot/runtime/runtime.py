@@ -8,6 +8,7 @@ from collections import deque
 from collections.abc import Callable, Iterable
 from typing import Protocol
 
+from omnibot import collector
 from omnibot.client import (
     ClientRecording,
     ErrorEvent,
@@ -329,7 +330,9 @@ class Runtime(Listening, Sending):
             return []
 
     def run(self, until: Callable[[], bool] | None = None, duration: float | None = None) -> None:
-        """Cycle until ``until()`` is true or ``duration`` s of the cycle clock passed."""
+        """Cycle until ``until()`` is true or ``duration`` s of the cycle clock passed. The command's
+        start is over: the garbage collector released (:func:`omnibot.collector.release`)."""
+        collector.release()
         start = self.pacer.now()
         while not (until is not None and until()) and (
             duration is None or self.pacer.now() - start < duration

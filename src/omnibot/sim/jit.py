@@ -38,6 +38,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 from numba.core import event
 
+from omnibot import collector
 from omnibot.sim import kernels
 from omnibot.sim.twins import python_twins
 
@@ -224,5 +225,6 @@ os.register_at_fork(after_in_child=active._forget)
 __all__ = ["CALLED", "COMPILED", "PYTHON", "ActiveKernels", "active", "fill_cache", "load_cached"]
 
 
-if __name__ == "__main__":  # the compiling process of a cold start
-    fill_cache()
+if __name__ == "__main__":  # the compiling process of a cold start, and make setup's
+    with collector.starting():  # numba's compiler makes objects by the million: collected seldom
+        fill_cache()

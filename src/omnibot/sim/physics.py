@@ -87,7 +87,7 @@ from omnibot.errors import SimulationError
 from omnibot.floor import Surface, get_surface, static_loads
 from omnibot.robot import RobotDescription
 from omnibot.sim import jit, kernels
-from omnibot.sim.kernels import lanes, layout
+from omnibot.sim.kernels import layout
 from omnibot.sim.physics_charge import BatteryCharge
 from omnibot.sim.physics_parameters import parameters
 from omnibot.sim.physics_state import StateArrays
@@ -366,7 +366,12 @@ class Physics(StateArrays):
             raise SimulationError(f"steps must be >= 0, got {steps}")
         ids = self._inputs(pwm, surface_ids, external_force)
         chunks = [1] * steps if self._charge.draining else [steps] if steps else []
-        kernel = jit.active.physics_step_parallel if exact else lanes.physics_run
+        if exact:
+            kernel = jit.active.physics_step_parallel
+        else:  # imported on first use: defining the lanes' kernels takes 40 ms that a simulator never needs
+            from omnibot.sim.kernels import lanes
+
+            kernel = lanes.physics_run
         for chunk in chunks:
             failed = kernel(
                 self._buffer,

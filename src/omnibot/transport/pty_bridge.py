@@ -35,6 +35,7 @@ from collections.abc import Callable, Sequence
 from types import TracebackType
 from typing import Self
 
+from omnibot import collector
 from omnibot.errors import LinkError
 from omnibot.transport.lockstep import DEFAULT_BAUD, LockstepDevice
 from omnibot.transport.pacing import Pacer
@@ -257,7 +258,9 @@ def serve_together(
 ) -> None:
     """Serve several bridges from one real-time loop, their devices stepped together by ``step()``
     once per tick (a fleet of simulated robots on one clock: ``omnibot sim --pty`` with several
-    robots), until ``stop`` or any bridge's own stop is set. Their devices share one tick."""
+    robots), until ``stop`` or any bridge's own stop is set. Their devices share one tick. The
+    command's start is over: the garbage collector released (:func:`omnibot.collector.release`)."""
+    collector.release()
     masters = [b._master for b in bridges if b._master is not None]
     if not bridges or len(masters) != len(bridges):
         raise LinkError("pty bridge is closed")
