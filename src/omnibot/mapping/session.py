@@ -116,8 +116,9 @@ class MappingSink(ScanFeed):
 
 
 class LocalisingSink(ScanFeed):
-    """Localises the robot in a saved map from a runtime: each scan and the odometry of its time go
-    to a :class:`~omnibot.mapping.localise.Localiser`; :meth:`pose_now` is the map-frame pose now (the
+    """Localises the robot in a saved map from a runtime: each scan, the odometry at its first ray
+    and the twist over it (its motion distortion undone) go to a
+    :class:`~omnibot.mapping.localise.Localiser`; :meth:`pose_now` is the map-frame pose now (the
     localiser's ``map -> odom`` composed with the latest odometry) and :meth:`points` the latest
     scan's returns in the map frame (for goto's obstacle watch)."""
 
