@@ -1,6 +1,6 @@
 """Going to a place in the room: 20 seeded goals per robot, arrival error from the simulator's truth.
 
-Run: ``python -m benchmarks.goto`` (``--goals N``, ``--robots``, ``--poses odometry,truth``,
+Run: ``python -m benchmarks.goto`` (``--goals N``, ``--robots``, ``--poses odometry,truth[,localiser]``,
 ``--world``, ``--obstacle``, ``--scanner``; a few minutes on one core).
 
 For each robot and goal k (seed k): the room world rasterised at 2.5 cm
@@ -14,7 +14,12 @@ tracker and judges arrival (5 cm, 5 degrees) by its pose provider:
   the map pose);
 * ``truth``: the simulator's true pose as the provider (standing in for a perfect localiser: the
   follower still steers by the estimate, the plan is moved into its frame and correction legs
-  take out the drift).
+  take out the drift);
+* ``localiser``: ``omnibot goto``'s own, the :class:`~omnibot.mapping.Localiser` in the map fed
+  by the robot's scanner (:class:`~omnibot.mapping.LocalisingSink`, started at the true start
+  with 5 cm of spread), the obstacle watch on its points; its lead over the truth along the
+  direction of travel while the robot moves at 0.5 m/s or more (issue 25's) is printed after
+  the table.
 
 Per robot and provider: goals arrived (by goto's verdict) and arrived by the truth (within 5 cm
 and 5 degrees of the true pose), the truth's final position and heading errors (mean, max),
@@ -31,20 +36,22 @@ import argparse
 import math
 import statistics
 import tempfile
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import yaml
 
 from benchmarks.planner import free_poses, inside_walls, rasterise
+from omnibot.client import RobotClient
 from omnibot.lidar import open_scanner
-from omnibot.mapping import inflate
+from omnibot.mapping import Localiser, LocalisingSink, OccupancyGrid, inflate
 from omnibot.motion import Pose2D
 from omnibot.navigation import GotoOptions, GotoResult, PoseProvider, ScanPoints, simulated_client
 from omnibot.navigation.goto import goto
-from omnibot.robot import load_robot
-from omnibot.runtime import Runtime
+from omnibot.robot import RobotDescription, load_robot
+from omnibot.runtime import Cycle, Runtime
 from omnibot.sim import load_world
 from omnibot.transport import find_simulator
 
@@ -61,6 +68,8 @@ class Outcome:
     result: GotoResult
     truth: Pose2D
     contacts: int
+    lead: float | None = None
+    """``localiser``: its mean lead (m) over the truth along the travel at >= 0.5 m/s (None: not moving)."""
 
     @property
     def error(self) -> float:
@@ -117,6 +126,9 @@ def run_goal(
             p = sim.pose
             return Pose2D(p.x, p.y, p.theta)
 
+        if provider == "localiser":
+            result, lead = localised(client, robot, grid, (start, goal), options, seed, truth)
+            return Outcome(robot_name, provider, seed, goal, result, truth(), len(sim.collisions), lead)
         pose = truth if provider == "truth" else None
         if not scanner:
             result = goto(client, robot, grid, goal, start, options, pose=pose)
@@ -133,6 +145,62 @@ def run_goal(
         finally:
             scans.close()
         return Outcome(robot_name, provider, seed, goal, result, truth(), len(sim.collisions))
+
+
+class LeadTrace:
+    """A runtime sink after the localising one: the localiser's pose now beside the truth now."""
+
+    def __init__(self, sink: LocalisingSink, truth: Callable[[], Pose2D]) -> None:
+        self.sink, self.truth = sink, truth
+        self.rows: list[tuple[float, float, float, float, float]] = []
+
+    def __call__(self, cycle: Cycle) -> None:
+        now = self.sink.pose_now()
+        if now is not None:
+            true = self.truth()
+            self.rows.append((cycle.t, now.x, now.y, true.x, true.y))
+
+    def lead(self, speed: float = 0.5) -> float | None:
+        """Mean of (pose - truth) along the truth's velocity over the cycles at ``speed`` m/s or more."""
+        if len(self.rows) < 3:
+            return None
+        t, x, y, tx, ty = np.array(self.rows).T
+        vx, vy = np.gradient(tx, t), np.gradient(ty, t)
+        fast = np.hypot(vx, vy) >= speed
+        if not fast.any():
+            return None
+        along = ((x - tx) * vx + (y - ty) * vy)[fast] / np.hypot(vx, vy)[fast]
+        return float(along.mean())
+
+
+def localised(
+    client: RobotClient,
+    robot: RobotDescription,
+    grid: OccupancyGrid,
+    ends: tuple[Pose2D, Pose2D],
+    options: GotoOptions | None,
+    seed: int,
+    truth: Callable[[], Pose2D],
+) -> tuple[GotoResult, float | None]:
+    """One goto from ``ends[0]`` to ``ends[1]`` on ``omnibot goto``'s localiser; its result and the
+    localiser's lead while moving."""
+    start, goal = ends
+    scans = open_scanner(None, client.link, robot)
+    localiser = Localiser(grid, seed=seed)
+    localiser.reset(start, spread=(0.05, 0.05))
+    sink = LocalisingSink(scans, localiser)
+    trace = LeadTrace(sink, truth)
+
+    def placing(runtime: Runtime) -> PoseProvider:
+        runtime.add_sink(sink)
+        runtime.add_sink(trace)
+        return sink.pose_now
+
+    try:
+        result = goto(client, robot, grid, goal, start, options, pose_from=placing, scan=sink.points)
+    finally:
+        sink.close()
+    return result, trace.lead()
 
 
 def table(outcomes: list[Outcome]) -> str:
@@ -188,6 +256,13 @@ def main(argv: list[str] | None = None) -> int:
                             flush=True,
                         )
     print(table(outcomes))
+    for robot in args.robots.split(","):
+        leads = [100 * o.lead for o in outcomes if o.robot == robot and o.lead is not None]
+        if leads:
+            print(
+                f"{robot}: the localiser's lead over the truth along the travel at >= 0.5 m/s, "
+                f"per goal mean {statistics.mean(leads):+.2f} cm (from {min(leads):+.2f} to {max(leads):+.2f})"
+            )
     return 0
 
 

@@ -7,7 +7,10 @@ scans (AMCL-like):
   body-frame dx, dy, dtheta: a holonomic base moves sideways too), with Gaussian noise of standard
   deviation ``alpha_xy * |step| + alpha_xy_turn * |dtheta|`` on x and y and
   ``alpha_turn * |dtheta| + alpha_turn_xy * |step|`` on theta;
-* **measurement** (likelihood field): ``beams`` returns of the scan, evenly picked, are projected
+* **measurement** (likelihood field): the scan's returns in the base frame at its first ray (a
+  spinning scanner's motion distortion undone with the base's ``twist`` over the revolution,
+  :mod:`omnibot.mapping.deskew`: raw, a moving robot's scan matches where it was half a revolution
+  later, and the pose led the truth by ``speed x period / 2``, 5 cm at 1 m/s and 10 Hz); ``beams`` returns of the scan, evenly picked, are projected
   from every particle; each scores ``z_hit * exp(-d^2 / 2 sigma_hit^2) + z_rand`` where ``d`` is the
   distance (the grid's Euclidean distance transform, capped at ``max_dist``) from its end point to
   the nearest occupied cell. A particle's log-weight gains ``beam_weight`` times the sum over
@@ -37,9 +40,10 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
 
+from omnibot.mapping.deskew import scan_points
 from omnibot.mapping.grid import OccupancyGrid
 from omnibot.mapping.se2 import compose, inverse, wrap
-from omnibot.motion import Pose2D
+from omnibot.motion import Pose2D, Twist
 from omnibot.scan import Scan
 
 FloatArray = NDArray[np.float64]
@@ -281,14 +285,18 @@ class Localiser:
         cov: FloatArray = (dev * w[:, None]).T @ dev
         return Pose2D(mx, my, mth), cov
 
-    def update(self, odom_pose: Pose2D, scan: Scan) -> LocalisedPose:
+    def update(self, odom_pose: Pose2D, scan: Scan, twist: Twist | None = None) -> LocalisedPose:
         """Move the particles by the odometry's step since the last update, weigh them by ``scan``,
-        resample, refine; the robot's pose in the map."""
+        resample, refine; the robot's pose in the map at the scan's first ray.
+
+        ``odom_pose`` is the odometry's at the scan's first ray and ``twist`` the base's body twist
+        over the scan (the odometry's motion from its first ray to its last), which undoes its motion
+        distortion; None: the rays are taken as measured at one instant (a robot at rest)."""
         if not self._initialised:
             raise RuntimeError("Localiser.update before reset: give it a first pose")
         self._predict(odom_pose)
         self._odom = odom_pose
-        points = scan.points("base")
+        points = scan.points("base") if twist is None else scan_points(scan, twist)
         self._weigh(points)
         w = self._weights()
         mean, cov = self._estimate(w)

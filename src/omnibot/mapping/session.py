@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from omnibot.mapping.deskew import scan_points
-from omnibot.mapping.feed import ScanFeed, Track, span_twist, undistorted
+from omnibot.mapping.feed import ScanFeed, Track, span_twist
 from omnibot.mapping.se2 import transform
 from omnibot.mapping.slam import Slam
 from omnibot.mapping.snapshot import MapSnapshot, RangeNoise
@@ -116,8 +116,9 @@ class MappingSink(ScanFeed):
 
 
 class LocalisingSink(ScanFeed):
-    """Localises the robot in a saved map from a runtime: each scan and the odometry of its time go
-    to a :class:`~omnibot.mapping.localise.Localiser`; :meth:`pose_now` is the map-frame pose now (the
+    """Localises the robot in a saved map from a runtime: each scan, the odometry at its first ray
+    and the twist over it (its motion distortion undone) go to a
+    :class:`~omnibot.mapping.localise.Localiser`; :meth:`pose_now` is the map-frame pose now (the
     localiser's ``map -> odom`` composed with the latest odometry) and :meth:`points` the latest
     scan's returns in the map frame (for goto's obstacle watch)."""
 
@@ -126,22 +127,26 @@ class LocalisingSink(ScanFeed):
         self.updates = 0
         self._map_to_odom = Pose2D(0.0, 0.0, 0.0)
         self._points: FloatArray | None = None
-        self._odom_points: dict[float, FloatArray] = {}  # by stamp, until the scan's update
+        self._kept: dict[float, tuple[Twist, FloatArray]] = {}  # by stamp, until the scan's update
         super().__init__(scans, threaded=threaded)
 
     def _keep(self, scan: Scan, start: Pose2D, end: Pose2D, span: float) -> None:
-        points = transform(start, undistorted(scan, start, end, span))  # the odometry frame
+        """Keep the scan's twist (its distortion undone by the localiser) and its returns, deskewed,
+        in the odometry frame (placed in the map once the scan has placed the frame)."""
+        twist = span_twist(start, end, span)
+        points = transform(start, scan_points(scan, twist))
         with self._lock:
-            self._odom_points[scan.stamp] = points
+            self._kept[scan.stamp] = (twist, points)
 
     def _update(self, scan: Scan, odom: Pose2D) -> None:
-        self.localiser.update(odom, scan)
+        with self._lock:
+            kept = self._kept.pop(scan.stamp, None)
+        self.localiser.update(odom, scan, None if kept is None else kept[0])
         with self._lock:
             self._map_to_odom = self.localiser.map_to_odom
             self.updates += 1
-            points = self._odom_points.pop(scan.stamp, None)
-            if points is not None:
-                self._points = transform(self._map_to_odom, points)
+            if kept is not None:
+                self._points = transform(self._map_to_odom, kept[1])
 
     def map_to_odom_now(self) -> Pose2D:
         """The odometry frame's pose in the map, as the last scan placed it (the start's guess before)."""
