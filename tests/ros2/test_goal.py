@@ -18,7 +18,7 @@ from omnibot.cli import main
 from omnibot.logs import header, schemas
 from omnibot.mapping import save_map
 from omnibot.mapping.score import world_grid
-from omnibot.motion import Estimate, Pose2D, Twist
+from omnibot.motion import Estimate, Pose2D
 from omnibot.robot import load_robot
 from omnibot.ros2.goal import GOAL_TYPE, GoalPoseSource, PlaceableSink, Refusal, Spread, spread_of
 from omnibot.ros2.odometry import OdometryReset
@@ -203,7 +203,7 @@ class Localiser:
         self.calls.append(f"reset {at.x:g} {spread[0]:g}")
         self.map_to_odom = at
 
-    def update(self, odom: Pose2D, scan: Any, twist: Twist | None = None) -> None:
+    def update(self, odom: Pose2D, scan: Any, points: Any = None) -> None:
         self.calls.append("update")
 
 

@@ -40,10 +40,9 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
 
-from omnibot.mapping.deskew import scan_points
 from omnibot.mapping.grid import OccupancyGrid
 from omnibot.mapping.se2 import compose, inverse, wrap
-from omnibot.motion import Pose2D, Twist
+from omnibot.motion import Pose2D
 from omnibot.scan import Scan
 
 FloatArray = NDArray[np.float64]
@@ -285,18 +284,20 @@ class Localiser:
         cov: FloatArray = (dev * w[:, None]).T @ dev
         return Pose2D(mx, my, mth), cov
 
-    def update(self, odom_pose: Pose2D, scan: Scan, twist: Twist | None = None) -> LocalisedPose:
+    def update(self, odom_pose: Pose2D, scan: Scan, points: FloatArray | None = None) -> LocalisedPose:
         """Move the particles by the odometry's step since the last update, weigh them by ``scan``,
         resample, refine; the robot's pose in the map at the scan's first ray.
 
-        ``odom_pose`` is the odometry's at the scan's first ray and ``twist`` the base's body twist
-        over the scan (the odometry's motion from its first ray to its last), which undoes its motion
-        distortion; None: the rays are taken as measured at one instant (a robot at rest)."""
+        ``odom_pose`` is the odometry's at the scan's first ray and ``points`` the scan's returns in
+        the base frame there, its motion distortion undone with the base's twist over the scan
+        (:func:`omnibot.mapping.deskew.scan_points`); None: the rays are taken as measured at one
+        instant (a robot at rest)."""
         if not self._initialised:
             raise RuntimeError("Localiser.update before reset: give it a first pose")
         self._predict(odom_pose)
         self._odom = odom_pose
-        points = scan.points("base") if twist is None else scan_points(scan, twist)
+        if points is None:
+            points = scan.points("base")
         self._weigh(points)
         w = self._weights()
         mean, cov = self._estimate(w)

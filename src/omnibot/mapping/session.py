@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 
 from omnibot.mapping.deskew import scan_points
 from omnibot.mapping.feed import ScanFeed, Track, span_twist
-from omnibot.mapping.se2 import transform
+from omnibot.mapping.se2 import compose, transform
 from omnibot.mapping.slam import Slam
 from omnibot.mapping.snapshot import MapSnapshot, RangeNoise
 from omnibot.motion import Pose2D, Twist
@@ -127,26 +127,26 @@ class LocalisingSink(ScanFeed):
         self.updates = 0
         self._map_to_odom = Pose2D(0.0, 0.0, 0.0)
         self._points: FloatArray | None = None
-        self._kept: dict[float, tuple[Twist, FloatArray]] = {}  # by stamp, until the scan's update
+        self._kept: dict[float, FloatArray] = {}  # deskewed returns by stamp, until the scan's update
         super().__init__(scans, threaded=threaded)
 
     def _keep(self, scan: Scan, start: Pose2D, end: Pose2D, span: float) -> None:
-        """Keep the scan's twist (its distortion undone by the localiser) and its returns, deskewed,
-        in the odometry frame (placed in the map once the scan has placed the frame)."""
-        twist = span_twist(start, end, span)
-        points = transform(start, scan_points(scan, twist))
+        """Keep the scan's returns in the base frame at its first ray, its distortion undone with the
+        odometry's twist over it: the localiser's input, and (placed in the map once the scan has
+        placed the odometry frame) the obstacle watch's."""
+        points = scan_points(scan, span_twist(start, end, span))
         with self._lock:
-            self._kept[scan.stamp] = (twist, points)
+            self._kept[scan.stamp] = points
 
     def _update(self, scan: Scan, odom: Pose2D) -> None:
         with self._lock:
             kept = self._kept.pop(scan.stamp, None)
-        self.localiser.update(odom, scan, None if kept is None else kept[0])
+        self.localiser.update(odom, scan, kept)
         with self._lock:
             self._map_to_odom = self.localiser.map_to_odom
             self.updates += 1
-            if kept is not None:
-                self._points = transform(self._map_to_odom, kept[1])
+            if kept is not None:  # the base frame at the first ray is the odometry's pose there
+                self._points = transform(compose(self._map_to_odom, odom), kept)
 
     def map_to_odom_now(self) -> Pose2D:
         """The odometry frame's pose in the map, as the last scan placed it (the start's guess before)."""
