@@ -86,6 +86,7 @@ def test_simulator_options_are_refused_with_a_port() -> None:
         ("socket://127.0.0.1:4000", False),
         ("spy+/dev/ttyACM0", False),
         ("simulator.local:4000", False),
+        ("sim", False),  # a device path, no scheme
     ],
 )
 def test_a_link_ending_in_the_physics_knows_where_the_robot_stands(url: str | None, known: bool) -> None:

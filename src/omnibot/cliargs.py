@@ -271,14 +271,21 @@ def simulated(args: argparse.Namespace) -> bool:
     """The robot is the in-process simulator: no ``--port``, or a ``sim://`` one (behind any
     ``spy+``/``faults+`` wrappers)."""
     port = getattr(args, "port", None)
-    return port is None or str(port).split("+")[-1].startswith("sim:")
+    return port is None or _scheme(port) == "sim"
 
 
 def physics_behind(url: str | None) -> bool:
     """The link ends in omnibot's physics: no URL (the default simulator), ``sim://`` or ``uno://``
     (the emulated UNO with the physics in the loop), behind any ``spy+``/``faults+`` wrappers. Such a
     link knows where the robot stands."""
-    return url is None or str(url).split("+")[-1].split(":", 1)[0] in ("sim", "uno")
+    return url is None or _scheme(url) in ("sim", "uno")
+
+
+def _scheme(url: str) -> str:
+    """The scheme of the link a URL ends in, behind any ``spy+``/``faults+`` wrappers ("" for a
+    device path: no ``scheme:``)."""
+    scheme, colon, _ = str(url).split("+")[-1].partition(":")
+    return scheme if colon else ""
 
 
 def sim_url(args: argparse.Namespace) -> str:
