@@ -40,7 +40,7 @@ __all__ = ["DEFAULT_BAUD", "LockstepClock", "LockstepDevice", "LockstepLink", "P
 
 DEFAULT_BAUD = 115200
 _EPS = 1e-9  # relative slack when turning a duration into whole ticks
-_EDGE = 1e-6  # ticks: a byte due this close after a tick's end may be in on it (pop_due's slack)
+_EDGE = 1e-6  # ticks: a time this close after a tick's end may be on it for the device's clock
 _FOREVER = 1 << 62  # ticks a read without a timeout may wait (146,000 years of 1 ms ticks)
 
 
@@ -139,10 +139,11 @@ class PacedFifo:
         return out
 
     def arrival(self, n: int) -> float:
-        """When the ``n``-th byte on the line (1-based) will have arrived, s (inf: fewer are on it)."""
+        """From when :meth:`pop_due` counts the ``n``-th byte on the line (1-based) as arrived, s (inf:
+        fewer are on it)."""
         for start, data in self._chunks:
             if n <= len(data):
-                return start + n * self.byte_time
+                return start + (n - _EPS) * self.byte_time
             n -= len(data)
         return math.inf
 
@@ -226,13 +227,14 @@ class LockstepLink(Link):
 
     def _run(self, ticks: int, ends: bytes = b"", most: int = 0) -> int:
         """Step at most ``ticks`` (>= 1) ticks; the ticks taken. While nothing is on the line to the
-        device, and what is on the line to the host cannot be gathered (:meth:`_gathered`) yet, the
-        device runs until it sends (one call, the same ticks), else one tick at a time."""
+        device, the device runs until it sends (one call, the same ticks) or, with bytes on the line
+        to the host, until they may be gathered (:meth:`_gathered`); else one tick at a time (a plain
+        read, ``most`` 0, takes the first byte, which a busy line brings on the next tick)."""
         if self._run_quiet is None or self._to_device.pending:
             self._step()
             return 1
         if self._to_host.pending:
-            ticks = min(ticks, self._ticks_ungathered(ends, most))
+            ticks = min(ticks, self._ticks_ungathered(ends, most)) if most else 0
             if ticks < 1:
                 self._step()
                 return 1
@@ -242,9 +244,9 @@ class LockstepLink(Link):
         return taken
 
     def _ticks_ungathered(self, ends: bytes, most: int) -> int:
-        """Whole ticks after which the bytes on the line to the host are surely not gathered yet: those
-        before the tick on which the first byte that would gather them arrives (a long stretch when
-        none would). Short by one near a tick's boundary, never long: that tick is stepped alone."""
+        """Whole ticks to the one on which the first byte on the line to the host that would gather
+        them arrives (a long stretch when none would): short by one if it arrives within
+        :data:`_EDGE` of a tick's end (the next run takes that tick), never long."""
         line = self._to_host
         need = most + 1 - len(self._inbox)
         end = line.first_of(ends)
@@ -253,7 +255,7 @@ class LockstepLink(Link):
         due = line.arrival(need)
         if due == math.inf:
             return _FOREVER
-        return math.ceil((due - self.device.time) / self.device.tick - _EDGE) - 1
+        return math.ceil((due - self.device.time) / self.device.tick - _EDGE)
 
     def _step(self) -> None:
         self._feed()
