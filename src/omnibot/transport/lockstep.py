@@ -305,8 +305,8 @@ class LockstepLink(Link):
                 while taken < ticks and not self._closed:
                     seen = len(inbox)
                     taken += self._run(ticks - taken, ends, most)
-                    if len(inbox) > seen and self._gathered(seen, ends, most):
-                        break
+                    if len(inbox) > seen and (len(inbox) > most or self._gathered(seen, ends, most)):
+                        break  # a plain read (most 0) at its first byte, without a call
             chunk = bytes(inbox[:max_bytes])
             del inbox[:max_bytes]
             return chunk
