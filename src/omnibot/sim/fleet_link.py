@@ -207,6 +207,11 @@ class FleetLink(LockstepLink):
             del self._inbox[:max_bytes]
             return chunk
 
+    def _read_gathered(self, max_bytes: int, timeout: float | None, ends: bytes, most: int) -> bytes:
+        """A plain :meth:`_read`: the fleet's time moves for every robot's driver, so a read waits
+        on it as ever (a lone lockstep link's gathering steps its own device)."""
+        return self._read(max_bytes, timeout)
+
     def _close(self) -> None:
         try:
             super()._close()
