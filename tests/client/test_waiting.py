@@ -27,10 +27,10 @@ class CountedLink(LockstepLink):
     reads = 0
     gathered = 0
 
-    def _read_gathered(self, max_bytes: int, timeout: float | None, ends: bytes, most: int) -> bytes:
+    def _read(self, max_bytes: int, timeout: float | None, ends: bytes = b"", most: int = 0) -> bytes:
         self.reads += 1
         self.gathered += bool(ends)
-        return super()._read_gathered(max_bytes, timeout, ends, most)
+        return super()._read(max_bytes, timeout, ends, most)
 
 
 def session(traced: bool) -> tuple[list[tuple[float, Telemetry]], object, CountedLink]:

@@ -197,7 +197,9 @@ class FleetLink(LockstepLink):
             if self._ticks_for(seconds):
                 self.shared.wait(self, self._target(seconds), for_bytes=False)
 
-    def _read(self, max_bytes: int, timeout: float | None) -> bytes:
+    def _read(self, max_bytes: int, timeout: float | None, ends: bytes = b"", most: int = 0) -> bytes:
+        """A read, gathered or not, waits on the fleet's time, which moves for every robot's driver
+        (a lone lockstep link's gathering steps its own device): the bytes as they come."""
         with self._lock:
             self._collect()
             if not self._inbox and timeout != 0:
@@ -206,11 +208,6 @@ class FleetLink(LockstepLink):
             chunk = bytes(self._inbox[:max_bytes])
             del self._inbox[:max_bytes]
             return chunk
-
-    def _read_gathered(self, max_bytes: int, timeout: float | None, ends: bytes, most: int) -> bytes:
-        """A plain :meth:`_read`: the fleet's time moves for every robot's driver, so a read waits
-        on it as ever (a lone lockstep link's gathering steps its own device)."""
-        return self._read(max_bytes, timeout)
 
     def _close(self) -> None:
         try:

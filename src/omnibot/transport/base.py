@@ -141,7 +141,11 @@ class Link(abc.ABC):
         if timeout is not None and timeout < 0:
             raise ValueError(f"timeout must be >= 0 or None, got {timeout}")
         try:
-            data = self._read_gathered(max_bytes, timeout, ends, most)
+            data = (
+                self._read_gathered(max_bytes, timeout, ends, most)
+                if ends or most
+                else self._read(max_bytes, timeout)
+            )
         except Exception as exc:
             if self._closed:  # closed by another thread while we were reading
                 raise LinkError(f"link {self._url} was closed during read") from exc

@@ -290,12 +290,13 @@ class LockstepLink(Link):
         with self._lock:
             self._to_device.push(self.device.time, data)
 
-    def _read(self, max_bytes: int, timeout: float | None) -> bytes:
-        return self._read_gathered(max_bytes, timeout, b"", 0)
-
     def _read_gathered(self, max_bytes: int, timeout: float | None, ends: bytes, most: int) -> bytes:
-        """Step until the bytes arrived are gathered (:meth:`_gathered`) or ``timeout`` s have passed;
-        then up to ``max_bytes`` of them."""
+        return self._read(max_bytes, timeout, ends, most)
+
+    def _read(self, max_bytes: int, timeout: float | None, ends: bytes = b"", most: int = 0) -> bytes:
+        """Step until the bytes arrived are gathered (:meth:`_gathered`; a plain read: the first
+        byte) or ``timeout`` s have passed; then up to ``max_bytes`` of them. Gathered reads come
+        here too, so a test's stand-in for ``_read`` (an unplugged cable) stands in for both."""
         with self._lock:
             self._collect()
             inbox = self._inbox
