@@ -38,7 +38,7 @@ from omnibot.motion import Pose2D
 from omnibot.robot import ScannerSpec
 from omnibot.scan import Scan
 from omnibot.sim import jit
-from omnibot.sim.kernels import layout
+from omnibot.sim.kernels import layout, ray_table
 from omnibot.sim.kernels.scan import (
     P_DROPOUT,
     P_DT,
@@ -162,8 +162,9 @@ class LaserScanner:
         """Angle between consecutive rays, rad (negative: clockwise)."""
         self.angles: FloatArray = np.arange(n, dtype=np.float64) * self.angle_increment
         """Direction of every ray in the scanner frame, rad."""
-        self._base_angles = np.ascontiguousarray(self.angles + spec.yaw)
         self._offsets = np.arange(n, dtype=np.float64) * self.time_increment
+        self._rays = ray_table.py_func(self._offsets, self.angles + spec.yaw)
+        """Each ray's time in the revolution and direction in the robot's base frame, with its cos and sin."""
         self._seed, self._key = seed, key
         self._bitgen = np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(key,)))
         self._gen = np.random.Generator(self._bitgen)
@@ -269,7 +270,7 @@ class LaserScanner:
             draws = self._draws(self.revolution) if whole else _NO_RAYS
             first, cast = self._next_ray, last > self._next_ray
             while cast and not jit.active.scan_revolution(
-                stamp, first, last, self._offsets, self._base_angles, hist, own, params, segments, *self._index,
+                stamp, first, last, self._rays, hist, own, params, segments, *self._index,
                 body_v, body_off, self._true, draws, measured,
             ):  # fmt: skip
                 self._index_for(segments, hist, own)
