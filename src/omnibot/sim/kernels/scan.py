@@ -206,33 +206,6 @@ def _body_hit(
 
 
 @njit(cache=True, inline="always")
-def _cast(
-    ox: float, oy: float, ang: float, dx: float, dy: float, k: int, k1: int, f: float, hist_p: FloatArray,
-    own: int, segments: FloatArray, starts: IntArray, entries: IntArray, near: FloatArray, body_v: FloatArray,
-    body_off: IntArray, body_r: FloatArray, max_range: float,
-) -> float:  # fmt: skip
-    """True range of one ray of :func:`scan_rays` from (ox, oy) at world angle ang (direction dx,
-    dy), at the time a fraction f from history row k to k1 (body_r: each body's bounding radius,
-    :func:`_body_radii`)."""
-    # its sector by multiplying, not dividing: a ray on a sector's border may be given either one,
-    # and either lists every edge it can meet (scan_index widens each edge's angles by 1e-9 rad)
-    turns = ang * (0.5 / math.pi)
-    sector = min(int((turns - math.floor(turns)) * SCAN_BINS), SCAN_BINS - 1)
-    best = np.inf
-    for q in range(starts[sector], starts[sector + 1]):
-        e = entries[q]
-        if near[e] > best:
-            break
-        best = min(best, _hit(ox, oy, dx, dy, segments[e, 0], segments[e, 1], segments[e, 2], segments[e, 3]))
-    for b in range(body_off.shape[0] - 1):
-        if b != own:
-            best = _body_hit(
-                hist_p, k, k1, f, 3 * b, ox, oy, dx, dy, body_r[b], body_v, body_off[b], body_off[b + 1], best
-            )
-    return best if best <= max_range else np.inf
-
-
-@njit(cache=True, inline="always")
 def _cast_rays(
     stamp: float, first: int, last: int, rays: FloatArray, hist_t0: float, hist_dt: float, hist_p: FloatArray,
     own: int, mount_x: float, mount_y: float, segments: FloatArray, starts: IntArray, entries: IntArray,
@@ -247,10 +220,24 @@ def _cast_rays(
         if k != row:
             row, ck, sk = k, math.cos(hist_p[k, c0 + 2]), math.sin(hist_p[k, c0 + 2])
         ox, oy, ang, dx, dy = ray_frame(hist_p, k, k1, f, c0, ck, sk, mount_x, mount_y, rays, i)
-        out[i] = _cast(
-            ox, oy, ang, dx, dy, k, k1, f, hist_p, own, segments, starts, entries, near, body_v, body_off, body_r,
-            max_range,
-        )  # fmt: skip
+        # its sector by multiplying, not dividing: a ray on a sector's border may be given either one,
+        # and either lists every edge it can meet (scan_index widens each edge's angles by 1e-9 rad)
+        turns = ang * (0.5 / math.pi)
+        sector = min(int((turns - math.floor(turns)) * SCAN_BINS), SCAN_BINS - 1)
+        best = np.inf
+        for q in range(starts[sector], starts[sector + 1]):  # here, not in a helper: 30 % faster
+            e = entries[q]
+            if near[e] > best:
+                break
+            best = min(
+                best, _hit(ox, oy, dx, dy, segments[e, 0], segments[e, 1], segments[e, 2], segments[e, 3])
+            )
+        for b in range(body_off.shape[0] - 1):
+            if b != own:
+                best = _body_hit(
+                    hist_p, k, k1, f, 3 * b, ox, oy, dx, dy, body_r[b], body_v, body_off[b], body_off[b + 1], best
+                )  # fmt: skip
+        out[i] = best if best <= max_range else np.inf
 
 
 @njit(cache=True)
