@@ -22,6 +22,7 @@ from omnibot.sim.kernels.scan import (
     P_RESOLUTION,
     SCAN_PARAMS,
 )
+from omnibot.sim.kernels.scan_noise import SCAN_POOL
 from omnibot.sim.world import load_world
 
 
@@ -59,7 +60,7 @@ def test_a_revolution_in_one_call_is_the_cast_and_the_measurement_and_asks_for_a
         dtype=np.float64,
     )
     no_v, no_off = np.zeros((0, 2)), np.zeros(1, dtype=np.int64)
-    draws = np.random.default_rng(3).random(3 * n)
+    draws = np.random.default_rng(3).random(2 * n + SCAN_POOL)
     params = np.zeros(SCAN_PARAMS)
     params[[P_DT, P_REACH, P_INNER, P_NOISE_FRACTION, P_RESOLUTION, P_DROPOUT, P_RANGE_MIN, P_RANGE_MAX]] = (
         0.005, 14.0, -1.0, 0.01, 0.00025, 0.05, 0.15, 12.0,

@@ -314,10 +314,10 @@ def scan_revolution(
 ) -> bool:
     """Rays ``first`` to ``last - 1`` of the revolution that began at ``stamp`` (ray i measured at
     stamp + rays[i, RAY_T] in direction rays[i, RAY_A] of the robot's base frame: :func:`ray_table`)
-    cast as :func:`scan_rays`
-    casts them (the ``P_`` columns of ``params``) into true[first:last]; then, given ``draws`` (3 per
-    ray; none: the revolution goes on), the whole revolution measured from ``true`` into ``measured``
-    (:func:`scan_measure`). The scanner's origins over the rows of ``hist_p`` must lie within
+    cast as :func:`scan_rays` casts them (the ``P_`` columns of ``params``) into true[first:last];
+    then, given ``draws`` (2 per ray and SCAN_POOL; none: the revolution goes on), the whole
+    revolution measured from ``true`` into ``measured`` (:func:`scan_measure`). The scanner's
+    origins over the rows of ``hist_p`` must lie within
     params[P_INNER] of (params[P_AX], params[P_AY]), the disc the edge index holds: else nothing is
     done and False returned (the caller builds an index for them and calls again)."""
     if not _index_holds(hist_p, 3 * own, params[P_AX], params[P_AY], params[P_INNER]):
