@@ -117,17 +117,17 @@ class PoseLog:
         """The rows as an (H, 3 bodies) array: a view of the body's log when there is one body, else
         the bodies' logs side by side (made once per record: the scanners of a fleet flushed
         together share it)."""
-        logs = [b.pose_log() for b in self.bodies]
-        si = logs[0][1]
-        n, key = int(si[layout.I_LOG_N]), (int(si[layout.I_LOG_N]), int(si[layout.I_LOG_NEXT]))
+        rows, si = self.bodies[0].pose_log()
+        n = int(si[layout.I_LOG_N])
         if n > self.capacity:
             raise SimulationError(
                 f"the scanners' pose log overflowed ({n} rows in {self.capacity}): a flush came too late"
             )
-        if len(logs) == 1:
-            return logs[0][0][:n]
+        if len(self.bodies) == 1:
+            return rows[:n]
+        key = (n, int(si[layout.I_LOG_NEXT]))
         if key != self._joined_key:
-            self._joined = np.concatenate([rows[:n] for rows, _ in logs], axis=1)
+            self._joined = np.concatenate([b.pose_log()[0][:n] for b in self.bodies], axis=1)
             self._joined_key = key
         return self._joined
 
@@ -332,8 +332,7 @@ class LaserScanner:
     def _deliver(self, stamp: float, measured: FloatArray) -> Scan:
         """The revolution that began at ``stamp``, measured, as a :class:`~omnibot.scan.Scan` (the
         scanner's own checked once: :meth:`Scan.but <omnibot.scan.Scan.but>`)."""
-        scan = self._template.but(stamp, measured)
-        self._true.fill(math.inf)
+        scan = self._template.but(stamp, measured)  # _true is cast again, every ray, before it is read
         self.last = scan
         self.scans += 1
         return scan
