@@ -188,6 +188,7 @@ class LaserScanner:
         )  # fmt: skip
         self._batch = np.empty((DRAW_BATCH, 2 * n + SCAN_POOL))
         """Uniform draws of revolutions _batch_rev, _batch_rev + 1...: one per row."""
+        self._batch_rows: list[FloatArray] = list(self._batch)
         self._batch_rev = -DRAW_BATCH
         self._template = Scan(
             stamp=0.0,
@@ -310,7 +311,7 @@ class LaserScanner:
         jumped to the first."""
         row = revolution - self._batch_rev
         if 0 <= row < DRAW_BATCH:
-            return self._batch[row]
+            return self._batch_rows[row]
         if revolution < self._stream_rev:  # back in the stream: from its start again
             self._bitgen = np.random.PCG64(np.random.SeedSequence(self._seed, spawn_key=(self._key,)))
             self._gen = np.random.Generator(self._bitgen)
@@ -319,7 +320,7 @@ class LaserScanner:
             self._bitgen.advance((revolution - self._stream_rev) * self._batch.shape[1])
         self._gen.random(out=self._batch)
         self._batch_rev, self._stream_rev = revolution, revolution + DRAW_BATCH
-        return self._batch[0]
+        return self._batch_rows[0]
 
     def _measure(self, draws: FloatArray, measured: FloatArray) -> None:
         """The revolution's true ranges measured into ``measured`` (:func:`~omnibot.sim.kernels.scan_measure`)."""
