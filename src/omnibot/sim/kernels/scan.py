@@ -97,6 +97,7 @@ def scan_index(
     near = np.full(n_seg, np.inf)
     first = np.zeros(n_seg, dtype=np.int64)
     count = np.zeros(n_seg, dtype=np.int64)
+    px1 = py1 = a1 = np.nan  # the last end point whose angle was found, and that angle
     for e in range(n_seg):
         x0, y0, x1, y1 = segments[e, 0], segments[e, 1], segments[e, 2], segments[e, 3]
         d = segment_distance(ax, ay, x0, y0, x1, y1)
@@ -106,8 +107,10 @@ def scan_index(
         if d <= radius:
             count[e] = SCAN_BINS
             continue
-        a0 = math.atan2(y0 - ay, x0 - ax)
-        span = _wrap(math.atan2(y1 - ay, x1 - ax) - a0)
+        # an outline's edge starts where the one before it ended: that angle is known
+        a0 = a1 if x0 == px1 and y0 == py1 else math.atan2(y0 - ay, x0 - ax)
+        px1, py1, a1 = x1, y1, math.atan2(y1 - ay, x1 - ax)
+        span = _wrap(a1 - a0)
         if span < 0.0:
             a0, span = a0 + span, -span
         widen = math.asin(min(1.0, radius / d)) + 1e-9
@@ -117,9 +120,10 @@ def scan_index(
         count[e] = min(int((a0 + span) / width) - lo + 1, SCAN_BINS)
     order = np.argsort(near)
     starts = np.zeros(SCAN_BINS + 1, dtype=np.int64)
-    for e in range(n_seg):
+    for e in range(n_seg):  # sector b of edge e: first[e] + k, wrapped by a subtraction, not a modulo
         for k in range(count[e]):
-            starts[(first[e] + k) % SCAN_BINS + 1] += 1
+            b = first[e] + k
+            starts[(b - SCAN_BINS if b >= SCAN_BINS else b) + 1] += 1
     for b in range(SCAN_BINS):
         starts[b + 1] += starts[b]
     fill = starts[:-1].copy()
@@ -127,7 +131,8 @@ def scan_index(
     for q in range(n_seg):
         e = order[q]
         for k in range(count[e]):
-            b = (first[e] + k) % SCAN_BINS
+            b = first[e] + k
+            b = b - SCAN_BINS if b >= SCAN_BINS else b
             entries[fill[b]] = e
             fill[b] += 1
     return starts, entries, near
