@@ -120,15 +120,19 @@ def scan_index(
         count[e] = min(int((a0 + span) / width) - lo + 1, SCAN_BINS)
     order = np.argsort(near)
     starts = np.zeros(SCAN_BINS + 1, dtype=np.int64)
-    for e in range(n_seg):  # sector b of edge e: first[e] + k, wrapped by a subtraction, not a modulo
-        for k in range(count[e]):
-            b = first[e] + k
-            starts[(b - SCAN_BINS if b >= SCAN_BINS else b) + 1] += 1
+    # each sector's count: edge e covers first[e] to first[e] + count[e] - 1 on a doubled circle
+    # (differences summed up), sector b being b and b + SCAN_BINS there
+    cover = np.zeros(2 * SCAN_BINS + 1, dtype=np.int64)
+    for e in range(n_seg):
+        cover[first[e]] += 1
+        cover[first[e] + count[e]] -= 1
+    for b in range(2 * SCAN_BINS):
+        cover[b + 1] += cover[b]
     for b in range(SCAN_BINS):
-        starts[b + 1] += starts[b]
+        starts[b + 1] = starts[b] + cover[b] + cover[b + SCAN_BINS]
     fill = starts[:-1].copy()
     entries = np.empty(starts[SCAN_BINS], dtype=np.int64)
-    for q in range(n_seg):
+    for q in range(n_seg):  # sector b of edge e: first[e] + k, wrapped by a subtraction, not a modulo
         e = order[q]
         for k in range(count[e]):
             b = first[e] + k
