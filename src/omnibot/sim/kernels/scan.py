@@ -238,9 +238,8 @@ def _cast_rays(
             e = entries[q]
             if near[e] > best:
                 break
-            best = min(
-                best, _hit(ox, oy, dx, dy, segments[e, 0], segments[e, 1], segments[e, 2], segments[e, 3])
-            )
+            t = _hit(ox, oy, dx, dy, segments[e, 0], segments[e, 1], segments[e, 2], segments[e, 3])
+            best = min(best, t)
         for b in range(body_off.shape[0] - 1):
             if b != own:
                 best = _body_hit(
@@ -326,9 +325,9 @@ def scan_revolution(
     cast as :func:`scan_rays` casts them (the ``P_`` columns of ``params``) into true[first:last];
     then, given ``draws`` (2 per ray and SCAN_POOL; none: the revolution goes on), the whole
     revolution measured from ``true`` into ``measured`` (:func:`scan_measure`). The scanner's
-    origins over the rows of ``hist_p`` must lie within
-    params[P_INNER] of (params[P_AX], params[P_AY]), the disc the edge index holds: else nothing is
-    done and False returned (the caller builds an index for them and calls again)."""
+    origins over the rows of ``hist_p`` must lie within params[P_INNER] of (params[P_AX],
+    params[P_AY]), the disc the edge index holds: else nothing is done and False returned (the
+    caller builds an index for them and calls again)."""
     if not _index_holds(hist_p, 3 * own, params[P_AX], params[P_AY], params[P_INNER]):
         return False
     _cast_rays(

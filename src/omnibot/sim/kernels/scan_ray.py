@@ -55,11 +55,10 @@ def turned(c: float, s: float, d: float) -> tuple[float, float]:
     """(cos, sin) of the angle d (|d| <= SMALL_TURN) more than the one whose cos and sin are c, s:
     d's own by their series to d^8 and d^9 (off by less than 3e-16), then turned by it."""
     d2 = d * d
-    cd = 1.0 - d2 * 0.5 * (1.0 - d2 * (1.0 / 12.0) * (1.0 - d2 * (1.0 / 30.0) * (1.0 - d2 * (1.0 / 56.0))))
-    sd = d * (
-        1.0
-        - d2 * (1.0 / 6.0) * (1.0 - d2 * (1.0 / 20.0) * (1.0 - d2 * (1.0 / 42.0) * (1.0 - d2 * (1.0 / 72.0))))
-    )
+    cd = 1.0 - d2 * (1.0 / 30.0) * (1.0 - d2 * (1.0 / 56.0))  # Horner's, from the innermost term
+    cd = 1.0 - d2 * 0.5 * (1.0 - d2 * (1.0 / 12.0) * cd)
+    sd = 1.0 - d2 * (1.0 / 42.0) * (1.0 - d2 * (1.0 / 72.0))
+    sd = d * (1.0 - d2 * (1.0 / 6.0) * (1.0 - d2 * (1.0 / 20.0) * sd))
     return c * cd - s * sd, s * cd + c * sd
 
 
