@@ -42,6 +42,7 @@ from scipy import ndimage
 
 from omnibot.mapping.grid import OccupancyGrid
 from omnibot.mapping.se2 import compose, inverse, wrap
+from omnibot.mapping.surface import SurfaceField
 from omnibot.motion import Pose2D
 from omnibot.scan import Scan
 
@@ -71,6 +72,8 @@ class LikelihoodField:
         self.dist: FloatArray = np.asarray(dist, dtype=np.float64)
         self.grid = grid
         self.max_dist = float(max_dist)
+        self.surface = SurfaceField(grid, occupied, max_dist=max_dist)
+        """The walls as local lines: what :func:`refine_pose` matches to."""
         o = grid.origin
         self._c, self._s = math.cos(o.theta), math.sin(o.theta)
 
@@ -93,26 +96,6 @@ class LikelihoodField:
         out[inside] = self.dist[row[inside], col[inside]]
         return out
 
-    def bilinear(self, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Interpolated distance and its gradient (d/dx, d/dy in the map frame) at 1-D points."""
-        u, v = self._local(x, y)
-        c0, r0 = np.floor(u).astype(np.int64), np.floor(v).astype(np.int64)
-        fu, fv = u - c0, v - r0
-        rows, cols = self.dist.shape
-        padded = np.pad(self.dist, 1, constant_values=self.max_dist)
-        c0p = np.clip(c0 + 1, 0, cols)
-        r0p = np.clip(r0 + 1, 0, rows)
-        d00 = padded[r0p, c0p]
-        d01 = padded[r0p, c0p + 1]
-        d10 = padded[r0p + 1, c0p]
-        d11 = padded[r0p + 1, c0p + 1]
-        d = (1 - fv) * ((1 - fu) * d00 + fu * d01) + fv * ((1 - fu) * d10 + fu * d11)
-        du = ((1 - fv) * (d01 - d00) + fv * (d11 - d10)) / self.grid.resolution
-        dv = ((1 - fu) * (d10 - d00) + fu * (d11 - d01)) / self.grid.resolution
-        gx = self._c * du - self._s * dv
-        gy = self._s * du + self._c * dv
-        return d, gx, gy
-
 
 def refine_pose(
     field: LikelihoodField, points: FloatArray, start: Pose2D, *, iterations: int = 10, huber: float = 0.05
@@ -125,8 +108,7 @@ def refine_pose(
         c, s = math.cos(th), math.sin(th)
         px = x + c * points[:, 0] - s * points[:, 1]
         py = y + s * points[:, 0] + c * points[:, 1]
-        d, gx, gy = field.bilinear(px, py)
-        ok = d < field.max_dist * 0.999
+        d, gx, gy, ok = field.surface.residuals(px, py)
         if ok.sum() < 3:
             break
         d, gx, gy = d[ok], gx[ok], gy[ok]
