@@ -1,16 +1,17 @@
 """A robot at rest in a mapped room: the localiser's pose stays on the truth, scan after scan.
 
 The scanner is the presets' RPLIDAR A1 (360 rays, range noise 1 % of the distance, 1 % dropouts),
-the map the room rasterised at 2.5 cm (goto's benchmark's) and made from scans at 5 cm (``omnibot
-map``'s). The bound, 1 cm after the first second (ten scans), from the errors' two sources:
+the map the room rasterised at 2.5 cm (goto's benchmark's) and at 5 cm (``omnibot map``'s cells).
+The bounds, 1 cm and 0.5 degrees after the first second (ten scans), from the errors' sources:
 
-* noise: about 340 returns per scan, a quarter on each of the room's four walls 1.5-3.5 m away
-  (sigma 1.5-3.5 cm): the least-squares position across a wall is good to about 3 cm / sqrt(85),
-  0.3 cm, 1 cm at three sigma;
+* noise: about 340 returns per scan, a quarter on each of the room's four walls 1-4 m away (sigma
+  1-4 cm): the least-squares position across a wall is good to about 3 cm / sqrt(85), 0.3 cm,
+  1 cm at three sigma; the heading, with the returns 1-4 m from the robot, to a tenth of a degree;
 * the map: a wall is a band of cells one or two thick; matched to the band's middle line, the
-  rasterisation's error is a fraction of a cell, well under the noise's (a matcher that lets the
-  returns sit anywhere in the bands, as main's did, is free to wander 1.25 cm across each wall of
-  a 2.5 cm map and 2.5 cm of a 5 cm one: up to 2.7 cm measured).
+  rasterisation's error is a fraction of a cell, well under the noise's. A matcher that lets the
+  returns sit anywhere in the bands (main's, on the distance to the cells' centres) is free to
+  wander 1.25 cm across each wall of a 2.5 cm map and 2.5 cm of a 5 cm one: 1.1-3.9 cm and up to
+  0.7 degrees measured on these poses (issue 25's "up to 4 cm at rest").
 """
 
 from __future__ import annotations

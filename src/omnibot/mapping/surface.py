@@ -60,6 +60,14 @@ def window_moments(cells: BoolArray, window: int) -> tuple[FloatArray, FloatArra
     return count, mean, cov
 
 
+def cell_coordinates(grid: OccupancyGrid, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Map-frame points -> continuous cell coordinates (col, row), measured from cell (0, 0)'s centre."""
+    o, res = grid.origin, grid.resolution
+    c, s = math.cos(o.theta), math.sin(o.theta)
+    dx, dy = x - o.x, y - o.y
+    return (c * dx + s * dy) / res - 0.5, (-s * dx + c * dy) / res - 0.5
+
+
 class SurfaceField:
     """The wall nearest to every cell of ``grid`` as a line (see the module docstring)."""
 
@@ -75,14 +83,16 @@ class SurfaceField:
         """Cells within ``max_dist`` of a face: elsewhere a point has no residual."""
         self._nearest = (np.asarray(nearest[0]), np.asarray(nearest[1]))
         count, mean, cov = window_moments(face, window)
-        vals, vecs = np.linalg.eigh(cov)
-        self.line: BoolArray = face & (count >= 3) & (vals[..., 0] <= LINE_SPREAD * vals[..., 1])
+        vals, vecs = np.linalg.eigh(cov[face])
+        self.line: BoolArray = face.copy()
         """Face cells whose neighbourhood is a line."""
+        self.line[face] = (count[face] >= 3) & (vals[:, 0] <= LINE_SPREAD * vals[:, 1])
         rows, cols = np.indices(face.shape)
         # each cell's anchor (the line's mean, or the cell's own centre) and normal, in cells (col, row)
         self.anchor = np.stack((cols, rows), axis=-1).astype(np.float64)
         self.anchor[self.line] += mean[self.line]
-        self.normal = np.where(self.line[..., None], vecs[..., :, 0], 0.0)
+        self.normal = np.zeros_like(self.anchor)
+        self.normal[self.line] = vecs[self.line[face], :, 0]
         o = grid.origin
         self._c, self._s = math.cos(o.theta), math.sin(o.theta)
 
@@ -90,10 +100,7 @@ class SurfaceField:
         """At 1-D map-frame points: each one's distance (m; signed along the normal on a line) to
         its nearest wall, that distance's gradient (d/dx, d/dy in the map frame) and whether the
         point is near enough a wall to have one."""
-        o, res = self.grid.origin, self.grid.resolution
-        dx, dy = x - o.x, y - o.y
-        u = (self._c * dx + self._s * dy) / res - 0.5  # cells from cell (0, 0)'s centre
-        v = (-self._s * dx + self._c * dy) / res - 0.5
+        u, v = cell_coordinates(self.grid, x, y)
         col, row = np.floor(u + 0.5).astype(np.int64), np.floor(v + 0.5).astype(np.int64)
         rows, cols = self.reach.shape
         ok = (row >= 0) & (row < rows) & (col >= 0) & (col < cols)
@@ -106,7 +113,7 @@ class SurfaceField:
         on_line = self.line[fr, fc]
         dist = np.hypot(du, dv)
         safe = np.maximum(dist, 1e-12)
-        r[ok] = np.where(on_line, n[:, 0] * du + n[:, 1] * dv, dist) * res
+        r[ok] = np.where(on_line, n[:, 0] * du + n[:, 1] * dv, dist) * self.grid.resolution
         ku[ok] = np.where(on_line, n[:, 0], du / safe)
         kv[ok] = np.where(on_line, n[:, 1], dv / safe)
         gx = self._c * ku - self._s * kv
@@ -114,4 +121,4 @@ class SurfaceField:
         return r, gx, gy, ok
 
 
-__all__ = ["LINE_SPREAD", "SurfaceField", "faces", "window_moments"]
+__all__ = ["LINE_SPREAD", "SurfaceField", "cell_coordinates", "faces", "window_moments"]
