@@ -30,8 +30,7 @@ from benchmarks.planner import rasterise
 from omnibot.lidar import open_scanner
 from omnibot.mapping import Localiser, LocalisingSink
 from omnibot.motion import Pose2D
-from omnibot.navigation import simulated_client
-from omnibot.navigation.goto import navigation_runtime
+from omnibot.navigation import navigation_runtime, simulated_client
 from omnibot.robot import load_robot
 from omnibot.runtime import Cycle
 from omnibot.sim import load_world
