@@ -1,13 +1,14 @@
 """The localiser on a robot at rest: its pose beside the simulator's truth every cycle (issue 25).
 
 Run: ``python -m benchmarks.localise_rest`` (``--robots``, ``--worlds``, ``--poses N``,
-``--seconds S``, ``--resolution M``; a minute or two per world on one core).
+``--seconds S``, ``--resolution M``, ``--map MAP.yaml``; a minute or two per world on one core).
 
 For each world, robot and pose (the world's start, then ``N - 1`` seeded poses where the robot
 fits, :func:`benchmarks.goto.goals`): the robot stands there in a fresh lockstep simulator (seed
 k, firmware and physics) on goto's runtime (:func:`omnibot.navigation.goto.navigation_runtime`,
 nothing driving), the :class:`~omnibot.mapping.Localiser` in the world rasterised at
-``--resolution`` (goto's benchmark's 2.5 cm by default) started 5 cm of spread about the truth and
+``--resolution`` (goto's benchmark's 2.5 cm by default), or in a saved map (``--map``: ``omnibot
+map``'s of the world, whose map frame is the world's), started 5 cm of spread about the truth and
 fed by the robot's scanner (:class:`~omnibot.mapping.LocalisingSink`, as ``omnibot goto``). Every
 cycle: the truth, the localiser's pose now (its ``map -> odom`` on the latest odometry) and the
 runtime's estimate (the fused odometry, which at rest must not move). Reported per world and
@@ -28,7 +29,7 @@ from numpy.typing import NDArray
 from benchmarks.goto import goals
 from benchmarks.planner import rasterise
 from omnibot.lidar import open_scanner
-from omnibot.mapping import Localiser, LocalisingSink
+from omnibot.mapping import Localiser, LocalisingSink, OccupancyGrid, load_map
 from omnibot.motion import Pose2D
 from omnibot.navigation import navigation_runtime, simulated_client
 from omnibot.robot import load_robot
@@ -74,10 +75,11 @@ class Rest:
         return float(np.hypot(*(e - e[0]).T).max())
 
 
-def at_rest(robot_name: str, world: str, pose: Pose2D, seed: int, seconds: float, resolution: float) -> Rest:
-    """The robot standing at ``pose`` for ``seconds`` (simulated), localised in the world's raster."""
+def at_rest(
+    robot_name: str, world: str, pose: Pose2D, seed: int, seconds: float, grid: OccupancyGrid
+) -> Rest:
+    """The robot standing at ``pose`` in ``world`` for ``seconds`` (simulated), localised in ``grid``."""
     robot = load_robot(robot_name)
-    grid = rasterise(load_world(world), resolution)
     rows: list[tuple[float, ...]] = []
     with simulated_client(robot, world=world, start=pose, seed=seed) as client:
         sim = find_simulator(client.link)
@@ -125,6 +127,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--poses", type=int, default=3, help="the world's start and N - 1 seeded poses")
     parser.add_argument("--seconds", type=float, default=6.0)
     parser.add_argument("--resolution", type=float, default=0.025)
+    parser.add_argument("--map", help="localise in this saved map (omnibot map's) instead; one world")
     args = parser.parse_args(argv)
     print(
         "| world | robot | poses | localiser from the truth (mean, 95 %, max) | heading (max, deg) | "
@@ -133,12 +136,10 @@ def main(argv: list[str] | None = None) -> int:
     print("|---|---|---|---|---|---|---|")
     for world in args.worlds.split(","):
         start = load_world(world).start or Pose2D(0.0, 0.0, 0.0)
+        grid = load_map(args.map) if args.map else rasterise(load_world(world), args.resolution)
         for robot in args.robots.split(","):
             poses = [start, *goals(robot, args.poses - 1, world)]
-            rests = [
-                at_rest(robot, world, pose, k + 1, args.seconds, args.resolution)
-                for k, pose in enumerate(poses)
-            ]
+            rests = [at_rest(robot, world, pose, k + 1, args.seconds, grid) for k, pose in enumerate(poses)]
             print(row(world, robot, rests), flush=True)
     return 0
 

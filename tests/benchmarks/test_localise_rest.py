@@ -4,13 +4,16 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from benchmarks.planner import rasterise
 
 from benchmarks import localise_rest
 from omnibot.motion import Pose2D
+from omnibot.sim import load_world
 
 
 def test_a_robot_at_rest_is_traced_every_cycle_after_the_first_second() -> None:
-    rest = localise_rest.at_rest("omni3", "room", Pose2D(1.0, 1.0, 0.0), seed=1, seconds=2.5, resolution=0.05)
+    grid = rasterise(load_world("room"), 0.05)
+    rest = localise_rest.at_rest("omni3", "room", Pose2D(1.0, 1.0, 0.0), seed=1, seconds=2.5, grid=grid)
     steps = np.diff(rest.rows[:, 0])
     assert len(steps) > 100 and np.allclose(steps, 0.01)  # every cycle (binary telemetry: 10 ms)
     assert rest.drift == 0.0  # nothing drives: the estimate stays put, whatever moves is the localiser
