@@ -15,7 +15,8 @@ from omnibot.robot import RobotDescription, load_robot, parse_description
 from omnibot.scan import Scan
 from omnibot.sim.fleet import Fleet
 from omnibot.sim.kernels import layout
-from omnibot.sim.scanner import PoseLog
+from omnibot.sim.kernels.scan_noise import SCAN_POOL
+from omnibot.sim.scanner import LaserScanner, PoseLog
 from omnibot.sim.simulator import Simulator
 from omnibot.sim.truth import Snapshot
 from omnibot.sim.world import load_world, parse_world
@@ -368,3 +369,18 @@ def test_a_revolution_whose_rays_were_all_cast_before_its_end_is_measured_at_its
     for a, b in zip(early, usual, strict=True):
         np.testing.assert_array_equal(a.ranges, b.ranges)
     assert np.isfinite(early[0].ranges).all()
+
+
+def test_the_noise_drawn_for_many_revolutions_at_once_is_each_revolutions_own_slice_of_the_stream() -> None:
+    spec = load_robot("omni4").scanner
+    assert spec is not None
+    scanner = LaserScanner(spec, seed=4, key=200)
+    size = 2 * spec.rays + SCAN_POOL
+
+    def alone(revolution: int) -> np.ndarray:
+        bits = np.random.PCG64(np.random.SeedSequence(4, spawn_key=(200,)))
+        bits.advance(revolution * size)
+        return np.random.Generator(bits).random(size)
+
+    for revolution in (0, 1, 7, 8, 30, 31, 2, 40):  # in order, across batches, jumped ahead and back
+        np.testing.assert_array_equal(scanner._draws(revolution), alone(revolution))

@@ -19,9 +19,10 @@ A revolution is delivered as a :class:`~omnibot.scan.Scan` once its last ray's t
 Each range is the true distance to the nearest wall, obstacle or other body plus
 N(0, noise_std + noise_fraction * distance), quantised to ``resolution``; ``inf`` for a dropout or
 a return outside [range_min, range_max]. The noise of revolution ``k`` is a fixed slice of the
-scanner's own random stream (``3 * rays`` uniform draws per revolution, the stream jumped ahead to
-revolution ``k``), so a revolution's ranges are the same whenever the scanner was switched on and
-however often it was flushed, and no other sensor's stream changes.
+scanner's own random stream (``2 * rays + SCAN_POOL`` uniform draws per revolution, the stream
+jumped ahead to revolution ``k``; the normals by the ziggurat, :mod:`~omnibot.sim.kernels.scan_noise`),
+so a revolution's ranges are the same whenever the scanner was switched on and however often it was
+flushed, and no other sensor's stream changes.
 """
 
 from __future__ import annotations
@@ -38,7 +39,7 @@ from omnibot.motion import Pose2D
 from omnibot.robot import ScannerSpec
 from omnibot.scan import Scan
 from omnibot.sim import jit
-from omnibot.sim.kernels import layout
+from omnibot.sim.kernels import layout, ray_table
 from omnibot.sim.kernels.scan import (
     P_DROPOUT,
     P_DT,
@@ -55,6 +56,7 @@ from omnibot.sim.kernels.scan import (
     SCAN_BINS,
     SCAN_PARAMS,
 )
+from omnibot.sim.kernels.scan_noise import SCAN_POOL
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -64,6 +66,8 @@ _NO_VERTICES = np.zeros((0, 2))
 _NO_BODIES = np.zeros(1, dtype=np.int64)
 _NO_RAYS = np.zeros(0)
 _NO_INDEX = (np.zeros(SCAN_BINS + 1, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0))
+DRAW_BATCH = 8
+"""Revolutions whose noise is drawn in one call of the random generator."""
 INDEX_SLACK = 0.25
 """m: room the scanner's edge index leaves around the origins it was made for (see _index_for)."""
 
@@ -113,17 +117,17 @@ class PoseLog:
         """The rows as an (H, 3 bodies) array: a view of the body's log when there is one body, else
         the bodies' logs side by side (made once per record: the scanners of a fleet flushed
         together share it)."""
-        logs = [b.pose_log() for b in self.bodies]
-        si = logs[0][1]
-        n, key = int(si[layout.I_LOG_N]), (int(si[layout.I_LOG_N]), int(si[layout.I_LOG_NEXT]))
+        rows, si = self.bodies[0].pose_log()
+        n = int(si[layout.I_LOG_N])
         if n > self.capacity:
             raise SimulationError(
                 f"the scanners' pose log overflowed ({n} rows in {self.capacity}): a flush came too late"
             )
-        if len(logs) == 1:
-            return logs[0][0][:n]
+        if len(self.bodies) == 1:
+            return rows[:n]
+        key = (n, int(si[layout.I_LOG_NEXT]))
         if key != self._joined_key:
-            self._joined = np.concatenate([rows[:n] for rows, _ in logs], axis=1)
+            self._joined = np.concatenate([b.pose_log()[0][:n] for b in self.bodies], axis=1)
             self._joined_key = key
         return self._joined
 
@@ -162,8 +166,9 @@ class LaserScanner:
         """Angle between consecutive rays, rad (negative: clockwise)."""
         self.angles: FloatArray = np.arange(n, dtype=np.float64) * self.angle_increment
         """Direction of every ray in the scanner frame, rad."""
-        self._base_angles = np.ascontiguousarray(self.angles + spec.yaw)
         self._offsets = np.arange(n, dtype=np.float64) * self.time_increment
+        self._rays = ray_table.py_func(self._offsets, self.angles + spec.yaw)
+        """Each ray's time in the revolution and direction in the robot's base frame, with its cos and sin."""
         self._seed, self._key = seed, key
         self._bitgen = np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(key,)))
         self._gen = np.random.Generator(self._bitgen)
@@ -181,7 +186,10 @@ class LaserScanner:
         self._params[P_NOISE_STD : P_RANGE_MAX + 1] = (
             spec.noise_std, spec.noise_fraction, spec.resolution, spec.dropout, spec.range_min, spec.range_max,
         )  # fmt: skip
-        self._draw_buffer = np.empty(3 * n)
+        self._batch = np.empty((DRAW_BATCH, 2 * n + SCAN_POOL))
+        """Uniform draws of revolutions _batch_rev, _batch_rev + 1...: one per row."""
+        self._batch_rows: list[FloatArray] = list(self._batch)
+        self._batch_rev = -DRAW_BATCH
         self._template = Scan(
             stamp=0.0,
             angle_min=0.0,
@@ -269,7 +277,7 @@ class LaserScanner:
             draws = self._draws(self.revolution) if whole else _NO_RAYS
             first, cast = self._next_ray, last > self._next_ray
             while cast and not jit.active.scan_revolution(
-                stamp, first, last, self._offsets, self._base_angles, hist, own, params, segments, *self._index,
+                stamp, first, last, self._rays, hist, own, params, segments, *self._index,
                 body_v, body_off, self._true, draws, measured,
             ):  # fmt: skip
                 self._index_for(segments, hist, own)
@@ -297,17 +305,22 @@ class LaserScanner:
         self._index_segments = segments
 
     def _draws(self, revolution: int) -> FloatArray:
-        """The 3 * rays uniform draws of ``revolution`` (the stream jumped to it), in a buffer of the
-        scanner's own (overwritten by the next revolution's)."""
-        size = 3 * self.spec.rays
+        """The 2 * rays + SCAN_POOL uniform draws of ``revolution`` (what
+        :func:`~omnibot.sim.kernels.scan_measure` takes): a row of a batch drawn for DRAW_BATCH
+        revolutions at once (the stream gives the same numbers in one call or many), the stream
+        jumped to the first."""
+        row = revolution - self._batch_rev
+        if 0 <= row < DRAW_BATCH:
+            return self._batch_rows[row]
         if revolution < self._stream_rev:  # back in the stream: from its start again
             self._bitgen = np.random.PCG64(np.random.SeedSequence(self._seed, spawn_key=(self._key,)))
             self._gen = np.random.Generator(self._bitgen)
             self._stream_rev = 0
         if revolution > self._stream_rev:
-            self._bitgen.advance((revolution - self._stream_rev) * size)
-        self._stream_rev = revolution + 1
-        return self._gen.random(size, out=self._draw_buffer)
+            self._bitgen.advance((revolution - self._stream_rev) * self._batch.shape[1])
+        self._gen.random(out=self._batch)
+        self._batch_rev, self._stream_rev = revolution, revolution + DRAW_BATCH
+        return self._batch_rows[0]
 
     def _measure(self, draws: FloatArray, measured: FloatArray) -> None:
         """The revolution's true ranges measured into ``measured`` (:func:`~omnibot.sim.kernels.scan_measure`)."""
@@ -320,8 +333,7 @@ class LaserScanner:
     def _deliver(self, stamp: float, measured: FloatArray) -> Scan:
         """The revolution that began at ``stamp``, measured, as a :class:`~omnibot.scan.Scan` (the
         scanner's own checked once: :meth:`Scan.but <omnibot.scan.Scan.but>`)."""
-        scan = self._template.but(stamp, measured)
-        self._true.fill(math.inf)
+        scan = self._template.but(stamp, measured)  # _true is cast again, every ray, before it is read
         self.last = scan
         self.scans += 1
         return scan
