@@ -8,12 +8,13 @@ import numpy as np
 import pytest
 
 from omnibot.client import RobotClient
-from omnibot.control import Path, make_follower, standard_path
+from omnibot.control import Path, correction_speed, make_follower, standard_path
 from omnibot.control.paths.standard import SWING
 from omnibot.errors import ConfigError
 from omnibot.estimation import SlipParameters
 from omnibot.motion import Pose2D, Twist
-from omnibot.navigation.metrics import ODOMETRY, TRUTH, tracking_report
+from omnibot.navigation.metrics import ODOMETRY, TRUTH, follow_report, tracking_report
+from omnibot.navigation.outcome import Tolerances
 from omnibot.navigation.runner import NavigationError, Navigator
 from omnibot.navigation.session import (
     PLAN_FLOOR_USE,
@@ -255,3 +256,38 @@ def test_a_robot_described_without_a_gyro_cannot_calibrate_one() -> None:
         with pytest.raises(ConfigError, match="omni4 has no gyro to calibrate"):
             nav.calibrate_gyro()
         nav.close()
+
+
+def test_a_robot_shoved_far_off_its_path_is_not_chased_and_the_follow_is_not_completed() -> None:
+    # omni3 (30 kg, 5 m/s) on a 3 m line; 2 s in, a hand shoves it sideways (15 g for 0.3 s)
+    robot = load_robot("omni3")
+    n = 61
+    path = Path(np.linspace(0.0, 3.0, n), np.zeros(n), np.zeros(n))
+    follower = make_follower("tracker", follower_limits(robot), rate=100.0)
+    with simulated_client(robot, seed=1) as client:
+        nav = Navigator(client, robot)
+        sim = nav.sim
+        assert sim is not None
+        shoved: list[float] = []
+
+        def hand(cycle: Cycle) -> None:
+            if not shoved and cycle.now >= 2.5:
+                sim.push((0.0, 15.0 * robot.mass), duration=0.3, motors_off=False)
+                shoved.append(cycle.now)
+
+        try:
+            nav.prepare(0.5)
+            nav.runtime.add_sink(hand)
+            run = nav.follow(path, follower)
+        finally:
+            nav.close()
+    assert shoved and not run.completed
+    assert run.failure.startswith("off the path: 5") and "(more than 50 cm), not chased" in run.failure
+    report = follow_report(run, robot, Tolerances())
+    assert not report["completed"] and report["failures"][0] == run.failure
+    # until it gave up it asked at most the path's planned speed plus the bounded correction
+    commands = run.arrays()["command"]
+    planned = follower.profile.speed.max()  # type: ignore[attr-defined]
+    assert (
+        np.hypot(commands[:, 0], commands[:, 1]).max() <= planned + correction_speed(follower.limits) + 1e-9
+    )

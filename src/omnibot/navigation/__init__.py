@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 from omnibot.faces import lazy_names
 
 if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
+    from omnibot.navigation.brake import BrakeSource
     from omnibot.navigation.following import FOLLOWER_PRIORITY, follower_source
     from omnibot.navigation.goal import GotoOptions, GotoResult, PoseProvider, ScanSource
     from omnibot.navigation.goto import navigation_runtime
@@ -34,6 +35,7 @@ if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
     from omnibot.navigation.webteach import PathTeacher
 
 _EXPORTS = {
+    "brake": ("BrakeSource",),
     "following": ("FOLLOWER_PRIORITY", "follower_source"),
     "goal": ("GotoOptions", "GotoResult", "PoseProvider", "ScanSource"),
     "goto": ("navigation_runtime",),
@@ -55,6 +57,7 @@ __all__ = [
     "MIN_POINTS",
     "SLIP_COURSES",
     "STANDSTILL",
+    "BrakeSource",
     "FollowJudge",
     "FollowOptions",
     "GotoOptions",
@@ -67,6 +70,7 @@ __all__ = [
     "ScanSource",
     "SlipCalibration",
     "Tolerances",
+    "brake",
     "calibrate_slip",
     "check_recording",
     "explore",

@@ -14,7 +14,8 @@ velocity and turn rate at every instant. Each control period (100 Hz or more):
    (gain ``cross``, integral ``cross_i``, clamped), along-track with a PI (``along``, ``along_i``),
    and heading with a PI (``heading``, by default :func:`heading_gain`; ``heading_i``) towards the
    path's heading where the robot is along it (the reference's, moved by the along-track error);
-4. **command**: v = v_ref + k_t e_t t + k_n e_n n and w = w_ref + k_theta e_theta, turned into the
+4. **command**: v = v_ref + k_t e_t t + k_n e_n n and w = w_ref + k_theta e_theta, the correction
+   (v - v_ref) within :func:`~omnibot.control.followers.base.correction_speed`, turned into the
    body frame with the heading at the middle of the next period, speed clamped to the limit, and
    the twist scaled down as a whole where it would be beyond the robot's reach
    (:func:`within_reach`: the wheels' free speed and the floor's load);
@@ -40,7 +41,9 @@ from omnibot.control.followers.base import (
     Command,
     Follower,
     State,
+    bound_correction,
     clamp_speed,
+    correction_speed,
     register,
     to_body,
     wrap,
@@ -139,6 +142,8 @@ class ProfileTracker(Follower):
         self.progress_heading = progress_heading
         """Ask for the path's heading where the robot is along it; False: the reference's own,
         wherever the robot is."""
+        self.correction = correction_speed(limits)
+        """m/s: the most the feedback adds to the reference's velocity (:func:`correction_speed`)."""
         self.response = VelocityResponse() if adapt else None
         self.profile: SpeedProfile | None = None
         self.tau = 0.0
@@ -147,6 +152,8 @@ class ProfileTracker(Follower):
         self._integral = np.zeros(3)  # along, cross, heading
         self._holds_heading = False
         self._ended_at: float | None = None
+        self._steady: bool | None = None  # the last command's reference was steady (None: a STOP)
+        self._dt_seen = 0.0  # the last command's interval, s
         self.errors = (0.0, 0.0, 0.0)
         """Last along-track, cross-track (m) and heading (rad) errors of the estimate."""
 
@@ -163,12 +170,13 @@ class ProfileTracker(Follower):
         if self.response is not None:
             self.response.reset()
 
-    def update(self, state: State) -> Command:
+    def command(self, state: State) -> Command:
         """Track the time-parametrised reference with feedforward plus feedback; STOP once done."""
         prof, path = self.profile, self.path
         assert prof is not None and path is not None
         self.planned_accel = 0.0
         self.planned_body_accel = None
+        self._steady = None
         if self.done:
             return STOP
         dt = self.dt if self._last_t is None else max(0.0, state.t - self._last_t)
@@ -215,7 +223,15 @@ class ProfileTracker(Follower):
         body = to_body(acc_x, acc_y, alpha, heading + 0.5 * w * self.dt)  # the same axes
         self.planned_body_accel = (body.vx, body.vy, body.w)
         steady = math.hypot(ref.ax, ref.ay) < STEADY_ACCEL and abs(ref.ax * tx + ref.ay * ty) < STEADY_SPEEDUP
-        return self._through_response(state, command, steady, dt)
+        self._steady, self._dt_seen = steady, dt
+        return command
+
+    def respond(self, state: State, command: Command) -> Command:
+        """``command`` (the body's twist, within the limits) through the learned response model and
+        within the robot's reach (:meth:`_through_response`); a STOP as it is."""
+        if self._steady is None:
+            return command
+        return self._through_response(state, command, self._steady, self._dt_seen)
 
     def _feedback(
         self, vx: float, vy: float, w: float, tx: float, ty: float, dt: float
@@ -228,7 +244,8 @@ class ProfileTracker(Follower):
         integral = self._integrate(e_t, e_n, e_th, dt)
         u_t = self.k_along * e_t + self.i_along * integral[0]
         u_n = self.k_cross * e_n + self.i_cross * integral[1]
-        vx, vy = clamp_speed(vx + u_t * tx + u_n * nx, vy + u_t * ty + u_n * ny, limits.v_max)
+        cx, cy = bound_correction(vx + u_t * tx + u_n * nx, vy + u_t * ty + u_n * ny, vx, vy, self.correction)
+        vx, vy = clamp_speed(cx, cy, limits.v_max)
         w = w + self.k_heading * e_th + self.i_heading * integral[2]
         return vx, vy, max(-limits.w_max, min(limits.w_max, w))
 
