@@ -294,7 +294,7 @@ def test_a_robot_blind_to_a_box_the_map_lacks_stalls_against_it_and_says_so(tmp_
 
 
 def shoved_goto(max_replans: int) -> tuple[GotoResult, Pose2D, int]:
-    """omni3 going across the room, shoved by a hand 1 s into its leg (8 g for 0.3 s, to the left of
+    """omni3 going across the room, shoved by a hand 1 s into its leg (8 N/kg for 0.3 s, to the left of
     its travel: past the 50 cm the follower chases); the result, the truth at the end, contacts."""
     robot = load_robot("omni3")
     client = simulated_client(robot, world="room", start=ROOM_START, seed=4)

@@ -55,8 +55,8 @@ from omnibot.control.paths.profile import SpeedProfile
 
 STEADY_ACCEL = 0.5
 """m/s^2: the response model learns only while the reference accelerates less than this (and the
-estimator sees no slip, and its speed changes slower than :data:`STEADY_SPEEDUP`): it is a
-steady-state gain."""
+estimator sees no slip, its speed changes slower than :data:`STEADY_SPEEDUP` and the feedback is
+within its bound, :attr:`ProfileTracker.correcting`): it is a steady-state gain."""
 STEADY_SPEEDUP = 0.1
 """m/s^2: the response model also learns only while the reference's speed changes slower than this.
 It compares the body's velocity with the command of ``delay`` before (the wheel loop's lag); a
@@ -144,6 +144,11 @@ class ProfileTracker(Follower):
         wherever the robot is."""
         self.correction = correction_speed(limits)
         """m/s: the most the feedback adds to the reference's velocity (:func:`correction_speed`)."""
+        self.correcting = False
+        """The last command's feedback was cut to :attr:`correction`: the robot is coming back to the
+        path (a push, a corrected estimate), lagging its command by design, and the response model
+        does not learn from it (it read a 30 cm recovery on omni4 as a slow floor and then asked
+        1.30 m/s of a 1 m/s robot)."""
         self.response = VelocityResponse() if adapt else None
         self.profile: SpeedProfile | None = None
         self.tau = 0.0
@@ -222,7 +227,11 @@ class ProfileTracker(Follower):
         command = to_body(vx, vy, w, heading, self.dt)
         body = to_body(acc_x, acc_y, alpha, heading + 0.5 * w * self.dt)  # the same axes
         self.planned_body_accel = (body.vx, body.vy, body.w)
-        steady = math.hypot(ref.ax, ref.ay) < STEADY_ACCEL and abs(ref.ax * tx + ref.ay * ty) < STEADY_SPEEDUP
+        steady = (
+            math.hypot(ref.ax, ref.ay) < STEADY_ACCEL
+            and abs(ref.ax * tx + ref.ay * ty) < STEADY_SPEEDUP
+            and not self.correcting
+        )
         self._steady, self._dt_seen = steady, dt
         return command
 
@@ -244,6 +253,7 @@ class ProfileTracker(Follower):
         integral = self._integrate(e_t, e_n, e_th, dt)
         u_t = self.k_along * e_t + self.i_along * integral[0]
         u_n = self.k_cross * e_n + self.i_cross * integral[1]
+        self.correcting = math.hypot(u_t, u_n) > self.correction
         cx, cy = bound_correction(vx + u_t * tx + u_n * nx, vy + u_t * ty + u_n * ny, vx, vy, self.correction)
         vx, vy = clamp_speed(cx, cy, limits.v_max)
         w = w + self.k_heading * e_th + self.i_heading * integral[2]
