@@ -29,10 +29,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from omnibot.control import Path, make_follower
+from omnibot.control import Follower, Path, make_follower
 from omnibot.motion import Pose2D
 from omnibot.navigation import Navigator, simulated_client
 from omnibot.navigation.session import follower_limits
+from omnibot.navigation.trace import FollowRun
 from omnibot.robot import load_robot
 from omnibot.runtime import Cycle
 
@@ -65,8 +66,10 @@ def line() -> Path:
     return Path(np.linspace(0.0, LENGTH, n), np.zeros(n), np.zeros(n))
 
 
-def run(robot_name: str, follower_name: str, scenario: str, speed: float | None, seed: int = 1) -> Outcome:
-    """Follow the line in ``scenario`` (see the module docstring)."""
+def follow_line(
+    robot_name: str, follower_name: str, scenario: str, speed: float | None = None, seed: int = 1
+) -> tuple[FollowRun, Follower]:
+    """Follow the line in ``scenario`` (see the module docstring): the run and its follower."""
     robot = load_robot(robot_name)
     path = line()
     beside = SCENARIOS[scenario] if scenario in ("offset", "far") else 0.0
@@ -85,9 +88,15 @@ def run(robot_name: str, follower_name: str, scenario: str, speed: float | None,
         try:
             nav.prepare(0.5)
             nav.runtime.add_sink(hand)
-            trace = nav.follow(path, follower)
+            return nav.follow(path, follower), follower
         finally:
             nav.close()
+
+
+def run(robot_name: str, follower_name: str, scenario: str, speed: float | None, seed: int = 1) -> Outcome:
+    """Follow the line in ``scenario`` and measure it."""
+    trace, follower = follow_line(robot_name, follower_name, scenario, speed, seed)
+    path = trace.path
     a = trace.arrays()
     profile = getattr(follower, "profile", None)
     planned = float(profile.speed.max()) if profile is not None else math.nan

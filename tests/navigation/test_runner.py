@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from benchmarks.off_path import follow_line
 
 from omnibot.client import RobotClient
 from omnibot.control import Path, correction_speed, make_follower, standard_path
@@ -260,52 +261,20 @@ def test_a_robot_described_without_a_gyro_cannot_calibrate_one() -> None:
 
 def test_a_robot_shoved_far_off_its_path_is_not_chased_and_the_follow_is_not_completed() -> None:
     # omni3 (30 kg, 5 m/s) on a 3 m line; 2 s in, a hand shoves it sideways (15 N/kg for 0.3 s)
-    robot = load_robot("omni3")
-    n = 61
-    path = Path(np.linspace(0.0, 3.0, n), np.zeros(n), np.zeros(n))
-    follower = make_follower("tracker", follower_limits(robot), rate=100.0)
-    with simulated_client(robot, seed=1) as client:
-        nav = Navigator(client, robot)
-        sim = nav.sim
-        assert sim is not None
-        shoved: list[float] = []
-
-        def hand(cycle: Cycle) -> None:
-            if not shoved and cycle.now >= 2.5:
-                sim.push((0.0, 15.0 * robot.mass), duration=0.3, motors_off=False)
-                shoved.append(cycle.now)
-
-        try:
-            nav.prepare(0.5)
-            nav.runtime.add_sink(hand)
-            run = nav.follow(path, follower)
-        finally:
-            nav.close()
-    assert shoved and not run.completed
+    run, follower = follow_line("omni3", "tracker", "shove")
+    assert not run.completed
     assert run.failure.startswith("off the path: 5") and "(more than 50 cm), not chased" in run.failure
-    report = follow_report(run, robot, Tolerances())
+    report = follow_report(run, load_robot("omni3"), Tolerances())
     assert not report["completed"] and report["failures"][0] == run.failure
     # until it gave up it asked at most the path's planned speed plus the bounded correction
-    commands = run.arrays()["command"]
+    asked = np.hypot(*run.arrays()["command"][:, :2].T)
     planned = follower.profile.speed.max()  # type: ignore[attr-defined]
-    assert (
-        np.hypot(commands[:, 0], commands[:, 1]).max() <= planned + correction_speed(follower.limits) + 1e-9
-    )
+    assert asked.max() <= planned + correction_speed(follower.limits) + 1e-9
 
 
 def test_a_follow_started_beside_its_path_comes_back_within_the_limits() -> None:
-    # omni4's estimate starts 30 cm beside a 3 m line (a localiser's correction, a run started away)
-    robot = load_robot("omni4")
-    n = 61
-    path = Path(np.linspace(0.0, 3.0, n), np.zeros(n), np.zeros(n))
-    follower = make_follower("tracker", follower_limits(robot), rate=100.0)
-    with simulated_client(robot, seed=1) as client:
-        nav = Navigator(client, robot, start=Pose2D(0.0, -0.3, 0.0))
-        try:
-            nav.prepare(0.5)
-            run = nav.follow(path, follower)
-        finally:
-            nav.close()
+    # omni4's estimate starts 30 cm beside the line (a localiser's correction, a run started away)
+    run, follower = follow_line("omni4", "tracker", "offset")
     assert run.completed, run.failure
     asked = np.hypot(*run.arrays()["command"][:, :2].T)
     # the response model did not learn the recovery as a slow floor (it did: 1.30 m/s asked)
