@@ -31,9 +31,8 @@ import numpy as np
 
 from omnibot.control import Follower, Path, make_follower
 from omnibot.motion import Pose2D
-from omnibot.navigation import Navigator, simulated_client
+from omnibot.navigation import FollowRun, Navigator, simulated_client
 from omnibot.navigation.session import follower_limits
-from omnibot.navigation.trace import FollowRun
 from omnibot.robot import load_robot
 from omnibot.runtime import Cycle
 
@@ -70,6 +69,7 @@ def follow_line(
     robot_name: str, follower_name: str, scenario: str, speed: float | None = None, seed: int = 1
 ) -> tuple[FollowRun, Follower]:
     """Follow the line in ``scenario`` (see the module docstring): the run and its follower."""
+
     robot = load_robot(robot_name)
     path = line()
     beside = SCENARIOS[scenario] if scenario in ("offset", "far") else 0.0
@@ -114,6 +114,7 @@ def run(robot_name: str, follower_name: str, scenario: str, speed: float | None,
 
 def main(argv: list[str] | None = None) -> None:
     """Print one row per robot, follower and scenario."""
+
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--robots", default="omni4,omni3,mecanum4")
     ap.add_argument("--followers", default="tracker,pure_pursuit,seed002")

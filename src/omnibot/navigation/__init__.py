@@ -32,6 +32,7 @@ if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
     from omnibot.navigation.scanwatch import ScanPoints
     from omnibot.navigation.session import FollowOptions, follow_path, simulated_client, summary, verdict
     from omnibot.navigation.slipcal import SLIP_COURSES, SlipCalibration, calibrate_slip
+    from omnibot.navigation.trace import FollowRun
     from omnibot.navigation.webteach import PathTeacher
 
 _EXPORTS = {
@@ -48,6 +49,7 @@ _EXPORTS = {
     "scanwatch": ("ScanPoints",),
     "session": ("FollowOptions", "follow_path", "simulated_client", "summary", "verdict"),
     "slipcal": ("SLIP_COURSES", "SlipCalibration", "calibrate_slip"),
+    "trace": ("FollowRun",),
     "webteach": ("PathTeacher",),
 }
 
@@ -60,6 +62,7 @@ __all__ = [
     "BrakeSource",
     "FollowJudge",
     "FollowOptions",
+    "FollowRun",
     "GotoOptions",
     "GotoResult",
     "GotoSource",
@@ -94,6 +97,7 @@ __all__ = [
     "slipcal",
     "summary",
     "teach",
+    "trace",
     "verdict",
     "views",
     "webteach",
