@@ -71,10 +71,13 @@ OFF_PATH = 0.5
 farther, it stops and fails (:attr:`Follower.failure`). Nav2's ``IsWithinPathTrackingBounds``
 defaults to the same 0.5 m either side; the trackers stay within 3 cm of their paths, and a path
 handed over from elsewhere begins with a straight run from the robot (``APPROACH_GAP``)."""
-CORRECTION_TIME = 0.25
+CORRECTION_TIME = 0.4
 """s: a follower's feedback adds to the path's velocity at most the speed the robot gains in this
-time at its acceleration limit (:func:`correction_speed`: omni4 and mecanum4 0.5 m/s, omni3 0.62
-m/s), so a robot pushed off its path comes back at the path's speed plus that, not at its top speed."""
+time at its acceleration limit (:func:`correction_speed`: omni4 and mecanum4 0.8 m/s, omni3 1.0
+m/s), so a robot pushed off its path comes back at the path's speed plus that, not at its top speed.
+The tracker's feedback reaches 0.5 m/s in normal tracking at omni4's top speed (it feeds back the
+predicted error, the estimate's velocity in it): at 0.25 s omni4's random paths on carpet came out
+0.38 -> 0.41 cm mean RMS, 1.33 -> 1.49 cm max; at 0.4 s as without the bound (BENCHMARKS.md)."""
 PLAN_WHEEL_USE = 0.85
 """Fraction of the wheels' free-running speed every follower plans with (the rest is the floor's load
 and the wheel-speed loop's headroom; see :mod:`omnibot.control.reach`)."""

@@ -51,12 +51,15 @@ from omnibot.control.followers.base import (
 from omnibot.control.followers.response import VelocityResponse
 from omnibot.control.paths.limits import MotionLimits
 from omnibot.control.paths.path import FloatArray, Path
-from omnibot.control.paths.profile import SpeedProfile
+from omnibot.control.paths.profile import Reference, SpeedProfile
 
 STEADY_ACCEL = 0.5
 """m/s^2: the response model learns only while the reference accelerates less than this (and the
 estimator sees no slip, its speed changes slower than :data:`STEADY_SPEEDUP` and the feedback is
-within its bound, :attr:`ProfileTracker.correcting`): it is a steady-state gain."""
+within its bound, and has been for :data:`RELEARN` s): it is a steady-state gain."""
+RELEARN = 1.0
+"""s: after the feedback was last cut to its bound (:attr:`ProfileTracker.correcting`: a robot coming
+back to its path) the response model waits this long before it learns again."""
 STEADY_SPEEDUP = 0.1
 """m/s^2: the response model also learns only while the reference's speed changes slower than this.
 It compares the body's velocity with the command of ``delay`` before (the wheel loop's lag); a
@@ -146,9 +149,10 @@ class ProfileTracker(Follower):
         """m/s: the most the feedback adds to the reference's velocity (:func:`correction_speed`)."""
         self.correcting = False
         """The last command's feedback was cut to :attr:`correction`: the robot is coming back to the
-        path (a push, a corrected estimate), lagging its command by design, and the response model
-        does not learn from it (it read a 30 cm recovery on omni4 as a slow floor and then asked
-        1.30 m/s of a 1 m/s robot)."""
+        path (a push, a corrected estimate), lagging its command by design; the response model does
+        not learn from it, nor for :data:`RELEARN` s after (it read a 30 cm recovery on omni4 as a
+        slow floor and then asked 1.27-1.30 m/s of a 1 m/s robot)."""
+        self._corrected_at = -math.inf  # when the feedback was last cut to its bound, s
         self.response = VelocityResponse() if adapt else None
         self.profile: SpeedProfile | None = None
         self.tau = 0.0
@@ -171,6 +175,7 @@ class ProfileTracker(Follower):
         self._holds_heading = float(np.ptp(path.theta)) == 0.0  # planned_accel only then
         self._last_t = t
         self._ended_at = None
+        self._corrected_at = -math.inf
         self._integral[:] = 0.0
         if self.response is not None:
             self.response.reset()
@@ -227,13 +232,19 @@ class ProfileTracker(Follower):
         command = to_body(vx, vy, w, heading, self.dt)
         body = to_body(acc_x, acc_y, alpha, heading + 0.5 * w * self.dt)  # the same axes
         self.planned_body_accel = (body.vx, body.vy, body.w)
-        steady = (
+        self._steady, self._dt_seen = self._learns(ref, tx, ty, state.t), dt
+        return command
+
+    def _learns(self, ref: Reference, tx: float, ty: float, t: float) -> bool:
+        """Whether the response model may learn from the command for ``ref`` (heading ``tx, ty``) at
+        time ``t``: the reference steady and the feedback within its bound for :data:`RELEARN` s."""
+        if self.correcting:
+            self._corrected_at = t
+        return (
             math.hypot(ref.ax, ref.ay) < STEADY_ACCEL
             and abs(ref.ax * tx + ref.ay * ty) < STEADY_SPEEDUP
-            and not self.correcting
+            and t - self._corrected_at > RELEARN
         )
-        self._steady, self._dt_seen = steady, dt
-        return command
 
     def respond(self, state: State, command: Command) -> Command:
         """``command`` (the body's twist, within the limits) through the learned response model and
