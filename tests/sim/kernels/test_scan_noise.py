@@ -28,7 +28,7 @@ def test_a_measured_range_is_quantised_to_the_resolution_and_kept_within_the_lim
     normals, uniforms = np.array([0.3, -0.1, 0.0]), np.full(3, 0.5)
     out = np.empty(3)
     scan_measure(true, normals, uniforms, 0.0, 0.01, 0.00025, 0.0, 0.15, 12.0, out)
-    # 1.003 -> 1.003 (a multiple), 0.2 - 0.0002 = 0.1998 -> 0.19975 or 0.2; 0.1 below range_min
+    # 1.003 is 4012 quarter millimetres, 0.1998 rounds to 799 of them; 0.1 lies below range_min
     assert out[0] == round(1.003 / 0.00025) * 0.00025
     assert out[1] == round(0.1998 / 0.00025) * 0.00025
     assert np.isinf(out[2])
