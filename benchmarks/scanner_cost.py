@@ -105,7 +105,7 @@ def ray_casting(world: str, repeats: int = 200) -> tuple[float, float, float, fl
     params = np.zeros(SCAN_PARAMS)
     params[[P_DT, P_REACH, P_AX, P_AY, P_INNER]] = 0.001, 14.0, start.x, start.y, 0.25
     index = kernels.scan_index(seg, start.x, start.y, 0.25, 14.0)
-    args = (0.0, 0, n, rays, hist_p, 0, params, seg, *index, no_v, no_off, out, none, none)
+    args = (0.0, 0, n, rays, hist_p, 0, params, seg, *index, no_v, no_off, out, none, none, none)
     assert kernels.scan_revolution(*args)  # cast only: no draws
     t0 = time.process_time()
     for _ in range(repeats):

@@ -18,11 +18,14 @@ A revolution is delivered as a :class:`~omnibot.scan.Scan` once its last ray's t
 
 Each range is the true distance to the nearest wall, obstacle or other body plus
 N(0, noise_std + noise_fraction * distance), quantised to ``resolution``; ``inf`` for a dropout or
-a return outside [range_min, range_max]. The noise of revolution ``k`` is a fixed slice of the
-scanner's own random stream (``2 * rays + SCAN_POOL`` uniform draws per revolution, the stream
-jumped ahead to revolution ``k``; the normals by the ziggurat, :mod:`~omnibot.sim.kernels.scan_noise`),
-so a revolution's ranges are the same whenever the scanner was switched on and however often it was
-flushed, and no other sensor's stream changes.
+a return outside [range_min, range_max]. The noise comes from the scanner's own random stream (a
+PCG64 of its seed and key) in a fixed layout: revolutions ``8b`` to ``8b + 7`` (batch ``b`` of
+DRAW_BATCH) take the block of ``DRAW_BATCH * BLOCK_PER_RAY * rays`` outputs (3 a ray) that starts at
+output ``b`` times that, first their uniform draws (``Generator.random``, ``rays`` a revolution:
+the dropouts), then their standard normals (``Generator.standard_normal``, numpy's ziggurat,
+``rays`` a revolution), which take about 1.02 outputs each (2,940 for 2,880; the block leaves them
+twice as many). So a revolution's ranges are the same whenever the scanner was switched on and
+however often it was flushed, and no other sensor's stream changes.
 """
 
 from __future__ import annotations
@@ -56,7 +59,6 @@ from omnibot.sim.kernels.scan import (
     SCAN_BINS,
     SCAN_PARAMS,
 )
-from omnibot.sim.kernels.scan_noise import SCAN_POOL
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -67,7 +69,10 @@ _NO_BODIES = np.zeros(1, dtype=np.int64)
 _NO_RAYS = np.zeros(0)
 _NO_INDEX = (np.zeros(SCAN_BINS + 1, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0))
 DRAW_BATCH = 8
-"""Revolutions whose noise is drawn in one call of the random generator."""
+"""Revolutions whose noise is drawn together: revolutions ``8b`` to ``8b + 7`` (batch ``b``)."""
+BLOCK_PER_RAY = 3
+"""Outputs of the scanner's stream a ray's draws have in its batch's block: its uniform, and room
+for its normal (one output, or a few on a rejection)."""
 INDEX_SLACK = 0.25
 """m: room the scanner's edge index leaves around the origins it was made for (see _index_for)."""
 
@@ -169,11 +174,10 @@ class LaserScanner:
         self._offsets = np.arange(n, dtype=np.float64) * self.time_increment
         self._rays = ray_table.py_func(self._offsets, self.angles + spec.yaw)
         """Each ray's time in the revolution and direction in the robot's base frame, with its cos and sin."""
-        self._seed, self._key = seed, key
         self._bitgen = np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(key,)))
         self._gen = np.random.Generator(self._bitgen)
-        self._stream_rev = 0
-        """Revolution whose draws come next from the stream."""
+        self._stream_start = self._bitgen.state
+        """The stream's state at its start, from which each batch's block is reached."""
         stretch = 1.0 + 6.0 * spec.noise_fraction
         self._cast_range = spec.range_max * stretch + 6.0 * spec.noise_std + spec.resolution
         self._true = np.full(n, math.inf)
@@ -186,10 +190,11 @@ class LaserScanner:
         self._params[P_NOISE_STD : P_RANGE_MAX + 1] = (
             spec.noise_std, spec.noise_fraction, spec.resolution, spec.dropout, spec.range_min, spec.range_max,
         )  # fmt: skip
-        self._batch = np.empty((DRAW_BATCH, 2 * n + SCAN_POOL))
-        """Uniform draws of revolutions _batch_rev, _batch_rev + 1...: one per row."""
-        self._batch_rows: list[FloatArray] = list(self._batch)
-        self._batch_rev = -DRAW_BATCH
+        self._uniforms = np.empty((DRAW_BATCH, n))
+        self._normals = np.empty((DRAW_BATCH, n))
+        """Uniform and normal draws of batch _batch's revolutions: one per row."""
+        self._rows = list(zip(self._normals, self._uniforms, strict=True))
+        self._batch = -1
         self._template = Scan(
             stamp=0.0,
             angle_min=0.0,
@@ -274,18 +279,18 @@ class LaserScanner:
             whole = t >= end - _EPS  # the usual call: its end is the due time
             last = n if whole else int(np.searchsorted(self._offsets, t - stamp + _EPS, side="right"))
             measured = np.empty(n) if whole else _NO_RAYS
-            draws = self._draws(self.revolution) if whole else _NO_RAYS
+            normals, uniforms = self._draws(self.revolution) if whole else (_NO_RAYS, _NO_RAYS)
             first, cast = self._next_ray, last > self._next_ray
             while cast and not jit.active.scan_revolution(
                 stamp, first, last, self._rays, hist, own, params, segments, *self._index,
-                body_v, body_off, self._true, draws, measured,
+                body_v, body_off, self._true, normals, uniforms, measured,
             ):  # fmt: skip
                 self._index_for(segments, hist, own)
             self._next_ray = last
             if not whole:
                 break
             if not cast:  # every ray was cast by earlier flushes: measured here
-                self._measure(draws, measured)
+                self._measure(normals, uniforms, measured)
             done.append(self._deliver(stamp, measured))
             self.revolution += 1
             self._next_ray = 0
@@ -304,29 +309,25 @@ class LaserScanner:
         )
         self._index_segments = segments
 
-    def _draws(self, revolution: int) -> FloatArray:
-        """The 2 * rays + SCAN_POOL uniform draws of ``revolution`` (what
-        :func:`~omnibot.sim.kernels.scan_measure` takes): a row of a batch drawn for DRAW_BATCH
-        revolutions at once (the stream gives the same numbers in one call or many), the stream
-        jumped to the first."""
-        row = revolution - self._batch_rev
-        if 0 <= row < DRAW_BATCH:
-            return self._batch_rows[row]
-        if revolution < self._stream_rev:  # back in the stream: from its start again
-            self._bitgen = np.random.PCG64(np.random.SeedSequence(self._seed, spawn_key=(self._key,)))
-            self._gen = np.random.Generator(self._bitgen)
-            self._stream_rev = 0
-        if revolution > self._stream_rev:
-            self._bitgen.advance((revolution - self._stream_rev) * self._batch.shape[1])
-        self._gen.random(out=self._batch)
-        self._batch_rev, self._stream_rev = revolution, revolution + DRAW_BATCH
-        return self._batch_rows[0]
+    def _draws(self, revolution: int) -> tuple[FloatArray, FloatArray]:
+        """The normal and the uniform draws of ``revolution`` (what
+        :func:`~omnibot.sim.kernels.scan_measure` takes): rows of its batch's, drawn from the
+        batch's block of the stream (the module's docstring gives the layout)."""
+        batch, row = divmod(revolution, DRAW_BATCH)
+        if batch != self._batch:
+            bits = self._bitgen
+            bits.state = self._stream_start
+            bits.advance(batch * DRAW_BATCH * BLOCK_PER_RAY * self.spec.rays)
+            self._gen.random(out=self._uniforms)
+            self._gen.standard_normal(out=self._normals)
+            self._batch = batch
+        return self._rows[row]
 
-    def _measure(self, draws: FloatArray, measured: FloatArray) -> None:
+    def _measure(self, normals: FloatArray, uniforms: FloatArray, measured: FloatArray) -> None:
         """The revolution's true ranges measured into ``measured`` (:func:`~omnibot.sim.kernels.scan_measure`)."""
         p = self._params
         jit.active.scan_measure(
-            self._true, draws, p[P_NOISE_STD], p[P_NOISE_FRACTION], p[P_RESOLUTION], p[P_DROPOUT],
+            self._true, normals, uniforms, p[P_NOISE_STD], p[P_NOISE_FRACTION], p[P_RESOLUTION], p[P_DROPOUT],
             p[P_RANGE_MIN], p[P_RANGE_MAX], measured,
         )  # fmt: skip
 

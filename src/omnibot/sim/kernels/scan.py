@@ -317,14 +317,15 @@ def scan_revolution(
     body_v: FloatArray,
     body_off: IntArray,
     true: FloatArray,
-    draws: FloatArray,
+    normals: FloatArray,
+    uniforms: FloatArray,
     measured: FloatArray,
 ) -> bool:
     """Rays ``first`` to ``last - 1`` of the revolution that began at ``stamp`` (ray i measured at
     stamp + rays[i, RAY_T] in direction rays[i, RAY_A] of the robot's base frame: :func:`ray_table`)
     cast as :func:`scan_rays` casts them (the ``P_`` columns of ``params``) into true[first:last];
-    then, given ``draws`` (2 per ray and SCAN_POOL; none: the revolution goes on), the whole
-    revolution measured from ``true`` into ``measured`` (:func:`scan_measure`). The scanner's
+    then, given its ``normals`` and ``uniforms`` (one of each per ray; none: the revolution goes
+    on), the whole revolution measured from ``true`` into ``measured`` (:func:`scan_measure`). The scanner's
     origins over the rows of ``hist_p`` must lie within params[P_INNER] of (params[P_AX],
     params[P_AY]), the disc the edge index holds: else nothing is done and False returned (the
     caller builds an index for them and calls again)."""
@@ -334,9 +335,9 @@ def scan_revolution(
         stamp, first, last, rays, params[P_T0], params[P_DT], hist_p, own, params[P_MOUNT_X], params[P_MOUNT_Y],
         segments, starts, entries, near, body_v, body_off, params[P_REACH], true,
     )  # fmt: skip
-    if draws.shape[0]:
+    if normals.shape[0]:
         scan_measure(
-            true, draws, params[P_NOISE_STD], params[P_NOISE_FRACTION], params[P_RESOLUTION], params[P_DROPOUT],
+            true, normals, uniforms, params[P_NOISE_STD], params[P_NOISE_FRACTION], params[P_RESOLUTION], params[P_DROPOUT],
             params[P_RANGE_MIN], params[P_RANGE_MAX], measured,
         )  # fmt: skip
     return True

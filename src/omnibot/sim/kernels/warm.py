@@ -97,7 +97,7 @@ def warm_up_calls() -> list[tuple[Any, Callable[[], object]]]:
         f(1, 3), 0, f(0), f(0), f(2), f(0), 0, 0.001,
     )  # fmt: skip
     revolution = (
-        0.0, 0, 0, f(0, RAY_COLUMNS), f(1, 3), 0, f(SCAN_PARAMS), f(0, 4), *index, f(0, 2), i(2), f(0), f(0), f(0),
+        0.0, 0, 0, f(0, RAY_COLUMNS), f(1, 3), 0, f(SCAN_PARAMS), f(0, 4), *index, f(0, 2), i(2), f(0), f(0), f(0), f(0),
     )  # fmt: skip
     calls: dict[Any, Callable[[], object]] = {
         outline_contacts: lambda: outline_contacts(
@@ -113,7 +113,7 @@ def warm_up_calls() -> list[tuple[Any, Callable[[], object]]]:
             f(0), f(0), 0.0, 0.001, f(1, 3), 0, 0.0, 0.0, f(0, 4), *index, f(0, 2), i(2), 1.0, f(0)
         ),
         ray_table: lambda: ray_table(f(0), f(0)),
-        scan_measure: lambda: scan_measure(f(0), f(0), 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, f(0)),
+        scan_measure: lambda: scan_measure(f(0), f(0), f(0), 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, f(0)),
         scan_revolution: lambda: scan_revolution(*revolution),
         scan_index_around: lambda: scan_index_around(f(0, 4), f(1, 3), 0, 0.0, 1.0, 1.0, f(SCAN_PARAMS)),
         pose_log: lambda: pose_log(f(F_HEADER), si_full, 0.0, 0.0, 0.0, -(2**40)),
