@@ -18,8 +18,9 @@ tracker and judges arrival (5 cm, 5 degrees) by its pose provider:
 * ``localiser``: ``omnibot goto``'s own, the :class:`~omnibot.mapping.Localiser` in the map fed
   by the robot's scanner (:class:`~omnibot.mapping.LocalisingSink`, started at the true start
   with 5 cm of spread), the obstacle watch on its points; its lead over the truth along the
-  direction of travel while the robot moves at 0.5 m/s or more (issue 25's) is printed after
-  the table.
+  direction of travel while the robot moves at 0.5 m/s or more (issue 25's) and its distance
+  from the truth every cycle after the first second, at rest and moving, are printed after the
+  table.
 
 Per robot and provider: goals arrived (by goto's verdict) and arrived by the truth (within 5 cm
 and 5 degrees of the true pose), the truth's final position and heading errors (mean, max),
@@ -42,6 +43,7 @@ from pathlib import Path
 
 import numpy as np
 import yaml
+from numpy.typing import NDArray
 
 from benchmarks.planner import free_poses, inside_walls, rasterise
 from omnibot.client import RobotClient
@@ -54,6 +56,8 @@ from omnibot.robot import RobotDescription, load_robot
 from omnibot.runtime import Cycle, Runtime
 from omnibot.sim import load_world
 from omnibot.transport import find_simulator
+
+FloatArray = NDArray[np.float64]
 
 OBSTACLE: dict[str, object] = {"shape": "box", "center": [2.3, 2.0], "size": [0.3, 0.3]}
 """A box in the middle of the room that the map does not have (``--obstacle``)."""
@@ -70,6 +74,8 @@ class Outcome:
     contacts: int
     lead: float | None = None
     """``localiser``: its mean lead (m) over the truth along the travel at >= 0.5 m/s (None: not moving)."""
+    off: tuple[FloatArray, FloatArray] | None = None
+    """``localiser``: its distance (m) from the truth every cycle, at rest and moving (:meth:`LeadTrace.off`)."""
 
     @property
     def error(self) -> float:
@@ -127,8 +133,18 @@ def run_goal(
             return Pose2D(p.x, p.y, p.theta)
 
         if provider == "localiser":
-            result, lead = localised(client, robot, grid, (start, goal), options, seed, truth)
-            return Outcome(robot_name, provider, seed, goal, result, truth(), len(sim.collisions), lead)
+            result, trace = localised(client, robot, grid, (start, goal), options, seed, truth)
+            return Outcome(
+                robot_name,
+                provider,
+                seed,
+                goal,
+                result,
+                truth(),
+                len(sim.collisions),
+                trace.lead(),
+                trace.off(),
+            )
         pose = truth if provider == "truth" else None
         if not scanner:
             result = goto(client, robot, grid, goal, start, options, pose=pose)
@@ -160,6 +176,17 @@ class LeadTrace:
             true = self.truth()
             self.rows.append((cycle.t, now.x, now.y, true.x, true.y))
 
+    def off(self, rest: float = 0.005, settle: float = 1.0) -> tuple[FloatArray, FloatArray]:
+        """The localiser's distance from the truth each cycle after its first ``settle`` s: those
+        with the truth at rest (slower than ``rest`` m/s), and those moving."""
+        if len(self.rows) < 3:
+            return np.zeros(0), np.zeros(0)
+        t, x, y, tx, ty = np.array(self.rows).T
+        still = np.hypot(np.gradient(tx, t), np.gradient(ty, t)) < rest
+        off = np.hypot(x - tx, y - ty)
+        late = t >= t[0] + settle
+        return off[late & still], off[late & ~still]
+
     def lead(self, speed: float = 0.5) -> float | None:
         """Mean of (pose - truth) along the truth's velocity over the cycles at ``speed`` m/s or more."""
         if len(self.rows) < 3:
@@ -181,9 +208,9 @@ def localised(
     options: GotoOptions | None,
     seed: int,
     truth: Callable[[], Pose2D],
-) -> tuple[GotoResult, float | None]:
+) -> tuple[GotoResult, LeadTrace]:
     """One goto from ``ends[0]`` to ``ends[1]`` on ``omnibot goto``'s localiser; its result and the
-    localiser's lead while moving."""
+    localiser's pose beside the truth every cycle."""
     start, goal = ends
     scans = open_scanner(None, client.link, robot)
     localiser = Localiser(grid, seed=seed)
@@ -200,7 +227,7 @@ def localised(
         result = goto(client, robot, grid, goal, start, options, pose_from=placing, scan=sink.points)
     finally:
         sink.close()
-    return result, trace.lead()
+    return result, trace
 
 
 def table(outcomes: list[Outcome]) -> str:
@@ -263,6 +290,14 @@ def main(argv: list[str] | None = None) -> int:
                 f"{robot}: the localiser's lead over the truth along the travel at >= 0.5 m/s, "
                 f"per goal mean {statistics.mean(leads):+.2f} cm (from {min(leads):+.2f} to {max(leads):+.2f})"
             )
+        offs = [o.off for o in outcomes if o.robot == robot and o.off is not None]
+        for k, state in enumerate(("at rest", "moving")):
+            off = 100 * np.concatenate([o[k] for o in offs]) if offs else np.zeros(0)
+            if len(off):
+                print(
+                    f"{robot}: the localiser's distance from the truth {state} (after its first second), "
+                    f"mean {off.mean():.2f} cm, 95th percentile {np.percentile(off, 95):.2f}, max {off.max():.2f}"
+                )
     return 0
 
 

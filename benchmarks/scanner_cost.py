@@ -11,7 +11,8 @@ that simulated second (the goal: <= 10 %) and of one second of real time.
 * fleet: a :class:`~omnibot.sim.fleet.Fleet` of four omni4 robots (firmware included, standing
   still), every one with a scanner that sees the three others, in the same worlds;
 * ray casting alone: 360 rays of a turning robot, the compiled kernels (the edge index by direction,
-  built every few revolutions, and the cast) against the vectorised numpy
+  built every few revolutions, and a revolution's cast, :func:`~omnibot.sim.kernels.scan_revolution`
+  without the noise) against the vectorised numpy
   :meth:`World.raycast <omnibot.sim.world.World.raycast>` (every ray against every edge), the same rays.
 """
 
@@ -28,6 +29,7 @@ from omnibot.motion import Pose2D
 from omnibot.robot import load_robot
 from omnibot.scan import Scan
 from omnibot.sim import Fleet, Simulator, kernels, load_world
+from omnibot.sim.kernels.scan import P_AX, P_AY, P_DT, P_INNER, P_REACH, SCAN_PARAMS
 
 FLEET_POSES = {
     "room": [(1.0, 1.0), (2.5, 2.0), (4.2, 3.2), (1.0, 2.0)],
@@ -85,8 +87,9 @@ def _best(
 
 def ray_casting(world: str, repeats: int = 200) -> tuple[float, float, float, float]:
     """(index us, kernel us, numpy us, largest difference m) for 360 rays of a robot turning 0.5 rad
-    meanwhile: building the edge index (once every few revolutions), casting with it, and the
-    vectorised numpy raycast of every ray against every edge."""
+    meanwhile: building the edge index (once every few revolutions), a revolution's cast with it
+    (the rays' table made once, as a scanner makes it), and the vectorised numpy raycast of every
+    ray against every edge."""
     w = load_world(world)
     seg = np.ascontiguousarray(w.segments)
     n = 360
@@ -96,17 +99,21 @@ def ray_casting(world: str, repeats: int = 200) -> tuple[float, float, float, fl
     hist_p = np.zeros((101, 3))
     hist_p[:, 0], hist_p[:, 1] = start.x, start.y
     hist_p[:, 2] = np.linspace(0.0, 0.5, 101)
-    out = np.empty(n)
+    out, none = np.empty(n), np.zeros(0)
     no_v, no_off = np.zeros((0, 2)), np.zeros(1, dtype=np.int64)
+    rays = kernels.ray_table(ray_t, ray_a)  # once per scanner
+    params = np.zeros(SCAN_PARAMS)
+    params[[P_DT, P_REACH, P_AX, P_AY, P_INNER]] = 0.001, 14.0, start.x, start.y, 0.25
     index = kernels.scan_index(seg, start.x, start.y, 0.25, 14.0)
-    kernels.scan_rays(ray_t, ray_a, 0.0, 0.001, hist_p, 0, 0.0, 0.0, seg, *index, no_v, no_off, 14.0, out)
+    args = (0.0, 0, n, rays, hist_p, 0, params, seg, *index, no_v, no_off, out, none, none, none)
+    assert kernels.scan_revolution(*args)  # cast only: no draws
     t0 = time.process_time()
     for _ in range(repeats):
         index = kernels.scan_index(seg, start.x, start.y, 0.25, 14.0)
     built = (time.process_time() - t0) / repeats
     t0 = time.process_time()
     for _ in range(repeats):
-        kernels.scan_rays(ray_t, ray_a, 0.0, 0.001, hist_p, 0, 0.0, 0.0, seg, *index, no_v, no_off, 14.0, out)
+        kernels.scan_revolution(*args)
     compiled = (time.process_time() - t0) / repeats
     origins = np.column_stack((np.full(n, start.x), np.full(n, start.y)))
     angles = ray_a + np.interp(ray_t, np.arange(101) * 0.001, hist_p[:, 2])

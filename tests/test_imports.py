@@ -861,7 +861,7 @@ BENCHMARK_REACHES: dict[str, tuple[str, tuple[str, ...]]] = {
     "omnibot.navigation.plot": ("plots the runs", ("tracking.py",)),
     "omnibot.navigation.session": (
         "the follower limits and the simulated follow omnibot follow runs",
-        ("odometry_drift.py", "seed002_run.py", "slip_flag.py", "tracking.py"),
+        ("odometry_drift.py", "off_path.py", "seed002_run.py", "slip_flag.py", "tracking.py"),
     ),
     "omnibot.navigation.slipcal": (
         "the floor's slip calibration on the simulator",

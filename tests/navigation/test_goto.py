@@ -22,8 +22,8 @@ from omnibot.errors import BlockedError, ConfigError, OffMapError
 from omnibot.mapping import OccupancyGrid, PlannedPath, compose, inflate, inverse
 from omnibot.mapping.score import world_grid as rasterise
 from omnibot.motion import Pose2D
-from omnibot.navigation.goal import GotoOptions, PoseProvider
-from omnibot.navigation.goto import goto
+from omnibot.navigation.goal import GotoOptions, GotoResult, PoseProvider
+from omnibot.navigation.goto import go_to, goto, navigation_runtime
 from omnibot.navigation.obstacles import ObstacleWatch, stopping_reach
 from omnibot.navigation.planned import mark, planned_path
 from omnibot.navigation.session import simulated_client
@@ -291,3 +291,38 @@ def test_a_robot_blind_to_a_box_the_map_lacks_stalls_against_it_and_says_so(tmp_
     assert o.result.outcome == "stalled"
     assert o.result.reason.startswith("stalled: the wheels say")
     assert not o.result.arrived and o.contacts >= 1
+
+
+def shoved_goto(max_replans: int) -> tuple[GotoResult, Pose2D, int]:
+    """omni3 going across the room, shoved by a hand 1 s into its leg (8 N/kg for 0.3 s, to the left of
+    its travel: past the 50 cm the follower chases); the result, the truth at the end, contacts."""
+    robot = load_robot("omni3")
+    client = simulated_client(robot, world="room", start=ROOM_START, seed=4)
+    sim = find_simulator(client.link)
+    assert sim is not None
+    push = (-0.58 * 8.0 * robot.mass, 0.81 * 8.0 * robot.mass)
+    shoved: list[float] = []
+
+    def hand(cycle: Cycle) -> None:
+        if not shoved and cycle.now > 1.5:
+            sim.push(push, duration=0.3, motors_off=False)
+            shoved.append(cycle.now)
+
+    grid, options = rasterise(load_world("room")), GotoOptions(max_replans=max_replans)
+    with client, navigation_runtime(client, robot, ROOM_START, standstill=0.5, sinks=[hand]) as runtime:
+        result = go_to(runtime, robot, grid, Pose2D(3.5, 2.8, 0.0), options)
+    assert shoved
+    return result, sim.pose, len(sim.collisions)
+
+
+def test_a_robot_shoved_off_its_leg_is_not_chased_and_goto_plans_again_from_where_it_is() -> None:
+    result, truth, contacts = shoved_goto(max_replans=5)
+    assert result.arrived and result.strays == 1, result.summary()
+    assert truth_error(truth, result.goal)[0] <= 0.05 and contacts == 0
+
+
+def test_a_shove_with_no_replans_left_ends_the_goto_off_path() -> None:
+    result, truth, _ = shoved_goto(max_replans=0)
+    assert result.outcome == "off path" and result.strays == 0
+    assert result.reason.startswith("off the path: 5") and result.reason.endswith("still after 0 re-plans")
+    assert math.hypot(truth.x - result.goal.x, truth.y - result.goal.y) > 0.5  # stopped there

@@ -13,7 +13,7 @@ pytest.importorskip("cyclonedds", reason="cyclonedds is not installed (pip insta
 
 from omnibot.client import robot_session
 from omnibot.logs import header, quaternion, schemas
-from omnibot.motion import Estimate
+from omnibot.motion import Estimate, Pose2D
 from omnibot.protocol import codes
 from omnibot.ros2.odometry import yaw_of
 from omnibot.ros2.path import PATH_TYPE, PathSource, path_from_message
@@ -169,3 +169,22 @@ def test_a_new_path_replaces_the_old_and_an_empty_one_cancels(bench: Any) -> Non
     _run(runtime, lambda: False, 0.2)
     assert said[-1] == ("warn", "path in frame 'map' ignored: only 'r1/odom' is known here (no map)")
     assert source.state == "cancelled"
+
+
+def test_a_robot_carried_far_off_the_path_is_not_chased_and_the_abort_is_on_the_diagnostics(
+    bench: Any,
+) -> None:
+    runtime, source, reader, sim, said = bench
+    _run(runtime, lambda: False, 0.5)
+    _send(reader, path_message([(0.1 * i, 0.0, 0.0) for i in range(16)], frame="r1/odom"))
+    _run(runtime, lambda: source.progress > 0.3, 10.0)
+    here = runtime.estimator.estimate.pose
+    runtime.estimator.reset(Pose2D(here.x, here.y + 0.8, here.theta))  # a correction puts it 80 cm off
+    _run(runtime, lambda: source.state != "following", 1.0)
+    assert source.state == "failed", (source.detail, said)
+    assert source.detail.startswith("off the path: 80.0 cm from it"), source.detail
+    assert ("warn", f"path NOT completed: {source.detail}") in said, said
+    status = source.status()
+    assert status.level == 1 and status.message == f"failed: {source.detail}"
+    _run(runtime, lambda: False, 0.6)  # braked at its accelerations (2 m/s^2) from 1 m/s
+    assert math.hypot(sim.twist.vx, sim.twist.vy) < 0.01  # at rest where it was, not driving back

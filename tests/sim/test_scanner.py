@@ -15,7 +15,7 @@ from omnibot.robot import RobotDescription, load_robot, parse_description
 from omnibot.scan import Scan
 from omnibot.sim.fleet import Fleet
 from omnibot.sim.kernels import layout
-from omnibot.sim.scanner import PoseLog
+from omnibot.sim.scanner import BLOCK_PER_RAY, DRAW_BATCH, LaserScanner, PoseLog
 from omnibot.sim.simulator import Simulator
 from omnibot.sim.truth import Snapshot
 from omnibot.sim.world import load_world, parse_world
@@ -368,3 +368,37 @@ def test_a_revolution_whose_rays_were_all_cast_before_its_end_is_measured_at_its
     for a, b in zip(early, usual, strict=True):
         np.testing.assert_array_equal(a.ranges, b.ranges)
     assert np.isfinite(early[0].ranges).all()
+
+
+def test_the_noise_of_a_revolution_is_its_own_place_in_the_stream_whichever_came_before() -> None:
+    spec = load_robot("omni4").scanner
+    assert spec is not None
+    scanner = LaserScanner(spec, seed=4, key=200)
+    n, batch = spec.rays, DRAW_BATCH
+    block = batch * BLOCK_PER_RAY * n
+
+    def alone(revolution: int) -> tuple[np.ndarray, np.ndarray]:
+        """The layout the scanner's docstring gives: the batch's block, uniforms then normals."""
+        bits = np.random.PCG64(np.random.SeedSequence(4, spawn_key=(200,)))
+        bits.advance(revolution // batch * block)
+        gen = np.random.Generator(bits)
+        uniforms, normals = gen.random((batch, n)), gen.standard_normal((batch, n))
+        return normals[revolution % batch], uniforms[revolution % batch]
+
+    seen = []
+    for revolution in (0, 1, 7, 8, 30, 31, 2, 40):  # in order, across batches, jumped ahead and back
+        normals, uniforms = scanner._draws(revolution)
+        want_normals, want_uniforms = alone(revolution)
+        np.testing.assert_array_equal(normals, want_normals)
+        np.testing.assert_array_equal(uniforms, want_uniforms)
+        seen.append(normals.copy())
+    assert len({row.tobytes() for row in seen}) == len(seen)  # no two revolutions share their draws
+    # a batch's normals take about 1.02 outputs each: well inside the block's room for them
+    bits = np.random.PCG64(np.random.SeedSequence(4, spawn_key=(200,)))
+    gen = np.random.Generator(bits)
+    gen.random(batch * n)
+    gen.standard_normal(batch * n)
+    after = bits.random_raw()
+    probe = np.random.PCG64(np.random.SeedSequence(4, spawn_key=(200,)))
+    used = int(np.flatnonzero(probe.random_raw(block) == after)[0]) - batch * n
+    assert batch * n < used < 1.1 * batch * n <= block - batch * n

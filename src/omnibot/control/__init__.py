@@ -18,10 +18,12 @@ from omnibot.faces import lazy_names
 
 if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
     from omnibot.control.followers.base import (
+        OFF_PATH,
         STOP,
         Command,
         Follower,
         State,
+        correction_speed,
         follower_names,
         make_follower,
         to_body,
@@ -38,10 +40,12 @@ if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
 
 _EXPORTS = {
     "followers.base": (
+        "OFF_PATH",
         "STOP",
         "Command",
         "Follower",
         "State",
+        "correction_speed",
         "follower_names",
         "make_follower",
         "to_body",
@@ -58,6 +62,7 @@ _EXPORTS = {
 }
 
 __all__ = [
+    "OFF_PATH",
     "STOP",
     "Command",
     "Follower",
@@ -66,6 +71,7 @@ __all__ = [
     "Path",
     "PathRecorder",
     "State",
+    "correction_speed",
     "floor_course_rate",
     "follower_names",
     "followers",

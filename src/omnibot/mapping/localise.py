@@ -19,9 +19,12 @@ scans (AMCL-like):
 * **resampling**: low-variance (systematic), when the effective sample size falls below half the
   particles; a fixed count;
 * **refinement** (``refine=True``): the particles' weighted mean is the start of a Gauss-Newton
-  scan-to-map match on the bilinearly interpolated distance field (the valid returns thinned to one
+  scan-to-map match on the walls' local lines (:mod:`omnibot.mapping.surface`: each return's
+  signed distance to the line through the band of occupied cells nearest it, a fraction of a cell
+  from the wall; on the distance to the cells' centres, zero across a band one or two cells thick,
+  a robot at rest wandered up to 4 cm scan to scan, issue 25), the valid returns thinned to one
   per map cell, so a nearby obstacle's dense returns do not outweigh the far walls; Huber-
-  weighted): the returned pose is the match's, and the cloud is shifted by the correction so the
+  weighted: the returned pose is the match's, and the cloud is shifted by the correction so the
   next prediction starts from it. ``benchmarks/mapping_localise.py`` measured the refined pose
   several times more accurate than the filter's mean (BENCHMARKS.md).
 
@@ -42,6 +45,7 @@ from scipy import ndimage
 
 from omnibot.mapping.grid import OccupancyGrid
 from omnibot.mapping.se2 import compose, inverse, wrap
+from omnibot.mapping.surface import SurfaceField, cell_coordinates
 from omnibot.motion import Pose2D
 from omnibot.scan import Scan
 
@@ -61,7 +65,8 @@ class LocalisedPose:
 class LikelihoodField:
     """Distance (m) from every cell of a grid to its nearest occupied cell, capped at ``max_dist``
     (unknown cells too, as AMCL's field: the cells just behind a wall are unknown, and a field that
-    jumped there would pull matches off the wall); everything off the map is ``max_dist`` away."""
+    jumped there would pull matches off the wall); everything off the map is ``max_dist`` away: the
+    particles' weights. The walls as lines (:attr:`surface`) are what a pose is refined on."""
 
     def __init__(self, grid: OccupancyGrid, max_dist: float = 1.0, occupied: int = 65) -> None:
         occ = grid.occupied(occupied)
@@ -71,20 +76,12 @@ class LikelihoodField:
         self.dist: FloatArray = np.asarray(dist, dtype=np.float64)
         self.grid = grid
         self.max_dist = float(max_dist)
-        o = grid.origin
-        self._c, self._s = math.cos(o.theta), math.sin(o.theta)
-
-    def _local(self, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Map-frame points -> continuous cell coordinates (col, row) measured from cell centres."""
-        o, res = self.grid.origin, self.grid.resolution
-        dx, dy = x - o.x, y - o.y
-        u = (self._c * dx + self._s * dy) / res - 0.5
-        v = (-self._s * dx + self._c * dy) / res - 0.5
-        return u, v
+        self.surface = SurfaceField(grid, occupied, max_dist=max_dist)
+        """The walls as local lines: what :func:`refine_pose` matches to."""
 
     def nearest(self, x: FloatArray, y: FloatArray) -> FloatArray:
         """Distance at the cells holding the points (any shape)."""
-        u, v = self._local(x, y)
+        u, v = cell_coordinates(self.grid, x, y)
         col = np.floor(u + 0.5).astype(np.int64)
         row = np.floor(v + 0.5).astype(np.int64)
         rows, cols = self.dist.shape
@@ -93,40 +90,20 @@ class LikelihoodField:
         out[inside] = self.dist[row[inside], col[inside]]
         return out
 
-    def bilinear(self, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Interpolated distance and its gradient (d/dx, d/dy in the map frame) at 1-D points."""
-        u, v = self._local(x, y)
-        c0, r0 = np.floor(u).astype(np.int64), np.floor(v).astype(np.int64)
-        fu, fv = u - c0, v - r0
-        rows, cols = self.dist.shape
-        padded = np.pad(self.dist, 1, constant_values=self.max_dist)
-        c0p = np.clip(c0 + 1, 0, cols)
-        r0p = np.clip(r0 + 1, 0, rows)
-        d00 = padded[r0p, c0p]
-        d01 = padded[r0p, c0p + 1]
-        d10 = padded[r0p + 1, c0p]
-        d11 = padded[r0p + 1, c0p + 1]
-        d = (1 - fv) * ((1 - fu) * d00 + fu * d01) + fv * ((1 - fu) * d10 + fu * d11)
-        du = ((1 - fv) * (d01 - d00) + fv * (d11 - d10)) / self.grid.resolution
-        dv = ((1 - fu) * (d10 - d00) + fu * (d11 - d01)) / self.grid.resolution
-        gx = self._c * du - self._s * dv
-        gy = self._s * du + self._c * dv
-        return d, gx, gy
-
 
 def refine_pose(
     field: LikelihoodField, points: FloatArray, start: Pose2D, *, iterations: int = 10, huber: float = 0.05
 ) -> tuple[Pose2D, float]:
-    """Gauss-Newton match of base-frame ``points`` (n, 2) onto the distance field from ``start``:
-    the pose minimising the Huber-weighted sum of squared distances, and the RMS distance there."""
+    """Gauss-Newton match of base-frame ``points`` (n, 2) onto the field's walls (its
+    :class:`~omnibot.mapping.surface.SurfaceField`) from ``start``: the pose minimising the
+    Huber-weighted sum of squared distances, and the RMS distance there."""
     x, y, th = start.x, start.y, start.theta
     rms = math.inf
     for _ in range(iterations):
         c, s = math.cos(th), math.sin(th)
         px = x + c * points[:, 0] - s * points[:, 1]
         py = y + s * points[:, 0] + c * points[:, 1]
-        d, gx, gy = field.bilinear(px, py)
-        ok = d < field.max_dist * 0.999
+        d, gx, gy, ok = field.surface.residuals(px, py)
         if ok.sum() < 3:
             break
         d, gx, gy = d[ok], gx[ok], gy[ok]

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 from omnibot.faces import lazy_names
 
 if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
+    from omnibot.navigation.brake import BrakeSource
     from omnibot.navigation.following import FOLLOWER_PRIORITY, follower_source
     from omnibot.navigation.goal import GotoOptions, GotoResult, PoseProvider, ScanSource
     from omnibot.navigation.goto import navigation_runtime
@@ -31,9 +32,11 @@ if TYPE_CHECKING:  # the names __getattr__ gives, for type checkers
     from omnibot.navigation.scanwatch import ScanPoints
     from omnibot.navigation.session import FollowOptions, follow_path, simulated_client, summary, verdict
     from omnibot.navigation.slipcal import SLIP_COURSES, SlipCalibration, calibrate_slip
+    from omnibot.navigation.trace import FollowRun
     from omnibot.navigation.webteach import PathTeacher
 
 _EXPORTS = {
+    "brake": ("BrakeSource",),
     "following": ("FOLLOWER_PRIORITY", "follower_source"),
     "goal": ("GotoOptions", "GotoResult", "PoseProvider", "ScanSource"),
     "goto": ("navigation_runtime",),
@@ -46,6 +49,7 @@ _EXPORTS = {
     "scanwatch": ("ScanPoints",),
     "session": ("FollowOptions", "follow_path", "simulated_client", "summary", "verdict"),
     "slipcal": ("SLIP_COURSES", "SlipCalibration", "calibrate_slip"),
+    "trace": ("FollowRun",),
     "webteach": ("PathTeacher",),
 }
 
@@ -55,8 +59,10 @@ __all__ = [
     "MIN_POINTS",
     "SLIP_COURSES",
     "STANDSTILL",
+    "BrakeSource",
     "FollowJudge",
     "FollowOptions",
+    "FollowRun",
     "GotoOptions",
     "GotoResult",
     "GotoSource",
@@ -67,6 +73,7 @@ __all__ = [
     "ScanSource",
     "SlipCalibration",
     "Tolerances",
+    "brake",
     "calibrate_slip",
     "check_recording",
     "explore",
@@ -90,6 +97,7 @@ __all__ = [
     "slipcal",
     "summary",
     "teach",
+    "trace",
     "verdict",
     "views",
     "webteach",

@@ -25,7 +25,9 @@ PoseProvider = Callable[[], Pose2D | None]
 """The robot's pose in the map frame now (None: not known yet)."""
 ScanSource = Callable[[], FloatArray | None]
 """The latest scan's points (n, 2) in the map frame (None: no scan yet)."""
-Outcome = Literal["arrived", "no path", "blocked", "timed out", "stalled", "stopped", "missed", "cancelled"]
+Outcome = Literal[
+    "arrived", "no path", "blocked", "timed out", "stalled", "stopped", "missed", "cancelled", "off path"
+]
 Heading = Literal["auto", "travel", "goal"]
 
 
@@ -52,7 +54,8 @@ class GotoOptions:
     """m of the path ahead watched for obstacles the map does not have, at least: farther where the
     leg's planned speed needs more room to stop (:func:`~omnibot.navigation.obstacles.stopping_reach`)."""
     max_replans: int = 5
-    """Re-plans after obstacles before giving up (blocked)."""
+    """Re-plans after obstacles before giving up (blocked), and after legs the robot was carried off
+    (``off path``: farther than the follower chases, :data:`~omnibot.control.followers.base.OFF_PATH`)."""
     corrections: int = 2
     """Short legs from where the robot stopped when it ended farther than ``aim`` of the tolerances."""
     aim: float = 0.5
@@ -87,6 +90,9 @@ class GotoResult:
     plans: list[PlannedPath] = field(default_factory=list)
     replans: int = 0
     """Plans made after an obstacle the map did not have."""
+    strays: int = 0
+    """Plans made from where the robot was after a leg it was carried off (a push, a localiser's
+    correction: farther from the path than the follower chases)."""
     obstacles: list[tuple[float, float]] = field(default_factory=list)
     """Map-frame points marked as obstacles on the way."""
     grid: OccupancyGrid | None = None

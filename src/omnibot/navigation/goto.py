@@ -11,6 +11,9 @@
          that the map does not explain, in the robot's swept corridor ahead -> the leg ends, the
          robot is braked to rest (:mod:`omnibot.navigation.brake`, the runtime cycling), the
          points are marked in a copy of the grid, and it re-plans (bounded)
+      -> the robot carried farther from the path than the follower chases (a push, a localiser's
+         correction: :data:`~omnibot.control.followers.base.OFF_PATH`) -> the follower stops, the
+         robot is braked to rest and it re-plans from where it is (bounded: ``off path``)
       -> at the path's end, settled: within ``aim`` (half) of ``tolerance`` and
          ``heading_tolerance`` of the goal (by the provider) -> arrived; else a correction leg from
          where it stands (bounded), and at the last the whole tolerances decide
@@ -18,12 +21,12 @@
 :func:`go_to` drives a runtime that is already running (an estimator, telemetry with the sonars'
 ranges), the same steps as :class:`~omnibot.navigation.goto_source.GotoSource` takes cycle by cycle
 on a runtime a front end runs (:mod:`omnibot.navigation.leg`: ``Leg``, ``plan_leg``, ``obstacle_met``,
-``judge_leg``); :func:`goto` is the whole command on a client (the CLI's entry point): it starts
+``strayed``, ``judge_leg``); :func:`goto` is the whole command on a client (the CLI's entry point): it starts
 telemetry and the sonars, stands still while the gyro's bias is learned, goes, and leaves the
 controller stopped. A goal off the map or where the robot cannot stand raises (OffMapError,
 BlockedError: bad arguments) before anything moves; otherwise either returns a
 :class:`~omnibot.navigation.goal.GotoResult` (:mod:`omnibot.navigation.goal`): ``arrived`` or why not (``outcome``: no path, blocked, timed out, stalled,
-stopped, missed) in one line (``reason``).
+stopped, missed, off path) in one line (``reason``).
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager, suppress
+from typing import Literal
 
 from omnibot.client import NotSupported, RobotClient
 from omnibot.errors import ConfigError
@@ -44,11 +48,12 @@ from omnibot.motion import Pose2D
 from omnibot.navigation.goal import (
     GotoOptions,
     GotoResult,
+    Outcome,
     PoseProvider,
     ScanSource,
     within,
 )
-from omnibot.navigation.leg import Leg, judge_leg, leg_heading, obstacle_met, plan_leg
+from omnibot.navigation.leg import Leg, judge_leg, leg_heading, obstacle_met, plan_leg, strayed
 from omnibot.navigation.runner import STANDSTILL
 from omnibot.protocol import codes
 from omnibot.robot import RobotDescription
@@ -103,20 +108,28 @@ def go_to(
             leg = Leg(robot, *planned, here, est.pose, runtime.period, heading, opts, provider, scan)
             ended = leg.run(runtime, deadline, stalls)
             result.final = _wait_pose(provider, runtime)
-            if ended == "obstacle":
-                assert leg.watch.points is not None
-                if obstacle_met(result, leg.watch.points, leg.why, opts):
+            if ended != "done":
+                if _leg_over(result, leg, ended, opts):
                     break
                 continue
-            if ended != "done":
-                result.outcome = ended
-                result.reason = leg.why
-                break
             if judge_leg(result, opts, corrections):
                 break
             corrections += 1
     result.duration = clock.now() - t0
     return result
+
+
+def _leg_over(result: GotoResult, leg: Leg, ended: Outcome | Literal["obstacle"], opts: GotoOptions) -> bool:
+    """After a leg that did not reach its end: True when the goto is over (``ended`` a failure, or the
+    re-plans spent), False when a re-plan from where the robot is is due (an obstacle the map
+    lacked, the robot carried off its path)."""
+    if ended == "obstacle":
+        assert leg.watch.points is not None
+        return obstacle_met(result, leg.watch.points, leg.why, opts)
+    if ended == "off path":
+        return strayed(result, leg.why, opts)
+    result.outcome, result.reason = ended, leg.why
+    return True
 
 
 def _refuse_bad_goal(grid: OccupancyGrid, goal: Pose2D, radius: float, opts: GotoOptions) -> None:

@@ -9,7 +9,8 @@ runtime's cycles do the rest, each through :meth:`GotoSource.propose`::
     waiting   no pose yet (the localiser's first scan)          -> planning
     planning  plan_leg from the pose (no path: over)            -> leg
     leg       the tracker on the plan (leg.Leg), its ObstacleWatch asked each cycle;
-              an obstacle -> marked, re-planned (bounded); the time budget -> timed out;
+              an obstacle -> marked, re-planned (bounded); the robot farther from the path than
+              the follower chases -> re-planned from where it is (bounded); the time budget -> timed out;
               a stall, a refused command, an emergency stop -> stalled / stopped
     settling  braked to rest (navigation.brake: the leg's last twist ramped to zero at the
               robot's accelerations, then zero until the estimate is still), a zero twist for
@@ -33,7 +34,7 @@ from omnibot.mapping import OccupancyGrid, check_goal, check_start, inflate
 from omnibot.motion import Pose2D, Twist
 from omnibot.navigation.brake import BrakeSource
 from omnibot.navigation.goal import GotoOptions, GotoResult, Outcome, PoseProvider, ScanSource, within
-from omnibot.navigation.leg import Leg, judge_leg, leg_heading, obstacle_met, plan_leg
+from omnibot.navigation.leg import Leg, judge_leg, leg_heading, obstacle_met, plan_leg, strayed
 from omnibot.navigation.runner import WATCHDOG
 from omnibot.robot import RobotDescription
 from omnibot.runtime import Cycle, Proposal, must_end
@@ -250,6 +251,15 @@ class GotoSource:
                 self._finish(result.outcome, result.reason)
                 return None
             self._enter("settling", cycle.t)  # stop, then plan round it
+            self._brake = self._brake_from(leg)
+            self._replan = True
+            return self._settle(cycle)
+        if leg.off_path:
+            self._leg = None
+            if strayed(result, source.failure, self.options):
+                self._finish(result.outcome, result.reason)
+                return None
+            self._enter("settling", cycle.t)  # stop, then plan from where the robot is
             self._brake = self._brake_from(leg)
             self._replan = True
             return self._settle(cycle)

@@ -1,6 +1,7 @@
 """One leg of a goto: its plan on the map with what was met marked (:func:`plan_leg`), its heading
 (:func:`leg_heading`), the follow with its obstacle watch (:class:`Leg`), and what ends it: an obstacle
-the map did not have (:func:`obstacle_met`) or where the robot settled (:func:`judge_leg`). The steps
+the map did not have (:func:`obstacle_met`), the robot carried off the path (:func:`strayed`: a re-plan
+from where it is, as for an obstacle) or where the robot settled (:func:`judge_leg`). The steps
 :func:`~omnibot.navigation.goto.go_to` runs in a loop and
 :class:`~omnibot.navigation.goto_source.GotoSource` takes cycle by cycle.
 """
@@ -67,12 +68,29 @@ def obstacle_met(result: GotoResult, points: FloatArray, why: str, opts: GotoOpt
     assert result.grid is not None
     result.obstacles.extend((float(x), float(y)) for x, y in points)
     result.grid = mark(result.grid, points)
-    if result.replans >= opts.max_replans:
-        result.outcome = "blocked"
-        result.reason = f"blocked: {why}, still after {result.replans} re-plans"
+    if _spent(result, result.replans, "blocked", f"blocked: {why}", opts):
         return True
     result.replans += 1
     return False
+
+
+def strayed(result: GotoResult, why: str, opts: GotoOptions) -> bool:
+    """A leg ended with the robot farther from its path than the follower chases (``why``): True
+    when the goto is over (``off path``: no re-plan left), else a re-plan from where the robot now is
+    is due (counted in ``result.strays``)."""
+    if _spent(result, result.strays, "off path", why, opts):
+        return True
+    result.strays += 1
+    return False
+
+
+def _spent(result: GotoResult, made: int, outcome: Outcome, why: str, opts: GotoOptions) -> bool:
+    """True when the ``made`` re-plans are all the goto may make: it is over (``outcome``, ``why``)."""
+    if made < opts.max_replans:
+        return False
+    result.outcome = outcome
+    result.reason = f"{why}, still after {made} re-plans"
+    return True
 
 
 def judge_leg(result: GotoResult, opts: GotoOptions, corrections: int) -> bool:
@@ -150,7 +168,8 @@ class Leg:
         """Bring the robot to rest from the twist the follower last asked (:class:`BrakeSource`),
         the runtime cycling: braked on the motors where a coast would carry it farther than the
         margin beyond that, else the motors cut (STOP) and the coast waited out; a leg that an
-        obstacle ended, timed out or completed, not one ended by a failure (a stall, a refused
+        obstacle ended, that the robot was carried off, timed out or completed, not one ended by
+        a failure (a stall, a refused
         command, an emergency stop: the caller's STOP cuts at once)."""
         source = self.source
         last = source.twist or Twist()
@@ -171,6 +190,11 @@ class Leg:
         finally:
             runtime.remove_source(brake.name)
 
+    @property
+    def off_path(self) -> bool:
+        """The follower gave the leg up: the robot was farther from the path than it chases."""
+        return self.source.follower.strayed is not None
+
     def _obstacle(self, why: str) -> None:
         self.why = why
         self.source.end(why)
@@ -178,7 +202,8 @@ class Leg:
     def run(
         self, runtime: Runtime, deadline: float, stalls: StallWatch
     ) -> Outcome | Literal["obstacle", "done"]:
-        """Follow until the end, an obstacle, a failure or the time is up; then stop and settle."""
+        """Follow until the end, an obstacle, the robot off the path (``off path``), a failure or the
+        time is up; then stop and settle."""
         client, source = runtime.client, self.source
         began = client.clock.now()
         end = min(deadline, began + (self.budget if self.opts.timeout is None else math.inf))
@@ -190,7 +215,7 @@ class Leg:
             runtime.run(until=lambda: source.finished or client.clock.now() > end)
             runtime.remove_source(source.name)
             runtime.remove_sink(self.watch)
-            if self.watch.points is not None or not source.failure:
+            if self.watch.points is not None or self.off_path or not source.failure:
                 self._brake(runtime)
         finally:
             runtime.remove_source(source.name)
@@ -204,6 +229,9 @@ class Leg:
         if len(stalls.stalls) > found:
             self.why = stalls.stalls[-1].text
             return "stalled"
+        if self.off_path:
+            self.why = source.failure
+            return "off path"
         if source.failure:
             self.why = source.failure
             return "stopped"

@@ -15,7 +15,7 @@ and ``map -> odom``, go to each goal.
   must be in the map frame (``<prefix>map``); any other frame, a goal off the map, inside a wall or
   too near one, or not a finite pose is refused with one warning and changes nothing. A new goal
   pre-empts the one being gone to. The outcome (arrived, or why not: no path, blocked, timed out,
-  stalled, stopped, missed, cancelled) is a status line and the ``omnibot: goal`` diagnostic status.
+  stalled, stopped, missed, off path, cancelled) is a status line and the ``omnibot: goal`` diagnostic status.
 * ``initialpose`` (geometry_msgs/PoseWithCovarianceStamped, rviz2's "2D Pose Estimate", Nav2's
   initial pose) in the map frame re-places the localiser there (:meth:`GoalPoseSource.initial_pose`,
   read by the bridge's :class:`~omnibot.ros2.odometry.OdometryReset`): its particles are drawn

@@ -70,11 +70,12 @@ ERROR_CODES = {
     "stalled": 105,
     "missed": 105,
     "stopped": 100,
+    "off path": 106,
 }
 """A goal's ``error_code`` by goto's outcome, Nav2 Jazzy's codes (its BT navigator passes on its
 planner's and controller's): ComputePathToPose NO_VALID_PATH 208; FollowPath CONTROLLER_TIMED_OUT
-107, FAILED_TO_MAKE_PROGRESS 105, UNKNOWN 100 (stopped: an emergency stop, a refused command, no
-pose). Pre-empted or cancelled: 0, as Nav2."""
+107, FAILED_TO_MAKE_PROGRESS 105, NO_VALID_CONTROL 106 (off path: carried off its path again and
+again), UNKNOWN 100 (stopped: an emergency stop, a refused command, no pose). Pre-empted or cancelled: 0, as Nav2."""
 REFUSED = {"frame": 202, "pose": 200, "off map": 204, "blocked": 206}
 """A refused goal's ``error_code``: ComputePathToPose's TF_ERROR 202 (not in the map frame),
 UNKNOWN 200 (not a finite pose), GOAL_OUTSIDE_MAP 204, GOAL_OCCUPIED 206."""

@@ -13,6 +13,10 @@ controller. ``path`` is a command: each message is a path for the robot to repea
   base: it may differ from the direction of travel); a pose without a rotation (an all-zero
   quaternion) keeps the heading before it. When the robot is farther than 2 cm from the first pose
   it first drives straight to it; a single pose is a straight run to it.
+* A robot carried farther from the path than the follower chases (a push, the estimate corrected:
+  :data:`~omnibot.control.followers.base.OFF_PATH`) is not driven back: the path ends ``failed``
+  (``off the path: ... cm from it``), the robot is braked to rest from the last twist
+  (:class:`~omnibot.navigation.brake.BrakeSource`) and the abort is on the diagnostics.
 * Progress and result: a status line (the runtime's notices: received, replaced, cancelled,
   completed, NOT completed and why) and the ``omnibot: path`` diagnostic status (state, poses,
   length, progress along the path, cross-track error). Given the ``runtime``, each path is judged as
@@ -30,8 +34,15 @@ from typing import Any
 import numpy as np
 
 from omnibot.control import Path
-from omnibot.motion import Estimate
-from omnibot.navigation import FOLLOWER_PRIORITY, FollowJudge, follower_source, summary, verdict
+from omnibot.motion import Estimate, Twist
+from omnibot.navigation import (
+    FOLLOWER_PRIORITY,
+    BrakeSource,
+    FollowJudge,
+    follower_source,
+    summary,
+    verdict,
+)
 from omnibot.ros2.backend import RosNode
 from omnibot.ros2.diagnostics import Diagnosed
 from omnibot.ros2.odometry import yaw_of
@@ -113,6 +124,8 @@ class PathSource:
         """m off the current path (left positive)."""
         self.refused = ""
         """Why the last path was refused ("" once one is taken)."""
+        self.brake: BrakeSource | None = None
+        """Brings the robot to rest after a path the follower gave up (the robot off it)."""
 
     def propose(self, cycle: Cycle) -> Proposal | None:
         """The follower's twist for the newest path (None when there is none to follow)."""
@@ -122,7 +135,7 @@ class PathSource:
             self.receive(from_dds(samples[-1], PATH_TYPE), cycle.estimate)
         current = self.current
         if current is None or current.finished:
-            return None
+            return self._braking(cycle)
         proposal = current.propose(cycle)
         state = cycle.estimate
         if state is not None and len(current.path) > 1:
@@ -130,7 +143,22 @@ class PathSource:
             self.progress, self.cross = proj.s, proj.cross
         if current.finished:
             self._ended(current)
+            if current.follower.strayed is not None:
+                self.brake = BrakeSource(
+                    self.robot,
+                    current.twist or Twist(),
+                    self.period,
+                    name=self.name,
+                    watchdog=current.watchdog,
+                )
+                return self._braking(cycle)
         return proposal
+
+    def _braking(self, cycle: Cycle) -> Proposal | None:
+        """The brake's twist while it brings the robot to rest, else None."""
+        if self.brake is None or self.brake.finished:
+            return None
+        return self.brake.propose(cycle)
 
     def cancel(self, why: str) -> None:
         """End the path being followed (if any): ``why`` in the status."""
@@ -174,6 +202,7 @@ class PathSource:
                 on_verdict=lambda report: self._judged(current, report),
             )
         self.progress, self.cross, self.refused = 0.0, 0.0, ""
+        self.brake = None
         self.state = "following"
         self.detail = f"{len(msg.poses)} poses, {path.length:.2f} m"
         self.notify("info", f"path {'replaced' if replaced else 'received'}: following {self.detail}")

@@ -14,9 +14,10 @@ deadman and pressed it again) asks the runtime to release a latched emergency st
   when the robot comes back to it, it resumes from where the robot now is, driving straight back to
   the path's nearest point ahead of the progress made (if farther than ``APPROACH_GAP``) and then
   along the rest. ``on_override="stop"`` ends the run at the first override instead. An emergency
-  stop (a lock of priority 255), a refused command, a latched emergency stop on the controller or a
-  stall (:mod:`omnibot.runtime.stall`) end the run (:attr:`FollowerSource.failure`): nothing drives
-  off on its own after one. Its ``frame`` (the ``map -> odom`` correction of a SLAM or a localiser)
+  stop (a lock of priority 255), a refused command, a latched emergency stop on the controller, a
+  stall (:mod:`omnibot.runtime.stall`) or the robot farther from the path than the follower chases
+  (:attr:`~omnibot.control.Follower.off_path`: a push, a localiser's correction) end the run
+  (:attr:`FollowerSource.failure`): nothing drives off on its own after one. Its ``frame`` (the ``map -> odom`` correction of a SLAM or a localiser)
   has it steer by the estimate moved into the map frame, the path's, instead of the odometry's.
 * :class:`ScriptSource`: twists from a function of time (scripts, tests, demos, the navigator's
   scripted manoeuvres: ``record --teach drive``, the gyro spin, the slip runs); like a follower it
@@ -158,8 +159,8 @@ class FollowerSource:
         self._driven = self._driven or previous.source == self.name  # the arbiter gave it the robot
         command = self.follower.update(state)
         self.state = state
-        if self.follower.done:
-            self.end()
+        if self.follower.done or self.follower.failure:
+            self.end(self.follower.failure)
             return None
         self._s = self.path.project_near(state.x, state.y, self._s).s if len(self.path) > 1 else 0.0
         self.twist = Twist(command.vx, command.vy, command.w)

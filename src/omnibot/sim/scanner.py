@@ -18,9 +18,13 @@ A revolution is delivered as a :class:`~omnibot.scan.Scan` once its last ray's t
 
 Each range is the true distance to the nearest wall, obstacle or other body plus
 N(0, noise_std + noise_fraction * distance), quantised to ``resolution``; ``inf`` for a dropout or
-a return outside [range_min, range_max]. The noise of revolution ``k`` is a fixed slice of the
-scanner's own random stream (``3 * rays`` uniform draws per revolution, the stream jumped ahead to
-revolution ``k``), so a revolution's ranges are the same whenever the scanner was switched on and
+a return outside [range_min, range_max]. The noise comes from the scanner's own random stream (a
+PCG64 of its seed and key) in a fixed layout: revolutions ``8b`` to ``8b + 7`` (batch ``b`` of
+DRAW_BATCH) take the block of ``DRAW_BATCH * BLOCK_PER_RAY * rays`` outputs (3 a ray) that starts at
+output ``b`` times that, first their uniform draws (``Generator.random``, ``rays`` a revolution:
+the dropouts), then their standard normals (``Generator.standard_normal``, numpy's ziggurat,
+``rays`` a revolution), which take about 1.02 outputs each (2,940 for 2,880; the block leaves them
+twice as many). So a revolution's ranges are the same whenever the scanner was switched on and
 however often it was flushed, and no other sensor's stream changes.
 """
 
@@ -38,7 +42,7 @@ from omnibot.motion import Pose2D
 from omnibot.robot import ScannerSpec
 from omnibot.scan import Scan
 from omnibot.sim import jit
-from omnibot.sim.kernels import layout
+from omnibot.sim.kernels import layout, ray_table
 from omnibot.sim.kernels.scan import (
     P_DROPOUT,
     P_DT,
@@ -64,6 +68,11 @@ _NO_VERTICES = np.zeros((0, 2))
 _NO_BODIES = np.zeros(1, dtype=np.int64)
 _NO_RAYS = np.zeros(0)
 _NO_INDEX = (np.zeros(SCAN_BINS + 1, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0))
+DRAW_BATCH = 8
+"""Revolutions whose noise is drawn together: revolutions ``8b`` to ``8b + 7`` (batch ``b``)."""
+BLOCK_PER_RAY = 3
+"""Outputs of the scanner's stream a ray's draws have in its batch's block: its uniform, and room
+for its normal (one output, or a few on a rejection)."""
 INDEX_SLACK = 0.25
 """m: room the scanner's edge index leaves around the origins it was made for (see _index_for)."""
 
@@ -113,17 +122,17 @@ class PoseLog:
         """The rows as an (H, 3 bodies) array: a view of the body's log when there is one body, else
         the bodies' logs side by side (made once per record: the scanners of a fleet flushed
         together share it)."""
-        logs = [b.pose_log() for b in self.bodies]
-        si = logs[0][1]
-        n, key = int(si[layout.I_LOG_N]), (int(si[layout.I_LOG_N]), int(si[layout.I_LOG_NEXT]))
+        rows, si = self.bodies[0].pose_log()
+        n = int(si[layout.I_LOG_N])
         if n > self.capacity:
             raise SimulationError(
                 f"the scanners' pose log overflowed ({n} rows in {self.capacity}): a flush came too late"
             )
-        if len(logs) == 1:
-            return logs[0][0][:n]
+        if len(self.bodies) == 1:
+            return rows[:n]
+        key = (n, int(si[layout.I_LOG_NEXT]))
         if key != self._joined_key:
-            self._joined = np.concatenate([rows[:n] for rows, _ in logs], axis=1)
+            self._joined = np.concatenate([b.pose_log()[0][:n] for b in self.bodies], axis=1)
             self._joined_key = key
         return self._joined
 
@@ -162,13 +171,13 @@ class LaserScanner:
         """Angle between consecutive rays, rad (negative: clockwise)."""
         self.angles: FloatArray = np.arange(n, dtype=np.float64) * self.angle_increment
         """Direction of every ray in the scanner frame, rad."""
-        self._base_angles = np.ascontiguousarray(self.angles + spec.yaw)
         self._offsets = np.arange(n, dtype=np.float64) * self.time_increment
-        self._seed, self._key = seed, key
+        self._rays = ray_table.py_func(self._offsets, self.angles + spec.yaw)
+        """Each ray's time in the revolution and direction in the robot's base frame, with its cos and sin."""
         self._bitgen = np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(key,)))
         self._gen = np.random.Generator(self._bitgen)
-        self._stream_rev = 0
-        """Revolution whose draws come next from the stream."""
+        self._stream_start = self._bitgen.state
+        """The stream's state at its start, from which each batch's block is reached."""
         stretch = 1.0 + 6.0 * spec.noise_fraction
         self._cast_range = spec.range_max * stretch + 6.0 * spec.noise_std + spec.resolution
         self._true = np.full(n, math.inf)
@@ -181,7 +190,11 @@ class LaserScanner:
         self._params[P_NOISE_STD : P_RANGE_MAX + 1] = (
             spec.noise_std, spec.noise_fraction, spec.resolution, spec.dropout, spec.range_min, spec.range_max,
         )  # fmt: skip
-        self._draw_buffer = np.empty(3 * n)
+        self._uniforms = np.empty((DRAW_BATCH, n))
+        self._normals = np.empty((DRAW_BATCH, n))
+        """Uniform and normal draws of batch _batch's revolutions: one per row."""
+        self._rows = list(zip(self._normals, self._uniforms, strict=True))
+        self._batch = -1
         self._template = Scan(
             stamp=0.0,
             angle_min=0.0,
@@ -266,18 +279,18 @@ class LaserScanner:
             whole = t >= end - _EPS  # the usual call: its end is the due time
             last = n if whole else int(np.searchsorted(self._offsets, t - stamp + _EPS, side="right"))
             measured = np.empty(n) if whole else _NO_RAYS
-            draws = self._draws(self.revolution) if whole else _NO_RAYS
+            normals, uniforms = self._draws(self.revolution) if whole else (_NO_RAYS, _NO_RAYS)
             first, cast = self._next_ray, last > self._next_ray
             while cast and not jit.active.scan_revolution(
-                stamp, first, last, self._offsets, self._base_angles, hist, own, params, segments, *self._index,
-                body_v, body_off, self._true, draws, measured,
+                stamp, first, last, self._rays, hist, own, params, segments, *self._index,
+                body_v, body_off, self._true, normals, uniforms, measured,
             ):  # fmt: skip
                 self._index_for(segments, hist, own)
             self._next_ray = last
             if not whole:
                 break
             if not cast:  # every ray was cast by earlier flushes: measured here
-                self._measure(draws, measured)
+                self._measure(normals, uniforms, measured)
             done.append(self._deliver(stamp, measured))
             self.revolution += 1
             self._next_ray = 0
@@ -296,32 +309,32 @@ class LaserScanner:
         )
         self._index_segments = segments
 
-    def _draws(self, revolution: int) -> FloatArray:
-        """The 3 * rays uniform draws of ``revolution`` (the stream jumped to it), in a buffer of the
-        scanner's own (overwritten by the next revolution's)."""
-        size = 3 * self.spec.rays
-        if revolution < self._stream_rev:  # back in the stream: from its start again
-            self._bitgen = np.random.PCG64(np.random.SeedSequence(self._seed, spawn_key=(self._key,)))
-            self._gen = np.random.Generator(self._bitgen)
-            self._stream_rev = 0
-        if revolution > self._stream_rev:
-            self._bitgen.advance((revolution - self._stream_rev) * size)
-        self._stream_rev = revolution + 1
-        return self._gen.random(size, out=self._draw_buffer)
+    def _draws(self, revolution: int) -> tuple[FloatArray, FloatArray]:
+        """The normal and the uniform draws of ``revolution`` (what
+        :func:`~omnibot.sim.kernels.scan_measure` takes): rows of its batch's, drawn from the
+        batch's block of the stream (the module's docstring gives the layout)."""
+        batch, row = divmod(revolution, DRAW_BATCH)
+        if batch != self._batch:
+            bits = self._bitgen
+            bits.state = self._stream_start
+            bits.advance(batch * DRAW_BATCH * BLOCK_PER_RAY * self.spec.rays)
+            self._gen.random(out=self._uniforms)
+            self._gen.standard_normal(out=self._normals)
+            self._batch = batch
+        return self._rows[row]
 
-    def _measure(self, draws: FloatArray, measured: FloatArray) -> None:
+    def _measure(self, normals: FloatArray, uniforms: FloatArray, measured: FloatArray) -> None:
         """The revolution's true ranges measured into ``measured`` (:func:`~omnibot.sim.kernels.scan_measure`)."""
         p = self._params
         jit.active.scan_measure(
-            self._true, draws, p[P_NOISE_STD], p[P_NOISE_FRACTION], p[P_RESOLUTION], p[P_DROPOUT],
+            self._true, normals, uniforms, p[P_NOISE_STD], p[P_NOISE_FRACTION], p[P_RESOLUTION], p[P_DROPOUT],
             p[P_RANGE_MIN], p[P_RANGE_MAX], measured,
         )  # fmt: skip
 
     def _deliver(self, stamp: float, measured: FloatArray) -> Scan:
         """The revolution that began at ``stamp``, measured, as a :class:`~omnibot.scan.Scan` (the
         scanner's own checked once: :meth:`Scan.but <omnibot.scan.Scan.but>`)."""
-        scan = self._template.but(stamp, measured)
-        self._true.fill(math.inf)
+        scan = self._template.but(stamp, measured)  # _true is cast again, every ray, before it is read
         self.last = scan
         self.scans += 1
         return scan

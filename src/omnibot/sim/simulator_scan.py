@@ -95,7 +95,7 @@ class ScanFeed:
         time, from the thread that steps the simulator). SimulationError if the robot has no scanner."""
         if self._scanner is None:
             raise SimulationError(f"robot '{self.robot.name}' has no scanner (add a 'scanner:' section)")
-        self._scan_listeners.append(fn)
+        self._scan_listeners = [*self._scan_listeners, fn]  # a new list: a flush calls the one it began with
         self._scan_switch()
 
     def remove_scan_listener(self, fn: ScanListener) -> None:
@@ -172,7 +172,7 @@ class ScanFeed:
             due = min(due, now_us + round(SCAN_OTHERS_EVERY * 1e6))
         self._scan_due_us = due
         for scan in scans:
-            for fn in list(self._scan_listeners):
+            for fn in self._scan_listeners:
                 fn(scan)
         return due
 

@@ -9,7 +9,7 @@ while the compiled kernels are built in a process of their own (:mod:`omnibot.si
 
 Bit for bit: the kernels do IEEE double arithmetic in the order written (numba compiles them
 without ``fastmath``, so nothing is reassociated or fused), and numba calls the C library's
-``sin``, ``cos``, ``tanh``, ``atan2``, ``asin``, ``sqrt``, ``log1p``, ``floor`` as CPython's
+``sin``, ``cos``, ``tanh``, ``atan2``, ``asin``, ``sqrt``, ``floor`` as CPython's
 ``math`` does, with the same results. The one exception is ``math.hypot``: CPython (3.10 and later)
 computes it with its own, more accurate algorithm, numba calls the C library's ``hypot``; they
 differ in the last bit for about one argument pair in 600. :data:`LIBM` is ``math`` with the C

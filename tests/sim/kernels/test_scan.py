@@ -59,20 +59,22 @@ def test_a_revolution_in_one_call_is_the_cast_and_the_measurement_and_asks_for_a
         dtype=np.float64,
     )
     no_v, no_off = np.zeros((0, 2)), np.zeros(1, dtype=np.int64)
-    draws = np.random.default_rng(3).random(3 * n)
+    rng = np.random.default_rng(3)
+    draws = (rng.standard_normal(n), rng.random(n))
     params = np.zeros(SCAN_PARAMS)
     params[[P_DT, P_REACH, P_INNER, P_NOISE_FRACTION, P_RESOLUTION, P_DROPOUT, P_RANGE_MIN, P_RANGE_MAX]] = (
         0.005, 14.0, -1.0, 0.01, 0.00025, 0.05, 0.15, 12.0,
     )  # fmt: skip
     index = kernels.scan_index(segments, 1.15, 1.05, 0.5, 14.0)
     true, measured = np.full(n, math.inf), np.full(n, -1.0)
-    args = (3.0, 0, n, offsets, angles, hist, 0, params, segments, *index, no_v, no_off, true)
-    assert not kernels.scan_revolution(*args, draws, measured)  # no index yet
+    rays = kernels.ray_table(offsets, angles)
+    args = (3.0, 0, n, rays, hist, 0, params, segments, *index, no_v, no_off, true)
+    assert not kernels.scan_revolution(*args, *draws, measured)  # no index yet
     params[[P_AX, P_AY, P_INNER]] = 1.15, 1.05, 0.1  # a disc that misses the first rows
-    assert not kernels.scan_revolution(*args, draws, measured)
+    assert not kernels.scan_revolution(*args, *draws, measured)
     assert np.isinf(true).all() and (measured == -1.0).all()  # nothing done
     params[P_INNER] = 0.5
-    assert kernels.scan_revolution(*args, draws, measured)
+    assert kernels.scan_revolution(*args, *draws, measured)
     expected_true, expected = np.empty(n), np.empty(n)
     kernels.scan_rays(
         3.0 + offsets,
@@ -90,12 +92,12 @@ def test_a_revolution_in_one_call_is_the_cast_and_the_measurement_and_asks_for_a
         14.0,
         expected_true,
     )
-    kernels.scan_measure(expected_true, draws, 0.0, 0.01, 0.00025, 0.05, 0.15, 12.0, expected)
+    kernels.scan_measure(expected_true, *draws, 0.0, 0.01, 0.00025, 0.05, 0.15, 12.0, expected)
     np.testing.assert_array_equal(true, expected_true)
     np.testing.assert_array_equal(measured, expected)
     assert np.isfinite(true).all() and 0 < np.isinf(measured).sum() < 0.1 * n  # the dropouts
     # a part of a revolution, no draws: those rays cast, nothing measured
     part, nothing = np.full(n, math.inf), np.zeros(0)
-    assert kernels.scan_revolution(3.0, 10, 20, *args[3:12], no_v, no_off, part, nothing, nothing)
+    assert kernels.scan_revolution(3.0, 10, 20, *args[3:11], no_v, no_off, part, nothing, nothing, nothing)
     np.testing.assert_array_equal(part[10:20], expected_true[10:20])
     assert np.isinf(part[:10]).all() and np.isinf(part[20:]).all()

@@ -6,10 +6,28 @@ the time the command is sent)::
 
     follower = make_follower("tracker", limits, rate=100.0)
     follower.start(path, t)
-    while not follower.done:
+    while not (follower.done or follower.failure):
         command = follower.update(State(t, x, y, theta, vx, vy, w))   # -> VEL vx, vy, w
 
 Followers see only the state they are given (the robot's own estimate), never ground truth.
+
+Every follower's command is bounded the same way (:meth:`Follower.update` around each law's
+:meth:`Follower.command`), as Nav2's controllers and ros2_controllers bound theirs:
+
+* **the limits as given**: the body's twist each law asks is held within ``limits.v_max`` (the user's
+  ``--speed``, else the description's ``speed_max``) and ``limits.w_max``; what is sent is that
+  twist, or, for the tracker, the twist its learned response model says makes the body do it
+  (:meth:`Follower.respond`: on a floor where the body answers slower than asked the VEL is up to
+  1.3x that, the body's own speed staying within the limit);
+* **no chase**: farther than ``off_path`` m (default :data:`OFF_PATH`) from the path near the
+  progress made (a push, a localiser's correction, a wheel stalled then freed), the follower does
+  not steer back: it asks STOP from then on and says why in :attr:`Follower.failure` (its
+  :attr:`Follower.strayed` is how far off it was); the runtime's follower source ends the run
+  there (``follow``: NOT COMPLETED, exit 1; goto: a re-plan from where the robot is);
+* **a bounded correction**: the laws that add feedback to the path's own velocity keep that
+  correction within :func:`correction_speed` (the speed the robot gains in
+  :data:`CORRECTION_TIME` s at its acceleration limit), so near the path the command is at most the
+  path's planned speed there plus that margin.
 """
 
 from __future__ import annotations
@@ -48,6 +66,18 @@ PLAN_TIME_BUDGET = 1.2
 """The most a plan with a course-rate cap (:attr:`MotionLimits.course_rate`) may take, in minimum
 times without the cap at the full limits (the floor's whole reach: the benchmarks' yardstick): the
 cap gives way beyond it (the goal is 1.25x, less what tracking adds)."""
+OFF_PATH = 0.5
+"""m: how far from the path (the nearest point near the progress made) a follower still steers back;
+farther, it stops and fails (:attr:`Follower.failure`). Nav2's ``IsWithinPathTrackingBounds``
+defaults to the same 0.5 m either side; the trackers stay within 3 cm of their paths, and a path
+handed over from elsewhere begins with a straight run from the robot (``APPROACH_GAP``)."""
+CORRECTION_TIME = 0.4
+"""s: a follower's feedback adds to the path's velocity at most the speed the robot gains in this
+time at its acceleration limit (:func:`correction_speed`: omni4 and mecanum4 0.8 m/s, omni3 1.0
+m/s), so a robot pushed off its path comes back at the path's speed plus that, not at its top speed.
+The tracker's feedback reaches 0.5 m/s in normal tracking at omni4's top speed (it feeds back the
+predicted error, the estimate's velocity in it): at 0.25 s omni4's random paths on carpet came out
+0.38 -> 0.41 cm mean RMS, 1.33 -> 1.49 cm max; at 0.4 s as without the bound (BENCHMARKS.md)."""
 PLAN_WHEEL_USE = 0.85
 """Fraction of the wheels' free-running speed every follower plans with (the rest is the floor's load
 and the wheel-speed loop's headroom; see :mod:`omnibot.control.reach`)."""
@@ -74,6 +104,26 @@ def clamp_speed(vx: float, vy: float, v_max: float) -> tuple[float, float]:
     return vx, vy
 
 
+def correction_speed(limits: MotionLimits) -> float:
+    """m/s: the most feedback may add to the path's velocity (:data:`CORRECTION_TIME` at ``a_max``)."""
+    return CORRECTION_TIME * limits.a_max
+
+
+def bound_correction(vx: float, vy: float, ref_vx: float, ref_vy: float, cap: float) -> tuple[float, float]:
+    """``(vx, vy)`` with its difference from the reference's ``(ref_vx, ref_vy)`` at most ``cap`` m/s."""
+    dx, dy = clamp_speed(vx - ref_vx, vy - ref_vy, cap)
+    return ref_vx + dx, ref_vy + dy
+
+
+def within_limits(limits: MotionLimits, command: Command) -> Command:
+    """``command`` with its translation within ``limits.v_max`` and its turn rate within ``w_max``."""
+    vx, vy = clamp_speed(command.vx, command.vy, limits.v_max)
+    w = max(-limits.w_max, min(limits.w_max, command.w))
+    if (vx, vy, w) == (command.vx, command.vy, command.w):
+        return command
+    return Command(vx, vy, w)
+
+
 class Follower(ABC):
     """Base class: keeps the path, the limits and the control rate; subclasses implement the law."""
 
@@ -81,12 +131,23 @@ class Follower(ABC):
     end_tolerance: ClassVar[float] = 0.02
     """Position error (m) at the end within which the path counts as done."""
 
-    def __init__(self, limits: MotionLimits, *, rate: float = 100.0, **options: Any) -> None:
+    def __init__(
+        self, limits: MotionLimits, *, rate: float = 100.0, off_path: float = OFF_PATH, **options: Any
+    ) -> None:
         if options:
             raise ConfigError(f"follower {self.name!r} has no option(s) {', '.join(sorted(options))}")
         if not rate > 0:
             raise ConfigError(f"control rate must be positive, got {rate}")
+        if not off_path > 0:
+            raise ConfigError(f"off_path must be a positive distance (m), got {off_path}")
         self.limits = limits
+        self.off_path = off_path
+        """m: farther than this from the path the follower stops and fails (see the module docstring)."""
+        self.failure = ""
+        """Why the follower gave up ("" while it steers): it was farther than :attr:`off_path` from the path."""
+        self.strayed: float | None = None
+        """m: how far from the path the robot was when the follower gave up (None: it did not)."""
+        self._near = 0.0  # arc length of the path's point nearest the robot, m
         self.rate = rate
         self.dt = 1.0 / rate
         self.path: Path | None = None
@@ -119,10 +180,45 @@ class Follower(ABC):
         self.t0 = t
         self.done = False
         self.progress = 0.0
+        self.failure = ""
+        self.strayed = None
+        self._near = 0.0
+
+    def update(self, state: State) -> Command:
+        """The command for the next control period: the law's (:meth:`command`) within the limits,
+        or STOP once the robot is farther than :attr:`off_path` from the path (then for good:
+        :attr:`failure` says why)."""
+        if not self.failure:
+            self._watch_path(state)
+        if self.failure:
+            self.planned_accel = 0.0
+            self.planned_body_accel = None
+            return STOP
+        return self.respond(state, within_limits(self.limits, self.command(state)))
+
+    def _watch_path(self, state: State) -> None:
+        """Set :attr:`failure` when ``state`` is farther than :attr:`off_path` from the path near the
+        point it was nearest last time."""
+        path = self.path
+        assert path is not None
+        near = path.project_near(state.x, state.y, self._near)
+        self._near = near.s
+        off = math.hypot(state.x - near.x, state.y - near.y)
+        if off > self.off_path:
+            self.strayed = off
+            self.failure = (
+                f"off the path: {100 * off:.1f} cm from it {near.s:.2f} m along (more than "
+                f"{100 * self.off_path:.0f} cm), not chased"
+            )
 
     @abstractmethod
-    def update(self, state: State) -> Command:
-        """The command for the next control period."""
+    def command(self, state: State) -> Command:
+        """The law's command for the next control period: the body's twist (:meth:`update` bounds it)."""
+
+    def respond(self, state: State, command: Command) -> Command:
+        """What to send for the body to do ``command`` (within the limits): ``command`` itself; a
+        follower with a model of how the robot answers (the tracker's) inverts it here."""
+        return command
 
     def plan(self, path: Path, margin: float = PLAN_MARGIN) -> SpeedProfile:
         """The time-optimal profile within ``margin`` of the acceleration limits and

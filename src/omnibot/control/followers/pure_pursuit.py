@@ -61,7 +61,7 @@ class PurePursuit(Follower):
         super().start(path, t)
         self.profile = self.plan(path, self.margin)
 
-    def update(self, state: State) -> Command:
+    def command(self, state: State) -> Command:
         """Steer toward the look-ahead point on the path at the profile's speed; STOP once done."""
         path, prof = self.path, self.profile
         assert path is not None and prof is not None

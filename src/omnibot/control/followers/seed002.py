@@ -37,6 +37,7 @@ from omnibot.control.followers.base import (
     Follower,
     State,
     clamp_speed,
+    correction_speed,
     register,
     to_body,
     wrap,
@@ -80,7 +81,9 @@ class Seed002Follower(Follower):
         kp, ki, kd = speed_gains
         v = limits.v_max
         i_limit = 0.2 * v / ki if ki > 0 else 0.0
-        self.speed_pid = PID(kp, ki, kd, lo=-0.5 * v, hi=0.5 * v, i_limit=i_limit, d_tau=0.03)
+        # the speed loop slows down as it likes, and speeds up by at most the bounded correction
+        hi = min(0.5 * v, correction_speed(limits))
+        self.speed_pid = PID(kp, ki, kd, lo=-0.5 * v, hi=hi, i_limit=i_limit, d_tau=0.03)
         self.points: Path | None = None
         self.profile: SpeedProfile | None = None
         self.index = 0
@@ -120,7 +123,7 @@ class Seed002Follower(Follower):
         along = ((state.x - x1) * dx + (state.y - y1) * dy) / length
         return along >= length
 
-    def update(self, state: State) -> Command:
+    def command(self, state: State) -> Command:
         """Seed 002's segment-by-segment command for this state; STOP once done."""
         p, prof = self.points, self.profile
         assert p is not None and prof is not None and self.path is not None

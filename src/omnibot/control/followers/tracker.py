@@ -14,7 +14,8 @@ velocity and turn rate at every instant. Each control period (100 Hz or more):
    (gain ``cross``, integral ``cross_i``, clamped), along-track with a PI (``along``, ``along_i``),
    and heading with a PI (``heading``, by default :func:`heading_gain`; ``heading_i``) towards the
    path's heading where the robot is along it (the reference's, moved by the along-track error);
-4. **command**: v = v_ref + k_t e_t t + k_n e_n n and w = w_ref + k_theta e_theta, turned into the
+4. **command**: v = v_ref + k_t e_t t + k_n e_n n and w = w_ref + k_theta e_theta, the correction
+   (v - v_ref) within :func:`~omnibot.control.followers.base.correction_speed`, turned into the
    body frame with the heading at the middle of the next period, speed clamped to the limit, and
    the twist scaled down as a whole where it would be beyond the robot's reach
    (:func:`within_reach`: the wheels' free speed and the floor's load);
@@ -40,7 +41,9 @@ from omnibot.control.followers.base import (
     Command,
     Follower,
     State,
+    bound_correction,
     clamp_speed,
+    correction_speed,
     register,
     to_body,
     wrap,
@@ -48,12 +51,15 @@ from omnibot.control.followers.base import (
 from omnibot.control.followers.response import VelocityResponse
 from omnibot.control.paths.limits import MotionLimits
 from omnibot.control.paths.path import FloatArray, Path
-from omnibot.control.paths.profile import SpeedProfile
+from omnibot.control.paths.profile import Reference, SpeedProfile
 
 STEADY_ACCEL = 0.5
 """m/s^2: the response model learns only while the reference accelerates less than this (and the
-estimator sees no slip, and its speed changes slower than :data:`STEADY_SPEEDUP`): it is a
-steady-state gain."""
+estimator sees no slip, its speed changes slower than :data:`STEADY_SPEEDUP` and the feedback is
+within its bound, and has been for :data:`RELEARN` s): it is a steady-state gain."""
+RELEARN = 1.0
+"""s: after the feedback was last cut to its bound (:attr:`ProfileTracker.correcting`: a robot coming
+back to its path) the response model waits this long before it learns again."""
 STEADY_SPEEDUP = 0.1
 """m/s^2: the response model also learns only while the reference's speed changes slower than this.
 It compares the body's velocity with the command of ``delay`` before (the wheel loop's lag); a
@@ -139,6 +145,14 @@ class ProfileTracker(Follower):
         self.progress_heading = progress_heading
         """Ask for the path's heading where the robot is along it; False: the reference's own,
         wherever the robot is."""
+        self.correction = correction_speed(limits)
+        """m/s: the most the feedback adds to the reference's velocity (:func:`correction_speed`)."""
+        self.correcting = False
+        """The last command's feedback was cut to :attr:`correction`: the robot is coming back to the
+        path (a push, a corrected estimate), lagging its command by design; the response model does
+        not learn from it, nor for :data:`RELEARN` s after (it read a 30 cm recovery on omni4 as a
+        slow floor and then asked 1.27-1.30 m/s of a 1 m/s robot)."""
+        self._corrected_at = -math.inf  # when the feedback was last cut to its bound, s
         self.response = VelocityResponse() if adapt else None
         self.profile: SpeedProfile | None = None
         self.tau = 0.0
@@ -147,6 +161,8 @@ class ProfileTracker(Follower):
         self._integral = np.zeros(3)  # along, cross, heading
         self._holds_heading = False
         self._ended_at: float | None = None
+        self._steady: bool | None = None  # the last command's reference was steady (None: a STOP)
+        self._dt_seen = 0.0  # the last command's interval, s
         self.errors = (0.0, 0.0, 0.0)
         """Last along-track, cross-track (m) and heading (rad) errors of the estimate."""
 
@@ -159,16 +175,18 @@ class ProfileTracker(Follower):
         self._holds_heading = float(np.ptp(path.theta)) == 0.0  # planned_accel only then
         self._last_t = t
         self._ended_at = None
+        self._corrected_at = -math.inf
         self._integral[:] = 0.0
         if self.response is not None:
             self.response.reset()
 
-    def update(self, state: State) -> Command:
+    def command(self, state: State) -> Command:
         """Track the time-parametrised reference with feedforward plus feedback; STOP once done."""
         prof, path = self.profile, self.path
         assert prof is not None and path is not None
         self.planned_accel = 0.0
         self.planned_body_accel = None
+        self._steady = None
         if self.done:
             return STOP
         dt = self.dt if self._last_t is None else max(0.0, state.t - self._last_t)
@@ -214,8 +232,26 @@ class ProfileTracker(Follower):
         command = to_body(vx, vy, w, heading, self.dt)
         body = to_body(acc_x, acc_y, alpha, heading + 0.5 * w * self.dt)  # the same axes
         self.planned_body_accel = (body.vx, body.vy, body.w)
-        steady = math.hypot(ref.ax, ref.ay) < STEADY_ACCEL and abs(ref.ax * tx + ref.ay * ty) < STEADY_SPEEDUP
-        return self._through_response(state, command, steady, dt)
+        self._steady, self._dt_seen = self._learns(ref, tx, ty, state.t), dt
+        return command
+
+    def _learns(self, ref: Reference, tx: float, ty: float, t: float) -> bool:
+        """Whether the response model may learn from the command for ``ref`` (heading ``tx, ty``) at
+        time ``t``: the reference steady and the feedback within its bound for :data:`RELEARN` s."""
+        if self.correcting:
+            self._corrected_at = t
+        return (
+            math.hypot(ref.ax, ref.ay) < STEADY_ACCEL
+            and abs(ref.ax * tx + ref.ay * ty) < STEADY_SPEEDUP
+            and t - self._corrected_at > RELEARN
+        )
+
+    def respond(self, state: State, command: Command) -> Command:
+        """``command`` (the body's twist, within the limits) through the learned response model and
+        within the robot's reach (:meth:`_through_response`); a STOP as it is."""
+        if self._steady is None:
+            return command
+        return self._through_response(state, command, self._steady, self._dt_seen)
 
     def _feedback(
         self, vx: float, vy: float, w: float, tx: float, ty: float, dt: float
@@ -228,7 +264,9 @@ class ProfileTracker(Follower):
         integral = self._integrate(e_t, e_n, e_th, dt)
         u_t = self.k_along * e_t + self.i_along * integral[0]
         u_n = self.k_cross * e_n + self.i_cross * integral[1]
-        vx, vy = clamp_speed(vx + u_t * tx + u_n * nx, vy + u_t * ty + u_n * ny, limits.v_max)
+        self.correcting = math.hypot(u_t, u_n) > self.correction
+        cx, cy = bound_correction(vx + u_t * tx + u_n * nx, vy + u_t * ty + u_n * ny, vx, vy, self.correction)
+        vx, vy = clamp_speed(cx, cy, limits.v_max)
         w = w + self.k_heading * e_th + self.i_heading * integral[2]
         return vx, vy, max(-limits.w_max, min(limits.w_max, w))
 

@@ -7,7 +7,9 @@
 * :mod:`~omnibot.sim.kernels.sensors`: the gyro and the tracking wheels;
 * :mod:`~omnibot.sim.kernels.step`: one robot's whole step (:func:`robot_step`, its parts
   :func:`robot_before` and :func:`robot_after`) and a fleet's (:func:`fleet_step`);
-* :mod:`~omnibot.sim.kernels.scan`: the laser scanner (``scan_*``, and :func:`pose_log` its poses);
+* :mod:`~omnibot.sim.kernels.scan`: the laser scanner (``scan_*``, and :func:`pose_log` its poses),
+  with :mod:`~omnibot.sim.kernels.scan_ray` where its rays start and point (:func:`ray_table`) and
+  :mod:`~omnibot.sim.kernels.scan_noise` its measurement;
 * :mod:`~omnibot.sim.kernels.lanes`: the batch physics in vector lanes (``Physics.run(exact=False)``),
   with its own vectorisable ``tanh``, ``sin`` and ``cos`` (:mod:`~omnibot.sim.kernels.libm`);
 * :mod:`~omnibot.sim.kernels.layout`: the column indices and packed-buffer offsets they share;
@@ -38,10 +40,11 @@ from omnibot.sim.kernels.scan import (
     pose_log,
     scan_index,
     scan_index_around,
-    scan_measure,
     scan_rays,
     scan_revolution,
 )
+from omnibot.sim.kernels.scan_noise import scan_measure
+from omnibot.sim.kernels.scan_ray import ray_table
 from omnibot.sim.kernels.sensors import gyro_measure, gyro_update, tracking_update
 from omnibot.sim.kernels.step import fleet_step, robot_after, robot_before, robot_step
 from omnibot.sim.kernels.warm import KERNELS, SIMULATOR_KERNELS, warm_up, warm_up_calls
@@ -66,6 +69,7 @@ __all__ = [
     "physics_step_parallel",
     "physics_views",
     "pose_log",
+    "ray_table",
     "robot_after",
     "robot_before",
     "robot_step",
@@ -73,6 +77,8 @@ __all__ = [
     "scan_index",
     "scan_index_around",
     "scan_measure",
+    "scan_noise",
+    "scan_ray",
     "scan_rays",
     "scan_revolution",
     "sensors",

@@ -22,6 +22,8 @@ from omnibot.sim.kernels.layout import (
     IntArray,
     sim_offsets,
 )
+from omnibot.sim.kernels.scan_noise import scan_measure
+from omnibot.sim.kernels.scan_ray import RAY_T, bracket, lerp, ray_frame, ray_table
 
 SCAN_BINS = 256
 """Directions of a :func:`scan_index`: the circle is cut into this many equal sectors."""
@@ -95,6 +97,7 @@ def scan_index(
     near = np.full(n_seg, np.inf)
     first = np.zeros(n_seg, dtype=np.int64)
     count = np.zeros(n_seg, dtype=np.int64)
+    px1 = py1 = a1 = np.nan  # the last end point whose angle was found, and that angle
     for e in range(n_seg):
         x0, y0, x1, y1 = segments[e, 0], segments[e, 1], segments[e, 2], segments[e, 3]
         d = segment_distance(ax, ay, x0, y0, x1, y1)
@@ -104,8 +107,10 @@ def scan_index(
         if d <= radius:
             count[e] = SCAN_BINS
             continue
-        a0 = math.atan2(y0 - ay, x0 - ax)
-        span = _wrap(math.atan2(y1 - ay, x1 - ax) - a0)
+        # an outline's edge starts where the one before it ended: that angle is known
+        a0 = a1 if x0 == px1 and y0 == py1 else math.atan2(y0 - ay, x0 - ax)
+        px1, py1, a1 = x1, y1, math.atan2(y1 - ay, x1 - ax)
+        span = _wrap(a1 - a0)
         if span < 0.0:
             a0, span = a0 + span, -span
         widen = math.asin(min(1.0, radius / d)) + 1e-9
@@ -115,17 +120,23 @@ def scan_index(
         count[e] = min(int((a0 + span) / width) - lo + 1, SCAN_BINS)
     order = np.argsort(near)
     starts = np.zeros(SCAN_BINS + 1, dtype=np.int64)
+    # each sector's count: edge e covers first[e] to first[e] + count[e] - 1 on a doubled circle
+    # (differences summed up), sector b being b and b + SCAN_BINS there
+    cover = np.zeros(2 * SCAN_BINS + 1, dtype=np.int64)
     for e in range(n_seg):
-        for k in range(count[e]):
-            starts[(first[e] + k) % SCAN_BINS + 1] += 1
+        cover[first[e]] += 1
+        cover[first[e] + count[e]] -= 1
+    for b in range(2 * SCAN_BINS):
+        cover[b + 1] += cover[b]
     for b in range(SCAN_BINS):
-        starts[b + 1] += starts[b]
+        starts[b + 1] = starts[b] + cover[b] + cover[b + SCAN_BINS]
     fill = starts[:-1].copy()
     entries = np.empty(starts[SCAN_BINS], dtype=np.int64)
-    for q in range(n_seg):
+    for q in range(n_seg):  # sector b of edge e: first[e] + k, wrapped by a subtraction, not a modulo
         e = order[q]
         for k in range(count[e]):
-            b = (first[e] + k) % SCAN_BINS
+            b = first[e] + k
+            b = b - SCAN_BINS if b >= SCAN_BINS else b
             entries[fill[b]] = e
             fill[b] += 1
     return starts, entries, near
@@ -172,37 +183,6 @@ def _body_radii(body_v: FloatArray, body_off: IntArray) -> FloatArray:
 
 
 @njit(cache=True, inline="always")
-def _bracket(t: float, hist_t0: float, hist_dt: float, n_hist: int) -> tuple[int, int, float]:
-    """(row k, row k1, fraction f): time t lies a fraction f of the way from history row k to k1
-    (held outside the history)."""
-    pos = (t - hist_t0) / hist_dt
-    k = min(max(math.floor(pos), 0), max(n_hist - 2, 0))
-    f = min(max(pos - k, 0.0), 1.0) if n_hist > 1 else 0.0
-    k1 = k + 1 if n_hist > 1 else k
-    return k, k1, f
-
-
-@njit(cache=True, inline="always")
-def _lerp(hist_p: FloatArray, k: int, k1: int, f: float, col: int) -> float:
-    """Column col of the history, a fraction f of the way from row k to row k1."""
-    value: float = hist_p[k, col] + f * (hist_p[k1, col] - hist_p[k, col])
-    return value
-
-
-@njit(cache=True, inline="always")
-def _ray_origin(
-    hist_p: FloatArray, k: int, k1: int, f: float, c0: int, mount_x: float, mount_y: float, a: float
-) -> tuple[float, float, float]:
-    """(x, y, world angle) of a ray from the scanner at (mount_x, mount_y) on the robot whose pose
-    is history columns c0..c0+2, a fraction f from row k to k1, in direction a of its base frame."""
-    x, y, th = _lerp(hist_p, k, k1, f, c0), _lerp(hist_p, k, k1, f, c0 + 1), _lerp(hist_p, k, k1, f, c0 + 2)
-    if mount_x == 0.0 and mount_y == 0.0:  # on the robot's origin: the same numbers, no cos and sin
-        return x, y, th + a
-    c, s = math.cos(th), math.sin(th)
-    return x + c * mount_x - s * mount_y, y + s * mount_x + c * mount_y, th + a
-
-
-@njit(cache=True, inline="always")
 def _outline_hit(
     rx: float, ry: float, dx: float, dy: float, bt: float, body_v: FloatArray, v0: int, v1: int, best: float
 ) -> float:
@@ -226,41 +206,46 @@ def _body_hit(
     """``best``, or the distance along the ray from (ox, oy) in direction (dx, dy) to the outline
     body_v[v0:v1] (bounding radius r) of the body whose pose is history columns cb..cb+2, a
     fraction f from row k to k1, if nearer."""
-    rx, ry = _lerp(hist_p, k, k1, f, cb) - ox, _lerp(hist_p, k, k1, f, cb + 1) - oy
+    rx, ry = lerp(hist_p, k, k1, f, cb) - ox, lerp(hist_p, k, k1, f, cb + 1) - oy
     along = rx * dx + ry * dy
     if along + r < 0.0 or along - r > best or abs(rx * dy - ry * dx) > r:
         return best  # its bounding circle is behind, beyond the best hit or beside the ray
-    bt = _lerp(hist_p, k, k1, f, cb + 2)
+    bt = lerp(hist_p, k, k1, f, cb + 2)
     return _outline_hit(rx, ry, dx, dy, bt, body_v, v0, v1, best)
 
 
 @njit(cache=True, inline="always")
-def _cast(
-    t: float, a: float, hist_t0: float, hist_dt: float, hist_p: FloatArray, own: int, mount_x: float,
-    mount_y: float, segments: FloatArray, starts: IntArray, entries: IntArray, near: FloatArray,
-    body_v: FloatArray, body_off: IntArray, body_r: FloatArray, max_range: float,
-) -> float:  # fmt: skip
-    """True range of one ray of :func:`scan_rays` (measured at time t in direction a; body_r: each
-    body's bounding radius, :func:`_body_radii`)."""
-    k, k1, f = _bracket(t, hist_t0, hist_dt, hist_p.shape[0])
-    ox, oy, ang = _ray_origin(hist_p, k, k1, f, 3 * own, mount_x, mount_y, a)
-    dx, dy = math.cos(ang), math.sin(ang)
-    # its sector by multiplying, not dividing: a ray on a sector's border may be given either one,
-    # and either lists every edge it can meet (scan_index widens each edge's angles by 1e-9 rad)
-    turns = ang * (0.5 / math.pi)
-    sector = min(int((turns - math.floor(turns)) * SCAN_BINS), SCAN_BINS - 1)
-    best = np.inf
-    for q in range(starts[sector], starts[sector + 1]):
-        e = entries[q]
-        if near[e] > best:
-            break
-        best = min(best, _hit(ox, oy, dx, dy, segments[e, 0], segments[e, 1], segments[e, 2], segments[e, 3]))
-    for b in range(body_off.shape[0] - 1):
-        if b != own:
-            best = _body_hit(
-                hist_p, k, k1, f, 3 * b, ox, oy, dx, dy, body_r[b], body_v, body_off[b], body_off[b + 1], best
-            )
-    return best if best <= max_range else np.inf
+def _cast_rays(
+    stamp: float, first: int, last: int, rays: FloatArray, hist_t0: float, hist_dt: float, hist_p: FloatArray,
+    own: int, mount_x: float, mount_y: float, segments: FloatArray, starts: IntArray, entries: IntArray,
+    near: FloatArray, body_v: FloatArray, body_off: IntArray, max_range: float, out: FloatArray,
+) -> None:  # fmt: skip
+    """Rays ``first`` to ``last - 1`` of ``rays`` (ray i at time stamp + rays[i, RAY_T]) cast into
+    out, as :func:`scan_rays` describes (the cos and sin of a history row's heading once per row)."""
+    body_r = _body_radii(body_v, body_off)
+    c0, row, ck, sk = 3 * own, -1, 1.0, 0.0
+    for i in range(first, last):
+        k, k1, f = bracket(stamp + rays[i, RAY_T], hist_t0, hist_dt, hist_p.shape[0])
+        if k != row:
+            row, ck, sk = k, math.cos(hist_p[k, c0 + 2]), math.sin(hist_p[k, c0 + 2])
+        ox, oy, ang, dx, dy = ray_frame(hist_p, k, k1, f, c0, ck, sk, mount_x, mount_y, rays, i)
+        # its sector by multiplying, not dividing: a ray on a sector's border may be given either one,
+        # and either lists every edge it can meet (scan_index widens each edge's angles by 1e-9 rad)
+        turns = ang * (0.5 / math.pi)
+        sector = min(int((turns - math.floor(turns)) * SCAN_BINS), SCAN_BINS - 1)
+        best = np.inf
+        for q in range(starts[sector], starts[sector + 1]):  # here, not in a helper: 30 % faster
+            e = entries[q]
+            if near[e] > best:
+                break
+            t = _hit(ox, oy, dx, dy, segments[e, 0], segments[e, 1], segments[e, 2], segments[e, 3])
+            best = min(best, t)
+        for b in range(body_off.shape[0] - 1):
+            if b != own:
+                best = _body_hit(
+                    hist_p, k, k1, f, 3 * b, ox, oy, dx, dy, body_r[b], body_v, body_off[b], body_off[b + 1], best
+                )  # fmt: skip
+        out[i] = best if best <= max_range else np.inf
 
 
 @njit(cache=True)
@@ -297,41 +282,11 @@ def scan_rays(
     every origin); a body only if its bounding circle meets the ray. The result is the same as
     testing everything.
     """
-    body_r = _body_radii(body_v, body_off)
-    for i in range(ray_t.shape[0]):
-        out[i] = _cast(
-            ray_t[i], ray_a[i], hist_t0, hist_dt, hist_p, own, mount_x, mount_y, segments, starts, entries, near,
-            body_v, body_off, body_r, max_range,
-        )  # fmt: skip
-
-
-@njit(cache=True)
-def scan_measure(
-    true: FloatArray,
-    draws: FloatArray,
-    noise_std: float,
-    noise_fraction: float,
-    resolution: float,
-    dropout: float,
-    range_min: float,
-    range_max: float,
-    out: FloatArray,
-) -> None:
-    """What the scanner reports for the true ranges (inf: no return) into out, from 3 uniform draws
-    per ray (draws[i], draws[n + i], draws[2n + i]: a Box-Muller normal from the first two, the
-    dropout from the third): the range plus N(0, noise_std + noise_fraction * range), quantised to
-    resolution (when > 0); inf for a dropout or a value outside [range_min, range_max]."""
-    n = true.shape[0]
-    for i in range(n):
-        r = true[i]
-        if not r < np.inf or draws[2 * n + i] < dropout:
-            out[i] = np.inf
-            continue
-        z = math.sqrt(-2.0 * math.log1p(-draws[i])) * math.cos(2.0 * math.pi * draws[n + i])
-        v = r + (noise_std + noise_fraction * r) * z
-        if resolution > 0.0:
-            v = round(v / resolution) * resolution
-        out[i] = v if range_min <= v <= range_max else np.inf
+    rays = ray_table(ray_t, ray_a)
+    _cast_rays(
+        0.0, 0, rays.shape[0], rays, hist_t0, hist_dt, hist_p, own, mount_x, mount_y, segments, starts, entries,
+        near, body_v, body_off, max_range, out,
+    )  # fmt: skip
 
 
 @njit(cache=True)
@@ -351,8 +306,7 @@ def scan_revolution(
     stamp: float,
     first: int,
     last: int,
-    offsets: FloatArray,
-    angles: FloatArray,
+    rays: FloatArray,
     hist_p: FloatArray,
     own: int,
     params: FloatArray,
@@ -363,28 +317,27 @@ def scan_revolution(
     body_v: FloatArray,
     body_off: IntArray,
     true: FloatArray,
-    draws: FloatArray,
+    normals: FloatArray,
+    uniforms: FloatArray,
     measured: FloatArray,
 ) -> bool:
     """Rays ``first`` to ``last - 1`` of the revolution that began at ``stamp`` (ray i measured at
-    stamp + offsets[i] in direction angles[i] of the robot's base frame) cast as :func:`scan_rays`
-    casts them (the ``P_`` columns of ``params``) into true[first:last]; then, given ``draws`` (3 per
-    ray; none: the revolution goes on), the whole revolution measured from ``true`` into ``measured``
-    (:func:`scan_measure`). The scanner's origins over the rows of ``hist_p`` must lie within
-    params[P_INNER] of (params[P_AX], params[P_AY]), the disc the edge index holds: else nothing is
-    done and False returned (the caller builds an index for them and calls again)."""
+    stamp + rays[i, RAY_T] in direction rays[i, RAY_A] of the robot's base frame: :func:`ray_table`)
+    cast as :func:`scan_rays` casts them (the ``P_`` columns of ``params``) into true[first:last];
+    then, given its ``normals`` and ``uniforms`` (one of each per ray; none: the revolution goes
+    on), the whole revolution measured from ``true`` into ``measured`` (:func:`scan_measure`). The scanner's
+    origins over the rows of ``hist_p`` must lie within params[P_INNER] of (params[P_AX],
+    params[P_AY]), the disc the edge index holds: else nothing is done and False returned (the
+    caller builds an index for them and calls again)."""
     if not _index_holds(hist_p, 3 * own, params[P_AX], params[P_AY], params[P_INNER]):
         return False
-    body_r = _body_radii(body_v, body_off)
-    t0, dt, mx, my, reach = params[P_T0], params[P_DT], params[P_MOUNT_X], params[P_MOUNT_Y], params[P_REACH]
-    for i in range(first, last):
-        true[i] = _cast(
-            stamp + offsets[i], angles[i], t0, dt, hist_p, own, mx, my, segments, starts, entries, near, body_v,
-            body_off, body_r, reach,
-        )  # fmt: skip
-    if draws.shape[0]:
+    _cast_rays(
+        stamp, first, last, rays, params[P_T0], params[P_DT], hist_p, own, params[P_MOUNT_X], params[P_MOUNT_Y],
+        segments, starts, entries, near, body_v, body_off, params[P_REACH], true,
+    )  # fmt: skip
+    if normals.shape[0]:
         scan_measure(
-            true, draws, params[P_NOISE_STD], params[P_NOISE_FRACTION], params[P_RESOLUTION], params[P_DROPOUT],
+            true, normals, uniforms, params[P_NOISE_STD], params[P_NOISE_FRACTION], params[P_RESOLUTION], params[P_DROPOUT],
             params[P_RANGE_MIN], params[P_RANGE_MAX], measured,
         )  # fmt: skip
     return True

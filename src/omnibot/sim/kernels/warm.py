@@ -33,10 +33,11 @@ from omnibot.sim.kernels.scan import (
     pose_log,
     scan_index,
     scan_index_around,
-    scan_measure,
     scan_rays,
     scan_revolution,
 )
+from omnibot.sim.kernels.scan_noise import scan_measure
+from omnibot.sim.kernels.scan_ray import RAY_COLUMNS, ray_table
 from omnibot.sim.kernels.sensors import gyro_measure, gyro_update, tracking_update
 from omnibot.sim.kernels.step import fleet_step, robot_after, robot_before, robot_step
 from omnibot.sim.kernels.wheels import contact_speeds, physics_step, physics_step_parallel
@@ -55,7 +56,7 @@ SIMULATOR_KERNELS = (
 calls :func:`physics_offsets` and :func:`sim_offsets` as plain Python, their ``py_func``)."""
 KERNELS = (
     *SIMULATOR_KERNELS, physics_step, contact_speeds, surface_probe, robot_before, robot_after, gyro_update,
-    gyro_measure, tracking_update, scan_index, scan_rays,
+    gyro_measure, tracking_update, scan_index, scan_rays, ray_table,
 )  # fmt: skip
 """Every serial kernel (:func:`physics_step_parallel`, for batches, compiles on its first call)."""
 
@@ -96,7 +97,7 @@ def warm_up_calls() -> list[tuple[Any, Callable[[], object]]]:
         f(1, 3), 0, f(0), f(0), f(2), f(0), 0, 0.001,
     )  # fmt: skip
     revolution = (
-        0.0, 0, 0, f(0), f(0), f(1, 3), 0, f(SCAN_PARAMS), f(0, 4), *index, f(0, 2), i(2), f(0), f(0), f(0),
+        0.0, 0, 0, f(0, RAY_COLUMNS), f(1, 3), 0, f(SCAN_PARAMS), f(0, 4), *index, f(0, 2), i(2), f(0), f(0), f(0), f(0),
     )  # fmt: skip
     calls: dict[Any, Callable[[], object]] = {
         outline_contacts: lambda: outline_contacts(
@@ -111,7 +112,8 @@ def warm_up_calls() -> list[tuple[Any, Callable[[], object]]]:
         scan_rays: lambda: scan_rays(
             f(0), f(0), 0.0, 0.001, f(1, 3), 0, 0.0, 0.0, f(0, 4), *index, f(0, 2), i(2), 1.0, f(0)
         ),
-        scan_measure: lambda: scan_measure(f(0), f(0), 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, f(0)),
+        ray_table: lambda: ray_table(f(0), f(0)),
+        scan_measure: lambda: scan_measure(f(0), f(0), f(0), 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, f(0)),
         scan_revolution: lambda: scan_revolution(*revolution),
         scan_index_around: lambda: scan_index_around(f(0, 4), f(1, 3), 0, 0.0, 1.0, 1.0, f(SCAN_PARAMS)),
         pose_log: lambda: pose_log(f(F_HEADER), si_full, 0.0, 0.0, 0.0, -(2**40)),
