@@ -115,9 +115,9 @@ def harness(monkeypatch: pytest.MonkeyPatch) -> Iterator[Harness]:
 
     pump_once = RobotClient._pump_once
 
-    def pump(self: RobotClient, timeout: float) -> int:
+    def pump(self: RobotClient, timeout: float, gather: bool = False) -> int:
         h.pump(self)
-        return pump_once(self, timeout)
+        return pump_once(self, timeout, gather)
 
     monkeypatch.setattr(SimDevice, "__init__", recording_init)
     monkeypatch.setattr(RobotClient, "_pump_once", pump)

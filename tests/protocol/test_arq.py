@@ -68,6 +68,16 @@ def test_timeout_retransmits_then_gives_up() -> None:
     assert tx.pending() == [] and tx.allocate() == (4, True)  # the next frame resynchronises
 
 
+def test_idle_while_nothing_waits_and_no_give_up_is_untaken() -> None:
+    tx = session(window=4, timeout_ms=50, retries=0)
+    assert tx.idle()
+    seq, _ = tx.allocate()
+    tx.track(seq, b"f", 0)
+    assert not tx.idle()
+    assert tx.poll(50) == [] and tx.pending() == [] and not tx.idle()  # given up: still to be taken
+    assert tx.take_failed() == [seq] and tx.idle()
+
+
 def test_progress_restarts_the_timer() -> None:
     """While the oldest frame keeps being acknowledged, a full window waiting on the line is not
     sent again (32 frames take 44 ms of a 115200-baud line); an acknowledgement of a later frame

@@ -377,3 +377,12 @@ def test_vel_takes_the_body_acceleration_as_three_more_fields() -> None:
 )
 def test_integer_fields(fields: list[str], expected: list[int] | None) -> None:
     assert text._ints(fields) == expected
+
+
+def test_a_decoder_says_what_ends_its_lines_and_how_much_may_come_before_one() -> None:
+    replies, commands = text.TextDecoder(), text.TextDecoder(commands=True)
+    assert replies.ends == b"\r\n" and commands.ends == b";\r\n"
+    assert replies.room() == codes.EVENT_LINE_MAX and commands.room() == codes.LINE_MAX
+    assert list(replies.feed(b"TEL,1,2")) == [] and replies.room() == codes.EVENT_LINE_MAX - 7
+    assert list(replies.feed(b"x" * replies.room())) == []  # up to the limit: still a line arriving
+    assert [type(msg) for msg in replies.feed(b"x")] == [m.Malformed]  # one more: too long, at once

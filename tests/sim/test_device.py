@@ -106,16 +106,22 @@ def session(device: SimDevice | EveryTick) -> tuple[list[tuple[float, bytes]], i
         return reads, link.steps
 
 
-def test_quiet_runs_give_the_bytes_at_the_times_of_tick_by_tick_steps() -> None:
-    quiet, ticked = SimDevice("omni4", seed=2), SimDevice("omni4", seed=2)
+def counted_quiet_runs(device: SimDevice) -> list[int]:
+    """The ticks asked of each of ``device``'s :meth:`SimDevice.run_quiet` calls from now on."""
     calls: list[int] = []
-    run_quiet = quiet.run_quiet
+    run_quiet = device.run_quiet
 
     def counted(ticks: int) -> int:
         calls.append(ticks)
         return run_quiet(ticks)
 
-    quiet.run_quiet = counted  # type: ignore[method-assign]
+    device.run_quiet = counted  # type: ignore[method-assign]
+    return calls
+
+
+def test_quiet_runs_give_the_bytes_at_the_times_of_tick_by_tick_steps() -> None:
+    quiet, ticked = SimDevice("omni4", seed=2), SimDevice("omni4", seed=2)
+    calls = counted_quiet_runs(quiet)
     reads, steps = session(quiet)
     assert (reads, steps) == session(EveryTick(ticked)) and len(reads) > 100
     assert quiet.sim.pose == ticked.sim.pose and quiet.controller.now_ms == ticked.controller.now_ms
@@ -132,3 +138,28 @@ def test_a_quiet_run_ends_on_the_tick_the_firmware_sends() -> None:
     t0 = device.time
     taken = device.run_quiet(100)
     assert device.transmit().startswith(b"TEL,") and device.time == pytest.approx(t0 + taken * device.tick)
+
+
+def gathered_session(device: SimDevice | EveryTick) -> tuple[list[tuple[float, bytes]], int, bytes]:
+    """TEL every 10 ms, a MOVE and a STATUS read a line at a time (as a client waiting reads), then
+    a clock sleep over the line's bytes: each read with its time, the steps, what the sleep left."""
+    reads: list[tuple[float, bytes]] = []
+    with LockstepLink(device) as link:
+        for line in (b"TELEM,10,255\n", b"MOVE,10,40,30,0\n", b"STATUS\n"):
+            link.write(line)
+            end = link.clock.now() + 0.4
+            while (left := end - link.clock.now()) > 0:
+                if chunk := link.read_gathered(b"\r\n", 256, timeout=left):
+                    reads.append((link.clock.now(), chunk))
+        link.clock.sleep(0.1)
+        return reads, link.steps, link.read(timeout=0)
+
+
+def test_quiet_runs_through_a_line_to_the_host_until_the_bytes_would_gather() -> None:
+    quiet, ticked = SimDevice("omni4", seed=2), SimDevice("omni4", seed=2)
+    calls = counted_quiet_runs(quiet)
+    reads, steps, left = gathered_session(quiet)
+    assert (reads, steps, left) == gathered_session(EveryTick(ticked)) and len(reads) > 100 and left
+    assert sum(b"\r" not in chunk and b"\n" not in chunk for _, chunk in reads) <= 3  # at the 3 timeouts
+    assert quiet.sim.pose == ticked.sim.pose and quiet.controller.now_ms == ticked.controller.now_ms
+    assert len(calls) < steps / 4  # a TEL line's 5 ticks on the line mostly in one call

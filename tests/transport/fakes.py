@@ -52,6 +52,17 @@ class EchoDevice:
         self.closed = True
 
 
+class QuietEcho(EchoDevice):
+    """An :class:`EchoDevice` that takes quiet stretches in one call (a QuietSteps device)."""
+
+    def run_quiet(self, ticks: int) -> int:
+        taken = 0
+        while taken < ticks and not self._out:
+            self.step()
+            taken += 1
+        return taken
+
+
 class EchoServer:
     """A TCP echo server on 127.0.0.1 (ephemeral port) serving one client at a time in a thread."""
 

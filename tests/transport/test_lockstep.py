@@ -10,7 +10,7 @@ from omnibot.errors import LinkError
 from omnibot.transport import Clock, LockstepDevice, LockstepLink
 from omnibot.transport.lockstep import PacedFifo
 
-from .fakes import EchoDevice
+from .fakes import EchoDevice, QuietEcho
 
 
 def read_exactly(link: LockstepLink, n: int, timeout: float = 5.0) -> bytes:
@@ -154,3 +154,65 @@ def test_paced_fifo_queues_behind_busy_line() -> None:
     assert fifo.pop_due(0.03) == b"c"
     fifo.push(1.0, b"d")  # idle line: starts at once
     assert fifo.pop_due(1.01) == b"d"
+
+
+def test_paced_fifo_says_when_a_byte_arrives_and_where_an_end_is() -> None:
+    fifo = PacedFifo(byte_time=0.01)
+    fifo.push(0.0, b"ab")
+    fifo.push(0.005, b"c\nd")  # behind the first two: c is in at 0.03, the LF at 0.04
+    assert [fifo.arrival(n) for n in (1, 2, 3, 4, 5)] == pytest.approx([0.01, 0.02, 0.03, 0.04, 0.05])
+    assert fifo.arrival(6) == float("inf")
+    assert fifo.first_of(b"\r\n") == 3 and fifo.first_of(b"b") == 1 and fifo.first_of(b"x") == -1
+    assert fifo.first_of(b"") == -1
+    assert fifo.pop_due(0.02) == b"ab"
+    assert fifo.arrival(2) == pytest.approx(0.04) and fifo.first_of(b"\n") == 1
+
+
+def test_a_gathered_read_returns_at_an_end_at_more_than_most_or_at_its_timeout() -> None:
+    with LockstepLink(EchoDevice(per_byte=True)) as link:  # 115200 baud: 11.52 bytes a 1 ms tick
+        link.write(b"x" * 30 + b"\n" + b"y" * 100)
+        got = link.read_gathered(b"\r\n", 256, timeout=1.0)
+        assert got == b"x" * 30 + b"\n" + b"y" * (len(got) - 31) and len(got) < 31 + 12
+        more = link.read_gathered(b"\n", 20, timeout=1.0)  # no end to come: 21 bytes and more
+        assert 20 < len(more) < 21 + 12 and set(more) == {ord("y")}
+        t0 = link.clock.now()
+        rest = link.read_gathered(b"\n", 1000, timeout=0.002)  # the timeout first: what came by then
+        assert 0 < len(rest) <= 24 and link.clock.now() == pytest.approx(t0 + 0.002)
+
+
+def test_a_gathered_read_takes_what_is_there_when_it_is_already_gathered() -> None:
+    with LockstepLink(EchoDevice()) as link:
+        link.write(b"A\nB\n")
+        link.clock.sleep(0.05)
+        steps = link.steps
+        assert link.read_gathered(b"\n", 256, timeout=1.0) == b"A\nB\n" and link.steps == steps
+        assert link.read_gathered(b"\n", 256, timeout=0) == b"" and link.steps == steps
+
+
+@pytest.mark.parametrize("baud", [57600, 115200, 115201, 300, 0])
+@pytest.mark.parametrize("device", [EchoDevice, QuietEcho])
+def test_reads_gathered_get_the_bytes_of_reads_by_the_same_times(baud: int, device: type[EchoDevice]) -> None:
+    """Tick by tick or in quiet runs up to the tick a line's end arrives, at any baud rate."""
+
+    def session(gather: bool) -> tuple[list[tuple[float, bytes]], int]:
+        reads: list[tuple[float, bytes]] = []
+        with LockstepLink(device(), baud=baud) as link:
+            for i in range(20):
+                link.write(f"line {i} of the session\n".encode())
+                end = link.clock.now() + (2.0 if baud == 300 else 0.02)
+                while (left := end - link.clock.now()) > 0:
+                    chunk = (
+                        link.read_gathered(b"\n", 256, timeout=left) if gather else link.read(timeout=left)
+                    )
+                    if chunk:
+                        reads.append((link.clock.now(), chunk))
+            return reads, link.steps
+
+    plain, steps = session(False)
+    gathered, gathered_steps = session(True)
+    assert gathered_steps == steps and len(gathered) == 20 and (baud == 0 or len(gathered) < len(plain))
+    ends = [t for t, chunk in plain if b"\n" in chunk]
+    assert [t for t, _ in gathered] == ends
+    for t, _ in gathered:
+        assert b"".join(c for u, c in plain if u <= t) == b"".join(c for u, c in gathered if u <= t)
+    assert b"".join(c for _, c in plain) == b"".join(c for _, c in gathered)

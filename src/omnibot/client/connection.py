@@ -50,10 +50,15 @@ class Connection:
             self._fail(exc)
             raise
 
-    def read(self, timeout: float) -> bytes:
-        """What the link has within ``timeout`` s (a LinkError: handled, then raised)."""
+    def read(self, timeout: float, gather: tuple[bytes, int] | None = None) -> bytes:
+        """What the link has within ``timeout`` s (a LinkError: handled, then raised). ``gather``
+        (ends, most): the reader acts only on those (:meth:`~omnibot.transport.Link.read_gathered`);
+        not while tracing, whose recorder is told every read as it came."""
         try:
-            data = self.link.read(4096, timeout)
+            if gather is not None and not self.tracers:
+                data = self.link.read_gathered(*gather, 4096, timeout)
+            else:
+                data = self.link.read(4096, timeout)
         except LinkError as exc:
             self._fail(exc)
             raise

@@ -76,5 +76,5 @@ class ClientCore:
     def _write(self, data: bytes) -> None:
         self._connection.write(data)
 
-    def _read(self, timeout: float) -> bytes:
-        return self._connection.read(timeout)
+    def _read(self, timeout: float, gather: tuple[bytes, int] | None = None) -> bytes:
+        return self._connection.read(timeout, gather)

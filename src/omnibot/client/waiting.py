@@ -35,7 +35,7 @@ class Waiting(Receiving):
         """Let ``seconds`` pass on the link's clock, dispatching events meanwhile."""
         deadline = self.clock.now() + seconds
         while (remaining := deadline - self.clock.now()) > 0:
-            self._pump_once(remaining)
+            self._pump_once(remaining, gather=True)
 
     def drain(self, timeout: float | None = None) -> None:
         """Wait until every command sent has its reply (those that timed out excepted)."""
@@ -58,14 +58,21 @@ class Waiting(Receiving):
             remaining = deadline - self.clock.now()
             if remaining <= 0:
                 raise LinkTimeout(f"{what} (timeout on {self.link.url})")
-            self._pump_once(min(remaining, _FOREVER_STEP))
+            self._pump_once(min(remaining, _FOREVER_STEP), gather=True)
 
-    def _pump_once(self, timeout: float) -> int:
-        if self._wire.sender is not None:  # binary or sequenced text: retransmissions are due in time
+    def _pump_once(self, timeout: float, gather: bool = False) -> int:
+        """Read within ``timeout`` s and dispatch. ``gather``: the caller acts only on what is
+        dispatched (a wait, a sleep), so the read may gather the bytes until the wire can decode
+        something (:meth:`~omnibot.client.wire.TextWire.gather`) while no frame waits for its
+        retransmission (the sender's timer is serviced between reads)."""
+        wire = self._wire
+        sender = wire.sender
+        if sender is not None:  # binary or sequenced text: retransmissions are due in time
             self._service()
             if self._replies.waiting:
                 timeout = min(timeout, RETRY_POLL)
-        data = self._read(timeout)
+        until = wire.gather() if gather and (sender is None or sender.idle()) else None
+        data = self._read(timeout, until)
         return self._process(data) if data else 0
 
     def _in_flight(self, pending: Pending) -> bool:

@@ -112,6 +112,12 @@ class TextWire:
         for message, tag in self._decoder.feed_tagged(data):
             yield message if isinstance(message, Malformed) else Packet(message, tag or 0)
 
+    def gather(self) -> tuple[bytes, int]:
+        """(ends, most): the bytes that end a line, and how many more may come before the line is
+        too long; until one of those nothing received can be decoded
+        (:meth:`~omnibot.transport.Link.read_gathered`)."""
+        return self._decoder.ends, self._decoder.room()
+
     def rest(self) -> bytes:
         """The bytes of an unfinished line, handed to the next wire when the protocol switches."""
         return self._decoder.rest()
@@ -173,6 +179,10 @@ class BinaryWire:
             self._tail = b""
             hello = HelloReply(int(found[1]), found[2].decode("ascii", "replace"), int(found[3]))
             yield Packet(hello, 0, event=True)
+
+    def gather(self) -> None:
+        """None: every frame is acted on as it comes (an event's ACK)."""
+        return None
 
     def rest(self) -> bytes:
         """The bytes not yet decoded for the next wire: after a reset, those that followed its HELLO line."""

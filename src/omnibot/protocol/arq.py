@@ -98,6 +98,11 @@ class Sender:
         oldest = self._pending[0]
         return not oldest.sync and seq_back(self._next, oldest.seq, self.top) < self.window
 
+    def idle(self) -> bool:
+        """Nothing waits for its acknowledgement and no give-up is still to be taken: :meth:`poll`
+        and :meth:`take_failed` have nothing to do, whenever they are called."""
+        return not self._pending and not self._failed
+
     @property
     def needs_sync(self) -> bool:
         """True if the next frame will be SYNC: the first one, or the first after a give-up."""

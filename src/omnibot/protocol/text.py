@@ -321,6 +321,8 @@ class TextDecoder:
         self._buf = bytearray()
         self._skipping = False
         self._ends = _COMMAND_END_RE if commands else _LINE_END_RE
+        self.ends = b";\r\n" if commands else b"\r\n"
+        """The bytes :attr:`_ends` matches: a message is decoded once one of them comes (or :meth:`room` runs out)."""
         self._limit = codes.LINE_MAX if commands else codes.EVENT_LINE_MAX
         self._open = True
         """The buffer holds no terminator and no line is being skipped (a drain ran to its end): bytes
@@ -361,6 +363,11 @@ class TextDecoder:
             self._skipping = cut
             if message is not None:
                 yield message, tag
+
+    def room(self) -> int:
+        """Bytes that may still come without one of :attr:`ends` before the line is too long (and is
+        decoded, Malformed, at the next feed)."""
+        return self._limit - len(self._buf)
 
     def rest(self) -> bytes:
         """Take the bytes not decoded yet (e.g. the first binary frames after a MODE switch)."""

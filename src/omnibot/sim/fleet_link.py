@@ -197,7 +197,9 @@ class FleetLink(LockstepLink):
             if self._ticks_for(seconds):
                 self.shared.wait(self, self._target(seconds), for_bytes=False)
 
-    def _read(self, max_bytes: int, timeout: float | None) -> bytes:
+    def _read(self, max_bytes: int, timeout: float | None, ends: bytes = b"", most: int = 0) -> bytes:
+        """A read, gathered or not, waits on the fleet's time, which moves for every robot's driver
+        (a lone lockstep link's gathering steps its own device): the bytes as they come."""
         with self._lock:
             self._collect()
             if not self._inbox and timeout != 0:

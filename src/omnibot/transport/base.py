@@ -124,13 +124,28 @@ class Link(abc.ABC):
 
     def read(self, max_bytes: int = 4096, timeout: float | None = None) -> bytes:
         """Return 1..max_bytes available bytes, waiting up to ``timeout`` s; ``b""`` on timeout."""
+        return self.read_gathered(b"", 0, max_bytes, timeout)
+
+    def read_gathered(
+        self, ends: bytes, most: int, max_bytes: int = 4096, timeout: float | None = None
+    ) -> bytes:
+        """:meth:`read` for a reader that can act only once a byte of ``ends`` has come or more than
+        ``most`` bytes have (a line decoder: a line's end, or a line too long). A link whose bytes
+        come when they come returns as :meth:`read` does; one that can hold them back for nothing
+        (a lockstep link, whose time moves only while it is read) may return later, at the first of
+        those or the timeout, with every byte that has come by then: the reader gets the same bytes
+        by the same time in fewer reads. ``ends=b""``, ``most=0``: :meth:`read`."""
         self._check_open()
         if max_bytes < 1:
             raise ValueError(f"max_bytes must be >= 1, got {max_bytes}")
         if timeout is not None and timeout < 0:
             raise ValueError(f"timeout must be >= 0 or None, got {timeout}")
         try:
-            data = self._read(max_bytes, timeout)
+            data = (
+                self._read_gathered(max_bytes, timeout, ends, most)
+                if ends or most
+                else self._read(max_bytes, timeout)
+            )
         except Exception as exc:
             if self._closed:  # closed by another thread while we were reading
                 raise LinkError(f"link {self._url} was closed during read") from exc
@@ -181,6 +196,10 @@ class Link(abc.ABC):
     @abc.abstractmethod
     def _read(self, max_bytes: int, timeout: float | None) -> bytes:
         """Read with the semantics of :meth:`read`; arguments already checked."""
+
+    def _read_gathered(self, max_bytes: int, timeout: float | None, ends: bytes, most: int) -> bytes:
+        """:meth:`read_gathered` on an open link; by default :meth:`_read` (the bytes as they come)."""
+        return self._read(max_bytes, timeout)
 
     @abc.abstractmethod
     def _close(self) -> None:

@@ -14,6 +14,16 @@ A byte leaves its FIFO when its last bit is on the other side; a byte written wh
 queues behind the others, so throughput is capped at ``baud / 10`` bytes per simulated second in each
 direction (``baud=0``: unpaced, bytes arrive at the next tick boundary). Simulated time moves in whole
 device ticks, so waits round up to whole ticks and a positive wait always moves at least one tick.
+
+A read returns on the tick its first bytes arrive. A paced line brings a line a few bytes a tick, so
+a reader that can only act at a line's end (the client's waits) reads
+:meth:`~omnibot.transport.Link.read_gathered`: the link steps on until a byte that ends a line has
+arrived (or more than the reader can take without one, or the timeout), and hands over every byte
+arrived by then, the bytes and times of the reads it saves. While no byte is on its way to the device
+and none on the way to the host would end the wait within a tick, a device with ``run_quiet``
+(:class:`QuietSteps`) takes the ticks in one call (:meth:`LockstepLink._run`); the bytes that
+arrived meanwhile are taken at its end, the same as tick by tick (:meth:`PacedFifo.pop_due` is a
+function of the time it is asked at).
 """
 
 from __future__ import annotations
@@ -30,6 +40,7 @@ __all__ = ["DEFAULT_BAUD", "LockstepClock", "LockstepDevice", "LockstepLink", "P
 
 DEFAULT_BAUD = 115200
 _EPS = 1e-9  # relative slack when turning a duration into whole ticks
+_EDGE = 1e-6  # ticks: a time this close after a tick's end may be on it for the device's clock
 _FOREVER = 1 << 62  # ticks a read without a timeout may wait (146,000 years of 1 ms ticks)
 
 
@@ -67,7 +78,8 @@ class LockstepDevice(Protocol):
 
 @runtime_checkable
 class QuietSteps(Protocol):
-    """A :class:`LockstepDevice` that can take several ticks in one call while the line is quiet."""
+    """A :class:`LockstepDevice` that can take several ticks in one call while nothing reaches it
+    (and nobody waits on what is on its way to the host)."""
 
     def run_quiet(self, ticks: int) -> int:
         """Step up to ``ticks`` ticks, stopping after the first one in which the device sent bytes
@@ -125,6 +137,25 @@ class PacedFifo:
                 break
         self.pending -= len(out)
         return out
+
+    def arrival(self, n: int) -> float:
+        """From when :meth:`pop_due` counts the ``n``-th byte on the line (1-based) as arrived, s (inf:
+        fewer are on it)."""
+        for start, data in self._chunks:
+            if n <= len(data):
+                return start + (n - _EPS) * self.byte_time
+            n -= len(data)
+        return math.inf
+
+    def first_of(self, ends: bytes) -> int:
+        """How many bytes on the line come before the first byte of ``ends`` (-1: none of them)."""
+        before = 0
+        for _, data in self._chunks:
+            found = [i for i in map(data.find, ends) if i >= 0]
+            if found:
+                return before + min(found)
+            before += len(data)
+        return -1
 
     def clear(self) -> None:
         """Drop everything on the line."""
@@ -186,24 +217,45 @@ class LockstepLink(Link):
         self._check_open()
         with self._lock:
             ticks = self._ticks_for(seconds)
-            while ticks > 0:
-                ticks -= self._run(ticks)
+            while ticks > 0:  # nobody reads meanwhile: the line to the host never holds the device back
+                ticks -= self._run(ticks, b"", _FOREVER)
 
     def _ticks_for(self, seconds: float) -> int:
         if seconds <= 0:
             return 0
         return max(1, math.ceil(seconds / self.device.tick - _EPS))
 
-    def _run(self, ticks: int) -> int:
-        """Step at most ``ticks`` (>= 1) ticks; the ticks taken. While nothing is on either line
-        the device runs until it sends (one call, the same ticks), else one tick at a time."""
-        if self._run_quiet is None or self._to_device.pending or self._to_host.pending:
+    def _run(self, ticks: int, ends: bytes = b"", most: int = 0) -> int:
+        """Step at most ``ticks`` (>= 1) ticks; the ticks taken. While nothing is on the line to the
+        device, the device runs until it sends (one call, the same ticks) or, with bytes on the line
+        to the host, until they may be gathered (:meth:`_gathered`); else one tick at a time (a plain
+        read, ``most`` 0, takes the first byte, which a busy line brings on the next tick)."""
+        if self._run_quiet is None or self._to_device.pending:
             self._step()
             return 1
+        if self._to_host.pending:
+            ticks = min(ticks, self._ticks_ungathered(ends, most)) if most else 0
+            if ticks < 1:
+                self._step()
+                return 1
         taken = self._run_quiet(ticks)
         self.steps += taken
         self._drain()
         return taken
+
+    def _ticks_ungathered(self, ends: bytes, most: int) -> int:
+        """Whole ticks to the one on which the first byte on the line to the host that would gather
+        them arrives (a long stretch when none would): short by one if it arrives within
+        :data:`_EDGE` of a tick's end (the next run takes that tick), never long."""
+        line = self._to_host
+        need = most + 1 - len(self._inbox)
+        end = line.first_of(ends)
+        if end >= 0:
+            need = min(need, end + 1)
+        due = line.arrival(need)
+        if due == math.inf:
+            return _FOREVER
+        return math.ceil((due - self.device.time) / self.device.tick - _EDGE)
 
     def _step(self) -> None:
         self._feed()
@@ -238,17 +290,32 @@ class LockstepLink(Link):
         with self._lock:
             self._to_device.push(self.device.time, data)
 
-    def _read(self, max_bytes: int, timeout: float | None) -> bytes:
+    def _read_gathered(self, max_bytes: int, timeout: float | None, ends: bytes, most: int) -> bytes:
+        return self._read(max_bytes, timeout, ends, most)
+
+    def _read(self, max_bytes: int, timeout: float | None, ends: bytes = b"", most: int = 0) -> bytes:
+        """Step until the bytes arrived are gathered (:meth:`_gathered`; a plain read: the first
+        byte) or ``timeout`` s have passed; then up to ``max_bytes`` of them. Gathered reads come
+        here too, so a test's stand-in for ``_read`` (an unplugged cable) stands in for both."""
         with self._lock:
             self._collect()
-            if not self._inbox and timeout != 0:
+            inbox = self._inbox
+            if timeout != 0 and not (inbox and self._gathered(0, ends, most)):
                 ticks = _FOREVER if timeout is None else self._ticks_for(timeout)
                 taken = 0
-                while not self._inbox and taken < ticks and not self._closed:
-                    taken += self._run(ticks - taken)
-            chunk = bytes(self._inbox[:max_bytes])
-            del self._inbox[:max_bytes]
+                while taken < ticks and not self._closed:
+                    seen = len(inbox)
+                    taken += self._run(ticks - taken, ends, most)
+                    if len(inbox) > seen and (len(inbox) > most or self._gathered(seen, ends, most)):
+                        break  # a plain read (most 0) at its first byte, without a call
+            chunk = bytes(inbox[:max_bytes])
+            del inbox[:max_bytes]
             return chunk
+
+    def _gathered(self, since: int, ends: bytes, most: int) -> bool:
+        """The inbox holds more than ``most`` bytes, or a byte of ``ends`` from ``since`` on."""
+        inbox = self._inbox
+        return len(inbox) > most or any(inbox.find(end, since) >= 0 for end in ends)
 
     def _close(self) -> None:
         with self._lock:
