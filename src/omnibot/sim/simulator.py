@@ -72,6 +72,8 @@ from omnibot.sim.truth import CollisionEvent, CollisionListener, TruthRecorder
 from omnibot.sim.world import World, load_world
 
 FloatArray = NDArray[np.float64]
+_NO_FORCE = [0.0, 0.0, 0.0]
+"""No applied force (a list equal to it: -0.0 too; a NaN is not)."""
 
 
 class PwmRangeError(SimulationError, ValueError):
@@ -303,18 +305,15 @@ class Simulator(Contacts, SensorReadings, ScanFeed, Listeners, StepState):
     def step(self, n: int = 1) -> None:
         """Advance ``n`` steps of ``dt``."""
         for _ in range(n):
-            self._step_once()
-
-    def _step_once(self) -> None:
-        now_us = self.clock.ticks_us()
-        n_extra = self._extra_forces(now_us) if self._pushes or any(self._applied) else 0
-        args = self._step_args
-        if args is not None:  # the arguments bound once (_bind_step): only the count and the time change
-            args[A_N_EXTRA], args[A_NOW_US] = n_extra, now_us
-            status = jit.active.robot_step(*args)
-        else:
-            status = self._step_other(now_us, n_extra)
-        self._finish_step(status, now_us)
+            now_us = self.clock.ticks_us()
+            n_extra = self._extra_forces(now_us) if self._pushes or self._applied != _NO_FORCE else 0
+            args = self._step_args  # bound once (_bind_step): only the count and the time change
+            if args is not None:
+                args[A_N_EXTRA], args[A_NOW_US] = n_extra, now_us
+                status = jit.active.robot_step(*args)
+            else:
+                status = self._step_other(now_us, n_extra)
+            self._finish_step(status, now_us)
 
     def _finish_step(self, status: int, now_us: int) -> None:
         """What follows the compiled step of the step that began at ``now_us`` (its ``status`` bits;
@@ -372,7 +371,7 @@ class Simulator(Contacts, SensorReadings, ScanFeed, Listeners, StepState):
     def _extra_forces(self, now_us: int) -> int:
         """Put the applied force and the hand pushes still acting into the extra-force rows; their count."""
         rows: list[Sequence[float]] = []
-        if any(self._applied):
+        if self._applied != _NO_FORCE:
             rows.append(self._applied)
             self._applied = [0.0, 0.0, 0.0]
         if self._pushes:
