@@ -198,7 +198,8 @@ class Physics(StateArrays):
     def count_step(self) -> None:
         """Account for a step the compiled simulator step made on :attr:`buffer` (time, battery charge)."""
         self._steps += 1  # _stepped(0, 1), a call less: once a robot a step
-        self._drain()
+        if self._charge.draining:  # _drain's test, a call less while no battery drains
+            self._drain()
 
     def _drain(self) -> None:
         """Run the draining batteries down by the last step's current."""

@@ -53,6 +53,14 @@ from omnibot.sim import jit
 from omnibot.sim.clock import SimClock
 from omnibot.sim.geometry import convex_hull
 from omnibot.sim.kernels import layout
+from omnibot.sim.kernels.layout import (
+    A_N_EXTRA,
+    A_NOW_US,
+    STEP_BAD_SURFACE,
+    STEP_COLLISION,
+    STEP_REFILL,
+    STEP_SCAN,
+)
 from omnibot.sim.physics import Physics
 from omnibot.sim.physics_like import PhysicsFactory, PhysicsLike, default_physics
 from omnibot.sim.simulator_contacts import Contacts
@@ -64,6 +72,8 @@ from omnibot.sim.truth import CollisionEvent, CollisionListener, TruthRecorder
 from omnibot.sim.world import World, load_world
 
 FloatArray = NDArray[np.float64]
+_NO_FORCE = [0.0, 0.0, 0.0]
+"""No applied force (a list equal to it: -0.0 too; a NaN is not)."""
 
 
 class PwmRangeError(SimulationError, ValueError):
@@ -131,6 +141,7 @@ class Simulator(Contacts, SensorReadings, ScanFeed, Listeners, StepState):
 
         self._init_scan(self._make_sensors())
         self._sensors = self._sensor_arrays()
+        self._bind_step()
 
         self._check_clear(start)
         if truth_recorder is not None:
@@ -294,41 +305,43 @@ class Simulator(Contacts, SensorReadings, ScanFeed, Listeners, StepState):
     def step(self, n: int = 1) -> None:
         """Advance ``n`` steps of ``dt``."""
         for _ in range(n):
-            self._step_once()
-
-    def _step_once(self) -> None:
-        now_us = self.clock.ticks_us()
-        n_extra = self._extra_forces(now_us) if self._pushes or any(self._applied) else 0
-        physics = self._packed
-        if physics is not None:
-            status = jit.active.robot_step(
-                physics.buffer, self._step_ids, physics.m, self._n_surfaces, *self._world_packed, self._sf, self._si,
-                self._extra, n_extra, *self._sensors, now_us, self.dt,
-            )  # fmt: skip
-        else:
-            status = self._step_other(now_us, n_extra)
-        self._finish_step(status, now_us)
+            now_us = self.clock.ticks_us()
+            n_extra = self._extra_forces(now_us) if self._pushes or self._applied != _NO_FORCE else 0
+            args = self._step_args  # bound once (_bind_step): only the count and the time change
+            if args is not None:
+                args[A_N_EXTRA], args[A_NOW_US] = n_extra, now_us
+                status = jit.active.robot_step(*args)
+            else:
+                status = self._step_other(now_us, n_extra)
+            self._finish_step(status, now_us)
 
     def _finish_step(self, status: int, now_us: int) -> None:
         """What follows the compiled step of the step that began at ``now_us`` (its ``status`` bits;
         a fleet's :func:`~omnibot.sim.kernels.fleet_step` too): the collision events, the clock, the
         sensors' normal draws, the scanner and the listeners."""
-        if status & layout.STEP_BAD_SURFACE:
+        if status & STEP_BAD_SURFACE:
             raise SimulationError(f"surface_ids must index the {self._n_surfaces} surfaces of this Physics")
         if self._packed is not None:
             self._packed.count_step()
-        if status & layout.STEP_COLLISION:
+        if status & STEP_COLLISION:
             self._collisions_found()
         self.clock.advance_us(self._dt_us)
-        if status & layout.STEP_REFILL:
+        if status & (STEP_REFILL | STEP_SCAN):
+            self._refill_and_scan(status, now_us + self._dt_us)
+        if self._listeners and now_us + self._dt_us >= self._next_notify_us:
+            self._notify()
+
+    def _refill_and_scan(self, status: int, end_us: int) -> None:
+        """The sensors' new normal draws and the scanner's revolution a step ending at ``end_us`` asks
+        for (its ``status`` bits)."""
+        if status & STEP_REFILL:
             self.tracking.refill()
             if self.gyro is not None:
                 self.gyro.refill(self.dt)
             self._sensors = self._sensor_arrays()
-        if status & layout.STEP_SCAN:
-            self._scan_tick(now_us + self._dt_us)
-        if self._listeners and now_us + self._dt_us >= self._next_notify_us:
-            self._notify()
+            self._bind_step()
+        if status & STEP_SCAN:
+            self._scan_tick(end_us)
 
     def _step_other(self, now_us: int, n_extra: int) -> int:
         """A step with a physics of another kind: the compiled step's parts before and after its step."""
@@ -358,7 +371,7 @@ class Simulator(Contacts, SensorReadings, ScanFeed, Listeners, StepState):
     def _extra_forces(self, now_us: int) -> int:
         """Put the applied force and the hand pushes still acting into the extra-force rows; their count."""
         rows: list[Sequence[float]] = []
-        if any(self._applied):
+        if self._applied != _NO_FORCE:
             rows.append(self._applied)
             self._applied = [0.0, 0.0, 0.0]
         if self._pushes:
@@ -366,6 +379,7 @@ class Simulator(Contacts, SensorReadings, ScanFeed, Listeners, StepState):
             rows += [p[1:] for p in self._pushes]
         if len(rows) > len(self._extra):
             self._extra = np.zeros((2 * len(rows), 3))
+            self._bind_step()
         if rows:
             self._extra[: len(rows)] = rows
         return len(rows)

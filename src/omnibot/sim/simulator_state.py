@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -42,6 +43,8 @@ class StepState:
     _pose_row: FloatArray
     _twist_row: FloatArray
     _dt_us: int
+    _step_args: list[Any] | None
+    """robot_step's arguments, bound by :meth:`_bind_step`."""
 
     @property
     def _log_stride_us(self) -> int:
@@ -107,6 +110,17 @@ class StepState:
         self._state6 = np.zeros(6)
         self._force = np.zeros((1, 3))
 
+    def _bind_step(self) -> None:
+        """Bind the compiled step's arguments (:func:`~omnibot.sim.kernels.robot_step`'s, in its order)
+        to the arrays they are now: again whenever one is replaced (a fleet's rehoming, the sensors'
+        refill, more extra-force rows). The step sets only the extra-force count and the time (the
+        ``A_`` indices of :mod:`~omnibot.sim.kernels.layout`); None with a physics of another kind."""
+        physics = self._packed
+        self._step_args = None if physics is None else [
+            physics.buffer, self._step_ids, physics.m, self._n_surfaces, *self._world_packed, self._sf, self._si,
+            self._extra, 0, *self._sensors, 0, self.dt,
+        ]  # fmt: skip
+
     def _sensor_arrays(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """The gyro's and tracking wheels' state and normal draws, as the compiled step takes them."""
         gyro, tracking = self.gyro, self.tracking
@@ -146,6 +160,7 @@ class StepState:
             self.gyro.state = gyro_state
         self.tracking.state = tracking_state
         self._sensors = self._sensor_arrays()
+        self._bind_step()
 
 
 __all__ = ["StepState"]

@@ -12,7 +12,8 @@ Column indices are compile-time constants (numba freezes a module's globals when
 * the simulator's float and int state (``F_`` and ``I_`` headers, :func:`sim_offsets`), the
   world's packed geometry (:func:`world_offsets`), a physics state packed in one buffer
   (:func:`physics_offsets`, :func:`physics_views`), a fleet's layout (``L_`` columns) and
-  :func:`~omnibot.sim.kernels.step.robot_step`'s status bits (``STEP_``).
+  :func:`~omnibot.sim.kernels.step.robot_step`'s status bits (``STEP_``) and the places of its
+  arguments that change from step to step (``A_``).
 """
 
 from __future__ import annotations
@@ -89,6 +90,10 @@ WORLD_HEADER = 5
 
 # robot_step status bits (STEP_SCAN: the pose log recorded a row at or after its flush time)
 STEP_BAD_SURFACE, STEP_COLLISION, STEP_REFILL, STEP_FORCE, STEP_SCAN = 1, 2, 4, 8, 16
+
+# robot_step's arguments that change from step to step (the simulator binds the others once):
+# the number of extra-force rows and the time the step begins
+A_N_EXTRA, A_NOW_US = 9, 14
 
 # a fleet's layout (fleet_step): one row per robot, where its arrays lie in the fleet's buffers
 (
