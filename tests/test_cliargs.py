@@ -9,12 +9,15 @@ from pathlib import Path
 import pytest
 
 from omnibot.cliargs import (
+    OFF_PATH_HELP,
     add_calibration_option,
+    add_off_path_option,
     add_robot_options,
     calibrated_floor,
     check_distinct,
     check_plot,
     check_sim_options,
+    off_path_options,
     physics_behind,
     seed_of,
     sim_url,
@@ -146,3 +149,24 @@ def test_the_floor_a_ramp_keeps_within_is_a_calibrations() -> None:
     assert calibrated_floor(p.parse_args(["--surface", "carpet"])) is None  # the floor's slip not asked
     assert calibrated_floor(p.parse_args(["--calibration", "cal.yaml"])) is None  # no floor named
     assert calibrated_floor(argparse.Namespace()) is None  # a command without the options
+
+
+def test_off_path_is_the_followers_bound_unless_given() -> None:
+    """``--off-path``: none given leaves the followers' own bound (the one the help names); a distance
+    given reaches the follower ``follow`` and ``run --follow`` make; a bad one is refused, named."""
+    from omnibot.control import OFF_PATH, standard_path
+    from omnibot.navigation import follower_source
+    from omnibot.robot import load_robot
+
+    assert OFF_PATH_HELP == OFF_PATH
+    p = argparse.ArgumentParser()
+    add_off_path_option(p)
+    assert off_path_options(p.parse_args([])) == {}
+    given = off_path_options(p.parse_args(["--off-path", "1.5"]))
+    assert given == {"off_path": 1.5}
+    path = standard_path("line", size=0.5)
+    robot = load_robot("omni4")
+    assert follower_source(robot, path, 0.01).follower.off_path == OFF_PATH
+    assert follower_source(robot, path, 0.01, options=given).follower.off_path == 1.5
+    with pytest.raises(ConfigError, match="--off-path: expected a positive number"):
+        off_path_options(p.parse_args(["--off-path", "-0.2"]))

@@ -69,6 +69,30 @@ def add_wheel_loop_option(p: argparse.ArgumentParser) -> None:
     )
 
 
+OFF_PATH_HELP = 0.5
+"""The default ``--off-path`` the help names (the followers' ``OFF_PATH``; a test keeps them equal,
+this module importing no follower)."""
+
+
+def add_off_path_option(p: argparse.ArgumentParser, prefix: str = "") -> None:
+    """``--off-path M`` on the commands that follow a path (``follow``, ``run --follow``): the follower's
+    ``off_path`` (:data:`omnibot.control.followers.base.OFF_PATH` by default)."""
+    p.add_argument(
+        "--off-path",
+        type=float,
+        metavar="M",
+        help=f"{prefix}how far from the path (m) the follower still steers back (default {OFF_PATH_HELP}, "
+        "Nav2's bound); farther, it stops and the run ends NOT COMPLETED",
+    )
+
+
+def off_path_options(args: argparse.Namespace) -> dict[str, float]:
+    """The follower options ``--off-path`` gives: ``{"off_path": M}``, or none (the default)."""
+    if args.off_path is None:
+        return {}
+    return {"off_path": positive(args.off_path, "--off-path")}
+
+
 def add_calibration_option(p: argparse.ArgumentParser) -> None:
     """``--calibration CAL.yaml`` on the runtime's front ends (``teleop``, ``dashboard``, ``ros2``,
     ``run``); :func:`use_calibration` applies it."""

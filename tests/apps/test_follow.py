@@ -68,6 +68,7 @@ def test_follow_on_a_floor_plans_within_its_reach(tmp_path: FsPath) -> None:
         (["follow", "{good}", "--follower", "purepursuit"], "unknown follower 'purepursuit'"),
         (["follow", "{good}", "--estimator", "magic"], "unknown estimator 'magic'"),
         (["follow", "{good}", "--speed", "-1"], "--speed: expected a positive number"),
+        (["follow", "{good}", "--off-path", "0"], "--off-path: expected a positive number"),
         (["follow", "{good}", "--robot", "omni5"], "unknown robot 'omni5'"),
         (["follow", "{good}", "--port", "bogus://x"], "omnibot: error:"),
         (

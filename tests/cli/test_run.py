@@ -74,6 +74,7 @@ def test_a_follow_that_does_not_complete_is_status_1(
         (["run", "--follow", "nope.csv"], "--follow: cannot read nope.csv"),
         (["run", "--dashboard", "--duration", "-1"], "--duration: expected a positive number of seconds"),
         (["run", "--follow", "x.csv", "--follower", "magic"], "--follower: unknown follower 'magic'"),
+        (["run", "--follow", "x.csv", "--off-path", "nan"], "--off-path: expected a positive number"),
     ],
 )
 def test_bad_arguments_are_one_line_errors(

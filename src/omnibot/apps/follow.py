@@ -14,11 +14,13 @@ from typing import TYPE_CHECKING, Any
 from omnibot.apps.teach import robot_client
 from omnibot.cliargs import (
     DeprecatedAlias,
+    add_off_path_option,
     add_robot_options,
     add_wheel_loop_option,
     check_distinct,
     check_plot,
     check_sim_options,
+    off_path_options,
     positive,
     recording_of,
     seed_of,
@@ -45,6 +47,7 @@ def run(args: argparse.Namespace) -> int:
     rate = positive(args.rate, "--rate")
     speed = positive(args.speed, "--speed") if args.speed is not None else None
     tolerances = _tolerances(args)
+    follower_options = off_path_options(args)
     targets = _follow_targets(args)
     metres = "{l_bar}{bar}| {n:.2f}/{total:.2f} m [{elapsed}<{remaining}]"
     with (
@@ -55,6 +58,7 @@ def run(args: argparse.Namespace) -> int:
         slip = floor.params if floor is not None else None
         options = FollowOptions(
             follower=args.follower,
+            follower_options=follower_options,
             speed=speed,
             estimator=args.estimator,
             rate=rate,
@@ -202,6 +206,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "keeps within and whose tables and wheel slip --calibration applies (also with --port)",
     )
     p.add_argument("--speed", type=float, help="speed cap, m/s (default: the robot's limit)")
+    add_off_path_option(p)
     p.add_argument("--estimator", default="fused", help="estimator the follower sees (default fused)")
     p.add_argument("--rate", type=float, default=100.0, help="control rate, Hz (default 100)")
     add_wheel_loop_option(p)

@@ -32,7 +32,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """Declare ``omnibot run``'s options (the robot options shared with every command, then its own)."""
     from omnibot.apps.dashboard import add_server_options
     from omnibot.apps.ros2 import add_bridge_options
-    from omnibot.cliargs import add_calibration_option, add_robot_options, add_wheel_loop_option
+    from omnibot.cliargs import (
+        add_calibration_option,
+        add_off_path_option,
+        add_robot_options,
+        add_wheel_loop_option,
+    )
 
     add_robot_options(
         p,
@@ -57,6 +62,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--follower", default="tracker", help="--follow: seed002, pure_pursuit or tracker (default)"
     )
     p.add_argument("--speed", type=float, help="--follow: speed cap, m/s (default: the robot's limit)")
+    add_off_path_option(p, "--follow: ")
     p.add_argument(
         "--ros2",
         action="store_true",
@@ -103,6 +109,7 @@ class Parts:
 
 def _check(args: argparse.Namespace) -> None:
     from omnibot.apps.ros2 import check as check_ros2
+    from omnibot.cliargs import off_path_options
     from omnibot.control import follower_names
 
     if not (args.teleop or args.dashboard or args.follow or args.ros2):
@@ -112,6 +119,7 @@ def _check(args: argparse.Namespace) -> None:
         raise ConfigError(f"expected a positive number of seconds, got {args.duration}", key="--duration")
     if args.speed is not None and not (math.isfinite(args.speed) and args.speed > 0):
         raise ConfigError(f"expected a positive speed in m/s, got {args.speed}", key="--speed")
+    off_path_options(args)  # checked before anything starts
     if args.follower not in follower_names():
         raise ConfigError(
             f"unknown follower '{args.follower}'; expected one of: {', '.join(follower_names())}",
@@ -130,7 +138,7 @@ def compose(
     """Add the pad and the follower to ``runtime`` (any thread: before it runs); ``say`` tells the
     command's status lines."""
     from omnibot.apps.teleop import open_source
-    from omnibot.cliargs import calibrated_floor
+    from omnibot.cliargs import calibrated_floor, off_path_options
     from omnibot.estimation import make_estimator
     from omnibot.motion import Pose2D
     from omnibot.navigation import FOLLOWER_PRIORITY, STANDSTILL, FollowJudge, follower_source
@@ -142,7 +150,9 @@ def compose(
     if path is not None:
         slip = runtime.slip.params if runtime.slip is not None else None
         runtime.estimator = make_estimator("fused", robot, Pose2D(*path.start), slip)
-        parts.follower = follower_source(robot, path, runtime.period, args.follower, args.speed)
+        parts.follower = follower_source(
+            robot, path, runtime.period, args.follower, args.speed, options=off_path_options(args)
+        )
         runtime.add_source(parts.follower)
         parts.judge = FollowJudge(
             runtime, robot, parts.follower, speed=args.speed, on_verdict=lambda r: _tell(runtime, r)

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 from omnibot.control import Path, make_follower
 from omnibot.navigation.runner import WATCHDOG
 from omnibot.navigation.session import follower_limits
@@ -24,12 +26,14 @@ def follower_source(
     *,
     name: str = "follower",
     priority: int = FOLLOWER_PRIORITY,
+    options: dict[str, Any] | None = None,
 ) -> FollowerSource:
     """The follower source ``omnibot follow`` and ``run --follow`` drive ``path`` with at ``period``
-    (the tracker's gains scaled as for the page's Repeat above 100 Hz); ROS 2's ``path`` uses it too."""
+    (the tracker's gains scaled as for the page's Repeat above 100 Hz; ``options``: the follower's own,
+    e.g. ``off_path``); ROS 2's ``path`` uses it too."""
     limits = follower_limits(robot, speed)
     gains = gains_for(period, limits) if follower == "tracker" and period > 0.0101 else {}
-    made = make_follower(follower, limits, rate=1.0 / period, **gains)
+    made = make_follower(follower, limits, rate=1.0 / period, **gains, **(options or {}))
     return FollowerSource(
         made,
         path,
