@@ -98,6 +98,7 @@ def test_bad_input_is_one_line_and_exit_2(
         ),
         (["map", "--path", "x.csv", "--resolution", "0", "--out", str(tmp_path / "o")], "--resolution"),
         (["map", "--path", "x.csv", "--hit-range", "-1", "--out", str(tmp_path / "o")], "--hit-range"),
+        (["map", "--path", "x.csv", "--off-path", "0", "--out", str(tmp_path / "o")], "--off-path"),
         (
             [
                 "map",

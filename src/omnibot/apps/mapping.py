@@ -41,12 +41,11 @@ TRUTH_PERIOD = 0.01
 """Sampling of the simulator's true pose, s (the trajectories are associated within 10 ms)."""
 
 
-def add_arguments(p: argparse.ArgumentParser) -> None:
-    """Declare ``omnibot map``'s options."""
-    from omnibot.apps.ros2 import add_bridge_options
-    from omnibot.cliargs import add_calibration_option, add_robot_options, add_wheel_loop_option
+def _add_drive_options(p: argparse.ArgumentParser) -> None:
+    """How ``omnibot map`` drives: ``--path`` (its follower and ``--off-path``), ``--teleop`` or
+    ``--explore``."""
+    from omnibot.cliargs import add_off_path_option
 
-    add_robot_options(p, world="room", port_help="the simulated --robot in lockstep (paced with --teleop)")
     drive = p.add_mutually_exclusive_group(required=True)
     drive.add_argument("--path", metavar="PATH.csv", help="follow this path file while mapping")
     drive.add_argument(
@@ -58,6 +57,17 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="the robot drives itself to the edges of what it has mapped (frontiers) until the reachable "
         "space is mapped or --duration passes (default 300 s)",
     )
+    p.add_argument("--follower", default="tracker", help="--path: seed002, pure_pursuit or tracker (default)")
+    add_off_path_option(p, "--path: ")
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Declare ``omnibot map``'s options."""
+    from omnibot.apps.ros2 import add_bridge_options
+    from omnibot.cliargs import add_calibration_option, add_robot_options, add_wheel_loop_option
+
+    add_robot_options(p, world="room", port_help="the simulated --robot in lockstep (paced with --teleop)")
+    _add_drive_options(p)
     p.add_argument(
         "--out", metavar="DIR", required=True, help="directory for the map, trajectories and report"
     )
@@ -76,7 +86,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="returns up to this range mark map cells, farther ones only clear (default: where the "
         "scanner's range noise reaches 2 cm, 2 m for an RPLIDAR A1)",
     )
-    p.add_argument("--follower", default="tracker", help="--path: seed002, pure_pursuit or tracker (default)")
     p.add_argument(
         "--speed",
         type=float,
@@ -108,9 +117,10 @@ def _say(text: str) -> None:
 
 def _check(args: argparse.Namespace) -> Path:
     from omnibot.apps.ros2 import check as check_ros2
-    from omnibot.cliargs import output_dir, simulated
+    from omnibot.cliargs import off_path_options, output_dir, simulated
 
     check_ros2(args)
+    off_path_options(args)  # checked before anything starts
     if not (math.isfinite(args.resolution) and 0.005 <= args.resolution <= 1.0):
         raise ConfigError(f"expected a cell size of 0.005 to 1 m, got {args.resolution}", key="--resolution")
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
