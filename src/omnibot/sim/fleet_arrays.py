@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 
 from omnibot.sim import jit
 from omnibot.sim.kernels import layout as kernel_layout
-from omnibot.sim.simulator import Simulator
+from omnibot.sim.simulator import NO_FORCE, Simulator
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -128,7 +128,7 @@ class FleetArrays:
     def step(self, now_us: int) -> None:
         """One step of every robot, the step beginning at ``now_us`` (every robot's clock reads it)."""
         sims = self.sims
-        if self._with_extra or any([s._pushes or any(s._applied) for s in sims]):
+        if self._with_extra or any([s._pushes or s._applied != NO_FORCE for s in sims]):
             self._gather_extra(now_us)
         every = jit.active.fleet_step(
             self.fbuf, self.ibuf, self.layout, self._wf, self._wi, self.normals, self.extra, self.status, now_us,

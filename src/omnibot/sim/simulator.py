@@ -72,8 +72,9 @@ from omnibot.sim.truth import CollisionEvent, CollisionListener, TruthRecorder
 from omnibot.sim.world import World, load_world
 
 FloatArray = NDArray[np.float64]
-_NO_FORCE = [0.0, 0.0, 0.0]
-"""No applied force (a list equal to it: -0.0 too; a NaN is not)."""
+NO_FORCE = [0.0, 0.0, 0.0]
+"""No applied force: ``Simulator._applied`` equal to it (-0.0 too; a NaN is not) adds no extra-force row
+(the robot stepped alone and in a fleet, :mod:`omnibot.sim.fleet_arrays`)."""
 
 
 class PwmRangeError(SimulationError, ValueError):
@@ -306,7 +307,7 @@ class Simulator(Contacts, SensorReadings, ScanFeed, Listeners, StepState):
         """Advance ``n`` steps of ``dt``."""
         for _ in range(n):
             now_us = self.clock.ticks_us()
-            n_extra = self._extra_forces(now_us) if self._pushes or self._applied != _NO_FORCE else 0
+            n_extra = self._extra_forces(now_us) if self._pushes or self._applied != NO_FORCE else 0
             args = self._step_args  # bound once (_bind_step): only the count and the time change
             if args is not None:
                 args[A_N_EXTRA], args[A_NOW_US] = n_extra, now_us
@@ -371,7 +372,7 @@ class Simulator(Contacts, SensorReadings, ScanFeed, Listeners, StepState):
     def _extra_forces(self, now_us: int) -> int:
         """Put the applied force and the hand pushes still acting into the extra-force rows; their count."""
         rows: list[Sequence[float]] = []
-        if self._applied != _NO_FORCE:
+        if self._applied != NO_FORCE:
             rows.append(self._applied)
             self._applied = [0.0, 0.0, 0.0]
         if self._pushes:
