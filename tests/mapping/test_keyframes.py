@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import math
-from functools import partial
 
 import numpy as np
-from benchmarks.slam_synthetic import RATE, corridor_world, synthetic_scan
+from benchmarks.slam_synthetic import RATE, a1_scan, corridor_world, synthetic_scan
 
 from omnibot.mapping.keyframes import MAX_JOINED
 from omnibot.mapping.slam import Slam
@@ -14,8 +13,6 @@ from omnibot.motion import Pose2D, Twist
 
 STILL = 30
 """Scans of the standstill at the start (3 s: the bench's, while the gyro's bias is learned)."""
-a1_scan = partial(synthetic_scan, range_max=12.0, noise=0.0, noise_fraction=0.01)
-"""A scan with an RPLIDAR A1's reach and range noise, as the simulator's scanner has them."""
 TILT = math.radians(0.15)
 """How far the first scan's walls are turned: its noise's draw on the bench's omni3 seed 3 (0.1-0.2 deg)."""
 

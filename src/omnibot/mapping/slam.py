@@ -165,6 +165,7 @@ class Slam(LoopClosing, AnchorMatching):
         self.matches: list[MatchResult] = []
         """The front end's match of every keyframe but the first."""
         self.anchored = 0
+        self.anchors = []
         self._graph = PoseGraph(self.optimizer)
 
     # ------------------------------------------------------------------ queries
