@@ -88,7 +88,7 @@ class KeyframeStore:
     def _with_points(self, frame: Keyframe, scan: Scan, delta: Pose2D | None = None) -> Keyframe:
         """``frame`` with ``scan``'s returns (deskewed with the latest twist; taken ``delta`` from it,
         None: where it was) added, and those within ``anchor_range`` to its anchor points."""
-        at = delta or Pose2D(0.0, 0.0, 0.0)
+        at = delta if delta is not None else Pose2D(0.0, 0.0, 0.0)
         points = np.vstack((frame.points, transform(at, scan_points(scan, self._twist))))
         mount = transform(at, np.array([[scan.mount.x, scan.mount.y]]))[0]
         fresh = points[len(frame.points) :]
