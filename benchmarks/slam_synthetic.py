@@ -84,6 +84,12 @@ def synthetic_scan(
     )
 
 
+def a1_scan(world: World, pose: Pose2D, rng: np.random.Generator, stamp: float = 0.0) -> Scan:
+    """A :func:`synthetic_scan` with an RPLIDAR A1's reach and range noise (12 m, 1 % of the range, as
+    the simulator's scanner has them)."""
+    return synthetic_scan(world, pose, rng, stamp, range_max=12.0, noise=0.0, noise_fraction=0.01)
+
+
 def corridor_world(length: float = 30.0, width: float = 2.0) -> World:
     """A long closed corridor without features along x from 0 to ``length``, centred on y = 0."""
     return parse_world(

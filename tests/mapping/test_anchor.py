@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
-from benchmarks.slam_synthetic import RATE, corridor_path, corridor_world, drifting_odometry, synthetic_scan
+from benchmarks.slam_synthetic import RATE, a1_scan, corridor_path, corridor_world, drifting_odometry
 
 from omnibot.mapping.slam import Slam
+from omnibot.motion import Pose2D
 
 
 def test_an_end_wall_in_range_holds_the_axis_where_the_odometry_drifts() -> None:
@@ -15,18 +18,7 @@ def test_an_end_wall_in_range_holds_the_axis_where_the_odometry_drifts() -> None
     world = corridor_world(30.0)
     truth = corridor_path(8.0, start=1.5)
     odom = drifting_odometry(truth, np.random.default_rng(21))
-    scans = [
-        synthetic_scan(
-            world,
-            pose,
-            np.random.default_rng(1000 + k),
-            k / RATE,
-            range_max=12.0,
-            noise=0.0,
-            noise_fraction=0.01,
-        )
-        for k, pose in enumerate(truth)
-    ]
+    scans = [a1_scan(world, pose, np.random.default_rng(1000 + k), k / RATE) for k, pose in enumerate(truth)]
     along = {}
     for anchored in (True, False):
         slam = Slam() if anchored else Slam(anchor_reach=None)  # the anchor submap is on by default
@@ -44,3 +36,27 @@ def test_an_end_wall_in_range_holds_the_axis_where_the_odometry_drifts() -> None
     # pull was taken out of the axis, -0.9 cm, which leant against this odometry's drift: 1.6 cm)
     assert along[True] < 0.035
     assert along[True] * 5 < along_odom
+
+
+def test_an_anchor_factor_is_from_a_keyframe_that_saw_the_wall_fixing_the_axis_up_close() -> None:
+    """Back from the far end wall, the anchor submap's oldest keyframe is one of the blind stretch, 12 m
+    from the wall whose returns fix the axis: a factor from it tied it to where the wall's keyframes
+    stood at that moment. Every factor is from a keyframe that came within ``anchor_range`` of the
+    wall: the first close view of it."""
+    world = corridor_world(30.0)
+    step = 0.4 / RATE
+    out = [Pose2D(17.0 + k * step, 0.3 * math.sin(0.05 * k), 0.0) for k in range(round(11.6 / step) + 1)]
+    back = [Pose2D(28.6 - k * step, 0.3 * math.sin(0.05 * (k + len(out))), 0.0) for k in range(1, 201)]
+    truth = out + back
+    odom = drifting_odometry(
+        truth, np.random.default_rng(5), scale=0.01, heading_bias=0.0, noise_theta=0.0005
+    )
+    slam = Slam()
+    for k, (pose, odom_pose) in enumerate(zip(truth, odom, strict=True)):
+        scan = a1_scan(world, pose, np.random.default_rng(700 + k), k / RATE)
+        slam.update(odom_pose, scan, k / RATE)
+    seen_at = [truth[round(scan.stamp * RATE)].x for _, scan in slam.keyframes()]
+    assert len(slam.anchors) == slam.anchored > 10
+    for reference, keyframe in slam.anchors:
+        assert seen_at[keyframe] < 28.0  # on the way back, the far wall beyond the sliding submap's lines
+        assert seen_at[reference] > 30.0 - slam.anchor_range - 0.3
