@@ -158,6 +158,26 @@ def test_an_output_folder_that_cannot_be_made_is_a_one_line_error(
     assert capsys.readouterr().err == f"omnibot: error: --out: cannot make directory {out}: Not a directory\n"
 
 
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["map", "--explore", "--port", "sim://omni9", "--duration", "1"],
+        ["calibrate", "--quick", "--robot", "omni9"],
+        ["demo", "--port", "sim://omni9"],
+    ],
+    ids=["map", "calibrate", "demo"],
+)
+def test_a_command_that_cannot_start_leaves_no_output_folder(
+    argv: list[str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--out DIR`` is checked before the run and made only when a file goes into it: a command
+    refused (here a robot that does not exist, an option that does not go with --port) leaves none."""
+    out = tmp_path / "new" / "out"
+    assert main([*argv, "--out", str(out)]) == 2
+    assert capsys.readouterr().err.startswith("omnibot: error: ")
+    assert not (tmp_path / "new").exists()
+
+
 def test_a_full_standard_output_is_a_one_line_error() -> None:
     with open("/dev/full", "w") as full:
         proc = subprocess.run(

@@ -344,10 +344,8 @@ def positive(value: float, flag: str) -> float:
 
 
 def output_dir(text: str, flag: str = "--out") -> Path:
-    """``--out DIR`` made (with its parents); one line if it cannot be."""
-    out = Path(text)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ConfigError(f"cannot make directory {out}: {exc.strerror or exc}", key=flag) from None
-    return out
+    """``--out DIR`` checked, not made: its writer makes it with the first file
+    (:func:`omnibot.outputs.made_directory`), so a run that fails first leaves no empty directory."""
+    from omnibot.outputs import check_directory
+
+    return check_directory(text, flag)

@@ -160,11 +160,12 @@ def export_csv(run: Run, out: Path) -> list[Path]:
 def export(args: argparse.Namespace) -> int:
     """``omnibot log export``."""
     from omnibot.cliargs import output_dir
+    from omnibot.outputs import made_directory
 
     run = load(args)
     out = output_dir(args.csv, "--csv")
     try:
-        written = export_csv(run, out)
+        written = export_csv(run, made_directory(out, "--csv"))
     except OSError as exc:
         raise ConfigError(f"cannot write in {out}: {exc.strerror or exc}", key="--csv") from None
     for path in written:

@@ -302,6 +302,7 @@ class _Mapping:
     def finish(self, out: Path, parts: Any, resolution: float) -> int:
         from omnibot.apps.run import outcome
         from omnibot.mapping import score_lines, write_outputs
+        from omnibot.outputs import made_directory
 
         sink = self.sink
         if sink is None:
@@ -311,7 +312,12 @@ class _Mapping:
             return 1
         try:
             result = write_outputs(
-                out, sink, truth=self.truth, world=self.world, resolution=resolution, noise=self.noise
+                made_directory(out, "--out"),
+                sink,
+                truth=self.truth,
+                world=self.world,
+                resolution=resolution,
+                noise=self.noise,
             )
         except ValueError as exc:
             print(f"omnibot map: {exc} ({sink.received} scans received)", file=sys.stderr)
