@@ -164,16 +164,19 @@ def test_an_output_folder_that_cannot_be_made_is_a_one_line_error(
         ["map", "--explore", "--port", "sim://omni9", "--duration", "1"],
         ["calibrate", "--quick", "--robot", "omni9"],
         ["demo", "--port", "sim://omni9"],
+        ["follow", "{path}", "--port", "sim://omni9"],
     ],
-    ids=["map", "calibrate", "demo"],
+    ids=["map", "calibrate", "demo", "follow"],
 )
 def test_a_command_that_cannot_start_leaves_no_output_folder(
     argv: list[str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """``--out DIR`` is checked before the run and made only when a file goes into it: a command
-    refused (here a robot that does not exist, an option that does not go with --port) leaves none."""
+    refused (here for a robot that does not exist) leaves none."""
+    path = tmp_path / "path.csv"
+    path.write_text("x,y\n0,0\n1,0\n")
     out = tmp_path / "new" / "out"
-    assert main([*argv, "--out", str(out)]) == 2
+    assert main([*(a.format(path=path) for a in argv), "--out", str(out)]) == 2
     assert capsys.readouterr().err.startswith("omnibot: error: ")
     assert not (tmp_path / "new").exists()
 
