@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import shlex
 import subprocess
 import sys
@@ -179,6 +180,21 @@ def test_a_command_that_cannot_start_leaves_no_output_folder(
     assert main([*(a.format(path=path) for a in argv), "--out", str(out)]) == 2
     assert capsys.readouterr().err.startswith("omnibot: error: ")
     assert not (tmp_path / "new").exists()
+
+
+def test_the_commands_whose_world_is_the_room_are_the_ones_docs_cli_md_names() -> None:
+    """docs/cli.md's --world row names every command that stands the simulated robot in the room
+    by default (the others: the empty floor)."""
+    from omnibot.apps.subcommands import Commands
+    from omnibot.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if isinstance(a, Commands))
+    sub.fill_all()
+    in_room = {name for name, p in sub.choices.items() if p.get_default("default_world") == "room"}
+    doc = (Path(__file__).parents[1] / "docs" / "cli.md").read_text(encoding="utf-8")
+    row = next(line for line in doc.splitlines() if line.startswith("| `--world NAME"))
+    listed = row.rsplit("| `empty`; `room` for ", 1)[1].split(" (they need walls)")[0]
+    assert set(re.findall(r"`([a-z0-9]+)`", listed)) == in_room
 
 
 def test_a_full_standard_output_is_a_one_line_error() -> None:
