@@ -155,6 +155,7 @@ def fake_calibration(monkeypatch: pytest.MonkeyPatch) -> dict[str, Any]:
 
     def fake_report(result: CalibrationResult, directory: Any) -> list[Path]:
         path = Path(directory) / "accuracy.md"
+        path.parent.mkdir(parents=True, exist_ok=True)  # as write_report makes --out DIR
         path.write_text("report\n")
         return [path]
 
