@@ -76,6 +76,10 @@ def test_simulator_options_are_refused_with_a_port() -> None:
     with pytest.raises(ConfigError, match="--seed, --world shape the simulated robot"):
         check_sim_options(parse("--port", "sim://omni4", "--seed", "2", "--world", "room"))
     check_sim_options(parse("--port", "sim://omni4", "--surface", "wood"), allowed=("surface",))
+    with pytest.raises(
+        ConfigError, match=r"^--world: --world shapes the simulated robot; with --port put it in a sim:// URL"
+    ):
+        check_sim_options(parse("--port", "sim://omni4", "--world", "room"))
 
 
 @pytest.mark.parametrize(

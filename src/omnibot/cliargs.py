@@ -225,8 +225,9 @@ def check_sim_options(args: argparse.Namespace, allowed: Sequence[str] = ()) -> 
         f"--{name}" for name in SIM_ONLY if name not in allowed and getattr(args, name, None) is not None
     ]
     if given:
+        verb, them = ("shapes", "it") if len(given) == 1 else ("shape", "them")
         raise ConfigError(
-            f"{', '.join(given)} shape the simulated robot; with --port put them in a sim:// URL "
+            f"{', '.join(given)} {verb} the simulated robot; with --port put {them} in a sim:// URL "
             "(sim://omni4?seed=1&world=room&surface=wood)",
             key=given[0],
         )
