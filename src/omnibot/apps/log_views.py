@@ -254,6 +254,14 @@ def recover(args: argparse.Namespace) -> int:
     if result.cut_short is None and not args.force:
         print(f"{result.source} is whole (it has its summary): nothing to recover")
         return EXIT_OK
+    if result.cut_short is not None and result.messages == 0:
+        result.target.unlink()  # made by recover() alone ('xb'): a file of no message is no recovery
+        print(
+            f"omnibot: error: {result.source}: no message before the cut (the log was cut short: "
+            f"{result.cut_short}): nothing to recover, nothing written",
+            file=sys.stderr,
+        )
+        return EXIT_FAILED
     print(
         f"wrote {result.target}: {result.messages} messages, {result.duration:.3f} s"
         + (f" (the log was cut short: {result.cut_short})" if result.cut_short else "")
