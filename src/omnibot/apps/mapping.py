@@ -33,7 +33,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from omnibot.errors import ConfigError
+from omnibot.errors import ConfigError, SimulationError
 
 EXPLORE_LIMIT = 300.0
 """s ``--explore`` drives at most without ``--duration``."""
@@ -166,9 +166,24 @@ def run(args: argparse.Namespace) -> int:
     parts: Parts | None = None
     try:
         parts = run_in_this_thread(args, url, config, path, mapping.attach, _say, frame=mapping.map_to_odom)
+    except ConfigError as exc:
+        raise _told_as_the_path(exc, args) from None
     finally:
         mapping.close()
     return mapping.finish(out, parts, args.resolution)
+
+
+def _told_as_the_path(exc: ConfigError, args: argparse.Namespace) -> ConfigError:
+    """A robot that cannot stand at the path's first pose (where ``map --path`` puts it) told as the
+    path given, not as the ``sim://`` URL made of it; any other error as it is."""
+    why = exc.__context__  # the simulator's own reason, which the URL's scheme restated
+    if exc.key != "pose" or args.port is not None or not isinstance(why, SimulationError):
+        return exc
+    return ConfigError(
+        f"{why}: the simulated robot is put at the first pose of {args.path}; give a path that starts "
+        "inside the world",
+        key="--path",
+    )
 
 
 def _explore(args: argparse.Namespace, url: str, out: Path) -> int:
