@@ -337,6 +337,18 @@ def check_world(args: argparse.Namespace) -> None:
     load_world(world_of(args))
 
 
+def placed_by(exc: ConfigError, flag: str, where: str) -> ConfigError:
+    """A simulated robot that cannot stand where ``flag`` put it (through the ``pose=`` of the
+    ``sim://`` URL a command made of it) told as ``flag`` and ``where`` the robot was put, not as
+    that URL, which the user never wrote; any other error as it is."""
+    from omnibot.errors import SimulationError
+
+    why = exc.__context__  # the simulator's own reason, which the URL's scheme restated
+    if exc.key != "pose" or not isinstance(why, SimulationError):
+        return exc
+    return ConfigError(f"{why}: the simulated robot is put at {where}", key=flag)
+
+
 def positive(value: float, flag: str) -> float:
     """``value`` if it is a positive finite number, else a ConfigError naming ``flag``."""
     if not (math.isfinite(value) and value > 0):

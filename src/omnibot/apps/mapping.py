@@ -33,7 +33,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from omnibot.errors import ConfigError, SimulationError
+from omnibot.errors import ConfigError
 
 EXPLORE_LIMIT = 300.0
 """s ``--explore`` drives at most without ``--duration``."""
@@ -144,7 +144,7 @@ def run(args: argparse.Namespace) -> int:
     except ImportError:
         raise ConfigError("omnibot map needs the slam extra: pip install 'omnibot[slam]'") from None
     from omnibot.apps.run import Parts, run_in_this_thread
-    from omnibot.cliargs import check_sim_options, sim_url
+    from omnibot.cliargs import check_sim_options, placed_by, sim_url
     from omnibot.control import read_path
     from omnibot.teleop import load_teleop_config
 
@@ -167,23 +167,14 @@ def run(args: argparse.Namespace) -> int:
     try:
         parts = run_in_this_thread(args, url, config, path, mapping.attach, _say, frame=mapping.map_to_odom)
     except ConfigError as exc:
-        raise _told_as_the_path(exc, args) from None
+        if args.port is not None:
+            raise
+        raise placed_by(
+            exc, "--path", f"the first pose of {args.path}; give a path that starts inside the world"
+        ) from None
     finally:
         mapping.close()
     return mapping.finish(out, parts, args.resolution)
-
-
-def _told_as_the_path(exc: ConfigError, args: argparse.Namespace) -> ConfigError:
-    """A robot that cannot stand at the path's first pose (where ``map --path`` puts it) told as the
-    path given, not as the ``sim://`` URL made of it; any other error as it is."""
-    why = exc.__context__  # the simulator's own reason, which the URL's scheme restated
-    if exc.key != "pose" or args.port is not None or not isinstance(why, SimulationError):
-        return exc
-    return ConfigError(
-        f"{why}: the simulated robot is put at the first pose of {args.path}; give a path that starts "
-        "inside the world",
-        key="--path",
-    )
 
 
 def _explore(args: argparse.Namespace, url: str, out: Path) -> int:
