@@ -35,8 +35,9 @@ def check_directory(path: str | Path, flag: str) -> Path:
     interrupted before writing leaves no empty directory behind."""
     target = Path(path)
     existing = next(p for p in (target, *target.parents) if p.exists() or p == Path(p.anchor))
-    if not existing.is_dir():
-        raise ConfigError(f"cannot make directory {target}: {os.strerror(errno.ENOTDIR)}", key=flag)
+    if not existing.is_dir():  # as mkdir says it: the directory itself a file, or one of its parents
+        error = errno.EEXIST if existing == target else errno.ENOTDIR
+        raise ConfigError(f"cannot make directory {target}: {os.strerror(error)}", key=flag)
     if not os.access(existing, os.W_OK | os.X_OK):
         raise ConfigError(f"cannot make directory {target}: {os.strerror(errno.EACCES)}", key=flag)
     return target
