@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import shlex
 import subprocess
 import sys
@@ -156,6 +157,44 @@ def test_an_output_folder_that_cannot_be_made_is_a_one_line_error(
     out = tmp_path / "file" / "plots"
     assert main(["tour", "--robot", "omni4", "--duration", "0.1", "--out", str(out)]) == 2
     assert capsys.readouterr().err == f"omnibot: error: --out: cannot make directory {out}: Not a directory\n"
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["map", "--explore", "--port", "sim://omni9", "--duration", "1"],
+        ["calibrate", "--quick", "--robot", "omni9"],
+        ["demo", "--port", "sim://omni9"],
+        ["follow", "{path}", "--port", "sim://omni9"],
+    ],
+    ids=["map", "calibrate", "demo", "follow"],
+)
+def test_a_command_that_cannot_start_leaves_no_output_folder(
+    argv: list[str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--out DIR`` is checked before the run and made only when a file goes into it: a command
+    refused (here for a robot that does not exist) leaves none."""
+    path = tmp_path / "path.csv"
+    path.write_text("x,y\n0,0\n1,0\n")
+    out = tmp_path / "new" / "out"
+    assert main([*(a.format(path=path) for a in argv), "--out", str(out)]) == 2
+    assert capsys.readouterr().err.startswith("omnibot: error: ")
+    assert not (tmp_path / "new").exists()
+
+
+def test_the_commands_whose_world_is_the_room_are_the_ones_docs_cli_md_names() -> None:
+    """docs/cli.md's --world row names every command that stands the simulated robot in the room
+    by default (the others: the empty floor)."""
+    from omnibot.apps.subcommands import Commands
+    from omnibot.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if isinstance(a, Commands))
+    sub.fill_all()
+    in_room = {name for name, p in sub.choices.items() if p.get_default("default_world") == "room"}
+    doc = (Path(__file__).parents[1] / "docs" / "cli.md").read_text(encoding="utf-8")
+    row = next(line for line in doc.splitlines() if line.startswith("| `--world NAME"))
+    listed = row.rsplit("| `empty`; `room` for ", 1)[1].split(" (they need walls)")[0]
+    assert set(re.findall(r"`([a-z0-9]+)`", listed)) == in_room
 
 
 def test_a_full_standard_output_is_a_one_line_error() -> None:

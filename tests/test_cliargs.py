@@ -23,7 +23,7 @@ from omnibot.cliargs import (
     sim_url,
 )
 from omnibot.errors import ConfigError
-from omnibot.outputs import check_writable
+from omnibot.outputs import check_directory, check_writable
 
 
 def parse(*argv: str, world: str = "empty") -> argparse.Namespace:
@@ -76,6 +76,10 @@ def test_simulator_options_are_refused_with_a_port() -> None:
     with pytest.raises(ConfigError, match="--seed, --world shape the simulated robot"):
         check_sim_options(parse("--port", "sim://omni4", "--seed", "2", "--world", "room"))
     check_sim_options(parse("--port", "sim://omni4", "--surface", "wood"), allowed=("surface",))
+    with pytest.raises(
+        ConfigError, match=r"^--world: --world shapes the simulated robot; with --port put it in a sim:// URL"
+    ):
+        check_sim_options(parse("--port", "sim://omni4", "--world", "room"))
 
 
 @pytest.mark.parametrize(
@@ -170,3 +174,14 @@ def test_off_path_is_the_followers_bound_unless_given() -> None:
     assert follower_source(robot, path, 0.01, options=given).follower.off_path == 1.5
     with pytest.raises(ConfigError, match="--off-path: expected a positive number"):
         off_path_options(p.parse_args(["--off-path", "-0.2"]))
+
+
+def test_an_output_directory_is_checked_and_not_made(tmp_path: Path) -> None:
+    """What mkdir would say, before the run, and nothing made (the writers make it)."""
+    assert check_directory(tmp_path / "a" / "b", "--out") == tmp_path / "a" / "b"
+    assert not (tmp_path / "a").exists()
+    (tmp_path / "f").write_text("")
+    with pytest.raises(ConfigError, match=rf"^--out: cannot make directory {tmp_path}/f: File exists$"):
+        check_directory(tmp_path / "f", "--out")
+    with pytest.raises(ConfigError, match=rf"^--csv: cannot make directory {tmp_path}/f/x: Not a directory$"):
+        check_directory(tmp_path / "f" / "x", "--csv")

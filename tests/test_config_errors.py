@@ -123,6 +123,16 @@ def test_text_that_is_not_yaml_says_so() -> None:
         load_yaml("? [1]\n: 2\n", "thing", "t.yaml")
 
 
+def test_text_that_is_not_yaml_is_told_in_one_line_with_its_place() -> None:
+    """PyYAML's own message spans four lines and names '<unicode string>': ours is one, the file's."""
+    with pytest.raises(ConfigError) as info:
+        load_yaml("walls: [[0,0],[1\n", "world", "w.yaml")
+    assert str(info.value) == (
+        "w.yaml is not valid YAML: line 2, column 1: did not find expected ',' or ']' "
+        "(while parsing a flow sequence from line 1, column 15)"
+    )
+
+
 def test_a_file_with_a_key_given_twice_is_named(tmp_path: Path) -> None:
     path = tmp_path / "c.yaml"
     path.write_text("a: 1\n\nb: {a: 1}\na: 2\n")

@@ -225,8 +225,9 @@ def check_sim_options(args: argparse.Namespace, allowed: Sequence[str] = ()) -> 
         f"--{name}" for name in SIM_ONLY if name not in allowed and getattr(args, name, None) is not None
     ]
     if given:
+        verb, them = ("shapes", "it") if len(given) == 1 else ("shape", "them")
         raise ConfigError(
-            f"{', '.join(given)} shape the simulated robot; with --port put them in a sim:// URL "
+            f"{', '.join(given)} {verb} the simulated robot; with --port put {them} in a sim:// URL "
             "(sim://omni4?seed=1&world=room&surface=wood)",
             key=given[0],
         )
@@ -336,6 +337,18 @@ def check_world(args: argparse.Namespace) -> None:
     load_world(world_of(args))
 
 
+def placed_by(exc: ConfigError, flag: str, where: str) -> ConfigError:
+    """A simulated robot that cannot stand where ``flag`` put it (through the ``pose=`` of the
+    ``sim://`` URL a command made of it) told as ``flag`` and ``where`` the robot was put, not as
+    that URL, which the user never wrote; any other error as it is."""
+    from omnibot.errors import SimulationError
+
+    why = exc.__context__  # the simulator's own reason, which the URL's scheme restated
+    if exc.key != "pose" or not isinstance(why, SimulationError):
+        return exc
+    return ConfigError(f"{why}: the simulated robot is put at {where}", key=flag)
+
+
 def positive(value: float, flag: str) -> float:
     """``value`` if it is a positive finite number, else a ConfigError naming ``flag``."""
     if not (math.isfinite(value) and value > 0):
@@ -344,10 +357,8 @@ def positive(value: float, flag: str) -> float:
 
 
 def output_dir(text: str, flag: str = "--out") -> Path:
-    """``--out DIR`` made (with its parents); one line if it cannot be."""
-    out = Path(text)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ConfigError(f"cannot make directory {out}: {exc.strerror or exc}", key=flag) from None
-    return out
+    """``--out DIR`` checked, not made: its writer makes it with the first file
+    (:func:`omnibot.outputs.made_directory`), so a run that fails first leaves no empty directory."""
+    from omnibot.outputs import check_directory
+
+    return check_directory(text, flag)

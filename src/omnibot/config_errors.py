@@ -106,7 +106,21 @@ def load_yaml(text: str, what: str = "", source: str = "") -> Any:
             f"{head}: {exc.key}: duplicate key on line {exc.again} (first on line {exc.line}){more}"
         ) from None
     except yaml.YAMLError as exc:
-        raise ConfigError(f"{source or what or 'the text'} is not valid YAML: {exc}") from None
+        raise ConfigError(f"{source or what or 'the text'} is not valid YAML: {_yaml_problem(exc)}") from None
+
+
+def _yaml_problem(exc: yaml.YAMLError) -> str:
+    """PyYAML's error in one line, its places as the file's lines and columns (from 1); its own
+    text spans several lines and names the parsed string ('<unicode string>'), not the file."""
+    if not isinstance(exc, yaml.MarkedYAMLError) or exc.problem_mark is None:
+        return str(exc)
+    place = f"line {exc.problem_mark.line + 1}, column {exc.problem_mark.column + 1}"
+    context = ""
+    if exc.context:
+        mark = exc.context_mark
+        start = f" from line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
+        context = f" ({exc.context}{start})"
+    return f"{place}: {exc.problem}{context}"
 
 
 def read_yaml(path: str | Path, what: str) -> Any:

@@ -27,6 +27,10 @@ class Pose2D:
     y: float
     theta: float
 
+    def text(self) -> str:
+        """The pose as a person gives it (``pose=X,Y,THETA``): ``(x, y, theta deg)``, m and degrees."""
+        return f"({self.x:g}, {self.y:g}, {math.degrees(self.theta):g} deg)"
+
 
 class Twist(NamedTuple):
     """A planar velocity: vx, vy in m/s, w in rad/s (body frame unless said otherwise)."""

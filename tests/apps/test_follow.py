@@ -42,6 +42,16 @@ def test_follow_writes_report_plot_and_truth(tmp_path: FsPath, capsys: pytest.Ca
     assert truth.read_text().startswith("t,x,y,theta\n0.000,0.0")
 
 
+def test_follow_makes_its_out_folder_when_it_writes(tmp_path: FsPath) -> None:
+    """``--out DIR`` that does not exist yet: made, with its parents, for the files the run writes."""
+    path_file = tmp_path / "s.csv"
+    write_path(standard_path("s_curve", size=0.4), path_file)
+    out = tmp_path / "new" / "out"
+    assert main(["follow", str(path_file), "--speed", "0.4", "--out", str(out)]) == 0
+    assert json.loads((out / "follow_report.json").read_text())["completed"]
+    assert (out / "follow_truth.csv").read_text().startswith("t,x,y,theta\n")
+
+
 def test_follow_on_a_floor_plans_within_its_reach(tmp_path: FsPath) -> None:
     """Carpet cannot give omni4 1 m/s on a 45 degree course: --surface carpet plans (and times the
     run against the minimum) within what the floor lets the motors give."""

@@ -72,3 +72,15 @@ def test_a_map_that_does_not_load_is_exit_2(tmp_path: Path, capsys: pytest.Captu
     err = capsys.readouterr().err
     assert "bad.yaml" in err
     assert_one_line_error(err)
+
+
+def test_an_initial_pose_in_a_wall_is_told_as_the_option_given(
+    room_map: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--initial-pose`` puts the simulated robot there: where it cannot stand, the line names the
+    option, not a sim:// URL the user never wrote."""
+    assert main(["goto", "3,2.8", "--map", str(room_map), "--initial-pose", "0,0,0"]) == 2
+    assert capsys.readouterr().err == (
+        "omnibot: error: --initial-pose: start pose (0, 0, 0 deg) overlaps walls[0] of world 'room': the "
+        "simulated robot is put at --initial-pose; give a pose inside the world\n"
+    )

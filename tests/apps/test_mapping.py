@@ -119,3 +119,18 @@ def test_bad_input_is_one_line_and_exit_2(
         err = capsys.readouterr().err
         assert text in err, err
         assert_one_line_error(err)
+
+
+def test_a_path_that_starts_in_a_wall_is_told_as_the_path_given(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--path`` puts the simulated robot at the path's first pose: where it cannot stand, the line
+    names the path and that pose, not a sim:// URL the user never wrote."""
+    path = loop(tmp_path, [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0)])  # (0, 0) is in the room's corner
+    assert main(["map", "--path", str(path), "--world", "room", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err == (
+        "omnibot: error: --path: start pose (0, 0, 0 deg) overlaps walls[0] of world 'room': the simulated "
+        f"robot is put at the first pose of {path}; give a path that starts inside the world\n"
+    )
+    assert not (tmp_path / "o").exists()

@@ -124,7 +124,7 @@ def test_unwritable_output_is_refused_before_the_robot_moves(
         (["send", "STATUS", "--world", "moon"], "unknown world"),
         (["send", "STATUS", "--surface", "ice"], "unknown surface 'ice'"),
         (["follow", "{line}", "--port", "sim://omni4", "--seed", "3"], "--seed"),
-        (["demo", "--port", "sim://omni4", "--world", "room"], "put them in a sim:// URL"),
+        (["demo", "--port", "sim://omni4", "--world", "room"], "put it in a sim:// URL"),
         (["send", "STATUS", "--port", "/dev/omnibot-no-such-port"], "--port: cannot open"),
         # a negative seed reached numpy's SeedSequence (exit 70) where no sim:// URL checked it
         (["follow", "{line}", "--seed", "-1"], "--seed: expected an integer >= 0"),

@@ -4,6 +4,7 @@ exit status (a recording too short, a run outside its tolerances, a calibration 
 from __future__ import annotations
 
 import math
+import re
 import sys
 from pathlib import Path
 from types import SimpleNamespace
@@ -35,6 +36,7 @@ def test_a_recording_too_short_is_not_written(
     assert main(argv) == 1
     text = capsys.readouterr().out
     assert "a path needs at least 10 points and 0.1 m" in text and "nothing written" in text
+    assert re.match(r"omnibot record: omni3 listened to: recorded \d+ points, ", text), text  # said once
     assert not out.exists()
     harness.assert_left_as_found()
 
@@ -155,6 +157,7 @@ def fake_calibration(monkeypatch: pytest.MonkeyPatch) -> dict[str, Any]:
 
     def fake_report(result: CalibrationResult, directory: Any) -> list[Path]:
         path = Path(directory) / "accuracy.md"
+        path.parent.mkdir(parents=True, exist_ok=True)  # as write_report makes --out DIR
         path.write_text("report\n")
         return [path]
 

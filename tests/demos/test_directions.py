@@ -40,10 +40,11 @@ def test_rotation_turns_in_place() -> None:
 
 
 def test_tour_cli_writes_plots(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["tour", "--robot", "omni4", "--duration", "0.3", "--out", str(tmp_path)]) == 0
-    assert (tmp_path / "directions_omni4.png").stat().st_size > 10_000
-    out = capsys.readouterr().out
-    assert "forward-left" in out and "rotate cw" in out
+    out = tmp_path / "new" / "out"  # made when the plot is written
+    assert main(["tour", "--robot", "omni4", "--duration", "0.3", "--out", str(out)]) == 0
+    assert (out / "directions_omni4.png").stat().st_size > 10_000
+    said = capsys.readouterr().out
+    assert "forward-left" in said and "rotate cw" in said
 
 
 def test_tour_bad_input(capsys: pytest.CaptureFixture[str]) -> None:

@@ -45,7 +45,8 @@ def test_demo_in_lockstep_meets_the_seed_examples(tmp_path: Path, monkeypatch: p
         yield bars[-1][1]
 
     monkeypatch.setattr(seed000, "progress_bar", progress_bar)
-    report, ok = run_demo("sim://omni4?world=room&seed=1", "omni4", tmp_path)
+    out = tmp_path / "out"  # made when the demo writes its files
+    report, ok = run_demo("sim://omni4?world=room&seed=1", "omni4", out)
     assert ok
     [(total, bar)] = bars  # the bar counts the examples really run, each named while it runs
     assert total == bar.n == len(bar.postfixes) == 5 and bar.postfixes[0] == "circle, heading held"
@@ -67,8 +68,8 @@ def test_demo_in_lockstep_meets_the_seed_examples(tmp_path: Path, monkeypatch: p
     assert approach.startswith("stopped")
     # front 10 cm ahead of the centre; the stop allows for a wall met at a slant, so it stops early
     assert 15 < number(approach, r"centre ([\d.]+) cm from the wall") < 60
-    assert (tmp_path / "demo_trajectory.png").stat().st_size > 20_000
-    assert (tmp_path / "demo_truth.csv").read_text().startswith("t,x,y,theta\n")
+    assert (out / "demo_trajectory.png").stat().st_size > 20_000
+    assert (out / "demo_truth.csv").read_text().startswith("t,x,y,theta\n")
 
 
 def test_demo_command_through_the_pty_emulator(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

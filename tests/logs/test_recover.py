@@ -114,3 +114,19 @@ def test_a_file_torn_inside_a_chunk_is_recovered_up_to_it(recorded: RecordedRun,
     with AnyReader([out.target]) as reader:
         theirs = [(c.topic, t, bytes(raw)) for c, t, raw in reader.messages()]
     assert sorted(theirs) == sorted((m.topic, m.ns, m.data) for m in ours)
+
+
+def test_a_log_cut_before_its_first_message_is_not_recovered_as_an_empty_one(
+    recorded: RecordedRun, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Nothing to recover is not a recovery: no file written, status 1 and one line saying why."""
+    torn = tmp_path / "torn.mcap"
+    torn.write_bytes(recorded.path.read_bytes()[:5000])  # killed before its first chunk was written
+    assert LogFile.open(torn).read_all() == []
+    capsys.readouterr()
+    assert main(["log", "recover", str(torn)]) == 1
+    said = capsys.readouterr()
+    assert said.out == ""
+    assert said.err.startswith(f"omnibot: error: {torn}: no message before the cut (the log was cut short: ")
+    assert said.err.endswith("): nothing to recover, nothing written\n") and said.err.count("\n") == 1
+    assert not (tmp_path / "torn-recovered.mcap").exists()

@@ -94,6 +94,13 @@ def test_start_pose_from_world_and_argument(omni4) -> None:
         Simulator(omni4, world="room", start_pose=(0.05, 2.0, 0.0), physics_factory=FakePhysics)
 
 
+def test_a_start_pose_in_a_wall_is_told_in_metres_and_degrees(omni4) -> None:
+    """The pose is told as the user gives it (pose=X,Y,THETA in degrees), not as radians' repr."""
+    with pytest.raises(SimulationError) as caught:
+        Simulator(omni4, world="room", start_pose=(0.05, 2.0, math.radians(45)), physics_factory=FakePhysics)
+    assert "start pose (0.05, 2, 45 deg) overlaps walls[0] of world 'room'" in str(caught.value)
+
+
 # --------------------------------------------------------------------------- surfaces
 
 

@@ -34,7 +34,7 @@ from omnibot.cliargs import (
     world_of,
 )
 from omnibot.errors import ConfigError
-from omnibot.outputs import check_writable
+from omnibot.outputs import check_directory, check_writable
 
 if TYPE_CHECKING:
     from omnibot.calibration import AccuracyPlan, CalibrationResult, Plan, Verdict
@@ -355,8 +355,5 @@ def _outputs(args: argparse.Namespace) -> tuple[Path, Path]:
     cal_file = Path(cal) if cal else out_dir / "calibration.yaml"
     if cal:
         check_writable(cal_file, "--calibration")
-    try:
-        out_dir.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ConfigError(f"cannot make directory {out_dir}: {exc.strerror or exc}", key="--out") from None
+    check_directory(out_dir, "--out")  # made by the report (and the calibration file) when written
     return cal_file, out_dir

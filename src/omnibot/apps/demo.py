@@ -88,13 +88,14 @@ def _tour(args: argparse.Namespace) -> int:
 def _plot(robot: RobotDescription, runs: list[DirectionRun], png: Path) -> str:
     """Draw the tour's plot (where matplotlib is installed); the line saying where, or why not."""
     from omnibot.demos import plot_tour
+    from omnibot.outputs import made_directory
     from omnibot.plots import unavailable
 
     why = unavailable()
     if why is not None:
         return f"  plot left out: {why}\n"
     try:
-        plot_tour(robot, runs, png)
+        plot_tour(robot, runs, made_directory(png.parent, "--out") / png.name)
     except OSError as exc:
         raise ConfigError(f"cannot write {png}: {exc.strerror or exc}", key="--out") from None
     return f"  plot: {png}\n"

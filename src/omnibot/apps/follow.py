@@ -21,13 +21,14 @@ from omnibot.cliargs import (
     check_plot,
     check_sim_options,
     off_path_options,
+    output_dir,
     positive,
     recording_of,
     seed_of,
     use_calibration,
 )
 from omnibot.errors import ConfigError
-from omnibot.outputs import check_writable
+from omnibot.outputs import check_writable, made_directory
 
 if TYPE_CHECKING:
     from omnibot.navigation import Tolerances
@@ -135,6 +136,8 @@ def _write_follow_outputs(
     args: argparse.Namespace, targets: dict[str, FsPath | None], run: Any, report: dict[str, Any], robot: str
 ) -> None:
     """Write the ground truth, the report and the plot where :func:`_follow_targets` put them."""
+    if args.out:
+        made_directory(FsPath(args.out), "--out")
     if targets["truth"] is not None:
         if run.has_truth:
             _write_truth(run, targets["truth"])
@@ -157,14 +160,8 @@ def _write_follow_outputs(
 
 
 def _out_dir(args: argparse.Namespace) -> FsPath | None:
-    if not args.out:
-        return None
-    out = FsPath(args.out)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ConfigError(f"cannot make directory {out}: {exc.strerror or exc}", key="--out") from None
-    return out
+    """``--out DIR`` checked (made by :func:`_write_follow_outputs` with its first file), or None."""
+    return output_dir(args.out) if args.out else None
 
 
 def _target(given: str | None, out: FsPath | None, name: str) -> FsPath | None:

@@ -22,6 +22,7 @@ that does not load, a goal off the map or inside a wall.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 from typing import Any
 
@@ -61,7 +62,14 @@ def _say(text: str) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """``omnibot goto``: the exit status."""
-    from omnibot.cliargs import check_sim_options, physics_behind, recording_of, sim_url, simulated
+    from omnibot.cliargs import (
+        check_sim_options,
+        physics_behind,
+        placed_by,
+        recording_of,
+        sim_url,
+        simulated,
+    )
     from omnibot.client import robot_session
     from omnibot.mapping import check_goal, inflate, load_map
     from omnibot.motion import Pose2D, parse_pose
@@ -94,7 +102,13 @@ def run(args: argparse.Namespace) -> int:
         planner=args.planner,
         speed=args.speed,
     )
-    with robot_session(url, args.robot, recording=recording_of(args)) as session:
+    with contextlib.ExitStack() as stack:
+        try:
+            session = stack.enter_context(robot_session(url, args.robot, recording=recording_of(args)))
+        except ConfigError as exc:
+            if initial is None or args.port is not None:
+                raise
+            raise placed_by(exc, "--initial-pose", "--initial-pose; give a pose inside the world") from None
         client, robot = session.client, session.robot
         start = _start(client, initial)
         goal = Pose2D(gx, gy, start.theta if gtheta is None else gtheta)

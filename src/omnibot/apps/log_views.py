@@ -160,11 +160,12 @@ def export_csv(run: Run, out: Path) -> list[Path]:
 def export(args: argparse.Namespace) -> int:
     """``omnibot log export``."""
     from omnibot.cliargs import output_dir
+    from omnibot.outputs import made_directory
 
     run = load(args)
     out = output_dir(args.csv, "--csv")
     try:
-        written = export_csv(run, out)
+        written = export_csv(run, made_directory(out, "--csv"))
     except OSError as exc:
         raise ConfigError(f"cannot write in {out}: {exc.strerror or exc}", key="--csv") from None
     for path in written:
@@ -253,6 +254,14 @@ def recover(args: argparse.Namespace) -> int:
     if result.cut_short is None and not args.force:
         print(f"{result.source} is whole (it has its summary): nothing to recover")
         return EXIT_OK
+    if result.cut_short is not None and result.messages == 0:
+        result.target.unlink()  # made by recover() alone ('xb'): a file of no message is no recovery
+        print(
+            f"omnibot: error: {result.source}: no message before the cut (the log was cut short: "
+            f"{result.cut_short}): nothing to recover, nothing written",
+            file=sys.stderr,
+        )
+        return EXIT_FAILED
     print(
         f"wrote {result.target}: {result.messages} messages, {result.duration:.3f} s"
         + (f" (the log was cut short: {result.cut_short})" if result.cut_short else "")

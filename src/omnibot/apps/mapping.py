@@ -144,7 +144,7 @@ def run(args: argparse.Namespace) -> int:
     except ImportError:
         raise ConfigError("omnibot map needs the slam extra: pip install 'omnibot[slam]'") from None
     from omnibot.apps.run import Parts, run_in_this_thread
-    from omnibot.cliargs import check_sim_options, sim_url
+    from omnibot.cliargs import check_sim_options, placed_by, sim_url
     from omnibot.control import read_path
     from omnibot.teleop import load_teleop_config
 
@@ -166,6 +166,12 @@ def run(args: argparse.Namespace) -> int:
     parts: Parts | None = None
     try:
         parts = run_in_this_thread(args, url, config, path, mapping.attach, _say, frame=mapping.map_to_odom)
+    except ConfigError as exc:
+        if args.port is not None:
+            raise
+        raise placed_by(
+            exc, "--path", f"the first pose of {args.path}; give a path that starts inside the world"
+        ) from None
     finally:
         mapping.close()
     return mapping.finish(out, parts, args.resolution)
@@ -302,6 +308,7 @@ class _Mapping:
     def finish(self, out: Path, parts: Any, resolution: float) -> int:
         from omnibot.apps.run import outcome
         from omnibot.mapping import score_lines, write_outputs
+        from omnibot.outputs import made_directory
 
         sink = self.sink
         if sink is None:
@@ -311,7 +318,12 @@ class _Mapping:
             return 1
         try:
             result = write_outputs(
-                out, sink, truth=self.truth, world=self.world, resolution=resolution, noise=self.noise
+                made_directory(out, "--out"),
+                sink,
+                truth=self.truth,
+                world=self.world,
+                resolution=resolution,
+                noise=self.noise,
             )
         except ValueError as exc:
             print(f"omnibot map: {exc} ({sink.received} scans received)", file=sys.stderr)

@@ -58,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
     what = {
         "push": f"pushed by hand along {args.shape}",
         "drive": f"driven along {args.shape}",
-        "listen": "recorded",
+        "listen": "listened to",
     }
     if problem is not None:
         print(f"omnibot record: {robot.name} {what[mode]}: {problem}; nothing written")

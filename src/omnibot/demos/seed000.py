@@ -128,7 +128,6 @@ def run_demo(
 
     if port is not None:
         port = with_world(port, world)
-    out.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
         truth_file = TruthFile(Path(tmp) / "truth.csv") if port is None else None
         world_map = _world_map(world) if port is None else None
@@ -188,6 +187,7 @@ def _write_outputs(
     png = out / "demo_trajectory.png"
     written = [str(png)] if draw else []
     try:
+        out.mkdir(parents=True, exist_ok=True)
         if draw:
             plot(truth, odo_trail, world_map, png)
         if truth is not None:

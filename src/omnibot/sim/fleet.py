@@ -191,9 +191,8 @@ class Fleet:
         )
         for other in self._order:
             if self._pair_contact(body, other) is not None:
-                p = device.sim.pose
                 raise ConfigError(
-                    f"robot {name!r} at ({p.x:g}, {p.y:g}, {math.degrees(p.theta):g} deg) overlaps robot "
+                    f"robot {name!r} at {device.sim.pose.text()} overlaps robot "
                     f"{other.name!r}; give each robot its own pose=X,Y,THETA",
                     key="pose",
                 )

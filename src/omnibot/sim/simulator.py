@@ -117,7 +117,7 @@ class Simulator(Contacts, SensorReadings, ScanFeed, Listeners, StepState):
         w = load_world("empty") if world is None else world if isinstance(world, World) else load_world(world)
         self.world = w.with_floor(surface) if surface is not None and surface != w.floor else w
         self._physics = self._make_physics(physics_factory or default_physics)
-        start = self._place(start_pose)
+        self._place(start_pose)
 
         n_wheels = robot.n_wheels
         # a Physics: one compiled call per step, on its own input arrays; another kind: compiled
@@ -144,7 +144,7 @@ class Simulator(Contacts, SensorReadings, ScanFeed, Listeners, StepState):
         self._sensors = self._sensor_arrays()
         self._bind_step()
 
-        self._check_clear(start)
+        self._check_clear()
         if truth_recorder is not None:
             self.add_listener(truth_recorder, period=truth_recorder.period)
 
@@ -162,9 +162,9 @@ class Simulator(Contacts, SensorReadings, ScanFeed, Listeners, StepState):
         self._floor_ids = np.full((1, self.robot.n_wheels), self._surface_map[0], dtype=np.int64)
         return physics
 
-    def _place(self, start_pose: Pose2D | Sequence[float] | None) -> tuple[float, ...]:
+    def _place(self, start_pose: Pose2D | Sequence[float] | None) -> None:
         """Put the robot at ``start_pose`` (else the world's start, else the origin) and keep views of
-        its state rows; returns the start as given."""
+        its state rows."""
         given = start_pose if start_pose is not None else self.world.start or Pose2D(0.0, 0.0, 0.0)
         start = (given.x, given.y, given.theta) if isinstance(given, Pose2D) else tuple(given)
         if len(start) != 3:
@@ -173,7 +173,6 @@ class Simulator(Contacts, SensorReadings, ScanFeed, Listeners, StepState):
         # views of robot 0's state: the physics updates its arrays in place
         self._pose_row = self._physics.pose[0]
         self._twist_row = self._physics.twist[0]
-        return start
 
     # ------------------------------------------------------------------ state
 

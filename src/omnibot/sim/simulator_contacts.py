@@ -56,13 +56,13 @@ class Contacts:
         """Call ``fn(event)`` for every new collision (also appended to :attr:`collisions`)."""
         self._collision_listeners.append(fn)
 
-    def _check_clear(self, start: tuple[float, ...]) -> None:
+    def _check_clear(self) -> None:
         """Refuse a start pose whose outline overlaps the world."""
         x, y, th = self._pose_row.tolist()
         touching = self._find_contacts(x, y, th)
         if touching >= 0:
             raise SimulationSetupError(
-                f"start pose {tuple(float(c) for c in start)} overlaps {self.world.contact_owners[touching]} "
+                f"start pose {Pose2D(x, y, th).text()} overlaps {self.world.contact_owners[touching]} "
                 f"of world '{self.world.name}'"
             )
 
