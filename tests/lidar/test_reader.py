@@ -100,7 +100,10 @@ def test_the_driver_reads_info_health_and_scans(served: tuple[RplidarDevice, str
             lidar.start_motor()  # the A1's DTR line: a pty has none (docs/lidar.md)
         lidar.start_motor = lambda: lidar._set_pwm(lidar.motor_speed)  # the A2's way only
         measures = []
-        for new_scan, quality, angle, distance in lidar.iter_measures():
+        # the driver's buffer bound off (its documented False): on a loaded machine the test's reader may
+        # fall 3,000 bytes behind the served revolutions, which the driver then drops mid-measure: a
+        # claim about keeping up, not about reading the protocol, which this test is
+        for new_scan, quality, angle, distance in lidar.iter_measures(max_buf_meas=False):
             measures.append((new_scan, quality, angle, distance))
             if len(measures) == 2 * N:
                 break
