@@ -18,7 +18,9 @@ keyframes (:mod:`~omnibot.mapping.posegraph`, gtsam ``Pose2`` nodes; ``optimizer
 Levenberg-Marquardt): between consecutive keyframes an odometry factor (noise growing with the
 distance and angle driven, ``odometry_noise``) and the match factor (the match's own covariance, so
 a direction the scans leave unconstrained, such as a corridor's axis, is carried by odometry
-alone); loop closures, verified and robust (:mod:`~omnibot.mapping.loops`).
+alone); where a match is degenerate, a heading factor from the first keyframe through the
+corridor's straight side walls (:mod:`~omnibot.mapping.walls`: each match's heading noise would
+otherwise random-walk along it); loop closures, verified and robust (:mod:`~omnibot.mapping.loops`).
 The scans taken while the robot stands still (the odometry where it was at the previous scan, no
 twist over the scan: the start's standstill while the gyro's bias is learned, a stop) join the
 keyframe they were taken at (:meth:`~omnibot.mapping.keyframes.KeyframeStore._join`): one scan's
@@ -26,8 +28,8 @@ noise turns its walls by 0.05-0.2 degree, which every keyframe matched against i
 first keyframe's would set the map's heading (a corridor's side wall 30 m on 3-10 cm off, a turn
 the side walls cannot see); the standstill's scans average it out.
 ``scan_to_submap=False`` leaves the front end out (odometry and loop closures only),
-``deskew=False`` the motion-distortion correction, ``join_still=False`` the standstill's joins: to
-measure what each part brings.
+``deskew=False`` the motion-distortion correction, ``join_still=False`` the standstill's joins,
+``wall_heading=False`` the wall-heading factors: to measure what each part brings.
 
 Poses between keyframes are their keyframe's estimate composed with the odometry since it, so
 :meth:`Slam.trajectory` follows every correction of the graph. The map frame starts at the first
@@ -49,6 +51,7 @@ from omnibot.mapping.loops import LoopClosing
 from omnibot.mapping.matcher import ScanMatcher
 from omnibot.mapping.posegraph import OPTIMIZERS, PoseGraph
 from omnibot.mapping.se2 import between, compose, inverse, rotate_covariance
+from omnibot.mapping.walls import WallHeading
 from omnibot.motion import Pose2D, Twist
 from omnibot.scan import Scan
 
@@ -58,7 +61,7 @@ STILL = (1e-4, 1e-5)
 """The odometry's largest move between two scans (m, rad) that still counts as standing still."""
 
 
-class Slam(LoopClosing, AnchorMatching):
+class Slam(LoopClosing, AnchorMatching, WallHeading):
     """Online 2D SLAM (see the module docstring): feed :meth:`update` odometry poses and scans."""
 
     def __init__(
@@ -85,6 +88,7 @@ class Slam(LoopClosing, AnchorMatching):
         scan_to_submap: bool = True,
         deskew: bool = True,
         join_still: bool = True,
+        wall_heading: bool = True,
         matcher: ScanMatcher | None = None,
     ) -> None:
         self.keyframe_distance = keyframe_distance
@@ -107,6 +111,7 @@ class Slam(LoopClosing, AnchorMatching):
         self.scan_to_submap = scan_to_submap
         self.deskew = deskew
         self.join_still = join_still
+        self.wall_heading = wall_heading
         self._check_options(resolution)
         self.matcher = matcher or ScanMatcher(resolution=resolution)
 
@@ -166,6 +171,8 @@ class Slam(LoopClosing, AnchorMatching):
         """The front end's match of every keyframe but the first."""
         self.anchored = 0
         self.anchors = []
+        self._walls = {}
+        self.walled = 0
         self._graph = PoseGraph(self.optimizer)
 
     # ------------------------------------------------------------------ queries
@@ -288,6 +295,8 @@ class Slam(LoopClosing, AnchorMatching):
             anchor = self._anchor_match(frame, predicted, result) if anchored else None
             if anchor is not None:
                 seen.append(anchor)
+            if result.unconstrained:
+                self._wall_factor(new, result)
         for reference, pose, covariance in seen:
             relative = between(self._estimates[reference], pose)
             cov = rotate_covariance(covariance, -pose.theta)
