@@ -229,6 +229,18 @@ def room_map(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return path
 
 
+def test_an_initial_pose_in_a_wall_is_told_as_the_option_given(
+    room_map: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The simulated robot put at ``--initial-pose`` where it cannot stand: the line names the option,
+    not the sim:// URL the bridge made of it (the link refuses it before any ROS 2 node is made)."""
+    assert main(["ros2", "--map", str(room_map), "--initial-pose", "0,0,0"]) == 2
+    assert capsys.readouterr().err == (
+        "omnibot: error: --initial-pose: start pose (0, 0, 0 deg) overlaps walls[0] of world 'room': the "
+        "simulated robot is put at --initial-pose; give a pose inside the world\n"
+    )
+
+
 @pytest.mark.parametrize(
     ("args", "text"),
     [

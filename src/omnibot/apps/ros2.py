@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Any
 from omnibot.errors import ConfigError
 
 if TYPE_CHECKING:
+    from omnibot.client import RobotSession
     from omnibot.ros2 import BridgeMap, BridgeSettings, RobotSpec, Timeline
 
 
@@ -320,8 +321,7 @@ def run(args: argparse.Namespace) -> int:
     other: a robot that cannot be opened ends the command before any robot moves, and the links of a
     shared simulated world are all open before any runtime waits on one. Then one robot runs here;
     several run a thread each (the first to end, or to fail, ends them all)."""
-    from omnibot.cliargs import check_sim_options, recording_of
-    from omnibot.client import robot_session
+    from omnibot.cliargs import check_sim_options
     from omnibot.ros2 import Timeline
 
     specs = check(args)
@@ -333,9 +333,7 @@ def run(args: argparse.Namespace) -> int:
         robots: list[_Robot] = []
         for spec in specs:
             url = _url(args, spec)
-            session = stack.enter_context(
-                robot_session(url, args.robot, timeout=0.5, recording=recording_of(args))
-            )
+            session = _enter_session(stack, args, spec, url)
             label = f"ros2 [{spec.namespace}]: " if several else "ros2: "
             one = _open(args, spec, session, url, label, timeline)
             stack.callback(one.node.close)
@@ -346,6 +344,22 @@ def run(args: argparse.Namespace) -> int:
         else:
             _serve(robots[0], args, stop)
     return 0
+
+
+def _enter_session(
+    stack: contextlib.ExitStack[Any], args: argparse.Namespace, spec: RobotSpec, url: str
+) -> RobotSession:
+    """The robot's session on ``url``, entered in ``stack``; a simulated robot that cannot stand at
+    ``--initial-pose`` (put into the URL by :func:`_url`) told as that option, not as the URL."""
+    from omnibot.cliargs import placed_by, recording_of
+    from omnibot.client import robot_session
+
+    try:
+        return stack.enter_context(robot_session(url, args.robot, timeout=0.5, recording=recording_of(args)))
+    except ConfigError as exc:
+        if spec.url is not None or getattr(args, "initial_pose", None) is None:
+            raise
+        raise placed_by(exc, "--initial-pose", "--initial-pose; give a pose inside the world") from None
 
 
 def _url(args: argparse.Namespace, spec: RobotSpec) -> str:
