@@ -14,6 +14,7 @@ import pytest
 
 pytest.importorskip("cyclonedds", reason="cyclonedds is not installed (pip install 'omnibot[ros2]')")
 
+from omnibot.apps import ros2 as ros2_app
 from omnibot.cli import main
 from omnibot.logs import header, schemas
 from omnibot.mapping import save_map
@@ -230,10 +231,16 @@ def room_map(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def test_an_initial_pose_in_a_wall_is_told_as_the_option_given(
-    room_map: Path, capsys: pytest.CaptureFixture[str]
+    room_map: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """The simulated robot put at ``--initial-pose`` where it cannot stand: the line names the option,
-    not the sim:// URL the bridge made of it (the link refuses it before any ROS 2 node is made)."""
+    not the sim:// URL the bridge made of it (the link refuses it before any ROS 2 node is made: this
+    test runs outside a private network namespace, so making one fails it instead)."""
+
+    def no_node(*args: Any) -> None:
+        raise AssertionError("the bridge made its node: the link accepted a pose in a wall")
+
+    monkeypatch.setattr(ros2_app, "_open", no_node)
     assert main(["ros2", "--map", str(room_map), "--initial-pose", "0,0,0"]) == 2
     assert capsys.readouterr().err == (
         "omnibot: error: --initial-pose: start pose (0, 0, 0 deg) overlaps walls[0] of world 'room': the "
