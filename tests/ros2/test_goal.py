@@ -14,7 +14,7 @@ import pytest
 
 pytest.importorskip("cyclonedds", reason="cyclonedds is not installed (pip install 'omnibot[ros2]')")
 
-from omnibot.apps import ros2 as ros2_app
+import omnibot.ros2
 from omnibot.cli import main
 from omnibot.logs import header, schemas
 from omnibot.mapping import save_map
@@ -240,7 +240,7 @@ def test_an_initial_pose_in_a_wall_is_told_as_the_option_given(
     def no_node(*args: Any) -> None:
         raise AssertionError("the bridge made its node: the link accepted a pose in a wall")
 
-    monkeypatch.setattr(ros2_app, "_open", no_node)
+    monkeypatch.setattr(omnibot.ros2, "attach", no_node)  # where the bridge makes its node
     assert main(["ros2", "--map", str(room_map), "--initial-pose", "0,0,0"]) == 2
     assert capsys.readouterr().err == (
         "omnibot: error: --initial-pose: start pose (0, 0, 0 deg) overlaps walls[0] of world 'room': the "
